@@ -1,0 +1,88 @@
+//! Reports: the human-readable table and the JSON object.
+
+use std::fmt::Write;
+
+use anyhow::{Result, bail};
+use metric::{Evaluation, MetricForm, Scene};
+use serde::Serialize;
+
+/// Refuses to print a result with a non-finite number (a defect, never expected).
+pub fn check_finite(r: &Evaluation) -> Result<()> {
+    let numbers = [
+        ("asnr", r.asnr),
+        ("mean_mtf", r.mean_mtf),
+        ("snr0", r.snr0),
+        ("photoelectrons", r.photoelectrons),
+        ("glare.m0", r.glare.m0),
+        ("glare.vg", r.glare.vg),
+        ("fraunhofer.fraction_outside", r.fraunhofer.fraction_outside),
+    ];
+    for (name, v) in numbers {
+        if !v.is_finite() {
+            bail!("internal error: {name} = {v} is not finite; please report this scene");
+        }
+    }
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    scene: &'a str,
+    lens: String,
+    #[serde(flatten)]
+    result: &'a Evaluation,
+}
+
+/// One JSON object: the scene label, the lens and every field of the evaluation.
+pub fn json(label: &str, scene: &Scene, r: &Evaluation) -> Result<String> {
+    Ok(serde_json::to_string_pretty(&Report { scene: label, lens: scene.lens().describe(), result: r })?)
+}
+
+/// The short table printed by default.
+pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
+    let mut s = String::new();
+    let form = match r.form {
+        MetricForm::Mean => "SNR0 × mean MTF",
+        MetricForm::Integral => "SNR0 × ∫MTF dν, cycles/mm",
+    };
+    let _ = writeln!(s, "scene      {label}");
+    let _ = writeln!(s, "lens       {}", scene.lens().describe());
+    let _ = writeln!(s);
+    let _ = writeln!(s, "  ASNR                        {:>12.4}   {form}", r.asnr);
+    let _ = writeln!(s, "  SNR0 = √N                   {:>12.4}   shot-noise limited (SI eq. S9)", r.snr0);
+    let _ = writeln!(s, "  photoelectrons N            {:>12.1}   per pixel (SI eq. S7–S8)", r.photoelectrons);
+    let _ = writeln!(
+        s,
+        "  mean MTF                    {:>12.6}   over 0–{:.2} cycles/mm (Nyquist){}",
+        r.mean_mtf,
+        r.nyquist_cyc_per_mm,
+        if scene.camera().pixel_mtf() { ", with pixel MTF" } else { "" }
+    );
+    let _ = writeln!(s, "  ∫ MTF dν                    {:>12.4}   cycles/mm", r.mtf_integral_cyc_per_mm);
+    let _ = writeln!(s, "  ASNR, integral form         {:>12.2}   cycles/mm (eq. 1 as printed)", r.asnr_integral_cyc_per_mm);
+    let _ = writeln!(
+        s,
+        "  mean wavelength             {:>12.2}   nm (cutoff there {:.1} cycles/mm)",
+        r.mean_wavelength_nm, r.cutoff_cyc_per_mm
+    );
+    let _ = writeln!(s);
+    let f = &r.fraunhofer;
+    let shift = f.max_shift_nm.map_or("no limit".to_owned(), |v| format!("±{v:.1} nm"));
+    let _ = writeln!(
+        s,
+        "  Fraunhofer (SI eq. S15)     {:>12}   blur ≤ {} mm up to {shift}; {:.3} % of the signal beyond",
+        if f.valid { "valid" } else { "NOT valid" },
+        f.threshold_mm,
+        100.0 * f.fraction_outside
+    );
+    let g = &r.glare;
+    let _ = writeln!(
+        s,
+        "  glare M0 = τ1/T (eq. S13)   {:>12.4}   τ1 = {:.4}, T = {:.4}, VG = {:.1} % (eq. S12)",
+        g.m0,
+        g.efficiency,
+        g.transmission,
+        100.0 * g.vg
+    );
+    s
+}

@@ -1,0 +1,222 @@
+//! The chromatic metalens / diffractive lens.
+
+use optics::{Field, LensModel, Order, Pupil, Wavefront};
+use radiometry::Sampled;
+
+use crate::Error;
+
+/// A quantity of the lens that is constant or tabulated against wavelength (piecewise linear
+/// between samples, zero outside the table: a lens is not characterized where it was not
+/// measured).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Curve {
+    /// The same value at every wavelength.
+    Constant(f64),
+    /// Samples against wavelength (m).
+    Table(Sampled),
+}
+
+impl Curve {
+    /// The value at `wavelength_m`.
+    pub fn value(&self, wavelength_m: f64) -> f64 {
+        match self {
+            Curve::Constant(v) => *v,
+            Curve::Table(t) => t.value(wavelength_m),
+        }
+    }
+
+    fn breakpoints(&self) -> &[f64] {
+        match self {
+            Curve::Constant(_) => &[],
+            Curve::Table(t) => t.wavelengths(),
+        }
+    }
+
+    fn range(&self) -> (f64, f64) {
+        match self {
+            Curve::Constant(v) => (*v, *v),
+            Curve::Table(t) => (t.min_value(), t.max_value()),
+        }
+    }
+}
+
+/// A chromatic (uncorrected) metalens or diffractive lens: `f(λ) = f0 λ0/λ`, the detector at
+/// `f0`, one imaging order (the first diffraction order) with efficiency τ1(λ) through the full
+/// circular aperture, total transmission T(λ) into all orders.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChromaticMetalens {
+    f_number: f64,
+    focal_length: f64,
+    design_wavelength: f64,
+    efficiency: Curve,
+    transmission: Curve,
+}
+
+fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
+    if value.is_finite() && ok {
+        Ok(())
+    } else {
+        Err(Error::OutOfRange { name, value, expected })
+    }
+}
+
+impl ChromaticMetalens {
+    /// A chromatic lens of working F-number `f_number` (`f0/D`, ≥ 0.5 so that the paraxial
+    /// `NA = 1/(2F#)` ≤ 1), design focal length `focal_length_m` at `design_wavelength_m`, with
+    /// first-order efficiency `efficiency` and total transmission `transmission` (both in
+    /// `[0, 1]`, `τ1 ≤ T` at every wavelength).
+    pub fn new(
+        f_number: f64,
+        focal_length_m: f64,
+        design_wavelength_m: f64,
+        efficiency: Curve,
+        transmission: Curve,
+    ) -> Result<Self, Error> {
+        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+        check(
+            "design_wavelength",
+            design_wavelength_m,
+            design_wavelength_m > 0.0,
+            "a finite wavelength > 0 m",
+        )?;
+        for (name, curve) in [("efficiency", &efficiency), ("transmission", &transmission)] {
+            let (lo, hi) = curve.range();
+            check(name, lo, lo >= 0.0, "a fraction in [0, 1]")?;
+            check(name, hi, hi <= 1.0, "a fraction in [0, 1]")?;
+        }
+        // τ1 ≤ T: both piecewise linear, so checking at every sample of either suffices
+        // (and anywhere for two constants).
+        let probes: Vec<f64> = efficiency
+            .breakpoints()
+            .iter()
+            .chain(transmission.breakpoints())
+            .copied()
+            .chain(std::iter::once(design_wavelength_m))
+            .collect();
+        for lambda in probes {
+            let (e, t) = (efficiency.value(lambda), transmission.value(lambda));
+            if e > t * (1.0 + 1e-12) {
+                return Err(Error::EfficiencyAboveTransmission {
+                    wavelength_nm: optics::round_for_display(lambda * 1e9),
+                    efficiency: e,
+                    transmission: t,
+                });
+            }
+        }
+        Ok(ChromaticMetalens {
+            f_number,
+            focal_length: focal_length_m,
+            design_wavelength: design_wavelength_m,
+            efficiency,
+            transmission,
+        })
+    }
+
+    /// Focal length at `wavelength_m`: `f(λ) = f0 λ0/λ` (PHYSICS.md, chromatic lens).
+    pub fn focal_length_at(&self, wavelength_m: f64) -> f64 {
+        self.focal_length * self.design_wavelength / wavelength_m
+    }
+
+    /// Defocus at the pupil edge with the detector at `f0`:
+    /// `W020(λ) = (D²/8)(1/f(λ) − 1/f0) = (λ/λ0 − 1) f0/(8 F#²)` (PHYSICS.md), m.
+    pub fn defocus(&self, wavelength_m: f64) -> f64 {
+        (wavelength_m / self.design_wavelength - 1.0) * self.focal_length
+            / (8.0 * self.f_number * self.f_number)
+    }
+}
+
+impl LensModel for ChromaticMetalens {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    fn orders(&self, wavelength_m: f64, _field: Field) -> Vec<Order> {
+        vec![Order::new(
+            self.efficiency.value(wavelength_m),
+            Pupil::Full,
+            Wavefront::defocus(self.defocus(wavelength_m)),
+        )]
+    }
+
+    fn efficiency(&self, wavelength_m: f64) -> f64 {
+        self.efficiency.value(wavelength_m)
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.transmission.value(wavelength_m)
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        Some(self.design_wavelength)
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        let mut b: Vec<f64> =
+            self.efficiency.breakpoints().iter().chain(self.transmission.breakpoints()).copied().collect();
+        b.sort_by(f64::total_cmp);
+        b.dedup();
+        b
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "chromatic metalens F/{} f0 = {} mm at λ0 = {} nm",
+            optics::round_for_display(self.f_number),
+            optics::round_for_display(self.focal_length * 1e3),
+            optics::round_for_display(self.design_wavelength * 1e9)
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper() -> ChromaticMetalens {
+        ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
+    }
+
+    #[test]
+    fn focal_length_scales_inversely_with_wavelength() {
+        let lens = paper();
+        // f(λ) = f0 λ0/λ: at 400 nm the focal length doubles
+        assert!((lens.focal_length_at(400e-9) - 6.72e-3).abs() < 1e-15);
+        assert_eq!(lens.defocus(800e-9), 0.0);
+    }
+
+    #[test]
+    fn defocus_matches_the_thin_lens_sag_difference() {
+        // W020 = (D²/8)(1/f(λ) − 1/f0) with D = f0/F# = 1.344 mm
+        let lens = paper();
+        let d: f64 = 3.36e-3 / 2.5;
+        for lambda in [700e-9, 790e-9, 900e-9] {
+            let direct = d * d / 8.0 * (1.0 / lens.focal_length_at(lambda) - 1.0 / 3.36e-3);
+            assert!((lens.defocus(lambda) - direct).abs() < 1e-18, "{lambda}");
+        }
+    }
+
+    #[test]
+    fn rejects_efficiency_above_transmission() {
+        let e = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.6), Curve::Constant(0.55))
+            .unwrap_err();
+        assert!(e.to_string().contains("τ1 = 0.6 exceeds transmission T = 0.55"), "{e}");
+    }
+
+    #[test]
+    fn rejects_out_of_range_parameters() {
+        let e = ChromaticMetalens::new(0.3, 3.36e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(0.5))
+            .unwrap_err();
+        assert!(e.to_string().contains("f_number = 0.3 is out of range"), "{e}");
+        let e = ChromaticMetalens::new(2.5, f64::NAN, 800e-9, Curve::Constant(0.1), Curve::Constant(0.5))
+            .unwrap_err();
+        assert!(e.to_string().contains("focal_length = NaN"), "{e}");
+        let e = ChromaticMetalens::new(2.5, 3e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(1.5))
+            .unwrap_err();
+        assert!(e.to_string().contains("transmission = 1.5"), "{e}");
+    }
+}

@@ -1,0 +1,57 @@
+//! Built-in lens families for the ASNR toolkit, each a [`LensModel`].
+//!
+//! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
+//!   (PHYSICS.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
+//!   constant or tabulated.
+//!
+//! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
+//! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
+//! cannot produce NaN.
+//!
+//! # Example
+//! ```
+//! use lenses::{ChromaticMetalens, Curve};
+//! use optics::LensModel;
+//! // the paper's lens: F/2.5, f0 = 3.36 mm, λ0 = 800 nm, τ1 = 0.15, T = 0.55
+//! let lens = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), Curve::Constant(0.55))
+//!     .unwrap();
+//! assert_eq!(lens.efficiency(850e-9), 0.15);
+//! // 50 nm from the design wavelength the focus moves by f0 Δλ/λ0 ≈ 0.2 mm:
+//! // W020 = (λ/λ0 − 1) f0/(8 F#²) = 0.0625 × 3.36e-3 / 50 = 4.2 µm
+//! let w020 = lens.defocus(850e-9);
+//! assert!((w020 - 4.2e-6).abs() < 1e-12);
+//! ```
+//!
+//! Units: SI (m). Efficiencies are fractions of the light incident on the aperture.
+
+mod chromatic;
+
+pub use chromatic::{ChromaticMetalens, Curve};
+
+/// What can be wrong with a lens description.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter is outside its physical range.
+    #[error("{name} = {value} is out of range: expected {expected}")]
+    OutOfRange {
+        /// Parameter name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// The imaging efficiency exceeds the total transmission somewhere.
+    #[error(
+        "efficiency τ1 = {efficiency} exceeds transmission T = {transmission} at {wavelength_nm} nm: expected τ1 ≤ T ≤ 1"
+    )]
+    EfficiencyAboveTransmission {
+        /// Where, nm.
+        wavelength_nm: f64,
+        /// τ1 there.
+        efficiency: f64,
+        /// T there.
+        transmission: f64,
+    },
+}

@@ -1,0 +1,195 @@
+//! Evaluation of a scene: photoelectrons, SNR0, mean MTF, ASNR and the validity report.
+
+use std::f64::consts::PI;
+
+use optics::{Field, LensModel, Polychromatic};
+use radiometry::Spectrum;
+use radiometry::constants::{PLANCK, SPEED_OF_LIGHT};
+use serde::Serialize;
+
+use crate::{Error, MetricForm, Scene};
+
+/// Fraunhofer validity of the result (paper SI eq. S15).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Fraunhofer {
+    /// Whether the detected spectrum stays inside the valid range: the fraction of the signal
+    /// blurred beyond the threshold is at most the scene's allowance.
+    pub valid: bool,
+    /// Blur-radius threshold, mm.
+    pub threshold_mm: f64,
+    /// The largest wavelength shift from the design wavelength whose blur radius stays under the
+    /// threshold (eq. S15 solved for Δλ), nm; `None` if the lens has no design wavelength or no
+    /// shift reaches the threshold.
+    pub max_shift_nm: Option<f64>,
+    /// Fraction of the detected signal at wavelengths blurred beyond the threshold.
+    pub fraction_outside: f64,
+    /// The allowance for `fraction_outside`.
+    pub max_fraction: f64,
+}
+
+/// Veiling glare estimate from spurious orders (paper SI eq. S12–S13).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Glare {
+    /// Imaging efficiency τ1 averaged over the detected spectrum.
+    pub efficiency: f64,
+    /// Total transmission T averaged over the detected spectrum.
+    pub transmission: f64,
+    /// Zero-frequency modulation `M0 = τ1/T` (eq. S13).
+    pub m0: f64,
+    /// Veiling glare `VG = (1 − M0)/(1 + M0)` (eq. S12).
+    pub vg: f64,
+}
+
+/// How the numbers were computed.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Numerics {
+    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, PHYSICS.md integral).
+    pub engine: &'static str,
+    /// Spectral quadrature panels and nodes.
+    pub spectral_panels: usize,
+    /// Spectral nodes (over all imaging orders).
+    pub spectral_nodes: usize,
+    /// Frequency panels, after splitting at sign changes of the polychromatic OTF.
+    pub frequency_panels: usize,
+    /// Evaluations of the polychromatic OTF.
+    pub otf_evaluations: usize,
+    /// Sign changes of the polychromatic OTF below Nyquist (each one a zero of the MTF).
+    pub sign_changes: usize,
+}
+
+/// The ASNR of a scene and the numbers behind it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Evaluation {
+    /// The ASNR in the scene's chosen form (see `form`).
+    pub asnr: f64,
+    /// Which form `asnr` is: `mean` (dimensionless) or `integral` (cycles/mm).
+    pub form: MetricForm,
+    /// `SNR0 × mean MTF` (paper eq. 1, normalized by ν_N).
+    pub asnr_mean: f64,
+    /// `SNR0 × ∫_0^{ν_N} MTF dν`, cycles/mm (paper eq. 1 as printed).
+    pub asnr_integral_cyc_per_mm: f64,
+    /// Mean of the polychromatic MTF over `[0, ν_N]`.
+    pub mean_mtf: f64,
+    /// `∫_0^{ν_N} MTF dν`, cycles/mm.
+    pub mtf_integral_cyc_per_mm: f64,
+    /// Zero-frequency, shot-noise-limited SNR `√N` (paper SI eq. S9).
+    pub snr0: f64,
+    /// Signal photoelectrons per pixel `N` (paper SI eq. S7–S8).
+    pub photoelectrons: f64,
+    /// Nyquist frequency `1/(2p)`, cycles/mm.
+    pub nyquist_cyc_per_mm: f64,
+    /// Photoelectron-weighted mean wavelength, nm.
+    pub mean_wavelength_nm: f64,
+    /// Incoherent cutoff `1/(λ F#)` at the mean wavelength, cycles/mm.
+    pub cutoff_cyc_per_mm: f64,
+    /// Fraunhofer validity (eq. S15).
+    pub fraunhofer: Fraunhofer,
+    /// Veiling glare estimate (eq. S12–S13).
+    pub glare: Glare,
+    /// Warnings about the result's assumptions (truncated spectra, validity).
+    pub warnings: Vec<String>,
+    /// How it was computed.
+    pub numerics: Numerics,
+}
+
+/// Evaluates the ASNR of `scene` (paper eq. 1) on axis, shot-noise limited.
+///
+/// - Detected spectrum before the lens: `ρ(λ) = L(λ) η(λ) λ` (radiance × QE × λ, eq. S8).
+/// - Photoelectrons `N = A t π NA² /(h c) ∫ ρ(λ) τ1(λ) dλ` (eq. S7 into S8), `A = p²`,
+///   `NA = 1/(2 F#)`; `SNR0 = √N` (S9).
+/// - Mean MTF: [`optics::Polychromatic::mean_mtf`] up to `ν_N = 1/(2p)`.
+pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
+    let lens = scene.lens();
+    let camera = scene.camera();
+    let detected = Spectrum::product(vec![
+        scene.radiance().clone(),
+        camera.quantum_efficiency().clone(),
+        Spectrum::Linear { slope: 1.0 },
+    ]);
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, nyquist, pixel)?;
+
+    let na = lens.numerical_aperture();
+    let area = camera.pixel_pitch() * camera.pixel_pitch();
+    let photoelectrons =
+        area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
+    let snr0 = radiometry::shot_noise_snr(photoelectrons);
+    let (mean_mtf, work) = poly.mean_mtf();
+    let integral = mean_mtf * nyquist * 1e-3;
+    let asnr_mean = snr0 * mean_mtf;
+    let asnr_integral = snr0 * integral;
+
+    let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
+    let fraunhofer = fraunhofer(scene, &poly);
+    let glare = glare(lens, &poly);
+
+    let mut warnings = Vec::new();
+    for t in scene.radiance().truncations().iter().chain(camera.quantum_efficiency().truncations().iter()) {
+        warnings.push(format!(
+            "a Gaussian spectrum (centre {:.1} nm, σ {:.1} nm) reaches λ ≤ 0: {:.3e} of its area was cut off",
+            t.center_m * 1e9,
+            t.sigma_m * 1e9,
+            t.fraction
+        ));
+    }
+    if !fraunhofer.valid {
+        warnings.push(format!(
+            "{:.2} % of the signal is blurred beyond the Fraunhofer threshold of {} mm (paper SI eq. S15): the MTF model is not valid there",
+            100.0 * fraunhofer.fraction_outside,
+            fraunhofer.threshold_mm
+        ));
+    }
+    Ok(Evaluation {
+        asnr: match scene.options().form {
+            MetricForm::Mean => asnr_mean,
+            MetricForm::Integral => asnr_integral,
+        },
+        form: scene.options().form,
+        asnr_mean,
+        asnr_integral_cyc_per_mm: asnr_integral,
+        mean_mtf,
+        mtf_integral_cyc_per_mm: integral,
+        snr0,
+        photoelectrons,
+        nyquist_cyc_per_mm: nyquist * 1e-3,
+        mean_wavelength_nm: mean_wavelength * 1e9,
+        cutoff_cyc_per_mm: optics::cutoff_frequency(mean_wavelength, lens.f_number()) * 1e-3,
+        fraunhofer,
+        glare,
+        warnings,
+        numerics: Numerics {
+            engine: "exact-1d",
+            spectral_panels: work.spectral_panels,
+            spectral_nodes: work.spectral_nodes,
+            frequency_panels: work.frequency_panels,
+            otf_evaluations: work.otf_evaluations,
+            sign_changes: work.sign_changes,
+        },
+    })
+}
+
+fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>) -> Fraunhofer {
+    let options = scene.options();
+    let threshold = options.fraunhofer_threshold;
+    let max_shift = scene
+        .lens()
+        .design_wavelength()
+        .and_then(|l0| optics::fraunhofer::max_wavelength_shift(scene.lens(), l0, threshold));
+    let fraction_outside = poly.fraction_blurred_beyond(threshold);
+    Fraunhofer {
+        valid: fraction_outside <= options.fraunhofer_max_fraction,
+        threshold_mm: threshold * 1e3,
+        max_shift_nm: max_shift.map(|s| s * 1e9),
+        fraction_outside,
+        max_fraction: options.fraunhofer_max_fraction,
+    }
+}
+
+fn glare(lens: &dyn LensModel, poly: &Polychromatic<'_>) -> Glare {
+    let detected = poly.detected_integral(|_| 1.0);
+    let efficiency = poly.detected_integral(|l| lens.efficiency(l)) / detected;
+    let transmission = poly.detected_integral(|l| lens.transmission(l)) / detected;
+    let m0 = noise::buralli_morris_modulation(efficiency, transmission);
+    Glare { efficiency, transmission, m0, vg: noise::glare_from_modulation(m0) }
+}

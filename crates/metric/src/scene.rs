@@ -1,0 +1,148 @@
+//! The scene: lens, light, camera, exposure, options — validated domain types.
+
+use std::sync::Arc;
+
+use optics::LensModel;
+use radiometry::Spectrum;
+use serde::Serialize;
+
+use crate::Error;
+
+fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
+    if value.is_finite() && ok {
+        Ok(())
+    } else {
+        Err(Error::OutOfRange { name, value, expected })
+    }
+}
+
+/// The camera: pixel pitch, spectral quantum efficiency, and whether the pixel-aperture MTF
+/// multiplies the lens MTF.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pixel_pitch: f64,
+    quantum_efficiency: Spectrum,
+    pixel_mtf: bool,
+}
+
+impl Camera {
+    /// A camera with square pixels of `pixel_pitch_m` (active area `p²`, 100 % fill factor),
+    /// quantum efficiency η(λ) (values in `[0, 1]`), and the pixel-aperture MTF
+    /// `|sinc(p ν)|` applied if `pixel_mtf` (PHYSICS.md: off by default, the paper uses the lens
+    /// MTF only).
+    pub fn new(pixel_pitch_m: f64, quantum_efficiency: Spectrum, pixel_mtf: bool) -> Result<Self, Error> {
+        check("pixel_pitch", pixel_pitch_m, pixel_pitch_m > 0.0, "a finite length > 0 m")?;
+        Ok(Camera { pixel_pitch: pixel_pitch_m, quantum_efficiency, pixel_mtf })
+    }
+
+    /// Pixel pitch p, m.
+    pub fn pixel_pitch(&self) -> f64 {
+        self.pixel_pitch
+    }
+
+    /// Nyquist frequency `1/(2p)`, cycles/m.
+    pub fn nyquist(&self) -> f64 {
+        0.5 / self.pixel_pitch
+    }
+
+    /// Quantum efficiency η(λ).
+    pub fn quantum_efficiency(&self) -> &Spectrum {
+        &self.quantum_efficiency
+    }
+
+    /// Whether the pixel-aperture MTF is applied.
+    pub fn pixel_mtf(&self) -> bool {
+        self.pixel_mtf
+    }
+}
+
+/// Which form of paper eq. 1 the `asnr` field reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MetricForm {
+    /// `SNR0 × mean MTF over [0, ν_N]`: dimensionless, the SNR averaged over frequency (default).
+    #[default]
+    Mean,
+    /// `SNR0 × ∫_0^{ν_N} MTF dν` in cycles/mm: eq. 1 as printed.
+    Integral,
+}
+
+/// Evaluation options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Which form the `asnr` field reports.
+    pub form: MetricForm,
+    /// Geometric blur radius up to which the Fraunhofer MTF is valid, m (paper SI eq. S15: 0.25 mm).
+    pub fraunhofer_threshold: f64,
+    /// Largest fraction of the detected signal allowed at wavelengths blurred beyond the
+    /// threshold for the result to count as valid.
+    pub fraunhofer_max_fraction: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { form: MetricForm::Mean, fraunhofer_threshold: 0.25e-3, fraunhofer_max_fraction: 0.01 }
+    }
+}
+
+/// Everything the ASNR depends on.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    lens: Arc<dyn LensModel>,
+    radiance: Spectrum,
+    camera: Camera,
+    exposure: f64,
+    options: Options,
+}
+
+impl Scene {
+    /// A scene: `lens`; `radiance`, the spectral radiance of the bright target as it reaches the
+    /// lens, after any filter (W/(m² sr m)); `camera`; exposure time `exposure_s`; `options`.
+    pub fn new(
+        lens: Arc<dyn LensModel>,
+        radiance: Spectrum,
+        camera: Camera,
+        exposure_s: f64,
+        options: Options,
+    ) -> Result<Self, Error> {
+        check("exposure", exposure_s, exposure_s > 0.0, "a finite time > 0 s")?;
+        check(
+            "fraunhofer_threshold",
+            options.fraunhofer_threshold,
+            options.fraunhofer_threshold > 0.0,
+            "a finite length > 0 m",
+        )?;
+        check(
+            "fraunhofer_max_fraction",
+            options.fraunhofer_max_fraction,
+            (0.0..=1.0).contains(&options.fraunhofer_max_fraction),
+            "a fraction in [0, 1]",
+        )?;
+        Ok(Scene { lens, radiance, camera, exposure: exposure_s, options })
+    }
+
+    /// The lens.
+    pub fn lens(&self) -> &dyn LensModel {
+        &*self.lens
+    }
+
+    /// Spectral radiance reaching the lens, W/(m² sr m).
+    pub fn radiance(&self) -> &Spectrum {
+        &self.radiance
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Exposure time, s.
+    pub fn exposure(&self) -> f64 {
+        self.exposure
+    }
+
+    /// The options.
+    pub fn options(&self) -> &Options {
+        &self.options
+    }
+}

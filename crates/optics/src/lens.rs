@@ -1,0 +1,192 @@
+//! The `LensModel` trait and its vocabulary: what a lens does to light of one wavelength from
+//! one field point.
+//!
+//! A lens model *describes*; the optics crate *computes*. A model answers which imaging orders
+//! reach the detector, with what efficiency, through which pupil and with what wavefront error at
+//! the detector plane, and how much light it transmits in total. The polychromatic engine
+//! ([`crate::Polychromatic`]) turns that into transfer functions, choosing the fast exact 1-D
+//! path where the description allows it.
+
+use std::fmt;
+use std::sync::Arc;
+
+/// A field point: the chief-ray angle of the object point, radians.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct Field {
+    /// Field angle along x, radians.
+    pub x_rad: f64,
+    /// Field angle along y, radians.
+    pub y_rad: f64,
+}
+
+impl Field {
+    /// The optical axis.
+    pub const ON_AXIS: Field = Field { x_rad: 0.0, y_rad: 0.0 };
+}
+
+/// The pupil an imaging order passes through.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Pupil {
+    /// The lens' full circular aperture of diameter `D = f0/F#`, centred on the axis.
+    Full,
+}
+
+/// Wavefront error of an imaging order at the exit pupil, relative to a reference sphere
+/// centred on the detector point, in metres of optical path at the pupil edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct Wavefront {
+    /// Defocus coefficient `W020` (m): `W(ρ) = W020 ρ²` with ρ the normalized pupil radius.
+    ///
+    /// Paraxially a focus shift `Δz` behind the detector gives `W020 = Δz NA²/2 = Δz/(8 F#²)`.
+    pub defocus_m: f64,
+}
+
+impl Wavefront {
+    /// A wavefront with defocus only.
+    pub fn defocus(w020_m: f64) -> Wavefront {
+        Wavefront { defocus_m: w020_m }
+    }
+}
+
+/// One imaging order (a diffraction order, or one channel of a multiplexed lens).
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Order {
+    /// Fraction of the light incident on the aperture that this order brings to the image
+    /// (for a metalens, the first-order efficiency τ1 of paper SI eq. S7), in `[0, 1]`.
+    pub efficiency: f64,
+    /// The pupil this order is imaged through.
+    pub pupil: Pupil,
+    /// Its wavefront error at the detector.
+    pub wavefront: Wavefront,
+}
+
+impl Order {
+    /// An order through `pupil` with `efficiency` and `wavefront`.
+    pub fn new(efficiency: f64, pupil: Pupil, wavefront: Wavefront) -> Order {
+        Order { efficiency, pupil, wavefront }
+    }
+}
+
+/// What a lens does to light: the trait every lens family implements.
+///
+/// Object safe (`&dyn LensModel`, `Box<dyn LensModel>` work), `Send + Sync + Debug`, plain `f64` in SI
+/// units. Three methods are required; the rest have defaults built on them.
+///
+/// Architecture invariant: the detector sits at [`focal_length`](LensModel::focal_length) `f0`
+/// behind the lens, and [`f_number`](LensModel::f_number) is `f0/D`; everything
+/// wavelength-dependent (focus shift, efficiency) is expressed through [`orders`](LensModel::orders).
+pub trait LensModel: Send + Sync + fmt::Debug {
+    /// Working F-number `F# = f0/D` at the detector.
+    fn f_number(&self) -> f64;
+
+    /// Distance from the lens to the detector (the design focal length `f0`), m.
+    fn focal_length(&self) -> f64;
+
+    /// The imaging orders for light of `wavelength_m` from `field`.
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order>;
+
+    /// Imaging efficiency at `wavelength_m` on axis: the sum of the orders' efficiencies.
+    fn efficiency(&self, wavelength_m: f64) -> f64 {
+        self.orders(wavelength_m, Field::ON_AXIS).iter().map(|o| o.efficiency).sum()
+    }
+
+    /// Total transmission `T(λ)` into all orders, focused or not (paper SI eq. S13).
+    /// The default is [`efficiency`](LensModel::efficiency): a lens without stray orders.
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.efficiency(wavelength_m)
+    }
+
+    /// Wavelengths (m) where the efficiency or transmission has a kink (samples of a table);
+    /// spectral quadratures split their panels there. Default: none.
+    fn breakpoints(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// The wavelength the lens was designed for (m), if it has one: the reference of the
+    /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
+    fn design_wavelength(&self) -> Option<f64> {
+        None
+    }
+
+    /// Numerical aperture on the image side, paraxial: `NA0 = D/(2 f0) = 1/(2 F#)`.
+    fn numerical_aperture(&self) -> f64 {
+        0.5 / self.f_number()
+    }
+
+    /// Short human-readable description, for reports.
+    fn describe(&self) -> String {
+        format!(
+            "lens F/{} f0 = {} mm",
+            round_for_display(self.f_number()),
+            round_for_display(self.focal_length() * 1e3)
+        )
+    }
+}
+
+/// `x` rounded to 12 significant digits, so that unit conversions print as typed
+/// (`3.36e-3 m × 1e3` prints `3.36`, not `3.3600000000000003`).
+pub fn round_for_display(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let digits = 11 - x.abs().log10().floor() as i32;
+    let scale = 10f64.powi(digits);
+    (x * scale).round() / scale
+}
+
+macro_rules! forward_lens_model {
+    ($($ty:ty),*) => {$(
+        impl<T: LensModel + ?Sized> LensModel for $ty {
+            fn f_number(&self) -> f64 { (**self).f_number() }
+            fn focal_length(&self) -> f64 { (**self).focal_length() }
+            fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+                (**self).orders(wavelength_m, field)
+            }
+            fn efficiency(&self, wavelength_m: f64) -> f64 { (**self).efficiency(wavelength_m) }
+            fn transmission(&self, wavelength_m: f64) -> f64 { (**self).transmission(wavelength_m) }
+            fn breakpoints(&self) -> Vec<f64> { (**self).breakpoints() }
+            fn numerical_aperture(&self) -> f64 { (**self).numerical_aperture() }
+            fn design_wavelength(&self) -> Option<f64> { (**self).design_wavelength() }
+            fn describe(&self) -> String { (**self).describe() }
+        }
+    )*};
+}
+forward_lens_model!(&T, Box<T>, Arc<T>);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug)]
+    struct Perfect;
+    impl LensModel for Perfect {
+        fn f_number(&self) -> f64 {
+            2.0
+        }
+        fn focal_length(&self) -> f64 {
+            0.01
+        }
+        fn orders(&self, _: f64, _: Field) -> Vec<Order> {
+            vec![Order::new(0.9, Pupil::Full, Wavefront::default())]
+        }
+    }
+
+    fn takes_dyn(lens: &dyn LensModel) -> f64 {
+        lens.transmission(5e-7) + lens.numerical_aperture()
+    }
+
+    #[test]
+    fn object_safe_with_forwarding_impls() {
+        let boxed: Box<dyn LensModel> = Box::new(Perfect);
+        let arc: Arc<dyn LensModel> = Arc::new(Perfect);
+        let expected = 0.9 + 0.25;
+        assert_eq!(takes_dyn(&Perfect), expected);
+        assert_eq!(takes_dyn(&boxed), expected);
+        assert_eq!(takes_dyn(&arc), expected);
+        assert_eq!(takes_dyn(&&Perfect), expected);
+    }
+}

@@ -1,0 +1,42 @@
+//! Optics for the ASNR toolkit: transfer functions of lenses, monochromatic and polychromatic,
+//! and the [`LensModel`] trait that lens families implement.
+//!
+//! # What is here
+//! - [`defocus_otf`]: the exact OTF of a centred circular pupil with defocus (a 1-D integral,
+//!   composite Gauss–Legendre with panel counts that grow with defocus), [`mtf_diffraction_limited`],
+//!   [`pixel_mtf`].
+//! - [`Polychromatic`]: the signed polychromatic OTF with photoelectron weights, its modulus, and
+//!   its mean up to the Nyquist frequency (the quantity in paper eq. 1).
+//! - [`LensModel`] with its vocabulary ([`Order`], [`Pupil`], [`Wavefront`], [`Field`]).
+//! - [`fraunhofer`]: the validity check of paper SI eq. S15.
+//! - [`reference`]: slow, independent references the fast paths are tested against.
+//!
+//! # Conventions
+//! SI units everywhere (wavelengths and lengths in m, spatial frequencies in cycles/m).
+//! `s = ν/ν_c(λ)` with `ν_c = 1/(λ F#)`; defocus `w = W020/λ` waves at the pupil edge.
+//! OTFs are normalized to 1 at zero frequency; a polychromatic OTF is the weighted sum of the
+//! signed monochromatic OTFs, each at its own `s` (PHYSICS.md).
+//!
+//! # Example
+//! ```
+//! use optics::{defocus_otf, mtf_diffraction_limited};
+//! // PHYSICS.md test vector: OTF(s = 0.1, w = 0.5 waves) = 0.74209
+//! assert!((defocus_otf(0.1, 0.5) - 0.74209).abs() < 1e-5);
+//! // no defocus: the diffraction-limited MTF
+//! assert!((defocus_otf(0.3, 0.0) - mtf_diffraction_limited(0.3)).abs() < 1e-15);
+//! ```
+
+mod error;
+pub mod fraunhofer;
+mod lens;
+mod otf;
+mod poly;
+pub mod quad;
+pub mod reference;
+#[cfg(feature = "testkit")]
+pub mod testkit;
+
+pub use error::Error;
+pub use lens::{round_for_display, Field, LensModel, Order, Pupil, Wavefront};
+pub use otf::{cutoff_frequency, defocus_otf, defocus_otf_panels, mtf_diffraction_limited, pixel_mtf};
+pub use poly::{GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work};

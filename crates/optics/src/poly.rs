@@ -1,0 +1,428 @@
+//! The polychromatic OTF and its mean up to a frequency limit, on the exact 1-D path.
+//!
+//! PHYSICS.md, "Polychromatic OTF": the signed monochromatic OTFs are summed with the
+//! detected-photoelectron weights `ρ(λ) τ(λ)` (source × filter × QE × λ, times the order's
+//! efficiency), each at its own `s = ν λ F#`, and the MTF is the modulus of the sum:
+//!
+//! ```text
+//! OTF_poly(ν) = Σ_orders ∫ ρ(λ) τ_o(λ) OTF(ν λ F#, W020_o(λ)/λ) dλ  /  Σ_orders ∫ ρ(λ) τ_o(λ) dλ
+//! mean MTF    = (1/ν_max) ∫_0^{ν_max} P(ν) |OTF_poly(ν)| dν,   P = pixel MTF or 1
+//! ```
+//!
+//! Numerics (each piece tested against [`crate::reference`]):
+//! - **Spectral panels.** The wavelength axis is cut at every kink of the spectrum and of the lens
+//!   tables, Gaussian factors are kept to ±[`GAUSSIAN_HALF_WIDTH_SIGMAS`] σ (the rest weighs below
+//!   1e-21), and panels are split until each is at most 2σ wide and the defocus phase at the
+//!   highest frequency turns by at most [`quad::MAX_PANEL_PHASE`] across it.
+//! - **Cutoff.** A wavelength contributes only while `s < 1`, i.e. `λ < 1/(ν F#)`. The panel that
+//!   straddles that limit is clipped there and integrated in `u` with `λ = λ_cut − L u²`, which
+//!   turns the `(1 − s)^{3/2}` edge of the OTF into a smooth integrand.
+//! - **Frequency panels.** `[0, ν_max]` is cut where any spectral panel edge reaches its cutoff,
+//!   and split so that the defocus phase changes by at most [`quad::MAX_PANEL_PHASE`] per panel.
+//!   Where `OTF_poly` changes sign inside a panel, the root is located (bracketed secant /
+//!   bisection) and the panel split there, so `|OTF_poly|` is integrated piecewise smoothly.
+
+use std::f64::consts::PI;
+
+use radiometry::Spectrum;
+
+use crate::lens::{Field, LensModel, Pupil};
+use crate::otf::{defocus_otf, pixel_mtf};
+use crate::{Error, quad};
+
+/// Half-width, in standard deviations, kept of each Gaussian spectral factor: `exp(−10²/2)`
+/// is 2e-22 of the peak.
+pub const GAUSSIAN_HALF_WIDTH_SIGMAS: f64 = 10.0;
+
+/// Weight fraction below which a spectral node does not set the frequency sampling.
+const SIGNIFICANT_WEIGHT: f64 = 1e-13;
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lambda: f64,
+    /// quadrature weight × ρ(λ) × order efficiency
+    weight: f64,
+    /// W020 of the order, m
+    w020: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Panel {
+    lo: f64,
+    hi: f64,
+    /// nodes[start..end] of the unclipped panel
+    start: usize,
+    end: usize,
+}
+
+/// Counts of what an evaluation did, for `--explain` and the accuracy report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Work {
+    /// Spectral panels (each with [`quad::ORDER`] nodes per imaging order).
+    pub spectral_panels: usize,
+    /// Spectral nodes, summed over orders.
+    pub spectral_nodes: usize,
+    /// Frequency panels after splitting at sign changes.
+    pub frequency_panels: usize,
+    /// Evaluations of the polychromatic OTF.
+    pub otf_evaluations: usize,
+    /// Sign changes of the polychromatic OTF located below the frequency limit.
+    pub sign_changes: usize,
+}
+
+/// A prepared polychromatic evaluation: spectral nodes and weights for one lens, detected
+/// spectrum and field point, valid for frequencies up to `max_frequency`.
+#[derive(Debug)]
+pub struct Polychromatic<'a> {
+    lens: &'a dyn LensModel,
+    detected: &'a Spectrum,
+    field: Field,
+    f_number: f64,
+    max_frequency: f64,
+    pixel_pitch: Option<f64>,
+    nodes: Vec<Node>,
+    /// (λ, quadrature weight × ρ(λ)) at every unclipped spectral node, before the lens
+    samples: Vec<(f64, f64)>,
+    panels: Vec<Panel>,
+    total_weight: f64,
+    /// largest |W020| among significant nodes, m
+    w020_max: f64,
+}
+
+impl<'a> Polychromatic<'a> {
+    /// Prepares the spectral quadrature for `lens` seen through the `detected` spectrum.
+    ///
+    /// `detected` is the spectral density of detected photons *before* the lens efficiency:
+    /// source radiance × filter × quantum efficiency × λ (paper SI eq. S8), any scale.
+    /// `max_frequency` (cycles/m) is the upper end of the mean, usually the Nyquist frequency
+    /// `1/(2p)`; `pixel_pitch` (m), if given, multiplies the MTF by the pixel-aperture MTF.
+    pub fn new(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+    ) -> Result<Self, Error> {
+        let f_number = lens.f_number();
+        if !(max_frequency.is_finite() && max_frequency > 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "max_frequency",
+                value: max_frequency,
+                expected: "finite and > 0 cycles/m",
+            });
+        }
+        let (lo, hi) = spectral_extent(detected)?;
+        let mut cuts: Vec<f64> = detected
+            .breakpoints()
+            .into_iter()
+            .chain(lens.breakpoints())
+            .filter(|&b| b > lo && b < hi)
+            .collect();
+        cuts.push(lo);
+        cuts.push(hi);
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup();
+        let sigma_min = detected
+            .gaussians()
+            .iter()
+            .map(|g| g.sigma())
+            .fold(f64::INFINITY, f64::min);
+
+        let mut this = Polychromatic {
+            lens,
+            detected,
+            field,
+            f_number,
+            max_frequency,
+            pixel_pitch,
+            nodes: Vec::new(),
+            samples: Vec::new(),
+            panels: Vec::new(),
+            total_weight: 0.0,
+            w020_max: 0.0,
+        };
+        let phase_per_w020 = 8.0 * PI * f_number * max_frequency;
+        for pair in cuts.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let mut n = ((b - a) / (2.0 * sigma_min)).ceil().max(1.0) as usize;
+            // refine until the defocus phase at max_frequency turns ≤ MAX_PANEL_PHASE per panel
+            loop {
+                let h = (b - a) / n as f64;
+                let mut worst: f64 = 0.0;
+                let mut prev = this.max_w020(a);
+                for k in 1..=n {
+                    let x = a + h * k as f64;
+                    let cur = this.max_w020(x);
+                    let mid = this.max_w020(x - 0.5 * h);
+                    let turn = (cur - prev).abs().max((mid - prev).abs())
+                        + cur.abs().max(prev.abs()) * max_frequency * f_number * h;
+                    worst = worst.max(turn * phase_per_w020);
+                    prev = cur;
+                }
+                if worst <= quad::MAX_PANEL_PHASE || n > 1 << 20 {
+                    break;
+                }
+                n = (n as f64 * (worst / quad::MAX_PANEL_PHASE).min(64.0)).ceil() as usize + 1;
+            }
+            let h = (b - a) / n as f64;
+            for k in 0..n {
+                let (plo, phi) = (a + h * k as f64, a + h * (k + 1) as f64);
+                let start = this.nodes.len();
+                let (mut nodes, mut samples) = (Vec::new(), Vec::new());
+                quad::for_each_node(plo, phi, 1, |lambda, q| {
+                    samples.push((lambda, q * detected.value(lambda)));
+                    this.emit_orders(lambda, q, &mut |node| nodes.push(node));
+                });
+                this.nodes.extend(nodes);
+                this.samples.extend(samples);
+                this.panels.push(Panel { lo: plo, hi: phi, start, end: this.nodes.len() });
+            }
+        }
+        this.total_weight = this.nodes.iter().map(|n| n.weight).sum();
+        if !(this.total_weight > 0.0 && this.total_weight.is_finite()) {
+            return Err(Error::NoSignal { total: this.total_weight });
+        }
+        let threshold = SIGNIFICANT_WEIGHT * this.total_weight;
+        this.w020_max = this
+            .nodes
+            .iter()
+            .filter(|n| n.weight.abs() > threshold)
+            .map(|n| n.w020.abs())
+            .fold(0.0, f64::max);
+        Ok(this)
+    }
+
+    fn max_w020(&self, lambda: f64) -> f64 {
+        self.lens
+            .orders(lambda, self.field)
+            .iter()
+            .map(|o| o.wavefront.defocus_m)
+            .fold(0.0, |m: f64, w| if w.abs() > m.abs() { w } else { m })
+    }
+
+    /// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for the clipped panel.
+    fn clipped_nodes(&self, lo: f64, cut: f64, mut emit: impl FnMut(Node)) {
+        let len = cut - lo;
+        quad::for_each_node(0.0, 1.0, 1, |u, q| {
+            self.emit_orders(cut - len * u * u, q * 2.0 * len * u, &mut emit);
+        });
+    }
+
+    fn emit_orders(&self, lambda: f64, q: f64, emit: &mut impl FnMut(Node)) {
+        let rho = self.detected.value(lambda);
+        if rho == 0.0 {
+            return;
+        }
+        for order in self.lens.orders(lambda, self.field) {
+            match order.pupil {
+                Pupil::Full => emit(Node {
+                    lambda,
+                    weight: q * rho * order.efficiency,
+                    w020: order.wavefront.defocus_m,
+                }),
+            }
+        }
+    }
+
+    /// `∫ ρ(λ) τ(λ) dλ` summed over the imaging orders: the detected-signal integral in the units
+    /// of the `detected` spectrum.
+    pub fn total_weight(&self) -> f64 {
+        self.total_weight
+    }
+
+    /// `∫ ρ(λ) f(λ) dλ` over the detected spectrum *before* the lens (no efficiency factor),
+    /// with the same quadrature.
+    pub fn detected_integral(&self, mut f: impl FnMut(f64) -> f64) -> f64 {
+        self.samples.iter().map(|&(lambda, q_rho)| q_rho * f(lambda)).sum()
+    }
+
+    /// Weighted average of `f(λ, W020)` over the detected spectrum (weights `ρ τ`).
+    pub fn spectral_average(&self, mut f: impl FnMut(f64, f64) -> f64) -> f64 {
+        self.nodes.iter().map(|n| n.weight * f(n.lambda, n.w020)).sum::<f64>() / self.total_weight
+    }
+
+    /// Signed polychromatic OTF at `frequency` (cycles/m), normalized to 1 at zero frequency.
+    pub fn otf(&self, frequency: f64) -> f64 {
+        let nu = frequency.abs();
+        let nuf = nu * self.f_number;
+        let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
+        let term = |n: &Node| n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda);
+        let mut sum = 0.0;
+        for p in &self.panels {
+            if p.hi <= cut {
+                sum += self.nodes[p.start..p.end].iter().map(term).sum::<f64>();
+            } else if p.lo < cut {
+                self.clipped_nodes(p.lo, cut, |n| sum += term(&n));
+            }
+        }
+        sum / self.total_weight
+    }
+
+    /// Polychromatic MTF at `frequency`: `|OTF_poly|`, times the pixel MTF if enabled.
+    pub fn mtf(&self, frequency: f64) -> f64 {
+        self.otf(frequency).abs() * self.pixel_factor(frequency)
+    }
+
+    fn pixel_factor(&self, frequency: f64) -> f64 {
+        self.pixel_pitch.map_or(1.0, |p| pixel_mtf(p, frequency))
+    }
+
+    /// Frequencies in `(0, max_frequency)` where `OTF_poly` may have a kink: a spectral panel edge
+    /// reaching its cutoff.
+    fn frequency_cuts(&self) -> Vec<f64> {
+        let mut cuts = vec![0.0, self.max_frequency];
+        for p in &self.panels {
+            for lambda in [p.lo, p.hi] {
+                if lambda > 0.0 {
+                    let nu = 1.0 / (lambda * self.f_number);
+                    if nu < self.max_frequency {
+                        cuts.push(nu);
+                    }
+                }
+            }
+        }
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * self.max_frequency);
+        cuts
+    }
+
+    /// The mean of the MTF over `[0, max_frequency]` and what it took.
+    pub fn mean_mtf(&self) -> (f64, Work) {
+        let mut work = Work {
+            spectral_panels: self.panels.len(),
+            spectral_nodes: self.nodes.len(),
+            ..Work::default()
+        };
+        // defocus phase rate in ν: d/dν [8π F# ν W020 (cos t − ν λ F#)] ≤ 8π F# W020 (1 + 2s)
+        let phase_rate = 8.0 * PI * self.f_number * self.w020_max * 3.0;
+        let mut total = 0.0;
+        for pair in self.frequency_cuts().windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(2.0) as usize;
+            let h = (b - a) / n as f64;
+            let mut left = (a, self.otf(a));
+            work.otf_evaluations += 1;
+            for k in 0..n {
+                let hi = if k + 1 == n { b } else { a + h * (k + 1) as f64 };
+                let right = (hi, self.otf(hi));
+                work.otf_evaluations += 1;
+                total += self.integrate_panel(left, right, &mut work);
+                left = right;
+            }
+        }
+        (total / self.max_frequency, work)
+    }
+
+    /// `∫ P(ν) |OTF_poly(ν)| dν` over one panel whose end values are known, split at sign changes.
+    fn integrate_panel(&self, left: (f64, f64), right: (f64, f64), work: &mut Work) -> f64 {
+        let (a, b) = (left.0, right.0);
+        let rule = quad::rule();
+        let mid = 0.5 * (a + b);
+        let half = 0.5 * (b - a);
+        let mut samples = Vec::with_capacity(quad::ORDER + 2);
+        samples.push(left);
+        for &(x, _) in rule {
+            let nu = mid + half * x;
+            samples.push((nu, self.otf(nu)));
+        }
+        samples.push(right);
+        work.otf_evaluations += quad::ORDER;
+        let mut roots = Vec::new();
+        for pair in samples.windows(2) {
+            let ((x0, f0), (x1, f1)) = (pair[0], pair[1]);
+            if f0 == 0.0 && x0 > a {
+                roots.push(x0);
+            } else if f0 * f1 < 0.0 {
+                roots.push(self.root(x0, f0, x1, f1, work));
+            }
+        }
+        if roots.is_empty() {
+            work.frequency_panels += 1;
+            let sign = samples.iter().map(|s| s.1).sum::<f64>().signum();
+            return half
+                * rule
+                    .iter()
+                    .zip(&samples[1..=quad::ORDER])
+                    .map(|(&(_, w), &(nu, f))| w * sign * f * self.pixel_factor(nu))
+                    .sum::<f64>();
+        }
+        work.sign_changes += roots.len();
+        let mut edges = vec![a];
+        edges.extend(roots);
+        edges.push(b);
+        let mut total = 0.0;
+        for e in edges.windows(2) {
+            work.frequency_panels += 1;
+            work.otf_evaluations += quad::ORDER;
+            total += quad::composite(e[0], e[1], 1, |nu| self.mtf(nu));
+        }
+        total
+    }
+
+    /// A zero of `OTF_poly` in `[x0, x1]`, where the signs of `f0`, `f1` differ (Illinois method
+    /// with a bisection safeguard), to 1e-14 of the frequency limit.
+    fn root(&self, mut x0: f64, mut f0: f64, mut x1: f64, mut f1: f64, work: &mut Work) -> f64 {
+        let tol = 1e-14 * self.max_frequency;
+        let mut side = 0;
+        for _ in 0..200 {
+            if (x1 - x0).abs() <= tol {
+                break;
+            }
+            let mut x = (x0 * f1 - x1 * f0) / (f1 - f0);
+            if !(x > x0.min(x1) && x < x0.max(x1)) {
+                x = 0.5 * (x0 + x1);
+            }
+            let f = self.otf(x);
+            work.otf_evaluations += 1;
+            if f == 0.0 {
+                return x;
+            }
+            if f * f1 < 0.0 {
+                x0 = x1;
+                f0 = f1;
+                side = 0;
+            } else {
+                side += 1;
+                if side >= 2 {
+                    f0 *= 0.5;
+                }
+            }
+            x1 = x;
+            f1 = f;
+        }
+        0.5 * (x0 + x1)
+    }
+
+    /// Cutoff frequency (cycles/m) of the shortest wavelength covered: `OTF_poly` is zero beyond.
+    pub fn max_cutoff(&self) -> f64 {
+        let lo = self.panels.first().map_or(0.0, |p| p.lo);
+        1.0 / (lo * self.f_number)
+    }
+
+    /// Largest |W020| (m) among the spectral nodes that carry weight.
+    pub fn max_defocus(&self) -> f64 {
+        self.w020_max
+    }
+
+    /// Photoelectron-weighted fraction of the detected signal whose geometric blur radius
+    /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15).
+    pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
+        let na = self.lens.numerical_aperture();
+        self.spectral_average(|_, w020| if 2.0 * w020.abs() / na > radius_m { 1.0 } else { 0.0 })
+    }
+}
+
+/// The wavelength interval the spectral quadrature covers: the spectrum's support, with Gaussian
+/// factors cut at ±[`GAUSSIAN_HALF_WIDTH_SIGMAS`] σ.
+fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
+    let (mut lo, mut hi) = detected.support();
+    for g in detected.gaussians() {
+        lo = lo.max(g.center() - GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
+        hi = hi.min(g.center() + GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
+    }
+    lo = lo.max(0.0);
+    if !(hi.is_finite() && hi > lo) {
+        return Err(Error::UnboundedSpectrum { lo, hi });
+    }
+    Ok((lo, hi))
+}

@@ -1,0 +1,1 @@
+//! Slow reference (to be written)

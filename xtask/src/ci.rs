@@ -1,0 +1,110 @@
+//! `cargo xtask ci`: the full check, one step after another, stopping at the first failure.
+//! `.ci/run` runs exactly this.
+
+use std::path::Path;
+
+use anyhow::{Result, bail};
+
+use crate::{cmd, tidy};
+
+/// One check: a short name for the log and the function that performs it.
+struct Step {
+    name: &'static str,
+    run: fn(&Path) -> Result<()>,
+}
+
+/// The steps, in order: cheap checks first so a formatting slip fails in seconds.
+const STEPS: &[Step] = &[
+    Step {
+        name: "rustfmt and clippy installed",
+        run: ensure_components,
+    },
+    Step {
+        name: "fmt",
+        run: fmt,
+    },
+    Step {
+        name: "tidy",
+        run: run_tidy,
+    },
+    Step {
+        name: "clippy",
+        run: clippy,
+    },
+    Step {
+        name: "test",
+        run: test,
+    },
+    Step {
+        name: "doc",
+        run: doc,
+    },
+];
+
+/// Run every step from the workspace `root`; print `ci: N passed, M failed` at the end.
+pub(crate) fn run(root: &Path) -> Result<()> {
+    let total = STEPS.len();
+    for (index, step) in STEPS.iter().enumerate() {
+        eprintln!("\n==> ci [{}/{total}] {}", index + 1, step.name);
+        if let Err(err) = (step.run)(root) {
+            println!("\nci: {index} passed, 1 failed");
+            return Err(err.context(format!("ci step `{}` failed", step.name)));
+        }
+    }
+    println!("\nci: {total} passed, 0 failed");
+    Ok(())
+}
+
+/// Install rustfmt and clippy through rustup when `cargo fmt` or `cargo clippy` is missing.
+fn ensure_components(root: &Path) -> Result<()> {
+    let fmt = cmd::status(&mut cmd::cargo(root, &["fmt", "--version"]))?;
+    let clippy = cmd::status(&mut cmd::cargo(root, &["clippy", "--version"]))?;
+    if fmt && clippy {
+        return Ok(());
+    }
+    let mut rustup = std::process::Command::new("rustup");
+    rustup
+        .args(["component", "add", "rustfmt", "clippy"])
+        .current_dir(root);
+    cmd::run(&mut rustup)?;
+    for tool in ["fmt", "clippy"] {
+        if !cmd::status(&mut cmd::cargo(root, &[tool, "--version"]))? {
+            bail!("`cargo {tool}` is still unavailable after `rustup component add`");
+        }
+    }
+    Ok(())
+}
+
+fn fmt(root: &Path) -> Result<()> {
+    cmd::run(&mut cmd::cargo(root, &["fmt", "--all", "--check"]))
+}
+
+fn run_tidy(root: &Path) -> Result<()> {
+    eprintln!("$ cargo xtask tidy   (in-process)");
+    tidy::run(root)
+}
+
+fn clippy(root: &Path) -> Result<()> {
+    cmd::run(&mut cmd::cargo(
+        root,
+        &[
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--locked",
+            "--",
+            "-D",
+            "warnings",
+        ],
+    ))
+}
+
+fn test(root: &Path) -> Result<()> {
+    cmd::run(&mut cmd::cargo(root, &["test", "--workspace", "--locked"]))
+}
+
+fn doc(root: &Path) -> Result<()> {
+    let mut command = cmd::cargo(root, &["doc", "--workspace", "--no-deps", "--locked"]);
+    command.env("RUSTDOCFLAGS", "-D warnings");
+    cmd::run(&mut command)
+}

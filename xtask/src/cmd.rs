@@ -1,0 +1,75 @@
+//! Running external commands: echo each one, then run it with inherited output, and turn a
+//! failure into an error that names the command.
+
+use std::path::Path;
+use std::process::Command;
+
+use anyhow::{Context, Result, bail};
+
+/// A `cargo` command with `args`, run from the workspace `root`.
+pub(crate) fn cargo(root: &Path, args: &[&str]) -> Command {
+    let mut command = Command::new("cargo");
+    command.args(args).current_dir(root);
+    command
+}
+
+/// Echo `command` to stderr, run it and fail unless it exits successfully.
+pub(crate) fn run(command: &mut Command) -> Result<()> {
+    if status(command)? {
+        Ok(())
+    } else {
+        bail!("`{}` failed", display(command))
+    }
+}
+
+/// Echo `command` to stderr, run it and report whether it exited successfully; an error only
+/// when it could not be started at all.
+pub(crate) fn status(command: &mut Command) -> Result<bool> {
+    let shown = display(command);
+    eprintln!("$ {shown}");
+    let status = command
+        .status()
+        .with_context(|| format!("could not start `{shown}` (is it installed and on PATH?)"))?;
+    Ok(status.success())
+}
+
+/// `command` as a shell line: environment overrides, program, arguments.
+pub(crate) fn display(command: &Command) -> String {
+    let mut words = Vec::new();
+    for (key, value) in command.get_envs() {
+        if let Some(value) = value {
+            words.push(format!(
+                "{}={}",
+                key.to_string_lossy(),
+                quote(&value.to_string_lossy())
+            ));
+        }
+    }
+    words.push(quote(&command.get_program().to_string_lossy()));
+    words.extend(command.get_args().map(|arg| quote(&arg.to_string_lossy())));
+    words.join(" ")
+}
+
+/// Double-quote a word that contains whitespace or is empty.
+fn quote(word: &str) -> String {
+    if word.is_empty() || word.contains(char::is_whitespace) {
+        format!("\"{word}\"")
+    } else {
+        word.to_owned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_shows_env_program_and_quoted_args() {
+        let mut command = cargo(Path::new("."), &["doc", "--workspace"]);
+        command.env("RUSTDOCFLAGS", "-D warnings");
+        assert_eq!(
+            display(&command),
+            "RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace"
+        );
+    }
+}

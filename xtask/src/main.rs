@@ -1,0 +1,76 @@
+//! Workspace automation, run as `cargo xtask <task>` (the cargo-xtask convention, as in
+//! rust-analyzer): every check and chore of the project lives here, in Rust, instead of in
+//! shell scripts. `.cargo/config.toml` aliases `cargo xtask` to this binary.
+//!
+//! Tasks:
+//! - `ci`: the full check that `.ci/run` and the README point to.
+//! - `tidy`: the architecture invariants (dependency direction, workspace dependencies and lints,
+//!   crate docs), checked by reading the manifests.
+//!
+//! Each task is a module with a `run(root)` entry point; add new tasks to [`TASKS`] and `main`.
+
+mod ci;
+mod cmd;
+mod tidy;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Every task with its one-line description, in the order `cargo xtask help` lists them.
+const TASKS: &[(&str, &str)] = &[
+    (
+        "ci",
+        "full check: fmt, tidy, clippy -D warnings, tests, docs -D warnings",
+    ),
+    (
+        "tidy",
+        "architecture invariants: dependency direction, workspace deps and lints, crate docs",
+    ),
+];
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let task = args.first().map(String::as_str);
+    if let Some(extra) = args.get(1) {
+        eprintln!("xtask: error: unexpected argument `{extra}` (tasks take no arguments)");
+        return ExitCode::FAILURE;
+    }
+    let root = project_root();
+    let result = match task {
+        None | Some("help" | "-h" | "--help") => {
+            print!("{}", help());
+            Ok(())
+        }
+        Some("ci") => ci::run(&root),
+        Some("tidy") => tidy::run(&root),
+        Some(other) => {
+            eprint!("{}", help());
+            Err(anyhow::anyhow!("unknown task `{other}`"))
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("xtask: error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The usage text: one line per task.
+fn help() -> String {
+    let mut text = String::from("usage: cargo xtask <task>\n\ntasks:\n");
+    for (name, description) in TASKS {
+        text.push_str(&format!("  {name:<6} {description}\n"));
+    }
+    text.push_str("  help   print this list\n");
+    text
+}
+
+/// The workspace root: the parent of this crate's folder.
+fn project_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives one level below the workspace root")
+        .to_path_buf()
+}
