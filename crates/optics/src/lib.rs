@@ -38,5 +38,8 @@ pub mod testkit;
 
 pub use error::Error;
 pub use lens::{round_for_display, Field, LensModel, Order, Pupil, Wavefront};
-pub use otf::{cutoff_frequency, defocus_otf, defocus_otf_panels, mtf_diffraction_limited, pixel_mtf};
+pub use otf::{
+    BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_bessel, defocus_otf_panels,
+    defocus_otf_quadrature, mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
+};
 pub use poly::{GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work};

@@ -45,8 +45,8 @@ pub fn fiber_irradiance(power_w: f64, fiber_core_diameter_m: f64) -> f64 {
 /// rounding), steeper panels the closed form w·[ΔE/ΔR + (E_a R_b − E_b R_a)/ΔR² · ln(R_b/R_a)].
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] if the calibration wavelength is not finite and > 0 or R is not
-/// > 0 there; [`Error::ZeroResponsivity`] if R is 0 where E_norm > 0 (including outside the
+/// [`Error::InvalidParameter`] if the calibration wavelength is not finite and > 0, or if R is
+/// not positive there; [`Error::ZeroResponsivity`] if R is 0 where E_norm > 0 (including outside the
 /// responsivity table).
 pub fn broadband_correction(
     normalized: &Sampled,
@@ -215,6 +215,21 @@ mod tests {
         assert!((gl - cf).abs() < 1e-6, "{gl} vs {cf}");
         // Exact: ∫_0^1 (1 + 2t)/(1 + t) dt = 2 − ln 2.
         assert!((gl - (2.0 - 2f64.ln())).abs() < 1e-15);
+    }
+
+    #[test]
+    fn ratio_integral_closed_form_with_varying_spectrum() {
+        // ∫_0^1 (1 + 2t)/(1 + 9t) dt = 2/9 + (1·10 − 3·1)/81 · ln 10 = 0.4212110574192385,
+        // checked against 1000 Gauss–Legendre panels.
+        let cf = ratio_integral(0.0, 1.0, 1.0, 3.0, 1.0, 10.0);
+        assert!((cf - (2.0 / 9.0 + 7.0 / 81.0 * 10f64.ln())).abs() < 1e-15);
+        let fine: f64 = (0..1000)
+            .map(|i| {
+                let (a, b) = (f64::from(i) / 1000.0, f64::from(i + 1) / 1000.0);
+                quadrature::panel(a, b, |t| (1.0 + 2.0 * t) / (1.0 + 9.0 * t))
+            })
+            .sum();
+        assert!((cf - fine).abs() < 1e-14, "{cf} vs {fine}");
     }
 
     #[test]

@@ -6,7 +6,8 @@ use std::sync::OnceLock;
 pub(crate) const ORDER: usize = 16;
 
 /// Highest polynomial degree integrated exactly on one panel.
-pub(crate) const EXACT_DEGREE: usize = 2 * ORDER - 1;
+#[cfg(test)]
+const EXACT_DEGREE: usize = 2 * ORDER - 1;
 
 struct Rule {
     nodes: [f64; ORDER],

@@ -1,0 +1,281 @@
+//! End-to-end tests of the `asnr` binary: the paper scene, `--set`, `--json`, and bad input.
+//!
+//! Every bad-input case asserts a non-zero exit, no panic, and a message that names the file (or
+//! the `--set`), the key, the value and what is accepted.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/paper-theory.toml");
+const TABULATED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/tabulated.toml");
+
+fn asnr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_asnr")).args(args).output().expect("the asnr binary runs")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Runs `asnr` expecting failure; returns stderr after checking the exit code and that it did not panic.
+fn fails(args: &[&str]) -> String {
+    let out = asnr(args);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "args {args:?}: expected exit 1, stderr: {err}");
+    assert!(!err.contains("panicked"), "args {args:?} panicked: {err}");
+    assert!(err.starts_with("error: "), "args {args:?}: {err}");
+    err
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = asnr(args);
+    assert!(out.status.success(), "args {args:?}: {}", stderr(&out));
+    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
+}
+
+/// A scratch directory unique to one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("asnr-cli-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The paper scene with `from` replaced by `to`, written into `dir`.
+fn edited_paper(dir: &Path, from: &str, to: &str) -> PathBuf {
+    let text = std::fs::read_to_string(PAPER).unwrap();
+    assert!(text.contains(from), "the paper scene has no `{from}`");
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text.replacen(from, to, 1)).unwrap();
+    path
+}
+
+#[test]
+fn embedded_scene_prints_the_table() {
+    let out = asnr(&["evaluate"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    for needle in ["embedded paper scene", "ASNR", "SNR0 = √N", "mean MTF", "Fraunhofer", "M0 = τ1/T"] {
+        assert!(text.contains(needle), "missing {needle:?} in\n{text}");
+    }
+}
+
+#[test]
+fn embedded_scene_is_the_example_file() {
+    let a = json(&["evaluate", "--json"]);
+    let b = json(&["evaluate", PAPER, "--json"]);
+    assert_eq!(a["asnr"], b["asnr"]);
+    assert_eq!(a["mean_mtf"], b["mean_mtf"]);
+}
+
+#[test]
+fn json_has_the_documented_keys_and_they_hang_together() {
+    let v = json(&["evaluate", PAPER, "--set", "lens.f_number=2.5", "--set", "spectrum.range_nm=50", "--json"]);
+    for key in ["mean_mtf", "mtf_integral_cyc_per_mm", "snr0", "photoelectrons", "asnr"] {
+        assert!(v[key].as_f64().is_some_and(f64::is_finite), "{key}: {}", v[key]);
+    }
+    let f = |k: &str| v[k].as_f64().unwrap();
+    assert!((f("snr0") - f("photoelectrons").sqrt()).abs() < 1e-9 * f("snr0"));
+    assert!((f("asnr") - f("snr0") * f("mean_mtf")).abs() < 1e-12 * f("asnr"));
+    // ∫MTF dν = mean × ν_N, ν_N = 1/(2 × 5.2 µm) = 96.1538 cycles/mm
+    assert!((f("mtf_integral_cyc_per_mm") - f("mean_mtf") * 1e3 / (2.0 * 5.2)).abs() < 1e-9);
+    assert_eq!(v["fraunhofer"]["valid"], serde_json::Value::Bool(true));
+    // eq. S15: Δλ = 0.25 mm × 800 nm / (3.36 mm × 0.2) = 297.619 nm
+    let shift = v["fraunhofer"]["max_shift_nm"].as_f64().unwrap();
+    assert!((shift - 0.25 * 800.0 / (3.36 * 0.2)).abs() < 1e-6, "{shift}");
+    // eq. S13, S12: M0 = 0.15/0.55 = 0.2727, VG = 0.5714 (paper SI: 0.27, 57 %)
+    assert!((v["glare"]["m0"].as_f64().unwrap() - 0.15 / 0.55).abs() < 1e-12);
+    assert!((v["glare"]["vg"].as_f64().unwrap() - 4.0 / 7.0).abs() < 1e-12);
+}
+
+#[test]
+fn photoelectrons_grow_with_the_range_and_set_overrides_apply() {
+    // paper theory: photon count ∝ spectral range (flat source behind a Gaussian filter)
+    let n = |range: &str| {
+        json(&["evaluate", "--set", &format!("spectrum.range_nm={range}"), "--json"])["photoelectrons"]
+            .as_f64()
+            .unwrap()
+    };
+    let (n10, n100) = (n("10"), n("100"));
+    // ∫ λ G dλ = peak σ √(2π) (c + 0), σ ∝ range: the ratio is 10 to within the λ-weighting
+    assert!((n100 / n10 - 10.0).abs() < 1e-6, "{n10} {n100}");
+}
+
+#[test]
+fn integral_form_reports_cycles_per_mm() {
+    let v = json(&["evaluate", "--set", "options.form=integral", "--json"]);
+    assert_eq!(v["form"], "integral");
+    assert_eq!(v["asnr"], v["asnr_integral_cyc_per_mm"]);
+}
+
+#[test]
+fn tabulated_example_runs() {
+    let v = json(&["evaluate", TABULATED, "--json"]);
+    let m = v["mean_mtf"].as_f64().unwrap();
+    assert!(m > 0.0 && m < 1.0, "{m}");
+    assert!(v["glare"]["efficiency"].as_f64().unwrap() < v["glare"]["transmission"].as_f64().unwrap());
+}
+
+#[test]
+fn spectrum_reaching_zero_wavelength_is_reported_not_hidden() {
+    // large pixels keep the frequency range (and the run time) small: every wavelength here is
+    // defocused by nearly the whole aperture
+    let out = asnr(&[
+        "evaluate",
+        "--set",
+        "spectrum.center_nm=40",
+        "--set",
+        "spectrum.range_nm=100",
+        "--set",
+        "camera.pixel_pitch_um=50",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("reaches λ ≤ 0") && err.contains("was cut off"), "{err}");
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("NaN"));
+}
+
+// ---- bad input: one test per kind, each asserting the message ----
+
+#[test]
+fn bad_value_out_of_range() {
+    let err = fails(&["evaluate", PAPER, "--set", "lens.f_number=-2"]);
+    assert!(err.contains("paper-theory.toml (--set lens.f_number=-2): lens.f_number = -2: expected a number ≥ 0.5"), "{err}");
+}
+
+#[test]
+fn bad_value_not_finite() {
+    let err = fails(&["evaluate", PAPER, "--set", "spectrum.range_nm=nan"]);
+    assert!(err.contains("spectrum.range_nm = NaN: expected a width > 0 nm"), "{err}");
+    let err = fails(&["evaluate", PAPER, "--set", "camera.pixel_pitch_um=inf"]);
+    assert!(err.contains("camera.pixel_pitch_um = inf: expected a length > 0 µm"), "{err}");
+}
+
+#[test]
+fn bad_unknown_key_in_file() {
+    let dir = scratch("unknown-key");
+    let path = edited_paper(&dir, "f_number = 2.5", "f_number = 2.5\nfnumber = 2.8");
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("scene.toml: lens.fnumber: unknown field `fnumber`, expected one of"), "{err}");
+}
+
+#[test]
+fn bad_unknown_key_by_set() {
+    let err = fails(&["evaluate", PAPER, "--set", "camera.gain=2"]);
+    assert!(err.contains("(--set camera.gain=2): camera.gain: unknown field `gain`"), "{err}");
+}
+
+#[test]
+fn bad_wrong_type() {
+    let err = fails(&["evaluate", PAPER, "--set", "lens.f_number=fast"]);
+    assert!(err.contains("lens.f_number: invalid type: string \"fast\", expected f64"), "{err}");
+}
+
+#[test]
+fn bad_malformed_toml() {
+    let dir = scratch("malformed");
+    let path = dir.join("broken.toml");
+    std::fs::write(&path, "[lens\nf_number = 2.5\n").unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("broken.toml: malformed TOML") && err.contains("line 1"), "{err}");
+}
+
+#[test]
+fn bad_missing_file() {
+    let err = fails(&["evaluate", "/nonexistent/scene.toml"]);
+    assert!(err.contains("cannot read the scene file /nonexistent/scene.toml"), "{err}");
+}
+
+#[test]
+fn bad_empty_file() {
+    let dir = scratch("empty");
+    let path = dir.join("empty.toml");
+    std::fs::write(&path, "  \n").unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("empty.toml: the scene file is empty"), "{err}");
+}
+
+#[test]
+fn bad_missing_key() {
+    let dir = scratch("missing-key");
+    let path = edited_paper(&dir, "time_ms = 1.23", "");
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("exposure: missing field `time_ms`"), "{err}");
+}
+
+#[test]
+fn bad_efficiency_above_transmission() {
+    let err = fails(&["evaluate", PAPER, "--set", "lens.efficiency=0.7"]);
+    assert!(err.contains("efficiency τ1 = 0.7 exceeds transmission T = 0.55 at 800 nm: expected τ1 ≤ T ≤ 1"), "{err}");
+}
+
+#[test]
+fn bad_fraction_above_one() {
+    let err = fails(&["evaluate", PAPER, "--set", "camera.quantum_efficiency=1.5"]);
+    assert!(err.contains("camera.quantum_efficiency = 1.5: expected a fraction in [0, 1] or a CSV path"), "{err}");
+}
+
+#[test]
+fn bad_unreadable_csv() {
+    let err = fails(&["evaluate", PAPER, "--set", "lens.efficiency=no-such-table.csv"]);
+    assert!(err.contains("lens.efficiency = \"no-such-table.csv\": cannot read the CSV file"), "{err}");
+}
+
+#[test]
+fn bad_csv_non_increasing_wavelengths() {
+    let dir = scratch("non-increasing");
+    std::fs::write(dir.join("eff.csv"), "wavelength_nm,efficiency\n800,0.1\n790,0.12\n").unwrap();
+    let path = edited_paper(&dir, "efficiency = 0.15", "efficiency = \"eff.csv\"");
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("scene.toml: lens.efficiency = \"eff.csv\""), "{err}");
+    assert!(err.contains("line 3: wavelength 790 nm does not exceed the previous 800 nm"), "{err}");
+}
+
+#[test]
+fn bad_csv_not_numeric_and_too_short() {
+    let dir = scratch("csv-garbage");
+    std::fs::write(dir.join("qe.csv"), "wavelength_nm,qe\n800,0.2\n810,abc\n").unwrap();
+    let path = edited_paper(&dir, "quantum_efficiency = 0.2", "quantum_efficiency = \"qe.csv\"");
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("line 3: `810,abc` is not a pair of finite numbers"), "{err}");
+    std::fs::write(dir.join("qe.csv"), "wavelength_nm,qe\n800,0.2\n").unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("1 data rows; expected at least two rows"), "{err}");
+}
+
+#[test]
+fn bad_csv_value_out_of_range() {
+    let dir = scratch("csv-range");
+    std::fs::write(dir.join("f.csv"), "700,0.5\n800,1.2\n900,0.5\n").unwrap();
+    let text = std::fs::read_to_string(PAPER).unwrap();
+    let start = text.find("[spectrum]").unwrap();
+    let end = text.find("[camera]").unwrap();
+    let scene = format!("{}[spectrum]\nshape = \"table\"\ncsv = \"f.csv\"\n\n{}", &text[..start], &text[end..]);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, scene).unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.contains("spectrum.csv = \"f.csv\"") && err.contains("line 2: transmission 1.2 is out of range; expected [0, 1]"), "{err}");
+}
+
+#[test]
+fn bad_choice_and_inapplicable_key() {
+    let err = fails(&["evaluate", PAPER, "--set", "spectrum.shape=lorentzian"]);
+    assert!(err.contains("spectrum.shape = \"lorentzian\": expected \"gaussian\", \"tophat\", \"table\" or \"none\""), "{err}");
+    let err = fails(&["evaluate", PAPER, "--set", "source.temperature_k=3000"]);
+    assert!(err.contains("source.temperature_k does not apply to source.kind = \"flat\""), "{err}");
+}
+
+#[test]
+fn bad_set_syntax() {
+    let err = fails(&["evaluate", PAPER, "--set", "lens.f_number"]);
+    assert!(err.contains("--set lens.f_number: expected key=value"), "{err}");
+    let err = fails(&["evaluate", PAPER, "--set", "lens..f_number=2"]);
+    assert!(err.contains("is not a dotted key"), "{err}");
+    let err = fails(&["evaluate", PAPER, "--set", "lens.f_number.x=2"]);
+    assert!(err.contains("`lens.f_number` is a value, not a table"), "{err}");
+}
+
+#[test]
+fn bad_zero_signal_is_an_error_not_nan() {
+    let err = fails(&["evaluate", PAPER, "--set", "lens.efficiency=0"]);
+    assert!(err.contains("no detected signal"), "{err}");
+}
