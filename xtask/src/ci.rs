@@ -15,30 +15,12 @@ struct Step {
 
 /// The steps, in order: cheap checks first so a formatting slip fails in seconds.
 const STEPS: &[Step] = &[
-    Step {
-        name: "rustfmt and clippy installed",
-        run: ensure_components,
-    },
-    Step {
-        name: "fmt",
-        run: fmt,
-    },
-    Step {
-        name: "tidy",
-        run: run_tidy,
-    },
-    Step {
-        name: "clippy",
-        run: clippy,
-    },
-    Step {
-        name: "test",
-        run: test,
-    },
-    Step {
-        name: "doc",
-        run: doc,
-    },
+    Step { name: "rustfmt and clippy installed", run: ensure_components },
+    Step { name: "fmt", run: fmt },
+    Step { name: "tidy", run: run_tidy },
+    Step { name: "clippy", run: clippy },
+    Step { name: "test", run: test },
+    Step { name: "doc", run: doc },
 ];
 
 /// Run every step from the workspace `root`; print `ci: N passed, M failed` at the end.
@@ -63,9 +45,7 @@ fn ensure_components(root: &Path) -> Result<()> {
         return Ok(());
     }
     let mut rustup = std::process::Command::new("rustup");
-    rustup
-        .args(["component", "add", "rustfmt", "clippy"])
-        .current_dir(root);
+    rustup.args(["component", "add", "rustfmt", "clippy"]).current_dir(root);
     cmd::run(&mut rustup)?;
     for tool in ["fmt", "clippy"] {
         if !cmd::status(&mut cmd::cargo(root, &[tool, "--version"]))? {
@@ -85,18 +65,7 @@ fn run_tidy(root: &Path) -> Result<()> {
 }
 
 fn clippy(root: &Path) -> Result<()> {
-    cmd::run(&mut cmd::cargo(
-        root,
-        &[
-            "clippy",
-            "--workspace",
-            "--all-targets",
-            "--locked",
-            "--",
-            "-D",
-            "warnings",
-        ],
-    ))
+    cmd::run(&mut cmd::cargo(root, &["clippy", "--workspace", "--all-targets", "--locked", "--", "-D", "warnings"]))
 }
 
 fn test(root: &Path) -> Result<()> {

@@ -15,11 +15,7 @@ pub(crate) fn cargo(root: &Path, args: &[&str]) -> Command {
 
 /// Echo `command` to stderr, run it and fail unless it exits successfully.
 pub(crate) fn run(command: &mut Command) -> Result<()> {
-    if status(command)? {
-        Ok(())
-    } else {
-        bail!("`{}` failed", display(command))
-    }
+    if status(command)? { Ok(()) } else { bail!("`{}` failed", display(command)) }
 }
 
 /// Echo `command` to stderr, run it and report whether it exited successfully; an error only
@@ -27,9 +23,8 @@ pub(crate) fn run(command: &mut Command) -> Result<()> {
 pub(crate) fn status(command: &mut Command) -> Result<bool> {
     let shown = display(command);
     eprintln!("$ {shown}");
-    let status = command
-        .status()
-        .with_context(|| format!("could not start `{shown}` (is it installed and on PATH?)"))?;
+    let status =
+        command.status().with_context(|| format!("could not start `{shown}` (is it installed and on PATH?)"))?;
     Ok(status.success())
 }
 
@@ -38,11 +33,7 @@ pub(crate) fn display(command: &Command) -> String {
     let mut words = Vec::new();
     for (key, value) in command.get_envs() {
         if let Some(value) = value {
-            words.push(format!(
-                "{}={}",
-                key.to_string_lossy(),
-                quote(&value.to_string_lossy())
-            ));
+            words.push(format!("{}={}", key.to_string_lossy(), quote(&value.to_string_lossy())));
         }
     }
     words.push(quote(&command.get_program().to_string_lossy()));
@@ -52,11 +43,7 @@ pub(crate) fn display(command: &Command) -> String {
 
 /// Double-quote a word that contains whitespace or is empty.
 fn quote(word: &str) -> String {
-    if word.is_empty() || word.contains(char::is_whitespace) {
-        format!("\"{word}\"")
-    } else {
-        word.to_owned()
-    }
+    if word.is_empty() || word.contains(char::is_whitespace) { format!("\"{word}\"") } else { word.to_owned() }
 }
 
 #[cfg(test)]
@@ -67,9 +54,6 @@ mod tests {
     fn display_shows_env_program_and_quoted_args() {
         let mut command = cargo(Path::new("."), &["doc", "--workspace"]);
         command.env("RUSTDOCFLAGS", "-D warnings");
-        assert_eq!(
-            display(&command),
-            "RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace"
-        );
+        assert_eq!(display(&command), "RUSTDOCFLAGS=\"-D warnings\" cargo doc --workspace");
     }
 }

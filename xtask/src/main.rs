@@ -18,14 +18,8 @@ use std::process::ExitCode;
 
 /// Every task with its one-line description, in the order `cargo xtask help` lists them.
 const TASKS: &[(&str, &str)] = &[
-    (
-        "ci",
-        "full check: fmt, tidy, clippy -D warnings, tests, docs -D warnings",
-    ),
-    (
-        "tidy",
-        "architecture invariants: dependency direction, workspace deps and lints, crate docs",
-    ),
+    ("ci", "full check: fmt, tidy, clippy -D warnings, tests, docs -D warnings"),
+    ("tidy", "architecture invariants: dependency direction, workspace deps and lints, crate docs"),
 ];
 
 fn main() -> ExitCode {

@@ -43,9 +43,7 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
 pub(crate) fn run(root: &Path) -> Result<()> {
     let crates_dir = root.join("crates");
     let mut folders = Vec::new();
-    for entry in fs::read_dir(&crates_dir)
-        .with_context(|| format!("cannot list {}", crates_dir.display()))?
-    {
+    for entry in fs::read_dir(&crates_dir).with_context(|| format!("cannot list {}", crates_dir.display()))? {
         let entry = entry?;
         if entry.file_type()?.is_dir() {
             folders.push(format!("crates/{}", entry.file_name().to_string_lossy()));
@@ -62,11 +60,7 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         eprintln!("tidy: {violation}");
     }
     if !violations.is_empty() {
-        bail!(
-            "tidy: {} violation(s) in {} crates",
-            violations.len(),
-            folders.len()
-        );
+        bail!("tidy: {} violation(s) in {} crates", violations.len(), folders.len());
     }
     eprintln!("tidy: {} crates checked, no violations", folders.len());
     Ok(())
@@ -77,11 +71,8 @@ fn check_member(root: &Path, folder: &str, violations: &mut Vec<String>) -> Resu
     let name = folder.rsplit('/').next().unwrap_or(folder);
     let manifest_path = format!("{folder}/Cargo.toml");
     match fs::read_to_string(root.join(&manifest_path)) {
-        Ok(text) => violations.extend(
-            check_manifest(name, &text)
-                .into_iter()
-                .map(|problem| format!("{manifest_path}: {problem}")),
-        ),
+        Ok(text) => violations
+            .extend(check_manifest(name, &text).into_iter().map(|problem| format!("{manifest_path}: {problem}"))),
         Err(err) => violations.push(format!("{manifest_path}: cannot read: {err}")),
     }
 
@@ -93,12 +84,9 @@ fn check_member(root: &Path, folder: &str, violations: &mut Vec<String>) -> Resu
             continue;
         }
         crate_roots += 1;
-        let source =
-            fs::read_to_string(&full).with_context(|| format!("cannot read {}", full.display()))?;
+        let source = fs::read_to_string(&full).with_context(|| format!("cannot read {}", full.display()))?;
         if !opens_with_crate_doc(&source) {
-            violations.push(format!(
-                "{path}: does not open with a `//!` crate doc comment"
-            ));
+            violations.push(format!("{path}: does not open with a `//!` crate doc comment"));
         }
     }
     if crate_roots == 0 {
@@ -115,60 +103,37 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
     };
     let mut problems = Vec::new();
 
-    let package_name = manifest
-        .get("package")
-        .and_then(|package| package.get("name"))
-        .and_then(Value::as_str);
+    let package_name = manifest.get("package").and_then(|package| package.get("name")).and_then(Value::as_str);
     match package_name {
         Some(name) if name == folder => {}
-        Some(name) => problems.push(format!(
-            "package name `{name}` differs from its folder name `{folder}`"
-        )),
+        Some(name) => problems.push(format!("package name `{name}` differs from its folder name `{folder}`")),
         None => problems.push("has no [package] name".to_owned()),
     }
 
-    let lints_from_workspace = manifest
-        .get("lints")
-        .and_then(|lints| lints.get("workspace"))
-        .and_then(Value::as_bool)
-        == Some(true);
+    let lints_from_workspace =
+        manifest.get("lints").and_then(|lints| lints.get("workspace")).and_then(Value::as_bool) == Some(true);
     if !lints_from_workspace {
         problems.push("missing `[lints] workspace = true`".to_owned());
     }
 
-    let allowed = RULES
-        .iter()
-        .find(|(name, _)| *name == folder)
-        .map(|(_, allowed)| *allowed);
+    let allowed = RULES.iter().find(|(name, _)| *name == folder).map(|(_, allowed)| *allowed);
     if allowed.is_none() {
-        problems.push(format!(
-            "no dependency rule for `{folder}`: add it to RULES in xtask/src/tidy.rs"
-        ));
+        problems.push(format!("no dependency rule for `{folder}`: add it to RULES in xtask/src/tidy.rs"));
     }
 
     for table in dependency_tables(&manifest) {
         for (key, spec) in table.deps {
             // A renamed dependency (`alias = { package = "optics", .. }`) is still `optics`.
-            let name = spec
-                .get("package")
-                .and_then(Value::as_str)
-                .unwrap_or(key.as_str());
+            let name = spec.get("package").and_then(Value::as_str).unwrap_or(key.as_str());
             let is_project = RULES.iter().any(|(project, _)| *project == name);
             if is_project
                 && table.normal
                 && let Some(Allowed::Only(list)) = allowed
                 && !list.contains(&name)
             {
-                let list = if list.is_empty() {
-                    "none".to_owned()
-                } else {
-                    list.join(", ")
-                };
-                let place = if table.label == "[dependencies]" {
-                    String::new()
-                } else {
-                    format!(" in {}", table.label)
-                };
+                let list = if list.is_empty() { "none".to_owned() } else { list.join(", ") };
+                let place =
+                    if table.label == "[dependencies]" { String::new() } else { format!(" in {}", table.label) };
                 problems.push(format!("depends on {name}{place} (allowed: {list})"));
             }
             let from_workspace = spec.get("workspace").and_then(Value::as_bool) == Some(true);
@@ -195,30 +160,19 @@ struct DepTable<'a> {
 
 /// All dependency tables: top-level and `[target.<cfg>.*]`.
 fn dependency_tables(manifest: &Table) -> Vec<DepTable<'_>> {
-    const KINDS: [(&str, bool); 3] = [
-        ("dependencies", true),
-        ("build-dependencies", true),
-        ("dev-dependencies", false),
-    ];
+    const KINDS: [(&str, bool); 3] =
+        [("dependencies", true), ("build-dependencies", true), ("dev-dependencies", false)];
     let mut tables = Vec::new();
     for (kind, normal) in KINDS {
         if let Some(deps) = manifest.get(kind).and_then(Value::as_table) {
-            tables.push(DepTable {
-                label: format!("[{kind}]"),
-                normal,
-                deps,
-            });
+            tables.push(DepTable { label: format!("[{kind}]"), normal, deps });
         }
     }
     if let Some(targets) = manifest.get("target").and_then(Value::as_table) {
         for (cfg, target) in targets {
             for (kind, normal) in KINDS {
                 if let Some(deps) = target.get(kind).and_then(Value::as_table) {
-                    tables.push(DepTable {
-                        label: format!("[target.'{cfg}'.{kind}]"),
-                        normal,
-                        deps,
-                    });
+                    tables.push(DepTable { label: format!("[target.'{cfg}'.{kind}]"), normal, deps });
                 }
             }
         }
@@ -228,11 +182,7 @@ fn dependency_tables(manifest: &Table) -> Vec<DepTable<'_>> {
 
 /// Whether the first non-blank line of `source` is a `//!` doc comment.
 pub(crate) fn opens_with_crate_doc(source: &str) -> bool {
-    source
-        .lines()
-        .map(str::trim)
-        .find(|line| !line.is_empty())
-        .is_some_and(|line| line.starts_with("//!"))
+    source.lines().map(str::trim).find(|line| !line.is_empty()).is_some_and(|line| line.starts_with("//!"))
 }
 
 #[cfg(test)]

@@ -59,7 +59,11 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         if scene.camera().pixel_mtf() { ", with pixel MTF" } else { "" }
     );
     let _ = writeln!(s, "  ∫ MTF dν                    {:>12.4}   cycles/mm", r.mtf_integral_cyc_per_mm);
-    let _ = writeln!(s, "  ASNR, integral form         {:>12.2}   cycles/mm (eq. 1 as printed)", r.asnr_integral_cyc_per_mm);
+    let _ = writeln!(
+        s,
+        "  ASNR, integral form         {:>12.2}   cycles/mm (eq. 1 as printed)",
+        r.asnr_integral_cyc_per_mm
+    );
     let _ = writeln!(
         s,
         "  mean wavelength             {:>12.2}   nm (cutoff there {:.1} cycles/mm)",

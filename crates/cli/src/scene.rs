@@ -232,12 +232,10 @@ fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(String, String)
         if i + 1 == parts.len() {
             cursor.insert((*part).to_owned(), parsed.clone());
         } else {
-            let entry = cursor
-                .entry((*part).to_owned())
-                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-            cursor = entry.as_table_mut().ok_or_else(|| {
-                anyhow!("--set {arg}: `{}` is a value, not a table", parts[..=i].join("."))
-            })?;
+            let entry = cursor.entry((*part).to_owned()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            cursor = entry
+                .as_table_mut()
+                .ok_or_else(|| anyhow!("--set {arg}: `{}` is a value, not a table", parts[..=i].join(".")))?;
         }
     }
     Ok((key.to_owned(), arg.to_owned()))
@@ -248,7 +246,13 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
     let l = &raw.lens;
     match l.model.as_deref().unwrap_or("chromatic") {
         "chromatic" => {}
-        other => return Err(o.bad("lens.model", format!("\"{other}\""), "\"chromatic\" (a chromatic metalens or diffractive lens)")),
+        other => {
+            return Err(o.bad(
+                "lens.model",
+                format!("\"{other}\""),
+                "\"chromatic\" (a chromatic metalens or diffractive lens)",
+            ));
+        }
     }
     let f_number = o.number("lens.f_number", l.f_number, l.f_number >= 0.5, "a number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
     let f0 = o.number("lens.focal_length_mm", l.focal_length_mm, l.focal_length_mm > 0.0, "a length > 0 mm")?;
@@ -284,7 +288,8 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
         Curve::Constant(v) => Spectrum::Constant(v),
         Curve::Table(t) => Spectrum::Sampled(t),
     };
-    let camera = Camera::new(pitch * 1e-6, qe, c.pixel_mtf).map_err(|e| anyhow!("{}: [camera]: {e}", o.of("camera")))?;
+    let camera =
+        Camera::new(pitch * 1e-6, qe, c.pixel_mtf).map_err(|e| anyhow!("{}: [camera]: {e}", o.of("camera")))?;
 
     // [exposure], [options]
     let t = o.number("exposure.time_ms", raw.exposure.time_ms, raw.exposure.time_ms > 0.0, "a time > 0 ms")?;
@@ -369,28 +374,41 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
         "tophat" => {
             let (c, r, p) = band(o)?;
             if c - 0.5 * r <= 0.0 {
-                return Err(o.bad("spectrum.range_nm", r * 1e9, "a full width under twice spectrum.center_nm (the band must stay at λ > 0)"));
+                return Err(o.bad(
+                    "spectrum.range_nm",
+                    r * 1e9,
+                    "a full width under twice spectrum.center_nm (the band must stay at λ > 0)",
+                ));
             }
             Some(Spectrum::TopHat(
-                TopHat::new(c - 0.5 * r, c + 0.5 * r, p).map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
+                TopHat::new(c - 0.5 * r, c + 0.5 * r, p)
+                    .map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
             ))
         }
         "table" => {
-            for (k, v) in [("spectrum.center_nm", s.center_nm), ("spectrum.range_nm", s.range_nm), ("spectrum.peak", s.peak)] {
+            for (k, v) in
+                [("spectrum.center_nm", s.center_nm), ("spectrum.range_nm", s.range_nm), ("spectrum.peak", s.peak)]
+            {
                 o.forbid(k, &v, &ctx)?;
             }
             let f = o.require("spectrum.csv", s.csv.as_ref(), "the path of a CSV file: wavelength_nm, transmission")?;
             Some(Spectrum::Sampled(o.table("spectrum.csv", f, 1.0, "transmission")?))
         }
         "none" => {
-            for (k, v) in [("spectrum.center_nm", s.center_nm), ("spectrum.range_nm", s.range_nm), ("spectrum.peak", s.peak)] {
+            for (k, v) in
+                [("spectrum.center_nm", s.center_nm), ("spectrum.range_nm", s.range_nm), ("spectrum.peak", s.peak)]
+            {
                 o.forbid(k, &v, &ctx)?;
             }
             o.forbid("spectrum.csv", &s.csv, &ctx)?;
             None
         }
         other => {
-            return Err(o.bad("spectrum.shape", format!("\"{other}\""), "\"gaussian\", \"tophat\", \"table\" or \"none\""));
+            return Err(o.bad(
+                "spectrum.shape",
+                format!("\"{other}\""),
+                "\"gaussian\", \"tophat\", \"table\" or \"none\"",
+            ));
         }
     })
 }

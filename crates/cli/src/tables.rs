@@ -10,8 +10,7 @@ use radiometry::Sampled;
 /// `[lo, hi]` (`what` names them in messages).
 pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> {
     let shown = path.display();
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read the CSV file {shown}"))?;
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read the CSV file {shown}"))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))
@@ -27,10 +26,7 @@ pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> 
             continue;
         }
         if record.len() != 2 {
-            bail!(
-                "{shown}: line {line}: {} columns; expected two: wavelength_nm, value",
-                record.len()
-            );
+            bail!("{shown}: line {line}: {} columns; expected two: wavelength_nm, value", record.len());
         }
         let parse = |field: &str| field.parse::<f64>().ok().filter(|v| v.is_finite());
         match (parse(&record[0]), parse(&record[1])) {
@@ -38,12 +34,12 @@ pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> 
                 if wl <= 0.0 {
                     bail!("{shown}: line {line}: wavelength {wl} nm; expected a wavelength > 0 nm");
                 }
-                if let Some(&prev) = wavelengths.last() {
-                    if wl <= prev {
-                        bail!(
-                            "{shown}: line {line}: wavelength {wl} nm does not exceed the previous {prev} nm; wavelengths must increase strictly"
-                        );
-                    }
+                if let Some(&prev) = wavelengths.last()
+                    && wl <= prev
+                {
+                    bail!(
+                        "{shown}: line {line}: wavelength {wl} nm does not exceed the previous {prev} nm; wavelengths must increase strictly"
+                    );
                 }
                 if !(lo..=hi).contains(&v) {
                     bail!("{shown}: line {line}: {what} {v} is out of range; expected [{lo}, {hi}]");
@@ -59,10 +55,7 @@ pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> 
         }
     }
     if wavelengths.len() < 2 {
-        bail!(
-            "{shown}: {} data rows; expected at least two rows of wavelength_nm, value",
-            wavelengths.len()
-        );
+        bail!("{shown}: {} data rows; expected at least two rows of wavelength_nm, value", wavelengths.len());
     }
     let metres = wavelengths.iter().map(|wl| wl * 1e-9).collect();
     Sampled::new(metres, values).with_context(|| format!("{shown}: invalid table"))

@@ -139,7 +139,10 @@ fn spectrum_reaching_zero_wavelength_is_reported_not_hidden() {
 #[test]
 fn bad_value_out_of_range() {
     let err = fails(&["evaluate", PAPER, "--set", "lens.f_number=-2"]);
-    assert!(err.contains("paper-theory.toml (--set lens.f_number=-2): lens.f_number = -2: expected a number ≥ 0.5"), "{err}");
+    assert!(
+        err.contains("paper-theory.toml (--set lens.f_number=-2): lens.f_number = -2: expected a number ≥ 0.5"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -253,13 +256,20 @@ fn bad_csv_value_out_of_range() {
     let path = dir.join("scene.toml");
     std::fs::write(&path, scene).unwrap();
     let err = fails(&["evaluate", path.to_str().unwrap()]);
-    assert!(err.contains("spectrum.csv = \"f.csv\"") && err.contains("line 2: transmission 1.2 is out of range; expected [0, 1]"), "{err}");
+    assert!(
+        err.contains("spectrum.csv = \"f.csv\"")
+            && err.contains("line 2: transmission 1.2 is out of range; expected [0, 1]"),
+        "{err}"
+    );
 }
 
 #[test]
 fn bad_choice_and_inapplicable_key() {
     let err = fails(&["evaluate", PAPER, "--set", "spectrum.shape=lorentzian"]);
-    assert!(err.contains("spectrum.shape = \"lorentzian\": expected \"gaussian\", \"tophat\", \"table\" or \"none\""), "{err}");
+    assert!(
+        err.contains("spectrum.shape = \"lorentzian\": expected \"gaussian\", \"tophat\", \"table\" or \"none\""),
+        "{err}"
+    );
     let err = fails(&["evaluate", PAPER, "--set", "source.temperature_k=3000"]);
     assert!(err.contains("source.temperature_k does not apply to source.kind = \"flat\""), "{err}");
 }

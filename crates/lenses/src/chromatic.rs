@@ -53,11 +53,7 @@ pub struct ChromaticMetalens {
 }
 
 fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
-    if value.is_finite() && ok {
-        Ok(())
-    } else {
-        Err(Error::OutOfRange { name, value, expected })
-    }
+    if value.is_finite() && ok { Ok(()) } else { Err(Error::OutOfRange { name, value, expected }) }
 }
 
 impl ChromaticMetalens {
@@ -74,12 +70,7 @@ impl ChromaticMetalens {
     ) -> Result<Self, Error> {
         check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
         check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
-        check(
-            "design_wavelength",
-            design_wavelength_m,
-            design_wavelength_m > 0.0,
-            "a finite wavelength > 0 m",
-        )?;
+        check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
         for (name, curve) in [("efficiency", &efficiency), ("transmission", &transmission)] {
             let (lo, hi) = curve.range();
             check(name, lo, lo >= 0.0, "a fraction in [0, 1]")?;
@@ -121,8 +112,7 @@ impl ChromaticMetalens {
     /// Defocus at the pupil edge with the detector at `f0`:
     /// `W020(λ) = (D²/8)(1/f(λ) − 1/f0) = (λ/λ0 − 1) f0/(8 F#²)` (PHYSICS.md), m.
     pub fn defocus(&self, wavelength_m: f64) -> f64 {
-        (wavelength_m / self.design_wavelength - 1.0) * self.focal_length
-            / (8.0 * self.f_number * self.f_number)
+        (wavelength_m / self.design_wavelength - 1.0) * self.focal_length / (8.0 * self.f_number * self.f_number)
     }
 }
 
@@ -202,21 +192,17 @@ mod tests {
 
     #[test]
     fn rejects_efficiency_above_transmission() {
-        let e = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.6), Curve::Constant(0.55))
-            .unwrap_err();
+        let e = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.6), Curve::Constant(0.55)).unwrap_err();
         assert!(e.to_string().contains("τ1 = 0.6 exceeds transmission T = 0.55"), "{e}");
     }
 
     #[test]
     fn rejects_out_of_range_parameters() {
-        let e = ChromaticMetalens::new(0.3, 3.36e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(0.5))
-            .unwrap_err();
+        let e = ChromaticMetalens::new(0.3, 3.36e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(0.5)).unwrap_err();
         assert!(e.to_string().contains("f_number = 0.3 is out of range"), "{e}");
-        let e = ChromaticMetalens::new(2.5, f64::NAN, 800e-9, Curve::Constant(0.1), Curve::Constant(0.5))
-            .unwrap_err();
+        let e = ChromaticMetalens::new(2.5, f64::NAN, 800e-9, Curve::Constant(0.1), Curve::Constant(0.5)).unwrap_err();
         assert!(e.to_string().contains("focal_length = NaN"), "{e}");
-        let e = ChromaticMetalens::new(2.5, 3e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(1.5))
-            .unwrap_err();
+        let e = ChromaticMetalens::new(2.5, 3e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(1.5)).unwrap_err();
         assert!(e.to_string().contains("transmission = 1.5"), "{e}");
     }
 }

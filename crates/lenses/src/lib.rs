@@ -1,4 +1,4 @@
-//! Built-in lens families for the ASNR toolkit, each a [`LensModel`].
+//! Built-in lens families for the ASNR toolkit, each a [`optics::LensModel`].
 //!
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
 //!   (PHYSICS.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)

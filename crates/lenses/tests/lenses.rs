@@ -25,8 +25,7 @@ fn chromatic_metalens_conforms() {
 #[test]
 fn tabulated_efficiency_conforms() {
     let eff = Sampled::new(vec![700e-9, 800e-9, 900e-9], vec![0.05, 0.15, 0.08]).unwrap();
-    let lens =
-        ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Table(eff), Curve::Constant(0.55)).unwrap();
+    let lens = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Table(eff), Curve::Constant(0.55)).unwrap();
     check_lens(&lens, &band(800.0, 100.0)).unwrap();
 }
 

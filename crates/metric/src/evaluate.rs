@@ -112,8 +112,7 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
 
     let na = lens.numerical_aperture();
     let area = camera.pixel_pitch() * camera.pixel_pitch();
-    let photoelectrons =
-        area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
+    let photoelectrons = area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
     let snr0 = radiometry::shot_noise_snr(photoelectrons);
     let (mean_mtf, work) = poly.mean_mtf();
     let integral = mean_mtf * nyquist * 1e-3;

@@ -9,11 +9,7 @@ use serde::Serialize;
 use crate::Error;
 
 fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
-    if value.is_finite() && ok {
-        Ok(())
-    } else {
-        Err(Error::OutOfRange { name, value, expected })
-    }
+    if value.is_finite() && ok { Ok(()) } else { Err(Error::OutOfRange { name, value, expected }) }
 }
 
 /// The camera: pixel pitch, spectral quantum efficiency, and whether the pixel-aperture MTF

@@ -10,10 +10,7 @@ use crate::lens::{Field, LensModel};
 /// Geometric blur radius (m) of the worst imaging order at `wavelength_m`: `2 |W020| / NA`.
 pub fn blur_radius(lens: &dyn LensModel, wavelength_m: f64) -> f64 {
     let na = lens.numerical_aperture();
-    lens.orders(wavelength_m, Field::ON_AXIS)
-        .iter()
-        .map(|o| 2.0 * o.wavefront.defocus_m.abs() / na)
-        .fold(0.0, f64::max)
+    lens.orders(wavelength_m, Field::ON_AXIS).iter().map(|o| 2.0 * o.wavefront.defocus_m.abs() / na).fold(0.0, f64::max)
 }
 
 /// The largest wavelength shift from `reference_m` (usually the design wavelength) on either side

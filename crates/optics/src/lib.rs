@@ -9,7 +9,7 @@
 //!   its mean up to the Nyquist frequency (the quantity in paper eq. 1).
 //! - [`LensModel`] with its vocabulary ([`Order`], [`Pupil`], [`Wavefront`], [`Field`]).
 //! - [`fraunhofer`]: the validity check of paper SI eq. S15.
-//! - [`reference`]: slow, independent references the fast paths are tested against.
+//! - [`reference`](mod@reference): slow, independent references the fast paths are tested against.
 //!
 //! # Conventions
 //! SI units everywhere (wavelengths and lengths in m, spatial frequencies in cycles/m).
@@ -37,9 +37,9 @@ pub mod reference;
 pub mod testkit;
 
 pub use error::Error;
-pub use lens::{round_for_display, Field, LensModel, Order, Pupil, Wavefront};
+pub use lens::{Field, LensModel, Order, Pupil, Wavefront, round_for_display};
 pub use otf::{
-    BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_bessel, defocus_otf_panels,
-    defocus_otf_quadrature, mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
+    BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_bessel, defocus_otf_panels, defocus_otf_quadrature,
+    mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
-pub use poly::{GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work};
+pub use poly::{FREQUENCY_TOLERANCE, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work};

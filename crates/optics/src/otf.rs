@@ -173,11 +173,7 @@ pub fn defocus_otf_bessel(s: f64, a: f64) -> f64 {
 /// 100 % fill factor, along a pixel axis (`p` in m, `ν` in cycles/m).
 pub fn pixel_mtf(pixel_pitch_m: f64, frequency: f64) -> f64 {
     let x = PI * pixel_pitch_m * frequency;
-    if x.abs() < 1e-8 {
-        1.0 - x * x / 6.0
-    } else {
-        (x.sin() / x).abs()
-    }
+    if x.abs() < 1e-8 { 1.0 - x * x / 6.0 } else { (x.sin() / x).abs() }
 }
 
 /// Incoherent cutoff frequency `ν_c = 1/(λ F#)` in cycles/m.

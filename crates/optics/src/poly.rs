@@ -183,21 +183,13 @@ impl<'a> Polychromatic<'a> {
             });
         }
         let (lo, hi) = spectral_extent(detected)?;
-        let mut cuts: Vec<f64> = detected
-            .breakpoints()
-            .into_iter()
-            .chain(lens.breakpoints())
-            .filter(|&b| b > lo && b < hi)
-            .collect();
+        let mut cuts: Vec<f64> =
+            detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&b| b > lo && b < hi).collect();
         cuts.push(lo);
         cuts.push(hi);
         cuts.sort_by(f64::total_cmp);
         cuts.dedup();
-        let sigma_min = detected
-            .gaussians()
-            .iter()
-            .map(|g| g.sigma())
-            .fold(f64::INFINITY, f64::min);
+        let sigma_min = detected.gaussians().iter().map(|g| g.sigma()).fold(f64::INFINITY, f64::min);
 
         let mut this = Polychromatic {
             lens,
@@ -255,12 +247,8 @@ impl<'a> Polychromatic<'a> {
             return Err(Error::NoSignal { total: this.total_weight });
         }
         let threshold = SIGNIFICANT_WEIGHT * this.total_weight;
-        this.w020_max = this
-            .nodes
-            .iter()
-            .filter(|n| n.weight.abs() > threshold)
-            .map(|n| n.w020.abs())
-            .fold(0.0, f64::max);
+        this.w020_max =
+            this.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
         this.w020_rms = this.spectral_average(|_, w020| w020 * w020).sqrt();
         Ok(this)
     }
@@ -288,11 +276,9 @@ impl<'a> Polychromatic<'a> {
         }
         for order in self.lens.orders(lambda, self.field) {
             match order.pupil {
-                Pupil::Full => emit(Node {
-                    lambda,
-                    weight: q * rho * order.efficiency,
-                    w020: order.wavefront.defocus_m,
-                }),
+                Pupil::Full => {
+                    emit(Node { lambda, weight: q * rho * order.efficiency, w020: order.wavefront.defocus_m })
+                }
             }
         }
     }
@@ -367,11 +353,7 @@ impl<'a> Polychromatic<'a> {
     /// samples change sign is split at the located zeros first, so `|OTF_poly|` is only ever
     /// integrated where it is smooth. The initial panels are sized by the weighted-RMS defocus.
     pub fn mean_mtf(&self) -> (f64, Work) {
-        let mut work = Work {
-            spectral_panels: self.panels.len(),
-            spectral_nodes: self.nodes.len(),
-            ..Work::default()
-        };
+        let mut work = Work { spectral_panels: self.panels.len(), spectral_nodes: self.nodes.len(), ..Work::default() };
         // defocus phase rate in ν: d/dν [8π F# ν W020 (cos t − ν λ F#)] = 8π F# W020 (cos t − 2s)
         let phase_rate = 8.0 * PI * self.f_number * self.w020_rms;
         let tolerance = FREQUENCY_TOLERANCE / self.max_frequency;

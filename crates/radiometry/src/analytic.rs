@@ -1,9 +1,7 @@
 //! Analytic spectra: truncated Gaussian, top-hat, Planck blackbody.
 
 use crate::Error;
-use crate::constants::{
-    BOLTZMANN, PLANCK, SECOND_RADIATION_CONSTANT, SPEED_OF_LIGHT, STEFAN_BOLTZMANN,
-};
+use crate::constants::{BOLTZMANN, PLANCK, SECOND_RADIATION_CONSTANT, SPEED_OF_LIGHT, STEFAN_BOLTZMANN};
 use crate::error::{check, non_negative, positive};
 use core::f64::consts::{PI, SQRT_2};
 
@@ -30,11 +28,7 @@ impl Gaussian {
         positive("center", center_m, "m")?;
         positive("sigma", sigma_m, "m")?;
         non_negative("peak", peak, "")?;
-        Ok(Gaussian {
-            center_m,
-            sigma_m,
-            peak,
-        })
+        Ok(Gaussian { center_m, sigma_m, peak })
     }
 
     /// From the paper's spectral range (m): σ = range/(2√2) (paper, Results).
@@ -97,11 +91,7 @@ impl Gaussian {
     /// `peak · σ√(2π) · ½·erfc(−center/(σ√2))` (the erfc form avoids the cancellation of
     /// `1 − truncated_fraction` for wide spectra).
     pub fn integral(&self) -> f64 {
-        self.peak
-            * self.sigma_m
-            * SQRT_2PI
-            * 0.5
-            * libm::erfc(-self.center_m / (self.sigma_m * SQRT_2))
+        self.peak * self.sigma_m * SQRT_2PI * 0.5 * libm::erfc(-self.center_m / (self.sigma_m * SQRT_2))
     }
 }
 
@@ -120,12 +110,7 @@ impl TopHat {
     /// [`Error::InvalidParameter`] naming the bad parameter.
     pub fn new(lo_m: f64, hi_m: f64, value: f64) -> Result<Self, Error> {
         non_negative("lo", lo_m, "m")?;
-        check(
-            "hi",
-            hi_m,
-            hi_m.is_finite() && hi_m > lo_m,
-            format!("finite and > lo (= {lo_m:?}) m"),
-        )?;
+        check("hi", hi_m, hi_m.is_finite() && hi_m > lo_m, format!("finite and > lo (= {lo_m:?}) m"))?;
         non_negative("value", value, "")?;
         Ok(TopHat { lo_m, hi_m, value })
     }
@@ -290,10 +275,7 @@ mod tests {
             let x = SECOND_RADIATION_CONSTANT / l / 300.0;
             let log_form = (2.0 * SPEED_OF_LIGHT * BOLTZMANN * 300.0 / l.powi(4)) * x / x.exp_m1();
             let direct = b.spectral_radiance(l);
-            assert!(
-                (log_form / direct - 1.0).abs() < 1e-13,
-                "{l}: {log_form} vs {direct}"
-            );
+            assert!((log_form / direct - 1.0).abs() < 1e-13, "{l}: {log_form} vs {direct}");
         }
     }
 

@@ -64,12 +64,7 @@ pub fn broadband_correction(
     let (e_lo, e_hi) = normalized.range();
     let (r_lo, r_hi) = responsivity.range();
     let mut cuts: Vec<f64> = normalized.wavelengths().to_vec();
-    cuts.extend(
-        responsivity
-            .wavelengths()
-            .iter()
-            .filter(|&&w| w > e_lo && w < e_hi),
-    );
+    cuts.extend(responsivity.wavelengths().iter().filter(|&&w| w > e_lo && w < e_hi));
     cuts.sort_by(f64::total_cmp);
     cuts.dedup();
     let mut sum = 0.0;
@@ -80,11 +75,7 @@ pub fn broadband_correction(
             continue;
         }
         let inside = a >= r_lo && b <= r_hi;
-        let (ra, rb) = if inside {
-            (responsivity.value(a), responsivity.value(b))
-        } else {
-            (0.0, 0.0)
-        };
+        let (ra, rb) = if inside { (responsivity.value(a), responsivity.value(b)) } else { (0.0, 0.0) };
         // R and E are linear on the panel: find where R = 0 and E > 0.
         let bad = if ra == 0.0 && rb == 0.0 {
             Some(if ea > 0.0 { a } else { b })
@@ -108,17 +99,12 @@ fn ratio_integral(a: f64, b: f64, ea: f64, eb: f64, ra: f64, rb: f64) -> f64 {
     let width = b - a;
     let (lo, hi) = (ra.min(rb), ra.max(rb));
     if hi <= 2.0 * lo {
-        return quadrature::panel(0.0, 1.0, |t| (ea + (eb - ea) * t) / (ra + (rb - ra) * t))
-            * width;
+        return quadrature::panel(0.0, 1.0, |t| (ea + (eb - ea) * t) / (ra + (rb - ra) * t)) * width;
     }
     let de = eb - ea;
     let dr = rb - ra;
     let cross = ea * rb - eb * ra;
-    let log_term = if cross == 0.0 {
-        0.0
-    } else {
-        cross / (dr * dr) * (rb / ra).ln()
-    };
+    let log_term = if cross == 0.0 { 0.0 } else { cross / (dr * dr) * (rb / ra).ln() };
     width * (de / dr + log_term)
 }
 
@@ -129,10 +115,7 @@ pub fn corrected_irradiance(correction: f64, irradiance: f64) -> f64 {
 
 /// Paper SI eq. S5: absolute spectral irradiance E_λ = E_norm(λ) · E_accurate, W/(m² m), for a
 /// normalized spectrum (1/m) and an irradiance (W/m²). Scaling follows [`Sampled::scaled`].
-pub fn absolute_spectral_irradiance(
-    normalized: &Sampled,
-    corrected_irradiance_w_m2: f64,
-) -> Sampled {
+pub fn absolute_spectral_irradiance(normalized: &Sampled, corrected_irradiance_w_m2: f64) -> Sampled {
     normalized.scaled(corrected_irradiance_w_m2)
 }
 
@@ -172,11 +155,7 @@ pub fn photoelectrons_monochromatic(
     wavelength_m: f64,
     camera_irradiance_w_m2: f64,
 ) -> f64 {
-    pixel_area_m2
-        * exposure_s
-        * quantum_efficiency
-        * camera_irradiance_w_m2
-        * photon_flux_per_watt(wavelength_m)
+    pixel_area_m2 * exposure_s * quantum_efficiency * camera_irradiance_w_m2 * photon_flux_per_watt(wavelength_m)
 }
 
 /// Paper SI eq. S8: N = A t/(h c) ∫ η(λ) λ E_cam(λ) dλ, photoelectrons, for a pixel area (m²), an

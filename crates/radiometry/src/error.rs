@@ -79,47 +79,20 @@ pub enum Error {
 }
 
 /// `Ok(x)` when `x` passes `ok`, else an [`Error::InvalidParameter`].
-pub(crate) fn check(
-    name: &'static str,
-    value: f64,
-    ok: bool,
-    accepted: impl Into<String>,
-) -> Result<f64, Error> {
-    if ok {
-        Ok(value)
-    } else {
-        Err(Error::InvalidParameter {
-            name,
-            value,
-            accepted: accepted.into(),
-        })
-    }
+pub(crate) fn check(name: &'static str, value: f64, ok: bool, accepted: impl Into<String>) -> Result<f64, Error> {
+    if ok { Ok(value) } else { Err(Error::InvalidParameter { name, value, accepted: accepted.into() }) }
 }
 
 /// Finite and > 0, with the given unit in the message.
 pub(crate) fn positive(name: &'static str, value: f64, unit: &str) -> Result<f64, Error> {
-    check(
-        name,
-        value,
-        value.is_finite() && value > 0.0,
-        format!("finite and > 0{}", unit_suffix(unit)),
-    )
+    check(name, value, value.is_finite() && value > 0.0, format!("finite and > 0{}", unit_suffix(unit)))
 }
 
 /// Finite and >= 0, with the given unit in the message.
 pub(crate) fn non_negative(name: &'static str, value: f64, unit: &str) -> Result<f64, Error> {
-    check(
-        name,
-        value,
-        value.is_finite() && value >= 0.0,
-        format!("finite and >= 0{}", unit_suffix(unit)),
-    )
+    check(name, value, value.is_finite() && value >= 0.0, format!("finite and >= 0{}", unit_suffix(unit)))
 }
 
 fn unit_suffix(unit: &str) -> String {
-    if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    }
+    if unit.is_empty() { String::new() } else { format!(" {unit}") }
 }

@@ -54,12 +54,9 @@ mod spectrum;
 
 pub use analytic::{Blackbody, Gaussian, TopHat};
 pub use chain::{
-    absolute_spectral_irradiance, broadband_correction, camera_irradiance, corrected_irradiance,
-    fiber_irradiance, normalize, photoelectrons, photoelectrons_monochromatic,
-    photon_flux_per_watt, shot_noise_snr, target_radiance,
+    absolute_spectral_irradiance, broadband_correction, camera_irradiance, corrected_irradiance, fiber_irradiance,
+    normalize, photoelectrons, photoelectrons_monochromatic, photon_flux_per_watt, shot_noise_snr, target_radiance,
 };
 pub use error::Error;
 pub use sampled::Sampled;
-pub use spectrum::{
-    GAUSSIAN_WINDOW_SIGMAS, NEGLIGIBLE_TRUNCATION, QuadratureNode, Spectrum, Truncation,
-};
+pub use spectrum::{GAUSSIAN_WINDOW_SIGMAS, NEGLIGIBLE_TRUNCATION, QuadratureNode, Spectrum, Truncation};

@@ -24,15 +24,10 @@ impl Sampled {
     /// [`Error::NotIncreasing`].
     pub fn new(wavelengths_m: Vec<f64>, values: Vec<f64>) -> Result<Sampled, Error> {
         if wavelengths_m.len() != values.len() {
-            return Err(Error::LengthMismatch {
-                wavelengths: wavelengths_m.len(),
-                values: values.len(),
-            });
+            return Err(Error::LengthMismatch { wavelengths: wavelengths_m.len(), values: values.len() });
         }
         if wavelengths_m.len() < 2 {
-            return Err(Error::TooFewSamples {
-                count: wavelengths_m.len(),
-            });
+            return Err(Error::TooFewSamples { count: wavelengths_m.len() });
         }
         for (index, (&w, &v)) in wavelengths_m.iter().zip(&values).enumerate() {
             if !(w.is_finite() && w > 0.0) {
@@ -44,12 +39,7 @@ impl Sampled {
                 });
             }
             if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::InvalidSample {
-                    quantity: "value",
-                    index,
-                    value: v,
-                    accepted: "finite and >= 0",
-                });
+                return Err(Error::InvalidSample { quantity: "value", index, value: v, accepted: "finite and >= 0" });
             }
             if index > 0 && w <= wavelengths_m[index - 1] {
                 return Err(Error::NotIncreasing {
@@ -60,10 +50,7 @@ impl Sampled {
                 });
             }
         }
-        Ok(Sampled {
-            wavelengths: wavelengths_m,
-            values,
-        })
+        Ok(Sampled { wavelengths: wavelengths_m, values })
     }
 
     /// Sample wavelengths, m (strictly increasing).
@@ -78,17 +65,12 @@ impl Sampled {
 
     /// First and last sample wavelengths, m.
     pub fn range(&self) -> (f64, f64) {
-        (
-            self.wavelengths[0],
-            self.wavelengths[self.wavelengths.len() - 1],
-        )
+        (self.wavelengths[0], self.wavelengths[self.wavelengths.len() - 1])
     }
 
     /// Index i ≥ 1 of the segment [w[i−1], w[i]] holding `l` (clamped to the first/last segment).
     fn segment(&self, l: f64) -> usize {
-        self.wavelengths
-            .partition_point(|&w| w <= l)
-            .clamp(1, self.wavelengths.len() - 1)
+        self.wavelengths.partition_point(|&w| w <= l).clamp(1, self.wavelengths.len() - 1)
     }
 
     /// Linear interpolation on segment i (valid for l inside it).
@@ -118,11 +100,7 @@ impl Sampled {
     /// ∫ value dλ over the whole table (trapezoid rule, exact for the piecewise-linear model).
     /// Unit: value unit × m.
     pub fn integral(&self) -> f64 {
-        self.wavelengths
-            .windows(2)
-            .zip(self.values.windows(2))
-            .map(|(x, y)| 0.5 * (x[1] - x[0]) * (y[0] + y[1]))
-            .sum()
+        self.wavelengths.windows(2).zip(self.values.windows(2)).map(|(x, y)| 0.5 * (x[1] - x[0]) * (y[0] + y[1])).sum()
     }
 
     /// ∫_lo^hi value dλ, exact for the piecewise-linear model (zero outside the table). Oriented:
@@ -160,10 +138,7 @@ impl Sampled {
 
     /// Largest sample value.
     pub fn max_value(&self) -> f64 {
-        self.values
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, f64::max)
+        self.values.iter().copied().fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// Smallest sample value (the spectrum itself is 0 outside the table).
@@ -178,10 +153,7 @@ impl Sampled {
     /// propagates) rather than being silently replaced: validate user-supplied factors with
     /// [`Sampled::try_scaled`].
     pub fn scaled(&self, k: f64) -> Sampled {
-        Sampled {
-            wavelengths: self.wavelengths.clone(),
-            values: self.values.iter().map(|v| v * k).collect(),
-        }
+        Sampled { wavelengths: self.wavelengths.clone(), values: self.values.iter().map(|v| v * k).collect() }
     }
 
     /// [`Sampled::scaled`] with validation: `k` must be finite and ≥ 0 and every scaled value
@@ -193,12 +165,7 @@ impl Sampled {
         crate::error::non_negative("scale factor", k, "")?;
         let s = self.scaled(k);
         if let Some((index, &value)) = s.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::InvalidSample {
-                quantity: "value",
-                index,
-                value,
-                accepted: "finite and >= 0",
-            });
+            return Err(Error::InvalidSample { quantity: "value", index, value, accepted: "finite and >= 0" });
         }
         Ok(s)
     }
@@ -237,10 +204,7 @@ mod tests {
         assert!((s.integral_between(750e-9, 850e-9) - 1.5e-7).abs() < 1e-21);
         assert!((s.integral_between(850e-9, 750e-9) + 1.5e-7).abs() < 1e-21);
         assert_eq!(s.integral_between(1e-6, 2e-6), 0.0);
-        assert_eq!(
-            s.integral_between(f64::NEG_INFINITY, f64::INFINITY),
-            s.integral()
-        );
+        assert_eq!(s.integral_between(f64::NEG_INFINITY, f64::INFINITY), s.integral());
         assert!(s.integral_between(f64::NAN, 1.0).is_nan());
     }
 

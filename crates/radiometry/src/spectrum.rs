@@ -155,19 +155,16 @@ impl Spectrum {
     /// interval (x, x).
     pub fn support(&self) -> (f64, f64) {
         match self {
-            Spectrum::Constant(_)
-            | Spectrum::Linear { .. }
-            | Spectrum::Gaussian(_)
-            | Spectrum::Blackbody { .. } => (0.0, f64::INFINITY),
+            Spectrum::Constant(_) | Spectrum::Linear { .. } | Spectrum::Gaussian(_) | Spectrum::Blackbody { .. } => {
+                (0.0, f64::INFINITY)
+            }
             Spectrum::Sampled(s) => s.range(),
             Spectrum::TopHat(t) => (t.lo(), t.hi()),
             Spectrum::Product(fs) => {
                 let (lo, hi) = fs
                     .iter()
                     .map(Spectrum::support)
-                    .fold((0.0, f64::INFINITY), |(lo, hi), (a, b)| {
-                        (f64::max(lo, a), f64::min(hi, b))
-                    });
+                    .fold((0.0, f64::INFINITY), |(lo, hi), (a, b)| (f64::max(lo, a), f64::min(hi, b)));
                 if lo > hi { (lo, lo) } else { (lo, hi) }
             }
         }
@@ -356,10 +353,7 @@ impl Spectrum {
 
 fn push(nodes: &mut Vec<QuadratureNode>, wavelength_m: f64, weight: f64) {
     if weight != 0.0 {
-        nodes.push(QuadratureNode {
-            wavelength_m,
-            weight,
-        });
+        nodes.push(QuadratureNode { wavelength_m, weight });
     }
 }
 
@@ -385,10 +379,8 @@ mod tests {
     #[test]
     fn product_flattens() {
         let a = Spectrum::Constant(2.0);
-        let p = Spectrum::product(vec![
-            a.clone(),
-            Spectrum::Product(vec![a.clone(), Spectrum::Product(vec![a.clone()])]),
-        ]);
+        let p =
+            Spectrum::product(vec![a.clone(), Spectrum::Product(vec![a.clone(), Spectrum::Product(vec![a.clone()])])]);
         assert_eq!(p, Spectrum::Product(vec![a.clone(), a.clone(), a]));
         assert_eq!(p.value(1e-6), 8.0);
         assert_eq!(p.value(0.0), 0.0);
@@ -419,17 +411,10 @@ mod tests {
     fn single_factor_integrals_are_closed_form() {
         let g = Gaussian::new(800e-9, 10e-9, 3.0).unwrap();
         assert_eq!(Spectrum::Gaussian(g).integral(), g.integral());
-        assert_eq!(
-            Spectrum::product(vec![Spectrum::Constant(2.0), g.into()]).integral(),
-            2.0 * g.integral()
-        );
+        assert_eq!(Spectrum::product(vec![Spectrum::Constant(2.0), g.into()]).integral(), 2.0 * g.integral());
         assert_eq!(Spectrum::Constant(2.0).integral(), f64::INFINITY);
         assert_eq!(Spectrum::Constant(0.0).integral(), 0.0);
-        assert!(
-            Spectrum::Linear { slope: 1.0 }
-                .quadrature_nodes()
-                .is_empty()
-        );
+        assert!(Spectrum::Linear { slope: 1.0 }.quadrature_nodes().is_empty());
     }
 
     #[test]
@@ -450,10 +435,7 @@ mod tests {
         let narrow = Spectrum::Gaussian(Gaussian::new(800e-9, 10e-9, 1.0).unwrap());
         assert!(narrow.truncations().is_empty());
         // Cut by a table covering only center ± 1σ: 2 × Φ(−1) = 0.31731050786291415 lost.
-        let cut = Spectrum::product(vec![
-            narrow.clone(),
-            table(&[790.0, 810.0], &[1.0, 1.0]).into(),
-        ]);
+        let cut = Spectrum::product(vec![narrow.clone(), table(&[790.0, 810.0], &[1.0, 1.0]).into()]);
         let t = cut.truncations();
         assert_eq!(t.len(), 1);
         assert!((t[0].fraction - 0.317_310_507_862_914_15).abs() < 1e-12);

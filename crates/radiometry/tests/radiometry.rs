@@ -44,20 +44,13 @@ fn s1_normalize_triangle() {
 #[test]
 fn s1_zero_spectrum_is_an_error() {
     let zero = table(&[700.0, 900.0], &[0.0, 0.0]);
-    assert_eq!(
-        err_text(normalize(&zero)),
-        "the integral of the relative spectrum must be finite and > 0, got 0.0"
-    );
+    assert_eq!(err_text(normalize(&zero)), "the integral of the relative spectrum must be finite and > 0, got 0.0");
 }
 
 #[test]
 fn s2_fiber_irradiance() {
     // P = 1 mW on a 400 µm core: E = 1e-3 / (π (200e-6)²) = 7957.747154594767 W/m².
-    assert_relative_eq!(
-        fiber_irradiance(1e-3, 400e-6),
-        7_957.747_154_594_767,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(fiber_irradiance(1e-3, 400e-6), 7_957.747_154_594_767, max_relative = EXACT);
 }
 
 #[test]
@@ -65,11 +58,7 @@ fn s3_flat_responsivity_gives_one() {
     // R constant: corr = ∫ E_norm dλ × R/R = 1.
     let e = normalize(&table(&[700.0, 800.0, 900.0], &[0.0, 2.0, 0.0])).unwrap();
     let r = table(&[400.0, 1100.0], &[0.3, 0.3]);
-    assert_relative_eq!(
-        broadband_correction(&e, &r, nm(800.0)).unwrap(),
-        1.0,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(broadband_correction(&e, &r, nm(800.0)).unwrap(), 1.0, max_relative = EXACT);
 }
 
 #[test]
@@ -82,11 +71,7 @@ fn s3_ramp_responsivity() {
     assert_relative_eq!(corr, 1.039_720_770_839_917_9, max_relative = EXACT);
     // The same responsivity with an extra sample on the line: same result.
     let r3 = table(&[700.0, 750.0, 900.0], &[1.0, 1.25, 2.0]);
-    assert_relative_eq!(
-        broadband_correction(&e, &r3, nm(800.0)).unwrap(),
-        corr,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(broadband_correction(&e, &r3, nm(800.0)).unwrap(), corr, max_relative = EXACT);
 }
 
 #[test]
@@ -144,11 +129,7 @@ fn s4_s5_absolute_spectral_irradiance() {
     // S5 on the normalized triangle (peak 1e7 per m): peak 8.273835e10 W/(m² m), area = E_acc.
     let n = normalize(&table(&[700.0, 800.0, 900.0], &[0.0, 2.0, 0.0])).unwrap();
     let abs = absolute_spectral_irradiance(&n, e_acc);
-    assert_relative_eq!(
-        abs.values()[1],
-        8.273_835_005_724_435e10,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(abs.values()[1], 8.273_835_005_724_435e10, max_relative = EXACT);
     assert_relative_eq!(abs.integral(), e_acc, max_relative = EXACT);
 }
 
@@ -156,21 +137,13 @@ fn s4_s5_absolute_spectral_irradiance() {
 fn s6_target_radiance() {
     // E = 1 W/(m² nm) = 1e9 W/(m² m), T = 0.9, f = 50 mm, D = 10 mm: (2f/D)² = 100,
     // L = 1e9 / (π 0.9) × 100 = 3.5367765131532297e10 W/(m² sr m).
-    assert_relative_eq!(
-        target_radiance(1e9, 0.9, 50e-3, 10e-3),
-        3.536_776_513_153_229_7e10,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(target_radiance(1e9, 0.9, 50e-3, 10e-3), 3.536_776_513_153_229_7e10, max_relative = EXACT);
 }
 
 #[test]
 fn s7_camera_irradiance() {
     // L = 1e10 W/(m² sr m), τ1 = 0.15, NA = 0.2: π × 1e10 × 0.15 × 0.04 = 1.8849555921538759e8.
-    assert_relative_eq!(
-        camera_irradiance(1e10, 0.15, 0.2),
-        1.884_955_592_153_875_9e8,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(camera_irradiance(1e10, 0.15, 0.2), 1.884_955_592_153_875_9e8, max_relative = EXACT);
 }
 
 #[test]
@@ -184,11 +157,7 @@ fn s6_then_s7_round_trip_through_a_unit_relay() {
 #[test]
 fn s8_photon_flux_and_monochromatic_count() {
     // λ/(hc) at 800 nm = 800e-9 / (6.62607015e-34 × 299792458) = 4.027293254034167e18 per J.
-    assert_relative_eq!(
-        photon_flux_per_watt(800e-9),
-        4.027_293_254_034_167e18,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(photon_flux_per_watt(800e-9), 4.027_293_254_034_167e18, max_relative = EXACT);
     // 5.2 µm pixel (A = 2.704e-11 m²), t = 10 ms, η = 0.5, E = 1 mW/m² at 800 nm:
     // N = 2.704e-11 × 1e-2 × 0.5 × 1e-3 × 4.027293254034167e18 = 544.4900479454194.
     assert_relative_eq!(
@@ -239,29 +208,15 @@ fn full_chain_matches_closed_form() {
     let corr = broadband_correction(&n_rel, &r, nm(800.0)).unwrap();
     let e_acc = corrected_irradiance(corr, fiber_irradiance(1e-6, 400e-6));
     let e_lambda = absolute_spectral_irradiance(&n_rel, e_acc);
-    let radiance: Vec<f64> = e_lambda
-        .values()
-        .iter()
-        .map(|&e| target_radiance(e, 0.9, 50e-3, 10e-3))
-        .collect();
-    let cam: Vec<f64> = radiance
-        .iter()
-        .map(|&l| camera_irradiance(l, 0.15, 0.2))
-        .collect();
+    let radiance: Vec<f64> = e_lambda.values().iter().map(|&e| target_radiance(e, 0.9, 50e-3, 10e-3)).collect();
+    let cam: Vec<f64> = radiance.iter().map(|&l| camera_irradiance(l, 0.15, 0.2)).collect();
     let cam = Sampled::new(e_lambda.wavelengths().to_vec(), cam).unwrap();
-    let n = photoelectrons(
-        2.704e-11,
-        1e-2,
-        &Spectrum::Sampled(cam),
-        &Spectrum::Constant(0.5),
-    );
+    let n = photoelectrons(2.704e-11, 1e-2, &Spectrum::Sampled(cam), &Spectrum::Constant(0.5));
 
     let e_flat = 1e-6 / (PI * 200e-6 * 200e-6) / 200e-9;
     let e_cam = PI * (e_flat / (0.9 * PI) * 100.0) * 0.15 * 0.04;
-    let want = 2.704e-11 * 1e-2 * 0.5 / (PLANCK * SPEED_OF_LIGHT)
-        * e_cam
-        * (nm(900.0).powi(2) - nm(700.0).powi(2))
-        / 2.0;
+    let want =
+        2.704e-11 * 1e-2 * 0.5 / (PLANCK * SPEED_OF_LIGHT) * e_cam * (nm(900.0).powi(2) - nm(700.0).powi(2)) / 2.0;
     assert_relative_eq!(n, want, max_relative = EXACT);
 }
 
@@ -273,11 +228,7 @@ fn table_integrals_exact_against_analytic() {
     // ∫ = (3² − 1²)/2 µm = 4e-6 m; from 1.2 to 2.5 µm: (2.5² − 1.2²)/2 = 2.405e-6 m.
     let s = Sampled::new(vec![1e-6, 1.5e-6, 3e-6], vec![1.0, 1.5, 3.0]).unwrap();
     assert_relative_eq!(s.integral(), 4e-6, max_relative = EXACT);
-    assert_relative_eq!(
-        s.integral_between(1.2e-6, 2.5e-6),
-        2.405e-6,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(s.integral_between(1.2e-6, 2.5e-6), 2.405e-6, max_relative = EXACT);
     assert_relative_eq!(s.value(2.2e-6), 2.2, max_relative = EXACT);
 }
 
@@ -295,21 +246,12 @@ fn products_of_tables_exact_against_analytic_polynomial() {
 /// Slow reference: ∫ a·b·λ dλ for two tables, by Simpson's rule (exact for cubics) on every
 /// segment of the merged grid, where each table is either one straight line or absent.
 fn reference_product_integral(a: &Sampled, b: &Sampled) -> f64 {
-    let mut grid: Vec<f64> = a
-        .wavelengths()
-        .iter()
-        .chain(b.wavelengths())
-        .copied()
-        .collect();
+    let mut grid: Vec<f64> = a.wavelengths().iter().chain(b.wavelengths()).copied().collect();
     grid.sort_by(f64::total_cmp);
     grid.dedup();
     let on = |t: &Sampled, x0: f64, x1: f64, x: f64| {
         let (first, last) = t.range();
-        if x0 >= first && x1 <= last {
-            t.value(x)
-        } else {
-            0.0
-        }
+        if x0 >= first && x1 <= last { t.value(x) } else { 0.0 }
     };
     grid.windows(2)
         .map(|w| {
@@ -329,11 +271,7 @@ fn gaussian_range_and_integral() {
     assert_relative_eq!(g.sigma(), 17.677_669_529_663_685e-9, max_relative = EXACT);
     assert_relative_eq!(g.range(), 2.0 * SQRT_2 * g.sigma(), max_relative = EXACT);
     // Far from λ = 0: area = peak σ √(2π).
-    assert_relative_eq!(
-        g.integral(),
-        2.0 * g.sigma() * (2.0 * PI).sqrt(),
-        max_relative = EXACT
-    );
+    assert_relative_eq!(g.integral(), 2.0 * g.sigma() * (2.0 * PI).sqrt(), max_relative = EXACT);
     assert_eq!(g.truncated_fraction(), 0.0);
 }
 
@@ -342,11 +280,7 @@ fn gaussian_truncated_at_zero() {
     // center 10 nm, σ 20 nm: fraction = ½ erfc(0.5/√2) = 0.3085375387259869 (Φ(−0.5)),
     // area = σ√(2π)(1 − 0.30853...) = 3.4664787125507689e-8 m for peak 1.
     let g = Gaussian::new(nm(10.0), nm(20.0), 1.0).unwrap();
-    assert_relative_eq!(
-        g.truncated_fraction(),
-        0.308_537_538_725_986_9,
-        max_relative = EXACT
-    );
+    assert_relative_eq!(g.truncated_fraction(), 0.308_537_538_725_986_9, max_relative = EXACT);
     assert_relative_eq!(g.integral(), 3.466_478_712_550_769e-8, max_relative = EXACT);
     let s = Spectrum::Gaussian(g);
     let t = s.truncations();
@@ -363,11 +297,7 @@ fn gaussian_times_linear_is_center_times_area() {
     // ∫ λ G(λ) dλ = center × peak σ√(2π) for an untruncated Gaussian.
     let g = Gaussian::new(nm(800.0), nm(20.0), 3.0).unwrap();
     let s = Spectrum::product(vec![g.into(), Spectrum::Linear { slope: 1.0 }]);
-    assert_relative_eq!(
-        s.integral(),
-        nm(800.0) * g.integral(),
-        max_relative = QUADRATURE
-    );
+    assert_relative_eq!(s.integral(), nm(800.0) * g.integral(), max_relative = QUADRATURE);
     // Quadrature nodes carry the same total weight.
     let total: f64 = s.quadrature_nodes().iter().map(|n| n.weight).sum();
     assert_relative_eq!(total, s.integral(), max_relative = EXACT);
@@ -380,18 +310,10 @@ fn planck_golden_values() {
     // 10 µm, 300 K: 9.924 W/(m² sr µm) (textbook thermal-IR value); 30-digit value
     // 9.92403333007069466e6 W/(m² sr m).
     let room = Blackbody::new(300.0).unwrap();
-    assert_relative_eq!(
-        room.spectral_radiance(10e-6),
-        9.924_033_330_070_695e6,
-        max_relative = 1e-12
-    );
+    assert_relative_eq!(room.spectral_radiance(10e-6), 9.924_033_330_070_695e6, max_relative = 1e-12);
     // 500 nm, 5778 K (solar photosphere): 2.6375669866614797e13 W/(m² sr m).
     let sun = Blackbody::new(5778.0).unwrap();
-    assert_relative_eq!(
-        sun.spectral_radiance(500e-9),
-        2.637_566_986_661_479_7e13,
-        max_relative = 1e-12
-    );
+    assert_relative_eq!(sun.spectral_radiance(500e-9), 2.637_566_986_661_479_7e13, max_relative = 1e-12);
 }
 
 #[test]
@@ -432,38 +354,20 @@ fn stefan_boltzmann_by_quadrature() {
 
 #[test]
 fn bad_input_messages() {
-    assert_eq!(
-        err_text(Gaussian::new(800e-9, -1e-9, 1.0)),
-        "sigma must be finite and > 0 m, got -1e-9"
-    );
-    assert_eq!(
-        err_text(Gaussian::new(f64::NAN, 1e-9, 1.0)),
-        "center must be finite and > 0 m, got NaN"
-    );
-    assert_eq!(
-        err_text(Gaussian::new(800e-9, 1e-9, -2.0)),
-        "peak must be finite and >= 0, got -2.0"
-    );
-    assert_eq!(
-        err_text(Gaussian::from_range(800e-9, 0.0, 1.0)),
-        "range must be finite and > 0 m, got 0.0"
-    );
+    assert_eq!(err_text(Gaussian::new(800e-9, -1e-9, 1.0)), "sigma must be finite and > 0 m, got -1e-9");
+    assert_eq!(err_text(Gaussian::new(f64::NAN, 1e-9, 1.0)), "center must be finite and > 0 m, got NaN");
+    assert_eq!(err_text(Gaussian::new(800e-9, 1e-9, -2.0)), "peak must be finite and >= 0, got -2.0");
+    assert_eq!(err_text(Gaussian::from_range(800e-9, 0.0, 1.0)), "range must be finite and > 0 m, got 0.0");
     assert_eq!(
         err_text(Sampled::new(vec![700e-9, f64::NAN], vec![1.0, 1.0])),
         "wavelength[1] must be finite and > 0 m, got NaN"
     );
     assert_eq!(
-        err_text(Sampled::new(
-            vec![700e-9, 800e-9, 800e-9],
-            vec![1.0, 1.0, 1.0]
-        )),
+        err_text(Sampled::new(vec![700e-9, 800e-9, 800e-9], vec![1.0, 1.0, 1.0])),
         "wavelengths must be strictly increasing, got wavelength[2] = 8e-7 m after wavelength[1] = \
          8e-7 m"
     );
-    assert_eq!(
-        err_text(Sampled::new(vec![700e-9], vec![1.0])),
-        "a sampled spectrum needs at least 2 samples, got 1"
-    );
+    assert_eq!(err_text(Sampled::new(vec![700e-9], vec![1.0])), "a sampled spectrum needs at least 2 samples, got 1");
     assert_eq!(
         err_text(Sampled::new(vec![700e-9, 800e-9], vec![1.0, -0.5])),
         "value[1] must be finite and >= 0, got -0.5"
@@ -476,52 +380,32 @@ fn bad_input_messages() {
         err_text(Sampled::new(vec![-7e-7, 800e-9], vec![1.0, 1.0])),
         "wavelength[0] must be finite and > 0 m, got -7e-7"
     );
-    assert_eq!(
-        err_text(TopHat::new(800e-9, 700e-9, 1.0)),
-        "hi must be finite and > lo (= 8e-7) m, got 7e-7"
-    );
-    assert_eq!(
-        err_text(Blackbody::new(-3.0)),
-        "temperature must be finite and in (0, 1e12] K, got -3.0"
-    );
-    assert_eq!(
-        err_text(Spectrum::constant(f64::INFINITY)),
-        "constant must be finite and >= 0, got inf"
-    );
+    assert_eq!(err_text(TopHat::new(800e-9, 700e-9, 1.0)), "hi must be finite and > lo (= 8e-7) m, got 7e-7");
+    assert_eq!(err_text(Blackbody::new(-3.0)), "temperature must be finite and in (0, 1e12] K, got -3.0");
+    assert_eq!(err_text(Spectrum::constant(f64::INFINITY)), "constant must be finite and >= 0, got inf");
     let s = table(&[700.0, 900.0], &[1.0, 1.0]);
-    assert_eq!(
-        err_text(s.try_scaled(-1.0)),
-        "scale factor must be finite and >= 0, got -1.0"
-    );
+    assert_eq!(err_text(s.try_scaled(-1.0)), "scale factor must be finite and >= 0, got -1.0");
 }
 
 // ---------------------------------------------------------------- properties
 
 fn config() -> Config {
-    Config {
-        cases: 256,
-        rng_seed: RngSeed::Fixed(0x5EED_A5A1),
-        ..Config::default()
-    }
+    Config { cases: 256, rng_seed: RngSeed::Fixed(0x5EED_A5A1), ..Config::default() }
 }
 
 /// A random table on visible–NIR wavelengths: 2..40 samples, increasing steps 0.1..50 nm, values
 /// in [0, 10].
 fn arb_table() -> impl Strategy<Value = Sampled> {
-    (
-        300.0..900.0f64,
-        prop::collection::vec((0.1..50.0f64, 0.0..10.0f64), 2..40),
-    )
-        .prop_map(|(start, steps)| {
-            let mut w = Vec::with_capacity(steps.len());
-            let mut l = start;
-            for (dl, _) in &steps {
-                l += dl;
-                w.push(nm(l));
-            }
-            let v = steps.iter().map(|(_, v)| *v).collect();
-            Sampled::new(w, v).unwrap()
-        })
+    (300.0..900.0f64, prop::collection::vec((0.1..50.0f64, 0.0..10.0f64), 2..40)).prop_map(|(start, steps)| {
+        let mut w = Vec::with_capacity(steps.len());
+        let mut l = start;
+        for (dl, _) in &steps {
+            l += dl;
+            w.push(nm(l));
+        }
+        let v = steps.iter().map(|(_, v)| *v).collect();
+        Sampled::new(w, v).unwrap()
+    })
 }
 
 proptest! {
