@@ -185,20 +185,9 @@ pub fn cutoff_frequency(wavelength_m: f64, f_number: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// PHYSICS.md test vectors (s, w → OTF), quoted to 5 decimals there.
-    const VECTORS: [(f64, f64, f64); 7] = [
-        (0.1, 0.0, 0.87289),
-        (0.1, 0.5, 0.74209),
-        (0.1, 1.0, 0.42665),
-        (0.2, 1.0, -0.01441),
-        (0.5, 0.25, 0.28747),
-        (0.05, 2.0, 0.41297),
-        (0.1, 2.0, -0.08396),
-    ];
-
     #[test]
     fn physics_test_vectors_hold_to_1e5() {
-        for (s, w, expected) in VECTORS {
+        for (s, w, expected) in crate::reference::PHYSICS_TEST_VECTORS {
             let got = defocus_otf(s, w);
             assert!((got - expected).abs() < 1e-5, "OTF({s}, {w}) = {got}, expected {expected}");
         }

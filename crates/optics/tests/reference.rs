@@ -131,15 +131,7 @@ fn modulus_quadrature_splits_at_sign_changes() {
 fn otf_matches_physics_md_test_vectors() {
     // Source: PHYSICS.md "Optics: the OTF", test vectors (s, w → OTF), printed to 5 decimals:
     // tolerance 1e-5.
-    for (s, w, expected) in [
-        (0.1, 0.0, 0.87289),
-        (0.1, 0.5, 0.74209),
-        (0.1, 1.0, 0.42665),
-        (0.2, 1.0, -0.01441),
-        (0.5, 0.25, 0.28747),
-        (0.05, 2.0, 0.41297),
-        (0.1, 2.0, -0.08396),
-    ] {
+    for (s, w, expected) in optics::reference::PHYSICS_TEST_VECTORS {
         let v = otf_defocus(s, w);
         assert!((v - expected).abs() < 1e-5, "OTF({s}, {w}) = {v}, expected {expected}");
     }
@@ -372,20 +364,7 @@ fn mean_mtf_agrees_with_a_composite_simpson_over_frequency() {
     // Tolerance 1e-8 relative (Simpson's h⁴ error).
     with_gaussian_scene(10.0, 2.5, 5.2e-6, false, |scene| {
         let nu_n = scene.nyquist();
-        let n = 200;
-        let h = nu_n / f64::from(n);
-        let mut sum = 0.0;
-        for k in 0..=n {
-            let c = if k == 0 || k == n {
-                1.0
-            } else if k % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            sum += c * polychromatic_otf(scene, h * f64::from(k), 1e-11).abs();
-        }
-        let simpson = sum * h / 3.0 / nu_n;
+        let simpson = simpson(|nu| polychromatic_otf(scene, nu, 1e-11).abs(), 0.0, nu_n, 200) / nu_n;
         let m = mean_mtf(scene, 1e-10);
         assert!(rel(m, simpson) < 1e-8, "{m} vs {simpson}");
     });
@@ -471,23 +450,27 @@ fn mean_mtf_with_sign_changes_agrees_with_piecewise_simpson() {
     assert_eq!(cuts.len() - 2, 6, "{cuts:?}");
     let mut total = 0.0;
     for w in cuts.windows(2) {
-        let m = 200;
-        let h = (w[1] - w[0]) / f64::from(m);
-        let mut sum = 0.0;
-        for k in 0..=m {
-            let c = if k == 0 || k == m {
-                1.0
-            } else if k % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            sum += c * g(w[0] + h * f64::from(k)).abs();
-        }
-        total += sum * h / 3.0;
+        total += simpson(|nu| g(nu).abs(), w[0], w[1], 200);
     }
     let expected = total / nu_n;
     let q = mean_mtf_quadrature(&scene, 1e-10);
     assert!(q.converged);
     assert!(rel(q.value, expected) < 1e-9, "{} vs {expected}", q.value);
+}
+
+/// Composite Simpson's rule with `n` (even) intervals on `[a, b]`: the plain independent check.
+fn simpson(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, n: u32) -> f64 {
+    let h = (b - a) / f64::from(n);
+    let mut sum = 0.0;
+    for k in 0..=n {
+        let c = if k == 0 || k == n {
+            1.0
+        } else if k % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        sum += c * f(a + h * f64::from(k));
+    }
+    sum * h / 3.0
 }
