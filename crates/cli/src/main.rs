@@ -5,6 +5,7 @@
 //! files, arguments or the environment.
 
 mod output;
+mod plot;
 mod scene;
 mod tables;
 
@@ -35,6 +36,32 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The polychromatic MTF from 0 to Nyquist (or to the cutoff), with the diffraction limit.
+    Mtf {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path, e.g. --set spectrum.range_nm=100 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Print one JSON object instead of the table.
+        #[arg(long, conflicts_with = "csv")]
+        json: bool,
+        /// Print CSV (one row per frequency) instead of the table.
+        #[arg(long)]
+        csv: bool,
+        /// Also draw the curves into this SVG file.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
+        /// Extend the axis to the cutoff of the shortest wavelength instead of stopping at Nyquist.
+        #[arg(long)]
+        to_cutoff: bool,
+        /// Number of equally spaced frequencies, from 0 to the end of the axis.
+        #[arg(long, default_value_t = 101, value_name = "N")]
+        points: usize,
+        /// Monochromatic curves at these wavelengths, nm (comma-separated, e.g. 780,800,820).
+        #[arg(long, value_delimiter = ',', value_name = "NM")]
+        wavelengths: Vec<f64>,
+    },
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -51,6 +78,31 @@ fn run(cli: Cli) -> Result<()> {
                 for w in &result.warnings {
                     eprintln!("warning: {w}");
                 }
+            }
+            Ok(())
+        }
+        Command::Mtf { scene, set, json, csv, plot, to_cutoff, points, wavelengths } => {
+            let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+            if !(2..=100_000).contains(&points) {
+                anyhow::bail!("--points {points}: expected a whole number from 2 to 100000");
+            }
+            if let Some(bad) = wavelengths.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
+                anyhow::bail!("--wavelengths: {bad} nm: expected wavelengths > 0 nm");
+            }
+            let loaded = scene::load(scene.as_deref(), &set)?;
+            let range = if to_cutoff { metric::FrequencyRange::Cutoff } else { metric::FrequencyRange::Nyquist };
+            let metres: Vec<f64> = wavelengths.iter().map(|w| w * 1e-9).collect();
+            let curve =
+                metric::mtf_curve(&loaded, range, points, &metres).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            if let Some(path) = &plot {
+                plot::mtf_svg(path, &format!("{} — {label}", loaded.lens().describe()), &curve)?;
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&curve)?);
+            } else if csv {
+                print!("{}", output::mtf_csv(&curve));
+            } else {
+                print!("{}", output::mtf_table(&label, &loaded, &curve));
             }
             Ok(())
         }

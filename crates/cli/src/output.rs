@@ -3,7 +3,7 @@
 use std::fmt::Write;
 
 use anyhow::{Result, bail};
-use metric::{Evaluation, MetricForm, Scene};
+use metric::{Evaluation, MetricForm, MtfCurve, Scene};
 use serde::Serialize;
 
 /// Refuses to print a result with a non-finite number (a defect, never expected).
@@ -88,5 +88,54 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         g.transmission,
         100.0 * g.vg
     );
+    s
+}
+
+/// The MTF curve as CSV: one row per frequency.
+pub fn mtf_csv(c: &MtfCurve) -> String {
+    let mut s = String::from("frequency_cyc_per_mm,otf,mtf,diffraction_limited");
+    for wl in &c.wavelengths_nm {
+        let _ = write!(s, ",mtf_{wl}nm");
+    }
+    s.push('\n');
+    for i in 0..c.frequency_cyc_per_mm.len() {
+        let _ = write!(s, "{},{},{},{}", c.frequency_cyc_per_mm[i], c.otf[i], c.mtf[i], c.diffraction_limited[i]);
+        for mono in &c.monochromatic {
+            let _ = write!(s, ",{}", mono[i]);
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The MTF curve as a short table (at most 21 rows; `--csv` gives every point).
+pub fn mtf_table(label: &str, scene: &Scene, c: &MtfCurve) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "scene      {label}");
+    let _ = writeln!(s, "lens       {}", scene.lens().describe());
+    let _ = writeln!(
+        s,
+        "MTF{}; diffraction limit at the mean wavelength {:.1} nm; Nyquist {:.2} cycles/mm",
+        if c.pixel_mtf { " × pixel MTF" } else { "" },
+        c.mean_wavelength_nm,
+        c.nyquist_cyc_per_mm
+    );
+    let _ = writeln!(s);
+    let _ = write!(s, "  {:>12}  {:>10}  {:>10}", "cycles/mm", "MTF", "diffr. lim.");
+    for wl in &c.wavelengths_nm {
+        let _ = write!(s, "  {:>10}", format!("{wl} nm"));
+    }
+    s.push('\n');
+    let n = c.frequency_cyc_per_mm.len();
+    let step = n.div_ceil(21).max(1);
+    let rows = (0..n).step_by(step).chain(std::iter::once(n - 1)).collect::<std::collections::BTreeSet<_>>();
+    for i in rows {
+        let _ =
+            write!(s, "  {:>12.3}  {:>10.6}  {:>10.6}", c.frequency_cyc_per_mm[i], c.mtf[i], c.diffraction_limited[i]);
+        for mono in &c.monochromatic {
+            let _ = write!(s, "  {:>10.6}", mono[i]);
+        }
+        s.push('\n');
+    }
     s
 }

@@ -289,3 +289,54 @@ fn bad_zero_signal_is_an_error_not_nan() {
     let err = fails(&["evaluate", PAPER, "--set", "lens.efficiency=0"]);
     assert!(err.contains("no detected signal"), "{err}");
 }
+
+// ---- asnr mtf ----
+
+#[test]
+fn mtf_csv_has_one_row_per_point_and_starts_at_one() {
+    let out = asnr(&["mtf", "--csv", "--points", "11", "--wavelengths", "790,810"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_790nm,mtf_810nm");
+    assert_eq!(lines.len(), 12);
+    assert_eq!(lines[1], "0,1,1,1,1,1");
+    // last row at Nyquist 1/(2 × 5.2 µm) = 96.1538 cycles/mm, MTF below the diffraction limit
+    let last: Vec<f64> = lines[11].split(',').map(|v| v.parse().unwrap()).collect();
+    assert!((last[0] - 1e3 / 10.4).abs() < 1e-9, "{last:?}");
+    assert!(last[2] < last[3] && last[2] > 0.0, "{last:?}");
+}
+
+#[test]
+fn mtf_mean_of_the_curve_agrees_with_evaluate() {
+    // trapezoid over 2001 points of the smooth paper-scene MTF vs the adaptive mean: 1e-6
+    let curve = json(&["mtf", "--json", "--points", "2001"]);
+    let mtf: Vec<f64> = curve["mtf"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let n = mtf.len() - 1;
+    let trapezoid = (mtf.iter().sum::<f64>() - 0.5 * (mtf[0] + mtf[n])) / n as f64;
+    let mean = json(&["evaluate", "--json"])["mean_mtf"].as_f64().unwrap();
+    assert!((trapezoid - mean).abs() < 1e-6, "{trapezoid} vs {mean}");
+}
+
+#[test]
+fn mtf_to_cutoff_reaches_zero_and_plots() {
+    let dir = scratch("mtf-plot");
+    let svg = dir.join("mtf.svg");
+    let out = asnr(&["mtf", "--to-cutoff", "--json", "--plot", svg.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mtf = v["mtf"].as_array().unwrap();
+    assert_eq!(mtf.last().unwrap().as_f64().unwrap(), 0.0);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") && text.contains("polychromatic MTF") && text.contains("Nyquist"));
+}
+
+#[test]
+fn bad_mtf_arguments() {
+    let err = fails(&["mtf", "--points", "1"]);
+    assert!(err.contains("--points 1: expected a whole number from 2 to 100000"), "{err}");
+    let err = fails(&["mtf", "--wavelengths", "800,-5"]);
+    assert!(err.contains("--wavelengths: -5 nm: expected wavelengths > 0 nm"), "{err}");
+    let err = fails(&["mtf", "--plot", "/tmp/asnr-plot.png"]);
+    assert!(err.contains("--plot /tmp/asnr-plot.png: expected a file name ending in .svg"), "{err}");
+}

@@ -101,11 +101,7 @@ pub struct Evaluation {
 pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     let lens = scene.lens();
     let camera = scene.camera();
-    let detected = Spectrum::product(vec![
-        scene.radiance().clone(),
-        camera.quantum_efficiency().clone(),
-        Spectrum::Linear { slope: 1.0 },
-    ]);
+    let detected = detected_spectrum(scene);
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, nyquist, pixel)?;
@@ -165,6 +161,101 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
             otf_evaluations: work.otf_evaluations,
             sign_changes: work.sign_changes,
         },
+    })
+}
+
+/// Detected spectral density before the lens: radiance × QE × λ (paper SI eq. S8 integrand
+/// without τ1 and the constant factors).
+pub(crate) fn detected_spectrum(scene: &Scene) -> Spectrum {
+    Spectrum::product(vec![
+        scene.radiance().clone(),
+        scene.camera().quantum_efficiency().clone(),
+        Spectrum::Linear { slope: 1.0 },
+    ])
+}
+
+/// The polychromatic MTF of a scene sampled on a frequency grid, with references.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MtfCurve {
+    /// Frequencies, cycles/mm, from 0 to the requested maximum.
+    pub frequency_cyc_per_mm: Vec<f64>,
+    /// Signed polychromatic OTF (on axis it is real), before the pixel MTF.
+    pub otf: Vec<f64>,
+    /// Polychromatic MTF `|OTF|`, times the pixel MTF if the camera applies it.
+    pub mtf: Vec<f64>,
+    /// Aberration-free MTF of the same aperture at the mean wavelength (times the pixel MTF if
+    /// applied): the diffraction limit for reference.
+    pub diffraction_limited: Vec<f64>,
+    /// Wavelengths of the monochromatic curves, nm.
+    pub wavelengths_nm: Vec<f64>,
+    /// Monochromatic MTFs, one row per wavelength (times the pixel MTF if applied).
+    pub monochromatic: Vec<Vec<f64>>,
+    /// Nyquist frequency, cycles/mm.
+    pub nyquist_cyc_per_mm: f64,
+    /// Photoelectron-weighted mean wavelength, nm.
+    pub mean_wavelength_nm: f64,
+    /// Whether the pixel MTF is included.
+    pub pixel_mtf: bool,
+}
+
+/// How far an [`MtfCurve`] extends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrequencyRange {
+    /// From 0 to the camera's Nyquist frequency `1/(2p)`.
+    Nyquist,
+    /// From 0 to the incoherent cutoff of the shortest wavelength in the spectrum, beyond which the
+    /// MTF is zero.
+    Cutoff,
+}
+
+/// Samples the polychromatic MTF of `scene` at `points` equally spaced frequencies over `range`,
+/// with the diffraction-limited curve at the mean wavelength and the monochromatic MTFs at
+/// `wavelengths_m`.
+pub fn mtf_curve(
+    scene: &Scene,
+    range: FrequencyRange,
+    points: usize,
+    wavelengths_m: &[f64],
+) -> Result<MtfCurve, Error> {
+    let lens = scene.lens();
+    let camera = scene.camera();
+    let detected = detected_spectrum(scene);
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let mut max_frequency = camera.nyquist();
+    let mut poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, max_frequency, pixel)?;
+    if range == FrequencyRange::Cutoff {
+        max_frequency = poly.max_cutoff();
+        poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, max_frequency, pixel)?;
+    }
+    let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
+    let points = points.max(2);
+    let frequencies: Vec<f64> = (0..points).map(|k| max_frequency * k as f64 / (points - 1) as f64).collect();
+    let pixel_factor = |nu: f64| pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+    let otf: Vec<f64> = frequencies.iter().map(|&nu| poly.otf(nu)).collect();
+    let mtf = frequencies.iter().zip(&otf).map(|(&nu, o)| o.abs() * pixel_factor(nu)).collect();
+    let diffraction_limited = frequencies
+        .iter()
+        .map(|&nu| optics::mtf_diffraction_limited(nu * mean_wavelength * lens.f_number()) * pixel_factor(nu))
+        .collect();
+    let monochromatic = wavelengths_m
+        .iter()
+        .map(|&l| {
+            frequencies
+                .iter()
+                .map(|&nu| optics::monochromatic_otf(lens, l, Field::ON_AXIS, nu).abs() * pixel_factor(nu))
+                .collect()
+        })
+        .collect();
+    Ok(MtfCurve {
+        frequency_cyc_per_mm: frequencies.iter().map(|nu| nu * 1e-3).collect(),
+        otf,
+        mtf,
+        diffraction_limited,
+        wavelengths_nm: wavelengths_m.iter().map(|l| optics::round_for_display(l * 1e9)).collect(),
+        monochromatic,
+        nyquist_cyc_per_mm: camera.nyquist() * 1e-3,
+        mean_wavelength_nm: mean_wavelength * 1e9,
+        pixel_mtf: pixel.is_some(),
     })
 }
 

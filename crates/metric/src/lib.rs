@@ -40,7 +40,7 @@
 mod evaluate;
 mod scene;
 
-pub use evaluate::{Evaluation, Fraunhofer, Glare, Numerics, evaluate};
+pub use evaluate::{Evaluation, Fraunhofer, FrequencyRange, Glare, MtfCurve, Numerics, evaluate, mtf_curve};
 pub use scene::{Camera, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

@@ -242,7 +242,9 @@ impl<'a> Polychromatic<'a> {
                 this.panels.push(Panel { lo: plo, hi: phi, start, end: this.nodes.len() });
             }
         }
-        this.total_weight = this.nodes.iter().map(|n| n.weight).sum();
+        // summed panel by panel, in the order `otf` sums, so that OTF(0) is exactly 1
+        this.total_weight =
+            this.panels.iter().map(|p| this.nodes[p.start..p.end].iter().map(|n| n.weight).sum::<f64>()).sum();
         if !(this.total_weight > 0.0 && this.total_weight.is_finite()) {
             return Err(Error::NoSignal { total: this.total_weight });
         }
@@ -303,6 +305,9 @@ impl<'a> Polychromatic<'a> {
     /// Signed polychromatic OTF at `frequency` (cycles/m), normalized to 1 at zero frequency.
     pub fn otf(&self, frequency: f64) -> f64 {
         let nu = frequency.abs();
+        if nu == 0.0 {
+            return 1.0;
+        }
         let nuf = nu * self.f_number;
         let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
         let term = |n: &Node| n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda);
@@ -476,6 +481,22 @@ impl<'a> Polychromatic<'a> {
         let na = self.lens.numerical_aperture();
         self.spectral_average(|_, w020| if 2.0 * w020.abs() / na > radius_m { 1.0 } else { 0.0 })
     }
+}
+
+/// Monochromatic OTF of `lens` at one wavelength: the efficiency-weighted sum of its orders' OTFs
+/// at `frequency` (cycles/m), normalized to 1 at zero frequency (0 if no order transmits).
+pub fn monochromatic_otf(lens: &dyn LensModel, wavelength_m: f64, field: Field, frequency: f64) -> f64 {
+    let s = frequency.abs() * wavelength_m * lens.f_number();
+    let (mut sum, mut total) = (0.0, 0.0);
+    for order in lens.orders(wavelength_m, field) {
+        match order.pupil {
+            Pupil::Full => {
+                sum += order.efficiency * defocus_otf(s, order.wavefront.defocus_m / wavelength_m);
+                total += order.efficiency;
+            }
+        }
+    }
+    if total > 0.0 { sum / total } else { 0.0 }
 }
 
 /// The wavelength interval the spectral quadrature covers: the spectrum's support, with Gaussian
