@@ -49,8 +49,8 @@ enum Command {
         /// Print CSV (one row per frequency) instead of the table.
         #[arg(long)]
         csv: bool,
-        /// Also draw the curves into this SVG file.
-        #[arg(long, value_name = "FILE.svg")]
+        /// Also draw the curves into this file (.svg or .png).
+        #[arg(long, value_name = "FILE.svg|png")]
         plot: Option<PathBuf>,
         /// Extend the axis to the cutoff of the shortest wavelength instead of stopping at Nyquist.
         #[arg(long)]
@@ -95,7 +95,7 @@ fn run(cli: Cli) -> Result<()> {
             let curve =
                 metric::mtf_curve(&loaded, range, points, &metres).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if let Some(path) = &plot {
-                plot::mtf_svg(path, &format!("{} — {label}", loaded.lens().describe()), &curve)?;
+                plot::mtf_plot(path, &format!("{} — {label}", loaded.lens().describe()), &curve)?;
             }
             if json {
                 println!("{}", serde_json::to_string_pretty(&curve)?);

@@ -1,20 +1,43 @@
-//! MTF plots (SVG, drawn by plotters' pure-Rust SVG backend: no system fonts or libraries).
+//! MTF plots, SVG or PNG, drawn by plotters' pure-Rust backends. PNG text is rasterized with
+//! DejaVu Sans embedded in the binary (`assets/`, Bitstream Vera licence), so no system font or
+//! fontconfig is needed.
 
 use std::path::Path;
+use std::sync::Once;
 
 use anyhow::{Result, anyhow, bail};
 use metric::MtfCurve;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// Writes the MTF curve as an SVG line chart: the polychromatic MTF, the diffraction limit, the
-/// monochromatic curves, and the Nyquist frequency when the axis extends past it.
-pub fn mtf_svg(path: &Path, title: &str, curve: &MtfCurve) -> Result<()> {
-    match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("svg") => {}
-        _ => bail!("--plot {}: expected a file name ending in .svg", path.display()),
-    }
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+/// Plot size, pixels.
+const SIZE: (u32, u32) = (900, 560);
+
+/// Writes the MTF curve as a line chart, SVG or PNG by the file's extension: the polychromatic
+/// MTF, the diffraction limit, the monochromatic curves, and the Nyquist frequency when the axis
+/// extends past it.
+pub fn mtf_plot(path: &Path, title: &str, curve: &MtfCurve) -> Result<()> {
     let err = |e: &dyn std::fmt::Display| anyhow!("--plot {}: {e}", path.display());
-    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    // both backends measure text with the registered font (the PNG one also rasterizes it)
+    static REGISTER: Once = Once::new();
+    REGISTER.call_once(|| {
+        // the font is a valid TrueType file compiled into the binary
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("svg") => draw(SVGBackend::new(path, SIZE).into_drawing_area(), title, curve).map_err(|e| err(&e)),
+        Some("png") => draw(BitMapBackend::new(path, SIZE).into_drawing_area(), title, curve).map_err(|e| err(&e)),
+        _ => bail!("--plot {}: expected a file name ending in .svg or .png", path.display()),
+    }
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, title: &str, curve: &MtfCurve) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: &dyn std::fmt::Display| e.to_string();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let x_max = curve.frequency_cyc_per_mm.last().copied().unwrap_or(1.0).max(1e-12);
     let mut chart = ChartBuilder::on(&root)

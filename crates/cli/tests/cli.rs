@@ -337,6 +337,17 @@ fn bad_mtf_arguments() {
     assert!(err.contains("--points 1: expected a whole number from 2 to 100000"), "{err}");
     let err = fails(&["mtf", "--wavelengths", "800,-5"]);
     assert!(err.contains("--wavelengths: -5 nm: expected wavelengths > 0 nm"), "{err}");
-    let err = fails(&["mtf", "--plot", "/tmp/asnr-plot.png"]);
-    assert!(err.contains("--plot /tmp/asnr-plot.png: expected a file name ending in .svg"), "{err}");
+    let err = fails(&["mtf", "--plot", "/tmp/asnr-plot.pdf"]);
+    assert!(err.contains("--plot /tmp/asnr-plot.pdf: expected a file name ending in .svg or .png"), "{err}");
+}
+
+#[test]
+fn mtf_png_plot_is_a_png() {
+    let dir = scratch("mtf-png");
+    let png = dir.join("mtf.png");
+    let out = asnr(&["mtf", "--csv", "--points", "21", "--plot", png.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(bytes.len() > 10_000, "a 900 × 560 chart, {} bytes", bytes.len());
 }
