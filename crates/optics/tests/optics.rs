@@ -126,3 +126,20 @@ proptest! {
         prop_assert!((poly.otf(nu) - mono).abs() < 1e-6, "{} vs {}", poly.otf(nu), mono);
     }
 }
+
+/// Hopkins' 1955 Bessel series (libm Bessel functions) against the fast path: a third
+/// independent evaluation of the same OTF.
+#[test]
+fn hopkins_series_agrees_with_the_fast_path() {
+    let mut worst: f64 = 0.0;
+    for &w in &[0.05, 0.25, 1.0, 3.0, 12.0, 60.0] {
+        for i in 1..50 {
+            let s = i as f64 / 50.0;
+            worst = worst.max((reference::otf_hopkins(s, w) - defocus_otf(s, w)).abs());
+        }
+    }
+    assert!(worst < 1e-11, "largest difference {worst:e}");
+    for (s, w, expected) in reference::PHYSICS_TEST_VECTORS {
+        assert!((reference::otf_hopkins(s, w) - expected).abs() < 1e-5, "({s}, {w})");
+    }
+}
