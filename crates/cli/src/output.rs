@@ -58,6 +58,13 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         r.nyquist_cyc_per_mm,
         if scene.camera().pixel_mtf() { ", with pixel MTF" } else { "" }
     );
+    if r.mean_mtf_radial != r.mean_mtf_tangential {
+        let _ = writeln!(
+            s,
+            "    radial / tangential       {:>12.6}   / {:.6} at field ({}°, {}°), lateral colour",
+            r.mean_mtf_radial, r.mean_mtf_tangential, r.field_deg[0], r.field_deg[1]
+        );
+    }
     let _ = writeln!(s, "  ∫ MTF dν                    {:>12.4}   cycles/mm", r.mtf_integral_cyc_per_mm);
     let _ = writeln!(
         s,
@@ -94,12 +101,19 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
 /// The MTF curve as CSV: one row per frequency.
 pub fn mtf_csv(c: &MtfCurve) -> String {
     let mut s = String::from("frequency_cyc_per_mm,otf,mtf,diffraction_limited");
+    let split = c.mtf_radial.iter().chain(&c.mtf_tangential).collect::<Vec<_>>();
+    if split.len() == 2 {
+        s.push_str(",mtf_radial,mtf_tangential");
+    }
     for wl in &c.wavelengths_nm {
         let _ = write!(s, ",mtf_{wl}nm");
     }
     s.push('\n');
     for i in 0..c.frequency_cyc_per_mm.len() {
         let _ = write!(s, "{},{},{},{}", c.frequency_cyc_per_mm[i], c.otf[i], c.mtf[i], c.diffraction_limited[i]);
+        for curve in &split {
+            let _ = write!(s, ",{}", curve[i]);
+        }
         for mono in &c.monochromatic {
             let _ = write!(s, ",{}", mono[i]);
         }

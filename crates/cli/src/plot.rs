@@ -71,11 +71,22 @@ where
             .label(format!("{wl:.1} nm"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
     }
+    if let (Some(r), Some(t)) = (&curve.mtf_radial, &curve.mtf_tangential) {
+        for (ys, name, colour) in
+            [(r, "radial (lateral colour)", RGBColor(90, 150, 240)), (t, "tangential", RGBColor(20, 40, 120))]
+        {
+            chart
+                .draw_series(DashedLineSeries::new(series(ys), 8, 4, colour.stroke_width(2)))
+                .map_err(|e| err(&e))?
+                .label(name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        }
+    }
     let blue = RGBColor(20, 80, 200);
     chart
         .draw_series(LineSeries::new(series(&curve.mtf), blue.stroke_width(3)))
         .map_err(|e| err(&e))?
-        .label("polychromatic MTF")
+        .label(if curve.mtf_radial.is_some() { "polychromatic MTF (mean of both)" } else { "polychromatic MTF" })
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3)));
     if curve.nyquist_cyc_per_mm < x_max * 0.999 {
         let n = curve.nyquist_cyc_per_mm;

@@ -67,6 +67,15 @@ struct RawScene {
     exposure: RawExposure,
     #[serde(default)]
     options: Option<RawOptions>,
+    #[serde(default)]
+    field: Option<RawField>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawField {
+    x_deg: Option<f64>,
+    y_deg: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -311,7 +320,15 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
                 o.number("options.fraunhofer_max_fraction", v, (0.0..=1.0).contains(&v), "a fraction in [0, 1]")?;
         }
     }
-    Scene::new(Arc::new(lens), radiance, camera, t * 1e-3, options).map_err(|e| anyhow!("{}: {e}", o.file))
+    let scene =
+        Scene::new(Arc::new(lens), radiance, camera, t * 1e-3, options).map_err(|e| anyhow!("{}: {e}", o.file))?;
+    let Some(f) = &raw.field else { return Ok(scene) };
+    let angle = |key: &str, v: Option<f64>| -> Result<f64> {
+        let v = v.unwrap_or(0.0);
+        Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())
+    };
+    let field = optics::Field::new(angle("field.x_deg", f.x_deg)?, angle("field.y_deg", f.y_deg)?);
+    scene.at_field(field).map_err(|e| anyhow!("{}: {e}", o.of("field")))
 }
 
 fn source(s: &RawSource, o: &Origins) -> Result<Spectrum> {

@@ -351,3 +351,16 @@ fn mtf_png_plot_is_a_png() {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     assert!(bytes.len() > 10_000, "a 900 × 560 chart, {} bytes", bytes.len());
 }
+
+#[test]
+fn off_axis_field_reports_the_radial_tangential_split() {
+    let v = json(&["evaluate", "--set", "field.x_deg=8", "--json"]);
+    let (r, t) = (v["mean_mtf_radial"].as_f64().unwrap(), v["mean_mtf_tangential"].as_f64().unwrap());
+    let on_axis = json(&["evaluate", "--json"])["mean_mtf"].as_f64().unwrap();
+    assert!(r < t && (t - on_axis).abs() < 1e-12, "{r} {t} {on_axis}");
+    let out = asnr(&["mtf", "--csv", "--points", "3", "--set", "field.x_deg=8"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_radial,mtf_tangential\n"), "{text}");
+    let err = fails(&["evaluate", "--set", "field.x_deg=95"]);
+    assert!(err.contains("field.x_deg = 95: expected an angle in degrees, within ±90"), "{err}");
+}

@@ -116,6 +116,19 @@ impl ChromaticMetalens {
     }
 }
 
+impl ChromaticMetalens {
+    /// Lateral colour: displacement (m) on the detector of the image of `field` at
+    /// `wavelength_m` from its design-wavelength position. A diffractive lens behind a remote
+    /// aperture stop (the wide-field metalens of the paper's ref. 13) forms its image at a height
+    /// proportional to its focal length, `h(λ) = f(λ) tan θ`, so relative to `h0 = f0 tan θ` the
+    /// shift is `h0 (λ0/λ − 1)`, along the field direction. Field curvature and the other
+    /// off-axis aberrations are not modelled here.
+    pub fn lateral_colour(&self, wavelength_m: f64, field: Field) -> [f64; 2] {
+        let k = self.design_wavelength / wavelength_m - 1.0;
+        [self.focal_length * field.x_rad.tan() * k, self.focal_length * field.y_rad.tan() * k]
+    }
+}
+
 impl LensModel for ChromaticMetalens {
     fn f_number(&self) -> f64 {
         self.f_number
@@ -125,11 +138,12 @@ impl LensModel for ChromaticMetalens {
         self.focal_length
     }
 
-    fn orders(&self, wavelength_m: f64, _field: Field) -> Vec<Order> {
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        let [dx, dy] = self.lateral_colour(wavelength_m, field);
         vec![Order::new(
             self.efficiency.value(wavelength_m),
             Pupil::Full,
-            Wavefront::defocus(self.defocus(wavelength_m)),
+            Wavefront::defocus(self.defocus(wavelength_m)).shifted(dx, dy),
         )]
     }
 
@@ -188,6 +202,18 @@ mod tests {
             let direct = d * d / 8.0 * (1.0 / lens.focal_length_at(lambda) - 1.0 / 3.36e-3);
             assert!((lens.defocus(lambda) - direct).abs() < 1e-18, "{lambda}");
         }
+    }
+
+    #[test]
+    fn lateral_colour_scales_with_focal_length() {
+        // 8° field: h0 = 3.36 mm × tan 8° = 0.47222 mm; at 850 nm h = h0 × 800/850, shift = h0 (800/850 − 1)
+        let lens = paper();
+        let field = Field::new(8f64.to_radians(), 0.0);
+        let [dx, dy] = lens.lateral_colour(850e-9, field);
+        let h0 = 3.36e-3 * 8f64.to_radians().tan();
+        assert!((dx - h0 * (800.0 / 850.0 - 1.0)).abs() < 1e-18 && dy == 0.0);
+        assert_eq!(lens.lateral_colour(800e-9, field), [0.0, 0.0]);
+        assert_eq!(lens.lateral_colour(850e-9, Field::ON_AXIS), [0.0, 0.0]);
     }
 
     #[test]

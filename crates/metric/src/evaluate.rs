@@ -2,7 +2,7 @@
 
 use std::f64::consts::PI;
 
-use optics::{Field, LensModel, Polychromatic};
+use optics::{LensModel, Polychromatic};
 use radiometry::Spectrum;
 use radiometry::constants::{PLANCK, SPEED_OF_LIGHT};
 use serde::Serialize;
@@ -68,8 +68,15 @@ pub struct Evaluation {
     pub asnr_mean: f64,
     /// `SNR0 × ∫_0^{ν_N} MTF dν`, cycles/mm (paper eq. 1 as printed).
     pub asnr_integral_cyc_per_mm: f64,
-    /// Mean of the polychromatic MTF over `[0, ν_N]`.
+    /// Mean of the polychromatic MTF over `[0, ν_N]`. Off axis, where lateral colour makes the
+    /// OTF depend on direction, the average of the radial and tangential means.
     pub mean_mtf: f64,
+    /// Mean MTF for frequencies along the field direction (the direction lateral colour smears).
+    pub mean_mtf_radial: f64,
+    /// Mean MTF for frequencies perpendicular to the field direction.
+    pub mean_mtf_tangential: f64,
+    /// Field angles `(x, y)`, degrees.
+    pub field_deg: [f64; 2],
     /// `∫_0^{ν_N} MTF dν`, cycles/mm.
     pub mtf_integral_cyc_per_mm: f64,
     /// Zero-frequency, shot-noise-limited SNR `√N` (paper SI eq. S9).
@@ -104,13 +111,28 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     let detected = detected_spectrum(scene);
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, nyquist, pixel)?;
+    let field = scene.field();
+    let poly = Polychromatic::new(lens, &detected, field, nyquist, pixel)?;
 
     let na = lens.numerical_aperture();
     let area = camera.pixel_pitch() * camera.pixel_pitch();
     let photoelectrons = area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
     let snr0 = radiometry::shot_noise_snr(photoelectrons);
-    let (mean_mtf, work) = poly.mean_mtf();
+    let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = if poly.has_lateral_shifts() {
+        let radial = field.y_rad.atan2(field.x_rad);
+        let (r, w1) = poly.mean_mtf_along(radial);
+        let (t, w2) = poly.mean_mtf_along(radial + 0.5 * PI);
+        let work = optics::Work {
+            frequency_panels: w1.frequency_panels + w2.frequency_panels,
+            otf_evaluations: w1.otf_evaluations + w2.otf_evaluations,
+            sign_changes: w1.sign_changes + w2.sign_changes,
+            ..w1
+        };
+        (0.5 * (r + t), r, t, work)
+    } else {
+        let (m, work) = poly.mean_mtf();
+        (m, m, m, work)
+    };
     let integral = mean_mtf * nyquist * 1e-3;
     let asnr_mean = snr0 * mean_mtf;
     let asnr_integral = snr0 * integral;
@@ -144,6 +166,9 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         asnr_mean,
         asnr_integral_cyc_per_mm: asnr_integral,
         mean_mtf,
+        mean_mtf_radial,
+        mean_mtf_tangential,
+        field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
         mtf_integral_cyc_per_mm: integral,
         snr0,
         photoelectrons,
@@ -154,7 +179,7 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         glare,
         warnings,
         numerics: Numerics {
-            engine: "exact-1d",
+            engine: if poly.has_lateral_shifts() { "exact-1d, complex sum with lateral colour" } else { "exact-1d" },
             spectral_panels: work.spectral_panels,
             spectral_nodes: work.spectral_nodes,
             frequency_panels: work.frequency_panels,
@@ -179,9 +204,11 @@ pub(crate) fn detected_spectrum(scene: &Scene) -> Spectrum {
 pub struct MtfCurve {
     /// Frequencies, cycles/mm, from 0 to the requested maximum.
     pub frequency_cyc_per_mm: Vec<f64>,
-    /// Signed polychromatic OTF (on axis it is real), before the pixel MTF.
+    /// Signed polychromatic OTF of the rotationally symmetric system (image displacements
+    /// ignored), before the pixel MTF.
     pub otf: Vec<f64>,
-    /// Polychromatic MTF `|OTF|`, times the pixel MTF if the camera applies it.
+    /// Polychromatic MTF `|OTF|`, times the pixel MTF if the camera applies it; off axis with
+    /// lateral colour, the average of the radial and tangential MTFs.
     pub mtf: Vec<f64>,
     /// Aberration-free MTF of the same aperture at the mean wavelength (times the pixel MTF if
     /// applied): the diffraction limit for reference.
@@ -190,6 +217,10 @@ pub struct MtfCurve {
     pub wavelengths_nm: Vec<f64>,
     /// Monochromatic MTFs, one row per wavelength (times the pixel MTF if applied).
     pub monochromatic: Vec<Vec<f64>>,
+    /// Off axis with lateral colour: the MTF for frequencies along the field direction.
+    pub mtf_radial: Option<Vec<f64>>,
+    /// Off axis with lateral colour: the MTF for frequencies perpendicular to it.
+    pub mtf_tangential: Option<Vec<f64>>,
     /// Nyquist frequency, cycles/mm.
     pub nyquist_cyc_per_mm: f64,
     /// Photoelectron-weighted mean wavelength, nm.
@@ -222,10 +253,11 @@ pub fn mtf_curve(
     let detected = detected_spectrum(scene);
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let mut max_frequency = camera.nyquist();
-    let mut poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, max_frequency, pixel)?;
+    let field = scene.field();
+    let mut poly = Polychromatic::new(lens, &detected, field, max_frequency, pixel)?;
     if range == FrequencyRange::Cutoff {
         max_frequency = poly.max_cutoff();
-        poly = Polychromatic::new(lens, &detected, Field::ON_AXIS, max_frequency, pixel)?;
+        poly = Polychromatic::new(lens, &detected, field, max_frequency, pixel)?;
     }
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let points = points.max(2);
@@ -237,12 +269,21 @@ pub fn mtf_curve(
         .iter()
         .map(|&nu| optics::mtf_diffraction_limited(nu * mean_wavelength * lens.f_number()) * pixel_factor(nu))
         .collect();
+    let radial = field.y_rad.atan2(field.x_rad);
+    let along = |azimuth: f64| -> Vec<f64> { frequencies.iter().map(|&nu| poly.mtf_along(nu, azimuth)).collect() };
+    let (mtf_radial, mtf_tangential) =
+        if poly.has_lateral_shifts() { (Some(along(radial)), Some(along(radial + 0.5 * PI))) } else { (None, None) };
+    // off axis the headline curve is the radial–tangential average, as `mean_mtf` is
+    let mtf = match (&mtf_radial, &mtf_tangential) {
+        (Some(r), Some(t)) => r.iter().zip(t).map(|(a, b)| 0.5 * (a + b)).collect(),
+        _ => mtf,
+    };
     let monochromatic = wavelengths_m
         .iter()
         .map(|&l| {
             frequencies
                 .iter()
-                .map(|&nu| optics::monochromatic_otf(lens, l, Field::ON_AXIS, nu).abs() * pixel_factor(nu))
+                .map(|&nu| optics::monochromatic_otf(lens, l, field, nu).abs() * pixel_factor(nu))
                 .collect()
         })
         .collect();
@@ -253,6 +294,8 @@ pub fn mtf_curve(
         diffraction_limited,
         wavelengths_nm: wavelengths_m.iter().map(|l| optics::round_for_display(l * 1e9)).collect(),
         monochromatic,
+        mtf_radial,
+        mtf_tangential,
         nyquist_cyc_per_mm: camera.nyquist() * 1e-3,
         mean_wavelength_nm: mean_wavelength * 1e9,
         pixel_mtf: pixel.is_some(),

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use optics::LensModel;
+use optics::{Field, LensModel};
 use radiometry::Spectrum;
 use serde::Serialize;
 
@@ -89,6 +89,7 @@ pub struct Scene {
     camera: Camera,
     exposure: f64,
     options: Options,
+    field: Field,
 }
 
 impl Scene {
@@ -114,7 +115,20 @@ impl Scene {
             (0.0..=1.0).contains(&options.fraunhofer_max_fraction),
             "a fraction in [0, 1]",
         )?;
-        Ok(Scene { lens, radiance, camera, exposure: exposure_s, options })
+        Ok(Scene { lens, radiance, camera, exposure: exposure_s, options, field: Field::ON_AXIS })
+    }
+
+    /// This scene seen at the field point `field` (default: on axis).
+    pub fn at_field(self, field: Field) -> Result<Self, Error> {
+        for (name, v) in [("field angle x", field.x_rad), ("field angle y", field.y_rad)] {
+            check(name, v, v.abs() < std::f64::consts::FRAC_PI_2, "a finite angle within ±90°")?;
+        }
+        Ok(Scene { field, ..self })
+    }
+
+    /// The field point.
+    pub fn field(&self) -> Field {
+        self.field
     }
 
     /// The lens.

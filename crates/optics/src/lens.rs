@@ -23,6 +23,16 @@ pub struct Field {
 impl Field {
     /// The optical axis.
     pub const ON_AXIS: Field = Field { x_rad: 0.0, y_rad: 0.0 };
+
+    /// A field point at angles `(x, y)`, radians.
+    pub fn new(x_rad: f64, y_rad: f64) -> Field {
+        Field { x_rad, y_rad }
+    }
+
+    /// Whether this is the optical axis.
+    pub fn is_on_axis(&self) -> bool {
+        self.x_rad == 0.0 && self.y_rad == 0.0
+    }
 }
 
 /// The pupil an imaging order passes through.
@@ -42,12 +52,21 @@ pub struct Wavefront {
     ///
     /// Paraxially a focus shift `Δz` behind the detector gives `W020 = Δz NA²/2 = Δz/(8 F#²)`.
     pub defocus_m: f64,
+    /// Lateral displacement `(x, y)` of the image point on the detector from the field's reference
+    /// image point, m: a wavefront tilt. It leaves the MTF of one wavelength unchanged but gives
+    /// each wavelength of a polychromatic sum its own phase `exp(−2πi ν·Δ)` (lateral colour).
+    pub image_shift_m: [f64; 2],
 }
 
 impl Wavefront {
     /// A wavefront with defocus only.
     pub fn defocus(w020_m: f64) -> Wavefront {
-        Wavefront { defocus_m: w020_m }
+        Wavefront { defocus_m: w020_m, image_shift_m: [0.0, 0.0] }
+    }
+
+    /// This wavefront with the image point displaced by `(x, y)` m on the detector.
+    pub fn shifted(self, x_m: f64, y_m: f64) -> Wavefront {
+        Wavefront { image_shift_m: [x_m, y_m], ..self }
     }
 }
 

@@ -24,6 +24,7 @@
 
 use std::f64::consts::PI;
 
+use num_complex::Complex64;
 use radiometry::Spectrum;
 
 use crate::lens::{Field, LensModel, Pupil};
@@ -113,6 +114,8 @@ struct Node {
     weight: f64,
     /// W020 of the order, m
     w020: f64,
+    /// image displacement on the detector, m
+    shift: [f64; 2],
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -158,6 +161,8 @@ pub struct Polychromatic<'a> {
     w020_max: f64,
     /// weighted RMS of W020, m
     w020_rms: f64,
+    /// whether any node's image is displaced (the OTF is then complex off the shift-free axis)
+    shifted: bool,
 }
 
 impl<'a> Polychromatic<'a> {
@@ -204,6 +209,7 @@ impl<'a> Polychromatic<'a> {
             total_weight: 0.0,
             w020_max: 0.0,
             w020_rms: 0.0,
+            shifted: false,
         };
         let phase_per_w020 = 8.0 * PI * f_number * max_frequency;
         for pair in cuts.windows(2) {
@@ -252,6 +258,7 @@ impl<'a> Polychromatic<'a> {
         this.w020_max =
             this.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
         this.w020_rms = this.spectral_average(|_, w020| w020 * w020).sqrt();
+        this.shifted = this.nodes.iter().any(|n| n.shift != [0.0, 0.0]);
         Ok(this)
     }
 
@@ -278,9 +285,12 @@ impl<'a> Polychromatic<'a> {
         }
         for order in self.lens.orders(lambda, self.field) {
             match order.pupil {
-                Pupil::Full => {
-                    emit(Node { lambda, weight: q * rho * order.efficiency, w020: order.wavefront.defocus_m })
-                }
+                Pupil::Full => emit(Node {
+                    lambda,
+                    weight: q * rho * order.efficiency,
+                    w020: order.wavefront.defocus_m,
+                    shift: order.wavefront.image_shift_m,
+                }),
             }
         }
     }
@@ -302,24 +312,63 @@ impl<'a> Polychromatic<'a> {
         self.nodes.iter().map(|n| n.weight * f(n.lambda, n.w020)).sum::<f64>() / self.total_weight
     }
 
-    /// Signed polychromatic OTF at `frequency` (cycles/m), normalized to 1 at zero frequency.
-    pub fn otf(&self, frequency: f64) -> f64 {
+    /// Calls `visit(weight × OTF(s, w), shift)` for every spectral node that passes `frequency`.
+    fn contributions(&self, frequency: f64, mut visit: impl FnMut(f64, [f64; 2])) {
         let nu = frequency.abs();
-        if nu == 0.0 {
-            return 1.0;
-        }
         let nuf = nu * self.f_number;
         let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
-        let term = |n: &Node| n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda);
-        let mut sum = 0.0;
+        let mut term = |n: &Node| visit(n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda), n.shift);
         for p in &self.panels {
             if p.hi <= cut {
-                sum += self.nodes[p.start..p.end].iter().map(term).sum::<f64>();
+                self.nodes[p.start..p.end].iter().for_each(&mut term);
             } else if p.lo < cut {
-                self.clipped_nodes(p.lo, cut, |n| sum += term(&n));
+                self.clipped_nodes(p.lo, cut, |n| term(&n));
             }
         }
+    }
+
+    /// Signed polychromatic OTF at `frequency` (cycles/m), normalized to 1 at zero frequency, of
+    /// the rotationally symmetric system: image displacements are ignored (see
+    /// [`otf_along`](Self::otf_along) for the complex OTF with lateral colour).
+    pub fn otf(&self, frequency: f64) -> f64 {
+        if frequency == 0.0 {
+            return 1.0;
+        }
+        let mut sum = 0.0;
+        self.contributions(frequency, |v, _| sum += v);
         sum / self.total_weight
+    }
+
+    /// Complex polychromatic OTF at `frequency` (cycles/m) along the direction `azimuth` (radians
+    /// from the detector's x axis): each wavelength's OTF times `exp(−2πi ν u·Δ)` for its image
+    /// displacement Δ (PHYSICS.md: in the general case sum complex OTFs, then take the modulus).
+    pub fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
+        if frequency == 0.0 {
+            return Complex64::new(1.0, 0.0);
+        }
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let k = -2.0 * PI * frequency;
+        let mut sum = Complex64::new(0.0, 0.0);
+        self.contributions(frequency, |v, [dx, dy]| {
+            if dx == 0.0 && dy == 0.0 {
+                sum.re += v;
+            } else {
+                let (s, c) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+                sum += Complex64::new(v * c, v * s);
+            }
+        });
+        sum / self.total_weight
+    }
+
+    /// Whether some wavelength's image is displaced, so that the OTF is complex and depends on
+    /// the direction.
+    pub fn has_lateral_shifts(&self) -> bool {
+        self.shifted
+    }
+
+    /// Polychromatic MTF along `azimuth`: `|OTF|` times the pixel MTF along a pixel axis.
+    pub fn mtf_along(&self, frequency: f64, azimuth: f64) -> f64 {
+        self.otf_along(frequency, azimuth).norm() * self.pixel_factor(frequency)
     }
 
     /// Polychromatic MTF at `frequency`: `|OTF_poly|`, times the pixel MTF if enabled.
@@ -358,6 +407,23 @@ impl<'a> Polychromatic<'a> {
     /// samples change sign is split at the located zeros first, so `|OTF_poly|` is only ever
     /// integrated where it is smooth. The initial panels are sized by the weighted-RMS defocus.
     pub fn mean_mtf(&self) -> (f64, Work) {
+        self.mean_of(&|nu| self.otf(nu))
+    }
+
+    /// The mean of the MTF along `azimuth` (radians from the x axis) over `[0, max_frequency]`:
+    /// [`mean_mtf`](Self::mean_mtf) for the complex OTF of a system with lateral colour. Without
+    /// image displacements it equals [`mean_mtf`](Self::mean_mtf).
+    pub fn mean_mtf_along(&self, azimuth: f64) -> (f64, Work) {
+        if !self.shifted {
+            return self.mean_mtf();
+        }
+        // |OTF| ≥ 0: no sign changes to split at, only isolated zeros the adaptive rule resolves
+        self.mean_of(&|nu| self.otf_along(nu, azimuth).norm())
+    }
+
+    /// Adaptive mean over `[0, max_frequency]` of `P(ν) |value(ν)|`, where `value` is a signed
+    /// OTF (split at its sign changes) or a modulus.
+    fn mean_of(&self, value: &dyn Fn(f64) -> f64) -> (f64, Work) {
         let mut work = Work { spectral_panels: self.panels.len(), spectral_nodes: self.nodes.len(), ..Work::default() };
         // defocus phase rate in ν: d/dν [8π F# ν W020 (cos t − ν λ F#)] = 8π F# W020 (cos t − 2s)
         let phase_rate = 8.0 * PI * self.f_number * self.w020_rms;
@@ -367,13 +433,13 @@ impl<'a> Polychromatic<'a> {
             let (a, b) = (pair[0], pair[1]);
             let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(4.0) as usize;
             let h = (b - a) / n as f64;
-            let mut left = (a, self.otf(a));
+            let mut left = (a, value(a));
             work.otf_evaluations += 1;
             for k in 0..n {
                 let hi = if k + 1 == n { b } else { a + h * (k + 1) as f64 };
-                let right = (hi, self.otf(hi));
+                let right = (hi, value(hi));
                 work.otf_evaluations += 1;
-                total += self.integrate_panel(left, right, tolerance, 0, &mut work);
+                total += self.integrate_panel(value, left, right, tolerance, 0, &mut work);
                 left = right;
             }
         }
@@ -382,7 +448,15 @@ impl<'a> Polychromatic<'a> {
 
     /// `∫ P(ν) |OTF_poly(ν)| dν` over one panel whose end values are known: split at sign
     /// changes, bisected until the Gauss–Kronrod error estimate is below `tolerance × width`.
-    fn integrate_panel(&self, left: (f64, f64), right: (f64, f64), tolerance: f64, depth: u32, work: &mut Work) -> f64 {
+    fn integrate_panel(
+        &self,
+        value: &dyn Fn(f64) -> f64,
+        left: (f64, f64),
+        right: (f64, f64),
+        tolerance: f64,
+        depth: u32,
+        work: &mut Work,
+    ) -> f64 {
         let (a, b) = (left.0, right.0);
         let mid = 0.5 * (a + b);
         let half = 0.5 * (b - a);
@@ -391,7 +465,7 @@ impl<'a> Polychromatic<'a> {
         samples[16] = right;
         for (i, &x) in KRONROD_NODES.iter().enumerate() {
             let nu = mid + half * x;
-            samples[i + 1] = (nu, self.otf(nu));
+            samples[i + 1] = (nu, value(nu));
         }
         work.otf_evaluations += 15;
         let mut edges = Vec::new();
@@ -400,7 +474,7 @@ impl<'a> Polychromatic<'a> {
             if f0 == 0.0 && x0 > a && x0 < b {
                 edges.push((x0, 0.0));
             } else if f0 * f1 < 0.0 {
-                edges.push((self.root(x0, f0, x1, f1, work), 0.0));
+                edges.push((self.root(value, x0, f0, x1, f1, work), 0.0));
             }
         }
         if !edges.is_empty() && depth < MAX_DEPTH {
@@ -408,7 +482,7 @@ impl<'a> Polychromatic<'a> {
             let mut total = 0.0;
             let mut from = left;
             for to in edges.into_iter().chain(std::iter::once(right)) {
-                total += self.integrate_panel(from, to, tolerance, depth + 1, work);
+                total += self.integrate_panel(value, from, to, tolerance, depth + 1, work);
                 from = to;
             }
             return total;
@@ -426,13 +500,21 @@ impl<'a> Polychromatic<'a> {
             return kronrod;
         }
         let centre = samples[8];
-        self.integrate_panel(left, centre, tolerance, depth + 1, work)
-            + self.integrate_panel(centre, right, tolerance, depth + 1, work)
+        self.integrate_panel(value, left, centre, tolerance, depth + 1, work)
+            + self.integrate_panel(value, centre, right, tolerance, depth + 1, work)
     }
 
     /// A zero of `OTF_poly` in `[x0, x1]`, where the signs of `f0`, `f1` differ (Illinois method
     /// with a bisection safeguard), to 1e-14 of the frequency limit.
-    fn root(&self, mut x0: f64, mut f0: f64, mut x1: f64, mut f1: f64, work: &mut Work) -> f64 {
+    fn root(
+        &self,
+        value: &dyn Fn(f64) -> f64,
+        mut x0: f64,
+        mut f0: f64,
+        mut x1: f64,
+        mut f1: f64,
+        work: &mut Work,
+    ) -> f64 {
         let tol = 1e-14 * self.max_frequency;
         let mut side = 0;
         for _ in 0..200 {
@@ -443,7 +525,7 @@ impl<'a> Polychromatic<'a> {
             if !(x > x0.min(x1) && x < x0.max(x1)) {
                 x = 0.5 * (x0 + x1);
             }
-            let f = self.otf(x);
+            let f = value(x);
             work.otf_evaluations += 1;
             if f == 0.0 {
                 return x;
