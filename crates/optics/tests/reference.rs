@@ -249,23 +249,14 @@ fn polychromatic_otf_agrees_with_a_composite_simpson_sum() {
     // Tolerance 1e-9 absolute.
     with_gaussian_scene(50.0, 2.5, 5.2e-6, false, |scene| {
         let nu = 0.5 * scene.nyquist();
-        let n = 40_000;
-        let h = (scene.lambda_max - scene.lambda_min) / f64::from(n);
-        let (mut num, mut den) = (0.0, 0.0);
-        for k in 0..=n {
-            let l = scene.lambda_min + h * f64::from(k);
-            let c = if k == 0 || k == n {
-                1.0
-            } else if k % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            let r = (scene.density)(l);
-            den += c * r;
-            num += c * r * otf_defocus(nu * l * scene.f_number, scene.defocus_waves(l));
-        }
-        let simpson = num / den;
+        let (lo, hi) = (scene.lambda_min, scene.lambda_max);
+        let num = simpson(
+            |l| (scene.density)(l) * otf_defocus(nu * l * scene.f_number, scene.defocus_waves(l)),
+            lo,
+            hi,
+            40_000,
+        );
+        let simpson = num / simpson(|l| (scene.density)(l), lo, hi, 40_000);
         let v = polychromatic_otf(scene, nu, 1e-10);
         assert!((v - simpson).abs() < 1e-9, "{v} vs {simpson}");
     });
