@@ -8,6 +8,9 @@
 //! - [`Polychromatic`]: the signed polychromatic OTF with photoelectron weights, its modulus, and
 //!   its mean up to the Nyquist frequency (the quantity in paper eq. 1).
 //! - [`LensModel`] with its vocabulary ([`Order`], [`Pupil`], [`Wavefront`], [`Field`]).
+//! - [`fft`]: the general-pupil engine — sampled apertures (decentred, annular, sector, any mask;
+//!   edge pixels weighted by their exact area), Seidel and Zernike wavefronts, the complex 2-D OTF
+//!   by FFT with reusable plans and only `Q ≥ 1 + s_max` padding, slices and azimuthal averages.
 //! - [`fraunhofer`]: the validity check of paper SI eq. S15.
 //! - [`reference`](mod@reference): slow, independent references the fast paths are tested against.
 //!

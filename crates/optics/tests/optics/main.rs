@@ -1,0 +1,6 @@
+//! Integration tests of the optics crate, one binary (STYLE.md): the fast OTF paths against
+//! identities and references, the slow references themselves, and the FFT pupil engine.
+
+mod fft;
+mod otf;
+mod reference;
