@@ -87,6 +87,14 @@ struct RawLens {
     design_wavelength_nm: f64,
     efficiency: NumberOrFile,
     transmission: Option<NumberOrFile>,
+    iris_decentre_x: Option<f64>,
+    iris_decentre_y: Option<f64>,
+    obscuration: Option<f64>,
+    sector_deg: Option<[f64; 2]>,
+    spherical_um: Option<f64>,
+    coma_um: Option<f64>,
+    astigmatism_um: Option<f64>,
+    field_curvature_um: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -130,6 +138,7 @@ struct RawOptions {
     form: Option<String>,
     fraunhofer_threshold_mm: Option<f64>,
     fraunhofer_max_fraction: Option<f64>,
+    pupil_samples: Option<u32>,
 }
 
 /// Where a scene came from, and which keys `--set` overrode: every message names its origin.
@@ -276,8 +285,24 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
         Some(t) => o.curve("lens.transmission", t, "transmission")?,
         None => efficiency.clone(),
     };
-    let lens = ChromaticMetalens::new(f_number, f0 * 1e-3, l0 * 1e-9, efficiency, transmission)
+    let mut lens = ChromaticMetalens::new(f_number, f0 * 1e-3, l0 * 1e-9, efficiency, transmission)
         .map_err(|e| anyhow!("{}: [lens]: {e}", o.of("lens")))?;
+    if let Some(aperture) = aperture(l, o)? {
+        lens = lens.with_aperture(aperture);
+    }
+    let seidel = |key: &str, v: Option<f64>| -> Result<f64> {
+        let v = v.unwrap_or(0.0);
+        Ok(o.number(key, v, v.abs() <= 1e3, "a wavefront coefficient in µm, |W| ≤ 1000 µm")? * 1e-6)
+    };
+    let terms = [
+        seidel("lens.spherical_um", l.spherical_um)?,
+        seidel("lens.coma_um", l.coma_um)?,
+        seidel("lens.astigmatism_um", l.astigmatism_um)?,
+        seidel("lens.field_curvature_um", l.field_curvature_um)?,
+    ];
+    if terms.iter().any(|&t| t != 0.0) {
+        lens = lens.with_seidel(terms[0], terms[1], terms[2], terms[3]);
+    }
 
     // [source] × [spectrum]
     let radiance = source(&raw.source, o)?;
@@ -315,6 +340,14 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
             options.fraunhofer_threshold =
                 o.number("options.fraunhofer_threshold_mm", v, v > 0.0, "a length > 0 mm")? * 1e-3;
         }
+        if let Some(v) = opt.pupil_samples {
+            options.pupil_samples = o.number(
+                "options.pupil_samples",
+                f64::from(v),
+                (16..=4096).contains(&v),
+                "a whole number of pupil samples from 16 to 4096",
+            )? as usize;
+        }
         if let Some(v) = opt.fraunhofer_max_fraction {
             options.fraunhofer_max_fraction =
                 o.number("options.fraunhofer_max_fraction", v, (0.0..=1.0).contains(&v), "a fraction in [0, 1]")?;
@@ -329,6 +362,41 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
     };
     let field = optics::Field::new(angle("field.x_deg", f.x_deg)?, angle("field.y_deg", f.y_deg)?);
     scene.at_field(field).map_err(|e| anyhow!("{}: {e}", o.of("field")))
+}
+
+/// The iris, when the scene makes it other than the centred full circle.
+fn aperture(l: &RawLens, o: &Origins) -> Result<Option<optics::fft::Aperture>> {
+    let fraction = |key: &str, v: Option<f64>, lo: f64, hi: f64, expected: &str| -> Result<Option<f64>> {
+        v.map(|v| o.number(key, v, v >= lo && v < hi, expected)).transpose()
+    };
+    let dx =
+        fraction("lens.iris_decentre_x", l.iris_decentre_x, -1.0, 1.0, "a fraction of the aperture radius in (−1, 1)")?;
+    let dy =
+        fraction("lens.iris_decentre_y", l.iris_decentre_y, -1.0, 1.0, "a fraction of the aperture radius in (−1, 1)")?;
+    let obscuration = fraction("lens.obscuration", l.obscuration, 0.0, 1.0, "a ratio of radii in [0, 1)")?;
+    let sector = match l.sector_deg {
+        Some([a, b]) => {
+            let key = "lens.sector_deg";
+            if !(a.is_finite() && b.is_finite() && b > a && b - a <= 360.0) {
+                return Err(o.bad(
+                    key,
+                    format!("[{a}, {b}]"),
+                    "[start, end] in degrees with start < end ≤ start + 360",
+                ));
+            }
+            Some((a.to_radians(), b.to_radians()))
+        }
+        None => None,
+    };
+    if dx.is_none() && dy.is_none() && obscuration.is_none() && sector.is_none() {
+        return Ok(None);
+    }
+    let shape = optics::fft::Aperture::disc(obscuration.unwrap_or(0.0), sector)
+        .map_err(|e| anyhow!("{}: lens.obscuration / lens.sector_deg: {e}", o.of("lens")))?;
+    let shape = shape
+        .decentred(dx.unwrap_or(0.0), dy.unwrap_or(0.0))
+        .map_err(|e| anyhow!("{}: lens.iris_decentre_x / _y: {e}", o.of("lens")))?;
+    Ok(Some(shape))
 }
 
 fn source(s: &RawSource, o: &Origins) -> Result<Spectrum> {

@@ -1,5 +1,8 @@
 //! The chromatic metalens / diffractive lens.
 
+use std::sync::Arc;
+
+use optics::fft::Aperture;
 use optics::{Field, LensModel, Order, Pupil, Wavefront};
 use radiometry::Sampled;
 
@@ -43,13 +46,17 @@ impl Curve {
 /// A chromatic (uncorrected) metalens or diffractive lens: `f(λ) = f0 λ0/λ`, the detector at
 /// `f0`, one imaging order (the first diffraction order) with efficiency τ1(λ) through the full
 /// circular aperture, total transmission T(λ) into all orders.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct ChromaticMetalens {
     f_number: f64,
     focal_length: f64,
     design_wavelength: f64,
     efficiency: Curve,
     transmission: Curve,
+    /// the iris when it is not the centred full circle (decentred, obscured, a sector)
+    aperture: Option<Arc<Aperture>>,
+    /// Seidel terms (m at the pupil edge) besides the chromatic defocus: W040, W131, W222, W220
+    seidel: [f64; 4],
 }
 
 fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
@@ -101,7 +108,22 @@ impl ChromaticMetalens {
             design_wavelength: design_wavelength_m,
             efficiency,
             transmission,
+            aperture: None,
+            seidel: [0.0; 4],
         })
+    }
+
+    /// This lens imaging through `aperture` (in units of the full aperture's radius) instead of
+    /// the centred full circle: a decentred iris (paper SI Fig. S3), an obscuration, a sector.
+    /// Such a lens is computed on the FFT path.
+    pub fn with_aperture(self, aperture: Aperture) -> Self {
+        ChromaticMetalens { aperture: Some(Arc::new(aperture)), ..self }
+    }
+
+    /// This lens with Seidel aberrations at the scene's field point (m at the pupil edge, the
+    /// field along +x): spherical W040, coma W131, astigmatism W222, field curvature W220.
+    pub fn with_seidel(self, spherical_m: f64, coma_m: f64, astigmatism_m: f64, field_curvature_m: f64) -> Self {
+        ChromaticMetalens { seidel: [spherical_m, coma_m, astigmatism_m, field_curvature_m], ..self }
     }
 
     /// Focal length at `wavelength_m`: `f(λ) = f0 λ0/λ` (PHYSICS.md, chromatic lens).
@@ -140,11 +162,10 @@ impl LensModel for ChromaticMetalens {
 
     fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
         let [dx, dy] = self.lateral_colour(wavelength_m, field);
-        vec![Order::new(
-            self.efficiency.value(wavelength_m),
-            Pupil::Full,
-            Wavefront::defocus(self.defocus(wavelength_m)).shifted(dx, dy),
-        )]
+        let mut wavefront = Wavefront::defocus(self.defocus(wavelength_m)).shifted(dx, dy);
+        [wavefront.spherical_m, wavefront.coma_m, wavefront.astigmatism_m, wavefront.field_curvature_m] = self.seidel;
+        let pupil = self.aperture.as_ref().map_or(Pupil::Full, |a| Pupil::Aperture(a.clone()));
+        vec![Order::new(self.efficiency.value(wavelength_m), pupil, wavefront)]
     }
 
     fn efficiency(&self, wavelength_m: f64) -> f64 {

@@ -43,8 +43,9 @@ pub struct Glare {
 /// How the numbers were computed.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Numerics {
-    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, PHYSICS.md integral).
-    pub engine: &'static str,
+    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, PHYSICS.md integral),
+    /// or `"fft: N pupil samples, padded to M"` for other pupils and wavefronts.
+    pub engine: String,
     /// Spectral quadrature panels and nodes.
     pub spectral_panels: usize,
     /// Spectral nodes (over all imaging orders).
@@ -71,9 +72,10 @@ pub struct Evaluation {
     /// Mean of the polychromatic MTF over `[0, ν_N]`. Off axis, where lateral colour makes the
     /// OTF depend on direction, the average of the radial and tangential means.
     pub mean_mtf: f64,
-    /// Mean MTF for frequencies along the field direction (the direction lateral colour smears).
+    /// Mean MTF for frequencies along the field direction (the direction lateral colour smears;
+    /// on axis, along the detector's x axis).
     pub mean_mtf_radial: f64,
-    /// Mean MTF for frequencies perpendicular to the field direction.
+    /// Mean MTF for frequencies perpendicular to the field direction (on axis, along y).
     pub mean_mtf_tangential: f64,
     /// Field angles `(x, y)`, degrees.
     pub field_deg: [f64; 2],
@@ -112,13 +114,14 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let field = scene.field();
-    let poly = Polychromatic::new(lens, &detected, field, nyquist, pixel)?;
+    let samples = scene.options().pupil_samples;
+    let poly = Polychromatic::with_pupil_samples(lens, &detected, field, nyquist, pixel, samples)?;
 
     let na = lens.numerical_aperture();
     let area = camera.pixel_pitch() * camera.pixel_pitch();
     let photoelectrons = area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
     let snr0 = radiometry::shot_noise_snr(photoelectrons);
-    let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = if poly.has_lateral_shifts() {
+    let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = if poly.direction_dependent() {
         let radial = field.y_rad.atan2(field.x_rad);
         let (r, w1) = poly.mean_mtf_along(radial);
         let (t, w2) = poly.mean_mtf_along(radial + 0.5 * PI);
@@ -179,7 +182,15 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         glare,
         warnings,
         numerics: Numerics {
-            engine: if poly.has_lateral_shifts() { "exact-1d, complex sum with lateral colour" } else { "exact-1d" },
+            engine: match poly.engine() {
+                optics::Engine::Fft { pupil_samples, padded } => {
+                    format!("fft: {pupil_samples} pupil samples, padded to {padded}")
+                }
+                optics::Engine::Exact1d if poly.has_lateral_shifts() => {
+                    "exact-1d, complex sum with lateral colour".to_owned()
+                }
+                optics::Engine::Exact1d => "exact-1d".to_owned(),
+            },
             spectral_panels: work.spectral_panels,
             spectral_nodes: work.spectral_nodes,
             frequency_panels: work.frequency_panels,
@@ -254,10 +265,11 @@ pub fn mtf_curve(
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let mut max_frequency = camera.nyquist();
     let field = scene.field();
-    let mut poly = Polychromatic::new(lens, &detected, field, max_frequency, pixel)?;
+    let samples = scene.options().pupil_samples;
+    let mut poly = Polychromatic::with_pupil_samples(lens, &detected, field, max_frequency, pixel, samples)?;
     if range == FrequencyRange::Cutoff {
         max_frequency = poly.max_cutoff();
-        poly = Polychromatic::new(lens, &detected, field, max_frequency, pixel)?;
+        poly = Polychromatic::with_pupil_samples(lens, &detected, field, max_frequency, pixel, samples)?;
     }
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let points = points.max(2);

@@ -73,11 +73,18 @@ pub struct Options {
     /// Largest fraction of the detected signal allowed at wavelengths blurred beyond the
     /// threshold for the result to count as valid.
     pub fraunhofer_max_fraction: f64,
+    /// Pupil samples across the diameter when the FFT path is needed (16 to 4096).
+    pub pupil_samples: usize,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { form: MetricForm::Mean, fraunhofer_threshold: 0.25e-3, fraunhofer_max_fraction: 0.01 }
+        Options {
+            form: MetricForm::Mean,
+            fraunhofer_threshold: 0.25e-3,
+            fraunhofer_max_fraction: 0.01,
+            pupil_samples: optics::DEFAULT_PUPIL_SAMPLES,
+        }
     }
 }
 
@@ -115,6 +122,8 @@ impl Scene {
             (0.0..=1.0).contains(&options.fraunhofer_max_fraction),
             "a fraction in [0, 1]",
         )?;
+        let n = options.pupil_samples as f64;
+        check("pupil_samples", n, (16.0..=4096.0).contains(&n), "a whole number from 16 to 4096")?;
         Ok(Scene { lens, radiance, camera, exposure: exposure_s, options, field: Field::ON_AXIS })
     }
 

@@ -36,11 +36,14 @@ impl Field {
 }
 
 /// The pupil an imaging order passes through.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 #[non_exhaustive]
 pub enum Pupil {
     /// The lens' full circular aperture of diameter `D = f0/F#`, centred on the axis.
     Full,
+    /// Any other aperture, in units of the full aperture's radius (decentred iris, annulus,
+    /// sector or segment, mask): computed on the FFT path.
+    Aperture(Arc<crate::fft::Aperture>),
 }
 
 /// Wavefront error of an imaging order at the exit pupil, relative to a reference sphere
@@ -56,12 +59,40 @@ pub struct Wavefront {
     /// image point, m: a wavefront tilt. It leaves the MTF of one wavelength unchanged but gives
     /// each wavelength of a polychromatic sum its own phase `exp(−2πi ν·Δ)` (lateral colour).
     pub image_shift_m: [f64; 2],
+    /// Seidel coefficients at this field point (the field along +x), m at the pupil edge:
+    /// spherical `W040 ρ⁴`, coma `W131 ρ³ cos φ`, astigmatism `W222 ρ² cos² φ`, field curvature
+    /// `W220 ρ²`. Any non-zero term sends the order to the FFT path.
+    pub spherical_m: f64,
+    /// Coma `W131` (m), see [`spherical_m`](Self::spherical_m).
+    pub coma_m: f64,
+    /// Astigmatism `W222` (m).
+    pub astigmatism_m: f64,
+    /// Field curvature `W220` (m).
+    pub field_curvature_m: f64,
 }
 
 impl Wavefront {
     /// A wavefront with defocus only.
     pub fn defocus(w020_m: f64) -> Wavefront {
-        Wavefront { defocus_m: w020_m, image_shift_m: [0.0, 0.0] }
+        Wavefront { defocus_m: w020_m, ..Wavefront::default() }
+    }
+
+    /// Whether the wavefront is defocus (and tilt) only, as the exact 1-D path requires.
+    pub fn is_defocus_only(&self) -> bool {
+        self.spherical_m == 0.0 && self.coma_m == 0.0 && self.astigmatism_m == 0.0 && self.field_curvature_m == 0.0
+    }
+
+    /// The FFT path's aberration set for this wavefront (tilt excluded: it is applied as a phase).
+    pub fn aberrations(&self) -> crate::fft::Aberrations {
+        crate::fft::Aberrations {
+            w020_m: self.defocus_m,
+            w040_m: self.spherical_m,
+            w131_m: self.coma_m,
+            w222_m: self.astigmatism_m,
+            w220_m: self.field_curvature_m,
+            field: 1.0,
+            ..crate::fft::Aberrations::default()
+        }
     }
 
     /// This wavefront with the image point displaced by `(x, y)` m on the detector.
@@ -71,7 +102,7 @@ impl Wavefront {
 }
 
 /// One imaging order (a diffraction order, or one channel of a multiplexed lens).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 #[non_exhaustive]
 pub struct Order {
     /// Fraction of the light incident on the aperture that this order brings to the image

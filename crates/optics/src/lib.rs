@@ -46,4 +46,7 @@ pub use otf::{
     BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_bessel, defocus_otf_panels, defocus_otf_quadrature,
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
-pub use poly::{FREQUENCY_TOLERANCE, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work, monochromatic_otf};
+pub use poly::{
+    DEFAULT_PUPIL_SAMPLES, Engine, FREQUENCY_TOLERANCE, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work,
+    monochromatic_otf,
+};
