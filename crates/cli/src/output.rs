@@ -59,10 +59,15 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         if scene.camera().pixel_mtf() { ", with pixel MTF" } else { "" }
     );
     if r.mean_mtf_radial != r.mean_mtf_tangential {
+        let (names, at) = if r.field_deg == [0.0, 0.0] {
+            ("along x / along y", "on axis".to_owned())
+        } else {
+            ("radial / tangential", format!("at field ({}°, {}°)", r.field_deg[0], r.field_deg[1]))
+        };
         let _ = writeln!(
             s,
-            "    radial / tangential       {:>12.6}   / {:.6} at field ({}°, {}°), lateral colour",
-            r.mean_mtf_radial, r.mean_mtf_tangential, r.field_deg[0], r.field_deg[1]
+            "    {names:<24}{:>12.6}   / {:.6} {at}: the OTF depends on direction",
+            r.mean_mtf_radial, r.mean_mtf_tangential
         );
     }
     let _ = writeln!(s, "  ∫ MTF dν                    {:>12.4}   cycles/mm", r.mtf_integral_cyc_per_mm);

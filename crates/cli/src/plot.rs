@@ -72,9 +72,10 @@ where
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
     }
     if let (Some(r), Some(t)) = (&curve.mtf_radial, &curve.mtf_tangential) {
-        for (ys, name, colour) in
-            [(r, "radial (lateral colour)", RGBColor(90, 150, 240)), (t, "tangential", RGBColor(20, 40, 120))]
-        {
+        for (ys, name, colour) in [
+            (r, "along the field (x on axis)", RGBColor(90, 150, 240)),
+            (t, "across it (y on axis)", RGBColor(20, 40, 120)),
+        ] {
             chart
                 .draw_series(DashedLineSeries::new(series(ys), 8, 4, colour.stroke_width(2)))
                 .map_err(|e| err(&e))?

@@ -364,3 +364,14 @@ fn off_axis_field_reports_the_radial_tangential_split() {
     let err = fails(&["evaluate", "--set", "field.x_deg=95"]);
     assert!(err.contains("field.x_deg = 95: expected an angle in degrees, within ±90"), "{err}");
 }
+
+#[test]
+fn decentred_iris_example_uses_the_fft_path_and_splits_x_and_y() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/decentred-iris.toml");
+    let v = json(&["evaluate", scene, "--json"]);
+    assert!(v["numerics"]["engine"].as_str().unwrap().starts_with("fft:"), "{}", v["numerics"]["engine"]);
+    assert!(v["mean_mtf_radial"].as_f64().unwrap() < v["mean_mtf_tangential"].as_f64().unwrap());
+    let out = asnr(&["mtf", scene, "--csv", "--points", "5"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_radial,mtf_tangential\n"), "{text}");
+}

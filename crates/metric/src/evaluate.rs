@@ -284,7 +284,7 @@ pub fn mtf_curve(
     let radial = field.y_rad.atan2(field.x_rad);
     let along = |azimuth: f64| -> Vec<f64> { frequencies.iter().map(|&nu| poly.mtf_along(nu, azimuth)).collect() };
     let (mtf_radial, mtf_tangential) =
-        if poly.has_lateral_shifts() { (Some(along(radial)), Some(along(radial + 0.5 * PI))) } else { (None, None) };
+        if poly.direction_dependent() { (Some(along(radial)), Some(along(radial + 0.5 * PI))) } else { (None, None) };
     // off axis the headline curve is the radial–tangential average, as `mean_mtf` is
     let mtf = match (&mtf_radial, &mtf_tangential) {
         (Some(r), Some(t)) => r.iter().zip(t).map(|(a, b)| 0.5 * (a + b)).collect(),
