@@ -80,9 +80,8 @@
 //! Nyquist) along the `+x` slice against the exact 1-D path, for a centred circle with `w` waves
 //! of defocus, and the time of one evaluation ([`OtfPlan::otf`] + [`Otf::mean_mtf`], best of 3,
 //! dev profile: opt-level 2, dependencies 3; a 2-core development machine). Produced by
-//! [`convergence_table`]`(w, 0.2, &[32, 64, 128, 256, 512, 1024])` for `w = 0, 1`, printed once
-//! from a throw-away test run with
-//! `CARGO_TARGET_DIR=/tmp/target-fft cargo test -p optics --test fft <that test> -- --nocapture`:
+//! [`convergence_table`]`(w, 0.2, &[32, 64, 128, 256, 512, 1024])` for `w = 0, 1`; regenerate it
+//! with `cargo run -p optics --example fft_convergence`:
 //!
 //! | N | M | error, w = 0 | error, w = 1 | time per evaluation |
 //! |---|---|---|---|---|
