@@ -68,6 +68,22 @@ fn with_gaussian_scene<R>(
     body(&scene)
 }
 
+/// The paper's lens and camera (F/2.5, f0 = 3.36 mm, λ0 = 800 nm, 5.2 µm, no pixel MTF) over
+/// `[lo, hi]` with the photoelectron `density`.
+fn paper_scene(density: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> ReferenceScene<'_> {
+    ReferenceScene {
+        density,
+        lambda_min: lo,
+        lambda_max: hi,
+        breakpoints: &[],
+        f_number: 2.5,
+        focal_length_m: F0,
+        design_wavelength_m: LAMBDA0,
+        pixel_pitch_m: 5.2e-6,
+        pixel_mtf: false,
+    }
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
@@ -312,17 +328,7 @@ fn mean_mtf_is_independent_of_the_density_scale() {
     let (sigma, lo, hi) = gaussian(50e-9);
     let m = |scale: f64| {
         let density = move |l: f64| scale * l * (-(l - LAMBDA0).powi(2) / (2.0 * sigma * sigma)).exp();
-        let scene = ReferenceScene {
-            density: &density,
-            lambda_min: lo,
-            lambda_max: hi,
-            breakpoints: &[],
-            f_number: 2.5,
-            focal_length_m: F0,
-            design_wavelength_m: LAMBDA0,
-            pixel_pitch_m: 5.2e-6,
-            pixel_mtf: false,
-        };
+        let scene = paper_scene(&density, lo, hi);
         mean_mtf(&scene, 1e-10)
     };
     assert!(rel(m(1e25), m(1.0)) < 1e-12);
@@ -367,17 +373,7 @@ fn top_hat_spectrum() {
     let flat = |l: f64| {
         if (775e-9..=825e-9).contains(&l) { 1.0 } else { 0.0 }
     };
-    let scene = ReferenceScene {
-        density: &flat,
-        lambda_min: 775e-9,
-        lambda_max: 825e-9,
-        breakpoints: &[],
-        f_number: 2.5,
-        focal_length_m: F0,
-        design_wavelength_m: LAMBDA0,
-        pixel_pitch_m: 5.2e-6,
-        pixel_mtf: false,
-    };
+    let scene = paper_scene(&flat, 775e-9, 825e-9);
     let m_flat = mean_mtf(&scene, 1e-9);
     assert!(0.0 < m_flat && m_flat < 1.0);
     // Narrowing a flat band towards λ0 tends to the monochromatic value.
@@ -406,17 +402,7 @@ fn mean_mtf_with_sign_changes_agrees_with_piecewise_simpson() {
     let centre = 850e-9;
     let sigma = 10e-9 / (2.0 * 2f64.sqrt());
     let density = move |l: f64| l * (-(l - centre) * (l - centre) / (2.0 * sigma * sigma)).exp();
-    let scene = ReferenceScene {
-        density: &density,
-        lambda_min: centre - 12.0 * sigma,
-        lambda_max: centre + 12.0 * sigma,
-        breakpoints: &[],
-        f_number: 2.5,
-        focal_length_m: F0,
-        design_wavelength_m: LAMBDA0,
-        pixel_pitch_m: 5.2e-6,
-        pixel_mtf: false,
-    };
+    let scene = paper_scene(&density, centre - 12.0 * sigma, centre + 12.0 * sigma);
     let nu_n = scene.nyquist();
     let g = |nu: f64| polychromatic_otf(&scene, nu, 1e-11);
     let n = 400;
