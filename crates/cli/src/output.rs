@@ -49,7 +49,19 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
     let _ = writeln!(s, "lens       {}", scene.lens().describe());
     let _ = writeln!(s);
     let _ = writeln!(s, "  ASNR                        {:>12.4}   {form}", r.asnr);
-    let _ = writeln!(s, "  SNR0 = √N                   {:>12.4}   shot-noise limited (SI eq. S9)", r.snr0);
+    match r.glare_mode {
+        metric::GlareMode::FirstOrder => {
+            let _ = writeln!(s, "  SNR0 = √N                   {:>12.4}   shot-noise limited (SI eq. S9)", r.snr0);
+        }
+        metric::GlareMode::Included => {
+            let _ = writeln!(
+                s,
+                "  SNR0 = N/√N_T               {:>12.4}   with the glare of {:.1} stray e⁻ (SI eq. S14)",
+                r.snr0,
+                r.transmitted_photoelectrons - r.photoelectrons
+            );
+        }
+    }
     let _ = writeln!(s, "  photoelectrons N            {:>12.1}   per pixel (SI eq. S7–S8)", r.photoelectrons);
     let _ = writeln!(
         s,

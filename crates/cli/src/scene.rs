@@ -139,6 +139,7 @@ struct RawOptions {
     fraunhofer_threshold_mm: Option<f64>,
     fraunhofer_max_fraction: Option<f64>,
     pupil_samples: Option<u32>,
+    glare: Option<String>,
 }
 
 /// Where a scene came from, and which keys `--set` overrode: every message names its origin.
@@ -339,6 +340,15 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
         if let Some(v) = opt.fraunhofer_threshold_mm {
             options.fraunhofer_threshold =
                 o.number("options.fraunhofer_threshold_mm", v, v > 0.0, "a length > 0 mm")? * 1e-3;
+        }
+        if let Some(g) = &opt.glare {
+            options.glare = match g.as_str() {
+                "first_order" => metric::GlareMode::FirstOrder,
+                "included" => metric::GlareMode::Included,
+                other => {
+                    return Err(o.bad("options.glare", format!("\"{other}\""), "\"first_order\" or \"included\""));
+                }
+            };
         }
         if let Some(v) = opt.pupil_samples {
             options.pupil_samples = o.number(

@@ -7,7 +7,7 @@ use radiometry::Spectrum;
 use radiometry::constants::{PLANCK, SPEED_OF_LIGHT};
 use serde::Serialize;
 
-use crate::{Error, MetricForm, Scene};
+use crate::{Error, GlareMode, MetricForm, Scene};
 
 /// Fraunhofer validity of the result (paper SI eq. S15).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -81,10 +81,16 @@ pub struct Evaluation {
     pub field_deg: [f64; 2],
     /// `∫_0^{ν_N} MTF dν`, cycles/mm.
     pub mtf_integral_cyc_per_mm: f64,
-    /// Zero-frequency, shot-noise-limited SNR `√N` (paper SI eq. S9).
+    /// Zero-frequency SNR: `√N` (paper SI eq. S9) with `glare = "first_order"`, `N/√N_T`
+    /// (eq. S14) with `glare = "included"`.
     pub snr0: f64,
+    /// Which noise `snr0` counts.
+    pub glare_mode: GlareMode,
     /// Signal photoelectrons per pixel `N` (paper SI eq. S7–S8).
     pub photoelectrons: f64,
+    /// Photoelectrons per pixel from all transmitted light, imaged or stray, `N_T` (eq. S8 with
+    /// τ1 → T): the shot noise of the glare-inclusive SNR.
+    pub transmitted_photoelectrons: f64,
     /// Nyquist frequency `1/(2p)`, cycles/mm.
     pub nyquist_cyc_per_mm: f64,
     /// Photoelectron-weighted mean wavelength, nm.
@@ -120,7 +126,12 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     let na = lens.numerical_aperture();
     let area = camera.pixel_pitch() * camera.pixel_pitch();
     let photoelectrons = area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
-    let snr0 = radiometry::shot_noise_snr(photoelectrons);
+    // eq. S8 with τ1 → T: every photoelectron the lens transmits, imaged or stray
+    let transmitted = photoelectrons / poly.total_weight() * poly.detected_integral(|l| lens.transmission(l));
+    let snr0 = match scene.options().glare {
+        GlareMode::FirstOrder => radiometry::shot_noise_snr(photoelectrons),
+        GlareMode::Included => noise::snr_with_glare(photoelectrons, transmitted.max(photoelectrons)),
+    };
     let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = if poly.direction_dependent() {
         let radial = field.y_rad.atan2(field.x_rad);
         let (r, w1) = poly.mean_mtf_along(radial);
@@ -174,7 +185,9 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
         mtf_integral_cyc_per_mm: integral,
         snr0,
+        glare_mode: scene.options().glare,
         photoelectrons,
+        transmitted_photoelectrons: transmitted,
         nyquist_cyc_per_mm: nyquist * 1e-3,
         mean_wavelength_nm: mean_wavelength * 1e9,
         cutoff_cyc_per_mm: optics::cutoff_frequency(mean_wavelength, lens.f_number()) * 1e-3,

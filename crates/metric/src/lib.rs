@@ -41,7 +41,7 @@ mod evaluate;
 mod scene;
 
 pub use evaluate::{Evaluation, Fraunhofer, FrequencyRange, Glare, MtfCurve, Numerics, evaluate, mtf_curve};
-pub use scene::{Camera, MetricForm, Options, Scene};
+pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -63,6 +63,18 @@ pub enum MetricForm {
     Integral,
 }
 
+/// Which noise the zero-frequency SNR counts (paper SI, "ASNR metric that includes VG effect").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GlareMode {
+    /// The paper's main analysis: signal and shot noise from the imaging order only (eq. S8–S9).
+    #[default]
+    FirstOrder,
+    /// Noise from all transmitted light, signal from the imaging order: `SNR = S/√S_N` (eq. S14,
+    /// τ1 → T in eq. S7 for `S_N`), used with the normalized MTF.
+    Included,
+}
+
 /// Evaluation options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
@@ -75,6 +87,8 @@ pub struct Options {
     pub fraunhofer_max_fraction: f64,
     /// Pupil samples across the diameter when the FFT path is needed (16 to 4096).
     pub pupil_samples: usize,
+    /// Whether the SNR counts the stray light of the other orders (veiling glare).
+    pub glare: GlareMode,
 }
 
 impl Default for Options {
@@ -84,6 +98,7 @@ impl Default for Options {
             fraunhofer_threshold: 0.25e-3,
             fraunhofer_max_fraction: 0.01,
             pupil_samples: optics::DEFAULT_PUPIL_SAMPLES,
+            glare: GlareMode::FirstOrder,
         }
     }
 }

@@ -271,3 +271,25 @@ fn decentred_iris_lowers_the_mtf_and_breaks_the_symmetry() {
         decentred.mean_mtf_tangential
     );
 }
+
+/// Both glare modes (paper SI eq. S14). Paper scene: N = 559.3854 e⁻ from τ1 = 0.15; all
+/// transmitted light N_T = N × 0.55/0.15 = 2051.0798 e⁻; SNR = N/√N_T = 559.3854/45.28885 = 12.35148.
+/// The MTF (normalized) is the same in both modes.
+#[test]
+fn glare_modes() {
+    let first = evaluate(&scene(2.5, 50e-9, 5.2e-6, false, LAMBDA0)).unwrap();
+    let lens = paper_lens();
+    let options = Options { glare: metric::GlareMode::Included, ..Options::default() };
+    let s = scene(2.5, 50e-9, 5.2e-6, false, LAMBDA0);
+    let with = Scene::new(Arc::new(lens), s.radiance().clone(), s.camera().clone(), s.exposure(), options).unwrap();
+    let glare = evaluate(&with).unwrap();
+    assert!((glare.transmitted_photoelectrons - 2051.0798).abs() < 1e-3, "{}", glare.transmitted_photoelectrons);
+    assert!((glare.snr0 - 12.35148).abs() < 1e-4, "{}", glare.snr0);
+    assert_eq!(glare.mean_mtf, first.mean_mtf);
+    // T = τ1: no stray light, both modes agree
+    let clean = ChromaticMetalens::new(2.5, F0, LAMBDA0, Curve::Constant(0.15), Curve::Constant(0.15)).unwrap();
+    let options = Options { glare: metric::GlareMode::Included, ..Options::default() };
+    let no_stray =
+        Scene::new(Arc::new(clean), s.radiance().clone(), s.camera().clone(), s.exposure(), options).unwrap();
+    assert!((evaluate(&no_stray).unwrap().snr0 - first.snr0).abs() < 1e-9 * first.snr0);
+}
