@@ -4,6 +4,7 @@
 //! binary. Human-readable table by default, `--json` for scripts. The only crate that reads
 //! files, arguments or the environment.
 
+mod optimize;
 mod output;
 mod plot;
 mod scene;
@@ -33,6 +34,23 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The value of one numeric scene key that maximizes the ASNR (scan, then golden section).
+    Optimize {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// The key to vary and its range, e.g. --over spectrum.range_nm=1:200.
+        #[arg(long, value_name = "KEY=LO:HI")]
+        over: String,
+        /// Stop when the bracket is narrower than this fraction of HI − LO.
+        #[arg(long, default_value_t = 1e-4, value_name = "FRACTION")]
+        tolerance: f64,
+        /// Print one JSON object.
         #[arg(long)]
         json: bool,
     },
@@ -78,6 +96,28 @@ fn run(cli: Cli) -> Result<()> {
                 for w in &result.warnings {
                     eprintln!("warning: {w}");
                 }
+            }
+            Ok(())
+        }
+        Command::Optimize { scene, set, over, tolerance, json } => {
+            if !(tolerance > 0.0 && tolerance < 1.0) {
+                anyhow::bail!("--tolerance {tolerance}: expected a fraction of the range in (0, 1)");
+            }
+            let range = optimize::parse_range(&over, false)?;
+            let asnr_at = |x: f64| -> Result<f64> {
+                let mut overrides = set.clone();
+                overrides.push(format!("{}={x}", range.key));
+                let loaded = scene::load(scene.as_deref(), &overrides)?;
+                Ok(metric::evaluate(&loaded)?.asnr)
+            };
+            let best = optimize::maximize(&range, tolerance * (range.hi - range.lo), asnr_at)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&best)?);
+            } else {
+                println!(
+                    "best {} = {:.6} (±{:.2e}) → ASNR {:.6}   [{} evaluations over {}…{}]",
+                    best.key, best.best, best.tolerance, best.asnr, best.evaluations, best.lo, best.hi
+                );
             }
             Ok(())
         }

@@ -375,3 +375,28 @@ fn decentred_iris_example_uses_the_fft_path_and_splits_x_and_y() {
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_radial,mtf_tangential\n"), "{text}");
 }
+
+// ---- asnr optimize ----
+
+#[test]
+fn optimize_finds_an_interior_maximum_of_the_spectral_range() {
+    let v = json(&["optimize", "--over", "spectrum.range_nm=1:200", "--tolerance", "1e-3", "--json"]);
+    let (best, asnr) = (v["best"].as_f64().unwrap(), v["asnr"].as_f64().unwrap());
+    assert!(best > 10.0 && best < 100.0, "{best}");
+    // the maximum beats both ends and the paper's 50 nm
+    for range in ["1", "200", "50"] {
+        let at =
+            json(&["evaluate", "--set", &format!("spectrum.range_nm={range}"), "--json"])["asnr"].as_f64().unwrap();
+        assert!(asnr >= at, "{asnr} < {at} at {range} nm");
+    }
+}
+
+#[test]
+fn bad_optimize_arguments() {
+    let err = fails(&["optimize", "--over", "spectrum.range_nm=200:1"]);
+    assert!(err.contains("LO = 200 must be below HI = 1"), "{err}");
+    let err = fails(&["optimize", "--over", "lens.colour=1:2"]);
+    assert!(err.contains("lens.colour: unknown field `colour`"), "{err}");
+    let err = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--tolerance", "2"]);
+    assert!(err.contains("--tolerance 2: expected a fraction of the range in (0, 1)"), "{err}");
+}

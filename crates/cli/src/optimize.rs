@@ -1,0 +1,165 @@
+//! `asnr optimize`: the value of one numeric scene key that maximizes the ASNR.
+
+use anyhow::{Context, Result, bail};
+use serde::Serialize;
+
+/// Points of the coarse scan that brackets the maximum before the golden-section search.
+const SCAN_POINTS: usize = 17;
+
+/// A `KEY=LO:HI` range.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Range {
+    /// Dotted scene key.
+    pub key: String,
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+    /// Grid points (sweeps only).
+    pub points: Option<usize>,
+}
+
+/// Parses `KEY=LO:HI` (and `KEY=LO:HI:N` when `with_points`).
+pub fn parse_range(arg: &str, with_points: bool) -> Result<Range> {
+    let form = if with_points { "KEY=LO:HI:N" } else { "KEY=LO:HI" };
+    let Some((key, spec)) = arg.split_once('=') else {
+        bail!(
+            "--over {arg}: expected {form}, e.g. --over spectrum.range_nm=1:200{}",
+            if with_points { ":50" } else { "" }
+        );
+    };
+    let parts: Vec<&str> = spec.split(':').collect();
+    let expected = if with_points { 3 } else { 2 };
+    if parts.len() != expected {
+        bail!("--over {arg}: expected {form}");
+    }
+    let num = |s: &str, what: &str| -> Result<f64> {
+        s.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .with_context(|| format!("--over {arg}: {what} `{s}` is not a finite number"))
+    };
+    let (lo, hi) = (num(parts[0], "LO")?, num(parts[1], "HI")?);
+    if lo >= hi {
+        bail!("--over {arg}: LO = {lo} must be below HI = {hi}");
+    }
+    let points =
+        if with_points {
+            let n: usize =
+                parts[2].trim().parse().ok().filter(|n| (1..=1_000_000).contains(n)).with_context(|| {
+                    format!("--over {arg}: N `{}` is not a whole number from 1 to 1000000", parts[2])
+                })?;
+            Some(n)
+        } else {
+            None
+        };
+    Ok(Range { key: key.trim().to_owned(), lo, hi, points })
+}
+
+/// The maximum found.
+#[derive(Clone, Debug, Serialize)]
+pub struct Optimum {
+    /// The key varied.
+    pub key: String,
+    /// The best value of the key.
+    pub best: f64,
+    /// The ASNR there.
+    pub asnr: f64,
+    /// The search interval.
+    pub lo: f64,
+    /// The search interval.
+    pub hi: f64,
+    /// `best` is within this of the true maximizer of a unimodal ASNR on the bracket.
+    pub tolerance: f64,
+    /// ASNR evaluations used.
+    pub evaluations: usize,
+}
+
+/// Maximizes `f` on `[lo, hi]`: a scan of [`SCAN_POINTS`] brackets the best point, then
+/// golden-section search narrows the bracket to `tolerance` (absolute, in the key's units).
+pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<f64>) -> Result<Optimum> {
+    let (lo, hi) = (range.lo, range.hi);
+    let step = (hi - lo) / (SCAN_POINTS - 1) as f64;
+    let mut evaluations = 0;
+    let mut best = (lo, f64::NEG_INFINITY);
+    let mut best_index = 0;
+    for i in 0..SCAN_POINTS {
+        let x = if i + 1 == SCAN_POINTS { hi } else { lo + step * i as f64 };
+        let y = f(x)?;
+        evaluations += 1;
+        if y > best.1 {
+            best = (x, y);
+            best_index = i;
+        }
+    }
+    let mut a = lo + step * best_index.saturating_sub(1) as f64;
+    let mut b = (lo + step * (best_index + 1) as f64).min(hi);
+    let ratio = (5f64.sqrt() - 1.0) / 2.0;
+    let mut c = b - ratio * (b - a);
+    let mut d = a + ratio * (b - a);
+    let (mut fc, mut fd) = (f(c)?, f(d)?);
+    evaluations += 2;
+    while b - a > tolerance {
+        if fc >= fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - ratio * (b - a);
+            fc = f(c)?;
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + ratio * (b - a);
+            fd = f(d)?;
+        }
+        evaluations += 1;
+        for (x, y) in [(c, fc), (d, fd)] {
+            if y > best.1 {
+                best = (x, y);
+            }
+        }
+    }
+    Ok(Optimum {
+        key: range.key.clone(),
+        best: best.0,
+        asnr: best.1,
+        lo,
+        hi,
+        tolerance: (b - a).max(tolerance),
+        evaluations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_the_maximum_of_a_parabola() {
+        let range = Range { key: "x".into(), lo: 0.0, hi: 10.0, points: None };
+        let o = maximize(&range, 1e-8, |x| Ok(-(x - 3.3) * (x - 3.3))).unwrap();
+        assert!((o.best - 3.3).abs() < 1e-8, "{}", o.best);
+        assert!(o.evaluations < 80);
+    }
+
+    #[test]
+    fn maximum_at_an_end_of_the_range() {
+        let range = Range { key: "x".into(), lo: 1.0, hi: 2.0, points: None };
+        let o = maximize(&range, 1e-9, |x| Ok(x)).unwrap();
+        assert!((o.best - 2.0).abs() < 1e-8, "{}", o.best);
+    }
+
+    #[test]
+    fn parses_ranges() {
+        assert_eq!(
+            parse_range("spectrum.range_nm=1:200", false).unwrap(),
+            Range { key: "spectrum.range_nm".into(), lo: 1.0, hi: 200.0, points: None }
+        );
+        assert_eq!(parse_range("lens.f_number=1.4:5:40", true).unwrap().points, Some(40));
+        assert!(parse_range("a=2:1", false).unwrap_err().to_string().contains("LO = 2 must be below HI = 1"));
+        assert!(parse_range("a=1:x", false).unwrap_err().to_string().contains("HI `x` is not a finite number"));
+        assert!(parse_range("a", false).unwrap_err().to_string().contains("expected KEY=LO:HI"));
+    }
+}
