@@ -147,7 +147,7 @@ mod tests {
     #[test]
     fn maximum_at_an_end_of_the_range() {
         let range = Range { key: "x".into(), lo: 1.0, hi: 2.0, points: None };
-        let o = maximize(&range, 1e-9, |x| Ok(x)).unwrap();
+        let o = maximize(&range, 1e-9, Ok).unwrap();
         assert!((o.best - 2.0).abs() < 1e-8, "{}", o.best);
     }
 
