@@ -8,6 +8,7 @@ mod optimize;
 mod output;
 mod plot;
 mod scene;
+mod sweep;
 mod tables;
 
 use std::path::PathBuf;
@@ -53,6 +54,29 @@ enum Command {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+    },
+    /// The ASNR over a grid of one or more keys (cartesian product), in parallel.
+    Sweep {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// A key to sweep, N points from LO to HI (repeatable; the first varies slowest).
+        #[arg(long, value_name = "KEY=LO:HI:N", required = true)]
+        over: Vec<String>,
+        /// Print CSV: one column per swept key, then mean_mtf, snr0, asnr, ….
+        #[arg(long, conflicts_with = "json")]
+        csv: bool,
+        /// Print a JSON array of points.
+        #[arg(long)]
+        json: bool,
+        /// Draw the ASNR (one key: a line; two keys: a heatmap with the optimum ridge), .svg or .png.
+        #[arg(long, value_name = "FILE")]
+        plot: Option<PathBuf>,
+        /// Worker threads (0 = all cores). The results do not depend on it.
+        #[arg(long, default_value_t = 0, value_name = "N")]
+        threads: usize,
     },
     /// The polychromatic MTF from 0 to Nyquist (or to the cutoff), with the diffraction limit.
     Mtf {
@@ -118,6 +142,30 @@ fn run(cli: Cli) -> Result<()> {
                     "best {} = {:.6} (±{:.2e}) → ASNR {:.6}   [{} evaluations over {}…{}]",
                     best.key, best.best, best.tolerance, best.asnr, best.evaluations, best.lo, best.hi
                 );
+            }
+            Ok(())
+        }
+        Command::Sweep { scene, set, over, csv, json, plot, threads } => {
+            let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
+            let total: usize = ranges.iter().map(|r| r.points.unwrap_or(1)).product();
+            if total > 10_000_000 {
+                anyhow::bail!("--over: {total} grid points; expected at most 10000000");
+            }
+            let source = scene::read(scene.as_deref())?;
+            // validate the scene and the keys once before spending the grid
+            let mut first = set.clone();
+            first.extend(ranges.iter().map(|r| format!("{}={}", r.key, r.lo)));
+            scene::build_from(&source, &first)?;
+            let points = sweep::run(&source, &set, &ranges, threads)?;
+            if let Some(path) = &plot {
+                plot::sweep_plot(path, source.label(), &ranges, &points)?;
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&points)?);
+            } else if csv {
+                print!("{}", sweep::csv(&ranges, &points));
+            } else {
+                print!("{}", sweep::table(source.label(), &ranges, &points));
             }
             Ok(())
         }

@@ -200,8 +200,23 @@ impl Origins {
     }
 }
 
-/// Reads and validates a scene: `file` (None = the embedded paper scene) with `--set` overrides.
-pub fn load(file: Option<&Path>, overrides: &[String]) -> Result<Scene> {
+/// A scene file's text, read once and built into scenes with different overrides (sweeps).
+#[derive(Clone, Debug)]
+pub struct Source {
+    text: String,
+    label: String,
+    dir: PathBuf,
+}
+
+impl Source {
+    /// How messages name this scene.
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+}
+
+/// Reads a scene file (None = the embedded paper scene).
+pub fn read(file: Option<&Path>) -> Result<Source> {
     let (text, label, dir) = match file {
         Some(path) => {
             let text = std::fs::read_to_string(path)
@@ -211,11 +226,22 @@ pub fn load(file: Option<&Path>, overrides: &[String]) -> Result<Scene> {
         }
         None => (PAPER_SCENE.to_owned(), "embedded paper scene".to_owned(), PathBuf::from(".")),
     };
+    Ok(Source { text, label, dir })
+}
+
+/// Reads and validates a scene: `file` (None = the embedded paper scene) with `--set` overrides.
+pub fn load(file: Option<&Path>, overrides: &[String]) -> Result<Scene> {
+    build_from(&read(file)?, overrides)
+}
+
+/// Builds and validates the scene of `source` with `--set` overrides.
+pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene> {
+    let (text, label, dir) = (&source.text, source.label.clone(), source.dir.clone());
     if text.trim().is_empty() {
         bail!("{label}: the scene file is empty: expected TOML tables [lens], [source], [camera], [exposure]");
     }
     let mut table: toml::Table =
-        toml::from_str(&text).map_err(|e| anyhow!("{label}: malformed TOML: {}", e.to_string().trim_end()))?;
+        toml::from_str(text).map_err(|e| anyhow!("{label}: malformed TOML: {}", e.to_string().trim_end()))?;
     let mut origins = Origins { file: label, dir, overrides: BTreeMap::new() };
     for arg in overrides {
         let (key, value) = apply_override(&mut table, arg)?;

@@ -400,3 +400,66 @@ fn bad_optimize_arguments() {
     let err = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--tolerance", "2"]);
     assert!(err.contains("--tolerance 2: expected a fraction of the range in (0, 1)"), "{err}");
 }
+
+// ---- asnr sweep ----
+
+#[test]
+fn sweep_csv_is_identical_with_one_and_two_threads() {
+    let args = |threads: &'static str| {
+        vec![
+            "sweep",
+            "--over",
+            "lens.f_number=2:5:6",
+            "--over",
+            "spectrum.range_nm=1:20:10",
+            "--csv",
+            "--threads",
+            threads,
+        ]
+    };
+    let one = asnr(&args("1"));
+    let two = asnr(&args("2"));
+    assert!(one.status.success() && two.status.success(), "{}", stderr(&one));
+    assert_eq!(one.stdout, two.stdout);
+    let text = String::from_utf8(one.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "lens.f_number,spectrum.range_nm,mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid");
+    assert_eq!(lines.len(), 61);
+    // the first key varies slowest; the grid includes both ends
+    assert!(lines[1].starts_with("2,1,") && lines[10].starts_with("2,20,") && lines[60].starts_with("5,20,"), "{text}");
+}
+
+#[test]
+fn sweep_points_match_evaluate_and_plot() {
+    let dir = scratch("sweep-plot");
+    let png = dir.join("heat.png");
+    let out = asnr(&[
+        "sweep",
+        "--over",
+        "spectrum.range_nm=10:50:3",
+        "--over",
+        "camera.pixel_pitch_um=4:6:2",
+        "--json",
+        "--plot",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let points: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let p = &points[2]; // range 10 + 20 × 1 = 30 nm, pitch 4 µm
+    assert_eq!(p["values"], serde_json::json!([30.0, 4.0]));
+    let direct = json(&["evaluate", "--set", "spectrum.range_nm=30", "--set", "camera.pixel_pitch_um=4", "--json"]);
+    assert_eq!(p["asnr"], direct["asnr"]);
+    assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+}
+
+#[test]
+fn bad_sweep_arguments() {
+    let err = fails(&["sweep", "--over", "spectrum.range_nm=1:200"]);
+    assert!(err.contains("expected KEY=LO:HI:N"), "{err}");
+    let err = fails(&["sweep", "--over", "spectrum.range_nm=1:200:0"]);
+    assert!(err.contains("N `0` is not a whole number from 1 to 1000000"), "{err}");
+    let err = fails(&["sweep", "--over", "lens.f_number=0.1:1:3"]);
+    assert!(err.contains("lens.f_number = 0.1: expected a number ≥ 0.5"), "{err}");
+    let err = fails(&["sweep", "--over", "a.b=1:2:2", "--over", "c.d=1:2:2", "--over", "e.f=1:2:2", "--plot", "x.svg"]);
+    assert!(err.contains("unknown field"), "{err}");
+}
