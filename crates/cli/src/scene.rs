@@ -124,6 +124,11 @@ struct RawCamera {
     #[serde(default)]
     pixel_mtf: bool,
     quantum_efficiency: NumberOrFile,
+    read_noise_e: Option<f64>,
+    dark_current_e_per_s: Option<f64>,
+    full_well_e: Option<f64>,
+    gain_dn_per_e: Option<f64>,
+    adc_bits: Option<u32>,
 }
 
 #[derive(Deserialize)]
@@ -349,8 +354,11 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
         Curve::Constant(v) => Spectrum::Constant(v),
         Curve::Table(t) => Spectrum::Sampled(t),
     };
-    let camera =
+    let mut camera =
         Camera::new(pitch * 1e-6, qe, c.pixel_mtf).map_err(|e| anyhow!("{}: [camera]: {e}", o.of("camera")))?;
+    if let Some(sensor) = sensor(c, o)? {
+        camera = camera.with_sensor(sensor);
+    }
 
     // [exposure], [options]
     let t = o.number("exposure.time_ms", raw.exposure.time_ms, raw.exposure.time_ms > 0.0, "a time > 0 ms")?;
@@ -398,6 +406,39 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
     };
     let field = optics::Field::new(angle("field.x_deg", f.x_deg)?, angle("field.y_deg", f.y_deg)?);
     scene.at_field(field).map_err(|e| anyhow!("{}: {e}", o.of("field")))
+}
+
+/// The sensor noise model, when the scene gives any of its keys (otherwise shot-noise limited).
+fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>> {
+    if c.read_noise_e.is_none()
+        && c.dark_current_e_per_s.is_none()
+        && c.full_well_e.is_none()
+        && c.gain_dn_per_e.is_none()
+        && c.adc_bits.is_none()
+    {
+        return Ok(None);
+    }
+    let read = c.read_noise_e.unwrap_or(0.0);
+    let read = o.number("camera.read_noise_e", read, read >= 0.0, "a read noise ≥ 0 e⁻ rms")?;
+    let dark = c.dark_current_e_per_s.unwrap_or(0.0);
+    let dark = o.number("camera.dark_current_e_per_s", dark, dark >= 0.0, "a dark current ≥ 0 e⁻/s")?;
+    let well = match c.full_well_e {
+        Some(w) => o.number("camera.full_well_e", w, w > 0.0, "a full-well capacity > 0 e⁻")?,
+        None => f64::INFINITY,
+    };
+    let sensor = match (c.gain_dn_per_e, c.adc_bits) {
+        (Some(k), Some(bits)) => {
+            let k = o.number("camera.gain_dn_per_e", k, k > 0.0, "a conversion gain > 0 DN/e⁻")?;
+            if !(1..=32).contains(&bits) {
+                return Err(o.bad("camera.adc_bits", bits, "a whole number of bits from 1 to 32"));
+            }
+            noise::Sensor::new(read, dark, well, k, bits)
+        }
+        (None, None) => noise::Sensor::without_adc(read, dark, well),
+        (Some(_), None) => bail!("{}: camera.gain_dn_per_e needs camera.adc_bits too", o.of("camera.adc_bits")),
+        (None, Some(_)) => bail!("{}: camera.adc_bits needs camera.gain_dn_per_e too", o.of("camera.gain_dn_per_e")),
+    };
+    sensor.map(Some).map_err(|e| anyhow!("{}: [camera]: {e}", o.of("camera")))
 }
 
 /// The iris, when the scene makes it other than the centred full circle.

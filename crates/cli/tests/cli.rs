@@ -463,3 +463,18 @@ fn bad_sweep_arguments() {
     let err = fails(&["sweep", "--over", "a.b=1:2:2", "--over", "c.d=1:2:2", "--over", "e.f=1:2:2", "--plot", "x.svg"]);
     assert!(err.contains("unknown field"), "{err}");
 }
+
+#[test]
+fn sensor_keys_saturation_warning_and_bad_values() {
+    let out = asnr(&["evaluate", "--set", "camera.full_well_e=400", "--set", "camera.read_noise_e=10"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("warning: the pixel saturates: 559 e⁻"), "{}", stderr(&out));
+    // clipped to 400 e⁻: SNR0 = 400/√(400 + 10²) = 17.8885
+    let v = json(&["evaluate", "--set", "camera.full_well_e=400", "--set", "camera.read_noise_e=10", "--json"]);
+    assert!((v["snr0"].as_f64().unwrap() - 400.0 / 500f64.sqrt()).abs() < 1e-9);
+    assert_eq!(v["noise"]["saturated"], serde_json::Value::Bool(true));
+    let err = fails(&["evaluate", "--set", "camera.read_noise_e=-1"]);
+    assert!(err.contains("camera.read_noise_e = -1: expected a read noise ≥ 0 e⁻ rms"), "{err}");
+    let err = fails(&["evaluate", "--set", "camera.adc_bits=12"]);
+    assert!(err.contains("camera.adc_bits needs camera.gain_dn_per_e too"), "{err}");
+}

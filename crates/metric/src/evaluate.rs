@@ -40,6 +40,23 @@ pub struct Glare {
     pub vg: f64,
 }
 
+/// The variances (e⁻²) behind the zero-frequency SNR: `SNR0 = N/√(total)` (EMVA 1288).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NoiseReport {
+    /// Shot noise of the signal and of the stray light.
+    pub shot_variance_e2: f64,
+    /// Shot noise of the dark current.
+    pub dark_variance_e2: f64,
+    /// Read noise σ_r².
+    pub read_variance_e2: f64,
+    /// Quantization, (1/12 DN²)/K².
+    pub quantization_variance_e2: f64,
+    /// Their sum.
+    pub total_variance_e2: f64,
+    /// Whether signal + stray light + dark charge exceeded the full well (the signal was clipped).
+    pub saturated: bool,
+}
+
 /// How the numbers were computed.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Numerics {
@@ -91,6 +108,8 @@ pub struct Evaluation {
     /// Photoelectrons per pixel from all transmitted light, imaged or stray, `N_T` (eq. S8 with
     /// τ1 → T): the shot noise of the glare-inclusive SNR.
     pub transmitted_photoelectrons: f64,
+    /// The noise budget behind `snr0` (EMVA 1288 form).
+    pub noise: NoiseReport,
     /// Nyquist frequency `1/(2p)`, cycles/mm.
     pub nyquist_cyc_per_mm: f64,
     /// Photoelectron-weighted mean wavelength, nm.
@@ -128,10 +147,13 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     let photoelectrons = area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
     // eq. S8 with τ1 → T: every photoelectron the lens transmits, imaged or stray
     let transmitted = photoelectrons / poly.total_weight() * poly.detected_integral(|l| lens.transmission(l));
-    let snr0 = match scene.options().glare {
-        GlareMode::FirstOrder => radiometry::shot_noise_snr(photoelectrons),
-        GlareMode::Included => noise::snr_with_glare(photoelectrons, transmitted.max(photoelectrons)),
+    // stray light of the other orders adds shot noise but no signal (eq. S14: τ1 → T for the noise)
+    let background = match scene.options().glare {
+        GlareMode::FirstOrder => 0.0,
+        GlareMode::Included => (transmitted - photoelectrons).max(0.0),
     };
+    let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure());
+    let snr0 = budget.snr;
     let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = if poly.direction_dependent() {
         let radial = field.y_rad.atan2(field.x_rad);
         let (r, w1) = poly.mean_mtf_along(radial);
@@ -164,6 +186,14 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
             t.fraction
         ));
     }
+    if budget.saturated {
+        warnings.push(format!(
+            "the pixel saturates: {:.0} e⁻ of signal, stray light and dark charge exceed the {:.0} e⁻ the sensor holds; the signal was clipped to {:.0} e⁻ and SNR0 uses it",
+            budget.unclipped_signal_e + budget.background_e + budget.dark_e,
+            budget.saturation_e,
+            budget.signal_e
+        ));
+    }
     if !fraunhofer.valid {
         warnings.push(format!(
             "{:.2} % of the signal is blurred beyond the Fraunhofer threshold of {} mm (paper SI eq. S15): the MTF model is not valid there",
@@ -188,6 +218,14 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         glare_mode: scene.options().glare,
         photoelectrons,
         transmitted_photoelectrons: transmitted,
+        noise: NoiseReport {
+            shot_variance_e2: budget.shot_variance_e2,
+            dark_variance_e2: budget.dark_variance_e2,
+            read_variance_e2: budget.read_variance_e2,
+            quantization_variance_e2: budget.quantization_variance_e2,
+            total_variance_e2: budget.total_variance_e2,
+            saturated: budget.saturated,
+        },
         nyquist_cyc_per_mm: nyquist * 1e-3,
         mean_wavelength_nm: mean_wavelength * 1e9,
         cutoff_cyc_per_mm: optics::cutoff_frequency(mean_wavelength, lens.f_number()) * 1e-3,

@@ -40,7 +40,9 @@
 mod evaluate;
 mod scene;
 
-pub use evaluate::{Evaluation, Fraunhofer, FrequencyRange, Glare, MtfCurve, Numerics, evaluate, mtf_curve};
+pub use evaluate::{
+    Evaluation, Fraunhofer, FrequencyRange, Glare, MtfCurve, NoiseReport, Numerics, evaluate, mtf_curve,
+};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

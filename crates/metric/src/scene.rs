@@ -19,6 +19,7 @@ pub struct Camera {
     pixel_pitch: f64,
     quantum_efficiency: Spectrum,
     pixel_mtf: bool,
+    sensor: noise::Sensor,
 }
 
 impl Camera {
@@ -28,7 +29,18 @@ impl Camera {
     /// MTF only).
     pub fn new(pixel_pitch_m: f64, quantum_efficiency: Spectrum, pixel_mtf: bool) -> Result<Self, Error> {
         check("pixel_pitch", pixel_pitch_m, pixel_pitch_m > 0.0, "a finite length > 0 m")?;
-        Ok(Camera { pixel_pitch: pixel_pitch_m, quantum_efficiency, pixel_mtf })
+        Ok(Camera { pixel_pitch: pixel_pitch_m, quantum_efficiency, pixel_mtf, sensor: noise::Sensor::ideal() })
+    }
+
+    /// This camera with a sensor noise model (default: [`noise::Sensor::ideal`], shot-noise
+    /// limited as the paper assumes).
+    pub fn with_sensor(self, sensor: noise::Sensor) -> Self {
+        Camera { sensor, ..self }
+    }
+
+    /// The sensor noise model.
+    pub fn sensor(&self) -> &noise::Sensor {
+        &self.sensor
     }
 
     /// Pixel pitch p, m.

@@ -293,3 +293,18 @@ fn glare_modes() {
         Scene::new(Arc::new(clean), s.radiance().clone(), s.camera().clone(), s.exposure(), options).unwrap();
     assert!((evaluate(&no_stray).unwrap().snr0 - first.snr0).abs() < 1e-9 * first.snr0);
 }
+
+/// A sensor with read noise moves SNR0 off √N (EMVA 1288 form): paper scene, N = 559.3854 e⁻,
+/// σ_r = 10 e⁻: SNR0 = N/√(N + σ_r²) = 559.3854/25.67850 = 21.78419.
+#[test]
+fn read_noise_lowers_snr0() {
+    let s = scene(2.5, 50e-9, 5.2e-6, false, LAMBDA0);
+    let sensor = noise::Sensor::without_adc(10.0, 0.0, f64::INFINITY).unwrap();
+    let camera = s.camera().clone().with_sensor(sensor);
+    let noisy =
+        Scene::new(Arc::new(paper_lens()), s.radiance().clone(), camera, s.exposure(), Options::default()).unwrap();
+    let r = evaluate(&noisy).unwrap();
+    assert!((r.snr0 - 21.78419).abs() < 1e-5, "{}", r.snr0);
+    assert_eq!(r.noise.read_variance_e2, 100.0);
+    assert!(!r.noise.saturated && r.warnings.is_empty());
+}
