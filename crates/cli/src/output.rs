@@ -71,7 +71,9 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         if scene.camera().pixel_mtf() { ", with pixel MTF" } else { "" }
     );
     if r.mean_mtf_radial != r.mean_mtf_tangential {
-        let (names, at) = if r.field_deg == [0.0, 0.0] {
+        let (names, at) = if !r.field_points.is_empty() {
+            ("radial / tangential", "averaged over the field points".to_owned())
+        } else if r.field_deg == [0.0, 0.0] {
             ("along x / along y", "on axis".to_owned())
         } else {
             ("radial / tangential", format!("at field ({}°, {}°)", r.field_deg[0], r.field_deg[1]))
@@ -80,6 +82,13 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
             s,
             "    {names:<24}{:>12.6}   / {:.6} {at}: the OTF depends on direction",
             r.mean_mtf_radial, r.mean_mtf_tangential
+        );
+    }
+    for p in &r.field_points {
+        let _ = writeln!(
+            s,
+            "    field ({:>5.2}°, {:>5.2}°) × {:<6} mean MTF {:.6}, ASNR {:.4}",
+            p.field_deg[0], p.field_deg[1], p.weight, p.mean_mtf, p.asnr
         );
     }
     let _ = writeln!(s, "  ∫ MTF dν                    {:>12.4}   cycles/mm", r.mtf_integral_cyc_per_mm);

@@ -69,6 +69,16 @@ struct RawScene {
     options: Option<RawOptions>,
     #[serde(default)]
     field: Option<RawField>,
+    #[serde(default)]
+    fields: Option<Vec<RawFieldPoint>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFieldPoint {
+    x_deg: Option<f64>,
+    y_deg: Option<f64>,
+    weight: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -399,13 +409,32 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
     }
     let scene =
         Scene::new(Arc::new(lens), radiance, camera, t * 1e-3, options).map_err(|e| anyhow!("{}: {e}", o.file))?;
-    let Some(f) = &raw.field else { return Ok(scene) };
     let angle = |key: &str, v: Option<f64>| -> Result<f64> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())
     };
-    let field = optics::Field::new(angle("field.x_deg", f.x_deg)?, angle("field.y_deg", f.y_deg)?);
-    scene.at_field(field).map_err(|e| anyhow!("{}: {e}", o.of("field")))
+    match (&raw.field, &raw.fields) {
+        (Some(_), Some(_)) => bail!("{}: [field] and [[fields]] both given: use one point or a weighted list", o.file),
+        (Some(f), None) => {
+            let field = optics::Field::new(angle("field.x_deg", f.x_deg)?, angle("field.y_deg", f.y_deg)?);
+            scene.at_field(field).map_err(|e| anyhow!("{}: {e}", o.of("field")))
+        }
+        (None, Some(list)) => {
+            if list.is_empty() {
+                bail!("{}: [[fields]] is empty: expected at least one field point", o.of("fields"));
+            }
+            let mut points = Vec::new();
+            for (i, f) in list.iter().enumerate() {
+                let x = angle(&format!("fields[{i}].x_deg"), f.x_deg)?;
+                let y = angle(&format!("fields[{i}].y_deg"), f.y_deg)?;
+                let w = f.weight.unwrap_or(1.0);
+                let w = o.number(&format!("fields[{i}].weight"), w, w >= 0.0, "a relative weight ≥ 0")?;
+                points.push((optics::Field::new(x, y), w));
+            }
+            scene.over_fields(points).map_err(|e| anyhow!("{}: [[fields]]: {e}", o.of("fields")))
+        }
+        (None, None) => Ok(scene),
+    }
 }
 
 /// The sensor noise model, when the scene gives any of its keys (otherwise shot-noise limited).

@@ -478,3 +478,17 @@ fn sensor_keys_saturation_warning_and_bad_values() {
     let err = fails(&["evaluate", "--set", "camera.adc_bits=12"]);
     assert!(err.contains("camera.adc_bits needs camera.gain_dn_per_e too"), "{err}");
 }
+
+#[test]
+fn field_list_averages_and_rejects_mixed_forms() {
+    let dir = scratch("fov");
+    let text = std::fs::read_to_string(PAPER).unwrap();
+    let path = dir.join("fov.toml");
+    std::fs::write(&path, format!("{text}\n[[fields]]\nx_deg = 0\nweight = 2\n\n[[fields]]\nx_deg = 8\n")).unwrap();
+    let v = json(&["evaluate", path.to_str().unwrap(), "--json"]);
+    let on = json(&["evaluate", "--json"])["asnr"].as_f64().unwrap();
+    let off = json(&["evaluate", "--set", "field.x_deg=8", "--json"])["asnr"].as_f64().unwrap();
+    assert!((v["asnr"].as_f64().unwrap() - (2.0 * on + off) / 3.0).abs() < 1e-9, "{}", v["asnr"]);
+    let err = fails(&["evaluate", path.to_str().unwrap(), "--set", "field.x_deg=3"]);
+    assert!(err.contains("[field] and [[fields]] both given"), "{err}");
+}

@@ -40,6 +40,19 @@ pub struct Glare {
     pub vg: f64,
 }
 
+/// One field point of a field-of-view average.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FieldPoint {
+    /// Field angles `(x, y)`, degrees.
+    pub field_deg: [f64; 2],
+    /// Relative weight.
+    pub weight: f64,
+    /// Mean MTF there.
+    pub mean_mtf: f64,
+    /// ASNR there.
+    pub asnr: f64,
+}
+
 /// The variances (e⁻²) behind the zero-frequency SNR: `SNR0 = N/√(total)` (EMVA 1288).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct NoiseReport {
@@ -94,8 +107,11 @@ pub struct Evaluation {
     pub mean_mtf_radial: f64,
     /// Mean MTF for frequencies perpendicular to the field direction (on axis, along y).
     pub mean_mtf_tangential: f64,
-    /// Field angles `(x, y)`, degrees.
+    /// Field angles `(x, y)`, degrees (the first point of a field-of-view average).
     pub field_deg: [f64; 2],
+    /// The points of a field-of-view average, whose weighted means the fields above are (empty
+    /// for a single field).
+    pub field_points: Vec<FieldPoint>,
     /// `∫_0^{ν_N} MTF dν`, cycles/mm.
     pub mtf_integral_cyc_per_mm: f64,
     /// Zero-frequency SNR: `√N` (paper SI eq. S9) with `glare = "first_order"`, `N/√N_T`
@@ -133,6 +149,38 @@ pub struct Evaluation {
 ///   `NA = 1/(2 F#)`; `SNR0 = √N` (S9).
 /// - Mean MTF: [`optics::Polychromatic::mean_mtf`] up to `ν_N = 1/(2p)`.
 pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
+    if scene.fields().is_empty() {
+        return evaluate_field(scene);
+    }
+    // field-of-view average: each point evaluated with its own off-axis OTF, then the
+    // weighted mean of the ASNRs (and of the numbers behind them)
+    let mut points = Vec::new();
+    for &(field, weight) in scene.fields() {
+        points.push((evaluate_field(&scene.single_field(field))?, weight));
+    }
+    let total: f64 = points.iter().map(|p| p.1).sum();
+    let mean = |f: &dyn Fn(&Evaluation) -> f64| points.iter().map(|(e, w)| w * f(e)).sum::<f64>() / total;
+    let mut combined = points[0].0.clone();
+    combined.asnr = mean(&|e| e.asnr);
+    combined.asnr_mean = mean(&|e| e.asnr_mean);
+    combined.asnr_integral_cyc_per_mm = mean(&|e| e.asnr_integral_cyc_per_mm);
+    combined.mean_mtf = mean(&|e| e.mean_mtf);
+    combined.mean_mtf_radial = mean(&|e| e.mean_mtf_radial);
+    combined.mean_mtf_tangential = mean(&|e| e.mean_mtf_tangential);
+    combined.mtf_integral_cyc_per_mm = mean(&|e| e.mtf_integral_cyc_per_mm);
+    combined.snr0 = mean(&|e| e.snr0);
+    combined.fraunhofer.valid = points.iter().all(|(e, _)| e.fraunhofer.valid);
+    combined.warnings = points.iter().flat_map(|(e, _)| e.warnings.clone()).collect();
+    combined.warnings.dedup();
+    combined.field_points = points
+        .iter()
+        .map(|(e, w)| FieldPoint { field_deg: e.field_deg, weight: *w, mean_mtf: e.mean_mtf, asnr: e.asnr })
+        .collect();
+    Ok(combined)
+}
+
+/// The evaluation at the scene's single field point.
+fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let lens = scene.lens();
     let camera = scene.camera();
     let detected = detected_spectrum(scene);
@@ -213,6 +261,7 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         mean_mtf_radial,
         mean_mtf_tangential,
         field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
+        field_points: Vec::new(),
         mtf_integral_cyc_per_mm: integral,
         snr0,
         glare_mode: scene.options().glare,

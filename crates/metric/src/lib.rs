@@ -41,7 +41,7 @@ mod evaluate;
 mod scene;
 
 pub use evaluate::{
-    Evaluation, Fraunhofer, FrequencyRange, Glare, MtfCurve, NoiseReport, Numerics, evaluate, mtf_curve,
+    Evaluation, FieldPoint, Fraunhofer, FrequencyRange, Glare, MtfCurve, NoiseReport, Numerics, evaluate, mtf_curve,
 };
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 

@@ -124,6 +124,8 @@ pub struct Scene {
     exposure: f64,
     options: Options,
     field: Field,
+    /// further weighted field points for a field-of-view average (empty: `field` alone)
+    fields: Vec<(Field, f64)>,
 }
 
 impl Scene {
@@ -151,7 +153,7 @@ impl Scene {
         )?;
         let n = options.pupil_samples as f64;
         check("pupil_samples", n, (16.0..=4096.0).contains(&n), "a whole number from 16 to 4096")?;
-        Ok(Scene { lens, radiance, camera, exposure: exposure_s, options, field: Field::ON_AXIS })
+        Ok(Scene { lens, radiance, camera, exposure: exposure_s, options, field: Field::ON_AXIS, fields: Vec::new() })
     }
 
     /// This scene seen at the field point `field` (default: on axis).
@@ -165,6 +167,32 @@ impl Scene {
     /// The field point.
     pub fn field(&self) -> Field {
         self.field
+    }
+
+    /// This scene averaged over weighted field points (paper SI, end of the veiling-glare
+    /// section: the ASNR "as an average (or a weighted average …) over the ASNR at several
+    /// locations in the FOV"). Weights are relative, ≥ 0, not all zero.
+    pub fn over_fields(self, fields: Vec<(Field, f64)>) -> Result<Self, Error> {
+        let mut first = None;
+        for &(field, weight) in &fields {
+            check("field weight", weight, weight >= 0.0, "a finite weight ≥ 0")?;
+            first.get_or_insert(field);
+            self.clone().at_field(field)?;
+        }
+        let total: f64 = fields.iter().map(|f| f.1).sum();
+        check("sum of the field weights", total, total > 0.0, "at least one field with a weight > 0")?;
+        let field = first.unwrap_or(Field::ON_AXIS);
+        Ok(Scene { field, fields, ..self })
+    }
+
+    /// This scene at one of its (already validated) field points, without the average.
+    pub(crate) fn single_field(&self, field: Field) -> Scene {
+        Scene { field, fields: Vec::new(), ..self.clone() }
+    }
+
+    /// The weighted field points of a field-of-view average (empty for a single field).
+    pub fn fields(&self) -> &[(Field, f64)] {
+        &self.fields
     }
 
     /// The lens.

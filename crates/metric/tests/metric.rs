@@ -308,3 +308,18 @@ fn read_noise_lowers_snr0() {
     assert_eq!(r.noise.read_variance_e2, 100.0);
     assert!(!r.noise.saturated && r.warnings.is_empty());
 }
+
+/// Field-of-view average (paper SI, end of the VG section): the weighted mean of the ASNRs at
+/// the field points, each with its own off-axis OTF.
+#[test]
+fn field_of_view_average_is_the_weighted_mean() {
+    let base = || scene(2.5, 20e-9, 5.2e-6, false, LAMBDA0);
+    let points = [(optics::Field::ON_AXIS, 2.0), (optics::Field::new(8f64.to_radians(), 0.0), 1.0)];
+    let each: Vec<f64> = points.iter().map(|&(f, _)| evaluate(&base().at_field(f).unwrap()).unwrap().asnr).collect();
+    let fov = evaluate(&base().over_fields(points.to_vec()).unwrap()).unwrap();
+    let expected = (2.0 * each[0] + each[1]) / 3.0;
+    assert!((fov.asnr - expected).abs() < 1e-12 * expected, "{} vs {expected}", fov.asnr);
+    assert_eq!(fov.field_points.len(), 2);
+    assert_eq!(fov.field_points[1].asnr, each[1]);
+    assert!(base().over_fields(vec![(optics::Field::ON_AXIS, 0.0)]).is_err());
+}
