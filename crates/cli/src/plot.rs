@@ -11,6 +11,7 @@ use metric::MtfCurve;
 use crate::optimize::Range;
 use crate::sweep::Point;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
@@ -88,16 +89,26 @@ where
             .map_err(|e| err(&e))?
             .label(format!("best {} = {:.4}, ASNR {:.4}", range.key, best.values[0], best.asnr))
             .legend(|(x, y)| Circle::new((x + 10, y), 5, RED.filled()));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(180, 180, 180))
-            .draw()
-            .map_err(|e| err(&e))?;
+        legend(&mut chart)?;
     }
     root.present().map_err(|e| err(&e))?;
     Ok(())
+}
+
+/// The series legend, top right, on a translucent white box.
+fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(RGBColor(180, 180, 180))
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// Viridis-like colour for `t` in [0, 1] (five stops of matplotlib's viridis, linear between).
@@ -160,13 +171,7 @@ where
         .label(format!("best {} for each {}", ranges[1].key, ranges[0].key))
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
     chart.draw_series(ridge.iter().map(|&p| Circle::new(p, 3, WHITE.filled()))).map_err(|e| err(&e))?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(180, 180, 180))
-        .draw()
-        .map_err(|e| err(&e))?;
+    legend(&mut chart)?;
     // colour bar
     let mut scale = ChartBuilder::on(&bar)
         .margin_top(56)
@@ -259,13 +264,7 @@ where
             .label(format!("Nyquist {n:.1} cycles/mm"))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RGBColor(120, 120, 120)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.9))
-        .border_style(RGBColor(180, 180, 180))
-        .draw()
-        .map_err(|e| err(&e))?;
+    legend(&mut chart)?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
 }
