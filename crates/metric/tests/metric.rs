@@ -323,3 +323,12 @@ fn field_of_view_average_is_the_weighted_mean() {
     assert_eq!(fov.field_points[1].asnr, each[1]);
     assert!(base().over_fields(vec![(optics::Field::ON_AXIS, 0.0)]).is_err());
 }
+
+/// Regression: with the cutoff below Nyquist the OTF vanishes identically over part of the band;
+/// those exact zeros once counted as sign changes and the adaptive rule split without end.
+/// F/16 and F/50 (cutoff 78 and 25 cycles/mm against a Nyquist of 96) against the reference.
+#[test]
+fn cutoff_below_nyquist_is_fast_and_right() {
+    check(16.0, 50.0, 5.2, false);
+    check(50.0, 50.0, 5.2, true);
+}

@@ -631,14 +631,20 @@ impl<'a> Polychromatic<'a> {
             samples[i + 1] = (nu, value(nu));
         }
         work.otf_evaluations += 15;
+        // sign changes between consecutive non-zero samples (exact zeros, e.g. past the cutoff
+        // where the OTF vanishes identically, are not sign changes)
         let mut edges = Vec::new();
-        for pair in samples.windows(2) {
-            let ((x0, f0), (x1, f1)) = (pair[0], pair[1]);
-            if f0 == 0.0 && x0 > a && x0 < b {
-                edges.push((x0, 0.0));
-            } else if f0 * f1 < 0.0 {
-                edges.push((self.root(value, x0, f0, x1, f1, work), 0.0));
+        let mut last: Option<(f64, f64)> = None;
+        for &(x, f) in &samples {
+            if f == 0.0 {
+                continue;
             }
+            if let Some((x0, f0)) = last
+                && f0 * f < 0.0
+            {
+                edges.push((self.root(value, x0, f0, x, f, work), 0.0));
+            }
+            last = Some((x, f));
         }
         if !edges.is_empty() && depth < MAX_DEPTH {
             work.sign_changes += edges.len();
