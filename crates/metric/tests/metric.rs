@@ -332,3 +332,19 @@ fn cutoff_below_nyquist_is_fast_and_right() {
     check(16.0, 50.0, 5.2, false);
     check(50.0, 50.0, 5.2, true);
 }
+
+/// Regression: 0.3 µm pixels put Nyquist (1667 cycles/mm) far past every cutoff; near the cutoff
+/// the OTF is tiny and its rounding noise once kept the adaptive rule bisecting without end.
+/// Once Nyquist is past the cutoff of every wavelength (10 nm band: ±7σ reaches 775 nm, cutoff
+/// 1/(775 nm × 2.5) = 516 cycles/mm), smaller pixels add only zeros: the MTF area ∫ MTF dν is the
+/// same for 0.5 µm and 0.3 µm pixels, and below the diffraction limit's ν_c · 4/(3π).
+#[test]
+fn nyquist_far_past_the_cutoff_terminates() {
+    let a = evaluate(&scene(2.5, 10e-9, 0.5e-6, false, LAMBDA0)).unwrap();
+    let b = evaluate(&scene(2.5, 10e-9, 0.3e-6, false, LAMBDA0)).unwrap();
+    let (area_a, area_b) = (a.mtf_integral_cyc_per_mm, b.mtf_integral_cyc_per_mm);
+    assert!((area_a - area_b).abs() < 1e-8 * area_a, "{area_a} vs {area_b}");
+    // diffraction limit at 775 nm: 516.1 cycles/mm × 0.42441 = 219.0 cycles/mm
+    assert!(area_b < 219.0 && area_b > 100.0, "{area_b}");
+    assert!(b.numerics.otf_evaluations < 50_000, "{}", b.numerics.otf_evaluations);
+}

@@ -273,7 +273,10 @@ impl<'a> Polychromatic<'a> {
             needs_fft: Cell::new(false),
             fft: None,
         };
-        let phase_per_w020 = 8.0 * PI * f_number * max_frequency;
+        // no wavelength contributes past its cutoff: the highest frequency that matters is the
+        // cutoff of the shortest wavelength covered, when it is below max_frequency
+        let highest = if lo > 0.0 { max_frequency.min(1.0 / (lo * f_number)) } else { max_frequency };
+        let phase_per_w020 = 8.0 * PI * f_number * highest;
         for pair in cuts.windows(2) {
             let (a, b) = (pair[0], pair[1]);
             let mut n = ((b - a) / (2.0 * sigma_min)).ceil().max(1.0) as usize;
@@ -286,8 +289,8 @@ impl<'a> Polychromatic<'a> {
                     let x = a + h * k as f64;
                     let cur = this.max_w020(x);
                     let mid = this.max_w020(x - 0.5 * h);
-                    let turn = (cur - prev).abs().max((mid - prev).abs())
-                        + cur.abs().max(prev.abs()) * max_frequency * f_number * h;
+                    let turn =
+                        (cur - prev).abs().max((mid - prev).abs()) + cur.abs().max(prev.abs()) * highest * f_number * h;
                     worst = worst.max(turn * phase_per_w020);
                     prev = cur;
                 }
@@ -594,7 +597,9 @@ impl<'a> Polychromatic<'a> {
         let mut total = 0.0;
         for pair in self.frequency_cuts().windows(2) {
             let (a, b) = (pair[0], pair[1]);
-            let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(4.0) as usize;
+            // at least 4 panels over the whole range, not per interval between cutoff cuts
+            let floor = (4.0 * (b - a) / self.max_frequency).ceil();
+            let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).max(1.0) as usize;
             let h = (b - a) / n as f64;
             let mut left = (a, value(a));
             work.otf_evaluations += 1;
@@ -664,7 +669,13 @@ impl<'a> Polychromatic<'a> {
             gauss += GAUSS_WEIGHTS[i] * v;
         }
         let (kronrod, gauss) = (kronrod * half, gauss * half);
-        if (kronrod - gauss).abs() <= tolerance * (b - a) || depth >= MAX_DEPTH {
+        // Accept at the tolerance, or where no refinement can help: the Kronrod–Gauss difference
+        // at the rounding level of the sums themselves (near the cutoff the OTF is tiny and its
+        // evaluation noise does not shrink with the panel), or a panel below 1e-9 of the range.
+        let rounding = 1e3 * f64::EPSILON * kronrod.abs().max(tolerance * (b - a));
+        let error = (kronrod - gauss).abs();
+        if error <= tolerance * (b - a) || error <= rounding || b - a <= 1e-9 * self.max_frequency || depth >= MAX_DEPTH
+        {
             work.frequency_panels += 1;
             return kronrod;
         }
