@@ -363,14 +363,13 @@ pub fn mtf_curve(
     let camera = scene.camera();
     let detected = detected_spectrum(scene);
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let mut max_frequency = camera.nyquist();
+    let max_frequency = match range {
+        FrequencyRange::Nyquist => camera.nyquist(),
+        FrequencyRange::Cutoff => optics::highest_cutoff(lens, &detected)?,
+    };
     let field = scene.field();
     let samples = scene.options().pupil_samples;
-    let mut poly = Polychromatic::with_pupil_samples(lens, &detected, field, max_frequency, pixel, samples)?;
-    if range == FrequencyRange::Cutoff {
-        max_frequency = poly.max_cutoff();
-        poly = Polychromatic::with_pupil_samples(lens, &detected, field, max_frequency, pixel, samples)?;
-    }
+    let poly = Polychromatic::with_pupil_samples(lens, &detected, field, max_frequency, pixel, samples)?;
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let points = points.max(2);
     let frequencies: Vec<f64> = (0..points).map(|k| max_frequency * k as f64 / (points - 1) as f64).collect();
@@ -393,12 +392,10 @@ pub fn mtf_curve(
     let monochromatic = wavelengths_m
         .iter()
         .map(|&l| {
-            frequencies
-                .iter()
-                .map(|&nu| optics::monochromatic_otf(lens, l, field, nu).abs() * pixel_factor(nu))
-                .collect()
+            let mtf = optics::monochromatic_mtf(lens, l, field, &frequencies, samples)?;
+            Ok(mtf.iter().zip(&frequencies).map(|(m, &nu)| m * pixel_factor(nu)).collect())
         })
-        .collect();
+        .collect::<Result<Vec<Vec<f64>>, Error>>()?;
     Ok(MtfCurve {
         frequency_cyc_per_mm: frequencies.iter().map(|nu| nu * 1e-3).collect(),
         otf,

@@ -48,5 +48,5 @@ pub use otf::{
 };
 pub use poly::{
     DEFAULT_PUPIL_SAMPLES, Engine, FREQUENCY_TOLERANCE, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work,
-    monochromatic_otf,
+    highest_cutoff, monochromatic_mtf,
 };

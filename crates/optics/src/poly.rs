@@ -275,7 +275,7 @@ impl<'a> Polychromatic<'a> {
         };
         // no wavelength contributes past its cutoff: the highest frequency that matters is the
         // cutoff of the shortest wavelength covered, when it is below max_frequency
-        let highest = if lo > 0.0 { max_frequency.min(1.0 / (lo * f_number)) } else { max_frequency };
+        let highest = max_frequency.min(highest_cutoff(lens, detected)?);
         let phase_per_w020 = 8.0 * PI * f_number * highest;
         for pair in cuts.windows(2) {
             let (a, b) = (pair[0], pair[1]);
@@ -745,40 +745,58 @@ impl<'a> Polychromatic<'a> {
     }
 }
 
-/// Monochromatic OTF of `lens` at one wavelength: the efficiency-weighted sum of its orders' OTFs
-/// at `frequency` (cycles/m) along +x, normalized to 1 at zero frequency (0 if no order
-/// transmits). Orders beyond the exact path contribute the modulus of their FFT OTF.
-pub fn monochromatic_otf(lens: &dyn LensModel, wavelength_m: f64, field: Field, frequency: f64) -> f64 {
-    let s = frequency.abs() * wavelength_m * lens.f_number();
-    let (mut sum, mut total) = (0.0, 0.0);
+/// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):
+/// the modulus of the efficiency-weighted sum of its orders' OTFs (with their lateral-shift
+/// phases), normalized to 1 at zero frequency (all zeros if no order transmits). Orders beyond
+/// the exact path get one FFT grid each, with `pupil_samples` across the diameter.
+pub fn monochromatic_mtf(
+    lens: &dyn LensModel,
+    wavelength_m: f64,
+    field: Field,
+    frequencies: &[f64],
+    pupil_samples: usize,
+) -> Result<Vec<f64>, Error> {
+    let to_s = |nu: f64| nu.abs() * wavelength_m * lens.f_number();
+    let s_max = frequencies.iter().map(|&nu| to_s(nu)).fold(0.0, f64::max).clamp(1e-6, 1.0);
+    let mut sum = vec![Complex64::new(0.0, 0.0); frequencies.len()];
+    let mut total = 0.0;
     for order in lens.orders(wavelength_m, field) {
         total += order.efficiency;
-        if s >= 1.0 {
-            continue;
-        }
-        let otf = match &order.pupil {
-            Pupil::Full if order.wavefront.is_defocus_only() => {
-                defocus_otf(s, order.wavefront.defocus_m / wavelength_m)
-            }
+        let grid = match &order.pupil {
+            Pupil::Full if order.wavefront.is_defocus_only() => None,
             pupil => {
-                // one FFT for one value: fine for plotting a few wavelengths, not for hot loops
                 let aperture = match pupil {
                     Pupil::Aperture(a) => (**a).clone(),
                     _ => Aperture::circle(),
                 };
-                let grid = SampledPupil::new(DEFAULT_PUPIL_SAMPLES, &aperture, &order.wavefront.aberrations())
-                    .and_then(|p| {
-                        let mut plan = OtfPlan::new(DEFAULT_PUPIL_SAMPLES, s.max(1e-6))?;
-                        let mut out = Otf::new();
-                        plan.otf(&p, wavelength_m, &mut out);
-                        Ok(out)
-                    });
-                grid.map_or(f64::NAN, |g| g.at(s, 0.0).norm())
+                let sampled = SampledPupil::new(pupil_samples, &aperture, &order.wavefront.aberrations())?;
+                let mut out = Otf::new();
+                OtfPlan::new(pupil_samples, s_max)?.otf(&sampled, wavelength_m, &mut out);
+                Some(out)
             }
         };
-        sum += order.efficiency * otf;
+        let w = order.wavefront.defocus_m / wavelength_m;
+        for (acc, &nu) in sum.iter_mut().zip(frequencies) {
+            let s = to_s(nu);
+            if s >= 1.0 {
+                continue;
+            }
+            let otf = match &grid {
+                None => Complex64::new(defocus_otf(s, w), 0.0),
+                Some(g) => g.at(s.min(g.s_max()), 0.0),
+            };
+            let phase = -2.0 * PI * nu * order.wavefront.image_shift_m[0];
+            *acc += otf * Complex64::from_polar(order.efficiency, phase);
+        }
     }
-    if total > 0.0 { sum / total } else { 0.0 }
+    Ok(sum.iter().map(|z| if total > 0.0 { z.norm() / total } else { 0.0 }).collect())
+}
+
+/// Cutoff frequency (cycles/m) of the shortest wavelength the spectral quadrature covers for
+/// `lens` and `detected`: every polychromatic OTF is zero beyond it. Needs no OTF work.
+pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, Error> {
+    let (lo, _) = spectral_extent(detected)?;
+    Ok(if lo > 0.0 { 1.0 / (lo * lens.f_number()) } else { f64::INFINITY })
 }
 
 /// The wavelength interval the spectral quadrature covers: the spectrum's support, with Gaussian

@@ -15,9 +15,8 @@ pub fn check_lens(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), Strin
     if !(f_number.is_finite() && f_number > 0.0) {
         return Err(format!("f_number() = {f_number}: expected finite and > 0"));
     }
-    let probe = Polychromatic::new(lens, detected, Field::ON_AXIS, 1.0, None)
-        .map_err(|e| format!("cannot prepare the polychromatic OTF: {e}"))?;
-    let cutoff = probe.max_cutoff();
+    let cutoff =
+        crate::highest_cutoff(lens, detected).map_err(|e| format!("cannot prepare the polychromatic OTF: {e}"))?;
     let poly = Polychromatic::new(lens, detected, Field::ON_AXIS, cutoff, None)
         .map_err(|e| format!("cannot prepare the polychromatic OTF: {e}"))?;
     let at_zero = poly.mtf(0.0);
