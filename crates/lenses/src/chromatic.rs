@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use optics::fft::Aperture;
-use optics::{Field, LensModel, Order, Pupil, Wavefront};
+use optics::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront};
 use radiometry::Sampled;
 
 use crate::Error;
@@ -186,6 +186,22 @@ impl LensModel for ChromaticMetalens {
         b.sort_by(f64::total_cmp);
         b.dedup();
         b
+    }
+
+    fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> {
+        // W020 = (λ/λ0 − 1) f0/(8F#²): affine; on axis no lateral colour; the full pupil with no
+        // Seidel terms; and both efficiency curves constant
+        let (Curve::Constant(efficiency), Curve::Constant(transmission)) = (&self.efficiency, &self.transmission)
+        else {
+            return None;
+        };
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        (self.aperture.is_none() && self.seidel == [0.0; 4] && field.is_on_axis()).then_some(AffineDefocus {
+            efficiency: *efficiency,
+            transmission: *transmission,
+            w020_intercept_m: -k,
+            w020_slope: k / self.design_wavelength,
+        })
     }
 
     fn describe(&self) -> String {

@@ -187,8 +187,13 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let field = scene.field();
-    let samples = scene.options().pupil_samples;
-    let poly = Polychromatic::with_pupil_samples(lens, &detected, field, nyquist, pixel, samples)?;
+    let options = scene.options();
+    let settings = optics::Settings {
+        pupil_samples: options.pupil_samples,
+        tolerance: options.tolerance,
+        closed_form: options.closed_form,
+    };
+    let poly = Polychromatic::with_settings(lens, &detected, field, nyquist, pixel, settings)?;
 
     let na = lens.numerical_aperture();
     let area = camera.pixel_pitch() * camera.pixel_pitch();
@@ -290,6 +295,9 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
                     "exact-1d, complex sum with lateral colour".to_owned()
                 }
                 optics::Engine::Exact1d => "exact-1d".to_owned(),
+                optics::Engine::ClosedForm => {
+                    "closed-form spectral integral (Gaussian spectrum, affine defocus)".to_owned()
+                }
             },
             spectral_panels: work.spectral_panels,
             spectral_nodes: work.spectral_nodes,
@@ -368,8 +376,13 @@ pub fn mtf_curve(
         FrequencyRange::Cutoff => optics::highest_cutoff(lens, &detected)?,
     };
     let field = scene.field();
-    let samples = scene.options().pupil_samples;
-    let poly = Polychromatic::with_pupil_samples(lens, &detected, field, max_frequency, pixel, samples)?;
+    let options = scene.options();
+    let settings = optics::Settings {
+        pupil_samples: options.pupil_samples,
+        tolerance: options.tolerance,
+        closed_form: options.closed_form,
+    };
+    let poly = Polychromatic::with_settings(lens, &detected, field, max_frequency, pixel, settings)?;
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let points = points.max(2);
     let frequencies: Vec<f64> = (0..points).map(|k| max_frequency * k as f64 / (points - 1) as f64).collect();
@@ -392,7 +405,7 @@ pub fn mtf_curve(
     let monochromatic = wavelengths_m
         .iter()
         .map(|&l| {
-            let mtf = optics::monochromatic_mtf(lens, l, field, &frequencies, samples)?;
+            let mtf = optics::monochromatic_mtf(lens, l, field, &frequencies, options.pupil_samples)?;
             Ok(mtf.iter().zip(&frequencies).map(|(m, &nu)| m * pixel_factor(nu)).collect())
         })
         .collect::<Result<Vec<Vec<f64>>, Error>>()?;

@@ -101,6 +101,12 @@ pub struct Options {
     pub pupil_samples: usize,
     /// Whether the SNR counts the stray light of the other orders (veiling glare).
     pub glare: GlareMode,
+    /// Relative error allowed in the mean MTF (the frequency integral and, on the closed-form
+    /// engine, the integral that remains); spectral quadratures are exact to rounding anyway.
+    pub tolerance: f64,
+    /// Whether the closed-form spectral engine may be used where it applies (off: always the
+    /// spectral quadrature, for cross-checks).
+    pub closed_form: bool,
 }
 
 impl Default for Options {
@@ -111,6 +117,8 @@ impl Default for Options {
             fraunhofer_max_fraction: 0.01,
             pupil_samples: optics::DEFAULT_PUPIL_SAMPLES,
             glare: GlareMode::FirstOrder,
+            tolerance: optics::DEFAULT_TOLERANCE,
+            closed_form: true,
         }
     }
 }
@@ -139,21 +147,14 @@ impl Scene {
         options: Options,
     ) -> Result<Self, Error> {
         check("exposure", exposure_s, exposure_s > 0.0, "a finite time > 0 s")?;
-        check(
-            "fraunhofer_threshold",
-            options.fraunhofer_threshold,
-            options.fraunhofer_threshold > 0.0,
-            "a finite length > 0 m",
-        )?;
-        check(
-            "fraunhofer_max_fraction",
-            options.fraunhofer_max_fraction,
-            (0.0..=1.0).contains(&options.fraunhofer_max_fraction),
-            "a fraction in [0, 1]",
-        )?;
-        let n = options.pupil_samples as f64;
-        check("pupil_samples", n, (16.0..=4096.0).contains(&n), "a whole number from 16 to 4096")?;
+        check_options(&options)?;
         Ok(Scene { lens, radiance, camera, exposure: exposure_s, options, field: Field::ON_AXIS, fields: Vec::new() })
+    }
+
+    /// This scene with other `options` (validated as in [`new`](Self::new)).
+    pub fn with_options(self, options: Options) -> Result<Self, Error> {
+        check_options(&options)?;
+        Ok(Scene { options, ..self })
     }
 
     /// This scene seen at the field point `field` (default: on axis).
@@ -219,4 +220,25 @@ impl Scene {
     pub fn options(&self) -> &Options {
         &self.options
     }
+}
+
+/// The checks of [`Options`] shared by [`Scene::new`] and [`Scene::with_options`].
+fn check_options(options: &Options) -> Result<(), Error> {
+    check(
+        "fraunhofer_threshold",
+        options.fraunhofer_threshold,
+        options.fraunhofer_threshold > 0.0,
+        "a finite length > 0 m",
+    )?;
+    check(
+        "fraunhofer_max_fraction",
+        options.fraunhofer_max_fraction,
+        (0.0..=1.0).contains(&options.fraunhofer_max_fraction),
+        "a fraction in [0, 1]",
+    )?;
+    let n = options.pupil_samples as f64;
+    check("pupil_samples", n, (16.0..=4096.0).contains(&n), "a whole number from 16 to 4096")?;
+    let t = options.tolerance;
+    check("tolerance", t, (1e-14..=0.1).contains(&t), "a relative error from 1e-14 to 0.1")?;
+    Ok(())
 }

@@ -121,6 +121,20 @@ impl Order {
     }
 }
 
+/// The lens of [`LensModel::affine_defocus`]: one full-pupil order, `W020(λ) = w0 + w1 λ`,
+/// constant efficiency and transmission.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AffineDefocus {
+    /// Imaging efficiency τ1 (fraction), the same at every wavelength.
+    pub efficiency: f64,
+    /// Total transmission T (fraction), the same at every wavelength.
+    pub transmission: f64,
+    /// `w0`: W020 extrapolated to λ = 0, m.
+    pub w020_intercept_m: f64,
+    /// `w1 = dW020/dλ` (dimensionless).
+    pub w020_slope: f64,
+}
+
 /// What a lens does to light: the trait every lens family implements.
 ///
 /// Object safe (`&dyn LensModel`, `Box<dyn LensModel>` work), `Send + Sync + Debug`, plain `f64` in SI
@@ -167,6 +181,17 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         0.5 / self.f_number()
     }
 
+    /// A promise that enables the closed-form spectral integration ([`crate::GaussianDefocus`]):
+    /// at `field`, for every wavelength, [`orders`](LensModel::orders) is one order through the
+    /// full circular pupil whose only aberration is a defocus affine in λ,
+    /// `W020(λ) = w0 + w1 λ`, with no image shift, and the efficiency and transmission do not
+    /// depend on λ. Default: `None` (no promise). The promise is checked against `orders` at a
+    /// few wavelengths before it is used.
+    fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> {
+        let _ = field;
+        None
+    }
+
     /// Short human-readable description, for reports.
     fn describe(&self) -> String {
         format!(
@@ -202,6 +227,7 @@ macro_rules! forward_lens_model {
             fn numerical_aperture(&self) -> f64 { (**self).numerical_aperture() }
             fn design_wavelength(&self) -> Option<f64> { (**self).design_wavelength() }
             fn describe(&self) -> String { (**self).describe() }
+            fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> { (**self).affine_defocus(field) }
         }
     )*};
 }

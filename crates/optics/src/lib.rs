@@ -29,6 +29,7 @@
 //! assert!((defocus_otf(0.3, 0.0) - mtf_diffraction_limited(0.3)).abs() < 1e-15);
 //! ```
 
+mod closed;
 mod error;
 pub mod fft;
 pub mod fraunhofer;
@@ -40,13 +41,14 @@ pub mod reference;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 
+pub use closed::GaussianDefocus;
 pub use error::Error;
-pub use lens::{Field, LensModel, Order, Pupil, Wavefront, round_for_display};
+pub use lens::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront, round_for_display};
 pub use otf::{
     BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_bessel, defocus_otf_panels, defocus_otf_quadrature,
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
 pub use poly::{
-    DEFAULT_PUPIL_SAMPLES, Engine, FREQUENCY_TOLERANCE, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Work,
+    DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Settings, Work,
     highest_cutoff, monochromatic_mtf,
 };

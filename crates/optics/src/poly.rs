@@ -30,6 +30,7 @@ use std::sync::Arc;
 use num_complex::Complex64;
 use radiometry::Spectrum;
 
+use crate::closed::GaussianDefocus;
 use crate::fft::{Aperture, Otf, OtfPlan, SampledPupil};
 
 use crate::lens::{Field, LensModel, Pupil};
@@ -51,6 +52,9 @@ pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
 pub enum Engine {
     /// The exact 1-D integral: centred circular pupils with defocus (and lateral shifts) only.
     Exact1d,
+    /// The spectral integral in closed form ([`GaussianDefocus`]): a Gaussian × polynomial
+    /// spectrum through one full pupil with defocus affine in λ; one adaptive integral left.
+    ClosedForm,
     /// Sampled pupils by FFT: `pupil_samples` across the diameter, padded to `padded` points.
     Fft {
         /// Pupil samples across the diameter.
@@ -82,10 +86,6 @@ impl std::fmt::Debug for FftPath {
 
 /// Weight fraction below which a spectral node does not count towards the largest defocus.
 const SIGNIFICANT_WEIGHT: f64 = 1e-13;
-
-/// Absolute error allowed in the mean MTF by the frequency integration's error estimate (the
-/// Kronrod–Gauss difference, which overestimates the Kronrod sum's error by orders of magnitude).
-pub const FREQUENCY_TOLERANCE: f64 = 1e-10;
 
 /// Bisection depth limit of the adaptive frequency integration.
 const MAX_DEPTH: u32 = 40;
@@ -183,7 +183,31 @@ pub struct Work {
     pub otf_evaluations: usize,
     /// Sign changes of the polychromatic OTF located below the frequency limit.
     pub sign_changes: usize,
+    /// Evaluations of the closed-form spectral integral `E(c)` (closed-form engine only).
+    pub closed_form_evaluations: usize,
 }
+
+/// How a [`Polychromatic`] is computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Pupil samples across the diameter on the FFT path.
+    pub pupil_samples: usize,
+    /// Relative error allowed in the mean MTF (the frequency integration and, on the
+    /// closed-form engine, the remaining integral in `t`); the spectral quadratures are exact
+    /// to rounding whatever its value.
+    pub tolerance: f64,
+    /// Whether the closed-form engine may be used where it applies.
+    pub closed_form: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { pupil_samples: DEFAULT_PUPIL_SAMPLES, tolerance: DEFAULT_TOLERANCE, closed_form: true }
+    }
+}
+
+/// Default relative tolerance of the mean MTF.
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
 
 /// A prepared polychromatic evaluation: spectral nodes and weights for one lens, detected
 /// spectrum and field point, valid for frequencies up to `max_frequency`.
@@ -210,6 +234,14 @@ pub struct Polychromatic<'a> {
     needs_fft: Cell<bool>,
     /// the FFT layer, when some order's pupil or wavefront is beyond the exact path
     fft: Option<FftPath>,
+    /// the closed-form spectral integral, when it applies
+    closed: Option<GaussianDefocus>,
+    /// relative tolerance of the mean MTF
+    tolerance: f64,
+    /// absolute tolerance of one closed-form OTF value (set by the mean)
+    otf_tolerance: Cell<f64>,
+    /// closed-form E(c) evaluations so far
+    closed_evaluations: Cell<usize>,
 }
 
 impl<'a> Polychromatic<'a> {
@@ -239,6 +271,32 @@ impl<'a> Polychromatic<'a> {
         pixel_pitch: Option<f64>,
         pupil_samples: usize,
     ) -> Result<Self, Error> {
+        let settings = Settings { pupil_samples, ..Settings::default() };
+        Self::with_settings(lens, detected, field, max_frequency, pixel_pitch, settings)
+    }
+
+    /// [`new`](Self::new) with explicit [`Settings`]: the tolerance, the pupil sampling of the
+    /// FFT path, and whether the closed-form engine may be used.
+    ///
+    /// The closed-form engine is chosen when the detected spectrum is a Gaussian times a
+    /// polynomial ([`Spectrum::gaussian_polynomial`]) and the lens promises an affine defocus
+    /// ([`LensModel::affine_defocus`]) that its [`orders`](LensModel::orders) confirm.
+    pub fn with_settings(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+    ) -> Result<Self, Error> {
+        let pupil_samples = settings.pupil_samples;
+        if !(settings.tolerance.is_finite() && settings.tolerance > 0.0 && settings.tolerance < 1.0) {
+            return Err(Error::InvalidParameter {
+                name: "tolerance",
+                value: settings.tolerance,
+                expected: "a relative error in (0, 1), e.g. 1e-6",
+            });
+        }
         let f_number = lens.f_number();
         if !(max_frequency.is_finite() && max_frequency > 0.0) {
             return Err(Error::InvalidParameter {
@@ -272,7 +330,18 @@ impl<'a> Polychromatic<'a> {
             shifted: false,
             needs_fft: Cell::new(false),
             fft: None,
+            closed: None,
+            tolerance: settings.tolerance,
+            otf_tolerance: Cell::new(0.05 * settings.tolerance),
+            closed_evaluations: Cell::new(0),
         };
+        if settings.closed_form
+            && let Some(closed) = closed_form(lens, detected, field)
+        {
+            this.closed_nodes(&closed, lens.affine_defocus(field));
+            this.closed = Some(closed);
+            return Ok(this);
+        }
         // no wavelength contributes past its cutoff: the highest frequency that matters is the
         // cutoff of the shortest wavelength covered, when it is below max_frequency
         let highest = max_frequency.min(highest_cutoff(lens, detected)?);
@@ -328,6 +397,35 @@ impl<'a> Polychromatic<'a> {
             this.fft = Some(this.build_fft(pupil_samples)?);
         }
         Ok(this)
+    }
+
+    /// The spectral nodes of the closed-form engine: not for the OTF (its spectral integral is
+    /// exact) but for the averages over the spectrum ([`detected_integral`](Self::detected_integral),
+    /// [`spectral_average`](Self::spectral_average)): 8 Gauss–Legendre panels over μ ± 10σ,
+    /// exact to rounding for the smooth functions they are used with.
+    fn closed_nodes(&mut self, closed: &GaussianDefocus, affine: Option<crate::AffineDefocus>) {
+        let Some(affine) = affine else { return };
+        let (mu, sigma) = (closed.center(), closed.sigma());
+        let (lo, hi) = ((mu - 10.0 * sigma).max(0.0), mu + 10.0 * sigma);
+        let (mut samples, mut nodes) = (Vec::new(), Vec::new());
+        quad::for_each_node(lo, hi, 8, |lambda, q| {
+            let q_rho = q * self.detected.value(lambda);
+            samples.push((lambda, q_rho));
+            nodes.push(Node {
+                lambda,
+                weight: q_rho * affine.efficiency,
+                w020: affine.w020_intercept_m + affine.w020_slope * lambda,
+                shift: [0.0, 0.0],
+            });
+        });
+        self.panels.push(Panel { lo, hi, start: 0, end: nodes.len() });
+        self.samples = samples;
+        self.nodes = nodes;
+        self.total_weight = closed.total_weight();
+        let threshold = SIGNIFICANT_WEIGHT * self.total_weight;
+        self.w020_max =
+            self.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
+        self.w020_rms = self.spectral_average(|_, w020| w020 * w020).sqrt();
     }
 
     fn max_w020(&self, lambda: f64) -> f64 {
@@ -408,6 +506,9 @@ impl<'a> Polychromatic<'a> {
 
     /// The OTF engine in use.
     pub fn engine(&self) -> Engine {
+        if self.closed.is_some() {
+            return Engine::ClosedForm;
+        }
         match &self.fft {
             Some(f) => Engine::Fft { pupil_samples: f.pupil_samples, padded: f.padded },
             None => Engine::Exact1d,
@@ -459,6 +560,11 @@ impl<'a> Polychromatic<'a> {
         if frequency == 0.0 {
             return 1.0;
         }
+        if let Some(closed) = &self.closed {
+            let (value, evaluations) = closed.otf(frequency, self.otf_tolerance.get());
+            self.closed_evaluations.set(self.closed_evaluations.get() + evaluations);
+            return value;
+        }
         if self.fft.is_some() {
             // no rotational symmetry to rely on: the real part along +x
             return self.otf_along(frequency, 0.0).re;
@@ -474,6 +580,10 @@ impl<'a> Polychromatic<'a> {
     pub fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
         if frequency == 0.0 {
             return Complex64::new(1.0, 0.0);
+        }
+        if self.closed.is_some() {
+            // on axis, rotationally symmetric and real
+            return Complex64::new(self.otf(frequency), 0.0);
         }
         let (sin_a, cos_a) = azimuth.sin_cos();
         let k = -2.0 * PI * frequency;
@@ -532,6 +642,10 @@ impl<'a> Polychromatic<'a> {
     /// reaching its cutoff.
     fn frequency_cuts(&self) -> Vec<f64> {
         let mut cuts = vec![0.0, self.max_frequency];
+        if self.closed.is_some() {
+            // the closed form is exact across the spectrum: no panel edges, no kinks
+            return cuts;
+        }
         for p in &self.panels {
             for lambda in [p.lo, p.hi] {
                 if lambda > 0.0 {
@@ -550,7 +664,7 @@ impl<'a> Polychromatic<'a> {
     /// The mean of the MTF over `[0, max_frequency]` and what it took.
     ///
     /// Adaptive Gauss–Kronrod (7/15) on frequency panels: a panel is accepted when the Kronrod
-    /// and Gauss sums of `P |OTF_poly|` differ by less than [`FREQUENCY_TOLERANCE`] of the
+    /// and Gauss sums of `P |OTF_poly|` differ by less than the tolerance of the
     /// frequency range times its share of the range, and bisected otherwise. A panel whose
     /// samples change sign is split at the located zeros first, so `|OTF_poly|` is only ever
     /// integrated where it is smooth. The initial panels are sized by the weighted-RMS defocus.
@@ -575,7 +689,11 @@ impl<'a> Polychromatic<'a> {
     /// Adaptive mean over `[0, max_frequency]` of `P(ν) |value(ν)|`, where `value` is a signed
     /// OTF (split at its sign changes) or a modulus.
     fn mean_of(&self, value: &dyn Fn(f64) -> f64) -> (f64, Work) {
-        let mut work = Work { spectral_panels: self.panels.len(), spectral_nodes: self.nodes.len(), ..Work::default() };
+        let mut work = if self.closed.is_some() {
+            Work::default()
+        } else {
+            Work { spectral_panels: self.panels.len(), spectral_nodes: self.nodes.len(), ..Work::default() }
+        };
         if let Some(fft) = &self.fft {
             // The interpolated grid is only continuous across its cells (kinks at every grid line
             // of every node): a fixed composite rule at a quarter of the finest cell, not an
@@ -591,14 +709,40 @@ impl<'a> Polychromatic<'a> {
             let total = quad::composite(0.0, self.max_frequency, panels, |nu| value(nu).abs() * self.pixel_factor(nu));
             return (total / self.max_frequency, work);
         }
+        // The tolerance is relative to the mean, which is not known before it is computed: the
+        // first pass assumes a mean of at least `guess`; a smaller result is recomputed with its
+        // own value as the guess (absolute error ≤ tolerance × mean, never below 1e-15).
+        let mut guess = 0.25;
+        loop {
+            let closed_before = self.closed_evaluations.get();
+            let (mean, pass) = self.mean_pass(value, self.tolerance * guess);
+            work.frequency_panels += pass.frequency_panels;
+            work.otf_evaluations += pass.otf_evaluations;
+            work.sign_changes += pass.sign_changes;
+            work.closed_form_evaluations += self.closed_evaluations.get() - closed_before;
+            if mean >= 0.5 * guess || guess <= 1e-9 {
+                return (mean, work);
+            }
+            guess = mean.max(1e-9);
+        }
+    }
+
+    /// One adaptive pass of [`mean_of`](Self::mean_of) to an absolute error `absolute` of the mean.
+    fn mean_pass(&self, value: &dyn Fn(f64) -> f64, absolute: f64) -> (f64, Work) {
+        let mut work = Work::default();
+        // each OTF value may be off by a fraction of the budget: the mean is their average
+        self.otf_tolerance.set(0.2 * absolute);
+        // panel errors are budgeted per unit width: Σ tolerance × (b − a) = absolute × ν_max
+        let tolerance = absolute;
         // defocus phase rate in ν: d/dν [8π F# ν W020 (cos t − ν λ F#)] = 8π F# W020 (cos t − 2s)
         let phase_rate = 8.0 * PI * self.f_number * self.w020_rms;
-        let tolerance = FREQUENCY_TOLERANCE / self.max_frequency;
+        let min_panels = if self.closed.is_some() { 1.0 } else { 4.0 };
         let mut total = 0.0;
         for pair in self.frequency_cuts().windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts
-            let floor = (4.0 * (b - a) / self.max_frequency).ceil();
+            // (1 on the closed-form engine, whose OTF has no kinks)
+            let floor = (min_panels * (b - a) / self.max_frequency).ceil();
             let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).max(1.0) as usize;
             let h = (b - a) / n as f64;
             let mut left = (a, value(a));
@@ -669,11 +813,23 @@ impl<'a> Polychromatic<'a> {
             gauss += GAUSS_WEIGHTS[i] * v;
         }
         let (kronrod, gauss) = (kronrod * half, gauss * half);
+        // QUADPACK's qk15 estimate: |K − G| overstates the Kronrod error on smooth panels,
+        // where the error falls as its 1.5th power relative to the panel's variation
+        let mean = kronrod / (b - a);
+        let resasc = half
+            * samples[1..16]
+                .iter()
+                .enumerate()
+                .map(|(i, &(nu, f))| KRONROD_WEIGHTS[i] * (f.abs() * self.pixel_factor(nu) - mean).abs())
+                .sum::<f64>();
         // Accept at the tolerance, or where no refinement can help: the Kronrod–Gauss difference
         // at the rounding level of the sums themselves (near the cutoff the OTF is tiny and its
         // evaluation noise does not shrink with the panel), or a panel below 1e-9 of the range.
         let rounding = 1e3 * f64::EPSILON * kronrod.abs().max(tolerance * (b - a));
-        let error = (kronrod - gauss).abs();
+        let mut error = (kronrod - gauss).abs();
+        if resasc > 0.0 && error > 0.0 {
+            error = resasc * (200.0 * error / resasc).powf(1.5).min(1.0);
+        }
         if error <= tolerance * (b - a) || error <= rounding || b - a <= 1e-9 * self.max_frequency || depth >= MAX_DEPTH
         {
             work.frequency_panels += 1;
@@ -801,6 +957,43 @@ pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, 
 
 /// The wavelength interval the spectral quadrature covers: the spectrum's support, with Gaussian
 /// factors cut at ±[`GAUSSIAN_HALF_WIDTH_SIGMAS`] σ.
+/// The closed-form engine for `lens` seen through `detected` at `field`, when it applies: a
+/// Gaussian × polynomial spectrum and a lens whose [`LensModel::affine_defocus`] promise is
+/// confirmed by its [`orders`](LensModel::orders) at three wavelengths.
+fn closed_form(lens: &dyn LensModel, detected: &Spectrum, field: Field) -> Option<GaussianDefocus> {
+    let affine = lens.affine_defocus(field)?;
+    let gp = detected.gaussian_polynomial()?;
+    if !(affine.efficiency > 0.0) || gp.coefficients.len() > crate::closed::MAX_TERMS {
+        return None;
+    }
+    for lambda in [gp.center_m - gp.sigma_m, gp.center_m, gp.center_m + 2.0 * gp.sigma_m] {
+        if lambda <= 0.0 {
+            continue;
+        }
+        let orders = lens.orders(lambda, field);
+        let [order] = orders.as_slice() else { return None };
+        let w020 = affine.w020_intercept_m + affine.w020_slope * lambda;
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()) + 1e-18;
+        if !matches!(order.pupil, Pupil::Full)
+            || !order.wavefront.is_defocus_only()
+            || order.wavefront.image_shift_m != [0.0, 0.0]
+            || !close(order.efficiency, affine.efficiency)
+            || !close(order.wavefront.defocus_m, w020)
+        {
+            return None;
+        }
+    }
+    Some(GaussianDefocus::new(
+        gp.center_m,
+        gp.sigma_m,
+        &gp.coefficients,
+        affine.efficiency,
+        affine.w020_intercept_m,
+        affine.w020_slope,
+        lens.f_number(),
+    ))
+}
+
 fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
     let (mut lo, mut hi) = detected.support();
     for g in detected.gaussians() {

@@ -59,4 +59,6 @@ pub use chain::{
 };
 pub use error::Error;
 pub use sampled::Sampled;
-pub use spectrum::{GAUSSIAN_WINDOW_SIGMAS, NEGLIGIBLE_TRUNCATION, QuadratureNode, Spectrum, Truncation};
+pub use spectrum::{
+    GAUSSIAN_WINDOW_SIGMAS, GaussianPolynomial, NEGLIGIBLE_TRUNCATION, QuadratureNode, Spectrum, Truncation,
+};

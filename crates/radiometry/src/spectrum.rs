@@ -57,6 +57,30 @@ pub struct Truncation {
     pub support_m: (f64, f64),
 }
 
+/// A spectrum of the form `P(λ) · exp(−(λ − center)²/(2σ²))` for λ > 0, `P` a polynomial
+/// (see [`Spectrum::gaussian_polynomial`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GaussianPolynomial {
+    /// Centre of the Gaussian, m.
+    pub center_m: f64,
+    /// Its standard deviation, m.
+    pub sigma_m: f64,
+    /// Coefficients of `P` in powers of λ (SI, λ in m), lowest first; they carry the peak value.
+    pub coefficients: Vec<f64>,
+}
+
+impl GaussianPolynomial {
+    /// The value at `wavelength_m` (0 at λ ≤ 0).
+    pub fn value(&self, wavelength_m: f64) -> f64 {
+        if wavelength_m <= 0.0 {
+            return 0.0;
+        }
+        let d = (wavelength_m - self.center_m) / self.sigma_m;
+        let p = self.coefficients.iter().rev().fold(0.0, |acc, c| acc * wavelength_m + c);
+        p * (-0.5 * d * d).exp()
+    }
+}
+
 /// One quadrature node: `Σ weight · g(wavelength_m)` approximates `∫ spectrum(λ) g(λ) dλ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QuadratureNode {
@@ -210,6 +234,42 @@ impl Spectrum {
             }
         });
         out
+    }
+
+    /// The spectrum as `P(λ) · exp(−(λ − center)²/(2σ²))` for λ > 0 (0 at λ ≤ 0), with `P` a
+    /// polynomial, when it is a product of exactly one Gaussian (several Gaussian factors are
+    /// combined into one) with constants and linear factors; `None` otherwise. Closed-form
+    /// spectral integration applies to such spectra (`optics`, the Gaussian closed form).
+    pub fn gaussian_polynomial(&self) -> Option<GaussianPolynomial> {
+        let mut coefficients = vec![1.0];
+        let mut gaussian: Option<(f64, f64, f64)> = None; // (center, σ, peak)
+        let mut ok = true;
+        self.visit(&mut |f| match f {
+            Spectrum::Constant(c) => coefficients.iter_mut().for_each(|x| *x *= c),
+            Spectrum::Linear { slope } => {
+                coefficients.insert(0, 0.0);
+                coefficients.iter_mut().for_each(|x| *x *= slope);
+            }
+            Spectrum::Gaussian(g) => {
+                let (m2, s2, p2) = (g.center(), g.sigma(), g.peak());
+                gaussian = Some(match gaussian {
+                    None => (m2, s2, p2),
+                    // exp(−(λ−m1)²/2s1²) exp(−(λ−m2)²/2s2²) = exp(−(m1−m2)²/2(s1²+s2²)) exp(−(λ−m)²/2s²)
+                    Some((m1, s1, p1)) => {
+                        let (v1, v2) = (s1 * s1, s2 * s2);
+                        let m = (m1 * v2 + m2 * v1) / (v1 + v2);
+                        let s = (v1 * v2 / (v1 + v2)).sqrt();
+                        let p = p1 * p2 * (-(m1 - m2).powi(2) / (2.0 * (v1 + v2))).exp();
+                        (m, s, p)
+                    }
+                });
+            }
+            _ => ok = false,
+        });
+        let (center_m, sigma_m, peak) = gaussian?;
+        coefficients.iter_mut().for_each(|x| *x *= peak);
+        (ok && sigma_m > 0.0 && sigma_m.is_finite() && coefficients.iter().all(|c| c.is_finite()))
+            .then_some(GaussianPolynomial { center_m, sigma_m, coefficients })
     }
 
     /// Calls `f` on every non-product factor.
@@ -370,6 +430,31 @@ fn flatten_into(s: Spectrum, out: &mut Vec<Spectrum>) {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn gaussian_polynomial_reproduces_the_product() {
+        // radiance × Gaussian filter × Gaussian QE × λ: one Gaussian times a linear polynomial
+        let g1 = Gaussian::new(800e-9, 20e-9, 2.0).unwrap();
+        let g2 = Gaussian::new(780e-9, 40e-9, 0.5).unwrap();
+        let s = Spectrum::product(vec![
+            Spectrum::Constant(3.0),
+            Spectrum::Gaussian(g1),
+            Spectrum::Linear { slope: 1.0 },
+            Spectrum::Gaussian(g2),
+        ]);
+        let gp = s.gaussian_polynomial().unwrap();
+        assert_eq!(gp.coefficients.len(), 2);
+        for l in [700e-9, 790e-9, 805e-9, 900e-9] {
+            let (a, b) = (s.value(l), gp.value(l));
+            assert!((a - b).abs() <= 1e-13 * a.abs(), "{l}: {a} vs {b}");
+        }
+        assert_eq!(gp.value(-1e-9), 0.0);
+        // tables, top-hats and blackbodies have no such form
+        let t =
+            Spectrum::product(vec![Spectrum::Gaussian(g1), Spectrum::TopHat(TopHat::new(7e-7, 9e-7, 1.0).unwrap())]);
+        assert!(t.gaussian_polynomial().is_none());
+        assert!(Spectrum::Constant(1.0).gaussian_polynomial().is_none());
+    }
     use super::*;
 
     fn table(w_nm: &[f64], v: &[f64]) -> Sampled {
