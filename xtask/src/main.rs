@@ -6,11 +6,13 @@
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `tidy`: the architecture invariants (dependency direction, workspace dependencies and lints,
 //!   crate docs), checked by reading the manifests.
+//! - `stress [--quick]`: the numerical stress sweep of the metric (`stress.rs`).
 //!
 //! Each task is a module with a `run(root)` entry point; add new tasks to [`TASKS`] and `main`.
 
 mod ci;
 mod cmd;
+mod stress;
 mod tidy;
 
 use std::path::{Path, PathBuf};
@@ -20,13 +22,14 @@ use std::process::ExitCode;
 const TASKS: &[(&str, &str)] = &[
     ("ci", "full check: fmt, tidy, clippy -D warnings, tests, docs -D warnings"),
     ("tidy", "architecture invariants: dependency direction, workspace deps and lints, crate docs"),
+    ("stress", "numerical stress sweep of the metric, checked and timed (--quick: the CI-sized grid)"),
 ];
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let task = args.first().map(String::as_str);
-    if let Some(extra) = args.get(1) {
-        eprintln!("xtask: error: unexpected argument `{extra}` (tasks take no arguments)");
+    if let Some(extra) = args.get(1).filter(|_| !matches!(task, Some("stress"))) {
+        eprintln!("xtask: error: unexpected argument `{extra}` (this task takes no arguments)");
         return ExitCode::FAILURE;
     }
     let root = project_root();
@@ -37,6 +40,7 @@ fn main() -> ExitCode {
         }
         Some("ci") => ci::run(&root),
         Some("tidy") => tidy::run(&root),
+        Some("stress") => stress::run(&root, &args[1..]),
         Some(other) => {
             eprint!("{}", help());
             Err(anyhow::anyhow!("unknown task `{other}`"))

@@ -1,0 +1,60 @@
+//! Criterion benchmarks of [`metric::evaluate`]: the whole ASNR of a scene, from the spectral
+//! quadrature to the mean MTF, the photoelectron count and the reports.
+//!
+//! - the paper scene (SI, Fig. 2): F/2.5, f0 = 3.36 mm, λ0 = 800 nm, a 50 nm Gaussian range,
+//!   5.2 µm pixels, τ1 = 0.15, T = 0.55, QE 0.2, 1.23 ms;
+//! - the same lens at F/1.4 with a 200 nm range (the costly corner of the paper's design space:
+//!   up to ±7σ = ±495 nm around 800 nm, 44 waves of defocus at the widest kept wavelength);
+//! - the paper scene through the decentred iris of SI Fig. S3 (the FFT path, 256 pupil samples).
+//!
+//! `cargo bench -p metric --bench evaluate` (about a minute). Timings are measured here and never
+//! asserted (STYLE.md).
+
+use std::hint::black_box;
+use std::sync::Arc;
+use std::time::Duration;
+
+use criterion::{Criterion, SamplingMode, criterion_main};
+use lenses::{ChromaticMetalens, Curve};
+use metric::{Camera, Options, Scene, evaluate};
+use radiometry::{Gaussian, Spectrum};
+
+const F0: f64 = 3.36e-3;
+const LAMBDA0: f64 = 800e-9;
+
+fn lens(f_number: f64) -> ChromaticMetalens {
+    ChromaticMetalens::new(f_number, F0, LAMBDA0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
+}
+
+/// The paper theory scene with `lens`, a Gaussian filter of `range_m` at λ0 on a flat source.
+fn scene(lens: ChromaticMetalens, range_m: f64) -> Scene {
+    let filter = Gaussian::from_range(LAMBDA0, range_m, 1.0).unwrap();
+    let radiance = Spectrum::product(vec![Spectrum::Constant(0.025e9), Spectrum::Gaussian(filter)]);
+    let camera = Camera::new(5.2e-6, Spectrum::Constant(0.2), false).unwrap();
+    Scene::new(Arc::new(lens), radiance, camera, 1.23e-3, Options::default()).unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    let mut group = c.benchmark_group("evaluate");
+    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(5));
+    // slow points (up to seconds each): one run per sample is enough
+    group.sampling_mode(SamplingMode::Flat);
+    let cases = [
+        ("paper F2.5 50nm", scene(lens(2.5), 50e-9)),
+        ("F1.4 200nm", scene(lens(1.4), 200e-9)),
+        ("paper F2.5 50nm decentred iris fft", {
+            let iris = optics::fft::Aperture::circle().decentred(0.1, 0.0).unwrap();
+            scene(lens(2.5).with_aperture(iris), 50e-9)
+        }),
+    ];
+    for (name, scene) in &cases {
+        group.bench_function(*name, |b| b.iter(|| evaluate(black_box(scene)).unwrap().asnr));
+    }
+    group.finish();
+}
+
+/// The benchmark group (a private module: the macro's function has no docs of its own).
+mod group {
+    criterion::criterion_group!(benches, super::bench);
+}
+criterion_main!(group::benches);
