@@ -3,15 +3,19 @@
 //! shell scripts. `.cargo/config.toml` aliases `cargo xtask` to this binary.
 //!
 //! Tasks:
+//! - `accuracy [--quick]`: the accuracy-versus-time report (`BENCHMARKS.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
+//! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
 //! - `tidy`: the architecture invariants (dependency direction, workspace dependencies and lints,
 //!   crate docs), checked by reading the manifests.
 //! - `stress [--quick]`: the numerical stress sweep of the metric (`stress.rs`).
 //!
 //! Each task is a module with a `run(root)` entry point; add new tasks to [`TASKS`] and `main`.
 
+mod accuracy;
 mod ci;
 mod cmd;
+mod figures;
 mod stress;
 mod tidy;
 
@@ -20,7 +24,9 @@ use std::process::ExitCode;
 
 /// Every task with its one-line description, in the order `cargo xtask help` lists them.
 const TASKS: &[(&str, &str)] = &[
+    ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
     ("ci", "full check: fmt, tidy, clippy -D warnings, tests, docs -D warnings"),
+    ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("tidy", "architecture invariants: dependency direction, workspace deps and lints, crate docs"),
     ("stress", "numerical stress sweep of the metric, checked and timed (--quick: the CI-sized grid)"),
 ];
@@ -28,7 +34,7 @@ const TASKS: &[(&str, &str)] = &[
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let task = args.first().map(String::as_str);
-    if let Some(extra) = args.get(1).filter(|_| !matches!(task, Some("stress"))) {
+    if let Some(extra) = args.get(1).filter(|_| !matches!(task, Some("stress" | "accuracy"))) {
         eprintln!("xtask: error: unexpected argument `{extra}` (this task takes no arguments)");
         return ExitCode::FAILURE;
     }
@@ -38,7 +44,9 @@ fn main() -> ExitCode {
             print!("{}", help());
             Ok(())
         }
+        Some("accuracy") => accuracy::run(&root, &args[1..]),
         Some("ci") => ci::run(&root),
+        Some("figures") => figures::run(&root),
         Some("tidy") => tidy::run(&root),
         Some("stress") => stress::run(&root, &args[1..]),
         Some(other) => {
@@ -59,9 +67,9 @@ fn main() -> ExitCode {
 fn help() -> String {
     let mut text = String::from("usage: cargo xtask <task>\n\ntasks:\n");
     for (name, description) in TASKS {
-        text.push_str(&format!("  {name:<6} {description}\n"));
+        text.push_str(&format!("  {name:<8} {description}\n"));
     }
-    text.push_str("  help   print this list\n");
+    text.push_str("  help     print this list\n");
     text
 }
 

@@ -7,6 +7,7 @@
 mod optimize;
 mod output;
 mod plot;
+mod plotcmd;
 mod scene;
 mod sweep;
 mod tables;
@@ -37,6 +38,12 @@ enum Command {
         /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
+        /// Relative error allowed in the mean MTF (sets options.tolerance; default 1e-6).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
+        /// Print how the result is computed (engine, quadratures, error budget, work) after it.
+        #[arg(long)]
+        explain: bool,
     },
     /// The value of one numeric scene key that maximizes the ASNR (scan, then golden section).
     Optimize {
@@ -50,7 +57,10 @@ enum Command {
         over: String,
         /// Stop when the bracket is narrower than this fraction of HI − LO.
         #[arg(long, default_value_t = 1e-4, value_name = "FRACTION")]
-        tolerance: f64,
+        xtol: f64,
+        /// Relative error allowed in each ASNR evaluated (sets options.tolerance; default 1e-6).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
@@ -77,7 +87,12 @@ enum Command {
         /// Worker threads (0 = all cores). The results do not depend on it.
         #[arg(long, default_value_t = 0, value_name = "N")]
         threads: usize,
+        /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
     },
+    /// Replot sweep CSVs: lines overlaid, or one CSV as a heatmap (`cargo xtask figures` uses it).
+    Plot(plotcmd::PlotArgs),
     /// The polychromatic MTF from 0 to Nyquist (or to the cutoff), with the diffraction limit.
     Mtf {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -108,8 +123,9 @@ enum Command {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Evaluate { scene, set, json } => {
+        Command::Evaluate { scene, set, json, tolerance, explain } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+            let set = with_tolerance(set, tolerance);
             let loaded = scene::load(scene.as_deref(), &set)?;
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             output::check_finite(&result)?;
@@ -121,12 +137,16 @@ fn run(cli: Cli) -> Result<()> {
                     eprintln!("warning: {w}");
                 }
             }
+            if explain {
+                print!("{}", output::explain(&loaded, &result));
+            }
             Ok(())
         }
-        Command::Optimize { scene, set, over, tolerance, json } => {
-            if !(tolerance > 0.0 && tolerance < 1.0) {
-                anyhow::bail!("--tolerance {tolerance}: expected a fraction of the range in (0, 1)");
+        Command::Optimize { scene, set, over, xtol, tolerance, json } => {
+            if !(xtol > 0.0 && xtol < 1.0) {
+                anyhow::bail!("--xtol {xtol}: expected a fraction of the range in (0, 1)");
             }
+            let set = with_tolerance(set, tolerance);
             let range = optimize::parse_range(&over, false)?;
             let asnr_at = |x: f64| -> Result<f64> {
                 let mut overrides = set.clone();
@@ -134,7 +154,7 @@ fn run(cli: Cli) -> Result<()> {
                 let loaded = scene::load(scene.as_deref(), &overrides)?;
                 Ok(metric::evaluate(&loaded)?.asnr)
             };
-            let best = optimize::maximize(&range, tolerance * (range.hi - range.lo), asnr_at)?;
+            let best = optimize::maximize(&range, xtol * (range.hi - range.lo), asnr_at)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&best)?);
             } else {
@@ -145,7 +165,8 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Sweep { scene, set, over, csv, json, plot, threads } => {
+        Command::Sweep { scene, set, over, csv, json, plot, threads, tolerance } => {
+            let set = with_tolerance(set, tolerance);
             let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
             let total: usize = ranges.iter().map(|r| r.points.unwrap_or(1)).product();
             if total > 10_000_000 {
@@ -169,6 +190,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Plot(args) => plotcmd::run(&args),
         Command::Mtf { scene, set, json, csv, plot, to_cutoff, points, wavelengths } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
             if !(2..=100_000).contains(&points) {
@@ -195,6 +217,14 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// `--tolerance REL` as the override `options.tolerance=REL` (validated with the scene).
+fn with_tolerance(mut set: Vec<String>, tolerance: Option<f64>) -> Vec<String> {
+    if let Some(t) = tolerance {
+        set.push(format!("options.tolerance={t}"));
+    }
+    set
 }
 
 fn main() -> ExitCode {

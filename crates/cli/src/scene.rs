@@ -16,7 +16,7 @@ use radiometry::{Blackbody, Gaussian, Spectrum, TopHat};
 use serde::Deserialize;
 use serde::de::{self, Visitor};
 
-use crate::tables::read_table;
+use crate::tables::{FREQUENCY, read_pairs, read_table};
 
 /// The paper's theory scene, embedded in the binary (`examples/paper-theory.toml`).
 pub const PAPER_SCENE: &str = include_str!("../../../examples/paper-theory.toml");
@@ -139,6 +139,7 @@ struct RawCamera {
     full_well_e: Option<f64>,
     gain_dn_per_e: Option<f64>,
     adc_bits: Option<u32>,
+    noise_spectrum: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -155,6 +156,7 @@ struct RawOptions {
     fraunhofer_max_fraction: Option<f64>,
     pupil_samples: Option<u32>,
     glare: Option<String>,
+    tolerance: Option<f64>,
 }
 
 /// Where a scene came from, and which keys `--set` overrode: every message names its origin.
@@ -369,6 +371,14 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
     if let Some(sensor) = sensor(c, o)? {
         camera = camera.with_sensor(sensor);
     }
+    if let Some(file) = &c.noise_spectrum {
+        let key = "camera.noise_spectrum";
+        let (cyc_per_mm, relative) = read_pairs(&o.path(file), &FREQUENCY, 0.0, f64::MAX, "relative noise amplitude")
+            .with_context(|| format!("{}: {key} = \"{file}\"", o.of(key)))?;
+        let shape = optics::NoiseShape::new(cyc_per_mm.iter().map(|f| f * 1e3).collect(), relative)
+            .map_err(|e| anyhow!("{}: {key} = \"{file}\": {e}", o.of(key)))?;
+        camera = camera.with_noise_spectrum(shape);
+    }
 
     // [exposure], [options]
     let t = o.number("exposure.time_ms", raw.exposure.time_ms, raw.exposure.time_ms > 0.0, "a time > 0 ms")?;
@@ -401,6 +411,14 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
                 (16..=4096).contains(&v),
                 "a whole number of pupil samples from 16 to 4096",
             )? as usize;
+        }
+        if let Some(v) = opt.tolerance {
+            options.tolerance = o.number(
+                "options.tolerance",
+                v,
+                (1e-14..=0.1).contains(&v),
+                "a relative error of the mean MTF from 1e-14 to 0.1 (default 1e-6)",
+            )?;
         }
         if let Some(v) = opt.fraunhofer_max_fraction {
             options.fraunhofer_max_fraction =

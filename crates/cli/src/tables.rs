@@ -10,6 +10,32 @@ use radiometry::Sampled;
 /// `[lo, hi]` (`what` names them in messages).
 pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> {
     let shown = path.display();
+    let (wavelengths, values) = read_pairs(path, &WAVELENGTH, lo, hi, what)?;
+    let metres = wavelengths.iter().map(|wl| wl * 1e-9).collect();
+    Sampled::new(metres, values).with_context(|| format!("{shown}: invalid table"))
+}
+
+/// The first column of a two-column table: its name and unit in messages, and whether 0 is
+/// allowed.
+pub struct Axis {
+    /// Name, e.g. "wavelength".
+    pub name: &'static str,
+    /// Unit as typed, e.g. "nm".
+    pub unit: &'static str,
+    /// Whether the first value may be 0 (frequencies) or must be > 0 (wavelengths).
+    pub zero_allowed: bool,
+}
+
+/// Wavelengths in nm, > 0.
+pub const WAVELENGTH: Axis = Axis { name: "wavelength", unit: "nm", zero_allowed: false };
+
+/// Spatial frequencies in cycles/mm, ≥ 0.
+pub const FREQUENCY: Axis = Axis { name: "frequency", unit: "cyc_per_mm", zero_allowed: true };
+
+/// Reads a table of `x, value` rows as typed (`axis` units): the rules of [`read_table`].
+pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Result<(Vec<f64>, Vec<f64>)> {
+    let shown = path.display();
+    let (name, unit) = (axis.name, axis.unit);
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read the CSV file {shown}"))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
@@ -26,19 +52,20 @@ pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> 
             continue;
         }
         if record.len() != 2 {
-            bail!("{shown}: line {line}: {} columns; expected two: wavelength_nm, value", record.len());
+            bail!("{shown}: line {line}: {} columns; expected two: {name}_{unit}, value", record.len());
         }
         let parse = |field: &str| field.parse::<f64>().ok().filter(|v| v.is_finite());
         match (parse(&record[0]), parse(&record[1])) {
             (Some(wl), Some(v)) => {
-                if wl <= 0.0 {
-                    bail!("{shown}: line {line}: wavelength {wl} nm; expected a wavelength > 0 nm");
+                if wl < 0.0 || (wl == 0.0 && !axis.zero_allowed) {
+                    let bound = if axis.zero_allowed { "≥ 0" } else { "> 0" };
+                    bail!("{shown}: line {line}: {name} {wl} {unit}; expected a {name} {bound} {unit}");
                 }
                 if let Some(&prev) = wavelengths.last()
                     && wl <= prev
                 {
                     bail!(
-                        "{shown}: line {line}: wavelength {wl} nm does not exceed the previous {prev} nm; wavelengths must increase strictly"
+                        "{shown}: line {line}: {name} {wl} {unit} does not exceed the previous {prev} {unit}; {name}s must increase strictly"
                     );
                 }
                 if !(lo..=hi).contains(&v) {
@@ -49,14 +76,13 @@ pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> 
             }
             _ if wavelengths.is_empty() && index == 0 => {} // header row
             _ => bail!(
-                "{shown}: line {line}: `{}` is not a pair of finite numbers; expected wavelength_nm, value",
+                "{shown}: line {line}: `{}` is not a pair of finite numbers; expected {name}_{unit}, value",
                 record.iter().collect::<Vec<_>>().join(",")
             ),
         }
     }
     if wavelengths.len() < 2 {
-        bail!("{shown}: {} data rows; expected at least two rows of wavelength_nm, value", wavelengths.len());
+        bail!("{shown}: {} data rows; expected at least two rows of {name}_{unit}, value", wavelengths.len());
     }
-    let metres = wavelengths.iter().map(|wl| wl * 1e-9).collect();
-    Sampled::new(metres, values).with_context(|| format!("{shown}: invalid table"))
+    Ok((wavelengths, values))
 }

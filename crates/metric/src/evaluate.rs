@@ -76,6 +76,12 @@ pub struct Numerics {
     /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, PHYSICS.md integral),
     /// or `"fft: N pupil samples, padded to M"` for other pupils and wavefronts.
     pub engine: String,
+    /// The relative tolerance asked of the mean MTF.
+    pub tolerance: f64,
+    /// Evaluations of the closed-form spectral integral (closed-form engine only).
+    pub closed_form_evaluations: usize,
+    /// Whether a non-white noise spectrum put the SNR inside the integral.
+    pub noise_spectrum: bool,
     /// Spectral quadrature panels and nodes.
     pub spectral_panels: usize,
     /// Spectral nodes (over all imaging orders).
@@ -95,7 +101,8 @@ pub struct Evaluation {
     pub asnr: f64,
     /// Which form `asnr` is: `mean` (dimensionless) or `integral` (cycles/mm).
     pub form: MetricForm,
-    /// `SNR0 × mean MTF` (paper eq. 1, normalized by ν_N).
+    /// `SNR0 × mean MTF` (paper eq. 1, normalized by ν_N); with a non-white noise spectrum
+    /// `n(ν)`, `SNR0 × mean(MTF/n)` (the SNR inside the integral).
     pub asnr_mean: f64,
     /// `SNR0 × ∫_0^{ν_N} MTF dν`, cycles/mm (paper eq. 1 as printed).
     pub asnr_integral_cyc_per_mm: f64,
@@ -211,20 +218,30 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         let radial = field.y_rad.atan2(field.x_rad);
         let (r, w1) = poly.mean_mtf_along(radial);
         let (t, w2) = poly.mean_mtf_along(radial + 0.5 * PI);
-        let work = optics::Work {
-            frequency_panels: w1.frequency_panels + w2.frequency_panels,
-            otf_evaluations: w1.otf_evaluations + w2.otf_evaluations,
-            sign_changes: w1.sign_changes + w2.sign_changes,
-            ..w1
-        };
+        let work = add_work(w1, w2);
         (0.5 * (r + t), r, t, work)
     } else {
         let (m, work) = poly.mean_mtf();
         (m, m, m, work)
     };
+    // a non-white noise spectrum puts the SNR inside the integral (eq. 1 text): the mean of
+    // MTF(ν)/n(ν), radial and tangential averaged as for the MTF
+    let (weighted_mean, work) = match camera.noise_spectrum() {
+        None => (mean_mtf, work),
+        Some(shape) if poly.direction_dependent() => {
+            let radial = field.y_rad.atan2(field.x_rad);
+            let (r, w1) = poly.mean_mtf_over_noise(shape, radial);
+            let (t, w2) = poly.mean_mtf_over_noise(shape, radial + 0.5 * PI);
+            (0.5 * (r + t), add_work(add_work(work, w1), w2))
+        }
+        Some(shape) => {
+            let (m, w) = poly.mean_mtf_over_noise(shape, 0.0);
+            (m, add_work(work, w))
+        }
+    };
     let integral = mean_mtf * nyquist * 1e-3;
-    let asnr_mean = snr0 * mean_mtf;
-    let asnr_integral = snr0 * integral;
+    let asnr_mean = snr0 * weighted_mean;
+    let asnr_integral = snr0 * weighted_mean * nyquist * 1e-3;
 
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let fraunhofer = fraunhofer(scene, &poly);
@@ -299,6 +316,9 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
                     "closed-form spectral integral (Gaussian spectrum, affine defocus)".to_owned()
                 }
             },
+            tolerance: options.tolerance,
+            closed_form_evaluations: work.closed_form_evaluations,
+            noise_spectrum: camera.noise_spectrum().is_some(),
             spectral_panels: work.spectral_panels,
             spectral_nodes: work.spectral_nodes,
             frequency_panels: work.frequency_panels,
@@ -306,6 +326,17 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             sign_changes: work.sign_changes,
         },
     })
+}
+
+/// The work of two passes over the same spectral quadrature.
+fn add_work(a: optics::Work, b: optics::Work) -> optics::Work {
+    optics::Work {
+        frequency_panels: a.frequency_panels + b.frequency_panels,
+        otf_evaluations: a.otf_evaluations + b.otf_evaluations,
+        sign_changes: a.sign_changes + b.sign_changes,
+        closed_form_evaluations: a.closed_form_evaluations + b.closed_form_evaluations,
+        ..a
+    }
 }
 
 /// Detected spectral density before the lens: radiance × QE × λ (paper SI eq. S8 integrand

@@ -20,6 +20,7 @@ pub struct Camera {
     quantum_efficiency: Spectrum,
     pixel_mtf: bool,
     sensor: noise::Sensor,
+    noise_spectrum: Option<optics::NoiseShape>,
 }
 
 impl Camera {
@@ -29,13 +30,30 @@ impl Camera {
     /// MTF only).
     pub fn new(pixel_pitch_m: f64, quantum_efficiency: Spectrum, pixel_mtf: bool) -> Result<Self, Error> {
         check("pixel_pitch", pixel_pitch_m, pixel_pitch_m > 0.0, "a finite length > 0 m")?;
-        Ok(Camera { pixel_pitch: pixel_pitch_m, quantum_efficiency, pixel_mtf, sensor: noise::Sensor::ideal() })
+        Ok(Camera {
+            pixel_pitch: pixel_pitch_m,
+            quantum_efficiency,
+            pixel_mtf,
+            sensor: noise::Sensor::ideal(),
+            noise_spectrum: None,
+        })
     }
 
     /// This camera with a sensor noise model (default: [`noise::Sensor::ideal`], shot-noise
     /// limited as the paper assumes).
     pub fn with_sensor(self, sensor: noise::Sensor) -> Self {
         Camera { sensor, ..self }
+    }
+
+    /// This camera with a non-white noise spectrum `n(ν)` (relative to the white level of
+    /// SNR0): the SNR then moves inside the frequency integral of eq. 1, `ASNR = SNR0 · mean(MTF/n)`.
+    pub fn with_noise_spectrum(self, noise_spectrum: optics::NoiseShape) -> Self {
+        Camera { noise_spectrum: Some(noise_spectrum), ..self }
+    }
+
+    /// The non-white noise spectrum, if any (default: white).
+    pub fn noise_spectrum(&self) -> Option<&optics::NoiseShape> {
+        self.noise_spectrum.as_ref()
     }
 
     /// The sensor noise model.
@@ -199,6 +217,11 @@ impl Scene {
     /// The lens.
     pub fn lens(&self) -> &dyn LensModel {
         &*self.lens
+    }
+
+    /// The lens, shared.
+    pub fn lens_arc(&self) -> Arc<dyn LensModel> {
+        self.lens.clone()
     }
 
     /// Spectral radiance reaching the lens, W/(m² sr m).

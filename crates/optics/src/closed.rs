@@ -123,6 +123,8 @@ struct AtFrequency {
     a: Complex64,
     sqrt_a: Complex64,
     inv_2a: Complex64,
+    /// where the Gaussian is cut off, in σ: beyond it the weight is below the tolerance
+    tail: f64,
 }
 
 impl GaussianDefocus {
@@ -158,7 +160,7 @@ impl GaussianDefocus {
         let lower_x = (lower > -TAIL_SIGMAS).then_some(lower);
         let mut this = GaussianDefocus { center: center_m, sigma: sigma_m, q, lower_x, w0, w1, f_number, weight: 1.0 };
         // E at ν = 0 (no phase, no cut) is the weight itself
-        this.weight = this.moments(&this.at_frequency(0.0), 0.0, 0.0, f64::INFINITY).re;
+        this.weight = this.moments(&this.at_frequency(0.0, TAIL_SIGMAS), 0.0, 0.0, f64::INFINITY).re;
         this
     }
 
@@ -177,13 +179,28 @@ impl GaussianDefocus {
         self.weight
     }
 
-    fn at_frequency(&self, nu: f64) -> AtFrequency {
+    /// The fraction of [`total_weight`](Self::total_weight) at wavelengths whose defocus
+    /// exceeds `limit_m` in magnitude, `|w0 + w1 λ| > limit`: exact (the weight between the two
+    /// edges in closed form), not a sum over nodes that a step function would defeat.
+    pub fn fraction_defocused_beyond(&self, limit_m: f64) -> f64 {
+        if self.w1 == 0.0 {
+            return if self.w0.abs() > limit_m { 1.0 } else { 0.0 };
+        }
+        let (a, b) = ((-limit_m - self.w0) / self.w1, (limit_m - self.w0) / self.w1);
+        let (lo, hi) = (a.min(b), a.max(b));
+        let f = self.at_frequency(0.0, TAIL_SIGMAS);
+        let below = |l: f64| self.moments(&f, 0.0, 0.0, (l - self.center) / self.sigma).re;
+        let inside = below(hi) - below(lo);
+        (1.0 - inside / self.weight).clamp(0.0, 1.0)
+    }
+
+    fn at_frequency(&self, nu: f64, tail: f64) -> AtFrequency {
         let beta = nu * self.f_number;
         let scale = 8.0 * PI * beta;
         let (a_mu, a1) = (scale * (self.w0 + self.w1 * self.center), scale * self.w1);
         let phi2 = -a1 * beta * self.sigma * self.sigma;
         let a = Complex64::new(0.5, -phi2);
-        AtFrequency { beta, a_mu, a1, phi2, a, sqrt_a: a.sqrt(), inv_2a: (2.0 * a).inv() }
+        AtFrequency { beta, a_mu, a1, phi2, a, sqrt_a: a.sqrt(), inv_2a: (2.0 * a).inv(), tail }
     }
 
     /// `E(c)` in the units of the weight (see the module docs), with the spectrum cut at
@@ -199,10 +216,10 @@ impl GaussianDefocus {
     /// `∫_{x_lo}^{x_hi} Q(x) exp(−x²/2 + i(φ0 + φ1 x + φ2 x²)) dx`.
     fn moments(&self, f: &AtFrequency, phi0: f64, phi1: f64, cut_x: f64) -> Complex64 {
         let zero = Complex64::new(0.0, 0.0);
-        let upper = (cut_x < TAIL_SIGMAS).then_some(cut_x);
+        let upper = (cut_x < f.tail).then_some(cut_x);
         let lower = self.lower_x;
         match (upper, lower) {
-            (Some(u), _) if u < -TAIL_SIGMAS => return zero,
+            (Some(u), _) if u < -f.tail => return zero,
             (Some(u), Some(l)) if u <= l => return zero,
             _ => {}
         }
@@ -282,9 +299,12 @@ impl GaussianDefocus {
         if nu == 0.0 {
             return (1.0, 0);
         }
-        let f = self.at_frequency(nu);
-        // the spectrum is negligible for c < β(μ − 10σ) (and absent below λ = 0)
-        let c_lo = (f.beta * (self.center - TAIL_SIGMAS * self.sigma)).max(0.0);
+        // the Gaussian's tails beyond ±x weigh ~e^{−x²/2}: cut where that is far below the
+        // tolerance (6σ at 1e-7, 10σ at most)
+        let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+        let f = self.at_frequency(nu, tail);
+        // the spectrum is negligible for c < β(μ − tail σ) (and absent below λ = 0)
+        let c_lo = (f.beta * (self.center - tail * self.sigma)).max(0.0);
         if c_lo >= 1.0 {
             return (0.0, 0);
         }
@@ -295,7 +315,7 @@ impl GaussianDefocus {
         // inside the cut zone the integrand follows the Gaussian's cumulative distribution:
         // cut at its centre and shoulders too
         let mut cuts = vec![c_lo, 1.0];
-        cuts.extend([-3.0, 0.0, 3.0, TAIL_SIGMAS].map(|x| f.beta * (self.center + x * self.sigma)));
+        cuts.extend([0.0, tail].map(|x| f.beta * (self.center + x * self.sigma)));
         if f.a1 != 0.0 {
             // φ1 = σ(a1 (c − βμ) − β a_μ) = 0
             let c_star = f.beta * self.center + f.beta * f.a_mu / f.a1;
@@ -397,6 +417,21 @@ mod tests {
                 assert!((fast - slow).abs() < 2e-9, "range {range}, ν {nu}: {fast} vs {slow}");
             }
         }
+    }
+
+    #[test]
+    fn fraction_defocused_beyond_is_the_gaussian_tail() {
+        // P = 1: the weight outside λ0 ± Δ, Δ = limit/w1, is erfc(Δ/(σ√2)) of the whole Gaussian
+        // (the paper lens is centred on λ0, where W020 = 0); this one is broad enough that the
+        // part at λ ≤ 0, t = ½ erfc(μ/(σ√2)) = 6e-12, is missing from the weight
+        let g = paper(330e-9, &[1.0]);
+        let limit = 5e-6;
+        let delta = limit / g.w1;
+        let t = 0.5 * libm::erfc(g.center / (g.sigma * 2f64.sqrt()));
+        let exact = (libm::erfc(delta / (g.sigma * 2f64.sqrt())) - t) / (1.0 - t);
+        let got = g.fraction_defocused_beyond(limit);
+        assert!((got - exact).abs() < 1e-13, "{got} vs {exact}");
+        assert_eq!(g.fraction_defocused_beyond(1.0), 0.0);
     }
 
     #[test]

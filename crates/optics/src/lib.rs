@@ -49,6 +49,6 @@ pub use otf::{
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
 pub use poly::{
-    DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, GAUSSIAN_HALF_WIDTH_SIGMAS, Polychromatic, Settings, Work,
-    highest_cutoff, monochromatic_mtf,
+    DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Polychromatic, Settings,
+    Work, highest_cutoff, monochromatic_mtf,
 };

@@ -187,6 +187,54 @@ pub struct Work {
     pub closed_form_evaluations: usize,
 }
 
+/// A non-white noise spectrum: the noise amplitude at spatial frequency ν relative to the
+/// white level that SNR0 uses, `n(ν)` (1 = white), piecewise linear between its samples and
+/// constant beyond its ends.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoiseShape {
+    frequencies: Vec<f64>,
+    relative: Vec<f64>,
+}
+
+impl NoiseShape {
+    /// `relative[i]` at `frequencies[i]` (cycles/m, ≥ 0, strictly increasing, at least two);
+    /// every relative amplitude finite and > 0.
+    pub fn new(frequencies: Vec<f64>, relative: Vec<f64>) -> Result<NoiseShape, Error> {
+        let bad = |name, value, expected| Err(Error::InvalidParameter { name, value, expected });
+        if frequencies.len() < 2 || frequencies.len() != relative.len() {
+            return bad(
+                "noise spectrum samples",
+                frequencies.len() as f64,
+                "at least two (frequency, amplitude) pairs",
+            );
+        }
+        for (i, &f) in frequencies.iter().enumerate() {
+            if !(f.is_finite() && f >= 0.0) || (i > 0 && f <= frequencies[i - 1]) {
+                return bad("noise spectrum frequency", f, "finite, ≥ 0 and strictly increasing cycles/m");
+            }
+        }
+        if let Some(&v) = relative.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return bad("relative noise amplitude", v, "finite and > 0 (1 = the white level)");
+        }
+        Ok(NoiseShape { frequencies, relative })
+    }
+
+    /// `n(ν)` at `frequency` (cycles/m, sign ignored).
+    pub fn value(&self, frequency: f64) -> f64 {
+        let nu = frequency.abs();
+        let (x, y) = (&self.frequencies, &self.relative);
+        let i = x.partition_point(|&f| f <= nu);
+        if i == 0 {
+            return y[0];
+        }
+        if i == x.len() {
+            return y[x.len() - 1];
+        }
+        let t = (nu - x[i - 1]) / (x[i] - x[i - 1]);
+        y[i - 1] + t * (y[i] - y[i - 1])
+    }
+}
+
 /// How a [`Polychromatic`] is computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
@@ -686,6 +734,18 @@ impl<'a> Polychromatic<'a> {
         self.mean_of(&|nu| self.otf_along(nu, azimuth).norm())
     }
 
+    /// The mean over `[0, max_frequency]` of `P(ν) |OTF(ν)| / n(ν)` for a non-white noise
+    /// spectrum `n` (paper eq. 1 text: "if this is not the case, the SNR can be placed inside the
+    /// integral"): times SNR0 it is the ASNR with the noise amplitude `n(ν) σ` at each frequency.
+    /// Along `azimuth` when the OTF depends on direction.
+    pub fn mean_mtf_over_noise(&self, noise: &NoiseShape, azimuth: f64) -> (f64, Work) {
+        if self.direction_dependent() {
+            self.mean_of(&|nu| self.otf_along(nu, azimuth).norm() / noise.value(nu))
+        } else {
+            self.mean_of(&|nu| self.otf(nu) / noise.value(nu))
+        }
+    }
+
     /// Adaptive mean over `[0, max_frequency]` of `P(ν) |value(ν)|`, where `value` is a signed
     /// OTF (split at its sign changes) or a modulus.
     fn mean_of(&self, value: &dyn Fn(f64) -> f64) -> (f64, Work) {
@@ -736,12 +796,12 @@ impl<'a> Polychromatic<'a> {
         let tolerance = absolute;
         // defocus phase rate in ν: d/dν [8π F# ν W020 (cos t − ν λ F#)] = 8π F# W020 (cos t − 2s)
         let phase_rate = 8.0 * PI * self.f_number * self.w020_rms;
-        let min_panels = if self.closed.is_some() { 1.0 } else { 4.0 };
+        let min_panels = if self.closed.is_some() { 2.0 } else { 4.0 };
         let mut total = 0.0;
         for pair in self.frequency_cuts().windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts
-            // (1 on the closed-form engine, whose OTF has no kinks)
+            // (2 on the closed-form engine, whose OTF has no kinks)
             let floor = (min_panels * (b - a) / self.max_frequency).ceil();
             let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).max(1.0) as usize;
             let h = (b - a) / n as f64;
@@ -897,6 +957,9 @@ impl<'a> Polychromatic<'a> {
     /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15).
     pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
         let na = self.lens.numerical_aperture();
+        if let Some(closed) = &self.closed {
+            return closed.fraction_defocused_beyond(0.5 * radius_m * na);
+        }
         self.spectral_average(|_, w020| if 2.0 * w020.abs() / na > radius_m { 1.0 } else { 0.0 })
     }
 }
@@ -963,7 +1026,7 @@ pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, 
 fn closed_form(lens: &dyn LensModel, detected: &Spectrum, field: Field) -> Option<GaussianDefocus> {
     let affine = lens.affine_defocus(field)?;
     let gp = detected.gaussian_polynomial()?;
-    if !(affine.efficiency > 0.0) || gp.coefficients.len() > crate::closed::MAX_TERMS {
+    if affine.efficiency.is_nan() || affine.efficiency <= 0.0 || gp.coefficients.len() > crate::closed::MAX_TERMS {
         return None;
     }
     for lambda in [gp.center_m - gp.sigma_m, gp.center_m, gp.center_m + 2.0 * gp.sigma_m] {
