@@ -20,6 +20,7 @@ const STEPS: &[Step] = &[
     Step { name: "tidy", run: run_tidy },
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
+    Step { name: "stress (reduced grid)", run: stress },
     Step { name: "doc", run: doc },
 ];
 
@@ -70,6 +71,15 @@ fn clippy(root: &Path) -> Result<()> {
 
 fn test(root: &Path) -> Result<()> {
     cmd::run(&mut cmd::cargo(root, &["test", "--workspace", "--locked"]))
+}
+
+/// The reduced stress grid (`cargo xtask stress --quick`), in the test profile that the test step
+/// has just built (opt-level 2), so CI pays no release build for it.
+fn stress(root: &Path) -> Result<()> {
+    cmd::run(&mut cmd::cargo(
+        root,
+        &["run", "--locked", "--quiet", "--package", "metric", "--example", "stress", "--", "--quick"],
+    ))
 }
 
 fn doc(root: &Path) -> Result<()> {

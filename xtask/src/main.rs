@@ -25,7 +25,7 @@ use std::process::ExitCode;
 /// Every task with its one-line description, in the order `cargo xtask help` lists them.
 const TASKS: &[(&str, &str)] = &[
     ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
-    ("ci", "full check: fmt, tidy, clippy -D warnings, tests, docs -D warnings"),
+    ("ci", "full check: fmt, tidy, clippy -D warnings, tests, reduced stress grid, docs -D warnings"),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("tidy", "architecture invariants: dependency direction, workspace deps and lints, crate docs"),
     ("stress", "numerical stress sweep of the metric, checked and timed (--quick: the CI-sized grid)"),
