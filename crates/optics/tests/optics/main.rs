@@ -3,4 +3,5 @@
 
 mod fft;
 mod otf;
+mod properties;
 mod reference;

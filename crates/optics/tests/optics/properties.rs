@@ -1,16 +1,16 @@
-//! Property tests of the optics invariants on physical ranges, with fixed seeds:
-//!
-//! - `0 ≤ MTF ≤ MTF(0) = 1`, monochromatic and polychromatic, on and off axis;
-//! - the MTF vanishes past the incoherent cutoff `1/(λ F#)` of the shortest wavelength (exact
-//!   path, polychromatic sum, FFT grid);
-//! - a polychromatic OTF tends to the monochromatic one as the spectral range shrinks (exact and
-//!   FFT paths);
-//! - conjugate symmetry `OTF(−ν) = OTF(ν)*` of the complex OTF (lateral colour on the exact path,
-//!   decentred apertures on the FFT path, the raw FFT grid);
-//! - Parseval between the sampled pupil and its PSF, and the OTF grid summing to the PSF's
-//!   central value (the Fourier pair at the origin).
-//!
-//! Case counts keep the whole file to a few seconds in the dev profile.
+// Property tests of the optics invariants on physical ranges, with fixed seeds:
+//
+// - `0 ≤ MTF ≤ MTF(0) = 1`, monochromatic and polychromatic, on and off axis;
+// - the MTF vanishes past the incoherent cutoff `1/(λ F#)` of the shortest wavelength (exact
+//   path, polychromatic sum, FFT grid);
+// - a polychromatic OTF tends to the monochromatic one as the spectral range shrinks (exact and
+//   FFT paths);
+// - conjugate symmetry `OTF(−ν) = OTF(ν)*` of the complex OTF (lateral colour on the exact path,
+//   decentred apertures on the FFT path, the raw FFT grid);
+// - Parseval between the sampled pupil and its PSF, and the OTF grid summing to the PSF's
+//   central value (the Fourier pair at the origin).
+//
+// Case counts keep the whole file to a few seconds in the dev profile.
 
 use std::f64::consts::PI;
 use std::sync::Arc;

@@ -1,14 +1,14 @@
-//! Property tests of [`metric::evaluate`] on physical ranges, with fixed seeds:
-//!
-//! - bounds: every output finite, `0 ≤ mean MTF ≤ 1`, `ASNR = SNR0 × mean MTF ≤ SNR0`,
-//!   `SNR0 = √N` for a shot-noise-limited camera, for Gaussian, top-hat and blackbody light;
-//! - `SNR0 ∝ √(exposure)` (shot noise), with the MTF untouched;
-//! - invariance under a change of units: radiance × k with exposure / k changes nothing; every
-//!   length × k (wavelengths, focal length, pixel, blur threshold) keeps the MTF and multiplies
-//!   N by k⁴; the same spectrum as a Gaussian and as a dense table, a top-hat and its table;
-//! - a vanishing spectral range gives the monochromatic mean MTF.
-//!
-//! Case counts keep the whole file to a few seconds in the dev profile.
+// Property tests of [`metric::evaluate`] on physical ranges, with fixed seeds:
+//
+// - bounds: every output finite, `0 ≤ mean MTF ≤ 1`, `ASNR = SNR0 × mean MTF ≤ SNR0`,
+//   `SNR0 = √N` for a shot-noise-limited camera, for Gaussian, top-hat and blackbody light;
+// - `SNR0 ∝ √(exposure)` (shot noise), with the MTF untouched;
+// - invariance under a change of units: radiance × k with exposure / k changes nothing; every
+//   length × k (wavelengths, focal length, pixel, blur threshold) keeps the MTF and multiplies
+//   N by k⁴; the same spectrum as a Gaussian and as a dense table, a top-hat and its table;
+// - a vanishing spectral range gives the monochromatic mean MTF.
+//
+// Case counts keep the whole file to a few seconds in the dev profile.
 
 use std::sync::Arc;
 

@@ -425,3 +425,5 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
     assert!(rel < 1e-7, "{} vs {direct} ({rel:e})", ramp.asnr / ramp.snr0);
     assert!(ramp.asnr < base.asnr && ramp.asnr > flat.asnr);
 }
+
+mod properties;
