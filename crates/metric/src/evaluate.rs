@@ -195,11 +195,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let field = scene.field();
     let options = scene.options();
-    let settings = optics::Settings {
-        pupil_samples: options.pupil_samples,
-        tolerance: options.tolerance,
-        closed_form: options.closed_form,
-    };
+    let settings = options.settings();
     let poly = Polychromatic::with_settings(lens, &detected, field, nyquist, pixel, settings)?;
 
     let na = lens.numerical_aperture();
@@ -408,11 +404,7 @@ pub fn mtf_curve(
     };
     let field = scene.field();
     let options = scene.options();
-    let settings = optics::Settings {
-        pupil_samples: options.pupil_samples,
-        tolerance: options.tolerance,
-        closed_form: options.closed_form,
-    };
+    let settings = options.settings();
     let poly = Polychromatic::with_settings(lens, &detected, field, max_frequency, pixel, settings)?;
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let points = points.max(2);

@@ -127,6 +127,13 @@ pub struct Options {
     pub closed_form: bool,
 }
 
+impl Options {
+    /// The optics engine's settings these options ask for.
+    pub fn settings(&self) -> optics::Settings {
+        optics::Settings { pupil_samples: self.pupil_samples, tolerance: self.tolerance, closed_form: self.closed_form }
+    }
+}
+
 impl Default for Options {
     fn default() -> Self {
         Options {
