@@ -43,8 +43,8 @@ pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Res
         .trim(csv::Trim::All)
         .flexible(true)
         .from_reader(text.as_bytes());
-    // wavelengths kept in nm as typed, for messages; converted to m at the end
-    let (mut wavelengths, mut values): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+    // the first column kept as typed (the caller converts units)
+    let (mut xs, mut values): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     for (index, record) in reader.records().enumerate() {
         let record = record.with_context(|| format!("{shown}: malformed CSV"))?;
         let line = record.position().map_or(index as u64 + 1, |p| p.line());
@@ -56,33 +56,33 @@ pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Res
         }
         let parse = |field: &str| field.parse::<f64>().ok().filter(|v| v.is_finite());
         match (parse(&record[0]), parse(&record[1])) {
-            (Some(wl), Some(v)) => {
-                if wl < 0.0 || (wl == 0.0 && !axis.zero_allowed) {
+            (Some(x), Some(v)) => {
+                if x < 0.0 || (x == 0.0 && !axis.zero_allowed) {
                     let bound = if axis.zero_allowed { "≥ 0" } else { "> 0" };
-                    bail!("{shown}: line {line}: {name} {wl} {unit}; expected a {name} {bound} {unit}");
+                    bail!("{shown}: line {line}: {name} {x} {unit}; expected a {name} {bound} {unit}");
                 }
-                if let Some(&prev) = wavelengths.last()
-                    && wl <= prev
+                if let Some(&prev) = xs.last()
+                    && x <= prev
                 {
                     bail!(
-                        "{shown}: line {line}: {name} {wl} {unit} does not exceed the previous {prev} {unit}; {name}s must increase strictly"
+                        "{shown}: line {line}: {name} {x} {unit} does not exceed the previous {prev} {unit}; {name}s must increase strictly"
                     );
                 }
                 if !(lo..=hi).contains(&v) {
                     bail!("{shown}: line {line}: {what} {v} is out of range; expected [{lo}, {hi}]");
                 }
-                wavelengths.push(wl);
+                xs.push(x);
                 values.push(v);
             }
-            _ if wavelengths.is_empty() && index == 0 => {} // header row
+            _ if xs.is_empty() && index == 0 => {} // header row
             _ => bail!(
                 "{shown}: line {line}: `{}` is not a pair of finite numbers; expected {name}_{unit}, value",
                 record.iter().collect::<Vec<_>>().join(",")
             ),
         }
     }
-    if wavelengths.len() < 2 {
-        bail!("{shown}: {} data rows; expected at least two rows of {name}_{unit}, value", wavelengths.len());
+    if xs.len() < 2 {
+        bail!("{shown}: {} data rows; expected at least two rows of {name}_{unit}, value", xs.len());
     }
-    Ok((wavelengths, values))
+    Ok((xs, values))
 }

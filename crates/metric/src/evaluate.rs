@@ -210,28 +210,26 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     };
     let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure());
     let snr0 = budget.snr;
-    let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = if poly.direction_dependent() {
-        let radial = field.y_rad.atan2(field.x_rad);
-        let (r, w1) = poly.mean_mtf_along(radial);
-        let (t, w2) = poly.mean_mtf_along(radial + 0.5 * PI);
-        let work = add_work(w1, w2);
-        (0.5 * (r + t), r, t, work)
-    } else {
-        let (m, work) = poly.mean_mtf();
-        (m, m, m, work)
+    // where the OTF depends on direction, a mean along the field direction (radial) and one
+    // across it (tangential), averaged; otherwise one mean
+    let directional = |mean_along: &dyn Fn(f64) -> (f64, optics::Work)| {
+        if poly.direction_dependent() {
+            let radial = field.y_rad.atan2(field.x_rad);
+            let (r, w1) = mean_along(radial);
+            let (t, w2) = mean_along(radial + 0.5 * PI);
+            (0.5 * (r + t), r, t, add_work(w1, w2))
+        } else {
+            let (m, work) = mean_along(0.0);
+            (m, m, m, work)
+        }
     };
+    let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = directional(&|azimuth| poly.mean_mtf_along(azimuth));
     // a non-white noise spectrum puts the SNR inside the integral (eq. 1 text): the mean of
     // MTF(ν)/n(ν), radial and tangential averaged as for the MTF
     let (weighted_mean, work) = match camera.noise_spectrum() {
         None => (mean_mtf, work),
-        Some(shape) if poly.direction_dependent() => {
-            let radial = field.y_rad.atan2(field.x_rad);
-            let (r, w1) = poly.mean_mtf_over_noise(shape, radial);
-            let (t, w2) = poly.mean_mtf_over_noise(shape, radial + 0.5 * PI);
-            (0.5 * (r + t), add_work(add_work(work, w1), w2))
-        }
         Some(shape) => {
-            let (m, w) = poly.mean_mtf_over_noise(shape, 0.0);
+            let (m, _, _, w) = directional(&|azimuth| poly.mean_mtf_over_noise(shape, azimuth));
             (m, add_work(work, w))
         }
     };

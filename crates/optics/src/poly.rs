@@ -90,66 +90,6 @@ const SIGNIFICANT_WEIGHT: f64 = 1e-13;
 /// Bisection depth limit of the adaptive frequency integration.
 const MAX_DEPTH: u32 = 40;
 
-/// Gauss–Kronrod 15-point nodes on [−1, 1], ascending (QUADPACK `qk15`).
-#[allow(clippy::excessive_precision)] // QUADPACK's published digits
-const KRONROD_NODES: [f64; 15] = [
-    -0.991_455_371_120_812_639_206_854_697_526_329,
-    -0.949_107_912_342_758_524_526_189_684_047_851,
-    -0.864_864_423_359_769_072_789_712_788_640_926,
-    -0.741_531_185_599_394_439_863_864_773_280_788,
-    -0.586_087_235_467_691_130_294_144_845_693_013,
-    -0.405_845_151_377_397_166_906_606_412_076_961,
-    -0.207_784_955_007_898_467_600_689_403_773_245,
-    0.0,
-    0.207_784_955_007_898_467_600_689_403_773_245,
-    0.405_845_151_377_397_166_906_606_412_076_961,
-    0.586_087_235_467_691_130_294_144_845_693_013,
-    0.741_531_185_599_394_439_863_864_773_280_788,
-    0.864_864_423_359_769_072_789_712_788_640_926,
-    0.949_107_912_342_758_524_526_189_684_047_851,
-    0.991_455_371_120_812_639_206_854_697_526_329,
-];
-
-/// Kronrod weights for [`KRONROD_NODES`].
-#[allow(clippy::excessive_precision)] // QUADPACK's published digits
-const KRONROD_WEIGHTS: [f64; 15] = [
-    0.022_935_322_010_529_224_963_732_008_058_970,
-    0.063_092_092_629_978_553_290_700_663_189_204,
-    0.104_790_010_322_250_183_839_876_322_541_518,
-    0.140_653_259_715_525_918_745_189_590_510_238,
-    0.169_004_726_639_267_902_826_583_426_598_550,
-    0.190_350_578_064_785_409_913_256_402_421_014,
-    0.204_432_940_075_298_892_414_161_999_234_649,
-    0.209_482_141_084_727_828_012_999_174_891_714,
-    0.204_432_940_075_298_892_414_161_999_234_649,
-    0.190_350_578_064_785_409_913_256_402_421_014,
-    0.169_004_726_639_267_902_826_583_426_598_550,
-    0.140_653_259_715_525_918_745_189_590_510_238,
-    0.104_790_010_322_250_183_839_876_322_541_518,
-    0.063_092_092_629_978_553_290_700_663_189_204,
-    0.022_935_322_010_529_224_963_732_008_058_970,
-];
-
-/// The embedded 7-point Gauss weights, at the odd-indexed Kronrod nodes (zero elsewhere).
-#[allow(clippy::excessive_precision)] // QUADPACK's published digits
-const GAUSS_WEIGHTS: [f64; 15] = [
-    0.0,
-    0.129_484_966_168_869_693_270_611_432_679_082,
-    0.0,
-    0.279_705_391_489_276_667_901_467_771_423_780,
-    0.0,
-    0.381_830_050_505_118_944_950_369_775_488_975,
-    0.0,
-    0.417_959_183_673_469_387_755_102_040_816_327,
-    0.0,
-    0.381_830_050_505_118_944_950_369_775_488_975,
-    0.0,
-    0.279_705_391_489_276_667_901_467_771_423_780,
-    0.0,
-    0.129_484_966_168_869_693_270_611_432_679_082,
-    0.0,
-];
-
 #[derive(Clone, Copy, Debug)]
 struct Node {
     lambda: f64,
@@ -384,9 +324,9 @@ impl<'a> Polychromatic<'a> {
             closed_evaluations: Cell::new(0),
         };
         if settings.closed_form
-            && let Some(closed) = closed_form(lens, detected, field)
+            && let Some((closed, affine)) = closed_form(lens, detected, field)
         {
-            this.closed_nodes(&closed, lens.affine_defocus(field));
+            this.closed_nodes(&closed, affine);
             this.closed = Some(closed);
             return Ok(this);
         }
@@ -436,10 +376,7 @@ impl<'a> Polychromatic<'a> {
         if !(this.total_weight > 0.0 && this.total_weight.is_finite()) {
             return Err(Error::NoSignal { total: this.total_weight });
         }
-        let threshold = SIGNIFICANT_WEIGHT * this.total_weight;
-        this.w020_max =
-            this.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
-        this.w020_rms = this.spectral_average(|_, w020| w020 * w020).sqrt();
+        this.defocus_statistics();
         this.shifted = this.nodes.iter().any(|n| n.shift != [0.0, 0.0]);
         if this.needs_fft.get() {
             this.fft = Some(this.build_fft(pupil_samples)?);
@@ -451,8 +388,7 @@ impl<'a> Polychromatic<'a> {
     /// exact) but for the averages over the spectrum ([`detected_integral`](Self::detected_integral),
     /// [`spectral_average`](Self::spectral_average)): 8 Gauss–Legendre panels over μ ± 10σ,
     /// exact to rounding for the smooth functions they are used with.
-    fn closed_nodes(&mut self, closed: &GaussianDefocus, affine: Option<crate::AffineDefocus>) {
-        let Some(affine) = affine else { return };
+    fn closed_nodes(&mut self, closed: &GaussianDefocus, affine: crate::AffineDefocus) {
         let (mu, sigma) = (closed.center(), closed.sigma());
         let (lo, hi) = ((mu - 10.0 * sigma).max(0.0), mu + 10.0 * sigma);
         let (mut samples, mut nodes) = (Vec::new(), Vec::new());
@@ -470,6 +406,12 @@ impl<'a> Polychromatic<'a> {
         self.samples = samples;
         self.nodes = nodes;
         self.total_weight = closed.total_weight();
+        self.defocus_statistics();
+    }
+
+    /// The largest |W020| among the nodes that carry weight, and the weighted RMS of W020 (the
+    /// frequency rule's initial panels), once the nodes and the total weight are known.
+    fn defocus_statistics(&mut self) {
         let threshold = SIGNIFICANT_WEIGHT * self.total_weight;
         self.w020_max =
             self.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
@@ -835,7 +777,7 @@ impl<'a> Polychromatic<'a> {
         let mut samples = [(0.0, 0.0); 17];
         samples[0] = left;
         samples[16] = right;
-        for (i, &x) in KRONROD_NODES.iter().enumerate() {
+        for (i, &x) in quad::KRONROD_NODES.iter().enumerate() {
             let nu = mid + half * x;
             samples[i + 1] = (nu, value(nu));
         }
@@ -865,31 +807,18 @@ impl<'a> Polychromatic<'a> {
             }
             return total;
         }
-        let mut kronrod = 0.0;
-        let mut gauss = 0.0;
-        for (i, &(nu, f)) in samples[1..16].iter().enumerate() {
-            let v = f.abs() * self.pixel_factor(nu);
-            kronrod += KRONROD_WEIGHTS[i] * v;
-            gauss += GAUSS_WEIGHTS[i] * v;
+        let mut values = [0.0; 15];
+        for (v, &(nu, f)) in values.iter_mut().zip(&samples[1..16]) {
+            *v = f.abs() * self.pixel_factor(nu);
         }
-        let (kronrod, gauss) = (kronrod * half, gauss * half);
-        // QUADPACK's qk15 estimate: |K − G| overstates the Kronrod error on smooth panels,
-        // where the error falls as its 1.5th power relative to the panel's variation
-        let mean = kronrod / (b - a);
-        let resasc = half
-            * samples[1..16]
-                .iter()
-                .enumerate()
-                .map(|(i, &(nu, f))| KRONROD_WEIGHTS[i] * (f.abs() * self.pixel_factor(nu) - mean).abs())
-                .sum::<f64>();
+        let panel = quad::Qk15::new(&values, half);
+        let kronrod = panel.kronrod;
         // Accept at the tolerance, or where no refinement can help: the Kronrod–Gauss difference
         // at the rounding level of the sums themselves (near the cutoff the OTF is tiny and its
         // evaluation noise does not shrink with the panel), or a panel below 1e-9 of the range.
         let rounding = 1e3 * f64::EPSILON * kronrod.abs().max(tolerance * (b - a));
-        let mut error = (kronrod - gauss).abs();
-        if resasc > 0.0 && error > 0.0 {
-            error = resasc * (200.0 * error / resasc).powf(1.5).min(1.0);
-        }
+        // QUADPACK's qk15 estimate, the 1.5th power
+        let error = panel.error(|r| r.powf(1.5));
         if error <= tolerance * (b - a) || error <= rounding || b - a <= 1e-9 * self.max_frequency || depth >= MAX_DEPTH
         {
             work.frequency_panels += 1;
@@ -1023,7 +952,11 @@ pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, 
 /// The closed-form engine for `lens` seen through `detected` at `field`, when it applies: a
 /// Gaussian × polynomial spectrum and a lens whose [`LensModel::affine_defocus`] promise is
 /// confirmed by its [`orders`](LensModel::orders) at three wavelengths.
-fn closed_form(lens: &dyn LensModel, detected: &Spectrum, field: Field) -> Option<GaussianDefocus> {
+fn closed_form(
+    lens: &dyn LensModel,
+    detected: &Spectrum,
+    field: Field,
+) -> Option<(GaussianDefocus, crate::AffineDefocus)> {
     let affine = lens.affine_defocus(field)?;
     let gp = detected.gaussian_polynomial()?;
     if affine.efficiency.is_nan() || affine.efficiency <= 0.0 || gp.coefficients.len() > crate::closed::MAX_TERMS {
@@ -1046,7 +979,7 @@ fn closed_form(lens: &dyn LensModel, detected: &Spectrum, field: Field) -> Optio
             return None;
         }
     }
-    Some(GaussianDefocus::new(
+    let closed = GaussianDefocus::new(
         gp.center_m,
         gp.sigma_m,
         &gp.coefficients,
@@ -1054,7 +987,8 @@ fn closed_form(lens: &dyn LensModel, detected: &Spectrum, field: Field) -> Optio
         affine.w020_intercept_m,
         affine.w020_slope,
         lens.f_number(),
-    ))
+    );
+    Some((closed, affine))
 }
 
 fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
