@@ -217,12 +217,14 @@ impl Origins {
     }
 }
 
-/// A scene file's text, read once and built into scenes with different overrides (sweeps).
+/// A scene file's text, read once and built into scenes with different overrides (sweeps):
+/// its TOML is parsed once, on first use, and each scene starts from a copy of that table.
 #[derive(Clone, Debug)]
 pub struct Source {
     text: String,
     label: String,
     dir: PathBuf,
+    parsed: std::sync::OnceLock<std::result::Result<toml::Table, String>>,
 }
 
 impl Source {
@@ -243,7 +245,7 @@ pub fn read(file: Option<&Path>) -> Result<Source> {
         }
         None => (PAPER_SCENE.to_owned(), "embedded paper scene".to_owned(), PathBuf::from(".")),
     };
-    Ok(Source { text, label, dir })
+    Ok(Source { text, label, dir, parsed: std::sync::OnceLock::new() })
 }
 
 /// Reads and validates a scene: `file` (None = the embedded paper scene) with `--set` overrides.
@@ -257,8 +259,8 @@ pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene> {
     if text.trim().is_empty() {
         bail!("{label}: the scene file is empty: expected TOML tables [lens], [source], [camera], [exposure]");
     }
-    let mut table: toml::Table =
-        toml::from_str(text).map_err(|e| anyhow!("{label}: malformed TOML: {}", e.to_string().trim_end()))?;
+    let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| e.to_string().trim_end().to_owned()));
+    let mut table = parsed.clone().map_err(|e| anyhow!("{label}: malformed TOML: {e}"))?;
     let mut origins = Origins { file: label, dir, overrides: BTreeMap::new() };
     for arg in overrides {
         let (key, value) = apply_override(&mut table, arg)?;

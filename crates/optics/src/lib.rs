@@ -31,6 +31,7 @@
 
 mod closed;
 mod error;
+pub mod faddeeva;
 pub mod fft;
 pub mod fraunhofer;
 mod lens;

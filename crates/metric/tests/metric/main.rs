@@ -340,13 +340,15 @@ fn cutoff_below_nyquist_is_fast_and_right() {
 /// the OTF is tiny and its rounding noise once kept the adaptive rule bisecting without end.
 /// Once Nyquist is past the cutoff of every wavelength (10 nm band: ±7σ reaches 775 nm, cutoff
 /// 1/(775 nm × 2.5) = 516 cycles/mm), smaller pixels add only zeros: the MTF area ∫ MTF dν is the
-/// same for 0.5 µm and 0.3 µm pixels, and below the diffraction limit's ν_c · 4/(3π).
+/// same for 0.5 µm and 0.3 µm pixels (each within the default relative tolerance 1e-6 of it),
+/// and below the diffraction limit's ν_c · 4/(3π).
 #[test]
 fn nyquist_far_past_the_cutoff_terminates() {
     let a = evaluate(&scene(2.5, 10e-9, 0.5e-6, false, LAMBDA0)).unwrap();
     let b = evaluate(&scene(2.5, 10e-9, 0.3e-6, false, LAMBDA0)).unwrap();
     let (area_a, area_b) = (a.mtf_integral_cyc_per_mm, b.mtf_integral_cyc_per_mm);
-    assert!((area_a - area_b).abs() < 1e-8 * area_a, "{area_a} vs {area_b}");
+    let tolerance = optics::DEFAULT_TOLERANCE;
+    assert!((area_a - area_b).abs() < 2.0 * tolerance * area_a, "{area_a} vs {area_b}");
     // diffraction limit at 775 nm: 516.1 cycles/mm × 0.42441 = 219.0 cycles/mm
     assert!(area_b < 219.0 && area_b > 100.0, "{area_b}");
     assert!(b.numerics.otf_evaluations < 50_000, "{}", b.numerics.otf_evaluations);
@@ -391,6 +393,36 @@ fn closed_form_engine_matches_the_spectral_quadrature() {
         assert!(rel < 1e-9, "F/{f}, {range} m at {centre} m: {} vs {} ({rel:e})", closed.mean_mtf, quadrature.mean_mtf);
         let pe = (closed.photoelectrons - quadrature.photoelectrons).abs() / quadrature.photoelectrons;
         assert!(pe < 1e-10, "photoelectrons {} vs {}", closed.photoelectrons, quadrature.photoelectrons);
+    }
+}
+
+/// The requested tolerance is met: at 1e-3, 1e-6 and 1e-8 the closed-form engine's mean MTF is
+/// within that relative error of its own converged value (1e-13; the engine itself is checked
+/// against the spectral quadrature above and the reference elsewhere), on easy and hard scenes:
+/// the paper, broad bands at fast F-numbers (narrow, oscillating bumps in the pupil angle), a
+/// slow narrow one, and pixels whose Nyquist frequency is far past the cutoff.
+#[test]
+fn closed_form_engine_meets_the_requested_tolerance() {
+    let cases = [
+        (2.5, 50e-9, 5.2e-6),
+        (1.0, 200e-9, 5.2e-6),
+        (1.4, 150e-9, 2e-6),
+        (2.6, 170e-9, 5.2e-6),
+        (10.0, 20e-9, 5.2e-6),
+        (2.5, 10e-9, 0.3e-6),
+    ];
+    for (f, range, pixel) in cases {
+        let s = scene(f, range, pixel, false, LAMBDA0);
+        let at = |tolerance| {
+            let options = Options { tolerance, ..Options::default() };
+            evaluate(&s.clone().with_options(options).unwrap()).unwrap().mean_mtf
+        };
+        let converged = at(1e-13);
+        for tolerance in [1e-3, 1e-6, 1e-8] {
+            let rel = (at(tolerance) - converged).abs() / converged;
+            eprintln!("F/{f} {range:e} m, {pixel:e} m pixels, tolerance {tolerance:e}: error {rel:.1e}");
+            assert!(rel <= tolerance, "F/{f}, {range} m, {pixel} m pixels: error {rel:e} at tolerance {tolerance:e}");
+        }
     }
 }
 
