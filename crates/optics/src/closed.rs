@@ -286,9 +286,6 @@ impl GaussianDefocus {
             let reach = r * width;
             from = from.max(c_star - reach);
             to = to.min(c_star + reach);
-            if width < 0.05 {
-                cuts.extend([c_star - 2.0 * width, c_star, c_star + 2.0 * width].map(|c| c.clamp(from, to.max(from))));
-            }
         }
         if to > from {
             cuts.extend([from, to]);
@@ -326,13 +323,10 @@ fn adaptive(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tolerance: f64, evaluations:
             *v = f(x);
         }
         *evaluations += n;
-        let sums = rule.sums(0.5 * (b - a), &values);
+        let sums = rule.sums(0.5 * (b - a), &values[..n]);
         let k = sums.kronrod;
-        // QUADPACK's estimate with the exponent 2 instead of 1.5: |K − G| overstates the
-        // Kronrod error on these analytic integrands, where the error falls at least as its
-        // square relative to the panel's variation `resasc` (checked against the brute-force
-        // spectral quadrature and the reference: the results stay within 1e-9 of them at a
-        // requested 1e-6)
+        // the asymptotic estimate (quad::Sums::asymptotic_error; G7–K15 here needs more
+        // evaluations at 1e-6 and 1e-7, measured on the paper and F/1.4 200 nm scenes)
         let error = sums.asymptotic_error(1.6);
         if error <= tol || depth >= MAX_DEPTH || error <= 50.0 * f64::EPSILON * sums.resabs {
             return k;

@@ -772,13 +772,12 @@ impl<'a> Polychromatic<'a> {
         work: &mut Work,
     ) -> f64 {
         let (a, b) = (left.0, right.0);
-        let mid = 0.5 * (a + b);
         let half = 0.5 * (b - a);
         let mut samples = [(0.0, 0.0); 17];
         samples[0] = left;
         samples[16] = right;
-        for (i, &x) in quad::KRONROD_NODES.iter().enumerate() {
-            let nu = mid + half * x;
+        let nodes = quad::GK15.nodes(a, b);
+        for (i, &nu) in nodes[..15].iter().enumerate() {
             samples[i + 1] = (nu, value(nu));
         }
         work.otf_evaluations += 15;
@@ -811,7 +810,7 @@ impl<'a> Polychromatic<'a> {
         for (v, &(nu, f)) in values.iter_mut().zip(&samples[1..16]) {
             *v = f.abs() * self.pixel_factor(nu);
         }
-        let panel = quad::qk15(&values, half);
+        let panel = quad::GK15.sums(half, &values);
         let kronrod = panel.kronrod;
         // Accept at the tolerance, or where no refinement can help: the Kronrod–Gauss difference
         // at the rounding level of the sums themselves (near the cutoff the OTF is tiny and its

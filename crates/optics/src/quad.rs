@@ -62,82 +62,7 @@ pub fn for_each_node<F: FnMut(f64, f64)>(a: f64, b: f64, panels: usize, mut visi
     }
 }
 
-/// Gauss–Kronrod 15-point nodes on [−1, 1], ascending (QUADPACK `qk15`).
-#[allow(clippy::excessive_precision)] // QUADPACK's published digits
-pub const KRONROD_NODES: [f64; 15] = [
-    -0.991_455_371_120_812_639_206_854_697_526_329,
-    -0.949_107_912_342_758_524_526_189_684_047_851,
-    -0.864_864_423_359_769_072_789_712_788_640_926,
-    -0.741_531_185_599_394_439_863_864_773_280_788,
-    -0.586_087_235_467_691_130_294_144_845_693_013,
-    -0.405_845_151_377_397_166_906_606_412_076_961,
-    -0.207_784_955_007_898_467_600_689_403_773_245,
-    0.0,
-    0.207_784_955_007_898_467_600_689_403_773_245,
-    0.405_845_151_377_397_166_906_606_412_076_961,
-    0.586_087_235_467_691_130_294_144_845_693_013,
-    0.741_531_185_599_394_439_863_864_773_280_788,
-    0.864_864_423_359_769_072_789_712_788_640_926,
-    0.949_107_912_342_758_524_526_189_684_047_851,
-    0.991_455_371_120_812_639_206_854_697_526_329,
-];
-
-/// Kronrod weights for [`KRONROD_NODES`].
-#[allow(clippy::excessive_precision)] // QUADPACK's published digits
-pub const KRONROD_WEIGHTS: [f64; 15] = [
-    0.022_935_322_010_529_224_963_732_008_058_970,
-    0.063_092_092_629_978_553_290_700_663_189_204,
-    0.104_790_010_322_250_183_839_876_322_541_518,
-    0.140_653_259_715_525_918_745_189_590_510_238,
-    0.169_004_726_639_267_902_826_583_426_598_550,
-    0.190_350_578_064_785_409_913_256_402_421_014,
-    0.204_432_940_075_298_892_414_161_999_234_649,
-    0.209_482_141_084_727_828_012_999_174_891_714,
-    0.204_432_940_075_298_892_414_161_999_234_649,
-    0.190_350_578_064_785_409_913_256_402_421_014,
-    0.169_004_726_639_267_902_826_583_426_598_550,
-    0.140_653_259_715_525_918_745_189_590_510_238,
-    0.104_790_010_322_250_183_839_876_322_541_518,
-    0.063_092_092_629_978_553_290_700_663_189_204,
-    0.022_935_322_010_529_224_963_732_008_058_970,
-];
-
-/// The embedded 7-point Gauss weights, at the odd-indexed Kronrod nodes (zero elsewhere).
-#[allow(clippy::excessive_precision)] // QUADPACK's published digits
-pub const GAUSS_WEIGHTS: [f64; 15] = [
-    0.0,
-    0.129_484_966_168_869_693_270_611_432_679_082,
-    0.0,
-    0.279_705_391_489_276_667_901_467_771_423_780,
-    0.0,
-    0.381_830_050_505_118_944_950_369_775_488_975,
-    0.0,
-    0.417_959_183_673_469_387_755_102_040_816_327,
-    0.0,
-    0.381_830_050_505_118_944_950_369_775_488_975,
-    0.0,
-    0.279_705_391_489_276_667_901_467_771_423_780,
-    0.0,
-    0.129_484_966_168_869_693_270_611_432_679_082,
-    0.0,
-];
-
-/// The sums of one Gauss–Kronrod 7/15 panel (QUADPACK `qk15`) from the integrand's values at
-/// the [`KRONROD_NODES`] mapped to a panel of half-width `half`.
-pub fn qk15(values: &[f64; 15], half: f64) -> Sums {
-    let (mut kronrod, mut gauss, mut resabs) = (0.0, 0.0, 0.0);
-    for (i, &v) in values.iter().enumerate() {
-        kronrod += KRONROD_WEIGHTS[i] * v;
-        gauss += GAUSS_WEIGHTS[i] * v;
-        resabs += KRONROD_WEIGHTS[i] * v.abs();
-    }
-    let mean = 0.5 * kronrod;
-    let resasc: f64 = values.iter().enumerate().map(|(i, &v)| KRONROD_WEIGHTS[i] * (v - mean).abs()).sum();
-    let h = half.abs();
-    Sums { kronrod: kronrod * half, gauss: gauss * half, resabs: resabs * h, resasc: resasc * h }
-}
-
-// Gauss–Kronrod pairs (QUADPACK dqk21 / dqk61 constants, Piessens et al. 1983, computed by
+// Gauss–Kronrod pairs (QUADPACK dqk15 / dqk21 / dqk61 constants, Piessens et al. 1983, computed by
 // L. W. Fullerton with 80-digit arithmetic; checked by polynomial exactness in the reference's
 // tests). The fast path and `reference` share the constants, not the algorithms.
 
@@ -188,6 +113,10 @@ impl GaussKronrod {
                 resg += self.wg[j / 2] * pair;
             }
         }
+        if 2 * self.wg.len() > m {
+            // an odd Gauss rule (G7): the centre is a Gauss node too
+            resg += self.wg[m / 2] * fx[m];
+        }
         let mean = 0.5 * resk;
         let mut resasc = self.wgk[m] * (fx[m] - mean).abs();
         for j in 0..m {
@@ -225,6 +154,37 @@ impl GaussKronrod {
 
 /// Largest number of points of the rules below.
 pub const MAX_POINTS: usize = 61;
+
+/// The G7–K15 pair (QUADPACK `dqk15`).
+#[allow(clippy::excessive_precision)]
+pub const GK15: GaussKronrod = GaussKronrod {
+    xgk: &[
+        0.991_455_371_120_812_639_206_854_697_526_329,
+        0.949_107_912_342_758_524_526_189_684_047_851,
+        0.864_864_423_359_769_072_789_712_788_640_926,
+        0.741_531_185_599_394_439_863_864_773_280_788,
+        0.586_087_235_467_691_130_294_144_845_693_013,
+        0.405_845_151_377_397_166_906_606_412_076_961,
+        0.207_784_955_007_898_467_600_689_403_773_245,
+        0.0,
+    ],
+    wgk: &[
+        0.022_935_322_010_529_224_963_732_008_058_970,
+        0.063_092_092_629_978_553_290_700_663_189_204,
+        0.104_790_010_322_250_183_839_876_322_541_518,
+        0.140_653_259_715_525_918_745_189_590_510_238,
+        0.169_004_726_639_267_902_826_583_426_598_550,
+        0.190_350_578_064_785_409_913_256_402_421_014,
+        0.204_432_940_075_298_892_414_161_999_234_649,
+        0.209_482_141_084_727_828_012_999_174_891_714,
+    ],
+    wg: &[
+        0.129_484_966_168_869_693_270_611_432_679_082,
+        0.279_705_391_489_276_667_901_467_771_423_780,
+        0.381_830_050_505_118_944_950_369_775_488_975,
+        0.417_959_183_673_469_387_755_102_040_816_327,
+    ],
+};
 
 /// The G10–K21 pair (QUADPACK `dqk21`).
 // The 33-digit QUADPACK values are kept as published (rounded to f64 by the compiler).

@@ -94,9 +94,10 @@ fn rel(a: f64, b: f64) -> f64 {
 
 #[test]
 fn gauss_kronrod_rules_are_exact_to_their_degree() {
-    // K21 is exact for degree ≤ 31 and its G10 part for degree ≤ 19; K61 for ≤ 91, G30 for ≤ 59.
+    // K15 is exact for degree ≤ 22 and its G7 part (odd: the centre is a Gauss node) for ≤ 13;
+    // K21 for ≤ 31 and its G10 part for ≤ 19; K61 for ≤ 91, G30 for ≤ 59.
     // Exact: ∫_0^1 x^k dx = 1/(k + 1). Tolerance: rounding, 1e-14 relative.
-    for (rule, kronrod_degree, gauss_degree) in [(GK21, 31, 19), (GK61, 91, 59)] {
+    for (rule, kronrod_degree, gauss_degree) in [(optics::quad::GK15, 22, 13), (GK21, 31, 19), (GK61, 91, 59)] {
         for k in 0..=kronrod_degree {
             let (v, _) = rule.panel(|x: f64| x.powi(k), 0.0, 1.0);
             assert!(rel(v, 1.0 / f64::from(k + 1)) < 1e-14, "{} pts, x^{k}: {v}", rule.points());
