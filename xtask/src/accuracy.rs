@@ -1,6 +1,7 @@
 //! `cargo xtask accuracy [--quick]`: the accuracy-versus-time report. Builds and runs the example
-//! `crates/metric/examples/accuracy.rs` in release (xtask depends on no project crate), which
-//! writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the workspace root.
+//! `crates/metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
+//! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
+//! workspace root.
 
 use std::path::Path;
 

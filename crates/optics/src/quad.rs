@@ -1,4 +1,5 @@
-//! Composite Gauss–Legendre quadrature with a fixed rule per panel.
+//! Composite Gauss–Legendre quadrature with a fixed rule per panel, and single Gauss–Legendre
+//! and Gauss–Hermite rules of any order (for the accuracy report's fixed-order comparisons).
 //!
 //! Every integral in the fast path is a sum of panels, each integrated with the same
 //! [`ORDER`]-point Gauss–Legendre rule (nodes from `gauss-quad`, Bogaert's algorithm). The
@@ -22,14 +23,74 @@ pub const MAX_PANEL_PHASE: f64 = 12.0;
 pub fn rule() -> &'static [(f64, f64); ORDER] {
     static RULE: OnceLock<[(f64, f64); ORDER]> = OnceLock::new();
     RULE.get_or_init(|| {
-        let n = NonZeroUsize::new(ORDER).expect("ORDER > 0");
-        let gl = gauss_quad::legendre::GaussLegendre::new(n);
-        let mut pairs: Vec<(f64, f64)> = gl.as_node_weight_pairs().to_vec();
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut out = [(0.0, 0.0); ORDER];
-        out.copy_from_slice(&pairs);
+        out.copy_from_slice(&gauss_legendre(ORDER));
         out
     })
+}
+
+/// The `n`-point Gauss–Legendre rule on `[-1, 1]` (`n ≥ 1`; 0 is taken as 1): `(node, weight)`
+/// pairs, nodes ascending, exact for polynomials of degree `2n − 1`. Nodes and weights from
+/// `gauss-quad` (Bogaert's O(n) algorithm, accurate to rounding for any `n`).
+pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    let n = NonZeroUsize::new(n).unwrap_or(NonZeroUsize::MIN);
+    let mut pairs = gauss_quad::legendre::GaussLegendre::new(n).as_node_weight_pairs().to_vec();
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pairs
+}
+
+/// The `n`-point Gauss–Hermite rule for `∫_{−∞}^{∞} e^{−x²} f(x) dx ≈ Σ wᵢ f(xᵢ)` (`n ≥ 1`; 0 is
+/// taken as 1): `(node, weight)` pairs, nodes ascending, exact for polynomials `f` of degree
+/// `2n − 1`. A Gaussian spectrum of centre μ and standard deviation σ takes the nodes
+/// `λᵢ = μ + √2 σ xᵢ`.
+///
+/// Golub–Welsch (the eigenvalues of the Jacobi matrix, from `gauss-quad`) gives the nodes to a
+/// few ulps of the largest; each is then polished by Newton's method on the orthonormal Hermite
+/// recurrence (Press et al., *Numerical Recipes*, 3rd ed., §4.6, `gauher`)
+///
+/// ```text
+/// p₀ = π^{−1/4},  p₁ = √2 x p₀,  pⱼ = √(2/j) x pⱼ₋₁ − √((j−1)/j) pⱼ₋₂,  pₙ' = √(2n) pₙ₋₁,
+/// ```
+///
+/// and the weight taken from the same recurrence, `wᵢ = 2/pₙ'(xᵢ)²`, which keeps its relative
+/// accuracy even for the outermost nodes (weights down to 1e-300), where the eigenvector form of
+/// Golub–Welsch only has absolute accuracy. The recurrence is run on `pⱼ e^{−x²/2}`, which stays
+/// of order one, so nothing overflows for `n` up to several hundred.
+pub fn gauss_hermite(n: usize) -> Vec<(f64, f64)> {
+    let n = NonZeroUsize::new(n).unwrap_or(NonZeroUsize::MIN);
+    let m = n.get();
+    // (pₙ, pₙ₋₁) e^{−x²/2}
+    let scaled = |x: f64| {
+        let (mut prev, mut cur) = (0.0, std::f64::consts::PI.powf(-0.25) * (-0.5 * x * x).exp());
+        for j in 1..=m {
+            let j = j as f64;
+            let next = (2.0 / j).sqrt() * x * cur - ((j - 1.0) / j).sqrt() * prev;
+            prev = cur;
+            cur = next;
+        }
+        (cur, prev)
+    };
+    let initial = gauss_quad::hermite::GaussHermite::new(n);
+    let mut pairs: Vec<(f64, f64)> = initial
+        .as_node_weight_pairs()
+        .iter()
+        .map(|&(x0, _)| {
+            let mut x = x0;
+            for _ in 0..8 {
+                let (p, q) = scaled(x);
+                let step = p / ((2.0 * m as f64).sqrt() * q);
+                x -= step;
+                if step.abs() <= 4.0 * f64::EPSILON * x.abs().max(1.0) {
+                    break;
+                }
+            }
+            // wᵢ = 2/pₙ'² = 2/(2n pₙ₋₁²) = e^{−x²}/(n (pₙ₋₁ e^{−x²/2})²)
+            let q = scaled(x).1;
+            (x, (-x * x).exp() / (m as f64 * q * q))
+        })
+        .collect();
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pairs
 }
 
 /// Integrates `f` over `[a, b]` with `panels` equal panels of the [`ORDER`]-point rule.
@@ -368,6 +429,65 @@ mod tests {
         // ∫_0^1 x^31 dx = 1/32
         let v = composite(0.0, 1.0, 1, |x| x.powi(31));
         assert!((v - 1.0 / 32.0).abs() < 1e-15, "{v}");
+    }
+
+    #[test]
+    fn gauss_legendre_rules_are_exact_to_degree_2n_minus_1() {
+        // ∫_{−1}^{1} x^{2k} dx = 2/(2k + 1); odd powers integrate to 0 by the symmetric nodes
+        for n in [1, 2, 3, 8, 16, 37, 128] {
+            let r = gauss_legendre(n);
+            assert_eq!(r.len(), n);
+            assert!(r.windows(2).all(|p| p[0].0 < p[1].0));
+            for k in 0..n {
+                let exact = 2.0 / (2 * k + 1) as f64;
+                let got: f64 = r.iter().map(|&(x, w)| w * x.powi(2 * k as i32)).sum();
+                assert!((got / exact - 1.0).abs() < 1e-13, "n {n}, x^{}: {got} vs {exact}", 2 * k);
+            }
+            // one degree too many: x^{2n} is not integrated exactly (the error falls as 4^{−n},
+            // so it is visible for small n only)
+            if n <= 8 {
+                let got: f64 = r.iter().map(|&(x, w)| w * x.powi(2 * n as i32)).sum();
+                assert!((got * (2 * n + 1) as f64 / 2.0 - 1.0).abs() > 1e-6, "n {n}");
+            }
+        }
+        assert_eq!(&gauss_legendre(ORDER)[..], &rule()[..]);
+        assert_eq!(gauss_legendre(0), gauss_legendre(1));
+    }
+
+    #[test]
+    fn gauss_hermite_rules_integrate_even_moments_exactly() {
+        // ∫ x^{2k} e^{−x²} dx = Γ(k + ½) = √π (2k − 1)!!/2^k, built up by Γ(k + 3/2) = (k + ½) Γ(k + ½)
+        for n in [1, 2, 5, 16, 33, 64, 128] {
+            let r = gauss_hermite(n);
+            assert_eq!(r.len(), n);
+            assert!(r.windows(2).all(|p| p[0].0 < p[1].0));
+            let mut exact = std::f64::consts::PI.sqrt();
+            for k in 0..n {
+                let got: f64 = r.iter().map(|&(x, w)| w * x.powi(2 * k as i32)).sum();
+                assert!((got / exact - 1.0).abs() < 1e-12, "n {n}, x^{}: {got} vs {exact}", 2 * k);
+                // odd moments vanish: nodes and weights symmetric
+                let odd: f64 = r.iter().map(|&(x, w)| w * x.powi(2 * k as i32 + 1)).sum();
+                let scale: f64 = r.iter().map(|&(x, w)| (w * x.powi(2 * k as i32 + 1)).abs()).sum();
+                assert!(odd.abs() <= 1e-13 * scale, "n {n}, x^{}: {odd}", 2 * k + 1);
+                exact *= k as f64 + 0.5;
+            }
+            // x^{2n} is past the rule's degree: its moment comes out low by √π n!/2^n, a
+            // relative √(πn)/2^n, visible for small n
+            if n <= 5 {
+                let got: f64 = r.iter().map(|&(x, w)| w * x.powi(2 * n as i32)).sum();
+                assert!((got / exact - 1.0).abs() > 1e-2, "n {n}");
+            }
+        }
+    }
+
+    #[test]
+    fn gauss_hermite_matches_a_closed_form_transform() {
+        // ∫ e^{−x²} cos(k x) dx = √π e^{−k²/4}: an entire integrand, converged at 40 nodes
+        for k in [0.5, 2.0, 6.0] {
+            let got: f64 = gauss_hermite(40).iter().map(|&(x, w)| w * (k * x).cos()).sum();
+            let exact = std::f64::consts::PI.sqrt() * (-k * k / 4.0).exp();
+            assert!((got - exact).abs() < 1e-14, "k {k}: {got} vs {exact}");
+        }
     }
 
     #[test]

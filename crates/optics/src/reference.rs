@@ -573,31 +573,56 @@ pub fn mean_mtf_quadrature(scene: &ReferenceScene<'_>, rel_tol: f64) -> Quadratu
 /// Bessel functions from `libm::jn` (not the fast path's recurrence); the sums stop where
 /// `Jn(a)` is below 1e-17 (`n > a + 12 a^{1/3} + 30`). For `a → 0` the closed form MTF_0 is used.
 pub fn otf_hopkins(s: f64, w: f64) -> f64 {
+    let a = (8.0 * PI * w * s).abs();
+    otf_hopkins_terms(s, w, (a + 12.0 * a.cbrt() + 30.0) as usize + 1)
+}
+
+/// [`otf_hopkins`] with each of its two brackets cut after `terms` terms: `β J1` and `n = 1 …
+/// terms − 1` in the first, `n = 0 … terms − 1` in the second (Bessel orders up to `2 terms`).
+/// The series converges once `2 terms` passes `|a| = 8π |w s|`, where `Jn(a)` starts to decay;
+/// fewer terms give the truncation error the accuracy report measures.
+pub fn otf_hopkins_terms(s: f64, w: f64, terms: usize) -> f64 {
     if s <= 0.0 {
         return 1.0;
     }
     if s >= 1.0 {
         return 0.0;
     }
-    let a = (8.0 * std::f64::consts::PI * w * s).abs();
+    let a = (8.0 * PI * w * s).abs();
     let beta = s.acos();
     if a < 1e-6 {
         return std::f64::consts::FRAC_2_PI * (beta - s * (1.0 - s * s).sqrt());
     }
-    let n_max = (a + 12.0 * a.cbrt() + 30.0) as i32;
     let j = |n: i32| libm::jn(n, a);
+    let terms = i32::try_from(terms).unwrap_or(i32::MAX / 2 - 1);
     let mut first = beta * j(1);
     let mut second = 0.0;
-    for n in 1..=n_max {
+    for n in 1..terms {
         let sign = if n % 2 == 1 { 1.0 } else { -1.0 };
         let m = f64::from(2 * n);
         first += sign * (m * beta).sin() / m * (j(2 * n - 1) - j(2 * n + 1));
     }
-    for n in 0..=n_max {
+    for n in 0..terms {
         let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
         let m = f64::from(2 * n + 1);
         second += sign * (m * beta).sin() / m * (j(2 * n) - j(2 * n + 2));
     }
-    let k = 4.0 / (std::f64::consts::PI * a);
+    let k = 4.0 / (PI * a);
     k * ((a * s).cos() * first - (a * s).sin() * second)
+}
+
+/// The geometric-optics limit of the defocused OTF (PHYSICS.md, "Geometric limit"), an
+/// approximation for comparisons, good at large defocus only: `OTF → 2 J1(x)/x` with
+/// `x = π d ν`, blur-disk diameter `d = 2 |Δz| NA`. With `Δz = 8 F#² W020`, `NA = 1/(2 F#)` and
+/// `ν = s/(λ F#)`, `x = 8π |w| s = |a|`. 1 at `s ≤ 0` and `a = 0`; 0 at `s ≥ 1` like the OTF
+/// (the geometric formula itself knows no cutoff); `J1` from `libm`.
+pub fn otf_geometric(s: f64, w: f64) -> f64 {
+    if s <= 0.0 {
+        return 1.0;
+    }
+    if s >= 1.0 {
+        return 0.0;
+    }
+    let x = (8.0 * PI * w * s).abs();
+    if x < 1e-8 { 1.0 - x * x / 8.0 } else { 2.0 * libm::j1(x) / x }
 }

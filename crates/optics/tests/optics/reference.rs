@@ -6,7 +6,7 @@
 
 use optics::reference::{
     GK21, GK61, ReferenceScene, integrate, integrate_modulus, mean_mtf, mean_mtf_quadrature, otf_defocus,
-    polychromatic_otf,
+    otf_geometric, otf_hopkins, otf_hopkins_terms, polychromatic_otf,
 };
 use std::f64::consts::PI;
 
@@ -232,14 +232,45 @@ fn otf_tends_to_the_geometric_limit() {
         (1..=200)
             .map(|k| {
                 let s = 0.5 * f64::from(k) / 200.0;
-                let x = 8.0 * PI * w * s;
-                (otf_defocus(s, w) - 2.0 * libm::j1(x) / x).abs()
+                (otf_defocus(s, w) - otf_geometric(s, w)).abs()
             })
             .fold(0.0, f64::max)
     };
     let devs: Vec<f64> = [3.0, 10.0, 30.0, 100.0].map(worst).to_vec();
     assert!(devs.windows(2).all(|d| d[1] < d[0]), "{devs:?}");
     assert!(devs[3] < 1e-2, "{devs:?}");
+    // and it is only an approximation: at small defocus it is far off (w = 0.5, s = 0.3:
+    // 2 J1(3.77)/3.77 = −0.01 against an OTF of 0.3)
+    assert!((otf_defocus(0.3, 0.5) - otf_geometric(0.3, 0.5)).abs() > 0.1);
+    // limits: 1 at zero frequency or zero defocus, 0 past the cutoff
+    assert_eq!(otf_geometric(0.0, 5.0), 1.0);
+    assert_eq!(otf_geometric(0.4, 0.0), 1.0);
+    assert_eq!(otf_geometric(1.0, 5.0), 0.0);
+}
+
+/// Hopkins' series cut after `terms` terms: converged (to the reference's 1e-12) once the Bessel
+/// orders it reaches, `2 terms`, pass `a + 12 a^{1/3} + 30` (where `Jn(a)` < 1e-17), identical to
+/// the full series with its own term count, and visibly truncated with too few terms.
+#[test]
+fn hopkins_series_truncated_converges_to_the_full_series() {
+    for w in [0.25, 1.0, 5.0, 30.0] {
+        for s in [0.05, 0.3, 0.6, 0.9] {
+            let a = 8.0 * PI * w * s;
+            let enough = ((a + 12.0 * a.cbrt() + 30.0) / 2.0).ceil() as usize;
+            let full = otf_hopkins(s, w);
+            let cut = otf_hopkins_terms(s, w, enough);
+            assert!((cut - otf_defocus(s, w)).abs() < 1e-12, "s {s} w {w}: {cut} vs {}", otf_defocus(s, w));
+            assert!((cut - full).abs() < 1e-14, "s {s} w {w}: {cut} vs {full}");
+            assert_eq!(otf_hopkins_terms(s, w, (a + 12.0 * a.cbrt() + 30.0) as usize + 1), full);
+        }
+    }
+    // a = 8π · 1 · 0.5 = 12.6: five terms reach J10 only (measured error 2.2e-3)
+    assert!((otf_hopkins_terms(0.5, 1.0, 5) - otf_defocus(0.5, 1.0)).abs() > 1e-4);
+    // a = 8π · 30 · 0.6 = 452: the error only falls once 2 terms passes a (measured 4.4e-6,
+    // 1.5e-10, 3e-18 at 150, 240, 300 terms)
+    let (s, w) = (0.6, 30.0);
+    let errors: Vec<f64> = [150, 240, 300].map(|k| (otf_hopkins_terms(s, w, k) - otf_defocus(s, w)).abs()).to_vec();
+    assert!(errors[0] > 1e-6 && errors[1] < 1e-9 && errors[2] < 1e-12, "{errors:?}");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,324 @@
+//! The accuracy-versus-time report (`cargo xtask accuracy`): for every way of computing the
+//! mean MTF of a scene and every way of computing the monochromatic OTF, its error against a
+//! converged reference and its time; writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg`
+//! (error against time, log–log, one panel per table).
+//!
+//! Mean MTF of one ASNR point (paper scene F/2.5, 50 nm and hard scene F/1.4, 200 nm), against
+//! `optics::reference::mean_mtf` at 1e-12 (computed once per scene):
+//! - the production engines through `metric::evaluate`: closed form and spectral quadrature at
+//!   tolerances 1e-2 … 1e-12, FFT pupils of 64 … 1024 samples, and the spectral quadrature of a
+//!   tabulated spectrum (`Spectrum::Sampled`, 1 nm and finer);
+//! - spectral rules with the production monochromatic OTF at each node and one fixed, converged
+//!   frequency rule ([`spectral`]): uniform nodes over ±kσ and Gauss–Hermite.
+//!
+//! OTF kernels ([`kernels`]): `optics::defocus_otf`, fixed Gauss–Legendre node counts, Hopkins'
+//! series cut after K terms and the geometric approximation, against
+//! `optics::reference::otf_defocus`, per defocus from 0.25 to 300 waves.
+//!
+//! Times are medians of repeated single-threaded calls in this (release) process.
+//!
+//! Run: `cargo run --release -p metric --example accuracy -- [--quick] [OUT_DIR]`.
+
+mod kernels;
+mod plot;
+mod report;
+mod spectral;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use lenses::{ChromaticMetalens, Curve};
+use metric::{Camera, Evaluation, Options, Scene, evaluate};
+use optics::reference::{ReferenceScene, mean_mtf};
+use radiometry::{Gaussian, Sampled, Spectrum};
+
+/// Design focal length of the paper's lens (PHYSICS.md, "The metric"), m.
+const F0: f64 = 3.36e-3;
+/// Design wavelength, m.
+const LAMBDA0: f64 = 800e-9;
+/// Pixel pitch, m.
+const PIXEL_PITCH: f64 = 5.2e-6;
+
+/// A scene of the report: the paper's lens at an F-number, a Gaussian spectrum of a range.
+struct Case {
+    name: &'static str,
+    f_number: f64,
+    range_m: f64,
+}
+
+impl Case {
+    /// σ of the Gaussian: the spectral range is 2√2 σ (PHYSICS.md, "Radiometry").
+    fn sigma(&self) -> f64 {
+        self.range_m / (2.0 * 2f64.sqrt())
+    }
+
+    /// Defocus in waves at the pupil edge of the chromatic lens at `lambda` (PHYSICS.md,
+    /// "Optics"): `W020 = (λ/λ0 − 1) f0/(8 F#²)`, `w = W020/λ`.
+    fn waves(&self, lambda: f64) -> f64 {
+        (lambda / LAMBDA0 - 1.0) * F0 / (8.0 * self.f_number * self.f_number) / lambda
+    }
+}
+
+/// How a mean-MTF row was computed: one colour and marker each in the plot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Family {
+    ClosedForm,
+    Quadrature,
+    Fft,
+    Table,
+    /// Uniform (trapezoid) nodes over ±k σ.
+    Uniform(u32),
+    Hermite,
+}
+
+impl Family {
+    fn name(self) -> String {
+        match self {
+            Family::ClosedForm => "closed form".into(),
+            Family::Quadrature => "spectral quadrature".into(),
+            Family::Fft => "FFT pupil".into(),
+            Family::Table => "tabulated spectrum".into(),
+            Family::Uniform(k) => format!("uniform ±{k}σ"),
+            Family::Hermite => "Gauss–Hermite".into(),
+        }
+    }
+}
+
+/// One mean-MTF row: a method and setting on a scene.
+struct Row {
+    case: &'static str,
+    family: Family,
+    setting: String,
+    mean_mtf: f64,
+    error: f64,
+    micros: f64,
+    repeats: usize,
+    work: String,
+}
+
+/// A measured row: median µs, timed runs, mean MTF, work done.
+type Measured = (f64, usize, f64, String);
+
+/// Median wall time of `f` in µs over repeats filling about `budget`, the number of timed runs,
+/// and the first run's result. At least `min_repeats` runs follow the first, or one if the first
+/// took over a second; when the first alone exceeds the budget and `min_repeats` is 0, it is the
+/// only sample.
+fn time<T>(budget: Duration, min_repeats: usize, mut f: impl FnMut() -> T) -> (f64, usize, T) {
+    let first = Instant::now();
+    let result = f();
+    let once = first.elapsed().as_secs_f64();
+    let floor = if once > 1.0 { min_repeats.min(1) } else { min_repeats };
+    let repeats = ((budget.as_secs_f64() / once.max(1e-7)) as usize).clamp(floor, 2001);
+    let mut samples: Vec<f64> = (0..repeats)
+        .map(|_| {
+            let t = Instant::now();
+            std::hint::black_box(f());
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    if samples.is_empty() {
+        samples.push(once);
+    }
+    samples.sort_by(f64::total_cmp);
+    (samples[samples.len() / 2] * 1e6, samples.len(), result)
+}
+
+/// The paper's chromatic lens at the case's F-number (τ1 = 0.15, T = 0.55), optionally through
+/// an explicit circular aperture (which sends it down the FFT path).
+fn lens(case: &Case, aperture: bool) -> ChromaticMetalens {
+    let lens =
+        ChromaticMetalens::new(case.f_number, F0, LAMBDA0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap();
+    if aperture { lens.with_aperture(optics::fft::Aperture::circle()) } else { lens }
+}
+
+/// A flat source behind the Gaussian filter of the case (PHYSICS.md, "The metric": photon count
+/// ∝ range), QE 0.2, 5.2 µm pixels.
+fn scene(case: &Case, aperture: bool, options: Options) -> Scene {
+    let filter = Gaussian::from_range(LAMBDA0, case.range_m, 1.0).unwrap();
+    scene_with(case, aperture, Spectrum::Gaussian(filter), options)
+}
+
+/// [`scene`] with the Gaussian filter tabulated every `spacing_m` over ±7σ (the production
+/// window of a Gaussian factor, 2.6e-12 of its area outside): piecewise linear between samples.
+/// The λ of eq. S8 is applied by `evaluate`, as for every scene. Returns the sample count too.
+fn table_scene(case: &Case, spacing_m: f64, options: Options) -> (Scene, usize) {
+    let filter = Gaussian::from_range(LAMBDA0, case.range_m, 1.0).unwrap();
+    let half = (7.0 * case.sigma() / spacing_m).ceil() as i64;
+    let wavelengths: Vec<f64> = (-half..=half).map(|j| LAMBDA0 + j as f64 * spacing_m).collect();
+    let values = wavelengths.iter().map(|&l| filter.value(l)).collect();
+    let samples = wavelengths.len();
+    let table = Sampled::new(wavelengths, values).unwrap();
+    (scene_with(case, false, Spectrum::Sampled(table), options), samples)
+}
+
+fn scene_with(case: &Case, aperture: bool, filter: Spectrum, options: Options) -> Scene {
+    let radiance = Spectrum::product(vec![Spectrum::Constant(0.025e9), filter]);
+    let camera = Camera::new(PIXEL_PITCH, Spectrum::Constant(0.2), false).unwrap();
+    Scene::new(Arc::new(lens(case, aperture)), radiance, camera, 1.23e-3, options).unwrap()
+}
+
+/// The converged mean MTF of the case: `optics::reference::mean_mtf` at 1e-12 with the detected
+/// density `λ · G(λ)` over ±12σ.
+fn reference(case: &Case) -> f64 {
+    let sigma = case.sigma();
+    let density = move |l: f64| l * (-0.5 * ((l - LAMBDA0) / sigma).powi(2)).exp();
+    mean_mtf(
+        &ReferenceScene {
+            density: &density,
+            lambda_min: (LAMBDA0 - 12.0 * sigma).max(1e-3 * LAMBDA0),
+            lambda_max: LAMBDA0 + 12.0 * sigma,
+            breakpoints: &[],
+            f_number: case.f_number,
+            focal_length_m: F0,
+            design_wavelength_m: LAMBDA0,
+            pixel_pitch_m: PIXEL_PITCH,
+            pixel_mtf: false,
+        },
+        1e-12,
+    )
+}
+
+/// What the report measured besides the rows: for its header.
+struct Context {
+    quick: bool,
+    /// Per case: (name, reference mean MTF, seconds the reference took).
+    references: Vec<(&'static str, f64, f64)>,
+    /// Per case: the fixed frequency rule of the spectral-rule rows.
+    frequency_rules: Vec<(&'static str, spectral::FrequencyRule)>,
+}
+
+/// Settings of one run: the full report or the `--quick` smoke run.
+struct Grid {
+    budget: Duration,
+    min_repeats: usize,
+    tolerances: &'static [f64],
+    pupil_samples: &'static [usize],
+    /// Table spacings (m) for the paper scene and the hard scene.
+    table_spacings: [&'static [f64]; 2],
+    uniform_sigmas: &'static [u32],
+    uniform_nodes: &'static [usize],
+    hermite_nodes: &'static [usize],
+}
+
+const FULL: Grid = Grid {
+    budget: Duration::from_millis(400),
+    min_repeats: 3,
+    tolerances: &[1e-2, 1e-4, 1e-6, 1e-7, 1e-8, 1e-10, 1e-12],
+    pupil_samples: &[64, 128, 256, 512, 1024],
+    table_spacings: [&[1e-9, 0.1e-9], &[2e-9, 1e-9]],
+    uniform_sigmas: &[3, 5, 7],
+    uniform_nodes: &[8, 16, 32, 64, 128, 256, 512],
+    hermite_nodes: &[4, 8, 16, 32, 64, 128],
+};
+
+const QUICK: Grid = Grid {
+    budget: Duration::from_millis(20),
+    min_repeats: 0,
+    tolerances: &[1e-3, 1e-9],
+    pupil_samples: &[64],
+    table_spacings: [&[2e-9], &[]],
+    uniform_sigmas: &[3, 7],
+    uniform_nodes: &[16, 64],
+    hermite_nodes: &[8, 32],
+};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    let out = args.iter().find(|a| !a.starts_with("--")).map_or_else(|| PathBuf::from("."), PathBuf::from);
+    let grid = if quick { QUICK } else { FULL };
+    let cases = [
+        Case { name: "paper: F/2.5, 50 nm", f_number: 2.5, range_m: 50e-9 },
+        Case { name: "hard: F/1.4, 200 nm", f_number: 1.4, range_m: 200e-9 },
+    ];
+    let mut rows = Vec::new();
+    let mut context = Context { quick, references: Vec::new(), frequency_rules: Vec::new() };
+    for (index, case) in cases.iter().enumerate() {
+        let started = Instant::now();
+        let exact = reference(case);
+        let seconds = started.elapsed().as_secs_f64();
+        eprintln!("{}: reference mean MTF {exact:.15} ({seconds:.1} s)", case.name);
+        context.references.push((case.name, exact, seconds));
+        let mut push = |family: Family, setting: String, (micros, repeats, mean, work): Measured| {
+            let error = (mean - exact).abs() / exact;
+            eprintln!("  {:<22} {setting:<16} error {error:.2e}  {micros:>12.1} µs", family.name());
+            rows.push(Row { case: case.name, family, setting, mean_mtf: mean, error, micros, repeats, work });
+        };
+        let production = |scene: &Scene, work: &dyn Fn(&Evaluation) -> String| -> Measured {
+            let (micros, repeats, e) = time(grid.budget, grid.min_repeats, || evaluate(scene).unwrap());
+            (micros, repeats, e.mean_mtf, work(&e))
+        };
+        let nodes_work = |e: &Evaluation| {
+            let n = &e.numerics;
+            format!("{} OTF values, {} spectral nodes", n.otf_evaluations, n.spectral_nodes)
+        };
+        for &t in grid.tolerances {
+            let options = Options { tolerance: t, ..Options::default() };
+            let closed_work = |e: &Evaluation| {
+                let n = &e.numerics;
+                format!("{} OTF values, {} E(c)", n.otf_evaluations, n.closed_form_evaluations)
+            };
+            push(Family::ClosedForm, format!("tol {t:e}"), production(&scene(case, false, options), &closed_work));
+        }
+        // the hard scene's spectral quadrature takes about a second a point: not in a smoke run
+        let tolerances = if quick && index == 1 { &[] } else { grid.tolerances };
+        for &t in tolerances {
+            let options = Options { tolerance: t, closed_form: false, ..Options::default() };
+            push(Family::Quadrature, format!("tol {t:e}"), production(&scene(case, false, options), &nodes_work));
+        }
+        if case.f_number >= 2.0 {
+            for &n in grid.pupil_samples {
+                let options = Options { pupil_samples: n, ..Options::default() };
+                push(Family::Fft, format!("N = {n}"), production(&scene(case, true, options), &nodes_work));
+            }
+        }
+        for &spacing in grid.table_spacings[index] {
+            let options = Options { closed_form: false, ..Options::default() };
+            let (table, samples) = table_scene(case, spacing, options);
+            let work = |e: &Evaluation| format!("{samples} table samples; {}", nodes_work(e));
+            push(Family::Table, format!("{} nm", spacing * 1e9), production(&table, &work));
+        }
+        // spectral rules with one fixed frequency rule, converged on the finest of them
+        let finest: Vec<Vec<spectral::Node>> = [
+            grid.uniform_sigmas.iter().max().map(|&k| spectral::uniform(case, k, max(grid.uniform_nodes))),
+            Some(spectral::hermite(case, &optics::quad::gauss_hermite(max(grid.hermite_nodes)))),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let rule = spectral::FrequencyRule::converged(case, &finest);
+        eprintln!("  frequency rule: {} panels (last doubling changed the mean by {:.1e})", rule.panels, rule.change);
+        for &k in grid.uniform_sigmas {
+            for &n in grid.uniform_nodes {
+                let (micros, repeats, (mean, evaluations)) =
+                    time(grid.budget, grid.min_repeats, || rule.mean_mtf(case, &spectral::uniform(case, k, n)));
+                let work = format!("{n} spectral nodes × {evaluations} ν = {} OTF values", n * evaluations);
+                push(Family::Uniform(k), format!("n = {n}"), (micros, repeats, mean, work));
+            }
+        }
+        for &n in grid.hermite_nodes {
+            // the standard rule is computed once, as the production caches its Gauss–Legendre rule
+            let standard = optics::quad::gauss_hermite(n);
+            let (micros, repeats, (mean, evaluations)) =
+                time(grid.budget, grid.min_repeats, || rule.mean_mtf(case, &spectral::hermite(case, &standard)));
+            let used = spectral::hermite(case, &standard).len();
+            let work = format!("{used} spectral nodes × {evaluations} ν = {} OTF values", used * evaluations);
+            push(Family::Hermite, format!("n = {n}"), (micros, repeats, mean, work));
+        }
+        context.frequency_rules.push((case.name, rule));
+    }
+    let kernel_rows = kernels::measure(quick);
+    let md = report::markdown(&rows, &kernel_rows, &context);
+    std::fs::create_dir_all(&out).unwrap();
+    let path = out.join("BENCHMARKS.md");
+    std::fs::write(&path, md).unwrap();
+    let svg = out.join("docs/benchmarks/accuracy.svg");
+    std::fs::create_dir_all(svg.parent().unwrap()).unwrap();
+    plot::draw(&svg, &rows, &kernel_rows, &cases);
+    eprintln!("wrote {} and {}", path.display(), svg.display());
+}
+
+fn max(values: &[usize]) -> usize {
+    values.iter().copied().max().unwrap_or(1)
+}

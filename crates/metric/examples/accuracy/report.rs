@@ -1,0 +1,223 @@
+//! `BENCHMARKS.md`: the two tables, what each method is, and the targets.
+
+use std::fmt::Write as _;
+
+use crate::kernels::{DEFOCUS_WAVES, Kernel, KernelRow};
+use crate::{Context, Family, Row};
+
+/// The issue's targets and where they stand (kept in sync with the measured table by hand).
+const TARGETS: &str = include_str!("targets.md");
+
+/// One line per mean-MTF method: what it is.
+fn explain(family: Family) -> String {
+    match family {
+        Family::ClosedForm => "`metric::evaluate` with the closed-form engine (`optics::GaussianDefocus`): the \
+             Gaussian × polynomial spectrum integrated over λ exactly (complex Gaussian integrals, Faddeeva's \
+             erfcx), adaptive Gauss–Kronrod in the pupil angle t and in ν to the tolerance."
+            .into(),
+        Family::Quadrature => "`metric::evaluate` with the closed form off (engine `exact-1d`): 16-point \
+             Gauss–Legendre spectral panels over ±7σ (≤ 2σ wide, ≤ 12 rad of defocus phase each), \
+             `optics::defocus_otf` at every node, adaptive Gauss–Kronrod in ν split at sign changes; the \
+             spectral panels are exact to rounding whatever the tolerance."
+            .into(),
+        Family::Fft => "`metric::evaluate` on the same circular pupil given as an explicit aperture, which takes \
+             the general-pupil engine: N pupil samples across the diameter → PSF → OTF by FFT at every spectral \
+             node; its error falls as ~1/N."
+            .into(),
+        Family::Table => "`metric::evaluate` with the Gaussian filter given as a `Spectrum::Sampled` table \
+             (samples every h over ±7σ, piecewise linear between them; closed form off): spectral panels split \
+             at every sample, exact for the piecewise-linear model, so the error is the table's interpolation \
+             of the Gaussian, ∝ h²."
+            .into(),
+        Family::Uniform(_) => "trapezoid rule: n equally spaced wavelengths over λ0 ± kσ with weights λ·G(λ) \
+             (h/2 at the ends), `optics::defocus_otf` at each, the fixed frequency rule below; the Gaussian \
+             beyond ±kσ is dropped (PHYSICS.md: a bias of ~1e-3 of the MTF area at ±3σ, ~1e-7 at ±5σ)."
+            .into(),
+        Family::Hermite => "n wavelengths λ0 + √2σ xᵢ of the rule for e^{−x²} \
+             (`optics::quad::gauss_hermite`) with weights wᵢ λᵢ (the λ factor of the detected weight is \
+             integrated exactly), `optics::defocus_otf` at each, the fixed frequency rule below; no cut."
+            .into(),
+    }
+}
+
+/// One line per OTF kernel: what it is.
+fn explain_kernel(kernel: Kernel) -> &'static str {
+    match kernel {
+        Kernel::Production => {
+            "production: `(4/π) ∫_0^{acos s} sin²t cos[a(cos t − s)] dt` by 16-point \
+             Gauss–Legendre panels, `defocus_otf_panels` of them (≤ 12 rad of phase each), for |a| < 24; the \
+             Jacobi–Anger Bessel series (Miller's recurrence) from |a| = 24 (`BESSEL_SERIES_MIN_A`) up."
+        }
+        Kernel::ProductionQuadrature => {
+            "the production panels at every a (what the series replaces above \
+             |a| = 24)."
+        }
+        Kernel::GaussLegendre(_) => {
+            "one n-point Gauss–Legendre rule on PHYSICS.md's t-form \
+             `4/(πa) ∫_0^{acos s} sin[a(cos t − s)] cos t dt`, whatever a: it fails once the integrand's \
+             ~a/π oscillations outnumber the nodes."
+        }
+        Kernel::Hopkins(_) => {
+            "Hopkins' 1955 Bessel series with libm's Jn, each of its two brackets cut after K \
+             terms (Bessel orders ≤ 2K; `optics::reference::otf_hopkins_terms`): converged once 2K passes \
+             a = 8πws; \"all terms\" is `optics::reference::otf_hopkins`."
+        }
+        Kernel::Geometric => {
+            "the geometric-optics blur disk `2J1(x)/x`, x = πdν = 8πws = a (PHYSICS.md, \
+             \"Geometric limit\"; `optics::reference::otf_geometric`): a large-defocus approximation."
+        }
+    }
+}
+
+fn duration(micros: f64) -> String {
+    if micros >= 1000.0 { format!("{:.2} ms", micros / 1000.0) } else { format!("{micros:.1} µs") }
+}
+
+fn nanos(ns: f64) -> String {
+    if ns >= 1e6 {
+        format!("{:.1} ms", ns / 1e6)
+    } else if ns >= 1e4 {
+        format!("{:.1} µs", ns / 1e3)
+    } else {
+        format!("{ns:.0} ns")
+    }
+}
+
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_owned());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores available, {} {}", std::env::consts::OS, std::env::consts::ARCH)
+}
+
+/// The whole file.
+pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Benchmarks: accuracy against time\n");
+    let _ = writeln!(
+        s,
+        "Regenerate with `cargo xtask accuracy` (this file and `docs/benchmarks/accuracy.svg`){}.\n",
+        if context.quick { " — this copy is from the reduced `--quick` grid" } else { "" }
+    );
+    let _ = writeln!(
+        s,
+        "Machine: {}. Times are medians of repeated single-threaded calls in a release build.\n",
+        machine()
+    );
+    let _ = writeln!(s, "![error against time](docs/benchmarks/accuracy.svg)\n");
+
+    let _ = writeln!(s, "## Mean MTF of one ASNR point\n");
+    let references: Vec<String> = context
+        .references
+        .iter()
+        .map(|(name, value, seconds)| format!("{name}: {value:.15} in {seconds:.1} s"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "Error: relative error of the mean MTF (hence of the ASNR) against `optics::reference::mean_mtf` at \
+         1e-12 (printed y-form OTF, adaptive Gauss–Kronrod in ν, λ and y; computed once per scene — {}). The \
+         reference's own error is ~1e-12. The scenes: the paper's chromatic metalens (f0 = 3.36 mm, λ0 = 800 nm, \
+         τ1 = 0.15) with a flat source behind a Gaussian filter centred at λ0, 5.2 µm pixels; detected weight \
+         λ·G(λ).\n",
+        references.join("; ")
+    );
+    let rules: Vec<String> = context
+        .frequency_rules
+        .iter()
+        .map(|(name, rule)| {
+            let change = if rule.change == 0.0 { "not at all".to_owned() } else { format!("by {:.0e}", rule.change) };
+            format!("{name}: {} panels (the last doubling moved the means {change})", rule.panels)
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "Time per point: a whole `metric::evaluate` call (photoelectrons, glare, Fraunhofer check, mean MTF) for \
+         the production rows; the mean MTF alone (nodes and frequency rule) for the uniform and Gauss–Hermite \
+         rows. Their frequency rule is fixed and converged, so that their error is the spectral rule's: equal \
+         panels of 16-point Gauss–Legendre on [0, ν_N], each panel where the polychromatic OTF changes sign split \
+         at the zero (Illinois), panel count doubled until the finest rules' means move by ≤ 1e-14 — {}.\n",
+        rules.join("; ")
+    );
+    let mut families: Vec<Family> = Vec::new();
+    for r in rows {
+        let generic = match r.family {
+            Family::Uniform(_) => Family::Uniform(0),
+            f => f,
+        };
+        if !families.contains(&generic) {
+            families.push(generic);
+        }
+    }
+    for f in families {
+        let name = match f {
+            Family::Uniform(_) => "uniform ±kσ".to_owned(),
+            f => f.name(),
+        };
+        let _ = writeln!(s, "- **{name}**: {}", explain(f));
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(s, "| scene | method | setting | mean MTF | relative error | time per point | runs | work |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.12} | {:.1e} | {} | {} | {} |",
+            r.case,
+            r.family.name(),
+            r.setting,
+            r.mean_mtf,
+            r.error,
+            duration(r.micros),
+            r.repeats,
+            r.work
+        );
+    }
+
+    let _ = writeln!(s, "\n## OTF kernels\n");
+    let _ = writeln!(
+        s,
+        "The monochromatic OTF of a centred circular pupil with defocus w waves, at the 12 frequencies \
+         s = (k − ½)/12 for each w, against `optics::reference::otf_defocus` (PHYSICS.md's printed y-form by \
+         adaptive Gauss–Kronrod, accurate to ~1e-13 absolute: smaller errors are the reference's). Each w column: \
+         the largest absolute error over the 12 points · the median time per OTF value. Relative error: to the \
+         envelope min(1, 4/(π|a|)), a = 8πws, that bounds |OTF| (|sin| ≤ 1 in the printed formula). The OTF is 1 \
+         at s = 0, so an absolute error is also relative to the OTF's scale, and bounds the error it puts into \
+         the mean MTF.\n"
+    );
+    let mut seen: Vec<&'static str> = Vec::new();
+    for row in kernels {
+        if !seen.contains(&row.kernel.name()) {
+            seen.push(row.kernel.name());
+            let _ = writeln!(s, "- **{}**: {}", row.kernel.name(), explain_kernel(row.kernel));
+        }
+    }
+    let _ = writeln!(s);
+    let header: Vec<String> = DEFOCUS_WAVES.iter().map(|w| format!("w = {w}")).collect();
+    let _ = writeln!(
+        s,
+        "| method | setting | {} | max abs. error | max rel. error | time per value | work |",
+        header.join(" | ")
+    );
+    let _ = writeln!(s, "|---|---|{}---|---|---|---|", "---|".repeat(DEFOCUS_WAVES.len()));
+    for row in kernels {
+        let cells: Vec<String> = row.cells.iter().map(|c| format!("{:.1e} · {}", c.abs, nanos(c.nanos))).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.1e} | {:.1e} | {} | {} |",
+            row.kernel.name(),
+            row.kernel.setting(),
+            cells.join(" | "),
+            row.max_abs(),
+            row.max_rel(),
+            nanos(row.nanos()),
+            row.work
+        );
+    }
+    let _ = writeln!(s);
+    s.push_str(TARGETS);
+    s
+}
