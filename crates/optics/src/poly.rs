@@ -883,13 +883,23 @@ impl<'a> Polychromatic<'a> {
     }
 
     /// Photoelectron-weighted fraction of the detected signal whose geometric blur radius
-    /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15).
+    /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15), exact on every
+    /// engine: in closed form on the closed-form engine
+    /// ([`GaussianDefocus::fraction_defocused_beyond`]); on the spectral quadrature, the
+    /// wavelengths where each order's `|W020|` crosses `radius_m NA/2` are located in every
+    /// spectral panel and the weight beyond them integrated by Gauss–Legendre on the
+    /// sub-intervals (`fraunhofer::weight_defocused_beyond`), so the step never falls between
+    /// nodes and the fraction is continuous in every parameter.
     pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
         let na = self.lens.numerical_aperture();
+        let limit = 0.5 * radius_m * na;
         if let Some(closed) = &self.closed {
-            return closed.fraction_defocused_beyond(0.5 * radius_m * na);
+            return closed.fraction_defocused_beyond(limit);
         }
-        self.spectral_average(|_, w020| if 2.0 * w020.abs() / na > radius_m { 1.0 } else { 0.0 })
+        let panels: Vec<(f64, f64)> = self.panels.iter().map(|p| (p.lo, p.hi)).collect();
+        let density = |lambda: f64| self.detected.value(lambda);
+        let beyond = crate::fraunhofer::weight_defocused_beyond(self.lens, self.field, &density, &panels, limit);
+        (beyond / self.total_weight).clamp(0.0, 1.0)
     }
 }
 
