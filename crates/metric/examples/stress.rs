@@ -342,13 +342,18 @@ fn grid() -> Vec<Point> {
     }
     points.push(Point { qe_table: true, quick: true, ..paper.clone() });
     points.push(Point { qe_table: true, light: Light::TopHat { lo: 400.0, hi: 1000.0 }, ..paper.clone() });
-    // line spectra: in focus, defocused (also by ~1e4 waves at f0 = 1 m), through the FFT path
-    // and off axis, with a tabulated QE, and beyond the Fraunhofer limit
-    for (f_number, f0_mm, centre, pixel_um) in
-        [(0.5, F0_MM, 800.0, 0.3), (2.5, F0_MM, 850.0, 5.2), (50.0, F0_MM, 600.0, 50.0), (1.0, 1000.0, 1200.0, 5.2)]
-    {
+    // line spectra: in focus, defocused (by ~500 and ~5000 waves at f0 = 336 mm: one wavelength
+    // keeps every zero of its OTF, ~1600 below Nyquist at 5000 waves), through the FFT path and
+    // off axis, with a tabulated QE, and beyond the Fraunhofer limit
+    for (f_number, f0_mm, centre, pixel_um) in [
+        (0.5, F0_MM, 800.0, 0.3),
+        (2.5, F0_MM, 850.0, 5.2),
+        (50.0, F0_MM, 600.0, 50.0),
+        (2.5, 336.0, 850.0, 5.2),
+        (1.0, 336.0, 900.0, 5.2),
+    ] {
         let light = Light::Line { centre, width: 10.0 };
-        let quick = f_number == 2.5 || f0_mm == 1000.0;
+        let quick = f_number == 2.5;
         points.push(Point { f_number, f0_mm, light, pixel_um, quick, ..paper.clone() });
     }
     let line = Light::Line { centre: 830.0, width: 1.0 };
