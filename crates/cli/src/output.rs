@@ -186,7 +186,15 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
     let n = &r.numerics;
     let mut s = String::from("\nHow this was computed (--explain)\n");
     let _ = writeln!(s, "  engine       {}", n.engine);
-    let spectral = if n.engine.starts_with("closed-form") {
+    let spectral = if n.engine.starts_with("monochromatic") {
+        format!(
+            "no spectral quadrature: a line spectrum is one wavelength, {:.4} nm; {} node{} (one per imaging \
+             order), each order's exact OTF there; its photons are those of its equivalent band (peak × width)",
+            r.mean_wavelength_nm,
+            n.spectral_nodes,
+            if n.spectral_nodes == 1 { "" } else { "s" }
+        )
+    } else if n.engine.starts_with("closed-form") {
         format!(
             "exact: the spectrum is a Gaussian × polynomial and the lens's defocus is affine in λ, so the \
              integral over λ is a complex Gaussian integral (Faddeeva erfcx); {} evaluations of it inside \

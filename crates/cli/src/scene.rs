@@ -12,7 +12,7 @@ use std::sync::Arc;
 use anyhow::{Context, Result, anyhow, bail};
 use lenses::{ChromaticMetalens, Curve};
 use metric::{Camera, MetricForm, Options, Scene};
-use radiometry::{Blackbody, Gaussian, Spectrum, TopHat};
+use radiometry::{Blackbody, Gaussian, Line, Spectrum, TopHat};
 use serde::Deserialize;
 use serde::de::{self, Visitor};
 
@@ -596,6 +596,28 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
                     .map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
             ))
         }
+        "line" => {
+            // one wavelength for the optics; range_nm is the equivalent width that sets the
+            // photon count (∫T dλ = peak × range, as for the other shapes)
+            o.forbid("spectrum.csv", &s.csv, &ctx)?;
+            let c = o.require("spectrum.center_nm", s.center_nm, "the line's wavelength > 0 nm")?;
+            let c = o.number("spectrum.center_nm", c, c > 0.0, "the line's wavelength > 0 nm")?;
+            let width = "the equivalent width > 0 nm of the band (∫T dλ / T_peak; it sets the photon count)";
+            let r = o.require("spectrum.range_nm", s.range_nm, width)?;
+            let r = o.number("spectrum.range_nm", r, r > 0.0, width)?;
+            if r >= 2.0 * c {
+                return Err(o.bad(
+                    "spectrum.range_nm",
+                    r,
+                    "an equivalent width under twice spectrum.center_nm (the band must stay at λ > 0)",
+                ));
+            }
+            let p = s.peak.unwrap_or(1.0);
+            let p = o.number("spectrum.peak", p, p > 0.0 && p <= 1.0, "a transmission in (0, 1]")?;
+            Some(Spectrum::Line(
+                Line::new(c * 1e-9, r * 1e-9, p).map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
+            ))
+        }
         "table" => {
             for (k, v) in
                 [("spectrum.center_nm", s.center_nm), ("spectrum.range_nm", s.range_nm), ("spectrum.peak", s.peak)]
@@ -618,7 +640,7 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
             return Err(o.bad(
                 "spectrum.shape",
                 format!("\"{other}\""),
-                "\"gaussian\", \"tophat\", \"table\" or \"none\"",
+                "\"gaussian\", \"tophat\", \"line\" (one wavelength), \"table\" or \"none\"",
             ));
         }
     })

@@ -8,6 +8,7 @@ use std::process::{Command, Output};
 
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/paper-theory.toml");
 const TABULATED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/tabulated.toml");
+const MONOCHROMATIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/monochromatic.toml");
 
 fn asnr(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_asnr")).args(args).output().expect("the asnr binary runs")
@@ -267,7 +268,7 @@ fn bad_csv_value_out_of_range() {
 fn bad_choice_and_inapplicable_key() {
     let err = fails(&["evaluate", PAPER, "--set", "spectrum.shape=lorentzian"]);
     assert!(
-        err.contains("spectrum.shape = \"lorentzian\": expected \"gaussian\", \"tophat\", \"table\" or \"none\""),
+        err.contains("spectrum.shape = \"lorentzian\": expected \"gaussian\", \"tophat\", \"line\" (one wavelength), \"table\" or \"none\""),
         "{err}"
     );
     let err = fails(&["evaluate", PAPER, "--set", "source.temperature_k=3000"]);
@@ -534,4 +535,97 @@ fn field_list_averages_and_rejects_mixed_forms() {
     assert!((v["asnr"].as_f64().unwrap() - (2.0 * on + off) / 3.0).abs() < 1e-9, "{}", v["asnr"]);
     let err = fails(&["evaluate", path.to_str().unwrap(), "--set", "field.x_deg=3"]);
     assert!(err.contains("[field] and [[fields]] both given"), "{err}");
+}
+
+// ---- line spectra (one wavelength) ----
+
+/// The example scene: one wavelength, no spectral quadrature, named in the JSON and by --explain;
+/// the photons of the band's equivalent width (1 nm of a 50 nm-range Gaussian's σ√(2π) = 44.31 nm).
+#[test]
+fn line_example_is_monochromatic() {
+    let v = json(&["evaluate", MONOCHROMATIC, "--json"]);
+    assert_eq!(v["numerics"]["engine"], "monochromatic (line spectrum): exact-1d");
+    assert_eq!(v["numerics"]["spectral_nodes"], 1);
+    assert_eq!(v["numerics"]["spectral_panels"], 0);
+    assert!((v["mean_wavelength_nm"].as_f64().unwrap() - 800.0).abs() < 1e-9, "{}", v["mean_wavelength_nm"]);
+    // at the design wavelength: the diffraction-limited mean over [0, s_N], s_N = ν_N λ0 F# = 0.19231
+    let s_n: f64 = 800e-9 * 2.5 / (2.0 * 5.2e-6);
+    let theta = s_n.acos();
+    // ∫_0^x (2/π)(acos s − s√(1−s²)) ds = (2/π)[x acos x − √(1−x²) + 1 + ((1−x²)^{3/2} − 1)/3]
+    let mean = 2.0 / std::f64::consts::PI
+        * (s_n * theta - (1.0 - s_n * s_n).sqrt() + 1.0 + ((1.0 - s_n * s_n).powf(1.5) - 1.0) / 3.0)
+        / s_n;
+    let got = v["mean_mtf"].as_f64().unwrap();
+    assert!((got - mean).abs() < 1e-6, "{got} vs {mean}");
+    let paper = json(&["evaluate", "--json"]);
+    let ratio = v["photoelectrons"].as_f64().unwrap() / paper["photoelectrons"].as_f64().unwrap();
+    let expected = 1.0 / (50.0 / (2.0 * 2f64.sqrt()) * (2.0 * std::f64::consts::PI).sqrt());
+    assert!((ratio - expected).abs() < 1e-9, "{ratio} vs {expected}");
+    let out = asnr(&["evaluate", MONOCHROMATIC, "--explain", "--set", "spectrum.center_nm=850"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("no spectral quadrature") && text.contains("850.0000 nm"), "{text}");
+    assert!(text.contains("engine       monochromatic (line spectrum): exact-1d"), "{text}");
+}
+
+/// The line's keys: center_nm and range_nm required, peak optional in (0, 1], no csv; every
+/// message names the file, the key, the value and what is accepted.
+#[test]
+fn bad_line_keys() {
+    let dir = scratch("line-keys");
+    let text = std::fs::read_to_string(MONOCHROMATIC).unwrap();
+    for (key, needle) in [
+        ("center_nm = 800.0", "spectrum.center_nm is missing: expected the line's wavelength > 0 nm"),
+        ("range_nm = 1.0", "spectrum.range_nm is missing: expected the equivalent width > 0 nm"),
+    ] {
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, text.replacen(key, "", 1)).unwrap();
+        let err = fails(&["evaluate", path.to_str().unwrap()]);
+        assert!(err.contains(path.to_str().unwrap()) && err.contains(needle), "{err}");
+    }
+    let err = fails(&["evaluate", MONOCHROMATIC, "--set", "spectrum.range_nm=0"]);
+    assert!(
+        err.contains("(--set spectrum.range_nm=0): spectrum.range_nm = 0: expected the equivalent width > 0 nm"),
+        "{err}"
+    );
+    let err = fails(&["evaluate", MONOCHROMATIC, "--set", "spectrum.range_nm=1600"]);
+    assert!(
+        err.contains("spectrum.range_nm = 1600: expected an equivalent width under twice spectrum.center_nm"),
+        "{err}"
+    );
+    let err = fails(&["evaluate", MONOCHROMATIC, "--set", "spectrum.center_nm=-5"]);
+    assert!(err.contains("spectrum.center_nm = -5: expected the line's wavelength > 0 nm"), "{err}");
+    let err = fails(&["evaluate", MONOCHROMATIC, "--set", "spectrum.peak=1.5"]);
+    assert!(err.contains("spectrum.peak = 1.5: expected a transmission in (0, 1]"), "{err}");
+    let err = fails(&["evaluate", MONOCHROMATIC, "--set", "spectrum.csv=filter.csv"]);
+    assert!(err.contains("spectrum.csv does not apply to spectrum.shape = \"line\""), "{err}");
+    let err = fails(&["evaluate", MONOCHROMATIC, "--set", "spectrum.center_nm=inf"]);
+    assert!(err.contains("spectrum.center_nm = inf"), "{err}");
+    // the paper scene turned into a line by --set alone
+    let v = json(&["evaluate", "--set", "spectrum.shape=line", "--json"]);
+    assert!(v["numerics"]["engine"].as_str().unwrap().starts_with("monochromatic"), "{}", v["numerics"]["engine"]);
+    // peak defaults to 1: the example states it, removing it changes nothing
+    let path = dir.join("no-peak.toml");
+    std::fs::write(&path, text.replacen("peak = 1.0", "", 1)).unwrap();
+    assert_eq!(
+        json(&["evaluate", path.to_str().unwrap(), "--json"])["asnr"],
+        json(&["evaluate", MONOCHROMATIC, "--json"])["asnr"]
+    );
+}
+
+/// A sweep over the line's wavelength: each point is the evaluation at that wavelength, and the
+/// ASNR peaks at the design wavelength (the one without defocus; photons ∝ λ grow only 5 %).
+#[test]
+fn sweep_over_the_line_wavelength() {
+    let out = asnr(&["sweep", MONOCHROMATIC, "--over", "spectrum.center_nm=760:840:5", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let points: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let points = points.as_array().unwrap();
+    assert_eq!(points.len(), 5);
+    let asnr_at = |i: usize| points[i]["asnr"].as_f64().unwrap();
+    assert_eq!(points[2]["values"], serde_json::json!([800.0]));
+    for i in [0, 1, 3, 4] {
+        assert!(asnr_at(i) < asnr_at(2), "{i}: {} vs {}", asnr_at(i), asnr_at(2));
+    }
+    let direct = json(&["evaluate", MONOCHROMATIC, "--set", "spectrum.center_nm=780", "--json"]);
+    assert_eq!(points[1]["asnr"], direct["asnr"]);
 }

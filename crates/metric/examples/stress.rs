@@ -8,7 +8,7 @@
 //! The grid: F/0.5–F/50; Gaussian spectral ranges 1e-3–600 nm; pixels 0.3–50 µm; efficiencies
 //! 1e-9–1; 1e-3–1e12 photoelectrons (through the radiance or the exposure); defocus up to 1e4
 //! waves at the band edges (focal lengths up to 1 m: `w = (λ/λ0 − 1) f0/(8 F#² λ)`); top-hat,
-//! tabulated and blackbody spectra and a tabulated QE; decentred and annular apertures (the FFT
+//! tabulated, blackbody and line (one-wavelength) spectra and a tabulated QE; decentred and annular apertures (the FFT
 //! path); off-axis points with lateral colour; sensor noise with saturation; glare included.
 //! `--quick` runs the subset marked quick (well under a minute in release, for CI); the full grid
 //! keeps the extreme corners, however slow they are today.
@@ -33,7 +33,7 @@ use lenses::{ChromaticMetalens, Curve};
 use metric::{Camera, GlareMode, Options, Scene, evaluate};
 use optics::Field;
 use optics::fft::Aperture;
-use radiometry::{Blackbody, Gaussian, Sampled, Spectrum, TopHat};
+use radiometry::{Blackbody, Gaussian, Line, Sampled, Spectrum, TopHat};
 
 /// The paper scene (PHYSICS.md, "The metric"): F/2.5, f0 = 3.36 mm, λ0 = 800 nm, 50 nm
 /// Gaussian, 5.2 µm pixels, τ1 = 0.15, T = 0.55, QE 0.2, 0.025 W/(m² sr nm), 1.23 ms: 559.4 e⁻.
@@ -57,6 +57,9 @@ enum Light {
     Blackbody { kelvin: f64, lo: f64, hi: f64 },
     /// A blackbody (K) behind a Gaussian filter, nm.
     BlackbodyGaussian { kelvin: f64, centre: f64, range: f64 },
+    /// A flat source behind a line filter (one wavelength for the optics; the photons of a band
+    /// of equivalent width `width`), nm.
+    Line { centre: f64, width: f64 },
 }
 
 impl Light {
@@ -68,6 +71,7 @@ impl Light {
                 ((centre - range).max(1.0), centre + range)
             }
             Light::TopHat { lo, hi } | Light::Table { lo, hi, .. } | Light::Blackbody { lo, hi, .. } => (lo, hi),
+            Light::Line { centre, .. } => (centre, centre),
         }
     }
 
@@ -78,6 +82,7 @@ impl Light {
             Light::Table { lo, hi, samples, .. } => format!("table {lo}-{hi} ({samples})"),
             Light::Blackbody { kelvin, lo, hi } => format!("bb {kelvin}K {lo}-{hi}"),
             Light::BlackbodyGaussian { kelvin, centre, range } => format!("bb {kelvin}K gauss {range}nm@{centre}"),
+            Light::Line { centre, width } => format!("line {width}nm@{centre}"),
         }
     }
 }
@@ -222,6 +227,10 @@ impl Point {
                     Spectrum::Gaussian(g),
                 ])
             }
+            Light::Line { centre, width } => {
+                let l = Line::new(nm(centre), nm(width), 1.0).map_err(|e| err(&e))?;
+                Spectrum::product(vec![flat, Spectrum::Line(l)])
+            }
         };
         let transmission = self.efficiency.max(0.55);
         let mut lens = ChromaticMetalens::new(
@@ -333,6 +342,30 @@ fn grid() -> Vec<Point> {
     }
     points.push(Point { qe_table: true, quick: true, ..paper.clone() });
     points.push(Point { qe_table: true, light: Light::TopHat { lo: 400.0, hi: 1000.0 }, ..paper.clone() });
+    // line spectra: in focus, defocused (by ~500 and ~5000 waves at f0 = 336 mm: one wavelength
+    // keeps every zero of its OTF, ~1600 below Nyquist at 5000 waves), through the FFT path and
+    // off axis, with a tabulated QE, and beyond the Fraunhofer limit
+    for (f_number, f0_mm, centre, pixel_um) in [
+        (0.5, F0_MM, 800.0, 0.3),
+        (2.5, F0_MM, 850.0, 5.2),
+        (50.0, F0_MM, 600.0, 50.0),
+        (2.5, 336.0, 850.0, 5.2),
+        (1.0, 336.0, 900.0, 5.2),
+    ] {
+        let light = Light::Line { centre, width: 10.0 };
+        let quick = f_number == 2.5;
+        points.push(Point { f_number, f0_mm, light, pixel_um, quick, ..paper.clone() });
+    }
+    let line = Light::Line { centre: 830.0, width: 1.0 };
+    points.push(Point {
+        light: line.clone(),
+        aperture: Some((0.1, 0.0, 0.0)),
+        pupil_samples: 64,
+        quick: true,
+        ..paper.clone()
+    });
+    points.push(Point { light: line.clone(), field_deg: 8.0, qe_table: true, quick: true, ..paper.clone() });
+    points.push(Point { light: Light::Line { centre: 1150.0, width: 10.0 }, ..paper.clone() });
 
     // 5. the FFT path: decentred irises (SI Fig. S3), an annulus, coarse and fine pupil grids
     for (dx, range) in [(0.1, 10.0), (0.1, 50.0), (0.1, 200.0), (0.3, 50.0)] {

@@ -74,7 +74,9 @@ pub struct NoiseReport {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Numerics {
     /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, PHYSICS.md integral),
-    /// or `"fft: N pupil samples, padded to M"` for other pupils and wavefronts.
+    /// `"fft: N pupil samples, padded to M"` for other pupils and wavefronts, `"closed-form …"`
+    /// for the closed-form spectral integral, or `"monochromatic (line spectrum): …"` followed by
+    /// one of the first two for a line spectrum (one wavelength, no spectral quadrature).
     pub engine: String,
     /// The relative tolerance asked of the mean MTF.
     pub tolerance: f64,
@@ -302,6 +304,13 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
                 optics::Engine::Fft { pupil_samples, padded } => {
                     format!("fft: {pupil_samples} pupil samples, padded to {padded}")
                 }
+                optics::Engine::Monochromatic { fft: Some((pupil_samples, padded)) } => {
+                    format!("monochromatic (line spectrum): fft: {pupil_samples} pupil samples, padded to {padded}")
+                }
+                optics::Engine::Monochromatic { fft: None } if poly.has_lateral_shifts() => {
+                    "monochromatic (line spectrum): exact-1d, complex sum with lateral colour".to_owned()
+                }
+                optics::Engine::Monochromatic { fft: None } => "monochromatic (line spectrum): exact-1d".to_owned(),
                 optics::Engine::Exact1d if poly.has_lateral_shifts() => {
                     "exact-1d, complex sum with lateral colour".to_owned()
                 }

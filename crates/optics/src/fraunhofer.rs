@@ -49,3 +49,152 @@ pub fn max_wavelength_shift(lens: &dyn LensModel, reference_m: f64, threshold_m:
         (a, b) => a.or(b),
     }
 }
+
+/// Equal sub-intervals per spectral panel at which [`weight_defocused_beyond`] samples W020 to
+/// bracket its crossings of the limit. A W020 that crosses the limit and returns within 1/16 of a
+/// panel is missed; W020 monotone within a panel (every chromatic lens: it is affine in λ) is
+/// handled exactly.
+pub(crate) const CROSSING_SAMPLES: usize = 16;
+
+/// `Σ_orders ∫ ρ(λ) τ_o(λ) dλ` over the wavelengths where order `o` is defocused beyond
+/// `limit_m`, `|W020_o(λ)| > limit_m` (for the blur radius `x = 2|W020|/NA` of eq. S15,
+/// `limit_m = x NA/2`), on the spectral `panels` `[lo, hi]` inside each of which `ρ` (`density`)
+/// and the lens are smooth.
+///
+/// Per panel and per order, W020 is sampled at [`CROSSING_SAMPLES`] + 1 points, every sign change
+/// of `W020 ∓ limit` is bracketed and located by the Illinois method to 1e-14 of λ, and the
+/// sub-intervals beyond the limit are integrated by one 16-point Gauss–Legendre panel each (the
+/// rule the spectral quadrature itself uses on the whole panel, which the sub-intervals tile).
+/// The step at the crossing therefore never lands between nodes: the result is exact to rounding
+/// for the integrands the panels integrate exactly, and continuous in every parameter.
+pub(crate) fn weight_defocused_beyond(
+    lens: &dyn LensModel,
+    field: Field,
+    density: &dyn Fn(f64) -> f64,
+    panels: &[(f64, f64)],
+    limit_m: f64,
+) -> f64 {
+    let order = |lambda: f64, k: usize| lens.orders(lambda, field).into_iter().nth(k);
+    let mut total = 0.0;
+    for &(lo, hi) in panels {
+        if hi <= lo {
+            continue;
+        }
+        let h = (hi - lo) / CROSSING_SAMPLES as f64;
+        let grid: Vec<f64> =
+            (0..=CROSSING_SAMPLES).map(|i| if i == CROSSING_SAMPLES { hi } else { lo + h * i as f64 }).collect();
+        let orders: Vec<Vec<f64>> =
+            grid.iter().map(|&l| lens.orders(l, field).iter().map(|o| o.wavefront.defocus_m).collect()).collect();
+        let count = orders.iter().map(Vec::len).max().unwrap_or(0);
+        for k in 0..count {
+            let w020 = |l: f64| order(l, k).map_or(f64::NAN, |o| o.wavefront.defocus_m);
+            let mut cuts = vec![lo, hi];
+            for target in [-limit_m, limit_m] {
+                for (i, pair) in grid.windows(2).enumerate() {
+                    let (Some(&w0), Some(&w1)) = (orders[i].get(k), orders[i + 1].get(k)) else { continue };
+                    let (f0, f1) = (w0 - target, w1 - target);
+                    if f0 * f1 < 0.0 {
+                        cuts.push(illinois(&|l| w020(l) - target, pair[0], f0, pair[1], f1));
+                    }
+                }
+            }
+            cuts.sort_by(f64::total_cmp);
+            for pair in cuts.windows(2) {
+                let (a, b) = (pair[0], pair[1]);
+                // NaN (the order missing at the midpoint) is not beyond
+                let beyond = b > a && w020(0.5 * (a + b)).abs() > limit_m;
+                if !beyond {
+                    continue;
+                }
+                crate::quad::for_each_node(a, b, 1, |lambda, q| {
+                    if let Some(o) = order(lambda, k) {
+                        total += q * density(lambda) * o.efficiency;
+                    }
+                });
+            }
+        }
+    }
+    total
+}
+
+/// A zero of `f` in `[x0, x1]`, where `f0 = f(x0)` and `f1 = f(x1)` have opposite signs: the
+/// Illinois variant of regula falsi with a bisection safeguard, to 1e-14 of `max(|x0|, |x1|)`.
+fn illinois(f: &dyn Fn(f64) -> f64, mut x0: f64, mut f0: f64, mut x1: f64, mut f1: f64) -> f64 {
+    let tol = 1e-14 * x0.abs().max(x1.abs());
+    let mut side = 0;
+    for _ in 0..200 {
+        if (x1 - x0).abs() <= tol {
+            break;
+        }
+        let mut x = (x0 * f1 - x1 * f0) / (f1 - f0);
+        if !(x > x0.min(x1) && x < x0.max(x1)) {
+            x = 0.5 * (x0 + x1);
+        }
+        let fx = f(x);
+        if fx == 0.0 {
+            return x;
+        }
+        if !fx.is_finite() {
+            // the order is missing at x (the lens changed its order count inside a panel)
+            return x;
+        }
+        if fx * f1 < 0.0 {
+            x0 = x1;
+            f0 = f1;
+            side = 0;
+        } else {
+            side += 1;
+            if side >= 2 {
+                f0 *= 0.5;
+            }
+        }
+        x1 = x;
+        f1 = fx;
+    }
+    0.5 * (x0 + x1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lens::{Order, Pupil, Wavefront};
+
+    /// Two orders: one with an affine defocus through zero at 800 nm, one with a parabolic
+    /// defocus (a focus extremum inside the band, so W020 crosses each limit twice).
+    #[derive(Debug)]
+    struct TwoOrders;
+    impl LensModel for TwoOrders {
+        fn f_number(&self) -> f64 {
+            2.0
+        }
+        fn focal_length(&self) -> f64 {
+            5e-3
+        }
+        fn orders(&self, lambda: f64, _: Field) -> Vec<Order> {
+            let x = (lambda - 800e-9) / 100e-9;
+            vec![
+                Order::new(0.3, Pupil::Full, Wavefront::defocus(2e-6 * x)),
+                Order::new(0.1, Pupil::Full, Wavefront::defocus(3e-6 * x * x - 1e-6)),
+            ]
+        }
+    }
+
+    #[test]
+    fn crossings_of_every_order_are_located() {
+        // flat density on [600, 1000] nm split into uneven panels; limit 1 µm:
+        // order 1: |2x| > 1 ⇔ |x| > 1/2: outside 750–850 nm → 300 nm of the 400 nm band;
+        // order 2: |3x² − 1| > 1 ⇔ x² > 2/3: |λ − 800| > 81.6497 nm → 400 − 163.2993 nm.
+        let panels = [(600e-9, 640e-9), (640e-9, 790e-9), (790e-9, 1000e-9)];
+        let got = weight_defocused_beyond(&TwoOrders, Field::ON_AXIS, &|_| 1.0, &panels, 1e-6);
+        let exact = 0.3 * 300e-9 + 0.1 * (400e-9 - 2.0 * 100e-9 * (2.0f64 / 3.0).sqrt());
+        assert!((got - exact).abs() < 1e-14 * exact, "{got:e} vs {exact:e}");
+        // nothing beyond a limit above every |W020| of the band (≤ 4 µm and 11 µm)
+        assert_eq!(weight_defocused_beyond(&TwoOrders, Field::ON_AXIS, &|_| 1.0, &panels, 20e-6), 0.0);
+    }
+
+    #[test]
+    fn illinois_converges_to_rounding() {
+        let root = illinois(&|x: f64| x * x * x - 2.0, 1.0, -1.0, 2.0, 6.0);
+        assert!((root - 2f64.cbrt()).abs() < 1e-14, "{root}");
+    }
+}

@@ -21,6 +21,9 @@
 //!   and integrated by adaptive Gauss–Kronrod (7/15). Where `OTF_poly` changes sign inside a
 //!   panel, the root is located (Illinois method) and the panel split there, so `|OTF_poly|` is
 //!   only integrated where it is smooth.
+//! - **Line spectra** ([`Spectrum::as_line`]) skip all of the spectral part: the sum over λ is one
+//!   term per imaging order at the line's wavelength ([`Engine::Monochromatic`]), whose cutoff is
+//!   the one frequency cut.
 
 use std::f64::consts::PI;
 
@@ -61,6 +64,15 @@ pub enum Engine {
         pupil_samples: usize,
         /// FFT length after padding.
         padded: usize,
+    },
+    /// A line spectrum ([`Spectrum::as_line`]): one wavelength, one node per imaging order, no
+    /// spectral quadrature. The OTF is the efficiency-weighted sum of the orders' exact OTFs
+    /// there (complex with lateral shifts), each by the 1-D integral or, where its pupil or
+    /// wavefront needs it, by FFT.
+    Monochromatic {
+        /// `Some((pupil samples across the diameter, FFT length after padding))` when some
+        /// order goes through the FFT; `None` when every order is on the exact 1-D path.
+        fft: Option<(usize, usize)>,
     },
 }
 
@@ -268,7 +280,9 @@ impl<'a> Polychromatic<'a> {
     ///
     /// The closed-form engine is chosen when the detected spectrum is a Gaussian times a
     /// polynomial ([`Spectrum::gaussian_polynomial`]) and the lens promises an affine defocus
-    /// ([`LensModel::affine_defocus`]) that its [`orders`](LensModel::orders) confirm.
+    /// ([`LensModel::affine_defocus`]) that its [`orders`](LensModel::orders) confirm. A line
+    /// spectrum ([`Spectrum::as_line`]) is one wavelength ([`Engine::Monochromatic`]): one node
+    /// per imaging order, no spectral quadrature.
     pub fn with_settings(
         lens: &'a dyn LensModel,
         detected: &'a Spectrum,
@@ -292,6 +306,9 @@ impl<'a> Polychromatic<'a> {
                 value: max_frequency,
                 expected: "finite and > 0 cycles/m",
             });
+        }
+        if let Some(line) = detected.as_line() {
+            return Self::monochromatic(lens, detected, field, max_frequency, pixel_pitch, settings, line);
         }
         let (lo, hi) = spectral_extent(detected)?;
         let mut cuts: Vec<f64> =
@@ -382,6 +399,70 @@ impl<'a> Polychromatic<'a> {
             this.fft = Some(this.build_fft(pupil_samples)?);
         }
         Ok(this)
+    }
+
+    /// The evaluation of a line spectrum (`line` = [`Spectrum::as_line`] of `detected`): one node
+    /// per imaging order at the line's wavelength, weighted by the line's weight × the order's
+    /// efficiency; no spectral panels, no clipping at the cutoff (the wavelength passes a
+    /// frequency or not), and an FFT grid per order only where a pupil needs one.
+    fn monochromatic(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+        line: radiometry::QuadratureNode,
+    ) -> Result<Self, Error> {
+        let lambda = line.wavelength_m;
+        let mut this = Polychromatic {
+            lens,
+            detected,
+            field,
+            f_number: lens.f_number(),
+            max_frequency,
+            pixel_pitch,
+            nodes: Vec::new(),
+            samples: vec![(lambda, line.weight)],
+            panels: Vec::new(),
+            total_weight: 0.0,
+            w020_max: 0.0,
+            w020_rms: 0.0,
+            shifted: false,
+            needs_fft: Cell::new(false),
+            fft: None,
+            closed: None,
+            tolerance: settings.tolerance,
+            otf_tolerance: Cell::new(0.05 * settings.tolerance),
+            closed_evaluations: Cell::new(0),
+        };
+        for order in lens.orders(lambda, field) {
+            if !matches!(order.pupil, Pupil::Full) || !order.wavefront.is_defocus_only() {
+                this.needs_fft.set(true);
+            }
+            this.nodes.push(Node {
+                lambda,
+                weight: line.weight * order.efficiency,
+                w020: order.wavefront.defocus_m,
+                shift: order.wavefront.image_shift_m,
+            });
+        }
+        this.total_weight = this.nodes.iter().map(|n| n.weight).sum();
+        if !(this.total_weight > 0.0 && this.total_weight.is_finite()) {
+            return Err(Error::NoSignal { total: this.total_weight });
+        }
+        this.defocus_statistics();
+        this.shifted = this.nodes.iter().any(|n| n.shift != [0.0, 0.0]);
+        if this.needs_fft.get() {
+            this.fft = Some(this.build_fft(settings.pupil_samples)?);
+        }
+        Ok(this)
+    }
+
+    /// The wavelength of a line spectrum ([`Engine::Monochromatic`]): the only case without
+    /// spectral panels (the quadrature has at least one, the closed form one for its averages).
+    fn line(&self) -> Option<f64> {
+        if self.panels.is_empty() { self.samples.first().map(|s| s.0) } else { None }
     }
 
     /// The spectral nodes of the closed-form engine: not for the OTF (its spectral integral is
@@ -499,6 +580,9 @@ impl<'a> Polychromatic<'a> {
         if self.closed.is_some() {
             return Engine::ClosedForm;
         }
+        if self.line().is_some() {
+            return Engine::Monochromatic { fft: self.fft.as_ref().map(|f| (f.pupil_samples, f.padded)) };
+        }
         match &self.fft {
             Some(f) => Engine::Fft { pupil_samples: f.pupil_samples, padded: f.padded },
             None => Engine::Exact1d,
@@ -534,6 +618,13 @@ impl<'a> Polychromatic<'a> {
         let nuf = nu * self.f_number;
         let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
         let mut term = |n: &Node| visit(n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda), n.shift);
+        if let Some(lambda) = self.line() {
+            // one wavelength: it passes this frequency or not
+            if lambda < cut {
+                self.nodes.iter().for_each(&mut term);
+            }
+            return;
+        }
         for p in &self.panels {
             if p.hi <= cut {
                 self.nodes[p.start..p.end].iter().for_each(&mut term);
@@ -636,13 +727,13 @@ impl<'a> Polychromatic<'a> {
             // the closed form is exact across the spectrum: no panel edges, no kinks
             return cuts;
         }
-        for p in &self.panels {
-            for lambda in [p.lo, p.hi] {
-                if lambda > 0.0 {
-                    let nu = 1.0 / (lambda * self.f_number);
-                    if nu < self.max_frequency {
-                        cuts.push(nu);
-                    }
+        // panel edges, or the one wavelength of a line, reaching their cutoffs
+        let ends = self.panels.iter().flat_map(|p| [p.lo, p.hi]);
+        for lambda in ends.chain(self.line()) {
+            if lambda > 0.0 {
+                let nu = 1.0 / (lambda * self.f_number);
+                if nu < self.max_frequency {
+                    cuts.push(nu);
                 }
             }
         }
@@ -872,7 +963,7 @@ impl<'a> Polychromatic<'a> {
 
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: `OTF_poly` is zero beyond.
     pub fn max_cutoff(&self) -> f64 {
-        let lo = self.panels.first().map_or(0.0, |p| p.lo);
+        let lo = self.line().or(self.panels.first().map(|p| p.lo)).unwrap_or(0.0);
         1.0 / (lo * self.f_number)
     }
 
@@ -882,13 +973,27 @@ impl<'a> Polychromatic<'a> {
     }
 
     /// Photoelectron-weighted fraction of the detected signal whose geometric blur radius
-    /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15).
+    /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15), exact on every
+    /// engine: in closed form on the closed-form engine
+    /// ([`GaussianDefocus::fraction_defocused_beyond`]); on the spectral quadrature, the
+    /// wavelengths where each order's `|W020|` crosses `radius_m NA/2` are located in every
+    /// spectral panel and the weight beyond them integrated by Gauss–Legendre on the
+    /// sub-intervals (`fraunhofer::weight_defocused_beyond`), so the step never falls between
+    /// nodes and the fraction is continuous in every parameter.
     pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
         let na = self.lens.numerical_aperture();
+        let limit = 0.5 * radius_m * na;
         if let Some(closed) = &self.closed {
-            return closed.fraction_defocused_beyond(0.5 * radius_m * na);
+            return closed.fraction_defocused_beyond(limit);
         }
-        self.spectral_average(|_, w020| if 2.0 * w020.abs() / na > radius_m { 1.0 } else { 0.0 })
+        if self.line().is_some() {
+            // one wavelength: each order is beyond or not (0 or 1 for a single order)
+            return self.spectral_average(|_, w020| if w020.abs() > limit { 1.0 } else { 0.0 });
+        }
+        let panels: Vec<(f64, f64)> = self.panels.iter().map(|p| (p.lo, p.hi)).collect();
+        let density = |lambda: f64| self.detected.value(lambda);
+        let beyond = crate::fraunhofer::weight_defocused_beyond(self.lens, self.field, &density, &panels, limit);
+        (beyond / self.total_weight).clamp(0.0, 1.0)
     }
 }
 
@@ -942,7 +1047,10 @@ pub fn monochromatic_mtf(
 /// Cutoff frequency (cycles/m) of the shortest wavelength the spectral quadrature covers for
 /// `lens` and `detected`: every polychromatic OTF is zero beyond it. Needs no OTF work.
 pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, Error> {
-    let (lo, _) = spectral_extent(detected)?;
+    let lo = match detected.as_line() {
+        Some(line) => line.wavelength_m,
+        None => spectral_extent(detected)?.0,
+    };
     Ok(if lo > 0.0 { 1.0 / (lo * lens.f_number()) } else { f64::INFINITY })
 }
 

@@ -148,6 +148,89 @@ impl TopHat {
     }
 }
 
+/// A spectral line: a band narrow enough for the optics to treat as one wavelength, with the
+/// photon count of its full width.
+///
+/// As a measure (what [`Spectrum::integral`](crate::Spectrum::integral) and
+/// [`Spectrum::quadrature_nodes`](crate::Spectrum::quadrature_nodes) integrate) it is
+/// `peak · width · δ(λ − center)`: every other factor of a product is evaluated at the centre,
+/// and the band counts `peak × width`, the area of a filter of equivalent width `width`
+/// (∫ T dλ / T_peak) and peak transmission `peak`. Photoelectrons therefore scale with the width
+/// exactly as for the other filters (paper, Results: the photon count is proportional to the
+/// spectral range), and a line equals a top-hat of the same width and peak for every factor
+/// linear in λ across the band (flat source, constant QE, the λ of SI eq. S8).
+///
+/// As a function ([`value`](Line::value)) it is that equivalent band: `peak` on
+/// `[center − width/2, center + width/2]`, 0 outside (what the filter transmits, for plots and
+/// support checks).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Line {
+    center_m: f64,
+    width_m: f64,
+    peak: f64,
+}
+
+impl Line {
+    /// Validates: `center_m` finite and > 0 m, `width_m` (the equivalent width) finite, > 0 and
+    /// < 2 `center_m` (the band stays at λ > 0), `peak` finite and ≥ 0.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the bad parameter.
+    pub fn new(center_m: f64, width_m: f64, peak: f64) -> Result<Self, Error> {
+        positive("center", center_m, "m")?;
+        check(
+            "width",
+            width_m,
+            width_m.is_finite() && width_m > 0.0 && width_m < 2.0 * center_m,
+            format!("finite, > 0 and < 2 × center (= {:?}) m, so the band stays at λ > 0", 2.0 * center_m),
+        )?;
+        non_negative("peak", peak, "")?;
+        Ok(Line { center_m, width_m, peak })
+    }
+
+    /// The wavelength the optics sees, m.
+    pub fn center(&self) -> f64 {
+        self.center_m
+    }
+
+    /// Equivalent width `∫ T dλ / T_peak`, m.
+    pub fn width(&self) -> f64 {
+        self.width_m
+    }
+
+    /// Peak value (transmission of a filter).
+    pub fn peak(&self) -> f64 {
+        self.peak
+    }
+
+    /// Lower edge of the equivalent band, m.
+    pub fn lo(&self) -> f64 {
+        self.center_m - 0.5 * self.width_m
+    }
+
+    /// Upper edge of the equivalent band, m.
+    pub fn hi(&self) -> f64 {
+        self.center_m + 0.5 * self.width_m
+    }
+
+    /// The equivalent band: `peak` on [lo, hi] (edges included), 0 outside, NaN for NaN.
+    pub fn value(&self, wavelength_m: f64) -> f64 {
+        let l = wavelength_m;
+        if l.is_nan() {
+            f64::NAN
+        } else if l >= self.lo() && l <= self.hi() {
+            self.peak
+        } else {
+            0.0
+        }
+    }
+
+    /// The line's weight `peak · width` (value unit × m): its integral, all at the centre.
+    pub fn integral(&self) -> f64 {
+        self.peak * self.width_m
+    }
+}
+
 /// A Planck blackbody at a temperature (K).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Blackbody {
@@ -265,6 +348,24 @@ mod tests {
         assert!((t.integral() - 5e-8).abs() < 1e-22);
         assert!(TopHat::new(850e-9, 750e-9, 1.0).is_err());
         assert!(TopHat::new(-1e-9, 750e-9, 1.0).is_err());
+    }
+
+    #[test]
+    fn line() {
+        let l = Line::new(800e-9, 10e-9, 0.5).unwrap();
+        assert_eq!((l.center(), l.width(), l.peak()), (800e-9, 10e-9, 0.5));
+        // the equivalent band 795–805 nm
+        assert_eq!(l.value(795e-9), 0.5);
+        assert_eq!(l.value(805.1e-9), 0.0);
+        assert!(l.value(f64::NAN).is_nan());
+        // 0.5 × 10 nm
+        assert!((l.integral() - 5e-9).abs() < 1e-24);
+        let e = Line::new(800e-9, 1600e-9, 1.0).unwrap_err().to_string();
+        assert!(e.contains("width must be finite, > 0 and < 2 × center"), "{e}");
+        assert!(Line::new(800e-9, 0.0, 1.0).is_err());
+        assert!(Line::new(0.0, 1e-9, 1.0).is_err());
+        assert!(Line::new(800e-9, 1e-9, -1.0).is_err());
+        assert!(Line::new(800e-9, f64::NAN, 1.0).is_err());
     }
 
     #[test]

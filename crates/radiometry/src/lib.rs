@@ -32,6 +32,9 @@
 //!   are exact for that model. Every [`Spectrum`] is 0 at λ ≤ 0.
 //! - A Gaussian's "spectral range" is 2√2·σ (paper, Results), not the FWHM. A Gaussian is
 //!   truncated at λ ≤ 0 and [`Spectrum::truncations`] reports any non-negligible loss.
+//! - A [`Line`] is a narrow band the optics treats as one wavelength: integrals and quadrature
+//!   nodes put its weight `peak × equivalent width` at its centre (every other factor evaluated
+//!   there, [`Spectrum::as_line`]); as a function it is its equivalent band.
 //! - [`normalize`] gives unit area per metre (eq. S1): values in 1/m.
 //! - Constants are CODATA exact ([`constants`]).
 //! - Constructors validate and return [`Error`]; evaluation and integration never fail
@@ -52,7 +55,7 @@ mod quadrature;
 mod sampled;
 mod spectrum;
 
-pub use analytic::{Blackbody, Gaussian, TopHat};
+pub use analytic::{Blackbody, Gaussian, Line, TopHat};
 pub use chain::{
     absolute_spectral_irradiance, broadband_correction, camera_irradiance, corrected_irradiance, fiber_irradiance,
     normalize, photoelectrons, photoelectrons_monochromatic, photon_flux_per_watt, shot_noise_snr, target_radiance,

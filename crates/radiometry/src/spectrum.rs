@@ -2,7 +2,7 @@
 //! integrals.
 
 use crate::Error;
-use crate::analytic::{Blackbody, Gaussian, TopHat};
+use crate::analytic::{Blackbody, Gaussian, Line, TopHat};
 use crate::quadrature;
 use crate::sampled::Sampled;
 
@@ -32,6 +32,10 @@ pub enum Spectrum {
     Gaussian(Gaussian),
     /// A top-hat band.
     TopHat(TopHat),
+    /// A spectral line: one wavelength for integrals and the optics, with the weight of its
+    /// equivalent band ([`Line`]). A product holding a line is that line, weighted by the other
+    /// factors at its centre (see [`as_line`](Spectrum::as_line)).
+    Line(Line),
     /// `scale ·` Planck spectral radiance B_λ(T) in W/(m² sr m). Support (0, +∞).
     Blackbody {
         /// The blackbody.
@@ -108,6 +112,12 @@ impl From<TopHat> for Spectrum {
     }
 }
 
+impl From<Line> for Spectrum {
+    fn from(l: Line) -> Self {
+        Spectrum::Line(l)
+    }
+}
+
 impl From<Blackbody> for Spectrum {
     fn from(source: Blackbody) -> Self {
         Spectrum::Blackbody { source, scale: 1.0 }
@@ -152,6 +162,8 @@ impl Spectrum {
     }
 
     /// Value at `wavelength_m` (the product of the factors' values); 0 at λ ≤ 0, NaN for NaN.
+    /// A [`Line`] factor has the value of its equivalent band here; integrals treat it as one
+    /// wavelength.
     pub fn value(&self, wavelength_m: f64) -> f64 {
         let l = wavelength_m;
         if l.is_nan() {
@@ -163,6 +175,7 @@ impl Spectrum {
             Spectrum::Sampled(s) => s.value(l),
             Spectrum::Gaussian(g) => g.value(l),
             Spectrum::TopHat(t) => t.value(l),
+            Spectrum::Line(line) => line.value(l),
             Spectrum::Blackbody { source, scale } => scale * source.spectral_radiance(l),
             Spectrum::Product(fs) => {
                 if l <= 0.0 {
@@ -175,7 +188,7 @@ impl Spectrum {
 
     /// Interval (m) outside which the spectrum is exactly 0: the factors' supports intersected.
     /// Gaussian, Constant, Linear and Blackbody: (0, +∞); table: (first, last); top-hat:
-    /// (lo, hi). The lower bound is never < 0; an empty intersection is reported as a zero-width
+    /// (lo, hi); line: its equivalent band (lo, hi). The lower bound is never < 0; an empty intersection is reported as a zero-width
     /// interval (x, x).
     pub fn support(&self) -> (f64, f64) {
         match self {
@@ -184,6 +197,7 @@ impl Spectrum {
             }
             Spectrum::Sampled(s) => s.range(),
             Spectrum::TopHat(t) => (t.lo(), t.hi()),
+            Spectrum::Line(line) => (line.lo(), line.hi()),
             Spectrum::Product(fs) => {
                 let (lo, hi) = fs
                     .iter()
@@ -195,7 +209,8 @@ impl Spectrum {
     }
 
     /// Sorted, deduplicated wavelengths (m) inside the (closed) support where the spectrum may
-    /// not be smooth: table samples and top-hat edges. Used to split quadrature panels.
+    /// not be smooth: table samples, top-hat edges, and a line's centre and band edges. Used to
+    /// split quadrature panels.
     pub fn breakpoints(&self) -> Vec<f64> {
         let mut out = Vec::new();
         self.collect_breakpoints(&mut out);
@@ -210,6 +225,7 @@ impl Spectrum {
         match self {
             Spectrum::Sampled(s) => out.extend_from_slice(s.wavelengths()),
             Spectrum::TopHat(t) => out.extend([t.lo(), t.hi()]),
+            Spectrum::Line(line) => out.extend([line.lo(), line.center(), line.hi()]),
             Spectrum::Product(fs) => fs.iter().for_each(|f| f.collect_breakpoints(out)),
             _ => {}
         }
@@ -238,8 +254,9 @@ impl Spectrum {
 
     /// The spectrum as `P(λ) · exp(−(λ − center)²/(2σ²))` for λ > 0 (0 at λ ≤ 0), with `P` a
     /// polynomial, when it is a product of exactly one Gaussian (several Gaussian factors are
-    /// combined into one) with constants and linear factors; `None` otherwise. Closed-form
-    /// spectral integration applies to such spectra (`optics`, the Gaussian closed form).
+    /// combined into one) with constants and linear factors; `None` otherwise (in particular for
+    /// a [`Line`], which is one wavelength). Closed-form spectral integration applies to such
+    /// spectra (`optics`, the Gaussian closed form).
     pub fn gaussian_polynomial(&self) -> Option<GaussianPolynomial> {
         let mut coefficients = vec![1.0];
         let mut gaussian: Option<(f64, f64, f64)> = None; // (center, σ, peak)
@@ -272,6 +289,24 @@ impl Spectrum {
             .then_some(GaussianPolynomial { center_m, sigma_m, coefficients })
     }
 
+    /// The spectrum as one weighted wavelength, when a factor is a [`Line`]: the line at its
+    /// centre with weight `peak · width · Π f(center)` over the other factors `f`, so that
+    /// `∫ spectrum · g dλ = weight · g(center)` for any `g` (the whole band at one wavelength).
+    /// With several lines the narrowest (the first among equals) is the wavelength, and the
+    /// others act as filters: their equivalent bands' values at its centre. `None` without a line.
+    pub fn as_line(&self) -> Option<QuadratureNode> {
+        let mut factors = Vec::new();
+        self.visit(&mut |f| factors.push(f));
+        let (index, line) = factors
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| if let Spectrum::Line(l) = f { Some((i, *l)) } else { None })
+            .reduce(|best, next| if next.1.width() < best.1.width() { next } else { best })?;
+        let c = line.center();
+        let others: f64 = factors.iter().enumerate().filter(|&(i, _)| i != index).map(|(_, f)| f.value(c)).product();
+        Some(QuadratureNode { wavelength_m: c, weight: line.integral() * others })
+    }
+
     /// Calls `f` on every non-product factor.
     fn visit<'a>(&'a self, f: &mut impl FnMut(&'a Spectrum)) {
         match self {
@@ -283,7 +318,12 @@ impl Spectrum {
     /// Each Gaussian factor that loses more than 1e-15 of its (untruncated) area outside the
     /// spectrum's support: below λ = 0 (½·erfc(center/(σ√2)) for a lone Gaussian) or outside a
     /// table or band it is multiplied with (PHYSICS.md: truncated there, and the fact reported).
+    /// A spectrum with a [`Line`] truncates nothing: its Gaussian factors are only evaluated at
+    /// the line.
     pub fn truncations(&self) -> Vec<Truncation> {
+        if self.as_line().is_some() {
+            return Vec::new();
+        }
         let (lo, hi) = self.support();
         self.gaussians()
             .into_iter()
@@ -301,6 +341,9 @@ impl Spectrum {
 
     /// ∫ spectrum dλ over λ > 0 (spectrum unit × m).
     ///
+    /// With a [`Line`] factor: the weight of [`as_line`](Self::as_line), `peak · width` times the
+    /// other factors at the centre (exact).
+    ///
     /// Exact (closed form): a single `Sampled` (trapezoid), `Gaussian` (erfc, with truncation),
     /// `TopHat`, `Blackbody` (σT⁴/π), each optionally times `Constant`s. Products of only
     /// `Constant` and `Linear` factors integrate to +∞ (0 if a factor is 0).
@@ -314,6 +357,9 @@ impl Spectrum {
     /// infinite upper tail to a finite interval by u = 1/λ (relative error ~1e-15 on
     /// ∫B dλ and ∫λB dλ).
     pub fn integral(&self) -> f64 {
+        if let Some(line) = self.as_line() {
+            return line.weight;
+        }
         let factors: Vec<&Spectrum> = {
             let mut v = Vec::new();
             self.visit(&mut |f| v.push(f));
@@ -357,9 +403,14 @@ impl Spectrum {
     /// Quadrature nodes for weighting by this spectrum: `Σ weight · g(λ)` ≈ `∫ spectrum · g dλ`,
     /// with the panels described in [`integral`](Self::integral) (nodes of zero weight
     /// dropped). `Σ weight` is the numerical integral. Empty when the spectrum has unbounded
-    /// support without a decaying (Gaussian or Blackbody) factor.
+    /// support without a decaying (Gaussian or Blackbody) factor. With a [`Line`] factor: one
+    /// node, [`as_line`](Self::as_line) (exact for every `g`), or none if its weight is 0.
     pub fn quadrature_nodes(&self) -> Vec<QuadratureNode> {
         let mut nodes = Vec::new();
+        if let Some(line) = self.as_line() {
+            push(&mut nodes, line.wavelength_m, line.weight);
+            return nodes;
+        }
         let (mut lo, mut hi) = self.support();
         let gaussians = self.gaussians();
         for g in &gaussians {
@@ -509,6 +560,71 @@ mod tests {
         let g = Gaussian::new(800e-9, 10e-9, 3.0).unwrap();
         let s = Spectrum::product(vec![g.into(), TopHat::new(0.0, 1e-5, 1.0).unwrap().into()]);
         assert!((s.integral() / g.integral() - 1.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn a_line_is_one_wavelength_with_the_weight_of_its_band() {
+        let line = Line::new(800e-9, 10e-9, 0.5).unwrap();
+        let s = Spectrum::product(vec![
+            Spectrum::Constant(3.0),
+            line.into(),
+            Spectrum::Linear { slope: 2.0 },
+            table(&[700.0, 900.0], &[0.2, 0.6]).into(),
+        ]);
+        // 3 × (0.5 × 10 nm) × 2 × 800 nm × 0.4 (the table at 800 nm)
+        let weight = 3.0 * 5e-9 * 2.0 * 800e-9 * 0.4;
+        let node = s.as_line().unwrap();
+        assert_eq!(node.wavelength_m, 800e-9);
+        assert!((node.weight - weight).abs() < 1e-15 * weight, "{} vs {weight}", node.weight);
+        assert_eq!(s.integral(), node.weight);
+        assert_eq!(s.quadrature_nodes(), vec![node]);
+        // the function is the equivalent band 795–805 nm
+        assert_eq!(s.support(), (line.lo(), line.hi()));
+        assert!((line.lo() - 795e-9).abs() < 1e-20 && (line.hi() - 805e-9).abs() < 1e-20);
+        assert_eq!(s.breakpoints(), vec![line.lo(), 800e-9, line.hi()]);
+        assert!((s.value(801e-9) - 3.0 * 0.5 * 2.0 * 801e-9 * 0.402).abs() < 1e-20);
+        assert_eq!(s.value(806e-9), 0.0);
+        // no closed form, nothing truncated, even by a Gaussian factor far narrower than the band
+        assert!(s.gaussian_polynomial().is_none());
+        let g = Spectrum::product(vec![line.into(), Gaussian::new(790e-9, 1e-9, 2.0).unwrap().into()]);
+        assert!(g.truncations().is_empty());
+        // 5e-9 × 2 exp(−50)
+        let expected = 5e-9 * 2.0 * (-50f64).exp();
+        assert!((g.integral() - expected).abs() < 1e-12 * expected, "{} vs {expected}", g.integral());
+        // a line outside a table has no weight and no node
+        let dark = Spectrum::product(vec![line.into(), table(&[810.0, 900.0], &[1.0, 1.0]).into()]);
+        assert_eq!(dark.integral(), 0.0);
+        assert!(dark.quadrature_nodes().is_empty());
+        assert!(Spectrum::Constant(1.0).as_line().is_none());
+    }
+
+    #[test]
+    fn of_two_lines_the_narrower_is_the_wavelength() {
+        // a 1 nm laser line at 805 nm through a 20 nm band at 800 nm of peak 0.8: the band
+        // transmits 0.8 of the line's 1 nm × 2
+        let laser = Line::new(805e-9, 1e-9, 2.0).unwrap();
+        let filter = Line::new(800e-9, 20e-9, 0.8).unwrap();
+        for s in
+            [Spectrum::product(vec![filter.into(), laser.into()]), Spectrum::product(vec![laser.into(), filter.into()])]
+        {
+            let node = s.as_line().unwrap();
+            assert_eq!(node.wavelength_m, 805e-9);
+            assert!((node.weight - 1.6e-9).abs() < 1e-24, "{}", node.weight);
+        }
+    }
+
+    #[test]
+    fn a_line_counts_the_photons_of_a_top_hat_of_its_width() {
+        // flat source × filter × λ: ∫ λ over [c − w/2, c + w/2] = c w exactly, for any w
+        for (c, w) in [(800e-9, 50e-9), (550e-9, 1e-9), (1e-6, 1.5e-6)] {
+            let with = |filter: Spectrum| {
+                Spectrum::product(vec![Spectrum::Constant(7.0), filter, Spectrum::Linear { slope: 1.0 }]).integral()
+            };
+            let line = with(Line::new(c, w, 0.9).unwrap().into());
+            let band = with(TopHat::new(c - 0.5 * w, c + 0.5 * w, 0.9).unwrap().into());
+            // (the top-hat's Gauss–Legendre nodes carry rounding of their positions, ~1e-13)
+            assert!((line - band).abs() < 1e-12 * band, "{line} vs {band}");
+        }
     }
 
     #[test]

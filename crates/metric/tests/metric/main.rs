@@ -458,4 +458,6 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
     assert!(ramp.asnr < base.asnr && ramp.asnr > flat.asnr);
 }
 
+mod fraunhofer;
+mod line;
 mod properties;

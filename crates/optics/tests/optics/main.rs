@@ -2,6 +2,7 @@
 //! identities and references, the slow references themselves, and the FFT pupil engine.
 
 mod fft;
+mod line;
 mod otf;
 mod properties;
 mod reference;
