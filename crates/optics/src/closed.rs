@@ -271,7 +271,9 @@ impl GaussianDefocus {
         let c_cut = f.beta * (self.center + tail * self.sigma);
         let mut cuts = vec![c_lo, c_cut.min(1.0)];
         let (mut from, mut to): (f64, f64) = (c_cut, 1.0);
-        if f.a1 != 0.0 {
+        // (with the Gaussian truncated at λ = 0 the truncation's endpoint term does not decay
+        // away from c*: nothing is skipped then)
+        if f.a1 != 0.0 && self.lower_x.is_none() {
             // φ1 = σ(a1 (c − βμ) − β a_μ) = 0
             let c_star = f.beta * self.center + f.beta * f.a_mu / f.a1;
             let width = (1.0 + 4.0 * f.phi2 * f.phi2).sqrt() / (self.sigma * f.a1).abs();
