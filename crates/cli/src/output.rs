@@ -197,8 +197,10 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
     } else if n.engine.starts_with("closed-form") {
         format!(
             "exact: the spectrum is a Gaussian × polynomial and the lens's defocus is affine in λ, so the \
-             integral over λ is a complex Gaussian integral (Faddeeva erfcx); {} evaluations of it inside \
-             an adaptive Gauss–Kronrod 7/15 integral over the pupil-overlap angle",
+             integral over λ is a complex Gaussian integral (Faddeeva erfcx, Weideman's series); {} evaluations \
+             of it inside an adaptive Gauss–Kronrod 10/21 integral over the pupil-overlap angle (one panel where \
+             the spectrum is cut, one over the envelope peak; where that envelope is below the tolerance the \
+             angle is skipped)",
             n.closed_form_evaluations
         )
     } else if n.engine.starts_with("fft") {
@@ -223,8 +225,9 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
     );
     let _ = writeln!(
         s,
-        "  tolerance    {:e} relative on the mean MTF: the frequency rule to tolerance × mean (QUADPACK error \
-         estimate), each OTF value to a fifth of that; spectral integrals exact to rounding",
+        "  tolerance    {:e} relative on the mean MTF: the frequency rule to tolerance × mean, each closed-form \
+         OTF value to half of that (panel error |K − G|^1.6 of the panel's variation once |K − G| is below 1e-3 \
+         of it, the asymptotic Kronrod error; QUADPACK's estimate otherwise); spectral integrals exact to rounding",
         n.tolerance
     );
     let glare = if (r.glare.transmission - r.glare.efficiency).abs() <= 1e-15 * r.glare.transmission.max(1e-300) {

@@ -2,7 +2,8 @@
 //! quadrature to the mean MTF, the photoelectron count and the reports.
 //!
 //! - the paper scene (SI, Fig. 2): F/2.5, f0 = 3.36 mm, λ0 = 800 nm, a 50 nm Gaussian range,
-//!   5.2 µm pixels, τ1 = 0.15, T = 0.55, QE 0.2, 1.23 ms;
+//!   5.2 µm pixels, τ1 = 0.15, T = 0.55, QE 0.2, 1.23 ms (closed-form engine at the default
+//!   tolerance and at 1e-7, and the spectral quadrature);
 //! - the same lens at F/1.4 with a 200 nm range (the costly corner of the paper's design space:
 //!   up to ±7σ = ±495 nm around 800 nm, 44 waves of defocus at the widest kept wavelength);
 //! - the paper scene through the decentred iris of SI Fig. S3 (the FFT path, 256 pupil samples).
@@ -41,6 +42,14 @@ fn bench(c: &mut Criterion) {
     group.sampling_mode(SamplingMode::Flat);
     let cases = [
         ("paper F2.5 50nm", scene(lens(2.5), 50e-9)),
+        ("paper F2.5 50nm tolerance 1e-7", {
+            let options = Options { tolerance: 1e-7, ..Options::default() };
+            scene(lens(2.5), 50e-9).with_options(options).unwrap()
+        }),
+        ("paper F2.5 50nm spectral quadrature", {
+            let options = Options { closed_form: false, ..Options::default() };
+            scene(lens(2.5), 50e-9).with_options(options).unwrap()
+        }),
         ("F1.4 200nm", scene(lens(1.4), 200e-9)),
         ("paper F2.5 50nm decentred iris fft", {
             let iris = optics::fft::Aperture::circle().decentred(0.1, 0.0).unwrap();

@@ -1,7 +1,9 @@
 //! Criterion benchmarks of the optics kernels: the exact defocused OTF on its two branches
 //! (Gauss–Legendre below `|a| = 24`, Bessel series above), the pixel MTF, the polychromatic
-//! engine on the paper scene (preparation and the mean up to Nyquist), and the FFT path's
-//! [`OtfPlan::otf`] for a decentred iris at 64–512 pupil samples.
+//! engine on the paper scene (preparation and the mean up to Nyquist), the closed-form engine's
+//! kernels (one polychromatic OTF value of [`GaussianDefocus`], the Weideman `erfcx` against
+//! the `errorfunctions` crate it replaces), and the FFT path's [`OtfPlan::otf`] for a decentred
+//! iris at 64–512 pupil samples.
 //!
 //! `cargo bench -p optics --bench kernels` (about a minute; `-- <filter>` runs a subset, e.g.
 //! `-- fft`). Timings are measured here and never asserted (STYLE.md).
@@ -10,8 +12,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, criterion_main};
+use num_complex::Complex64;
 use optics::fft::{Aberrations, Aperture, Otf, OtfPlan, SampledPupil};
-use optics::{Field, LensModel, Order, Polychromatic, Pupil, Wavefront, defocus_otf, pixel_mtf};
+use optics::{Field, GaussianDefocus, LensModel, Order, Polychromatic, Pupil, Wavefront, defocus_otf, pixel_mtf};
 use radiometry::{Gaussian, Spectrum};
 
 /// Paper scene (SI, Fig. 2): F/2.5, f0 = 3.36 mm, λ0 = 800 nm, 5.2 µm pixels.
@@ -87,6 +90,31 @@ fn polychromatic(c: &mut Criterion) {
     group.finish();
 }
 
+fn closed_form(c: &mut Criterion) {
+    // the paper scene's detected spectrum λ·G(λ) (50 nm range), τ1 = 0.15, W020 = (λ/λ0 − 1) k
+    let k = F0 / (8.0 * F_NUMBER * F_NUMBER);
+    let sigma = 50e-9 / (2.0 * 2f64.sqrt());
+    let new = || GaussianDefocus::new(LAMBDA0, sigma, &[0.0, 1.0], 0.15, -k, k / LAMBDA0, F_NUMBER);
+    let closed = new();
+    let nyquist = 0.5 / PIXEL;
+    let mut group = c.benchmark_group("closed form paper scene");
+    group.warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    group.bench_function("GaussianDefocus::new", |b| b.iter(|| black_box(new())));
+    for (label, tolerance) in [("otf at nyquist/2, 1e-7", 1e-7), ("otf at nyquist/2, 1e-10", 1e-10)] {
+        group.bench_function(label, |b| b.iter(|| closed.otf(black_box(0.5 * nyquist), tolerance).0));
+    }
+    group.finish();
+    // an argument of the cut zone at the paper's Nyquist frequency
+    let z = Complex64::new(1.3, -0.4);
+    let mut group = c.benchmark_group("erfcx");
+    group.warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    group.bench_function("Weideman series (optics::faddeeva)", |b| b.iter(|| optics::faddeeva::erfcx(black_box(z))));
+    group.bench_function("errorfunctions crate, 1e-13", |b| {
+        b.iter(|| errorfunctions::erfcx_with_relerror(black_box(z), 1e-13))
+    });
+    group.finish();
+}
+
 fn fft(c: &mut Criterion) {
     // the paper's iris decentred by 10 % of the radius (SI Fig. S3), ½ wave of defocus, read up
     // to the paper scene's Nyquist: s = ν_N λ F# = 0.19
@@ -122,6 +150,6 @@ fn fft(c: &mut Criterion) {
 
 /// The benchmark group (a private module: the macro's function has no docs of its own).
 mod group {
-    criterion::criterion_group!(benches, super::monochromatic, super::polychromatic, super::fft);
+    criterion::criterion_group!(benches, super::monochromatic, super::polychromatic, super::closed_form, super::fft);
 }
 criterion_main!(group::benches);

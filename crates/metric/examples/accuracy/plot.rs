@@ -43,6 +43,7 @@ fn family_style(family: Family) -> (RGBColor, Marker) {
         Family::ClosedForm => (PALETTE[0], Marker::Circle),
         Family::Quadrature => (PALETTE[1], Marker::Square),
         Family::Fft => (PALETTE[2], Marker::Triangle),
+        Family::FftDecentred => (PALETTE[2], Marker::Square),
         Family::Table => (PALETTE[3], Marker::Diamond),
         Family::Uniform(3) => (PALETTE[4], Marker::Cross),
         Family::Uniform(5) => (PALETTE[5], Marker::Cross),
