@@ -823,7 +823,8 @@ impl<'a> Polychromatic<'a> {
     /// One adaptive pass of [`mean_of`](Self::mean_of) to an absolute error `absolute` of the mean.
     fn mean_pass(&self, value: &dyn Fn(f64) -> f64, absolute: f64) -> (f64, Work) {
         let mut work = Work::default();
-        // each OTF value may be off by a fraction of the budget: the mean is their average
+        // each closed-form OTF value may be off by a tenth of the budget: the mean is a weighted
+        // average of them, and a tenth keeps their noise well below what the ν rule resolves
         self.otf_tolerance.set(0.5 * absolute);
         // panel errors are budgeted per unit width: Σ tolerance × (b − a) = absolute × ν_max
         let tolerance = absolute;
@@ -907,9 +908,17 @@ impl<'a> Polychromatic<'a> {
         // at the rounding level of the sums themselves (near the cutoff the OTF is tiny and its
         // evaluation noise does not shrink with the panel), or a panel below 1e-9 of the range.
         let rounding = 1e3 * f64::EPSILON * kronrod.abs().max(tolerance * (b - a));
+        // closed-form OTF values are themselves computed to `otf_tolerance`: a Kronrod–Gauss
+        // difference within twice that per unit width is their noise, which no bisection removes
+        // (at thousands of waves the rule otherwise bisected at the noise level without end)
+        let noise = if self.closed.is_some() { 2.0 * self.otf_tolerance.get() * (b - a) } else { 0.0 };
         // the asymptotic estimate: the Kronrod error is about |K − G|^1.64 (G7–K15)
         let error = panel.asymptotic_error(1.64);
-        if error <= tolerance * (b - a) || error <= rounding || b - a <= 1e-9 * self.max_frequency || depth >= MAX_DEPTH
+        if error <= tolerance * (b - a)
+            || error <= rounding
+            || (panel.kronrod - panel.gauss).abs() <= noise
+            || b - a <= 1e-9 * self.max_frequency
+            || depth >= MAX_DEPTH
         {
             work.frequency_panels += 1;
             return kronrod;
