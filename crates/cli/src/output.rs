@@ -225,9 +225,8 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
     );
     let _ = writeln!(
         s,
-        "  tolerance    {:e} relative on the mean MTF: the frequency rule to tolerance × mean (panel error \
-         |K − G|^1.64 of the panel's variation once |K − G| is below 1e-3 of it, QUADPACK's estimate otherwise), \
-         each closed-form OTF value to half of that (QUADPACK's estimate); spectral integrals exact to rounding",
+        "  tolerance    {:e} relative on the mean MTF: the frequency rule to tolerance × mean, each closed-form \
+         OTF value to half of that (QUADPACK's error estimate in both); spectral integrals exact to rounding",
         n.tolerance
     );
     let glare = if (r.glare.transmission - r.glare.efficiency).abs() <= 1e-15 * r.glare.transmission.max(1e-300) {

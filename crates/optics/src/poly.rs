@@ -912,8 +912,10 @@ impl<'a> Polychromatic<'a> {
         // difference within twice that per unit width is their noise, which no bisection removes
         // (at thousands of waves the rule otherwise bisected at the noise level without end)
         let noise = if self.closed.is_some() { 2.0 * self.otf_tolerance.get() * (b - a) } else { 0.0 };
-        // the asymptotic estimate: the Kronrod error is about |K − G|^1.64 (G7–K15)
-        let error = panel.asymptotic_error(1.64);
+        // QUADPACK's estimate: the asymptotic one (|K − G|^1.64 of the variation, trusted below
+        // 1e-3 of it) accepted a panel holding a hidden dip of the OTF to zero, 180× over the
+        // tolerance (F/12.9, 21.5 nm, 2 µm pixels; test closed_form_engine_meets_the_requested_tolerance)
+        let error = panel.error(|r| r.powf(1.5));
         if error <= tolerance * (b - a)
             || error <= rounding
             || (panel.kronrod - panel.gauss).abs() <= noise

@@ -375,9 +375,6 @@ pub const GK61: GaussKronrod = GaussKronrod {
     ],
 };
 
-/// Largest `|K − G|/resasc` at which [`Sums::asymptotic_error`] trusts the asymptotic regime.
-pub const ASYMPTOTIC_REGIME: f64 = 1e-3;
-
 /// The sums of one Gauss–Kronrod panel ([`GaussKronrod::sums`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sums {
@@ -392,25 +389,6 @@ pub struct Sums {
 }
 
 impl Sums {
-    /// The error estimate of the Kronrod sum in the asymptotic regime: on an integrand analytic
-    /// in a Bernstein ellipse of parameter ρ the n-point Gauss error falls as ρ^{−2n} and the
-    /// (2n+1)-point Kronrod error as ρ^{−(3n+2)}, so the Kronrod error is about the Gauss error
-    /// (≈ |K − G|) to the power `p = (3n + 2)/(2n)` (1.6 for G10–K21, 1.64 for G7–K15) in units
-    /// of the panel's variation `resasc`: `resasc · r^p`, `r = |K − G|/resasc`. That regime is
-    /// trusted only once the Gauss sum is already good to [`ASYMPTOTIC_REGIME`] of the
-    /// variation; above it QUADPACK's cautious `resasc · min(1, (200 r)^1.5)` applies (a panel
-    /// where both sums miss a narrow feature by the same amount has a moderate `r` and a large
-    /// error: seen at 6000 waves of defocus, r = 0.014 with the Kronrod sum off by half the
-    /// variation).
-    pub fn asymptotic_error(&self, p: f64) -> f64 {
-        let error = (self.kronrod - self.gauss).abs();
-        if !(self.resasc > 0.0 && error > 0.0) {
-            return error;
-        }
-        let r = error / self.resasc;
-        if r <= ASYMPTOTIC_REGIME { self.resasc * r.powf(p) } else { self.error(|r| r.powf(1.5)) }
-    }
-
     /// QUADPACK's error estimate `resasc · min(1, scale(200 |K − G| / resasc))`: `|K − G|`
     /// overstates the Kronrod error on smooth panels, where it falls as a power of the ratio
     /// (`scale(r) = r^1.5` in QUADPACK).

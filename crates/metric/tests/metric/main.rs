@@ -410,6 +410,8 @@ fn closed_form_engine_meets_the_requested_tolerance() {
         (2.6, 170e-9, 5.2e-6),
         (10.0, 20e-9, 5.2e-6),
         (2.5, 10e-9, 0.3e-6),
+        // Nyquist past the cutoff: the OTF dips to zero between the rule's nodes
+        (12.889473684210527, 21.526315789473685e-9, 2e-6),
     ];
     for (f, range, pixel) in cases {
         let s = scene(f, range, pixel, false, LAMBDA0);
