@@ -6,6 +6,7 @@
 //! `Δf = f0 Δλ/λ0` gives eq. S15, `x = f0 (Δλ/λ0) NA`.
 
 use crate::lens::{Field, LensModel};
+use crate::quad;
 
 /// Geometric blur radius (m) of the worst imaging order at `wavelength_m`: `2 |W020| / NA`.
 pub fn blur_radius(lens: &dyn LensModel, wavelength_m: f64) -> f64 {
@@ -94,7 +95,14 @@ pub(crate) fn weight_defocused_beyond(
                     let (Some(&w0), Some(&w1)) = (orders[i].get(k), orders[i + 1].get(k)) else { continue };
                     let (f0, f1) = (w0 - target, w1 - target);
                     if f0 * f1 < 0.0 {
-                        cuts.push(illinois(&|l| w020(l) - target, pair[0], f0, pair[1], f1));
+                        cuts.push(quad::illinois(
+                            &mut |l| w020(l) - target,
+                            pair[0],
+                            f0,
+                            pair[1],
+                            f1,
+                            1e-14 * pair[0].abs().max(pair[1].abs()),
+                        ));
                     }
                 }
             }
@@ -106,7 +114,7 @@ pub(crate) fn weight_defocused_beyond(
                 if !beyond {
                     continue;
                 }
-                crate::quad::for_each_node(a, b, 1, |lambda, q| {
+                quad::for_each_node(a, b, 1, |lambda, q| {
                     if let Some(o) = order(lambda, k) {
                         total += q * density(lambda) * o.efficiency;
                     }
@@ -115,43 +123,6 @@ pub(crate) fn weight_defocused_beyond(
         }
     }
     total
-}
-
-/// A zero of `f` in `[x0, x1]`, where `f0 = f(x0)` and `f1 = f(x1)` have opposite signs: the
-/// Illinois variant of regula falsi with a bisection safeguard, to 1e-14 of `max(|x0|, |x1|)`.
-fn illinois(f: &dyn Fn(f64) -> f64, mut x0: f64, mut f0: f64, mut x1: f64, mut f1: f64) -> f64 {
-    let tol = 1e-14 * x0.abs().max(x1.abs());
-    let mut side = 0;
-    for _ in 0..200 {
-        if (x1 - x0).abs() <= tol {
-            break;
-        }
-        let mut x = (x0 * f1 - x1 * f0) / (f1 - f0);
-        if !(x > x0.min(x1) && x < x0.max(x1)) {
-            x = 0.5 * (x0 + x1);
-        }
-        let fx = f(x);
-        if fx == 0.0 {
-            return x;
-        }
-        if !fx.is_finite() {
-            // the order is missing at x (the lens changed its order count inside a panel)
-            return x;
-        }
-        if fx * f1 < 0.0 {
-            x0 = x1;
-            f0 = f1;
-            side = 0;
-        } else {
-            side += 1;
-            if side >= 2 {
-                f0 *= 0.5;
-            }
-        }
-        x1 = x;
-        f1 = fx;
-    }
-    0.5 * (x0 + x1)
 }
 
 #[cfg(test)]
@@ -194,7 +165,7 @@ mod tests {
 
     #[test]
     fn illinois_converges_to_rounding() {
-        let root = illinois(&|x: f64| x * x * x - 2.0, 1.0, -1.0, 2.0, 6.0);
+        let root = quad::illinois(&mut |x: f64| x * x * x - 2.0, 1.0, -1.0, 2.0, 6.0, 2e-14);
         assert!((root - 2f64.cbrt()).abs() < 1e-14, "{root}");
     }
 }

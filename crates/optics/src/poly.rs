@@ -319,27 +319,7 @@ impl<'a> Polychromatic<'a> {
         cuts.dedup();
         let sigma_min = detected.gaussians().iter().map(|g| g.sigma()).fold(f64::INFINITY, f64::min);
 
-        let mut this = Polychromatic {
-            lens,
-            detected,
-            field,
-            f_number,
-            max_frequency,
-            pixel_pitch,
-            nodes: Vec::new(),
-            samples: Vec::new(),
-            panels: Vec::new(),
-            total_weight: 0.0,
-            w020_max: 0.0,
-            w020_rms: 0.0,
-            shifted: false,
-            needs_fft: Cell::new(false),
-            fft: None,
-            closed: None,
-            tolerance: settings.tolerance,
-            otf_tolerance: Cell::new(0.05 * settings.tolerance),
-            closed_evaluations: Cell::new(0),
-        };
+        let mut this = Self::empty(lens, detected, field, max_frequency, pixel_pitch, settings);
         if settings.closed_form
             && let Some((closed, affine)) = closed_form(lens, detected, field)
         {
@@ -415,27 +395,8 @@ impl<'a> Polychromatic<'a> {
         line: radiometry::QuadratureNode,
     ) -> Result<Self, Error> {
         let lambda = line.wavelength_m;
-        let mut this = Polychromatic {
-            lens,
-            detected,
-            field,
-            f_number: lens.f_number(),
-            max_frequency,
-            pixel_pitch,
-            nodes: Vec::new(),
-            samples: vec![(lambda, line.weight)],
-            panels: Vec::new(),
-            total_weight: 0.0,
-            w020_max: 0.0,
-            w020_rms: 0.0,
-            shifted: false,
-            needs_fft: Cell::new(false),
-            fft: None,
-            closed: None,
-            tolerance: settings.tolerance,
-            otf_tolerance: Cell::new(0.05 * settings.tolerance),
-            closed_evaluations: Cell::new(0),
-        };
+        let mut this = Self::empty(lens, detected, field, max_frequency, pixel_pitch, settings);
+        this.samples = vec![(lambda, line.weight)];
         for order in lens.orders(lambda, field) {
             if !matches!(order.pupil, Pupil::Full) || !order.wavefront.is_defocus_only() {
                 this.needs_fft.set(true);
@@ -463,6 +424,38 @@ impl<'a> Polychromatic<'a> {
     /// spectral panels (the quadrature has at least one, the closed form one for its averages).
     fn line(&self) -> Option<f64> {
         if self.panels.is_empty() { self.samples.first().map(|s| s.0) } else { None }
+    }
+
+    /// A preparation with no nodes yet, for the constructors to fill.
+    fn empty(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+    ) -> Self {
+        Polychromatic {
+            lens,
+            detected,
+            field,
+            f_number: lens.f_number(),
+            max_frequency,
+            pixel_pitch,
+            nodes: Vec::new(),
+            samples: Vec::new(),
+            panels: Vec::new(),
+            total_weight: 0.0,
+            w020_max: 0.0,
+            w020_rms: 0.0,
+            shifted: false,
+            needs_fft: Cell::new(false),
+            fft: None,
+            closed: None,
+            tolerance: settings.tolerance,
+            otf_tolerance: Cell::new(0.05 * settings.tolerance),
+            closed_evaluations: Cell::new(0),
+        }
     }
 
     /// The spectral nodes of the closed-form engine: not for the OTF (its spectral integral is
@@ -884,7 +877,13 @@ impl<'a> Polychromatic<'a> {
             if let Some((x0, f0)) = last
                 && f0 * f < 0.0
             {
-                edges.push((self.root(value, x0, f0, x, f, work), 0.0));
+                // a zero of OTF_poly (Illinois), to 1e-14 of the frequency limit
+                let mut counted = |nu: f64| {
+                    work.otf_evaluations += 1;
+                    value(nu)
+                };
+                let zero = quad::illinois(&mut counted, x0, f0, x, f, 1e-14 * self.max_frequency);
+                edges.push((zero, 0.0));
             }
             last = Some((x, f));
         }
@@ -928,48 +927,6 @@ impl<'a> Polychromatic<'a> {
         let centre = samples[8];
         self.integrate_panel(value, left, centre, tolerance, depth + 1, work)
             + self.integrate_panel(value, centre, right, tolerance, depth + 1, work)
-    }
-
-    /// A zero of `OTF_poly` in `[x0, x1]`, where the signs of `f0`, `f1` differ (Illinois method
-    /// with a bisection safeguard), to 1e-14 of the frequency limit.
-    fn root(
-        &self,
-        value: &dyn Fn(f64) -> f64,
-        mut x0: f64,
-        mut f0: f64,
-        mut x1: f64,
-        mut f1: f64,
-        work: &mut Work,
-    ) -> f64 {
-        let tol = 1e-14 * self.max_frequency;
-        let mut side = 0;
-        for _ in 0..200 {
-            if (x1 - x0).abs() <= tol {
-                break;
-            }
-            let mut x = (x0 * f1 - x1 * f0) / (f1 - f0);
-            if !(x > x0.min(x1) && x < x0.max(x1)) {
-                x = 0.5 * (x0 + x1);
-            }
-            let f = value(x);
-            work.otf_evaluations += 1;
-            if f == 0.0 {
-                return x;
-            }
-            if f * f1 < 0.0 {
-                x0 = x1;
-                f0 = f1;
-                side = 0;
-            } else {
-                side += 1;
-                if side >= 2 {
-                    f0 *= 0.5;
-                }
-            }
-            x1 = x;
-            f1 = f;
-        }
-        0.5 * (x0 + x1)
     }
 
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: `OTF_poly` is zero beyond.

@@ -123,6 +123,39 @@ pub fn for_each_node<F: FnMut(f64, f64)>(a: f64, b: f64, panels: usize, mut visi
     }
 }
 
+/// A zero of `f` in `[x0, x1]`, where `f0 = f(x0)` and `f1 = f(x1)` have opposite signs: the
+/// Illinois variant of regula falsi with a bisection safeguard, to `tol` in `x`. A non-finite
+/// value ends the search at its abscissa (a lens whose order count changes inside a panel).
+pub fn illinois(f: &mut dyn FnMut(f64) -> f64, mut x0: f64, mut f0: f64, mut x1: f64, mut f1: f64, tol: f64) -> f64 {
+    let mut side = 0;
+    for _ in 0..200 {
+        if (x1 - x0).abs() <= tol {
+            break;
+        }
+        let mut x = (x0 * f1 - x1 * f0) / (f1 - f0);
+        if !(x > x0.min(x1) && x < x0.max(x1)) {
+            x = 0.5 * (x0 + x1);
+        }
+        let fx = f(x);
+        if fx == 0.0 || !fx.is_finite() {
+            return x;
+        }
+        if fx * f1 < 0.0 {
+            x0 = x1;
+            f0 = f1;
+            side = 0;
+        } else {
+            side += 1;
+            if side >= 2 {
+                f0 *= 0.5;
+            }
+        }
+        x1 = x;
+        f1 = fx;
+    }
+    0.5 * (x0 + x1)
+}
+
 // Gauss–Kronrod pairs (QUADPACK dqk15 / dqk21 / dqk61 constants, Piessens et al. 1983, computed by
 // L. W. Fullerton with 80-digit arithmetic; checked by polynomial exactness in the reference's
 // tests). The fast path and `reference` share the constants, not the algorithms.
