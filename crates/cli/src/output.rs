@@ -198,9 +198,9 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
         format!(
             "exact: the spectrum is a Gaussian × polynomial and the lens's defocus is affine in λ, so the \
              integral over λ is a complex Gaussian integral (Faddeeva erfcx, Weideman's series); {} evaluations \
-             of it inside an adaptive Gauss–Kronrod 10/21 integral over the pupil-overlap angle (one panel where \
-             the spectrum is cut, one over the envelope peak; where that envelope is below the tolerance the \
-             angle is skipped)",
+             of it inside an adaptive Gauss–Kronrod 10/21 integral over the pupil-overlap angle (panels where \
+             the spectrum is cut, split at its centre, and over the envelope peak; where that envelope is below \
+             the tolerance the angle is skipped)",
             n.closed_form_evaluations
         )
     } else if n.engine.starts_with("fft") {

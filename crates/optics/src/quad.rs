@@ -224,7 +224,7 @@ impl GaussKronrod {
     /// the function values at [`nodes`](Self::nodes). The error estimate is never below the floor.
     pub fn estimate(&self, a: f64, b: f64, fx: &[f64]) -> (f64, f64, f64) {
         let s = self.sums(0.5 * (b - a), fx);
-        let mut err = s.error(|r| r.powf(1.5));
+        let mut err = s.error();
         let mut round = 0.0;
         if s.resabs > f64::MIN_POSITIVE / (50.0 * f64::EPSILON) {
             round = 50.0 * f64::EPSILON * s.resabs;
@@ -422,12 +422,15 @@ pub struct Sums {
 }
 
 impl Sums {
-    /// QUADPACK's error estimate `resasc · min(1, scale(200 |K − G| / resasc))`: `|K − G|`
-    /// overstates the Kronrod error on smooth panels, where it falls as a power of the ratio
-    /// (`scale(r) = r^1.5` in QUADPACK).
-    pub fn error(&self, scale: impl Fn(f64) -> f64) -> f64 {
+    /// QUADPACK's error estimate `resasc · min(1, (200 |K − G| / resasc)^1.5)`: `|K − G|`
+    /// overstates the Kronrod error on smooth panels, where it falls as a power of the ratio.
+    pub fn error(&self) -> f64 {
         let error = (self.kronrod - self.gauss).abs();
-        if self.resasc > 0.0 && error > 0.0 { self.resasc * scale(200.0 * error / self.resasc).min(1.0) } else { error }
+        if self.resasc > 0.0 && error > 0.0 {
+            self.resasc * (200.0 * error / self.resasc).powf(1.5).min(1.0)
+        } else {
+            error
+        }
     }
 }
 
