@@ -1,5 +1,5 @@
 //! `cargo xtask accuracy [--quick]`: the accuracy-versus-time report. Builds and runs the example
-//! `crates/metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
+//! `metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
 //! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
 //! workspace root.
 

@@ -154,7 +154,7 @@ fn plots() -> Vec<Vec<String>> {
 /// `docs/figures/` under the workspace `root`.
 pub(crate) fn run(root: &Path) -> Result<()> {
     let start = Instant::now();
-    cmd::run(&mut cmd::cargo(root, &["build", "--release", "--package", "cli", "--bin", "asnr"]))?;
+    cmd::run(&mut cmd::cargo(root, &["build", "--release", "--package", "asnr", "--bin", "asnr"]))?;
     let asnr = asnr_binary(root)?;
     let out = root.join(OUT_DIR);
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -202,7 +202,7 @@ fn asnr_binary(root: &Path) -> Result<PathBuf> {
     let target = metadata["target_directory"].as_str().context("`cargo metadata` has no target_directory")?;
     let binary = Path::new(target).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     if !binary.is_file() {
-        bail!("{}: not found after `cargo build --release -p cli`", binary.display());
+        bail!("{}: not found after `cargo build --release -p asnr`", binary.display());
     }
     Ok(binary)
 }

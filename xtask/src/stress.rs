@@ -2,7 +2,7 @@
 //! stress sweep of the metric over the corners of the physical parameter space.
 //!
 //! xtask depends on no project crate (`tidy` enforces it), so the sweep itself is the example
-//! `crates/metric/examples/stress.rs`; this task builds it in release and runs it, passing the
+//! `metric/examples/stress.rs`; this task builds it in release and runs it, passing the
 //! arguments on. It prints a table (engine and time of every point), the failures, warnings,
 //! fallbacks and slowest points, and `stress: N points, M failures`, and fails on any failure.
 //! `--quick` is the CI-sized grid (well under a minute in release).

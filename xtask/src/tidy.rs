@@ -1,8 +1,11 @@
 //! `cargo xtask tidy`: the architecture invariants, checked by reading each member's
 //! `Cargo.toml` (with the `toml` crate) and crate root.
 //!
-//! For every folder under `crates/`, and for `xtask/`:
-//! - the package name equals the folder name;
+//! The layout (the user's design card): every workspace member is a folder at the repository
+//! root (`radiometry/ optics/ noise/ metric/ lenses/ scene/ cli/ xtask/`, and the crates added
+//! beside them); there is no `crates/` folder. For every member of the root manifest:
+//! - the package name equals the folder name, except `cli/`, whose package is `asnr` (so that
+//!   `cargo install --path cli` installs and reports the `asnr` binary), see [`PACKAGE_NAMES`];
 //! - the project crates in its normal dependencies (`[dependencies]`, `[build-dependencies]`
 //!   and their `[target.*]` forms) are among those [`RULES`] allows; dev-dependencies may use
 //!   any project crate (so `metric` tests may use `lenses`);
@@ -34,25 +37,31 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("noise", Allowed::Only(&["radiometry"])),
     ("lenses", Allowed::Only(&["optics", "radiometry"])),
     ("metric", Allowed::Only(&["optics", "noise", "radiometry"])),
+    ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
     ("cli", Allowed::Any),
     ("xtask", Allowed::Only(&[])),
 ];
 
-/// Check every member under the workspace `root`; print each violation as
+/// Folders whose package name is not the folder name: `(folder, package)`.
+pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[("cli", "asnr")];
+
+/// The package name the member in `folder` must have.
+fn package_name(folder: &str) -> &str {
+    PACKAGE_NAMES.iter().find(|(f, _)| *f == folder).map_or(folder, |(_, package)| package)
+}
+
+/// Check every member of the workspace at `root`; print each violation as
 /// `tidy: <path>: <problem>` and fail if there is any.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let crates_dir = root.join("crates");
-    let mut folders = Vec::new();
-    for entry in fs::read_dir(&crates_dir).with_context(|| format!("cannot list {}", crates_dir.display()))? {
-        let entry = entry?;
-        if entry.file_type()?.is_dir() {
-            folders.push(format!("crates/{}", entry.file_name().to_string_lossy()));
-        }
-    }
-    folders.sort();
-    folders.push("xtask".to_owned());
-
+    let manifest_path = root.join("Cargo.toml");
+    let text =
+        fs::read_to_string(&manifest_path).with_context(|| format!("cannot read {}", manifest_path.display()))?;
     let mut violations = Vec::new();
+    let folders = match workspace_members(&text) {
+        Ok(members) => members,
+        Err(problem) => bail!("tidy: Cargo.toml: {problem}"),
+    };
+    violations.extend(check_layout(&folders, root.join("crates").exists()));
     for folder in &folders {
         check_member(root, folder, &mut violations)?;
     }
@@ -66,7 +75,36 @@ pub(crate) fn run(root: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Check one member folder (`crates/optics`, `xtask`), pushing `<path>: <problem>` lines.
+/// The `[workspace] members` of the root manifest `text`, as written.
+pub(crate) fn workspace_members(text: &str) -> std::result::Result<Vec<String>, String> {
+    let manifest: Table = text.parse().map_err(|err| format!("cannot parse: {err}"))?;
+    let members = manifest
+        .get("workspace")
+        .and_then(|w| w.get("members"))
+        .and_then(Value::as_array)
+        .ok_or("has no [workspace] members list")?;
+    members.iter().map(|m| m.as_str().map(str::to_owned).ok_or_else(|| format!("member {m} is not a string"))).collect()
+}
+
+/// Layout problems: a member that is not a top-level folder (`crates/optics`, `a/b`), or a
+/// leftover `crates/` folder (`crates_dir`).
+pub(crate) fn check_layout(members: &[String], crates_dir: bool) -> Vec<String> {
+    let mut problems = Vec::new();
+    for member in members {
+        if member.contains('/') || member.contains('*') {
+            problems.push(format!(
+                "Cargo.toml: member `{member}` is not a folder at the repository root \
+                 (the layout is radiometry/ optics/ noise/ metric/ lenses/ scene/ cli/ xtask/ …)"
+            ));
+        }
+    }
+    if crates_dir {
+        problems.push("crates/: the crates stand at the repository root, not under crates/".to_owned());
+    }
+    problems
+}
+
+/// Check one member folder (`optics`, `xtask`), pushing `<path>: <problem>` lines.
 fn check_member(root: &Path, folder: &str, violations: &mut Vec<String>) -> Result<()> {
     let name = folder.rsplit('/').next().unwrap_or(folder);
     let manifest_path = format!("{folder}/Cargo.toml");
@@ -103,10 +141,14 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
     };
     let mut problems = Vec::new();
 
-    let package_name = manifest.get("package").and_then(|package| package.get("name")).and_then(Value::as_str);
-    match package_name {
-        Some(name) if name == folder => {}
-        Some(name) => problems.push(format!("package name `{name}` differs from its folder name `{folder}`")),
+    let expected = package_name(folder);
+    let found = manifest.get("package").and_then(|package| package.get("name")).and_then(Value::as_str);
+    match found {
+        Some(name) if name == expected => {}
+        Some(name) if expected == folder => {
+            problems.push(format!("package name `{name}` differs from its folder name `{folder}`"))
+        }
+        Some(name) => problems.push(format!("package name `{name}`: the package in `{folder}/` is `{expected}`")),
         None => problems.push("has no [package] name".to_owned()),
     }
 
@@ -258,7 +300,7 @@ mod tests {
 
     #[test]
     fn cli_may_depend_on_anything_and_unknown_crates_need_a_rule() {
-        let cli = "[package]\nname = \"cli\"\n[dependencies]\nlenses.workspace = true\n\
+        let cli = "[package]\nname = \"asnr\"\n[dependencies]\nlenses.workspace = true\n\
                    metric.workspace = true\n[lints]\nworkspace = true\n";
         assert!(check_manifest("cli", cli).is_empty());
         let unknown = "[package]\nname = \"extra\"\n[lints]\nworkspace = true\n";
@@ -267,6 +309,20 @@ mod tests {
             vec!["no dependency rule for `extra`: add it to RULES in xtask/src/tidy.rs"]
         );
         assert_eq!(check_manifest("cli", "[package").len(), 1);
+        let named_cli = "[package]\nname = \"cli\"\n[lints]\nworkspace = true\n";
+        assert_eq!(check_manifest("cli", named_cli), vec!["package name `cli`: the package in `cli/` is `asnr`"]);
+    }
+
+    #[test]
+    fn members_stand_at_the_root() {
+        let members = workspace_members("[workspace]\nmembers = [\"optics\", \"crates/metric\"]\n").unwrap();
+        assert_eq!(members, ["optics", "crates/metric"]);
+        let problems = check_layout(&members, true);
+        assert_eq!(problems.len(), 2, "{problems:?}");
+        assert!(problems[0].contains("`crates/metric` is not a folder at the repository root"));
+        assert!(problems[1].starts_with("crates/"));
+        assert!(check_layout(&["optics".to_owned(), "xtask".to_owned()], false).is_empty());
+        assert!(workspace_members("[package]\nname = \"x\"\n").is_err());
     }
 
     #[test]

@@ -8,9 +8,7 @@ mod optimize;
 mod output;
 mod plot;
 mod plotcmd;
-mod scene;
 mod sweep;
-mod tables;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

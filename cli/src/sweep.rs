@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::optimize::Range;
-use crate::scene::{self, Source};
+use scene::Source;
 
 /// One evaluated grid point.
 #[derive(Clone, Debug, Serialize)]

@@ -19,7 +19,7 @@ use serde::de::{self, Visitor};
 use crate::tables::{FREQUENCY, read_pairs, read_table};
 
 /// The paper's theory scene, embedded in the binary (`examples/paper-theory.toml`).
-pub const PAPER_SCENE: &str = include_str!("../../../examples/paper-theory.toml");
+pub const PAPER_SCENE: &str = include_str!("../../examples/paper-theory.toml");
 
 /// A scene value that is a number or the path of a two-column CSV table.
 #[derive(Clone, Debug, PartialEq)]

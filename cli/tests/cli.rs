@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/paper-theory.toml");
-const TABULATED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/tabulated.toml");
-const MONOCHROMATIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/monochromatic.toml");
+const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml");
+const TABULATED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/tabulated.toml");
+const MONOCHROMATIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/monochromatic.toml");
 
 fn asnr(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_asnr")).args(args).output().expect("the asnr binary runs")
@@ -371,7 +371,7 @@ fn off_axis_field_reports_the_radial_tangential_split() {
 
 #[test]
 fn decentred_iris_example_uses_the_fft_path_and_splits_x_and_y() {
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/decentred-iris.toml");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/decentred-iris.toml");
     let v = json(&["evaluate", scene, "--json"]);
     assert!(v["numerics"]["engine"].as_str().unwrap().starts_with("fft:"), "{}", v["numerics"]["engine"]);
     assert!(v["mean_mtf_radial"].as_f64().unwrap() < v["mean_mtf_tangential"].as_f64().unwrap());
@@ -461,8 +461,7 @@ fn noise_spectrum_from_csv() {
     let dir = std::env::temp_dir().join(format!("asnr-noise-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("scene.toml");
-    let base =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/paper-theory.toml")).unwrap();
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml")).unwrap();
     std::fs::write(&scene, base.replace("[camera]", "[camera]\nnoise_spectrum = \"nps.csv\"")).unwrap();
     std::fs::write(dir.join("nps.csv"), "frequency_cyc_per_mm,relative\n0,2\n100,2\n").unwrap();
     let white = json(&["evaluate", "--json"])["asnr"].as_f64().unwrap();
