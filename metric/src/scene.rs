@@ -159,6 +159,8 @@ pub struct Scene {
     field: Field,
     /// further weighted field points for a field-of-view average (empty: `field` alone)
     fields: Vec<(Field, f64)>,
+    /// the scene's title (scene files: `title`), for reports and plots
+    title: Option<String>,
 }
 
 impl Scene {
@@ -173,7 +175,16 @@ impl Scene {
     ) -> Result<Self, Error> {
         check("exposure", exposure_s, exposure_s > 0.0, "a finite time > 0 s")?;
         check_options(&options)?;
-        Ok(Scene { lens, radiance, camera, exposure: exposure_s, options, field: Field::ON_AXIS, fields: Vec::new() })
+        Ok(Scene {
+            lens,
+            radiance,
+            camera,
+            exposure: exposure_s,
+            options,
+            field: Field::ON_AXIS,
+            fields: Vec::new(),
+            title: None,
+        })
     }
 
     /// This scene with other `options` (validated as in [`new`](Self::new)).
@@ -219,6 +230,19 @@ impl Scene {
     /// The weighted field points of a field-of-view average (empty for a single field).
     pub fn fields(&self) -> &[(Field, f64)] {
         &self.fields
+    }
+
+    /// The same scene with a title (reports and plot titles show it). An empty or blank title
+    /// is no title.
+    pub fn with_title(mut self, title: impl Into<String>) -> Self {
+        let title = title.into();
+        self.title = if title.trim().is_empty() { None } else { Some(title) };
+        self
+    }
+
+    /// The scene's title, if it has one.
+    pub fn title(&self) -> Option<&str> {
+        self.title.as_deref()
     }
 
     /// The lens.

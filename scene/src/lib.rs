@@ -21,3 +21,14 @@ mod tables;
 
 pub use load::{PAPER_SCENE, Source, build_from, load, read};
 pub use tables::{Axis, FREQUENCY, WAVELENGTH, read_pairs, read_table};
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_title_reaches_the_scene() {
+        let paper = crate::load(None, &[]).unwrap();
+        assert_eq!(paper.title(), Some("Paper theory model: chromatic metalens F/2.5, 800 nm, 50 nm range"));
+        let retitled = crate::load(None, &["title=\"Mine\"".to_owned()]).unwrap();
+        assert_eq!(retitled.title(), Some("Mine"));
+    }
+}

@@ -57,7 +57,6 @@ impl<'de> Deserialize<'de> for NumberOrFile {
 #[serde(deny_unknown_fields)]
 struct RawScene {
     #[serde(default)]
-    #[allow(dead_code)]
     title: Option<String>,
     lens: RawLens,
     source: RawSource,
@@ -273,7 +272,11 @@ pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene> {
         let inner = inner.split("\nin `").next().unwrap_or_default().trim_end().to_owned();
         anyhow!("{}: {key}: {inner}", origins.of(&key))
     })?;
-    build(&raw, &origins)
+    let scene = build(&raw, &origins)?;
+    Ok(match &raw.title {
+        Some(title) => scene.with_title(title.clone()),
+        None => scene,
+    })
 }
 
 /// Applies one `--set key=value` to the TOML table. The value is read as TOML (number, boolean,
