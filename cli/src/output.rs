@@ -109,7 +109,10 @@ fn noise_budget(r: &Evaluation) -> String {
 
 /// `v` with four significant digits, in plain notation from 0.001 to 1e6.
 fn significant(v: f64) -> String {
-    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-3..1e6).contains(&v.abs()) {
         return format!("{v:.3e}");
     }
     let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
@@ -247,6 +250,9 @@ struct MtfReport<'a> {
     /// The scene's `title` (null without one).
     title: Option<&'a str>,
     lens: String,
+    /// What `mtf` is: on axis, the tangential–sagittal average, or the weighted mean over the
+    /// field points (the text table's `MTF:` line).
+    mtf_is: String,
     #[serde(flatten)]
     curve: &'a MtfCurve,
 }
@@ -257,6 +263,7 @@ pub fn mtf_json(label: &str, scene: &Scene, c: &MtfCurve) -> Result<String> {
         scene: label,
         title: scene.title(),
         lens: scene.lens().describe(),
+        mtf_is: mtf_meaning(c).trim_start_matches("MTF: ").to_owned(),
         curve: c,
     })?)
 }
@@ -425,4 +432,18 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
         let _ = writeln!(s, "  field        weighted average of {fields} field points, each evaluated as above");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::significant;
+
+    #[test]
+    fn significant_keeps_four_digits_and_never_breaks_on_zero() {
+        assert_eq!(significant(559.43), "559.4");
+        assert_eq!(significant(9.0), "9.000");
+        assert_eq!(significant(2051.3), "2051");
+        assert_eq!(significant(0.000_12), "1.200e-4");
+        assert_eq!(significant(0.0), "0");
+    }
 }

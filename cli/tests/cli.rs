@@ -740,6 +740,7 @@ fn labels_scene_title_is_shown() {
     assert_eq!(v["title"], "Labels caption");
     let m = json(&["mtf", "--json", "--points", "3", "--set", "title=\"Labels caption\""]);
     assert_eq!(m["title"], "Labels caption");
+    assert_eq!(m["mtf_is"], "on axis");
     let dir = scratch("labels-title");
     let svg = dir.join("mtf.svg");
     succeeds(&["mtf", "--points", "11", "--set", "title=\"Labels caption\"", "--plot", svg.to_str().unwrap()]);
@@ -768,6 +769,7 @@ fn labels_mtf_over_fields_keeps_every_field_point() {
     let points = c["field_points"].as_array().unwrap();
     assert_eq!(points.len(), 2);
     assert_eq!(points[1]["field_deg"], serde_json::json!([8.0, 0.0]));
+    assert!(c["mtf_is"].as_str().unwrap().starts_with("weighted mean over 2 field points"), "{}", c["mtf_is"]);
     let f = |v: &serde_json::Value| v[4].as_f64().unwrap();
     assert!(points[0]["mtf_tangential"].is_null());
     assert!(f(&points[1]["mtf_tangential"]) < f(&points[1]["mtf_sagittal"]));
