@@ -310,6 +310,35 @@ fn read_noise_lowers_snr0() {
     assert!((r.snr0 - 21.78419).abs() < 1e-5, "{}", r.snr0);
     assert_eq!(r.noise.read_variance_e2, 100.0);
     assert!(!r.noise.saturated && r.warnings.is_empty());
+    // the report names the terms: not shot-noise limited any more
+    assert!(!r.noise.shot_noise_limited);
+    assert_eq!((r.noise.terms.as_slice(), r.noise.read_noise_e), (&["shot", "read"][..], 10.0));
+    let ideal = evaluate(&s).unwrap();
+    assert!(ideal.noise.shot_noise_limited && ideal.noise.terms == ["shot"]);
+}
+
+/// Over a field-of-view average, `mtf_curve` keeps every field point's curves, and its headline
+/// curves are their weighted means (the on-axis point has no tangential–sagittal split).
+#[test]
+fn mtf_curve_over_fields_keeps_every_point() {
+    let base = || scene(2.5, 20e-9, 5.2e-6, false, LAMBDA0);
+    let off = optics::Field::new(8f64.to_radians(), 0.0);
+    let points = vec![(optics::Field::ON_AXIS, 2.0), (off, 1.0)];
+    let curve = |s: &Scene| metric::mtf_curve(s, metric::FrequencyRange::Nyquist, 9, &[]).unwrap();
+    let fov = curve(&base().over_fields(points).unwrap());
+    let (on, at8) = (curve(&base()), curve(&base().at_field(off).unwrap()));
+    assert_eq!(fov.field_points.len(), 2);
+    assert_eq!(fov.field_points[1].mtf_tangential, at8.mtf_tangential);
+    assert!(fov.field_points[0].mtf_tangential.is_none());
+    let (t8, s8) = (at8.mtf_tangential.as_ref().unwrap(), at8.mtf_sagittal.as_ref().unwrap());
+    for k in 0..9 {
+        let mean = (2.0 * on.mtf[k] + at8.mtf[k]) / 3.0;
+        assert!((fov.mtf[k] - mean).abs() < 1e-14, "{k}: {} vs {mean}", fov.mtf[k]);
+        let tangential = (2.0 * on.mtf[k] + t8[k]) / 3.0;
+        assert!((fov.mtf_tangential.as_ref().unwrap()[k] - tangential).abs() < 1e-14);
+        // lateral colour lowers the tangential MTF (along the field), not the sagittal one
+        assert!(t8[k] <= s8[k] + 1e-12 && (s8[k] - on.mtf[k]).abs() < 1e-9, "{k}");
+    }
 }
 
 /// Field-of-view average (paper SI, end of the VG section): the weighted mean of the ASNRs at
