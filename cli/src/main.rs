@@ -153,13 +153,13 @@ fn run(cli: Cli) -> Result<()> {
                 Ok(metric::evaluate(&loaded)?.asnr)
             };
             let best = optimize::maximize(&range, xtol * (range.hi - range.lo), asnr_at)?;
+            if let Some(warning) = optimize::bound_warning(&best) {
+                eprintln!("warning: {warning}");
+            }
             if json {
                 println!("{}", serde_json::to_string_pretty(&best)?);
             } else {
-                println!(
-                    "best {} = {:.6} (±{:.2e}) → ASNR {:.6}   [{} evaluations over {}…{}]",
-                    best.key, best.best, best.tolerance, best.asnr, best.evaluations, best.lo, best.hi
-                );
+                print!("{}", optimize::report(&best));
             }
             Ok(())
         }
@@ -174,17 +174,20 @@ fn run(cli: Cli) -> Result<()> {
             // validate the scene and the keys once before spending the grid
             let mut first = set.clone();
             first.extend(ranges.iter().map(|r| format!("{}={}", r.key, r.lo)));
-            scene::build_from(&source, &first)?;
+            let built = scene::build_from(&source, &first)?;
             let points = sweep::run(&source, &set, &ranges, threads)?;
+            for line in sweep::warnings(&ranges, &points) {
+                eprintln!("{line}");
+            }
             if let Some(path) = &plot {
-                plot::sweep_plot(path, source.label(), &ranges, &points)?;
+                plot::sweep_plot(path, built.title().unwrap_or(source.label()), &ranges, &points)?;
             }
             if json {
                 println!("{}", serde_json::to_string_pretty(&points)?);
             } else if csv {
                 print!("{}", sweep::csv(&ranges, &points));
             } else {
-                print!("{}", sweep::table(source.label(), &ranges, &points));
+                print!("{}", sweep::table(source.label(), built.title(), &ranges, &points));
             }
             Ok(())
         }
@@ -203,10 +206,10 @@ fn run(cli: Cli) -> Result<()> {
             let curve =
                 metric::mtf_curve(&loaded, range, points, &metres).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if let Some(path) = &plot {
-                plot::mtf_plot(path, &format!("{} — {label}", loaded.lens().describe()), &curve)?;
+                plot::mtf_plot(path, loaded.title().unwrap_or(&label), &curve)?;
             }
             if json {
-                println!("{}", serde_json::to_string_pretty(&curve)?);
+                println!("{}", output::mtf_json(&label, &loaded, &curve)?);
             } else if csv {
                 print!("{}", output::mtf_csv(&curve));
             } else {

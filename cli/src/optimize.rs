@@ -57,13 +57,19 @@ pub fn parse_range(arg: &str, with_points: bool) -> Result<Range> {
     Ok(Range { key: key.trim().to_owned(), lo, hi, points })
 }
 
+/// How [`maximize`] finds `best` (the JSON's `method`), to tell it from a sweep's best grid point
+/// and the plot's parabola through it.
+pub const METHOD: &str = "golden-section search to ±tolerance, after a 17-point scan";
+
 /// The maximum found.
 #[derive(Clone, Debug, Serialize)]
 pub struct Optimum {
     /// The key varied.
     pub key: String,
-    /// The best value of the key.
+    /// The best value of the key, by [`METHOD`].
     pub best: f64,
+    /// How `best` was found: [`METHOD`].
+    pub method: &'static str,
     /// The ASNR there.
     pub asnr: f64,
     /// The search interval.
@@ -74,6 +80,35 @@ pub struct Optimum {
     pub tolerance: f64,
     /// ASNR evaluations used.
     pub evaluations: usize,
+    /// Whether `best` is within `tolerance` of `lo` or `hi`: the maximum may lie outside the range.
+    pub at_bound: bool,
+}
+
+/// The warning when the best value is on a bound of the search range.
+pub fn bound_warning(o: &Optimum) -> Option<String> {
+    if !o.at_bound {
+        return None;
+    }
+    let (end, value) = if o.best - o.lo <= o.hi - o.best { ("LO", o.lo) } else { ("HI", o.hi) };
+    Some(format!(
+        "the best {} = {} is at the bound {end} = {value} of --over {}={}:{}: the maximum may lie outside LO:HI; widen the range",
+        o.key, o.best, o.key, o.lo, o.hi
+    ))
+}
+
+/// The text report: the value found, by which method, and how many evaluations it took.
+pub fn report(o: &Optimum) -> String {
+    format!(
+        "best {} = {:.6} (±{:.2e}, golden-section search after a {SCAN_POINTS}-point scan) → ASNR {:.6}   [{} evaluations over {}…{}]{}\n",
+        o.key,
+        o.best,
+        o.tolerance,
+        o.asnr,
+        o.evaluations,
+        o.lo,
+        o.hi,
+        if o.at_bound { "   AT THE BOUND: the maximum may lie outside" } else { "" }
+    )
 }
 
 /// Maximizes `f` on `[lo, hi]`: a scan of [`SCAN_POINTS`] brackets the best point, then
@@ -121,14 +156,17 @@ pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<
             }
         }
     }
+    let tolerance = (b - a).max(tolerance);
     Ok(Optimum {
         key: range.key.clone(),
         best: best.0,
+        method: METHOD,
         asnr: best.1,
         lo,
         hi,
-        tolerance: (b - a).max(tolerance),
+        tolerance,
         evaluations,
+        at_bound: best.0 - lo <= tolerance || hi - best.0 <= tolerance,
     })
 }
 
@@ -149,6 +187,20 @@ mod tests {
         let range = Range { key: "x".into(), lo: 1.0, hi: 2.0, points: None };
         let o = maximize(&range, 1e-9, Ok).unwrap();
         assert!((o.best - 2.0).abs() < 1e-8, "{}", o.best);
+        assert!(o.at_bound);
+        let warning = bound_warning(&o).unwrap();
+        assert!(warning.contains("at the bound HI = 2") && warning.contains("may lie outside LO:HI"), "{warning}");
+        assert!(report(&o).contains("AT THE BOUND"));
+        let o = maximize(&range, 1e-9, |x| Ok(-x)).unwrap();
+        assert!(o.at_bound && bound_warning(&o).unwrap().contains("at the bound LO = 1"));
+    }
+
+    #[test]
+    fn an_interior_maximum_is_not_at_the_bound() {
+        let range = Range { key: "x".into(), lo: 0.0, hi: 10.0, points: None };
+        let o = maximize(&range, 1e-6, |x| Ok(-(x - 3.3) * (x - 3.3))).unwrap();
+        assert!(!o.at_bound && bound_warning(&o).is_none());
+        assert!(report(&o).contains("golden-section search after a 17-point scan"), "{}", report(&o));
     }
 
     #[test]

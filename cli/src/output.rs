@@ -28,14 +28,95 @@ pub fn check_finite(r: &Evaluation) -> Result<()> {
 #[derive(Serialize)]
 struct Report<'a> {
     scene: &'a str,
+    /// The scene's `title` (null without one).
+    title: Option<&'a str>,
     lens: String,
     #[serde(flatten)]
     result: &'a Evaluation,
 }
 
-/// One JSON object: the scene label, the lens and every field of the evaluation.
+/// One JSON object: the scene label, its title, the lens and every field of the evaluation.
 pub fn json(label: &str, scene: &Scene, r: &Evaluation) -> Result<String> {
-    Ok(serde_json::to_string_pretty(&Report { scene: label, lens: scene.lens().describe(), result: r })?)
+    Ok(serde_json::to_string_pretty(&Report {
+        scene: label,
+        title: scene.title(),
+        lens: scene.lens().describe(),
+        result: r,
+    })?)
+}
+
+/// The header lines of every report: the scene (file or embedded), its title if it has one,
+/// and the lens.
+fn header(s: &mut String, label: &str, scene: &Scene) {
+    let _ = writeln!(s, "scene      {label}");
+    if let Some(title) = scene.title() {
+        let _ = writeln!(s, "title      {title}");
+    }
+    let _ = writeln!(s, "lens       {}", scene.lens().describe());
+}
+
+/// The formula and the words of the SNR0 line: which noise terms went into it (paper SI eq. S9
+/// or S14 when only shot noise is left, EMVA 1288 otherwise).
+fn snr0_line(r: &Evaluation) -> (String, String) {
+    let n = &r.noise;
+    let stray = r.transmitted_photoelectrons - r.photoelectrons;
+    let glare = r.glare_mode == metric::GlareMode::Included;
+    if n.shot_noise_limited {
+        return if glare {
+            ("SNR0 = N/√N_T".to_owned(), format!("shot noise with the glare of {stray:.1} stray e⁻ (SI eq. S14)"))
+        } else {
+            ("SNR0 = √N".to_owned(), "shot-noise limited (SI eq. S9)".to_owned())
+        };
+    }
+    let mut formula = vec![if glare { "N_T" } else { "N" }];
+    let mut words = vec![if glare {
+        format!("shot (with the glare of {stray:.1} stray e⁻, SI eq. S14)")
+    } else {
+        "shot".to_owned()
+    }];
+    if n.read_variance_e2 > 0.0 {
+        formula.push("σ_r²");
+        words.push(format!("read {:.1} e⁻", n.read_noise_e));
+    }
+    if n.dark_variance_e2 > 0.0 {
+        formula.push("D·t");
+        words.push(format!("dark {} e⁻", significant(n.dark_e)));
+    }
+    if n.quantization_variance_e2 > 0.0 {
+        formula.push("σ_q²");
+        words.push("quantization".to_owned());
+    }
+    (format!("SNR0 = N/√({})", formula.join(" + ")), format!("{} (EMVA 1288)", words.join(" + ")))
+}
+
+/// Each noise term's variance and its share of the total, for the report when shot noise is not
+/// the only one.
+fn noise_budget(r: &Evaluation) -> String {
+    let n = &r.noise;
+    let total = n.total_variance_e2;
+    [
+        ("shot", n.shot_variance_e2),
+        ("read", n.read_variance_e2),
+        ("dark", n.dark_variance_e2),
+        ("quantization", n.quantization_variance_e2),
+    ]
+    .iter()
+    .filter(|(_, v)| *v > 0.0)
+    .map(|(name, v)| format!("{name} {} ({} %)", significant(*v), significant(100.0 * v / total)))
+    .collect::<Vec<_>>()
+    .join(", ")
+}
+
+/// `v` with four significant digits, in plain notation from 0.001 to 1e6.
+fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-3..1e6).contains(&v.abs()) {
+        return format!("{v:.3e}");
+    }
+    let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// The short table printed by default.
@@ -45,22 +126,18 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         MetricForm::Mean => "SNR0 × mean MTF",
         MetricForm::Integral => "SNR0 × ∫MTF dν, cycles/mm",
     };
-    let _ = writeln!(s, "scene      {label}");
-    let _ = writeln!(s, "lens       {}", scene.lens().describe());
+    header(&mut s, label, scene);
     let _ = writeln!(s);
     let _ = writeln!(s, "  ASNR                        {:>12.4}   {form}", r.asnr);
-    match r.glare_mode {
-        metric::GlareMode::FirstOrder => {
-            let _ = writeln!(s, "  SNR0 = √N                   {:>12.4}   shot-noise limited (SI eq. S9)", r.snr0);
-        }
-        metric::GlareMode::Included => {
-            let _ = writeln!(
-                s,
-                "  SNR0 = N/√N_T               {:>12.4}   with the glare of {:.1} stray e⁻ (SI eq. S14)",
-                r.snr0,
-                r.transmitted_photoelectrons - r.photoelectrons
-            );
-        }
+    let (formula, words) = snr0_line(r);
+    let _ = writeln!(s, "  {formula:<28}{:>12.4}   {words}", r.snr0);
+    if !r.noise.shot_noise_limited {
+        let _ = writeln!(
+            s,
+            "    noise budget, e⁻²         {:>12}   {}",
+            significant(r.noise.total_variance_e2),
+            noise_budget(r)
+        );
     }
     let _ = writeln!(s, "  photoelectrons N            {:>12.1}   per pixel (SI eq. S7–S8)", r.photoelectrons);
     let _ = writeln!(
@@ -70,24 +147,31 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         r.nyquist_cyc_per_mm,
         if scene.camera().pixel_mtf() { ", with pixel MTF" } else { "" }
     );
-    if r.mean_mtf_radial != r.mean_mtf_tangential {
+    if r.mean_mtf_tangential != r.mean_mtf_sagittal {
         let (names, at) = if !r.field_points.is_empty() {
-            ("radial / tangential", "averaged over the field points".to_owned())
+            ("tangential / sagittal", "weighted mean over the field points".to_owned())
         } else if r.field_deg == [0.0, 0.0] {
             ("along x / along y", "on axis".to_owned())
         } else {
-            ("radial / tangential", format!("at field ({}°, {}°)", r.field_deg[0], r.field_deg[1]))
+            ("tangential / sagittal", format!("at field ({}°, {}°)", r.field_deg[0], r.field_deg[1]))
         };
         let _ = writeln!(
             s,
-            "    {names:<24}{:>12.6}   / {:.6} {at}: the OTF depends on direction",
-            r.mean_mtf_radial, r.mean_mtf_tangential
+            "    {names:<24}{:>12.6}   / {:.6} {at}: the OTF depends on direction{}",
+            r.mean_mtf_tangential,
+            r.mean_mtf_sagittal,
+            if names.starts_with("tangential") { " (tangential: along the field, sagittal: across it)" } else { "" }
         );
     }
     for p in &r.field_points {
+        let split = if p.mean_mtf_tangential == p.mean_mtf_sagittal {
+            String::new()
+        } else {
+            format!(" (tangential {:.6} / sagittal {:.6})", p.mean_mtf_tangential, p.mean_mtf_sagittal)
+        };
         let _ = writeln!(
             s,
-            "    field ({:>5.2}°, {:>5.2}°) × {:<6} mean MTF {:.6}, ASNR {:.4}",
+            "    field ({:>5.2}°, {:>5.2}°) × {:<6} mean MTF {:.6}{split}, ASNR {:.4}",
             p.field_deg[0], p.field_deg[1], p.weight, p.mean_mtf, p.asnr
         );
     }
@@ -124,12 +208,24 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
     s
 }
 
-/// The MTF curve as CSV: one row per frequency.
+/// The MTF curve as CSV: one row per frequency. Where the OTF depends on direction, the
+/// tangential and sagittal columns; over a field-of-view average, `mtf` (and they) are the
+/// weighted means and `fields[i].mtf` (with `fields[i].mtf_tangential`, `fields[i].mtf_sagittal`
+/// where they differ) are the curves of the scene's field point `fields[i]`.
 pub fn mtf_csv(c: &MtfCurve) -> String {
     let mut s = String::from("frequency_cyc_per_mm,otf,mtf,diffraction_limited");
-    let split = c.mtf_radial.iter().chain(&c.mtf_tangential).collect::<Vec<_>>();
-    if split.len() == 2 {
-        s.push_str(",mtf_radial,mtf_tangential");
+    let mut columns: Vec<&Vec<f64>> = Vec::new();
+    if let (Some(t), Some(g)) = (&c.mtf_tangential, &c.mtf_sagittal) {
+        s.push_str(",mtf_tangential,mtf_sagittal");
+        columns.extend([t, g]);
+    }
+    for (i, p) in c.field_points.iter().enumerate() {
+        let _ = write!(s, ",fields[{i}].mtf");
+        columns.push(&p.mtf);
+        if let (Some(t), Some(g)) = (&p.mtf_tangential, &p.mtf_sagittal) {
+            let _ = write!(s, ",fields[{i}].mtf_tangential,fields[{i}].mtf_sagittal");
+            columns.extend([t, g]);
+        }
     }
     for wl in &c.wavelengths_nm {
         let _ = write!(s, ",mtf_{wl}nm");
@@ -137,7 +233,7 @@ pub fn mtf_csv(c: &MtfCurve) -> String {
     s.push('\n');
     for i in 0..c.frequency_cyc_per_mm.len() {
         let _ = write!(s, "{},{},{},{}", c.frequency_cyc_per_mm[i], c.otf[i], c.mtf[i], c.diffraction_limited[i]);
-        for curve in &split {
+        for curve in &columns {
             let _ = write!(s, ",{}", curve[i]);
         }
         for mono in &c.monochromatic {
@@ -148,11 +244,67 @@ pub fn mtf_csv(c: &MtfCurve) -> String {
     s
 }
 
+#[derive(Serialize)]
+struct MtfReport<'a> {
+    scene: &'a str,
+    /// The scene's `title` (null without one).
+    title: Option<&'a str>,
+    lens: String,
+    /// What `mtf` is: on axis, the tangential–sagittal average, or the weighted mean over the
+    /// field points (the text table's `MTF:` line).
+    mtf_is: String,
+    #[serde(flatten)]
+    curve: &'a MtfCurve,
+}
+
+/// The MTF curve as one JSON object: the scene label, its title, the lens and the curve's fields.
+pub fn mtf_json(label: &str, scene: &Scene, c: &MtfCurve) -> Result<String> {
+    Ok(serde_json::to_string_pretty(&MtfReport {
+        scene: label,
+        title: scene.title(),
+        lens: scene.lens().describe(),
+        mtf_is: mtf_meaning(c).trim_start_matches("MTF: ").to_owned(),
+        curve: c,
+    })?)
+}
+
+/// What the `MTF` column of the table (and `mtf` of the CSV and JSON) is.
+fn mtf_meaning(c: &MtfCurve) -> String {
+    let split = c.mtf_tangential.is_some();
+    if !c.field_points.is_empty() {
+        let points: Vec<String> = c
+            .field_points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| format!("fields[{i}] ({}°, {}°) × {}", p.field_deg[0], p.field_deg[1], p.weight))
+            .collect();
+        format!(
+            "MTF: weighted mean over {} field points{}: {}",
+            c.field_points.len(),
+            if split { " of the tangential–sagittal averages" } else { "" },
+            points.join(", ")
+        )
+    } else if split && c.field_deg == [0.0, 0.0] {
+        "MTF: mean of the MTFs along x and along y (on axis; the OTF depends on direction)".to_owned()
+    } else if split {
+        format!(
+            "MTF: mean of the tangential (along the field) and sagittal (across it) MTFs at field ({}°, {}°)",
+            c.field_deg[0], c.field_deg[1]
+        )
+    } else if c.field_deg == [0.0, 0.0] {
+        "MTF: on axis".to_owned()
+    } else {
+        format!("MTF: at field ({}°, {}°), the same in every direction", c.field_deg[0], c.field_deg[1])
+    }
+}
+
+/// At most this many field points get their own columns in the table.
+const TABLE_FIELD_POINTS: usize = 4;
+
 /// The MTF curve as a short table (at most 21 rows; `--csv` gives every point).
 pub fn mtf_table(label: &str, scene: &Scene, c: &MtfCurve) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "scene      {label}");
-    let _ = writeln!(s, "lens       {}", scene.lens().describe());
+    header(&mut s, label, scene);
     let _ = writeln!(
         s,
         "MTF{}; diffraction limit at the mean wavelength {:.1} nm; Nyquist {:.2} cycles/mm",
@@ -160,8 +312,28 @@ pub fn mtf_table(label: &str, scene: &Scene, c: &MtfCurve) -> String {
         c.mean_wavelength_nm,
         c.nyquist_cyc_per_mm
     );
+    let _ = writeln!(s, "{}", mtf_meaning(c));
+    let on_axis = c.field_points.is_empty() && c.field_deg == [0.0, 0.0];
+    let mut columns: Vec<(String, &Vec<f64>)> = Vec::new();
+    if let (Some(t), Some(g)) = (&c.mtf_tangential, &c.mtf_sagittal) {
+        let (a, b) = if on_axis { ("along x", "along y") } else { ("tangential", "sagittal") };
+        columns.extend([(a.to_owned(), t), (b.to_owned(), g)]);
+    }
+    if c.field_points.len() <= TABLE_FIELD_POINTS {
+        for (i, p) in c.field_points.iter().enumerate() {
+            match (&p.mtf_tangential, &p.mtf_sagittal) {
+                (Some(t), Some(g)) => columns.extend([(format!("[{i}] tang."), t), (format!("[{i}] sag."), g)]),
+                _ => columns.push((format!("[{i}] MTF"), &p.mtf)),
+            }
+        }
+    } else {
+        let _ = writeln!(s, "(each field point's curves: --csv or --json)");
+    }
     let _ = writeln!(s);
     let _ = write!(s, "  {:>12}  {:>10}  {:>10}", "cycles/mm", "MTF", "diffr. lim.");
+    for (name, _) in &columns {
+        let _ = write!(s, "  {name:>10}");
+    }
     for wl in &c.wavelengths_nm {
         let _ = write!(s, "  {:>10}", format!("{wl} nm"));
     }
@@ -172,6 +344,9 @@ pub fn mtf_table(label: &str, scene: &Scene, c: &MtfCurve) -> String {
     for i in rows {
         let _ =
             write!(s, "  {:>12.3}  {:>10.6}  {:>10.6}", c.frequency_cyc_per_mm[i], c.mtf[i], c.diffraction_limited[i]);
+        for (_, curve) in &columns {
+            let _ = write!(s, "  {:>10.6}", curve[i]);
+        }
         for mono in &c.monochromatic {
             let _ = write!(s, "  {:>10.6}", mono[i]);
         }
@@ -244,15 +419,31 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
         }
     };
     let _ = writeln!(s, "  glare        {glare}");
-    let noise = if n.noise_spectrum {
+    let spectrum = if n.noise_spectrum {
         "non-white noise spectrum: ASNR = SNR0 · mean(MTF/n) (the SNR inside the integral, eq. 1 text)"
     } else {
-        "white (shot-noise limited): ASNR = SNR0 · mean MTF (eq. 1)"
+        "white noise: ASNR = SNR0 · mean MTF (eq. 1)"
     };
+    let (formula, words) = snr0_line(r);
+    let noise = format!("{spectrum}; {formula}: {words}");
     let _ = writeln!(s, "  noise        {noise}");
     let fields = scene.fields().len();
     if fields > 0 {
         let _ = writeln!(s, "  field        weighted average of {fields} field points, each evaluated as above");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::significant;
+
+    #[test]
+    fn significant_keeps_four_digits_and_never_breaks_on_zero() {
+        assert_eq!(significant(559.43), "559.4");
+        assert_eq!(significant(9.0), "9.000");
+        assert_eq!(significant(2051.3), "2051");
+        assert_eq!(significant(0.000_12), "1.200e-4");
+        assert_eq!(significant(0.0), "0");
+    }
 }

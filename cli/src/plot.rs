@@ -372,7 +372,9 @@ where
         let dashed = |j: usize| s.shaded.get(j).copied().unwrap_or(false);
         let best = peak(&s.points);
         let label = match best {
-            Some((x, y)) if mark_best => format!("{}: max {} at {}", s.label, number(y), number(x)),
+            Some((x, y)) if mark_best => {
+                format!("{}: max {} at {} (parabola between grid points)", s.label, number(y), number(x))
+            }
             _ => s.label.clone(),
         };
         // runs of segments, solid, or dashed where they end in a shaded point
@@ -611,10 +613,10 @@ where
             .label(format!("{wl:.1} nm"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
     }
-    if let (Some(r), Some(t)) = (&curve.mtf_radial, &curve.mtf_tangential) {
+    if let (Some(r), Some(t)) = (&curve.mtf_tangential, &curve.mtf_sagittal) {
         for (ys, name, colour) in [
-            (r, "along the field (x on axis)", RGBColor(90, 150, 240)),
-            (t, "across it (y on axis)", RGBColor(20, 40, 120)),
+            (r, "tangential: along the field (x on axis)", RGBColor(90, 150, 240)),
+            (t, "sagittal: across it (y on axis)", RGBColor(20, 40, 120)),
         ] {
             chart
                 .draw_series(DashedLineSeries::new(series(ys), 8, 4, colour.stroke_width(2)))
@@ -627,7 +629,11 @@ where
     chart
         .draw_series(LineSeries::new(series(&curve.mtf), blue.stroke_width(3)))
         .map_err(|e| err(&e))?
-        .label(if curve.mtf_radial.is_some() { "polychromatic MTF (mean of both)" } else { "polychromatic MTF" })
+        .label(match (curve.field_points.len(), curve.mtf_tangential.is_some()) {
+            (0, false) => "polychromatic MTF".to_owned(),
+            (0, true) => "polychromatic MTF (mean of both)".to_owned(),
+            (n, _) => format!("polychromatic MTF, weighted mean of {n} field points"),
+        })
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3)));
     if curve.nyquist_cyc_per_mm < x_max * 0.999 {
         let n = curve.nyquist_cyc_per_mm;

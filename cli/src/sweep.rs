@@ -28,6 +28,8 @@ pub struct Point {
     pub photoelectrons: f64,
     /// Whether the Fraunhofer model is valid there (SI eq. S15).
     pub fraunhofer_valid: bool,
+    /// The evaluation's warnings there (truncated spectra, saturation, validity).
+    pub warnings: Vec<String>,
 }
 
 /// Grid values of one range: `N` points from `LO` to `HI` inclusive (`LO` alone for `N = 1`).
@@ -77,6 +79,7 @@ pub fn run(source: &Source, overrides: &[String], ranges: &[Range], threads: usi
             asnr: r.asnr,
             photoelectrons: r.photoelectrons,
             fraunhofer_valid: r.fraunhofer.valid,
+            warnings: r.warnings,
         })
     };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
@@ -93,47 +96,145 @@ pub fn run(source: &Source, overrides: &[String], ranges: &[Range], threads: usi
     Ok(points)
 }
 
-/// CSV: one column per swept key (its dotted key), then the results.
+/// At most this many of the points' warnings are printed; the rest are counted.
+const SHOWN_WARNINGS: usize = 5;
+
+/// The warnings of the sweep for stderr: each point's, prefixed with where it is, the first
+/// [`SHOWN_WARNINGS`] of them and a count of the rest (all are in `--json` and `--csv`).
+pub fn warnings(ranges: &[Range], points: &[Point]) -> Vec<String> {
+    let all: Vec<String> = points
+        .iter()
+        .flat_map(|p| {
+            let at = at(ranges, &p.values);
+            p.warnings.iter().map(move |w| format!("warning: at {at}: {w}"))
+        })
+        .collect();
+    let mut shown: Vec<String> = all.iter().take(SHOWN_WARNINGS).cloned().collect();
+    if all.len() > SHOWN_WARNINGS {
+        let with = points.iter().filter(|p| !p.warnings.is_empty()).count();
+        shown.push(format!(
+            "warning: … and {} more warnings ({} of the {} points have warnings; --json or --csv lists them all)",
+            all.len() - SHOWN_WARNINGS,
+            with,
+            points.len()
+        ));
+    }
+    shown
+}
+
+/// `key = value, …` of one grid point.
+fn at(ranges: &[Range], values: &[f64]) -> String {
+    ranges.iter().zip(values).map(|(r, v)| format!("{}={v}", r.key)).collect::<Vec<_>>().join(", ")
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_owned() }
+}
+
+/// CSV: one column per swept key (its dotted key), then the results, the Fraunhofer validity and
+/// the point's warnings (joined by ` | `, quoted).
 pub fn csv(ranges: &[Range], points: &[Point]) -> String {
     let mut s = String::new();
     for r in ranges {
         let _ = write!(s, "{},", r.key);
     }
-    s.push_str("mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid\n");
+    s.push_str("mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid,warnings\n");
     for p in points {
         for v in &p.values {
             let _ = write!(s, "{v},");
         }
-        let _ = writeln!(s, "{},{},{},{},{}", p.mean_mtf, p.snr0, p.asnr, p.photoelectrons, p.fraunhofer_valid);
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{}",
+            p.mean_mtf,
+            p.snr0,
+            p.asnr,
+            p.photoelectrons,
+            p.fraunhofer_valid,
+            csv_field(&p.warnings.join(" | "))
+        );
     }
     s
 }
 
-/// The best point and, for small grids, every point.
-pub fn table(label: &str, ranges: &[Range], points: &[Point]) -> String {
+/// The best point of the grid, and for one key the maximum refined between grid points (the
+/// parabola through the best point and its two neighbours, as the plot's legend gives it), and
+/// for small grids every point, the Fraunhofer-invalid ones marked `*`.
+pub fn table(label: &str, title: Option<&str>, ranges: &[Range], points: &[Point]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "scene      {label}");
+    if let Some(title) = title {
+        let _ = writeln!(s, "title      {title}");
+    }
     let _ = writeln!(
         s,
         "swept      {} points over {}",
         points.len(),
         ranges.iter().map(|r| r.key.as_str()).collect::<Vec<_>>().join(" × ")
     );
+    let invalid = points.iter().filter(|p| !p.fraunhofer_valid).count();
     if let Some(best) = points.iter().max_by(|a, b| a.asnr.total_cmp(&b.asnr)) {
         let at: Vec<String> = ranges.iter().zip(&best.values).map(|(r, v)| format!("{} = {v:.6}", r.key)).collect();
-        let _ = writeln!(s, "best       ASNR {:.6} at {}", best.asnr, at.join(", "));
+        let edge = ranges
+            .iter()
+            .zip(&best.values)
+            .filter(|(r, v)| r.points.unwrap_or(2) > 1 && (**v == r.lo || **v == r.hi))
+            .map(|(r, _)| r.key.as_str())
+            .collect::<Vec<_>>();
+        let _ = writeln!(
+            s,
+            "best of the grid points                 ASNR {:.6} at {}{}{}",
+            best.asnr,
+            at.join(", "),
+            if best.fraunhofer_valid { "" } else { " *" },
+            if edge.is_empty() {
+                String::new()
+            } else {
+                format!(" (at the end of the {} range: the maximum may lie outside it)", edge.join(", "))
+            }
+        );
+    }
+    if let [range] = ranges {
+        let samples: Vec<(f64, f64)> = points.iter().map(|p| (p.values[0], p.asnr)).collect();
+        let best = (0..samples.len()).max_by(|&a, &b| samples[a].1.total_cmp(&samples[b].1));
+        let interior = best.is_some_and(|j| j > 0 && j + 1 < samples.len());
+        if let Some((x, y)) = crate::plot::peak(&samples).filter(|_| interior) {
+            let _ = writeln!(
+                s,
+                "refined between grid points (parabola) ASNR {y:.6} at {} = {x:.6} (as the plot's legend gives it)",
+                range.key
+            );
+        }
+    }
+    if invalid > 0 {
+        let _ = writeln!(
+            s,
+            "Fraunhofer {invalid} of the {} points NOT valid (SI eq. S15): the MTF model does not hold there",
+            points.len()
+        );
     }
     if points.len() <= 60 {
         let _ = writeln!(s);
         for r in ranges {
             let _ = write!(s, "  {:>20}", r.key);
         }
-        let _ = writeln!(s, "  {:>10}  {:>10}  {:>10}", "mean MTF", "SNR0", "ASNR");
+        let _ = writeln!(s, "  {:>10}  {:>10}  {:>10}  {:>10}", "mean MTF", "SNR0", "ASNR", "Fraunhofer");
         for p in points {
             for v in &p.values {
                 let _ = write!(s, "  {v:>20.6}");
             }
-            let _ = writeln!(s, "  {:>10.6}  {:>10.4}  {:>10.6}", p.mean_mtf, p.snr0, p.asnr);
+            let _ = writeln!(
+                s,
+                "  {:>10.6}  {:>10.4}  {:>10.6}  {:>10}",
+                p.mean_mtf,
+                p.snr0,
+                p.asnr,
+                if p.fraunhofer_valid { "valid" } else { "* invalid" }
+            );
+        }
+        if invalid > 0 {
+            let _ = writeln!(s, "  * the Fraunhofer model is not valid at this point (SI eq. S15)");
         }
     } else {
         let _ = writeln!(s, "(use --csv or --json for all {} points)", points.len());

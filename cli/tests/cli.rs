@@ -356,15 +356,18 @@ fn mtf_png_plot_is_a_png() {
 }
 
 #[test]
-fn off_axis_field_reports_the_radial_tangential_split() {
+fn off_axis_field_reports_the_tangential_sagittal_split() {
     let v = json(&["evaluate", "--set", "field.x_deg=8", "--json"]);
-    let (r, t) = (v["mean_mtf_radial"].as_f64().unwrap(), v["mean_mtf_tangential"].as_f64().unwrap());
+    let (r, t) = (v["mean_mtf_tangential"].as_f64().unwrap(), v["mean_mtf_sagittal"].as_f64().unwrap());
     let on_axis = json(&["evaluate", "--json"])["mean_mtf"].as_f64().unwrap();
     // off axis the spectral quadrature (±7σ window), on axis the closed form: 2.4e-12 apart
     assert!(r < t && (t - on_axis).abs() < 1e-9, "{r} {t} {on_axis}");
     let out = asnr(&["mtf", "--csv", "--points", "3", "--set", "field.x_deg=8"]);
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_radial,mtf_tangential\n"), "{text}");
+    assert!(
+        text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_tangential,mtf_sagittal\n"),
+        "{text}"
+    );
     let err = fails(&["evaluate", "--set", "field.x_deg=95"]);
     assert!(err.contains("field.x_deg = 95: expected an angle in degrees, within ±90"), "{err}");
 }
@@ -374,10 +377,13 @@ fn decentred_iris_example_uses_the_fft_path_and_splits_x_and_y() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/decentred-iris.toml");
     let v = json(&["evaluate", scene, "--json"]);
     assert!(v["numerics"]["engine"].as_str().unwrap().starts_with("fft:"), "{}", v["numerics"]["engine"]);
-    assert!(v["mean_mtf_radial"].as_f64().unwrap() < v["mean_mtf_tangential"].as_f64().unwrap());
+    assert!(v["mean_mtf_tangential"].as_f64().unwrap() < v["mean_mtf_sagittal"].as_f64().unwrap());
     let out = asnr(&["mtf", scene, "--csv", "--points", "5"]);
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_radial,mtf_tangential\n"), "{text}");
+    assert!(
+        text.starts_with("frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_tangential,mtf_sagittal\n"),
+        "{text}"
+    );
 }
 
 // ---- asnr optimize ----
@@ -429,7 +435,7 @@ fn sweep_csv_is_identical_with_one_and_two_threads() {
     assert_eq!(one.stdout, two.stdout);
     let text = String::from_utf8(one.stdout).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines[0], "lens.f_number,spectrum.range_nm,mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid");
+    assert_eq!(lines[0], "lens.f_number,spectrum.range_nm,mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid,warnings");
     assert_eq!(lines.len(), 4001);
     // the first key varies slowest; the grid includes both ends
     assert!(lines[1].starts_with("1,2,") && lines[100].starts_with("1,200,") && lines[4000].starts_with("10,200,"));
@@ -627,4 +633,222 @@ fn sweep_over_the_line_wavelength() {
     }
     let direct = json(&["evaluate", MONOCHROMATIC, "--set", "spectrum.center_nm=780", "--json"]);
     assert_eq!(points[1]["asnr"], direct["asnr"]);
+}
+
+// ---- labels ----
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Runs `asnr` expecting success; returns (stdout, stderr).
+fn succeeds(args: &[&str]) -> (String, String) {
+    let out = asnr(args);
+    assert!(out.status.success(), "args {args:?}: {}", stderr(&out));
+    (stdout(&out), stderr(&out))
+}
+
+/// With read noise (and dark current) the SNR0 line names the terms that went into it and the
+/// budget, never "shot-noise limited"; JSON says which terms; the ideal sensor keeps SI eq. S9.
+#[test]
+fn labels_snr0_names_the_noise_terms() {
+    let read = ["--set", "camera.read_noise_e=3", "--set", "camera.dark_current_e_per_s=100"];
+    let (text, _) = succeeds(&[&["evaluate", "--explain"][..], &read].concat());
+    assert!(!text.contains("shot-noise limited"), "{text}");
+    assert!(text.contains("SNR0 = N/√(N + σ_r² + D·t)") && text.contains("shot + read 3.0 e⁻ + dark 0.123"), "{text}");
+    assert!(text.contains("noise budget, e⁻²") && text.contains("read 9.000 ("), "{text}");
+    assert!(text.contains("noise        white noise: ASNR = SNR0 · mean MTF (eq. 1)"), "{text}");
+    let v = json(&[&["evaluate", "--json"][..], &read].concat());
+    assert_eq!(v["noise"]["shot_noise_limited"], false);
+    assert_eq!(v["noise"]["terms"], serde_json::json!(["shot", "read", "dark"]));
+    assert_eq!(v["noise"]["read_noise_e"], 3.0);
+    let n = v["photoelectrons"].as_f64().unwrap();
+    let total = v["noise"]["total_variance_e2"].as_f64().unwrap();
+    assert!(
+        (total - (n + 9.0 + 0.123)).abs() < 1e-9 * total
+            && (v["snr0"].as_f64().unwrap() - n / total.sqrt()).abs() < 1e-12
+    );
+    // glare included (SI eq. S14) with read noise: its own line, also naming the read noise
+    let (text, _) = succeeds(&["evaluate", "--set", "camera.read_noise_e=3", "--set", "options.glare=included"]);
+    assert!(
+        text.contains("SNR0 = N/√(N_T + σ_r²)") && text.contains("SI eq. S14") && text.contains("read 3.0 e⁻"),
+        "{text}"
+    );
+    // the ideal sensor: shot-noise limited, as before
+    let (text, _) = succeeds(&["evaluate", "--explain"]);
+    assert!(text.contains("SNR0 = √N") && text.contains("shot-noise limited (SI eq. S9)"), "{text}");
+    assert!(!text.contains("noise budget"), "{text}");
+    assert_eq!(json(&["evaluate", "--json"])["noise"]["shot_noise_limited"], true);
+}
+
+/// Zemax and Code V's names: off axis, lateral colour degrades the TANGENTIAL MTF (frequencies
+/// along the field direction); the sagittal one (across it) equals the on-axis MTF
+/// (README: 0.439 on axis, 0.295 along the field at 8°).
+#[test]
+fn labels_tangential_is_along_the_field() {
+    let v = json(&["evaluate", "--set", "field.x_deg=8", "--json"]);
+    let (t, s) = (v["mean_mtf_tangential"].as_f64().unwrap(), v["mean_mtf_sagittal"].as_f64().unwrap());
+    let on_axis = json(&["evaluate", "--json"])["mean_mtf"].as_f64().unwrap();
+    assert!(t < s - 0.1 && (s - on_axis).abs() < 1e-9, "{t} {s} {on_axis}");
+    assert!((t - 0.295).abs() < 1e-3 && (on_axis - 0.439).abs() < 1e-3, "{t} {on_axis}");
+    assert!(v.get("mean_mtf_radial").is_none(), "{v}");
+    let (text, _) = succeeds(&["evaluate", "--set", "field.x_deg=8"]);
+    assert!(text.contains("tangential / sagittal       0.294743   / 0.438848"), "{text}");
+    let c = json(&["mtf", "--json", "--points", "5", "--set", "field.x_deg=8"]);
+    let at = |k: &str| c[k][4].as_f64().unwrap();
+    assert!(at("mtf_tangential") < at("mtf_sagittal"), "{c}");
+    assert!(c.get("mtf_radial").is_none());
+    let (text, _) = succeeds(&["mtf", "--points", "5", "--set", "field.x_deg=8"]);
+    assert!(text.contains("tangential") && text.contains("sagittal") && text.contains("along the field"), "{text}");
+}
+
+/// A Gaussian cut by a source table's range is reported with that range, and the fraction lost
+/// below and above it (σ = 200/(2√2) nm: Φ(−70/σ) = 0.1611, Φ(−60/σ) = 0.1981), not as λ ≤ 0.
+#[test]
+fn labels_truncation_by_a_table_names_its_range() {
+    let dir = scratch("labels-led");
+    let mut csv = String::from("wavelength_nm,radiance\n");
+    for w in (470..=600).step_by(10) {
+        csv.push_str(&format!("{w},0.02\n"));
+    }
+    std::fs::write(dir.join("led.csv"), csv).unwrap();
+    let text = std::fs::read_to_string(PAPER)
+        .unwrap()
+        .replacen("kind = \"flat\"", "kind = \"table\"\ncsv = \"led.csv\"", 1)
+        .replacen("radiance_w_m2_sr_nm = 0.025", "", 1)
+        .replacen("center_nm = 800.0", "center_nm = 540.0", 1)
+        .replacen("range_nm = 50.0", "range_nm = 200.0", 1);
+    let scene = dir.join("led.toml");
+    std::fs::write(&scene, text).unwrap();
+    let (_, err) = succeeds(&["evaluate", scene.to_str().unwrap()]);
+    assert!(!err.contains("λ ≤ 0"), "{err}");
+    assert!(err.contains("the radiance's Gaussian factor (centre 540.0 nm, σ 70.7 nm)"), "{err}");
+    assert!(err.contains("is cut to the 470.0–600.0 nm the radiance covers"), "{err}");
+    assert!(
+        err.contains("3.592e-1 of its area was cut off (1.611e-1 below 470.0 nm, 1.981e-1 above 600.0 nm)"),
+        "{err}"
+    );
+}
+
+/// The scene title: in the text report, the JSON, and the plots' captions (falling back to the
+/// file name without a title).
+#[test]
+fn labels_scene_title_is_shown() {
+    let (text, _) = succeeds(&["evaluate"]);
+    assert!(text.contains("\ntitle      Paper theory model: chromatic metalens F/2.5"), "{text}");
+    let v = json(&["evaluate", "--set", "title=\"Labels caption\"", "--json"]);
+    assert_eq!(v["title"], "Labels caption");
+    let m = json(&["mtf", "--json", "--points", "3", "--set", "title=\"Labels caption\""]);
+    assert_eq!(m["title"], "Labels caption");
+    assert_eq!(m["mtf_is"], "on axis");
+    let dir = scratch("labels-title");
+    let svg = dir.join("mtf.svg");
+    succeeds(&["mtf", "--points", "11", "--set", "title=\"Labels caption\"", "--plot", svg.to_str().unwrap()]);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("Labels caption"));
+    let svg = dir.join("sweep.svg");
+    let over = ["--over", "spectrum.range_nm=10:50:3"];
+    succeeds(&[&["sweep", "--set", "title=\"Labels caption\"", "--plot", svg.to_str().unwrap()][..], &over].concat());
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("Labels caption"));
+    // no title: null in the JSON, the file name on the plot
+    let untitled = edited_paper(&dir, "title = \"Paper theory model", "# title = \"Paper theory model");
+    assert_eq!(json(&["evaluate", untitled.to_str().unwrap(), "--json"])["title"], serde_json::Value::Null);
+    let svg = dir.join("untitled.svg");
+    succeeds(&["mtf", untitled.to_str().unwrap(), "--points", "11", "--plot", svg.to_str().unwrap()]);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("scene.toml"));
+}
+
+/// `mtf` on a `[[fields]]` scene shows every field point's curves and says the headline curve is
+/// their weighted mean.
+#[test]
+fn labels_mtf_over_fields_keeps_every_field_point() {
+    let dir = scratch("labels-fields");
+    let fields = "[[fields]]\nx_deg = 0\nweight = 1\n\n[[fields]]\nx_deg = 8\nweight = 3\n\n[camera]";
+    let scene = edited_paper(&dir, "[camera]", fields);
+    let scene = scene.to_str().unwrap();
+    let c = json(&["mtf", scene, "--json", "--points", "5"]);
+    let points = c["field_points"].as_array().unwrap();
+    assert_eq!(points.len(), 2);
+    assert_eq!(points[1]["field_deg"], serde_json::json!([8.0, 0.0]));
+    assert!(c["mtf_is"].as_str().unwrap().starts_with("weighted mean over 2 field points"), "{}", c["mtf_is"]);
+    let f = |v: &serde_json::Value| v[4].as_f64().unwrap();
+    assert!(points[0]["mtf_tangential"].is_null());
+    assert!(f(&points[1]["mtf_tangential"]) < f(&points[1]["mtf_sagittal"]));
+    let mean = 0.25 * f(&points[0]["mtf"]) + 0.75 * f(&points[1]["mtf"]);
+    assert!((f(&c["mtf"]) - mean).abs() < 1e-12, "{} vs {mean}", c["mtf"]);
+    let (text, _) = succeeds(&["mtf", scene, "--csv", "--points", "3"]);
+    assert!(
+        text.starts_with(
+            "frequency_cyc_per_mm,otf,mtf,diffraction_limited,mtf_tangential,mtf_sagittal,fields[0].mtf,\
+             fields[1].mtf,fields[1].mtf_tangential,fields[1].mtf_sagittal\n"
+        ),
+        "{text}"
+    );
+    let (text, _) = succeeds(&["mtf", scene, "--points", "3"]);
+    assert!(text.contains("MTF: weighted mean over 2 field points"), "{text}");
+    assert!(
+        text.contains("fields[1] (8°, 0°) × 3") && text.contains("[1] tang.") && text.contains("[0] MTF"),
+        "{text}"
+    );
+    let svg = dir.join("fields.svg");
+    succeeds(&["mtf", scene, "--points", "11", "--plot", svg.to_str().unwrap()]);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("weighted mean of 2 field points"));
+    // evaluate lists each point's tangential and sagittal means
+    let (text, _) = succeeds(&["evaluate", scene]);
+    assert!(text.contains("(tangential 0.294743 / sagittal 0.438848)"), "{text}");
+}
+
+/// The sweep table marks Fraunhofer-invalid points, stderr carries the points' warnings (the
+/// first five and a count), CSV and JSON carry validity and warnings.
+#[test]
+fn labels_sweep_marks_invalid_points_and_warns() {
+    let over = ["--over", "spectrum.range_nm=50:650:2"];
+    let (text, err) = succeeds(&[&["sweep"][..], &over].concat());
+    assert!(text.contains("* invalid") && text.contains("Fraunhofer 1 of the 2 points NOT valid"), "{text}");
+    assert!(err.contains("warning: at spectrum.range_nm=650: ") && err.contains("Fraunhofer threshold"), "{err}");
+    assert!(!err.contains("spectrum.range_nm=50:"), "{err}");
+    let (csv, _) = succeeds(&[&["sweep", "--csv"][..], &over].concat());
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].ends_with(",fraunhofer_valid,warnings"), "{csv}");
+    assert!(lines[1].ends_with(",true,") && lines[2].contains(",false,\"") && lines[2].contains("Fraunhofer"), "{csv}");
+    let v = json(&[&["sweep", "--json"][..], &over].concat());
+    assert_eq!(v[0]["warnings"], serde_json::json!([]));
+    assert!(v[1]["fraunhofer_valid"] == false && !v[1]["warnings"].as_array().unwrap().is_empty(), "{v}");
+    // many warnings: the first five, then a count
+    let (_, err) = succeeds(&["sweep", "--over", "spectrum.range_nm=600:700:4"]);
+    assert_eq!(err.lines().filter(|l| l.starts_with("warning: at ")).count(), 5, "{err}");
+    assert!(err.contains("… and 3 more warnings (4 of the 4 points have warnings"), "{err}");
+}
+
+/// `optimize` warns (stderr, JSON `at_bound`) when the best value is on the search bound, and
+/// says how it found it.
+#[test]
+fn labels_optimize_warns_at_the_bound() {
+    let out = asnr(&["optimize", "--over", "spectrum.range_nm=1:10", "--xtol", "1e-3"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("at the bound HI = 10") && err.contains("the maximum may lie outside LO:HI"), "{err}");
+    let text = stdout(&out);
+    assert!(text.contains("golden-section search after a 17-point scan") && text.contains("AT THE BOUND"), "{text}");
+    let v = json(&["optimize", "--over", "spectrum.range_nm=1:10", "--xtol", "1e-3", "--json"]);
+    assert_eq!(v["at_bound"], true);
+    assert!(v["method"].as_str().unwrap().starts_with("golden-section search"), "{v}");
+    let out = asnr(&["optimize", "--over", "spectrum.range_nm=1:200", "--xtol", "1e-3", "--json"]);
+    assert!(!stderr(&out).contains("warning"), "{}", stderr(&out));
+    assert_eq!(serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["at_bound"], false);
+}
+
+/// The three "best" values of one curve are named apart: the sweep's best grid point, its
+/// parabola refinement (also the plot legend's), and optimize's golden section.
+#[test]
+fn labels_best_values_say_how_they_were_found() {
+    let dir = scratch("labels-best");
+    let svg = dir.join("line.svg");
+    let (text, _) = succeeds(&["sweep", "--over", "spectrum.range_nm=10:100:7", "--plot", svg.to_str().unwrap()]);
+    assert!(text.contains("best of the grid points                 ASNR"), "{text}");
+    assert!(text.contains("refined between grid points (parabola) ASNR"), "{text}");
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("(parabola between grid points)"));
+    // the grid's best at an end of the range is flagged
+    let (text, _) = succeeds(&["sweep", "--over", "spectrum.range_nm=1:10:3"]);
+    assert!(text.contains("(at the end of the spectrum.range_nm range: the maximum may lie outside it)"), "{text}");
+    assert!(!text.contains("refined between grid points"), "{text}");
 }

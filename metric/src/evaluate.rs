@@ -49,13 +49,29 @@ pub struct FieldPoint {
     pub weight: f64,
     /// Mean MTF there.
     pub mean_mtf: f64,
+    /// Tangential mean MTF there (along the field direction).
+    pub mean_mtf_tangential: f64,
+    /// Sagittal mean MTF there (across the field direction).
+    pub mean_mtf_sagittal: f64,
     /// ASNR there.
     pub asnr: f64,
 }
 
-/// The variances (e⁻²) behind the zero-frequency SNR: `SNR0 = N/√(total)` (EMVA 1288).
+/// The variances (e⁻²) behind the zero-frequency SNR:
+/// `SNR0 = N/√(N + N_bg + D·t + σ_r² + σ_q²/K²)` (EMVA 1288 Release 4.0 Linear, §2.3, with the
+/// stray light's shot noise N_bg of paper SI eq. S14); `√N` (SI eq. S9) when only shot noise is
+/// left.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct NoiseReport {
+    /// The noise terms with a non-zero variance, in the order `"shot"`, `"read"`, `"dark"`,
+    /// `"quantization"` (shot noise is always there when there is signal).
+    pub terms: Vec<&'static str>,
+    /// Whether shot noise is the only term (`SNR0 = √N`, SI eq. S9, or `N/√N_T`, eq. S14).
+    pub shot_noise_limited: bool,
+    /// Read noise σ_r, e⁻ rms.
+    pub read_noise_e: f64,
+    /// Dark charge D·t collected in the exposure, e⁻.
+    pub dark_e: f64,
     /// Shot noise of the signal and of the stray light.
     pub shot_variance_e2: f64,
     /// Shot noise of the dark current.
@@ -73,7 +89,7 @@ pub struct NoiseReport {
 /// How the numbers were computed.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Numerics {
-    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, PHYSICS.md integral),
+    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, the docs/physics.md integral),
     /// `"fft: N pupil samples, padded to M"` for other pupils and wavefronts, `"closed-form …"`
     /// for the closed-form spectral integral, or `"monochromatic (line spectrum): …"` followed by
     /// one of the first two for a line spectrum (one wavelength, no spectral quadrature).
@@ -109,13 +125,14 @@ pub struct Evaluation {
     /// `SNR0 × ∫_0^{ν_N} MTF dν`, cycles/mm (paper eq. 1 as printed).
     pub asnr_integral_cyc_per_mm: f64,
     /// Mean of the polychromatic MTF over `[0, ν_N]`. Off axis, where lateral colour makes the
-    /// OTF depend on direction, the average of the radial and tangential means.
+    /// OTF depend on direction, the average of the tangential and sagittal means.
     pub mean_mtf: f64,
-    /// Mean MTF for frequencies along the field direction (the direction lateral colour smears;
-    /// on axis, along the detector's x axis).
-    pub mean_mtf_radial: f64,
-    /// Mean MTF for frequencies perpendicular to the field direction (on axis, along y).
+    /// Tangential mean MTF, as Zemax and Code V name it: for frequencies along the field
+    /// direction (in the meridional plane, the direction lateral colour smears; on axis, along
+    /// the detector's x axis).
     pub mean_mtf_tangential: f64,
+    /// Sagittal mean MTF: for frequencies across the field direction (on axis, along y).
+    pub mean_mtf_sagittal: f64,
     /// Field angles `(x, y)`, degrees (the first point of a field-of-view average).
     pub field_deg: [f64; 2],
     /// The points of a field-of-view average, whose weighted means the fields above are (empty
@@ -123,8 +140,9 @@ pub struct Evaluation {
     pub field_points: Vec<FieldPoint>,
     /// `∫_0^{ν_N} MTF dν`, cycles/mm.
     pub mtf_integral_cyc_per_mm: f64,
-    /// Zero-frequency SNR: `√N` (paper SI eq. S9) with `glare = "first_order"`, `N/√N_T`
-    /// (eq. S14) with `glare = "included"`.
+    /// Zero-frequency SNR `N/√(total noise variance)` (EMVA 1288; the terms in `noise`): with
+    /// an ideal sensor `√N` (paper SI eq. S9) with `glare = "first_order"`, `N/√N_T` (eq. S14)
+    /// with `glare = "included"`.
     pub snr0: f64,
     /// Which noise `snr0` counts.
     pub glare_mode: GlareMode,
@@ -151,11 +169,13 @@ pub struct Evaluation {
     pub numerics: Numerics,
 }
 
-/// Evaluates the ASNR of `scene` (paper eq. 1) on axis, shot-noise limited.
+/// Evaluates the ASNR of `scene` (paper eq. 1) at its field point (or the weighted average over
+/// its field points).
 ///
 /// - Detected spectrum before the lens: `ρ(λ) = L(λ) η(λ) λ` (radiance × QE × λ, eq. S8).
 /// - Photoelectrons `N = A t π NA² /(h c) ∫ ρ(λ) τ1(λ) dλ` (eq. S7 into S8), `A = p²`,
-///   `NA = 1/(2 F#)`; `SNR0 = √N` (S9).
+///   `NA = 1/(2 F#)`; `SNR0 = √N` (S9) for a shot-noise limited sensor, otherwise the EMVA 1288
+///   SNR of [`noise::budget`] (see [`NoiseReport`]).
 /// - Mean MTF: [`optics::Polychromatic::mean_mtf`] up to `ν_N = 1/(2p)`.
 pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     if scene.fields().is_empty() {
@@ -174,8 +194,8 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     combined.asnr_mean = mean(&|e| e.asnr_mean);
     combined.asnr_integral_cyc_per_mm = mean(&|e| e.asnr_integral_cyc_per_mm);
     combined.mean_mtf = mean(&|e| e.mean_mtf);
-    combined.mean_mtf_radial = mean(&|e| e.mean_mtf_radial);
     combined.mean_mtf_tangential = mean(&|e| e.mean_mtf_tangential);
+    combined.mean_mtf_sagittal = mean(&|e| e.mean_mtf_sagittal);
     combined.mtf_integral_cyc_per_mm = mean(&|e| e.mtf_integral_cyc_per_mm);
     combined.snr0 = mean(&|e| e.snr0);
     combined.fraunhofer.valid = points.iter().all(|(e, _)| e.fraunhofer.valid);
@@ -183,7 +203,14 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     combined.warnings.dedup();
     combined.field_points = points
         .iter()
-        .map(|(e, w)| FieldPoint { field_deg: e.field_deg, weight: *w, mean_mtf: e.mean_mtf, asnr: e.asnr })
+        .map(|(e, w)| FieldPoint {
+            field_deg: e.field_deg,
+            weight: *w,
+            mean_mtf: e.mean_mtf,
+            mean_mtf_tangential: e.mean_mtf_tangential,
+            mean_mtf_sagittal: e.mean_mtf_sagittal,
+            asnr: e.asnr,
+        })
         .collect();
     Ok(combined)
 }
@@ -212,22 +239,22 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     };
     let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure());
     let snr0 = budget.snr;
-    // where the OTF depends on direction, a mean along the field direction (radial) and one
-    // across it (tangential), averaged; otherwise one mean
+    // where the OTF depends on direction, a mean along the field direction (tangential) and one
+    // across it (sagittal), averaged; otherwise one mean
     let directional = |mean_along: &dyn Fn(f64) -> (f64, optics::Work)| {
         if poly.direction_dependent() {
-            let radial = field.y_rad.atan2(field.x_rad);
-            let (r, w1) = mean_along(radial);
-            let (t, w2) = mean_along(radial + 0.5 * PI);
-            (0.5 * (r + t), r, t, add_work(w1, w2))
+            let along_field = field.y_rad.atan2(field.x_rad);
+            let (t, w1) = mean_along(along_field);
+            let (s, w2) = mean_along(along_field + 0.5 * PI);
+            (0.5 * (t + s), t, s, add_work(w1, w2))
         } else {
             let (m, work) = mean_along(0.0);
             (m, m, m, work)
         }
     };
-    let (mean_mtf, mean_mtf_radial, mean_mtf_tangential, work) = directional(&|azimuth| poly.mean_mtf_along(azimuth));
+    let (mean_mtf, mean_mtf_tangential, mean_mtf_sagittal, work) = directional(&|azimuth| poly.mean_mtf_along(azimuth));
     // a non-white noise spectrum puts the SNR inside the integral (eq. 1 text): the mean of
-    // MTF(ν)/n(ν), radial and tangential averaged as for the MTF
+    // MTF(ν)/n(ν), tangential and sagittal averaged as for the MTF
     let (weighted_mean, work) = match camera.noise_spectrum() {
         None => (mean_mtf, work),
         Some(shape) => {
@@ -244,13 +271,10 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let glare = glare(lens, &poly);
 
     let mut warnings = Vec::new();
-    for t in scene.radiance().truncations().iter().chain(camera.quantum_efficiency().truncations().iter()) {
-        warnings.push(format!(
-            "a Gaussian spectrum (centre {:.1} nm, σ {:.1} nm) reaches λ ≤ 0: {:.3e} of its area was cut off",
-            t.center_m * 1e9,
-            t.sigma_m * 1e9,
-            t.fraction
-        ));
+    for (what, spectrum) in [("radiance", scene.radiance()), ("quantum efficiency", camera.quantum_efficiency())] {
+        for t in spectrum.truncations() {
+            warnings.push(truncation_warning(what, &t));
+        }
     }
     if budget.saturated {
         warnings.push(format!(
@@ -276,8 +300,8 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         asnr_mean,
         asnr_integral_cyc_per_mm: asnr_integral,
         mean_mtf,
-        mean_mtf_radial,
         mean_mtf_tangential,
+        mean_mtf_sagittal,
         field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
         field_points: Vec::new(),
         mtf_integral_cyc_per_mm: integral,
@@ -286,6 +310,20 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         photoelectrons,
         transmitted_photoelectrons: transmitted,
         noise: NoiseReport {
+            terms: [
+                ("shot", budget.shot_variance_e2),
+                ("read", budget.read_variance_e2),
+                ("dark", budget.dark_variance_e2),
+                ("quantization", budget.quantization_variance_e2),
+            ]
+            .into_iter()
+            .filter_map(|(name, v)| (v > 0.0).then_some(name))
+            .collect(),
+            shot_noise_limited: budget.read_variance_e2 == 0.0
+                && budget.dark_variance_e2 == 0.0
+                && budget.quantization_variance_e2 == 0.0,
+            read_noise_e: camera.sensor().read_noise_e(),
+            dark_e: budget.dark_e,
             shot_variance_e2: budget.shot_variance_e2,
             dark_variance_e2: budget.dark_variance_e2,
             read_variance_e2: budget.read_variance_e2,
@@ -331,6 +369,54 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     })
 }
 
+/// The warning for a Gaussian factor of the `what` spectrum cut by the spectrum's support
+/// ([`radiometry::Truncation`]): at λ ≤ 0 for a lone Gaussian, otherwise at the ends of the
+/// table or band it is multiplied with, with the fraction lost on each side (docs/physics.md:
+/// spectra are truncated there and the fact reported).
+fn truncation_warning(what: &str, t: &radiometry::Truncation) -> String {
+    let (lo, hi) = t.support_m;
+    let nm = |m: f64| m * 1e9;
+    let mut sides = Vec::new();
+    let below = gaussian_tail_below(t.center_m, t.sigma_m, lo);
+    if below > 0.0 {
+        sides.push(if lo > 0.0 {
+            format!("{below:.3e} below {:.1} nm", nm(lo))
+        } else {
+            format!("{below:.3e} at λ ≤ 0")
+        });
+    }
+    if hi.is_finite() {
+        let above = gaussian_tail_below(-t.center_m, t.sigma_m, -hi);
+        if above > 0.0 {
+            sides.push(format!("{above:.3e} above {:.1} nm", nm(hi)));
+        }
+    }
+    let (cut_by, sides) = if lo <= 0.0 && hi.is_infinite() {
+        ("reaches λ ≤ 0".to_owned(), String::new())
+    } else {
+        let range = format!("{:.1}–{:.1} nm", nm(lo), nm(hi));
+        (
+            format!("is cut to the {range} the {what} covers (a table or band it is multiplied with)"),
+            format!(" ({})", sides.join(", ")),
+        )
+    };
+    format!(
+        "the {what}'s Gaussian factor (centre {:.1} nm, σ {:.1} nm) {cut_by}: {:.3e} of its area was cut off{sides}",
+        nm(t.center_m),
+        nm(t.sigma_m),
+        t.fraction
+    )
+}
+
+/// The fraction of a Gaussian's area (centre `center`, σ `sigma`, any sign) below `x`:
+/// `½·erfc((center − x)/(σ√2))`, through [`radiometry::Gaussian::truncated_fraction`] (its
+/// area at λ ≤ 0) of the Gaussian shifted by `−x`.
+fn gaussian_tail_below(center: f64, sigma: f64, x: f64) -> f64 {
+    let tail = |c: f64| radiometry::Gaussian::new(c, sigma, 1.0).map_or(0.5, |g| g.truncated_fraction());
+    let d = center - x;
+    if d >= 0.0 { tail(d) } else { 1.0 - tail(-d) }
+}
+
 /// The work of two passes over the same spectral quadrature.
 fn add_work(a: optics::Work, b: optics::Work) -> optics::Work {
     optics::Work {
@@ -353,6 +439,9 @@ pub(crate) fn detected_spectrum(scene: &Scene) -> Spectrum {
 }
 
 /// The polychromatic MTF of a scene sampled on a frequency grid, with references.
+///
+/// Over a field-of-view average (`[[fields]]`), every curve is the weighted mean of the field
+/// points' curves, each of which is in `field_points`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MtfCurve {
     /// Frequencies, cycles/mm, from 0 to the requested maximum.
@@ -360,8 +449,9 @@ pub struct MtfCurve {
     /// Signed polychromatic OTF of the rotationally symmetric system (image displacements
     /// ignored), before the pixel MTF.
     pub otf: Vec<f64>,
-    /// Polychromatic MTF `|OTF|`, times the pixel MTF if the camera applies it; off axis with
-    /// lateral colour, the average of the radial and tangential MTFs.
+    /// Polychromatic MTF `|OTF|`, times the pixel MTF if the camera applies it; where the OTF
+    /// depends on direction (off axis with lateral colour, a decentred pupil), the average of the
+    /// tangential and sagittal MTFs, as `Evaluation::mean_mtf` is.
     pub mtf: Vec<f64>,
     /// Aberration-free MTF of the same aperture at the mean wavelength (times the pixel MTF if
     /// applied): the diffraction limit for reference.
@@ -370,16 +460,39 @@ pub struct MtfCurve {
     pub wavelengths_nm: Vec<f64>,
     /// Monochromatic MTFs, one row per wavelength (times the pixel MTF if applied).
     pub monochromatic: Vec<Vec<f64>>,
-    /// Off axis with lateral colour: the MTF for frequencies along the field direction.
-    pub mtf_radial: Option<Vec<f64>>,
-    /// Off axis with lateral colour: the MTF for frequencies perpendicular to it.
+    /// Where the OTF depends on direction: the tangential MTF (Zemax and Code V's name), for
+    /// frequencies along the field direction, the one lateral colour degrades (on axis, along x).
     pub mtf_tangential: Option<Vec<f64>>,
+    /// Where the OTF depends on direction: the sagittal MTF, for frequencies across the field
+    /// direction (on axis, along y).
+    pub mtf_sagittal: Option<Vec<f64>>,
+    /// Field angles `(x, y)`, degrees, of a single field point (the first point of a
+    /// field-of-view average).
+    pub field_deg: [f64; 2],
+    /// The points of a field-of-view average, each with its own curves, whose weighted means the
+    /// curves above are (empty for a single field).
+    pub field_points: Vec<FieldCurve>,
     /// Nyquist frequency, cycles/mm.
     pub nyquist_cyc_per_mm: f64,
     /// Photoelectron-weighted mean wavelength, nm.
     pub mean_wavelength_nm: f64,
     /// Whether the pixel MTF is included.
     pub pixel_mtf: bool,
+}
+
+/// The MTF at one field point of a field-of-view average, on the frequencies of its [`MtfCurve`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FieldCurve {
+    /// Field angles `(x, y)`, degrees.
+    pub field_deg: [f64; 2],
+    /// Relative weight.
+    pub weight: f64,
+    /// The MTF there (the tangential–sagittal average where they differ).
+    pub mtf: Vec<f64>,
+    /// The tangential MTF there, where the OTF depends on direction.
+    pub mtf_tangential: Option<Vec<f64>>,
+    /// The sagittal MTF there, where the OTF depends on direction.
+    pub mtf_sagittal: Option<Vec<f64>>,
 }
 
 /// How far an [`MtfCurve`] extends.
@@ -394,8 +507,54 @@ pub enum FrequencyRange {
 
 /// Samples the polychromatic MTF of `scene` at `points` equally spaced frequencies over `range`,
 /// with the diffraction-limited curve at the mean wavelength and the monochromatic MTFs at
-/// `wavelengths_m`.
+/// `wavelengths_m`. Over a field-of-view average, the curves of every field point and their
+/// weighted means.
 pub fn mtf_curve(
+    scene: &Scene,
+    range: FrequencyRange,
+    points: usize,
+    wavelengths_m: &[f64],
+) -> Result<MtfCurve, Error> {
+    if scene.fields().is_empty() {
+        return mtf_curve_at_field(scene, range, points, wavelengths_m);
+    }
+    let mut curves = Vec::new();
+    for &(field, weight) in scene.fields() {
+        curves.push((mtf_curve_at_field(&scene.single_field(field), range, points, wavelengths_m)?, weight));
+    }
+    let total: f64 = curves.iter().map(|c| c.1).sum();
+    let mean = |f: &dyn Fn(&MtfCurve) -> &Vec<f64>| -> Vec<f64> {
+        let mut out = vec![0.0; curves[0].0.frequency_cyc_per_mm.len()];
+        for (c, w) in &curves {
+            for (o, v) in out.iter_mut().zip(f(c)) {
+                *o += w * v / total;
+            }
+        }
+        out
+    };
+    let split = curves.iter().any(|(c, _)| c.mtf_tangential.is_some());
+    let mut combined = curves[0].0.clone();
+    combined.otf = mean(&|c| &c.otf);
+    combined.mtf = mean(&|c| &c.mtf);
+    combined.monochromatic = (0..wavelengths_m.len()).map(|i| mean(&|c| &c.monochromatic[i])).collect();
+    // a field point whose OTF does not depend on direction has tangential = sagittal = mtf
+    combined.mtf_tangential = split.then(|| mean(&|c| c.mtf_tangential.as_ref().unwrap_or(&c.mtf)));
+    combined.mtf_sagittal = split.then(|| mean(&|c| c.mtf_sagittal.as_ref().unwrap_or(&c.mtf)));
+    combined.field_points = curves
+        .into_iter()
+        .map(|(c, weight)| FieldCurve {
+            field_deg: c.field_deg,
+            weight,
+            mtf: c.mtf,
+            mtf_tangential: c.mtf_tangential,
+            mtf_sagittal: c.mtf_sagittal,
+        })
+        .collect();
+    Ok(combined)
+}
+
+/// The curves at the scene's single field point.
+fn mtf_curve_at_field(
     scene: &Scene,
     range: FrequencyRange,
     points: usize,
@@ -423,13 +582,17 @@ pub fn mtf_curve(
         .iter()
         .map(|&nu| optics::mtf_diffraction_limited(nu * mean_wavelength * lens.f_number()) * pixel_factor(nu))
         .collect();
-    let radial = field.y_rad.atan2(field.x_rad);
+    let along_field = field.y_rad.atan2(field.x_rad);
     let along = |azimuth: f64| -> Vec<f64> { frequencies.iter().map(|&nu| poly.mtf_along(nu, azimuth)).collect() };
-    let (mtf_radial, mtf_tangential) =
-        if poly.direction_dependent() { (Some(along(radial)), Some(along(radial + 0.5 * PI))) } else { (None, None) };
-    // off axis the headline curve is the radial–tangential average, as `mean_mtf` is
-    let mtf = match (&mtf_radial, &mtf_tangential) {
-        (Some(r), Some(t)) => r.iter().zip(t).map(|(a, b)| 0.5 * (a + b)).collect(),
+    let (mtf_tangential, mtf_sagittal) = if poly.direction_dependent() {
+        (Some(along(along_field)), Some(along(along_field + 0.5 * PI)))
+    } else {
+        (None, None)
+    };
+    // where the OTF depends on direction the headline curve is the tangential–sagittal average,
+    // as `mean_mtf` is
+    let mtf = match (&mtf_tangential, &mtf_sagittal) {
+        (Some(t), Some(s)) => t.iter().zip(s).map(|(a, b)| 0.5 * (a + b)).collect(),
         _ => mtf,
     };
     let monochromatic = wavelengths_m
@@ -446,8 +609,10 @@ pub fn mtf_curve(
         diffraction_limited,
         wavelengths_nm: wavelengths_m.iter().map(|l| optics::round_for_display(l * 1e9)).collect(),
         monochromatic,
-        mtf_radial,
         mtf_tangential,
+        mtf_sagittal,
+        field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
+        field_points: Vec::new(),
         nyquist_cyc_per_mm: camera.nyquist() * 1e-3,
         mean_wavelength_nm: mean_wavelength * 1e9,
         pixel_mtf: pixel.is_some(),
@@ -477,4 +642,31 @@ fn glare(lens: &dyn LensModel, poly: &Polychromatic<'_>) -> Glare {
     let transmission = poly.detected_integral(|l| lens.transmission(l)) / detected;
     let m0 = noise::buralli_morris_modulation(efficiency, transmission);
     Glare { efficiency, transmission, m0, vg: noise::glare_from_modulation(m0) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A Gaussian cut by a table names the table's range and each side's loss; a lone Gaussian
+    /// reaching λ ≤ 0 says so (½·erfc(2/√2) = Φ(−2) = 0.02275 for a centre 2σ from 0).
+    #[test]
+    fn truncation_warning_says_what_cut_the_gaussian() {
+        let cut =
+            radiometry::Truncation { center_m: 540e-9, sigma_m: 50e-9, fraction: 0.2, support_m: (490e-9, 640e-9) };
+        let w = truncation_warning("radiance", &cut);
+        // 1σ below (Φ(−1) = 0.15866), 2σ above (Φ(−2) = 0.02275)
+        assert!(w.contains("cut to the 490.0–640.0 nm the radiance covers"), "{w}");
+        assert!(w.contains("(1.587e-1 below 490.0 nm, 2.275e-2 above 640.0 nm)") && !w.contains("λ ≤ 0"), "{w}");
+        let zero = radiometry::Truncation {
+            center_m: 40e-9,
+            sigma_m: 20e-9,
+            fraction: 0.02275,
+            support_m: (0.0, f64::INFINITY),
+        };
+        let w = truncation_warning("quantum efficiency", &zero);
+        assert!(w.contains("the quantum efficiency's Gaussian factor") && w.contains("reaches λ ≤ 0: 2.275e-2"), "{w}");
+        assert!((gaussian_tail_below(1.0, 1.0, 1.0) - 0.5).abs() < 1e-15);
+        assert!((gaussian_tail_below(0.0, 1.0, 1.0) - 0.841_344_746_068_542_9).abs() < 1e-12);
+    }
 }

@@ -41,7 +41,8 @@ mod evaluate;
 mod scene;
 
 pub use evaluate::{
-    Evaluation, FieldPoint, Fraunhofer, FrequencyRange, Glare, MtfCurve, NoiseReport, Numerics, evaluate, mtf_curve,
+    Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MtfCurve, NoiseReport, Numerics, evaluate,
+    mtf_curve,
 };
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 

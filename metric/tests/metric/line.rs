@@ -175,8 +175,8 @@ fn fraunhofer_fraction_of_a_line_is_zero_or_one() {
     }
 }
 
-/// At one wavelength lateral colour is a pure phase, `|e^{iφ} OTF| = |OTF|`: off axis the radial
-/// and tangential means equal the on-axis one. The FFT of the sampled pupil (the full circle
+/// At one wavelength lateral colour is a pure phase, `|e^{iφ} OTF| = |OTF|`: off axis the tangential
+/// and sagittal means equal the on-axis one. The FFT of the sampled pupil (the full circle
 /// given as an aperture) agrees with the exact 1-D OTF to its sampling error (fft module table:
 /// ~5e-5 at 256 samples).
 #[test]
@@ -187,7 +187,7 @@ fn line_off_axis_and_on_the_fft_path() {
         .unwrap();
     let off = evaluate(&off).unwrap();
     assert_eq!(off.numerics.engine, "monochromatic (line spectrum): exact-1d, complex sum with lateral colour");
-    for m in [off.mean_mtf_radial, off.mean_mtf_tangential] {
+    for m in [off.mean_mtf_tangential, off.mean_mtf_sagittal] {
         assert!((m - on_axis.mean_mtf).abs() < 1e-9, "{m} vs {}", on_axis.mean_mtf);
     }
     let circle = lens(2.5).with_aperture(optics::fft::Aperture::circle());

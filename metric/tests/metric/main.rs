@@ -192,12 +192,12 @@ proptest! {
 }
 
 /// Off axis, lateral colour (image height ∝ f(λ)) smears the image along the field direction:
-/// the radial MTF falls, the tangential one is untouched (the shifts are perpendicular to it).
-/// The radial mean is checked against a direct complex sum written here from the geometry:
+/// the tangential MTF falls, the sagittal one is untouched (the shifts are perpendicular to it).
+/// The tangential mean is checked against a direct complex sum written here from the geometry:
 /// OTF(ν) = ∫ λ G(λ) OTF_1D(ν λ F#, w(λ)) exp(−2πi ν h0 (λ0/λ − 1)) dλ / ∫ λ G dλ,
 /// h0 = f0 tan θ, on composite Gauss–Legendre panels unrelated to the engine's.
 #[test]
-fn lateral_colour_splits_radial_and_tangential() {
+fn lateral_colour_splits_tangential_and_sagittal() {
     let (f, range, pixel, centre) = (2.5, 20e-9, 5.2e-6, LAMBDA0);
     let theta = 8f64.to_radians();
     // on axis the closed-form engine, off axis the spectral quadrature with lateral colour: both
@@ -206,9 +206,9 @@ fn lateral_colour_splits_radial_and_tangential() {
     let on_axis = evaluate(&tight(scene(f, range, pixel, false, centre))).unwrap();
     let off = evaluate(&tight(scene(f, range, pixel, false, centre)).at_field(optics::Field::new(theta, 0.0)).unwrap())
         .unwrap();
-    assert!((off.mean_mtf_tangential - on_axis.mean_mtf).abs() < 1e-10 * on_axis.mean_mtf);
-    assert!(off.mean_mtf_radial < on_axis.mean_mtf - 0.05, "{} vs {}", off.mean_mtf_radial, on_axis.mean_mtf);
-    assert_eq!(off.mean_mtf, 0.5 * (off.mean_mtf_radial + off.mean_mtf_tangential));
+    assert!((off.mean_mtf_sagittal - on_axis.mean_mtf).abs() < 1e-10 * on_axis.mean_mtf);
+    assert!(off.mean_mtf_tangential < on_axis.mean_mtf - 0.05, "{} vs {}", off.mean_mtf_tangential, on_axis.mean_mtf);
+    assert_eq!(off.mean_mtf, 0.5 * (off.mean_mtf_tangential + off.mean_mtf_sagittal));
 
     let sigma = range / (2.0 * 2f64.sqrt());
     let h0 = F0 * theta.tan();
@@ -216,7 +216,7 @@ fn lateral_colour_splits_radial_and_tangential() {
     let (lo, hi) = (centre - 8.0 * sigma, centre + 8.0 * sigma);
     let rho = |l: f64| l * (-0.5 * ((l - centre) / sigma).powi(2)).exp();
     let norm = optics::quad::composite(lo, hi, 64, rho);
-    let radial = |nu: f64| {
+    let tangential = |nu: f64| {
         let (mut re, mut im) = (0.0, 0.0);
         optics::quad::for_each_node(lo, hi, 64, |l, q| {
             let w = (l / LAMBDA0 - 1.0) * F0 / (8.0 * f * f) / l;
@@ -227,9 +227,9 @@ fn lateral_colour_splits_radial_and_tangential() {
         });
         re.hypot(im) / norm
     };
-    let direct = optics::quad::composite(0.0, nyquist, 48, radial) / nyquist;
-    let rel = (off.mean_mtf_radial - direct).abs() / direct;
-    assert!(rel < 1e-6, "engine {} vs direct {direct} ({rel:e})", off.mean_mtf_radial);
+    let direct = optics::quad::composite(0.0, nyquist, 48, tangential) / nyquist;
+    let rel = (off.mean_mtf_tangential - direct).abs() / direct;
+    assert!(rel < 1e-6, "engine {} vs direct {direct} ({rel:e})", off.mean_mtf_tangential);
 }
 
 fn paper_with(lens: ChromaticMetalens) -> Scene {
@@ -255,7 +255,7 @@ fn fft_path_matches_the_exact_path_on_the_paper_scene() {
     eprintln!("FFT {} vs exact {} ({rel:.1e})", fft.mean_mtf, exact.mean_mtf);
     assert!(rel < 1e-4, "FFT {} vs exact {} ({rel:e})", fft.mean_mtf, exact.mean_mtf);
     // a centred circle is symmetric: both directions agree to the grid's interpolation error
-    assert!((fft.mean_mtf_radial - fft.mean_mtf_tangential).abs() < 1e-5);
+    assert!((fft.mean_mtf_tangential - fft.mean_mtf_sagittal).abs() < 1e-5);
 }
 
 /// Paper SI Fig. S3: the measured MTF fell below simulation because the mechanical iris was
@@ -268,10 +268,10 @@ fn decentred_iris_lowers_the_mtf_and_breaks_the_symmetry() {
     let decentred = evaluate(&paper_with(paper_lens().with_aperture(iris))).unwrap();
     assert!(decentred.mean_mtf < centred.mean_mtf - 1e-3, "{} vs {}", decentred.mean_mtf, centred.mean_mtf);
     assert!(
-        decentred.mean_mtf_radial < decentred.mean_mtf_tangential - 1e-3,
+        decentred.mean_mtf_tangential < decentred.mean_mtf_sagittal - 1e-3,
         "x {} vs y {}",
-        decentred.mean_mtf_radial,
-        decentred.mean_mtf_tangential
+        decentred.mean_mtf_tangential,
+        decentred.mean_mtf_sagittal
     );
 }
 
@@ -310,6 +310,35 @@ fn read_noise_lowers_snr0() {
     assert!((r.snr0 - 21.78419).abs() < 1e-5, "{}", r.snr0);
     assert_eq!(r.noise.read_variance_e2, 100.0);
     assert!(!r.noise.saturated && r.warnings.is_empty());
+    // the report names the terms: not shot-noise limited any more
+    assert!(!r.noise.shot_noise_limited);
+    assert_eq!((r.noise.terms.as_slice(), r.noise.read_noise_e), (&["shot", "read"][..], 10.0));
+    let ideal = evaluate(&s).unwrap();
+    assert!(ideal.noise.shot_noise_limited && ideal.noise.terms == ["shot"]);
+}
+
+/// Over a field-of-view average, `mtf_curve` keeps every field point's curves, and its headline
+/// curves are their weighted means (the on-axis point has no tangential–sagittal split).
+#[test]
+fn mtf_curve_over_fields_keeps_every_point() {
+    let base = || scene(2.5, 20e-9, 5.2e-6, false, LAMBDA0);
+    let off = optics::Field::new(8f64.to_radians(), 0.0);
+    let points = vec![(optics::Field::ON_AXIS, 2.0), (off, 1.0)];
+    let curve = |s: &Scene| metric::mtf_curve(s, metric::FrequencyRange::Nyquist, 9, &[]).unwrap();
+    let fov = curve(&base().over_fields(points).unwrap());
+    let (on, at8) = (curve(&base()), curve(&base().at_field(off).unwrap()));
+    assert_eq!(fov.field_points.len(), 2);
+    assert_eq!(fov.field_points[1].mtf_tangential, at8.mtf_tangential);
+    assert!(fov.field_points[0].mtf_tangential.is_none());
+    let (t8, s8) = (at8.mtf_tangential.as_ref().unwrap(), at8.mtf_sagittal.as_ref().unwrap());
+    for k in 0..9 {
+        let mean = (2.0 * on.mtf[k] + at8.mtf[k]) / 3.0;
+        assert!((fov.mtf[k] - mean).abs() < 1e-14, "{k}: {} vs {mean}", fov.mtf[k]);
+        let tangential = (2.0 * on.mtf[k] + t8[k]) / 3.0;
+        assert!((fov.mtf_tangential.as_ref().unwrap()[k] - tangential).abs() < 1e-14);
+        // lateral colour lowers the tangential MTF (along the field), not the sagittal one
+        assert!(t8[k] <= s8[k] + 1e-12 && (s8[k] - on.mtf[k]).abs() < 1e-9, "{k}");
+    }
 }
 
 /// Field-of-view average (paper SI, end of the VG section): the weighted mean of the ASNRs at
