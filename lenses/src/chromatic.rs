@@ -126,13 +126,13 @@ impl ChromaticMetalens {
         ChromaticMetalens { seidel: [spherical_m, coma_m, astigmatism_m, field_curvature_m], ..self }
     }
 
-    /// Focal length at `wavelength_m`: `f(λ) = f0 λ0/λ` (PHYSICS.md, chromatic lens).
+    /// Focal length at `wavelength_m`: `f(λ) = f0 λ0/λ` (docs/physics.md, "Chromatic lens").
     pub fn focal_length_at(&self, wavelength_m: f64) -> f64 {
         self.focal_length * self.design_wavelength / wavelength_m
     }
 
     /// Defocus at the pupil edge with the detector at `f0`:
-    /// `W020(λ) = (D²/8)(1/f(λ) − 1/f0) = (λ/λ0 − 1) f0/(8 F#²)` (PHYSICS.md), m.
+    /// `W020(λ) = (D²/8)(1/f(λ) − 1/f0) = (λ/λ0 − 1) f0/(8 F#²)` (docs/physics.md, "Chromatic lens"), m.
     pub fn defocus(&self, wavelength_m: f64) -> f64 {
         (wavelength_m / self.design_wavelength - 1.0) * self.focal_length / (8.0 * self.f_number * self.f_number)
     }

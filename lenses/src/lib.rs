@@ -1,7 +1,7 @@
 //! Built-in lens families for the ASNR toolkit, each a [`optics::LensModel`].
 //!
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
-//!   (PHYSICS.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
+//!   (docs/physics.md, "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
 //!   constant or tabulated.
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and

@@ -35,7 +35,7 @@ use optics::Field;
 use optics::fft::Aperture;
 use radiometry::{Blackbody, Gaussian, Line, Sampled, Spectrum, TopHat};
 
-/// The paper scene (PHYSICS.md, "The metric"): F/2.5, f0 = 3.36 mm, λ0 = 800 nm, 50 nm
+/// The paper scene (docs/physics.md, "The metric"): F/2.5, f0 = 3.36 mm, λ0 = 800 nm, 50 nm
 /// Gaussian, 5.2 µm pixels, τ1 = 0.15, T = 0.55, QE 0.2, 0.025 W/(m² sr nm), 1.23 ms: 559.4 e⁻.
 const F0_MM: f64 = 3.36;
 const LAMBDA0_NM: f64 = 800.0;

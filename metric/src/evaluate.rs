@@ -89,7 +89,7 @@ pub struct NoiseReport {
 /// How the numbers were computed.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Numerics {
-    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, the docs/physics.md integral),
+    /// The OTF engine: `"exact-1d"` (centred circular pupil with defocus, docs/physics.md, "Exact defocused OTF"),
     /// `"fft: N pupil samples, padded to M"` for other pupils and wavefronts, `"closed-form …"`
     /// for the closed-form spectral integral, or `"monochromatic (line spectrum): …"` followed by
     /// one of the first two for a line spectrum (one wavelength, no spectral quadrature).

@@ -26,7 +26,7 @@ pub struct Camera {
 impl Camera {
     /// A camera with square pixels of `pixel_pitch_m` (active area `p²`, 100 % fill factor),
     /// quantum efficiency η(λ) (values in `[0, 1]`), and the pixel-aperture MTF
-    /// `|sinc(p ν)|` applied if `pixel_mtf` (PHYSICS.md: off by default, the paper uses the lens
+    /// `|sinc(p ν)|` applied if `pixel_mtf` (docs/physics.md, "Pixel MTF": off by default, the paper uses the lens
     /// MTF only).
     pub fn new(pixel_pitch_m: f64, quantum_efficiency: Spectrum, pixel_mtf: bool) -> Result<Self, Error> {
         check("pixel_pitch", pixel_pitch_m, pixel_pitch_m > 0.0, "a finite length > 0 m")?;

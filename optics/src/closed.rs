@@ -2,7 +2,7 @@
 //! aberration is a defocus affine in λ (the chromatic metalens of the paper).
 //!
 //! # The idea
-//! With `s = ν F# λ` and `a = 8π W020 ν F#` (PHYSICS.md), the defocused OTF is
+//! With `s = ν F# λ` and `a = 8π W020 ν F#` (docs/physics.md, "Exact defocused OTF"), the defocused OTF is
 //! `OTF(s, a) = (4/π) ∫_0^{acos s} sin²t cos[a (cos t − s)] dt`. For `W020 = w0 + w1 λ` both `a`
 //! and `s` are affine in λ, so the phase `φ(λ, c) = a(λ)(c − β λ)` (`c = cos t`, `β = ν F#`) is a
 //! *quadratic* in λ. Swapping the order of integration (`t ≤ acos s` ⇔ `λ ≤ Λ(c) = c/β`):

@@ -18,12 +18,12 @@
 //! SI units everywhere (wavelengths and lengths in m, spatial frequencies in cycles/m).
 //! `s = ν/ν_c(λ)` with `ν_c = 1/(λ F#)`; defocus `w = W020/λ` waves at the pupil edge.
 //! OTFs are normalized to 1 at zero frequency; a polychromatic OTF is the weighted sum of the
-//! signed monochromatic OTFs, each at its own `s` (PHYSICS.md).
+//! signed monochromatic OTFs, each at its own `s` (docs/physics.md, "Polychromatic OTF").
 //!
 //! # Example
 //! ```
 //! use optics::{defocus_otf, mtf_diffraction_limited};
-//! // PHYSICS.md test vector: OTF(s = 0.1, w = 0.5 waves) = 0.74209
+//! // Test vector of docs/physics.md ("Test vectors and identities"): OTF(s = 0.1, w = 0.5 waves) = 0.74209
 //! assert!((defocus_otf(0.1, 0.5) - 0.74209).abs() < 1e-5);
 //! // no defocus: the diffraction-limited MTF
 //! assert!((defocus_otf(0.3, 0.0) - mtf_diffraction_limited(0.3)).abs() < 1e-15);

@@ -1,7 +1,7 @@
 //! Monochromatic transfer functions of a circular pupil: the exact defocused OTF, the
 //! aberration-free MTF and the pixel-aperture MTF.
 //!
-//! Conventions (`shared/PHYSICS.md`, "Optics: the OTF"): `s = ν/ν_c(λ)` is the frequency
+//! Conventions (docs/physics.md, "The OTF"): `s = ν/ν_c(λ)` is the frequency
 //! normalized to the incoherent cutoff `ν_c = 1/(λ F#)`; `w = W020/λ` is the defocus in waves at
 //! the pupil edge. The OTF is normalized to 1 at `s = 0`, is real for a centred circular pupil
 //! with defocus only, may be negative, and is zero for `s ≥ 1`.
@@ -12,7 +12,7 @@ use crate::quad;
 
 /// Aberration-free MTF of a circular pupil: `MTF_0(s) = (2/π)[acos s − s √(1 − s²)]`.
 ///
-/// Returns 1 for `s ≤ 0` and 0 for `s ≥ 1` (PHYSICS.md, limit `a → 0` of the defocused OTF).
+/// Returns 1 for `s ≤ 0` and 0 for `s ≥ 1` (docs/physics.md: limit `a → 0` of the defocused OTF).
 pub fn mtf_diffraction_limited(s: f64) -> f64 {
     if s <= 0.0 {
         1.0
@@ -27,7 +27,7 @@ pub fn mtf_diffraction_limited(s: f64) -> f64 {
 ///
 /// `∫ acos s ds = s acos s − √(1 − s²)` and `∫ s √(1 − s²) ds = −(1 − s²)^{3/2}/3`, so
 /// `∫_0^x MTF_0 ds = (2/π)[x acos x − √(1 − x²) + 1 − (1 − (1 − x²)^{3/2})/3]`, which is
-/// `4/(3π)` at `x = 1` (PHYSICS.md identity). Past the cutoff the MTF is zero.
+/// `4/(3π)` at `x = 1` (docs/physics.md, "Test vectors and identities"). Past the cutoff the MTF is zero.
 pub fn mtf_diffraction_limited_mean(s_max: f64) -> f64 {
     if s_max <= 0.0 {
         return 1.0;
@@ -57,7 +57,7 @@ pub fn defocus_otf_panels(s: f64, w: f64) -> usize {
 /// Exact OTF of a centred circular pupil with defocus `w` waves (`W020/λ`) at normalized
 /// frequency `s`.
 ///
-/// PHYSICS.md gives `OTF(s, w) = 4/(π a) ∫_0^{acos s} sin[a(cos t − s)] cos t dt` with `a = 8π w s`.
+/// docs/physics.md gives `OTF(s, w) = 4/(π a) ∫_0^{acos s} sin[a(cos t − s)] cos t dt` with `a = 8π w s`.
 /// We integrate the same overlap integral before the integration by parts,
 /// `OTF(s, w) = (4/π) ∫_0^{acos s} sin²t · cos[a(cos t − s)] dt`,
 /// which has no `1/a` (so no special case at `a = 0`) and a smooth, bounded integrand: composite
@@ -225,7 +225,7 @@ mod tests {
 
     #[test]
     fn diffraction_limited_mean_closed_form() {
-        // ∫_0^1 MTF_0 ds = 4/(3π) (PHYSICS.md identity)
+        // ∫_0^1 MTF_0 ds = 4/(3π) (docs/physics.md, "Test vectors and identities")
         assert!((mtf_diffraction_limited_mean(1.0) - 4.0 / (3.0 * PI)).abs() < 1e-15);
         // against quadrature of MTF_0 on [0, 0.37] (smooth there)
         let x = 0.37;

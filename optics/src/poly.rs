@@ -1,6 +1,6 @@
 //! The polychromatic OTF and its mean up to a frequency limit, on the exact 1-D path.
 //!
-//! PHYSICS.md, "Polychromatic OTF": the signed monochromatic OTFs are summed with the
+//! docs/physics.md, "Polychromatic OTF": the signed monochromatic OTFs are summed with the
 //! detected-photoelectron weights `ρ(λ) τ(λ)` (source × filter × QE × λ, times the order's
 //! efficiency), each at its own `s = ν λ F#`, and the MTF is the modulus of the sum:
 //!
@@ -649,7 +649,7 @@ impl<'a> Polychromatic<'a> {
 
     /// Complex polychromatic OTF at `frequency` (cycles/m) along the direction `azimuth` (radians
     /// from the detector's x axis): each wavelength's OTF times `exp(−2πi ν u·Δ)` for its image
-    /// displacement Δ (PHYSICS.md: in the general case sum complex OTFs, then take the modulus).
+    /// displacement Δ (docs/physics.md: in the general case sum complex OTFs, then take the modulus).
     pub fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
         if frequency == 0.0 {
             return Complex64::new(1.0, 0.0);

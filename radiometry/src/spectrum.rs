@@ -317,7 +317,7 @@ impl Spectrum {
 
     /// Each Gaussian factor that loses more than 1e-15 of its (untruncated) area outside the
     /// spectrum's support: below λ = 0 (½·erfc(center/(σ√2)) for a lone Gaussian) or outside a
-    /// table or band it is multiplied with (PHYSICS.md: truncated there, and the fact reported).
+    /// table or band it is multiplied with (docs/physics.md, "Spectra": truncated there, and the fact reported).
     /// A spectrum with a [`Line`] truncates nothing: its Gaussian factors are only evaluated at
     /// the line.
     pub fn truncations(&self) -> Vec<Truncation> {

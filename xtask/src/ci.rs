@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Result, bail};
 
-use crate::{cmd, tidy};
+use crate::{cmd, readme, tidy};
 
 /// One check: a short name for the log and the function that performs it.
 struct Step {
@@ -20,6 +20,7 @@ const STEPS: &[Step] = &[
     Step { name: "tidy", run: run_tidy },
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
+    Step { name: "readme (every README command as written)", run: run_readme },
     Step { name: "stress (reduced grid)", run: stress },
     Step { name: "doc", run: doc },
 ];
@@ -63,6 +64,11 @@ fn fmt(root: &Path) -> Result<()> {
 fn run_tidy(root: &Path) -> Result<()> {
     eprintln!("$ cargo xtask tidy   (in-process)");
     tidy::run(root)
+}
+
+fn run_readme(root: &Path) -> Result<()> {
+    eprintln!("$ cargo xtask readme   (in-process)");
+    readme::run(root)
 }
 
 fn clippy(root: &Path) -> Result<()> {

@@ -6,8 +6,9 @@
 //! - `accuracy [--quick]`: the accuracy-versus-time report (`BENCHMARKS.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
-//! - `tidy`: the architecture invariants (dependency direction, workspace dependencies and lints,
-//!   crate docs), checked by reading the manifests.
+//! - `readme`: every command of the README's ```` ```sh ```` blocks, run as written (`readme.rs`).
+//! - `tidy`: the architecture invariants (layout, dependency direction, workspace dependencies
+//!   and lints, crate docs, no file pointing outside the repository).
 //! - `stress [--quick]`: the numerical stress sweep of the metric (`stress.rs`).
 //!
 //! Each task is a module with a `run(root)` entry point; add new tasks to [`TASKS`] and `main`.
@@ -16,6 +17,7 @@ mod accuracy;
 mod ci;
 mod cmd;
 mod figures;
+mod readme;
 mod stress;
 mod tidy;
 
@@ -25,9 +27,13 @@ use std::process::ExitCode;
 /// Every task with its one-line description, in the order `cargo xtask help` lists them.
 const TASKS: &[(&str, &str)] = &[
     ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
-    ("ci", "full check: fmt, tidy, clippy -D warnings, tests, reduced stress grid, docs -D warnings"),
+    ("ci", "full check: fmt, tidy, clippy -D warnings, tests, README commands, reduced stress grid, docs -D warnings"),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
-    ("tidy", "architecture invariants: dependency direction, workspace deps and lints, crate docs"),
+    ("readme", "run every command of the README's ```sh blocks as written; none may change git status"),
+    (
+        "tidy",
+        "architecture invariants: layout, dependency direction, workspace deps and lints, crate docs, no paths outside the repository",
+    ),
     ("stress", "numerical stress sweep of the metric, checked and timed (--quick: the CI-sized grid)"),
 ];
 
@@ -47,6 +53,7 @@ fn main() -> ExitCode {
         Some("accuracy") => accuracy::run(&root, &args[1..]),
         Some("ci") => ci::run(&root),
         Some("figures") => figures::run(&root),
+        Some("readme") => readme::run(&root),
         Some("tidy") => tidy::run(&root),
         Some("stress") => stress::run(&root, &args[1..]),
         Some(other) => {

@@ -13,9 +13,14 @@
 //!   `[workspace.dependencies]`;
 //! - it has `[lints] workspace = true`;
 //! - `src/lib.rs` and `src/main.rs`, whichever exist, open with a `//!` crate doc comment.
+//!
+//! And for every tracked `*.md`, `*.rs` and `*.toml` file (`git ls-files`): it refers to no path
+//! outside the repository ([`OUTSIDE_PATTERNS`]); the physics conventions the code cites are in
+//! the repository's own `docs/physics.md`.
 
 use std::fs;
 use std::path::Path;
+use std::process::Command;
 
 use anyhow::{Context, Result, bail};
 use toml::{Table, Value};
@@ -65,6 +70,7 @@ pub(crate) fn run(root: &Path) -> Result<()> {
     for folder in &folders {
         check_member(root, folder, &mut violations)?;
     }
+    violations.extend(check_outside_references(root)?);
     for violation in &violations {
         eprintln!("tidy: {violation}");
     }
@@ -222,6 +228,62 @@ fn dependency_tables(manifest: &Table) -> Vec<DepTable<'_>> {
     tables
 }
 
+/// Text that points outside the repository: the sibling `shared` folder of the project's
+/// workspace, its conventions page (the repository's copy is `docs/physics.md`) and the paper's
+/// file (cite the paper by title and authors). Written with `concat!` so that this file does not
+/// match itself.
+pub(crate) const OUTSIDE_PATTERNS: &[&str] = &[
+    concat!("../", "shared"),
+    concat!("shared/", "PHYSICS", ".md"),
+    concat!("shared/", "paper"),
+    concat!("PHYSICS", ".md"),
+];
+
+/// The file types checked for [`OUTSIDE_PATTERNS`].
+const CHECKED_EXTENSIONS: &[&str] = &["md", "rs", "toml"];
+
+/// The `path:line: refers to … outside the repository` problems of one tracked file.
+pub(crate) fn outside_references(path: &str, text: &str) -> Vec<String> {
+    let mut problems = Vec::new();
+    for (number, line) in text.lines().enumerate() {
+        // The first pattern that matches names the problem: the most specific come first.
+        if let Some(pattern) = OUTSIDE_PATTERNS.iter().find(|pattern| line.contains(**pattern)) {
+            problems.push(format!(
+                "{path}:{}: refers to `{pattern}`, outside the repository (cite docs/physics.md, \
+                 or the paper by title and authors)",
+                number + 1
+            ));
+        }
+    }
+    problems
+}
+
+/// Check every tracked `*.md`, `*.rs`, `*.toml` file of the repository at `root`.
+fn check_outside_references(root: &Path) -> Result<Vec<String>> {
+    let output = Command::new("git")
+        .args(["ls-files", "-z"])
+        .current_dir(root)
+        .output()
+        .context("could not run `git ls-files` (tidy needs git and a clone)")?;
+    if !output.status.success() {
+        bail!("`git ls-files` failed: {}", String::from_utf8_lossy(&output.stderr).trim());
+    }
+    let mut problems = Vec::new();
+    for path in String::from_utf8_lossy(&output.stdout).split('\0').filter(|path| !path.is_empty()) {
+        let checked = Path::new(path)
+            .extension()
+            .and_then(|extension| extension.to_str())
+            .is_some_and(|extension| CHECKED_EXTENSIONS.contains(&extension));
+        if !checked {
+            continue;
+        }
+        // A tracked file deleted in the work tree is not there to refer to anything.
+        let Ok(text) = fs::read_to_string(root.join(path)) else { continue };
+        problems.extend(outside_references(path, &text));
+    }
+    Ok(problems)
+}
+
 /// Whether the first non-blank line of `source` is a `//!` doc comment.
 pub(crate) fn opens_with_crate_doc(source: &str) -> bool {
     source.lines().map(str::trim).find(|line| !line.is_empty()).is_some_and(|line| line.starts_with("//!"))
@@ -323,6 +385,31 @@ mod tests {
         assert!(problems[1].starts_with("crates/"));
         assert!(check_layout(&["optics".to_owned(), "xtask".to_owned()], false).is_empty());
         assert!(workspace_members("[package]\nname = \"x\"\n").is_err());
+    }
+
+    #[test]
+    fn references_outside_the_repository_are_found() {
+        let up = concat!("../", "shared");
+        let conventions = concat!("PHYSICS", ".md");
+        let text = format!(
+            "//! Conventions: docs/physics.md, \"Optics\".\n\
+             /// See `{up}/{conventions}`.\n\
+             /// ({conventions}, \"The metric\")\n\
+             /// the paper: {up}/paper/how-good-is-your-metalens.md\n\
+             pub const PHYSICS_TEST_VECTORS: [f64; 0] = [];\n"
+        );
+        let problems = outside_references("optics/src/x.rs", &text);
+        assert_eq!(problems.len(), 3, "{problems:?}");
+        assert!(problems[0].starts_with(&format!("optics/src/x.rs:2: refers to `{up}`")), "{problems:?}");
+        assert!(problems[1].starts_with(&format!("optics/src/x.rs:3: refers to `{conventions}`")), "{problems:?}");
+        assert!(problems[2].starts_with("optics/src/x.rs:4:"), "{problems:?}");
+        assert!(outside_references("README.md", "See docs/physics.md and ARCHITECTURE.md.\n").is_empty());
+    }
+
+    #[test]
+    fn the_repository_refers_to_nothing_outside_it() {
+        let problems = check_outside_references(&crate::project_root()).unwrap();
+        assert!(problems.is_empty(), "{}", problems.join("\n"));
     }
 
     #[test]

@@ -24,7 +24,7 @@ pub(crate) enum Kernel {
     Production,
     /// `optics::defocus_otf_quadrature`: the production panels at every `a`.
     ProductionQuadrature,
-    /// One n-point Gauss–Legendre rule on PHYSICS.md's t-form.
+    /// One n-point Gauss–Legendre rule on the t-form (docs/physics.md, "Exact defocused OTF").
     GaussLegendre(usize),
     /// Hopkins' series cut after K terms (`None`: its own term count, converged).
     Hopkins(Option<usize>),
@@ -87,7 +87,7 @@ impl KernelRow {
     }
 }
 
-/// PHYSICS.md's t-form `OTF = 4/(π a) ∫_0^{acos s} sin[a(cos t − s)] cos t dt`, `a = 8π w s`, by
+/// The t-form (docs/physics.md) `OTF = 4/(π a) ∫_0^{acos s} sin[a(cos t − s)] cos t dt`, `a = 8π w s`, by
 /// one Gauss–Legendre rule (`rule` on [−1, 1]) over the whole interval.
 fn t_form(s: f64, w: f64, rule: &[(f64, f64)]) -> f64 {
     let a = 8.0 * PI * w * s;

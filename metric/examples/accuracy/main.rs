@@ -33,7 +33,7 @@ use metric::{Camera, Evaluation, Options, Scene, evaluate};
 use optics::reference::{ReferenceScene, mean_mtf};
 use radiometry::{Gaussian, Sampled, Spectrum};
 
-/// Design focal length of the paper's lens (PHYSICS.md, "The metric"), m.
+/// Design focal length of the paper's lens (docs/physics.md, "The metric"), m.
 const F0: f64 = 3.36e-3;
 /// Design wavelength, m.
 const LAMBDA0: f64 = 800e-9;
@@ -48,13 +48,13 @@ struct Case {
 }
 
 impl Case {
-    /// σ of the Gaussian: the spectral range is 2√2 σ (PHYSICS.md, "Radiometry").
+    /// σ of the Gaussian: the spectral range is 2√2 σ (docs/physics.md, "Spectra").
     fn sigma(&self) -> f64 {
         self.range_m / (2.0 * 2f64.sqrt())
     }
 
-    /// Defocus in waves at the pupil edge of the chromatic lens at `lambda` (PHYSICS.md,
-    /// "Optics"): `W020 = (λ/λ0 − 1) f0/(8 F#²)`, `w = W020/λ`.
+    /// Defocus in waves at the pupil edge of the chromatic lens at `lambda` (docs/physics.md,
+    /// "Chromatic lens"): `W020 = (λ/λ0 − 1) f0/(8 F#²)`, `w = W020/λ`.
     fn waves(&self, lambda: f64) -> f64 {
         (lambda / LAMBDA0 - 1.0) * F0 / (8.0 * self.f_number * self.f_number) / lambda
     }
@@ -148,7 +148,7 @@ fn decentred_scene(case: &Case, pupil_samples: usize) -> Scene {
     Scene::new(Arc::new(lens.with_aperture(iris)), radiance, camera, 1.23e-3, options).unwrap()
 }
 
-/// A flat source behind the Gaussian filter of the case (PHYSICS.md, "The metric": photon count
+/// A flat source behind the Gaussian filter of the case (docs/physics.md, "The metric": photon count
 /// ∝ range), QE 0.2, 5.2 µm pixels.
 fn scene(case: &Case, aperture: bool, options: Options) -> Scene {
     let filter = Gaussian::from_range(LAMBDA0, case.range_m, 1.0).unwrap();

@@ -35,7 +35,7 @@ fn explain(family: Family) -> String {
             .into(),
         Family::Uniform(_) => "trapezoid rule: n equally spaced wavelengths over λ0 ± kσ with weights λ·G(λ) \
              (h/2 at the ends), `optics::defocus_otf` at each, the fixed frequency rule below; the Gaussian \
-             beyond ±kσ is dropped (PHYSICS.md: a bias of ~1e-3 of the MTF area at ±3σ, ~1e-7 at ±5σ)."
+             beyond ±kσ is dropped (docs/physics.md: a bias of ~1e-3 of the MTF area at ±3σ, ~1e-7 at ±5σ)."
             .into(),
         Family::Hermite => "n wavelengths λ0 + √2σ xᵢ of the rule for e^{−x²} \
              (`optics::quad::gauss_hermite`) with weights wᵢ λᵢ (the λ factor of the detected weight is \
@@ -57,7 +57,7 @@ fn explain_kernel(kernel: Kernel) -> &'static str {
              |a| = 24)."
         }
         Kernel::GaussLegendre(_) => {
-            "one n-point Gauss–Legendre rule on PHYSICS.md's t-form \
+            "one n-point Gauss–Legendre rule on the t-form of docs/physics.md \
              `4/(πa) ∫_0^{acos s} sin[a(cos t − s)] cos t dt`, whatever a: it fails once the integrand's \
              ~a/π oscillations outnumber the nodes."
         }
@@ -67,7 +67,7 @@ fn explain_kernel(kernel: Kernel) -> &'static str {
              a = 8πws; \"all terms\" is `optics::reference::otf_hopkins`."
         }
         Kernel::Geometric => {
-            "the geometric-optics blur disk `2J1(x)/x`, x = πdν = 8πws = a (PHYSICS.md, \
+            "the geometric-optics blur disk `2J1(x)/x`, x = πdν = 8πws = a (docs/physics.md, \
              \"Geometric limit\"; `optics::reference::otf_geometric`): a large-defocus approximation."
         }
     }
@@ -193,7 +193,7 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
     let _ = writeln!(
         s,
         "The monochromatic OTF of a centred circular pupil with defocus w waves, at the 12 frequencies \
-         s = (k − ½)/12 for each w, against `optics::reference::otf_defocus` (PHYSICS.md's printed y-form by \
+         s = (k − ½)/12 for each w, against `optics::reference::otf_defocus` (the y-form printed in docs/physics.md, by \
          adaptive Gauss–Kronrod, accurate to ~1e-13 absolute: smaller errors are the reference's). Each w column: \
          the largest absolute error over the 12 points · the median time per OTF value. Relative error: to the \
          envelope min(1, 4/(π|a|)), a = 8πws, that bounds |OTF| (|sin| ≤ 1 in the printed formula). The OTF is 1 \

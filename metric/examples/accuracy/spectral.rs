@@ -2,7 +2,7 @@
 //! monochromatic OTF (`optics::defocus_otf`) at its nodes and one fixed frequency rule, so that a
 //! row's error is its spectral rule's.
 //!
-//! PHYSICS.md, "Polychromatic OTF": `OTF_poly(ν) = Σ Wᵢ OTF(ν λᵢ F#, w(λᵢ)) / Σ Wᵢ` with the
+//! docs/physics.md, "Polychromatic OTF": `OTF_poly(ν) = Σ Wᵢ OTF(ν λᵢ F#, w(λᵢ)) / Σ Wᵢ` with the
 //! detected weights `W ∝ λ · G(λ)` (flat source behind a Gaussian filter, constant QE and τ1),
 //! and the mean MTF `(1/ν_N) ∫_0^{ν_N} |OTF_poly| dν` (paper eq. 1 without SNR0).
 
@@ -24,7 +24,7 @@ fn gaussian(case: &Case, lambda: f64) -> f64 {
 
 /// The trapezoid rule with `n ≥ 2` nodes on `[λ0 − kσ, λ0 + kσ]`: spacing `h = 2kσ/(n − 1)`,
 /// weights `h` (`h/2` at the ends) times `λ G(λ)`. The Gaussian beyond ±kσ is dropped, which
-/// biases the MTF area by about 1e-3 at ±3σ and 1e-7 at ±5σ (PHYSICS.md, "Optics").
+/// biases the MTF area by about 1e-3 at ±3σ and 1e-7 at ±5σ (docs/physics.md, "Spectral quadrature").
 pub(crate) fn uniform(case: &Case, k: u32, n: usize) -> Vec<Node> {
     let half = f64::from(k) * case.sigma();
     let h = 2.0 * half / (n - 1) as f64;
@@ -40,7 +40,7 @@ pub(crate) fn uniform(case: &Case, k: u32, n: usize) -> Vec<Node> {
 /// Gauss–Hermite nodes `λᵢ = λ0 + √2 σ xᵢ` from the standard rule `(xᵢ, wᵢ)` for `e^{−x²}`
 /// (`optics::quad::gauss_hermite`): `∫ λ G(λ) g(λ) dλ = √2 σ ∫ e^{−x²} λ(x) g(λ(x)) dx`, so the
 /// weight is `√2 σ wᵢ λᵢ` and the λ factor, linear in x, is integrated exactly with the rest.
-/// Nodes at λ ≤ 0, where the spectrum is zero (PHYSICS.md: truncated there), are dropped; their
+/// Nodes at λ ≤ 0, where the spectrum is zero (docs/physics.md, "Spectra": truncated there), are dropped; their
 /// weights are below `e^{−(λ0/σ)²/2}` (1e-28 for the hard scene).
 pub(crate) fn hermite(case: &Case, standard: &[(f64, f64)]) -> Vec<Node> {
     let scale = 2f64.sqrt() * case.sigma();

@@ -43,7 +43,7 @@ fn line(centre: f64, width: f64, peak: f64) -> Spectrum {
 }
 
 /// Mean over [0, ν_N] of |OTF(ν λ F#, W020(λ)/λ)| for the chromatic lens at one wavelength,
-/// written from PHYSICS.md with `defocus_otf` only: zeros bracketed on a 4000-point grid and
+/// written from docs/physics.md ("Exact defocused OTF"), with `defocus_otf` only: zeros bracketed on a 4000-point grid and
 /// bisected to rounding, 8 Gauss–Legendre panels between consecutive zeros; a piece that ends at
 /// the cutoff is integrated in u with ν = ν_c − (ν_c − a) u², which smooths the (1 − s)^{3/2} edge.
 fn direct_mean(f_number: f64, lambda: f64, pixel_m: f64) -> f64 {

@@ -18,7 +18,7 @@ use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use radiometry::{Blackbody, Gaussian, Sampled, Spectrum, TopHat};
 
-/// The paper's lens and camera (PHYSICS.md, "The metric").
+/// The paper's lens and camera (docs/physics.md, "The metric").
 const F0: f64 = 3.36e-3;
 const LAMBDA0: f64 = 800e-9;
 const RADIANCE: f64 = 0.025e9;

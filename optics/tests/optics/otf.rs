@@ -18,8 +18,8 @@ fn strehl_quarter(w: f64) -> f64 {
     })
 }
 
-/// PHYSICS.md identities: ∫_0^1 MTF_0 ds = 4/(3π) and 2 ∫_0^1 OTF(s, w) s ds = Strehl/4 with
-/// Strehl = [sin(πw)/(πw)]² for pure defocus, to 1e-9. PHYSICS.md quotes the identity's value,
+/// docs/physics.md identities: ∫_0^1 MTF_0 ds = 4/(3π) and 2 ∫_0^1 OTF(s, w) s ds = Strehl/4 with
+/// Strehl = [sin(πw)/(πw)]² for pure defocus, to 1e-9. docs/physics.md quotes the identity's value,
 /// Strehl/4: w = 0.25 → 0.20264, w = 0.5 → 0.10132.
 #[test]
 fn identities_hold_to_1e9() {
@@ -47,7 +47,7 @@ fn fast_otf_matches_the_reference() {
     assert!(worst < 1e-10, "largest difference {worst:e}");
 }
 
-/// Geometric limit (PHYSICS.md): for large defocus OTF → 2 J1(x)/x, x = π d ν, with the blur
+/// Geometric limit (docs/physics.md, "Geometric limit"): for large defocus OTF → 2 J1(x)/x, x = π d ν, with the blur
 /// diameter d = 2|Δz| NA. In normalized units x = 8π w s... precisely: Δz = 8 F#² W020,
 /// d ν = 2 · 8 F#² W020 / (2 F#) · s/(λ F#) = 8 w s, so x = 8π w s = a.
 #[test]
