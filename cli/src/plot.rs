@@ -815,7 +815,7 @@ fn tick_count(ctx: Ctx, length: i32, each: f64) -> usize {
 impl Axes<'_> {
     /// Tick counts and formats for a plotting area about `(w, h)` pixels.
     fn ticks(&self, ctx: Ctx, (w, h): (i32, i32)) -> ((usize, TickFormat), (usize, TickFormat)) {
-        let nx = tick_count(ctx, w, TICK_PT * 6.0);
+        let nx = tick_count(ctx, w, TICK_PT * 4.0);
         let ny = tick_count(ctx, h, TICK_PT * 2.5);
         ((nx, TickFormat::of(&ticks(self.x, nx))), (ny, TickFormat::of(&ticks(self.y, ny))))
     }
@@ -1094,7 +1094,9 @@ impl Plot for LinesPlot<'_> {
         }
         let (lo, hi) = extent(all().map(|p| p.1));
         let (lo, hi) = (lo.min(0.0), hi.max(0.0));
-        let pad = 0.06 * (hi - lo).max(1e-12);
+        // 6 % of the span above (and below, for negative values); all zeros span 0 to 1
+        let span = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) { hi - lo } else { hi.abs().max(1.0) / 0.06 };
+        let pad = 0.06 * span;
         let y = (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad);
         let axes = Axes { x: (x0, x1), y, x_desc: self.labels.x, y_desc: self.labels.y, grid: true };
         let (mut chart, _) = axes.build(area, ctx, 0)?;
@@ -1253,7 +1255,9 @@ impl Plot for HeatmapPlot<'_> {
             })
             .collect();
         draw_curve(&mut chart, ctx, &ridge, RIDGE)?;
-        if ridge.len() <= 60 {
+        // a dot at each sample of the ridge, when they are at least 8 pt apart
+        let plot_w = f64::from(chart.plotting_area().dim_in_pixel().0) / ctx.k;
+        if ridge.len() as f64 * 8.0 <= plot_w {
             let (r, ring) = (ctx.px(1.8), RGBColor(30, 30, 30).stroke_width(ctx.stroke(0.5)));
             chart
                 .draw_series(ridge.iter().flat_map(|&p| [Circle::new(p, r, WHITE.filled()), Circle::new(p, r, ring)]))

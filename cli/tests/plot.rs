@@ -180,6 +180,16 @@ fn heatmap_of_a_sweep_csv_with_ridge_mark_and_shading() {
         "-o",
         out.to_str().unwrap(),
     ]);
+    // the legend lies outside the heatmap and its colour bar
+    let lines = polylines(&svg(&out));
+    let legend = outline(&lines, LEGEND_EDGE).expect("a legend box");
+    let frames: Vec<Rect> = lines
+        .iter()
+        .filter(|l| l.stroke == FRAME && l.points.len() >= 5 && l.points.first() == l.points.get(4))
+        .map(Polyline::bounds)
+        .collect();
+    assert_eq!(frames.len(), 2, "the heatmap's and the colour bar's frames: {frames:?}");
+    assert!(frames.iter().all(|f| !f.overlaps(&legend)), "legend {legend:?} over {frames:?}");
     let texts = texts(&svg(&out));
     for needle in [
         "max ASNR for each F-number",
