@@ -82,6 +82,13 @@ enum Command {
         /// Draw the ASNR (one key: a line; two keys: a heatmap with the optimum ridge), .svg or .png.
         #[arg(long, value_name = "FILE")]
         plot: Option<PathBuf>,
+        /// Width of the plot, pixels (default 900); the height follows.
+        #[arg(long, value_name = "PX", requires = "plot")]
+        width: Option<u32>,
+        /// Resolution of the plot, dots per inch: text and lines are sized in points at it, and
+        /// PNGs record it (default: the width over 6 inches). E.g. --width 1050 --dpi 300.
+        #[arg(long, value_name = "N", requires = "plot")]
+        dpi: Option<f64>,
         /// Worker threads (0 = all cores). The results do not depend on it.
         #[arg(long, default_value_t = 0, value_name = "N")]
         threads: usize,
@@ -107,6 +114,13 @@ enum Command {
         /// Also draw the curves into this file (.svg or .png).
         #[arg(long, value_name = "FILE.svg|png")]
         plot: Option<PathBuf>,
+        /// Width of the plot, pixels (default 900); the height follows.
+        #[arg(long, value_name = "PX", requires = "plot")]
+        width: Option<u32>,
+        /// Resolution of the plot, dots per inch: text and lines are sized in points at it, and
+        /// PNGs record it (default: the width over 6 inches). E.g. --width 1050 --dpi 300.
+        #[arg(long, value_name = "N", requires = "plot")]
+        dpi: Option<f64>,
         /// Extend the axis to the cutoff of the shortest wavelength instead of stopping at Nyquist.
         #[arg(long)]
         to_cutoff: bool,
@@ -163,7 +177,8 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Sweep { scene, set, over, csv, json, plot, threads, tolerance } => {
+        Command::Sweep { scene, set, over, csv, json, plot, width, dpi, threads, tolerance } => {
+            let figure = plot::Figure::new(width, dpi)?;
             let set = with_tolerance(set, tolerance);
             let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
             let total: usize = ranges.iter().map(|r| r.points.unwrap_or(1)).product();
@@ -180,7 +195,7 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!("{line}");
             }
             if let Some(path) = &plot {
-                plot::sweep_plot(path, built.title().unwrap_or(source.label()), &ranges, &points)?;
+                plot::sweep_plot(path, &figure, built.title().unwrap_or_default(), &ranges, &points)?;
             }
             if json {
                 println!("{}", serde_json::to_string_pretty(&points)?);
@@ -192,7 +207,8 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Plot(args) => plotcmd::run(&args),
-        Command::Mtf { scene, set, json, csv, plot, to_cutoff, points, wavelengths } => {
+        Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths } => {
+            let figure = plot::Figure::new(width, dpi)?;
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
             if !(2..=100_000).contains(&points) {
                 anyhow::bail!("--points {points}: expected a whole number from 2 to 100000");
@@ -206,7 +222,8 @@ fn run(cli: Cli) -> Result<()> {
             let curve =
                 metric::mtf_curve(&loaded, range, points, &metres).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if let Some(path) = &plot {
-                plot::mtf_plot(path, loaded.title().unwrap_or(&label), &curve)?;
+                let title = loaded.title().map_or_else(|| loaded.lens().describe(), str::to_owned);
+                plot::mtf_plot(path, &figure, &title, &curve)?;
             }
             if json {
                 println!("{}", output::mtf_json(&label, &loaded, &curve)?);

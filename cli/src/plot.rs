@@ -2,6 +2,16 @@
 //! general line overlays and heatmaps of `asnr plot`. PNG text is rasterized with DejaVu Sans
 //! embedded in the binary (`assets/`, Bitstream Vera licence), so no system font or fontconfig is
 //! needed.
+//!
+//! Layout: the title (wrapped to the width), the axes with human labels and units taken from the
+//! dotted keys ([`axis_label`]), and the legend in a box below the axes, never over the data.
+//! Sizes are in points (1/72 inch) at the figure's resolution ([`Figure`]): a 3.5-inch figure at
+//! 300 dpi has 8 pt tick labels and 9 pt axis labels. Reference curves (diffraction limit,
+//! Nyquist, `--mark-x` lines) are dark and dashed and drawn last, on top of the data; each legend
+//! swatch is drawn with its line's own stroke, dashes included. PNGs are rendered at two or three
+//! times their size and box-filtered down, which anti-aliases lines, and carry their resolution
+//! in a pHYs chunk; SVGs are drawn at twice their shown size so plotters' whole-pixel coordinates
+//! do not make curves visibly stepped.
 
 use std::path::Path;
 use std::sync::Once;
@@ -12,13 +22,13 @@ use metric::MtfCurve;
 use crate::optimize::Range;
 use crate::sweep::Point;
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::Ranged;
 use plotters::coord::types::RangedCoordf64;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
-
-/// Plot size, pixels.
-const SIZE: (u32, u32) = (900, 560);
 
 /// Registers the embedded font (both backends measure text with it; PNG also rasterizes it).
 fn register_font() {
@@ -29,63 +39,158 @@ fn register_font() {
     });
 }
 
-/// Draws with `$draw(root)` into `$path` on the backend its extension names (.svg or .png);
-/// errors name the option `$flag` that gave the path.
-macro_rules! render {
-    ($flag:expr, $path:expr, $draw:expr) => {{
-        let (flag, path): (&str, &Path) = ($flag, $path);
-        let err = |e: &dyn std::fmt::Display| anyhow!("{flag} {}: {e}", path.display());
-        register_font();
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("svg") => $draw(SVGBackend::new(path, SIZE).into_drawing_area()).map_err(|e| err(&e)),
-            Some("png") => $draw(BitMapBackend::new(path, SIZE).into_drawing_area()).map_err(|e| err(&e)),
-            _ => bail!("{flag} {}: expected a file name ending in .svg or .png", path.display()),
-        }
-    }};
+/// Default figure width, pixels.
+pub const DEFAULT_WIDTH: u32 = 900;
+/// Without `--dpi`, a figure is this many inches wide (900 px: 150 dpi).
+const DEFAULT_INCHES: f64 = 6.0;
+/// Accepted `--width`, pixels.
+const WIDTHS: std::ops::RangeInclusive<u32> = 300..=4000;
+/// Accepted `--dpi`.
+const DPIS: std::ops::RangeInclusive<f64> = 30.0..=2400.0;
+/// Accepted physical widths, `--width / --dpi`, inches: narrower leaves no room for the text.
+const INCHES: std::ops::RangeInclusive<f64> = 2.0..=40.0;
+/// Height of the axes block (plot, ticks and axis labels) over the width; the title and the
+/// legend add to it.
+const ASPECT: f64 = 0.56;
+
+/// Title, axis-label, tick-label and legend text sizes, points.
+const TITLE_PT: f64 = 10.0;
+const DESC_PT: f64 = 9.0;
+const TICK_PT: f64 = 8.0;
+const LEGEND_PT: f64 = 8.0;
+/// A plotters font size over the em size it draws in SVG (plotters writes `font-size = size / 1.24`).
+const FONT_SCALE: f64 = 1.24;
+
+/// SVGs are drawn at this many times their shown size (see the module docs).
+const SVG_FINE: u32 = 2;
+/// Largest supersampled PNG, pixels (3 bytes each).
+const MAX_SUPERSAMPLED: u64 = 48_000_000;
+
+/// Size and resolution of a plot: the width in pixels and the dots per inch that set the size
+/// of text and lines (sizes are in points); the height follows from the width and the legend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Figure {
+    width: u32,
+    dpi: f64,
 }
 
-/// How many times larger SVGs of [`lines_plot`] and [`heatmap_plot`] are drawn than shown.
-/// Plotters rounds SVG coordinates to whole pixels, which makes smooth curves visibly stepped;
-/// drawn at `FINE × SIZE` and shown at `SIZE` (the viewBox keeps the drawing's coordinates), the
-/// steps are a fraction of a pixel.
-const FINE: u32 = 2;
+impl Default for Figure {
+    fn default() -> Self {
+        Self { width: DEFAULT_WIDTH, dpi: f64::from(DEFAULT_WIDTH) / DEFAULT_INCHES }
+    }
+}
 
-/// Like `render!`, with `$draw(root, k)` scaling its pixel sizes (fonts, margins, strokes) by
-/// `k`: SVGs are drawn at [`FINE`] times [`SIZE`] and shown at `SIZE`; PNGs at `SIZE`, `k = 1`.
-macro_rules! render_fine {
-    ($flag:expr, $path:expr, $draw:expr) => {{
-        let (flag, path): (&str, &Path) = ($flag, $path);
-        let err = |e: &dyn std::fmt::Display| anyhow!("{flag} {}: {e}", path.display());
-        register_font();
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-            Some("svg") => {
-                let fine = (SIZE.0 * FINE, SIZE.1 * FINE);
-                let mut text = String::new();
-                $draw(SVGBackend::with_string(&mut text, fine).into_drawing_area(), FINE as i32)
-                    .map_err(|e| err(&e))?;
-                let text = text.replacen(
-                    &format!("<svg width=\"{}\" height=\"{}\"", fine.0, fine.1),
-                    &format!("<svg width=\"{}\" height=\"{}\"", SIZE.0, SIZE.1),
-                    1,
-                );
-                std::fs::write(path, text).map_err(|e| err(&e))
-            }
-            Some("png") => $draw(BitMapBackend::new(path, SIZE).into_drawing_area(), 1).map_err(|e| err(&e)),
-            _ => bail!("{flag} {}: expected a file name ending in .svg or .png", path.display()),
+impl Figure {
+    /// The figure of `--width PX` and `--dpi N` (defaults: 900 px, a 6-inch figure).
+    pub fn new(width: Option<u32>, dpi: Option<f64>) -> Result<Self> {
+        let width = width.unwrap_or(DEFAULT_WIDTH);
+        if !WIDTHS.contains(&width) {
+            bail!("--width {width}: expected a whole number of pixels from {} to {}", WIDTHS.start(), WIDTHS.end());
         }
-    }};
+        let Some(dpi) = dpi else {
+            return Ok(Self { width, dpi: f64::from(width) / DEFAULT_INCHES });
+        };
+        if !(dpi.is_finite() && DPIS.contains(&dpi)) {
+            bail!("--dpi {dpi}: expected dots per inch from {} to {}", DPIS.start(), DPIS.end());
+        }
+        let inches = f64::from(width) / dpi;
+        if !INCHES.contains(&inches) {
+            bail!(
+                "--dpi {dpi} with --width {width}: the figure would be {inches:.2} inches wide; expected --width / \
+                 --dpi from {} to {} inches (e.g. --width 1050 --dpi 300 for a 3.5-inch column)",
+                INCHES.start(),
+                INCHES.end()
+            );
+        }
+        Ok(Self { width, dpi })
+    }
+
+    /// Pixels per point (1/72 inch).
+    fn px_per_pt(&self) -> f64 {
+        self.dpi / 72.0
+    }
+}
+
+/// Human name and unit of a scene key or result column: from a table of known keys, otherwise
+/// the last segment of the dotted key with a unit suffix (`_nm`, `_um`, `_mm`, `_ms`, `_deg`,
+/// `_k`, `_e`, `_cyc_per_mm`) taken off as the unit and underscores read as spaces.
+pub fn quantity(key: &str) -> (String, Option<&'static str>) {
+    const KNOWN: &[(&str, &str, Option<&str>)] = &[
+        ("spectrum.range_nm", "spectral range", Some("nm")),
+        ("spectrum.center_nm", "centre wavelength", Some("nm")),
+        ("spectrum.peak", "filter peak transmission", None),
+        ("lens.f_number", "F-number", None),
+        ("lens.focal_length_mm", "focal length", Some("mm")),
+        ("lens.design_wavelength_nm", "design wavelength", Some("nm")),
+        ("lens.efficiency", "lens efficiency τ1", None),
+        ("lens.transmission", "lens transmission", None),
+        ("lens.spherical_um", "spherical aberration", Some("µm")),
+        ("lens.field_curvature_um", "field curvature", Some("µm")),
+        ("camera.pixel_pitch_um", "pixel pitch", Some("µm")),
+        ("camera.quantum_efficiency", "quantum efficiency", None),
+        ("camera.read_noise_e", "read noise", Some("e⁻")),
+        ("camera.full_well_e", "full well", Some("e⁻")),
+        ("camera.gain_dn_per_e", "gain", Some("DN/e⁻")),
+        ("camera.adc_bits", "ADC bits", None),
+        ("exposure.time_ms", "exposure time", Some("ms")),
+        ("field.x_deg", "field angle x", Some("°")),
+        ("field.y_deg", "field angle y", Some("°")),
+        ("source.temperature_k", "source temperature", Some("K")),
+        ("source.radiance_w_m2_sr_nm", "radiance", Some("W m⁻² sr⁻¹ nm⁻¹")),
+        ("options.fraunhofer_threshold_mm", "Fraunhofer threshold", Some("mm")),
+        ("asnr", "ASNR", None),
+        ("mean_mtf", "mean MTF", None),
+        ("snr0", "SNR0", None),
+        ("photoelectrons", "photoelectrons per pixel", None),
+        ("fraunhofer_valid", "Fraunhofer approximation valid", None),
+        ("frequency_cyc_per_mm", "spatial frequency", Some("cycles/mm")),
+        ("mtf", "MTF", None),
+        ("diffraction_limited", "diffraction-limited MTF", None),
+    ];
+    const SUFFIXES: &[(&str, &str)] = &[
+        ("_cyc_per_mm", "cycles/mm"),
+        ("_nm", "nm"),
+        ("_um", "µm"),
+        ("_mm", "mm"),
+        ("_ms", "ms"),
+        ("_deg", "°"),
+        ("_k", "K"),
+        ("_e", "e⁻"),
+    ];
+    let key = key.trim();
+    if let Some(&(_, name, unit)) = KNOWN.iter().find(|k| k.0 == key) {
+        return (name.to_owned(), unit);
+    }
+    let last = key.rsplit('.').next().filter(|s| !s.is_empty()).unwrap_or(key);
+    for &(suffix, unit) in SUFFIXES {
+        if let Some(stem) = last.strip_suffix(suffix).filter(|s| !s.is_empty()) {
+            return (stem.replace('_', " "), Some(unit));
+        }
+    }
+    let name = last.replace('_', " ").trim().to_owned();
+    (if name.is_empty() { key.to_owned() } else { name }, None)
+}
+
+/// The axis label of a scene key or result column: its human name with the unit in parentheses,
+/// e.g. `spectrum.range_nm` → "spectral range (nm)" (see [`quantity`]).
+pub fn axis_label(key: &str) -> String {
+    match quantity(key) {
+        (name, Some(unit)) => format!("{name} ({unit})"),
+        (name, None) => name,
+    }
 }
 
 /// Writes the MTF curve as a line chart, SVG or PNG by the file's extension: the polychromatic
-/// MTF, the diffraction limit, the monochromatic curves, and the Nyquist frequency when the axis
-/// extends past it.
-pub fn mtf_plot(path: &Path, title: &str, curve: &MtfCurve) -> Result<()> {
-    render!("--plot", path, |root| draw(root, title, curve))
+/// MTF, the off-axis directional MTFs, the monochromatic curves, and on top the diffraction limit
+/// and the Nyquist frequency (when the axis extends past it). An empty `title` is none.
+pub fn mtf_plot(path: &Path, figure: &Figure, title: &str, curve: &MtfCurve) -> Result<()> {
+    render("--plot", path, figure, &MtfPlot { title, curve })
 }
 
 /// Writes a sweep's ASNR: a line against the key for one swept key, a heatmap with the ridge of
-/// the optimum (the best second key for each value of the first) for two.
-pub fn sweep_plot(path: &Path, title: &str, ranges: &[Range], points: &[Point]) -> Result<()> {
+/// the optimum (the best second key for each value of the first) for two. An empty `title` is
+/// none.
+pub fn sweep_plot(path: &Path, figure: &Figure, title: &str, ranges: &[Range], points: &[Point]) -> Result<()> {
     match ranges {
         [range] => {
             let series = Series {
@@ -93,8 +198,10 @@ pub fn sweep_plot(path: &Path, title: &str, ranges: &[Range], points: &[Point]) 
                 points: points.iter().map(|p| (p.values[0], p.asnr)).collect(),
                 shaded: Vec::new(),
             };
-            let labels = Labels { title, x: &range.key, y: "ASNR", ..Labels::default() };
-            lines_plot("--plot", path, &labels, &[series], &[], true)
+            let x = axis_label(&range.key);
+            let unit = quantity(&range.key).1.unwrap_or_default();
+            let labels = Labels { title, x: &x, y: "ASNR", x_unit: unit, ..Labels::default() };
+            lines_plot("--plot", path, figure, &labels, &[series], &[], true)
         }
         [first, second] => {
             let grid = Grid {
@@ -103,9 +210,10 @@ pub fn sweep_plot(path: &Path, title: &str, ranges: &[Range], points: &[Point]) 
                 z: points.iter().map(|p| p.asnr).collect(),
                 shaded: Vec::new(),
             };
-            let ridge = format!("best {} for each {}", second.key, first.key);
-            let labels = Labels { title, x: &first.key, y: &second.key, z: "ASNR", ridge: &ridge, shade: "" };
-            heatmap_plot("--plot", path, &labels, &grid, &[])
+            let (x, y) = (axis_label(&first.key), axis_label(&second.key));
+            let ridge = format!("best {} for each {}", quantity(&second.key).0, quantity(&first.key).0);
+            let labels = Labels { title, x: &x, y: &y, z: "ASNR", ridge: &ridge, ..Labels::default() };
+            heatmap_plot("--plot", path, figure, &labels, &grid, &[])
         }
         _ => bail!("--plot: a sweep over {} keys; plots take one key (a line) or two (a heatmap)", ranges.len()),
     }
@@ -115,7 +223,7 @@ pub fn sweep_plot(path: &Path, title: &str, ranges: &[Range], points: &[Point]) 
 /// of shaded regions (used only when something is shaded).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Labels<'a> {
-    /// Caption above the chart.
+    /// Caption above the chart; empty for none.
     pub title: &'a str,
     /// Description of the x axis.
     pub x: &'a str,
@@ -127,6 +235,8 @@ pub struct Labels<'a> {
     pub ridge: &'a str,
     /// Legend entry of shaded points or cells.
     pub shade: &'a str,
+    /// Unit of x for the legend's maxima ("max 10.57 at 34.39 nm"); empty for none.
+    pub x_unit: &'a str,
 }
 
 /// One line of an overlay plot.
@@ -163,25 +273,13 @@ pub struct Mark {
     pub label: Option<String>,
 }
 
-/// Series colours: blue, red, amber (the paper's Fig. 2b order: theory, simulated, measured),
-/// then green, purple, teal, brown, grey.
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(20, 80, 200),
-    RGBColor(215, 40, 40),
-    RGBColor(235, 160, 0),
-    RGBColor(40, 160, 70),
-    RGBColor(150, 60, 170),
-    RGBColor(0, 150, 160),
-    RGBColor(140, 80, 30),
-    RGBColor(90, 90, 90),
-];
-
 /// Writes lines `series` (at least one point in all), with vertical `marks`, shaded regions
 /// where a series' points are flagged, and with `mark_best` a dot at each line's maximum (see
 /// [`peak`]; its x and y in the legend). SVG or PNG by the file's extension; errors name `flag`.
 pub fn lines_plot(
     flag: &str,
     path: &Path,
+    figure: &Figure,
     labels: &Labels,
     series: &[Series],
     marks: &[Mark],
@@ -190,17 +288,24 @@ pub fn lines_plot(
     if series.iter().all(|s| s.points.is_empty()) {
         bail!("{flag} {}: nothing to plot (no points)", path.display());
     }
-    render_fine!(flag, path, |root, k| draw_lines(root, k, labels, series, marks, mark_best))
+    render(flag, path, figure, &LinesPlot { labels, series, marks, mark_best })
 }
 
 /// Writes a heatmap of `grid` with a colour bar, the ridge (for each x the y of the largest
 /// value, see [`peak`]; a white line), vertical `marks` (dashed red) and shaded cells. SVG or PNG
 /// by the file's extension; errors name `flag`.
-pub fn heatmap_plot(flag: &str, path: &Path, labels: &Labels, grid: &Grid, marks: &[Mark]) -> Result<()> {
+pub fn heatmap_plot(
+    flag: &str,
+    path: &Path,
+    figure: &Figure,
+    labels: &Labels,
+    grid: &Grid,
+    marks: &[Mark],
+) -> Result<()> {
     if grid.xs.is_empty() || grid.ys.is_empty() || grid.z.len() != grid.xs.len() * grid.ys.len() {
         bail!("{flag} {}: the heatmap grid is empty or incomplete", path.display());
     }
-    render_fine!(flag, path, |root, k| draw_heatmap(root, k, labels, grid, marks))
+    render(flag, path, figure, &HeatmapPlot { labels, grid, marks })
 }
 
 /// The maximum of sampled `(x, y)` (increasing x): the largest sample, refined by the vertex of
@@ -247,191 +352,807 @@ fn extent(values: impl Iterator<Item = f64>) -> (f64, f64) {
     if lo.is_finite() && hi.is_finite() { (lo, hi) } else { (0.0, 1.0) }
 }
 
-/// Plain number for legends and ticks: up to four decimals, trailing zeros dropped.
+/// Plain number for legends: up to four decimals, trailing zeros dropped.
 pub fn number(v: f64) -> String {
     let s = format!("{v:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".to_owned() } else { s.to_owned() }
 }
 
-/// The embedded font at `size` pixels times the scale `k`.
-fn font(size: i32, k: i32) -> (&'static str, i32) {
-    ("sans-serif", size * k)
+/// `v` to four significant digits, trailing zeros dropped: "10.57", "34.39", "0.001234".
+fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return number(v);
+    }
+    let decimals = (3 - v.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    let s = format!("{v:.decimals$}");
+    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
+    if s == "-0" { "0".to_owned() } else { s.to_owned() }
 }
 
-/// A stroke `width` pixels wide times the scale `k`.
-fn px(width: i32, k: i32) -> u32 {
-    (width * k).unsigned_abs()
+/// How tick labels are written: fixed with this many decimals, or in scientific notation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum TickFormat {
+    Fixed(usize),
+    Scientific,
 }
 
-/// Draws the vertical marks over `y_range` in `colour`, dashed and `width` pixels wide (times
-/// the scale `k`); one legend entry per distinct label.
-fn draw_marks<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
-    k: i32,
-    marks: &[Mark],
-    (y0, y1): (f64, f64),
-    (colour, width): (RGBColor, i32),
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let style = colour.stroke_width(px(width, k));
-    let mut labelled: Vec<&str> = Vec::new();
-    for mark in marks {
-        let series = chart
-            .draw_series(DashedLineSeries::new(vec![(mark.x, y0), (mark.x, y1)], 8 * k, 5 * k, style))
-            .map_err(|e| e.to_string())?;
-        if let Some(label) = mark.label.as_deref().filter(|l| !labelled.contains(l)) {
-            labelled.push(label);
-            series.label(label).legend(move |(x, y)| {
-                plotters::element::DashedPathElement::new(vec![(x, y), (x + 20 * k, y)], 5 * k, 3 * k, style)
-            });
+impl TickFormat {
+    /// The fewest decimals that write every tick exactly (to a millionth of the step); scientific
+    /// for ticks of more than eight decimals or of a million or more.
+    fn of(ticks: &[f64]) -> Self {
+        let step = ticks.windows(2).map(|w| (w[1] - w[0]).abs()).fold(f64::INFINITY, f64::min);
+        let step =
+            if step.is_finite() && step > 0.0 { step } else { ticks.first().map_or(1.0, |t| t.abs().max(1e-300)) };
+        if ticks.iter().any(|t| t.abs() >= 1e6) {
+            return Self::Scientific;
         }
+        (0..=8)
+            .find(|&d| {
+                let scale = 10f64.powi(d as i32);
+                ticks.iter().all(|t| ((t * scale).round() / scale - t).abs() <= 1e-6 * step)
+            })
+            .map_or(Self::Scientific, Self::Fixed)
     }
-    Ok(())
-}
 
-fn draw_lines<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    k: i32,
-    labels: &Labels,
-    series: &[Series],
-    marks: &[Mark],
-    mark_best: bool,
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let err = |e: &dyn std::fmt::Display| e.to_string();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let all = || series.iter().flat_map(|s| s.points.iter());
-    let (mut x0, mut x1) = extent(all().map(|p| p.0));
-    if x1 <= x0 {
-        (x0, x1) = (x0 - 0.5, x1 + 0.5);
-    }
-    let (lo, hi) = extent(all().map(|p| p.1));
-    let (lo, hi) = (lo.min(0.0), hi.max(0.0));
-    let pad = 0.08 * (hi - lo).max(1e-12);
-    let (y0, y1) = (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(labels.title, font(20, k))
-        .margin(16 * k)
-        .margin_right(28 * k)
-        .x_label_area_size(48 * k)
-        .y_label_area_size(64 * k)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc(labels.x)
-        .y_desc(labels.y)
-        .x_label_formatter(&|v| number(*v))
-        .y_label_formatter(&|v| number(*v))
-        .max_light_lines(1)
-        .bold_line_style(RGBColor(205, 205, 205).stroke_width(px(1, k)))
-        .light_line_style(RGBColor(240, 240, 240).stroke_width(px(1, k)))
-        .axis_style(BLACK.stroke_width(px(1, k)))
-        .set_all_tick_mark_size(5 * k)
-        .label_style(font(14, k))
-        .axis_desc_style(font(16, k))
-        .draw()
-        .map_err(|e| err(&e))?;
-    // shading first, under everything: each series' flagged points, layered in translucent grey
-    let grey = RGBColor(110, 110, 110);
-    let mut shade_legend = !labels.shade.is_empty();
-    for s in series.iter().filter(|s| s.shaded.iter().any(|&f| f)) {
-        let xs: Vec<f64> = s.points.iter().map(|p| p.0).collect();
-        let edges = cell_edges(&xs);
-        let shaded = |i: usize| s.shaded.get(i).copied().unwrap_or(false);
-        let mut rects = Vec::new();
-        let mut i = 0;
-        while i < xs.len() {
-            let start = i;
-            while i < xs.len() && shaded(i) {
-                i += 1;
-            }
-            if i > start {
-                rects.push(Rectangle::new([(edges[start], y0), (edges[i], y1)], grey.mix(0.12).filled()));
-            } else {
-                i += 1;
-            }
-        }
-        let drawn = chart.draw_series(rects).map_err(|e| err(&e))?;
-        if shade_legend {
-            shade_legend = false;
-            drawn.label(labels.shade).legend(move |(x, y)| {
-                Rectangle::new([(x, y - 6 * k), (x + 20 * k, y + 6 * k)], grey.mix(0.3).filled())
-            });
-        }
-    }
-    draw_marks(&mut chart, k, marks, (y0, y1), (RGBColor(100, 100, 100), 1))?;
-    for (i, s) in series.iter().enumerate() {
-        let colour = PALETTE[i % PALETTE.len()];
-        let style = colour.stroke_width(px(3, k));
-        let dashed = |j: usize| s.shaded.get(j).copied().unwrap_or(false);
-        let best = peak(&s.points);
-        let label = match best {
-            Some((x, y)) if mark_best => {
-                format!("{}: max {} at {} (parabola between grid points)", s.label, number(y), number(x))
-            }
-            _ => s.label.clone(),
+    fn write(self, v: f64) -> String {
+        let s = match self {
+            Self::Fixed(d) => format!("{v:.d$}"),
+            Self::Scientific => format!("{v:.2e}"),
         };
-        // runs of segments, solid, or dashed where they end in a shaded point
-        let mut runs: Vec<(bool, Vec<(f64, f64)>)> = Vec::new();
-        for (j, w) in s.points.windows(2).enumerate() {
-            match runs.last_mut() {
-                Some((kind, run)) if *kind == dashed(j + 1) => run.push(w[1]),
-                _ => runs.push((dashed(j + 1), vec![w[0], w[1]])),
-            }
-        }
-        if runs.is_empty() {
-            runs.push((false, s.points.clone()));
-        }
-        for (j, (kind, run)) in runs.into_iter().enumerate() {
-            let drawn = if kind {
-                let thin = colour.stroke_width(px(2, k));
-                chart.draw_series(DashedLineSeries::new(run, 7 * k, 5 * k, thin)).map_err(|e| err(&e))?
-            } else {
-                chart.draw_series(LineSeries::new(run, style)).map_err(|e| err(&e))?
-            };
-            if j == 0 {
-                let label = label.clone();
-                drawn.label(label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20 * k, y)], style));
-            }
-        }
-        if let (Some(best), true) = (best, mark_best) {
-            let (r, ring) = (5 * k, WHITE.stroke_width(px(1, k)));
-            chart
-                .draw_series([Circle::new(best, r, colour.filled()), Circle::new(best, r, ring)])
-                .map_err(|e| err(&e))?;
+        match s.strip_prefix('-') {
+            Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
+            _ => s,
         }
     }
-    legend(&mut chart, k, 14)?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
 }
 
-/// The series legend, top right, on a translucent white box, its text `size` pixels; pixel sizes
-/// times the scale `k`.
-fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
-    k: i32,
-    size: i32,
+/// The tick values plotters draws on `lo..hi` for at most `n` labels.
+fn ticks((lo, hi): (f64, f64), n: usize) -> Vec<f64> {
+    RangedCoordf64::from(lo..hi).key_points(n)
+}
+
+/// Device pixels per point, the scale every size is drawn at.
+#[derive(Clone, Copy, Debug)]
+struct Ctx {
+    k: f64,
+}
+
+impl Ctx {
+    /// `pt` points in device pixels.
+    fn px(self, pt: f64) -> i32 {
+        (pt * self.k).round() as i32
+    }
+
+    /// A stroke `pt` points wide, at least one pixel.
+    fn stroke(self, pt: f64) -> u32 {
+        ((pt * self.k).round() as u32).max(1)
+    }
+
+    /// The embedded font at `pt` points.
+    fn font(self, pt: f64) -> FontDesc<'static> {
+        ("sans-serif", pt * self.k * FONT_SCALE).into_font()
+    }
+
+    /// Width of `text` at `pt` points, device pixels.
+    fn text_width(self, pt: f64, text: &str) -> i32 {
+        self.font(pt).box_size(text).map_or(0, |(w, _)| i32::try_from(w).unwrap_or(i32::MAX))
+    }
+}
+
+/// How a curve is stroked: colour, width (points), dashes (on, off; points), and an optional
+/// wider outline under it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Stroke {
+    colour: RGBColor,
+    width: f64,
+    dash: Option<(f64, f64)>,
+    halo: Option<(RGBColor, f64)>,
+}
+
+impl Stroke {
+    const fn solid(colour: RGBColor, width: f64) -> Self {
+        Self { colour, width, dash: None, halo: None }
+    }
+
+    const fn dashed(colour: RGBColor, width: f64, on: f64, off: f64) -> Self {
+        Self { colour, width, dash: Some((on, off)), halo: None }
+    }
+
+    /// The same stroke, dashed: the shaded parts of a line.
+    const fn with_dashes(self) -> Self {
+        Self { dash: Some((4.0, 2.5)), ..self }
+    }
+}
+
+/// The picture beside a legend entry.
+#[derive(Clone, Copy, Debug)]
+enum Swatch {
+    /// A stretch of the line, with its stroke.
+    Line(Stroke),
+    /// A stretch of the line with a dot (fill colour) in its middle.
+    Dot(Stroke, RGBColor),
+    /// A patch: `base` colour under a translucent `fill`, optionally with a line across.
+    Patch { base: Option<RGBColor>, fill: (RGBColor, f64), line: Option<Stroke> },
+}
+
+/// One legend entry.
+#[derive(Clone, Debug)]
+struct Entry {
+    label: String,
+    swatch: Swatch,
+}
+
+/// Axis, frame and text colour.
+const INK: RGBColor = RGBColor(0, 0, 0);
+/// Grid lines.
+const GRID: RGBColor = RGBColor(222, 222, 222);
+/// The legend box's edge.
+const LEGEND_EDGE: RGBColor = RGBColor(150, 150, 150);
+/// Reference curves: the diffraction limit.
+const REFERENCE: Stroke = Stroke::dashed(RGBColor(0, 0, 0), 1.0, 4.0, 2.0);
+/// Vertical reference lines (Nyquist, `--mark-x` on lines).
+const MARK: Stroke = Stroke::dashed(RGBColor(60, 60, 60), 0.9, 1.5, 1.5);
+/// Vertical reference lines on heatmaps.
+const HEAT_MARK: Stroke = Stroke::dashed(RGBColor(230, 30, 30), 1.2, 4.0, 2.0);
+/// The heatmap ridge: white on a dark outline.
+const RIDGE: Stroke =
+    Stroke { colour: RGBColor(255, 255, 255), width: 1.0, dash: None, halo: Some((RGBColor(30, 30, 30), 2.2)) };
+/// Shading of points or cells beyond validity: grey, translucent.
+const SHADE: (RGBColor, f64) = (RGBColor(110, 110, 110), 0.14);
+
+/// Series colours: blue, red, amber (the paper's Fig. 2b order: theory, simulated, measured),
+/// then green, purple, teal, brown, grey.
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(20, 80, 200),
+    RGBColor(215, 40, 40),
+    RGBColor(235, 160, 0),
+    RGBColor(40, 160, 70),
+    RGBColor(150, 60, 170),
+    RGBColor(0, 150, 160),
+    RGBColor(140, 80, 30),
+    RGBColor(90, 90, 90),
+];
+
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+fn fail(e: &dyn std::fmt::Display) -> String {
+    e.to_string()
+}
+
+/// A kind of plot: its title, its legend, and how it draws its axes and data.
+trait Plot {
+    fn title(&self) -> &str;
+    fn entries(&self) -> Vec<Entry>;
+    /// Draws the axes and the data into `area` (the figure less title and legend).
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, ctx: Ctx) -> Result<(), String>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// The figure's layout, device pixels: the title's lines, the heights of the title, axes and
+/// legend blocks, and the legend's grid of entries.
+#[derive(Clone, Debug)]
+struct Layout {
+    width: i32,
+    title: Vec<String>,
+    title_h: i32,
+    axes_h: i32,
+    legend: Option<LegendLayout>,
+}
+
+#[derive(Clone, Debug)]
+struct LegendLayout {
+    /// Each entry's lines of text (long labels are wrapped), column and first row.
+    placed: Vec<(Vec<String>, usize, usize)>,
+    /// Width of each column.
+    columns: Vec<i32>,
+    box_w: i32,
+    box_h: i32,
+}
+
+/// Margin around the figure, points.
+const MARGIN_PT: f64 = 6.0;
+/// Legend metrics, points: swatch length, swatch-to-text gap, column gap, row height, padding.
+const SWATCH_PT: f64 = 20.0;
+const SWATCH_GAP_PT: f64 = 5.0;
+const COLUMN_GAP_PT: f64 = 14.0;
+const ROW_PT: f64 = LEGEND_PT * 1.6;
+const PAD_PT: f64 = 5.0;
+
+impl Layout {
+    fn new(ctx: Ctx, width: i32, title: &str, entries: &[Entry]) -> Self {
+        let margin = ctx.px(MARGIN_PT);
+        let title = wrap(ctx, TITLE_PT, title, width - 2 * margin);
+        let title_h = if title.is_empty() { 0 } else { ctx.px(TITLE_PT * 1.3) * title.len() as i32 + ctx.px(4.0) };
+        let axes_h = (f64::from(width) * ASPECT).round() as i32;
+        let legend = (!entries.is_empty()).then(|| {
+            let available = width - 2 * margin - 2 * ctx.px(PAD_PT);
+            let swatch = ctx.px(SWATCH_PT) + ctx.px(SWATCH_GAP_PT);
+            let lines: Vec<Vec<String>> = entries
+                .iter()
+                .map(|e| {
+                    if ctx.text_width(LEGEND_PT, &e.label) <= available - swatch {
+                        vec![e.label.clone()]
+                    } else {
+                        wrap(ctx, LEGEND_PT, &e.label, available - swatch)
+                    }
+                })
+                .collect();
+            let items: Vec<i32> = lines
+                .iter()
+                .map(|l| swatch + l.iter().map(|t| ctx.text_width(LEGEND_PT, t)).max().unwrap_or(0))
+                .collect();
+            // entries fill the columns top to bottom, left to right
+            let per_column = |n: usize| items.len().div_ceil(n);
+            let columns_of = |n: usize| -> Vec<i32> {
+                items.chunks(per_column(n)).map(|c| c.iter().copied().max().unwrap_or(0)).collect()
+            };
+            let total =
+                |columns: &[i32]| columns.iter().sum::<i32>() + ctx.px(COLUMN_GAP_PT) * (columns.len() as i32 - 1);
+            let n = (1..=items.len()).rev().find(|&n| n == 1 || total(&columns_of(n)) <= available).unwrap_or(1);
+            let (k, columns) = (per_column(n), columns_of(n));
+            let mut placed = Vec::with_capacity(lines.len());
+            let mut rows = 0;
+            for (i, text) in lines.into_iter().enumerate() {
+                let row = if i % k == 0 {
+                    0
+                } else {
+                    placed.last().map_or(0, |(t, _, r): &(Vec<String>, usize, usize)| r + t.len())
+                };
+                rows = rows.max(row + text.len());
+                placed.push((text, i / k, row));
+            }
+            LegendLayout {
+                placed,
+                box_w: total(&columns) + 2 * ctx.px(PAD_PT),
+                box_h: rows as i32 * ctx.px(ROW_PT) + 2 * ctx.px(PAD_PT),
+                columns,
+            }
+        });
+        Self { width, title, title_h, axes_h, legend }
+    }
+
+    /// Height of the figure, device pixels.
+    fn height(&self, ctx: Ctx) -> i32 {
+        let legend = self.legend.as_ref().map_or(0, |l| l.box_h + ctx.px(MARGIN_PT));
+        ctx.px(MARGIN_PT) + self.title_h + self.axes_h + legend + ctx.px(MARGIN_PT)
+    }
+}
+
+/// `text` broken into lines at spaces so each is at most `width` pixels wide at `pt` points (a
+/// single word wider than that is a line of its own).
+fn wrap(ctx: Ctx, pt: f64, text: &str, width: i32) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        let longer = if line.is_empty() { word.to_owned() } else { format!("{line} {word}") };
+        if line.is_empty() || ctx.text_width(pt, &longer) <= width {
+            line = longer;
+        } else {
+            lines.push(std::mem::replace(&mut line, word.to_owned()));
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// Draws the whole figure: white ground, title, the plot's axes and data, and the legend below.
+fn compose<DB: DrawingBackend, P: Plot>(
+    root: &DrawingArea<DB, Shift>,
+    ctx: Ctx,
+    layout: &Layout,
+    plot: &P,
+    entries: &[Entry],
 ) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .margin(10 * k)
-        .legend_area_size(30 * k)
-        .background_style(WHITE.mix(0.9))
-        .border_style(RGBColor(180, 180, 180).stroke_width(px(1, k)))
-        .label_font(font(size, k))
-        .draw()
-        .map_err(|e| e.to_string())
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let margin = ctx.px(MARGIN_PT);
+    let style = ctx.font(TITLE_PT).color(&INK).pos(Pos::new(HPos::Center, VPos::Top));
+    for (i, line) in layout.title.iter().enumerate() {
+        let y = margin + ctx.px(TITLE_PT * 1.3) * i as i32;
+        root.draw(&Text::new(line.clone(), (layout.width / 2, y), style.clone())).map_err(|e| fail(&e))?;
+    }
+    let (_, rest) = root.split_vertically(margin + layout.title_h);
+    let (axes, below) = rest.split_vertically(layout.axes_h);
+    plot.draw(&axes, ctx)?;
+    if let Some(legend) = &layout.legend {
+        draw_legend(&below, ctx, layout.width, legend, entries)?;
+    }
+    root.present().map_err(|e| fail(&e))
+}
+
+/// The legend: a white box with a grey edge, centred below the axes, its entries row by row.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    ctx: Ctx,
+    width: i32,
+    legend: &LegendLayout,
+    entries: &[Entry],
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let (x0, y0) = ((width - legend.box_w) / 2, ctx.px(MARGIN_PT));
+    let (x1, y1) = (x0 + legend.box_w, y0 + legend.box_h);
+    area.draw(&Rectangle::new([(x0, y0), (x1, y1)], WHITE.filled())).map_err(|e| fail(&e))?;
+    let edge = LEGEND_EDGE.stroke_width(ctx.stroke(0.5));
+    area.draw(&PathElement::new(outline((x0, y0), (x1, y1)), edge)).map_err(|e| fail(&e))?;
+    let style = ctx.font(LEGEND_PT).color(&INK).pos(Pos::new(HPos::Left, VPos::Center));
+    let row_y = |row: usize| y0 + ctx.px(PAD_PT) + row as i32 * ctx.px(ROW_PT) + ctx.px(ROW_PT) / 2;
+    for (entry, (lines, column, row)) in entries.iter().zip(&legend.placed) {
+        let x = x0
+            + ctx.px(PAD_PT)
+            + legend.columns[..*column].iter().sum::<i32>()
+            + ctx.px(COLUMN_GAP_PT) * *column as i32;
+        draw_swatch(area, ctx, (x, row_y(*row)), &entry.swatch)?;
+        for (i, line) in lines.iter().enumerate() {
+            let text = (x + ctx.px(SWATCH_PT) + ctx.px(SWATCH_GAP_PT), row_y(row + i));
+            area.draw(&Text::new(line.clone(), text, style.clone())).map_err(|e| fail(&e))?;
+        }
+    }
+    Ok(())
+}
+
+/// The closed outline of the rectangle with corners `a` and `b`, a stroke's path: its first side
+/// drawn twice so the first corner is joined like the others (SVG and plotters' rectangles
+/// ignore the stroke width).
+fn outline<T: Copy>(a: (T, T), b: (T, T)) -> Vec<(T, T)> {
+    vec![a, (b.0, a.1), b, (a.0, b.1), a, (b.0, a.1)]
+}
+
+/// A segment from `from` to `to` (device pixels) with stroke `s`: the halo, then the line,
+/// dashed with its own pattern.
+fn draw_segment<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    ctx: Ctx,
+    from: (i32, i32),
+    to: (i32, i32),
+    s: Stroke,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    if let Some((colour, width)) = s.halo {
+        area.draw(&PathElement::new(vec![from, to], colour.stroke_width(ctx.stroke(width)))).map_err(|e| fail(&e))?;
+    }
+    let style = s.colour.stroke_width(ctx.stroke(s.width));
+    match s.dash {
+        None => area.draw(&PathElement::new(vec![from, to], style)),
+        Some((on, off)) => area.draw(&DashedPathElement::new(vec![from, to], ctx.px(on), ctx.px(off), style)),
+    }
+    .map_err(|e| fail(&e))
+}
+
+/// The swatch of a legend entry, its left end at `(x, y)`.
+fn draw_swatch<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    ctx: Ctx,
+    (x, y): (i32, i32),
+    swatch: &Swatch,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let end = (x + ctx.px(SWATCH_PT), y);
+    match *swatch {
+        Swatch::Line(s) => draw_segment(area, ctx, (x, y), end, s),
+        Swatch::Dot(s, fill) => {
+            draw_segment(area, ctx, (x, y), end, s)?;
+            let (centre, r) = ((x + ctx.px(SWATCH_PT) / 2, y), ctx.px(2.5).unsigned_abs());
+            area.draw(&Circle::new(centre, r, fill.filled())).map_err(|e| fail(&e))?;
+            area.draw(&Circle::new(centre, r, WHITE.stroke_width(ctx.stroke(0.5)))).map_err(|e| fail(&e))
+        }
+        Swatch::Patch { base, fill: (colour, alpha), line } => {
+            let h = ctx.px(LEGEND_PT * 0.6);
+            let corners = [(x, y - h), (x + ctx.px(SWATCH_PT), y + h)];
+            if let Some(base) = base {
+                area.draw(&Rectangle::new(corners, base.filled())).map_err(|e| fail(&e))?;
+            }
+            area.draw(&Rectangle::new(corners, colour.mix(alpha).filled())).map_err(|e| fail(&e))?;
+            match line {
+                Some(s) => draw_segment(area, ctx, (x, y), end, s),
+                None => Ok(()),
+            }
+        }
+    }
+}
+
+/// A curve in data coordinates with stroke `s`.
+fn draw_curve<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    ctx: Ctx,
+    points: &[(f64, f64)],
+    s: Stroke,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    if let Some((colour, width)) = s.halo {
+        chart
+            .draw_series(LineSeries::new(points.iter().copied(), colour.stroke_width(ctx.stroke(width))))
+            .map_err(|e| fail(&e))?;
+    }
+    let style = s.colour.stroke_width(ctx.stroke(s.width));
+    match s.dash {
+        None => chart.draw_series(LineSeries::new(points.iter().copied(), style)).map(|_| ()),
+        Some((on, off)) => {
+            chart.draw_series(DashedLineSeries::new(points.iter().copied(), ctx.px(on), ctx.px(off), style)).map(|_| ())
+        }
+    }
+    .map_err(|e| fail(&e))
+}
+
+/// The axes of one chart: ranges, descriptions, and the room they need, device pixels.
+struct Axes<'a> {
+    x: (f64, f64),
+    y: (f64, f64),
+    x_desc: &'a str,
+    y_desc: &'a str,
+    grid: bool,
+}
+
+/// Space around the plotting area of a chart, device pixels.
+#[derive(Clone, Copy, Debug)]
+struct Margins {
+    top: i32,
+    bottom: i32,
+    left: i32,
+    right: i32,
+    x_labels: i32,
+    y_labels: i32,
+}
+
+/// How many tick labels fit along `length` pixels when each takes `each` points.
+fn tick_count(ctx: Ctx, length: i32, each: f64) -> usize {
+    usize::try_from(length / ctx.px(each).max(1)).unwrap_or(0).clamp(3, 12)
+}
+
+impl Axes<'_> {
+    /// Tick counts and formats for a plotting area about `(w, h)` pixels.
+    fn ticks(&self, ctx: Ctx, (w, h): (i32, i32)) -> ((usize, TickFormat), (usize, TickFormat)) {
+        let nx = tick_count(ctx, w, TICK_PT * 4.0);
+        let ny = tick_count(ctx, h, TICK_PT * 2.5);
+        ((nx, TickFormat::of(&ticks(self.x, nx))), (ny, TickFormat::of(&ticks(self.y, ny))))
+    }
+
+    fn margins(&self, ctx: Ctx, (w, h): (i32, i32), right_extra: i32) -> Margins {
+        let ((nx, fx), (ny, fy)) = self.ticks(ctx, (w, h));
+        let y_tick_w = ticks(self.y, ny).iter().map(|&v| ctx.text_width(TICK_PT, &fy.write(v))).max().unwrap_or(0);
+        let last_x = ticks(self.x, nx).last().map_or(0, |&v| ctx.text_width(TICK_PT, &fx.write(v)));
+        let mark = ctx.px(3.0) + ctx.px(2.0);
+        Margins {
+            top: ctx.px(TICK_PT * 0.8),
+            bottom: ctx.px(2.0),
+            left: ctx.px(MARGIN_PT),
+            right: (last_x / 2 + ctx.px(2.0)).max(ctx.px(MARGIN_PT)) + right_extra,
+            x_labels: mark + ctx.px(TICK_PT * 1.3) + ctx.px(DESC_PT * 1.5),
+            y_labels: mark + y_tick_w + ctx.px(3.0) + ctx.px(DESC_PT * 1.4),
+        }
+    }
+
+    /// Builds the chart on `area` with its mesh, axis labels and ticks; `right_extra` pixels are
+    /// kept free on the right (a colour bar).
+    fn build<'a, DB: DrawingBackend>(
+        &self,
+        area: &'a DrawingArea<DB, Shift>,
+        ctx: Ctx,
+        right_extra: i32,
+    ) -> Result<(Chart<'a, DB>, Margins), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let (w, h) = area.dim_in_pixel();
+        let (w, h) = (i32::try_from(w).unwrap_or(i32::MAX), i32::try_from(h).unwrap_or(i32::MAX));
+        let m0 = self.margins(ctx, (w, h), right_extra);
+        let plot = (w - m0.left - m0.right - m0.y_labels, h - m0.top - m0.bottom - m0.x_labels);
+        let m = self.margins(ctx, plot, right_extra);
+        let ((nx, fx), (ny, fy)) = self.ticks(ctx, plot);
+        let mut chart = ChartBuilder::on(area)
+            .margin_top(m.top)
+            .margin_bottom(m.bottom)
+            .margin_left(m.left)
+            .margin_right(m.right)
+            .x_label_area_size(m.x_labels)
+            .y_label_area_size(m.y_labels)
+            .build_cartesian_2d(self.x.0..self.x.1, self.y.0..self.y.1)
+            .map_err(|e| fail(&e))?;
+        let (x_format, y_format) = (|v: &f64| fx.write(*v), |v: &f64| fy.write(*v));
+        let mut mesh = chart.configure_mesh();
+        mesh.x_labels(nx)
+            .y_labels(ny)
+            .x_desc(self.x_desc)
+            .y_desc(self.y_desc)
+            .x_label_formatter(&x_format)
+            .y_label_formatter(&y_format)
+            .max_light_lines(0)
+            .bold_line_style(GRID.stroke_width(ctx.stroke(0.4)))
+            .axis_style(INK.stroke_width(ctx.stroke(0.6)))
+            .set_all_tick_mark_size(ctx.px(3.0))
+            .label_style(ctx.font(TICK_PT))
+            .axis_desc_style(ctx.font(DESC_PT));
+        if !self.grid {
+            mesh.disable_mesh();
+        }
+        mesh.draw().map_err(|e| fail(&e))?;
+        Ok((chart, m))
+    }
+
+    /// The frame around the plotting area, drawn over the data's edges.
+    fn frame<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>, ctx: Ctx) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let path = outline((self.x.0, self.y.0), (self.x.1, self.y.1));
+        chart.draw_series([PathElement::new(path, INK.stroke_width(ctx.stroke(0.6)))]).map(|_| ()).map_err(|e| fail(&e))
+    }
+}
+
+/// Draws the SVG or PNG of `plot` into `path` (by its extension); errors name `flag`.
+fn render<P: Plot>(flag: &str, path: &Path, figure: &Figure, plot: &P) -> Result<()> {
+    let err = |e: &dyn std::fmt::Display| anyhow!("{flag} {}: {e}", path.display());
+    register_font();
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("svg") => std::fs::write(path, svg(figure, plot).map_err(|e| err(&e))?).map_err(|e| err(&e)),
+        Some("png") => {
+            let (size, rgb) = rasterize(figure, plot, supersampling(figure, plot)).map_err(|e| err(&e))?;
+            write_png(path, size, &rgb, figure.dpi).map_err(|e| err(&e))
+        }
+        _ => bail!("{flag} {}: expected a file name ending in .svg or .png", path.display()),
+    }
+}
+
+/// The SVG text of `plot`: drawn at [`SVG_FINE`] times the figure's size, shown at its size.
+fn svg<P: Plot>(figure: &Figure, plot: &P) -> Result<String, String> {
+    let ctx = Ctx { k: figure.px_per_pt() * f64::from(SVG_FINE) };
+    let entries = plot.entries();
+    let width = figure.width * SVG_FINE;
+    let layout = Layout::new(ctx, i32::try_from(width).unwrap_or(i32::MAX), plot.title(), &entries);
+    let shown = (figure.width, layout.height(ctx).unsigned_abs().div_ceil(SVG_FINE));
+    let fine = (width, shown.1 * SVG_FINE);
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, fine).into_drawing_area();
+        compose(&root, ctx, &layout, plot, &entries)?;
+    }
+    Ok(text.replacen(
+        &format!("<svg width=\"{}\" height=\"{}\"", fine.0, fine.1),
+        &format!("<svg width=\"{}\" height=\"{}\"", shown.0, shown.1),
+        1,
+    ))
+}
+
+/// How many times larger a PNG is drawn than written: 3, or 2 for very large figures.
+fn supersampling<P: Plot>(figure: &Figure, plot: &P) -> u32 {
+    let ctx = Ctx { k: figure.px_per_pt() };
+    let layout = Layout::new(ctx, i32::try_from(figure.width).unwrap_or(i32::MAX), plot.title(), &plot.entries());
+    let pixels = u64::from(figure.width) * u64::from(layout.height(ctx).unsigned_abs());
+    if pixels * 9 <= MAX_SUPERSAMPLED { 3 } else { 2 }
+}
+
+/// The RGB pixels of `plot` at the figure's size: drawn `s` times larger and box-filtered down.
+fn rasterize<P: Plot>(figure: &Figure, plot: &P, s: u32) -> Result<((u32, u32), Vec<u8>), String> {
+    let ctx = Ctx { k: figure.px_per_pt() * f64::from(s) };
+    let entries = plot.entries();
+    let width = figure.width * s;
+    let layout = Layout::new(ctx, i32::try_from(width).unwrap_or(i32::MAX), plot.title(), &entries);
+    let size = (figure.width, layout.height(ctx).unsigned_abs().div_ceil(s));
+    let big_size = (width, size.1 * s);
+    let mut big = vec![255u8; big_size.0 as usize * big_size.1 as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut big, big_size).into_drawing_area();
+        compose(&root, ctx, &layout, plot, &entries)?;
+    }
+    Ok((size, downsample(&big, size, s)))
+}
+
+/// `big` (RGB, `s` times `(w, h)`) averaged over `s × s` blocks.
+fn downsample(big: &[u8], (w, h): (u32, u32), s: u32) -> Vec<u8> {
+    let (w, h, s) = (w as usize, h as usize, s as usize);
+    let n = (s * s) as u32;
+    let mut out = vec![0u8; w * h * 3];
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = [0u32; 3];
+            for dy in 0..s {
+                let row = (y * s + dy) * w * s;
+                for dx in 0..s {
+                    let i = (row + x * s + dx) * 3;
+                    for (c, total) in sum.iter_mut().enumerate() {
+                        *total += u32::from(big[i + c]);
+                    }
+                }
+            }
+            for (c, total) in sum.iter().enumerate() {
+                out[(y * w + x) * 3 + c] = ((total + n / 2) / n) as u8;
+            }
+        }
+    }
+    out
+}
+
+/// Writes RGB pixels as a PNG with its resolution, `dpi`, in a pHYs chunk.
+fn write_png(path: &Path, (w, h): (u32, u32), rgb: &[u8], dpi: f64) -> Result<(), String> {
+    {
+        let mut backend = BitMapBackend::new(path, (w, h));
+        backend.blit_bitmap((0, 0), (w, h), rgb).map_err(|e| fail(&e))?;
+        backend.present().map_err(|e| fail(&e))?;
+    }
+    let png = std::fs::read(path).map_err(|e| fail(&e))?;
+    let png = with_phys(&png, dpi).ok_or("the PNG encoder wrote no IHDR chunk")?;
+    std::fs::write(path, png).map_err(|e| fail(&e))
+}
+
+/// `png` with a pHYs chunk (pixels per metre, both axes) after its IHDR chunk; `None` if it does
+/// not start with one.
+fn with_phys(png: &[u8], dpi: f64) -> Option<Vec<u8>> {
+    // the 8-byte signature, then IHDR: length, type, 13 bytes of data, CRC
+    const END_OF_IHDR: usize = 8 + 4 + 4 + 13 + 4;
+    if png.len() < END_OF_IHDR || &png[12..16] != b"IHDR" {
+        return None;
+    }
+    let ppm = (dpi / 0.0254).round() as u32;
+    let mut chunk = b"pHYs".to_vec();
+    chunk.extend(ppm.to_be_bytes());
+    chunk.extend(ppm.to_be_bytes());
+    chunk.push(1); // the unit is the metre
+    let crc = crc32(&chunk);
+    let mut out = png[..END_OF_IHDR].to_vec();
+    out.extend(9u32.to_be_bytes());
+    out.extend(chunk);
+    out.extend(crc.to_be_bytes());
+    out.extend(&png[END_OF_IHDR..]);
+    Some(out)
+}
+
+/// CRC-32 (ISO 3309, as PNG chunks use).
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 == 1 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+/// Line charts of `asnr plot` and one-key sweeps.
+struct LinesPlot<'a> {
+    labels: &'a Labels<'a>,
+    series: &'a [Series],
+    marks: &'a [Mark],
+    mark_best: bool,
+}
+
+impl LinesPlot<'_> {
+    fn stroke(i: usize) -> Stroke {
+        Stroke::solid(PALETTE[i % PALETTE.len()], 1.6)
+    }
+
+    fn shaded(&self) -> bool {
+        self.series.iter().any(|s| s.shaded.iter().any(|&f| f))
+    }
+}
+
+/// One legend entry per distinct label of `marks`, with `stroke`.
+fn mark_entries(marks: &[Mark], stroke: Stroke) -> Vec<Entry> {
+    let mut entries: Vec<Entry> = Vec::new();
+    for label in marks.iter().filter_map(|m| m.label.as_deref()) {
+        if !entries.iter().any(|e| e.label == label) {
+            entries.push(Entry { label: label.to_owned(), swatch: Swatch::Line(stroke) });
+        }
+    }
+    entries
+}
+
+impl Plot for LinesPlot<'_> {
+    fn title(&self) -> &str {
+        self.labels.title
+    }
+
+    fn entries(&self) -> Vec<Entry> {
+        let mut entries: Vec<Entry> = self
+            .series
+            .iter()
+            .enumerate()
+            .map(|(i, s)| match peak(&s.points) {
+                Some((x, y)) if self.mark_best => {
+                    let unit =
+                        if self.labels.x_unit.is_empty() { String::new() } else { format!(" {}", self.labels.x_unit) };
+                    // how the maximum was found: refined between grid points, or a grid point at an end
+                    let at_end = s.points.first().is_some_and(|p| p.0 == x) || s.points.last().is_some_and(|p| p.0 == x);
+                    let how = if at_end { "grid point at the end of the range" } else { "parabola between grid points" };
+                    Entry {
+                        label: format!("{}: max {} at {}{unit} ({how})", s.label, significant(y), significant(x)),
+                        swatch: Swatch::Dot(Self::stroke(i), Self::stroke(i).colour),
+                    }
+                }
+                _ => Entry { label: s.label.clone(), swatch: Swatch::Line(Self::stroke(i)) },
+            })
+            .collect();
+        entries.extend(mark_entries(self.marks, MARK));
+        if self.shaded() && !self.labels.shade.is_empty() {
+            let line = Stroke::solid(RGBColor(60, 60, 60), 1.0).with_dashes();
+            entries.push(Entry {
+                label: self.labels.shade.to_owned(),
+                swatch: Swatch::Patch { base: None, fill: (SHADE.0, SHADE.1 * 2.0), line: Some(line) },
+            });
+        }
+        entries
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, ctx: Ctx) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let all = || self.series.iter().flat_map(|s| s.points.iter());
+        let (mut x0, mut x1) = extent(all().map(|p| p.0));
+        if x1 <= x0 {
+            (x0, x1) = (x0 - 0.5, x1 + 0.5);
+        }
+        let (lo, hi) = extent(all().map(|p| p.1));
+        let (lo, hi) = (lo.min(0.0), hi.max(0.0));
+        // 6 % of the span above (and below, for negative values); all zeros span 0 to 1
+        let span = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) { hi - lo } else { hi.abs().max(1.0) / 0.06 };
+        let pad = 0.06 * span;
+        let y = (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad);
+        let axes = Axes { x: (x0, x1), y, x_desc: self.labels.x, y_desc: self.labels.y, grid: true };
+        let (mut chart, _) = axes.build(area, ctx, 0)?;
+        // shading first, under everything: each series' flagged points, layered in translucent grey
+        for s in self.series.iter().filter(|s| s.shaded.iter().any(|&f| f)) {
+            let xs: Vec<f64> = s.points.iter().map(|p| p.0).collect();
+            let edges = cell_edges(&xs);
+            let shaded = |i: usize| s.shaded.get(i).copied().unwrap_or(false);
+            let mut rects = Vec::new();
+            let mut i = 0;
+            while i < xs.len() {
+                let start = i;
+                while i < xs.len() && shaded(i) {
+                    i += 1;
+                }
+                if i > start {
+                    rects.push(Rectangle::new([(edges[start], y.0), (edges[i], y.1)], SHADE.0.mix(SHADE.1).filled()));
+                } else {
+                    i += 1;
+                }
+            }
+            chart.draw_series(rects).map_err(|e| fail(&e))?;
+        }
+        for (i, s) in self.series.iter().enumerate() {
+            let stroke = Self::stroke(i);
+            let dashed = |j: usize| s.shaded.get(j).copied().unwrap_or(false);
+            // runs of segments, solid, or dashed where they end in a shaded point
+            let mut runs: Vec<(bool, Vec<(f64, f64)>)> = Vec::new();
+            for (j, w) in s.points.windows(2).enumerate() {
+                match runs.last_mut() {
+                    Some((kind, run)) if *kind == dashed(j + 1) => run.push(w[1]),
+                    _ => runs.push((dashed(j + 1), vec![w[0], w[1]])),
+                }
+            }
+            if runs.is_empty() {
+                runs.push((false, s.points.clone()));
+            }
+            for (kind, run) in runs {
+                draw_curve(&mut chart, ctx, &run, if kind { stroke.with_dashes() } else { stroke })?;
+            }
+            if let (Some(best), true) = (peak(&s.points), self.mark_best) {
+                let (r, ring) = (ctx.px(2.5), WHITE.stroke_width(ctx.stroke(0.5)));
+                chart
+                    .draw_series([Circle::new(best, r, stroke.colour.filled()), Circle::new(best, r, ring)])
+                    .map_err(|e| fail(&e))?;
+            }
+        }
+        // reference lines last, on top
+        for mark in self.marks {
+            draw_curve(&mut chart, ctx, &[(mark.x, y.0), (mark.x, y.1)], MARK)?;
+        }
+        axes.frame(&mut chart, ctx)
+    }
 }
 
 /// Viridis-like colour for `t` in [0, 1] (five stops of matplotlib's viridis, linear between).
@@ -445,207 +1166,249 @@ fn colour(t: f64) -> RGBColor {
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
-fn draw_heatmap<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    k: i32,
-    labels: &Labels,
-    grid: &Grid,
-    marks: &[Mark],
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let err = |e: &dyn std::fmt::Display| e.to_string();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let (ex, ey) = (cell_edges(&grid.xs), cell_edges(&grid.ys));
-    let ny = grid.ys.len();
-    let (lo, hi) = extent(grid.z.iter().copied());
-    let span = (hi - lo).max(1e-300);
-    let (x0, x1, y0, y1) = (ex[0], ex[ex.len() - 1], ey[0], ey[ey.len() - 1]);
-    let width = i32::try_from(root.dim_in_pixel().0).unwrap_or(i32::MAX);
-    let (plot, bar) = root.split_horizontally(width - 120 * k);
-    let mut chart = ChartBuilder::on(&plot)
-        .caption(labels.title, font(20, k))
-        .margin(16 * k)
-        .x_label_area_size(48 * k)
-        .y_label_area_size(64 * k)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc(labels.x)
-        .y_desc(labels.y)
-        .x_label_formatter(&|v| number(*v))
-        .y_label_formatter(&|v| number(*v))
-        .axis_style(BLACK.stroke_width(px(1, k)))
-        .set_all_tick_mark_size(5 * k)
-        .label_style(font(14, k))
-        .axis_desc_style(font(16, k))
-        .draw()
-        .map_err(|e| err(&e))?;
-    let cell = |i: usize, j: usize| [(ex[i], ey[j]), (ex[i + 1], ey[j + 1])];
-    // each cell reaches halfway into the next (which is drawn later and covers it), so no
-    // anti-aliased seam shows between cells whose edges fall between pixels
-    let beyond = |edges: &[f64], i: usize| edges.get(i + 2).map_or(edges[i + 1], |e| 0.5 * (edges[i + 1] + e));
-    let overlapping = |i: usize, j: usize| [(ex[i], ey[j]), (beyond(&ex, i), beyond(&ey, j))];
-    let cells = (0..grid.xs.len()).flat_map(|i| (0..ny).map(move |j| (i, j)));
-    chart
-        .draw_series(
-            cells
-                .clone()
-                .map(|(i, j)| Rectangle::new(overlapping(i, j), colour((grid.z[i * ny + j] - lo) / span).filled())),
-        )
-        .map_err(|e| err(&e))?;
-    let shaded = |i: usize, j: usize| grid.shaded.get(i * ny + j).copied().unwrap_or(false);
-    if grid.shaded.iter().any(|&s| s) {
-        let veil = WHITE.mix(0.55);
-        let drawn = chart
-            .draw_series(cells.filter(|&(i, j)| shaded(i, j)).map(|(i, j)| Rectangle::new(cell(i, j), veil.filled())))
-            .map_err(|e| err(&e))?;
-        if !labels.shade.is_empty() {
-            drawn.label(labels.shade).legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + Rectangle::new([(0, -6 * k), (20 * k, 6 * k)], colour(0.3).filled())
-                    + Rectangle::new([(0, -6 * k), (20 * k, 6 * k)], veil.filled())
-            });
-        }
-    }
-    draw_marks(&mut chart, k, marks, (y0, y1), (RGBColor(230, 30, 30), 2))?;
-    // the ridge: for each x, the y with the largest value; white on a dark outline
-    let ridge: Vec<(f64, f64)> = grid
-        .z
-        .chunks(ny)
-        .zip(&grid.xs)
-        .filter_map(|(column, &x)| {
-            let samples: Vec<(f64, f64)> = grid.ys.iter().copied().zip(column.iter().copied()).collect();
-            Some((x, peak(&samples)?.0))
-        })
-        .collect();
-    let dark = RGBColor(30, 30, 30);
-    let (outline, line) = (dark.stroke_width(px(4, k)), WHITE.stroke_width(px(2, k)));
-    chart.draw_series(LineSeries::new(ridge.clone(), outline)).map_err(|e| err(&e))?;
-    let drawn = chart.draw_series(LineSeries::new(ridge.clone(), line)).map_err(|e| err(&e))?;
-    if !labels.ridge.is_empty() {
-        drawn.label(labels.ridge).legend(move |(x, y)| {
-            EmptyElement::at((x, y))
-                + PathElement::new(vec![(0, 0), (20 * k, 0)], outline)
-                + PathElement::new(vec![(0, 0), (20 * k, 0)], line)
-        });
-    }
-    if ridge.len() <= 60 {
-        let ring = dark.stroke_width(px(1, k));
-        chart
-            .draw_series(
-                ridge.iter().flat_map(|&p| [Circle::new(p, 3 * k, WHITE.filled()), Circle::new(p, 3 * k, ring)]),
-            )
-            .map_err(|e| err(&e))?;
-    }
-    legend(&mut chart, k, 14)?;
-    // colour bar, labelled on its right
-    let mut scale = ChartBuilder::on(&bar)
-        .margin_top(52 * k)
-        .margin_bottom(64 * k)
-        .margin_left(8 * k)
-        .right_y_label_area_size(64 * k)
-        .build_cartesian_2d(0.0..1.0, lo..hi + span * 1e-9)
-        .map_err(|e| err(&e))?;
-    scale
-        .configure_mesh()
-        .disable_mesh()
-        .disable_x_axis()
-        .y_desc(labels.z)
-        .y_label_formatter(&|v| number(*v))
-        .axis_style(BLACK.stroke_width(px(1, k)))
-        .set_all_tick_mark_size(5 * k)
-        .label_style(font(14, k))
-        .axis_desc_style(font(16, k))
-        .draw()
-        .map_err(|e| err(&e))?;
-    let steps = 100;
-    scale
-        .draw_series((0..steps).map(|i| {
-            // each step reaches halfway into the next, drawn over it, so no seams show
-            let a = lo + span * i as f64 / steps as f64;
-            let b = lo + span * ((i + 1) as f64 + if i + 1 < steps { 0.5 } else { 0.0 }) / steps as f64;
-            Rectangle::new([(0.0, a), (1.0, b)], colour(i as f64 / (steps - 1) as f64).filled())
-        }))
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+/// Heatmaps of `asnr plot --z` and two-key sweeps.
+struct HeatmapPlot<'a> {
+    labels: &'a Labels<'a>,
+    grid: &'a Grid,
+    marks: &'a [Mark],
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, title: &str, curve: &MtfCurve) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let err = |e: &dyn std::fmt::Display| e.to_string();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let x_max = curve.frequency_cyc_per_mm.last().copied().unwrap_or(1.0).max(1e-12);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
-        .margin(16)
-        .x_label_area_size(44)
-        .y_label_area_size(56)
-        .build_cartesian_2d(0.0..x_max, 0.0..1.05)
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("spatial frequency (cycles/mm)")
-        .y_desc(if curve.pixel_mtf { "MTF (lens × pixel)" } else { "MTF" })
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(|e| err(&e))?;
-    let xs = &curve.frequency_cyc_per_mm;
-    let series = |ys: &[f64]| xs.iter().copied().zip(ys.iter().copied()).collect::<Vec<_>>();
+/// The white veil over shaded heatmap cells.
+const VEIL: (RGBColor, f64) = (RGBColor(255, 255, 255), 0.55);
 
-    chart
-        .draw_series(DashedLineSeries::new(series(&curve.diffraction_limited), 6, 4, BLACK.stroke_width(1)))
-        .map_err(|e| err(&e))?
-        .label(format!("diffraction limit at {:.1} nm", curve.mean_wavelength_nm))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-    let palette = [RGBColor(230, 120, 20), RGBColor(40, 160, 70), RGBColor(170, 60, 170), RGBColor(200, 40, 40)];
-    for (i, (wl, ys)) in curve.wavelengths_nm.iter().zip(&curve.monochromatic).enumerate() {
-        let colour = palette[i % palette.len()];
-        chart
-            .draw_series(LineSeries::new(series(ys), colour.stroke_width(1)))
-            .map_err(|e| err(&e))?
-            .label(format!("{wl:.1} nm"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+impl HeatmapPlot<'_> {
+    /// `(lo, hi)` of the values, `hi > lo`.
+    fn range(&self) -> (f64, f64) {
+        let (lo, hi) = extent(self.grid.z.iter().copied());
+        if hi > lo { (lo, hi) } else { (lo - 0.5, hi + 0.5) }
     }
-    if let (Some(r), Some(t)) = (&curve.mtf_tangential, &curve.mtf_sagittal) {
-        for (ys, name, colour) in [
-            (r, "tangential: along the field (x on axis)", RGBColor(90, 150, 240)),
-            (t, "sagittal: across it (y on axis)", RGBColor(20, 40, 120)),
-        ] {
-            chart
-                .draw_series(DashedLineSeries::new(series(ys), 8, 4, colour.stroke_width(2)))
-                .map_err(|e| err(&e))?
-                .label(name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+}
+
+impl Plot for HeatmapPlot<'_> {
+    fn title(&self) -> &str {
+        self.labels.title
+    }
+
+    fn entries(&self) -> Vec<Entry> {
+        let mut entries = Vec::new();
+        if !self.labels.ridge.is_empty() {
+            entries.push(Entry { label: self.labels.ridge.to_owned(), swatch: Swatch::Line(RIDGE) });
         }
+        entries.extend(mark_entries(self.marks, HEAT_MARK));
+        if self.grid.shaded.iter().any(|&s| s) && !self.labels.shade.is_empty() {
+            entries.push(Entry {
+                label: self.labels.shade.to_owned(),
+                swatch: Swatch::Patch { base: Some(colour(0.3)), fill: VEIL, line: None },
+            });
+        }
+        entries
     }
-    let blue = RGBColor(20, 80, 200);
-    chart
-        .draw_series(LineSeries::new(series(&curve.mtf), blue.stroke_width(3)))
-        .map_err(|e| err(&e))?
-        .label(match (curve.field_points.len(), curve.mtf_tangential.is_some()) {
-            (0, false) => "polychromatic MTF".to_owned(),
-            (0, true) => "polychromatic MTF (mean of both)".to_owned(),
-            (n, _) => format!("polychromatic MTF, weighted mean of {n} field points"),
-        })
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3)));
-    if curve.nyquist_cyc_per_mm < x_max * 0.999 {
-        let n = curve.nyquist_cyc_per_mm;
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, ctx: Ctx) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let grid = self.grid;
+        let (ex, ey) = (cell_edges(&grid.xs), cell_edges(&grid.ys));
+        let ny = grid.ys.len();
+        let (lo, hi) = self.range();
+        let span = hi - lo;
+        let (x0, x1, y0, y1) = (ex[0], ex[ex.len() - 1], ey[0], ey[ey.len() - 1]);
+        // the colour bar's room on the right: gap, bar, ticks, labels, description
+        let (_, area_h) = area.dim_in_pixel();
+        let bar_n = tick_count(ctx, i32::try_from(area_h).unwrap_or(i32::MAX) * 3 / 4, TICK_PT * 2.5);
+        let bar_ticks = ticks((lo, hi), bar_n);
+        let bar_format = TickFormat::of(&bar_ticks);
+        let bar_labels = bar_ticks.iter().map(|&v| ctx.text_width(TICK_PT, &bar_format.write(v))).max().unwrap_or(0);
+        let bar_label_area = ctx.px(5.0) + bar_labels + ctx.px(4.0) + ctx.px(DESC_PT * 1.6);
+        let bar_w = ctx.px(12.0) + ctx.px(10.0) + bar_label_area + ctx.px(MARGIN_PT);
+        let axes = Axes { x: (x0, x1), y: (y0, y1), x_desc: self.labels.x, y_desc: self.labels.y, grid: false };
+        let (mut chart, margins) = axes.build(area, ctx, bar_w)?;
+        let cell = |i: usize, j: usize| [(ex[i], ey[j]), (ex[i + 1], ey[j + 1])];
+        // each cell reaches halfway into the next (which is drawn later and covers it), so no
+        // anti-aliased seam shows between cells whose edges fall between pixels
+        let beyond = |edges: &[f64], i: usize| edges.get(i + 2).map_or(edges[i + 1], |e| 0.5 * (edges[i + 1] + e));
+        let overlapping = |i: usize, j: usize| [(ex[i], ey[j]), (beyond(&ex, i), beyond(&ey, j))];
+        let cells = (0..grid.xs.len()).flat_map(|i| (0..ny).map(move |j| (i, j)));
         chart
-            .draw_series(LineSeries::new(vec![(n, 0.0), (n, 1.05)], RGBColor(120, 120, 120).stroke_width(1)))
-            .map_err(|e| err(&e))?
-            .label(format!("Nyquist {n:.1} cycles/mm"))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RGBColor(120, 120, 120)));
+            .draw_series(
+                cells
+                    .clone()
+                    .map(|(i, j)| Rectangle::new(overlapping(i, j), colour((grid.z[i * ny + j] - lo) / span).filled())),
+            )
+            .map_err(|e| fail(&e))?;
+        let shaded = |i: usize, j: usize| grid.shaded.get(i * ny + j).copied().unwrap_or(false);
+        if grid.shaded.iter().any(|&s| s) {
+            chart
+                .draw_series(
+                    cells
+                        .filter(|&(i, j)| shaded(i, j))
+                        .map(|(i, j)| Rectangle::new(cell(i, j), VEIL.0.mix(VEIL.1).filled())),
+                )
+                .map_err(|e| fail(&e))?;
+        }
+        // the ridge: for each x, the y with the largest value
+        let ridge: Vec<(f64, f64)> = grid
+            .z
+            .chunks(ny)
+            .zip(&grid.xs)
+            .filter_map(|(column, &x)| {
+                let samples: Vec<(f64, f64)> = grid.ys.iter().copied().zip(column.iter().copied()).collect();
+                Some((x, peak(&samples)?.0))
+            })
+            .collect();
+        draw_curve(&mut chart, ctx, &ridge, RIDGE)?;
+        // a dot at each sample of the ridge, when they are at least 8 pt apart
+        let plot_w = f64::from(chart.plotting_area().dim_in_pixel().0) / ctx.k;
+        if ridge.len() as f64 * 8.0 <= plot_w {
+            let (r, ring) = (ctx.px(1.8), RGBColor(30, 30, 30).stroke_width(ctx.stroke(0.5)));
+            chart
+                .draw_series(ridge.iter().flat_map(|&p| [Circle::new(p, r, WHITE.filled()), Circle::new(p, r, ring)]))
+                .map_err(|e| fail(&e))?;
+        }
+        // reference lines last, on top
+        for mark in self.marks {
+            draw_curve(&mut chart, ctx, &[(mark.x, y0), (mark.x, y1)], HEAT_MARK)?;
+        }
+        axes.frame(&mut chart, ctx)?;
+        // the colour bar, level with the plotting area, labelled on its right
+        let (w, _) = area.dim_in_pixel();
+        let (_, bar) = area.split_horizontally(i32::try_from(w).unwrap_or(i32::MAX) - bar_w);
+        let mut scale = ChartBuilder::on(&bar)
+            .margin_top(margins.top)
+            .margin_bottom(margins.bottom + margins.x_labels)
+            .margin_left(ctx.px(12.0))
+            .margin_right(ctx.px(MARGIN_PT))
+            .right_y_label_area_size(bar_label_area)
+            .build_cartesian_2d(0.0..1.0, lo..hi)
+            .map_err(|e| fail(&e))?;
+        scale
+            .configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_labels(bar_n)
+            .y_desc(self.labels.z)
+            .y_label_formatter(&|v| bar_format.write(*v))
+            .axis_style(INK.stroke_width(ctx.stroke(0.6)))
+            .set_all_tick_mark_size(ctx.px(3.0))
+            .label_style(ctx.font(TICK_PT))
+            .axis_desc_style(ctx.font(DESC_PT))
+            .draw()
+            .map_err(|e| fail(&e))?;
+        let steps = 100;
+        scale
+            .draw_series((0..steps).map(|i| {
+                // each step reaches halfway into the next, drawn over it, so no seams show
+                let a = lo + span * i as f64 / steps as f64;
+                let b = lo + span * ((i + 1) as f64 + if i + 1 < steps { 0.5 } else { 0.0 }) / steps as f64;
+                Rectangle::new([(0.0, a), (1.0, b)], colour(i as f64 / (steps - 1) as f64).filled())
+            }))
+            .map_err(|e| fail(&e))?;
+        scale
+            .draw_series([PathElement::new(outline((0.0, lo), (1.0, hi)), INK.stroke_width(ctx.stroke(0.6)))])
+            .map(|_| ())
+            .map_err(|e| fail(&e))
     }
-    legend(&mut chart, 1, 12)?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+}
+
+/// The MTF chart of `asnr mtf --plot`.
+struct MtfPlot<'a> {
+    title: &'a str,
+    curve: &'a MtfCurve,
+}
+
+/// The polychromatic MTF.
+const POLY: Stroke = Stroke::solid(RGBColor(20, 80, 200), 1.8);
+/// Monochromatic curves: thin, in colours apart from the polychromatic blue.
+const MONO: [RGBColor; 5] = [
+    RGBColor(235, 140, 0),
+    RGBColor(40, 160, 70),
+    RGBColor(170, 60, 170),
+    RGBColor(215, 40, 40),
+    RGBColor(0, 150, 160),
+];
+/// The off-axis directional MTFs: along the field, across it.
+const OFF_AXIS: [Stroke; 2] =
+    [Stroke::dashed(RGBColor(90, 160, 240), 1.3, 5.0, 2.0), Stroke::dashed(RGBColor(10, 30, 110), 1.3, 2.0, 1.5)];
+
+/// The off-axis MTFs of `curve` (frequencies along the field direction, then across it) with
+/// their legend labels; `None` on axis. The only place that names the directional fields.
+fn off_axis(curve: &MtfCurve) -> Option<[(&[f64], &'static str); 2]> {
+    Some([
+        (curve.mtf_tangential.as_deref()?, "tangential (along the field)"),
+        (curve.mtf_sagittal.as_deref()?, "sagittal (across the field)"),
+    ])
+}
+
+impl MtfPlot<'_> {
+    fn mono(i: usize) -> Stroke {
+        Stroke::solid(MONO[i % MONO.len()], 0.9)
+    }
+
+    /// Whether the axis extends past Nyquist, so the Nyquist line is drawn.
+    fn nyquist(&self) -> Option<f64> {
+        let x_max = self.curve.frequency_cyc_per_mm.last().copied().unwrap_or(1.0);
+        let n = self.curve.nyquist_cyc_per_mm;
+        (n.is_finite() && n < x_max * 0.999).then_some(n)
+    }
+}
+
+impl Plot for MtfPlot<'_> {
+    fn title(&self) -> &str {
+        self.title
+    }
+
+    fn entries(&self) -> Vec<Entry> {
+        let curve = self.curve;
+        let poly = match (curve.field_points.len(), off_axis(curve).is_some()) {
+            (0, false) => "polychromatic MTF".to_owned(),
+            (0, true) => "polychromatic MTF (mean of both directions)".to_owned(),
+            (n, _) => format!("polychromatic MTF, weighted mean of {n} field points"),
+        };
+        let mut entries = vec![Entry { label: poly, swatch: Swatch::Line(POLY) }];
+        for ((_, label), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
+            entries.push(Entry { label: label.to_owned(), swatch: Swatch::Line(stroke) });
+        }
+        for (i, wl) in curve.wavelengths_nm.iter().enumerate() {
+            entries.push(Entry { label: format!("{wl:.1} nm"), swatch: Swatch::Line(Self::mono(i)) });
+        }
+        entries.push(Entry {
+            label: format!("diffraction limit ({:.1} nm)", curve.mean_wavelength_nm),
+            swatch: Swatch::Line(REFERENCE),
+        });
+        if let Some(n) = self.nyquist() {
+            entries.push(Entry { label: format!("Nyquist ({n:.1} cycles/mm)"), swatch: Swatch::Line(MARK) });
+        }
+        entries
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, ctx: Ctx) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let curve = self.curve;
+        let x_max = curve.frequency_cyc_per_mm.last().copied().unwrap_or(1.0).max(1e-12);
+        let y_desc = if curve.pixel_mtf { "MTF (lens × pixel)" } else { "MTF" };
+        let x_desc = axis_label("frequency_cyc_per_mm");
+        let axes = Axes { x: (0.0, x_max), y: (0.0, 1.05), x_desc: &x_desc, y_desc, grid: true };
+        let (mut chart, _) = axes.build(area, ctx, 0)?;
+        let xs = &curve.frequency_cyc_per_mm;
+        let series = |ys: &[f64]| xs.iter().copied().zip(ys.iter().copied()).collect::<Vec<_>>();
+        for (i, ys) in curve.monochromatic.iter().enumerate() {
+            draw_curve(&mut chart, ctx, &series(ys), Self::mono(i))?;
+        }
+        for ((ys, _), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
+            draw_curve(&mut chart, ctx, &series(ys), stroke)?;
+        }
+        draw_curve(&mut chart, ctx, &series(&curve.mtf), POLY)?;
+        // references last, on top: the diffraction limit often coincides with the curve at the
+        // design wavelength
+        draw_curve(&mut chart, ctx, &series(&curve.diffraction_limited), REFERENCE)?;
+        if let Some(n) = self.nyquist() {
+            draw_curve(&mut chart, ctx, &[(n, 0.0), (n, 1.05)], MARK)?;
+        }
+        axes.frame(&mut chart, ctx)
+    }
 }
 
 #[cfg(test)]
@@ -675,5 +1438,156 @@ mod tests {
         assert_eq!(cell_edges(&[2.0]), vec![1.5, 2.5]);
         assert_eq!(number(2.50000000001), "2.5");
         assert_eq!(number(-0.00001), "0");
+        assert_eq!(significant(10.56981), "10.57");
+        assert_eq!(significant(34.3947), "34.39");
+        assert_eq!(significant(0.00123456), "0.001235");
+        assert_eq!(significant(12345.6), "12346");
+    }
+
+    #[test]
+    fn axis_labels_are_human_with_units() {
+        for (key, label) in [
+            ("spectrum.range_nm", "spectral range (nm)"),
+            ("lens.f_number", "F-number"),
+            ("camera.pixel_pitch_um", "pixel pitch (µm)"),
+            ("exposure.time_ms", "exposure time (ms)"),
+            ("asnr", "ASNR"),
+            ("mean_mtf", "mean MTF"),
+            ("snr0", "SNR0"),
+            ("frequency_cyc_per_mm", "spatial frequency (cycles/mm)"),
+            // the generic rule: last segment, unit suffix, underscores as spaces
+            ("lens.coma_um", "coma (µm)"),
+            ("lens.sector_deg", "sector (°)"),
+            ("source.temperature_k", "source temperature (K)"),
+            ("noise.dark_current_e", "dark current (e⁻)"),
+            ("otf.cutoff_cyc_per_mm", "cutoff (cycles/mm)"),
+            ("filter.width_mm", "width (mm)"),
+            ("some.plain_name", "plain name"),
+            ("x", "x"),
+            // a bare suffix is a name, not a unit
+            ("lens._nm", "nm"),
+        ] {
+            assert_eq!(axis_label(key), label, "{key}");
+        }
+        assert_eq!(quantity("camera.pixel_pitch_um"), ("pixel pitch".to_owned(), Some("µm")));
+    }
+
+    #[test]
+    fn tick_formats_write_each_tick_exactly_once() {
+        assert_eq!(TickFormat::of(&[0.0, 0.25, 0.5, 0.75]), TickFormat::Fixed(2));
+        assert_eq!(TickFormat::of(&[0.0, 20.0, 40.0]), TickFormat::Fixed(0));
+        assert_eq!(TickFormat::of(&[0.1, 0.2, 0.30000000000000004]), TickFormat::Fixed(1));
+        assert_eq!(TickFormat::of(&[1e-9, 2e-9]), TickFormat::Scientific);
+        assert_eq!(TickFormat::of(&[0.0, 2e6]), TickFormat::Scientific);
+        assert_eq!(TickFormat::Fixed(1).write(-0.0), "0.0");
+        assert_eq!(TickFormat::Fixed(2).write(0.25), "0.25");
+        assert_eq!(TickFormat::Scientific.write(2e-9), "2.00e-9");
+    }
+
+    #[test]
+    fn figure_sizes_are_validated() {
+        assert_eq!(Figure::new(None, None).unwrap(), Figure::default());
+        let f = Figure::new(Some(1050), Some(300.0)).unwrap();
+        assert!((f.px_per_pt() - 300.0 / 72.0).abs() < 1e-12);
+        let err = Figure::new(Some(100), None).unwrap_err().to_string();
+        assert_eq!(err, "--width 100: expected a whole number of pixels from 300 to 4000");
+        let err = Figure::new(None, Some(f64::NAN)).unwrap_err().to_string();
+        assert_eq!(err, "--dpi NaN: expected dots per inch from 30 to 2400");
+        let err = Figure::new(Some(300), Some(600.0)).unwrap_err().to_string();
+        assert!(err.starts_with("--dpi 600 with --width 300: the figure would be 0.50 inches wide;"), "{err}");
+    }
+
+    #[test]
+    fn phys_chunk_is_a_valid_png_chunk() {
+        // CRC of "IEND", as every PNG ends
+        assert_eq!(crc32(b"IEND"), 0xAE42_6082);
+        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+        png.extend([0u8; 17]);
+        png.extend(b"rest");
+        let out = with_phys(&png, 300.0).unwrap();
+        assert_eq!(&out[33..37], &9u32.to_be_bytes());
+        assert_eq!(&out[37..41], b"pHYs");
+        assert_eq!(&out[41..45], &11_811u32.to_be_bytes()); // 300 dpi in pixels per metre
+        assert_eq!(out[49], 1);
+        assert_eq!(&out[50..54], &crc32(&out[37..50]).to_be_bytes());
+        assert_eq!(&out[54..], b"rest");
+        assert_eq!(with_phys(b"not a png", 300.0), None);
+    }
+
+    /// A straight line in many short segments, as curves are drawn.
+    fn straight() -> Vec<Series> {
+        let points = (0..=300).map(|i| f64::from(i) / 300.0).map(|x| (x, 0.1 + 0.37 * x)).collect();
+        vec![Series { label: "a".to_owned(), points, shaded: Vec::new() }]
+    }
+
+    /// Pixels of `rgb` that are neither white, nor the line colour, nor grey: the blends of a
+    /// blue line's edge with the white ground.
+    fn blue_blends(rgb: &[u8]) -> std::collections::BTreeSet<[u8; 3]> {
+        let RGBColor(r, g, b) = PALETTE[0];
+        rgb.chunks(3)
+            .map(|p| [p[0], p[1], p[2]])
+            .filter(|p| *p != [r, g, b] && *p != [255, 255, 255] && p[2] > p[0].saturating_add(20))
+            .collect()
+    }
+
+    /// How far the drawn centre of a straight blue line strays from straight: the RMS of the
+    /// second differences of its centre (the coverage-weighted mean row), column by column over
+    /// the middle half of the upper two thirds (the plot, not the legend). Zero for an exact
+    /// line; vertices rounded to whole pixels kink it.
+    fn wobble(rgb: &[u8], (w, h): (u32, u32)) -> f64 {
+        let (w, h) = (w as usize, h as usize);
+        let centres: Vec<f64> = (w / 4..3 * w / 4)
+            .filter_map(|x| {
+                let (mut sum, mut weight) = (0.0, 0.0);
+                for y in 0..2 * h / 3 {
+                    let p = &rgb[(y * w + x) * 3..][..3];
+                    if p[2] > p[0].saturating_add(20) {
+                        let d = (255.0 - f64::from(p[0])) / 235.0;
+                        sum += d * y as f64;
+                        weight += d;
+                    }
+                }
+                (weight > 0.0).then(|| sum / weight)
+            })
+            .collect();
+        let second: Vec<f64> = centres.windows(3).map(|c| c[2] - 2.0 * c[1] + c[0]).collect();
+        (second.iter().map(|d| d * d).sum::<f64>() / second.len() as f64).sqrt()
+    }
+
+    #[test]
+    fn png_lines_are_anti_aliased_by_supersampling() {
+        register_font();
+        let series = straight();
+        let labels = Labels { x: "x", y: "y", ..Labels::default() };
+        let plot = LinesPlot { labels: &labels, series: &series, marks: &[], mark_best: false };
+        let figure = Figure::default();
+        let (size, rgb) = rasterize(&figure, &plot, 3).unwrap();
+        assert_eq!(size.0, DEFAULT_WIDTH);
+        assert_eq!(rgb.len(), (size.0 * size.1 * 3) as usize);
+        // the edges of the line blend its blue into white in many steps
+        let smooth = blue_blends(&rgb).len();
+        assert!(smooth >= 50, "{smooth} blended colours");
+        // drawn directly at its size, as plotters draws a PNG, the line kinks at every vertex
+        let (_, direct) = rasterize(&figure, &plot, 1).unwrap();
+        let (soft, hard) = (wobble(&rgb, size), wobble(&direct, size));
+        assert!(soft < 0.7 * hard, "wobble {soft} px supersampled, {hard} px directly");
+    }
+
+    #[test]
+    fn legends_never_widen_past_the_figure_and_wrap_into_rows() {
+        register_font();
+        let ctx = Ctx { k: Figure::new(Some(1050), Some(300.0)).unwrap().px_per_pt() };
+        let entries: Vec<Entry> =
+            (0..8).map(|i| Entry { label: format!("entry {i}"), swatch: Swatch::Line(POLY) }).collect();
+        let layout = Layout::new(ctx, 1050, "a title long enough to need two lines at this size, surely", &entries);
+        let legend = layout.legend.unwrap();
+        assert!(legend.box_w <= 1050 - 2 * ctx.px(MARGIN_PT), "{}", legend.box_w);
+        assert!(legend.columns.len() >= 2 && legend.columns.len() < 8, "{:?}", legend.columns);
+        assert_eq!(layout.title.len(), 2, "{:?}", layout.title);
+        // a label wider than the figure is wrapped onto lines of its own
+        let long = [Entry { label: "a very long legend entry indeed, ".repeat(4), swatch: Swatch::Line(POLY) }];
+        let legend = Layout::new(ctx, 1050, "", &long).legend.unwrap();
+        assert!(legend.box_w <= 1050 - 2 * ctx.px(MARGIN_PT), "{}", legend.box_w);
+        assert!(legend.placed[0].0.len() >= 2, "{:?}", legend.placed);
     }
 }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::plot::{self, Grid, Labels, Mark, Series};
+use crate::plot::{self, Figure, Grid, Labels, Mark, Series};
 
 /// The column `--shade-invalid` reads: whether the Fraunhofer approximation holds (SI eq. S15).
 const VALID_COLUMN: &str = "fraunhofer_valid";
@@ -39,24 +39,34 @@ pub struct PlotArgs {
     /// Split each CSV into one line per distinct value of this column, e.g. lens.f_number.
     #[arg(long, value_name = "COLUMN", conflicts_with = "z")]
     group: Option<String>,
-    /// Legend label of each group; `{}` stands for its value, e.g. "F/{}" (default "COLUMN = {}").
+    /// Legend label of each group; `{}` stands for its value, e.g. "F/{}" (default: the column's
+    /// name and unit, e.g. "pixel pitch = {} µm").
     #[arg(long, value_name = "TEMPLATE", requires = "group")]
     group_label: Option<String>,
     /// The plot to write, .svg or .png.
     #[arg(short, long, value_name = "FILE.svg|png")]
     output: PathBuf,
-    /// Caption above the chart (default: "Y vs X").
+    /// Caption above the chart (default: "Y vs X" with the columns' names; "" for none).
     #[arg(long)]
     title: Option<String>,
-    /// Description of the x axis (default: the column name).
+    /// Description of the x axis (default: the column's name and unit, e.g. "spectral range (nm)"
+    /// for spectrum.range_nm).
     #[arg(long, value_name = "TEXT")]
     x_label: Option<String>,
-    /// Description of the y axis (default: the column name).
+    /// Description of the y axis (default: the column's name and unit).
     #[arg(long, value_name = "TEXT")]
     y_label: Option<String>,
-    /// Description of the heatmap's colour bar (default: the --z column name).
+    /// Description of the heatmap's colour bar (default: the --z column's name and unit).
     #[arg(long, value_name = "TEXT", requires = "z")]
     z_label: Option<String>,
+    /// Width of the plot, pixels (default 900); the height follows.
+    #[arg(long, value_name = "PX")]
+    width: Option<u32>,
+    /// Resolution, dots per inch: text is 8–10 pt and lines are sized in points at it, and PNGs
+    /// record it (default: the width over 6 inches, 150 dpi at 900 px). E.g. --width 1050 --dpi
+    /// 300 for a 3.5-inch column.
+    #[arg(long, value_name = "N")]
+    dpi: Option<f64>,
     /// Shade where the fraunhofer_valid column is false (SI eq. S15); lines are dashed there.
     #[arg(long)]
     shade_invalid: bool,
@@ -71,30 +81,43 @@ pub struct PlotArgs {
 
 /// Runs `asnr plot`: reads the CSVs, checks every value, and writes the plot.
 pub fn run(args: &PlotArgs) -> Result<()> {
+    let figure = Figure::new(args.width, args.dpi)?;
     let marks = args.mark_x.iter().map(|m| parse_mark(m)).collect::<Result<Vec<_>>>()?;
     let inputs = args.inputs.iter().map(|i| parse_input(i)).collect::<Vec<_>>();
-    let x_label = args.x_label.as_deref().unwrap_or(&args.x);
-    let y_label = args.y_label.as_deref().unwrap_or(&args.y);
+    // axis labels: the given text, or the column's name and unit; names (no units) in titles
+    let label = |given: &Option<String>, column: &str| given.clone().unwrap_or_else(|| plot::axis_label(column));
+    let name = |given: &Option<String>, column: &str| given.clone().unwrap_or_else(|| plot::quantity(column).0);
+    let (x_label, y_label) = (label(&args.x_label, &args.x), label(&args.y_label, &args.y));
+    let (x_name, y_name) = (name(&args.x_label, &args.x), name(&args.y_label, &args.y));
     if let Some(z) = &args.z {
         let [(path, _)] = inputs.as_slice() else {
             bail!("--z {z}: a heatmap is drawn from one CSV; got {} files", inputs.len());
         };
         let table = Table::read(path)?;
         let grid = grid(&table, &args.x, &args.y, z, args.shade_invalid)?;
-        let z_label = args.z_label.as_deref().unwrap_or(z);
-        let title = args.title.clone().unwrap_or_else(|| format!("{z_label} vs {x_label} and {y_label}"));
-        let ridge = format!("max {z_label} for each {x_label}");
-        let labels = Labels { title: &title, x: x_label, y: y_label, z: z_label, ridge: &ridge, shade: SHADE_LABEL };
-        return plot::heatmap_plot("--output", &args.output, &labels, &grid, &marks);
+        let (z_label, z_name) = (label(&args.z_label, z), name(&args.z_label, z));
+        let title = args.title.clone().unwrap_or_else(|| format!("{z_name} vs {x_name} and {y_name}"));
+        let ridge = format!("max {z_name} for each {x_name}");
+        let labels = Labels {
+            title: &title,
+            x: &x_label,
+            y: &y_label,
+            z: &z_label,
+            ridge: &ridge,
+            shade: SHADE_LABEL,
+            x_unit: "",
+        };
+        return plot::heatmap_plot("--output", &args.output, &figure, &labels, &grid, &marks);
     }
     let mut series = Vec::new();
     for (path, label) in &inputs {
         let table = Table::read(path)?;
         series.extend(lines(&table, label.as_deref(), args)?);
     }
-    let title = args.title.clone().unwrap_or_else(|| format!("{y_label} vs {x_label}"));
-    let labels = Labels { title: &title, x: x_label, y: y_label, shade: SHADE_LABEL, ..Labels::default() };
-    plot::lines_plot("--output", &args.output, &labels, &series, &marks, args.mark_best)
+    let title = args.title.clone().unwrap_or_else(|| format!("{y_name} vs {x_name}"));
+    let x_unit = plot::quantity(&args.x).1.unwrap_or_default();
+    let labels = Labels { title: &title, x: &x_label, y: &y_label, shade: SHADE_LABEL, x_unit, ..Labels::default() };
+    plot::lines_plot("--output", &args.output, &figure, &labels, &series, &marks, args.mark_best)
 }
 
 /// `CSV[=LABEL]`: an existing file named with `=` is taken whole; otherwise the text after the
@@ -255,7 +278,10 @@ fn lines(table: &Table, label: Option<&str>, args: &PlotArgs) -> Result<Vec<Seri
         let name = match &args.group {
             None => file,
             Some(column) => {
-                let template = args.group_label.clone().unwrap_or_else(|| format!("{column} = {{}}"));
+                let template = args.group_label.clone().unwrap_or_else(|| match plot::quantity(column) {
+                    (name, Some(unit)) => format!("{name} = {{}} {unit}"),
+                    (name, None) => format!("{name} = {{}}"),
+                });
                 let group = template.replace("{}", text);
                 if label.is_some() || args.inputs.len() > 1 { format!("{file}, {group}") } else { group }
             }
