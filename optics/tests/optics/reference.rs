@@ -1,5 +1,5 @@
 //! Tests of the slow reference (`optics::reference`): its quadrature, the defocus OTF against the
-//! PHYSICS.md test vectors, identities and an independent formula, and the mean MTF against closed
+//! docs/physics.md test vectors, identities and an independent formula, and the mean MTF against closed
 //! forms and independent quadratures.
 //!
 //! Every golden value states its source and tolerance. Nothing here uses the fast path.
@@ -10,7 +10,7 @@ use optics::reference::{
 };
 use std::f64::consts::PI;
 
-/// Closed-form diffraction-limited MTF, `MTF_0(s) = (2/π)[acos s − s√(1−s²)]` (PHYSICS.md).
+/// Closed-form diffraction-limited MTF, `MTF_0(s) = (2/π)[acos s − s√(1−s²)]` (docs/physics.md).
 fn mtf0(s: f64) -> f64 {
     if s >= 1.0 {
         return 0.0;
@@ -26,18 +26,18 @@ fn mtf0(s: f64) -> f64 {
 /// * `∫ s√(1−s²) ds = −(1−s²)^{3/2}/3`, so `∫_0^x s√(1−s²) ds = [1 − (1−x²)^{3/2}]/3`.
 ///
 /// Hence `∫_0^x MTF_0 = (2/π)[x acos x + 2/3 − √(1−x²) + (1−x²)^{3/2}/3]`; at `x = 1` this is
-/// `4/(3π)`, the PHYSICS.md identity. Past the cutoff (`x > 1`) the integral stays at `4/(3π)`.
+/// `4/(3π)`, the docs/physics.md identity. Past the cutoff (`x > 1`) the integral stays at `4/(3π)`.
 fn mtf0_integral(x: f64) -> f64 {
     let x = x.min(1.0);
     let r = (1.0 - x * x).sqrt();
     (2.0 / PI) * (x * x.acos() + 2.0 / 3.0 - r + r * r * r / 3.0)
 }
 
-/// Paper lens (PHYSICS.md "The metric"): f0 = 3.36 mm, λ0 = 800 nm.
+/// Paper lens (docs/physics.md "The metric"): f0 = 3.36 mm, λ0 = 800 nm.
 const F0: f64 = 3.36e-3;
 const LAMBDA0: f64 = 800e-9;
 
-/// Gaussian photoelectron density `λ exp(−(λ−c)²/(2σ²))`, σ = range/(2√2) (PHYSICS.md), with
+/// Gaussian photoelectron density `λ exp(−(λ−c)²/(2σ²))`, σ = range/(2√2) (docs/physics.md), with
 /// range `c ± 12σ` clipped to positive wavelengths. Returns (σ, λ_min, λ_max).
 fn gaussian(range_m: f64) -> (f64, f64, f64) {
     let sigma = range_m / (2.0 * 2f64.sqrt());
@@ -146,7 +146,7 @@ fn modulus_quadrature_splits_at_sign_changes() {
 
 #[test]
 fn otf_matches_physics_md_test_vectors() {
-    // Source: PHYSICS.md "Optics: the OTF", test vectors (s, w → OTF), printed to 5 decimals:
+    // Source: docs/physics.md "Optics: the OTF", test vectors (s, w → OTF), printed to 5 decimals:
     // tolerance 1e-5.
     for (s, w, expected) in optics::reference::PHYSICS_TEST_VECTORS {
         let v = otf_defocus(s, w);
@@ -156,7 +156,7 @@ fn otf_matches_physics_md_test_vectors() {
 
 #[test]
 fn otf_without_defocus_is_the_closed_form_mtf0() {
-    // Closed form MTF_0 (PHYSICS.md), also for a → 0 (w tiny): 1e-12 absolute, near both ends.
+    // Closed form MTF_0 (docs/physics.md), also for a → 0 (w tiny): 1e-12 absolute, near both ends.
     let ss = [1e-12, 1e-9, 1e-6, 1e-3, 0.05, 0.1, 0.25, 0.5, 0.75, 0.9, 0.999, 1.0 - 1e-6, 1.0 - 1e-9];
     for s in ss {
         for w in [0.0, 1e-12, -1e-12] {
@@ -205,10 +205,10 @@ fn otf_agrees_with_the_x_form_to_1e12() {
 
 #[test]
 fn otf_integral_identities() {
-    // ∫_0^1 MTF_0 ds = 4/(3π) (PHYSICS.md), tolerance 1e-12.
+    // ∫_0^1 MTF_0 ds = 4/(3π) (docs/physics.md), tolerance 1e-12.
     let q = integrate(GK21, |s| otf_defocus(s, 0.0), &[0.0, 0.5, 1.0], 1e-14, 0.0);
     assert!((q.value - 4.0 / (3.0 * PI)).abs() < 1e-12, "{}", q.value);
-    // 2∫_0^1 OTF(s, w) s ds = Strehl/4, Strehl = [sin(πw)/(πw)]² (PHYSICS.md), tolerance 1e-9.
+    // 2∫_0^1 OTF(s, w) s ds = Strehl/4, Strehl = [sin(πw)/(πw)]² (docs/physics.md), tolerance 1e-9.
     // The values printed next to it (w = 0.25 → 0.20264, w = 0.5 → 0.10132) are Strehl/4, i.e.
     // 2∫ OTF s ds (Strehl itself is 0.81057 and 0.40528): checked to 1e-5.
     for (w, printed) in [(0.25, 0.20264), (0.5, 0.10132), (3.3, f64::NAN)] {
@@ -225,7 +225,7 @@ fn otf_integral_identities() {
 
 #[test]
 fn otf_tends_to_the_geometric_limit() {
-    // Geometric limit (PHYSICS.md): OTF → 2 J1(x)/x, x = π d ν, d = 2|Δz| NA. With Δz = 8 F#² w λ,
+    // Geometric limit (docs/physics.md): OTF → 2 J1(x)/x, x = π d ν, d = 2|Δz| NA. With Δz = 8 F#² w λ,
     // NA = 1/(2F#) and ν = s/(λ F#): x = 8π w s = a. The worst deviation over s ∈ (0, 0.5]
     // shrinks as w grows (measured: 6.4e-2, 2.5e-2, 1.1e-2, 2.8e-3 for w = 3, 10, 30, 100).
     let worst = |w: f64| {
