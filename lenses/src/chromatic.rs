@@ -46,6 +46,13 @@ impl Curve {
 /// A chromatic (uncorrected) metalens or diffractive lens: `f(λ) = f0 λ0/λ`, the detector at
 /// `f0`, one imaging order (the first diffraction order) with efficiency τ1(λ) through the full
 /// circular aperture, total transmission T(λ) into all orders.
+///
+/// Wavefront sign (docs/physics.md, "Sign of the wavefront"; the convention of [`optics::Wavefront`]):
+/// `W` is the optical path of the actual wavefront relative to the reference sphere centred on
+/// the detector point, `W020 > 0` a focus behind the detector. Longer wavelengths focus in front
+/// of the detector (`f(λ) < f0`), so their defocus is negative:
+/// `W020(λ) = (1 − λ/λ0) f0/(8 F#²)` ([`defocus`](Self::defocus)). The Seidel terms of
+/// [`with_seidel`](Self::with_seidel) carry the same sign and add to it.
 #[derive(Clone, Debug)]
 pub struct ChromaticMetalens {
     f_number: f64,
@@ -121,20 +128,25 @@ impl ChromaticMetalens {
     }
 
     /// This lens with Seidel aberrations at the scene's field point (m at the pupil edge, the
-    /// field along +x): spherical W040, coma W131, astigmatism W222, field curvature W220.
+    /// field along +x): spherical `W040 ρ⁴`, coma `W131 ρ³ cos φ`, astigmatism `W222 ρ² cos² φ`,
+    /// field curvature `W220 ρ²`, with the sign of the chromatic defocus (docs/physics.md, "Optics:
+    /// the OTF"): `W040 > 0` focuses the marginal zone behind the paraxial focus, `W220 > 0` moves
+    /// the focus of the field point behind the detector, and `W220` adds to `W020(λ)`: with
+    /// `W220 > 0` the sharpest wavelength is the one with `W020(λ) = −W220`, above λ0.
     pub fn with_seidel(self, spherical_m: f64, coma_m: f64, astigmatism_m: f64, field_curvature_m: f64) -> Self {
         ChromaticMetalens { seidel: [spherical_m, coma_m, astigmatism_m, field_curvature_m], ..self }
     }
 
-    /// Focal length at `wavelength_m`: `f(λ) = f0 λ0/λ` (docs/physics.md, "Chromatic lens").
+    /// Focal length at `wavelength_m`: `f(λ) = f0 λ0/λ` (docs/physics.md, "Lens families").
     pub fn focal_length_at(&self, wavelength_m: f64) -> f64 {
         self.focal_length * self.design_wavelength / wavelength_m
     }
 
-    /// Defocus at the pupil edge with the detector at `f0`:
-    /// `W020(λ) = (D²/8)(1/f(λ) − 1/f0) = (λ/λ0 − 1) f0/(8 F#²)` (docs/physics.md, "Chromatic lens"), m.
+    /// Defocus at the pupil edge with the detector at `f0`, m:
+    /// `W020(λ) = (D²/8)(1/f0 − 1/f(λ)) = (1 − λ/λ0) f0/(8 F#²)` (docs/physics.md, "Optics: the
+    /// OTF"). Negative for `λ > λ0`: `f(λ) < f0` puts the focus in front of the detector.
     pub fn defocus(&self, wavelength_m: f64) -> f64 {
-        (wavelength_m / self.design_wavelength - 1.0) * self.focal_length / (8.0 * self.f_number * self.f_number)
+        (1.0 - wavelength_m / self.design_wavelength) * self.focal_length / (8.0 * self.f_number * self.f_number)
     }
 }
 
@@ -189,8 +201,8 @@ impl LensModel for ChromaticMetalens {
     }
 
     fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> {
-        // W020 = (λ/λ0 − 1) f0/(8F#²): affine; on axis no lateral colour; the full pupil with no
-        // Seidel terms; and both efficiency curves constant
+        // W020 = (1 − λ/λ0) f0/(8F#²) = k − (k/λ0) λ: affine; on axis no lateral colour; the
+        // full pupil with no Seidel terms; and both efficiency curves constant
         let (Curve::Constant(efficiency), Curve::Constant(transmission)) = (&self.efficiency, &self.transmission)
         else {
             return None;
@@ -199,8 +211,8 @@ impl LensModel for ChromaticMetalens {
         (self.aperture.is_none() && self.seidel == [0.0; 4] && field.is_on_axis()).then_some(AffineDefocus {
             efficiency: *efficiency,
             transmission: *transmission,
-            w020_intercept_m: -k,
-            w020_slope: k / self.design_wavelength,
+            w020_intercept_m: k,
+            w020_slope: -k / self.design_wavelength,
         })
     }
 
@@ -232,13 +244,48 @@ mod tests {
 
     #[test]
     fn defocus_matches_the_thin_lens_sag_difference() {
-        // W020 = (D²/8)(1/f(λ) − 1/f0) with D = f0/F# = 1.344 mm
+        // The sag of the converging reference sphere of radius f0 minus that of the actual wave
+        // converging at f(λ): W020 = (D²/8)(1/f0 − 1/f(λ)), D = f0/F# = 1.344 mm
         let lens = paper();
         let d: f64 = 3.36e-3 / 2.5;
         for lambda in [700e-9, 790e-9, 900e-9] {
-            let direct = d * d / 8.0 * (1.0 / lens.focal_length_at(lambda) - 1.0 / 3.36e-3);
+            let direct = d * d / 8.0 * (1.0 / 3.36e-3 - 1.0 / lens.focal_length_at(lambda));
             assert!((lens.defocus(lambda) - direct).abs() < 1e-18, "{lambda}");
         }
+    }
+
+    /// The sign convention (docs/physics.md, "Sign of the wavefront"): a focus `Δz` behind the
+    /// detector is `W020 = Δz/(8 F#²) > 0`. Below λ0 the focal length grows (`f(λ) > f0`: the
+    /// focus behind the detector, W020 > 0), above λ0 it shrinks (in front, W020 < 0), and
+    /// paraxially `W020 ≈ (f(λ) − f0)/(8 F#²)`.
+    #[test]
+    fn defocus_is_negative_when_the_focus_is_in_front_of_the_detector() {
+        let lens = paper();
+        let k = 3.36e-3 / (8.0 * 2.5 * 2.5);
+        for lambda in [700e-9, 790e-9, 799.9e-9, 800.1e-9, 850e-9, 1000e-9] {
+            let w020 = lens.defocus(lambda);
+            assert_eq!(w020 < 0.0, lambda > 800e-9, "{lambda}: {w020}");
+            assert_eq!(w020 < 0.0, lens.focal_length_at(lambda) < 3.36e-3, "{lambda}");
+            assert!((w020 - (1.0 - lambda / 800e-9) * k).abs() < 1e-20, "{lambda}: {w020}");
+            // the order reports the same defocus
+            assert_eq!(lens.orders(lambda, Field::ON_AXIS)[0].wavefront.defocus_m, w020);
+        }
+        // 850 nm: f = 3.16235 mm, 0.19765 mm in front; W020 = −0.0625 k = −4.2 µm
+        assert!((lens.defocus(850e-9) + 4.2e-6).abs() < 1e-15);
+        let dz = lens.focal_length_at(790e-9) - 3.36e-3;
+        assert!((lens.defocus(790e-9) - dz / 50.0).abs() < 0.02 * dz / 50.0, "{dz}");
+    }
+
+    /// The closed form's affine coefficients reproduce `defocus` (intercept `+k`, slope `−k/λ0`).
+    #[test]
+    fn affine_defocus_follows_the_sign() {
+        let lens = paper();
+        let a = lens.affine_defocus(Field::ON_AXIS).unwrap();
+        for lambda in [500e-9, 800e-9, 850e-9] {
+            let w = a.w020_intercept_m + a.w020_slope * lambda;
+            assert!((w - lens.defocus(lambda)).abs() < 1e-18, "{lambda}: {w}");
+        }
+        assert!(a.w020_intercept_m > 0.0 && a.w020_slope < 0.0);
     }
 
     #[test]

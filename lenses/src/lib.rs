@@ -1,7 +1,7 @@
 //! Built-in lens families for the ASNR toolkit, each a [`optics::LensModel`].
 //!
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
-//!   (docs/physics.md, "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
+//!   (docs/physics.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
 //!   constant or tabulated.
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
@@ -16,10 +16,11 @@
 //! let lens = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), Curve::Constant(0.55))
 //!     .unwrap();
 //! assert_eq!(lens.efficiency(850e-9), 0.15);
-//! // 50 nm from the design wavelength the focus moves by f0 Δλ/λ0 ≈ 0.2 mm:
-//! // W020 = (λ/λ0 − 1) f0/(8 F#²) = 0.0625 × 3.36e-3 / 50 = 4.2 µm
+//! // 50 nm above the design wavelength the focus moves f0 Δλ/λ0 ≈ 0.2 mm toward the lens, in
+//! // front of the detector: W020 = (1 − λ/λ0) f0/(8 F#²) = −0.0625 × 3.36e-3 / 50 = −4.2 µm
+//! // (W020 > 0 is a focus behind the detector, docs/physics.md "Sign of the wavefront")
 //! let w020 = lens.defocus(850e-9);
-//! assert!((w020 - 4.2e-6).abs() < 1e-12);
+//! assert!((w020 + 4.2e-6).abs() < 1e-12);
 //! ```
 //!
 //! Units: SI (m). Efficiencies are fractions of the light incident on the aperture.

@@ -47,3 +47,114 @@ fn conformance_check_catches_a_broken_lens() {
     }
     assert!(check_lens(&Broken, &band(800.0, 10.0)).is_err());
 }
+
+// ---- wavefront sign (docs/physics.md, "Sign of the wavefront") ----
+
+const F0: f64 = 3.36e-3;
+const LAMBDA0: f64 = 800e-9;
+const F_NUMBER: f64 = 2.5;
+
+fn paper_lens() -> ChromaticMetalens {
+    ChromaticMetalens::new(F_NUMBER, F0, LAMBDA0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
+}
+
+/// The wavelength where the chromatic defocus is `w020_m`, from the convention alone:
+/// `W020(λ) = (1 − λ/λ0) f0/(8 F#²)` ⇒ `λ = λ0 (1 − W020 8F#²/f0)`.
+fn wavelength_with_defocus(w020_m: f64) -> f64 {
+    LAMBDA0 * (1.0 - w020_m * 8.0 * F_NUMBER * F_NUMBER / F0)
+}
+
+/// OTF along `+x` at `s = ν/ν_c` of a circular pupil with the rotationally symmetric wavefront
+/// `W = W020 ρ² + W040 ρ⁴` (m) at `wavelength`, by brute-force quadrature of the pupil
+/// autocorrelation `OTF(s) = (1/π) ∫ P(u) P*(u + 2s x̂) d²u`, `P = exp(+i 2π W/λ)`, written here
+/// independently of the FFT path. With `u = (x − s, y)` the overlap is `(|x| + s)² + y² ≤ 1` and
+/// the phase difference `k [W(x − s, y) − W(x + s, y)] = −4 k s x [W020 + 2 W040 (x² + y² + s²)]`
+/// is odd in `x`, so the OTF is real: `(4/π) ∫_0^{1−s} dx ∫_0^{√(1−(x+s)²)} cos(…) dy`, done in
+/// `x + s = cos t`, `y = v sin t` (no square-root endpoint), Gauss–Legendre in `t` and `v`.
+fn autocorrelation_otf(s: f64, w020_m: f64, w040_m: f64, wavelength: f64) -> f64 {
+    let k = std::f64::consts::TAU / wavelength;
+    let mut total = 0.0;
+    optics::quad::for_each_node(0.0, s.acos(), 24, |t, wt| {
+        let (sin_t, cos_t) = t.sin_cos();
+        let x = cos_t - s;
+        let inner = optics::quad::composite(0.0, 1.0, 24, |v| {
+            let y = v * sin_t;
+            let phase = -4.0 * k * s * x * (w020_m + 2.0 * w040_m * (x * x + y * y + s * s));
+            phase.cos()
+        });
+        total += wt * sin_t * sin_t * inner;
+    });
+    4.0 / std::f64::consts::PI * total
+}
+
+/// Normalized frequencies of the checks, and the lens's MTF there (FFT path, 256 samples).
+const S: [f64; 6] = [0.05, 0.1, 0.2, 0.3, 0.45, 0.6];
+
+fn lens_mtf(lens: &ChromaticMetalens, wavelength: f64) -> Vec<f64> {
+    let nus: Vec<f64> = S.iter().map(|s| s / (wavelength * F_NUMBER)).collect();
+    optics::monochromatic_mtf(lens, wavelength, optics::Field::ON_AXIS, &nus, 256).unwrap()
+}
+
+/// The quadrature above is right: the diffraction-limited MTF and the exact defocus OTF.
+#[test]
+fn autocorrelation_quadrature_reproduces_the_exact_otf() {
+    for s in S {
+        let perfect = autocorrelation_otf(s, 0.0, 0.0, LAMBDA0);
+        assert!((perfect - optics::mtf_diffraction_limited(s)).abs() < 1e-12, "s {s}: {perfect}");
+        for w in [0.3, -0.7, 1.5] {
+            let got = autocorrelation_otf(s, w * LAMBDA0, 0.0, LAMBDA0);
+            let exact = optics::defocus_otf(s, w);
+            assert!((got - exact).abs() < 1e-10, "s {s}, w {w}: {got} vs {exact}");
+        }
+    }
+}
+
+/// The sign test. With spherical aberration `W040 > 0`, the chromatic defocus balances it at
+/// the wavelength where `W020(λ) = −W040` (above λ0: `f(λ) < f0` pulls the focus in front of the
+/// detector, toward the marginal focus): there the lens's OTF is that of the balanced pupil
+/// `W040 (ρ⁴ − ρ²)`; at the wavelength on the other side of λ0, `W020 = +W040`, it is that of
+/// `W040 (ρ⁴ + ρ²)` and much worse. A lens whose defocus had the opposite sign swaps the two.
+#[test]
+fn chromatic_defocus_balances_spherical_aberration_above_the_design_wavelength() {
+    let w040 = 0.5e-6;
+    let lens = paper_lens().with_seidel(w040, 0.0, 0.0, 0.0);
+    let balanced = wavelength_with_defocus(-w040);
+    let doubled = wavelength_with_defocus(w040);
+    // 805.95 nm and 794.05 nm for the paper's lens (f0/(8F#²) = 67.2 µm)
+    assert!((balanced - 805.952e-9).abs() < 1e-12 && (doubled - 794.048e-9).abs() < 1e-12, "{balanced} {doubled}");
+
+    let at_balanced = lens_mtf(&lens, balanced);
+    let at_doubled = lens_mtf(&lens, doubled);
+    let (mut sum_balanced, mut sum_doubled) = (0.0, 0.0);
+    for (i, s) in S.into_iter().enumerate() {
+        let good = autocorrelation_otf(s, -w040, w040, balanced);
+        let bad = autocorrelation_otf(s, w040, w040, doubled);
+        // the two pupils are far apart: the check discriminates the sign
+        assert!(good.abs() - bad.abs() > 0.05, "s {s}: {good} vs {bad}");
+        assert!((at_balanced[i] - good.abs()).abs() < 2e-3, "s {s}: lens {} vs balanced {good}", at_balanced[i]);
+        assert!((at_doubled[i] - bad.abs()).abs() < 2e-3, "s {s}: lens {} vs unbalanced {bad}", at_doubled[i]);
+        sum_balanced += at_balanced[i];
+        sum_doubled += at_doubled[i];
+    }
+    assert!(sum_balanced > sum_doubled + 0.5, "{sum_balanced} vs {sum_doubled}");
+}
+
+/// Field curvature adds to the chromatic defocus with the same sign: at the wavelength where
+/// `W020(λ) = −W220` the field point is in focus (the diffraction-limited MTF), at `W020 = +W220`
+/// it sees twice the defocus, `2 W220/λ` waves.
+#[test]
+fn field_curvature_adds_to_the_chromatic_defocus() {
+    let w220 = 0.5e-6;
+    let lens = paper_lens().with_seidel(0.0, 0.0, 0.0, w220);
+    let sharp = wavelength_with_defocus(-w220);
+    let blurred = wavelength_with_defocus(w220);
+    let at_sharp = lens_mtf(&lens, sharp);
+    let at_blurred = lens_mtf(&lens, blurred);
+    for (i, s) in S.into_iter().enumerate() {
+        let perfect = optics::mtf_diffraction_limited(s);
+        let twice = optics::defocus_otf(s, 2.0 * w220 / blurred).abs();
+        assert!(perfect - twice > 0.05, "s {s}");
+        assert!((at_sharp[i] - perfect).abs() < 2e-3, "s {s}: {} vs {perfect}", at_sharp[i]);
+        assert!((at_blurred[i] - twice).abs() < 2e-3, "s {s}: {} vs {twice}", at_blurred[i]);
+    }
+}

@@ -7,7 +7,7 @@
 //!
 //! The grid: F/0.5–F/50; Gaussian spectral ranges 1e-3–600 nm; pixels 0.3–50 µm; efficiencies
 //! 1e-9–1; 1e-3–1e12 photoelectrons (through the radiance or the exposure); defocus up to 1e4
-//! waves at the band edges (focal lengths up to 1 m: `w = (λ/λ0 − 1) f0/(8 F#² λ)`); top-hat,
+//! waves at the band edges (focal lengths up to 1 m: `w = (1 − λ/λ0) f0/(8 F#² λ)`); top-hat,
 //! tabulated, blackbody and line (one-wavelength) spectra and a tabulated QE; decentred and annular apertures (the FFT
 //! path); off-axis points with lateral colour; sensor noise with saturation; glare included.
 //! `--quick` runs the subset marked quick (well under a minute in release, for CI); the full grid

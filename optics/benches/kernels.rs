@@ -36,7 +36,7 @@ impl LensModel for Chromatic {
         F0
     }
     fn orders(&self, lambda: f64, _: Field) -> Vec<Order> {
-        let w020 = (lambda / LAMBDA0 - 1.0) * F0 / (8.0 * F_NUMBER * F_NUMBER);
+        let w020 = (1.0 - lambda / LAMBDA0) * F0 / (8.0 * F_NUMBER * F_NUMBER);
         vec![Order::new(0.15, Pupil::Full, Wavefront::defocus(w020))]
     }
 }
@@ -91,10 +91,10 @@ fn polychromatic(c: &mut Criterion) {
 }
 
 fn closed_form(c: &mut Criterion) {
-    // the paper scene's detected spectrum λ·G(λ) (50 nm range), τ1 = 0.15, W020 = (λ/λ0 − 1) k
+    // the paper scene's detected spectrum λ·G(λ) (50 nm range), τ1 = 0.15, W020 = (1 − λ/λ0) k
     let k = F0 / (8.0 * F_NUMBER * F_NUMBER);
     let sigma = 50e-9 / (2.0 * 2f64.sqrt());
-    let new = || GaussianDefocus::new(LAMBDA0, sigma, &[0.0, 1.0], 0.15, -k, k / LAMBDA0, F_NUMBER);
+    let new = || GaussianDefocus::new(LAMBDA0, sigma, &[0.0, 1.0], 0.15, k, -k / LAMBDA0, F_NUMBER);
     let closed = new();
     let nyquist = 0.5 / PIXEL;
     let mut group = c.benchmark_group("closed form paper scene");

@@ -385,11 +385,12 @@ mod tests {
     use super::*;
     use crate::defocus_otf;
 
-    /// The paper lens: F/2.5, f0 3.36 mm, λ0 800 nm; W020 = (λ/λ0 − 1) f0/(8F#²).
+    /// The paper lens: F/2.5, f0 3.36 mm, λ0 800 nm; W020 = (1 − λ/λ0) f0/(8F#²) (docs/physics.md,
+    /// "Sign of the wavefront").
     fn paper(range_m: f64, coefficients: &[f64]) -> GaussianDefocus {
         let (f, f0, l0) = (2.5, 3.36e-3, 800e-9);
         let k = f0 / (8.0 * f * f);
-        GaussianDefocus::new(800e-9, range_m / (2.0 * 2f64.sqrt()), coefficients, 0.15, -k, k / l0, f)
+        GaussianDefocus::new(800e-9, range_m / (2.0 * 2f64.sqrt()), coefficients, 0.15, k, -k / l0, f)
     }
 
     /// Slow check: the same OTF by brute-force quadrature over λ of the monochromatic OTF.
@@ -455,7 +456,8 @@ mod tests {
         for f in [0.5, 2.5, 10.0] {
             for range in [10e-9, 100e-9, 600e-9] {
                 let k = f0 / (8.0 * f * f);
-                let g = GaussianDefocus::new(l0, range / (2.0 * 2f64.sqrt()), &[0.0, 1.0], 0.15, -k, k / l0, f);
+                // W020 = (1 − λ/λ0) k (docs/physics.md, "Sign of the wavefront")
+                let g = GaussianDefocus::new(l0, range / (2.0 * 2f64.sqrt()), &[0.0, 1.0], 0.15, k, -k / l0, f);
                 let cutoff = 1.0 / (f * l0);
                 for share in [0.04, 0.25, 0.42, 0.71, 1.2] {
                     let nu = share * cutoff;
@@ -475,12 +477,12 @@ mod tests {
 
     #[test]
     fn fraction_defocused_beyond_is_the_gaussian_tail() {
-        // P = 1: the weight outside λ0 ± Δ, Δ = limit/w1, is erfc(Δ/(σ√2)) of the whole Gaussian
+        // P = 1: the weight outside λ0 ± Δ, Δ = limit/|w1|, is erfc(Δ/(σ√2)) of the whole Gaussian
         // (the paper lens is centred on λ0, where W020 = 0); this one is broad enough that the
         // part at λ ≤ 0, t = ½ erfc(μ/(σ√2)) = 6e-12, is missing from the weight
         let g = paper(330e-9, &[1.0]);
         let limit = 5e-6;
-        let delta = limit / g.w1;
+        let delta = limit / g.w1.abs();
         let t = 0.5 * libm::erfc(g.center / (g.sigma * 2f64.sqrt()));
         let exact = (libm::erfc(delta / (g.sigma * 2f64.sqrt())) - t) / (1.0 - t);
         let got = g.fraction_defocused_beyond(limit);

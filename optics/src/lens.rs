@@ -48,20 +48,31 @@ pub enum Pupil {
 
 /// Wavefront error of an imaging order at the exit pupil, relative to a reference sphere
 /// centred on the detector point, in metres of optical path at the pupil edge.
+///
+/// Sign (docs/physics.md, "Sign of the wavefront"), the one every lens and every engine follows: `W` is
+/// the optical path of the actual wavefront relative to the reference sphere centred on the
+/// detector point; the pupil field is `A exp(+i 2π W/λ)` with time dependence `exp(−iωt)`.
+/// `W020 > 0` means the wave focuses **behind** the detector (farther from the lens): a focus
+/// `Δz` behind it gives `W020 = Δz NA²/2`. The Seidel terms carry the same sign (`W040 > 0`: the
+/// marginal zone focuses behind the paraxial focus; `W220 > 0`: the field point focuses behind
+/// the detector), and `W220` adds to `W020`. For pure defocus the OTF is even in `W020`; any other
+/// term, a decentred pupil with lateral colour, or a sum over orders, reveals the sign.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub struct Wavefront {
     /// Defocus coefficient `W020` (m): `W(ρ) = W020 ρ²` with ρ the normalized pupil radius.
     ///
-    /// Paraxially a focus shift `Δz` behind the detector gives `W020 = Δz NA²/2 = Δz/(8 F#²)`.
+    /// Paraxially a focus shift `Δz` behind the detector gives `W020 = Δz NA²/2 = Δz/(8 F#²)`;
+    /// a focus in front of the detector gives `W020 < 0`.
     pub defocus_m: f64,
     /// Lateral displacement `(x, y)` of the image point on the detector from the field's reference
     /// image point, m: a wavefront tilt. It leaves the MTF of one wavelength unchanged but gives
     /// each wavelength of a polychromatic sum its own phase `exp(−2πi ν·Δ)` (lateral colour).
     pub image_shift_m: [f64; 2],
-    /// Seidel coefficients at this field point (the field along +x), m at the pupil edge:
-    /// spherical `W040 ρ⁴`, coma `W131 ρ³ cos φ`, astigmatism `W222 ρ² cos² φ`, field curvature
-    /// `W220 ρ²`. Any non-zero term sends the order to the FFT path.
+    /// Seidel coefficients at this field point (the field along +x), m at the pupil edge, with
+    /// the sign of [`defocus_m`](Self::defocus_m): spherical `W040 ρ⁴`, coma `W131 ρ³ cos φ`,
+    /// astigmatism `W222 ρ² cos² φ`, field curvature `W220 ρ²` (the `H = 1` values of
+    /// [`crate::fft::Aberrations`]). Any non-zero term sends the order to the FFT path.
     pub spherical_m: f64,
     /// Coma `W131` (m), see [`spherical_m`](Self::spherical_m).
     pub coma_m: f64,
@@ -143,6 +154,11 @@ pub struct AffineDefocus {
 /// Architecture invariant: the detector sits at [`focal_length`](LensModel::focal_length) `f0`
 /// behind the lens, and [`f_number`](LensModel::f_number) is `f0/D`; everything
 /// wavelength-dependent (focus shift, efficiency) is expressed through [`orders`](LensModel::orders).
+///
+/// Wavefront sign: every implementation reports its orders' [`Wavefront`] in the convention of
+/// docs/physics.md, "Sign of the wavefront" (see [`Wavefront`]): `W020 > 0` is a focus behind the
+/// detector. A chromatic lens `f(λ) = f0 λ0/λ` thus has `W020(λ) = (1 − λ/λ0) f0/(8 F#²)`,
+/// negative for `λ > λ0`.
 pub trait LensModel: Send + Sync + fmt::Debug {
     /// Working F-number `F# = f0/D` at the detector.
     fn f_number(&self) -> f64;

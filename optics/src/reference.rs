@@ -11,7 +11,9 @@
 //!   evaluated as `(4/π) ∫ u sinc(a u) dy` with `u = √(1−y²) − s`, which is exact at `a = 0`
 //!   (`MTF_0(s)`) with no cancellation.
 //! * [`polychromatic_otf`]: `∫ ρ(λ) OTF(ν λ F#, w(λ)) dλ / ∫ ρ(λ) dλ` for a chromatic lens
-//!   `f(λ) = f0 λ0/λ`, `w(λ) = (λ/λ0 − 1) f0 / (8 F#² λ)` (signed sum, docs/physics.md, "Polychromatic OTF").
+//!   `f(λ) = f0 λ0/λ`, `w(λ) = (1 − λ/λ0) f0 / (8 F#² λ)` (signed sum; the sign of
+//!   docs/physics.md, "Sign of the wavefront": `w > 0` is a focus behind the detector, so `w < 0` for
+//!   `λ > λ0`; the defocus OTF is even in `w`).
 //! * [`mean_mtf`]: `(1/ν_N) ∫_0^{ν_N} P(ν) |OTF_poly(ν)| dν` (paper eq. 1 without SNR0), with the
 //!   integration range split at the sign changes of `OTF_poly`.
 
@@ -342,7 +344,7 @@ pub const PHYSICS_TEST_VECTORS: [(f64, f64, f64); 7] = [
 ];
 
 /// Exact OTF of a circular pupil with defocus `w` (waves at the pupil edge) at normalized
-/// frequency `s = ν/ν_c`, from docs/physics.md ("Exact defocused OTF") as printed:
+/// frequency `s = ν/ν_c`, from docs/physics.md as printed:
 /// `OTF(s, w) = 4/(π a) ∫_0^{√(1−s²)} sin[a(√(1−y²) − s)] dy`, `a = 8π w s`,
 /// computed as `(4/π) ∫ u sinc(a u) dy`, `u = √(1−y²) − s`, so that `a → 0` gives
 /// `MTF_0(s) = (2/π)[acos s − s√(1−s²)]` without cancellation. Real, may be negative; even in `s`
@@ -419,9 +421,11 @@ pub struct ReferenceScene<'a> {
 }
 
 impl ReferenceScene<'_> {
-    /// Defocus at the pupil edge in waves, `w(λ) = (λ/λ0 − 1) f0 / (8 F#²) / λ`.
+    /// Defocus at the pupil edge in waves, `w(λ) = W020(λ)/λ = (1 − λ/λ0) f0 / (8 F#²) / λ`
+    /// (docs/physics.md, "Sign of the wavefront": negative for `λ > λ0`, where `f(λ) < f0` focuses in
+    /// front of the detector).
     pub fn defocus_waves(&self, lambda: f64) -> f64 {
-        (lambda / self.design_wavelength_m - 1.0) * self.focal_length_m / (8.0 * self.f_number * self.f_number) / lambda
+        (1.0 - lambda / self.design_wavelength_m) * self.focal_length_m / (8.0 * self.f_number * self.f_number) / lambda
     }
 
     /// Nyquist frequency `ν_N = 1/(2p)` (cycles/m).
@@ -521,7 +525,7 @@ impl ReferenceScene<'_> {
 }
 
 /// Polychromatic OTF `∫ ρ(λ) OTF(ν λ F#, w(λ)) dλ / ∫ ρ(λ) dλ` at frequency `nu` (cycles/m):
-/// the signed, photoelectron-weighted sum of the monochromatic OTFs (docs/physics.md,
+/// the signed, photoelectron-weighted sum of the monochromatic OTFs (docs/physics.md
 /// "Polychromatic OTF"). Error target `rel_tol · max(|OTF_poly|, 1e-3)`.
 pub fn polychromatic_otf(scene: &ReferenceScene<'_>, nu: f64, rel_tol: f64) -> f64 {
     let norm = scene.norm();

@@ -54,9 +54,9 @@ impl Case {
     }
 
     /// Defocus in waves at the pupil edge of the chromatic lens at `lambda` (docs/physics.md,
-    /// "Chromatic lens"): `W020 = (λ/λ0 − 1) f0/(8 F#²)`, `w = W020/λ`.
+    /// "Chromatic lens"): `W020 = (1 − λ/λ0) f0/(8 F#²)`, `w = W020/λ`.
     fn waves(&self, lambda: f64) -> f64 {
-        (lambda / LAMBDA0 - 1.0) * F0 / (8.0 * self.f_number * self.f_number) / lambda
+        (1.0 - lambda / LAMBDA0) * F0 / (8.0 * self.f_number * self.f_number) / lambda
     }
 }
 

@@ -1,7 +1,7 @@
 //! The Fraunhofer fraction (paper SI eq. S15) on the spectral-quadrature path: exact against
 //! closed forms written here, against the closed-form engine, and continuous in a sweep.
 //!
-//! For the chromatic lens `W020(λ) = (λ/λ0 − 1) f0/(8F#²)` (docs/physics.md, "Chromatic lens"), so the blur radius
+//! For the chromatic lens `W020(λ) = (1 − λ/λ0) f0/(8F#²)` (docs/physics.md), so the blur radius
 //! `2|W020|/NA` exceeds `x` exactly where `|λ − λ0| > Δ = 2 x λ0 F#/f0` (eq. S15 solved for Δλ:
 //! 297.619 nm for the paper's lens and 0.25 mm).
 

@@ -50,7 +50,8 @@ fn direct_mean(f_number: f64, lambda: f64, pixel_m: f64) -> f64 {
     let nyquist = 0.5 / pixel_m;
     let cutoff = 1.0 / (lambda * f_number);
     let top = nyquist.min(cutoff);
-    let w = (lambda / LAMBDA0 - 1.0) * F0 / (8.0 * f_number * f_number) / lambda;
+    // w = (1 − λ/λ0) f0/(8 F#² λ) (docs/physics.md, "Sign of the wavefront")
+    let w = (1.0 - lambda / LAMBDA0) * F0 / (8.0 * f_number * f_number) / lambda;
     let otf = |nu: f64| defocus_otf(nu * lambda * f_number, w);
     let mut cuts = vec![0.0];
     let n = 4000;

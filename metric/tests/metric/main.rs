@@ -219,7 +219,8 @@ fn lateral_colour_splits_tangential_and_sagittal() {
     let tangential = |nu: f64| {
         let (mut re, mut im) = (0.0, 0.0);
         optics::quad::for_each_node(lo, hi, 64, |l, q| {
-            let w = (l / LAMBDA0 - 1.0) * F0 / (8.0 * f * f) / l;
+            // w = (1 − λ/λ0) f0/(8 F#² λ) (docs/physics.md, "Sign of the wavefront")
+            let w = (1.0 - l / LAMBDA0) * F0 / (8.0 * f * f) / l;
             let v = q * rho(l) * optics::defocus_otf(nu * l * f, w);
             let phase = -2.0 * std::f64::consts::PI * nu * h0 * (LAMBDA0 / l - 1.0);
             re += v * phase.cos();
@@ -273,6 +274,113 @@ fn decentred_iris_lowers_the_mtf_and_breaks_the_symmetry() {
         decentred.mean_mtf_tangential,
         decentred.mean_mtf_sagittal
     );
+}
+
+// ---- wavefront sign ----
+// docs/physics.md, "Sign of the wavefront": W020 > 0 is a focus behind the detector, so the chromatic
+// lens has W020(λ) = (1 − λ/λ0) f0/(8F#²) = (1 − λ/λ0) k, negative above λ0, and the Seidel terms
+// carry the same sign. Pure defocus hides the sign (the OTF is even in W020); the checks below
+// combine the chromatic defocus with a term that does not.
+
+/// `optics::reference::mean_mtf` of the paper scene (F/2.5, 50 nm Gaussian at λ0, 5.2 µm) with
+/// the constant defocus `c` (m) added to the chromatic one: `(1 − λ/λ0) k + c = (k + c)(1 − λ/λ0')`
+/// with `λ0' = λ0 (k + c)/k`, i.e. the reference's chromatic lens with design wavelength `λ0'`
+/// and focal length `f0 (k + c)/k` (the focal length enters its defocus only, through `k`).
+fn paper_reference_with_defocus(c: f64) -> f64 {
+    let k = F0 / (8.0 * 2.5 * 2.5);
+    let sigma = 50e-9 / (2.0 * 2f64.sqrt());
+    let density = move |l: f64| l * (-0.5 * ((l - LAMBDA0) / sigma).powi(2)).exp();
+    let scene = ReferenceScene {
+        density: &density,
+        lambda_min: LAMBDA0 - 12.0 * sigma,
+        lambda_max: LAMBDA0 + 12.0 * sigma,
+        breakpoints: &[],
+        f_number: 2.5,
+        focal_length_m: F0 * (k + c) / k,
+        design_wavelength_m: LAMBDA0 * (k + c) / k,
+        pixel_pitch_m: 5.2e-6,
+        pixel_mtf: false,
+    };
+    mean_mtf(&scene, 1e-10)
+}
+
+/// The acceptance check of the sign on the embedded paper scene (`asnr evaluate --set
+/// lens.field_curvature_um=0.5 --set options.pupil_samples=512`, and `lens.spherical_um=0.5`).
+/// Field curvature adds to the chromatic defocus, so the scene with `W220 = 0.5 µm` (FFT path,
+/// 512 pupil samples) is the pure-defocus scene with `W020(λ) + W220`, sharpest where
+/// `W020(λ) = −W220`, at 806 nm: its mean MTF is the 1-D reference's with that defocus, 0.426322
+/// (the FFT path at 512 samples gives 0.426315).
+/// Independently, quadrature of the pupil integral in numpy and prysm's FFT, with this sign
+/// convention, gave 0.42632 for field curvature and 0.42525 for spherical aberration
+/// `W040 = 0.5 µm`. With the opposite sign (the defect this checks) the field-curvature scene came
+/// out 0.42291 (sharpest at 794 nm) and the spherical one 0.42230. The spherical scene runs at
+/// the default 256 pupil samples (0.425221, against 0.425238 at 512), to keep the test short.
+#[test]
+fn seidel_terms_on_the_paper_scene_follow_the_wavefront_sign() {
+    let run = |lens: ChromaticMetalens, pupil_samples: usize| {
+        let options = Options { pupil_samples, ..Options::default() };
+        evaluate(&paper_with(lens).with_options(options).unwrap()).unwrap()
+    };
+
+    let w220 = 0.5e-6;
+    let curved = run(paper_lens().with_seidel(0.0, 0.0, 0.0, w220), 512);
+    assert!(curved.numerics.engine.starts_with("fft: 512 pupil samples"), "{}", curved.numerics.engine);
+    let same_sign = paper_reference_with_defocus(w220);
+    let opposite = paper_reference_with_defocus(-w220);
+    eprintln!("field curvature: {} (reference {same_sign}, opposite sign {opposite})", curved.mean_mtf);
+    assert!((same_sign - 0.42632).abs() < 1e-5, "{same_sign}");
+    assert!(same_sign - opposite > 3e-3, "{same_sign} vs {opposite}");
+    assert!((curved.mean_mtf - same_sign).abs() < 5e-5, "{} vs {same_sign}", curved.mean_mtf);
+    assert!((curved.mean_mtf - 0.42632).abs() < 2e-4, "{}", curved.mean_mtf);
+
+    let spherical = run(paper_lens().with_seidel(0.5e-6, 0.0, 0.0, 0.0), 256);
+    eprintln!("spherical: {}", spherical.mean_mtf);
+    assert!((spherical.mean_mtf - 0.42525).abs() < 2e-4, "{}", spherical.mean_mtf);
+}
+
+/// A decentred iris off axis: the decentre tilts each wavelength's wave by `2 W020(λ) dx`
+/// (normalized pupil), moving its image by `x_d(λ) = 4 W020(λ) dx F# = dx f0 (1 − λ/λ0)/(2F#)`
+/// (toward −x above λ0 for dx > 0: the rays have crossed in front of the detector), while lateral
+/// colour moves it by `h0 (λ0/λ − 1)`, `h0 = f0 tan θ`, also toward −x above λ0 for a field along
+/// +x. The two add with an iris decentred toward the field and partly cancel with one decentred
+/// away from it. The engine's tangential mean MTF (along the field) (FFT path) against a direct sum written here,
+/// `OTF(ν) = ∫ λ G(λ) OTF_1D(ν λ F#, w(λ)) exp(−2πi ν (x_d(λ) + h0 (λ0/λ − 1))) dλ / ∫ λ G dλ`.
+#[test]
+fn decentred_iris_and_lateral_colour_shift_the_image_the_same_way() {
+    let (f, pixel) = (2.5, 5.2e-6);
+    let theta = 8f64.to_radians();
+    let h0 = F0 * theta.tan();
+    let sigma = 50e-9 / (2.0 * 2f64.sqrt());
+    let (lo, hi) = (LAMBDA0 - 8.0 * sigma, LAMBDA0 + 8.0 * sigma);
+    let rho = |l: f64| l * (-0.5 * ((l - LAMBDA0) / sigma).powi(2)).exp();
+    let norm = optics::quad::composite(lo, hi, 64, rho);
+    let nyquist = 0.5 / pixel;
+    let direct = |dx: f64| {
+        let tangential = |nu: f64| {
+            let (mut re, mut im) = (0.0, 0.0);
+            optics::quad::for_each_node(lo, hi, 64, |l, q| {
+                let w = (1.0 - l / LAMBDA0) * F0 / (8.0 * f * f) / l;
+                let v = q * rho(l) * optics::defocus_otf(nu * l * f, w);
+                let shift = dx * F0 * (1.0 - l / LAMBDA0) / (2.0 * f) + h0 * (LAMBDA0 / l - 1.0);
+                let phase = -2.0 * std::f64::consts::PI * nu * shift;
+                re += v * phase.cos();
+                im += v * phase.sin();
+            });
+            re.hypot(im) / norm
+        };
+        optics::quad::composite(0.0, nyquist, 48, tangential) / nyquist
+    };
+    let engine = |dx: f64| {
+        let iris = optics::fft::Aperture::circle().decentred(dx, 0.0).unwrap();
+        let scene = paper_with(paper_lens().with_aperture(iris)).at_field(optics::Field::new(theta, 0.0)).unwrap();
+        evaluate(&scene).unwrap().mean_mtf_tangential
+    };
+    let (toward, away) = (engine(0.15), engine(-0.15));
+    let (toward_direct, away_direct) = (direct(0.15), direct(-0.15));
+    eprintln!("iris toward the field {toward} ({toward_direct}), away {away} ({away_direct})");
+    assert!(away_direct - toward_direct > 0.02, "{toward_direct} vs {away_direct}");
+    assert!((toward - toward_direct).abs() < 3e-4, "{toward} vs {toward_direct}");
+    assert!((away - away_direct).abs() < 3e-4, "{away} vs {away_direct}");
 }
 
 /// Both glare modes (paper SI eq. S14). Paper scene: N = 559.3854 e⁻ from τ1 = 0.15; all

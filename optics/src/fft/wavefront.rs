@@ -11,8 +11,15 @@
 //! W = W020 ρ² + W040 ρ⁴ + W131 H ρ³ cos φ + W222 H² ρ² cos² φ + W220 H² ρ² + Σ_j c_j Z_j(ρ, φ)
 //! ```
 //!
-//! Sign: `W020 > 0` is a focus behind the detector (`W020 = Δz/(8 F#²)`, as in
-//! [`crate::Wavefront`]); the pupil field is `A exp(+i 2π W/λ)`.
+//! Sign (docs/physics.md, "Sign of the wavefront", as in [`crate::Wavefront`]): `W` is the optical
+//! path of the actual wavefront relative to the reference sphere centred on the detector point;
+//! the pupil field is `A exp(+i 2π W/λ)` (time dependence `exp(−iωt)`). `W020 > 0` is a focus
+//! `Δz` behind the detector (`W020 = Δz NA²/2 = Δz/(8 F#²)`), and every Seidel term carries the
+//! same sign: `W040 > 0` focuses the marginal zone behind the paraxial focus, `W220 > 0` adds to
+//! `W020` (the field point's focus behind the detector), `W222 > 0` puts the tangential focus
+//! (the `x`–`z` section, which holds the field point) behind the sagittal one, and `W131 > 0`
+//! sends the outer zones' rays toward `+x` (`∂W/∂x > 0`), the coma flare pointing away from the
+//! axis.
 //!
 //! Zernike terms use **Noll's** ordering and normalization (R. J. Noll, "Zernike polynomials and
 //! atmospheric turbulence", J. Opt. Soc. Am. 66, 207 (1976), eq. 3 and Table I): with
@@ -246,6 +253,28 @@ mod tests {
             let got = a.opd_m(x, y);
             assert!((got - expected).abs() < 1e-14, "Z{j}: {got} vs {expected}");
         }
+    }
+
+    /// The Seidel terms as defined in the module docs (Wyant & Creath with the field along +x),
+    /// and field curvature adding to defocus with the same sign: `W020 = −W220 H²` cancels it.
+    #[test]
+    fn seidel_terms_match_their_definitions() {
+        let (x, y, h) = (0.3_f64, -0.5_f64, 0.7_f64);
+        let r2 = x * x + y * y;
+        let cos_phi = x / r2.sqrt();
+        let one = |a: Aberrations| Aberrations { field: h, ..a }.opd_m(x, y);
+        let cases = [
+            (one(Aberrations { w020_m: 1.0, ..Default::default() }), r2),
+            (one(Aberrations { w040_m: 1.0, ..Default::default() }), r2 * r2),
+            (one(Aberrations { w131_m: 1.0, ..Default::default() }), h * r2.powf(1.5) * cos_phi),
+            (one(Aberrations { w222_m: 1.0, ..Default::default() }), h * h * r2 * cos_phi * cos_phi),
+            (one(Aberrations { w220_m: 1.0, ..Default::default() }), h * h * r2),
+        ];
+        for (i, (got, expected)) in cases.into_iter().enumerate() {
+            assert!((got - expected).abs() < 1e-15, "term {i}: {got} vs {expected}");
+        }
+        let balanced = one(Aberrations { w020_m: -0.5e-6 * h * h, w220_m: 0.5e-6, ..Default::default() });
+        assert!(balanced.abs() < 1e-22, "{balanced}");
     }
 
     /// Orthonormality on the unit disc by a polar Gauss–Legendre × trapezoid product rule.

@@ -202,7 +202,7 @@ fn conjugate_symmetry_holds_on_the_grid_and_between_samples() {
 }
 
 /// Parseval: `Σ PSF = M² Σ |P|²`; and the PSF peak over `(Σ A)²` is the Strehl ratio,
-/// `[sin(πw)/(πw)]²` for pure defocus (docs/physics.md, "Test vectors and identities").
+/// `[sin(πw)/(πw)]²` for pure defocus (docs/physics.md).
 #[test]
 fn parseval_between_pupil_and_psf() {
     let (aperture, aberrations) = coma_like();

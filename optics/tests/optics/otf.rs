@@ -47,7 +47,7 @@ fn fast_otf_matches_the_reference() {
     assert!(worst < 1e-10, "largest difference {worst:e}");
 }
 
-/// Geometric limit (docs/physics.md, "Geometric limit"): for large defocus OTF → 2 J1(x)/x, x = π d ν, with the blur
+/// Geometric limit (docs/physics.md): for large defocus OTF → 2 J1(x)/x, x = π d ν, with the blur
 /// diameter d = 2|Δz| NA. In normalized units x = 8π w s... precisely: Δz = 8 F#² W020,
 /// d ν = 2 · 8 F#² W020 / (2 F#) · s/(λ F#) = 8 w s, so x = 8π w s = a.
 #[test]
@@ -73,7 +73,8 @@ impl LensModel for Chromatic {
         3.36e-3
     }
     fn orders(&self, lambda: f64, _: Field) -> Vec<Order> {
-        let w020 = (lambda / 800e-9 - 1.0) * 3.36e-3 / (8.0 * self.f_number * self.f_number);
+        // W020 = (1 − λ/λ0) f0/(8 F#²) (docs/physics.md, "Sign of the wavefront")
+        let w020 = (1.0 - lambda / 800e-9) * 3.36e-3 / (8.0 * self.f_number * self.f_number);
         vec![Order::new(0.15, Pupil::Full, Wavefront::defocus(w020))]
     }
 }
@@ -120,7 +121,7 @@ proptest! {
         let spectrum = band(centre, 1e-13);
         let nu = frac / (centre * f);
         let poly = Polychromatic::new(&lens, &spectrum, Field::ON_AXIS, 1e5, None).unwrap();
-        let w020 = (centre / 800e-9 - 1.0) * 3.36e-3 / (8.0 * f * f);
+        let w020 = (1.0 - centre / 800e-9) * 3.36e-3 / (8.0 * f * f);
         let mono = defocus_otf(nu * centre * f, w020 / centre);
         prop_assert!((poly.otf(nu) - mono).abs() < 1e-6, "{} vs {}", poly.otf(nu), mono);
     }

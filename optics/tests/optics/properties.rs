@@ -44,9 +44,10 @@ impl Chromatic {
         Chromatic { f_number, aperture: Some(Arc::new(aperture)) }
     }
 
-    /// `W020(λ) = (λ/λ0 − 1) f0/(8 F#²)`, m (docs/physics.md, "Chromatic lens").
+    /// `W020(λ) = (1 − λ/λ0) f0/(8 F#²)`, m (docs/physics.md, "Sign of the wavefront": negative for
+    /// λ > λ0, the focus in front of the detector).
     fn w020(&self, lambda: f64) -> f64 {
-        (lambda / LAMBDA0 - 1.0) * F0 / (8.0 * self.f_number * self.f_number)
+        (1.0 - lambda / LAMBDA0) * F0 / (8.0 * self.f_number * self.f_number)
     }
 }
 

@@ -1,5 +1,5 @@
 //! Tests of the slow reference (`optics::reference`): its quadrature, the defocus OTF against the
-//! The test vectors and identities of docs/physics.md and an independent formula, and the mean MTF against closed
+//! docs/physics.md test vectors, identities and an independent formula, and the mean MTF against closed
 //! forms and independent quadratures.
 //!
 //! Every golden value states its source and tolerance. Nothing here uses the fast path.
@@ -33,11 +33,11 @@ fn mtf0_integral(x: f64) -> f64 {
     (2.0 / PI) * (x * x.acos() + 2.0 / 3.0 - r + r * r * r / 3.0)
 }
 
-/// Paper lens (docs/physics.md, "The metric"): f0 = 3.36 mm, λ0 = 800 nm.
+/// Paper lens (docs/physics.md "The metric"): f0 = 3.36 mm, λ0 = 800 nm.
 const F0: f64 = 3.36e-3;
 const LAMBDA0: f64 = 800e-9;
 
-/// Gaussian photoelectron density `λ exp(−(λ−c)²/(2σ²))`, σ = range/(2√2) (docs/physics.md, "Spectra"), with
+/// Gaussian photoelectron density `λ exp(−(λ−c)²/(2σ²))`, σ = range/(2√2) (docs/physics.md), with
 /// range `c ± 12σ` clipped to positive wavelengths. Returns (σ, λ_min, λ_max).
 fn gaussian(range_m: f64) -> (f64, f64, f64) {
     let sigma = range_m / (2.0 * 2f64.sqrt());
@@ -146,7 +146,7 @@ fn modulus_quadrature_splits_at_sign_changes() {
 
 #[test]
 fn otf_matches_physics_md_test_vectors() {
-    // Source: docs/physics.md, "Test vectors and identities" (s, w → OTF), printed to 5 decimals:
+    // Source: docs/physics.md "Test vectors and identities" (s, w → OTF), printed to 5 decimals:
     // tolerance 1e-5.
     for (s, w, expected) in optics::reference::PHYSICS_TEST_VECTORS {
         let v = otf_defocus(s, w);
@@ -205,7 +205,7 @@ fn otf_agrees_with_the_x_form_to_1e12() {
 
 #[test]
 fn otf_integral_identities() {
-    // ∫_0^1 MTF_0 ds = 4/(3π) (docs/physics.md, "Test vectors and identities"), tolerance 1e-12.
+    // ∫_0^1 MTF_0 ds = 4/(3π) (docs/physics.md), tolerance 1e-12.
     let q = integrate(GK21, |s| otf_defocus(s, 0.0), &[0.0, 0.5, 1.0], 1e-14, 0.0);
     assert!((q.value - 4.0 / (3.0 * PI)).abs() < 1e-12, "{}", q.value);
     // 2∫_0^1 OTF(s, w) s ds = Strehl/4, Strehl = [sin(πw)/(πw)]² (docs/physics.md), tolerance 1e-9.
