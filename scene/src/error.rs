@@ -216,8 +216,8 @@ pub(crate) fn shorten_quoted(message: &str) -> String {
         rest = &after[len + 1..];
     }
     out.push_str(rest);
-    if out.chars().count() > 4 * SHOWN {
-        let head: String = out.chars().take(4 * SHOWN).collect();
+    if out.chars().count() > 12 * SHOWN {
+        let head: String = out.chars().take(12 * SHOWN).collect();
         return format!("{head}… ({} bytes)", out.len());
     }
     out

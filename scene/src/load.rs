@@ -377,7 +377,8 @@ impl TomlFailure {
             let skip = column.saturating_sub(crate::error::SHOWN / 2);
             let part: String = whole.chars().skip(skip).take(crate::error::SHOWN).collect();
             let lead = if skip > 0 { "…" } else { "" };
-            format!("`{lead}{}…` (a line of {} bytes)", shorten(&part), whole.len())
+            let tail = if whole.chars().count() > skip + crate::error::SHOWN { "…" } else { "" };
+            format!("`{lead}{}{tail}` (a line of {} bytes)", shorten(&part), whole.len())
         };
         let message = e.message().trim().replace('\n', "; ");
         TomlFailure { line, column, message: shorten_quoted(&message), excerpt }
