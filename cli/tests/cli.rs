@@ -819,3 +819,15 @@ fn set_with_a_trailing_comment_is_refused() {
     let v = json(&["evaluate", "--set", "title=\"F/2.8 # one\"", "--json"]);
     assert!(v["asnr"].as_f64().is_some());
 }
+
+/// A key given twice (two --set, or --set and --tolerance/--over) kept the last silently.
+#[test]
+fn a_key_given_twice_is_refused() {
+    let err = fails(&["evaluate", "--set", "lens.f_number=2", "--set", "lens.f_number=3"]);
+    assert!(
+        err.contains("--set lens.f_number=3: lens.f_number is given twice (also by --set lens.f_number=2)"),
+        "{err}"
+    );
+    let err = fails(&["evaluate", "--set", "options.tolerance=1e-4", "--tolerance", "1e-3"]);
+    assert!(err.contains("options.tolerance is given twice"), "{err}");
+}

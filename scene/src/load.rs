@@ -172,7 +172,8 @@ impl Origins {
     /// The origin of `key`: the `--set` that gave it (or a table above it), else the file.
     fn of(&self, key: &str) -> String {
         for (k, arg) in &self.overrides {
-            if key == k || key.starts_with(&format!("{k}.")) || k.starts_with(&format!("{key}.")) {
+            let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
+            if key == k || below(key, k) || below(k, key) {
                 return format!("{} (--set {})", self.file, shorten(arg));
             }
         }
@@ -326,7 +327,7 @@ pub(crate) fn number_prefix(s: &str) -> Option<&str> {
     let s = s.trim();
     let mut end = 0;
     for (i, c) in s.char_indices().take(40) {
-        if !(c.is_ascii_digit() || "+-.eE_".contains(c)) {
+        if !(c.is_ascii_digit() || "+-.eE".contains(c)) {
             break;
         }
         end = i + c.len_utf8();
@@ -336,7 +337,7 @@ pub(crate) fn number_prefix(s: &str) -> Option<&str> {
 
 /// The unit a scene key carries in its name (`center_nm` → ` in nm`), for messages.
 fn unit_of(key: &str) -> &'static str {
-    let key = key.split('[').next().unwrap_or(key);
+    let key = key.trim_end_matches(|c: char| c.is_ascii_digit() || c == '[' || c == ']');
     let suffixes = [
         ("_w_m2_sr_nm", " in W/(m² sr nm)"),
         ("_e_per_s", " in e⁻/s"),
@@ -490,29 +491,40 @@ pub fn check_overrides(file: Option<&Path>, overrides: &[String]) -> Result<(), 
             problem: format!("expected KEY=VALUE (write --set {}={})", shorten(arg.trim()), shorten(&value)),
         });
     }
-    let mut scratch = toml::Table::new();
+    apply_overrides(&mut toml::Table::new(), overrides).map(drop)
+}
+
+/// Applies every override in turn; a key given twice is refused (the first would be dropped).
+/// Returns each key with the override that gave it.
+fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<BTreeMap<String, String>, Error> {
+    let mut given: BTreeMap<String, String> = BTreeMap::new();
     for arg in overrides {
-        apply_override(&mut scratch, arg)?;
+        let (key, arg) = apply_override(table, arg)?;
+        if let Some(first) = given.get(&key) {
+            return Err(Error::Override {
+                arg: shorten(&arg),
+                problem: format!(
+                    "{key} is given twice (also by --set {}); expected each key once (--tolerance and --over set their keys too)",
+                    shorten(first)
+                ),
+            });
+        }
+        given.insert(key, arg);
     }
-    Ok(())
+    Ok(given)
 }
 
 /// The merged TOML table of `source` with `overrides`, deserialized, and where each key came from.
 fn prepare(source: &Source, overrides: &[String]) -> Result<(RawScene, Origins), Error> {
     let (text, label, dir) = (&source.text, source.label.clone(), source.dir.clone());
-    for arg in overrides {
-        apply_override(&mut toml::Table::new(), arg)?;
-    }
+    apply_overrides(&mut toml::Table::new(), overrides)?;
     if text.trim().is_empty() {
         return Err(Error::Empty { origin: label });
     }
     let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| TomlFailure::new(text, &e)));
     let mut table = parsed.clone().map_err(|e| e.error(&label))?;
-    let mut origins = Origins { file: label, dir, overrides: BTreeMap::new(), warnings: RefCell::new(Vec::new()) };
-    for arg in overrides {
-        let (key, value) = apply_override(&mut table, arg)?;
-        origins.overrides.insert(key, value);
-    }
+    let overrides = apply_overrides(&mut table, overrides)?;
+    let origins = Origins { file: label, dir, overrides, warnings: RefCell::new(Vec::new()) };
     let raw: RawScene = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
         .map_err(|e| schema_error(&e, &table, &origins))?;
     Ok((raw, origins))
@@ -982,4 +994,53 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
             ));
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn number_prefixes_and_units() {
+        assert_eq!(number_prefix("800nm"), Some("800"));
+        assert_eq!(number_prefix(" 5.2 um"), Some("5.2"));
+        assert_eq!(number_prefix("1e-3s"), Some("1e-3"));
+        assert_eq!(number_prefix("2.8e"), Some("2.8"));
+        assert_eq!(number_prefix("fast"), None);
+        assert_eq!(number_prefix("inf"), None);
+        assert_eq!(number_prefix("e5"), None);
+        assert_eq!(unit_of("spectrum.center_nm"), " in nm");
+        assert_eq!(unit_of("source.radiance_w_m2_sr_nm"), " in W/(m² sr nm)");
+        assert_eq!(unit_of("camera.dark_current_e_per_s"), " in e⁻/s");
+        assert_eq!(unit_of("fields[0].x_deg"), " in degrees");
+        assert_eq!(unit_of("lens.sector_deg[1]"), " in degrees");
+        assert_eq!(unit_of("lens.f_number"), "");
+    }
+
+    /// The resolved TOML of every example scene builds to the same scene: same ASNR, bit for bit.
+    #[test]
+    fn resolved_examples_load_to_the_same_asnr() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml"] {
+            let source = read(Some(&root.join(name))).unwrap();
+            let text = resolved_toml(&source, &[]).unwrap();
+            let again = Source::from_text(text.clone(), "resolved", std::env::temp_dir());
+            let a = metric::evaluate(&build_from(&source, &[]).unwrap()).unwrap();
+            let b = metric::evaluate(&build_from(&again, &[]).unwrap()).unwrap();
+            assert_eq!(a.asnr, b.asnr, "{name}:\n{text}");
+            // and it is a fixed point: resolving the resolved scene changes only the header
+            let twice = resolved_toml(&again, &[]).unwrap();
+            let body = |t: &str| t.lines().filter(|l| !l.starts_with("# From")).collect::<Vec<_>>().join("\n");
+            assert_eq!(body(&twice), body(&text), "{name}");
+        }
+    }
+
+    #[test]
+    fn toml_errors_quote_a_short_excerpt() {
+        let text = format!("title = \"x\"\n[lens\n{}", "y".repeat(10_000));
+        let e = build_from(&Source::from_text(text, "big.toml", "."), &[]).unwrap_err().to_string();
+        assert!(e.starts_with("big.toml: malformed TOML at line 2, column "), "{e}");
+        assert!(e.contains("`[lens`"), "{e}");
+        assert!(e.len() < 300, "{e}");
+    }
 }
