@@ -553,13 +553,13 @@ fn schema_error(e: &serde_path_to_error::Error<toml::de::Error>, table: &toml::T
             let expected = format!("{kind}{unit} (write {n}, not {})", quoted(s));
             return Error::Value { origin, key: shorten(&key), value: quoted(s), expected };
         }
-        return Error::Schema {
-            origin,
-            key: shorten(&key),
-            message: format!("{} ({kind}{unit})", shorten_quoted(&inner)),
-        };
     }
-    Error::Schema { origin, key: shorten(&key), message: shorten_quoted(&inner) }
+    // `f_number = "fast"`, `pupil_samples = 256.5`, `center_nm = true`: which number, which unit
+    let message = match numeric {
+        Some(kind) => format!("{} ({kind}{})", shorten_quoted(&inner), unit_of(&key)),
+        None => shorten_quoted(&inner),
+    };
+    Error::Schema { origin, key: shorten(&key), message }
 }
 
 /// The value at a serde path in the merged table.
@@ -1035,6 +1035,36 @@ mod tests {
         }
     }
 
+    /// A table whose wavelengths all lie below 100 nm was typed in µm: valid, and warned about.
+    #[test]
+    fn a_table_in_micrometres_is_warned_about() {
+        let dir = std::env::temp_dir().join(format!("scene-load-um-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("qe.csv"), "0.65,0.2\n1.0,0.1\n").unwrap();
+        let text = PAPER_SCENE.replacen("quantum_efficiency = 0.2", "quantum_efficiency = \"qe.csv\"", 1);
+        let loaded = build_with_warnings(&Source::from_text(text, "s.toml", &dir), &[]).unwrap();
+        let shown: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+        assert_eq!(
+            shown,
+            [
+                "s.toml: camera.quantum_efficiency = \"qe.csv\": its wavelengths 0.65–1 nm are all outside 100–20000 nm: looks like µm (650–1000 nm?)"
+            ]
+        );
+        assert!(build_with_warnings(&Source::from_text(PAPER_SCENE, "p", "."), &[]).unwrap().warnings.is_empty());
+    }
+
+    #[test]
+    fn whole_numbers_and_types_are_named() {
+        let paper = Source::from_text(PAPER_SCENE, "p", ".");
+        let e = build_from(&paper, &["options.pupil_samples=256.5".to_owned()]).unwrap_err().to_string();
+        assert!(
+            e.ends_with("options.pupil_samples: invalid type: floating point `256.5`, expected u32 (a whole number)"),
+            "{e}"
+        );
+        let e = build_from(&paper, &["spectrum.center_nm=true".to_owned()]).unwrap_err().to_string();
+        assert!(e.ends_with("expected f64 (a number in nm)"), "{e}");
+    }
+
     #[test]
     fn toml_errors_quote_a_short_excerpt() {
         let text = format!("title = \"x\"\n[lens\n{}", "y".repeat(10_000));
@@ -1043,4 +1073,60 @@ mod tests {
         assert!(e.contains("`[lens`"), "{e}");
         assert!(e.len() < 300, "{e}");
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 512, ..Default::default() })]
+
+        /// Any finite value of any numeric key, by --set, loads or is refused with a message
+        /// naming the key: never a panic. (Magnitudes from 1e-300 to 1e300: robustness, not physics.)
+        #[test]
+        fn any_finite_value_loads_or_names_its_key(
+            index in 0usize..NUMERIC_KEYS.len(),
+            mantissa in -10.0f64..10.0,
+            exponent in -300i32..300,
+        ) {
+            let key = NUMERIC_KEYS[index];
+            let value = mantissa * 10f64.powi(exponent);
+            let paper = Source::from_text(PAPER_SCENE, "p", ".");
+            let set = format!("{key}={value:e}");
+            match build_with_warnings(&paper, std::slice::from_ref(&set)) {
+                Ok(loaded) => {
+                    for w in &loaded.warnings {
+                        proptest::prop_assert!(w.key == key, "{w}");
+                    }
+                }
+                Err(e) => {
+                    let m = e.to_string();
+                    proptest::prop_assert!(m.contains(key) || m.contains("[lens]") || m.contains("[camera]") || m.contains("[spectrum]"), "{set}: {m}");
+                }
+            }
+        }
+    }
+
+    const NUMERIC_KEYS: [&str; 24] = [
+        "lens.f_number",
+        "lens.focal_length_mm",
+        "lens.design_wavelength_nm",
+        "lens.efficiency",
+        "lens.transmission",
+        "lens.iris_decentre_x",
+        "lens.obscuration",
+        "lens.spherical_um",
+        "lens.coma_um",
+        "source.radiance_w_m2_sr_nm",
+        "spectrum.center_nm",
+        "spectrum.range_nm",
+        "spectrum.peak",
+        "camera.pixel_pitch_um",
+        "camera.quantum_efficiency",
+        "camera.read_noise_e",
+        "camera.dark_current_e_per_s",
+        "camera.full_well_e",
+        "exposure.time_ms",
+        "options.fraunhofer_threshold_mm",
+        "options.fraunhofer_max_fraction",
+        "options.tolerance",
+        "field.x_deg",
+        "field.y_deg",
+    ];
 }
