@@ -809,6 +809,11 @@ fn long_and_binary_scene_files_give_short_messages() {
         err.contains("image.toml: not a text file") && err.contains("expected a scene file in UTF-8 text"),
         "{err}"
     );
+    // an endless file is refused after 64 MiB, not read until the memory is full
+    if Path::new("/dev/zero").exists() {
+        let err = fails(&["evaluate", "/dev/zero"]);
+        assert!(err.contains("/dev/zero: more than 64 MiB: expected a scene file"), "{err}");
+    }
 }
 
 /// `--set lens.f_number=2.8#x` is TOML with a comment: the `#x` was dropped silently.

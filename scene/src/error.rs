@@ -21,6 +21,16 @@ pub enum Error {
         /// Why.
         cause: std::io::Error,
     },
+    /// A file longer than [`MAX_FILE_BYTES`](crate::MAX_FILE_BYTES), refused unread.
+    #[error("{path}: more than {} MiB: expected a {what} (a scene is a few kB, a table at most a few MB)", limit >> 20)]
+    TooLarge {
+        /// "scene file" or "CSV file".
+        what: &'static str,
+        /// The path.
+        path: String,
+        /// The limit, bytes.
+        limit: u64,
+    },
     /// A file that is not UTF-8 text (binary data, another encoding).
     #[error(
         "{path}: not a text file (a NUL or non-UTF-8 byte at byte {offset} of {len}): expected a {what} in UTF-8 text"

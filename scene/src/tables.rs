@@ -42,9 +42,19 @@ pub const FREQUENCY: Axis = Axis { name: "frequency", unit: "cyc_per_mm", zero_a
 
 /// Reads a UTF-8 text file (`what` names it in messages: "scene file", "CSV file"); a leading
 /// byte-order mark is dropped, a file with a NUL or non-UTF-8 byte is refused as not text.
+/// Files longer than this are refused unread (a scene is a few kB, a spectral table at most a
+/// few MB): `/dev/zero` or a disk image given by mistake must not fill the memory.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
 pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Error> {
+    use std::io::Read as _;
     let shown = || path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|cause| Error::Read { what, path: shown(), cause })?;
+    let io = |cause| Error::Read { what, path: shown(), cause };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path).and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)).map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(Error::TooLarge { what, path: shown(), limit: MAX_FILE_BYTES });
+    }
     let len = bytes.len();
     let text = String::from_utf8(bytes).map_err(|e| Error::NotText {
         what,
