@@ -96,6 +96,14 @@ enum Command {
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
     },
+    /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
+    Scene {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path, e.g. --set lens.f_number=2.8 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
     /// Replot sweep CSVs: lines overlaid, or one CSV as a heatmap (`cargo xtask figures` uses it).
     Plot(plotcmd::PlotArgs),
     /// The polychromatic MTF from 0 to Nyquist (or to the cutoff), with the diffraction limit.
@@ -138,7 +146,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Evaluate { scene, set, json, tolerance, explain } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
             let set = with_tolerance(set, tolerance);
-            let loaded = scene::load(scene.as_deref(), &set)?;
+            let loaded = load(scene.as_deref(), &set)?;
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             output::check_finite(&result)?;
             if json {
@@ -160,6 +168,10 @@ fn run(cli: Cli) -> Result<()> {
             }
             let set = with_tolerance(set, tolerance);
             let range = optimize::parse_range(&over, false)?;
+            // validate the scene (and print its warnings) once, at the low end of the range
+            let mut first = set.clone();
+            first.push(format!("{}={}", range.key, range.lo));
+            load(scene.as_deref(), &first)?;
             let asnr_at = |x: f64| -> Result<f64> {
                 let mut overrides = set.clone();
                 overrides.push(format!("{}={x}", range.key));
@@ -185,11 +197,14 @@ fn run(cli: Cli) -> Result<()> {
             if total > 10_000_000 {
                 anyhow::bail!("--over: {total} grid points; expected at most 10000000");
             }
+            scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;
             // validate the scene and the keys once before spending the grid
             let mut first = set.clone();
             first.extend(ranges.iter().map(|r| format!("{}={}", r.key, r.lo)));
-            let built = scene::build_from(&source, &first)?;
+            let loaded = scene::build_with_warnings(&source, &first)?;
+            warn(&loaded.warnings);
+            let built = loaded.scene;
             let points = sweep::run(&source, &set, &ranges, threads)?;
             for line in sweep::warnings(&ranges, &points) {
                 eprintln!("{line}");
@@ -207,6 +222,13 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Plot(args) => plotcmd::run(&args),
+        Command::Scene { scene, set } => {
+            scene::check_overrides(scene.as_deref(), &set)?;
+            let source = scene::read(scene.as_deref())?;
+            warn(&scene::build_with_warnings(&source, &set)?.warnings);
+            print!("{}", scene::resolved_toml(&source, &set)?);
+            Ok(())
+        }
         Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths } => {
             let figure = plot::Figure::new(width, dpi)?;
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
@@ -216,7 +238,7 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(bad) = wavelengths.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
                 anyhow::bail!("--wavelengths: {bad} nm: expected wavelengths > 0 nm");
             }
-            let loaded = scene::load(scene.as_deref(), &set)?;
+            let loaded = load(scene.as_deref(), &set)?;
             let range = if to_cutoff { metric::FrequencyRange::Cutoff } else { metric::FrequencyRange::Nyquist };
             let metres: Vec<f64> = wavelengths.iter().map(|w| w * 1e-9).collect();
             let curve =
@@ -234,6 +256,21 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+/// Loads a scene (the `--set`s checked before the file is read) and prints its plausibility
+/// warnings to stderr.
+fn load(scene: Option<&std::path::Path>, set: &[String]) -> Result<metric::Scene> {
+    let loaded = scene::load_with_warnings(scene, set)?;
+    warn(&loaded.warnings);
+    Ok(loaded.scene)
+}
+
+/// Prints a scene's plausibility warnings (values that look like a unit slip) to stderr.
+fn warn(warnings: &[scene::Warning]) {
+    for w in warnings {
+        eprintln!("warning: {w}");
     }
 }
 

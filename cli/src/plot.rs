@@ -1065,8 +1065,10 @@ impl Plot for LinesPlot<'_> {
                     let unit =
                         if self.labels.x_unit.is_empty() { String::new() } else { format!(" {}", self.labels.x_unit) };
                     // how the maximum was found: refined between grid points, or a grid point at an end
-                    let at_end = s.points.first().is_some_and(|p| p.0 == x) || s.points.last().is_some_and(|p| p.0 == x);
-                    let how = if at_end { "grid point at the end of the range" } else { "parabola between grid points" };
+                    let at_end =
+                        s.points.first().is_some_and(|p| p.0 == x) || s.points.last().is_some_and(|p| p.0 == x);
+                    let how =
+                        if at_end { "grid point at the end of the range" } else { "parabola between grid points" };
                     Entry {
                         label: format!("{}: max {} at {}{unit} ({how})", s.label, significant(y), significant(x)),
                         swatch: Swatch::Dot(Self::stroke(i), Self::stroke(i).colour),

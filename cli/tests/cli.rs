@@ -749,12 +749,13 @@ fn labels_scene_title_is_shown() {
     let over = ["--over", "spectrum.range_nm=10:50:3"];
     succeeds(&[&["sweep", "--set", "title=\"Labels caption\"", "--plot", svg.to_str().unwrap()][..], &over].concat());
     assert!(std::fs::read_to_string(&svg).unwrap().contains("Labels caption"));
-    // no title: null in the JSON, the file name on the plot
+    // no title: null in the JSON; the MTF plot is captioned with the lens, never a file path
     let untitled = edited_paper(&dir, "title = \"Paper theory model", "# title = \"Paper theory model");
     assert_eq!(json(&["evaluate", untitled.to_str().unwrap(), "--json"])["title"], serde_json::Value::Null);
     let svg = dir.join("untitled.svg");
     succeeds(&["mtf", untitled.to_str().unwrap(), "--points", "11", "--plot", svg.to_str().unwrap()]);
-    assert!(std::fs::read_to_string(&svg).unwrap().contains("scene.toml"));
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawn.contains("chromatic metalens F/2.5") && !drawn.contains("scene.toml"), "{drawn}");
 }
 
 /// `mtf` on a `[[fields]]` scene shows every field point's curves and says the headline curve is
@@ -851,4 +852,212 @@ fn labels_best_values_say_how_they_were_found() {
     let (text, _) = succeeds(&["sweep", "--over", "spectrum.range_nm=1:10:3"]);
     assert!(text.contains("(at the end of the spectrum.range_nm range: the maximum may lie outside it)"), "{text}");
     assert!(!text.contains("refined between grid points"), "{text}");
+}
+
+// ---- scene input ----
+
+/// `asnr scene` prints the scene as read, every default filled in and CSV paths resolved, and
+/// that text loads again to the same ASNR (from another folder: the paths are absolute).
+#[test]
+fn scene_prints_the_resolved_scene_and_it_loads_to_the_same_asnr() {
+    let dir = scratch("resolved");
+    for (name, scene) in [("paper", PAPER), ("tabulated", TABULATED)] {
+        let out = asnr(&["scene", scene]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let text = String::from_utf8(out.stdout).unwrap();
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, &text).unwrap();
+        let again = json(&["evaluate", path.to_str().unwrap(), "--json"]);
+        let direct = json(&["evaluate", scene, "--json"]);
+        assert_eq!(again["asnr"], direct["asnr"], "{name}:\n{text}");
+        assert_eq!(again["mean_mtf"], direct["mean_mtf"], "{name}");
+        for line in [
+            "model = \"chromatic\"",
+            "pixel_mtf = false",
+            "form = \"mean\"",
+            "glare = \"first_order\"",
+            "tolerance = 1e-6",
+            "fraunhofer_threshold_mm = 0.25",
+            "fraunhofer_max_fraction = 0.01",
+            "pupil_samples = 256",
+            "iris_decentre_x = 0.0",
+            "x_deg = 0.0",
+            "y_deg = 0.0",
+        ] {
+            assert!(text.lines().any(|l| l == line), "{name}: no `{line}` in\n{text}");
+        }
+    }
+    // the paper: transmission given, peak filled in
+    let text = String::from_utf8(asnr(&["scene", PAPER, "--set", "lens.f_number=2.8"]).stdout).unwrap();
+    assert!(text.contains("\nf_number = 2.8\n") && text.contains("\npeak = 1.0\n"), "{text}");
+    // transmission defaults to the efficiency; a CSV path resolves against the scene's folder
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/data/cmos-qe.csv");
+    let data = std::path::absolute(data).unwrap();
+    let out = asnr(&["scene", PAPER, "--set", "lens.transmission=0.15"]);
+    assert!(String::from_utf8(out.stdout).unwrap().contains("\ntransmission = 0.15\n"));
+    let text = String::from_utf8(asnr(&["scene", TABULATED]).stdout).unwrap();
+    let qe = format!("quantum_efficiency = \"{}\"", data.display());
+    assert!(text.contains(&qe), "no `{qe}` in\n{text}");
+}
+
+/// `--set lens.f_number 2.8` (no `=`): clap takes `2.8` as the scene path; the message says to
+/// write `--set lens.f_number=2.8` instead of "cannot read the scene file 2.8".
+#[test]
+fn set_without_equals_is_named_before_the_scene_is_read() {
+    let expected = "--set lens.f_number: expected KEY=VALUE (write --set lens.f_number=2.8)";
+    for cmd in [
+        vec!["evaluate", "--set", "lens.f_number", "2.8"],
+        vec!["scene", "--set", "lens.f_number", "2.8"],
+        vec!["mtf", "--set", "lens.f_number", "2.8"],
+        vec!["sweep", "--set", "lens.f_number", "2.8", "--over", "spectrum.range_nm=10:20:2"],
+        vec!["optimize", "--set", "lens.f_number", "2.8", "--over", "spectrum.range_nm=10:20"],
+    ] {
+        let err = fails(&cmd);
+        assert!(err.contains(expected) && !err.contains("cannot read"), "{cmd:?}: {err}");
+    }
+}
+
+/// A string with a unit where a number belongs (`800nm`, in the file or by --set) says which
+/// number to write, in the key's unit; `15%` for a fraction says 0.15.
+#[test]
+fn a_number_with_its_unit_says_what_to_write() {
+    let err = fails(&["evaluate", "--set", "spectrum.center_nm=800nm"]);
+    assert!(
+        err.contains(
+            "(--set spectrum.center_nm=800nm): spectrum.center_nm = \"800nm\": expected a number in nm (write 800, not \"800nm\")"
+        ),
+        "{err}"
+    );
+    let dir = scratch("unit-string");
+    let path = edited_paper(&dir, "pixel_pitch_um = 5.2", "pixel_pitch_um = \"5.2 um\"");
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(
+        err.contains(
+            "scene.toml: camera.pixel_pitch_um = \"5.2 um\": expected a number in µm (write 5.2, not \"5.2 um\")"
+        ),
+        "{err}"
+    );
+    let err = fails(&["evaluate", "--set", "exposure.time_ms=1.23ms"]);
+    assert!(err.contains("expected a number in ms (write 1.23, not \"1.23ms\")"), "{err}");
+    let err = fails(&["evaluate", "--set", "lens.efficiency=15%"]);
+    assert!(
+        err.contains("lens.efficiency = \"15%\": expected a fraction in [0, 1] (write 0.15, not \"15%\")"),
+        "{err}"
+    );
+}
+
+/// The iris decentre accepts the open interval (−1, 1) on both sides (−1 was accepted, +1
+/// refused); a decentre of 0 is the default pupil, on the exact path (it went to the FFT path).
+#[test]
+fn iris_decentre_is_open_on_both_sides_and_zero_is_the_default() {
+    for key in ["lens.iris_decentre_x", "lens.iris_decentre_y"] {
+        for v in ["-1", "1"] {
+            let err = fails(&["evaluate", "--set", &format!("{key}={v}")]);
+            assert!(
+                err.contains(&format!("{key} = {v}: expected a fraction of the aperture radius in (−1, 1)")),
+                "{err}"
+            );
+        }
+    }
+    let default = json(&["evaluate", "--json"]);
+    let zero = json(&["evaluate", "--set", "lens.iris_decentre_x=0", "--set", "lens.obscuration=0", "--json"]);
+    assert_eq!(zero["asnr"], default["asnr"]);
+    assert_eq!(zero["numerics"]["engine"], default["numerics"]["engine"]);
+}
+
+/// Values that are valid but almost surely a unit slip load with a warning naming key, value
+/// and the likely unit; the paper scene has none.
+#[test]
+fn unit_slips_are_warned_about() {
+    for (set, warning) in [
+        ("camera.pixel_pitch_um=0.0052", "camera.pixel_pitch_um = 0.0052: below 0.1 µm: looks like mm (5.2 µm?)"),
+        ("camera.pixel_pitch_um=5200", "camera.pixel_pitch_um = 5200: above 100 µm: looks like nm (5.2 µm?)"),
+        ("lens.focal_length_mm=0.00336", "lens.focal_length_mm = 0.00336: below 0.01 mm: looks like m (3.36 mm?)"),
+        ("lens.design_wavelength_nm=0.8", "lens.design_wavelength_nm = 0.8: below 100 nm: looks like µm (800 nm?)"),
+        ("spectrum.center_nm=8e-7", "spectrum.center_nm = 8e-7: below 100 nm: looks like m (800 nm?)"),
+        ("exposure.time_ms=1230000000", "exposure.time_ms = 1230000000: above 10000000 ms (2.8 h): looks like µs"),
+    ] {
+        let out = asnr(&["scene", "--set", set]);
+        let err = stderr(&out);
+        assert!(out.status.success(), "{set}: {err}");
+        assert!(err.contains(&format!("warning: embedded paper scene (--set {set}): {warning}")), "{set}: {err}");
+    }
+    let out = asnr(&["scene"]);
+    assert!(out.status.success() && out.stderr.is_empty(), "{}", stderr(&out));
+}
+
+/// CSV tables: a first row that starts with a number is data (`700,nan` was dropped as a
+/// header); a semicolon- or tab-separated table is named as such (it said "1 columns").
+#[test]
+fn csv_first_rows_and_separators() {
+    let dir = scratch("csv-input");
+    let path = edited_paper(&dir, "quantum_efficiency = 0.2", "quantum_efficiency = \"qe.csv\"");
+    for (table, needle) in [
+        ("700,nan\n800,0.2\n900,0.2\n", "line 1: `700,nan` is not a pair of finite numbers: `nan` is not finite"),
+        ("700,0.1S\n800,0.2\n900,0.2\n", "line 1: `700,0.1S` is not a pair of finite numbers: `0.1S` is not a number"),
+        ("wavelength_nm;qe\n700;0.2\n800;0.2\n", "line 1: `wavelength_nm;qe` is separated by ';'"),
+        ("700\t0.2\n800\t0.2\n", "is separated by tab; expected comma-separated `wavelength_nm, value`"),
+    ] {
+        std::fs::write(dir.join("qe.csv"), table).unwrap();
+        let err = fails(&["evaluate", path.to_str().unwrap()]);
+        assert!(
+            err.contains("scene.toml: camera.quantum_efficiency = \"qe.csv\": ") && err.contains("qe.csv: line"),
+            "{err}"
+        );
+        assert!(err.contains(needle), "{table:?}: {err}");
+    }
+}
+
+/// A 30 MB one-line garbage scene echoed 60 MB to stderr; a binary file gave "stream did not
+/// contain valid UTF-8". Both now give a short message naming the file.
+#[test]
+fn long_and_binary_scene_files_give_short_messages() {
+    let dir = scratch("garbage");
+    let path = dir.join("garbage.toml");
+    std::fs::write(&path, "x".repeat(30_000_000)).unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.len() < 400, "{} bytes", err.len());
+    assert!(
+        err.contains("garbage.toml: malformed TOML at line 1") && err.contains("(a line of 30000000 bytes)"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(PAPER)
+        .unwrap()
+        .replace("shape = \"gaussian\"", &format!("shape = \"{}\"", "g".repeat(1 << 20)));
+    std::fs::write(&path, text).unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(err.len() < 400 && err.contains("spectrum.shape = \"ggg") && err.contains("… (1048576 bytes)\""), "{err}");
+    let path = dir.join("image.toml");
+    std::fs::write(&path, b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR").unwrap();
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    assert!(
+        err.contains("image.toml: not a text file") && err.contains("expected a scene file in UTF-8 text"),
+        "{err}"
+    );
+    // an endless file is refused after 64 MiB, not read until the memory is full
+    if Path::new("/dev/zero").exists() {
+        let err = fails(&["evaluate", "/dev/zero"]);
+        assert!(err.contains("/dev/zero: more than 64 MiB: expected a scene file"), "{err}");
+    }
+}
+
+/// `--set lens.f_number=2.8#x` is TOML with a comment: the `#x` was dropped silently.
+#[test]
+fn set_with_a_trailing_comment_is_refused() {
+    let err = fails(&["evaluate", "--set", "lens.f_number=2.8 # faster"]);
+    assert!(err.contains("--set lens.f_number=2.8 # faster: `#` starts a TOML comment"), "{err}");
+    let v = json(&["evaluate", "--set", "title=\"F/2.8 # one\"", "--json"]);
+    assert!(v["asnr"].as_f64().is_some());
+}
+
+/// A key given twice (two --set, or --set and --tolerance/--over) kept the last silently.
+#[test]
+fn a_key_given_twice_is_refused() {
+    let err = fails(&["evaluate", "--set", "lens.f_number=2", "--set", "lens.f_number=3"]);
+    assert!(
+        err.contains("--set lens.f_number=3: lens.f_number is given twice (also by --set lens.f_number=2)"),
+        "{err}"
+    );
+    let err = fails(&["evaluate", "--set", "options.tolerance=1e-4", "--tolerance", "1e-3"]);
+    assert!(err.contains("options.tolerance is given twice"), "{err}");
 }

@@ -4,26 +4,27 @@
 //! here with a message naming the file (or the `--set` that gave it), the dotted key, the value
 //! and what is accepted, before any library type is built.
 
+use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::{Context, Result, anyhow, bail};
 use lenses::{ChromaticMetalens, Curve};
 use metric::{Camera, MetricForm, Options, Scene};
 use radiometry::{Blackbody, Gaussian, Line, Spectrum, TopHat};
 use serde::Deserialize;
 use serde::de::{self, Visitor};
 
-use crate::tables::{FREQUENCY, read_pairs, read_table};
+use crate::error::{Error, Warning, num, quoted, shorten, shorten_quoted};
+use crate::tables::{FREQUENCY, WAVELENGTH, read_pairs, read_text, sampled};
 
 /// The paper's theory scene, embedded in the binary (`examples/paper-theory.toml`).
 pub const PAPER_SCENE: &str = include_str!("../../examples/paper-theory.toml");
 
 /// A scene value that is a number or the path of a two-column CSV table.
 #[derive(Clone, Debug, PartialEq)]
-enum NumberOrFile {
+pub(crate) enum NumberOrFile {
     Number(f64),
     File(String),
 }
@@ -55,164 +56,343 @@ impl<'de> Deserialize<'de> for NumberOrFile {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawScene {
+pub(crate) struct RawScene {
     #[serde(default)]
-    title: Option<String>,
-    lens: RawLens,
-    source: RawSource,
+    pub title: Option<String>,
+    pub lens: RawLens,
+    pub source: RawSource,
     #[serde(default)]
-    spectrum: Option<RawSpectrum>,
-    camera: RawCamera,
-    exposure: RawExposure,
+    pub spectrum: Option<RawSpectrum>,
+    pub camera: RawCamera,
+    pub exposure: RawExposure,
     #[serde(default)]
-    options: Option<RawOptions>,
+    pub options: Option<RawOptions>,
     #[serde(default)]
-    field: Option<RawField>,
+    pub field: Option<RawField>,
     #[serde(default)]
-    fields: Option<Vec<RawFieldPoint>>,
+    pub fields: Option<Vec<RawFieldPoint>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawFieldPoint {
-    x_deg: Option<f64>,
-    y_deg: Option<f64>,
-    weight: Option<f64>,
+pub(crate) struct RawFieldPoint {
+    pub x_deg: Option<f64>,
+    pub y_deg: Option<f64>,
+    pub weight: Option<f64>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawField {
-    x_deg: Option<f64>,
-    y_deg: Option<f64>,
+pub(crate) struct RawField {
+    pub x_deg: Option<f64>,
+    pub y_deg: Option<f64>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawLens {
-    model: Option<String>,
-    f_number: f64,
-    focal_length_mm: f64,
-    design_wavelength_nm: f64,
-    efficiency: NumberOrFile,
-    transmission: Option<NumberOrFile>,
-    iris_decentre_x: Option<f64>,
-    iris_decentre_y: Option<f64>,
-    obscuration: Option<f64>,
-    sector_deg: Option<[f64; 2]>,
-    spherical_um: Option<f64>,
-    coma_um: Option<f64>,
-    astigmatism_um: Option<f64>,
-    field_curvature_um: Option<f64>,
+pub(crate) struct RawLens {
+    pub model: Option<String>,
+    pub f_number: f64,
+    pub focal_length_mm: f64,
+    pub design_wavelength_nm: f64,
+    pub efficiency: NumberOrFile,
+    pub transmission: Option<NumberOrFile>,
+    pub iris_decentre_x: Option<f64>,
+    pub iris_decentre_y: Option<f64>,
+    pub obscuration: Option<f64>,
+    pub sector_deg: Option<[f64; 2]>,
+    pub spherical_um: Option<f64>,
+    pub coma_um: Option<f64>,
+    pub astigmatism_um: Option<f64>,
+    pub field_curvature_um: Option<f64>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawSource {
-    kind: String,
-    radiance_w_m2_sr_nm: Option<f64>,
-    temperature_k: Option<f64>,
-    scale: Option<f64>,
-    csv: Option<String>,
+pub(crate) struct RawSource {
+    pub kind: String,
+    pub radiance_w_m2_sr_nm: Option<f64>,
+    pub temperature_k: Option<f64>,
+    pub scale: Option<f64>,
+    pub csv: Option<String>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawSpectrum {
-    shape: String,
-    center_nm: Option<f64>,
-    range_nm: Option<f64>,
-    peak: Option<f64>,
-    csv: Option<String>,
+pub(crate) struct RawSpectrum {
+    pub shape: String,
+    pub center_nm: Option<f64>,
+    pub range_nm: Option<f64>,
+    pub peak: Option<f64>,
+    pub csv: Option<String>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawCamera {
-    pixel_pitch_um: f64,
+pub(crate) struct RawCamera {
+    pub pixel_pitch_um: f64,
     #[serde(default)]
-    pixel_mtf: bool,
-    quantum_efficiency: NumberOrFile,
-    read_noise_e: Option<f64>,
-    dark_current_e_per_s: Option<f64>,
-    full_well_e: Option<f64>,
-    gain_dn_per_e: Option<f64>,
-    adc_bits: Option<u32>,
-    noise_spectrum: Option<String>,
+    pub pixel_mtf: bool,
+    pub quantum_efficiency: NumberOrFile,
+    pub read_noise_e: Option<f64>,
+    pub dark_current_e_per_s: Option<f64>,
+    pub full_well_e: Option<f64>,
+    pub gain_dn_per_e: Option<f64>,
+    pub adc_bits: Option<u32>,
+    pub noise_spectrum: Option<String>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawExposure {
-    time_ms: f64,
+pub(crate) struct RawExposure {
+    pub time_ms: f64,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawOptions {
-    form: Option<String>,
-    fraunhofer_threshold_mm: Option<f64>,
-    fraunhofer_max_fraction: Option<f64>,
-    pupil_samples: Option<u32>,
-    glare: Option<String>,
-    tolerance: Option<f64>,
+pub(crate) struct RawOptions {
+    pub form: Option<String>,
+    pub fraunhofer_threshold_mm: Option<f64>,
+    pub fraunhofer_max_fraction: Option<f64>,
+    pub pupil_samples: Option<u32>,
+    pub glare: Option<String>,
+    pub tolerance: Option<f64>,
 }
 
 /// Where a scene came from, and which keys `--set` overrode: every message names its origin.
-struct Origins {
-    file: String,
+/// Plausibility warnings collect here while the scene is built.
+pub(crate) struct Origins {
+    pub file: String,
     dir: PathBuf,
-    overrides: BTreeMap<String, String>,
+    pub overrides: BTreeMap<String, String>,
+    warnings: RefCell<Vec<Warning>>,
 }
 
 impl Origins {
     /// The origin of `key`: the `--set` that gave it (or a table above it), else the file.
     fn of(&self, key: &str) -> String {
         for (k, arg) in &self.overrides {
-            if key == k || key.starts_with(&format!("{k}.")) || k.starts_with(&format!("{key}.")) {
-                return format!("{} (--set {arg})", self.file);
+            let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
+            if key == k || below(key, k) || below(k, key) {
+                return format!("{} (--set {})", self.file, shorten(arg));
             }
         }
         self.file.clone()
     }
 
-    fn bad(&self, key: &str, value: impl fmt::Display, expected: &str) -> anyhow::Error {
-        anyhow!("{}: {key} = {value}: expected {expected}", self.of(key))
+    fn bad(&self, key: &str, value: impl fmt::Display, expected: &str) -> Error {
+        Error::Value {
+            origin: self.of(key),
+            key: key.to_owned(),
+            value: value.to_string(),
+            expected: expected.to_owned(),
+        }
     }
 
-    fn number(&self, key: &str, value: f64, ok: bool, expected: &str) -> Result<f64> {
-        if value.is_finite() && ok { Ok(value) } else { Err(self.bad(key, value, expected)) }
+    fn number(&self, key: &str, value: f64, ok: bool, expected: &str) -> Result<f64, Error> {
+        if value.is_finite() && ok { Ok(value) } else { Err(self.bad(key, num(value), expected)) }
     }
 
-    fn require<T>(&self, key: &str, value: Option<T>, expected: &str) -> Result<T> {
-        value.ok_or_else(|| anyhow!("{}: {key} is missing: expected {expected}", self.of(key)))
+    fn require<T>(&self, key: &str, value: Option<T>, expected: &str) -> Result<T, Error> {
+        value.ok_or_else(|| Error::Missing { origin: self.of(key), key: key.to_owned(), expected: expected.to_owned() })
     }
 
-    fn forbid<T>(&self, key: &str, value: &Option<T>, context: &str) -> Result<()> {
+    fn forbid<T>(&self, key: &str, value: &Option<T>, context: &str) -> Result<(), Error> {
         if value.is_some() {
-            bail!("{}: {key} does not apply to {context}", self.of(key));
+            return Err(Error::NotApplicable {
+                origin: self.of(key),
+                key: key.to_owned(),
+                context: context.to_owned(),
+            });
         }
         Ok(())
     }
 
-    fn path(&self, file: &str) -> PathBuf {
+    fn conflict(&self, key: &str, message: String) -> Error {
+        Error::Conflict { origin: self.of(key), message }
+    }
+
+    /// A library constructor's refusal, named by the keys or table involved.
+    fn domain(&self, key: &str, context: &str, cause: impl std::error::Error + Send + Sync + 'static) -> Error {
+        let context = (!context.is_empty()).then(|| context.to_owned());
+        Error::Domain { origin: self.of(key), context, cause: Box::new(cause) }
+    }
+
+    fn warn(&self, key: &str, value: String, hint: String) {
+        self.warnings.borrow_mut().push(Warning { origin: self.of(key), key: key.to_owned(), value, hint });
+    }
+
+    /// A CSV path as given in the scene, resolved against the scene file's folder.
+    pub(crate) fn path(&self, file: &str) -> PathBuf {
         let p = Path::new(file);
         if p.is_absolute() { p.to_path_buf() } else { self.dir.join(p) }
     }
 
+    /// `e` from reading the table `file` of `key`, in the key's context; a string that is a
+    /// number with a unit or a quoted number (`"15%"`, `"0.15"`) and no such file is named as such.
+    fn table_error(&self, key: &str, file: &str, e: Error, expected: &str) -> Error {
+        if let Error::Read { cause, .. } = &e
+            && cause.kind() == std::io::ErrorKind::NotFound
+            && let Some(n) = number_prefix(file)
+        {
+            let rest = file.trim()[n.len()..].trim();
+            let write = match (rest, n.parse::<f64>()) {
+                ("%", Ok(v)) => format!("write {}, not {}", num(v / 100.0), quoted(file)),
+                _ => format!("write {n}, not {}", quoted(file)),
+            };
+            return self.bad(
+                key,
+                quoted(file),
+                &format!("{expected} ({write}), or the path of a CSV file (none is there)"),
+            );
+        }
+        Error::Table { origin: self.of(key), key: key.to_owned(), file: shorten(file), cause: Box::new(e) }
+    }
+
     /// The CSV table `file` given for `key`, values in `[0, hi]`.
-    fn table(&self, key: &str, file: &str, hi: f64, what: &str) -> Result<radiometry::Sampled> {
-        read_table(&self.path(file), 0.0, hi, what).with_context(|| format!("{}: {key} = \"{file}\"", self.of(key)))
+    fn table(&self, key: &str, file: &str, hi: f64, what: &str, expected: &str) -> Result<radiometry::Sampled, Error> {
+        let path = self.path(file);
+        let read = read_pairs(&path, &WAVELENGTH, 0.0, hi, what).and_then(|(nm, values)| {
+            let (lo_nm, hi_nm) = (nm[0], nm[nm.len() - 1]);
+            sampled(&path, &nm, values).map(|t| (t, lo_nm, hi_nm))
+        });
+        let (table, lo_nm, hi_nm) = read.map_err(|e| self.table_error(key, file, e, expected))?;
+        if hi_nm < WAVELENGTH_PLAUSIBLE_NM.0 || lo_nm > WAVELENGTH_PLAUSIBLE_NM.1 {
+            let (unit, factor) = wavelength_slip(hi_nm);
+            self.warn(
+                key,
+                quoted(file),
+                format!(
+                    "its wavelengths {}–{} nm are all outside {}–{} nm: looks like {unit} ({}–{} nm?)",
+                    num(lo_nm),
+                    num(hi_nm),
+                    WAVELENGTH_PLAUSIBLE_NM.0,
+                    WAVELENGTH_PLAUSIBLE_NM.1,
+                    rounded(lo_nm * factor),
+                    rounded(hi_nm * factor)
+                ),
+            );
+        }
+        Ok(table)
     }
 
     /// A fraction in `[0, 1]`, constant or tabulated.
-    fn curve(&self, key: &str, value: &NumberOrFile, what: &str) -> Result<Curve> {
+    fn curve(&self, key: &str, value: &NumberOrFile, what: &str) -> Result<Curve, Error> {
+        let expected = "a fraction in [0, 1] or a CSV path";
         Ok(match value {
-            NumberOrFile::Number(v) => {
-                Curve::Constant(self.number(key, *v, (0.0..=1.0).contains(v), "a fraction in [0, 1] or a CSV path")?)
-            }
-            NumberOrFile::File(f) => Curve::Table(self.table(key, f, 1.0, what)?),
+            NumberOrFile::Number(v) => Curve::Constant(self.number(key, *v, (0.0..=1.0).contains(v), expected)?),
+            NumberOrFile::File(f) => Curve::Table(self.table(key, f, 1.0, what, "a fraction in [0, 1]")?),
         })
+    }
+
+    /// Warns about a wavelength in nm outside [`WAVELENGTH_PLAUSIBLE_NM`].
+    fn wavelength(&self, key: &str, nm: f64) {
+        let (lo, hi) = WAVELENGTH_PLAUSIBLE_NM;
+        if nm < lo || nm > hi {
+            let (unit, factor) = wavelength_slip(nm);
+            let side = if nm < lo { format!("below {lo} nm") } else { format!("above {hi} nm") };
+            self.warn(key, num(nm), format!("{side}: looks like {unit} ({} nm?)", rounded(nm * factor)));
+        }
+    }
+}
+
+/// Plausible wavelengths, nm: from the far ultraviolet to the thermal infrared. A scene value
+/// outside is valid but almost surely in µm or m (below) or pm/Å (above), and warned about.
+pub const WAVELENGTH_PLAUSIBLE_NM: (f64, f64) = (100.0, 20000.0);
+/// Plausible pixel pitches, µm (below: mm typed as µm; above: nm typed as µm).
+pub const PIXEL_PITCH_PLAUSIBLE_UM: (f64, f64) = (0.1, 100.0);
+/// Plausible focal lengths, mm (below: m typed as mm; above: µm typed as mm).
+pub const FOCAL_LENGTH_PLAUSIBLE_MM: (f64, f64) = (0.01, 1e4);
+/// Plausible exposure times, ms: 1 ns to 2.8 h (below: s typed as ms; above: µs typed as ms).
+pub const EXPOSURE_PLAUSIBLE_MS: (f64, f64) = (1e-6, 1e7);
+
+/// The unit a wavelength outside the plausible range was probably typed in, and the factor to nm.
+fn wavelength_slip(nm: f64) -> (&'static str, f64) {
+    if nm > WAVELENGTH_PLAUSIBLE_NM.1 {
+        ("pm", 1e-3)
+    } else if nm < 1e-3 {
+        ("m", 1e9)
+    } else {
+        ("µm", 1e3)
+    }
+}
+
+/// `v` to 6 significant digits, as a number is typed (`5.2`, not `5.199999999999999`).
+fn rounded(v: f64) -> String {
+    num(format!("{v:.5e}").parse::<f64>().unwrap_or(v))
+}
+
+/// The number a string starts with, as typed (`"800nm"` → `800`), if any.
+pub(crate) fn number_prefix(s: &str) -> Option<&str> {
+    let s = s.trim();
+    let mut end = 0;
+    for (i, c) in s.char_indices().take(40) {
+        if !(c.is_ascii_digit() || "+-.eE".contains(c)) {
+            break;
+        }
+        end = i + c.len_utf8();
+    }
+    (0..=end).rev().map(|e| &s[..e]).find(|p| p.contains(|c: char| c.is_ascii_digit()) && p.parse::<f64>().is_ok())
+}
+
+/// The unit a scene key carries in its name (`center_nm` → ` in nm`), for messages.
+fn unit_of(key: &str) -> &'static str {
+    let key = key.trim_end_matches(|c: char| c.is_ascii_digit() || c == '[' || c == ']');
+    let suffixes = [
+        ("_w_m2_sr_nm", " in W/(m² sr nm)"),
+        ("_e_per_s", " in e⁻/s"),
+        ("_dn_per_e", " in DN/e⁻"),
+        ("_nm", " in nm"),
+        ("_um", " in µm"),
+        ("_mm", " in mm"),
+        ("_ms", " in ms"),
+        ("_deg", " in degrees"),
+        ("_k", " in K"),
+        ("_e", " in e⁻"),
+        ("_bits", " of bits"),
+    ];
+    suffixes.iter().find(|(s, _)| key.ends_with(s)).map_or("", |(_, u)| u)
+}
+
+/// The parsed TOML of a source, or how it failed (kept to build the error again).
+#[derive(Clone, Debug)]
+struct TomlFailure {
+    line: usize,
+    column: usize,
+    message: String,
+    excerpt: String,
+}
+
+impl TomlFailure {
+    fn new(text: &str, e: &toml::de::Error) -> TomlFailure {
+        let start = e.span().map_or(0, |s| s.start).min(text.len());
+        let start = (0..=start).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+        let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+        let line = text[..start].matches('\n').count() + 1;
+        let column = text[line_start..start].chars().count() + 1;
+        let whole = &text[line_start..line_end];
+        let excerpt = if whole.chars().count() <= crate::error::SHOWN {
+            format!("`{}`", shorten(whole))
+        } else {
+            let skip = column.saturating_sub(crate::error::SHOWN / 2);
+            let part: String = whole.chars().skip(skip).take(crate::error::SHOWN).collect();
+            let lead = if skip > 0 { "…" } else { "" };
+            let tail = if whole.chars().count() > skip + crate::error::SHOWN { "…" } else { "" };
+            format!("`{lead}{}{tail}` (a line of {} bytes)", shorten(&part), whole.len())
+        };
+        let message = e.message().trim().replace('\n', "; ");
+        TomlFailure { line, column, message: shorten_quoted(&message), excerpt }
+    }
+
+    fn error(&self, origin: &str) -> Error {
+        Error::Toml {
+            origin: origin.to_owned(),
+            line: self.line,
+            column: self.column,
+            message: self.message.clone(),
+            excerpt: self.excerpt.clone(),
+        }
     }
 }
 
@@ -223,7 +403,7 @@ pub struct Source {
     text: String,
     label: String,
     dir: PathBuf,
-    parsed: std::sync::OnceLock<std::result::Result<toml::Table, String>>,
+    parsed: std::sync::OnceLock<Result<toml::Table, TomlFailure>>,
 }
 
 impl Source {
@@ -231,69 +411,203 @@ impl Source {
     pub fn label(&self) -> &str {
         &self.label
     }
+
+    /// A scene given as text (`label` names it in messages; CSV paths resolve against `dir`).
+    pub fn from_text(text: impl Into<String>, label: impl Into<String>, dir: impl Into<PathBuf>) -> Source {
+        Source { text: text.into(), label: label.into(), dir: dir.into(), parsed: std::sync::OnceLock::new() }
+    }
+}
+
+/// A built scene and the plausibility warnings of its values (see [`load_with_warnings`]).
+#[derive(Debug)]
+#[non_exhaustive]
+pub struct Loaded {
+    /// The validated scene.
+    pub scene: Scene,
+    /// Values that are valid but almost surely a unit slip, in the order they were read.
+    pub warnings: Vec<Warning>,
 }
 
 /// Reads a scene file (None = the embedded paper scene).
-pub fn read(file: Option<&Path>) -> Result<Source> {
-    let (text, label, dir) = match file {
+pub fn read(file: Option<&Path>) -> Result<Source, Error> {
+    Ok(match file {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read the scene file {}", path.display()))?;
+            let text = read_text(path, "scene file")?;
             let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            (text, path.display().to_string(), dir)
+            Source::from_text(text, path.display().to_string(), dir)
         }
-        None => (PAPER_SCENE.to_owned(), "embedded paper scene".to_owned(), PathBuf::from(".")),
-    };
-    Ok(Source { text, label, dir, parsed: std::sync::OnceLock::new() })
+        None => Source::from_text(PAPER_SCENE, "embedded paper scene", "."),
+    })
 }
 
 /// Reads and validates a scene: `file` (None = the embedded paper scene) with `--set` overrides.
-pub fn load(file: Option<&Path>, overrides: &[String]) -> Result<Scene> {
-    build_from(&read(file)?, overrides)
+pub fn load(file: Option<&Path>, overrides: &[String]) -> Result<Scene, Error> {
+    Ok(load_with_warnings(file, overrides)?.scene)
+}
+
+/// [`load`], with the plausibility warnings: a pixel pitch outside
+/// [`PIXEL_PITCH_PLAUSIBLE_UM`], a focal length outside [`FOCAL_LENGTH_PLAUSIBLE_MM`], a
+/// wavelength (`design_wavelength_nm`, `center_nm`, or a whole table's) outside
+/// [`WAVELENGTH_PLAUSIBLE_NM`], an exposure outside [`EXPOSURE_PLAUSIBLE_MS`]. Each names the
+/// key, the value and the unit it was probably typed in.
+pub fn load_with_warnings(file: Option<&Path>, overrides: &[String]) -> Result<Loaded, Error> {
+    check_overrides(file, overrides)?;
+    build_with_warnings(&read(file)?, overrides)
 }
 
 /// Builds and validates the scene of `source` with `--set` overrides.
-pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene> {
-    let (text, label, dir) = (&source.text, source.label.clone(), source.dir.clone());
-    if text.trim().is_empty() {
-        bail!("{label}: the scene file is empty: expected TOML tables [lens], [source], [camera], [exposure]");
-    }
-    let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| e.to_string().trim_end().to_owned()));
-    let mut table = parsed.clone().map_err(|e| anyhow!("{label}: malformed TOML: {e}"))?;
-    let mut origins = Origins { file: label, dir, overrides: BTreeMap::new() };
-    for arg in overrides {
-        let (key, value) = apply_override(&mut table, arg)?;
-        origins.overrides.insert(key, value);
-    }
-    let raw: RawScene = serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-        let key = e.path().to_string();
-        // toml appends "in `key`" to its messages; the key is already named in front
-        let inner = e.inner().to_string();
-        let inner = inner.split("\nin `").next().unwrap_or_default().trim_end().to_owned();
-        anyhow!("{}: {key}: {inner}", origins.of(&key))
-    })?;
+pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene, Error> {
+    Ok(build_with_warnings(source, overrides)?.scene)
+}
+
+/// [`build_from`], with the plausibility warnings of [`load_with_warnings`].
+pub fn build_with_warnings(source: &Source, overrides: &[String]) -> Result<Loaded, Error> {
+    let (raw, origins) = prepare(source, overrides)?;
     let scene = build(&raw, &origins)?;
-    Ok(match &raw.title {
-        Some(title) => scene.with_title(title.clone()),
-        None => scene,
-    })
+    Ok(Loaded { scene, warnings: origins.warnings.into_inner() })
+}
+
+/// The scene of `source` with `overrides` as TOML with every default filled in and every CSV
+/// path resolved (absolute): what was read. It is validated first, and loads again to the same
+/// scene.
+pub fn resolved_toml(source: &Source, overrides: &[String]) -> Result<String, Error> {
+    let (raw, origins) = prepare(source, overrides)?;
+    build(&raw, &origins)?;
+    crate::resolved::write(&raw, &origins)
+}
+
+/// Checks the syntax of every override (`key=value`, a dotted key) before any file is read.
+/// When one lacks `=` and `file` does not exist, `file` is probably that override's value split
+/// off by an argument parser (`--set lens.f_number 2.8`), and the message says so.
+pub fn check_overrides(file: Option<&Path>, overrides: &[String]) -> Result<(), Error> {
+    let lacking: Vec<&String> = overrides.iter().filter(|a| !a.contains('=')).collect();
+    if let (Some(path), [arg]) = (file, lacking.as_slice())
+        && !path.exists()
+        && path.extension().is_none_or(|e| e != "toml")
+    {
+        let value = path.display().to_string();
+        return Err(Error::Override {
+            arg: shorten(arg),
+            problem: format!("expected KEY=VALUE (write --set {}={})", shorten(arg.trim()), shorten(&value)),
+        });
+    }
+    apply_overrides(&mut toml::Table::new(), overrides).map(drop)
+}
+
+/// Applies every override in turn; a key given twice is refused (the first would be dropped).
+/// Returns each key with the override that gave it.
+fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<BTreeMap<String, String>, Error> {
+    let mut given: BTreeMap<String, String> = BTreeMap::new();
+    for arg in overrides {
+        let (key, arg) = apply_override(table, arg)?;
+        if let Some(first) = given.get(&key) {
+            return Err(Error::Override {
+                arg: shorten(&arg),
+                problem: format!(
+                    "{key} is given twice (also by --set {}); expected each key once (--tolerance and --over set their keys too)",
+                    shorten(first)
+                ),
+            });
+        }
+        given.insert(key, arg);
+    }
+    Ok(given)
+}
+
+/// The merged TOML table of `source` with `overrides`, deserialized, and where each key came from.
+fn prepare(source: &Source, overrides: &[String]) -> Result<(RawScene, Origins), Error> {
+    let (text, label, dir) = (&source.text, source.label.clone(), source.dir.clone());
+    apply_overrides(&mut toml::Table::new(), overrides)?;
+    if text.trim().is_empty() {
+        return Err(Error::Empty { origin: label });
+    }
+    let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| TomlFailure::new(text, &e)));
+    let mut table = parsed.clone().map_err(|e| e.error(&label))?;
+    let overrides = apply_overrides(&mut table, overrides)?;
+    let origins = Origins { file: label, dir, overrides, warnings: RefCell::new(Vec::new()) };
+    let raw: RawScene = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
+        .map_err(|e| schema_error(&e, &table, &origins))?;
+    Ok((raw, origins))
+}
+
+/// A serde error (unknown key, wrong type, missing key) as a message naming origin and key; a
+/// string where a number belongs (`"800nm"`) says which number and unit to write.
+fn schema_error(e: &serde_path_to_error::Error<toml::de::Error>, table: &toml::Table, o: &Origins) -> Error {
+    let key = e.path().to_string();
+    // toml appends "in `key`" to its messages; the key is already named in front
+    let inner = e.inner().to_string();
+    let inner = inner.split("\nin `").next().unwrap_or_default().trim_end().to_owned();
+    let origin = o.of(&key);
+    let numeric = if inner.ends_with("expected f64") {
+        Some("a number")
+    } else if inner.ends_with("expected u32") {
+        Some("a whole number")
+    } else {
+        None
+    };
+    if let (Some(kind), true) = (numeric, inner.starts_with("invalid type: string")) {
+        let unit = unit_of(&key);
+        if let Some(toml::Value::String(s)) = lookup(table, e.path())
+            && let Some(n) = number_prefix(s)
+        {
+            let expected = format!("{kind}{unit} (write {n}, not {})", quoted(s));
+            return Error::Value { origin, key: shorten(&key), value: quoted(s), expected };
+        }
+    }
+    // `f_number = "fast"`, `pupil_samples = 256.5`, `center_nm = true`: which number, which unit
+    let message = match numeric {
+        Some(kind) => format!("{} ({kind}{})", shorten_quoted(&inner), unit_of(&key)),
+        None => shorten_quoted(&inner),
+    };
+    Error::Schema { origin, key: shorten(&key), message }
+}
+
+/// The value at a serde path in the merged table.
+fn lookup<'a>(table: &'a toml::Table, path: &serde_path_to_error::Path) -> Option<&'a toml::Value> {
+    use serde_path_to_error::Segment;
+    let mut segments = path.iter();
+    let mut value = match segments.next()? {
+        Segment::Map { key } => table.get(key)?,
+        _ => return None,
+    };
+    for segment in segments {
+        value = match segment {
+            Segment::Map { key } => value.as_table()?.get(key)?,
+            Segment::Seq { index } => value.as_array()?.get(*index)?,
+            _ => return None,
+        };
+    }
+    Some(value)
 }
 
 /// Applies one `--set key=value` to the TOML table. The value is read as TOML (number, boolean,
 /// quoted string), or as a bare string if it is not valid TOML (`--set spectrum.shape=tophat`).
-fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(String, String)> {
+fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(String, String), Error> {
+    let refuse = |problem: String| Error::Override { arg: shorten(arg), problem };
     let Some((key, value)) = arg.split_once('=') else {
-        bail!("--set {arg}: expected key=value with a dotted key, e.g. --set lens.f_number=2.5");
+        return Err(refuse(format!(
+            "expected key=value with a dotted key (write --set {}=VALUE, e.g. --set lens.f_number=2.5)",
+            shorten(arg.trim())
+        )));
     };
     let key = key.trim();
     let parts: Vec<&str> = key.split('.').collect();
     if key.is_empty() || parts.iter().any(|p| p.is_empty()) {
-        bail!("--set {arg}: `{key}` is not a dotted key, e.g. lens.f_number");
+        return Err(refuse(format!("`{}` is not a dotted key, e.g. lens.f_number", shorten(key))));
+    }
+    if value.contains(['\n', '\r']) {
+        return Err(refuse("the value spans several lines; expected a value on one line".to_owned()));
     }
     let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
         .ok()
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(value.trim().to_owned()));
+    // `2.8 # x` or `2.8#x` is valid TOML with a comment: refuse rather than drop the rest
+    if value.contains('#') && !parsed.to_string().contains('#') {
+        return Err(refuse(format!(
+            "`#` starts a TOML comment, so the value would be read as {parsed} and the rest dropped; expected the value alone (quote a string that holds `#`)"
+        )));
+    }
     let mut cursor = table;
     for (i, part) in parts.iter().enumerate() {
         if i + 1 == parts.len() {
@@ -302,44 +616,47 @@ fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(String, String)
             let entry = cursor.entry((*part).to_owned()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
             cursor = entry
                 .as_table_mut()
-                .ok_or_else(|| anyhow!("--set {arg}: `{}` is a value, not a table", parts[..=i].join(".")))?;
+                .ok_or_else(|| refuse(format!("`{}` is a value, not a table", shorten(&parts[..=i].join(".")))))?;
         }
     }
     Ok((key.to_owned(), arg.to_owned()))
 }
 
-fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
+fn build(raw: &RawScene, o: &Origins) -> Result<Scene, Error> {
     // [lens]
     let l = &raw.lens;
     match l.model.as_deref().unwrap_or("chromatic") {
         "chromatic" => {}
         other => {
-            return Err(o.bad(
-                "lens.model",
-                format!("\"{other}\""),
-                "\"chromatic\" (a chromatic metalens or diffractive lens)",
-            ));
+            return Err(o.bad("lens.model", quoted(other), "\"chromatic\" (a chromatic metalens or diffractive lens)"));
         }
     }
     let f_number = o.number("lens.f_number", l.f_number, l.f_number >= 0.5, "a number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
     let f0 = o.number("lens.focal_length_mm", l.focal_length_mm, l.focal_length_mm > 0.0, "a length > 0 mm")?;
+    let (lo, hi) = FOCAL_LENGTH_PLAUSIBLE_MM;
+    if f0 < lo {
+        o.warn("lens.focal_length_mm", num(f0), format!("below {lo} mm: looks like m ({} mm?)", rounded(f0 * 1e3)));
+    } else if f0 > hi {
+        o.warn("lens.focal_length_mm", num(f0), format!("above {hi} mm: looks like µm ({} mm?)", rounded(f0 * 1e-3)));
+    }
     let l0 = o.number(
         "lens.design_wavelength_nm",
         l.design_wavelength_nm,
         l.design_wavelength_nm > 0.0,
         "a wavelength > 0 nm",
     )?;
+    o.wavelength("lens.design_wavelength_nm", l0);
     let efficiency = o.curve("lens.efficiency", &l.efficiency, "efficiency")?;
     let transmission = match &l.transmission {
         Some(t) => o.curve("lens.transmission", t, "transmission")?,
         None => efficiency.clone(),
     };
     let mut lens = ChromaticMetalens::new(f_number, f0 * 1e-3, l0 * 1e-9, efficiency, transmission)
-        .map_err(|e| anyhow!("{}: [lens]: {e}", o.of("lens")))?;
+        .map_err(|e| o.domain("lens", "[lens]", e))?;
     if let Some(aperture) = aperture(l, o)? {
         lens = lens.with_aperture(aperture);
     }
-    let seidel = |key: &str, v: Option<f64>| -> Result<f64> {
+    let seidel = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() <= 1e3, "a wavefront coefficient in µm, |W| ≤ 1000 µm")? * 1e-6)
     };
@@ -367,84 +684,65 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
     // [camera]
     let c = &raw.camera;
     let pitch = o.number("camera.pixel_pitch_um", c.pixel_pitch_um, c.pixel_pitch_um > 0.0, "a length > 0 µm")?;
+    let (lo, hi) = PIXEL_PITCH_PLAUSIBLE_UM;
+    if pitch < lo {
+        o.warn(
+            "camera.pixel_pitch_um",
+            num(pitch),
+            format!("below {lo} µm: looks like mm ({} µm?)", rounded(pitch * 1e3)),
+        );
+    } else if pitch > hi {
+        o.warn(
+            "camera.pixel_pitch_um",
+            num(pitch),
+            format!("above {hi} µm: looks like nm ({} µm?)", rounded(pitch * 1e-3)),
+        );
+    }
     let qe = match o.curve("camera.quantum_efficiency", &c.quantum_efficiency, "quantum efficiency")? {
         Curve::Constant(v) => Spectrum::Constant(v),
         Curve::Table(t) => Spectrum::Sampled(t),
     };
-    let mut camera =
-        Camera::new(pitch * 1e-6, qe, c.pixel_mtf).map_err(|e| anyhow!("{}: [camera]: {e}", o.of("camera")))?;
+    let mut camera = Camera::new(pitch * 1e-6, qe, c.pixel_mtf).map_err(|e| o.domain("camera", "[camera]", e))?;
     if let Some(sensor) = sensor(c, o)? {
         camera = camera.with_sensor(sensor);
     }
     if let Some(file) = &c.noise_spectrum {
         let key = "camera.noise_spectrum";
+        let expected = "the path of a CSV file: frequency_cyc_per_mm, relative noise amplitude";
         let (cyc_per_mm, relative) = read_pairs(&o.path(file), &FREQUENCY, 0.0, f64::MAX, "relative noise amplitude")
-            .with_context(|| format!("{}: {key} = \"{file}\"", o.of(key)))?;
+            .map_err(|e| o.table_error(key, file, e, expected))?;
         let shape = optics::NoiseShape::new(cyc_per_mm.iter().map(|f| f * 1e3).collect(), relative)
-            .map_err(|e| anyhow!("{}: {key} = \"{file}\": {e}", o.of(key)))?;
+            .map_err(|e| o.domain(key, &format!("{key} = {}", quoted(file)), e))?;
         camera = camera.with_noise_spectrum(shape);
     }
 
     // [exposure], [options]
     let t = o.number("exposure.time_ms", raw.exposure.time_ms, raw.exposure.time_ms > 0.0, "a time > 0 ms")?;
-    let mut options = Options::default();
-    if let Some(opt) = &raw.options {
-        if let Some(form) = &opt.form {
-            options.form = match form.as_str() {
-                "mean" => MetricForm::Mean,
-                "integral" => MetricForm::Integral,
-                other => return Err(o.bad("options.form", format!("\"{other}\""), "\"mean\" or \"integral\"")),
-            };
-        }
-        if let Some(v) = opt.fraunhofer_threshold_mm {
-            options.fraunhofer_threshold =
-                o.number("options.fraunhofer_threshold_mm", v, v > 0.0, "a length > 0 mm")? * 1e-3;
-        }
-        if let Some(g) = &opt.glare {
-            options.glare = match g.as_str() {
-                "first_order" => metric::GlareMode::FirstOrder,
-                "included" => metric::GlareMode::Included,
-                other => {
-                    return Err(o.bad("options.glare", format!("\"{other}\""), "\"first_order\" or \"included\""));
-                }
-            };
-        }
-        if let Some(v) = opt.pupil_samples {
-            options.pupil_samples = o.number(
-                "options.pupil_samples",
-                f64::from(v),
-                (16..=4096).contains(&v),
-                "a whole number of pupil samples from 16 to 4096",
-            )? as usize;
-        }
-        if let Some(v) = opt.tolerance {
-            options.tolerance = o.number(
-                "options.tolerance",
-                v,
-                (1e-14..=0.1).contains(&v),
-                "a relative error of the mean MTF from 1e-14 to 0.1 (default 1e-6)",
-            )?;
-        }
-        if let Some(v) = opt.fraunhofer_max_fraction {
-            options.fraunhofer_max_fraction =
-                o.number("options.fraunhofer_max_fraction", v, (0.0..=1.0).contains(&v), "a fraction in [0, 1]")?;
-        }
+    let (lo, hi) = EXPOSURE_PLAUSIBLE_MS;
+    if t < lo {
+        o.warn("exposure.time_ms", num(t), format!("below {lo} ms (1 ns): looks like s ({} ms?)", rounded(t * 1e3)));
+    } else if t > hi {
+        o.warn("exposure.time_ms", num(t), format!("above {hi} ms (2.8 h): looks like µs ({} ms?)", rounded(t * 1e-3)));
     }
-    let scene =
-        Scene::new(Arc::new(lens), radiance, camera, t * 1e-3, options).map_err(|e| anyhow!("{}: {e}", o.file))?;
-    let angle = |key: &str, v: Option<f64>| -> Result<f64> {
+    let options = options(raw.options.as_ref(), o)?;
+    let scene = Scene::new(Arc::new(lens), radiance, camera, t * 1e-3, options).map_err(|e| o.domain("", "", e))?;
+    let angle = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())
     };
-    match (&raw.field, &raw.fields) {
-        (Some(_), Some(_)) => bail!("{}: [field] and [[fields]] both given: use one point or a weighted list", o.file),
+    let scene = match (&raw.field, &raw.fields) {
+        (Some(_), Some(_)) => {
+            return Err(
+                o.conflict("field", "[field] and [[fields]] both given: use one point or a weighted list".to_owned())
+            );
+        }
         (Some(f), None) => {
             let field = optics::Field::new(angle("field.x_deg", f.x_deg)?, angle("field.y_deg", f.y_deg)?);
-            scene.at_field(field).map_err(|e| anyhow!("{}: {e}", o.of("field")))
+            scene.at_field(field).map_err(|e| o.domain("field", "[field]", e))?
         }
         (None, Some(list)) => {
             if list.is_empty() {
-                bail!("{}: [[fields]] is empty: expected at least one field point", o.of("fields"));
+                return Err(o.conflict("fields", "[[fields]] is empty: expected at least one field point".to_owned()));
             }
             let mut points = Vec::new();
             for (i, f) in list.iter().enumerate() {
@@ -454,14 +752,61 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene> {
                 let w = o.number(&format!("fields[{i}].weight"), w, w >= 0.0, "a relative weight ≥ 0")?;
                 points.push((optics::Field::new(x, y), w));
             }
-            scene.over_fields(points).map_err(|e| anyhow!("{}: [[fields]]: {e}", o.of("fields")))
+            scene.over_fields(points).map_err(|e| o.domain("fields", "[[fields]]", e))?
         }
-        (None, None) => Ok(scene),
+        (None, None) => scene,
+    };
+    Ok(match &raw.title {
+        Some(title) => scene.with_title(title.clone()),
+        None => scene,
+    })
+}
+
+/// `[options]`: [`Options::default`] with the keys given.
+fn options(opt: Option<&RawOptions>, o: &Origins) -> Result<Options, Error> {
+    let mut options = Options::default();
+    let Some(opt) = opt else { return Ok(options) };
+    if let Some(form) = &opt.form {
+        options.form = match form.as_str() {
+            "mean" => MetricForm::Mean,
+            "integral" => MetricForm::Integral,
+            other => return Err(o.bad("options.form", quoted(other), "\"mean\" or \"integral\"")),
+        };
     }
+    if let Some(v) = opt.fraunhofer_threshold_mm {
+        options.fraunhofer_threshold =
+            o.number("options.fraunhofer_threshold_mm", v, v > 0.0, "a length > 0 mm")? * 1e-3;
+    }
+    if let Some(g) = &opt.glare {
+        options.glare = match g.as_str() {
+            "first_order" => metric::GlareMode::FirstOrder,
+            "included" => metric::GlareMode::Included,
+            other => return Err(o.bad("options.glare", quoted(other), "\"first_order\" or \"included\"")),
+        };
+    }
+    if let Some(v) = opt.pupil_samples {
+        if !(16..=4096).contains(&v) {
+            return Err(o.bad("options.pupil_samples", v, "a whole number of pupil samples from 16 to 4096"));
+        }
+        options.pupil_samples = v as usize;
+    }
+    if let Some(v) = opt.tolerance {
+        options.tolerance = o.number(
+            "options.tolerance",
+            v,
+            (1e-14..=0.1).contains(&v),
+            "a relative error of the mean MTF from 1e-14 to 0.1 (default 1e-6)",
+        )?;
+    }
+    if let Some(v) = opt.fraunhofer_max_fraction {
+        options.fraunhofer_max_fraction =
+            o.number("options.fraunhofer_max_fraction", v, (0.0..=1.0).contains(&v), "a fraction in [0, 1]")?;
+    }
+    Ok(options)
 }
 
 /// The sensor noise model, when the scene gives any of its keys (otherwise shot-noise limited).
-fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>> {
+fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
     if c.read_noise_e.is_none()
         && c.dark_current_e_per_s.is_none()
         && c.full_well_e.is_none()
@@ -475,7 +820,9 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>> {
     let dark = c.dark_current_e_per_s.unwrap_or(0.0);
     let dark = o.number("camera.dark_current_e_per_s", dark, dark >= 0.0, "a dark current ≥ 0 e⁻/s")?;
     let well = match c.full_well_e {
-        Some(w) => o.number("camera.full_well_e", w, w > 0.0, "a full-well capacity > 0 e⁻")?,
+        // inf: no saturation, as without the key (what `asnr scene` prints for the default)
+        Some(w) if w == f64::INFINITY => w,
+        Some(w) => o.number("camera.full_well_e", w, w > 0.0, "a full-well capacity > 0 e⁻ (inf for no limit)")?,
         None => f64::INFINITY,
     };
     let sensor = match (c.gain_dn_per_e, c.adc_bits) {
@@ -487,29 +834,34 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>> {
             noise::Sensor::new(read, dark, well, k, bits)
         }
         (None, None) => noise::Sensor::without_adc(read, dark, well),
-        (Some(_), None) => bail!("{}: camera.gain_dn_per_e needs camera.adc_bits too", o.of("camera.adc_bits")),
-        (None, Some(_)) => bail!("{}: camera.adc_bits needs camera.gain_dn_per_e too", o.of("camera.gain_dn_per_e")),
+        (Some(_), None) => {
+            return Err(o.conflict("camera.adc_bits", "camera.gain_dn_per_e needs camera.adc_bits too".to_owned()));
+        }
+        (None, Some(_)) => {
+            return Err(o.conflict("camera.gain_dn_per_e", "camera.adc_bits needs camera.gain_dn_per_e too".to_owned()));
+        }
     };
-    sensor.map(Some).map_err(|e| anyhow!("{}: [camera]: {e}", o.of("camera")))
+    sensor.map(Some).map_err(|e| o.domain("camera", "[camera]", e))
 }
 
-/// The iris, when the scene makes it other than the centred full circle.
-fn aperture(l: &RawLens, o: &Origins) -> Result<Option<optics::fft::Aperture>> {
-    let fraction = |key: &str, v: Option<f64>, lo: f64, hi: f64, expected: &str| -> Result<Option<f64>> {
-        v.map(|v| o.number(key, v, v >= lo && v < hi, expected)).transpose()
+/// The iris, when the scene makes it other than the centred full circle (a decentre of 0 and an
+/// obscuration of 0 are the default pupil, computed exactly as without the keys).
+fn aperture(l: &RawLens, o: &Origins) -> Result<Option<optics::fft::Aperture>, Error> {
+    let decentre = "a fraction of the aperture radius in (−1, 1)";
+    let open = |key: &str, v: Option<f64>| v.map(|v| o.number(key, v, v > -1.0 && v < 1.0, decentre)).transpose();
+    let dx = open("lens.iris_decentre_x", l.iris_decentre_x)?.unwrap_or(0.0);
+    let dy = open("lens.iris_decentre_y", l.iris_decentre_y)?.unwrap_or(0.0);
+    let obscuration = match l.obscuration {
+        Some(v) => o.number("lens.obscuration", v, (0.0..1.0).contains(&v), "a ratio of radii in [0, 1)")?,
+        None => 0.0,
     };
-    let dx =
-        fraction("lens.iris_decentre_x", l.iris_decentre_x, -1.0, 1.0, "a fraction of the aperture radius in (−1, 1)")?;
-    let dy =
-        fraction("lens.iris_decentre_y", l.iris_decentre_y, -1.0, 1.0, "a fraction of the aperture radius in (−1, 1)")?;
-    let obscuration = fraction("lens.obscuration", l.obscuration, 0.0, 1.0, "a ratio of radii in [0, 1)")?;
     let sector = match l.sector_deg {
         Some([a, b]) => {
             let key = "lens.sector_deg";
             if !(a.is_finite() && b.is_finite() && b > a && b - a <= 360.0) {
                 return Err(o.bad(
                     key,
-                    format!("[{a}, {b}]"),
+                    format!("[{}, {}]", num(a), num(b)),
                     "[start, end] in degrees with start < end ≤ start + 360",
                 ));
             }
@@ -517,20 +869,18 @@ fn aperture(l: &RawLens, o: &Origins) -> Result<Option<optics::fft::Aperture>> {
         }
         None => None,
     };
-    if dx.is_none() && dy.is_none() && obscuration.is_none() && sector.is_none() {
+    if dx == 0.0 && dy == 0.0 && obscuration == 0.0 && sector.is_none() {
         return Ok(None);
     }
-    let shape = optics::fft::Aperture::disc(obscuration.unwrap_or(0.0), sector)
-        .map_err(|e| anyhow!("{}: lens.obscuration / lens.sector_deg: {e}", o.of("lens")))?;
-    let shape = shape
-        .decentred(dx.unwrap_or(0.0), dy.unwrap_or(0.0))
-        .map_err(|e| anyhow!("{}: lens.iris_decentre_x / _y: {e}", o.of("lens")))?;
+    let shape = optics::fft::Aperture::disc(obscuration, sector)
+        .map_err(|e| o.domain("lens", "lens.obscuration / lens.sector_deg", e))?;
+    let shape = shape.decentred(dx, dy).map_err(|e| o.domain("lens", "lens.iris_decentre_x / _y", e))?;
     Ok(Some(shape))
 }
 
-fn source(s: &RawSource, o: &Origins) -> Result<Spectrum> {
+fn source(s: &RawSource, o: &Origins) -> Result<Spectrum, Error> {
     let kind = s.kind.as_str();
-    let ctx = format!("source.kind = \"{kind}\"");
+    let ctx = format!("source.kind = {}", quoted(kind));
     match kind {
         "flat" => {
             o.forbid("source.temperature_k", &s.temperature_k, &ctx)?;
@@ -549,7 +899,7 @@ fn source(s: &RawSource, o: &Origins) -> Result<Spectrum> {
             let t = o.number(key, t, t > 0.0, "a temperature > 0 K")?;
             let scale = s.scale.unwrap_or(1.0);
             let scale = o.number("source.scale", scale, scale > 0.0, "a factor > 0 on the Planck radiance")?;
-            let source = Blackbody::new(t).map_err(|e| anyhow!("{}: {key}: {e}", o.of(key)))?;
+            let source = Blackbody::new(t).map_err(|e| o.domain(key, key, e))?;
             Ok(Spectrum::Blackbody { source, scale })
         }
         "table" => {
@@ -558,20 +908,21 @@ fn source(s: &RawSource, o: &Origins) -> Result<Spectrum> {
             o.forbid("source.scale", &s.scale, &ctx)?;
             let key = "source.csv";
             let f = o.require(key, s.csv.as_ref(), "the path of a CSV file: wavelength_nm, W/(m² sr nm)")?;
-            let table = o.table(key, f, f64::INFINITY, "spectral radiance")?;
+            let table = o.table(key, f, f64::INFINITY, "spectral radiance", "the path of a CSV file")?;
             Ok(Spectrum::Sampled(table.scaled(1e9)))
         }
-        other => Err(o.bad("source.kind", format!("\"{other}\""), "\"flat\", \"blackbody\" or \"table\"")),
+        other => Err(o.bad("source.kind", quoted(other), "\"flat\", \"blackbody\" or \"table\"")),
     }
 }
 
-fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
+fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
     let shape = s.shape.as_str();
-    let ctx = format!("spectrum.shape = \"{shape}\"");
-    let band = |o: &Origins| -> Result<(f64, f64, f64)> {
+    let ctx = format!("spectrum.shape = {}", quoted(shape));
+    let band = |o: &Origins| -> Result<(f64, f64, f64), Error> {
         o.forbid("spectrum.csv", &s.csv, &ctx)?;
         let c = o.require("spectrum.center_nm", s.center_nm, "a wavelength > 0 nm")?;
         let c = o.number("spectrum.center_nm", c, c > 0.0, "a wavelength > 0 nm")?;
+        o.wavelength("spectrum.center_nm", c);
         let r = o.require("spectrum.range_nm", s.range_nm, "a width > 0 nm")?;
         let r = o.number("spectrum.range_nm", r, r > 0.0, "a width > 0 nm")?;
         let p = s.peak.unwrap_or(1.0);
@@ -581,22 +932,19 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
     Ok(match shape {
         "gaussian" => {
             let (c, r, p) = band(o)?;
-            Some(Spectrum::Gaussian(
-                Gaussian::from_range(c, r, p).map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
-            ))
+            Some(Spectrum::Gaussian(Gaussian::from_range(c, r, p).map_err(|e| o.domain("spectrum", "[spectrum]", e))?))
         }
         "tophat" => {
             let (c, r, p) = band(o)?;
             if c - 0.5 * r <= 0.0 {
                 return Err(o.bad(
                     "spectrum.range_nm",
-                    r * 1e9,
+                    num(s.range_nm.unwrap_or(r * 1e9)),
                     "a full width under twice spectrum.center_nm (the band must stay at λ > 0)",
                 ));
             }
             Some(Spectrum::TopHat(
-                TopHat::new(c - 0.5 * r, c + 0.5 * r, p)
-                    .map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
+                TopHat::new(c - 0.5 * r, c + 0.5 * r, p).map_err(|e| o.domain("spectrum", "[spectrum]", e))?,
             ))
         }
         "line" => {
@@ -605,21 +953,20 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
             o.forbid("spectrum.csv", &s.csv, &ctx)?;
             let c = o.require("spectrum.center_nm", s.center_nm, "the line's wavelength > 0 nm")?;
             let c = o.number("spectrum.center_nm", c, c > 0.0, "the line's wavelength > 0 nm")?;
+            o.wavelength("spectrum.center_nm", c);
             let width = "the equivalent width > 0 nm of the band (∫T dλ / T_peak; it sets the photon count)";
             let r = o.require("spectrum.range_nm", s.range_nm, width)?;
             let r = o.number("spectrum.range_nm", r, r > 0.0, width)?;
             if r >= 2.0 * c {
                 return Err(o.bad(
                     "spectrum.range_nm",
-                    r,
+                    num(r),
                     "an equivalent width under twice spectrum.center_nm (the band must stay at λ > 0)",
                 ));
             }
             let p = s.peak.unwrap_or(1.0);
             let p = o.number("spectrum.peak", p, p > 0.0 && p <= 1.0, "a transmission in (0, 1]")?;
-            Some(Spectrum::Line(
-                Line::new(c * 1e-9, r * 1e-9, p).map_err(|e| anyhow!("{}: [spectrum]: {e}", o.of("spectrum")))?,
-            ))
+            Some(Spectrum::Line(Line::new(c * 1e-9, r * 1e-9, p).map_err(|e| o.domain("spectrum", "[spectrum]", e))?))
         }
         "table" => {
             for (k, v) in
@@ -628,7 +975,7 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
                 o.forbid(k, &v, &ctx)?;
             }
             let f = o.require("spectrum.csv", s.csv.as_ref(), "the path of a CSV file: wavelength_nm, transmission")?;
-            Some(Spectrum::Sampled(o.table("spectrum.csv", f, 1.0, "transmission")?))
+            Some(Spectrum::Sampled(o.table("spectrum.csv", f, 1.0, "transmission", "the path of a CSV file")?))
         }
         "none" => {
             for (k, v) in
@@ -642,9 +989,144 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>> {
         other => {
             return Err(o.bad(
                 "spectrum.shape",
-                format!("\"{other}\""),
+                quoted(other),
                 "\"gaussian\", \"tophat\", \"line\" (one wavelength), \"table\" or \"none\"",
             ));
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn number_prefixes_and_units() {
+        assert_eq!(number_prefix("800nm"), Some("800"));
+        assert_eq!(number_prefix(" 5.2 um"), Some("5.2"));
+        assert_eq!(number_prefix("1e-3s"), Some("1e-3"));
+        assert_eq!(number_prefix("2.8e"), Some("2.8"));
+        assert_eq!(number_prefix("fast"), None);
+        assert_eq!(number_prefix("inf"), None);
+        assert_eq!(number_prefix("e5"), None);
+        assert_eq!(unit_of("spectrum.center_nm"), " in nm");
+        assert_eq!(unit_of("source.radiance_w_m2_sr_nm"), " in W/(m² sr nm)");
+        assert_eq!(unit_of("camera.dark_current_e_per_s"), " in e⁻/s");
+        assert_eq!(unit_of("fields[0].x_deg"), " in degrees");
+        assert_eq!(unit_of("lens.sector_deg[1]"), " in degrees");
+        assert_eq!(unit_of("lens.f_number"), "");
+    }
+
+    /// The resolved TOML of every example scene builds to the same scene: same ASNR, bit for bit.
+    #[test]
+    fn resolved_examples_load_to_the_same_asnr() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml"] {
+            let source = read(Some(&root.join(name))).unwrap();
+            let text = resolved_toml(&source, &[]).unwrap();
+            let again = Source::from_text(text.clone(), "resolved", std::env::temp_dir());
+            let a = metric::evaluate(&build_from(&source, &[]).unwrap()).unwrap();
+            let b = metric::evaluate(&build_from(&again, &[]).unwrap()).unwrap();
+            assert_eq!(a.asnr, b.asnr, "{name}:\n{text}");
+            // and it is a fixed point: resolving the resolved scene changes only the header
+            let twice = resolved_toml(&again, &[]).unwrap();
+            let body = |t: &str| t.lines().filter(|l| !l.starts_with("# From")).collect::<Vec<_>>().join("\n");
+            assert_eq!(body(&twice), body(&text), "{name}");
+        }
+    }
+
+    /// A table whose wavelengths all lie below 100 nm was typed in µm: valid, and warned about.
+    #[test]
+    fn a_table_in_micrometres_is_warned_about() {
+        let dir = std::env::temp_dir().join(format!("scene-load-um-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("qe.csv"), "0.65,0.2\n1.0,0.1\n").unwrap();
+        let text = PAPER_SCENE.replacen("quantum_efficiency = 0.2", "quantum_efficiency = \"qe.csv\"", 1);
+        let loaded = build_with_warnings(&Source::from_text(text, "s.toml", &dir), &[]).unwrap();
+        let shown: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+        assert_eq!(
+            shown,
+            [
+                "s.toml: camera.quantum_efficiency = \"qe.csv\": its wavelengths 0.65–1 nm are all outside 100–20000 nm: looks like µm (650–1000 nm?)"
+            ]
+        );
+        assert!(build_with_warnings(&Source::from_text(PAPER_SCENE, "p", "."), &[]).unwrap().warnings.is_empty());
+    }
+
+    #[test]
+    fn whole_numbers_and_types_are_named() {
+        let paper = Source::from_text(PAPER_SCENE, "p", ".");
+        let e = build_from(&paper, &["options.pupil_samples=256.5".to_owned()]).unwrap_err().to_string();
+        assert!(
+            e.ends_with("options.pupil_samples: invalid type: floating point `256.5`, expected u32 (a whole number)"),
+            "{e}"
+        );
+        let e = build_from(&paper, &["spectrum.center_nm=true".to_owned()]).unwrap_err().to_string();
+        assert!(e.ends_with("expected f64 (a number in nm)"), "{e}");
+    }
+
+    #[test]
+    fn toml_errors_quote_a_short_excerpt() {
+        let text = format!("title = \"x\"\n[lens\n{}", "y".repeat(10_000));
+        let e = build_from(&Source::from_text(text, "big.toml", "."), &[]).unwrap_err().to_string();
+        assert!(e.starts_with("big.toml: malformed TOML at line 2, column "), "{e}");
+        assert!(e.contains("`[lens`"), "{e}");
+        assert!(e.len() < 300, "{e}");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 512, ..Default::default() })]
+
+        /// Any finite value of any numeric key, by --set, loads or is refused with a message
+        /// naming the key: never a panic. (Magnitudes from 1e-300 to 1e300: robustness, not physics.)
+        #[test]
+        fn any_finite_value_loads_or_names_its_key(
+            index in 0usize..NUMERIC_KEYS.len(),
+            mantissa in -10.0f64..10.0,
+            exponent in -300i32..300,
+        ) {
+            let key = NUMERIC_KEYS[index];
+            let value = mantissa * 10f64.powi(exponent);
+            let paper = Source::from_text(PAPER_SCENE, "p", ".");
+            let set = format!("{key}={value:e}");
+            match build_with_warnings(&paper, std::slice::from_ref(&set)) {
+                Ok(loaded) => {
+                    for w in &loaded.warnings {
+                        proptest::prop_assert!(w.key == key, "{w}");
+                    }
+                }
+                Err(e) => {
+                    let m = e.to_string();
+                    proptest::prop_assert!(m.contains(key) || m.contains("[lens]") || m.contains("[camera]") || m.contains("[spectrum]"), "{set}: {m}");
+                }
+            }
+        }
+    }
+
+    const NUMERIC_KEYS: [&str; 24] = [
+        "lens.f_number",
+        "lens.focal_length_mm",
+        "lens.design_wavelength_nm",
+        "lens.efficiency",
+        "lens.transmission",
+        "lens.iris_decentre_x",
+        "lens.obscuration",
+        "lens.spherical_um",
+        "lens.coma_um",
+        "source.radiance_w_m2_sr_nm",
+        "spectrum.center_nm",
+        "spectrum.range_nm",
+        "spectrum.peak",
+        "camera.pixel_pitch_um",
+        "camera.quantum_efficiency",
+        "camera.read_noise_e",
+        "camera.dark_current_e_per_s",
+        "camera.full_well_e",
+        "exposure.time_ms",
+        "options.fraunhofer_threshold_mm",
+        "options.fraunhofer_max_fraction",
+        "options.tolerance",
+        "field.x_deg",
+        "field.y_deg",
+    ];
 }

@@ -2,17 +2,25 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, bail};
 use radiometry::Sampled;
 
-/// Reads a table of `wavelength_nm, value` rows; `#` starts a comment, and a first row that is
-/// not numeric is taken as a header. Wavelengths must increase strictly; values must lie in
-/// `[lo, hi]` (`what` names them in messages).
-pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled> {
-    let shown = path.display();
+use crate::error::{Error, shorten};
+
+/// Reads a table of `wavelength_nm, value` rows: the rules of [`read_pairs`], wavelengths
+/// converted to m.
+pub fn read_table(path: &Path, lo: f64, hi: f64, what: &str) -> Result<Sampled, Error> {
     let (wavelengths, values) = read_pairs(path, &WAVELENGTH, lo, hi, what)?;
-    let metres = wavelengths.iter().map(|wl| wl * 1e-9).collect();
-    Sampled::new(metres, values).with_context(|| format!("{shown}: invalid table"))
+    sampled(path, &wavelengths, values)
+}
+
+/// The table read from `path` as a [`Sampled`] spectrum, wavelengths from nm to m.
+pub(crate) fn sampled(path: &Path, wavelengths_nm: &[f64], values: Vec<f64>) -> Result<Sampled, Error> {
+    let metres = wavelengths_nm.iter().map(|wl| wl * 1e-9).collect();
+    Sampled::new(metres, values).map_err(|e| Error::Csv {
+        file: path.display().to_string(),
+        line: None,
+        message: format!("invalid table: {e}"),
+    })
 }
 
 /// The first column of a two-column table: its name and unit in messages, and whether 0 is
@@ -32,11 +40,74 @@ pub const WAVELENGTH: Axis = Axis { name: "wavelength", unit: "nm", zero_allowed
 /// Spatial frequencies in cycles/mm, ≥ 0.
 pub const FREQUENCY: Axis = Axis { name: "frequency", unit: "cyc_per_mm", zero_allowed: true };
 
-/// Reads a table of `x, value` rows as typed (`axis` units): the rules of [`read_table`].
-pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Result<(Vec<f64>, Vec<f64>)> {
-    let shown = path.display();
+/// Reads a UTF-8 text file (`what` names it in messages: "scene file", "CSV file"); a leading
+/// byte-order mark is dropped, a file with a NUL or non-UTF-8 byte is refused as not text.
+/// Files longer than this are refused unread (a scene is a few kB, a spectral table at most a
+/// few MB): `/dev/zero` or a disk image given by mistake must not fill the memory.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
+pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Error> {
+    use std::io::Read as _;
+    let shown = || path.display().to_string();
+    let io = |cause| Error::Read { what, path: shown(), cause };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path).and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)).map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(Error::TooLarge { what, path: shown(), limit: MAX_FILE_BYTES });
+    }
+    let len = bytes.len();
+    let text = String::from_utf8(bytes).map_err(|e| Error::NotText {
+        what,
+        path: shown(),
+        offset: e.utf8_error().valid_up_to(),
+        len,
+    })?;
+    if let Some(offset) = text.find('\0') {
+        return Err(Error::NotText { what, path: shown(), offset, len });
+    }
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_owned(),
+        None => text,
+    })
+}
+
+/// Whether a CSV field reads as a number, or starts like one (`0.1S`, `800nm`): such a field
+/// makes its row data, never a header.
+fn numeric_looking(field: &str) -> bool {
+    field.parse::<f64>().is_ok() || field.starts_with(|c: char| c.is_ascii_digit() || "+-.".contains(c))
+}
+
+/// The unit a header's first field names, when it is one of the length units a wavelength
+/// column might be given in (`wavelength_um`, `lambda (µm)`, `wl[nm]`).
+fn header_length_unit(field: &str) -> Option<&'static str> {
+    let lower = field.to_lowercase();
+    let tokens: Vec<&str> =
+        lower.split(|c: char| !(c.is_alphanumeric() || c == 'µ' || c == 'å')).filter(|t| !t.is_empty()).collect();
+    let last = tokens.last().copied()?;
+    if tokens.len() < 2 && !lower.contains(['(', '[']) {
+        return None; // a bare word such as "nm" or "um" alone is taken as the unit only in a compound
+    }
+    Some(match last {
+        "nm" | "nanometer" | "nanometers" | "nanometre" | "nanometres" => "nm",
+        "um" | "µm" | "micron" | "microns" | "micrometer" | "micrometers" | "micrometre" | "micrometres" => "µm",
+        "mm" => "mm",
+        "m" | "meter" | "meters" | "metre" | "metres" => "m",
+        "pm" => "pm",
+        "a" | "å" | "angstrom" | "angstroms" => "Å",
+        _ => return None,
+    })
+}
+
+/// Reads a table of `x, value` rows as typed (`axis` units). `#` starts a comment line; the
+/// first row is a header only if none of its fields is or starts like a number
+/// (`wavelength_nm,value`): `700,nan` or `700,0.1S` is data and an error. A wavelength header
+/// that names another unit (`wavelength_um`) is refused rather than read as nm. The `x` must
+/// increase strictly; values must be finite and lie in `[lo, hi]` (`what` names them).
+pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    let file = path.display().to_string();
     let (name, unit) = (axis.name, axis.unit);
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read the CSV file {shown}"))?;
+    let err = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
+    let text = read_text(path, "CSV file")?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))
@@ -45,44 +116,161 @@ pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Res
         .from_reader(text.as_bytes());
     // the first column kept as typed (the caller converts units)
     let (mut xs, mut values): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+    let mut first = true;
     for (index, record) in reader.records().enumerate() {
-        let record = record.with_context(|| format!("{shown}: malformed CSV"))?;
-        let line = record.position().map_or(index as u64 + 1, |p| p.line());
-        if record.iter().all(|f| f.is_empty()) {
+        let record = record.map_err(|e| {
+            let line = e.position().map(csv::Position::line);
+            err(line, format!("malformed CSV: {}", shorten(&e.to_string())))
+        })?;
+        let line = record.position().map_or(index as u64 + 1, csv::Position::line);
+        if record.iter().all(str::is_empty) {
             continue;
         }
-        if record.len() != 2 {
-            bail!("{shown}: line {line}: {} columns; expected two: {name}_{unit}, value", record.len());
-        }
-        let parse = |field: &str| field.parse::<f64>().ok().filter(|v| v.is_finite());
-        match (parse(&record[0]), parse(&record[1])) {
-            (Some(x), Some(v)) => {
-                if x < 0.0 || (x == 0.0 && !axis.zero_allowed) {
-                    let bound = if axis.zero_allowed { "≥ 0" } else { "> 0" };
-                    bail!("{shown}: line {line}: {name} {x} {unit}; expected a {name} {bound} {unit}");
-                }
-                if let Some(&prev) = xs.last()
-                    && x <= prev
-                {
-                    bail!(
-                        "{shown}: line {line}: {name} {x} {unit} does not exceed the previous {prev} {unit}; {name}s must increase strictly"
-                    );
-                }
-                if !(lo..=hi).contains(&v) {
-                    bail!("{shown}: line {line}: {what} {v} is out of range; expected [{lo}, {hi}]");
-                }
-                xs.push(x);
-                values.push(v);
+        let row = || shorten(&record.iter().collect::<Vec<_>>().join(","));
+        if record.len() == 1 {
+            let field = &record[0];
+            let separator =
+                [(';', "';'"), ('\t', "tab"), (' ', "spaces")].into_iter().find(|(c, _)| field.contains(*c));
+            if let Some((_, separator)) = separator {
+                return Err(err(
+                    Some(line),
+                    format!("`{}` is separated by {separator}; expected comma-separated `{name}_{unit}, value`", row()),
+                ));
             }
-            _ if xs.is_empty() && index == 0 => {} // header row
-            _ => bail!(
-                "{shown}: line {line}: `{}` is not a pair of finite numbers; expected {name}_{unit}, value",
-                record.iter().collect::<Vec<_>>().join(",")
-            ),
         }
+        if record.iter().any(|f| f.contains(';')) {
+            return Err(err(
+                Some(line),
+                format!(
+                    "`{}` contains ';' (a semicolon-separated table, decimal commas?); expected comma-separated `{name}_{unit}, value` with decimal points",
+                    row()
+                ),
+            ));
+        }
+        if record.len() != 2 {
+            return Err(err(
+                Some(line),
+                format!("`{}`: {} columns; expected two: {name}_{unit}, value", row(), record.len()),
+            ));
+        }
+        let is_header = first && !record.iter().any(numeric_looking);
+        first = false;
+        if is_header {
+            if axis.unit == "nm"
+                && let Some(other) = header_length_unit(&record[0])
+                && other != "nm"
+            {
+                return Err(err(
+                    Some(line),
+                    format!(
+                        "the header `{}` gives the {name} in {other}; expected the {name} in nm (convert the column, header `{name}_nm`)",
+                        row()
+                    ),
+                ));
+            }
+            continue;
+        }
+        let parse = |field: &str| -> Result<f64, Error> {
+            match field.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                Ok(_) => Err(err(
+                    Some(line),
+                    format!(
+                        "`{}` is not a pair of finite numbers: `{}` is not finite; expected {name}_{unit}, value",
+                        row(),
+                        shorten(field)
+                    ),
+                )),
+                Err(_) => Err(err(
+                    Some(line),
+                    format!(
+                        "`{}` is not a pair of finite numbers: `{}` is not a number; expected {name}_{unit}, value",
+                        row(),
+                        shorten(field)
+                    ),
+                )),
+            }
+        };
+        let (x, v) = (parse(&record[0])?, parse(&record[1])?);
+        if x < 0.0 || (x == 0.0 && !axis.zero_allowed) {
+            let bound = if axis.zero_allowed { "≥ 0" } else { "> 0" };
+            return Err(err(Some(line), format!("{name} {x} {unit}; expected a {name} {bound} {unit}")));
+        }
+        if let Some(&prev) = xs.last()
+            && x <= prev
+        {
+            return Err(err(
+                Some(line),
+                format!("{name} {x} {unit} does not exceed the previous {prev} {unit}; {name}s must increase strictly"),
+            ));
+        }
+        if !(lo..=hi).contains(&v) {
+            return Err(err(Some(line), format!("{what} {v} is out of range; expected [{lo}, {hi}]")));
+        }
+        xs.push(x);
+        values.push(v);
     }
     if xs.len() < 2 {
-        bail!("{shown}: {} data rows; expected at least two rows of {name}_{unit}, value", xs.len());
+        return Err(err(None, format!("{} data rows; expected at least two rows of {name}_{unit}, value", xs.len())));
     }
     Ok((xs, values))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(name: &str, text: &[u8]) -> Result<(Vec<f64>, Vec<f64>), Error> {
+        let dir = std::env::temp_dir().join(format!("scene-tables-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        read_pairs(&path, &WAVELENGTH, 0.0, 1.0, "efficiency")
+    }
+
+    /// A first row that starts with a number is data: `nan` or `0.1S` there is an error naming
+    /// the line and the value, not a header silently dropped (it was, before).
+    #[test]
+    fn a_numeric_first_row_is_data_not_a_header() {
+        for (name, text, bad) in [
+            ("nan.csv", "700,nan\n800,0.1\n900,0.1\n", "`nan` is not finite"),
+            ("unit.csv", "700,0.1S\n800,0.1\n900,0.1\n", "`0.1S` is not a number"),
+        ] {
+            let e = table(name, text.as_bytes()).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains("line 1: ") && e.contains(bad), "{e}");
+        }
+        let (xs, _) = table("header.csv", b"wavelength_nm,value\n700,0.1\n800,0.2\n").unwrap();
+        assert_eq!(xs, vec![700.0, 800.0]);
+        let (xs, _) = table("bom.csv", "\u{feff}700,0.1\n800,0.2\n".as_bytes()).unwrap();
+        assert_eq!(xs, vec![700.0, 800.0], "a byte-order mark must not turn the first row into a header");
+    }
+
+    #[test]
+    fn other_separators_are_named() {
+        for (name, text, sep) in [
+            ("semi.csv", "wavelength_nm;value\n700;0.1\n800;0.2\n", "separated by ';'"),
+            ("tab.csv", "700\t0.1\n800\t0.2\n", "separated by tab"),
+            ("decimal-comma.csv", "700;0,1\n800;0,2\n", "contains ';'"),
+        ] {
+            let e = table(name, text.as_bytes()).unwrap_err().to_string();
+            assert!(e.contains(sep) && e.contains("expected comma-separated `wavelength_nm, value`"), "{e}");
+            assert!(e.contains("line 1"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_header_in_another_unit_is_refused() {
+        let e = table("um.csv", b"wavelength_um,value\n0.7,0.1\n0.8,0.2\n").unwrap_err().to_string();
+        assert!(e.contains("gives the wavelength in µm; expected the wavelength in nm"), "{e}");
+        assert!(table("nm.csv", b"lambda (nm),value\n700,0.1\n800,0.2\n").is_ok());
+    }
+
+    #[test]
+    fn binary_and_long_rows_give_short_messages() {
+        let e = table("bin.csv", b"700,0.1\n\xff\xfe\x00\x01").unwrap_err().to_string();
+        assert!(e.contains("not a text file") && e.contains("byte 8"), "{e}");
+        let long = format!("700,{}\n", "9".repeat(1_000_000) + "x");
+        let e = table("long.csv", long.as_bytes()).unwrap_err().to_string();
+        assert!(e.len() < 400 && e.contains("bytes)"), "{} bytes: {}", e.len(), &e[..e.len().min(400)]);
+    }
 }

@@ -1,0 +1,242 @@
+//! The scene as read, written back as TOML with every default filled in (`asnr scene`).
+//!
+//! Numbers are written as they were read (shortest round-trip form, in the scene's units), so
+//! the text loads again to the same scene; CSV paths are written resolved (absolute), so it
+//! loads from any folder. Defaults come from the library ([`metric::Options::default`],
+//! [`noise::Sensor::ideal`]), not from numbers typed here.
+
+use std::fmt::Write as _;
+
+use metric::{GlareMode, MetricForm, Options};
+
+use crate::error::{Error, shorten};
+use crate::load::{NumberOrFile, Origins, RawScene};
+
+struct Out {
+    text: String,
+}
+
+impl Out {
+    fn line(&mut self, line: &str) {
+        self.text.push_str(line);
+        self.text.push('\n');
+    }
+
+    fn table(&mut self, name: &str) {
+        let _ = write!(self.text, "\n[{name}]\n");
+    }
+
+    fn value(&mut self, key: &str, value: &str) {
+        let _ = writeln!(self.text, "{key} = {value}");
+    }
+
+    fn number(&mut self, key: &str, v: f64) {
+        self.value(key, &float(v));
+    }
+
+    fn string(&mut self, key: &str, s: &str) {
+        self.value(key, &toml::Value::String(s.to_owned()).to_string());
+    }
+}
+
+/// A TOML float that parses back to the same `f64` (`0.25`, `5.0`, `1e-6`, `inf`).
+fn float(v: f64) -> String {
+    if v.is_infinite() {
+        return if v > 0.0 { "inf".to_owned() } else { "-inf".to_owned() };
+    }
+    format!("{v:?}")
+}
+
+/// The shortest decimal `d` with `d × to_si == si` (a default held in SI, written in the
+/// scene's unit, e.g. 0.25e-3 m as 0.25 mm).
+fn in_unit(si: f64, to_si: f64) -> f64 {
+    for digits in 0..17 {
+        if let Ok(d) = format!("{:.digits$e}", si / to_si).parse::<f64>()
+            && d * to_si == si
+        {
+            return d;
+        }
+    }
+    si / to_si
+}
+
+/// A CSV path as the loader resolves it, made absolute so the text loads from any folder.
+fn path(o: &Origins, key: &str, file: &str) -> Result<String, Error> {
+    let resolved = o.path(file);
+    let resolved = std::path::absolute(&resolved).unwrap_or(resolved);
+    resolved.to_str().map(str::to_owned).ok_or_else(|| Error::Value {
+        origin: o.file.clone(),
+        key: key.to_owned(),
+        value: format!("\"{}\"", shorten(&resolved.to_string_lossy())),
+        expected: "a path that is valid UTF-8 (to be written as TOML)".to_owned(),
+    })
+}
+
+fn curve(out: &mut Out, o: &Origins, key: &str, value: &NumberOrFile) -> Result<(), Error> {
+    match value {
+        NumberOrFile::Number(v) => out.number(key, *v),
+        NumberOrFile::File(f) => out.string(key, &path(o, &format!("lens.{key}"), f)?),
+    }
+    Ok(())
+}
+
+/// The resolved TOML of an already validated scene.
+pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
+    let mut out = Out { text: String::new() };
+    out.line("# The scene as read (asnr scene): every default filled in, CSV paths resolved.");
+    out.line(&format!("# From: {}", shorten(&o.file)));
+    for arg in o.overrides.values() {
+        out.line(&format!("#   --set {}", shorten(arg)));
+    }
+    if let Some(title) = &raw.title {
+        out.string("title", title);
+    }
+
+    let l = &raw.lens;
+    out.table("lens");
+    out.string("model", l.model.as_deref().unwrap_or("chromatic"));
+    out.number("f_number", l.f_number);
+    out.number("focal_length_mm", l.focal_length_mm);
+    out.number("design_wavelength_nm", l.design_wavelength_nm);
+    curve(&mut out, o, "efficiency", &l.efficiency)?;
+    match &l.transmission {
+        Some(t) => curve(&mut out, o, "transmission", t)?,
+        None => {
+            out.line("# transmission not given: the efficiency (no stray light)");
+            curve(&mut out, o, "transmission", &l.efficiency)?;
+        }
+    }
+    out.number("iris_decentre_x", l.iris_decentre_x.unwrap_or(0.0));
+    out.number("iris_decentre_y", l.iris_decentre_y.unwrap_or(0.0));
+    out.number("obscuration", l.obscuration.unwrap_or(0.0));
+    match l.sector_deg {
+        Some([a, b]) => out.value("sector_deg", &format!("[{}, {}]", float(a), float(b))),
+        None => out.line("# sector_deg not given: the full circle"),
+    }
+    for (key, v) in [
+        ("spherical_um", l.spherical_um),
+        ("coma_um", l.coma_um),
+        ("astigmatism_um", l.astigmatism_um),
+        ("field_curvature_um", l.field_curvature_um),
+    ] {
+        out.number(key, v.unwrap_or(0.0));
+    }
+
+    let s = &raw.source;
+    out.table("source");
+    out.string("kind", &s.kind);
+    match s.kind.as_str() {
+        "flat" => out.number("radiance_w_m2_sr_nm", s.radiance_w_m2_sr_nm.unwrap_or_default()),
+        "blackbody" => {
+            out.number("temperature_k", s.temperature_k.unwrap_or_default());
+            out.number("scale", s.scale.unwrap_or(1.0));
+        }
+        _ => out.string("csv", &path(o, "source.csv", s.csv.as_deref().unwrap_or_default())?),
+    }
+
+    out.table("spectrum");
+    match &raw.spectrum {
+        None => {
+            out.line("# [spectrum] not given: no filter");
+            out.string("shape", "none");
+        }
+        Some(sp) => {
+            out.string("shape", &sp.shape);
+            match sp.shape.as_str() {
+                "table" => out.string("csv", &path(o, "spectrum.csv", sp.csv.as_deref().unwrap_or_default())?),
+                "none" => {}
+                _ => {
+                    out.number("center_nm", sp.center_nm.unwrap_or_default());
+                    out.number("range_nm", sp.range_nm.unwrap_or_default());
+                    out.number("peak", sp.peak.unwrap_or(1.0));
+                }
+            }
+        }
+    }
+
+    let c = &raw.camera;
+    let ideal = noise::Sensor::ideal();
+    out.table("camera");
+    out.number("pixel_pitch_um", c.pixel_pitch_um);
+    out.value("pixel_mtf", &c.pixel_mtf.to_string());
+    match &c.quantum_efficiency {
+        NumberOrFile::Number(v) => out.number("quantum_efficiency", *v),
+        NumberOrFile::File(f) => out.string("quantum_efficiency", &path(o, "camera.quantum_efficiency", f)?),
+    }
+    out.number("read_noise_e", c.read_noise_e.unwrap_or(ideal.read_noise_e()));
+    out.number("dark_current_e_per_s", c.dark_current_e_per_s.unwrap_or(ideal.dark_current_e_per_s()));
+    out.number("full_well_e", c.full_well_e.unwrap_or(ideal.full_well_e()));
+    match (c.gain_dn_per_e, c.adc_bits) {
+        (Some(k), Some(bits)) => {
+            out.number("gain_dn_per_e", k);
+            out.value("adc_bits", &bits.to_string());
+        }
+        _ => out.line("# gain_dn_per_e, adc_bits not given: no ADC quantization"),
+    }
+    match &c.noise_spectrum {
+        Some(f) => out.string("noise_spectrum", &path(o, "camera.noise_spectrum", f)?),
+        None => out.line("# noise_spectrum not given: white noise"),
+    }
+
+    out.table("exposure");
+    out.number("time_ms", raw.exposure.time_ms);
+
+    let defaults = Options::default();
+    let opt = raw.options.as_ref();
+    out.table("options");
+    let form = match defaults.form {
+        MetricForm::Mean => "mean",
+        MetricForm::Integral => "integral",
+    };
+    out.string("form", opt.and_then(|p| p.form.as_deref()).unwrap_or(form));
+    out.number(
+        "fraunhofer_threshold_mm",
+        opt.and_then(|p| p.fraunhofer_threshold_mm).unwrap_or_else(|| in_unit(defaults.fraunhofer_threshold, 1e-3)),
+    );
+    out.number(
+        "fraunhofer_max_fraction",
+        opt.and_then(|p| p.fraunhofer_max_fraction).unwrap_or(defaults.fraunhofer_max_fraction),
+    );
+    let samples = opt.and_then(|p| p.pupil_samples).map_or(defaults.pupil_samples.to_string(), |v| v.to_string());
+    out.value("pupil_samples", &samples);
+    let glare = match defaults.glare {
+        GlareMode::FirstOrder => "first_order",
+        GlareMode::Included => "included",
+    };
+    out.string("glare", opt.and_then(|p| p.glare.as_deref()).unwrap_or(glare));
+    out.number("tolerance", opt.and_then(|p| p.tolerance).unwrap_or(defaults.tolerance));
+
+    match (&raw.field, &raw.fields) {
+        (_, Some(list)) => {
+            for f in list {
+                out.text.push_str("\n[[fields]]\n");
+                out.number("x_deg", f.x_deg.unwrap_or(0.0));
+                out.number("y_deg", f.y_deg.unwrap_or(0.0));
+                out.number("weight", f.weight.unwrap_or(1.0));
+            }
+        }
+        (f, None) => {
+            out.table("field");
+            out.number("x_deg", f.as_ref().and_then(|f| f.x_deg).unwrap_or(0.0));
+            out.number("y_deg", f.as_ref().and_then(|f| f.y_deg).unwrap_or(0.0));
+        }
+    }
+    Ok(out.text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_in_the_scene_unit_round_trip() {
+        let d = Options::default();
+        let mm = in_unit(d.fraunhofer_threshold, 1e-3);
+        assert_eq!(mm, 0.25);
+        assert_eq!(mm * 1e-3, d.fraunhofer_threshold);
+        for v in [0.25, 5.2, 1e-6, 3.36, 1e300, 0.1 + 0.2] {
+            assert_eq!(float(v).parse::<f64>().unwrap(), v);
+        }
+        assert_eq!(float(f64::INFINITY), "inf");
+    }
+}
