@@ -46,6 +46,10 @@ use crate::{Error, quad};
 /// cost: the widest kept wavelength sets the largest defocus, and the work grows as its cube.
 pub const GAUSSIAN_HALF_WIDTH_SIGMAS: f64 = 7.0;
 
+/// The most initial frequency panels of one interval (the adaptive rule bisects further where
+/// needed): a bound, so that no finite input asks for more panels than memory and time allow.
+const MAX_PANELS: f64 = (1 << 20) as f64;
+
 /// Pupil samples across the diameter on the FFT path: the mean MTF of a defocused circle is then
 /// within 2.5e-5 of the exact path (`fft` module convergence table; 1e-4 needs N ≥ 128).
 pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
@@ -715,11 +719,30 @@ impl<'a> Polychromatic<'a> {
     /// reaching its cutoff.
     fn frequency_cuts(&self) -> Vec<f64> {
         let mut cuts = vec![0.0, self.max_frequency];
-        if self.closed.is_some() {
-            // the closed form is exact across the spectrum: no panel edges, no kinks
+        if let Some(closed) = &self.closed {
+            // the closed form is exact across the spectrum: no panel edges, no kinks; but where
+            // the cutoffs 1/(λ F#) of the Gaussian's centre and flanks lie below max_frequency, the
+            // OTF is non-zero on a small part of the range only, which one panel's nodes can miss
+            // entirely (F/1e4: cutoff at 1/770 of Nyquist): cut there
+            let (mu, sigma) = (closed.center(), closed.sigma());
+            for k in 0..=GAUSSIAN_HALF_WIDTH_SIGMAS as usize {
+                let lambda = mu - k as f64 * sigma;
+                let nu = 1.0 / (lambda * self.f_number);
+                if lambda > 0.0 && nu < self.max_frequency {
+                    cuts.push(nu);
+                }
+            }
+            // and where the OTF vanishes altogether (the averages' shortest wavelength)
+            if self.max_cutoff() < self.max_frequency {
+                cuts.push(self.max_cutoff());
+            }
+            cuts.sort_by(f64::total_cmp);
+            cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * a.abs().max(b.abs()));
             return cuts;
         }
-        // panel edges, or the one wavelength of a line, reaching their cutoffs
+        // panel edges, or the one wavelength of a line, reaching their cutoffs (merged when within
+        // 1e-12 of each other, relative to themselves: a 1e-206 m pixel puts Nyquist 1e200 times
+        // above them)
         let ends = self.panels.iter().flat_map(|p| [p.lo, p.hi]);
         for lambda in ends.chain(self.line()) {
             if lambda > 0.0 {
@@ -730,7 +753,7 @@ impl<'a> Polychromatic<'a> {
             }
         }
         cuts.sort_by(f64::total_cmp);
-        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * self.max_frequency);
+        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * a.abs().max(b.abs()));
         cuts
     }
 
@@ -829,7 +852,13 @@ impl<'a> Polychromatic<'a> {
             // at least 4 panels over the whole range, not per interval between cutoff cuts
             // (2 on the closed-form engine, whose OTF has no kinks)
             let floor = (min_panels * (b - a) / self.max_frequency).ceil();
-            let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).max(1.0) as usize;
+            // beyond the highest cutoff the OTF is zero: one panel (a range up to 1e199 cycles/m
+            // past it, from a 1e-206 m pixel, would otherwise ask for more panels than exist)
+            let n = if a >= self.max_cutoff() {
+                1
+            } else {
+                ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).clamp(1.0, MAX_PANELS) as usize
+            };
             let h = (b - a) / n as f64;
             let mut left = (a, value(a));
             work.otf_evaluations += 1;
