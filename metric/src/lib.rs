@@ -62,7 +62,7 @@ pub enum Error {
     },
     /// The scene detects no light: the radiance and the quantum efficiency do not overlap, or
     /// their product is zero.
-    #[error("no signal: {reason}; no light is detected")]
+    #[error("no detected signal: {reason}")]
     NoLight {
         /// Which spectra, and their ranges in nm.
         reason: String,

@@ -308,7 +308,9 @@ fn check_light(radiance: &Spectrum, camera: &Camera) -> Result<(), Error> {
     let mut factors = Vec::new();
     bounded_factors(radiance, "the radiance reaching the lens (source × spectrum filter)", &mut factors);
     bounded_factors(camera.quantum_efficiency(), "the quantum efficiency (camera.quantum_efficiency)", &mut factors);
-    let nm = |(name, lo, hi): (&str, f64, f64)| format!("{name} covers {:.6}–{:.6} nm", lo * 1e9, hi * 1e9);
+    let nm = |(name, lo, hi): (&str, f64, f64)| {
+        format!("{name} covers {}–{} nm", optics::round_for_display(lo * 1e9), optics::round_for_display(hi * 1e9))
+    };
     for (i, &a) in factors.iter().enumerate() {
         for &b in &factors[i + 1..] {
             if a.1.max(b.1) >= a.2.min(b.2) {
