@@ -268,7 +268,7 @@ fn with_explain(report: &str, explain: &str) -> Result<String> {
     let body = report.trim_end().strip_suffix('}').map(str::trim_end);
     let Some(body) = body else { anyhow::bail!("internal error: the JSON report is not an object") };
     let lines: Vec<String> =
-        explain.lines().filter(|l| !l.trim().is_empty()).map(|l| serde_json::to_string(l)).collect::<Result<_, _>>()?;
+        explain.lines().filter(|l| !l.trim().is_empty()).map(serde_json::to_string).collect::<Result<_, _>>()?;
     let out = format!("{body},\n  \"explain\": [\n    {}\n  ]\n}}", lines.join(",\n    "));
     serde_json::from_str::<serde_json::Value>(&out)?;
     Ok(out)

@@ -210,7 +210,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             "the detected spectral integral ∫ L η λ τ1 dλ",
             format!("the radiance (source.radiance_w_m2_sr_nm, source.scale or the source table) is too large: it exceeds {:e}", f64::MAX),
         ),
-        optics::Error::NoSignal { total } if total == 0.0 => Error::NoLight {
+        optics::Error::NoSignal { total: 0.0 } => Error::NoLight {
             reason: "the lens transmits nothing into its imaging order where light is detected (lens.efficiency \
                      is zero there)"
                 .to_owned(),
@@ -228,9 +228,10 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             ),
         ));
     }
-    // the MTF integration resolves a bounded number of defocus waves (docs/physics.md, "Numerics")
+    // the MTF integration resolves a bounded number of defocus waves (far beyond the Fraunhofer
+    // validity of paper SI eq. S15)
     let waves = poly.max_defocus() / mean_wavelength;
-    if !(waves <= MAX_DEFOCUS_WAVES) {
+    if waves.is_nan() || waves > MAX_DEFOCUS_WAVES {
         return Err(Error::Defocus {
             waves,
             w020_m: poly.max_defocus(),

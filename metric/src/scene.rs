@@ -301,7 +301,7 @@ fn bounded_factors(spectrum: &Spectrum, name: &'static str, out: &mut Vec<(&'sta
 }
 
 /// Refuses a scene that detects no light before any optics is computed: bounded factors of the
-/// radiance and of the quantum efficiency that do not overlap (docs/physics.md, "The metric":
+/// radiance and of the quantum efficiency that do not overlap (paper SI eq. S8:
 /// the detected spectrum is `L(λ) η(λ) λ`, zero outside the overlap), or a detected spectrum
 /// that is zero everywhere (a zero quantum efficiency, radiance or filter peak).
 fn check_light(radiance: &Spectrum, camera: &Camera) -> Result<(), Error> {
