@@ -150,15 +150,18 @@ fn run(cli: Cli) -> Result<()> {
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             output::check_finite(&result)?;
             if json {
-                println!("{}", output::json(&label, &loaded, &result)?);
+                let report = output::json(&label, &loaded, &result)?;
+                // with --json, stdout stays one JSON document: the explanation is its `explain` field
+                let report = if explain { with_explain(&report, &output::explain(&loaded, &result))? } else { report };
+                println!("{report}");
             } else {
                 print!("{}", output::table(&label, &loaded, &result));
                 for w in &result.warnings {
                     eprintln!("warning: {w}");
                 }
-            }
-            if explain {
-                print!("{}", output::explain(&loaded, &result));
+                if explain {
+                    print!("{}", output::explain(&loaded, &result));
+                }
             }
             Ok(())
         }
@@ -168,13 +171,14 @@ fn run(cli: Cli) -> Result<()> {
             }
             let set = with_tolerance(set, tolerance);
             let range = optimize::parse_range(&over, false)?;
+            check_over_keys(&set, std::slice::from_ref(&range))?;
             // validate the scene (and print its warnings) once, at the low end of the range
             let mut first = set.clone();
-            first.push(format!("{}={}", range.key, range.lo));
+            first.push(optimize::assignment(&range.key, range.lo));
             load(scene.as_deref(), &first)?;
             let asnr_at = |x: f64| -> Result<f64> {
                 let mut overrides = set.clone();
-                overrides.push(format!("{}={x}", range.key));
+                overrides.push(optimize::assignment(&range.key, x));
                 let loaded = scene::load(scene.as_deref(), &overrides)?;
                 Ok(metric::evaluate(&loaded)?.asnr)
             };
@@ -193,15 +197,29 @@ fn run(cli: Cli) -> Result<()> {
             let figure = plot::Figure::new(width, dpi)?;
             let set = with_tolerance(set, tolerance);
             let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
-            let total: usize = ranges.iter().map(|r| r.points.unwrap_or(1)).product();
-            if total > 10_000_000 {
-                anyhow::bail!("--over: {total} grid points; expected at most 10000000");
+            check_over_keys(&set, &ranges)?;
+            // the product of the axes, checked: four axes of 65536 points wrap a usize to 0
+            let total = ranges.iter().try_fold(1_usize, |n, r| n.checked_mul(r.points.unwrap_or(1)));
+            if total.is_none_or(|t| t > MAX_GRID_POINTS) {
+                let product: f64 = ranges.iter().map(|r| r.points.unwrap_or(1) as f64).product();
+                let axes: Vec<String> = ranges.iter().map(|r| r.points.unwrap_or(1).to_string()).collect();
+                anyhow::bail!(
+                    "--over: {} = {product:e} grid points; expected at most {MAX_GRID_POINTS}",
+                    axes.join(" × ")
+                );
+            }
+            let max_threads = max_threads();
+            if threads > max_threads {
+                anyhow::bail!(
+                    "--threads {threads}: expected 0 (all cores) to {max_threads} (4 × the {} available cores)",
+                    max_threads / 4
+                );
             }
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;
             // validate the scene and the keys once before spending the grid
             let mut first = set.clone();
-            first.extend(ranges.iter().map(|r| format!("{}={}", r.key, r.lo)));
+            first.extend(ranges.iter().map(|r| optimize::assignment(&r.key, r.lo)));
             let loaded = scene::build_with_warnings(&source, &first)?;
             warn(&loaded.warnings);
             let built = loaded.scene;
@@ -272,6 +290,45 @@ fn warn(warnings: &[scene::Warning]) {
     for w in warnings {
         eprintln!("warning: {w}");
     }
+}
+
+/// The most grid points a sweep evaluates.
+const MAX_GRID_POINTS: usize = 10_000_000;
+
+/// The most sweep worker threads: 4 × the available cores (more only add contention).
+fn max_threads() -> usize {
+    4 * std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+}
+
+/// Refuses a key given twice to `--over`, or given to both `--set` (or `--tolerance`, which is
+/// `options.tolerance`) and `--over`: one value of it would silently be ignored.
+fn check_over_keys(set: &[String], ranges: &[optimize::Range]) -> Result<()> {
+    for (i, r) in ranges.iter().enumerate() {
+        if ranges[..i].iter().any(|earlier| earlier.key == r.key) {
+            anyhow::bail!("--over {}: the key is given to --over twice; give each key once", r.key);
+        }
+        if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == r.key)) {
+            let given =
+                if r.key == "options.tolerance" { format!("--set {s} or --tolerance") } else { format!("--set {s}") };
+            anyhow::bail!(
+                "--over {}: the key is also given by {given}; --over would override it: give it in one place",
+                r.key
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The JSON object `report` with the `--explain` text as a last field `explain`, one string
+/// per line.
+fn with_explain(report: &str, explain: &str) -> Result<String> {
+    let body = report.trim_end().strip_suffix('}').map(str::trim_end);
+    let Some(body) = body else { anyhow::bail!("internal error: the JSON report is not an object") };
+    let lines: Vec<String> =
+        explain.lines().filter(|l| !l.trim().is_empty()).map(serde_json::to_string).collect::<Result<_, _>>()?;
+    let out = format!("{body},\n  \"explain\": [\n    {}\n  ]\n}}", lines.join(",\n    "));
+    serde_json::from_str::<serde_json::Value>(&out)?;
+    Ok(out)
 }
 
 /// `--tolerance REL` as the override `options.tolerance=REL` (validated with the scene).

@@ -67,7 +67,7 @@ pub fn run(source: &Source, overrides: &[String], ranges: &[Range], threads: usi
     let evaluate = |values: &Vec<f64>| -> Result<Point> {
         let mut set = overrides.to_vec();
         for (range, v) in ranges.iter().zip(values) {
-            set.push(format!("{}={v}", range.key));
+            set.push(crate::optimize::assignment(&range.key, *v));
         }
         let scene = scene::build_from(source, &set)?;
         let r = metric::evaluate(&scene).map_err(|e| anyhow!("{}: {e}", source.label()))?;

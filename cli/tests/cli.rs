@@ -24,7 +24,9 @@ fn fails(args: &[&str]) -> String {
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "args {args:?}: expected exit 1, stderr: {err}");
     assert!(!err.contains("panicked"), "args {args:?} panicked: {err}");
-    assert!(err.starts_with("error: "), "args {args:?}: {err}");
+    // the error message, after any plausibility warnings about the values (unit slips)
+    let error = err.find("error: ").unwrap_or_else(|| panic!("args {args:?}: no error message: {err}"));
+    assert!(err[..error].lines().all(|l| l.starts_with("warning: ")), "args {args:?}: {err}");
     err
 }
 
@@ -1060,4 +1062,70 @@ fn a_key_given_twice_is_refused() {
     );
     let err = fails(&["evaluate", "--set", "options.tolerance=1e-4", "--tolerance", "1e-3"]);
     assert!(err.contains("options.tolerance is given twice"), "{err}");
+}
+
+// ---- robustness ----
+
+/// Photon counts beyond f64 are refused with the keys that drive them (it was a panic,
+/// `signal_e must be finite`); counts that stay finite are reported, with no `null` in the JSON.
+#[test]
+fn overflowing_photoelectrons_are_refused_not_a_panic() {
+    let err = fails(&["evaluate", "--set", "exposure.time_ms=1e308"]);
+    for needle in ["photoelectrons per pixel N", "exposure.time_ms", "camera.pixel_pitch_um", "full well"] {
+        assert!(err.contains(needle), "missing {needle:?} in {err}");
+    }
+    let out = asnr(&["evaluate", "--set", "exposure.time_ms=1e300", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(!text.contains("null"), "{text}");
+}
+
+/// A read noise whose square overflows is refused by name (the JSON carried `null` variances).
+#[test]
+fn read_noise_whose_variance_overflows_is_refused() {
+    let err = fails(&["evaluate", "--set", "camera.read_noise_e=1e200", "--json"]);
+    assert!(
+        err.contains("camera.read_noise_e=1e200") && err.contains("read_noise must be below 1.3e154 e⁻ rms"),
+        "{err}"
+    );
+}
+
+/// `--over` grids: a point count that overflows is refused with the product (four axes of 65536
+/// wrapped to 0 points and an empty CSV), a key given twice or also given by `--set` is refused
+/// by name, and generated values beyond TOML's integers are passed as floats (1e20 failed on its
+/// own `50000000000000000000`).
+#[test]
+fn sweep_grids_are_checked_and_generated_values_parse_back() {
+    let axes = ["lens.f_number=2:3:65536", "camera.pixel_pitch_um=2:3:65536", "exposure.time_ms=1:2:65536"];
+    let mut args = vec!["sweep", "--csv"];
+    for a in axes.iter().chain(&["spectrum.range_nm=1:2:65536"]) {
+        args.extend(["--over", a]);
+    }
+    let err = fails(&args);
+    assert!(err.contains("65536 × 65536 × 65536 × 65536 = 1.8446744073709552e19 grid points"), "{err}");
+    let err = fails(&["sweep", "--over", "lens.f_number=2:3:2", "--over", "lens.f_number=4:5:2", "--csv"]);
+    assert!(err.contains("--over lens.f_number: the key is given to --over twice"), "{err}");
+    let err = fails(&["sweep", "--set", "lens.f_number=2", "--over", "lens.f_number=2:3:2", "--csv"]);
+    assert!(err.contains("also given by --set lens.f_number=2"), "{err}");
+    let err = fails(&["optimize", "--tolerance", "1e-6", "--over", "options.tolerance=1e-7:1e-5"]);
+    assert!(err.contains("--over options.tolerance") && err.contains("--tolerance"), "{err}");
+    let out = asnr(&["sweep", "--over", "camera.full_well_e=1e3:1e20:3", "--csv"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 4);
+}
+
+/// `--threads` is bounded by 4 × the available cores.
+#[test]
+fn sweep_threads_are_bounded() {
+    let err = fails(&["sweep", "--over", "lens.f_number=2:3:2", "--threads", "10000", "--csv"]);
+    assert!(err.contains("--threads 10000: expected 0 (all cores) to"), "{err}");
+}
+
+/// `--json --explain`: stdout is one JSON document, the explanation its `explain` field.
+#[test]
+fn json_with_explain_is_one_document() {
+    let v = json(&["evaluate", "--json", "--explain"]);
+    let lines = v["explain"].as_array().expect("an explain array");
+    assert!(lines[0].as_str().unwrap().contains("How this was computed"), "{lines:?}");
+    assert!(v["asnr"].is_f64());
 }

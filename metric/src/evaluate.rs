@@ -187,8 +187,13 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     for &(field, weight) in scene.fields() {
         points.push((evaluate_field(&scene.single_field(field))?, weight));
     }
-    let total: f64 = points.iter().map(|p| p.1).sum();
-    let mean = |f: &dyn Fn(&Evaluation) -> f64| points.iter().map(|(e, w)| w * f(e)).sum::<f64>() / total;
+    // relative weights, divided by the largest first (exact for it, no underflow for subnormal
+    // ones), then the weighted mean (paper SI, end of the veiling-glare section)
+    let largest = points.iter().map(|p| p.1).fold(0.0, f64::max);
+    let relative: Vec<f64> = points.iter().map(|p| p.1 / largest).collect();
+    let total: f64 = relative.iter().sum();
+    let mean =
+        |f: &dyn Fn(&Evaluation) -> f64| points.iter().zip(&relative).map(|((e, _), w)| w * f(e)).sum::<f64>() / total;
     let mut combined = points[0].0.clone();
     combined.asnr = mean(&|e| e.asnr);
     combined.asnr_mean = mean(&|e| e.asnr_mean);
@@ -212,6 +217,7 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
             asnr: e.asnr,
         })
         .collect();
+    check_finite(&combined)?;
     Ok(combined)
 }
 
@@ -225,19 +231,83 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let field = scene.field();
     let options = scene.options();
     let settings = options.settings();
-    let poly = Polychromatic::with_settings(lens, &detected, field, nyquist, pixel, settings)?;
+    let poly = Polychromatic::with_settings(lens, &detected, field, nyquist, pixel, settings).map_err(|e| match e {
+        // a detected integral beyond f64::MAX is too much light, not none
+        optics::Error::NoSignal { total } if total == f64::INFINITY => overflow(
+            "the detected spectral integral ∫ L η λ τ1 dλ",
+            format!("the radiance (source.radiance_w_m2_sr_nm, source.scale or the source table) is too large: it exceeds {:e}", f64::MAX),
+        ),
+        optics::Error::NoSignal { total: 0.0 } => Error::NoLight {
+            reason: "the lens transmits nothing into its imaging order where light is detected (lens.efficiency \
+                     is zero there)"
+                .to_owned(),
+        },
+        e => Error::Optics(e),
+    })?;
+    let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
+    if !(mean_wavelength.is_finite() && mean_wavelength > 0.0) {
+        return Err(overflow(
+            "the mean detected wavelength",
+            format!(
+                "the detected spectrum's moment ∫ L η λ² τ1 dλ is too large to represent (mean wavelength \
+                 {mean_wavelength}): the spectrum (spectrum.range_nm, spectrum.center_nm or the tables) reaches \
+                 wavelengths too long"
+            ),
+        ));
+    }
+    // the MTF integration resolves a bounded number of defocus waves (far beyond the Fraunhofer
+    // validity of paper SI eq. S15)
+    let waves = poly.max_defocus() / mean_wavelength;
+    if waves.is_nan() || waves > MAX_DEFOCUS_WAVES {
+        return Err(Error::Defocus {
+            waves,
+            w020_m: poly.max_defocus(),
+            wavelength_nm: mean_wavelength * 1e9,
+            limit: MAX_DEFOCUS_WAVES,
+        });
+    }
 
     let na = lens.numerical_aperture();
-    let area = camera.pixel_pitch() * camera.pixel_pitch();
-    let photoelectrons = area * scene.exposure() * PI * na * na / (PLANCK * SPEED_OF_LIGHT) * poly.total_weight();
+    let pitch = camera.pixel_pitch();
+    // eq. S7–S8, N = p² t π NA² /(h c) ∫ ρ τ1 dλ, in the same order of operations as the plain
+    // product but with the binary exponent kept aside, so that no partial product overflows
+    let photoelectrons = Scaled::of(pitch)
+        .times(pitch)
+        .times(scene.exposure())
+        .times(PI)
+        .times(na)
+        .times(na)
+        .over(PLANCK * SPEED_OF_LIGHT)
+        .times(poly.total_weight())
+        .value();
+    if !photoelectrons.is_finite() {
+        return Err(overflow(
+            "the photoelectrons per pixel N (paper SI eq. S7–S8)",
+            format!(
+                "pixel pitch {pitch:e} m (camera.pixel_pitch_um), exposure {:e} s (exposure.time_ms), NA {na:e} \
+                 (lens.f_number) and the detected radiance make N exceed {:e} e⁻, more than any full well holds",
+                scene.exposure(),
+                f64::MAX
+            ),
+        ));
+    }
     // eq. S8 with τ1 → T: every photoelectron the lens transmits, imaged or stray
-    let transmitted = photoelectrons / poly.total_weight() * poly.detected_integral(|l| lens.transmission(l));
+    let transmitted = Scaled::of(photoelectrons)
+        .over(poly.total_weight())
+        .times(poly.detected_integral(|l| lens.transmission(l)))
+        .value();
+    if !transmitted.is_finite() {
+        return Err(overflow(
+            "the transmitted photoelectrons N_T (paper SI eq. S8 with τ1 → T)",
+            format!("N = {photoelectrons:e} e⁻ times T/τ1 exceeds {:e} e⁻", f64::MAX),
+        ));
+    }
     // stray light of the other orders adds shot noise but no signal (eq. S14: τ1 → T for the noise)
     let background = match scene.options().glare {
         GlareMode::FirstOrder => 0.0,
         GlareMode::Included => (transmitted - photoelectrons).max(0.0),
     };
-    let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure());
+    let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure())?;
     let snr0 = budget.snr;
     // where the OTF depends on direction, a mean along the field direction (tangential) and one
     // across it (sagittal), averaged; otherwise one mean
@@ -266,7 +336,6 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let asnr_mean = snr0 * weighted_mean;
     let asnr_integral = snr0 * weighted_mean * nyquist * 1e-3;
 
-    let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let fraunhofer = fraunhofer(scene, &poly);
     let glare = glare(lens, &poly);
 
@@ -291,7 +360,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             fraunhofer.threshold_mm
         ));
     }
-    Ok(Evaluation {
+    let evaluation = Evaluation {
         asnr: match scene.options().form {
             MetricForm::Mean => asnr_mean,
             MetricForm::Integral => asnr_integral,
@@ -366,7 +435,112 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             otf_evaluations: work.otf_evaluations,
             sign_changes: work.sign_changes,
         },
-    })
+    };
+    check_finite(&evaluation)?;
+    Ok(evaluation)
+}
+
+/// The largest defocus, in waves at the mean wavelength, that [`evaluate`] integrates: far beyond
+/// any lens the Fraunhofer model holds for (paper SI eq. S15: tens of waves at the 0.25 mm blur
+/// threshold) and the stress grid's 1e4 waves at the band edges, well short of the point where
+/// the phases lose their precision and the frequency integration stops converging.
+pub const MAX_DEFOCUS_WAVES: f64 = 1e5;
+
+fn overflow(quantity: &'static str, detail: String) -> Error {
+    Error::Overflow { quantity, detail }
+}
+
+/// Every number of an evaluation is finite: a number that is not (an overflow the checks above
+/// did not foresee) is an error naming it, never a NaN or an infinity in a report.
+fn check_finite(e: &Evaluation) -> Result<(), Error> {
+    let numbers = [
+        ("asnr", e.asnr),
+        ("asnr_mean", e.asnr_mean),
+        ("asnr_integral_cyc_per_mm", e.asnr_integral_cyc_per_mm),
+        ("mean_mtf", e.mean_mtf),
+        ("mean_mtf_tangential", e.mean_mtf_tangential),
+        ("mean_mtf_sagittal", e.mean_mtf_sagittal),
+        ("mtf_integral_cyc_per_mm", e.mtf_integral_cyc_per_mm),
+        ("snr0", e.snr0),
+        ("photoelectrons", e.photoelectrons),
+        ("transmitted_photoelectrons", e.transmitted_photoelectrons),
+        ("noise.total_variance_e2", e.noise.total_variance_e2),
+        ("nyquist_cyc_per_mm", e.nyquist_cyc_per_mm),
+        ("mean_wavelength_nm", e.mean_wavelength_nm),
+        ("cutoff_cyc_per_mm", e.cutoff_cyc_per_mm),
+        ("fraunhofer.fraction_outside", e.fraunhofer.fraction_outside),
+        ("fraunhofer.max_shift_nm", e.fraunhofer.max_shift_nm.unwrap_or(0.0)),
+        ("glare.efficiency", e.glare.efficiency),
+        ("glare.transmission", e.glare.transmission),
+        ("glare.m0", e.glare.m0),
+        ("glare.vg", e.glare.vg),
+    ];
+    match numbers.iter().find(|(_, v)| !v.is_finite()) {
+        Some(&(name, value)) => Err(overflow(
+            "a result",
+            format!("{name} = {value} is not a finite number for this scene; its inputs are too large or too small"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A positive number as a mantissa in [0.5, 1) and a binary exponent: products and quotients
+/// round exactly as the plain ones do, without overflowing or underflowing on the way.
+#[derive(Clone, Copy)]
+struct Scaled {
+    mantissa: f64,
+    exponent: i32,
+}
+
+impl Scaled {
+    fn of(x: f64) -> Scaled {
+        let (mantissa, exponent) = frexp(x);
+        Scaled { mantissa, exponent }
+    }
+
+    fn times(self, x: f64) -> Scaled {
+        let (m, e) = frexp(x);
+        let (mantissa, exponent) = frexp(self.mantissa * m);
+        Scaled { mantissa, exponent: self.exponent + e + exponent }
+    }
+
+    fn over(self, x: f64) -> Scaled {
+        let (m, e) = frexp(x);
+        let (mantissa, exponent) = frexp(self.mantissa / m);
+        Scaled { mantissa, exponent: self.exponent - e + exponent }
+    }
+
+    /// The number, `inf` beyond `f64::MAX`, rounded to a subnormal or 0 below `f64::MIN_POSITIVE`.
+    fn value(self) -> f64 {
+        let (mut m, mut e) = (self.mantissa, self.exponent);
+        while e > 1000 {
+            m *= 2f64.powi(1000);
+            e -= 1000;
+            if m.is_infinite() {
+                return m;
+            }
+        }
+        while e < -1000 {
+            m *= 2f64.powi(-1000);
+            e += 1000;
+        }
+        m * 2f64.powi(e)
+    }
+}
+
+/// `x = m 2^e` with `|m|` in [0.5, 1) for finite non-zero `x` (`(x, 0)` for 0, NaN, ±inf).
+fn frexp(x: f64) -> (f64, i32) {
+    if x == 0.0 || !x.is_finite() {
+        return (x, 0);
+    }
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    if biased == 0 {
+        // subnormal: scale into the normal range first
+        let (m, e) = frexp(x * 2f64.powi(64));
+        return (m, e - 64);
+    }
+    (f64::from_bits((bits & !(0x7ff << 52)) | (1022 << 52)), biased - 1022)
 }
 
 /// The warning for a Gaussian factor of the `what` spectrum cut by the spectrum's support
@@ -431,11 +605,12 @@ fn add_work(a: optics::Work, b: optics::Work) -> optics::Work {
 /// Detected spectral density before the lens: radiance × QE × λ (paper SI eq. S8 integrand
 /// without τ1 and the constant factors).
 pub(crate) fn detected_spectrum(scene: &Scene) -> Spectrum {
-    Spectrum::product(vec![
-        scene.radiance().clone(),
-        scene.camera().quantum_efficiency().clone(),
-        Spectrum::Linear { slope: 1.0 },
-    ])
+    detected_spectrum_of(scene.radiance(), scene.camera())
+}
+
+/// [`detected_spectrum`] of a radiance seen by a camera.
+pub(crate) fn detected_spectrum_of(radiance: &Spectrum, camera: &crate::Camera) -> Spectrum {
+    Spectrum::product(vec![radiance.clone(), camera.quantum_efficiency().clone(), Spectrum::Linear { slope: 1.0 }])
 }
 
 /// The polychromatic MTF of a scene sampled on a frequency grid, with references.

@@ -41,8 +41,8 @@ mod evaluate;
 mod scene;
 
 pub use evaluate::{
-    Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MtfCurve, NoiseReport, Numerics, evaluate,
-    mtf_curve,
+    Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MAX_DEFOCUS_WAVES, MtfCurve, NoiseReport,
+    Numerics, evaluate, mtf_curve,
 };
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
@@ -60,6 +60,41 @@ pub enum Error {
         /// What is accepted.
         expected: &'static str,
     },
+    /// The scene detects no light: the radiance and the quantum efficiency do not overlap, or
+    /// their product is zero.
+    #[error("no detected signal: {reason}")]
+    NoLight {
+        /// Which spectra, and their ranges in nm.
+        reason: String,
+    },
+    /// A number computed from the scene exceeds the largest finite number (about 1.8e308).
+    #[error("{quantity} overflows: {detail}")]
+    Overflow {
+        /// What overflowed.
+        quantity: &'static str,
+        /// The values that drive it and the scene keys that set them.
+        detail: String,
+    },
+    /// The defocus is beyond what the MTF integration can resolve.
+    #[error(
+        "the defocus reaches {waves:.3e} waves (W020 = {w020_m:.3e} m, at the mean wavelength {wavelength_nm:.1} nm): beyond the \
+         {limit:e} waves the MTF integration resolves (the blur is far beyond the Fraunhofer threshold, paper SI \
+         eq. S15); reduce lens.focal_length_mm, the distance of the spectrum from lens.design_wavelength_nm, or \
+         the spectral range"
+    )]
+    Defocus {
+        /// Largest defocus, waves.
+        waves: f64,
+        /// Its W020, m.
+        w020_m: f64,
+        /// The mean detected wavelength the waves are counted at, nm.
+        wavelength_nm: f64,
+        /// The limit, waves.
+        limit: f64,
+    },
+    /// The noise budget could not be formed.
+    #[error(transparent)]
+    Noise(#[from] noise::Error),
     /// The optics could not be evaluated.
     #[error(transparent)]
     Optics(#[from] optics::Error),

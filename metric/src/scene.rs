@@ -30,6 +30,13 @@ impl Camera {
     /// MTF only).
     pub fn new(pixel_pitch_m: f64, quantum_efficiency: Spectrum, pixel_mtf: bool) -> Result<Self, Error> {
         check("pixel_pitch", pixel_pitch_m, pixel_pitch_m > 0.0, "a finite length > 0 m")?;
+        // the Nyquist frequency 1/(2p) must be finite too (p ≥ 2.8e-309 m)
+        check(
+            "pixel_pitch",
+            pixel_pitch_m,
+            (0.5 / pixel_pitch_m).is_finite(),
+            "a length whose Nyquist frequency 1/(2p) is finite (≥ 2.8e-309 m)",
+        )?;
         Ok(Camera {
             pixel_pitch: pixel_pitch_m,
             quantum_efficiency,
@@ -175,6 +182,7 @@ impl Scene {
     ) -> Result<Self, Error> {
         check("exposure", exposure_s, exposure_s > 0.0, "a finite time > 0 s")?;
         check_options(&options)?;
+        check_light(&radiance, &camera)?;
         Ok(Scene {
             lens,
             radiance,
@@ -216,8 +224,10 @@ impl Scene {
             first.get_or_insert(field);
             self.clone().at_field(field)?;
         }
-        let total: f64 = fields.iter().map(|f| f.1).sum();
-        check("sum of the field weights", total, total > 0.0, "at least one field with a weight > 0")?;
+        // relative weights: normalized by the largest in the average, so that subnormal weights
+        // (5e-324) weigh as much as their ratios say instead of underflowing
+        let largest = fields.iter().map(|f| f.1).fold(0.0, f64::max);
+        check("largest field weight", largest, largest > 0.0, "at least one field with a weight > 0")?;
         let field = first.unwrap_or(Field::ON_AXIS);
         Ok(Scene { field, fields, ..self })
     }
@@ -274,6 +284,50 @@ impl Scene {
     pub fn options(&self) -> &Options {
         &self.options
     }
+}
+
+/// The range `(lo, hi)` (m) outside which `spectrum` is zero, for each bounded factor of it
+/// (tables, top-hats, lines), with the factor's name; unbounded factors are not listed.
+fn bounded_factors(spectrum: &Spectrum, name: &'static str, out: &mut Vec<(&'static str, f64, f64)>) {
+    match spectrum {
+        Spectrum::Product(factors) => factors.iter().for_each(|f| bounded_factors(f, name, out)),
+        other => {
+            let (lo, hi) = other.support();
+            if hi.is_finite() {
+                out.push((name, lo, hi));
+            }
+        }
+    }
+}
+
+/// Refuses a scene that detects no light before any optics is computed: bounded factors of the
+/// radiance and of the quantum efficiency that do not overlap (paper SI eq. S8:
+/// the detected spectrum is `L(λ) η(λ) λ`, zero outside the overlap), or a detected spectrum
+/// that is zero everywhere (a zero quantum efficiency, radiance or filter peak).
+fn check_light(radiance: &Spectrum, camera: &Camera) -> Result<(), Error> {
+    let mut factors = Vec::new();
+    bounded_factors(radiance, "the radiance reaching the lens (source × spectrum filter)", &mut factors);
+    bounded_factors(camera.quantum_efficiency(), "the quantum efficiency (camera.quantum_efficiency)", &mut factors);
+    let nm = |(name, lo, hi): (&str, f64, f64)| {
+        format!("{name} covers {}–{} nm", optics::round_for_display(lo * 1e9), optics::round_for_display(hi * 1e9))
+    };
+    for (i, &a) in factors.iter().enumerate() {
+        for &b in &factors[i + 1..] {
+            if a.1.max(b.1) >= a.2.min(b.2) {
+                return Err(Error::NoLight { reason: format!("{}, {}: they do not overlap", nm(a), nm(b)) });
+            }
+        }
+    }
+    let detected = crate::evaluate::detected_spectrum_of(radiance, camera);
+    let integral = detected.integral();
+    if integral == 0.0 || integral.is_nan() {
+        return Err(Error::NoLight {
+            reason: "the radiance (source.radiance_w_m2_sr_nm or the source table, times the spectrum filter) \
+                     times the quantum efficiency (camera.quantum_efficiency) is zero at every wavelength"
+                .to_owned(),
+        });
+    }
+    Ok(())
 }
 
 /// The checks of [`Options`] shared by [`Scene::new`] and [`Scene::with_options`].

@@ -9,6 +9,10 @@ use crate::error::{Error, check, non_negative, positive};
 /// Variance of an ideal uniform quantizer, σ_q² = 1/12 DN² (EMVA 1288 Release 4.0 Linear, §2.2).
 pub const QUANTIZATION_VARIANCE_DN2: f64 = 1.0 / 12.0;
 
+/// The largest value whose square is finite (about 1.3e154): read noises and inverse gains
+/// beyond it have no finite variance.
+const MAX_SQUARABLE: f64 = 1.3e154;
+
 /// The camera's temporal noise sources and limits (EMVA 1288 Release 4.0 Linear, §2.2 and §2.4):
 /// read noise σ_r (e⁻ rms), dark current (e⁻/s), full-well capacity (e⁻), and, when the camera
 /// digitizes, the conversion gain K (DN/e⁻) and the ADC resolution (bits).
@@ -45,6 +49,13 @@ impl Sensor {
     ) -> Result<Sensor, Error> {
         let mut sensor = Sensor::without_adc(read_noise_e, dark_current_e_per_s, full_well_e)?;
         positive("gain", gain_dn_per_e, "DN/e⁻")?;
+        // quantization noise referred to the input is (1/12)/K²: finite for K ≥ 1/MAX_SQUARABLE
+        check(
+            "gain",
+            gain_dn_per_e,
+            gain_dn_per_e >= 1.0 / MAX_SQUARABLE,
+            format!("at least {:e} DN/e⁻ (the quantization variance (1/12)/K² must be finite)", 1.0 / MAX_SQUARABLE),
+        )?;
         check("adc_bits", f64::from(adc_bits), (1..=32).contains(&adc_bits), "an integer from 1 to 32 bits")?;
         sensor.adc = Some(Adc { gain_dn_per_e, bits: adc_bits });
         Ok(sensor)
@@ -55,6 +66,13 @@ impl Sensor {
     /// ≥ 0) and full-well capacity `full_well_e` (e⁻, > 0; `f64::INFINITY` for no limit).
     pub fn without_adc(read_noise_e: f64, dark_current_e_per_s: f64, full_well_e: f64) -> Result<Sensor, Error> {
         non_negative("read_noise", read_noise_e, "e⁻ rms")?;
+        // the budget adds σ_r²: a read noise whose square overflows has no finite variance
+        check(
+            "read_noise",
+            read_noise_e,
+            read_noise_e < MAX_SQUARABLE,
+            format!("below {MAX_SQUARABLE:e} e⁻ rms (its square, the read variance σ_r², must be finite)"),
+        )?;
         non_negative("dark_current", dark_current_e_per_s, "e⁻/s")?;
         check("full_well", full_well_e, full_well_e > 0.0, "> 0 e⁻ (inf for no limit)")?;
         Ok(Sensor { read_noise_e, dark_current_e_per_s, full_well_e, adc: None })
@@ -179,14 +197,25 @@ impl NoiseBudget {
 /// the SNR never exceeds EMVA's `SNR_max = √μ_e.sat` (§2.4). Check `saturated`: a clipped budget
 /// is a ceiling, not a prediction.
 ///
-/// # Panics
-/// If `signal_e`, `background_e` or `exposure_s` is negative, NaN or infinite (a bug in the
-/// caller: validated scenes cannot produce them).
-pub fn budget(sensor: &Sensor, signal_e: f64, background_e: f64, exposure_s: f64) -> NoiseBudget {
-    for (name, value) in [("signal_e", signal_e), ("background_e", background_e), ("exposure_s", exposure_s)] {
-        assert!(value.is_finite() && value >= 0.0, "noise::budget: {name} must be finite and >= 0, got {value:?}");
-    }
+/// # Errors
+/// [`Error::InvalidParameter`] if `signal_e`, `background_e` or `exposure_s` is negative, NaN
+/// or infinite; [`Error::Overflow`] if the dark charge (dark current × exposure) or the sum of
+/// the variances exceeds the largest finite number, so that no finite budget exists.
+pub fn budget(sensor: &Sensor, signal_e: f64, background_e: f64, exposure_s: f64) -> Result<NoiseBudget, Error> {
+    non_negative("signal", signal_e, "e⁻")?;
+    non_negative("background", background_e, "e⁻")?;
+    non_negative("exposure", exposure_s, "s")?;
     let unclipped_dark_e = sensor.dark_current_e_per_s * exposure_s;
+    if !unclipped_dark_e.is_finite() {
+        return Err(Error::Overflow {
+            quantity: "dark charge",
+            detail: format!(
+                "dark current {:e} e⁻/s × exposure {exposure_s:e} s exceeds {:e} e⁻",
+                sensor.dark_current_e_per_s,
+                f64::MAX
+            ),
+        });
+    }
     let saturation_e = sensor.saturation_e();
     let saturated = signal_e + background_e + unclipped_dark_e > saturation_e;
     let (signal, background, dark) = if saturated {
@@ -201,9 +230,18 @@ pub fn budget(sensor: &Sensor, signal_e: f64, background_e: f64, exposure_s: f64
     let read = sensor.read_noise_e * sensor.read_noise_e;
     let quantization = sensor.quantization_variance_e2();
     let total = shot + dark + read + quantization;
+    if !total.is_finite() {
+        return Err(Error::Overflow {
+            quantity: "total noise variance",
+            detail: format!(
+                "shot {shot:e} + dark {dark:e} + read {read:e} + quantization {quantization:e} e⁻² exceeds {:e} e⁻²",
+                f64::MAX
+            ),
+        });
+    }
     // total ≥ signal, so total = 0 only without signal: 0, never 0/0.
     let snr = if signal > 0.0 { signal / total.sqrt() } else { 0.0 };
-    NoiseBudget {
+    Ok(NoiseBudget {
         exposure_s,
         signal_e: signal,
         unclipped_signal_e: signal_e,
@@ -217,7 +255,7 @@ pub fn budget(sensor: &Sensor, signal_e: f64, background_e: f64, exposure_s: f64
         quantization_variance_e2: quantization,
         total_variance_e2: total,
         snr,
-    }
+    })
 }
 
 #[cfg(test)]
@@ -241,7 +279,7 @@ mod tests {
         assert_eq!(ideal.quantization_variance_e2(), 0.0);
         assert_eq!((ideal.gain_dn_per_e(), ideal.adc_bits()), (None, None));
         // no light: SNR 0, not 0/0
-        let b = budget(&ideal, 0.0, 0.0, 1.0);
+        let b = budget(&ideal, 0.0, 0.0, 1.0).unwrap();
         assert_eq!((b.snr, b.total_variance_e2, b.saturated), (0.0, 0.0, false));
     }
 

@@ -18,6 +18,14 @@ pub enum Error {
         /// The accepted range, with unit (e.g. "finite and > 0 DN/e⁻").
         accepted: String,
     },
+    /// A charge or variance of a noise budget exceeds the largest finite number.
+    #[error("the {quantity} overflows: {detail}")]
+    Overflow {
+        /// What overflowed.
+        quantity: &'static str,
+        /// The terms that make it, with units.
+        detail: String,
+    },
     /// A region of a frame stack has no pixels.
     #[error("the {region} region must have at least 1 pixel, got 0")]
     EmptyRegion {

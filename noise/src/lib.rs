@@ -29,10 +29,10 @@
 //! // 1000 e⁻ on a camera with σ_r = 5 e⁻, 100 e⁻/s dark current, K = 0.5 DN/e⁻, 12 bits, 0.1 s:
 //! // variance 1000 + 10 + 25 + (1/12)/0.5² = 1035.33 e⁻², SNR = 31.08 (√1000 = 31.62 if ideal).
 //! let camera = Sensor::new(5.0, 100.0, 20_000.0, 0.5, 12)?;
-//! let b = budget(&camera, 1000.0, 0.0, 0.1);
+//! let b = budget(&camera, 1000.0, 0.0, 0.1)?;
 //! assert!((b.snr - 31.0785).abs() < 1e-4 && !b.saturated);
 //! // Glare: 2667 e⁻ of spurious-order light (T/τ1 − 1 = 2.67) on the ideal detector, eq. S14.
-//! let glare = budget(&Sensor::ideal(), 1000.0, 1000.0 * (0.55 / 0.15 - 1.0), 0.1);
+//! let glare = budget(&Sensor::ideal(), 1000.0, 1000.0 * (0.55 / 0.15 - 1.0), 0.1)?;
 //! assert!((glare.snr - 16.514).abs() < 1e-3);
 //!
 //! // Measured (eq. 2–4): one white and one black pixel over three frames.
@@ -56,7 +56,8 @@
 //! - Measured standard deviations are temporal (per pixel, over frames) sample standard
 //!   deviations with divisor n − 1, averaged over the pixels of a region as the paper did.
 //! - Constructors and the measurement and fitting functions validate and return [`Error`];
-//!   [`budget`] panics on negative or non-finite inputs; the glare ratios (S10–S14) do not
+//!   [`budget`] returns an [`Error`] for negative or non-finite inputs and for budgets too large to
+//!   represent (never a non-finite number); the glare ratios (S10–S14) do not
 //!   validate (NaN in, NaN out).
 
 mod budget;

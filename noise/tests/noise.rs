@@ -72,7 +72,7 @@ fn budget_hand_worked() {
     // shot 1000, dark 10, read 25, quantization (1/12)/0.25 = 0.333…; total 1035.333… e⁻²;
     // SNR = 1000/√1035.333… = 31.078489 (EMVA 1288 §2.3)
     let sensor = Sensor::new(5.0, 100.0, 20_000.0, 0.5, 12).unwrap();
-    let b = budget(&sensor, 1000.0, 0.0, 0.1);
+    let b = budget(&sensor, 1000.0, 0.0, 0.1).unwrap();
     assert!(!b.saturated);
     assert_eq!((b.signal_e, b.background_e, b.shot_variance_e2, b.read_variance_e2), (1000.0, 0.0, 1000.0, 25.0));
     assert!((b.dark_e - 10.0).abs() < TIGHT && (b.dark_variance_e2 - 10.0).abs() < TIGHT);
@@ -86,7 +86,7 @@ fn budget_hand_worked() {
 fn budget_with_background_adds_its_shot_noise_only() {
     // 1000 e⁻ signal + 500 e⁻ background on the camera above: total 1535.333…, SNR = 25.5216
     let sensor = Sensor::new(5.0, 100.0, 20_000.0, 0.5, 12).unwrap();
-    let b = budget(&sensor, 1000.0, 500.0, 0.1);
+    let b = budget(&sensor, 1000.0, 500.0, 0.1).unwrap();
     assert_eq!((b.signal_e, b.shot_variance_e2), (1000.0, 1500.0));
     assert!((b.snr - 1000.0 / (1535.0f64 + 1.0 / 3.0).sqrt()).abs() < TIGHT);
 }
@@ -95,11 +95,11 @@ fn budget_with_background_adds_its_shot_noise_only() {
 fn ideal_sensor_gives_sqrt_n() {
     // paper SI eq. S9: SNR = √N. Exact for perfect squares (N/√N with √N exact) …
     for (n, root) in [(1.0, 1.0), (1024.0, 32.0), (1e6, 1e3), (2.25e8, 1.5e4)] {
-        assert_eq!(budget(&Sensor::ideal(), n, 0.0, 1.0).snr, root);
+        assert_eq!(budget(&Sensor::ideal(), n, 0.0, 1.0).unwrap().snr, root);
     }
     // … and to rounding otherwise
     for n in [2.0, 1000.0, 12_345.678, 3.3e9] {
-        let snr = budget(&Sensor::ideal(), n, 0.0, 1.0).snr;
+        let snr = budget(&Sensor::ideal(), n, 0.0, 1.0).unwrap().snr;
         assert!((snr / n.sqrt() - 1.0).abs() <= ULPS, "N = {n}: {snr}");
     }
 }
@@ -109,12 +109,12 @@ fn ideal_sensor_with_glare_background_is_s14() {
     // paper SI eq. S14 with S_N = S·T/τ1, i.e. background = (T/τ1 − 1)·S.
     // τ1 = 0.25, T = 0.75: background 2S, S_N = 3S exactly, so bit for bit
     for s in [1.0, 1000.0, 4321.5] {
-        let b = budget(&Sensor::ideal(), s, (0.75 / 0.25 - 1.0) * s, 0.0);
+        let b = budget(&Sensor::ideal(), s, (0.75 / 0.25 - 1.0) * s, 0.0).unwrap();
         assert_eq!(b.snr, snr_with_glare(s, 3.0 * s));
     }
     // the paper's τ1 = 0.15, T = 0.55: S = 1000, S_N = 3666.67, SNR = 16.514 (glare tests in lib)
     let s = 1000.0;
-    let b = budget(&Sensor::ideal(), s, (0.55 / 0.15 - 1.0) * s, 0.0);
+    let b = budget(&Sensor::ideal(), s, (0.55 / 0.15 - 1.0) * s, 0.0).unwrap();
     assert!((b.snr / snr_with_glare(s, s * 0.55 / 0.15) - 1.0).abs() <= ULPS);
     assert!((b.snr - 16.514).abs() < 1e-3);
 }
@@ -125,7 +125,7 @@ fn full_well_clips_the_signal_and_says_so() {
     // collected 12 010 > 10 000 → dark 10, signal 9990; total 9990 + 10 + 25 + 1/3 = 10 025.333,
     // SNR = 9990/√10 025.333 = 99.7734
     let sensor = Sensor::new(5.0, 100.0, 10_000.0, 0.5, 16).unwrap();
-    let b = budget(&sensor, 12_000.0, 0.0, 0.1);
+    let b = budget(&sensor, 12_000.0, 0.0, 0.1).unwrap();
     assert!(b.saturated);
     assert_eq!((b.unclipped_signal_e, b.saturation_e), (12_000.0, 10_000.0));
     assert!((b.signal_e - 9990.0).abs() < TIGHT && (b.dark_e - 10.0).abs() < TIGHT);
@@ -133,14 +133,14 @@ fn full_well_clips_the_signal_and_says_so() {
     assert!((b.snr - 9990.0 / (10_025.0f64 + 1.0 / 3.0).sqrt()).abs() < TIGHT, "{}", b.snr);
     assert!(b.snr < 10_000f64.sqrt()); // EMVA SNR_max = √μ_e.sat = 100
     // exactly full: not saturated
-    assert!(!budget(&sensor, 9990.0, 0.0, 0.1).saturated);
+    assert!(!budget(&sensor, 9990.0, 0.0, 0.1).unwrap().saturated);
 }
 
 #[test]
 fn background_alone_can_fill_the_well() {
     // glare 20 000 e⁻ in a 10 000 e⁻ well: the black level saturates, no signal is left (eq. 2)
     let sensor = Sensor::without_adc(3.0, 0.0, 10_000.0).unwrap();
-    let b = budget(&sensor, 1000.0, 20_000.0, 1.0);
+    let b = budget(&sensor, 1000.0, 20_000.0, 1.0).unwrap();
     assert!(b.saturated);
     assert_eq!((b.signal_e, b.background_e, b.snr), (0.0, 10_000.0, 0.0));
 }
@@ -149,7 +149,7 @@ fn background_alone_can_fill_the_well() {
 fn adc_range_clips_before_the_well() {
     // 8 bits, K = 0.1 DN/e⁻: 255 DN = 2550 e⁻ < 10 000 e⁻ well; 3000 e⁻ of signal → 2550
     let sensor = Sensor::new(0.0, 0.0, 10_000.0, 0.1, 8).unwrap();
-    let b = budget(&sensor, 3000.0, 0.0, 0.0);
+    let b = budget(&sensor, 3000.0, 0.0, 0.0).unwrap();
     assert!(b.saturated);
     assert!((b.signal_e - 2550.0).abs() < TIGHT);
 }
@@ -302,8 +302,8 @@ proptest! {
     /// Shot-noise limit (paper SI eq. S9): the signal grows as t, the SNR as √t.
     #[test]
     fn snr_grows_as_sqrt_t_in_the_shot_noise_limit(rate in 1e2..1e8f64, t in 1e-4..1.0f64, factor in 1.0..100.0f64) {
-        let short = budget(&Sensor::ideal(), rate * t, 0.0, t).snr;
-        let long = budget(&Sensor::ideal(), rate * t * factor, 0.0, t * factor).snr;
+        let short = budget(&Sensor::ideal(), rate * t, 0.0, t).unwrap().snr;
+        let long = budget(&Sensor::ideal(), rate * t * factor, 0.0, t * factor).unwrap().snr;
         prop_assert!((long / short / factor.sqrt() - 1.0).abs() < 1e-12, "{short} {long}");
     }
 
@@ -315,7 +315,7 @@ proptest! {
         bits in 8u32..17, signal in 0.0..2e6f64, background in 0.0..1e6f64, t in 0.0..1.0f64,
     ) {
         let sensor = Sensor::new(read, dark, well, gain, bits).unwrap();
-        let b = budget(&sensor, signal, background, t);
+        let b = budget(&sensor, signal, background, t).unwrap();
         prop_assert!(b.snr.is_finite() && b.snr >= 0.0);
         prop_assert!(b.snr <= signal.sqrt() * (1.0 + ULPS), "{} > √{signal}", b.snr);
         prop_assert!(b.snr <= sensor.saturation_e().sqrt() * (1.0 + ULPS));
@@ -323,7 +323,61 @@ proptest! {
         if !b.saturated {
             prop_assert_eq!((b.signal_e, b.background_e), (signal, background));
         }
-        let ideal = budget(&Sensor::ideal(), signal, 0.0, t).snr;
+        let ideal = budget(&Sensor::ideal(), signal, 0.0, t).unwrap().snr;
         prop_assert!(b.snr <= ideal * (1.0 + ULPS));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Robustness: no panic, no non-finite number
+
+#[test]
+fn budget_refuses_bad_inputs_and_overflow_instead_of_panicking() {
+    // a negative or infinite charge is an error naming it, not a panic
+    for (signal, background, t, name) in
+        [(-1.0, 0.0, 1.0, "signal"), (f64::INFINITY, 0.0, 1.0, "signal"), (1.0, f64::NAN, 1.0, "background")]
+    {
+        match budget(&Sensor::ideal(), signal, background, t) {
+            Err(Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{name}: expected InvalidParameter, got {other:?}"),
+        }
+    }
+    // dark current × exposure beyond f64::MAX, and variances whose sum overflows
+    let dark = Sensor::without_adc(0.0, 1e300, f64::INFINITY).unwrap();
+    let err = budget(&dark, 1.0, 0.0, 1e10).unwrap_err();
+    assert!(err.to_string().contains("dark charge overflows"), "{err}");
+    let err = budget(&Sensor::ideal(), 1.5e308, 1.5e308, 1.0).unwrap_err();
+    assert!(err.to_string().contains("total noise variance overflows"), "{err}");
+}
+
+#[test]
+fn sensor_refuses_noise_whose_variance_is_not_finite() {
+    // σ_r = 1e200 e⁻: σ_r² = inf; K = 1e-200 DN/e⁻: (1/12)/K² = inf
+    let err = Sensor::without_adc(1e200, 0.0, 1e4).unwrap_err();
+    assert!(err.to_string().contains("read_noise must be below 1.3e154 e⁻ rms"), "{err}");
+    let err = Sensor::new(1.0, 0.0, 1e4, 1e-200, 12).unwrap_err();
+    assert!(err.to_string().starts_with("gain must be at least"), "{err}");
+}
+
+proptest! {
+    #![proptest_config(Config { cases: 64, ..config() })]
+
+    /// Over decades of every input: a sensor and a budget are either refused or entirely finite.
+    #[test]
+    fn budgets_are_finite_or_refused(
+        read_exp in -3.0..200.0f64, dark_exp in -3.0..300.0f64, well_exp in 0.0..300.0f64,
+        gain_exp in -200.0..200.0f64, bits in 1u32..33, signal_exp in -300.0..308.0f64,
+        background_exp in -300.0..308.0f64, t_exp in -300.0..300.0f64,
+    ) {
+        let p = |e: f64| 10f64.powf(e);
+        let Ok(sensor) = Sensor::new(p(read_exp), p(dark_exp), p(well_exp), p(gain_exp), bits) else {
+            return Ok(());
+        };
+        if let Ok(b) = budget(&sensor, p(signal_exp), p(background_exp), p(t_exp)) {
+            for v in [b.signal_e, b.background_e, b.dark_e, b.shot_variance_e2, b.dark_variance_e2,
+                      b.read_variance_e2, b.quantization_variance_e2, b.total_variance_e2, b.snr] {
+                prop_assert!(v.is_finite() && v >= 0.0, "{b:?}");
+            }
+        }
     }
 }

@@ -46,6 +46,10 @@ use crate::{Error, quad};
 /// cost: the widest kept wavelength sets the largest defocus, and the work grows as its cube.
 pub const GAUSSIAN_HALF_WIDTH_SIGMAS: f64 = 7.0;
 
+/// The most initial frequency panels of one interval (the adaptive rule bisects further where
+/// needed): a bound, so that no finite input asks for more panels than memory and time allow.
+const MAX_PANELS: f64 = (1 << 20) as f64;
+
 /// Pupil samples across the diameter on the FFT path: the mean MTF of a defocused circle is then
 /// within 2.5e-5 of the exact path (`fft` module convergence table; 1e-4 needs N ≥ 128).
 pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
@@ -715,11 +719,30 @@ impl<'a> Polychromatic<'a> {
     /// reaching its cutoff.
     fn frequency_cuts(&self) -> Vec<f64> {
         let mut cuts = vec![0.0, self.max_frequency];
-        if self.closed.is_some() {
-            // the closed form is exact across the spectrum: no panel edges, no kinks
+        if let Some(closed) = &self.closed {
+            // the closed form is exact across the spectrum: no panel edges, no kinks; but where
+            // the cutoffs 1/(λ F#) of the Gaussian's centre and flanks lie below max_frequency, the
+            // OTF is non-zero on a small part of the range only, which one panel's nodes can miss
+            // entirely (F/1e4: cutoff at 1/770 of Nyquist): cut there
+            let (mu, sigma) = (closed.center(), closed.sigma());
+            for k in 0..=GAUSSIAN_HALF_WIDTH_SIGMAS as usize {
+                let lambda = mu - k as f64 * sigma;
+                let nu = 1.0 / (lambda * self.f_number);
+                if lambda > 0.0 && nu < self.max_frequency {
+                    cuts.push(nu);
+                }
+            }
+            // and where the OTF vanishes altogether (the averages' shortest wavelength)
+            if self.max_cutoff() < self.max_frequency {
+                cuts.push(self.max_cutoff());
+            }
+            cuts.sort_by(f64::total_cmp);
+            cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * a.abs().max(b.abs()));
             return cuts;
         }
-        // panel edges, or the one wavelength of a line, reaching their cutoffs
+        // panel edges, or the one wavelength of a line, reaching their cutoffs (merged when within
+        // 1e-12 of each other, relative to themselves: a 1e-206 m pixel puts Nyquist 1e200 times
+        // above them)
         let ends = self.panels.iter().flat_map(|p| [p.lo, p.hi]);
         for lambda in ends.chain(self.line()) {
             if lambda > 0.0 {
@@ -730,7 +753,7 @@ impl<'a> Polychromatic<'a> {
             }
         }
         cuts.sort_by(f64::total_cmp);
-        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * self.max_frequency);
+        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * a.abs().max(b.abs()));
         cuts
     }
 
@@ -788,31 +811,41 @@ impl<'a> Polychromatic<'a> {
                 .iter()
                 .map(|n| 1.0 / (n.otf.n() as f64 * n.lambda * self.f_number))
                 .fold(f64::INFINITY, f64::min);
-            let panels = ((4.0 * self.max_frequency / cell).ceil() as usize).clamp(8, 1 << 16);
+            // over [0, highest cutoff] where that is below max_frequency: the OTF is zero beyond
+            let top = self.active_top();
+            let panels = ((4.0 * top / cell).ceil() as usize).clamp(8, 1 << 16);
             work.frequency_panels = panels;
             work.otf_evaluations = panels * quad::ORDER;
-            let total = quad::composite(0.0, self.max_frequency, panels, |nu| value(nu).abs() * self.pixel_factor(nu));
+            let total = quad::composite(0.0, top, panels, |nu| value(nu).abs() * self.pixel_factor(nu));
             return (total / self.max_frequency, work);
         }
         // The tolerance is relative to the mean, which is not known before it is computed: the
         // first pass assumes a mean of at least `guess`; a smaller result is recomputed with its
         // own value as the guess (absolute error ≤ tolerance × mean, never below 1e-15).
-        let mut guess = 0.25;
+        // Where the highest cutoff lies below max_frequency, the mean is at most the fraction
+        // `active` of the range the OTF is non-zero on: the guesses scale with it, and the error
+        // budget, spent on that fraction only, is divided by it, so that the tolerance stays
+        // relative to the OTF there (a 1e-206 m pixel puts the fraction at 1e-200: the budget of
+        // the whole range asked 1e-15 of the OTF, its rounding noise, for 6000 sign changes)
+        let active = (self.active_top() / self.max_frequency).clamp(f64::MIN_POSITIVE, 1.0);
+        let mut guess = 0.25 * active;
         loop {
             let closed_before = self.closed_evaluations.get();
-            let (mean, pass) = self.mean_pass(value, self.tolerance * guess);
+            let (mean, pass) = self.mean_pass(value, self.tolerance * guess / active);
             work.frequency_panels += pass.frequency_panels;
             work.otf_evaluations += pass.otf_evaluations;
             work.sign_changes += pass.sign_changes;
             work.closed_form_evaluations += self.closed_evaluations.get() - closed_before;
-            if mean >= 0.5 * guess || guess <= 1e-9 {
+            if mean >= 0.5 * guess || guess <= 1e-9 * active {
                 return (mean, work);
             }
-            guess = mean.max(1e-9);
+            guess = mean.max(1e-9 * active);
         }
     }
 
-    /// One adaptive pass of [`mean_of`](Self::mean_of) to an absolute error `absolute` of the mean.
+    /// One adaptive pass of [`mean_of`](Self::mean_of) to an absolute error `absolute` of the mean
+    /// over the range where the OTF is non-zero (the whole range unless the highest cutoff is
+    /// below `max_frequency`).
     fn mean_pass(&self, value: &dyn Fn(f64) -> f64, absolute: f64) -> (f64, Work) {
         let mut work = Work::default();
         // each closed-form OTF value may be off by half the budget: the mean is a weighted
@@ -829,7 +862,13 @@ impl<'a> Polychromatic<'a> {
             // at least 4 panels over the whole range, not per interval between cutoff cuts
             // (2 on the closed-form engine, whose OTF has no kinks)
             let floor = (min_panels * (b - a) / self.max_frequency).ceil();
-            let n = ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).max(1.0) as usize;
+            // beyond the highest cutoff the OTF is zero: one panel (a range up to 1e199 cycles/m
+            // past it, from a 1e-206 m pixel, would otherwise ask for more panels than exist)
+            let n = if a >= self.max_cutoff() {
+                1
+            } else {
+                ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).clamp(1.0, MAX_PANELS) as usize
+            };
             let h = (b - a) / n as f64;
             let mut left = (a, value(a));
             work.otf_evaluations += 1;
@@ -876,12 +915,12 @@ impl<'a> Polychromatic<'a> {
             if let Some((x0, f0)) = last
                 && f0 * f < 0.0
             {
-                // a zero of OTF_poly (Illinois), to 1e-14 of the frequency limit
+                // a zero of OTF_poly (Illinois), to 1e-14 of the frequency limit (or of the highest cutoff)
                 let mut counted = |nu: f64| {
                     work.otf_evaluations += 1;
                     value(nu)
                 };
-                let zero = quad::illinois(&mut counted, x0, f0, x, f, 1e-14 * self.max_frequency);
+                let zero = quad::illinois(&mut counted, x0, f0, x, f, 1e-14 * self.active_top());
                 edges.push((zero, 0.0));
             }
             last = Some((x, f));
@@ -917,7 +956,7 @@ impl<'a> Polychromatic<'a> {
         if error <= tolerance * (b - a)
             || error <= rounding
             || (panel.kronrod - panel.gauss).abs() <= noise
-            || b - a <= 1e-9 * self.max_frequency
+            || b - a <= 1e-9 * self.active_top()
             || depth >= MAX_DEPTH
         {
             work.frequency_panels += 1;
@@ -926,6 +965,13 @@ impl<'a> Polychromatic<'a> {
         let centre = samples[8];
         self.integrate_panel(value, left, centre, tolerance, depth + 1, work)
             + self.integrate_panel(value, centre, right, tolerance, depth + 1, work)
+    }
+
+    /// The end of the frequency range where the OTF can be non-zero: `max_frequency`, or the
+    /// highest cutoff if that is below it (the frequency rule's lengths scale with it: a 1e-206 m
+    /// pixel puts `max_frequency` 1e200 times above it).
+    fn active_top(&self) -> f64 {
+        self.max_cutoff().min(self.max_frequency)
     }
 
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: `OTF_poly` is zero beyond.

@@ -8,6 +8,10 @@ use core::f64::consts::{PI, SQRT_2};
 /// √(2π).
 const SQRT_2PI: f64 = 2.506_628_274_631_000_7;
 
+/// The narrowest Gaussian accepted, σ as a fraction of its centre wavelength (1e-10: 8e-17 m at
+/// 800 nm, some 1e7 floating-point steps across ±12σ).
+pub const MIN_RELATIVE_SIGMA: f64 = 1e-10;
+
 /// A Gaussian spectrum `peak · exp(−(λ − center)²/(2σ²))`, truncated to 0 at λ ≤ 0.
 ///
 /// The paper's "spectral range" of a Gaussian spectrum is 2√2·σ (paper, Results), **not** the
@@ -27,6 +31,17 @@ impl Gaussian {
     pub fn new(center_m: f64, sigma_m: f64, peak: f64) -> Result<Self, Error> {
         positive("center", center_m, "m")?;
         positive("sigma", sigma_m, "m")?;
+        // narrower than this, center ± a few σ are the same few floating-point numbers and no
+        // quadrature resolves the peak: such a band is a line (Spectrum::Line)
+        check(
+            "sigma",
+            sigma_m,
+            sigma_m >= MIN_RELATIVE_SIGMA * center_m,
+            format!(
+                "at least {MIN_RELATIVE_SIGMA:e} × center (= {:e} m) for the wavelength grid to resolve it; a narrower band is a line",
+                MIN_RELATIVE_SIGMA * center_m
+            ),
+        )?;
         non_negative("peak", peak, "")?;
         Ok(Gaussian { center_m, sigma_m, peak })
     }

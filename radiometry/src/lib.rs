@@ -55,7 +55,7 @@ mod quadrature;
 mod sampled;
 mod spectrum;
 
-pub use analytic::{Blackbody, Gaussian, Line, TopHat};
+pub use analytic::{Blackbody, Gaussian, Line, MIN_RELATIVE_SIGMA, TopHat};
 pub use chain::{
     absolute_spectral_irradiance, broadband_correction, camera_irradiance, corrected_irradiance, fiber_irradiance,
     normalize, photoelectrons, photoelectrons_monochromatic, photon_flux_per_watt, shot_noise_snr, target_radiance,

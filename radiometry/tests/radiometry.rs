@@ -463,3 +463,13 @@ proptest! {
         prop_assert!(corr >= rc / max * (1.0 - 1e-12) && corr <= rc / min * (1.0 + 1e-12));
     }
 }
+
+/// A Gaussian narrower than 1e-10 of its centre is refused by name (centre ± σ are a handful of
+/// floating-point numbers: the scene detected "no light" or "the spectrum extends over [8e-7,
+/// 8e-7] m" for `spectrum.range_nm = 1e-200`).
+#[test]
+fn gaussians_below_the_wavelength_resolution_are_refused() {
+    let err = Gaussian::from_range(800e-9, 1e-209, 1.0).unwrap_err().to_string();
+    assert!(err.contains("sigma must be at least 1e-10 × center"), "{err}");
+    assert!(Gaussian::from_range(800e-9, 1e-12, 1.0).is_ok(), "0.001 nm at 800 nm is resolved");
+}

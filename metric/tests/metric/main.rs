@@ -600,3 +600,4 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
 mod fraunhofer;
 mod line;
 mod properties;
+mod robust;
