@@ -156,6 +156,16 @@ pub enum Error {
         /// The constructor's error.
         cause: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// A scene that could not be built although every value was valid on its own, and that
+    /// has values which look like a unit slip: the likely cause is named with the error (a
+    /// quantum-efficiency table typed in µm detects no light at all).
+    #[error("{error}; note, values that look like a unit slip: {}", warnings.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
+    WithWarnings {
+        /// The error.
+        error: Box<Error>,
+        /// The plausibility warnings of the scene.
+        warnings: Vec<Warning>,
+    },
 }
 
 /// A value that is valid but almost surely a unit slip (e.g. a pixel pitch of 0.0052 µm typed

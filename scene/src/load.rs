@@ -463,8 +463,13 @@ pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene, Error>
 /// [`build_from`], with the plausibility warnings of [`load_with_warnings`].
 pub fn build_with_warnings(source: &Source, overrides: &[String]) -> Result<Loaded, Error> {
     let (raw, origins) = prepare(source, overrides)?;
-    let scene = build(&raw, &origins)?;
-    Ok(Loaded { scene, warnings: origins.warnings.into_inner() })
+    match build(&raw, &origins) {
+        Ok(scene) => Ok(Loaded { scene, warnings: origins.warnings.into_inner() }),
+        Err(error) => {
+            let warnings = origins.warnings.into_inner();
+            if warnings.is_empty() { Err(error) } else { Err(Error::WithWarnings { error: Box::new(error), warnings }) }
+        }
+    }
 }
 
 /// The scene of `source` with `overrides` as TOML with every default filled in and every CSV
@@ -1042,13 +1047,19 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("qe.csv"), "0.65,0.2\n1.0,0.1\n").unwrap();
         let text = PAPER_SCENE.replacen("quantum_efficiency = 0.2", "quantum_efficiency = \"qe.csv\"", 1);
-        let loaded = build_with_warnings(&Source::from_text(text, "s.toml", &dir), &[]).unwrap();
-        let shown: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+        // such a table detects no light in the band: the error names the likely slip with it
+        let error = build_with_warnings(&Source::from_text(text, "s.toml", &dir), &[]).unwrap_err();
+        let Error::WithWarnings { error: cause, warnings } = &error else { panic!("{error}") };
+        assert!(cause.to_string().contains("no detected signal"), "{cause}");
+        let shown: Vec<String> = warnings.iter().map(ToString::to_string).collect();
         assert_eq!(
             shown,
             [
                 "s.toml: camera.quantum_efficiency = \"qe.csv\": its wavelengths 0.65–1 nm are all outside 100–20000 nm: looks like µm (650–1000 nm?)"
             ]
+        );
+        assert!(
+            error.to_string().contains("note, values that look like a unit slip: s.toml: camera.quantum_efficiency")
         );
         assert!(build_with_warnings(&Source::from_text(PAPER_SCENE, "p", "."), &[]).unwrap().warnings.is_empty());
     }
