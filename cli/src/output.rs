@@ -2,28 +2,9 @@
 
 use std::fmt::Write;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use metric::{Evaluation, MetricForm, MtfCurve, Scene};
 use serde::Serialize;
-
-/// Refuses to print a result with a non-finite number (a defect, never expected).
-pub fn check_finite(r: &Evaluation) -> Result<()> {
-    let numbers = [
-        ("asnr", r.asnr),
-        ("mean_mtf", r.mean_mtf),
-        ("snr0", r.snr0),
-        ("photoelectrons", r.photoelectrons),
-        ("glare.m0", r.glare.m0),
-        ("glare.vg", r.glare.vg),
-        ("fraunhofer.fraction_outside", r.fraunhofer.fraction_outside),
-    ];
-    for (name, v) in numbers {
-        if !v.is_finite() {
-            bail!("internal error: {name} = {v} is not finite; please report this scene");
-        }
-    }
-    Ok(())
-}
 
 #[derive(Serialize)]
 struct Report<'a> {
