@@ -3,6 +3,9 @@
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
 //!   (docs/physics.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
 //!   constant or tabulated.
+//! - [`Refractive`]: the ideal refractive reference, `W = 0`, or with glass dispersion
+//!   `f(λ) = f0 (n0 − 1)/(n(λ) − 1)` ([`Sellmeier`]), `τ = T` from the Fresnel or coated
+//!   surface losses.
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
 //! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
@@ -26,8 +29,10 @@
 //! Units: SI (m). Efficiencies are fractions of the light incident on the aperture.
 
 mod chromatic;
+mod refractive;
 
 pub use chromatic::{ChromaticMetalens, Curve};
+pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 
 /// What can be wrong with a lens description.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -158,3 +158,65 @@ fn field_curvature_adds_to_the_chromatic_defocus() {
         assert!((at_blurred[i] - twice).abs() < 2e-3, "s {s}: {} vs {twice}", at_blurred[i]);
     }
 }
+
+// ---- the refractive reference (docs/physics.md, "Lens families") ----
+
+/// The diffraction-limited polychromatic mean MTF over `[0, nu_max]` for the `detected`
+/// spectrum, from the closed-form monochromatic mean alone: with a wavelength-independent
+/// efficiency the mean of `Σ w(λ) MTF0(ν λ F#)/Σ w` over ν is `∫ ρ(λ) M(ν_max λ F#) dλ / ∫ ρ`,
+/// `M` = [`optics::mtf_diffraction_limited_mean`]. Gauss–Legendre over ±10 σ of a Gaussian band.
+fn diffraction_limited_mean(detected: &Spectrum, centre: f64, sigma: f64, nu_max: f64, f_number: f64) -> f64 {
+    let (lo, hi) = (centre - 10.0 * sigma, centre + 10.0 * sigma);
+    let num = optics::quad::composite(lo, hi, 64, |l| {
+        detected.value(l) * optics::mtf_diffraction_limited_mean(nu_max * l * f_number)
+    });
+    num / optics::quad::composite(lo, hi, 64, |l| detected.value(l))
+}
+
+fn mean_mtf(lens: &dyn optics::LensModel, detected: &Spectrum, nu_max: f64) -> f64 {
+    optics::Polychromatic::new(lens, detected, optics::Field::ON_AXIS, nu_max, None).unwrap().mean_mtf().0
+}
+
+#[test]
+fn dispersion_free_refractive_lens_is_diffraction_limited_over_a_band() {
+    use lenses::{Glass, Refractive, Surfaces};
+    let lens = Refractive::new(F_NUMBER, F0, LAMBDA0, Glass::Constant(1.5168), 2, Surfaces::Uncoated).unwrap();
+    check_lens(&lens, &band(800.0, 100.0)).unwrap();
+    for (centre, range) in [(550.0, 100.0), (800.0, 200.0), (1000.0, 50.0)] {
+        let detected = band(centre, range);
+        let sigma = range * 1e-9 / (2.0 * std::f64::consts::SQRT_2);
+        // Nyquist of a 2 µm pixel: 250 cycles/mm, half the cutoff at 800 nm
+        let got = mean_mtf(&lens, &detected, 2.5e5);
+        let want = diffraction_limited_mean(&detected, centre * 1e-9, sigma, 2.5e5, F_NUMBER);
+        assert!((got - want).abs() < 1e-5 * want, "{centre} nm ± {range}: {got} vs {want}");
+    }
+}
+
+/// N-BK7 focuses red behind the detector and blue in front: the lens's defocus against the hand
+/// formula `W020 = f0/(8F#²) (n0 − n)/(n0 − 1)` with the catalogue's indices (n_e = 1.51872 at
+/// 546.07 nm, n_C = 1.51432 at 656.27 nm, n_F = 1.52238 at 486.13 nm).
+#[test]
+fn n_bk7_lens_defocus_has_the_sign_of_normal_dispersion() {
+    use lenses::{Glass, Refractive, Sellmeier, Surfaces};
+    use optics::LensModel;
+    let lens =
+        Refractive::new(F_NUMBER, F0, 546.07e-9, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap();
+    let k = F0 / (8.0 * F_NUMBER * F_NUMBER);
+    let n0 = 1.51872;
+    for (lambda, n) in [(656.27e-9, 1.51432), (486.13e-9, 1.52238)] {
+        let hand = k * (n0 - n) / (n0 - 1.0);
+        let order = &lens.orders(lambda, optics::Field::ON_AXIS)[0];
+        let w020 = order.wavefront.defocus_m;
+        assert_eq!(w020 > 0.0, lambda > 546.07e-9, "{lambda}: {w020}");
+        // catalogue indices to 5 decimals: the index difference to ~0.3 %
+        assert!((w020 - hand).abs() < 5e-3 * hand.abs(), "{lambda}: {w020} vs {hand}");
+    }
+    // 656 nm: +0.570 µm, 486 nm: −0.471 µm at F/2.5, f0 = 3.36 mm
+    assert!((lens.orders(656.27e-9, optics::Field::ON_AXIS)[0].wavefront.defocus_m - 0.570e-6).abs() < 3e-9);
+    // the polychromatic MTF of a broad band is below the diffraction limit, and conforms
+    check_lens(&lens, &band(550.0, 100.0)).unwrap();
+    let detected = band(550.0, 200.0);
+    let sigma = 200e-9 / (2.0 * std::f64::consts::SQRT_2);
+    let perfect = diffraction_limited_mean(&detected, 550e-9, sigma, 2.5e5, F_NUMBER);
+    assert!(mean_mtf(&lens, &detected, 2.5e5) < perfect);
+}
