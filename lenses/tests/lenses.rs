@@ -220,3 +220,44 @@ fn n_bk7_lens_defocus_has_the_sign_of_normal_dispersion() {
     let perfect = diffraction_limited_mean(&detected, 550e-9, sigma, 2.5e5, F_NUMBER);
     assert!(mean_mtf(&lens, &detected, 2.5e5) < perfect);
 }
+
+// ---- the dispersion-engineered achromat ----
+
+/// [`diffraction_limited_mean`] with the spectrum restricted to `[lo, hi]` (the wavelengths a
+/// lens images), Gauss–Legendre on 64 panels.
+fn diffraction_limited_mean_between(detected: &Spectrum, lo: f64, hi: f64, nu_max: f64, f_number: f64) -> f64 {
+    let num = optics::quad::composite(lo, hi, 64, |l| {
+        detected.value(l) * optics::mtf_diffraction_limited_mean(nu_max * l * f_number)
+    });
+    num / optics::quad::composite(lo, hi, 64, |l| detected.value(l))
+}
+
+#[test]
+fn ideal_achromat_is_diffraction_limited_in_its_band() {
+    use lenses::{DelayOverflow, DispersionEngineered};
+    // F/2.5 at f0 = 3.36 mm needs 221.96 fs: a library of 250 fs suffices
+    let lens = DispersionEngineered::new(
+        F_NUMBER,
+        F0,
+        (400e-9, 1200e-9),
+        250e-15,
+        Curve::Constant(0.3),
+        Curve::Constant(0.7),
+        DelayOverflow::Reject,
+    )
+    .unwrap();
+    for (centre, range) in [(600.0, 40.0), (800.0, 60.0), (1000.0, 40.0)] {
+        let detected = band(centre, range);
+        check_lens(&lens, &detected).unwrap();
+        let sigma = range * 1e-9 / (2.0 * std::f64::consts::SQRT_2);
+        let got = mean_mtf(&lens, &detected, 2.5e5);
+        let want = diffraction_limited_mean(&detected, centre * 1e-9, sigma, 2.5e5, F_NUMBER);
+        assert!((got - want).abs() < 1e-5 * want, "{centre} nm ± {range}: {got} vs {want}");
+    }
+    // a band straddling the upper edge: only the wavelengths inside are imaged
+    let detected = band(1150.0, 200.0);
+    let got = mean_mtf(&lens, &detected, 2.5e5);
+    let want =
+        diffraction_limited_mean_between(&detected, 1150e-9 - 7.0 * 200e-9 / 8f64.sqrt(), 1200e-9, 2.5e5, F_NUMBER);
+    assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
+}
