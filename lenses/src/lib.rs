@@ -8,6 +8,8 @@
 //!   surface losses.
 //! - [`DispersionEngineered`]: an achromat over a design band whose aperture must fit the
 //!   group-delay range of its meta-atom library (or, [`DelayOverflow::Reduced`], is partly chromatic).
+//! - [`Harmonic`]: a multi-order diffractive lens of design order p, orders m with
+//!   `τ_m = τ_base sinc²(pλ0/λ − m)` and `W020_m(λ) = (1 − mλ/(pλ0)) f0/(8F#²)`.
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
 //! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
@@ -32,10 +34,12 @@
 
 mod chromatic;
 mod dispersion;
+mod harmonic;
 mod refractive;
 
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
+pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 
 /// What can be wrong with a lens description.

@@ -261,3 +261,28 @@ fn ideal_achromat_is_diffraction_limited_in_its_band() {
         diffraction_limited_mean_between(&detected, 1150e-9 - 7.0 * 200e-9 / 8f64.sqrt(), 1200e-9, 2.5e5, F_NUMBER);
     assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
 }
+
+// ---- the harmonic diffractive lens ----
+
+/// Near λ0 a harmonic lens of design order 1 images as the chromatic lens whose τ1 is its
+/// first-order efficiency: the other orders carry ~δ²/k² each (δ = λ0/λ − 1), far below the
+/// tolerance. At λ0 exactly only the first order carries light: the diffraction limit.
+#[test]
+fn harmonic_lens_of_order_one_images_as_the_chromatic_lens_near_the_design_wavelength() {
+    use lenses::{Harmonic, sinc};
+    let h = Harmonic::new(F_NUMBER, F0, LAMBDA0, 1, 0.4, Curve::Constant(0.6)).unwrap();
+    let nus: Vec<f64> = S.iter().map(|s| s / (LAMBDA0 * F_NUMBER)).collect();
+    let at_design = optics::monochromatic_mtf(&h, LAMBDA0, optics::Field::ON_AXIS, &nus, 256).unwrap();
+    for (s, m) in S.iter().zip(&at_design) {
+        assert!((m - optics::mtf_diffraction_limited(*s)).abs() < 1e-12, "s {s}: {m}");
+    }
+    for lambda in [799.2e-9, 800.5e-9, 801e-9] {
+        let tau1 = 0.4 * sinc(LAMBDA0 / lambda - 1.0).powi(2);
+        let c = ChromaticMetalens::new(F_NUMBER, F0, LAMBDA0, Curve::Constant(tau1), Curve::Constant(0.6)).unwrap();
+        let a = optics::monochromatic_mtf(&h, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        let b = optics::monochromatic_mtf(&c, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-5, "{lambda}: {x} vs {y}");
+        }
+    }
+}
