@@ -10,6 +10,8 @@
 //!   group-delay range of its meta-atom library (or, [`DelayOverflow::Reduced`], is partly chromatic).
 //! - [`Harmonic`]: a multi-order diffractive lens of design order p, orders m with
 //!   `τ_m = τ_base sinc²(pλ0/λ − m)` and `W020_m(λ) = (1 − mλ/(pλ0)) f0/(8F#²)`.
+//! - [`Interleaved`]: a spatially multiplexed lens of N interleaved chromatic channels λ_j,
+//!   `τ_j = η_j/N²`, `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`.
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
 //! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
@@ -35,11 +37,13 @@
 mod chromatic;
 mod dispersion;
 mod harmonic;
+mod interleaved;
 mod refractive;
 
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
+pub use interleaved::{Channel, Interleaved};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 
 /// What can be wrong with a lens description.

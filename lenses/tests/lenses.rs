@@ -286,3 +286,35 @@ fn harmonic_lens_of_order_one_images_as_the_chromatic_lens_near_the_design_wavel
         }
     }
 }
+
+// ---- the interleaved multiplexed lens ----
+
+/// One channel is the chromatic lens of its wavelength (τ = η/1²); with three channels at the
+/// wavelength of one, the monochromatic OTF is the efficiency-weighted sum of that channel's
+/// diffraction-limited OTF and the others' defocused ones.
+#[test]
+fn interleaved_channels_are_chromatic_lenses() {
+    use lenses::{Channel, Interleaved};
+    let nus: Vec<f64> = S.iter().map(|s| s / (LAMBDA0 * F_NUMBER)).collect();
+    let one = vec![Channel { wavelength_m: LAMBDA0, efficiency: Curve::Constant(0.5) }];
+    let single = Interleaved::new(F_NUMBER, F0, one, Curve::Constant(0.9)).unwrap();
+    let c = ChromaticMetalens::new(F_NUMBER, F0, LAMBDA0, Curve::Constant(0.5), Curve::Constant(0.9)).unwrap();
+    for lambda in [780e-9, 800e-9, 830e-9] {
+        let a = optics::monochromatic_mtf(&single, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        let b = optics::monochromatic_mtf(&c, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        assert_eq!(a, b, "{lambda}");
+    }
+    let waves = [700e-9, LAMBDA0, 900e-9];
+    let three: Vec<Channel> =
+        waves.iter().map(|&w| Channel { wavelength_m: w, efficiency: Curve::Constant(0.6) }).collect();
+    let lens = Interleaved::new(F_NUMBER, F0, three, Curve::Constant(0.9)).unwrap();
+    check_lens(&lens, &band(800.0, 1.0)).unwrap();
+    let got = optics::monochromatic_mtf(&lens, LAMBDA0, optics::Field::ON_AXIS, &nus, 256).unwrap();
+    let k = F0 / (8.0 * F_NUMBER * F_NUMBER);
+    for (i, s) in S.into_iter().enumerate() {
+        let sum: f64 = waves.iter().map(|&w| optics::defocus_otf(s, (1.0 - LAMBDA0 / w) * k / LAMBDA0)).sum();
+        let want = (sum / 3.0).abs();
+        assert!((got[i] - want).abs() < 1e-12, "s {s}: {} vs {want}", got[i]);
+        assert!(got[i] < optics::mtf_diffraction_limited(s));
+    }
+}
