@@ -28,14 +28,14 @@ impl Curve {
         }
     }
 
-    fn breakpoints(&self) -> &[f64] {
+    pub(crate) fn breakpoints(&self) -> &[f64] {
         match self {
             Curve::Constant(_) => &[],
             Curve::Table(t) => t.wavelengths(),
         }
     }
 
-    fn range(&self) -> (f64, f64) {
+    pub(crate) fn range(&self) -> (f64, f64) {
         match self {
             Curve::Constant(v) => (*v, *v),
             Curve::Table(t) => (t.min_value(), t.max_value()),
@@ -66,8 +66,40 @@ pub struct ChromaticMetalens {
     seidel: [f64; 4],
 }
 
-fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
+/// `Ok` when `value` is finite and `ok`, else [`Error::OutOfRange`] naming the parameter.
+pub(crate) fn check(name: &'static str, value: f64, ok: bool, expected: &'static str) -> Result<(), Error> {
     if value.is_finite() && ok { Ok(()) } else { Err(Error::OutOfRange { name, value, expected }) }
+}
+
+/// `Ok` when every value of `curve` is a fraction in `[0, 1]`.
+pub(crate) fn check_fraction(name: &'static str, curve: &Curve) -> Result<(), Error> {
+    let (lo, hi) = curve.range();
+    check(name, lo, lo >= 0.0, "a fraction in [0, 1]")?;
+    check(name, hi, hi <= 1.0, "a fraction in [0, 1]")
+}
+
+/// `Ok` when the total imaging efficiency `efficiency(λ)` (a sum of the piecewise-linear
+/// `parts`) is at most `transmission(λ)` everywhere: both sides are piecewise linear with kinks
+/// only at the curves' samples, so checking there (and anywhere, here at `anywhere_m`, for
+/// constants) suffices.
+pub(crate) fn check_efficiency_below_transmission(
+    efficiency: &dyn Fn(f64) -> f64,
+    parts: &[&Curve],
+    transmission: &Curve,
+    anywhere_m: f64,
+) -> Result<(), Error> {
+    let probes = parts.iter().flat_map(|c| c.breakpoints()).chain(transmission.breakpoints()).copied();
+    for lambda in probes.chain(std::iter::once(anywhere_m)) {
+        let (e, t) = (efficiency(lambda), transmission.value(lambda));
+        if e > t * (1.0 + 1e-12) {
+            return Err(Error::EfficiencyAboveTransmission {
+                wavelength_nm: optics::round_for_display(lambda * 1e9),
+                efficiency: e,
+                transmission: t,
+            });
+        }
+    }
+    Ok(())
 }
 
 impl ChromaticMetalens {
@@ -85,30 +117,14 @@ impl ChromaticMetalens {
         check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
         check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
         check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
-        for (name, curve) in [("efficiency", &efficiency), ("transmission", &transmission)] {
-            let (lo, hi) = curve.range();
-            check(name, lo, lo >= 0.0, "a fraction in [0, 1]")?;
-            check(name, hi, hi <= 1.0, "a fraction in [0, 1]")?;
-        }
-        // τ1 ≤ T: both piecewise linear, so checking at every sample of either suffices
-        // (and anywhere for two constants).
-        let probes: Vec<f64> = efficiency
-            .breakpoints()
-            .iter()
-            .chain(transmission.breakpoints())
-            .copied()
-            .chain(std::iter::once(design_wavelength_m))
-            .collect();
-        for lambda in probes {
-            let (e, t) = (efficiency.value(lambda), transmission.value(lambda));
-            if e > t * (1.0 + 1e-12) {
-                return Err(Error::EfficiencyAboveTransmission {
-                    wavelength_nm: optics::round_for_display(lambda * 1e9),
-                    efficiency: e,
-                    transmission: t,
-                });
-            }
-        }
+        check_fraction("efficiency", &efficiency)?;
+        check_fraction("transmission", &transmission)?;
+        check_efficiency_below_transmission(
+            &|l| efficiency.value(l),
+            &[&efficiency],
+            &transmission,
+            design_wavelength_m,
+        )?;
         Ok(ChromaticMetalens {
             f_number,
             focal_length: focal_length_m,

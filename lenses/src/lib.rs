@@ -3,6 +3,15 @@
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
 //!   (docs/physics.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
 //!   constant or tabulated.
+//! - [`Refractive`]: the ideal refractive reference, `W = 0`, or with glass dispersion
+//!   `f(λ) = f0 (n0 − 1)/(n(λ) − 1)` ([`Sellmeier`]), `τ = T` from the Fresnel or coated
+//!   surface losses.
+//! - [`DispersionEngineered`]: an achromat over a design band whose aperture must fit the
+//!   group-delay range of its meta-atom library (or, [`DelayOverflow::Reduced`], is partly chromatic).
+//! - [`Harmonic`]: a multi-order diffractive lens of design order p, orders m with
+//!   `τ_m = τ_base sinc²(pλ0/λ − m)` and `W020_m(λ) = (1 − mλ/(pλ0)) f0/(8F#²)`.
+//! - [`Interleaved`]: a spatially multiplexed lens of N interleaved chromatic channels λ_j,
+//!   `τ_j = η_j/N²`, `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`.
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
 //! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
@@ -26,8 +35,16 @@
 //! Units: SI (m). Efficiencies are fractions of the light incident on the aperture.
 
 mod chromatic;
+mod dispersion;
+mod harmonic;
+mod interleaved;
+mod refractive;
 
 pub use chromatic::{ChromaticMetalens, Curve};
+pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
+pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
+pub use interleaved::{Channel, Interleaved};
+pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 
 /// What can be wrong with a lens description.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -54,5 +71,19 @@ pub enum Error {
         efficiency: f64,
         /// T there.
         transmission: f64,
+    },
+    /// A dispersion-engineered lens whose aperture needs more group delay than its library has.
+    #[error(
+        "the achromatic aperture needs a group-delay range ΔT_req = {required_fs:.2} fs but the meta-atom library provides ΔT_lib = {library_fs:.2} fs: at this focal length the library allows at most D = {max_diameter_um:.1} µm (F/{max_f_number:.2}); use a smaller aperture (a larger F-number), a library of larger range, or delay_overflow = reduced"
+    )]
+    GroupDelayExceeded {
+        /// ΔT_req, fs.
+        required_fs: f64,
+        /// ΔT_lib, fs.
+        library_fs: f64,
+        /// The largest diameter the library allows at the focal length, µm.
+        max_diameter_um: f64,
+        /// The F-number at that diameter.
+        max_f_number: f64,
     },
 }

@@ -158,3 +158,163 @@ fn field_curvature_adds_to_the_chromatic_defocus() {
         assert!((at_blurred[i] - twice).abs() < 2e-3, "s {s}: {} vs {twice}", at_blurred[i]);
     }
 }
+
+// ---- the refractive reference (docs/physics.md, "Lens families") ----
+
+/// The diffraction-limited polychromatic mean MTF over `[0, nu_max]` for the `detected`
+/// spectrum, from the closed-form monochromatic mean alone: with a wavelength-independent
+/// efficiency the mean of `Σ w(λ) MTF0(ν λ F#)/Σ w` over ν is `∫ ρ(λ) M(ν_max λ F#) dλ / ∫ ρ`,
+/// `M` = [`optics::mtf_diffraction_limited_mean`]. Gauss–Legendre over ±10 σ of a Gaussian band.
+fn diffraction_limited_mean(detected: &Spectrum, centre: f64, sigma: f64, nu_max: f64, f_number: f64) -> f64 {
+    let (lo, hi) = (centre - 10.0 * sigma, centre + 10.0 * sigma);
+    let num = optics::quad::composite(lo, hi, 64, |l| {
+        detected.value(l) * optics::mtf_diffraction_limited_mean(nu_max * l * f_number)
+    });
+    num / optics::quad::composite(lo, hi, 64, |l| detected.value(l))
+}
+
+fn mean_mtf(lens: &dyn optics::LensModel, detected: &Spectrum, nu_max: f64) -> f64 {
+    optics::Polychromatic::new(lens, detected, optics::Field::ON_AXIS, nu_max, None).unwrap().mean_mtf().0
+}
+
+#[test]
+fn dispersion_free_refractive_lens_is_diffraction_limited_over_a_band() {
+    use lenses::{Glass, Refractive, Surfaces};
+    let lens = Refractive::new(F_NUMBER, F0, LAMBDA0, Glass::Constant(1.5168), 2, Surfaces::Uncoated).unwrap();
+    check_lens(&lens, &band(800.0, 100.0)).unwrap();
+    for (centre, range) in [(550.0, 100.0), (800.0, 200.0), (1000.0, 50.0)] {
+        let detected = band(centre, range);
+        let sigma = range * 1e-9 / (2.0 * std::f64::consts::SQRT_2);
+        // Nyquist of a 2 µm pixel: 250 cycles/mm, half the cutoff at 800 nm
+        let got = mean_mtf(&lens, &detected, 2.5e5);
+        let want = diffraction_limited_mean(&detected, centre * 1e-9, sigma, 2.5e5, F_NUMBER);
+        assert!((got - want).abs() < 1e-5 * want, "{centre} nm ± {range}: {got} vs {want}");
+    }
+}
+
+/// N-BK7 focuses red behind the detector and blue in front: the lens's defocus against the hand
+/// formula `W020 = f0/(8F#²) (n0 − n)/(n0 − 1)` with the catalogue's indices (n_e = 1.51872 at
+/// 546.07 nm, n_C = 1.51432 at 656.27 nm, n_F = 1.52238 at 486.13 nm).
+#[test]
+fn n_bk7_lens_defocus_has_the_sign_of_normal_dispersion() {
+    use lenses::{Glass, Refractive, Sellmeier, Surfaces};
+    use optics::LensModel;
+    let lens =
+        Refractive::new(F_NUMBER, F0, 546.07e-9, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap();
+    let k = F0 / (8.0 * F_NUMBER * F_NUMBER);
+    let n0 = 1.51872;
+    for (lambda, n) in [(656.27e-9, 1.51432), (486.13e-9, 1.52238)] {
+        let hand = k * (n0 - n) / (n0 - 1.0);
+        let order = &lens.orders(lambda, optics::Field::ON_AXIS)[0];
+        let w020 = order.wavefront.defocus_m;
+        assert_eq!(w020 > 0.0, lambda > 546.07e-9, "{lambda}: {w020}");
+        // catalogue indices to 5 decimals: the index difference to ~0.3 %
+        assert!((w020 - hand).abs() < 5e-3 * hand.abs(), "{lambda}: {w020} vs {hand}");
+    }
+    // 656 nm: +0.570 µm, 486 nm: −0.471 µm at F/2.5, f0 = 3.36 mm
+    assert!((lens.orders(656.27e-9, optics::Field::ON_AXIS)[0].wavefront.defocus_m - 0.570e-6).abs() < 3e-9);
+    // the polychromatic MTF of a broad band is below the diffraction limit, and conforms
+    check_lens(&lens, &band(550.0, 100.0)).unwrap();
+    let detected = band(550.0, 200.0);
+    let sigma = 200e-9 / (2.0 * std::f64::consts::SQRT_2);
+    let perfect = diffraction_limited_mean(&detected, 550e-9, sigma, 2.5e5, F_NUMBER);
+    assert!(mean_mtf(&lens, &detected, 2.5e5) < perfect);
+}
+
+// ---- the dispersion-engineered achromat ----
+
+/// [`diffraction_limited_mean`] with the spectrum restricted to `[lo, hi]` (the wavelengths a
+/// lens images), Gauss–Legendre on 64 panels.
+fn diffraction_limited_mean_between(detected: &Spectrum, lo: f64, hi: f64, nu_max: f64, f_number: f64) -> f64 {
+    let num = optics::quad::composite(lo, hi, 64, |l| {
+        detected.value(l) * optics::mtf_diffraction_limited_mean(nu_max * l * f_number)
+    });
+    num / optics::quad::composite(lo, hi, 64, |l| detected.value(l))
+}
+
+#[test]
+fn ideal_achromat_is_diffraction_limited_in_its_band() {
+    use lenses::{DelayOverflow, DispersionEngineered};
+    // F/2.5 at f0 = 3.36 mm needs 221.96 fs: a library of 250 fs suffices
+    let lens = DispersionEngineered::new(
+        F_NUMBER,
+        F0,
+        (400e-9, 1200e-9),
+        250e-15,
+        Curve::Constant(0.3),
+        Curve::Constant(0.7),
+        DelayOverflow::Reject,
+    )
+    .unwrap();
+    for (centre, range) in [(600.0, 40.0), (800.0, 60.0), (1000.0, 40.0)] {
+        let detected = band(centre, range);
+        check_lens(&lens, &detected).unwrap();
+        let sigma = range * 1e-9 / (2.0 * std::f64::consts::SQRT_2);
+        let got = mean_mtf(&lens, &detected, 2.5e5);
+        let want = diffraction_limited_mean(&detected, centre * 1e-9, sigma, 2.5e5, F_NUMBER);
+        assert!((got - want).abs() < 1e-5 * want, "{centre} nm ± {range}: {got} vs {want}");
+    }
+    // a band straddling the upper edge: only the wavelengths inside are imaged
+    let detected = band(1150.0, 200.0);
+    let got = mean_mtf(&lens, &detected, 2.5e5);
+    let want =
+        diffraction_limited_mean_between(&detected, 1150e-9 - 7.0 * 200e-9 / 8f64.sqrt(), 1200e-9, 2.5e5, F_NUMBER);
+    assert!((got - want).abs() < 1e-5 * want, "{got} vs {want}");
+}
+
+// ---- the harmonic diffractive lens ----
+
+/// Near λ0 a harmonic lens of design order 1 images as the chromatic lens whose τ1 is its
+/// first-order efficiency: the other orders carry ~δ²/k² each (δ = λ0/λ − 1), far below the
+/// tolerance. At λ0 exactly only the first order carries light: the diffraction limit.
+#[test]
+fn harmonic_lens_of_order_one_images_as_the_chromatic_lens_near_the_design_wavelength() {
+    use lenses::{Harmonic, sinc};
+    let h = Harmonic::new(F_NUMBER, F0, LAMBDA0, 1, 0.4, Curve::Constant(0.6)).unwrap();
+    let nus: Vec<f64> = S.iter().map(|s| s / (LAMBDA0 * F_NUMBER)).collect();
+    let at_design = optics::monochromatic_mtf(&h, LAMBDA0, optics::Field::ON_AXIS, &nus, 256).unwrap();
+    for (s, m) in S.iter().zip(&at_design) {
+        assert!((m - optics::mtf_diffraction_limited(*s)).abs() < 1e-12, "s {s}: {m}");
+    }
+    for lambda in [799.2e-9, 800.5e-9, 801e-9] {
+        let tau1 = 0.4 * sinc(LAMBDA0 / lambda - 1.0).powi(2);
+        let c = ChromaticMetalens::new(F_NUMBER, F0, LAMBDA0, Curve::Constant(tau1), Curve::Constant(0.6)).unwrap();
+        let a = optics::monochromatic_mtf(&h, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        let b = optics::monochromatic_mtf(&c, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-5, "{lambda}: {x} vs {y}");
+        }
+    }
+}
+
+// ---- the interleaved multiplexed lens ----
+
+/// One channel is the chromatic lens of its wavelength (τ = η/1²); with three channels at the
+/// wavelength of one, the monochromatic OTF is the efficiency-weighted sum of that channel's
+/// diffraction-limited OTF and the others' defocused ones.
+#[test]
+fn interleaved_channels_are_chromatic_lenses() {
+    use lenses::{Channel, Interleaved};
+    let nus: Vec<f64> = S.iter().map(|s| s / (LAMBDA0 * F_NUMBER)).collect();
+    let one = vec![Channel { wavelength_m: LAMBDA0, efficiency: Curve::Constant(0.5) }];
+    let single = Interleaved::new(F_NUMBER, F0, one, Curve::Constant(0.9)).unwrap();
+    let c = ChromaticMetalens::new(F_NUMBER, F0, LAMBDA0, Curve::Constant(0.5), Curve::Constant(0.9)).unwrap();
+    for lambda in [780e-9, 800e-9, 830e-9] {
+        let a = optics::monochromatic_mtf(&single, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        let b = optics::monochromatic_mtf(&c, lambda, optics::Field::ON_AXIS, &nus, 256).unwrap();
+        assert_eq!(a, b, "{lambda}");
+    }
+    let waves = [700e-9, LAMBDA0, 900e-9];
+    let three: Vec<Channel> =
+        waves.iter().map(|&w| Channel { wavelength_m: w, efficiency: Curve::Constant(0.6) }).collect();
+    let lens = Interleaved::new(F_NUMBER, F0, three, Curve::Constant(0.9)).unwrap();
+    check_lens(&lens, &band(800.0, 1.0)).unwrap();
+    let got = optics::monochromatic_mtf(&lens, LAMBDA0, optics::Field::ON_AXIS, &nus, 256).unwrap();
+    let k = F0 / (8.0 * F_NUMBER * F_NUMBER);
+    for (i, s) in S.into_iter().enumerate() {
+        let sum: f64 = waves.iter().map(|&w| optics::defocus_otf(s, (1.0 - LAMBDA0 / w) * k / LAMBDA0)).sum();
+        let want = (sum / 3.0).abs();
+        assert!((got[i] - want).abs() < 1e-12, "s {s}: {} vs {want}", got[i]);
+        assert!(got[i] < optics::mtf_diffraction_limited(s));
+    }
+}
