@@ -117,39 +117,28 @@ fn overlays_labelled_csvs_with_marks_and_best_points() {
 fn groups_one_csv_into_lines_and_shades_invalid_points() {
     let dir = scratch("group");
     let csv = file(&dir, "grid.csv", &grid_csv());
+    let plot = |out: &std::path::Path| {
+        succeeds(&[
+            "plot",
+            &csv,
+            "--x",
+            "spectrum.range_nm",
+            "--y",
+            "asnr",
+            "--group",
+            "lens.f_number",
+            "--group-label",
+            "F/{}",
+            "--shade-invalid",
+            "--output",
+            out.to_str().unwrap(),
+        ]);
+    };
     let out = dir.join("s9.png");
-    succeeds(&[
-        "plot",
-        &csv,
-        "--x",
-        "spectrum.range_nm",
-        "--y",
-        "asnr",
-        "--group",
-        "lens.f_number",
-        "--group-label",
-        "F/{}",
-        "--shade-invalid",
-        "--output",
-        out.to_str().unwrap(),
-    ]);
+    plot(&out);
     assert_eq!(&std::fs::read(&out).unwrap()[..4], b"\x89PNG");
     let out = dir.join("s9.svg");
-    succeeds(&[
-        "plot",
-        &csv,
-        "--x",
-        "spectrum.range_nm",
-        "--y",
-        "asnr",
-        "--group",
-        "lens.f_number",
-        "--group-label",
-        "F/{}",
-        "--shade-invalid",
-        "--output",
-        out.to_str().unwrap(),
-    ]);
+    plot(&out);
     let texts = texts(&svg(&out));
     for needle in ["F/1.5", "F/2.5", "Fraunhofer approximation not valid (SI eq. S15)"] {
         assert!(texts.iter().any(|t| t == needle), "missing {needle:?} in {texts:?}");
