@@ -242,8 +242,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;
-            warn(&scene::build_with_warnings(&source, &set)?.warnings);
-            print!("{}", scene::resolved_toml(&source, &set)?);
+            let resolved = scene::resolved_toml(&source, &set)?;
+            warn(&resolved.warnings);
+            print!("{}", resolved.toml);
             Ok(())
         }
         Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths } => {

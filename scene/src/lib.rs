@@ -47,7 +47,7 @@ mod tables;
 
 pub use error::{Error, SHOWN, Warning};
 pub use load::{
-    EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, Loaded, PAPER_SCENE, PIXEL_PITCH_PLAUSIBLE_UM, Source,
+    EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, Loaded, PAPER_SCENE, PIXEL_PITCH_PLAUSIBLE_UM, Resolved, Source,
     WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, check_overrides, load, load_with_warnings, read,
     resolved_toml,
 };

@@ -463,22 +463,37 @@ pub fn build_from(source: &Source, overrides: &[String]) -> Result<Scene, Error>
 /// [`build_from`], with the plausibility warnings of [`load_with_warnings`].
 pub fn build_with_warnings(source: &Source, overrides: &[String]) -> Result<Loaded, Error> {
     let (raw, origins) = prepare(source, overrides)?;
-    match build(&raw, &origins) {
-        Ok(scene) => Ok(Loaded { scene, warnings: origins.warnings.into_inner() }),
-        Err(error) => {
-            let warnings = origins.warnings.into_inner();
-            if warnings.is_empty() { Err(error) } else { Err(Error::WithWarnings { error: Box::new(error), warnings }) }
-        }
+    build_checked(&raw, &origins)
+}
+
+/// Builds the scene and takes its plausibility warnings: with the scene, or named beside the
+/// error when it cannot be built (a unit slip is then the likely cause).
+fn build_checked(raw: &RawScene, origins: &Origins) -> Result<Loaded, Error> {
+    let built = build(raw, origins);
+    let warnings = origins.warnings.take();
+    match built {
+        Ok(scene) => Ok(Loaded { scene, warnings }),
+        Err(error) if warnings.is_empty() => Err(error),
+        Err(error) => Err(Error::WithWarnings { error: Box::new(error), warnings }),
     }
 }
 
+/// A scene as read ([`resolved_toml`]) and its plausibility warnings.
+#[derive(Clone, Debug)]
+pub struct Resolved {
+    /// TOML with every default filled in and every CSV path resolved (absolute).
+    pub toml: String,
+    /// Values that are valid but almost surely a unit slip, as [`Loaded::warnings`].
+    pub warnings: Vec<Warning>,
+}
+
 /// The scene of `source` with `overrides` as TOML with every default filled in and every CSV
-/// path resolved (absolute): what was read. It is validated first, and loads again to the same
-/// scene.
-pub fn resolved_toml(source: &Source, overrides: &[String]) -> Result<String, Error> {
+/// path resolved (absolute): what was read. It is validated (built) once, and loads again to the
+/// same scene.
+pub fn resolved_toml(source: &Source, overrides: &[String]) -> Result<Resolved, Error> {
     let (raw, origins) = prepare(source, overrides)?;
-    build(&raw, &origins)?;
-    crate::resolved::write(&raw, &origins)
+    let warnings = build_checked(&raw, &origins)?.warnings;
+    Ok(Resolved { toml: crate::resolved::write(&raw, &origins)?, warnings })
 }
 
 /// Checks the syntax of every override (`key=value`, a dotted key) before any file is read.
@@ -1028,13 +1043,13 @@ mod tests {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
         for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml"] {
             let source = read(Some(&root.join(name))).unwrap();
-            let text = resolved_toml(&source, &[]).unwrap();
+            let text = resolved_toml(&source, &[]).unwrap().toml;
             let again = Source::from_text(text.clone(), "resolved", std::env::temp_dir());
             let a = metric::evaluate(&build_from(&source, &[]).unwrap()).unwrap();
             let b = metric::evaluate(&build_from(&again, &[]).unwrap()).unwrap();
             assert_eq!(a.asnr, b.asnr, "{name}:\n{text}");
             // and it is a fixed point: resolving the resolved scene changes only the header
-            let twice = resolved_toml(&again, &[]).unwrap();
+            let twice = resolved_toml(&again, &[]).unwrap().toml;
             let body = |t: &str| t.lines().filter(|l| !l.starts_with("# From")).collect::<Vec<_>>().join("\n");
             assert_eq!(body(&twice), body(&text), "{name}");
         }
