@@ -405,7 +405,7 @@ fn the_legend_is_outside_the_data_and_every_curve_inside_it() {
 fn mtf_references_are_drawn_last_and_dashed_lines_have_dashed_swatches() {
     let dir = scratch("mtf-styles");
     let out = dir.join("mtf.svg");
-    let run = asnr(&[
+    succeeds(&[
         "mtf",
         "--set",
         "field.x_deg=8",
@@ -416,7 +416,6 @@ fn mtf_references_are_drawn_last_and_dashed_lines_have_dashed_swatches() {
         "--plot",
         out.to_str().unwrap(),
     ]);
-    assert!(run.status.success(), "{}", stderr(&run));
     let lines = polylines(&svg(&out));
     let frame = outline(&lines, FRAME).unwrap();
     let legend = outline(&lines, LEGEND_EDGE).unwrap();
@@ -472,8 +471,7 @@ fn sweep_and_mtf_plots_show_the_scene_title_and_human_axis_labels() {
     let dir = scratch("titles");
     let theory_title = "Paper theory model: chromatic metalens F/2.5, 800 nm, 50 nm range";
     let out = dir.join("sweep.svg");
-    let run = asnr(&["sweep", PAPER, "--over", "camera.pixel_pitch_um=4:6:3", "--plot", out.to_str().unwrap()]);
-    assert!(run.status.success(), "{}", stderr(&run));
+    succeeds(&["sweep", PAPER, "--over", "camera.pixel_pitch_um=4:6:3", "--plot", out.to_str().unwrap()]);
     let text = svg(&out);
     assert_eq!(title(&text), theory_title);
     let all = texts(&text);
@@ -484,7 +482,7 @@ fn sweep_and_mtf_plots_show_the_scene_title_and_human_axis_labels() {
     assert!(!all.iter().any(|t| t.contains("camera.pixel_pitch_um")), "{all:?}");
 
     let out = dir.join("heat.svg");
-    let run = asnr(&[
+    succeeds(&[
         "sweep",
         "--over",
         "spectrum.range_nm=10:50:3",
@@ -493,7 +491,6 @@ fn sweep_and_mtf_plots_show_the_scene_title_and_human_axis_labels() {
         "--plot",
         out.to_str().unwrap(),
     ]);
-    assert!(run.status.success(), "{}", stderr(&run));
     let text = svg(&out);
     // the embedded scene is the paper's theory scene, with its title
     assert_eq!(title(&text), theory_title);
@@ -503,8 +500,7 @@ fn sweep_and_mtf_plots_show_the_scene_title_and_human_axis_labels() {
     }
 
     let out = dir.join("mtf.svg");
-    let run = asnr(&["mtf", MONOCHROMATIC, "--points", "21", "--plot", out.to_str().unwrap()]);
-    assert!(run.status.success(), "{}", stderr(&run));
+    succeeds(&["mtf", MONOCHROMATIC, "--points", "21", "--plot", out.to_str().unwrap()]);
     let text = svg(&out);
     let expected = "Paper lens F/2.5 behind a 1 nm line filter at 800 nm (one wavelength for the optics)";
     assert_eq!(title(&text), expected);
