@@ -36,6 +36,12 @@ impl Field {
 }
 
 /// The pupil an imaging order passes through.
+///
+/// Photon counts follow the pupil's area (docs/physics.md, "Lens families"): an order's
+/// [`efficiency`](Order::efficiency) is a fraction of the light incident on the **full** clear
+/// aperture, so an order through a pupil of area fraction `a` ([`Pupil::area_fraction`]) carries
+/// at most `a` of it; a lens model puts the area in the efficiency (a sector of 10° collects
+/// 1/36 of the light of the full lens), and `optics::testkit` checks `efficiency ≤ a`.
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub enum Pupil {
@@ -44,6 +50,56 @@ pub enum Pupil {
     /// Any other aperture, in units of the full aperture's radius (decentred iris, annulus,
     /// sector or segment, mask): computed on the FFT path.
     Aperture(Arc<crate::fft::Aperture>),
+    /// Several zones of one aperture, coherent at one wavelength (a segmented multiplexed lens):
+    /// one composite pupil whose field is `amplitude_j exp(i 2π W_j/λ)` in zone `j`, computed on
+    /// the FFT path. Each zone's [`Zone::wavefront`] replaces the order's wavefront there (it is
+    /// written in full-aperture coordinates, so an off-centre zone's defocus is also a tilt); the
+    /// order's `image_shift_m` applies to all zones, and its `defocus_m` should be the zone
+    /// defocus of largest size (it sizes the spectral rule and the Fraunhofer check). The
+    /// order's efficiency is `Σ amplitude_j² × area fraction_j` times nothing else: the zones'
+    /// amplitudes carry their efficiencies.
+    Zones(Arc<[Zone]>),
+    /// No pupil: the order's OTF is given as a table against wavelength and frequency (a
+    /// measured or simulated MTF, e.g. a Zemax FFT MTF export). The order's wavefront is not
+    /// used except `image_shift_m`; the table's `defocus_m` may be set for the Fraunhofer check.
+    Table(Arc<crate::OtfTable>),
+}
+
+impl Pupil {
+    /// The fraction of the full aperture's area `π R²` this pupil transmits: 1 for
+    /// [`Full`](Pupil::Full) and [`Table`](Pupil::Table) (a measured OTF carries its area in its
+    /// efficiency), the aperture's area over π, and for [`Zones`](Pupil::Zones) the
+    /// power-weighted sum `Σ amplitude_j² area_j/π`. A mask's area is measured on a 512² grid
+    /// with supersampled edge pixels.
+    pub fn area_fraction(&self) -> f64 {
+        match self {
+            Pupil::Full | Pupil::Table(_) => 1.0,
+            Pupil::Aperture(a) => a.area_fraction(),
+            Pupil::Zones(zones) => zones.iter().map(|z| z.amplitude * z.amplitude * z.aperture.area_fraction()).sum(),
+        }
+    }
+}
+
+/// One zone of a composite pupil ([`Pupil::Zones`]).
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct Zone {
+    /// The zone's region, in units of the full aperture's radius, centred on the lens axis.
+    pub aperture: Arc<crate::fft::Aperture>,
+    /// Field amplitude transmission, ≥ 0: the zone passes `amplitude²` of the power incident on it.
+    pub amplitude: f64,
+    /// The zone's wavefront (defocus and Seidel terms, full-aperture coordinates, the sign of
+    /// [`Wavefront`]). Its `image_shift_m` is applied as a tilt of this zone alone (on top of
+    /// the order's shift, which applies to all zones): zones of a multiplexed lens off axis each
+    /// have their own lateral colour.
+    pub wavefront: Wavefront,
+}
+
+impl Zone {
+    /// A zone `aperture` with field `amplitude` and `wavefront`.
+    pub fn new(aperture: Arc<crate::fft::Aperture>, amplitude: f64, wavefront: Wavefront) -> Zone {
+        Zone { aperture, amplitude, wavefront }
+    }
 }
 
 /// Wavefront error of an imaging order at the exit pupil, relative to a reference sphere

@@ -37,6 +37,7 @@ pub mod fraunhofer;
 mod lens;
 mod otf;
 mod poly;
+mod table;
 pub mod quad;
 pub mod reference;
 #[cfg(feature = "testkit")]
@@ -44,7 +45,7 @@ pub mod testkit;
 
 pub use closed::GaussianDefocus;
 pub use error::Error;
-pub use lens::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront, round_for_display};
+pub use lens::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront, Zone, round_for_display};
 pub use otf::{
     BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_bessel, defocus_otf_panels, defocus_otf_quadrature,
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
@@ -53,3 +54,4 @@ pub use poly::{
     DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Polychromatic, Settings,
     Work, highest_cutoff, monochromatic_mtf,
 };
+pub use table::{OtfTable, TABLE_ZERO_FREQUENCY_TOLERANCE};

@@ -546,6 +546,8 @@ impl<'a> Polychromatic<'a> {
                 let aperture = match &order.pupil {
                     Pupil::Full => circle.clone(),
                     Pupil::Aperture(a) => a.clone(),
+                    // PLACEHOLDER until the composite and tabulated orders are wired into the FFT layer
+                    _ => return Err(Error::InvalidParameter { name: "pupil", value: 0.0, expected: "WIP" }),
                 };
                 let aberrations = order.wavefront.aberrations();
                 let pupil = match &mut cached {

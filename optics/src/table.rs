@@ -1,0 +1,196 @@
+//! A transfer function given as a table: the OTF (or MTF) of one imaging order measured or
+//! simulated at a few wavelengths, against spatial frequency at the detector.
+//!
+//! This is what the paper did with its Zemax and measured MTFs, and what an order of a
+//! [`Pupil::Table`](crate::Pupil::Table) carries. Between tabulated wavelengths the value is
+//! linear in λ; below the first and above the last wavelength it is the end row's (a table is
+//! not extrapolated in λ: the lens that holds it states its wavelength range and efficiency).
+//! Between tabulated frequencies it is linear in ν, and zero beyond the last frequency. Off
+//! axis a table may give tangential (along the field) and sagittal curves; along an azimuth `φ`
+//! measured from the field direction the value is `T cos²φ + S sin²φ` (the two are equal on
+//! axis). Each row is normalized to 1 at zero frequency, as an OTF is by definition.
+
+use crate::Error;
+
+/// The OTF of one order against wavelength and frequency (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OtfTable {
+    wavelengths_m: Vec<f64>,
+    frequencies: Vec<f64>,
+    tangential: Vec<Vec<f64>>,
+    sagittal: Vec<Vec<f64>>,
+}
+
+fn bad<T>(name: &'static str, value: f64, expected: &'static str) -> Result<T, Error> {
+    Err(Error::InvalidParameter { name, value, expected })
+}
+
+/// How far a row's value at zero frequency may be from 1 before the table is refused (it is then
+/// not an OTF, or not normalized: a typing or unit slip).
+pub const TABLE_ZERO_FREQUENCY_TOLERANCE: f64 = 0.02;
+
+impl OtfTable {
+    /// A table at `wavelengths_m` (≥ 1, finite, > 0, strictly increasing) and `frequencies`
+    /// (cycles/m at the detector, ≥ 2, the first 0, strictly increasing), with
+    /// `tangential[i][k]` the OTF at wavelength `i`, frequency `k` (finite, in `[−1, 1]`
+    /// after normalization, within [`TABLE_ZERO_FREQUENCY_TOLERANCE`] of 1 at `ν = 0`), and
+    /// optionally `sagittal` of the same shape (the tangential values are used for both when
+    /// `None`). Each row is divided by its value at zero frequency.
+    pub fn new(
+        wavelengths_m: Vec<f64>,
+        frequencies: Vec<f64>,
+        tangential: Vec<Vec<f64>>,
+        sagittal: Option<Vec<Vec<f64>>>,
+    ) -> Result<OtfTable, Error> {
+        if wavelengths_m.is_empty() {
+            return bad("table wavelengths", 0.0, "at least one wavelength");
+        }
+        for (i, &l) in wavelengths_m.iter().enumerate() {
+            if !(l.is_finite() && l > 0.0) || (i > 0 && l <= wavelengths_m[i - 1]) {
+                return bad("table wavelength", l, "finite, > 0 m and strictly increasing");
+            }
+        }
+        if frequencies.len() < 2 {
+            return bad("table frequencies", frequencies.len() as f64, "at least two frequencies, the first 0");
+        }
+        if frequencies[0] != 0.0 {
+            return bad("table first frequency", frequencies[0], "0 cycles/m (the OTF is 1 there)");
+        }
+        for (k, &f) in frequencies.iter().enumerate() {
+            if !f.is_finite() || (k > 0 && f <= frequencies[k - 1]) {
+                return bad("table frequency", f, "finite and strictly increasing cycles/m");
+            }
+        }
+        let normalize = |rows: Vec<Vec<f64>>| -> Result<Vec<Vec<f64>>, Error> {
+            if rows.len() != wavelengths_m.len() {
+                return bad("table rows", rows.len() as f64, "one row per wavelength");
+            }
+            rows.into_iter()
+                .map(|row| {
+                    if row.len() != frequencies.len() {
+                        return bad("table row length", row.len() as f64, "one value per frequency");
+                    }
+                    let at_zero = row[0];
+                    if !(at_zero.is_finite() && (at_zero - 1.0).abs() <= TABLE_ZERO_FREQUENCY_TOLERANCE) {
+                        return bad("table value at zero frequency", at_zero, "1 within 0.02 (an OTF is 1 at ν = 0)");
+                    }
+                    let row: Vec<f64> = row.iter().map(|v| v / at_zero).collect();
+                    if let Some(&v) = row.iter().find(|v| !(v.is_finite() && v.abs() <= 1.0 + 1e-9)) {
+                        return bad("table value", v, "finite, in [−1, 1] (an OTF, or an MTF in [0, 1])");
+                    }
+                    Ok(row.into_iter().map(|v| v.clamp(-1.0, 1.0)).collect())
+                })
+                .collect()
+        };
+        let tangential = normalize(tangential)?;
+        let sagittal = match sagittal {
+            Some(rows) => normalize(rows)?,
+            None => tangential.clone(),
+        };
+        Ok(OtfTable { wavelengths_m, frequencies, tangential, sagittal })
+    }
+
+    /// The tabulated wavelengths, m.
+    pub fn wavelengths(&self) -> &[f64] {
+        &self.wavelengths_m
+    }
+
+    /// The tabulated frequencies, cycles/m.
+    pub fn frequencies(&self) -> &[f64] {
+        &self.frequencies
+    }
+
+    /// The highest tabulated frequency, cycles/m: the OTF is zero beyond.
+    pub fn max_frequency(&self) -> f64 {
+        self.frequencies[self.frequencies.len() - 1]
+    }
+
+    /// Whether the tangential and sagittal curves differ somewhere.
+    pub fn is_direction_dependent(&self) -> bool {
+        self.tangential != self.sagittal
+    }
+
+    /// The OTF at `wavelength_m` and `frequency` (cycles/m, sign ignored) along the direction at
+    /// angle `azimuth_from_field_rad` from the field direction: `T cos²φ + S sin²φ`.
+    pub fn value(&self, wavelength_m: f64, frequency: f64, azimuth_from_field_rad: f64) -> f64 {
+        let t = self.interpolate(&self.tangential, wavelength_m, frequency.abs());
+        if !self.is_direction_dependent() {
+            return t;
+        }
+        let s = self.interpolate(&self.sagittal, wavelength_m, frequency.abs());
+        let c2 = azimuth_from_field_rad.cos().powi(2);
+        t * c2 + s * (1.0 - c2)
+    }
+
+    fn interpolate(&self, rows: &[Vec<f64>], wavelength_m: f64, nu: f64) -> f64 {
+        let f = &self.frequencies;
+        if nu >= self.max_frequency() {
+            return if nu == self.max_frequency() { self.row_at(rows, wavelength_m, f.len() - 1) } else { 0.0 };
+        }
+        let k = f.partition_point(|&x| x <= nu).max(1);
+        let u = (nu - f[k - 1]) / (f[k] - f[k - 1]);
+        let (a, b) = (self.row_at(rows, wavelength_m, k - 1), self.row_at(rows, wavelength_m, k));
+        a + u * (b - a)
+    }
+
+    /// Column `k` of the rows, linear in wavelength, the end rows beyond the table.
+    fn row_at(&self, rows: &[Vec<f64>], wavelength_m: f64, k: usize) -> f64 {
+        let w = &self.wavelengths_m;
+        if wavelength_m <= w[0] {
+            return rows[0][k];
+        }
+        if wavelength_m >= w[w.len() - 1] {
+            return rows[w.len() - 1][k];
+        }
+        let i = w.partition_point(|&x| x <= wavelength_m);
+        let u = (wavelength_m - w[i - 1]) / (w[i] - w[i - 1]);
+        rows[i - 1][k] + u * (rows[i][k] - rows[i - 1][k])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table() -> OtfTable {
+        OtfTable::new(
+            vec![500e-9, 600e-9],
+            vec![0.0, 1e5, 2e5],
+            vec![vec![1.0, 0.5, 0.1], vec![1.0, 0.7, 0.3]],
+            Some(vec![vec![1.0, 0.3, 0.0], vec![1.0, 0.5, 0.1]]),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn interpolates_linearly_in_wavelength_and_frequency() {
+        let t = table();
+        assert_eq!(t.value(500e-9, 0.0, 0.0), 1.0);
+        assert!((t.value(550e-9, 1e5, 0.0) - 0.6).abs() < 1e-15);
+        assert!((t.value(500e-9, 1.5e5, 0.0) - 0.3).abs() < 1e-15);
+        // sagittal across the field, the mean at 45°
+        assert!((t.value(500e-9, 1e5, std::f64::consts::FRAC_PI_2) - 0.3).abs() < 1e-15);
+        assert!((t.value(500e-9, 1e5, std::f64::consts::FRAC_PI_4) - 0.4).abs() < 1e-15);
+        // end rows beyond the wavelengths, zero beyond the last frequency
+        assert_eq!(t.value(400e-9, 1e5, 0.0), 0.5);
+        assert_eq!(t.value(700e-9, 1e5, 0.0), 0.7);
+        assert_eq!(t.value(600e-9, 2e5, 0.0), 0.3);
+        assert_eq!(t.value(600e-9, 2.0001e5, 0.0), 0.0);
+        assert_eq!(t.value(600e-9, -1e5, 0.0), 0.7);
+    }
+
+    #[test]
+    fn rows_are_normalized_and_bad_tables_refused() {
+        let t = OtfTable::new(vec![5e-7], vec![0.0, 1.0], vec![vec![0.99, 0.495]], None).unwrap();
+        assert_eq!(t.value(5e-7, 1.0, 0.0), 0.5);
+        assert!(!t.is_direction_dependent());
+        let e = OtfTable::new(vec![5e-7], vec![0.0, 1.0], vec![vec![100.0, 50.0]], None).unwrap_err();
+        assert!(e.to_string().contains("table value at zero frequency"), "{e}");
+        let e = OtfTable::new(vec![5e-7], vec![1.0, 2.0], vec![vec![1.0, 0.5]], None).unwrap_err();
+        assert!(e.to_string().contains("first frequency"), "{e}");
+        let e = OtfTable::new(vec![5e-7], vec![0.0, 1.0], vec![vec![1.0, f64::NAN]], None).unwrap_err();
+        assert!(e.to_string().contains("table value"), "{e}");
+        let e = OtfTable::new(vec![6e-7, 5e-7], vec![0.0, 1.0], vec![vec![1.0, 0.5]; 2], None).unwrap_err();
+        assert!(e.to_string().contains("wavelength"), "{e}");
+    }
+}
