@@ -6,3 +6,4 @@ mod line;
 mod otf;
 mod properties;
 mod reference;
+mod zones;
