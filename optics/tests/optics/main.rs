@@ -6,4 +6,5 @@ mod line;
 mod otf;
 mod properties;
 mod reference;
+mod tables;
 mod zones;
