@@ -169,55 +169,97 @@ fn needs_grid(order: &Order) -> bool {
 /// spectral panels' phase-turn rule (it cannot move the OTF by more than that).
 const NEGLIGIBLE_EFFICIENCY: f64 = 1e-9;
 
-/// The defocus values whose phase the spectral panels must resolve at `lambda`: one per order
-/// of non-negligible efficiency, one per zone (of non-zero amplitude) of a composite pupil, none
-/// for a tabulated OTF (its rows are interpolated linearly in λ and the panels are cut at them).
-fn phase_defocus(lens: &dyn LensModel, lambda: f64, field: Field) -> Vec<f64> {
+/// Efficiency, relative to the sum over the orders, up to which an order may be present at one
+/// end of a spectral panel and absent at the other without counting as a jump ([`largest_turn`]):
+/// an order entering or leaving the window of a harmonic lens (`sinc²(3 − δ) ≈ δ²/9` at the window
+/// edge), whose weight jumps by no more than that whatever the panel.
+const VANISHING_EFFICIENCY: f64 = 1e-3;
+
+/// One order's defocus at one wavelength for the phase-turn rule, with whether its efficiency
+/// is small enough to appear or vanish between neighbouring wavelengths.
+#[derive(Clone, Copy, Debug)]
+struct PhaseEntry {
+    w020: f64,
+    vanishing: bool,
+}
+
+/// The defocus values whose phase the spectral panels must resolve at `lambda`, sorted: one per
+/// order of non-negligible efficiency, one per zone (of non-zero amplitude) of a composite pupil
+/// (each with its order's efficiency), none for a tabulated OTF (its rows are interpolated
+/// linearly in λ and the panels are cut at them).
+fn phase_defocus(lens: &dyn LensModel, lambda: f64, field: Field) -> Vec<PhaseEntry> {
     let orders = lens.orders(lambda, field);
     let total: f64 = orders.iter().map(|o| o.efficiency.abs()).sum();
     let mut out = Vec::new();
     for o in orders.iter().filter(|o| o.efficiency.abs() > NEGLIGIBLE_EFFICIENCY * total) {
+        let vanishing = o.efficiency.abs() <= VANISHING_EFFICIENCY * total;
         match &o.pupil {
             Pupil::Table(_) => {}
-            Pupil::Zones(zones) => {
-                out.extend(zones.iter().filter(|z| z.amplitude > 0.0).map(|z| z.wavefront.defocus_m));
-            }
-            _ => out.push(o.wavefront.defocus_m),
+            Pupil::Zones(zones) => out.extend(
+                zones
+                    .iter()
+                    .filter(|z| z.amplitude > 0.0)
+                    .map(|z| PhaseEntry { w020: z.wavefront.defocus_m, vanishing }),
+            ),
+            _ => out.push(PhaseEntry { w020: o.wavefront.defocus_m, vanishing }),
         }
     }
+    out.sort_by(|a, b| a.w020.total_cmp(&b.w020));
     out
 }
 
-/// The largest change of one order's defocus between two neighbouring wavelengths with defocus
-/// lists `from` and `to` ([`phase_defocus`]). Orders carry no identity across wavelengths, so
-/// they are matched: by mutual nearest W020 (an order entering or leaving the list, as the window
-/// of a harmonic lens moves, is unmatched and does not count: its weight jumps, which no panel
-/// refines away), and, when the counts agree, also by index (a multiplexed lens lists its
-/// channels in one order); the smaller of the two is taken. Index matching alone mistakes a
-/// shifted window (orders 1–6 → 2–7, same count) for a jump of every order by the order spacing,
-/// and measuring the largest-|W020| order alone jumps between orders of opposite sign: either
-/// refines without end (2^20 panels for an interleaved lens over 100 nm). Nearest matching alone
-/// could pair an order with its neighbour when the panel is so coarse that orders move by more
-/// than half their spacing; the turn is then still at least that half spacing, and the
-/// refinement goes on until the match is right, unless orders lie within the allowed turn of
-/// each other.
-fn largest_turn(from: &[f64], to: &[f64]) -> f64 {
-    let nearest = |x: f64, list: &[f64]| -> Option<usize> {
-        (0..list.len()).min_by(|&i, &j| (list[i] - x).abs().total_cmp(&(list[j] - x).abs()))
-    };
-    let mut mutual: f64 = 0.0;
-    for (i, &a) in from.iter().enumerate() {
-        if let Some(j) = nearest(a, to)
-            && nearest(to[j], from) == Some(i)
-        {
-            mutual = mutual.max((to[j] - a).abs());
+/// The largest change of one order's defocus between two neighbouring wavelengths whose defocus
+/// lists ([`phase_defocus`], sorted) are `from` and `to`.
+///
+/// Orders carry no identity across wavelengths, so they are matched: by the monotone alignment
+/// of the sorted lists that leaves the fewest orders of non-vanishing efficiency unmatched, and
+/// among those the smallest largest change (a bottleneck alignment, by dynamic programming). An
+/// order entering or leaving the window of a harmonic lens, with an efficiency near zero there,
+/// stays unmatched (its weight jumps by that little, which no panel refines away), while the
+/// channels of a multiplexed lens, all bright, are matched one to one in W020 order, which is
+/// their own order since their defocus curves do not cross: a shift of every channel by one
+/// channel spacing across a panel counts as that large change, not as none. Measuring the
+/// largest-|W020| order alone jumped between orders of opposite sign, and matching by list
+/// index alone mistook a shifted window (orders 1–6 → 2–7) for a jump of every order; both
+/// refined without end (the panel bound, 2^20 panels, for an interleaved or harmonic lens over
+/// 50–200 nm).
+fn largest_turn(from: &[PhaseEntry], to: &[PhaseEntry]) -> f64 {
+    let (n, m) = (from.len(), to.len());
+    // cost[i][j]: (unmatched bright orders, largest change) aligning from[..i] with to[..j],
+    // compared lexicographically (the sum in the first and the maximum in the second are both
+    // monotone, so the cell-wise minimum is the optimum)
+    let mut cost = vec![(usize::MAX, f64::INFINITY); (n + 1) * (m + 1)];
+    let at = |i: usize, j: usize| i * (m + 1) + j;
+    cost[at(0, 0)] = (0, 0.0);
+    let better = |a: (usize, f64), b: (usize, f64)| a.0 < b.0 || (a.0 == b.0 && a.1 < b.1);
+    for i in 0..=n {
+        for j in 0..=m {
+            let mut best = cost[at(i, j)];
+            if i > 0 && cost[at(i - 1, j)].0 != usize::MAX {
+                let (c, t) = cost[at(i - 1, j)];
+                let candidate = (c + usize::from(!from[i - 1].vanishing), t);
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            if j > 0 && cost[at(i, j - 1)].0 != usize::MAX {
+                let (c, t) = cost[at(i, j - 1)];
+                let candidate = (c + usize::from(!to[j - 1].vanishing), t);
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            if i > 0 && j > 0 && cost[at(i - 1, j - 1)].0 != usize::MAX {
+                let (c, t) = cost[at(i - 1, j - 1)];
+                let candidate = (c, t.max((from[i - 1].w020 - to[j - 1].w020).abs()));
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            cost[at(i, j)] = best;
         }
     }
-    if from.len() == to.len() {
-        let by_index = from.iter().zip(to).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        return mutual.min(by_index);
-    }
-    mutual
+    cost[at(n, m)].1
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -460,7 +502,7 @@ impl<'a> Polychromatic<'a> {
                     // per order (docs/physics.md, "Spectral quadrature": the OTF turns with the
                     // defocus in waves at each s), the change of W020 across the panel plus the
                     // change of s = ν λ F# times the largest |W020|
-                    let largest = cur.iter().chain(&prev).map(|w| w.abs()).fold(0.0, f64::max);
+                    let largest = cur.iter().chain(&prev).map(|e| e.w020.abs()).fold(0.0, f64::max);
                     let turn =
                         largest_turn(&prev, &cur).max(largest_turn(&prev, &mid)) + largest * highest * f_number * h;
                     worst = worst.max(turn * phase_per_w020);

@@ -3,6 +3,7 @@
 
 mod fft;
 mod line;
+mod orders;
 mod otf;
 mod properties;
 mod reference;
