@@ -1360,7 +1360,7 @@ fn closed_form(
     Some((closed, affine))
 }
 
-fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
+pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
     let (mut lo, mut hi) = detected.support();
     for g in detected.gaussians() {
         lo = lo.max(g.center() - GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
