@@ -135,7 +135,9 @@ impl Node {
         Node {
             lambda,
             weight,
-            w020: order.wavefront.defocus_m,
+            // the largest zone defocus of a composite pupil (the frequency rule's statistics and
+            // the Fraunhofer check of a line); the defocused OTF uses it only for a full pupil
+            w020: crate::fraunhofer::order_defocus(order),
             shift: order.wavefront.image_shift_m,
             table: match &order.pupil {
                 Pupil::Table(t) => Some(t.clone()),
