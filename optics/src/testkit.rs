@@ -113,7 +113,7 @@ fn check_description(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), St
     for lambda in check_wavelengths(detected)? {
         let nm = lambda * 1e9;
         let transmission = lens.transmission(lambda);
-        if !(transmission.is_finite() && transmission >= 0.0 && transmission <= 1.0 + RELATIVE_SLACK) {
+        if !(transmission.is_finite() && (0.0..=1.0 + RELATIVE_SLACK).contains(&transmission)) {
             return Err(format!("at λ = {nm} nm: transmission() = {transmission}, expected finite, in [0, 1]"));
         }
         for field in [Field::ON_AXIS, OFF_AXIS_FIELD] {

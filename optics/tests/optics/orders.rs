@@ -94,35 +94,53 @@ impl<C: Channels + std::fmt::Debug + Send + Sync> LensModel for Lens<C> {
     }
 }
 
+/// An order's efficiency against λ.
+type Efficiency = Box<dyn Fn(f64) -> f64>;
+
+/// One order for the reference: the design wavelength of its chromatic defocus, its efficiency
+/// and the band where it exists.
+struct Span {
+    design: f64,
+    efficiency: Efficiency,
+    band: (f64, f64),
+}
+
+/// One order's share of the reference: its scene's density and its photon weight.
+struct Part<'a> {
+    span: &'a Span,
+    density: Box<dyn Fn(f64) -> f64 + 'a>,
+    weight: f64,
+}
+
 /// The slow reference: the photon-weighted sum over orders of each order's polychromatic OTF
 /// (a chromatic lens for its own wavelength, with the density `ρ(λ) τ_m(λ)` on the wavelengths
 /// where the order exists, each integrated to 1e-9), and the mean of its modulus to 1e-8.
-/// `orders` lists each order once as (design wavelength, efficiency against λ, the band where
-/// it exists).
-fn reference_mean(orders: &[(f64, &dyn Fn(f64) -> f64, (f64, f64))]) -> f64 {
+fn reference_mean(orders: &[Span]) -> f64 {
     let rho = |lambda: f64| lambda; // the top-hat band × λ (SI eq. S8)
-    let scenes: Vec<(f64, Box<dyn Fn(f64) -> f64 + '_>, (f64, f64), f64)> = orders
+    let parts: Vec<Part<'_>> = orders
         .iter()
-        .map(|&(lambda_j, tau, (lo, hi))| {
+        .map(|span| {
+            let (lo, hi) = span.band;
+            let tau = &span.efficiency;
             let density = Box::new(move |l: f64| if (lo..=hi).contains(&l) { rho(l) * tau(l) } else { 0.0 });
             let weight = reference::integrate(reference::GK21, |l| rho(l) * tau(l), &[lo, hi], 0.0, 1e-13).value;
-            (lambda_j, density as Box<dyn Fn(f64) -> f64>, (lo, hi), weight)
+            Part { span, density, weight }
         })
         .collect();
-    let total: f64 = scenes.iter().map(|s| s.3).sum();
+    let total: f64 = parts.iter().map(|p| p.weight).sum();
     let otf = |nu: f64| -> f64 {
-        scenes
+        parts
             .iter()
-            .filter(|s| s.3 > 0.0)
-            .map(|(lambda_j, density, (lo, hi), weight)| {
+            .filter(|p| p.weight > 0.0)
+            .map(|Part { span, density, weight }| {
                 let scene = ReferenceScene {
                     density: density.as_ref(),
-                    lambda_min: *lo,
-                    lambda_max: *hi,
+                    lambda_min: span.band.0,
+                    lambda_max: span.band.1,
                     breakpoints: &[],
                     f_number: F_NUMBER,
                     focal_length_m: FOCAL_LENGTH,
-                    design_wavelength_m: *lambda_j,
+                    design_wavelength_m: span.design,
                     pixel_pitch_m: 5.2e-6,
                     pixel_mtf: false,
                 };
@@ -152,9 +170,12 @@ fn an_interleaved_lens_takes_few_panels_and_matches_the_reference() {
     let poly = Polychromatic::new(&lens, &spectrum, Field::ON_AXIS, NYQUIST, None).unwrap();
     let (mean, work) = poly.mean_mtf();
     assert!(work.spectral_panels <= 32 && work.spectral_nodes <= 32 * 16 * 3, "{work:?}");
-    let tau = |_: f64| 0.6 / 9.0;
-    let orders: Vec<(f64, &dyn Fn(f64) -> f64, (f64, f64))> =
-        lens.0.wavelengths.iter().map(|&w| (w, &tau as &dyn Fn(f64) -> f64, (lo, hi))).collect();
+    let orders: Vec<Span> = lens
+        .0
+        .wavelengths
+        .iter()
+        .map(|&design| Span { design, efficiency: Box::new(|_| 0.6 / 9.0), band: (lo, hi) })
+        .collect();
     let want = reference_mean(&orders);
     assert!((mean - want).abs() < 1e-6 * want, "{mean} vs the reference {want}: {:e}", (mean - want) / want);
 }
@@ -176,19 +197,18 @@ fn harmonic_lenses_take_few_panels_and_match_the_reference() {
         // every order m that is in the window somewhere in the band, over the part where it is:
         // |m − α| ≤ 3 ⇔ pλ0/(m + 3) ≤ λ ≤ pλ0/(m − 3)
         let p = f64::from(order);
-        let taus: Vec<(f64, Box<dyn Fn(f64) -> f64>, (f64, f64))> = (1..=20u32)
+        let orders: Vec<Span> = (1..=20u32)
             .filter_map(|m| {
                 let mf = f64::from(m);
                 let from = (p * LAMBDA0 / (mf + 3.0)).max(lo);
                 let to = if mf > 3.0 { (p * LAMBDA0 / (mf - 3.0)).min(hi) } else { hi };
-                (from < to).then(|| {
-                    let tau: Box<dyn Fn(f64) -> f64> = Box::new(move |l: f64| 0.9 * sinc(p * LAMBDA0 / l - mf).powi(2));
-                    (p * LAMBDA0 / mf, tau, (from, to))
+                (from < to).then(|| Span {
+                    design: p * LAMBDA0 / mf,
+                    efficiency: Box::new(move |l: f64| 0.9 * sinc(p * LAMBDA0 / l - mf).powi(2)),
+                    band: (from, to),
                 })
             })
             .collect();
-        let orders: Vec<(f64, &dyn Fn(f64) -> f64, (f64, f64))> =
-            taus.iter().map(|(w, t, range)| (*w, t.as_ref(), *range)).collect();
         let want = reference_mean(&orders);
         assert!((mean - want).abs() < 1e-6 * want, "p = {order}: {mean} vs the reference {want}");
     }
