@@ -21,6 +21,13 @@
 //!   and integrated by adaptive Gauss–Kronrod (7/15). Where `OTF_poly` changes sign inside a
 //!   panel, the root is located (Illinois method) and the panel split there, so `|OTF_poly|` is
 //!   only integrated where it is smooth.
+//! - **Several orders.** The panels resolve the defocus phase of every order (and every zone of
+//!   a composite pupil), matched between neighbouring wavelengths (`largest_turn`), not only the
+//!   order of largest defocus, whose sign jumps between the channels of a multiplexed lens.
+//! - **Tabulated orders** ([`Pupil::Table`]) are read at ν (T/S along the azimuth from the field
+//!   direction) in place of the defocused OTF, on the exact path or beside the FFT layer's grids;
+//!   composite pupils of zones ([`Pupil::Zones`]) get one FFT grid per node, of their coherent
+//!   field (`fft::SampledZones`).
 //! - **Line spectra** ([`Spectrum::as_line`]) skip all of the spectral part: the sum over λ is one
 //!   term per imaging order at the line's wavelength ([`Engine::Monochromatic`]), whose cutoff is
 //!   the one frequency cut.
@@ -59,7 +66,8 @@ pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
 /// How the OTF is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Engine {
-    /// The exact 1-D integral: centred circular pupils with defocus (and lateral shifts) only.
+    /// The exact 1-D integral: centred circular pupils with defocus (and lateral shifts) only,
+    /// and tabulated OTFs ([`Pupil::Table`]).
     Exact1d,
     /// The spectral integral in closed form ([`GaussianDefocus`]): a Gaussian × polynomial
     /// spectrum through one full pupil with defocus affine in λ; one adaptive integral left.
@@ -1265,7 +1273,9 @@ impl FftLayer {
 /// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):
 /// the modulus of the efficiency-weighted sum of its orders' OTFs (with their lateral-shift
 /// phases), normalized to 1 at zero frequency (all zeros if no order transmits). Orders beyond
-/// the exact path get one FFT grid each, with `pupil_samples` across the diameter.
+/// the exact path get one FFT grid each, with `pupil_samples` across the diameter (a composite
+/// pupil of zones one grid of its coherent field); a tabulated order is read at ν, along +x
+/// measured from the field direction.
 pub fn monochromatic_mtf(
     lens: &dyn LensModel,
     wavelength_m: f64,

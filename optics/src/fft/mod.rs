@@ -6,6 +6,14 @@
 //! ([`SampledPupil::is_centred_defocus`] says when); this path covers everything else and is
 //! tested against it where both apply.
 //!
+//! A composite pupil of coherent zones (a segmented multiplexed lens, [`crate::Pupil::Zones`])
+//! is sampled once per set of zone apertures ([`SampledZones`]: each zone's pixels with their
+//! exact area fractions, e.g. [`Aperture::ring`] zones); per wavelength its complex field
+//! `Σ_j A_jk a_j exp(i 2π W_j/λ)` goes through [`OtfPlan::otf_of_field`], normalized by the power
+//! `Σ_k Σ_j A_jk a_j²` the zones pass, which is the single aperture's normalization below for one
+//! zone of amplitude 1 (zones tiling the circle give the circle's grid to rounding; tested,
+//! with a brute-force autocorrelation of two half discs, in tests/optics/zones.rs).
+//!
 //! # Conventions
 //! - **Pupil**: coordinates normalized to the aperture radius `R = D/2`, from the aperture centre;
 //!   an `N × N` grid spans the diameter, pixel `h = 2/N` ([`SampledPupil`]). The wavefront is
