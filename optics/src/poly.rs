@@ -1384,3 +1384,41 @@ pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> 
     }
     Ok((lo, hi))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bright(w: &[f64]) -> Vec<PhaseEntry> {
+        w.iter().map(|&w020| PhaseEntry { w020, vanishing: false }).collect()
+    }
+
+    /// The matching of orders between neighbouring wavelengths, against the changes worked out
+    /// by hand.
+    #[test]
+    fn orders_are_matched_by_their_defocus() {
+        // three bright channels each moving by one channel spacing (1.0) across the panel: the
+        // nearest-neighbour pairs would see 0.1, the true change is 1.0
+        let from = bright(&[-1.0, 0.0, 1.0]);
+        let to = bright(&[-2.0, -1.1, 0.0]);
+        assert_eq!(largest_turn(&from, &to), 1.1);
+        // a harmonic window shifting by one order (same count): the order leaving at one end
+        // and the one entering at the other are near zero efficiency and stay unmatched
+        let mut from = bright(&[1.0, 2.0, 3.0, 4.0]);
+        from[0].vanishing = true;
+        let mut to = bright(&[2.05, 3.05, 4.05, 5.05]);
+        to[3].vanishing = true;
+        assert!((largest_turn(&from, &to) - 0.05).abs() < 1e-12);
+        // the same shift with bright end orders is a jump of every order (no vanishing order to
+        // leave out): matched one to one
+        assert!(
+            (largest_turn(&bright(&[1.0, 2.0, 3.0, 4.0]), &bright(&[2.05, 3.05, 4.05, 5.05])) - 1.05).abs() < 1e-12
+        );
+        // an order appearing (the counts differ): the others are matched, whatever its brightness
+        assert!((largest_turn(&bright(&[1.0, 2.0]), &bright(&[1.1, 2.1, 3.0])) - 0.1).abs() < 1e-12);
+        assert!((largest_turn(&bright(&[0.0, 1.0, 2.0]), &bright(&[1.2, 2.2])) - 0.2).abs() < 1e-12);
+        // nothing to match
+        assert_eq!(largest_turn(&[], &bright(&[1.0])), 0.0);
+        assert_eq!(largest_turn(&[], &[]), 0.0);
+    }
+}
