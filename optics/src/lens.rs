@@ -55,13 +55,19 @@ pub enum Pupil {
     /// the FFT path. Each zone's [`Zone::wavefront`] replaces the order's wavefront there (it is
     /// written in full-aperture coordinates, so an off-centre zone's defocus is also a tilt); the
     /// order's `image_shift_m` applies to all zones, and its `defocus_m` should be the zone
-    /// defocus of largest size (it sizes the spectral rule and the Fraunhofer check). The
-    /// order's efficiency is `Σ amplitude_j² × area fraction_j` times nothing else: the zones'
-    /// amplitudes carry their efficiencies.
+    /// defocus of largest size (it sizes the frequency rule and the Fraunhofer check, which take
+    /// the largest zone defocus when that is larger; the spectral panels follow every zone's
+    /// defocus). The order's efficiency is `Σ amplitude_j² × area fraction_j` times nothing else:
+    /// the zones' amplitudes carry their efficiencies. The grid is normalized by that power, so
+    /// the order's OTF is 1 at zero frequency (`fft::SampledZones`, `fft::OtfPlan::otf_of_field`).
+    /// Keep the zones' `Arc<Aperture>`s the same from call to call: their sampling is cached.
     Zones(Arc<[Zone]>),
     /// No pupil: the order's OTF is given as a table against wavelength and frequency (a
-    /// measured or simulated MTF, e.g. a Zemax FFT MTF export). The order's wavefront is not
-    /// used except `image_shift_m`; the table's `defocus_m` may be set for the Fraunhofer check.
+    /// measured or simulated MTF, e.g. a Zemax FFT MTF export), read at ν directly below the
+    /// order's cutoff `1/(λ F#)`; its tangential curve along the field direction (`+x` on
+    /// axis). The order's wavefront is not used except `image_shift_m`; the order's `defocus_m`
+    /// may be set for the Fraunhofer check. On the exact 1-D path with other full-pupil orders,
+    /// or beside the FFT layer's grids; the spectral panels are cut at the table's wavelengths.
     Table(Arc<crate::OtfTable>),
 }
 
@@ -89,9 +95,11 @@ pub struct Zone {
     /// Field amplitude transmission, ≥ 0: the zone passes `amplitude²` of the power incident on it.
     pub amplitude: f64,
     /// The zone's wavefront (defocus and Seidel terms, full-aperture coordinates, the sign of
-    /// [`Wavefront`]). Its `image_shift_m` is applied as a tilt of this zone alone (on top of
-    /// the order's shift, which applies to all zones): zones of a multiplexed lens off axis each
-    /// have their own lateral colour.
+    /// [`Wavefront`]). Its `image_shift_m` Δ is applied as a tilt of this zone alone,
+    /// `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's radius, `NA = 1/(2F#)`),
+    /// which moves the zone's image by Δ, the way the order's shift (which applies to all zones
+    /// on top) moves the order's: zones of a multiplexed lens off axis each have their own
+    /// lateral colour.
     pub wavefront: Wavefront,
 }
 
