@@ -223,6 +223,51 @@ pub struct AffineDefocus {
 /// docs/physics.md, "Sign of the wavefront" (see [`Wavefront`]): `W020 > 0` is a focus behind the
 /// detector. A chromatic lens `f(λ) = f0 λ0/λ` thus has `W020(λ) = (1 − λ/λ0) f0/(8 F#²)`,
 /// negative for `λ > λ0`.
+///
+/// Photon counts follow the pupil: an order's efficiency is a fraction of the light incident on
+/// the full aperture, at most its [`Pupil::area_fraction`]. `optics::testkit::check_lens`
+/// (feature `testkit`) checks an implementation against these rules and the transfer-function
+/// invariants; `examples/custom-lens` in the repository is a whole downstream crate.
+///
+/// # Implementing it
+/// A chromatic metalens behind an iris that opens a 90° sector of its aperture: one order
+/// through a [`Pupil::Aperture`], with the sector's area fraction (1/4) in its efficiency and
+/// its transmission. Nothing is hidden: this is the whole implementation.
+///
+/// ```
+/// use std::sync::Arc;
+/// use optics::fft::Aperture;
+/// use optics::{Field, LensModel, Order, Pupil, Wavefront};
+///
+/// #[derive(Debug)]
+/// struct QuarterMetalens {
+///     aperture: Arc<Aperture>,
+/// }
+///
+/// impl LensModel for QuarterMetalens {
+///     fn f_number(&self) -> f64 {
+///         2.5
+///     }
+///
+///     fn focal_length(&self) -> f64 {
+///         3.36e-3
+///     }
+///
+///     fn orders(&self, wavelength_m: f64, _field: Field) -> Vec<Order> {
+///         // f(λ) = f0 λ0/λ with the detector at f0: W020 = (1 − λ/λ0) f0/(8F#²)
+///         let w020 = (1.0 - wavelength_m / 800e-9) * 3.36e-3 / (8.0 * 2.5 * 2.5);
+///         let efficiency = 0.15 * self.aperture.area_fraction();
+///         vec![Order::new(efficiency, Pupil::Aperture(self.aperture.clone()), Wavefront::defocus(w020))]
+///     }
+///
+///     fn transmission(&self, _wavelength_m: f64) -> f64 {
+///         0.55 * self.aperture.area_fraction()
+///     }
+/// }
+///
+/// let lens = QuarterMetalens { aperture: Arc::new(Aperture::sector(0.0, std::f64::consts::FRAC_PI_2).unwrap()) };
+/// assert!((lens.efficiency(800e-9) - 0.15 / 4.0).abs() < 1e-15);
+/// ```
 pub trait LensModel: Send + Sync + fmt::Debug {
     /// Working F-number `F# = f0/D` at the detector.
     fn f_number(&self) -> f64;
