@@ -39,12 +39,14 @@ mod dispersion;
 mod harmonic;
 mod interleaved;
 mod refractive;
+mod segmented;
 
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
+pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
 
 /// What can be wrong with a lens description.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
