@@ -40,6 +40,7 @@ mod harmonic;
 mod interleaved;
 mod refractive;
 mod segmented;
+mod tabulated;
 
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
@@ -47,6 +48,10 @@ pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
+pub use tabulated::{
+    FieldChoice, PIXEL_DIVISION_LIMIT, Tabulated, ZemaxField, ZemaxMtf, decode_text, parse_mtf_csv,
+    parse_zemax_fft_mtf, zemax_otf_table,
+};
 
 /// What can be wrong with a lens description.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -88,4 +93,35 @@ pub enum Error {
         /// The F-number at that diameter.
         max_f_number: f64,
     },
+    /// Text (a Zemax listing, a CSV) that is not what was expected.
+    #[error("{}expected {expected}, found `{found}`", line_prefix(*.line))]
+    Parse {
+        /// The line, from 1 (0: the text as a whole).
+        line: usize,
+        /// What was expected there.
+        expected: String,
+        /// What was found.
+        found: String,
+    },
+    /// An OTF table that optics refuses (a row not 1 at zero frequency, values beyond [−1, 1], …).
+    #[error("OTF table: {0}")]
+    Table(optics::Error),
+    /// A table said to contain the pixel MTF exceeds 1 once divided by it.
+    #[error(
+        "the table divided by the pixel MTF of {pitch_um} µm is {value} > 1 at {wavelength_nm} nm, {frequency_cyc_per_mm} cycles/mm: the table does not contain that pixel MTF (check the pitch, or give none)"
+    )]
+    PixelMtfNotInTable {
+        /// Where, nm.
+        wavelength_nm: f64,
+        /// Where, cycles/mm.
+        frequency_cyc_per_mm: f64,
+        /// The divided value.
+        value: f64,
+        /// The pixel pitch, µm.
+        pitch_um: f64,
+    },
+}
+
+fn line_prefix(line: usize) -> String {
+    if line == 0 { String::new() } else { format!("line {line}: ") }
 }
