@@ -36,8 +36,10 @@ use radiometry::Spectrum;
 use crate::closed::GaussianDefocus;
 use crate::fft::{Aperture, Otf, OtfPlan, SampledPupil};
 
-use crate::lens::{Field, LensModel, Pupil};
+use crate::fft::{SampledZones, ZoneField};
+use crate::lens::{Field, LensModel, Order, Pupil};
 use crate::otf::{defocus_otf, pixel_mtf};
+use crate::table::OtfTable;
 use crate::{Error, quad};
 
 /// Half-width, in standard deviations, kept of each Gaussian spectral factor: the area beyond
@@ -84,7 +86,15 @@ struct FftNode {
     lambda: f64,
     weight: f64,
     shift: [f64; 2],
-    otf: Otf,
+    kind: FftKind,
+}
+
+/// How an order's OTF is read on the FFT layer.
+enum FftKind {
+    /// A complex OTF grid: a sampled pupil or a composite of zones.
+    Grid(Otf),
+    /// A tabulated OTF ([`Pupil::Table`]), read at ν directly.
+    Table(Arc<OtfTable>),
 }
 
 /// The FFT layer: one complex OTF grid per spectral node and order.
@@ -106,7 +116,7 @@ const SIGNIFICANT_WEIGHT: f64 = 1e-13;
 /// Bisection depth limit of the adaptive frequency integration.
 const MAX_DEPTH: u32 = 40;
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Node {
     lambda: f64,
     /// quadrature weight × ρ(λ) × order efficiency
@@ -115,6 +125,99 @@ struct Node {
     w020: f64,
     /// image displacement on the detector, m
     shift: [f64; 2],
+    /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
+    table: Option<Arc<OtfTable>>,
+}
+
+impl Node {
+    /// The node of `order` at `lambda` with `weight` (quadrature weight × ρ × efficiency).
+    fn of(order: &Order, lambda: f64, weight: f64) -> Node {
+        Node {
+            lambda,
+            weight,
+            w020: order.wavefront.defocus_m,
+            shift: order.wavefront.image_shift_m,
+            table: match &order.pupil {
+                Pupil::Table(t) => Some(t.clone()),
+                _ => None,
+            },
+        }
+    }
+
+    /// The real OTF of this node's order at `s = ν λ F#` (`s < 1`) along the direction at
+    /// `azimuth_from_field` from the field direction (a table's T/S; the defocused OTF of a
+    /// centred circle does not depend on it).
+    fn otf(&self, s: f64, frequency: f64, azimuth_from_field: f64) -> f64 {
+        match &self.table {
+            None => defocus_otf(s, self.w020 / self.lambda),
+            Some(t) => t.value(self.lambda, frequency, azimuth_from_field),
+        }
+    }
+}
+
+/// Whether `order` needs the FFT layer: a pupil other than the full circle (an aperture, a
+/// composite of zones), or a wavefront beyond defocus; a tabulated OTF is read directly.
+fn needs_grid(order: &Order) -> bool {
+    match &order.pupil {
+        Pupil::Full => !order.wavefront.is_defocus_only(),
+        Pupil::Table(_) => false,
+        _ => true,
+    }
+}
+
+/// Efficiency, relative to the sum over the orders, below which an order does not count in the
+/// spectral panels' phase-turn rule (it cannot move the OTF by more than that).
+const NEGLIGIBLE_EFFICIENCY: f64 = 1e-9;
+
+/// The defocus values whose phase the spectral panels must resolve at `lambda`: one per order
+/// of non-negligible efficiency, one per zone (of non-zero amplitude) of a composite pupil, none
+/// for a tabulated OTF (its rows are interpolated linearly in λ and the panels are cut at them).
+fn phase_defocus(lens: &dyn LensModel, lambda: f64, field: Field) -> Vec<f64> {
+    let orders = lens.orders(lambda, field);
+    let total: f64 = orders.iter().map(|o| o.efficiency.abs()).sum();
+    let mut out = Vec::new();
+    for o in orders.iter().filter(|o| o.efficiency.abs() > NEGLIGIBLE_EFFICIENCY * total) {
+        match &o.pupil {
+            Pupil::Table(_) => {}
+            Pupil::Zones(zones) => {
+                out.extend(zones.iter().filter(|z| z.amplitude > 0.0).map(|z| z.wavefront.defocus_m));
+            }
+            _ => out.push(o.wavefront.defocus_m),
+        }
+    }
+    out
+}
+
+/// The largest change of one order's defocus between two neighbouring wavelengths with defocus
+/// lists `from` and `to` ([`phase_defocus`]). Orders carry no identity across wavelengths, so
+/// they are matched: by mutual nearest W020 (an order entering or leaving the list, as the window
+/// of a harmonic lens moves, is unmatched and does not count: its weight jumps, which no panel
+/// refines away), and, when the counts agree, also by index (a multiplexed lens lists its
+/// channels in one order); the smaller of the two is taken. Index matching alone mistakes a
+/// shifted window (orders 1–6 → 2–7, same count) for a jump of every order by the order spacing,
+/// and measuring the largest-|W020| order alone jumps between orders of opposite sign: either
+/// refines without end (2^20 panels for an interleaved lens over 100 nm). Nearest matching alone
+/// could pair an order with its neighbour when the panel is so coarse that orders move by more
+/// than half their spacing; the turn is then still at least that half spacing, and the
+/// refinement goes on until the match is right, unless orders lie within the allowed turn of
+/// each other.
+fn largest_turn(from: &[f64], to: &[f64]) -> f64 {
+    let nearest = |x: f64, list: &[f64]| -> Option<usize> {
+        (0..list.len()).min_by(|&i, &j| (list[i] - x).abs().total_cmp(&(list[j] - x).abs()))
+    };
+    let mut mutual: f64 = 0.0;
+    for (i, &a) in from.iter().enumerate() {
+        if let Some(j) = nearest(a, to)
+            && nearest(to[j], from) == Some(i)
+        {
+            mutual = mutual.max((to[j] - a).abs());
+        }
+    }
+    if from.len() == to.len() {
+        let by_index = from.iter().zip(to).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        return mutual.min(by_index);
+    }
+    mutual
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -234,6 +337,8 @@ pub struct Polychromatic<'a> {
     w020_rms: f64,
     /// whether any node's image is displaced (the OTF is then complex off the shift-free axis)
     shifted: bool,
+    /// whether some tabulated order has different tangential and sagittal curves
+    directional_tables: bool,
     /// set while emitting nodes if some order needs a sampled pupil
     needs_fft: Cell<bool>,
     /// the FFT layer, when some order's pupil or wavefront is beyond the exact path
@@ -315,8 +420,13 @@ impl<'a> Polychromatic<'a> {
             return Self::monochromatic(lens, detected, field, max_frequency, pixel_pitch, settings, line);
         }
         let (lo, hi) = spectral_extent(detected)?;
-        let mut cuts: Vec<f64> =
-            detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&b| b > lo && b < hi).collect();
+        let mut cuts: Vec<f64> = detected
+            .breakpoints()
+            .into_iter()
+            .chain(lens.breakpoints())
+            .chain(table_wavelengths(lens, field, lo, hi))
+            .filter(|&b| b > lo && b < hi)
+            .collect();
         cuts.push(lo);
         cuts.push(hi);
         cuts.sort_by(f64::total_cmp);
@@ -342,13 +452,17 @@ impl<'a> Polychromatic<'a> {
             loop {
                 let h = (b - a) / n as f64;
                 let mut worst: f64 = 0.0;
-                let mut prev = this.max_w020(a);
+                let mut prev = phase_defocus(lens, a, field);
                 for k in 1..=n {
                     let x = a + h * k as f64;
-                    let cur = this.max_w020(x);
-                    let mid = this.max_w020(x - 0.5 * h);
+                    let cur = phase_defocus(lens, x, field);
+                    let mid = phase_defocus(lens, x - 0.5 * h, field);
+                    // per order (docs/physics.md, "Spectral quadrature": the OTF turns with the
+                    // defocus in waves at each s), the change of W020 across the panel plus the
+                    // change of s = ν λ F# times the largest |W020|
+                    let largest = cur.iter().chain(&prev).map(|w| w.abs()).fold(0.0, f64::max);
                     let turn =
-                        (cur - prev).abs().max((mid - prev).abs()) + cur.abs().max(prev.abs()) * highest * f_number * h;
+                        largest_turn(&prev, &cur).max(largest_turn(&prev, &mid)) + largest * highest * f_number * h;
                     worst = worst.max(turn * phase_per_w020);
                     prev = cur;
                 }
@@ -386,6 +500,8 @@ impl<'a> Polychromatic<'a> {
         }
         self.defocus_statistics();
         self.shifted = self.nodes.iter().any(|n| n.shift != [0.0, 0.0]);
+        self.directional_tables =
+            self.nodes.iter().any(|n| n.table.as_ref().is_some_and(|t| t.is_direction_dependent()));
         if self.needs_fft.get() {
             self.fft = Some(self.build_fft(pupil_samples)?);
         }
@@ -409,15 +525,10 @@ impl<'a> Polychromatic<'a> {
         let mut this = Self::empty(lens, detected, field, max_frequency, pixel_pitch, settings);
         this.samples = vec![(lambda, line.weight)];
         for order in lens.orders(lambda, field) {
-            if !matches!(order.pupil, Pupil::Full) || !order.wavefront.is_defocus_only() {
+            if needs_grid(&order) {
                 this.needs_fft.set(true);
             }
-            this.nodes.push(Node {
-                lambda,
-                weight: line.weight * order.efficiency,
-                w020: order.wavefront.defocus_m,
-                shift: order.wavefront.image_shift_m,
-            });
+            this.nodes.push(Node::of(&order, lambda, line.weight * order.efficiency));
         }
         this.total_weight = this.nodes.iter().map(|n| n.weight).sum();
         this.finish(settings.pupil_samples)
@@ -452,6 +563,7 @@ impl<'a> Polychromatic<'a> {
             w020_max: 0.0,
             w020_rms: 0.0,
             shifted: false,
+            directional_tables: false,
             needs_fft: Cell::new(false),
             fft: None,
             closed: None,
@@ -477,6 +589,7 @@ impl<'a> Polychromatic<'a> {
                 weight: q_rho * affine.efficiency,
                 w020: affine.w020_intercept_m + affine.w020_slope * lambda,
                 shift: [0.0, 0.0],
+                table: None,
             });
         });
         self.panels.push(Panel { lo, hi, start: 0, end: nodes.len() });
@@ -495,14 +608,6 @@ impl<'a> Polychromatic<'a> {
         self.w020_rms = self.spectral_average(|_, w020| w020 * w020).sqrt();
     }
 
-    fn max_w020(&self, lambda: f64) -> f64 {
-        self.lens
-            .orders(lambda, self.field)
-            .iter()
-            .map(|o| o.wavefront.defocus_m)
-            .fold(0.0, |m: f64, w| if w.abs() > m.abs() { w } else { m })
-    }
-
     /// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for the clipped panel.
     fn clipped_nodes(&self, lo: f64, cut: f64, mut emit: impl FnMut(Node)) {
         let len = cut - lo;
@@ -517,60 +622,35 @@ impl<'a> Polychromatic<'a> {
             return;
         }
         for order in self.lens.orders(lambda, self.field) {
-            if !matches!(order.pupil, Pupil::Full) || !order.wavefront.is_defocus_only() {
+            if needs_grid(&order) {
                 self.needs_fft.set(true);
             }
-            emit(Node {
-                lambda,
-                weight: q * rho * order.efficiency,
-                w020: order.wavefront.defocus_m,
-                shift: order.wavefront.image_shift_m,
-            });
+            emit(Node::of(&order, lambda, q * rho * order.efficiency));
         }
     }
 
-    /// One complex OTF grid per unclipped spectral node and order, from one reused plan; sampled
-    /// pupils are cached while the aperture stays the same.
+    /// One complex OTF grid per unclipped spectral node and order, from one reused plan (a
+    /// tabulated order is read directly); sampled pupils and zones are cached while their
+    /// apertures (the same `Arc`s) stay the same.
     fn build_fft(&self, pupil_samples: usize) -> Result<FftPath, Error> {
         let lambda_max = self.samples.iter().map(|s| s.0).fold(0.0, f64::max);
         let s_max = (self.max_frequency * lambda_max * self.f_number).min(1.0);
-        let mut plan = OtfPlan::new(pupil_samples, s_max)?;
-        let circle = Arc::new(Aperture::circle());
-        let mut cached: Option<(Arc<Aperture>, SampledPupil)> = None;
+        let mut layer = FftLayer::new(pupil_samples, s_max, self.lens.numerical_aperture())?;
         let mut nodes = Vec::new();
         for &(lambda, q_rho) in &self.samples {
             if q_rho == 0.0 {
                 continue;
             }
             for order in self.lens.orders(lambda, self.field) {
-                let aperture = match &order.pupil {
-                    Pupil::Full => circle.clone(),
-                    Pupil::Aperture(a) => a.clone(),
-                    // PLACEHOLDER until the composite and tabulated orders are wired into the FFT layer
-                    _ => return Err(Error::InvalidParameter { name: "pupil", value: 0.0, expected: "WIP" }),
-                };
-                let aberrations = order.wavefront.aberrations();
-                let pupil = match &mut cached {
-                    Some((a, p)) if Arc::ptr_eq(a, &aperture) => {
-                        p.set_aberrations(&aberrations)?;
-                        p
-                    }
-                    slot => {
-                        let p = SampledPupil::new(pupil_samples, &aperture, &aberrations)?;
-                        &mut slot.insert((aperture, p)).1
-                    }
-                };
-                let mut otf = Otf::new();
-                plan.otf(pupil, lambda, &mut otf);
                 nodes.push(FftNode {
                     lambda,
                     weight: q_rho * order.efficiency,
                     shift: order.wavefront.image_shift_m,
-                    otf,
+                    kind: layer.kind(&order, lambda)?,
                 });
             }
         }
-        Ok(FftPath { nodes, pupil_samples, padded: plan.padded_len() })
+        Ok(FftPath { nodes, pupil_samples, padded: layer.plan.padded_len() })
     }
 
     /// The OTF engine in use.
@@ -590,7 +670,7 @@ impl<'a> Polychromatic<'a> {
     /// Whether the OTF depends on direction (lateral colour, or a non-symmetric pupil or
     /// wavefront): the MTF must then be read along an azimuth.
     pub fn direction_dependent(&self) -> bool {
-        self.shifted || self.fft.is_some()
+        self.shifted || self.fft.is_some() || self.directional_tables
     }
 
     /// `∫ ρ(λ) τ(λ) dλ` summed over the imaging orders: the detected-signal integral in the units
@@ -611,11 +691,12 @@ impl<'a> Polychromatic<'a> {
     }
 
     /// Calls `visit(weight × OTF(s, w), shift)` for every spectral node that passes `frequency`.
-    fn contributions(&self, frequency: f64, mut visit: impl FnMut(f64, [f64; 2])) {
+    /// A tabulated order is read along `azimuth_from_field` (radians from the field direction).
+    fn contributions(&self, frequency: f64, azimuth_from_field: f64, mut visit: impl FnMut(f64, [f64; 2])) {
         let nu = frequency.abs();
         let nuf = nu * self.f_number;
         let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
-        let mut term = |n: &Node| visit(n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda), n.shift);
+        let mut term = |n: &Node| visit(n.weight * n.otf(nuf * n.lambda, nu, azimuth_from_field), n.shift);
         if let Some(lambda) = self.line() {
             // one wavelength: it passes this frequency or not
             if lambda < cut {
@@ -649,7 +730,8 @@ impl<'a> Polychromatic<'a> {
             return self.otf_along(frequency, 0.0).re;
         }
         let mut sum = 0.0;
-        self.contributions(frequency, |v, _| sum += v);
+        // along +x: a tabulated order's direction relative to the field's
+        self.contributions(frequency, -self.field_direction(), |v, _| sum += v);
         sum / self.total_weight
     }
 
@@ -671,12 +753,17 @@ impl<'a> Polychromatic<'a> {
             let nuf = frequency.abs() * self.f_number;
             // OTF(−ν) = OTF(ν)*: read the grid at |ν| along the azimuth turned by π
             let azimuth = if frequency < 0.0 { azimuth + PI } else { azimuth };
+            let from_field = azimuth - self.field_direction();
             for n in &fft.nodes {
                 let s = nuf * n.lambda;
-                if s >= 1.0 || s > n.otf.s_max() {
+                if s >= 1.0 {
                     continue;
                 }
-                let mut v = n.otf.at(s, azimuth) * n.weight;
+                let mut v = match &n.kind {
+                    FftKind::Grid(otf) if s <= otf.s_max() => otf.at(s, azimuth) * n.weight,
+                    FftKind::Grid(_) => continue,
+                    FftKind::Table(t) => Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0),
+                };
                 let [dx, dy] = n.shift;
                 if dx != 0.0 || dy != 0.0 {
                     let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
@@ -686,7 +773,7 @@ impl<'a> Polychromatic<'a> {
             }
             return sum / self.total_weight;
         }
-        self.contributions(frequency, |v, [dx, dy]| {
+        self.contributions(frequency, azimuth - self.field_direction(), |v, [dx, dy]| {
             if dx == 0.0 && dy == 0.0 {
                 sum.re += v;
             } else {
@@ -695,6 +782,13 @@ impl<'a> Polychromatic<'a> {
             }
         });
         sum / self.total_weight
+    }
+
+    /// The field direction on the detector, radians from `+x`: `atan2(y, x)` of the field
+    /// angles, `+x` on axis (docs/physics.md, "Off-axis MTFs: tangential and sagittal"); a
+    /// tabulated order's tangential curve lies along it.
+    fn field_direction(&self) -> f64 {
+        self.field.y_rad.atan2(self.field.x_rad)
     }
 
     /// Whether some wavelength's image is displaced, so that the OTF is complex and depends on
@@ -811,7 +905,10 @@ impl<'a> Polychromatic<'a> {
             let cell = fft
                 .nodes
                 .iter()
-                .map(|n| 1.0 / (n.otf.n() as f64 * n.lambda * self.f_number))
+                .filter_map(|n| match &n.kind {
+                    FftKind::Grid(otf) => Some(1.0 / (otf.n() as f64 * n.lambda * self.f_number)),
+                    FftKind::Table(_) => None,
+                })
                 .fold(f64::INFINITY, f64::min);
             // over [0, highest cutoff] where that is below max_frequency: the OTF is zero beyond
             let top = self.active_top();
@@ -1012,6 +1109,115 @@ impl<'a> Polychromatic<'a> {
     }
 }
 
+/// The wavelengths of the OTF tables of `lens`'s orders, found at five wavelengths across
+/// `[lo, hi]`: a table is linear in λ between its rows, so the spectral panels are cut there.
+fn table_wavelengths(lens: &dyn LensModel, field: Field, lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    for k in 0..5 {
+        let lambda = lo + (hi - lo) * k as f64 / 4.0;
+        if lambda <= 0.0 {
+            continue;
+        }
+        for order in lens.orders(lambda, field) {
+            if let Pupil::Table(t) = &order.pupil {
+                out.extend_from_slice(t.wavelengths());
+            }
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out.dedup();
+    out
+}
+
+/// Cache size of sampled pupils and zone sets on the FFT layer (a lens has a few apertures).
+const SAMPLED_CACHE: usize = 8;
+
+/// The FFT layer's state while its grids are computed: one plan, and the sampled pupils and
+/// zone sets of the apertures seen so far (kept while the lens hands out the same `Arc`s).
+struct FftLayer {
+    n: usize,
+    plan: OtfPlan,
+    numerical_aperture: f64,
+    circle: Arc<Aperture>,
+    pupils: Vec<(Arc<Aperture>, SampledPupil)>,
+    zones: Vec<SampledZones>,
+    fields: Vec<ZoneField>,
+}
+
+impl FftLayer {
+    fn new(n: usize, s_max: f64, numerical_aperture: f64) -> Result<FftLayer, Error> {
+        Ok(FftLayer {
+            n,
+            plan: OtfPlan::new(n, s_max)?,
+            numerical_aperture,
+            circle: Arc::new(Aperture::circle()),
+            pupils: Vec::new(),
+            zones: Vec::new(),
+            fields: Vec::new(),
+        })
+    }
+
+    /// How `order`'s OTF at `lambda` is read: a grid of its sampled pupil, of its composite of
+    /// zones, or its table.
+    fn kind(&mut self, order: &Order, lambda: f64) -> Result<FftKind, Error> {
+        let aperture = match &order.pupil {
+            Pupil::Table(t) => return Ok(FftKind::Table(t.clone())),
+            Pupil::Zones(zones) => return self.zones_grid(zones, lambda).map(FftKind::Grid),
+            Pupil::Aperture(a) => a.clone(),
+            _ => self.circle.clone(),
+        };
+        let aberrations = order.wavefront.aberrations();
+        let slot = match self.pupils.iter().position(|(a, _)| Arc::ptr_eq(a, &aperture)) {
+            Some(i) => {
+                self.pupils[i].1.set_aberrations(&aberrations)?;
+                i
+            }
+            None => {
+                let p = SampledPupil::new(self.n, &aperture, &aberrations)?;
+                if self.pupils.len() == SAMPLED_CACHE {
+                    self.pupils.remove(0);
+                }
+                self.pupils.push((aperture, p));
+                self.pupils.len() - 1
+            }
+        };
+        let mut otf = Otf::new();
+        self.plan.otf(&self.pupils[slot].1, lambda, &mut otf);
+        Ok(FftKind::Grid(otf))
+    }
+
+    /// The OTF of one composite pupil (docs/physics.md, "General pupils"; `fft::SampledZones`):
+    /// the zones' fields add coherently, each with its amplitude, its wavefront and, for its own
+    /// image shift Δ, the tilt `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's
+    /// radius), which multiplies its part of the OTF by `exp(−2πi ν·Δ)` as an order's shift does.
+    fn zones_grid(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<Otf, Error> {
+        let apertures = || zones.iter().map(|z| &z.aperture);
+        let slot = match self.zones.iter().position(|s| s.is_sampling_of(apertures())) {
+            Some(i) => i,
+            None => {
+                let list: Vec<Arc<Aperture>> = apertures().cloned().collect();
+                if self.zones.len() == SAMPLED_CACHE {
+                    self.zones.remove(0);
+                }
+                self.zones.push(SampledZones::new(self.n, &list)?);
+                self.zones.len() - 1
+            }
+        };
+        let na = self.numerical_aperture;
+        self.fields.clear();
+        self.fields.extend(zones.iter().map(|z| ZoneField {
+            amplitude: z.amplitude,
+            aberrations: z.wavefront.aberrations(),
+            tilt_m: [z.wavefront.image_shift_m[0] * na, z.wavefront.image_shift_m[1] * na],
+        }));
+        let sampled = &mut self.zones[slot];
+        sampled.set_field(&self.fields, lambda)?;
+        let mut otf = Otf::new();
+        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
+        Ok(otf)
+    }
+}
+
 /// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):
 /// the modulus of the efficiency-weighted sum of its orders' OTFs (with their lateral-shift
 /// phases), normalized to 1 at zero frequency (all zeros if no order transmits). Orders beyond
@@ -1027,30 +1233,29 @@ pub fn monochromatic_mtf(
     let s_max = frequencies.iter().map(|&nu| to_s(nu)).fold(0.0, f64::max).clamp(1e-6, 1.0);
     let mut sum = vec![Complex64::new(0.0, 0.0); frequencies.len()];
     let mut total = 0.0;
+    let mut layer: Option<FftLayer> = None;
+    // along +x: a tabulated order's direction relative to the field's
+    let from_field = -field.y_rad.atan2(field.x_rad);
     for order in lens.orders(wavelength_m, field) {
         total += order.efficiency;
-        let grid = match &order.pupil {
-            Pupil::Full if order.wavefront.is_defocus_only() => None,
-            pupil => {
-                let aperture = match pupil {
-                    Pupil::Aperture(a) => (**a).clone(),
-                    _ => Aperture::circle(),
-                };
-                let sampled = SampledPupil::new(pupil_samples, &aperture, &order.wavefront.aberrations())?;
-                let mut out = Otf::new();
-                OtfPlan::new(pupil_samples, s_max)?.otf(&sampled, wavelength_m, &mut out);
-                Some(out)
-            }
+        let kind = if needs_grid(&order) {
+            let layer = match &mut layer {
+                Some(l) => l,
+                slot => slot.insert(FftLayer::new(pupil_samples, s_max, lens.numerical_aperture())?),
+            };
+            Some(layer.kind(&order, wavelength_m)?)
+        } else {
+            None
         };
-        let w = order.wavefront.defocus_m / wavelength_m;
+        let node = Node::of(&order, wavelength_m, order.efficiency);
         for (acc, &nu) in sum.iter_mut().zip(frequencies) {
             let s = to_s(nu);
             if s >= 1.0 {
                 continue;
             }
-            let otf = match &grid {
-                None => Complex64::new(defocus_otf(s, w), 0.0),
-                Some(g) => g.at(s.min(g.s_max()), 0.0),
+            let otf = match &kind {
+                Some(FftKind::Grid(g)) => g.at(s.min(g.s_max()), 0.0),
+                _ => Complex64::new(node.otf(s, nu, from_field), 0.0),
             };
             let phase = -2.0 * PI * nu * order.wavefront.image_shift_m[0];
             *acc += otf * Complex64::from_polar(order.efficiency, phase);

@@ -121,8 +121,10 @@ mod aperture;
 mod convergence;
 mod plan;
 mod wavefront;
+mod zones;
 
 pub use aperture::{Aperture, MASK_SUPERSAMPLING, MaskFn};
 pub use convergence::{convergence_table, defocus_mean_mtf};
 pub use plan::{INTERPOLATION_POINTS, MAX_SAMPLES, MIN_SAMPLES, Otf, OtfPlan, SampledPupil, fast_fft_len};
 pub use wavefront::{Aberrations, MAX_NOLL_INDEX, noll_to_nm};
+pub use zones::{SampledZones, ZoneField};
