@@ -94,8 +94,8 @@ pub struct Segmented {
     layout: Layout,
     /// the zones' apertures, built once and shared by every `orders` call
     zones: Vec<Arc<Aperture>>,
-    /// the zones' area fractions as built (exact for rings and sectors of disc shapes, measured
-    /// for masks): the `a_j` of the efficiencies, so that `τ ≤` the pupil's area
+    /// the zones' area fractions as built (exact for rings and sectors, measured for masks): the
+    /// `a_j` of the efficiencies, so that `τ ≤` the pupil's area
     areas: Vec<f64>,
     transmission: Curve,
     other_channels: OtherChannels,
@@ -215,8 +215,8 @@ impl Segmented {
         self.other_channels
     }
 
-    /// The zones' area fractions `a_j` as built: exact for disc-shaped zones (the given
-    /// fractions to rounding), measured for masks (and for inner rings, which are masks).
+    /// The zones' area fractions `a_j` as built: the given fractions (to rounding) for rings and
+    /// sectors, measured for masks.
     pub fn area_fractions(&self) -> &[f64] {
         &self.areas
     }
@@ -258,8 +258,7 @@ impl Segmented {
     }
 }
 
-/// Concentric rings of areas `a_j`, the first innermost. A ring reaching the rim is an exact
-/// annulus; an inner ring is a mask (its area measured with supersampled edge pixels).
+/// Concentric rings of areas `a_j`, the first innermost ([`Aperture::ring`], exact edge areas).
 fn rings(areas: &[f64]) -> Vec<Arc<Aperture>> {
     let mut cumulative: f64 = 0.0;
     areas
@@ -267,17 +266,8 @@ fn rings(areas: &[f64]) -> Vec<Arc<Aperture>> {
         .map(|a| {
             let inner = cumulative.sqrt();
             cumulative += a;
-            let outer = cumulative.sqrt();
-            let aperture = if outer >= 1.0 - 1e-12 {
-                Aperture::annulus(inner).expect("inner radius in [0, 1): the zones' areas are > 0 and sum to ≤ 1")
-            } else {
-                let (r0, r1) = (inner * inner, outer * outer);
-                Aperture::mask(move |x, y| {
-                    let r2 = x * x + y * y;
-                    r2 >= r0 && r2 <= r1
-                })
-            };
-            Arc::new(aperture)
+            let outer = cumulative.sqrt().min(1.0);
+            Arc::new(Aperture::ring(inner, outer, None).expect("0 ≤ inner < outer ≤ 1: areas > 0, Σ ≤ 1"))
         })
         .collect()
 }
@@ -450,16 +440,12 @@ mod tests {
 
     #[test]
     fn zones_have_their_area_fractions() {
-        // sectors of 1/3 each: exact; rings: the outer one an exact annulus, the inner two masks
-        let s = rgb(Layout::Sectors);
-        for a in s.area_fractions() {
-            assert!((a - 1.0 / 3.0).abs() < 1e-15, "{a}");
+        // sectors and rings of 1/3 each, exact
+        for layout in [Layout::Sectors, Layout::Concentric] {
+            for a in rgb(layout).area_fractions() {
+                assert!((a - 1.0 / 3.0).abs() < 1e-15, "{a}");
+            }
         }
-        let c = rgb(Layout::Concentric);
-        for a in c.area_fractions() {
-            assert!((a - 1.0 / 3.0).abs() < 2e-5, "{a}");
-        }
-        assert!((c.area_fractions()[2] - 1.0 / 3.0).abs() < 1e-15);
         // unequal areas and an opaque remainder
         let lens = Segmented::new(
             2.5,
