@@ -3,6 +3,7 @@
 
 mod photons;
 mod segmented;
+mod tabulated;
 
 use lenses::{ChromaticMetalens, Curve};
 use optics::testkit::check_lens;
