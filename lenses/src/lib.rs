@@ -38,6 +38,7 @@ mod chromatic;
 mod dispersion;
 mod harmonic;
 mod interleaved;
+pub mod presets;
 mod refractive;
 mod segmented;
 mod tabulated;
@@ -46,6 +47,7 @@ pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
+pub use presets::{preset, preset_names};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
 pub use tabulated::{
@@ -106,6 +108,14 @@ pub enum Error {
     /// An OTF table that optics refuses (a row not 1 at zero frequency, values beyond [−1, 1], …).
     #[error("OTF table: {0}")]
     Table(optics::Error),
+    /// A preset name that does not exist.
+    #[error("unknown lens preset `{name}`: expected one of {known}")]
+    UnknownPreset {
+        /// The name given.
+        name: String,
+        /// The names known, comma-separated.
+        known: String,
+    },
     /// A table said to contain the pixel MTF exceeds 1 once divided by it.
     #[error(
         "the table divided by the pixel MTF of {pitch_um} µm is {value} > 1 at {wavelength_nm} nm, {frequency_cyc_per_mm} cycles/mm: the table does not contain that pixel MTF (check the pitch, or give none)"
