@@ -2,6 +2,7 @@
 //! independent formulas (one binary: the modules below hold the families added later).
 
 mod photons;
+mod reference;
 mod segmented;
 mod tabulated;
 
