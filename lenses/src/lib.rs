@@ -2,7 +2,8 @@
 //!
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
 //!   (docs/physics.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
-//!   constant or tabulated.
+//!   constant or tabulated; through an iris ([`ChromaticMetalens::with_aperture`]) both scale by
+//!   its area fraction (photon counts follow the pupil).
 //! - [`Refractive`]: the ideal refractive reference, `W = 0`, or with glass dispersion
 //!   `f(λ) = f0 (n0 − 1)/(n(λ) − 1)` ([`Sellmeier`]), `τ = T` from the Fresnel or coated
 //!   surface losses.
@@ -12,6 +13,21 @@
 //!   `τ_m = τ_base sinc²(pλ0/λ − m)` and `W020_m(λ) = (1 − mλ/(pλ0)) f0/(8F#²)`.
 //! - [`Interleaved`]: a spatially multiplexed lens of N interleaved chromatic channels λ_j,
 //!   `τ_j = η_j/N²`, `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`.
+//! - [`Segmented`]: a spatially multiplexed lens of N chromatic channels in zones of area
+//!   fractions a_j ([`Layout`]: concentric rings, sectors, or a user's map), one composite pupil
+//!   ([`optics::Pupil::Zones`]) with the zone wavefronts `W_j = (1 − λ/λ_j) f0/(8F#²) ρ²`,
+//!   efficiency `Σ a_j η_j`; the other channels' light as signal or, [`OtherChannels`], as
+//!   background outside each channel's band.
+//! - [`Tabulated`]: one order whose OTF is a measured or simulated table
+//!   ([`optics::Pupil::Table`]) with efficiency and transmission tables, a contained pixel MTF
+//!   divided out; the tables come from text: [`parse_zemax_fft_mtf`] (Zemax FFT MTF listings in
+//!   UTF-16, UTF-8 or Latin-1) with [`zemax_otf_table`], or [`parse_mtf_csv`].
+//! - [`presets`]: the paper's lens and published devices by name ([`preset`], [`preset_names`]).
+//!
+//! The wavefront sign is one (docs/physics.md, "Sign of the wavefront"): `W020 > 0` focuses
+//! behind the detector. Efficiencies τ and the transmission T are fractions of the power incident
+//! on the full clear aperture: a sub-aperture, zone, obscuration or sector carries its area
+//! fraction in τ (docs/physics.md, "Lens families").
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
 //! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
@@ -32,7 +48,8 @@
 //! assert!((w020 + 4.2e-6).abs() < 1e-12);
 //! ```
 //!
-//! Units: SI (m). Efficiencies are fractions of the light incident on the aperture.
+//! Units: SI (m). Efficiencies are fractions of the light incident on the full aperture. This
+//! crate reads no files: the parsers take text.
 
 mod chromatic;
 mod dispersion;
