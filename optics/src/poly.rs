@@ -59,6 +59,11 @@ pub const GAUSSIAN_HALF_WIDTH_SIGMAS: f64 = 7.0;
 /// needed): a bound, so that no finite input asks for more panels than memory and time allow.
 const MAX_PANELS: f64 = (1 << 20) as f64;
 
+/// Memory the FFT path may hold in OTF grids, bytes (4 GiB: a sixth of the 24 GiB machines the
+/// project is built for, so that a parallel sweep on two cores stays within memory). A scene
+/// that needs more stops with [`Error::WorkBudget`] before allocating.
+pub const FFT_MEMORY_BUDGET: f64 = 4.0 * (1u64 << 30) as f64;
+
 /// Pupil samples across the diameter on the FFT path: the mean MTF of a defocused circle is then
 /// within 2.5e-5 of the exact path (`fft` module convergence table; 1e-4 needs N ≥ 128).
 pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
@@ -688,6 +693,27 @@ impl<'a> Polychromatic<'a> {
         let lambda_max = self.samples.iter().map(|s| s.0).fold(0.0, f64::max);
         let s_max = (self.max_frequency * lambda_max * self.f_number).min(1.0);
         let mut layer = FftLayer::new(pupil_samples, s_max, self.lens.numerical_aperture())?;
+        // memory budget: one (2K + 1)² complex grid per spectral node and order on the grid path,
+        // counted before any is made (a 300 nm band at 1024 samples would hold 12 GB)
+        let side = 2 * layer.plan.max_lag() + 1;
+        let grid_bytes = (side * side * std::mem::size_of::<Complex64>()) as f64;
+        let grids: usize = self
+            .samples
+            .iter()
+            .filter(|s| s.1 != 0.0)
+            .map(|&(lambda, _)| {
+                self.lens.orders(lambda, self.field).iter().filter(|o| !matches!(o.pupil, Pupil::Table(_))).count()
+            })
+            .sum();
+        if grids as f64 * grid_bytes > FFT_MEMORY_BUDGET {
+            return Err(Error::WorkBudget {
+                grids,
+                grid_mb: grid_bytes / 1e6,
+                total_gib: grids as f64 * grid_bytes / f64::from(1u32 << 30),
+                budget_gib: FFT_MEMORY_BUDGET / f64::from(1u32 << 30),
+                pupil_samples,
+            });
+        }
         let mut nodes = Vec::new();
         for &(lambda, q_rho) in &self.samples {
             if q_rho == 0.0 {

@@ -236,6 +236,11 @@ impl OtfPlan {
         self.m
     }
 
+    /// Largest lag `K` (each axis) of the grids this plan writes: `(2K + 1)²` values each.
+    pub fn max_lag(&self) -> usize {
+        self.half
+    }
+
     /// Highest normalized frequency readable from the OTFs this plan computes.
     pub fn s_max(&self) -> f64 {
         self.s_max
