@@ -37,9 +37,9 @@ pub mod fraunhofer;
 mod lens;
 mod otf;
 mod poly;
-mod table;
 pub mod quad;
 pub mod reference;
+mod table;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 

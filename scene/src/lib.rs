@@ -41,11 +41,13 @@
 //! trailing TOML comment are errors.
 
 mod error;
+mod lens;
 mod load;
 mod resolved;
 mod tables;
 
 pub use error::{Error, SHOWN, Warning};
+pub use lens::PRESETS;
 pub use load::{
     EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, Loaded, PAPER_SCENE, PIXEL_PITCH_PLAUSIBLE_UM, Resolved, Source,
     WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, check_overrides, load, load_with_warnings, read,
