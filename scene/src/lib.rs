@@ -40,12 +40,16 @@
 //! keys, keys that do not apply, CSV rows that are not numbers and `--set` values with a
 //! trailing TOML comment are errors.
 
+mod compare;
 mod error;
 mod lens;
 mod load;
 mod resolved;
 mod tables;
 
+pub use compare::{
+    Comparison, DESIGNS_SCENE, Design, build_comparison, is_comparison, load_comparison, read_comparison,
+};
 pub use error::{Error, SHOWN, Warning};
 pub use lens::PRESETS;
 pub use load::{

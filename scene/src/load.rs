@@ -154,6 +154,24 @@ pub(crate) struct Origins {
 }
 
 impl Origins {
+    /// The origins of one design of a comparison file: the same file and overrides, the lens
+    /// table named `lens` (e.g. `designs[1].lens`), no warnings yet.
+    pub(crate) fn for_lens(&self, lens: String) -> Origins {
+        Origins {
+            file: self.file.clone(),
+            dir: self.dir.clone(),
+            overrides: self.overrides.clone(),
+            warnings: RefCell::new(Vec::new()),
+            lens,
+            preset: None,
+        }
+    }
+
+    /// The plausibility warnings collected so far (taken out).
+    pub(crate) fn take_warnings(&self) -> Vec<Warning> {
+        self.warnings.take()
+    }
+
     /// `key` as messages name it: a `lens.…` key of a comparison's design is `designs[i].lens.…`.
     pub(crate) fn key(&self, key: &str) -> String {
         match key.strip_prefix("lens") {
