@@ -342,13 +342,13 @@ impl<'a> Polychromatic<'a> {
             loop {
                 let h = (b - a) / n as f64;
                 let mut worst: f64 = 0.0;
-                let mut prev = this.max_w020(a);
+                let mut prev = this.w020s(a);
                 for k in 1..=n {
                     let x = a + h * k as f64;
-                    let cur = this.max_w020(x);
-                    let mid = this.max_w020(x - 0.5 * h);
-                    let turn =
-                        (cur - prev).abs().max((mid - prev).abs()) + cur.abs().max(prev.abs()) * highest * f_number * h;
+                    let cur = this.w020s(x);
+                    let mid = this.w020s(x - 0.5 * h);
+                    let largest = cur.iter().chain(&prev).fold(0.0_f64, |m, w| m.max(w.abs()));
+                    let turn = w020_step(&prev, &cur).max(w020_step(&prev, &mid)) + largest * highest * f_number * h;
                     worst = worst.max(turn * phase_per_w020);
                     prev = cur;
                 }
@@ -495,12 +495,10 @@ impl<'a> Polychromatic<'a> {
         self.w020_rms = self.spectral_average(|_, w020| w020 * w020).sqrt();
     }
 
-    fn max_w020(&self, lambda: f64) -> f64 {
-        self.lens
-            .orders(lambda, self.field)
-            .iter()
-            .map(|o| o.wavefront.defocus_m)
-            .fold(0.0, |m: f64, w| if w.abs() > m.abs() { w } else { m })
+    fn w020s(&self, lambda: f64) -> Vec<f64> {
+        let orders = self.lens.orders(lambda, self.field);
+        let total: f64 = orders.iter().map(|o| o.efficiency).sum();
+        orders.iter().filter(|o| o.efficiency > 1e-9 * total).map(|o| o.wavefront.defocus_m).collect()
     }
 
     /// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for the clipped panel.
@@ -1124,4 +1122,20 @@ fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
         return Err(Error::UnboundedSpectrum { lo, hi });
     }
     Ok((lo, hi))
+}
+
+/// How far the defocus of the orders moves from `from` to `to`: for each order, the distance to
+/// the nearest order of the other set (orders are not labelled; paired by nearness, so two
+/// orders whose |W020| cross are two smooth curves, not a jump of the signed largest).
+fn w020_step(from: &[f64], to: &[f64]) -> f64 {
+    let nearest = |w: f64, set: &[f64]| set.iter().map(|v| (w - v).abs()).fold(f64::INFINITY, f64::min);
+    let one = |a: &[f64], b: &[f64]| {
+        a.iter().map(|&w| if b.is_empty() { w.abs() } else { nearest(w, b) }).fold(0.0, f64::max)
+    };
+    // an order entering or leaving the set (at the efficiency threshold) is not a move
+    match from.len().cmp(&to.len()) {
+        std::cmp::Ordering::Less => one(from, to),
+        std::cmp::Ordering::Greater => one(to, from),
+        std::cmp::Ordering::Equal => one(from, to).max(one(to, from)),
+    }
 }
