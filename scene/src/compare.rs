@@ -73,6 +73,8 @@ pub struct Comparison {
     pub designs: Vec<Design>,
     /// Values that look like a unit slip (each once).
     pub warnings: Vec<Warning>,
+    /// The shared spectrum's `center_nm` and `range_nm`, when it has them (a band-pass shape).
+    pub band_nm: Option<(f64, f64)>,
 }
 
 /// Reads a comparison file (None = the embedded comparison, [`DESIGNS_SCENE`]).
@@ -208,7 +210,12 @@ pub fn build_comparison(source: &Source, overrides: &[String]) -> Result<Compari
         }
     }
     let title = table.get("title").and_then(|t| t.as_str()).map(str::to_owned);
-    Ok(Comparison { title, label: source.label().to_owned(), designs: built, warnings })
+    let spectrum = table.get("spectrum").and_then(toml::Value::as_table);
+    let number = |key: &str| {
+        spectrum.and_then(|s| s.get(key)).and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+    };
+    let band_nm = number("center_nm").zip(number("range_nm"));
+    Ok(Comparison { title, label: source.label().to_owned(), designs: built, warnings, band_nm })
 }
 
 /// The chromatic twin of `scene`'s lens: the same F-number and focal length, designed for
