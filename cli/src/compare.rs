@@ -161,6 +161,13 @@ pub struct Report {
     pub ranking_at_best: Vec<String>,
 }
 
+/// A design at the scene band: its evaluation, the glare-free and glare-inclusive ASNR, and its
+/// chromatic twin's ASNR (None when the twin detects no light).
+type AtScene = (Evaluation, f64, f64, Option<f64>);
+
+/// The best range of a search and every `(range, ASNR)` evaluated, in order of range.
+type Refined = (Best, Vec<(f64, f64)>);
+
 /// N points log-spaced from `lo` to `hi` inclusive.
 fn log_axis(range: &Range) -> Vec<f64> {
     let n = range.points.unwrap_or(2).max(1);
@@ -285,7 +292,7 @@ fn compute(
             .progress_chars("=> "),
     );
     // the scene band: the scene's options, glare-free and glare-inclusive, and the twin
-    let at_scene: Vec<Result<(Evaluation, f64, f64, Option<f64>)>> = base
+    let at_scene: Vec<Result<AtScene>> = base
         .designs
         .par_iter()
         .map(|d| {
@@ -318,12 +325,12 @@ fn compute(
     let curves: Vec<Vec<(f64, f64)>> = (0..searches.len())
         .map(|s| grid.iter().copied().zip(values[s * grid.len()..][..grid.len()].iter().copied()).collect())
         .collect();
-    let bests: Vec<Result<(Best, Vec<(f64, f64)>)>> = searches
+    let bests: Vec<Result<Refined>> = searches
         .par_iter()
         .zip(curves.par_iter())
         .map(|(search, curve)| refine(curve, |x| asnr_with(source, set, &search.overrides(x), search.design)))
         .collect();
-    let bests: Vec<(Best, Vec<(f64, f64)>)> = bests.into_iter().collect::<Result<_>>()?;
+    let bests: Vec<Refined> = bests.into_iter().collect::<Result<_>>()?;
 
     let mut designs = Vec::new();
     for (i, (d, scene_result)) in base.designs.iter().zip(at_scene).enumerate() {
@@ -398,7 +405,7 @@ fn compute(
 
 /// The best range of a sampled curve: its largest sample, refined by golden section (in log
 /// range) between its two neighbours; the curve returned with the points evaluated, in order.
-fn refine(curve: &[(f64, f64)], mut f: impl FnMut(f64) -> Result<f64>) -> Result<(Best, Vec<(f64, f64)>)> {
+fn refine(curve: &[(f64, f64)], mut f: impl FnMut(f64) -> Result<f64>) -> Result<Refined> {
     let j = (0..curve.len()).max_by(|&a, &b| curve[a].1.total_cmp(&curve[b].1)).context("an empty grid")?;
     let mut points = curve.to_vec();
     let mut best = curve[j];
@@ -454,8 +461,8 @@ pub fn table(r: &Report) -> String {
     let _ = writeln!(
         s,
         "scene band spectrum centred at {} nm, range {} nm ({KEY})",
-        sig(r.center_nm, 6),
-        sig(r.range_nm, 6)
+        crate::plot::number(r.center_nm),
+        crate::plot::number(r.range_nm)
     );
     let _ = writeln!(s, "best band  {}", r.method);
     let w = r.designs.iter().map(|d| d.name.chars().count()).max().unwrap_or(6).max(6);
@@ -519,7 +526,7 @@ pub fn table(r: &Report) -> String {
                 .map(|c| {
                     format!(
                         "{} nm: best range {} nm, ASNR {:.4}{}",
-                        sig(c.wavelength_nm, 6),
+                        crate::plot::number(c.wavelength_nm),
                         sig(c.best.range_nm, 4),
                         c.best.asnr,
                         if c.best.at_bound { " *" } else { "" }

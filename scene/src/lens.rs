@@ -211,18 +211,18 @@ pub(crate) fn apply_preset(lens: &mut toml::Table, o: &Origins) -> Result<Option
         return Err(o.bad("lens.preset", quoted(name), &expected));
     };
     let preset: toml::Table = toml::from_str(text).unwrap_or_default();
-    if let (Some(given), Some(own)) = (lens.get("model").and_then(|m| m.as_str()), preset.get("model")) {
-        if Some(given) != own.as_str() {
-            return Err(o.conflict(
-                "lens.model",
-                format!(
-                    "lens.preset = {} is a {} lens, but lens.model = {}: give the model of the preset, or no preset",
-                    quoted(name),
-                    own,
-                    quoted(given)
-                ),
-            ));
-        }
+    if let (Some(given), Some(own)) = (lens.get("model").and_then(|m| m.as_str()), preset.get("model"))
+        && Some(given) != own.as_str()
+    {
+        return Err(o.conflict(
+            "lens.model",
+            format!(
+                "lens.preset = {} is a {} lens, but lens.model = {}: give the model of the preset, or no preset",
+                quoted(name),
+                own,
+                quoted(given)
+            ),
+        ));
     }
     let mut supplied = Vec::new();
     for (k, v) in preset {

@@ -1066,7 +1066,7 @@ mod tests {
     #[test]
     fn resolved_examples_load_to_the_same_asnr() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
-        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml"] {
+        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml", "harmonic.toml"] {
             let source = read(Some(&root.join(name))).unwrap();
             let text = resolved_toml(&source, &[]).unwrap().toml;
             let again = Source::from_text(text.clone(), "resolved", std::env::temp_dir());
