@@ -62,6 +62,8 @@ pub struct ChromaticMetalens {
     transmission: Curve,
     /// the iris when it is not the centred full circle (decentred, obscured, a sector)
     aperture: Option<Arc<Aperture>>,
+    /// the iris' area as a fraction of the full aperture's (1 without an iris): it scales τ1 and T
+    area_fraction: f64,
     /// Seidel terms (m at the pupil edge) besides the chromatic defocus: W040, W131, W222, W220
     seidel: [f64; 4],
 }
@@ -132,6 +134,7 @@ impl ChromaticMetalens {
             efficiency,
             transmission,
             aperture: None,
+            area_fraction: 1.0,
             seidel: [0.0; 4],
         })
     }
@@ -139,8 +142,23 @@ impl ChromaticMetalens {
     /// This lens imaging through `aperture` (in units of the full aperture's radius) instead of
     /// the centred full circle: a decentred iris (paper SI Fig. S3), an obscuration, a sector.
     /// Such a lens is computed on the FFT path.
+    ///
+    /// Photon counts follow the pupil (docs/physics.md, "Lens families": a sub-aperture,
+    /// obscuration or sector carries its area fraction in τ): the efficiency τ1(λ) and the
+    /// transmission T(λ) given to [`new`](Self::new) are those of the full clear aperture, and
+    /// through `aperture` both are multiplied by its area fraction `a`
+    /// ([`Aperture::area_fraction`], exact for discs, annuli and sectors, measured for a mask):
+    /// a 10° sector collects `1/36` of the light, an annulus of obscuration ε `1 − ε²`, and a
+    /// decentred iris of full size all of it. Light the iris stops is neither signal nor
+    /// background: it never reaches the detector.
     pub fn with_aperture(self, aperture: Aperture) -> Self {
-        ChromaticMetalens { aperture: Some(Arc::new(aperture)), ..self }
+        let area_fraction = aperture.area_fraction();
+        ChromaticMetalens { aperture: Some(Arc::new(aperture)), area_fraction, ..self }
+    }
+
+    /// The area fraction of the iris ([`with_aperture`](Self::with_aperture)), 1 without one.
+    pub fn area_fraction(&self) -> f64 {
+        self.area_fraction
     }
 
     /// This lens with Seidel aberrations at the scene's field point (m at the pupil edge, the
@@ -193,15 +211,17 @@ impl LensModel for ChromaticMetalens {
         let mut wavefront = Wavefront::defocus(self.defocus(wavelength_m)).shifted(dx, dy);
         [wavefront.spherical_m, wavefront.coma_m, wavefront.astigmatism_m, wavefront.field_curvature_m] = self.seidel;
         let pupil = self.aperture.as_ref().map_or(Pupil::Full, |a| Pupil::Aperture(a.clone()));
-        vec![Order::new(self.efficiency.value(wavelength_m), pupil, wavefront)]
+        vec![Order::new(self.efficiency(wavelength_m), pupil, wavefront)]
     }
 
+    /// τ1(λ) times the iris' area fraction ([`with_aperture`](Self::with_aperture)).
     fn efficiency(&self, wavelength_m: f64) -> f64 {
-        self.efficiency.value(wavelength_m)
+        self.area_fraction * self.efficiency.value(wavelength_m)
     }
 
+    /// T(λ) times the iris' area fraction.
     fn transmission(&self, wavelength_m: f64) -> f64 {
-        self.transmission.value(wavelength_m)
+        self.area_fraction * self.transmission.value(wavelength_m)
     }
 
     fn design_wavelength(&self) -> Option<f64> {
@@ -330,5 +350,27 @@ mod tests {
         assert!(e.to_string().contains("focal_length = NaN"), "{e}");
         let e = ChromaticMetalens::new(2.5, 3e-3, 800e-9, Curve::Constant(0.1), Curve::Constant(1.5)).unwrap_err();
         assert!(e.to_string().contains("transmission = 1.5"), "{e}");
+    }
+
+    /// Photon counts follow the pupil: a 10° sector passes 1/36 of τ1 and T, an annulus of
+    /// obscuration 0.5 three quarters, a decentred full-size iris all of it (area fractions of
+    /// the shapes by hand: angle/2π, 1 − ε²).
+    #[test]
+    fn an_aperture_scales_efficiency_and_transmission_by_its_area() {
+        let sector = Aperture::sector(0.0, 10f64.to_radians()).unwrap();
+        let annulus = Aperture::annulus(0.5).unwrap();
+        let iris = Aperture::circle().decentred(0.2, -0.1).unwrap();
+        for (aperture, area) in [(sector, 1.0 / 36.0), (annulus, 0.75), (iris, 1.0)] {
+            let lens = paper().with_aperture(aperture);
+            assert!((lens.area_fraction() - area).abs() < 1e-15, "{area}");
+            for lambda in [700e-9, 800e-9] {
+                assert!((lens.efficiency(lambda) - 0.15 * area).abs() < 1e-15, "{area}");
+                assert!((lens.transmission(lambda) - 0.55 * area).abs() < 1e-15, "{area}");
+                let order = &lens.orders(lambda, Field::ON_AXIS)[0];
+                assert_eq!(order.efficiency, lens.efficiency(lambda));
+                assert!((order.pupil.area_fraction() - area).abs() < 1e-15);
+            }
+        }
+        assert_eq!(paper().area_fraction(), 1.0);
     }
 }

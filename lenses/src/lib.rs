@@ -2,7 +2,8 @@
 //!
 //! - [`ChromaticMetalens`]: a chromatic metalens or diffractive lens, `f(λ) = f0 λ0/λ`
 //!   (docs/physics.md "Lens families"), with first-order efficiency τ1(λ) and total transmission T(λ)
-//!   constant or tabulated.
+//!   constant or tabulated; through an iris ([`ChromaticMetalens::with_aperture`]) both scale by
+//!   its area fraction (photon counts follow the pupil).
 //! - [`Refractive`]: the ideal refractive reference, `W = 0`, or with glass dispersion
 //!   `f(λ) = f0 (n0 − 1)/(n(λ) − 1)` ([`Sellmeier`]), `τ = T` from the Fresnel or coated
 //!   surface losses.
@@ -12,6 +13,21 @@
 //!   `τ_m = τ_base sinc²(pλ0/λ − m)` and `W020_m(λ) = (1 − mλ/(pλ0)) f0/(8F#²)`.
 //! - [`Interleaved`]: a spatially multiplexed lens of N interleaved chromatic channels λ_j,
 //!   `τ_j = η_j/N²`, `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`.
+//! - [`Segmented`]: a spatially multiplexed lens of N chromatic channels in zones of area
+//!   fractions a_j ([`Layout`]: concentric rings, sectors, or a user's map), one composite pupil
+//!   ([`optics::Pupil::Zones`]) with the zone wavefronts `W_j = (1 − λ/λ_j) f0/(8F#²) ρ²`,
+//!   efficiency `Σ a_j η_j`; the other channels' light as signal or, [`OtherChannels`], as
+//!   background outside each channel's band.
+//! - [`Tabulated`]: one order whose OTF is a measured or simulated table
+//!   ([`optics::Pupil::Table`]) with efficiency and transmission tables, a contained pixel MTF
+//!   divided out; the tables come from text: [`parse_zemax_fft_mtf`] (Zemax FFT MTF listings in
+//!   UTF-16, UTF-8 or Latin-1) with [`zemax_otf_table`], or [`parse_mtf_csv`].
+//! - [`presets`]: the paper's lens and published devices by name ([`preset`], [`preset_names`]).
+//!
+//! The wavefront sign is one (docs/physics.md, "Sign of the wavefront"): `W020 > 0` focuses
+//! behind the detector. Efficiencies τ and the transmission T are fractions of the power incident
+//! on the full clear aperture: a sub-aperture, zone, obscuration or sector carries its area
+//! fraction in τ (docs/physics.md, "Lens families").
 //!
 //! Constructors validate every parameter (finite, in its physical range, `τ1 ≤ T ≤ 1`) and
 //! return [`Error`] naming the parameter, its value and what is accepted, so a constructed lens
@@ -32,19 +48,29 @@
 //! assert!((w020 + 4.2e-6).abs() < 1e-12);
 //! ```
 //!
-//! Units: SI (m). Efficiencies are fractions of the light incident on the aperture.
+//! Units: SI (m). Efficiencies are fractions of the light incident on the full aperture. This
+//! crate reads no files: the parsers take text.
 
 mod chromatic;
 mod dispersion;
 mod harmonic;
 mod interleaved;
+pub mod presets;
 mod refractive;
+mod segmented;
+mod tabulated;
 
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
+pub use presets::{preset, preset_names};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
+pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
+pub use tabulated::{
+    FieldChoice, PIXEL_DIVISION_LIMIT, Tabulated, ZemaxField, ZemaxMtf, decode_text, parse_mtf_csv,
+    parse_zemax_fft_mtf, zemax_otf_table,
+};
 
 /// What can be wrong with a lens description.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -86,4 +112,43 @@ pub enum Error {
         /// The F-number at that diameter.
         max_f_number: f64,
     },
+    /// Text (a Zemax listing, a CSV) that is not what was expected.
+    #[error("{}expected {expected}, found `{found}`", line_prefix(*.line))]
+    Parse {
+        /// The line, from 1 (0: the text as a whole).
+        line: usize,
+        /// What was expected there.
+        expected: String,
+        /// What was found.
+        found: String,
+    },
+    /// An OTF table that optics refuses (a row not 1 at zero frequency, values beyond [−1, 1], …).
+    #[error("OTF table: {0}")]
+    Table(optics::Error),
+    /// A preset name that does not exist.
+    #[error("unknown lens preset `{name}`: expected one of {known}")]
+    UnknownPreset {
+        /// The name given.
+        name: String,
+        /// The names known, comma-separated.
+        known: String,
+    },
+    /// A table said to contain the pixel MTF exceeds 1 once divided by it.
+    #[error(
+        "the table divided by the pixel MTF of {pitch_um} µm is {value} > 1 at {wavelength_nm} nm, {frequency_cyc_per_mm} cycles/mm: the table does not contain that pixel MTF (check the pitch, or give none)"
+    )]
+    PixelMtfNotInTable {
+        /// Where, nm.
+        wavelength_nm: f64,
+        /// Where, cycles/mm.
+        frequency_cyc_per_mm: f64,
+        /// The divided value.
+        value: f64,
+        /// The pixel pitch, µm.
+        pitch_um: f64,
+    },
+}
+
+fn line_prefix(line: usize) -> String {
+    if line == 0 { String::new() } else { format!("line {line}: ") }
 }

@@ -2,8 +2,9 @@
 //! (Gauss–Legendre below `|a| = 24`, Bessel series above), the pixel MTF, the polychromatic
 //! engine on the paper scene (preparation and the mean up to Nyquist), the closed-form engine's
 //! kernels (one polychromatic OTF value of [`GaussianDefocus`], the Weideman `erfcx` against
-//! the `errorfunctions` crate it replaces), and the FFT path's [`OtfPlan::otf`] for a decentred
-//! iris at 64–512 pupil samples.
+//! the `errorfunctions` crate it replaces), the FFT path's [`OtfPlan::otf`] for a decentred
+//! iris at 64–512 pupil samples, and a composite pupil of three sector zones (the field of
+//! [`SampledZones::set_field`] and [`OtfPlan::otf_of_field`]) at 256.
 //!
 //! `cargo bench -p optics --bench kernels` (about a minute; `-- <filter>` runs a subset, e.g.
 //! `-- fft`). Timings are measured here and never asserted (STYLE.md).
@@ -13,7 +14,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, criterion_main};
 use num_complex::Complex64;
-use optics::fft::{Aberrations, Aperture, Otf, OtfPlan, SampledPupil};
+use optics::fft::{Aberrations, Aperture, Otf, OtfPlan, SampledPupil, SampledZones, ZoneField};
 use optics::{Field, GaussianDefocus, LensModel, Order, Polychromatic, Pupil, Wavefront, defocus_otf, pixel_mtf};
 use radiometry::{Gaussian, Spectrum};
 
@@ -135,6 +136,37 @@ fn fft(c: &mut Criterion) {
             })
         });
     }
+    group.finish();
+
+    // a segmented lens at one wavelength: three 120° sectors, each with its own defocus; the
+    // field per wavelength and its OTF, against the single aperture's otf at the same N
+    let zones: Vec<std::sync::Arc<Aperture>> = (0..3)
+        .map(|j| {
+            let third = std::f64::consts::TAU / 3.0;
+            std::sync::Arc::new(Aperture::sector(j as f64 * third, (j + 1) as f64 * third).unwrap())
+        })
+        .collect();
+    let fields: Vec<ZoneField> = (0..3)
+        .map(|j| ZoneField {
+            amplitude: 0.9,
+            aberrations: Aberrations::defocus((j as f64 - 1.0) * LAMBDA0),
+            tilt_m: [0.0, 0.0],
+        })
+        .collect();
+    let n = 256;
+    let mut sampled = SampledZones::new(n, &zones).unwrap();
+    let mut plan = OtfPlan::new(n, s_max).unwrap();
+    let mut otf = Otf::new();
+    let mut group = c.benchmark_group("fft composite of three sectors");
+    group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(3));
+    group.sampling_mode(SamplingMode::Flat);
+    group.bench_function("set_field + otf_of_field, N = 256", |b| {
+        b.iter(|| {
+            sampled.set_field(black_box(&fields), LAMBDA0).unwrap();
+            plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
+            otf.sample(1, 0)
+        })
+    });
     group.finish();
 
     let mut group = c.benchmark_group("fft SampledPupil::new decentred iris");

@@ -30,4 +30,21 @@ pub enum Error {
         /// The integral found.
         total: f64,
     },
+    /// The FFT path would need more memory than its budget ([`crate::FFT_MEMORY_BUDGET`]): it
+    /// stops before allocating instead of exhausting the machine.
+    #[error(
+        "the FFT path would hold {grids} complex OTF grids of {grid_mb:.1} MB ({total_gib:.1} GiB, over the {budget_gib:.0} GiB budget) for {pupil_samples} pupil samples across the diameter: lower the pupil sampling (each halving divides the memory by about 4) or narrow the spectrum (fewer spectral nodes)"
+    )]
+    WorkBudget {
+        /// OTF grids needed (spectral nodes × orders on the FFT path).
+        grids: usize,
+        /// Size of one grid, MB.
+        grid_mb: f64,
+        /// Their total, GiB.
+        total_gib: f64,
+        /// The budget, GiB.
+        budget_gib: f64,
+        /// Pupil samples across the diameter.
+        pupil_samples: usize,
+    },
 }

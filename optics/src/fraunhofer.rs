@@ -5,13 +5,31 @@
 //! `W020 = Δz NA²/2` the blur radius of any order is `2 |W020| / NA`; for the chromatic lens,
 //! `Δf = f0 Δλ/λ0` gives eq. S15, `x = f0 (Δλ/λ0) NA`.
 
-use crate::lens::{Field, LensModel};
+use crate::lens::{Field, LensModel, Order, Pupil};
 use crate::quad;
 
-/// Geometric blur radius (m) of the worst imaging order at `wavelength_m`: `2 |W020| / NA`.
+/// The defocus (m) that sets an order's blur: its `W020`, or for a composite pupil of zones
+/// ([`Pupil::Zones`]) the zone defocus of largest size if that is larger (the order's `defocus_m`
+/// should already be it; a lens that leaves it at 0 is not taken for focused). A tabulated order
+/// ([`Pupil::Table`]) has the `defocus_m` its lens gives it (0: always within the limit). Signed:
+/// the value of largest size.
+pub(crate) fn order_defocus(order: &Order) -> f64 {
+    let own = order.wavefront.defocus_m;
+    match &order.pupil {
+        Pupil::Zones(zones) => zones
+            .iter()
+            .filter(|z| z.amplitude > 0.0)
+            .map(|z| z.wavefront.defocus_m)
+            .fold(own, |m, w| if w.abs() > m.abs() { w } else { m }),
+        _ => own,
+    }
+}
+
+/// Geometric blur radius (m) of the worst imaging order at `wavelength_m`: `2 |W020| / NA`, with
+/// the largest zone defocus of a composite pupil ([`Pupil::Zones`]).
 pub fn blur_radius(lens: &dyn LensModel, wavelength_m: f64) -> f64 {
     let na = lens.numerical_aperture();
-    lens.orders(wavelength_m, Field::ON_AXIS).iter().map(|o| 2.0 * o.wavefront.defocus_m.abs() / na).fold(0.0, f64::max)
+    lens.orders(wavelength_m, Field::ON_AXIS).iter().map(|o| 2.0 * order_defocus(o).abs() / na).fold(0.0, f64::max)
 }
 
 /// The largest wavelength shift from `reference_m` (usually the design wavelength) on either side
@@ -58,7 +76,8 @@ pub fn max_wavelength_shift(lens: &dyn LensModel, reference_m: f64, threshold_m:
 pub(crate) const CROSSING_SAMPLES: usize = 16;
 
 /// `Σ_orders ∫ ρ(λ) τ_o(λ) dλ` over the wavelengths where order `o` is defocused beyond
-/// `limit_m`, `|W020_o(λ)| > limit_m` (for the blur radius `x = 2|W020|/NA` of eq. S15,
+/// `limit_m`, `|W020_o(λ)| > limit_m` (W020 of [`order_defocus`]: a composite pupil's largest
+/// zone defocus; for the blur radius `x = 2|W020|/NA` of eq. S15,
 /// `limit_m = x NA/2`), on the spectral `panels` `[lo, hi]` inside each of which `ρ` (`density`)
 /// and the lens are smooth.
 ///
@@ -85,10 +104,10 @@ pub(crate) fn weight_defocused_beyond(
         let grid: Vec<f64> =
             (0..=CROSSING_SAMPLES).map(|i| if i == CROSSING_SAMPLES { hi } else { lo + h * i as f64 }).collect();
         let orders: Vec<Vec<f64>> =
-            grid.iter().map(|&l| lens.orders(l, field).iter().map(|o| o.wavefront.defocus_m).collect()).collect();
+            grid.iter().map(|&l| lens.orders(l, field).iter().map(order_defocus).collect()).collect();
         let count = orders.iter().map(Vec::len).max().unwrap_or(0);
         for k in 0..count {
-            let w020 = |l: f64| order(l, k).map_or(f64::NAN, |o| o.wavefront.defocus_m);
+            let w020 = |l: f64| order(l, k).map_or(f64::NAN, |o| order_defocus(&o));
             let mut cuts = vec![lo, hi];
             for target in [-limit_m, limit_m] {
                 for (i, pair) in grid.windows(2).enumerate() {
@@ -161,6 +180,54 @@ mod tests {
         assert!((got - exact).abs() < 1e-14 * exact, "{got:e} vs {exact:e}");
         // nothing beyond a limit above every |W020| of the band (≤ 4 µm and 11 µm)
         assert_eq!(weight_defocused_beyond(&TwoOrders, Field::ON_AXIS, &|_| 1.0, &panels, 20e-6), 0.0);
+    }
+
+    /// A segmented lens whose order leaves `defocus_m` at 0: its blur is its largest zone's;
+    /// a tabulated order's is the `defocus_m` its lens sets.
+    #[derive(Debug)]
+    struct Zoned;
+    impl LensModel for Zoned {
+        fn f_number(&self) -> f64 {
+            2.0
+        }
+        fn focal_length(&self) -> f64 {
+            5e-3
+        }
+        fn orders(&self, lambda: f64, _: Field) -> Vec<Order> {
+            use std::sync::Arc;
+            let x = (lambda - 800e-9) / 100e-9;
+            let half = |a: f64| Arc::new(crate::fft::Aperture::sector(a, a + std::f64::consts::PI).unwrap());
+            let zones = vec![
+                crate::Zone::new(half(0.0), 0.9, Wavefront::defocus(2e-6 * x)),
+                crate::Zone::new(half(std::f64::consts::PI), 0.9, Wavefront::defocus(-1e-6 * x)),
+                // dark: does not count
+                crate::Zone::new(half(0.0), 0.0, Wavefront::defocus(9e-6)),
+            ];
+            let table = crate::OtfTable::new(vec![800e-9], vec![0.0, 1e6], vec![vec![1.0, 0.0]], None).unwrap();
+            vec![
+                Order::new(0.4, Pupil::Zones(Arc::from(zones)), Wavefront::default()),
+                Order::new(0.1, Pupil::Table(Arc::new(table)), Wavefront::defocus(0.5e-6)),
+            ]
+        }
+    }
+
+    #[test]
+    fn zones_blur_by_their_largest_defocus_and_tables_by_theirs() {
+        let na = Zoned.numerical_aperture();
+        // at 900 nm the zones' defocus is 2 µm and −1 µm: the 2 µm zone sets the blur
+        assert!((blur_radius(&Zoned, 900e-9) - 2.0 * 2e-6 / na).abs() < 1e-18);
+        // at 800 nm the zones are in focus: the table's 0.5 µm
+        assert!((blur_radius(&Zoned, 800e-9) - 2.0 * 0.5e-6 / na).abs() < 1e-18);
+        // limit 1 µm over 600–1000 nm: the zones beyond where |2x| > 1 (outside 750–850 nm),
+        // 300 nm of 400; the table never
+        let panels = [(600e-9, 1000e-9)];
+        let got = weight_defocused_beyond(&Zoned, Field::ON_AXIS, &|_| 1.0, &panels, 1e-6);
+        let exact = 0.4 * 300e-9;
+        assert!((got - exact).abs() < 1e-14 * exact, "{got:e} vs {exact:e}");
+        let got = weight_defocused_beyond(&Zoned, Field::ON_AXIS, &|_| 1.0, &panels, 0.4e-6);
+        // the table's 0.5 µm is beyond 0.4 µm everywhere; the zones outside 780–820 nm
+        let exact = 0.1 * 400e-9 + 0.4 * 360e-9;
+        assert!((got - exact).abs() < 1e-14 * exact, "{got:e} vs {exact:e}");
     }
 
     #[test]

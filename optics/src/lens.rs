@@ -55,13 +55,19 @@ pub enum Pupil {
     /// the FFT path. Each zone's [`Zone::wavefront`] replaces the order's wavefront there (it is
     /// written in full-aperture coordinates, so an off-centre zone's defocus is also a tilt); the
     /// order's `image_shift_m` applies to all zones, and its `defocus_m` should be the zone
-    /// defocus of largest size (it sizes the spectral rule and the Fraunhofer check). The
-    /// order's efficiency is `Σ amplitude_j² × area fraction_j` times nothing else: the zones'
-    /// amplitudes carry their efficiencies.
+    /// defocus of largest size (it sizes the frequency rule and the Fraunhofer check, which take
+    /// the largest zone defocus when that is larger; the spectral panels follow every zone's
+    /// defocus). The order's efficiency is `Σ amplitude_j² × area fraction_j` times nothing else:
+    /// the zones' amplitudes carry their efficiencies. The grid is normalized by that power, so
+    /// the order's OTF is 1 at zero frequency (`fft::SampledZones`, `fft::OtfPlan::otf_of_field`).
+    /// Keep the zones' `Arc<Aperture>`s the same from call to call: their sampling is cached.
     Zones(Arc<[Zone]>),
     /// No pupil: the order's OTF is given as a table against wavelength and frequency (a
-    /// measured or simulated MTF, e.g. a Zemax FFT MTF export). The order's wavefront is not
-    /// used except `image_shift_m`; the table's `defocus_m` may be set for the Fraunhofer check.
+    /// measured or simulated MTF, e.g. a Zemax FFT MTF export), read at ν directly below the
+    /// order's cutoff `1/(λ F#)`; its tangential curve along the field direction (`+x` on
+    /// axis). The order's wavefront is not used except `image_shift_m`; the order's `defocus_m`
+    /// may be set for the Fraunhofer check. On the exact 1-D path with other full-pupil orders,
+    /// or beside the FFT layer's grids; the spectral panels are cut at the table's wavelengths.
     Table(Arc<crate::OtfTable>),
 }
 
@@ -89,9 +95,11 @@ pub struct Zone {
     /// Field amplitude transmission, ≥ 0: the zone passes `amplitude²` of the power incident on it.
     pub amplitude: f64,
     /// The zone's wavefront (defocus and Seidel terms, full-aperture coordinates, the sign of
-    /// [`Wavefront`]). Its `image_shift_m` is applied as a tilt of this zone alone (on top of
-    /// the order's shift, which applies to all zones): zones of a multiplexed lens off axis each
-    /// have their own lateral colour.
+    /// [`Wavefront`]). Its `image_shift_m` Δ is applied as a tilt of this zone alone,
+    /// `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's radius, `NA = 1/(2F#)`),
+    /// which moves the zone's image by Δ, the way the order's shift (which applies to all zones
+    /// on top) moves the order's: zones of a multiplexed lens off axis each have their own
+    /// lateral colour.
     pub wavefront: Wavefront,
 }
 
@@ -215,6 +223,51 @@ pub struct AffineDefocus {
 /// docs/physics.md, "Sign of the wavefront" (see [`Wavefront`]): `W020 > 0` is a focus behind the
 /// detector. A chromatic lens `f(λ) = f0 λ0/λ` thus has `W020(λ) = (1 − λ/λ0) f0/(8 F#²)`,
 /// negative for `λ > λ0`.
+///
+/// Photon counts follow the pupil: an order's efficiency is a fraction of the light incident on
+/// the full aperture, at most its [`Pupil::area_fraction`]. `optics::testkit::check_lens`
+/// (feature `testkit`) checks an implementation against these rules and the transfer-function
+/// invariants; `examples/custom-lens` in the repository is a whole downstream crate.
+///
+/// # Implementing it
+/// A chromatic metalens behind an iris that opens a 90° sector of its aperture: one order
+/// through a [`Pupil::Aperture`], with the sector's area fraction (1/4) in its efficiency and
+/// its transmission. Nothing is hidden: this is the whole implementation.
+///
+/// ```
+/// use std::sync::Arc;
+/// use optics::fft::Aperture;
+/// use optics::{Field, LensModel, Order, Pupil, Wavefront};
+///
+/// #[derive(Debug)]
+/// struct QuarterMetalens {
+///     aperture: Arc<Aperture>,
+/// }
+///
+/// impl LensModel for QuarterMetalens {
+///     fn f_number(&self) -> f64 {
+///         2.5
+///     }
+///
+///     fn focal_length(&self) -> f64 {
+///         3.36e-3
+///     }
+///
+///     fn orders(&self, wavelength_m: f64, _field: Field) -> Vec<Order> {
+///         // f(λ) = f0 λ0/λ with the detector at f0: W020 = (1 − λ/λ0) f0/(8F#²)
+///         let w020 = (1.0 - wavelength_m / 800e-9) * 3.36e-3 / (8.0 * 2.5 * 2.5);
+///         let efficiency = 0.15 * self.aperture.area_fraction();
+///         vec![Order::new(efficiency, Pupil::Aperture(self.aperture.clone()), Wavefront::defocus(w020))]
+///     }
+///
+///     fn transmission(&self, _wavelength_m: f64) -> f64 {
+///         0.55 * self.aperture.area_fraction()
+///     }
+/// }
+///
+/// let lens = QuarterMetalens { aperture: Arc::new(Aperture::sector(0.0, std::f64::consts::FRAC_PI_2).unwrap()) };
+/// assert!((lens.efficiency(800e-9) - 0.15 / 4.0).abs() < 1e-15);
+/// ```
 pub trait LensModel: Send + Sync + fmt::Debug {
     /// Working F-number `F# = f0/D` at the detector.
     fn f_number(&self) -> f64;

@@ -21,6 +21,13 @@
 //!   and integrated by adaptive Gauss–Kronrod (7/15). Where `OTF_poly` changes sign inside a
 //!   panel, the root is located (Illinois method) and the panel split there, so `|OTF_poly|` is
 //!   only integrated where it is smooth.
+//! - **Several orders.** The panels resolve the defocus phase of every order (and every zone of
+//!   a composite pupil), matched between neighbouring wavelengths (`largest_turn`), not only the
+//!   order of largest defocus, whose sign jumps between the channels of a multiplexed lens.
+//! - **Tabulated orders** ([`Pupil::Table`]) are read at ν (T/S along the azimuth from the field
+//!   direction) in place of the defocused OTF, on the exact path or beside the FFT layer's grids;
+//!   composite pupils of zones ([`Pupil::Zones`]) get one FFT grid per node, of their coherent
+//!   field (`fft::SampledZones`).
 //! - **Line spectra** ([`Spectrum::as_line`]) skip all of the spectral part: the sum over λ is one
 //!   term per imaging order at the line's wavelength ([`Engine::Monochromatic`]), whose cutoff is
 //!   the one frequency cut.
@@ -36,8 +43,10 @@ use radiometry::Spectrum;
 use crate::closed::GaussianDefocus;
 use crate::fft::{Aperture, Otf, OtfPlan, SampledPupil};
 
-use crate::lens::{Field, LensModel, Pupil};
+use crate::fft::{SampledZones, ZoneField};
+use crate::lens::{Field, LensModel, Order, Pupil};
 use crate::otf::{defocus_otf, pixel_mtf};
+use crate::table::OtfTable;
 use crate::{Error, quad};
 
 /// Half-width, in standard deviations, kept of each Gaussian spectral factor: the area beyond
@@ -50,6 +59,11 @@ pub const GAUSSIAN_HALF_WIDTH_SIGMAS: f64 = 7.0;
 /// needed): a bound, so that no finite input asks for more panels than memory and time allow.
 const MAX_PANELS: f64 = (1 << 20) as f64;
 
+/// Memory the FFT path may hold in OTF grids, bytes (4 GiB: a sixth of the 24 GiB machines the
+/// project is built for, so that a parallel sweep on two cores stays within memory). A scene
+/// that needs more stops with [`Error::WorkBudget`] before allocating.
+pub const FFT_MEMORY_BUDGET: f64 = 4.0 * (1u64 << 30) as f64;
+
 /// Pupil samples across the diameter on the FFT path: the mean MTF of a defocused circle is then
 /// within 2.5e-5 of the exact path (`fft` module convergence table; 1e-4 needs N ≥ 128).
 pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
@@ -57,7 +71,8 @@ pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
 /// How the OTF is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Engine {
-    /// The exact 1-D integral: centred circular pupils with defocus (and lateral shifts) only.
+    /// The exact 1-D integral: centred circular pupils with defocus (and lateral shifts) only,
+    /// and tabulated OTFs ([`Pupil::Table`]).
     Exact1d,
     /// The spectral integral in closed form ([`GaussianDefocus`]): a Gaussian × polynomial
     /// spectrum through one full pupil with defocus affine in λ; one adaptive integral left.
@@ -84,7 +99,15 @@ struct FftNode {
     lambda: f64,
     weight: f64,
     shift: [f64; 2],
-    otf: Otf,
+    kind: FftKind,
+}
+
+/// How an order's OTF is read on the FFT layer.
+enum FftKind {
+    /// A complex OTF grid: a sampled pupil or a composite of zones.
+    Grid(Otf),
+    /// A tabulated OTF ([`Pupil::Table`]), read at ν directly.
+    Table(Arc<OtfTable>),
 }
 
 /// The FFT layer: one complex OTF grid per spectral node and order.
@@ -106,7 +129,7 @@ const SIGNIFICANT_WEIGHT: f64 = 1e-13;
 /// Bisection depth limit of the adaptive frequency integration.
 const MAX_DEPTH: u32 = 40;
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Node {
     lambda: f64,
     /// quadrature weight × ρ(λ) × order efficiency
@@ -115,6 +138,143 @@ struct Node {
     w020: f64,
     /// image displacement on the detector, m
     shift: [f64; 2],
+    /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
+    table: Option<Arc<OtfTable>>,
+}
+
+impl Node {
+    /// The node of `order` at `lambda` with `weight` (quadrature weight × ρ × efficiency).
+    fn of(order: &Order, lambda: f64, weight: f64) -> Node {
+        Node {
+            lambda,
+            weight,
+            // the largest zone defocus of a composite pupil (the frequency rule's statistics and
+            // the Fraunhofer check of a line); the defocused OTF uses it only for a full pupil
+            w020: crate::fraunhofer::order_defocus(order),
+            shift: order.wavefront.image_shift_m,
+            table: match &order.pupil {
+                Pupil::Table(t) => Some(t.clone()),
+                _ => None,
+            },
+        }
+    }
+
+    /// The real OTF of this node's order at `s = ν λ F#` (`s < 1`) along the direction at
+    /// `azimuth_from_field` from the field direction (a table's T/S; the defocused OTF of a
+    /// centred circle does not depend on it).
+    fn otf(&self, s: f64, frequency: f64, azimuth_from_field: f64) -> f64 {
+        match &self.table {
+            None => defocus_otf(s, self.w020 / self.lambda),
+            Some(t) => t.value(self.lambda, frequency, azimuth_from_field),
+        }
+    }
+}
+
+/// Whether `order` needs the FFT layer: a pupil other than the full circle (an aperture, a
+/// composite of zones), or a wavefront beyond defocus; a tabulated OTF is read directly.
+fn needs_grid(order: &Order) -> bool {
+    match &order.pupil {
+        Pupil::Full => !order.wavefront.is_defocus_only(),
+        Pupil::Table(_) => false,
+        _ => true,
+    }
+}
+
+/// Efficiency, relative to the sum over the orders, below which an order does not count in the
+/// spectral panels' phase-turn rule (it cannot move the OTF by more than that).
+const NEGLIGIBLE_EFFICIENCY: f64 = 1e-9;
+
+/// Efficiency, relative to the sum over the orders, up to which an order may be present at one
+/// end of a spectral panel and absent at the other without counting as a jump ([`largest_turn`]):
+/// an order entering or leaving the window of a harmonic lens (`sinc²(3 − δ) ≈ δ²/9` at the window
+/// edge), whose weight jumps by no more than that whatever the panel.
+const VANISHING_EFFICIENCY: f64 = 1e-3;
+
+/// One order's defocus at one wavelength for the phase-turn rule, with whether its efficiency
+/// is small enough to appear or vanish between neighbouring wavelengths.
+#[derive(Clone, Copy, Debug)]
+struct PhaseEntry {
+    w020: f64,
+    vanishing: bool,
+}
+
+/// The defocus values whose phase the spectral panels must resolve at `lambda`, sorted: one per
+/// order of non-negligible efficiency, one per zone (of non-zero amplitude) of a composite pupil
+/// (each with its order's efficiency), none for a tabulated OTF (its rows are interpolated
+/// linearly in λ and the panels are cut at them).
+fn phase_defocus(lens: &dyn LensModel, lambda: f64, field: Field) -> Vec<PhaseEntry> {
+    let orders = lens.orders(lambda, field);
+    let total: f64 = orders.iter().map(|o| o.efficiency.abs()).sum();
+    let mut out = Vec::new();
+    for o in orders.iter().filter(|o| o.efficiency.abs() > NEGLIGIBLE_EFFICIENCY * total) {
+        let vanishing = o.efficiency.abs() <= VANISHING_EFFICIENCY * total;
+        match &o.pupil {
+            Pupil::Table(_) => {}
+            Pupil::Zones(zones) => out.extend(
+                zones
+                    .iter()
+                    .filter(|z| z.amplitude > 0.0)
+                    .map(|z| PhaseEntry { w020: z.wavefront.defocus_m, vanishing }),
+            ),
+            _ => out.push(PhaseEntry { w020: o.wavefront.defocus_m, vanishing }),
+        }
+    }
+    out.sort_by(|a, b| a.w020.total_cmp(&b.w020));
+    out
+}
+
+/// The largest change of one order's defocus between two neighbouring wavelengths whose defocus
+/// lists ([`phase_defocus`], sorted) are `from` and `to`.
+///
+/// Orders carry no identity across wavelengths, so they are matched: by the monotone alignment
+/// of the sorted lists that leaves the fewest orders of non-vanishing efficiency unmatched, and
+/// among those the smallest largest change (a bottleneck alignment, by dynamic programming). An
+/// order entering or leaving the window of a harmonic lens, with an efficiency near zero there,
+/// stays unmatched (its weight jumps by that little, which no panel refines away), while the
+/// channels of a multiplexed lens, all bright, are matched one to one in W020 order, which is
+/// their own order since their defocus curves do not cross: a shift of every channel by one
+/// channel spacing across a panel counts as that large change, not as none. Measuring the
+/// largest-|W020| order alone jumped between orders of opposite sign, and matching by list
+/// index alone mistook a shifted window (orders 1–6 → 2–7) for a jump of every order; both
+/// refined without end (the panel bound, 2^20 panels, for an interleaved or harmonic lens over
+/// 50–200 nm).
+fn largest_turn(from: &[PhaseEntry], to: &[PhaseEntry]) -> f64 {
+    let (n, m) = (from.len(), to.len());
+    // cost[i][j]: (unmatched bright orders, largest change) aligning from[..i] with to[..j],
+    // compared lexicographically (the sum in the first and the maximum in the second are both
+    // monotone, so the cell-wise minimum is the optimum)
+    let mut cost = vec![(usize::MAX, f64::INFINITY); (n + 1) * (m + 1)];
+    let at = |i: usize, j: usize| i * (m + 1) + j;
+    cost[at(0, 0)] = (0, 0.0);
+    let better = |a: (usize, f64), b: (usize, f64)| a.0 < b.0 || (a.0 == b.0 && a.1 < b.1);
+    for i in 0..=n {
+        for j in 0..=m {
+            let mut best = cost[at(i, j)];
+            if i > 0 && cost[at(i - 1, j)].0 != usize::MAX {
+                let (c, t) = cost[at(i - 1, j)];
+                let candidate = (c + usize::from(!from[i - 1].vanishing), t);
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            if j > 0 && cost[at(i, j - 1)].0 != usize::MAX {
+                let (c, t) = cost[at(i, j - 1)];
+                let candidate = (c + usize::from(!to[j - 1].vanishing), t);
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            if i > 0 && j > 0 && cost[at(i - 1, j - 1)].0 != usize::MAX {
+                let (c, t) = cost[at(i - 1, j - 1)];
+                let candidate = (c, t.max((from[i - 1].w020 - to[j - 1].w020).abs()));
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            cost[at(i, j)] = best;
+        }
+    }
+    cost[at(n, m)].1
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -234,6 +394,8 @@ pub struct Polychromatic<'a> {
     w020_rms: f64,
     /// whether any node's image is displaced (the OTF is then complex off the shift-free axis)
     shifted: bool,
+    /// whether some tabulated order has different tangential and sagittal curves
+    directional_tables: bool,
     /// set while emitting nodes if some order needs a sampled pupil
     needs_fft: Cell<bool>,
     /// the FFT layer, when some order's pupil or wavefront is beyond the exact path
@@ -315,8 +477,13 @@ impl<'a> Polychromatic<'a> {
             return Self::monochromatic(lens, detected, field, max_frequency, pixel_pitch, settings, line);
         }
         let (lo, hi) = spectral_extent(detected)?;
-        let mut cuts: Vec<f64> =
-            detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&b| b > lo && b < hi).collect();
+        let mut cuts: Vec<f64> = detected
+            .breakpoints()
+            .into_iter()
+            .chain(lens.breakpoints())
+            .chain(table_wavelengths(lens, field, lo, hi))
+            .filter(|&b| b > lo && b < hi)
+            .collect();
         cuts.push(lo);
         cuts.push(hi);
         cuts.sort_by(f64::total_cmp);
@@ -342,13 +509,17 @@ impl<'a> Polychromatic<'a> {
             loop {
                 let h = (b - a) / n as f64;
                 let mut worst: f64 = 0.0;
-                let mut prev = this.w020s(a);
+                let mut prev = phase_defocus(lens, a, field);
                 for k in 1..=n {
                     let x = a + h * k as f64;
-                    let cur = this.w020s(x);
-                    let mid = this.w020s(x - 0.5 * h);
-                    let largest = cur.iter().chain(&prev).fold(0.0_f64, |m, w| m.max(w.abs()));
-                    let turn = w020_step(&prev, &cur).max(w020_step(&prev, &mid)) + largest * highest * f_number * h;
+                    let cur = phase_defocus(lens, x, field);
+                    let mid = phase_defocus(lens, x - 0.5 * h, field);
+                    // per order (docs/physics.md, "Spectral quadrature": the OTF turns with the
+                    // defocus in waves at each s), the change of W020 across the panel plus the
+                    // change of s = ν λ F# times the largest |W020|
+                    let largest = cur.iter().chain(&prev).map(|e| e.w020.abs()).fold(0.0, f64::max);
+                    let turn =
+                        largest_turn(&prev, &cur).max(largest_turn(&prev, &mid)) + largest * highest * f_number * h;
                     worst = worst.max(turn * phase_per_w020);
                     prev = cur;
                 }
@@ -386,6 +557,8 @@ impl<'a> Polychromatic<'a> {
         }
         self.defocus_statistics();
         self.shifted = self.nodes.iter().any(|n| n.shift != [0.0, 0.0]);
+        self.directional_tables =
+            self.nodes.iter().any(|n| n.table.as_ref().is_some_and(|t| t.is_direction_dependent()));
         if self.needs_fft.get() {
             self.fft = Some(self.build_fft(pupil_samples)?);
         }
@@ -409,15 +582,10 @@ impl<'a> Polychromatic<'a> {
         let mut this = Self::empty(lens, detected, field, max_frequency, pixel_pitch, settings);
         this.samples = vec![(lambda, line.weight)];
         for order in lens.orders(lambda, field) {
-            if !matches!(order.pupil, Pupil::Full) || !order.wavefront.is_defocus_only() {
+            if needs_grid(&order) {
                 this.needs_fft.set(true);
             }
-            this.nodes.push(Node {
-                lambda,
-                weight: line.weight * order.efficiency,
-                w020: order.wavefront.defocus_m,
-                shift: order.wavefront.image_shift_m,
-            });
+            this.nodes.push(Node::of(&order, lambda, line.weight * order.efficiency));
         }
         this.total_weight = this.nodes.iter().map(|n| n.weight).sum();
         this.finish(settings.pupil_samples)
@@ -452,6 +620,7 @@ impl<'a> Polychromatic<'a> {
             w020_max: 0.0,
             w020_rms: 0.0,
             shifted: false,
+            directional_tables: false,
             needs_fft: Cell::new(false),
             fft: None,
             closed: None,
@@ -477,6 +646,7 @@ impl<'a> Polychromatic<'a> {
                 weight: q_rho * affine.efficiency,
                 w020: affine.w020_intercept_m + affine.w020_slope * lambda,
                 shift: [0.0, 0.0],
+                table: None,
             });
         });
         self.panels.push(Panel { lo, hi, start: 0, end: nodes.len() });
@@ -495,12 +665,6 @@ impl<'a> Polychromatic<'a> {
         self.w020_rms = self.spectral_average(|_, w020| w020 * w020).sqrt();
     }
 
-    fn w020s(&self, lambda: f64) -> Vec<f64> {
-        let orders = self.lens.orders(lambda, self.field);
-        let total: f64 = orders.iter().map(|o| o.efficiency).sum();
-        orders.iter().filter(|o| o.efficiency > 1e-9 * total).map(|o| o.wavefront.defocus_m).collect()
-    }
-
     /// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for the clipped panel.
     fn clipped_nodes(&self, lo: f64, cut: f64, mut emit: impl FnMut(Node)) {
         let len = cut - lo;
@@ -515,60 +679,56 @@ impl<'a> Polychromatic<'a> {
             return;
         }
         for order in self.lens.orders(lambda, self.field) {
-            if !matches!(order.pupil, Pupil::Full) || !order.wavefront.is_defocus_only() {
+            if needs_grid(&order) {
                 self.needs_fft.set(true);
             }
-            emit(Node {
-                lambda,
-                weight: q * rho * order.efficiency,
-                w020: order.wavefront.defocus_m,
-                shift: order.wavefront.image_shift_m,
-            });
+            emit(Node::of(&order, lambda, q * rho * order.efficiency));
         }
     }
 
-    /// One complex OTF grid per unclipped spectral node and order, from one reused plan; sampled
-    /// pupils are cached while the aperture stays the same.
+    /// One complex OTF grid per unclipped spectral node and order, from one reused plan (a
+    /// tabulated order is read directly); sampled pupils and zones are cached while their
+    /// apertures (the same `Arc`s) stay the same.
     fn build_fft(&self, pupil_samples: usize) -> Result<FftPath, Error> {
         let lambda_max = self.samples.iter().map(|s| s.0).fold(0.0, f64::max);
         let s_max = (self.max_frequency * lambda_max * self.f_number).min(1.0);
-        let mut plan = OtfPlan::new(pupil_samples, s_max)?;
-        let circle = Arc::new(Aperture::circle());
-        let mut cached: Option<(Arc<Aperture>, SampledPupil)> = None;
+        let mut layer = FftLayer::new(pupil_samples, s_max, self.lens.numerical_aperture())?;
+        // memory budget: one (2K + 1)² complex grid per spectral node and order on the grid path,
+        // counted before any is made (a 300 nm band at 1024 samples would hold 12 GB)
+        let side = 2 * layer.plan.max_lag() + 1;
+        let grid_bytes = (side * side * std::mem::size_of::<Complex64>()) as f64;
+        let grids: usize = self
+            .samples
+            .iter()
+            .filter(|s| s.1 != 0.0)
+            .map(|&(lambda, _)| {
+                self.lens.orders(lambda, self.field).iter().filter(|o| !matches!(o.pupil, Pupil::Table(_))).count()
+            })
+            .sum();
+        if grids as f64 * grid_bytes > FFT_MEMORY_BUDGET {
+            return Err(Error::WorkBudget {
+                grids,
+                grid_mb: grid_bytes / 1e6,
+                total_gib: grids as f64 * grid_bytes / f64::from(1u32 << 30),
+                budget_gib: FFT_MEMORY_BUDGET / f64::from(1u32 << 30),
+                pupil_samples,
+            });
+        }
         let mut nodes = Vec::new();
         for &(lambda, q_rho) in &self.samples {
             if q_rho == 0.0 {
                 continue;
             }
             for order in self.lens.orders(lambda, self.field) {
-                let aperture = match &order.pupil {
-                    Pupil::Full => circle.clone(),
-                    Pupil::Aperture(a) => a.clone(),
-                    // PLACEHOLDER until the composite and tabulated orders are wired into the FFT layer
-                    _ => return Err(Error::InvalidParameter { name: "pupil", value: 0.0, expected: "WIP" }),
-                };
-                let aberrations = order.wavefront.aberrations();
-                let pupil = match &mut cached {
-                    Some((a, p)) if Arc::ptr_eq(a, &aperture) => {
-                        p.set_aberrations(&aberrations)?;
-                        p
-                    }
-                    slot => {
-                        let p = SampledPupil::new(pupil_samples, &aperture, &aberrations)?;
-                        &mut slot.insert((aperture, p)).1
-                    }
-                };
-                let mut otf = Otf::new();
-                plan.otf(pupil, lambda, &mut otf);
                 nodes.push(FftNode {
                     lambda,
                     weight: q_rho * order.efficiency,
                     shift: order.wavefront.image_shift_m,
-                    otf,
+                    kind: layer.kind(&order, lambda)?,
                 });
             }
         }
-        Ok(FftPath { nodes, pupil_samples, padded: plan.padded_len() })
+        Ok(FftPath { nodes, pupil_samples, padded: layer.plan.padded_len() })
     }
 
     /// The OTF engine in use.
@@ -588,7 +748,7 @@ impl<'a> Polychromatic<'a> {
     /// Whether the OTF depends on direction (lateral colour, or a non-symmetric pupil or
     /// wavefront): the MTF must then be read along an azimuth.
     pub fn direction_dependent(&self) -> bool {
-        self.shifted || self.fft.is_some()
+        self.shifted || self.fft.is_some() || self.directional_tables
     }
 
     /// `∫ ρ(λ) τ(λ) dλ` summed over the imaging orders: the detected-signal integral in the units
@@ -609,11 +769,12 @@ impl<'a> Polychromatic<'a> {
     }
 
     /// Calls `visit(weight × OTF(s, w), shift)` for every spectral node that passes `frequency`.
-    fn contributions(&self, frequency: f64, mut visit: impl FnMut(f64, [f64; 2])) {
+    /// A tabulated order is read along `azimuth_from_field` (radians from the field direction).
+    fn contributions(&self, frequency: f64, azimuth_from_field: f64, mut visit: impl FnMut(f64, [f64; 2])) {
         let nu = frequency.abs();
         let nuf = nu * self.f_number;
         let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
-        let mut term = |n: &Node| visit(n.weight * defocus_otf(nuf * n.lambda, n.w020 / n.lambda), n.shift);
+        let mut term = |n: &Node| visit(n.weight * n.otf(nuf * n.lambda, nu, azimuth_from_field), n.shift);
         if let Some(lambda) = self.line() {
             // one wavelength: it passes this frequency or not
             if lambda < cut {
@@ -647,7 +808,8 @@ impl<'a> Polychromatic<'a> {
             return self.otf_along(frequency, 0.0).re;
         }
         let mut sum = 0.0;
-        self.contributions(frequency, |v, _| sum += v);
+        // along +x: a tabulated order's direction relative to the field's
+        self.contributions(frequency, -self.field_direction(), |v, _| sum += v);
         sum / self.total_weight
     }
 
@@ -669,12 +831,17 @@ impl<'a> Polychromatic<'a> {
             let nuf = frequency.abs() * self.f_number;
             // OTF(−ν) = OTF(ν)*: read the grid at |ν| along the azimuth turned by π
             let azimuth = if frequency < 0.0 { azimuth + PI } else { azimuth };
+            let from_field = azimuth - self.field_direction();
             for n in &fft.nodes {
                 let s = nuf * n.lambda;
-                if s >= 1.0 || s > n.otf.s_max() {
+                if s >= 1.0 {
                     continue;
                 }
-                let mut v = n.otf.at(s, azimuth) * n.weight;
+                let mut v = match &n.kind {
+                    FftKind::Grid(otf) if s <= otf.s_max() => otf.at(s, azimuth) * n.weight,
+                    FftKind::Grid(_) => continue,
+                    FftKind::Table(t) => Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0),
+                };
                 let [dx, dy] = n.shift;
                 if dx != 0.0 || dy != 0.0 {
                     let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
@@ -684,7 +851,7 @@ impl<'a> Polychromatic<'a> {
             }
             return sum / self.total_weight;
         }
-        self.contributions(frequency, |v, [dx, dy]| {
+        self.contributions(frequency, azimuth - self.field_direction(), |v, [dx, dy]| {
             if dx == 0.0 && dy == 0.0 {
                 sum.re += v;
             } else {
@@ -693,6 +860,13 @@ impl<'a> Polychromatic<'a> {
             }
         });
         sum / self.total_weight
+    }
+
+    /// The field direction on the detector, radians from `+x`: `atan2(y, x)` of the field
+    /// angles, `+x` on axis (docs/physics.md, "Off-axis MTFs: tangential and sagittal"); a
+    /// tabulated order's tangential curve lies along it.
+    fn field_direction(&self) -> f64 {
+        self.field.y_rad.atan2(self.field.x_rad)
     }
 
     /// Whether some wavelength's image is displaced, so that the OTF is complex and depends on
@@ -809,7 +983,10 @@ impl<'a> Polychromatic<'a> {
             let cell = fft
                 .nodes
                 .iter()
-                .map(|n| 1.0 / (n.otf.n() as f64 * n.lambda * self.f_number))
+                .filter_map(|n| match &n.kind {
+                    FftKind::Grid(otf) => Some(1.0 / (otf.n() as f64 * n.lambda * self.f_number)),
+                    FftKind::Table(_) => None,
+                })
                 .fold(f64::INFINITY, f64::min);
             // over [0, highest cutoff] where that is below max_frequency: the OTF is zero beyond
             let top = self.active_top();
@@ -1010,10 +1187,121 @@ impl<'a> Polychromatic<'a> {
     }
 }
 
+/// The wavelengths of the OTF tables of `lens`'s orders, found at five wavelengths across
+/// `[lo, hi]`: a table is linear in λ between its rows, so the spectral panels are cut there.
+fn table_wavelengths(lens: &dyn LensModel, field: Field, lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    for k in 0..5 {
+        let lambda = lo + (hi - lo) * k as f64 / 4.0;
+        if lambda <= 0.0 {
+            continue;
+        }
+        for order in lens.orders(lambda, field) {
+            if let Pupil::Table(t) = &order.pupil {
+                out.extend_from_slice(t.wavelengths());
+            }
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out.dedup();
+    out
+}
+
+/// Cache size of sampled pupils and zone sets on the FFT layer (a lens has a few apertures).
+const SAMPLED_CACHE: usize = 8;
+
+/// The FFT layer's state while its grids are computed: one plan, and the sampled pupils and
+/// zone sets of the apertures seen so far (kept while the lens hands out the same `Arc`s).
+struct FftLayer {
+    n: usize,
+    plan: OtfPlan,
+    numerical_aperture: f64,
+    circle: Arc<Aperture>,
+    pupils: Vec<(Arc<Aperture>, SampledPupil)>,
+    zones: Vec<SampledZones>,
+    fields: Vec<ZoneField>,
+}
+
+impl FftLayer {
+    fn new(n: usize, s_max: f64, numerical_aperture: f64) -> Result<FftLayer, Error> {
+        Ok(FftLayer {
+            n,
+            plan: OtfPlan::new(n, s_max)?,
+            numerical_aperture,
+            circle: Arc::new(Aperture::circle()),
+            pupils: Vec::new(),
+            zones: Vec::new(),
+            fields: Vec::new(),
+        })
+    }
+
+    /// How `order`'s OTF at `lambda` is read: a grid of its sampled pupil, of its composite of
+    /// zones, or its table.
+    fn kind(&mut self, order: &Order, lambda: f64) -> Result<FftKind, Error> {
+        let aperture = match &order.pupil {
+            Pupil::Table(t) => return Ok(FftKind::Table(t.clone())),
+            Pupil::Zones(zones) => return self.zones_grid(zones, lambda).map(FftKind::Grid),
+            Pupil::Aperture(a) => a.clone(),
+            _ => self.circle.clone(),
+        };
+        let aberrations = order.wavefront.aberrations();
+        let slot = match self.pupils.iter().position(|(a, _)| Arc::ptr_eq(a, &aperture)) {
+            Some(i) => {
+                self.pupils[i].1.set_aberrations(&aberrations)?;
+                i
+            }
+            None => {
+                let p = SampledPupil::new(self.n, &aperture, &aberrations)?;
+                if self.pupils.len() == SAMPLED_CACHE {
+                    self.pupils.remove(0);
+                }
+                self.pupils.push((aperture, p));
+                self.pupils.len() - 1
+            }
+        };
+        let mut otf = Otf::new();
+        self.plan.otf(&self.pupils[slot].1, lambda, &mut otf);
+        Ok(FftKind::Grid(otf))
+    }
+
+    /// The OTF of one composite pupil (docs/physics.md, "General pupils"; `fft::SampledZones`):
+    /// the zones' fields add coherently, each with its amplitude, its wavefront and, for its own
+    /// image shift Δ, the tilt `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's
+    /// radius), which multiplies its part of the OTF by `exp(−2πi ν·Δ)` as an order's shift does.
+    fn zones_grid(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<Otf, Error> {
+        let apertures = || zones.iter().map(|z| &z.aperture);
+        let slot = match self.zones.iter().position(|s| s.is_sampling_of(apertures())) {
+            Some(i) => i,
+            None => {
+                let list: Vec<Arc<Aperture>> = apertures().cloned().collect();
+                if self.zones.len() == SAMPLED_CACHE {
+                    self.zones.remove(0);
+                }
+                self.zones.push(SampledZones::new(self.n, &list)?);
+                self.zones.len() - 1
+            }
+        };
+        let na = self.numerical_aperture;
+        self.fields.clear();
+        self.fields.extend(zones.iter().map(|z| ZoneField {
+            amplitude: z.amplitude,
+            aberrations: z.wavefront.aberrations(),
+            tilt_m: [z.wavefront.image_shift_m[0] * na, z.wavefront.image_shift_m[1] * na],
+        }));
+        let sampled = &mut self.zones[slot];
+        sampled.set_field(&self.fields, lambda)?;
+        let mut otf = Otf::new();
+        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
+        Ok(otf)
+    }
+}
+
 /// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):
 /// the modulus of the efficiency-weighted sum of its orders' OTFs (with their lateral-shift
 /// phases), normalized to 1 at zero frequency (all zeros if no order transmits). Orders beyond
-/// the exact path get one FFT grid each, with `pupil_samples` across the diameter.
+/// the exact path get one FFT grid each, with `pupil_samples` across the diameter (a composite
+/// pupil of zones one grid of its coherent field); a tabulated order is read at ν, along +x
+/// measured from the field direction.
 pub fn monochromatic_mtf(
     lens: &dyn LensModel,
     wavelength_m: f64,
@@ -1025,30 +1313,29 @@ pub fn monochromatic_mtf(
     let s_max = frequencies.iter().map(|&nu| to_s(nu)).fold(0.0, f64::max).clamp(1e-6, 1.0);
     let mut sum = vec![Complex64::new(0.0, 0.0); frequencies.len()];
     let mut total = 0.0;
+    let mut layer: Option<FftLayer> = None;
+    // along +x: a tabulated order's direction relative to the field's
+    let from_field = -field.y_rad.atan2(field.x_rad);
     for order in lens.orders(wavelength_m, field) {
         total += order.efficiency;
-        let grid = match &order.pupil {
-            Pupil::Full if order.wavefront.is_defocus_only() => None,
-            pupil => {
-                let aperture = match pupil {
-                    Pupil::Aperture(a) => (**a).clone(),
-                    _ => Aperture::circle(),
-                };
-                let sampled = SampledPupil::new(pupil_samples, &aperture, &order.wavefront.aberrations())?;
-                let mut out = Otf::new();
-                OtfPlan::new(pupil_samples, s_max)?.otf(&sampled, wavelength_m, &mut out);
-                Some(out)
-            }
+        let kind = if needs_grid(&order) {
+            let layer = match &mut layer {
+                Some(l) => l,
+                slot => slot.insert(FftLayer::new(pupil_samples, s_max, lens.numerical_aperture())?),
+            };
+            Some(layer.kind(&order, wavelength_m)?)
+        } else {
+            None
         };
-        let w = order.wavefront.defocus_m / wavelength_m;
+        let node = Node::of(&order, wavelength_m, order.efficiency);
         for (acc, &nu) in sum.iter_mut().zip(frequencies) {
             let s = to_s(nu);
             if s >= 1.0 {
                 continue;
             }
-            let otf = match &grid {
-                None => Complex64::new(defocus_otf(s, w), 0.0),
-                Some(g) => g.at(s.min(g.s_max()), 0.0),
+            let otf = match &kind {
+                Some(FftKind::Grid(g)) => g.at(s.min(g.s_max()), 0.0),
+                _ => Complex64::new(node.otf(s, nu, from_field), 0.0),
             };
             let phase = -2.0 * PI * nu * order.wavefront.image_shift_m[0];
             *acc += otf * Complex64::from_polar(order.efficiency, phase);
@@ -1111,7 +1398,7 @@ fn closed_form(
     Some((closed, affine))
 }
 
-fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
+pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
     let (mut lo, mut hi) = detected.support();
     for g in detected.gaussians() {
         lo = lo.max(g.center() - GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
@@ -1124,18 +1411,40 @@ fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
     Ok((lo, hi))
 }
 
-/// How far the defocus of the orders moves from `from` to `to`: for each order, the distance to
-/// the nearest order of the other set (orders are not labelled; paired by nearness, so two
-/// orders whose |W020| cross are two smooth curves, not a jump of the signed largest).
-fn w020_step(from: &[f64], to: &[f64]) -> f64 {
-    let nearest = |w: f64, set: &[f64]| set.iter().map(|v| (w - v).abs()).fold(f64::INFINITY, f64::min);
-    let one = |a: &[f64], b: &[f64]| {
-        a.iter().map(|&w| if b.is_empty() { w.abs() } else { nearest(w, b) }).fold(0.0, f64::max)
-    };
-    // an order entering or leaving the set (at the efficiency threshold) is not a move
-    match from.len().cmp(&to.len()) {
-        std::cmp::Ordering::Less => one(from, to),
-        std::cmp::Ordering::Greater => one(to, from),
-        std::cmp::Ordering::Equal => one(from, to).max(one(to, from)),
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bright(w: &[f64]) -> Vec<PhaseEntry> {
+        w.iter().map(|&w020| PhaseEntry { w020, vanishing: false }).collect()
+    }
+
+    /// The matching of orders between neighbouring wavelengths, against the changes worked out
+    /// by hand.
+    #[test]
+    fn orders_are_matched_by_their_defocus() {
+        // three bright channels each moving by one channel spacing (1.0) across the panel: the
+        // nearest-neighbour pairs would see 0.1, the true change is 1.0
+        let from = bright(&[-1.0, 0.0, 1.0]);
+        let to = bright(&[-2.0, -1.1, 0.0]);
+        assert_eq!(largest_turn(&from, &to), 1.1);
+        // a harmonic window shifting by one order (same count): the order leaving at one end
+        // and the one entering at the other are near zero efficiency and stay unmatched
+        let mut from = bright(&[1.0, 2.0, 3.0, 4.0]);
+        from[0].vanishing = true;
+        let mut to = bright(&[2.05, 3.05, 4.05, 5.05]);
+        to[3].vanishing = true;
+        assert!((largest_turn(&from, &to) - 0.05).abs() < 1e-12);
+        // the same shift with bright end orders is a jump of every order (no vanishing order to
+        // leave out): matched one to one
+        assert!(
+            (largest_turn(&bright(&[1.0, 2.0, 3.0, 4.0]), &bright(&[2.05, 3.05, 4.05, 5.05])) - 1.05).abs() < 1e-12
+        );
+        // an order appearing (the counts differ): the others are matched, whatever its brightness
+        assert!((largest_turn(&bright(&[1.0, 2.0]), &bright(&[1.1, 2.1, 3.0])) - 0.1).abs() < 1e-12);
+        assert!((largest_turn(&bright(&[0.0, 1.0, 2.0]), &bright(&[1.2, 2.2])) - 0.2).abs() < 1e-12);
+        // nothing to match
+        assert_eq!(largest_turn(&[], &bright(&[1.0])), 0.0);
+        assert_eq!(largest_turn(&[], &[]), 0.0);
     }
 }

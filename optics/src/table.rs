@@ -19,6 +19,9 @@ pub struct OtfTable {
     frequencies: Vec<f64>,
     tangential: Vec<Vec<f64>>,
     sagittal: Vec<Vec<f64>>,
+    /// whether the two curves differ somewhere (compared once: [`value`](OtfTable::value) is
+    /// called for every spectral node and frequency)
+    directional: bool,
 }
 
 fn bad<T>(name: &'static str, value: f64, expected: &'static str) -> Result<T, Error> {
@@ -87,7 +90,8 @@ impl OtfTable {
             Some(rows) => normalize(rows)?,
             None => tangential.clone(),
         };
-        Ok(OtfTable { wavelengths_m, frequencies, tangential, sagittal })
+        let directional = tangential != sagittal;
+        Ok(OtfTable { wavelengths_m, frequencies, tangential, sagittal, directional })
     }
 
     /// The tabulated wavelengths, m.
@@ -107,7 +111,7 @@ impl OtfTable {
 
     /// Whether the tangential and sagittal curves differ somewhere.
     pub fn is_direction_dependent(&self) -> bool {
-        self.tangential != self.sagittal
+        self.directional
     }
 
     /// The OTF at `wavelength_m` and `frequency` (cycles/m, sign ignored) along the direction at

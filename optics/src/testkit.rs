@@ -1,20 +1,53 @@
 //! Conformance checks for [`LensModel`] implementations (feature `testkit`).
 //!
-//! A downstream lens family calls [`check_lens`] from its tests: whatever the lens does, its
-//! polychromatic MTF must be 1 at zero frequency, within `[0, 1]`, zero past the cutoff of the
-//! shortest wavelength, and finite everywhere.
+//! [`check_lens`] is the check a downstream lens family calls from its tests (enable the
+//! feature in its dev-dependencies: `optics = { …, features = ["testkit"] }`):
+//!
+//! ```text
+//! optics::testkit::check_lens(&my_lens, &detected_spectrum)?;
+//! ```
+//!
+//! It checks what the engine relies on and cannot check itself while it computes:
+//!
+//! - the description, on a grid of 33 wavelengths over the detected spectrum's extent (its
+//!   one wavelength for a line), on axis and at one off-axis field point
+//!   ([`OFF_AXIS_FIELD`]): every order's efficiency finite and ≥ 0; the sum of the
+//!   efficiencies ≤ the transmission ≤ 1 (relative 1e-12; docs/physics.md, "Lens families":
+//!   τ and T are fractions of the power incident on the full clear aperture, and the background
+//!   `T − Σ τ` is ≥ 0); each order's efficiency ≤ its pupil's
+//!   [`area_fraction`](crate::Pupil::area_fraction) (photon counts follow the pupil area: a
+//!   10° sector cannot collect the light of the full lens); every wavefront coefficient and
+//!   image shift finite, the zones' too, and every zone amplitude finite and ≥ 0;
+//! - the polychromatic MTF on axis: 1 at zero frequency, within `[0, 1]` and finite up to the
+//!   cutoff of the shortest wavelength, and zero beyond it.
+//!
+//! The first violation is returned with the wavelength, field point, order and numbers involved.
+
+use std::sync::Arc;
 
 use radiometry::Spectrum;
 
-use crate::{Field, LensModel, Polychromatic};
+use crate::fft::Aperture;
+use crate::{Field, LensModel, Order, Polychromatic, Pupil, Wavefront};
 
-/// Checks the transfer-function invariants of `lens` over the `detected` spectrum.
-/// Returns a description of the first violation.
+/// Wavelengths of the description checks, evenly over the detected spectrum's extent.
+pub const CHECK_WAVELENGTHS: usize = 33;
+
+/// The off-axis field point of the description checks, radians: 5° along x and 2° along y (an
+/// oblique field, so that a lens mixing up x and y shows).
+pub const OFF_AXIS_FIELD: Field = Field { x_rad: 0.087_266_462_599_716_48, y_rad: 0.034_906_585_039_886_59 };
+
+/// Relative slack of the efficiency and transmission bounds (rounding of sums and products).
+const RELATIVE_SLACK: f64 = 1e-12;
+
+/// Checks the description and the transfer-function invariants of `lens` over the `detected`
+/// spectrum (module docs). Returns a description of the first violation.
 pub fn check_lens(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), String> {
     let f_number = lens.f_number();
     if !(f_number.is_finite() && f_number > 0.0) {
         return Err(format!("f_number() = {f_number}: expected finite and > 0"));
     }
+    check_description(lens, detected)?;
     let cutoff =
         crate::highest_cutoff(lens, detected).map_err(|e| format!("cannot prepare the polychromatic OTF: {e}"))?;
     let poly = Polychromatic::new(lens, detected, Field::ON_AXIS, cutoff, None)
@@ -37,4 +70,263 @@ pub fn check_lens(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), Strin
         }
     }
     Ok(())
+}
+
+/// The wavelengths the description is checked at: [`CHECK_WAVELENGTHS`] over the spectral
+/// extent the engine integrates, or the line's one wavelength.
+fn check_wavelengths(detected: &Spectrum) -> Result<Vec<f64>, String> {
+    if let Some(line) = detected.as_line() {
+        return Ok(vec![line.wavelength_m]);
+    }
+    let (lo, hi) =
+        crate::poly::spectral_extent(detected).map_err(|e| format!("cannot find the spectrum's extent: {e}"))?;
+    let lo = if lo > 0.0 { lo } else { 1e-3 * hi };
+    Ok((0..CHECK_WAVELENGTHS).map(|k| lo + (hi - lo) * k as f64 / (CHECK_WAVELENGTHS - 1) as f64).collect())
+}
+
+/// The area fractions of the apertures seen so far (a mask's is measured on a 512² grid: once).
+#[derive(Default)]
+struct Areas(Vec<(Arc<Aperture>, f64)>);
+
+impl Areas {
+    fn of(&mut self, aperture: &Arc<Aperture>) -> f64 {
+        if let Some((_, a)) = self.0.iter().find(|(k, _)| Arc::ptr_eq(k, aperture)) {
+            return *a;
+        }
+        let a = aperture.area_fraction();
+        self.0.push((aperture.clone(), a));
+        a
+    }
+
+    /// [`Pupil::area_fraction`], with the apertures' areas cached.
+    fn pupil(&mut self, pupil: &Pupil) -> f64 {
+        match pupil {
+            Pupil::Aperture(a) => self.of(a),
+            Pupil::Zones(zones) => zones.iter().map(|z| z.amplitude * z.amplitude * self.of(&z.aperture)).sum(),
+            other => other.area_fraction(),
+        }
+    }
+}
+
+fn check_description(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), String> {
+    let mut areas = Areas::default();
+    for lambda in check_wavelengths(detected)? {
+        let nm = lambda * 1e9;
+        let transmission = lens.transmission(lambda);
+        if !(transmission.is_finite() && (0.0..=1.0 + RELATIVE_SLACK).contains(&transmission)) {
+            return Err(format!("at λ = {nm} nm: transmission() = {transmission}, expected finite, in [0, 1]"));
+        }
+        for field in [Field::ON_AXIS, OFF_AXIS_FIELD] {
+            let at = format!("at λ = {nm} nm, field ({}, {}) rad", field.x_rad, field.y_rad);
+            let orders = lens.orders(lambda, field);
+            let count = orders.len();
+            let mut sum = 0.0;
+            for (k, order) in orders.iter().enumerate() {
+                let which = format!("{at}, order {} of {count}", k + 1);
+                check_order(order, &which, &mut areas)?;
+                sum += order.efficiency;
+            }
+            if sum > transmission * (1.0 + RELATIVE_SLACK) {
+                return Err(format!(
+                    "{at}: the orders' efficiencies sum to {sum}, more than the transmission {transmission} \
+                     (τ and T are fractions of the light on the full aperture, docs/physics.md \"Lens families\")"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_order(order: &Order, which: &str, areas: &mut Areas) -> Result<(), String> {
+    let eta = order.efficiency;
+    if !(eta.is_finite() && eta >= 0.0) {
+        return Err(format!("{which}: efficiency {eta}, expected finite and ≥ 0"));
+    }
+    check_wavefront(&order.wavefront, which)?;
+    if let Pupil::Zones(zones) = &order.pupil {
+        for (j, zone) in zones.iter().enumerate() {
+            let zone_which = format!("{which}, zone {} of {}", j + 1, zones.len());
+            if !(zone.amplitude.is_finite() && zone.amplitude >= 0.0) {
+                return Err(format!("{zone_which}: amplitude {}, expected finite and ≥ 0", zone.amplitude));
+            }
+            check_wavefront(&zone.wavefront, &zone_which)?;
+        }
+    }
+    let area = areas.pupil(&order.pupil);
+    if eta > area * (1.0 + RELATIVE_SLACK) {
+        return Err(format!(
+            "{which}: efficiency {eta} exceeds its pupil's area fraction {area} (photon counts follow the \
+             pupil area: put the area in the efficiency, docs/physics.md \"Lens families\")"
+        ));
+    }
+    Ok(())
+}
+
+fn check_wavefront(w: &Wavefront, which: &str) -> Result<(), String> {
+    let terms = [
+        ("defocus_m", w.defocus_m),
+        ("image_shift_m[0]", w.image_shift_m[0]),
+        ("image_shift_m[1]", w.image_shift_m[1]),
+        ("spherical_m", w.spherical_m),
+        ("coma_m", w.coma_m),
+        ("astigmatism_m", w.astigmatism_m),
+        ("field_curvature_m", w.field_curvature_m),
+    ];
+    match terms.iter().find(|(_, v)| !v.is_finite()) {
+        Some((name, v)) => Err(format!("{which}: wavefront {name} = {v}, expected finite")),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::TAU;
+
+    use radiometry::{Gaussian, Spectrum};
+
+    use super::*;
+    use crate::Zone;
+
+    fn band() -> Spectrum {
+        Spectrum::Gaussian(Gaussian::new(800e-9, 10e-9, 1.0).unwrap())
+    }
+
+    /// A lens whose orders are given by a closure of (λ, field); transmission `t`.
+    struct Described<F> {
+        orders: F,
+        transmission: f64,
+    }
+
+    impl<F> std::fmt::Debug for Described<F> {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("Described")
+        }
+    }
+
+    impl<F: Fn(f64, Field) -> Vec<Order> + Send + Sync> LensModel for Described<F> {
+        fn f_number(&self) -> f64 {
+            2.5
+        }
+        fn focal_length(&self) -> f64 {
+            3.36e-3
+        }
+        fn orders(&self, lambda: f64, field: Field) -> Vec<Order> {
+            (self.orders)(lambda, field)
+        }
+        fn transmission(&self, _: f64) -> f64 {
+            self.transmission
+        }
+    }
+
+    fn lens<F: Fn(f64, Field) -> Vec<Order> + Send + Sync>(transmission: f64, orders: F) -> Described<F> {
+        Described { orders, transmission }
+    }
+
+    fn fails_with(lens: &dyn LensModel, words: &[&str]) {
+        let e = check_lens(lens, &band()).expect_err("the check must fail");
+        for w in words {
+            assert!(e.contains(w), "{e:?} should name {w:?}");
+        }
+    }
+
+    fn sector(degrees: f64) -> Arc<Aperture> {
+        Arc::new(Aperture::sector(0.0, degrees.to_radians()).unwrap())
+    }
+
+    #[test]
+    fn a_sound_lens_passes() {
+        // a segmented lens: three sectors with their area in the efficiency, and an order
+        // through a 10° sector with 1/36 of the light
+        let thirds: Vec<Arc<Aperture>> = (0..3)
+            .map(|j| Arc::new(Aperture::sector(j as f64 * TAU / 3.0, (j + 1) as f64 * TAU / 3.0).unwrap()))
+            .collect();
+        let small = sector(10.0);
+        let good = lens(0.95, move |lambda, _| {
+            let zones: Vec<Zone> = thirds
+                .iter()
+                .enumerate()
+                .map(|(j, a)| Zone::new(a.clone(), 0.8f64.sqrt(), Wavefront::defocus((j as f64 - 1.0) * 1e-7)))
+                .collect();
+            vec![
+                Order::new(0.8 * 0.9, Pupil::Zones(Arc::from(zones)), Wavefront::defocus(1e-7 * (lambda / 800e-9))),
+                Order::new(0.1 / 36.0, Pupil::Aperture(small.clone()), Wavefront::defocus(0.0)),
+            ]
+        });
+        check_lens(&good, &band()).unwrap();
+    }
+
+    #[test]
+    fn a_negative_or_nan_efficiency_fails() {
+        let negative = lens(0.9, |lambda, _| {
+            let eta = if lambda > 810e-9 { -0.1 } else { 0.5 };
+            vec![Order::new(eta, Pupil::Full, Wavefront::default())]
+        });
+        fails_with(&negative, &["efficiency -0.1", "order 1 of 1", "λ = 8"]);
+        let nan = lens(0.9, |_, field: Field| {
+            let eta = if field.is_on_axis() { 0.5 } else { f64::NAN };
+            vec![Order::new(0.1, Pupil::Full, Wavefront::default()), Order::new(eta, Pupil::Full, Wavefront::default())]
+        });
+        fails_with(&nan, &["efficiency NaN", "order 2 of 2", "field (0.08"]);
+    }
+
+    #[test]
+    fn efficiencies_above_the_transmission_or_a_transmission_above_one_fail() {
+        let over = lens(0.5, |_, _| {
+            vec![Order::new(0.3, Pupil::Full, Wavefront::default()), Order::new(0.3, Pupil::Full, Wavefront::default())]
+        });
+        fails_with(&over, &["sum to 0.6", "transmission 0.5"]);
+        let above_one = lens(1.2, |_, _| vec![Order::new(0.5, Pupil::Full, Wavefront::default())]);
+        fails_with(&above_one, &["transmission() = 1.2"]);
+    }
+
+    #[test]
+    fn an_efficiency_above_the_pupil_area_fails() {
+        // a 10° sector that collects the full lens's light
+        let a = sector(10.0);
+        let greedy = lens(0.9, move |_, _| vec![Order::new(0.8, Pupil::Aperture(a.clone()), Wavefront::default())]);
+        fails_with(&greedy, &["efficiency 0.8", "area fraction 0.0277"]);
+        // zones: the efficiency above Σ amplitude² × area
+        let a = sector(90.0);
+        let zoned = lens(0.9, move |_, _| {
+            let zones: Arc<[Zone]> = Arc::from(vec![Zone::new(a.clone(), 1.0, Wavefront::default())]);
+            vec![Order::new(0.5, Pupil::Zones(zones), Wavefront::default())]
+        });
+        fails_with(&zoned, &["efficiency 0.5", "area fraction 0.25"]);
+    }
+
+    #[test]
+    fn a_non_finite_wavefront_fails() {
+        let tilted = lens(0.9, |_, field: Field| {
+            let shift = if field.is_on_axis() { 0.0 } else { f64::INFINITY };
+            vec![Order::new(0.5, Pupil::Full, Wavefront::defocus(1e-7).shifted(0.0, shift))]
+        });
+        fails_with(&tilted, &["image_shift_m[1] = inf"]);
+        let coma = lens(0.9, |_, _| {
+            vec![Order::new(0.5, Pupil::Full, Wavefront { coma_m: f64::NAN, ..Wavefront::default() })]
+        });
+        fails_with(&coma, &["coma_m = NaN"]);
+    }
+
+    #[test]
+    fn a_bad_zone_fails() {
+        let a = sector(180.0);
+        let b = sector(90.0);
+        let negative = lens(0.9, move |_, _| {
+            let zones =
+                vec![Zone::new(a.clone(), 0.5, Wavefront::default()), Zone::new(a.clone(), -0.5, Wavefront::default())];
+            vec![Order::new(0.1, Pupil::Zones(Arc::from(zones)), Wavefront::default())]
+        });
+        fails_with(&negative, &["zone 2 of 2", "amplitude -0.5"]);
+        let nan = lens(0.9, move |_, _| {
+            let zones = vec![Zone::new(b.clone(), f64::NAN, Wavefront::default())];
+            vec![Order::new(0.1, Pupil::Zones(Arc::from(zones)), Wavefront::default())]
+        });
+        fails_with(&nan, &["zone 1 of 1", "amplitude NaN"]);
+        let c = sector(90.0);
+        let defocus = lens(0.9, move |_, _| {
+            let zones = vec![Zone::new(c.clone(), 0.5, Wavefront::defocus(f64::NAN))];
+            vec![Order::new(0.01, Pupil::Zones(Arc::from(zones)), Wavefront::default())]
+        });
+        fails_with(&defocus, &["zone 1 of 1", "defocus_m = NaN"]);
+    }
 }

@@ -4,6 +4,9 @@
 //! The layout (the user's design card): every workspace member is a folder at the repository
 //! root (`radiometry/ optics/ noise/ metric/ lenses/ scene/ cli/ xtask/`, and the crates added
 //! beside them); there is no `crates/` folder. For every member of the root manifest:
+//! Downstream example crates are the one exception to the layout: `examples/<name>/` (one level,
+//! e.g. `examples/custom-lens`), each a user's crate built with the public API only.
+//!
 //! - the package name equals the folder name, except `cli/`, whose package is `asnr` (so that
 //!   `cargo install --path cli` installs and reports the `asnr` binary), see [`PACKAGE_NAMES`];
 //! - the project crates in its normal dependencies (`[dependencies]`, `[build-dependencies]`
@@ -45,6 +48,8 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
     ("cli", Allowed::Any),
     ("xtask", Allowed::Only(&[])),
+    // examples/custom-lens: a downstream crate implementing LensModel with the public API only
+    ("custom-lens", Allowed::Any),
 ];
 
 /// Folders whose package name is not the folder name: `(folder, package)`.
@@ -97,7 +102,10 @@ pub(crate) fn workspace_members(text: &str) -> std::result::Result<Vec<String>, 
 pub(crate) fn check_layout(members: &[String], crates_dir: bool) -> Vec<String> {
     let mut problems = Vec::new();
     for member in members {
-        if member.contains('/') || member.contains('*') {
+        // a downstream example (`examples/custom-lens`) is a crate of its own that uses the
+        // project as a user would: one level under examples/, nothing deeper
+        let example = member.strip_prefix("examples/").is_some_and(|rest| !rest.is_empty() && !rest.contains('/'));
+        if (member.contains('/') && !example) || member.contains('*') {
             problems.push(format!(
                 "Cargo.toml: member `{member}` is not a folder at the repository root \
                  (the layout is radiometry/ optics/ noise/ metric/ lenses/ scene/ cli/ xtask/ …)"
@@ -384,6 +392,9 @@ mod tests {
         assert!(problems[0].contains("`crates/metric` is not a folder at the repository root"));
         assert!(problems[1].starts_with("crates/"));
         assert!(check_layout(&["optics".to_owned(), "xtask".to_owned()], false).is_empty());
+        // downstream examples one level under examples/, and no deeper
+        assert!(check_layout(&["examples/custom-lens".to_owned()], false).is_empty());
+        assert_eq!(check_layout(&["examples/a/b".to_owned(), "examples/".to_owned()], false).len(), 2);
         assert!(workspace_members("[package]\nname = \"x\"\n").is_err());
     }
 

@@ -6,7 +6,7 @@
 //!
 //! # Edge pixels carry their area fraction
 //! A pixel's transmission is the fraction of its area inside the aperture. For every shape built
-//! from discs and wedges (circle, decentred circle, annulus, sector, and their combinations) the
+//! from discs and wedges (circle, decentred circle, annulus, sector, ring zone, and their combinations) the
 //! fraction is **exact** (to rounding): the pixel square is clipped by the wedge's half-planes
 //! (Sutherland–Hodgman; a wedge wider than π is split in two), and the area of the clipped convex
 //! polygon inside a disc is the sum over its edges of the signed area of the triangle (centre,
@@ -44,7 +44,8 @@ pub const MASK_SUPERSAMPLING: usize = 16;
 /// The transmitting region of an exit pupil, in coordinates normalized to the aperture radius.
 ///
 /// Built with [`circle`](Aperture::circle), [`annulus`](Aperture::annulus),
-/// [`sector`](Aperture::sector), [`disc`](Aperture::disc) (annular sector) or
+/// [`sector`](Aperture::sector), [`disc`](Aperture::disc) (annular sector),
+/// [`ring`](Aperture::ring) (an annular sector inside the full aperture: a zone) or
 /// [`mask`](Aperture::mask), optionally [`decentred`](Aperture::decentred) from the lens axis.
 /// Constructors validate their parameters.
 #[derive(Clone)]
@@ -55,9 +56,10 @@ pub struct Aperture {
 
 #[derive(Clone)]
 enum Shape {
-    /// `obscuration ≤ r ≤ 1`, optionally only angles in `[start, end]`.
+    /// `obscuration ≤ r ≤ outer` (`outer ≤ 1`), optionally only angles in `[start, end]`.
     Disc {
         obscuration: f64,
+        outer: f64,
         sector: Option<(f64, f64)>,
     },
     Mask(Arc<MaskFn>),
@@ -67,7 +69,9 @@ impl fmt::Debug for Aperture {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let mut d = f.debug_struct("Aperture");
         match &self.shape {
-            Shape::Disc { obscuration, sector } => d.field("obscuration", obscuration).field("sector", sector),
+            Shape::Disc { obscuration, outer, sector } => {
+                d.field("obscuration", obscuration).field("outer", outer).field("sector", sector)
+            }
             Shape::Mask(_) => d.field("mask", &"<closure>"),
         };
         d.field("decentre", &self.decentre).finish()
@@ -77,7 +81,7 @@ impl fmt::Debug for Aperture {
 impl Aperture {
     /// The full circle of radius 1 (the lens' clear aperture), centred on the lens axis.
     pub fn circle() -> Aperture {
-        Aperture { shape: Shape::Disc { obscuration: 0.0, sector: None }, decentre: (0.0, 0.0) }
+        Aperture { shape: Shape::Disc { obscuration: 0.0, outer: 1.0, sector: None }, decentre: (0.0, 0.0) }
     }
 
     /// An annulus `obscuration ≤ r ≤ 1`: a circle with a central obscuration of radius ratio
@@ -98,6 +102,30 @@ impl Aperture {
         if !(0.0..1.0).contains(&obscuration) {
             return Err(Error::InvalidParameter { name: "obscuration", value: obscuration, expected: "in [0, 1)" });
         }
+        Aperture::ring(obscuration, 1.0, sector)
+    }
+
+    /// A ring `inner ≤ r ≤ outer` of the full aperture (`0 ≤ inner < outer ≤ 1`, in units of the
+    /// full aperture's radius, centred on the lens axis), restricted to the angles
+    /// `sector = (start, end)` if given (`0 < end − start ≤ 2π`): one zone of a segmented lens.
+    /// The pupil grid still spans the full aperture (`s = 1` is its cutoff), and edge pixels carry
+    /// their exact area, on both circles and both sector edges (module docs). Concentric zones
+    /// of area fractions `a_j` are the rings `r_{j−1} … r_j` with `r_j = √(Σ_{i≤j} a_i)`.
+    pub fn ring(inner: f64, outer: f64, sector: Option<(f64, f64)>) -> Result<Aperture, Error> {
+        if !(outer > 0.0 && outer <= 1.0) {
+            return Err(Error::InvalidParameter {
+                name: "ring outer radius",
+                value: outer,
+                expected: "in (0, 1] (fraction of the full aperture's radius)",
+            });
+        }
+        if !(inner >= 0.0 && inner < outer) {
+            return Err(Error::InvalidParameter {
+                name: "ring inner radius",
+                value: inner,
+                expected: "in [0, outer) (fraction of the full aperture's radius)",
+            });
+        }
         if let Some((a, b)) = sector {
             if !a.is_finite() {
                 return Err(Error::InvalidParameter { name: "sector start", value: a, expected: "finite (radians)" });
@@ -113,7 +141,7 @@ impl Aperture {
         }
         // A full turn is no restriction.
         let sector = sector.filter(|(a, b)| b - a < TAU);
-        Ok(Aperture { shape: Shape::Disc { obscuration, sector }, decentre: (0.0, 0.0) })
+        Ok(Aperture { shape: Shape::Disc { obscuration: inner, outer, sector }, decentre: (0.0, 0.0) })
     }
 
     /// An arbitrary aperture: `inside(x, y)` says whether the point `(x, y)` of the grid square
@@ -146,16 +174,16 @@ impl Aperture {
     /// Whether this is the full circle centred on the lens axis: the case the exact 1-D path
     /// ([`crate::defocus_otf`]) covers when the wavefront is defocus only.
     pub fn is_centred_circle(&self) -> bool {
-        matches!(self.shape, Shape::Disc { obscuration, sector: None } if obscuration == 0.0)
+        matches!(self.shape, Shape::Disc { obscuration, outer, sector: None } if obscuration == 0.0 && outer == 1.0)
             && self.decentre == (0.0, 0.0)
     }
 
     /// Exact area of the aperture in units of `R²` (`π` for the full circle), or `None` for a mask.
     pub fn exact_area(&self) -> Option<f64> {
         match self.shape {
-            Shape::Disc { obscuration, sector } => {
+            Shape::Disc { obscuration, outer, sector } => {
                 let angle = sector.map_or(TAU, |(a, b)| b - a);
-                Some(0.5 * angle * (1.0 - obscuration * obscuration))
+                Some(0.5 * angle * (outer * outer - obscuration * obscuration))
             }
             Shape::Mask(_) => None,
         }
@@ -184,7 +212,7 @@ impl Aperture {
     pub fn area_in(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
         let rect = Rect { x0, x1, y0, y1 };
         match &self.shape {
-            Shape::Disc { obscuration, sector } => disc_area_in(&rect, *obscuration, *sector),
+            Shape::Disc { obscuration, outer, sector } => disc_area_in(&rect, *obscuration, *outer, *sector),
             Shape::Mask(inside) => mask_area_in(&rect, inside.as_ref()),
         }
     }
@@ -318,15 +346,15 @@ fn triangle_in_disc(a: (f64, f64), b: (f64, f64), r: f64) -> f64 {
     area
 }
 
-/// Exact area of `rect ∩ {obscuration ≤ r ≤ 1} ∩ wedge`.
-fn disc_area_in(rect: &Rect, obscuration: f64, sector: Option<(f64, f64)>) -> f64 {
+/// Exact area of `rect ∩ {obscuration ≤ r ≤ outer} ∩ wedge`.
+fn disc_area_in(rect: &Rect, obscuration: f64, outer: f64, sector: Option<(f64, f64)>) -> f64 {
     let (near, far) = rect.distance_range();
-    if near >= 1.0 || far <= obscuration {
+    if near >= outer || far <= obscuration {
         return 0.0;
     }
     let full_square = Polygon::from_rect(rect);
     let ring = |poly: &Polygon, full: f64| -> f64 {
-        let outer = if far <= 1.0 { full } else { poly.area_in_disc(1.0) };
+        let within_outer = if far <= outer { full } else { poly.area_in_disc(outer) };
         let inner = if obscuration == 0.0 || near >= obscuration {
             0.0
         } else if far <= obscuration {
@@ -334,7 +362,7 @@ fn disc_area_in(rect: &Rect, obscuration: f64, sector: Option<(f64, f64)>) -> f6
         } else {
             poly.area_in_disc(obscuration)
         };
-        (outer - inner).max(0.0)
+        (within_outer - inner).max(0.0)
     };
     match sector {
         None => ring(&full_square, rect.area()),
@@ -395,6 +423,10 @@ mod tests {
             Aperture::sector(0.3, 2.2).unwrap(),
             Aperture::sector(-1.0, 3.5).unwrap(),
             Aperture::disc(0.5, Some((1.0, 1.0 + TAU / 3.0))).unwrap(),
+            Aperture::ring(0.0, 0.61, None).unwrap(),
+            Aperture::ring(0.3, 0.8, None).unwrap(),
+            Aperture::ring(0.45, 0.9, Some((-0.4, 1.9))).unwrap(),
+            Aperture::ring(0.2, 0.7, Some((0.5, 0.5 + 4.0))).unwrap(),
         ];
         for ap in &shapes {
             for n in [7usize, 16, 33] {
@@ -412,12 +444,54 @@ mod tests {
         }
     }
 
+    /// Zones tiling the circle (three concentric rings of equal area, `r_j = √(j/3)`, and three
+    /// sectors of the outer ring) share their boundary pixels: every pixel's areas add up to the
+    /// circle's, to rounding.
+    #[test]
+    fn ring_zones_tile_the_circle_pixel_by_pixel() {
+        let r = [0.0, (1.0f64 / 3.0).sqrt(), (2.0f64 / 3.0).sqrt(), 1.0];
+        let third = TAU / 3.0;
+        let zones = [
+            Aperture::ring(r[0], r[1], None).unwrap(),
+            Aperture::ring(r[1], r[2], None).unwrap(),
+            Aperture::ring(r[2], r[3], Some((0.1, 0.1 + third))).unwrap(),
+            Aperture::ring(r[2], r[3], Some((0.1 + third, 0.1 + 2.0 * third))).unwrap(),
+            Aperture::ring(r[2], r[3], Some((0.1 + 2.0 * third, 0.1 + TAU))).unwrap(),
+        ];
+        for z in &zones[..2] {
+            assert!((z.area_fraction() - 1.0 / 3.0).abs() < 1e-15, "{z:?}");
+        }
+        let circle = Aperture::circle();
+        let n = 29;
+        let h = 2.0 / n as f64;
+        for j in 0..n {
+            for i in 0..n {
+                let (x0, y0) = (-1.0 + i as f64 * h, -1.0 + j as f64 * h);
+                let sum: f64 = zones.iter().map(|z| z.area_in(x0, x0 + h, y0, y0 + h)).sum();
+                let whole = circle.area_in(x0, x0 + h, y0, y0 + h);
+                assert!((sum - whole).abs() < 1e-15, "pixel ({i}, {j}): {sum} vs {whole}");
+            }
+        }
+    }
+
+    #[test]
+    fn ring_radii_are_validated() {
+        for (inner, outer) in
+            [(0.5, 0.5), (0.6, 0.5), (-0.1, 0.5), (0.0, 1.01), (0.0, 0.0), (f64::NAN, 0.5), (0.1, f64::NAN)]
+        {
+            assert!(Aperture::ring(inner, outer, None).is_err(), "({inner}, {outer})");
+        }
+        assert!(Aperture::ring(0.0, 1.0, None).unwrap().is_centred_circle());
+        assert!(!Aperture::ring(0.0, 0.9, None).unwrap().is_centred_circle());
+        assert!(Aperture::ring(0.2, 0.9, Some((1.0, 0.5))).is_err());
+    }
+
     /// A pixel straddling the circle and a sector edge: the area against a fine midpoint rule.
     #[test]
     fn edge_pixel_area_matches_brute_force() {
         let ap = Aperture::sector(0.2, 0.75).unwrap();
         let r = Rect { x0: 0.55, x1: 0.8, y0: 0.45, y1: 0.7 };
-        let exact = disc_area_in(&r, 0.0, Some((0.2, 0.75)));
+        let exact = disc_area_in(&r, 0.0, 1.0, Some((0.2, 0.75)));
         let m = 2000;
         let mut count = 0usize;
         for j in 0..m {

@@ -6,6 +6,14 @@
 //! ([`SampledPupil::is_centred_defocus`] says when); this path covers everything else and is
 //! tested against it where both apply.
 //!
+//! A composite pupil of coherent zones (a segmented multiplexed lens, [`crate::Pupil::Zones`])
+//! is sampled once per set of zone apertures ([`SampledZones`]: each zone's pixels with their
+//! exact area fractions, e.g. [`Aperture::ring`] zones); per wavelength its complex field
+//! `Σ_j A_jk a_j exp(i 2π W_j/λ)` goes through [`OtfPlan::otf_of_field`], normalized by the power
+//! `Σ_k Σ_j A_jk a_j²` the zones pass, which is the single aperture's normalization below for one
+//! zone of amplitude 1 (zones tiling the circle give the circle's grid to rounding; tested,
+//! with a brute-force autocorrelation of two half discs, in tests/optics/zones.rs).
+//!
 //! # Conventions
 //! - **Pupil**: coordinates normalized to the aperture radius `R = D/2`, from the aperture centre;
 //!   an `N × N` grid spans the diameter, pixel `h = 2/N` ([`SampledPupil`]). The wavefront is
@@ -121,8 +129,10 @@ mod aperture;
 mod convergence;
 mod plan;
 mod wavefront;
+mod zones;
 
 pub use aperture::{Aperture, MASK_SUPERSAMPLING, MaskFn};
 pub use convergence::{convergence_table, defocus_mean_mtf};
 pub use plan::{INTERPOLATION_POINTS, MAX_SAMPLES, MIN_SAMPLES, Otf, OtfPlan, SampledPupil, fast_fft_len};
 pub use wavefront::{Aberrations, MAX_NOLL_INDEX, noll_to_nm};
+pub use zones::{SampledZones, ZoneField};

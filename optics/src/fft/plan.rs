@@ -126,7 +126,7 @@ impl SampledPupil {
     }
 }
 
-fn check_samples(n: usize) -> Result<(), Error> {
+pub(super) fn check_samples(n: usize) -> Result<(), Error> {
     if !(MIN_SAMPLES..=MAX_SAMPLES).contains(&n) {
         return Err(Error::InvalidParameter {
             name: "pupil samples N",
@@ -236,6 +236,11 @@ impl OtfPlan {
         self.m
     }
 
+    /// Largest lag `K` (each axis) of the grids this plan writes: `(2K + 1)²` values each.
+    pub fn max_lag(&self) -> usize {
+        self.half
+    }
+
     /// Highest normalized frequency readable from the OTFs this plan computes.
     pub fn s_max(&self) -> f64 {
         self.s_max
@@ -246,17 +251,27 @@ impl OtfPlan {
     fn pupil_spectrum(&mut self, pupil: &SampledPupil, wavelength_m: f64) {
         assert_eq!(pupil.n(), self.n, "pupil sampled with N = {} for a plan with N = {}", pupil.n(), self.n);
         assert!(wavelength_m > 0.0 && wavelength_m.is_finite(), "wavelength {wavelength_m} m");
-        let (n, m) = (self.n, self.m);
+        let n = self.n;
         let k = TAU / wavelength_m;
         let zero = Complex64::new(0.0, 0.0);
-        for j in 0..n {
-            let row = &mut self.rows[j * m..(j + 1) * m];
-            row[n..].fill(zero);
+        self.spectrum_of(|j, row| {
             let amplitude = &pupil.amplitude[j * n..(j + 1) * n];
             let opd = &pupil.opd_m[j * n..(j + 1) * n];
             for ((out, &a), &w) in row.iter_mut().zip(amplitude).zip(opd) {
                 *out = if a > 0.0 { Complex64::from_polar(a, k * w) } else { zero };
             }
+        });
+    }
+
+    /// `F = DFT₂(P)` of the zero-padded pupil field whose row `j` (`N` values) `fill(j, row)`
+    /// writes, left transposed in `work` (`work[qx M + qy]`).
+    fn spectrum_of(&mut self, fill: impl Fn(usize, &mut [Complex64])) {
+        let (n, m) = (self.n, self.m);
+        let zero = Complex64::new(0.0, 0.0);
+        for j in 0..n {
+            let row = &mut self.rows[j * m..(j + 1) * m];
+            row[n..].fill(zero);
+            fill(j, &mut row[..n]);
         }
         // along x: the N non-zero rows only
         self.forward.process_with_scratch(&mut self.rows, &mut self.scratch);
@@ -288,6 +303,29 @@ impl OtfPlan {
     /// If `pupil.n()` differs from the plan's `N` or the wavelength is not positive and finite.
     pub fn otf(&mut self, pupil: &SampledPupil, wavelength_m: f64, out: &mut Otf) {
         self.pupil_spectrum(pupil, wavelength_m);
+        self.autocorrelation(pupil.amplitude.iter().sum::<f64>(), out);
+    }
+
+    /// The complex OTF of a pupil given as its complex field, `N × N` row-major (`field[j N + i]`,
+    /// pixel `(i, j)` as in [`SampledPupil`]): a composite pupil of coherent zones
+    /// ([`SampledZones`](super::SampledZones)) or any other field. `weight` is the normalization
+    /// `Σ_k Σ_j A_jk a_j²` in pixel units (pixel area fractions `A_jk` of zone `j` times its
+    /// power transmission `a_j²`): for one zone of amplitude 1 it is the `Σ A` of
+    /// [`otf`](Self::otf), and both give the same grid for the same pupil. The zero lag is set to
+    /// exactly 1; a field of zero weight gives the OTF 1 at zero and 0 elsewhere.
+    ///
+    /// # Panics
+    /// If `field.len()` is not `N²`.
+    pub fn otf_of_field(&mut self, field: &[Complex64], weight: f64, out: &mut Otf) {
+        let n = self.n;
+        assert_eq!(field.len(), n * n, "a field of {} values for a plan with N = {n}", field.len());
+        self.spectrum_of(|j, row| row.copy_from_slice(&field[j * n..(j + 1) * n]));
+        self.autocorrelation(weight, out);
+    }
+
+    /// The OTF grid from the pupil spectrum in `work`: `conj IDFT₂(|F|²) / (M² weight)` at the
+    /// stored lags, the zero lag set to 1.
+    fn autocorrelation(&mut self, weight: f64, out: &mut Otf) {
         let (m, half) = (self.m, self.half);
         for v in &mut self.work {
             *v = Complex64::new(v.norm_sqr(), 0.0);
@@ -304,7 +342,7 @@ impl OtfPlan {
             }
         }
         self.inverse.process_with_scratch(&mut self.lags, &mut self.scratch);
-        let scale = 1.0 / ((m * m) as f64 * pupil.amplitude.iter().sum::<f64>());
+        let scale = if weight > 0.0 { 1.0 / ((m * m) as f64 * weight) } else { 0.0 };
         out.n = self.n;
         out.half = half;
         out.s_max = self.s_max;

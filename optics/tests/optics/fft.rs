@@ -382,3 +382,40 @@ fn engine_choice_flags_the_exact_case() {
     assert!(!SampledPupil::new(16, &aperture, &defocus(1.0)).unwrap().is_centred_defocus());
     assert!(!SampledPupil::new(16, &Aperture::circle(), &aberrations).unwrap().is_centred_defocus());
 }
+
+/// A lens through a sector on the FFT path, for the memory budget.
+#[derive(Debug)]
+struct SectorLens(std::sync::Arc<Aperture>);
+
+impl optics::LensModel for SectorLens {
+    fn f_number(&self) -> f64 {
+        2.5
+    }
+    fn focal_length(&self) -> f64 {
+        3.36e-3
+    }
+    fn orders(&self, wavelength_m: f64, _: optics::Field) -> Vec<optics::Order> {
+        let w020 = (1.0 - wavelength_m / 800e-9) * 3.36e-3 / 50.0;
+        let pupil = optics::Pupil::Aperture(self.0.clone());
+        vec![optics::Order::new(0.15 * self.0.area_fraction(), pupil, optics::Wavefront::defocus(w020))]
+    }
+}
+
+/// A scene whose OTF grids would exceed the memory budget stops before allocating them, with the
+/// numbers (a 300 nm band at 2048 pupil samples would hold tens of GiB), and the same scene at a
+/// coarse sampling is prepared.
+#[test]
+fn fft_path_refuses_scenes_over_its_memory_budget() {
+    let lens = SectorLens(std::sync::Arc::new(Aperture::sector(0.0, 2.0).unwrap()));
+    let band = radiometry::Spectrum::Gaussian(radiometry::Gaussian::from_range(800e-9, 300e-9, 1.0).unwrap());
+    let nyquist = 1.0 / (2.0 * 5.2e-6);
+    let settings = |n| optics::Settings { pupil_samples: n, ..optics::Settings::default() };
+    let e = optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings(2048))
+        .unwrap_err();
+    let message = e.to_string();
+    assert!(matches!(e, optics::Error::WorkBudget { .. }), "{message}");
+    assert!(message.contains("over the 4 GiB budget") && message.contains("2048 pupil samples"), "{message}");
+    assert!(
+        optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings(32)).is_ok()
+    );
+}

@@ -3,6 +3,9 @@
 
 mod fft;
 mod line;
+mod orders;
 mod otf;
 mod properties;
 mod reference;
+mod tables;
+mod zones;

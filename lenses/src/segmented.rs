@@ -1,0 +1,590 @@
+//! The segmented spatially multiplexed lens: N chromatic channels side by side in one aperture.
+
+use std::f64::consts::TAU;
+use std::fmt;
+use std::sync::Arc;
+
+use optics::fft::Aperture;
+use optics::{Field, LensModel, Order, Pupil, Wavefront, Zone};
+
+use crate::Error;
+use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
+use crate::interleaved::Channel;
+
+/// A user's zone map: `(x, y)` in the pupil's normalized coordinates (`[-1, 1]²`, units of the
+/// full aperture's radius, origin on the lens axis) to the index of the channel whose zone
+/// holds the point, or `None` where the aperture is opaque. Points outside the unit circle are
+/// opaque whatever the map says.
+pub type ZoneMap = dyn Fn(f64, f64) -> Option<usize> + Send + Sync;
+
+/// How the channels' zones tile the aperture of a [`Segmented`] lens.
+#[derive(Clone)]
+pub enum Layout {
+    /// Concentric zones, the first channel innermost: channel `j` fills the ring
+    /// `r_{j−1} ≤ r ≤ r_j`, `r_j = √(a_1 + … + a_j)` (radius in units of the full aperture's), so
+    /// that its area fraction is `a_j`; with `Σ a_j < 1` the rim beyond `r_N` is opaque.
+    Concentric,
+    /// Sectors (wedges from the centre to the rim): channel `j` spans the angles
+    /// `[2π (a_1 + … + a_{j−1}), 2π (a_1 + … + a_j)]`, the first starting at `+x` and going
+    /// counter-clockwise; with `Σ a_j < 1` the last wedge up to `+x` is opaque.
+    Sectors,
+    /// Any zones: a [`ZoneMap`]. The area fractions are measured from the map
+    /// ([`Aperture::area_fraction`] of each zone, on a 512² grid with supersampled edge pixels).
+    Mask(Arc<ZoneMap>),
+}
+
+impl fmt::Debug for Layout {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Layout::Concentric => "Concentric",
+            Layout::Sectors => "Sectors",
+            Layout::Mask(_) => "Mask(<zone map>)",
+        })
+    }
+}
+
+/// Where a [`Segmented`] lens counts the light a channel brings to the detector at wavelengths
+/// other than its own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OtherChannels {
+    /// Every zone's light at every wavelength is signal, each with its own defocus in the one
+    /// composite pupil: at λ the other channels form a defocused image on top of the focused
+    /// one, as the paper treats its chromatic lens (docs/physics.md, "Lens families").
+    #[default]
+    Signal,
+    /// A zone's light is signal only in its channel's band, where that channel is the one in
+    /// focus; elsewhere it reaches the detector as background (noise only, within `T`). The
+    /// bands tile the spectrum at the midpoints between neighbouring channel wavelengths (in
+    /// wavelength order): channel `j`'s band is `[(λ_{j−1} + λ_j)/2, (λ_j + λ_{j+1})/2)`, the
+    /// outermost bands reaching half the adjacent spacing beyond λ_1 and λ_N (one channel: every
+    /// wavelength). So at each wavelength at most one zone, that of the nearest channel, is
+    /// imaged: the defocus of the channel in focus is at most
+    /// `(Δλ/2)/λ_j · f0/(8F#²)` for channel spacing Δλ, and a colour sensor that assigns the
+    /// bands to its colour channels sees no crosstalk counted as signal. Outside all bands
+    /// nothing is signal (τ = 0).
+    Background,
+}
+
+/// A segmented spatially multiplexed achromat: N chromatic channels, channel `j` designed to
+/// focus λ_j at `f0` and occupying a zone of area fraction `a_j` of the aperture
+/// (docs/physics.md, "Lens families").
+///
+/// - Efficiency: zone `j` passes η_j(λ) of the light incident on it, so it brings
+///   `τ_j(λ) = a_j η_j(λ)` of the light incident on the full aperture to the detector
+///   (photon counts follow the pupil area); the lens' imaging efficiency is `Σ_j a_j η_j(λ)`
+///   ([`OtherChannels::Signal`]), at most the total transmission `T(λ)`.
+/// - Wavefront: the zones of one aperture are coherent at one wavelength, so the lens forms one
+///   image through one composite pupil ([`Pupil::Zones`]) with a piecewise wavefront: in zone
+///   `j` the field is `√η_j(λ) exp(i 2π W_j/λ)` with
+///   `W_j(x, y) = (1 − λ/λ_j) · f0/(8F#²) · (x² + y²)/R²` in full-aperture coordinates
+///   (docs/physics.md, "Sign of the wavefront": `W020 > 0` focuses behind the detector). An
+///   off-centre zone sees that defocus about the lens axis, i.e. defocus about its own centre
+///   plus a tilt: its defocused image is displaced.
+/// - Off axis, channel `j`'s image sits at `f_j(λ) tan θ` behind a remote stop, so zone `j`
+///   carries the lateral colour `f0 tan θ (λ_j/λ − 1)` as its own image shift.
+///
+/// Multiplexing keeps the in-focus spectral density of a chromatic lens (each wavelength is
+/// focused only by the zone of its channel), so it does not raise the broadband ASNR: its gain
+/// is colour fidelity and the choice of each channel's band.
+#[derive(Clone, Debug)]
+pub struct Segmented {
+    f_number: f64,
+    focal_length: f64,
+    channels: Vec<Channel>,
+    layout: Layout,
+    /// the zones' apertures, built once and shared by every `orders` call
+    zones: Vec<Arc<Aperture>>,
+    /// the zones' area fractions as built (exact for rings and sectors, measured for masks): the
+    /// `a_j` of the efficiencies, so that `τ ≤` the pupil's area
+    areas: Vec<f64>,
+    transmission: Curve,
+    other_channels: OtherChannels,
+    /// each channel's band for [`OtherChannels::Background`], `[lo, hi)`, m
+    bands: Vec<(f64, f64)>,
+}
+
+/// Side of the grid on which a [`Layout::Mask`] is scanned for zone indices beyond the channels.
+const MASK_INDEX_SCAN: usize = 256;
+
+impl Segmented {
+    /// A segmented lens of working F-number `f_number` (≥ 0.5) and focal length
+    /// `focal_length_m` (> 0) with 1 to 16 `channels` (design wavelengths finite, > 0 and
+    /// distinct, in the layout's order; efficiencies fractions), zones laid out by `layout` with
+    /// area fractions `area_fractions` (`None`: `1/N` each; each finite and > 0, `Σ a_j ≤ 1`;
+    /// must be `None` for [`Layout::Mask`], whose areas are measured) and total transmission
+    /// `transmission` (a fraction, `Σ a_j η_j ≤ T` at every wavelength).
+    pub fn new(
+        f_number: f64,
+        focal_length_m: f64,
+        channels: Vec<Channel>,
+        layout: Layout,
+        area_fractions: Option<Vec<f64>>,
+        transmission: Curve,
+    ) -> Result<Self, Error> {
+        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+        let n = channels.len();
+        check("channels", n as f64, (1..=16).contains(&n), "1 to 16 channels")?;
+        for (j, c) in channels.iter().enumerate() {
+            let l = c.wavelength_m;
+            check("channels.wavelength", l, l > 0.0, "a finite wavelength > 0 m")?;
+            check(
+                "channels.wavelength",
+                l,
+                channels[..j].iter().all(|o| o.wavelength_m != l),
+                "distinct channel wavelengths (one channel per wavelength)",
+            )?;
+            check_fraction("channels.efficiency", &c.efficiency)?;
+        }
+        check_fraction("transmission", &transmission)?;
+        let (zones, areas) = match &layout {
+            Layout::Mask(map) => {
+                if let Some(a) = &area_fractions {
+                    return Err(Error::OutOfRange {
+                        name: "area_fractions",
+                        value: a.len() as f64,
+                        expected: "none with a mask layout (its zones' areas are measured from the map)",
+                    });
+                }
+                mask_zones(map, n)?
+            }
+            layout => {
+                let areas = match area_fractions {
+                    None => vec![1.0 / n as f64; n],
+                    Some(a) => a,
+                };
+                check("area_fractions", areas.len() as f64, areas.len() == n, "one area fraction per channel")?;
+                for &a in &areas {
+                    check("area_fractions", a, a > 0.0, "a finite fraction > 0 of the aperture's area")?;
+                }
+                let total: f64 = areas.iter().sum();
+                check("area_fractions (sum)", total, total <= 1.0 + 1e-12, "Σ a_j ≤ 1: the zones fit in the aperture")?;
+                let zones = match layout {
+                    Layout::Concentric => rings(&areas),
+                    _ => sectors(&areas),
+                };
+                let measured = zones.iter().map(|z| z.area_fraction()).collect();
+                (zones, measured)
+            }
+        };
+        let bands = bands(&channels);
+        let lens = Segmented {
+            f_number,
+            focal_length: focal_length_m,
+            channels,
+            layout,
+            zones,
+            areas,
+            transmission,
+            other_channels: OtherChannels::Signal,
+            bands,
+        };
+        let parts: Vec<&Curve> = lens.channels.iter().map(|c| &c.efficiency).collect();
+        check_efficiency_below_transmission(
+            &|l| lens.signal_efficiency(l, OtherChannels::Signal),
+            &parts,
+            &lens.transmission,
+            lens.centre(),
+        )?;
+        Ok(lens)
+    }
+
+    /// This lens with the other channels' light counted as `other_channels` (default
+    /// [`OtherChannels::Signal`]).
+    pub fn with_other_channels(self, other_channels: OtherChannels) -> Self {
+        Segmented { other_channels, ..self }
+    }
+
+    /// The family's name.
+    pub fn kind(&self) -> &'static str {
+        "multiplexed-segmented"
+    }
+
+    /// The channels, in the layout's order.
+    pub fn channels(&self) -> &[Channel] {
+        &self.channels
+    }
+
+    /// The layout.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// Where the other channels' light counts.
+    pub fn other_channels(&self) -> OtherChannels {
+        self.other_channels
+    }
+
+    /// The zones' area fractions `a_j` as built: the given fractions (to rounding) for rings and
+    /// sectors, measured for masks.
+    pub fn area_fractions(&self) -> &[f64] {
+        &self.areas
+    }
+
+    /// Channel `j`'s band `[lo, hi)` (m) where [`OtherChannels::Background`] counts its light as
+    /// signal.
+    pub fn band(&self, j: usize) -> (f64, f64) {
+        self.bands[j]
+    }
+
+    /// The focused efficiency of zone `j` at `wavelength_m`: `a_j η_j(λ)`, or 0 outside the
+    /// channel's band with [`OtherChannels::Background`].
+    pub fn zone_efficiency(&self, j: usize, wavelength_m: f64) -> f64 {
+        self.areas[j] * self.signal_eta(j, wavelength_m, self.other_channels)
+    }
+
+    /// Defocus of zone `j` at `wavelength_m`: `W020_j = (1 − λ/λ_j) f0/(8F#²)`.
+    pub fn zone_defocus(&self, j: usize, wavelength_m: f64) -> f64 {
+        (1.0 - wavelength_m / self.channels[j].wavelength_m) * self.focal_length / (8.0 * self.f_number * self.f_number)
+    }
+
+    /// η_j(λ) where zone `j`'s light is signal, else 0.
+    fn signal_eta(&self, j: usize, wavelength_m: f64, other: OtherChannels) -> f64 {
+        let (lo, hi) = self.bands[j];
+        let lit = other == OtherChannels::Signal || (wavelength_m >= lo && wavelength_m < hi);
+        if lit { self.channels[j].efficiency.value(wavelength_m) } else { 0.0 }
+    }
+
+    fn signal_efficiency(&self, wavelength_m: f64, other: OtherChannels) -> f64 {
+        (0..self.channels.len()).map(|j| self.areas[j] * self.signal_eta(j, wavelength_m, other)).sum()
+    }
+
+    fn centre(&self) -> f64 {
+        let (lo, hi) = self
+            .channels
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), c| (lo.min(c.wavelength_m), hi.max(c.wavelength_m)));
+        0.5 * (lo + hi)
+    }
+}
+
+/// Concentric rings of areas `a_j`, the first innermost ([`Aperture::ring`], exact edge areas).
+fn rings(areas: &[f64]) -> Vec<Arc<Aperture>> {
+    let mut cumulative: f64 = 0.0;
+    areas
+        .iter()
+        .map(|a| {
+            let inner = cumulative.sqrt();
+            cumulative += a;
+            let outer = cumulative.sqrt().min(1.0);
+            Arc::new(Aperture::ring(inner, outer, None).expect("0 ≤ inner < outer ≤ 1: areas > 0, Σ ≤ 1"))
+        })
+        .collect()
+}
+
+/// Sectors of angular widths `2π a_j` from `+x`, counter-clockwise.
+fn sectors(areas: &[f64]) -> Vec<Arc<Aperture>> {
+    let mut start = 0.0;
+    areas
+        .iter()
+        .map(|a| {
+            let end = start + TAU * a.min(1.0);
+            let aperture = Aperture::sector(start, end).expect("a sector of width in (0, 2π]");
+            start = end;
+            Arc::new(aperture)
+        })
+        .collect()
+}
+
+/// The zones of a mask layout and their measured areas; refuses an index beyond the channels
+/// and a channel without area.
+fn mask_zones(map: &Arc<ZoneMap>, n: usize) -> Result<(Vec<Arc<Aperture>>, Vec<f64>), Error> {
+    let h = 2.0 / MASK_INDEX_SCAN as f64;
+    for i in 0..MASK_INDEX_SCAN {
+        for k in 0..MASK_INDEX_SCAN {
+            let (x, y) = (-1.0 + (i as f64 + 0.5) * h, -1.0 + (k as f64 + 0.5) * h);
+            if let Some(j) = map(x, y).filter(|&j| j >= n && x * x + y * y <= 1.0) {
+                return Err(Error::OutOfRange {
+                    name: "mask zone index",
+                    value: j as f64,
+                    expected: "a channel index below the number of channels (or None: opaque)",
+                });
+            }
+        }
+    }
+    let mut zones = Vec::with_capacity(n);
+    let mut areas = Vec::with_capacity(n);
+    for j in 0..n {
+        let map = Arc::clone(map);
+        let zone = Aperture::mask(move |x, y| x * x + y * y <= 1.0 && map(x, y) == Some(j));
+        let area = zone.area_fraction();
+        check("mask zone area", area, area > 0.0, "every channel's zone has an area > 0 in the mask")?;
+        zones.push(Arc::new(zone));
+        areas.push(area);
+    }
+    Ok((zones, areas))
+}
+
+/// Each channel's band (module docs of [`OtherChannels::Background`]), in the channels' order.
+fn bands(channels: &[Channel]) -> Vec<(f64, f64)> {
+    let mut sorted: Vec<f64> = channels.iter().map(|c| c.wavelength_m).collect();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len();
+    channels
+        .iter()
+        .map(|c| {
+            if n == 1 {
+                return (0.0, f64::INFINITY);
+            }
+            let i = sorted.iter().position(|&l| l == c.wavelength_m).expect("a channel's own wavelength");
+            let lo = if i == 0 { sorted[0] - 0.5 * (sorted[1] - sorted[0]) } else { 0.5 * (sorted[i - 1] + sorted[i]) };
+            let hi = if i == n - 1 {
+                sorted[n - 1] + 0.5 * (sorted[n - 1] - sorted[n - 2])
+            } else {
+                0.5 * (sorted[i] + sorted[i + 1])
+            };
+            (lo.max(0.0), hi)
+        })
+        .collect()
+}
+
+impl LensModel for Segmented {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    /// One order through the composite pupil of the zones (type docs); its `defocus_m` is the
+    /// zone defocus of largest size among the zones that carry light (all zones when none does).
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        let (tx, ty) = (field.x_rad.tan(), field.y_rad.tan());
+        let mut efficiency = 0.0;
+        let (mut largest_lit, mut largest): (f64, f64) = (0.0, 0.0);
+        let zones: Vec<Zone> = (0..self.channels.len())
+            .map(|j| {
+                let eta = self.signal_eta(j, wavelength_m, self.other_channels);
+                efficiency += self.areas[j] * eta;
+                let amplitude = eta.sqrt();
+                let w020 = self.zone_defocus(j, wavelength_m);
+                if w020.abs() > largest.abs() {
+                    largest = w020;
+                }
+                if amplitude > 0.0 && w020.abs() > largest_lit.abs() {
+                    largest_lit = w020;
+                }
+                let k = self.channels[j].wavelength_m / wavelength_m - 1.0;
+                let shift = [self.focal_length * tx * k, self.focal_length * ty * k];
+                Zone::new(Arc::clone(&self.zones[j]), amplitude, Wavefront::defocus(w020).shifted(shift[0], shift[1]))
+            })
+            .collect();
+        let any_lit = zones.iter().any(|z| z.amplitude > 0.0);
+        let defocus = if any_lit { largest_lit } else { largest };
+        vec![Order::new(efficiency, Pupil::Zones(zones.into()), Wavefront::defocus(defocus))]
+    }
+
+    fn efficiency(&self, wavelength_m: f64) -> f64 {
+        self.signal_efficiency(wavelength_m, self.other_channels)
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.transmission.value(wavelength_m)
+    }
+
+    /// The centre of the channels' range, `(λ_min + λ_max)/2`.
+    fn design_wavelength(&self) -> Option<f64> {
+        Some(self.centre())
+    }
+
+    /// The curves' samples, and with [`OtherChannels::Background`] the band edges.
+    fn breakpoints(&self) -> Vec<f64> {
+        let mut b: Vec<f64> = self
+            .channels
+            .iter()
+            .flat_map(|c| c.efficiency.breakpoints().iter().copied())
+            .chain(self.transmission.breakpoints().iter().copied())
+            .collect();
+        if self.other_channels == OtherChannels::Background {
+            b.extend(self.bands.iter().flat_map(|&(lo, hi)| [lo, hi]).filter(|l| l.is_finite() && *l > 0.0));
+        }
+        b.sort_by(f64::total_cmp);
+        b.dedup();
+        b
+    }
+
+    fn describe(&self) -> String {
+        let r = optics::round_for_display;
+        let waves: Vec<String> = self.channels.iter().map(|c| format!("{}", r(c.wavelength_m * 1e9))).collect();
+        let layout = match self.layout {
+            Layout::Concentric => "concentric",
+            Layout::Sectors => "sectors",
+            Layout::Mask(_) => "mask",
+        };
+        format!(
+            "segmented multiplexed metalens F/{} f0 = {} mm, {} channel{} at {} nm ({layout}{})",
+            r(self.f_number),
+            r(self.focal_length * 1e3),
+            self.channels.len(),
+            if self.channels.len() == 1 { "" } else { "s" },
+            waves.join(", "),
+            if self.other_channels == OtherChannels::Background { ", other channels as background" } else { "" }
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const F0: f64 = 3.36e-3;
+
+    fn channels(waves_nm: &[f64], eta: f64) -> Vec<Channel> {
+        waves_nm.iter().map(|&w| Channel { wavelength_m: w * 1e-9, efficiency: Curve::Constant(eta) }).collect()
+    }
+
+    fn rgb(layout: Layout) -> Segmented {
+        Segmented::new(2.5, F0, channels(&[450.0, 550.0, 650.0], 0.8), layout, None, Curve::Constant(0.9)).unwrap()
+    }
+
+    #[test]
+    fn zones_have_their_area_fractions() {
+        // sectors and rings of 1/3 each, exact
+        for layout in [Layout::Sectors, Layout::Concentric] {
+            for a in rgb(layout).area_fractions() {
+                assert!((a - 1.0 / 3.0).abs() < 1e-15, "{a}");
+            }
+        }
+        // unequal areas and an opaque remainder
+        let lens = Segmented::new(
+            2.5,
+            F0,
+            channels(&[500.0, 600.0], 0.5),
+            Layout::Sectors,
+            Some(vec![0.5, 0.25]),
+            Curve::Constant(0.9),
+        )
+        .unwrap();
+        assert_eq!(lens.area_fractions(), &[0.5, 0.25]);
+        assert!((lens.efficiency(550e-9) - 0.75 * 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn one_order_whose_zones_carry_the_efficiencies() {
+        let lens = rgb(Layout::Sectors);
+        let orders = lens.orders(520e-9, Field::ON_AXIS);
+        assert_eq!(orders.len(), 1);
+        let o = &orders[0];
+        assert!((o.efficiency - 0.8).abs() < 1e-15);
+        assert!((o.pupil.area_fraction() - o.efficiency).abs() < 1e-15);
+        let Pupil::Zones(zones) = &o.pupil else { panic!("a composite pupil") };
+        let k = F0 / 50.0;
+        for (j, z) in zones.iter().enumerate() {
+            assert!((z.amplitude - 0.8f64.sqrt()).abs() < 1e-15);
+            let want = (1.0 - 520e-9 / lens.channels()[j].wavelength_m) * k;
+            assert!((z.wavefront.defocus_m - want).abs() < 1e-20, "{j}");
+            // the apertures are built once
+            assert!(Arc::ptr_eq(&z.aperture, &lens.zones[j]));
+        }
+        // the largest zone defocus: the 650 nm channel's, positive (its focal length at 520 nm,
+        // f0 · 650/520, puts the focus behind the detector)
+        assert_eq!(o.wavefront.defocus_m, lens.zone_defocus(2, 520e-9));
+        assert!(o.wavefront.defocus_m > 0.0);
+        let again = lens.orders(600e-9, Field::ON_AXIS);
+        let Pupil::Zones(z2) = &again[0].pupil else { panic!() };
+        assert!(Arc::ptr_eq(&zones[1].aperture, &z2[1].aperture));
+    }
+
+    #[test]
+    fn off_axis_each_zone_has_its_lateral_colour() {
+        let lens = rgb(Layout::Concentric);
+        let field = Field::new(0.1, 0.0);
+        let [o] = &lens.orders(550e-9, field)[..] else { panic!() };
+        let Pupil::Zones(zones) = &o.pupil else { panic!() };
+        let h0 = F0 * 0.1f64.tan();
+        for (j, z) in zones.iter().enumerate() {
+            let want = h0 * (lens.channels()[j].wavelength_m / 550e-9 - 1.0);
+            assert!((z.wavefront.image_shift_m[0] - want).abs() < 1e-18 && z.wavefront.image_shift_m[1] == 0.0);
+        }
+        assert_eq!(zones[1].wavefront.image_shift_m, [0.0, 0.0]);
+        assert_eq!(o.wavefront.image_shift_m, [0.0, 0.0]);
+    }
+
+    #[test]
+    fn background_keeps_only_the_channel_in_focus() {
+        let lens = rgb(Layout::Sectors).with_other_channels(OtherChannels::Background);
+        for (j, (lo, hi)) in [(400e-9, 500e-9), (500e-9, 600e-9), (600e-9, 700e-9)].into_iter().enumerate() {
+            let (a, b) = lens.band(j);
+            assert!((a - lo).abs() < 1e-20 && (b - hi).abs() < 1e-20, "{j}: {a} {b}");
+        }
+        for (lambda, lit) in
+            [(420e-9, Some(0)), (501e-9, Some(1)), (599e-9, Some(1)), (690e-9, Some(2)), (701e-9, None)]
+        {
+            let o = &lens.orders(lambda, Field::ON_AXIS)[0];
+            let Pupil::Zones(zones) = &o.pupil else { panic!() };
+            for (j, z) in zones.iter().enumerate() {
+                assert_eq!(z.amplitude > 0.0, lit == Some(j), "{lambda} zone {j}");
+            }
+            let want = if lit.is_some() { 0.8 / 3.0 } else { 0.0 };
+            assert!((o.efficiency - want).abs() < 1e-15, "{lambda}");
+            assert_eq!(lens.efficiency(lambda), o.efficiency);
+            if let Some(j) = lit {
+                assert_eq!(o.wavefront.defocus_m, lens.zone_defocus(j, lambda));
+            }
+            // the transmission does not change: the rest is background
+            assert_eq!(lens.transmission(lambda), 0.9);
+        }
+        assert!(lens.breakpoints().iter().any(|b| (b - 500e-9).abs() < 1e-20), "{:?}", lens.breakpoints());
+        // one channel: every wavelength is its band
+        let one = Segmented::new(2.5, F0, channels(&[550.0], 0.5), Layout::Concentric, None, Curve::Constant(0.6))
+            .unwrap()
+            .with_other_channels(OtherChannels::Background);
+        assert_eq!(one.efficiency(1000e-9), 0.5);
+    }
+
+    #[test]
+    fn mask_layout_measures_its_zones() {
+        // left half channel 0, right half channel 1
+        let map: Arc<ZoneMap> = Arc::new(|x: f64, _y: f64| Some(if x < 0.0 { 0 } else { 1 }));
+        let lens =
+            Segmented::new(2.5, F0, channels(&[500.0, 600.0], 0.6), Layout::Mask(map), None, Curve::Constant(0.7))
+                .unwrap();
+        for a in lens.area_fractions() {
+            assert!((a - 0.5).abs() < 1e-6, "{a}");
+        }
+        let bad: Arc<ZoneMap> = Arc::new(|x: f64, _y: f64| Some(if x < 0.0 { 0 } else { 2 }));
+        let e = Segmented::new(2.5, F0, channels(&[500.0, 600.0], 0.6), Layout::Mask(bad), None, Curve::Constant(0.7))
+            .unwrap_err();
+        assert!(e.to_string().contains("mask zone index = 2"), "{e}");
+        let empty: Arc<ZoneMap> = Arc::new(|_x: f64, _y: f64| Some(0));
+        let e =
+            Segmented::new(2.5, F0, channels(&[500.0, 600.0], 0.6), Layout::Mask(empty), None, Curve::Constant(0.7))
+                .unwrap_err();
+        assert!(e.to_string().contains("mask zone area = 0"), "{e}");
+    }
+
+    #[test]
+    fn rejects_out_of_range_parameters() {
+        let new = |waves: &[f64], eta: f64, areas: Option<Vec<f64>>, t: f64| {
+            Segmented::new(2.5, F0, channels(waves, eta), Layout::Sectors, areas, Curve::Constant(t))
+        };
+        let e = new(&[], 0.5, None, 0.9).unwrap_err();
+        assert!(e.to_string().contains("channels = 0 is out of range: expected 1 to 16"), "{e}");
+        let e = new(&[500.0, 500.0], 0.5, None, 0.9).unwrap_err();
+        assert!(e.to_string().contains("distinct channel wavelengths"), "{e}");
+        let e = new(&[500.0, 600.0], 0.5, Some(vec![0.5, 0.0]), 0.9).unwrap_err();
+        assert!(e.to_string().contains("area_fractions = 0 is out of range"), "{e}");
+        let e = new(&[500.0, 600.0], 0.5, Some(vec![0.7, 0.4]), 0.9).unwrap_err();
+        assert!(e.to_string().contains("area_fractions (sum) = 1.1"), "{e}");
+        let e = new(&[500.0, 600.0], 0.5, Some(vec![0.5]), 0.9).unwrap_err();
+        assert!(e.to_string().contains("one area fraction per channel"), "{e}");
+        // Σ a_j η_j = 0.8 above T = 0.7
+        let e = new(&[500.0, 600.0], 0.8, None, 0.7).unwrap_err();
+        assert!(e.to_string().contains("exceeds transmission T = 0.7"), "{e}");
+        let map: Arc<ZoneMap> = Arc::new(|_x: f64, _y: f64| Some(0));
+        let e =
+            Segmented::new(2.5, F0, channels(&[500.0], 0.5), Layout::Mask(map), Some(vec![1.0]), Curve::Constant(0.9))
+                .unwrap_err();
+        assert!(e.to_string().contains("none with a mask layout"), "{e}");
+    }
+
+    #[test]
+    fn describes_itself() {
+        assert_eq!(
+            rgb(Layout::Concentric).describe(),
+            "segmented multiplexed metalens F/2.5 f0 = 3.36 mm, 3 channels at 450, 550, 650 nm (concentric)"
+        );
+        assert_eq!(rgb(Layout::Sectors).kind(), "multiplexed-segmented");
+    }
+}

@@ -1,0 +1,192 @@
+//! A composite pupil of coherent zones: several apertures of one lens, each with its own
+//! amplitude and wavefront, sampled once on the full aperture's grid.
+//!
+//! docs/physics.md, "General pupils": the OTF is the normalized autocorrelation of the pupil
+//! field. The zones of one aperture at one wavelength are coherent (a segmented spatially
+//! multiplexed lens is one lens, its segments' fields add), so the field of pixel `k` is
+//!
+//! ```text
+//! P_k = Σ_j A_jk a_j exp(i 2π (W_j(x_k) + t_j · x_k)/λ)
+//! ```
+//!
+//! with `A_jk` the exact area fraction of pixel `k` inside zone `j` (a boundary pixel shared by
+//! two zones gets both parts: zones that tile the circle with one amplitude and wavefront give
+//! the circle's pupil, pixel by pixel, to rounding), `a_j` the zone's field amplitude, `W_j` its
+//! wavefront (full-aperture coordinates centred on the lens axis, the sign of docs/physics.md,
+//! "Sign of the wavefront") and `t_j` a tilt (m of OPD at the edge of the full aperture). The
+//! OTF is normalized by `Σ_k Σ_j A_jk a_j²`, the power the zones pass, which is the single
+//! aperture's `Σ A` for one zone of amplitude 1 ([`OtfPlan::otf_of_field`](super::OtfPlan::otf_of_field)).
+//!
+//! Coordinates: the grid spans the full aperture `[-1, 1]²` (units of its radius `R`, centred
+//! on the lens axis), pixel `(i, j)` as in [`SampledPupil`](super::SampledPupil). A zone's
+//! aperture is placed on it at its [`decentre`](Aperture::decentre) (for a
+//! [`ring`](Aperture::ring), none); what falls outside the grid is not sampled.
+//!
+//! A tilt `t = (Δx, Δy) NA` moves the zone's image by `Δ` on the detector (NA = 1/(2 F#)):
+//! the stationary phase of the Fraunhofer integral (module docs of [`fft`](super)) puts the PSF
+//! of `W = t x` at `x0 = t z/R = t/NA`, and its OTF carries `exp(−2πi ν·Δ)`, the phase an
+//! order-level image shift gets (tested: one full-circle zone tilted by `Δ NA` against the
+//! circle with the order's shift).
+
+use std::f64::consts::TAU;
+use std::sync::Arc;
+
+use num_complex::Complex64;
+
+use super::aperture::Aperture;
+use super::wavefront::{Aberrations, Compiled};
+use crate::Error;
+
+/// One zone's field at one wavelength: its amplitude, wavefront and tilt.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ZoneField {
+    /// Field amplitude `a_j ≥ 0` (the zone passes `a_j²` of the power incident on it).
+    pub amplitude: f64,
+    /// The zone's wavefront, full-aperture coordinates from the lens axis.
+    pub aberrations: Aberrations,
+    /// Tilt `(t_x, t_y)`, m of OPD at the full aperture's edge: `W += t_x x + t_y y`.
+    pub tilt_m: [f64; 2],
+}
+
+/// The zones of a composite pupil sampled on an `N × N` grid over the full aperture (module
+/// docs): each zone's pixels with their exact area fractions, kept while the apertures stay the
+/// same, and the complex field at the last wavelength.
+#[derive(Clone, Debug)]
+pub struct SampledZones {
+    n: usize,
+    apertures: Vec<Arc<Aperture>>,
+    /// per zone: (pixel index, area fraction in (0, 1])
+    pixels: Vec<Vec<(usize, f64)>>,
+    field: Vec<Complex64>,
+    weight: f64,
+}
+
+impl SampledZones {
+    /// Samples the zones `apertures` on an `n × n` grid (`n` in `8..=8192`), at least one zone.
+    pub fn new(n: usize, apertures: &[Arc<Aperture>]) -> Result<SampledZones, Error> {
+        super::plan::check_samples(n)?;
+        if apertures.is_empty() {
+            return Err(Error::InvalidParameter { name: "zones", value: 0.0, expected: "at least one zone" });
+        }
+        let h = 2.0 / n as f64;
+        let pixels = apertures
+            .iter()
+            .map(|aperture| {
+                let (dx, dy) = aperture.decentre();
+                let mut list = Vec::new();
+                for j in 0..n {
+                    let y0 = -1.0 + j as f64 * h - dy;
+                    for i in 0..n {
+                        let x0 = -1.0 + i as f64 * h - dx;
+                        let a = (aperture.area_in(x0, x0 + h, y0, y0 + h) / (h * h)).clamp(0.0, 1.0);
+                        if a > 0.0 {
+                            list.push((j * n + i, a));
+                        }
+                    }
+                }
+                list
+            })
+            .collect();
+        Ok(SampledZones {
+            n,
+            apertures: apertures.to_vec(),
+            pixels,
+            field: vec![Complex64::new(0.0, 0.0); n * n],
+            weight: 0.0,
+        })
+    }
+
+    /// Whether these are the zones `apertures` (the same `Arc`s, in order): the sampling can be
+    /// reused.
+    pub fn is_sampling_of<'z>(&self, apertures: impl ExactSizeIterator<Item = &'z Arc<Aperture>>) -> bool {
+        apertures.len() == self.apertures.len() && apertures.zip(&self.apertures).all(|(a, b)| Arc::ptr_eq(a, b))
+    }
+
+    /// Samples across the full aperture's diameter.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Zones sampled.
+    pub fn len(&self) -> usize {
+        self.apertures.len()
+    }
+
+    /// Whether there is no zone (never: [`new`](Self::new) refuses none).
+    pub fn is_empty(&self) -> bool {
+        self.apertures.is_empty()
+    }
+
+    /// The area of zone `j` on the grid, in units of `R²` (its exact area for the disc shapes,
+    /// inside the grid).
+    pub fn zone_area(&self, j: usize) -> f64 {
+        let h = 2.0 / self.n as f64;
+        self.pixels[j].iter().map(|&(_, a)| a).sum::<f64>() * h * h
+    }
+
+    /// Computes the composite field `Σ_j A_jk a_j exp(i 2π (W_j + t_j·x)/λ)` at `wavelength_m`
+    /// for `zones` (one per sampled aperture, in order) and its weight `Σ_k Σ_j A_jk a_j²`.
+    pub fn set_field(&mut self, zones: &[ZoneField], wavelength_m: f64) -> Result<(), Error> {
+        if zones.len() != self.apertures.len() {
+            return Err(Error::InvalidParameter {
+                name: "zone fields",
+                value: zones.len() as f64,
+                expected: "one per sampled zone",
+            });
+        }
+        if !(wavelength_m > 0.0 && wavelength_m.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "wavelength",
+                value: wavelength_m,
+                expected: "finite and > 0 m",
+            });
+        }
+        for z in zones {
+            if !(z.amplitude.is_finite() && z.amplitude >= 0.0) {
+                return Err(Error::InvalidParameter {
+                    name: "zone amplitude",
+                    value: z.amplitude,
+                    expected: "finite and ≥ 0",
+                });
+            }
+            z.aberrations.validate()?;
+            if let Some(&t) = z.tilt_m.iter().find(|t| !t.is_finite()) {
+                return Err(Error::InvalidParameter { name: "zone tilt", value: t, expected: "finite (m)" });
+            }
+        }
+        let n = self.n;
+        let h = 2.0 / n as f64;
+        let k = TAU / wavelength_m;
+        self.field.fill(Complex64::new(0.0, 0.0));
+        let mut weight = 0.0;
+        for (z, pixels) in zones.iter().zip(&self.pixels) {
+            if z.amplitude == 0.0 {
+                continue;
+            }
+            let compiled = Compiled::new(&z.aberrations);
+            let [tx, ty] = z.tilt_m;
+            let mut area = 0.0;
+            for &(p, a) in pixels {
+                let (i, j) = (p % n, p / n);
+                let (x, y) = (-1.0 + (i as f64 + 0.5) * h, -1.0 + (j as f64 + 0.5) * h);
+                let opd = compiled.opd_m(x, y) + tx * x + ty * y;
+                self.field[p] += Complex64::from_polar(a * z.amplitude, k * opd);
+                area += a;
+            }
+            weight += area * z.amplitude * z.amplitude;
+        }
+        self.weight = weight;
+        Ok(())
+    }
+
+    /// The field of the last [`set_field`](Self::set_field), `N × N` row-major.
+    pub fn field(&self) -> &[Complex64] {
+        &self.field
+    }
+
+    /// `Σ_k Σ_j A_jk a_j²` of the last [`set_field`](Self::set_field) (pixel units): the OTF's
+    /// normalization ([`OtfPlan::otf_of_field`](super::OtfPlan::otf_of_field)).
+    pub fn weight(&self) -> f64 {
+        self.weight
+    }
+}
