@@ -40,7 +40,7 @@ pub struct Design {
     /// Its `name`.
     pub name: String,
     /// Its family: `chromatic`, `refractive`, `dispersion-engineered`, `harmonic`,
-    /// `multiplexed-interleaved` (later `multiplexed-segmented`, `tabulated`).
+    /// `multiplexed-interleaved`, `multiplexed-segmented` or `tabulated`.
     pub kind: &'static str,
     /// The file's scene with this design's lens.
     pub scene: Scene,
@@ -81,7 +81,8 @@ pub struct Comparison {
 pub fn read_comparison(file: Option<&Path>) -> Result<Source, Error> {
     match file {
         Some(_) => crate::read(file),
-        None => Ok(Source::from_text(DESIGNS_SCENE, EMBEDDED, ".")),
+        // its CSV tables are those of the source tree's examples/ folder
+        None => Ok(Source::from_text(DESIGNS_SCENE, EMBEDDED, concat!(env!("CARGO_MANIFEST_DIR"), "/../examples"))),
     }
 }
 

@@ -91,6 +91,7 @@ pub(crate) enum Model {
     Dispersion,
     Harmonic,
     Multiplexed,
+    Tabulated,
 }
 
 impl Model {
@@ -101,6 +102,7 @@ impl Model {
             Model::Dispersion => "dispersion-engineered",
             Model::Harmonic => "harmonic",
             Model::Multiplexed => "multiplexed",
+            Model::Tabulated => "tabulated",
         }
     }
 
@@ -138,6 +140,7 @@ impl Model {
                 "channel_efficiencies",
                 "transmission",
             ],
+            Model::Tabulated => &["mtf", "mtf_includes_pixel_um", "design_wavelength_nm", "efficiency", "transmission"],
         };
         keys.contains(&key)
     }
@@ -189,13 +192,7 @@ pub(crate) fn model(l: &RawLens, o: &Origins) -> Result<Model, Error> {
         "dispersion-engineered" => Model::Dispersion,
         "harmonic" => Model::Harmonic,
         "multiplexed" => Model::Multiplexed,
-        "tabulated" => {
-            return Err(o.bad(
-                "lens.model",
-                quoted("tabulated"),
-                &format!("{MODELS}: tabulated (measured-MTF) lenses are not in this build yet"),
-            ));
-        }
+        "tabulated" => Model::Tabulated,
         other => return Err(o.bad("lens.model", quoted(other), MODELS)),
     })
 }
@@ -479,24 +476,47 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         }
         Model::Multiplexed => {
             let key = "lens.layout";
-            let layouts = "\"interleaved\" (segmented layouts are not in this build yet)";
-            match o.require(key, l.layout.as_deref(), layouts)? {
-                "interleaved" => {}
+            let layouts = "\"segmented\" (zones side by side) or \"interleaved\" (meta-atoms interleaved)";
+            let segmented = match o.require(key, l.layout.as_deref(), layouts)? {
+                "interleaved" => false,
+                "segmented" => true,
                 other => return Err(o.bad(key, quoted(other), layouts)),
-            }
-            let ctx = "lens.layout = \"interleaved\"";
-            o.forbid("lens.zones", &l.zones, ctx)?;
-            o.forbid("lens.zone_mask", &l.zone_mask, ctx)?;
-            o.forbid("lens.area_fractions", &l.area_fractions, ctx)?;
-            if let Some(other) = l.other_channels.as_deref()
-                && other != "signal"
-            {
-                return Err(o.bad(
-                    "lens.other_channels",
-                    quoted(other),
-                    "\"signal\" (an interleaved lens's other channels form a defocused image over the full aperture: signal with its defocus in the OTF, docs/physics.md)",
-                ));
-            }
+            };
+            let other_channels = match l.other_channels.as_deref().unwrap_or("signal") {
+                "signal" => lenses::OtherChannels::Signal,
+                "background" if segmented => lenses::OtherChannels::Background,
+                other => {
+                    let expected = if segmented {
+                        "\"signal\" (every zone's light is signal, with its defocus) or \"background\" (a zone's light is signal only in its channel's band)"
+                    } else {
+                        "\"signal\" (an interleaved lens's other channels form a defocused image over the full aperture: signal with its defocus in the OTF, docs/physics.md)"
+                    };
+                    return Err(o.bad("lens.other_channels", quoted(other), expected));
+                }
+            };
+            let layout = if segmented {
+                let zones = "\"concentric\" (rings, the first channel innermost) or \"sectors\" (wedges)";
+                let layout = match l.zones.as_deref().unwrap_or("concentric") {
+                    "concentric" => lenses::Layout::Concentric,
+                    "sectors" => lenses::Layout::Sectors,
+                    "mask" => {
+                        return Err(o.bad(
+                            "lens.zones",
+                            quoted("mask"),
+                            &format!("{zones} (zone-mask files are not read by scene files yet)"),
+                        ));
+                    }
+                    other => return Err(o.bad("lens.zones", quoted(other), zones)),
+                };
+                o.forbid("lens.zone_mask", &l.zone_mask, "lens.zones other than \"mask\"")?;
+                Some(layout)
+            } else {
+                let ctx = "lens.layout = \"interleaved\"";
+                o.forbid("lens.zones", &l.zones, ctx)?;
+                o.forbid("lens.zone_mask", &l.zone_mask, ctx)?;
+                o.forbid("lens.area_fractions", &l.area_fractions, ctx)?;
+                None
+            };
             let key = "lens.channels_nm";
             let expected = "1 to 16 channel wavelengths in nm, each > 0, increasing";
             let channels = o.require(key, l.channels_nm.as_ref(), expected)?;
@@ -505,7 +525,14 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             }
             let mut prev = 0.0;
             for (j, &c) in channels.iter().enumerate() {
-                o.number(&format!("{key}[{j}]"), c, c > prev, expected)?;
+                // a segmented lens's channels are in its zones' order; an interleaved lens's increase
+                let ok = if segmented { c > 0.0 && !channels[..j].contains(&c) } else { c > prev };
+                let expected = if segmented {
+                    "1 to 16 distinct channel wavelengths in nm, each > 0, in the zones' order"
+                } else {
+                    expected
+                };
+                o.number(&format!("{key}[{j}]"), c, ok, expected)?;
                 o.wavelength(&format!("{key}[{j}]"), c);
                 prev = c;
             }
@@ -546,14 +573,92 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             let t = o.require(key, l.transmission.as_ref(), expected)?;
             let transmission = o.curve(key, t, "transmission")?;
             let n = channels.len();
-            let list =
+            let list: Vec<Channel> =
                 channels.iter().zip(etas).map(|(c, e)| Channel { wavelength_m: c * 1e-9, efficiency: e }).collect();
-            let lens =
-                Interleaved::new(f_number, f0_m, list, transmission).map_err(|e| o.domain("lens", "[lens]", e))?;
-            info.kind = "multiplexed-interleaved";
             info.channels_m = channels.iter().map(|c| c * 1e-9).collect();
-            info.design_wavelength_m = Some(0.5 * (channels[0] + channels[n - 1]) * 1e-9);
-            info.notes.push(format!("{n} interleaved channels, each τ_j = η_j/N² = η_j/{}", n * n));
+            let (lo, hi) = channels.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), &c| (a.min(c), b.max(c)));
+            info.design_wavelength_m = Some(0.5 * (lo + hi) * 1e-9);
+            if let Some(layout) = layout {
+                let areas = match &l.area_fractions {
+                    None => None,
+                    Some(a) => {
+                        let key = "lens.area_fractions";
+                        let expected = "one area fraction per channel, each > 0, summing to at most 1";
+                        if a.len() != n {
+                            return Err(o.bad(key, format!("a list of {}", a.len()), expected));
+                        }
+                        for (j, &v) in a.iter().enumerate() {
+                            o.number(&format!("{key}[{j}]"), v, v > 0.0 && v <= 1.0, expected)?;
+                        }
+                        let sum: f64 = a.iter().sum();
+                        if sum > 1.0 + 1e-12 {
+                            return Err(o.bad(key, format!("a list summing to {}", num(sum)), expected));
+                        }
+                        Some(a.clone())
+                    }
+                };
+                let lens = lenses::Segmented::new(f_number, f0_m, list, layout, areas, transmission)
+                    .map_err(|e| o.domain("lens", "[lens]", e))?
+                    .with_other_channels(other_channels);
+                info.kind = "multiplexed-segmented";
+                let fractions: Vec<String> = lens.area_fractions().iter().map(|a| format!("{a:.4}")).collect();
+                info.notes.push(format!(
+                    "{n} {} zones, area fractions {}, τ_j = a_j η_j; other channels' light: {}",
+                    l.zones.as_deref().unwrap_or("concentric"),
+                    fractions.join(", "),
+                    l.other_channels.as_deref().unwrap_or("signal")
+                ));
+                Arc::new(lens)
+            } else {
+                let lens =
+                    Interleaved::new(f_number, f0_m, list, transmission).map_err(|e| o.domain("lens", "[lens]", e))?;
+                info.kind = "multiplexed-interleaved";
+                info.notes.push(format!("{n} interleaved channels, each τ_j = η_j/N² = η_j/{}", n * n));
+                Arc::new(lens)
+            }
+        }
+        Model::Tabulated => {
+            let key = "lens.mtf";
+            let expected = "the path of an MTF table: a CSV (wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]) or a Zemax FFT MTF text export";
+            let file = o.require(key, l.mtf.as_ref(), expected)?;
+            let path = o.path(file);
+            let bytes = std::fs::read(&path).map_err(|cause| Error::Table {
+                origin: o.of(key),
+                key: o.key(key),
+                file: crate::error::shorten(file),
+                cause: Box::new(Error::Read { what: "MTF table", path: path.display().to_string(), cause }),
+            })?;
+            let ctx = format!("lens.mtf = {}", quoted(file));
+            let csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+            let table = if csv {
+                let text = lenses::decode_text(&bytes).map_err(|e| o.domain(key, &ctx, e))?;
+                lenses::parse_mtf_csv(&text)
+            } else {
+                lenses::parse_zemax_fft_mtf(&bytes)
+                    .and_then(|listing| lenses::zemax_otf_table(&[listing], lenses::FieldChoice::OnAxis))
+            }
+            .map_err(|e| o.domain(key, &ctx, e))?;
+            let efficiency = efficiency(o)?;
+            let transmission = transmission(o, &efficiency)?;
+            let pixel = match l.mtf_includes_pixel_um {
+                Some(p) => Some(
+                    o.number(
+                        "lens.mtf_includes_pixel_um",
+                        p,
+                        p > 0.0,
+                        "the pitch > 0 µm of the pixel whose MTF the table contains (divided out)",
+                    )? * 1e-6,
+                ),
+                None => None,
+            };
+            let mut lens = lenses::Tabulated::new(f_number, f0_m, table, efficiency, transmission, pixel)
+                .map_err(|e| o.domain("lens", "[lens]", e))?;
+            if l.design_wavelength_nm.is_some() {
+                let l0 = design_wavelength(o)?;
+                lens = lens.with_design_wavelength(l0).map_err(|e| o.domain("lens", "[lens]", e))?;
+                info.design_wavelength_m = Some(l0);
+            }
+            info.notes.push(format!("OTF table from {}", crate::error::shorten(file)));
             Arc::new(lens)
         }
     };

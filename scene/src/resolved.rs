@@ -189,6 +189,27 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
                 curve(out, o, "transmission", t)?;
             }
             out.string("other_channels", l.other_channels.as_deref().unwrap_or("signal"));
+            if l.layout.as_deref() == Some("segmented") {
+                out.string("zones", l.zones.as_deref().unwrap_or("concentric"));
+                match &l.area_fractions {
+                    Some(a) => out.value("area_fractions", &list(a)),
+                    None => out.line("# area_fractions not given: 1/N each"),
+                }
+            }
+        }
+        Model::Tabulated => {
+            let key = o.key("lens.mtf");
+            out.string("mtf", &path(o, &key, l.mtf.as_deref().unwrap_or_default())?);
+            match l.mtf_includes_pixel_um {
+                Some(p) => out.number("mtf_includes_pixel_um", p),
+                None => out.line("# mtf_includes_pixel_um not given: the table holds the lens MTF alone"),
+            }
+            match l.design_wavelength_nm {
+                Some(w) => out.number("design_wavelength_nm", w),
+                None => out.line("# design_wavelength_nm not given: none (the Fraunhofer check has no reference)"),
+            }
+            efficiency(out)?;
+            transmission(out)?;
         }
     }
     Ok(())
