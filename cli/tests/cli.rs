@@ -1149,6 +1149,12 @@ fn with_lens(dir: &Path, name: &str, lens: &str) -> PathBuf {
 const REFRACTIVE_LENS: &str =
     "model = \"refractive\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800\nglass = \"N-BK7\"";
 const ACHROMAT_LENS: &str = "model = \"dispersion-engineered\"\naperture_diameter_mm = 0.2\nfocal_length_mm = 3.36\ndesign_band_nm = [750, 850]\ngroup_delay_range_fs = 5\nefficiency = 0.15\ntransmission = 0.55";
+const SEGMENTED_LENS: &str = "model = \"multiplexed\"\nlayout = \"segmented\"\nzones = \"concentric\"\nf_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [800, 750, 850]\narea_fractions = [0.5, 0.25, 0.25]\nother_channels = \"signal\"\nefficiency = 0.15\ntransmission = 0.55";
+const TABULATED_LENS: &str = concat!(
+    "model = \"tabulated\"\nmtf = \"",
+    env!("CARGO_MANIFEST_DIR"),
+    "/../examples/data/paper-chromatic-mtf.csv\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800\nefficiency = 0.15\ntransmission = 0.55"
+);
 const INTERLEAVED_LENS: &str = "model = \"multiplexed\"\nlayout = \"interleaved\"\nf_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [750, 800, 850]\nefficiency = 0.15\ntransmission = 0.55";
 
 /// Every family loads from a scene file, evaluates, and `asnr scene` writes it back to the same
@@ -1160,6 +1166,8 @@ fn compare_every_family_loads_evaluates_and_resolves() {
         with_lens(&dir, "refractive.toml", REFRACTIVE_LENS),
         with_lens(&dir, "achromat.toml", ACHROMAT_LENS),
         with_lens(&dir, "interleaved.toml", INTERLEAVED_LENS),
+        with_lens(&dir, "segmented.toml", SEGMENTED_LENS),
+        with_lens(&dir, "tabulated.toml", TABULATED_LENS),
         PathBuf::from(HARMONIC),
     ];
     for file in &files {
@@ -1217,7 +1225,7 @@ fn compare_lens_keys_are_refused_with_their_message() {
             &["--set", "lens.model=multiplexed"],
             "lens.design_wavelength_nm does not apply to lens.model = \"multiplexed\"",
         ),
-        (&["--set", "lens.model=tabulated"], "tabulated (measured-MTF) lenses are not in this build yet"),
+        (&["--set", "lens.model=tabulated"], "lens.mtf is missing: expected the path of an MTF table"),
         (
             &["--set", "lens.iris_decentre_x=0.1", "--set", "lens.model=harmonic"],
             "does not apply to lens.model = \"harmonic\"",
@@ -1267,13 +1275,51 @@ fn compare_lens_keys_are_refused_with_their_message() {
             "lens.channels_nm=[800, 750]",
             "lens.channels_nm[1] = 750: expected 1 to 16 channel wavelengths in nm, each > 0, increasing",
         ),
-        ("lens.layout=stacked", "lens.layout = \"stacked\": expected \"interleaved\""),
+        (
+            "lens.layout=stacked",
+            "lens.layout = \"stacked\": expected \"segmented\" (zones side by side) or \"interleaved\"",
+        ),
         ("lens.zones=sectors", "lens.zones does not apply to lens.layout = \"interleaved\""),
         ("lens.other_channels=background", "lens.other_channels = \"background\": expected \"signal\""),
         ("lens.channel_efficiencies=[0.1, 0.2]", "lens.efficiency and lens.channel_efficiencies both given"),
         ("lens.transmission=0.01", "exceeds transmission T = 0.01"),
     ] {
         let err = fails(&["evaluate", i, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+    let segmented = with_lens(&dir, "segmented.toml", SEGMENTED_LENS);
+    let g = segmented.to_str().unwrap();
+    for (set, expected) in [
+        (
+            "lens.area_fractions=[0.5, 0.5, 0.5]",
+            "lens.area_fractions = a list summing to 1.5: expected one area fraction per channel",
+        ),
+        ("lens.area_fractions=[0.5, 0.5]", "lens.area_fractions = a list of 2: expected one area fraction per channel"),
+        ("lens.zones=mask", "lens.zones = \"mask\": expected \"concentric\""),
+        (
+            "lens.zones=hexagons",
+            "lens.zones = \"hexagons\": expected \"concentric\" (rings, the first channel innermost) or \"sectors\" (wedges)",
+        ),
+        ("lens.other_channels=noise", "lens.other_channels = \"noise\": expected \"signal\""),
+        (
+            "lens.channels_nm=[800, 800, 850]",
+            "lens.channels_nm[1] = 800: expected 1 to 16 distinct channel wavelengths",
+        ),
+    ] {
+        let err = fails(&["evaluate", g, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+    // other channels as background: the scene builds (evaluating it is the optics engine's work)
+    let (text, _) = succeeds(&["scene", g, "--set", "lens.other_channels=background"]);
+    assert!(text.contains("\nother_channels = \"background\"\n"), "{text}");
+    let tabulated = with_lens(&dir, "tabulated.toml", TABULATED_LENS);
+    let t = tabulated.to_str().unwrap();
+    for (set, expected) in [
+        ("lens.mtf=no-such.csv", "lens.mtf = \"no-such.csv\": cannot read the MTF table"),
+        ("lens.mtf_includes_pixel_um=-5", "lens.mtf_includes_pixel_um = -5: expected the pitch > 0 µm"),
+        ("lens.glass=N-BK7", "lens.glass does not apply to lens.model = \"tabulated\""),
+    ] {
+        let err = fails(&["evaluate", t, "--set", set]);
         assert!(err.contains(expected), "{set}: {err}");
     }
 }
@@ -1390,7 +1436,9 @@ fn compare_table_csv_plot_and_embedded() {
 #[test]
 fn compare_files_and_arguments_are_checked() {
     let dir = scratch("compare-bad");
-    let text = std::fs::read_to_string(DESIGNS).unwrap();
+    // the copies live elsewhere: their table path made absolute
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/data/");
+    let text = std::fs::read_to_string(DESIGNS).unwrap().replace("\"data/", &format!("\"{data}"));
     // one design at another focal length
     let other = dir.join("focal.toml");
     std::fs::write(&other, text.replacen("focal_length_mm = 3.36", "focal_length_mm = 4", 1)).unwrap();

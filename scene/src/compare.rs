@@ -271,7 +271,7 @@ mod tests {
             scene.remove("designs");
             scene.insert("lens".to_owned(), designs[i]["lens"].clone());
             let text = toml::to_string(&scene).unwrap();
-            let single = Source::from_text(text, "design", ".");
+            let single = Source::from_text(text, "design", concat!(env!("CARGO_MANIFEST_DIR"), "/../examples"));
             let set = ["spectrum.range_nm=10".to_owned()];
             let resolved = crate::resolved_toml(&single, &set).unwrap().toml;
             let again = Source::from_text(resolved.clone(), "resolved", ".");
