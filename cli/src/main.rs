@@ -4,6 +4,7 @@
 //! binary. Human-readable table by default, `--json` for scripts. The only crate that reads
 //! files, arguments or the environment.
 
+mod compare;
 mod optimize;
 mod output;
 mod plot;
@@ -96,6 +97,9 @@ enum Command {
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
     },
+    /// Lens designs side by side: ASNR at the scene band and at each design's best band, the
+    /// chromatic twin, glare (default: the embedded comparison of the lens families).
+    Compare(compare::CompareArgs),
     /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
     Scene {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -239,6 +243,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Plot(args) => plotcmd::run(&args),
+        Command::Compare(args) => compare::run(args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;

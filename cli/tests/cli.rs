@@ -1129,3 +1129,349 @@ fn json_with_explain_is_one_document() {
     assert!(lines[0].as_str().unwrap().contains("How this was computed"), "{lines:?}");
     assert!(v["asnr"].is_f64());
 }
+
+// ---- asnr compare ----
+
+const DESIGNS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/designs.toml");
+const HARMONIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/harmonic.toml");
+/// A small grid of spectral ranges: the tests run in a debug build.
+const SMALL_GRID: &str = "spectrum.range_nm=10:200:4";
+
+/// The paper scene with its `[lens]` table replaced by `lens`, written into `dir` as `name`.
+fn with_lens(dir: &Path, name: &str, lens: &str) -> PathBuf {
+    let text = std::fs::read_to_string(PAPER).unwrap();
+    let (start, end) = (text.find("[lens]").unwrap(), text.find("[source]").unwrap());
+    let path = dir.join(name);
+    std::fs::write(&path, format!("{}[lens]\n{lens}\n{}", &text[..start], &text[end..])).unwrap();
+    path
+}
+
+const REFRACTIVE_LENS: &str =
+    "model = \"refractive\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800\nglass = \"N-BK7\"";
+const ACHROMAT_LENS: &str = "model = \"dispersion-engineered\"\naperture_diameter_mm = 0.2\nfocal_length_mm = 3.36\ndesign_band_nm = [750, 850]\ngroup_delay_range_fs = 5\nefficiency = 0.15\ntransmission = 0.55";
+const SEGMENTED_LENS: &str = "model = \"multiplexed\"\nlayout = \"segmented\"\nzones = \"concentric\"\nf_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [800, 750, 850]\narea_fractions = [0.5, 0.25, 0.25]\nother_channels = \"signal\"\nefficiency = 0.15\ntransmission = 0.55";
+const TABULATED_LENS: &str = concat!(
+    "model = \"tabulated\"\nmtf = \"",
+    env!("CARGO_MANIFEST_DIR"),
+    "/../examples/data/paper-chromatic-mtf.csv\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800\nefficiency = 0.15\ntransmission = 0.55"
+);
+const INTERLEAVED_LENS: &str = "model = \"multiplexed\"\nlayout = \"interleaved\"\nf_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [750, 800, 850]\nefficiency = 0.15\ntransmission = 0.55";
+
+/// Every family loads from a scene file, evaluates, and `asnr scene` writes it back to the same
+/// ASNR, bit for bit.
+#[test]
+fn compare_every_family_loads_evaluates_and_resolves() {
+    let dir = scratch("families");
+    let files = [
+        with_lens(&dir, "refractive.toml", REFRACTIVE_LENS),
+        with_lens(&dir, "achromat.toml", ACHROMAT_LENS),
+        with_lens(&dir, "interleaved.toml", INTERLEAVED_LENS),
+        with_lens(&dir, "segmented.toml", SEGMENTED_LENS),
+        with_lens(&dir, "tabulated.toml", TABULATED_LENS),
+        PathBuf::from(HARMONIC),
+    ];
+    for file in &files {
+        let file = file.to_str().unwrap();
+        // the harmonic lens's six orders are slow in a debug build: a narrow band
+        let narrow = ["--set", "spectrum.range_nm=5"];
+        let set: &[&str] = if file.ends_with("harmonic.toml") { &narrow } else { &[] };
+        let direct = json(&[&["evaluate", file, "--json"], set].concat());
+        assert!(direct["asnr"].as_f64().unwrap() > 0.0, "{file}");
+        let (text, _) = succeeds(&[&["scene", file], set].concat());
+        let again = dir.join("again.toml");
+        std::fs::write(&again, &text).unwrap();
+        let reloaded = json(&["evaluate", again.to_str().unwrap(), "--json"]);
+        assert_eq!(reloaded["asnr"], direct["asnr"], "{file}:\n{text}");
+    }
+    // the preset fills in the keys not given, and asnr scene says which
+    let preset = with_lens(&dir, "preset.toml", "preset = \"paper-chromatic\"\nf_number = 2.8");
+    let (text, _) = succeeds(&["scene", preset.to_str().unwrap()]);
+    assert!(text.contains("# preset \"paper-chromatic\": design_wavelength_nm, efficiency, focal_length_mm, model, transmission from the preset"), "{text}");
+    assert!(text.contains("\nf_number = 2.8\n"), "{text}");
+    let direct = json(&["evaluate", "--json", "--set", "lens.f_number=2.8"]);
+    assert_eq!(json(&["evaluate", preset.to_str().unwrap(), "--json"])["asnr"], direct["asnr"]);
+}
+
+/// Keys out of range, of another family, or unknown: refused naming the key, the value, the
+/// model and what is accepted.
+#[test]
+fn compare_lens_keys_are_refused_with_their_message() {
+    let dir = scratch("lens-keys");
+    let refractive = with_lens(&dir, "refractive.toml", REFRACTIVE_LENS);
+    let r = refractive.to_str().unwrap();
+    let cases: [(&[&str], &str); 13] = [
+        (
+            &["--set", "lens.model=fresnel"],
+            "lens.model = \"fresnel\": expected \"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\" or \"multiplexed\"",
+        ),
+        (&["--set", "lens.design_order=3"], "lens.design_order does not apply to lens.model = \"chromatic\""),
+        (
+            &["--set", "lens.aperture_diameter_mm=1"],
+            "lens.f_number and lens.aperture_diameter_mm both given: give one (F# = f0/D)",
+        ),
+        (&["--set", "lens.channels_nm=[800]"], "lens.channels_nm does not apply to lens.model = \"chromatic\""),
+        (&["--set", "lens.glass=N-BK7"], "lens.glass does not apply to lens.model = \"chromatic\""),
+        (&["--set", "lens.preset=mine"], "lens.preset = \"mine\": expected the name of a preset: \"paper-chromatic\""),
+        (&["--set", "lens.model=harmonic"], "lens.design_order is missing: expected a whole number from 1 to 1000"),
+        (
+            &["--set", "lens.model=harmonic", "--set", "lens.design_order=0"],
+            "lens.design_order = 0: expected a whole number from 1 to 1000",
+        ),
+        (
+            &["--set", "lens.model=dispersion-engineered"],
+            "lens.design_wavelength_nm does not apply to lens.model = \"dispersion-engineered\"",
+        ),
+        (
+            &["--set", "lens.model=multiplexed"],
+            "lens.design_wavelength_nm does not apply to lens.model = \"multiplexed\"",
+        ),
+        (&["--set", "lens.model=tabulated"], "lens.mtf is missing: expected the path of an MTF table"),
+        (
+            &["--set", "lens.iris_decentre_x=0.1", "--set", "lens.model=harmonic"],
+            "does not apply to lens.model = \"harmonic\"",
+        ),
+        (&["--set", "lens.colour=1"], "lens.colour: unknown field `colour`"),
+    ];
+    for (set, expected) in cases {
+        let err = fails(&[&["evaluate", PAPER], set].concat());
+        assert!(err.contains(expected), "{set:?}: {err}");
+    }
+    let refractive_cases: [(&str, &str); 6] = [
+        ("lens.glass=F2", "lens.glass = \"F2\": expected \"N-BK7\""),
+        ("lens.elements=0", "lens.elements = 0: expected a whole number of thin elements from 1 to 100"),
+        ("lens.coating_reflectance=1", "lens.coating_reflectance = 1: expected a reflectance per surface in [0, 1)"),
+        ("lens.refractive_index=1.5", "lens.glass and lens.refractive_index both given: give one"),
+        ("lens.design_wavelength_nm=3000", "lens.design_wavelength_nm = 3000: expected a wavelength in 300–2500 nm"),
+        ("lens.efficiency=0.5", "lens.efficiency does not apply to lens.model = \"refractive\""),
+    ];
+    for (set, expected) in refractive_cases {
+        let err = fails(&["evaluate", r, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+    let achromat = with_lens(&dir, "achromat.toml", ACHROMAT_LENS);
+    let a = achromat.to_str().unwrap();
+    for (set, expected) in [
+        (
+            "lens.design_band_nm=[850, 750]",
+            "lens.design_band_nm = [850, 750]: expected [λ_min, λ_max] in nm, 0 < λ_min < λ_max",
+        ),
+        (
+            "lens.group_delay_range_fs=-1",
+            "lens.group_delay_range_fs = -1: expected the meta-atom library's group-delay range > 0 fs",
+        ),
+        ("lens.delay_overflow=wrap", "lens.delay_overflow = \"wrap\": expected \"reject\""),
+        (
+            "lens.aperture_diameter_mm=7",
+            "lens.aperture_diameter_mm = 7: expected a diameter > 0 mm and ≤ 2 f0 = 6.72 mm",
+        ),
+    ] {
+        let err = fails(&["evaluate", a, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+    let interleaved = with_lens(&dir, "interleaved.toml", INTERLEAVED_LENS);
+    let i = interleaved.to_str().unwrap();
+    for (set, expected) in [
+        (
+            "lens.channels_nm=[800, 750]",
+            "lens.channels_nm[1] = 750: expected 1 to 16 channel wavelengths in nm, each > 0, increasing",
+        ),
+        (
+            "lens.layout=stacked",
+            "lens.layout = \"stacked\": expected \"segmented\" (zones side by side) or \"interleaved\"",
+        ),
+        ("lens.zones=sectors", "lens.zones does not apply to lens.layout = \"interleaved\""),
+        ("lens.other_channels=background", "lens.other_channels = \"background\": expected \"signal\""),
+        ("lens.channel_efficiencies=[0.1, 0.2]", "lens.efficiency and lens.channel_efficiencies both given"),
+        ("lens.transmission=0.01", "exceeds transmission T = 0.01"),
+    ] {
+        let err = fails(&["evaluate", i, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+    let segmented = with_lens(&dir, "segmented.toml", SEGMENTED_LENS);
+    let g = segmented.to_str().unwrap();
+    for (set, expected) in [
+        (
+            "lens.area_fractions=[0.5, 0.5, 0.5]",
+            "lens.area_fractions = a list summing to 1.5: expected one area fraction per channel",
+        ),
+        ("lens.area_fractions=[0.5, 0.5]", "lens.area_fractions = a list of 2: expected one area fraction per channel"),
+        ("lens.zones=mask", "lens.zones = \"mask\": expected \"concentric\""),
+        (
+            "lens.zones=hexagons",
+            "lens.zones = \"hexagons\": expected \"concentric\" (rings, the first channel innermost) or \"sectors\" (wedges)",
+        ),
+        ("lens.other_channels=noise", "lens.other_channels = \"noise\": expected \"signal\""),
+        (
+            "lens.channels_nm=[800, 800, 850]",
+            "lens.channels_nm[1] = 800: expected 1 to 16 distinct channel wavelengths",
+        ),
+    ] {
+        let err = fails(&["evaluate", g, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+    // other channels as background: the scene builds (evaluating it is the optics engine's work)
+    let (text, _) = succeeds(&["scene", g, "--set", "lens.other_channels=background"]);
+    assert!(text.contains("\nother_channels = \"background\"\n"), "{text}");
+    let tabulated = with_lens(&dir, "tabulated.toml", TABULATED_LENS);
+    let t = tabulated.to_str().unwrap();
+    for (set, expected) in [
+        ("lens.mtf=no-such.csv", "lens.mtf = \"no-such.csv\": cannot read the MTF table"),
+        ("lens.mtf_includes_pixel_um=-5", "lens.mtf_includes_pixel_um = -5: expected the pitch > 0 µm"),
+        ("lens.glass=N-BK7", "lens.glass does not apply to lens.model = \"tabulated\""),
+    ] {
+        let err = fails(&["evaluate", t, "--set", set]);
+        assert!(err.contains(expected), "{set}: {err}");
+    }
+}
+
+/// The paper's lens as a dispersion-engineered design at 5 fs is refused, with the delay it
+/// needs and the largest aperture the library allows; "reduced" accepts it with its β.
+#[test]
+fn compare_paper_aperture_achromat_is_refused_with_the_group_delay_numbers() {
+    let dir = scratch("achromat-reject");
+    let lens = ACHROMAT_LENS.replace("aperture_diameter_mm = 0.2", "f_number = 2.5");
+    let path = with_lens(&dir, "paper-achromat.toml", &lens);
+    let err = fails(&["evaluate", path.to_str().unwrap()]);
+    for needle in [
+        "lens.group_delay_range_fs = 5: expected at least ΔT_req = 221.96 fs",
+        "allows at most D_max = 200.8 µm (F/16.74)",
+        "lens.delay_overflow = \"reduced\"",
+    ] {
+        assert!(err.contains(needle), "no `{needle}` in {err}");
+    }
+    let reduced = json(&["evaluate", path.to_str().unwrap(), "--json", "--set", "lens.delay_overflow=reduced"]);
+    assert!(reduced["asnr"].as_f64().unwrap() > 0.0);
+}
+
+/// The JSON has every design with the documented fields; the ranking is one a designer can act
+/// on: the refractive reference bounds the chromatic lens of equal aperture, and the reduced
+/// achromat is reported with its β and group delays.
+#[test]
+fn compare_json_fields_kinds_and_ranking() {
+    let v = json(&["compare", DESIGNS, "--json", "--over", SMALL_GRID]);
+    let designs = v["designs"].as_array().unwrap();
+    let kinds = [
+        "chromatic",
+        "dispersion-engineered",
+        "harmonic",
+        "multiplexed-segmented",
+        "multiplexed-interleaved",
+        "refractive",
+        "tabulated",
+    ];
+    for d in designs {
+        for key in [
+            "name",
+            "kind",
+            "asnr",
+            "mean_mtf",
+            "snr0",
+            "best_range_nm",
+            "best_asnr",
+            "photoelectrons",
+            "m0",
+            "fresnel_zones",
+            "twin_band_nm",
+            "twin_asnr",
+            "asnr_glare_free",
+            "asnr_glare_inclusive",
+            "rank",
+            "curve",
+        ] {
+            assert!(!d[key].is_null(), "{key} missing in {d}");
+        }
+        assert!(kinds.contains(&d["kind"].as_str().unwrap()), "{d}");
+        assert!(d["asnr_glare_inclusive"].as_f64().unwrap() <= d["asnr_glare_free"].as_f64().unwrap() + 1e-12);
+    }
+    let by_name = |n: &str| designs.iter().find(|d| d["name"].as_str().unwrap().starts_with(n)).unwrap();
+    let (chromatic, refractive) = (by_name("paper chromatic"), by_name("N-BK7 singlet"));
+    assert_eq!(chromatic["asnr"].as_f64().unwrap(), json(&["evaluate", "--json"])["asnr"].as_f64().unwrap());
+    assert!(refractive["asnr"].as_f64().unwrap() >= chromatic["asnr"].as_f64().unwrap());
+    assert_eq!(refractive["rank"], 1);
+    // the chromatic lens is its own twin; N_z = 84, twin band 4.762 nm
+    assert_eq!(chromatic["twin_asnr"], chromatic["asnr"]);
+    assert!((chromatic["fresnel_zones"].as_f64().unwrap() - 84.0).abs() < 1e-9);
+    let reduced = by_name("achromat F/2.5");
+    let notes = reduced["notes"].to_string();
+    assert!(notes.contains("ΔT_req = 221.96 fs > ΔT_lib = 5 fs, β = ΔT_lib/ΔT_req = 0.0225"), "{notes}");
+    let interleaved = by_name("interleaved");
+    assert_eq!(interleaved["kind"], "multiplexed-interleaved");
+    assert_eq!(interleaved["channels"].as_array().unwrap().len(), 3);
+    assert_eq!(v["ranking"][0], refractive["name"]);
+}
+
+/// The table names what was computed; CSV has one row per design; the plot is written; the
+/// embedded comparison is the example file.
+#[test]
+fn compare_table_csv_plot_and_embedded() {
+    let dir = scratch("compare-out");
+    let svg = dir.join("compare.svg");
+    let (table, _) = succeeds(&["compare", DESIGNS, "--over", SMALL_GRID, "--plot", svg.to_str().unwrap()]);
+    for needle in [
+        "At the scene band",
+        "ASNR",
+        "mean MTF",
+        "SNR0",
+        "N (e⁻)",
+        "M0",
+        "glare-incl.",
+        "twin ASNR",
+        "best range nm",
+        "N_z",
+        "λ0/(2N_z) nm",
+        "Ranking by ASNR at the scene band: 1. N-BK7 singlet",
+        "β = ΔT_lib/ΔT_req",
+    ] {
+        assert!(table.contains(needle), "no `{needle}` in\n{table}");
+    }
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("paper chromatic F/2.5") && svg.contains("ASNR"));
+    let (csv, _) = succeeds(&["compare", "--csv", "--over", SMALL_GRID]);
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("name,kind,asnr,mean_mtf,snr0,"), "{csv}");
+    let designs = std::fs::read_to_string(DESIGNS).unwrap().matches("[[designs]]").count();
+    assert_eq!(lines.len(), 1 + designs, "{csv}");
+}
+
+#[test]
+fn compare_files_and_arguments_are_checked() {
+    let dir = scratch("compare-bad");
+    // the copies live elsewhere: their table path made absolute
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/data/");
+    let text = std::fs::read_to_string(DESIGNS).unwrap().replace("\"data/", &format!("\"{data}"));
+    // one design at another focal length
+    let other = dir.join("focal.toml");
+    std::fs::write(&other, text.replacen("focal_length_mm = 3.36", "focal_length_mm = 4", 1)).unwrap();
+    let err = fails(&["compare", other.to_str().unwrap(), "--over", SMALL_GRID]);
+    assert!(
+        err.contains("a fair comparison keeps the focal length")
+            && err.contains("allow_different_focal_lengths = true"),
+        "{err}"
+    );
+    // a design's key by index, refused with its full path; an index past the end
+    let err = fails(&["compare", "--set", "designs[1].lens.f_number=0.1", "--over", SMALL_GRID]);
+    assert!(err.contains("designs[1].lens.f_number = 0.1: expected a number ≥ 0.5"), "{err}");
+    let err = fails(&["compare", "--set", "designs[9].lens.f_number=4"]);
+    assert!(err.contains("`designs[9]`: `designs` has"), "{err}");
+    let err = fails(&["compare", "--set", "designs[0].lens.design_order=2"]);
+    assert!(
+        err.contains("designs[0].lens.design_order does not apply to designs[0].lens.model = \"chromatic\""),
+        "{err}"
+    );
+    let err = fails(&["compare", "--over", "lens.f_number=1:4:3"]);
+    assert!(err.contains("compare searches the spectral range only"), "{err}");
+    let err = fails(&["compare", "--set", "lens.f_number=2"]);
+    assert!(err.contains("a [lens] table would apply to no design"), "{err}");
+    // a scene file is not a comparison, and a comparison not a scene
+    let err = fails(&["compare", PAPER]);
+    assert!(err.contains("a [lens] table would apply to no design"), "{err}");
+    let err = fails(&["evaluate", DESIGNS]);
+    assert!(err.contains("read it with asnr compare"), "{err}");
+    // a design without a name, or two with one name
+    let unnamed = dir.join("unnamed.toml");
+    std::fs::write(&unnamed, text.replacen("name = \"paper chromatic F/2.5\"", "", 1)).unwrap();
+    assert!(fails(&["compare", unnamed.to_str().unwrap()]).contains("designs[0].name is missing"));
+    let twice = dir.join("twice.toml");
+    std::fs::write(&twice, text.replacen("N-BK7 singlet F/2.5", "paper chromatic F/2.5", 1)).unwrap();
+    assert!(fails(&["compare", twice.to_str().unwrap()]).contains("expected a name no other design has"));
+}

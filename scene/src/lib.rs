@@ -28,6 +28,14 @@
 //! );
 //! ```
 //!
+//! `[lens] model` chooses the family (docs/physics.md, "Lens families"): `chromatic`,
+//! `refractive`, `dispersion-engineered`, `harmonic`, `multiplexed` (layout `segmented` or
+//! `interleaved`) or `tabulated`, each with its keys; a key of another family is refused naming
+//! the model, and `preset` fills in a named lens's keys ([`PRESETS`]). A comparison file has
+//! `[[designs]]` (each a `name` and a `lens` table) instead of `[lens]`: [`load_comparison`]
+//! builds every design in the shared scene ([`Comparison`], [`Design`]), and `--set` reaches one
+//! design by index (`designs[1].lens.f_number=4`).
+//!
 //! Plausibility warnings ([`load_with_warnings`], [`Warning`]) flag values that are valid but
 //! almost surely typed in another unit: a pixel pitch outside [`PIXEL_PITCH_PLAUSIBLE_UM`]
 //! (0.1–100 µm), a focal length outside [`FOCAL_LENGTH_PLAUSIBLE_MM`] (0.01–10⁴ mm), a
@@ -40,12 +48,18 @@
 //! keys, keys that do not apply, CSV rows that are not numbers and `--set` values with a
 //! trailing TOML comment are errors.
 
+mod compare;
 mod error;
+mod lens;
 mod load;
 mod resolved;
 mod tables;
 
+pub use compare::{
+    Comparison, DESIGNS_SCENE, Design, build_comparison, is_comparison, load_comparison, read_comparison,
+};
 pub use error::{Error, SHOWN, Warning};
+pub use lens::PRESETS;
 pub use load::{
     EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, Loaded, PAPER_SCENE, PIXEL_PITCH_PLAUSIBLE_UM, Resolved, Source,
     WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, check_overrides, load, load_with_warnings, read,

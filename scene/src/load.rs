@@ -8,15 +8,15 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
-use lenses::{ChromaticMetalens, Curve};
+use lenses::Curve;
 use metric::{Camera, MetricForm, Options, Scene};
 use radiometry::{Blackbody, Gaussian, Line, Spectrum, TopHat};
 use serde::Deserialize;
 use serde::de::{self, Visitor};
 
 use crate::error::{Error, Warning, num, quoted, shorten, shorten_quoted};
+use crate::lens::RawLens;
 use crate::tables::{FREQUENCY, WAVELENGTH, read_pairs, read_text, sampled};
 
 /// The paper's theory scene, embedded in the binary (`examples/paper-theory.toml`).
@@ -90,25 +90,6 @@ pub(crate) struct RawField {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct RawLens {
-    pub model: Option<String>,
-    pub f_number: f64,
-    pub focal_length_mm: f64,
-    pub design_wavelength_nm: f64,
-    pub efficiency: NumberOrFile,
-    pub transmission: Option<NumberOrFile>,
-    pub iris_decentre_x: Option<f64>,
-    pub iris_decentre_y: Option<f64>,
-    pub obscuration: Option<f64>,
-    pub sector_deg: Option<[f64; 2]>,
-    pub spherical_um: Option<f64>,
-    pub coma_um: Option<f64>,
-    pub astigmatism_um: Option<f64>,
-    pub field_curvature_um: Option<f64>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 pub(crate) struct RawSource {
     pub kind: String,
     pub radiance_w_m2_sr_nm: Option<f64>,
@@ -166,11 +147,52 @@ pub(crate) struct Origins {
     dir: PathBuf,
     pub overrides: BTreeMap<String, String>,
     warnings: RefCell<Vec<Warning>>,
+    /// How the lens table is named in messages: `lens`, or `designs[1].lens` in a comparison file.
+    pub lens: String,
+    /// The preset the lens table named, and the keys it supplied (not given in the table).
+    pub preset: Option<(String, Vec<String>)>,
 }
 
 impl Origins {
+    /// The origins of one design of a comparison file: the same file and overrides, the lens
+    /// table named `lens` (e.g. `designs[1].lens`), no warnings yet.
+    pub(crate) fn for_lens(&self, lens: String) -> Origins {
+        Origins {
+            file: self.file.clone(),
+            dir: self.dir.clone(),
+            overrides: self.overrides.clone(),
+            warnings: RefCell::new(Vec::new()),
+            lens,
+            preset: None,
+        }
+    }
+
+    /// The plausibility warnings collected so far (taken out).
+    pub(crate) fn take_warnings(&self) -> Vec<Warning> {
+        self.warnings.take()
+    }
+
+    /// `key` as messages name it: a `lens.…` key of a comparison's design is `designs[i].lens.…`.
+    pub(crate) fn key(&self, key: &str) -> String {
+        match key.strip_prefix("lens") {
+            Some(rest) if self.lens != "lens" && (rest.is_empty() || rest.starts_with(['.', '['])) => {
+                format!("{}{rest}", self.lens)
+            }
+            _ => key.to_owned(),
+        }
+    }
+
+    /// A context such as `[lens]` or `lens.model = "x"` with the lens table named as in [`Origins::key`].
+    fn context(&self, context: &str) -> String {
+        if self.lens == "lens" {
+            return context.to_owned();
+        }
+        context.replace("[lens]", &format!("[{}]", self.lens)).replace("lens.", &format!("{}.", self.lens))
+    }
+
     /// The origin of `key`: the `--set` that gave it (or a table above it), else the file.
-    fn of(&self, key: &str) -> String {
+    pub(crate) fn of(&self, key: &str) -> String {
+        let key = &self.key(key);
         for (k, arg) in &self.overrides {
             let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
             if key == k || below(key, k) || below(k, key) {
@@ -180,46 +202,51 @@ impl Origins {
         self.file.clone()
     }
 
-    fn bad(&self, key: &str, value: impl fmt::Display, expected: &str) -> Error {
+    pub(crate) fn bad(&self, key: &str, value: impl fmt::Display, expected: &str) -> Error {
         Error::Value {
             origin: self.of(key),
-            key: key.to_owned(),
+            key: self.key(key),
             value: value.to_string(),
             expected: expected.to_owned(),
         }
     }
 
-    fn number(&self, key: &str, value: f64, ok: bool, expected: &str) -> Result<f64, Error> {
+    pub(crate) fn number(&self, key: &str, value: f64, ok: bool, expected: &str) -> Result<f64, Error> {
         if value.is_finite() && ok { Ok(value) } else { Err(self.bad(key, num(value), expected)) }
     }
 
-    fn require<T>(&self, key: &str, value: Option<T>, expected: &str) -> Result<T, Error> {
-        value.ok_or_else(|| Error::Missing { origin: self.of(key), key: key.to_owned(), expected: expected.to_owned() })
+    pub(crate) fn require<T>(&self, key: &str, value: Option<T>, expected: &str) -> Result<T, Error> {
+        value.ok_or_else(|| Error::Missing { origin: self.of(key), key: self.key(key), expected: expected.to_owned() })
     }
 
-    fn forbid<T>(&self, key: &str, value: &Option<T>, context: &str) -> Result<(), Error> {
+    pub(crate) fn forbid<T>(&self, key: &str, value: &Option<T>, context: &str) -> Result<(), Error> {
         if value.is_some() {
             return Err(Error::NotApplicable {
                 origin: self.of(key),
-                key: key.to_owned(),
-                context: context.to_owned(),
+                key: self.key(key),
+                context: self.context(context),
             });
         }
         Ok(())
     }
 
-    fn conflict(&self, key: &str, message: String) -> Error {
-        Error::Conflict { origin: self.of(key), message }
+    pub(crate) fn conflict(&self, key: &str, message: String) -> Error {
+        Error::Conflict { origin: self.of(key), message: self.context(&message) }
     }
 
     /// A library constructor's refusal, named by the keys or table involved.
-    fn domain(&self, key: &str, context: &str, cause: impl std::error::Error + Send + Sync + 'static) -> Error {
-        let context = (!context.is_empty()).then(|| context.to_owned());
+    pub(crate) fn domain(
+        &self,
+        key: &str,
+        context: &str,
+        cause: impl std::error::Error + Send + Sync + 'static,
+    ) -> Error {
+        let context = (!context.is_empty()).then(|| self.context(context));
         Error::Domain { origin: self.of(key), context, cause: Box::new(cause) }
     }
 
-    fn warn(&self, key: &str, value: String, hint: String) {
-        self.warnings.borrow_mut().push(Warning { origin: self.of(key), key: key.to_owned(), value, hint });
+    pub(crate) fn warn(&self, key: &str, value: String, hint: String) {
+        self.warnings.borrow_mut().push(Warning { origin: self.of(key), key: self.key(key), value, hint });
     }
 
     /// A CSV path as given in the scene, resolved against the scene file's folder.
@@ -246,7 +273,7 @@ impl Origins {
                 &format!("{expected} ({write}), or the path of a CSV file (none is there)"),
             );
         }
-        Error::Table { origin: self.of(key), key: key.to_owned(), file: shorten(file), cause: Box::new(e) }
+        Error::Table { origin: self.of(key), key: self.key(key), file: shorten(file), cause: Box::new(e) }
     }
 
     /// The CSV table `file` given for `key`, values in `[0, hi]`.
@@ -277,7 +304,7 @@ impl Origins {
     }
 
     /// A fraction in `[0, 1]`, constant or tabulated.
-    fn curve(&self, key: &str, value: &NumberOrFile, what: &str) -> Result<Curve, Error> {
+    pub(crate) fn curve(&self, key: &str, value: &NumberOrFile, what: &str) -> Result<Curve, Error> {
         let expected = "a fraction in [0, 1] or a CSV path";
         Ok(match value {
             NumberOrFile::Number(v) => Curve::Constant(self.number(key, *v, (0.0..=1.0).contains(v), expected)?),
@@ -286,7 +313,7 @@ impl Origins {
     }
 
     /// Warns about a wavelength in nm outside [`WAVELENGTH_PLAUSIBLE_NM`].
-    fn wavelength(&self, key: &str, nm: f64) {
+    pub(crate) fn wavelength(&self, key: &str, nm: f64) {
         let (lo, hi) = WAVELENGTH_PLAUSIBLE_NM;
         if nm < lo || nm > hi {
             let (unit, factor) = wavelength_slip(nm);
@@ -511,15 +538,21 @@ pub fn check_overrides(file: Option<&Path>, overrides: &[String]) -> Result<(), 
             problem: format!("expected KEY=VALUE (write --set {}={})", shorten(arg.trim()), shorten(&value)),
         });
     }
-    apply_overrides(&mut toml::Table::new(), overrides).map(drop)
+    apply_overrides(&mut toml::Table::new(), overrides, true).map(drop)
 }
 
 /// Applies every override in turn; a key given twice is refused (the first would be dropped).
 /// Returns each key with the override that gave it.
-fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<BTreeMap<String, String>, Error> {
+/// With `check_only` (an empty table: the syntax alone), an indexed key (`designs[1].lens.x`) is
+/// not looked up.
+fn apply_overrides(
+    table: &mut toml::Table,
+    overrides: &[String],
+    check_only: bool,
+) -> Result<BTreeMap<String, String>, Error> {
     let mut given: BTreeMap<String, String> = BTreeMap::new();
     for arg in overrides {
-        let (key, arg) = apply_override(table, arg)?;
+        let (key, arg) = apply_override(table, arg, check_only)?;
         if let Some(first) = given.get(&key) {
             return Err(Error::Override {
                 arg: shorten(&arg),
@@ -534,26 +567,52 @@ fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<BTre
     Ok(given)
 }
 
-/// The merged TOML table of `source` with `overrides`, deserialized, and where each key came from.
-fn prepare(source: &Source, overrides: &[String]) -> Result<(RawScene, Origins), Error> {
+/// The merged TOML table of `source` with `overrides`, and where each key came from.
+pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Table, Origins), Error> {
     let (text, label, dir) = (&source.text, source.label.clone(), source.dir.clone());
-    apply_overrides(&mut toml::Table::new(), overrides)?;
+    apply_overrides(&mut toml::Table::new(), overrides, true)?;
     if text.trim().is_empty() {
         return Err(Error::Empty { origin: label });
     }
     let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| TomlFailure::new(text, &e)));
     let mut table = parsed.clone().map_err(|e| e.error(&label))?;
-    let overrides = apply_overrides(&mut table, overrides)?;
-    let origins = Origins { file: label, dir, overrides, warnings: RefCell::new(Vec::new()) };
-    let raw: RawScene = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
-        .map_err(|e| schema_error(&e, &table, &origins))?;
+    let overrides = apply_overrides(&mut table, overrides, false)?;
+    let origins = Origins {
+        file: label,
+        dir,
+        overrides,
+        warnings: RefCell::new(Vec::new()),
+        lens: "lens".to_owned(),
+        preset: None,
+    };
+    Ok((table, origins))
+}
+
+/// The merged TOML table of `source` with `overrides`, deserialized, and where each key came from.
+fn prepare(source: &Source, overrides: &[String]) -> Result<(RawScene, Origins), Error> {
+    let (table, mut origins) = merged(source, overrides)?;
+    if table.contains_key("designs") {
+        return Err(origins.conflict(
+            "designs",
+            "the file compares designs ([[designs]]): read it with asnr compare (scene::load_comparison), or give one lens as [lens]".to_owned(),
+        ));
+    }
+    let raw = raw_scene(table, &mut origins)?;
     Ok((raw, origins))
+}
+
+/// A scene's merged table (its lens's preset filled in) as the raw scene.
+pub(crate) fn raw_scene(mut table: toml::Table, origins: &mut Origins) -> Result<RawScene, Error> {
+    if let Some(toml::Value::Table(lens)) = table.get_mut("lens") {
+        origins.preset = crate::lens::apply_preset(lens, origins)?;
+    }
+    serde_path_to_error::deserialize(toml::Value::Table(table.clone())).map_err(|e| schema_error(&e, &table, origins))
 }
 
 /// A serde error (unknown key, wrong type, missing key) as a message naming origin and key; a
 /// string where a number belongs (`"800nm"`) says which number and unit to write.
 fn schema_error(e: &serde_path_to_error::Error<toml::de::Error>, table: &toml::Table, o: &Origins) -> Error {
-    let key = e.path().to_string();
+    let key = o.key(&e.path().to_string());
     // toml appends "in `key`" to its messages; the key is already named in front
     let inner = e.inner().to_string();
     let inner = inner.split("\nin `").next().unwrap_or_default().trim_end().to_owned();
@@ -602,7 +661,7 @@ fn lookup<'a>(table: &'a toml::Table, path: &serde_path_to_error::Path) -> Optio
 
 /// Applies one `--set key=value` to the TOML table. The value is read as TOML (number, boolean,
 /// quoted string), or as a bare string if it is not valid TOML (`--set spectrum.shape=tophat`).
-fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(String, String), Error> {
+fn apply_override(table: &mut toml::Table, arg: &str, check_only: bool) -> Result<(String, String), Error> {
     let refuse = |problem: String| Error::Override { arg: shorten(arg), problem };
     let Some((key, value)) = arg.split_once('=') else {
         return Err(refuse(format!(
@@ -630,65 +689,64 @@ fn apply_override(table: &mut toml::Table, arg: &str) -> Result<(String, String)
     }
     let mut cursor = table;
     for (i, part) in parts.iter().enumerate() {
-        if i + 1 == parts.len() {
-            cursor.insert((*part).to_owned(), parsed.clone());
-        } else {
-            let entry = cursor.entry((*part).to_owned()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
-            cursor = entry
-                .as_table_mut()
-                .ok_or_else(|| refuse(format!("`{}` is a value, not a table", shorten(&parts[..=i].join(".")))))?;
+        let here = parts[..=i].join(".");
+        let last = i + 1 == parts.len();
+        let (name, index) = split_index(part).ok_or_else(|| {
+            refuse(format!("`{}` is not a key or a list entry (write e.g. designs[1].lens.f_number=4)", shorten(part)))
+        })?;
+        let Some(index) = index else {
+            if last {
+                cursor.insert(name.to_owned(), parsed.clone());
+                break;
+            }
+            let entry = cursor.entry(name.to_owned()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            cursor =
+                entry.as_table_mut().ok_or_else(|| refuse(format!("`{}` is a value, not a table", shorten(&here))))?;
+            continue;
+        };
+        let Some(value) = cursor.get_mut(name) else {
+            if check_only {
+                break;
+            }
+            return Err(refuse(format!("`{}`: the scene has no list `{}` to index", shorten(&here), shorten(name))));
+        };
+        let Some(list) = value.as_array_mut() else {
+            return Err(refuse(format!(
+                "`{}` is not a list ([[{}]]), so `{}` names nothing",
+                name,
+                name,
+                shorten(&here)
+            )));
+        };
+        let len = list.len();
+        let Some(item) = list.get_mut(index) else {
+            let range = if len == 0 { "none".to_owned() } else { format!("{name}[0] to {name}[{}]", len - 1) };
+            return Err(refuse(format!("`{}`: `{name}` has {len} entries ({range})", shorten(&here))));
+        };
+        if last {
+            *item = parsed.clone();
+            break;
         }
+        cursor = item.as_table_mut().ok_or_else(|| refuse(format!("`{}` is a value, not a table", shorten(&here))))?;
     }
     Ok((key.to_owned(), arg.to_owned()))
 }
 
+/// `name` or `name[index]` of one segment of a dotted key; `None` for a malformed index.
+fn split_index(part: &str) -> Option<(&str, Option<usize>)> {
+    let Some((name, rest)) = part.split_once('[') else { return Some((part, None)) };
+    let index = rest.strip_suffix(']')?.trim().parse().ok()?;
+    (!name.is_empty()).then_some((name, Some(index)))
+}
+
 fn build(raw: &RawScene, o: &Origins) -> Result<Scene, Error> {
+    Ok(build_parts(raw, o)?.0)
+}
+
+/// The scene and what the comparison needs to know of its lens.
+pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::lens::LensInfo), Error> {
     // [lens]
-    let l = &raw.lens;
-    match l.model.as_deref().unwrap_or("chromatic") {
-        "chromatic" => {}
-        other => {
-            return Err(o.bad("lens.model", quoted(other), "\"chromatic\" (a chromatic metalens or diffractive lens)"));
-        }
-    }
-    let f_number = o.number("lens.f_number", l.f_number, l.f_number >= 0.5, "a number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
-    let f0 = o.number("lens.focal_length_mm", l.focal_length_mm, l.focal_length_mm > 0.0, "a length > 0 mm")?;
-    let (lo, hi) = FOCAL_LENGTH_PLAUSIBLE_MM;
-    if f0 < lo {
-        o.warn("lens.focal_length_mm", num(f0), format!("below {lo} mm: looks like m ({} mm?)", rounded(f0 * 1e3)));
-    } else if f0 > hi {
-        o.warn("lens.focal_length_mm", num(f0), format!("above {hi} mm: looks like µm ({} mm?)", rounded(f0 * 1e-3)));
-    }
-    let l0 = o.number(
-        "lens.design_wavelength_nm",
-        l.design_wavelength_nm,
-        l.design_wavelength_nm > 0.0,
-        "a wavelength > 0 nm",
-    )?;
-    o.wavelength("lens.design_wavelength_nm", l0);
-    let efficiency = o.curve("lens.efficiency", &l.efficiency, "efficiency")?;
-    let transmission = match &l.transmission {
-        Some(t) => o.curve("lens.transmission", t, "transmission")?,
-        None => efficiency.clone(),
-    };
-    let mut lens = ChromaticMetalens::new(f_number, f0 * 1e-3, l0 * 1e-9, efficiency, transmission)
-        .map_err(|e| o.domain("lens", "[lens]", e))?;
-    if let Some(aperture) = aperture(l, o)? {
-        lens = lens.with_aperture(aperture);
-    }
-    let seidel = |key: &str, v: Option<f64>| -> Result<f64, Error> {
-        let v = v.unwrap_or(0.0);
-        Ok(o.number(key, v, v.abs() <= 1e3, "a wavefront coefficient in µm, |W| ≤ 1000 µm")? * 1e-6)
-    };
-    let terms = [
-        seidel("lens.spherical_um", l.spherical_um)?,
-        seidel("lens.coma_um", l.coma_um)?,
-        seidel("lens.astigmatism_um", l.astigmatism_um)?,
-        seidel("lens.field_curvature_um", l.field_curvature_um)?,
-    ];
-    if terms.iter().any(|&t| t != 0.0) {
-        lens = lens.with_seidel(terms[0], terms[1], terms[2], terms[3]);
-    }
+    let crate::lens::BuiltLens { lens, info } = crate::lens::build(&raw.lens, o)?;
 
     // [source] × [spectrum]
     let radiance = source(&raw.source, o)?;
@@ -745,7 +803,7 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene, Error> {
         o.warn("exposure.time_ms", num(t), format!("above {hi} ms (2.8 h): looks like µs ({} ms?)", rounded(t * 1e-3)));
     }
     let options = options(raw.options.as_ref(), o)?;
-    let scene = Scene::new(Arc::new(lens), radiance, camera, t * 1e-3, options).map_err(|e| o.domain("", "", e))?;
+    let scene = Scene::new(lens, radiance, camera, t * 1e-3, options).map_err(|e| o.domain("", "", e))?;
     let angle = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())
@@ -776,10 +834,11 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene, Error> {
         }
         (None, None) => scene,
     };
-    Ok(match &raw.title {
+    let scene = match &raw.title {
         Some(title) => scene.with_title(title.clone()),
         None => scene,
-    })
+    };
+    Ok((scene, info))
 }
 
 /// `[options]`: [`Options::default`] with the keys given.
@@ -862,40 +921,6 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
         }
     };
     sensor.map(Some).map_err(|e| o.domain("camera", "[camera]", e))
-}
-
-/// The iris, when the scene makes it other than the centred full circle (a decentre of 0 and an
-/// obscuration of 0 are the default pupil, computed exactly as without the keys).
-fn aperture(l: &RawLens, o: &Origins) -> Result<Option<optics::fft::Aperture>, Error> {
-    let decentre = "a fraction of the aperture radius in (−1, 1)";
-    let open = |key: &str, v: Option<f64>| v.map(|v| o.number(key, v, v > -1.0 && v < 1.0, decentre)).transpose();
-    let dx = open("lens.iris_decentre_x", l.iris_decentre_x)?.unwrap_or(0.0);
-    let dy = open("lens.iris_decentre_y", l.iris_decentre_y)?.unwrap_or(0.0);
-    let obscuration = match l.obscuration {
-        Some(v) => o.number("lens.obscuration", v, (0.0..1.0).contains(&v), "a ratio of radii in [0, 1)")?,
-        None => 0.0,
-    };
-    let sector = match l.sector_deg {
-        Some([a, b]) => {
-            let key = "lens.sector_deg";
-            if !(a.is_finite() && b.is_finite() && b > a && b - a <= 360.0) {
-                return Err(o.bad(
-                    key,
-                    format!("[{}, {}]", num(a), num(b)),
-                    "[start, end] in degrees with start < end ≤ start + 360",
-                ));
-            }
-            Some((a.to_radians(), b.to_radians()))
-        }
-        None => None,
-    };
-    if dx == 0.0 && dy == 0.0 && obscuration == 0.0 && sector.is_none() {
-        return Ok(None);
-    }
-    let shape = optics::fft::Aperture::disc(obscuration, sector)
-        .map_err(|e| o.domain("lens", "lens.obscuration / lens.sector_deg", e))?;
-    let shape = shape.decentred(dx, dy).map_err(|e| o.domain("lens", "lens.iris_decentre_x / _y", e))?;
-    Ok(Some(shape))
 }
 
 fn source(s: &RawSource, o: &Origins) -> Result<Spectrum, Error> {
@@ -1041,7 +1066,7 @@ mod tests {
     #[test]
     fn resolved_examples_load_to_the_same_asnr() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
-        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml"] {
+        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml", "harmonic.toml"] {
             let source = read(Some(&root.join(name))).unwrap();
             let text = resolved_toml(&source, &[]).unwrap().toml;
             let again = Source::from_text(text.clone(), "resolved", std::env::temp_dir());

@@ -10,6 +10,7 @@ use std::fmt::Write as _;
 use metric::{GlareMode, MetricForm, Options};
 
 use crate::error::{Error, shorten};
+use crate::lens::{Model, RawLens};
 use crate::load::{NumberOrFile, Origins, RawScene};
 
 struct Out {
@@ -75,7 +76,141 @@ fn path(o: &Origins, key: &str, file: &str) -> Result<String, Error> {
 fn curve(out: &mut Out, o: &Origins, key: &str, value: &NumberOrFile) -> Result<(), Error> {
     match value {
         NumberOrFile::Number(v) => out.number(key, *v),
-        NumberOrFile::File(f) => out.string(key, &path(o, &format!("lens.{key}"), f)?),
+        NumberOrFile::File(f) => out.string(key, &path(o, &o.key(&format!("lens.{key}")), f)?),
+    }
+    Ok(())
+}
+
+fn list(values: &[f64]) -> String {
+    format!("[{}]", values.iter().map(|v| float(*v)).collect::<Vec<_>>().join(", "))
+}
+
+/// The `[lens]` table of an already validated lens: the keys of its family, defaults filled in.
+fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
+    out.table(&o.lens);
+    let model = crate::lens::model(l, o)?;
+    if let Some((name, keys)) = &o.preset {
+        out.line(&format!(
+            "# preset {}: {} from the preset, the other keys as given (they override it)",
+            toml::Value::String(name.clone()),
+            if keys.is_empty() { "nothing".to_owned() } else { keys.join(", ") }
+        ));
+    }
+    out.string("model", model.name());
+    match (l.f_number, l.aperture_diameter_mm) {
+        (_, Some(d)) => out.number("aperture_diameter_mm", d),
+        (f, None) => out.number("f_number", f.unwrap_or_default()),
+    }
+    out.number("focal_length_mm", l.focal_length_mm.unwrap_or_default());
+    let efficiency = |out: &mut Out| -> Result<(), Error> {
+        match &l.efficiency {
+            Some(e) => curve(out, o, "efficiency", e),
+            None => Ok(()),
+        }
+    };
+    let transmission = |out: &mut Out| -> Result<(), Error> {
+        match (&l.transmission, &l.efficiency) {
+            (Some(t), _) => curve(out, o, "transmission", t),
+            (None, Some(e)) => {
+                out.line("# transmission not given: the efficiency (no stray light)");
+                curve(out, o, "transmission", e)
+            }
+            (None, None) => Ok(()),
+        }
+    };
+    match model {
+        Model::Chromatic => {
+            out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
+            efficiency(out)?;
+            transmission(out)?;
+            out.number("iris_decentre_x", l.iris_decentre_x.unwrap_or(0.0));
+            out.number("iris_decentre_y", l.iris_decentre_y.unwrap_or(0.0));
+            out.number("obscuration", l.obscuration.unwrap_or(0.0));
+            match l.sector_deg {
+                Some([a, b]) => out.value("sector_deg", &list(&[a, b])),
+                None => out.line("# sector_deg not given: the full circle"),
+            }
+            for (key, v) in [
+                ("spherical_um", l.spherical_um),
+                ("coma_um", l.coma_um),
+                ("astigmatism_um", l.astigmatism_um),
+                ("field_curvature_um", l.field_curvature_um),
+            ] {
+                out.number(key, v.unwrap_or(0.0));
+            }
+        }
+        Model::Refractive => {
+            out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
+            match (&l.glass, l.refractive_index) {
+                (_, Some(n)) => out.number("refractive_index", n),
+                (Some(g), None) => out.string("glass", g),
+                (None, None) => {
+                    out.line("# glass not given: N-BK7");
+                    out.string("glass", "N-BK7");
+                }
+            }
+            out.value("elements", &l.elements.unwrap_or(1).to_string());
+            match l.coating_reflectance {
+                Some(r) => out.number("coating_reflectance", r),
+                None => out.line("# coating_reflectance not given: uncoated (Fresnel reflectance of the glass)"),
+            }
+        }
+        Model::Dispersion => {
+            let [lo, hi] = l.design_band_nm.unwrap_or_default();
+            out.value("design_band_nm", &list(&[lo, hi]));
+            out.number("group_delay_range_fs", l.group_delay_range_fs.unwrap_or_default());
+            out.string("delay_overflow", l.delay_overflow.as_deref().unwrap_or("reject"));
+            efficiency(out)?;
+            transmission(out)?;
+        }
+        Model::Harmonic => {
+            out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
+            out.value("design_order", &l.design_order.unwrap_or(1).to_string());
+            efficiency(out)?;
+            transmission(out)?;
+        }
+        Model::Multiplexed => {
+            out.string("layout", l.layout.as_deref().unwrap_or("interleaved"));
+            out.value("channels_nm", &list(l.channels_nm.as_deref().unwrap_or_default()));
+            efficiency(out)?;
+            if let Some(list) = &l.channel_efficiencies {
+                let mut items = Vec::new();
+                for (j, e) in list.iter().enumerate() {
+                    items.push(match e {
+                        NumberOrFile::Number(v) => float(*v),
+                        NumberOrFile::File(f) => {
+                            toml::Value::String(path(o, &format!("lens.channel_efficiencies[{j}]"), f)?).to_string()
+                        }
+                    });
+                }
+                out.value("channel_efficiencies", &format!("[{}]", items.join(", ")));
+            }
+            if let Some(t) = &l.transmission {
+                curve(out, o, "transmission", t)?;
+            }
+            out.string("other_channels", l.other_channels.as_deref().unwrap_or("signal"));
+            if l.layout.as_deref() == Some("segmented") {
+                out.string("zones", l.zones.as_deref().unwrap_or("concentric"));
+                match &l.area_fractions {
+                    Some(a) => out.value("area_fractions", &list(a)),
+                    None => out.line("# area_fractions not given: 1/N each"),
+                }
+            }
+        }
+        Model::Tabulated => {
+            let key = o.key("lens.mtf");
+            out.string("mtf", &path(o, &key, l.mtf.as_deref().unwrap_or_default())?);
+            match l.mtf_includes_pixel_um {
+                Some(p) => out.number("mtf_includes_pixel_um", p),
+                None => out.line("# mtf_includes_pixel_um not given: the table holds the lens MTF alone"),
+            }
+            match l.design_wavelength_nm {
+                Some(w) => out.number("design_wavelength_nm", w),
+                None => out.line("# design_wavelength_nm not given: none (the Fraunhofer check has no reference)"),
+            }
+            efficiency(out)?;
+            transmission(out)?;
+        }
     }
     Ok(())
 }
@@ -92,35 +227,7 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
         out.string("title", title);
     }
 
-    let l = &raw.lens;
-    out.table("lens");
-    out.string("model", l.model.as_deref().unwrap_or("chromatic"));
-    out.number("f_number", l.f_number);
-    out.number("focal_length_mm", l.focal_length_mm);
-    out.number("design_wavelength_nm", l.design_wavelength_nm);
-    curve(&mut out, o, "efficiency", &l.efficiency)?;
-    match &l.transmission {
-        Some(t) => curve(&mut out, o, "transmission", t)?,
-        None => {
-            out.line("# transmission not given: the efficiency (no stray light)");
-            curve(&mut out, o, "transmission", &l.efficiency)?;
-        }
-    }
-    out.number("iris_decentre_x", l.iris_decentre_x.unwrap_or(0.0));
-    out.number("iris_decentre_y", l.iris_decentre_y.unwrap_or(0.0));
-    out.number("obscuration", l.obscuration.unwrap_or(0.0));
-    match l.sector_deg {
-        Some([a, b]) => out.value("sector_deg", &format!("[{}, {}]", float(a), float(b))),
-        None => out.line("# sector_deg not given: the full circle"),
-    }
-    for (key, v) in [
-        ("spherical_um", l.spherical_um),
-        ("coma_um", l.coma_um),
-        ("astigmatism_um", l.astigmatism_um),
-        ("field_curvature_um", l.field_curvature_um),
-    ] {
-        out.number(key, v.unwrap_or(0.0));
-    }
+    lens(&mut out, o, &raw.lens)?;
 
     let s = &raw.source;
     out.table("source");

@@ -1,0 +1,613 @@
+//! `asnr compare`: lens designs side by side under one scene (a comparison file, or the embedded
+//! comparison of the families, examples/designs.toml).
+//!
+//! For each design: the ASNR at the scene's band (glare-free and glare-inclusive, paper SI
+//! eq. S9 and S14), its chromatic twin's, and the spectral range that maximizes its ASNR: the
+//! best of a log grid, refined by golden section between the grid neighbours. A multiplexed
+//! design also gets the best range of each channel, the spectrum centred at its wavelength.
+//! Every grid point is an independent evaluation, run in parallel and collected in grid order.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, anyhow, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::optimize::{Range, assignment, parse_range};
+use metric::{Evaluation, GlareMode};
+use scene::{Comparison, Source};
+
+/// The swept key: the spectral range of the shared spectrum.
+const KEY: &str = "spectrum.range_nm";
+/// The default grid of `--over`: 16 points, log-spaced from 2 to 300 nm (ratio 1.40 between
+/// neighbours; the golden section refines the best).
+const DEFAULT_GRID: (f64, f64, usize) = (2.0, 300.0, 16);
+/// The golden-section refinement stops when the bracket is this narrow in ln(range): 1 % of the
+/// range (the ASNR is flat near its maximum: 1 % of the range moves it by far less).
+const REFINE_TOLERANCE: f64 = 1e-2;
+
+/// The arguments of `asnr compare`.
+#[derive(clap::Args)]
+pub struct CompareArgs {
+    /// Comparison file (TOML with [[designs]]). Without it, the embedded comparison of the lens
+    /// families (examples/designs.toml).
+    pub scene: Option<PathBuf>,
+    /// Override a key by its dotted path: shared (spectrum.range_nm=20) or one design's
+    /// (designs[1].lens.f_number=4) (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Print one JSON object instead of the table.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Print CSV, one row per design.
+    #[arg(long)]
+    pub csv: bool,
+    /// Draw the ASNR against the spectral range, one line per design (.svg or .png).
+    #[arg(long, value_name = "FILE.svg|png")]
+    pub plot: Option<PathBuf>,
+    /// Width of the plot, pixels (default 900); the height follows.
+    #[arg(long, value_name = "PX", requires = "plot")]
+    pub width: Option<u32>,
+    /// Resolution of the plot, dots per inch (default: the width over 6 inches).
+    #[arg(long, value_name = "N", requires = "plot")]
+    pub dpi: Option<f64>,
+    /// The grid of spectral ranges searched for each design's best band, N points log-spaced
+    /// from LO to HI nm (default spectrum.range_nm=2:300:16).
+    #[arg(long, value_name = "spectrum.range_nm=LO:HI:N")]
+    pub over: Option<String>,
+    /// Worker threads (0 = all cores). The results do not depend on it.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub threads: usize,
+    /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6).
+    #[arg(long, value_name = "REL")]
+    pub tolerance: Option<f64>,
+}
+
+/// The best spectral range found for a design (or one channel of it).
+#[derive(Clone, Debug, Serialize)]
+pub struct Best {
+    /// The range, nm.
+    pub range_nm: f64,
+    /// The ASNR there.
+    pub asnr: f64,
+    /// Whether it is at an end of the grid (the maximum may lie outside it).
+    pub at_bound: bool,
+}
+
+/// One channel of a multiplexed design: the spectrum centred at its wavelength.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChannelBest {
+    /// The channel's wavelength (the spectrum's centre), nm.
+    pub wavelength_nm: f64,
+    /// The best range there.
+    pub best: Best,
+}
+
+/// One design's results.
+#[derive(Clone, Debug, Serialize)]
+pub struct DesignReport {
+    /// The design's name.
+    pub name: String,
+    /// Its family.
+    pub kind: &'static str,
+    /// The lens, described.
+    pub lens: String,
+    /// ASNR at the scene's band, with the scene's options.
+    pub asnr: f64,
+    /// Mean MTF up to Nyquist.
+    pub mean_mtf: f64,
+    /// Zero-frequency SNR.
+    pub snr0: f64,
+    /// Signal photoelectrons per pixel.
+    pub photoelectrons: f64,
+    /// `M0 = τ1/T` (SI eq. S13).
+    pub m0: f64,
+    /// Veiling glare `(1 − M0)/(1 + M0)` (SI eq. S12).
+    pub vg: f64,
+    /// ASNR with the imaging order's shot noise only (options.glare = "first_order", SI eq. S9).
+    pub asnr_glare_free: f64,
+    /// ASNR with the noise of all transmitted light (options.glare = "included", SI eq. S14).
+    pub asnr_glare_inclusive: f64,
+    /// Whether the Fraunhofer model holds at the scene band (SI eq. S15).
+    pub fraunhofer_valid: bool,
+    /// The Fresnel zones `N_z = f0/(8F#²λ0)`.
+    pub fresnel_zones: f64,
+    /// λ0 of `fresnel_zones`, nm.
+    pub design_wavelength_nm: f64,
+    /// The band a chromatic lens of this aperture keeps sharp, `λ0/(2N_z)`, nm.
+    pub twin_band_nm: f64,
+    /// The chromatic twin's ASNR at the scene band (absent when the twin detects no light).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub twin_asnr: Option<f64>,
+    /// The best spectral range, nm.
+    pub best_range_nm: f64,
+    /// The ASNR at the best range.
+    pub best_asnr: f64,
+    /// Whether the best range is at an end of the grid.
+    pub best_at_bound: bool,
+    /// Rank by ASNR at the scene band (1 = best).
+    pub rank: usize,
+    /// Rank by ASNR at each design's best band.
+    pub rank_at_best: usize,
+    /// A multiplexed design's channels, each with its best range.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<ChannelBest>,
+    /// Facts of the design.
+    pub notes: Vec<String>,
+    /// The evaluation's warnings at the scene band.
+    pub warnings: Vec<String>,
+    /// The ASNR at each grid range, `[range_nm, asnr]`.
+    pub curve: Vec<[f64; 2]>,
+}
+
+/// The whole comparison.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The file (or the embedded comparison).
+    pub scene: String,
+    /// Its title.
+    pub title: Option<String>,
+    /// The shared spectrum's centre, nm.
+    pub center_nm: f64,
+    /// The shared spectrum's range, nm (the scene band).
+    pub range_nm: f64,
+    /// How the best band was found.
+    pub method: String,
+    /// The designs, in file order.
+    pub designs: Vec<DesignReport>,
+    /// Design names by ASNR at the scene band, best first.
+    pub ranking: Vec<String>,
+    /// Design names by ASNR at their best band, best first.
+    pub ranking_at_best: Vec<String>,
+}
+
+/// A design at the scene band: its evaluation, the glare-free and glare-inclusive ASNR, and its
+/// chromatic twin's ASNR (None when the twin detects no light).
+type AtScene = (Evaluation, f64, f64, Option<f64>);
+
+/// The best range of a search and every `(range, ASNR)` evaluated, in order of range.
+type Refined = (Best, Vec<(f64, f64)>);
+
+/// N points log-spaced from `lo` to `hi` inclusive.
+fn log_axis(range: &Range) -> Vec<f64> {
+    let n = range.points.unwrap_or(2).max(1);
+    if n == 1 {
+        return vec![range.lo];
+    }
+    let (a, b) = (range.lo.ln(), range.hi.ln());
+    (0..n)
+        .map(|i| match i {
+            0 => range.lo,
+            i if i + 1 == n => range.hi,
+            i => (a + (b - a) * i as f64 / (n - 1) as f64).exp(),
+        })
+        .collect()
+}
+
+/// Runs `asnr compare`.
+pub fn run(args: CompareArgs) -> Result<()> {
+    let figure = crate::plot::Figure::new(args.width, args.dpi)?;
+    let mut set = args.set.clone();
+    if let Some(t) = args.tolerance {
+        set.push(format!("options.tolerance={t}"));
+    }
+    let range = match &args.over {
+        Some(o) => parse_range(o, true)?,
+        None => Range { key: KEY.to_owned(), lo: DEFAULT_GRID.0, hi: DEFAULT_GRID.1, points: Some(DEFAULT_GRID.2) },
+    };
+    if range.key != KEY {
+        bail!("--over {}: compare searches the spectral range only; expected --over {KEY}=LO:HI:N", range.key);
+    }
+    if range.lo <= 0.0 {
+        bail!("--over {KEY}={}:{}: expected LO > 0 nm (the grid is log-spaced)", range.lo, range.hi);
+    }
+    if range.points.is_some_and(|n| n > 10_000) {
+        bail!("--over {KEY}: {} points; expected at most 10000", range.points.unwrap_or_default());
+    }
+    crate::check_over_keys(&set, std::slice::from_ref(&range))?;
+    let max_threads = crate::max_threads();
+    if args.threads > max_threads {
+        bail!("--threads {}: expected 0 (all cores) to {max_threads} (4 × the available cores)", args.threads);
+    }
+    scene::check_overrides(args.scene.as_deref(), &set)?;
+    let source = scene::read_comparison(args.scene.as_deref())?;
+    let base = scene::build_comparison(&source, &set)?;
+    crate::warn(&base.warnings);
+    let Some((center_nm, range_nm)) = base.band_nm else {
+        bail!(
+            "{}: the shared [spectrum] has no center_nm and range_nm: compare needs a band-pass spectrum (shape \"gaussian\", \"tophat\" or \"line\") to search the best band",
+            base.label
+        );
+    };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build()?;
+    let report = pool.install(|| compute(&source, &set, &range, &base, center_nm, range_nm))?;
+    if let Some(path) = &args.plot {
+        plot(path, &figure, &base, &report)?;
+    }
+    for d in &report.designs {
+        for w in &d.warnings {
+            eprintln!("warning: {}: {w}", d.name);
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if args.csv {
+        print!("{}", csv(&report));
+    } else {
+        print!("{}", table(&report));
+    }
+    Ok(())
+}
+
+/// Evaluates a scene, the error naming the design.
+fn evaluate(name: &str, scene: &metric::Scene) -> Result<Evaluation> {
+    metric::evaluate(scene).map_err(|e| anyhow!("design \"{name}\": {e}"))
+}
+
+/// The ASNR of design `index` with the extra overrides `extra`.
+fn asnr_with(source: &Source, set: &[String], extra: &[String], index: usize) -> Result<f64> {
+    let mut all = set.to_vec();
+    all.extend_from_slice(extra);
+    let comparison = scene::build_comparison(source, &all)?;
+    let design = &comparison.designs[index];
+    Ok(evaluate(&design.name, &design.scene)?.asnr)
+}
+
+/// One search of the best range: the design, the channel's centre (None: the scene's).
+#[derive(Clone, Copy)]
+struct Search {
+    design: usize,
+    centre_nm: Option<f64>,
+}
+
+impl Search {
+    fn overrides(&self, range_nm: f64) -> Vec<String> {
+        let mut extra = vec![assignment(KEY, range_nm)];
+        if let Some(c) = self.centre_nm {
+            extra.push(assignment("spectrum.center_nm", c));
+        }
+        extra
+    }
+}
+
+fn compute(
+    source: &Source,
+    set: &[String],
+    range: &Range,
+    base: &Comparison,
+    center_nm: f64,
+    range_nm: f64,
+) -> Result<Report> {
+    let grid = log_axis(range);
+    let mut searches: Vec<Search> = (0..base.designs.len()).map(|design| Search { design, centre_nm: None }).collect();
+    for (design, d) in base.designs.iter().enumerate() {
+        searches.extend(d.channels_nm.iter().map(|&c| Search { design, centre_nm: Some(c) }));
+    }
+    let tasks: Vec<(usize, usize)> = (0..searches.len()).flat_map(|s| (0..grid.len()).map(move |k| (s, k))).collect();
+    let total = tasks.len() + 3 * base.designs.len();
+    let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} evaluations, eta {eta}")
+            .map_err(|e| anyhow!("progress bar template: {e}"))?
+            .progress_chars("=> "),
+    );
+    // the scene band: the scene's options, glare-free and glare-inclusive, and the twin
+    let at_scene: Vec<Result<AtScene>> = base
+        .designs
+        .par_iter()
+        .map(|d| {
+            let r = evaluate(&d.name, &d.scene)?;
+            let other = match r.glare_mode {
+                GlareMode::FirstOrder => GlareMode::Included,
+                GlareMode::Included => GlareMode::FirstOrder,
+            };
+            let options = metric::Options { glare: other, ..d.scene.options().clone() };
+            let scene = d.scene.clone().with_options(options).map_err(|e| anyhow!("design \"{}\": {e}", d.name))?;
+            let o = evaluate(&d.name, &scene)?.asnr;
+            let (free, inclusive) = if r.glare_mode == GlareMode::FirstOrder { (r.asnr, o) } else { (o, r.asnr) };
+            let twin = metric::evaluate(&d.twin).ok().map(|t| t.asnr);
+            bar.inc(3);
+            Ok((r, free, inclusive, twin))
+        })
+        .collect();
+    let values: Vec<Result<f64>> = tasks
+        .par_iter()
+        .map(|&(s, k)| {
+            let search = searches[s];
+            let v = asnr_with(source, set, &search.overrides(grid[k]), search.design)
+                .with_context(|| format!("at {KEY}={}", grid[k]));
+            bar.inc(1);
+            v
+        })
+        .collect();
+    bar.finish_and_clear();
+    let values: Vec<f64> = values.into_iter().collect::<Result<_>>()?;
+    let curves: Vec<Vec<(f64, f64)>> = (0..searches.len())
+        .map(|s| grid.iter().copied().zip(values[s * grid.len()..][..grid.len()].iter().copied()).collect())
+        .collect();
+    let bests: Vec<Result<Refined>> = searches
+        .par_iter()
+        .zip(curves.par_iter())
+        .map(|(search, curve)| refine(curve, |x| asnr_with(source, set, &search.overrides(x), search.design)))
+        .collect();
+    let bests: Vec<Refined> = bests.into_iter().collect::<Result<_>>()?;
+
+    let mut designs = Vec::new();
+    for (i, (d, scene_result)) in base.designs.iter().zip(at_scene).enumerate() {
+        let (r, free, inclusive, twin) = scene_result?;
+        let (best, curve) = &bests[i];
+        let channels = searches
+            .iter()
+            .zip(&bests)
+            .filter(|(s, _)| s.design == i && s.centre_nm.is_some())
+            .map(|(s, (b, _))| ChannelBest { wavelength_nm: s.centre_nm.unwrap_or_default(), best: b.clone() })
+            .collect();
+        designs.push(DesignReport {
+            name: d.name.clone(),
+            kind: d.kind,
+            lens: d.scene.lens().describe(),
+            asnr: r.asnr,
+            mean_mtf: r.mean_mtf,
+            snr0: r.snr0,
+            photoelectrons: r.photoelectrons,
+            m0: r.glare.m0,
+            vg: r.glare.vg,
+            asnr_glare_free: free,
+            asnr_glare_inclusive: inclusive,
+            fraunhofer_valid: r.fraunhofer.valid,
+            fresnel_zones: d.fresnel_zones,
+            design_wavelength_nm: d.design_wavelength_nm,
+            twin_band_nm: d.twin_band_nm,
+            twin_asnr: twin,
+            best_range_nm: best.range_nm,
+            best_asnr: best.asnr,
+            best_at_bound: best.at_bound,
+            rank: 0,
+            rank_at_best: 0,
+            channels,
+            notes: d.notes.clone(),
+            warnings: r.warnings.clone(),
+            curve: curve.iter().map(|&(x, y)| [x, y]).collect(),
+        });
+    }
+    let order = |key: &dyn Fn(&DesignReport) -> f64| -> Vec<usize> {
+        let mut idx: Vec<usize> = (0..designs.len()).collect();
+        idx.sort_by(|&a, &b| key(&designs[b]).total_cmp(&key(&designs[a])));
+        idx
+    };
+    let ranking = order(&|d| d.asnr);
+    let ranking_at_best = order(&|d| d.best_asnr);
+    for (place, &i) in ranking.iter().enumerate() {
+        designs[i].rank = place + 1;
+    }
+    for (place, &i) in ranking_at_best.iter().enumerate() {
+        designs[i].rank_at_best = place + 1;
+    }
+    let names = |idx: &[usize]| idx.iter().map(|&i| designs[i].name.clone()).collect::<Vec<_>>();
+    let (ranking, ranking_at_best) = (names(&ranking), names(&ranking_at_best));
+    Ok(Report {
+        scene: base.label.clone(),
+        title: base.title.clone(),
+        center_nm,
+        range_nm,
+        method: format!(
+            "best of a {}-point log grid of {KEY} from {} to {} nm, refined by golden section between its neighbours (to {} of the range)",
+            grid.len(),
+            range.lo,
+            range.hi,
+            REFINE_TOLERANCE
+        ),
+        designs,
+        ranking,
+        ranking_at_best,
+    })
+}
+
+/// The best range of a sampled curve: its largest sample, refined by golden section (in log
+/// range) between its two neighbours; the curve returned with the points evaluated, in order.
+fn refine(curve: &[(f64, f64)], mut f: impl FnMut(f64) -> Result<f64>) -> Result<Refined> {
+    let j = (0..curve.len()).max_by(|&a, &b| curve[a].1.total_cmp(&curve[b].1)).context("an empty grid")?;
+    let mut points = curve.to_vec();
+    let mut best = curve[j];
+    if j > 0 && j + 1 < curve.len() {
+        let (mut a, mut b) = (curve[j - 1].0.ln(), curve[j + 1].0.ln());
+        let ratio = (5f64.sqrt() - 1.0) / 2.0;
+        let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
+        let (mut fc, mut fd) = (f(c.exp())?, f(d.exp())?);
+        points.push((c.exp(), fc));
+        points.push((d.exp(), fd));
+        while b - a > REFINE_TOLERANCE {
+            if fc >= fd {
+                (b, d, fd) = (d, c, fc);
+                c = b - ratio * (b - a);
+                fc = f(c.exp())?;
+                points.push((c.exp(), fc));
+            } else {
+                (a, c, fc) = (c, d, fd);
+                d = a + ratio * (b - a);
+                fd = f(d.exp())?;
+                points.push((d.exp(), fd));
+            }
+        }
+        for &(x, y) in &points {
+            if y > best.1 {
+                best = (x, y);
+            }
+        }
+    }
+    points.sort_by(|p, q| p.0.total_cmp(&q.0));
+    points.dedup_by(|p, q| p.0 == q.0);
+    let at_bound = j == 0 || j + 1 == curve.len();
+    Ok((Best { range_nm: best.0, asnr: best.1, at_bound }, points))
+}
+
+/// A number to `digits` significant digits, without exponent for ordinary magnitudes.
+fn sig(v: f64, digits: usize) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let magnitude = v.abs().log10().floor() as i32;
+    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// The human-readable report.
+pub fn table(r: &Report) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "comparison {}", r.scene);
+    if let Some(t) = &r.title {
+        let _ = writeln!(s, "title      {t}");
+    }
+    let _ = writeln!(
+        s,
+        "scene band spectrum centred at {} nm, range {} nm ({KEY})",
+        crate::plot::number(r.center_nm),
+        crate::plot::number(r.range_nm)
+    );
+    let _ = writeln!(s, "best band  {}", r.method);
+    let w = r.designs.iter().map(|d| d.name.chars().count()).max().unwrap_or(6).max(6);
+    let k = r.designs.iter().map(|d| d.kind.len()).max().unwrap_or(4).max(4);
+    let _ = writeln!(
+        s,
+        "\nAt the scene band (ASNR = SNR0 × mean MTF up to Nyquist; glare-incl.: SNR0 with the noise of all transmitted light, SI eq. S14)"
+    );
+    let _ = writeln!(
+        s,
+        "  #  {:w$}  {:k$}  {:>8}  {:>8}  {:>7}  {:>8}  {:>6}  {:>11}  {:>9}",
+        "design", "kind", "ASNR", "mean MTF", "SNR0", "N (e⁻)", "M0", "glare-incl.", "twin ASNR"
+    );
+    for d in &r.designs {
+        let _ = writeln!(
+            s,
+            "  {:>1}  {:w$}  {:k$}  {:>8}  {:>8.5}  {:>7.3}  {:>8}  {:>6.4}  {:>11}  {:>9}",
+            d.rank,
+            d.name,
+            d.kind,
+            format!("{:.4}", d.asnr),
+            d.mean_mtf,
+            d.snr0,
+            sig(d.photoelectrons, 4),
+            d.m0,
+            format!("{:.4}", d.asnr_glare_inclusive),
+            d.twin_asnr.map_or("no light".to_owned(), |t| format!("{t:.4}")),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nBest band and aperture (N_z = f0/(8F#²λ0) Fresnel zones; a chromatic lens of this aperture keeps λ0/(2N_z) sharp)"
+    );
+    let _ = writeln!(
+        s,
+        "  #  {:w$}  {:>13}  {:>10}  {:>9}  {:>12}",
+        "design", "best range nm", "ASNR there", "N_z", "λ0/(2N_z) nm"
+    );
+    for d in &r.designs {
+        let _ = writeln!(
+            s,
+            "  {:>1}  {:w$}  {:>13}  {:>10.4}  {:>9}  {:>12}",
+            d.rank_at_best,
+            d.name,
+            format!("{}{}", sig(d.best_range_nm, 4), if d.best_at_bound { " *" } else { "" }),
+            d.best_asnr,
+            sig(d.fresnel_zones, 4),
+            sig(d.twin_band_nm, 4),
+        );
+    }
+    if r.designs.iter().any(|d| d.best_at_bound) {
+        let _ = writeln!(s, "  * at an end of the grid: the maximum may lie outside it (widen --over)");
+    }
+    let channels: Vec<&DesignReport> = r.designs.iter().filter(|d| !d.channels.is_empty()).collect();
+    if !channels.is_empty() {
+        let _ = writeln!(s, "\nChannels (the spectrum centred at each channel's wavelength, its range searched)");
+        for d in channels {
+            let each: Vec<String> = d
+                .channels
+                .iter()
+                .map(|c| {
+                    format!(
+                        "{} nm: best range {} nm, ASNR {:.4}{}",
+                        crate::plot::number(c.wavelength_nm),
+                        sig(c.best.range_nm, 4),
+                        c.best.asnr,
+                        if c.best.at_bound { " *" } else { "" }
+                    )
+                })
+                .collect();
+            let _ = writeln!(s, "  {}: {}", d.name, each.join("; "));
+        }
+    }
+    let _ = writeln!(s, "\nRanking by ASNR at the scene band: {}", numbered(&r.ranking));
+    if r.ranking_at_best != r.ranking {
+        let _ = writeln!(s, "At each design's best band the ranking differs: {}", numbered(&r.ranking_at_best));
+    } else {
+        let _ = writeln!(s, "At each design's best band the ranking is the same.");
+    }
+    let noted: Vec<&DesignReport> = r.designs.iter().filter(|d| !d.notes.is_empty()).collect();
+    if !noted.is_empty() {
+        let _ = writeln!(s, "\nNotes");
+        for d in noted {
+            let _ = writeln!(s, "  {}: {}", d.name, d.notes.join("; "));
+        }
+    }
+    s
+}
+
+fn numbered(names: &[String]) -> String {
+    names.iter().enumerate().map(|(i, n)| format!("{}. {n}", i + 1)).collect::<Vec<_>>().join(", ")
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
+fn field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_owned() }
+}
+
+/// CSV, one row per design.
+pub fn csv(r: &Report) -> String {
+    let mut s = String::from(
+        "name,kind,asnr,mean_mtf,snr0,photoelectrons,m0,asnr_glare_free,asnr_glare_inclusive,twin_asnr,fresnel_zones,twin_band_nm,best_range_nm,best_asnr,rank,rank_at_best,notes\n",
+    );
+    for d in &r.designs {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            field(&d.name),
+            d.kind,
+            d.asnr,
+            d.mean_mtf,
+            d.snr0,
+            d.photoelectrons,
+            d.m0,
+            d.asnr_glare_free,
+            d.asnr_glare_inclusive,
+            d.twin_asnr.map_or(String::new(), |t| t.to_string()),
+            d.fresnel_zones,
+            d.twin_band_nm,
+            d.best_range_nm,
+            d.best_asnr,
+            d.rank,
+            d.rank_at_best,
+            field(&d.notes.join(" | "))
+        );
+    }
+    s
+}
+
+/// ASNR against the spectral range, one line per design, the best points marked.
+fn plot(path: &std::path::Path, figure: &crate::plot::Figure, base: &Comparison, r: &Report) -> Result<()> {
+    let series: Vec<crate::plot::Series> = r
+        .designs
+        .iter()
+        .map(|d| crate::plot::Series {
+            label: d.name.clone(),
+            points: d.curve.iter().map(|p| (p[0], p[1])).collect(),
+            shaded: Vec::new(),
+        })
+        .collect();
+    let x = crate::plot::axis_label(KEY);
+    let title = base.title.clone().unwrap_or_default();
+    let labels = crate::plot::Labels { title: &title, x: &x, y: "ASNR", x_unit: "nm", ..Default::default() };
+    let mark = crate::plot::Mark { x: r.range_nm, label: Some(format!("scene band, {} nm", sig(r.range_nm, 4))) };
+    crate::plot::lines_plot("--plot", path, figure, &labels, &series, &[mark], true)
+}

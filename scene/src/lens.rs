@@ -1,0 +1,777 @@
+//! The `[lens]` table: one builder per lens family (docs/physics.md, "Lens families").
+//!
+//! `model` chooses the family; every key of the table is checked against it, so a key of
+//! another family is refused naming the model (`lens.design_order does not apply to
+//! lens.model = "chromatic"`). A `preset` fills in the keys the table does not give.
+
+use std::sync::Arc;
+
+use lenses::{
+    Channel, ChromaticMetalens, Curve, DelayOverflow, DispersionEngineered, Glass, Harmonic, Interleaved, Refractive,
+    Sellmeier, Surfaces, max_diameter, required_group_delay,
+};
+use optics::LensModel;
+use serde::Deserialize;
+
+use crate::error::{Error, num, quoted};
+use crate::load::{NumberOrFile, Origins};
+
+/// The models a scene file accepts, as messages list them.
+pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\" or \"multiplexed\" (layout \"interleaved\")";
+
+/// The lens presets, by the names of `lenses::preset_names`: a name and the `[lens]` keys it
+/// stands for (keys given beside `preset` override them). Each is the lens of `lenses::preset`
+/// of that name (the publications and the values chosen are documented there); a test checks
+/// that both build the same lens.
+pub const PRESETS: [(&str, &str); 6] = [
+    (
+        "paper-chromatic",
+        "model = \"chromatic\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800.0\n\
+         efficiency = 0.15\ntransmission = 0.55\n",
+    ),
+    (
+        "chen2019",
+        "model = \"dispersion-engineered\"\naperture_diameter_mm = 0.0264\nfocal_length_mm = 0.0646665292094759\n\
+         design_band_nm = [460.0, 700.0]\ngroup_delay_range_fs = 4.5\nefficiency = 0.2\ntransmission = 0.9\n",
+    ),
+    (
+        "wang2018",
+        "model = \"dispersion-engineered\"\naperture_diameter_mm = 0.05\nfocal_length_mm = 0.235\n\
+         design_band_nm = [400.0, 660.0]\ngroup_delay_range_fs = 4.5\nefficiency = 0.4\ntransmission = 0.9\n",
+    ),
+    (
+        "ndao2020",
+        "model = \"dispersion-engineered\"\naperture_diameter_mm = 0.01\nfocal_length_mm = 0.041365578819969516\n\
+         design_band_nm = [640.0, 1200.0]\ngroup_delay_range_fs = 0.97\ndelay_overflow = \"reject\"\n\
+         efficiency = 0.5599999999999999\ntransmission = 0.8\n",
+    ),
+    (
+        "ndao2020-reduced",
+        "model = \"dispersion-engineered\"\naperture_diameter_mm = 0.01\nfocal_length_mm = 0.041365578819969516\n\
+         design_band_nm = [640.0, 1200.0]\ngroup_delay_range_fs = 0.97\ndelay_overflow = \"reduced\"\n\
+         efficiency = 0.5599999999999999\ntransmission = 0.8\n",
+    ),
+    (
+        "n-bk7-singlet",
+        "model = \"refractive\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800.0\n\
+         glass = \"N-BK7\"\nelements = 1\n",
+    ),
+];
+
+/// The glasses `lens.glass` names.
+const GLASSES: &str = "\"N-BK7\" (Schott, Sellmeier 300–2500 nm)";
+
+#[derive(Deserialize, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawLens {
+    pub model: Option<String>,
+    /// Read from the table by [`apply_preset`] before deserializing; here to be a known key.
+    #[serde(rename = "preset")]
+    pub _preset: Option<toml::Value>,
+    pub f_number: Option<f64>,
+    pub aperture_diameter_mm: Option<f64>,
+    pub focal_length_mm: Option<f64>,
+    pub design_wavelength_nm: Option<f64>,
+    pub design_band_nm: Option<[f64; 2]>,
+    pub group_delay_range_fs: Option<f64>,
+    pub delay_overflow: Option<String>,
+    pub design_order: Option<u32>,
+    pub channels_nm: Option<Vec<f64>>,
+    pub layout: Option<String>,
+    pub zones: Option<String>,
+    pub zone_mask: Option<String>,
+    pub area_fractions: Option<Vec<f64>>,
+    pub other_channels: Option<String>,
+    pub glass: Option<String>,
+    pub refractive_index: Option<f64>,
+    pub elements: Option<u32>,
+    pub coating_reflectance: Option<f64>,
+    pub efficiency: Option<NumberOrFile>,
+    pub transmission: Option<NumberOrFile>,
+    pub channel_efficiencies: Option<Vec<NumberOrFile>>,
+    pub mtf: Option<String>,
+    pub mtf_includes_pixel_um: Option<f64>,
+    pub iris_decentre_x: Option<f64>,
+    pub iris_decentre_y: Option<f64>,
+    pub obscuration: Option<f64>,
+    pub sector_deg: Option<[f64; 2]>,
+    pub spherical_um: Option<f64>,
+    pub coma_um: Option<f64>,
+    pub astigmatism_um: Option<f64>,
+    pub field_curvature_um: Option<f64>,
+}
+
+/// A lens family of the scene format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Model {
+    Chromatic,
+    Refractive,
+    Dispersion,
+    Harmonic,
+    Multiplexed,
+    Tabulated,
+}
+
+impl Model {
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Model::Chromatic => "chromatic",
+            Model::Refractive => "refractive",
+            Model::Dispersion => "dispersion-engineered",
+            Model::Harmonic => "harmonic",
+            Model::Multiplexed => "multiplexed",
+            Model::Tabulated => "tabulated",
+        }
+    }
+
+    /// Whether the family has the key (the keys every family has are not listed).
+    fn has(self, key: &str) -> bool {
+        let keys: &[&str] = match self {
+            Model::Chromatic => &[
+                "design_wavelength_nm",
+                "efficiency",
+                "transmission",
+                "iris_decentre_x",
+                "iris_decentre_y",
+                "obscuration",
+                "sector_deg",
+                "spherical_um",
+                "coma_um",
+                "astigmatism_um",
+                "field_curvature_um",
+            ],
+            Model::Refractive => {
+                &["design_wavelength_nm", "glass", "refractive_index", "elements", "coating_reflectance"]
+            }
+            Model::Dispersion => {
+                &["design_band_nm", "group_delay_range_fs", "delay_overflow", "efficiency", "transmission"]
+            }
+            Model::Harmonic => &["design_wavelength_nm", "design_order", "efficiency", "transmission"],
+            Model::Multiplexed => &[
+                "channels_nm",
+                "layout",
+                "zones",
+                "zone_mask",
+                "area_fractions",
+                "other_channels",
+                "efficiency",
+                "channel_efficiencies",
+                "transmission",
+            ],
+            Model::Tabulated => &["mtf", "mtf_includes_pixel_um", "design_wavelength_nm", "efficiency", "transmission"],
+        };
+        keys.contains(&key)
+    }
+}
+
+impl RawLens {
+    /// Every family-specific key and whether the table gives it.
+    fn given(&self) -> [(&'static str, bool); 30] {
+        [
+            ("design_wavelength_nm", self.design_wavelength_nm.is_some()),
+            ("design_band_nm", self.design_band_nm.is_some()),
+            ("group_delay_range_fs", self.group_delay_range_fs.is_some()),
+            ("delay_overflow", self.delay_overflow.is_some()),
+            ("design_order", self.design_order.is_some()),
+            ("channels_nm", self.channels_nm.is_some()),
+            ("layout", self.layout.is_some()),
+            ("zones", self.zones.is_some()),
+            ("zone_mask", self.zone_mask.is_some()),
+            ("area_fractions", self.area_fractions.is_some()),
+            ("other_channels", self.other_channels.is_some()),
+            ("glass", self.glass.is_some()),
+            ("refractive_index", self.refractive_index.is_some()),
+            ("elements", self.elements.is_some()),
+            ("coating_reflectance", self.coating_reflectance.is_some()),
+            ("efficiency", self.efficiency.is_some()),
+            ("transmission", self.transmission.is_some()),
+            ("channel_efficiencies", self.channel_efficiencies.is_some()),
+            ("mtf", self.mtf.is_some()),
+            ("mtf_includes_pixel_um", self.mtf_includes_pixel_um.is_some()),
+            ("iris_decentre_x", self.iris_decentre_x.is_some()),
+            ("iris_decentre_y", self.iris_decentre_y.is_some()),
+            ("obscuration", self.obscuration.is_some()),
+            ("sector_deg", self.sector_deg.is_some()),
+            ("spherical_um", self.spherical_um.is_some()),
+            ("coma_um", self.coma_um.is_some()),
+            ("astigmatism_um", self.astigmatism_um.is_some()),
+            ("field_curvature_um", self.field_curvature_um.is_some()),
+            ("f_number", self.f_number.is_some()),
+            ("aperture_diameter_mm", self.aperture_diameter_mm.is_some()),
+        ]
+    }
+}
+
+/// The model a lens table names (default chromatic), or the error listing the accepted ones.
+pub(crate) fn model(l: &RawLens, o: &Origins) -> Result<Model, Error> {
+    Ok(match l.model.as_deref().unwrap_or("chromatic") {
+        "chromatic" => Model::Chromatic,
+        "refractive" => Model::Refractive,
+        "dispersion-engineered" => Model::Dispersion,
+        "harmonic" => Model::Harmonic,
+        "multiplexed" => Model::Multiplexed,
+        "tabulated" => Model::Tabulated,
+        other => return Err(o.bad("lens.model", quoted(other), MODELS)),
+    })
+}
+
+/// Fills the keys a `preset` stands for into the lens table `lens` (keys given stay); returns
+/// the preset's name and the keys it supplied.
+pub(crate) fn apply_preset(lens: &mut toml::Table, o: &Origins) -> Result<Option<(String, Vec<String>)>, Error> {
+    let Some(value) = lens.get("preset").cloned() else { return Ok(None) };
+    let names: Vec<String> = PRESETS.iter().map(|(n, _)| quoted(n)).collect();
+    let expected = format!("the name of a preset: {}", names.join(", "));
+    let Some(name) = value.as_str() else { return Err(o.bad("lens.preset", &value, &expected)) };
+    let Some((_, text)) = PRESETS.iter().find(|(n, _)| *n == name) else {
+        return Err(o.bad("lens.preset", quoted(name), &expected));
+    };
+    let preset: toml::Table = toml::from_str(text).unwrap_or_default();
+    if let (Some(given), Some(own)) = (lens.get("model").and_then(|m| m.as_str()), preset.get("model"))
+        && Some(given) != own.as_str()
+    {
+        return Err(o.conflict(
+            "lens.model",
+            format!(
+                "lens.preset = {} is a {} lens, but lens.model = {}: give the model of the preset, or no preset",
+                quoted(name),
+                own,
+                quoted(given)
+            ),
+        ));
+    }
+    let mut supplied = Vec::new();
+    for (k, v) in preset {
+        // a preset's aperture yields to the other aperture key given in the table
+        let other = match k.as_str() {
+            "f_number" => "aperture_diameter_mm",
+            "aperture_diameter_mm" => "f_number",
+            _ => "",
+        };
+        if !lens.contains_key(&k) && !lens.contains_key(other) {
+            supplied.push(k.clone());
+            lens.insert(k, v);
+        }
+    }
+    Ok(Some((name.to_owned(), supplied)))
+}
+
+/// What a comparison reports of a lens besides its [`LensModel`].
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LensInfo {
+    /// The family, as `Design::kind` names it.
+    pub kind: &'static str,
+    /// Its design wavelength (a dispersion-engineered lens: the band's centre), m.
+    pub design_wavelength_m: Option<f64>,
+    /// A multiplexed lens's channel wavelengths, m.
+    pub channels_m: Vec<f64>,
+    /// Facts of the design a reader needs (group delay, β, glass, efficiency per channel).
+    pub notes: Vec<String>,
+}
+
+/// A lens built from its table.
+pub(crate) struct BuiltLens {
+    pub lens: Arc<dyn LensModel>,
+    pub info: LensInfo,
+}
+
+/// Builds the lens of a `[lens]` table (every key validated against its family).
+pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
+    let model = model(l, o)?;
+    let context = format!("lens.model = {}", quoted(model.name()));
+    for (key, given) in l.given() {
+        if given && !matches!(key, "f_number" | "aperture_diameter_mm") && !model.has(key) {
+            return Err(Error::NotApplicable {
+                origin: o.of(&format!("lens.{key}")),
+                key: o.key(&format!("lens.{key}")),
+                context: o.key(&context),
+            });
+        }
+    }
+    let f0 = o.require("lens.focal_length_mm", l.focal_length_mm, "a length > 0 mm")?;
+    let f0 = o.number("lens.focal_length_mm", f0, f0 > 0.0, "a length > 0 mm")?;
+    let (lo, hi) = crate::FOCAL_LENGTH_PLAUSIBLE_MM;
+    if f0 < lo {
+        o.warn("lens.focal_length_mm", num(f0), format!("below {lo} mm: looks like m ({} mm?)", rounded(f0 * 1e3)));
+    } else if f0 > hi {
+        o.warn("lens.focal_length_mm", num(f0), format!("above {hi} mm: looks like µm ({} mm?)", rounded(f0 * 1e-3)));
+    }
+    let f_number = f_number(l, o, f0)?;
+    let f0_m = f0 * 1e-3;
+    let efficiency = |o: &Origins| -> Result<Curve, Error> {
+        let e = o.require("lens.efficiency", l.efficiency.as_ref(), "a fraction in [0, 1] or a CSV path")?;
+        o.curve("lens.efficiency", e, "efficiency")
+    };
+    let transmission = |o: &Origins, efficiency: &Curve| -> Result<Curve, Error> {
+        match &l.transmission {
+            Some(t) => o.curve("lens.transmission", t, "transmission"),
+            None => Ok(efficiency.clone()),
+        }
+    };
+    let design_wavelength = |o: &Origins| -> Result<f64, Error> {
+        let key = "lens.design_wavelength_nm";
+        let v = o.require(key, l.design_wavelength_nm, "a wavelength > 0 nm")?;
+        let v = o.number(key, v, v > 0.0, "a wavelength > 0 nm")?;
+        o.wavelength(key, v);
+        Ok(v * 1e-9)
+    };
+    let mut info = LensInfo { kind: model.name(), ..LensInfo::default() };
+    let lens: Arc<dyn LensModel> = match model {
+        Model::Chromatic => {
+            let l0 = design_wavelength(o)?;
+            let efficiency = efficiency(o)?;
+            let transmission = transmission(o, &efficiency)?;
+            let mut lens = ChromaticMetalens::new(f_number, f0_m, l0, efficiency, transmission)
+                .map_err(|e| o.domain("lens", "[lens]", e))?;
+            if let Some(aperture) = aperture(l, o)? {
+                lens = lens.with_aperture(aperture);
+            }
+            let seidel = |key: &str, v: Option<f64>| -> Result<f64, Error> {
+                let v = v.unwrap_or(0.0);
+                Ok(o.number(key, v, v.abs() <= 1e3, "a wavefront coefficient in µm, |W| ≤ 1000 µm")? * 1e-6)
+            };
+            let terms = [
+                seidel("lens.spherical_um", l.spherical_um)?,
+                seidel("lens.coma_um", l.coma_um)?,
+                seidel("lens.astigmatism_um", l.astigmatism_um)?,
+                seidel("lens.field_curvature_um", l.field_curvature_um)?,
+            ];
+            if terms.iter().any(|&t| t != 0.0) {
+                lens = lens.with_seidel(terms[0], terms[1], terms[2], terms[3]);
+            }
+            info.design_wavelength_m = Some(l0);
+            Arc::new(lens)
+        }
+        Model::Refractive => {
+            let l0 = design_wavelength(o)?;
+            let glass = match (&l.glass, l.refractive_index) {
+                (Some(_), Some(_)) => {
+                    return Err(o.conflict(
+                        "lens.refractive_index",
+                        "lens.glass and lens.refractive_index both given: give one (a named glass, or a constant index without dispersion)".to_owned(),
+                    ));
+                }
+                (None, Some(n)) => {
+                    Glass::Constant(o.number("lens.refractive_index", n, n >= 1.0, "a refractive index ≥ 1")?)
+                }
+                (glass, None) => match glass.as_deref().unwrap_or("N-BK7") {
+                    "N-BK7" => {
+                        let (lo, hi) = Sellmeier::N_BK7.range();
+                        if !(l0 >= lo && l0 <= hi) {
+                            return Err(o.bad(
+                                "lens.design_wavelength_nm",
+                                num(l0 * 1e9),
+                                "a wavelength in 300–2500 nm (where the N-BK7 Sellmeier formula holds)",
+                            ));
+                        }
+                        Glass::Sellmeier(Sellmeier::N_BK7)
+                    }
+                    other => return Err(o.bad("lens.glass", quoted(other), GLASSES)),
+                },
+            };
+            let elements = l.elements.unwrap_or(1);
+            if !(1..=100).contains(&elements) {
+                return Err(o.bad("lens.elements", elements, "a whole number of thin elements from 1 to 100"));
+            }
+            let surfaces = match l.coating_reflectance {
+                Some(r) => Surfaces::Coated(o.number(
+                    "lens.coating_reflectance",
+                    r,
+                    (0.0..1.0).contains(&r),
+                    "a reflectance per surface in [0, 1)",
+                )?),
+                None => Surfaces::Uncoated,
+            };
+            let lens = Refractive::new(f_number, f0_m, l0, glass, elements, surfaces)
+                .map_err(|e| o.domain("lens", "[lens]", e))?;
+            let n0 = lens.index(l0).unwrap_or(1.0);
+            info.notes.push(format!(
+                "n(λ0) = {:.4}, τ = T = {:.4} at λ0 ({} element{}, {})",
+                n0,
+                lens.transmission(l0),
+                elements,
+                if elements == 1 { "" } else { "s" },
+                match surfaces {
+                    Surfaces::Uncoated => "uncoated".to_owned(),
+                    Surfaces::Coated(r) => format!("coated, R = {} per surface", num(r)),
+                }
+            ));
+            info.design_wavelength_m = Some(l0);
+            Arc::new(lens)
+        }
+        Model::Dispersion => {
+            let key = "lens.design_band_nm";
+            let [lo, hi] = o.require(key, l.design_band_nm, "[λ_min, λ_max] in nm, 0 < λ_min < λ_max")?;
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
+                return Err(o.bad(
+                    key,
+                    format!("[{}, {}]", num(lo), num(hi)),
+                    "[λ_min, λ_max] in nm, 0 < λ_min < λ_max",
+                ));
+            }
+            o.wavelength(key, lo);
+            let key = "lens.group_delay_range_fs";
+            let expected = "the meta-atom library's group-delay range > 0 fs";
+            let delay = o.require(key, l.group_delay_range_fs, expected)?;
+            let delay = o.number(key, delay, delay > 0.0, expected)?;
+            let overflow = match l.delay_overflow.as_deref().unwrap_or("reject") {
+                "reject" => DelayOverflow::Reject,
+                "reduced" => DelayOverflow::Reduced,
+                other => {
+                    return Err(o.bad(
+                        "lens.delay_overflow",
+                        quoted(other),
+                        "\"reject\" (refuse an aperture the library cannot make achromatic) or \"reduced\" (accept it partly chromatic)",
+                    ));
+                }
+            };
+            let efficiency = efficiency(o)?;
+            let transmission = transmission(o, &efficiency)?;
+            let required = required_group_delay(f0_m, f0_m / f_number);
+            if overflow == DelayOverflow::Reject && required > delay * 1e-15 {
+                let d_max = max_diameter(f0_m, delay * 1e-15);
+                return Err(o.bad(
+                    "lens.group_delay_range_fs",
+                    num(delay),
+                    &format!(
+                        "at least ΔT_req = {:.2} fs, the group delay the aperture D = {} mm (F/{}) needs at f0 = {} mm; \
+                         this library (ΔT_lib = {} fs) allows at most D_max = {:.1} µm (F/{:.2}): \
+                         give a smaller aperture, a library of larger range, or lens.delay_overflow = \"reduced\"",
+                        required * 1e15,
+                        rounded(f0 / f_number),
+                        rounded(f_number),
+                        num(f0),
+                        num(delay),
+                        d_max * 1e6,
+                        f0_m / d_max
+                    ),
+                ));
+            }
+            let lens = DispersionEngineered::new(
+                f_number,
+                f0_m,
+                (lo * 1e-9, hi * 1e-9),
+                delay * 1e-15,
+                efficiency,
+                transmission,
+                overflow,
+            )
+            .map_err(|e| o.domain("lens", "[lens]", e))?;
+            let beta = lens.true_delay_fraction();
+            info.notes.push(if beta < 1.0 {
+                format!(
+                    "reduced achromatism: ΔT_req = {:.2} fs > ΔT_lib = {} fs, β = ΔT_lib/ΔT_req = {:.4} (D_max = {:.1} µm)",
+                    required * 1e15,
+                    num(delay),
+                    beta,
+                    max_diameter(f0_m, delay * 1e-15) * 1e6
+                )
+            } else {
+                format!("true achromat: ΔT_req = {:.2} fs ≤ ΔT_lib = {} fs, β = 1", required * 1e15, num(delay))
+            });
+            info.design_wavelength_m = Some(0.5 * (lo + hi) * 1e-9);
+            Arc::new(lens)
+        }
+        Model::Harmonic => {
+            let l0 = design_wavelength(o)?;
+            let key = "lens.design_order";
+            let p = o.require(key, l.design_order, "a whole number from 1 to 1000 (the phase wraps at 2πp)")?;
+            if !(1..=1000).contains(&p) {
+                return Err(o.bad(key, p, "a whole number from 1 to 1000 (the phase wraps at 2πp)"));
+            }
+            let key = "lens.efficiency";
+            let expected =
+                "a fraction in [0, 1]: the peak efficiency τ_base of the design order (a harmonic lens takes no table)";
+            let base = match o.require(key, l.efficiency.as_ref(), expected)? {
+                NumberOrFile::Number(v) => o.number(key, *v, (0.0..=1.0).contains(v), expected)?,
+                NumberOrFile::File(f) => return Err(o.bad(key, quoted(f), expected)),
+            };
+            let transmission = transmission(o, &Curve::Constant(base))?;
+            let lens =
+                Harmonic::new(f_number, f0_m, l0, p, base, transmission).map_err(|e| o.domain("lens", "[lens]", e))?;
+            info.notes.push(format!("design order p = {p}: orders m with |m − p λ0/λ| ≤ 3"));
+            info.design_wavelength_m = Some(l0);
+            Arc::new(lens)
+        }
+        Model::Multiplexed => {
+            let key = "lens.layout";
+            let layouts = "\"segmented\" (zones side by side) or \"interleaved\" (meta-atoms interleaved)";
+            let segmented = match o.require(key, l.layout.as_deref(), layouts)? {
+                "interleaved" => false,
+                "segmented" => true,
+                other => return Err(o.bad(key, quoted(other), layouts)),
+            };
+            let other_channels = match l.other_channels.as_deref().unwrap_or("signal") {
+                "signal" => lenses::OtherChannels::Signal,
+                "background" if segmented => lenses::OtherChannels::Background,
+                other => {
+                    let expected = if segmented {
+                        "\"signal\" (every zone's light is signal, with its defocus) or \"background\" (a zone's light is signal only in its channel's band)"
+                    } else {
+                        "\"signal\" (an interleaved lens's other channels form a defocused image over the full aperture: signal with its defocus in the OTF, docs/physics.md)"
+                    };
+                    return Err(o.bad("lens.other_channels", quoted(other), expected));
+                }
+            };
+            let layout = if segmented {
+                let zones = "\"concentric\" (rings, the first channel innermost) or \"sectors\" (wedges)";
+                let layout = match l.zones.as_deref().unwrap_or("concentric") {
+                    "concentric" => lenses::Layout::Concentric,
+                    "sectors" => lenses::Layout::Sectors,
+                    "mask" => {
+                        return Err(o.bad(
+                            "lens.zones",
+                            quoted("mask"),
+                            &format!("{zones} (zone-mask files are not read by scene files yet)"),
+                        ));
+                    }
+                    other => return Err(o.bad("lens.zones", quoted(other), zones)),
+                };
+                o.forbid("lens.zone_mask", &l.zone_mask, "lens.zones other than \"mask\"")?;
+                Some(layout)
+            } else {
+                let ctx = "lens.layout = \"interleaved\"";
+                o.forbid("lens.zones", &l.zones, ctx)?;
+                o.forbid("lens.zone_mask", &l.zone_mask, ctx)?;
+                o.forbid("lens.area_fractions", &l.area_fractions, ctx)?;
+                None
+            };
+            let key = "lens.channels_nm";
+            let expected = "1 to 16 channel wavelengths in nm, each > 0, increasing";
+            let channels = o.require(key, l.channels_nm.as_ref(), expected)?;
+            if channels.is_empty() || channels.len() > 16 {
+                return Err(o.bad(key, format!("a list of {}", channels.len()), expected));
+            }
+            let mut prev = 0.0;
+            for (j, &c) in channels.iter().enumerate() {
+                // a segmented lens's channels are in its zones' order; an interleaved lens's increase
+                let ok = if segmented { c > 0.0 && !channels[..j].contains(&c) } else { c > prev };
+                let expected = if segmented {
+                    "1 to 16 distinct channel wavelengths in nm, each > 0, in the zones' order"
+                } else {
+                    expected
+                };
+                o.number(&format!("{key}[{j}]"), c, ok, expected)?;
+                o.wavelength(&format!("{key}[{j}]"), c);
+                prev = c;
+            }
+            let etas: Vec<Curve> = match (&l.efficiency, &l.channel_efficiencies) {
+                (Some(_), Some(_)) => {
+                    return Err(o.conflict(
+                        "lens.channel_efficiencies",
+                        "lens.efficiency and lens.channel_efficiencies both given: give one (the same η for every channel, or one per channel)".to_owned(),
+                    ));
+                }
+                (Some(e), None) => {
+                    let eta = o.curve("lens.efficiency", e, "efficiency")?;
+                    vec![eta; channels.len()]
+                }
+                (None, Some(list)) => {
+                    if list.len() != channels.len() {
+                        return Err(o.bad(
+                            "lens.channel_efficiencies",
+                            format!("a list of {}", list.len()),
+                            &format!("one efficiency per channel: {} (as lens.channels_nm)", channels.len()),
+                        ));
+                    }
+                    list.iter()
+                        .enumerate()
+                        .map(|(j, e)| o.curve(&format!("lens.channel_efficiencies[{j}]"), e, "efficiency"))
+                        .collect::<Result<_, _>>()?
+                }
+                (None, None) => {
+                    return Err(o.require::<()>(
+                        "lens.efficiency",
+                        None,
+                        "each channel's efficiency η as if it filled the aperture: a fraction in [0, 1] or a CSV path (or lens.channel_efficiencies, one per channel)",
+                    ).unwrap_err());
+                }
+            };
+            let key = "lens.transmission";
+            let expected = "the total transmission T into all channels and orders: a fraction in [0, 1] or a CSV path";
+            let t = o.require(key, l.transmission.as_ref(), expected)?;
+            let transmission = o.curve(key, t, "transmission")?;
+            let n = channels.len();
+            let list: Vec<Channel> =
+                channels.iter().zip(etas).map(|(c, e)| Channel { wavelength_m: c * 1e-9, efficiency: e }).collect();
+            info.channels_m = channels.iter().map(|c| c * 1e-9).collect();
+            let (lo, hi) = channels.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), &c| (a.min(c), b.max(c)));
+            info.design_wavelength_m = Some(0.5 * (lo + hi) * 1e-9);
+            if let Some(layout) = layout {
+                let areas = match &l.area_fractions {
+                    None => None,
+                    Some(a) => {
+                        let key = "lens.area_fractions";
+                        let expected = "one area fraction per channel, each > 0, summing to at most 1";
+                        if a.len() != n {
+                            return Err(o.bad(key, format!("a list of {}", a.len()), expected));
+                        }
+                        for (j, &v) in a.iter().enumerate() {
+                            o.number(&format!("{key}[{j}]"), v, v > 0.0 && v <= 1.0, expected)?;
+                        }
+                        let sum: f64 = a.iter().sum();
+                        if sum > 1.0 + 1e-12 {
+                            return Err(o.bad(key, format!("a list summing to {}", num(sum)), expected));
+                        }
+                        Some(a.clone())
+                    }
+                };
+                let lens = lenses::Segmented::new(f_number, f0_m, list, layout, areas, transmission)
+                    .map_err(|e| o.domain("lens", "[lens]", e))?
+                    .with_other_channels(other_channels);
+                info.kind = "multiplexed-segmented";
+                let fractions: Vec<String> = lens.area_fractions().iter().map(|a| format!("{a:.4}")).collect();
+                info.notes.push(format!(
+                    "{n} {} zones, area fractions {}, τ_j = a_j η_j; other channels' light: {}",
+                    l.zones.as_deref().unwrap_or("concentric"),
+                    fractions.join(", "),
+                    l.other_channels.as_deref().unwrap_or("signal")
+                ));
+                Arc::new(lens)
+            } else {
+                let lens =
+                    Interleaved::new(f_number, f0_m, list, transmission).map_err(|e| o.domain("lens", "[lens]", e))?;
+                info.kind = "multiplexed-interleaved";
+                info.notes.push(format!("{n} interleaved channels, each τ_j = η_j/N² = η_j/{}", n * n));
+                Arc::new(lens)
+            }
+        }
+        Model::Tabulated => {
+            let key = "lens.mtf";
+            let expected = "the path of an MTF table: a CSV (wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]) or a Zemax FFT MTF text export";
+            let file = o.require(key, l.mtf.as_ref(), expected)?;
+            let path = o.path(file);
+            let bytes = std::fs::read(&path).map_err(|cause| Error::Table {
+                origin: o.of(key),
+                key: o.key(key),
+                file: crate::error::shorten(file),
+                cause: Box::new(Error::Read { what: "MTF table", path: path.display().to_string(), cause }),
+            })?;
+            let ctx = format!("lens.mtf = {}", quoted(file));
+            let csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+            let table = if csv {
+                let text = lenses::decode_text(&bytes).map_err(|e| o.domain(key, &ctx, e))?;
+                lenses::parse_mtf_csv(&text)
+            } else {
+                lenses::parse_zemax_fft_mtf(&bytes)
+                    .and_then(|listing| lenses::zemax_otf_table(&[listing], lenses::FieldChoice::OnAxis))
+            }
+            .map_err(|e| o.domain(key, &ctx, e))?;
+            let efficiency = efficiency(o)?;
+            let transmission = transmission(o, &efficiency)?;
+            let pixel = match l.mtf_includes_pixel_um {
+                Some(p) => Some(
+                    o.number(
+                        "lens.mtf_includes_pixel_um",
+                        p,
+                        p > 0.0,
+                        "the pitch > 0 µm of the pixel whose MTF the table contains (divided out)",
+                    )? * 1e-6,
+                ),
+                None => None,
+            };
+            let mut lens = lenses::Tabulated::new(f_number, f0_m, table, efficiency, transmission, pixel)
+                .map_err(|e| o.domain("lens", "[lens]", e))?;
+            if l.design_wavelength_nm.is_some() {
+                let l0 = design_wavelength(o)?;
+                lens = lens.with_design_wavelength(l0).map_err(|e| o.domain("lens", "[lens]", e))?;
+                info.design_wavelength_m = Some(l0);
+            }
+            info.notes.push(format!("OTF table from {}", crate::error::shorten(file)));
+            Arc::new(lens)
+        }
+    };
+    Ok(BuiltLens { lens, info })
+}
+
+/// The working F-number from `lens.f_number` or `lens.aperture_diameter_mm` (exactly one).
+fn f_number(l: &RawLens, o: &Origins, f0_mm: f64) -> Result<f64, Error> {
+    let expected = "a number ≥ 0.5 (NA = 1/(2F#) ≤ 1)";
+    match (l.f_number, l.aperture_diameter_mm) {
+        (Some(_), Some(_)) => Err(o.conflict(
+            "lens.aperture_diameter_mm",
+            "lens.f_number and lens.aperture_diameter_mm both given: give one (F# = f0/D)".to_owned(),
+        )),
+        (None, None) => Err(o
+            .require::<()>("lens.f_number", None, &format!("{expected}, or lens.aperture_diameter_mm (F# = f0/D)"))
+            .unwrap_err()),
+        (Some(f), None) => o.number("lens.f_number", f, f >= 0.5, expected),
+        (None, Some(d)) => {
+            let key = "lens.aperture_diameter_mm";
+            let ok = d > 0.0 && f0_mm / d >= 0.5;
+            let expected = format!("a diameter > 0 mm and ≤ 2 f0 = {} mm (F# = f0/D ≥ 0.5)", num(2.0 * f0_mm));
+            o.number(key, d, ok, &expected)?;
+            Ok(f0_mm / d)
+        }
+    }
+}
+
+/// `v` to 6 significant digits.
+fn rounded(v: f64) -> String {
+    num(format!("{v:.5e}").parse::<f64>().unwrap_or(v))
+}
+
+/// The iris, when the scene makes it other than the centred full circle (a decentre of 0 and an
+/// obscuration of 0 are the default pupil, computed exactly as without the keys).
+fn aperture(l: &RawLens, o: &Origins) -> Result<Option<optics::fft::Aperture>, Error> {
+    let decentre = "a fraction of the aperture radius in (−1, 1)";
+    let open = |key: &str, v: Option<f64>| v.map(|v| o.number(key, v, v > -1.0 && v < 1.0, decentre)).transpose();
+    let dx = open("lens.iris_decentre_x", l.iris_decentre_x)?.unwrap_or(0.0);
+    let dy = open("lens.iris_decentre_y", l.iris_decentre_y)?.unwrap_or(0.0);
+    let obscuration = match l.obscuration {
+        Some(v) => o.number("lens.obscuration", v, (0.0..1.0).contains(&v), "a ratio of radii in [0, 1)")?,
+        None => 0.0,
+    };
+    let sector = match l.sector_deg {
+        Some([a, b]) => {
+            let key = "lens.sector_deg";
+            if !(a.is_finite() && b.is_finite() && b > a && b - a <= 360.0) {
+                return Err(o.bad(
+                    key,
+                    format!("[{}, {}]", num(a), num(b)),
+                    "[start, end] in degrees with start < end ≤ start + 360",
+                ));
+            }
+            Some((a.to_radians(), b.to_radians()))
+        }
+        None => None,
+    };
+    if dx == 0.0 && dy == 0.0 && obscuration == 0.0 && sector.is_none() {
+        return Ok(None);
+    }
+    let shape = optics::fft::Aperture::disc(obscuration, sector)
+        .map_err(|e| o.domain("lens", "lens.obscuration / lens.sector_deg", e))?;
+    let shape = shape.decentred(dx, dy).map_err(|e| o.domain("lens", "lens.iris_decentre_x / _y", e))?;
+    Ok(Some(shape))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every preset's keys build the lens `lenses::preset` builds of that name (ndao2020: τ = 0.7 × 0.8,
+    /// written as the f64 it is) (same description
+    /// and transfer at three wavelengths), or are refused as it is.
+    #[test]
+    fn presets_are_the_lenses_presets() {
+        assert_eq!(PRESETS.iter().map(|(n, _)| *n).collect::<Vec<_>>(), lenses::preset_names());
+        for (name, _) in PRESETS {
+            let text = crate::PAPER_SCENE.replace(
+                &crate::PAPER_SCENE
+                    [crate::PAPER_SCENE.find("[lens]").unwrap()..crate::PAPER_SCENE.find("[source]").unwrap()],
+                &format!("[lens]\npreset = \"{name}\"\n\n"),
+            );
+            let source = crate::Source::from_text(text, "p", ".");
+            match (crate::build_from(&source, &[]), lenses::preset(name)) {
+                (Ok(scene), Ok(lens)) => {
+                    assert_eq!(scene.lens().describe(), lens.describe(), "{name}");
+                    for l in [500e-9, 700e-9, 900e-9] {
+                        assert_eq!(scene.lens().efficiency(l), lens.efficiency(l), "{name}");
+                        assert_eq!(scene.lens().transmission(l), lens.transmission(l), "{name}");
+                    }
+                }
+                (Err(e), Err(_)) => assert!(e.to_string().contains("ΔT_req"), "{name}: {e}"),
+                (a, b) => panic!("{name}: {:?} against {:?}", a.err().map(|e| e.to_string()), b.err()),
+            }
+        }
+    }
+}
