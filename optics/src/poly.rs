@@ -509,9 +509,14 @@ impl<'a> Polychromatic<'a> {
             loop {
                 let h = (b - a) / n as f64;
                 let mut worst: f64 = 0.0;
-                let mut prev = phase_defocus(lens, a, field);
+                // the interval's ends are read just inside it: a lens may jump at its own
+                // breakpoints (the band edges of a multiplexed lens whose other channels are
+                // background), which are the interval's ends, and a jump there is no turn of
+                // the phase inside (the quadrature nodes never reach the ends)
+                let inside = 1e-9 * (b - a);
+                let mut prev = phase_defocus(lens, a + inside, field);
                 for k in 1..=n {
-                    let x = a + h * k as f64;
+                    let x = if k == n { b - inside } else { a + h * k as f64 };
                     let cur = phase_defocus(lens, x, field);
                     let mid = phase_defocus(lens, x - 0.5 * h, field);
                     // per order (docs/physics.md, "Spectral quadrature": the OTF turns with the

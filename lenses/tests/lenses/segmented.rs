@@ -165,3 +165,33 @@ fn segmented_lens_does_not_beat_the_chromatic_lens_over_a_broad_band() {
     let bg = seg.clone().with_other_channels(OtherChannels::Background);
     check_lens(&bg, &band(800.0, 4.0)).unwrap();
 }
+
+/// With the other channels as background the lens jumps from one lit zone to the next at each
+/// band edge (its breakpoints): the spectral panels stop there instead of refining towards the
+/// jump (which took 3.5 million panels before the interval ends were read from inside), and at
+/// one wavelength inside a band the lens is that channel's zone alone.
+#[test]
+fn background_channels_evaluate_in_few_panels() {
+    let lens = Segmented::new(
+        F_NUMBER,
+        F0,
+        constant(&[750e-9, 800e-9, 850e-9], 0.15),
+        Layout::Sectors,
+        None,
+        Curve::Constant(0.55),
+    )
+    .unwrap()
+    .with_other_channels(OtherChannels::Background);
+    let detected = band(800.0, 50.0);
+    let settings = optics::Settings { pupil_samples: 64, ..optics::Settings::default() };
+    let poly = optics::Polychromatic::with_settings(&lens, &detected, Field::ON_AXIS, 96.15e3, None, settings).unwrap();
+    let (mean, work) = poly.mean_mtf();
+    assert!(work.spectral_panels < 64, "{work:?}");
+    assert!(mean > 0.0 && mean < 1.0, "{mean}");
+    // inside the 800 nm band only the middle zone is lit: a third of the aperture, η = 0.15
+    let orders = lens.orders(790e-9, Field::ON_AXIS);
+    let optics::Pupil::Zones(zones) = &orders[0].pupil else { panic!("{:?}", orders[0].pupil) };
+    let lit: Vec<usize> = (0..zones.len()).filter(|&j| zones[j].amplitude > 0.0).collect();
+    assert_eq!(lit, [1]);
+    assert!((orders[0].efficiency - 0.05).abs() < 1e-15, "{}", orders[0].efficiency);
+}
