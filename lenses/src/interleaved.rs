@@ -15,6 +15,24 @@ pub struct Channel {
     pub efficiency: Curve,
 }
 
+/// The samples of the channels' efficiency curves and of the transmission, with `extra` (band
+/// edges), sorted and deduplicated: the breakpoints of a multiplexed lens.
+pub(crate) fn channel_breakpoints(
+    channels: &[Channel],
+    transmission: &Curve,
+    extra: impl IntoIterator<Item = f64>,
+) -> Vec<f64> {
+    let mut b: Vec<f64> = channels
+        .iter()
+        .flat_map(|c| c.efficiency.breakpoints().iter().copied())
+        .chain(transmission.breakpoints().iter().copied())
+        .chain(extra)
+        .collect();
+    b.sort_by(f64::total_cmp);
+    b.dedup();
+    b
+}
+
 /// A spatially multiplexed metalens of N interleaved channels: channel `j` is a chromatic lens
 /// wave designed to focus λ_j at `f0` across the full aperture, its meta-atoms interleaved with
 /// the other channels' (docs/physics.md, "Lens families").
@@ -120,15 +138,7 @@ impl LensModel for Interleaved {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        let mut b: Vec<f64> = self
-            .channels
-            .iter()
-            .flat_map(|c| c.efficiency.breakpoints().iter().copied())
-            .chain(self.transmission.breakpoints().iter().copied())
-            .collect();
-        b.sort_by(f64::total_cmp);
-        b.dedup();
-        b
+        channel_breakpoints(&self.channels, &self.transmission, [])
     }
 
     fn describe(&self) -> String {

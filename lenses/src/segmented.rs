@@ -390,18 +390,12 @@ impl LensModel for Segmented {
 
     /// The curves' samples, and with [`OtherChannels::Background`] the band edges.
     fn breakpoints(&self) -> Vec<f64> {
-        let mut b: Vec<f64> = self
-            .channels
-            .iter()
-            .flat_map(|c| c.efficiency.breakpoints().iter().copied())
-            .chain(self.transmission.breakpoints().iter().copied())
-            .collect();
-        if self.other_channels == OtherChannels::Background {
-            b.extend(self.bands.iter().flat_map(|&(lo, hi)| [lo, hi]).filter(|l| l.is_finite() && *l > 0.0));
-        }
-        b.sort_by(f64::total_cmp);
-        b.dedup();
-        b
+        let edges: Vec<f64> = if self.other_channels == OtherChannels::Background {
+            self.bands.iter().flat_map(|&(lo, hi)| [lo, hi]).filter(|l| l.is_finite() && *l > 0.0).collect()
+        } else {
+            Vec::new()
+        };
+        crate::interleaved::channel_breakpoints(&self.channels, &self.transmission, edges)
     }
 
     fn describe(&self) -> String {
