@@ -1295,11 +1295,12 @@ fn compare_lens_keys_are_refused_with_their_message() {
             "lens.area_fractions = a list summing to 1.5: expected one area fraction per channel",
         ),
         ("lens.area_fractions=[0.5, 0.5]", "lens.area_fractions = a list of 2: expected one area fraction per channel"),
-        ("lens.zones=mask", "lens.zones = \"mask\": expected \"concentric\""),
+        ("lens.zones=mask", "lens.zone_mask is missing: expected the path of a zone-mask file"),
         (
             "lens.zones=hexagons",
-            "lens.zones = \"hexagons\": expected \"concentric\" (rings, the first channel innermost) or \"sectors\" (wedges)",
+            "lens.zones = \"hexagons\": expected \"concentric\" (rings, the first channel innermost), \"sectors\" (wedges) or \"mask\"",
         ),
+        ("lens.zone_mask=zones.txt", "lens.zone_mask does not apply to lens.zones other than \"mask\""),
         ("lens.other_channels=noise", "lens.other_channels = \"noise\": expected \"signal\""),
         (
             "lens.channels_nm=[800, 800, 850]",
@@ -1309,9 +1310,34 @@ fn compare_lens_keys_are_refused_with_their_message() {
         let err = fails(&["evaluate", g, "--set", set]);
         assert!(err.contains(expected), "{set}: {err}");
     }
-    // other channels as background: the scene builds (evaluating it is the optics engine's work)
+    // other channels as background: the scene builds and evaluates in few spectral panels
     let (text, _) = succeeds(&["scene", g, "--set", "lens.other_channels=background"]);
     assert!(text.contains("\nother_channels = \"background\"\n"), "{text}");
+    succeeds(&["evaluate", g, "--set", "lens.other_channels=background", "--set", "options.pupil_samples=64"]);
+    // a zone mask: a square grid of zone numbers over the aperture, checked cell by cell
+    let masked = SEGMENTED_LENS.replace("zones = \"concentric\"", "zones = \"mask\"\nzone_mask = \"zones.txt\"");
+    let masked = with_lens(&dir, "masked.toml", &masked.replace("area_fractions = [0.5, 0.25, 0.25]\n", ""));
+    let m = masked.to_str().unwrap();
+    let zones = |text: &str| std::fs::write(dir.join("zones.txt"), text).unwrap();
+    // left half 800 nm, right half 750 nm, a square core 850 nm
+    zones("# a 4 × 4 map over the aperture's square\n1 1 2 2\n1 3 3 2\n1 3 3 2\n1 1 2 2\n");
+    let (json, _) = succeeds(&["evaluate", m, "--json", "--set", "options.pupil_samples=64"]);
+    assert!(json.contains("\"asnr\""), "{json}");
+    let (text, _) = succeeds(&["scene", m]);
+    assert!(text.contains("zones = \"mask\"") && text.contains("zones.txt\""), "{text}");
+    let err = fails(&["evaluate", m, "--set", "lens.area_fractions=[0.5, 0.25, 0.25]"]);
+    assert!(err.contains("lens.area_fractions does not apply to lens.zones = \"mask\""), "{err}");
+    for (text, expected) in [
+        ("# one row\n1 2 3\n", "1 grid rows: expected a square grid of 2 to 4096 rows"),
+        ("1 1 2\n1 3 2\n", "line 1: 3 cells: expected 2, as many as the grid has rows"),
+        ("1 1 2\n1 3\n1 3 2\n", "line 2: 2 cells: expected 3, as many as the grid has rows"),
+        ("1 4\n2 3\n", "cell 4: expected a zone number 1 to 3"),
+        ("1 1\n2 2\n", "the grid's largest zone number is 2 for 3 channels"),
+    ] {
+        zones(text);
+        let err = fails(&["evaluate", m]);
+        assert!(err.contains(expected), "{text}: {err}");
+    }
     let tabulated = with_lens(&dir, "tabulated.toml", TABULATED_LENS);
     let t = tabulated.to_str().unwrap();
     for (set, expected) in [

@@ -513,20 +513,17 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                 }
             };
             let layout = if segmented {
-                let zones = "\"concentric\" (rings, the first channel innermost) or \"sectors\" (wedges)";
+                let zones = "\"concentric\" (rings, the first channel innermost), \"sectors\" (wedges) or \"mask\" (a zone map in lens.zone_mask)";
+                // the mask is read once the channels are known (its zone numbers refer to them)
                 let layout = match l.zones.as_deref().unwrap_or("concentric") {
-                    "concentric" => lenses::Layout::Concentric,
-                    "sectors" => lenses::Layout::Sectors,
-                    "mask" => {
-                        return Err(o.bad(
-                            "lens.zones",
-                            quoted("mask"),
-                            &format!("{zones} (zone-mask files are not read by scene files yet)"),
-                        ));
-                    }
+                    "concentric" => Some(lenses::Layout::Concentric),
+                    "sectors" => Some(lenses::Layout::Sectors),
+                    "mask" => None,
                     other => return Err(o.bad("lens.zones", quoted(other), zones)),
                 };
-                o.forbid("lens.zone_mask", &l.zone_mask, "lens.zones other than \"mask\"")?;
+                if layout.is_some() {
+                    o.forbid("lens.zone_mask", &l.zone_mask, "lens.zones other than \"mask\"")?;
+                }
                 Some(layout)
             } else {
                 let ctx = "lens.layout = \"interleaved\"";
@@ -597,6 +594,32 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             let (lo, hi) = channels.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), &c| (a.min(c), b.max(c)));
             info.design_wavelength_m = Some(0.5 * (lo + hi) * 1e-9);
             if let Some(layout) = layout {
+                let layout = match layout {
+                    Some(layout) => layout,
+                    None => {
+                        let key = "lens.zone_mask";
+                        let expected = "the path of a zone-mask file: a square grid of zone numbers 1 to N (the channels of lens.channels_nm) or 0 for opaque over the aperture's bounding square, first row at the top";
+                        let file = o.require(key, l.zone_mask.as_deref(), expected)?;
+                        let grid = crate::tables::read_zone_grid(&o.path(file), n)
+                            .map_err(|e| o.table_error(key, file, e, expected))?;
+                        if grid.zones() < n {
+                            return Err(o.bad(
+                                key,
+                                quoted(file),
+                                &format!(
+                                    "a zone for every channel: the grid's largest zone number is {} for {n} channels",
+                                    grid.zones()
+                                ),
+                            ));
+                        }
+                        o.forbid(
+                            "lens.area_fractions",
+                            &l.area_fractions,
+                            "lens.zones = \"mask\" (the areas are measured from the map)",
+                        )?;
+                        lenses::Layout::Mask(Arc::new(move |x, y| grid.at(x, y)))
+                    }
+                };
                 let areas = match &l.area_fractions {
                     None => None,
                     Some(a) => {

@@ -257,7 +257,7 @@ impl Origins {
 
     /// `e` from reading the table `file` of `key`, in the key's context; a string that is a
     /// number with a unit or a quoted number (`"15%"`, `"0.15"`) and no such file is named as such.
-    fn table_error(&self, key: &str, file: &str, e: Error, expected: &str) -> Error {
+    pub(crate) fn table_error(&self, key: &str, file: &str, e: Error, expected: &str) -> Error {
         if let Error::Read { cause, .. } = &e
             && cause.kind() == std::io::ErrorKind::NotFound
             && let Some(n) = number_prefix(file)

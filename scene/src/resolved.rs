@@ -191,6 +191,9 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             out.string("other_channels", l.other_channels.as_deref().unwrap_or("signal"));
             if l.layout.as_deref() == Some("segmented") {
                 out.string("zones", l.zones.as_deref().unwrap_or("concentric"));
+                if let Some(file) = &l.zone_mask {
+                    out.string("zone_mask", &path(o, "lens.zone_mask", file)?);
+                }
                 match &l.area_fractions {
                     Some(a) => out.value("area_fractions", &list(a)),
                     None => out.line("# area_fractions not given: 1/N each"),

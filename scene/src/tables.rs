@@ -274,3 +274,121 @@ mod tests {
         assert!(e.len() < 400 && e.contains("bytes)"), "{} bytes: {}", e.len(), &e[..e.len().min(400)]);
     }
 }
+
+/// A segmented lens's zone map read from a text file: a square grid of zone numbers over the
+/// full aperture's bounding square `[−1, 1]²` (docs/physics.md, "Lens families": segmented).
+///
+/// Format: one grid row per line, the first line at the top (`y = +1`), columns from `x = −1` to
+/// `+1`; cells separated by spaces, tabs or commas; `1` … `N` is the zone of channel `k` (in the
+/// order of `channels_nm`), `0` or `.` is opaque; `#` starts a comment line, blank lines are
+/// skipped. Every row has as many cells as there are rows (at least 2, at most 4096). Cells
+/// outside the unit circle are outside the lens whatever they hold.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct ZoneGrid {
+    side: usize,
+    /// row-major from the top, 0 opaque, k ≥ 1 channel k
+    cells: Vec<u16>,
+}
+
+impl ZoneGrid {
+    /// The zone (0-based channel index) at `(x, y)` in `[−1, 1]²`, `None` where opaque.
+    pub(crate) fn at(&self, x: f64, y: f64) -> Option<usize> {
+        let n = self.side as f64;
+        let col = (((x + 1.0) * 0.5 * n).floor().max(0.0) as usize).min(self.side - 1);
+        let row = (((1.0 - y) * 0.5 * n).floor().max(0.0) as usize).min(self.side - 1);
+        match self.cells[row * self.side + col] {
+            0 => None,
+            k => Some(usize::from(k) - 1),
+        }
+    }
+
+    /// The largest zone number in the grid.
+    pub(crate) fn zones(&self) -> usize {
+        usize::from(self.cells.iter().copied().max().unwrap_or(0))
+    }
+}
+
+/// Reads a [`ZoneGrid`] from `path` (`channels` zones accepted).
+pub(crate) fn read_zone_grid(path: &Path, channels: usize) -> Result<ZoneGrid, Error> {
+    let file = path.display().to_string();
+    let err = |line: usize, message: String| Error::Csv { file: file.clone(), line: Some(line as u64), message };
+    let text = read_text(path, "zone-mask file")?;
+    let mut rows: Vec<(usize, Vec<u16>)> = Vec::new();
+    for (index, line) in text.lines().enumerate() {
+        let number = index + 1;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut row = Vec::new();
+        for cell in line.split(|c: char| c == ',' || c.is_whitespace()).filter(|c| !c.is_empty()) {
+            let zone = match cell {
+                "." => 0,
+                _ => match cell.parse::<u16>() {
+                    Ok(k) if usize::from(k) <= channels => k,
+                    _ => {
+                        return Err(err(
+                            number,
+                            format!(
+                                "cell {}: expected a zone number 1 to {channels} (one per channel of lens.channels_nm) or 0 or . for opaque",
+                                shorten(cell)
+                            ),
+                        ));
+                    }
+                },
+            };
+            row.push(zone);
+        }
+        if row.len() > 4096 {
+            return Err(err(number, format!("{} cells: expected at most 4096 per row", row.len())));
+        }
+        rows.push((number, row));
+    }
+    let side = rows.len();
+    if !(2..=4096).contains(&side) {
+        return Err(Error::Csv {
+            file,
+            line: None,
+            message: format!("{side} grid rows: expected a square grid of 2 to 4096 rows of zone numbers"),
+        });
+    }
+    let mut cells = Vec::with_capacity(side * side);
+    for (number, row) in rows {
+        if row.len() != side {
+            return Err(err(
+                number,
+                format!(
+                    "{} cells: expected {side}, as many as the grid has rows (a square over the aperture)",
+                    row.len()
+                ),
+            ));
+        }
+        cells.extend(row);
+    }
+    Ok(ZoneGrid { side, cells })
+}
+
+#[cfg(test)]
+mod zone_grid_tests {
+    use super::*;
+
+    /// Rows from the top (+y), columns from the left (−x); 0 and `.` opaque; zones 1-based in
+    /// the file, 0-based channels in the map; the square's edges belong to its edge cells.
+    #[test]
+    fn grid_cells_map_to_the_aperture_square() {
+        let dir = std::env::temp_dir().join(format!("scene-zone-grid-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("grid.txt");
+        std::fs::write(&path, "# top row first\n1, 2\n. 3\n").unwrap();
+        let grid = read_zone_grid(&path, 3).unwrap();
+        assert_eq!(grid.zones(), 3);
+        assert_eq!(grid.at(-0.5, 0.5), Some(0));
+        assert_eq!(grid.at(0.5, 0.5), Some(1));
+        assert_eq!(grid.at(-0.5, -0.5), None);
+        assert_eq!(grid.at(0.5, -0.5), Some(2));
+        assert_eq!((grid.at(1.0, 1.0), grid.at(-1.0, -1.0)), (Some(1), None));
+        std::fs::write(&path, "1 2\n3 x\n").unwrap();
+        let e = read_zone_grid(&path, 3).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("cell x"), "{e}");
+    }
+}
