@@ -603,6 +603,16 @@ fn plot(path: &std::path::Path, figure: &crate::plot::Figure, base: &Comparison,
             label: d.name.clone(),
             points: d.curve.iter().map(|p| (p[0], p[1])).collect(),
             shaded: Vec::new(),
+            // the best the comparison found (golden section between grid points), as its table says
+            best: Some((
+                (d.best_range_nm, d.best_asnr),
+                if d.best_at_bound {
+                    "grid point at the end of the range"
+                } else {
+                    "golden section between grid points"
+                }
+                .to_owned(),
+            )),
         })
         .collect();
     let x = crate::plot::axis_label(KEY);

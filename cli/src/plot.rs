@@ -197,6 +197,7 @@ pub fn sweep_plot(path: &Path, figure: &Figure, title: &str, ranges: &[Range], p
                 label: "ASNR".to_owned(),
                 points: points.iter().map(|p| (p.values[0], p.asnr)).collect(),
                 shaded: Vec::new(),
+                best: None,
             };
             let x = axis_label(&range.key);
             let unit = quantity(&range.key).1.unwrap_or_default();
@@ -248,6 +249,9 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Points to shade and draw dashed, one flag per point; empty for none.
     pub shaded: Vec<bool>,
+    /// The maximum as the caller found it (`(x, y)` and how, for the legend), marked instead of
+    /// the parabola through the largest sample ([`peak`]); `None`: that parabola.
+    pub best: Option<((f64, f64), String)>,
 }
 
 /// A complete rectangular grid of values `z(x, y)` for a heatmap.
@@ -1060,15 +1064,20 @@ impl Plot for LinesPlot<'_> {
             .series
             .iter()
             .enumerate()
-            .map(|(i, s)| match peak(&s.points) {
-                Some((x, y)) if self.mark_best => {
+            .map(|(i, s)| match s.best.clone().or_else(|| peak(&s.points).map(|p| (p, String::new()))) {
+                Some(((x, y), given)) if self.mark_best => {
                     let unit =
                         if self.labels.x_unit.is_empty() { String::new() } else { format!(" {}", self.labels.x_unit) };
                     // how the maximum was found: refined between grid points, or a grid point at an end
                     let at_end =
                         s.points.first().is_some_and(|p| p.0 == x) || s.points.last().is_some_and(|p| p.0 == x);
-                    let how =
-                        if at_end { "grid point at the end of the range" } else { "parabola between grid points" };
+                    let how = if !given.is_empty() {
+                        given.as_str()
+                    } else if at_end {
+                        "grid point at the end of the range"
+                    } else {
+                        "parabola between grid points"
+                    };
                     Entry {
                         label: format!("{}: max {} at {}{unit} ({how})", s.label, significant(y), significant(x)),
                         swatch: Swatch::Dot(Self::stroke(i), Self::stroke(i).colour),
@@ -1142,7 +1151,7 @@ impl Plot for LinesPlot<'_> {
             for (kind, run) in runs {
                 draw_curve(&mut chart, ctx, &run, if kind { stroke.with_dashes() } else { stroke })?;
             }
-            if let (Some(best), true) = (peak(&s.points), self.mark_best) {
+            if let (Some(best), true) = (s.best.as_ref().map(|b| b.0).or_else(|| peak(&s.points)), self.mark_best) {
                 let (r, ring) = (ctx.px(2.5), WHITE.stroke_width(ctx.stroke(0.5)));
                 chart
                     .draw_series([Circle::new(best, r, stroke.colour.filled()), Circle::new(best, r, ring)])
@@ -1519,7 +1528,7 @@ mod tests {
     /// A straight line in many short segments, as curves are drawn.
     fn straight() -> Vec<Series> {
         let points = (0..=300).map(|i| f64::from(i) / 300.0).map(|x| (x, 0.1 + 0.37 * x)).collect();
-        vec![Series { label: "a".to_owned(), points, shaded: Vec::new() }]
+        vec![Series { label: "a".to_owned(), points, shaded: Vec::new(), best: None }]
     }
 
     /// Pixels of `rgb` that are neither white, nor the line colour, nor grey: the blends of a

@@ -290,6 +290,7 @@ fn lines(table: &Table, label: Option<&str>, args: &PlotArgs) -> Result<Vec<Seri
             label: name,
             points: rows.iter().map(|&k| (xs[k], ys[k])).collect(),
             shaded: rows.iter().map(|&k| invalid[k]).collect(),
+            best: None,
         });
     }
     Ok(series)
