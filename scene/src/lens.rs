@@ -89,7 +89,7 @@ pub(crate) struct RawLens {
     pub efficiency: Option<NumberOrFile>,
     pub transmission: Option<NumberOrFile>,
     pub channel_efficiencies: Option<Vec<NumberOrFile>>,
-    pub mtf: Option<String>,
+    pub mtf: Option<OneOrMany>,
     pub mtf_includes_pixel_um: Option<f64>,
     pub iris_decentre_x: Option<f64>,
     pub iris_decentre_y: Option<f64>,
@@ -161,6 +161,26 @@ impl Model {
             Model::Tabulated => &["mtf", "mtf_includes_pixel_um", "design_wavelength_nm", "efficiency", "transmission"],
         };
         keys.contains(&key)
+    }
+}
+
+/// A path, or a list of paths (`lens.mtf`: one Zemax export per wavelength).
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(untagged)]
+pub(crate) enum OneOrMany {
+    /// One path.
+    One(String),
+    /// Several paths.
+    Many(Vec<String>),
+}
+
+impl OneOrMany {
+    /// The paths, in the order given.
+    pub(crate) fn paths(&self) -> Vec<&str> {
+        match self {
+            OneOrMany::One(p) => vec![p.as_str()],
+            OneOrMany::Many(list) => list.iter().map(String::as_str).collect(),
+        }
     }
 }
 
@@ -660,25 +680,40 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         }
         Model::Tabulated => {
             let key = "lens.mtf";
-            let expected = "the path of an MTF table: a CSV (wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]) or a Zemax FFT MTF text export";
-            let file = o.require(key, l.mtf.as_ref(), expected)?;
-            let path = o.path(file);
-            let bytes = std::fs::read(&path).map_err(|cause| Error::Table {
-                origin: o.of(key),
-                key: o.key(key),
-                file: crate::error::shorten(file),
-                cause: Box::new(Error::Read { what: "MTF table", path: path.display().to_string(), cause }),
-            })?;
-            let ctx = format!("lens.mtf = {}", quoted(file));
-            let csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-            let table = if csv {
-                let text = lenses::decode_text(&bytes).map_err(|e| o.domain(key, &ctx, e))?;
-                lenses::parse_mtf_csv(&text)
-            } else {
-                lenses::parse_zemax_fft_mtf(&bytes)
-                    .and_then(|listing| lenses::zemax_otf_table(&[listing], lenses::FieldChoice::OnAxis))
+            let expected = "the path of an MTF table: a CSV (wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]), a Zemax FFT MTF text export, or a list of Zemax exports (one per wavelength)";
+            let files = o.require(key, l.mtf.as_ref(), expected)?.paths();
+            if files.is_empty() || files.len() > 1000 {
+                return Err(o.bad(key, format!("a list of {}", files.len()), expected));
             }
-            .map_err(|e| o.domain(key, &ctx, e))?;
+            let mut listings = Vec::new();
+            let mut csv_table = None;
+            for (i, &file) in files.iter().enumerate() {
+                let item = if files.len() > 1 { format!("{key}[{i}]") } else { key.to_owned() };
+                let path = o.path(file);
+                let bytes = crate::tables::read_bytes(&path, "MTF table").map_err(|e| Error::Table {
+                    origin: o.of(key),
+                    key: o.key(&item),
+                    file: crate::error::shorten(file),
+                    cause: Box::new(e),
+                })?;
+                let ctx = format!("{item} = {}", quoted(file));
+                if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) {
+                    if files.len() > 1 {
+                        return Err(o.bad(&item, quoted(file), "a Zemax export: a list holds one Zemax FFT MTF export per wavelength (a CSV table holds every wavelength itself: give it alone)"));
+                    }
+                    let text = lenses::decode_text(&bytes).map_err(|e| o.domain(&item, &ctx, e))?;
+                    csv_table = Some(lenses::parse_mtf_csv(&text).map_err(|e| o.domain(&item, &ctx, e))?);
+                } else {
+                    listings.push(lenses::parse_zemax_fft_mtf(&bytes).map_err(|e| o.domain(&item, &ctx, e))?);
+                }
+            }
+            let ctx = format!("{key} = {}", files.iter().map(|f| quoted(f)).collect::<Vec<_>>().join(", "));
+            let table = match csv_table {
+                Some(table) => table,
+                None => lenses::zemax_otf_table(&listings, lenses::FieldChoice::OnAxis)
+                    .map_err(|e| o.domain(key, &ctx, e))?,
+            };
+            let file = files.join(", ");
             let efficiency = efficiency(o)?;
             let transmission = transmission(o, &efficiency)?;
             let pixel = match l.mtf_includes_pixel_um {
@@ -699,7 +734,7 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                 lens = lens.with_design_wavelength(l0).map_err(|e| o.domain("lens", "[lens]", e))?;
                 info.design_wavelength_m = Some(l0);
             }
-            info.notes.push(format!("OTF table from {}", crate::error::shorten(file)));
+            info.notes.push(format!("OTF table from {}", crate::error::shorten(&file)));
             Arc::new(lens)
         }
     };

@@ -202,7 +202,16 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
         }
         Model::Tabulated => {
             let key = o.key("lens.mtf");
-            out.string("mtf", &path(o, &key, l.mtf.as_deref().unwrap_or_default())?);
+            match &l.mtf {
+                Some(crate::lens::OneOrMany::Many(files)) => {
+                    let resolved: Vec<String> = files
+                        .iter()
+                        .map(|f| path(o, &key, f).map(|p| toml::Value::String(p).to_string()))
+                        .collect::<Result<_, _>>()?;
+                    out.value("mtf", &format!("[{}]", resolved.join(", ")));
+                }
+                one => out.string("mtf", &path(o, &key, one.as_ref().map_or("", |m| m.paths()[0]))?),
+            }
             match l.mtf_includes_pixel_um {
                 Some(p) => out.number("mtf_includes_pixel_um", p),
                 None => out.line("# mtf_includes_pixel_um not given: the table holds the lens MTF alone"),

@@ -46,6 +46,19 @@ pub const FREQUENCY: Axis = Axis { name: "frequency", unit: "cyc_per_mm", zero_a
 /// few MB): `/dev/zero` or a disk image given by mistake must not fill the memory.
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
 
+/// The bytes of `path` (a table in an encoding its parser decodes, e.g. a UTF-16 Zemax export),
+/// refused unread beyond [`MAX_FILE_BYTES`].
+pub(crate) fn read_bytes(path: &Path, what: &'static str) -> Result<Vec<u8>, Error> {
+    use std::io::Read as _;
+    let io = |cause| Error::Read { what, path: path.display().to_string(), cause };
+    let mut bytes = Vec::new();
+    std::fs::File::open(path).and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)).map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(Error::TooLarge { what, path: path.display().to_string(), limit: MAX_FILE_BYTES });
+    }
+    Ok(bytes)
+}
+
 pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Error> {
     use std::io::Read as _;
     let shown = || path.display().to_string();
