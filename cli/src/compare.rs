@@ -617,7 +617,10 @@ fn plot(path: &std::path::Path, figure: &crate::plot::Figure, base: &Comparison,
         .collect();
     let x = crate::plot::axis_label(KEY);
     let title = base.title.clone().unwrap_or_default();
-    let labels = crate::plot::Labels { title: &title, x: &x, y: "ASNR", x_unit: "nm", ..Default::default() };
+    // the designs' ASNRs span orders of magnitude (the refractive reference against a small
+    // achromat): a log axis keeps every design readable
+    let labels =
+        crate::plot::Labels { title: &title, x: &x, y: "ASNR", x_unit: "nm", log_y: true, ..Default::default() };
     let mark = crate::plot::Mark { x: r.range_nm, label: Some(format!("scene band, {} nm", sig(r.range_nm, 4))) };
     crate::plot::lines_plot("--plot", path, figure, &labels, &series, &[mark], true)
 }

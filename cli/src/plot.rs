@@ -238,6 +238,9 @@ pub struct Labels<'a> {
     pub shade: &'a str,
     /// Unit of x for the legend's maxima ("max 10.57 at 34.39 nm"); empty for none.
     pub x_unit: &'a str,
+    /// Line plots: a logarithmic y axis (decades labelled, 2–9 × 10^k as light grid lines), for
+    /// values spanning orders of magnitude; non-positive values are left out.
+    pub log_y: bool,
 }
 
 /// One line of an overlay plot.
@@ -379,6 +382,8 @@ fn significant(v: f64) -> String {
 enum TickFormat {
     Fixed(usize),
     Scientific,
+    /// A log10 axis: the tick `v` is written as the value `10^v`.
+    Decades,
 }
 
 impl TickFormat {
@@ -403,6 +408,10 @@ impl TickFormat {
         let s = match self {
             Self::Fixed(d) => format!("{v:.d$}"),
             Self::Scientific => format!("{v:.2e}"),
+            Self::Decades => {
+                let value = 10f64.powf(v.round());
+                if (1e-4..1e6).contains(&value) { number(value) } else { format!("{value:.0e}") }
+            }
         };
         match s.strip_prefix('-') {
             Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
@@ -491,6 +500,8 @@ struct Entry {
 const INK: RGBColor = RGBColor(0, 0, 0);
 /// Grid lines.
 const GRID: RGBColor = RGBColor(222, 222, 222);
+/// The lighter lines between decades on a log axis.
+const MINOR_GRID: RGBColor = RGBColor(238, 238, 238);
 /// The legend box's edge.
 const LEGEND_EDGE: RGBColor = RGBColor(150, 150, 150);
 /// Reference curves: the diffraction limit.
@@ -798,6 +809,8 @@ struct Axes<'a> {
     x_desc: &'a str,
     y_desc: &'a str,
     grid: bool,
+    /// y holds log10 of the values: ticks at whole decades, written as the values
+    y_log: bool,
 }
 
 /// Space around the plotting area of a chart, device pixels.
@@ -820,6 +833,11 @@ impl Axes<'_> {
     /// Tick counts and formats for a plotting area about `(w, h)` pixels.
     fn ticks(&self, ctx: Ctx, (w, h): (i32, i32)) -> ((usize, TickFormat), (usize, TickFormat)) {
         let nx = tick_count(ctx, w, TICK_PT * 4.0);
+        if self.y_log {
+            // one tick per whole decade: as many labels as decades, so the nice step is 1
+            let decades = (self.y.1.floor() - self.y.0.ceil()).max(0.0) as usize + 1;
+            return ((nx, TickFormat::of(&ticks(self.x, nx))), (decades.max(2), TickFormat::Decades));
+        }
         let ny = tick_count(ctx, h, TICK_PT * 2.5);
         ((nx, TickFormat::of(&ticks(self.x, nx))), (ny, TickFormat::of(&ticks(self.y, ny))))
     }
@@ -1101,21 +1119,57 @@ impl Plot for LinesPlot<'_> {
     where
         DB::ErrorType: 'static,
     {
-        let all = || self.series.iter().flat_map(|s| s.points.iter());
+        // on a log axis the series are drawn as log10 of their positive values
+        let log_series: Vec<Series>;
+        let series: &[Series] = if self.labels.log_y {
+            let log = |(x, y): (f64, f64)| (y > 0.0).then(|| (x, y.log10()));
+            log_series = self
+                .series
+                .iter()
+                .map(|s| Series {
+                    label: s.label.clone(),
+                    points: s.points.iter().copied().filter_map(log).collect(),
+                    shaded: if s.points.iter().all(|p| p.1 > 0.0) { s.shaded.clone() } else { Vec::new() },
+                    best: s.best.as_ref().and_then(|(p, how)| log(*p).map(|p| (p, how.clone()))),
+                })
+                .collect();
+            &log_series
+        } else {
+            self.series
+        };
+        let all = || series.iter().flat_map(|s| s.points.iter());
         let (mut x0, mut x1) = extent(all().map(|p| p.0));
         if x1 <= x0 {
             (x0, x1) = (x0 - 0.5, x1 + 0.5);
         }
         let (lo, hi) = extent(all().map(|p| p.1));
-        let (lo, hi) = (lo.min(0.0), hi.max(0.0));
-        // 6 % of the span above (and below, for negative values); all zeros span 0 to 1
-        let span = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) { hi - lo } else { hi.abs().max(1.0) / 0.06 };
-        let pad = 0.06 * span;
-        let y = (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad);
-        let axes = Axes { x: (x0, x1), y, x_desc: self.labels.x, y_desc: self.labels.y, grid: true };
+        let y = if self.labels.log_y {
+            // whole decades around the data, or 4 % of the span beyond it where that is tighter
+            let pad = 0.04 * (hi - lo).max(1.0);
+            ((lo - pad).max(lo.floor()), (hi + pad).min(hi.ceil().max(hi + 1e-9)))
+        } else {
+            let (lo, hi) = (lo.min(0.0), hi.max(0.0));
+            // 6 % of the span above (and below, for negative values); all zeros span 0 to 1
+            let span = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) { hi - lo } else { hi.abs().max(1.0) / 0.06 };
+            let pad = 0.06 * span;
+            (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad)
+        };
+        let axes =
+            Axes { x: (x0, x1), y, x_desc: self.labels.x, y_desc: self.labels.y, grid: true, y_log: self.labels.log_y };
         let (mut chart, _) = axes.build(area, ctx, 0)?;
+        if self.labels.log_y {
+            // 2–9 × 10^k: light lines between the decades' grid lines
+            for decade in (y.0.floor() as i32)..=(y.1.ceil() as i32) {
+                for k in 2..=9 {
+                    let v = f64::from(decade) + f64::from(k).log10();
+                    if v > y.0 && v < y.1 {
+                        draw_curve(&mut chart, ctx, &[(x0, v), (x1, v)], Stroke::solid(MINOR_GRID, 0.3))?;
+                    }
+                }
+            }
+        }
         // shading first, under everything: each series' flagged points, layered in translucent grey
-        for s in self.series.iter().filter(|s| s.shaded.iter().any(|&f| f)) {
+        for s in series.iter().filter(|s| s.shaded.iter().any(|&f| f)) {
             let xs: Vec<f64> = s.points.iter().map(|p| p.0).collect();
             let edges = cell_edges(&xs);
             let shaded = |i: usize| s.shaded.get(i).copied().unwrap_or(false);
@@ -1134,7 +1188,7 @@ impl Plot for LinesPlot<'_> {
             }
             chart.draw_series(rects).map_err(|e| fail(&e))?;
         }
-        for (i, s) in self.series.iter().enumerate() {
+        for (i, s) in series.iter().enumerate() {
             let stroke = Self::stroke(i);
             let dashed = |j: usize| s.shaded.get(j).copied().unwrap_or(false);
             // runs of segments, solid, or dashed where they end in a shaded point
@@ -1233,7 +1287,8 @@ impl Plot for HeatmapPlot<'_> {
         let bar_labels = bar_ticks.iter().map(|&v| ctx.text_width(TICK_PT, &bar_format.write(v))).max().unwrap_or(0);
         let bar_label_area = ctx.px(5.0) + bar_labels + ctx.px(4.0) + ctx.px(DESC_PT * 1.6);
         let bar_w = ctx.px(12.0) + ctx.px(10.0) + bar_label_area + ctx.px(MARGIN_PT);
-        let axes = Axes { x: (x0, x1), y: (y0, y1), x_desc: self.labels.x, y_desc: self.labels.y, grid: false };
+        let axes =
+            Axes { x: (x0, x1), y: (y0, y1), x_desc: self.labels.x, y_desc: self.labels.y, grid: false, y_log: false };
         let (mut chart, margins) = axes.build(area, ctx, bar_w)?;
         let cell = |i: usize, j: usize| [(ex[i], ey[j]), (ex[i + 1], ey[j + 1])];
         // each cell reaches halfway into the next (which is drawn later and covers it), so no
@@ -1401,7 +1456,7 @@ impl Plot for MtfPlot<'_> {
         let x_max = curve.frequency_cyc_per_mm.last().copied().unwrap_or(1.0).max(1e-12);
         let y_desc = if curve.pixel_mtf { "MTF (lens × pixel)" } else { "MTF" };
         let x_desc = axis_label("frequency_cyc_per_mm");
-        let axes = Axes { x: (0.0, x_max), y: (0.0, 1.05), x_desc: &x_desc, y_desc, grid: true };
+        let axes = Axes { x: (0.0, x_max), y: (0.0, 1.05), x_desc: &x_desc, y_desc, grid: true, y_log: false };
         let (mut chart, _) = axes.build(area, ctx, 0)?;
         let xs = &curve.frequency_cyc_per_mm;
         let series = |ys: &[f64]| xs.iter().copied().zip(ys.iter().copied()).collect::<Vec<_>>();
@@ -1493,6 +1548,41 @@ mod tests {
         assert_eq!(TickFormat::Fixed(1).write(-0.0), "0.0");
         assert_eq!(TickFormat::Fixed(2).write(0.25), "0.25");
         assert_eq!(TickFormat::Scientific.write(2e-9), "2.00e-9");
+        // a log axis writes the values at whole decades
+        assert_eq!(TickFormat::Decades.write(2.0), "100");
+        assert_eq!(TickFormat::Decades.write(-1.0), "0.1");
+        assert_eq!(TickFormat::Decades.write(0.0), "1");
+        assert_eq!(TickFormat::Decades.write(7.0), "1e7");
+    }
+
+    /// A log-y line plot of values from 0.2 to 120: its ticks are the decades 1, 10, 100, one
+    /// each, the decades' key points are whole numbers, and a non-positive value is left out.
+    #[test]
+    fn log_axis_ticks_are_whole_decades() {
+        let axes = Axes {
+            x: (0.0, 1.0),
+            y: (0.2f64.log10() - 0.1, 120f64.log10() + 0.1),
+            x_desc: "x",
+            y_desc: "y",
+            grid: true,
+            y_log: true,
+        };
+        let ((_, _), (ny, format)) = axes.ticks(Ctx { k: 1.0 }, (400, 300));
+        assert_eq!(format, TickFormat::Decades);
+        let keys = ticks(axes.y, ny);
+        assert_eq!(keys, vec![0.0, 1.0, 2.0], "{ny}");
+        let points = vec![(1.0, 0.2), (2.0, 0.0), (3.0, 12.0), (4.0, 120.0)];
+        let series = vec![Series { label: "a".to_owned(), points, shaded: Vec::new(), best: None }];
+        let labels = Labels { title: "t", x: "x", y: "ASNR", log_y: true, ..Default::default() };
+        let text = svg(
+            &Figure::new(None, None).unwrap(),
+            &LinesPlot { labels: &labels, series: &series, marks: &[], mark_best: true },
+        )
+        .unwrap();
+        for tick in [">\n1\n<", ">\n10\n<", ">\n100\n<"] {
+            assert!(text.contains(tick), "{tick}");
+        }
+        assert!(text.contains("max 120 at 4"), "the legend gives the value, not its logarithm");
     }
 
     #[test]

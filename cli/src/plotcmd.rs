@@ -106,6 +106,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             ridge: &ridge,
             shade: SHADE_LABEL,
             x_unit: "",
+            log_y: false,
         };
         return plot::heatmap_plot("--output", &args.output, &figure, &labels, &grid, &marks);
     }
