@@ -1542,6 +1542,15 @@ fn tabulated_lens_reads_a_list_of_zemax_exports() {
     std::fs::write(dir.join("t.csv"), "wavelength_nm,frequency_cyc_per_mm,mtf\n800,0,1\n800,100,0.5\n").unwrap();
     let err = fails(&["evaluate", f, "--set", "lens.mtf=[\"z750.txt\", \"t.csv\"]"]);
     assert!(err.contains("lens.mtf[1] = \"t.csv\": expected a Zemax export"), "{err}");
+    // the 5° field block (index 1) of the same exports: here the same curves, the same result
+    let at_field = json(&["evaluate", f, "--json", "--set", "lens.mtf_field=1"])["mean_mtf"].as_f64().unwrap();
+    assert_eq!(at_field, mean);
+    let (text, _) = succeeds(&["scene", f, "--set", "lens.mtf_field=1"]);
+    assert!(text.contains("\nmtf_field = 1\n"), "{text}");
+    let err = fails(&["evaluate", f, "--set", "lens.mtf_field=2"]);
+    assert!(err.contains("field index = 2") && err.contains("field blocks"), "{err}");
+    let err = fails(&["evaluate", f, "--set", "lens.mtf_field=0", "--set", "lens.mtf=t.csv"]);
+    assert!(err.contains("lens.mtf_field = 0: expected no field index with a CSV table"), "{err}");
     let err = fails(&["evaluate", f, "--set", "lens.mtf=[\"z750.txt\", \"missing.txt\"]"]);
     assert!(err.contains("lens.mtf[1]") && err.contains("missing.txt"), "{err}");
 }

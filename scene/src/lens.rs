@@ -91,6 +91,7 @@ pub(crate) struct RawLens {
     pub channel_efficiencies: Option<Vec<NumberOrFile>>,
     pub mtf: Option<OneOrMany>,
     pub mtf_includes_pixel_um: Option<f64>,
+    pub mtf_field: Option<u32>,
     pub iris_decentre_x: Option<f64>,
     pub iris_decentre_y: Option<f64>,
     pub obscuration: Option<f64>,
@@ -158,7 +159,9 @@ impl Model {
                 "channel_efficiencies",
                 "transmission",
             ],
-            Model::Tabulated => &["mtf", "mtf_includes_pixel_um", "design_wavelength_nm", "efficiency", "transmission"],
+            Model::Tabulated => {
+                &["mtf", "mtf_includes_pixel_um", "mtf_field", "design_wavelength_nm", "efficiency", "transmission"]
+            }
         };
         keys.contains(&key)
     }
@@ -186,7 +189,7 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 30] {
+    fn given(&self) -> [(&'static str, bool); 31] {
         [
             ("design_wavelength_nm", self.design_wavelength_nm.is_some()),
             ("design_band_nm", self.design_band_nm.is_some()),
@@ -208,6 +211,7 @@ impl RawLens {
             ("channel_efficiencies", self.channel_efficiencies.is_some()),
             ("mtf", self.mtf.is_some()),
             ("mtf_includes_pixel_um", self.mtf_includes_pixel_um.is_some()),
+            ("mtf_field", self.mtf_field.is_some()),
             ("iris_decentre_x", self.iris_decentre_x.is_some()),
             ("iris_decentre_y", self.iris_decentre_y.is_some()),
             ("obscuration", self.obscuration.is_some()),
@@ -708,10 +712,21 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                 }
             }
             let ctx = format!("{key} = {}", files.iter().map(|f| quoted(f)).collect::<Vec<_>>().join(", "));
+            // the Zemax field block: the on-axis one, or the one lens.mtf_field names (from 0)
+            let field = match l.mtf_field {
+                Some(i) if csv_table.is_some() => {
+                    return Err(o.bad(
+                        "lens.mtf_field",
+                        i,
+                        "no field index with a CSV table (it holds one curve per wavelength): only with Zemax exports",
+                    ));
+                }
+                Some(i) => lenses::FieldChoice::Index(i as usize),
+                None => lenses::FieldChoice::OnAxis,
+            };
             let table = match csv_table {
                 Some(table) => table,
-                None => lenses::zemax_otf_table(&listings, lenses::FieldChoice::OnAxis)
-                    .map_err(|e| o.domain(key, &ctx, e))?,
+                None => lenses::zemax_otf_table(&listings, field).map_err(|e| o.domain(key, &ctx, e))?,
             };
             let file = files.join(", ");
             let efficiency = efficiency(o)?;

@@ -212,6 +212,9 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
                 }
                 one => out.string("mtf", &path(o, &key, one.as_ref().map_or("", |m| m.paths()[0]))?),
             }
+            if let Some(i) = l.mtf_field {
+                out.value("mtf_field", &i.to_string());
+            }
             match l.mtf_includes_pixel_um {
                 Some(p) => out.number("mtf_includes_pixel_um", p),
                 None => out.line("# mtf_includes_pixel_um not given: the table holds the lens MTF alone"),
