@@ -169,8 +169,12 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Optimize { scene, set, over, xtol, tolerance, json } => {
-            if !(xtol > 0.0 && xtol < 1.0) {
-                anyhow::bail!("--xtol {xtol}: expected a fraction of the range in (0, 1)");
+            if !(1e-12..1.0).contains(&xtol) {
+                // as typed: 1e-17, not 0.00000000000000001
+                let xtol = if xtol != 0.0 && xtol.abs() < 1e-4 { format!("{xtol:e}") } else { format!("{xtol}") };
+                anyhow::bail!(
+                    "--xtol {xtol}: expected a fraction of the range in [1e-12, 1) (a finer bracket is below the float spacing of the range's values)"
+                );
             }
             let set = with_tolerance(set, tolerance);
             let range = optimize::parse_range(&over, false)?;

@@ -153,7 +153,9 @@ pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<
     let mut d = a + ratio * (b - a);
     let (mut fc, mut fd) = (f(c)?, f(d)?);
     evaluations += 2;
-    while b - a > tolerance {
+    // a bracket cannot shrink below the float spacing of its ends: stop there whatever the
+    // tolerance (a tolerance below it would loop for ever)
+    while b - a > tolerance && b - a > 8.0 * f64::EPSILON * a.abs().max(b.abs()) {
         if fc >= fd {
             b = d;
             d = c;
@@ -198,6 +200,16 @@ mod tests {
         let o = maximize(&range, 1e-8, |x| Ok(-(x - 3.3) * (x - 3.3))).unwrap();
         assert!((o.best - 3.3).abs() < 1e-8, "{}", o.best);
         assert!(o.evaluations < 80);
+    }
+
+    /// A tolerance below the float spacing of the bracket's ends stops at that spacing (it looped
+    /// for ever) with the maximum found to it.
+    #[test]
+    fn a_tolerance_below_the_float_spacing_stops_there() {
+        let range = Range { key: "x".into(), lo: 1.0, hi: 200.0, points: None };
+        let o = maximize(&range, 0.0, |x| Ok(-(x - 100.3) * (x - 100.3))).unwrap();
+        assert!((o.best - 100.3).abs() < 1e-6, "{}", o.best);
+        assert!(o.evaluations < 200, "{}", o.evaluations);
     }
 
     #[test]

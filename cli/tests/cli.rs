@@ -410,7 +410,10 @@ fn bad_optimize_arguments() {
     let err = fails(&["optimize", "--over", "lens.colour=1:2"]);
     assert!(err.contains("lens.colour: unknown field `colour`"), "{err}");
     let err = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--xtol", "2"]);
-    assert!(err.contains("--xtol 2: expected a fraction of the range in (0, 1)"), "{err}");
+    assert!(err.contains("--xtol 2: expected a fraction of the range in [1e-12, 1)"), "{err}");
+    // a bracket below the float spacing could never close: refused at once, not run for ever
+    let err = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--xtol", "1e-17"]);
+    assert!(err.contains("--xtol 1e-17: expected a fraction of the range in [1e-12, 1)"), "{err}");
 }
 
 // ---- asnr sweep ----
