@@ -412,25 +412,10 @@ fn refine(curve: &[(f64, f64)], mut f: impl FnMut(f64) -> Result<f64>) -> Result
     let mut points = curve.to_vec();
     let mut best = curve[j];
     if j > 0 && j + 1 < curve.len() {
-        let (mut a, mut b) = (curve[j - 1].0.ln(), curve[j + 1].0.ln());
-        let ratio = (5f64.sqrt() - 1.0) / 2.0;
-        let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
-        let (mut fc, mut fd) = (f(c.exp())?, f(d.exp())?);
-        points.push((c.exp(), fc));
-        points.push((d.exp(), fd));
-        while b - a > REFINE_TOLERANCE {
-            if fc >= fd {
-                (b, d, fd) = (d, c, fc);
-                c = b - ratio * (b - a);
-                fc = f(c.exp())?;
-                points.push((c.exp(), fc));
-            } else {
-                (a, c, fc) = (c, d, fd);
-                d = a + ratio * (b - a);
-                fd = f(d.exp())?;
-                points.push((d.exp(), fd));
-            }
-        }
+        // in ln(range): the grid is log-spaced
+        let (a, b) = (curve[j - 1].0.ln(), curve[j + 1].0.ln());
+        let (found, _) = crate::optimize::golden_section(a, b, REFINE_TOLERANCE, |x| f(x.exp()))?;
+        points.extend(found.into_iter().map(|(x, y)| (x.exp(), y)));
         for &(x, y) in &points {
             if y > best.1 {
                 best = (x, y);

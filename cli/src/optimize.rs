@@ -129,6 +129,35 @@ pub fn report(o: &Optimum) -> String {
     )
 }
 
+/// Golden-section search for a maximum of `f` in `[a, b]` until the bracket is at most
+/// `tolerance` wide, or at the float spacing of its ends (a tolerance below that would loop for
+/// ever): every point evaluated, in order, and the final bracket's width.
+pub fn golden_section(
+    mut a: f64,
+    mut b: f64,
+    tolerance: f64,
+    mut f: impl FnMut(f64) -> Result<f64>,
+) -> Result<(Vec<(f64, f64)>, f64)> {
+    let ratio = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
+    let (mut fc, mut fd) = (f(c)?, f(d)?);
+    let mut points = vec![(c, fc), (d, fd)];
+    while b - a > tolerance && b - a > 8.0 * f64::EPSILON * a.abs().max(b.abs()) {
+        if fc >= fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - ratio * (b - a);
+            fc = f(c)?;
+            points.push((c, fc));
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + ratio * (b - a);
+            fd = f(d)?;
+            points.push((d, fd));
+        }
+    }
+    Ok((points, b - a))
+}
+
 /// Maximizes `f` on `[lo, hi]`: a scan of [`SCAN_POINTS`] brackets the best point, then
 /// golden-section search narrows the bracket to `tolerance` (absolute, in the key's units).
 pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<f64>) -> Result<Optimum> {
@@ -146,37 +175,16 @@ pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<
             best_index = i;
         }
     }
-    let mut a = lo + step * best_index.saturating_sub(1) as f64;
-    let mut b = (lo + step * (best_index + 1) as f64).min(hi);
-    let ratio = (5f64.sqrt() - 1.0) / 2.0;
-    let mut c = b - ratio * (b - a);
-    let mut d = a + ratio * (b - a);
-    let (mut fc, mut fd) = (f(c)?, f(d)?);
-    evaluations += 2;
-    // a bracket cannot shrink below the float spacing of its ends: stop there whatever the
-    // tolerance (a tolerance below it would loop for ever)
-    while b - a > tolerance && b - a > 8.0 * f64::EPSILON * a.abs().max(b.abs()) {
-        if fc >= fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - ratio * (b - a);
-            fc = f(c)?;
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + ratio * (b - a);
-            fd = f(d)?;
-        }
-        evaluations += 1;
-        for (x, y) in [(c, fc), (d, fd)] {
-            if y > best.1 {
-                best = (x, y);
-            }
+    let a = lo + step * best_index.saturating_sub(1) as f64;
+    let b = (lo + step * (best_index + 1) as f64).min(hi);
+    let (points, width) = golden_section(a, b, tolerance, &mut f)?;
+    evaluations += points.len();
+    for &(x, y) in &points {
+        if y > best.1 {
+            best = (x, y);
         }
     }
-    let tolerance = (b - a).max(tolerance);
+    let tolerance = width.max(tolerance);
     Ok(Optimum {
         key: range.key.clone(),
         best: best.0,

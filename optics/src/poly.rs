@@ -702,14 +702,9 @@ impl<'a> Polychromatic<'a> {
         // counted before any is made (a 300 nm band at 1024 samples would hold 12 GB)
         let side = 2 * layer.plan.max_lag() + 1;
         let grid_bytes = (side * side * std::mem::size_of::<Complex64>()) as f64;
-        let grids: usize = self
-            .samples
-            .iter()
-            .filter(|s| s.1 != 0.0)
-            .map(|&(lambda, _)| {
-                self.lens.orders(lambda, self.field).iter().filter(|o| !matches!(o.pupil, Pupil::Table(_))).count()
-            })
-            .sum();
+        // (the unclipped nodes are those orders, one per order at each sample of the spectrum;
+        // a tabulated order is read directly)
+        let grids = self.nodes.iter().filter(|n| n.table.is_none()).count();
         if grids as f64 * grid_bytes > FFT_MEMORY_BUDGET {
             return Err(Error::WorkBudget {
                 grids,
