@@ -884,7 +884,7 @@ fn scene_prints_the_resolved_scene_and_it_loads_to_the_same_asnr() {
             "tolerance = 1e-6",
             "fraunhofer_threshold_mm = 0.25",
             "fraunhofer_max_fraction = 0.01",
-            "pupil_samples = 256",
+            "# pupil_samples: not set, so the FFT path chooses its sampling from the tolerance",
             "iris_decentre_x = 0.0",
             "x_deg = 0.0",
             "y_deg = 0.0",

@@ -261,7 +261,7 @@ impl Point {
             camera = camera.with_sensor(noise::Sensor::without_adc(read, 0.0, well).map_err(|e| err(&e))?);
         }
         let options = Options {
-            pupil_samples: self.pupil_samples,
+            pupil_samples: Some(self.pupil_samples),
             glare: if self.glare_included { GlareMode::Included } else { GlareMode::FirstOrder },
             ..Options::default()
         };

@@ -773,7 +773,13 @@ fn mtf_curve_at_field(
     let monochromatic = wavelengths_m
         .iter()
         .map(|&l| {
-            let mtf = optics::monochromatic_mtf(lens, l, field, &frequencies, options.pupil_samples)?;
+            let mtf = optics::monochromatic_mtf(
+                lens,
+                l,
+                field,
+                &frequencies,
+                options.pupil_samples.unwrap_or(optics::DEFAULT_PUPIL_SAMPLES),
+            )?;
             Ok(mtf.iter().zip(&frequencies).map(|(m, &nu)| m * pixel_factor(nu)).collect())
         })
         .collect::<Result<Vec<Vec<f64>>, Error>>()?;

@@ -122,8 +122,9 @@ pub struct Options {
     /// Largest fraction of the detected signal allowed at wavelengths blurred beyond the
     /// threshold for the result to count as valid.
     pub fraunhofer_max_fraction: f64,
-    /// Pupil samples across the diameter when the FFT path is needed (16 to 4096).
-    pub pupil_samples: usize,
+    /// Pupil samples across the diameter when the FFT path is needed (16 to 4096); `None`: chosen
+    /// from the tolerance.
+    pub pupil_samples: Option<usize>,
     /// Whether the SNR counts the stray light of the other orders (veiling glare).
     pub glare: GlareMode,
     /// Relative error allowed in the mean MTF (the frequency integral and, on the closed-form
@@ -137,7 +138,12 @@ pub struct Options {
 impl Options {
     /// The optics engine's settings these options ask for.
     pub fn settings(&self) -> optics::Settings {
-        optics::Settings { pupil_samples: self.pupil_samples, tolerance: self.tolerance, closed_form: self.closed_form }
+        optics::Settings {
+            pupil_samples: self.pupil_samples,
+            tolerance: self.tolerance,
+            closed_form: self.closed_form,
+            ..optics::Settings::default()
+        }
     }
 }
 
@@ -147,7 +153,7 @@ impl Default for Options {
             form: MetricForm::Mean,
             fraunhofer_threshold: 0.25e-3,
             fraunhofer_max_fraction: 0.01,
-            pupil_samples: optics::DEFAULT_PUPIL_SAMPLES,
+            pupil_samples: None,
             glare: GlareMode::FirstOrder,
             tolerance: optics::DEFAULT_TOLERANCE,
             closed_form: true,
@@ -344,8 +350,10 @@ fn check_options(options: &Options) -> Result<(), Error> {
         (0.0..=1.0).contains(&options.fraunhofer_max_fraction),
         "a fraction in [0, 1]",
     )?;
-    let n = options.pupil_samples as f64;
-    check("pupil_samples", n, (16.0..=4096.0).contains(&n), "a whole number from 16 to 4096")?;
+    if let Some(n) = options.pupil_samples {
+        let n = n as f64;
+        check("pupil_samples", n, (16.0..=4096.0).contains(&n), "a whole number from 16 to 4096")?;
+    }
     let t = options.tolerance;
     check("tolerance", t, (1e-14..=0.1).contains(&t), "a relative error from 1e-14 to 0.1")?;
     Ok(())

@@ -52,6 +52,6 @@ pub use otf::{
 };
 pub use poly::{
     DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET, GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape,
-    Polychromatic, Settings, Work, highest_cutoff, monochromatic_mtf,
+    Polychromatic, Settings, SpectralRule, Work, highest_cutoff, monochromatic_mtf,
 };
 pub use table::{OtfTable, TABLE_ZERO_FREQUENCY_TOLERANCE};

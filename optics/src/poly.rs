@@ -354,20 +354,42 @@ impl NoiseShape {
 /// How a [`Polychromatic`] is computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
-    /// Pupil samples across the diameter on the FFT path.
-    pub pupil_samples: usize,
-    /// Relative error allowed in the mean MTF (the frequency integration and, on the
-    /// closed-form engine, the remaining integral in `t`); the spectral quadratures are exact
-    /// to rounding whatever its value.
+    /// Pupil samples across the diameter on the FFT path: `None` lets the tolerance choose
+    /// them; `Some(n)` fixes them (the result then has the FFT path's error at `n`, whatever
+    /// the tolerance).
+    pub pupil_samples: Option<usize>,
+    /// Relative error allowed in the mean MTF.
     pub tolerance: f64,
     /// Whether the closed-form engine may be used where it applies.
     pub closed_form: bool,
+    /// The spectral rule of the quadrature engines.
+    pub spectral_rule: SpectralRule,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { pupil_samples: DEFAULT_PUPIL_SAMPLES, tolerance: DEFAULT_TOLERANCE, closed_form: true }
+        Settings {
+            pupil_samples: None,
+            tolerance: DEFAULT_TOLERANCE,
+            closed_form: true,
+            spectral_rule: SpectralRule::default(),
+        }
     }
+}
+
+/// How the integral over wavelength is done where no closed form applies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpectralRule {
+    /// Product integration: the OTF, smooth in λ, is interpolated at nodes whose number follows
+    /// its defocus phase and the tolerance; the weights are the exact moments of the detected
+    /// spectrum against the interpolation basis, so kinks of a measured spectrum cost nothing.
+    #[default]
+    Interpolated,
+    /// The per-interval rule, kept as the reference: 16-point Gauss–Legendre panels cut at every
+    /// kink of the spectrum and of the lens and refined until the defocus phase turns by at most
+    /// 12 rad per panel; exact to rounding whatever the tolerance, at a cost that grows with
+    /// the number of table samples.
+    Panels,
 }
 
 /// Default relative tolerance of the mean MTF.
@@ -437,7 +459,7 @@ impl<'a> Polychromatic<'a> {
         pixel_pitch: Option<f64>,
         pupil_samples: usize,
     ) -> Result<Self, Error> {
-        let settings = Settings { pupil_samples, ..Settings::default() };
+        let settings = Settings { pupil_samples: Some(pupil_samples), ..Settings::default() };
         Self::with_settings(lens, detected, field, max_frequency, pixel_pitch, settings)
     }
 
@@ -457,7 +479,7 @@ impl<'a> Polychromatic<'a> {
         pixel_pitch: Option<f64>,
         settings: Settings,
     ) -> Result<Self, Error> {
-        let pupil_samples = settings.pupil_samples;
+        let pupil_samples = settings.pupil_samples.unwrap_or(DEFAULT_PUPIL_SAMPLES);
         if !(settings.tolerance.is_finite() && settings.tolerance > 0.0 && settings.tolerance < 1.0) {
             return Err(Error::InvalidParameter {
                 name: "tolerance",
@@ -593,7 +615,7 @@ impl<'a> Polychromatic<'a> {
             this.nodes.push(Node::of(&order, lambda, line.weight * order.efficiency));
         }
         this.total_weight = this.nodes.iter().map(|n| n.weight).sum();
-        this.finish(settings.pupil_samples)
+        this.finish(settings.pupil_samples.unwrap_or(DEFAULT_PUPIL_SAMPLES))
     }
 
     /// The wavelength of a line spectrum ([`Engine::Monochromatic`]): the only case without

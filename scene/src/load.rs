@@ -867,7 +867,7 @@ fn options(opt: Option<&RawOptions>, o: &Origins) -> Result<Options, Error> {
         if !(16..=4096).contains(&v) {
             return Err(o.bad("options.pupil_samples", v, "a whole number of pupil samples from 16 to 4096"));
         }
-        options.pupil_samples = v as usize;
+        options.pupil_samples = Some(v as usize);
     }
     if let Some(v) = opt.tolerance {
         options.tolerance = o.number(

@@ -319,8 +319,10 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
         "fraunhofer_max_fraction",
         opt.and_then(|p| p.fraunhofer_max_fraction).unwrap_or(defaults.fraunhofer_max_fraction),
     );
-    let samples = opt.and_then(|p| p.pupil_samples).map_or(defaults.pupil_samples.to_string(), |v| v.to_string());
-    out.value("pupil_samples", &samples);
+    match opt.and_then(|p| p.pupil_samples).map(|v| v as usize).or(defaults.pupil_samples) {
+        Some(v) => out.value("pupil_samples", &v.to_string()),
+        None => out.line("# pupil_samples: not set, so the FFT path chooses its sampling from the tolerance"),
+    }
     let glare = match defaults.glare {
         GlareMode::FirstOrder => "first_order",
         GlareMode::Included => "included",

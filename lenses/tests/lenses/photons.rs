@@ -15,7 +15,7 @@ fn scene(lens: ChromaticMetalens) -> Scene {
     let filter = Gaussian::from_range(LAMBDA0, 10e-9, 1.0).unwrap();
     let radiance = Spectrum::product(vec![Spectrum::Constant(0.025e9), Spectrum::Gaussian(filter)]);
     let camera = Camera::new(5.2e-6, Spectrum::Constant(0.2), false).unwrap();
-    let options = Options { pupil_samples: 64, ..Options::default() };
+    let options = Options { pupil_samples: Some(64), ..Options::default() };
     Scene::new(Arc::new(lens), radiance, camera, 1.23e-3, options).unwrap()
 }
 

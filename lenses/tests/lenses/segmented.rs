@@ -183,7 +183,7 @@ fn background_channels_evaluate_in_few_panels() {
     .unwrap()
     .with_other_channels(OtherChannels::Background);
     let detected = band(800.0, 50.0);
-    let settings = optics::Settings { pupil_samples: 64, ..optics::Settings::default() };
+    let settings = optics::Settings { pupil_samples: Some(64), ..optics::Settings::default() };
     let poly = optics::Polychromatic::with_settings(&lens, &detected, Field::ON_AXIS, 96.15e3, None, settings).unwrap();
     let (mean, work) = poly.mean_mtf();
     assert!(work.spectral_panels < 64, "{work:?}");

@@ -318,7 +318,7 @@ fn paper_reference_with_defocus(c: f64) -> f64 {
 #[test]
 fn seidel_terms_on_the_paper_scene_follow_the_wavefront_sign() {
     let run = |lens: ChromaticMetalens, pupil_samples: usize| {
-        let options = Options { pupil_samples, ..Options::default() };
+        let options = Options { pupil_samples: Some(pupil_samples), ..Options::default() };
         evaluate(&paper_with(lens).with_options(options).unwrap()).unwrap()
     };
 

@@ -409,7 +409,7 @@ fn fft_path_refuses_scenes_over_its_memory_budget() {
     let lens = SectorLens(std::sync::Arc::new(Aperture::sector(0.0, 2.0).unwrap()));
     let band = radiometry::Spectrum::Gaussian(radiometry::Gaussian::from_range(800e-9, 300e-9, 1.0).unwrap());
     let nyquist = 1.0 / (2.0 * 5.2e-6);
-    let settings = |n| optics::Settings { pupil_samples: n, ..optics::Settings::default() };
+    let settings = |n| optics::Settings { pupil_samples: Some(n), ..optics::Settings::default() };
     let e = optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings(2048))
         .unwrap_err();
     let message = e.to_string();

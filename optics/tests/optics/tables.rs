@@ -135,7 +135,7 @@ fn a_table_beside_a_sampled_pupil_is_read_on_the_fft_layer() {
     let annulus = Arc::new(Aperture::annulus(0.4).unwrap());
     let exact = Chromatic { table: None, annulus: Some(annulus.clone()) };
     let tabulated = Chromatic { table: Some(Arc::new(chromatic_table())), annulus: Some(annulus) };
-    let settings = optics::Settings { pupil_samples: 64, ..optics::Settings::default() };
+    let settings = optics::Settings { pupil_samples: Some(64), ..optics::Settings::default() };
     let pe = Polychromatic::with_settings(&exact, &spectrum, Field::ON_AXIS, NYQUIST, None, settings).unwrap();
     let pt = Polychromatic::with_settings(&tabulated, &spectrum, Field::ON_AXIS, NYQUIST, None, settings).unwrap();
     assert!(matches!(pt.engine(), Engine::Fft { .. }), "{:?}", pt.engine());

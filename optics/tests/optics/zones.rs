@@ -193,7 +193,7 @@ fn zone_tilt_moves_the_image_like_the_order_shift() {
         OneOrder(Order::new(1.0, Pupil::Aperture(circle), Wavefront::defocus(w020).shifted(shift[0], shift[1])));
     let spectrum: &'static Spectrum = Box::leak(Box::new(line_at(LAMBDA)));
     let nu_max = 0.8 / (LAMBDA * 2.5);
-    let settings = optics::Settings { pupil_samples: 128, ..optics::Settings::default() };
+    let settings = optics::Settings { pupil_samples: Some(128), ..optics::Settings::default() };
     let build = |lens: &'static OneOrder| {
         Polychromatic::with_settings(lens, spectrum, Field::ON_AXIS, nu_max, None, settings).unwrap()
     };
@@ -287,7 +287,7 @@ impl LensModel for Segmented {
 fn the_coherent_composite_differs_from_the_incoherent_sum() {
     let band = Spectrum::TopHat(TopHat::new(775e-9, 825e-9, 1.0).unwrap());
     let nyquist = 0.5 / 5.2e-6;
-    let settings = optics::Settings { pupil_samples: 256, ..optics::Settings::default() };
+    let settings = optics::Settings { pupil_samples: Some(256), ..optics::Settings::default() };
     let coherent = Segmented::new(true);
     let incoherent = Segmented::new(false);
     let pc = Polychromatic::with_settings(&coherent, &band, Field::ON_AXIS, nyquist, None, settings).unwrap();
@@ -320,7 +320,7 @@ fn one_wavelength_through_a_tiling_composite_is_the_circle() {
     let frequencies: Vec<f64> = (0..40).map(|k| 0.6 * cutoff * k as f64 / 39.0).collect();
     let mtf = optics::monochromatic_mtf(&lens, LAMBDA, Field::ON_AXIS, &frequencies, 128).unwrap();
     let spectrum = line_at(LAMBDA);
-    let settings = optics::Settings { pupil_samples: 128, ..optics::Settings::default() };
+    let settings = optics::Settings { pupil_samples: Some(128), ..optics::Settings::default() };
     let poly = Polychromatic::with_settings(&lens, &spectrum, Field::ON_AXIS, 0.6 * cutoff, None, settings).unwrap();
     assert!(matches!(poly.engine(), optics::Engine::Monochromatic { fft: Some((128, _)) }), "{:?}", poly.engine());
     assert_eq!(poly.max_defocus(), w020);
