@@ -133,6 +133,9 @@ pub struct Options {
     /// Whether the closed-form spectral engine may be used where it applies (off: always the
     /// spectral quadrature, for cross-checks).
     pub closed_form: bool,
+    /// The spectral rule where no closed form applies: product integration (default) or the
+    /// per-interval panels kept as the reference.
+    pub spectral_rule: optics::SpectralRule,
 }
 
 impl Options {
@@ -142,7 +145,7 @@ impl Options {
             pupil_samples: self.pupil_samples,
             tolerance: self.tolerance,
             closed_form: self.closed_form,
-            ..optics::Settings::default()
+            spectral_rule: self.spectral_rule,
         }
     }
 }
@@ -157,6 +160,7 @@ impl Default for Options {
             glare: GlareMode::FirstOrder,
             tolerance: optics::DEFAULT_TOLERANCE,
             closed_form: true,
+            spectral_rule: optics::SpectralRule::Interpolated,
         }
     }
 }

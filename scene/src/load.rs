@@ -138,6 +138,7 @@ pub(crate) struct RawOptions {
     pub pupil_samples: Option<u32>,
     pub glare: Option<String>,
     pub tolerance: Option<f64>,
+    pub spectral_rule: Option<String>,
 }
 
 /// Where a scene came from, and which keys `--set` overrode: every message names its origin.
@@ -861,6 +862,19 @@ fn options(opt: Option<&RawOptions>, o: &Origins) -> Result<Options, Error> {
             "first_order" => metric::GlareMode::FirstOrder,
             "included" => metric::GlareMode::Included,
             other => return Err(o.bad("options.glare", quoted(other), "\"first_order\" or \"included\"")),
+        };
+    }
+    if let Some(r) = &opt.spectral_rule {
+        options.spectral_rule = match r.as_str() {
+            "interpolated" => optics::SpectralRule::Interpolated,
+            "panels" => optics::SpectralRule::Panels,
+            other => {
+                return Err(o.bad(
+                    "options.spectral_rule",
+                    quoted(other),
+                    "\"interpolated\" (product integration, the default) or \"panels\" (the per-interval reference rule)",
+                ));
+            }
         };
     }
     if let Some(v) = opt.pupil_samples {

@@ -329,6 +329,11 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
     };
     out.string("glare", opt.and_then(|p| p.glare.as_deref()).unwrap_or(glare));
     out.number("tolerance", opt.and_then(|p| p.tolerance).unwrap_or(defaults.tolerance));
+    let rule = match defaults.spectral_rule {
+        optics::SpectralRule::Interpolated => "interpolated",
+        optics::SpectralRule::Panels => "panels",
+    };
+    out.string("spectral_rule", opt.and_then(|p| p.spectral_rule.as_deref()).unwrap_or(rule));
 
     match (&raw.field, &raw.fields) {
         (_, Some(list)) => {

@@ -1,0 +1,172 @@
+//! The closed-form engine ([`GaussianDefocus`]): a Gaussian × polynomial spectrum through one full
+//! pupil with defocus affine in λ, the spectral integral done exactly; one integral (over the
+//! pupil angle) is left per OTF value, to a tolerance the frequency rule sets.
+
+use std::cell::Cell;
+
+use num_complex::Complex64;
+use radiometry::Spectrum;
+
+use crate::closed::GaussianDefocus;
+use crate::lens::{Field, LensModel, Pupil};
+use crate::quad;
+
+use super::spectral::{Node, Nodes, Panel};
+use super::{Engine, FrequencyRule, GAUSSIAN_HALF_WIDTH_SIGMAS, OtfEngine};
+
+/// The closed-form engine and its counters.
+#[derive(Debug)]
+pub(super) struct Closed {
+    pub closed: GaussianDefocus,
+    pub nodes: Nodes,
+    pub f_number: f64,
+    /// absolute tolerance of one OTF value (set by the frequency rule)
+    pub otf_tolerance: Cell<f64>,
+    /// E(c) evaluations so far
+    pub evaluations: Cell<usize>,
+}
+
+impl Closed {
+    /// The engine, with spectral nodes not for the OTF (its spectral integral is exact) but for
+    /// the averages over the spectrum (`detected_integral`, `spectral_average`): 8 Gauss–Legendre
+    /// panels over μ ± 10σ, exact to rounding for the smooth functions they are used with.
+    pub fn new(closed: GaussianDefocus, affine: crate::AffineDefocus, detected: &Spectrum, f_number: f64) -> Closed {
+        let (mu, sigma) = (closed.center(), closed.sigma());
+        let (lo, hi) = ((mu - 10.0 * sigma).max(0.0), mu + 10.0 * sigma);
+        let mut nodes = Nodes::default();
+        quad::for_each_node(lo, hi, 8, |lambda, q| {
+            let q_rho = q * detected.value(lambda);
+            nodes.samples.push((lambda, q_rho));
+            nodes.nodes.push(Node {
+                lambda,
+                weight: q_rho * affine.efficiency,
+                w020: affine.w020_intercept_m + affine.w020_slope * lambda,
+                shift: [0.0, 0.0],
+                table: None,
+            });
+        });
+        nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len() });
+        nodes.total_weight = closed.total_weight();
+        Closed { closed, nodes, f_number, otf_tolerance: Cell::new(1e-8), evaluations: Cell::new(0) }
+    }
+}
+
+impl OtfEngine for Closed {
+    fn engine(&self) -> Engine {
+        Engine::ClosedForm
+    }
+
+    fn nodes(&self) -> &Nodes {
+        &self.nodes
+    }
+
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn otf(&self, frequency: f64) -> f64 {
+        if frequency == 0.0 {
+            return 1.0;
+        }
+        let (value, evaluations) = self.closed.otf(frequency, self.otf_tolerance.get());
+        self.evaluations.set(self.evaluations.get() + evaluations);
+        value
+    }
+
+    fn otf_along(&self, frequency: f64, _azimuth: f64) -> Complex64 {
+        // on axis, rotationally symmetric and real
+        Complex64::new(self.otf(frequency), 0.0)
+    }
+
+    fn direction_dependent(&self) -> bool {
+        false
+    }
+
+    fn frequency_rule(&self) -> FrequencyRule {
+        FrequencyRule::Adaptive { min_panels: 1.0 }
+    }
+
+    /// The closed form is exact across the spectrum: no panel edges, no kinks; but where the
+    /// cutoffs 1/(λ F#) of the Gaussian's centre and flanks lie below `max_frequency`, the OTF is
+    /// non-zero on a small part of the range only, which one panel's nodes can miss entirely
+    /// (F/1e4: cutoff at 1/770 of Nyquist): cut there, and where the OTF vanishes altogether.
+    fn frequency_cuts(&self, max_frequency: f64) -> Vec<f64> {
+        let mut cuts = vec![0.0, max_frequency];
+        let (mu, sigma) = (self.closed.center(), self.closed.sigma());
+        for k in 0..=GAUSSIAN_HALF_WIDTH_SIGMAS as usize {
+            let lambda = mu - k as f64 * sigma;
+            let nu = 1.0 / (lambda * self.f_number);
+            if lambda > 0.0 && nu < max_frequency {
+                cuts.push(nu);
+            }
+        }
+        if self.max_cutoff() < max_frequency {
+            cuts.push(self.max_cutoff());
+        }
+        super::sort_cuts(cuts)
+    }
+
+    fn set_value_tolerance(&self, absolute: f64) {
+        self.otf_tolerance.set(absolute);
+    }
+
+    fn value_noise(&self) -> f64 {
+        self.otf_tolerance.get()
+    }
+
+    fn value_evaluations(&self) -> usize {
+        self.evaluations.get()
+    }
+
+    fn fraction_blurred_beyond(
+        &self,
+        _lens: &dyn LensModel,
+        _detected: &Spectrum,
+        _field: Field,
+        w020_limit: f64,
+    ) -> f64 {
+        self.closed.fraction_defocused_beyond(w020_limit)
+    }
+}
+
+/// The closed-form engine for `lens` seen through `detected` at `field`, when it applies: a
+/// Gaussian × polynomial spectrum and a lens whose [`LensModel::affine_defocus`] promise is
+/// confirmed by its [`orders`](LensModel::orders) at three wavelengths.
+pub(super) fn closed_form(
+    lens: &dyn LensModel,
+    detected: &Spectrum,
+    field: Field,
+) -> Option<(GaussianDefocus, crate::AffineDefocus)> {
+    let affine = lens.affine_defocus(field)?;
+    let gp = detected.gaussian_polynomial()?;
+    if affine.efficiency.is_nan() || affine.efficiency <= 0.0 || gp.coefficients.len() > crate::closed::MAX_TERMS {
+        return None;
+    }
+    for lambda in [gp.center_m - gp.sigma_m, gp.center_m, gp.center_m + 2.0 * gp.sigma_m] {
+        if lambda <= 0.0 {
+            continue;
+        }
+        let orders = lens.orders(lambda, field);
+        let [order] = orders.as_slice() else { return None };
+        let w020 = affine.w020_intercept_m + affine.w020_slope * lambda;
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()) + 1e-18;
+        if !matches!(order.pupil, Pupil::Full)
+            || !order.wavefront.is_defocus_only()
+            || order.wavefront.image_shift_m != [0.0, 0.0]
+            || !close(order.efficiency, affine.efficiency)
+            || !close(order.wavefront.defocus_m, w020)
+        {
+            return None;
+        }
+    }
+    let closed = GaussianDefocus::new(
+        gp.center_m,
+        gp.sigma_m,
+        &gp.coefficients,
+        affine.efficiency,
+        affine.w020_intercept_m,
+        affine.w020_slope,
+        lens.f_number(),
+    );
+    Some((closed, affine))
+}

@@ -1,0 +1,302 @@
+//! The FFT engine: sampled pupils (apertures, composite pupils of zones, wavefronts beyond
+//! defocus) by FFT, one complex OTF grid per spectral node and order (docs/physics.md, "General
+//! pupils"); tabulated orders are read directly beside the grids.
+
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+use num_complex::Complex64;
+
+use crate::Error;
+use crate::fft::{Aperture, Otf, OtfPlan, SampledPupil, SampledZones, ZoneField};
+use crate::lens::{Field, LensModel, Order, Pupil};
+use crate::table::OtfTable;
+
+use super::spectral::{Node, Nodes, Scene, needs_grid};
+use super::{Engine, FFT_MEMORY_BUDGET, FrequencyRule, OtfEngine};
+
+pub(super) struct FftNode {
+    lambda: f64,
+    weight: f64,
+    shift: [f64; 2],
+    kind: FftKind,
+}
+
+/// How an order's OTF is read on the FFT layer.
+pub(super) enum FftKind {
+    /// A complex OTF grid: a sampled pupil or a composite of zones.
+    Grid(Otf),
+    /// A tabulated OTF ([`Pupil::Table`]), read at ν directly.
+    Table(Arc<OtfTable>),
+}
+
+/// The FFT layer: one complex OTF grid per spectral node and order.
+pub(super) struct FftPath {
+    nodes: Vec<FftNode>,
+    pub pupil_samples: usize,
+    pub padded: usize,
+}
+
+impl std::fmt::Debug for FftPath {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "FftPath {{ {} nodes, N = {}, M = {} }}", self.nodes.len(), self.pupil_samples, self.padded)
+    }
+}
+
+impl FftPath {
+    /// One complex OTF grid per spectral sample and order of `nodes`, from one reused plan (a
+    /// tabulated order is read directly); sampled pupils and zones are cached while their
+    /// apertures (the same `Arc`s) stay the same. The grids are counted against
+    /// [`FFT_MEMORY_BUDGET`] before any is made.
+    pub fn build(scene: &Scene<'_>, nodes: &Nodes, pupil_samples: usize) -> Result<FftPath, Error> {
+        let lambda_max = nodes.samples.iter().map(|s| s.0).fold(0.0, f64::max);
+        let s_max = (scene.max_frequency * lambda_max * scene.f_number).min(1.0);
+        let mut layer = FftLayer::new(pupil_samples, s_max, scene.lens.numerical_aperture())?;
+        // memory budget: one (2K + 1)² complex grid per spectral node and order on the grid path,
+        // counted before any is made (a 300 nm band at 1024 samples would hold 12 GB)
+        let side = 2 * layer.plan.max_lag() + 1;
+        let grid_bytes = (side * side * std::mem::size_of::<Complex64>()) as f64;
+        let grids = nodes.nodes.iter().filter(|n| n.table.is_none()).count();
+        if grids as f64 * grid_bytes > FFT_MEMORY_BUDGET {
+            return Err(Error::WorkBudget {
+                grids,
+                grid_mb: grid_bytes / 1e6,
+                total_gib: grids as f64 * grid_bytes / f64::from(1u32 << 30),
+                budget_gib: FFT_MEMORY_BUDGET / f64::from(1u32 << 30),
+                pupil_samples,
+            });
+        }
+        let mut out = Vec::new();
+        for &(lambda, weight) in &nodes.samples {
+            if weight == 0.0 {
+                continue;
+            }
+            for order in scene.lens.orders(lambda, scene.field) {
+                out.push(FftNode {
+                    lambda,
+                    weight: weight * order.efficiency,
+                    shift: order.wavefront.image_shift_m,
+                    kind: layer.kind(&order, lambda)?,
+                });
+            }
+        }
+        Ok(FftPath { nodes: out, pupil_samples, padded: layer.plan.padded_len() })
+    }
+
+    /// `Σ weight × OTF` over the grids along `azimuth` (radians from x), each times
+    /// `exp(−2πi ν u·Δ)` for its image shift; not normalized.
+    pub fn sum_along(&self, scene: &Scene<'_>, frequency: f64, azimuth: f64) -> Complex64 {
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let k = -2.0 * PI * frequency;
+        let nuf = frequency.abs() * scene.f_number;
+        // OTF(−ν) = OTF(ν)*: read the grid at |ν| along the azimuth turned by π
+        let azimuth = if frequency < 0.0 { azimuth + PI } else { azimuth };
+        let from_field = azimuth - scene.field_direction();
+        let mut sum = Complex64::new(0.0, 0.0);
+        for n in &self.nodes {
+            let s = nuf * n.lambda;
+            if s >= 1.0 {
+                continue;
+            }
+            let mut v = match &n.kind {
+                FftKind::Grid(otf) if s <= otf.s_max() => otf.at(s, azimuth) * n.weight,
+                FftKind::Grid(_) => continue,
+                FftKind::Table(t) => Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0),
+            };
+            let [dx, dy] = n.shift;
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+                v *= Complex64::new(pc, ps);
+            }
+            sum += v;
+        }
+        sum
+    }
+
+    /// The finest grid cell in ν (cycles/m): the interpolated grids kink at every cell edge.
+    pub fn finest_cell(&self, f_number: f64) -> f64 {
+        self.nodes
+            .iter()
+            .filter_map(|n| match &n.kind {
+                FftKind::Grid(otf) => Some(1.0 / (otf.n() as f64 * n.lambda * f_number)),
+                FftKind::Table(_) => None,
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// Spectral nodes read through FFT grids.
+#[derive(Debug)]
+pub(super) struct Grids<'a> {
+    pub scene: Scene<'a>,
+    pub nodes: Nodes,
+    pub fft: FftPath,
+}
+
+impl OtfEngine for Grids<'_> {
+    fn engine(&self) -> Engine {
+        Engine::Fft { pupil_samples: self.fft.pupil_samples, padded: self.fft.padded }
+    }
+
+    fn nodes(&self) -> &Nodes {
+        &self.nodes
+    }
+
+    fn f_number(&self) -> f64 {
+        self.scene.f_number
+    }
+
+    fn otf(&self, frequency: f64) -> f64 {
+        // no rotational symmetry to rely on: the real part along +x
+        self.otf_along(frequency, 0.0).re
+    }
+
+    fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
+        self.fft.sum_along(&self.scene, frequency, azimuth) / self.nodes.total_weight
+    }
+
+    fn direction_dependent(&self) -> bool {
+        true
+    }
+
+    fn frequency_rule(&self) -> FrequencyRule {
+        FrequencyRule::Fixed { cell: self.fft.finest_cell(self.scene.f_number) }
+    }
+}
+
+/// Cache size of sampled pupils and zone sets on the FFT layer (a lens has a few apertures).
+const SAMPLED_CACHE: usize = 8;
+
+/// The FFT layer's state while its grids are computed: one plan, and the sampled pupils and
+/// zone sets of the apertures seen so far (kept while the lens hands out the same `Arc`s).
+struct FftLayer {
+    n: usize,
+    plan: OtfPlan,
+    numerical_aperture: f64,
+    circle: Arc<Aperture>,
+    pupils: Vec<(Arc<Aperture>, SampledPupil)>,
+    zones: Vec<SampledZones>,
+    fields: Vec<ZoneField>,
+}
+
+impl FftLayer {
+    fn new(n: usize, s_max: f64, numerical_aperture: f64) -> Result<FftLayer, Error> {
+        Ok(FftLayer {
+            n,
+            plan: OtfPlan::new(n, s_max)?,
+            numerical_aperture,
+            circle: Arc::new(Aperture::circle()),
+            pupils: Vec::new(),
+            zones: Vec::new(),
+            fields: Vec::new(),
+        })
+    }
+
+    /// How `order`'s OTF at `lambda` is read: a grid of its sampled pupil, of its composite of
+    /// zones, or its table.
+    fn kind(&mut self, order: &Order, lambda: f64) -> Result<FftKind, Error> {
+        let aperture = match &order.pupil {
+            Pupil::Table(t) => return Ok(FftKind::Table(t.clone())),
+            Pupil::Zones(zones) => return self.zones_grid(zones, lambda).map(FftKind::Grid),
+            Pupil::Aperture(a) => a.clone(),
+            _ => self.circle.clone(),
+        };
+        let aberrations = order.wavefront.aberrations();
+        let slot = match self.pupils.iter().position(|(a, _)| Arc::ptr_eq(a, &aperture)) {
+            Some(i) => {
+                self.pupils[i].1.set_aberrations(&aberrations)?;
+                i
+            }
+            None => {
+                let p = SampledPupil::new(self.n, &aperture, &aberrations)?;
+                if self.pupils.len() == SAMPLED_CACHE {
+                    self.pupils.remove(0);
+                }
+                self.pupils.push((aperture, p));
+                self.pupils.len() - 1
+            }
+        };
+        let mut otf = Otf::new();
+        self.plan.otf(&self.pupils[slot].1, lambda, &mut otf);
+        Ok(FftKind::Grid(otf))
+    }
+
+    /// The OTF of one composite pupil (docs/physics.md, "General pupils"; `fft::SampledZones`):
+    /// the zones' fields add coherently, each with its amplitude, its wavefront and, for its own
+    /// image shift Δ, the tilt `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's
+    /// radius), which multiplies its part of the OTF by `exp(−2πi ν·Δ)` as an order's shift does.
+    fn zones_grid(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<Otf, Error> {
+        let apertures = || zones.iter().map(|z| &z.aperture);
+        let slot = match self.zones.iter().position(|s| s.is_sampling_of(apertures())) {
+            Some(i) => i,
+            None => {
+                let list: Vec<Arc<Aperture>> = apertures().cloned().collect();
+                if self.zones.len() == SAMPLED_CACHE {
+                    self.zones.remove(0);
+                }
+                self.zones.push(SampledZones::new(self.n, &list)?);
+                self.zones.len() - 1
+            }
+        };
+        let na = self.numerical_aperture;
+        self.fields.clear();
+        self.fields.extend(zones.iter().map(|z| ZoneField {
+            amplitude: z.amplitude,
+            aberrations: z.wavefront.aberrations(),
+            tilt_m: [z.wavefront.image_shift_m[0] * na, z.wavefront.image_shift_m[1] * na],
+        }));
+        let sampled = &mut self.zones[slot];
+        sampled.set_field(&self.fields, lambda)?;
+        let mut otf = Otf::new();
+        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
+        Ok(otf)
+    }
+}
+
+/// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):
+/// the modulus of the efficiency-weighted sum of its orders' OTFs (with their lateral-shift
+/// phases), normalized to 1 at zero frequency (all zeros if no order transmits). Orders beyond
+/// the exact path get one FFT grid each, with `pupil_samples` across the diameter (a composite
+/// pupil of zones one grid of its coherent field); a tabulated order is read at ν, along +x
+/// measured from the field direction.
+pub fn monochromatic_mtf(
+    lens: &dyn LensModel,
+    wavelength_m: f64,
+    field: Field,
+    frequencies: &[f64],
+    pupil_samples: usize,
+) -> Result<Vec<f64>, Error> {
+    let to_s = |nu: f64| nu.abs() * wavelength_m * lens.f_number();
+    let s_max = frequencies.iter().map(|&nu| to_s(nu)).fold(0.0, f64::max).clamp(1e-6, 1.0);
+    let mut sum = vec![Complex64::new(0.0, 0.0); frequencies.len()];
+    let mut total = 0.0;
+    let mut layer: Option<FftLayer> = None;
+    // along +x: a tabulated order's direction relative to the field's
+    let from_field = -field.y_rad.atan2(field.x_rad);
+    for order in lens.orders(wavelength_m, field) {
+        total += order.efficiency;
+        let kind = if needs_grid(&order) {
+            let layer = match &mut layer {
+                Some(l) => l,
+                slot => slot.insert(FftLayer::new(pupil_samples, s_max, lens.numerical_aperture())?),
+            };
+            Some(layer.kind(&order, wavelength_m)?)
+        } else {
+            None
+        };
+        let node = Node::of(&order, wavelength_m, order.efficiency);
+        for (acc, &nu) in sum.iter_mut().zip(frequencies) {
+            let s = to_s(nu);
+            if s >= 1.0 {
+                continue;
+            }
+            let otf = match &kind {
+                Some(FftKind::Grid(g)) => g.at(s.min(g.s_max()), 0.0),
+                _ => Complex64::new(node.otf(s, nu, from_field), 0.0),
+            };
+            let phase = -2.0 * PI * nu * order.wavefront.image_shift_m[0];
+            *acc += otf * Complex64::from_polar(order.efficiency, phase);
+        }
+    }
+    Ok(sum.iter().map(|z| if total > 0.0 { z.norm() / total } else { 0.0 }).collect())
+}

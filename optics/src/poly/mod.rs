@@ -1,0 +1,545 @@
+//! The polychromatic OTF and its mean up to a frequency limit.
+//!
+//! docs/physics.md, "Polychromatic OTF": the signed monochromatic OTFs are summed with the
+//! detected-photoelectron weights `ρ(λ) τ(λ)` (source × filter × QE × λ, times the order's
+//! efficiency), each at its own `s = ν λ F#`, and the MTF is the modulus of the sum:
+//!
+//! ```text
+//! OTF_poly(ν) = Σ_orders ∫ ρ(λ) τ_o(λ) OTF(ν λ F#, W020_o(λ)/λ) dλ  /  Σ_orders ∫ ρ(λ) τ_o(λ) dλ
+//! mean MTF    = (1/ν_max) ∫_0^{ν_max} P(ν) |OTF_poly(ν)| dν,   P = pixel MTF or 1
+//! ```
+//!
+//! # The map
+//! [`Polychromatic`] is the one interface. Its constructor [`choose`]s an engine, a type
+//! implementing [`OtfEngine`] (the OTF along an azimuth, its spectral nodes, its frequency rule
+//! and its counters), the way RustFFT's planner hands out one `Arc<dyn Fft>`:
+//! - `closed_form` — [`Engine::ClosedForm`]: the spectral integral in closed form.
+//! - `exact` — [`Engine::Exact1d`]: spectral nodes through the exact 1-D OTF.
+//! - `grid` — [`Engine::Fft`]: spectral nodes through FFT grids of sampled pupils.
+//! - `line` — [`Engine::Monochromatic`]: a line spectrum, one node per order.
+//!
+//! The spectral nodes come from `spectral`: product integration (the default) or the
+//! per-interval panels (the reference; [`SpectralRule`]). The frequency integration over any
+//! engine is written once, in `frequency`. Each piece is tested against [`crate::reference`].
+//!
+//! - **Cutoff.** A wavelength contributes only while `s < 1`, i.e. `λ < 1/(ν F#)`. On the
+//!   panels rule, the panel that straddles that limit is clipped there and integrated in `u`
+//!   with `λ = λ_cut − L u²`, which turns the `(1 − s)^{3/2}` edge of the OTF into a smooth
+//!   integrand; product integration is chosen only where no cutoff falls inside the band.
+//! - **Frequency panels.** `[0, ν_max]` is cut where any spectral panel edge reaches its cutoff,
+//!   and integrated by adaptive Gauss–Kronrod (7/15). Where `OTF_poly` changes sign inside a
+//!   panel, the root is located (Illinois method) and the panel split there, so `|OTF_poly|` is
+//!   only integrated where it is smooth.
+//! - **Several orders.** The panels resolve the defocus phase of every order (and every zone of
+//!   a composite pupil), matched between neighbouring wavelengths, not only the order of
+//!   largest defocus, whose sign jumps between the channels of a multiplexed lens.
+//! - **Tabulated orders** ([`Pupil::Table`](crate::Pupil)) are read at ν (T/S along the azimuth
+//!   from the field direction) in place of the defocused OTF, on the exact path or beside the
+//!   FFT layer's grids; composite pupils of zones get one FFT grid per node, of their coherent
+//!   field (`fft::SampledZones`).
+//! - **Line spectra** ([`Spectrum::as_line`]) skip all of the spectral part: the sum over λ is one
+//!   term per imaging order at the line's wavelength, whose cutoff is the one frequency cut.
+
+use num_complex::Complex64;
+use radiometry::Spectrum;
+
+use crate::Error;
+use crate::lens::{Field, LensModel};
+
+mod closed_form;
+mod exact;
+mod frequency;
+mod grid;
+mod line;
+mod noise;
+mod spectral;
+
+pub use grid::monochromatic_mtf;
+pub use noise::NoiseShape;
+pub(crate) use spectral::spectral_extent;
+
+use spectral::{Nodes, Scene};
+
+/// Half-width, in standard deviations, kept of each Gaussian spectral factor: the area beyond
+/// ±7σ is `erfc(7/√2)` = 2.6e-12 of the total, so neither the photoelectron count nor the
+/// normalized polychromatic OTF moves by more than that (the OTF is bounded by 1). Wider windows
+/// cost: the widest kept wavelength sets the largest defocus, and the work grows as its cube.
+pub const GAUSSIAN_HALF_WIDTH_SIGMAS: f64 = 7.0;
+
+/// The most initial frequency panels of one interval (the adaptive rule bisects further where
+/// needed): a bound, so that no finite input asks for more panels than memory and time allow.
+const MAX_PANELS: f64 = (1 << 20) as f64;
+
+/// Memory the FFT path may hold in OTF grids, bytes (4 GiB: a sixth of the 24 GiB machines the
+/// project is built for, so that a parallel sweep on two cores stays within memory). A scene
+/// that needs more stops with [`Error::WorkBudget`] before allocating.
+pub const FFT_MEMORY_BUDGET: f64 = 4.0 * (1u64 << 30) as f64;
+
+/// Pupil samples across the diameter on the FFT path when the settings fix none: the mean MTF
+/// of a defocused circle is then within 2.5e-5 of the exact path (`fft` module convergence
+/// table; 1e-4 needs N ≥ 128).
+pub const DEFAULT_PUPIL_SAMPLES: usize = 256;
+
+/// How the OTF is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// The exact 1-D integral: centred circular pupils with defocus (and lateral shifts) only,
+    /// and tabulated OTFs ([`Pupil::Table`](crate::Pupil)).
+    Exact1d,
+    /// The spectral integral in closed form ([`GaussianDefocus`](crate::GaussianDefocus)): a
+    /// Gaussian × polynomial spectrum through one full pupil with defocus affine in λ; one
+    /// adaptive integral left.
+    ClosedForm,
+    /// Sampled pupils by FFT: `pupil_samples` across the diameter, padded to `padded` points.
+    Fft {
+        /// Pupil samples across the diameter.
+        pupil_samples: usize,
+        /// FFT length after padding.
+        padded: usize,
+    },
+    /// A line spectrum ([`Spectrum::as_line`]): one wavelength, one node per imaging order, no
+    /// spectral quadrature. The OTF is the efficiency-weighted sum of the orders' exact OTFs
+    /// there (complex with lateral shifts), each by the 1-D integral or, where its pupil or
+    /// wavefront needs it, by FFT.
+    Monochromatic {
+        /// `Some((pupil samples across the diameter, FFT length after padding))` when some
+        /// order goes through the FFT; `None` when every order is on the exact 1-D path.
+        fft: Option<(usize, usize)>,
+    },
+}
+
+/// Weight fraction below which a spectral node does not count towards the largest defocus.
+const SIGNIFICANT_WEIGHT: f64 = 1e-13;
+
+/// Bisection depth limit of the adaptive frequency integration.
+const MAX_DEPTH: u32 = 40;
+
+/// Counts of what an evaluation did, for `--explain` and the accuracy report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Work {
+    /// Spectral panels (each with [`quad::ORDER`] nodes per imaging order).
+    pub spectral_panels: usize,
+    /// Spectral nodes, summed over orders.
+    pub spectral_nodes: usize,
+    /// Frequency panels after splitting at sign changes.
+    pub frequency_panels: usize,
+    /// Evaluations of the polychromatic OTF.
+    pub otf_evaluations: usize,
+    /// Sign changes of the polychromatic OTF located below the frequency limit.
+    pub sign_changes: usize,
+    /// Evaluations of the closed-form spectral integral `E(c)` (closed-form engine only).
+    pub closed_form_evaluations: usize,
+}
+
+/// How a [`Polychromatic`] is computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Pupil samples across the diameter on the FFT path: `None` lets the tolerance choose
+    /// them; `Some(n)` fixes them (the result then has the FFT path's error at `n`, whatever
+    /// the tolerance).
+    pub pupil_samples: Option<usize>,
+    /// Relative error allowed in the mean MTF.
+    pub tolerance: f64,
+    /// Whether the closed-form engine may be used where it applies.
+    pub closed_form: bool,
+    /// The spectral rule of the quadrature engines.
+    pub spectral_rule: SpectralRule,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            pupil_samples: None,
+            tolerance: DEFAULT_TOLERANCE,
+            closed_form: true,
+            spectral_rule: SpectralRule::default(),
+        }
+    }
+}
+
+/// How the integral over wavelength is done where no closed form applies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpectralRule {
+    /// Product integration: the OTF, smooth in λ, is interpolated at nodes whose number follows
+    /// its defocus phase and the tolerance; the weights are the exact moments of the detected
+    /// spectrum against the interpolation basis, so kinks of a measured spectrum cost nothing.
+    #[default]
+    Interpolated,
+    /// The per-interval rule, kept as the reference: 16-point Gauss–Legendre panels cut at every
+    /// kink of the spectrum and of the lens and refined until the defocus phase turns by at most
+    /// 12 rad per panel; exact to rounding whatever the tolerance, at a cost that grows with
+    /// the number of table samples.
+    Panels,
+}
+
+/// Default relative tolerance of the mean MTF.
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+
+/// How the frequency integral is done over an engine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum FrequencyRule {
+    /// Adaptive Gauss–Kronrod, at least `min_panels` initial panels over the whole range.
+    Adaptive {
+        /// Initial panels over `[0, ν_max]` (at least).
+        min_panels: f64,
+    },
+    /// A fixed composite rule at a quarter of `cell` (cycles/m), the finest cell of the FFT
+    /// grids, whose interpolation kinks at every cell edge.
+    Fixed {
+        /// The finest grid cell in ν, cycles/m.
+        cell: f64,
+    },
+}
+
+/// What every engine answers: the polychromatic OTF, normalized to 1 at ν = 0 (the caller
+/// answers ν = 0 itself), the spectral nodes it sums (for the averages over the spectrum), how
+/// its frequency integral is done, and its counters.
+trait OtfEngine: std::fmt::Debug {
+    /// Which engine this is, for `--explain`.
+    fn engine(&self) -> Engine;
+    /// The spectral nodes.
+    fn nodes(&self) -> &Nodes;
+    /// The signed OTF of the rotationally symmetric system along +x (image shifts ignored).
+    fn otf(&self, frequency: f64) -> f64;
+    /// The complex OTF along `azimuth` (radians from the detector's x axis).
+    fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64;
+    /// Whether the OTF depends on direction, so that the MTF must be read along an azimuth.
+    fn direction_dependent(&self) -> bool {
+        self.nodes().direction_dependent()
+    }
+    /// How the frequency integral is done.
+    fn frequency_rule(&self) -> FrequencyRule;
+    /// Frequencies in `[0, max_frequency]` where the OTF may kink (with both ends): a spectral
+    /// panel edge, or the one wavelength of a line, reaching its cutoff.
+    fn frequency_cuts(&self, max_frequency: f64) -> Vec<f64> {
+        let nodes = self.nodes();
+        let f_number = self.f_number();
+        let mut cuts = vec![0.0, max_frequency];
+        let ends = nodes.panels.iter().flat_map(|p| [p.lo, p.hi]);
+        for lambda in ends.chain(nodes.line) {
+            if lambda > 0.0 {
+                let nu = 1.0 / (lambda * f_number);
+                if nu < max_frequency {
+                    cuts.push(nu);
+                }
+            }
+        }
+        sort_cuts(cuts)
+    }
+    /// The F-number the nodes' `s = ν λ F#` use.
+    fn f_number(&self) -> f64;
+    /// Sets the absolute tolerance of one OTF value, where the engine computes each to a
+    /// tolerance (closed form); others ignore it.
+    fn set_value_tolerance(&self, _absolute: f64) {}
+    /// The absolute noise of one OTF value (0 where values are exact to rounding).
+    fn value_noise(&self) -> f64 {
+        0.0
+    }
+    /// Evaluations of an inner integrand so far (closed form: E(c)).
+    fn value_evaluations(&self) -> usize {
+        0
+    }
+    /// Cutoff frequency (cycles/m) of the shortest wavelength covered: the OTF is zero beyond.
+    fn max_cutoff(&self) -> f64 {
+        1.0 / (self.nodes().shortest() * self.f_number())
+    }
+    /// Photoelectron-weighted fraction of the signal whose `|W020|` exceeds `w020_limit`.
+    fn fraction_blurred_beyond(&self, lens: &dyn LensModel, detected: &Spectrum, field: Field, w020_limit: f64) -> f64 {
+        let nodes = self.nodes();
+        if nodes.line.is_some() {
+            // one wavelength: each order is beyond or not (0 or 1 for a single order)
+            let beyond: f64 = nodes.nodes.iter().filter(|n| n.w020.abs() > w020_limit).map(|n| n.weight).sum();
+            return beyond / nodes.total_weight;
+        }
+        let panels: Vec<(f64, f64)> = nodes.panels.iter().map(|p| (p.lo, p.hi)).collect();
+        let density = |lambda: f64| detected.value(lambda);
+        let beyond = crate::fraunhofer::weight_defocused_beyond(lens, field, &density, &panels, w020_limit);
+        (beyond / nodes.total_weight).clamp(0.0, 1.0)
+    }
+}
+
+/// The error of the last of a sequence of nested rules (each with twice the points of the one
+/// before) from the differences `moves` between consecutive ones, last last: with the ratio
+/// `r = d/d'` of the last two, the next difference is about `d r` while the convergence is
+/// linear (a constant ratio per doubling, as before the rule resolves its integrand), and falls
+/// to `d r²`-like once it is geometric in the points (`C ρ^{−n}`: the ratio then squares at
+/// each doubling); the estimate is `d r min(1, r/r')` with `r'` the ratio before, so it
+/// credits only the acceleration the moves show. With fewer than two moves: infinite.
+fn nested_error(moves: &[f64]) -> f64 {
+    match moves {
+        [.., d1, d2] if *d1 > 0.0 => {
+            let r = (d2 / d1).min(1.0);
+            let acceleration = match moves {
+                [.., d0, d1, _] if *d0 > 0.0 && *d1 > 0.0 => (r / (d1 / d0)).min(1.0),
+                _ => 1.0,
+            };
+            d2 * r * acceleration
+        }
+        [.., _, d2] => *d2,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Sorted frequency cuts, merged when within 1e-12 of each other relative to themselves (a
+/// 1e-206 m pixel puts Nyquist 1e200 times above them).
+fn sort_cuts(mut cuts: Vec<f64>) -> Vec<f64> {
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * a.abs().max(b.abs()));
+    cuts
+}
+
+/// A prepared polychromatic evaluation for one lens, detected spectrum and field point, valid
+/// for frequencies up to `max_frequency`: the engine [`choose`]n for them, and what the
+/// frequency integration needs.
+#[derive(Debug)]
+pub struct Polychromatic<'a> {
+    lens: &'a dyn LensModel,
+    detected: &'a Spectrum,
+    field: Field,
+    f_number: f64,
+    max_frequency: f64,
+    pixel_pitch: Option<f64>,
+    tolerance: f64,
+    engine: Box<dyn OtfEngine + 'a>,
+    /// largest |W020| among significant nodes, m
+    w020_max: f64,
+    /// weighted RMS of W020, m
+    w020_rms: f64,
+    /// largest |W020| among the nodes whose weight could move the mean by a hundredth of the
+    /// tolerance, m: the defocus phase a frequency rule must resolve
+    w020_resolved: f64,
+}
+
+/// The engine for a scene: the closed form where it applies (and is allowed), a line's engine
+/// for a line spectrum, else spectral nodes (product integration, or the panels rule where a
+/// cutoff falls inside the band or the settings ask for it) read through the exact 1-D OTF, or
+/// through FFT grids where some order's pupil or wavefront needs them.
+fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine + 'a>, Error> {
+    let pupil_samples = settings.pupil_samples.unwrap_or(DEFAULT_PUPIL_SAMPLES);
+    if let Some(l) = scene.detected.as_line() {
+        let nodes = spectral::line(&scene, l);
+        check_signal(&nodes)?;
+        let fft = if nodes.needs_grid { Some(grid::FftPath::build(&scene, &nodes, pupil_samples)?) } else { None };
+        return Ok(Box::new(line::Line { scene, nodes, fft }));
+    }
+    let (lo, hi) = spectral_extent(scene.detected)?;
+    if settings.closed_form
+        && let Some((closed, affine)) = closed_form::closed_form(scene.lens, scene.detected, scene.field)
+    {
+        let engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number);
+        check_signal(&engine.nodes)?;
+        return Ok(Box::new(engine));
+    }
+    let interpolated = match settings.spectral_rule {
+        SpectralRule::Interpolated => spectral::interpolated(&scene, lo, hi, settings.tolerance),
+        SpectralRule::Panels => None,
+    };
+    let nodes = match interpolated {
+        Some(nodes) => nodes,
+        None => spectral::panels(&scene, lo, hi),
+    };
+    check_signal(&nodes)?;
+    if nodes.needs_grid {
+        let fft = grid::FftPath::build(&scene, &nodes, pupil_samples)?;
+        return Ok(Box::new(grid::Grids { scene, nodes, fft }));
+    }
+    Ok(Box::new(exact::Quadrature { scene, nodes }))
+}
+
+/// A signal must be there: the nodes' total weight positive and finite.
+fn check_signal(nodes: &Nodes) -> Result<(), Error> {
+    if nodes.total_weight > 0.0 && nodes.total_weight.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::NoSignal { total: nodes.total_weight })
+    }
+}
+
+impl<'a> Polychromatic<'a> {
+    /// Prepares the spectral quadrature for `lens` seen through the `detected` spectrum.
+    ///
+    /// `detected` is the spectral density of detected photons *before* the lens efficiency:
+    /// source radiance × filter × quantum efficiency × λ (paper SI eq. S8), any scale.
+    /// `max_frequency` (cycles/m) is the upper end of the mean, usually the Nyquist frequency
+    /// `1/(2p)`; `pixel_pitch` (m), if given, multiplies the MTF by the pixel-aperture MTF.
+    pub fn new(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+    ) -> Result<Self, Error> {
+        Self::with_settings(lens, detected, field, max_frequency, pixel_pitch, Settings::default())
+    }
+
+    /// [`new`](Self::new) with `pupil_samples` across the diameter for orders that need the FFT
+    /// path (ignored on the exact path).
+    pub fn with_pupil_samples(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        pupil_samples: usize,
+    ) -> Result<Self, Error> {
+        let settings = Settings { pupil_samples: Some(pupil_samples), ..Settings::default() };
+        Self::with_settings(lens, detected, field, max_frequency, pixel_pitch, settings)
+    }
+
+    /// [`new`](Self::new) with explicit [`Settings`]: the tolerance, the pupil sampling of the
+    /// FFT path, whether the closed-form engine may be used, and the spectral rule.
+    ///
+    /// The closed-form engine is chosen when the detected spectrum is a Gaussian times a
+    /// polynomial ([`Spectrum::gaussian_polynomial`]) and the lens promises an affine defocus
+    /// ([`LensModel::affine_defocus`]) that its [`orders`](LensModel::orders) confirm. A line
+    /// spectrum ([`Spectrum::as_line`]) is one wavelength ([`Engine::Monochromatic`]): one node
+    /// per imaging order, no spectral quadrature.
+    pub fn with_settings(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+    ) -> Result<Self, Error> {
+        if !(settings.tolerance.is_finite() && settings.tolerance > 0.0 && settings.tolerance < 1.0) {
+            return Err(Error::InvalidParameter {
+                name: "tolerance",
+                value: settings.tolerance,
+                expected: "a relative error in (0, 1), e.g. 1e-6",
+            });
+        }
+        if !(max_frequency.is_finite() && max_frequency > 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "max_frequency",
+                value: max_frequency,
+                expected: "finite and > 0 cycles/m",
+            });
+        }
+        let f_number = lens.f_number();
+        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch };
+        let engine = choose(scene, settings)?;
+        let mut this = Polychromatic {
+            lens,
+            detected,
+            field,
+            f_number,
+            max_frequency,
+            pixel_pitch,
+            tolerance: settings.tolerance,
+            engine,
+            w020_max: 0.0,
+            w020_rms: 0.0,
+            w020_resolved: 0.0,
+        };
+        // the largest |W020| among the nodes that carry weight, and the weighted RMS of W020
+        // (the frequency rule's initial panels)
+        let nodes = this.engine.nodes();
+        let threshold = SIGNIFICANT_WEIGHT * nodes.total_weight;
+        this.w020_max =
+            nodes.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
+        let relevant = 1e-2 * settings.tolerance * nodes.total_weight.abs();
+        this.w020_resolved =
+            nodes.nodes.iter().filter(|n| n.weight.abs() > relevant).map(|n| n.w020.abs()).fold(0.0, f64::max);
+        // (product-integration weights may be negative: the average of W020² too, by rounding)
+        this.w020_rms = this.spectral_average(|_, w020| w020 * w020).max(0.0).sqrt();
+        Ok(this)
+    }
+
+    /// The OTF engine in use.
+    pub fn engine(&self) -> Engine {
+        self.engine.engine()
+    }
+
+    /// Whether the OTF depends on direction (lateral colour, or a non-symmetric pupil or
+    /// wavefront): the MTF must then be read along an azimuth.
+    pub fn direction_dependent(&self) -> bool {
+        self.engine.direction_dependent()
+    }
+
+    /// `∫ ρ(λ) τ(λ) dλ` summed over the imaging orders: the detected-signal integral in the units
+    /// of the `detected` spectrum.
+    pub fn total_weight(&self) -> f64 {
+        self.engine.nodes().total_weight
+    }
+
+    /// `∫ ρ(λ) f(λ) dλ` over the detected spectrum *before* the lens (no efficiency factor),
+    /// with the same spectral rule.
+    pub fn detected_integral(&self, mut f: impl FnMut(f64) -> f64) -> f64 {
+        self.engine.nodes().samples.iter().map(|&(lambda, w)| w * f(lambda)).sum()
+    }
+
+    /// Weighted average of `f(λ, W020)` over the detected spectrum (weights `ρ τ`).
+    pub fn spectral_average(&self, mut f: impl FnMut(f64, f64) -> f64) -> f64 {
+        let nodes = self.engine.nodes();
+        nodes.nodes.iter().map(|n| n.weight * f(n.lambda, n.w020)).sum::<f64>() / nodes.total_weight
+    }
+
+    /// Signed polychromatic OTF at `frequency` (cycles/m), normalized to 1 at zero frequency, of
+    /// the rotationally symmetric system: image displacements are ignored (see
+    /// [`otf_along`](Self::otf_along) for the complex OTF with lateral colour).
+    pub fn otf(&self, frequency: f64) -> f64 {
+        if frequency == 0.0 {
+            return 1.0;
+        }
+        self.engine.otf(frequency)
+    }
+
+    /// Complex polychromatic OTF at `frequency` (cycles/m) along the direction `azimuth` (radians
+    /// from the detector's x axis): each wavelength's OTF times `exp(−2πi ν u·Δ)` for its image
+    /// displacement Δ (docs/physics.md: in the general case sum complex OTFs, then take the modulus).
+    pub fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
+        if frequency == 0.0 {
+            return Complex64::new(1.0, 0.0);
+        }
+        self.engine.otf_along(frequency, azimuth)
+    }
+
+    /// Whether some wavelength's image is displaced, so that the OTF is complex and depends on
+    /// the direction.
+    pub fn has_lateral_shifts(&self) -> bool {
+        self.engine.nodes().shifted()
+    }
+
+    /// Polychromatic MTF along `azimuth`: `|OTF|` times the pixel MTF along a pixel axis.
+    pub fn mtf_along(&self, frequency: f64, azimuth: f64) -> f64 {
+        self.otf_along(frequency, azimuth).norm() * self.pixel_factor(frequency)
+    }
+
+    /// Polychromatic MTF at `frequency`: `|OTF_poly|`, times the pixel MTF if enabled.
+    pub fn mtf(&self, frequency: f64) -> f64 {
+        self.otf(frequency).abs() * self.pixel_factor(frequency)
+    }
+
+    fn pixel_factor(&self, frequency: f64) -> f64 {
+        self.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, frequency))
+    }
+
+    /// Largest |W020| (m) among the spectral nodes that carry weight.
+    pub fn max_defocus(&self) -> f64 {
+        self.w020_max
+    }
+
+    /// Photoelectron-weighted fraction of the detected signal whose geometric blur radius
+    /// `2|W020|/NA` exceeds `radius_m` (Fraunhofer validity, paper SI eq. S15), exact on every
+    /// engine: in closed form on the closed-form engine
+    /// ([`GaussianDefocus::fraction_defocused_beyond`](crate::GaussianDefocus::fraction_defocused_beyond));
+    /// on the spectral rules, the wavelengths where each order's `|W020|` crosses
+    /// `radius_m NA/2` are located in every spectral panel and the weight beyond them integrated
+    /// by Gauss–Legendre on the sub-intervals (`fraunhofer::weight_defocused_beyond`), so the
+    /// step never falls between nodes and the fraction is continuous in every parameter.
+    pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
+        let limit = 0.5 * radius_m * self.lens.numerical_aperture();
+        self.engine.fraction_blurred_beyond(self.lens, self.detected, self.field, limit)
+    }
+}
+
+/// Cutoff frequency (cycles/m) of the shortest wavelength the spectral quadrature covers for
+/// `lens` and `detected`: every polychromatic OTF is zero beyond it. Needs no OTF work.
+pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, Error> {
+    let lo = match detected.as_line() {
+        Some(line) => line.wavelength_m,
+        None => spectral_extent(detected)?.0,
+    };
+    Ok(if lo > 0.0 { 1.0 / (lo * lens.f_number()) } else { f64::INFINITY })
+}

@@ -1,0 +1,913 @@
+//! The spectral rules: where the polychromatic OTF is sampled in wavelength, and with what weights.
+//!
+//! Both rules turn the detected spectrum ρ(λ) and the lens into [`Nodes`]: one [`Node`] per
+//! wavelength and imaging order, whose weight is the rule's weight × the order's efficiency, so
+//! that every engine sums `Σ weight × OTF_order(ν, λ)` and divides by the same sum at ν = 0.
+//!
+//! - **Product integration** ([`interpolated`], the default; docs/physics.md, "Spectral
+//!   quadrature"): the OTF at fixed ν is smooth in λ (for the chromatic lens its defocus phase is
+//!   linear in λ); the detected weight is not (a measured table kinks at every sample). So the
+//!   lens's part `g(ν, λ) = Σ_o τ_o(λ) OTF_o(ν, λ)` is interpolated in λ on Chebyshev–Lobatto
+//!   points of each panel, and the weights are the exact moments of ρ against the Lagrange basis,
+//!   computed once per scene from the Chebyshev moments `∫ ρ T_j` (Gauss–Legendre on the smooth
+//!   pieces of ρ, in the angle θ of `x = cos θ`). The panels follow the lens (its breakpoints and
+//!   its defocus phase), not the spectrum's samples; each panel's node count follows its phase
+//!   and its share of the weight through the Chebyshev interpolation bound (Trefethen,
+//!   *Approximation Theory and Approximation Practice*, Thm 8.2), checked a posteriori by the
+//!   nested rule of half the points.
+//! - **Panels** ([`panels`], the reference): 16-point Gauss–Legendre panels cut at every kink of
+//!   the spectrum and the lens, refined until the defocus phase turns by at most
+//!   [`quad::MAX_PANEL_PHASE`] across each; exact to rounding, at a cost that grows with the
+//!   number of table samples. Its panels can be clipped at a cutoff inside the band (the exact
+//!   engine does), which product integration cannot, so bands whose cutoffs fall below the
+//!   frequency limit take this rule.
+
+use std::f64::consts::PI;
+use std::sync::{Arc, OnceLock};
+
+use num_complex::Complex64;
+use radiometry::Spectrum;
+
+use crate::lens::{Field, LensModel, Order, Pupil};
+use crate::otf::{defocus_otf, pixel_mtf};
+use crate::table::OtfTable;
+use crate::{Error, quad};
+
+use super::GAUSSIAN_HALF_WIDTH_SIGMAS;
+
+/// One wavelength of one imaging order.
+#[derive(Clone, Debug)]
+pub(super) struct Node {
+    pub lambda: f64,
+    /// rule weight × order efficiency (the rule weight is `q ρ(λ)` for a quadrature node and a
+    /// moment of ρ for an interpolation node)
+    pub weight: f64,
+    /// W020 of the order, m
+    pub w020: f64,
+    /// image displacement on the detector, m
+    pub shift: [f64; 2],
+    /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
+    pub table: Option<Arc<OtfTable>>,
+}
+
+impl Node {
+    /// The node of `order` at `lambda` with `weight` (rule weight × efficiency).
+    pub fn of(order: &Order, lambda: f64, weight: f64) -> Node {
+        Node {
+            lambda,
+            weight,
+            // the largest zone defocus of a composite pupil (the frequency rule's statistics and
+            // the Fraunhofer check of a line); the defocused OTF uses it only for a full pupil
+            w020: crate::fraunhofer::order_defocus(order),
+            shift: order.wavefront.image_shift_m,
+            table: match &order.pupil {
+                Pupil::Table(t) => Some(t.clone()),
+                _ => None,
+            },
+        }
+    }
+
+    /// The real OTF of this node's order at `s = ν λ F#` (`s < 1`) along the direction at
+    /// `azimuth_from_field` from the field direction (a table's T/S; the defocused OTF of a
+    /// centred circle does not depend on it).
+    pub fn otf(&self, s: f64, frequency: f64, azimuth_from_field: f64) -> f64 {
+        match &self.table {
+            None => defocus_otf(s, self.w020 / self.lambda),
+            Some(t) => t.value(self.lambda, frequency, azimuth_from_field),
+        }
+    }
+}
+
+/// Whether `order` needs the FFT layer: a pupil other than the full circle (an aperture, a
+/// composite of zones), or a wavefront beyond defocus; a tabulated OTF is read directly.
+pub(super) fn needs_grid(order: &Order) -> bool {
+    match &order.pupil {
+        Pupil::Full => !order.wavefront.is_defocus_only(),
+        Pupil::Table(_) => false,
+        _ => true,
+    }
+}
+
+/// A spectral panel: its interval and its nodes `nodes[start..end]`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Panel {
+    pub lo: f64,
+    pub hi: f64,
+    pub start: usize,
+    pub end: usize,
+}
+
+/// What a spectral rule produces.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Nodes {
+    pub nodes: Vec<Node>,
+    /// (λ, rule weight) at every node wavelength, before the lens: `∫ ρ f ≈ Σ w f(λ)`
+    pub samples: Vec<(f64, f64)>,
+    pub panels: Vec<Panel>,
+    /// Σ node weights, panel by panel in the order the engines sum (so that OTF(0) is 1)
+    pub total_weight: f64,
+    /// whether some order needs the FFT layer
+    pub needs_grid: bool,
+    /// product-integration nodes: their weights are not `q ρ(λ)`, so a panel cannot be clipped
+    /// at a cutoff inside it (the rule is only chosen where no cutoff falls inside the band)
+    pub interpolated: bool,
+    /// the wavelength of a line spectrum (one node per order, no panels)
+    pub line: Option<f64>,
+}
+
+impl Nodes {
+    /// Appends the nodes of every order of `lens` at `lambda` with rule weight `q`.
+    fn emit(&mut self, lens: &dyn LensModel, field: Field, lambda: f64, q: f64) {
+        for order in lens.orders(lambda, field) {
+            self.needs_grid |= needs_grid(&order);
+            self.nodes.push(Node::of(&order, lambda, q * order.efficiency));
+        }
+    }
+
+    /// Whether the OTF of these nodes depends on direction: some image is displaced (lateral
+    /// colour), or some tabulated order has different tangential and sagittal curves.
+    pub fn direction_dependent(&self) -> bool {
+        self.nodes.iter().any(|n| n.shift != [0.0, 0.0] || n.table.as_ref().is_some_and(|t| t.is_direction_dependent()))
+    }
+
+    /// Whether some node's image is displaced.
+    pub fn shifted(&self) -> bool {
+        self.nodes.iter().any(|n| n.shift != [0.0, 0.0])
+    }
+
+    /// The shortest wavelength covered: a line's, or the first panel's lower end.
+    pub fn shortest(&self) -> f64 {
+        self.line.or(self.panels.first().map(|p| p.lo)).unwrap_or(0.0)
+    }
+
+    fn sum_weights(&mut self) {
+        self.total_weight =
+            self.panels.iter().map(|p| self.nodes[p.start..p.end].iter().map(|n| n.weight).sum::<f64>()).sum();
+    }
+}
+
+/// The scene as the spectral rules see it.
+#[derive(Clone, Copy)]
+pub(super) struct Scene<'a> {
+    pub lens: &'a dyn LensModel,
+    pub detected: &'a Spectrum,
+    pub field: Field,
+    pub f_number: f64,
+    pub max_frequency: f64,
+    pub pixel_pitch: Option<f64>,
+}
+
+impl Scene<'_> {
+    /// The field direction on the detector, radians from `+x`: `atan2(y, x)` of the field
+    /// angles, `+x` on axis (docs/physics.md, "Off-axis MTFs: tangential and sagittal"); a
+    /// tabulated order's tangential curve lies along it.
+    pub fn field_direction(&self) -> f64 {
+        self.field.y_rad.atan2(self.field.x_rad)
+    }
+}
+
+impl std::fmt::Debug for Scene<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Scene {{ F# = {}, ν_max = {} }}", self.f_number, self.max_frequency)
+    }
+}
+
+/// Efficiency, relative to the sum over the orders, below which an order does not count in the
+/// spectral panels' phase-turn rule (it cannot move the OTF by more than that).
+const NEGLIGIBLE_EFFICIENCY: f64 = 1e-9;
+
+/// Efficiency, relative to the sum over the orders, up to which an order may be present at one
+/// end of a spectral panel and absent at the other without counting as a jump ([`largest_turn`]):
+/// an order entering or leaving the window of a harmonic lens (`sinc²(3 − δ) ≈ δ²/9` at the window
+/// edge), whose weight jumps by no more than that whatever the panel.
+const VANISHING_EFFICIENCY: f64 = 1e-3;
+
+/// One order's defocus at one wavelength for the phase-turn rule, with whether its efficiency
+/// is small enough to appear or vanish between neighbouring wavelengths.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PhaseEntry {
+    pub w020: f64,
+    pub vanishing: bool,
+}
+
+/// The defocus values whose phase the spectral panels must resolve at `lambda`, sorted: one per
+/// order of non-negligible efficiency, one per zone (of non-zero amplitude) of a composite pupil
+/// (each with its order's efficiency), none for a tabulated OTF (its rows are interpolated
+/// linearly in λ and the panels are cut at them).
+fn phase_defocus(lens: &dyn LensModel, lambda: f64, field: Field) -> Vec<PhaseEntry> {
+    let orders = lens.orders(lambda, field);
+    let total: f64 = orders.iter().map(|o| o.efficiency.abs()).sum();
+    let mut out = Vec::new();
+    for o in orders.iter().filter(|o| o.efficiency.abs() > NEGLIGIBLE_EFFICIENCY * total) {
+        let vanishing = o.efficiency.abs() <= VANISHING_EFFICIENCY * total;
+        match &o.pupil {
+            Pupil::Table(_) => {}
+            Pupil::Zones(zones) => out.extend(
+                zones
+                    .iter()
+                    .filter(|z| z.amplitude > 0.0)
+                    .map(|z| PhaseEntry { w020: z.wavefront.defocus_m, vanishing }),
+            ),
+            _ => out.push(PhaseEntry { w020: o.wavefront.defocus_m, vanishing }),
+        }
+    }
+    out.sort_by(|a, b| a.w020.total_cmp(&b.w020));
+    out
+}
+
+/// The largest change of one order's defocus between two neighbouring wavelengths whose defocus
+/// lists ([`phase_defocus`], sorted) are `from` and `to`.
+///
+/// Orders carry no identity across wavelengths, so they are matched: by the monotone alignment
+/// of the sorted lists that leaves the fewest orders of non-vanishing efficiency unmatched, and
+/// among those the smallest largest change (a bottleneck alignment, by dynamic programming). An
+/// order entering or leaving the window of a harmonic lens, with an efficiency near zero there,
+/// stays unmatched (its weight jumps by that little, which no panel refines away), while the
+/// channels of a multiplexed lens, all bright, are matched one to one in W020 order, which is
+/// their own order since their defocus curves do not cross: a shift of every channel by one
+/// channel spacing across a panel counts as that large change, not as none. Measuring the
+/// largest-|W020| order alone jumped between orders of opposite sign, and matching by list
+/// index alone mistook a shifted window (orders 1–6 → 2–7) for a jump of every order; both
+/// refined without end (the panel bound, 2^20 panels, for an interleaved or harmonic lens over
+/// 50–200 nm).
+pub(super) fn largest_turn(from: &[PhaseEntry], to: &[PhaseEntry]) -> f64 {
+    let (n, m) = (from.len(), to.len());
+    // cost[i][j]: (unmatched bright orders, largest change) aligning from[..i] with to[..j],
+    // compared lexicographically (the sum in the first and the maximum in the second are both
+    // monotone, so the cell-wise minimum is the optimum)
+    let mut cost = vec![(usize::MAX, f64::INFINITY); (n + 1) * (m + 1)];
+    let at = |i: usize, j: usize| i * (m + 1) + j;
+    cost[at(0, 0)] = (0, 0.0);
+    let better = |a: (usize, f64), b: (usize, f64)| a.0 < b.0 || (a.0 == b.0 && a.1 < b.1);
+    for i in 0..=n {
+        for j in 0..=m {
+            let mut best = cost[at(i, j)];
+            if i > 0 && cost[at(i - 1, j)].0 != usize::MAX {
+                let (c, t) = cost[at(i - 1, j)];
+                let candidate = (c + usize::from(!from[i - 1].vanishing), t);
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            if j > 0 && cost[at(i, j - 1)].0 != usize::MAX {
+                let (c, t) = cost[at(i, j - 1)];
+                let candidate = (c + usize::from(!to[j - 1].vanishing), t);
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            if i > 0 && j > 0 && cost[at(i - 1, j - 1)].0 != usize::MAX {
+                let (c, t) = cost[at(i - 1, j - 1)];
+                let candidate = (c, t.max((from[i - 1].w020 - to[j - 1].w020).abs()));
+                if better(candidate, best) {
+                    best = candidate;
+                }
+            }
+            cost[at(i, j)] = best;
+        }
+    }
+    cost[at(n, m)].1
+}
+
+/// The defocus phase (rad, at frequency `highest`) that the OTF turns through across each of
+/// `n` equal panels of `[a, b]`: per order (docs/physics.md, "Spectral quadrature": the OTF
+/// turns with the defocus in waves at each s), the change of W020 across the panel plus the
+/// change of s = ν λ F# times the largest |W020|, times `8π F# ν`.
+///
+/// The interval's ends are read just inside it: a lens may jump at its own breakpoints (the band
+/// edges of a multiplexed lens whose other channels are background), which are the interval's
+/// ends, and a jump there is no turn of the phase inside (no node reaches the ends).
+fn panel_turns(scene: &Scene<'_>, highest: f64, a: f64, b: f64, n: usize) -> Vec<f64> {
+    let (lens, field, f_number) = (scene.lens, scene.field, scene.f_number);
+    let phase_per_w020 = 8.0 * PI * f_number * highest;
+    let h = (b - a) / n as f64;
+    let inside = 1e-9 * (b - a);
+    let mut prev = phase_defocus(lens, a + inside, field);
+    let mut out = Vec::with_capacity(n);
+    for k in 1..=n {
+        let x = if k == n { b - inside } else { a + h * k as f64 };
+        let cur = phase_defocus(lens, x, field);
+        let mid = phase_defocus(lens, x - 0.5 * h, field);
+        let largest = cur.iter().chain(&prev).map(|e| e.w020.abs()).fold(0.0, f64::max);
+        let turn = largest_turn(&prev, &cur).max(largest_turn(&prev, &mid)) + largest * highest * f_number * h;
+        out.push(turn * phase_per_w020);
+        prev = cur;
+    }
+    out
+}
+
+/// The most panels one interval may be cut into: a bound, so that no finite input asks for more
+/// panels than memory and time allow.
+const MAX_INTERVAL_PANELS: usize = 1 << 20;
+
+/// The wavelengths where the lens may kink or jump inside `[lo, hi]`: its breakpoints and the
+/// rows of its OTF tables, with `lo` and `hi`, sorted; with `spectrum`, the spectrum's kinks too.
+fn cuts(scene: &Scene<'_>, lo: f64, hi: f64, spectrum: bool) -> Vec<f64> {
+    let mut cuts: Vec<f64> = scene.lens.breakpoints();
+    cuts.extend(table_wavelengths(scene.lens, scene.field, lo, hi));
+    if spectrum {
+        cuts.extend(scene.detected.breakpoints());
+    }
+    cuts.retain(|&b| b > lo && b < hi);
+    cuts.push(lo);
+    cuts.push(hi);
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    cuts
+}
+
+/// The highest frequency whose OTF the spectral rule must resolve: the frequency limit, or the
+/// cutoff of the shortest wavelength covered when that is lower.
+fn highest_frequency(scene: &Scene<'_>, lo: f64) -> f64 {
+    let cutoff = if lo > 0.0 { 1.0 / (lo * scene.f_number) } else { f64::INFINITY };
+    scene.max_frequency.min(cutoff)
+}
+
+/// The per-interval rule (the reference): 16-point Gauss–Legendre panels cut at every kink of
+/// the spectrum and of the lens, each at most 2σ of the narrowest Gaussian factor wide and turned
+/// through at most [`quad::MAX_PANEL_PHASE`] of defocus phase at the highest frequency.
+pub(super) fn panels(scene: &Scene<'_>, lo: f64, hi: f64) -> Nodes {
+    let detected = scene.detected;
+    let sigma_min = detected.gaussians().iter().map(|g| g.sigma()).fold(f64::INFINITY, f64::min);
+    let highest = highest_frequency(scene, lo);
+    let mut out = Nodes::default();
+    for pair in cuts(scene, lo, hi, true).windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let mut n = ((b - a) / (2.0 * sigma_min)).ceil().max(1.0) as usize;
+        loop {
+            let worst = panel_turns(scene, highest, a, b, n).into_iter().fold(0.0, f64::max);
+            if worst <= quad::MAX_PANEL_PHASE || n > MAX_INTERVAL_PANELS {
+                break;
+            }
+            n = (n as f64 * (worst / quad::MAX_PANEL_PHASE).min(64.0)).ceil() as usize + 1;
+        }
+        let h = (b - a) / n as f64;
+        for k in 0..n {
+            let (plo, phi) = (a + h * k as f64, a + h * (k + 1) as f64);
+            let start = out.nodes.len();
+            quad::for_each_node(plo, phi, 1, |lambda, q| {
+                let q_rho = q * detected.value(lambda);
+                out.samples.push((lambda, q_rho));
+                if q_rho != 0.0 {
+                    out.emit(scene.lens, scene.field, lambda, q_rho);
+                }
+            });
+            out.panels.push(Panel { lo: plo, hi: phi, start, end: out.nodes.len() });
+        }
+    }
+    out.sum_weights();
+    out
+}
+
+/// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for a panel of the reference
+/// rule clipped at the cutoff `cut` (the `(1 − s)^{3/2}` edge of the OTF becomes smooth in `u`).
+pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl FnMut(Node)) {
+    let len = cut - lo;
+    quad::for_each_node(0.0, 1.0, 1, |u, q| {
+        let lambda = cut - len * u * u;
+        let rho = scene.detected.value(lambda);
+        if rho == 0.0 {
+            return;
+        }
+        let q = q * 2.0 * len * u * rho;
+        for order in scene.lens.orders(lambda, scene.field) {
+            emit(Node::of(&order, lambda, q * order.efficiency));
+        }
+    });
+}
+
+/// The nodes of a line spectrum: one per imaging order at its wavelength, weighted by the line's
+/// weight × the order's efficiency.
+pub(super) fn line(scene: &Scene<'_>, line: radiometry::QuadratureNode) -> Nodes {
+    let lambda = line.wavelength_m;
+    let mut out = Nodes { line: Some(lambda), samples: vec![(lambda, line.weight)], ..Nodes::default() };
+    out.emit(scene.lens, scene.field, lambda, line.weight);
+    out.total_weight = out.nodes.iter().map(|n| n.weight).sum();
+    out
+}
+
+/// Share of the tolerance that the spectral rule may spend (the frequency rule has the rest).
+pub(super) const SPECTRAL_SHARE: f64 = 0.25;
+
+/// Largest phase (rad, at the frequency limit) of one product-integration panel: its points
+/// then start at about a third of that (`e^{iκx}` needs about κ points, κ = phase/2) and double
+/// until the nested check passes.
+const INTERPOLATION_PANEL_PHASE: f64 = 48.0;
+
+/// The point counts of the nested Chebyshev–Lobatto rules: each level's points are the even
+/// points of the next.
+const LEVELS: [usize; 7] = [3, 5, 9, 17, 33, 65, 129];
+
+/// Bound on the Lebesgue constant of Chebyshev–Lobatto interpolation up to 129 points
+/// (`(2/π) ln(n) + 1` < 4): an interpolant of a function bounded by 1 is bounded by this, so a
+/// panel whose weight share × 2 × this is within its budget needs no resolution at all.
+const LEBESGUE: f64 = 4.0;
+
+/// The product-integration rule (see the module docs), or `None` where it does not apply: a
+/// cutoff `1/(λ F#)` of some covered wavelength below the frequency limit (the OTF then has the
+/// edge `(1 − s)^{3/2}` inside the band, which the panels rule clips at).
+///
+/// `tolerance` is the relative tolerance of the mean MTF; the rule spends [`SPECTRAL_SHARE`] of
+/// it on the polychromatic OTF at the frequency limit, where its λ-dependence is fastest, shared
+/// between the panels in proportion to the square root of their weight. A panel's points double (nested
+/// Chebyshev–Lobatto rules) until the product integral of its part of the OTF there moves by
+/// less than its share; the error of the accepted rule is then far below that difference. The
+/// share is relative to the mean MTF, estimated from the OTF at ¼, ½ and 1 of the limit once
+/// the nodes exist; where the estimate is below the first pass's guess of 1, the panels are
+/// refined again to the smaller share.
+pub(super) fn interpolated(scene: &Scene<'_>, lo: f64, hi: f64, tolerance: f64) -> Option<Nodes> {
+    let top = scene.max_frequency;
+    // s = ν λ F# < 1 on the whole band up to the limit
+    if top * hi * scene.f_number >= 1.0 - 1e-6 || lo <= 0.0 {
+        return None;
+    }
+    let kinks = scene.detected.breakpoints();
+    let smooth = smoothness_scale(scene.detected);
+    let mut panels: Vec<Interpolant> = Vec::new();
+    let mut lens_cuts = cuts(scene, lo, hi, false);
+    lens_cuts.extend(order_changes(scene, &lens_cuts));
+    lens_cuts.sort_by(f64::total_cmp);
+    lens_cuts.dedup();
+    for pair in lens_cuts.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let sub = 32;
+        let turns = panel_turns(scene, top, a, b, sub);
+        let total: f64 = turns.iter().sum();
+        let n = ((total / INTERPOLATION_PANEL_PHASE).ceil() as usize).clamp(1, MAX_INTERVAL_PANELS);
+        let h = (b - a) / n as f64;
+        for k in 0..n {
+            let (pa, pb) = (a + h * k as f64, if k + 1 == n { b } else { a + h * (k + 1) as f64 });
+            let phase = overlap_sum(&turns, a, b, pa, pb);
+            panels.push(Interpolant::new(scene.detected, &kinks, smooth, pa, pb, phase));
+        }
+    }
+    let total_mass: f64 = panels.iter().map(|p| p.mass.abs()).sum();
+    if !(total_mass > 0.0 && total_mass.is_finite()) {
+        return None;
+    }
+    let mut estimate = 1.0;
+    for _pass in 0..3 {
+        let budget = SPECTRAL_SHARE * tolerance * estimate;
+        // the budget is shared in proportion to √(weight share): a panel of little weight may be
+        // less accurate per unit weight, and the sum of the shares' errors stays within it
+        let roots: f64 = panels.iter().map(|p| (p.mass.abs() / total_mass).sqrt()).sum::<f64>().max(f64::MIN_POSITIVE);
+        let mut k = 0;
+        while k < panels.len() {
+            let share = panels[k].mass.abs() / total_mass;
+            if share == 0.0 {
+                k += 1;
+                continue;
+            }
+            let allowed = budget * share.sqrt() / roots / share;
+            if panels[k].refine(scene, top, allowed) {
+                k += 1;
+            } else {
+                // beyond the most points: halve the panel (its phase halves with it)
+                let p = panels.remove(k);
+                let mid = 0.5 * (p.a + p.b);
+                panels.insert(k, Interpolant::new(scene.detected, &kinks, smooth, mid, p.b, 0.5 * p.phase));
+                panels.insert(k, Interpolant::new(scene.detected, &kinks, smooth, p.a, mid, 0.5 * p.phase));
+            }
+        }
+        let nodes = emit(scene, &panels);
+        let mean = mean_estimate(scene, &nodes, top).clamp(1e-9, 1.0);
+        if mean >= 0.5 * estimate {
+            return Some(nodes);
+        }
+        estimate = mean;
+    }
+    Some(emit(scene, &panels))
+}
+
+/// The nodes of the accepted rules, panel by panel.
+fn emit(scene: &Scene<'_>, panels: &[Interpolant]) -> Nodes {
+    let mut out = Nodes { interpolated: true, ..Nodes::default() };
+    for p in panels {
+        if p.mass == 0.0 {
+            continue;
+        }
+        let start = out.nodes.len();
+        for (&lambda, &w) in p.lambdas().iter().zip(&p.weights) {
+            out.samples.push((lambda, w));
+            if w != 0.0 {
+                out.emit(scene.lens, scene.field, lambda, w);
+            }
+        }
+        out.panels.push(Panel { lo: p.a, hi: p.b, start, end: out.nodes.len() });
+    }
+    out.sum_weights();
+    out
+}
+
+/// The mean MTF estimated from the polychromatic OTF of `nodes` at ¼, ½ and 1 of `top` (a
+/// three-point midpoint-like average, with the pixel MTF), for the spectral budget.
+fn mean_estimate(scene: &Scene<'_>, nodes: &Nodes, top: f64) -> f64 {
+    if !(nodes.total_weight > 0.0 && nodes.total_weight.is_finite()) {
+        return 1.0;
+    }
+    let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| pixel_mtf(p, nu));
+    let mut sum = 0.0;
+    for f in [0.25, 0.5, 1.0] {
+        let nu = f * top;
+        let mut g = Complex64::new(0.0, 0.0);
+        for n in &nodes.nodes {
+            g += Complex64::from_polar(n.weight, 0.0) * order_value(n, nu, scene.f_number);
+        }
+        sum += (g / nodes.total_weight).norm() * pixel(nu);
+    }
+    sum / 3.0
+}
+
+/// One order's OTF at `nu` (per unit efficiency... the node's own, without its weight), with the
+/// phase of its image shift along the shift (the direction in which it turns the OTF fastest).
+fn order_value(n: &Node, nu: f64, f_number: f64) -> Complex64 {
+    let value = n.otf(nu * f_number * n.lambda, nu, 0.0);
+    let shift = n.shift[0].hypot(n.shift[1]);
+    Complex64::from_polar(value, -2.0 * PI * nu * shift)
+}
+
+/// The part `Σ_o τ_o OTF_o` of the OTF at `nu` of the lens's orders at `lambda`.
+fn lens_value(scene: &Scene<'_>, lambda: f64, nu: f64) -> Complex64 {
+    scene
+        .lens
+        .orders(lambda, scene.field)
+        .iter()
+        .map(|o| order_value(&Node::of(o, lambda, 0.0), nu, scene.f_number) * o.efficiency)
+        .sum()
+}
+
+/// One product-integration panel: its moment rule, its current nested level, and the lens's
+/// part of the OTF at the frequency limit on that level's points.
+struct Interpolant {
+    a: f64,
+    b: f64,
+    phase: f64,
+    /// `∫ ρ` over the panel
+    mass: f64,
+    rule: MomentRule,
+    /// index into [`LEVELS`] of the accepted (or current) rule; `None` before the first
+    level: Option<usize>,
+    /// the lens's OTF at the limit on the current level's points
+    values: Vec<Complex64>,
+    /// product-integration weights of the current level
+    weights: Vec<f64>,
+    /// the moves between consecutive levels so far (index: the finer level − 1)
+    moves: Vec<f64>,
+}
+
+impl Interpolant {
+    fn new(detected: &Spectrum, kinks: &[f64], smooth: f64, a: f64, b: f64, phase: f64) -> Interpolant {
+        let rule = MomentRule::new(detected, kinks, smooth, a, b, LEVELS[LEVELS.len() - 1] - 1);
+        let mass = rule.moments(0)[0];
+        Interpolant { a, b, phase, mass, rule, level: None, values: Vec::new(), weights: Vec::new(), moves: Vec::new() }
+    }
+
+    /// The wavelengths of the current level's points (k = 0 at `b`), moved 1e-12 of the panel
+    /// inside its ends: a lens may jump at its own breakpoints, which are panel ends.
+    fn lambdas(&self) -> Vec<f64> {
+        let points = self.weights.len();
+        let (c, h) = (0.5 * (self.a + self.b), 0.5 * (self.b - self.a));
+        let inside = 1e-12 * (self.b - self.a);
+        (0..points)
+            .map(|k| {
+                let x = if points > 1 { (PI * k as f64 / (points - 1) as f64).cos() } else { 0.0 };
+                (c + h * x).clamp(self.a + inside, self.b - inside)
+            })
+            .collect()
+    }
+
+    /// Sets the level, evaluating the lens at its new points only (the old ones are its even
+    /// points).
+    fn set_level(&mut self, scene: &Scene<'_>, top: f64, level: usize) {
+        let points = LEVELS[level];
+        let old = std::mem::take(&mut self.values);
+        let step = match self.level {
+            Some(l) if l < level => (LEVELS[level] - 1) / (LEVELS[l] - 1),
+            _ => 0,
+        };
+        self.weights = lobatto_weights(&self.rule.moments(points - 1), points);
+        let lambdas = self.lambdas();
+        self.values = (0..points)
+            .map(|k| if step > 0 && k % step == 0 { old[k / step] } else { lens_value(scene, lambdas[k], top) })
+            .collect();
+        self.level = Some(level);
+    }
+
+    /// Refines until the panel's part of the OTF at the limit, per unit of the panel's weight,
+    /// is within `allowed` of the converged value. `false` when even the finest rule does not
+    /// settle.
+    ///
+    /// The estimate compares each nested level with the one below. Once the level has about
+    /// 0.6 κ points (κ = phase/2: `e^{iκx}` is then resolved and the interpolation error falls
+    /// geometrically, `C ρ^{−n}`), the accepted level's error is estimated from the moves by
+    /// [`nested_error`](super::nested_error) (measured on the chromatic lens over
+    /// 600–1000 nm: moves of 4.9e-3 and 8.9e-6 at 17 and 33 points, 4.5e-14 left); below that,
+    /// where a coarse pair can agree by chance, two consecutive moves must both be within
+    /// `allowed`.
+    fn refine(&mut self, scene: &Scene<'_>, top: f64, allowed: f64) -> bool {
+        let resolved = 0.3 * self.phase + 1.0;
+        if self.level.is_none() {
+            // a panel whose weight is too small to matter takes the quadratic; else the levels
+            // are climbed from 5 points (the coarse levels' points are the finer ones' even
+            // points: climbing costs no evaluation that the accepted level does not make)
+            let first = if 2.0 * LEBESGUE <= allowed { 0 } else { 1 };
+            self.set_level(scene, top, first);
+            if first == 0 {
+                return true;
+            }
+        }
+        loop {
+            let level = self.level.unwrap_or(0);
+            if level == 0 && 2.0 * LEBESGUE <= allowed {
+                return true;
+            }
+            let points = LEVELS[level];
+            if level > 0 {
+                let half = LEVELS[level - 1];
+                let coarse = lobatto_weights(&self.rule.moments(half - 1), half);
+                let full: Complex64 = self.values.iter().zip(&self.weights).map(|(v, w)| v * w).sum();
+                let step = (points - 1) / (half - 1);
+                let part: Complex64 = coarse.iter().enumerate().map(|(k, w)| self.values[k * step] * w).sum();
+                if self.moves.len() < level {
+                    self.moves.push((full - part).norm() / self.mass.abs());
+                }
+                let moves = &self.moves;
+                // once resolved, the nested estimate; before, two consecutive moves within the
+                // budget (a coarse pair can agree by chance)
+                let error = if points as f64 >= resolved {
+                    super::nested_error(moves)
+                } else {
+                    match moves.as_slice() {
+                        [.., a, b] => a.max(*b),
+                        _ => f64::INFINITY,
+                    }
+                };
+                if error <= allowed {
+                    return true;
+                }
+            }
+            if level + 1 == LEVELS.len() {
+                return false;
+            }
+            self.set_level(scene, top, level + 1);
+        }
+    }
+}
+
+/// Where the set of orders changes inside the intervals between `cuts`: an order entering or
+/// leaving (the window of a harmonic lens), or the whole set shifting by one order at once (the
+/// same count, every order one spacing further). The lens's part of the OTF is not smooth there
+/// (the entering order's efficiency rises from a double zero), which interpolation across it
+/// would pay for in points; the panels are cut there instead. Located on 64 samples per
+/// interval, each change then by bisection to 1e-13 of the interval.
+fn order_changes(scene: &Scene<'_>, cuts: &[f64]) -> Vec<f64> {
+    let same = |a: &[PhaseEntry], b: &[PhaseEntry]| {
+        if a.len() != b.len() {
+            return false;
+        }
+        // matched by index, as against the best alignment: a shifted set moves every order by
+        // a spacing by index, by almost nothing aligned
+        let by_index = a.iter().zip(b).map(|(x, y)| (x.w020 - y.w020).abs()).fold(0.0, f64::max);
+        by_index <= 2.0 * largest_turn(a, b) + 1e-15 * a.iter().map(|e| e.w020.abs()).fold(0.0, f64::max)
+    };
+    let (lens, field) = (scene.lens, scene.field);
+    let mut out = Vec::new();
+    for pair in cuts.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let inside = 1e-9 * (b - a);
+        let n = 64;
+        let at = |k: usize| {
+            if k == n {
+                b - inside
+            } else if k == 0 {
+                a + inside
+            } else {
+                a + (b - a) * k as f64 / n as f64
+            }
+        };
+        let mut prev = phase_defocus(lens, at(0), field);
+        if prev.len() <= 1 && phase_defocus(lens, at(n), field).len() <= 1 {
+            // one order at both ends: no set to change (a lens whose count goes 1 → 0 → 1 inside
+            // is cut at its own breakpoints)
+            continue;
+        }
+        for k in 1..=n {
+            let cur = phase_defocus(lens, at(k), field);
+            if !same(&prev, &cur) {
+                let (mut lo, mut hi) = (at(k - 1), at(k));
+                let left = prev.clone();
+                while hi - lo > 1e-13 * (b - a) {
+                    let mid = 0.5 * (lo + hi);
+                    if same(&left, &phase_defocus(lens, mid, field)) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                out.push(0.5 * (lo + hi));
+            }
+            prev = cur;
+        }
+    }
+    out
+}
+
+/// The part of `Σ turns` over the equal sub-steps of `[a, b]` that lies in `[pa, pb]`.
+fn overlap_sum(turns: &[f64], a: f64, b: f64, pa: f64, pb: f64) -> f64 {
+    let h = (b - a) / turns.len() as f64;
+    turns
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let (lo, hi) = (a + h * i as f64, a + h * (i + 1) as f64);
+            let overlap = (hi.min(pb) - lo.max(pa)).max(0.0);
+            t * overlap / h
+        })
+        .sum()
+}
+
+/// The shortest scale (m) on which the detected spectrum varies smoothly between its kinks: the
+/// narrowest Gaussian factor's σ, else a tenth of the shortest wavelength a blackbody or a
+/// power law can vary on (they are smooth on the scale of λ itself).
+fn smoothness_scale(detected: &Spectrum) -> f64 {
+    let sigma = detected.gaussians().iter().map(|g| g.sigma()).fold(f64::INFINITY, f64::min);
+    let (lo, _) = detected.support();
+    sigma.min(0.1 * lo.max(50e-9))
+}
+
+/// Gauss–Legendre rules of 1 to 24 points, on [−1, 1].
+fn gauss_rule(points: usize) -> &'static [(f64, f64)] {
+    static RULES: OnceLock<Vec<Vec<(f64, f64)>>> = OnceLock::new();
+    let rules = RULES.get_or_init(|| (0..=24).map(quad::gauss_legendre).collect());
+    &rules[points.clamp(1, 24)]
+}
+
+/// The quadrature of one panel's Chebyshev moments `μ_j = ∫_a^b ρ(λ) T_j(x) dλ`,
+/// `x = (2λ − a − b)/(b − a)`: the points `cos θ_i` and weights `ρ(λ_i) h sin θ_i w_i`, with ρ
+/// evaluated once, so that moments of any degree up to the one it was built for cost one
+/// recurrence per point.
+///
+/// In the angle θ of `x = cos θ` the integrand `ρ(c + h cos θ) cos(jθ) h sin θ` is smooth between
+/// the kinks of ρ (`kinks`, sorted): each piece is cut into sub-pieces over which `jθ` and ρ
+/// (varying on the scale `smooth`) turn by at most 4 rad, and each sub-piece takes the fewest
+/// Gauss–Legendre points whose error bound `(e k/(2p))^{2p}` (k half that phase; the bound
+/// behind [`quad::MAX_PANEL_PHASE`]) is below 1e-16 of its share: a 0.25 nm table sample in a
+/// 100 nm panel takes 5 points, a Gaussian of 20 nm over ±7σ a few hundred in all.
+struct MomentRule {
+    cos: Vec<f64>,
+    weight: Vec<f64>,
+}
+
+impl MomentRule {
+    fn new(detected: &Spectrum, kinks: &[f64], smooth: f64, a: f64, b: f64, degree: usize) -> MomentRule {
+        let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
+        // θ decreasing in λ: θ = π at a, 0 at b; pieces between the kinks inside (a, b)
+        let from = kinks.partition_point(|&k| k <= a);
+        let to = kinks.partition_point(|&k| k < b);
+        let mut edges = Vec::with_capacity(to - from + 2);
+        edges.push(PI);
+        for &k in &kinks[from..to] {
+            edges.push(((k - c) / h).clamp(-1.0, 1.0).acos());
+        }
+        edges.push(0.0);
+        // ρ's phase per unit θ: dλ/dθ ≤ h, over its scale
+        let rho_rate = if smooth.is_finite() { 2.0 * h / smooth } else { 0.0 };
+        let rate = degree as f64 + rho_rate;
+        let mut out = MomentRule { cos: Vec::new(), weight: Vec::new() };
+        for pair in edges.windows(2) {
+            let (t1, t0) = (pair[0], pair[1]);
+            let length = t1 - t0;
+            if length <= 0.0 {
+                continue;
+            }
+            let phase = rate * length;
+            let subs = (phase / 4.0).ceil().max(1.0);
+            let k = 0.5 * phase / subs;
+            let mut p = 2;
+            while p < 24 && (std::f64::consts::E * k / (2.0 * p as f64)).powi(2 * p as i32) > 1e-16 {
+                p += 1;
+            }
+            let rule = gauss_rule(p);
+            let sub_len = length / subs;
+            for s in 0..subs as usize {
+                let mid = t0 + sub_len * (s as f64 + 0.5);
+                for &(x, w) in rule {
+                    let theta = mid + 0.5 * sub_len * x;
+                    let (sin, cos) = theta.sin_cos();
+                    let weight = detected.value(c + h * cos) * h * sin * w * 0.5 * sub_len;
+                    if weight != 0.0 {
+                        out.cos.push(cos);
+                        out.weight.push(weight);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// `μ_0 … μ_degree`, by the three-term recurrence `T_{j+1} = 2x T_j − T_{j−1}` at each point.
+    fn moments(&self, degree: usize) -> Vec<f64> {
+        let mut mu = vec![0.0; degree + 1];
+        for (&x, &w) in self.cos.iter().zip(&self.weight) {
+            let (mut prev, mut cur) = (1.0, x);
+            mu[0] += w;
+            if degree >= 1 {
+                mu[1] += w * x;
+            }
+            for m in mu.iter_mut().skip(2) {
+                let next = 2.0 * x * cur - prev;
+                *m += w * next;
+                prev = cur;
+                cur = next;
+            }
+        }
+        mu
+    }
+}
+
+/// Product-integration weights on the `points` Chebyshev–Lobatto points `x_k = cos(πk/n)`,
+/// n = points − 1 (k = 0 is x = 1): `w_k = ∫ ρ ℓ_k`, from the Chebyshev moments μ_0..μ_n. The
+/// interpolant is `Σ_j c_j T_j` with `c_j = (2/n) Σ''_k f_k T_j(x_k)` (first and last terms of
+/// both sums halved), so `∫ ρ p = Σ_k f_k (2/n) h_k Σ_j h_j μ_j cos(πjk/n)`.
+pub(super) fn lobatto_weights(mu: &[f64], points: usize) -> Vec<f64> {
+    let n = points - 1;
+    let halve = |i: usize| if i == 0 || i == n { 0.5 } else { 1.0 };
+    (0..points)
+        .map(|k| {
+            let sum: f64 = (0..=n).map(|j| halve(j) * mu[j] * (PI * (j * k % (2 * n)) as f64 / n as f64).cos()).sum();
+            2.0 / n as f64 * halve(k) * sum
+        })
+        .collect()
+}
+
+/// The wavelengths of the OTF tables of `lens`'s orders, found at five wavelengths across
+/// `[lo, hi]`: a table is linear in λ between its rows, so the spectral panels are cut there.
+fn table_wavelengths(lens: &dyn LensModel, field: Field, lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    for k in 0..5 {
+        let lambda = lo + (hi - lo) * k as f64 / 4.0;
+        if lambda <= 0.0 {
+            continue;
+        }
+        for order in lens.orders(lambda, field) {
+            if let Pupil::Table(t) = &order.pupil {
+                out.extend_from_slice(t.wavelengths());
+            }
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out.dedup();
+    out
+}
+
+/// The wavelength interval the spectral rules cover: the spectrum's support, with Gaussian
+/// factors cut at ±[`GAUSSIAN_HALF_WIDTH_SIGMAS`] σ.
+pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
+    let (mut lo, mut hi) = detected.support();
+    for g in detected.gaussians() {
+        lo = lo.max(g.center() - GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
+        hi = hi.min(g.center() + GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
+    }
+    lo = lo.max(0.0);
+    if !(hi.is_finite() && hi > lo) {
+        return Err(Error::UnboundedSpectrum { lo, hi });
+    }
+    Ok((lo, hi))
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bright(w: &[f64]) -> Vec<PhaseEntry> {
+        w.iter().map(|&w020| PhaseEntry { w020, vanishing: false }).collect()
+    }
+
+    /// The matching of orders between neighbouring wavelengths, against the changes worked out
+    /// by hand.
+    #[test]
+    fn orders_are_matched_by_their_defocus() {
+        // three bright channels each moving by one channel spacing (1.0) across the panel: the
+        // nearest-neighbour pairs would see 0.1, the true change is 1.0
+        let from = bright(&[-1.0, 0.0, 1.0]);
+        let to = bright(&[-2.0, -1.1, 0.0]);
+        assert_eq!(largest_turn(&from, &to), 1.1);
+        // a harmonic window shifting by one order (same count): the order leaving at one end
+        // and the one entering at the other are near zero efficiency and stay unmatched
+        let mut from = bright(&[1.0, 2.0, 3.0, 4.0]);
+        from[0].vanishing = true;
+        let mut to = bright(&[2.05, 3.05, 4.05, 5.05]);
+        to[3].vanishing = true;
+        assert!((largest_turn(&from, &to) - 0.05).abs() < 1e-12);
+        // the same shift with bright end orders is a jump of every order (no vanishing order to
+        // leave out): matched one to one
+        assert!(
+            (largest_turn(&bright(&[1.0, 2.0, 3.0, 4.0]), &bright(&[2.05, 3.05, 4.05, 5.05])) - 1.05).abs() < 1e-12
+        );
+        // an order appearing (the counts differ): the others are matched, whatever its brightness
+        assert!((largest_turn(&bright(&[1.0, 2.0]), &bright(&[1.1, 2.1, 3.0])) - 0.1).abs() < 1e-12);
+        assert!((largest_turn(&bright(&[0.0, 1.0, 2.0]), &bright(&[1.2, 2.2])) - 0.2).abs() < 1e-12);
+        // nothing to match
+        assert_eq!(largest_turn(&[], &bright(&[1.0])), 0.0);
+        assert_eq!(largest_turn(&[], &[]), 0.0);
+    }
+}
