@@ -20,7 +20,8 @@ pub(super) struct Closed {
     pub closed: GaussianDefocus,
     pub nodes: Nodes,
     pub f_number: f64,
-    /// absolute tolerance of one OTF value (set by the frequency rule)
+    /// absolute tolerance of one OTF value (set by the frequency rule; before it, for single
+    /// OTF values, 5 % of the relative tolerance)
     pub otf_tolerance: Cell<f64>,
     /// E(c) evaluations so far
     pub evaluations: Cell<usize>,
@@ -30,7 +31,13 @@ impl Closed {
     /// The engine, with spectral nodes not for the OTF (its spectral integral is exact) but for
     /// the averages over the spectrum (`detected_integral`, `spectral_average`): 8 Gauss–Legendre
     /// panels over μ ± 10σ, exact to rounding for the smooth functions they are used with.
-    pub fn new(closed: GaussianDefocus, affine: crate::AffineDefocus, detected: &Spectrum, f_number: f64) -> Closed {
+    pub fn new(
+        closed: GaussianDefocus,
+        affine: crate::AffineDefocus,
+        detected: &Spectrum,
+        f_number: f64,
+        tolerance: f64,
+    ) -> Closed {
         let (mu, sigma) = (closed.center(), closed.sigma());
         let (lo, hi) = ((mu - 10.0 * sigma).max(0.0), mu + 10.0 * sigma);
         let mut nodes = Nodes::default();
@@ -47,7 +54,7 @@ impl Closed {
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len() });
         nodes.total_weight = closed.total_weight();
-        Closed { closed, nodes, f_number, otf_tolerance: Cell::new(1e-8), evaluations: Cell::new(0) }
+        Closed { closed, nodes, f_number, otf_tolerance: Cell::new(0.05 * tolerance), evaluations: Cell::new(0) }
     }
 }
 

@@ -326,7 +326,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     if settings.closed_form
         && let Some((closed, affine)) = closed_form::closed_form(scene.lens, scene.detected, scene.field)
     {
-        let engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number);
+        let engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number, settings.tolerance);
         check_signal(&engine.nodes)?;
         return Ok(Box::new(engine));
     }
