@@ -131,7 +131,7 @@ mod plan;
 mod wavefront;
 mod zones;
 
-pub use aperture::{Aperture, MASK_SUPERSAMPLING, MaskFn};
+pub use aperture::{Aperture, MASK_SUPERSAMPLING, MaskFn, ReducedCircle, reduce_decentred_circle};
 pub use convergence::{convergence_table, defocus_mean_mtf};
 pub use plan::{INTERPOLATION_POINTS, MAX_SAMPLES, MIN_SAMPLES, Otf, OtfPlan, SampledPupil, fast_fft_len};
 pub use wavefront::{Aberrations, MAX_NOLL_INDEX, noll_to_nm};
