@@ -11,7 +11,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use num_complex::Complex64;
 use optics::fft::{
-    Aberrations, Aperture, Otf, OtfPlan, SampledPupil, convergence_table, defocus_mean_mtf, reduce_decentred_circle,
+    Aberrations, Aperture, Otf, OtfPlan, SampledPupil, convergence_table, defocus_mean_mtf, pupil_samples_for,
+    reduce_decentred_circle,
 };
 use optics::{defocus_otf, mtf_diffraction_limited, mtf_diffraction_limited_mean, reference};
 
@@ -651,4 +652,90 @@ fn decentred_iris_lens_matches_its_reduction_on_the_exact_path() {
             assert!(((fft - exact) / exact).abs() < 1.5e-4, "{iris:?} at {azimuth}: {fft} vs {exact}");
         }
     }
+}
+
+// ---- Choosing the pupil sampling from the tolerance (`pupil_samples_for`)
+
+/// The plan: at least 128 samples, even, more for a tighter tolerance, the largest `N` of its
+/// padded length; the paper scene at 1e-4 starts at `(130, 260)`.
+#[test]
+fn sampling_plan_follows_the_tolerance() {
+    let s_max = 0.22;
+    let mut last = 0;
+    for tolerance in [1e-2, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5] {
+        let plan = pupil_samples_for(tolerance, s_max, 40).unwrap();
+        assert!(plan.samples >= optics::fft::MIN_CHOSEN_SAMPLES && plan.samples.is_multiple_of(2), "{plan:?}");
+        assert!(plan.samples >= last, "{tolerance}: {plan:?}");
+        // the model with its safety factor meets the tolerance at the start
+        let (c, q) = optics::fft::ERROR_MODEL;
+        assert!(optics::fft::SAFETY * c * (plan.samples as f64).powf(-q) <= tolerance, "{plan:?}");
+        // one more pair of samples would need a longer FFT
+        let k = |n: usize| (s_max * n as f64).ceil() as usize + 2;
+        let m = |n: usize| optics::fft::fast_fft_len(n + k(n));
+        assert_eq!(m(plan.samples), OtfPlan::new(plan.samples, s_max).unwrap().padded_len());
+        assert!(m(plan.samples + 2) > m(plan.samples), "{plan:?}");
+        last = plan.samples;
+    }
+    let plan = pupil_samples_for(1e-4, s_max, 40).unwrap();
+    assert_eq!((plan.coarse(), plan.samples, plan.limit), (130, 260, 2048));
+    let refined = plan.refine(2e-4).unwrap();
+    assert_eq!((refined.coarse(), refined.samples), (260, 520));
+    for (tolerance, s_max, grids) in [(0.0, 0.2, 1), (1.0, 0.2, 1), (1e-4, 0.0, 1), (1e-4, 1.5, 1), (1e-4, 0.2, 0)] {
+        assert!(
+            matches!(pupil_samples_for(tolerance, s_max, grids), Err(optics::Error::InvalidParameter { .. })),
+            "{tolerance} {s_max} {grids}"
+        );
+    }
+}
+
+/// Beyond reach: a tolerance the 2048-sample cap cannot meet, a memory budget that caps `N`
+/// lower for many grids, and a refinement past the limit all stop with the numbers: the
+/// tolerance asked, the `N` needed, the limit and the error reachable there.
+#[test]
+fn sampling_beyond_reach_is_refused_with_the_numbers() {
+    let e = pupil_samples_for(1e-7, 0.22, 40).unwrap_err();
+    let optics::Error::PupilSampling { tolerance, needed, limit, reachable } = e.clone() else { panic!("{e}") };
+    assert_eq!((tolerance, limit), (1e-7, 2048));
+    assert!(needed > 10_000 && reachable > 1e-7 && reachable < 1e-5, "{e}");
+    let message = e.to_string();
+    assert!(message.contains("1e-7") && message.contains(&needed.to_string()) && message.contains("2048"), "{message}");
+    // 20 000 grids (a 300 nm band with several orders) of up to 4 GiB: N is capped far lower
+    let plan = pupil_samples_for(1e-3, 0.22, 20_000).unwrap();
+    assert!(plan.limit < 400 && plan.limit >= plan.samples, "{plan:?}");
+    let side = 2 * ((0.22 * plan.limit as f64).ceil() as usize + 2) + 1;
+    assert!(20_000.0 * (side * side * 16) as f64 <= optics::FFT_MEMORY_BUDGET);
+    assert!(matches!(pupil_samples_for(1e-5, 0.22, 20_000), Err(optics::Error::PupilSampling { .. })));
+    // a refinement past the limit
+    let e = plan.refine(1e-2).unwrap_err();
+    assert!(e.to_string().contains(&format!("N = {}", plan.limit)), "{e}");
+}
+
+/// The plan end to end on the paper lens through the iris decentred by 10 %: the mean MTF at
+/// `N/2` and `N`, extrapolated, is within the tolerance of the exact value (the iris' reduction
+/// on the exact path), and the estimate is no smaller than the true error of `M_N` by more than
+/// the study's margin.
+#[test]
+fn richardson_plan_meets_the_tolerance_on_the_decentred_iris() {
+    let band = radiometry::Spectrum::Gaussian(radiometry::Gaussian::from_range(800e-9, 50e-9, 1.0).unwrap());
+    let nyquist = 1.0 / (2.0 * 5.2e-6);
+    let iris = std::sync::Arc::new(Aperture::circle().decentred(0.1, 0.0).unwrap());
+    let mean = |reduced: bool, n: Option<usize>| {
+        let lens = IrisLens { reduced, iris: iris.clone() };
+        let settings = optics::Settings { pupil_samples: n, tolerance: 1e-8, ..optics::Settings::default() };
+        let poly = optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings)
+            .unwrap();
+        poly.mean_mtf_along(0.0).0
+    };
+    let exact = mean(true, None);
+    let tolerance = 2e-4;
+    // s_max at the longest wavelength the spectral rule keeps (λ0 + 7σ)
+    let s_max = nyquist * (800e-9 + 7.0 * 50e-9 / 8f64.sqrt()) * IrisLens::F_NUMBER;
+    let plan = pupil_samples_for(tolerance, s_max, 192).unwrap();
+    let (coarse, fine) = (mean(false, Some(plan.coarse())), mean(false, Some(plan.samples)));
+    let estimate = plan.extrapolate(coarse, fine);
+    assert!(estimate.converged, "{plan:?}: {estimate:?}");
+    let error_fine = ((fine - exact) / exact).abs();
+    let error_value = ((estimate.value - exact) / exact).abs();
+    assert!(error_value <= tolerance && error_value < 0.2 * error_fine, "{error_value:e} vs {error_fine:e}");
+    assert!(estimate.error > 0.8 * error_fine, "{estimate:?} vs {error_fine:e}");
 }
