@@ -30,6 +30,22 @@ pub enum Error {
         /// The integral found.
         total: f64,
     },
+    /// The FFT path cannot reach the tolerance asked within its pupil-sampling limit (the cap
+    /// [`crate::fft::MAX_CHOSEN_SAMPLES`] or the memory budget [`crate::FFT_MEMORY_BUDGET`]
+    /// for the grids held): see [`crate::fft::pupil_samples_for`].
+    #[error(
+        "the FFT path cannot reach a tolerance of {tolerance:e} on the mean MTF: its error falls as N^-1.6 with the pupil samples N across the diameter, and {tolerance:e} would need N ≈ {needed}, beyond the {limit} it may use here (the 2048-sample cap, or the memory budget for this many spectral nodes); at N = {limit} it reaches about {reachable:.1e}: ask for that tolerance or a coarser one"
+    )]
+    PupilSampling {
+        /// The relative tolerance asked.
+        tolerance: f64,
+        /// Pupil samples it would need (predicted).
+        needed: usize,
+        /// The largest pupil sampling allowed.
+        limit: usize,
+        /// The relative error reachable at `limit` (predicted).
+        reachable: f64,
+    },
     /// The FFT path would need more memory than its budget ([`crate::FFT_MEMORY_BUDGET`]): it
     /// stops before allocating instead of exhausting the machine.
     #[error(

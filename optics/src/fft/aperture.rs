@@ -178,6 +178,22 @@ impl Aperture {
             && self.decentre == (0.0, 0.0)
     }
 
+    /// The aperture as one circle, when it is exactly one: `Some((centre, radius))`, the centre
+    /// `[dx, dy]` from the lens axis and the radius, both in units of the full aperture's radius
+    /// `R` (a [`circle`](Aperture::circle) or a [`ring`](Aperture::ring) without obscuration or
+    /// sector, centred or [`decentred`](Aperture::decentred): the scene's iris is
+    /// `Aperture::disc(0, None).decentred(dx, dy)`, the circle of radius 1 centred at
+    /// `(dx, dy)`). `None` for an annulus, a sector or a mask.
+    ///
+    /// With a defocus-only wavefront such a pupil is a centred circle in disguise:
+    /// [`reduce_decentred_circle`] gives its exact 1-D description.
+    pub fn as_circle(&self) -> Option<([f64; 2], f64)> {
+        match self.shape {
+            Shape::Disc { obscuration: 0.0, outer, sector: None } => Some(([self.decentre.0, self.decentre.1], outer)),
+            _ => None,
+        }
+    }
+
     /// Exact area of the aperture in units of `R²` (`π` for the full circle), or `None` for a mask.
     pub fn exact_area(&self) -> Option<f64> {
         match self.shape {
@@ -216,6 +232,111 @@ impl Aperture {
             Shape::Mask(inside) => mask_area_in(&rect, inside.as_ref()),
         }
     }
+}
+
+/// A circular pupil with defocus, decentred from the lens axis, described as the centred circle
+/// the exact 1-D path computes ([`reduce_decentred_circle`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReducedCircle {
+    /// Radius `r` of the pupil, in units of the full aperture's radius `R`: the pupil is a lens
+    /// of F-number `F#/r`, its frequencies `s' = s/r` (`s` normalized to the full aperture's
+    /// cutoff `2 NA/λ`, the FFT path's convention).
+    pub radius: f64,
+    /// Defocus at the pupil's own edge, m: `W020 r²`.
+    pub defocus_m: f64,
+    /// Image displacement on the detector, m, that the decentre's tilt produces:
+    /// `Δ = 2 W020 d/NA = 4 F# W020 d`.
+    pub image_shift_m: [f64; 2],
+}
+
+/// The exact description of a circular pupil of radius `radius` centred at `centre` (both in
+/// units of the full aperture's radius `R`, the centre from the lens axis; what
+/// [`Aperture::as_circle`] returns) on a lens with defocus only, `W = W020 ρ²` with `ρ` from
+/// the lens axis (docs/physics.md, "Sign of the wavefront"), and image-side numerical aperture
+/// `numerical_aperture = 1/(2 F#)` of the full aperture.
+///
+/// # Derivation
+/// Write a pupil point as `x = d + u` (`d` the centre, `|u| ≤ r`, units of `R`):
+///
+/// ```text
+/// W = W020 |d + u|² = W020 |u|² + 2 W020 d·u + W020 |d|²
+///   = (W020 r²) |v|² + 2 W020 d·u + piston,         v = u/r, |v| ≤ 1
+/// ```
+///
+/// - **Defocus** `W020 r²` at the pupil's own edge `|v| = 1`: the pupil is the centred circle of
+///   radius `rR`, a lens of F-number `F#/r` whose cutoff is `r ν_c`, so its OTF is
+///   [`crate::defocus_otf`]`(s/r, W020 r²/λ)` at the full aperture's normalized frequency `s`
+///   (docs/physics.md, "Exact defocused OTF"; zero for `s ≥ r`).
+/// - **Tilt** `t·u`, `t = 2 W020 d` (m of OPD per unit `R`, the convention of
+///   [`ZoneField::tilt_m`](super::ZoneField::tilt_m)). A wavefront slope `∂W/∂x > 0` moves the
+///   PSF toward `+x` (module docs of [`fft`](super), "Conventions"); the stationary phase of the
+///   Fraunhofer integral puts the PSF of `W = t·u` at `Δ = t z/R = t/NA` (module docs of
+///   [`SampledZones`](super::SampledZones)), so
+///
+///   ```text
+///   Δ = 2 W020 d / NA = 4 F# W020 d        (m, on the detector)
+///   ```
+///
+///   the convention of [`crate::Wavefront::image_shift_m`]: the OTF is multiplied by
+///   `exp(−2πi ν·Δ)` (docs/physics.md, "Polychromatic OTF"). In the FFT path's normalized
+///   frequency (`ν = s/(λ F#)`) that phase is `−8π w d·s` with `w = W020/λ`: `W020 > 0` (focus
+///   behind the detector, rays not yet crossed) and an iris moved toward `+x` put the blur
+///   toward `+x`, as the ray picture says.
+/// - The **piston** `W020 |d|²` does not change the OTF.
+///
+/// Hence, exactly (the FFT path reproduces it to its sampling error; tests/optics/fft.rs):
+///
+/// ```text
+/// OTF_decentred(ν) = defocus_otf(s/r, W020 r²/λ) · exp(−2πi ν·Δ),   s = ν λ F#
+/// ```
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for a radius outside `(0, 1]`, a non-finite centre or defocus,
+/// or a numerical aperture outside `(0, 1)`.
+///
+/// # Example
+/// ```
+/// use optics::fft::{Aperture, reduce_decentred_circle};
+/// // the scene's iris decentred by 15 % of the radius along x, at F/2.5, 1 µm of defocus
+/// let iris = Aperture::circle().decentred(0.15, 0.0)?;
+/// let (centre, radius) = iris.as_circle().unwrap();
+/// let reduced = reduce_decentred_circle(centre, radius, 1e-6, 0.2)?;
+/// assert_eq!((reduced.radius, reduced.defocus_m), (1.0, 1e-6));
+/// assert!((reduced.image_shift_m[0] - 1.5e-6).abs() < 1e-20); // 2 × 1 µm × 0.15 / 0.2
+/// # Ok::<(), optics::Error>(())
+/// ```
+pub fn reduce_decentred_circle(
+    centre: [f64; 2],
+    radius: f64,
+    w020_m: f64,
+    numerical_aperture: f64,
+) -> Result<ReducedCircle, Error> {
+    if !(radius > 0.0 && radius <= 1.0) {
+        return Err(Error::InvalidParameter {
+            name: "circle radius",
+            value: radius,
+            expected: "in (0, 1] (fraction of the full aperture's radius)",
+        });
+    }
+    if let Some(&c) = centre.iter().find(|c| !c.is_finite()) {
+        return Err(Error::InvalidParameter {
+            name: "circle centre",
+            value: c,
+            expected: "finite (fraction of the radius)",
+        });
+    }
+    if !w020_m.is_finite() {
+        return Err(Error::InvalidParameter { name: "W020", value: w020_m, expected: "finite (metres of OPD)" });
+    }
+    if !(numerical_aperture > 0.0 && numerical_aperture < 1.0) {
+        return Err(Error::InvalidParameter {
+            name: "numerical aperture",
+            value: numerical_aperture,
+            expected: "in (0, 1)",
+        });
+    }
+    let k = 2.0 * w020_m / numerical_aperture;
+    Ok(ReducedCircle { radius, defocus_m: w020_m * radius * radius, image_shift_m: [k * centre[0], k * centre[1]] })
 }
 
 #[derive(Clone, Copy)]

@@ -20,7 +20,7 @@ pub const MAX_SAMPLES: usize = 8192;
 pub const INTERPOLATION_POINTS: usize = 4;
 
 /// Extra lags stored beyond `s_max N` so that the interpolation stencil stays on the grid.
-const STENCIL_MARGIN: usize = INTERPOLATION_POINTS / 2;
+pub(super) const STENCIL_MARGIN: usize = INTERPOLATION_POINTS / 2;
 
 /// A pupil sampled on an `N × N` grid across the aperture diameter: the transmission (area
 /// fraction) of each pixel and the wavefront (OPD, metres) at its centre.
@@ -221,7 +221,7 @@ impl OtfPlan {
             inverse,
             rows: vec![zero; n * m],
             work: vec![zero; m * m],
-            lags: vec![zero; (2 * half + 1) * m],
+            lags: vec![zero; (half + 1) * m],
             scratch: vec![zero; scratch_len],
         })
     }
@@ -297,7 +297,7 @@ impl OtfPlan {
     ///
     /// `OTF(k) = Σ_m P(m) P*(m + k) / (M² · Σ A)` for lags `|kx|, |ky| ≤ K`, computed as the
     /// inverse DFT of `|DFT(P)|²` (conjugated) and normalized by the exact aperture area; the zero
-    /// lag is set to exactly 1 (module docs). Cost: `2N + 2M + 2K + 1` FFTs of length `M`.
+    /// lag is set to exactly 1 (module docs). Cost: `N + M + ⌈M/2⌉ + K + 1` FFTs of length `M`.
     ///
     /// # Panics
     /// If `pupil.n()` differs from the plan's `N` or the wavelength is not positive and finite.
@@ -325,34 +325,56 @@ impl OtfPlan {
 
     /// The OTF grid from the pupil spectrum in `work`: `conj IDFT₂(|F|²) / (M² weight)` at the
     /// stored lags, the zero lag set to 1.
+    ///
+    /// `|F|²` is real, so its inverse `R` is Hermitian, `R(−k) = R(k)*`: only the lags
+    /// `ky ∈ [0, K]` are transformed, the others are conjugates. Along `qy` two real rows
+    /// `a, b` (`qx = 2j, 2j + 1`) go through one complex FFT as `z = a + i b`, and are separated
+    /// with `A(ky) = (Z(ky) + Z(−ky)*)/2`, `B(ky) = (Z(ky) − Z(−ky)*)/(2i)`: `⌈M/2⌉ + K + 1`
+    /// inverse FFTs instead of `M + 2K + 1`.
     fn autocorrelation(&mut self, weight: f64, out: &mut Otf) {
         let (m, half) = (self.m, self.half);
-        for v in &mut self.work {
-            *v = Complex64::new(v.norm_sqr(), 0.0);
-        }
-        // inverse along qy → ky, every qx row
-        self.inverse.process_with_scratch(&mut self.work, &mut self.scratch);
-        // gather the lags ky ∈ [−K, K] as rows, then inverse along qx → kx
-        let side = 2 * half + 1;
-        for (r, ky) in (-(half as i64)..=half as i64).enumerate() {
-            let col = ky.rem_euclid(m as i64) as usize;
-            let dst = &mut self.lags[r * m..(r + 1) * m];
-            for (qx, d) in dst.iter_mut().enumerate() {
-                *d = self.work[qx * m + col];
+        // pack the real rows |F|² of qx = 2j, 2j + 1 into row j, in place (row j ≤ 2j is read
+        // before it is written)
+        let packed = m.div_ceil(2);
+        for j in 0..packed {
+            let (a, b) = (2 * j * m, (2 * j + 1) * m);
+            for qy in 0..m {
+                let re = self.work[a + qy].norm_sqr();
+                let im = if 2 * j + 1 < m { self.work[b + qy].norm_sqr() } else { 0.0 };
+                self.work[j * m + qy] = Complex64::new(re, im);
             }
         }
-        self.inverse.process_with_scratch(&mut self.lags, &mut self.scratch);
+        // inverse along qy → ky, then separate the pairs into the rows ky ∈ [0, K] of `lags`
+        self.inverse.process_with_scratch(&mut self.work[..packed * m], &mut self.scratch);
+        let (half_re, minus_half_i) = (Complex64::new(0.5, 0.0), Complex64::new(0.0, -0.5));
+        for j in 0..packed {
+            let z = &self.work[j * m..(j + 1) * m];
+            for ky in 0..=half {
+                let (zk, zm) = (z[ky % m], z[(m - ky % m) % m].conj());
+                self.lags[ky * m + 2 * j] = (zk + zm) * half_re;
+                if 2 * j + 1 < m {
+                    self.lags[ky * m + 2 * j + 1] = (zk - zm) * minus_half_i;
+                }
+            }
+        }
+        // inverse along qx → kx
+        self.inverse.process_with_scratch(&mut self.lags[..(half + 1) * m], &mut self.scratch);
         let scale = if weight > 0.0 { 1.0 / ((m * m) as f64 * weight) } else { 0.0 };
+        let side = 2 * half + 1;
         out.n = self.n;
         out.half = half;
         out.s_max = self.s_max;
         out.grid.clear();
-        out.grid.reserve(side * side);
-        for r in 0..side {
-            let row = &self.lags[r * m..(r + 1) * m];
-            for kx in -(half as i64)..=half as i64 {
+        out.grid.resize(side * side, Complex64::new(0.0, 0.0));
+        let h = half as i64;
+        for ky in 0..=h {
+            let row = &self.lags[ky as usize * m..(ky as usize + 1) * m];
+            for kx in -h..=h {
                 // R(k) = Σ P(m + k) P*(m); the OTF is its conjugate (module docs)
-                out.grid.push(row[kx.rem_euclid(m as i64) as usize].conj() * scale);
+                let v = row[kx.rem_euclid(m as i64) as usize].conj() * scale;
+                out.grid[((ky + h) * side as i64 + kx + h) as usize] = v;
+                // OTF(−k) = OTF(k)*
+                out.grid[((h - ky) * side as i64 + h - kx) as usize] = v.conj();
             }
         }
         out.grid[half * side + half] = Complex64::new(1.0, 0.0);
@@ -584,6 +606,53 @@ mod tests {
                 let got: f64 = w.iter().enumerate().map(|(j, wj)| wj * ((lo + j as i32) as f64).powi(p)).sum();
                 assert!((got - t.powi(p)).abs() < 1e-13, "t = {t}, degree {p}");
             }
+        }
+    }
+
+    /// The Hermitian shortcut of the inverse transform against the direct sum
+    /// `Σ_m P(m) P*(m + k) / Σ A` at every stored lag, for an odd and an even padded length.
+    #[test]
+    fn grid_is_the_direct_autocorrelation() {
+        for (n, s_max, odd) in [(10, 0.2, true), (12, 0.2, false), (9, 1.0, false)] {
+            let mut plan = OtfPlan::new(n, s_max).unwrap();
+            assert_eq!(plan.padded_len() % 2 == 1, odd, "M = {}", plan.padded_len());
+            // an arbitrary field with a few zeros
+            let field: Vec<Complex64> = (0..n * n)
+                .map(|p| {
+                    if p % 7 == 3 {
+                        Complex64::new(0.0, 0.0)
+                    } else {
+                        Complex64::from_polar(0.3 + (p % 5) as f64 * 0.15, 0.37 * (p * p) as f64)
+                    }
+                })
+                .collect();
+            let weight: f64 = field.iter().map(|z| z.norm_sqr()).sum();
+            let mut otf = Otf::new();
+            plan.otf_of_field(&field, weight, &mut otf);
+            let k = otf.max_lag() as i64;
+            let at = |i: i64, j: i64| {
+                if (0..n as i64).contains(&i) && (0..n as i64).contains(&j) {
+                    field[(j * n as i64 + i) as usize]
+                } else {
+                    Complex64::new(0.0, 0.0)
+                }
+            };
+            let mut worst: f64 = 0.0;
+            for ky in -k..=k {
+                for kx in -k..=k {
+                    if kx == 0 && ky == 0 {
+                        continue;
+                    }
+                    let mut direct = Complex64::new(0.0, 0.0);
+                    for j in 0..n as i64 {
+                        for i in 0..n as i64 {
+                            direct += at(i, j) * at(i + kx, j + ky).conj();
+                        }
+                    }
+                    worst = worst.max((otf.sample(kx, ky) - direct / weight).norm());
+                }
+            }
+            assert!(worst < 1e-14, "N = {n}: {worst:e}");
         }
     }
 

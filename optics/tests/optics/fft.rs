@@ -10,7 +10,10 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use num_complex::Complex64;
-use optics::fft::{Aberrations, Aperture, Otf, OtfPlan, SampledPupil, convergence_table, defocus_mean_mtf};
+use optics::fft::{
+    Aberrations, Aperture, Otf, OtfPlan, SampledPupil, convergence_table, defocus_mean_mtf, pupil_samples_for,
+    reduce_decentred_circle,
+};
 use optics::{defocus_otf, mtf_diffraction_limited, mtf_diffraction_limited_mean, reference};
 
 /// Any wavelength: the OTF depends on `W/λ` only.
@@ -418,4 +421,321 @@ fn fft_path_refuses_scenes_over_its_memory_budget() {
     assert!(
         optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings(32)).is_ok()
     );
+}
+
+// ---- A decentred circle with defocus is a centred circle with a shift (`reduce_decentred_circle`)
+
+/// What [`Aperture::as_circle`] sees: one circle, centred or decentred, of any radius; nothing
+/// else.
+#[test]
+fn as_circle_recognizes_exactly_one_circle() {
+    assert_eq!(Aperture::circle().as_circle(), Some(([0.0, 0.0], 1.0)));
+    assert_eq!(Aperture::circle().decentred(0.1, -0.15).unwrap().as_circle(), Some(([0.1, -0.15], 1.0)));
+    // the scene's iris: `disc(0, None).decentred(dx, dy)`
+    let iris = Aperture::disc(0.0, None).unwrap().decentred(0.15, 0.0).unwrap();
+    assert_eq!(iris.as_circle(), Some(([0.15, 0.0], 1.0)));
+    let zone = Aperture::ring(0.0, 0.6, None).unwrap().decentred(0.2, 0.3).unwrap();
+    assert_eq!(zone.as_circle(), Some(([0.2, 0.3], 0.6)));
+    // a full turn is no sector
+    assert_eq!(Aperture::sector(0.3, 0.3 + 2.0 * PI).unwrap().as_circle(), Some(([0.0, 0.0], 1.0)));
+    assert_eq!(Aperture::annulus(0.3).unwrap().as_circle(), None);
+    assert_eq!(Aperture::sector(0.0, PI).unwrap().as_circle(), None);
+    assert_eq!(Aperture::ring(0.2, 0.6, None).unwrap().as_circle(), None);
+    assert_eq!(Aperture::mask(|x, y| x * x + y * y <= 1.0).as_circle(), None);
+}
+
+/// The reduction's numbers: radius kept, defocus `W020 r²`, shift `2 W020 d/NA`, validated inputs.
+#[test]
+fn reduced_circle_numbers_and_validation() {
+    let reduced = reduce_decentred_circle([0.3, -0.2], 0.5, 2e-6, 0.2).unwrap();
+    assert_eq!(reduced.radius, 0.5);
+    assert!((reduced.defocus_m - 0.5e-6).abs() < 1e-22);
+    // F/2.5: Δ = 4 F# W020 d = 4 · 2.5 · 2 µm · (0.3, −0.2) = (6, −4) µm
+    assert!((reduced.image_shift_m[0] - 6e-6).abs() < 1e-18 && (reduced.image_shift_m[1] + 4e-6).abs() < 1e-18);
+    for (centre, radius, w020, na) in [
+        ([0.0, 0.0], 0.0, 1e-6, 0.2),
+        ([0.0, 0.0], 1.1, 1e-6, 0.2),
+        ([f64::NAN, 0.0], 1.0, 1e-6, 0.2),
+        ([0.0, 0.0], 1.0, f64::INFINITY, 0.2),
+        ([0.0, 0.0], 1.0, 1e-6, 0.0),
+        ([0.0, 0.0], 1.0, 1e-6, 1.0),
+    ] {
+        assert!(reduce_decentred_circle(centre, radius, w020, na).is_err(), "{centre:?} {radius} {w020} {na}");
+    }
+}
+
+/// The FFT grid of a decentred circle of radius `r = ½` with defocus `W020`, sampled with `N`
+/// across the full aperture, is **sample for sample** the grid of the reduced description: the
+/// centred unit circle sampled with `rN` across it (the same pixels: the frequency axis scales
+/// by `1/r`, lag `k` is `s = k/N` there and `s' = k/(rN) = s/r` here) with defocus `W020 r²` and
+/// the tilt `2 W020 d·u` as Noll `Z2`, `Z3` (coefficients `W020 r d_x`, `W020 r d_y`). Only the
+/// piston differs, which no OTF sees: the two agree to rounding, for both signs of the defocus.
+#[test]
+fn decentred_circle_grid_is_the_reduced_circle_grid() {
+    let (n, r, s_max) = (128, 0.5, 0.2);
+    for (w, dx, dy) in [(1.5, 0.3, -0.2), (-0.8, -0.1, 0.25), (2.0, 0.0, 0.0)] {
+        let w020 = w * LAMBDA;
+        let decentred = Aperture::ring(0.0, r, None).unwrap().decentred(dx, dy).unwrap();
+        let grid = otf_of(n, s_max, &decentred, &defocus(w));
+        let reduced = reduce_decentred_circle([dx, dy], r, w020, 0.2).unwrap();
+        let tilt = Aberrations {
+            w020_m: reduced.defocus_m,
+            zernike_noll_m: vec![(2, w020 * r * dx), (3, w020 * r * dy)],
+            ..Aberrations::default()
+        };
+        let n_reduced = (r * n as f64) as usize;
+        let reduced_grid = otf_of(n_reduced, s_max / r, &Aperture::circle(), &tilt);
+        assert_eq!(grid.max_lag(), reduced_grid.max_lag());
+        let k = grid.max_lag() as i64;
+        let mut worst: f64 = 0.0;
+        for ky in -k..=k {
+            for kx in -k..=k {
+                worst = worst.max((grid.sample(kx, ky) - reduced_grid.sample(kx, ky)).norm());
+            }
+        }
+        assert!(worst < 1e-12, "w = {w}, d = ({dx}, {dy}): {worst:e}");
+    }
+}
+
+/// The reduced description against the exact 1-D path: the FFT OTF of a decentred circle
+/// (radius `r`, centre `d`, defocus `w` waves) equals `defocus_otf(s/r, w r²) exp(−2πi ν·Δ)`,
+/// `ν·Δ = 4 w s·d` in the full aperture's normalized frequency, along several azimuths, to the
+/// FFT path's pointwise accuracy `0.2/(rN)` (file docs: the pupil has `rN` samples across).
+#[test]
+fn decentred_circle_is_the_exact_otf_with_the_reduced_shift() {
+    let n = 256;
+    let s_max = 0.2;
+    // F/2.5: any F-number; the phase in normalized frequency does not depend on it
+    let na = 0.2;
+    let f_number = 0.5 / na;
+    for (w, dx, dy, r) in [(0.5, 0.1, 0.0, 1.0), (2.0, 0.15, 0.0, 1.0), (-1.0, 0.1, -0.15, 1.0), (1.0, -0.2, 0.3, 0.7)]
+    {
+        let aperture = Aperture::ring(0.0, r, None).unwrap().decentred(dx, dy).unwrap();
+        let otf = otf_of(n, s_max, &aperture, &defocus(w));
+        let (centre, radius) = aperture.as_circle().unwrap();
+        let reduced = reduce_decentred_circle(centre, radius, w * LAMBDA, na).unwrap();
+        let w_reduced = reduced.defocus_m / LAMBDA;
+        let tolerance = slice_tolerance((r * n as f64) as usize);
+        let mut worst: f64 = 0.0;
+        for azimuth in [0.0, 0.7, FRAC_PI_2, 2.5, 4.0] {
+            let (sin, cos) = f64::sin_cos(azimuth);
+            for i in 1..=40 {
+                let s = s_max * i as f64 / 40.0;
+                let nu = s / (LAMBDA * f_number);
+                let [ex, ey] = reduced.image_shift_m;
+                let phase = Complex64::from_polar(1.0, -2.0 * PI * nu * (ex * cos + ey * sin));
+                let exact = defocus_otf(s / radius, w_reduced) * phase;
+                worst = worst.max((otf.at(s, azimuth) - exact).norm());
+            }
+        }
+        assert!(worst < tolerance, "w = {w}, d = ({dx}, {dy}), r = {r}: {worst:e} (tolerance {tolerance:e})");
+    }
+}
+
+/// The sign of the shift, where its direction matters: an image shift `−Δ` given explicitly
+/// (the order's `image_shift_m`, whose convention the polychromatic sum applies) cancels the
+/// decentred iris' own shift `Δ`, so the OTF is real and equals the centred one; `+Δ` doubles
+/// it instead. A two-wavelength sum shows it in the modulus too: the iris' shifts of opposite
+/// defocus cancel the given ones only with the right sign.
+#[test]
+fn the_decentred_shift_has_the_sign_that_cancels_an_opposite_image_shift() {
+    let (n, s_max, na) = (256, 0.2, 0.2);
+    let f_number = 0.5 / na;
+    let iris = Aperture::circle().decentred(0.15, -0.05).unwrap();
+    let (centre, radius) = iris.as_circle().unwrap();
+    let shift_phase = |shift: [f64; 2], s: f64, azimuth: f64| {
+        let nu = s / (LAMBDA * f_number);
+        Complex64::from_polar(1.0, -2.0 * PI * nu * (shift[0] * azimuth.cos() + shift[1] * azimuth.sin()))
+    };
+    let mut grids = Vec::new();
+    for w in [1.2, -0.7] {
+        let otf = otf_of(n, s_max, &iris, &defocus(w));
+        let reduced = reduce_decentred_circle(centre, radius, w * LAMBDA, na).unwrap();
+        grids.push((w, otf, reduced.image_shift_m));
+    }
+    let tolerance = slice_tolerance(n);
+    let (mut cancelled, mut wrong_sign, mut sum_right, mut sum_wrong): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
+    for azimuth in [0.0, 1.0, 2.0] {
+        for i in 1..=20 {
+            let s = s_max * i as f64 / 20.0;
+            let mut right = Complex64::new(0.0, 0.0);
+            let mut wrong = Complex64::new(0.0, 0.0);
+            let mut centred = 0.0;
+            for (w, otf, shift) in &grids {
+                let z = otf.at(s, azimuth);
+                let exact = defocus_otf(s, *w);
+                // the order's explicit shift −Δ undoes the iris' Δ: real, the centred OTF
+                let undone = z * shift_phase([-shift[0], -shift[1]], s, azimuth);
+                cancelled = cancelled.max((undone - exact).norm());
+                // +Δ on top of the iris' Δ: the phase of a 2Δ shift
+                let doubled = z * shift_phase(*shift, s, azimuth);
+                wrong_sign = wrong_sign.max((doubled - exact).norm());
+                right += undone;
+                wrong += doubled;
+                centred += exact;
+            }
+            sum_right = sum_right.max((right.norm() - centred.abs()).abs());
+            sum_wrong = sum_wrong.max((wrong.norm() - centred.abs()).abs());
+        }
+    }
+    assert!(cancelled < tolerance, "{cancelled:e}");
+    assert!(wrong_sign > 0.2, "{wrong_sign}");
+    assert!(sum_right < 2.0 * tolerance, "{sum_right:e}");
+    assert!(sum_wrong > 0.1, "{sum_wrong}");
+}
+
+/// A chromatic lens (`f(λ) = f0 λ0/λ`, paper lens F/2.5) through a decentred iris: on the FFT
+/// path, or as its reduction on the exact path (F-number `F#/r`, defocus `W020 r²` and the
+/// image shift `Δ(λ)` per wavelength). Their polychromatic mean MTFs agree to the FFT path's
+/// error at `N = 256` (BENCHMARKS.md: 5.4e-5 relative for the 10 % iris; measured here 4.9e-5
+/// to 7.6e-5, the smaller iris having `0.8 N` samples across).
+#[derive(Debug)]
+struct IrisLens {
+    reduced: bool,
+    iris: std::sync::Arc<Aperture>,
+}
+
+impl IrisLens {
+    const F_NUMBER: f64 = 2.5;
+    const F0: f64 = 3.36e-3;
+    const LAMBDA0: f64 = 800e-9;
+
+    fn w020(lambda: f64) -> f64 {
+        (1.0 - lambda / Self::LAMBDA0) * Self::F0 / (8.0 * Self::F_NUMBER * Self::F_NUMBER)
+    }
+}
+
+impl optics::LensModel for IrisLens {
+    fn f_number(&self) -> f64 {
+        let (_, r) = self.iris.as_circle().unwrap();
+        if self.reduced { Self::F_NUMBER / r } else { Self::F_NUMBER }
+    }
+    fn focal_length(&self) -> f64 {
+        Self::F0
+    }
+    fn orders(&self, lambda: f64, _: optics::Field) -> Vec<optics::Order> {
+        let w020 = Self::w020(lambda);
+        let efficiency = 0.15 * self.iris.area_fraction();
+        if self.reduced {
+            let (centre, radius) = self.iris.as_circle().unwrap();
+            let reduced = reduce_decentred_circle(centre, radius, w020, 0.5 / Self::F_NUMBER).unwrap();
+            let [dx, dy] = reduced.image_shift_m;
+            let wavefront = optics::Wavefront::defocus(reduced.defocus_m).shifted(dx, dy);
+            vec![optics::Order::new(efficiency, optics::Pupil::Full, wavefront)]
+        } else {
+            let pupil = optics::Pupil::Aperture(self.iris.clone());
+            vec![optics::Order::new(efficiency, pupil, optics::Wavefront::defocus(w020))]
+        }
+    }
+}
+
+#[test]
+fn decentred_iris_lens_matches_its_reduction_on_the_exact_path() {
+    let band = radiometry::Spectrum::Gaussian(radiometry::Gaussian::from_range(800e-9, 50e-9, 1.0).unwrap());
+    let nyquist = 1.0 / (2.0 * 5.2e-6);
+    let settings = optics::Settings { pupil_samples: Some(256), ..optics::Settings::default() };
+    for iris in [
+        Aperture::circle().decentred(0.15, 0.0).unwrap(),
+        Aperture::ring(0.0, 0.8, None).unwrap().decentred(0.05, 0.1).unwrap(),
+    ] {
+        let iris = std::sync::Arc::new(iris);
+        let mean = |reduced: bool, azimuth: f64| {
+            let lens = IrisLens { reduced, iris: iris.clone() };
+            let poly =
+                optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings)
+                    .unwrap();
+            assert_eq!(matches!(poly.engine(), optics::Engine::Fft { .. }), !reduced);
+            poly.mean_mtf_along(azimuth).0
+        };
+        for azimuth in [0.0, FRAC_PI_2] {
+            let (fft, exact) = (mean(false, azimuth), mean(true, azimuth));
+            assert!(((fft - exact) / exact).abs() < 1.5e-4, "{iris:?} at {azimuth}: {fft} vs {exact}");
+        }
+    }
+}
+
+// ---- Choosing the pupil sampling from the tolerance (`pupil_samples_for`)
+
+/// The plan: at least 128 samples, even, more for a tighter tolerance, the largest `N` of its
+/// padded length; the paper scene at 1e-4 starts at `(130, 260)`.
+#[test]
+fn sampling_plan_follows_the_tolerance() {
+    let s_max = 0.22;
+    let mut last = 0;
+    for tolerance in [1e-2, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5] {
+        let plan = pupil_samples_for(tolerance, s_max, 40).unwrap();
+        assert!(plan.samples >= optics::fft::MIN_CHOSEN_SAMPLES && plan.samples.is_multiple_of(2), "{plan:?}");
+        assert!(plan.samples >= last, "{tolerance}: {plan:?}");
+        // the model with its safety factor meets the tolerance at the start
+        let (c, q) = optics::fft::ERROR_MODEL;
+        assert!(optics::fft::SAFETY * c * (plan.samples as f64).powf(-q) <= tolerance, "{plan:?}");
+        // one more pair of samples would need a longer FFT
+        let k = |n: usize| (s_max * n as f64).ceil() as usize + 2;
+        let m = |n: usize| optics::fft::fast_fft_len(n + k(n));
+        assert_eq!(m(plan.samples), OtfPlan::new(plan.samples, s_max).unwrap().padded_len());
+        assert!(m(plan.samples + 2) > m(plan.samples), "{plan:?}");
+        last = plan.samples;
+    }
+    let plan = pupil_samples_for(1e-4, s_max, 40).unwrap();
+    assert_eq!((plan.coarse(), plan.samples, plan.limit), (130, 260, 2048));
+    let refined = plan.refine(2e-4).unwrap();
+    assert_eq!((refined.coarse(), refined.samples), (260, 520));
+    for (tolerance, s_max, grids) in [(0.0, 0.2, 1), (1.0, 0.2, 1), (1e-4, 0.0, 1), (1e-4, 1.5, 1), (1e-4, 0.2, 0)] {
+        assert!(
+            matches!(pupil_samples_for(tolerance, s_max, grids), Err(optics::Error::InvalidParameter { .. })),
+            "{tolerance} {s_max} {grids}"
+        );
+    }
+}
+
+/// Beyond reach: a tolerance the 2048-sample cap cannot meet, a memory budget that caps `N`
+/// lower for many grids, and a refinement past the limit all stop with the numbers: the
+/// tolerance asked, the `N` needed, the limit and the error reachable there.
+#[test]
+fn sampling_beyond_reach_is_refused_with_the_numbers() {
+    let e = pupil_samples_for(1e-7, 0.22, 40).unwrap_err();
+    let optics::Error::PupilSampling { tolerance, needed, limit, reachable } = e.clone() else { panic!("{e}") };
+    assert_eq!((tolerance, limit), (1e-7, 2048));
+    assert!(needed > 10_000 && reachable > 1e-7 && reachable < 1e-5, "{e}");
+    let message = e.to_string();
+    assert!(message.contains("1e-7") && message.contains(&needed.to_string()) && message.contains("2048"), "{message}");
+    // 20 000 grids (a 300 nm band with several orders) of up to 4 GiB: N is capped far lower
+    let plan = pupil_samples_for(1e-3, 0.22, 20_000).unwrap();
+    assert!(plan.limit < 400 && plan.limit >= plan.samples, "{plan:?}");
+    let side = 2 * ((0.22 * plan.limit as f64).ceil() as usize + 2) + 1;
+    assert!(20_000.0 * (side * side * 16) as f64 <= optics::FFT_MEMORY_BUDGET);
+    assert!(matches!(pupil_samples_for(1e-5, 0.22, 20_000), Err(optics::Error::PupilSampling { .. })));
+    // a refinement past the limit
+    let e = plan.refine(1e-2).unwrap_err();
+    assert!(e.to_string().contains(&format!("N = {}", plan.limit)), "{e}");
+}
+
+/// The plan end to end on the paper lens through the iris decentred by 10 %: the mean MTF at
+/// `N/2` and `N`, extrapolated, is within the tolerance of the exact value (the iris' reduction
+/// on the exact path), and the estimate is no smaller than the true error of `M_N` by more than
+/// the study's margin.
+#[test]
+fn richardson_plan_meets_the_tolerance_on_the_decentred_iris() {
+    let band = radiometry::Spectrum::Gaussian(radiometry::Gaussian::from_range(800e-9, 50e-9, 1.0).unwrap());
+    let nyquist = 1.0 / (2.0 * 5.2e-6);
+    let iris = std::sync::Arc::new(Aperture::circle().decentred(0.1, 0.0).unwrap());
+    let mean = |reduced: bool, n: Option<usize>| {
+        let lens = IrisLens { reduced, iris: iris.clone() };
+        let settings = optics::Settings { pupil_samples: n, tolerance: 1e-8, ..optics::Settings::default() };
+        let poly = optics::Polychromatic::with_settings(&lens, &band, optics::Field::ON_AXIS, nyquist, None, settings)
+            .unwrap();
+        poly.mean_mtf_along(0.0).0
+    };
+    let exact = mean(true, None);
+    let tolerance = 2e-4;
+    // s_max at the longest wavelength the spectral rule keeps (λ0 + 7σ)
+    let s_max = nyquist * (800e-9 + 7.0 * 50e-9 / 8f64.sqrt()) * IrisLens::F_NUMBER;
+    let plan = pupil_samples_for(tolerance, s_max, 192).unwrap();
+    let (coarse, fine) = (mean(false, Some(plan.coarse())), mean(false, Some(plan.samples)));
+    let estimate = plan.extrapolate(coarse, fine);
+    assert!(estimate.converged, "{plan:?}: {estimate:?}");
+    let error_fine = ((fine - exact) / exact).abs();
+    let error_value = ((estimate.value - exact) / exact).abs();
+    assert!(error_value <= tolerance && error_value < 0.2 * error_fine, "{error_value:e} vs {error_fine:e}");
+    assert!(estimate.error > 0.8 * error_fine, "{estimate:?} vs {error_fine:e}");
 }
