@@ -33,6 +33,9 @@ pub(crate) const NUMPY_SCRIPT: &str = "xtask/baselines/numpy_table.py";
 /// Iris decentre of `examples/decentred-iris.toml`, radii.
 const IRIS_DECENTRE: f64 = 0.15;
 
+/// Pupil samplings and the mean MTF at each.
+pub(crate) type Samplings = Vec<(usize, f64)>;
+
 /// What the report says about the references of these rows.
 pub(crate) struct Notes {
     /// Spectrometer: (reference mean MTF, seconds, its work).
@@ -42,7 +45,7 @@ pub(crate) struct Notes {
     /// Decentred iris 0.15: (reference, tangential, sagittal, seconds, check at decentre 0).
     pub iris: Option<(f64, f64, f64, f64, f64)>,
     /// Coma: (extrapolated reference, observed order, the samplings and their means).
-    pub coma: Option<(f64, f64, Vec<(usize, f64)>)>,
+    pub coma: Option<(f64, f64, Samplings)>,
 }
 
 impl Notes {
