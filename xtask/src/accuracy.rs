@@ -2,20 +2,89 @@
 //! `metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
 //! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
 //! workspace root.
+//!
+//! Before that it builds the release `asnr` binary (the report times a whole `asnr sweep`) and
+//! prepares the numpy baseline `xtask/baselines/numpy_table.py`: a virtual environment in
+//! `target/baselines-venv` with the pinned `xtask/baselines/requirements.txt` (made once, remade
+//! when the requirements change), else the system `python3` if it imports numpy; when neither
+//! works the report says "numpy not available: row skipped".
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 
 use anyhow::{Result, bail};
 
 use crate::cmd;
+
+/// The virtual environment of the baseline, relative to the workspace root.
+const VENV: &str = "target/baselines-venv";
+const REQUIREMENTS: &str = "xtask/baselines/requirements.txt";
 
 /// Build and run the report from the workspace `root`.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     if let Some(bad) = args.iter().find(|a| a.as_str() != "--quick") {
         bail!("unknown argument `{bad}` (usage: cargo xtask accuracy [--quick])");
     }
+    cmd::run(&mut cmd::cargo(root, &["build", "--release", "--quiet", "--package", "asnr", "--bin", "asnr"]))?;
+    let asnr = target_dir(root).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut command =
         cmd::cargo(root, &["run", "--release", "--quiet", "--package", "metric", "--example", "accuracy", "--"]);
-    command.args(args).arg(root);
+    command.args(args).arg("--asnr").arg(&asnr);
+    match python(root) {
+        Ok(python) => {
+            command.arg("--python").arg(python);
+        }
+        Err(why) => eprintln!("accuracy: numpy not available: row skipped ({why})"),
+    }
+    command.arg(root);
     cmd::run(&mut command)
+}
+
+/// Cargo's target folder: `CARGO_TARGET_DIR` if set, else `target/` at the root.
+fn target_dir(root: &Path) -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), |dir| root.join(PathBuf::from(dir)))
+}
+
+/// Whether `python` imports numpy.
+fn has_numpy(python: &Path) -> bool {
+    Command::new(python)
+        .args(["-c", "import numpy"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// An interpreter with numpy for the baseline: the project's virtual environment (made here if
+/// it is missing or its requirements changed), else the system `python3`.
+fn python(root: &Path) -> Result<PathBuf, String> {
+    let venv = root.join(VENV);
+    let bin = if cfg!(windows) { venv.join("Scripts").join("python.exe") } else { venv.join("bin").join("python") };
+    let requirements = std::fs::read_to_string(root.join(REQUIREMENTS)).map_err(|e| format!("{REQUIREMENTS}: {e}"))?;
+    // the requirements the environment was made from, written after a successful install
+    let stamp = venv.join("requirements.installed");
+    let current = std::fs::read_to_string(&stamp).is_ok_and(|s| s == requirements);
+    if current && has_numpy(&bin) {
+        return Ok(bin);
+    }
+    let made = (|| -> Result<bool> {
+        if !cmd::status(Command::new("python3").args(["-m", "venv", "--clear"]).arg(&venv))? {
+            return Ok(false);
+        }
+        let mut pip = Command::new(&bin);
+        pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"]).arg(root.join(REQUIREMENTS));
+        Ok(cmd::status(&mut pip)? && has_numpy(&bin))
+    })();
+    match made {
+        Ok(true) => {
+            let _ = std::fs::write(&stamp, &requirements);
+            Ok(bin)
+        }
+        _ if has_numpy(Path::new("python3")) => {
+            eprintln!("accuracy: could not make {VENV}; using the system python3, which has numpy");
+            Ok(PathBuf::from("python3"))
+        }
+        Ok(false) => Err(format!("could not make {VENV} with {REQUIREMENTS}, and python3 has no numpy")),
+        Err(e) => Err(format!("{e:#}")),
+    }
 }

@@ -5,6 +5,7 @@
 //! Tasks:
 //! - `accuracy [--quick]`: the accuracy-versus-time report (`BENCHMARKS.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
+//! - `data [--check]`: the generated data files of `examples/data/` (`data.rs`).
 //! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
 //! - `readme`: every command of the README's ```` ```sh ```` blocks, run as written (`readme.rs`).
 //! - `tidy`: the architecture invariants (layout, dependency direction, workspace dependencies
@@ -16,6 +17,7 @@
 mod accuracy;
 mod ci;
 mod cmd;
+mod data;
 mod figures;
 mod readme;
 mod stress;
@@ -28,6 +30,7 @@ use std::process::ExitCode;
 const TASKS: &[(&str, &str)] = &[
     ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
     ("ci", "full check: fmt, tidy, clippy -D warnings, tests, README commands, reduced stress grid, docs -D warnings"),
+    ("data", "(re)write the generated data files of examples/data/ (the spectrometer table; --check: compare only)"),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("readme", "run every command of the README's ```sh blocks as written; none may change git status"),
     (
@@ -40,7 +43,7 @@ const TASKS: &[(&str, &str)] = &[
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let task = args.first().map(String::as_str);
-    if let Some(extra) = args.get(1).filter(|_| !matches!(task, Some("stress" | "accuracy"))) {
+    if let Some(extra) = args.get(1).filter(|_| !matches!(task, Some("stress" | "accuracy" | "data"))) {
         eprintln!("xtask: error: unexpected argument `{extra}` (this task takes no arguments)");
         return ExitCode::FAILURE;
     }
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         }
         Some("accuracy") => accuracy::run(&root, &args[1..]),
         Some("ci") => ci::run(&root),
+        Some("data") => data::run(&root, &args[1..]),
         Some("figures") => figures::run(&root),
         Some("readme") => readme::run(&root),
         Some("tidy") => tidy::run(&root),

@@ -6,8 +6,9 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use crate::Family;
+use crate::Row;
 use crate::kernels::{DEFOCUS_WAVES, Kernel, KernelRow};
-use crate::{Case, Row};
+use crate::tolerance::{COMA, IRIS, SPECTROMETER};
 
 static FONT: &[u8] = include_bytes!("../../../cli/assets/DejaVuSans.ttf");
 
@@ -49,6 +50,30 @@ fn family_style(family: Family) -> (RGBColor, Marker) {
         Family::Uniform(5) => (PALETTE[5], Marker::Cross),
         Family::Uniform(_) => (PALETTE[7], Marker::Cross),
         Family::Hermite => (PALETTE[6], Marker::Circle),
+        Family::Default => (PALETTE[6], Marker::Square),
+        Family::Numpy => (NAVY, Marker::Diamond),
+    }
+}
+
+/// Colours of the tolerance ladders, one per scene (beyond the Okabe–Ito eight).
+const PURPLE: RGBColor = RGBColor(117, 63, 160);
+const RED: RGBColor = RGBColor(200, 30, 30);
+const BROWN: RGBColor = RGBColor(150, 100, 30);
+const NAVY: RGBColor = RGBColor(30, 40, 120);
+
+/// Colour, marker and key text of a family on a scene: the default-settings ladders get one
+/// colour per scene.
+fn style(case: &str, family: Family) -> (RGBColor, Marker, String) {
+    let ladder = |colour, name: &str| (colour, Marker::Square, format!("default settings: {name}"));
+    match (family, case) {
+        (Family::Default, SPECTROMETER) => ladder(PURPLE, "spectrometer"),
+        (Family::Default, IRIS) => ladder(RED, "decentred iris 0.15"),
+        (Family::Default, COMA) => ladder(BROWN, "coma 0.5 µm"),
+        (Family::Numpy, _) => (NAVY, Marker::Diamond, "numpy baseline: spectrometer".to_owned()),
+        _ => {
+            let (colour, marker) = family_style(family);
+            (colour, marker, family.name())
+        }
     }
 }
 
@@ -157,8 +182,9 @@ fn chart<'a, DB: DrawingBackend>(
 const WIDTH: u32 = 1180;
 const KEY_WIDTH: u32 = 240;
 
-/// The two panels; `cases` orders the scenes (the first drawn filled, the others outlined).
-pub(crate) fn draw(path: &Path, rows: &[Row], kernels: &[KernelRow], cases: &[Case]) {
+/// The two panels; `cases` orders the scenes (the first drawn filled, the second outlined; the
+/// tolerance ladders after them filled, each in its own colour).
+pub(crate) fn draw(path: &Path, rows: &[Row], kernels: &[KernelRow], cases: &[&str]) {
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
     draw_on(SVGBackend::new(path, (WIDTH, 1240)).into_drawing_area(), rows, kernels, cases);
 }
@@ -167,7 +193,7 @@ fn draw_on<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     rows: &[Row],
     kernels: &[KernelRow],
-    cases: &[Case],
+    cases: &[&str],
 ) {
     root.fill(&WHITE).unwrap();
     let (upper, lower) = root.split_vertically(640);
@@ -180,9 +206,10 @@ fn draw_on<DB: DrawingBackend>(
         chart(&upper, "Mean-MTF error against time per ASNR point", "time per point, µs (median, one core)", range);
     let mut key = Key { area: &upper_key, y: 70 };
     let mut keyed: Vec<String> = Vec::new();
-    for (index, case) in cases.iter().enumerate() {
+    for (index, &case) in cases.iter().enumerate() {
+        let filled = index != 1;
         let mut families: Vec<Family> = Vec::new();
-        for r in rows.iter().filter(|r| r.case == case.name) {
+        for r in rows.iter().filter(|r| r.case == case) {
             if !families.contains(&r.family) {
                 families.push(r.family);
             }
@@ -190,14 +217,13 @@ fn draw_on<DB: DrawingBackend>(
         for family in families {
             let points: Vec<(f64, f64)> = rows
                 .iter()
-                .filter(|r| r.case == case.name && r.family == family)
+                .filter(|r| r.case == case && r.family == family)
                 .map(|r| (r.micros, r.error.max(FLOOR)))
                 .collect();
-            let (colour, marker) = family_style(family);
-            let line = ShapeStyle::from(colour).stroke_width(if index == 0 { 2 } else { 1 });
+            let (colour, marker, name) = style(case, family);
+            let line = ShapeStyle::from(colour).stroke_width(if filled { 2 } else { 1 });
             top.draw_series(LineSeries::new(points.clone(), line)).unwrap();
-            markers(&mut top, &points, marker, if index == 0 { line.filled() } else { line });
-            let name = family.name();
+            markers(&mut top, &points, marker, if filled { line.filled() } else { line });
             if !keyed.contains(&name) {
                 key.entry(&name, Some(ShapeStyle::from(colour).stroke_width(2)), Some((marker, colour.filled())));
                 keyed.push(name);
@@ -205,9 +231,9 @@ fn draw_on<DB: DrawingBackend>(
         }
     }
     key.gap();
-    for (index, case) in cases.iter().enumerate() {
+    for (index, case) in cases.iter().take(2).enumerate() {
         let style = if index == 0 { BLACK.filled() } else { ShapeStyle::from(BLACK).stroke_width(1) };
-        key.entry(case.name, None, Some((Marker::Circle, style)));
+        key.entry(case, None, Some((Marker::Circle, style)));
     }
 
     // OTF kernels: colour per method, marker per defocus, lines through a method's settings

@@ -3,10 +3,8 @@
 use std::fmt::Write as _;
 
 use crate::kernels::{DEFOCUS_WAVES, Kernel, KernelRow};
-use crate::{Context, Family, Row};
-
-/// The issue's targets and where they stand (kept in sync with the measured table by hand).
-const TARGETS: &str = include_str!("targets.md");
+use crate::tolerance::{COMA, IRIS, NUMPY_SCRIPT, SPECTROMETER, TABLE};
+use crate::{Context, Family, Row, map, targets};
 
 /// One line per mean-MTF method: what it is.
 fn explain(family: Family) -> String {
@@ -25,8 +23,7 @@ fn explain(family: Family) -> String {
              node; its error falls as ~1/N."
             .into(),
         Family::FftDecentred => "`metric::evaluate` through the paper's iris decentred by 10 % of the radius \
-             (SI Fig. S3), the issue's FFT target: no exact path exists, so the error is against the Richardson \
-             extrapolation of the three finest samplings (below)."
+             (SI Fig. S3) at fixed pupil samplings N, against the exact reference of the decentred iris (below)."
             .into(),
         Family::Table => "`metric::evaluate` with the Gaussian filter given as a `Spectrum::Sampled` table \
              (samples every h over ±7σ, piecewise linear between them; closed form off): spectral panels split \
@@ -41,6 +38,19 @@ fn explain(family: Family) -> String {
              (`optics::quad::gauss_hermite`) with weights wᵢ λᵢ (the λ factor of the detected weight is \
              integrated exactly), `optics::defocus_otf` at each, the fixed frequency rule below; no cut."
             .into(),
+        Family::Default => "`metric::evaluate` of a scene file read as `asnr evaluate` reads it \
+             (`scene::load` with `--set options.tolerance=…`), every other setting the default: the engines \
+             choose their work (spectral rule, frequency rule, FFT sampling) from the tolerance. Scenes: \
+             `examples/spectrometer.toml`, `examples/decentred-iris.toml`, and `examples/paper-theory.toml` \
+             with `lens.coma_um=0.5` (FFT path); references below."
+            .into(),
+        Family::Numpy => format!(
+            "`{NUMPY_SCRIPT}` (numpy, not part of the engines): product integration — the OTF interpolated in λ \
+             by a Legendre polynomial through nλ Gauss–Legendre nodes, weights the exact moments of the \
+             piecewise-linear λ·T(λ) — and fixed Gauss–Legendre rules of nt points in the pupil angle and nν in \
+             frequency; the median of repeated calls inside Python after the table is read (BLAS held to one \
+             thread), as our rows time `metric::evaluate` on a loaded scene."
+        ),
     }
 }
 
@@ -109,8 +119,12 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
     );
     let _ = writeln!(
         s,
-        "Machine: {}. Times are medians of repeated single-threaded calls in a release build.\n",
-        machine()
+        "Machine: {}; load average (1, 5, 15 min) {} at the start of the run and {} at its end: the machine \
+         is shared, and a load above its core count slows every row. Times are medians of repeated \
+         single-threaded calls in a release build.\n",
+        machine(),
+        context.load.0,
+        context.load.1
     );
     let _ = writeln!(s, "![error against time](docs/benchmarks/accuracy.svg)\n");
 
@@ -122,8 +136,8 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
         .collect();
     let _ = writeln!(
         s,
-        "Error: relative error of the mean MTF (hence of the ASNR) against `optics::reference::mean_mtf` at \
-         1e-12 (printed y-form OTF, adaptive Gauss–Kronrod in ν, λ and y; computed once per scene — {}). The \
+        "Error: relative error of the mean MTF (hence of the ASNR); for the paper and hard scenes against \
+         `optics::reference::mean_mtf` at 1e-12 (printed y-form OTF, adaptive Gauss–Kronrod in ν, λ and y; computed once per scene — {}). The \
          reference's own error is ~1e-12. The scenes: the paper's chromatic metalens (f0 = 3.36 mm, λ0 = 800 nm, \
          τ1 = 0.15) with a flat source behind a Gaussian filter centred at λ0, 5.2 µm pixels; detected weight \
          λ·G(λ).\n",
@@ -146,12 +160,74 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
          at the zero (Illinois), panel count doubled until the finest rules' means move by ≤ 1e-14 — {}.\n",
         rules.join("; ")
     );
-    if let Some((name, value, order)) = context.decentred {
+    if let Some((reference, tangential, sagittal, seconds, check)) = context.notes.iris {
         let _ = writeln!(
             s,
-            "Decentred iris ({name}): the reference is {value:.12}, the Richardson extrapolation \
-             M_fine + (M_fine − M_mid)/(2^p − 1) of the three finest pupil samplings, with the observed order \
-             p = {order:.2} from their differences.\n"
+            "Decentred iris (SI Fig. S3; {IRIS} and the fixed-N rows' 0.1): exact reference, written for this \
+             report (metric/examples/accuracy/iris.rs). On the defocus-only chromatic lens a full-size iris \
+             decentred by d radii is exactly the centred circular pupil with the same defocus W020(λ) plus a tilt \
+             2 d W020(λ), i.e. an image shift Δ(λ) = −4 d F# W020(λ) along the decentre: the OTF along it is the \
+             exact defocus OTF times exp(−i d a), a = 8π w s, summed over λ as a complex number, and across it \
+             the centred lens's. So the tangential mean is a nested adaptive Gauss–Kronrod integral (G10–K21, \
+             relative 1e-12) of |∫ λ G(λ) OTF e^(−i d a) dλ| over ν, with the printed y-form OTF \
+             (`optics::reference::otf_defocus`, 1e-13 absolute) at every node, and the sagittal mean is \
+             `optics::reference::mean_mtf`; `metric::evaluate` reports their average. At d = 0.15: \
+             {reference:.15} (tangential {tangential:.15}, sagittal {sagittal:.15}; {seconds:.1} s). Its own \
+             accuracy: at d = 0 the same code gives `optics::reference::mean_mtf` to {check:.1e}, and its \
+             quadratures are held to 1e-12.\n"
+        );
+    }
+    if let Some((name, exact, richardson, order)) = context.decentred {
+        let _ = writeln!(
+            s,
+            "Decentred iris 0.1 ({name}, fixed N): exact reference {exact:.12}; the Richardson extrapolation \
+             M_fine + (M_fine − M_mid)/(2^p − 1) of the three finest pupil samplings (observed order \
+             p = {order:.2}), the reference before, is {richardson:.12}, {:.1e} from it.\n",
+            (richardson - exact).abs() / exact
+        );
+    }
+    if let Some((reference, seconds, work)) = &context.notes.spectrometer {
+        let _ = writeln!(
+            s,
+            "Spectrometer table ({SPECTROMETER}): `examples/spectrometer.toml`, the paper's lens (F/2.5, \
+             f0 = 3.36 mm, λ0 = 800 nm) behind `{TABLE}` (synthetic: a 52 nm super-Gaussian band at 825 nm, 1601 \
+             samples at 0.25 nm over 600–1000 nm, 0.2 % floor, seeded noise; `cargo xtask data` writes it), flat \
+             source, constant QE, 5.2 µm pixels. Reference: the same scene through `optics::Polychromatic` with \
+             `Settings {{ spectral_rule: SpectralRule::Panels, tolerance: 1e-12, .. }}` (the per-interval rule: \
+             16-point Gauss–Legendre panels cut at every table sample, exact to rounding for the piecewise-linear \
+             table; the frequency rule to 1e-12), computed once: {reference:.15} in {seconds:.1} s ({work}). \
+             `metric::Options` has no spectral rule, so the report builds the detected spectrum (radiance × QE × \
+             λ) as `metric::evaluate` does.\n"
+        );
+    }
+    match &context.notes.numpy {
+        Ok((python, version)) => {
+            let _ = writeln!(
+                s,
+                "numpy baseline: `python3 {NUMPY_SCRIPT} {TABLE}` with numpy {version} ({}), side by side with \
+                 our rows in this run; its error is against the same reference.\n",
+                if python.contains("baselines-venv") {
+                    "the virtual environment `cargo xtask accuracy` makes in target/baselines-venv from \
+                     xtask/baselines/requirements.txt"
+                } else {
+                    "the system interpreter"
+                }
+            );
+        }
+        Err(why) => {
+            let _ = writeln!(s, "{why}.\n");
+        }
+    }
+    if let Some((reference, order, samplings)) = &context.notes.coma {
+        let means: Vec<String> = samplings.iter().map(|(n, m)| format!("N = {n}: {m:.12}")).collect();
+        let _ = writeln!(
+            s,
+            "Coma ({COMA}): `examples/paper-theory.toml` with `lens.coma_um=0.5` (FFT path). Reference: the \
+             Richardson extrapolation M_fine + (M_fine − M_mid)/(2^p − 1) of fixed pupil samplings ({}; \
+             `options.pupil_samples`), observed order p = {order:.2}: {reference:.12}. Its own error is about the \
+             size of the last correction, {:.1e}.\n",
+            means.join(", "),
+            (reference - samplings[2].1).abs() / reference
         );
     }
     let mut families: Vec<Family> = Vec::new();
@@ -230,6 +306,37 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
         );
     }
     let _ = writeln!(s);
-    s.push_str(TARGETS);
+    match &context.map {
+        Some(m) => map_section(&mut s, m),
+        None => {
+            let _ = writeln!(
+                s,
+                "## The map\n\nNot measured: the release `asnr` binary was not given (`cargo xtask accuracy` builds it \
+                 and passes `--asnr`).\n"
+            );
+        }
+    }
+    s.push_str(&targets::markdown(rows, context.map.as_ref()));
     s
+}
+
+fn map_section(s: &mut String, m: &map::Map) {
+    let _ = writeln!(s, "## The map: a whole `asnr sweep`\n");
+    let _ = writeln!(
+        s,
+        "`asnr {}` ({} points, release binary, 2 worker threads), timed from outside as a whole process: wall \
+         clock and the CPU time (user + system) it used, medians of {} runs. Error: the largest relative \
+         difference of a point's ASNR (and of its mean MTF) from the same sweep with `--tolerance 1e-12`.\n",
+        map::ARGS.join(" "),
+        m.points,
+        m.runs
+    );
+    let _ = writeln!(s, "| sweep | wall | CPU | largest ASNR error | largest mean-MTF error | runs |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| tolerance 1e-6 (default) | {:.2} s | {:.2} s | {:.1e} | {:.1e} | {} |",
+        m.wall_s, m.cpu_s, m.asnr_error, m.mean_mtf_error, m.runs
+    );
+    let _ = writeln!(s, "| tolerance 1e-12 (the reference) | {:.2} s | — | — | — | 1 |\n", m.reference_wall_s);
 }

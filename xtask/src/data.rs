@@ -1,0 +1,168 @@
+//! `cargo xtask data [--check]`: the generated data files of `examples/data/`, (re)written from
+//! the code below so that anyone can reproduce them byte for byte (`--check`: fail if a file
+//! differs from what the code makes, without writing).
+//!
+//! `examples/data/spectrometer-825-52.csv` is a synthetic spectrometer export (not a
+//! measurement): a band-pass filter of 52 nm FWHM centred at 825 nm, sampled every 0.25 nm over
+//! 600–1000 nm (1601 rows, `wavelength_nm,transmission`, transmission with 5 decimals):
+//!
+//! ```text
+//! T(λ) = 0.002 + 0.898 · exp(−ln 2 · (2 |λ − 825 nm| / 52 nm)^8) + n(λ)
+//! ```
+//!
+//! an 8th-power super-Gaussian (peak 0.9, half of the band above the floor at 825 ± 26 nm,
+//! 10–90 % edges 9.7 nm wide) on a 0.2 % floor, plus measurement noise `n`: the sum of two
+//! uniform deviates in ±0.0005 (triangular on ±0.001, standard deviation 0.00041, so that every
+//! value stays ≥ 0.001) drawn in wavelength order from xorshift64* seeded with [`SEED`]. It is
+//! the issue's spectrometer case ("a spectrometer table at 0.25 nm over 600–1000 nm"), read by
+//! `examples/spectrometer.toml` and the accuracy report.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+
+/// The spectrometer table, relative to the workspace root.
+pub(crate) const SPECTROMETER: &str = "examples/data/spectrometer-825-52.csv";
+
+/// First wavelength, step and row count of the table (nm): 600, 600.25, …, 1000.
+const START_NM: f64 = 600.0;
+const STEP_NM: f64 = 0.25;
+const ROWS: usize = 1601;
+
+/// The band: centre, FWHM (nm), peak and floor transmission, super-Gaussian order (the exponent
+/// is twice it).
+const CENTRE_NM: f64 = 825.0;
+const FWHM_NM: f64 = 52.0;
+const PEAK: f64 = 0.9;
+const FLOOR: f64 = 0.002;
+const ORDER: i32 = 4;
+
+/// Half-width of each of the two uniform noise deviates.
+const NOISE_HALF_WIDTH: f64 = 0.0005;
+
+/// Seed of the noise generator.
+pub(crate) const SEED: u64 = 825_052;
+
+/// xorshift64* (Vigna, "An experimental exploration of Marsaglia's xorshift generators,
+/// scrambled", 2016): a fixed, dependency-free generator, so the table never changes.
+struct XorShift64Star(u64);
+
+impl XorShift64Star {
+    fn next_u64(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.0 = x;
+        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Uniform in [0, 1): the top 53 bits.
+    fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The noiseless filter curve at `lambda_nm`.
+fn band(lambda_nm: f64) -> f64 {
+    let u = 2.0 * (lambda_nm - CENTRE_NM).abs() / FWHM_NM;
+    FLOOR + (PEAK - FLOOR) * (-std::f64::consts::LN_2 * u.powi(2 * ORDER)).exp()
+}
+
+/// The text of the spectrometer table (header comment, column names, 1601 rows).
+pub(crate) fn spectrometer_table() -> String {
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "# Synthetic spectrometer export (NOT a measurement), written by `cargo xtask data` (xtask/src/data.rs).\n\
+         # A band-pass filter of 52 nm FWHM at 825 nm, sampled every 0.25 nm over 600-1000 nm (1601 rows):\n\
+         # T = 0.002 + 0.898 exp(-ln2 (2|lambda - 825 nm|/52 nm)^8) + noise, an 8th-power super-Gaussian\n\
+         # (peak 0.9, 10-90 % edges 9.7 nm wide) on a 0.2 % floor; the noise is the sum of two uniform\n\
+         # deviates in +-0.0005 from xorshift64* seeded with {SEED}, drawn in wavelength order.\n\
+         wavelength_nm,transmission"
+    );
+    let mut rng = XorShift64Star(SEED);
+    for i in 0..ROWS {
+        let lambda = START_NM + STEP_NM * i as f64;
+        let noise = NOISE_HALF_WIDTH * (2.0 * rng.uniform() - 1.0) + NOISE_HALF_WIDTH * (2.0 * rng.uniform() - 1.0);
+        let _ = writeln!(text, "{lambda:.2},{:.5}", band(lambda) + noise);
+    }
+    text
+}
+
+/// Write (or with `--check`, compare) every generated file under the workspace `root`.
+pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
+    let check = match args {
+        [] => false,
+        [flag] if flag == "--check" => true,
+        [bad, ..] => bail!("unknown argument `{bad}` (usage: cargo xtask data [--check])"),
+    };
+    let path = root.join(SPECTROMETER);
+    let text = spectrometer_table();
+    if check {
+        let current = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        if current != text {
+            bail!("{SPECTROMETER} differs from what `cargo xtask data` writes: run it and commit the file");
+        }
+        eprintln!("data: {SPECTROMETER} is up to date");
+    } else {
+        std::fs::write(&path, &text).with_context(|| format!("cannot write {}", path.display()))?;
+        eprintln!("data: wrote {SPECTROMETER} ({ROWS} rows)");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rows(text: &str) -> Vec<(f64, f64)> {
+        text.lines()
+            .filter(|l| !l.starts_with('#') && !l.starts_with("wavelength"))
+            .map(|l| {
+                let (a, b) = l.split_once(',').unwrap();
+                (a.parse().unwrap(), b.parse().unwrap())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_table_has_the_issue_shape() {
+        let rows = rows(&spectrometer_table());
+        assert_eq!(rows.len(), 1601);
+        assert_eq!((rows[0].0, rows[1600].0), (600.0, 1000.0));
+        assert!(rows.windows(2).all(|w| (w[1].0 - w[0].0 - 0.25).abs() < 1e-12));
+        // floor and noise: every value within ±0.001 of the noiseless curve, none below 0.001
+        for &(l, t) in &rows {
+            assert!((t - band(l)).abs() <= 0.001 + 5e-6, "{l}: {t}");
+            assert!(t >= 0.001 - 5e-6, "{l}: {t}");
+        }
+        // the band: peak ~0.9 at 825 nm, half of it above the floor at 825 ± 26 nm
+        let at = |nm: f64| band(nm);
+        assert!((at(825.0) - 0.9).abs() < 1e-12);
+        assert!((at(799.0) - (FLOOR + 0.5 * (PEAK - FLOOR))).abs() < 1e-12);
+        assert!((at(851.0) - (FLOOR + 0.5 * (PEAK - FLOOR))).abs() < 1e-12);
+        assert!((at(700.0) - FLOOR).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_noise_is_seeded_and_centred() {
+        assert_eq!(spectrometer_table(), spectrometer_table());
+        let rows = rows(&spectrometer_table());
+        let noise: Vec<f64> = rows.iter().map(|&(l, t)| t - band(l)).collect();
+        let mean = noise.iter().sum::<f64>() / noise.len() as f64;
+        let sd = (noise.iter().map(|n| (n - mean).powi(2)).sum::<f64>() / noise.len() as f64).sqrt();
+        assert!(mean.abs() < 5e-5, "{mean}");
+        // triangular on ±0.001: standard deviation 0.001/√6 = 0.00041 (and rounding to 5 decimals)
+        assert!((sd - 0.001 / 6f64.sqrt()).abs() < 3e-5, "{sd}");
+    }
+
+    /// The committed file is what the generator writes (`cargo xtask data` after a change).
+    #[test]
+    fn the_committed_table_is_current() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap();
+        let committed = std::fs::read_to_string(root.join(SPECTROMETER)).unwrap();
+        assert!(committed == spectrometer_table(), "run `cargo xtask data` and commit {SPECTROMETER}");
+    }
+}
