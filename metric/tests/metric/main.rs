@@ -244,12 +244,15 @@ fn paper_lens() -> ChromaticMetalens {
     ChromaticMetalens::new(2.5, F0, LAMBDA0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
 }
 
-/// Issue 3: the FFT path on the paper scene (the full circle given as a sampled aperture) agrees
-/// with the exact 1-D path within 1e-4 at the default 256 pupil samples (measured 5.5e-5).
+/// Issue 3: the FFT path on the paper scene (the full circle given as a sampled aperture: a
+/// sector of the full turn, which the engine does not reduce to the exact path as it does a
+/// circular iris) agrees with the exact 1-D path within 1e-4 at the default 256 pupil samples
+/// (measured 5.5e-5).
 #[test]
 fn fft_path_matches_the_exact_path_on_the_paper_scene() {
     let exact = evaluate(&paper_with(paper_lens())).unwrap();
-    let fft = evaluate(&paper_with(paper_lens().with_aperture(optics::fft::Aperture::circle()))).unwrap();
+    let full_turn = optics::fft::Aperture::mask(|x, y| x * x + y * y <= 1.0);
+    let fft = evaluate(&paper_with(paper_lens().with_aperture(full_turn))).unwrap();
     assert!(exact.numerics.engine.starts_with("closed-form"), "{}", exact.numerics.engine);
     assert!(fft.numerics.engine.starts_with("fft: 256 pupil samples"), "{}", fft.numerics.engine);
     let rel = (fft.mean_mtf - exact.mean_mtf).abs() / exact.mean_mtf;

@@ -48,6 +48,7 @@ impl Closed {
                 lambda,
                 weight: q_rho * affine.efficiency,
                 w020: affine.w020_intercept_m + affine.w020_slope * lambda,
+                scale: 1.0,
                 shift: [0.0, 0.0],
                 table: None,
             });

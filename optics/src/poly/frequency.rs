@@ -118,7 +118,13 @@ impl Polychromatic<'_> {
             FrequencyRule::Fixed { .. } => 4.0,
         };
         let mut total = 0.0;
-        let tables = self.engine.nodes().nodes.iter().any(|n| n.table.is_some());
+        // the nested Clenshaw–Curtis rules where the OTF is smooth in ν by construction: the
+        // product-integration nodes, chosen only where every wavelength passes the frequency
+        // limit (no cutoff kinks) and without tables (kinks at their columns); elsewhere (the
+        // closed form, whose OTF beyond a flank's cutoff is not analytic, and the reference
+        // panels) the adaptive rule alone, as it was
+        let nodes = self.engine.nodes();
+        let smooth_rule = nodes.interpolated && !nodes.nodes.iter().any(|n| n.table.is_some());
         for pair in self.engine.frequency_cuts(self.max_frequency).windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts
@@ -138,9 +144,8 @@ impl Polychromatic<'_> {
                 let hi = if k + 1 == n { b } else { a + h * (k + 1) as f64 };
                 let right = (hi, value(hi));
                 work.otf_evaluations += 1;
-                // (a tabulated OTF is linear in ν between its columns: kinks at every column,
-                // which no smooth rule sees; the adaptive rule takes it)
-                let smooth = if tables { None } else { self.smooth_panel(value, left, right, tolerance, &mut work) };
+                let smooth =
+                    if smooth_rule { self.smooth_panel(value, left, right, tolerance, &mut work) } else { None };
                 total += match smooth {
                     Some(integral) => integral,
                     None => self.integrate_panel(value, left, right, tolerance, 0, &mut work),

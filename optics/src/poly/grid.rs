@@ -275,7 +275,7 @@ pub fn monochromatic_mtf(
     let from_field = -field.y_rad.atan2(field.x_rad);
     for order in lens.orders(wavelength_m, field) {
         total += order.efficiency;
-        let kind = if needs_grid(&order) {
+        let kind = if needs_grid(&order, true) {
             let layer = match &mut layer {
                 Some(l) => l,
                 slot => slot.insert(FftLayer::new(pupil_samples, s_max, lens.numerical_aperture())?),
@@ -284,17 +284,18 @@ pub fn monochromatic_mtf(
         } else {
             None
         };
-        let node = Node::of(&order, wavelength_m, order.efficiency);
+        let node = Node::of(&order, wavelength_m, order.efficiency, Some(lens.numerical_aperture()));
         for (acc, &nu) in sum.iter_mut().zip(frequencies) {
             let s = to_s(nu);
             if s >= 1.0 {
                 continue;
             }
-            let otf = match &kind {
-                Some(FftKind::Grid(g)) => g.at(s.min(g.s_max()), 0.0),
-                _ => Complex64::new(node.otf(s, nu, from_field), 0.0),
+            // (a reduced iris's tilt is in its node's shift; a grid holds its pupil's own phase)
+            let (otf, shift) = match &kind {
+                Some(FftKind::Grid(g)) => (g.at(s.min(g.s_max()), 0.0), order.wavefront.image_shift_m[0]),
+                _ => (Complex64::new(node.otf(s, nu, from_field), 0.0), node.shift[0]),
             };
-            let phase = -2.0 * PI * nu * order.wavefront.image_shift_m[0];
+            let phase = -2.0 * PI * nu * shift;
             *acc += otf * Complex64::from_polar(order.efficiency, phase);
         }
     }

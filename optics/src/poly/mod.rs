@@ -144,6 +144,11 @@ pub struct Settings {
     pub closed_form: bool,
     /// The spectral rule of the quadrature engines.
     pub spectral_rule: SpectralRule,
+    /// Whether a circular iris (centred or decentred) on an order whose only aberration is
+    /// defocus goes to the exact 1-D path, as the centred circle of its radius with the tilt that
+    /// decentring adds (exact; docs/physics.md, "General pupils"); off, it is sampled on the FFT
+    /// path, for cross-checks.
+    pub exact_irises: bool,
 }
 
 impl Default for Settings {
@@ -153,6 +158,7 @@ impl Default for Settings {
             tolerance: DEFAULT_TOLERANCE,
             closed_form: true,
             spectral_rule: SpectralRule::default(),
+            exact_irises: true,
         }
     }
 }
@@ -417,7 +423,8 @@ impl<'a> Polychromatic<'a> {
             });
         }
         let f_number = lens.f_number();
-        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch };
+        let irises = settings.exact_irises.then(|| lens.numerical_aperture());
+        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises };
         let engine = choose(scene, settings)?;
         let mut this = Polychromatic {
             lens,

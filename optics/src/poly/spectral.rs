@@ -42,8 +42,11 @@ pub(super) struct Node {
     /// rule weight × order efficiency (the rule weight is `q ρ(λ)` for a quadrature node and a
     /// moment of ρ for an interpolation node)
     pub weight: f64,
-    /// W020 of the order, m
+    /// W020 of the order at its pupil's edge, m
     pub w020: f64,
+    /// the pupil's radius in units of the full aperture's: 1, or a decentred circular iris's
+    /// (its frequencies scale by 1/r)
+    pub scale: f64,
     /// image displacement on the detector, m
     pub shift: [f64; 2],
     /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
@@ -51,20 +54,29 @@ pub(super) struct Node {
 }
 
 impl Node {
-    /// The node of `order` at `lambda` with `weight` (rule weight × efficiency).
-    pub fn of(order: &Order, lambda: f64, weight: f64) -> Node {
-        Node {
+    /// The node of `order` at `lambda` with `weight` (rule weight × efficiency); with `irises`,
+    /// the lens's numerical aperture, a circular iris (decentred or not) on a defocus-only order
+    /// is reduced to the centred circle of its radius with a tilt ([`reduced_circle`]).
+    pub fn of(order: &Order, lambda: f64, weight: f64, irises: Option<f64>) -> Node {
+        let mut node = Node {
             lambda,
             weight,
             // the largest zone defocus of a composite pupil (the frequency rule's statistics and
             // the Fraunhofer check of a line); the defocused OTF uses it only for a full pupil
             w020: crate::fraunhofer::order_defocus(order),
+            scale: 1.0,
             shift: order.wavefront.image_shift_m,
             table: match &order.pupil {
                 Pupil::Table(t) => Some(t.clone()),
                 _ => None,
             },
+        };
+        if let Some(r) = irises.and_then(|na| reduced_circle(order, na)) {
+            node.w020 = r.defocus_m;
+            node.scale = r.radius;
+            node.shift = [node.shift[0] + r.image_shift_m[0], node.shift[1] + r.image_shift_m[1]];
         }
+        node
     }
 
     /// The real OTF of this node's order at `s = ν λ F#` (`s < 1`) along the direction at
@@ -72,18 +84,34 @@ impl Node {
     /// centred circle does not depend on it).
     pub fn otf(&self, s: f64, frequency: f64, azimuth_from_field: f64) -> f64 {
         match &self.table {
-            None => defocus_otf(s, self.w020 / self.lambda),
+            None => defocus_otf(s / self.scale, self.w020 / self.lambda),
             Some(t) => t.value(self.lambda, frequency, azimuth_from_field),
         }
     }
 }
 
-/// Whether `order` needs the FFT layer: a pupil other than the full circle (an aperture, a
-/// composite of zones), or a wavefront beyond defocus; a tabulated OTF is read directly.
-pub(super) fn needs_grid(order: &Order) -> bool {
+/// A circular iris, centred or decentred, on an order whose only aberration is defocus: exactly
+/// the centred circle of the iris's radius `r` (F-number `F#/r`) with the defocus `W020 r²` at
+/// its edge and the tilt `2 W020 d` that moves the image by `Δ = 2 W020 d/NA`
+/// (`fft::reduce_decentred_circle`; docs/physics.md, "General pupils"), which the exact 1-D path
+/// computes with the tilt's phase `exp(−2πi ν·Δ)`.
+fn reduced_circle(order: &Order, na: f64) -> Option<crate::fft::ReducedCircle> {
+    let Pupil::Aperture(aperture) = &order.pupil else { return None };
+    if !order.wavefront.is_defocus_only() {
+        return None;
+    }
+    let (centre, radius) = aperture.as_circle()?;
+    crate::fft::reduce_decentred_circle(centre, radius, order.wavefront.defocus_m, na).ok()
+}
+
+/// Whether `order` needs the FFT layer: a pupil other than the full circle or (with `irises`) a
+/// circular iris (an annulus, a sector, a mask, a composite of zones), or a wavefront beyond
+/// defocus; a tabulated OTF is read directly.
+pub(super) fn needs_grid(order: &Order, irises: bool) -> bool {
     match &order.pupil {
         Pupil::Full => !order.wavefront.is_defocus_only(),
         Pupil::Table(_) => false,
+        Pupil::Aperture(a) => !(irises && order.wavefront.is_defocus_only() && a.as_circle().is_some()),
         _ => true,
     }
 }
@@ -116,11 +144,11 @@ pub(super) struct Nodes {
 }
 
 impl Nodes {
-    /// Appends the nodes of every order of `lens` at `lambda` with rule weight `q`.
-    fn emit(&mut self, lens: &dyn LensModel, field: Field, lambda: f64, q: f64) {
-        for order in lens.orders(lambda, field) {
-            self.needs_grid |= needs_grid(&order);
-            self.nodes.push(Node::of(&order, lambda, q * order.efficiency));
+    /// Appends the nodes of every order of the scene's lens at `lambda` with rule weight `q`.
+    fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64) {
+        for order in scene.lens.orders(lambda, scene.field) {
+            self.needs_grid |= needs_grid(&order, scene.irises.is_some());
+            self.nodes.push(Node::of(&order, lambda, q * order.efficiency, scene.irises));
         }
     }
 
@@ -155,6 +183,9 @@ pub(super) struct Scene<'a> {
     pub f_number: f64,
     pub max_frequency: f64,
     pub pixel_pitch: Option<f64>,
+    /// the lens's numerical aperture where circular irises go to the exact path
+    /// ([`Settings::exact_irises`](super::Settings::exact_irises)), else `None`
+    pub irises: Option<f64>,
 }
 
 impl Scene<'_> {
@@ -349,7 +380,7 @@ pub(super) fn panels(scene: &Scene<'_>, lo: f64, hi: f64) -> Nodes {
                 let q_rho = q * detected.value(lambda);
                 out.samples.push((lambda, q_rho));
                 if q_rho != 0.0 {
-                    out.emit(scene.lens, scene.field, lambda, q_rho);
+                    out.emit(scene, lambda, q_rho);
                 }
             });
             out.panels.push(Panel { lo: plo, hi: phi, start, end: out.nodes.len() });
@@ -371,7 +402,7 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
         }
         let q = q * 2.0 * len * u * rho;
         for order in scene.lens.orders(lambda, scene.field) {
-            emit(Node::of(&order, lambda, q * order.efficiency));
+            emit(Node::of(&order, lambda, q * order.efficiency, scene.irises));
         }
     });
 }
@@ -381,7 +412,7 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
 pub(super) fn line(scene: &Scene<'_>, line: radiometry::QuadratureNode) -> Nodes {
     let lambda = line.wavelength_m;
     let mut out = Nodes { line: Some(lambda), samples: vec![(lambda, line.weight)], ..Nodes::default() };
-    out.emit(scene.lens, scene.field, lambda, line.weight);
+    out.emit(scene, lambda, line.weight);
     out.total_weight = out.nodes.iter().map(|n| n.weight).sum();
     out
 }
@@ -490,7 +521,7 @@ fn emit(scene: &Scene<'_>, panels: &[Interpolant]) -> Nodes {
         for (&lambda, &w) in p.lambdas().iter().zip(&p.weights) {
             out.samples.push((lambda, w));
             if w != 0.0 {
-                out.emit(scene.lens, scene.field, lambda, w);
+                out.emit(scene, lambda, w);
             }
         }
         out.panels.push(Panel { lo: p.a, hi: p.b, start, end: out.nodes.len() });
@@ -532,7 +563,7 @@ fn lens_value(scene: &Scene<'_>, lambda: f64, nu: f64) -> Complex64 {
         .lens
         .orders(lambda, scene.field)
         .iter()
-        .map(|o| order_value(&Node::of(o, lambda, 0.0), nu, scene.f_number) * o.efficiency)
+        .map(|o| order_value(&Node::of(o, lambda, 0.0, scene.irises), nu, scene.f_number) * o.efficiency)
         .sum()
 }
 
