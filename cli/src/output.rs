@@ -359,32 +359,55 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
              the tolerance the angle is skipped)",
             n.closed_form_evaluations
         )
-    } else if n.engine.starts_with("fft") {
-        format!(
-            "{} panels, {} nodes of 16-point Gauss–Legendre (Gaussians kept to ±7σ, panels cut at every table \
-             sample), one FFT OTF grid per node",
-            n.spectral_panels, n.spectral_nodes
-        )
     } else {
-        format!(
-            "{} panels, {} nodes of 16-point Gauss–Legendre (Gaussians kept to ±7σ: 2.6e-12 of the area left \
-             out; panels cut at every table sample and sized so the defocus phase turns ≤ 12 rad per panel)",
-            n.spectral_panels, n.spectral_nodes
-        )
+        let rule = if n.spectral_interpolated {
+            format!(
+                "product integration: {} panels, {} nodes (Chebyshev–Lobatto points, nested, each panel's count \
+                 doubled until the OTF at Nyquist settles to its share of the tolerance; weights the exact \
+                 moments of the detected spectrum, so its table samples cost nothing; panels follow the lens's \
+                 defocus phase and where its set of orders changes)",
+                n.spectral_panels, n.spectral_nodes
+            )
+        } else {
+            format!(
+                "{} panels, {} nodes of 16-point Gauss–Legendre (Gaussians kept to ±7σ: 2.6e-12 of the area left \
+                 out; panels cut at every table sample and sized so the defocus phase turns ≤ 12 rad per panel; \
+                 exact to rounding)",
+                n.spectral_panels, n.spectral_nodes
+            )
+        };
+        if n.engine.starts_with("fft") { format!("{rule}; one FFT OTF grid per node") } else { rule }
     };
     let _ = writeln!(s, "  spectrum     {spectral}");
     let _ = writeln!(
         s,
-        "  frequencies  0 … {:.4} cycles/mm (Nyquist; the mean stops there), adaptive Gauss–Kronrod 7/15: {} panels, \
-         {} OTF evaluations, {} sign changes located",
-        r.nyquist_cyc_per_mm, n.frequency_panels, n.otf_evaluations, n.sign_changes
+        "  frequencies  0 … {:.4} cycles/mm (Nyquist; the mean stops there), {}: {} panels, {} OTF evaluations, {} \
+         sign changes located",
+        r.nyquist_cyc_per_mm,
+        if n.engine.starts_with("fft") {
+            "a fixed composite Gauss–Legendre rule at a quarter of the finest grid cell"
+        } else if n.spectral_interpolated {
+            "nested Clenshaw–Curtis, adaptive Gauss–Kronrod 7/15 where it does not settle"
+        } else {
+            "adaptive Gauss–Kronrod 7/15"
+        },
+        n.frequency_panels,
+        n.otf_evaluations,
+        n.sign_changes
     );
-    let _ = writeln!(
-        s,
-        "  tolerance    {:e} relative on the mean MTF: the frequency rule to tolerance × mean, each closed-form \
-         OTF value to half of that (QUADPACK's error estimate in both); spectral integrals exact to rounding",
-        n.tolerance
-    );
+    let budget = if n.engine.starts_with("fft") && n.engine.contains("chosen") {
+        "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N), the frequency \
+         rule converged below both"
+    } else if n.spectral_interpolated {
+        "a quarter to the spectral rule (nested estimate at Nyquist), the rest to the frequency rule"
+    } else if n.engine.starts_with("closed-form") {
+        "the frequency rule to tolerance × mean, each closed-form OTF value to half of that (QUADPACK's error \
+         estimate in both); the spectral integral exact"
+    } else {
+        "the frequency rule to tolerance × mean (QUADPACK's error estimate); the spectral integrals exact to \
+         rounding"
+    };
+    let _ = writeln!(s, "  tolerance    {:e} relative on the mean MTF: {budget}", n.tolerance);
     let glare = if (r.glare.transmission - r.glare.efficiency).abs() <= 1e-15 * r.glare.transmission.max(1e-300) {
         "no stray light (T = τ1): nothing to add".to_owned()
     } else {

@@ -110,6 +110,9 @@ pub struct Numerics {
     pub otf_evaluations: usize,
     /// Sign changes of the polychromatic OTF below Nyquist (each one a zero of the MTF).
     pub sign_changes: usize,
+    /// Whether the spectral nodes are product-integration nodes (the OTF interpolated in λ,
+    /// weights the moments of the detected spectrum) rather than Gauss–Legendre panels.
+    pub spectral_interpolated: bool,
 }
 
 /// The ASNR of a scene and the numbers behind it.
@@ -408,9 +411,13 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         warnings,
         numerics: Numerics {
             engine: match poly.engine() {
-                optics::Engine::Fft { pupil_samples, padded } => {
-                    format!("fft: {pupil_samples} pupil samples, padded to {padded}")
-                }
+                optics::Engine::Fft { pupil_samples, padded, coarse } => match coarse {
+                    Some(c) => format!(
+                        "fft: {pupil_samples} pupil samples, padded to {padded} (chosen from the tolerance; \
+                             Richardson with {c})"
+                    ),
+                    None => format!("fft: {pupil_samples} pupil samples, padded to {padded}"),
+                },
                 optics::Engine::Monochromatic { fft: Some((pupil_samples, padded)) } => {
                     format!("monochromatic (line spectrum): fft: {pupil_samples} pupil samples, padded to {padded}")
                 }
@@ -434,6 +441,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             frequency_panels: work.frequency_panels,
             otf_evaluations: work.otf_evaluations,
             sign_changes: work.sign_changes,
+            spectral_interpolated: work.spectral_interpolated,
         },
     };
     check_finite(&evaluation)?;

@@ -146,6 +146,7 @@ impl Options {
             tolerance: self.tolerance,
             closed_form: self.closed_form,
             spectral_rule: self.spectral_rule,
+            ..optics::Settings::default()
         }
     }
 }

@@ -63,7 +63,12 @@ impl Polychromatic<'_> {
             Work::default()
         } else {
             let nodes = self.engine.nodes();
-            Work { spectral_panels: nodes.panels.len(), spectral_nodes: nodes.nodes.len(), ..Work::default() }
+            Work {
+                spectral_panels: nodes.panels.len(),
+                spectral_nodes: nodes.nodes.len(),
+                spectral_interpolated: nodes.interpolated,
+                ..Work::default()
+            }
         };
         if let FrequencyRule::Fixed { cell } = self.engine.frequency_rule() {
             // The interpolated grid is only continuous across its cells (kinks at every grid line
@@ -71,11 +76,21 @@ impl Polychromatic<'_> {
             // adaptive one, integrates it to well below the FFT path's own error.
             // over [0, highest cutoff] where that is below max_frequency: the OTF is zero beyond
             let top = self.active_top();
-            let panels = ((4.0 * top / cell).ceil() as usize).clamp(8, 1 << 16);
+            let (panels, evaluations) = super::grid::fixed_rule(top, cell);
             work.frequency_panels = panels;
-            work.otf_evaluations = panels * quad::ORDER;
-            let total = quad::composite(0.0, top, panels, |nu| value(nu).abs() * self.pixel_factor(nu));
-            return (total / self.max_frequency, work);
+            work.otf_evaluations = evaluations;
+            let mean =
+                || quad::composite(0.0, top, panels, |nu| value(nu).abs() * self.pixel_factor(nu)) / self.max_frequency;
+            let fine = mean();
+            // the sampling chosen from the tolerance: the same mean at N/2, extrapolated
+            if let Some(plan) = self.engine.richardson() {
+                self.engine.read_coarse(true);
+                let coarse = mean();
+                self.engine.read_coarse(false);
+                work.otf_evaluations += evaluations;
+                return (plan.extrapolate(coarse, fine).value, work);
+            }
+            return (fine, work);
         }
         // The tolerance is relative to the mean, which is not known before it is computed: the
         // first pass assumes a mean of at least `guess`; a smaller result is recomputed with its

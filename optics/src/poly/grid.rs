@@ -125,17 +125,90 @@ impl FftPath {
     }
 }
 
-/// Spectral nodes read through FFT grids.
+/// Spectral nodes read through FFT grids: one sampling fixed by the settings, or the two
+/// samplings `N/2` and `N` of a [`SamplingPlan`](crate::fft::SamplingPlan) chosen from the
+/// tolerance, whose means are extrapolated (Richardson, `fft::sampling`).
 #[derive(Debug)]
 pub(super) struct Grids<'a> {
     pub scene: Scene<'a>,
     pub nodes: Nodes,
     pub fft: FftPath,
+    /// the coarse sampling `N/2` and the plan, when the tolerance chose `N`
+    pub coarse: Option<(FftPath, crate::fft::SamplingPlan)>,
+    /// whether the OTF is read from the coarse sampling (while the frequency rule takes its mean)
+    pub reading_coarse: std::cell::Cell<bool>,
+}
+
+/// Share of the tolerance the FFT sampling may spend (the spectral rule spends its own share,
+/// the fixed frequency rule is converged far below either).
+pub(super) const SAMPLING_SHARE: f64 = 0.5;
+
+impl<'a> Grids<'a> {
+    /// The engine for `nodes`: at `pupil_samples` if given; else at the sampling the tolerance
+    /// asks for (`fft::pupil_samples_for` with [`SAMPLING_SHARE`] of it), verified by the
+    /// Richardson extrapolation of the means along x at `N/2` and `N` and refined (doubling `N`)
+    /// until the estimate is within it, or [`Error::PupilSampling`] beyond reach.
+    pub fn new(scene: Scene<'a>, nodes: Nodes, pupil_samples: Option<usize>, tolerance: f64) -> Result<Self, Error> {
+        if let Some(n) = pupil_samples {
+            let fft = FftPath::build(&scene, &nodes, n)?;
+            return Ok(Grids { scene, nodes, fft, coarse: None, reading_coarse: std::cell::Cell::new(false) });
+        }
+        let lambda_max = nodes.samples.iter().map(|s| s.0).fold(0.0, f64::max);
+        let s_max = (scene.max_frequency * lambda_max * scene.f_number).clamp(1e-6, 1.0);
+        let grids = nodes.nodes.iter().filter(|n| n.table.is_none()).count().max(1);
+        let mut plan = crate::fft::pupil_samples_for(SAMPLING_SHARE * tolerance, s_max, grids)?;
+        let mut coarse = FftPath::build(&scene, &nodes, plan.coarse())?;
+        let mut fine = FftPath::build(&scene, &nodes, plan.samples)?;
+        loop {
+            let mean = |path: &FftPath| {
+                fixed_mean(&scene, path, &|nu| (path.sum_along(&scene, nu, 0.0) / nodes.total_weight).norm())
+            };
+            let estimate = plan.extrapolate(mean(&coarse), mean(&fine));
+            if estimate.converged {
+                break;
+            }
+            plan = plan.refine(estimate.error)?;
+            coarse = fine;
+            fine = FftPath::build(&scene, &nodes, plan.samples)?;
+        }
+        Ok(Grids { scene, nodes, fft: fine, coarse: Some((coarse, plan)), reading_coarse: std::cell::Cell::new(false) })
+    }
+
+    fn path(&self) -> &FftPath {
+        match &self.coarse {
+            Some((coarse, _)) if self.reading_coarse.get() => coarse,
+            _ => &self.fft,
+        }
+    }
+}
+
+/// The mean over `[0, top]` (top the frequency limit, or the highest cutoff below it) of
+/// `P(ν) value(ν)` on the FFT path: the interpolated grid is only continuous across its cells
+/// (kinks at every grid line of every node), so a fixed composite rule at a quarter of the finest
+/// cell ([`fixed_rule`]), not an adaptive one, integrates it to well below the FFT path's own
+/// error. The integral is divided by `max_frequency` (the OTF is zero beyond `top`).
+fn fixed_mean(scene: &Scene<'_>, path: &FftPath, value: &dyn Fn(f64) -> f64) -> f64 {
+    let lo = path.nodes.iter().map(|n| n.lambda).fold(f64::INFINITY, f64::min);
+    let top = scene.max_frequency.min(1.0 / (lo * scene.f_number));
+    let (panels, _) = fixed_rule(top, path.finest_cell(scene.f_number));
+    let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+    crate::quad::composite(0.0, top, panels, |nu| value(nu).abs() * pixel(nu)) / scene.max_frequency
+}
+
+/// The panels of the fixed composite rule over `[0, top]` for grids whose finest cell in ν is
+/// `cell`: a quarter of a cell each (at least 8, at most 65 536), and the OTF evaluations.
+pub(super) fn fixed_rule(top: f64, cell: f64) -> (usize, usize) {
+    let panels = ((4.0 * top / cell).ceil() as usize).clamp(8, 1 << 16);
+    (panels, panels * crate::quad::ORDER)
 }
 
 impl OtfEngine for Grids<'_> {
     fn engine(&self) -> Engine {
-        Engine::Fft { pupil_samples: self.fft.pupil_samples, padded: self.fft.padded }
+        Engine::Fft {
+            pupil_samples: self.fft.pupil_samples,
+            padded: self.fft.padded,
+            coarse: self.coarse.as_ref().map(|(c, _)| c.pupil_samples),
+        }
     }
 
     fn nodes(&self) -> &Nodes {
@@ -152,7 +225,7 @@ impl OtfEngine for Grids<'_> {
     }
 
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
-        self.fft.sum_along(&self.scene, frequency, azimuth) / self.nodes.total_weight
+        self.path().sum_along(&self.scene, frequency, azimuth) / self.nodes.total_weight
     }
 
     fn direction_dependent(&self) -> bool {
@@ -161,6 +234,14 @@ impl OtfEngine for Grids<'_> {
 
     fn frequency_rule(&self) -> FrequencyRule {
         FrequencyRule::Fixed { cell: self.fft.finest_cell(self.scene.f_number) }
+    }
+
+    fn richardson(&self) -> Option<crate::fft::SamplingPlan> {
+        self.coarse.as_ref().map(|(_, plan)| *plan)
+    }
+
+    fn read_coarse(&self, on: bool) {
+        self.reading_coarse.set(on && self.coarse.is_some());
     }
 }
 

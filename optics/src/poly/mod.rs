@@ -96,6 +96,9 @@ pub enum Engine {
         pupil_samples: usize,
         /// FFT length after padding.
         padded: usize,
+        /// `Some(N/2)` when the tolerance chose the sampling: the mean is the Richardson
+        /// extrapolation of the means at `N/2` and `N` (`fft::SamplingPlan`).
+        coarse: Option<usize>,
     },
     /// A line spectrum ([`Spectrum::as_line`]): one wavelength, one node per imaging order, no
     /// spectral quadrature. The OTF is the efficiency-weighted sum of the orders' exact OTFs
@@ -127,6 +130,9 @@ pub struct Work {
     pub otf_evaluations: usize,
     /// Sign changes of the polychromatic OTF located below the frequency limit.
     pub sign_changes: usize,
+    /// Whether the spectral nodes are product-integration nodes ([`SpectralRule::Interpolated`])
+    /// rather than quadrature panels.
+    pub spectral_interpolated: bool,
     /// Evaluations of the closed-form spectral integral `E(c)` (closed-form engine only).
     pub closed_form_evaluations: usize,
 }
@@ -245,6 +251,13 @@ trait OtfEngine: std::fmt::Debug {
     fn value_evaluations(&self) -> usize {
         0
     }
+    /// The sampling plan whose coarse level the engine also holds (the FFT engine when the
+    /// tolerance chose its sampling): the frequency rule then extrapolates the two means.
+    fn richardson(&self) -> Option<crate::fft::SamplingPlan> {
+        None
+    }
+    /// Reads the OTF from the coarse level (`on`) or the fine one.
+    fn read_coarse(&self, _on: bool) {}
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: the OTF is zero beyond.
     fn max_cutoff(&self) -> f64 {
         1.0 / (self.nodes().shortest() * self.f_number())
@@ -346,8 +359,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     };
     check_signal(&nodes)?;
     if nodes.needs_grid {
-        let fft = grid::FftPath::build(&scene, &nodes, pupil_samples)?;
-        return Ok(Box::new(grid::Grids { scene, nodes, fft }));
+        return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, settings.tolerance)?));
     }
     Ok(Box::new(exact::Quadrature { scene, nodes }))
 }
