@@ -37,7 +37,7 @@ enum Command {
         /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
-        /// Relative error allowed in the mean MTF (sets options.tolerance; default 1e-6).
+        /// Relative error allowed in the mean MTF (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
         /// Print how the result is computed (engine, quadratures, error budget, work) after it.
@@ -57,7 +57,7 @@ enum Command {
         /// Stop when the bracket is narrower than this fraction of HI − LO.
         #[arg(long, default_value_t = 1e-4, value_name = "FRACTION")]
         xtol: f64,
-        /// Relative error allowed in each ASNR evaluated (sets options.tolerance; default 1e-6).
+        /// Relative error allowed in each ASNR evaluated (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
         /// Print one JSON object.
@@ -93,7 +93,7 @@ enum Command {
         /// Worker threads (0 = all cores). The results do not depend on it.
         #[arg(long, default_value_t = 0, value_name = "N")]
         threads: usize,
-        /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6).
+        /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
     },

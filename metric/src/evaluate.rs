@@ -269,6 +269,25 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             limit: MAX_DEFOCUS_WAVES,
         });
     }
+    // the work of the MTF integration grows as the square of the defocus phase at the frequency
+    // limit, a = 8π F# ν W020 (docs/physics.md, "Exact defocused OTF"): past the budget a scene
+    // would take minutes; it stops at once with the numbers instead
+    let phase = 8.0 * std::f64::consts::PI * lens.f_number() * nyquist * poly.max_defocus();
+    if phase.is_nan() || phase > MAX_DEFOCUS_PHASE {
+        return Err(Error::DefocusPhase { phase, w020_m: poly.max_defocus(), limit: MAX_DEFOCUS_PHASE });
+    }
+    // on the spectral rules the work is about nodes × phase (each node's OTF at each frequency,
+    // the frequencies and each OTF's cost both growing with the phase)
+    if poly.engine() != optics::Engine::ClosedForm {
+        let work = poly.spectral_nodes() as f64 * phase.max(1.0);
+        if work > MAX_SPECTRAL_WORK {
+            return Err(Error::SpectralWork {
+                nodes: poly.spectral_nodes(),
+                phase,
+                seconds: work * SECONDS_PER_SPECTRAL_WORK,
+            });
+        }
+    }
 
     let na = lens.numerical_aperture();
     let pitch = camera.pixel_pitch();
@@ -453,6 +472,22 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
 /// threshold) and the stress grid's 1e4 waves at the band edges, well short of the point where
 /// the phases lose their precision and the frequency integration stops converging.
 pub const MAX_DEFOCUS_WAVES: f64 = 1e5;
+
+/// The largest `spectral nodes × defocus phase at the frequency limit (rad)` that [`evaluate`]
+/// integrates on the spectral rules: about 5 s on one core ([`SECONDS_PER_SPECTRAL_WORK`]).
+pub const MAX_SPECTRAL_WORK: f64 = 3e6;
+
+/// Seconds per unit of `nodes × phase` on the spectral rules, measured on the spectrometer table
+/// (`examples/spectrometer.toml` at F/0.8, f0 = 6, 10 and 20 mm: 760 × 570, 1320 × 950 and
+/// 2840 × 1900 took 0.59, 1.87 and 8.95 s; release, one core).
+pub const SECONDS_PER_SPECTRAL_WORK: f64 = 1.7e-6;
+
+/// The largest defocus phase at the frequency limit, `8π F# ν_N |W020|` in radians, that
+/// [`evaluate`] integrates: the work grows as its square, and past 1.5e4 rad a point takes
+/// seconds (measured: 4.6e4 rad, the paper lens designed for 10 nm, 60 s; F/0.5 with f0 = 50 mm
+/// over a 1000 nm range, 89 s). The broadest scene of the paper's study, F/1.4 over 300 nm,
+/// reaches 670 rad.
+pub const MAX_DEFOCUS_PHASE: f64 = 1.5e4;
 
 fn overflow(quantity: &'static str, detail: String) -> Error {
     Error::Overflow { quantity, detail }

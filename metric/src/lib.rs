@@ -92,6 +92,38 @@ pub enum Error {
         /// The limit, waves.
         limit: f64,
     },
+    /// The defocus phase at the frequency limit is beyond the work budget.
+    #[error(
+        "the defocus phase at the frequency limit reaches {phase:.3e} rad (8π F# ν W020, W020 = {w020_m:.3e} m): \
+         beyond the {limit:e} rad the MTF integration does in seconds (its work grows as the square of that \
+         phase; the blur is far beyond the Fraunhofer threshold, paper SI eq. S15); reduce \
+         lens.focal_length_mm, the distance of the spectrum from lens.design_wavelength_nm, the spectral \
+         range, or camera.pixel_pitch_um's Nyquist frequency"
+    )]
+    DefocusPhase {
+        /// `8π F# ν_N |W020|`, rad.
+        phase: f64,
+        /// The largest |W020|, m.
+        w020_m: f64,
+        /// The budget, rad.
+        limit: f64,
+    },
+    /// The spectral rule's work is beyond the budget.
+    #[error(
+        "the spectral rule needs {nodes} wavelength nodes at a defocus phase of {phase:.3e} rad at the frequency \
+         limit: about {seconds:.0} s of work, beyond the 5 s budget; reduce lens.focal_length_mm, the distance of \
+         the spectrum from lens.design_wavelength_nm or the spectral range, loosen options.tolerance, or (with \
+         options.spectral_rule = \"panels\", which takes nodes at every table sample) use the default \
+         product integration"
+    )]
+    SpectralWork {
+        /// Spectral nodes.
+        nodes: usize,
+        /// `8π F# ν_N |W020|`, rad.
+        phase: f64,
+        /// The estimated time, s.
+        seconds: f64,
+    },
     /// The noise budget could not be formed.
     #[error(transparent)]
     Noise(#[from] noise::Error),

@@ -136,6 +136,10 @@ pub struct Options {
     /// The spectral rule where no closed form applies: product integration (default) or the
     /// per-interval panels kept as the reference.
     pub spectral_rule: optics::SpectralRule,
+    /// Relative tolerance of the mean MTF on the FFT path: `None` follows `tolerance` (a scene
+    /// that sets its tolerance asks it of every engine); the default is
+    /// [`optics::DEFAULT_FFT_TOLERANCE`].
+    pub fft_tolerance: Option<f64>,
 }
 
 impl Options {
@@ -146,6 +150,7 @@ impl Options {
             tolerance: self.tolerance,
             closed_form: self.closed_form,
             spectral_rule: self.spectral_rule,
+            fft_tolerance: self.fft_tolerance,
             ..optics::Settings::default()
         }
     }
@@ -162,6 +167,7 @@ impl Default for Options {
             tolerance: optics::DEFAULT_TOLERANCE,
             closed_form: true,
             spectral_rule: optics::SpectralRule::Interpolated,
+            fft_tolerance: Some(optics::DEFAULT_FFT_TOLERANCE),
         }
     }
 }

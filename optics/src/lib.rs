@@ -51,7 +51,8 @@ pub use otf::{
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
 pub use poly::{
-    DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET, GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape,
-    Polychromatic, Settings, SpectralRule, Work, highest_cutoff, monochromatic_mtf,
+    DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET,
+    GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Polychromatic, Settings, SpectralRule, Work, highest_cutoff,
+    monochromatic_mtf,
 };
 pub use table::{OtfTable, TABLE_ZERO_FREQUENCY_TOLERANCE};

@@ -884,6 +884,8 @@ fn options(opt: Option<&RawOptions>, o: &Origins) -> Result<Options, Error> {
         options.pupil_samples = Some(v as usize);
     }
     if let Some(v) = opt.tolerance {
+        // a tolerance the scene asks for is asked of every engine, the FFT path's too
+        options.fft_tolerance = None;
         options.tolerance = o.number(
             "options.tolerance",
             v,

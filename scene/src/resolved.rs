@@ -328,7 +328,16 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
         GlareMode::Included => "included",
     };
     out.string("glare", opt.and_then(|p| p.glare.as_deref()).unwrap_or(glare));
-    out.number("tolerance", opt.and_then(|p| p.tolerance).unwrap_or(defaults.tolerance));
+    // written only where the scene set it: a set tolerance is asked of every engine, the FFT
+    // path's too, while the default is 1e-4 there
+    match opt.and_then(|p| p.tolerance) {
+        Some(t) => out.number("tolerance", t),
+        None => out.line(&format!(
+            "# tolerance: not set, so {:e} (and {:e} on the FFT path)",
+            defaults.tolerance,
+            defaults.fft_tolerance.unwrap_or(defaults.tolerance)
+        )),
+    }
     let rule = match defaults.spectral_rule {
         optics::SpectralRule::Interpolated => "interpolated",
         optics::SpectralRule::Panels => "panels",

@@ -254,7 +254,7 @@ fn fft_path_matches_the_exact_path_on_the_paper_scene() {
     let full_turn = optics::fft::Aperture::mask(|x, y| x * x + y * y <= 1.0);
     let fft = evaluate(&paper_with(paper_lens().with_aperture(full_turn))).unwrap();
     assert!(exact.numerics.engine.starts_with("closed-form"), "{}", exact.numerics.engine);
-    assert!(fft.numerics.engine.starts_with("fft: 256 pupil samples"), "{}", fft.numerics.engine);
+    assert!(fft.numerics.engine.starts_with("fft: "), "{}", fft.numerics.engine);
     let rel = (fft.mean_mtf - exact.mean_mtf).abs() / exact.mean_mtf;
     eprintln!("FFT {} vs exact {} ({rel:.1e})", fft.mean_mtf, exact.mean_mtf);
     assert!(rel < 1e-4, "FFT {} vs exact {} ({rel:e})", fft.mean_mtf, exact.mean_mtf);

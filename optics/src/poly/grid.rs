@@ -167,8 +167,17 @@ impl<'a> Grids<'a> {
             if estimate.converged {
                 break;
             }
-            plan = plan.refine(estimate.error)?;
-            coarse = fine;
+            plan = match plan.refine(estimate.error) {
+                Ok(next) => next,
+                // doubling would pass the limit: the limit itself is tried before giving up
+                Err(_) if plan.samples + 2 <= plan.limit => {
+                    crate::fft::SamplingPlan { samples: plan.limit - plan.limit % 2, ..plan }
+                }
+                Err(e) => return Err(e),
+            };
+            // the old fine level is the new coarse one when N doubled (Richardson needs N/2)
+            coarse =
+                if fine.pupil_samples == plan.coarse() { fine } else { FftPath::build(&scene, &nodes, plan.coarse())? };
             fine = FftPath::build(&scene, &nodes, plan.samples)?;
         }
         Ok(Grids { scene, nodes, fft: fine, coarse: Some((coarse, plan)), reading_coarse: std::cell::Cell::new(false) })

@@ -146,6 +146,12 @@ pub struct Settings {
     pub pupil_samples: Option<usize>,
     /// Relative error allowed in the mean MTF.
     pub tolerance: f64,
+    /// Relative error allowed in the mean MTF on the FFT path, where it differs from
+    /// `tolerance`: `None` follows `tolerance`. The default, [`DEFAULT_FFT_TOLERANCE`], is what
+    /// the sampled pupil reaches in about a second (1e-6 would need ~6000 samples across it,
+    /// beyond its 2048-sample cap); a tolerance beyond reach is refused with
+    /// [`Error::PupilSampling`].
+    pub fft_tolerance: Option<f64>,
     /// Whether the closed-form engine may be used where it applies.
     pub closed_form: bool,
     /// The spectral rule of the quadrature engines.
@@ -162,6 +168,7 @@ impl Default for Settings {
         Settings {
             pupil_samples: None,
             tolerance: DEFAULT_TOLERANCE,
+            fft_tolerance: Some(DEFAULT_FFT_TOLERANCE),
             closed_form: true,
             spectral_rule: SpectralRule::default(),
             exact_irises: true,
@@ -186,6 +193,9 @@ pub enum SpectralRule {
 
 /// Default relative tolerance of the mean MTF.
 pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+
+/// Default relative tolerance of the mean MTF on the FFT path ([`Settings::fft_tolerance`]).
+pub const DEFAULT_FFT_TOLERANCE: f64 = 1e-4;
 
 /// How the frequency integral is done over an engine.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -359,7 +369,8 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     };
     check_signal(&nodes)?;
     if nodes.needs_grid {
-        return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, settings.tolerance)?));
+        let tolerance = settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance);
+        return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, tolerance)?));
     }
     Ok(Box::new(exact::Quadrature { scene, nodes }))
 }
@@ -532,6 +543,11 @@ impl<'a> Polychromatic<'a> {
 
     fn pixel_factor(&self, frequency: f64) -> f64 {
         self.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, frequency))
+    }
+
+    /// The spectral nodes (over all imaging orders) the engine sums at each frequency.
+    pub fn spectral_nodes(&self) -> usize {
+        self.engine.nodes().nodes.len()
     }
 
     /// Largest |W020| (m) among the spectral nodes that carry weight.

@@ -7,5 +7,6 @@ mod orders;
 mod otf;
 mod properties;
 mod reference;
+mod spectral;
 mod tables;
 mod zones;
