@@ -140,6 +140,9 @@ pub struct Options {
     /// that sets its tolerance asks it of every engine); the default is
     /// [`optics::DEFAULT_FFT_TOLERANCE`].
     pub fft_tolerance: Option<f64>,
+    /// Whether a circular iris on a defocus-only lens goes to the exact path (default; off: the
+    /// FFT path, for cross-checks): [`optics::Settings::exact_irises`].
+    pub exact_irises: bool,
 }
 
 impl Options {
@@ -151,7 +154,7 @@ impl Options {
             closed_form: self.closed_form,
             spectral_rule: self.spectral_rule,
             fft_tolerance: self.fft_tolerance,
-            ..optics::Settings::default()
+            exact_irises: self.exact_irises,
         }
     }
 }
@@ -168,6 +171,7 @@ impl Default for Options {
             closed_form: true,
             spectral_rule: optics::SpectralRule::Interpolated,
             fft_tolerance: Some(optics::DEFAULT_FFT_TOLERANCE),
+            exact_irises: true,
         }
     }
 }

@@ -164,7 +164,7 @@ fn decentred_scene(case: &Case, pupil_samples: usize) -> Scene {
     let filter = Gaussian::from_range(LAMBDA0, case.range_m, 1.0).unwrap();
     let radiance = Spectrum::product(vec![Spectrum::Constant(0.025e9), Spectrum::Gaussian(filter)]);
     let camera = Camera::new(5.2e-6, Spectrum::Constant(0.2), false).unwrap();
-    let options = Options { pupil_samples: Some(pupil_samples), ..Options::default() };
+    let options = Options { pupil_samples: Some(pupil_samples), exact_irises: false, ..Options::default() };
     Scene::new(Arc::new(lens.with_aperture(iris)), radiance, camera, 1.23e-3, options).unwrap()
 }
 
@@ -360,7 +360,8 @@ fn main() {
         }
         if case.f_number >= 2.0 {
             for &n in grid.pupil_samples {
-                let options = Options { pupil_samples: Some(n), ..Options::default() };
+                // (the circle sampled on the FFT path, not reduced to the exact one)
+                let options = Options { pupil_samples: Some(n), exact_irises: false, ..Options::default() };
                 push(Family::Fft, format!("N = {n}"), production(&scene(case, true, options), &nodes_work));
             }
         }

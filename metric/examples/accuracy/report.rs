@@ -18,12 +18,14 @@ fn explain(family: Family) -> String {
              `optics::defocus_otf` at every node, adaptive Gauss–Kronrod in ν split at sign changes; the \
              spectral panels are exact to rounding whatever the tolerance."
             .into(),
-        Family::Fft => "`metric::evaluate` on the same circular pupil given as an explicit aperture, which takes \
-             the general-pupil engine: N pupil samples across the diameter → PSF → OTF by FFT at every spectral \
-             node; its error falls as ~1/N."
+        Family::Fft => "`metric::evaluate` on the same circular pupil given as an explicit aperture, sampled on \
+             the general-pupil engine (`exact_irises` off: by default a circular iris goes to the exact path): N \
+             pupil samples across the diameter → PSF → OTF by FFT at every spectral node; its error falls as \
+             ~0.4 N^-1.6."
             .into(),
         Family::FftDecentred => "`metric::evaluate` through the paper's iris decentred by 10 % of the radius \
-             (SI Fig. S3) at fixed pupil samplings N, against the exact reference of the decentred iris (below)."
+             (SI Fig. S3), sampled on the FFT path at fixed pupil samplings N (`exact_irises` off), against the \
+             exact reference of the decentred iris (below)."
             .into(),
         Family::Table => "`metric::evaluate` with the Gaussian filter given as a `Spectrum::Sampled` table \
              (samples every h over ±7σ, piecewise linear between them; closed form off): spectral panels split \
