@@ -108,6 +108,15 @@ pub enum Error {
         /// The budget, rad.
         limit: f64,
     },
+    /// An engine stopped at its work budget before the mean MTF converged.
+    #[error(
+        "{reason}; reduce lens.focal_length_mm, the distance of the spectrum from lens.design_wavelength_nm or \
+         the spectral range"
+    )]
+    WorkBudget {
+        /// What the engine said.
+        reason: String,
+    },
     /// The spectral rule's work is beyond the budget.
     #[error(
         "the spectral rule needs {nodes} wavelength nodes at a defocus phase of {phase:.3e} rad at the frequency \

@@ -268,6 +268,10 @@ trait OtfEngine: std::fmt::Debug {
     }
     /// Reads the OTF from the coarse level (`on`) or the fine one.
     fn read_coarse(&self, _on: bool) {}
+    /// Why the engine stopped before its result converged (a work budget), if it did.
+    fn over_budget(&self) -> Option<String> {
+        None
+    }
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: the OTF is zero beyond.
     fn max_cutoff(&self) -> f64 {
         1.0 / (self.nodes().shortest() * self.f_number())
@@ -543,6 +547,12 @@ impl<'a> Polychromatic<'a> {
 
     fn pixel_factor(&self, frequency: f64) -> f64 {
         self.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, frequency))
+    }
+
+    /// Why the last mean stopped before it converged (a work budget), if it did: its value is
+    /// then not the mean MTF, and the caller reports this instead.
+    pub fn over_budget(&self) -> Option<String> {
+        self.engine.over_budget()
     }
 
     /// The spectral nodes (over all imaging orders) the engine sums at each frequency.
