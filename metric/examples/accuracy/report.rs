@@ -198,8 +198,8 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
              `Settings {{ spectral_rule: SpectralRule::Panels, tolerance: 1e-12, .. }}` (the per-interval rule: \
              16-point Gauss–Legendre panels cut at every table sample, exact to rounding for the piecewise-linear \
              table; the frequency rule to 1e-12), computed once: {reference:.15} in {seconds:.1} s ({work}). \
-             `metric::Options` has no spectral rule, so the report builds the detected spectrum (radiance × QE × \
-             λ) as `metric::evaluate` does.\n"
+             The report builds the detected spectrum (radiance × QE × λ) as `metric::evaluate` does and \
+             calls the optics directly, so the reference's mean is the optics' alone.\n"
         );
     }
     match &context.notes.numpy {

@@ -90,8 +90,8 @@ fn row(case: &'static str, family: Family, setting: String, reference: f64, meas
 pub(crate) fn spectrometer(grid: &Grid, python: Option<&Path>, rows: &mut Vec<Row>, notes: &mut Notes) {
     eprintln!("{SPECTROMETER}:");
     // the reference: the same scene, today's per-interval rule at 1e-12, straight through optics
-    // (metric::Options has no spectral rule: the detected spectrum is built as metric::evaluate
-    // builds it, radiance × QE × λ, paper SI eq. S8)
+    // (the detected spectrum built as metric::evaluate builds it, radiance × QE × λ, paper SI
+    // eq. S8, and the optics called directly: the reference's mean is the optics' alone)
     let scene = load("examples/spectrometer.toml", &[]);
     let camera = scene.camera();
     let detected = Spectrum::product(vec![

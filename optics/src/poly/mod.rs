@@ -120,7 +120,7 @@ const MAX_DEPTH: u32 = 40;
 /// Counts of what an evaluation did, for `--explain` and the accuracy report.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Work {
-    /// Spectral panels (each with [`quad::ORDER`] nodes per imaging order).
+    /// Spectral panels (each with [`quad::ORDER`](crate::quad::ORDER) nodes per imaging order).
     pub spectral_panels: usize,
     /// Spectral nodes, summed over orders.
     pub spectral_nodes: usize,
@@ -322,7 +322,7 @@ fn sort_cuts(mut cuts: Vec<f64>) -> Vec<f64> {
 }
 
 /// A prepared polychromatic evaluation for one lens, detected spectrum and field point, valid
-/// for frequencies up to `max_frequency`: the engine [`choose`]n for them, and what the
+/// for frequencies up to `max_frequency`: the engine chosen for them, and what the
 /// frequency integration needs.
 #[derive(Debug)]
 pub struct Polychromatic<'a> {
