@@ -362,8 +362,9 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
     } else {
         let rule = if n.spectral_interpolated {
             format!(
-                "product integration: {} panels, {} nodes (Chebyshev–Lobatto points, nested, each panel's count \
-                 doubled until the OTF at Nyquist settles to its share of the tolerance; weights the exact \
+                "product integration: {} panels, {} nodes (Chebyshev–Lobatto points: each panel's count \
+                 doubled until the OTF at Nyquist settles to its share of the tolerance, then cut to the fewest \
+                 that stay within it; weights the exact \
                  moments of the detected spectrum, so its table samples cost nothing; panels follow the lens's \
                  defocus phase and where its set of orders changes)",
                 n.spectral_panels, n.spectral_nodes
@@ -396,7 +397,7 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
         n.sign_changes
     );
     let budget = if n.engine.starts_with("fft") && n.engine.contains("chosen") {
-        "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N), the frequency \
+        "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N, its order checked at N/4), the frequency \
          rule converged below both"
     } else if n.spectral_interpolated {
         "a quarter to the spectral rule (nested estimate at Nyquist), the rest to the frequency rule"

@@ -34,7 +34,7 @@ pub enum Error {
     /// [`crate::fft::MAX_CHOSEN_SAMPLES`] or the memory budget [`crate::FFT_MEMORY_BUDGET`]
     /// for the grids held): see [`crate::fft::pupil_samples_for`].
     #[error(
-        "the FFT path cannot reach a tolerance of {tolerance:e} on the mean MTF: its error falls as N^-1.6 with the pupil samples N across the diameter, and {tolerance:e} would need N ≈ {needed}, beyond the {limit} it may use here (the 2048-sample cap, or the memory budget for this many spectral nodes); at N = {limit} it reaches about {reachable:.1e}: ask for that tolerance or a coarser one"
+        "the FFT path cannot reach a tolerance of {tolerance:e} on the mean MTF: its extrapolated error falls as 1/N with the pupil samples N across the diameter, and {tolerance:e} would need N ≈ {needed}, beyond the {limit} it may use here (the 2048-sample cap, the memory budget for this many spectral nodes, or about three seconds of grids per sampling); at N = {limit} it reaches about {reachable:.1e}: ask for that tolerance or a coarser one"
     )]
     PupilSampling {
         /// The relative tolerance asked.

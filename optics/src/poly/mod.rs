@@ -367,13 +367,22 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         SpectralRule::Interpolated => spectral::interpolated(&scene, lo, hi, settings.tolerance),
         SpectralRule::Panels => None,
     };
-    let nodes = match interpolated {
+    let mut nodes = match interpolated {
         Some(nodes) => nodes,
         None => spectral::panels(&scene, lo, hi),
     };
     check_signal(&nodes)?;
     if nodes.needs_grid {
         let tolerance = settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance);
+        // the FFT path's tolerance bounds the mean's accuracy: spectral nodes (one grid each)
+        // finer than it buy nothing
+        if nodes.interpolated
+            && tolerance > settings.tolerance
+            && let Some(coarser) = spectral::interpolated(&scene, lo, hi, tolerance)
+        {
+            nodes = coarser;
+            check_signal(&nodes)?;
+        }
         return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, tolerance)?));
     }
     Ok(Box::new(exact::Quadrature { scene, nodes }))
