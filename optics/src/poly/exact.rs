@@ -36,7 +36,26 @@ pub(super) fn contributions(
         }
     };
     if nodes.line.is_some() || nodes.interpolated {
-        nodes.nodes.iter().for_each(&mut term);
+        // the defocused OTFs of all the nodes at once (the Bessel series in interleaved
+        // lanes: `defocus_otf_many`), then visited in order
+        let (mut points, mut values) = (Vec::with_capacity(nodes.nodes.len()), Vec::new());
+        for n in &nodes.nodes {
+            if n.lambda < cut && n.table.is_none() {
+                points.push((nuf * n.lambda / n.scale, n.w020 / n.lambda));
+            }
+        }
+        values.resize(points.len(), 0.0);
+        crate::otf::defocus_otf_many(&points, &mut values);
+        let mut next = values.iter();
+        for n in &nodes.nodes {
+            if n.lambda >= cut {
+                continue;
+            }
+            match &n.table {
+                None => visit(n.weight * next.next().copied().unwrap_or(0.0), n.shift),
+                Some(t) => visit(n.weight * t.value(n.lambda, nu, azimuth_from_field), n.shift),
+            }
+        }
         return;
     }
     for p in &nodes.panels {

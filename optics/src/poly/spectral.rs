@@ -429,6 +429,10 @@ const INTERPOLATION_PANEL_PHASE: f64 = 48.0;
 /// points of the next.
 const LEVELS: [usize; 7] = [3, 5, 9, 17, 33, 65, 129];
 
+/// The degree a panel's moment rule is first built for: the levels up to 33 points (most
+/// panels stop there; a finer level rebuilds it, [`Interpolant::moments`]).
+const FIRST_MOMENT_DEGREE: usize = 32;
+
 /// Bound on the Lebesgue constant of Chebyshev–Lobatto interpolation up to 129 points
 /// (`(2/π) ln(n) + 1` < 4): an interpolant of a function bounded by 1 is bounded by this, so a
 /// panel whose weight share × 2 × this is within its budget needs no resolution at all.
@@ -578,14 +582,34 @@ fn order_value(n: &Node, nu: f64, f_number: f64) -> Complex64 {
     Complex64::from_polar(value, -2.0 * PI * nu * shift)
 }
 
-/// The part `Σ_o τ_o OTF_o` of the OTF at `nu` of the lens's orders at `lambda`.
-fn lens_value(scene: &Scene<'_>, lambda: f64, nu: f64) -> Complex64 {
-    scene
-        .lens
-        .orders(lambda, scene.field)
+/// The part `Σ_o τ_o OTF_o` of the OTF at `nu` of the lens's orders at each of `lambdas`, the
+/// defocused OTFs of all their orders at once ([`crate::otf::defocus_otf_many`]).
+fn lens_values(scene: &Scene<'_>, lambdas: &[f64], nu: f64) -> Vec<Complex64> {
+    let mut nodes: Vec<(usize, Node, f64)> = Vec::new();
+    for (i, &lambda) in lambdas.iter().enumerate() {
+        for o in scene.lens.orders(lambda, scene.field) {
+            nodes.push((i, Node::of(&o, lambda, 0.0, scene.irises), o.efficiency));
+        }
+    }
+    let nuf = nu * scene.f_number;
+    let points: Vec<(f64, f64)> = nodes
         .iter()
-        .map(|o| order_value(&Node::of(o, lambda, 0.0, scene.irises), nu, scene.f_number) * o.efficiency)
-        .sum()
+        .filter(|(_, n, _)| n.table.is_none())
+        .map(|(_, n, _)| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
+        .collect();
+    let mut values = vec![0.0; points.len()];
+    crate::otf::defocus_otf_many(&points, &mut values);
+    let mut next = values.iter();
+    let mut out = vec![Complex64::new(0.0, 0.0); lambdas.len()];
+    for (i, n, efficiency) in &nodes {
+        let value = match n.table {
+            None => next.next().copied().unwrap_or(0.0),
+            Some(_) => n.otf(nuf * n.lambda, nu, 0.0),
+        };
+        let shift = n.shift[0].hypot(n.shift[1]);
+        out[*i] += Complex64::from_polar(value, -2.0 * PI * nu * shift) * efficiency;
+    }
+    out
 }
 
 /// One product-integration panel: its moment rule, its current nested level, and the lens's
@@ -597,6 +621,10 @@ struct Interpolant {
     /// `∫ ρ` over the panel
     mass: f64,
     rule: MomentRule,
+    /// the Chebyshev moments `μ_0 …` computed so far (see [`moments`](Self::moments))
+    mu: Vec<f64>,
+    /// the detected spectrum's smoothness scale (for a rule of higher degree)
+    smooth: f64,
     /// index into [`LEVELS`] of the accepted (or current) rule; `None` before the first
     level: Option<usize>,
     /// the lens's OTF at the limit on the current level's points
@@ -611,20 +639,38 @@ struct Interpolant {
 
 impl Interpolant {
     fn new(detected: &Spectrum, kinks: &[f64], smooth: f64, a: f64, b: f64, phase: f64) -> Interpolant {
-        let rule = MomentRule::new(detected, kinks, smooth, a, b, LEVELS[LEVELS.len() - 1] - 1);
-        let mass = rule.moments(0)[0];
+        let rule = MomentRule::new(detected, kinks, smooth, a, b, FIRST_MOMENT_DEGREE);
+        let mu = rule.moments(0);
         Interpolant {
             a,
             b,
             phase,
-            mass,
+            mass: mu[0],
             rule,
+            mu,
+            smooth,
             level: None,
             values: Vec::new(),
             weights: Vec::new(),
             moves: Vec::new(),
             error: f64::INFINITY,
         }
+    }
+
+    /// `μ_0 … μ_degree` of the panel's weight, computed once up to the degree its moment rule
+    /// was built for ([`FIRST_MOMENT_DEGREE`], enough for the levels to 33 points): a higher
+    /// degree rebuilds the rule for the finest level (more points where its Chebyshev
+    /// polynomials turn faster) and computes them all again.
+    fn moments(&mut self, detected: &Spectrum, degree: usize) -> &[f64] {
+        if degree > self.rule.degree {
+            let most = LEVELS[LEVELS.len() - 1] - 1;
+            self.rule = MomentRule::new(detected, &detected.breakpoints(), self.smooth, self.a, self.b, most);
+            self.mu.clear();
+        }
+        if self.mu.len() <= degree {
+            self.mu = self.rule.moments(self.rule.degree);
+        }
+        &self.mu[..=degree]
     }
 
     /// The wavelengths of the current level's points (k = 0 at `b`), moved 1e-12 of the panel
@@ -650,10 +696,13 @@ impl Interpolant {
             Some(l) if l < level => (LEVELS[level] - 1) / (LEVELS[l] - 1),
             _ => 0,
         };
-        self.weights = lobatto_weights(&self.rule.moments(points - 1), points);
+        self.weights = lobatto_weights(self.moments(scene.detected, points - 1), points);
         let lambdas = self.lambdas();
+        let fresh: Vec<usize> = (0..points).filter(|&k| !(step > 0 && k % step == 0)).collect();
+        let wanted: Vec<f64> = fresh.iter().map(|&k| lambdas[k]).collect();
+        let mut computed = lens_values(scene, &wanted, top).into_iter();
         self.values = (0..points)
-            .map(|k| if step > 0 && k % step == 0 { old[k / step] } else { lens_value(scene, lambdas[k], top) })
+            .map(|k| if step > 0 && k % step == 0 { old[k / step] } else { computed.next().unwrap_or_default() })
             .collect();
         self.level = Some(level);
     }
@@ -691,7 +740,7 @@ impl Interpolant {
             let points = LEVELS[level];
             if level > 0 {
                 let half = LEVELS[level - 1];
-                let coarse = lobatto_weights(&self.rule.moments(half - 1), half);
+                let coarse = lobatto_weights(self.moments(scene.detected, half - 1), half);
                 let full: Complex64 = self.values.iter().zip(&self.weights).map(|(v, w)| v * w).sum();
                 let step = (points - 1) / (half - 1);
                 let part: Complex64 = coarse.iter().enumerate().map(|(k, w)| self.values[k * step] * w).sum();
@@ -744,10 +793,11 @@ impl Interpolant {
             return;
         }
         let mass = self.mass.abs();
+        let mu = self.moments(scene.detected, full_points - 1).to_vec();
         let at = |n: usize| -> (Vec<f64>, Vec<Complex64>, f64) {
-            let weights = lobatto_weights(&self.rule.moments(n - 1), n);
+            let weights = lobatto_weights(&mu[..n], n);
             let probe = Interpolant { weights: weights.clone(), ..self.shallow() };
-            let values: Vec<Complex64> = probe.lambdas().iter().map(|&l| lens_value(scene, l, top)).collect();
+            let values = lens_values(scene, &probe.lambdas(), top);
             let sum: Complex64 = values.iter().zip(&weights).map(|(v, w)| v * w).sum();
             (weights, values, (sum - reference).norm() / mass)
         };
@@ -783,7 +833,9 @@ impl Interpolant {
             b: self.b,
             phase: self.phase,
             mass: self.mass,
-            rule: MomentRule { cos: Vec::new(), weight: Vec::new() },
+            rule: MomentRule { cos: Vec::new(), weight: Vec::new(), degree: 0 },
+            mu: Vec::new(),
+            smooth: self.smooth,
             level: self.level,
             values: Vec::new(),
             weights: Vec::new(),
@@ -893,6 +945,8 @@ fn gauss_rule(points: usize) -> &'static [(f64, f64)] {
 /// behind [`quad::MAX_PANEL_PHASE`]) is below 1e-16 of its share: a 0.25 nm table sample in a
 /// 100 nm panel takes 5 points, a Gaussian of 20 nm over ±7σ a few hundred in all.
 struct MomentRule {
+    /// the highest degree the rule integrates to its 1e-16 bound
+    degree: usize,
     cos: Vec<f64>,
     weight: Vec<f64>,
 }
@@ -912,7 +966,7 @@ impl MomentRule {
         // ρ's phase per unit θ: dλ/dθ ≤ h, over its scale
         let rho_rate = if smooth.is_finite() { 2.0 * h / smooth } else { 0.0 };
         let rate = degree as f64 + rho_rate;
-        let mut out = MomentRule { cos: Vec::new(), weight: Vec::new() };
+        let mut out = MomentRule { cos: Vec::new(), weight: Vec::new(), degree };
         for pair in edges.windows(2) {
             let (t1, t0) = (pair[0], pair[1]);
             let length = t1 - t0;
@@ -971,9 +1025,11 @@ impl MomentRule {
 pub(super) fn lobatto_weights(mu: &[f64], points: usize) -> Vec<f64> {
     let n = points - 1;
     let halve = |i: usize| if i == 0 || i == n { 0.5 } else { 1.0 };
+    // cos(πm/n) for m < 2n, indexed by jk mod 2n
+    let cosines: Vec<f64> = (0..2 * n).map(|m| (PI * m as f64 / n as f64).cos()).collect();
     (0..points)
         .map(|k| {
-            let sum: f64 = (0..=n).map(|j| halve(j) * mu[j] * (PI * (j * k % (2 * n)) as f64 / n as f64).cos()).sum();
+            let sum: f64 = (0..=n).map(|j| halve(j) * mu[j] * cosines[j * k % (2 * n)]).sum();
             2.0 / n as f64 * halve(k) * sum
         })
         .collect()
