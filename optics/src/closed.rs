@@ -156,6 +156,13 @@ impl GaussianDefocus {
         })
     }
 
+    /// The truncation at λ = 0 where it matters at `tail` σ: beyond `tail` the Gaussian's weight
+    /// is below the tail's own share of the tolerance, as the upper cut is ignored beyond it
+    /// (the paper lens over 300 nm at 1e-6: λ = 0 lies 6.3σ below the centre, 6.4σ is kept).
+    fn lower_at(&self, tail: f64) -> Option<f64> {
+        self.lower_x.filter(|&l| l > -tail)
+    }
+
     fn at_frequency(&self, nu: f64, tail: f64) -> AtFrequency {
         let beta = nu * self.f_number;
         let scale = 8.0 * PI * beta;
@@ -190,7 +197,7 @@ impl GaussianDefocus {
     fn moments(&self, f: &AtFrequency, phi0: f64, phi1: f64, cut_x: f64) -> Complex64 {
         let zero = Complex64::new(0.0, 0.0);
         let upper = (cut_x < f.tail).then_some(cut_x);
-        let lower = self.lower_x;
+        let lower = self.lower_at(f.tail);
         match (upper, lower) {
             (Some(u), _) if u < -f.tail => return zero,
             (Some(u), Some(l)) if u <= l => return zero,
@@ -296,7 +303,7 @@ impl GaussianDefocus {
             }
             // (with the Gaussian truncated at λ = 0 the truncation's endpoint term does not
             // decay away from c*: nothing is skipped then)
-            if self.lower_x.is_none() {
+            if self.lower_at(tail).is_none() {
                 // |E| ≤ e^{−r²/2} × (the polynomial at |x − m| ≈ r + 2): r widths from c*, with
                 // r² = tail² + 2 ln(growth), is below the tail's own 1e-3 tolerance
                 let norm: f64 = self.q.iter().map(|v| v.abs()).sum();

@@ -112,6 +112,13 @@ impl OtfEngine for Closed {
         FrequencyRule::Adaptive { min_panels: 1.0 }
     }
 
+    /// Smooth in ν where every wavelength of the Gaussian's ±7σ passes `max_frequency` (no
+    /// cutoff inside the range; the weight beyond is 2.6e-12 of the area).
+    fn smooth_in_frequency(&self, max_frequency: f64) -> bool {
+        let longest = self.closed.center() + GAUSSIAN_HALF_WIDTH_SIGMAS * self.closed.sigma();
+        max_frequency * longest * self.f_number < 1.0 - 1e-6
+    }
+
     /// The closed form is exact across the spectrum: no panel edges, no kinks; but where the
     /// cutoffs 1/(λ F#) of the Gaussian's centre and flanks lie below `max_frequency`, the OTF is
     /// non-zero on a small part of the range only, which one panel's nodes can miss entirely

@@ -133,13 +133,11 @@ impl Polychromatic<'_> {
             FrequencyRule::Fixed { .. } => 4.0,
         };
         let mut total = 0.0;
-        // the nested Clenshaw–Curtis rules where the OTF is smooth in ν by construction: the
-        // product-integration nodes, chosen only where every wavelength passes the frequency
-        // limit (no cutoff kinks) and without tables (kinks at their columns); elsewhere (the
-        // closed form, whose OTF beyond a flank's cutoff is not analytic, and the reference
-        // panels) the adaptive rule alone, as it was
-        let nodes = self.engine.nodes();
-        let smooth_rule = nodes.interpolated && !nodes.nodes.iter().any(|n| n.table.is_some());
+        // the nested Clenshaw–Curtis rules where the OTF is smooth in ν by construction
+        // (`OtfEngine::smooth_in_frequency`: product-integration nodes, or the closed form
+        // where every wavelength of its ±7σ passes the limit); elsewhere (cutoff kinks, the
+        // reference panels) the adaptive rule alone
+        let smooth_rule = self.engine.smooth_in_frequency(self.max_frequency);
         for pair in self.engine.frequency_cuts(self.max_frequency).windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts

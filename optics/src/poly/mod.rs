@@ -231,6 +231,13 @@ trait OtfEngine: std::fmt::Debug {
     }
     /// How the frequency integral is done.
     fn frequency_rule(&self) -> FrequencyRule;
+    /// Whether the OTF is smooth (analytic) in ν up to `max_frequency`, so that the nested
+    /// Clenshaw–Curtis rules may take the frequency integral: product-integration nodes (chosen
+    /// only where every wavelength passes the limit) without tables (kinks at their columns).
+    fn smooth_in_frequency(&self, _max_frequency: f64) -> bool {
+        let nodes = self.nodes();
+        nodes.interpolated && !nodes.nodes.iter().any(|n| n.table.is_some())
+    }
     /// Frequencies in `[0, max_frequency]` where the OTF may kink (with both ends): a spectral
     /// panel edge, or the one wavelength of a line, reaching its cutoff.
     fn frequency_cuts(&self, max_frequency: f64) -> Vec<f64> {
