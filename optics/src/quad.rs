@@ -93,6 +93,28 @@ pub fn gauss_hermite(n: usize) -> Vec<(f64, f64)> {
     pairs
 }
 
+/// Points per panel of the fixed frequency rule on FFT grids ([`composite_fixed`]): its panels
+/// are a quarter of the finest grid cell, and the bicubic interpolant is smooth inside a cell,
+/// so half of [`ORDER`] moves the mean by 4e-11 (coma 0.5 µm) and 3e-10 (the concentric
+/// segmented lens) at N = 256 against 16 points, far below the FFT path's own error (4 points:
+/// 2e-9 and 6e-9).
+pub const FIXED_ORDER: usize = 8;
+
+/// Integrates `f` over `[a, b]` with `panels` equal panels of the [`FIXED_ORDER`]-point rule.
+pub fn composite_fixed<F: FnMut(f64) -> f64>(a: f64, b: f64, panels: usize, mut f: F) -> f64 {
+    static RULE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    let rule = RULE.get_or_init(|| gauss_legendre(FIXED_ORDER));
+    let panels = panels.max(1);
+    let h = (b - a) / panels as f64;
+    let mut total = 0.0;
+    for p in 0..panels {
+        let mid = a + h * (p as f64 + 0.5);
+        let sum: f64 = rule.iter().map(|&(x, w)| w * f(mid + 0.5 * h * x)).sum();
+        total += 0.5 * h * sum;
+    }
+    total
+}
+
 /// Integrates `f` over `[a, b]` with `panels` equal panels of the [`ORDER`]-point rule.
 pub fn composite<F: FnMut(f64) -> f64>(a: f64, b: f64, panels: usize, mut f: F) -> f64 {
     let panels = panels.max(1);

@@ -208,6 +208,7 @@
 //! ```
 
 mod aperture;
+pub(crate) mod cis;
 mod convergence;
 mod plan;
 mod sampling;

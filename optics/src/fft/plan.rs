@@ -253,13 +253,10 @@ impl OtfPlan {
         assert!(wavelength_m > 0.0 && wavelength_m.is_finite(), "wavelength {wavelength_m} m");
         let n = self.n;
         let k = TAU / wavelength_m;
-        let zero = Complex64::new(0.0, 0.0);
         self.spectrum_of(|j, row| {
             let amplitude = &pupil.amplitude[j * n..(j + 1) * n];
             let opd = &pupil.opd_m[j * n..(j + 1) * n];
-            for ((out, &a), &w) in row.iter_mut().zip(amplitude).zip(opd) {
-                *out = if a > 0.0 { Complex64::from_polar(a, k * w) } else { zero };
-            }
+            super::cis::fill(row, amplitude, k, opd);
         });
     }
 

@@ -79,8 +79,10 @@ impl Polychromatic<'_> {
             let (panels, evaluations) = super::grid::fixed_rule(top, cell);
             work.frequency_panels = panels;
             work.otf_evaluations = evaluations;
-            let mean =
-                || quad::composite(0.0, top, panels, |nu| value(nu).abs() * self.pixel_factor(nu)) / self.max_frequency;
+            let mean = || {
+                quad::composite_fixed(0.0, top, panels, |nu| value(nu).abs() * self.pixel_factor(nu))
+                    / self.max_frequency
+            };
             let fine = mean();
             // the sampling chosen from the tolerance: the same mean at N/2, extrapolated
             if let Some(plan) = self.engine.richardson() {

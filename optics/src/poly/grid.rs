@@ -250,14 +250,14 @@ fn fixed_mean(scene: &Scene<'_>, path: &FftPath, value: &dyn Fn(f64) -> f64) -> 
     let top = scene.max_frequency.min(1.0 / (lo * scene.f_number));
     let (panels, _) = fixed_rule(top, path.finest_cell(scene.f_number));
     let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
-    crate::quad::composite(0.0, top, panels, |nu| value(nu).abs() * pixel(nu)) / scene.max_frequency
+    crate::quad::composite_fixed(0.0, top, panels, |nu| value(nu).abs() * pixel(nu)) / scene.max_frequency
 }
 
 /// The panels of the fixed composite rule over `[0, top]` for grids whose finest cell in ν is
 /// `cell`: a quarter of a cell each (at least 8, at most 65 536), and the OTF evaluations.
 pub(super) fn fixed_rule(top: f64, cell: f64) -> (usize, usize) {
     let panels = ((4.0 * top / cell).ceil() as usize).clamp(8, 1 << 16);
-    (panels, panels * crate::quad::ORDER)
+    (panels, panels * crate::quad::FIXED_ORDER)
 }
 
 impl OtfEngine for Grids<'_> {

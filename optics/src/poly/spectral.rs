@@ -565,21 +565,29 @@ fn mean_estimate(scene: &Scene<'_>, nodes: &Nodes, top: f64) -> f64 {
     let mut sum = 0.0;
     for f in [0.25, 0.5, 1.0] {
         let nu = f * top;
+        // the defocused OTFs of every node at once (`defocus_otf_many`)
+        let nuf = nu * scene.f_number;
+        let points: Vec<(f64, f64)> = nodes
+            .nodes
+            .iter()
+            .filter(|n| n.table.is_none())
+            .map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
+            .collect();
+        let mut values = vec![0.0; points.len()];
+        crate::otf::defocus_otf_many(&points, &mut values);
+        let mut next = values.iter();
         let mut g = Complex64::new(0.0, 0.0);
         for n in &nodes.nodes {
-            g += Complex64::from_polar(n.weight, 0.0) * order_value(n, nu, scene.f_number);
+            let value = match n.table {
+                None => next.next().copied().unwrap_or(0.0),
+                Some(_) => n.otf(nuf * n.lambda, nu, 0.0),
+            };
+            let shift = n.shift[0].hypot(n.shift[1]);
+            g += Complex64::from_polar(n.weight * value, -2.0 * PI * nu * shift);
         }
         sum += (g / nodes.total_weight).norm() * pixel(nu);
     }
     sum / 3.0
-}
-
-/// One order's OTF at `nu` (per unit efficiency... the node's own, without its weight), with the
-/// phase of its image shift along the shift (the direction in which it turns the OTF fastest).
-fn order_value(n: &Node, nu: f64, f_number: f64) -> Complex64 {
-    let value = n.otf(nu * f_number * n.lambda, nu, 0.0);
-    let shift = n.shift[0].hypot(n.shift[1]);
-    Complex64::from_polar(value, -2.0 * PI * nu * shift)
 }
 
 /// The part `Σ_o τ_o OTF_o` of the OTF at `nu` of the lens's orders at each of `lambdas`, the
@@ -986,7 +994,7 @@ impl MomentRule {
                 let mid = t0 + sub_len * (s as f64 + 0.5);
                 for &(x, w) in rule {
                     let theta = mid + 0.5 * sub_len * x;
-                    let (sin, cos) = theta.sin_cos();
+                    let (sin, cos) = crate::fft::cis::sin_cos(theta);
                     let weight = detected.value(c + h * cos) * h * sin * w * 0.5 * sub_len;
                     if weight != 0.0 {
                         out.cos.push(cos);

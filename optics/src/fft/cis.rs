@@ -1,0 +1,100 @@
+//! `a e^{iφ}` for a row of pupil samples at once (the pupil field of every FFT grid), and the
+//! sine and cosine behind it (also the exact OTF's quadrature in the pupil angle).
+//!
+//! glibc's `sincos` costs ~20 ns a call (it saves and restores the rounding mode around its
+//! range reduction), a third of the FFT path's time; here the reduction is Cody–Waite's with
+//! π/2 in three parts and the sine and cosine are Taylor polynomials on `|r| ≤ π/4` to degrees
+//! 15 and 16 (truncation below 2e-17), written without branches so that the compiler
+//! vectorizes the row. Accurate to a few ulp of 1 for `|φ| ≤ 1e6` rad (the defocus-phase
+//! budget is 1e5 rad; tested against `f64::sin_cos`).
+
+use num_complex::Complex64;
+
+/// π/2 in three parts (each exact in fewer bits, so `q · part` is exact for `|q| < 2^20`).
+const PIO2_1: f64 = 1.570_796_326_734_125_6;
+const PIO2_2: f64 = 6.077_100_506_303_966e-11;
+const PIO2_3: f64 = 2.022_266_248_795_950_6e-21;
+
+/// Adding and subtracting this rounds to the nearest integer (for magnitudes below 2^51).
+const ROUND: f64 = 6_755_399_441_055_744.0;
+
+/// `(sin φ, cos φ)`.
+#[inline(always)]
+pub(crate) fn sin_cos(phi: f64) -> (f64, f64) {
+    let q = (phi * std::f64::consts::FRAC_2_PI + ROUND) - ROUND;
+    let r = ((phi - q * PIO2_1) - q * PIO2_2) - q * PIO2_3;
+    let r2 = r * r;
+    // sin r = r Σ (−1)^k r^{2k}/(2k+1)!, cos r = Σ (−1)^k r^{2k}/(2k)!, by Horner
+    let s = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0
+                    + r2 * (-1.0 / 5040.0
+                        + r2 * (1.0 / 362_880.0
+                            + r2 * (-1.0 / 39_916_800.0
+                                + r2 * (1.0 / 6_227_020_800.0 + r2 * (-1.0 / 1_307_674_368_000.0))))))));
+    let c = 1.0
+        + r2 * (-0.5
+            + r2 * (1.0 / 24.0
+                + r2 * (-1.0 / 720.0
+                    + r2 * (1.0 / 40_320.0
+                        + r2 * (-1.0 / 3_628_800.0
+                            + r2 * (1.0 / 479_001_600.0
+                                + r2 * (-1.0 / 87_178_291_200.0 + r2 * (1.0 / 20_922_789_888_000.0))))))));
+    // the quadrant: φ = q π/2 + r
+    let quadrant = (q as i64) & 3;
+    let (sin, cos) = if quadrant & 1 == 0 { (s, c) } else { (c, -s) };
+    let flip = if quadrant & 2 == 0 { 1.0 } else { -1.0 };
+    (flip * sin, flip * cos)
+}
+
+/// `out[i] = a[i] e^{i k w[i]}` where `a[i] > 0`, else 0.
+pub(crate) fn fill(out: &mut [Complex64], amplitude: &[f64], k: f64, opd: &[f64]) {
+    for ((o, &a), &w) in out.iter_mut().zip(amplitude).zip(opd) {
+        let (s, c) = sin_cos(k * w);
+        let a = if a > 0.0 { a } else { 0.0 };
+        *o = Complex64::new(a * c, a * s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Against `f64::sin_cos` over the phases the FFT path meets and far beyond: within 4e-16
+    /// absolute below 1e3 rad, and within the reduction's 1e-16 relative to |φ| up to 1e6.
+    #[test]
+    fn matches_the_library_sin_cos() {
+        let mut worst_small: f64 = 0.0;
+        let mut worst_large: f64 = 0.0;
+        let mut x: f64 = 0.123_456_789;
+        for i in 0..200_000 {
+            // spread over ±1e6 rad, denser near 0
+            let phi = if i % 2 == 0 { (x - 0.5) * 2e3 } else { (x - 0.5) * 2e6 };
+            x = (x * 3.987_654_321 + 0.314_159).fract();
+            let (s, c) = sin_cos(phi);
+            let (s0, c0) = phi.sin_cos();
+            let d = (s - s0).abs().max((c - c0).abs());
+            if phi.abs() < 1e3 {
+                worst_small = worst_small.max(d);
+            } else {
+                worst_large = worst_large.max(d / phi.abs());
+            }
+        }
+        assert!(worst_small < 4e-16, "{worst_small:e}");
+        assert!(worst_large < 1e-16, "{worst_large:e}");
+        for phi in [0.0, -0.0, std::f64::consts::FRAC_PI_4, std::f64::consts::FRAC_PI_2, std::f64::consts::PI, -3.0] {
+            let ((s, c), (s0, c0)) = (sin_cos(phi), phi.sin_cos());
+            assert!((s - s0).abs() < 3e-16 && (c - c0).abs() < 3e-16, "{phi}");
+        }
+    }
+
+    #[test]
+    fn fill_zeroes_the_opaque_samples() {
+        let mut out = vec![Complex64::new(9.0, 9.0); 3];
+        fill(&mut out, &[1.0, 0.0, 0.5], 2.0, &[0.25, 1.0, -0.5]);
+        assert!((out[0] - Complex64::from_polar(1.0, 0.5)).norm() < 1e-16);
+        assert_eq!(out[1], Complex64::new(0.0, 0.0));
+        assert!((out[2] - Complex64::from_polar(0.5, -1.0)).norm() < 1e-16);
+    }
+}
