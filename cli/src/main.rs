@@ -5,6 +5,7 @@
 //! files, arguments or the environment.
 
 mod compare;
+mod measure;
 mod optimize;
 mod output;
 mod plot;
@@ -100,6 +101,9 @@ enum Command {
     /// Lens designs side by side: ASNR at the scene band and at each design's best band, the
     /// chromatic twin, glare (default: the embedded comparison of the lens families).
     Compare(compare::CompareArgs),
+    /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
+    /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
+    Measure(measure::MeasureArgs),
     /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
     Scene {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -248,6 +252,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => compare::run(args),
+        Command::Measure(args) => measure::run(&args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;

@@ -1569,3 +1569,65 @@ fn tabulated_lens_reads_a_list_of_zemax_exports() {
     let err = fails(&["evaluate", f, "--set", "lens.mtf=[\"z750.txt\", \"missing.txt\"]"]);
     assert!(err.contains("lens.mtf[1]") && err.contains("missing.txt"), "{err}");
 }
+
+/// A 16-bit grayscale PNG whose left half reads `white` and right half `black`, each plus a
+/// deterministic ±`noise` pattern (a third of it on the black half) that changes with `k`.
+fn measure_frame(path: &Path, k: usize, white: f64, black: f64, noise: f64) {
+    let (w, h) = (32usize, 16usize);
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64 ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    let bytes: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let u = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let level = if i % w < w / 2 { white + 2.0 * noise * u } else { black + 2.0 * noise / 3.0 * u };
+            (level.round() as u16).to_be_bytes()
+        })
+        .collect();
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::Sixteen);
+    encoder.write_header().unwrap().write_image_data(&bytes).unwrap();
+}
+
+/// `asnr measure` on a directory of frames: the JSON keys, eq. 2 and 4 against the levels
+/// written, VG from capped-black frames; the table names eq. 3's noise terms; bad input exits 1.
+#[test]
+fn measure_reads_a_stack_and_reports_snr_and_glare() {
+    let dir = scratch("measure");
+    let stack = dir.join("stack");
+    std::fs::create_dir_all(&stack).unwrap();
+    for k in 0..10 {
+        measure_frame(&stack.join(format!("f{k:02}.png")), k, 30_000.0, 5_000.0, 300.0);
+    }
+    let capped = dir.join("capped.png");
+    measure_frame(&capped, 99, 1_000.0, 1_000.0, 0.0);
+    let stack_arg = stack.to_str().unwrap();
+    let capped_arg = capped.to_str().unwrap();
+    let regions = ["--white", "2,2,12,12", "--black", "18,2,12,12"];
+    let v = json(&[&["measure", stack_arg], &regions[..], &["--capped-black", capped_arg, "--json"]].concat());
+    for key in ["signal", "sigma_white", "sigma_black", "sigma_signal", "snr", "vg", "frames", "pixels"] {
+        assert!(v.get(key).is_some(), "{key} missing: {v}");
+    }
+    assert_eq!(v["frames"], 10);
+    assert_eq!(v["pixels"]["white"], 144);
+    let signal = v["signal"].as_f64().unwrap();
+    assert!((signal - 25_000.0).abs() < 50.0, "{v}");
+    let (sw, sb) = (v["sigma_white"].as_f64().unwrap(), v["sigma_black"].as_f64().unwrap());
+    let snr = v["snr"].as_f64().unwrap();
+    assert!((snr - signal / (sw * sw - sb * sb).sqrt()).abs() < 1e-9 * snr, "{v}");
+    let vg = v["vg"].as_f64().unwrap();
+    assert!((vg - 4_000.0 / 29_000.0).abs() < 2e-3, "{v}");
+    let (table, _) = succeeds(&[&["measure", stack_arg], &regions[..], &["--include-glare"]].concat());
+    assert!(table.contains("σ_s = σ_w: glare and camera noise included") && table.contains("SNR"), "{table}");
+    // bad input: a region outside, one frame, no such file
+    let err = fails(&[&["measure", stack_arg], &["--white", "2,2,12,12", "--black", "30,2,12,12"][..]].concat());
+    assert!(err.contains("black region `30,2,12,12`") && err.contains("32 × 16"), "{err}");
+    let one = stack.join("f00.png");
+    let err = fails(&[&["measure", one.to_str().unwrap()], &regions[..]].concat());
+    assert!(err.contains("1 frame(s)"), "{err}");
+    let err = fails(&[&["measure", "/nonexistent/frame.png", "/nonexistent/frame.png"], &regions[..]].concat());
+    assert!(err.contains("/nonexistent/frame.png"), "{err}");
+}

@@ -1,0 +1,74 @@
+//! `asnr measure`: the SNR (paper eq. 2–4), and with capped-black frames the veiling glare and
+//! modulation (SI eq. S10–S12), of a stack of camera frames.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+/// Arguments of `asnr measure`.
+#[derive(clap::Args)]
+pub struct MeasureArgs {
+    /// Frames of one stack (8- or 16-bit grayscale PNG), or directories holding them (their .png
+    /// files in name order); at least 2 frames (the paper grabbed 30).
+    #[arg(required = true, value_name = "FRAMES")]
+    pub frames: Vec<PathBuf>,
+    /// The white region, X,Y,W,H in pixels (corner column and row from the top-left, width, height).
+    #[arg(long, value_name = "X,Y,W,H")]
+    pub white: String,
+    /// The black region, X,Y,W,H in pixels.
+    #[arg(long, value_name = "X,Y,W,H")]
+    pub black: String,
+    /// Frames taken with the camera capped (no light): their mean over the black region is the
+    /// capped black level, from which VG = black/white (levels above it) and M are computed.
+    #[arg(long, num_args = 1.., value_name = "FRAMES")]
+    pub capped_black: Vec<PathBuf>,
+    /// σ_s = σ_w instead of √(σ_w² − σ_b²): glare and camera noise count (the SI's variant).
+    #[arg(long)]
+    pub include_glare: bool,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `asnr measure`.
+pub fn run(args: &MeasureArgs) -> Result<()> {
+    let white = imaging::Region::parse("white", &args.white)?;
+    let black = imaging::Region::parse("black", &args.black)?;
+    let frames = imaging::read_stack("frames", &args.frames)?;
+    let capped = if args.capped_black.is_empty() {
+        None
+    } else {
+        let paths = imaging::frames::frame_paths(&args.capped_black)?;
+        Some(paths.iter().map(|p| imaging::read_frame(p)).collect::<Result<Vec<_>, _>>()?)
+    };
+    let m = imaging::measure(&frames, white, black, capped.as_deref(), args.include_glare)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&m)?);
+        return Ok(());
+    }
+    let noise = if m.include_glare {
+        "σ_s = σ_w: glare and camera noise included (SI)"
+    } else {
+        "σ_s = √(σ_w² − σ_b²) (eq. 3): the black region's noise subtracted"
+    };
+    println!("frames            {:>12}   {} × {} pixels", m.frames, frames[0].width, frames[0].height);
+    println!("white region      {:>12}   pixels at {}", m.pixels.white, args.white);
+    println!("black region      {:>12}   pixels at {}", m.pixels.black, args.black);
+    println!("white level       {:>12.4}   DN (mean over frames and pixels)", m.white);
+    println!("black level       {:>12.4}   DN", m.black);
+    println!("signal            {:>12.4}   DN = white − black (eq. 2)", m.signal);
+    println!("σ_w               {:>12.4}   DN (temporal sample σ per pixel, averaged)", m.sigma_white);
+    println!("σ_b               {:>12.4}   DN", m.sigma_black);
+    println!("σ_s               {:>12.4}   DN, {noise}", m.sigma_signal);
+    println!("SNR               {:>12.4}   signal/σ_s (eq. 4)", m.snr);
+    if let (Some(c), Some(vg), Some(mo)) = (m.capped_black, m.vg, m.modulation) {
+        println!(
+            "capped black      {:>12.4}   DN (mean of {} capped frames over the black region)",
+            c,
+            capped.map_or(0, |f| f.len())
+        );
+        println!("VG                {:>12.4}   (black − capped)/(white − capped) (SI eq. S10)", vg);
+        println!("M                 {:>12.4}   (1 − VG)/(1 + VG) (SI eq. S11–S12)", mo);
+    }
+    Ok(())
+}

@@ -1,0 +1,83 @@
+//! What can go wrong reading frames and measuring them: each message names the file, the
+//! value and what is accepted.
+
+use std::path::PathBuf;
+
+/// An error of the `imaging` crate.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read or decoded.
+    #[error("{}: {message}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why (the decoder's or the system's words).
+        message: String,
+    },
+    /// A frame that is not single-channel grayscale.
+    #[error("{}: a {color} image; expected a grayscale frame (8- or 16-bit, no alpha): convert it, or export the camera's raw grey levels", path.display())]
+    NotGrayscale {
+        /// The file.
+        path: PathBuf,
+        /// Its colour type, as the PNG header says.
+        color: String,
+    },
+    /// Frames of different sizes in one stack.
+    #[error("{}: {width} × {height} pixels, but {} is {first_width} × {first_height}; every frame of a stack must have the same size", path.display(), first.display())]
+    SizeMismatch {
+        /// The frame that differs.
+        path: PathBuf,
+        /// Its width and height.
+        width: usize,
+        /// Its height.
+        height: usize,
+        /// The stack's first frame.
+        first: PathBuf,
+        /// The first frame's width.
+        first_width: usize,
+        /// The first frame's height.
+        first_height: usize,
+    },
+    /// Fewer frames than a temporal standard deviation needs.
+    #[error(
+        "{what}: {frames} frame(s); at least 2 are needed for a temporal standard deviation (the paper grabbed 30)"
+    )]
+    TooFewFrames {
+        /// Which stack.
+        what: &'static str,
+        /// How many frames it has.
+        frames: usize,
+    },
+    /// A directory with no frame in it, or no input at all.
+    #[error("{}: no .png frames found (give frame files, or directories holding them)", path.display())]
+    NoFrames {
+        /// The directory (or the empty argument list, as "").
+        path: PathBuf,
+    },
+    /// A region written wrongly or lying outside the frames.
+    #[error("{name} region `{text}`: {message}")]
+    Region {
+        /// `white`, `black`, or `capped-black`.
+        name: &'static str,
+        /// What was given.
+        text: String,
+        /// What is wrong and what is accepted.
+        message: String,
+    },
+    /// The statistics refused the levels (no signal, no signal noise, …).
+    #[error(transparent)]
+    Statistics(#[from] noise::Error),
+    /// Capped-black levels at or above the levels they are subtracted from.
+    #[error(
+        "the capped black level {capped:.6} is not below the {region} level {level:.6}: the capped-black frames cannot be the camera's dark output for these frames"
+    )]
+    CappedBlack {
+        /// The capped black level.
+        capped: f64,
+        /// `white` or `black`.
+        region: &'static str,
+        /// That region's level.
+        level: f64,
+    },
+}

@@ -1,0 +1,122 @@
+//! Stacks of grayscale frames: 8- and 16-bit PNG (1-, 2- and 4-bit grey is expanded to 8-bit),
+//! grey levels as read (DN), no scaling.
+
+use std::path::{Path, PathBuf};
+
+use crate::Error;
+
+/// One grayscale frame: `width × height` grey levels, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// The file it was read from.
+    pub path: PathBuf,
+    /// Pixels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Bits per sample of the file (8 or 16).
+    pub bit_depth: u8,
+    /// Grey levels, `data[y · width + x]`.
+    pub data: Vec<f64>,
+}
+
+impl Frame {
+    /// The grey level at column `x`, row `y` (from the top).
+    pub fn at(&self, x: usize, y: usize) -> f64 {
+        self.data[y * self.width + x]
+    }
+}
+
+/// Reads one grayscale PNG.
+///
+/// # Errors
+/// [`Error::Read`] when the file cannot be opened or decoded, [`Error::NotGrayscale`] for a
+/// colour, palette or alpha image.
+pub fn read_frame(path: &Path) -> Result<Frame, Error> {
+    let read = |message: String| Error::Read { path: path.to_owned(), message };
+    let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    // low bit depths to 8 bits; palettes would become RGB and are refused below
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(|e| read(format!("not a PNG frame ({e})")))?;
+    let (color, depth) = reader.output_color_type();
+    if color != png::ColorType::Grayscale {
+        return Err(Error::NotGrayscale { path: path.to_owned(), color: format!("{color:?}").to_lowercase() });
+    }
+    let mut buffer = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buffer).map_err(|e| read(format!("cannot decode ({e})")))?;
+    let (width, height) = (info.width as usize, info.height as usize);
+    let data: Vec<f64> = match depth {
+        png::BitDepth::Sixteen => {
+            buffer[..info.buffer_size()].chunks_exact(2).map(|b| f64::from(u16::from_be_bytes([b[0], b[1]]))).collect()
+        }
+        _ => buffer[..info.buffer_size()].iter().map(|&b| f64::from(b)).collect(),
+    };
+    if data.len() != width * height {
+        return Err(read(format!("{} samples for {width} × {height} pixels", data.len())));
+    }
+    let bit_depth = if depth == png::BitDepth::Sixteen { 16 } else { 8 };
+    Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
+}
+
+/// The frame files of `inputs`: files as given, directories as their `.png` files in name
+/// order.
+///
+/// # Errors
+/// [`Error::Read`] for a directory that cannot be listed, [`Error::NoFrames`] for a directory
+/// without frames or no inputs at all.
+pub fn frame_paths(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
+    if inputs.is_empty() {
+        return Err(Error::NoFrames { path: PathBuf::new() });
+    }
+    let mut out = Vec::new();
+    for input in inputs {
+        if input.is_dir() {
+            let listing =
+                std::fs::read_dir(input).map_err(|e| Error::Read { path: input.clone(), message: e.to_string() })?;
+            let mut found: Vec<PathBuf> = listing
+                .filter_map(|entry| entry.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")))
+                .collect();
+            if found.is_empty() {
+                return Err(Error::NoFrames { path: input.clone() });
+            }
+            found.sort();
+            out.extend(found);
+        } else {
+            out.push(input.clone());
+        }
+    }
+    Ok(out)
+}
+
+/// Reads a stack: every frame of `inputs` ([`frame_paths`]), all of the first one's size, at
+/// least two (`what` names the stack in the messages).
+///
+/// # Errors
+/// Those of [`frame_paths`] and [`read_frame`], [`Error::SizeMismatch`] and
+/// [`Error::TooFewFrames`].
+pub fn read_stack(what: &'static str, inputs: &[PathBuf]) -> Result<Vec<Frame>, Error> {
+    let paths = frame_paths(inputs)?;
+    let mut frames: Vec<Frame> = Vec::with_capacity(paths.len());
+    for path in &paths {
+        let frame = read_frame(path)?;
+        if let Some(first) = frames.first()
+            && (first.width, first.height) != (frame.width, frame.height)
+        {
+            return Err(Error::SizeMismatch {
+                path: frame.path,
+                width: frame.width,
+                height: frame.height,
+                first: first.path.clone(),
+                first_width: first.width,
+                first_height: first.height,
+            });
+        }
+        frames.push(frame);
+    }
+    if frames.len() < 2 {
+        return Err(Error::TooFewFrames { what, frames: frames.len() });
+    }
+    Ok(frames)
+}

@@ -1,0 +1,18 @@
+//! Camera frames and what the paper measured from them.
+//!
+//! - [`frames`](mod@frames): stacks of grayscale frames (8- and 16-bit PNG), read and checked alike;
+//! - [`measure`](mod@measure): the SNR of a white and a black region over a stack (paper eq. 2–4, and the
+//!   glare-inclusive variant of the SI, σ_s = σ_w), and with capped-black frames the veiling
+//!   glare `VG = black/white` (SI eq. S10, levels above the capped black) and the zero-frequency
+//!   modulation `M = (1 − VG)/(1 + VG)` (S11–S12).
+//!
+//! The statistics are `noise::measured_snr_regions`: per pixel the temporal mean and sample
+//! standard deviation, averaged over each region's pixels, as the paper did.
+
+pub mod error;
+pub mod frames;
+pub mod measure;
+
+pub use error::Error;
+pub use frames::{Frame, read_frame, read_stack};
+pub use measure::{Measurement, Region, measure};
