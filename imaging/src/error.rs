@@ -50,7 +50,7 @@ pub enum Error {
         frames: usize,
     },
     /// A directory with no frame in it, or no input at all.
-    #[error("{}: no .png frames found (give frame files, or directories holding them)", path.display())]
+    #[error("{}: no frames found (give frame files, directories holding .png frames, or a pattern such as frames/*.png)", path.display())]
     NoFrames {
         /// The directory (or the empty argument list, as "").
         path: PathBuf,

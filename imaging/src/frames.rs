@@ -59,19 +59,53 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
     Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
 }
 
+/// Whether `name` matches `pattern`: `*` any run of characters, `?` one character.
+fn matches(pattern: &[char], name: &[char]) -> bool {
+    match (pattern.first(), name.first()) {
+        (None, None) => true,
+        (Some('*'), _) => matches(&pattern[1..], name) || (!name.is_empty() && matches(pattern, &name[1..])),
+        (Some('?'), Some(_)) => matches(&pattern[1..], &name[1..]),
+        (Some(p), Some(n)) if p == n => matches(&pattern[1..], &name[1..]),
+        _ => false,
+    }
+}
+
 /// The frame files of `inputs`: files as given, directories as their `.png` files in name
-/// order.
+/// order, and a file name with `*` or `?` (a glob the shell did not expand, e.g. quoted) as the
+/// files of its directory that match it, in name order.
 ///
 /// # Errors
 /// [`Error::Read`] for a directory that cannot be listed, [`Error::NoFrames`] for a directory
-/// without frames or no inputs at all.
+/// or pattern without frames or no inputs at all.
 pub fn frame_paths(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
     if inputs.is_empty() {
         return Err(Error::NoFrames { path: PathBuf::new() });
     }
     let mut out = Vec::new();
     for input in inputs {
-        if input.is_dir() {
+        let name = input.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if !input.exists() && (name.contains('*') || name.contains('?')) {
+            let dir = match input.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+                _ => PathBuf::from("."),
+            };
+            let pattern: Vec<char> = name.chars().collect();
+            let listing =
+                std::fs::read_dir(&dir).map_err(|e| Error::Read { path: dir.clone(), message: e.to_string() })?;
+            let mut found: Vec<PathBuf> = listing
+                .filter_map(|entry| entry.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.is_file()
+                        && p.file_name()
+                            .is_some_and(|n| matches(&pattern, &n.to_string_lossy().chars().collect::<Vec<_>>()))
+                })
+                .collect();
+            if found.is_empty() {
+                return Err(Error::NoFrames { path: input.clone() });
+            }
+            found.sort();
+            out.extend(found);
+        } else if input.is_dir() {
             let listing =
                 std::fs::read_dir(input).map_err(|e| Error::Read { path: input.clone(), message: e.to_string() })?;
             let mut found: Vec<PathBuf> = listing

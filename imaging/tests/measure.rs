@@ -78,6 +78,11 @@ fn recovers_the_known_snr_vg_and_modulation() {
     // a directory is read as its .png frames in name order
     let frames = read_stack("frames", std::slice::from_ref(&dir)).unwrap();
     assert_eq!(frames.len(), 30);
+    // a pattern the shell did not expand: the same 30 frames, in name order
+    let globbed = read_stack("frames", &[dir.join("f0?*.png")]).unwrap();
+    assert_eq!(globbed, frames);
+    let e = read_stack("frames", &[dir.join("g*.png")]).unwrap_err();
+    assert!(e.to_string().contains("g*.png") && e.to_string().contains("no frames found"), "{e}");
     let capped = read_stack("capped", &[capped_dir]).unwrap();
     let (w, b) = regions();
     let m = measure(&frames, w, b, Some(&capped), false).unwrap();
