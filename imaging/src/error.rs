@@ -68,6 +68,12 @@ pub enum Error {
     /// The statistics refused the levels (no signal, no signal noise, …).
     #[error(transparent)]
     Statistics(#[from] noise::Error),
+    /// A characterization series that cannot be fitted.
+    #[error("camera characterization: {message}")]
+    Characterization {
+        /// What is wrong and what is needed.
+        message: String,
+    },
     /// Capped-black levels at or above the levels they are subtracted from.
     #[error(
         "the capped black level {capped:.6} is not below the {region} level {level:.6}: the capped-black frames cannot be the camera's dark output for these frames"

@@ -4,15 +4,20 @@
 //! - [`measure`](mod@measure): the SNR of a white and a black region over a stack (paper eq. 2–4, and the
 //!   glare-inclusive variant of the SI, σ_s = σ_w), and with capped-black frames the veiling
 //!   glare `VG = black/white` (SI eq. S10, levels above the capped black) and the zero-frequency
-//!   modulation `M = (1 − VG)/(1 + VG)` (S11–S12).
+//!   modulation `M = (1 − VG)/(1 + VG)` (S11–S12);
+//! - [`characterize`](mod@characterize): a camera from stacks at increasing illumination (SI
+//!   Fig. S6–S8, EMVA 1288): STF and PTC log-log slopes with their standard errors, with and
+//!   without the capped black subtracted, the conversion gain K, read noise and saturation.
 //!
 //! The statistics are `noise::measured_snr_regions`: per pixel the temporal mean and sample
 //! standard deviation, averaged over each region's pixels, as the paper did.
 
+pub mod characterize;
 pub mod error;
 pub mod frames;
 pub mod measure;
 
+pub use characterize::{Characterization, Fit, Level, characterize, fit_line, level_of};
 pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack};
 pub use measure::{Measurement, Region, measure};

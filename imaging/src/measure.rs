@@ -43,7 +43,7 @@ impl Region {
     }
 
     /// Checks that the region lies inside frames of `width × height` pixels.
-    fn check(&self, name: &'static str, width: usize, height: usize) -> Result<(), Error> {
+    pub(crate) fn check(&self, name: &'static str, width: usize, height: usize) -> Result<(), Error> {
         if self.x + self.width > width || self.y + self.height > height {
             return Err(Error::Region {
                 name,
@@ -61,7 +61,7 @@ impl Region {
     }
 
     /// Each pixel's time series over `frames`.
-    fn series(&self, frames: &[Frame]) -> Vec<Vec<f64>> {
+    pub(crate) fn series(&self, frames: &[Frame]) -> Vec<Vec<f64>> {
         let mut out = Vec::with_capacity(self.width * self.height);
         for y in self.y..self.y + self.height {
             for x in self.x..self.x + self.width {

@@ -1,0 +1,93 @@
+//! `imaging::characterize` on a series made by an EMVA 1288 camera simulated here (independent of
+//! the project's sensor model): electrons Gaussian with variance = mean (shot noise), read noise,
+//! conversion gain K, a dark offset, 1-DN quantization and clipping at the full well. K, the read
+//! noise, the slopes (STF 1, PTC 0.5 with the capped black subtracted) and the saturation point
+//! are recovered within the stated tolerances.
+
+use imaging::{Frame, Region, characterize, fit_line, level_of};
+
+struct Normal(u64);
+
+impl Normal {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn sample(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+const K: f64 = 0.4; // DN per electron
+const OFFSET: f64 = 100.0; // DN
+const READ_E: f64 = 6.0; // electrons rms
+const FULL_WELL_E: f64 = 9000.0;
+const SIDE: usize = 24;
+
+/// Eight frames of SIDE × SIDE pixels at `electrons` mean signal per pixel.
+fn stack(electrons: f64, normal: &mut Normal) -> Vec<Frame> {
+    (0..8)
+        .map(|_| {
+            let data = (0..SIDE * SIDE)
+                .map(|_| {
+                    let e = (electrons + electrons.sqrt() * normal.sample()).min(FULL_WELL_E);
+                    let dn = OFFSET + K * (e + READ_E * normal.sample());
+                    dn.round().clamp(0.0, 4095.0)
+                })
+                .collect();
+            Frame { path: "synthetic".into(), width: SIDE, height: SIDE, bit_depth: 16, data }
+        })
+        .collect()
+}
+
+#[test]
+fn recovers_gain_read_noise_slopes_and_saturation() {
+    let mut normal = Normal(0x5851_f42d_4c95_7f2d);
+    let region = Region::parse("characterization", &format!("0,0,{SIDE},{SIDE}")).unwrap();
+    let dark = level_of(&stack(0.0, &mut normal), region, 0.0).unwrap();
+    // illumination in photons per pixel, quantum efficiency 0.5: 20 … 30 000 electrons
+    let levels: Vec<_> = (0..17)
+        .map(|k| {
+            let electrons = 20.0 * 1.6f64.powi(k);
+            level_of(&stack(electrons, &mut normal), region, electrons / 0.5).unwrap()
+        })
+        .collect();
+    let c = characterize(dark, &levels).unwrap();
+    assert!((c.conversion_gain / K - 1.0).abs() < 0.03, "K = {} ± {}", c.conversion_gain, c.conversion_gain_sigma);
+    assert!(c.conversion_gain_sigma > 0.0 && c.conversion_gain_sigma < 0.02 * K, "{}", c.conversion_gain_sigma);
+    // σ_dark² = (K σ_read)² + 1/12 (quantization): 6.04 e⁻
+    assert!((c.read_noise_e / READ_E - 1.0).abs() < 0.05, "read noise {} e", c.read_noise_e);
+    assert!((c.stf.slope - 1.0).abs() < 0.01, "{:?}", c.stf);
+    assert!((c.ptc.slope - 0.5).abs() < 0.02, "{:?}", c.ptc);
+    // without the capped black subtracted, its 100 DN offset bends the STF below slope 1
+    assert!(c.stf_raw.slope < 0.95 && c.ptc_raw.points == c.ptc.points, "{:?} vs {:?}", c.stf_raw, c.stf);
+    // the largest variance is the last level below the full well (20 · 1.6^9 = 5498 e⁻ … 8796 e⁻ at k = 10)
+    let sat_e = 20.0 * 1.6f64.powi(c.saturation as i32);
+    assert!((5000.0..FULL_WELL_E).contains(&sat_e), "saturation at level {} ({sat_e} e⁻)", c.saturation);
+    assert!(c.stf.points >= 8, "{:?}", c.stf);
+}
+
+#[test]
+fn line_fit_and_its_errors() {
+    // exact line: zero residual, zero standard errors
+    let f = fit_line(&[1.0, 2.0, 3.0, 4.0], &[3.0, 5.0, 7.0, 9.0]).unwrap();
+    assert!((f.slope - 2.0).abs() < 1e-12 && (f.intercept - 1.0).abs() < 1e-12 && f.slope_sigma < 1e-12);
+    // by hand: x̄ = ȳ = 1.5, Sxy = 3, Sxx = 5: slope 0.6, intercept 1.5 − 0.6 · 1.5 = 0.6
+    let f = fit_line(&[0.0, 1.0, 2.0, 3.0], &[1.0, 0.0, 3.0, 2.0]).unwrap();
+    assert!((f.slope - 0.6).abs() < 1e-12 && (f.intercept - 0.6).abs() < 1e-12, "{f:?}");
+    // residuals 0.4, −1.2, 1.2, −0.4: s² = 3.2/2, σ_slope = √(s²/Sxx) = √(1.6/5)
+    assert!((f.slope_sigma - (1.6f64 / 5.0).sqrt()).abs() < 1e-12, "{f:?}");
+    assert!(fit_line(&[1.0], &[1.0]).is_none());
+    assert!(fit_line(&[2.0, 2.0, 2.0], &[1.0, 2.0, 3.0]).is_none());
+    // too few usable levels: a clear error
+    let region = Region::parse("characterization", "0,0,2,2").unwrap();
+    let frame = |v: f64| Frame { path: "x".into(), width: 2, height: 2, bit_depth: 8, data: vec![v; 4] };
+    let e = level_of(&[frame(1.0)], region, 1.0).unwrap_err();
+    assert!(e.to_string().contains("1 frame(s)"), "{e}");
+    let dark = level_of(&[frame(1.0), frame(2.0)], region, 0.0).unwrap();
+    let e = characterize(dark, &[dark]).unwrap_err();
+    assert!(e.to_string().contains("positive"), "{e}");
+}
