@@ -4,6 +4,7 @@
 //! binary. Human-readable table by default, `--json` for scripts. The only crate that reads
 //! files, arguments or the environment.
 
+mod characterize;
 mod compare;
 mod measure;
 mod optimize;
@@ -104,6 +105,9 @@ enum Command {
     /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
     /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
     Measure(measure::MeasureArgs),
+    /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
+    /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
+    Characterize(characterize::CharacterizeArgs),
     /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
     Scene {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -253,6 +257,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => compare::run(args),
         Command::Measure(args) => measure::run(&args),
+        Command::Characterize(args) => characterize::run(&args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;

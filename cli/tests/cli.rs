@@ -1631,3 +1631,41 @@ fn measure_reads_a_stack_and_reports_snr_and_glare() {
     let err = fails(&[&["measure", "/nonexistent/frame.png", "/nonexistent/frame.png"], &regions[..]].concat());
     assert!(err.contains("/nonexistent/frame.png"), "{err}");
 }
+
+/// `asnr characterize` on a series file of PNG stacks (frames by `measure_frame`, the left half
+/// read: level 100 + K N, variance K² N + σ_d²): K, the slopes, and the table; a level without
+/// illumination exits 1 naming it.
+#[test]
+fn characterize_reads_a_series_file() {
+    let dir = scratch("characterize");
+    let (k, read_dn) = (0.5, 3.0);
+    let mut toml = String::from("region = \"0,0,16,16\"\n");
+    for (i, electrons) in [0.0, 100.0, 200.0, 400.0, 800.0, 1600.0, 3200.0].iter().enumerate() {
+        let stack = dir.join(format!("s{i}"));
+        std::fs::create_dir_all(&stack).unwrap();
+        let variance: f64 = k * k * electrons + read_dn * read_dn;
+        // uniform noise of half-width a has variance a²/3
+        let a = (3.0 * variance).sqrt();
+        for f in 0..12 {
+            measure_frame(&stack.join(format!("f{f:02}.png")), 1000 * i + f, 100.0 + k * electrons, 100.0, a);
+        }
+        if i == 0 {
+            toml.push_str(&format!("[dark]\nframes = [\"s{i}\"]\n"));
+        } else {
+            toml.push_str(&format!("[[levels]]\nillumination = {electrons}\nframes = [\"s{i}/*.png\"]\n"));
+        }
+    }
+    let series = dir.join("series.toml");
+    std::fs::write(&series, &toml).unwrap();
+    let v = json(&["characterize", series.to_str().unwrap(), "--json"]);
+    let gain = v["conversion_gain"].as_f64().unwrap();
+    assert!((gain / k - 1.0).abs() < 0.1, "{v}");
+    assert!((v["stf"]["slope"].as_f64().unwrap() - 1.0).abs() < 0.02, "{v}");
+    assert!((v["ptc"]["slope"].as_f64().unwrap() - 0.5).abs() < 0.05, "{v}");
+    assert_eq!(v["saturation"], 5, "{v}");
+    let (table, _) = succeeds(&["characterize", series.to_str().unwrap()]);
+    assert!(table.contains("conversion gain K") && table.contains("0.5 = shot-noise limited"), "{table}");
+    std::fs::write(&series, toml.replacen("illumination = 100\n", "", 1)).unwrap();
+    let err = fails(&["characterize", series.to_str().unwrap()]);
+    assert!(err.contains("levels[0].illumination is missing"), "{err}");
+}
