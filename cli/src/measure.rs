@@ -8,8 +8,8 @@ use anyhow::Result;
 /// Arguments of `asnr measure`.
 #[derive(clap::Args)]
 pub struct MeasureArgs {
-    /// Frames of one stack (8- or 16-bit grayscale PNG), directories holding them (their .png
-    /// files in name order), or patterns such as 'frames/*.png'; at least 2 frames (the paper
+    /// Frames of one stack (8- or 16-bit grayscale PNG or TIFF), directories holding them (their
+    /// .png/.tif files in name order), or patterns such as 'frames/*.png'; at least 2 frames (the paper
     /// grabbed 30).
     #[arg(required = true, value_name = "FRAMES")]
     pub frames: Vec<PathBuf>,

@@ -1,5 +1,5 @@
-//! Stacks of grayscale frames: 8- and 16-bit PNG (1-, 2- and 4-bit grey is expanded to 8-bit),
-//! grey levels as read (DN), no scaling.
+//! Stacks of grayscale frames: 8- and 16-bit PNG (1-, 2- and 4-bit grey is expanded to 8-bit) and
+//! TIFF (`.tif`, `.tiff`), grey levels as read (DN), no scaling.
 
 use std::path::{Path, PathBuf};
 
@@ -27,12 +27,16 @@ impl Frame {
     }
 }
 
-/// Reads one grayscale PNG.
+/// Reads one grayscale frame: PNG, or TIFF by the extension `.tif`/`.tiff`.
 ///
 /// # Errors
 /// [`Error::Read`] when the file cannot be opened or decoded, [`Error::NotGrayscale`] for a
 /// colour, palette or alpha image.
 pub fn read_frame(path: &Path) -> Result<Frame, Error> {
+    let tiff = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
+    if tiff {
+        return read_tiff(path);
+    }
     let read = |message: String| Error::Read { path: path.to_owned(), message };
     let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
@@ -59,6 +63,32 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
     Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
 }
 
+/// Reads one grayscale TIFF (8- or 16-bit, first image of the file).
+fn read_tiff(path: &Path) -> Result<Frame, Error> {
+    use tiff::decoder::{Decoder, DecodingResult};
+    let read = |message: String| Error::Read { path: path.to_owned(), message };
+    let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
+    let mut decoder =
+        Decoder::new(std::io::BufReader::new(file)).map_err(|e| read(format!("not a TIFF frame ({e})")))?;
+    let color = decoder.colortype().map_err(|e| read(format!("cannot decode ({e})")))?;
+    let bit_depth = match color {
+        tiff::ColorType::Gray(8) => 8,
+        tiff::ColorType::Gray(16) => 16,
+        other => return Err(Error::NotGrayscale { path: path.to_owned(), color: format!("{other:?}").to_lowercase() }),
+    };
+    let (width, height) = decoder.dimensions().map_err(|e| read(format!("cannot decode ({e})")))?;
+    let data: Vec<f64> = match decoder.read_image().map_err(|e| read(format!("cannot decode ({e})")))? {
+        DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
+        _ => return Err(read("samples that are not 8- or 16-bit unsigned grey levels".to_owned())),
+    };
+    let (width, height) = (width as usize, height as usize);
+    if data.len() != width * height {
+        return Err(read(format!("{} samples for {width} × {height} pixels", data.len())));
+    }
+    Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
+}
+
 /// Whether `name` matches `pattern`: `*` any run of characters, `?` one character.
 fn matches(pattern: &[char], name: &[char]) -> bool {
     match (pattern.first(), name.first()) {
@@ -70,7 +100,7 @@ fn matches(pattern: &[char], name: &[char]) -> bool {
     }
 }
 
-/// The frame files of `inputs`: files as given, directories as their `.png` files in name
+/// The frame files of `inputs`: files as given, directories as their `.png`/`.tif(f)` files in name
 /// order, and a file name with `*` or `?` (a glob the shell did not expand, e.g. quoted) as the
 /// files of its directory that match it, in name order.
 ///
@@ -110,7 +140,9 @@ pub fn frame_paths(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
                 std::fs::read_dir(input).map_err(|e| Error::Read { path: input.clone(), message: e.to_string() })?;
             let mut found: Vec<PathBuf> = listing
                 .filter_map(|entry| entry.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")))
+                .filter(|p| {
+                    p.extension().is_some_and(|e| ["png", "tif", "tiff"].iter().any(|x| e.eq_ignore_ascii_case(x)))
+                })
                 .collect();
             if found.is_empty() {
                 return Err(Error::NoFrames { path: input.clone() });

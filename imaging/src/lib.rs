@@ -1,6 +1,6 @@
 //! Camera frames and what the paper measured from them.
 //!
-//! - [`frames`](mod@frames): stacks of grayscale frames (8- and 16-bit PNG), read and checked alike;
+//! - [`frames`](mod@frames): stacks of grayscale frames (8- and 16-bit PNG and TIFF), read and checked alike;
 //! - [`measure`](mod@measure): the SNR of a white and a black region over a stack (paper eq. 2–4, and the
 //!   glare-inclusive variant of the SI, σ_s = σ_w), and with capped-black frames the veiling
 //!   glare `VG = black/white` (SI eq. S10, levels above the capped black) and the zero-frequency

@@ -78,6 +78,20 @@ fn recovers_the_known_snr_vg_and_modulation() {
     // a directory is read as its .png frames in name order
     let frames = read_stack("frames", std::slice::from_ref(&dir)).unwrap();
     assert_eq!(frames.len(), 30);
+    // the same frames as 16-bit TIFF: the same grey levels
+    let tiff_dir = dir.join("tiff");
+    std::fs::create_dir_all(&tiff_dir).unwrap();
+    for (k, f) in frames.iter().take(3).enumerate() {
+        let file = std::fs::File::create(tiff_dir.join(format!("t{k}.tif"))).unwrap();
+        let data: Vec<u16> = f.data.iter().map(|&v| v as u16).collect();
+        tiff::encoder::TiffEncoder::new(file)
+            .unwrap()
+            .write_image::<tiff::encoder::colortype::Gray16>(W as u32, H as u32, &data)
+            .unwrap();
+    }
+    let tiffs = read_stack("frames", std::slice::from_ref(&tiff_dir)).unwrap();
+    assert_eq!(tiffs.len(), 3);
+    assert!(tiffs.iter().zip(&frames).all(|(t, p)| t.data == p.data && t.bit_depth == 16));
     // a pattern the shell did not expand: the same 30 frames, in name order
     let globbed = read_stack("frames", &[dir.join("f0?*.png")]).unwrap();
     assert_eq!(globbed, frames);
