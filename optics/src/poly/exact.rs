@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use num_complex::Complex64;
 
-use super::spectral::{Nodes, Scene, clipped_nodes};
+use super::spectral::{Nodes, Scene, clipped_nodes, node_otfs};
 use super::{Engine, FrequencyRule, OtfEngine};
 
 /// Spectral nodes read through the exact 1-D OTF of each order.
@@ -36,25 +36,10 @@ pub(super) fn contributions(
         }
     };
     if nodes.line.is_some() || nodes.interpolated {
-        // the defocused OTFs of all the nodes at once (the Bessel series in interleaved
-        // lanes: `defocus_otf_many`), then visited in order
-        let (mut points, mut values) = (Vec::with_capacity(nodes.nodes.len()), Vec::new());
-        for n in &nodes.nodes {
-            if n.lambda < cut && n.table.is_none() {
-                points.push((nuf * n.lambda / n.scale, n.w020 / n.lambda));
-            }
-        }
-        values.resize(points.len(), 0.0);
-        crate::otf::defocus_otf_many(&points, &mut values);
-        let mut next = values.iter();
-        for n in &nodes.nodes {
-            if n.lambda >= cut {
-                continue;
-            }
-            match &n.table {
-                None => visit(n.weight * next.next().copied().unwrap_or(0.0), n.shift),
-                Some(t) => visit(n.weight * t.value(n.lambda, nu, azimuth_from_field), n.shift),
-            }
+        // every node's OTF at once (`node_otfs`), then visited in order
+        let passing: Vec<&super::spectral::Node> = nodes.nodes.iter().filter(|n| n.lambda < cut).collect();
+        for (n, value) in passing.iter().zip(node_otfs(&passing, nu, scene.f_number, azimuth_from_field)) {
+            visit(n.weight * value, n.shift);
         }
         return;
     }

@@ -90,6 +90,25 @@ impl Node {
     }
 }
 
+/// [`Node::otf`] of each of `nodes` at `nu` (cycles/m; `f_number` of the lens, a table read along
+/// `azimuth_from_field`), in order: the defocused ones all at once
+/// ([`crate::otf::defocus_otf_many`], the Bessel series in interleaved lanes).
+pub(super) fn node_otfs(nodes: &[&Node], nu: f64, f_number: f64, azimuth_from_field: f64) -> Vec<f64> {
+    let nuf = nu * f_number;
+    let points: Vec<(f64, f64)> =
+        nodes.iter().filter(|n| n.table.is_none()).map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda)).collect();
+    let mut defocused = vec![0.0; points.len()];
+    crate::otf::defocus_otf_many(&points, &mut defocused);
+    let mut next = defocused.into_iter();
+    nodes
+        .iter()
+        .map(|n| match n.table {
+            None => next.next().unwrap_or(0.0),
+            Some(_) => n.otf(nuf * n.lambda, nu, azimuth_from_field),
+        })
+        .collect()
+}
+
 /// A circular iris, centred or decentred, on an order whose only aberration is defocus: exactly
 /// the centred circle of the iris's radius `r` (F-number `F#/r`) with the defocus `W020 r²` at
 /// its edge and the tilt `2 W020 d` that moves the image by `Δ = 2 W020 d/NA`
@@ -565,23 +584,9 @@ fn mean_estimate(scene: &Scene<'_>, nodes: &Nodes, top: f64) -> f64 {
     let mut sum = 0.0;
     for f in [0.25, 0.5, 1.0] {
         let nu = f * top;
-        // the defocused OTFs of every node at once (`defocus_otf_many`)
-        let nuf = nu * scene.f_number;
-        let points: Vec<(f64, f64)> = nodes
-            .nodes
-            .iter()
-            .filter(|n| n.table.is_none())
-            .map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
-            .collect();
-        let mut values = vec![0.0; points.len()];
-        crate::otf::defocus_otf_many(&points, &mut values);
-        let mut next = values.iter();
+        let all: Vec<&Node> = nodes.nodes.iter().collect();
         let mut g = Complex64::new(0.0, 0.0);
-        for n in &nodes.nodes {
-            let value = match n.table {
-                None => next.next().copied().unwrap_or(0.0),
-                Some(_) => n.otf(nuf * n.lambda, nu, 0.0),
-            };
+        for (n, value) in all.iter().zip(node_otfs(&all, nu, scene.f_number, 0.0)) {
             let shift = n.shift[0].hypot(n.shift[1]);
             g += Complex64::from_polar(n.weight * value, -2.0 * PI * nu * shift);
         }
@@ -590,8 +595,8 @@ fn mean_estimate(scene: &Scene<'_>, nodes: &Nodes, top: f64) -> f64 {
     sum / 3.0
 }
 
-/// The part `Σ_o τ_o OTF_o` of the OTF at `nu` of the lens's orders at each of `lambdas`, the
-/// defocused OTFs of all their orders at once ([`crate::otf::defocus_otf_many`]).
+/// The part `Σ_o τ_o OTF_o` of the OTF at `nu` of the lens's orders at each of `lambdas`, all
+/// their orders' OTFs at once ([`node_otfs`]).
 fn lens_values(scene: &Scene<'_>, lambdas: &[f64], nu: f64) -> Vec<Complex64> {
     let mut nodes: Vec<(usize, Node, f64)> = Vec::new();
     for (i, &lambda) in lambdas.iter().enumerate() {
@@ -599,21 +604,9 @@ fn lens_values(scene: &Scene<'_>, lambdas: &[f64], nu: f64) -> Vec<Complex64> {
             nodes.push((i, Node::of(&o, lambda, 0.0, scene.irises), o.efficiency));
         }
     }
-    let nuf = nu * scene.f_number;
-    let points: Vec<(f64, f64)> = nodes
-        .iter()
-        .filter(|(_, n, _)| n.table.is_none())
-        .map(|(_, n, _)| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
-        .collect();
-    let mut values = vec![0.0; points.len()];
-    crate::otf::defocus_otf_many(&points, &mut values);
-    let mut next = values.iter();
+    let all: Vec<&Node> = nodes.iter().map(|(_, n, _)| n).collect();
     let mut out = vec![Complex64::new(0.0, 0.0); lambdas.len()];
-    for (i, n, efficiency) in &nodes {
-        let value = match n.table {
-            None => next.next().copied().unwrap_or(0.0),
-            Some(_) => n.otf(nuf * n.lambda, nu, 0.0),
-        };
+    for ((i, n, efficiency), value) in nodes.iter().zip(node_otfs(&all, nu, scene.f_number, 0.0)) {
         let shift = n.shift[0].hypot(n.shift[1]);
         out[*i] += Complex64::from_polar(value, -2.0 * PI * nu * shift) * efficiency;
     }
