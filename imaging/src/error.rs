@@ -68,6 +68,15 @@ pub enum Error {
     /// The statistics refused the levels (no signal, no signal noise, …).
     #[error(transparent)]
     Statistics(#[from] noise::Error),
+    /// A rendering that cannot be made (target, grid or scene out of range).
+    #[error("render: {message}")]
+    Render {
+        /// What is wrong and what is accepted.
+        message: String,
+    },
+    /// The scene could not be evaluated.
+    #[error(transparent)]
+    Scene(#[from] metric::Error),
     /// A characterization series that cannot be fitted.
     #[error("camera characterization: {message}")]
     Characterization {

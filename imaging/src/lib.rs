@@ -9,6 +9,11 @@
 //!   Fig. S6–S8, EMVA 1288): STF and PTC log-log slopes with their standard errors, with and
 //!   without the capped black subtracted, the conversion gain K, read noise and saturation.
 //!
+//! - [`target`](mod@target): test objects, a procedural USAF-1951 target or a user's PNG, and the
+//!   measured modulation of a bar set;
+//! - [`render`](mod@render): the forward model of the paper's Fig. 4 (object → photoelectrons →
+//!   the scene's 2-D polychromatic OTF → veiling glare → sensor noise) and the Wiener restoration.
+//!
 //! The statistics are `noise::measured_snr_regions`: per pixel the temporal mean and sample
 //! standard deviation, averaged over each region's pixels, as the paper did.
 
@@ -16,8 +21,12 @@ pub mod characterize;
 pub mod error;
 pub mod frames;
 pub mod measure;
+pub mod render;
+pub mod target;
 
 pub use characterize::{Characterization, Fit, Level, characterize, fit_line, level_of};
 pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack};
 pub use measure::{Measurement, Region, measure};
+pub use render::{Rendering, Transfer, render, transfer};
+pub use target::{Polarity, Target};

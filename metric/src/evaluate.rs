@@ -651,7 +651,7 @@ fn add_work(a: optics::Work, b: optics::Work) -> optics::Work {
 
 /// Detected spectral density before the lens: radiance × QE × λ (paper SI eq. S8 integrand
 /// without τ1 and the constant factors).
-pub(crate) fn detected_spectrum(scene: &Scene) -> Spectrum {
+pub fn detected_spectrum(scene: &Scene) -> Spectrum {
     detected_spectrum_of(scene.radiance(), scene.camera())
 }
 

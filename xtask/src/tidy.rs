@@ -46,7 +46,7 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("lenses", Allowed::Only(&["optics", "radiometry"])),
     ("metric", Allowed::Only(&["optics", "noise", "radiometry"])),
     ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
-    ("imaging", Allowed::Only(&["noise"])),
+    ("imaging", Allowed::Only(&["metric", "noise", "optics", "radiometry"])),
     ("cli", Allowed::Any),
     ("xtask", Allowed::Only(&[])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only

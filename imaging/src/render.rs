@@ -1,0 +1,585 @@
+//! The forward model of the paper's Fig. 4 and its restoration: a test object → the scene's
+//! photoelectrons per pixel → the 2-D polychromatic OTF → veiling glare → sensor noise, and the
+//! Wiener filter back.
+//!
+//! 1. **Object.** A [`Target`] of relative radiance `o ∈ [0, 1]` on a grid `S` times finer than
+//!    the pixels (`S` odd).
+//! 2. **Light.** A white area of the object gives `N` first-order photoelectrons per pixel (paper
+//!    SI eq. S7–S8: [`metric::Evaluation::photoelectrons`]).
+//! 3. **Optics.** The image is `N · (o ⊛ PSF)`: on the fine grid, the object's spectrum times the
+//!    scene's polychromatic OTF ([`transfer`]: the signed, complex sum over wavelengths with the
+//!    photoelectron weights, each wavelength at its own `s = ν λ F#`, at the scene's field and
+//!    pupil; docs/physics.md, "Polychromatic OTF"). The image is periodic (a circular
+//!    convolution): targets keep a uniform margin.
+//! 4. **Pixels.** Each pixel reads the fine cell at its centre, or, when the camera applies the
+//!    pixel MTF (`camera.pixel_mtf`), the mean of its `S × S` cells (pixel integration, whose
+//!    transfer is the pixel MTF sampled on the fine grid).
+//! 5. **Veiling glare.** The light the lens sends into other orders, `N_T − N` per pixel for a
+//!    white object (eq. S8 with τ1 → T), is spread far beyond the image: a uniform veil of
+//!    `(N_T − N) · ō` over the frame, `ō` the object's mean. For `ō = 1/2` the modulation of a
+//!    large pattern is `N/(N + 2(N_T − N)ō) = τ1/T`, Buralli and Morris's `M0` (eq. S13).
+//! 6. **Sensor** (EMVA 1288 linear model, [`noise::Sensor`]): Poisson photoelectrons of the
+//!    expected charge plus the dark charge (dark current × exposure), clipped at the full well,
+//!    Gaussian read noise, and with an ADC `DN = round(K e)` clipped to `[0, 2^bits − 1]`.
+//!    Seeded (PCG-64 MCG): a seed gives the same frames on every machine.
+//! 7. **Restoration.** Wiener: `G = H*/(|H|² + NSR)` with `H` the transfer from the object to the
+//!    pixels (the OTF at the pixels' frequencies, times the pixel MTF when it is applied) and
+//!    `NSR = σ²/N²`: the frame's white noise (its variance at the frame's mean level: shot noise of
+//!    signal, veil and dark, read noise, quantization) over the power of a full white-to-black
+//!    modulation. Then `G H = SNR(ν)²/(1 + SNR(ν)²)` with `SNR(ν) = MTF(ν) N/σ`, the SNR whose
+//!    average over frequency is the ASNR (eq. 1): the restored contrast follows the ASNR.
+//!    Optionally the black level is subtracted and the white raised back by a gain, as the paper
+//!    discusses (the SNR is unchanged).
+
+use std::f64::consts::{PI, SQRT_2};
+use std::sync::Arc;
+
+use num_complex::Complex64;
+use optics::Polychromatic;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal, Poisson};
+use rand_pcg::Pcg64Mcg;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::Error;
+use crate::target::{BarSet, Orientation, Target, bar_modulation};
+
+/// Real 2-D FFTs of one size (`nx` columns, `ny` rows, row-major): rows by `realfft` (real ↔ the
+/// half spectrum `nx/2 + 1` wide), columns by `rustfft`.
+pub struct Fft2 {
+    nx: usize,
+    ny: usize,
+    r2c: Arc<dyn realfft::RealToComplex<f64>>,
+    c2r: Arc<dyn realfft::ComplexToReal<f64>>,
+    col_forward: Arc<dyn rustfft::Fft<f64>>,
+    col_inverse: Arc<dyn rustfft::Fft<f64>>,
+}
+
+impl Fft2 {
+    /// Plans the transforms of an `nx × ny` image (`nx` even).
+    pub fn new(nx: usize, ny: usize) -> Fft2 {
+        let mut real = realfft::RealFftPlanner::<f64>::new();
+        let mut complex = rustfft::FftPlanner::<f64>::new();
+        Fft2 {
+            nx,
+            ny,
+            r2c: real.plan_fft_forward(nx),
+            c2r: real.plan_fft_inverse(nx),
+            col_forward: complex.plan_fft_forward(ny),
+            col_inverse: complex.plan_fft_inverse(ny),
+        }
+    }
+
+    /// Columns of the half spectrum, `nx/2 + 1`.
+    pub fn half_width(&self) -> usize {
+        self.nx / 2 + 1
+    }
+
+    /// The half spectrum `F[ky · (nx/2 + 1) + kx]` of a real image (unnormalized DFT,
+    /// `exp(−2πi k·n/N)`).
+    pub fn forward(&self, image: &[f64]) -> Vec<Complex64> {
+        let hw = self.half_width();
+        let mut spectrum = vec![Complex64::new(0.0, 0.0); hw * self.ny];
+        let mut row = vec![0.0; self.nx];
+        for (y, out) in spectrum.chunks_exact_mut(hw).enumerate() {
+            row.copy_from_slice(&image[y * self.nx..(y + 1) * self.nx]);
+            // lengths match by construction
+            let _ = self.r2c.process(&mut row, out);
+        }
+        self.columns(&mut spectrum, &self.col_forward);
+        spectrum
+    }
+
+    /// The real image of a half spectrum, normalized (`inverse(forward(x)) = x`).
+    pub fn inverse(&self, mut spectrum: Vec<Complex64>) -> Vec<f64> {
+        let hw = self.half_width();
+        self.columns(&mut spectrum, &self.col_inverse);
+        let scale = 1.0 / (self.nx * self.ny) as f64;
+        let mut image = vec![0.0; self.nx * self.ny];
+        for (row, out) in spectrum.chunks_exact_mut(hw).zip(image.chunks_exact_mut(self.nx)) {
+            // the DC and Nyquist bins of a real row are real: drop their rounding residue
+            row[0].im = 0.0;
+            if self.nx % 2 == 0 {
+                row[hw - 1].im = 0.0;
+            }
+            let _ = self.c2r.process(row, out);
+            for v in out.iter_mut() {
+                *v *= scale;
+            }
+        }
+        image
+    }
+
+    fn columns(&self, spectrum: &mut [Complex64], fft: &Arc<dyn rustfft::Fft<f64>>) {
+        let hw = self.half_width();
+        let mut column = vec![Complex64::new(0.0, 0.0); self.ny];
+        for x in 0..hw {
+            for (y, c) in column.iter_mut().enumerate() {
+                *c = spectrum[y * hw + x];
+            }
+            fft.process(&mut column);
+            for (y, c) in column.iter().enumerate() {
+                spectrum[y * hw + x] = *c;
+            }
+        }
+    }
+}
+
+/// Azimuths over `[0, π)` at which a direction-dependent OTF is sampled (1.4° apart); between
+/// them it is interpolated linearly, and `OTF(ν, φ + π) = OTF(ν, φ)*` gives the other half.
+pub const AZIMUTHS: usize = 128;
+
+/// Radial samples per frequency step of the grid: the OTF is read by cubic interpolation from
+/// samples four times finer than the grid's own frequency spacing.
+pub const RADIAL_PER_STEP: f64 = 4.0;
+
+/// A scene's polychromatic OTF sampled on the half spectrum of an `nx × ny` grid of spacing
+/// `spacing_m` (the DFT frequencies `kx/(nx d)`, `ky/(ny d)`; `ky` above `ny/2` negative). The
+/// grid's x is the detector's x; its rows run along the detector's y.
+#[derive(Clone, Debug)]
+pub struct Transfer {
+    /// Columns of the grid.
+    pub nx: usize,
+    /// Rows of the grid.
+    pub ny: usize,
+    /// Sample spacing of the grid, m.
+    pub spacing_m: f64,
+    /// `OTF[ky · (nx/2 + 1) + kx]`, 1 at zero frequency.
+    pub values: Vec<Complex64>,
+    /// Whether the OTF depends on the direction (off axis with lateral colour, decentred pupils).
+    pub direction_dependent: bool,
+    /// Evaluations of the polychromatic OTF it took.
+    pub evaluations: usize,
+}
+
+impl Transfer {
+    /// The value at the grid's frequency `(kx, ky)` (`kx ≤ nx/2`).
+    pub fn at(&self, kx: usize, ky: usize) -> Complex64 {
+        self.values[ky * (self.nx / 2 + 1) + kx]
+    }
+}
+
+/// Signed index of DFT bin `k` of `n`.
+fn signed(k: usize, n: usize) -> f64 {
+    if k <= n / 2 { k as f64 } else { k as f64 - n as f64 }
+}
+
+/// Samples the polychromatic OTF of `scene` (at its field point; the first one of a
+/// field-of-view average) on the half spectrum of an `nx × ny` grid of spacing `spacing_m`.
+///
+/// The OTF is evaluated on radii `k · h`, `h` a quarter of the grid's frequency step, up to the
+/// grid's corner or the incoherent cutoff of the shortest wavelength (zero beyond), along one
+/// azimuth where it does not depend on the direction and along [`AZIMUTHS`] otherwise, and read
+/// at each grid frequency by cubic (Catmull–Rom) interpolation in radius and linear
+/// interpolation in azimuth. In parallel (each worker its own `Polychromatic`).
+///
+/// # Errors
+/// [`Error::Scene`] when the scene's optics cannot be evaluated.
+pub fn transfer(scene: &metric::Scene, nx: usize, ny: usize, spacing_m: f64) -> Result<Transfer, Error> {
+    let lens = scene.lens();
+    let detected = metric::detected_spectrum(scene);
+    let field = scene.field();
+    let settings = scene.options().settings();
+    let optics_error = |e: optics::Error| Error::Scene(metric::Error::Optics(e));
+    let cutoff = optics::highest_cutoff(lens, &detected).map_err(optics_error)?;
+    let corner = 0.5 / spacing_m * SQRT_2;
+    let reach = corner.min(cutoff);
+    let step = 1.0 / (RADIAL_PER_STEP * nx.max(ny) as f64 * spacing_m);
+    let radii = (reach / step).ceil() as usize + 3;
+    let probe = Polychromatic::with_settings(lens, &detected, field, reach, None, settings).map_err(optics_error)?;
+    let dependent = probe.direction_dependent();
+    drop(probe);
+    let azimuths = if dependent { AZIMUTHS } else { 1 };
+    // table[k · azimuths + m] = OTF(k h, m π/azimuths), k = 0 … radii
+    let chunk = (radii + 1).div_ceil(4 * rayon::current_num_threads().max(1)).max(16);
+    let table: Vec<Vec<Complex64>> = (0..=radii)
+        .collect::<Vec<_>>()
+        .par_chunks(chunk)
+        .map(|ks| -> Result<Vec<Complex64>, Error> {
+            let poly =
+                Polychromatic::with_settings(lens, &detected, field, reach, None, settings).map_err(optics_error)?;
+            let mut out = Vec::with_capacity(ks.len() * azimuths);
+            for &k in ks {
+                let nu = k as f64 * step;
+                for m in 0..azimuths {
+                    let phi = m as f64 * PI / azimuths as f64;
+                    out.push(if nu < cutoff { poly.otf_along(nu, phi) } else { Complex64::new(0.0, 0.0) });
+                }
+            }
+            Ok(out)
+        })
+        .collect::<Result<_, _>>()?;
+    let table: Vec<Complex64> = table.into_iter().flatten().collect();
+    // sample (k, m), with k = −1 the opposite direction's first radius
+    let sample = |k: isize, m: usize| -> Complex64 {
+        if k < 0 { table[azimuths + m].conj() } else { table[k as usize * azimuths + m] }
+    };
+    let along = |nu: f64, m: usize| -> Complex64 {
+        let t = nu / step;
+        let i = t.floor() as isize;
+        let f = t - i as f64;
+        // Catmull–Rom weights
+        let w = [
+            0.5 * (-f + 2.0 * f * f - f * f * f),
+            0.5 * (2.0 - 5.0 * f * f + 3.0 * f * f * f),
+            0.5 * (f + 4.0 * f * f - 3.0 * f * f * f),
+            0.5 * (-f * f + f * f * f),
+        ];
+        (0..4).map(|j| sample(i - 1 + j as isize, m) * w[j as usize]).sum()
+    };
+    let hw = nx / 2 + 1;
+    let values: Vec<Complex64> = (0..ny * hw)
+        .into_par_iter()
+        .map(|index| {
+            let (kx, ky) = (index % hw, index / hw);
+            let nu_x = kx as f64 / (nx as f64 * spacing_m);
+            let nu_y = signed(ky, ny) / (ny as f64 * spacing_m);
+            let nu = nu_x.hypot(nu_y);
+            if nu == 0.0 {
+                return Complex64::new(1.0, 0.0);
+            }
+            if nu >= cutoff {
+                return Complex64::new(0.0, 0.0);
+            }
+            if azimuths == 1 {
+                return along(nu, 0);
+            }
+            // φ in (−π/2, π/2]; the lower half is the conjugate of the opposite direction
+            let mut phi = nu_y.atan2(nu_x);
+            let flip = phi < 0.0;
+            if flip {
+                phi += PI;
+            }
+            let t = phi / PI * azimuths as f64;
+            let m = (t.floor() as usize).min(azimuths - 1);
+            let f = t - m as f64;
+            let a = along(nu, m);
+            let b = if m + 1 == azimuths { along(nu, 0).conj() } else { along(nu, m + 1) };
+            let v = a * (1.0 - f) + b * f;
+            if flip { v.conj() } else { v }
+        })
+        .collect();
+    Ok(Transfer { nx, ny, spacing_m, values, direction_dependent: dependent, evaluations: (radii + 1) * azimuths })
+}
+
+/// How a rendering is made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Seed of the noise (frame `i` uses `seed + i`).
+    pub seed: u64,
+    /// Raw frames to draw (at least 1; the first is restored).
+    pub frames: usize,
+    /// Whether the light of the other orders veils the image (step 5).
+    pub glare: bool,
+    /// Whether the restored image has the black level subtracted and the white raised back.
+    pub subtract_black: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { seed: 1, frames: 1, glare: true, subtract_black: false }
+    }
+}
+
+/// The measured modulation of one bar set in the noise-free, raw and restored images.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct BarContrast {
+    /// USAF group.
+    pub group: i32,
+    /// USAF element.
+    pub element: u8,
+    /// Line pairs per mm at the detector.
+    pub frequency_cyc_per_mm: f64,
+    /// Which way the bars run.
+    pub orientation: Orientation,
+    /// Whether the frequency lies above the detector's Nyquist frequency (aliased).
+    pub above_nyquist: bool,
+    /// In the noise-free image.
+    pub expected: f64,
+    /// In the first raw frame.
+    pub raw: f64,
+    /// In the restored image.
+    pub restored: f64,
+}
+
+/// A rendered scene.
+#[derive(Clone, Debug)]
+pub struct Rendering {
+    /// Pixels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Noise-free charge per pixel, e⁻ (signal, veil and dark).
+    pub expected_e: Vec<f64>,
+    /// Raw frames: DN with an ADC, e⁻ without.
+    pub frames: Vec<Vec<f64>>,
+    /// The first frame restored, e⁻ (black-subtracted and raised back if asked).
+    pub restored_e: Vec<f64>,
+    /// First-order photoelectrons of a white area, `N` (eq. S7–S8).
+    pub signal_e: f64,
+    /// The uniform veil of the other orders' light, e⁻ per pixel.
+    pub veil_e: f64,
+    /// Dark charge per pixel, e⁻.
+    pub dark_e: f64,
+    /// Expected charge of a large white area, e⁻.
+    pub white_e: f64,
+    /// Expected charge of a large black area, e⁻.
+    pub black_e: f64,
+    /// The noise-to-signal power ratio of the Wiener filter, `σ²/N²`.
+    pub nsr: f64,
+    /// The frame's noise standard deviation at its mean level, e⁻.
+    pub noise_e: f64,
+    /// DN per e⁻ of the raw frames (the ADC's gain), or `None` when they are in e⁻.
+    pub dn_per_e: Option<f64>,
+    /// Per bar set, its modulation.
+    pub bars: Vec<BarContrast>,
+    /// The OTF's evaluations.
+    pub otf_evaluations: usize,
+    /// Whether the OTF depends on the direction.
+    pub direction_dependent: bool,
+}
+
+impl Rendering {
+    /// Mean restored modulation over the bar sets below Nyquist (0 without bars).
+    pub fn mean_restored_contrast(&self) -> f64 {
+        mean(self.bars.iter().filter(|b| !b.above_nyquist).map(|b| b.restored))
+    }
+
+    /// Mean raw modulation over the bar sets below Nyquist (0 without bars).
+    pub fn mean_raw_contrast(&self) -> f64 {
+        mean(self.bars.iter().filter(|b| !b.above_nyquist).map(|b| b.raw))
+    }
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = values.fold((0.0, 0_usize), |(s, n), v| (s + v, n + 1));
+    if n == 0 { 0.0 } else { sum / n as f64 }
+}
+
+/// Renders `target` through `scene` (whose evaluation is `evaluation`): the noise-free image, the
+/// raw frames and the restored first frame (module docs, steps 1–7).
+///
+/// # Errors
+/// [`Error::Scene`] when the optics cannot be evaluated, [`Error::Render`] for no frames or a
+/// scene without signal.
+pub fn render(
+    scene: &metric::Scene,
+    evaluation: &metric::Evaluation,
+    target: &Target,
+    settings: &Settings,
+) -> Result<Rendering, Error> {
+    if settings.frames == 0 {
+        return Err(Error::Render { message: "0 frames: expected at least 1".to_owned() });
+    }
+    let signal_e = evaluation.photoelectrons;
+    if !(signal_e.is_finite() && signal_e > 0.0) {
+        return Err(Error::Render { message: format!("{signal_e} photoelectrons per pixel: nothing to image") });
+    }
+    let camera = scene.camera();
+    let pitch = camera.pixel_pitch();
+    let s = target.oversample;
+    let (fw, fh) = (target.fine_width(), target.fine_height());
+    let (w, h) = (target.width, target.height);
+    let otf = transfer(scene, fw, fh, pitch / s as f64)?;
+    // 3. the image on the fine grid, relative to a white area
+    let fine_fft = Fft2::new(fw, fh);
+    let mut spectrum = fine_fft.forward(&target.fine);
+    for (v, t) in spectrum.iter_mut().zip(&otf.values) {
+        *v *= t;
+    }
+    let blurred = fine_fft.inverse(spectrum);
+    // 4. pixels: the centre cell, or the mean of the pixel's cells
+    let integrate = camera.pixel_mtf();
+    let c = s / 2;
+    let relative: Vec<f64> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            if integrate {
+                let mut sum = 0.0;
+                for r in 0..s {
+                    let row = &blurred[(y * s + r) * fw + x * s..(y * s + r) * fw + x * s + s];
+                    sum += row.iter().sum::<f64>();
+                }
+                sum / (s * s) as f64
+            } else {
+                blurred[(y * s + c) * fw + x * s + c]
+            }
+        })
+        .collect();
+    // 5. light: signal, the veil of the other orders, dark charge
+    let object_mean = target.mean();
+    let veil_e =
+        if settings.glare { (evaluation.transmitted_photoelectrons - signal_e).max(0.0) * object_mean } else { 0.0 };
+    let sensor = camera.sensor();
+    let dark_e = sensor.dark_current_e_per_s() * scene.exposure();
+    let expected_e: Vec<f64> = relative.iter().map(|r| signal_e * r.max(0.0) + veil_e + dark_e).collect();
+    // 6. frames
+    let frames = (0..settings.frames)
+        .map(|i| expose(&expected_e, sensor, settings.seed.wrapping_add(i as u64)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let dn_per_e = sensor.gain_dn_per_e();
+    let to_electrons = |frame: &[f64]| -> Vec<f64> { frame.iter().map(|v| dn_per_e.map_or(*v, |k| v / k)).collect() };
+    let raw_e = to_electrons(&frames[0]);
+    // 7. Wiener restoration on the pixel grid
+    let mean_level = expected_e.iter().sum::<f64>() / expected_e.len() as f64;
+    let variance = mean_level + sensor.read_noise_e().powi(2) + sensor.quantization_variance_e2();
+    let nsr = variance / (signal_e * signal_e);
+    let pixel_fft = Fft2::new(w, h);
+    let hw = w / 2 + 1;
+    let mut spectrum = pixel_fft.forward(&raw_e);
+    for (index, v) in spectrum.iter_mut().enumerate() {
+        let (kx, ky) = (index % hw, index / hw);
+        let fine_ky = if ky <= h / 2 { ky } else { fh - (h - ky) };
+        let mut t = otf.at(kx, fine_ky);
+        if integrate {
+            t *= box_factor(kx, w, s) * box_factor(if ky <= h / 2 { ky } else { h - ky }, h, s);
+        }
+        *v *= t.conj() / (t.norm_sqr() + nsr);
+    }
+    let mut restored_e = pixel_fft.inverse(spectrum);
+    let white_e = signal_e + veil_e + dark_e;
+    let black_e = veil_e + dark_e;
+    if settings.subtract_black {
+        let gain = white_e / (white_e - black_e);
+        for v in &mut restored_e {
+            *v = (*v - black_e) * gain;
+        }
+    }
+    let bars = target
+        .bars
+        .iter()
+        .map(|set: &BarSet| BarContrast {
+            group: set.group,
+            element: set.element,
+            frequency_cyc_per_mm: set.frequency_cyc_per_mm,
+            orientation: set.orientation,
+            above_nyquist: !set.resolvable_by_pixels(),
+            expected: bar_modulation(&expected_e, w, set),
+            raw: bar_modulation(&raw_e, w, set),
+            restored: bar_modulation(&restored_e, w, set),
+        })
+        .collect();
+    Ok(Rendering {
+        width: w,
+        height: h,
+        expected_e,
+        frames,
+        restored_e,
+        signal_e,
+        veil_e,
+        dark_e,
+        white_e,
+        black_e,
+        nsr,
+        noise_e: variance.sqrt(),
+        dn_per_e,
+        bars,
+        otf_evaluations: otf.evaluations,
+        direction_dependent: otf.direction_dependent,
+    })
+}
+
+/// Transfer of the mean over `s` fine cells centred on a pixel, at the pixel grid's DFT bin `k`
+/// of `n` (`k ≤ n/2`): `(1/s) Σ_m cos(2π k m/(s n))`, `m = −(s−1)/2 … (s−1)/2` (the pixel MTF
+/// `sinc(p ν)` as the fine grid samples it).
+fn box_factor(k: usize, n: usize, s: usize) -> f64 {
+    let half = (s / 2) as isize;
+    (-half..=half).map(|m| (2.0 * PI * k as f64 * m as f64 / (s * n) as f64).cos()).sum::<f64>() / s as f64
+}
+
+/// One raw frame of the expected charge `expected_e` (step 6): DN with an ADC, e⁻ without.
+///
+/// # Errors
+/// [`Error::Render`] for a charge the Poisson sampler cannot take (not finite).
+pub fn expose(expected_e: &[f64], sensor: &noise::Sensor, seed: u64) -> Result<Vec<f64>, Error> {
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let read = Normal::new(0.0, sensor.read_noise_e())
+        .map_err(|e| Error::Render { message: format!("read noise {}: {e}", sensor.read_noise_e()) })?;
+    let full_well = sensor.full_well_e();
+    let adc = sensor.gain_dn_per_e().zip(sensor.adc_bits());
+    expected_e
+        .iter()
+        .map(|&mean| {
+            let shot = if mean > 0.0 {
+                Poisson::new(mean)
+                    .map_err(|e| Error::Render { message: format!("expected charge {mean} e⁻: {e}") })?
+                    .sample(&mut rng)
+            } else {
+                0.0
+            };
+            let charge = shot.min(full_well) + read.sample(&mut rng);
+            Ok(match adc {
+                Some((k, bits)) => (k * charge).round().clamp(0.0, ((1_u64 << bits) - 1) as f64),
+                None => charge,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fft2_round_trips_and_matches_the_direct_dft() {
+        let (nx, ny) = (6, 5);
+        let image: Vec<f64> = (0..nx * ny).map(|i| ((i * 7919) % 13) as f64 - 4.0).collect();
+        let fft = Fft2::new(nx, ny);
+        let spectrum = fft.forward(&image);
+        // the direct DFT at every bin of the half spectrum
+        for ky in 0..ny {
+            for kx in 0..=nx / 2 {
+                let mut sum = Complex64::new(0.0, 0.0);
+                for y in 0..ny {
+                    for x in 0..nx {
+                        let phase = -2.0 * PI * (kx as f64 * x as f64 / nx as f64 + ky as f64 * y as f64 / ny as f64);
+                        sum += Complex64::from_polar(image[y * nx + x], phase);
+                    }
+                }
+                assert!((spectrum[ky * (nx / 2 + 1) + kx] - sum).norm() < 1e-12, "({kx}, {ky})");
+            }
+        }
+        let back = fft.inverse(spectrum);
+        for (a, b) in image.iter().zip(&back) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn box_factor_is_the_sampled_pixel_mtf() {
+        // k = 0: 1; a fine grid of 3 cells per pixel at the pixel Nyquist (k = n/2):
+        // (1 + 2 cos(π/3))/3 = 2/3, against sinc(1/2) = 0.6366 of the continuous pixel
+        assert!((box_factor(0, 64, 3) - 1.0).abs() < 1e-15);
+        assert!((box_factor(32, 64, 3) - 2.0 / 3.0).abs() < 1e-15);
+        assert!((box_factor(32, 64, 1) - 1.0).abs() < 1e-15);
+    }
+
+    /// The sensor model: Poisson mean and variance, read noise added, ADC gain and clipping.
+    #[test]
+    fn exposure_has_the_sensor_statistics() {
+        let n = 200_000;
+        let expected = vec![400.0; n];
+        let shot = expose(&expected, &noise::Sensor::ideal(), 7).unwrap();
+        let (m, v) = moments(&shot);
+        // standard errors: √(400/n) = 0.045 for the mean, 400 √(2/n) = 1.3 for the variance
+        assert!((m - 400.0).abs() < 0.2, "{m}");
+        assert!((v - 400.0).abs() < 6.0, "{v}");
+        let sensor = noise::Sensor::new(5.0, 0.0, f64::INFINITY, 0.5, 12).unwrap();
+        let dn = expose(&expected, &sensor, 7).unwrap();
+        let (m, v) = moments(&dn);
+        // DN: K(400) = 200, K²(400 + 25) + 1/12 = 106.33
+        assert!((m - 200.0).abs() < 0.1, "{m}");
+        assert!((v - 106.33).abs() < 2.0, "{v}");
+        let clipped = expose(&[1e4], &noise::Sensor::new(0.0, 0.0, 3000.0, 1.0, 10).unwrap(), 1).unwrap();
+        assert_eq!(clipped, vec![1023.0]);
+        // a seed gives the same frame
+        assert_eq!(expose(&expected[..100], &sensor, 3).unwrap(), expose(&expected[..100], &sensor, 3).unwrap());
+    }
+
+    fn moments(x: &[f64]) -> (f64, f64) {
+        let m = x.iter().sum::<f64>() / x.len() as f64;
+        let v = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() - 1) as f64;
+        (m, v)
+    }
+}
