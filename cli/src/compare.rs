@@ -11,7 +11,6 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -287,12 +286,7 @@ fn compute(
     }
     let tasks: Vec<(usize, usize)> = (0..searches.len()).flat_map(|s| (0..grid.len()).map(move |k| (s, k))).collect();
     let total = tasks.len() + 3 * base.designs.len();
-    let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} evaluations, eta {eta}")
-            .map_err(|e| anyhow!("progress bar template: {e}"))?
-            .progress_chars("=> "),
-    );
+    let bar = crate::sweep::progress_bar(total as u64, "evaluations")?;
     // the scene band: the scene's options, glare-free and glare-inclusive, and the twin
     let at_scene: Vec<Result<AtScene>> = base
         .designs

@@ -9,8 +9,10 @@ mod compare;
 mod measure;
 mod optimize;
 mod output;
+mod panel;
 mod plot;
 mod plotcmd;
+mod render;
 mod sweep;
 
 use std::path::PathBuf;
@@ -108,6 +110,9 @@ enum Command {
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
+    /// Simulated and Wiener-restored images of a USAF-1951 target (or a PNG) through the scene,
+    /// one per spectral range (the paper's Fig. 4), with the measured bar contrast.
+    Render(render::RenderArgs),
     /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
     Scene {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -257,6 +262,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => compare::run(args),
         Command::Measure(args) => measure::run(&args),
+        Command::Render(args) => render::run(&args),
         Command::Characterize(args) => characterize::run(&args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;

@@ -31,7 +31,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 /// Registers the embedded font (both backends measure text with it; PNG also rasterizes it).
-fn register_font() {
+pub(crate) fn register_font() {
     static REGISTER: Once = Once::new();
     REGISTER.call_once(|| {
         // the font is a valid TrueType file compiled into the binary
@@ -998,7 +998,7 @@ fn downsample(big: &[u8], (w, h): (u32, u32), s: u32) -> Vec<u8> {
 }
 
 /// Writes RGB pixels as a PNG with its resolution, `dpi`, in a pHYs chunk.
-fn write_png(path: &Path, (w, h): (u32, u32), rgb: &[u8], dpi: f64) -> Result<(), String> {
+pub(crate) fn write_png(path: &Path, (w, h): (u32, u32), rgb: &[u8], dpi: f64) -> Result<(), String> {
     {
         let mut backend = BitMapBackend::new(path, (w, h));
         backend.blit_bitmap((0, 0), (w, h), rgb).map_err(|e| fail(&e))?;

@@ -58,12 +58,7 @@ pub fn run(source: &Source, overrides: &[String], ranges: &[Range], threads: usi
             values
         })
         .collect();
-    let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} points, eta {eta}")
-            .map_err(|e| anyhow!("progress bar template: {e}"))?
-            .progress_chars("=> "),
-    );
+    let bar = progress_bar(total as u64, "points")?;
     let evaluate = |values: &Vec<f64>| -> Result<Point> {
         let mut set = overrides.to_vec();
         for (range, v) in ranges.iter().zip(values) {
@@ -240,4 +235,15 @@ pub fn table(label: &str, title: Option<&str>, ranges: &[Range], points: &[Point
         let _ = writeln!(s, "(use --csv or --json for all {} points)", points.len());
     }
     s
+}
+
+/// A progress bar on stderr for `total` steps counted in `unit` (drawn only on a terminal).
+pub fn progress_bar(total: u64, unit: &str) -> Result<ProgressBar> {
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit}, eta {{eta}}"))
+            .map_err(|e| anyhow!("progress bar template: {e}"))?
+            .progress_chars("=> "),
+    );
+    Ok(bar)
 }

@@ -63,6 +63,34 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
     Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
 }
 
+/// Writes a grayscale PNG of `width × height` grey levels (row-major from the top-left), 8-bit
+/// when every level is below 256 and `bit_depth` is 8, else 16-bit.
+///
+/// # Errors
+/// [`Error::Read`] (naming the file) when it cannot be written, or the levels do not fill
+/// `width × height`.
+pub fn write_png(path: &Path, width: usize, height: usize, levels: &[u16], bit_depth: u8) -> Result<(), Error> {
+    let fail = |message: String| Error::Read { path: path.to_owned(), message };
+    if levels.len() != width * height || (bit_depth == 8 && levels.iter().any(|&v| v > 255)) {
+        return Err(fail(format!("{} levels for {width} × {height} pixels at {bit_depth} bits", levels.len())));
+    }
+    let file = std::fs::File::create(path).map_err(|e| fail(format!("cannot write ({e})")))?;
+    let (w, h) = (u32::try_from(width), u32::try_from(height));
+    let (Ok(w), Ok(h)) = (w, h) else { return Err(fail(format!("{width} × {height} pixels: too large for PNG"))) };
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    encoder.set_color(png::ColorType::Grayscale);
+    let bytes: Vec<u8> = if bit_depth == 8 {
+        encoder.set_depth(png::BitDepth::Eight);
+        levels.iter().map(|&v| v as u8).collect()
+    } else {
+        encoder.set_depth(png::BitDepth::Sixteen);
+        levels.iter().flat_map(|v| v.to_be_bytes()).collect()
+    };
+    let mut writer = encoder.write_header().map_err(|e| fail(format!("cannot write ({e})")))?;
+    writer.write_image_data(&bytes).map_err(|e| fail(format!("cannot write ({e})")))?;
+    writer.finish().map_err(|e| fail(format!("cannot write ({e})")))
+}
+
 /// Reads one grayscale TIFF (8- or 16-bit, first image of the file).
 fn read_tiff(path: &Path) -> Result<Frame, Error> {
     use tiff::decoder::{Decoder, DecodingResult};

@@ -26,7 +26,7 @@ pub mod target;
 
 pub use characterize::{Characterization, Fit, Level, characterize, fit_line, level_of};
 pub use error::Error;
-pub use frames::{Frame, read_frame, read_stack};
+pub use frames::{Frame, read_frame, read_stack, write_png};
 pub use measure::{Measurement, Region, measure};
 pub use render::{Rendering, Transfer, render, transfer};
 pub use target::{Polarity, Target};

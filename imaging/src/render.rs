@@ -43,7 +43,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::Error;
-use crate::target::{BarSet, Orientation, Target, bar_modulation};
+use crate::target::{Orientation, Target, bar_fundamental, bar_modulation};
 
 /// Real 2-D FFTs of one size (`nx` columns, `ny` rows, row-major): rows by `realfft` (real ↔ the
 /// half spectrum `nx/2 + 1` wide), columns by `rustfft`.
@@ -301,6 +301,12 @@ pub struct BarContrast {
     pub raw: f64,
     /// In the restored image.
     pub restored: f64,
+    /// Contrast-to-noise ratio over the raw frames: the mean of the bars' fundamental amplitude
+    /// ([`bar_fundamental`]) over the frames, over its temporal standard deviation (at least 2
+    /// frames): the SNR at the bars' frequency, eq. 2–4 applied to a bar set.
+    pub cnr_raw: Option<f64>,
+    /// Contrast-to-noise ratio over the restored frames, likewise.
+    pub cnr_restored: Option<f64>,
 }
 
 /// A rendered scene.
@@ -350,6 +356,41 @@ impl Rendering {
     pub fn mean_raw_contrast(&self) -> f64 {
         mean(self.bars.iter().filter(|b| !b.above_nyquist).map(|b| b.raw))
     }
+
+    /// The restored contrast-to-noise ratio averaged over frequency as the ASNR averages the
+    /// SNR (eq. 1): the two orientations of each element averaged, then the trapezoid rule over
+    /// the elements' frequencies below Nyquist divided by their span (`None` with fewer than two
+    /// elements or two frames).
+    pub fn frequency_mean_cnr_restored(&self) -> Option<f64> {
+        frequency_mean(&self.bars, |b| b.cnr_restored)
+    }
+
+    /// [`frequency_mean_cnr_restored`](Self::frequency_mean_cnr_restored) of the raw frame.
+    pub fn frequency_mean_cnr_raw(&self) -> Option<f64> {
+        frequency_mean(&self.bars, |b| b.cnr_raw)
+    }
+}
+
+fn frequency_mean(bars: &[BarContrast], value: impl Fn(&BarContrast) -> Option<f64>) -> Option<f64> {
+    // (frequency, mean over orientations), in frequency order
+    let mut points: Vec<(f64, f64, usize)> = Vec::new();
+    for b in bars.iter().filter(|b| !b.above_nyquist) {
+        let v = value(b)?;
+        match points.iter_mut().find(|p| p.0 == b.frequency_cyc_per_mm) {
+            Some(p) => {
+                p.1 += v;
+                p.2 += 1;
+            }
+            None => points.push((b.frequency_cyc_per_mm, v, 1)),
+        }
+    }
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if points.len() < 2 {
+        return None;
+    }
+    let area: f64 =
+        points.windows(2).map(|w| 0.5 * (w[0].1 / w[0].2 as f64 + w[1].1 / w[1].2 as f64) * (w[1].0 - w[0].0)).sum();
+    Some(area / (points[points.len() - 1].0 - points[0].0))
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> f64 {
@@ -420,36 +461,68 @@ pub fn render(
         .collect::<Result<Vec<_>, _>>()?;
     let dn_per_e = sensor.gain_dn_per_e();
     let to_electrons = |frame: &[f64]| -> Vec<f64> { frame.iter().map(|v| dn_per_e.map_or(*v, |k| v / k)).collect() };
-    let raw_e = to_electrons(&frames[0]);
-    // 7. Wiener restoration on the pixel grid
+    // 7. Wiener restoration on the pixel grid, G = H*/(|H|² + NSR)
     let mean_level = expected_e.iter().sum::<f64>() / expected_e.len() as f64;
     let variance = mean_level + sensor.read_noise_e().powi(2) + sensor.quantization_variance_e2();
     let nsr = variance / (signal_e * signal_e);
     let pixel_fft = Fft2::new(w, h);
     let hw = w / 2 + 1;
-    let mut spectrum = pixel_fft.forward(&raw_e);
-    for (index, v) in spectrum.iter_mut().enumerate() {
-        let (kx, ky) = (index % hw, index / hw);
-        let fine_ky = if ky <= h / 2 { ky } else { fh - (h - ky) };
-        let mut t = otf.at(kx, fine_ky);
-        if integrate {
-            t *= box_factor(kx, w, s) * box_factor(if ky <= h / 2 { ky } else { h - ky }, h, s);
-        }
-        *v *= t.conj() / (t.norm_sqr() + nsr);
-    }
-    let mut restored_e = pixel_fft.inverse(spectrum);
+    let filter: Vec<Complex64> = (0..h * hw)
+        .map(|index| {
+            let (kx, ky) = (index % hw, index / hw);
+            let fine_ky = if ky <= h / 2 { ky } else { fh - (h - ky) };
+            let mut t = otf.at(kx, fine_ky);
+            if integrate {
+                t *= box_factor(kx, w, s) * box_factor(if ky <= h / 2 { ky } else { h - ky }, h, s);
+            }
+            t.conj() / (t.norm_sqr() + nsr)
+        })
+        .collect();
     let white_e = signal_e + veil_e + dark_e;
     let black_e = veil_e + dark_e;
-    if settings.subtract_black {
-        let gain = white_e / (white_e - black_e);
-        for v in &mut restored_e {
-            *v = (*v - black_e) * gain;
+    let restore = |raw_e: &[f64]| -> Vec<f64> {
+        let mut spectrum = pixel_fft.forward(raw_e);
+        for (v, g) in spectrum.iter_mut().zip(&filter) {
+            *v *= g;
+        }
+        let mut restored = pixel_fft.inverse(spectrum);
+        if settings.subtract_black {
+            let gain = white_e / (white_e - black_e);
+            for v in &mut restored {
+                *v = (*v - black_e) * gain;
+            }
+        }
+        restored
+    };
+    // every frame restored: the bars' fundamental amplitude over the frames gives their temporal
+    // contrast-to-noise ratio, raw and restored (eq. 2–4 applied to a bar set)
+    let mut raw_e = Vec::new();
+    let mut restored_e = Vec::new();
+    let mut differences: Vec<Vec<[f64; 2]>> = vec![Vec::with_capacity(frames.len()); target.bars.len()];
+    for (i, frame) in frames.iter().enumerate() {
+        let raw = to_electrons(frame);
+        let restored = restore(&raw);
+        for (set, d) in target.bars.iter().zip(&mut differences) {
+            d.push([bar_fundamental(&raw, w, set), bar_fundamental(&restored, w, set)]);
+        }
+        if i == 0 {
+            raw_e = raw;
+            restored_e = restored;
         }
     }
+    let cnr = |d: &[[f64; 2]], k: usize| -> Option<f64> {
+        let n = d.len();
+        (n >= 2).then(|| {
+            let m = d.iter().map(|v| v[k]).sum::<f64>() / n as f64;
+            let var = d.iter().map(|v| (v[k] - m).powi(2)).sum::<f64>() / (n - 1) as f64;
+            m.abs() / var.sqrt()
+        })
+    };
     let bars = target
         .bars
         .iter()
-        .map(|set: &BarSet| BarContrast {
+        .zip(&differences)
+        .map(|(set, d)| BarContrast {
             group: set.group,
             element: set.element,
             frequency_cyc_per_mm: set.frequency_cyc_per_mm,
@@ -458,6 +531,8 @@ pub fn render(
             expected: bar_modulation(&expected_e, w, set),
             raw: bar_modulation(&raw_e, w, set),
             restored: bar_modulation(&restored_e, w, set),
+            cnr_raw: cnr(d, 0),
+            cnr_restored: cnr(d, 1),
         })
         .collect();
     Ok(Rendering {

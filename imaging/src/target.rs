@@ -307,11 +307,61 @@ fn paint(target: &mut Target, rect: [f64; 4], level: f64) {
     }
 }
 
-/// The measured modulation of one bar set in an image of detector pixels (`width` per row):
-/// the image averaged along the bars over the middle 60 % of their length, read across them at
-/// the three bar centres and the two gap centres (linear interpolation between pixel centres),
-/// `M = |bars − gaps|/(bars + gaps)`.
+/// The measured modulation of one bar set in an image of detector pixels (`width` per row),
+/// `M = |bars − gaps|/(bars + gaps)` of [`bar_levels`].
 pub fn bar_modulation(image: &[f64], width: usize, set: &BarSet) -> f64 {
+    let (bars, gaps) = bar_levels(image, width, set);
+    let sum = bars + gaps;
+    if sum > 0.0 { (bars - gaps).abs() / sum } else { 0.0 }
+}
+
+/// The amplitude of the bar set's fundamental in an image, in the image's units: the
+/// least-squares fit `I = a + b cos(π (u − u0 − w/2)/w)` over the pixels whose centres lie across
+/// the three bars (`u0 … u0 + 5w`, `u` across the bars) and along the middle 60 % of their
+/// length; `b > 0` where the bars are brighter than the gaps. A narrow-band measure: its noise
+/// comes from frequencies near the bars' own, where a linear restoration scales the noise as it
+/// scales the signal.
+pub fn bar_fundamental(image: &[f64], width: usize, set: &BarSet) -> f64 {
+    let height = image.len() / width;
+    let w = set.bar_width_px;
+    let [x, y] = set.origin_px;
+    let (len0, across0) = match set.orientation {
+        Orientation::Vertical => (y, x),
+        Orientation::Horizontal => (x, y),
+    };
+    let along = (len0 + 1.0 * w).floor() as usize..((len0 + 4.0 * w).ceil() as usize).max(len0 as usize + 1);
+    let across = across0.floor() as usize..(across0 + 5.0 * w).ceil() as usize;
+    let (mut n, mut sc, mut si, mut scc, mut sci) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for a in along {
+        for c in across.clone() {
+            let centre = c as f64 + 0.5;
+            if centre < across0 || centre > across0 + 5.0 * w {
+                continue;
+            }
+            let (col, row) = match set.orientation {
+                Orientation::Vertical => (c, a),
+                Orientation::Horizontal => (a, c),
+            };
+            if col >= width || row >= height {
+                continue;
+            }
+            let v = image[row * width + col];
+            let k = (std::f64::consts::PI * (centre - across0 - 0.5 * w) / w).cos();
+            n += 1.0;
+            sc += k;
+            si += v;
+            scc += k * k;
+            sci += k * v;
+        }
+    }
+    let var = scc - sc * sc / n;
+    if n < 2.0 || var <= 0.0 { 0.0 } else { (sci - sc * si / n) / var }
+}
+
+/// The mean levels of the bars and of the gaps between them: the image averaged along the bars
+/// over the middle 60 % of their length, read across them at the three bar centres and the two
+/// gap centres (linear interpolation between pixel centres).
+pub fn bar_levels(image: &[f64], width: usize, set: &BarSet) -> (f64, f64) {
     let height = image.len() / width;
     let w = set.bar_width_px;
     let [x, y] = set.origin_px;
@@ -343,8 +393,7 @@ pub fn bar_modulation(image: &[f64], width: usize, set: &BarSet) -> f64 {
     };
     let bars = (0..3).map(|k| profile(across0 + w * (0.5 + 2.0 * k as f64))).sum::<f64>() / 3.0;
     let gaps = (0..2).map(|k| profile(across0 + w * (1.5 + 2.0 * k as f64))).sum::<f64>() / 2.0;
-    let sum = bars + gaps;
-    if sum > 0.0 { (bars - gaps).abs() / sum } else { 0.0 }
+    (bars, gaps)
 }
 
 #[cfg(test)]
@@ -376,8 +425,9 @@ mod tests {
         assert!((ink - bars).abs() < 1e-9 * ink, "{ink} vs {bars}");
         // the object sampled at pixel centres (the middle fine cell) keeps its modulation
         let s = t.oversample;
-        let centres: Vec<f64> =
-            (0..t.height * t.width).map(|i| t.fine[((i / t.width) * s + s / 2) * t.fine_width() + (i % t.width) * s + s / 2]).collect();
+        let centres: Vec<f64> = (0..t.height * t.width)
+            .map(|i| t.fine[((i / t.width) * s + s / 2) * t.fine_width() + (i % t.width) * s + s / 2])
+            .collect();
         for set in t.bars.iter().filter(|b| b.bar_width_px >= 3.0) {
             let m = bar_modulation(&centres, t.width, set);
             assert!(m > 0.9, "{set:?}: {m}");
