@@ -131,8 +131,8 @@ impl Fft2 {
 pub const AZIMUTHS: usize = 128;
 
 /// Radial samples per frequency step of the grid: the OTF is read by cubic interpolation from
-/// samples four times finer than the grid's own frequency spacing.
-pub const RADIAL_PER_STEP: f64 = 4.0;
+/// samples eight times finer than the grid's own frequency spacing.
+pub const RADIAL_PER_STEP: f64 = 8.0;
 
 /// A scene's polychromatic OTF sampled on the half spectrum of an `nx × ny` grid of spacing
 /// `spacing_m` (the DFT frequencies `kx/(nx d)`, `ky/(ny d)`; `ky` above `ny/2` negative). The
@@ -168,7 +168,7 @@ fn signed(k: usize, n: usize) -> f64 {
 /// Samples the polychromatic OTF of `scene` (at its field point; the first one of a
 /// field-of-view average) on the half spectrum of an `nx × ny` grid of spacing `spacing_m`.
 ///
-/// The OTF is evaluated on radii `k · h`, `h` a quarter of the grid's frequency step, up to the
+/// The OTF is evaluated on radii `k · h`, `h` an eighth of the grid's frequency step, up to the
 /// grid's corner or the incoherent cutoff of the shortest wavelength (zero beyond), along one
 /// azimuth where it does not depend on the direction and along [`AZIMUTHS`] otherwise, and read
 /// at each grid frequency by cubic (Catmull–Rom) interpolation in radius and linear
@@ -211,9 +211,10 @@ pub fn transfer(scene: &metric::Scene, nx: usize, ny: usize, spacing_m: f64) -> 
         })
         .collect::<Result<_, _>>()?;
     let table: Vec<Complex64> = table.into_iter().flatten().collect();
-    // sample (k, m), with k = −1 the opposite direction's first radius
+    // sample (k, m); k = −1 continues the radial profile linearly (the OTF has a cone at ν = 0,
+    // |ν|-like through the origin, but each radial profile is smooth from r = 0 on)
     let sample = |k: isize, m: usize| -> Complex64 {
-        if k < 0 { table[azimuths + m].conj() } else { table[k as usize * azimuths + m] }
+        if k < 0 { table[m] * 2.0 - table[azimuths + m] } else { table[k as usize * azimuths + m] }
     };
     let along = |nu: f64, m: usize| -> Complex64 {
         let t = nu / step;
