@@ -12,6 +12,7 @@ mod output;
 mod panel;
 mod plot;
 mod plotcmd;
+mod psf;
 mod render;
 mod sweep;
 
@@ -113,6 +114,10 @@ enum Command {
     /// Simulated and Wiener-restored images of a USAF-1951 target (or a PNG) through the scene,
     /// one per spectral range (the paper's Fig. 4), with the measured bar contrast.
     Render(render::RenderArgs),
+    /// The scene's 2-D polychromatic PSF at its field point and pupil: PNG, CSV matrix, JSON.
+    Psf(psf::GridArgs),
+    /// The scene's 2-D polychromatic OTF (real and imaginary parts, MTF): PNG, CSV matrices, JSON.
+    Otf(psf::GridArgs),
     /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
     Scene {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -263,6 +268,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => compare::run(args),
         Command::Measure(args) => measure::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
+        Command::Otf(args) => psf::run(&args, psf::Kind::Otf),
         Command::Characterize(args) => characterize::run(&args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;

@@ -1669,3 +1669,74 @@ fn characterize_reads_a_series_file() {
     let err = fails(&["characterize", series.to_str().unwrap()]);
     assert!(err.contains("levels[0].illumination is missing"), "{err}");
 }
+
+/// `asnr render` end to end: every file it announces, the panel, contrast.csv, render.json;
+/// its frames measured by `asnr measure` at the regions it prints recover SNR0 (eq. 4; 30
+/// frames of 1024 pixels: the white σ to 0.4 % plus the mean sample σ's +0.9 % bias, 2.5 %
+/// allowed), and bad input.
+#[test]
+fn render_writes_images_whose_frames_measure_the_scenes_snr0() {
+    let dir = scratch("render");
+    let out = dir.to_str().unwrap();
+    let v = json(&["render", "--out", out, "--ranges", "50,10", "--frames", "30", "--no-glare", "--json"]);
+    let ranges = v["ranges"].as_array().unwrap();
+    assert_eq!(ranges.len(), 2);
+    for name in ["panel.png", "contrast.csv", "render.json", "raw-50nm.png", "restored-10nm-16bit.png"] {
+        assert!(dir.join(name).is_file(), "{name} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("contrast.csv")).unwrap();
+    assert!(csv.starts_with("range_nm,group,element,frequency_cyc_per_mm,orientation"), "{csv}");
+    assert_eq!(csv.lines().count(), 1 + 2 * 48, "two ranges × 4 groups × 6 elements × 2 orientations");
+    let region = |key: &str| {
+        let r = &v[key];
+        format!("{},{},{},{}", r["x"], r["y"], r["width"], r["height"])
+    };
+    let (white, black) = (region("white_region"), region("black_region"));
+    let frames = dir.join("frames-50nm");
+    let m = json(&["measure", frames.to_str().unwrap(), "--white", &white, "--black", &black, "--json"]);
+    assert_eq!(m["frames"], 30);
+    let snr0 = ranges[0]["snr0"].as_f64().unwrap();
+    let snr = m["snr"].as_f64().unwrap();
+    assert!((snr / snr0 - 1.0).abs() < 0.025, "measured {snr} against SNR0 {snr0}");
+    // bad input names the option, the value and what is accepted
+    let err = fails(&["render", "--out", out, "--target", "bars.txt"]);
+    assert!(err.contains("--target bars.txt") && err.contains("usaf, usaf-negative or a grayscale .png"), "{err}");
+    let err = fails(&["render", "--out", out, "--oversample", "2"]);
+    assert!(err.contains("oversampling 2") && err.contains("odd"), "{err}");
+    let err = fails(&["render", "--out", out, "--groups", "6:x"]);
+    assert!(err.contains("--groups 6:x") && err.contains("FIRST:LAST"), "{err}");
+    let err = fails(&["render", "--out", out, "--frames", "0"]);
+    assert!(err.contains("--frames 0") && err.contains("1 to 1000"), "{err}");
+    let err = fails(&["render", "--out", out, "--ranges=-5"]);
+    assert!(err.contains("-5 nm") && err.contains("> 0 nm"), "{err}");
+    let err = fails(&["render", "--out", out, "--target", dir.join("none.png").to_str().unwrap()]);
+    assert!(err.contains("none.png"), "{err}");
+}
+
+/// `asnr psf` and `asnr otf`: the PSF sums to 1, and the OTF's centre row is the polychromatic
+/// OTF along x at the grid's frequencies (the scene's own engine, to the 2-D sampling's
+/// interpolation error).
+#[test]
+fn psf_and_otf_export_the_scenes_2d_transfer() {
+    let dir = scratch("psf");
+    let out = dir.to_str().unwrap();
+    let v = json(&["psf", "--out", out, "--size", "64"]);
+    assert!((v["sum"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{v}");
+    let psf = std::fs::read_to_string(dir.join("psf.csv")).unwrap();
+    assert_eq!(psf.lines().count(), 64);
+    let v = json(&["otf", "--out", out, "--size", "64"]);
+    let step = v["frequency_step_cyc_per_mm"].as_f64().unwrap() * 1e3;
+    let real = std::fs::read_to_string(dir.join("otf-real.csv")).unwrap();
+    let centre_row: Vec<f64> = real.lines().nth(32).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
+    let scene = scene::load(None, &[]).unwrap();
+    let detected = metric::detected_spectrum(&scene);
+    let poly = optics::Polychromatic::new(scene.lens(), &detected, scene.field(), 40.0 * step, None).unwrap();
+    for k in [0_usize, 3, 10, 25] {
+        let expected = poly.otf(k as f64 * step);
+        assert!((centre_row[32 + k] - expected).abs() < 1e-5, "k = {k}: {} against {expected}", centre_row[32 + k]);
+    }
+    let err = fails(&["otf", "--out", out, "--size", "15"]);
+    assert!(err.contains("--size 15") && err.contains("even"), "{err}");
+    let err = fails(&["psf", "--out", out, "--spacing-um", "0"]);
+    assert!(err.contains("--spacing-um 0"), "{err}");
+}

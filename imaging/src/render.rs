@@ -100,7 +100,7 @@ impl Fft2 {
         for (row, out) in spectrum.chunks_exact_mut(hw).zip(image.chunks_exact_mut(self.nx)) {
             // the DC and Nyquist bins of a real row are real: drop their rounding residue
             row[0].im = 0.0;
-            if self.nx % 2 == 0 {
+            if self.nx.is_multiple_of(2) {
                 row[hw - 1].im = 0.0;
             }
             let _ = self.c2r.process(row, out);
