@@ -25,7 +25,7 @@ const TITLE: usize = 40;
 const HEADING: usize = 30;
 const SIDE: usize = 30;
 
-/// Writes the panel of `columns` (images `width × height`) as a PNG at 150 dpi.
+/// Writes the panel of `columns` (images `width × height`) as an 8-bit grayscale PNG.
 pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[Column]) -> Result<()> {
     crate::plot::register_font();
     let k = MIN_TILE.div_ceil(width).max(1);
@@ -76,8 +76,11 @@ pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[C
         }
         root.present().map_err(|e| fail(&e))?;
     }
-    let size = (u32::try_from(w).map_err(|e| fail(&e))?, u32::try_from(h).map_err(|e| fail(&e))?);
-    crate::plot::write_png(path, size, &rgb, 150.0).map_err(|e| anyhow!("{}: {e}", path.display()))
+    // everything on it is grey: an 8-bit grayscale PNG is a third of the RGB one (noise does not
+    // compress)
+    let grey: Vec<u16> = rgb.chunks_exact(3).map(|p| u16::from(p[0])).collect();
+    imaging::write_png(path, w, h, &grey, 8)?;
+    Ok(())
 }
 
 fn to_i32(v: usize) -> i32 {

@@ -998,7 +998,7 @@ fn downsample(big: &[u8], (w, h): (u32, u32), s: u32) -> Vec<u8> {
 }
 
 /// Writes RGB pixels as a PNG with its resolution, `dpi`, in a pHYs chunk.
-pub(crate) fn write_png(path: &Path, (w, h): (u32, u32), rgb: &[u8], dpi: f64) -> Result<(), String> {
+fn write_png(path: &Path, (w, h): (u32, u32), rgb: &[u8], dpi: f64) -> Result<(), String> {
     {
         let mut backend = BitMapBackend::new(path, (w, h));
         backend.blit_bitmap((0, 0), (w, h), rgb).map_err(|e| fail(&e))?;

@@ -67,7 +67,7 @@ fn rendered(range_nm: f64, frames: usize, glare: bool) -> (metric::Evaluation, i
 }
 
 /// Group 5 (32–57 cycles/mm) at 50 nm sits where the defocused MTF is low: the raw bars keep
-/// about half their modulation, the Wiener filter restores most of it.
+/// about 0.4 of their modulation, the Wiener filter restores nearly all of it.
 #[test]
 fn restoration_raises_the_contrast_of_a_mid_frequency_group() {
     let (_, r, _) = rendered(50.0, 1, false);
@@ -75,7 +75,8 @@ fn restoration_raises_the_contrast_of_a_mid_frequency_group() {
     assert_eq!(group.len(), 12);
     let raw = group.iter().map(|b| b.raw).sum::<f64>() / 12.0;
     let restored = group.iter().map(|b| b.restored).sum::<f64>() / 12.0;
-    assert!(raw < 0.75 && restored > 0.85 && restored > 1.3 * raw, "raw {raw}, restored {restored}");
+    // measured: 0.38 raw, 0.99 restored
+    assert!(raw < 0.5 && restored > 0.9, "raw {raw}, restored {restored}");
     // the noise-free image's modulation is the raw one without noise
     let expected = group.iter().map(|b| b.expected).sum::<f64>() / 12.0;
     assert!((expected - raw).abs() < 0.05, "expected {expected}, raw {raw}");

@@ -7,7 +7,9 @@
 //! - Fig. 2b: that slice at F/2.5 ("theory") and a "simulated" curve from tabulated lens efficiency
 //!   and camera QE (`examples/paper-simulated.toml`; illustrative tables, not the paper's data);
 //! - SI Fig. S9: the ASNR against spectral range extended to broad bands for several F-numbers,
-//!   shaded where the Fraunhofer approximation fails (SI eq. S15).
+//!   shaded where the Fraunhofer approximation fails (SI eq. S15);
+//! - Fig. 4: the simulated USAF target at 100, 50 and 10 nm, raw and Wiener-restored
+//!   (`asnr render`), as a PNG panel with its contrast table.
 //!
 //! The task builds the `asnr` binary in release mode and drives it as a subprocess (xtask depends
 //! on no project crate): `asnr sweep … --csv` computes each CSV, `asnr plot` draws each SVG, so
@@ -184,6 +186,19 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         if !command.status().with_context(|| format!("could not start `{}`", asnr.display()))?.success() {
             bail!("`asnr plot` failed for {}", args.last().map_or("?", String::as_str));
         }
+    }
+    // Fig. 4: the simulated and restored USAF target at 100, 50 and 10 nm (its panel, contrast
+    // table and description; the individual images stay in target/)
+    let scratch = root.join("target").join("fig4-render");
+    let mut command = Command::new(&asnr);
+    command.args(["render", "--ranges", "100,50,10", "--frames", "12", "--out"]).arg(&scratch).current_dir(root);
+    eprintln!("$ asnr {}", cmd::display(&command).split_once(' ').map_or("", |(_, rest)| rest));
+    if !command.status().with_context(|| format!("could not start `{}`", asnr.display()))?.success() {
+        bail!("`asnr render` failed for Fig. 4");
+    }
+    for (from, to) in [("panel.png", "fig4-render-panel.png"), ("contrast.csv", "fig4-render-contrast.csv")] {
+        std::fs::copy(scratch.join(from), out.join(to))
+            .with_context(|| format!("cannot copy {from} into {OUT_DIR}"))?;
     }
     println!("figures: written to {OUT_DIR}/ in {:.1} s ({sweeping:.1} s of sweeps)", start.elapsed().as_secs_f64());
     Ok(())
