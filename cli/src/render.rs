@@ -80,6 +80,8 @@ struct RangeReport {
     otf_evaluations: usize,
     direction_dependent: bool,
     files: Vec<String>,
+    /// Per bar set: modulation (noise-free, raw, restored) and contrast-to-noise ratios.
+    bars: Vec<imaging::render::BarContrast>,
 }
 
 /// render.json.
@@ -192,6 +194,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             otf_evaluations: rendering.otf_evaluations,
             direction_dependent: rendering.direction_dependent,
             files,
+            bars: rendering.bars.clone(),
         });
         progress.inc(1);
     }

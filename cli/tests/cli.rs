@@ -1672,7 +1672,7 @@ fn characterize_reads_a_series_file() {
 
 /// `asnr render` end to end: every file it announces, the panel, contrast.csv, render.json;
 /// its frames measured by `asnr measure` at the regions it prints recover SNR0 (eq. 4; 30
-/// frames of 1024 pixels: the white σ to 0.4 % plus the mean sample σ's +0.9 % bias, 2.5 %
+/// frames of 1024 pixels: the white σ to 0.4 % plus the mean sample σ's +0.9 % bias, 2 %
 /// allowed), and bad input.
 #[test]
 fn render_writes_images_whose_frames_measure_the_scenes_snr0() {
@@ -1697,7 +1697,7 @@ fn render_writes_images_whose_frames_measure_the_scenes_snr0() {
     assert_eq!(m["frames"], 30);
     let snr0 = ranges[0]["snr0"].as_f64().unwrap();
     let snr = m["snr"].as_f64().unwrap();
-    assert!((snr / snr0 - 1.0).abs() < 0.025, "measured {snr} against SNR0 {snr0}");
+    assert!((snr / snr0 - 1.0).abs() < 0.02, "measured {snr} against SNR0 {snr0}");
     // bad input names the option, the value and what is accepted
     let err = fails(&["render", "--out", out, "--target", "bars.txt"]);
     assert!(err.contains("--target bars.txt") && err.contains("usaf, usaf-negative or a grayscale .png"), "{err}");
