@@ -193,7 +193,12 @@ pub fn radiance_meter(m: &RadianceMeter) -> Result<RadianceMeterSteps, Error> {
     use crate::error::{check, positive};
     positive("power", m.power_w, "W")?;
     positive("fiber core diameter", m.fiber_core_diameter_m, "m")?;
-    check("relay transmission", m.relay_transmission, m.relay_transmission > 0.0 && m.relay_transmission <= 1.0, "in (0, 1]")?;
+    check(
+        "relay transmission",
+        m.relay_transmission,
+        m.relay_transmission > 0.0 && m.relay_transmission <= 1.0,
+        "in (0, 1]",
+    )?;
     positive("relay iris diameter", m.relay_iris_m, "m")?;
     positive("relay focal length", m.relay_focal_length_m, "m")?;
     let relative_integral = m.relative_spectrum.integral();
