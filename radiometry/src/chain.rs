@@ -186,8 +186,8 @@ pub struct RadianceMeterSteps {
 /// radiance, with every intermediate value (for reports: `asnr evaluate --explain`).
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] for a power, diameter, iris or focal length that is not finite and
-/// > 0, or a relay transmission outside (0, 1]; the errors of [`normalize`] and
+/// [`Error::InvalidParameter`] for a power, diameter, iris or focal length that is not finite
+/// and positive, or a relay transmission outside (0, 1]; the errors of [`normalize`] and
 /// [`broadband_correction`]; [`Error::InvalidSample`] if a value overflows.
 pub fn radiance_meter(m: &RadianceMeter) -> Result<RadianceMeterSteps, Error> {
     use crate::error::{check, positive};

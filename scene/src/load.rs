@@ -1277,7 +1277,8 @@ mod tests {
             let (text, dir) = meter_scene(name, edits);
             build_from(&Source::from_text(text, "m.toml", &dir), &[]).unwrap_err().to_string()
         };
-        let cases: [(&str, &[(&str, &str)], &str); 11] = [
+        type Case<'a> = (&'a str, &'a [(&'a str, &'a str)], &'a str);
+        let cases: [Case; 11] = [
             (
                 "power",
                 &[("power_nw = 10", "power_nw = 0")],
