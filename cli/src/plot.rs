@@ -1757,6 +1757,27 @@ mod tests {
         assert_eq!(TickFormat::Decades.write(7.0), "1e7");
     }
 
+    /// A log-x axis from 0.3 to 2e4 (log10: −0.52 … 4.3): one tick per whole decade, 1 … 10000,
+    /// written as the values, as on a log y axis.
+    #[test]
+    fn log_x_axis_ticks_are_whole_decades() {
+        let axes = Axes {
+            x: (0.3f64.log10(), 2e4f64.log10()),
+            y: (0.0, 1.0),
+            x_desc: "x",
+            y_desc: "y",
+            grid: true,
+            y_log: false,
+            x_log: true,
+        };
+        let ((nx, format), _) = axes.ticks(Ctx { k: 1.0 }, (400, 300));
+        assert_eq!(format, TickFormat::Decades);
+        let keys = ticks(axes.x, nx);
+        assert_eq!(keys, vec![0.0, 1.0, 2.0, 3.0, 4.0], "{nx}");
+        let written: Vec<String> = keys.iter().map(|&v| format.write(v)).collect();
+        assert_eq!(written, ["1", "10", "100", "1000", "10000"]);
+    }
+
     /// A log-y line plot of values from 0.2 to 120: its ticks are the decades 1, 10, 100, one
     /// each, the decades' key points are whole numbers, and a non-positive value is left out.
     #[test]

@@ -1665,6 +1665,26 @@ fn characterize_reads_a_series_file() {
     assert_eq!(v["saturation"], 5, "{v}");
     let (table, _) = succeeds(&["characterize", series.to_str().unwrap()]);
     assert!(table.contains("conversion gain K") && table.contains("0.5 = shot-noise limited"), "{table}");
+    // --plot: the STF and PTC panels (SI Fig. S7–S8), each fit's slope in the legend as the JSON has it
+    let svg = dir.join("transfer.svg");
+    succeeds(&["characterize", series.to_str().unwrap(), "--plot", svg.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for caption in
+        ["(a) signal transfer (STF)", "(b) photon transfer (PTC)", "mean signal (DN)", "temporal noise σ (DN)"]
+    {
+        assert!(text.contains(caption), "{caption} missing");
+    }
+    let slope = format!("STF, μ − μ_dark (capped black subtracted): slope {:.4}", v["stf"]["slope"].as_f64().unwrap());
+    assert!(text.contains(&slope), "{slope} missing");
+    let slope = format!("PTC, raw σ vs μ: slope {:.4}", v["ptc_raw"]["slope"].as_f64().unwrap());
+    assert!(text.contains(&slope), "{slope} missing");
+    // one filled or hollow dot per level and set: 6 levels × 4 sets, each dot drawn twice (fill and ring)
+    assert!(text.matches("<circle").count() >= 48, "{}", text.matches("<circle").count());
+    let png = dir.join("transfer.png");
+    succeeds(&["characterize", series.to_str().unwrap(), "--plot", png.to_str().unwrap()]);
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    let err = fails(&["characterize", series.to_str().unwrap(), "--plot", dir.join("t.pdf").to_str().unwrap()]);
+    assert!(err.contains("--plot") && err.contains("expected a file name ending in .svg or .png"), "{err}");
     std::fs::write(&series, toml.replacen("illumination = 100\n", "", 1)).unwrap();
     let err = fails(&["characterize", series.to_str().unwrap()]);
     assert!(err.contains("levels[0].illumination is missing"), "{err}");
