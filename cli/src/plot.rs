@@ -919,6 +919,55 @@ impl Axes<'_> {
         Ok((chart, m))
     }
 
+    /// On a log axis with fewer than three labelled decades, labels (and tick marks) at 2 and
+    /// 5 × 10^k too, so that a short axis is readable; `area` is the one the chart was built on.
+    fn label_between_decades<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        chart: &Chart<'_, DB>,
+        ctx: Ctx,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let between = |(lo, hi): (f64, f64)| -> Vec<f64> {
+            if hi.floor() - lo.ceil() + 1.0 >= 3.0 {
+                return Vec::new();
+            }
+            ((lo.floor() as i32)..=(hi.ceil() as i32))
+                .flat_map(|d| [2f64, 5.0].map(|m| f64::from(d) + m.log10()))
+                .filter(|&v| v > lo && v < hi)
+                .collect()
+        };
+        let (bx, by) = area.get_base_pixel();
+        let (mark, gap, ink) = (ctx.px(3.0), ctx.px(3.0), INK.stroke_width(ctx.stroke(0.6)));
+        let label = |v: f64| number(10f64.powf(v));
+        let draw = |e: &dyn Fn() -> Result<(), String>| e();
+        if self.y_log {
+            let style = ctx.font(TICK_PT).color(&INK).pos(Pos::new(HPos::Right, VPos::Center));
+            for v in between(self.y) {
+                let (px, py) = chart.backend_coord(&(self.x.0, v));
+                let (x, y) = (px - bx, py - by);
+                draw(&|| {
+                    area.draw(&PathElement::new(vec![(x - mark, y), (x, y)], ink)).map_err(|e| fail(&e))?;
+                    area.draw(&Text::new(label(v), (x - mark - gap, y), style.clone())).map_err(|e| fail(&e))
+                })?;
+            }
+        }
+        if self.x_log {
+            let style = ctx.font(TICK_PT).color(&INK).pos(Pos::new(HPos::Center, VPos::Top));
+            for v in between(self.x) {
+                let (px, py) = chart.backend_coord(&(v, self.y.0));
+                let (x, y) = (px - bx, py - by);
+                draw(&|| {
+                    area.draw(&PathElement::new(vec![(x, y), (x, y + mark)], ink)).map_err(|e| fail(&e))?;
+                    area.draw(&Text::new(label(v), (x, y + mark + gap), style.clone())).map_err(|e| fail(&e))
+                })?;
+            }
+        }
+        Ok(())
+    }
+
     /// The frame around the plotting area, drawn over the data's edges.
     fn frame<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>, ctx: Ctx) -> Result<(), String>
     where
@@ -1184,6 +1233,7 @@ impl Plot for LinesPlot<'_> {
             x_log: self.labels.log_x,
         };
         let (mut chart, _) = axes.build(area, ctx, 0)?;
+        axes.label_between_decades(area, &chart, ctx)?;
         minor_decades(&mut chart, ctx, (x0, x1), y, (log_x, log_y))?;
         // shading first, under everything: each series' flagged points, layered in translucent grey
         for s in series.iter().filter(|s| s.shaded.iter().any(|&f| f)) {
@@ -1366,6 +1416,7 @@ impl Plot for FitPlot<'_> {
             let y = around(extent(all.iter().map(|p| p.1)));
             let axes = Axes { x, y, x_desc: panel.x, y_desc: panel.y, grid: true, y_log: true, x_log: true };
             let (mut chart, _) = axes.build(&below, ctx, 0)?;
+            axes.label_between_decades(&below, &chart, ctx)?;
             minor_decades(&mut chart, ctx, x, y, (true, true))?;
             for set in &panel.sets {
                 let stroke = Self::stroke(set);
