@@ -942,16 +942,13 @@ impl Axes<'_> {
         let (bx, by) = area.get_base_pixel();
         let (mark, gap, ink) = (ctx.px(3.0), ctx.px(3.0), INK.stroke_width(ctx.stroke(0.6)));
         let label = |v: f64| number(10f64.powf(v));
-        let draw = |e: &dyn Fn() -> Result<(), String>| e();
         if self.y_log {
             let style = ctx.font(TICK_PT).color(&INK).pos(Pos::new(HPos::Right, VPos::Center));
             for v in between(self.y) {
                 let (px, py) = chart.backend_coord(&(self.x.0, v));
                 let (x, y) = (px - bx, py - by);
-                draw(&|| {
-                    area.draw(&PathElement::new(vec![(x - mark, y), (x, y)], ink)).map_err(|e| fail(&e))?;
-                    area.draw(&Text::new(label(v), (x - mark - gap, y), style.clone())).map_err(|e| fail(&e))
-                })?;
+                area.draw(&PathElement::new(vec![(x - mark, y), (x, y)], ink)).map_err(|e| fail(&e))?;
+                area.draw(&Text::new(label(v), (x - mark - gap, y), style.clone())).map_err(|e| fail(&e))?;
             }
         }
         if self.x_log {
@@ -959,10 +956,8 @@ impl Axes<'_> {
             for v in between(self.x) {
                 let (px, py) = chart.backend_coord(&(v, self.y.0));
                 let (x, y) = (px - bx, py - by);
-                draw(&|| {
-                    area.draw(&PathElement::new(vec![(x, y), (x, y + mark)], ink)).map_err(|e| fail(&e))?;
-                    area.draw(&Text::new(label(v), (x, y + mark + gap), style.clone())).map_err(|e| fail(&e))
-                })?;
+                area.draw(&PathElement::new(vec![(x, y), (x, y + mark)], ink)).map_err(|e| fail(&e))?;
+                area.draw(&Text::new(label(v), (x, y + mark + gap), style.clone())).map_err(|e| fail(&e))?;
             }
         }
         Ok(())
