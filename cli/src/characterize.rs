@@ -26,6 +26,17 @@ pub struct CharacterizeArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Also draw the STF and PTC on log-log axes with their fitted lines, with and without the
+    /// capped black subtracted (paper SI Fig. S7–S8), into FILE (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Plot width in pixels (default 900).
+    #[arg(long, value_name = "PX")]
+    pub width: Option<u32>,
+    /// Plot resolution: sets the size of text and lines (a point is 1/72 inch), and PNGs record
+    /// it (default: the width over 6 inches).
+    #[arg(long)]
+    pub dpi: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -81,6 +92,10 @@ pub fn run(args: &CharacterizeArgs) -> Result<()> {
         );
     }
     let c = imaging::characterize(dark, &levels).with_context(|| file.display().to_string())?;
+    if let Some(path) = &args.plot {
+        let figure = crate::plot::Figure::new(args.width, args.dpi)?;
+        plot(path, &figure, file, &c)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&c)?);
         return Ok(());
@@ -107,4 +122,52 @@ pub fn run(args: &CharacterizeArgs) -> Result<()> {
     println!("PTC slope           {} (log √(σ² − σ²_dark) vs log μ − μ_dark; 0.5 = shot-noise limited)", fit(&c.ptc));
     println!("PTC slope, raw      {} (capped black not subtracted)", fit(&c.ptc_raw));
     Ok(())
+}
+
+/// The STF and PTC of `c` on log-log axes (paper SI Fig. S7, S8): measured levels and fitted
+/// lines, raw (red) and with the capped black subtracted (blue); hollow points were not fitted.
+fn plot(path: &Path, figure: &crate::plot::Figure, file: &Path, c: &imaging::Characterization) -> Result<()> {
+    use crate::plot::{FitPanel, FitSet};
+    let slope = |what: &str, f: &imaging::Fit| format!("{what}: slope {:.4} ± {:.4}", f.slope, f.slope_sigma);
+    let (dark_mean, dark_var) = (c.dark.mean, c.dark.variance);
+    let set = |label: String, f: &imaging::Fit, colour: usize, point: &dyn Fn(&imaging::Level) -> (f64, f64)| FitSet {
+        label,
+        points: c.levels.iter().map(point).collect(),
+        fitted: c.fitted.clone(),
+        line: Some((f.slope, f.intercept)),
+        colour,
+    };
+    let stf = FitPanel {
+        caption: "(a) signal transfer (STF)",
+        x: "illumination (series file units)",
+        y: "mean signal (DN)",
+        sets: vec![
+            set(slope("STF, raw μ", &c.stf_raw), &c.stf_raw, 1, &|l: &imaging::Level| (l.illumination, l.mean)),
+            set(slope("STF, μ − μ_dark (capped black subtracted)", &c.stf), &c.stf, 0, &|l: &imaging::Level| {
+                (l.illumination, l.mean - dark_mean)
+            }),
+        ],
+    };
+    let ptc = FitPanel {
+        caption: "(b) photon transfer (PTC)",
+        x: "mean signal (DN)",
+        y: "temporal noise σ (DN)",
+        sets: vec![
+            set(slope("PTC, raw σ vs μ", &c.ptc_raw), &c.ptc_raw, 1, &|l: &imaging::Level| {
+                (l.mean, l.variance.sqrt())
+            }),
+            set(
+                slope("PTC, √(σ² − σ²_dark) vs μ − μ_dark (subtracted)", &c.ptc),
+                &c.ptc,
+                0,
+                &|l: &imaging::Level| (l.mean - dark_mean, (l.variance - dark_var).max(0.0).sqrt()),
+            ),
+        ],
+    };
+    let name = file.file_name().map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let title = format!(
+        "Camera transfer curves ({name}): K = {:.4} DN/e⁻, read noise {:.2} e⁻",
+        c.conversion_gain, c.read_noise_e
+    );
+    crate::plot::fit_panels_plot("--plot", path, figure, &title, &[stf, ptc])
 }

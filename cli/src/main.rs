@@ -168,12 +168,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Evaluate { scene, set, json, tolerance, explain } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
             let set = with_tolerance(set, tolerance);
-            let loaded = load(scene.as_deref(), &set)?;
+            let read = scene::load_with_warnings(scene.as_deref(), &set)?;
+            warn(&read.warnings);
+            let (loaded, meter) = (read.scene, read.radiance_meter);
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if json {
                 let report = output::json(&label, &loaded, &result)?;
                 // with --json, stdout stays one JSON document: the explanation is its `explain` field
-                let report = if explain { with_explain(&report, &output::explain(&loaded, &result))? } else { report };
+                let report = if explain {
+                    with_explain(&report, &output::explain(&loaded, &result, meter.as_ref()))?
+                } else {
+                    report
+                };
                 println!("{report}");
             } else {
                 print!("{}", output::table(&label, &loaded, &result));
@@ -181,7 +187,7 @@ fn run(cli: Cli) -> Result<()> {
                     eprintln!("warning: {w}");
                 }
                 if explain {
-                    print!("{}", output::explain(&loaded, &result));
+                    print!("{}", output::explain(&loaded, &result, meter.as_ref()));
                 }
             }
             Ok(())

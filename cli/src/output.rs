@@ -338,9 +338,12 @@ pub fn mtf_table(label: &str, scene: &Scene, c: &MtfCurve) -> String {
 
 /// The evaluation plan behind `r` (`asnr evaluate --explain`): which engine and why, the
 /// quadratures and their work, and the error budget.
-pub fn explain(scene: &Scene, r: &Evaluation) -> String {
+pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::RadianceMeterSteps>) -> String {
     let n = &r.numerics;
     let mut s = String::from("\nHow this was computed (--explain)\n");
+    if let Some(m) = meter {
+        s.push_str(&radiance_meter(m));
+    }
     let _ = writeln!(s, "  engine       {}", n.engine);
     let spectral = if n.engine.starts_with("monochromatic") {
         format!(
@@ -436,6 +439,69 @@ pub fn explain(scene: &Scene, r: &Evaluation) -> String {
     if fields > 0 {
         let _ = writeln!(s, "  field        weighted average of {fields} field points, each evaluated as above");
     }
+    s
+}
+
+/// The steps of a radiance-meter source (SI eq. S1–S6) with their values, in the units of the
+/// paper's SI (nm, nW, µm, mm; spectral quantities per nm).
+fn radiance_meter(m: &radiometry::RadianceMeterSteps) -> String {
+    let (lo, hi) = m.normalized.range();
+    let peak = |t: &radiometry::Sampled| {
+        let i = (0..t.values().len()).max_by(|&a, &b| t.values()[a].total_cmp(&t.values()[b])).unwrap_or(0);
+        (t.values()[i], t.wavelengths()[i] * 1e9)
+    };
+    let (e_peak, at) = peak(&m.spectral_irradiance);
+    let (l_peak, _) = peak(&m.radiance);
+    let power_nw = m.fiber_irradiance_w_m2 * m.fiber_area_m2 * 1e9;
+    let core_um = (4.0 * m.fiber_area_m2 / std::f64::consts::PI).sqrt() * 1e6;
+    let mut s = String::from("  source       radiance meter → the target's spectral radiance (SI eq. S1–S6):\n");
+    let mut line = |eq: &str, text: String| {
+        let _ = writeln!(s, "    {eq:<4}{text}");
+    };
+    line(
+        "S1",
+        format!(
+            "∫E_rel dλ = {} (the CSV's unit × nm) over {}–{} nm; E_norm = E_rel/∫E_rel dλ, peak {} /nm at {} nm",
+            significant(m.relative_integral * 1e9),
+            significant(lo * 1e9),
+            significant(hi * 1e9),
+            significant(m.normalized.values().iter().copied().fold(0.0, f64::max) * 1e-9),
+            significant(peak(&m.normalized).1)
+        ),
+    );
+    line(
+        "S2",
+        format!(
+            "E = P/A_fiber = {} nW / {} m² (π d²/4, d = {} µm) = {} W/m²",
+            significant(power_nw),
+            significant(m.fiber_area_m2),
+            significant(core_um),
+            significant(m.fiber_irradiance_w_m2)
+        ),
+    );
+    line(
+        "S3",
+        format!(
+            "corr = ∫E_norm R(λ_cal)/R(λ) dλ = {} (R(λ_cal) = {})",
+            significant(m.correction),
+            significant(m.calibration_responsivity)
+        ),
+    );
+    line("S4", format!("E_accurate = corr · E = {} W/m²", significant(m.corrected_irradiance_w_m2)));
+    line(
+        "S5",
+        format!("E_λ = E_norm · E_accurate: peak {} W/(m² nm) at {} nm", significant(e_peak * 1e-9), significant(at)),
+    );
+    line(
+        "S6",
+        format!(
+            "L_λ = E_λ/(π T_lenses) · (2f/D)² = E_λ × {} /sr: peak {} W/(m² sr nm) at {} nm, ∫L_λ dλ = {} W/(m² sr)",
+            significant(m.relay_factor_per_sr),
+            significant(l_peak * 1e-9),
+            significant(at),
+            significant(m.radiance.integral())
+        ),
+    );
     s
 }
 

@@ -241,6 +241,8 @@ pub struct Labels<'a> {
     /// Line plots: a logarithmic y axis (decades labelled, 2–9 × 10^k as light grid lines), for
     /// values spanning orders of magnitude; non-positive values are left out.
     pub log_y: bool,
+    /// Line plots: a logarithmic x axis, as `log_y`.
+    pub log_x: bool,
 }
 
 /// One line of an overlay plot.
@@ -485,6 +487,8 @@ enum Swatch {
     Line(Stroke),
     /// A stretch of the line with a dot (fill colour) in its middle.
     Dot(Stroke, RGBColor),
+    /// A hollow dot: a ring of this colour.
+    Ring(RGBColor),
     /// A patch: `base` colour under a translucent `fill`, optionally with a line across.
     Patch { base: Option<RGBColor>, fill: (RGBColor, f64), line: Option<Stroke> },
 }
@@ -762,6 +766,10 @@ where
             area.draw(&Circle::new(centre, r, fill.filled())).map_err(|e| fail(&e))?;
             area.draw(&Circle::new(centre, r, WHITE.stroke_width(ctx.stroke(0.5)))).map_err(|e| fail(&e))
         }
+        Swatch::Ring(colour) => {
+            let (centre, r) = ((x + ctx.px(SWATCH_PT) / 2, y), ctx.px(2.6).unsigned_abs());
+            area.draw(&Circle::new(centre, r, colour.stroke_width(ctx.stroke(1.0)))).map_err(|e| fail(&e))
+        }
         Swatch::Patch { base, fill: (colour, alpha), line } => {
             let h = ctx.px(LEGEND_PT * 0.6);
             let corners = [(x, y - h), (x + ctx.px(SWATCH_PT), y + h)];
@@ -811,6 +819,8 @@ struct Axes<'a> {
     grid: bool,
     /// y holds log10 of the values: ticks at whole decades, written as the values
     y_log: bool,
+    /// x holds log10 of the values, as `y_log`
+    x_log: bool,
 }
 
 /// Space around the plotting area of a chart, device pixels.
@@ -832,14 +842,19 @@ fn tick_count(ctx: Ctx, length: i32, each: f64) -> usize {
 impl Axes<'_> {
     /// Tick counts and formats for a plotting area about `(w, h)` pixels.
     fn ticks(&self, ctx: Ctx, (w, h): (i32, i32)) -> ((usize, TickFormat), (usize, TickFormat)) {
-        let nx = tick_count(ctx, w, TICK_PT * 4.0);
+        // a log axis: one tick per whole decade, as many labels as decades, so the nice step is 1
+        let decades = |(lo, hi): (f64, f64)| ((hi.floor() - lo.ceil()).max(0.0) as usize + 1).max(2);
+        let x = if self.x_log {
+            (decades(self.x), TickFormat::Decades)
+        } else {
+            let nx = tick_count(ctx, w, TICK_PT * 4.0);
+            (nx, TickFormat::of(&ticks(self.x, nx)))
+        };
         if self.y_log {
-            // one tick per whole decade: as many labels as decades, so the nice step is 1
-            let decades = (self.y.1.floor() - self.y.0.ceil()).max(0.0) as usize + 1;
-            return ((nx, TickFormat::of(&ticks(self.x, nx))), (decades.max(2), TickFormat::Decades));
+            return (x, (decades(self.y), TickFormat::Decades));
         }
         let ny = tick_count(ctx, h, TICK_PT * 2.5);
-        ((nx, TickFormat::of(&ticks(self.x, nx))), (ny, TickFormat::of(&ticks(self.y, ny))))
+        (x, (ny, TickFormat::of(&ticks(self.y, ny))))
     }
 
     fn margins(&self, ctx: Ctx, (w, h): (i32, i32), right_extra: i32) -> Margins {
@@ -902,6 +917,50 @@ impl Axes<'_> {
         }
         mesh.draw().map_err(|e| fail(&e))?;
         Ok((chart, m))
+    }
+
+    /// On a log axis with fewer than three labelled decades, labels (and tick marks) at 2 and
+    /// 5 × 10^k too, so that a short axis is readable; `area` is the one the chart was built on.
+    fn label_between_decades<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        chart: &Chart<'_, DB>,
+        ctx: Ctx,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let between = |(lo, hi): (f64, f64)| -> Vec<f64> {
+            if hi.floor() - lo.ceil() + 1.0 >= 3.0 {
+                return Vec::new();
+            }
+            ((lo.floor() as i32)..=(hi.ceil() as i32))
+                .flat_map(|d| [2f64, 5.0].map(|m| f64::from(d) + m.log10()))
+                .filter(|&v| v > lo && v < hi)
+                .collect()
+        };
+        let (bx, by) = area.get_base_pixel();
+        let (mark, gap, ink) = (ctx.px(3.0), ctx.px(3.0), INK.stroke_width(ctx.stroke(0.6)));
+        let label = |v: f64| number(10f64.powf(v));
+        if self.y_log {
+            let style = ctx.font(TICK_PT).color(&INK).pos(Pos::new(HPos::Right, VPos::Center));
+            for v in between(self.y) {
+                let (px, py) = chart.backend_coord(&(self.x.0, v));
+                let (x, y) = (px - bx, py - by);
+                area.draw(&PathElement::new(vec![(x - mark, y), (x, y)], ink)).map_err(|e| fail(&e))?;
+                area.draw(&Text::new(label(v), (x - mark - gap, y), style.clone())).map_err(|e| fail(&e))?;
+            }
+        }
+        if self.x_log {
+            let style = ctx.font(TICK_PT).color(&INK).pos(Pos::new(HPos::Center, VPos::Top));
+            for v in between(self.x) {
+                let (px, py) = chart.backend_coord(&(v, self.y.0));
+                let (x, y) = (px - bx, py - by);
+                area.draw(&PathElement::new(vec![(x, y), (x, y + mark)], ink)).map_err(|e| fail(&e))?;
+                area.draw(&Text::new(label(v), (x, y + mark + gap), style.clone())).map_err(|e| fail(&e))?;
+            }
+        }
+        Ok(())
     }
 
     /// The frame around the plotting area, drawn over the data's edges.
@@ -1121,15 +1180,20 @@ impl Plot for LinesPlot<'_> {
     {
         // on a log axis the series are drawn as log10 of their positive values
         let log_series: Vec<Series>;
-        let series: &[Series] = if self.labels.log_y {
-            let log = |(x, y): (f64, f64)| (y > 0.0).then(|| (x, y.log10()));
+        let (log_x, log_y) = (self.labels.log_x, self.labels.log_y);
+        let series: &[Series] = if log_x || log_y {
+            let log = |(x, y): (f64, f64)| {
+                let x = if log_x { (x > 0.0).then(|| x.log10())? } else { x };
+                let y = if log_y { (y > 0.0).then(|| y.log10())? } else { y };
+                Some((x, y))
+            };
             log_series = self
                 .series
                 .iter()
                 .map(|s| Series {
                     label: s.label.clone(),
                     points: s.points.iter().copied().filter_map(log).collect(),
-                    shaded: if s.points.iter().all(|p| p.1 > 0.0) { s.shaded.clone() } else { Vec::new() },
+                    shaded: if s.points.iter().all(|&p| log(p).is_some()) { s.shaded.clone() } else { Vec::new() },
                     best: s.best.as_ref().and_then(|(p, how)| log(*p).map(|p| (p, how.clone()))),
                 })
                 .collect();
@@ -1154,20 +1218,18 @@ impl Plot for LinesPlot<'_> {
             let pad = 0.06 * span;
             (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad)
         };
-        let axes =
-            Axes { x: (x0, x1), y, x_desc: self.labels.x, y_desc: self.labels.y, grid: true, y_log: self.labels.log_y };
+        let axes = Axes {
+            x: (x0, x1),
+            y,
+            x_desc: self.labels.x,
+            y_desc: self.labels.y,
+            grid: true,
+            y_log: self.labels.log_y,
+            x_log: self.labels.log_x,
+        };
         let (mut chart, _) = axes.build(area, ctx, 0)?;
-        if self.labels.log_y {
-            // 2–9 × 10^k: light lines between the decades' grid lines
-            for decade in (y.0.floor() as i32)..=(y.1.ceil() as i32) {
-                for k in 2..=9 {
-                    let v = f64::from(decade) + f64::from(k).log10();
-                    if v > y.0 && v < y.1 {
-                        draw_curve(&mut chart, ctx, &[(x0, v), (x1, v)], Stroke::solid(MINOR_GRID, 0.3))?;
-                    }
-                }
-            }
-        }
+        axes.label_between_decades(area, &chart, ctx)?;
+        minor_decades(&mut chart, ctx, (x0, x1), y, (log_x, log_y))?;
         // shading first, under everything: each series' flagged points, layered in translucent grey
         for s in series.iter().filter(|s| s.shaded.iter().any(|&f| f)) {
             let xs: Vec<f64> = s.points.iter().map(|p| p.0).collect();
@@ -1217,6 +1279,184 @@ impl Plot for LinesPlot<'_> {
             draw_curve(&mut chart, ctx, &[(mark.x, y.0), (mark.x, y.1)], MARK)?;
         }
         axes.frame(&mut chart, ctx)
+    }
+}
+
+/// On log axes (`log`: x, y), light lines at 2–9 × 10^k between the decades' grid lines.
+fn minor_decades<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    ctx: Ctx,
+    x: (f64, f64),
+    y: (f64, f64),
+    log: (bool, bool),
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let between = |(lo, hi): (f64, f64)| {
+        ((lo.floor() as i32)..=(hi.ceil() as i32))
+            .flat_map(|decade| (2..=9).map(move |k| f64::from(decade) + f64::from(k).log10()))
+            .filter(move |&v| v > lo && v < hi)
+    };
+    let minor = Stroke::solid(MINOR_GRID, 0.3);
+    if log.0 {
+        for v in between(x) {
+            draw_curve(chart, ctx, &[(v, y.0), (v, y.1)], minor)?;
+        }
+    }
+    if log.1 {
+        for v in between(y) {
+            draw_curve(chart, ctx, &[(x.0, v), (x.1, v)], minor)?;
+        }
+    }
+    Ok(())
+}
+
+/// A set of measured points on a [`FitPanel`], with the straight line fitted to them in log-log
+/// coordinates.
+#[derive(Clone, Debug)]
+pub struct FitSet {
+    /// Legend entry (the fit's slope belongs in it).
+    pub label: String,
+    /// Measured `(x, y)`, both > 0 (others are left out).
+    pub points: Vec<(f64, f64)>,
+    /// Per point, whether the fit used it: drawn filled, the others hollow.
+    pub fitted: Vec<bool>,
+    /// `log10 y = intercept + slope · log10 x`: (slope, intercept), drawn over the fitted points.
+    pub line: Option<(f64, f64)>,
+    /// Colour index into the palette.
+    pub colour: usize,
+}
+
+/// One log-log panel of measured points and fitted power laws (a camera's STF or PTC).
+#[derive(Clone, Debug)]
+pub struct FitPanel<'a> {
+    /// Caption above the panel, e.g. "(a) signal transfer".
+    pub caption: &'a str,
+    /// Description of the x axis, with its unit.
+    pub x: &'a str,
+    /// Description of the y axis, with its unit.
+    pub y: &'a str,
+    /// The point sets.
+    pub sets: Vec<FitSet>,
+}
+
+/// Writes `panels` side by side on log-log axes, each set's points (filled where fitted, hollow
+/// where not) and fitted line, one legend below for all; SVG or PNG by the file's extension;
+/// errors name `flag`.
+pub fn fit_panels_plot(flag: &str, path: &Path, figure: &Figure, title: &str, panels: &[FitPanel]) -> Result<()> {
+    if panels.iter().all(|p| p.sets.iter().all(|s| s.points.iter().all(|&(x, y)| !(x > 0.0 && y > 0.0)))) {
+        bail!("{flag} {}: nothing to plot (no positive points)", path.display());
+    }
+    render(flag, path, figure, &FitPlot { title, panels })
+}
+
+/// The panels of [`fit_panels_plot`].
+struct FitPlot<'a> {
+    title: &'a str,
+    panels: &'a [FitPanel<'a>],
+}
+
+impl FitPlot<'_> {
+    fn stroke(set: &FitSet) -> Stroke {
+        Stroke::solid(PALETTE[set.colour % PALETTE.len()], 1.3)
+    }
+}
+
+impl Plot for FitPlot<'_> {
+    fn title(&self) -> &str {
+        self.title
+    }
+
+    fn entries(&self) -> Vec<Entry> {
+        let mut entries = Vec::new();
+        for set in self.panels.iter().flat_map(|p| &p.sets) {
+            if !entries.iter().any(|e: &Entry| e.label == set.label) {
+                let stroke = Self::stroke(set);
+                entries.push(Entry { label: set.label.clone(), swatch: Swatch::Dot(stroke, stroke.colour) });
+            }
+        }
+        if self.panels.iter().flat_map(|p| &p.sets).any(|s| s.fitted.iter().any(|f| !f)) {
+            entries.push(Entry {
+                label: "hollow: levels left out of the fits (dark-limited, or at or near saturation)".to_owned(),
+                swatch: Swatch::Ring(RGBColor(90, 90, 90)),
+            });
+        }
+        entries
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, ctx: Ctx) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let cells = area.split_evenly((1, self.panels.len().max(1)));
+        for (panel, cell) in self.panels.iter().zip(&cells) {
+            let caption_h = ctx.px(DESC_PT * 1.8);
+            let (top, below) = cell.split_vertically(caption_h);
+            let (cw, _) = top.dim_in_pixel();
+            let style = ctx.font(DESC_PT).color(&INK).pos(Pos::new(HPos::Center, VPos::Top));
+            let centre = i32::try_from(cw / 2).unwrap_or(0);
+            top.draw(&Text::new(panel.caption.to_owned(), (centre, ctx.px(2.0)), style)).map_err(|e| fail(&e))?;
+            let log = |&(x, y): &(f64, f64)| (x > 0.0 && y > 0.0).then(|| (x.log10(), y.log10()));
+            let all: Vec<(f64, f64)> = panel.sets.iter().flat_map(|s| s.points.iter().filter_map(log)).collect();
+            if all.is_empty() {
+                continue;
+            }
+            // whole decades around the data, or 5 % of the span beyond it where that is tighter
+            let around = |(lo, hi): (f64, f64)| {
+                let pad = 0.05 * (hi - lo).max(1.0);
+                ((lo - pad).max(lo.floor()), (hi + pad).min(hi.ceil().max(hi + 1e-9)))
+            };
+            let x = around(extent(all.iter().map(|p| p.0)));
+            let y = around(extent(all.iter().map(|p| p.1)));
+            let axes = Axes { x, y, x_desc: panel.x, y_desc: panel.y, grid: true, y_log: true, x_log: true };
+            let (mut chart, _) = axes.build(&below, ctx, 0)?;
+            axes.label_between_decades(&below, &chart, ctx)?;
+            minor_decades(&mut chart, ctx, x, y, (true, true))?;
+            for set in &panel.sets {
+                let stroke = Self::stroke(set);
+                let points: Vec<((f64, f64), bool)> = set
+                    .points
+                    .iter()
+                    .zip(set.fitted.iter().chain(std::iter::repeat(&true)))
+                    .filter_map(|(p, &f)| log(p).map(|p| (p, f)))
+                    .collect();
+                if let Some((slope, intercept)) = set.line {
+                    let fitted = || points.iter().filter(|(_, f)| *f).map(|(p, _)| p.0);
+                    let (lo, hi) = (fitted().fold(f64::INFINITY, f64::min), fitted().fold(f64::NEG_INFINITY, f64::max));
+                    if lo < hi {
+                        // the line over the fitted points and a little beyond, inside the axes
+                        let (a, b) = ((lo - 0.15 * (hi - lo)).max(x.0), (hi + 0.15 * (hi - lo)).min(x.1));
+                        let line: Vec<(f64, f64)> = (0..=64)
+                            .map(|i| a + (b - a) * f64::from(i) / 64.0)
+                            .map(|v| (v, intercept + slope * v))
+                            .filter(|p| p.1 >= y.0 && p.1 <= y.1)
+                            .collect();
+                        draw_curve(&mut chart, ctx, &line, stroke)?;
+                    }
+                }
+                let r = ctx.px(2.6);
+                for &(p, fitted) in &points {
+                    if fitted {
+                        chart
+                            .draw_series([
+                                Circle::new(p, r, stroke.colour.filled()),
+                                Circle::new(p, r, WHITE.stroke_width(ctx.stroke(0.5))),
+                            ])
+                            .map_err(|e| fail(&e))?;
+                    } else {
+                        chart
+                            .draw_series([
+                                Circle::new(p, r, WHITE.filled()),
+                                Circle::new(p, r, stroke.colour.stroke_width(ctx.stroke(1.0))),
+                            ])
+                            .map_err(|e| fail(&e))?;
+                    }
+                }
+            }
+            axes.frame(&mut chart, ctx)?;
+        }
+        Ok(())
     }
 }
 
@@ -1287,8 +1527,15 @@ impl Plot for HeatmapPlot<'_> {
         let bar_labels = bar_ticks.iter().map(|&v| ctx.text_width(TICK_PT, &bar_format.write(v))).max().unwrap_or(0);
         let bar_label_area = ctx.px(5.0) + bar_labels + ctx.px(4.0) + ctx.px(DESC_PT * 1.6);
         let bar_w = ctx.px(12.0) + ctx.px(10.0) + bar_label_area + ctx.px(MARGIN_PT);
-        let axes =
-            Axes { x: (x0, x1), y: (y0, y1), x_desc: self.labels.x, y_desc: self.labels.y, grid: false, y_log: false };
+        let axes = Axes {
+            x: (x0, x1),
+            y: (y0, y1),
+            x_desc: self.labels.x,
+            y_desc: self.labels.y,
+            grid: false,
+            y_log: false,
+            x_log: false,
+        };
         let (mut chart, margins) = axes.build(area, ctx, bar_w)?;
         let cell = |i: usize, j: usize| [(ex[i], ey[j]), (ex[i + 1], ey[j + 1])];
         // each cell reaches halfway into the next (which is drawn later and covers it), so no
@@ -1456,7 +1703,8 @@ impl Plot for MtfPlot<'_> {
         let x_max = curve.frequency_cyc_per_mm.last().copied().unwrap_or(1.0).max(1e-12);
         let y_desc = if curve.pixel_mtf { "MTF (lens × pixel)" } else { "MTF" };
         let x_desc = axis_label("frequency_cyc_per_mm");
-        let axes = Axes { x: (0.0, x_max), y: (0.0, 1.05), x_desc: &x_desc, y_desc, grid: true, y_log: false };
+        let axes =
+            Axes { x: (0.0, x_max), y: (0.0, 1.05), x_desc: &x_desc, y_desc, grid: true, y_log: false, x_log: false };
         let (mut chart, _) = axes.build(area, ctx, 0)?;
         let xs = &curve.frequency_cyc_per_mm;
         let series = |ys: &[f64]| xs.iter().copied().zip(ys.iter().copied()).collect::<Vec<_>>();
@@ -1555,6 +1803,27 @@ mod tests {
         assert_eq!(TickFormat::Decades.write(7.0), "1e7");
     }
 
+    /// A log-x axis from 0.3 to 2e4 (log10: −0.52 … 4.3): one tick per whole decade, 1 … 10000,
+    /// written as the values, as on a log y axis.
+    #[test]
+    fn log_x_axis_ticks_are_whole_decades() {
+        let axes = Axes {
+            x: (0.3f64.log10(), 2e4f64.log10()),
+            y: (0.0, 1.0),
+            x_desc: "x",
+            y_desc: "y",
+            grid: true,
+            y_log: false,
+            x_log: true,
+        };
+        let ((nx, format), _) = axes.ticks(Ctx { k: 1.0 }, (400, 300));
+        assert_eq!(format, TickFormat::Decades);
+        let keys = ticks(axes.x, nx);
+        assert_eq!(keys, vec![0.0, 1.0, 2.0, 3.0, 4.0], "{nx}");
+        let written: Vec<String> = keys.iter().map(|&v| format.write(v)).collect();
+        assert_eq!(written, ["1", "10", "100", "1000", "10000"]);
+    }
+
     /// A log-y line plot of values from 0.2 to 120: its ticks are the decades 1, 10, 100, one
     /// each, the decades' key points are whole numbers, and a non-positive value is left out.
     #[test]
@@ -1566,6 +1835,7 @@ mod tests {
             y_desc: "y",
             grid: true,
             y_log: true,
+            x_log: false,
         };
         let ((_, _), (ny, format)) = axes.ticks(Ctx { k: 1.0 }, (400, 300));
         assert_eq!(format, TickFormat::Decades);

@@ -107,6 +107,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             shade: SHADE_LABEL,
             x_unit: "",
             log_y: false,
+            log_x: false,
         };
         return plot::heatmap_plot("--output", &args.output, &figure, &labels, &grid, &marks);
     }

@@ -1665,6 +1665,26 @@ fn characterize_reads_a_series_file() {
     assert_eq!(v["saturation"], 5, "{v}");
     let (table, _) = succeeds(&["characterize", series.to_str().unwrap()]);
     assert!(table.contains("conversion gain K") && table.contains("0.5 = shot-noise limited"), "{table}");
+    // --plot: the STF and PTC panels (SI Fig. S7–S8), each fit's slope in the legend as the JSON has it
+    let svg = dir.join("transfer.svg");
+    succeeds(&["characterize", series.to_str().unwrap(), "--plot", svg.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for caption in
+        ["(a) signal transfer (STF)", "(b) photon transfer (PTC)", "mean signal (DN)", "temporal noise σ (DN)"]
+    {
+        assert!(text.contains(caption), "{caption} missing");
+    }
+    let slope = format!("STF, μ − μ_dark (capped black subtracted): slope {:.4}", v["stf"]["slope"].as_f64().unwrap());
+    assert!(text.contains(&slope), "{slope} missing");
+    let slope = format!("PTC, raw σ vs μ: slope {:.4}", v["ptc_raw"]["slope"].as_f64().unwrap());
+    assert!(text.contains(&slope), "{slope} missing");
+    // one filled or hollow dot per level and set: 6 levels × 4 sets, each dot drawn twice (fill and ring)
+    assert!(text.matches("<circle").count() >= 48, "{}", text.matches("<circle").count());
+    let png = dir.join("transfer.png");
+    succeeds(&["characterize", series.to_str().unwrap(), "--plot", png.to_str().unwrap()]);
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    let err = fails(&["characterize", series.to_str().unwrap(), "--plot", dir.join("t.pdf").to_str().unwrap()]);
+    assert!(err.contains("--plot") && err.contains("expected a file name ending in .svg or .png"), "{err}");
     std::fs::write(&series, toml.replacen("illumination = 100\n", "", 1)).unwrap();
     let err = fails(&["characterize", series.to_str().unwrap()]);
     assert!(err.contains("levels[0].illumination is missing"), "{err}");
@@ -1739,4 +1759,69 @@ fn psf_and_otf_export_the_scenes_2d_transfer() {
     assert!(err.contains("--size 15") && err.contains("even"), "{err}");
     let err = fails(&["psf", "--out", out, "--spacing-um", "0"]);
     assert!(err.contains("--spacing-um 0"), "{err}");
+}
+
+/// `[source] kind = "radiance_meter"` end to end (SI eq. S1–S6). A meter whose readings are
+/// those a flat 0.025 W/(m² sr nm) target behind the spectrometer table would give — the same
+/// table as its relative spectrum, a flat responsivity (corr = 1, S3), a relay of T = 1,
+/// D = 10 mm, f = 50 mm ((D/2f)² = 0.01), and the power S6 and S2 predict,
+/// P = π T (D/2f)² · 0.025 W/(m² sr nm) · ∫T dλ · π (200 µm)² — puts the same photoelectrons in a
+/// pixel as `examples/spectrometer.toml` (flat source × that table), to 1e-9. `--explain` prints
+/// each step's value; `examples/radiance-meter.toml` runs.
+#[test]
+fn radiance_meter_source_end_to_end() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let table = std::fs::read_to_string(root.join("examples/data/spectrometer-825-52.csv")).unwrap();
+    let rows: Vec<(f64, f64)> = table
+        .lines()
+        .filter_map(|l| {
+            let (a, b) = l.split_once(',')?;
+            Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
+        })
+        .collect();
+    assert_eq!(rows.len(), 1601);
+    // ∫T dλ by the trapezoid rule, exact for the piecewise-linear table (nm)
+    let area_nm: f64 = rows.windows(2).map(|w| 0.5 * (w[1].0 - w[0].0) * (w[0].1 + w[1].1)).sum();
+    let pi = std::f64::consts::PI;
+    let power_nw = pi * 0.01 * 0.025 * area_nm * pi * 200e-6 * 200e-6 * 1e9;
+    let dir = scratch("radiance-meter");
+    std::fs::write(dir.join("flat.csv"), "400,1\n1100,1\n").unwrap();
+    let scene = root.join("examples/radiance-meter.toml");
+    let scene = scene.to_str().unwrap();
+    let (power, flat) = (
+        format!("source.power_nw={power_nw:e}"),
+        format!("source.responsivity_csv=\"{}\"", dir.join("flat.csv").display()),
+    );
+    let args = ["evaluate", scene, "--json", "--set", &power, "--set", &flat, "--set", "source.relay_transmission=1"];
+    let meter = json(&args);
+    let reference = json(&["evaluate", root.join("examples/spectrometer.toml").to_str().unwrap(), "--json"]);
+    let (a, b) = (meter["photoelectrons"].as_f64().unwrap(), reference["photoelectrons"].as_f64().unwrap());
+    assert!((a / b - 1.0).abs() < 1e-9, "radiance meter {a} vs flat source × table {b}");
+
+    // --explain: every step, with the example's values worked by hand:
+    // S2 E = 4.6 nW/(π (200 µm)²) = 0.036606 W/m²; S6 (2·50/10)²/(π · 0.95) = 33.506 /sr
+    let (text, _) = succeeds(&["evaluate", scene, "--explain"]);
+    for step in [
+        "    S1  ∫E_rel dλ",
+        "    S2  E = P/A_fiber = 4.600 nW / 1.257e-7 m²",
+        "    S3  corr = ",
+        "    S4  E_accurate",
+        "    S5  E_λ",
+        "    S6  L_λ",
+    ] {
+        assert!(text.contains(step), "{step} missing:\n{text}");
+    }
+    assert!(text.contains("= 0.03661 W/m²") && text.contains("E_λ × 33.51 /sr"), "{text}");
+    // with --json the steps are lines of the `explain` field
+    let v = json(&["evaluate", scene, "--json", "--explain"]);
+    let explain = v["explain"].as_array().unwrap();
+    assert!(explain.iter().any(|l| l.as_str().unwrap().contains("S3  corr = ∫E_norm R(λ_cal)/R(λ) dλ")), "{v}");
+    // other sources print no such steps
+    let (text, _) = succeeds(&["evaluate", "--explain"]);
+    assert!(!text.contains("S1  ∫E_rel"), "{text}");
+    // bad values: exit 1, the key and what is accepted
+    let err = fails(&["evaluate", scene, "--set", "source.relay_iris_mm=-3"]);
+    assert!(err.contains("source.relay_iris_mm = -3: expected the relay iris diameter > 0 mm"), "{err}");
+    let err = fails(&["evaluate", scene, "--set", "source.relative_spectrum_csv=missing.csv"]);
+    assert!(err.contains("source.relative_spectrum_csv = \"missing.csv\"") && err.contains("cannot read"), "{err}");
 }

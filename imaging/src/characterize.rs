@@ -107,6 +107,8 @@ pub struct Characterization {
     pub levels: Vec<Level>,
     /// Index into `levels` of the saturation point: the largest variance (EMVA 1288).
     pub saturation: usize,
+    /// Per level, whether the fits used it (above the capped black, below 90 % of saturation).
+    pub fitted: Vec<bool>,
     /// STF, log10 μ against log10 illumination (capped black not subtracted; SI Fig. S7a).
     pub stf_raw: Fit,
     /// STF with the capped black subtracted: log10 (μ − μ_dark) (SI Fig. S8a; ≈ 1 when linear).
@@ -147,12 +149,13 @@ pub fn characterize(dark: Level, levels: &[Level]) -> Result<Characterization, E
         levels.iter().enumerate().max_by(|a, b| a.1.variance.total_cmp(&b.1.variance)).map_or(0, |(i, _)| i);
     let sat_mean = levels.get(saturation).map_or(f64::INFINITY, |l| l.mean);
     // below the saturation point (a level within 1 % of its mean is on the roll-off)
-    let usable: Vec<&Level> = levels
+    let fitted: Vec<bool> = levels
         .iter()
-        .filter(|l| {
+        .map(|l| {
             l.mean - dark.mean > 0.0 && l.variance > dark.variance && l.mean < dark.mean + 0.9 * (sat_mean - dark.mean)
         })
         .collect();
+    let usable: Vec<&Level> = levels.iter().zip(&fitted).filter(|(_, f)| **f).map(|(l, _)| l).collect();
     if usable.len() < 3 {
         return Err(bad(format!(
             "{} of {} levels are above the capped black and below saturation; at least 3 are needed for the fits",
@@ -181,6 +184,7 @@ pub fn characterize(dark: Level, levels: &[Level]) -> Result<Characterization, E
         dark,
         levels: levels.to_vec(),
         saturation,
+        fitted,
         stf_raw,
         stf,
         ptc_raw,

@@ -68,6 +68,10 @@ fn recovers_gain_read_noise_slopes_and_saturation() {
     let sat_e = 20.0 * 1.6f64.powi(c.saturation as i32);
     assert!((5000.0..FULL_WELL_E).contains(&sat_e), "saturation at level {} ({sat_e} e⁻)", c.saturation);
     assert!(c.stf.points >= 8, "{:?}", c.stf);
+    // `fitted` names the levels the fits used: as many as each fit counts, none at or past saturation
+    assert_eq!(c.fitted.len(), levels.len());
+    assert_eq!(c.fitted.iter().filter(|&&f| f).count(), c.stf.points);
+    assert!(c.fitted[c.saturation..].iter().all(|&f| !f), "{:?}", c.fitted);
 }
 
 #[test]

@@ -132,6 +132,98 @@ pub fn target_radiance(
     spectral_irradiance / (PI * relay_transmission) * g * g
 }
 
+/// The readings of the paper's spectral radiance meter (SI section "Radiometric calculation"):
+/// the spectrometer's relative spectrum through the fiber, the power meter's reading of the same
+/// fiber, the meter's spectral responsivity and calibration wavelength, and the Lambertian relay
+/// (lenses L1, L2 with an iris between them) that images the target onto the fiber face.
+/// Wavelengths in m, lengths in m, power in W; the spectrum and the responsivity in any unit.
+#[derive(Clone, Debug)]
+pub struct RadianceMeter {
+    /// E_rel(λ), the spectrometer's relative spectrum (any unit, ≥ 0).
+    pub relative_spectrum: Sampled,
+    /// P, the power meter's reading, W.
+    pub power_w: f64,
+    /// The fiber core diameter d, m (A_fiber = π d²/4).
+    pub fiber_core_diameter_m: f64,
+    /// R(λ), the power meter's spectral responsivity (A/W or relative).
+    pub responsivity: Sampled,
+    /// λ_cal, the wavelength the meter is calibrated at, m.
+    pub calibration_wavelength_m: f64,
+    /// T_lenses, the relay's transmission, in (0, 1].
+    pub relay_transmission: f64,
+    /// D, the iris between the relay lenses, m.
+    pub relay_iris_m: f64,
+    /// f, the focal length of the relay lens before the fiber (L2), m.
+    pub relay_focal_length_m: f64,
+}
+
+/// Every step of [`radiance_meter`], SI eq. S1–S6, in SI units.
+#[derive(Clone, Debug)]
+pub struct RadianceMeterSteps {
+    /// S1: ∫E_rel dλ (the relative spectrum's unit × m).
+    pub relative_integral: f64,
+    /// S1: E_norm = E_rel/∫E_rel dλ, 1/m (unit area).
+    pub normalized: Sampled,
+    /// S2: A_fiber = π d²/4, m².
+    pub fiber_area_m2: f64,
+    /// S2: E = P/A_fiber, W/m².
+    pub fiber_irradiance_w_m2: f64,
+    /// S3: R(λ_cal), in the responsivity's unit.
+    pub calibration_responsivity: f64,
+    /// S3: corr = ∫E_norm R(λ_cal)/R(λ) dλ (dimensionless).
+    pub correction: f64,
+    /// S4: E_accurate = corr · E, W/m².
+    pub corrected_irradiance_w_m2: f64,
+    /// S5: E_λ = E_norm · E_accurate, W/(m² m).
+    pub spectral_irradiance: Sampled,
+    /// S6: (2f/D)²/(π T_lenses), 1/sr: L_λ = this × E_λ.
+    pub relay_factor_per_sr: f64,
+    /// S6: L_λ, the target's spectral radiance, W/(m² sr m).
+    pub radiance: Sampled,
+}
+
+/// Paper SI eq. S1–S6 in one go: the readings of a radiance meter → the target's spectral
+/// radiance, with every intermediate value (for reports: `asnr evaluate --explain`).
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for a power, diameter, iris or focal length that is not finite
+/// and positive, or a relay transmission outside (0, 1]; the errors of [`normalize`] and
+/// [`broadband_correction`]; [`Error::InvalidSample`] if a value overflows.
+pub fn radiance_meter(m: &RadianceMeter) -> Result<RadianceMeterSteps, Error> {
+    use crate::error::{check, positive};
+    positive("power", m.power_w, "W")?;
+    positive("fiber core diameter", m.fiber_core_diameter_m, "m")?;
+    check(
+        "relay transmission",
+        m.relay_transmission,
+        m.relay_transmission > 0.0 && m.relay_transmission <= 1.0,
+        "in (0, 1]",
+    )?;
+    positive("relay iris diameter", m.relay_iris_m, "m")?;
+    positive("relay focal length", m.relay_focal_length_m, "m")?;
+    let relative_integral = m.relative_spectrum.integral();
+    let normalized = normalize(&m.relative_spectrum)?;
+    let fiber_area_m2 = 0.25 * PI * m.fiber_core_diameter_m * m.fiber_core_diameter_m;
+    let fiber_irradiance_w_m2 = fiber_irradiance(m.power_w, m.fiber_core_diameter_m);
+    let correction = broadband_correction(&normalized, &m.responsivity, m.calibration_wavelength_m)?;
+    let corrected_irradiance_w_m2 = corrected_irradiance(correction, fiber_irradiance_w_m2);
+    let spectral_irradiance = normalized.try_scaled(corrected_irradiance_w_m2)?;
+    let relay_factor_per_sr = target_radiance(1.0, m.relay_transmission, m.relay_focal_length_m, m.relay_iris_m);
+    let radiance = spectral_irradiance.try_scaled(relay_factor_per_sr)?;
+    Ok(RadianceMeterSteps {
+        relative_integral,
+        normalized,
+        fiber_area_m2,
+        fiber_irradiance_w_m2,
+        calibration_responsivity: m.responsivity.value(m.calibration_wavelength_m),
+        correction,
+        corrected_irradiance_w_m2,
+        spectral_irradiance,
+        relay_factor_per_sr,
+        radiance,
+    })
+}
+
 /// Paper SI eq. S7: camera-plane spectral irradiance E_cam = π L τ₁ NA², W/(m² m) from a spectral
 /// radiance in W/(m² sr m), the lens efficiency τ₁ and numerical aperture NA.
 pub fn camera_irradiance(radiance: f64, efficiency: f64, numerical_aperture: f64) -> f64 {

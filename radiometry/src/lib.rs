@@ -57,8 +57,9 @@ mod spectrum;
 
 pub use analytic::{Blackbody, Gaussian, Line, MIN_RELATIVE_SIGMA, TopHat};
 pub use chain::{
-    absolute_spectral_irradiance, broadband_correction, camera_irradiance, corrected_irradiance, fiber_irradiance,
-    normalize, photoelectrons, photoelectrons_monochromatic, photon_flux_per_watt, shot_noise_snr, target_radiance,
+    RadianceMeter, RadianceMeterSteps, absolute_spectral_irradiance, broadband_correction, camera_irradiance,
+    corrected_irradiance, fiber_irradiance, normalize, photoelectrons, photoelectrons_monochromatic,
+    photon_flux_per_watt, radiance_meter, shot_noise_snr, target_radiance,
 };
 pub use error::Error;
 pub use sampled::Sampled;

@@ -220,6 +220,77 @@ fn full_chain_matches_closed_form() {
     assert_relative_eq!(n, want, max_relative = EXACT);
 }
 
+/// The radiance meter's readings of the hand-worked example below.
+fn hand_worked_meter() -> RadianceMeter {
+    RadianceMeter {
+        relative_spectrum: table(&[800.0, 810.0, 820.0], &[2.0, 4.0, 2.0]),
+        power_w: 10e-9,
+        fiber_core_diameter_m: 400e-6,
+        responsivity: table(&[800.0, 810.0, 820.0], &[0.5, 0.5, 1.0]),
+        calibration_wavelength_m: nm(810.0),
+        relay_transmission: 0.8,
+        relay_iris_m: 10e-3,
+        relay_focal_length_m: 50e-3,
+    }
+}
+
+#[test]
+fn radiance_meter_s1_to_s6_worked_by_hand() {
+    // A triangle spectrum E_rel = 2, 4, 2 at 800, 810, 820 nm; 10 nW on a 400 µm core; R = 0.5,
+    // 0.5, 1.0 A/W at the same wavelengths, calibrated at 810 nm; relay T = 0.8, f = 50 mm,
+    // D = 10 mm. Every step on paper:
+    let s = radiance_meter(&hand_worked_meter()).unwrap();
+    // S1: ∫E_rel dλ = 10 nm·(2 + 4)/2 + 10 nm·(4 + 2)/2 = 60 nm = 6e-8 m;
+    //     E_norm(810 nm) = 4/6e-8 m = 6.666…e7 /m (0.0667 /nm), and ∫E_norm dλ = 1.
+    assert_relative_eq!(s.relative_integral, 6e-8, max_relative = EXACT);
+    assert_relative_eq!(s.normalized.value(nm(810.0)), 4.0 / 6e-8, max_relative = EXACT);
+    assert_relative_eq!(s.normalized.integral(), 1.0, max_relative = EXACT);
+    // S2: A = π (200 µm)² = 4π e-8 m² = 1.2566e-7 m²; E = 1e-8 W / 4π e-8 m² = 1/(4π)
+    //     = 0.0795775 W/m².
+    assert_relative_eq!(s.fiber_area_m2, 4.0 * PI * 1e-8, max_relative = EXACT);
+    assert_relative_eq!(s.fiber_irradiance_w_m2, 1.0 / (4.0 * PI), max_relative = EXACT);
+    // S3: corr = R(810)·∫E_norm/R dλ = 0.5/60 nm · ∫E_rel/R dλ. On 800–810 nm R = 0.5:
+    //     ∫ = 30 nm/0.5 = 60 nm. On 810–820 nm, t = (λ − 810 nm)/10 nm, E = 4 − 2t,
+    //     R = 0.5(1 + t): ∫ = 10 nm · 2∫_0^1 (4 − 2t)/(1 + t) dt = 20 nm ∫_0^1 (6/(1 + t) − 2) dt
+    //     = 20 nm (6 ln 2 − 2) = (120 ln 2 − 40) nm. Sum (20 + 120 ln 2) nm, so
+    //     corr = 0.5 (20 + 120 ln 2)/60 = 1/6 + ln 2 = 0.8598138.
+    assert_relative_eq!(s.calibration_responsivity, 0.5, max_relative = EXACT);
+    assert_relative_eq!(s.correction, 1.0 / 6.0 + 2f64.ln(), max_relative = EXACT);
+    // S4: E_accurate = corr · E = 0.8598138/(4π) = 0.0684218 W/m².
+    let e_acc = (1.0 / 6.0 + 2f64.ln()) / (4.0 * PI);
+    assert_relative_eq!(s.corrected_irradiance_w_m2, e_acc, max_relative = EXACT);
+    assert_relative_eq!(e_acc, 0.068_421_811_962_487_5, max_relative = 1e-15);
+    // S5: E_λ(810 nm) = E_norm(810) · E_accurate = 6.6667e7 /m × 0.0684218 W/m²
+    //     = 4.561454e6 W/(m² m) (4.561e-3 W/(m² nm)); zero at the ends' neighbours outside.
+    assert_relative_eq!(s.spectral_irradiance.value(nm(810.0)), 4.0 / 6e-8 * e_acc, max_relative = EXACT);
+    assert_relative_eq!(s.spectral_irradiance.value(nm(810.0)), 4.561_454_130_832_501e6, max_relative = 1e-14);
+    assert_relative_eq!(s.spectral_irradiance.integral(), e_acc, max_relative = EXACT);
+    // S6: (2f/D)² = (100 mm/10 mm)² = 100; /(π · 0.8) = 125/π = 39.78874 /sr;
+    //     L(810 nm) = 4.561454e6 × 39.78874 = 1.814945e8 W/(m² sr m) (0.1815 W/(m² sr nm)).
+    assert_relative_eq!(s.relay_factor_per_sr, 125.0 / PI, max_relative = EXACT);
+    assert_relative_eq!(s.radiance.value(nm(810.0)), 1.814_944_931_522_343_8e8, max_relative = 1e-14);
+    assert_relative_eq!(s.radiance.value(nm(805.0)), 0.75 * 1.814_944_931_522_343_8e8, max_relative = 1e-14);
+    assert_eq!(s.radiance.wavelengths(), s.normalized.wavelengths());
+}
+
+#[test]
+fn radiance_meter_refuses_bad_readings() {
+    let with = |f: fn(&mut RadianceMeter)| {
+        let mut m = hand_worked_meter();
+        f(&mut m);
+        err_text(radiance_meter(&m))
+    };
+    assert_eq!(with(|m| m.power_w = 0.0), "power must be finite and > 0 W, got 0.0");
+    assert_eq!(with(|m| m.fiber_core_diameter_m = f64::NAN), "fiber core diameter must be finite and > 0 m, got NaN");
+    assert_eq!(with(|m| m.relay_transmission = 1.5), "relay transmission must be in (0, 1], got 1.5");
+    assert_eq!(with(|m| m.relay_iris_m = -1.0), "relay iris diameter must be finite and > 0 m, got -1.0");
+    assert_eq!(with(|m| m.relay_focal_length_m = 0.0), "relay focal length must be finite and > 0 m, got 0.0");
+    assert!(with(|m| m.calibration_wavelength_m = nm(900.0)).contains("responsivity at the calibration wavelength"));
+    assert!(with(|m| m.relative_spectrum = table(&[800.0, 820.0], &[0.0, 0.0])).contains("relative spectrum"));
+    // the responsivity table ends at 815 nm where the spectrum is still > 0
+    assert!(with(|m| m.responsivity = table(&[800.0, 815.0], &[0.5, 0.5])).contains("responsivity must be > 0"));
+}
+
 // ---------------------------------------------------------------- tables
 
 #[test]

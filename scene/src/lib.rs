@@ -28,6 +28,11 @@
 //! );
 //! ```
 //!
+//! `[source] kind` is `flat`, `blackbody`, `table` (a CSV of spectral radiance) or
+//! `radiance_meter`: the readings of the paper's radiance meter (spectrometer spectrum, power
+//! meter, fiber, responsivity, relay) turned into the target's radiance by SI eq. S1–S6
+//! ([`radiometry::radiance_meter`]), whose steps [`Loaded::radiance_meter`] keeps.
+//!
 //! `[lens] model` chooses the family (docs/physics.md, "Lens families"): `chromatic`,
 //! `refractive`, `dispersion-engineered`, `harmonic`, `multiplexed` (layout `segmented` or
 //! `interleaved`) or `tabulated`, each with its keys; a key of another family is refused naming

@@ -96,6 +96,35 @@ pub(crate) struct RawSource {
     pub temperature_k: Option<f64>,
     pub scale: Option<f64>,
     pub csv: Option<String>,
+    // kind = "radiance_meter" (SI eq. S1–S6)
+    pub relative_spectrum_csv: Option<String>,
+    pub power_nw: Option<f64>,
+    pub fiber_core_diameter_um: Option<f64>,
+    pub responsivity_csv: Option<String>,
+    pub calibration_wavelength_nm: Option<f64>,
+    pub relay_transmission: Option<f64>,
+    pub relay_iris_mm: Option<f64>,
+    pub relay_focal_length_mm: Option<f64>,
+}
+
+impl RawSource {
+    /// Every key of `[source]` but `kind`, and whether it is given.
+    fn given(&self) -> [(&'static str, bool); 12] {
+        [
+            ("radiance_w_m2_sr_nm", self.radiance_w_m2_sr_nm.is_some()),
+            ("temperature_k", self.temperature_k.is_some()),
+            ("scale", self.scale.is_some()),
+            ("csv", self.csv.is_some()),
+            ("relative_spectrum_csv", self.relative_spectrum_csv.is_some()),
+            ("power_nw", self.power_nw.is_some()),
+            ("fiber_core_diameter_um", self.fiber_core_diameter_um.is_some()),
+            ("responsivity_csv", self.responsivity_csv.is_some()),
+            ("calibration_wavelength_nm", self.calibration_wavelength_nm.is_some()),
+            ("relay_transmission", self.relay_transmission.is_some()),
+            ("relay_iris_mm", self.relay_iris_mm.is_some()),
+            ("relay_focal_length_mm", self.relay_focal_length_mm.is_some()),
+        ]
+    }
 }
 
 #[derive(Deserialize)]
@@ -152,6 +181,8 @@ pub(crate) struct Origins {
     pub lens: String,
     /// The preset the lens table named, and the keys it supplied (not given in the table).
     pub preset: Option<(String, Vec<String>)>,
+    /// The steps of a radiance-meter source (SI eq. S1–S6), kept for reports.
+    meter: RefCell<Option<radiometry::RadianceMeterSteps>>,
 }
 
 impl Origins {
@@ -165,6 +196,7 @@ impl Origins {
             warnings: RefCell::new(Vec::new()),
             lens,
             preset: None,
+            meter: RefCell::new(None),
         }
     }
 
@@ -370,6 +402,7 @@ fn unit_of(key: &str) -> &'static str {
         ("_w_m2_sr_nm", " in W/(m² sr nm)"),
         ("_e_per_s", " in e⁻/s"),
         ("_dn_per_e", " in DN/e⁻"),
+        ("_nw", " in nW"),
         ("_nm", " in nm"),
         ("_um", " in µm"),
         ("_mm", " in mm"),
@@ -454,6 +487,9 @@ pub struct Loaded {
     pub scene: Scene,
     /// Values that are valid but almost surely a unit slip, in the order they were read.
     pub warnings: Vec<Warning>,
+    /// With `[source] kind = "radiance_meter"`: every step from the meter's readings to the
+    /// target's spectral radiance (SI eq. S1–S6), for reports (`asnr evaluate --explain`).
+    pub radiance_meter: Option<radiometry::RadianceMeterSteps>,
 }
 
 /// Reads a scene file (None = the embedded paper scene).
@@ -500,7 +536,7 @@ fn build_checked(raw: &RawScene, origins: &Origins) -> Result<Loaded, Error> {
     let built = build(raw, origins);
     let warnings = origins.warnings.take();
     match built {
-        Ok(scene) => Ok(Loaded { scene, warnings }),
+        Ok(scene) => Ok(Loaded { scene, warnings, radiance_meter: origins.meter.take() }),
         Err(error) if warnings.is_empty() => Err(error),
         Err(error) => Err(Error::WithWarnings { error: Box::new(error), warnings }),
     }
@@ -585,6 +621,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
         warnings: RefCell::new(Vec::new()),
         lens: "lens".to_owned(),
         preset: None,
+        meter: RefCell::new(None),
     };
     Ok((table, origins))
 }
@@ -939,22 +976,45 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
     sensor.map(Some).map_err(|e| o.domain("camera", "[camera]", e))
 }
 
+/// The kinds of `[source]` and the keys each takes (besides `kind`).
+const SOURCE_KINDS: [(&str, &[&str]); 4] = [
+    ("flat", &["radiance_w_m2_sr_nm"]),
+    ("blackbody", &["temperature_k", "scale"]),
+    ("table", &["csv"]),
+    (
+        "radiance_meter",
+        &[
+            "relative_spectrum_csv",
+            "power_nw",
+            "fiber_core_diameter_um",
+            "responsivity_csv",
+            "calibration_wavelength_nm",
+            "relay_transmission",
+            "relay_iris_mm",
+            "relay_focal_length_mm",
+        ],
+    ),
+];
+
 fn source(s: &RawSource, o: &Origins) -> Result<Spectrum, Error> {
     let kind = s.kind.as_str();
     let ctx = format!("source.kind = {}", quoted(kind));
+    let Some((_, keys)) = SOURCE_KINDS.iter().find(|(k, _)| *k == kind) else {
+        return Err(o.bad("source.kind", quoted(kind), "\"flat\", \"blackbody\", \"table\" or \"radiance_meter\""));
+    };
+    for (key, given) in s.given() {
+        if given && !keys.contains(&key) {
+            o.forbid(&format!("source.{key}"), &Some(()), &ctx)?;
+        }
+    }
     match kind {
         "flat" => {
-            o.forbid("source.temperature_k", &s.temperature_k, &ctx)?;
-            o.forbid("source.scale", &s.scale, &ctx)?;
-            o.forbid("source.csv", &s.csv, &ctx)?;
             let key = "source.radiance_w_m2_sr_nm";
             let l = o.require(key, s.radiance_w_m2_sr_nm, "a spectral radiance > 0 W/(m² sr nm)")?;
             // W/(m² sr nm) → W/(m² sr m)
             Ok(Spectrum::Constant(o.number(key, l, l > 0.0, "a spectral radiance > 0 W/(m² sr nm)")? * 1e9))
         }
         "blackbody" => {
-            o.forbid("source.radiance_w_m2_sr_nm", &s.radiance_w_m2_sr_nm, &ctx)?;
-            o.forbid("source.csv", &s.csv, &ctx)?;
             let key = "source.temperature_k";
             let t = o.require(key, s.temperature_k, "a temperature > 0 K")?;
             let t = o.number(key, t, t > 0.0, "a temperature > 0 K")?;
@@ -964,16 +1024,71 @@ fn source(s: &RawSource, o: &Origins) -> Result<Spectrum, Error> {
             Ok(Spectrum::Blackbody { source, scale })
         }
         "table" => {
-            o.forbid("source.radiance_w_m2_sr_nm", &s.radiance_w_m2_sr_nm, &ctx)?;
-            o.forbid("source.temperature_k", &s.temperature_k, &ctx)?;
-            o.forbid("source.scale", &s.scale, &ctx)?;
             let key = "source.csv";
             let f = o.require(key, s.csv.as_ref(), "the path of a CSV file: wavelength_nm, W/(m² sr nm)")?;
             let table = o.table(key, f, f64::INFINITY, "spectral radiance", "the path of a CSV file")?;
             Ok(Spectrum::Sampled(table.scaled(1e9)))
         }
-        other => Err(o.bad("source.kind", quoted(other), "\"flat\", \"blackbody\" or \"table\"")),
+        _ => radiance_meter(s, o),
     }
+}
+
+/// `[source] kind = "radiance_meter"`: the meter's readings → the target's spectral radiance by
+/// SI eq. S1–S6 ([`radiometry::radiance_meter`]); the steps are kept for `--explain`.
+fn radiance_meter(s: &RawSource, o: &Origins) -> Result<Spectrum, Error> {
+    let positive = |key: &str, v: Option<f64>, expected: &str| -> Result<f64, Error> {
+        let v = o.require(key, v, expected)?;
+        o.number(key, v, v > 0.0, expected)
+    };
+    let key = "source.relative_spectrum_csv";
+    let expected =
+        "the path of a CSV file: wavelength_nm, relative spectral power (the spectrometer's export, any unit, ≥ 0)";
+    let f = o.require(key, s.relative_spectrum_csv.as_ref(), expected)?;
+    let relative = o.table(key, f, f64::INFINITY, "relative spectral power", "the path of a CSV file")?;
+    let power = positive("source.power_nw", s.power_nw, "the power meter's reading > 0 nW")?;
+    let core = positive("source.fiber_core_diameter_um", s.fiber_core_diameter_um, "a fiber core diameter > 0 µm")?;
+    let key = "source.responsivity_csv";
+    let expected = "the path of a CSV file: wavelength_nm, the power meter's responsivity (A/W or relative, ≥ 0)";
+    let f = o.require(key, s.responsivity_csv.as_ref(), expected)?;
+    let responsivity = o.table(key, f, f64::INFINITY, "responsivity", "the path of a CSV file")?;
+    let key = "source.calibration_wavelength_nm";
+    let cal = positive(key, s.calibration_wavelength_nm, "the meter's calibration wavelength > 0 nm")?;
+    o.wavelength(key, cal);
+    let (lo, hi) = responsivity.range();
+    let r_cal = responsivity.value(cal * 1e-9);
+    if !(cal * 1e-9 >= lo && cal * 1e-9 <= hi && r_cal > 0.0) {
+        return Err(o.bad(
+            key,
+            num(cal),
+            &format!(
+                "a wavelength where the responsivity table ({}) is > 0: it covers {}–{} nm",
+                shorten(&quoted(s.responsivity_csv.as_deref().unwrap_or_default())),
+                rounded(lo * 1e9),
+                rounded(hi * 1e9)
+            ),
+        ));
+    }
+    let t = s.relay_transmission;
+    let t = o.require("source.relay_transmission", t, "the relay lenses' transmission in (0, 1]")?;
+    let t =
+        o.number("source.relay_transmission", t, t > 0.0 && t <= 1.0, "the relay lenses' transmission in (0, 1]")?;
+    let iris = positive("source.relay_iris_mm", s.relay_iris_mm, "the relay iris diameter > 0 mm")?;
+    let focal = positive("source.relay_focal_length_mm", s.relay_focal_length_mm, "the relay focal length > 0 mm")?;
+    let meter = radiometry::RadianceMeter {
+        relative_spectrum: relative,
+        power_w: power * 1e-9,
+        fiber_core_diameter_m: core * 1e-6,
+        responsivity,
+        calibration_wavelength_m: cal * 1e-9,
+        relay_transmission: t,
+        relay_iris_m: iris * 1e-3,
+        relay_focal_length_m: focal * 1e-3,
+    };
+    let steps = radiometry::radiance_meter(&meter)
+        .map_err(|e| o.domain("source", "[source] kind = \"radiance_meter\" (SI eq. S1–S6)", e))?;
+    let radiance = Spectrum::Sampled(steps.radiance.clone());
+    o.meter.replace(Some(steps));
+    Ok(radiance)
 }
 
 fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
@@ -1082,7 +1197,9 @@ mod tests {
     #[test]
     fn resolved_examples_load_to_the_same_asnr() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
-        for name in ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml", "harmonic.toml"] {
+        for name in
+            ["paper-theory.toml", "monochromatic.toml", "decentred-iris.toml", "harmonic.toml", "radiance-meter.toml"]
+        {
             let source = read(Some(&root.join(name))).unwrap();
             let text = resolved_toml(&source, &[]).unwrap().toml;
             let again = Source::from_text(text.clone(), "resolved", std::env::temp_dir());
@@ -1094,6 +1211,137 @@ mod tests {
             let body = |t: &str| t.lines().filter(|l| !l.starts_with("# From")).collect::<Vec<_>>().join("\n");
             assert_eq!(body(&twice), body(&text), "{name}");
         }
+    }
+
+    /// A scene with a radiance-meter source on the hand-worked tables of
+    /// `radiometry/tests/radiometry.rs` (`radiance_meter_s1_to_s6_worked_by_hand`), in a folder
+    /// of its own; `extra` replaces lines of `[source]`.
+    fn meter_scene(name: &str, edits: &[(&str, &str)]) -> (String, PathBuf) {
+        let dir = std::env::temp_dir().join(format!("scene-meter-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("rel.csv"), "wavelength_nm,counts\n800,2\n810,4\n820,2\n").unwrap();
+        std::fs::write(dir.join("resp.csv"), "wavelength_nm,a_per_w\n800,0.5\n810,0.5\n820,1.0\n").unwrap();
+        let mut source = "[source]\nkind = \"radiance_meter\"\nrelative_spectrum_csv = \"rel.csv\"\npower_nw = 10\n\
+                          fiber_core_diameter_um = 400\nresponsivity_csv = \"resp.csv\"\ncalibration_wavelength_nm = 810\n\
+                          relay_transmission = 0.8\nrelay_iris_mm = 10\nrelay_focal_length_mm = 50\n"
+            .to_owned();
+        for (from, to) in edits {
+            assert!(source.contains(from), "{from}");
+            source = source.replacen(from, to, 1);
+        }
+        let text = format!(
+            "[lens]\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800.0\nefficiency = 0.15\n\
+             transmission = 0.55\n\n{source}\n[camera]\npixel_pitch_um = 5.2\nquantum_efficiency = 0.2\n\n\
+             [exposure]\ntime_ms = 1.23\n"
+        );
+        (text, dir)
+    }
+
+    /// The radiance-meter source gives the target radiance of the hand-worked example: S1 ∫E_rel
+    /// = 60 nm, S2 E = 1/(4π) W/m², S3 corr = 1/6 + ln 2, S4 E_acc = 0.0684218 W/m², S5 E_λ(810 nm)
+    /// = 4/6e-8 m × E_acc = 4.561454e6 W/(m² m), S6 × 125/π: L(810 nm) = 1.814945e8 W/(m² sr m)
+    /// (every step worked on paper in radiometry's test); through the scene's units (nW, µm,
+    /// mm, nm) to 1e-14.
+    #[test]
+    fn a_radiance_meter_source_gives_the_hand_worked_radiance() {
+        let (text, dir) = meter_scene("ok", &[]);
+        let loaded = build_with_warnings(&Source::from_text(text.clone(), "m.toml", &dir), &[]).unwrap();
+        let l = loaded.scene.radiance();
+        let want = 1.814_944_931_522_343_8e8;
+        assert!((l.value(810e-9) / want - 1.0).abs() < 1e-14, "{l:?}");
+        assert!((l.value(805e-9) / (0.75 * want) - 1.0).abs() < 1e-14);
+        assert_eq!(l.value(830e-9), 0.0);
+        let steps = loaded.radiance_meter.unwrap();
+        assert!((steps.relative_integral / 6e-8 - 1.0).abs() < 1e-14);
+        assert!((steps.fiber_irradiance_w_m2 * 4.0 * std::f64::consts::PI - 1.0).abs() < 1e-14);
+        assert!((steps.correction / (1.0 / 6.0 + 2f64.ln()) - 1.0).abs() < 1e-14);
+        assert!((steps.corrected_irradiance_w_m2 / 0.068_421_811_962_487_5 - 1.0).abs() < 1e-14);
+        assert!((steps.relay_factor_per_sr * std::f64::consts::PI / 125.0 - 1.0).abs() < 1e-14);
+        // other sources carry no steps
+        assert!(build_with_warnings(&Source::from_text(PAPER_SCENE, "p", "."), &[]).unwrap().radiance_meter.is_none());
+        // `asnr scene` writes every key back, paths absolute, and it loads to the same radiance
+        let resolved = resolved_toml(&Source::from_text(text, "m.toml", &dir), &[]).unwrap().toml;
+        assert!(
+            resolved.contains("power_nw = 10.0\n") && resolved.contains("relay_focal_length_mm = 50.0\n"),
+            "{resolved}"
+        );
+        let again = build_from(&Source::from_text(resolved, "r", std::env::temp_dir()), &[]).unwrap();
+        assert_eq!(again.radiance().value(810e-9), l.value(810e-9));
+    }
+
+    /// Every bad key or value of a radiance-meter source is named with the file, the key, the
+    /// value and what is accepted; missing files name the key and the path.
+    #[test]
+    fn radiance_meter_errors_name_the_key() {
+        let error = |name: &str, edits: &[(&str, &str)]| {
+            let (text, dir) = meter_scene(name, edits);
+            build_from(&Source::from_text(text, "m.toml", &dir), &[]).unwrap_err().to_string()
+        };
+        type Case<'a> = (&'a str, &'a [(&'a str, &'a str)], &'a str);
+        let cases: [Case; 11] = [
+            (
+                "power",
+                &[("power_nw = 10", "power_nw = 0")],
+                "m.toml: source.power_nw = 0: expected the power meter's reading > 0 nW",
+            ),
+            (
+                "core",
+                &[("fiber_core_diameter_um = 400", "fiber_core_diameter_um = -4")],
+                "m.toml: source.fiber_core_diameter_um = -4: expected a fiber core diameter > 0 µm",
+            ),
+            (
+                "t",
+                &[("relay_transmission = 0.8", "relay_transmission = 1.2")],
+                "m.toml: source.relay_transmission = 1.2: expected the relay lenses' transmission in (0, 1]",
+            ),
+            (
+                "iris",
+                &[("relay_iris_mm = 10", "relay_iris_mm = 0")],
+                "m.toml: source.relay_iris_mm = 0: expected the relay iris diameter > 0 mm",
+            ),
+            (
+                "focal",
+                &[("relay_focal_length_mm = 50\n", "")],
+                "m.toml: source.relay_focal_length_mm is missing: expected the relay focal length > 0 mm",
+            ),
+            (
+                "cal",
+                &[("calibration_wavelength_nm = 810", "calibration_wavelength_nm = 900")],
+                "m.toml: source.calibration_wavelength_nm = 900: expected a wavelength where the responsivity table (\"resp.csv\") is > 0: it covers 800–820 nm",
+            ),
+            ("file", &[("\"rel.csv\"", "\"nope.csv\"")], "source.relative_spectrum_csv"),
+            (
+                "foreign",
+                &[("power_nw = 10", "power_nw = 10\nscale = 2")],
+                "m.toml: source.scale does not apply to source.kind = \"radiance_meter\"",
+            ),
+            (
+                "kind",
+                &[("\"radiance_meter\"", "\"radiance-meter\"")],
+                "m.toml: source.kind = \"radiance-meter\": expected \"flat\", \"blackbody\", \"table\" or \"radiance_meter\"",
+            ),
+            ("unit", &[("power_nw = 10", "power_nw = \"10nW\"")], "source.power_nw"),
+            ("unknown", &[("power_nw = 10", "power_nw = 10\npower_uw = 1")], "power_uw"),
+        ];
+        for (name, edits, want) in cases {
+            let got = error(name, edits);
+            assert!(got.contains(want), "{name}: {got}\n  wanted: {want}");
+        }
+        // the responsivity is zero inside the spectrum's band: the chain refuses it (S3)
+        let (text, dir) = meter_scene("zero", &[]);
+        std::fs::write(dir.join("resp.csv"), "800,0.5\n810,0.5\n815,0.0\n820,0.0\n").unwrap();
+        let got = build_from(&Source::from_text(text, "m.toml", &dir), &[]).unwrap_err().to_string();
+        assert!(
+            got.contains("[source] kind = \"radiance_meter\"") && got.contains("responsivity must be > 0"),
+            "{got}"
+        );
+        // a missing file says which file and which key
+        let got = error("missing", &[("\"resp.csv\"", "\"gone.csv\"")]);
+        assert!(got.contains("source.responsivity_csv") && got.contains("gone.csv"), "{got}");
+        // a key of the radiance meter under another kind is refused naming the kind
+        let text = PAPER_SCENE.replacen("radiance_w_m2_sr_nm = 0.025", "radiance_w_m2_sr_nm = 0.025\npower_nw = 3", 1);
+        let got = build_from(&Source::from_text(text, "f.toml", "."), &[]).unwrap_err().to_string();
+        assert_eq!(got, "f.toml: source.power_nw does not apply to source.kind = \"flat\"");
     }
 
     /// A table whose wavelengths all lie below 100 nm was typed in µm: valid, and warned about.

@@ -253,6 +253,19 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
             out.number("temperature_k", s.temperature_k.unwrap_or_default());
             out.number("scale", s.scale.unwrap_or(1.0));
         }
+        "radiance_meter" => {
+            out.line("# the target's spectral radiance from a radiance meter's readings (SI eq. S1–S6)");
+            let file = s.relative_spectrum_csv.as_deref().unwrap_or_default();
+            out.string("relative_spectrum_csv", &path(o, "source.relative_spectrum_csv", file)?);
+            out.number("power_nw", s.power_nw.unwrap_or_default());
+            out.number("fiber_core_diameter_um", s.fiber_core_diameter_um.unwrap_or_default());
+            let file = s.responsivity_csv.as_deref().unwrap_or_default();
+            out.string("responsivity_csv", &path(o, "source.responsivity_csv", file)?);
+            out.number("calibration_wavelength_nm", s.calibration_wavelength_nm.unwrap_or_default());
+            out.number("relay_transmission", s.relay_transmission.unwrap_or_default());
+            out.number("relay_iris_mm", s.relay_iris_mm.unwrap_or_default());
+            out.number("relay_focal_length_mm", s.relay_focal_length_mm.unwrap_or_default());
+        }
         _ => out.string("csv", &path(o, "source.csv", s.csv.as_deref().unwrap_or_default())?),
     }
 

@@ -41,7 +41,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
 }
 
 /// Cargo's target folder: `CARGO_TARGET_DIR` if set, else `target/` at the root.
-fn target_dir(root: &Path) -> PathBuf {
+pub(crate) fn target_dir(root: &Path) -> PathBuf {
     std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), |dir| root.join(PathBuf::from(dir)))
 }
 
@@ -58,33 +58,12 @@ fn has_numpy(python: &Path) -> bool {
 /// An interpreter with numpy for the baseline: the project's virtual environment (made here if
 /// it is missing or its requirements changed), else the system `python3`.
 fn python(root: &Path) -> Result<PathBuf, String> {
-    let venv = root.join(VENV);
-    let bin = if cfg!(windows) { venv.join("Scripts").join("python.exe") } else { venv.join("bin").join("python") };
-    let requirements = std::fs::read_to_string(root.join(REQUIREMENTS)).map_err(|e| format!("{REQUIREMENTS}: {e}"))?;
-    // the requirements the environment was made from, written after a successful install
-    let stamp = venv.join("requirements.installed");
-    let current = std::fs::read_to_string(&stamp).is_ok_and(|s| s == requirements);
-    if current && has_numpy(&bin) {
-        return Ok(bin);
-    }
-    let made = (|| -> Result<bool> {
-        if !cmd::status(Command::new("python3").args(["-m", "venv", "--clear"]).arg(&venv))? {
-            return Ok(false);
-        }
-        let mut pip = Command::new(&bin);
-        pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"]).arg(root.join(REQUIREMENTS));
-        Ok(cmd::status(&mut pip)? && has_numpy(&bin))
-    })();
-    match made {
-        Ok(true) => {
-            let _ = std::fs::write(&stamp, &requirements);
-            Ok(bin)
-        }
-        _ if has_numpy(Path::new("python3")) => {
+    match cmd::venv(root, VENV, REQUIREMENTS, "numpy") {
+        Ok(bin) => Ok(bin),
+        Err(_) if has_numpy(Path::new("python3")) => {
             eprintln!("accuracy: could not make {VENV}; using the system python3, which has numpy");
             Ok(PathBuf::from("python3"))
         }
-        Ok(false) => Err(format!("could not make {VENV} with {REQUIREMENTS}, and python3 has no numpy")),
-        Err(e) => Err(format!("{e:#}")),
+        Err(e) => Err(format!("{e:#}; and python3 has no numpy")),
     }
 }

@@ -20,6 +20,7 @@ const STEPS: &[Step] = &[
     Step { name: "tidy", run: run_tidy },
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
+    Step { name: "emva (asnr characterize against the emva1288 camera model)", run: emva },
     Step { name: "readme (every README command as written)", run: run_readme },
     Step { name: "stress (reduced grid)", run: stress },
     Step { name: "doc", run: doc },
@@ -73,6 +74,11 @@ fn run_readme(root: &Path) -> Result<()> {
 
 fn clippy(root: &Path) -> Result<()> {
     cmd::run(&mut cmd::cargo(root, &["clippy", "--workspace", "--all-targets", "--locked", "--", "-D", "warnings"]))
+}
+
+fn emva(root: &Path) -> Result<()> {
+    eprintln!("$ cargo xtask emva   (in-process)");
+    crate::emva::run(root)
 }
 
 fn test(root: &Path) -> Result<()> {

@@ -46,6 +46,39 @@ fn quote(word: &str) -> String {
     if word.is_empty() || word.contains(char::is_whitespace) { format!("\"{word}\"") } else { word.to_owned() }
 }
 
+/// The python of the virtual environment `venv` (relative to `root`) with the pinned
+/// `requirements` installed: made with `python3 -m venv` and `pip install -r` when it is missing
+/// or was made from other requirements (a stamp file inside it keeps the requirements it was
+/// made from), reused otherwise; `probe` is a module it must import.
+pub(crate) fn venv(root: &Path, venv: &str, requirements: &str, probe: &str) -> Result<std::path::PathBuf> {
+    let dir = root.join(venv);
+    let bin = if cfg!(windows) { dir.join("Scripts").join("python.exe") } else { dir.join("bin").join("python") };
+    let pinned =
+        std::fs::read_to_string(root.join(requirements)).map_err(|e| anyhow::anyhow!("{requirements}: {e}"))?;
+    let imports = |python: &Path| {
+        Command::new(python)
+            .args(["-c", &format!("import {probe}")])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    let stamp = dir.join("requirements.installed");
+    if std::fs::read_to_string(&stamp).is_ok_and(|s| s == pinned) && imports(&bin) {
+        return Ok(bin);
+    }
+    if !status(Command::new("python3").args(["-m", "venv", "--clear"]).arg(&dir))? {
+        anyhow::bail!("python3 -m venv {venv} failed");
+    }
+    let mut pip = Command::new(&bin);
+    pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"]).arg(root.join(requirements));
+    if !status(&mut pip)? || !imports(&bin) {
+        anyhow::bail!("could not install {requirements} into {venv} (or it does not import {probe})");
+    }
+    std::fs::write(&stamp, &pinned)?;
+    Ok(bin)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

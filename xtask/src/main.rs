@@ -6,6 +6,7 @@
 //! - `accuracy [--quick]`: the accuracy-versus-time report (`BENCHMARKS.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `data [--check]`: the generated data files of `examples/data/` (`data.rs`).
+//! - `emva`: `asnr characterize` against the `emva1288` package's camera model (`emva.rs`).
 //! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
 //! - `readme`: every command of the README's ```` ```sh ```` blocks, run as written (`readme.rs`).
 //! - `tidy`: the architecture invariants (layout, dependency direction, workspace dependencies
@@ -18,6 +19,7 @@ mod accuracy;
 mod ci;
 mod cmd;
 mod data;
+mod emva;
 mod figures;
 mod readme;
 mod stress;
@@ -29,8 +31,15 @@ use std::process::ExitCode;
 /// Every task with its one-line description, in the order `cargo xtask help` lists them.
 const TASKS: &[(&str, &str)] = &[
     ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
-    ("ci", "full check: fmt, tidy, clippy -D warnings, tests, README commands, reduced stress grid, docs -D warnings"),
+    (
+        "ci",
+        "full check: fmt, tidy, clippy -D warnings, tests, the emva1288 cross-check, README commands, reduced stress grid, docs -D warnings",
+    ),
     ("data", "(re)write the generated data files of examples/data/ (the spectrometer table; --check: compare only)"),
+    (
+        "emva",
+        "asnr characterize checked on a series from the emva1288 package's camera model (a pinned venv in target/)",
+    ),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("readme", "run every command of the README's ```sh blocks as written; none may change git status"),
     (
@@ -56,6 +65,7 @@ fn main() -> ExitCode {
         Some("accuracy") => accuracy::run(&root, &args[1..]),
         Some("ci") => ci::run(&root),
         Some("data") => data::run(&root, &args[1..]),
+        Some("emva") => emva::run(&root),
         Some("figures") => figures::run(&root),
         Some("readme") => readme::run(&root),
         Some("tidy") => tidy::run(&root),
