@@ -35,11 +35,6 @@ pub(super) struct FftPath {
     nodes: Vec<FftNode>,
     pub pupil_samples: usize,
     pub padded: usize,
-    /// Whether some single-aperture grid aliases its pupil's phase: more than
-    /// [`PHASE_NYQUIST_WAVES`] between neighbouring samples (`SampledPupil::max_opd_step_m` / λ).
-    aliased: bool,
-    /// Whether some grid is a composite pupil of zones.
-    composite: bool,
 }
 
 impl std::fmt::Debug for FftPath {
@@ -85,13 +80,33 @@ impl FftPath {
                 });
             }
         }
-        Ok(FftPath {
-            nodes: out,
-            pupil_samples,
-            padded: layer.plan.padded_len(),
-            aliased: layer.aliased,
-            composite: layer.composite,
-        })
+        Ok(FftPath { nodes: out, pupil_samples, padded: layer.plan.padded_len() })
+    }
+
+    /// Whether the pupils of `nodes` sampled at `pupil_samples` alias their phase: `Some(true)`
+    /// where some single aperture's wavefront turns by more than [`PHASE_NYQUIST_WAVES`] between
+    /// neighbouring samples, `None` where a pupil is a composite of zones (whose ring edges
+    /// converge irregularly whatever the phase does). Samples the pupils only: no grid.
+    fn aliases_phase(scene: &Scene<'_>, nodes: &Nodes, pupil_samples: usize) -> Result<Option<bool>, Error> {
+        // (the layer's plan is not used: the smallest one)
+        let mut layer = FftLayer::new(pupil_samples, 1e-9, scene.lens.numerical_aperture())?;
+        let mut aliased = false;
+        for &(lambda, weight) in &nodes.samples {
+            if weight == 0.0 {
+                continue;
+            }
+            for order in scene.lens.orders(lambda, scene.field) {
+                match &order.pupil {
+                    Pupil::Table(_) => {}
+                    Pupil::Zones(_) => return Ok(None),
+                    _ => {
+                        let slot = layer.pupil(&order)?;
+                        aliased |= layer.pupils[slot].1.max_opd_step_m() > PHASE_NYQUIST_WAVES * lambda;
+                    }
+                }
+            }
+        }
+        Ok(Some(aliased))
     }
 
     /// `Σ weight × OTF` over the grids along `azimuth` (radians from x), each times
@@ -221,8 +236,8 @@ impl<'a> Grids<'a> {
         // three levels: N/4 checks that the pair (N/2, N) is in its asymptotic range (a
         // composite pupil's ring edges can make N/2 and N agree by chance: the concentric
         // segmented lens went 0.3104, 0.3087, 0.3110 at N = 32, 64, 128 and settles at 0.3119)
-        let level = |path: FftPath| (mean(&path), path.aliased && !path.composite);
-        let mut quarter = level(FftPath::build(&scene, &nodes, plan.coarse() / 2)?);
+        let aliased = |n: usize| FftPath::aliases_phase(&scene, &nodes, n).map(|a| a == Some(true));
+        let mut quarter = (mean(&FftPath::build(&scene, &nodes, plan.coarse() / 2)?), aliased(plan.coarse() / 2)?);
         let mut coarse = FftPath::build(&scene, &nodes, plan.coarse())?;
         let mut fine = FftPath::build(&scene, &nodes, plan.samples)?;
         loop {
@@ -252,11 +267,8 @@ impl<'a> Grids<'a> {
             };
             // the old fine level is the new coarse one when N doubled (Richardson needs N/2)
             let doubled = fine.pupil_samples == plan.coarse();
-            quarter = if doubled {
-                (half, coarse.aliased && !coarse.composite)
-            } else {
-                level(FftPath::build(&scene, &nodes, plan.coarse() / 2)?)
-            };
+            let quarter_mean = if doubled { half } else { mean(&FftPath::build(&scene, &nodes, plan.coarse() / 2)?) };
+            quarter = (quarter_mean, aliased(plan.coarse() / 2)?);
             coarse = if doubled { fine } else { FftPath::build(&scene, &nodes, plan.coarse())? };
             fine = FftPath::build(&scene, &nodes, plan.samples)?;
         }
@@ -347,10 +359,6 @@ struct FftLayer {
     pupils: Vec<(Arc<Aperture>, SampledPupil)>,
     zones: Vec<SampledZones>,
     fields: Vec<ZoneField>,
-    /// Whether a single-aperture grid made so far aliases its pupil's phase.
-    aliased: bool,
-    /// Whether a composite pupil of zones was sampled.
-    composite: bool,
 }
 
 impl FftLayer {
@@ -363,20 +371,26 @@ impl FftLayer {
             pupils: Vec::new(),
             zones: Vec::new(),
             fields: Vec::new(),
-            aliased: false,
-            composite: false,
         })
     }
 
     /// How `order`'s OTF at `lambda` is read: a grid of its sampled pupil, of its composite of
     /// zones, or its table.
     fn kind(&mut self, order: &Order, lambda: f64) -> Result<FftKind, Error> {
-        let aperture = match &order.pupil {
+        let slot = match &order.pupil {
             Pupil::Table(t) => return Ok(FftKind::Table(t.clone())),
-            Pupil::Zones(zones) => {
-                self.composite = true;
-                return self.zones_grid(zones, lambda).map(FftKind::Grid);
-            }
+            Pupil::Zones(zones) => return self.zones_grid(zones, lambda).map(FftKind::Grid),
+            _ => self.pupil(order)?,
+        };
+        let mut otf = Otf::new();
+        self.plan.otf(&self.pupils[slot].1, lambda, &mut otf);
+        Ok(FftKind::Grid(otf))
+    }
+
+    /// The cached sampled pupil of `order` (its aperture, or the full circle) with the order's
+    /// wavefront: its slot in `pupils`.
+    fn pupil(&mut self, order: &Order) -> Result<usize, Error> {
+        let aperture = match &order.pupil {
             Pupil::Aperture(a) => a.clone(),
             _ => self.circle.clone(),
         };
@@ -395,11 +409,7 @@ impl FftLayer {
                 self.pupils.len() - 1
             }
         };
-        let pupil = &self.pupils[slot].1;
-        self.aliased |= pupil.max_opd_step_m() > PHASE_NYQUIST_WAVES * lambda;
-        let mut otf = Otf::new();
-        self.plan.otf(pupil, lambda, &mut otf);
-        Ok(FftKind::Grid(otf))
+        Ok(slot)
     }
 
     /// The OTF of one composite pupil (docs/physics.md, "General pupils"; `fft::SampledZones`):
