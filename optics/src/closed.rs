@@ -481,11 +481,10 @@ mod tests {
             .sum()
     }
 
-    /// The adaptive rule meets its (absolute) tolerance against [`resolved`] from narrow to
-    /// broad bands, fast to slow lenses (0.2 to 500 waves of defocus per σ), up to past the
-    /// centre wavelength's cutoff, with Gaussians truncated at λ = 0 among them.
-    #[test]
-    fn meets_its_tolerance_against_a_resolved_reference() {
+    /// The scenes of the tests against [`resolved`]: narrow to broad bands, fast to slow lenses
+    /// (0.2 to 500 waves of defocus per σ), up to past the centre wavelength's cutoff, with
+    /// Gaussians truncated at λ = 0 among them; `check(label, g, ν, exact)` for each.
+    fn for_each_resolved_case(mut check: impl FnMut(&str, &GaussianDefocus, f64, f64)) {
         let (f0, l0) = (3.36e-3, 800e-9);
         for f in [0.5, 2.5, 10.0] {
             for range in [10e-9, 100e-9, 600e-9] {
@@ -495,46 +494,38 @@ mod tests {
                 let cutoff = 1.0 / (f * l0);
                 for share in [0.04, 0.25, 0.42, 0.71, 1.2] {
                     let nu = share * cutoff;
-                    let exact = resolved(&g, nu);
-                    for tolerance in [1e-6, 1e-9] {
-                        let (value, _) = g.otf(nu, tolerance);
-                        let error = (value - exact).abs();
-                        assert!(
-                            error <= tolerance,
-                            "F/{f}, {range} m, ν/νc {share}: {value} vs {exact} at {tolerance}"
-                        );
-                    }
+                    check(&format!("F/{f}, {range} m, ν/νc {share}"), &g, nu, resolved(&g, nu));
                 }
             }
         }
     }
 
-    /// The error `otf_estimated` reports bounds the true one (against [`resolved`]) on the scenes
-    /// of the test above (without its factor [`ESTIMATE_SAFETY`] the largest ratio of the true
-    /// error to the estimate was 2.1, on the 600 nm bands): a value kept for a later, tighter
-    /// tolerance on its estimate is within that tolerance.
+    /// The adaptive rule meets its (absolute) tolerance against [`resolved`] on the scenes of
+    /// [`for_each_resolved_case`].
+    #[test]
+    fn meets_its_tolerance_against_a_resolved_reference() {
+        for_each_resolved_case(|label, g, nu, exact| {
+            for tolerance in [1e-6, 1e-9] {
+                let (value, _) = g.otf(nu, tolerance);
+                let error = (value - exact).abs();
+                assert!(error <= tolerance, "{label}: {value} vs {exact} at {tolerance}");
+            }
+        });
+    }
+
+    /// The error `otf_estimated` reports bounds the true one (against [`resolved`]) on the same
+    /// scenes (without its factor [`ESTIMATE_SAFETY`] the largest ratio of the true error to the
+    /// estimate was 2.1, on the 600 nm bands): a value kept for a later, tighter tolerance on its
+    /// estimate is within that tolerance.
     #[test]
     fn estimated_error_bounds_the_true_error() {
-        let (f0, l0) = (3.36e-3, 800e-9);
-        for f in [0.5, 2.5, 10.0] {
-            for range in [10e-9, 100e-9, 600e-9] {
-                let k = f0 / (8.0 * f * f);
-                let g = GaussianDefocus::new(l0, range / (2.0 * 2f64.sqrt()), &[0.0, 1.0], 0.15, k, -k / l0, f);
-                let cutoff = 1.0 / (f * l0);
-                for share in [0.04, 0.25, 0.42, 0.71, 1.2] {
-                    let nu = share * cutoff;
-                    let exact = resolved(&g, nu);
-                    for tolerance in [1e-4, 1e-6, 1e-9] {
-                        let (value, _, estimate) = g.otf_estimated(nu, tolerance);
-                        let error = (value - exact).abs();
-                        assert!(
-                            error <= estimate,
-                            "F/{f}, {range} m, ν/νc {share} at {tolerance:e}: error {error:e} > estimate {estimate:e}"
-                        );
-                    }
-                }
+        for_each_resolved_case(|label, g, nu, exact| {
+            for tolerance in [1e-4, 1e-6, 1e-9] {
+                let (value, _, estimate) = g.otf_estimated(nu, tolerance);
+                let error = (value - exact).abs();
+                assert!(error <= estimate, "{label} at {tolerance:e}: error {error:e} > estimate {estimate:e}");
             }
-        }
+        });
     }
 
     #[test]
