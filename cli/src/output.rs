@@ -400,7 +400,7 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
         n.sign_changes
     );
     let budget = if n.engine.starts_with("fft") && n.engine.contains("chosen") {
-        "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N, its order checked at N/4), the frequency \
+        "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N, its order checked at N/4, or only its direction where N/4 aliases the pupil phase), the frequency \
          rule converged below both"
     } else if n.spectral_interpolated {
         "a quarter to the spectral rule (nested estimate at Nyquist), the rest to the frequency rule"

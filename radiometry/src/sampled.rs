@@ -69,8 +69,18 @@ impl Sampled {
     }
 
     /// Index i ≥ 1 of the segment [w[i−1], w[i]] holding `l` (clamped to the first/last segment).
+    ///
+    /// The proportional guess first (right at once on an evenly spaced table, as spectrometer
+    /// tables are), checked against its ends; a binary search where it misses.
     fn segment(&self, l: f64) -> usize {
-        self.wavelengths.partition_point(|&w| w <= l).clamp(1, self.wavelengths.len() - 1)
+        let w = &self.wavelengths;
+        let n = w.len();
+        let (first, last) = (w[0], w[n - 1]);
+        let guess = (((l - first) / (last - first) * (n - 1) as f64) as usize).saturating_add(1).clamp(1, n - 1);
+        if w[guess - 1] <= l && (l < w[guess] || guess == n - 1) {
+            return guess;
+        }
+        w.partition_point(|&x| x <= l).clamp(1, n - 1)
     }
 
     /// Linear interpolation on segment i (valid for l inside it).
@@ -191,6 +201,25 @@ mod tests {
         assert_eq!(s.value(901e-9), 0.0);
         assert_eq!(s.value(-1.0), 0.0);
         assert!(s.value(f64::NAN).is_nan());
+    }
+
+    /// The proportional guess of `segment` finds the segment the binary search finds, on an
+    /// evenly spaced and an uneven table, at every sample, between samples and outside.
+    #[test]
+    fn segment_guess_is_the_binary_search() {
+        let even: Vec<f64> = (0..41).map(|k| 600e-9 + 0.25e-9 * f64::from(k)).collect();
+        let uneven: Vec<f64> = (0..41).map(|k| 600e-9 + 1e-9 * f64::from(k * k)).collect();
+        for w in [even, uneven] {
+            let table = Sampled::new(w.clone(), vec![1.0; w.len()]).unwrap();
+            let search = |l: f64| w.partition_point(|&x| x <= l).clamp(1, w.len() - 1);
+            let mut probes = vec![0.0, 1e-9, w[0] - 1e-12, 2e-6, f64::INFINITY, f64::NEG_INFINITY];
+            for pair in w.windows(2) {
+                probes.extend([pair[0], 0.5 * (pair[0] + pair[1]), pair[1] - 1e-18, pair[1]]);
+            }
+            for l in probes {
+                assert_eq!(table.segment(l), search(l), "{l:e}");
+            }
+        }
     }
 
     #[test]

@@ -262,6 +262,26 @@ fn fft_path_matches_the_exact_path_on_the_paper_scene() {
     assert!((fft.mean_mtf_tangential - fft.mean_mtf_sagittal).abs() < 1e-5);
 }
 
+/// Coma 0.5 µm on the paper scene, FFT path, tolerance 1e-4 (the accuracy report's coma row):
+/// the band's flanks carry 15 waves of defocus, which the N/4 level (32 samples) aliases, so the
+/// pair (64, 128) is judged by its own estimate and the direction of the three levels rather than
+/// refined to 256 by an observed order that level cannot show. Its mean is within the tolerance
+/// of the Richardson extrapolation (order 1.5, the rule's own) of fixed samplings 256 and 512
+/// (measured 7.5e-6 against the report's 256/512/1024 reference).
+#[test]
+fn fft_path_with_an_aliased_quarter_level_meets_its_tolerance() {
+    let coma = paper_lens().with_seidel(0.0, 0.5e-6, 0.0, 0.0);
+    let at = |options: Options| evaluate(&paper_with(coma.clone()).with_options(options).unwrap()).unwrap();
+    let chosen = at(Options { tolerance: 1e-4, ..Options::default() });
+    assert!(chosen.numerics.engine.starts_with("fft: 128 pupil samples"), "{}", chosen.numerics.engine);
+    let fixed = |n| at(Options { tolerance: 1e-4, pupil_samples: Some(n), ..Options::default() }).mean_mtf;
+    let (mid, fine) = (fixed(256), fixed(512));
+    let reference = fine + (fine - mid) / (2f64.powf(1.5) - 1.0);
+    let rel = (chosen.mean_mtf - reference).abs() / reference;
+    eprintln!("coma at 1e-4: {} ({}), reference {reference} ({rel:.1e})", chosen.mean_mtf, chosen.numerics.engine);
+    assert!(rel <= 1e-4, "{} vs {reference} ({rel:e})", chosen.mean_mtf);
+}
+
 /// Paper SI Fig. S3: the measured MTF fell below simulation because the mechanical iris was
 /// decentred. A 10 % decentre along x lowers the mean MTF and makes it direction dependent
 /// (lower along the decentre); ignoring the decentre would give the centred numbers exactly.

@@ -120,6 +120,31 @@ impl SampledPupil {
         self.area
     }
 
+    /// The largest OPD difference between neighbouring transmitting samples, along x or y (m):
+    /// the wavefront's steepest step per sample. Below half a wavelength the sampling resolves
+    /// the pupil phase (its Nyquist limit); above, the field aliases and the grid is not yet in
+    /// the range where the mean MTF converges at its measured order.
+    pub fn max_opd_step_m(&self) -> f64 {
+        let n = self.n;
+        let (a, w) = (&self.amplitude, &self.opd_m);
+        let mut step: f64 = 0.0;
+        for j in 0..n {
+            for i in 0..n {
+                let k = j * n + i;
+                if a[k] <= 0.0 {
+                    continue;
+                }
+                if i + 1 < n && a[k + 1] > 0.0 {
+                    step = step.max((w[k + 1] - w[k]).abs());
+                }
+                if j + 1 < n && a[k + n] > 0.0 {
+                    step = step.max((w[k + n] - w[k]).abs());
+                }
+            }
+        }
+        step
+    }
+
     /// Whether the exact 1-D path applies: a centred full circle with defocus only.
     pub fn is_centred_defocus(&self) -> bool {
         self.aperture.is_centred_circle() && self.aberrations.is_defocus_only()

@@ -31,7 +31,10 @@
 //!    than the study's (a larger `C`) shows a larger correction and is refined accordingly.
 //!    The plan accepts when `error ≤ tolerance` and the mean at `N/4` shows the pair in its
 //!    asymptotic range: an observed order ([`observed_order`]) of at least 1, or levels that
-//!    agree to a tenth of the tolerance; it returns `value`. (A composite pupil's ring edges can
+//!    agree to a tenth of the tolerance; it returns `value`. Where the `N/4` level aliases the
+//!    pupil phase of a single aperture (more than half a wave between neighbouring samples,
+//!    [`SampledPupil::max_opd_step_m`](super::SampledPupil::max_opd_step_m)) it is not yet in
+//!    that range, and the three levels need only move one way (`poly::grid`). (A composite pupil's ring edges can
 //!    make `N/2` and `N` agree by chance: the concentric segmented lens's mean went 0.3104,
 //!    0.3087, 0.3110, 0.3116 at `N` = 32 … 256, and settles at 0.3119 with order 1.9.)
 //! 3. **Refine** otherwise ([`SamplingPlan::refine`]): `N → 2N`, the old `N` becoming the

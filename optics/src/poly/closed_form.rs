@@ -2,7 +2,8 @@
 //! pupil with defocus affine in λ, the spectral integral done exactly; one integral (over the
 //! pupil angle) is left per OTF value, to a tolerance the frequency rule sets.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
 
 use num_complex::Complex64;
 use radiometry::Spectrum;
@@ -29,6 +30,10 @@ pub(super) struct Closed {
     pub otf_tolerance: Cell<f64>,
     /// E(c) evaluations so far
     pub evaluations: Cell<usize>,
+    /// The OTF values computed so far and their estimated errors, by the bits of ν: a mean redone
+    /// to a tighter tolerance (its first pass found a smaller mean than it assumed) asks most of
+    /// its frequencies again, and a value whose estimate is within the new tolerance is kept.
+    pub values: RefCell<HashMap<u64, (f64, f64)>>,
 }
 
 impl Closed {
@@ -59,7 +64,14 @@ impl Closed {
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len() });
         nodes.total_weight = closed.total_weight();
-        Closed { closed, nodes, f_number, otf_tolerance: Cell::new(0.05 * tolerance), evaluations: Cell::new(0) }
+        Closed {
+            closed,
+            nodes,
+            f_number,
+            otf_tolerance: Cell::new(0.05 * tolerance),
+            evaluations: Cell::new(0),
+            values: RefCell::new(HashMap::new()),
+        }
     }
 }
 
@@ -85,8 +97,15 @@ impl OtfEngine for Closed {
         if self.evaluations.get() > CLOSED_FORM_BUDGET {
             return 0.0;
         }
-        let (value, evaluations) = self.closed.otf(frequency, self.otf_tolerance.get());
+        let tolerance = self.otf_tolerance.get();
+        if let Some(&(value, error)) = self.values.borrow().get(&frequency.to_bits())
+            && error <= tolerance
+        {
+            return value;
+        }
+        let (value, evaluations, error) = self.closed.otf_estimated(frequency, tolerance);
         self.evaluations.set(self.evaluations.get() + evaluations);
+        self.values.borrow_mut().insert(frequency.to_bits(), (value, error));
         value
     }
 

@@ -999,10 +999,32 @@ impl MomentRule {
         out
     }
 
-    /// `μ_0 … μ_degree`, by the three-term recurrence `T_{j+1} = 2x T_j − T_{j−1}` at each point.
+    /// `μ_0 … μ_degree`, by the three-term recurrence `T_{j+1} = 2x T_j − T_{j−1}` at each point,
+    /// [`MOMENT_LANES`] points at a time (one recurrence alone is bound by its latency).
     fn moments(&self, degree: usize) -> Vec<f64> {
         let mut mu = vec![0.0; degree + 1];
-        for (&x, &w) in self.cos.iter().zip(&self.weight) {
+        let lanes = self.cos.chunks_exact(MOMENT_LANES).zip(self.weight.chunks_exact(MOMENT_LANES));
+        for (x, w) in lanes {
+            let x: [f64; MOMENT_LANES] = x.try_into().expect("a chunk of MOMENT_LANES");
+            let w: [f64; MOMENT_LANES] = w.try_into().expect("a chunk of MOMENT_LANES");
+            let (mut prev, mut cur) = ([1.0; MOMENT_LANES], x);
+            mu[0] += w.iter().sum::<f64>();
+            if degree >= 1 {
+                mu[1] += (0..MOMENT_LANES).map(|l| w[l] * x[l]).sum::<f64>();
+            }
+            for m in mu.iter_mut().skip(2) {
+                let mut sum = 0.0;
+                for l in 0..MOMENT_LANES {
+                    let next = 2.0 * x[l] * cur[l] - prev[l];
+                    sum += w[l] * next;
+                    prev[l] = cur[l];
+                    cur[l] = next;
+                }
+                *m += sum;
+            }
+        }
+        let rest = self.cos.len() - self.cos.len() % MOMENT_LANES;
+        for (&x, &w) in self.cos[rest..].iter().zip(&self.weight[rest..]) {
             let (mut prev, mut cur) = (1.0, x);
             mu[0] += w;
             if degree >= 1 {
@@ -1018,6 +1040,9 @@ impl MomentRule {
         mu
     }
 }
+
+/// Points of a moment rule whose Chebyshev recurrences run side by side.
+const MOMENT_LANES: usize = 8;
 
 /// Product-integration weights on the `points` Chebyshev–Lobatto points `x_k = cos(πk/n)`,
 /// n = points − 1 (k = 0 is x = 1): `w_k = ∫ ρ ℓ_k`, from the Chebyshev moments μ_0..μ_n. The
