@@ -279,7 +279,7 @@ impl GaussianDefocus {
         (value, evaluations)
     }
 
-    /// [`otf`](Self::otf) and its estimated absolute error: [`ESTIMATE_SAFETY`] × (the adaptive
+    /// [`otf`](Self::otf) and its estimated absolute error: `ESTIMATE_SAFETY` × (the adaptive
     /// rule's estimates of the panels it accepted, plus what the tolerance let it leave out: the
     /// Gaussian's tails beyond `tail` σ and the skipped stretch of the uncut zone, each up to 1e-3
     /// of `tolerance`). A value whose estimate is within a later, tighter tolerance serves it.
