@@ -70,6 +70,27 @@ impl BarSet {
         })
     }
 
+    /// The rows (or columns) along the bars' middle 60 % of their length, and where the set
+    /// starts across the bars, in pixels.
+    fn reading_frame(&self) -> (std::ops::Range<usize>, f64) {
+        let w = self.bar_width_px;
+        let [x, y] = self.origin_px;
+        let (len0, across0) = match self.orientation {
+            Orientation::Vertical => (y, x),
+            Orientation::Horizontal => (x, y),
+        };
+        let first = (len0 + 1.0 * w).floor() as usize;
+        (first..((len0 + 4.0 * w).ceil() as usize).max(first + 1), across0)
+    }
+
+    /// The (column, row) of the pixel `along` the bars and `across` them.
+    fn pixel(&self, along: usize, across: usize) -> (usize, usize) {
+        match self.orientation {
+            Orientation::Vertical => (across, along),
+            Orientation::Horizontal => (along, across),
+        }
+    }
+
     /// Whether the pattern's period (two bar widths) is at least two pixels: below it the
     /// frequency lies above the detector's Nyquist frequency and is aliased.
     pub fn resolvable_by_pixels(&self) -> bool {
@@ -324,12 +345,7 @@ pub fn bar_modulation(image: &[f64], width: usize, set: &BarSet) -> f64 {
 pub fn bar_fundamental(image: &[f64], width: usize, set: &BarSet) -> f64 {
     let height = image.len() / width;
     let w = set.bar_width_px;
-    let [x, y] = set.origin_px;
-    let (len0, across0) = match set.orientation {
-        Orientation::Vertical => (y, x),
-        Orientation::Horizontal => (x, y),
-    };
-    let along = (len0 + 1.0 * w).floor() as usize..((len0 + 4.0 * w).ceil() as usize).max(len0 as usize + 1);
+    let (along, across0) = set.reading_frame();
     let across = across0.floor() as usize..(across0 + 5.0 * w).ceil() as usize;
     let (mut n, mut sc, mut si, mut scc, mut sci) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for a in along {
@@ -338,10 +354,7 @@ pub fn bar_fundamental(image: &[f64], width: usize, set: &BarSet) -> f64 {
             if centre < across0 || centre > across0 + 5.0 * w {
                 continue;
             }
-            let (col, row) = match set.orientation {
-                Orientation::Vertical => (c, a),
-                Orientation::Horizontal => (a, c),
-            };
+            let (col, row) = set.pixel(a, c);
             if col >= width || row >= height {
                 continue;
             }
@@ -364,19 +377,9 @@ pub fn bar_fundamental(image: &[f64], width: usize, set: &BarSet) -> f64 {
 pub fn bar_levels(image: &[f64], width: usize, set: &BarSet) -> (f64, f64) {
     let height = image.len() / width;
     let w = set.bar_width_px;
-    let [x, y] = set.origin_px;
-    // a pixel index along the bars' length and across them
-    let (len0, across0) = match set.orientation {
-        Orientation::Vertical => (y, x),
-        Orientation::Horizontal => (x, y),
-    };
-    let first = (len0 + 1.0 * w).floor() as usize;
-    let last = ((len0 + 4.0 * w).ceil() as usize).max(first + 1);
+    let (rows, across0) = set.reading_frame();
     let value = |along: usize, across: usize| -> f64 {
-        let (c, r) = match set.orientation {
-            Orientation::Vertical => (across, along),
-            Orientation::Horizontal => (along, across),
-        };
+        let (c, r) = set.pixel(along, across);
         image[r.min(height - 1) * width + c.min(width - 1)]
     };
     // the profile across the bars at a position `p` (pixels), averaged along them
@@ -386,10 +389,10 @@ pub fn bar_levels(image: &[f64], width: usize, set: &BarSet) -> (f64, f64) {
         let frac = (t - i).clamp(0.0, 1.0);
         let i = i as usize;
         let mut sum = 0.0;
-        for along in first..last {
+        for along in rows.clone() {
             sum += (1.0 - frac) * value(along, i) + frac * value(along, i + 1);
         }
-        sum / (last - first) as f64
+        sum / rows.len() as f64
     };
     let bars = (0..3).map(|k| profile(across0 + w * (0.5 + 2.0 * k as f64))).sum::<f64>() / 3.0;
     let gaps = (0..2).map(|k| profile(across0 + w * (1.5 + 2.0 * k as f64))).sum::<f64>() / 2.0;
