@@ -7,6 +7,7 @@
 mod characterize;
 mod compare;
 mod measure;
+mod merge;
 mod optimize;
 mod output;
 mod panel;
@@ -77,8 +78,17 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// A key to sweep, N points from LO to HI (repeatable; the first varies slowest).
-        #[arg(long, value_name = "KEY=LO:HI:N", required = true)]
+        #[arg(long, value_name = "KEY=LO:HI:N", required_unless_present = "points")]
         over: Vec<String>,
+        /// Designs that are not a grid: a CSV whose header names scene keys and whose rows give
+        /// their values, one design per row (instead of --over).
+        #[arg(long, value_name = "FILE.csv", conflicts_with = "over")]
+        points: Option<PathBuf>,
+        /// Evaluate only shard I of N (1 ≤ I ≤ N): the points whose index is I − 1 modulo N, as CSV
+        /// with an `index` column first, each row written as soon as it is done. `asnr merge`
+        /// joins the N shards' files into the single-process CSV, byte for byte.
+        #[arg(long, value_name = "I/N", conflicts_with_all = ["json", "plot"])]
+        shard: Option<String>,
         /// Print CSV: one column per swept key, then mean_mtf, snr0, asnr, ….
         #[arg(long, conflicts_with = "json")]
         csv: bool,
@@ -102,6 +112,8 @@ enum Command {
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
     },
+    /// Join the CSVs of `asnr sweep --shard I/N` into the single-process `asnr sweep --csv` output.
+    Merge(merge::MergeArgs),
     /// Lens designs side by side: ASNR at the scene band and at each design's best band, the
     /// chromatic twin, glare (default: the embedded comparison of the lens families).
     Compare(compare::CompareArgs),
@@ -224,21 +236,49 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Sweep { scene, set, over, csv, json, plot, width, dpi, threads, tolerance } => {
+        Command::Sweep { scene, set, over, points, shard, csv, json, plot, width, dpi, threads, tolerance } => {
             let figure = plot::Figure::new(width, dpi)?;
             let set = with_tolerance(set, tolerance);
-            let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
-            check_over_keys(&set, &ranges)?;
-            // the product of the axes, checked: four axes of 65536 points wrap a usize to 0
-            let total = ranges.iter().try_fold(1_usize, |n, r| n.checked_mul(r.points.unwrap_or(1)));
-            if total.is_none_or(|t| t > MAX_GRID_POINTS) {
-                let product: f64 = ranges.iter().map(|r| r.points.unwrap_or(1) as f64).product();
-                let axes: Vec<String> = ranges.iter().map(|r| r.points.unwrap_or(1).to_string()).collect();
-                anyhow::bail!(
-                    "--over: {} = {product:e} grid points; expected at most {MAX_GRID_POINTS}",
-                    axes.join(" × ")
-                );
-            }
+            let shard = shard.as_deref().map(parse_shard).transpose()?;
+            let (ranges, design, what) = match &points {
+                Some(path) => {
+                    if plot.is_some() {
+                        anyhow::bail!(
+                            "--plot: a plot needs a grid (--over KEY=LO:HI:N); --points gives a list of designs"
+                        );
+                    }
+                    let file = scene::sweep::read_points(path)?;
+                    // the table's ranges: each column's extent (no grid, so no refinement)
+                    let ranges = file
+                        .keys
+                        .iter()
+                        .enumerate()
+                        .map(|(k, key)| {
+                            let column = file.rows.iter().map(|r| r[k]);
+                            let lo = column.clone().fold(f64::INFINITY, f64::min);
+                            let hi = column.fold(f64::NEG_INFINITY, f64::max);
+                            optimize::Range { key: key.clone(), lo, hi, points: Some(1) }
+                        })
+                        .collect::<Vec<_>>();
+                    (ranges, sweep::Design::List(file.rows), format!("--points {}", path.display()))
+                }
+                None => {
+                    let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
+                    // the product of the axes, checked: four axes of 65536 points wrap a usize to 0
+                    let total = ranges.iter().try_fold(1_usize, |n, r| n.checked_mul(r.points.unwrap_or(1)));
+                    if total.is_none_or(|t| t > MAX_GRID_POINTS) {
+                        let product: f64 = ranges.iter().map(|r| r.points.unwrap_or(1) as f64).product();
+                        let axes: Vec<String> = ranges.iter().map(|r| r.points.unwrap_or(1).to_string()).collect();
+                        anyhow::bail!(
+                            "--over: {} = {product:e} grid points; expected at most {MAX_GRID_POINTS}",
+                            axes.join(" × ")
+                        );
+                    }
+                    let design = sweep::Design::grid(&ranges);
+                    (ranges, design, "--over".to_owned())
+                }
+            };
+            check_keys(&what, &set, &ranges)?;
             let max_threads = max_threads();
             if threads > max_threads {
                 anyhow::bail!(
@@ -248,14 +288,20 @@ fn run(cli: Cli) -> Result<()> {
             }
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;
+            let keys: Vec<String> = ranges.iter().map(|r| r.key.clone()).collect();
             // validate the scene and the keys once before spending the grid
             let mut first = set.clone();
-            first.extend(ranges.iter().map(|r| optimize::assignment(&r.key, r.lo)));
+            first.extend(keys.iter().zip(design.values(0)).map(|(k, v)| scene::sweep::assignment(k, v)));
             let loaded = scene::build_with_warnings(&source, &first)?;
             warn(&loaded.warnings);
             let built = loaded.scene;
-            let points = sweep::run(&source, &set, &ranges, threads)?;
-            for line in sweep::warnings(&ranges, &points) {
+            let sweep = sweep::Sweep { source: &source, overrides: &set, keys, design };
+            if let Some((i, n)) = shard {
+                let indices: Vec<usize> = scene::sweep::shard_indices(i, n, sweep.design.len()).collect();
+                return sweep::stream(&sweep, &indices, threads, &mut std::io::stdout());
+            }
+            let points = sweep::run(&sweep, threads)?;
+            for line in sweep::warnings(&sweep.keys, &points) {
                 eprintln!("{line}");
             }
             if let Some(path) = &plot {
@@ -264,12 +310,13 @@ fn run(cli: Cli) -> Result<()> {
             if json {
                 println!("{}", serde_json::to_string_pretty(&points)?);
             } else if csv {
-                print!("{}", sweep::csv(&ranges, &points));
+                print!("{}", sweep::csv(&sweep.keys, &points));
             } else {
                 print!("{}", sweep::table(source.label(), built.title(), &ranges, &points));
             }
             Ok(())
         }
+        Command::Merge(args) => merge::run(&args),
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => compare::run(args),
         Command::Measure(args) => measure::run(&args),
@@ -341,15 +388,20 @@ fn max_threads() -> usize {
 /// Refuses a key given twice to `--over`, or given to both `--set` (or `--tolerance`, which is
 /// `options.tolerance`) and `--over`: one value of it would silently be ignored.
 fn check_over_keys(set: &[String], ranges: &[optimize::Range]) -> Result<()> {
+    check_keys("--over", set, ranges)
+}
+
+/// [`check_over_keys`] for keys swept by `what` (`--over`, or `--points FILE`).
+fn check_keys(what: &str, set: &[String], ranges: &[optimize::Range]) -> Result<()> {
     for (i, r) in ranges.iter().enumerate() {
         if ranges[..i].iter().any(|earlier| earlier.key == r.key) {
-            anyhow::bail!("--over {}: the key is given to --over twice; give each key once", r.key);
+            anyhow::bail!("{what} {}: the key is given to {what} twice; give each key once", r.key);
         }
         if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == r.key)) {
             let given =
                 if r.key == "options.tolerance" { format!("--set {s} or --tolerance") } else { format!("--set {s}") };
             anyhow::bail!(
-                "--over {}: the key is also given by {given}; --over would override it: give it in one place",
+                "{what} {}: the key is also given by {given}; {what} would override it: give it in one place",
                 r.key
             );
         }
@@ -367,6 +419,16 @@ fn with_explain(report: &str, explain: &str) -> Result<String> {
     let out = format!("{body},\n  \"explain\": [\n    {}\n  ]\n}}", lines.join(",\n    "));
     serde_json::from_str::<serde_json::Value>(&out)?;
     Ok(out)
+}
+
+/// `--shard I/N`: shard `I` (1-based) of `N`.
+fn parse_shard(arg: &str) -> Result<(usize, usize)> {
+    let parsed =
+        arg.split_once('/').and_then(|(i, n)| Some((i.trim().parse::<usize>().ok()?, n.trim().parse::<usize>().ok()?)));
+    match parsed {
+        Some((i, n)) if n >= 1 && (1..=n).contains(&i) => Ok((i, n)),
+        _ => anyhow::bail!("--shard {arg}: expected I/N with whole numbers 1 ≤ I ≤ N, e.g. --shard 3/8 (shard 3 of 8)"),
+    }
 }
 
 /// `--tolerance REL` as the override `options.tolerance=REL` (validated with the scene).

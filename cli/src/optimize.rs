@@ -64,20 +64,7 @@ pub fn parse_range(arg: &str, with_points: bool) -> Result<Range> {
 /// and the plot's parabola through it.
 pub const METHOD: &str = "golden-section search to ±tolerance, after a 17-point scan";
 
-/// `KEY=VALUE` for a generated value: the shortest decimal that parses back to the same `f64`,
-/// as a TOML integer when it is a whole number TOML's 64-bit integers hold exactly (|v| < 2^53:
-/// integer keys such as `options.pupil_samples` stay integers), else in exponent form, which TOML
-/// reads as a float (`5e19`, not `50000000000000000000`, which overflows TOML's integers).
-pub fn assignment(key: &str, value: f64) -> String {
-    if value.fract() == 0.0 && value.abs() < 9_007_199_254_740_992.0 {
-        format!("{key}={value}")
-    } else if value.fract() != 0.0 && value.abs() >= 1e-5 && value.abs() < 1e16 {
-        // plain decimals with a point are TOML floats too, and read better
-        format!("{key}={value}")
-    } else {
-        format!("{key}={value:e}")
-    }
-}
+pub use scene::sweep::assignment;
 
 /// The maximum found.
 #[derive(Clone, Debug, Serialize)]
@@ -252,23 +239,5 @@ mod tests {
         assert!(parse_range("a=1:x", false).unwrap_err().to_string().contains("HI `x` is not a finite number"));
         assert!(parse_range("a", false).unwrap_err().to_string().contains("expected KEY=LO:HI"));
         assert!(parse_range("a=-1e308:1e308", false).unwrap_err().to_string().contains("overflows"));
-    }
-
-    #[test]
-    fn assignments_parse_back_as_toml_bit_for_bit() {
-        // 5e19 as "50000000000000000000" is a TOML integer beyond i64; whole numbers below 2^53
-        // stay integers (integer keys), everything else round-trips through a TOML float
-        assert_eq!(assignment("k", 5e19), "k=5e19");
-        assert_eq!(assignment("k", 64.0), "k=64");
-        for v in [5e19, 64.0, 0.1, 1.0 / 3.0, -2.5e-7, 1e-300, 5e-324, f64::MAX, -9.007_199_254_740_993e15, 123456.789]
-        {
-            let text = assignment("k", v);
-            let literal = &text[2..];
-            // a TOML integer (no point, no exponent) must fit in i64; anything else is a float
-            if !literal.contains(['.', 'e']) {
-                assert!(literal.parse::<i64>().is_ok(), "{text}");
-            }
-            assert_eq!(literal.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{text}");
-        }
     }
 }

@@ -4,91 +4,122 @@
 //! results are collected in grid order, so the output is identical whatever the thread count.
 
 use std::fmt::Write;
+use std::sync::Mutex;
 
 use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
-use serde::Serialize;
+pub use scene::sweep::Point;
+use scene::sweep::{Grid, PointError, evaluate_point};
 
 use crate::optimize::Range;
 use scene::Source;
 
-/// One evaluated grid point.
-#[derive(Clone, Debug, Serialize)]
-pub struct Point {
-    /// The swept keys' values, in `--over` order.
-    pub values: Vec<f64>,
-    /// Mean MTF up to Nyquist.
-    pub mean_mtf: f64,
-    /// Zero-frequency SNR.
-    pub snr0: f64,
-    /// The ASNR (the scene's form).
-    pub asnr: f64,
-    /// Signal photoelectrons per pixel.
-    pub photoelectrons: f64,
-    /// Whether the Fraunhofer model is valid there (SI eq. S15).
-    pub fraunhofer_valid: bool,
-    /// The evaluation's warnings there (truncated spectra, saturation, validity).
-    pub warnings: Vec<String>,
-}
-
 /// Grid values of one range: `N` points from `LO` to `HI` inclusive (`LO` alone for `N = 1`).
 pub fn axis(range: &Range) -> Vec<f64> {
-    let n = range.points.unwrap_or(2).max(1);
-    if n == 1 {
-        return vec![range.lo];
-    }
-    (0..n)
-        .map(|i| if i + 1 == n { range.hi } else { range.lo + (range.hi - range.lo) * i as f64 / (n - 1) as f64 })
-        .collect()
+    scene::sweep::axis(range.lo, range.hi, range.points.unwrap_or(2))
 }
 
-/// Evaluates the cartesian product of the ranges (the first key varies slowest) on `threads`
-/// threads (0 = all cores), with a progress bar on stderr when it is a terminal.
-pub fn run(source: &Source, overrides: &[String], ranges: &[Range], threads: usize) -> Result<Vec<Point>> {
-    let axes: Vec<Vec<f64>> = ranges.iter().map(axis).collect();
-    let total: usize = axes.iter().map(Vec::len).product();
-    let grid: Vec<Vec<f64>> = (0..total)
-        .map(|mut flat| {
-            let mut values = vec![0.0; axes.len()];
-            for (k, axis) in axes.iter().enumerate().rev() {
-                values[k] = axis[flat % axis.len()];
-                flat /= axis.len();
-            }
-            values
-        })
-        .collect();
-    let bar = progress_bar(total as u64, "points")?;
-    let evaluate = |values: &Vec<f64>| -> Result<Point> {
-        let mut set = overrides.to_vec();
-        for (range, v) in ranges.iter().zip(values) {
-            set.push(crate::optimize::assignment(&range.key, *v));
-        }
-        let scene = scene::build_from(source, &set)?;
-        let r = metric::evaluate(&scene).map_err(|e| anyhow!("{}: {e}", source.label()))?;
-        bar.inc(1);
-        Ok(Point {
-            values: values.clone(),
-            mean_mtf: r.mean_mtf,
-            snr0: r.snr0,
-            asnr: r.asnr,
-            photoelectrons: r.photoelectrons,
-            fraunhofer_valid: r.fraunhofer.valid,
-            warnings: r.warnings,
-        })
-    };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let results: Vec<Result<Point>> = pool.install(|| grid.par_iter().map(evaluate).collect());
-    bar.finish_and_clear();
-    let mut points = Vec::with_capacity(total);
-    for (values, r) in grid.iter().zip(results) {
-        let point = r.map_err(|e| {
-            let at: Vec<String> = ranges.iter().zip(values).map(|(k, v)| format!("{}={v}", k.key)).collect();
-            e.context(format!("at sweep point {}", at.join(", ")))
-        })?;
-        points.push(point);
+/// The points of a sweep: the cartesian product of `--over` ranges, or the rows of a `--points`
+/// file; each point has an index (its position), which shards and merges keep.
+#[derive(Clone, Debug)]
+pub enum Design {
+    /// `--over` ranges' product, the first key varying slowest.
+    Grid(Grid),
+    /// `--points FILE.csv` rows, in file order.
+    List(Vec<Vec<f64>>),
+}
+
+impl Design {
+    /// The grid of `ranges`.
+    pub fn grid(ranges: &[Range]) -> Design {
+        Design::Grid(Grid::new(ranges.iter().map(axis).collect()))
     }
-    Ok(points)
+
+    /// Its number of points.
+    pub fn len(&self) -> usize {
+        match self {
+            Design::Grid(g) => g.len(),
+            Design::List(rows) => rows.len(),
+        }
+    }
+
+    /// The values of point `index`.
+    pub fn values(&self, index: usize) -> Vec<f64> {
+        match self {
+            Design::Grid(g) => g.values(index),
+            Design::List(rows) => rows[index].clone(),
+        }
+    }
+}
+
+/// A sweep: the scene, the `--set` overrides, the swept keys and their points.
+pub struct Sweep<'a> {
+    /// The scene file (or the embedded scene).
+    pub source: &'a Source,
+    /// `--set` overrides, applied before the swept keys.
+    pub overrides: &'a [String],
+    /// The swept keys, in `--over` (or points-file column) order.
+    pub keys: Vec<String>,
+    /// Their points.
+    pub design: Design,
+}
+
+impl Sweep<'_> {
+    /// Evaluates point `index`; an error names where it is.
+    fn point(&self, index: usize) -> Result<Point> {
+        let values = self.design.values(index);
+        evaluate_point(self.source, self.overrides, &self.keys, &values).map_err(|e: PointError| {
+            let at: Vec<String> = self.keys.iter().zip(&values).map(|(k, v)| format!("{k}={v}")).collect();
+            anyhow!(e).context(format!("at sweep point {} (index {index})", at.join(", ")))
+        })
+    }
+}
+
+/// Evaluates every point on `threads` threads (0 = all cores), with a progress bar on stderr
+/// when it is a terminal; the points come back in index order, so the output is identical
+/// whatever the thread count.
+pub fn run(sweep: &Sweep, threads: usize) -> Result<Vec<Point>> {
+    let total = sweep.design.len();
+    let bar = progress_bar(total as u64, "points")?;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let results: Vec<Result<Point>> = pool.install(|| {
+        (0..total)
+            .into_par_iter()
+            .map(|i| {
+                let p = sweep.point(i);
+                bar.inc(1);
+                p
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    results.into_iter().collect()
+}
+
+/// Evaluates the points `indices` on `threads` threads and writes each one's CSV line, its index
+/// first, to `out` as soon as it is done (completion order: `asnr merge` sorts by index). The
+/// header is written first. Stops at the first point that cannot be evaluated; the lines written
+/// before stay.
+pub fn stream(sweep: &Sweep, indices: &[usize], threads: usize, out: &mut (dyn std::io::Write + Send)) -> Result<()> {
+    out.write_all(scene::sweep::csv_header(&sweep.keys, true).as_bytes())?;
+    out.flush()?;
+    let bar = progress_bar(indices.len() as u64, "points")?;
+    let out = Mutex::new(out);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    pool.install(|| {
+        indices.par_iter().try_for_each(|&i| -> Result<()> {
+            let point = sweep.point(i)?;
+            let line = scene::sweep::csv_row(&point, Some(i));
+            let mut out = out.lock().map_err(|_| anyhow!("internal error: the output lock is poisoned"))?;
+            out.write_all(line.as_bytes())?;
+            out.flush()?;
+            bar.inc(1);
+            Ok(())
+        })
+    })?;
+    bar.finish_and_clear();
+    Ok(())
 }
 
 /// At most this many of the points' warnings are printed; the rest are counted.
@@ -96,11 +127,11 @@ const SHOWN_WARNINGS: usize = 5;
 
 /// The warnings of the sweep for stderr: each point's, prefixed with where it is, the first
 /// [`SHOWN_WARNINGS`] of them and a count of the rest (all are in `--json` and `--csv`).
-pub fn warnings(ranges: &[Range], points: &[Point]) -> Vec<String> {
+pub fn warnings(keys: &[String], points: &[Point]) -> Vec<String> {
     let all: Vec<String> = points
         .iter()
         .flat_map(|p| {
-            let at = at(ranges, &p.values);
+            let at = at(keys, &p.values);
             p.warnings.iter().map(move |w| format!("warning: at {at}: {w}"))
         })
         .collect();
@@ -118,37 +149,16 @@ pub fn warnings(ranges: &[Range], points: &[Point]) -> Vec<String> {
 }
 
 /// `key = value, …` of one grid point.
-fn at(ranges: &[Range], values: &[f64]) -> String {
-    ranges.iter().zip(values).map(|(r, v)| format!("{}={v}", r.key)).collect::<Vec<_>>().join(", ")
-}
-
-/// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
-fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_owned() }
+fn at(keys: &[String], values: &[f64]) -> String {
+    keys.iter().zip(values).map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(", ")
 }
 
 /// CSV: one column per swept key (its dotted key), then the results, the Fraunhofer validity and
-/// the point's warnings (joined by ` | `, quoted).
-pub fn csv(ranges: &[Range], points: &[Point]) -> String {
-    let mut s = String::new();
-    for r in ranges {
-        let _ = write!(s, "{},", r.key);
-    }
-    s.push_str("mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid,warnings\n");
+/// the point's warnings (joined by ` | `, quoted when needed), in index order.
+pub fn csv(keys: &[String], points: &[Point]) -> String {
+    let mut s = scene::sweep::csv_header(keys, false);
     for p in points {
-        for v in &p.values {
-            let _ = write!(s, "{v},");
-        }
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{}",
-            p.mean_mtf,
-            p.snr0,
-            p.asnr,
-            p.photoelectrons,
-            p.fraunhofer_valid,
-            csv_field(&p.warnings.join(" | "))
-        );
+        s.push_str(&scene::sweep::csv_row(p, None));
     }
     s
 }
@@ -190,7 +200,9 @@ pub fn table(label: &str, title: Option<&str>, ranges: &[Range], points: &[Point
             }
         );
     }
-    if let [range] = ranges {
+    if let [range] = ranges
+        && range.points.is_some_and(|n| n > 1)
+    {
         let samples: Vec<(f64, f64)> = points.iter().map(|p| (p.values[0], p.asnr)).collect();
         let best = (0..samples.len()).max_by(|&a, &b| samples[a].1.total_cmp(&samples[b].1));
         let interior = best.is_some_and(|j| j > 0 && j + 1 < samples.len());

@@ -1825,3 +1825,67 @@ fn radiance_meter_source_end_to_end() {
     let err = fails(&["evaluate", scene, "--set", "source.relative_spectrum_csv=missing.csv"]);
     assert!(err.contains("source.relative_spectrum_csv = \"missing.csv\"") && err.contains("cannot read"), "{err}");
 }
+
+/// `asnr sweep --shard I/N` writes every point once across the shards, its index first, and
+/// `asnr merge` joins the shards (given in any order) into the single-process CSV byte for byte;
+/// a `--points` file listing the grid's points gives the same CSV too.
+#[test]
+fn shards_merge_into_the_single_process_csv_and_points_files_match_the_grid() {
+    let dir = scratch("shards");
+    let grid = ["sweep", "--over", "lens.f_number=1.4:5:6", "--over", "spectrum.range_nm=2:300:7"];
+    let single = asnr(&[&grid[..], &["--csv"]].concat());
+    assert!(single.status.success(), "{}", stderr(&single));
+    let mut files = Vec::new();
+    let mut rows = 0;
+    for i in [3, 1, 2] {
+        let shard = format!("{i}/3");
+        let out = asnr(&[&grid[..], &["--shard", &shard, "--threads", "2"]].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(text.starts_with("index,lens.f_number,spectrum.range_nm,mean_mtf,"), "{text}");
+        // strided: shard i holds the indices ≡ i − 1 (mod 3)
+        for line in text.lines().skip(1) {
+            let index: usize = line.split(',').next().unwrap().parse().unwrap();
+            assert_eq!(index % 3, i - 1, "{line}");
+            rows += 1;
+        }
+        let path = dir.join(format!("shard-{i}.csv"));
+        std::fs::write(&path, text).unwrap();
+        files.push(path.display().to_string());
+    }
+    assert_eq!(rows, 42);
+    let merged = asnr(&[&["merge"][..], &files.iter().map(String::as_str).collect::<Vec<_>>()].concat());
+    assert!(merged.status.success(), "{}", stderr(&merged));
+    assert_eq!(merged.stdout, single.stdout, "merged shards differ from the single-process CSV");
+
+    // a points file of the grid's own values gives the same CSV
+    let text = String::from_utf8(single.stdout.clone()).unwrap();
+    let points: String = text.lines().map(|l| l.splitn(3, ',').take(2).collect::<Vec<_>>().join(",") + "\n").collect();
+    let path = dir.join("points.csv");
+    std::fs::write(&path, points).unwrap();
+    let listed = asnr(&["sweep", "--points", path.to_str().unwrap(), "--csv"]);
+    assert!(listed.status.success(), "{}", stderr(&listed));
+    assert_eq!(listed.stdout, single.stdout);
+
+    // bad input: a shard missing, a shard given twice, a file that is not a shard, a bad I/N,
+    // a value in a points file that is not a number
+    let err = fails(&["merge", &files[0], &files[1]]);
+    assert!(err.contains("points missing (indices"), "{err}");
+    let err = fails(&["merge", &files[0], &files[1], &files[2], &files[0]]);
+    assert!(err.contains("expected each point once"), "{err}");
+    let err = fails(&["merge", &files[0], &files[1], &files[2], "--expect", "50"]);
+    assert!(err.contains("8 of the 50 points missing (indices 42, 43"), "{err}");
+    let err = fails(&["merge", path.to_str().unwrap()]);
+    assert!(err.contains("expected `index`"), "{err}");
+    for bad in ["0/3", "4/3", "1/0", "x/2", "2"] {
+        let err = fails(&[&grid[..], &["--shard", bad]].concat());
+        assert!(err.contains(&format!("--shard {bad}: expected I/N")), "{err}");
+    }
+    std::fs::write(&path, "lens.f_number\n2.5\nF/4\n").unwrap();
+    let err = fails(&["sweep", "--points", path.to_str().unwrap()]);
+    assert!(err.contains("points.csv: line 3: lens.f_number = `F/4`: expected a finite number"), "{err}");
+    std::fs::write(&path, "lens.f_number\n0.1\n").unwrap();
+    let err = fails(&["sweep", "--points", path.to_str().unwrap()]);
+    assert!(err.contains("lens.f_number = 0.1: expected a number ≥ 0.5"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -58,6 +58,7 @@ mod error;
 mod lens;
 mod load;
 mod resolved;
+pub mod sweep;
 mod tables;
 
 pub use compare::{

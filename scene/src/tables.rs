@@ -60,13 +60,18 @@ pub(crate) fn read_bytes(path: &Path, what: &'static str) -> Result<Vec<u8>, Err
 }
 
 pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Error> {
+    read_text_limited(path, what, MAX_FILE_BYTES)
+}
+
+/// [`read_text`] with another size limit (points files of a sweep may hold millions of rows).
+pub(crate) fn read_text_limited(path: &Path, what: &'static str, limit: u64) -> Result<String, Error> {
     use std::io::Read as _;
     let shown = || path.display().to_string();
     let io = |cause| Error::Read { what, path: shown(), cause };
     let mut bytes = Vec::new();
-    std::fs::File::open(path).and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)).map_err(io)?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(Error::TooLarge { what, path: shown(), limit: MAX_FILE_BYTES });
+    std::fs::File::open(path).and_then(|f| f.take(limit + 1).read_to_end(&mut bytes)).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(Error::TooLarge { what, path: shown(), limit });
     }
     let len = bytes.len();
     let text = String::from_utf8(bytes).map_err(|e| Error::NotText {

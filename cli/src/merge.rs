@@ -1,0 +1,129 @@
+//! `asnr merge`: the CSVs of `asnr sweep --shard I/N` joined into the single-process CSV.
+//!
+//! Each shard's rows carry the point's index in the whole sweep (first column, `index`), in the
+//! order they finished. The merge checks that the files have the same header, that no index is
+//! given twice and none is missing (0 … the largest, or 0 … `--expect` − 1), sorts the rows by
+//! index and writes them without the index column. The fields are copied as read (the numbers
+//! are not parsed and re-printed), and quoted as `asnr sweep --csv` quotes them, so the result is
+//! the single-process CSV byte for byte.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+
+use scene::sweep::{INDEX_COLUMN, csv_field};
+
+/// Arguments of `asnr merge`.
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// The shards' CSV files (`asnr sweep --shard I/N --csv > shard-I.csv`), in any order.
+    #[arg(required = true, value_name = "SHARD.csv")]
+    pub files: Vec<PathBuf>,
+    /// Write the merged CSV to this file instead of standard output.
+    #[arg(long, short, value_name = "FILE.csv")]
+    pub output: Option<PathBuf>,
+    /// The number of points the whole sweep has: the merge then also refuses missing points at
+    /// the end (without it, it checks that the indices run from 0 to the largest without a gap).
+    #[arg(long, value_name = "N")]
+    pub expect: Option<usize>,
+}
+
+/// Runs `asnr merge`.
+pub fn run(args: &MergeArgs) -> Result<()> {
+    let merged = merge(&args.files, args.expect)?;
+    match &args.output {
+        Some(path) => std::fs::write(path, merged).with_context(|| format!("cannot write {}", path.display()))?,
+        None => {
+            use std::io::Write as _;
+            let mut out = std::io::stdout().lock();
+            if let Err(e) = out.write_all(merged.as_bytes()).and_then(|()| out.flush()) {
+                // `asnr merge … | head` closes the pipe: not an error of the merge
+                if e.kind() != std::io::ErrorKind::BrokenPipe {
+                    return Err(e.into());
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The merged CSV of the shard files `files`.
+pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
+    let mut header: Option<(Vec<String>, String)> = None;
+    // (index, the row's fields after the index, the file and line it came from)
+    let mut rows: Vec<(usize, Vec<String>, usize, u64)> = Vec::new();
+    for (f, path) in files.iter().enumerate() {
+        let shown = path.display();
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .from_path(path)
+            .with_context(|| format!("cannot read the shard {shown}"))?;
+        let names: Vec<String> = reader
+            .headers()
+            .with_context(|| format!("{shown}: cannot read its header"))?
+            .iter()
+            .map(str::to_owned)
+            .collect();
+        if names.first().map(String::as_str) != Some(INDEX_COLUMN) {
+            bail!(
+                "{shown}: the header starts with `{}`: expected `{INDEX_COLUMN}`, the first column `asnr sweep --shard I/N` writes",
+                names.first().map_or("", String::as_str)
+            );
+        }
+        match &header {
+            None => header = Some((names, shown.to_string())),
+            Some((first, first_file)) if *first != names => bail!(
+                "{shown}: its header `{}` differs from {first_file}'s `{}`: expected shards of one sweep",
+                names.join(","),
+                first.join(",")
+            ),
+            Some(_) => {}
+        }
+        for record in reader.records() {
+            let record = record.with_context(|| format!("{shown}: a malformed row"))?;
+            let line = record.position().map_or(0, csv::Position::line);
+            let index: usize = record[0].parse().ok().with_context(|| {
+                format!("{shown}: line {line}: index `{}`: expected a whole number ≥ 0", &record[0])
+            })?;
+            rows.push((index, record.iter().skip(1).map(str::to_owned).collect(), f, line));
+        }
+    }
+    let Some((names, _)) = header else { bail!("no shard files given") };
+    rows.sort_by_key(|r| r.0);
+    for pair in rows.windows(2) {
+        if pair[0].0 == pair[1].0 {
+            bail!(
+                "index {} is in {} (line {}) and in {} (line {}): expected each point once (shards of one sweep, each file given once)",
+                pair[0].0,
+                files[pair[0].2].display(),
+                pair[0].3,
+                files[pair[1].2].display(),
+                pair[1].3
+            );
+        }
+    }
+    let total = expect.unwrap_or_else(|| rows.last().map_or(0, |r| r.0 + 1));
+    if rows.len() != total || rows.last().is_some_and(|r| r.0 >= total) {
+        let present: std::collections::HashSet<usize> = rows.iter().map(|r| r.0).collect();
+        let missing: Vec<usize> = (0..total).filter(|i| !present.contains(i)).collect();
+        let beyond = rows.iter().filter(|r| r.0 >= total).count();
+        let shown: Vec<String> = missing.iter().take(8).map(ToString::to_string).collect();
+        bail!(
+            "{} of the {total} points missing (indices {}{}){}: expected every shard of the sweep, complete",
+            missing.len(),
+            shown.join(", "),
+            if missing.len() > 8 { ", …" } else { "" },
+            if beyond > 0 { format!(", and {beyond} rows with an index ≥ {total}") } else { String::new() }
+        );
+    }
+    let mut out = String::new();
+    let columns: Vec<String> = names.iter().skip(1).map(|n| csv_field(n)).collect();
+    out.push_str(&columns.join(","));
+    out.push('\n');
+    for (_, fields, _, _) in &rows {
+        let fields: Vec<String> = fields.iter().map(|x| csv_field(x)).collect();
+        out.push_str(&fields.join(","));
+        out.push('\n');
+    }
+    Ok(out)
+}
