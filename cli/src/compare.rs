@@ -185,14 +185,23 @@ fn log_axis(range: &Range) -> Vec<f64> {
         .collect()
 }
 
-/// Runs `asnr compare`.
-pub fn run(args: CompareArgs) -> Result<()> {
-    let figure = crate::plot::Figure::new(args.width, args.dpi)?;
-    let mut set = args.set.clone();
-    if let Some(t) = args.tolerance {
+/// The comparison of the designs of `scene` (None: the embedded comparison of the lens
+/// families) with the overrides `set` and the relative `tolerance` of each ASNR, the best band
+/// searched over `over` (`spectrum.range_nm=LO:HI:N`, log-spaced; default 2–300 nm, 16 points)
+/// on `threads` threads (0 = all cores): what `asnr compare` prints (and the Python package's
+/// `asnr.compare` returns), with the comparison it was built from.
+pub fn compare(
+    scene: Option<&std::path::Path>,
+    set: &[String],
+    tolerance: Option<f64>,
+    over: Option<&str>,
+    threads: usize,
+) -> Result<(Comparison, Report)> {
+    let mut set = set.to_vec();
+    if let Some(t) = tolerance {
         set.push(format!("options.tolerance={t}"));
     }
-    let range = match &args.over {
+    let range = match over {
         Some(o) => parse_range(o, true)?,
         None => Range { key: KEY.to_owned(), lo: DEFAULT_GRID.0, hi: DEFAULT_GRID.1, points: Some(DEFAULT_GRID.2) },
     };
@@ -207,11 +216,11 @@ pub fn run(args: CompareArgs) -> Result<()> {
     }
     crate::check_over_keys(&set, std::slice::from_ref(&range))?;
     let max_threads = crate::max_threads();
-    if args.threads > max_threads {
-        bail!("--threads {}: expected 0 (all cores) to {max_threads} (4 × the available cores)", args.threads);
+    if threads > max_threads {
+        bail!("--threads {}: expected 0 (all cores) to {max_threads} (4 × the available cores)", threads);
     }
-    scene::check_overrides(args.scene.as_deref(), &set)?;
-    let source = scene::read_comparison(args.scene.as_deref())?;
+    scene::check_overrides(scene, &set)?;
+    let source = scene::read_comparison(scene)?;
     let base = scene::build_comparison(&source, &set)?;
     crate::warn(&base.warnings);
     let Some((center_nm, range_nm)) = base.band_nm else {
@@ -220,8 +229,15 @@ pub fn run(args: CompareArgs) -> Result<()> {
             base.label
         );
     };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build()?;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let report = pool.install(|| compute(&source, &set, &range, &base, center_nm, range_nm))?;
+    Ok((base, report))
+}
+
+/// Runs `asnr compare`.
+pub fn run(args: CompareArgs) -> Result<()> {
+    let figure = crate::plot::Figure::new(args.width, args.dpi)?;
+    let (base, report) = compare(args.scene.as_deref(), &args.set, args.tolerance, args.over.as_deref(), args.threads)?;
     if let Some(path) = &args.plot {
         plot(path, &figure, &base, &report)?;
     }

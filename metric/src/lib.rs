@@ -42,7 +42,7 @@ mod scene;
 
 pub use evaluate::{
     Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MAX_DEFOCUS_WAVES, MtfCurve, NoiseReport,
-    Numerics, detected_spectrum, evaluate, mtf_curve,
+    Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 

@@ -222,6 +222,12 @@ impl Scene {
         Ok(Scene { options, ..self })
     }
 
+    /// This scene with another lens (the rest unchanged): e.g. a lens model written elsewhere
+    /// (the Python package's `LensModel`) in a scene read from a file.
+    pub fn with_lens(self, lens: Arc<dyn LensModel>) -> Self {
+        Scene { lens, ..self }
+    }
+
     /// This scene seen at the field point `field` (default: on axis).
     pub fn at_field(self, field: Field) -> Result<Self, Error> {
         for (name, v) in [("field angle x", field.x_rad), ("field angle y", field.y_rad)] {

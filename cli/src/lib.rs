@@ -1,0 +1,442 @@
+//! The `asnr` command line as a library: its subcommands (`evaluate`, `sweep`, `merge`,
+//! `compare`, …), which the binary (`src/main.rs`) runs and the Python package (`python/`)
+//! reuses, so that a sweep or a comparison is the same computation from either.
+//!
+//! Evaluates the ASNR (paper eq. 1) of a scene file, or of the paper's lens embedded in the
+//! binary. Human-readable table by default, `--json` for scripts.
+
+pub mod characterize;
+pub mod compare;
+pub mod measure;
+pub mod merge;
+pub mod optimize;
+pub mod output;
+pub mod panel;
+pub mod plot;
+pub mod plotcmd;
+pub mod psf;
+pub mod render;
+pub mod sweep;
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+/// How good is this metalens, really? The ASNR of a lens, light, camera and exposure.
+#[derive(Parser)]
+#[command(name = "asnr", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Evaluate the ASNR of a scene (default: the paper's lens, embedded).
+    Evaluate {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path, e.g. --set lens.f_number=2.8 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Relative error allowed in the mean MTF (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
+        /// Print how the result is computed (engine, quadratures, error budget, work) after it.
+        #[arg(long)]
+        explain: bool,
+    },
+    /// The value of one numeric scene key that maximizes the ASNR (scan, then golden section).
+    Optimize {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// The key to vary and its range, e.g. --over spectrum.range_nm=1:200.
+        #[arg(long, value_name = "KEY=LO:HI")]
+        over: String,
+        /// Stop when the bracket is narrower than this fraction of HI − LO.
+        #[arg(long, default_value_t = 1e-4, value_name = "FRACTION")]
+        xtol: f64,
+        /// Relative error allowed in each ASNR evaluated (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The ASNR over a grid of one or more keys (cartesian product), in parallel.
+    Sweep {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// A key to sweep, N points from LO to HI (repeatable; the first varies slowest).
+        #[arg(long, value_name = "KEY=LO:HI:N", required_unless_present = "points")]
+        over: Vec<String>,
+        /// Designs that are not a grid: a CSV whose header names scene keys and whose rows give
+        /// their values, one design per row (instead of --over).
+        #[arg(long, value_name = "FILE.csv", conflicts_with = "over")]
+        points: Option<PathBuf>,
+        /// Evaluate only shard I of N (1 ≤ I ≤ N): the points whose index is I − 1 modulo N, as CSV
+        /// with an `index` column first, each row written as soon as it is done. `asnr merge`
+        /// joins the N shards' files into the single-process CSV, byte for byte.
+        #[arg(long, value_name = "I/N", conflicts_with_all = ["json", "plot"])]
+        shard: Option<String>,
+        /// Print CSV: one column per swept key, then mean_mtf, snr0, asnr, ….
+        #[arg(long, conflicts_with = "json")]
+        csv: bool,
+        /// Print a JSON array of points.
+        #[arg(long)]
+        json: bool,
+        /// Draw the ASNR (one key: a line; two keys: a heatmap with the optimum ridge), .svg or .png.
+        #[arg(long, value_name = "FILE")]
+        plot: Option<PathBuf>,
+        /// Width of the plot, pixels (default 900); the height follows.
+        #[arg(long, value_name = "PX", requires = "plot")]
+        width: Option<u32>,
+        /// Resolution of the plot, dots per inch: text and lines are sized in points at it, and
+        /// PNGs record it (default: the width over 6 inches). E.g. --width 1050 --dpi 300.
+        #[arg(long, value_name = "N", requires = "plot")]
+        dpi: Option<f64>,
+        /// Worker threads (0 = all cores). The results do not depend on it.
+        #[arg(long, default_value_t = 0, value_name = "N")]
+        threads: usize,
+        /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
+    },
+    /// Join the CSVs of `asnr sweep --shard I/N` into the single-process `asnr sweep --csv` output.
+    Merge(merge::MergeArgs),
+    /// Lens designs side by side: ASNR at the scene band and at each design's best band, the
+    /// chromatic twin, glare (default: the embedded comparison of the lens families).
+    Compare(compare::CompareArgs),
+    /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
+    /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
+    Measure(measure::MeasureArgs),
+    /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
+    /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
+    Characterize(characterize::CharacterizeArgs),
+    /// Simulated and Wiener-restored images of a USAF-1951 target (or a PNG) through the scene,
+    /// one per spectral range (the paper's Fig. 4), with the measured bar contrast.
+    Render(render::RenderArgs),
+    /// The scene's 2-D polychromatic PSF at its field point and pupil: PNG, CSV matrix, JSON.
+    Psf(psf::GridArgs),
+    /// The scene's 2-D polychromatic OTF (real and imaginary parts, MTF): PNG, CSV matrices, JSON.
+    Otf(psf::GridArgs),
+    /// Print the scene as read: TOML with every default filled in and CSV paths resolved.
+    Scene {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path, e.g. --set lens.f_number=2.8 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Replot sweep CSVs: lines overlaid, or one CSV as a heatmap (`cargo xtask figures` uses it).
+    Plot(plotcmd::PlotArgs),
+    /// The polychromatic MTF from 0 to Nyquist (or to the cutoff), with the diffraction limit.
+    Mtf {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// Override a scene key by its dotted path, e.g. --set spectrum.range_nm=100 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Print one JSON object instead of the table.
+        #[arg(long, conflicts_with = "csv")]
+        json: bool,
+        /// Print CSV (one row per frequency) instead of the table.
+        #[arg(long)]
+        csv: bool,
+        /// Also draw the curves into this file (.svg or .png).
+        #[arg(long, value_name = "FILE.svg|png")]
+        plot: Option<PathBuf>,
+        /// Width of the plot, pixels (default 900); the height follows.
+        #[arg(long, value_name = "PX", requires = "plot")]
+        width: Option<u32>,
+        /// Resolution of the plot, dots per inch: text and lines are sized in points at it, and
+        /// PNGs record it (default: the width over 6 inches). E.g. --width 1050 --dpi 300.
+        #[arg(long, value_name = "N", requires = "plot")]
+        dpi: Option<f64>,
+        /// Extend the axis to the cutoff of the shortest wavelength instead of stopping at Nyquist.
+        #[arg(long)]
+        to_cutoff: bool,
+        /// Number of equally spaced frequencies, from 0 to the end of the axis.
+        #[arg(long, default_value_t = 101, value_name = "N")]
+        points: usize,
+        /// Monochromatic curves at these wavelengths, nm (comma-separated, e.g. 780,800,820).
+        #[arg(long, value_delimiter = ',', value_name = "NM")]
+        wavelengths: Vec<f64>,
+    },
+}
+
+/// Runs the command line `cli`.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Evaluate { scene, set, json, tolerance, explain } => {
+            let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+            let set = with_tolerance(set, tolerance);
+            let read = scene::load_with_warnings(scene.as_deref(), &set)?;
+            warn(&read.warnings);
+            let (loaded, meter) = (read.scene, read.radiance_meter);
+            let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            if json {
+                let report = output::json(&label, &loaded, &result)?;
+                // with --json, stdout stays one JSON document: the explanation is its `explain` field
+                let report = if explain {
+                    with_explain(&report, &output::explain(&loaded, &result, meter.as_ref()))?
+                } else {
+                    report
+                };
+                println!("{report}");
+            } else {
+                print!("{}", output::table(&label, &loaded, &result));
+                for w in &result.warnings {
+                    eprintln!("warning: {w}");
+                }
+                if explain {
+                    print!("{}", output::explain(&loaded, &result, meter.as_ref()));
+                }
+            }
+            Ok(())
+        }
+        Command::Optimize { scene, set, over, xtol, tolerance, json } => {
+            if !(1e-12..1.0).contains(&xtol) {
+                // as typed: 1e-17, not 0.00000000000000001
+                let xtol = if xtol != 0.0 && xtol.abs() < 1e-4 { format!("{xtol:e}") } else { format!("{xtol}") };
+                anyhow::bail!(
+                    "--xtol {xtol}: expected a fraction of the range in [1e-12, 1) (a finer bracket is below the float spacing of the range's values)"
+                );
+            }
+            let set = with_tolerance(set, tolerance);
+            let range = optimize::parse_range(&over, false)?;
+            check_over_keys(&set, std::slice::from_ref(&range))?;
+            // validate the scene (and print its warnings) once, at the low end of the range
+            let mut first = set.clone();
+            first.push(optimize::assignment(&range.key, range.lo));
+            load(scene.as_deref(), &first)?;
+            let asnr_at = |x: f64| -> Result<f64> {
+                let mut overrides = set.clone();
+                overrides.push(optimize::assignment(&range.key, x));
+                let loaded = scene::load(scene.as_deref(), &overrides)?;
+                Ok(metric::evaluate(&loaded)?.asnr)
+            };
+            let best = optimize::maximize(&range, xtol * (range.hi - range.lo), asnr_at)?;
+            if let Some(warning) = optimize::bound_warning(&best) {
+                eprintln!("warning: {warning}");
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&best)?);
+            } else {
+                print!("{}", optimize::report(&best));
+            }
+            Ok(())
+        }
+        Command::Sweep { scene, set, over, points, shard, csv, json, plot, width, dpi, threads, tolerance } => {
+            let figure = plot::Figure::new(width, dpi)?;
+            let set = with_tolerance(set, tolerance);
+            let shard = shard.as_deref().map(parse_shard).transpose()?;
+            let (ranges, design, what) = match &points {
+                Some(path) => {
+                    if plot.is_some() {
+                        anyhow::bail!(
+                            "--plot: a plot needs a grid (--over KEY=LO:HI:N); --points gives a list of designs"
+                        );
+                    }
+                    let file = scene::sweep::read_points(path)?;
+                    // the table's ranges: each column's extent (no grid, so no refinement)
+                    let ranges = file
+                        .keys
+                        .iter()
+                        .enumerate()
+                        .map(|(k, key)| {
+                            let column = file.rows.iter().map(|r| r[k]);
+                            let lo = column.clone().fold(f64::INFINITY, f64::min);
+                            let hi = column.fold(f64::NEG_INFINITY, f64::max);
+                            optimize::Range { key: key.clone(), lo, hi, points: Some(1) }
+                        })
+                        .collect::<Vec<_>>();
+                    (ranges, sweep::Design::List(file.rows), format!("--points {}", path.display()))
+                }
+                None => {
+                    let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
+                    // the product of the axes, checked: four axes of 65536 points wrap a usize to 0
+                    let total = ranges.iter().try_fold(1_usize, |n, r| n.checked_mul(r.points.unwrap_or(1)));
+                    if total.is_none_or(|t| t > MAX_GRID_POINTS) {
+                        let product: f64 = ranges.iter().map(|r| r.points.unwrap_or(1) as f64).product();
+                        let axes: Vec<String> = ranges.iter().map(|r| r.points.unwrap_or(1).to_string()).collect();
+                        anyhow::bail!(
+                            "--over: {} = {product:e} grid points; expected at most {MAX_GRID_POINTS}",
+                            axes.join(" × ")
+                        );
+                    }
+                    let design = sweep::Design::grid(&ranges);
+                    (ranges, design, "--over".to_owned())
+                }
+            };
+            check_keys(&what, &set, &ranges)?;
+            let max_threads = max_threads();
+            if threads > max_threads {
+                anyhow::bail!(
+                    "--threads {threads}: expected 0 (all cores) to {max_threads} (4 × the {} available cores)",
+                    max_threads / 4
+                );
+            }
+            scene::check_overrides(scene.as_deref(), &set)?;
+            let source = scene::read(scene.as_deref())?;
+            let keys: Vec<String> = ranges.iter().map(|r| r.key.clone()).collect();
+            // validate the scene and the keys once before spending the grid
+            let mut first = set.clone();
+            first.extend(keys.iter().zip(design.values(0)).map(|(k, v)| scene::sweep::assignment(k, v)));
+            let loaded = scene::build_with_warnings(&source, &first)?;
+            warn(&loaded.warnings);
+            let built = loaded.scene;
+            let sweep = sweep::Sweep { source: &source, overrides: &set, keys, design };
+            if let Some((i, n)) = shard {
+                let indices: Vec<usize> = scene::sweep::shard_indices(i, n, sweep.design.len()).collect();
+                return sweep::stream(&sweep, &indices, threads, &mut std::io::stdout());
+            }
+            let points = sweep::run(&sweep, threads)?;
+            for line in sweep::warnings(&sweep.keys, &points) {
+                eprintln!("{line}");
+            }
+            if let Some(path) = &plot {
+                plot::sweep_plot(path, &figure, built.title().unwrap_or_default(), &ranges, &points)?;
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&points)?);
+            } else if csv {
+                print!("{}", sweep::csv(&sweep.keys, &points));
+            } else {
+                print!("{}", sweep::table(source.label(), built.title(), &ranges, &points));
+            }
+            Ok(())
+        }
+        Command::Merge(args) => merge::run(&args),
+        Command::Plot(args) => plotcmd::run(&args),
+        Command::Compare(args) => compare::run(args),
+        Command::Measure(args) => measure::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
+        Command::Otf(args) => psf::run(&args, psf::Kind::Otf),
+        Command::Characterize(args) => characterize::run(&args),
+        Command::Scene { scene, set } => {
+            scene::check_overrides(scene.as_deref(), &set)?;
+            let source = scene::read(scene.as_deref())?;
+            let resolved = scene::resolved_toml(&source, &set)?;
+            warn(&resolved.warnings);
+            print!("{}", resolved.toml);
+            Ok(())
+        }
+        Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths } => {
+            let figure = plot::Figure::new(width, dpi)?;
+            let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+            if !(2..=100_000).contains(&points) {
+                anyhow::bail!("--points {points}: expected a whole number from 2 to 100000");
+            }
+            if let Some(bad) = wavelengths.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
+                anyhow::bail!("--wavelengths: {bad} nm: expected wavelengths > 0 nm");
+            }
+            let loaded = load(scene.as_deref(), &set)?;
+            let range = if to_cutoff { metric::FrequencyRange::Cutoff } else { metric::FrequencyRange::Nyquist };
+            let metres: Vec<f64> = wavelengths.iter().map(|w| w * 1e-9).collect();
+            let curve =
+                metric::mtf_curve(&loaded, range, points, &metres).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            if let Some(path) = &plot {
+                let title = loaded.title().map_or_else(|| loaded.lens().describe(), str::to_owned);
+                plot::mtf_plot(path, &figure, &title, &curve)?;
+            }
+            if json {
+                println!("{}", output::mtf_json(&label, &loaded, &curve)?);
+            } else if csv {
+                print!("{}", output::mtf_csv(&curve));
+            } else {
+                print!("{}", output::mtf_table(&label, &loaded, &curve));
+            }
+            Ok(())
+        }
+    }
+}
+
+/// Loads a scene (the `--set`s checked before the file is read) and prints its plausibility
+/// warnings to stderr.
+fn load(scene: Option<&std::path::Path>, set: &[String]) -> Result<metric::Scene> {
+    let loaded = scene::load_with_warnings(scene, set)?;
+    warn(&loaded.warnings);
+    Ok(loaded.scene)
+}
+
+/// Prints a scene's plausibility warnings (values that look like a unit slip) to stderr.
+fn warn(warnings: &[scene::Warning]) {
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
+/// The most grid points a sweep evaluates.
+const MAX_GRID_POINTS: usize = 10_000_000;
+
+/// The most sweep worker threads: 4 × the available cores (more only add contention).
+fn max_threads() -> usize {
+    4 * std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+}
+
+/// Refuses a key given twice to `--over`, or given to both `--set` (or `--tolerance`, which is
+/// `options.tolerance`) and `--over`: one value of it would silently be ignored.
+fn check_over_keys(set: &[String], ranges: &[optimize::Range]) -> Result<()> {
+    check_keys("--over", set, ranges)
+}
+
+/// [`check_over_keys`] for keys swept by `what` (`--over`, or `--points FILE`).
+fn check_keys(what: &str, set: &[String], ranges: &[optimize::Range]) -> Result<()> {
+    for (i, r) in ranges.iter().enumerate() {
+        if ranges[..i].iter().any(|earlier| earlier.key == r.key) {
+            anyhow::bail!("{what} {}: the key is given to {what} twice; give each key once", r.key);
+        }
+        if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == r.key)) {
+            let given =
+                if r.key == "options.tolerance" { format!("--set {s} or --tolerance") } else { format!("--set {s}") };
+            anyhow::bail!(
+                "{what} {}: the key is also given by {given}; {what} would override it: give it in one place",
+                r.key
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The JSON object `report` with the `--explain` text as a last field `explain`, one string
+/// per line.
+fn with_explain(report: &str, explain: &str) -> Result<String> {
+    let body = report.trim_end().strip_suffix('}').map(str::trim_end);
+    let Some(body) = body else { anyhow::bail!("internal error: the JSON report is not an object") };
+    let lines: Vec<String> =
+        explain.lines().filter(|l| !l.trim().is_empty()).map(serde_json::to_string).collect::<Result<_, _>>()?;
+    let out = format!("{body},\n  \"explain\": [\n    {}\n  ]\n}}", lines.join(",\n    "));
+    serde_json::from_str::<serde_json::Value>(&out)?;
+    Ok(out)
+}
+
+/// `--shard I/N`: shard `I` (1-based) of `N`.
+fn parse_shard(arg: &str) -> Result<(usize, usize)> {
+    let parsed =
+        arg.split_once('/').and_then(|(i, n)| Some((i.trim().parse::<usize>().ok()?, n.trim().parse::<usize>().ok()?)));
+    match parsed {
+        Some((i, n)) if n >= 1 && (1..=n).contains(&i) => Ok((i, n)),
+        _ => anyhow::bail!("--shard {arg}: expected I/N with whole numbers 1 ≤ I ≤ N, e.g. --shard 3/8 (shard 3 of 8)"),
+    }
+}
+
+/// `--tolerance REL` as the override `options.tolerance=REL` (validated with the scene).
+fn with_tolerance(mut set: Vec<String>, tolerance: Option<f64>) -> Vec<String> {
+    if let Some(t) = tolerance {
+        set.push(format!("options.tolerance={t}"));
+    }
+    set
+}
