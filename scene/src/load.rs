@@ -473,6 +473,16 @@ impl Source {
         &self.label
     }
 
+    /// The scene file's text.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// The folder its CSV paths resolve against.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
     /// A scene given as text (`label` names it in messages; CSV paths resolve against `dir`).
     pub fn from_text(text: impl Into<String>, label: impl Into<String>, dir: impl Into<PathBuf>) -> Source {
         Source { text: text.into(), label: label.into(), dir: dir.into(), parsed: std::sync::OnceLock::new() }

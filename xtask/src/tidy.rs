@@ -48,13 +48,14 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
     ("imaging", Allowed::Only(&["metric", "noise", "optics", "radiometry"])),
     ("cli", Allowed::Any),
+    ("python", Allowed::Any),
     ("xtask", Allowed::Only(&[])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only
     ("custom-lens", Allowed::Any),
 ];
 
 /// Folders whose package name is not the folder name: `(folder, package)`.
-pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[("cli", "asnr")];
+pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[("cli", "asnr"), ("python", "asnr-python")];
 
 /// The package name the member in `folder` must have.
 fn package_name(folder: &str) -> &str {

@@ -1,0 +1,331 @@
+"""How good is this metalens, really? The ASNR of a lens, light, camera and exposure.
+
+The `asnr` command line's computation from Python: a scene is read once (a scene file, TOML
+text or a dict), changed with :meth:`Scene.with_`, and evaluated at one point
+(:func:`evaluate`), at many (:func:`evaluate_many`, numpy arrays in and out, in parallel with the
+GIL released), over a grid (:func:`sweep`, a pandas DataFrame), or compared with other designs
+(:func:`compare`). :func:`mtf` gives the polychromatic MTF. Every number is the one ``asnr``
+prints for the same scene (the same Rust functions compute it): ``evaluate_many`` over a grid
+is ``asnr sweep --csv`` to the last digit, and :func:`to_csv` writes its bytes.
+
+Errors raise :class:`SceneError` with the command line's message, which names the file (or the
+override), the key, the value and what is accepted. Scene files, keys and units are those of the
+repository's README ("Scene files"); frequencies are in cycles/mm, wavelengths in nm unless a
+name says ``_m``.
+
+A lens written in Python (:class:`LensModel`) replaces a scene's ``[lens]`` for prototyping.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from . import _asnr
+from ._asnr import Scene, SceneError
+
+__all__ = [
+    "LensModel",
+    "Order",
+    "Report",
+    "Scene",
+    "SceneError",
+    "SceneWarning",
+    "RESULT_COLUMNS",
+    "axis",
+    "compare",
+    "concat",
+    "evaluate",
+    "evaluate_many",
+    "grid",
+    "load",
+    "mtf",
+    "sweep",
+    "to_csv",
+]
+
+__version__ = "0.1.0"
+
+#: The result columns of a sweep, after the swept keys' (as ``asnr sweep --csv`` writes them).
+RESULT_COLUMNS = ("mean_mtf", "snr0", "asnr", "photoelectrons", "fraunhofer_valid", "warnings")
+
+
+class SceneWarning(UserWarning):
+    """A scene value that is valid but looks like a unit slip (e.g. a pixel pitch in mm)."""
+
+
+def load(scene: str | os.PathLike[str] | Mapping[str, Any] | None = None, *, directory: str | os.PathLike[str] | None = None) -> Scene:
+    """Reads a scene.
+
+    ``scene`` is a path to a scene file (``str`` or ``pathlib.Path``), TOML text (a ``str``
+    holding a newline or ``=``), a dict of the file's tables (``{"lens": {"f_number": 2.5}, …}``)
+    or ``None`` for the paper's chromatic metalens (embedded, ``examples/paper-theory.toml``).
+    CSV paths in TOML text or a dict resolve against ``directory`` (default: the current folder).
+    Raises :class:`SceneError` if it is not a valid scene.
+    """
+    base = os.fspath(directory) if directory is not None else os.getcwd()
+    if scene is None:
+        return _asnr.load_file(None)
+    if isinstance(scene, Mapping):
+        return _asnr.load_json(json.dumps(scene, allow_nan=True), "scene dict", base)
+    if isinstance(scene, str) and ("\n" in scene or "=" in scene):
+        return _asnr.load_text(scene, "scene text", base)
+    if isinstance(scene, (str, os.PathLike)):
+        return _asnr.load_file(os.fspath(scene))
+    raise TypeError(f"load: a {type(scene).__name__}: expected a path, TOML text, a dict or None")
+
+
+class Report:
+    """One evaluation: the fields of ``asnr evaluate --json``'s ``result`` as attributes
+    (``asnr``, ``snr0``, ``mean_mtf``, ``photoelectrons``, ``fraunhofer``, ``glare``, ``noise``,
+    ``numerics``, ``warnings``, …), and ``scene``, ``title``, ``lens``."""
+
+    def __init__(self, report: dict[str, Any]):
+        self._report = report
+
+    def __getattr__(self, name: str) -> Any:
+        report = self.__dict__.get("_report", {})
+        if name in report.get("result", {}):
+            return report["result"][name]
+        if name in report and name != "result":
+            return report[name]
+        raise AttributeError(f"Report has no field {name!r}; the fields are {sorted(self.fields())}")
+
+    def fields(self) -> list[str]:
+        """The names of the report's fields."""
+        return [k for k in self._report if k != "result"] + list(self._report.get("result", {}))
+
+    def __dir__(self) -> list[str]:
+        return sorted(set(super().__dir__()) | set(self.fields()))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The report as ``asnr evaluate --json`` prints it (``scene``, ``title``, ``lens``,
+        ``result``)."""
+        return json.loads(json.dumps(self._report))
+
+    def __repr__(self) -> str:
+        r = self._report["result"]
+        return f"Report(asnr={r['asnr']:.6g}, snr0={r['snr0']:.6g}, mean_mtf={r['mean_mtf']:.6g}, lens={self._report['lens']!r})"
+
+
+def _warn(messages: Iterable[str]) -> None:
+    for m in messages:
+        warnings.warn(m, SceneWarning, stacklevel=3)
+
+
+def evaluate(scene: Scene) -> Report:
+    """The ASNR of ``scene`` and how it was computed (the report of ``asnr evaluate --json``).
+
+    Values that look like a unit slip are warned about (:class:`SceneWarning`); the evaluation's
+    own warnings are in ``report.warnings``."""
+    text, _lens, scene_warnings = _asnr.evaluate(_scene(scene))
+    _warn(scene_warnings)
+    return Report(json.loads(text))
+
+
+def _scene(scene: Any) -> Scene:
+    if not isinstance(scene, Scene):
+        raise TypeError(f"expected an asnr.Scene (asnr.load(...)), got a {type(scene).__name__}")
+    return scene
+
+
+def evaluate_many(scene: Scene, values: Mapping[str, Any], *, threads: int = 0, chunk: int = 256) -> dict[str, np.ndarray]:
+    """The ASNR at many points: ``values`` maps dotted scene keys to arrays (broadcast together,
+    numpy's rules); point ``i`` is the scene with every key at its ``i``-th value.
+
+    Returns a dict of arrays of the broadcast shape: the keys' values, then ``mean_mtf``,
+    ``snr0``, ``asnr``, ``photoelectrons`` (float64), ``fraunhofer_valid`` (bool) and ``warnings``
+    (str, each point's warnings joined by ``" | "``). Runs on ``threads`` threads (0: all cores)
+    with the GIL released, ``chunk`` points at a time; Ctrl-C stops it between chunks. Raises
+    :class:`SceneError` at the first point that is not a valid scene, naming it."""
+    scene = _scene(scene)
+    if not values:
+        raise ValueError("evaluate_many: no keys; expected a dict of dotted scene keys to arrays")
+    keys = list(values)
+    arrays = np.broadcast_arrays(*[np.asarray(values[k], dtype=np.float64) for k in keys])
+    shape = arrays[0].shape
+    columns = [np.ascontiguousarray(a, dtype=np.float64).ravel() for a in arrays]
+    out = _asnr.evaluate_many(scene, keys, columns, threads, chunk)
+    result: dict[str, np.ndarray] = {k: c.reshape(shape) for k, c in zip(keys, columns)}
+    for name in RESULT_COLUMNS:
+        column = out[name]
+        result[name] = (np.array(column, dtype=object) if name == "warnings" else column).reshape(shape)
+    return result
+
+
+def axis(lo: float, hi: float, n: int) -> np.ndarray:
+    """``n`` values from ``lo`` to ``hi``, both included, equally spaced: the floats of
+    ``asnr sweep --over KEY=LO:HI:N`` (``np.linspace`` may differ in the last bit)."""
+    return _asnr.axis(float(lo), float(hi), int(n))
+
+
+def grid(over: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """The points of a grid as flat arrays, the first key varying slowest (``asnr sweep``'s
+    order): ``over`` maps each key to ``(lo, hi, n)`` (:func:`axis`) or to its values."""
+    axes = []
+    for key, spec in over.items():
+        if isinstance(spec, tuple) and len(spec) == 3 and all(isinstance(x, (int, float)) for x in spec) and float(spec[2]).is_integer():
+            axes.append(axis(*spec))
+        else:
+            values = np.asarray(spec, dtype=np.float64).ravel()
+            if values.size == 0:
+                raise ValueError(f"{key}: no values")
+            axes.append(values)
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return {k: m.ravel() for k, m in zip(over, mesh)}
+
+
+def sweep(scene: Scene, over: Mapping[str, Any], *, threads: int = 0, frame: bool | None = None):
+    """The ASNR over the cartesian product of ``over`` (see :func:`grid`), as ``asnr sweep``
+    evaluates it: a pandas DataFrame with the CSV's columns (the keys, then
+    :data:`RESULT_COLUMNS`) when pandas is installed (``frame=False``: a dict of arrays)."""
+    result = evaluate_many(scene, grid(over), threads=threads)
+    if frame is False:
+        return result
+    try:
+        import pandas as pd
+    except ImportError:
+        if frame:
+            raise
+        return result
+    return pd.DataFrame(result)
+
+
+def concat(parts: Sequence[Mapping[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Results of :func:`evaluate_many` on batches (e.g. from Dask workers), joined in order."""
+    if not parts:
+        raise ValueError("concat: no results")
+    return {k: np.concatenate([np.ravel(p[k]) for p in parts]) for k in parts[0]}
+
+
+def to_csv(result: Any) -> str:
+    """The CSV ``asnr sweep --csv`` writes for these points, byte for byte: ``result`` is what
+    :func:`evaluate_many`, :func:`sweep` or :func:`concat` returned (a dict of arrays or a
+    DataFrame); the columns before ``mean_mtf`` are the keys."""
+    columns = list(result.keys())
+    if "mean_mtf" not in columns:
+        raise ValueError("to_csv: expected the result of evaluate_many or sweep (no mean_mtf column)")
+    keys = columns[: columns.index("mean_mtf")]
+    flat = {k: np.ravel(np.asarray(result[k])) for k in keys + list(RESULT_COLUMNS)}
+    n = flat["asnr"].size
+    rows = [
+        (
+            [float(flat[k][i]) for k in keys],
+            float(flat["mean_mtf"][i]),
+            float(flat["snr0"][i]),
+            float(flat["asnr"][i]),
+            float(flat["photoelectrons"][i]),
+            bool(flat["fraunhofer_valid"][i]),
+            str(flat["warnings"][i]),
+        )
+        for i in range(n)
+    ]
+    return _asnr.sweep_csv(keys, rows)
+
+
+def mtf(scene: Scene, nu: Any, *, wavelengths_nm: Iterable[float] = ()) -> dict[str, Any]:
+    """The polychromatic MTF of ``scene`` at the frequencies ``nu`` (cycles/mm, any shape):
+    a dict with ``frequency`` (``nu``), ``mtf`` (times the pixel MTF if the camera applies it;
+    the tangential–sagittal average where the OTF depends on direction, as the ASNR's mean is),
+    ``otf`` (signed), ``diffraction_limited`` (at the mean wavelength), ``mtf_tangential`` and
+    ``mtf_sagittal`` (or None), ``monochromatic`` (one row per wavelength of ``wavelengths_nm``),
+    and ``nyquist``, ``mean_wavelength_nm``."""
+    nu_array = np.asarray(nu, dtype=np.float64)
+    flat = np.ascontiguousarray(nu_array).ravel()
+    curve = json.loads(_asnr.mtf(_scene(scene), flat, [float(w) for w in wavelengths_nm]))
+    shaped = lambda v: None if v is None else np.asarray(v, dtype=np.float64).reshape(nu_array.shape)  # noqa: E731
+    return {
+        "frequency": nu_array,
+        "mtf": shaped(curve["mtf"]),
+        "otf": shaped(curve["otf"]),
+        "diffraction_limited": shaped(curve["diffraction_limited"]),
+        "mtf_tangential": shaped(curve["mtf_tangential"]),
+        "mtf_sagittal": shaped(curve["mtf_sagittal"]),
+        "wavelengths_nm": np.asarray(curve["wavelengths_nm"], dtype=np.float64),
+        "monochromatic": np.asarray(curve["monochromatic"], dtype=np.float64).reshape((len(curve["wavelengths_nm"]),) + nu_array.shape),
+        "nyquist": curve["nyquist_cyc_per_mm"],
+        "mean_wavelength_nm": curve["mean_wavelength_nm"],
+        "pixel_mtf": curve["pixel_mtf"],
+    }
+
+
+def compare(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    set: Mapping[str, Any] | Sequence[str] | None = None,  # noqa: A002 - the command line's name
+    tolerance: float | None = None,
+    over: str | None = None,
+    threads: int = 0,
+) -> dict[str, Any]:
+    """Lens designs side by side (``asnr compare --json``): the comparison file ``path`` (None:
+    the embedded comparison of the lens families), overrides ``set`` (a dict, or ``key=value``
+    strings; ``designs[1].lens.f_number`` reaches one design), each design's ASNR at the scene
+    band and at its best band searched over ``over`` (``"spectrum.range_nm=LO:HI:N"``), its
+    chromatic twin and glare."""
+    overrides = _override_strings(set)
+    text = _asnr.compare(None if path is None else os.fspath(path), overrides, tolerance, over, threads)
+    return json.loads(text)
+
+
+def _override_strings(set_: Mapping[str, Any] | Sequence[str] | None) -> list[str]:
+    if set_ is None:
+        return []
+    if isinstance(set_, Mapping):
+        out = []
+        for k, v in set_.items():
+            if isinstance(v, bool):
+                out.append(f"{k}={'true' if v else 'false'}")
+            elif isinstance(v, (int, float)) and not isinstance(v, bool):
+                out.append(f"{k}={v!r}" if math.isfinite(v) else f"{k}={v}")
+            else:
+                out.append(f"{k}={json.dumps(str(v))}")
+        return out
+    return [str(s) for s in set_]
+
+
+@dataclasses.dataclass(frozen=True)
+class Order:
+    """One imaging order of a :class:`LensModel` at one wavelength and field point (SI units,
+    the wavefront sign of the README's physics notes: ``defocus_m > 0`` focuses behind the
+    detector)."""
+
+    #: fraction of the light on the aperture this order brings to the image, in [0, 1]
+    efficiency: float
+    #: defocus W020 at the pupil edge, m
+    defocus_m: float
+    #: lateral displacement (x, y) of the image point on the detector, m (lateral colour)
+    image_shift_m: tuple[float, float] = (0.0, 0.0)
+    #: Seidel spherical W040, m (any Seidel term sends the order to the FFT path)
+    spherical_m: float = 0.0
+    #: Seidel coma W131, m
+    coma_m: float = 0.0
+    #: Seidel astigmatism W222, m
+    astigmatism_m: float = 0.0
+    #: Seidel field curvature W220, m
+    field_curvature_m: float = 0.0
+
+
+class LensModel:
+    """A lens written in Python, for prototyping: subclass it, set ``f_number`` and
+    ``focal_length_m`` (and ``design_wavelength_m`` for the Fraunhofer check), and return the
+    imaging orders from :meth:`orders`; optionally define ``transmission(wavelength_m)`` (the
+    total transmission into all orders, for glare; default: the orders' efficiency). Use it with
+    ``scene.with_lens(MyLens())``. The full circular pupil of diameter ``focal_length_m /
+    f_number`` is assumed. It is called back from the evaluation under the GIL: a few times
+    slower than a lens of the scene file, and an error raised in it is raised by the evaluation."""
+
+    f_number: float
+    focal_length_m: float
+    design_wavelength_m: float | None = None
+
+    def orders(self, wavelength_m: float, field: tuple[float, float]) -> list[Order]:
+        """The imaging orders for light of ``wavelength_m`` from the field angles ``field``
+        (x, y in radians)."""
+        raise NotImplementedError(f"{type(self).__name__}.orders(wavelength_m, field)")

@@ -1,0 +1,592 @@
+//! `asnr._asnr`: the native module of the `asnr` Python package (PyO3).
+//!
+//! The Python layer (`python/asnr/__init__.py`) gives the user's API (`asnr.load`, `asnr.evaluate`,
+//! `asnr.evaluate_many`, `asnr.sweep`, `asnr.mtf`, `asnr.compare`, `asnr.LensModel`); this module
+//! does the work with the same functions as the command line, so that a number computed from
+//! Python is the number `asnr` prints:
+//!
+//! - a scene is a [`scene::Source`] (a file's or a text's TOML, parsed once) and its overrides,
+//!   `key=value` as `--set` takes them, built by `scene::build_from`;
+//! - a point of `evaluate_many` is `scene::sweep::evaluate_point`, the function every
+//!   `asnr sweep` point goes through, so its values are the sweep CSV's to the last digit;
+//! - reports are the command line's JSON (`metric::Evaluation`, the comparison's `Report`),
+//!   decoded in Python;
+//! - errors raise `asnr.SceneError` with the command line's message.
+//!
+//! Long computations release the GIL and run on a rayon pool; `evaluate_many` checks for Ctrl-C
+//! between chunks of points. A lens written in Python ([`PyLens`]) is called back under the GIL.
+
+use std::sync::{Arc, Mutex};
+
+use numpy::{PyArray1, PyReadonlyArray1};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+use optics::{Field, LensModel, Order, Pupil, Wavefront};
+use scene::Source;
+use scene::sweep::{Point, assignment, evaluate_point};
+
+create_exception!(
+    asnr,
+    SceneError,
+    PyException,
+    "A scene that cannot be read, built or evaluated. The message is the command line's: it names the \
+     file (or the override), the key, the value and what is accepted."
+);
+
+/// The error as Python sees it: the whole chain of causes in one message, as `asnr` prints it.
+fn scene_error(e: impl Into<anyhow::Error>) -> PyErr {
+    SceneError::new_err(format!("{:#}", e.into()))
+}
+
+/// A scene: a scene file's (or a text's) TOML with overrides, and optionally a lens written in
+/// Python in place of its `[lens]`.
+#[pyclass(frozen, module = "asnr._asnr")]
+#[derive(Clone)]
+struct Scene {
+    source: Source,
+    overrides: Vec<String>,
+    lens: Option<Arc<PyLens>>,
+}
+
+impl Scene {
+    /// The validated scene.
+    fn build(&self) -> Result<metric::Scene, scene::Error> {
+        let built = scene::build_from(&self.source, &self.overrides)?;
+        Ok(match &self.lens {
+            Some(lens) => built.with_lens(lens.clone()),
+            None => built,
+        })
+    }
+
+    /// Refuses lens keys when the lens is Python's: they would not reach it.
+    fn check_keys<'a>(&self, keys: impl IntoIterator<Item = &'a str>) -> PyResult<()> {
+        if let Some(lens) = &self.lens {
+            for key in keys {
+                if key.starts_with("lens.") {
+                    return Err(SceneError::new_err(format!(
+                        "{}: {key}: the scene's lens is the Python object {}; its keys are set in Python, not as scene keys",
+                        self.source.label(),
+                        lens.name
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `key=value` for an override given in Python: numbers as `asnr sweep` writes them (the shortest
+/// decimal that reads back to the same float), integers and booleans as TOML's, strings quoted.
+fn override_text(key: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
+    if value.is_instance_of::<PyBool>() {
+        Ok(format!("{key}={}", value.extract::<bool>()?))
+    } else if value.is_instance_of::<PyInt>() {
+        Ok(format!("{key}={}", value.extract::<i64>()?))
+    } else if value.is_instance_of::<PyFloat>() || value.hasattr("__float__")? && !value.is_instance_of::<PyString>() {
+        Ok(assignment(key, value.extract::<f64>()?))
+    } else if let Ok(text) = value.cast::<PyString>() {
+        Ok(format!("{key}={}", toml::Value::String(text.to_str()?.to_owned())))
+    } else {
+        Err(PyTypeError::new_err(format!(
+            "{key}: a {}: expected a number, a bool or a string",
+            value.get_type().name()?
+        )))
+    }
+}
+
+#[pymethods]
+impl Scene {
+    /// How messages name the scene (its file, or "embedded paper scene").
+    #[getter]
+    fn label(&self) -> String {
+        self.source.label().to_owned()
+    }
+
+    /// The overrides applied to the file, `key=value` as `asnr --set` takes them.
+    #[getter]
+    fn overrides(&self) -> Vec<String> {
+        self.overrides.clone()
+    }
+
+    /// This scene with more overrides (a dict of dotted keys to values), validated now.
+    fn with_(&self, overrides: &Bound<'_, PyDict>) -> PyResult<Scene> {
+        let mut next = self.clone();
+        for (key, value) in overrides.iter() {
+            let key: String = key.extract()?;
+            self.check_keys([key.as_str()])?;
+            next.overrides.push(override_text(&key, &value)?);
+        }
+        next.build().map_err(scene_error)?;
+        Ok(next)
+    }
+
+    /// This scene with a lens written in Python (an object with `f_number`, `focal_length_m` and
+    /// `orders(wavelength_m, field)`): see `asnr.LensModel`.
+    fn with_lens(&self, lens: &Bound<'_, PyAny>) -> PyResult<Scene> {
+        let lens = PyLens::new(lens)?;
+        let mut next = Scene { lens: Some(Arc::new(lens)), ..self.clone() };
+        // the file's lens keys no longer apply, but the overrides of the others still do
+        next.overrides.retain(|o| !o.trim_start().starts_with("lens."));
+        next.build().map_err(scene_error)?;
+        Ok(next)
+    }
+
+    /// The scene as read, with every default filled in (`asnr scene`), as TOML text.
+    fn to_toml(&self) -> PyResult<String> {
+        Ok(scene::resolved_toml(&self.source, &self.overrides).map_err(scene_error)?.toml)
+    }
+
+    /// Pickling (Dask and multiprocessing send scenes to workers): the scene's text, label,
+    /// folder and overrides, and the Python lens object if it has one.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let rebuild = py.import("asnr._asnr")?.getattr("_rebuild_scene")?;
+        let lens = self.lens.as_ref().map(|l| l.object.clone_ref(py));
+        let args =
+            (self.source.text(), self.source.label(), self.source.dir().to_path_buf(), self.overrides.clone(), lens)
+                .into_pyobject(py)?;
+        Ok((rebuild, args))
+    }
+
+    fn __repr__(&self) -> String {
+        let lens = self.lens.as_ref().map_or(String::new(), |l| format!(", lens={}", l.name));
+        format!("Scene({:?}, overrides={:?}{lens})", self.source.label(), self.overrides)
+    }
+}
+
+/// The scene file `path` (None: the embedded paper scene).
+#[pyfunction]
+#[pyo3(signature = (path=None))]
+fn load_file(path: Option<std::path::PathBuf>) -> PyResult<Scene> {
+    let source = scene::read(path.as_deref()).map_err(scene_error)?;
+    let scene = Scene { source, overrides: Vec::new(), lens: None };
+    scene.build().map_err(scene_error)?;
+    Ok(scene)
+}
+
+/// A scene given as TOML text; CSV paths resolve against `directory`.
+#[pyfunction]
+fn load_text(text: String, label: String, directory: std::path::PathBuf) -> PyResult<Scene> {
+    let scene = Scene { source: Source::from_text(text, label, directory), overrides: Vec::new(), lens: None };
+    scene.build().map_err(scene_error)?;
+    Ok(scene)
+}
+
+/// A scene given as JSON text (a Python dict dumped), turned into TOML; CSV paths resolve
+/// against `directory`.
+#[pyfunction]
+fn load_json(json: &str, label: String, directory: std::path::PathBuf) -> PyResult<Scene> {
+    let value: serde_json::Value = serde_json::from_str(json).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let table: toml::Table = toml::Table::try_from(value).map_err(|e| {
+        SceneError::new_err(format!("{label}: cannot be written as TOML: {e} (None values are not allowed)"))
+    })?;
+    load_text(table.to_string(), label, directory)
+}
+
+/// The scene [`Scene::__reduce__`] pickled.
+#[pyfunction]
+fn _rebuild_scene(
+    text: String,
+    label: String,
+    directory: std::path::PathBuf,
+    overrides: Vec<String>,
+    lens: Option<Bound<'_, PyAny>>,
+) -> PyResult<Scene> {
+    let lens = lens.map(|l| PyLens::new(&l).map(Arc::new)).transpose()?;
+    Ok(Scene { source: Source::from_text(text, label, directory), overrides, lens })
+}
+
+/// The evaluation of a scene (`asnr evaluate --json`'s `result`, as JSON text) and the scene's
+/// plausibility warnings. The GIL is released while it runs.
+#[pyfunction]
+fn evaluate(py: Python<'_>, scene: &Scene) -> PyResult<(String, String, Vec<String>)> {
+    let loaded = scene::build_with_warnings(&scene.source, &scene.overrides).map_err(scene_error)?;
+    let warnings = loaded.warnings.iter().map(ToString::to_string).collect();
+    let built = match &scene.lens {
+        Some(lens) => loaded.scene.with_lens(lens.clone()),
+        None => loaded.scene,
+    };
+    let result = py.detach(|| metric::evaluate(&built));
+    if let Some(lens) = &scene.lens {
+        lens.raise()?;
+    }
+    let result = result.map_err(|e| SceneError::new_err(format!("{}: {e}", scene.source.label())))?;
+    let report = serde_json::json!({
+        "scene": scene.source.label(),
+        "title": built.title(),
+        "lens": built.lens().describe(),
+        "result": result,
+    });
+    Ok((report.to_string(), built.lens().describe(), warnings))
+}
+
+/// One point of `evaluate_many` with a Python lens (the file's lens goes through
+/// `evaluate_point`, as the command line's sweep does).
+fn evaluate_with_lens(scene: &Scene, lens: &Arc<PyLens>, keys: &[String], values: &[f64]) -> anyhow::Result<Point> {
+    let mut set = scene.overrides.clone();
+    set.extend(keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
+    let built = scene::build_from(&scene.source, &set)?.with_lens(lens.clone());
+    let r = metric::evaluate(&built).map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.label()))?;
+    Ok(Point {
+        values: values.to_vec(),
+        mean_mtf: r.mean_mtf,
+        snr0: r.snr0,
+        asnr: r.asnr,
+        photoelectrons: r.photoelectrons,
+        fraunhofer_valid: r.fraunhofer.valid,
+        warnings: r.warnings,
+    })
+}
+
+/// The ASNR at many points: `columns[k][i]` is key `keys[k]` at point `i`. Returns a dict of
+/// numpy arrays (`mean_mtf`, `snr0`, `asnr`, `photoelectrons`, `fraunhofer_valid`) and the list
+/// `warnings` (each point's, joined by " | "). Points run on `threads` threads (0: all cores) in
+/// chunks of `chunk`, the GIL released; Ctrl-C is honoured between chunks.
+#[pyfunction]
+#[pyo3(signature = (scene, keys, columns, threads=0, chunk=256))]
+fn evaluate_many<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    keys: Vec<String>,
+    columns: Vec<PyReadonlyArray1<'py, f64>>,
+    threads: usize,
+    chunk: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    use rayon::prelude::*;
+    if keys.len() != columns.len() {
+        return Err(PyValueError::new_err(format!("{} keys but {} columns", keys.len(), columns.len())));
+    }
+    scene.check_keys(keys.iter().map(String::as_str))?;
+    let columns: Vec<Vec<f64>> = columns
+        .iter()
+        .map(|c| c.as_slice().map(<[f64]>::to_vec))
+        .collect::<Result<_, _>>()
+        .map_err(|e| PyValueError::new_err(format!("the values must be contiguous float64 arrays: {e}")))?;
+    let n = columns.first().map_or(1, Vec::len);
+    if let Some((k, c)) = keys.iter().zip(&columns).find(|(_, c)| c.len() != n) {
+        return Err(PyValueError::new_err(format!(
+            "{k}: {} values; expected {n}, as many as the first key's",
+            c.len()
+        )));
+    }
+    if let Some((k, v)) = keys.iter().zip(&columns).find_map(|(k, c)| c.iter().find(|v| !v.is_finite()).map(|v| (k, v)))
+    {
+        return Err(SceneError::new_err(format!("{}: {k} = {v}: expected finite numbers", scene.source.label())));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| PyValueError::new_err(format!("threads = {threads}: {e}")))?;
+    let chunk = chunk.max(1);
+    let mut points: Vec<Point> = Vec::with_capacity(n);
+    let mut start = 0;
+    while start < n {
+        let end = (start + chunk).min(n);
+        let results: Vec<anyhow::Result<Point>> = py.detach(|| {
+            pool.install(|| {
+                (start..end)
+                    .into_par_iter()
+                    .map(|i| {
+                        let values: Vec<f64> = columns.iter().map(|c| c[i]).collect();
+                        match &scene.lens {
+                            None => evaluate_point(&scene.source, &scene.overrides, &keys, &values).map_err(Into::into),
+                            Some(lens) => evaluate_with_lens(scene, lens, &keys, &values),
+                        }
+                    })
+                    .collect()
+            })
+        });
+        if let Some(lens) = &scene.lens {
+            lens.raise()?;
+        }
+        for (i, r) in (start..end).zip(results) {
+            let point = r.map_err(|e| {
+                let at: Vec<String> = keys.iter().zip(&columns).map(|(k, c)| format!("{k}={}", c[i])).collect();
+                scene_error(e.context(format!("at point {i} ({})", at.join(", "))))
+            })?;
+            points.push(point);
+        }
+        py.check_signals()?;
+        start = end;
+    }
+    let out = PyDict::new(py);
+    let column = |f: fn(&Point) -> f64| PyArray1::from_vec(py, points.iter().map(f).collect());
+    out.set_item("mean_mtf", column(|p| p.mean_mtf))?;
+    out.set_item("snr0", column(|p| p.snr0))?;
+    out.set_item("asnr", column(|p| p.asnr))?;
+    out.set_item("photoelectrons", column(|p| p.photoelectrons))?;
+    out.set_item("fraunhofer_valid", PyArray1::from_vec(py, points.iter().map(|p| p.fraunhofer_valid).collect()))?;
+    out.set_item("warnings", PyList::new(py, points.iter().map(|p| p.warnings.join(" | ")))?)?;
+    Ok(out)
+}
+
+/// `n` values from `lo` to `hi`, both included, equally spaced, as `asnr sweep --over KEY=LO:HI:N`
+/// makes them (the same floats).
+#[pyfunction]
+fn axis<'py>(py: Python<'py>, lo: f64, hi: f64, n: usize) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) || n == 0 {
+        return Err(PyValueError::new_err(format!("axis({lo}, {hi}, {n}): expected finite lo < hi and n ≥ 1")));
+    }
+    Ok(PyArray1::from_vec(py, scene::sweep::axis(lo, hi, n)))
+}
+
+/// One row for [`sweep_csv`]: the point's values, mean MTF, SNR0, ASNR, photoelectrons, Fraunhofer
+/// validity and its warnings joined by " | ".
+type CsvRow = (Vec<f64>, f64, f64, f64, f64, bool, String);
+
+/// The CSV `asnr sweep --csv` writes for these points (`keys` and each point's values as
+/// `evaluate_many` got them, its results as it returned them).
+#[pyfunction]
+fn sweep_csv(keys: Vec<String>, rows: Vec<CsvRow>) -> String {
+    let mut s = scene::sweep::csv_header(&keys, false);
+    for (values, mean_mtf, snr0, asnr, photoelectrons, fraunhofer_valid, warnings) in rows {
+        let warnings = if warnings.is_empty() { Vec::new() } else { vec![warnings] };
+        let point = Point { values, mean_mtf, snr0, asnr, photoelectrons, fraunhofer_valid, warnings };
+        s.push_str(&scene::sweep::csv_row(&point, None));
+    }
+    s
+}
+
+/// The polychromatic MTF at the frequencies `frequencies` (cycles/mm), with the diffraction limit
+/// and the monochromatic MTFs at `wavelengths_nm`: `metric::mtf_at`'s curves as JSON text.
+#[pyfunction]
+#[pyo3(signature = (scene, frequencies, wavelengths_nm=Vec::new()))]
+fn mtf(
+    py: Python<'_>,
+    scene: &Scene,
+    frequencies: PyReadonlyArray1<'_, f64>,
+    wavelengths_nm: Vec<f64>,
+) -> PyResult<String> {
+    let frequencies = frequencies
+        .as_slice()
+        .map_err(|e| PyValueError::new_err(format!("the frequencies must be a contiguous float64 array: {e}")))?
+        .to_vec();
+    if let Some(bad) = wavelengths_nm.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
+        return Err(PyValueError::new_err(format!("wavelengths_nm: {bad} nm: expected wavelengths > 0 nm")));
+    }
+    let built = scene.build().map_err(scene_error)?;
+    let metres: Vec<f64> = wavelengths_nm.iter().map(|w| w * 1e-9).collect();
+    let curve = py.detach(|| metric::mtf_at(&built, &frequencies, &metres));
+    if let Some(lens) = &scene.lens {
+        lens.raise()?;
+    }
+    let curve = curve.map_err(|e| SceneError::new_err(format!("{}: {e}", scene.source.label())))?;
+    serde_json::to_string(&curve).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// `asnr compare`'s report as JSON text: the comparison file `path` (None: the embedded
+/// comparison of the lens families) with `overrides`, the best band searched over `over`.
+#[pyfunction]
+#[pyo3(signature = (path=None, overrides=Vec::new(), tolerance=None, over=None, threads=0))]
+fn compare(
+    py: Python<'_>,
+    path: Option<std::path::PathBuf>,
+    overrides: Vec<String>,
+    tolerance: Option<f64>,
+    over: Option<String>,
+    threads: usize,
+) -> PyResult<String> {
+    let (_, report) = py
+        .detach(|| asnr::compare::compare(path.as_deref(), &overrides, tolerance, over.as_deref(), threads))
+        .map_err(scene_error)?;
+    serde_json::to_string(&report).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// A lens written in Python: `f_number`, `focal_length_m`, optional `design_wavelength_m`, and
+/// `orders(wavelength_m, (field_x_rad, field_y_rad))` returning the imaging orders, each an object
+/// (or dict) with `efficiency` and `defocus_m` and optionally `image_shift_m` (x, y) and the Seidel
+/// terms `spherical_m`, `coma_m`, `astigmatism_m`, `field_curvature_m`; optional
+/// `transmission(wavelength_m)`. All in SI units, the wavefront sign of docs/physics.md. The first
+/// error raised in a callback is kept and raised when the evaluation returns.
+#[derive(Debug)]
+struct PyLens {
+    object: Py<PyAny>,
+    name: String,
+    f_number: f64,
+    focal_length: f64,
+    design_wavelength: Option<f64>,
+    has_transmission: bool,
+    error: Mutex<Option<PyErr>>,
+}
+
+impl PyLens {
+    fn new(object: &Bound<'_, PyAny>) -> PyResult<PyLens> {
+        let name = object.get_type().name()?.to_string();
+        let number = |attr: &str| -> PyResult<f64> {
+            let v: f64 = object.getattr(attr).and_then(|v| v.extract()).map_err(|e| {
+                PyTypeError::new_err(format!("{name}.{attr}: {e}: a LensModel needs f_number and focal_length_m (m)"))
+            })?;
+            if !(v.is_finite() && v > 0.0) {
+                return Err(PyValueError::new_err(format!("{name}.{attr} = {v}: expected a finite number > 0")));
+            }
+            Ok(v)
+        };
+        let f_number = number("f_number")?;
+        let focal_length = number("focal_length_m")?;
+        let design_wavelength = match object.getattr("design_wavelength_m") {
+            Ok(v) if !v.is_none() => Some(v.extract::<f64>()?),
+            _ => None,
+        };
+        if !object.getattr("orders").is_ok_and(|o| o.is_callable()) {
+            return Err(PyTypeError::new_err(format!(
+                "{name} has no method orders(wavelength_m, field): a LensModel returns its imaging orders"
+            )));
+        }
+        let has_transmission = object.getattr("transmission").is_ok_and(|t| t.is_callable());
+        Ok(PyLens {
+            object: object.clone().unbind(),
+            name,
+            f_number,
+            focal_length,
+            design_wavelength,
+            has_transmission,
+            error: Mutex::new(None),
+        })
+    }
+
+    /// Keeps the first error a callback raised.
+    fn keep(&self, e: PyErr) {
+        if let Ok(mut slot) = self.error.lock() {
+            slot.get_or_insert(e);
+        }
+    }
+
+    /// Raises (and clears) the error a callback raised, if any.
+    fn raise(&self) -> PyResult<()> {
+        match self.error.lock().ok().and_then(|mut slot| slot.take()) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn call_orders(&self, py: Python<'_>, wavelength_m: f64, field: Field) -> PyResult<Vec<Order>> {
+        let list = self.object.bind(py).call_method1("orders", (wavelength_m, (field.x_rad, field.y_rad)))?;
+        let mut orders = Vec::new();
+        for item in list.try_iter()? {
+            let item = item?;
+            let get = |attr: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
+                if let Ok(d) = item.cast::<PyDict>() {
+                    return d.get_item(attr);
+                }
+                if let Ok(t) = item.cast::<PyTuple>() {
+                    // (efficiency, defocus_m)
+                    return match attr {
+                        "efficiency" => t.get_item(0).map(Some),
+                        "defocus_m" => t.get_item(1).map(Some),
+                        _ => Ok(None),
+                    };
+                }
+                match item.getattr(attr) {
+                    Ok(v) if !v.is_none() => Ok(Some(v)),
+                    _ => Ok(None),
+                }
+            };
+            let number = |attr: &str, default: Option<f64>| -> PyResult<f64> {
+                let v = match get(attr)? {
+                    Some(v) => v.extract::<f64>()?,
+                    None => default.ok_or_else(|| {
+                        PyValueError::new_err(format!(
+                            "{}.orders({wavelength_m:e}): an order without {attr}",
+                            self.name
+                        ))
+                    })?,
+                };
+                if !v.is_finite() {
+                    return Err(PyValueError::new_err(format!(
+                        "{}.orders({wavelength_m:e}): {attr} = {v}: expected a finite number",
+                        self.name
+                    )));
+                }
+                Ok(v)
+            };
+            let efficiency = number("efficiency", None)?;
+            if !(0.0..=1.0).contains(&efficiency) {
+                return Err(PyValueError::new_err(format!(
+                    "{}.orders({wavelength_m:e}): efficiency = {efficiency}: expected a fraction in [0, 1]",
+                    self.name
+                )));
+            }
+            let mut wavefront = Wavefront::defocus(number("defocus_m", None)?);
+            wavefront.spherical_m = number("spherical_m", Some(0.0))?;
+            wavefront.coma_m = number("coma_m", Some(0.0))?;
+            wavefront.astigmatism_m = number("astigmatism_m", Some(0.0))?;
+            wavefront.field_curvature_m = number("field_curvature_m", Some(0.0))?;
+            if let Some(shift) = get("image_shift_m")? {
+                let (x, y): (f64, f64) = shift.extract()?;
+                wavefront = wavefront.shifted(x, y);
+            }
+            orders.push(Order::new(efficiency, Pupil::Full, wavefront));
+        }
+        Ok(orders)
+    }
+}
+
+impl LensModel for PyLens {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        Python::attach(|py| {
+            self.call_orders(py, wavelength_m, field).unwrap_or_else(|e| {
+                self.keep(e);
+                Vec::new()
+            })
+        })
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        if !self.has_transmission {
+            return self.efficiency(wavelength_m);
+        }
+        Python::attach(|py| {
+            let t = self.object.bind(py).call_method1("transmission", (wavelength_m,)).and_then(|t| t.extract::<f64>());
+            t.and_then(|t| {
+                if (0.0..=1.0).contains(&t) {
+                    Ok(t)
+                } else {
+                    Err(PyValueError::new_err(format!(
+                        "{}.transmission({wavelength_m:e}) = {t}: expected a fraction in [0, 1]",
+                        self.name
+                    )))
+                }
+            })
+            .unwrap_or_else(|e| {
+                self.keep(e);
+                0.0
+            })
+        })
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        self.design_wavelength
+    }
+
+    fn describe(&self) -> String {
+        format!("{} (Python) F/{} f0 = {} mm", self.name, self.f_number, self.focal_length * 1e3)
+    }
+}
+
+/// The native module.
+#[pymodule]
+fn _asnr(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add_class::<Scene>()?;
+    m.add_function(wrap_pyfunction!(load_file, m)?)?;
+    m.add_function(wrap_pyfunction!(_rebuild_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(load_text, m)?)?;
+    m.add_function(wrap_pyfunction!(load_json, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate_many, m)?)?;
+    m.add_function(wrap_pyfunction!(axis, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_csv, m)?)?;
+    m.add_function(wrap_pyfunction!(mtf, m)?)?;
+    m.add_function(wrap_pyfunction!(compare, m)?)?;
+    Ok(())
+}
