@@ -83,36 +83,33 @@ def load(scene: str | os.PathLike[str] | Mapping[str, Any] | None = None, *, dir
 
 
 class Report:
-    """One evaluation: the fields of ``asnr evaluate --json``'s ``result`` as attributes
-    (``asnr``, ``snr0``, ``mean_mtf``, ``photoelectrons``, ``fraunhofer``, ``glare``, ``noise``,
-    ``numerics``, ``warnings``, …), and ``scene``, ``title``, ``lens``."""
+    """One evaluation: the fields of ``asnr evaluate --json`` as attributes (``asnr``, ``snr0``,
+    ``mean_mtf``, ``photoelectrons``, ``fraunhofer``, ``glare``, ``noise``, ``numerics``,
+    ``warnings``, ``scene``, ``title``, ``lens``, …)."""
 
     def __init__(self, report: dict[str, Any]):
         self._report = report
 
     def __getattr__(self, name: str) -> Any:
         report = self.__dict__.get("_report", {})
-        if name in report.get("result", {}):
-            return report["result"][name]
-        if name in report and name != "result":
+        if name in report:
             return report[name]
-        raise AttributeError(f"Report has no field {name!r}; the fields are {sorted(self.fields())}")
+        raise AttributeError(f"Report has no field {name!r}; the fields are {self.fields()}")
 
     def fields(self) -> list[str]:
-        """The names of the report's fields."""
-        return [k for k in self._report if k != "result"] + list(self._report.get("result", {}))
+        """The names of the report's fields, in the JSON's order."""
+        return list(self._report)
 
     def __dir__(self) -> list[str]:
         return sorted(set(super().__dir__()) | set(self.fields()))
 
     def to_dict(self) -> dict[str, Any]:
-        """The report as ``asnr evaluate --json`` prints it (``scene``, ``title``, ``lens``,
-        ``result``)."""
+        """The report as ``asnr evaluate --json`` prints it (a copy)."""
         return json.loads(json.dumps(self._report))
 
     def __repr__(self) -> str:
-        r = self._report["result"]
-        return f"Report(asnr={r['asnr']:.6g}, snr0={r['snr0']:.6g}, mean_mtf={r['mean_mtf']:.6g}, lens={self._report['lens']!r})"
+        r = self._report
+        return f"Report(asnr={r['asnr']:.6g}, snr0={r['snr0']:.6g}, mean_mtf={r['mean_mtf']:.6g}, lens={r['lens']!r})"
 
 
 def _warn(messages: Iterable[str]) -> None:

@@ -213,13 +213,8 @@ fn evaluate(py: Python<'_>, scene: &Scene) -> PyResult<(String, String, Vec<Stri
         lens.raise()?;
     }
     let result = result.map_err(|e| SceneError::new_err(format!("{}: {e}", scene.source.label())))?;
-    let report = serde_json::json!({
-        "scene": scene.source.label(),
-        "title": built.title(),
-        "lens": built.lens().describe(),
-        "result": result,
-    });
-    Ok((report.to_string(), built.lens().describe(), warnings))
+    let report = asnr::output::json(scene.source.label(), &built, &result).map_err(scene_error)?;
+    Ok((report, built.lens().describe(), warnings))
 }
 
 /// One point of `evaluate_many` with a Python lens (the file's lens goes through

@@ -20,6 +20,7 @@ const STEPS: &[Step] = &[
     Step { name: "tidy", run: run_tidy },
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
+    Step { name: "python (the package built into target/python-venv, its pytest suite)", run: python },
     Step { name: "emva (asnr characterize against the emva1288 camera model)", run: emva },
     Step { name: "readme (every README command as written)", run: run_readme },
     Step { name: "stress (reduced grid)", run: stress },
@@ -74,6 +75,11 @@ fn run_readme(root: &Path) -> Result<()> {
 
 fn clippy(root: &Path) -> Result<()> {
     cmd::run(&mut cmd::cargo(root, &["clippy", "--workspace", "--all-targets", "--locked", "--", "-D", "warnings"]))
+}
+
+fn python(root: &Path) -> Result<()> {
+    eprintln!("$ cargo xtask python   (in-process)");
+    crate::python::run(root)
 }
 
 fn emva(root: &Path) -> Result<()> {

@@ -7,6 +7,7 @@
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `data [--check]`: the generated data files of `examples/data/` (`data.rs`).
 //! - `emva`: `asnr characterize` against the `emva1288` package's camera model (`emva.rs`).
+//! - `python`: the Python package built into a virtual environment, its pytest suite (`python.rs`).
 //! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
 //! - `readme`: every command of the README's ```` ```sh ```` blocks, run as written (`readme.rs`).
 //! - `tidy`: the architecture invariants (layout, dependency direction, workspace dependencies
@@ -21,6 +22,7 @@ mod cmd;
 mod data;
 mod emva;
 mod figures;
+mod python;
 mod readme;
 mod stress;
 mod tidy;
@@ -33,13 +35,14 @@ const TASKS: &[(&str, &str)] = &[
     ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
     (
         "ci",
-        "full check: fmt, tidy, clippy -D warnings, tests, the emva1288 cross-check, README commands, reduced stress grid, docs -D warnings",
+        "full check: fmt, tidy, clippy -D warnings, tests, the Python package's tests, the emva1288 cross-check, README commands, reduced stress grid, docs -D warnings",
     ),
     ("data", "(re)write the generated data files of examples/data/ (the spectrometer table; --check: compare only)"),
     (
         "emva",
         "asnr characterize checked on a series from the emva1288 package's camera model (a pinned venv in target/)",
     ),
+    ("python", "the Python package built into target/python-venv (pinned) and its pytest suite run against the CLI"),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("readme", "run every command of the README's ```sh blocks as written; none may change git status"),
     (
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
         Some("data") => data::run(&root, &args[1..]),
         Some("emva") => emva::run(&root),
         Some("figures") => figures::run(&root),
+        Some("python") => python::run(&root),
         Some("readme") => readme::run(&root),
         Some("tidy") => tidy::run(&root),
         Some("stress") => stress::run(&root, &args[1..]),
