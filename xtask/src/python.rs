@@ -3,10 +3,10 @@
 //!
 //! Makes `target/python-venv` with the pinned `python/requirements-test.txt` (maturin, numpy,
 //! pandas, dask/distributed, matplotlib, pytest; once, remade when the requirements change),
-//! builds the debug `asnr` binary the tests compare with, builds the extension into the
-//! environment with `maturin develop` (the dev profile, so it reuses the workspace's debug
-//! build), and runs `pytest python/tests` with `ASNR_BIN` pointing at that binary. A Python
-//! user installs the same package with `pip install ./python` (a release build).
+//! builds the debug `asnr` binary the tests compare with, installs the package into the
+//! environment with the README's command, `pip install ./python` (maturin's PEP 517 build, here
+//! in the dev profile so that it reuses the workspace's debug build; a user's install is a
+//! release build), and runs `pytest python/tests` with `ASNR_BIN` pointing at that binary.
 
 use std::path::Path;
 use std::process::Command;
@@ -22,17 +22,18 @@ const REQUIREMENTS: &str = "python/requirements-test.txt";
 
 /// Build the package into the environment and run its tests, from the workspace `root`.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let python =
-        cmd::venv(root, VENV, REQUIREMENTS, "pytest, maturin, numpy").context("the Python test environment")?;
+    let python = cmd::venv(root, VENV, REQUIREMENTS, "pytest, numpy").context("the Python test environment")?;
     cmd::run(&mut cmd::cargo(root, &["build", "--quiet", "--locked", "--package", "asnr", "--bin", "asnr"]))?;
-    let bin = python.parent().context("the environment's bin folder")?;
-    let mut develop = Command::new(bin.join(if cfg!(windows) { "maturin.exe" } else { "maturin" }));
-    develop
-        .args(["develop", "--quiet", "--locked", "--manifest-path"])
-        .arg(root.join("python").join("Cargo.toml"))
-        .env("VIRTUAL_ENV", root.join(VENV))
+    // the README's install command, `pip install ./python`, in the environment; in the dev
+    // profile (maturin's PEP 517 builds are release by default), which reuses the workspace's
+    // debug build; reinstalled whatever is there, without touching the pinned dependencies
+    let mut install = Command::new(&python);
+    install
+        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--force-reinstall", "--no-deps"])
+        .arg(root.join("python"))
+        .env("MATURIN_PEP517_ARGS", "--profile dev --locked")
         .current_dir(root);
-    cmd::run(&mut develop)?;
+    cmd::run(&mut install)?;
     let asnr = crate::accuracy::target_dir(root).join("debug").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut pytest = Command::new(&python);
     pytest.args(["-m", "pytest", "-q", "python/tests"]).env("ASNR_BIN", &asnr).current_dir(root);

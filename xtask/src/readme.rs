@@ -19,6 +19,10 @@ use anyhow::{Context, Result, bail};
 /// README commands that are not run: `(command prefix, reason)`. Kept minimal.
 pub(crate) const SKIP: &[(&str, &str)] = &[
     ("cargo xtask ci", "the CI itself, which runs this step"),
+    (
+        "pip install ./python",
+        "installs into the user's Python environment (a release build, minutes); `cargo xtask python`, a step of `cargo xtask ci`, runs it into target/python-venv",
+    ),
     ("cargo install --path cli", "a release build (minutes) that installs into ~/.cargo/bin, outside the repository"),
     (
         "cargo xtask figures",
