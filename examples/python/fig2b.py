@@ -46,14 +46,24 @@ def main() -> None:
         ),
     }
     fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=150)
-    for name, (label, scene) in curves.items():
+    top = 0.0
+    for offset, (name, (label, scene)) in zip((8, -14), curves.items()):
         frame = asnr.sweep(scene, ranges)
         (args.out / f"fig2b-{name}.csv").write_text(asnr.to_csv(frame))
         x, y = frame["spectrum.range_nm"].to_numpy(), frame["asnr"].to_numpy()
         (line,) = ax.plot(x, y, label=label, lw=1.8)
         best = y.argmax()
         ax.plot(x[best], y[best], "o", color=line.get_color(), ms=5)
-        ax.annotate(f"{y[best]:.2f} at {x[best]:.0f} nm", (x[best], y[best]), textcoords="offset points", xytext=(6, 6), fontsize=8)
+        top = max(top, y[best])
+        ax.annotate(
+            f"best of the grid: {y[best]:.2f} at {x[best]:.0f} nm",
+            (x[best], y[best]),
+            textcoords="offset points",
+            xytext=(8, offset),
+            fontsize=8,
+            color=line.get_color(),
+            bbox={"fc": "white", "ec": "none", "alpha": 0.85, "pad": 1},
+        )
         print(f"{name:>10}: best ASNR {y[best]:.4f} at a {x[best]:.0f} nm range")
     for i, width in enumerate(FILTERS_NM):
         ax.axvline(width, color="0.6", ls="--", lw=0.8, label="the paper's filters: 10, 40, 52, 125 nm (FWHM)" if i == 0 else None)
@@ -61,7 +71,7 @@ def main() -> None:
     ax.set_ylabel("ASNR")
     ax.set_title("Fig. 2b — ASNR at F/2.5 against spectral range (Gaussian at 800 nm)", fontsize=10)
     ax.set_xlim(0, 200)
-    ax.set_ylim(bottom=0)
+    ax.set_ylim(0, 1.12 * top)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
