@@ -245,7 +245,10 @@ mod tests {
         let listed =
             ["cargo xtask ci", "cargo install --path cli", "cargo xtask accuracy", "cargo xtask stress --quick"];
         let listed: Vec<String> = listed.iter().map(|c| (*c).to_owned()).collect();
-        assert_eq!(stale_skips(&listed), vec!["cargo xtask figures", "cargo doc --workspace --no-deps --open"]);
+        assert_eq!(
+            stale_skips(&listed),
+            vec!["pip install ./python", "cargo xtask figures", "cargo doc --workspace --no-deps --open"]
+        );
     }
 
     /// A scratch git repository holding `readme` as README.md (committed), for [`run_all`].
