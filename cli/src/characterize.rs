@@ -97,30 +97,33 @@ pub fn run(args: &CharacterizeArgs) -> Result<()> {
         plot(path, &figure, file, &c)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&c)?);
+        outln!("{}", serde_json::to_string_pretty(&c)?);
         return Ok(());
     }
     let fit = |f: &imaging::Fit| format!("{:.4} ± {:.4} ({} levels)", f.slope, f.slope_sigma, f.points);
-    println!(
+    outln!(
         "capped black        μ = {:.3} DN, σ = {:.3} DN ({} frames, {} pixels)",
         c.dark.mean,
         c.dark.variance.sqrt(),
         c.dark.frames,
         c.dark.pixels
     );
-    println!(
+    outln!(
         "conversion gain K   {:.5} ± {:.5} DN/e⁻ (EMVA 1288: σ² − σ²_dark = K (μ − μ_dark))",
-        c.conversion_gain, c.conversion_gain_sigma
+        c.conversion_gain,
+        c.conversion_gain_sigma
     );
-    println!("read noise          {:.3} e⁻ (σ_dark / K)", c.read_noise_e);
-    println!(
+    outln!("read noise          {:.3} e⁻ (σ_dark / K)", c.read_noise_e);
+    outln!(
         "saturation          level {} (the largest variance): μ = {:.1} DN, {:.0} e⁻ above the capped black",
-        c.saturation, c.levels[c.saturation].mean, c.saturation_e
+        c.saturation,
+        c.levels[c.saturation].mean,
+        c.saturation_e
     );
-    println!("STF slope           {} (log μ − μ_dark vs log illumination; 1 = linear)", fit(&c.stf));
-    println!("STF slope, raw      {} (capped black not subtracted)", fit(&c.stf_raw));
-    println!("PTC slope           {} (log √(σ² − σ²_dark) vs log μ − μ_dark; 0.5 = shot-noise limited)", fit(&c.ptc));
-    println!("PTC slope, raw      {} (capped black not subtracted)", fit(&c.ptc_raw));
+    outln!("STF slope           {} (log μ − μ_dark vs log illumination; 1 = linear)", fit(&c.stf));
+    outln!("STF slope, raw      {} (capped black not subtracted)", fit(&c.stf_raw));
+    outln!("PTC slope           {} (log √(σ² − σ²_dark) vs log μ − μ_dark; 0.5 = shot-noise limited)", fit(&c.ptc));
+    outln!("PTC slope, raw      {} (capped black not subtracted)", fit(&c.ptc_raw));
     Ok(())
 }
 

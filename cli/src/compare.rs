@@ -247,11 +247,11 @@ pub fn run(args: CompareArgs) -> Result<()> {
         }
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else if args.csv {
-        print!("{}", csv(&report));
+        out!("{}", csv(&report));
     } else {
-        print!("{}", table(&report));
+        out!("{}", table(&report));
     }
     Ok(())
 }

@@ -5,6 +5,21 @@
 //! Evaluates the ASNR (paper eq. 1) of a scene file, or of the paper's lens embedded in the
 //! binary. Human-readable table by default, `--json` for scripts.
 
+/// `print!` to standard output that returns the write's error instead of panicking: with
+/// `asnr … | head` the pipe closes early, and the binary then exits quietly (see `main.rs`).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::write_stdout(&format!($($arg)*))?
+    };
+}
+
+/// `println!` as [`out!`] does it.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::write_stdout(&format!("{}\n", format_args!($($arg)*)))?
+    };
+}
+
 pub mod characterize;
 pub mod compare;
 pub mod measure;
@@ -194,14 +209,14 @@ pub fn run(cli: Cli) -> Result<()> {
                 } else {
                     report
                 };
-                println!("{report}");
+                outln!("{report}");
             } else {
-                print!("{}", output::table(&label, &loaded, &result));
+                out!("{}", output::table(&label, &loaded, &result));
                 for w in &result.warnings {
                     eprintln!("warning: {w}");
                 }
                 if explain {
-                    print!("{}", output::explain(&loaded, &result, meter.as_ref()));
+                    out!("{}", output::explain(&loaded, &result, meter.as_ref()));
                 }
             }
             Ok(())
@@ -232,9 +247,9 @@ pub fn run(cli: Cli) -> Result<()> {
                 eprintln!("warning: {warning}");
             }
             if json {
-                println!("{}", serde_json::to_string_pretty(&best)?);
+                outln!("{}", serde_json::to_string_pretty(&best)?);
             } else {
-                print!("{}", optimize::report(&best));
+                out!("{}", optimize::report(&best));
             }
             Ok(())
         }
@@ -310,11 +325,11 @@ pub fn run(cli: Cli) -> Result<()> {
                 plot::sweep_plot(path, &figure, built.title().unwrap_or_default(), &ranges, &points)?;
             }
             if json {
-                println!("{}", serde_json::to_string_pretty(&points)?);
+                outln!("{}", serde_json::to_string_pretty(&points)?);
             } else if csv {
-                print!("{}", sweep::csv(&sweep.keys, &points));
+                out!("{}", sweep::csv(&sweep.keys, &points));
             } else {
-                print!("{}", sweep::table(source.label(), built.title(), &ranges, &points));
+                out!("{}", sweep::table(source.label(), built.title(), &ranges, &points));
             }
             Ok(())
         }
@@ -331,7 +346,7 @@ pub fn run(cli: Cli) -> Result<()> {
             let source = scene::read(scene.as_deref())?;
             let resolved = scene::resolved_toml(&source, &set)?;
             warn(&resolved.warnings);
-            print!("{}", resolved.toml);
+            out!("{}", resolved.toml);
             Ok(())
         }
         Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths } => {
@@ -353,11 +368,11 @@ pub fn run(cli: Cli) -> Result<()> {
                 plot::mtf_plot(path, &figure, &title, &curve)?;
             }
             if json {
-                println!("{}", output::mtf_json(&label, &loaded, &curve)?);
+                outln!("{}", output::mtf_json(&label, &loaded, &curve)?);
             } else if csv {
-                print!("{}", output::mtf_csv(&curve));
+                out!("{}", output::mtf_csv(&curve));
             } else {
-                print!("{}", output::mtf_table(&label, &loaded, &curve));
+                out!("{}", output::mtf_table(&label, &loaded, &curve));
             }
             Ok(())
         }
@@ -421,6 +436,22 @@ fn with_explain(report: &str, explain: &str) -> Result<String> {
     let out = format!("{body},\n  \"explain\": [\n    {}\n  ]\n}}", lines.join(",\n    "));
     serde_json::from_str::<serde_json::Value>(&out)?;
     Ok(out)
+}
+
+/// Writes `text` to standard output and flushes it.
+pub(crate) fn write_stdout(text: &str) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.flush()
+}
+
+/// Whether `error` is standard output's pipe closed by its reader (`asnr sweep --csv | head`):
+/// not a failure of the command, which then stops quietly.
+pub fn is_broken_pipe(error: &anyhow::Error) -> bool {
+    error
+        .chain()
+        .any(|e| e.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
 }
 
 /// `--shard I/N`: shard `I` (1-based) of `N`.

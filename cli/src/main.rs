@@ -12,6 +12,8 @@ fn main() -> ExitCode {
     let cli = asnr::Cli::parse();
     match asnr::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        // the reader of standard output went away (`asnr sweep --csv | head`): stop quietly
+        Err(e) if asnr::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

@@ -44,7 +44,7 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
     };
     let m = imaging::measure(&frames, white, black, capped.as_deref(), args.include_glare)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&m)?);
+        outln!("{}", serde_json::to_string_pretty(&m)?);
         return Ok(());
     }
     let noise = if m.include_glare {
@@ -52,24 +52,24 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
     } else {
         "σ_s = √(σ_w² − σ_b²) (eq. 3): the black region's noise subtracted"
     };
-    println!("frames            {:>12}   {} × {} pixels", m.frames, frames[0].width, frames[0].height);
-    println!("white region      {:>12}   pixels at {}", m.pixels.white, args.white);
-    println!("black region      {:>12}   pixels at {}", m.pixels.black, args.black);
-    println!("white level       {:>12.4}   DN (mean over frames and pixels)", m.white);
-    println!("black level       {:>12.4}   DN", m.black);
-    println!("signal            {:>12.4}   DN = white − black (eq. 2)", m.signal);
-    println!("σ_w               {:>12.4}   DN (temporal sample σ per pixel, averaged)", m.sigma_white);
-    println!("σ_b               {:>12.4}   DN", m.sigma_black);
-    println!("σ_s               {:>12.4}   DN, {noise}", m.sigma_signal);
-    println!("SNR               {:>12.4}   signal/σ_s (eq. 4)", m.snr);
+    outln!("frames            {:>12}   {} × {} pixels", m.frames, frames[0].width, frames[0].height);
+    outln!("white region      {:>12}   pixels at {}", m.pixels.white, args.white);
+    outln!("black region      {:>12}   pixels at {}", m.pixels.black, args.black);
+    outln!("white level       {:>12.4}   DN (mean over frames and pixels)", m.white);
+    outln!("black level       {:>12.4}   DN", m.black);
+    outln!("signal            {:>12.4}   DN = white − black (eq. 2)", m.signal);
+    outln!("σ_w               {:>12.4}   DN (temporal sample σ per pixel, averaged)", m.sigma_white);
+    outln!("σ_b               {:>12.4}   DN", m.sigma_black);
+    outln!("σ_s               {:>12.4}   DN, {noise}", m.sigma_signal);
+    outln!("SNR               {:>12.4}   signal/σ_s (eq. 4)", m.snr);
     if let (Some(c), Some(vg), Some(mo)) = (m.capped_black, m.vg, m.modulation) {
-        println!(
+        outln!(
             "capped black      {:>12.4}   DN (mean of {} capped frames over the black region)",
             c,
             capped.map_or(0, |f| f.len())
         );
-        println!("VG                {:>12.4}   (black − capped)/(white − capped) (SI eq. S10)", vg);
-        println!("M                 {:>12.4}   (1 − VG)/(1 + VG) (SI eq. S11–S12)", mo);
+        outln!("VG                {:>12.4}   (black − capped)/(white − capped) (SI eq. S10)", vg);
+        outln!("M                 {:>12.4}   (1 − VG)/(1 + VG) (SI eq. S11–S12)", mo);
     }
     Ok(())
 }

@@ -138,7 +138,7 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
     let json = serde_json::to_string_pretty(&description)?;
     let path = args.out.join(if kind == Kind::Psf { "psf.json" } else { "otf.json" });
     std::fs::write(&path, &json).with_context(|| format!("{}: cannot write", path.display()))?;
-    println!("{json}");
+    outln!("{json}");
     if 0.5 / spacing < cutoff {
         eprintln!(
             "warning: the grid's Nyquist frequency {:.1} cycles/mm is below the cutoff {:.1} cycles/mm: the OTF beyond it is left out (lower --spacing-um)",

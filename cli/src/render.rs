@@ -231,9 +231,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let json_path = args.out.join("render.json");
     std::fs::write(&json_path, &json).with_context(|| format!("{}: cannot write", json_path.display()))?;
     if args.json {
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print!("{}", table(&report, &object));
+        out!("{}", table(&report, &object));
     }
     Ok(())
 }

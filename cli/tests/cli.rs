@@ -1889,3 +1889,30 @@ fn shards_merge_into_the_single_process_csv_and_points_files_match_the_grid() {
     assert!(err.contains("lens.f_number = 0.1: expected a number ≥ 0.5"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `asnr … | head`: the reader closes the pipe after a line; the command stops quietly (exit 0,
+/// no panic, no error message) instead of panicking in `println!`.
+#[test]
+fn a_closed_output_pipe_stops_the_command_quietly() {
+    use std::io::{BufRead, BufReader};
+    for args in [
+        vec!["sweep", "--over", "lens.f_number=1.4:5:40", "--over", "spectrum.range_nm=2:300:100", "--csv"],
+        vec!["sweep", "--over", "lens.f_number=1.4:5:40", "--over", "spectrum.range_nm=2:300:100", "--shard", "1/2"],
+        vec!["mtf", "--csv", "--points", "100000"],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_asnr"))
+            .args(&args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+        // the reader is dropped here: the pipe is closed
+        let out = child.wait_with_output().unwrap();
+        let err = stderr(&out);
+        assert!(!first.is_empty(), "{args:?}");
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+        assert!(!err.contains("panicked") && !err.contains("error"), "{args:?}: {err}");
+    }
+}
