@@ -13,6 +13,7 @@ process, `asnr.evaluate_many` on the same points (`threads=2`) plus `asnr.to_csv
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import subprocess
 import time
@@ -26,6 +27,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--asnr", default="target/release/asnr", help="the asnr binary")
     parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--json", action="store_true", help="print one JSON object (for cargo xtask accuracy)")
     args = parser.parse_args()
     points = asnr.grid({"lens.f_number": (1.4, 5, 40), "spectrum.range_nm": (2, 300, 100)})
     scene = asnr.load()
@@ -39,6 +41,9 @@ def main() -> None:
         py_times.append(time.perf_counter() - start)
         assert ours == theirs, "the CSVs differ"
     cli, py = statistics.median(cli_times), statistics.median(py_times)
+    if args.json:
+        print(json.dumps({"cli_s": cli, "python_s": py, "runs": args.runs, "identical": True}))
+        return
     print(f"asnr sweep (whole process): {cli:.3f} s   evaluate_many + to_csv: {py:.3f} s   ratio {py / cli:.3f}   (medians of {args.runs}; CSVs identical)")
 
 

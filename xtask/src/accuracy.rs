@@ -7,7 +7,9 @@
 //! prepares the numpy baseline `xtask/baselines/numpy_table.py`: a virtual environment in
 //! `target/baselines-venv` with the pinned `xtask/baselines/requirements.txt` (made once, remade
 //! when the requirements change), else the system `python3` if it imports numpy; when neither
-//! works the report says "numpy not available: row skipped".
+//! works the report says "numpy not available: row skipped". Into that environment it installs
+//! the Python package (`pip install ./python`, release) for the map's `evaluate_many` row
+//! (`python/bench/map.py`).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -32,6 +34,27 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     command.args(args).arg("--asnr").arg(&asnr);
     match python(root) {
         Ok(python) => {
+            // the Python package, a release build (`pip install ./python`) in the same environment:
+            // the map's `evaluate_many` row, beside the command
+            let mut install = Command::new(&python);
+            install
+                .args([
+                    "-m",
+                    "pip",
+                    "install",
+                    "--quiet",
+                    "--disable-pip-version-check",
+                    "--force-reinstall",
+                    "--no-deps",
+                ])
+                .arg(root.join("python"))
+                .current_dir(root);
+            match cmd::status(&mut install) {
+                Ok(true) => {
+                    command.arg("--asnr-python").arg(&python);
+                }
+                _ => eprintln!("accuracy: the Python package did not install: its map row skipped"),
+            }
             command.arg("--python").arg(python);
         }
         Err(why) => eprintln!("accuracy: numpy not available: row skipped ({why})"),

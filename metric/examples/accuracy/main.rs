@@ -297,12 +297,14 @@ const QUICK: Grid = Grid {
 
 fn main() {
     let (mut quick, mut asnr, mut python, mut out) = (false, None, None, PathBuf::from("."));
+    let mut asnr_python: Option<PathBuf> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--quick" => quick = true,
             "--asnr" => asnr = Some(PathBuf::from(args.next().expect("--asnr BIN"))),
             "--python" => python = Some(PathBuf::from(args.next().expect("--python PY"))),
+            "--asnr-python" => asnr_python = Some(PathBuf::from(args.next().expect("--asnr-python PY"))),
             flag if flag.starts_with("--") => panic!("unknown flag {flag}"),
             _ => out = PathBuf::from(arg),
         }
@@ -443,7 +445,11 @@ fn main() {
     rows.extend(decentred_rows);
     tolerance::spectrometer(&grid, python.as_deref(), &mut rows, &mut context.notes);
     tolerance::coma(&grid, &mut rows, &mut context.notes);
-    context.map = asnr.as_deref().map(|bin| map::measure(bin, grid.map_runs));
+    context.map = asnr.as_deref().map(|bin| {
+        let mut m = map::measure(bin, grid.map_runs);
+        m.python = asnr_python.as_deref().and_then(|py| map::measure_python(py, bin, &out, grid.map_runs));
+        m
+    });
     let kernel_rows = kernels::measure(quick);
     context.load = (load_at_start, load_average());
     let md = report::markdown(&rows, &kernel_rows, &context);

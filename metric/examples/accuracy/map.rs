@@ -24,6 +24,9 @@ pub(crate) struct Map {
     pub mean_mtf_error: f64,
     /// Wall time of the 1e-12 sweep, s.
     pub reference_wall_s: f64,
+    /// The Python package's `evaluate_many` + `to_csv` on the same points in one process, and the
+    /// command beside it in the same run: (Python s, command s), medians (`python/bench/map.py`).
+    pub python: Option<(f64, f64)>,
 }
 
 /// CPU seconds (user + system) used by this process's waited-for children so far: fields 16 and
@@ -96,5 +99,33 @@ pub(crate) fn measure(asnr: &Path, runs: usize) -> Map {
         asnr_error,
         mean_mtf_error,
         reference_wall_s,
+        python: None,
     }
+}
+
+/// Runs `python/bench/map.py` (under `root`) with the interpreter `python` that has the package:
+/// `evaluate_many` on the map's points against `asnr` (the release binary) side by side, the CSVs
+/// checked equal by the script. None (and a note on stderr) when it fails.
+pub(crate) fn measure_python(python: &Path, asnr: &Path, root: &Path, runs: usize) -> Option<(f64, f64)> {
+    let script = root.join("python").join("bench").join("map.py");
+    eprintln!("map (Python): {} {}", python.display(), script.display());
+    let output = Command::new(python)
+        .arg(&script)
+        .arg("--asnr")
+        .arg(asnr)
+        .args(["--runs", &runs.max(3).to_string(), "--json"])
+        .output()
+        .ok()?;
+    if !output.status.success() {
+        eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
+        return None;
+    }
+    let text = String::from_utf8_lossy(&output.stdout);
+    let field = |name: &str| -> Option<f64> {
+        let at = text.find(&format!("\"{name}\": "))? + name.len() + 4;
+        text[at..].split([',', '}']).next()?.trim().parse().ok()
+    };
+    let (py, cli) = (field("python_s")?, field("cli_s")?);
+    eprintln!("  evaluate_many {py:.2} s, asnr sweep {cli:.2} s");
+    Some((py, cli))
 }

@@ -340,5 +340,14 @@ fn map_section(s: &mut String, m: &map::Map) {
         "| tolerance 1e-6 (default) | {:.2} s | {:.2} s | {:.1e} | {:.1e} | {} |",
         m.wall_s, m.cpu_s, m.asnr_error, m.mean_mtf_error, m.runs
     );
-    let _ = writeln!(s, "| tolerance 1e-12 (the reference) | {:.2} s | — | — | — | 1 |\n", m.reference_wall_s);
+    let _ = writeln!(s, "| tolerance 1e-12 (the reference) | {:.2} s | — | — | — | 1 |", m.reference_wall_s);
+    if let Some((py, cli)) = m.python {
+        let _ = writeln!(
+            s,
+            "| Python: `asnr.evaluate_many` + `asnr.to_csv` on the same points, in one process, 2 threads (`python/bench/map.py`; the command beside it in the same run: {cli:.2} s, so {:.2}×) | {py:.2} s | — | 0 (the same CSV bytes) | 0 | {} |",
+            py / cli,
+            m.runs.max(3)
+        );
+    }
+    let _ = writeln!(s);
 }
