@@ -484,6 +484,29 @@ mod tests {
         assert!(worst < 1e-12, "largest difference {worst:e}");
     }
 
+    /// The series from its tabulated start (`series_start`: the bound `(|a|/2)ⁿ/n!` up to
+    /// `|a| = 256`, the Debye start beyond) against the quadrature, densely over the table, across
+    /// its end and where its entries switch to the Debye start, one lane and four at once.
+    #[test]
+    fn bessel_series_from_its_start_matches_quadrature() {
+        let mut points = Vec::new();
+        for k in 0..=700 {
+            let a = 1.0 + 0.41 * k as f64;
+            for s in [0.03, 0.31, 0.77, 0.98] {
+                let w = a / (8.0 * PI * s);
+                let want = defocus_otf_quadrature(s, w);
+                let got = defocus_otf_bessel(s, a);
+                assert!((got - want).abs() < 1e-12, "a {a}, s {s}: {got} vs {want}");
+                points.push((s, w, want));
+            }
+        }
+        let mut out = vec![0.0; points.len()];
+        defocus_otf_many(&points.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>(), &mut out);
+        for (p, got) in points.iter().zip(out) {
+            assert!((got - p.2).abs() < 1e-12, "many, s {}, w {}: {got} vs {}", p.0, p.1, p.2);
+        }
+    }
+
     /// The batched evaluation (four interleaved lanes from the largest lane's start) against
     /// one call each: points of very different defocus side by side (a lane with |a| = 1 next
     /// to one with |a| = 3e4 starts its recurrence far above its own start), points on the
