@@ -30,6 +30,7 @@ use std::f64::consts::PI;
 
 use num_complex::Complex64;
 
+use crate::fft::cis;
 use crate::{faddeeva, quad};
 
 /// Beyond this many standard deviations a truncation of the Gaussian is ignored: the weight
@@ -198,7 +199,9 @@ impl GaussianDefocus {
         self.moments(f, phi0, phi1, cut_x)
     }
 
-    /// `∫_{x_lo}^{x_hi} Q(x) exp(−x²/2 + i(φ0 + φ1 x + φ2 x²)) dx`.
+    /// `∫_{x_lo}^{x_hi} Q(x) exp(−x²/2 + i(φ0 + φ1 x + φ2 x²)) dx`, `x_hi = cut_x` a point where
+    /// the phase vanishes (the cut λ = c/β of [`spectral`](Self::spectral), or any point of a
+    /// phase-free integrand at ν = 0).
     fn moments(&self, f: &AtFrequency, phi0: f64, phi1: f64, cut_x: f64) -> Complex64 {
         let zero = Complex64::new(0.0, 0.0);
         let upper = (cut_x < f.tail).then_some(cut_x);
@@ -211,32 +214,48 @@ impl GaussianDefocus {
         // −A(x − m)² + K with m = iφ1/(2A), K = iφ0 + A m²
         let m = Complex64::new(0.0, phi1) * f.inv_2a;
         let k = Complex64::new(0.0, phi0) + f.a * m * m;
-        let exp_k = k.exp();
-        // the integrand (without Q) at an endpoint x: exp(−x²/2 + iφ(x)) = e^{K − A(x−m)²}
-        let at = |x: f64| Complex64::from_polar((-0.5 * x * x).exp(), phi0 + x * (phi1 + x * f.phi2));
+        // e^K, only where a term needs it (a cut zone's E below the spectrum's centre does not:
+        // its e^K terms cancel, and are better left out than subtracted)
+        let exp_k = || {
+            let (sin, cos) = cis::sin_cos(k.im);
+            Complex64::new(cos, sin) * k.re.exp()
+        };
         let mut moments = [zero; MAX_TERMS];
         let terms = self.q.len();
         if upper.is_none() && lower.is_none() {
             // the whole line: M0 = e^K √(π/A), odd moments 0, M_j = (j − 1) M_{j−2}/(2A)
-            moments[0] = exp_k * f.root_pi_over_root_a;
+            moments[0] = exp_k() * f.root_pi_over_root_a;
             for j in 2..terms {
                 moments[j] = moments[j - 2] * (j - 1) as f64 * f.inv_2a;
             }
         } else {
-            // the integrand (without Q) at the finite endpoints, each computed once
-            let (e_lo, e_hi) = (lower.map(at), upper.map(at));
-            // e^K · erf(√A y) at y = x − m in a bounded form (erfcx only where Re z ≥ 0);
-            // the ±∞ endpoints give ±e^K
-            let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> Complex64 {
+            // the integrand (without Q) at the finite endpoints, exp(−x²/2 + iφ(x)) = e^{K − A(x−m)²},
+            // each computed once. The upper one is the cut λ = c/β, where the phase
+            // a(λ)(c − βλ) vanishes: it is real (exactly, where the sum φ0 + φ1 x + φ2 x² of terms
+            // up to thousands of radians would leave rounding).
+            let e_hi = upper.map(|x| Complex64::new((-0.5 * x * x).exp(), 0.0));
+            let e_lo = lower.map(|x| {
+                let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
+                Complex64::new(cos, sin) * (-0.5 * x * x).exp()
+            });
+            // e^K · erf(√A y) at y = x − m, in a bounded form (erfcx only where Re z ≥ 0), as
+            // sign · e^K + rest; the ±∞ endpoints give ±e^K
+            let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> (f64, Complex64) {
                 match (x, e) {
                     (Some(x), Some(e)) => {
                         let z = f.sqrt_a * (x - m);
-                        if z.re >= 0.0 { exp_k - e * faddeeva::erfcx(z) } else { -exp_k + e * faddeeva::erfcx(-z) }
+                        if z.re >= 0.0 { (1.0, -e * faddeeva::erfcx(z)) } else { (-1.0, e * faddeeva::erfcx(-z)) }
                     }
-                    _ => exp_k * at_infinity,
+                    _ => (at_infinity, zero),
                 }
             };
-            moments[0] = (erf_term(upper, e_hi, 1.0) - erf_term(lower, e_lo, -1.0)) * (0.5 * f.root_pi_over_root_a);
+            let (sign_hi, rest_hi) = erf_term(upper, e_hi, 1.0);
+            let (sign_lo, rest_lo) = erf_term(lower, e_lo, -1.0);
+            let mut difference = rest_hi - rest_lo;
+            if sign_hi != sign_lo {
+                difference += exp_k() * (sign_hi - sign_lo);
+            }
+            moments[0] = difference * (0.5 * f.root_pi_over_root_a);
             // higher moments of y = x − m: M_j = ((j−1) M_{j−2} + [y^{j−1} e^{…}]_{hi}^{lo}) / (2A)
             let (y_lo, y_hi) = (lower.map(|x| x - m), upper.map(|x| x - m));
             let (mut p_lo, mut p_hi) = (Complex64::new(1.0, 0.0), Complex64::new(1.0, 0.0));
@@ -346,7 +365,7 @@ impl GaussianDefocus {
         cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-15);
         let scale = 4.0 / (PI * self.weight);
         let integrand = |t: f64| {
-            let (s, c) = t.sin_cos();
+            let (s, c) = cis::sin_cos(t);
             s * s * self.spectral(&f, c).re * scale
         };
         let mut evaluations = 0;

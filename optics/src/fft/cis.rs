@@ -1,5 +1,6 @@
 //! `a e^{iφ}` for a row of pupil samples at once (the pupil field of every FFT grid), and the
-//! sine and cosine behind it (also the exact OTF's quadrature in the pupil angle).
+//! sine and cosine behind it (also the exact OTF's quadrature in the pupil angle, and the
+//! closed form's pupil angle and complex exponentials, `closed.rs`).
 //!
 //! glibc's `sincos` costs ~20 ns a call (it saves and restores the rounding mode around its
 //! range reduction), a third of the FFT path's time; here the reduction is Cody–Waite's with
