@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import os
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
@@ -266,25 +265,9 @@ def compare(
     strings; ``designs[1].lens.f_number`` reaches one design), each design's ASNR at the scene
     band and at its best band searched over ``over`` (``"spectrum.range_nm=LO:HI:N"``), its
     chromatic twin and glare."""
-    overrides = _override_strings(set)
+    overrides = dict(set) if isinstance(set, Mapping) else None if set is None else [str(s) for s in set]
     text = _asnr.compare(None if path is None else os.fspath(path), overrides, tolerance, over, threads)
     return json.loads(text)
-
-
-def _override_strings(set_: Mapping[str, Any] | Sequence[str] | None) -> list[str]:
-    if set_ is None:
-        return []
-    if isinstance(set_, Mapping):
-        out = []
-        for k, v in set_.items():
-            if isinstance(v, bool):
-                out.append(f"{k}={'true' if v else 'false'}")
-            elif isinstance(v, (int, float)) and not isinstance(v, bool):
-                out.append(f"{k}={v!r}" if math.isfinite(v) else f"{k}={v}")
-            else:
-                out.append(f"{k}={json.dumps(str(v))}")
-        return out
-    return [str(s) for s in set_]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -41,7 +41,7 @@ def sweep_csv(keys: list[str], rows: list[tuple[list[float], float, float, float
 def mtf(scene: Scene, frequencies: npt.NDArray[np.float64], wavelengths_nm: list[float] = ...) -> str: ...
 def compare(
     path: str | os.PathLike[str] | None = None,
-    overrides: list[str] = ...,
+    overrides: dict[str, float | int | bool | str] | list[str] | None = None,
     tolerance: float | None = None,
     over: str | None = None,
     threads: int = 0,

@@ -26,7 +26,7 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 use optics::{Field, LensModel, Order, Pupil, Wavefront};
 use scene::Source;
-use scene::sweep::{Point, assignment, evaluate_point};
+use scene::sweep::{Point, PointError, assignment, evaluate_point_with_lens};
 
 create_exception!(
     asnr,
@@ -217,24 +217,6 @@ fn evaluate(py: Python<'_>, scene: &Scene) -> PyResult<(String, String, Vec<Stri
     Ok((report, built.lens().describe(), warnings))
 }
 
-/// One point of `evaluate_many` with a Python lens (the file's lens goes through
-/// `evaluate_point`, as the command line's sweep does).
-fn evaluate_with_lens(scene: &Scene, lens: &Arc<PyLens>, keys: &[String], values: &[f64]) -> anyhow::Result<Point> {
-    let mut set = scene.overrides.clone();
-    set.extend(keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
-    let built = scene::build_from(&scene.source, &set)?.with_lens(lens.clone());
-    let r = metric::evaluate(&built).map_err(|e| anyhow::anyhow!("{}: {e}", scene.source.label()))?;
-    Ok(Point {
-        values: values.to_vec(),
-        mean_mtf: r.mean_mtf,
-        snr0: r.snr0,
-        asnr: r.asnr,
-        photoelectrons: r.photoelectrons,
-        fraunhofer_valid: r.fraunhofer.valid,
-        warnings: r.warnings,
-    })
-}
-
 /// The ASNR at many points: `columns[k][i]` is key `keys[k]` at point `i`. Returns a dict of
 /// numpy arrays (`mean_mtf`, `snr0`, `asnr`, `photoelectrons`, `fraunhofer_valid`) and the list
 /// `warnings` (each point's, joined by " | "). Points run on `threads` threads (0: all cores) in
@@ -279,16 +261,14 @@ fn evaluate_many<'py>(
     let mut start = 0;
     while start < n {
         let end = (start + chunk).min(n);
-        let results: Vec<anyhow::Result<Point>> = py.detach(|| {
+        let results: Vec<Result<Point, PointError>> = py.detach(|| {
             pool.install(|| {
                 (start..end)
                     .into_par_iter()
                     .map(|i| {
                         let values: Vec<f64> = columns.iter().map(|c| c[i]).collect();
-                        match &scene.lens {
-                            None => evaluate_point(&scene.source, &scene.overrides, &keys, &values).map_err(Into::into),
-                            Some(lens) => evaluate_with_lens(scene, lens, &keys, &values),
-                        }
+                        let lens = scene.lens.clone().map(|l| l as Arc<dyn LensModel>);
+                        evaluate_point_with_lens(&scene.source, &scene.overrides, &keys, &values, lens)
                     })
                     .collect()
             })
@@ -299,7 +279,7 @@ fn evaluate_many<'py>(
         for (i, r) in (start..end).zip(results) {
             let point = r.map_err(|e| {
                 let at: Vec<String> = keys.iter().zip(&columns).map(|(k, c)| format!("{k}={}", c[i])).collect();
-                scene_error(e.context(format!("at point {i} ({})", at.join(", "))))
+                scene_error(anyhow::Error::new(e).context(format!("at point {i} ({})", at.join(", "))))
             })?;
             points.push(point);
         }
@@ -372,17 +352,28 @@ fn mtf(
 }
 
 /// `asnr compare`'s report as JSON text: the comparison file `path` (None: the embedded
-/// comparison of the lens families) with `overrides`, the best band searched over `over`.
+/// comparison of the lens families) with `overrides` (a dict of keys to values, or `key=value`
+/// strings), the best band searched over `over`.
 #[pyfunction]
-#[pyo3(signature = (path=None, overrides=Vec::new(), tolerance=None, over=None, threads=0))]
+#[pyo3(signature = (path=None, overrides=None, tolerance=None, over=None, threads=0))]
 fn compare(
     py: Python<'_>,
     path: Option<std::path::PathBuf>,
-    overrides: Vec<String>,
+    overrides: Option<&Bound<'_, PyAny>>,
     tolerance: Option<f64>,
     over: Option<String>,
     threads: usize,
 ) -> PyResult<String> {
+    // a dict is written as `Scene.with_` writes it; a list holds `key=value` strings as typed
+    let overrides: Vec<String> = match overrides {
+        None => Vec::new(),
+        Some(o) => match o.cast::<PyDict>() {
+            Ok(dict) => {
+                dict.iter().map(|(k, v)| override_text(&k.extract::<String>()?, &v)).collect::<PyResult<_>>()?
+            }
+            Err(_) => o.extract()?,
+        },
+    };
     let (_, report) = py
         .detach(|| asnr::compare::compare(path.as_deref(), &overrides, tolerance, over.as_deref(), threads))
         .map_err(scene_error)?;

@@ -170,6 +170,12 @@ def test_compare_is_the_command_lines_report():
     theirs = json.loads(cli("compare", "--json", "--over", "spectrum.range_nm=10:100:3", "--threads", "2"))
     assert ours == theirs
     assert len(ours["designs"]) >= 4
+    # overrides as a dict are written as Scene.with_ writes them, as a list as typed
+    set_ = {"designs[1].lens.f_number": 4}
+    ours = asnr.compare(set=set_, over="spectrum.range_nm=10:100:3", threads=2)
+    theirs = cli("compare", "--json", "--set", "designs[1].lens.f_number=4", "--over", "spectrum.range_nm=10:100:3")
+    assert ours == json.loads(theirs)
+    assert asnr.compare(set=["designs[1].lens.f_number=4"], over="spectrum.range_nm=10:100:3", threads=2) == ours
 
 
 # --- a lens written in Python --------------------------------------------------------------

@@ -19,8 +19,11 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::Arc;
 
 use serde::Serialize;
+
+use optics::LensModel;
 
 use crate::{Error, Source};
 
@@ -140,9 +143,24 @@ pub fn evaluate_point(
     keys: &[String],
     values: &[f64],
 ) -> Result<Point, PointError> {
+    evaluate_point_with_lens(source, overrides, keys, values, None)
+}
+
+/// [`evaluate_point`] with the scene's lens replaced by `lens` when given (the Python package's
+/// lenses written in Python): the same scene, evaluation and point otherwise.
+pub fn evaluate_point_with_lens(
+    source: &Source,
+    overrides: &[String],
+    keys: &[String],
+    values: &[f64],
+    lens: Option<Arc<dyn LensModel>>,
+) -> Result<Point, PointError> {
     let mut set = overrides.to_vec();
     set.extend(keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
-    let scene = crate::build_from(source, &set)?;
+    let mut scene = crate::build_from(source, &set)?;
+    if let Some(lens) = lens {
+        scene = scene.with_lens(lens);
+    }
     let r =
         metric::evaluate(&scene).map_err(|cause| PointError::Evaluate { label: source.label().to_owned(), cause })?;
     Ok(Point {
@@ -221,12 +239,7 @@ pub fn read_points(path: &Path) -> Result<PointsFile, Error> {
     let file = path.display().to_string();
     let bad = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
     let text = crate::tables::read_text_limited(path, "points file", 1 << 30)?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .flexible(true)
-        .from_reader(text.as_bytes());
+    let mut reader = crate::tables::csv_reader(&text, true);
     let header = reader.headers().map_err(|e| bad(Some(1), format!("cannot read the header: {e}")))?.clone();
     let keys: Vec<String> = header.iter().map(str::to_owned).collect();
     if keys.is_empty() || keys.iter().any(String::is_empty) {

@@ -63,6 +63,17 @@ pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Error
     read_text_limited(path, what, MAX_FILE_BYTES)
 }
 
+/// The reader of the project's CSV inputs (tables, points files): `#` comments and blank lines
+/// skipped, fields trimmed, rows of any length (the caller names a wrong count with its line).
+pub(crate) fn csv_reader(text: &str, has_headers: bool) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .has_headers(has_headers)
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .flexible(true)
+        .from_reader(text.as_bytes())
+}
+
 /// [`read_text`] with another size limit (points files of a sweep may hold millions of rows).
 pub(crate) fn read_text_limited(path: &Path, what: &'static str, limit: u64) -> Result<String, Error> {
     use std::io::Read as _;
@@ -126,12 +137,7 @@ pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Res
     let (name, unit) = (axis.name, axis.unit);
     let err = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
     let text = read_text(path, "CSV file")?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .flexible(true)
-        .from_reader(text.as_bytes());
+    let mut reader = csv_reader(&text, false);
     // the first column kept as typed (the caller converts units)
     let (mut xs, mut values): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut first = true;
