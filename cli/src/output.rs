@@ -363,7 +363,16 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
             n.closed_form_evaluations
         )
     } else {
-        let rule = if n.spectral_interpolated {
+        let rule = if n.spectral_interpolated && n.spectral_evaluations > 0 {
+            format!(
+                "product integration per frequency: {} panels of nested Chebyshev–Lobatto levels (3, 5, 9, … 129 \
+                 points), each OTF value climbing them until its share of the tolerance is met: {} \
+                 single-wavelength OTFs in all; weights the exact moments of the detected spectrum, so its \
+                 table samples cost nothing; panels follow the lens's defocus phase; {} nodes (17 per panel) for \
+                 the averages over the spectrum",
+                n.spectral_panels, n.spectral_evaluations, n.spectral_nodes
+            )
+        } else if n.spectral_interpolated {
             format!(
                 "product integration: {} panels, {} nodes (Chebyshev–Lobatto points: each panel's count \
                  doubled until the OTF at Nyquist settles to its share of the tolerance, then cut to the fewest \
@@ -402,6 +411,9 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
     let budget = if n.engine.starts_with("fft") && n.engine.contains("chosen") {
         "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N, its order checked at N/4, or only its direction where N/4 aliases the pupil phase), the frequency \
          rule converged below both"
+    } else if n.spectral_interpolated && n.spectral_evaluations > 0 {
+        "the frequency rule to three quarters of tolerance × mean, each OTF value's spectral sum to half of that \
+         (nested estimates in both)"
     } else if n.spectral_interpolated {
         "a quarter to the spectral rule (nested estimate at Nyquist), the rest to the frequency rule"
     } else if n.engine.starts_with("closed-form") {

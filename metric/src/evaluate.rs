@@ -98,6 +98,8 @@ pub struct Numerics {
     pub tolerance: f64,
     /// Evaluations of the closed-form spectral integral (closed-form engine only).
     pub closed_form_evaluations: usize,
+    /// Single-wavelength OTFs summed by per-frequency product integration (exact 1-D engine).
+    pub spectral_evaluations: usize,
     /// Whether a non-white noise spectrum put the SNR inside the integral.
     pub noise_spectrum: bool,
     /// Spectral quadrature panels and nodes.
@@ -457,6 +459,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             },
             tolerance: options.tolerance,
             closed_form_evaluations: work.closed_form_evaluations,
+            spectral_evaluations: work.spectral_evaluations,
             noise_spectrum: camera.noise_spectrum().is_some(),
             spectral_panels: work.spectral_panels,
             spectral_nodes: work.spectral_nodes,
@@ -645,6 +648,7 @@ fn add_work(a: optics::Work, b: optics::Work) -> optics::Work {
         otf_evaluations: a.otf_evaluations + b.otf_evaluations,
         sign_changes: a.sign_changes + b.sign_changes,
         closed_form_evaluations: a.closed_form_evaluations + b.closed_form_evaluations,
+        spectral_evaluations: a.spectral_evaluations + b.spectral_evaluations,
         ..a
     }
 }

@@ -124,61 +124,7 @@ pub fn defocus_otf_bessel(s: f64, a: f64) -> f64 {
     if s >= 1.0 {
         return 0.0;
     }
-    let x = a.abs();
-    let start = series_start(x);
-    // one scratch buffer per thread for S(m): no allocation per call
-    SCRATCH.with(|cell| {
-        let mut buffer = cell.borrow_mut();
-        // grown, never cleared: every slot used below is written before it is read
-        if buffer.len() < start + 3 {
-            buffer.resize(start + 3, 0.0);
-        }
-        let big_s = &mut buffer[..start + 3];
-        let theta = s.acos();
-        let two_cos = 2.0 * s; // 2 cos θ
-        // S(m) = sin(mθ)/m for m = 0..=start+2, with S(0) = θ; sin(mθ) by the Chebyshev recurrence
-        let (mut sin_prev, mut sin_cur) = (0.0_f64, theta.sin()); // sin(0·θ), sin(1·θ)
-        big_s[0] = theta;
-        big_s[1] = sin_cur;
-        let reciprocals = reciprocals(start + 2);
-        for (m, slot) in big_s.iter_mut().enumerate().skip(2) {
-            let next = two_cos * sin_cur - sin_prev;
-            sin_prev = sin_cur;
-            sin_cur = next;
-            *slot = next * reciprocals.map_or_else(|| 1.0 / m as f64, |r| r[m]);
-        }
-        let c = |n: usize| 0.5 * big_s[n] - 0.25 * (big_s[n + 2] + big_s[n.abs_diff(2)]);
-        // Miller's backward recurrence with the sums taken on the way down (Jn unnormalized,
-        // all rescaled together); the terms past the start are below 1e-17 and harmless.
-        // The signs of iⁿ by n mod 4: even gets +, −; odd gets +, − (see the formula).
-        const EVEN: [f64; 4] = [2.0, 0.0, -2.0, 0.0];
-        const ODD: [f64; 4] = [0.0, 2.0, 0.0, -2.0];
-        const NORM: [f64; 4] = [2.0, 0.0, 2.0, 0.0];
-        let two_over_x = 2.0 / x;
-        let (mut j_above, mut j_n) = (0.0_f64, 1e-300_f64);
-        let (mut even, mut odd, mut norm) = (0.0_f64, 0.0_f64, 0.0_f64);
-        for n in (1..=start).rev() {
-            let (k, cn) = (n & 3, c(n));
-            even += EVEN[k] * j_n * cn;
-            odd += ODD[k] * j_n * cn;
-            norm += NORM[k] * j_n;
-            let below = (n as f64) * two_over_x * j_n - j_above;
-            j_above = j_n;
-            j_n = below;
-            if below.abs() > 1e250 {
-                j_above *= 1e-250;
-                j_n *= 1e-250;
-                even *= 1e-250;
-                odd *= 1e-250;
-                norm *= 1e-250;
-            }
-        }
-        even += j_n * c(0);
-        norm += j_n;
-        // odd terms change sign with a (Jn(−x) = (−1)ⁿ Jn(x)); sin(a s) does too: the product is even
-        let (sin_as, cos_as) = (x * s).sin_cos();
-        (4.0 / PI) * (cos_as * even + sin_as * odd) / norm
-    })
+    bessel_lanes([s], [a])[0]
 }
 
 /// `|a|` from which [`defocus_otf_many`] takes the Bessel series (one call takes it from
@@ -198,8 +144,18 @@ pub const BATCHED_SERIES_MIN_A: f64 = 1.0;
 /// If `points` and `out` differ in length.
 pub fn defocus_otf_many(points: &[(f64, f64)], out: &mut [f64]) {
     assert_eq!(points.len(), out.len(), "one output per point");
-    let mut lanes = [0usize; 4];
+    let mut lanes = [0usize; BATCH];
     let mut count = 0;
+    let batch = |lanes: &[usize; BATCH], count: usize, out: &mut [f64]| {
+        // a short batch repeats its last point in the spare lanes
+        let at = |k: usize| points[lanes[k.min(count - 1)]];
+        let s: [f64; BATCH] = std::array::from_fn(|k| at(k).0);
+        let a: [f64; BATCH] = std::array::from_fn(|k| 8.0 * PI * at(k).1 * at(k).0);
+        let values = bessel_lanes(s, a);
+        for (k, &i) in lanes[..count].iter().enumerate() {
+            out[i] = values[k];
+        }
+    };
     for (i, &(s, w)) in points.iter().enumerate() {
         let a = 8.0 * PI * w * s;
         let series = s > 0.0 && s < 1.0 && a.abs() * (1.0 - s) >= 1e-8 && a.abs() >= BATCHED_SERIES_MIN_A;
@@ -209,147 +165,157 @@ pub fn defocus_otf_many(points: &[(f64, f64)], out: &mut [f64]) {
         }
         lanes[count] = i;
         count += 1;
-        if count == 4 {
-            let at = |k: usize| points[lanes[k]];
-            let values = bessel4([0, 1, 2, 3].map(|k| at(k).0), [0, 1, 2, 3].map(|k| 8.0 * PI * at(k).1 * at(k).0));
-            for (k, v) in values.into_iter().enumerate() {
-                out[lanes[k]] = v;
-            }
+        if count == BATCH {
+            batch(&lanes, count, out);
             count = 0;
         }
     }
     if count > 0 {
-        // the remainder in one batch too, its last point repeated in the spare lanes
-        let at = |k: usize| points[lanes[k.min(count - 1)]];
-        let values = bessel4([0, 1, 2, 3].map(|k| at(k).0), [0, 1, 2, 3].map(|k| 8.0 * PI * at(k).1 * at(k).0));
-        for (k, &i) in lanes[..count].iter().enumerate() {
-            out[i] = values[k];
-        }
+        batch(&lanes, count, out);
     }
 }
 
-/// [`defocus_otf_bessel`] of four `(s, a)`, `0 < s < 1`, `|a| ≥ 1`, in interleaved lanes: one
-/// recurrence from the largest lane's start (a higher start only makes Miller's recurrence more
-/// exact), rescaled lane by lane every four steps (the backward growth per step, `2n/|a|`, is
-/// below 3e5 for any `|a| ≥ 1` within the defocus budget, so four steps stay within the 1e58
-/// of headroom above the 1e250 threshold).
-fn bessel4(s: [f64; 4], a: [f64; 4]) -> [f64; 4] {
+/// Lanes of [`defocus_otf_many`]'s batches.
+const BATCH: usize = 4;
+
+/// [`defocus_otf_bessel`] of `L` points `(s, a)`, `0 < s < 1`, `|a| ≥ 1`, in interleaved lanes
+/// (four independent chains of dependent multiply-adds fill the pipeline where one leaves it
+/// mostly idle): one recurrence from the largest lane's start (a higher start only makes
+/// Miller's recurrence more exact), everything in registers.
+///
+/// Going down in `n`, the sines `sin(mθ)` come from the same Chebyshev recurrence run downward,
+/// `sin((m−1)θ) = 2cosθ sin(mθ) − sin((m+1)θ)`, started from `sin(Mθ)` and `sin((M+1)θ)` at the
+/// top (`M = start + 2`; one sine and cosine per lane) — as stable as the upward run (both
+/// roots on the unit circle) — and `S(m) = sin(mθ)/m` is kept in a window of five, so that
+/// `C(n) = ½ S(n) − ¼ [S(n+2) + S(n−2)]` needs one new `S` per step and no table. The lanes are
+/// rescaled every four steps (the backward growth per step, `2n/|a|`, is below 3e5 for any
+/// `|a| ≥ 1` within the defocus budget, so four steps stay within the 1e58 of headroom above
+/// the 1e250 threshold).
+#[inline(always)]
+fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
     let x = a.map(f64::abs);
     let start = x.iter().map(|&x| series_start(x)).max().unwrap_or(0);
     // start ≡ 3 (mod 4): the recurrence runs in blocks of four whose signs are fixed
     let start = start | 3;
-    SCRATCH.with(|cell| {
-        let mut buffer = cell.borrow_mut();
-        // grown, never cleared (the zeroing was 3 % of the spectrometer scene's time): every
-        // slot used below is written before it is read
-        let len = 4 * (start + 3) + 4 * (start + 1);
-        if buffer.len() < len {
-            buffer.resize(len, 0.0);
-        }
-        let (big_s, c) = buffer[..len].split_at_mut(4 * (start + 3));
-        let theta = s.map(f64::acos);
-        let two_cos = s.map(|s| 2.0 * s);
-        let mut sin_prev = [0.0_f64; 4];
-        let mut sin_cur = theta.map(f64::sin);
-        big_s[..4].copy_from_slice(&theta);
-        big_s[4..8].copy_from_slice(&sin_cur);
-        let reciprocals = reciprocals(start + 2);
-        for m in 2..=start + 2 {
-            let r = reciprocals.map_or_else(|| 1.0 / m as f64, |t| t[m]);
-            let row = &mut big_s[4 * m..4 * m + 4];
-            for l in 0..4 {
-                let next = two_cos[l] * sin_cur[l] - sin_prev[l];
-                sin_prev[l] = sin_cur[l];
-                sin_cur[l] = next;
-                row[l] = next * r;
+    let reciprocals = reciprocals(start + 2);
+    let recip = |m: usize| reciprocals.map_or_else(|| 1.0 / m as f64, |r| r[m]);
+    let theta = s.map(f64::acos);
+    let two_cos = s.map(|s| 2.0 * s);
+    let sin_theta = s.map(|s| (1.0 - s * s).max(0.0).sqrt());
+    // the window at step n: sines of (n+1)θ and (n−2)θ … ; S(m) for m = n+2 … n−2
+    let top = start + 2;
+    let mut sin_above = [0.0; L]; // sin((n−1)θ) once the window is set
+    let mut sin_here = [0.0; L]; // sin((n−2)θ)
+    let mut big_s = [[0.0; L]; 5]; // S(n+2), S(n+1), S(n), S(n−1), S(n−2)
+    for l in 0..L {
+        let (sin_m, cos_m) = crate::fft::cis::sin_cos(top as f64 * theta[l]);
+        // sin((M+1)θ) = sin Mθ cos θ + cos Mθ sin θ
+        let mut upper = sin_m * s[l] + cos_m * sin_theta[l];
+        let mut lower = sin_m;
+        // down from M = start + 2 to start − 2: S(start+2) … S(start−2)
+        for (k, slot) in big_s.iter_mut().enumerate() {
+            let m = top - k;
+            slot[l] = lower * recip(m);
+            if k < 4 {
+                let next = two_cos[l] * lower - upper;
+                upper = lower;
+                lower = next;
             }
         }
-        // C(n) = ½ S(n) − ¼ [S(n+2) + S(|n−2|)]
-        for n in 0..=start {
-            let (here, above, below) = (4 * n, 4 * (n + 2), 4 * n.abs_diff(2));
-            for l in 0..4 {
-                c[here + l] = 0.5 * big_s[here + l] - 0.25 * (big_s[above + l] + big_s[below + l]);
-            }
-        }
-        let two_over_x = x.map(|x| 2.0 / x);
-        let mut state = Lanes { above: [0.0; 4], j: [1e-300; 4], even: [0.0; 4], odd: [0.0; 4], norm: [0.0; 4] };
-        // n ≡ 3: odd −, n ≡ 2: even − and norm, n ≡ 1: odd +, n ≡ 0: even + and norm (each
-        // term ×2, applied at the end); blocks down to n = 4, then 3, 2, 1 and n = 0 alone
-        let mut n = start;
-        while n >= 7 {
-            state.down(n, c, &two_over_x, Sum::Odd, -1.0);
-            state.down(n - 1, c, &two_over_x, Sum::EvenNorm, -1.0);
-            state.down(n - 2, c, &two_over_x, Sum::Odd, 1.0);
-            state.down(n - 3, c, &two_over_x, Sum::EvenNorm, 1.0);
-            state.rescale();
-            n -= 4;
-        }
-        state.down(3, c, &two_over_x, Sum::Odd, -1.0);
-        state.down(2, c, &two_over_x, Sum::EvenNorm, -1.0);
-        state.down(1, c, &two_over_x, Sum::Odd, 1.0);
-        let mut out = [0.0; 4];
-        for l in 0..4 {
-            let j0 = state.j[l];
-            let even = 2.0 * state.even[l] + j0 * c[l];
-            let norm = 2.0 * state.norm[l] + j0;
-            let (sin_as, cos_as) = (x[l] * s[l]).sin_cos();
-            out[l] = (4.0 / PI) * (cos_as * even + sin_as * 2.0 * state.odd[l]) / norm;
-        }
-        out
-    })
-}
-
-/// Which sums a step of [`bessel4`] adds its term to.
-#[derive(Clone, Copy, PartialEq)]
-enum Sum {
-    Odd,
-    EvenNorm,
-}
-
-/// The four lanes of [`bessel4`]'s backward recurrence: `J_{n+1}`, `J_n` (unnormalized) and
-/// the sums so far.
-struct Lanes {
-    above: [f64; 4],
-    j: [f64; 4],
-    even: [f64; 4],
-    odd: [f64; 4],
-    norm: [f64; 4],
-}
-
-impl Lanes {
-    /// Adds `sign J_n C(n)` to its sum (and `J_n` to the norm for even `n`), then steps down to
-    /// `J_{n−1} = (2n/x) J_n − J_{n+1}`.
-    #[inline(always)]
-    fn down(&mut self, n: usize, c: &[f64], two_over_x: &[f64; 4], sum: Sum, sign: f64) {
-        let nf = n as f64;
-        let cn = &c[4 * n..4 * n + 4];
-        for l in 0..4 {
-            let jc = self.j[l] * cn[l];
-            if sum == Sum::Odd {
-                self.odd[l] += sign * jc;
-            } else {
-                self.even[l] += sign * jc;
-                self.norm[l] += self.j[l];
-            }
-            let next = nf * two_over_x[l] * self.j[l] - self.above[l];
-            self.above[l] = self.j[l];
-            self.j[l] = next;
-        }
+        sin_above[l] = upper;
+        sin_here[l] = lower;
     }
-
-    /// Rescales a lane whose values passed 1e250 (checked every four steps).
-    #[inline(always)]
-    fn rescale(&mut self) {
-        for l in 0..4 {
-            if self.j[l].abs() > 1e250 {
-                self.above[l] *= 1e-250;
-                self.j[l] *= 1e-250;
-                self.even[l] *= 1e-250;
-                self.odd[l] *= 1e-250;
-                self.norm[l] *= 1e-250;
+    let [mut s2, mut s1, mut s0, mut sm1, mut sm2] = big_s;
+    let mut j_above = [0.0_f64; L];
+    let mut j = [1e-300_f64; L];
+    let (mut even, mut odd, mut norm) = ([0.0_f64; L], [0.0_f64; L], [0.0_f64; L]);
+    // one step at n (n ≥ 4): add ±J_n C(n) to its sum (and J_n to the norm for even n), step
+    // J down, then shift the window and bring in S(n−3)
+    let mut n = start;
+    macro_rules! step {
+        ($n:expr, $sum:ident, $sign:expr, $norm:expr) => {{
+            let nf = $n as f64;
+            let r = recip($n - 3);
+            for l in 0..L {
+                let c = 0.5 * s0[l] - 0.25 * (s2[l] + sm2[l]);
+                $sum[l] += $sign * j[l] * c;
+                if $norm {
+                    norm[l] += j[l];
+                }
+                let next = nf * (2.0 / x[l]) * j[l] - j_above[l];
+                j_above[l] = j[l];
+                j[l] = next;
+                // sin((n−3)θ) from sin((n−2)θ) and sin((n−1)θ)
+                let sin_next = two_cos[l] * sin_here[l] - sin_above[l];
+                sin_above[l] = sin_here[l];
+                sin_here[l] = sin_next;
+                s2[l] = s1[l];
+                s1[l] = s0[l];
+                s0[l] = sm1[l];
+                sm1[l] = sm2[l];
+                sm2[l] = sin_next * r;
+            }
+        }};
+    }
+    // n ≡ 3: odd −, n ≡ 2: even − and norm, n ≡ 1: odd +, n ≡ 0: even + and norm (each term ×2,
+    // applied at the end); blocks down to n = 4, then 3, 2, 1 and 0 with S(0) = θ and S(|n−2|)
+    while n >= 7 {
+        step!(n, odd, -1.0, false);
+        step!(n - 1, even, -1.0, true);
+        step!(n - 2, odd, 1.0, false);
+        step!(n - 3, even, 1.0, true);
+        for l in 0..L {
+            if j[l].abs() > 1e250 {
+                j_above[l] *= 1e-250;
+                j[l] *= 1e-250;
+                even[l] *= 1e-250;
+                odd[l] *= 1e-250;
+                norm[l] *= 1e-250;
+            }
+        }
+        n -= 4;
+        // every 16 steps the sines afresh (the recurrence's rounding grows with its length,
+        // ~1e-15 over a hundred steps; reseeded it stays at the 1e-16 of its first steps)
+        if n % 16 == 3 && n >= 7 {
+            for l in 0..L {
+                let (sin_m, cos_m) = crate::fft::cis::sin_cos((n - 2) as f64 * theta[l]);
+                sin_here[l] = sin_m;
+                sin_above[l] = sin_m * s[l] + cos_m * sin_theta[l];
             }
         }
     }
+    // the window now holds S(5) … S(1); n = 3, 2, 1, 0
+    let mut out = [0.0; L];
+    for l in 0..L {
+        let (s5, s4, s3, s2, s1, s0) = (s2[l], s1[l], s0[l], sm1[l], sm2[l], theta[l]);
+        let (mut jl, mut above) = (j[l], j_above[l]);
+        let two_over_x = 2.0 / x[l];
+        let (mut odd, mut even, mut norm) = (odd[l], even[l], norm[l]);
+        // n = 3, 2, 1 (S(|1 − 2|) = S(1)), each followed by the step down to n − 1
+        for (n, c) in
+            [(3usize, 0.5 * s3 - 0.25 * (s5 + s1)), (2, 0.5 * s2 - 0.25 * (s4 + s0)), (1, 0.5 * s1 - 0.25 * (s3 + s1))]
+        {
+            match n {
+                3 => odd -= jl * c,
+                2 => {
+                    even -= jl * c;
+                    norm += jl;
+                }
+                _ => odd += jl * c,
+            }
+            let next = n as f64 * two_over_x * jl - above;
+            above = jl;
+            jl = next;
+        }
+        // n = 0: C(0) = ½ θ − ½ S(2)
+        let j0 = jl;
+        let even = 2.0 * even + j0 * (0.5 * s0 - 0.5 * s2);
+        let norm = 2.0 * norm + j0;
+        // odd terms change sign with a (Jn(−x) = (−1)ⁿ Jn(x)); sin(a s) does too: the product is even
+        let (sin_as, cos_as) = crate::fft::cis::sin_cos(x[l] * s[l]);
+        out[l] = (4.0 / PI) * (cos_as * even + sin_as * 2.0 * odd) / norm;
+    }
+    out
 }
 
 /// Where Miller's backward recurrence for `Jn(x)` starts: [`SERIES_MARGIN`] orders above the
@@ -384,11 +350,6 @@ fn series_start(x: f64) -> usize {
 
 /// Orders above the last significant one at which [`series_start`] starts Miller's recurrence.
 const SERIES_MARGIN: usize = 8;
-
-thread_local! {
-    /// Scratch for [`defocus_otf_bessel`] and [`bessel4`]: the sine terms of one call.
-    static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
-}
 
 /// `1/m` for `m = 0 … 4096` (`m = 0` unused), or `None` beyond: a multiply where the series
 /// would divide.

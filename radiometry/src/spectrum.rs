@@ -61,6 +61,34 @@ pub struct Truncation {
     pub support_m: (f64, f64),
 }
 
+/// Most polynomial degree of one piece of a [`PiecewisePolynomial`] (a table × λ × a quadratic
+/// QE, say); a product of higher degree is not offered as one.
+pub const MAX_PIECE_DEGREE: usize = 4;
+
+/// A spectrum that is a polynomial between breakpoints (see [`Spectrum::piecewise_polynomial`]):
+/// piece `i` covers `[edges[i], edges[i + 1]]` and is `Σ_m pieces[i][m] (λ − edges[i])^m`; it is
+/// zero outside `[edges[0], edges[last]]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PiecewisePolynomial {
+    /// Breakpoints, m, increasing.
+    pub edges: Vec<f64>,
+    /// Coefficients of each piece in powers of `λ − edges[i]` (SI), lowest first.
+    pub pieces: Vec<Vec<f64>>,
+}
+
+impl PiecewisePolynomial {
+    /// The value at `wavelength_m` (0 outside the edges).
+    pub fn value(&self, wavelength_m: f64) -> f64 {
+        let (first, last) = (self.edges[0], self.edges[self.edges.len() - 1]);
+        if !(wavelength_m >= first && wavelength_m <= last) {
+            return 0.0;
+        }
+        let i = self.edges.partition_point(|&e| e <= wavelength_m).clamp(1, self.pieces.len()) - 1;
+        let t = wavelength_m - self.edges[i];
+        self.pieces[i].iter().rev().fold(0.0, |acc, c| acc * t + c)
+    }
+}
+
 /// A spectrum of the form `P(λ) · exp(−(λ − center)²/(2σ²))` for λ > 0, `P` a polynomial
 /// (see [`Spectrum::gaussian_polynomial`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -289,6 +317,72 @@ impl Spectrum {
             .then_some(GaussianPolynomial { center_m, sigma_m, coefficients })
     }
 
+    /// The spectrum as a [`PiecewisePolynomial`], exactly, when it is a product of tables,
+    /// top-hats, constants and linear factors with a finite support and pieces of degree at most
+    /// [`MAX_PIECE_DEGREE`] (a filter table × λ × constant QE and radiance: quadratic pieces
+    /// between the table's samples); `None` otherwise (Gaussians, blackbodies, lines, or no
+    /// bounded factor). Moments of such a spectrum are sums of polynomial integrals, exact
+    /// whatever the number of samples.
+    pub fn piecewise_polynomial(&self) -> Option<PiecewisePolynomial> {
+        let mut factors = Vec::new();
+        self.visit(&mut |f| factors.push(f));
+        let (lo, hi) = self.support();
+        if !(lo < hi && hi.is_finite() && lo >= 0.0) {
+            return None;
+        }
+        let mut degree = 0;
+        for f in &factors {
+            degree += match f {
+                Spectrum::Constant(_) | Spectrum::TopHat(_) => 0,
+                Spectrum::Linear { .. } | Spectrum::Sampled(_) => 1,
+                _ => return None,
+            };
+        }
+        if degree > MAX_PIECE_DEGREE {
+            return None;
+        }
+        let mut edges = self.breakpoints();
+        edges.extend([lo, hi]);
+        edges.retain(|&x| x >= lo && x <= hi);
+        edges.sort_by(f64::total_cmp);
+        edges.dedup();
+        let mut pieces: Vec<Vec<f64>> = vec![vec![1.0]; edges.len() - 1];
+        // a table's segment cursor per factor: the pieces are visited in increasing λ
+        let mut cursors = vec![1usize; factors.len()];
+        for (i, piece) in pieces.iter_mut().enumerate() {
+            let (x0, x1) = (edges[i], edges[i + 1]);
+            for (f, cursor) in factors.iter().zip(&mut cursors) {
+                // the factor on this piece as c0 + c1 t, t = λ − x0
+                let (c0, c1) = match f {
+                    Spectrum::Constant(c) => (*c, 0.0),
+                    Spectrum::TopHat(t) => (t.value(0.5 * (x0 + x1)), 0.0),
+                    Spectrum::Linear { slope } => (slope * x0, *slope),
+                    Spectrum::Sampled(table) => {
+                        let w = table.wavelengths();
+                        let v = table.values();
+                        let mid = 0.5 * (x0 + x1);
+                        while *cursor < w.len() - 1 && w[*cursor] < mid {
+                            *cursor += 1;
+                        }
+                        let k = *cursor;
+                        let slope = (v[k] - v[k - 1]) / (w[k] - w[k - 1]);
+                        (v[k - 1] + slope * (x0 - w[k - 1]), slope)
+                    }
+                    _ => return None,
+                };
+                let mut next = vec![0.0; piece.len() + usize::from(c1 != 0.0)];
+                for (m, &p) in piece.iter().enumerate() {
+                    next[m] += p * c0;
+                    if c1 != 0.0 {
+                        next[m + 1] += p * c1;
+                    }
+                }
+                *piece = next;
+            }
+        }
+        pieces.iter().all(|p| p.iter().all(|c| c.is_finite())).then_some(PiecewisePolynomial { edges, pieces })
+    }
+
     /// The spectrum as one weighted wavelength, when a factor is a [`Line`]: the line at its
     /// centre with weight `peak · width · Π f(center)` over the other factors `f`, so that
     /// `∫ spectrum · g dλ = weight · g(center)` for any `g` (the whole band at one wavelength).
@@ -481,6 +575,40 @@ fn flatten_into(s: Spectrum, out: &mut Vec<Spectrum>) {
 
 #[cfg(test)]
 mod tests {
+
+    /// The piecewise polynomial of a filter table × a second, coarser table × λ × a top-hat ×
+    /// a constant is the product itself, at the samples, between them and across every
+    /// breakpoint; spectra with a smooth non-polynomial factor have none.
+    #[test]
+    fn piecewise_polynomial_reproduces_the_product() {
+        let fine = Sampled::new(
+            (0..=40).map(|i| 600e-9 + 10e-9 * f64::from(i)).collect(),
+            (0..=40).map(|i| 0.5 + 0.4 * (0.7 * f64::from(i)).sin()).collect(),
+        )
+        .unwrap();
+        let coarse = Sampled::new(vec![550e-9, 700e-9, 850e-9, 1100e-9], vec![0.2, 1.0, 0.6, 0.9]).unwrap();
+        let s = Spectrum::product(vec![
+            Spectrum::Sampled(fine),
+            Spectrum::Sampled(coarse),
+            Spectrum::Linear { slope: 2.0 },
+            Spectrum::TopHat(TopHat::new(640e-9, 930e-9, 1.5).unwrap()),
+            Spectrum::Constant(3.0),
+        ]);
+        let p = s.piecewise_polynomial().expect("a product of tables, λ, a top-hat and a constant");
+        assert_eq!((p.edges[0], *p.edges.last().unwrap()), (640e-9, 930e-9));
+        for k in 0..=3000 {
+            let l = 620e-9 + 330e-9 * f64::from(k) / 3000.0;
+            let (got, want) = (p.value(l), s.value(l));
+            assert!((got - want).abs() <= 1e-12 * want.abs().max(1e-9), "{l}: {got} vs {want}");
+        }
+        let g = Gaussian::new(800e-9, 20e-9, 1.0).unwrap();
+        assert!(
+            Spectrum::product(vec![Spectrum::Gaussian(g), Spectrum::TopHat(TopHat::new(7e-7, 9e-7, 1.0).unwrap())])
+                .piecewise_polynomial()
+                .is_none()
+        );
+        assert!(Spectrum::Linear { slope: 1.0 }.piecewise_polynomial().is_none(), "an unbounded support");
+    }
 
     #[test]
     fn gaussian_polynomial_reproduces_the_product() {

@@ -110,7 +110,12 @@ impl Polychromatic<'_> {
             work.frequency_panels += pass.frequency_panels;
             work.otf_evaluations += pass.otf_evaluations;
             work.sign_changes += pass.sign_changes;
-            work.closed_form_evaluations += self.engine.value_evaluations() - closed_before;
+            let inner = self.engine.value_evaluations() - closed_before;
+            if self.engine.engine() == Engine::ClosedForm {
+                work.closed_form_evaluations += inner;
+            } else {
+                work.spectral_evaluations += inner;
+            }
             if mean >= 0.5 * guess || guess <= 1e-9 * active {
                 return (mean, work);
             }

@@ -52,6 +52,7 @@ mod frequency;
 mod grid;
 mod line;
 mod noise;
+mod per_frequency;
 mod spectral;
 
 pub use grid::monochromatic_mtf;
@@ -135,6 +136,9 @@ pub struct Work {
     pub spectral_interpolated: bool,
     /// Evaluations of the closed-form spectral integral `E(c)` (closed-form engine only).
     pub closed_form_evaluations: usize,
+    /// Single-wavelength OTFs summed by the per-frequency product integration (the exact 1-D
+    /// engine on centred circles: each OTF value climbs its own nested spectral levels).
+    pub spectral_evaluations: usize,
 }
 
 /// How a [`Polychromatic`] is computed.
@@ -368,6 +372,13 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     {
         let engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number, settings.tolerance);
         check_signal(&engine.nodes)?;
+        return Ok(Box::new(engine));
+    }
+    // product integration read per frequency, where every order is a centred circle with defocus
+    if settings.spectral_rule == SpectralRule::Interpolated
+        && let Some(engine) = per_frequency::PerFrequency::new(scene, lo, hi, settings.tolerance)
+    {
+        check_signal(engine.nodes())?;
         return Ok(Box::new(engine));
     }
     let interpolated = match settings.spectral_rule {
