@@ -179,91 +179,84 @@ pub fn defocus_otf_many(points: &[(f64, f64)], out: &mut [f64]) {
 const BATCH: usize = 4;
 
 /// [`defocus_otf_bessel`] of `L` points `(s, a)`, `0 < s < 1`, `|a| ≥ 1`, in interleaved lanes
-/// (four independent chains of dependent multiply-adds fill the pipeline where one leaves it
-/// mostly idle): one recurrence from the largest lane's start (a higher start only makes
-/// Miller's recurrence more exact), everything in registers.
+/// (independent chains of dependent multiply-adds fill the pipeline where one leaves it mostly
+/// idle): one recurrence from the largest lane's start (a higher start only makes Miller's
+/// recurrence more exact), everything in registers.
 ///
-/// Going down in `n`, the sines `sin(mθ)` come from the same Chebyshev recurrence run downward,
-/// `sin((m−1)θ) = 2cosθ sin(mθ) − sin((m+1)θ)`, started from `sin(Mθ)` and `sin((M+1)θ)` at the
-/// top (`M = start + 2`; one sine and cosine per lane) — as stable as the upward run (both
-/// roots on the unit circle) — and `S(m) = sin(mθ)/m` is kept in a window of five, so that
-/// `C(n) = ½ S(n) − ¼ [S(n+2) + S(n−2)]` needs one new `S` per step and no table. The lanes are
-/// rescaled every four steps (the backward growth per step, `2n/|a|`, is below 3e5 for any
-/// `|a| ≥ 1` within the defocus budget, so four steps stay within the 1e58 of headroom above
-/// the 1e250 threshold).
+/// The sum is taken in the form that needs the fewest live values per order. Over all integer
+/// orders (`J_{−n} = (−1)ⁿ J_n`, `C_{−n} = C_n`) the two brackets are `Σ_n iⁿ J_n C_n`, and with
+/// `C_n = ½ S(n) − ¼ [S(n+2) + S(n−2)]` re-indexed on `S`:
+///
+/// ```text
+/// Σ_n iⁿ J_n C_n = Σ_m i^m S(m) K_m,   K_m = ½ J_m + ¼ (J_{m−2} + J_{m+2}) = [(m−1) J_{m−1} + (m+1) J_{m+1}] / (2a)
+/// ```
+///
+/// (the three-term recurrence twice), whose `±m` terms are equal: `even = θ J_1 + Σ_{m even ≥ 2}
+/// ±sin(mθ)[(1 − 1/m) J_{m−1} + (1 + 1/m) J_{m+1}]`, `odd` the same over odd `m`, each over `a`.
+/// Going down in `m`, `J_{m+1}`, `J_m` and the new `J_{m−1}` are at hand, and `sin(mθ)` comes from
+/// the Chebyshev recurrence run downward from `sin(Mθ)`, `sin((M+1)θ)` (one sine and cosine per
+/// lane), reseeded every 16 orders (its rounding grows with its length). The lanes are rescaled
+/// every four steps (the backward growth per step, `2n/|a|`, is below 3e5 for any `|a| ≥ 1`
+/// within the defocus budget, so four steps stay within the 1e58 of headroom above the 1e250
+/// threshold).
 #[inline(always)]
 fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
     let x = a.map(f64::abs);
     let start = x.iter().map(|&x| series_start(x)).max().unwrap_or(0);
     // start ≡ 3 (mod 4): the recurrence runs in blocks of four whose signs are fixed
     let start = start | 3;
-    let reciprocals = reciprocals(start + 2);
+    let reciprocals = reciprocals(start + 1);
     let recip = |m: usize| reciprocals.map_or_else(|| 1.0 / m as f64, |r| r[m]);
     let theta = s.map(f64::acos);
     let two_cos = s.map(|s| 2.0 * s);
     let sin_theta = s.map(|s| (1.0 - s * s).max(0.0).sqrt());
-    // the window at step n: sines of (n+1)θ and (n−2)θ … ; S(m) for m = n+2 … n−2
-    let top = start + 2;
-    let mut sin_above = [0.0; L]; // sin((n−1)θ) once the window is set
-    let mut sin_here = [0.0; L]; // sin((n−2)θ)
-    let mut big_s = [[0.0; L]; 5]; // S(n+2), S(n+1), S(n), S(n−1), S(n−2)
-    for l in 0..L {
-        let (sin_m, cos_m) = crate::fft::cis::sin_cos(top as f64 * theta[l]);
-        // sin((M+1)θ) = sin Mθ cos θ + cos Mθ sin θ
-        let mut upper = sin_m * s[l] + cos_m * sin_theta[l];
-        let mut lower = sin_m;
-        // down from M = start + 2 to start − 2: S(start+2) … S(start−2)
-        for (k, slot) in big_s.iter_mut().enumerate() {
-            let m = top - k;
-            slot[l] = lower * recip(m);
-            if k < 4 {
-                let next = two_cos[l] * lower - upper;
-                upper = lower;
-                lower = next;
-            }
+    let two_over_x = x.map(|x| 2.0 / x);
+    // sin(mθ) and sin((m+1)θ) at the current order m
+    let seed = |m: usize| -> ([f64; L], [f64; L]) {
+        let mut here = [0.0; L];
+        let mut above = [0.0; L];
+        for l in 0..L {
+            let (sin_m, cos_m) = crate::fft::cis::sin_cos(m as f64 * theta[l]);
+            here[l] = sin_m;
+            above[l] = sin_m * s[l] + cos_m * sin_theta[l];
         }
-        sin_above[l] = upper;
-        sin_here[l] = lower;
-    }
-    let [mut s2, mut s1, mut s0, mut sm1, mut sm2] = big_s;
+        (here, above)
+    };
+    let (mut sin_here, mut sin_above) = seed(start);
     let mut j_above = [0.0_f64; L];
     let mut j = [1e-300_f64; L];
     let (mut even, mut odd, mut norm) = ([0.0_f64; L], [0.0_f64; L], [0.0_f64; L]);
-    // one step at n (n ≥ 4): add ±J_n C(n) to its sum (and J_n to the norm for even n), step
-    // J down, then shift the window and bring in S(n−3)
-    let mut n = start;
+    // one step at order m ≥ 1: J_{m−1}, the term ±sin(mθ)[(1 − 1/m) J_{m−1} + (1 + 1/m) J_{m+1}]
+    // into its sum (J_m into the norm for even m), then everything one order down
     macro_rules! step {
-        ($n:expr, $sum:ident, $sign:expr, $norm:expr) => {{
-            let nf = $n as f64;
-            let r = recip($n - 3);
+        ($m:expr, $sum:ident, $sign:expr, $norm:expr) => {{
+            let m = $m;
+            let (r, mf) = (recip(m), m as f64);
+            let (below_weight, above_weight) = ($sign * (1.0 - r), $sign * (1.0 + r));
             for l in 0..L {
-                let c = 0.5 * s0[l] - 0.25 * (s2[l] + sm2[l]);
-                $sum[l] += $sign * j[l] * c;
+                let below = mf * two_over_x[l] * j[l] - j_above[l];
+                $sum[l] += sin_here[l] * (below_weight * below + above_weight * j_above[l]);
                 if $norm {
                     norm[l] += j[l];
                 }
-                let next = nf * (2.0 / x[l]) * j[l] - j_above[l];
                 j_above[l] = j[l];
-                j[l] = next;
-                // sin((n−3)θ) from sin((n−2)θ) and sin((n−1)θ)
-                let sin_next = two_cos[l] * sin_here[l] - sin_above[l];
+                j[l] = below;
+                let sin_below = two_cos[l] * sin_here[l] - sin_above[l];
                 sin_above[l] = sin_here[l];
-                sin_here[l] = sin_next;
-                s2[l] = s1[l];
-                s1[l] = s0[l];
-                s0[l] = sm1[l];
-                sm1[l] = sm2[l];
-                sm2[l] = sin_next * r;
+                sin_here[l] = sin_below;
             }
         }};
     }
-    // n ≡ 3: odd −, n ≡ 2: even − and norm, n ≡ 1: odd +, n ≡ 0: even + and norm (each term ×2,
-    // applied at the end); blocks down to n = 4, then 3, 2, 1 and 0 with S(0) = θ and S(|n−2|)
-    while n >= 7 {
-        step!(n, odd, -1.0, false);
-        step!(n - 1, even, -1.0, true);
-        step!(n - 2, odd, 1.0, false);
-        step!(n - 3, even, 1.0, true);
+    // m ≡ 3: odd −, m ≡ 2: even − and norm, m ≡ 1: odd +, m ≡ 0: even + and norm
+    let mut m = start;
+    loop {
+        step!(m, odd, -1.0, false);
+        step!(m - 1, even, -1.0, true);
+        step!(m - 2, odd, 1.0, false);
+        if m == 3 {
+            break;
+        }
+        step!(m - 3, even, 1.0, true);
         for l in 0..L {
             if j[l].abs() > 1e250 {
                 j_above[l] *= 1e-250;
@@ -273,47 +266,19 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
                 norm[l] *= 1e-250;
             }
         }
-        n -= 4;
-        // every 16 steps the sines afresh (the recurrence's rounding grows with its length,
-        // ~1e-15 over a hundred steps; reseeded it stays at the 1e-16 of its first steps)
-        if n % 16 == 3 && n >= 7 {
-            for l in 0..L {
-                let (sin_m, cos_m) = crate::fft::cis::sin_cos((n - 2) as f64 * theta[l]);
-                sin_here[l] = sin_m;
-                sin_above[l] = sin_m * s[l] + cos_m * sin_theta[l];
-            }
+        m -= 4;
+        if m % 16 == 3 {
+            (sin_here, sin_above) = seed(m);
         }
     }
-    // the window now holds S(5) … S(1); n = 3, 2, 1, 0
+    // now j = J_0, j_above = J_1
     let mut out = [0.0; L];
     for l in 0..L {
-        let (s5, s4, s3, s2, s1, s0) = (s2[l], s1[l], s0[l], sm1[l], sm2[l], theta[l]);
-        let (mut jl, mut above) = (j[l], j_above[l]);
-        let two_over_x = 2.0 / x[l];
-        let (mut odd, mut even, mut norm) = (odd[l], even[l], norm[l]);
-        // n = 3, 2, 1 (S(|1 − 2|) = S(1)), each followed by the step down to n − 1
-        for (n, c) in
-            [(3usize, 0.5 * s3 - 0.25 * (s5 + s1)), (2, 0.5 * s2 - 0.25 * (s4 + s0)), (1, 0.5 * s1 - 0.25 * (s3 + s1))]
-        {
-            match n {
-                3 => odd -= jl * c,
-                2 => {
-                    even -= jl * c;
-                    norm += jl;
-                }
-                _ => odd += jl * c,
-            }
-            let next = n as f64 * two_over_x * jl - above;
-            above = jl;
-            jl = next;
-        }
-        // n = 0: C(0) = ½ θ − ½ S(2)
-        let j0 = jl;
-        let even = 2.0 * even + j0 * (0.5 * s0 - 0.5 * s2);
-        let norm = 2.0 * norm + j0;
+        let even = theta[l] * j_above[l] + even[l];
+        let norm = j[l] + 2.0 * norm[l];
         // odd terms change sign with a (Jn(−x) = (−1)ⁿ Jn(x)); sin(a s) does too: the product is even
         let (sin_as, cos_as) = crate::fft::cis::sin_cos(x[l] * s[l]);
-        out[l] = (4.0 / PI) * (cos_as * even + sin_as * 2.0 * odd) / norm;
+        out[l] = (4.0 / PI) * (cos_as * even + sin_as * odd[l]) / (x[l] * norm);
     }
     out
 }

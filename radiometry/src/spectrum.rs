@@ -72,8 +72,11 @@ pub const MAX_PIECE_DEGREE: usize = 4;
 pub struct PiecewisePolynomial {
     /// Breakpoints, m, increasing.
     pub edges: Vec<f64>,
-    /// Coefficients of each piece in powers of `λ − edges[i]` (SI), lowest first.
-    pub pieces: Vec<Vec<f64>>,
+    /// Coefficients of each piece in powers of `λ − edges[i]` (SI), lowest first; those above
+    /// [`degree`](Self::degree) are 0.
+    pub pieces: Vec<[f64; MAX_PIECE_DEGREE + 1]>,
+    /// The highest degree of any piece.
+    pub degree: usize,
 }
 
 impl PiecewisePolynomial {
@@ -346,7 +349,9 @@ impl Spectrum {
         edges.retain(|&x| x >= lo && x <= hi);
         edges.sort_by(f64::total_cmp);
         edges.dedup();
-        let mut pieces: Vec<Vec<f64>> = vec![vec![1.0]; edges.len() - 1];
+        let mut unit = [0.0; MAX_PIECE_DEGREE + 1];
+        unit[0] = 1.0;
+        let mut pieces = vec![unit; edges.len() - 1];
         // a table's segment cursor per factor: the pieces are visited in increasing λ
         let mut cursors = vec![1usize; factors.len()];
         for (i, piece) in pieces.iter_mut().enumerate() {
@@ -370,17 +375,18 @@ impl Spectrum {
                     }
                     _ => return None,
                 };
-                let mut next = vec![0.0; piece.len() + usize::from(c1 != 0.0)];
+                // × (c0 + c1 t); the degree stays within the bound counted above
+                let mut next = [0.0; MAX_PIECE_DEGREE + 1];
                 for (m, &p) in piece.iter().enumerate() {
                     next[m] += p * c0;
-                    if c1 != 0.0 {
+                    if m < MAX_PIECE_DEGREE {
                         next[m + 1] += p * c1;
                     }
                 }
                 *piece = next;
             }
         }
-        pieces.iter().all(|p| p.iter().all(|c| c.is_finite())).then_some(PiecewisePolynomial { edges, pieces })
+        pieces.iter().all(|p| p.iter().all(|c| c.is_finite())).then_some(PiecewisePolynomial { edges, pieces, degree })
     }
 
     /// The spectrum as one weighted wavelength, when a factor is a [`Line`]: the line at its

@@ -1048,7 +1048,7 @@ impl MomentRule {
     fn exact(pieces: &radiometry::PiecewisePolynomial, a: f64, b: f64) -> MomentRule {
         let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
         let edges = &pieces.edges;
-        let terms = pieces.pieces.iter().map(Vec::len).max().unwrap_or(1).min(PIECE_TERMS);
+        let terms = (pieces.degree + 1).min(PIECE_TERMS);
         let (mut x, mut jumps): (Vec<f64>, Vec<[f64; PIECE_TERMS]>) = (Vec::new(), Vec::new());
         // the pieces overlapping (a, b), each clipped to it, as polynomials in x
         let first = edges.partition_point(|&e| e <= a).saturating_sub(1);
@@ -1066,7 +1066,7 @@ impl MomentRule {
             // Σ_m r_m (λ − e_i)^m with λ − e_i = h (x − x_i): binomial expansion in powers of x
             let x_i = (edges[i] - c) / h;
             let mut coefficients = [0.0; PIECE_TERMS];
-            for (m, &r) in pieces.pieces[i].iter().enumerate().take(PIECE_TERMS) {
+            for (m, &r) in pieces.pieces[i].iter().enumerate().take(terms) {
                 let scaled = r * h.powi(m as i32);
                 let mut binomial = 1.0;
                 for j in (0..=m).rev() {
