@@ -344,7 +344,11 @@ fn main() {
         };
         let nodes_work = |e: &Evaluation| {
             let n = &e.numerics;
-            format!("{} OTF values, {} spectral nodes", n.otf_evaluations, n.spectral_nodes)
+            if n.spectral_evaluations > 0 {
+                format!("{} OTF values, {} single-wavelength OTFs", n.otf_evaluations, n.spectral_evaluations)
+            } else {
+                format!("{} OTF values, {} spectral nodes", n.otf_evaluations, n.spectral_nodes)
+            }
         };
         for &t in grid.tolerances {
             let options = Options { tolerance: t, ..Options::default() };

@@ -13,10 +13,11 @@ fn explain(family: Family) -> String {
              Gaussian × polynomial spectrum integrated over λ exactly (complex Gaussian integrals, Faddeeva's \
              erfcx), adaptive Gauss–Kronrod in the pupil angle t and in ν to the tolerance."
             .into(),
-        Family::Quadrature => "`metric::evaluate` with the closed form off (engine `exact-1d`): 16-point \
-             Gauss–Legendre spectral panels over ±7σ (≤ 2σ wide, ≤ 12 rad of defocus phase each), \
-             `optics::defocus_otf` at every node, adaptive Gauss–Kronrod in ν split at sign changes; the \
-             spectral panels are exact to rounding whatever the tolerance."
+        Family::Quadrature => "`metric::evaluate` with the closed form off (engine `exact-1d`): product \
+             integration per frequency over ±7σ (panels of ≤ 48 rad of defocus phase at Nyquist; each OTF value \
+             climbs each panel's nested Chebyshev–Lobatto levels until its share of the tolerance is met, weights \
+             the Chebyshev moments of λ·G(λ)), `optics::defocus_otf` (the Bessel series) at every point, nested \
+             Clenshaw–Curtis in ν."
             .into(),
         Family::Fft => "`metric::evaluate` on the same circular pupil given as an explicit aperture, sampled on \
              the general-pupil engine (`exact_irises` off: by default a circular iris goes to the exact path): N \
@@ -28,9 +29,9 @@ fn explain(family: Family) -> String {
              exact reference of the decentred iris (below)."
             .into(),
         Family::Table => "`metric::evaluate` with the Gaussian filter given as a `Spectrum::Sampled` table \
-             (samples every h over ±7σ, piecewise linear between them; closed form off): spectral panels split \
-             at every sample, exact for the piecewise-linear model, so the error is the table's interpolation \
-             of the Gaussian, ∝ h²."
+             (samples every h over ±7σ, piecewise linear between them; closed form off): product integration \
+             per frequency as above, its moments exact sums over the table's samples (the piecewise-linear \
+             model × λ), so the error is the table's interpolation of the Gaussian, ∝ h²."
             .into(),
         Family::Uniform(_) => "trapezoid rule: n equally spaced wavelengths over λ0 ± kσ with weights λ·G(λ) \
              (h/2 at the ends), `optics::defocus_otf` at each, the fixed frequency rule below; the Gaussian \

@@ -68,6 +68,13 @@ fn load(file: &str, overrides: &[String]) -> Scene {
 fn work(e: &Evaluation) -> String {
     let n = &e.numerics;
     let engine = if n.engine.starts_with("fft") { format!("{}; ", n.engine) } else { String::new() };
+    if n.spectral_evaluations > 0 {
+        // per-frequency product integration: each OTF value chose its own spectral points
+        return format!(
+            "{engine}{} spectral panels, {} OTF values, {} single-wavelength OTFs",
+            n.spectral_panels, n.otf_evaluations, n.spectral_evaluations
+        );
+    }
     format!(
         "{engine}{} spectral panels, {} spectral nodes, {} OTF values",
         n.spectral_panels, n.spectral_nodes, n.otf_evaluations
