@@ -195,7 +195,7 @@ const BATCH: usize = 4;
 /// ±sin(mθ)[(1 − 1/m) J_{m−1} + (1 + 1/m) J_{m+1}]`, `odd` the same over odd `m`, each over `a`.
 /// Going down in `m`, `J_{m+1}`, `J_m` and the new `J_{m−1}` are at hand, and `sin(mθ)` comes from
 /// the Chebyshev recurrence run downward from `sin(Mθ)`, `sin((M+1)θ)` (one sine and cosine per
-/// lane), reseeded every 16 orders (its rounding grows with its length). The lanes are rescaled
+/// lane), reseeded every 64 orders (its rounding grows with its length). The lanes are rescaled
 /// every four steps (the backward growth per step, `2n/|a|`, is below 3e5 for any `|a| ≥ 1`
 /// within the defocus budget, so four steps stay within the 1e58 of headroom above the 1e250
 /// threshold).
@@ -211,12 +211,24 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
     let two_cos = s.map(|s| 2.0 * s);
     let sin_theta = s.map(|s| (1.0 - s * s).max(0.0).sqrt());
     let two_over_x = x.map(|x| 2.0 / x);
-    // sin(mθ) and sin((m+1)θ) at the current order m
+    // sin(mθ) and sin((m+1)θ) at the current order m, with mθ to the last bit: θ = θ_hi + θ_lo
+    // with θ_hi on 24 bits, so that m θ_hi is exact (m < 2^29) and m θ_lo is small (|θ_lo| ≤
+    // 1e-7: below 1e-3 up to m = 1e4, its sine and cosine by Taylor's series to b⁵, b⁴)
+    let theta_hi = theta.map(|t| f64::from(t as f32));
     let seed = |m: usize| -> ([f64; L], [f64; L]) {
         let mut here = [0.0; L];
         let mut above = [0.0; L];
+        let mf = m as f64;
         for l in 0..L {
-            let (sin_m, cos_m) = crate::fft::cis::sin_cos(m as f64 * theta[l]);
+            let (sin_a, cos_a) = crate::fft::cis::sin_cos(mf * theta_hi[l]);
+            let b = mf * (theta[l] - theta_hi[l]);
+            let (sin_b, cos_b) = if b.abs() < 1e-3 {
+                let b2 = b * b;
+                (b * (1.0 - b2 / 6.0 * (1.0 - b2 / 20.0)), 1.0 - 0.5 * b2 * (1.0 - b2 / 12.0))
+            } else {
+                crate::fft::cis::sin_cos(b)
+            };
+            let (sin_m, cos_m) = (sin_a * cos_b + cos_a * sin_b, cos_a * cos_b - sin_a * sin_b);
             here[l] = sin_m;
             above[l] = sin_m * s[l] + cos_m * sin_theta[l];
         }
@@ -267,7 +279,7 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
             }
         }
         m -= 4;
-        if m % 16 == 3 {
+        if m % 64 == 3 {
             (sin_here, sin_above) = seed(m);
         }
     }
