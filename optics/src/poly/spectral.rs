@@ -1141,7 +1141,22 @@ impl MomentRule {
                 let points = point_moments(cos, weight, degree);
                 // F_i(n) = Σ_b Δc_i(b) T_n(x_b); E_i(n) = the same with ∫T_n (constants dropped)
                 let top = degree + terms + 1;
-                let f = chebyshev_sums::<PIECE_TERMS>(x, jumps, top);
+                // as many sums per point as the pieces have coefficients (a table × λ: three)
+                fn sums<const K: usize>(
+                    x: &[f64],
+                    jumps: &[[f64; PIECE_TERMS]],
+                    top: usize,
+                ) -> Vec<[f64; PIECE_TERMS]> {
+                    let w: Vec<[f64; K]> = jumps.iter().map(|j| std::array::from_fn(|i| j[i])).collect();
+                    let sums = chebyshev_sums::<K>(x, &w, top);
+                    sums.into_iter().map(|v| std::array::from_fn(|i| if i < K { v[i] } else { 0.0 })).collect()
+                }
+                let f = match terms {
+                    1 => sums::<1>(x, jumps, top),
+                    2 => sums::<2>(x, jumps, top),
+                    3 => sums::<3>(x, jumps, top),
+                    _ => sums::<PIECE_TERMS>(x, jumps, top),
+                };
                 let e = |i: usize, n: usize| -> f64 {
                     match n {
                         0 => f[1][i],
