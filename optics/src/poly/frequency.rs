@@ -366,7 +366,7 @@ impl Polychromatic<'_> {
 /// Clenshaw–Curtis weights on [−1, 1] at the `points` Chebyshev–Lobatto points
 /// `cos(πk/(points − 1))` (3, 5, 9, 17, 33 or 65): the product-integration weights of the
 /// constant weight, whose Chebyshev moments are `∫ T_j = 2/(1 − j²)` for even j, 0 for odd.
-fn clenshaw_curtis(points: usize) -> &'static [f64] {
+pub(crate) fn clenshaw_curtis(points: usize) -> &'static [f64] {
     static RULES: std::sync::OnceLock<Vec<Vec<f64>>> = std::sync::OnceLock::new();
     let rules = RULES.get_or_init(|| {
         [3usize, 5, 9, 17, 33, 65]

@@ -49,6 +49,7 @@ use crate::lens::{Field, LensModel};
 mod closed_form;
 mod exact;
 mod frequency;
+pub(crate) use frequency::clenshaw_curtis;
 mod grid;
 mod line;
 mod noise;
