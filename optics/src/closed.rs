@@ -146,6 +146,11 @@ impl GaussianDefocus {
         self.sigma
     }
 
+    /// `dW020/dλ`, the chromatic defocus (m per m).
+    pub fn defocus_slope(&self) -> f64 {
+        self.w1
+    }
+
     /// `∫ ρ(λ) τ1 dλ`: the detected-signal integral, exact.
     pub fn total_weight(&self) -> f64 {
         self.weight

@@ -128,8 +128,6 @@ impl Polychromatic<'_> {
         self.engine.set_value_tolerance(0.5 * absolute);
         // panel errors are budgeted per unit width: Σ tolerance × (b − a) = absolute × ν_max
         let tolerance = absolute;
-        // defocus phase rate in ν: d/dν [8π F# ν W020 (cos t − ν λ F#)] = 8π F# W020 (cos t − 2s)
-        let phase_rate = 8.0 * PI * self.f_number * self.w020_rms;
         let min_panels = match self.engine.frequency_rule() {
             FrequencyRule::Adaptive { min_panels } => min_panels,
             FrequencyRule::Fixed { .. } => 4.0,
@@ -150,7 +148,10 @@ impl Polychromatic<'_> {
             let n = if a >= self.max_cutoff() {
                 1
             } else {
-                ((b - a) * phase_rate / quad::MAX_PANEL_PHASE).ceil().max(floor).clamp(1.0, MAX_PANELS) as usize
+                (self.defocus_phase(a, b, self.w020_rms) / quad::MAX_PANEL_PHASE)
+                    .ceil()
+                    .max(floor)
+                    .clamp(1.0, MAX_PANELS) as usize
             };
             let h = (b - a) / n as f64;
             let mut left = (a, value(a));
@@ -169,6 +170,23 @@ impl Polychromatic<'_> {
             }
         }
         (total / self.max_frequency, work)
+    }
+
+    /// The defocus phase the OTF turns through over `[a, b]` (radians), with `w020` the defocus
+    /// to resolve: its rate in ν is `d/dν [8π F# ν W020 (cos t − ν λ F#)] = 8π F# W020 (cos t − 2s)`,
+    /// at most `8π F# |W020|`. Where the engine knows the oscillations to average out over the
+    /// spectrum beyond `ν_s` ([`OtfEngine::averaged_defocus`](super::OtfEngine::averaged_defocus)),
+    /// `w020` is replaced by the mean defocus plus the spread `|w1| σ = 1/(8π F# ν_s)` damped as
+    /// the averaging damps it, `exp(−(a/ν_s)²/2)` at the panel's start.
+    fn defocus_phase(&self, a: f64, b: f64, w020: f64) -> f64 {
+        let rate = 8.0 * PI * self.f_number;
+        match self.engine.averaged_defocus() {
+            Some((averaging, mean)) => {
+                let damping = (-0.5 * (a / averaging).powi(2)).exp();
+                (b - a) * (rate * mean.abs() + damping / averaging)
+            }
+            None => (b - a) * rate * w020,
+        }
     }
 
     /// `∫ P(ν) |OTF_poly(ν)| dν` over one panel where the OTF keeps its sign, by nested
@@ -202,8 +220,7 @@ impl Polychromatic<'_> {
         // points that resolve it (as in the spectral rule): a rule below them may see the
         // oscillation of a far-defocused order of small weight (a harmonic lens's outer orders)
         // as converged
-        let phase = 8.0 * PI * self.f_number * self.w020_resolved * (b - a);
-        let resolved = 0.3 * phase + 1.0;
+        let resolved = 0.3 * self.defocus_phase(a, b, self.w020_resolved) + 1.0;
         if resolved > 65.0 {
             return None;
         }

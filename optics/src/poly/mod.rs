@@ -256,6 +256,14 @@ trait OtfEngine: std::fmt::Debug {
         }
         sort_cuts(cuts)
     }
+    /// Where the engine knows that the defocus oscillations of the OTF in ν average out over
+    /// the spectrum: `(ν_s, W̄)`, beyond `ν_s` (cycles/m) only the oscillation at the mean defocus
+    /// `W̄` (m) survives, damped. The frequency rule then sizes its panels by `W̄` and the damped
+    /// spread (`Polychromatic::defocus_phase`); `None` (every other engine): by the nodes' RMS
+    /// and most resolved defocus.
+    fn averaged_defocus(&self) -> Option<(f64, f64)> {
+        None
+    }
     /// The F-number the nodes' `s = ν λ F#` use.
     fn f_number(&self) -> f64;
     /// Sets the absolute tolerance of one OTF value, where the engine computes each to a
