@@ -420,13 +420,20 @@ impl GaussianDefocus {
             }
         }
         let share = tolerance / pieces.len().max(1) as f64;
-        let value = pieces
-            .iter()
-            .map(|&(lo, hi, phase)| {
-                let resolved = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
-                nested(&integrand, hi.acos(), lo.acos(), share, resolved, &mut evaluations, &mut error)
-            })
-            .sum::<f64>();
+        let mut value = 0.0;
+        // the integrand at the end c = hi of the last piece, the start of the next one where they
+        // meet (each E(c) once); at c = 1 (t = 0) it is sin²0 × E = 0
+        let mut shared: Option<(f64, f64)> = None;
+        for &(lo, hi, phase) in &pieces {
+            let resolved = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
+            let known_b = shared.filter(|&(c, _)| c == lo).map(|(_, v)| v);
+            let known_a = (hi >= 1.0).then_some(0.0);
+            let (a, b) = (hi.acos(), lo.acos());
+            let (integral, at_a) =
+                nested(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
+            value += integral;
+            shared = Some((hi, at_a));
+        }
         (value, evaluations, ESTIMATE_SAFETY * error)
     }
 }
@@ -437,7 +444,9 @@ const LEVELS: [usize; 6] = [3, 5, 9, 17, 33, 65];
 /// `∫ f` over `[a, b]` to an absolute error of about `tolerance`, by nested Clenshaw–Curtis
 /// rules (3, 5, 9, … 65 points; each level's points are the next one's even points, so climbing
 /// wastes no evaluation), the piece bisected only where 65 points do not settle; the error
-/// estimates of the accepted pieces are added to `error`.
+/// estimates of the accepted pieces are added to `error`. `ends` are the integrand at `a` and
+/// `b` where the caller knows them (a neighbouring piece's end, or 0 at t = 0); returns the
+/// integral and the integrand at `a`. A bisection hands each half its two known ends.
 ///
 /// The error of a level is estimated from the differences ("moves") between consecutive levels:
 /// for an integrand analytic near the piece the Chebyshev coefficients, and with them the
@@ -449,20 +458,24 @@ const LEVELS: [usize; 6] = [3, 5, 9, 17, 33, 65];
 /// last two moves. So no level below 9 points is accepted, a 9-point level only on a move within
 /// the tolerance, and a pair that agrees by chance must also follow a fall. Over the 40 × 100
 /// map a piece costs 17 evaluations of `E` mostly, 33 sometimes, where the G10–K21 pair cost 21
-/// and a bisection 63: 64 instead of 74 evaluations per OTF value.
+/// and a bisection 63: 64 instead of 74 evaluations per OTF value (57 with the ends shared).
+#[allow(clippy::too_many_arguments)]
 fn nested(
     f: &dyn Fn(f64) -> f64,
     a: f64,
     b: f64,
+    ends: [Option<f64>; 2],
     tolerance: f64,
     resolved: f64,
     evaluations: &mut usize,
     error: &mut f64,
-) -> f64 {
+) -> (f64, f64) {
+    #[allow(clippy::too_many_arguments)]
     fn piece(
         f: &dyn Fn(f64) -> f64,
         a: f64,
         b: f64,
+        ends: [f64; 2],
         tol: f64,
         resolved: f64,
         depth: u32,
@@ -487,8 +500,8 @@ fn nested(
             let n = points - 1;
             let stride = 64 / n;
             if level == 0 {
-                values[..3].copy_from_slice(&[f(b), f(c), f(a)]);
-                *evaluations += 3;
+                values[..3].copy_from_slice(&[ends[1], f(c), ends[0]]);
+                *evaluations += 1;
             } else {
                 // spread the previous level's values to the even slots, fill the odd ones
                 for k in (0..=n / 2).rev() {
@@ -532,13 +545,22 @@ fn nested(
             *accepted += estimate;
             return integral;
         }
-        piece(f, a, c, 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
-            + piece(f, c, b, 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
+        // the halves' ends are known: a, the centre (the first level's middle point) and b
+        let middle = values[32];
+        piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
+            + piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
     }
+    let mut end = |known: Option<f64>, t: f64| {
+        known.unwrap_or_else(|| {
+            *evaluations += 1;
+            f(t)
+        })
+    };
+    let ends = [end(ends[0], a), end(ends[1], b)];
     if b <= a {
-        return 0.0;
+        return (0.0, ends[0]);
     }
-    piece(f, a, b, tolerance, resolved, 0, evaluations, error)
+    (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
 }
 
 /// `cos(πk/64)`, k = 0..64: the points of the nested Clenshaw–Curtis levels on `[−1, 1]`.
