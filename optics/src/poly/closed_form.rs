@@ -31,6 +31,8 @@ pub(super) struct Closed {
     pub otf_tolerance: Cell<f64>,
     /// E(c) evaluations so far
     pub evaluations: Cell<usize>,
+    /// the spectrally weighted mean of W020, m
+    pub mean_defocus: f64,
     /// The OTF values computed so far and their estimated errors, by the bits of ν: a mean redone
     /// to a tighter tolerance (its first pass found a smaller mean than it assumed) asks most of
     /// its frequencies again, and a value whose estimate is within the new tolerance is kept.
@@ -65,7 +67,10 @@ impl Closed {
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len() });
         nodes.total_weight = closed.total_weight();
+        let weight: f64 = nodes.nodes.iter().map(|n| n.weight).sum();
+        let mean_defocus = nodes.nodes.iter().map(|n| n.weight * n.w020).sum::<f64>() / weight;
         Closed {
+            mean_defocus,
             closed,
             nodes,
             f_number,
@@ -143,8 +148,20 @@ impl OtfEngine for Closed {
     /// cutoffs 1/(λ F#) of the Gaussian's centre and flanks lie below `max_frequency`, the OTF is
     /// non-zero on a small part of the range only, which one panel's nodes can miss entirely
     /// (F/1e4: cutoff at 1/770 of Nyquist): cut there, and where the OTF vanishes altogether.
+    /// Beyond `ν_s` ([`averaged_defocus`](OtfEngine::averaged_defocus)) the OTF decays about as
+    /// `C/ν` and its oscillation is damped as `exp(−(ν/ν_s)²/2)`: cut at `AVERAGED_DECAY ν_s`
+    /// (unless within half an octave of `max_frequency`), where that damping is 1e-14; the
+    /// frequency rule takes the rest in `ln ν`. Over the 40 × 100 map: 5.8 million evaluations of
+    /// E(c), against 7.4 with a cut per octave from `8 ν_s` on, 5.8 from `4 ν_s` (but the paper
+    /// point split in two panels, 1500 instead of 1013) and 6.5 from `2 ν_s`.
     fn frequency_cuts(&self, max_frequency: f64) -> Vec<f64> {
         let mut cuts = vec![0.0, max_frequency];
+        if let Some((averaging, _)) = self.averaged_defocus() {
+            let decayed = super::frequency::AVERAGED_DECAY * averaging;
+            if decayed < max_frequency / 1.5 {
+                cuts.push(decayed);
+            }
+        }
         let (mu, sigma) = (self.closed.center(), self.closed.sigma());
         for k in 0..=GAUSSIAN_HALF_WIDTH_SIGMAS as usize {
             let lambda = mu - k as f64 * sigma;
@@ -157,6 +174,16 @@ impl OtfEngine for Closed {
             cuts.push(self.max_cutoff());
         }
         super::sort_cuts(cuts)
+    }
+
+    /// With `W020 = w0 + w1 λ` and a Gaussian spectrum of σ, the monochromatic OTFs' oscillations
+    /// `e^{i 8π F# W020 ν (c − s)}` average over the spectrum to the one at the mean defocus,
+    /// damped by `exp(−(ν/ν_s)² (c − s)²/2)` with `ν_s = 1/(8π F# |w1| σ)` (the characteristic
+    /// function of the Gaussian): beyond `ν_s` the OTF is a smooth decay (about `C/ν`) plus that
+    /// damped oscillation, not the oscillation of its most defocused wavelengths.
+    fn averaged_defocus(&self) -> Option<(f64, f64)> {
+        let spread = (self.closed.defocus_slope() * self.closed.sigma()).abs();
+        (spread > 0.0).then(|| (1.0 / (8.0 * std::f64::consts::PI * self.f_number * spread), self.mean_defocus))
     }
 
     fn set_value_tolerance(&self, absolute: f64) {

@@ -49,6 +49,7 @@ use crate::lens::{Field, LensModel};
 mod closed_form;
 mod exact;
 mod frequency;
+pub(crate) use frequency::clenshaw_curtis;
 mod grid;
 mod line;
 mod noise;
@@ -258,6 +259,15 @@ trait OtfEngine: std::fmt::Debug {
             }
         }
         sort_cuts(cuts)
+    }
+    /// Where the engine knows that the defocus oscillations of the OTF in ν average out over
+    /// the spectrum: `(ν_s, W̄)`, beyond `ν_s` (cycles/m) only the oscillation at the mean defocus
+    /// `W̄` (m) survives, damped. The frequency rule then sizes its panels by `W̄` and the spread,
+    /// damped (`Polychromatic::defocus_phase`), and integrates past `frequency::AVERAGED_DECAY ν_s`
+    /// in `ln ν`; `None` (every other engine): panels by the nodes' RMS and most resolved
+    /// defocus, in ν.
+    fn averaged_defocus(&self) -> Option<(f64, f64)> {
+        None
     }
     /// The F-number the nodes' `s = ν λ F#` use.
     fn f_number(&self) -> f64;
