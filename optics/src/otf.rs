@@ -211,29 +211,8 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
     let two_cos = s.map(|s| 2.0 * s);
     let sin_theta = s.map(|s| (1.0 - s * s).max(0.0).sqrt());
     let two_over_x = x.map(|x| 2.0 / x);
-    // sin(mθ) and sin((m+1)θ) at the current order m, with mθ to the last bit: θ = θ_hi + θ_lo
-    // with θ_hi on 24 bits, so that m θ_hi is exact (m < 2^29) and m θ_lo is small (|θ_lo| ≤
-    // 1e-7: below 1e-3 up to m = 1e4, its sine and cosine by Taylor's series to b⁵, b⁴)
     let theta_hi = theta.map(|t| f64::from(t as f32));
-    let seed = |m: usize| -> ([f64; L], [f64; L]) {
-        let mut here = [0.0; L];
-        let mut above = [0.0; L];
-        let mf = m as f64;
-        for l in 0..L {
-            let (sin_a, cos_a) = crate::fft::cis::sin_cos(mf * theta_hi[l]);
-            let b = mf * (theta[l] - theta_hi[l]);
-            let (sin_b, cos_b) = if b.abs() < 1e-3 {
-                let b2 = b * b;
-                (b * (1.0 - b2 / 6.0 * (1.0 - b2 / 20.0)), 1.0 - 0.5 * b2 * (1.0 - b2 / 12.0))
-            } else {
-                crate::fft::cis::sin_cos(b)
-            };
-            let (sin_m, cos_m) = (sin_a * cos_b + cos_a * sin_b, cos_a * cos_b - sin_a * sin_b);
-            here[l] = sin_m;
-            above[l] = sin_m * s[l] + cos_m * sin_theta[l];
-        }
-        (here, above)
-    };
+    let seed = |m: usize| sines_at(m, s, theta, theta_hi, sin_theta);
     let (mut sin_here, mut sin_above) = seed(start);
     let mut j_above = [0.0_f64; L];
     let mut j = [1e-300_f64; L];
@@ -293,6 +272,35 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
         out[l] = (4.0 / PI) * (cos_as * even + sin_as * odd[l]) / (x[l] * norm);
     }
     out
+}
+
+/// `sin(mθ)` and `sin((m+1)θ)` in each lane, with `mθ` to the last bit: `θ = θ_hi + θ_lo` with
+/// `θ_hi` on 24 bits, so that `m θ_hi` is exact (`m < 2^29`) and `b = m θ_lo` is small
+/// (`|θ_lo| ≤ 1e-7`: `|b| ≤ 0.05` up to `m = 5e5`, past any start within the defocus budget), its
+/// sine and cosine by Taylor's series to `b⁷`, `b⁸` (below 1e-17 there); no branch, so the
+/// lanes vectorize.
+#[inline(always)]
+fn sines_at<const L: usize>(
+    m: usize,
+    s: [f64; L],
+    theta: [f64; L],
+    theta_hi: [f64; L],
+    sin_theta: [f64; L],
+) -> ([f64; L], [f64; L]) {
+    let mut here = [0.0; L];
+    let mut above = [0.0; L];
+    let mf = m as f64;
+    for l in 0..L {
+        let (sin_a, cos_a) = crate::fft::cis::sin_cos(mf * theta_hi[l]);
+        let b = mf * (theta[l] - theta_hi[l]);
+        let b2 = b * b;
+        let sin_b = b * (1.0 - b2 / 6.0 * (1.0 - b2 / 20.0 * (1.0 - b2 / 42.0)));
+        let cos_b = 1.0 - b2 / 2.0 * (1.0 - b2 / 12.0 * (1.0 - b2 / 30.0 * (1.0 - b2 / 56.0)));
+        let (sin_m, cos_m) = (sin_a * cos_b + cos_a * sin_b, cos_a * cos_b - sin_a * sin_b);
+        here[l] = sin_m;
+        above[l] = sin_m * s[l] + cos_m * sin_theta[l];
+    }
+    (here, above)
 }
 
 /// Where Miller's backward recurrence for `Jn(x)` starts: [`SERIES_MARGIN`] orders above the
