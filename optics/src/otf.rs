@@ -223,7 +223,8 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L]) -> [f64; L] {
         ($m:expr, $sum:ident, $sign:expr, $norm:expr) => {{
             let m = $m;
             let (r, mf) = (recip(m), m as f64);
-            let (below_weight, above_weight) = ($sign * (1.0 - r), $sign * (1.0 + r));
+            let sign: f64 = $sign;
+            let (below_weight, above_weight) = (sign * (1.0 - r), sign * (1.0 + r));
             for l in 0..L {
                 let below = mf * two_over_x[l] * j[l] - j_above[l];
                 $sum[l] += sin_here[l] * (below_weight * below + above_weight * j_above[l]);

@@ -147,7 +147,7 @@ impl Levelled {
         let mut values: Vec<f64> = Vec::new();
         let mut previous: Option<f64> = None;
         let mut moves: Vec<f64> = Vec::new();
-        for level in 0..LEVELS.len() {
+        for (level, &points) in LEVELS.iter().enumerate() {
             self.prepare(scene, level);
             let fresh = self.fresh_values(level, nu, evaluations);
             values = if level == 0 {
@@ -169,7 +169,7 @@ impl Levelled {
             }
             if let Some(before) = previous {
                 moves.push((integral - before).abs() / mass);
-                let error = if LEVELS[level] as f64 >= resolved {
+                let error = if points as f64 >= resolved {
                     nested_error(&moves)
                 } else {
                     match moves.as_slice() {
