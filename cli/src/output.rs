@@ -357,9 +357,9 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
         format!(
             "exact: the spectrum is a Gaussian × polynomial and the lens's defocus is affine in λ, so the \
              integral over λ is a complex Gaussian integral (Faddeeva erfcx, Weideman's series); {} evaluations \
-             of it inside an adaptive Gauss–Kronrod 10/21 integral over the pupil-overlap angle (panels where \
-             the spectrum is cut, split at its centre, and over the envelope peak; where that envelope is below \
-             the tolerance the angle is skipped)",
+             of it inside nested Clenshaw–Curtis rules over the pupil-overlap angle (pieces where the spectrum \
+             is cut, split at its centre, and over the envelope peak, each split where the integral's phase \
+             turns fast; where that envelope is below the tolerance the angle is skipped)",
             n.closed_form_evaluations
         )
     } else {
@@ -399,6 +399,9 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
         r.nyquist_cyc_per_mm,
         if n.engine.starts_with("fft") {
             "a fixed composite Gauss–Legendre rule at a quarter of the finest grid cell"
+        } else if n.engine.starts_with("closed-form") {
+            "nested Clenshaw–Curtis on panels from the band's averaging of defocus (one in ln ν past 8 ν_s), \
+             adaptive Gauss–Kronrod 7/15 where it does not settle"
         } else if n.spectral_interpolated {
             "nested Clenshaw–Curtis, adaptive Gauss–Kronrod 7/15 where it does not settle"
         } else {
@@ -417,8 +420,8 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
     } else if n.spectral_interpolated {
         "a quarter to the spectral rule (nested estimate at Nyquist), the rest to the frequency rule"
     } else if n.engine.starts_with("closed-form") {
-        "the frequency rule to tolerance × mean, each closed-form OTF value to half of that (QUADPACK's error \
-         estimate in both); the spectral integral exact"
+        "the frequency rule to tolerance × mean, each closed-form OTF value to half of that (nested estimates \
+         in both); the spectral integral exact"
     } else {
         "the frequency rule to tolerance × mean (QUADPACK's error estimate); the spectral integrals exact to \
          rounding"

@@ -11,7 +11,8 @@ fn explain(family: Family) -> String {
     match family {
         Family::ClosedForm => "`metric::evaluate` with the closed-form engine (`optics::GaussianDefocus`): the \
              Gaussian × polynomial spectrum integrated over λ exactly (complex Gaussian integrals, Faddeeva's \
-             erfcx), adaptive Gauss–Kronrod in the pupil angle t and in ν to the tolerance."
+             erfcx), nested Clenshaw–Curtis pieces in the pupil angle t, and in ν panels from the band's \
+             spectral averaging of defocus (one in ln ν past 8 ν_s), to the tolerance."
             .into(),
         Family::Quadrature => "`metric::evaluate` with the closed form off (engine `exact-1d`): product \
              integration per frequency over ±7σ (panels of ≤ 48 rad of defocus phase at Nyquist; each OTF value \
