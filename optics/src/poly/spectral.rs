@@ -741,7 +741,7 @@ impl Interpolant {
     /// The estimate compares each nested level with the one below. Once the level has about
     /// 0.6 κ points (κ = phase/2: `e^{iκx}` is then resolved and the interpolation error falls
     /// geometrically, `C ρ^{−n}`), the accepted level's error is estimated from the moves by
-    /// [`nested_error`](super::nested_error) (measured on the chromatic lens over
+    /// [`nested_error_accelerated`](super::nested_error_accelerated) (measured on the chromatic lens over
     /// 600–1000 nm: moves of 4.9e-3 and 8.9e-6 at 17 and 33 points, 4.5e-14 left); below that,
     /// where a coarse pair can agree by chance, two consecutive moves must both be within
     /// `allowed`.
@@ -778,7 +778,7 @@ impl Interpolant {
                 // once resolved, the nested estimate; before, two consecutive moves within the
                 // budget (a coarse pair can agree by chance)
                 let error = if points as f64 >= resolved {
-                    super::nested_error(moves)
+                    super::nested_error_accelerated(moves)
                 } else {
                     match moves.as_slice() {
                         [.., a, b] => a.max(*b),
