@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 
-use super::{Engine, FrequencyRule, MAX_DEPTH, MAX_PANELS, NoiseShape, Polychromatic, Work, nested_error};
+use super::{Engine, FrequencyRule, MAX_DEPTH, MAX_PANELS, NoiseShape, Polychromatic, Work, level_error, nested_error};
 
 /// Where the oscillations of the OTF in ν have averaged out over the spectrum, in units of the
 /// averaging frequency `ν_s` ([`OtfEngine::averaged_defocus`](super::OtfEngine::averaged_defocus)):
@@ -299,14 +299,7 @@ impl Polychromatic<'_> {
                 let moved = (integral - before).abs();
                 // the next move predicted from the ratio of the last two (geometric convergence)
                 moves.push(moved);
-                let error = if points as f64 >= resolved {
-                    nested_error(&moves)
-                } else {
-                    match moves.as_slice() {
-                        [.., x, y] => x.max(*y),
-                        _ => f64::INFINITY,
-                    }
-                };
+                let error = level_error(&moves, points as f64 >= resolved, nested_error);
                 if error <= budget || moved <= noise || moved <= 1e3 * f64::EPSILON * largest * (b - a) {
                     work.frequency_panels += 1;
                     return Some(integral);

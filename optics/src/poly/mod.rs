@@ -328,6 +328,21 @@ fn nested_error(moves: &[f64]) -> f64 {
     }
 }
 
+/// The error of the last of a sequence of nested rules, once the last has the points that
+/// resolve its integrand (`resolved`): the nested estimate `nested` ([`nested_error`] or
+/// [`nested_error_accelerated`]); before, where a coarse pair can agree by chance, the larger of
+/// the last two moves (two consecutive moves must both be within the budget). Infinite with
+/// fewer moves than that needs.
+fn level_error(moves: &[f64], resolved: bool, nested: fn(&[f64]) -> f64) -> f64 {
+    if resolved {
+        return nested(moves);
+    }
+    match moves {
+        [.., a, b] => a.max(*b),
+        _ => f64::INFINITY,
+    }
+}
+
 /// [`nested_error`] crediting the acceleration the moves show: `d r min(1, r/r')` with `r'` the
 /// ratio before (`d r²`-like once the convergence is geometric in the points). Only for the
 /// spectral rule at the frequency limit, whose accepted level is then checked once more against

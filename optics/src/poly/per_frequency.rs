@@ -27,9 +27,8 @@ use num_complex::Complex64;
 
 use super::spectral::{
     Density, Interpolant, LEBESGUE, LEVELS, Node, Nodes, Panel, Scene, Start, lobatto_lambdas, lobatto_weights,
-    needs_grid,
 };
-use super::{Engine, FrequencyRule, OtfEngine, nested_error};
+use super::{Engine, FrequencyRule, OtfEngine, level_error, nested_error};
 
 /// The level whose points carry the averages over the spectrum (`detected_integral`,
 /// `spectral_average`: the photon count, the mean wavelength, the RMS defocus): 17 points per
@@ -155,9 +154,7 @@ impl Levelled {
             } else {
                 // even points from the level below, odd ones new
                 let mut fresh = fresh.into_iter();
-                (0..LEVELS[level])
-                    .map(|k| if k % 2 == 0 { values[k / 2] } else { fresh.next().unwrap_or(0.0) })
-                    .collect()
+                (0..points).map(|k| if k % 2 == 0 { values[k / 2] } else { fresh.next().unwrap_or(0.0) }).collect()
             };
             let integral: f64 = values.iter().zip(&self.weights[level]).map(|(v, w)| v * w).sum();
             if level < first {
@@ -169,14 +166,7 @@ impl Levelled {
             }
             if let Some(before) = previous {
                 moves.push((integral - before).abs() / mass);
-                let error = if points as f64 >= resolved {
-                    nested_error(&moves)
-                } else {
-                    match moves.as_slice() {
-                        [.., a, b] => a.max(*b),
-                        _ => f64::INFINITY,
-                    }
-                };
+                let error = level_error(&moves, points as f64 >= resolved, nested_error);
                 if error <= allowed {
                     return Ok(integral);
                 }
@@ -220,22 +210,16 @@ impl<'a> PerFrequency<'a> {
             for (&lambda, &w) in lambdas.iter().zip(&p.weights[AVERAGE_LEVEL]) {
                 nodes.samples.push((lambda, w));
                 if w != 0.0 {
-                    for order in scene.lens.orders(lambda, scene.field) {
-                        let node = Node::of(&order, lambda, w * order.efficiency, scene.irises);
-                        if needs_grid(&order, scene.irises.is_some())
-                            || node.table.is_some()
-                            || node.shift != [0.0, 0.0]
-                        {
-                            return None;
-                        }
-                        nodes.nodes.push(node);
-                    }
+                    nodes.emit(&scene, lambda, w);
                 }
             }
             nodes.panels.push(Panel { lo: p.panel.a, hi: p.panel.b, start, end: nodes.nodes.len() });
         }
-        nodes.total_weight =
-            nodes.panels.iter().map(|p| nodes.nodes[p.start..p.end].iter().map(|n| n.weight).sum::<f64>()).sum();
+        // only centred circles with defocus: no FFT grid, no table, no image shift
+        if nodes.needs_grid || nodes.shifted() || nodes.nodes.iter().any(|n| n.table.is_some()) {
+            return None;
+        }
+        nodes.sum_weights();
         Some(PerFrequency {
             scene,
             nodes,

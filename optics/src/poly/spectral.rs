@@ -164,7 +164,7 @@ pub(super) struct Nodes {
 
 impl Nodes {
     /// Appends the nodes of every order of the scene's lens at `lambda` with rule weight `q`.
-    fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64) {
+    pub fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64) {
         for order in scene.lens.orders(lambda, scene.field) {
             self.needs_grid |= needs_grid(&order, scene.irises.is_some());
             self.nodes.push(Node::of(&order, lambda, q * order.efficiency, scene.irises));
@@ -187,7 +187,7 @@ impl Nodes {
         self.line.or(self.panels.first().map(|p| p.lo)).unwrap_or(0.0)
     }
 
-    fn sum_weights(&mut self) {
+    pub fn sum_weights(&mut self) {
         self.total_weight =
             self.panels.iter().map(|p| self.nodes[p.start..p.end].iter().map(|n| n.weight).sum::<f64>()).sum();
     }
@@ -777,14 +777,7 @@ impl Interpolant {
                 let moves = &self.moves;
                 // once resolved, the nested estimate; before, two consecutive moves within the
                 // budget (a coarse pair can agree by chance)
-                let error = if points as f64 >= resolved {
-                    super::nested_error_accelerated(moves)
-                } else {
-                    match moves.as_slice() {
-                        [.., a, b] => a.max(*b),
-                        _ => f64::INFINITY,
-                    }
-                };
+                let error = super::level_error(moves, points as f64 >= resolved, super::nested_error_accelerated);
                 if error <= allowed {
                     self.error = error;
                     return true;
