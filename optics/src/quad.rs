@@ -145,6 +145,57 @@ pub fn for_each_node<F: FnMut(f64, f64)>(a: f64, b: f64, panels: usize, mut visi
     }
 }
 
+/// Coefficients at the end of a nested Clenshaw–Curtis level that [`chebyshev_tail`] reads as
+/// its tail, and as many before them for its rate of decay.
+pub const TAIL: usize = 4;
+
+/// The size of the Chebyshev coefficients a level of `values` cannot hold, from those it holds
+/// (Trefethen, *Approximation Theory and Approximation Practice*, ch. 8 and 19).
+///
+/// `values` are a function at the `n = 2^k + 1` Chebyshev–Lobatto points `x_k = cos(πk/(n − 1))`
+/// (`k = 0` at `x = 1`; `n ≤ 129`). Their interpolant's coefficients `c_j` are the cosine
+/// transform of the values; an integral of the interpolant against a weight with Chebyshev
+/// moments `μ_j` is off by `Σ_{j ≥ n} c_j (μ_j − μ_{2(n−1)−j})` (each coefficient the points
+/// cannot hold aliased onto a degree below `n − 1`). The last [`TAIL`] coefficients give the
+/// size of the tail and, against the [`TAIL`] before them, its rate of decay `r` per degree;
+/// the coefficients left out are then at most `size · r^i`, and with their aliases sum to at
+/// most `2 · size · r/(1 − r)`, which is returned: times a bound on the moments near degree
+/// `n`, a bound on the integral's error. Infinite below `2 TAIL + 1` points or where the
+/// coefficients do not fall (`r ≥ 0.8`), zero where the last ones are. A geometric tail is an
+/// assumption (the nested estimate makes it too): the level must resolve the integrand's
+/// oscillation for it to be trusted.
+pub fn chebyshev_tail(values: &[f64]) -> f64 {
+    // cos(πi/128), i = 0 … 128; cos(πi/m) for m | 128 at i·128/m, reflected past π
+    static COSINES: std::sync::OnceLock<[f64; 129]> = std::sync::OnceLock::new();
+    let cosines = COSINES.get_or_init(|| std::array::from_fn(|i| (std::f64::consts::PI * i as f64 / 128.0).cos()));
+    let n = values.len();
+    if !(2 * TAIL + 1..=129).contains(&n) || !(n - 1).is_power_of_two() {
+        return f64::INFINITY;
+    }
+    let m = n - 1;
+    let stride = 128 / m;
+    let coefficient = |j: usize| {
+        // Σ'' v_k cos(πjk/m), the index jk mod 2m stepped by j
+        let mut sum = 0.5 * (values[0] + if j.is_multiple_of(2) { values[m] } else { -values[m] });
+        let mut i = 0;
+        for &v in &values[1..m] {
+            i += j;
+            if i >= 2 * m {
+                i -= 2 * m;
+            }
+            sum += v * cosines[if i <= m { i } else { 2 * m - i } * stride];
+        }
+        (if j == m { 0.5 } else { 1.0 }) * 2.0 / m as f64 * sum.abs()
+    };
+    let size = (n - TAIL..n).map(coefficient).fold(0.0, f64::max);
+    if size == 0.0 {
+        return 0.0;
+    }
+    let before = (n - 2 * TAIL..n - TAIL).map(coefficient).fold(0.0, f64::max);
+    let rate = (size / before).powf(1.0 / TAIL as f64);
+    if rate < 0.8 { 2.0 * size * rate / (1.0 - rate) } else { f64::INFINITY }
+}
+
 /// A zero of `f` in `[x0, x1]`, where `f0 = f(x0)` and `f1 = f(x1)` have opposite signs: the
 /// Illinois variant of regula falsi with a bisection safeguard, to `tol` in `x`. A non-finite
 /// value ends the search at its abscissa (a lens whose order count changes inside a panel).
