@@ -707,6 +707,49 @@ fn lookup<'a>(table: &'a toml::Table, path: &serde_path_to_error::Path) -> Optio
     Some(value)
 }
 
+/// `text` as TOML reads it where it is a plain decimal number: `[+-]` digits (no leading zero
+/// but `0` itself), then a fraction `.digits` and/or an exponent `e[+-]digits`; an integer
+/// without either (within i64), a finite float with. `None` for anything else (underscores, `inf`,
+/// hex, dates, strings …), which the TOML parser reads. A sweep's `--over` values are all
+/// plain numbers ([`crate::sweep::assignment`]): each of its points skips a TOML parse per key.
+fn plain_number(text: &str) -> Option<toml::Value> {
+    let bytes = text.as_bytes();
+    let digits = |from: usize| bytes[from..].iter().take_while(|b| b.is_ascii_digit()).count();
+    let mut i = usize::from(matches!(bytes.first(), Some(b'+' | b'-')));
+    let whole = digits(i);
+    if whole == 0 || (whole > 1 && bytes[i] == b'0') {
+        return None;
+    }
+    i += whole;
+    let mut float = false;
+    if bytes.get(i) == Some(&b'.') {
+        let fraction = digits(i + 1);
+        if fraction == 0 {
+            return None;
+        }
+        i += 1 + fraction;
+        float = true;
+    }
+    if matches!(bytes.get(i), Some(b'e' | b'E')) {
+        i += 1 + usize::from(matches!(bytes.get(i + 1), Some(b'+' | b'-')));
+        let exponent = digits(i);
+        if exponent == 0 {
+            return None;
+        }
+        i += exponent;
+        float = true;
+    }
+    if i != bytes.len() {
+        return None;
+    }
+    if float {
+        // beyond f64 (1e400) TOML refuses the literal; so does this
+        text.parse().ok().filter(|v: &f64| v.is_finite()).map(toml::Value::Float)
+    } else {
+        text.parse().ok().map(toml::Value::Integer)
+    }
+}
+
 /// Applies one `--set key=value` to the TOML table. The value is read as TOML (number, boolean,
 /// quoted string), or as a bare string if it is not valid TOML (`--set spectrum.shape=tophat`).
 fn apply_override(table: &mut toml::Table, arg: &str, check_only: bool) -> Result<(String, String), Error> {
@@ -725,10 +768,12 @@ fn apply_override(table: &mut toml::Table, arg: &str, check_only: bool) -> Resul
     if value.contains(['\n', '\r']) {
         return Err(refuse("the value spans several lines; expected a value on one line".to_owned()));
     }
-    let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
-        .ok()
-        .and_then(|mut t| t.remove("v"))
-        .unwrap_or_else(|| toml::Value::String(value.trim().to_owned()));
+    let parsed = plain_number(value.trim()).unwrap_or_else(|| {
+        toml::from_str::<toml::Table>(&format!("v = {value}"))
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(value.trim().to_owned()))
+    });
     // `2.8 # x` or `2.8#x` is valid TOML with a comment: refuse rather than drop the rest
     if value.contains('#') && !parsed.to_string().contains('#') {
         return Err(refuse(format!(
@@ -1185,6 +1230,41 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plain-number fast path reads what TOML reads, value and type, and leaves everything
+    /// else to the TOML parser (which reads it as before, or not at all).
+    #[test]
+    fn plain_numbers_read_as_toml_reads_them() {
+        let toml =
+            |text: &str| toml::from_str::<toml::Table>(&format!("v = {text}")).ok().and_then(|mut t| t.remove("v"));
+        for text in
+            ["0", "7", "-3", "+12", "1.4", "-0.25", "1e-7", "2.5E+3", "6.02e23", "5e-324", "0.1", "9223372036854775807"]
+        {
+            assert_eq!(plain_number(text), toml(text), "{text}");
+            assert!(plain_number(text).is_some(), "{text}");
+        }
+        // not plain: TOML's own reading (or refusal) stands
+        for text in [
+            "1e400",
+            "01",
+            "1.",
+            ".5",
+            "1e",
+            "1_000",
+            "inf",
+            "nan",
+            "0x1f",
+            "1.2.3",
+            "--1",
+            "1e+",
+            "",
+            "-",
+            "9223372036854775808",
+            "2.8 # x",
+        ] {
+            assert_eq!(plain_number(text), None, "{text}");
+        }
+    }
 
     #[test]
     fn number_prefixes_and_units() {
