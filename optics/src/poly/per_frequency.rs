@@ -308,20 +308,20 @@ impl OtfEngine for PerFrequency<'_> {
         let budget = self.otf_tolerance.get();
         let mut panels = self.panels.borrow_mut();
         'restart: loop {
-            // the budget shared in proportion to √(weight share), as at the limit
-            // (`spectral::interpolated`): per unit of a panel's weight, `budget √share / Σ√share / share`
-            let roots: f64 = panels
-                .iter()
-                .map(|p| (p.panel.mass.abs() / self.total_mass).sqrt())
-                .sum::<f64>()
-                .max(f64::MIN_POSITIVE);
+            // the budget shared equally between the panels that carry weight: per unit of a
+            // panel's weight, `budget / (panels × share)`. A panel's points grow with the log of
+            // its accuracy (the Chebyshev tail falls geometrically and faster), so equal shares
+            // of the error minimize their sum (Lagrange); a light panel far from focus takes a
+            // looser rule, not the heavy one's (the spectrometer scene at 1e-6: 6 % fewer
+            // single-wavelength OTFs than shares in proportion to √weight, the same error)
+            let weighted = panels.iter().filter(|p| p.panel.mass != 0.0).count().max(1) as f64;
             let mut sum = 0.0;
             for k in 0..panels.len() {
                 let share = panels[k].panel.mass.abs() / self.total_mass;
                 if share == 0.0 {
                     continue;
                 }
-                let allowed = budget * self.nodes.total_weight.abs() / self.total_mass * share.sqrt() / roots / share;
+                let allowed = budget * self.nodes.total_weight.abs() / self.total_mass / (weighted * share);
                 match panels[k].integral(&self.scene, nu, allowed, &self.evaluations) {
                     Ok(v) => sum += v,
                     // the narrowest panel: its finest level's value, whatever its error
