@@ -154,10 +154,13 @@ pub fn build_comparison(source: &Source, overrides: &[String]) -> Result<Compari
                 message: "unknown key: a design has `name` and `lens` (the other tables are shared)".to_owned(),
             });
         }
-        let mut scene_table = table.clone();
-        scene_table.insert("lens".to_owned(), toml::Value::Table(lens));
+        let with_lens = |lens: toml::Table| {
+            let mut scene_table = table.clone();
+            scene_table.insert("lens".to_owned(), toml::Value::Table(lens));
+            scene_table
+        };
         let mut o = origins.for_lens(format!("{at}.lens"));
-        let raw = raw_scene(scene_table, &mut o)?;
+        let raw = raw_scene(with_lens(lens.clone()), &mut o, &|| Some(with_lens(lens.clone())))?;
         let built_parts = build_parts(&raw, &o);
         for w in o.take_warnings() {
             if !warnings.contains(&w) {

@@ -645,16 +645,24 @@ fn prepare(source: &Source, overrides: &[String]) -> Result<(RawScene, Origins),
             "the file compares designs ([[designs]]): read it with asnr compare (scene::load_comparison), or give one lens as [lens]".to_owned(),
         ));
     }
-    let raw = raw_scene(table, &mut origins)?;
+    let raw = raw_scene(table, &mut origins, &|| merged(source, overrides).ok().map(|(table, _)| table))?;
     Ok((raw, origins))
 }
 
-/// A scene's merged table (its lens's preset filled in) as the raw scene.
-pub(crate) fn raw_scene(mut table: toml::Table, origins: &mut Origins) -> Result<RawScene, Error> {
+/// A scene's merged table (its lens's preset filled in) as the raw scene. The table is moved
+/// into the deserializer (a sweep builds one per point: a copy kept for the error message cost
+/// 3 % of a map); where it fails, `rebuild` makes it again for the message (without the preset,
+/// whose values are never the strings the message quotes).
+pub(crate) fn raw_scene(
+    mut table: toml::Table,
+    origins: &mut Origins,
+    rebuild: &dyn Fn() -> Option<toml::Table>,
+) -> Result<RawScene, Error> {
     if let Some(toml::Value::Table(lens)) = table.get_mut("lens") {
         origins.preset = crate::lens::apply_preset(lens, origins)?;
     }
-    serde_path_to_error::deserialize(toml::Value::Table(table.clone())).map_err(|e| schema_error(&e, &table, origins))
+    serde_path_to_error::deserialize(toml::Value::Table(table))
+        .map_err(|e| schema_error(&e, &rebuild().unwrap_or_default(), origins))
 }
 
 /// A serde error (unknown key, wrong type, missing key) as a message naming origin and key; a
