@@ -39,6 +39,41 @@ pub fn blur_radius(lens: &dyn LensModel, wavelength_m: f64) -> f64 {
 /// Returns `None` when the blur stays within the threshold over the searched range
 /// (`0 < λ ≤ 10 λ_ref`), i.e. no limit applies.
 pub fn max_wavelength_shift(lens: &dyn LensModel, reference_m: f64, threshold_m: f64) -> Option<f64> {
+    if let Some(affine) = lens.affine_defocus(Field::ON_AXIS) {
+        return affine_wavelength_shift(&affine, lens.numerical_aperture(), reference_m, threshold_m);
+    }
+    bisected_wavelength_shift(lens, reference_m, threshold_m)
+}
+
+/// [`max_wavelength_shift`] of a lens whose one order has the defocus `W020 = w0 + w1 λ`
+/// ([`LensModel::affine_defocus`]): the blur `2 |w0 + w1 λ|/NA` is within the threshold
+/// between the two roots `λ± = (±x NA/2 − w0)/w1`, so each side's shift is the distance to
+/// the root on that side, in the bisection's range (`0 < λ ≤ 10 λ_ref`) and 0 where the
+/// reference itself is blurred beyond it. The bisection's answer in closed form (tested
+/// against it): it cost a map 4 % of its time, fifty blur radii a side.
+fn affine_wavelength_shift(affine: &crate::AffineDefocus, na: f64, reference_m: f64, threshold_m: f64) -> Option<f64> {
+    let (w0, w1) = (affine.w020_intercept_m, affine.w020_slope);
+    let limit = 0.5 * threshold_m * na;
+    if 2.0 * (w0 + w1 * reference_m).abs() / na > threshold_m {
+        return Some(0.0);
+    }
+    if w1 == 0.0 {
+        return None;
+    }
+    let (a, b) = ((limit - w0) / w1, (-limit - w0) / w1);
+    let below = reference_m - a.min(b);
+    let above = a.max(b) - reference_m;
+    // the bisection's ranges: below down to λ = 1e-9 λ_ref, above up to 10 λ_ref
+    let below = (below < reference_m * (1.0 - 1e-9)).then_some(below.max(0.0));
+    let above = (above < 9.0 * reference_m).then_some(above.max(0.0));
+    match (below, above) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// [`max_wavelength_shift`] by bisection on [`blur_radius`], for any lens.
+fn bisected_wavelength_shift(lens: &dyn LensModel, reference_m: f64, threshold_m: f64) -> Option<f64> {
     let exceeds = |shift: f64, sign: f64| blur_radius(lens, reference_m + sign * shift) > threshold_m;
     let side = |sign: f64, max_shift: f64| -> Option<f64> {
         if !exceeds(max_shift, sign) {
@@ -228,6 +263,57 @@ mod tests {
         // the table's 0.5 µm is beyond 0.4 µm everywhere; the zones outside 780–820 nm
         let exact = 0.1 * 400e-9 + 0.4 * 360e-9;
         assert!((got - exact).abs() < 1e-14 * exact, "{got:e} vs {exact:e}");
+    }
+
+    /// One order with `W020 = w0 + w1 λ`, promised as affine.
+    #[derive(Debug)]
+    struct Affine(f64, f64);
+    impl LensModel for Affine {
+        fn f_number(&self) -> f64 {
+            2.5
+        }
+        fn focal_length(&self) -> f64 {
+            3.36e-3
+        }
+        fn orders(&self, lambda: f64, _: Field) -> Vec<Order> {
+            vec![Order::new(0.15, Pupil::Full, Wavefront::defocus(self.0 + self.1 * lambda))]
+        }
+        fn affine_defocus(&self, _: Field) -> Option<crate::AffineDefocus> {
+            Some(crate::AffineDefocus {
+                efficiency: 0.15,
+                transmission: 0.5,
+                w020_intercept_m: self.0,
+                w020_slope: self.1,
+            })
+        }
+    }
+
+    /// The closed form of an affine defocus gives the bisection's shifts to 1e-12 of the
+    /// reference: focus at, beside and far from the reference, thresholds from inside the
+    /// reference's own blur (0) to beyond the searched range (none), both signs of the slope.
+    #[test]
+    fn affine_shift_is_the_bisections() {
+        let reference = 800e-9;
+        for &(w0, w1) in &[
+            (-0.0168e-3, 0.021),
+            (0.0168e-3, -0.021),
+            (-0.017e-3, 0.021),
+            (-0.02e-3, 0.021),
+            (1e-6, 0.0),
+            (-2e-6, 1e-3),
+        ] {
+            let lens = Affine(w0, w1);
+            for &threshold in &[1e-7, 1e-6, 1e-5, 1e-4, 2.5e-4, 1e-3, 1e-2, 1.0] {
+                let fast = max_wavelength_shift(&lens, reference, threshold);
+                let slow = bisected_wavelength_shift(&lens, reference, threshold);
+                match (fast, slow) {
+                    (Some(f), Some(s)) => {
+                        assert!((f - s).abs() <= 1e-12 * reference, "({w0}, {w1}) {threshold}: {f} vs {s}")
+                    }
+                    (f, s) => assert_eq!(f, s, "({w0}, {w1}) {threshold}"),
+                }
+            }
+        }
     }
 
     #[test]
