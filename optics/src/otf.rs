@@ -147,9 +147,9 @@ pub fn defocus_otf_many(points: &[(f64, f64)], out: &mut [f64]) {
 }
 
 /// [`defocus_otf_many`] to an absolute error of `accuracy` per value (at most; 1e-17 or below
-/// is [`defocus_otf_many`] itself): the Bessel series stops where the orders it leaves out are
-/// below it ([`series_start`]), a product rule that needs its values to 1e-10 need not pay for
-/// 1e-17 (the spectrometer scene at tolerance 1e-6: 6 % of its time). Tested against
+/// is [`defocus_otf_many`] itself): the Bessel series starts Miller's recurrence where the
+/// orders it leaves out are below it, so a product rule that needs its values to 1e-10 need not
+/// pay for 1e-17 (the spectrometer scene at tolerance 1e-6: 6 % of its time). Tested against
 /// [`defocus_otf`] at every accuracy it takes.
 ///
 /// # Panics
