@@ -7,14 +7,18 @@
 //! `8π ν F# W020(λ)(cos t − s)`, which grows with ν: at Nyquist a panel of the spectrometer scene
 //! needs 33 points, at a quarter of it 9. So at each frequency each panel climbs the nested
 //! levels (3, 5, 9, 17, … points; each level's points are the next one's even points, so
-//! climbing wastes no evaluation) until the product integral moves by less than its share of the
-//! OTF value's tolerance, judged as [`Interpolant::refine`](super::spectral) judges it at the
+//! climbing wastes no evaluation) until the product integral is within its share of the OTF
+//! value's tolerance, judged as [`Interpolant::refine`](super::spectral) judges it at the
 //! limit: the nested estimate ([`nested_error`](super::nested_error)) once the level resolves the
 //! panel's phase at that frequency ([`POINTS_PER_RADIAN`] × phase + 1 points), two consecutive
-//! moves within the share before. The tolerance of a value comes from the frequency rule
-//! ([`OtfEngine::set_value_tolerance`]), as on the closed-form engine: [`VALUE_SHARE`] of its
-//! absolute budget per value, so the values' errors and the frequency rule's add up to at most
-//! the requested one.
+//! moves within the share before; or, once resolved, the tail of the level's own Chebyshev
+//! coefficients ([`Levelled::tail_error`]), which credits the faster-than-geometric fall the
+//! nested estimate cannot see (33 points where it asked for 65). The tolerance of a value comes
+//! from the frequency rule ([`OtfEngine::set_value_tolerance`]), as on the closed-form engine:
+//! [`VALUE_SHARE`] of its absolute budget per value, shared equally between the panels that
+//! carry weight, so the values' errors and the frequency rule's add up to at most the requested
+//! one; each single-wavelength OTF is computed only to a tenth of its panel's share
+//! ([`crate::otf::defocus_otf_many_within`]).
 //! A panel whose finest level (129 points) does not settle is halved, as at the limit.
 //!
 //! The engine applies where every order is a centred circle with defocus (the exact 1-D OTF; no
@@ -36,7 +40,8 @@ use crate::quad;
 /// panel, with exact moments, for functions as smooth as a lens's efficiency and defocus.
 const AVERAGE_LEVEL: usize = 3;
 
-/// Points per radian of a panel's defocus phase from which the nested estimate is trusted: about
+/// Points per radian of a panel's defocus phase from which the nested estimate and the Chebyshev
+/// tail are trusted: about
 /// κ = phase/2 points resolve `e^{iκx}` on Chebyshev points (Trefethen, ATAP ch. 8). The limit's
 /// own rule trusts 0.3 per radian, then checks the count it keeps against the accepted level
 /// (`Interpolant::trim`); here nothing checks a level after it, and at 0.3 a panel of the
@@ -48,8 +53,10 @@ const POINTS_PER_RADIAN: f64 = 0.5;
 /// tenth (on the closed-form engine, half). The spectral sums change level from one frequency
 /// to the next, so each value carries its own error; near the OTF's zeros that noise makes sign
 /// changes the frequency rule then locates (a top-hat at 600–660 nm, F/1.4, 2 µm pixels: 177
-/// zeros located at 1e-3 with half, against the 156 of the exact curve at every tolerance with
-/// a tenth). The spectrometer scene pays 7 % more single-wavelength OTFs for it.
+/// zeros located at 1e-3 with half, against the 156 of the exact curve with a tenth: 156 at
+/// 1e-3 and 1e-7, 154 at 1e-5, where one lobe of the OTF between two close zeros stays within
+/// the tolerance, the mean 2.8e-10 off). The spectrometer scene pays 7 % more single-wavelength
+/// OTFs for it.
 const VALUE_SHARE: f64 = 0.1;
 
 /// Narrowest panel, relative to the band, that a frequency's unsettled finest level halves.
