@@ -16,9 +16,10 @@ fn explain(family: Family) -> String {
             .into(),
         Family::Quadrature => "`metric::evaluate` with the closed form off (engine `exact-1d`): product \
              integration per frequency over ±7σ (panels of ≤ 48 rad of defocus phase at Nyquist; each OTF value \
-             climbs each panel's nested Chebyshev–Lobatto levels until its share of the tolerance is met, weights \
-             the Chebyshev moments of λ·G(λ)), `optics::defocus_otf` (the Bessel series) at every point, nested \
-             Clenshaw–Curtis in ν."
+             climbs each panel's nested Chebyshev–Lobatto levels until its share of the tolerance is met, by the \
+             nested estimate or the Chebyshev tail of the level's own values, the share equal between panels; \
+             weights the Chebyshev moments of λ·G(λ)), `optics::defocus_otf_many_within` (the Bessel series, to \
+             the accuracy the rule needs) at every point, nested Clenshaw–Curtis in ν."
             .into(),
         Family::Fft => "`metric::evaluate` on the same circular pupil given as an explicit aperture, sampled on \
              the general-pupil engine (`exact_irises` off: by default a circular iris goes to the exact path): N \
