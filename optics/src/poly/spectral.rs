@@ -1188,12 +1188,15 @@ fn point_moments(x: &[f64], w: &[f64], degree: usize) -> Vec<f64> {
 /// three-term recurrence `T_{n+1} = 2x T_n − T_{n−1}` at each point, [`MOMENT_LANES`] points at a
 /// time (one recurrence alone is bound by its latency).
 fn chebyshev_sums<const K: usize>(x: &[f64], w: &[[f64; K]], degree: usize) -> Vec<[f64; K]> {
-    let mut mu = vec![[0.0; K]; degree + 1];
+    // per lane, summed across the lanes once at the end (a sum across them at every order
+    // was a third of the moments' time)
+    let mut by_lane = vec![[[0.0; MOMENT_LANES]; K]; degree + 1];
     let lanes = x.chunks_exact(MOMENT_LANES).zip(w.chunks_exact(MOMENT_LANES));
     for (x, w) in lanes {
         let x: [f64; MOMENT_LANES] = x.try_into().expect("a chunk of MOMENT_LANES");
+        let w: [[f64; MOMENT_LANES]; K] = std::array::from_fn(|k| std::array::from_fn(|l| w[l][k]));
         let (mut prev, mut cur) = ([1.0; MOMENT_LANES], x);
-        for (n, m) in mu.iter_mut().enumerate() {
+        for (n, m) in by_lane.iter_mut().enumerate() {
             let t = match n {
                 0 => [1.0; MOMENT_LANES],
                 1 => x,
@@ -1204,11 +1207,14 @@ fn chebyshev_sums<const K: usize>(x: &[f64], w: &[[f64; K]], degree: usize) -> V
                     next
                 }
             };
-            for (k, slot) in m.iter_mut().enumerate() {
-                *slot += (0..MOMENT_LANES).map(|l| w[l][k] * t[l]).sum::<f64>();
+            for (slot, w) in m.iter_mut().zip(&w) {
+                for l in 0..MOMENT_LANES {
+                    slot[l] += w[l] * t[l];
+                }
             }
         }
     }
+    let mut mu: Vec<[f64; K]> = by_lane.iter().map(|m| m.map(|lanes| lanes.iter().sum())).collect();
     let rest = x.len() - x.len() % MOMENT_LANES;
     for (&x, w) in x[rest..].iter().zip(&w[rest..]) {
         let (mut prev, mut cur) = (1.0, x);
@@ -1283,9 +1289,18 @@ pub(super) fn lobatto_weights(mu: &[f64], points: usize) -> Vec<f64> {
     let halve = |i: usize| if i == 0 || i == n { 0.5 } else { 1.0 };
     // cos(πm/n) for m < 2n, indexed by jk mod 2n
     let cosines: Vec<f64> = (0..2 * n).map(|m| (PI * m as f64 / n as f64).cos()).collect();
+    let scaled: Vec<f64> = (0..=n).map(|j| halve(j) * mu[j]).collect();
     (0..points)
         .map(|k| {
-            let sum: f64 = (0..=n).map(|j| halve(j) * mu[j] * cosines[j * k % (2 * n)]).sum();
+            // jk mod 2n, stepped (a division per term was most of this function's time)
+            let (mut index, mut sum) = (0, 0.0);
+            for &m in &scaled {
+                sum += m * cosines[index];
+                index += k;
+                if index >= 2 * n {
+                    index -= 2 * n;
+                }
+            }
             2.0 / n as f64 * halve(k) * sum
         })
         .collect()
