@@ -138,6 +138,20 @@ pub const ASYMPTOTIC_MIN_PHASE: f64 = 18.0;
 /// Most terms [`defocus_otf_asymptotic`] sums in each of its two series.
 const ASYMPTOTIC_TERMS: usize = 48;
 
+/// `b_k/b_{k−1}` of the square-root edge's series times `a`: `(k − 3/2)(k + 1/2)/(2k)` (from
+/// `c_k/c_{k−1} = −(3/2 − k)/(2k)` and `Γ(k + 3/2)/Γ(k + 1/2) = k + 1/2`), a table where the
+/// loop divided twice a term.
+const EDGE_RATIOS: [f64; ASYMPTOTIC_TERMS + 1] = {
+    let mut table = [0.0; ASYMPTOTIC_TERMS + 1];
+    let mut k = 1;
+    while k <= ASYMPTOTIC_TERMS {
+        let kf = k as f64;
+        table[k] = (kf - 1.5) * (kf + 0.5) / (2.0 * kf);
+        k += 1;
+    }
+    table
+};
+
 /// [`defocus_otf`] at large defocus from its asymptotic expansion, or `None` where the expansion
 /// does not reach `target` (absolute).
 ///
@@ -201,8 +215,7 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     let mut previous = f64::INFINITY;
     for k in 0..=ASYMPTOTIC_TERMS {
         if k > 0 {
-            let kf = k as f64;
-            b *= (1.5 - kf) / kf * -0.5 * (kf + 0.5) / x;
+            b *= EDGE_RATIOS[k] * inv_x;
         }
         let cos_k = match k % 4 {
             0 => cos_p,
