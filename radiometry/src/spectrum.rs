@@ -356,6 +356,8 @@ impl Spectrum {
         let mut cursors = vec![1usize; factors.len()];
         for (i, piece) in pieces.iter_mut().enumerate() {
             let (x0, x1) = (edges[i], edges[i + 1]);
+            // the piece's degree so far: each factor raises it by at most one
+            let mut top = 0;
             for (f, cursor) in factors.iter().zip(&mut cursors) {
                 // the factor on this piece as c0 + c1 t, t = λ − x0
                 let (c0, c1) = match f {
@@ -375,15 +377,20 @@ impl Spectrum {
                     }
                     _ => return None,
                 };
-                // × (c0 + c1 t); the degree stays within the bound counted above
-                let mut next = [0.0; MAX_PIECE_DEGREE + 1];
-                for (m, &p) in piece.iter().enumerate() {
-                    next[m] += p * c0;
-                    if m < MAX_PIECE_DEGREE {
-                        next[m + 1] += p * c1;
+                // × (c0 + c1 t), from the top down in place; the degree stays within the bound
+                // counted above
+                if c1 != 0.0 && top < MAX_PIECE_DEGREE {
+                    piece[top + 1] = piece[top] * c1;
+                    for m in (1..=top).rev() {
+                        piece[m] = piece[m] * c0 + piece[m - 1] * c1;
+                    }
+                    piece[0] *= c0;
+                    top += 1;
+                } else {
+                    for v in &mut piece[..=top] {
+                        *v *= c0;
                     }
                 }
-                *piece = next;
             }
         }
         pieces.iter().all(|p| p.iter().all(|c| c.is_finite())).then_some(PiecewisePolynomial { edges, pieces, degree })
