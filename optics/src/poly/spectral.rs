@@ -670,7 +670,10 @@ pub(super) struct Interpolant {
 impl Interpolant {
     pub fn new(detected: &Spectrum, density: &Arc<Density>, a: f64, b: f64, phase: f64) -> Interpolant {
         let rule = MomentRule::new(detected, density, a, b, FIRST_MOMENT_DEGREE);
-        let mu = rule.moments(0);
+        // all the moments the first levels will ask for, in the one pass over the breakpoints
+        // that the mass alone would take (a second pass for them cost 2 % of a spectrometer
+        // evaluation)
+        let mu = rule.moments(FIRST_MOMENT_DEGREE.min(rule.degree()));
         Interpolant {
             a,
             b,
