@@ -334,15 +334,18 @@ const BATCH: usize = 4;
 /// lane), reseeded every 64 orders (its rounding grows with its length). The lanes are rescaled
 /// every four steps (the backward growth per step, `2n/|a|`, is below 3e5 for any `|a| ≥ 1`
 /// within the defocus budget, so four steps stay within the 1e58 of headroom above the 1e250
-/// threshold).
+/// threshold; below `|a| = 1` the series is about 20 orders long from 1e-300, and its growth,
+/// at most `(40/|a|)^20` = 1e193 at `|a|` = 1e-8, stays below 1e-100). The per-order constants
+/// come from [`order_coefficients`], four orders a block.
 #[inline(always)]
 fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64; L] {
     let x = a.map(f64::abs);
     let start = x.iter().map(|&x| series_start(x, accuracy)).max().unwrap_or(0);
     // start ≡ 3 (mod 4): the recurrence runs in blocks of four whose signs are fixed
     let start = start | 3;
-    let reciprocals = reciprocals(start + 1);
-    let recip = |m: usize| reciprocals.map_or_else(|| 1.0 / m as f64, |r| r[m]);
+    // (m, 1 − 1/m, 1 + 1/m) for m = 0 … start, read four at a time from the top
+    let table = order_coefficients(start + 1);
+    let (blocks, _) = table[..=start].as_chunks::<4>();
     let theta = s.map(f64::acos);
     let two_cos = s.map(|s| 2.0 * s);
     let sin_theta = s.map(|s| (1.0 - s * s).max(0.0).sqrt());
@@ -356,11 +359,10 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
     // one step at order m ≥ 1: J_{m−1}, the term ±sin(mθ)[(1 − 1/m) J_{m−1} + (1 + 1/m) J_{m+1}]
     // into its sum (J_m into the norm for even m), then everything one order down
     macro_rules! step {
-        ($m:expr, $sum:ident, $sign:expr, $norm:expr) => {{
-            let m = $m;
-            let (r, mf) = (recip(m), m as f64);
+        ($order:expr, $sum:ident, $sign:expr, $norm:expr) => {{
+            let [mf, below, above]: [f64; 3] = $order;
             let sign: f64 = $sign;
-            let (below_weight, above_weight) = (sign * (1.0 - r), sign * (1.0 + r));
+            let (below_weight, above_weight) = (sign * below, sign * above);
             for l in 0..L {
                 let below = mf * two_over_x[l] * j[l] - j_above[l];
                 $sum[l] += sin_here[l] * (below_weight * below + above_weight * j_above[l]);
@@ -375,16 +377,16 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
             }
         }};
     }
-    // m ≡ 3: odd −, m ≡ 2: even − and norm, m ≡ 1: odd +, m ≡ 0: even + and norm
-    let mut m = start;
-    loop {
-        step!(m, odd, -1.0, false);
-        step!(m - 1, even, -1.0, true);
-        step!(m - 2, odd, 1.0, false);
-        if m == 3 {
+    // block k holds m = 4k … 4k + 3. m ≡ 3: odd −, m ≡ 2: even − and norm, m ≡ 1: odd +,
+    // m ≡ 0: even + and norm (none at m = 0)
+    for (k, block) in blocks.iter().enumerate().rev() {
+        step!(block[3], odd, -1.0, false);
+        step!(block[2], even, -1.0, true);
+        step!(block[1], odd, 1.0, false);
+        if k == 0 {
             break;
         }
-        step!(m - 3, even, 1.0, true);
+        step!(block[0], even, 1.0, true);
         for l in 0..L {
             if j[l].abs() > 1e250 {
                 j_above[l] *= 1e-250;
@@ -394,7 +396,8 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
                 norm[l] *= 1e-250;
             }
         }
-        m -= 4;
+        // the next block's top order
+        let m = 4 * k - 1;
         if m % 64 == 3 {
             (sin_here, sin_above) = seed(m);
         }
@@ -485,14 +488,25 @@ const SERIES_CUTS: [f64; 4] = [1e-8, 1e-11, 1e-14, 1e-17];
 /// Orders above the last significant one at which [`series_start`] starts Miller's recurrence.
 const SERIES_MARGIN: usize = 8;
 
-/// `1/m` for `m = 0 … 4096` (`m = 0` unused), or `None` beyond: a multiply where the series
-/// would divide.
-fn reciprocals(up_to: usize) -> Option<&'static [f64]> {
-    static TABLE: std::sync::OnceLock<Vec<f64>> = std::sync::OnceLock::new();
-    const SIZE: usize = 4097;
-    (up_to < SIZE).then(|| {
-        TABLE.get_or_init(|| (0..SIZE).map(|m| if m == 0 { 0.0 } else { 1.0 / m as f64 }).collect()).as_slice()
-    })
+/// `(m, 1 − 1/m, 1 + 1/m)` for `m = 0 …` at least `up_to − 1` (`m = 0` unused): from a table up
+/// to 4096, built for the call beyond. The series reads its per-order constants from it, four
+/// orders a block, where it converted and looked up `m` at every step.
+fn order_coefficients(up_to: usize) -> std::borrow::Cow<'static, [[f64; 3]]> {
+    static TABLE: std::sync::OnceLock<Vec<[f64; 3]>> = std::sync::OnceLock::new();
+    const SIZE: usize = 4096;
+    let build = |size: usize| -> Vec<[f64; 3]> {
+        (0..size)
+            .map(|m| {
+                let r = if m == 0 { 0.0 } else { 1.0 / m as f64 };
+                [m as f64, 1.0 - r, 1.0 + r]
+            })
+            .collect()
+    };
+    if up_to <= SIZE {
+        std::borrow::Cow::Borrowed(TABLE.get_or_init(|| build(SIZE)).as_slice())
+    } else {
+        std::borrow::Cow::Owned(build(up_to))
+    }
 }
 
 /// Pixel-aperture MTF `|sinc(p ν)| = |sin(π p ν)/(π p ν)|` of a square pixel of pitch `p` with
