@@ -213,9 +213,9 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     let mut b = std::f64::consts::SQRT_2 * 0.5 * PI.sqrt() / (x * x.sqrt());
     let mut upper = 0.0;
     let mut previous = f64::INFINITY;
-    for k in 0..=ASYMPTOTIC_TERMS {
+    for (k, &ratio) in EDGE_RATIOS.iter().enumerate() {
         if k > 0 {
-            b *= EDGE_RATIOS[k] * inv_x;
+            b *= ratio * inv_x;
         }
         let cos_k = match k % 4 {
             0 => cos_p,
