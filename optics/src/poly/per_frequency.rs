@@ -158,7 +158,12 @@ impl Levelled {
         otfs.resize(pairs.len(), 0.0);
         let efficiency =
             fresh.iter().map(|p| p.orders.iter().map(|o| o.efficiency.abs()).sum::<f64>()).fold(0.0, f64::max);
-        let accuracy = 0.1 * allowed / (LEBESGUE * efficiency.max(f64::MIN_POSITIVE));
+        // Σ|w_k| per unit of the panel's weight: an error δ in every value moves the product
+        // integral by at most δ Σ|w_k| (about 1 for a positive weight; the Lebesgue constant
+        // bounds it)
+        let spread = self.weights[level].iter().map(|w| w.abs()).sum::<f64>() / self.panel.mass.abs();
+        let amplification = if spread.is_finite() { spread.clamp(1.0, LEBESGUE) } else { LEBESGUE };
+        let accuracy = 0.1 * allowed / (amplification * efficiency.max(f64::MIN_POSITIVE));
         crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
         evaluations.set(evaluations.get() + pairs.len());
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
