@@ -344,11 +344,15 @@ impl Spectrum {
         if degree > MAX_PIECE_DEGREE {
             return None;
         }
+        // the breakpoints come sorted, deduplicated and within the support: the support's ends
+        // go at the ends
         let mut edges = self.breakpoints();
-        edges.extend([lo, hi]);
-        edges.retain(|&x| x >= lo && x <= hi);
-        edges.sort_by(f64::total_cmp);
-        edges.dedup();
+        if edges.first() != Some(&lo) {
+            edges.insert(0, lo);
+        }
+        if edges.last() != Some(&hi) {
+            edges.push(hi);
+        }
         let mut unit = [0.0; MAX_PIECE_DEGREE + 1];
         unit[0] = 1.0;
         let mut pieces = vec![unit; edges.len() - 1];

@@ -984,6 +984,23 @@ const ILL_CONDITIONED: f64 = 1e4;
 /// Most coefficients of one piece of a piecewise-polynomial density.
 const PIECE_TERMS: usize = radiometry::MAX_PIECE_DEGREE + 1;
 
+/// `C(m, j)` for `m, j < PIECE_TERMS` (Pascal's triangle): the binomial expansion of a piece in
+/// powers of x without a division or a `powi` call per term.
+const BINOMIAL: [[f64; PIECE_TERMS]; PIECE_TERMS] = {
+    let mut table = [[0.0; PIECE_TERMS]; PIECE_TERMS];
+    let mut m = 0;
+    while m < PIECE_TERMS {
+        table[m][0] = 1.0;
+        let mut j = 1;
+        while j <= m {
+            table[m][j] = table[m - 1][j - 1] + if j < m { table[m - 1][j] } else { 0.0 };
+            j += 1;
+        }
+        m += 1;
+    }
+    table
+};
+
 /// One panel's Chebyshev moments `μ_j = ∫_a^b ρ(λ) T_j(x) dλ`, `x = (2λ − a − b)/(b − a)`.
 ///
 /// - **Exact**, where ρ is a polynomial between breakpoints (a table × λ × constants; radiometry's
@@ -1045,6 +1062,10 @@ impl MomentRule {
         let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
         let edges = &pieces.edges;
         let terms = (pieces.degree + 1).min(PIECE_TERMS);
+        let mut h_powers = [1.0; PIECE_TERMS];
+        for m in 1..PIECE_TERMS {
+            h_powers[m] = h_powers[m - 1] * h;
+        }
         let (mut x, mut jumps): (Vec<f64>, Vec<[f64; PIECE_TERMS]>) = (Vec::new(), Vec::new());
         // the pieces overlapping (a, b), each clipped to it, as polynomials in x
         let first = edges.partition_point(|&e| e <= a).saturating_sub(1);
@@ -1061,14 +1082,17 @@ impl MomentRule {
             }
             // Σ_m r_m (λ − e_i)^m with λ − e_i = h (x − x_i): binomial expansion in powers of x
             let x_i = (edges[i] - c) / h;
+            // (−x_i)^k, k < terms
+            let mut minus_x = [1.0; PIECE_TERMS];
+            for k in 1..terms {
+                minus_x[k] = minus_x[k - 1] * -x_i;
+            }
             let mut coefficients = [0.0; PIECE_TERMS];
             for (m, &r) in pieces.pieces[i].iter().enumerate().take(terms) {
-                let scaled = r * h.powi(m as i32);
-                let mut binomial = 1.0;
-                for j in (0..=m).rev() {
+                let scaled = r * h_powers[m];
+                for j in 0..=m {
                     // C(m, j) (−x_i)^{m−j}
-                    coefficients[j] += scaled * binomial * (-x_i).powi((m - j) as i32);
-                    binomial = binomial * j as f64 / (m - j + 1) as f64;
+                    coefficients[j] += scaled * BINOMIAL[m][j] * minus_x[m - j];
                 }
             }
             let (x_lo, x_hi) = (((lo - c) / h).clamp(-1.0, 1.0), ((hi - c) / h).clamp(-1.0, 1.0));
