@@ -83,6 +83,10 @@ struct Point {
 struct Levelled {
     panel: Interpolant,
     weights: Vec<Vec<f64>>,
+    /// per level, what an error δ in every OTF moves its product integral by, per unit of the
+    /// panel's weight and of δ: `Σ_k |w_k| / |mass|` (about 1 for a positive weight, at most the
+    /// Lebesgue constant) times the largest `Σ_o |τ_o|` of the level's new points
+    amplification: Vec<f64>,
     /// the points level ℓ adds to level ℓ − 1 (all three for level 0)
     fresh: Vec<Vec<Point>>,
     scratch: Scratch,
@@ -109,6 +113,7 @@ impl Levelled {
         Levelled {
             panel,
             weights: vec![Vec::new(); LEVELS.len()],
+            amplification: vec![f64::NAN; LEVELS.len()],
             fresh: vec![Vec::new(); LEVELS.len()],
             scratch: Scratch::default(),
         }
@@ -143,12 +148,21 @@ impl Levelled {
                 })
                 .collect();
         }
+        if self.amplification[level].is_nan() {
+            let spread = self.weights[level].iter().map(|w| w.abs()).sum::<f64>() / self.panel.mass.abs();
+            let spread = if spread.is_finite() { spread.clamp(1.0, LEBESGUE) } else { LEBESGUE };
+            let efficiency = self.fresh[level]
+                .iter()
+                .map(|p| p.orders.iter().map(|o| o.efficiency.abs()).sum::<f64>())
+                .fold(0.0, f64::max);
+            self.amplification[level] = spread * efficiency.max(f64::MIN_POSITIVE);
+        }
     }
 
     /// `g(ν, λ)` at the points level `level` adds, into `values` at their slots (all three for
     /// level 0, the odd ones above; `values` holds the level's points).
-    /// Each OTF to a tenth of `allowed` (per unit weight) over the efficiency and the Lebesgue
-    /// constant: an error δ per OTF moves the product integral by at most δ Σ τ_o Σ|w_k|.
+    /// Each OTF to a tenth of `allowed` (per unit weight) over the level's amplification: an
+    /// error δ per OTF moves the product integral by at most δ Σ τ_o Σ|w_k|.
     fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>) {
         let Scratch { pairs, otfs, values } = &mut self.scratch;
         let fresh = &self.fresh[level];
@@ -156,14 +170,7 @@ impl Levelled {
         pairs.extend(fresh.iter().flat_map(|p| p.orders.iter().map(|o| (nu * o.s_per_frequency, o.waves))));
         otfs.clear();
         otfs.resize(pairs.len(), 0.0);
-        let efficiency =
-            fresh.iter().map(|p| p.orders.iter().map(|o| o.efficiency.abs()).sum::<f64>()).fold(0.0, f64::max);
-        // Σ|w_k| per unit of the panel's weight: an error δ in every value moves the product
-        // integral by at most δ Σ|w_k| (about 1 for a positive weight; the Lebesgue constant
-        // bounds it)
-        let spread = self.weights[level].iter().map(|w| w.abs()).sum::<f64>() / self.panel.mass.abs();
-        let amplification = if spread.is_finite() { spread.clamp(1.0, LEBESGUE) } else { LEBESGUE };
-        let accuracy = 0.1 * allowed / (amplification * efficiency.max(f64::MIN_POSITIVE));
+        let accuracy = 0.1 * allowed / self.amplification[level];
         crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
         evaluations.set(evaluations.get() + pairs.len());
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
