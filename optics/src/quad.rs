@@ -145,6 +145,14 @@ pub fn for_each_node<F: FnMut(f64, f64)>(a: f64, b: f64, panels: usize, mut visi
     }
 }
 
+/// `cos(πi/128)` for `i = 0 … 255`, a whole turn: `cos(πm/n)` for any `n` dividing 128 (the
+/// nested Chebyshev–Lobatto levels to 129 points) is entry `m · 128/n`, for `m < 2n`, with no
+/// cosine computed and no reflection.
+pub fn turn_cosines() -> &'static [f64; 256] {
+    static COSINES: std::sync::OnceLock<[f64; 256]> = std::sync::OnceLock::new();
+    COSINES.get_or_init(|| std::array::from_fn(|i| (std::f64::consts::PI * i as f64 / 128.0).cos()))
+}
+
 /// Coefficients at the end of a nested Clenshaw–Curtis level that [`chebyshev_tail`] reads as
 /// its tail, and as many before them for its rate of decay.
 pub const TAIL: usize = 4;
@@ -165,9 +173,7 @@ pub const TAIL: usize = 4;
 /// assumption (the nested estimate makes it too): the level must resolve the integrand's
 /// oscillation for it to be trusted.
 pub fn chebyshev_tail(values: &[f64]) -> f64 {
-    // cos(πi/128), i = 0 … 128; cos(πi/m) for m | 128 at i·128/m, reflected past π
-    static COSINES: std::sync::OnceLock<[f64; 129]> = std::sync::OnceLock::new();
-    let cosines = COSINES.get_or_init(|| std::array::from_fn(|i| (std::f64::consts::PI * i as f64 / 128.0).cos()));
+    let cosines = turn_cosines();
     let n = values.len();
     if !(2 * TAIL + 1..=129).contains(&n) || !(n - 1).is_power_of_two() {
         return f64::INFINITY;
@@ -183,7 +189,7 @@ pub fn chebyshev_tail(values: &[f64]) -> f64 {
             if i >= 2 * m {
                 i -= 2 * m;
             }
-            sum += v * cosines[if i <= m { i } else { 2 * m - i } * stride];
+            sum += v * cosines[i * stride];
         }
         (if j == m { 0.5 } else { 1.0 }) * 2.0 / m as f64 * sum.abs()
     };
