@@ -208,7 +208,8 @@ impl Levelled {
         // interpolant is within the Lebesgue constant of that)
         let first = if 2.0 * LEBESGUE <= allowed { 0 } else { 1 };
         let mut previous: Option<f64> = None;
-        let mut moves: Vec<f64> = Vec::new();
+        // the moves between consecutive levels (at most one a level; no allocation per value)
+        let (mut moves, mut counted) = ([0.0; LEVELS.len()], 0);
         for (level, &points) in LEVELS.iter().enumerate() {
             self.prepare(scene, level);
             // the level below's points to the even slots (from the top down), the new ones between
@@ -231,8 +232,9 @@ impl Levelled {
             }
             let is_resolved = points as f64 >= resolved;
             if let Some(before) = previous {
-                moves.push((integral - before).abs() / mass);
-                if level_error(&moves, is_resolved, nested_error) <= allowed {
+                moves[counted] = (integral - before).abs() / mass;
+                counted += 1;
+                if level_error(&moves[..counted], is_resolved, nested_error) <= allowed {
                     return Ok(integral);
                 }
             }
