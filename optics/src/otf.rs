@@ -331,7 +331,8 @@ const BATCH: usize = 4;
 /// ±sin(mθ)[(1 − 1/m) J_{m−1} + (1 + 1/m) J_{m+1}]`, `odd` the same over odd `m`, each over `a`.
 /// Going down in `m`, `J_{m+1}`, `J_m` and the new `J_{m−1}` are at hand, and `sin(mθ)` comes from
 /// the Chebyshev recurrence run downward from `sin(Mθ)`, `sin((M+1)θ)` (one sine and cosine per
-/// lane), reseeded every 64 orders (its rounding grows with its length). The lanes are rescaled
+/// lane), reseeded every 64 orders (its rounding grows with its length) and at `m = 3` by the
+/// multiple-angle formulas. The lanes are rescaled
 /// every four steps (the backward growth per step, `2n/|a|`, is below 3e5 for any `|a| ≥ 1`
 /// within the defocus budget, so four steps stay within the 1e58 of headroom above the 1e250
 /// threshold; below `|a| = 1` the series is about 20 orders long from 1e-300, and its growth,
@@ -397,9 +398,18 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
                 norm[l] *= 1e-250;
             }
         }
-        // the next block's top order
+        // the next block's top order: reseeded 64 orders below the last seed, and at m = 3,
+        // where the terms of a short series are largest, by the multiple-angle formulas
+        // sin 3θ = sin θ (4s² − 1), sin 4θ = 4 s sin θ (2s² − 1) (no sine to compute: a
+        // sines_at there, as at 3 mod 64 before, cost a tenth of a short series)
         let m = 4 * k - 1;
-        if m % 64 == 3 {
+        if m == 3 {
+            for l in 0..L {
+                let s2 = s[l] * s[l];
+                sin_here[l] = sin_theta[l] * (4.0 * s2 - 1.0);
+                sin_above[l] = 4.0 * s[l] * sin_theta[l] * (2.0 * s2 - 1.0);
+            }
+        } else if (start - m) % 64 == 0 {
             (sin_here, sin_above) = seed(m);
         }
     }
