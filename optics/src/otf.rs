@@ -183,33 +183,37 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     let g0 = 1.0 - s * s;
     let (inv_x, inv) = (1.0 / x, 1.0 / (g0 * x));
     let (mut below, mut d) = (0.0, g0.sqrt() * inv_x);
+    let step = |n: usize, below: f64, d: f64| {
+        let nf = n as f64;
+        (s * (2.0 * nf - 1.0) * d + nf * (nf - 2.0) * below * inv_x) * inv
+    };
     let mut lower = 0.0;
     let mut previous = f64::INFINITY;
     let mut settled = false;
-    for n in 0..ASYMPTOTIC_TERMS {
-        let nf = n as f64;
-        let next = (s * (2.0 * nf - 1.0) * d + nf * (nf - 2.0) * below * inv_x) * inv;
-        (below, d) = (d, next);
-        let k = n + 1;
-        if k % 2 == 1 {
-            let sign = if (k + 1) % 4 == 0 { 1.0 } else { -1.0 };
-            let term = d * sign;
-            lower += term;
-            if term.abs() < target {
-                settled = true;
-                break;
-            }
-            if term.abs() > previous {
-                return None;
-            }
-            previous = term.abs();
+    // two steps a turn: n = 2j gives the odd order k = 2j + 1 (a term, of sign (−1)^{j+1}),
+    // n = 2j + 1 the even one after it
+    let mut sign = -1.0;
+    for j in 0..ASYMPTOTIC_TERMS / 2 {
+        (below, d) = (d, step(2 * j, below, d));
+        let term = d * sign;
+        lower += term;
+        if term.abs() < target {
+            settled = true;
+            break;
         }
+        if term.abs() > previous {
+            return None;
+        }
+        previous = term.abs();
+        sign = -sign;
+        (below, d) = (d, step(2 * j + 1, below, d));
     }
     if !settled {
         return None;
     }
     // u = 1: Watson's lemma at the square-root edge
     let (sin_p, cos_p) = crate::fft::cis::sin_cos(phase - 0.75 * PI);
+    let turns = [cos_p, sin_p, -cos_p, -sin_p];
     let mut b = std::f64::consts::SQRT_2 * 0.5 * PI.sqrt() / (x * x.sqrt());
     let mut upper = 0.0;
     let mut previous = f64::INFINITY;
@@ -217,13 +221,8 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
         if k > 0 {
             b *= ratio * inv_x;
         }
-        let cos_k = match k % 4 {
-            0 => cos_p,
-            1 => sin_p,
-            2 => -cos_p,
-            _ => -sin_p,
-        };
-        upper += b * cos_k;
+        // cos(φ − (2k + 3)π/4) = cos, sin, −cos, −sin of φ − 3π/4 as k goes round mod 4
+        upper += b * turns[k & 3];
         if b.abs() < target {
             return Some((4.0 / PI) * (lower + upper));
         }
