@@ -408,7 +408,7 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
                 sin_here[l] = sin_theta[l] * (4.0 * s2 - 1.0);
                 sin_above[l] = 4.0 * s[l] * sin_theta[l] * (2.0 * s2 - 1.0);
             }
-        } else if (start - m) % 64 == 0 {
+        } else if (start - m).is_multiple_of(64) {
             (sin_here, sin_above) = seed(m);
         }
     }
