@@ -356,45 +356,48 @@ impl Spectrum {
         let mut unit = [0.0; MAX_PIECE_DEGREE + 1];
         unit[0] = 1.0;
         let mut pieces = vec![unit; edges.len() - 1];
-        // a table's segment cursor per factor: the pieces are visited in increasing λ
-        let mut cursors = vec![1usize; factors.len()];
-        for (i, piece) in pieces.iter_mut().enumerate() {
-            let (x0, x1) = (edges[i], edges[i + 1]);
-            // the piece's degree so far: each factor raises it by at most one
-            let mut top = 0;
-            for (f, cursor) in factors.iter().zip(&mut cursors) {
-                // the factor on this piece as c0 + c1 t, t = λ − x0
-                let (c0, c1) = match f {
-                    Spectrum::Constant(c) => (*c, 0.0),
-                    Spectrum::TopHat(t) => (t.value(0.5 * (x0 + x1)), 0.0),
-                    Spectrum::Linear { slope } => (slope * x0, *slope),
-                    Spectrum::Sampled(table) => {
-                        let w = table.wavelengths();
-                        let v = table.values();
-                        let mid = 0.5 * (x0 + x1);
-                        while *cursor < w.len() - 1 && w[*cursor] < mid {
-                            *cursor += 1;
-                        }
-                        let k = *cursor;
-                        let slope = (v[k] - v[k - 1]) / (w[k] - w[k - 1]);
-                        (v[k - 1] + slope * (x0 - w[k - 1]), slope)
-                    }
-                    _ => return None,
-                };
-                // × (c0 + c1 t), from the top down in place; the degree stays within the bound
-                // counted above
-                if c1 != 0.0 && top < MAX_PIECE_DEGREE {
-                    piece[top + 1] = piece[top] * c1;
-                    for m in (1..=top).rev() {
-                        piece[m] = piece[m] * c0 + piece[m - 1] * c1;
-                    }
-                    piece[0] *= c0;
-                    top += 1;
-                } else {
-                    for v in &mut piece[..=top] {
-                        *v *= c0;
+        // factor by factor over all pieces (one dispatch a factor, not a piece); `top` is the
+        // degree so far, raised by one by each linear factor, within the bound counted above
+        let mut top = 0;
+        for f in &factors {
+            // × (c0 + c1 t), t = λ − x0, from the top down in place
+            let times = |piece: &mut [f64; MAX_PIECE_DEGREE + 1], c0: f64, c1: f64, top: usize| {
+                piece[top + 1] = piece[top] * c1;
+                for m in (1..=top).rev() {
+                    piece[m] = piece[m] * c0 + piece[m - 1] * c1;
+                }
+                piece[0] *= c0;
+            };
+            match f {
+                Spectrum::Constant(c) => pieces.iter_mut().for_each(|p| p[..=top].iter_mut().for_each(|v| *v *= c)),
+                Spectrum::TopHat(t) => {
+                    for (i, piece) in pieces.iter_mut().enumerate() {
+                        let c = t.value(0.5 * (edges[i] + edges[i + 1]));
+                        piece[..=top].iter_mut().for_each(|v| *v *= c);
                     }
                 }
+                Spectrum::Linear { slope } => {
+                    for (i, piece) in pieces.iter_mut().enumerate() {
+                        times(piece, slope * edges[i], *slope, top);
+                    }
+                    top += 1;
+                }
+                Spectrum::Sampled(table) => {
+                    // the table's segment under each piece: the pieces run in increasing λ
+                    let (w, v) = (table.wavelengths(), table.values());
+                    let mut k = 1;
+                    for (i, piece) in pieces.iter_mut().enumerate() {
+                        let (x0, x1) = (edges[i], edges[i + 1]);
+                        let mid = 0.5 * (x0 + x1);
+                        while k < w.len() - 1 && w[k] < mid {
+                            k += 1;
+                        }
+                        let slope = (v[k] - v[k - 1]) / (w[k] - w[k - 1]);
+                        times(piece, v[k - 1] + slope * (x0 - w[k - 1]), slope, top);
+                    }
+                    top += 1;
+                }
+                _ => return None,
             }
         }
         pieces.iter().all(|p| p.iter().all(|c| c.is_finite())).then_some(PiecewisePolynomial { edges, pieces, degree })
