@@ -183,9 +183,12 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     let g0 = 1.0 - s * s;
     let (inv_x, inv) = (1.0 / x, 1.0 / (g0 * x));
     let (mut below, mut d) = (0.0, g0.sqrt() * inv_x);
+    // D_{n+1} = α_n D_n + β_n D_{n−1}: the coefficients off the chain through D, so that a step
+    // is one multiply-add on it (two multiplies and an add before)
+    let (alpha, beta) = (s * inv, inv_x * inv);
     let step = |n: usize, below: f64, d: f64| {
         let nf = n as f64;
-        (s * (2.0 * nf - 1.0) * d + nf * (nf - 2.0) * below * inv_x) * inv
+        alpha * (2.0 * nf - 1.0) * d + beta * (nf * (nf - 2.0)) * below
     };
     let mut lower = 0.0;
     let mut previous = f64::INFINITY;
