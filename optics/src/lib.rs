@@ -47,9 +47,9 @@ pub use closed::GaussianDefocus;
 pub use error::Error;
 pub use lens::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront, Zone, round_for_display};
 pub use otf::{
-    ASYMPTOTIC_MIN_PHASE, BATCHED_SERIES_MIN_A, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf,
-    defocus_otf_asymptotic, defocus_otf_bessel, defocus_otf_many, defocus_otf_many_within, defocus_otf_panels,
-    defocus_otf_quadrature, mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
+    ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_asymptotic,
+    defocus_otf_bessel, defocus_otf_many, defocus_otf_many_within, defocus_otf_panels, defocus_otf_quadrature,
+    mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
 pub use poly::{
     DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET,

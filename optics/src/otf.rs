@@ -237,21 +237,18 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     None
 }
 
-/// `|a|` from which [`defocus_otf_many`] takes the Bessel series (one call takes it from
-/// [`BESSEL_SERIES_MIN_A`]): everywhere the defocus matters (`|a|(1 − s) ≥ 1e-8`). Four
-/// interleaved series cost less than the quadrature from `|a| = 1` (spectrometer scene at 1e-6:
-/// 3.1 ms against 4.2 ms from 24), and below it the series is a dozen orders, where the
-/// quadrature still takes its panel of Gauss–Legendre points and their cosines (from 1 to 0:
-/// -2 % instructions). The two agree to 1e-12 for `|a| ≥ 1`, and to 1e-15 from `|a| = 1e-8`
-/// to 1 (tested: the backward recurrence grows by `2n/|a|` a step there, from 1e-300 over
-/// about 20 orders, far from overflow).
-pub const BATCHED_SERIES_MIN_A: f64 = 0.0;
-
 /// [`defocus_otf`] at many `(s, w)` at once, into `out` (same length): those on the Bessel
 /// series four at a time, interleaved ([`defocus_otf_bessel`] is a chain of dependent
-/// multiply-adds, and four independent chains fill the pipeline) from
-/// [`BATCHED_SERIES_MIN_A`], the rest one by one. Equal to [`defocus_otf`] within 1e-12 (the
-/// series against the quadrature; tested).
+/// multiply-adds, and four independent chains fill the pipeline), the rest one by one. Equal
+/// to [`defocus_otf`] within 1e-12 (the series against the quadrature; tested).
+///
+/// The series takes every point where the defocus matters (`|a|(1 − s) ≥ 1e-8`; a single call
+/// takes it from [`BESSEL_SERIES_MIN_A`]). Four interleaved series cost less than the quadrature
+/// from `|a| = 1` (spectrometer scene at 1e-6: 3.1 ms against 4.2 ms from 24), and below it the
+/// series is a dozen orders where the quadrature still takes its panel of Gauss–Legendre points
+/// and their cosines (-2 % instructions). The two agree to 1e-12 for `|a| ≥ 1`, and to 1e-15
+/// from `|a| = 1e-8` to 1 (tested: the backward recurrence grows by `2n/|a|` a step there, from
+/// 1e-300 over about 20 orders, far from overflow).
 ///
 /// # Panics
 /// If `points` and `out` differ in length.
@@ -290,7 +287,7 @@ pub fn defocus_otf_many_within(points: &[(f64, f64)], out: &mut [f64], accuracy:
     };
     for (i, &(s, w)) in points.iter().enumerate() {
         let a = 8.0 * PI * w * s;
-        let series = s > 0.0 && s < 1.0 && a.abs() * (1.0 - s) >= 1e-8 && a.abs() >= BATCHED_SERIES_MIN_A;
+        let series = s > 0.0 && s < 1.0 && a.abs() * (1.0 - s) >= 1e-8;
         if !series {
             out[i] = defocus_otf(s, w);
             continue;
