@@ -153,6 +153,25 @@ pub fn turn_cosines() -> &'static [f64; 256] {
     COSINES.get_or_init(|| std::array::from_fn(|i| (std::f64::consts::PI * i as f64 / 128.0).cos()))
 }
 
+/// `sum + Σ_t terms[t] cos(π i_t / n)` with `i_t = first + t · step` taken mod `2n` by stepping
+/// (no division a term; `first, step ≤ 2n`): the cosine sums of Chebyshev–Lobatto points,
+/// `cos(πjk/n)`, from [`turn_cosines`] where `n` divides 128 (every nested level), computed
+/// otherwise.
+pub fn add_stepped_cosines(mut sum: f64, terms: &[f64], first: usize, step: usize, n: usize) -> f64 {
+    let (table, period) = (turn_cosines(), 2 * n);
+    let stride = if 128 % n == 0 { 128 / n } else { 0 };
+    let mut i = if first >= period { first - period } else { first };
+    for &t in terms {
+        let cosine = if stride > 0 { table[i * stride] } else { (std::f64::consts::PI * i as f64 / n as f64).cos() };
+        sum += t * cosine;
+        i += step;
+        if i >= period {
+            i -= period;
+        }
+    }
+    sum
+}
+
 /// Coefficients at the end of a nested Clenshaw–Curtis level that [`chebyshev_tail`] reads as
 /// its tail, and as many before them for its rate of decay.
 pub const TAIL: usize = 4;
@@ -173,24 +192,15 @@ pub const TAIL: usize = 4;
 /// assumption (the nested estimate makes it too): the level must resolve the integrand's
 /// oscillation for it to be trusted.
 pub fn chebyshev_tail(values: &[f64]) -> f64 {
-    let cosines = turn_cosines();
     let n = values.len();
     if !(2 * TAIL + 1..=129).contains(&n) || !(n - 1).is_power_of_two() {
         return f64::INFINITY;
     }
     let m = n - 1;
-    let stride = 128 / m;
     let coefficient = |j: usize| {
-        // Σ'' v_k cos(πjk/m), the index jk mod 2m stepped by j
-        let mut sum = 0.5 * (values[0] + if j.is_multiple_of(2) { values[m] } else { -values[m] });
-        let mut i = 0;
-        for &v in &values[1..m] {
-            i += j;
-            if i >= 2 * m {
-                i -= 2 * m;
-            }
-            sum += v * cosines[i * stride];
-        }
+        // Σ'' v_k cos(πjk/m): the halved ends, then k = 1 … m − 1
+        let ends = 0.5 * (values[0] + if j.is_multiple_of(2) { values[m] } else { -values[m] });
+        let sum = add_stepped_cosines(ends, &values[1..m], j, j, m);
         (if j == m { 0.5 } else { 1.0 }) * 2.0 / m as f64 * sum.abs()
     };
     let size = (n - TAIL..n).map(coefficient).fold(0.0, f64::max);

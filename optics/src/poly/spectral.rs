@@ -1314,29 +1314,8 @@ const MOMENT_LANES: usize = 8;
 pub(super) fn lobatto_weights(mu: &[f64], points: usize) -> Vec<f64> {
     let n = points - 1;
     let halve = |i: usize| if i == 0 || i == n { 0.5 } else { 1.0 };
-    // cos(πm/n) for m < 2n, indexed by jk mod 2n (from the table of a whole turn where n
-    // divides 128: every nested level)
-    let cosines: Vec<f64> = if 128 % n == 0 {
-        let table = quad::turn_cosines();
-        (0..2 * n).map(|m| table[m * (128 / n)]).collect()
-    } else {
-        (0..2 * n).map(|m| (PI * m as f64 / n as f64).cos()).collect()
-    };
     let scaled: Vec<f64> = (0..=n).map(|j| halve(j) * mu[j]).collect();
-    (0..points)
-        .map(|k| {
-            // jk mod 2n, stepped (a division per term was most of this function's time)
-            let (mut index, mut sum) = (0, 0.0);
-            for &m in &scaled {
-                sum += m * cosines[index];
-                index += k;
-                if index >= 2 * n {
-                    index -= 2 * n;
-                }
-            }
-            2.0 / n as f64 * halve(k) * sum
-        })
-        .collect()
+    (0..points).map(|k| 2.0 / n as f64 * halve(k) * quad::add_stepped_cosines(0.0, &scaled, 0, k, n)).collect()
 }
 
 /// The wavelengths of the OTF tables of `lens`'s orders, found at five wavelengths across
