@@ -1,0 +1,68 @@
+//! [`metric::evaluate`] of one scene file, repeated: the loop a profiler or an instruction counter
+//! runs on (the numbers of an optimization are measured on it), with the median time per call.
+//!
+//! ```text
+//! cargo build --release -p metric --example repeat
+//! target/release/examples/repeat examples/spectrometer.toml [TOLERANCE [RUNS]]
+//! valgrind --tool=callgrind target/release/examples/repeat examples/spectrometer.toml 1e-6 20
+//! perf record target/release/examples/repeat examples/spectrometer.toml 1e-6 1500
+//! ```
+//!
+//! The tolerance (default 1e-6) is set as `--set options.tolerance=…` would set it; 200 runs by
+//! default. Prints the median wall time of one call (not a benchmark: BENCHMARKS.md and the
+//! criterion benches are), the mean MTF, and the work the engines report. The scene is loaded
+//! once, outside the loop; an instruction count of the whole process includes that load
+//! (subtract a run with fewer repeats).
+
+use std::process::ExitCode;
+use std::time::Instant;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(path) = args.first() else {
+        eprintln!("usage: repeat SCENE.toml [TOLERANCE [RUNS]]");
+        return ExitCode::FAILURE;
+    };
+    let tolerance = args.get(1).map_or("1e-6", String::as_str);
+    let runs: usize = match args.get(2).map_or(Ok(200), |r| r.parse()) {
+        Ok(runs) if runs > 0 => runs,
+        _ => {
+            eprintln!("RUNS: write a whole number of at least 1, not {:?}", args[2]);
+            return ExitCode::FAILURE;
+        }
+    };
+    let scene = match scene::load(Some(std::path::Path::new(path)), &[format!("options.tolerance={tolerance}")]) {
+        Ok(scene) => scene,
+        Err(e) => {
+            eprintln!("{path}: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut seconds = Vec::with_capacity(runs);
+    let mut last = None;
+    for _ in 0..runs {
+        let started = Instant::now();
+        let evaluation = metric::evaluate(std::hint::black_box(&scene));
+        seconds.push(started.elapsed().as_secs_f64());
+        last = Some(evaluation);
+    }
+    match last {
+        Some(Ok(e)) => {
+            seconds.sort_by(f64::total_cmp);
+            let n = &e.numerics;
+            println!(
+                "median {:.1} µs over {runs} calls; mean MTF {:.15}; {} OTF values, {} single-wavelength OTFs",
+                seconds[runs / 2] * 1e6,
+                e.mean_mtf,
+                n.otf_evaluations,
+                n.spectral_evaluations
+            );
+            ExitCode::SUCCESS
+        }
+        Some(Err(e)) => {
+            eprintln!("{path}: {e}");
+            ExitCode::FAILURE
+        }
+        None => ExitCode::FAILURE,
+    }
+}
