@@ -153,23 +153,57 @@ pub fn turn_cosines() -> &'static [f64; 256] {
     COSINES.get_or_init(|| std::array::from_fn(|i| (std::f64::consts::PI * i as f64 / 128.0).cos()))
 }
 
-/// `sum + Σ_t terms[t] cos(π i_t / n)` with `i_t = first + t · step` taken mod `2n` by stepping
-/// (no division a term; `first, step ≤ 2n`): the cosine sums of Chebyshev–Lobatto points,
-/// `cos(πjk/n)`, from [`turn_cosines`] where `n` divides 128 (every nested level), computed
-/// otherwise.
-pub fn add_stepped_cosines(mut sum: f64, terms: &[f64], first: usize, step: usize, n: usize) -> f64 {
-    let (table, period) = (turn_cosines(), 2 * n);
-    let stride = if 128 % n == 0 { 128 / n } else { 0 };
-    let mut i = if first >= period { first - period } else { first };
-    for &t in terms {
-        let cosine = if stride > 0 { table[i * stride] } else { (std::f64::consts::PI * i as f64 / n as f64).cos() };
-        sum += t * cosine;
-        i += step;
-        if i >= period {
-            i -= period;
+/// `sum + Σ_t terms[t] cos(π i_t / n)` with `i_t = first + t · step` taken mod `2n` (`first,
+/// step ≤ 2n`): the cosine sums of Chebyshev–Lobatto points, `cos(πjk/n)`, from
+/// [`turn_cosines`] where `n` divides 128 (every nested level: entry `i · 128/n` mod 256, a mask
+/// and no branch a term), computed otherwise. Four partial sums (one chain of dependent adds
+/// is bound by their latency), added pairwise at the end.
+pub fn add_stepped_cosines(sum: f64, terms: &[f64], first: usize, step: usize, n: usize) -> f64 {
+    let mut sums = [sum, 0.0, 0.0, 0.0];
+    if 128 % n == 0 {
+        let table = turn_cosines();
+        let stride = 128 / n;
+        let (mut i, step) = ((first * stride) & 255, (step * stride) & 255);
+        let mut chunks = terms.chunks_exact(4);
+        for chunk in &mut chunks {
+            for (slot, &t) in sums.iter_mut().zip(chunk) {
+                *slot += t * table[i];
+                i = (i + step) & 255;
+            }
+        }
+        for &t in chunks.remainder() {
+            sums[0] += t * table[i];
+            i = (i + step) & 255;
+        }
+    } else {
+        let period = 2 * n;
+        let mut i = first % period;
+        for (t, &term) in terms.iter().enumerate() {
+            sums[t % 4] += term * (std::f64::consts::PI * i as f64 / n as f64).cos();
+            i = (i + step) % period;
         }
     }
-    sum
+    (sums[0] + sums[1]) + (sums[2] + sums[3])
+}
+
+/// `Σ a_k b_k` over the shorter of the two, in four partial sums added pairwise at the end (one
+/// chain of dependent adds is bound by their latency: a product rule's 33-point sum took as long
+/// as its products four times over).
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut sums = [0.0; 4];
+    let (chunks_a, chunks_b) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (rest_a, rest_b) = (chunks_a.remainder(), chunks_b.remainder());
+    for (x, y) in chunks_a.zip(chunks_b) {
+        for l in 0..4 {
+            sums[l] += x[l] * y[l];
+        }
+    }
+    for (slot, (x, y)) in sums.iter_mut().zip(rest_a.iter().zip(rest_b)) {
+        *slot += x * y;
+    }
+    (sums[0] + sums[1]) + (sums[2] + sums[3])
 }
 
 /// Coefficients at the end of a nested Clenshaw–Curtis level that [`chebyshev_tail`] reads as
@@ -208,7 +242,9 @@ pub fn chebyshev_tail(values: &[f64]) -> f64 {
         return 0.0;
     }
     let before = (n - 2 * TAIL..n - TAIL).map(coefficient).fold(0.0, f64::max);
-    let rate = (size / before).powf(1.0 / TAIL as f64);
+    // the fourth root ([`TAIL`] = 4) by two square roots, not `powf`
+    const _: () = assert!(TAIL == 4);
+    let rate = (size / before).sqrt().sqrt();
     if rate < 0.8 { 2.0 * size * rate / (1.0 - rate) } else { f64::INFINITY }
 }
 

@@ -72,10 +72,20 @@ struct OrderAt {
     efficiency: f64,
 }
 
-/// The lens at one Chebyshev–Lobatto point of a panel: its orders.
-#[derive(Clone, Debug)]
-struct Point {
+/// The lens at the points a level adds: their orders one after the other, and where each
+/// point's end (one allocation a level, not one a point).
+#[derive(Clone, Debug, Default)]
+struct Fresh {
     orders: Vec<OrderAt>,
+    ends: Vec<usize>,
+}
+
+impl Fresh {
+    /// The orders of point `k` of the level's new ones.
+    fn point(&self, k: usize) -> &[OrderAt] {
+        let start = if k == 0 { 0 } else { self.ends[k - 1] };
+        &self.orders[start..self.ends[k]]
+    }
 }
 
 /// A panel with its levels: the product-integration weights and the lens at the points each
@@ -88,7 +98,7 @@ struct Levelled {
     /// Lebesgue constant) times the largest `Σ_o |τ_o|` of the level's new points
     amplification: Vec<f64>,
     /// the points level ℓ adds to level ℓ − 1 (all three for level 0)
-    fresh: Vec<Vec<Point>>,
+    fresh: Vec<Fresh>,
     scratch: Scratch,
 }
 
@@ -114,7 +124,7 @@ impl Levelled {
             panel,
             weights: vec![Vec::new(); LEVELS.len()],
             amplification: vec![f64::NAN; LEVELS.len()],
-            fresh: vec![Vec::new(); LEVELS.len()],
+            fresh: vec![Fresh::default(); LEVELS.len()],
             scratch: Scratch::default(),
         }
     }
@@ -125,35 +135,31 @@ impl Levelled {
         if self.weights[level].is_empty() {
             self.weights[level] = lobatto_weights(self.panel.moments(scene.detected, points - 1), points);
         }
-        if self.fresh[level].is_empty() {
+        if self.fresh[level].ends.is_empty() {
             let lambdas = lobatto_lambdas(self.panel.a, self.panel.b, points);
-            self.fresh[level] = (0..points)
-                .filter(|&k| level == 0 || k % 2 == 1)
-                .map(|k| {
-                    let lambda = lambdas[k];
-                    let orders = scene
-                        .lens
-                        .orders(lambda, scene.field)
-                        .iter()
-                        .map(|o| {
-                            let node = Node::of(o, lambda, 0.0, scene.irises);
-                            OrderAt {
-                                s_per_frequency: scene.f_number * lambda / node.scale,
-                                waves: node.w020 / lambda,
-                                efficiency: o.efficiency,
-                            }
-                        })
-                        .collect();
-                    Point { orders }
-                })
-                .collect();
+            let fresh = &mut self.fresh[level];
+            let new_points = if level == 0 { points } else { points / 2 };
+            fresh.orders.reserve(new_points);
+            fresh.ends.reserve(new_points);
+            for k in (0..points).filter(|&k| level == 0 || k % 2 == 1) {
+                let lambda = lambdas[k];
+                fresh.orders.extend(scene.lens.orders(lambda, scene.field).iter().map(|o| {
+                    let node = Node::of(o, lambda, 0.0, scene.irises);
+                    OrderAt {
+                        s_per_frequency: scene.f_number * lambda / node.scale,
+                        waves: node.w020 / lambda,
+                        efficiency: o.efficiency,
+                    }
+                }));
+                fresh.ends.push(fresh.orders.len());
+            }
         }
         if self.amplification[level].is_nan() {
             let spread = self.weights[level].iter().map(|w| w.abs()).sum::<f64>() / self.panel.mass.abs();
             let spread = if spread.is_finite() { spread.clamp(1.0, LEBESGUE) } else { LEBESGUE };
-            let efficiency = self.fresh[level]
-                .iter()
-                .map(|p| p.orders.iter().map(|o| o.efficiency.abs()).sum::<f64>())
+            let fresh = &self.fresh[level];
+            let efficiency = (0..fresh.ends.len())
+                .map(|k| fresh.point(k).iter().map(|o| o.efficiency.abs()).sum::<f64>())
                 .fold(0.0, f64::max);
             self.amplification[level] = spread * efficiency.max(f64::MIN_POSITIVE);
         }
@@ -167,16 +173,17 @@ impl Levelled {
         let Scratch { pairs, otfs, values } = &mut self.scratch;
         let fresh = &self.fresh[level];
         pairs.clear();
-        pairs.extend(fresh.iter().flat_map(|p| p.orders.iter().map(|o| (nu * o.s_per_frequency, o.waves))));
+        pairs.extend(fresh.orders.iter().map(|o| (nu * o.s_per_frequency, o.waves)));
         otfs.clear();
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
         crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
         evaluations.set(evaluations.get() + pairs.len());
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
-        let mut next = otfs.iter();
-        for (k, p) in (first..).step_by(step).zip(fresh) {
-            values[k] = p.orders.iter().map(|o| o.efficiency * next.next().copied().unwrap_or(0.0)).sum();
+        let mut start = 0;
+        for (k, &end) in (first..).step_by(step).zip(&fresh.ends) {
+            values[k] = fresh.orders[start..end].iter().zip(&otfs[start..end]).map(|(o, v)| o.efficiency * v).sum();
+            start = end;
         }
     }
 
@@ -222,7 +229,7 @@ impl Levelled {
             }
             self.fresh_values(level, nu, allowed, evaluations);
             let values = &self.scratch.values;
-            let integral: f64 = values.iter().zip(&self.weights[level]).map(|(v, w)| v * w).sum();
+            let integral = quad::dot(values, &self.weights[level]);
             if level < first {
                 previous = Some(integral);
                 continue;
