@@ -210,11 +210,17 @@ impl LensModel for ChromaticMetalens {
     }
 
     fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        let mut orders = Vec::with_capacity(1);
+        self.orders_into(wavelength_m, field, &mut orders);
+        orders
+    }
+
+    fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
         let [dx, dy] = self.lateral_colour(wavelength_m, field);
         let mut wavefront = Wavefront::defocus(self.defocus(wavelength_m)).shifted(dx, dy);
         [wavefront.spherical_m, wavefront.coma_m, wavefront.astigmatism_m, wavefront.field_curvature_m] = self.seidel;
         let pupil = self.aperture.as_ref().map_or(Pupil::Full, |a| Pupil::Aperture(a.clone()));
-        vec![Order::new(self.efficiency(wavelength_m), pupil, wavefront)]
+        out.push(Order::new(self.efficiency(wavelength_m), pupil, wavefront));
     }
 
     /// τ1(λ) times the iris' area fraction ([`with_aperture`](Self::with_aperture)).

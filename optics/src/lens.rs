@@ -278,6 +278,14 @@ pub trait LensModel: Send + Sync + fmt::Debug {
     /// The imaging orders for light of `wavelength_m` from `field`.
     fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order>;
 
+    /// [`orders`](LensModel::orders) appended to `out`: the same orders, for a caller that reads
+    /// many wavelengths through one buffer (a product rule asks at every point of every level).
+    /// The default appends what `orders` returns; a lens may push its orders directly and save
+    /// the allocation of a vector a call.
+    fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
+        out.extend(self.orders(wavelength_m, field));
+    }
+
     /// Imaging efficiency at `wavelength_m` on axis: the sum of the orders' efficiencies.
     fn efficiency(&self, wavelength_m: f64) -> f64 {
         self.orders(wavelength_m, Field::ON_AXIS).iter().map(|o| o.efficiency).sum()
@@ -345,6 +353,9 @@ macro_rules! forward_lens_model {
             fn focal_length(&self) -> f64 { (**self).focal_length() }
             fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
                 (**self).orders(wavelength_m, field)
+            }
+            fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
+                (**self).orders_into(wavelength_m, field, out)
             }
             fn efficiency(&self, wavelength_m: f64) -> f64 { (**self).efficiency(wavelength_m) }
             fn transmission(&self, wavelength_m: f64) -> f64 { (**self).transmission(wavelength_m) }

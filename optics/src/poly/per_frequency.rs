@@ -141,9 +141,13 @@ impl Levelled {
             let new_points = if level == 0 { points } else { points / 2 };
             fresh.orders.reserve(new_points);
             fresh.ends.reserve(new_points);
+            // one buffer for the lens's orders at every point (`LensModel::orders_into`)
+            let mut orders = Vec::new();
             for k in (0..points).filter(|&k| level == 0 || k % 2 == 1) {
                 let lambda = lambdas[k];
-                fresh.orders.extend(scene.lens.orders(lambda, scene.field).iter().map(|o| {
+                orders.clear();
+                scene.lens.orders_into(lambda, scene.field, &mut orders);
+                fresh.orders.extend(orders.iter().map(|o| {
                     let node = Node::of(o, lambda, 0.0, scene.irises);
                     OrderAt {
                         s_per_frequency: scene.f_number * lambda / node.scale,
