@@ -186,6 +186,18 @@ pub fn add_stepped_cosines(sum: f64, terms: &[f64], first: usize, step: usize, n
     (sums[0] + sums[1]) + (sums[2] + sums[3])
 }
 
+/// `a · b + c`: one fused multiply-add (one rounding) where the build targets a CPU that has
+/// the instruction (`target-cpu=native` on x86-64 with FMA, `.cargo/config.toml`; every
+/// aarch64), else a multiply and an add (two roundings; `f64::mul_add` would call the C
+/// library's `fma` there, a function call a term). The inner loops of the exact OTF use it:
+/// where they are bound by the floating-point ports, a fused pair is one operation, not two.
+/// The two forms differ by at most one rounding of `a · b`: results agree between builds to
+/// rounding, not to the bit.
+#[inline(always)]
+pub fn fused(a: f64, b: f64, c: f64) -> f64 {
+    if cfg!(any(target_feature = "fma", target_arch = "aarch64")) { a.mul_add(b, c) } else { a * b + c }
+}
+
 /// `Σ a_k b_k` over the shorter of the two, in four partial sums added pairwise at the end (one
 /// chain of dependent adds is bound by their latency: a product rule's 33-point sum took as long
 /// as its products four times over).
