@@ -11,7 +11,8 @@
 //!
 //! - the description, on a grid of 33 wavelengths over the detected spectrum's extent (its
 //!   one wavelength for a line), on axis and at one off-axis field point
-//!   ([`OFF_AXIS_FIELD`]): every order's efficiency finite and ≥ 0; the sum of the
+//!   ([`OFF_AXIS_FIELD`]): [`orders_into`](LensModel::orders_into) appends what
+//!   [`orders`](LensModel::orders) returns; every order's efficiency finite and ≥ 0; the sum of the
 //!   efficiencies ≤ the transmission ≤ 1 (relative 1e-12; docs/physics.md, "Lens families":
 //!   τ and T are fractions of the power incident on the full clear aperture, and the background
 //!   `T − Σ τ` is ≥ 0); each order's efficiency ≤ its pupil's
@@ -119,6 +120,19 @@ fn check_description(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), St
         for field in [Field::ON_AXIS, OFF_AXIS_FIELD] {
             let at = format!("at λ = {nm} nm, field ({}, {}) rad", field.x_rad, field.y_rad);
             let orders = lens.orders(lambda, field);
+            // `orders_into` appends the same orders (twice into one buffer: appended, not replaced)
+            let mut buffer = Vec::new();
+            lens.orders_into(lambda, field, &mut buffer);
+            lens.orders_into(lambda, field, &mut buffer);
+            let twice: Vec<&Order> = orders.iter().chain(&orders).collect();
+            if format!("{:?}", buffer.iter().collect::<Vec<_>>()) != format!("{twice:?}") {
+                return Err(format!(
+                    "{at}: orders_into appended {} orders twice, not what orders() returns twice ({:?}, expected {:?})",
+                    buffer.len() / 2,
+                    buffer,
+                    orders
+                ));
+            }
             let count = orders.len();
             let mut sum = 0.0;
             for (k, order) in orders.iter().enumerate() {

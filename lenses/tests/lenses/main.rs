@@ -54,6 +54,31 @@ fn conformance_check_catches_a_broken_lens() {
     assert!(check_lens(&Broken, &band(800.0, 10.0)).is_err());
 }
 
+#[test]
+fn conformance_check_catches_orders_into_that_replaces() {
+    // orders_into must append to the caller's buffer what orders returns; one that clears it
+    // first would drop the orders of the wavelengths before (the per-frequency rule reads a
+    // level's points through one buffer)
+    #[derive(Debug)]
+    struct Replacing;
+    impl optics::LensModel for Replacing {
+        fn f_number(&self) -> f64 {
+            2.0
+        }
+        fn focal_length(&self) -> f64 {
+            1e-2
+        }
+        fn orders(&self, _: f64, _: optics::Field) -> Vec<optics::Order> {
+            vec![optics::Order::new(0.5, optics::Pupil::Full, optics::Wavefront::defocus(1e-7))]
+        }
+        fn orders_into(&self, wavelength_m: f64, field: optics::Field, out: &mut Vec<optics::Order>) {
+            *out = self.orders(wavelength_m, field);
+        }
+    }
+    let error = check_lens(&Replacing, &band(800.0, 10.0)).unwrap_err();
+    assert!(error.contains("orders_into"), "{error}");
+}
+
 // ---- wavefront sign (docs/physics.md, "Sign of the wavefront") ----
 
 const F0: f64 = 3.36e-3;

@@ -126,10 +126,12 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
         s,
         "Machine: {}; load average (1, 5, 15 min) {} at the start of the run and {} at its end: the machine \
          is shared, and a load above its core count slows every row. Times are medians of repeated \
-         single-threaded calls in a release build.\n",
+         single-threaded calls in a release build for the CPU it runs on (`target-cpu=native` in \
+         `.cargo/config.toml`, ARCHITECTURE.md \"Build settings\"; vector extensions in this build: {}).\n",
         machine(),
         context.load.0,
-        context.load.1
+        context.load.1,
+        vector_extensions()
     );
     let _ = writeln!(s, "![error against time](docs/benchmarks/accuracy.svg)\n");
 
@@ -353,4 +355,18 @@ fn map_section(s: &mut String, m: &map::Map) {
         );
     }
     let _ = writeln!(s);
+}
+
+/// The vector extensions this report was compiled with (the build's target features), or the
+/// baseline's: the times depend on them (ARCHITECTURE.md, "Build settings").
+fn vector_extensions() -> String {
+    let features = [
+        ("SSE2", cfg!(target_feature = "sse2")),
+        ("AVX2", cfg!(target_feature = "avx2")),
+        ("FMA", cfg!(target_feature = "fma")),
+        ("AVX-512F", cfg!(target_feature = "avx512f")),
+        ("NEON", cfg!(target_feature = "neon")),
+    ];
+    let on: Vec<&str> = features.iter().filter(|(_, on)| *on).map(|(name, _)| *name).collect();
+    if on.is_empty() { "none beyond the baseline".to_owned() } else { on.join(", ") }
 }
