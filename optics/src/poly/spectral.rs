@@ -1502,26 +1502,37 @@ pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> 
 mod tests {
     use super::*;
 
+    /// Uniform numbers in [−½, ½) from a xorshift stream seeded with `seed`: deterministic
+    /// noise for test tables.
+    fn uniform_noise(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
+    /// The spectrometer scene's kind of table: an 8th-power super-Gaussian band of 0.9 at
+    /// 825 nm (26 nm half width) on a 0.002 floor with ±0.0005 of `noise`, 1601 samples at
+    /// 0.25 nm over 600–1000 nm: (wavelengths, values).
+    fn noisy_band(noise: &mut impl FnMut() -> f64) -> (Vec<f64>, Vec<f64>) {
+        let wavelengths: Vec<f64> = (0..1601).map(|i| 600e-9 + 0.25e-9 * i as f64).collect();
+        let values = wavelengths
+            .iter()
+            .map(|&l| 0.002 + 0.9 * (-((l - 825e-9) / 26e-9).powi(8)).exp() + 0.001 * noise())
+            .map(|v: f64| v.max(0.0))
+            .collect();
+        (wavelengths, values)
+    }
+
     /// The exact moments of a piecewise-polynomial density (a noisy 0.25 nm table × λ × a
     /// constant, kinks at every sample) against the quadrature form of the same density, to
     /// degree 128 (the finest level's), on panels inside the table, across one sample, and
     /// reaching beyond both ends of its support; relative to the panel's mass.
     #[test]
     fn exact_moments_match_the_quadrature() {
-        let n = 1601;
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut noise = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let wavelengths: Vec<f64> = (0..n).map(|i| 600e-9 + 0.25e-9 * i as f64).collect();
-        let values: Vec<f64> = wavelengths
-            .iter()
-            .map(|&l| 0.002 + 0.9 * (-((l - 825e-9) / 26e-9).powi(8)).exp() + 0.001 * noise())
-            .map(|v: f64| v.max(0.0))
-            .collect();
+        let (wavelengths, values) = noisy_band(&mut uniform_noise(0x2545_f491_4f6c_dd1d));
         let table = radiometry::Sampled::new(wavelengths, values).unwrap();
         let detected =
             Spectrum::product(vec![Spectrum::Sampled(table), Spectrum::Linear { slope: 1.0 }, Spectrum::Constant(0.3)]);
@@ -1561,19 +1572,8 @@ mod tests {
     /// 1.6e-13 there for (b), ≤ 7e-14 elsewhere).
     #[test]
     fn factored_moments_match_the_unfactored_sums() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut noise = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let wavelengths: Vec<f64> = (0..1601).map(|i| 600e-9 + 0.25e-9 * i as f64).collect();
-        let values: Vec<f64> = wavelengths
-            .iter()
-            .map(|&l| 0.002 + 0.9 * (-((l - 825e-9) / 26e-9).powi(8)).exp() + 0.001 * noise())
-            .map(|v: f64| v.max(0.0))
-            .collect();
+        let mut noise = uniform_noise(0x9e37_79b9_7f4a_7c15);
+        let (wavelengths, values) = noisy_band(&mut noise);
         let table = || Spectrum::Sampled(radiometry::Sampled::new(wavelengths.clone(), values.clone()).unwrap());
         // (b): a smooth 10 nm table (a QE curve) over 590–1010 nm
         let coarse: Vec<f64> = (0..43).map(|i| 590e-9 + 10e-9 * i as f64).collect();
