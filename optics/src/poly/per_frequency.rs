@@ -81,10 +81,10 @@ struct Fresh {
 }
 
 impl Fresh {
-    /// The orders of point `k` of the level's new ones.
-    fn point(&self, k: usize) -> &[OrderAt] {
-        let start = if k == 0 { 0 } else { self.ends[k - 1] };
-        &self.orders[start..self.ends[k]]
+    /// Where the orders of point `k` of the level's new ones stand in `orders` (and their OTFs
+    /// in the level's list of them).
+    fn range(&self, k: usize) -> std::ops::Range<usize> {
+        (if k == 0 { 0 } else { self.ends[k - 1] })..self.ends[k]
     }
 }
 
@@ -163,7 +163,7 @@ impl Levelled {
             let spread = if spread.is_finite() { spread.clamp(1.0, LEBESGUE) } else { LEBESGUE };
             let fresh = &self.fresh[level];
             let efficiency = (0..fresh.ends.len())
-                .map(|k| fresh.point(k).iter().map(|o| o.efficiency.abs()).sum::<f64>())
+                .map(|k| fresh.orders[fresh.range(k)].iter().map(|o| o.efficiency.abs()).sum::<f64>())
                 .fold(0.0, f64::max);
             self.amplification[level] = spread * efficiency.max(f64::MIN_POSITIVE);
         }
@@ -184,10 +184,9 @@ impl Levelled {
         crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
         evaluations.set(evaluations.get() + pairs.len());
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
-        let mut start = 0;
-        for (k, &end) in (first..).step_by(step).zip(&fresh.ends) {
-            values[k] = fresh.orders[start..end].iter().zip(&otfs[start..end]).map(|(o, v)| o.efficiency * v).sum();
-            start = end;
+        for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
+            let range = fresh.range(point);
+            values[k] = fresh.orders[range.clone()].iter().zip(&otfs[range]).map(|(o, v)| o.efficiency * v).sum();
         }
     }
 
