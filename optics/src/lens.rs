@@ -69,6 +69,14 @@ pub enum Pupil {
     /// may be set for the Fraunhofer check. On the exact 1-D path with other full-pupil orders,
     /// or beside the FFT layer's grids; the spectral panels are cut at the table's wavelengths.
     Table(Arc<crate::OtfTable>),
+    /// The full circular aperture with a radially symmetric field given as data
+    /// ([`crate::radial::RadialPupil`]: an amplitude profile, wavefront terms beyond the order's
+    /// defocus, Zernike terms): a designer's phase profile or meta-atom library. The order's
+    /// `defocus_m` is the profile's best-fit defocus plus any other (build it with
+    /// [`Order::radial`]); its other Seidel terms add as on [`Full`](Pupil::Full). Symmetric
+    /// (every Zernike term `m = 0`, no other Seidel term) it is computed by the radial engine
+    /// (the autocorrelation integral, `radial` module); otherwise on the FFT path.
+    Radial(Arc<crate::radial::RadialPupil>),
 }
 
 impl Pupil {
@@ -79,7 +87,7 @@ impl Pupil {
     /// with supersampled edge pixels.
     pub fn area_fraction(&self) -> f64 {
         match self {
-            Pupil::Full | Pupil::Table(_) => 1.0,
+            Pupil::Full | Pupil::Table(_) | Pupil::Radial(_) => 1.0,
             Pupil::Aperture(a) => a.area_fraction(),
             Pupil::Zones(zones) => zones.iter().map(|z| z.amplitude * z.amplitude * z.aperture.area_fraction()).sum(),
         }
@@ -193,6 +201,16 @@ impl Order {
     /// An order through `pupil` with `efficiency` and `wavefront`.
     pub fn new(efficiency: f64, pupil: Pupil, wavefront: Wavefront) -> Order {
         Order { efficiency, pupil, wavefront }
+    }
+
+    /// An order through the radially symmetric pupil `pupil` ([`Pupil::Radial`]) whose defocus
+    /// is `wavefront.defocus_m` plus the pupil's best-fit defocus
+    /// ([`RadialPupil::fitted_defocus_m`](crate::radial::RadialPupil::fitted_defocus_m)), which
+    /// the pupil leaves out of its own terms: the order's `W020` is then the defocus that sizes
+    /// the spectral panels and the Fraunhofer check.
+    pub fn radial(efficiency: f64, pupil: Arc<crate::radial::RadialPupil>, wavefront: Wavefront) -> Order {
+        let wavefront = Wavefront { defocus_m: wavefront.defocus_m + pupil.fitted_defocus_m(), ..wavefront };
+        Order { efficiency, pupil: Pupil::Radial(pupil), wavefront }
     }
 }
 

@@ -38,6 +38,7 @@ mod lens;
 mod otf;
 mod poly;
 pub mod quad;
+pub mod radial;
 pub mod reference;
 mod table;
 #[cfg(feature = "testkit")]

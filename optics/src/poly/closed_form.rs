@@ -63,6 +63,7 @@ impl Closed {
                 scale: 1.0,
                 shift: [0.0, 0.0],
                 table: None,
+                radial: None,
             });
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len() });

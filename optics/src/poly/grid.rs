@@ -383,7 +383,13 @@ impl FftLayer {
             _ => self.pupil(order)?,
         };
         let mut otf = Otf::new();
-        self.plan.otf(&self.pupils[slot].1, lambda, &mut otf);
+        match &order.pupil {
+            Pupil::Radial(radial) => {
+                let (field, weight) = radial_field(&self.pupils[slot].1, radial, lambda);
+                self.plan.otf_of_field(&field, weight, &mut otf);
+            }
+            _ => self.plan.otf(&self.pupils[slot].1, lambda, &mut otf),
+        }
         Ok(FftKind::Grid(otf))
     }
 
@@ -394,7 +400,11 @@ impl FftLayer {
             Pupil::Aperture(a) => a.clone(),
             _ => self.circle.clone(),
         };
-        let aberrations = order.wavefront.aberrations();
+        let mut aberrations = order.wavefront.aberrations();
+        if let Pupil::Radial(radial) = &order.pupil {
+            // the symmetric part is added per pixel (`radial_field`); the rest is sampled here
+            aberrations.zernike_noll_m = radial.asymmetric_zernike();
+        }
         let slot = match self.pupils.iter().position(|(a, _)| Arc::ptr_eq(a, &aperture)) {
             Some(i) => {
                 self.pupils[i].1.set_aberrations(&aberrations)?;
@@ -442,6 +452,38 @@ impl FftLayer {
         self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
         Ok(otf)
     }
+}
+
+/// The field of a radial pupil ([`Pupil::Radial`]) on the samples of `sampled` (the full circle
+/// with the order's other aberrations): each transmitting pixel's area fraction times the
+/// profile's amplitude at its centre, with the profile's OPD beyond the defocus added to the
+/// sampled OPD; and its power `Σ f A²` (pixel units), the OTF's normalization.
+fn radial_field(
+    sampled: &crate::fft::SampledPupil,
+    radial: &crate::radial::RadialPupil,
+    lambda: f64,
+) -> (Vec<Complex64>, f64) {
+    let n = sampled.n();
+    let h = 2.0 / n as f64;
+    let k = 2.0 * PI / lambda;
+    let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+    let mut weight = 0.0;
+    for j in 0..n {
+        let y = -1.0 + (j as f64 + 0.5) * h;
+        for i in 0..n {
+            let idx = j * n + i;
+            if area[idx] <= 0.0 {
+                continue;
+            }
+            let x = -1.0 + (i as f64 + 0.5) * h;
+            let q = (x * x + y * y).min(1.0);
+            let a = radial.amplitude(q);
+            weight += area[idx] * a * a;
+            field[idx] = Complex64::from_polar(area[idx] * a, k * (opd[idx] + radial.opd_beyond_defocus_m(q)));
+        }
+    }
+    (field, weight)
 }
 
 /// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):

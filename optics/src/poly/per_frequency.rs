@@ -296,7 +296,7 @@ impl<'a> PerFrequency<'a> {
             nodes.panels.push(Panel { lo: p.panel.a, hi: p.panel.b, start, end: nodes.nodes.len() });
         }
         // only centred circles with defocus: no FFT grid, no table, no image shift
-        if nodes.needs_grid || nodes.shifted() || nodes.nodes.iter().any(|n| n.table.is_some()) {
+        if nodes.needs_grid || nodes.shifted() || nodes.nodes.iter().any(|n| !n.is_defocused_circle()) {
             return None;
         }
         nodes.sum_weights();

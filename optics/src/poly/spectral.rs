@@ -30,6 +30,7 @@ use radiometry::Spectrum;
 
 use crate::lens::{Field, LensModel, Order, Pupil};
 use crate::otf::{defocus_otf, pixel_mtf};
+use crate::radial::RadialOrder;
 use crate::table::OtfTable;
 use crate::{Error, quad};
 
@@ -51,6 +52,9 @@ pub(super) struct Node {
     pub shift: [f64; 2],
     /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
     pub table: Option<Arc<OtfTable>>,
+    /// the order's radially symmetric pupil ([`Pupil::Radial`]) prepared at this wavelength,
+    /// computed by the radial engine instead of the defocused OTF (where it needs no grid)
+    pub radial: Option<Arc<RadialOrder>>,
 }
 
 impl Node {
@@ -70,6 +74,12 @@ impl Node {
                 Pupil::Table(t) => Some(t.clone()),
                 _ => None,
             },
+            radial: match &order.pupil {
+                Pupil::Radial(p) if !needs_grid(order, false) => {
+                    Some(Arc::new(RadialOrder::new(p.clone(), order.wavefront.defocus_m, lambda)))
+                }
+                _ => None,
+            },
         };
         if let Some(r) = irises.and_then(|na| reduced_circle(order, na)) {
             node.w020 = r.defocus_m;
@@ -83,28 +93,41 @@ impl Node {
     /// `azimuth_from_field` from the field direction (a table's T/S; the defocused OTF of a
     /// centred circle does not depend on it).
     pub fn otf(&self, s: f64, frequency: f64, azimuth_from_field: f64) -> f64 {
-        match &self.table {
-            None => defocus_otf(s / self.scale, self.w020 / self.lambda),
-            Some(t) => t.value(self.lambda, frequency, azimuth_from_field),
+        match (&self.table, &self.radial) {
+            (Some(t), _) => t.value(self.lambda, frequency, azimuth_from_field),
+            (None, Some(r)) => r.otf(s, RADIAL_ACCURACY),
+            (None, None) => defocus_otf(s / self.scale, self.w020 / self.lambda),
         }
     }
+
+    /// Whether the node's OTF is the defocused circle's (neither a table nor a radial pupil).
+    pub fn is_defocused_circle(&self) -> bool {
+        self.table.is_none() && self.radial.is_none()
+    }
 }
+
+/// Absolute accuracy of one radial pupil's OTF value (`radial::RadialOrder::otf`): well below
+/// any tolerance of the mean, as the exact 1-D OTF is exact to rounding.
+const RADIAL_ACCURACY: f64 = 1e-12;
 
 /// [`Node::otf`] of each of `nodes` at `nu` (cycles/m; `f_number` of the lens, a table read along
 /// `azimuth_from_field`), in order: the defocused ones all at once
 /// ([`crate::otf::defocus_otf_many`], the Bessel series in interleaved lanes).
 pub(super) fn node_otfs(nodes: &[&Node], nu: f64, f_number: f64, azimuth_from_field: f64) -> Vec<f64> {
     let nuf = nu * f_number;
-    let points: Vec<(f64, f64)> =
-        nodes.iter().filter(|n| n.table.is_none()).map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda)).collect();
+    let points: Vec<(f64, f64)> = nodes
+        .iter()
+        .filter(|n| n.is_defocused_circle())
+        .map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
+        .collect();
     let mut defocused = vec![0.0; points.len()];
     crate::otf::defocus_otf_many(&points, &mut defocused);
     let mut next = defocused.into_iter();
     nodes
         .iter()
-        .map(|n| match n.table {
-            None => next.next().unwrap_or(0.0),
-            Some(_) => n.otf(nuf * n.lambda, nu, azimuth_from_field),
+        .map(|n| match n.is_defocused_circle() {
+            true => next.next().unwrap_or(0.0),
+            false => n.otf(nuf * n.lambda, nu, azimuth_from_field),
         })
         .collect()
 }
@@ -130,6 +153,7 @@ pub(super) fn needs_grid(order: &Order, irises: bool) -> bool {
     match &order.pupil {
         Pupil::Full => !order.wavefront.is_defocus_only(),
         Pupil::Table(_) => false,
+        Pupil::Radial(p) => !(p.is_symmetric() && order.wavefront.is_defocus_only()),
         Pupil::Aperture(a) => !(irises && order.wavefront.is_defocus_only() && a.as_circle().is_some()),
         _ => true,
     }

@@ -6,6 +6,7 @@ mod line;
 mod orders;
 mod otf;
 mod properties;
+mod radial;
 mod reference;
 mod spectral;
 mod tables;
