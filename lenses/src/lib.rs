@@ -22,6 +22,11 @@
 //!   ([`optics::Pupil::Table`]) with efficiency and transmission tables, a contained pixel MTF
 //!   divided out; the tables come from text: [`parse_zemax_fft_mtf`] (Zemax FFT MTF listings in
 //!   UTF-16, UTF-8 or Latin-1) with [`zemax_otf_table`], or [`parse_mtf_csv`].
+//! - [`PhaseLens`]: a designer's lens given by its phase profile at λ0 (Zemax Binary 2
+//!   coefficients, [`binary2_profile`], or a radial table), with an explicit [`Dispersion`]
+//!   (geometric phase, a diffractive kinoform of design order p, a fixed optical path), evaluated
+//!   against the exact reference sphere ([`optics::Pupil::Radial`]; off axis the oblique wave's
+//!   field aberrations).
 //! - [`presets`]: the paper's lens and published devices by name ([`preset`], [`preset_names`]).
 //!
 //! The wavefront sign is one (docs/physics.md, "Sign of the wavefront"): `W020 > 0` focuses
@@ -55,6 +60,7 @@ mod chromatic;
 mod dispersion;
 mod harmonic;
 mod interleaved;
+mod phase;
 pub mod presets;
 mod refractive;
 mod segmented;
@@ -64,6 +70,7 @@ pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
+pub use phase::{Dispersion, PhaseLens, binary2_profile, hyperbolic_binary2};
 pub use presets::{preset, preset_names};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
@@ -125,6 +132,10 @@ pub enum Error {
     /// An OTF table that optics refuses (a row not 1 at zero frequency, values beyond [−1, 1], …).
     #[error("OTF table: {0}")]
     Table(optics::Error),
+    /// A profile or pupil that optics refuses (a radial table not reaching the rim, a Noll
+    /// index out of range, …).
+    #[error("{0}")]
+    Pupil(optics::Error),
     /// A preset name that does not exist.
     #[error("unknown lens preset `{name}`: expected one of {known}")]
     UnknownPreset {

@@ -264,6 +264,7 @@ impl Spline {
 /// profile's own defocus is carried by the order ([`fitted_defocus_m`](Self::fitted_defocus_m)).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RadialPupil {
+    oblique: Option<Oblique>,
     amplitude: Option<Arc<RadialProfile>>,
     terms: Vec<(f64, Arc<RadialProfile>)>,
     zernike_noll_m: Vec<(usize, f64)>,
@@ -312,7 +313,7 @@ impl RadialPupil {
                 *acc += c * p;
             }
         }
-        let mut pupil = RadialPupil { amplitude, terms, zernike_noll_m, zernike_even, fit: 0.0 };
+        let mut pupil = RadialPupil { oblique: None, amplitude, terms, zernike_noll_m, zernike_even, fit: 0.0 };
         let even_fit = if pupil.zernike_even.is_empty() {
             0.0
         } else {
@@ -328,9 +329,24 @@ impl RadialPupil {
         self.fit
     }
 
-    /// Whether the pupil is radially symmetric (every Zernike term has `m = 0`).
+    /// Whether the pupil is radially symmetric (every Zernike term has `m = 0`, no oblique
+    /// incidence).
     pub fn is_symmetric(&self) -> bool {
-        self.zernike_noll_m.iter().all(|&(j, c)| c == 0.0 || noll_to_nm(j).1 == 0)
+        self.oblique.is_none() && self.zernike_noll_m.iter().all(|&(j, c)| c == 0.0 || noll_to_nm(j).1 == 0)
+    }
+
+    /// This pupil seen from a field point off axis ([`Oblique`]): its OPD gains the difference
+    /// between the oblique wave's path to the chief ray's image point and the on-axis path to
+    /// the axial point, which holds the field's coma, astigmatism and field curvature. The pupil
+    /// is then not symmetric (the FFT path).
+    pub fn with_oblique(mut self, oblique: Oblique) -> RadialPupil {
+        self.oblique = Some(oblique);
+        self
+    }
+
+    /// The off-axis part of the OPD (m) at normalized pupil coordinates `(x, y)` (0 on axis).
+    pub fn oblique_opd_m(&self, x: f64, y: f64) -> f64 {
+        self.oblique.map_or(0.0, |o| o.opd_m(x, y))
     }
 
     /// The Zernike terms `(Noll index, metres RMS)`.
@@ -373,6 +389,51 @@ impl RadialPupil {
         let mut all = self.zernike_noll_m.clone();
         all.extend_from_slice(zernike_noll_m);
         RadialPupil::new(self.amplitude.clone(), self.terms.clone(), all)
+    }
+}
+
+/// A plane wave from a field point off axis through a thin lens whose aperture is its stop
+/// (docs/physics.md, "Designs given as data"): the chief ray crosses the lens centre undeviated
+/// and meets the detector at `h = z (tan θx, tan θy)`. With the wave's direction cosines `α` and
+/// pupil coordinates `X = R (x, y)`, the OPD a lens phase adds to against the reference sphere
+/// centred on `h` is `α·X + |X − P| − |P|` (`P = (h, z)`), which on axis is the sag
+/// `√(|X|² + z²) − z`. [`opd_m`](Oblique::opd_m) is the difference from that on-axis sag: the
+/// field aberrations (coma, astigmatism, field curvature) of a lens designed on axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Oblique {
+    radius_m: f64,
+    distance_m: f64,
+    alpha: [f64; 2],
+    image: [f64; 2],
+}
+
+impl Oblique {
+    /// Incidence at the field angles `(x_rad, y_rad)` (chief-ray angles, |θ| < 80°) on a lens of
+    /// aperture radius `radius_m` with the detector at `distance_m`.
+    pub fn new(radius_m: f64, distance_m: f64, x_rad: f64, y_rad: f64) -> Result<Oblique, Error> {
+        for (name, v) in [("field angle x", x_rad), ("field angle y", y_rad)] {
+            if !(v.is_finite() && v.abs() < 80f64.to_radians()) {
+                return Err(Error::InvalidParameter { name, value: v, expected: "finite, |θ| < 80° (radians)" });
+            }
+        }
+        for (name, v) in [("aperture radius", radius_m), ("detector distance", distance_m)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidParameter { name, value: v, expected: "finite and > 0 m" });
+            }
+        }
+        let (tx, ty) = (x_rad.tan(), y_rad.tan());
+        let norm = (1.0 + tx * tx + ty * ty).sqrt();
+        Ok(Oblique { radius_m, distance_m, alpha: [tx / norm, ty / norm], image: [distance_m * tx, distance_m * ty] })
+    }
+
+    /// The OPD (m) at normalized pupil coordinates `(x, y)` beyond the on-axis sag.
+    pub fn opd_m(&self, x: f64, y: f64) -> f64 {
+        let (xm, ym, z) = (self.radius_m * x, self.radius_m * y, self.distance_m);
+        let [hx, hy] = self.image;
+        let to_image = ((xm - hx).powi(2) + (ym - hy).powi(2) + z * z).sqrt() - (hx * hx + hy * hy + z * z).sqrt();
+        let r2 = xm * xm + ym * ym;
+        let sag = r2 / ((r2 + z * z).sqrt() + z);
+        self.alpha[0] * xm + self.alpha[1] * ym + to_image - sag
     }
 }
 

@@ -480,7 +480,8 @@ fn radial_field(
             let q = (x * x + y * y).min(1.0);
             let a = radial.amplitude(q);
             weight += area[idx] * a * a;
-            field[idx] = Complex64::from_polar(area[idx] * a, k * (opd[idx] + radial.opd_beyond_defocus_m(q)));
+            let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
+            field[idx] = Complex64::from_polar(area[idx] * a, k * w);
         }
     }
     (field, weight)

@@ -1,0 +1,295 @@
+//! A lens given by its phase profile: a designer's metalens or diffractive lens (Zemax Binary 2
+//! coefficients or a radial phase table), evaluated against the exact reference sphere.
+
+use std::sync::Arc;
+
+use optics::radial::{Oblique, RadialProfile, RadialPupil};
+use optics::{Field, LensModel, Order, Wavefront};
+
+use crate::Error;
+use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
+use crate::harmonic::{HARMONIC_ORDER_REACH, sinc};
+use crate::refractive::Sellmeier;
+
+/// How the phase given at the design wavelength λ0 behaves at other wavelengths
+/// (docs/physics.md, "Designs given as data"). There is no default: a profile alone does not say.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Dispersion {
+    /// The radian phase is the same at every wavelength (a geometric / Pancharatnam–Berry
+    /// metalens, the idealized chromatic metalens): one focusing order, `f ∝ 1/λ`,
+    /// `W_λ = (λ/2π) φ0 + sag`.
+    GeometricPhase,
+    /// A kinoform wrapped every `2π p` at λ0 (a height profile without material dispersion): the
+    /// orders `m ≥ 1` with `|m − pλ0/λ| ≤ 3` carry `τ_m = τ sinc²(pλ0/λ − m)` and the phase
+    /// `(m/p) φ0` (the harmonic family generalized to any profile; `p = 1` is the ordinary
+    /// diffractive lens).
+    Diffractive {
+        /// The design order `p` (1 to 1000).
+        design_order: u32,
+    },
+    /// The optical path is fixed (a refractive surface): `W_λ = (λ0/2π) φ0 g(λ) + sag`, with
+    /// `g = (n(λ) − 1)/(n(λ0) − 1)` for a glass, 1 without.
+    Refractive {
+        /// The glass whose dispersion scales the path, if any.
+        glass: Option<Sellmeier>,
+    },
+}
+
+impl Dispersion {
+    /// The name used in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Dispersion::GeometricPhase => "geometric-phase",
+            Dispersion::Diffractive { .. } => "diffractive",
+            Dispersion::Refractive { .. } => "refractive",
+        }
+    }
+}
+
+/// A lens given by its phase `φ0(ρ)` at the design wavelength (radians, `ρ = r/R` with `R` the
+/// aperture radius `f0/(2F#)`), its wavelength behaviour ([`Dispersion`]), an optional field
+/// amplitude profile, and its efficiency τ(λ) and transmission T(λ) (fractions of the light on
+/// the aperture; the profile carries the shape of the pupil field, not its power).
+///
+/// Wavefront (docs/physics.md, "Designs given as data"; the sign of [`optics::Wavefront`]): the
+/// detector at `z = f0`, the field after the lens `A(ρ) exp(i φ_λ(ρ))` on an on-axis plane wave,
+/// and `W_λ(ρ) = (λ/2π) φ_λ(ρ) + (√(R²ρ² + z²) − z)` against the **exact** reference sphere. The
+/// hyperbolic profile `φ0 = −(2π/λ0)(√(r² + f0²) − f0)` is diffraction-limited at λ0; the
+/// quadratic one carries spherical aberration. Each order goes through
+/// [`optics::Pupil::Radial`]: the radial engine on axis, the FFT path off axis, where the
+/// oblique wave adds the field's coma, astigmatism and field curvature ([`Oblique`]: the
+/// aperture is the stop, so the chief ray crosses the lens centre undeviated).
+#[derive(Clone, Debug)]
+pub struct PhaseLens {
+    f_number: f64,
+    focal_length: f64,
+    design_wavelength: f64,
+    phase: Arc<RadialProfile>,
+    amplitude: Option<Arc<RadialProfile>>,
+    sphere: Arc<RadialProfile>,
+    dispersion: Dispersion,
+    efficiency: Curve,
+    transmission: Curve,
+    zernike_noll_m: Vec<(usize, f64)>,
+    /// how the profile was given, for reports
+    source: String,
+}
+
+impl PhaseLens {
+    /// A phase lens of working F-number `f_number` (≥ 0.5) with the detector at
+    /// `focal_length_m`, design wavelength `design_wavelength_m`, phase `phase` (radians at λ0
+    /// against `ρ = r/R`), optional field `amplitude` (shape only), `dispersion`, efficiency and
+    /// transmission (fractions, τ ≤ T), and `source` (how the profile was given, for reports).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        f_number: f64,
+        focal_length_m: f64,
+        design_wavelength_m: f64,
+        phase: Arc<RadialProfile>,
+        amplitude: Option<Arc<RadialProfile>>,
+        dispersion: Dispersion,
+        efficiency: Curve,
+        transmission: Curve,
+        source: String,
+    ) -> Result<PhaseLens, Error> {
+        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+        check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
+        if let Dispersion::Diffractive { design_order } = dispersion {
+            let p = f64::from(design_order);
+            check("design_order", p, (1.0..=1000.0).contains(&p), "a whole number from 1 to 1000")?;
+        }
+        if let Dispersion::Refractive { glass: Some(g) } = &dispersion
+            && g.index(design_wavelength_m).is_none()
+        {
+            return Err(Error::OutOfRange {
+                name: "design_wavelength",
+                value: design_wavelength_m,
+                expected: "inside the glass's Sellmeier range",
+            });
+        }
+        check_fraction("efficiency", &efficiency)?;
+        check_fraction("transmission", &transmission)?;
+        let eff = efficiency.clone();
+        check_efficiency_below_transmission(&|l| eff.value(l), &[&efficiency], &transmission, design_wavelength_m)?;
+        let radius = 0.5 * focal_length_m / f_number;
+        let sphere = Arc::new(RadialProfile::reference_sphere(radius, focal_length_m).map_err(optics_error)?);
+        Ok(PhaseLens {
+            f_number,
+            focal_length: focal_length_m,
+            design_wavelength: design_wavelength_m,
+            phase,
+            amplitude,
+            sphere,
+            dispersion,
+            efficiency,
+            transmission,
+            zernike_noll_m: Vec::new(),
+            source,
+        })
+    }
+
+    /// This lens with Zernike terms `(Noll index, metres RMS)` added to every order's wavefront
+    /// (an alignment or fabrication error on top of the design).
+    pub fn with_zernike(mut self, zernike_noll_m: Vec<(usize, f64)>) -> Result<PhaseLens, Error> {
+        RadialPupil::new(None, vec![], zernike_noll_m.clone()).map_err(optics_error)?;
+        self.zernike_noll_m = zernike_noll_m;
+        Ok(self)
+    }
+
+    /// The family's name.
+    pub fn kind(&self) -> &'static str {
+        "phase"
+    }
+
+    /// The dispersion model.
+    pub fn dispersion(&self) -> &Dispersion {
+        &self.dispersion
+    }
+
+    /// The aperture radius `R = f0/(2F#)`, m.
+    pub fn aperture_radius(&self) -> f64 {
+        0.5 * self.focal_length / self.f_number
+    }
+
+    /// The phase at λ0 (radians) at normalized radius `rho`.
+    pub fn phase_at(&self, rho: f64) -> f64 {
+        self.phase.value(rho * rho)
+    }
+
+    /// `(m, efficiency, metres of path per radian of φ0)` of each order at `wavelength_m`.
+    fn order_list(&self, wavelength_m: f64) -> Vec<(i64, f64, f64)> {
+        let tau = self.efficiency.value(wavelength_m);
+        let per_radian = wavelength_m / std::f64::consts::TAU;
+        match &self.dispersion {
+            Dispersion::GeometricPhase => vec![(1, tau, per_radian)],
+            Dispersion::Refractive { glass } => {
+                let g = glass.as_ref().map_or(1.0, |g| {
+                    let n0 = g.index(self.design_wavelength).unwrap_or(1.5);
+                    g.index(wavelength_m).map_or(1.0, |n| (n - 1.0) / (n0 - 1.0))
+                });
+                vec![(1, tau, self.design_wavelength / std::f64::consts::TAU * g)]
+            }
+            Dispersion::Diffractive { design_order } => {
+                let p = f64::from(*design_order);
+                let alpha = p * self.design_wavelength / wavelength_m;
+                let lo = (alpha - HARMONIC_ORDER_REACH).ceil().max(1.0);
+                let hi = (alpha + HARMONIC_ORDER_REACH).floor();
+                let mut out = Vec::new();
+                let mut m = lo;
+                while m <= hi {
+                    out.push((m as i64, tau * sinc(alpha - m).powi(2), per_radian * m / p));
+                    m += 1.0;
+                }
+                out
+            }
+        }
+    }
+
+    /// The pupil of one order: the phase term scaled to metres, the reference sphere, the
+    /// amplitude, the Zernike terms, and off axis the oblique incidence.
+    fn pupil(&self, path_per_radian: f64, field: Field) -> RadialPupil {
+        let terms = vec![(path_per_radian, self.phase.clone()), (1.0, self.sphere.clone())];
+        // validated at construction: the terms are finite, the Zernike indices in range
+        let pupil = RadialPupil::new(self.amplitude.clone(), terms, self.zernike_noll_m.clone()).unwrap_or_default();
+        if field.is_on_axis() {
+            return pupil;
+        }
+        match Oblique::new(self.aperture_radius(), self.focal_length, field.x_rad, field.y_rad) {
+            Ok(o) => pupil.with_oblique(o),
+            Err(_) => pupil,
+        }
+    }
+}
+
+fn optics_error(e: optics::Error) -> Error {
+    Error::Pupil(e)
+}
+
+impl LensModel for PhaseLens {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        self.order_list(wavelength_m)
+            .into_iter()
+            .map(|(_, efficiency, per_radian)| {
+                Order::radial(efficiency, Arc::new(self.pupil(per_radian, field)), Wavefront::default())
+            })
+            .collect()
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.transmission.value(wavelength_m)
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        Some(self.design_wavelength)
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        let mut out = self.efficiency.breakpoints().to_vec();
+        out.extend_from_slice(self.transmission.breakpoints());
+        out.sort_by(f64::total_cmp);
+        out.dedup();
+        out
+    }
+
+    fn describe(&self) -> String {
+        let r = optics::round_for_display;
+        let dispersion = match &self.dispersion {
+            Dispersion::Diffractive { design_order } => format!("diffractive, design order p = {design_order}"),
+            Dispersion::Refractive { glass: Some(_) } => "refractive, glass dispersion".to_string(),
+            other => other.name().to_string(),
+        };
+        format!(
+            "phase-profile lens F/{} f0 = {} mm at λ0 = {} nm ({}; {dispersion}), against the exact reference sphere",
+            r(self.f_number),
+            r(self.focal_length * 1e3),
+            r(self.design_wavelength * 1e9),
+            self.source,
+        )
+    }
+}
+
+/// The hyperbolic phase `φ0(r) = −(2π/λ0)(√(r² + f0²) − f0)` as Zemax Binary 2 coefficients
+/// `A_1 … A_terms` (radians, `ρ = r/R_norm`): the Taylor series of the hyperbola in `r²`,
+/// `A_i = −(2π/λ0) C(1/2, i) R_norm^{2i} / f0^{2i−1}` (docs/physics.md: four terms reach it to
+/// ~1e-11 m at the paper's aperture).
+pub fn hyperbolic_binary2(focal_length_m: f64, design_wavelength_m: f64, norm_radius_m: f64, terms: usize) -> Vec<f64> {
+    let k = std::f64::consts::TAU / design_wavelength_m;
+    let mut out = Vec::with_capacity(terms);
+    // √(f² + r²) − f = f Σ_{i≥1} C(1/2, i) (r²/f²)^i
+    let mut binom = 1.0; // C(1/2, 0)
+    for i in 1..=terms {
+        let fi = i as f64;
+        binom *= (0.5 - (fi - 1.0)) / fi;
+        out.push(-k * binom * norm_radius_m.powi(2 * i as i32) / focal_length_m.powi(2 * i as i32 - 1));
+    }
+    out
+}
+
+/// A Zemax Binary 2 phase `M Σ_i A_i (r/R_norm)^{2i}` as a profile in `ρ = r/R` of the aperture
+/// radius `aperture_radius_m`: `coefficients[i] = M A_i (R/R_norm)^{2i}`.
+pub fn binary2_profile(
+    coefficients: &[f64],
+    diffraction_order: f64,
+    norm_radius_m: f64,
+    aperture_radius_m: f64,
+) -> Result<RadialProfile, Error> {
+    check("norm_radius", norm_radius_m, norm_radius_m > 0.0, "a finite length > 0 m")?;
+    check("diffraction_order", diffraction_order, diffraction_order != 0.0, "a finite, non-zero number")?;
+    let scale = (aperture_radius_m / norm_radius_m).powi(2);
+    let mut poly = vec![0.0];
+    let mut power = 1.0;
+    for &a in coefficients {
+        power *= scale;
+        poly.push(diffraction_order * a * power);
+    }
+    RadialProfile::even_polynomial(poly).map_err(optics_error)
+}
