@@ -293,3 +293,87 @@ pub fn binary2_profile(
     }
     RadialProfile::even_polynomial(poly).map_err(optics_error)
 }
+
+/// Any lens with Zernike terms `(Noll index, metres RMS)` added to every order's wavefront: an
+/// alignment or fabrication error, or a designer's residual, on top of a family. Orders through
+/// the full aperture become [`optics::Pupil::Radial`] pupils carrying the terms (the radial
+/// engine where every term has `m = 0` and the order no other Seidel term, the FFT path
+/// otherwise); an order through another pupil (an iris, zones, a table) is refused at
+/// construction, as the terms are defined over the full aperture.
+#[derive(Debug)]
+pub struct WithZernike<L> {
+    inner: L,
+    pupil: Arc<RadialPupil>,
+}
+
+impl<L: LensModel> WithZernike<L> {
+    /// `inner` with `zernike_noll_m` on every order; refused where an order of `inner` at
+    /// `probe_wavelength_m` on axis goes through a pupil other than the full aperture.
+    pub fn new(inner: L, zernike_noll_m: Vec<(usize, f64)>, probe_wavelength_m: f64) -> Result<Self, Error> {
+        let pupil = Arc::new(RadialPupil::new(None, vec![], zernike_noll_m).map_err(optics_error)?);
+        for order in inner.orders(probe_wavelength_m, Field::ON_AXIS) {
+            if !matches!(order.pupil, optics::Pupil::Full | optics::Pupil::Radial(_)) {
+                return Err(Error::OutOfRange {
+                    name: "zernike_noll_rms_um",
+                    value: f64::NAN,
+                    expected: "a lens whose orders go through the full aperture (Zernike terms are defined over it; not with an iris, zones or a table)",
+                });
+            }
+        }
+        Ok(WithZernike { inner, pupil })
+    }
+}
+
+impl<L: LensModel> LensModel for WithZernike<L> {
+    fn f_number(&self) -> f64 {
+        self.inner.f_number()
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.inner.focal_length()
+    }
+
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        self.inner
+            .orders(wavelength_m, field)
+            .into_iter()
+            .map(|order| match &order.pupil {
+                optics::Pupil::Full => Order::radial(order.efficiency, self.pupil.clone(), order.wavefront),
+                optics::Pupil::Radial(p) => {
+                    let own = order.wavefront.defocus_m - p.fitted_defocus_m();
+                    match p.with_zernike(self.pupil.zernike_noll_m()) {
+                        Ok(merged) => {
+                            let mut wavefront = order.wavefront;
+                            wavefront.defocus_m = own;
+                            Order::radial(order.efficiency, Arc::new(merged), wavefront)
+                        }
+                        Err(_) => order,
+                    }
+                }
+                _ => order,
+            })
+            .collect()
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.inner.transmission(wavelength_m)
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        self.inner.breakpoints()
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        self.inner.design_wavelength()
+    }
+
+    fn describe(&self) -> String {
+        let terms: Vec<String> = self
+            .pupil
+            .zernike_noll_m()
+            .iter()
+            .map(|(j, c)| format!("Z{j} = {} µm", optics::round_for_display(c * 1e6)))
+            .collect();
+        format!("{} + Zernike (Noll, RMS) {}", self.inner.describe(), terms.join(", "))
+    }
+}

@@ -100,6 +100,12 @@ pub(crate) struct RawLens {
     pub coma_um: Option<f64>,
     pub astigmatism_um: Option<f64>,
     pub field_curvature_um: Option<f64>,
+    pub binary2: Option<Vec<f64>>,
+    pub norm_radius_mm: Option<f64>,
+    pub diffraction_order: Option<f64>,
+    pub phase_csv: Option<String>,
+    pub dispersion: Option<String>,
+    pub zernike_noll_rms_um: Option<Vec<f64>>,
 }
 
 /// A lens family of the scene format.
@@ -111,6 +117,7 @@ pub(crate) enum Model {
     Harmonic,
     Multiplexed,
     Tabulated,
+    Phase,
 }
 
 impl Model {
@@ -122,6 +129,7 @@ impl Model {
             Model::Harmonic => "harmonic",
             Model::Multiplexed => "multiplexed",
             Model::Tabulated => "tabulated",
+            Model::Phase => "phase",
         }
     }
 
@@ -140,14 +148,40 @@ impl Model {
                 "coma_um",
                 "astigmatism_um",
                 "field_curvature_um",
+                "zernike_noll_rms_um",
             ],
-            Model::Refractive => {
-                &["design_wavelength_nm", "glass", "refractive_index", "elements", "coating_reflectance"]
+            Model::Refractive => &[
+                "design_wavelength_nm",
+                "glass",
+                "refractive_index",
+                "elements",
+                "coating_reflectance",
+                "zernike_noll_rms_um",
+            ],
+            Model::Dispersion => &[
+                "design_band_nm",
+                "group_delay_range_fs",
+                "delay_overflow",
+                "efficiency",
+                "transmission",
+                "zernike_noll_rms_um",
+            ],
+            Model::Harmonic => {
+                &["design_wavelength_nm", "design_order", "efficiency", "transmission", "zernike_noll_rms_um"]
             }
-            Model::Dispersion => {
-                &["design_band_nm", "group_delay_range_fs", "delay_overflow", "efficiency", "transmission"]
-            }
-            Model::Harmonic => &["design_wavelength_nm", "design_order", "efficiency", "transmission"],
+            Model::Phase => &[
+                "design_wavelength_nm",
+                "efficiency",
+                "transmission",
+                "binary2",
+                "norm_radius_mm",
+                "diffraction_order",
+                "phase_csv",
+                "dispersion",
+                "design_order",
+                "glass",
+                "zernike_noll_rms_um",
+            ],
             Model::Multiplexed => &[
                 "channels_nm",
                 "layout",
@@ -158,6 +192,7 @@ impl Model {
                 "efficiency",
                 "channel_efficiencies",
                 "transmission",
+                "zernike_noll_rms_um",
             ],
             Model::Tabulated => {
                 &["mtf", "mtf_includes_pixel_um", "mtf_field", "design_wavelength_nm", "efficiency", "transmission"]
@@ -189,8 +224,14 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 31] {
+    fn given(&self) -> [(&'static str, bool); 37] {
         [
+            ("binary2", self.binary2.is_some()),
+            ("norm_radius_mm", self.norm_radius_mm.is_some()),
+            ("diffraction_order", self.diffraction_order.is_some()),
+            ("phase_csv", self.phase_csv.is_some()),
+            ("dispersion", self.dispersion.is_some()),
+            ("zernike_noll_rms_um", self.zernike_noll_rms_um.is_some()),
             ("design_wavelength_nm", self.design_wavelength_nm.is_some()),
             ("design_band_nm", self.design_band_nm.is_some()),
             ("group_delay_range_fs", self.group_delay_range_fs.is_some()),
@@ -235,6 +276,7 @@ pub(crate) fn model(l: &RawLens, o: &Origins) -> Result<Model, Error> {
         "harmonic" => Model::Harmonic,
         "multiplexed" => Model::Multiplexed,
         "tabulated" => Model::Tabulated,
+        "phase" => Model::Phase,
         other => return Err(o.bad("lens.model", quoted(other), MODELS)),
     })
 }
@@ -752,8 +794,185 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             info.notes.push(format!("OTF table from {}", crate::error::shorten(&file)));
             Arc::new(lens)
         }
+        Model::Phase => {
+            let l0 = design_wavelength(o)?;
+            let lens = phase_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?;
+            info.design_wavelength_m = Some(l0);
+            Arc::new(lens)
+        }
+    };
+    let lens = match zernike(l, o)? {
+        Some(terms) if model != Model::Phase => {
+            let probe = info.design_wavelength_m.or(info.channels_m.first().copied()).unwrap_or(550e-9);
+            info.notes.push(zernike_note(&terms));
+            Arc::new(
+                lenses::WithZernike::new(lens, terms, probe)
+                    .map_err(|e| o.domain("lens.zernike_noll_rms_um", "[lens]", e))?,
+            )
+        }
+        _ => lens,
     };
     Ok(BuiltLens { lens, info })
+}
+
+/// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.
+fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error> {
+    let Some(list) = &l.zernike_noll_rms_um else { return Ok(None) };
+    let key = "lens.zernike_noll_rms_um";
+    let max = optics::fft::MAX_NOLL_INDEX;
+    if list.is_empty() || list.len() > max {
+        return Err(o.bad(
+            key,
+            format!("{} terms", list.len()),
+            &format!("1 to {max} coefficients, Z1 first (Noll order, µm RMS of path)"),
+        ));
+    }
+    let mut out = Vec::new();
+    for (i, &c) in list.iter().enumerate() {
+        let item = format!("{key}[{i}]");
+        o.number(&item, c, c.abs() <= 1e3, "a Zernike coefficient in µm RMS, |c| ≤ 1000 µm")?;
+        if c != 0.0 {
+            out.push((i + 1, c * 1e-6));
+        }
+    }
+    Ok(Some(out))
+}
+
+fn zernike_note(terms: &[(usize, f64)]) -> String {
+    let list: Vec<String> = terms.iter().map(|(j, c)| format!("Z{j} = {} µm", num(c * 1e6))).collect();
+    if list.is_empty() {
+        "Zernike terms (Noll, RMS): all zero".to_owned()
+    } else {
+        format!("Zernike terms (Noll, RMS): {}", list.join(", "))
+    }
+}
+
+/// The `model = "phase"` lens: its profile (`binary2` or `phase_csv`), dispersion, efficiency.
+#[allow(clippy::too_many_arguments)]
+fn phase_lens(
+    l: &RawLens,
+    o: &Origins,
+    f_number: f64,
+    f0_m: f64,
+    l0: f64,
+    efficiency: Curve,
+    transmission: &dyn Fn(&Origins, &Curve) -> Result<Curve, Error>,
+    info: &mut LensInfo,
+) -> Result<lenses::PhaseLens, Error> {
+    let radius = 0.5 * f0_m / f_number;
+    let (phase, amplitude, source) = match (&l.binary2, &l.phase_csv) {
+        (Some(_), Some(_)) => {
+            return Err(o.conflict(
+                "lens.phase_csv",
+                "lens.binary2 and lens.phase_csv both given: give one profile (Zemax Binary 2 coefficients, or a radial table)".to_owned(),
+            ));
+        }
+        (None, None) => {
+            return Err(o.bad(
+                "lens.binary2",
+                "nothing",
+                "the phase at λ0: binary2 = [A1, A2, …] (radians, Zemax Binary 2 with norm_radius_mm), or phase_csv = \"file.csv\" (columns r_mm, phase_rad, optional amplitude)",
+            ));
+        }
+        (Some(coefficients), None) => {
+            o.forbid("lens.phase_csv", &l.phase_csv, "lens.binary2")?;
+            for (i, &a) in coefficients.iter().enumerate() {
+                o.number(&format!("lens.binary2[{i}]"), a, a.is_finite(), "a finite coefficient in radians")?;
+            }
+            if coefficients.is_empty() {
+                return Err(o.bad("lens.binary2", "[]", "at least one coefficient A1 (radians)"));
+            }
+            let norm = match l.norm_radius_mm {
+                Some(r) => o.number("lens.norm_radius_mm", r, r > 0.0, "a length > 0 mm")? * 1e-3,
+                None => {
+                    info.notes.push(format!("norm_radius_mm not given: the aperture radius {} mm", num(radius * 1e3)));
+                    radius
+                }
+            };
+            let m = l.diffraction_order.unwrap_or(1.0);
+            let m = o.number(
+                "lens.diffraction_order",
+                m,
+                m != 0.0 && m.abs() <= 1e3,
+                "Zemax's diffraction order M, non-zero (default 1)",
+            )?;
+            let profile = lenses::binary2_profile(coefficients, m, norm, radius)
+                .map_err(|e| o.domain("lens.binary2", "[lens]", e))?;
+            (
+                Arc::new(profile),
+                None,
+                format!(
+                    "Zemax Binary 2, {} terms, R_norm = {} mm, M = {}",
+                    coefficients.len(),
+                    num(norm * 1e3),
+                    num(m)
+                ),
+            )
+        }
+        (None, Some(file)) => {
+            for key in ["norm_radius_mm", "diffraction_order"] {
+                if l.given().iter().any(|(k, g)| *k == key && *g) {
+                    return Err(o.bad(
+                        &format!("lens.{key}"),
+                        "given",
+                        "only with lens.binary2 (a phase table is in r_mm)",
+                    ));
+                }
+            }
+            let path = o.path(file);
+            let table = crate::tables::read_phase_table(&path, radius * 1e3)
+                .map_err(|e| o.table_error("lens.phase_csv", file, e, "a CSV of r_mm, phase_rad[, amplitude]"))?;
+            let rho: Vec<f64> = table.r_mm.iter().map(|r| r * 1e-3 / radius).collect();
+            let phase = optics::radial::RadialProfile::table(rho.clone(), table.phase_rad)
+                .map_err(|e| o.domain("lens.phase_csv", "[lens]", lenses::Error::Pupil(e)))?;
+            let amplitude = match table.amplitude {
+                Some(a) => Some(Arc::new(
+                    optics::radial::RadialProfile::table(rho, a)
+                        .map_err(|e| o.domain("lens.phase_csv", "[lens]", lenses::Error::Pupil(e)))?,
+                )),
+                None => None,
+            };
+            (Arc::new(phase), amplitude, format!("phase table {}", crate::error::shorten(file)))
+        }
+    };
+    let dispersions = "\"geometric-phase\" (radian phase fixed: one order, f ∝ 1/λ), \"diffractive\" (a kinoform wrapped at 2πp: orders m, τ_m = τ sinc²(pλ0/λ − m)) or \"refractive\" (optical path fixed)";
+    let dispersion = match o.require("lens.dispersion", l.dispersion.as_deref(), dispersions)? {
+        "geometric-phase" => {
+            o.forbid("lens.design_order", &l.design_order, "lens.dispersion = \"geometric-phase\"")?;
+            o.forbid("lens.glass", &l.glass, "lens.dispersion = \"geometric-phase\"")?;
+            lenses::Dispersion::GeometricPhase
+        }
+        "diffractive" => {
+            o.forbid("lens.glass", &l.glass, "lens.dispersion = \"diffractive\"")?;
+            let p = l.design_order.unwrap_or(1);
+            if !(1..=1000).contains(&p) {
+                return Err(o.bad("lens.design_order", p, "a whole number from 1 to 1000 (the phase wraps at 2πp)"));
+            }
+            if l.design_order.is_none() {
+                info.notes.push("design_order not given: p = 1 (the ordinary diffractive lens)".to_owned());
+            }
+            lenses::Dispersion::Diffractive { design_order: p }
+        }
+        "refractive" => {
+            o.forbid("lens.design_order", &l.design_order, "lens.dispersion = \"refractive\"")?;
+            let glass = match l.glass.as_deref() {
+                None => None,
+                Some("N-BK7") => Some(Sellmeier::N_BK7),
+                Some(other) => return Err(o.bad("lens.glass", quoted(other), GLASSES)),
+            };
+            lenses::Dispersion::Refractive { glass }
+        }
+        other => return Err(o.bad("lens.dispersion", quoted(other), dispersions)),
+    };
+    let transmission = transmission(o, &efficiency)?;
+    let mut lens =
+        lenses::PhaseLens::new(f_number, f0_m, l0, phase, amplitude, dispersion, efficiency, transmission, source)
+            .map_err(|e| o.domain("lens", "[lens]", e))?;
+    if let Some(terms) = zernike(l, o)? {
+        info.notes.push(zernike_note(&terms));
+        lens = lens.with_zernike(terms).map_err(|e| o.domain("lens.zernike_noll_rms_um", "[lens]", e))?;
+    }
+    Ok(lens)
 }
 
 /// The working F-number from `lens.f_number` or `lens.aperture_diameter_mm` (exactly one).
@@ -846,5 +1065,82 @@ mod tests {
                 (a, b) => panic!("{name}: {:?} against {:?}", a.err().map(|e| e.to_string()), b.err()),
             }
         }
+    }
+
+    fn phase_scene(lens_keys: &str) -> String {
+        crate::PAPER_SCENE.replace(
+            &crate::PAPER_SCENE[crate::PAPER_SCENE.find("[lens]").unwrap()..crate::PAPER_SCENE.find("[source]").unwrap()],
+            &format!("[lens]\nmodel = \"phase\"\nf_number = 2.5\nfocal_length_mm = 3.36\ndesign_wavelength_nm = 800.0\nefficiency = 0.15\ntransmission = 0.55\n{lens_keys}\n\n"),
+        )
+    }
+
+    fn build_text(text: String, overrides: &[&str]) -> Result<metric::Scene, crate::Error> {
+        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        crate::build_from(&crate::Source::from_text(text, "test.toml", std::env::temp_dir()), &overrides)
+    }
+
+    /// The hyperbolic Binary 2 metalens loads, `--set lens.binary2[1]` reaches one coefficient,
+    /// and the phase lens's mistakes are named: no dispersion, no profile, two profiles, a key of
+    /// another dispersion, Zernike terms on a family with an iris.
+    #[test]
+    fn phase_lens_keys_and_errors() {
+        let hyperbolic = "binary2 = [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]";
+        let ok = phase_scene(&format!("{hyperbolic}\ndispersion = \"geometric-phase\""));
+        let scene = build_text(ok.clone(), &[]).unwrap();
+        assert!(scene.lens().describe().contains("Binary 2"), "{}", scene.lens().describe());
+        let changed = build_text(ok.clone(), &["lens.binary2[1]=0"]).unwrap();
+        let a = metric::evaluate(&scene).unwrap().mean_mtf;
+        let b = metric::evaluate(&changed).unwrap().mean_mtf;
+        assert!(b < 0.95 * a, "removing A2 adds spherical aberration: {a} -> {b}");
+        let err = |text: String| build_text(text, &[]).unwrap_err().to_string();
+        let e = err(phase_scene(hyperbolic));
+        assert!(e.contains("lens.dispersion") && e.contains("geometric-phase"), "{e}");
+        let e = err(phase_scene("dispersion = \"geometric-phase\""));
+        assert!(e.contains("lens.binary2") && e.contains("phase_csv"), "{e}");
+        let e = err(phase_scene(&format!("{hyperbolic}\nphase_csv = \"x.csv\"\ndispersion = \"refractive\"")));
+        assert!(e.contains("both given"), "{e}");
+        let e = err(phase_scene(&format!("{hyperbolic}\ndispersion = \"geometric-phase\"\ndesign_order = 2")));
+        assert!(e.contains("lens.design_order"), "{e}");
+        let iris = crate::PAPER_SCENE.replace(
+            "transmission = 0.55",
+            "transmission = 0.55\nobscuration = 0.3\nzernike_noll_rms_um = [0, 0, 0, 0.1]",
+        );
+        let e = err(iris);
+        assert!(e.contains("zernike"), "{e}");
+    }
+
+    /// A phase table that is wrapped, too short, or not from the axis is refused naming the
+    /// file and the numbers.
+    #[test]
+    fn phase_tables_are_checked() {
+        let dir = std::env::temp_dir().join(format!("asnr-phase-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let cases = [
+            ("short.csv", "r_mm,phase_rad\n0,0\n0.1,-1\n0.2,-2\n0.5,-3\n", "aperture radius 0.672"),
+            ("wrapped.csv", "r_mm,phase_rad\n0,0\n0.3,-1\n0.5,-5\n0.7,-6\n", "more than π"),
+            ("offaxis.csv", "r_mm,phase_rad\n0.1,0\n0.3,-1\n0.5,-2\n0.7,-3\n", "expected 0"),
+            ("noheader.csv", "0,0\n0.3,-1\n0.5,-2\n0.7,-3\n", "lacks r_mm"),
+        ];
+        for (name, text, want) in cases {
+            std::fs::write(dir.join(name), text).unwrap();
+            let scene =
+                phase_scene(&format!("phase_csv = \"{}\"\ndispersion = \"geometric-phase\"", dir.join(name).display()));
+            let e = build_text(scene, &[]).unwrap_err().to_string();
+            assert!(e.contains(want) && e.contains(name), "{name}: {e}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Zernike terms on the chromatic family: Z11 lowers the mean MTF; all-zero terms change nothing.
+    #[test]
+    fn zernike_terms_on_a_family() {
+        let plain = build_text(crate::PAPER_SCENE.to_owned(), &[]).unwrap();
+        let zero = build_text(crate::PAPER_SCENE.to_owned(), &["lens.zernike_noll_rms_um=[0, 0, 0, 0]"]).unwrap();
+        let z11 = build_text(crate::PAPER_SCENE.to_owned(), &["lens.zernike_noll_rms_um=[0,0,0,0,0,0,0,0,0,0,0.05]"])
+            .unwrap();
+        let (a, b, c) =
+            (metric::evaluate(&plain).unwrap(), metric::evaluate(&zero).unwrap(), metric::evaluate(&z11).unwrap());
+        assert!((a.mean_mtf - b.mean_mtf).abs() < 1e-6 * a.mean_mtf, "{} vs {}", a.mean_mtf, b.mean_mtf);
+        assert!(c.mean_mtf < a.mean_mtf, "{} vs {}", c.mean_mtf, a.mean_mtf);
     }
 }

@@ -226,6 +226,40 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             efficiency(out)?;
             transmission(out)?;
         }
+        Model::Phase => {
+            out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
+            if let Some(a) = &l.binary2 {
+                out.value("binary2", &list(a));
+                match l.norm_radius_mm {
+                    Some(r) => out.number("norm_radius_mm", r),
+                    None => {
+                        let radius = 0.5 * l.focal_length_mm.unwrap_or_default()
+                            / l.f_number.unwrap_or_else(|| {
+                                l.focal_length_mm.unwrap_or_default() / l.aperture_diameter_mm.unwrap_or(1.0)
+                            });
+                        out.line("# norm_radius_mm not given: the aperture radius");
+                        out.number("norm_radius_mm", radius);
+                    }
+                }
+                out.number("diffraction_order", l.diffraction_order.unwrap_or(1.0));
+            }
+            if let Some(file) = &l.phase_csv {
+                out.string("phase_csv", &path(o, "lens.phase_csv", file)?);
+            }
+            let dispersion = l.dispersion.as_deref().unwrap_or_default();
+            out.string("dispersion", dispersion);
+            if dispersion == "diffractive" {
+                out.value("design_order", &l.design_order.unwrap_or(1).to_string());
+            }
+            if let Some(g) = &l.glass {
+                out.string("glass", g);
+            }
+            efficiency(out)?;
+            transmission(out)?;
+        }
+    }
+    if let Some(z) = &l.zernike_noll_rms_um {
+        out.value("zernike_noll_rms_um", &list(z));
     }
     Ok(())
 }

@@ -416,3 +416,107 @@ mod zone_grid_tests {
         assert!(e.contains("line 2") && e.contains("cell x"), "{e}");
     }
 }
+
+/// A radial phase table (`lens.phase_csv`): radii in mm from the axis, the phase at λ0 in
+/// radians, and optionally the field amplitude.
+pub(crate) struct PhaseTable {
+    pub r_mm: Vec<f64>,
+    pub phase_rad: Vec<f64>,
+    pub amplitude: Option<Vec<f64>>,
+}
+
+/// Reads `r_mm, phase_rad[, amplitude]` (a header naming the columns, in any order; `#`
+/// comments): `r` from 0, strictly increasing, reaching at least `aperture_radius_mm`; the phase
+/// finite and unwrapped (a step of more than π between neighbouring samples is refused: the
+/// table is then either wrapped or too coarse for its local zone period `2π/|φ'|`, and the
+/// message gives both); the amplitude finite, ≥ 0, not zero everywhere.
+pub(crate) fn read_phase_table(path: &Path, aperture_radius_mm: f64) -> Result<PhaseTable, Error> {
+    let file = path.display().to_string();
+    let text = read_text(path, "CSV file")?;
+    let err = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
+    let mut reader = csv_reader(&text, true);
+    let headers: Vec<String> = reader
+        .headers()
+        .map_err(|e| err(None, format!("cannot read the header: {e}")))?
+        .iter()
+        .map(|h| h.trim().to_lowercase())
+        .collect();
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let (Some(ir), Some(ip)) = (find("r_mm"), find("phase_rad")) else {
+        return Err(err(
+            Some(1),
+            format!(
+                "the header `{}` lacks r_mm or phase_rad: expected the columns r_mm, phase_rad and optionally amplitude",
+                headers.join(",")
+            ),
+        ));
+    };
+    let ia = find("amplitude");
+    let (mut r, mut phase, mut amp) = (Vec::new(), Vec::new(), Vec::new());
+    for record in reader.records() {
+        let record = record.map_err(|e| err(None, format!("{e}")))?;
+        let line = record.position().map(|p| p.line());
+        let field = |i: usize, name: &str| -> Result<f64, Error> {
+            let raw = record.get(i).unwrap_or("");
+            raw.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(line, format!("{name} = `{}`: expected a finite number", shorten(raw))))
+        };
+        let ri = field(ir, "r_mm")?;
+        if ri < 0.0 || r.last().is_some_and(|&last| ri <= last) {
+            return Err(err(line, format!("r_mm = {ri}: expected ≥ 0 and strictly increasing")));
+        }
+        r.push(ri);
+        phase.push(field(ip, "phase_rad")?);
+        if let Some(ia) = ia {
+            let a = field(ia, "amplitude")?;
+            if a < 0.0 {
+                return Err(err(line, format!("amplitude = {a}: expected ≥ 0 (a field amplitude)")));
+            }
+            amp.push(a);
+        }
+    }
+    if r.len() < 4 {
+        return Err(err(None, format!("{} rows: expected at least 4, from r = 0 to the aperture radius", r.len())));
+    }
+    if r[0] != 0.0 {
+        return Err(err(None, format!("the first r_mm is {}: expected 0 (the table starts on the axis)", r[0])));
+    }
+    let last = r[r.len() - 1];
+    if last < aperture_radius_mm * (1.0 - 1e-9) {
+        return Err(err(
+            None,
+            format!(
+                "the last r_mm is {last}: expected at least the aperture radius {aperture_radius_mm} mm (the table must cover the aperture)"
+            ),
+        ));
+    }
+    for i in 1..r.len() {
+        let step = (phase[i] - phase[i - 1]).abs();
+        if step > std::f64::consts::PI && r[i - 1] < aperture_radius_mm {
+            let period = std::f64::consts::TAU * (r[i] - r[i - 1]) / step;
+            return Err(err(
+                None,
+                format!(
+                    "the phase steps by {step:.3} rad between r = {} and {} mm: more than π, so the table is wrapped or too coarse \
+                     (a step of {step:.3} rad means a local zone period of about {period:.3e} mm; sample at least 4 points a zone and give the unwrapped phase)",
+                    r[i - 1],
+                    r[i]
+                ),
+            ));
+        }
+    }
+    let amplitude = if ia.is_some() {
+        if amp.iter().all(|&a| a == 0.0) {
+            return Err(err(
+                None,
+                "the amplitude is 0 everywhere: expected a field amplitude > 0 somewhere".to_owned(),
+            ));
+        }
+        Some(amp)
+    } else {
+        None
+    };
+    Ok(PhaseTable { r_mm: r, phase_rad: phase, amplitude })
+}

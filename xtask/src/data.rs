@@ -16,6 +16,11 @@
 //! value stays ≥ 0.001) drawn in wavelength order from xorshift64* seeded with [`SEED`]. It is
 //! the spectrometer case ("a spectrometer table at 0.25 nm over 600–1000 nm"), read by
 //! `examples/spectrometer.toml` and the accuracy report.
+//!
+//! `examples/data/phase-hyperbolic-f2.5.csv` is the radial phase table of a hyperbolic metalens
+//! (the paper's aperture: F/2.5, f0 = 3.36 mm, R = 0.672 mm, λ0 = 800 nm), as a designer's script
+//! would export it: 801 rows `r_mm,phase_rad` from 0 to R, the unwrapped
+//! `φ0(r) = −(2π/λ0)(√(r² + f0²) − f0)` with 9 decimals (read by `examples/phase-table.toml`).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -91,6 +96,23 @@ pub(crate) fn spectrometer_table() -> String {
     text
 }
 
+/// The hyperbolic phase table, relative to the workspace root.
+pub(crate) const PHASE_TABLE: &str = "examples/data/phase-hyperbolic-f2.5.csv";
+
+/// The hyperbolic metalens's radial phase table (module docs).
+pub(crate) fn phase_table() -> String {
+    let (f0_mm, radius_mm, lambda_mm, rows) = (3.36_f64, 0.672_f64, 800e-6_f64, 800);
+    let mut text = String::from(
+        "# hyperbolic metalens F/2.5, f0 = 3.36 mm, lambda0 = 800 nm (cargo xtask data)\nr_mm,phase_rad\n",
+    );
+    for i in 0..=rows {
+        let r = radius_mm * i as f64 / rows as f64;
+        let phase = -std::f64::consts::TAU / lambda_mm * ((r * r + f0_mm * f0_mm).sqrt() - f0_mm);
+        let _ = writeln!(text, "{r:.6},{phase:.9}");
+    }
+    text
+}
+
 /// Write (or with `--check`, compare) every generated file under the workspace `root`.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     let check = match args {
@@ -98,17 +120,18 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         [flag] if flag == "--check" => true,
         [bad, ..] => bail!("unknown argument `{bad}` (usage: cargo xtask data [--check])"),
     };
-    let path = root.join(SPECTROMETER);
-    let text = spectrometer_table();
-    if check {
-        let current = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        if current != text {
-            bail!("{SPECTROMETER} differs from what `cargo xtask data` writes: run it and commit the file");
+    for (name, text) in [(SPECTROMETER, spectrometer_table()), (PHASE_TABLE, phase_table())] {
+        let path = root.join(name);
+        if check {
+            let current = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+            if current != text {
+                bail!("{name} differs from what `cargo xtask data` writes: run it and commit the file");
+            }
+            eprintln!("data: {name} is up to date");
+        } else {
+            std::fs::write(&path, &text).with_context(|| format!("cannot write {}", path.display()))?;
+            eprintln!("data: wrote {name} ({} rows)", text.lines().filter(|l| !l.starts_with('#')).count() - 1);
         }
-        eprintln!("data: {SPECTROMETER} is up to date");
-    } else {
-        std::fs::write(&path, &text).with_context(|| format!("cannot write {}", path.display()))?;
-        eprintln!("data: wrote {SPECTROMETER} ({ROWS} rows)");
     }
     Ok(())
 }
@@ -164,5 +187,18 @@ mod tests {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap();
         let committed = std::fs::read_to_string(root.join(SPECTROMETER)).unwrap();
         assert!(committed == spectrometer_table(), "run `cargo xtask data` and commit {SPECTROMETER}");
+        let committed = std::fs::read_to_string(root.join(PHASE_TABLE)).unwrap();
+        assert!(committed == phase_table(), "run `cargo xtask data` and commit {PHASE_TABLE}");
+    }
+
+    /// The phase table is the hyperbola: at the rim −(2π/λ0)(√(R² + f0²) − f0) = −527.79 rad.
+    #[test]
+    fn the_phase_table_reaches_the_rim() {
+        let text = phase_table();
+        let last = text.lines().last().unwrap();
+        let (r, phase) = last.split_once(',').unwrap();
+        assert_eq!(r, "0.672000");
+        let want = -std::f64::consts::TAU / 800e-6 * ((0.672f64 * 0.672 + 3.36 * 3.36).sqrt() - 3.36);
+        assert!((phase.parse::<f64>().unwrap() - want).abs() < 1e-8, "{phase} vs {want}");
     }
 }
