@@ -247,8 +247,9 @@ impl LensModel for PhaseLens {
             Dispersion::Refractive { glass: Some(_) } => "refractive, glass dispersion".to_string(),
             other => other.name().to_string(),
         };
+        let zernike: String = self.zernike_noll_m.iter().map(|(j, c)| format!(", Z{j} = {} µm", r(c * 1e6))).collect();
         format!(
-            "phase-profile lens F/{} f0 = {} mm at λ0 = {} nm ({}; {dispersion}), against the exact reference sphere",
+            "phase-profile lens F/{} f0 = {} mm at λ0 = {} nm ({}; {dispersion}{zernike}), against the exact reference sphere",
             r(self.f_number),
             r(self.focal_length * 1e3),
             r(self.design_wavelength * 1e9),
