@@ -291,7 +291,7 @@ impl RadialPupil {
         let check = crate::fft::Aberrations { zernike_noll_m: zernike_noll_m.clone(), ..Default::default() };
         check.validate()?;
         if let Some(a) = &amplitude
-            && !(a.mean_square() > 0.0)
+            && a.mean_square().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
         {
             return Err(Error::InvalidParameter {
                 name: "pupil amplitude power",
@@ -554,7 +554,8 @@ fn panel_phase(accuracy: f64) -> f64 {
 /// A shorter Gauss–Legendre rule (4 or 8 points on `[−1, 1]`) that integrates a factor turning
 /// through `phase` radians to `accuracy`, if one does: `(θ/2)^{2n}/(2n)! ≤ accuracy`.
 fn small_rule(phase: f64, accuracy: f64) -> Option<&'static [(f64, f64)]> {
-    static RULES: OnceLock<(Vec<(f64, f64)>, Vec<(f64, f64)>)> = OnceLock::new();
+    type Rule = Vec<(f64, f64)>;
+    static RULES: OnceLock<(Rule, Rule)> = OnceLock::new();
     let (four, eight) = RULES.get_or_init(|| (crate::quad::gauss_legendre(4), crate::quad::gauss_legendre(8)));
     let half = 0.5 * phase.max(1e-3);
     // (2n)! for n = 4, 8: 40320, 2.09e13
