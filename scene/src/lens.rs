@@ -17,7 +17,7 @@ use crate::error::{Error, num, quoted};
 use crate::load::{NumberOrFile, Origins};
 
 /// The models a scene file accepts, as messages list them.
-pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\" or \"multiplexed\" (layout \"interleaved\")";
+pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table) or \"phase\" (your design's phase profile)";
 
 /// The lens presets, by the names of `lenses::preset_names`: a name and the `[lens]` keys it
 /// stands for (keys given beside `preset` override them). Each is the lens of `lenses::preset`
