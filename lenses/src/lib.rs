@@ -27,6 +27,9 @@
 //!   (geometric phase, a diffractive kinoform of design order p, a fixed optical path), evaluated
 //!   against the exact reference sphere ([`optics::Pupil::Radial`]; off axis the oblique wave's
 //!   field aberrations).
+//! - [`LibraryLens`]: a metalens of meta-atoms from a [`Library`] (complex transmission against
+//!   parameters and wavelength) placed by a layout of rings, in the local periodic approximation:
+//!   the first order's pupil from the zone-Fourier coefficient `c_1(ρ)`, τ1 and T from the field.
 //! - [`presets`]: the paper's lens and published devices by name ([`preset`], [`preset_names`]).
 //!
 //! The wavefront sign is one (docs/physics.md, "Sign of the wavefront"): `W020 > 0` focuses
@@ -60,6 +63,7 @@ mod chromatic;
 mod dispersion;
 mod harmonic;
 mod interleaved;
+mod library;
 mod phase;
 pub mod presets;
 mod refractive;
@@ -70,6 +74,7 @@ pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
+pub use library::{Library, LibraryLens};
 pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
 pub use presets::{preset, preset_names};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
