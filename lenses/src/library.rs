@@ -142,14 +142,16 @@ impl Library {
 /// - at each wavelength and in each zone the field, as a function of `ψ` over one period, has the
 ///   Fourier coefficients `c_m = (1/2π) ∫ f(ψ) e^{−imψ} dψ` (each atom's constant field over its
 ///   interval of `ψ`); order 1 carries `|c_1|²` of the zone's light with the phase `ψ + arg c_1`
-///   (the imaging order: a radial pupil of amplitude `|c_1(ρ)|` at the zones' centres,
-///   `W = (λ/2π)(ψ + arg c_1) + sag` against the exact reference sphere); every other order
-///   focuses far from the detector (order m at `f/m`) and is background;
-/// - `τ1(λ) = Σ_zones |c_1|² × area`, `T(λ) = Σ_atoms |t_i|² × area` (fractions of the light on
-///   the aperture; Parseval: `Σ_m |c_m|²` is the zone's mean `|t|²`).
+///   (the imaging order: its coherent part, a least-squares polynomial in `ρ²` through the zones'
+///   `c_1`, gives a radial pupil of amplitude `|c_1(ρ)|` and wavefront
+///   `W = (λ/2π)(ψ + arg c_1) + sag` against the exact reference sphere); the zone-to-zone
+///   scatter about it (the atoms' discreteness) and every other order (order m focuses at `f/m`)
+///   are background;
+/// - `τ1(λ) = ∫|c_1|² dA/(πR²)` of the coherent part, `T(λ) = Σ_atoms |t_i|² × area` (fractions
+///   of the light on the aperture; Parseval: `Σ_m |c_m|²` is the zone's mean `|t|²`).
 ///
 /// A staircase of N equal phase levels per zone gives `c_1 = sinc(1/N)` (tested).
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct LibraryLens {
     f_number: f64,
     focal_length: f64,
@@ -164,6 +166,37 @@ pub struct LibraryLens {
     design_coefficients: Vec<f64>,
     sphere: Arc<RadialProfile>,
     source: String,
+    /// the distinct parameter sets, each atom's index into them and its area fraction
+    unique: Vec<Vec<f64>>,
+    atoms: Vec<(usize, f64)>,
+    /// the atoms' cells split at the zones, and the zones' (q at their middle, area fraction)
+    cells: Vec<Cell>,
+    zones: Vec<(f64, f64)>,
+    /// the first order at the wavelengths asked so far: (λ bits, τ1, T, pupil)
+    cache: std::sync::Mutex<Vec<(u64, f64, f64, Option<Arc<RadialPupil>>)>>,
+}
+
+impl Clone for LibraryLens {
+    fn clone(&self) -> LibraryLens {
+        LibraryLens {
+            f_number: self.f_number,
+            focal_length: self.focal_length,
+            design_wavelength: self.design_wavelength,
+            library: self.library.clone(),
+            radii: self.radii.clone(),
+            pitch: self.pitch,
+            params: self.params.clone(),
+            design: self.design.clone(),
+            design_coefficients: self.design_coefficients.clone(),
+            sphere: self.sphere.clone(),
+            source: self.source.clone(),
+            unique: self.unique.clone(),
+            atoms: self.atoms.clone(),
+            cells: self.cells.clone(),
+            zones: self.zones.clone(),
+            cache: std::sync::Mutex::new(Vec::new()),
+        }
+    }
 }
 
 impl LibraryLens {
@@ -261,6 +294,69 @@ impl LibraryLens {
         let design_coefficients = fit_even(&inside, DESIGN_FIT_DEGREE);
         let design = Arc::new(RadialProfile::even_polynomial(design_coefficients.clone()).map_err(Error::Pupil)?);
         let sphere = Arc::new(RadialProfile::reference_sphere(radius, focal_length_m).map_err(Error::Pupil)?);
+        // the cells, split where ψ crosses a whole turn from the axis (the zones), λ-independent
+        let area = std::f64::consts::PI * radius * radius;
+        let psi = |r: f64| design.value((r / radius).powi(2));
+        let psi0 = psi(0.0);
+        let turns = |r: f64| ((psi(r) - psi0).abs() / std::f64::consts::TAU).floor();
+        let mut unique: Vec<Vec<f64>> = Vec::new();
+        let mut atoms = Vec::new();
+        let mut cells = Vec::new();
+        let mut zone_edges: Vec<(f64, f64)> = Vec::new();
+        for (r, p) in radii_m.iter().zip(&params) {
+            let (a, b) = ((r - 0.5 * pitch).max(0.0), (r + 0.5 * pitch).min(radius));
+            if b <= a {
+                continue;
+            }
+            let u = match unique.iter().position(|x| x == p) {
+                Some(u) => u,
+                None => {
+                    unique.push(p.clone());
+                    unique.len() - 1
+                }
+            };
+            atoms.push((u, std::f64::consts::PI * (b * b - a * a) / area));
+            let mut start = a;
+            while start < b {
+                let k = turns(start);
+                let mut end = b;
+                if turns(b) > k {
+                    let (mut lo, mut hi) = (start, b);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        if turns(mid) > k { hi = mid } else { lo = mid }
+                    }
+                    end = hi;
+                }
+                let (pa, pb) = (psi(start), psi(end));
+                let zone = k as usize;
+                if zone_edges.len() <= zone {
+                    zone_edges.resize(zone + 1, (f64::NAN, f64::NAN));
+                }
+                let edges = &mut zone_edges[zone];
+                if edges.0.is_nan() {
+                    edges.0 = start;
+                }
+                edges.1 = end;
+                let kernel = (Complex64::from_polar(1.0, -pb) - Complex64::from_polar(1.0, -pa)) * Complex64::i();
+                cells.push(Cell { unique: u, zone, kernel, span: pb - pa });
+                if end <= start {
+                    break;
+                }
+                start = end;
+            }
+        }
+        let zones = zone_edges
+            .iter()
+            .map(|&(r_in, r_out)| {
+                if r_in.is_nan() {
+                    (0.0, 0.0)
+                } else {
+                    let q = 0.5 * (r_in * r_in + r_out * r_out) / (radius * radius);
+                    (q, std::f64::consts::PI * (r_out * r_out - r_in * r_in) / area)
+                }
+            })
+            .collect();
         Ok(LibraryLens {
             f_number,
             focal_length: focal_length_m,
@@ -273,6 +369,11 @@ impl LibraryLens {
             design_coefficients,
             sphere,
             source,
+            unique,
+            atoms,
+            cells,
+            zones,
+            cache: std::sync::Mutex::new(Vec::new()),
         })
     }
 
@@ -291,127 +392,132 @@ impl LibraryLens {
         self.design.value(rho * rho)
     }
 
-    /// `(τ1, T, zone centres ρ, c_1 at them)` at `wavelength_m`.
-    fn decompose(&self, wavelength_m: f64) -> (f64, f64, Vec<f64>, Vec<Complex64>) {
-        let radius = self.aperture_radius();
-        let area = std::f64::consts::PI * radius * radius;
-        let psi = |r: f64| self.design.value((r / radius).powi(2));
-        let psi0 = psi(0.0);
-        // zone index of a radius: whole turns of ψ from the axis
-        let turns = |r: f64| ((psi(r) - psi0).abs() / std::f64::consts::TAU).floor();
-        let mut transmission = 0.0;
-        let mut zones: Vec<(f64, f64, Complex64, f64)> = Vec::new(); // (r_in, r_out, Σ, ψ span)
-        for (r, p) in self.radii.iter().zip(&self.params) {
-            let (a, b) = ((r - 0.5 * self.pitch).max(0.0), (r + 0.5 * self.pitch).min(radius));
-            if b <= a {
-                continue;
-            }
-            let t = self.library.transmission(p, wavelength_m);
-            transmission += t.norm_sqr() * std::f64::consts::PI * (b * b - a * a) / area;
-            // split the cell where it crosses zone boundaries
-            let mut start = a;
-            while start < b {
-                let k = turns(start);
-                // the end of this zone inside the cell: bisection on turns()
-                let mut end = b;
-                if turns(b) > k {
-                    let (mut lo, mut hi) = (start, b);
-                    for _ in 0..60 {
-                        let mid = 0.5 * (lo + hi);
-                        if turns(mid) > k { hi = mid } else { lo = mid }
-                    }
-                    end = hi;
-                }
-                let (pa, pb) = (psi(start), psi(end));
-                // ∫ t e^{−iψ} dψ over [pa, pb] = t (e^{−i pb} − e^{−i pa})/(−i)
-                let integral = t * (Complex64::from_polar(1.0, -pb) - Complex64::from_polar(1.0, -pa)) * Complex64::i();
-                let index = k as usize;
-                if zones.len() <= index {
-                    zones.resize(index + 1, (f64::NAN, 0.0, Complex64::new(0.0, 0.0), 0.0));
-                }
-                let z = &mut zones[index];
-                if z.0.is_nan() {
-                    z.0 = start;
-                }
-                z.1 = end;
-                z.2 += integral;
-                z.3 += pb - pa;
-                if end <= start {
-                    break;
-                }
-                start = end;
-            }
+    /// `(T, zones' (q_centre, area fraction, c_1))` at `wavelength_m` (the cells precomputed).
+    fn decompose(&self, wavelength_m: f64) -> (f64, Vec<(f64, f64, Complex64)>) {
+        let t: Vec<Complex64> = self.unique.iter().map(|p| self.library.transmission(p, wavelength_m)).collect();
+        let transmission: f64 = self.atoms.iter().map(|&(u, area)| t[u].norm_sqr() * area).sum();
+        let mut sums = vec![(Complex64::new(0.0, 0.0), 0.0); self.zones.len()];
+        for cell in &self.cells {
+            // ∫ t e^{−iψ} dψ over [ψa, ψb] = i t (e^{−iψb} − e^{−iψa})
+            let z = &mut sums[cell.zone];
+            z.0 += t[cell.unique] * cell.kernel;
+            z.1 += cell.span;
         }
-        let mut tau = 0.0;
-        let mut centres = Vec::new();
-        let mut coefficients = Vec::new();
-        for &(r_in, r_out, sum, span) in zones.iter().filter(|z| !z.0.is_nan() && z.3 != 0.0) {
-            let c1 = sum / span;
-            tau += c1.norm_sqr() * std::f64::consts::PI * (r_out * r_out - r_in * r_in) / area;
-            centres.push(0.5 * (r_in + r_out) / radius);
-            coefficients.push(c1);
-        }
-        (tau, transmission, centres, coefficients)
+        let zones = self
+            .zones
+            .iter()
+            .zip(&sums)
+            .filter(|(_, s)| s.1 != 0.0)
+            .map(|(&(q, area), s)| (q, area, s.0 / s.1))
+            .collect();
+        (transmission, zones)
     }
 
-    /// The imaging order's pupil at `wavelength_m`: amplitude `|c_1|` and the phase
-    /// `ψ + arg c_1` through tables in ρ, and its efficiency τ1.
-    fn first_order(&self, wavelength_m: f64) -> (f64, Option<RadialPupil>) {
-        let (tau, _, centres, c1) = self.decompose(wavelength_m);
-        if tau <= 0.0 || centres.is_empty() {
-            return (0.0, None);
+    /// The imaging order's pupil at `wavelength_m` and its efficiency τ1: the coherent part of
+    /// the zones' `c_1(q)`, a least-squares polynomial of degree [`COHERENT_FIT_DEGREE`] in `q`
+    /// weighted by the zones' areas (its amplitude `|c_1|` and phase `ψ + arg c_1` through
+    /// tables of [`PUPIL_KNOTS`] radii); `τ1 = ∫|c_1|² dq`. The zone-to-zone scatter about the
+    /// fit (the atoms' discreteness) is light spread far from the image: background, within T.
+    fn first_order(&self, wavelength_m: f64) -> (f64, f64, Option<Arc<RadialPupil>>) {
+        let key = wavelength_m.to_bits();
+        if let Ok(cache) = self.cache.lock()
+            && let Some(hit) = cache.iter().find(|c| c.0 == key)
+        {
+            return (hit.1, hit.2, hit.3.clone());
         }
-        // knots: the axis, the zones' centres, the rim (the end values held)
-        let mut rho = vec![0.0];
-        let mut amp = vec![c1[0].norm()];
-        let mut arg = vec![c1[0].arg()];
-        for (r, c) in centres.iter().zip(&c1) {
-            if *r > *rho.last().unwrap_or(&0.0) && *r < 1.0 {
-                rho.push(*r);
+        let (transmission, zones) = self.decompose(wavelength_m);
+        let result = if zones.is_empty() {
+            (0.0, transmission, None)
+        } else {
+            let points_re: Vec<(f64, f64, f64)> = zones.iter().map(|&(q, a, c)| (q, c.re, a)).collect();
+            let points_im: Vec<(f64, f64, f64)> = zones.iter().map(|&(q, a, c)| (q, c.im, a)).collect();
+            let re = fit_weighted(&points_re, COHERENT_FIT_DEGREE);
+            let im = fit_weighted(&points_im, COHERENT_FIT_DEGREE);
+            let eval = |c: &[f64], q: f64| c.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
+            let rho: Vec<f64> = (0..PUPIL_KNOTS).map(|i| i as f64 / (PUPIL_KNOTS - 1) as f64).collect();
+            let mut amp = Vec::with_capacity(PUPIL_KNOTS);
+            let mut arg: Vec<f64> = Vec::with_capacity(PUPIL_KNOTS);
+            for &r in &rho {
+                let c = Complex64::new(eval(&re, r * r), eval(&im, r * r));
                 amp.push(c.norm());
-                let last = *arg.last().unwrap_or(&0.0);
                 let a = c.arg();
-                arg.push(a + ((last - a) / std::f64::consts::TAU).round() * std::f64::consts::TAU);
+                arg.push(match arg.last() {
+                    Some(&last) => a + ((last - a) / std::f64::consts::TAU).round() * std::f64::consts::TAU,
+                    None => a,
+                });
             }
+            let per_radian = wavelength_m / std::f64::consts::TAU;
+            match (RadialProfile::table(rho.clone(), amp), RadialProfile::table(rho, arg)) {
+                (Ok(amplitude), Ok(residual)) => {
+                    let tau = amplitude.mean_square().min(transmission);
+                    let terms = vec![
+                        (per_radian, self.design.clone()),
+                        (1.0, self.sphere.clone()),
+                        (per_radian, Arc::new(residual)),
+                    ];
+                    let pupil = RadialPupil::new(Some(Arc::new(amplitude)), terms, vec![]).ok().map(Arc::new);
+                    (if pupil.is_some() { tau } else { 0.0 }, transmission, pupil)
+                }
+                _ => (0.0, transmission, None),
+            }
+        };
+        if let Ok(mut cache) = self.cache.lock() {
+            if cache.len() >= CACHE_WAVELENGTHS {
+                cache.clear();
+            }
+            cache.push((key, result.0, result.1, result.2.clone()));
         }
-        let (last_amp, last_arg) = (*amp.last().unwrap_or(&0.0), *arg.last().unwrap_or(&0.0));
-        rho.push(1.0);
-        amp.push(last_amp);
-        arg.push(last_arg);
-        while rho.len() < 4 {
-            // a lens of one zone: pad the table (constant values)
-            let n = rho.len();
-            rho.insert(n - 1, 0.5 * (rho[n - 2] + 1.0));
-            amp.insert(n - 1, last_amp);
-            arg.insert(n - 1, last_arg);
-        }
-        let per_radian = wavelength_m / std::f64::consts::TAU;
-        let amplitude = RadialProfile::table(rho.clone(), amp).ok().map(Arc::new);
-        let residual = RadialProfile::table(rho, arg).ok().map(Arc::new);
-        let mut terms = vec![(per_radian, self.design.clone()), (1.0, self.sphere.clone())];
-        if let Some(r) = residual {
-            terms.push((per_radian, r));
-        }
-        (tau, RadialPupil::new(amplitude, terms, vec![]).ok())
+        result
     }
 }
 
-/// Least-squares coefficients `c_0 … c_degree` of `Σ c_i q^i` through the points `(q, value)`
-/// (normal equations in the Chebyshev-like scaled basis, solved by Gaussian elimination with
-/// partial pivoting; the degree is lowered to the points available).
-fn fit_even(points: &[(f64, f64)], degree: usize) -> Vec<f64> {
+/// Degree in `q` of the coherent first-order field fitted over the zones.
+const COHERENT_FIT_DEGREE: usize = 8;
+
+/// Radii of the imaging order's amplitude and phase tables (uniform in ρ, from the axis to the rim).
+const PUPIL_KNOTS: usize = 33;
+
+/// Wavelengths whose first order a lens keeps (an evaluation asks the same ones many times).
+const CACHE_WAVELENGTHS: usize = 4096;
+
+/// One atom's cell (or the part of it in one zone): its unique parameter set, its zone, and
+/// `i (e^{−iψb} − e^{−iψa})` and `ψb − ψa` over it.
+#[derive(Clone, Debug)]
+struct Cell {
+    unique: usize,
+    zone: usize,
+    kernel: Complex64,
+    span: f64,
+}
+
+/// [`fit_even`] with weights: `points` are `(q, value, weight)`.
+fn fit_weighted(points: &[(f64, f64, f64)], degree: usize) -> Vec<f64> {
     let degree = degree.min(points.len().saturating_sub(1));
     let n = degree + 1;
     let mut a = vec![vec![0.0; n + 1]; n];
-    for &(q, v) in points {
+    for &(q, v, w) in points {
         let powers: Vec<f64> = (0..n).map(|i| q.powi(i as i32)).collect();
         for i in 0..n {
             for j in 0..n {
-                a[i][j] += powers[i] * powers[j];
+                a[i][j] += w * powers[i] * powers[j];
             }
-            a[i][n] += powers[i] * v;
+            a[i][n] += w * powers[i] * v;
         }
     }
+    solve(a)
+}
+
+/// Least-squares coefficients `c_0 … c_degree` of `Σ c_i q^i` through the points `(q, value)`
+/// (the degree lowered to the points available).
+fn fit_even(points: &[(f64, f64)], degree: usize) -> Vec<f64> {
+    let weighted: Vec<(f64, f64, f64)> = points.iter().map(|&(q, v)| (q, v, 1.0)).collect();
+    fit_weighted(&weighted, degree)
+}
+
+/// The solution of the normal equations `a` (rows `[A | b]`), by Gauss–Jordan elimination with
+/// partial pivoting (a singular column gives 0).
+fn solve(mut a: Vec<Vec<f64>>) -> Vec<f64> {
+    let n = a.len();
     for col in 0..n {
         let pivot = (col..n).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
         a.swap(col, pivot);
@@ -441,19 +547,19 @@ impl LensModel for LibraryLens {
     }
 
     fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
-        let (tau, pupil) = self.first_order(wavelength_m);
+        let (tau, _, pupil) = self.first_order(wavelength_m);
         let Some(mut pupil) = pupil else { return Vec::new() };
         if !field.is_on_axis()
             && let Ok(o) =
                 optics::radial::Oblique::new(self.aperture_radius(), self.focal_length, field.x_rad, field.y_rad)
         {
-            pupil = pupil.with_oblique(o);
+            pupil = Arc::new((*pupil).clone().with_oblique(o));
         }
-        vec![Order::radial(tau, Arc::new(pupil), Wavefront::default())]
+        vec![Order::radial(tau, pupil, Wavefront::default())]
     }
 
     fn transmission(&self, wavelength_m: f64) -> f64 {
-        self.decompose(wavelength_m).1
+        self.first_order(wavelength_m).1
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -544,7 +544,7 @@ impl RadialOrder {
             // an amplitude table: about one radian of "turn" a knot interval, beside its own slope
             let (d1, _) = a.bounds;
             let scale = a.mean_square().sqrt().max(f64::MIN_POSITIVE);
-            a.knots() as f64 + 4.0 * d1 / scale
+            0.25 * a.knots() as f64 + 4.0 * d1 / scale
         });
         let k = std::f64::consts::TAU / wavelength_m;
         let proxy = phase_proxy(&|q| k * (w020_m * q + pupil.opd_beyond_defocus_m(q)));
