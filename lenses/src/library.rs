@@ -415,8 +415,8 @@ impl LibraryLens {
 
     /// The imaging order's pupil at `wavelength_m` and its efficiency τ1: the coherent part of
     /// the zones' `c_1(q)`, a least-squares polynomial of degree [`COHERENT_FIT_DEGREE`] in `q`
-    /// weighted by the zones' areas (its amplitude `|c_1|` and phase `ψ + arg c_1` through
-    /// tables of [`PUPIL_KNOTS`] radii); `τ1 = ∫|c_1|² dq`. The zone-to-zone scatter about the
+    /// weighted by the zones' areas (its amplitude `|c_1|` and phase `ψ + arg c_1` as polynomials
+    /// of degree [`PUPIL_KNOTS`] in `q`); `τ1 = ∫|c_1|² dq`. The zone-to-zone scatter about the
     /// fit (the atoms' discreteness) is light spread far from the image: background, within T.
     fn first_order(&self, wavelength_m: f64) -> (f64, f64, Option<Arc<RadialPupil>>) {
         let key = wavelength_m.to_bits();
@@ -434,20 +434,26 @@ impl LibraryLens {
             let re = fit_weighted(&points_re, COHERENT_FIT_DEGREE);
             let im = fit_weighted(&points_im, COHERENT_FIT_DEGREE);
             let eval = |c: &[f64], q: f64| c.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
-            let rho: Vec<f64> = (0..PUPIL_KNOTS).map(|i| i as f64 / (PUPIL_KNOTS - 1) as f64).collect();
-            let mut amp = Vec::with_capacity(PUPIL_KNOTS);
-            let mut arg: Vec<f64> = Vec::with_capacity(PUPIL_KNOTS);
-            for &r in &rho {
-                let c = Complex64::new(eval(&re, r * r), eval(&im, r * r));
-                amp.push(c.norm());
+            // |c_1| and arg c_1 (unwrapped) at Chebyshev points in q, as polynomials in q
+            let qs: Vec<f64> = (0..=PUPIL_KNOTS)
+                .map(|j| 0.5 * (1.0 - (std::f64::consts::PI * j as f64 / PUPIL_KNOTS as f64).cos()))
+                .collect();
+            let mut amp = Vec::with_capacity(qs.len());
+            let mut arg: Vec<(f64, f64, f64)> = Vec::with_capacity(qs.len());
+            for &q in &qs {
+                let c = Complex64::new(eval(&re, q), eval(&im, q));
+                amp.push((q, c.norm(), 1.0));
                 let a = c.arg();
-                arg.push(match arg.last() {
-                    Some(&last) => a + ((last - a) / std::f64::consts::TAU).round() * std::f64::consts::TAU,
+                let a = match arg.last() {
+                    Some(&(_, last, _)) => a + ((last - a) / std::f64::consts::TAU).round() * std::f64::consts::TAU,
                     None => a,
-                });
+                };
+                arg.push((q, a, 1.0));
             }
             let per_radian = wavelength_m / std::f64::consts::TAU;
-            match (RadialProfile::table(rho.clone(), amp), RadialProfile::table(rho, arg)) {
+            let amp = fit_weighted(&amp, PUPIL_KNOTS);
+            let arg = fit_weighted(&arg, PUPIL_KNOTS);
+            match (RadialProfile::even_polynomial(amp), RadialProfile::even_polynomial(arg)) {
                 (Ok(amplitude), Ok(residual)) => {
                     let tau = amplitude.mean_square().min(transmission);
                     let terms = vec![
@@ -474,8 +480,9 @@ impl LibraryLens {
 /// Degree in `q` of the coherent first-order field fitted over the zones.
 const COHERENT_FIT_DEGREE: usize = 8;
 
-/// Radii of the imaging order's amplitude and phase tables (uniform in ρ, from the axis to the rim).
-const PUPIL_KNOTS: usize = 33;
+/// Degree in `q` of the imaging order's amplitude and phase polynomials (interpolating `|c_1|`
+/// and `arg c_1` of the coherent fit at as many Chebyshev points plus one).
+const PUPIL_KNOTS: usize = 12;
 
 /// Wavelengths whose first order a lens keeps (an evaluation asks the same ones many times).
 const CACHE_WAVELENGTHS: usize = 4096;

@@ -458,8 +458,12 @@ pub struct RadialOrder {
     pupil: Arc<RadialPupil>,
     w020_m: f64,
     wavelength_m: f64,
-    /// `max |W'(q)|`, `max |W''(q)|` of the whole OPD, m
-    bounds: (f64, f64),
+    /// `max |W'(q)|` of the whole OPD, m, and the oscillation of `W'` over windows of
+    /// `2^j/`[`BOUND_SAMPLES`] in `q` (`j = 0, 1, …`: the largest `W'(a) − W'(b)` with
+    /// `|a − b|` within the window), m: how much the phase difference of two pupil points a
+    /// shift apart can change (module docs)
+    slope: f64,
+    oscillation: Vec<f64>,
     /// extra phase-equivalent (radians) for an amplitude table's knots
     amplitude_turns: f64,
     /// the phase `k W(q)` (radians) as a Chebyshev series in `x = 2q − 1`, where one of at most
@@ -539,7 +543,29 @@ fn phase_proxy(phase: &dyn Fn(f64) -> f64) -> Option<Vec<f64>> {
 impl RadialOrder {
     /// `pupil` with the order's defocus `w020_m` (m at the rim) at `wavelength_m`.
     pub fn new(pupil: Arc<RadialPupil>, w020_m: f64, wavelength_m: f64) -> RadialOrder {
-        let bounds = derivative_bounds(|q| w020_m * q + pupil.opd_beyond_defocus_m(q));
+        let h = 1.0 / BOUND_SAMPLES as f64;
+        let values: Vec<f64> =
+            (0..=BOUND_SAMPLES).map(|i| w020_m * (i as f64 * h) + pupil.opd_beyond_defocus_m(i as f64 * h)).collect();
+        let slopes: Vec<f64> = values.windows(2).map(|w| (w[1] - w[0]) / h).collect();
+        let slope = 1.25 * slopes.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        // windows of 2^j samples by doubling: max and min over [i, i + 2m) from those of m
+        let (mut hi, mut lo) = (slopes.clone(), slopes.clone());
+        let mut oscillation = Vec::new();
+        let mut width = 1;
+        loop {
+            // two neighbouring slopes differ by the second difference: a window of one sample
+            // holds the change across it
+            let osc = (0..hi.len()).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+            let across = slopes.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f64::max);
+            oscillation.push(1.25 * (osc + across));
+            if width >= BOUND_SAMPLES {
+                break;
+            }
+            let n = hi.len() - width;
+            hi = (0..n).map(|i| hi[i].max(hi[i + width])).collect();
+            lo = (0..n).map(|i| lo[i].min(lo[i + width])).collect();
+            width *= 2;
+        }
         let amplitude_turns = pupil.amplitude.as_ref().map_or(0.0, |a| {
             // an amplitude table: about one radian of "turn" a knot interval, beside its own slope
             let (d1, _) = a.bounds;
@@ -548,7 +574,14 @@ impl RadialOrder {
         });
         let k = std::f64::consts::TAU / wavelength_m;
         let proxy = phase_proxy(&|q| k * (w020_m * q + pupil.opd_beyond_defocus_m(q)));
-        RadialOrder { pupil, w020_m, wavelength_m, bounds, amplitude_turns, proxy }
+        RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, proxy }
+    }
+
+    /// The oscillation of `W'` (m) over windows of width `delta` in `q` (the next dyadic window).
+    fn oscillation_over(&self, delta: f64) -> f64 {
+        let samples = (delta * BOUND_SAMPLES as f64).max(1.0);
+        let j = (samples.log2().ceil() as usize).min(self.oscillation.len() - 1);
+        self.oscillation[j]
     }
 
     /// The pupil.
@@ -566,12 +599,12 @@ impl RadialOrder {
             return 1.0;
         }
         let k = std::f64::consts::TAU / self.wavelength_m;
-        let (g1, g2) = self.bounds;
+        let (g1, osc) = (self.slope, self.oscillation_over(4.0 * s * (1.0 - s)));
         let t_end = s.acos();
         // phase the integrand can turn through along t and along v (module docs' bounds), plus
         // the sin²t factor's (frequency 2) and an amplitude table's
-        let phase_t = k * 4.0 * s * (1.0 - s) * (g1 + g2 * t_end) + 2.0 * t_end + self.amplitude_turns;
-        let phase_v = k * 4.0 * s * (1.0 - s) * g2 + self.amplitude_turns;
+        let phase_t = k * (4.0 * s * (1.0 - s) * g1 + osc * t_end) + 2.0 * t_end + self.amplitude_turns;
+        let phase_v = k * osc + self.amplitude_turns;
         let theta = panel_phase(accuracy);
         let t_panels = (phase_t / theta).ceil().max(1.0) as usize;
         let v_rule = small_rule(phase_v, accuracy);
