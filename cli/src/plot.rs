@@ -362,11 +362,7 @@ fn extent(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Plain number for legends: up to four decimals, trailing zeros dropped.
-pub fn number(v: f64) -> String {
-    let s = format!("{v:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".to_owned() } else { s.to_owned() }
-}
+pub use report::number;
 
 /// `v` to four significant digits, trailing zeros dropped: "10.57", "34.39", "0.001234".
 fn significant(v: f64) -> String {

@@ -47,8 +47,10 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("metric", Allowed::Only(&["optics", "noise", "radiometry"])),
     ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
     ("imaging", Allowed::Only(&["metric", "noise", "optics", "radiometry"])),
+    ("report", Allowed::Only(&["metric", "scene", "radiometry"])),
     ("cli", Allowed::Any),
-    ("python", Allowed::Any),
+    // the Python extension: libraries only, never the command line (clap, plotters, image, …)
+    ("python", Allowed::Only(&["report", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
     ("xtask", Allowed::Only(&[])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only
     ("custom-lens", Allowed::Any),
@@ -181,8 +183,10 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
 
     for table in dependency_tables(&manifest) {
         for (key, spec) in table.deps {
-            // A renamed dependency (`alias = { package = "optics", .. }`) is still `optics`.
+            // A renamed dependency (`alias = { package = "optics", .. }`) is still `optics`, and a
+            // package named apart from its folder (`asnr`) is its folder's (`cli`).
             let name = spec.get("package").and_then(Value::as_str).unwrap_or(key.as_str());
+            let name = PACKAGE_NAMES.iter().find(|(_, package)| *package == name).map_or(name, |(folder, _)| *folder);
             let is_project = RULES.iter().any(|(project, _)| *project == name);
             if is_project
                 && table.normal
@@ -383,6 +387,16 @@ mod tests {
         assert_eq!(check_manifest("cli", "[package").len(), 1);
         let named_cli = "[package]\nname = \"cli\"\n[lints]\nworkspace = true\n";
         assert_eq!(check_manifest("cli", named_cli), vec!["package name `cli`: the package in `cli/` is `asnr`"]);
+    }
+
+    #[test]
+    fn the_python_extension_may_not_depend_on_the_command_line() {
+        let python = "[package]\nname = \"asnr-python\"\n[dependencies]\nreport.workspace = true\n\
+                      asnr.workspace = true\n[lints]\nworkspace = true\n";
+        assert_eq!(
+            check_manifest("python", python),
+            vec!["depends on cli (allowed: report, scene, metric, lenses, optics, noise, radiometry)"]
+        );
     }
 
     #[test]
