@@ -1469,9 +1469,18 @@ fn compare_table_csv_plot_and_embedded() {
     assert!(svg.contains("<svg") && svg.contains("paper chromatic F/2.5") && svg.contains("ASNR"));
     let (csv, _) = succeeds(&["compare", "--csv", "--over", SMALL_GRID]);
     let lines: Vec<&str> = csv.lines().collect();
-    assert!(lines[0].starts_with("name,kind,asnr,mean_mtf,snr0,"), "{csv}");
+    assert!(lines[0].starts_with("index,name,kind,asnr,mean_mtf,snr0,"), "{csv}");
     let designs = std::fs::read_to_string(DESIGNS).unwrap().matches("[[designs]]").count();
     assert_eq!(lines.len(), 1 + designs, "{csv}");
+    // each row's index is its design's place in the file, `designs[i]`, whatever its rank
+    for (i, line) in lines[1..].iter().enumerate() {
+        assert!(line.starts_with(&format!("{i},")), "row {i}: {line}");
+    }
+    // the table shows that index beside the rank: the best design is not designs[0]
+    assert!(table.contains("[i]: the design's place in the file"), "{table}");
+    let first = table.lines().find(|l| l.split_whitespace().next() == Some("1")).expect("a row ranked 1");
+    assert_eq!(first.split_whitespace().nth(1), Some("[1]"), "{first}\n{table}");
+    assert!(first.contains("N-BK7 singlet"), "{first}\n{table}");
 }
 
 #[test]

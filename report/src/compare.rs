@@ -50,6 +50,8 @@ pub struct ChannelBest {
 /// One design's results.
 #[derive(Clone, Debug, Serialize)]
 pub struct DesignReport {
+    /// The design's place in the file: `designs[index]` (the key `--set designs[N].…` uses).
+    pub index: usize,
     /// The design's name.
     pub name: String,
     /// Its family.
@@ -298,6 +300,7 @@ fn compute(
             .map(|(s, (b, _))| ChannelBest { wavelength_nm: s.centre_nm.unwrap_or_default(), best: b.clone() })
             .collect();
         designs.push(DesignReport {
+            index: i,
             name: d.name.clone(),
             kind: d.kind,
             lens: d.scene.lens().describe(),
@@ -407,20 +410,23 @@ pub fn table(r: &Report) -> String {
     let _ = writeln!(s, "best band  {}", r.method);
     let w = r.designs.iter().map(|d| d.name.chars().count()).max().unwrap_or(6).max(6);
     let k = r.designs.iter().map(|d| d.kind.len()).max().unwrap_or(4).max(4);
+    // `[i]`: the design's index in the file (`--set designs[i].…`), beside its rank `#`
+    let n = format!("[{}]", r.designs.len().saturating_sub(1)).len().max(3);
     let _ = writeln!(
         s,
         "\nAt the scene band (ASNR = SNR0 × mean MTF up to Nyquist; glare-incl.: SNR0 with the noise of all transmitted light, SI eq. S14)"
     );
     let _ = writeln!(
         s,
-        "  #  {:w$}  {:k$}  {:>8}  {:>8}  {:>7}  {:>8}  {:>6}  {:>11}  {:>9}",
-        "design", "kind", "ASNR", "mean MTF", "SNR0", "N (e⁻)", "M0", "glare-incl.", "twin ASNR"
+        "  #  {:>n$}  {:w$}  {:k$}  {:>8}  {:>8}  {:>7}  {:>8}  {:>6}  {:>11}  {:>9}",
+        "[i]", "design", "kind", "ASNR", "mean MTF", "SNR0", "N (e⁻)", "M0", "glare-incl.", "twin ASNR"
     );
     for d in &r.designs {
         let _ = writeln!(
             s,
-            "  {:>1}  {:w$}  {:k$}  {:>8}  {:>8.5}  {:>7.3}  {:>8}  {:>6.4}  {:>11}  {:>9}",
+            "  {:>1}  {:>n$}  {:w$}  {:k$}  {:>8}  {:>8.5}  {:>7.3}  {:>8}  {:>6.4}  {:>11}  {:>9}",
             d.rank,
+            format!("[{}]", d.index),
             d.name,
             d.kind,
             format!("{:.4}", d.asnr),
@@ -432,20 +438,23 @@ pub fn table(r: &Report) -> String {
             d.twin_asnr.map_or("no light".to_owned(), |t| format!("{t:.4}")),
         );
     }
+    let _ =
+        writeln!(s, "  #: rank by ASNR; [i]: the design's place in the file, as in --set designs[i].lens.f_number=4");
     let _ = writeln!(
         s,
         "\nBest band and aperture (N_z = f0/(8F#²λ0) Fresnel zones; a chromatic lens of this aperture keeps λ0/(2N_z) sharp)"
     );
     let _ = writeln!(
         s,
-        "  #  {:w$}  {:>13}  {:>10}  {:>9}  {:>12}",
-        "design", "best range nm", "ASNR there", "N_z", "λ0/(2N_z) nm"
+        "  #  {:>n$}  {:w$}  {:>13}  {:>10}  {:>9}  {:>12}",
+        "[i]", "design", "best range nm", "ASNR there", "N_z", "λ0/(2N_z) nm"
     );
     for d in &r.designs {
         let _ = writeln!(
             s,
-            "  {:>1}  {:w$}  {:>13}  {:>10.4}  {:>9}  {:>12}",
+            "  {:>1}  {:>n$}  {:w$}  {:>13}  {:>10.4}  {:>9}  {:>12}",
             d.rank_at_best,
+            format!("[{}]", d.index),
             d.name,
             format!("{}{}", sig(d.best_range_nm, 4), if d.best_at_bound { " *" } else { "" }),
             d.best_asnr,
@@ -504,12 +513,13 @@ fn field(text: &str) -> String {
 /// CSV, one row per design.
 pub fn csv(r: &Report) -> String {
     let mut s = String::from(
-        "name,kind,asnr,mean_mtf,snr0,photoelectrons,m0,asnr_glare_free,asnr_glare_inclusive,twin_asnr,fresnel_zones,twin_band_nm,best_range_nm,best_asnr,rank,rank_at_best,notes\n",
+        "index,name,kind,asnr,mean_mtf,snr0,photoelectrons,m0,asnr_glare_free,asnr_glare_inclusive,twin_asnr,fresnel_zones,twin_band_nm,best_range_nm,best_asnr,rank,rank_at_best,notes\n",
     );
     for d in &r.designs {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            d.index,
             field(&d.name),
             d.kind,
             d.asnr,

@@ -20,7 +20,10 @@ const STEPS: &[Step] = &[
     Step { name: "tidy", run: run_tidy },
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
-    Step { name: "python (the package built into target/python-venv, its pytest suite)", run: python },
+    Step {
+        name: "python (the portable wheel, built and checked, in a fresh venv without Rust: pytest, README blocks)",
+        run: python,
+    },
     Step { name: "emva (asnr characterize against the emva1288 camera model)", run: emva },
     Step { name: "readme (every README command as written)", run: run_readme },
     Step { name: "stress (reduced grid)", run: stress },

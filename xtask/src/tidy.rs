@@ -127,8 +127,14 @@ fn check_member(root: &Path, folder: &str, violations: &mut Vec<String>) -> Resu
     let name = folder.rsplit('/').next().unwrap_or(folder);
     let manifest_path = format!("{folder}/Cargo.toml");
     match fs::read_to_string(root.join(&manifest_path)) {
-        Ok(text) => violations
-            .extend(check_manifest(name, &text).into_iter().map(|problem| format!("{manifest_path}: {problem}"))),
+        Ok(text) => {
+            violations
+                .extend(check_manifest(name, &text).into_iter().map(|problem| format!("{manifest_path}: {problem}")));
+            if let Ok(manifest) = text.parse::<Table>() {
+                let unused = unused_dependencies(&manifest, |dirs| rust_sources(&root.join(folder), dirs))?;
+                violations.extend(unused.into_iter().map(|problem| format!("{manifest_path}: {problem}")));
+            }
+        }
         Err(err) => violations.push(format!("{manifest_path}: cannot read: {err}")),
     }
 
@@ -209,6 +215,64 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
         }
     }
     problems
+}
+
+/// Declared dependencies that no source of the crate names: a normal dependency must be named
+/// (`dep::`, `use dep`, `extern crate dep`) in `src/` or `build.rs`, a dev-dependency anywhere in
+/// `src/`, `tests/`, `benches/` or `examples/`. `sources(dirs)` gives the text of the crate's
+/// `.rs` files under those folders. The `unused_crate_dependencies` lint would do this for one
+/// target at a time, and flags every normal dependency in every test target that does not use it.
+pub(crate) fn unused_dependencies(
+    manifest: &Table,
+    sources: impl Fn(&[&str]) -> Result<Vec<String>>,
+) -> Result<Vec<String>> {
+    let mut problems = Vec::new();
+    for table in dependency_tables(manifest) {
+        let dirs: &[&str] = if table.normal { &["src", "build.rs"] } else { &["src", "tests", "benches", "examples"] };
+        let texts = sources(dirs)?;
+        for key in table.deps.keys() {
+            let ident = key.replace('-', "_");
+            if !texts.iter().any(|text| names_crate(text, &ident)) {
+                problems.push(format!(
+                    "{key} in {} is named by no source ({}): remove it, or use it",
+                    table.label,
+                    dirs.join(", ")
+                ));
+            }
+        }
+    }
+    Ok(problems)
+}
+
+/// Whether Rust source `text` names the crate `ident`: `ident::`, `use ident`, or
+/// `extern crate ident`, with `ident` a whole word.
+pub(crate) fn names_crate(text: &str, ident: &str) -> bool {
+    let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+    text.match_indices(ident).any(|(at, _)| {
+        let before = text[..at].chars().next_back();
+        let after = &text[at + ident.len()..];
+        if word(before) || word(after.chars().next()) {
+            return false;
+        }
+        let head = text[..at].trim_end();
+        after.trim_start().starts_with("::") || head.ends_with("use") || head.ends_with("extern crate")
+    })
+}
+
+/// The text of every `.rs` file under `dirs` (folders, or single files) of the crate at `crate_dir`.
+fn rust_sources(crate_dir: &Path, dirs: &[&str]) -> Result<Vec<String>> {
+    let mut texts = Vec::new();
+    let mut stack: Vec<std::path::PathBuf> = dirs.iter().map(|d| crate_dir.join(d)).collect();
+    while let Some(path) = stack.pop() {
+        if path.is_dir() {
+            for entry in fs::read_dir(&path)? {
+                stack.push(entry?.path());
+            }
+        } else if path.is_file() && path.extension().is_some_and(|e| e == "rs") {
+            texts.push(fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?);
+        }
+    }
+    Ok(texts)
 }
 
 /// One dependency table of a manifest.
@@ -397,6 +461,24 @@ mod tests {
             check_manifest("python", python),
             vec!["depends on cli (allowed: report, scene, metric, lenses, optics, noise, radiometry)"]
         );
+    }
+
+    #[test]
+    fn a_dependency_no_source_names_is_found() {
+        let manifest: Table = "[dependencies]\nserde.workspace = true\nrand_pcg.workspace = true\n\
+                               [dev-dependencies]\napprox.workspace = true\n"
+            .parse()
+            .unwrap();
+        let src = "use serde::Serialize;\nfn f() { let _ = rand_pcg_like::X; }\n".to_owned();
+        let test = "use approx::assert_relative_eq;\n".to_owned();
+        let problems = unused_dependencies(&manifest, |dirs| {
+            Ok(if dirs.contains(&"tests") { vec![src.clone(), test.clone()] } else { vec![src.clone()] })
+        })
+        .unwrap();
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert!(problems[0].starts_with("rand_pcg in [dependencies] is named by no source"), "{problems:?}");
+        assert!(names_crate("extern crate foo;", "foo") && names_crate("x = foo ::bar()", "foo"));
+        assert!(!names_crate("let foo = 1; foo_bar::x();", "foo") && !names_crate("a.foo::<u8>()", "foo_x"));
     }
 
     #[test]
