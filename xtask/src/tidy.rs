@@ -15,7 +15,11 @@
 //! - every dependency is `name.workspace = true`, so versions and paths live only in the root
 //!   `[workspace.dependencies]`;
 //! - it has `[lints] workspace = true`;
-//! - `src/lib.rs` and `src/main.rs`, whichever exist, open with a `//!` crate doc comment.
+//! - `src/lib.rs` and `src/main.rs`, whichever exist, open with a `//!` crate doc comment;
+//! - every dependency it declares is named by its sources ([`unused_dependencies`]).
+//!
+//! And for the whole build: no package in `cargo metadata` needs a newer Rust than the
+//! workspace's `rust-version`.
 //!
 //! And for every tracked `*.md`, `*.rs` and `*.toml` file (`git ls-files`): it refers to no path
 //! outside the repository ([`OUTSIDE_PATTERNS`]); the physics conventions the code cites are in
@@ -80,6 +84,7 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         check_member(root, folder, &mut violations)?;
     }
     violations.extend(check_outside_references(root)?);
+    violations.extend(check_rust_version(root, &text)?);
     for violation in &violations {
         eprintln!("tidy: {violation}");
     }
@@ -273,6 +278,54 @@ fn rust_sources(crate_dir: &Path, dirs: &[&str]) -> Result<Vec<String>> {
         }
     }
     Ok(texts)
+}
+
+/// The packages of the build (`cargo metadata`) whose `rust-version` is newer than the
+/// workspace's `rust-version` (in the root manifest `text`): the workspace's would then be a
+/// promise the build cannot keep. The workspace's own code is held to it by clippy's
+/// `incompatible_msrv` lint (std items stabilized later), part of `clippy -D warnings`.
+fn check_rust_version(root: &Path, text: &str) -> Result<Vec<String>> {
+    let manifest: Table = text.parse().context("Cargo.toml")?;
+    let Some(ours) = manifest
+        .get("workspace")
+        .and_then(|w| w.get("package"))
+        .and_then(|p| p.get("rust-version"))
+        .and_then(Value::as_str)
+    else {
+        return Ok(vec!["Cargo.toml: [workspace.package] has no rust-version".to_owned()]);
+    };
+    let output = Command::new("cargo")
+        .args(["metadata", "--format-version", "1", "--locked"])
+        .current_dir(root)
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .context("could not run `cargo metadata`")?;
+    if !output.status.success() {
+        bail!("`cargo metadata --format-version 1 --locked` failed");
+    }
+    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).context("cargo metadata's JSON")?;
+    let mut problems = Vec::new();
+    for package in metadata["packages"].as_array().map_or(&[][..], Vec::as_slice) {
+        if let Some(theirs) = package["rust_version"].as_str()
+            && newer(theirs, ours)
+        {
+            problems.push(format!(
+                "Cargo.toml: rust-version = \"{ours}\", but {} {} needs Rust {theirs}: raise ours or hold that dependency back",
+                package["name"].as_str().unwrap_or("?"),
+                package["version"].as_str().unwrap_or("?")
+            ));
+        }
+    }
+    Ok(problems)
+}
+
+/// Whether Rust version `a` (`1.89`, `1.89.0`) is newer than `b`.
+pub(crate) fn newer(a: &str, b: &str) -> bool {
+    let parts = |v: &str| -> Vec<u64> { v.split('.').map(|p| p.trim().parse().unwrap_or(0)).collect() };
+    let (mut a, mut b) = (parts(a), parts(b));
+    a.resize(3, 0);
+    b.resize(3, 0);
+    a > b
 }
 
 /// One dependency table of a manifest.
@@ -479,6 +532,12 @@ mod tests {
         assert!(problems[0].starts_with("rand_pcg in [dependencies] is named by no source"), "{problems:?}");
         assert!(names_crate("extern crate foo;", "foo") && names_crate("x = foo ::bar()", "foo"));
         assert!(!names_crate("let foo = 1; foo_bar::x();", "foo") && !names_crate("a.foo::<u8>()", "foo_x"));
+    }
+
+    #[test]
+    fn rust_versions_compare_by_number() {
+        assert!(newer("1.90", "1.89") && newer("1.89.1", "1.89") && newer("1.100", "1.99.9"));
+        assert!(!newer("1.89.0", "1.89") && !newer("1.88", "1.89") && !newer("1.9", "1.89"));
     }
 
     #[test]
