@@ -7,8 +7,10 @@
 //! Downstream example crates are the one exception to the layout: `examples/<name>/` (one level,
 //! e.g. `examples/custom-lens`), each a user's crate built with the public API only.
 //!
-//! - the package name equals the folder name, except `cli/`, whose package is `asnr` (so that
-//!   `cargo install --path cli` installs and reports the `asnr` binary), see [`PACKAGE_NAMES`];
+//! - the package name is the folder's, except those [`PACKAGE_NAMES`] lists: the libraries are
+//!   `asnr-<folder>` with `[lib] name = "<folder>"`, `cli/` is `asnr` (so that
+//!   `cargo install --path cli` installs and reports the `asnr` binary);
+//! - `version.workspace = true` (one version, in the root manifest);
 //! - the project crates in its normal dependencies (`[dependencies]`, `[build-dependencies]`
 //!   and their `[target.*]` forms) are among those [`RULES`] allows; dev-dependencies may use
 //!   any project crate (so `metric` tests may use `lenses`);
@@ -60,8 +62,22 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("custom-lens", Allowed::Any),
 ];
 
-/// Folders whose package name is not the folder name: `(folder, package)`.
-pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[("cli", "asnr"), ("python", "asnr-python")];
+/// Folders whose package name is not the folder name: `(folder, package)`. The libraries are
+/// packages `asnr-<folder>` (names that can be published: `noise`, `optics`, … are taken on
+/// crates.io) whose library keeps the folder's name (`[lib] name`), so the code says
+/// `use optics::…`; the root `[workspace.dependencies]` finds them by `package = "asnr-…"`.
+pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[
+    ("cli", "asnr"),
+    ("python", "asnr-python"),
+    ("radiometry", "asnr-radiometry"),
+    ("optics", "asnr-optics"),
+    ("noise", "asnr-noise"),
+    ("metric", "asnr-metric"),
+    ("lenses", "asnr-lenses"),
+    ("scene", "asnr-scene"),
+    ("imaging", "asnr-imaging"),
+    ("report", "asnr-report"),
+];
 
 /// The package name the member in `folder` must have.
 fn package_name(folder: &str) -> &str {
@@ -85,6 +101,10 @@ pub(crate) fn run(root: &Path) -> Result<()> {
     }
     violations.extend(check_outside_references(root)?);
     violations.extend(check_rust_version(root, &text)?);
+    violations.extend(check_versions(&text));
+    if let Ok(citation) = fs::read_to_string(root.join("CITATION.cff")) {
+        violations.extend(check_citation_version(&text, &citation));
+    }
     for violation in &violations {
         eprintln!("tidy: {violation}");
     }
@@ -179,6 +199,25 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
         }
         Some(name) => problems.push(format!("package name `{name}`: the package in `{folder}/` is `{expected}`")),
         None => problems.push("has no [package] name".to_owned()),
+    }
+    if expected == format!("asnr-{folder}") && folder != "python" {
+        let lib = manifest.get("lib").and_then(|lib| lib.get("name")).and_then(Value::as_str);
+        if lib != Some(folder) {
+            problems.push(format!(
+                "[lib] name is {}: the library of package `{expected}` keeps its folder's name, `name = \"{folder}\"`",
+                lib.map_or("missing".to_owned(), |l| format!("`{l}`"))
+            ));
+        }
+    }
+
+    let version_from_workspace = manifest
+        .get("package")
+        .and_then(|package| package.get("version"))
+        .and_then(|v| v.get("workspace"))
+        .and_then(Value::as_bool)
+        == Some(true);
+    if !version_from_workspace {
+        problems.push("missing `version.workspace = true` (one version, in the root manifest)".to_owned());
     }
 
     let lints_from_workspace =
@@ -319,6 +358,50 @@ fn check_rust_version(root: &Path, text: &str) -> Result<Vec<String>> {
     Ok(problems)
 }
 
+/// One version in one place: every project crate in the root manifest `text`'s
+/// `[workspace.dependencies]` carries the `version` of `[workspace.package]` (cargo needs one on a
+/// path dependency to publish), and no member sets a version of its own (checked per member:
+/// `version.workspace = true`).
+pub(crate) fn check_versions(text: &str) -> Vec<String> {
+    let Ok(manifest) = text.parse::<Table>() else { return Vec::new() };
+    let workspace = manifest.get("workspace");
+    let ours = workspace.and_then(|w| w.get("package")).and_then(|p| p.get("version")).and_then(Value::as_str);
+    let Some(ours) = ours else { return vec!["Cargo.toml: [workspace.package] has no version".to_owned()] };
+    let mut problems = Vec::new();
+    if let Some(deps) = workspace.and_then(|w| w.get("dependencies")).and_then(Value::as_table) {
+        for (key, spec) in deps {
+            if spec.get("path").is_none() {
+                continue;
+            }
+            let version = spec.get("version").and_then(Value::as_str);
+            if version != Some(ours) {
+                problems.push(format!(
+                    "Cargo.toml: [workspace.dependencies] {key} has version {}: expected \"{ours}\", the workspace's",
+                    version.map_or("none".to_owned(), |v| format!("\"{v}\""))
+                ));
+            }
+        }
+    }
+    problems
+}
+
+/// `CITATION.cff`'s `version:` line must be the workspace's version (root manifest `text`).
+pub(crate) fn check_citation_version(text: &str, citation: &str) -> Vec<String> {
+    let ours = text
+        .parse::<Table>()
+        .ok()
+        .and_then(|m| m.get("workspace")?.get("package")?.get("version")?.as_str().map(str::to_owned));
+    let cited = citation.lines().find_map(|l| l.strip_prefix("version:")).map(|v| v.trim().trim_matches('"'));
+    match (ours, cited) {
+        (Some(ours), Some(cited)) if ours == cited => Vec::new(),
+        (ours, cited) => vec![format!(
+            "CITATION.cff: version {} is not the workspace's {}",
+            cited.unwrap_or("(none)"),
+            ours.as_deref().unwrap_or("(none)")
+        )],
+    }
+}
+
 /// Whether Rust version `a` (`1.89`, `1.89.0`) is newer than `b`.
 pub(crate) fn newer(a: &str, b: &str) -> bool {
     let parts = |v: &str| -> Vec<u64> { v.split('.').map(|p| p.trim().parse().unwrap_or(0)).collect() };
@@ -426,8 +509,11 @@ mod tests {
 
     const CLEAN_METRIC: &str = r#"
         [package]
-        name = "metric"
+        name = "asnr-metric"
         version.workspace = true
+
+        [lib]
+        name = "metric"
 
         [dependencies]
         optics.workspace = true
@@ -464,7 +550,9 @@ mod tests {
         assert_eq!(
             check_manifest("metric", manifest),
             vec![
-                "package name `metrics` differs from its folder name `metric`",
+                "package name `metrics`: the package in `metric/` is `asnr-metric`",
+                "[lib] name is missing: the library of package `asnr-metric` keeps its folder's name, `name = \"metric\"`",
+                "missing `version.workspace = true` (one version, in the root manifest)",
                 "missing `[lints] workspace = true`",
                 "depends on lenses (allowed: optics, noise, radiometry)",
                 "serde in [dependencies] must be `serde.workspace = true` \
@@ -479,9 +567,12 @@ mod tests {
     fn leaf_crate_allows_no_project_crate_and_renames_are_seen_through() {
         let manifest = r#"
             [package]
+            name = "asnr-radiometry"
+            version.workspace = true
+            [lib]
             name = "radiometry"
             [build-dependencies]
-            opt = { package = "optics", workspace = true }
+            opt = { package = "asnr-optics", workspace = true }
             [lints]
             workspace = true
         "#;
@@ -493,22 +584,22 @@ mod tests {
 
     #[test]
     fn cli_may_depend_on_anything_and_unknown_crates_need_a_rule() {
-        let cli = "[package]\nname = \"asnr\"\n[dependencies]\nlenses.workspace = true\n\
+        let cli = "[package]\nname = \"asnr\"\nversion.workspace = true\n[dependencies]\nlenses.workspace = true\n\
                    metric.workspace = true\n[lints]\nworkspace = true\n";
         assert!(check_manifest("cli", cli).is_empty());
-        let unknown = "[package]\nname = \"extra\"\n[lints]\nworkspace = true\n";
+        let unknown = "[package]\nname = \"extra\"\nversion.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(
             check_manifest("extra", unknown),
             vec!["no dependency rule for `extra`: add it to RULES in xtask/src/tidy.rs"]
         );
         assert_eq!(check_manifest("cli", "[package").len(), 1);
-        let named_cli = "[package]\nname = \"cli\"\n[lints]\nworkspace = true\n";
+        let named_cli = "[package]\nname = \"cli\"\nversion.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(check_manifest("cli", named_cli), vec!["package name `cli`: the package in `cli/` is `asnr`"]);
     }
 
     #[test]
     fn the_python_extension_may_not_depend_on_the_command_line() {
-        let python = "[package]\nname = \"asnr-python\"\n[dependencies]\nreport.workspace = true\n\
+        let python = "[package]\nname = \"asnr-python\"\nversion.workspace = true\n[dependencies]\nreport.workspace = true\n\
                       asnr.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(
             check_manifest("python", python),
@@ -532,6 +623,31 @@ mod tests {
         assert!(problems[0].starts_with("rand_pcg in [dependencies] is named by no source"), "{problems:?}");
         assert!(names_crate("extern crate foo;", "foo") && names_crate("x = foo ::bar()", "foo"));
         assert!(!names_crate("let foo = 1; foo_bar::x();", "foo") && !names_crate("a.foo::<u8>()", "foo_x"));
+    }
+
+    #[test]
+    fn project_crates_carry_the_workspace_version() {
+        let root = "[workspace.package]\nversion = \"0.2.0\"\n[workspace.dependencies]\n\
+                    optics = { package = \"asnr-optics\", path = \"optics\", version = \"0.2.0\" }\n\
+                    noise = { package = \"asnr-noise\", path = \"noise\", version = \"0.1.0\" }\n\
+                    metric = { package = \"asnr-metric\", path = \"metric\" }\nserde = \"1\"\n";
+        assert_eq!(
+            check_versions(root),
+            vec![
+                "Cargo.toml: [workspace.dependencies] metric has version none: expected \"0.2.0\", the workspace's",
+                "Cargo.toml: [workspace.dependencies] noise has version \"0.1.0\": expected \"0.2.0\", the workspace's",
+            ]
+        );
+    }
+
+    #[test]
+    fn the_citation_cites_the_workspace_version() {
+        let root = "[workspace.package]\nversion = \"0.2.0\"\n";
+        assert!(check_citation_version(root, "cff-version: 1.2.0\nversion: 0.2.0\n").is_empty());
+        assert_eq!(
+            check_citation_version(root, "cff-version: 1.2.0\nversion: \"0.1.0\"\n"),
+            vec!["CITATION.cff: version 0.1.0 is not the workspace's 0.2.0"]
+        );
     }
 
     #[test]
