@@ -63,7 +63,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if args.json {
         outln!("{}", serde_json::to_string_pretty(&report)?);
     } else if args.csv {
-        out!("{}", csv(&report));
+        out!("{}", csv(&report)?);
     } else {
         out!("{}", table(&report));
     }

@@ -325,7 +325,8 @@ pub fn run(cli: Cli) -> Result<()> {
                 eprintln!("{line}");
             }
             if let Some(path) = &plot {
-                plot::sweep_plot(path, &figure, built.title().unwrap_or_default(), &ranges, &points)?;
+                let title = plot::sweep_title(&ranges, &built.lens().describe());
+                plot::sweep_plot(path, &figure, &title, &ranges, &points)?;
             }
             if json {
                 outln!("{}", serde_json::to_string_pretty(&points)?);

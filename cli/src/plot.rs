@@ -173,6 +173,22 @@ pub fn quantity(key: &str) -> (String, Option<&'static str>) {
 
 /// The axis label of a scene key or result column: its human name with the unit in parentheses,
 /// e.g. `spectrum.range_nm` → "spectral range (nm)" (see [`quantity`]).
+/// The title of a sweep's plot: what was swept, over which range, and the lens unless a lens key
+/// is swept ("ASNR over spectral range 10–50 nm and exposure time 1–2 ms: chromatic metalens
+/// F/2.5 …"); not the scene's title, whose band or F-number the sweep replaces.
+pub fn sweep_title(ranges: &[Range], lens: &str) -> String {
+    let swept: Vec<String> = ranges
+        .iter()
+        .map(|r| {
+            let (name, unit) = quantity(&r.key);
+            format!("{name} {}–{}{}", number(r.lo), number(r.hi), unit.map_or(String::new(), |u| format!(" {u}")))
+        })
+        .collect();
+    let title = format!("ASNR over {}", swept.join(" and "));
+    if ranges.iter().any(|r| r.key.starts_with("lens.")) { title } else { format!("{title}: {lens}") }
+}
+
+/// The axis label of a scene key: its name and unit, "spectral range (nm)".
 pub fn axis_label(key: &str) -> String {
     match quantity(key) {
         (name, Some(unit)) => format!("{name} ({unit})"),

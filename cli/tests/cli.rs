@@ -737,8 +737,8 @@ fn labels_truncation_by_a_table_names_its_range() {
     );
 }
 
-/// The scene title: in the text report, the JSON, and the plots' captions (falling back to the
-/// file name without a title).
+/// The scene title: in the text report, the JSON, and the MTF plot's caption (falling back to
+/// the lens without a title); a sweep's plot says what was swept instead.
 #[test]
 fn labels_scene_title_is_shown() {
     let (text, _) = succeeds(&["evaluate"]);
@@ -755,7 +755,10 @@ fn labels_scene_title_is_shown() {
     let svg = dir.join("sweep.svg");
     let over = ["--over", "spectrum.range_nm=10:50:3"];
     succeeds(&[&["sweep", "--set", "title=\"Labels caption\"", "--plot", svg.to_str().unwrap()][..], &over].concat());
-    assert!(std::fs::read_to_string(&svg).unwrap().contains("Labels caption"));
+    // a sweep's plot is captioned by what it swept (the scene's title states the one band or
+    // F-number the sweep replaces)
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawn.contains("ASNR over spectral range 10–50 nm") && !drawn.contains("Labels caption"), "{drawn}");
     // no title: null in the JSON; the MTF plot is captioned with the lens, never a file path
     let untitled = edited_paper(&dir, "title = \"Paper theory model", "# title = \"Paper theory model");
     assert_eq!(json(&["evaluate", untitled.to_str().unwrap(), "--json"])["title"], serde_json::Value::Null);

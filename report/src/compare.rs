@@ -505,39 +505,110 @@ fn numbered(names: &[String]) -> String {
     names.iter().enumerate().map(|(i, n)| format!("{}. {n}", i + 1)).collect::<Vec<_>>().join(", ")
 }
 
-/// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
-fn field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_owned() }
+/// CSV, one row per design, written by the `csv` crate (fields quoted where RFC 4180 needs it).
+pub fn csv(r: &Report) -> Result<String> {
+    let mut out = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
+    out.write_record([
+        "index",
+        "name",
+        "kind",
+        "asnr",
+        "mean_mtf",
+        "snr0",
+        "photoelectrons",
+        "m0",
+        "asnr_glare_free",
+        "asnr_glare_inclusive",
+        "twin_asnr",
+        "fresnel_zones",
+        "twin_band_nm",
+        "best_range_nm",
+        "best_asnr",
+        "rank",
+        "rank_at_best",
+        "notes",
+    ])?;
+    for d in &r.designs {
+        out.write_record([
+            d.index.to_string(),
+            d.name.clone(),
+            d.kind.to_owned(),
+            d.asnr.to_string(),
+            d.mean_mtf.to_string(),
+            d.snr0.to_string(),
+            d.photoelectrons.to_string(),
+            d.m0.to_string(),
+            d.asnr_glare_free.to_string(),
+            d.asnr_glare_inclusive.to_string(),
+            d.twin_asnr.map_or(String::new(), |t| t.to_string()),
+            d.fresnel_zones.to_string(),
+            d.twin_band_nm.to_string(),
+            d.best_range_nm.to_string(),
+            d.best_asnr.to_string(),
+            d.rank.to_string(),
+            d.rank_at_best.to_string(),
+            d.notes.join(" | "),
+        ])?;
+    }
+    Ok(String::from_utf8(out.into_inner().map_err(|e| anyhow!("CSV: {e}"))?)?)
 }
 
-/// CSV, one row per design.
-pub fn csv(r: &Report) -> String {
-    let mut s = String::from(
-        "index,name,kind,asnr,mean_mtf,snr0,photoelectrons,m0,asnr_glare_free,asnr_glare_inclusive,twin_asnr,fresnel_zones,twin_band_nm,best_range_nm,best_asnr,rank,rank_at_best,notes\n",
-    );
-    for d in &r.designs {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            d.index,
-            field(&d.name),
-            d.kind,
-            d.asnr,
-            d.mean_mtf,
-            d.snr0,
-            d.photoelectrons,
-            d.m0,
-            d.asnr_glare_free,
-            d.asnr_glare_inclusive,
-            d.twin_asnr.map_or(String::new(), |t| t.to_string()),
-            d.fresnel_zones,
-            d.twin_band_nm,
-            d.best_range_nm,
-            d.best_asnr,
-            d.rank,
-            d.rank_at_best,
-            field(&d.notes.join(" | "))
-        );
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn design(index: usize, name: &str, notes: &[&str]) -> DesignReport {
+        DesignReport {
+            index,
+            name: name.to_owned(),
+            kind: "chromatic",
+            lens: "a lens".to_owned(),
+            asnr: 10.5,
+            mean_mtf: 0.5,
+            snr0: 21.0,
+            photoelectrons: 441.0,
+            m0: 0.25,
+            vg: 0.6,
+            asnr_glare_free: 10.5,
+            asnr_glare_inclusive: 5.25,
+            fraunhofer_valid: true,
+            fresnel_zones: 84.0,
+            design_wavelength_nm: 800.0,
+            twin_band_nm: 4.76,
+            twin_asnr: None,
+            best_range_nm: 33.0,
+            best_asnr: 10.6,
+            best_at_bound: false,
+            rank: 2 - index,
+            rank_at_best: 2 - index,
+            channels: Vec::new(),
+            notes: notes.iter().map(|n| (*n).to_owned()).collect(),
+            warnings: Vec::new(),
+            curve: Vec::new(),
+        }
     }
-    s
+
+    #[test]
+    fn csv_quotes_what_needs_it_and_reads_back() {
+        let report = Report {
+            scene: "x.toml".to_owned(),
+            title: None,
+            center_nm: 800.0,
+            range_nm: 50.0,
+            method: String::new(),
+            designs: vec![design(0, "plain", &[]), design(1, "F/2.5, \"reduced\"", &["a, b", "line\nbreak"])],
+            ranking: Vec::new(),
+            ranking_at_best: Vec::new(),
+        };
+        let text = csv(&report).unwrap();
+        assert!(text.starts_with("index,name,kind,asnr,"), "{text}");
+        assert!(text.contains("\n0,plain,chromatic,10.5,"), "{text}");
+        let mut reader = ::csv::Reader::from_reader(text.as_bytes());
+        let rows: Vec<::csv::StringRecord> = reader.records().map(Result::unwrap).collect();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(&rows[1][0], "1");
+        assert_eq!(&rows[1][1], "F/2.5, \"reduced\"");
+        assert_eq!(&rows[1][10], "", "no twin: an empty field");
+        assert_eq!(&rows[1][17], "a, b | line\nbreak");
+    }
 }
