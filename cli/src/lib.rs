@@ -1,6 +1,7 @@
 //! The `asnr` command line as a library: its subcommands (`evaluate`, `sweep`, `merge`,
-//! `compare`, …), which the binary (`src/main.rs`) runs and the Python package (`python/`)
-//! reuses, so that a sweep or a comparison is the same computation from either.
+//! `compare`, …), which the binary (`src/main.rs`) runs. Its public surface is what the binary
+//! needs: [`Cli`] (the arguments), [`run`] and [`is_broken_pipe`]; the computations the Python
+//! package shares with it live in the `report` library (`asnr-report`).
 //!
 //! Evaluates the ASNR (paper eq. 1) of a scene file, or of the paper's lens embedded in the
 //! binary. Human-readable table by default, `--json` for scripts.
@@ -20,19 +21,19 @@ macro_rules! outln {
     };
 }
 
-pub mod characterize;
-pub mod comparecmd;
-pub mod measure;
-pub mod merge;
-pub mod panel;
-pub mod plot;
-pub mod plotcmd;
-pub mod psf;
-pub mod render;
-pub mod sweep;
+mod characterize;
+mod comparecmd;
+mod measure;
+mod merge;
+mod panel;
+mod plot;
+mod plotcmd;
+mod psf;
+mod render;
+mod sweep;
 
 // the reports shared with the Python package, under the names the subcommands use
-pub use report::{optimize, output};
+use report::{optimize, output};
 
 use optimize::{check_keys, check_over_keys, max_threads};
 

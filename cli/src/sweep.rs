@@ -44,11 +44,6 @@ impl Design {
         }
     }
 
-    /// Whether it has no point.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// The values of point `index`.
     pub fn values(&self, index: usize) -> Vec<f64> {
         match self {

@@ -33,13 +33,17 @@ const STEPS: &[Step] = &[
 /// Run every step from the workspace `root`; print `ci: N passed, M failed` at the end.
 pub(crate) fn run(root: &Path) -> Result<()> {
     let total = STEPS.len();
+    let start = std::time::Instant::now();
     for (index, step) in STEPS.iter().enumerate() {
         eprintln!("\n==> ci [{}/{total}] {}", index + 1, step.name);
+        let begun = std::time::Instant::now();
         if let Err(err) = (step.run)(root) {
             println!("\nci: {index} passed, 1 failed");
             return Err(err.context(format!("ci step `{}` failed", step.name)));
         }
+        eprintln!("==> ci [{}/{total}] done in {:.0} s", index + 1, begun.elapsed().as_secs_f64());
     }
+    eprintln!("==> ci: {:.0} s in all", start.elapsed().as_secs_f64());
     println!("\nci: {total} passed, 0 failed");
     Ok(())
 }
