@@ -4,7 +4,7 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
 /// Points of the coarse scan that brackets the maximum before the golden-section search.
-const SCAN_POINTS: usize = 17;
+pub const SCAN_POINTS: usize = 17;
 
 /// A `KEY=LO:HI` range.
 #[derive(Clone, Debug, PartialEq)]
