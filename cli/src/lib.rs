@@ -1,6 +1,7 @@
 //! The `asnr` command line as a library: its subcommands (`evaluate`, `sweep`, `merge`,
-//! `compare`, …), which the binary (`src/main.rs`) runs and the Python package (`python/`)
-//! reuses, so that a sweep or a comparison is the same computation from either.
+//! `compare`, …), which the binary (`src/main.rs`) runs. Its public surface is what the binary
+//! needs: [`Cli`] (the arguments), [`run`] and [`is_broken_pipe`]; the computations the Python
+//! package shares with it live in the `report` library (`asnr-report`).
 //!
 //! Evaluates the ASNR (paper eq. 1) of a scene file, or of the paper's lens embedded in the
 //! binary. Human-readable table by default, `--json` for scripts.
@@ -20,18 +21,21 @@ macro_rules! outln {
     };
 }
 
-pub mod characterize;
-pub mod compare;
-pub mod measure;
-pub mod merge;
-pub mod optimize;
-pub mod output;
-pub mod panel;
-pub mod plot;
-pub mod plotcmd;
-pub mod psf;
-pub mod render;
-pub mod sweep;
+mod characterize;
+mod comparecmd;
+mod measure;
+mod merge;
+mod panel;
+mod plot;
+mod plotcmd;
+mod psf;
+mod render;
+mod sweep;
+
+// the reports shared with the Python package, under the names the subcommands use
+use report::{optimize, output};
+
+use optimize::{check_keys, check_over_keys, max_threads};
 
 use std::path::PathBuf;
 
@@ -132,7 +136,7 @@ pub enum Command {
     Merge(merge::MergeArgs),
     /// Lens designs side by side: ASNR at the scene band and at each design's best band, the
     /// chromatic twin, glare (default: the embedded comparison of the lens families).
-    Compare(compare::CompareArgs),
+    Compare(comparecmd::CompareArgs),
     /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
     /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
     Measure(measure::MeasureArgs),
@@ -322,7 +326,8 @@ pub fn run(cli: Cli) -> Result<()> {
                 eprintln!("{line}");
             }
             if let Some(path) = &plot {
-                plot::sweep_plot(path, &figure, built.title().unwrap_or_default(), &ranges, &points)?;
+                let title = plot::sweep_title(&ranges, &built.lens().describe());
+                plot::sweep_plot(path, &figure, &title, &ranges, &points)?;
             }
             if json {
                 outln!("{}", serde_json::to_string_pretty(&points)?);
@@ -335,7 +340,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Merge(args) => merge::run(&args),
         Command::Plot(args) => plotcmd::run(&args),
-        Command::Compare(args) => compare::run(args),
+        Command::Compare(args) => comparecmd::run(args),
         Command::Measure(args) => measure::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
@@ -396,35 +401,6 @@ fn warn(warnings: &[scene::Warning]) {
 
 /// The most grid points a sweep evaluates.
 const MAX_GRID_POINTS: usize = 10_000_000;
-
-/// The most sweep worker threads: 4 × the available cores (more only add contention).
-fn max_threads() -> usize {
-    4 * std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
-}
-
-/// Refuses a key given twice to `--over`, or given to both `--set` (or `--tolerance`, which is
-/// `options.tolerance`) and `--over`: one value of it would silently be ignored.
-fn check_over_keys(set: &[String], ranges: &[optimize::Range]) -> Result<()> {
-    check_keys("--over", set, ranges)
-}
-
-/// [`check_over_keys`] for keys swept by `what` (`--over`, or `--points FILE`).
-fn check_keys(what: &str, set: &[String], ranges: &[optimize::Range]) -> Result<()> {
-    for (i, r) in ranges.iter().enumerate() {
-        if ranges[..i].iter().any(|earlier| earlier.key == r.key) {
-            anyhow::bail!("{what} {}: the key is given to {what} twice; give each key once", r.key);
-        }
-        if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == r.key)) {
-            let given =
-                if r.key == "options.tolerance" { format!("--set {s} or --tolerance") } else { format!("--set {s}") };
-            anyhow::bail!(
-                "{what} {}: the key is also given by {given}; {what} would override it: give it in one place",
-                r.key
-            );
-        }
-    }
-    Ok(())
-}
 
 /// The JSON object `report` with the `--explain` text as a last field `explain`, one string
 /// per line.

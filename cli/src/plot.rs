@@ -173,6 +173,22 @@ pub fn quantity(key: &str) -> (String, Option<&'static str>) {
 
 /// The axis label of a scene key or result column: its human name with the unit in parentheses,
 /// e.g. `spectrum.range_nm` → "spectral range (nm)" (see [`quantity`]).
+/// The title of a sweep's plot: what was swept, over which range, and the lens unless a lens key
+/// is swept ("ASNR over spectral range 10–50 nm and exposure time 1–2 ms: chromatic metalens
+/// F/2.5 …"); not the scene's title, whose band or F-number the sweep replaces.
+pub fn sweep_title(ranges: &[Range], lens: &str) -> String {
+    let swept: Vec<String> = ranges
+        .iter()
+        .map(|r| {
+            let (name, unit) = quantity(&r.key);
+            format!("{name} {}–{}{}", number(r.lo), number(r.hi), unit.map_or(String::new(), |u| format!(" {u}")))
+        })
+        .collect();
+    let title = format!("ASNR over {}", swept.join(" and "));
+    if ranges.iter().any(|r| r.key.starts_with("lens.")) { title } else { format!("{title}: {lens}") }
+}
+
+/// The axis label of a scene key: its name and unit, "spectral range (nm)".
 pub fn axis_label(key: &str) -> String {
     match quantity(key) {
         (name, Some(unit)) => format!("{name} ({unit})"),
@@ -362,11 +378,7 @@ fn extent(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Plain number for legends: up to four decimals, trailing zeros dropped.
-pub fn number(v: f64) -> String {
-    let s = format!("{v:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".to_owned() } else { s.to_owned() }
-}
+pub use report::number;
 
 /// `v` to four significant digits, trailing zeros dropped: "10.57", "34.39", "0.001234".
 fn significant(v: f64) -> String {
@@ -1056,50 +1068,18 @@ fn downsample(big: &[u8], (w, h): (u32, u32), s: u32) -> Vec<u8> {
     out
 }
 
-/// Writes RGB pixels as a PNG with its resolution, `dpi`, in a pHYs chunk.
+/// Writes RGB pixels as a PNG with its resolution, `dpi`, in a pHYs chunk (pixels per metre,
+/// both axes), through the `png` encoder.
 fn write_png(path: &Path, (w, h): (u32, u32), rgb: &[u8], dpi: f64) -> Result<(), String> {
-    {
-        let mut backend = BitMapBackend::new(path, (w, h));
-        backend.blit_bitmap((0, 0), (w, h), rgb).map_err(|e| fail(&e))?;
-        backend.present().map_err(|e| fail(&e))?;
-    }
-    let png = std::fs::read(path).map_err(|e| fail(&e))?;
-    let png = with_phys(&png, dpi).ok_or("the PNG encoder wrote no IHDR chunk")?;
-    std::fs::write(path, png).map_err(|e| fail(&e))
-}
-
-/// `png` with a pHYs chunk (pixels per metre, both axes) after its IHDR chunk; `None` if it does
-/// not start with one.
-fn with_phys(png: &[u8], dpi: f64) -> Option<Vec<u8>> {
-    // the 8-byte signature, then IHDR: length, type, 13 bytes of data, CRC
-    const END_OF_IHDR: usize = 8 + 4 + 4 + 13 + 4;
-    if png.len() < END_OF_IHDR || &png[12..16] != b"IHDR" {
-        return None;
-    }
+    let file = std::fs::File::create(path).map_err(|e| fail(&e))?;
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
     let ppm = (dpi / 0.0254).round() as u32;
-    let mut chunk = b"pHYs".to_vec();
-    chunk.extend(ppm.to_be_bytes());
-    chunk.extend(ppm.to_be_bytes());
-    chunk.push(1); // the unit is the metre
-    let crc = crc32(&chunk);
-    let mut out = png[..END_OF_IHDR].to_vec();
-    out.extend(9u32.to_be_bytes());
-    out.extend(chunk);
-    out.extend(crc.to_be_bytes());
-    out.extend(&png[END_OF_IHDR..]);
-    Some(out)
-}
-
-/// CRC-32 (ISO 3309, as PNG chunks use).
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= u32::from(b);
-        for _ in 0..8 {
-            c = if c & 1 == 1 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
-        }
-    }
-    !c
+    encoder.set_pixel_dims(Some(png::PixelDimensions { xppu: ppm, yppu: ppm, unit: png::Unit::Meter }));
+    let mut writer = encoder.write_header().map_err(|e| fail(&e))?;
+    writer.write_image_data(rgb).map_err(|e| fail(&e))?;
+    writer.finish().map_err(|e| fail(&e))
 }
 
 /// Line charts of `asnr plot` and one-key sweeps.
@@ -1460,15 +1440,9 @@ impl Plot for FitPlot<'_> {
     }
 }
 
-/// Viridis-like colour for `t` in [0, 1] (five stops of matplotlib's viridis, linear between).
+/// matplotlib's viridis for `t` in [0, 1] (plotters' table of eight stops, linear between).
 fn colour(t: f64) -> RGBColor {
-    const STOPS: [(u8, u8, u8); 5] = [(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)];
-    let t = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
-    let i = (t.floor() as usize).min(STOPS.len() - 2);
-    let f = t - i as f64;
-    let mix = |a: u8, b: u8| (f64::from(a) + (f64::from(b) - f64::from(a)) * f).round() as u8;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    plotters::style::colors::colormaps::ViridisRGB::get_color(t.clamp(0.0, 1.0))
 }
 
 /// Heatmaps of `asnr plot --z` and two-key sweeps.
@@ -1869,20 +1843,19 @@ mod tests {
     }
 
     #[test]
-    fn phys_chunk_is_a_valid_png_chunk() {
-        // CRC of "IEND", as every PNG ends
-        assert_eq!(crc32(b"IEND"), 0xAE42_6082);
-        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
-        png.extend([0u8; 17]);
-        png.extend(b"rest");
-        let out = with_phys(&png, 300.0).unwrap();
-        assert_eq!(&out[33..37], &9u32.to_be_bytes());
-        assert_eq!(&out[37..41], b"pHYs");
-        assert_eq!(&out[41..45], &11_811u32.to_be_bytes()); // 300 dpi in pixels per metre
-        assert_eq!(out[49], 1);
-        assert_eq!(&out[50..54], &crc32(&out[37..50]).to_be_bytes());
-        assert_eq!(&out[54..], b"rest");
-        assert_eq!(with_phys(b"not a png", 300.0), None);
+    fn png_records_its_resolution_and_pixels() {
+        let path = std::env::temp_dir().join(format!("asnr-plot-phys-{}.png", std::process::id()));
+        let rgb: Vec<u8> = (0..4 * 3 * 3).map(|i| (i * 7) as u8).collect();
+        write_png(&path, (4, 3), &rgb, 300.0).unwrap();
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        // 300 dpi is 11 811 pixels per metre
+        let dims = reader.info().pixel_dims.unwrap();
+        assert_eq!((dims.xppu, dims.yppu, dims.unit), (11_811, 11_811, png::Unit::Meter));
+        let mut pixels = vec![0; reader.output_buffer_size()];
+        reader.next_frame(&mut pixels).unwrap();
+        assert_eq!(pixels, rgb);
+        std::fs::remove_file(&path).unwrap();
     }
 
     /// A straight line in many short segments, as curves are drawn.

@@ -81,7 +81,11 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
         Some(s) => anyhow::bail!("--spacing-um {s}: expected a sample spacing > 0 and below 10000 µm"),
         None => 0.5 / cutoff,
     };
-    let transfer = imaging::transfer(&scene, n, n, spacing).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+    // off axis or through a composite pupil this takes tens of seconds: a spinner on a terminal
+    let spinner = crate::sweep::spinner(format!("the {n} × {n} OTF grid of {label}"))?;
+    let transfer = imaging::transfer(&scene, n, n, spacing);
+    spinner.finish_and_clear();
+    let transfer = transfer.map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("--out {}: cannot create the folder", args.out.display()))?;
     let centre = n / 2;

@@ -44,11 +44,6 @@ impl Design {
         }
     }
 
-    /// Whether it has no point.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// The values of point `index`.
     pub fn values(&self, index: usize) -> Vec<f64> {
         match self {
@@ -262,5 +257,18 @@ pub fn progress_bar(total: u64, unit: &str) -> Result<ProgressBar> {
             .map_err(|e| anyhow!("progress bar template: {e}"))?
             .progress_chars("=> "),
     );
+    Ok(bar)
+}
+
+/// A spinner on stderr with the elapsed time and `message`, for a computation whose steps are
+/// not counted (drawn only on a terminal; `finish_and_clear` removes it).
+pub fn spinner(message: String) -> Result<ProgressBar> {
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {elapsed_precise} {msg}")
+            .map_err(|e| anyhow!("progress spinner template: {e}"))?,
+    );
+    bar.set_message(message);
+    bar.enable_steady_tick(std::time::Duration::from_millis(250));
     Ok(bar)
 }

@@ -737,8 +737,8 @@ fn labels_truncation_by_a_table_names_its_range() {
     );
 }
 
-/// The scene title: in the text report, the JSON, and the plots' captions (falling back to the
-/// file name without a title).
+/// The scene title: in the text report, the JSON, and the MTF plot's caption (falling back to
+/// the lens without a title); a sweep's plot says what was swept instead.
 #[test]
 fn labels_scene_title_is_shown() {
     let (text, _) = succeeds(&["evaluate"]);
@@ -755,7 +755,10 @@ fn labels_scene_title_is_shown() {
     let svg = dir.join("sweep.svg");
     let over = ["--over", "spectrum.range_nm=10:50:3"];
     succeeds(&[&["sweep", "--set", "title=\"Labels caption\"", "--plot", svg.to_str().unwrap()][..], &over].concat());
-    assert!(std::fs::read_to_string(&svg).unwrap().contains("Labels caption"));
+    // a sweep's plot is captioned by what it swept (the scene's title states the one band or
+    // F-number the sweep replaces)
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    assert!(drawn.contains("ASNR over spectral range 10–50 nm") && !drawn.contains("Labels caption"), "{drawn}");
     // no title: null in the JSON; the MTF plot is captioned with the lens, never a file path
     let untitled = edited_paper(&dir, "title = \"Paper theory model", "# title = \"Paper theory model");
     assert_eq!(json(&["evaluate", untitled.to_str().unwrap(), "--json"])["title"], serde_json::Value::Null);
@@ -1469,9 +1472,18 @@ fn compare_table_csv_plot_and_embedded() {
     assert!(svg.contains("<svg") && svg.contains("paper chromatic F/2.5") && svg.contains("ASNR"));
     let (csv, _) = succeeds(&["compare", "--csv", "--over", SMALL_GRID]);
     let lines: Vec<&str> = csv.lines().collect();
-    assert!(lines[0].starts_with("name,kind,asnr,mean_mtf,snr0,"), "{csv}");
+    assert!(lines[0].starts_with("index,name,kind,asnr,mean_mtf,snr0,"), "{csv}");
     let designs = std::fs::read_to_string(DESIGNS).unwrap().matches("[[designs]]").count();
     assert_eq!(lines.len(), 1 + designs, "{csv}");
+    // each row's index is its design's place in the file, `designs[i]`, whatever its rank
+    for (i, line) in lines[1..].iter().enumerate() {
+        assert!(line.starts_with(&format!("{i},")), "row {i}: {line}");
+    }
+    // the table shows that index beside the rank: the best design is not designs[0]
+    assert!(table.contains("[i]: the design's place in the file"), "{table}");
+    let first = table.lines().find(|l| l.split_whitespace().next() == Some("1")).expect("a row ranked 1");
+    assert_eq!(first.split_whitespace().nth(1), Some("[1]"), "{first}\n{table}");
+    assert!(first.contains("N-BK7 singlet"), "{first}\n{table}");
 }
 
 #[test]

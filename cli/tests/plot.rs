@@ -467,13 +467,14 @@ fn title(svg: &str) -> String {
 }
 
 #[test]
-fn sweep_and_mtf_plots_show_the_scene_title_and_human_axis_labels() {
+fn sweep_and_mtf_plots_show_what_was_swept_and_human_axis_labels() {
     let dir = scratch("titles");
-    let theory_title = "Paper theory model: chromatic metalens F/2.5, 800 nm, 50 nm range";
+    let lens = "chromatic metalens F/2.5 f0 = 3.36 mm at λ0 = 800 nm";
     let out = dir.join("sweep.svg");
     succeeds(&["sweep", PAPER, "--over", "camera.pixel_pitch_um=4:6:3", "--plot", out.to_str().unwrap()]);
     let text = svg(&out);
-    assert_eq!(title(&text), theory_title);
+    // what was swept, not the scene's title (its "50 nm range" is what a band sweep replaces)
+    assert_eq!(title(&text), format!("ASNR over pixel pitch 4–6 µm: {lens}"));
     let all = texts(&text);
     assert!(!all.iter().any(|t| t.contains(".toml") || t.contains("examples")), "{all:?}");
     for needle in ["pixel pitch (µm)", "ASNR"] {
@@ -492,8 +493,11 @@ fn sweep_and_mtf_plots_show_the_scene_title_and_human_axis_labels() {
         out.to_str().unwrap(),
     ]);
     let text = svg(&out);
-    // the embedded scene is the paper's theory scene, with its title
-    assert_eq!(title(&text), theory_title);
+    assert_eq!(title(&text), format!("ASNR over spectral range 10–50 nm and exposure time 1–2 ms: {lens}"));
+    // a swept lens key makes the lens description stale: left out
+    let out = dir.join("f-number.svg");
+    succeeds(&["sweep", "--over", "lens.f_number=2:4:3", "--plot", out.to_str().unwrap()]);
+    assert_eq!(title(&svg(&out)), "ASNR over F-number 2–4");
     let all = texts(&text);
     for needle in ["spectral range (nm)", "exposure time (ms)", "best exposure time for each spectral range"] {
         assert!(all.iter().any(|t| t == needle), "missing {needle:?} in {all:?}");

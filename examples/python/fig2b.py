@@ -7,7 +7,7 @@ scene `asnr` embeds). "Simulated": the same with tabulated τ1(λ), T(λ) and QE
 The range is the Gaussian's 2√2σ, 2 to 200 nm in steps of 2 nm, as `cargo xtask figures` sweeps
 it; the paper's four band-pass filters (10, 40, 52 and 125 nm FWHM) are marked.
 
-    pip install ./python matplotlib
+    pip install "asnr-….whl[plot]"     # or, from the clone: pip install "./python[plot]"
     python examples/python/fig2b.py --out target/fig2b
 
 writes fig2b.png, fig2b.svg and the curves as fig2b-theory.csv and fig2b-simulated.csv (the
@@ -20,6 +20,7 @@ import argparse
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -50,7 +51,8 @@ def main() -> None:
     for offset, (name, (label, scene)) in zip((8, -14), curves.items()):
         frame = asnr.sweep(scene, ranges)
         (args.out / f"fig2b-{name}.csv").write_text(asnr.to_csv(frame))
-        x, y = frame["spectrum.range_nm"].to_numpy(), frame["asnr"].to_numpy()
+        # a DataFrame with pandas (the `plot` extra), a dict of arrays without: np.asarray reads both
+        x, y = np.asarray(frame["spectrum.range_nm"]), np.asarray(frame["asnr"])
         (line,) = ax.plot(x, y, label=label, lw=1.8)
         best = y.argmax()
         ax.plot(x[best], y[best], "o", color=line.get_color(), ms=5)

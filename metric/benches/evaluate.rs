@@ -8,7 +8,7 @@
 //!   up to ±7σ = ±495 nm around 800 nm, 44 waves of defocus at the widest kept wavelength);
 //! - the paper scene through the decentred iris of SI Fig. S3 (the FFT path, 256 pupil samples).
 //!
-//! `cargo bench -p metric --bench evaluate` (about a minute). Timings are measured here and never
+//! `cargo bench -p asnr-metric --bench evaluate` (about a minute). Timings are measured here and never
 //! asserted (STYLE.md).
 
 use std::hint::black_box;

@@ -2,7 +2,7 @@
 //! runs on (the numbers of an optimization are measured on it), with the median time per call.
 //!
 //! ```text
-//! cargo build --release -p metric --example repeat
+//! cargo build --release -p asnr-metric --example repeat
 //! target/release/examples/repeat examples/spectrometer.toml [TOLERANCE [RUNS]]
 //! valgrind --tool=callgrind target/release/examples/repeat examples/spectrometer.toml 1e-6 20
 //! perf record target/release/examples/repeat examples/spectrometer.toml 1e-6 1500

@@ -6,7 +6,7 @@
 //! iris at 64–512 pupil samples, and a composite pupil of three sector zones (the field of
 //! [`SampledZones::set_field`] and [`OtfPlan::otf_of_field`]) at 256.
 //!
-//! `cargo bench -p optics --bench kernels` (about a minute; `-- <filter>` runs a subset, e.g.
+//! `cargo bench -p asnr-optics --bench kernels` (about a minute; `-- <filter>` runs a subset, e.g.
 //! `-- fft`). Timings are measured here and never asserted (STYLE.md).
 
 use std::hint::black_box;

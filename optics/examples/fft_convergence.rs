@@ -1,7 +1,7 @@
 //! Regenerates the convergence table of the `optics::fft` module docs: the error of the FFT
 //! path's mean MTF over [0, 0.2] against the exact 1-D path, per pupil sampling.
 //!
-//! `cargo run -p optics --example fft_convergence`
+//! `cargo run -p asnr-optics --example fft_convergence`
 
 fn main() {
     let sizes = [32, 64, 128, 256, 512, 1024];

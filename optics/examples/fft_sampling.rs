@@ -3,7 +3,7 @@
 //! pupils the FFT path serves, and how well a Richardson extrapolation on `N/2` and `N`
 //! estimates the error.
 //!
-//! `cargo run -p optics --example fft_sampling` (a few minutes; `-- mono` or
+//! `cargo run -p asnr-optics --example fft_sampling` (a few minutes; `-- mono` or
 //! `-- poly` runs one part).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};

@@ -266,7 +266,8 @@ def compare(
     band and at its best band searched over ``over`` (``"spectrum.range_nm=LO:HI:N"``), its
     chromatic twin and glare."""
     overrides = dict(set) if isinstance(set, Mapping) else None if set is None else [str(s) for s in set]
-    text = _asnr.compare(None if path is None else os.fspath(path), overrides, tolerance, over, threads)
+    text, scene_warnings = _asnr.compare(None if path is None else os.fspath(path), overrides, tolerance, over, threads)
+    _warn(scene_warnings)
     return json.loads(text)
 
 

@@ -213,7 +213,7 @@ fn evaluate(py: Python<'_>, scene: &Scene) -> PyResult<(String, String, Vec<Stri
         lens.raise()?;
     }
     let result = result.map_err(|e| SceneError::new_err(format!("{}: {e}", scene.source.label())))?;
-    let report = asnr::output::json(scene.source.label(), &built, &result).map_err(scene_error)?;
+    let report = report::output::json(scene.source.label(), &built, &result).map_err(scene_error)?;
     Ok((report, built.lens().describe(), warnings))
 }
 
@@ -351,7 +351,7 @@ fn mtf(
     serde_json::to_string(&curve).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
-/// `asnr compare`'s report as JSON text: the comparison file `path` (None: the embedded
+/// `asnr compare`'s report as JSON text, and the comparison's plausibility warnings: the comparison file `path` (None: the embedded
 /// comparison of the lens families) with `overrides` (a dict of keys to values, or `key=value`
 /// strings), the best band searched over `over`.
 #[pyfunction]
@@ -363,7 +363,7 @@ fn compare(
     tolerance: Option<f64>,
     over: Option<String>,
     threads: usize,
-) -> PyResult<String> {
+) -> PyResult<(String, Vec<String>)> {
     // a dict is written as `Scene.with_` writes it; a list holds `key=value` strings as typed
     let overrides: Vec<String> = match overrides {
         None => Vec::new(),
@@ -374,10 +374,11 @@ fn compare(
             Err(_) => o.extract()?,
         },
     };
-    let (_, report) = py
-        .detach(|| asnr::compare::compare(path.as_deref(), &overrides, tolerance, over.as_deref(), threads))
+    let (base, report) = py
+        .detach(|| report::compare::compare(path.as_deref(), &overrides, tolerance, over.as_deref(), threads, &()))
         .map_err(scene_error)?;
-    serde_json::to_string(&report).map_err(|e| PyValueError::new_err(e.to_string()))
+    let warnings = base.warnings.iter().map(ToString::to_string).collect();
+    Ok((serde_json::to_string(&report).map_err(|e| PyValueError::new_err(e.to_string()))?, warnings))
 }
 
 /// A lens written in Python: `f_number`, `focal_length_m`, optional `design_wavelength_m`, and

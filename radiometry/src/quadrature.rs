@@ -14,50 +14,25 @@ struct Rule {
     weights: [f64; ORDER],
 }
 
-/// Gauss–Legendre nodes and weights on [−1, 1], by Newton iteration on P_n (Golub–Welsch free,
-/// converges to rounding in a few steps from the Chebyshev-like initial guess).
+/// Gauss–Legendre nodes and weights on [−1, 1], ascending, from `gauss-quad` (Bogaert's O(n)
+/// algorithm, accurate to rounding; the project's one Gauss–Legendre source, as in `optics::quad`),
+/// `ORDER` even.
 fn rule() -> &'static Rule {
     static RULE: OnceLock<Rule> = OnceLock::new();
     RULE.get_or_init(|| {
-        let n = ORDER;
+        let n = std::num::NonZeroUsize::new(ORDER).unwrap_or(std::num::NonZeroUsize::MIN);
+        let mut pairs = gauss_quad::legendre::GaussLegendre::new(n).as_node_weight_pairs().to_vec();
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // the upper half mirrored: nodes exactly symmetric, as the rule is
         let mut nodes = [0.0; ORDER];
         let mut weights = [0.0; ORDER];
-        for i in 0..n.div_ceil(2) {
-            let mut x = (core::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 1.0;
-            for _ in 0..100 {
-                let (p, d) = legendre(n, x);
-                dp = d;
-                let dx = p / d;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
-            }
-            let (_, d) = legendre(n, x);
-            dp = if d.is_finite() { d } else { dp };
-            let w = 2.0 / ((1.0 - x * x) * dp * dp);
-            nodes[i] = -x;
-            nodes[n - 1 - i] = x;
-            weights[i] = w;
-            weights[n - 1 - i] = w;
+        for i in ORDER / 2..ORDER.min(pairs.len()) {
+            let (x, w) = pairs[i];
+            (nodes[i], weights[i]) = (x, w);
+            (nodes[ORDER - 1 - i], weights[ORDER - 1 - i]) = (-x, w);
         }
         Rule { nodes, weights }
     })
-}
-
-/// (P_n(x), P_n'(x)) by the three-term recurrence.
-fn legendre(n: usize, x: f64) -> (f64, f64) {
-    let mut p0 = 1.0;
-    let mut p1 = x;
-    for k in 2..=n {
-        let kf = k as f64;
-        let p2 = ((2.0 * kf - 1.0) * x * p1 - (kf - 1.0) * p0) / kf;
-        p0 = p1;
-        p1 = p2;
-    }
-    let d = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-    (p1, d)
 }
 
 /// Calls `visit(x, w)` for each node x of the rule mapped to [a, b], with its weight w

@@ -1,8 +1,8 @@
 //! A downstream crate loading a scene file with one call and printing its ASNR.
 //!
 //! ```text
-//! cargo run -p scene --example evaluate_file                              # examples/paper-theory.toml
-//! cargo run -p scene --example evaluate_file -- examples/tabulated.toml
+//! cargo run -p asnr-scene --example evaluate_file                              # examples/paper-theory.toml
+//! cargo run -p asnr-scene --example evaluate_file -- examples/tabulated.toml
 //! ```
 //!
 //! Run from the repository root (the default path and the CSV tables the example scenes name

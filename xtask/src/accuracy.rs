@@ -30,7 +30,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     cmd::run(&mut cmd::cargo(root, &["build", "--release", "--quiet", "--package", "asnr", "--bin", "asnr"]))?;
     let asnr = target_dir(root).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut command =
-        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "metric", "--example", "accuracy", "--"]);
+        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "asnr-metric", "--example", "accuracy", "--"]);
     command.args(args).arg("--asnr").arg(&asnr);
     match python(root) {
         Ok(python) => {

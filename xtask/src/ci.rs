@@ -20,7 +20,10 @@ const STEPS: &[Step] = &[
     Step { name: "tidy", run: run_tidy },
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
-    Step { name: "python (the package built into target/python-venv, its pytest suite)", run: python },
+    Step {
+        name: "python (the portable wheel, built and checked, in a fresh venv without Rust: pytest, README blocks)",
+        run: python,
+    },
     Step { name: "emva (asnr characterize against the emva1288 camera model)", run: emva },
     Step { name: "readme (every README command as written)", run: run_readme },
     Step { name: "stress (reduced grid)", run: stress },
@@ -30,13 +33,17 @@ const STEPS: &[Step] = &[
 /// Run every step from the workspace `root`; print `ci: N passed, M failed` at the end.
 pub(crate) fn run(root: &Path) -> Result<()> {
     let total = STEPS.len();
+    let start = std::time::Instant::now();
     for (index, step) in STEPS.iter().enumerate() {
         eprintln!("\n==> ci [{}/{total}] {}", index + 1, step.name);
+        let begun = std::time::Instant::now();
         if let Err(err) = (step.run)(root) {
             println!("\nci: {index} passed, 1 failed");
             return Err(err.context(format!("ci step `{}` failed", step.name)));
         }
+        eprintln!("==> ci [{}/{total}] done in {:.0} s", index + 1, begun.elapsed().as_secs_f64());
     }
+    eprintln!("==> ci: {:.0} s in all", start.elapsed().as_secs_f64());
     println!("\nci: {total} passed, 0 failed");
     Ok(())
 }
@@ -96,7 +103,7 @@ fn test(root: &Path) -> Result<()> {
 fn stress(root: &Path) -> Result<()> {
     cmd::run(&mut cmd::cargo(
         root,
-        &["run", "--locked", "--quiet", "--package", "metric", "--example", "stress", "--", "--quick"],
+        &["run", "--locked", "--quiet", "--package", "asnr-metric", "--example", "stress", "--", "--quick"],
     ))
 }
 

@@ -7,7 +7,9 @@
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `data [--check]`: the generated data files of `examples/data/` (`data.rs`).
 //! - `emva`: `asnr characterize` against the `emva1288` package's camera model (`emva.rs`).
-//! - `python`: the Python package built into a virtual environment, its pytest suite (`python.rs`).
+//! - `python`: the wheel installed into a fresh virtual environment, its pytest suite and the
+//!   README's Python blocks (`python.rs`).
+//! - `wheel`: the Python package as one portable wheel, built and checked (`wheel.rs`).
 //! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
 //! - `readme`: every command of the README's ```` ```sh ```` blocks, run as written (`readme.rs`).
 //! - `tidy`: the architecture invariants (layout, dependency direction, workspace dependencies
@@ -26,6 +28,7 @@ mod python;
 mod readme;
 mod stress;
 mod tidy;
+mod wheel;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -42,9 +45,16 @@ const TASKS: &[(&str, &str)] = &[
         "emva",
         "asnr characterize checked on a series from the emva1288 package's camera model (a pinned venv in target/)",
     ),
-    ("python", "the Python package built into target/python-venv (pinned) and its pytest suite run against the CLI"),
+    (
+        "python",
+        "the wheel installed with its extras into a fresh target/python-venv (pinned), no Rust on PATH: its pytest suite against the CLI and the README's Python blocks",
+    ),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("readme", "run every command of the README's ```sh blocks as written; none may change git status"),
+    (
+        "wheel",
+        "the Python package as one portable abi3 wheel (x86-64-v3, manylinux2014) in target/wheels/, checked by auditwheel, abi3audit and its disassembly",
+    ),
     (
         "tidy",
         "architecture invariants: layout, dependency direction, workspace deps and lints, crate docs, no paths outside the repository",
@@ -73,6 +83,7 @@ fn main() -> ExitCode {
         Some("python") => python::run(&root),
         Some("readme") => readme::run(&root),
         Some("tidy") => tidy::run(&root),
+        Some("wheel") => wheel::run(&root),
         Some("stress") => stress::run(&root, &args[1..]),
         Some(other) => {
             eprint!("{}", help());

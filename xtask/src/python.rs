@@ -1,41 +1,136 @@
-//! `cargo xtask python`: the Python package (`python/`) built into a virtual environment and its
-//! pytest suite run against the command line (part of `cargo xtask ci`).
+//! `cargo xtask python`: the Python package as a user gets it, tested (part of `cargo xtask ci`).
 //!
-//! Makes `target/python-venv` with the pinned `python/requirements-test.txt` (maturin, numpy,
-//! pandas, dask/distributed, matplotlib, pytest; once, remade when the requirements change),
-//! builds the debug `asnr` binary the tests compare with, installs the package into the
-//! environment with the README's command, `pip install ./python` (maturin's PEP 517 build, here
-//! in the dev profile so that it reuses the workspace's debug build; a user's install is a
-//! release build), and runs `pytest python/tests` with `ASNR_BIN` pointing at that binary.
+//! 1. The portable wheel, built and checked by `cargo xtask wheel` (`wheel.rs`).
+//! 2. A fresh virtual environment, `target/python-venv` (made anew each run), into which pip
+//!    installs the wheel with its extras, `asnr-….whl[plot,dask]`, and pytest, every version
+//!    pinned by the constraints file `python/requirements-test.txt`.
+//! 3. With no Rust toolchain on `PATH` (every folder holding `cargo` or `rustc` left out, checked
+//!    from inside Python first): the pytest suite `python/tests` against the debug `asnr` binary
+//!    (`ASNR_BIN`), and every ```` ```python ```` block of the README, each as a script of its
+//!    own in `target/readme-python/`, as a user pastes it.
+//!
+//! The developer's install, `pip install ./python` (maturin's PEP 517 build from the clone), is
+//! the same build without the portable flags.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use crate::cmd;
 
 /// The virtual environment, relative to the workspace root.
 const VENV: &str = "target/python-venv";
-/// What it installs, pinned.
-const REQUIREMENTS: &str = "python/requirements-test.txt";
+/// The pinned versions of the package's dependencies, extras and pytest (a constraints file).
+const CONSTRAINTS: &str = "python/requirements-test.txt";
+/// Where the README's Python blocks are written and run.
+const SNIPPETS: &str = "target/readme-python";
 
-/// Build the package into the environment and run its tests, from the workspace `root`.
+/// Build the wheel, install it into a fresh environment, run the tests and the README's Python.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let python = cmd::venv(root, VENV, REQUIREMENTS, "pytest, numpy").context("the Python test environment")?;
+    let wheel = crate::wheel::build(root)?;
     cmd::run(&mut cmd::cargo(root, &["build", "--quiet", "--locked", "--package", "asnr", "--bin", "asnr"]))?;
-    // the README's install command, `pip install ./python`, in the environment; in the dev
-    // profile (maturin's PEP 517 builds are release by default), which reuses the workspace's
-    // debug build; reinstalled whatever is there, without touching the pinned dependencies
+    let dir = root.join(VENV);
+    if !cmd::status(Command::new("python3").args(["-m", "venv", "--clear"]).arg(&dir))? {
+        bail!("python3 -m venv {VENV} failed");
+    }
+    let python = if cfg!(windows) { dir.join("Scripts").join("python.exe") } else { dir.join("bin").join("python") };
+    // the user's command, `pip install asnr-….whl[plot,dask]`, with pytest; versions pinned
     let mut install = Command::new(&python);
     install
-        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--force-reinstall", "--no-deps"])
-        .arg(root.join("python"))
-        .env("MATURIN_PEP517_ARGS", "--profile dev --locked")
-        .current_dir(root);
+        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-c"])
+        .arg(root.join(CONSTRAINTS))
+        .arg(format!("{}[plot,dask]", wheel.display()))
+        .arg("pytest");
     cmd::run(&mut install)?;
+
+    let path = without_rust()?;
+    let mut check = Command::new(&python);
+    check
+        .args([
+            "-c",
+            "import shutil, asnr; found = [t for t in ('cargo', 'rustc') if shutil.which(t)]; \
+             assert not found, found; print('asnr from', asnr.__file__, '- no cargo, no rustc on PATH')",
+        ])
+        .env("PATH", &path)
+        .current_dir(root.join("target"));
+    cmd::run(&mut check)?;
+
     let asnr = crate::accuracy::target_dir(root).join("debug").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut pytest = Command::new(&python);
-    pytest.args(["-m", "pytest", "-q", "python/tests"]).env("ASNR_BIN", &asnr).current_dir(root);
-    cmd::run(&mut pytest)
+    pytest.args(["-m", "pytest", "-q", "python/tests"]).env("ASNR_BIN", &asnr).env("PATH", &path).current_dir(root);
+    cmd::run(&mut pytest)?;
+    readme_snippets(root, &python, &path)
+}
+
+/// `PATH` without the folders that hold `cargo` or `rustc`: the user of a wheel has no Rust
+/// toolchain.
+fn without_rust() -> Result<std::ffi::OsString> {
+    let keep: Vec<PathBuf> = std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+        .filter(|dir| !["cargo", "rustc"].iter().any(|tool| dir.join(tool).exists()))
+        .collect();
+    Ok(std::env::join_paths(keep)?)
+}
+
+/// Writes every ```` ```python ```` block of the README to a script of its own and runs it with
+/// `python` from the scripts' folder, `PATH` as given; the first failure names the block's line.
+fn readme_snippets(root: &Path, python: &Path, path: &std::ffi::OsStr) -> Result<()> {
+    let readme = std::fs::read_to_string(root.join("README.md")).context("README.md")?;
+    let blocks = python_blocks(&readme);
+    if blocks.is_empty() {
+        bail!("README.md: no ```python blocks");
+    }
+    let dir = root.join(SNIPPETS);
+    if dir.exists() {
+        std::fs::remove_dir_all(&dir)?;
+    }
+    std::fs::create_dir_all(&dir)?;
+    for (line, code) in &blocks {
+        let script = dir.join(format!("readme-line-{line}.py"));
+        std::fs::write(&script, code)?;
+        let mut run = Command::new(python);
+        run.arg(&script).env("PATH", path).env("MPLBACKEND", "Agg").current_dir(&dir);
+        cmd::run(&mut run).with_context(|| format!("README.md:{line}: the ```python block, as a script"))?;
+    }
+    eprintln!("readme: {} Python blocks ran as scripts", blocks.len());
+    Ok(())
+}
+
+/// The README's ```` ```python ```` blocks: the line of each opening fence and its code.
+pub(crate) fn python_blocks(markdown: &str) -> Vec<(usize, String)> {
+    let mut blocks = Vec::new();
+    let mut current: Option<(usize, String)> = None;
+    let mut inside_other = false;
+    for (index, line) in markdown.lines().enumerate() {
+        let trimmed = line.trim();
+        if let Some(info) = trimmed.strip_prefix("```") {
+            if let Some(block) = current.take() {
+                blocks.push(block);
+            } else if inside_other {
+                inside_other = false;
+            } else if info.trim() == "python" {
+                current = Some((index + 1, String::new()));
+            } else {
+                inside_other = true;
+            }
+            continue;
+        }
+        if let Some((_, code)) = &mut current {
+            code.push_str(line);
+            code.push('\n');
+        }
+    }
+    blocks
+}
+
+#[cfg(test)]
+mod tests {
+    use super::python_blocks;
+
+    #[test]
+    fn python_blocks_are_found_with_their_lines() {
+        let text = "# t\n```sh\nls\n```\n```python\nimport asnr\nprint(1)\n```\n```text\n```python\n```\n";
+        let blocks = python_blocks(text);
+        assert_eq!(blocks, vec![(5, "import asnr\nprint(1)\n".to_owned())]);
+    }
 }

@@ -21,7 +21,7 @@ pub(crate) const SKIP: &[(&str, &str)] = &[
     ("cargo xtask ci", "the CI itself, which runs this step"),
     (
         "pip install ./python",
-        "installs into the user's Python environment (a release build, minutes); `cargo xtask python`, a step of `cargo xtask ci`, runs it into target/python-venv",
+        "installs into the user's Python environment (a release build, minutes); `cargo xtask python`, a step of `cargo xtask ci`, installs the same package as the portable wheel into a fresh target/python-venv",
     ),
     ("cargo install --path cli", "a release build (minutes) that installs into ~/.cargo/bin, outside the repository"),
     (

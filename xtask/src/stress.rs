@@ -21,7 +21,7 @@ const OPTIONS: &[&str] = &["--timeout", "--only"];
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     check_args(args)?;
     let mut command =
-        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "metric", "--example", "stress", "--"]);
+        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "asnr-metric", "--example", "stress", "--"]);
     command.args(args);
     cmd::run(&mut command)
 }

@@ -7,15 +7,21 @@
 //! Downstream example crates are the one exception to the layout: `examples/<name>/` (one level,
 //! e.g. `examples/custom-lens`), each a user's crate built with the public API only.
 //!
-//! - the package name equals the folder name, except `cli/`, whose package is `asnr` (so that
-//!   `cargo install --path cli` installs and reports the `asnr` binary), see [`PACKAGE_NAMES`];
+//! - the package name is the folder's, except those [`PACKAGE_NAMES`] lists: the libraries are
+//!   `asnr-<folder>` with `[lib] name = "<folder>"`, `cli/` is `asnr` (so that
+//!   `cargo install --path cli` installs and reports the `asnr` binary);
+//! - `version.workspace = true` (one version, in the root manifest);
 //! - the project crates in its normal dependencies (`[dependencies]`, `[build-dependencies]`
 //!   and their `[target.*]` forms) are among those [`RULES`] allows; dev-dependencies may use
 //!   any project crate (so `metric` tests may use `lenses`);
 //! - every dependency is `name.workspace = true`, so versions and paths live only in the root
 //!   `[workspace.dependencies]`;
 //! - it has `[lints] workspace = true`;
-//! - `src/lib.rs` and `src/main.rs`, whichever exist, open with a `//!` crate doc comment.
+//! - `src/lib.rs` and `src/main.rs`, whichever exist, open with a `//!` crate doc comment;
+//! - every dependency it declares is named by its sources ([`unused_dependencies`]).
+//!
+//! And for the whole build: no package in `cargo metadata` needs a newer Rust than the
+//! workspace's `rust-version`.
 //!
 //! And for every tracked `*.md`, `*.rs` and `*.toml` file (`git ls-files`): it refers to no path
 //! outside the repository ([`OUTSIDE_PATTERNS`]); the physics conventions the code cites are in
@@ -47,15 +53,31 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("metric", Allowed::Only(&["optics", "noise", "radiometry"])),
     ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
     ("imaging", Allowed::Only(&["metric", "noise", "optics", "radiometry"])),
+    ("report", Allowed::Only(&["metric", "scene", "radiometry"])),
     ("cli", Allowed::Any),
-    ("python", Allowed::Any),
+    // the Python extension: libraries only, never the command line (clap, plotters, image, …)
+    ("python", Allowed::Only(&["report", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
     ("xtask", Allowed::Only(&[])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only
     ("custom-lens", Allowed::Any),
 ];
 
-/// Folders whose package name is not the folder name: `(folder, package)`.
-pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[("cli", "asnr"), ("python", "asnr-python")];
+/// Folders whose package name is not the folder name: `(folder, package)`. The libraries are
+/// packages `asnr-<folder>` (names that can be published: `noise`, `optics`, … are taken on
+/// crates.io) whose library keeps the folder's name (`[lib] name`), so the code says
+/// `use optics::…`; the root `[workspace.dependencies]` finds them by `package = "asnr-…"`.
+pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[
+    ("cli", "asnr"),
+    ("python", "asnr-python"),
+    ("radiometry", "asnr-radiometry"),
+    ("optics", "asnr-optics"),
+    ("noise", "asnr-noise"),
+    ("metric", "asnr-metric"),
+    ("lenses", "asnr-lenses"),
+    ("scene", "asnr-scene"),
+    ("imaging", "asnr-imaging"),
+    ("report", "asnr-report"),
+];
 
 /// The package name the member in `folder` must have.
 fn package_name(folder: &str) -> &str {
@@ -78,6 +100,11 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         check_member(root, folder, &mut violations)?;
     }
     violations.extend(check_outside_references(root)?);
+    violations.extend(check_rust_version(root, &text)?);
+    violations.extend(check_versions(&text));
+    if let Ok(citation) = fs::read_to_string(root.join("CITATION.cff")) {
+        violations.extend(check_citation_version(&text, &citation));
+    }
     for violation in &violations {
         eprintln!("tidy: {violation}");
     }
@@ -125,8 +152,14 @@ fn check_member(root: &Path, folder: &str, violations: &mut Vec<String>) -> Resu
     let name = folder.rsplit('/').next().unwrap_or(folder);
     let manifest_path = format!("{folder}/Cargo.toml");
     match fs::read_to_string(root.join(&manifest_path)) {
-        Ok(text) => violations
-            .extend(check_manifest(name, &text).into_iter().map(|problem| format!("{manifest_path}: {problem}"))),
+        Ok(text) => {
+            violations
+                .extend(check_manifest(name, &text).into_iter().map(|problem| format!("{manifest_path}: {problem}")));
+            if let Ok(manifest) = text.parse::<Table>() {
+                let unused = unused_dependencies(&manifest, |dirs| rust_sources(&root.join(folder), dirs))?;
+                violations.extend(unused.into_iter().map(|problem| format!("{manifest_path}: {problem}")));
+            }
+        }
         Err(err) => violations.push(format!("{manifest_path}: cannot read: {err}")),
     }
 
@@ -167,6 +200,25 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
         Some(name) => problems.push(format!("package name `{name}`: the package in `{folder}/` is `{expected}`")),
         None => problems.push("has no [package] name".to_owned()),
     }
+    if expected == format!("asnr-{folder}") && folder != "python" {
+        let lib = manifest.get("lib").and_then(|lib| lib.get("name")).and_then(Value::as_str);
+        if lib != Some(folder) {
+            problems.push(format!(
+                "[lib] name is {}: the library of package `{expected}` keeps its folder's name, `name = \"{folder}\"`",
+                lib.map_or("missing".to_owned(), |l| format!("`{l}`"))
+            ));
+        }
+    }
+
+    let version_from_workspace = manifest
+        .get("package")
+        .and_then(|package| package.get("version"))
+        .and_then(|v| v.get("workspace"))
+        .and_then(Value::as_bool)
+        == Some(true);
+    if !version_from_workspace {
+        problems.push("missing `version.workspace = true` (one version, in the root manifest)".to_owned());
+    }
 
     let lints_from_workspace =
         manifest.get("lints").and_then(|lints| lints.get("workspace")).and_then(Value::as_bool) == Some(true);
@@ -181,8 +233,10 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
 
     for table in dependency_tables(&manifest) {
         for (key, spec) in table.deps {
-            // A renamed dependency (`alias = { package = "optics", .. }`) is still `optics`.
+            // A renamed dependency (`alias = { package = "optics", .. }`) is still `optics`, and a
+            // package named apart from its folder (`asnr`) is its folder's (`cli`).
             let name = spec.get("package").and_then(Value::as_str).unwrap_or(key.as_str());
+            let name = PACKAGE_NAMES.iter().find(|(_, package)| *package == name).map_or(name, |(folder, _)| *folder);
             let is_project = RULES.iter().any(|(project, _)| *project == name);
             if is_project
                 && table.normal
@@ -205,6 +259,156 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
         }
     }
     problems
+}
+
+/// Declared dependencies that no source of the crate names: a normal dependency must be named
+/// (`dep::`, `use dep`, `extern crate dep`) in `src/` or `build.rs`, a dev-dependency anywhere in
+/// `src/`, `tests/`, `benches/` or `examples/`. `sources(dirs)` gives the text of the crate's
+/// `.rs` files under those folders. The `unused_crate_dependencies` lint would do this for one
+/// target at a time, and flags every normal dependency in every test target that does not use it.
+pub(crate) fn unused_dependencies(
+    manifest: &Table,
+    sources: impl Fn(&[&str]) -> Result<Vec<String>>,
+) -> Result<Vec<String>> {
+    let mut problems = Vec::new();
+    for table in dependency_tables(manifest) {
+        let dirs: &[&str] = if table.normal { &["src", "build.rs"] } else { &["src", "tests", "benches", "examples"] };
+        let texts = sources(dirs)?;
+        for key in table.deps.keys() {
+            let ident = key.replace('-', "_");
+            if !texts.iter().any(|text| names_crate(text, &ident)) {
+                problems.push(format!(
+                    "{key} in {} is named by no source ({}): remove it, or use it",
+                    table.label,
+                    dirs.join(", ")
+                ));
+            }
+        }
+    }
+    Ok(problems)
+}
+
+/// Whether Rust source `text` names the crate `ident`: `ident::`, `use ident`, or
+/// `extern crate ident`, with `ident` a whole word.
+pub(crate) fn names_crate(text: &str, ident: &str) -> bool {
+    let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+    text.match_indices(ident).any(|(at, _)| {
+        let before = text[..at].chars().next_back();
+        let after = &text[at + ident.len()..];
+        if word(before) || word(after.chars().next()) {
+            return false;
+        }
+        let head = text[..at].trim_end();
+        after.trim_start().starts_with("::") || head.ends_with("use") || head.ends_with("extern crate")
+    })
+}
+
+/// The text of every `.rs` file under `dirs` (folders, or single files) of the crate at `crate_dir`.
+fn rust_sources(crate_dir: &Path, dirs: &[&str]) -> Result<Vec<String>> {
+    let mut texts = Vec::new();
+    let mut stack: Vec<std::path::PathBuf> = dirs.iter().map(|d| crate_dir.join(d)).collect();
+    while let Some(path) = stack.pop() {
+        if path.is_dir() {
+            for entry in fs::read_dir(&path)? {
+                stack.push(entry?.path());
+            }
+        } else if path.is_file() && path.extension().is_some_and(|e| e == "rs") {
+            texts.push(fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?);
+        }
+    }
+    Ok(texts)
+}
+
+/// The packages of the build (`cargo metadata`) whose `rust-version` is newer than the
+/// workspace's `rust-version` (in the root manifest `text`): the workspace's would then be a
+/// promise the build cannot keep. The workspace's own code is held to it by clippy's
+/// `incompatible_msrv` lint (std items stabilized later), part of `clippy -D warnings`.
+fn check_rust_version(root: &Path, text: &str) -> Result<Vec<String>> {
+    let manifest: Table = text.parse().context("Cargo.toml")?;
+    let Some(ours) = manifest
+        .get("workspace")
+        .and_then(|w| w.get("package"))
+        .and_then(|p| p.get("rust-version"))
+        .and_then(Value::as_str)
+    else {
+        return Ok(vec!["Cargo.toml: [workspace.package] has no rust-version".to_owned()]);
+    };
+    let output = Command::new("cargo")
+        .args(["metadata", "--format-version", "1", "--locked"])
+        .current_dir(root)
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .context("could not run `cargo metadata`")?;
+    if !output.status.success() {
+        bail!("`cargo metadata --format-version 1 --locked` failed");
+    }
+    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).context("cargo metadata's JSON")?;
+    let mut problems = Vec::new();
+    for package in metadata["packages"].as_array().map_or(&[][..], Vec::as_slice) {
+        if let Some(theirs) = package["rust_version"].as_str()
+            && newer(theirs, ours)
+        {
+            problems.push(format!(
+                "Cargo.toml: rust-version = \"{ours}\", but {} {} needs Rust {theirs}: raise ours or hold that dependency back",
+                package["name"].as_str().unwrap_or("?"),
+                package["version"].as_str().unwrap_or("?")
+            ));
+        }
+    }
+    Ok(problems)
+}
+
+/// One version in one place: every project crate in the root manifest `text`'s
+/// `[workspace.dependencies]` carries the `version` of `[workspace.package]` (cargo needs one on a
+/// path dependency to publish), and no member sets a version of its own (checked per member:
+/// `version.workspace = true`).
+pub(crate) fn check_versions(text: &str) -> Vec<String> {
+    let Ok(manifest) = text.parse::<Table>() else { return Vec::new() };
+    let workspace = manifest.get("workspace");
+    let ours = workspace.and_then(|w| w.get("package")).and_then(|p| p.get("version")).and_then(Value::as_str);
+    let Some(ours) = ours else { return vec!["Cargo.toml: [workspace.package] has no version".to_owned()] };
+    let mut problems = Vec::new();
+    if let Some(deps) = workspace.and_then(|w| w.get("dependencies")).and_then(Value::as_table) {
+        for (key, spec) in deps {
+            if spec.get("path").is_none() {
+                continue;
+            }
+            let version = spec.get("version").and_then(Value::as_str);
+            if version != Some(ours) {
+                problems.push(format!(
+                    "Cargo.toml: [workspace.dependencies] {key} has version {}: expected \"{ours}\", the workspace's",
+                    version.map_or("none".to_owned(), |v| format!("\"{v}\""))
+                ));
+            }
+        }
+    }
+    problems
+}
+
+/// `CITATION.cff`'s `version:` line must be the workspace's version (root manifest `text`).
+pub(crate) fn check_citation_version(text: &str, citation: &str) -> Vec<String> {
+    let ours = text
+        .parse::<Table>()
+        .ok()
+        .and_then(|m| m.get("workspace")?.get("package")?.get("version")?.as_str().map(str::to_owned));
+    let cited = citation.lines().find_map(|l| l.strip_prefix("version:")).map(|v| v.trim().trim_matches('"'));
+    match (ours, cited) {
+        (Some(ours), Some(cited)) if ours == cited => Vec::new(),
+        (ours, cited) => vec![format!(
+            "CITATION.cff: version {} is not the workspace's {}",
+            cited.unwrap_or("(none)"),
+            ours.as_deref().unwrap_or("(none)")
+        )],
+    }
+}
+
+/// Whether Rust version `a` (`1.89`, `1.89.0`) is newer than `b`.
+pub(crate) fn newer(a: &str, b: &str) -> bool {
+    let parts = |v: &str| -> Vec<u64> { v.split('.').map(|p| p.trim().parse().unwrap_or(0)).collect() };
+    let (mut a, mut b) = (parts(a), parts(b));
+    a.resize(3, 0);
+    b.resize(3, 0);
+    a > b
 }
 
 /// One dependency table of a manifest.
@@ -305,8 +509,11 @@ mod tests {
 
     const CLEAN_METRIC: &str = r#"
         [package]
-        name = "metric"
+        name = "asnr-metric"
         version.workspace = true
+
+        [lib]
+        name = "metric"
 
         [dependencies]
         optics.workspace = true
@@ -343,7 +550,9 @@ mod tests {
         assert_eq!(
             check_manifest("metric", manifest),
             vec![
-                "package name `metrics` differs from its folder name `metric`",
+                "package name `metrics`: the package in `metric/` is `asnr-metric`",
+                "[lib] name is missing: the library of package `asnr-metric` keeps its folder's name, `name = \"metric\"`",
+                "missing `version.workspace = true` (one version, in the root manifest)",
                 "missing `[lints] workspace = true`",
                 "depends on lenses (allowed: optics, noise, radiometry)",
                 "serde in [dependencies] must be `serde.workspace = true` \
@@ -358,9 +567,12 @@ mod tests {
     fn leaf_crate_allows_no_project_crate_and_renames_are_seen_through() {
         let manifest = r#"
             [package]
+            name = "asnr-radiometry"
+            version.workspace = true
+            [lib]
             name = "radiometry"
             [build-dependencies]
-            opt = { package = "optics", workspace = true }
+            opt = { package = "asnr-optics", workspace = true }
             [lints]
             workspace = true
         "#;
@@ -372,17 +584,76 @@ mod tests {
 
     #[test]
     fn cli_may_depend_on_anything_and_unknown_crates_need_a_rule() {
-        let cli = "[package]\nname = \"asnr\"\n[dependencies]\nlenses.workspace = true\n\
+        let cli = "[package]\nname = \"asnr\"\nversion.workspace = true\n[dependencies]\nlenses.workspace = true\n\
                    metric.workspace = true\n[lints]\nworkspace = true\n";
         assert!(check_manifest("cli", cli).is_empty());
-        let unknown = "[package]\nname = \"extra\"\n[lints]\nworkspace = true\n";
+        let unknown = "[package]\nname = \"extra\"\nversion.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(
             check_manifest("extra", unknown),
             vec!["no dependency rule for `extra`: add it to RULES in xtask/src/tidy.rs"]
         );
         assert_eq!(check_manifest("cli", "[package").len(), 1);
-        let named_cli = "[package]\nname = \"cli\"\n[lints]\nworkspace = true\n";
+        let named_cli = "[package]\nname = \"cli\"\nversion.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(check_manifest("cli", named_cli), vec!["package name `cli`: the package in `cli/` is `asnr`"]);
+    }
+
+    #[test]
+    fn the_python_extension_may_not_depend_on_the_command_line() {
+        let python = "[package]\nname = \"asnr-python\"\nversion.workspace = true\n[dependencies]\nreport.workspace = true\n\
+                      asnr.workspace = true\n[lints]\nworkspace = true\n";
+        assert_eq!(
+            check_manifest("python", python),
+            vec!["depends on cli (allowed: report, scene, metric, lenses, optics, noise, radiometry)"]
+        );
+    }
+
+    #[test]
+    fn a_dependency_no_source_names_is_found() {
+        let manifest: Table = "[dependencies]\nserde.workspace = true\nrand_pcg.workspace = true\n\
+                               [dev-dependencies]\napprox.workspace = true\n"
+            .parse()
+            .unwrap();
+        let src = "use serde::Serialize;\nfn f() { let _ = rand_pcg_like::X; }\n".to_owned();
+        let test = "use approx::assert_relative_eq;\n".to_owned();
+        let problems = unused_dependencies(&manifest, |dirs| {
+            Ok(if dirs.contains(&"tests") { vec![src.clone(), test.clone()] } else { vec![src.clone()] })
+        })
+        .unwrap();
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert!(problems[0].starts_with("rand_pcg in [dependencies] is named by no source"), "{problems:?}");
+        assert!(names_crate("extern crate foo;", "foo") && names_crate("x = foo ::bar()", "foo"));
+        assert!(!names_crate("let foo = 1; foo_bar::x();", "foo") && !names_crate("a.foo::<u8>()", "foo_x"));
+    }
+
+    #[test]
+    fn project_crates_carry_the_workspace_version() {
+        let root = "[workspace.package]\nversion = \"0.2.0\"\n[workspace.dependencies]\n\
+                    optics = { package = \"asnr-optics\", path = \"optics\", version = \"0.2.0\" }\n\
+                    noise = { package = \"asnr-noise\", path = \"noise\", version = \"0.1.0\" }\n\
+                    metric = { package = \"asnr-metric\", path = \"metric\" }\nserde = \"1\"\n";
+        assert_eq!(
+            check_versions(root),
+            vec![
+                "Cargo.toml: [workspace.dependencies] metric has version none: expected \"0.2.0\", the workspace's",
+                "Cargo.toml: [workspace.dependencies] noise has version \"0.1.0\": expected \"0.2.0\", the workspace's",
+            ]
+        );
+    }
+
+    #[test]
+    fn the_citation_cites_the_workspace_version() {
+        let root = "[workspace.package]\nversion = \"0.2.0\"\n";
+        assert!(check_citation_version(root, "cff-version: 1.2.0\nversion: 0.2.0\n").is_empty());
+        assert_eq!(
+            check_citation_version(root, "cff-version: 1.2.0\nversion: \"0.1.0\"\n"),
+            vec!["CITATION.cff: version 0.1.0 is not the workspace's 0.2.0"]
+        );
+    }
+
+    #[test]
+    fn rust_versions_compare_by_number() {
+        assert!(newer("1.90", "1.89") && newer("1.89.1", "1.89") && newer("1.100", "1.99.9"));
+        assert!(!newer("1.89.0", "1.89") && !newer("1.88", "1.89") && !newer("1.9", "1.89"));
     }
 
     #[test]

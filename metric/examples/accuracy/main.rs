@@ -24,7 +24,7 @@
 //!
 //! Times are medians of repeated single-threaded calls in this (release) process.
 //!
-//! Run: `cargo run --release -p metric --example accuracy -- [--quick] [--asnr BIN] [--python PY]
+//! Run: `cargo run --release -p asnr-metric --example accuracy -- [--quick] [--asnr BIN] [--python PY]
 //! [OUT_DIR]`: `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
 //! numpy for the baseline (`cargo xtask accuracy` builds the one and prepares the other); the
 //! map or the numpy rows are skipped, and the report says so, without them.

@@ -92,7 +92,7 @@
 //! of defocus, and the time of one evaluation ([`OtfPlan::otf`] + [`Otf::mean_mtf`], best of 3,
 //! dev profile: opt-level 2, dependencies 3; a 2-core development machine). Produced by
 //! [`convergence_table`]`(w, 0.2, &[32, 64, 128, 256, 512, 1024])` for `w = 0, 1`; regenerate it
-//! with `cargo run -p optics --example fft_convergence`:
+//! with `cargo run -p asnr-optics --example fft_convergence`:
 //!
 //! | N | M | error, w = 0 | error, w = 1 | time per evaluation |
 //! |---|---|---|---|---|
@@ -118,7 +118,7 @@
 //! accept that within the tolerance and return the extrapolated
 //! `M_N + (M_N − M_{N/2})/(2^1.5 − 1)`; double `N` otherwise, up to 2048 or the memory budget
 //! ([`crate::Error::PupilSampling`] beyond). The study behind it, regenerated with
-//! `cargo run -p optics --example fft_sampling` (dev profile; `e_N` the relative error of the
+//! `cargo run -p asnr-optics --example fft_sampling` (dev profile; `e_N` the relative error of the
 //! mean MTF at `N`, `p_N = log2(|M_{N/2} − M_{N/4}| / |M_N − M_{N/2}|)` the observed order,
 //! `est/e` the Richardson estimate with `p = 1.5` over the true error of `M_N`, `e_R` the error of
 //! the extrapolated value; `~`: against the Richardson extrapolation of the two finest levels,

@@ -171,7 +171,7 @@ pub(super) struct Grids<'a> {
 /// the fixed frequency rule is converged far below either).
 pub(super) const SAMPLING_SHARE: f64 = 0.5;
 
-/// Seconds for one OTF grid at 256 pupil samples (`cargo bench -p optics --bench kernels -- "fft
+/// Seconds for one OTF grid at 256 pupil samples (`cargo bench -p asnr-optics --bench kernels -- "fft
 /// OtfPlan"`: 2.1 ms; the time grows as N²).
 const SECONDS_PER_GRID_256: f64 = 2.1e-3;
 

@@ -8,61 +8,24 @@
 //! Every grid point is an independent evaluation, run in parallel and collected in grid order.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::Progress;
 use crate::optimize::{Range, assignment, parse_range};
 use metric::{Evaluation, GlareMode};
 use scene::{Comparison, Source};
 
 /// The swept key: the spectral range of the shared spectrum.
-const KEY: &str = "spectrum.range_nm";
+pub const KEY: &str = "spectrum.range_nm";
 /// The default grid of `--over`: 16 points, log-spaced from 2 to 300 nm (ratio 1.40 between
 /// neighbours; the golden section refines the best).
 const DEFAULT_GRID: (f64, f64, usize) = (2.0, 300.0, 16);
 /// The golden-section refinement stops when the bracket is this narrow in ln(range): 1 % of the
 /// range (the ASNR is flat near its maximum: 1 % of the range moves it by far less).
 const REFINE_TOLERANCE: f64 = 1e-2;
-
-/// The arguments of `asnr compare`.
-#[derive(clap::Args)]
-pub struct CompareArgs {
-    /// Comparison file (TOML with [[designs]]). Without it, the embedded comparison of the lens
-    /// families (examples/designs.toml).
-    pub scene: Option<PathBuf>,
-    /// Override a key by its dotted path: shared (spectrum.range_nm=20) or one design's
-    /// (designs[1].lens.f_number=4) (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub set: Vec<String>,
-    /// Print one JSON object instead of the table.
-    #[arg(long, conflicts_with = "csv")]
-    pub json: bool,
-    /// Print CSV, one row per design.
-    #[arg(long)]
-    pub csv: bool,
-    /// Draw the ASNR against the spectral range, one line per design (.svg or .png).
-    #[arg(long, value_name = "FILE.svg|png")]
-    pub plot: Option<PathBuf>,
-    /// Width of the plot, pixels (default 900); the height follows.
-    #[arg(long, value_name = "PX", requires = "plot")]
-    pub width: Option<u32>,
-    /// Resolution of the plot, dots per inch (default: the width over 6 inches).
-    #[arg(long, value_name = "N", requires = "plot")]
-    pub dpi: Option<f64>,
-    /// The grid of spectral ranges searched for each design's best band, N points log-spaced
-    /// from LO to HI nm (default spectrum.range_nm=2:300:16).
-    #[arg(long, value_name = "spectrum.range_nm=LO:HI:N")]
-    pub over: Option<String>,
-    /// Worker threads (0 = all cores). The results do not depend on it.
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub threads: usize,
-    /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6).
-    #[arg(long, value_name = "REL")]
-    pub tolerance: Option<f64>,
-}
 
 /// The best spectral range found for a design (or one channel of it).
 #[derive(Clone, Debug, Serialize)]
@@ -87,6 +50,8 @@ pub struct ChannelBest {
 /// One design's results.
 #[derive(Clone, Debug, Serialize)]
 pub struct DesignReport {
+    /// The design's place in the file: `designs[index]` (the key `--set designs[N].…` uses).
+    pub index: usize,
     /// The design's name.
     pub name: String,
     /// Its family.
@@ -188,14 +153,16 @@ fn log_axis(range: &Range) -> Vec<f64> {
 /// The comparison of the designs of `scene` (None: the embedded comparison of the lens
 /// families) with the overrides `set` and the relative `tolerance` of each ASNR, the best band
 /// searched over `over` (`spectrum.range_nm=LO:HI:N`, log-spaced; default 2–300 nm, 16 points)
-/// on `threads` threads (0 = all cores): what `asnr compare` prints (and the Python package's
-/// `asnr.compare` returns), with the comparison it was built from.
+/// on `threads` threads (0 = all cores), each evaluation counted by `progress`: what
+/// `asnr compare` prints (and the Python package's `asnr.compare` returns), with the comparison
+/// it was built from (whose `warnings` the caller shows).
 pub fn compare(
     scene: Option<&std::path::Path>,
     set: &[String],
     tolerance: Option<f64>,
     over: Option<&str>,
     threads: usize,
+    progress: &dyn Progress,
 ) -> Result<(Comparison, Report)> {
     let mut set = set.to_vec();
     if let Some(t) = tolerance {
@@ -214,15 +181,14 @@ pub fn compare(
     if range.points.is_some_and(|n| n > 10_000) {
         bail!("--over {KEY}: {} points; expected at most 10000", range.points.unwrap_or_default());
     }
-    crate::check_over_keys(&set, std::slice::from_ref(&range))?;
-    let max_threads = crate::max_threads();
+    crate::optimize::check_over_keys(&set, std::slice::from_ref(&range))?;
+    let max_threads = crate::optimize::max_threads();
     if threads > max_threads {
         bail!("--threads {}: expected 0 (all cores) to {max_threads} (4 × the available cores)", threads);
     }
     scene::check_overrides(scene, &set)?;
     let source = scene::read_comparison(scene)?;
     let base = scene::build_comparison(&source, &set)?;
-    crate::warn(&base.warnings);
     let Some((center_nm, range_nm)) = base.band_nm else {
         bail!(
             "{}: the shared [spectrum] has no center_nm and range_nm: compare needs a band-pass spectrum (shape \"gaussian\", \"tophat\" or \"line\") to search the best band",
@@ -230,30 +196,8 @@ pub fn compare(
         );
     };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let report = pool.install(|| compute(&source, &set, &range, &base, center_nm, range_nm))?;
+    let report = pool.install(|| compute(&source, &set, &range, &base, center_nm, range_nm, progress))?;
     Ok((base, report))
-}
-
-/// Runs `asnr compare`.
-pub fn run(args: CompareArgs) -> Result<()> {
-    let figure = crate::plot::Figure::new(args.width, args.dpi)?;
-    let (base, report) = compare(args.scene.as_deref(), &args.set, args.tolerance, args.over.as_deref(), args.threads)?;
-    if let Some(path) = &args.plot {
-        plot(path, &figure, &base, &report)?;
-    }
-    for d in &report.designs {
-        for w in &d.warnings {
-            eprintln!("warning: {}: {w}", d.name);
-        }
-    }
-    if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?);
-    } else if args.csv {
-        out!("{}", csv(&report));
-    } else {
-        out!("{}", table(&report));
-    }
-    Ok(())
 }
 
 /// Evaluates a scene, the error naming the design.
@@ -294,6 +238,7 @@ fn compute(
     base: &Comparison,
     center_nm: f64,
     range_nm: f64,
+    progress: &dyn Progress,
 ) -> Result<Report> {
     let grid = log_axis(range);
     let mut searches: Vec<Search> = (0..base.designs.len()).map(|design| Search { design, centre_nm: None }).collect();
@@ -302,7 +247,7 @@ fn compute(
     }
     let tasks: Vec<(usize, usize)> = (0..searches.len()).flat_map(|s| (0..grid.len()).map(move |k| (s, k))).collect();
     let total = tasks.len() + 3 * base.designs.len();
-    let bar = crate::sweep::progress_bar(total as u64, "evaluations")?;
+    progress.start(total as u64);
     // the scene band: the scene's options, glare-free and glare-inclusive, and the twin
     let at_scene: Vec<Result<AtScene>> = base
         .designs
@@ -318,7 +263,7 @@ fn compute(
             let o = evaluate(&d.name, &scene)?.asnr;
             let (free, inclusive) = if r.glare_mode == GlareMode::FirstOrder { (r.asnr, o) } else { (o, r.asnr) };
             let twin = metric::evaluate(&d.twin).ok().map(|t| t.asnr);
-            bar.inc(3);
+            progress.advance(3);
             Ok((r, free, inclusive, twin))
         })
         .collect();
@@ -328,11 +273,11 @@ fn compute(
             let search = searches[s];
             let v = asnr_with(source, set, &search.overrides(grid[k]), search.design)
                 .with_context(|| format!("at {KEY}={}", grid[k]));
-            bar.inc(1);
+            progress.advance(1);
             v
         })
         .collect();
-    bar.finish_and_clear();
+    progress.finish();
     let values: Vec<f64> = values.into_iter().collect::<Result<_>>()?;
     let curves: Vec<Vec<(f64, f64)>> = (0..searches.len())
         .map(|s| grid.iter().copied().zip(values[s * grid.len()..][..grid.len()].iter().copied()).collect())
@@ -355,6 +300,7 @@ fn compute(
             .map(|(s, (b, _))| ChannelBest { wavelength_nm: s.centre_nm.unwrap_or_default(), best: b.clone() })
             .collect();
         designs.push(DesignReport {
+            index: i,
             name: d.name.clone(),
             kind: d.kind,
             lens: d.scene.lens().describe(),
@@ -439,7 +385,7 @@ fn refine(curve: &[(f64, f64)], mut f: impl FnMut(f64) -> Result<f64>) -> Result
 }
 
 /// A number to `digits` significant digits, without exponent for ordinary magnitudes.
-fn sig(v: f64, digits: usize) -> String {
+pub fn sig(v: f64, digits: usize) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }
@@ -458,26 +404,29 @@ pub fn table(r: &Report) -> String {
     let _ = writeln!(
         s,
         "scene band spectrum centred at {} nm, range {} nm ({KEY})",
-        crate::plot::number(r.center_nm),
-        crate::plot::number(r.range_nm)
+        crate::number(r.center_nm),
+        crate::number(r.range_nm)
     );
     let _ = writeln!(s, "best band  {}", r.method);
     let w = r.designs.iter().map(|d| d.name.chars().count()).max().unwrap_or(6).max(6);
     let k = r.designs.iter().map(|d| d.kind.len()).max().unwrap_or(4).max(4);
+    // `[i]`: the design's index in the file (`--set designs[i].…`), beside its rank `#`
+    let n = format!("[{}]", r.designs.len().saturating_sub(1)).len().max(3);
     let _ = writeln!(
         s,
         "\nAt the scene band (ASNR = SNR0 × mean MTF up to Nyquist; glare-incl.: SNR0 with the noise of all transmitted light, SI eq. S14)"
     );
     let _ = writeln!(
         s,
-        "  #  {:w$}  {:k$}  {:>8}  {:>8}  {:>7}  {:>8}  {:>6}  {:>11}  {:>9}",
-        "design", "kind", "ASNR", "mean MTF", "SNR0", "N (e⁻)", "M0", "glare-incl.", "twin ASNR"
+        "  #  {:>n$}  {:w$}  {:k$}  {:>8}  {:>8}  {:>7}  {:>8}  {:>6}  {:>11}  {:>9}",
+        "[i]", "design", "kind", "ASNR", "mean MTF", "SNR0", "N (e⁻)", "M0", "glare-incl.", "twin ASNR"
     );
     for d in &r.designs {
         let _ = writeln!(
             s,
-            "  {:>1}  {:w$}  {:k$}  {:>8}  {:>8.5}  {:>7.3}  {:>8}  {:>6.4}  {:>11}  {:>9}",
+            "  {:>1}  {:>n$}  {:w$}  {:k$}  {:>8}  {:>8.5}  {:>7.3}  {:>8}  {:>6.4}  {:>11}  {:>9}",
             d.rank,
+            format!("[{}]", d.index),
             d.name,
             d.kind,
             format!("{:.4}", d.asnr),
@@ -489,20 +438,23 @@ pub fn table(r: &Report) -> String {
             d.twin_asnr.map_or("no light".to_owned(), |t| format!("{t:.4}")),
         );
     }
+    let _ =
+        writeln!(s, "  #: rank by ASNR; [i]: the design's place in the file, as in --set designs[i].lens.f_number=4");
     let _ = writeln!(
         s,
         "\nBest band and aperture (N_z = f0/(8F#²λ0) Fresnel zones; a chromatic lens of this aperture keeps λ0/(2N_z) sharp)"
     );
     let _ = writeln!(
         s,
-        "  #  {:w$}  {:>13}  {:>10}  {:>9}  {:>12}",
-        "design", "best range nm", "ASNR there", "N_z", "λ0/(2N_z) nm"
+        "  #  {:>n$}  {:w$}  {:>13}  {:>10}  {:>9}  {:>12}",
+        "[i]", "design", "best range nm", "ASNR there", "N_z", "λ0/(2N_z) nm"
     );
     for d in &r.designs {
         let _ = writeln!(
             s,
-            "  {:>1}  {:w$}  {:>13}  {:>10.4}  {:>9}  {:>12}",
+            "  {:>1}  {:>n$}  {:w$}  {:>13}  {:>10.4}  {:>9}  {:>12}",
             d.rank_at_best,
+            format!("[{}]", d.index),
             d.name,
             format!("{}{}", sig(d.best_range_nm, 4), if d.best_at_bound { " *" } else { "" }),
             d.best_asnr,
@@ -523,7 +475,7 @@ pub fn table(r: &Report) -> String {
                 .map(|c| {
                     format!(
                         "{} nm: best range {} nm, ASNR {:.4}{}",
-                        crate::plot::number(c.wavelength_nm),
+                        crate::number(c.wavelength_nm),
                         sig(c.best.range_nm, 4),
                         c.best.asnr,
                         if c.best.at_bound { " *" } else { "" }
@@ -553,69 +505,110 @@ fn numbered(names: &[String]) -> String {
     names.iter().enumerate().map(|(i, n)| format!("{}. {n}", i + 1)).collect::<Vec<_>>().join(", ")
 }
 
-/// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
-fn field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_owned() }
-}
-
-/// CSV, one row per design.
-pub fn csv(r: &Report) -> String {
-    let mut s = String::from(
-        "name,kind,asnr,mean_mtf,snr0,photoelectrons,m0,asnr_glare_free,asnr_glare_inclusive,twin_asnr,fresnel_zones,twin_band_nm,best_range_nm,best_asnr,rank,rank_at_best,notes\n",
-    );
+/// CSV, one row per design, written by the `csv` crate (fields quoted where RFC 4180 needs it).
+pub fn csv(r: &Report) -> Result<String> {
+    let mut out = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
+    out.write_record([
+        "index",
+        "name",
+        "kind",
+        "asnr",
+        "mean_mtf",
+        "snr0",
+        "photoelectrons",
+        "m0",
+        "asnr_glare_free",
+        "asnr_glare_inclusive",
+        "twin_asnr",
+        "fresnel_zones",
+        "twin_band_nm",
+        "best_range_nm",
+        "best_asnr",
+        "rank",
+        "rank_at_best",
+        "notes",
+    ])?;
     for d in &r.designs {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            field(&d.name),
-            d.kind,
-            d.asnr,
-            d.mean_mtf,
-            d.snr0,
-            d.photoelectrons,
-            d.m0,
-            d.asnr_glare_free,
-            d.asnr_glare_inclusive,
+        out.write_record([
+            d.index.to_string(),
+            d.name.clone(),
+            d.kind.to_owned(),
+            d.asnr.to_string(),
+            d.mean_mtf.to_string(),
+            d.snr0.to_string(),
+            d.photoelectrons.to_string(),
+            d.m0.to_string(),
+            d.asnr_glare_free.to_string(),
+            d.asnr_glare_inclusive.to_string(),
             d.twin_asnr.map_or(String::new(), |t| t.to_string()),
-            d.fresnel_zones,
-            d.twin_band_nm,
-            d.best_range_nm,
-            d.best_asnr,
-            d.rank,
-            d.rank_at_best,
-            field(&d.notes.join(" | "))
-        );
+            d.fresnel_zones.to_string(),
+            d.twin_band_nm.to_string(),
+            d.best_range_nm.to_string(),
+            d.best_asnr.to_string(),
+            d.rank.to_string(),
+            d.rank_at_best.to_string(),
+            d.notes.join(" | "),
+        ])?;
     }
-    s
+    Ok(String::from_utf8(out.into_inner().map_err(|e| anyhow!("CSV: {e}"))?)?)
 }
 
-/// ASNR against the spectral range, one line per design, the best points marked.
-fn plot(path: &std::path::Path, figure: &crate::plot::Figure, base: &Comparison, r: &Report) -> Result<()> {
-    let series: Vec<crate::plot::Series> = r
-        .designs
-        .iter()
-        .map(|d| crate::plot::Series {
-            label: d.name.clone(),
-            points: d.curve.iter().map(|p| (p[0], p[1])).collect(),
-            shaded: Vec::new(),
-            // the best the comparison found (golden section between grid points), as its table says
-            best: Some((
-                (d.best_range_nm, d.best_asnr),
-                if d.best_at_bound {
-                    "grid point at the end of the range"
-                } else {
-                    "golden section between grid points"
-                }
-                .to_owned(),
-            )),
-        })
-        .collect();
-    let x = crate::plot::axis_label(KEY);
-    let title = base.title.clone().unwrap_or_default();
-    // the designs' ASNRs span orders of magnitude (the refractive reference against a small
-    // achromat): a log axis keeps every design readable
-    let labels =
-        crate::plot::Labels { title: &title, x: &x, y: "ASNR", x_unit: "nm", log_y: true, ..Default::default() };
-    let mark = crate::plot::Mark { x: r.range_nm, label: Some(format!("scene band, {} nm", sig(r.range_nm, 4))) };
-    crate::plot::lines_plot("--plot", path, figure, &labels, &series, &[mark], true)
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn design(index: usize, name: &str, notes: &[&str]) -> DesignReport {
+        DesignReport {
+            index,
+            name: name.to_owned(),
+            kind: "chromatic",
+            lens: "a lens".to_owned(),
+            asnr: 10.5,
+            mean_mtf: 0.5,
+            snr0: 21.0,
+            photoelectrons: 441.0,
+            m0: 0.25,
+            vg: 0.6,
+            asnr_glare_free: 10.5,
+            asnr_glare_inclusive: 5.25,
+            fraunhofer_valid: true,
+            fresnel_zones: 84.0,
+            design_wavelength_nm: 800.0,
+            twin_band_nm: 4.76,
+            twin_asnr: None,
+            best_range_nm: 33.0,
+            best_asnr: 10.6,
+            best_at_bound: false,
+            rank: 2 - index,
+            rank_at_best: 2 - index,
+            channels: Vec::new(),
+            notes: notes.iter().map(|n| (*n).to_owned()).collect(),
+            warnings: Vec::new(),
+            curve: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn csv_quotes_what_needs_it_and_reads_back() {
+        let report = Report {
+            scene: "x.toml".to_owned(),
+            title: None,
+            center_nm: 800.0,
+            range_nm: 50.0,
+            method: String::new(),
+            designs: vec![design(0, "plain", &[]), design(1, "F/2.5, \"reduced\"", &["a, b", "line\nbreak"])],
+            ranking: Vec::new(),
+            ranking_at_best: Vec::new(),
+        };
+        let text = csv(&report).unwrap();
+        assert!(text.starts_with("index,name,kind,asnr,"), "{text}");
+        assert!(text.contains("\n0,plain,chromatic,10.5,"), "{text}");
+        let mut reader = ::csv::Reader::from_reader(text.as_bytes());
+        let rows: Vec<::csv::StringRecord> = reader.records().map(Result::unwrap).collect();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(&rows[1][0], "1");
+        assert_eq!(&rows[1][1], "F/2.5, \"reduced\"");
+        assert_eq!(&rows[1][10], "", "no twin: an empty field");
+        assert_eq!(&rows[1][17], "a, b | line\nbreak");
+    }
 }

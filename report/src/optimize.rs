@@ -4,7 +4,7 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
 /// Points of the coarse scan that brackets the maximum before the golden-section search.
-const SCAN_POINTS: usize = 17;
+pub const SCAN_POINTS: usize = 17;
 
 /// A `KEY=LO:HI` range.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,6 +183,35 @@ pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<
         evaluations,
         at_bound: best.0 - lo <= tolerance || hi - best.0 <= tolerance,
     })
+}
+
+/// The most sweep worker threads: 4 × the available cores (more only add contention).
+pub fn max_threads() -> usize {
+    4 * std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+}
+
+/// Refuses a key given twice to `--over`, or given to both `--set` (or `--tolerance`, which is
+/// `options.tolerance`) and `--over`: one value of it would silently be ignored.
+pub fn check_over_keys(set: &[String], ranges: &[Range]) -> Result<()> {
+    check_keys("--over", set, ranges)
+}
+
+/// [`check_over_keys`] for keys swept by `what` (`--over`, or `--points FILE`).
+pub fn check_keys(what: &str, set: &[String], ranges: &[Range]) -> Result<()> {
+    for (i, r) in ranges.iter().enumerate() {
+        if ranges[..i].iter().any(|earlier| earlier.key == r.key) {
+            anyhow::bail!("{what} {}: the key is given to {what} twice; give each key once", r.key);
+        }
+        if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == r.key)) {
+            let given =
+                if r.key == "options.tolerance" { format!("--set {s} or --tolerance") } else { format!("--set {s}") };
+            anyhow::bail!(
+                "{what} {}: the key is also given by {given}; {what} would override it: give it in one place",
+                r.key
+            );
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
