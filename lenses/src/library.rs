@@ -173,8 +173,11 @@ pub struct LibraryLens {
     cells: Vec<Cell>,
     zones: Vec<(f64, f64)>,
     /// the first order at the wavelengths asked so far: (λ bits, τ1, T, pupil)
-    cache: std::sync::Mutex<Vec<(u64, f64, f64, Option<Arc<RadialPupil>>)>>,
+    cache: std::sync::Mutex<Vec<Cached>>,
 }
+
+/// A wavelength's first order: (λ bits, τ1, T, pupil).
+type Cached = (u64, f64, f64, Option<Arc<RadialPupil>>);
 
 impl Clone for LibraryLens {
     fn clone(&self) -> LibraryLens {
@@ -532,11 +535,12 @@ fn solve(mut a: Vec<Vec<f64>>) -> Vec<f64> {
         if p == 0.0 {
             continue;
         }
-        for row in 0..n {
-            if row != col {
-                let factor = a[row][col] / p;
-                for k in col..=n {
-                    a[row][k] -= factor * a[col][k];
+        let pivot_row = a[col].clone();
+        for (r, row) in a.iter_mut().enumerate() {
+            if r != col {
+                let factor = row[col] / p;
+                for (x, &y) in row.iter_mut().zip(&pivot_row).skip(col) {
+                    *x -= factor * y;
                 }
             }
         }
