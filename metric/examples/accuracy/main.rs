@@ -249,6 +249,8 @@ struct Grid {
     /// numpy settings (nλ, nν, nt) and the time budget of each, s.
     numpy_settings: &'static [(usize, usize, usize)],
     numpy_seconds: f64,
+    /// numpy radial baseline settings (nλ, nν, nt, nv).
+    numpy_radial_settings: &'static [(usize, usize, usize, usize)],
     /// Tolerances of the decentred-iris rows.
     iris_tolerances: &'static [f64],
     /// Fixed pupil samplings of the coma reference (coarse, mid, fine) and the tolerances.
@@ -270,6 +272,7 @@ const FULL: Grid = Grid {
     ladder: &[1e-2, 1e-4, 1e-6, 1e-8, 1e-10],
     numpy_settings: &[(96, 32, 32), (128, 48, 48)],
     numpy_seconds: 2.0,
+    numpy_radial_settings: &[(24, 16, 24, 6), (28, 20, 28, 6), (32, 24, 32, 8), (48, 32, 48, 12)],
     iris_tolerances: &[1e-4, 1e-6, 1e-8],
     coma_reference: &[256, 512, 1024],
     coma_tolerances: &[1e-3, 1e-4, 1e-5],
@@ -289,6 +292,7 @@ const QUICK: Grid = Grid {
     ladder: &[1e-2, 1e-6],
     numpy_settings: &[(96, 32, 32)],
     numpy_seconds: 0.5,
+    numpy_radial_settings: &[(32, 24, 32, 8)],
     iris_tolerances: &[1e-6],
     coma_reference: &[64, 128, 256],
     coma_tolerances: &[1e-4],
@@ -449,6 +453,7 @@ fn main() {
     rows.extend(decentred_rows);
     tolerance::spectrometer(&grid, python.as_deref(), &mut rows, &mut context.notes);
     tolerance::coma(&grid, &mut rows, &mut context.notes);
+    tolerance::designs(&grid, python.as_deref(), &mut rows, &mut context.notes);
     context.map = asnr.as_deref().map(|bin| {
         let mut m = map::measure(bin, grid.map_runs);
         m.python = asnr_python.as_deref().and_then(|py| map::measure_python(py, bin, &out, grid.map_runs));
@@ -462,8 +467,11 @@ fn main() {
     std::fs::write(&path, md).unwrap();
     let svg = out.join("docs/benchmarks/accuracy.svg");
     std::fs::create_dir_all(svg.parent().unwrap()).unwrap();
-    let names: Vec<&str> =
-        cases.iter().map(|c| c.name).chain([tolerance::SPECTROMETER, tolerance::IRIS, tolerance::COMA]).collect();
+    let names: Vec<&str> = cases
+        .iter()
+        .map(|c| c.name)
+        .chain([tolerance::SPECTROMETER, tolerance::IRIS, tolerance::COMA, tolerance::BINARY2])
+        .collect();
     plot::draw(&svg, &rows, &kernel_rows, &names);
     eprintln!("wrote {} and {}", path.display(), svg.display());
 }

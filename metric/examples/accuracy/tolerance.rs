@@ -21,6 +21,12 @@ use radiometry::Spectrum;
 
 use crate::{Case, Family, Grid, Measured, Row, iris, time};
 
+/// The designs given as data (issue "Your metalens"): a Binary 2 metalens and a meta-atom
+/// library lens, with the numpy radial baseline beside the first.
+pub(crate) const BINARY2: &str = "Binary 2 metalens: F/2.5, 50 nm";
+pub(crate) const LIBRARY: &str = "library lens: F/2.5, 50 nm";
+pub(crate) const NUMPY_RADIAL: &str = "xtask/baselines/numpy_radial.py";
+
 /// Scene names of the rows (the table's first column).
 pub(crate) const SPECTROMETER: &str = "spectrometer: F/2.5, 52 nm table";
 pub(crate) const IRIS: &str = "decentred iris 0.15: F/2.5, 50 nm";
@@ -46,11 +52,24 @@ pub(crate) struct Notes {
     pub iris: Option<(f64, f64, f64, f64, f64)>,
     /// Coma: (extrapolated reference, observed order, the samplings and their means).
     pub coma: Option<(f64, f64, Samplings)>,
+    /// Binary 2 metalens: (reference mean MTF, seconds, its work); library lens: (mean, seconds).
+    pub binary2: Option<(f64, f64, String)>,
+    pub library: Option<(f64, f64, String)>,
+    /// numpy radial baseline: the numpy version, or why the row was skipped.
+    pub numpy_radial: Result<String, String>,
 }
 
 impl Notes {
     pub(crate) fn new() -> Notes {
-        Notes { spectrometer: None, numpy: Err("numpy row not run".to_owned()), iris: None, coma: None }
+        Notes {
+            spectrometer: None,
+            numpy: Err("numpy row not run".to_owned()),
+            iris: None,
+            coma: None,
+            binary2: None,
+            library: None,
+            numpy_radial: Err("numpy radial row not run".to_owned()),
+        }
     }
 }
 
@@ -130,6 +149,99 @@ pub(crate) fn spectrometer(grid: &Grid, python: Option<&Path>, rows: &mut Vec<Ro
     if let Err(why) = &notes.numpy {
         eprintln!("  {why}");
     }
+}
+
+/// The reference of a scene file: its detected spectrum (radiance × QE × λ, as
+/// `metric::evaluate` builds it) through `optics::Polychromatic` with the per-interval spectral
+/// rule at 1e-12; (mean, seconds, work).
+fn panels_reference(file: &str) -> (f64, f64, String) {
+    let scene = load(file, &[]);
+    let camera = scene.camera();
+    let detected = Spectrum::product(vec![
+        scene.radiance().clone(),
+        camera.quantum_efficiency().clone(),
+        Spectrum::Linear { slope: 1.0 },
+    ]);
+    let settings = Settings { spectral_rule: SpectralRule::Panels, tolerance: 1e-12, ..Settings::default() };
+    let started = Instant::now();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let poly = Polychromatic::with_settings(scene.lens(), &detected, scene.field(), camera.nyquist(), pixel, settings)
+        .unwrap();
+    let (reference, w) = poly.mean_mtf();
+    let seconds = started.elapsed().as_secs_f64();
+    let work = format!(
+        "{} spectral panels, {} spectral nodes, {} OTF values",
+        w.spectral_panels, w.spectral_nodes, w.otf_evaluations
+    );
+    (reference, seconds, work)
+}
+
+/// The rows of the designs given as data: the Binary 2 metalens (`examples/phase-binary2.toml`)
+/// at the ladder's tolerances against the per-interval rule at 1e-12, the numpy radial baseline
+/// beside it, and the meta-atom library lens (`examples/library.toml`) at the default tolerance
+/// against its own per-interval reference.
+pub(crate) fn designs(grid: &Grid, python: Option<&Path>, rows: &mut Vec<Row>, notes: &mut Notes) {
+    eprintln!("{BINARY2}:");
+    let (reference, seconds, work) = panels_reference("examples/phase-binary2.toml");
+    eprintln!("  reference (Panels, 1e-12) {reference:.15} in {seconds:.1} s ({work})");
+    notes.binary2 = Some((reference, seconds, work));
+    for &t in grid.ladder {
+        let scene = load("examples/phase-binary2.toml", &[format!("options.tolerance={t:e}")]);
+        rows.push(row(BINARY2, Family::Default, format!("tol {t:e}"), reference, measure(grid, &scene)));
+    }
+    notes.numpy_radial = match python {
+        None => {
+            Err("numpy not available: radial row skipped (run `cargo xtask accuracy`, which prepares it)".to_owned())
+        }
+        Some(python) => numpy_radial(grid, python, reference, rows),
+    };
+    eprintln!("{LIBRARY}:");
+    let (reference, seconds, work) = panels_reference("examples/library.toml");
+    eprintln!("  reference (Panels, 1e-12) {reference:.15} in {seconds:.1} s ({work})");
+    notes.library = Some((reference, seconds, work));
+    let scene = load("examples/library.toml", &[]);
+    rows.push(row(LIBRARY, Family::Default, "tol 1e-6".to_owned(), reference, measure(grid, &scene)));
+}
+
+/// The numpy radial script at each of its settings (nλ, nν, nt, nv); its numpy version, or why not.
+fn numpy_radial(grid: &Grid, python: &Path, reference: f64, rows: &mut Vec<Row>) -> Result<String, String> {
+    let mut version = String::new();
+    for &(nl, nnu, nt, nv) in grid.numpy_radial_settings {
+        let output = Command::new(python)
+            .arg(root().join(NUMPY_RADIAL))
+            .args(["--nl", &nl.to_string(), "--nnu", &nnu.to_string(), "--nt", &nt.to_string()])
+            .args(["--nv", &nv.to_string(), "--seconds", &format!("{}", grid.numpy_seconds)])
+            .envs([("OMP_NUM_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"), ("MKL_NUM_THREADS", "1")])
+            .output()
+            .map_err(|e| format!("numpy radial row skipped ({} could not be started: {e})", python.display()))?;
+        if !output.status.success() {
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            return Err(format!(
+                "numpy radial row skipped ({NUMPY_RADIAL} failed: {})",
+                stderr.lines().last().unwrap_or("no message")
+            ));
+        }
+        let text = String::from_utf8_lossy(&output.stdout);
+        let value = |key: &str| {
+            text.lines()
+                .find_map(|l| l.strip_prefix(key).and_then(|v| v.strip_prefix('=')))
+                .map(str::to_owned)
+                .ok_or_else(|| format!("numpy radial row skipped: {NUMPY_RADIAL} printed no `{key}=`"))
+        };
+        let mean: f64 = value("mean_mtf")?.parse().map_err(|e| format!("numpy radial: mean_mtf: {e}"))?;
+        let millis: f64 = value("median_ms")?.parse().map_err(|e| format!("numpy radial: median_ms: {e}"))?;
+        let runs: usize = value("runs")?.parse().map_err(|e| format!("numpy radial: runs: {e}"))?;
+        version = value("numpy")?;
+        let work = format!("{nl} λ × {nnu} ν × {nt} t × {nv} v = {} integrand values", nl * nnu * nt * nv);
+        rows.push(row(
+            BINARY2,
+            Family::Numpy,
+            format!("nλ = {nl}, nν = {nnu}, nt = {nt}, nv = {nv}"),
+            reference,
+            (millis * 1e3, runs, mean, work),
+        ));
+    }
+    Ok(version)
 }
 
 /// Runs the numpy script at each of its settings; the interpreter and numpy version, or why not.
