@@ -461,7 +461,9 @@ pub fn render(
         .map(|i| expose(&expected_e, sensor, settings.seed.wrapping_add(i as u64)))
         .collect::<Result<Vec<_>, _>>()?;
     let dn_per_e = sensor.gain_dn_per_e();
-    let to_electrons = |frame: &[f64]| -> Vec<f64> { frame.iter().map(|v| dn_per_e.map_or(*v, |k| v / k)).collect() };
+    let offset = sensor.black_level_dn();
+    let to_electrons =
+        |frame: &[f64]| -> Vec<f64> { frame.iter().map(|v| dn_per_e.map_or(*v, |k| (v - offset) / k)).collect() };
     // 7. Wiener restoration on the pixel grid, G = H*/(|H|² + NSR)
     let mean_level = expected_e.iter().sum::<f64>() / expected_e.len() as f64;
     let variance = mean_level + sensor.read_noise_e().powi(2) + sensor.quantization_variance_e2();
@@ -574,6 +576,7 @@ pub fn expose(expected_e: &[f64], sensor: &noise::Sensor, seed: u64) -> Result<V
         .map_err(|e| Error::Render { message: format!("read noise {}: {e}", sensor.read_noise_e()) })?;
     let full_well = sensor.full_well_e();
     let adc = sensor.gain_dn_per_e().zip(sensor.adc_bits());
+    let offset = sensor.black_level_dn();
     expected_e
         .iter()
         .map(|&mean| {
@@ -586,7 +589,7 @@ pub fn expose(expected_e: &[f64], sensor: &noise::Sensor, seed: u64) -> Result<V
             };
             let charge = shot.min(full_well) + read.sample(&mut rng);
             Ok(match adc {
-                Some((k, bits)) => (k * charge).round().clamp(0.0, ((1_u64 << bits) - 1) as f64),
+                Some((k, bits)) => (k * charge + offset).round().clamp(0.0, ((1_u64 << bits) - 1) as f64),
                 None => charge,
             })
         })

@@ -149,6 +149,7 @@ pub(crate) struct RawCamera {
     pub full_well_e: Option<f64>,
     pub gain_dn_per_e: Option<f64>,
     pub adc_bits: Option<u32>,
+    pub black_level_dn: Option<f64>,
     pub noise_spectrum: Option<String>,
 }
 
@@ -1007,6 +1008,7 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
         && c.full_well_e.is_none()
         && c.gain_dn_per_e.is_none()
         && c.adc_bits.is_none()
+        && c.black_level_dn.is_none()
     {
         return Ok(None);
     }
@@ -1026,7 +1028,26 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
             if !(1..=32).contains(&bits) {
                 return Err(o.bad("camera.adc_bits", bits, "a whole number of bits from 1 to 32"));
             }
-            noise::Sensor::new(read, dark, well, k, bits)
+            let sensor = noise::Sensor::new(read, dark, well, k, bits);
+            match (sensor, c.black_level_dn) {
+                (Ok(sensor), Some(b)) => {
+                    let top = ((1_u64 << bits) - 1) as f64;
+                    let b = o.number(
+                        "camera.black_level_dn",
+                        b,
+                        (0.0..top).contains(&b),
+                        &format!("a black level ≥ 0 DN and below the ADC's largest output {top} DN"),
+                    )?;
+                    sensor.with_black_level(b)
+                }
+                (sensor, _) => sensor,
+            }
+        }
+        (None, None) if c.black_level_dn.is_some() => {
+            return Err(o.conflict(
+                "camera.black_level_dn",
+                "a black level needs an ADC: camera.gain_dn_per_e and camera.adc_bits".to_owned(),
+            ));
         }
         (None, None) => noise::Sensor::without_adc(read, dark, well),
         (Some(_), None) => {
