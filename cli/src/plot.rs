@@ -355,6 +355,17 @@ fn cell_edges(centres: &[f64]) -> Vec<f64> {
     }
 }
 
+/// Refuses an axis whose ends or span are not finite (values near the largest double, whose
+/// padded range overflows): its ticks could not be placed (plotters looped for ever on them).
+fn drawable(axis: &str, (lo, hi): (f64, f64)) -> Result<(), String> {
+    if lo.is_finite() && hi.is_finite() && (hi - lo).is_finite() {
+        return Ok(());
+    }
+    Err(format!(
+        "the {axis} axis would run from {lo:e} to {hi:e}, a span beyond the largest number (about 1.8e308); expected values whose range, with the axis' margin, is finite (below about 1e307)"
+    ))
+}
+
 /// `(lo, hi)` of finite values, `(0, 1)` for none.
 fn extent(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
@@ -424,6 +435,10 @@ impl TickFormat {
 
 /// The tick values plotters draws on `lo..hi` for at most `n` labels.
 fn ticks((lo, hi): (f64, f64), n: usize) -> Vec<f64> {
+    // plotters loops for ever on a span that is not finite (axes are checked by `drawable`)
+    if !(hi - lo).is_finite() {
+        return Vec::new();
+    }
     RangedCoordf64::from(lo..hi).key_points(n)
 }
 
@@ -883,6 +898,8 @@ impl Axes<'_> {
     where
         DB::ErrorType: 'static,
     {
+        drawable("x", self.x)?;
+        drawable("y", self.y)?;
         let (w, h) = area.dim_in_pixel();
         let (w, h) = (i32::try_from(w).unwrap_or(i32::MAX), i32::try_from(h).unwrap_or(i32::MAX));
         let m0 = self.margins(ctx, (w, h), right_extra);
@@ -1517,6 +1534,7 @@ impl Plot for HeatmapPlot<'_> {
         let (ex, ey) = (cell_edges(&grid.xs), cell_edges(&grid.ys));
         let ny = grid.ys.len();
         let (lo, hi) = self.range();
+        drawable("colour bar", (lo, hi))?;
         let span = hi - lo;
         let (x0, x1, y0, y1) = (ex[0], ex[ex.len() - 1], ey[0], ey[ey.len() - 1]);
         // the colour bar's room on the right: gap, bar, ticks, labels, description

@@ -1501,6 +1501,9 @@ fn compare_files_and_arguments_are_checked() {
     );
     let err = fails(&["compare", "--over", "lens.f_number=1:4:3"]);
     assert!(err.contains("compare searches the spectral range only"), "{err}");
+    // over the limit: refused at once with the numbers (10 000 points used to run for 40 minutes)
+    let err = fails(&["compare", "--over", "spectrum.range_nm=2:300:10000"]);
+    assert!(err.contains("10000 points; expected at most 1000") && err.contains("some 50 minutes"), "{err}");
     let err = fails(&["compare", "--set", "lens.f_number=2"]);
     assert!(err.contains("a [lens] table would apply to no design"), "{err}");
     // a scene file is not a comparison, and a comparison not a scene
