@@ -126,11 +126,17 @@ pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
             rows.last().map_or(0, |r| r.0),
             if expect.is_some() { " --expect gives" } else { "" }
         );
+        // the files merged, as the message's subject
+        let mut names: Vec<String> = files.iter().take(4).map(|f| f.display().to_string()).collect();
+        if files.len() > 4 {
+            names.push(format!("… ({} files)", files.len()));
+        }
+        let names = names.join(", ");
         if missing_count == 0 {
-            bail!("{beyond_text}: expected the shards of one sweep of {total} points");
+            bail!("{names}: {beyond_text}: expected the shards of one sweep of {total} points");
         }
         bail!(
-            "{missing_count} of the {total} points missing (indices {}{}){}: expected every shard of the sweep, complete",
+            "{names}: {missing_count} of the {total} points missing (indices {}{}){}: expected every shard of the sweep, complete",
             first_missing.join(", "),
             if missing_count > first_missing.len() { ", …" } else { "" },
             if beyond > 0 { format!(", and {beyond_text}") } else { String::new() }

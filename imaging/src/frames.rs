@@ -38,13 +38,16 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
         return read_tiff(path);
     }
     let read = |message: String| Error::Read { path: path.to_owned(), message };
+    // the size from the header's bytes, before the decoder allocates anything for it
+    let (w, h) = png_dimensions(path)?;
+    check_pixels(path, w, h, MAX_FRAME_PIXELS, "frame")?;
     let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    // the decoder's own limit, raised to a 16-bit frame of the largest size accepted
+    let limits = png::Limits { bytes: 2 * MAX_FRAME_PIXELS as usize + (1 << 20) };
+    let mut decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
     // low bit depths to 8 bits; palettes would become RGB and are refused below
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| read(format!("not a PNG frame ({e})")))?;
-    let header = reader.info();
-    check_pixels(path, header.width, header.height, MAX_FRAME_PIXELS, "frame")?;
     let (color, depth) = reader.output_color_type();
     if color != png::ColorType::Grayscale {
         return Err(Error::NotGrayscale { path: path.to_owned(), color: format!("{color:?}").to_lowercase() });
@@ -65,17 +68,32 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
     Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
 }
 
-/// The width and height a PNG file's header gives, read without decoding its image.
+/// The width and height a PNG file's header gives, read from its first 24 bytes (the signature
+/// and the IHDR chunk, which the PNG standard puts first) without decoding anything.
 ///
 /// # Errors
-/// [`Error::Read`] when the file cannot be opened or its header is not a PNG header.
+/// [`Error::Read`] when the file cannot be opened or does not start with a PNG signature and
+/// its IHDR chunk.
 pub fn png_dimensions(path: &Path) -> Result<(u32, u32), Error> {
+    use std::io::Read as _;
     let read = |message: String| Error::Read { path: path.to_owned(), message };
-    let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
-    let reader =
-        png::Decoder::new(std::io::BufReader::new(file)).read_info().map_err(|e| read(format!("not a PNG ({e})")))?;
-    let info = reader.info();
-    Ok((info.width, info.height))
+    let mut file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
+    let mut head = [0u8; 24];
+    let mut got = 0;
+    while got < head.len() {
+        match file.read(&mut head[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) => return Err(read(e.to_string())),
+        }
+    }
+    if got < head.len() || head[..8] != *b"\x89PNG\r\n\x1a\n" || head[12..16] != *b"IHDR" {
+        return Err(read(format!(
+            "not a PNG ({got} bytes of the 24 of a PNG signature and IHDR header were found, or they differ)"
+        )));
+    }
+    let word = |i: usize| u32::from_be_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]);
+    Ok((word(16), word(20)))
 }
 
 /// Writes a grayscale PNG of `width × height` grey levels (row-major from the top-left), 8-bit
