@@ -177,22 +177,6 @@ fn plots() -> Vec<Vec<String>> {
     vec![fig2a, fig2b, figs9]
 }
 
-#[cfg(test)]
-mod tests {
-    /// 2√2σ of the order-4 super-Gaussian against its closed form,
-    /// 0.5·2√2·√(Γ(3/8)/Γ(1/8))·(ln 2)^{−1/8} FWHM = 0.830452… FWHM (Γ(3/8) = 2.370436184416601,
-    /// Γ(1/8) = 7.533941598797612).
-    #[test]
-    fn filter_range_is_the_closed_form() {
-        let closed = std::f64::consts::SQRT_2
-            * (2.370_436_184_416_601_f64 / 7.533_941_598_797_612).sqrt()
-            * std::f64::consts::LN_2.powf(-0.125);
-        for w in super::PAPER_FILTERS_NM {
-            assert!((super::filter_range_nm(w) / w - closed).abs() < 1e-9, "{w}: {}", super::filter_range_nm(w) / w);
-        }
-    }
-}
-
 /// Builds `asnr` in release mode, runs the sweeps into CSVs and draws the SVGs, all in
 /// `docs/figures/` under the workspace `root`.
 pub(crate) fn run(root: &Path) -> Result<()> {
@@ -279,6 +263,19 @@ mod tests {
             }
             let output = args.iter().skip_while(|a| *a != "--output").nth(1).expect("an --output");
             assert!(output.starts_with(OUT_DIR) && output.ends_with(".svg"), "{output}");
+        }
+    }
+
+    /// 2√2σ of the order-4 super-Gaussian against its closed form,
+    /// 0.5·2√2·√(Γ(3/8)/Γ(1/8))·(ln 2)^{−1/8} FWHM = 0.830452… FWHM (Γ(3/8) = 2.370436184416601,
+    /// Γ(1/8) = 7.533941598797612).
+    #[test]
+    fn filter_range_is_the_closed_form() {
+        let closed = std::f64::consts::SQRT_2
+            * (2.370_436_184_416_601_f64 / 7.533_941_598_797_612).sqrt()
+            * std::f64::consts::LN_2.powf(-0.125);
+        for w in PAPER_FILTERS_NM {
+            assert!((filter_range_nm(w) / w - closed).abs() < 1e-9, "{w}: {}", filter_range_nm(w) / w);
         }
     }
 }
