@@ -993,6 +993,10 @@ impl Axes<'_> {
 /// Draws the SVG or PNG of `plot` into `path` (by its extension); errors name `flag`.
 fn render<P: Plot>(flag: &str, path: &Path, figure: &Figure, plot: &P) -> Result<()> {
     let err = |e: &dyn std::fmt::Display| anyhow!("{flag} {}: {e}", path.display());
+    // before any drawing: the folder the file goes in (the system's "No such file" named neither)
+    if let Some(folder) = path.parent().filter(|f| !f.as_os_str().is_empty() && !f.is_dir()) {
+        bail!("{flag} {}: the folder {} does not exist; create it first", path.display(), folder.display());
+    }
     register_font();
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("svg") => std::fs::write(path, svg(figure, plot).map_err(|e| err(&e))?).map_err(|e| err(&e)),

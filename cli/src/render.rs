@@ -325,7 +325,12 @@ fn make_target(args: &RenderArgs, pitch: f64, nyquist_cyc_per_mm: f64) -> Result
             })?
         }
     };
-    Ok(target::usaf(pitch, groups, polarity, args.oversample)?)
+    let given =
+        args.groups.as_deref().map_or_else(|| format!("{}:{} (the default)", groups.0, groups.1), str::to_owned);
+    target::usaf(pitch, groups, polarity, args.oversample).map_err(|e| match e {
+        imaging::Error::Render { message } => anyhow::anyhow!("--groups {given}: {message}"),
+        e => e.into(),
+    })
 }
 
 /// 8-bit display levels of an image in units of `per_e` per e⁻: 0 e⁻ → 0, the white area's

@@ -341,7 +341,27 @@ fn bad_mtf_arguments() {
     let err = fails(&["mtf", "--points", "1"]);
     assert!(err.contains("--points 1: expected a whole number from 2 to 100000"), "{err}");
     let err = fails(&["mtf", "--wavelengths", "800,-5"]);
-    assert!(err.contains("--wavelengths: -5 nm: expected wavelengths > 0 nm"), "{err}");
+    assert!(err.contains("--wavelengths: -5 nm: expected wavelengths from 1 nm to 1e6 nm"), "{err}");
+    // 1e-300 nm printed null in the JSON and NaN in the table
+    let err = fails(&["mtf", "--wavelengths", "1e-300", "--json"]);
+    assert!(err.contains("--wavelengths: 1e-300 nm: expected"), "{err}");
+    // a band reaching 0 nm: the cutoff is infinite (the message said `max_frequency = inf`)
+    let err = fails(&["mtf", "--to-cutoff", "--set", "spectrum.range_nm=3000"]);
+    assert!(
+        err.contains("cutoff 1/(λ F#)") && err.contains("reaches λ = 0 nm") && !err.contains("max_frequency"),
+        "{err}"
+    );
+    // internal names: `sigma` for spectrum.range_nm; NaN reported as no signal
+    let err = fails(&["evaluate", "--set", "spectrum.range_nm=1e-300"]);
+    assert!(
+        err.contains("spectrum.range_nm = 1e-300: expected a width of at least") && !err.contains("sigma"),
+        "{err}"
+    );
+    let err = fails(&["evaluate", "--set", "spectrum.range_nm=1e200"]);
+    assert!(err.contains("overflows") && !err.contains("no detected signal"), "{err}");
+    // an --over point named as --over, not as --set
+    let err = fails(&["sweep", "--over", "lens.f_number=0.1:2:3"]);
+    assert!(err.contains("(--over lens.f_number=0.1:2:3 at lens.f_number=0.1)") && !err.contains("--set"), "{err}");
     let err = fails(&["mtf", "--plot", "/tmp/asnr-plot.pdf"]);
     assert!(err.contains("--plot /tmp/asnr-plot.pdf: expected a file name ending in .svg or .png"), "{err}");
 }
@@ -1729,6 +1749,14 @@ fn render_writes_images_whose_frames_measure_the_scenes_snr0() {
     assert!(err.contains("oversampling 2") && err.contains("odd"), "{err}");
     let err = fails(&["render", "--out", out, "--groups", "6:x"]);
     assert!(err.contains("--groups 6:x") && err.contains("FIRST:LAST"), "{err}");
+    // a group range too large to draw is blamed on --groups, not on an image
+    let err = fails(&["render", "--out", out, "--groups", "0:6", "--oversample", "9"]);
+    assert!(
+        err.contains("--groups 0:6:") && err.contains("a higher first group") && !err.contains("smaller image"),
+        "{err}"
+    );
+    let err = fails(&["render", "--out", out, "--groups", "9:3"]);
+    assert!(err.contains("--groups 9:3: USAF groups 9 to 3"), "{err}");
     let err = fails(&["render", "--out", out, "--frames", "0"]);
     assert!(err.contains("--frames 0") && err.contains("1 to 1000"), "{err}");
     let err = fails(&["render", "--out", out, "--ranges=-5"]);
@@ -1891,6 +1919,10 @@ fn shards_merge_into_the_single_process_csv_and_points_files_match_the_grid() {
     std::fs::write(&path, "lens.f_number\n0.1\n").unwrap();
     let err = fails(&["sweep", "--points", path.to_str().unwrap()]);
     assert!(err.contains("lens.f_number = 0.1: expected a number ≥ 0.5"), "{err}");
+    // a points file without its header: its first row is not taken for keys
+    std::fs::write(&path, "2.5,50\n4,100\n").unwrap();
+    let err = fails(&["sweep", "--points", path.to_str().unwrap()]);
+    assert!(err.contains("points.csv: line 1: header `2.5,50`: `2.5` is a number, not a scene key"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

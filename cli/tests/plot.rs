@@ -589,3 +589,14 @@ fn values_near_the_largest_double_are_refused_not_hung() {
     let err = fails(&["plot", &grid, "--x", "a", "--y", "b", "--z", "c", "-o", out.to_str().unwrap()]);
     assert!(err.contains("axis would run from"), "{err}");
 }
+
+/// A --plot or --output file in a folder that does not exist: the folder is named (the system's
+/// "No such file or directory" named neither).
+#[test]
+fn a_missing_output_folder_is_named() {
+    let err = fails(&["mtf", "--plot", "/nonexistent-folder/sub/mtf.svg"]);
+    assert!(
+        err.contains("--plot /nonexistent-folder/sub/mtf.svg: the folder /nonexistent-folder/sub does not exist"),
+        "{err}"
+    );
+}

@@ -211,7 +211,15 @@ pub fn usaf(pitch_m: f64, groups: (i32, i32), polarity: Polarity, oversample: us
     let width = (sx + side + margin).ceil() as usize;
     let height = (height.max(black_y + side) + margin).ceil() as usize;
     let (width, height) = (width + width % 2, height + height % 2);
-    check_side(width * oversample, height * oversample)?;
+    if width.max(height) * oversample > MAX_FINE_SIDE {
+        return Err(Error::Render {
+            message: format!(
+                "USAF groups {first} to {last} make a {width} × {height} pixel target, a {} × {} fine grid at {oversample} cells a pixel, beyond {MAX_FINE_SIDE} cells a side: draw fewer groups, from a higher first group (finer bars), or lower the oversampling",
+                width * oversample,
+                height * oversample
+            ),
+        });
+    }
     let (ground, ink) = match polarity {
         Polarity::Positive => (1.0, 0.0),
         Polarity::Negative => (0.0, 1.0),

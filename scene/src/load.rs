@@ -224,16 +224,23 @@ impl Origins {
         context.replace("[lens]", &format!("[{}]", self.lens)).replace("lens.", &format!("{}.", self.lens))
     }
 
-    /// The origin of `key`: the `--set` that gave it (or a table above it), else the file.
+    /// The origin of `key`: the `--set` that gave it, else the one that gave the nearest table
+    /// above it, else those that gave keys below it (all of them), else the file.
     pub(crate) fn of(&self, key: &str) -> String {
         let key = &self.key(key);
-        for (k, arg) in &self.overrides {
-            let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
-            if key == k || below(key, k) || below(k, key) {
-                return format!("{} (--set {})", self.file, shorten(arg));
+        let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
+        let exact = self.overrides.iter().find(|(k, _)| *k == key).map(|(_, arg)| vec![arg]);
+        let above = || {
+            self.overrides.iter().filter(|(k, _)| below(key, k)).max_by_key(|(k, _)| k.len()).map(|(_, arg)| vec![arg])
+        };
+        let inside = self.overrides.iter().filter(|(k, _)| below(k, key)).map(|(_, arg)| arg).collect::<Vec<_>>();
+        match exact.or_else(above).unwrap_or(inside) {
+            args if args.is_empty() => self.file.clone(),
+            args => {
+                let sets: Vec<String> = args.iter().map(|a| format!("--set {}", shorten(a))).collect();
+                format!("{} ({})", self.file, sets.join(", "))
             }
         }
-        self.file.clone()
     }
 
     pub(crate) fn bad(&self, key: &str, value: impl fmt::Display, expected: &str) -> Error {
@@ -606,6 +613,17 @@ fn apply_overrides(
                 arg: shorten(&arg),
                 problem: format!(
                     "{key} is given twice (also by --set {}); expected each key once (--tolerance and --over set their keys too)",
+                    shorten(first)
+                ),
+            });
+        }
+        // a table given after a key inside it would replace (drop) that key
+        let below = |a: &str| a.starts_with(&format!("{key}.")) || a.starts_with(&format!("{key}["));
+        if let Some((inner, first)) = given.iter().find(|(k, _)| below(k)) {
+            return Err(Error::Override {
+                arg: shorten(&arg),
+                problem: format!(
+                    "it replaces the table {key}, dropping {inner} given before it by --set {}; give the table first, then the keys inside it",
                     shorten(first)
                 ),
             });
@@ -1184,7 +1202,8 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
         let c = o.number("spectrum.center_nm", c, c > 0.0, "a wavelength > 0 nm")?;
         o.wavelength("spectrum.center_nm", c);
         let r = o.require("spectrum.range_nm", s.range_nm, "a width > 0 nm")?;
-        let r = o.number("spectrum.range_nm", r, r > 0.0, "a width > 0 nm")?;
+        // in metres too: 1e-320 nm is 0 m
+        let r = o.number("spectrum.range_nm", r, r * 1e-9 > 0.0, "a width > 0 nm (at least 1e-300 nm)")?;
         let p = s.peak.unwrap_or(1.0);
         let p = o.number("spectrum.peak", p, p > 0.0 && p <= 1.0, "a transmission in (0, 1]")?;
         Ok((c * 1e-9, r * 1e-9, p))
@@ -1192,6 +1211,18 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
     Ok(match shape {
         "gaussian" => {
             let (c, r, p) = band(o)?;
+            // σ = range/(2√2) at least radiometry's 1e-10 of the centre (narrower is a line)
+            let least = 2.0 * std::f64::consts::SQRT_2 * radiometry::MIN_RELATIVE_SIGMA * c;
+            if r < least {
+                return Err(o.bad(
+                    "spectrum.range_nm",
+                    num(s.range_nm.unwrap_or(r * 1e9)),
+                    &format!(
+                        "a width of at least {:e} nm (2√2 × 1e-10 of spectrum.center_nm: no wavelength grid resolves a narrower Gaussian; use spectrum.shape = \"line\")",
+                        least * 1e9
+                    ),
+                ));
+            }
             Some(Spectrum::Gaussian(Gaussian::from_range(c, r, p).map_err(|e| o.domain("spectrum", "[spectrum]", e))?))
         }
         "tophat" => {
@@ -1259,6 +1290,17 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Several overrides reach one key: the one that gave it is blamed, not the table above it;
+    /// a table given after a key inside it (which it would drop) is refused.
+    #[test]
+    fn the_override_that_gave_a_key_is_blamed_and_none_is_dropped() {
+        let table = "spectrum={shape=\"gaussian\",center_nm=800.0,range_nm=50.0,peak=1.0}".to_owned();
+        let e = load(None, &[table.clone(), "spectrum.range_nm=-5".to_owned()]).unwrap_err().to_string();
+        assert!(e.starts_with("embedded paper scene (--set spectrum.range_nm=-5): spectrum.range_nm = -5"), "{e}");
+        let e = load(None, &["spectrum.range_nm=-5".to_owned(), table]).unwrap_err().to_string();
+        assert!(e.contains("it replaces the table spectrum, dropping spectrum.range_nm given before it by --set spectrum.range_nm=-5"), "{e}");
+    }
 
     /// The plain-number fast path reads what TOML reads, value and type, and leaves everything
     /// else to the TOML parser (which reads it as before, or not at all).
