@@ -161,7 +161,7 @@ fn bad_unknown_key_in_file() {
     let dir = scratch("unknown-key");
     let path = edited_paper(&dir, "f_number = 2.5", "f_number = 2.5\nfnumber = 2.8");
     let err = fails(&["evaluate", path.to_str().unwrap()]);
-    assert!(err.contains("scene.toml: lens.fnumber: unknown field `fnumber`, expected one of"), "{err}");
+    assert!(err.contains("scene.toml: lens.fnumber: unknown field `fnumber`: did you mean `f_number`?"), "{err}");
 }
 
 #[test]

@@ -152,7 +152,7 @@ fn segmented_lens_does_not_beat_the_chromatic_lens_over_a_broad_band() {
     let c = ChromaticMetalens::new(f_number, F0, LAMBDA0, Curve::Constant(0.5), Curve::Constant(0.8)).unwrap();
     check_lens(&seg, &band(800.0, 4.0)).unwrap();
     let nyquist = 1e5;
-    for range in [50.0, 200.0] {
+    for range in [50.0, 100.0, 200.0] {
         let detected = band(800.0, range);
         let a = optics::Polychromatic::with_pupil_samples(&seg, &detected, Field::ON_AXIS, nyquist, None, 128)
             .unwrap()
