@@ -678,6 +678,16 @@ mod tests {
         assert!((v - 106.33).abs() < 2.0, "{v}");
         let clipped = expose(&[1e4], &noise::Sensor::new(0.0, 0.0, 3000.0, 1.0, 10).unwrap(), 1).unwrap();
         assert_eq!(clipped, vec![1023.0]);
+        // a black level shifts the output, not its variance; without it a dark frame is clipped
+        // at 0 DN and its variance reads low
+        let offset = sensor.with_black_level(100.0).unwrap();
+        let (m, v) = moments(&expose(&expected, &offset, 7).unwrap());
+        assert!((m - 300.0).abs() < 0.1 && (v - 106.33).abs() < 2.0, "{m} {v}");
+        let dark = vec![0.0; n];
+        let (_, unclipped) = moments(&expose(&dark, &offset, 9).unwrap());
+        let (_, clipped) = moments(&expose(&dark, &sensor, 9).unwrap());
+        // K² σ_r² + 1/12 = 6.33 DN²; clipped at 0, about a third of that
+        assert!((unclipped - 6.333).abs() < 0.15 && clipped < 3.0, "{unclipped} {clipped}");
         // a seed gives the same frame
         assert_eq!(expose(&expected[..100], &sensor, 3).unwrap(), expose(&expected[..100], &sensor, 3).unwrap());
     }
