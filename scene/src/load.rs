@@ -184,6 +184,44 @@ pub(crate) struct Origins {
     pub preset: Option<(String, Vec<String>)>,
     /// The steps of a radiance-meter source (SI eq. S1–S6), kept for reports.
     meter: RefCell<Option<radiometry::RadianceMeterSteps>>,
+    /// The tables its source's scenes have read.
+    tables: TableCache,
+}
+
+/// The CSV tables the scenes of one [`Source`] have read, each kept while its file's size and
+/// modification time are unchanged: a sweep's points read and parse each table once (a 1601-row
+/// spectrometer table was read again at every point).
+#[derive(Clone, Debug, Default)]
+struct TableCache(std::sync::Arc<std::sync::Mutex<std::collections::HashMap<TableKey, CachedTable>>>);
+
+/// A table's file, its largest accepted value (as bits) and what it holds.
+type TableKey = (PathBuf, u64, String);
+
+#[derive(Clone, Debug)]
+struct CachedTable {
+    /// The file's modification time and length when it was read.
+    stamp: (Option<std::time::SystemTime>, u64),
+    table: radiometry::Sampled,
+    lo_nm: f64,
+    hi_nm: f64,
+}
+
+impl TableCache {
+    /// The stamp of `path` now (None when it cannot be read: then nothing is cached).
+    fn stamp(path: &Path) -> Option<(Option<std::time::SystemTime>, u64)> {
+        std::fs::metadata(path).ok().map(|m| (m.modified().ok(), m.len()))
+    }
+
+    fn get(&self, key: &TableKey, stamp: (Option<std::time::SystemTime>, u64)) -> Option<CachedTable> {
+        let map = self.0.lock().ok()?;
+        map.get(key).filter(|c| c.stamp == stamp && stamp.0.is_some()).cloned()
+    }
+
+    fn put(&self, key: TableKey, value: CachedTable) {
+        if let Ok(mut map) = self.0.lock() {
+            map.insert(key, value);
+        }
+    }
 }
 
 impl Origins {
@@ -198,6 +236,7 @@ impl Origins {
             lens,
             preset: None,
             meter: RefCell::new(None),
+            tables: self.tables.clone(),
         }
     }
 
@@ -320,11 +359,22 @@ impl Origins {
     /// The CSV table `file` given for `key`, values in `[0, hi]`.
     fn table(&self, key: &str, file: &str, hi: f64, what: &str, expected: &str) -> Result<radiometry::Sampled, Error> {
         let path = self.path(file);
-        let read = read_pairs(&path, &WAVELENGTH, 0.0, hi, what).and_then(|(nm, values)| {
-            let (lo_nm, hi_nm) = (nm[0], nm[nm.len() - 1]);
-            sampled(&path, &nm, values).map(|t| (t, lo_nm, hi_nm))
-        });
-        let (table, lo_nm, hi_nm) = read.map_err(|e| self.table_error(key, file, e, expected))?;
+        let cache_key = (path.clone(), hi.to_bits(), what.to_owned());
+        let stamp = TableCache::stamp(&path);
+        let (table, lo_nm, hi_nm) = match stamp.and_then(|s| self.tables.get(&cache_key, s)) {
+            Some(c) => (c.table, c.lo_nm, c.hi_nm),
+            None => {
+                let read = read_pairs(&path, &WAVELENGTH, 0.0, hi, what).and_then(|(nm, values)| {
+                    let (lo_nm, hi_nm) = (nm[0], nm[nm.len() - 1]);
+                    sampled(&path, &nm, values).map(|t| (t, lo_nm, hi_nm))
+                });
+                let (table, lo_nm, hi_nm) = read.map_err(|e| self.table_error(key, file, e, expected))?;
+                if let Some(stamp) = stamp {
+                    self.tables.put(cache_key, CachedTable { stamp, table: table.clone(), lo_nm, hi_nm });
+                }
+                (table, lo_nm, hi_nm)
+            }
+        };
         if hi_nm < WAVELENGTH_PLAUSIBLE_NM.0 || lo_nm > WAVELENGTH_PLAUSIBLE_NM.1 {
             let (unit, factor) = wavelength_slip(hi_nm);
             self.warn(
@@ -473,6 +523,7 @@ pub struct Source {
     label: String,
     dir: PathBuf,
     parsed: std::sync::OnceLock<Result<toml::Table, TomlFailure>>,
+    tables: TableCache,
 }
 
 impl Source {
@@ -493,7 +544,13 @@ impl Source {
 
     /// A scene given as text (`label` names it in messages; CSV paths resolve against `dir`).
     pub fn from_text(text: impl Into<String>, label: impl Into<String>, dir: impl Into<PathBuf>) -> Source {
-        Source { text: text.into(), label: label.into(), dir: dir.into(), parsed: std::sync::OnceLock::new() }
+        Source {
+            text: text.into(),
+            label: label.into(),
+            dir: dir.into(),
+            parsed: std::sync::OnceLock::new(),
+            tables: TableCache::default(),
+        }
     }
 }
 
@@ -651,6 +708,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
         lens: "lens".to_owned(),
         preset: None,
         meter: RefCell::new(None),
+        tables: source.tables.clone(),
     };
     Ok((table, origins))
 }
@@ -1290,6 +1348,31 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sweep's scenes read each CSV table once: a second build of one source takes the table
+    /// from its cache while the file's length and modification time are unchanged (here the
+    /// file is rewritten with other values of the same length and its time set back: the cached
+    /// values stay), and reads it again when they change.
+    #[test]
+    fn a_sources_tables_are_read_once_while_unchanged() {
+        let dir = std::env::temp_dir().join(format!("scene-table-cache-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let qe = dir.join("qe.csv");
+        std::fs::write(&qe, "wavelength_nm,qe\n700,0.20\n900,0.20\n").unwrap();
+        let text = include_str!("../../examples/paper-theory.toml")
+            .replace("quantum_efficiency = 0.2 ", "quantum_efficiency = \"qe.csv\" ");
+        let source = Source::from_text(text, "cached.toml", &dir);
+        let photoelectrons = |s: &Source| metric::evaluate(&build_from(s, &[]).unwrap()).unwrap().photoelectrons;
+        let first = photoelectrons(&source);
+        let time = std::fs::metadata(&qe).unwrap().modified().unwrap();
+        std::fs::write(&qe, "wavelength_nm,qe\n700,0.40\n900,0.40\n").unwrap();
+        std::fs::File::options().write(true).open(&qe).unwrap().set_modified(time).unwrap();
+        assert_eq!(photoelectrons(&source), first, "the cached table");
+        std::fs::write(&qe, "wavelength_nm,qe\n700,0.4\n900,0.4\n").unwrap();
+        let again = photoelectrons(&source);
+        assert!((again / first - 2.0).abs() < 1e-9, "{again} vs {first}: the file changed, read again");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// Several overrides reach one key: the one that gave it is blamed, not the table above it;
     /// a table given after a key inside it (which it would drop) is refused.
