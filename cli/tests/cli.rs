@@ -553,6 +553,24 @@ fn sensor_keys_saturation_warning_and_bad_values() {
     assert!(err.contains("camera.read_noise_e = -1: expected a read noise ≥ 0 e⁻ rms"), "{err}");
     let err = fails(&["evaluate", "--set", "camera.adc_bits=12"]);
     assert!(err.contains("camera.adc_bits needs camera.gain_dn_per_e too"), "{err}");
+    // the ADC's black level: below its largest output, and only with an ADC
+    let err = fails(&[
+        "evaluate",
+        "--set",
+        "camera.gain_dn_per_e=0.5",
+        "--set",
+        "camera.adc_bits=12",
+        "--set",
+        "camera.black_level_dn=5000",
+    ]);
+    assert!(
+        err.contains(
+            "camera.black_level_dn = 5000: expected a black level ≥ 0 DN and below the ADC's largest output 4095 DN"
+        ),
+        "{err}"
+    );
+    let err = fails(&["evaluate", "--set", "camera.black_level_dn=10"]);
+    assert!(err.contains("a black level needs an ADC"), "{err}");
 }
 
 #[test]
@@ -1757,6 +1775,25 @@ fn render_writes_images_whose_frames_measure_the_scenes_snr0() {
     );
     let err = fails(&["render", "--out", out, "--groups", "9:3"]);
     assert!(err.contains("--groups 9:3: USAF groups 9 to 3"), "{err}");
+    // an ADC without a black level: the dark areas clip at 0 DN, and render says so; with one
+    // (camera.black_level_dn, the scene key) it does not
+    let adc = ["--set", "camera.read_noise_e=5", "--set", "camera.gain_dn_per_e=0.5", "--set", "camera.adc_bits=12"];
+    let clipped = asnr(&[&["render", "--out", out, "--no-glare", "--target", "usaf-negative"][..], &adc[..]].concat());
+    assert!(clipped.status.success(), "{}", stderr(&clipped));
+    assert!(
+        stderr(&clipped).contains("read 0 DN") && stderr(&clipped).contains("camera.black_level_dn"),
+        "{}",
+        stderr(&clipped)
+    );
+    let offset = asnr(
+        &[
+            &["render", "--out", out, "--no-glare", "--target", "usaf-negative", "--set", "camera.black_level_dn=100"]
+                [..],
+            &adc[..],
+        ]
+        .concat(),
+    );
+    assert!(offset.status.success() && !stderr(&offset).contains("read 0 DN"), "{}", stderr(&offset));
     let err = fails(&["render", "--out", out, "--frames", "0"]);
     assert!(err.contains("--frames 0") && err.contains("1 to 1000"), "{err}");
     let err = fails(&["render", "--out", out, "--ranges=-5"]);
