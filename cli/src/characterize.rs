@@ -87,11 +87,27 @@ pub fn run(args: &CharacterizeArgs) -> Result<()> {
             );
         };
         let frames = read_stack(base, file, &what, stack)?;
+        let (f, d) = (&frames[0], &dark_frames[0]);
+        if (f.width, f.height) != (d.width, d.height) {
+            bail!(
+                "{}: {what}: {} is {} × {} pixels, but the [dark] frame {} is {} × {}; every stack of a series must have the same size",
+                file.display(),
+                f.path.display(),
+                f.width,
+                f.height,
+                d.path.display(),
+                d.width,
+                d.height
+            );
+        }
         levels.push(
             imaging::level_of(&frames, region, illumination).with_context(|| format!("{}: {what}", file.display()))?,
         );
     }
     let c = imaging::characterize(dark, &levels).with_context(|| file.display().to_string())?;
+    for warning in &c.warnings {
+        eprintln!("warning: {}: {warning}", file.display());
+    }
     if let Some(path) = &args.plot {
         let figure = crate::plot::Figure::new(args.width, args.dpi)?;
         plot(path, &figure, file, &c)?;
@@ -113,7 +129,11 @@ pub fn run(args: &CharacterizeArgs) -> Result<()> {
         c.conversion_gain,
         c.conversion_gain_sigma
     );
-    outln!("read noise          {:.3} e⁻ (σ_dark / K)", c.read_noise_e);
+    outln!(
+        "read noise          {:.3} ± {:.3} e⁻ (√(σ²_dark − 1/12 DN²) / K, EMVA 1288)",
+        c.read_noise_e,
+        c.read_noise_sigma_e
+    );
     outln!(
         "saturation          level {} (the largest variance): μ = {:.1} DN, {:.0} e⁻ above the capped black",
         c.saturation,

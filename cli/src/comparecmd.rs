@@ -34,7 +34,7 @@ pub struct CompareArgs {
     #[arg(long, value_name = "N", requires = "plot")]
     pub dpi: Option<f64>,
     /// The grid of spectral ranges searched for each design's best band, N points log-spaced
-    /// from LO to HI nm (default spectrum.range_nm=2:300:16).
+    /// from LO to HI nm (default spectrum.range_nm=2:300:16; at most 1000 points).
     #[arg(long, value_name = "spectrum.range_nm=LO:HI:N")]
     pub over: Option<String>,
     /// Worker threads (0 = all cores). The results do not depend on it.

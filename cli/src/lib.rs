@@ -239,7 +239,10 @@ pub fn run(cli: Cli) -> Result<()> {
             // validate the scene (and print its warnings) once, at the low end of the range
             let mut first = set.clone();
             first.push(optimize::assignment(&range.key, range.lo));
-            load(scene.as_deref(), &first)?;
+            let origin = [format!("--over {over}")];
+            let keys = [range.key.clone()];
+            load(scene.as_deref(), &first)
+                .map_err(|e| anyhow::anyhow!(sweep::relabel(&e.to_string(), &keys, &[range.lo], &origin)))?;
             let asnr_at = |x: f64| -> Result<f64> {
                 let mut overrides = set.clone();
                 overrides.push(optimize::assignment(&range.key, x));
@@ -261,7 +264,7 @@ pub fn run(cli: Cli) -> Result<()> {
             let figure = plot::Figure::new(width, dpi)?;
             let set = with_tolerance(set, tolerance);
             let shard = shard.as_deref().map(parse_shard).transpose()?;
-            let (ranges, design, what) = match &points {
+            let (ranges, design, what, origins) = match &points {
                 Some(path) => {
                     if plot.is_some() {
                         anyhow::bail!(
@@ -281,7 +284,9 @@ pub fn run(cli: Cli) -> Result<()> {
                             optimize::Range { key: key.clone(), lo, hi, points: Some(1) }
                         })
                         .collect::<Vec<_>>();
-                    (ranges, sweep::Design::List(file.rows), format!("--points {}", path.display()))
+                    let what = format!("--points {}", path.display());
+                    let origins = vec![what.clone(); ranges.len()];
+                    (ranges, sweep::Design::List(file.rows), what, origins)
                 }
                 None => {
                     let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
@@ -296,7 +301,8 @@ pub fn run(cli: Cli) -> Result<()> {
                         );
                     }
                     let design = sweep::Design::grid(&ranges);
-                    (ranges, design, "--over".to_owned())
+                    let origins = over.iter().map(|o| format!("--over {o}")).collect();
+                    (ranges, design, "--over".to_owned(), origins)
                 }
             };
             check_keys(&what, &set, &ranges)?;
@@ -312,11 +318,13 @@ pub fn run(cli: Cli) -> Result<()> {
             let keys: Vec<String> = ranges.iter().map(|r| r.key.clone()).collect();
             // validate the scene and the keys once before spending the grid
             let mut first = set.clone();
-            first.extend(keys.iter().zip(design.values(0)).map(|(k, v)| scene::sweep::assignment(k, v)));
-            let loaded = scene::build_with_warnings(&source, &first)?;
+            let values = design.values(0);
+            first.extend(keys.iter().zip(&values).map(|(k, v)| scene::sweep::assignment(k, *v)));
+            let loaded = scene::build_with_warnings(&source, &first)
+                .map_err(|e| anyhow::anyhow!(sweep::relabel(&e.to_string(), &keys, &values, &origins)))?;
             warn(&loaded.warnings);
             let built = loaded.scene;
-            let sweep = sweep::Sweep { source: &source, overrides: &set, keys, design };
+            let sweep = sweep::Sweep { source: &source, overrides: &set, keys, design, origins };
             if let Some((i, n)) = shard {
                 let indices: Vec<usize> = scene::sweep::shard_indices(i, n, sweep.design.len()).collect();
                 return sweep::stream(&sweep, &indices, threads, &mut std::io::stdout());
@@ -360,8 +368,15 @@ pub fn run(cli: Cli) -> Result<()> {
             if !(2..=100_000).contains(&points) {
                 anyhow::bail!("--points {points}: expected a whole number from 2 to 100000");
             }
-            if let Some(bad) = wavelengths.iter().find(|w| !(w.is_finite() && **w > 0.0)) {
-                anyhow::bail!("--wavelengths: {bad} nm: expected wavelengths > 0 nm");
+            // 1 nm to 1 mm: a wavelength of 1e-300 nm is a subnormal number of metres, whose cutoff
+            // and JSON value are not finite
+            if let Some(bad) = wavelengths.iter().find(|w| !(w.is_finite() && (1.0..=1e6).contains(*w))) {
+                let bad = if *bad != 0.0 && (bad.abs() < 1e-4 || bad.abs() >= 1e9) {
+                    format!("{bad:e}")
+                } else {
+                    bad.to_string()
+                };
+                anyhow::bail!("--wavelengths: {bad} nm: expected wavelengths from 1 nm to 1e6 nm (1 mm)");
             }
             let loaded = load(scene.as_deref(), &set)?;
             let range = if to_cutoff { metric::FrequencyRange::Cutoff } else { metric::FrequencyRange::Nyquist };

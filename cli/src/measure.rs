@@ -40,7 +40,23 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
         None
     } else {
         let paths = imaging::frames::frame_paths(&args.capped_black)?;
-        Some(paths.iter().map(|p| imaging::read_frame(p)).collect::<Result<Vec<_>, _>>()?)
+        let mut capped = Vec::new();
+        for (i, path) in paths.iter().enumerate() {
+            let frame = imaging::read_frame(path)?;
+            // each frame of the stack's size and depth, as it is read: memory stays that of a stack
+            imaging::frames::same_format(&frames[0], &frame)?;
+            if (i + 1) as u64 * (frame.width * frame.height) as u64 > imaging::frames::MAX_STACK_SAMPLES {
+                anyhow::bail!(
+                    "--capped-black: {} frames of {} × {} pixels are more than the {} grey levels a stack may hold",
+                    paths.len(),
+                    frame.width,
+                    frame.height,
+                    imaging::frames::MAX_STACK_SAMPLES
+                );
+            }
+            capped.push(frame);
+        }
+        Some(capped)
     };
     let m = imaging::measure(&frames, white, black, capped.as_deref(), args.include_glare)?;
     if args.json {
@@ -58,10 +74,10 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
     outln!("white level       {:>12.4}   DN (mean over frames and pixels)", m.white);
     outln!("black level       {:>12.4}   DN", m.black);
     outln!("signal            {:>12.4}   DN = white − black (eq. 2)", m.signal);
-    outln!("σ_w               {:>12.4}   DN (temporal sample σ per pixel, averaged)", m.sigma_white);
+    outln!("σ_w               {:>12.4}   DN (√ of the per-pixel temporal sample variance, averaged)", m.sigma_white);
     outln!("σ_b               {:>12.4}   DN", m.sigma_black);
     outln!("σ_s               {:>12.4}   DN, {noise}", m.sigma_signal);
-    outln!("SNR               {:>12.4}   signal/σ_s (eq. 4)", m.snr);
+    outln!("SNR               {:>12.4}   signal/σ_s (eq. 4), ± {:.4} (standard error)", m.snr, m.snr_sigma);
     if let (Some(c), Some(vg), Some(mo)) = (m.capped_black, m.vg, m.modulation) {
         outln!(
             "capped black      {:>12.4}   DN (mean of {} capped frames over the black region)",

@@ -103,17 +103,43 @@ pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
         }
     }
     let total = expect.unwrap_or_else(|| rows.last().map_or(0, |r| r.0 + 1));
-    if rows.len() != total || rows.last().is_some_and(|r| r.0 >= total) {
-        let present: std::collections::HashSet<usize> = rows.iter().map(|r| r.0).collect();
-        let missing: Vec<usize> = (0..total).filter(|i| !present.contains(i)).collect();
-        let beyond = rows.iter().filter(|r| r.0 >= total).count();
-        let shown: Vec<String> = missing.iter().take(8).map(ToString::to_string).collect();
+    // counted from the sorted, distinct rows: time and memory follow the rows, never `total`
+    let inside = rows.partition_point(|r| r.0 < total);
+    let beyond = rows.len() - inside;
+    let missing_count = total - inside;
+    if missing_count > 0 || beyond > 0 {
+        // the first 8 missing indices, from the gaps between the rows
+        let mut first_missing = Vec::new();
+        let mut next = 0;
+        for r in rows[..inside].iter().chain(std::iter::once(&(total, Vec::new(), 0, 0))) {
+            while next < r.0 && first_missing.len() < 8 {
+                first_missing.push(next.to_string());
+                next += 1;
+            }
+            if first_missing.len() == 8 {
+                break;
+            }
+            next = r.0 + 1;
+        }
+        let beyond_text = format!(
+            "{beyond} row(s) with an index ≥ {total} (the largest {}), beyond the {total} points{}",
+            rows.last().map_or(0, |r| r.0),
+            if expect.is_some() { " --expect gives" } else { "" }
+        );
+        // the files merged, as the message's subject
+        let mut names: Vec<String> = files.iter().take(4).map(|f| f.display().to_string()).collect();
+        if files.len() > 4 {
+            names.push(format!("… ({} files)", files.len()));
+        }
+        let names = names.join(", ");
+        if missing_count == 0 {
+            bail!("{names}: {beyond_text}: expected the shards of one sweep of {total} points");
+        }
         bail!(
-            "{} of the {total} points missing (indices {}{}){}: expected every shard of the sweep, complete",
-            missing.len(),
-            shown.join(", "),
-            if missing.len() > 8 { ", …" } else { "" },
-            if beyond > 0 { format!(", and {beyond} rows with an index ≥ {total}") } else { String::new() }
+            "{names}: {missing_count} of the {total} points missing (indices {}{}){}: expected every shard of the sweep, complete",
+            first_missing.join(", "),
+            if missing_count > first_missing.len() { ", …" } else { "" },
+            if beyond > 0 { format!(", and {beyond_text}") } else { String::new() }
         );
     }
     let mut out = String::new();
@@ -126,4 +152,36 @@ pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
         out.push('\n');
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shard(name: &str, text: &str) -> PathBuf {
+        let path = std::env::temp_dir().join(format!("asnr-merge-{}-{name}.csv", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    /// A huge `--expect` or index is counted from the rows, not enumerated (the merge used to
+    /// list 0 … N − 1: 1e14 indices), and the message does not contradict itself.
+    #[test]
+    fn huge_expect_and_index_are_counted_not_enumerated() {
+        let file = shard("huge", "index,a\n0,x\n2,y\n100000000000,z\n");
+        let e = merge(std::slice::from_ref(&file), Some(100_000_000_000_000)).unwrap_err().to_string();
+        assert!(
+            e.contains("99999999999997 of the 100000000000000 points missing (indices 1, 3, 4, 5, 6, 7, 8, 9, …)"),
+            "{e}"
+        );
+        let e = merge(std::slice::from_ref(&file), None).unwrap_err().to_string();
+        assert!(e.contains("99999999998 of the 100000000001 points missing (indices 1, 3, 4"), "{e}");
+        // every point present but some beyond --expect: no "0 of … missing"
+        let file = shard("beyond", "index,a\n0,x\n1,y\n2,z\n");
+        let e = merge(std::slice::from_ref(&file), Some(2)).unwrap_err().to_string();
+        assert!(!e.contains("missing") && e.contains("1 row(s) with an index ≥ 2 (the largest 2)"), "{e}");
+        let e = merge(std::slice::from_ref(&file), Some(5)).unwrap_err().to_string();
+        assert!(e.contains("2 of the 5 points missing (indices 3, 4)"), "{e}");
+        assert_eq!(merge(std::slice::from_ref(&file), Some(3)).unwrap(), "a\nx\ny\nz\n");
+    }
 }

@@ -371,6 +371,17 @@ fn cell_edges(centres: &[f64]) -> Vec<f64> {
     }
 }
 
+/// Refuses an axis whose ends or span are not finite (values near the largest double, whose
+/// padded range overflows): its ticks could not be placed (plotters looped for ever on them).
+fn drawable(axis: &str, (lo, hi): (f64, f64)) -> Result<(), String> {
+    if lo.is_finite() && hi.is_finite() && (hi - lo).is_finite() {
+        return Ok(());
+    }
+    Err(format!(
+        "the {axis} axis would run from {lo:e} to {hi:e}, a span beyond the largest number (about 1.8e308); expected values whose range, with the axis' margin, is finite (below about 1e307)"
+    ))
+}
+
 /// `(lo, hi)` of finite values, `(0, 1)` for none.
 fn extent(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
@@ -436,6 +447,10 @@ impl TickFormat {
 
 /// The tick values plotters draws on `lo..hi` for at most `n` labels.
 fn ticks((lo, hi): (f64, f64), n: usize) -> Vec<f64> {
+    // plotters loops for ever on a span that is not finite (axes are checked by `drawable`)
+    if !(hi - lo).is_finite() {
+        return Vec::new();
+    }
     RangedCoordf64::from(lo..hi).key_points(n)
 }
 
@@ -895,6 +910,8 @@ impl Axes<'_> {
     where
         DB::ErrorType: 'static,
     {
+        drawable("x", self.x)?;
+        drawable("y", self.y)?;
         let (w, h) = area.dim_in_pixel();
         let (w, h) = (i32::try_from(w).unwrap_or(i32::MAX), i32::try_from(h).unwrap_or(i32::MAX));
         let m0 = self.margins(ctx, (w, h), right_extra);
@@ -988,6 +1005,10 @@ impl Axes<'_> {
 /// Draws the SVG or PNG of `plot` into `path` (by its extension); errors name `flag`.
 fn render<P: Plot>(flag: &str, path: &Path, figure: &Figure, plot: &P) -> Result<()> {
     let err = |e: &dyn std::fmt::Display| anyhow!("{flag} {}: {e}", path.display());
+    // before any drawing: the folder the file goes in (the system's "No such file" named neither)
+    if let Some(folder) = path.parent().filter(|f| !f.as_os_str().is_empty() && !f.is_dir()) {
+        bail!("{flag} {}: the folder {} does not exist; create it first", path.display(), folder.display());
+    }
     register_font();
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("svg") => std::fs::write(path, svg(figure, plot).map_err(|e| err(&e))?).map_err(|e| err(&e)),
@@ -1491,6 +1512,7 @@ impl Plot for HeatmapPlot<'_> {
         let (ex, ey) = (cell_edges(&grid.xs), cell_edges(&grid.ys));
         let ny = grid.ys.len();
         let (lo, hi) = self.range();
+        drawable("colour bar", (lo, hi))?;
         let span = hi - lo;
         let (x0, x1, y0, y1) = (ex[0], ex[ex.len() - 1], ey[0], ey[ey.len() - 1]);
         // the colour bar's room on the right: gap, bar, ticks, labels, description

@@ -141,6 +141,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     for (range, scene) in ranges.iter().zip(&scenes) {
         let evaluation = metric::evaluate(scene).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
         let rendering = imaging::render(scene, &evaluation, &object, &settings)?;
+        // an ADC without a black level clips the dark noise at 0 DN (EMVA 1288's offset is missing)
+        if rendering.dn_per_e.is_some() {
+            let frame = &rendering.frames[0];
+            let zeros = frame.iter().filter(|&&v| v == 0.0).count() as f64 / frame.len() as f64;
+            if zeros > 0.01 && scene.camera().sensor().black_level_dn() == 0.0 {
+                eprintln!(
+                    "warning: {:.1} % of the pixels read 0 DN: the ADC clips the dark noise there (no black level), so dark frames measure low noise; set camera.black_level_dn to a few σ of the dark noise in DN",
+                    100.0 * zeros
+                );
+            }
+        }
         let tag = range.map_or("scene".to_owned(), |r| format!("{}nm", crate::plot::number(r)));
         let (files, png16_per_e) = write_images(&args.out, &tag, &rendering)?;
         for b in &rendering.bars {
@@ -325,7 +336,12 @@ fn make_target(args: &RenderArgs, pitch: f64, nyquist_cyc_per_mm: f64) -> Result
             })?
         }
     };
-    Ok(target::usaf(pitch, groups, polarity, args.oversample)?)
+    let given =
+        args.groups.as_deref().map_or_else(|| format!("{}:{} (the default)", groups.0, groups.1), str::to_owned);
+    target::usaf(pitch, groups, polarity, args.oversample).map_err(|e| match e {
+        imaging::Error::Render { message } => anyhow::anyhow!("--groups {given}: {message}"),
+        e => e.into(),
+    })
 }
 
 /// 8-bit display levels of an image in units of `per_e` per e⁻: 0 e⁻ → 0, the white area's

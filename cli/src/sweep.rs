@@ -63,6 +63,19 @@ pub struct Sweep<'a> {
     pub keys: Vec<String>,
     /// Their points.
     pub design: Design,
+    /// How each key was given (`--over KEY=LO:HI:N`, `--points FILE`), for the messages.
+    pub origins: Vec<String>,
+}
+
+/// `message` with each swept key's `(--set KEY=V)` origin renamed to the option that gave it,
+/// `origins[i]` for `keys[i]` (the scene loader sees a point's values as overrides).
+pub fn relabel(message: &str, keys: &[String], values: &[f64], origins: &[String]) -> String {
+    let mut out = message.to_owned();
+    for ((k, v), origin) in keys.iter().zip(values).zip(origins) {
+        let assignment = scene::sweep::assignment(k, *v);
+        out = out.replace(&format!("--set {assignment}"), &format!("{origin} at {assignment}"));
+    }
+    out
 }
 
 impl Sweep<'_> {
@@ -71,7 +84,8 @@ impl Sweep<'_> {
         let values = self.design.values(index);
         evaluate_point(self.source, self.overrides, &self.keys, &values).map_err(|e: PointError| {
             let at: Vec<String> = self.keys.iter().zip(&values).map(|(k, v)| format!("{k}={v}")).collect();
-            anyhow!(e).context(format!("at sweep point {} (index {index})", at.join(", ")))
+            anyhow!(relabel(&e.to_string(), &self.keys, &values, &self.origins))
+                .context(format!("at sweep point {} (index {index})", at.join(", ")))
         })
     }
 }

@@ -578,3 +578,29 @@ fn width_and_dpi_set_the_png_size_its_resolution_and_the_text_size() {
     let run = asnr(&["mtf", "--width", "1000"]);
     assert!(!run.status.success() && stderr(&run).contains("--plot"), "{}", stderr(&run));
 }
+
+/// Values near the largest double: the padded axis overflows; the plot is refused naming the
+/// axis and its ends (plotters looped for ever placing the ticks), never hangs; a heatmap whose
+/// values span more than the largest double likewise.
+#[test]
+fn values_near_the_largest_double_are_refused_not_hung() {
+    let dir = scratch("huge");
+    let lines = file(&dir, "huge.csv", "a,b\n1,1.7e308\n2,1.79e308\n");
+    let out = dir.join("huge.svg");
+    let err = fails(&["plot", &lines, "--x", "a", "--y", "b", "-o", out.to_str().unwrap()]);
+    assert!(err.contains("the y axis would run from 0e0 to inf"), "{err}");
+    let grid = file(&dir, "grid.csv", "a,b,c\n1,1,-1.7e308\n1,2,1.7e308\n2,1,0\n2,2,1\n");
+    let err = fails(&["plot", &grid, "--x", "a", "--y", "b", "--z", "c", "-o", out.to_str().unwrap()]);
+    assert!(err.contains("axis would run from"), "{err}");
+}
+
+/// A --plot or --output file in a folder that does not exist: the folder is named (the system's
+/// "No such file or directory" named neither).
+#[test]
+fn a_missing_output_folder_is_named() {
+    let err = fails(&["mtf", "--plot", "/nonexistent-folder/sub/mtf.svg"]);
+    assert!(
+        err.contains("--plot /nonexistent-folder/sub/mtf.svg: the folder /nonexistent-folder/sub does not exist"),
+        "{err}"
+    );
+}

@@ -39,6 +39,32 @@ pub enum Error {
         /// The first frame's height.
         first_height: usize,
     },
+    /// Frames of different bit depths in one stack (or between a stack and its capped black).
+    #[error("{}: {bits}-bit, but {} is {first_bits}-bit; every frame of a stack must have the same bit depth (the grey levels of 8- and 16-bit files are on different scales)", path.display(), first.display())]
+    DepthMismatch {
+        /// The frame that differs.
+        path: PathBuf,
+        /// Its bits per sample.
+        bits: u8,
+        /// The stack's first frame.
+        first: PathBuf,
+        /// The first frame's bits per sample.
+        first_bits: u8,
+    },
+    /// A file whose header asks for more pixels than a frame may have.
+    #[error("{}: {width} × {height} pixels ({pixels} in all) is more than the {limit} pixels a {what} may have", path.display(), pixels = *width as u64 * *height as u64)]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its width, from its header.
+        width: u32,
+        /// Its height, from its header.
+        height: u32,
+        /// The most pixels accepted.
+        limit: u64,
+        /// `frame`, `target image` or `stack`.
+        what: &'static str,
+    },
     /// Fewer frames than a temporal standard deviation needs.
     #[error(
         "{what}: {frames} frame(s); at least 2 are needed for a temporal standard deviation (the paper grabbed 30)"

@@ -38,8 +38,13 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
         return read_tiff(path);
     }
     let read = |message: String| Error::Read { path: path.to_owned(), message };
+    // the size from the header's bytes, before the decoder allocates anything for it
+    let (w, h) = png_dimensions(path)?;
+    check_pixels(path, w, h, MAX_FRAME_PIXELS, "frame")?;
     let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    // the decoder's own limit, raised to a 16-bit frame of the largest size accepted
+    let limits = png::Limits { bytes: 2 * MAX_FRAME_PIXELS as usize + (1 << 20) };
+    let mut decoder = png::Decoder::new_with_limits(std::io::BufReader::new(file), limits);
     // low bit depths to 8 bits; palettes would become RGB and are refused below
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| read(format!("not a PNG frame ({e})")))?;
@@ -61,6 +66,34 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
     }
     let bit_depth = if depth == png::BitDepth::Sixteen { 16 } else { 8 };
     Ok(Frame { path: path.to_owned(), width, height, bit_depth, data })
+}
+
+/// The width and height a PNG file's header gives, read from its first 24 bytes (the signature
+/// and the IHDR chunk, which the PNG standard puts first) without decoding anything.
+///
+/// # Errors
+/// [`Error::Read`] when the file cannot be opened or does not start with a PNG signature and
+/// its IHDR chunk.
+pub fn png_dimensions(path: &Path) -> Result<(u32, u32), Error> {
+    use std::io::Read as _;
+    let read = |message: String| Error::Read { path: path.to_owned(), message };
+    let mut file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
+    let mut head = [0u8; 24];
+    let mut got = 0;
+    while got < head.len() {
+        match file.read(&mut head[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) => return Err(read(e.to_string())),
+        }
+    }
+    if got < head.len() || head[..8] != *b"\x89PNG\r\n\x1a\n" || head[12..16] != *b"IHDR" {
+        return Err(read(format!(
+            "not a PNG ({got} bytes of the 24 of a PNG signature and IHDR header were found, or they differ)"
+        )));
+    }
+    let word = |i: usize| u32::from_be_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]);
+    Ok((word(16), word(20)))
 }
 
 /// Writes a grayscale PNG of `width × height` grey levels (row-major from the top-left), 8-bit
@@ -105,6 +138,7 @@ fn read_tiff(path: &Path) -> Result<Frame, Error> {
         other => return Err(Error::NotGrayscale { path: path.to_owned(), color: format!("{other:?}").to_lowercase() }),
     };
     let (width, height) = decoder.dimensions().map_err(|e| read(format!("cannot decode ({e})")))?;
+    check_pixels(path, width, height, MAX_FRAME_PIXELS, "frame")?;
     let data: Vec<f64> = match decoder.read_image().map_err(|e| read(format!("cannot decode ({e})")))? {
         DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
         DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
@@ -184,27 +218,30 @@ pub fn frame_paths(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
     Ok(out)
 }
 
-/// Reads a stack: every frame of `inputs` ([`frame_paths`]), all of the first one's size, at
-/// least two (`what` names the stack in the messages).
+/// Reads a stack: every frame of `inputs` ([`frame_paths`]), all of the first one's size and bit
+/// depth, at least two (`what` names the stack in the messages), at most [`MAX_STACK_SAMPLES`]
+/// grey levels in all.
 ///
 /// # Errors
-/// Those of [`frame_paths`] and [`read_frame`], [`Error::SizeMismatch`] and
-/// [`Error::TooFewFrames`].
+/// Those of [`frame_paths`] and [`read_frame`], [`Error::SizeMismatch`],
+/// [`Error::DepthMismatch`], [`Error::TooLarge`] and [`Error::TooFewFrames`].
 pub fn read_stack(what: &'static str, inputs: &[PathBuf]) -> Result<Vec<Frame>, Error> {
     let paths = frame_paths(inputs)?;
-    let mut frames: Vec<Frame> = Vec::with_capacity(paths.len());
+    let mut frames: Vec<Frame> = Vec::with_capacity(paths.len().min(1024));
+    let mut samples = 0_u64;
     for path in &paths {
         let frame = read_frame(path)?;
-        if let Some(first) = frames.first()
-            && (first.width, first.height) != (frame.width, frame.height)
-        {
-            return Err(Error::SizeMismatch {
+        if let Some(first) = frames.first() {
+            same_format(first, &frame)?;
+        }
+        samples += (frame.width * frame.height) as u64;
+        if samples > MAX_STACK_SAMPLES {
+            return Err(Error::TooLarge {
                 path: frame.path,
-                width: frame.width,
-                height: frame.height,
-                first: first.path.clone(),
-                first_width: first.width,
-                first_height: first.height,
+                width: frame.width as u32,
+                height: frame.height as u32,
+                limit: MAX_STACK_SAMPLES,
+                what: "stack (all its frames together)",
             });
         }
         frames.push(frame);
@@ -213,4 +250,46 @@ pub fn read_stack(what: &'static str, inputs: &[PathBuf]) -> Result<Vec<Frame>, 
         return Err(Error::TooFewFrames { what, frames: frames.len() });
     }
     Ok(frames)
+}
+
+/// The grey levels a stack may hold in all, 2²⁸ (2 GiB of `f64`): e.g. 30 frames of 8.9
+/// megapixels.
+pub const MAX_STACK_SAMPLES: u64 = 1 << 28;
+
+/// The pixels a frame may have, 2²⁶ (67 megapixels, 512 MiB of `f64`), checked from the file's
+/// header before anything is decoded.
+pub const MAX_FRAME_PIXELS: u64 = 1 << 26;
+
+/// Checks that `frame` has `first`'s size and bit depth.
+///
+/// # Errors
+/// [`Error::SizeMismatch`] or [`Error::DepthMismatch`], naming both files.
+pub fn same_format(first: &Frame, frame: &Frame) -> Result<(), Error> {
+    if (first.width, first.height) != (frame.width, frame.height) {
+        return Err(Error::SizeMismatch {
+            path: frame.path.clone(),
+            width: frame.width,
+            height: frame.height,
+            first: first.path.clone(),
+            first_width: first.width,
+            first_height: first.height,
+        });
+    }
+    if first.bit_depth != frame.bit_depth {
+        return Err(Error::DepthMismatch {
+            path: frame.path.clone(),
+            bits: frame.bit_depth,
+            first: first.path.clone(),
+            first_bits: first.bit_depth,
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a header of more than `limit` pixels, before any decoding.
+pub(crate) fn check_pixels(path: &Path, width: u32, height: u32, limit: u64, what: &'static str) -> Result<(), Error> {
+    if u64::from(width) * u64::from(height) > limit {
+        return Err(Error::TooLarge { path: path.to_owned(), width, height, limit, what });
+    }
+    Ok(())
 }

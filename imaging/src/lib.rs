@@ -24,7 +24,7 @@ pub mod measure;
 pub mod render;
 pub mod target;
 
-pub use characterize::{Characterization, Fit, Level, characterize, fit_line, level_of};
+pub use characterize::{Characterization, Fit, Level, characterize, fit_line, fit_line_weighted, level_of};
 pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack, write_png};
 pub use measure::{Measurement, Region, measure};

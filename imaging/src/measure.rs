@@ -44,16 +44,18 @@ impl Region {
 
     /// Checks that the region lies inside frames of `width × height` pixels.
     pub(crate) fn check(&self, name: &'static str, width: usize, height: usize) -> Result<(), Error> {
-        if self.x + self.width > width || self.y + self.height > height {
+        // in u128: x + w cannot wrap around
+        let (right, bottom) = (self.x as u128 + self.width as u128, self.y as u128 + self.height as u128);
+        if right > width as u128 || bottom > height as u128 {
             return Err(Error::Region {
                 name,
                 text: format!("{},{},{},{}", self.x, self.y, self.width, self.height),
                 message: format!(
                     "reaches column {} and row {}, outside the {width} × {height} frames (columns 0…{}, rows 0…{})",
-                    self.x + self.width - 1,
-                    self.y + self.height - 1,
-                    width - 1,
-                    height - 1
+                    right - 1,
+                    bottom - 1,
+                    width.saturating_sub(1),
+                    height.saturating_sub(1)
                 ),
             });
         }
@@ -85,7 +87,8 @@ pub struct Measurement {
     pub black: f64,
     /// Signal = white − black (eq. 2).
     pub signal: f64,
-    /// σ_w: the per-pixel temporal sample σ, averaged over the white pixels.
+    /// σ_w: √ of the per-pixel temporal sample variance averaged over the white pixels (variances
+    /// averaged: unbiased, EMVA 1288; see `noise::measured_snr_regions`).
     pub sigma_white: f64,
     /// σ_b: the same over the black pixels.
     pub sigma_black: f64,
@@ -93,6 +96,8 @@ pub struct Measurement {
     pub sigma_signal: f64,
     /// SNR = signal/σ_s (eq. 4), with the σ_s above.
     pub snr: f64,
+    /// The standard error of the SNR (the frames' temporal noise; `noise::measured_snr_regions`).
+    pub snr_sigma: f64,
     /// Whether σ_s = σ_w (glare and camera noise counted: the SI's glare-inclusive SNR).
     pub include_glare: bool,
     /// The capped-black level (mean of the capped-black frames over the black region), when given.
@@ -118,7 +123,7 @@ pub struct Pixels {
 ///
 /// # Errors
 /// [`Error::Region`] for a region outside the frames, [`Error::TooFewFrames`],
-/// [`Error::SizeMismatch`] between the stacks, [`Error::Statistics`] (no signal: white not
+/// [`Error::SizeMismatch`] or [`Error::DepthMismatch`] between any two frames, [`Error::Statistics`] (no signal: white not
 /// above black; no signal noise: σ_w ≤ σ_b), [`Error::CappedBlack`] for a capped black not
 /// below both levels.
 pub fn measure(
@@ -132,26 +137,25 @@ pub fn measure(
     if frames.len() < 2 {
         return Err(Error::TooFewFrames { what: "frames", frames: frames.len() });
     }
+    for f in &frames[1..] {
+        crate::frames::same_format(first, f)?;
+    }
     white.check("white", first.width, first.height)?;
     black.check("black", first.width, first.height)?;
     let stats = noise::measured_snr_regions(&white.series(frames), &black.series(frames))?;
-    let (sigma_signal, snr) =
-        if include_glare { (stats.white_sigma, stats.snr_with_glare) } else { (stats.signal_sigma, stats.snr) };
+    let (sigma_signal, snr, snr_sigma) = if include_glare {
+        (stats.white_sigma, stats.snr_with_glare, stats.snr_with_glare_sigma)
+    } else {
+        (stats.signal_sigma, stats.snr, stats.snr_sigma)
+    };
     let (capped_black, vg, modulation) = match capped {
         None => (None, None, None),
         Some(capped) => {
-            let Some(c0) = capped.first() else {
+            if capped.is_empty() {
                 return Err(Error::TooFewFrames { what: "capped-black frames", frames: 0 });
-            };
-            if (c0.width, c0.height) != (first.width, first.height) {
-                return Err(Error::SizeMismatch {
-                    path: c0.path.clone(),
-                    width: c0.width,
-                    height: c0.height,
-                    first: first.path.clone(),
-                    first_width: first.width,
-                    first_height: first.height,
-                });
+            }
+            for c in capped {
+                crate::frames::same_format(first, c)?;
             }
             let series = black.series(capped);
             let level = series.iter().flatten().sum::<f64>() / (series.len() * capped.len()) as f64;
@@ -174,6 +178,7 @@ pub fn measure(
         sigma_black: stats.black_sigma,
         sigma_signal,
         snr,
+        snr_sigma,
         include_glare,
         capped_black,
         vg,

@@ -9,8 +9,9 @@
 //! 3. **Optics.** The image is `N · (o ⊛ PSF)`: on the fine grid, the object's spectrum times the
 //!    scene's polychromatic OTF ([`transfer`]: the signed, complex sum over wavelengths with the
 //!    photoelectron weights, each wavelength at its own `s = ν λ F#`, at the scene's field and
-//!    pupil; docs/physics.md, "Polychromatic OTF"). The image is periodic (a circular
-//!    convolution): targets keep a uniform margin.
+//!    pupil; docs/physics.md, "Polychromatic OTF"). The product of spectra is a circular
+//!    convolution: the object is padded to twice its size by repeating its edge cells, so no
+//!    light wraps from one edge onto the opposite one (for PSFs up to half the image wide).
 //! 4. **Pixels.** Each pixel reads the fine cell at its centre, or, when the camera applies the
 //!    pixel MTF (`camera.pixel_mtf`), the mean of its `S × S` cells (pixel integration, whose
 //!    transfer is the pixel MTF sampled on the fine grid).
@@ -177,6 +178,19 @@ fn signed(k: usize, n: usize) -> f64 {
 /// # Errors
 /// [`Error::Scene`] when the scene's optics cannot be evaluated.
 pub fn transfer(scene: &metric::Scene, nx: usize, ny: usize, spacing_m: f64) -> Result<Transfer, Error> {
+    transfer_sampled(scene, nx, ny, spacing_m, nx.max(ny))
+}
+
+/// [`transfer`] with the radial samples an eighth of the frequency step of a grid of `sampled`
+/// cells a side (a padded grid keeps the sampling of the image it pads: the OTF is no less
+/// smooth for the padding).
+fn transfer_sampled(
+    scene: &metric::Scene,
+    nx: usize,
+    ny: usize,
+    spacing_m: f64,
+    sampled: usize,
+) -> Result<Transfer, Error> {
     let lens = scene.lens();
     let detected = metric::detected_spectrum(scene);
     let field = scene.field();
@@ -185,7 +199,7 @@ pub fn transfer(scene: &metric::Scene, nx: usize, ny: usize, spacing_m: f64) -> 
     let cutoff = optics::highest_cutoff(lens, &detected).map_err(optics_error)?;
     let corner = 0.5 / spacing_m * SQRT_2;
     let reach = corner.min(cutoff);
-    let step = 1.0 / (RADIAL_PER_STEP * nx.max(ny) as f64 * spacing_m);
+    let step = 1.0 / (RADIAL_PER_STEP * sampled as f64 * spacing_m);
     let radii = (reach / step).ceil() as usize + 3;
     let probe = Polychromatic::with_settings(lens, &detected, field, reach, None, settings).map_err(optics_error)?;
     let dependent = probe.direction_dependent();
@@ -423,14 +437,25 @@ pub fn render(
     let s = target.oversample;
     let (fw, fh) = (target.fine_width(), target.fine_height());
     let (w, h) = (target.width, target.height);
-    let otf = transfer(scene, fw, fh, pitch / s as f64)?;
-    // 3. the image on the fine grid, relative to a white area
-    let fine_fft = Fft2::new(fw, fh);
-    let mut spectrum = fine_fft.forward(&target.fine);
+    // 3. the image on the fine grid, relative to a white area: the object padded to twice its
+    // size by repeating its edge cells, so that the convolution (a product of spectra, periodic)
+    // does not wrap light from one edge onto the opposite one (PSFs up to half the image wide)
+    let (pw, ph) = (2 * fw, 2 * fh);
+    let (ox, oy) = (fw / 2, fh / 2);
+    let otf = transfer_sampled(scene, pw, ph, pitch / s as f64, fw.max(fh))?;
+    let padded: Vec<f64> = (0..pw * ph)
+        .map(|i| {
+            let (x, y) = ((i % pw).saturating_sub(ox).min(fw - 1), (i / pw).saturating_sub(oy).min(fh - 1));
+            target.fine[y * fw + x]
+        })
+        .collect();
+    let fine_fft = Fft2::new(pw, ph);
+    let mut spectrum = fine_fft.forward(&padded);
     for (v, t) in spectrum.iter_mut().zip(&otf.values) {
         *v *= t;
     }
-    let blurred = fine_fft.inverse(spectrum);
+    let blurred_padded = fine_fft.inverse(spectrum);
+    let blurred: Vec<f64> = (0..fw * fh).map(|i| blurred_padded[(i / fw + oy) * pw + i % fw + ox]).collect();
     // 4. pixels: the centre cell, or the mean of the pixel's cells
     let integrate = camera.pixel_mtf();
     let c = s / 2;
@@ -461,7 +486,9 @@ pub fn render(
         .map(|i| expose(&expected_e, sensor, settings.seed.wrapping_add(i as u64)))
         .collect::<Result<Vec<_>, _>>()?;
     let dn_per_e = sensor.gain_dn_per_e();
-    let to_electrons = |frame: &[f64]| -> Vec<f64> { frame.iter().map(|v| dn_per_e.map_or(*v, |k| v / k)).collect() };
+    let offset = sensor.black_level_dn();
+    let to_electrons =
+        |frame: &[f64]| -> Vec<f64> { frame.iter().map(|v| dn_per_e.map_or(*v, |k| (v - offset) / k)).collect() };
     // 7. Wiener restoration on the pixel grid, G = H*/(|H|² + NSR)
     let mean_level = expected_e.iter().sum::<f64>() / expected_e.len() as f64;
     let variance = mean_level + sensor.read_noise_e().powi(2) + sensor.quantization_variance_e2();
@@ -471,8 +498,9 @@ pub fn render(
     let filter: Vec<Complex64> = (0..h * hw)
         .map(|index| {
             let (kx, ky) = (index % hw, index / hw);
-            let fine_ky = if ky <= h / 2 { ky } else { fh - (h - ky) };
-            let mut t = otf.at(kx, fine_ky);
+            // the pixel grid's bin k is the padded fine grid's bin 2k (its frequency k/(w p))
+            let fine_ky = if ky <= h / 2 { 2 * ky } else { ph - 2 * (h - ky) };
+            let mut t = otf.at(2 * kx, fine_ky);
             if integrate {
                 t *= box_factor(kx, w, s) * box_factor(if ky <= h / 2 { ky } else { h - ky }, h, s);
             }
@@ -574,6 +602,7 @@ pub fn expose(expected_e: &[f64], sensor: &noise::Sensor, seed: u64) -> Result<V
         .map_err(|e| Error::Render { message: format!("read noise {}: {e}", sensor.read_noise_e()) })?;
     let full_well = sensor.full_well_e();
     let adc = sensor.gain_dn_per_e().zip(sensor.adc_bits());
+    let offset = sensor.black_level_dn();
     expected_e
         .iter()
         .map(|&mean| {
@@ -586,7 +615,7 @@ pub fn expose(expected_e: &[f64], sensor: &noise::Sensor, seed: u64) -> Result<V
             };
             let charge = shot.min(full_well) + read.sample(&mut rng);
             Ok(match adc {
-                Some((k, bits)) => (k * charge).round().clamp(0.0, ((1_u64 << bits) - 1) as f64),
+                Some((k, bits)) => (k * charge + offset).round().clamp(0.0, ((1_u64 << bits) - 1) as f64),
                 None => charge,
             })
         })
@@ -649,6 +678,16 @@ mod tests {
         assert!((v - 106.33).abs() < 2.0, "{v}");
         let clipped = expose(&[1e4], &noise::Sensor::new(0.0, 0.0, 3000.0, 1.0, 10).unwrap(), 1).unwrap();
         assert_eq!(clipped, vec![1023.0]);
+        // a black level shifts the output, not its variance; without it a dark frame is clipped
+        // at 0 DN and its variance reads low
+        let offset = sensor.with_black_level(100.0).unwrap();
+        let (m, v) = moments(&expose(&expected, &offset, 7).unwrap());
+        assert!((m - 300.0).abs() < 0.1 && (v - 106.33).abs() < 2.0, "{m} {v}");
+        let dark = vec![0.0; n];
+        let (_, unclipped) = moments(&expose(&dark, &offset, 9).unwrap());
+        let (_, clipped) = moments(&expose(&dark, &sensor, 9).unwrap());
+        // K² σ_r² + 1/12 = 6.33 DN²; clipped at 0, about a third of that
+        assert!((unclipped - 6.333).abs() < 0.15 && clipped < 3.0, "{unclipped} {clipped}");
         // a seed gives the same frame
         assert_eq!(expose(&expected[..100], &sensor, 3).unwrap(), expose(&expected[..100], &sensor, 3).unwrap());
     }

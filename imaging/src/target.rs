@@ -211,7 +211,15 @@ pub fn usaf(pitch_m: f64, groups: (i32, i32), polarity: Polarity, oversample: us
     let width = (sx + side + margin).ceil() as usize;
     let height = (height.max(black_y + side) + margin).ceil() as usize;
     let (width, height) = (width + width % 2, height + height % 2);
-    check_side(width * oversample, height * oversample)?;
+    if width.max(height) * oversample > MAX_FINE_SIDE {
+        return Err(Error::Render {
+            message: format!(
+                "USAF groups {first} to {last} make a {width} × {height} pixel target, a {} × {} fine grid at {oversample} cells a pixel, beyond {MAX_FINE_SIDE} cells a side: draw fewer groups, from a higher first group (finer bars), or lower the oversampling",
+                width * oversample,
+                height * oversample
+            ),
+        });
+    }
     let (ground, ink) = match polarity {
         Polarity::Positive => (1.0, 0.0),
         Polarity::Negative => (0.0, 1.0),
@@ -260,6 +268,19 @@ pub fn usaf(pitch_m: f64, groups: (i32, i32), polarity: Polarity, oversample: us
 /// or an image too large.
 pub fn from_png(path: &Path, oversample: usize) -> Result<Target, Error> {
     check_oversample(oversample)?;
+    // the size from the header, before the image is decoded
+    let (w, h) = crate::frames::png_dimensions(path)?;
+    let (w, h) = (w as usize, h as usize);
+    if w.max(h).saturating_mul(oversample) > MAX_FINE_SIDE {
+        return Err(Error::Render {
+            message: format!(
+                "{}: {w} × {h} pixels need a {} × {} fine grid at {oversample} cells a pixel, beyond {MAX_FINE_SIDE} cells a side: lower the oversampling or use a smaller image",
+                path.display(),
+                w.saturating_mul(oversample),
+                h.saturating_mul(oversample)
+            ),
+        });
+    }
     let frame = crate::read_frame(path)?;
     let full = if frame.bit_depth == 16 { 65535.0 } else { 255.0 };
     let (width, height) = (frame.width, frame.height);

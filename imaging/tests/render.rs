@@ -137,3 +137,35 @@ fn rendered_frames_measured_recover_the_scenes_snr0() {
         assert!((m.signal / r.signal_e - 1.0).abs() < 0.01, "signal {} against N {}", m.signal, r.signal_e);
     }
 }
+
+/// The convolution does not wrap around: with a white strip along the right edge, the
+/// noise-free level at the left edge is the one of the same scene on a canvas 40 pixels wider to
+/// the left (where the strip is far), within 1e-3 of N (the PSF's diffraction tails reach that
+/// far for real). The circular convolution put the strip's blur (8 pixels at 50 nm) there.
+#[test]
+fn light_does_not_wrap_from_one_edge_to_the_other() {
+    let scene = paper(&["spectrum.range_nm=50"]);
+    let evaluation = metric::evaluate(&scene).unwrap();
+    let (w, h, s) = (40, 12, 3);
+    let target = |extra: usize| imaging::Target {
+        width: w + extra,
+        height: h,
+        oversample: s,
+        fine: (0..(w + extra) * s * h * s)
+            .map(|i| if i % ((w + extra) * s) >= (w + extra - 4) * s { 1.0 } else { 0.05 })
+            .collect(),
+        bars: Vec::new(),
+        white: None,
+        black: None,
+        description: "strip".to_owned(),
+    };
+    let settings = Settings { seed: 1, frames: 1, glare: false, subtract_black: false };
+    let near = render(&scene, &evaluation, &target(0), &settings).unwrap();
+    let far = render(&scene, &evaluation, &target(40), &settings).unwrap();
+    let n = evaluation.photoelectrons;
+    for y in 0..h {
+        let (a, b) = (near.expected_e[y * w], far.expected_e[y * (w + 40) + 40]);
+        eprintln!("row {y}: {a} on the canvas, {b} on the wider one (N = {n})");
+        assert!((a - b).abs() < 1e-3 * n, "row {y}: {a} on the canvas, {b} on the wider one (N = {n})");
+    }
+}

@@ -242,6 +242,11 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             "the detected spectral integral ∫ L η λ τ1 dλ",
             format!("the radiance (source.radiance_w_m2_sr_nm, source.scale or the source table) is too large: it exceeds {:e}", f64::MAX),
         ),
+        // terms that overflow to ∞ − ∞: too much light or too wide a band, not none
+        optics::Error::NoSignal { total } if total.is_nan() => overflow(
+            "the detected spectral integral ∫ L η λ τ1 dλ",
+            "its terms overflow (NaN): the spectrum (spectrum.range_nm, spectrum.center_nm or the tables) reaches too far, or the radiance is too large".to_owned(),
+        ),
         optics::Error::NoSignal { total: 0.0 } => Error::NoLight {
             reason: "the lens transmits nothing into its imaging order where light is detected (lens.efficiency \
                      is zero there)"
@@ -814,7 +819,16 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let max_frequency = match sampling {
         Sampling::Grid(FrequencyRange::Nyquist, _) => camera.nyquist(),
-        Sampling::Grid(FrequencyRange::Cutoff, _) => optics::highest_cutoff(lens, &detected)?,
+        Sampling::Grid(FrequencyRange::Cutoff, _) => match optics::highest_cutoff(lens, &detected)? {
+            c if c.is_finite() => c,
+            // a band that reaches λ = 0: the cutoff 1/(λ F#) has no end
+            _ => {
+                return Err(overflow(
+                    "the incoherent cutoff 1/(λ F#) of the shortest detected wavelength",
+                    "the detected spectrum reaches λ = 0 nm (spectrum.range_nm, spectrum.center_nm or the tables): stop the axis at Nyquist, or keep the band above 0 nm".to_owned(),
+                ));
+            }
+        },
         // the engines are prepared up to the highest frequency asked (at least Nyquist)
         Sampling::Given(given) => given.iter().fold(camera.nyquist(), |m, f| m.max(f * 1e3)),
     };

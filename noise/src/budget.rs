@@ -32,6 +32,7 @@ pub struct Sensor {
 struct Adc {
     gain_dn_per_e: f64,
     bits: u32,
+    black_level_dn: f64,
 }
 
 impl Sensor {
@@ -57,7 +58,7 @@ impl Sensor {
             format!("at least {:e} DN/e⁻ (the quantization variance (1/12)/K² must be finite)", 1.0 / MAX_SQUARABLE),
         )?;
         check("adc_bits", f64::from(adc_bits), (1..=32).contains(&adc_bits), "an integer from 1 to 32 bits")?;
-        sensor.adc = Some(Adc { gain_dn_per_e, bits: adc_bits });
+        sensor.adc = Some(Adc { gain_dn_per_e, bits: adc_bits, black_level_dn: 0.0 });
         Ok(sensor)
     }
 
@@ -82,6 +83,40 @@ impl Sensor {
     /// noise, no dark current, an infinite well, no quantization.
     pub fn ideal() -> Sensor {
         Sensor { read_noise_e: 0.0, dark_current_e_per_s: 0.0, full_well_e: f64::INFINITY, adc: None }
+    }
+
+    /// The same camera with a black level (dark offset) of `black_level_dn` DN: the ADC reads
+    /// `round(K e + black_level_dn)`, clipped to `[0, 2^bits − 1]` (EMVA 1288 Release 4.0 Linear,
+    /// §2.2: μ_y = K (μ_e + μ_d) + μ_y.dark offset). With an offset of a few σ of the dark
+    /// noise, dark frames are not clipped at 0 DN and their variance is the camera's dark noise;
+    /// it cancels in every difference (eq. 2, the photon transfer) and lowers the ADC's range
+    /// above it ([`Sensor::saturation_e`]).
+    ///
+    /// # Errors
+    /// No ADC ([`Sensor::without_adc`], [`Sensor::ideal`]), or an offset that is not finite, below
+    /// 0 or at least the largest output 2^bits − 1 DN.
+    pub fn with_black_level(mut self, black_level_dn: f64) -> Result<Sensor, Error> {
+        let Some(adc) = self.adc.as_mut() else {
+            return Err(Error::InvalidParameter {
+                name: "black_level",
+                value: black_level_dn,
+                accepted: "a level only with an ADC (a conversion gain and bits)".to_owned(),
+            });
+        };
+        let top = ((1_u64 << adc.bits) - 1) as f64;
+        check(
+            "black_level",
+            black_level_dn,
+            black_level_dn.is_finite() && (0.0..top).contains(&black_level_dn),
+            format!("a level ≥ 0 DN and below the ADC's largest output {top} DN"),
+        )?;
+        adc.black_level_dn = black_level_dn;
+        Ok(self)
+    }
+
+    /// The black level (dark offset), DN; 0 without an ADC or when none was set.
+    pub fn black_level_dn(&self) -> f64 {
+        self.adc.map_or(0.0, |adc| adc.black_level_dn)
     }
 
     /// Read noise σ_r, e⁻ rms.
@@ -109,14 +144,14 @@ impl Sensor {
         self.adc.map(|adc| adc.bits)
     }
 
-    /// Saturation capacity μ_e.sat, e⁻: the full well, or the charge `(2^bits − 1)/K` that
-    /// drives the ADC to its largest output if that is smaller (EMVA 1288 Release 4.0 Linear,
-    /// §2.4: saturation is where the output stops following the input, whichever limit comes
-    /// first). No dark offset is modelled: 0 e⁻ reads 0 DN.
+    /// Saturation capacity μ_e.sat, e⁻: the full well, or the charge `(2^bits − 1 − B)/K` that
+    /// drives the ADC from its black level B ([`Sensor::with_black_level`], 0 by default) to its
+    /// largest output if that is smaller (EMVA 1288 Release 4.0 Linear, §2.4: saturation is where
+    /// the output stops following the input, whichever limit comes first).
     pub fn saturation_e(&self) -> f64 {
         match self.adc {
             Some(adc) => {
-                let adc_range_e = ((1_u64 << adc.bits) - 1) as f64 / adc.gain_dn_per_e;
+                let adc_range_e = (((1_u64 << adc.bits) - 1) as f64 - adc.black_level_dn) / adc.gain_dn_per_e;
                 self.full_well_e.min(adc_range_e)
             }
             None => self.full_well_e,

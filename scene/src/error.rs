@@ -224,8 +224,9 @@ pub(crate) fn num(v: f64) -> String {
 
 /// A message from a parser with every `…` or "…" quoted span shortened, and the whole capped.
 pub(crate) fn shorten_quoted(message: &str) -> String {
+    let suggested = did_you_mean(message);
     let mut out = String::new();
-    let mut rest = message;
+    let mut rest = suggested.as_deref().unwrap_or(message);
     while let Some(start) = rest.find(['`', '"']) {
         let quote = rest[start..].chars().next().unwrap_or('`');
         let after = &rest[start + 1..];
@@ -243,9 +244,55 @@ pub(crate) fn shorten_quoted(message: &str) -> String {
     out
 }
 
+/// serde's "unknown field `X`, expected one of `a`, `b`, …" (or "expected `a` or `b`") with the
+/// accepted name nearest to X (edit distance at most a third of its length, at least 2): "unknown
+/// field `X`: did you mean `a`?" instead of the whole list; `None` when nothing is near.
+fn did_you_mean(message: &str) -> Option<String> {
+    let start = message.find("unknown field `")?;
+    let rest = &message[start + "unknown field `".len()..];
+    let end = rest.find('`')?;
+    let field = &rest[..end];
+    let list = rest[end + 1..].strip_prefix(", expected ")?;
+    let names: Vec<&str> = list.split('`').skip(1).step_by(2).collect();
+    let (best, distance) = names.iter().map(|n| (*n, edit_distance(field, n))).min_by_key(|(_, d)| *d)?;
+    if distance > (field.chars().count() / 3).max(2) {
+        return None;
+    }
+    let list_end = list.rfind('`').map_or(list.len(), |i| i + 1);
+    let after = &list[list_end..];
+    Some(format!("{}unknown field `{field}`: did you mean `{best}`?{after}", &message[..start]))
+}
+
+/// Levenshtein distance over characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut previous = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let here = (previous + usize::from(ca != *cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            previous = row[j + 1];
+            row[j + 1] = here;
+        }
+    }
+    row[b.len()]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A key typo names the nearest key instead of listing all 34 of `[lens]`; a field far from
+    /// every name keeps the list.
+    #[test]
+    fn a_typo_gets_the_nearest_key() {
+        let m = "unknown field `f_numbr`, expected one of `model`, `preset`, `f_number`, `focal_length_mm`";
+        assert_eq!(shorten_quoted(m), "unknown field `f_numbr`: did you mean `f_number`?");
+        let m = "lens.x: unknown field `zzzzzzzz`, expected `model` or `preset`";
+        assert_eq!(shorten_quoted(m), m);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
 
     #[test]
     fn long_input_is_shortened_with_its_length() {

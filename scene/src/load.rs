@@ -149,6 +149,7 @@ pub(crate) struct RawCamera {
     pub full_well_e: Option<f64>,
     pub gain_dn_per_e: Option<f64>,
     pub adc_bits: Option<u32>,
+    pub black_level_dn: Option<f64>,
     pub noise_spectrum: Option<String>,
 }
 
@@ -183,6 +184,44 @@ pub(crate) struct Origins {
     pub preset: Option<(String, Vec<String>)>,
     /// The steps of a radiance-meter source (SI eq. S1–S6), kept for reports.
     meter: RefCell<Option<radiometry::RadianceMeterSteps>>,
+    /// The tables its source's scenes have read.
+    tables: TableCache,
+}
+
+/// The CSV tables the scenes of one [`Source`] have read, each kept while its file's size and
+/// modification time are unchanged: a sweep's points read and parse each table once (a 1601-row
+/// spectrometer table was read again at every point).
+#[derive(Clone, Debug, Default)]
+struct TableCache(std::sync::Arc<std::sync::Mutex<std::collections::HashMap<TableKey, CachedTable>>>);
+
+/// A table's file, its largest accepted value (as bits) and what it holds.
+type TableKey = (PathBuf, u64, String);
+
+#[derive(Clone, Debug)]
+struct CachedTable {
+    /// The file's modification time and length when it was read.
+    stamp: (Option<std::time::SystemTime>, u64),
+    table: radiometry::Sampled,
+    lo_nm: f64,
+    hi_nm: f64,
+}
+
+impl TableCache {
+    /// The stamp of `path` now (None when it cannot be read: then nothing is cached).
+    fn stamp(path: &Path) -> Option<(Option<std::time::SystemTime>, u64)> {
+        std::fs::metadata(path).ok().map(|m| (m.modified().ok(), m.len()))
+    }
+
+    fn get(&self, key: &TableKey, stamp: (Option<std::time::SystemTime>, u64)) -> Option<CachedTable> {
+        let map = self.0.lock().ok()?;
+        map.get(key).filter(|c| c.stamp == stamp && stamp.0.is_some()).cloned()
+    }
+
+    fn put(&self, key: TableKey, value: CachedTable) {
+        if let Ok(mut map) = self.0.lock() {
+            map.insert(key, value);
+        }
+    }
 }
 
 impl Origins {
@@ -197,6 +236,7 @@ impl Origins {
             lens,
             preset: None,
             meter: RefCell::new(None),
+            tables: self.tables.clone(),
         }
     }
 
@@ -223,16 +263,23 @@ impl Origins {
         context.replace("[lens]", &format!("[{}]", self.lens)).replace("lens.", &format!("{}.", self.lens))
     }
 
-    /// The origin of `key`: the `--set` that gave it (or a table above it), else the file.
+    /// The origin of `key`: the `--set` that gave it, else the one that gave the nearest table
+    /// above it, else those that gave keys below it (all of them), else the file.
     pub(crate) fn of(&self, key: &str) -> String {
         let key = &self.key(key);
-        for (k, arg) in &self.overrides {
-            let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
-            if key == k || below(key, k) || below(k, key) {
-                return format!("{} (--set {})", self.file, shorten(arg));
+        let below = |a: &str, b: &str| a.starts_with(&format!("{b}.")) || a.starts_with(&format!("{b}["));
+        let exact = self.overrides.iter().find(|(k, _)| *k == key).map(|(_, arg)| vec![arg]);
+        let above = || {
+            self.overrides.iter().filter(|(k, _)| below(key, k)).max_by_key(|(k, _)| k.len()).map(|(_, arg)| vec![arg])
+        };
+        let inside = self.overrides.iter().filter(|(k, _)| below(k, key)).map(|(_, arg)| arg).collect::<Vec<_>>();
+        match exact.or_else(above).unwrap_or(inside) {
+            args if args.is_empty() => self.file.clone(),
+            args => {
+                let sets: Vec<String> = args.iter().map(|a| format!("--set {}", shorten(a))).collect();
+                format!("{} ({})", self.file, sets.join(", "))
             }
         }
-        self.file.clone()
     }
 
     pub(crate) fn bad(&self, key: &str, value: impl fmt::Display, expected: &str) -> Error {
@@ -312,11 +359,22 @@ impl Origins {
     /// The CSV table `file` given for `key`, values in `[0, hi]`.
     fn table(&self, key: &str, file: &str, hi: f64, what: &str, expected: &str) -> Result<radiometry::Sampled, Error> {
         let path = self.path(file);
-        let read = read_pairs(&path, &WAVELENGTH, 0.0, hi, what).and_then(|(nm, values)| {
-            let (lo_nm, hi_nm) = (nm[0], nm[nm.len() - 1]);
-            sampled(&path, &nm, values).map(|t| (t, lo_nm, hi_nm))
-        });
-        let (table, lo_nm, hi_nm) = read.map_err(|e| self.table_error(key, file, e, expected))?;
+        let cache_key = (path.clone(), hi.to_bits(), what.to_owned());
+        let stamp = TableCache::stamp(&path);
+        let (table, lo_nm, hi_nm) = match stamp.and_then(|s| self.tables.get(&cache_key, s)) {
+            Some(c) => (c.table, c.lo_nm, c.hi_nm),
+            None => {
+                let read = read_pairs(&path, &WAVELENGTH, 0.0, hi, what).and_then(|(nm, values)| {
+                    let (lo_nm, hi_nm) = (nm[0], nm[nm.len() - 1]);
+                    sampled(&path, &nm, values).map(|t| (t, lo_nm, hi_nm))
+                });
+                let (table, lo_nm, hi_nm) = read.map_err(|e| self.table_error(key, file, e, expected))?;
+                if let Some(stamp) = stamp {
+                    self.tables.put(cache_key, CachedTable { stamp, table: table.clone(), lo_nm, hi_nm });
+                }
+                (table, lo_nm, hi_nm)
+            }
+        };
         if hi_nm < WAVELENGTH_PLAUSIBLE_NM.0 || lo_nm > WAVELENGTH_PLAUSIBLE_NM.1 {
             let (unit, factor) = wavelength_slip(hi_nm);
             self.warn(
@@ -465,6 +523,7 @@ pub struct Source {
     label: String,
     dir: PathBuf,
     parsed: std::sync::OnceLock<Result<toml::Table, TomlFailure>>,
+    tables: TableCache,
 }
 
 impl Source {
@@ -485,7 +544,13 @@ impl Source {
 
     /// A scene given as text (`label` names it in messages; CSV paths resolve against `dir`).
     pub fn from_text(text: impl Into<String>, label: impl Into<String>, dir: impl Into<PathBuf>) -> Source {
-        Source { text: text.into(), label: label.into(), dir: dir.into(), parsed: std::sync::OnceLock::new() }
+        Source {
+            text: text.into(),
+            label: label.into(),
+            dir: dir.into(),
+            parsed: std::sync::OnceLock::new(),
+            tables: TableCache::default(),
+        }
     }
 }
 
@@ -609,6 +674,17 @@ fn apply_overrides(
                 ),
             });
         }
+        // a table given after a key inside it would replace (drop) that key
+        let below = |a: &str| a.starts_with(&format!("{key}.")) || a.starts_with(&format!("{key}["));
+        if let Some((inner, first)) = given.iter().find(|(k, _)| below(k)) {
+            return Err(Error::Override {
+                arg: shorten(&arg),
+                problem: format!(
+                    "it replaces the table {key}, dropping {inner} given before it by --set {}; give the table first, then the keys inside it",
+                    shorten(first)
+                ),
+            });
+        }
         given.insert(key, arg);
     }
     Ok(given)
@@ -632,6 +708,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
         lens: "lens".to_owned(),
         preset: None,
         meter: RefCell::new(None),
+        tables: source.tables.clone(),
     };
     Ok((table, origins))
 }
@@ -1007,6 +1084,7 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
         && c.full_well_e.is_none()
         && c.gain_dn_per_e.is_none()
         && c.adc_bits.is_none()
+        && c.black_level_dn.is_none()
     {
         return Ok(None);
     }
@@ -1026,7 +1104,26 @@ fn sensor(c: &RawCamera, o: &Origins) -> Result<Option<noise::Sensor>, Error> {
             if !(1..=32).contains(&bits) {
                 return Err(o.bad("camera.adc_bits", bits, "a whole number of bits from 1 to 32"));
             }
-            noise::Sensor::new(read, dark, well, k, bits)
+            let sensor = noise::Sensor::new(read, dark, well, k, bits);
+            match (sensor, c.black_level_dn) {
+                (Ok(sensor), Some(b)) => {
+                    let top = ((1_u64 << bits) - 1) as f64;
+                    let b = o.number(
+                        "camera.black_level_dn",
+                        b,
+                        (0.0..top).contains(&b),
+                        &format!("a black level ≥ 0 DN and below the ADC's largest output {top} DN"),
+                    )?;
+                    sensor.with_black_level(b)
+                }
+                (sensor, _) => sensor,
+            }
+        }
+        (None, None) if c.black_level_dn.is_some() => {
+            return Err(o.conflict(
+                "camera.black_level_dn",
+                "a black level needs an ADC: camera.gain_dn_per_e and camera.adc_bits".to_owned(),
+            ));
         }
         (None, None) => noise::Sensor::without_adc(read, dark, well),
         (Some(_), None) => {
@@ -1163,7 +1260,8 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
         let c = o.number("spectrum.center_nm", c, c > 0.0, "a wavelength > 0 nm")?;
         o.wavelength("spectrum.center_nm", c);
         let r = o.require("spectrum.range_nm", s.range_nm, "a width > 0 nm")?;
-        let r = o.number("spectrum.range_nm", r, r > 0.0, "a width > 0 nm")?;
+        // in metres too: 1e-320 nm is 0 m
+        let r = o.number("spectrum.range_nm", r, r * 1e-9 > 0.0, "a width > 0 nm (at least 1e-300 nm)")?;
         let p = s.peak.unwrap_or(1.0);
         let p = o.number("spectrum.peak", p, p > 0.0 && p <= 1.0, "a transmission in (0, 1]")?;
         Ok((c * 1e-9, r * 1e-9, p))
@@ -1171,6 +1269,18 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
     Ok(match shape {
         "gaussian" => {
             let (c, r, p) = band(o)?;
+            // σ = range/(2√2) at least radiometry's 1e-10 of the centre (narrower is a line)
+            let least = 2.0 * std::f64::consts::SQRT_2 * radiometry::MIN_RELATIVE_SIGMA * c;
+            if r < least {
+                return Err(o.bad(
+                    "spectrum.range_nm",
+                    num(s.range_nm.unwrap_or(r * 1e9)),
+                    &format!(
+                        "a width of at least {:e} nm (2√2 × 1e-10 of spectrum.center_nm: no wavelength grid resolves a narrower Gaussian; use spectrum.shape = \"line\")",
+                        least * 1e9
+                    ),
+                ));
+            }
             Some(Spectrum::Gaussian(Gaussian::from_range(c, r, p).map_err(|e| o.domain("spectrum", "[spectrum]", e))?))
         }
         "tophat" => {
@@ -1238,6 +1348,42 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sweep's scenes read each CSV table once: a second build of one source takes the table
+    /// from its cache while the file's length and modification time are unchanged (here the
+    /// file is rewritten with other values of the same length and its time set back: the cached
+    /// values stay), and reads it again when they change.
+    #[test]
+    fn a_sources_tables_are_read_once_while_unchanged() {
+        let dir = std::env::temp_dir().join(format!("scene-table-cache-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let qe = dir.join("qe.csv");
+        std::fs::write(&qe, "wavelength_nm,qe\n700,0.20\n900,0.20\n").unwrap();
+        let text = include_str!("../../examples/paper-theory.toml")
+            .replace("quantum_efficiency = 0.2 ", "quantum_efficiency = \"qe.csv\" ");
+        let source = Source::from_text(text, "cached.toml", &dir);
+        let photoelectrons = |s: &Source| metric::evaluate(&build_from(s, &[]).unwrap()).unwrap().photoelectrons;
+        let first = photoelectrons(&source);
+        let time = std::fs::metadata(&qe).unwrap().modified().unwrap();
+        std::fs::write(&qe, "wavelength_nm,qe\n700,0.40\n900,0.40\n").unwrap();
+        std::fs::File::options().write(true).open(&qe).unwrap().set_modified(time).unwrap();
+        assert_eq!(photoelectrons(&source), first, "the cached table");
+        std::fs::write(&qe, "wavelength_nm,qe\n700,0.4\n900,0.4\n").unwrap();
+        let again = photoelectrons(&source);
+        assert!((again / first - 2.0).abs() < 1e-9, "{again} vs {first}: the file changed, read again");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Several overrides reach one key: the one that gave it is blamed, not the table above it;
+    /// a table given after a key inside it (which it would drop) is refused.
+    #[test]
+    fn the_override_that_gave_a_key_is_blamed_and_none_is_dropped() {
+        let table = "spectrum={shape=\"gaussian\",center_nm=800.0,range_nm=50.0,peak=1.0}".to_owned();
+        let e = load(None, &[table.clone(), "spectrum.range_nm=-5".to_owned()]).unwrap_err().to_string();
+        assert!(e.starts_with("embedded paper scene (--set spectrum.range_nm=-5): spectrum.range_nm = -5"), "{e}");
+        let e = load(None, &["spectrum.range_nm=-5".to_owned(), table]).unwrap_err().to_string();
+        assert!(e.contains("it replaces the table spectrum, dropping spectrum.range_nm given before it by --set spectrum.range_nm=-5"), "{e}");
+    }
 
     /// The plain-number fast path reads what TOML reads, value and type, and leaves everything
     /// else to the TOML parser (which reads it as before, or not at all).

@@ -348,6 +348,7 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
         (Some(k), Some(bits)) => {
             out.number("gain_dn_per_e", k);
             out.value("adc_bits", &bits.to_string());
+            out.number("black_level_dn", c.black_level_dn.unwrap_or(0.0));
         }
         _ => out.line("# gain_dn_per_e, adc_bits not given: no ADC quantization"),
     }

@@ -242,6 +242,16 @@ pub fn read_points(path: &Path) -> Result<PointsFile, Error> {
     let mut reader = crate::tables::csv_reader(&text, true);
     let header = reader.headers().map_err(|e| bad(Some(1), format!("cannot read the header: {e}")))?.clone();
     let keys: Vec<String> = header.iter().map(str::to_owned).collect();
+    // a file without its header: its first row would be read as keys "2.5", …
+    if let Some(number) = keys.iter().find(|k| k.trim().parse::<f64>().is_ok()) {
+        return Err(bad(
+            Some(1),
+            format!(
+                "header `{}`: `{number}` is a number, not a scene key: a points file starts with a header naming the keys of its columns, e.g. `lens.f_number,spectrum.range_nm`",
+                header.iter().collect::<Vec<_>>().join(",")
+            ),
+        ));
+    }
     if keys.is_empty() || keys.iter().any(String::is_empty) {
         return Err(bad(
             Some(1),

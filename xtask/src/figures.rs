@@ -40,6 +40,29 @@ const OUT_DIR: &str = "docs/figures";
 /// FB800-10 and FB800-40, Salvo 825 nm/52 nm and 830 nm/125 nm), where it measured.
 const PAPER_FILTERS_NM: [f64; 4] = [10.0, 40.0, 52.0, 125.0];
 
+/// The super-Gaussian order of a flat-topped band-pass filter (`exp(−ln 2 (2x/FWHM)^8)`, the
+/// shape of `examples/data/spectrometer-825-52.csv`).
+const FILTER_ORDER: i32 = 4;
+
+/// The spectral range 2√2σ of a flat-topped filter of full width at half maximum `fwhm_nm`: the
+/// paper defines the filters' range as 2√2σ of their measured spectra (Results, Fig. 2b: "the
+/// spectral range of the band-pass filters was also defined as 2√2σ"), not as their FWHM. For
+/// the order-4 super-Gaussian σ² = (FWHM/2)² Γ(3/8)/(Γ(1/8) (ln 2)^{1/4}), 2√2σ = 0.8305 FWHM
+/// (a top-hat: 0.8165; a Gaussian: 1.2011); here by the trapezoid rule over ±3 FWHM.
+fn filter_range_nm(fwhm_nm: f64) -> f64 {
+    let n = 60_000;
+    let (a, h) = (-3.0 * fwhm_nm, 6.0 * fwhm_nm / f64::from(n));
+    let (mut s0, mut s2) = (0.0, 0.0);
+    for i in 0..=n {
+        let x = a + f64::from(i) * h;
+        let f = (-std::f64::consts::LN_2 * (2.0 * x / fwhm_nm).powi(2 * FILTER_ORDER)).exp();
+        let w = if i == 0 || i == n { 0.5 } else { 1.0 };
+        s0 += w * f;
+        s2 += w * f * x * x;
+    }
+    2.0 * std::f64::consts::SQRT_2 * (s2 / s0).sqrt()
+}
+
 /// One sweep: the CSV it writes (in [`OUT_DIR`]) and the `asnr sweep` arguments before `--csv`.
 struct Sweep {
     csv: &'static str,
@@ -87,7 +110,9 @@ fn sweeps() -> Vec<Sweep> {
 fn plots() -> Vec<Vec<String>> {
     let dir = |file: &str| format!("{OUT_DIR}/{file}");
     let range = "spectral range 2√2σ (nm)";
-    let filters = "the paper's filters: 10, 40, 52, 125 nm (FWHM)";
+    let ranges: Vec<String> = PAPER_FILTERS_NM.iter().map(|&w| format!("{:.1}", filter_range_nm(w))).collect();
+    let filters =
+        format!("the paper's filters (10, 40, 52, 125 nm FWHM) at their 2√2σ: {} nm (flat-topped)", ranges.join(", "));
     let mut fig2b = vec![
         format!("{}=theory: flat τ1 and QE", dir("fig2b-theory.csv")),
         format!("{}=simulated: tabulated τ1(λ), QE(λ) (illustrative)", dir("fig2b-simulated.csv")),
@@ -104,7 +129,7 @@ fn plots() -> Vec<Vec<String>> {
         "--mark-best".into(),
     ];
     for width in PAPER_FILTERS_NM {
-        fig2b.extend(["--mark-x".into(), format!("{width}={filters}")]);
+        fig2b.extend(["--mark-x".into(), format!("{:.1}={filters}", filter_range_nm(width))]);
     }
     fig2b.extend(["--output".into(), dir("fig2b-asnr-range-f2.5.svg")]);
     let fig2a = vec![
@@ -238,6 +263,19 @@ mod tests {
             }
             let output = args.iter().skip_while(|a| *a != "--output").nth(1).expect("an --output");
             assert!(output.starts_with(OUT_DIR) && output.ends_with(".svg"), "{output}");
+        }
+    }
+
+    /// 2√2σ of the order-4 super-Gaussian against its closed form,
+    /// 0.5·2√2·√(Γ(3/8)/Γ(1/8))·(ln 2)^{−1/8} FWHM = 0.830452… FWHM (Γ(3/8) = 2.370436184416601,
+    /// Γ(1/8) = 7.533941598797612).
+    #[test]
+    fn filter_range_is_the_closed_form() {
+        let closed = std::f64::consts::SQRT_2
+            * (2.370_436_184_416_601_f64 / 7.533_941_598_797_612).sqrt()
+            * std::f64::consts::LN_2.powf(-0.125);
+        for w in PAPER_FILTERS_NM {
+            assert!((filter_range_nm(w) / w - closed).abs() < 1e-9, "{w}: {}", filter_range_nm(w) / w);
         }
     }
 }

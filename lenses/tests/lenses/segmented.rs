@@ -152,14 +152,17 @@ fn segmented_lens_does_not_beat_the_chromatic_lens_over_a_broad_band() {
     let c = ChromaticMetalens::new(f_number, F0, LAMBDA0, Curve::Constant(0.5), Curve::Constant(0.8)).unwrap();
     check_lens(&seg, &band(800.0, 4.0)).unwrap();
     let nyquist = 1e5;
-    for range in [50.0, 200.0] {
+    for range in [50.0, 100.0, 200.0] {
         let detected = band(800.0, range);
         let a = optics::Polychromatic::with_pupil_samples(&seg, &detected, Field::ON_AXIS, nyquist, None, 128)
             .unwrap()
             .mean_mtf()
             .0;
         let b = mean_mtf(&c, &detected, nyquist);
-        eprintln!("F/5, 800 ± {range} nm, 100 cycles/mm: segmented {a:.4}, chromatic {b:.4}, ratio {:.3}", a / b);
+        eprintln!(
+            "F/5, 800 nm, range {range} nm, 100 cycles/mm: mean MTF segmented {a:.4}, chromatic {b:.4}: {:.0} % below",
+            100.0 * (1.0 - a / b)
+        );
         assert!(a < b, "{range} nm: {a} vs {b}");
     }
     let bg = seg.clone().with_other_channels(OtherChannels::Background);
