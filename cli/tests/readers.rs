@@ -207,20 +207,18 @@ fn series_files_their_stacks_and_shard_csvs() {
                     std::fs::write(dir.join(stack).join("f1.png"), &f1).unwrap();
                 }
                 std::fs::write(&series, &s).unwrap();
-                let args = asnr::characterize::CharacterizeArgs {
-                    series: series.clone(),
-                    json: true,
-                    plot: None,
-                    width: None,
-                    dpi: None,
+                // the command as the binary runs it (its library's one entry point), the error
+                // chain as it prints it
+                let command = |args: &[&std::ffi::OsStr]| {
+                    let cli = <asnr::Cli as clap::Parser>::try_parse_from(args).map_err(|e| e.to_string())?;
+                    asnr::run(cli).map_err(|e| format!("{e:#}"))
                 };
-                // the error chain as the command prints it
-                named(asnr::characterize::run(&args).map_err(|e| format!("{e:#}")), &series)?;
-                std::fs::write(&shard, &c).unwrap();
                 named(
-                    asnr::merge::merge(std::slice::from_ref(&shard), None).map(|_| ()).map_err(|e| format!("{e:#}")),
-                    &shard,
+                    command(&["asnr".as_ref(), "characterize".as_ref(), series.as_os_str(), "--json".as_ref()]),
+                    &series,
                 )?;
+                std::fs::write(&shard, &c).unwrap();
+                named(command(&["asnr".as_ref(), "merge".as_ref(), shard.as_os_str()]), &shard)?;
                 Ok(())
             },
         )

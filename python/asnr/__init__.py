@@ -291,6 +291,11 @@ class Order:
     astigmatism_m: float = 0.0
     #: Seidel field curvature W220, m
     field_curvature_m: float = 0.0
+    #: Zernike terms in Noll order from Z1, m RMS (the m = 0 terms keep the radial engine, the
+    #: others send the order to the FFT path)
+    zernike_noll_m: tuple[float, ...] = ()
+    #: any radial polynomial term: OPD = sum c_i rho^(2 i), i = 0, 1, …, m (the radial engine)
+    radial_m: tuple[float, ...] = ()
 
 
 class LensModel:

@@ -383,8 +383,10 @@ fn compare(
 
 /// A lens written in Python: `f_number`, `focal_length_m`, optional `design_wavelength_m`, and
 /// `orders(wavelength_m, (field_x_rad, field_y_rad))` returning the imaging orders, each an object
-/// (or dict) with `efficiency` and `defocus_m` and optionally `image_shift_m` (x, y) and the Seidel
-/// terms `spherical_m`, `coma_m`, `astigmatism_m`, `field_curvature_m`; optional
+/// (or dict) with `efficiency` and `defocus_m` and optionally `image_shift_m` (x, y), the Seidel
+/// terms `spherical_m`, `coma_m`, `astigmatism_m`, `field_curvature_m`, Zernike terms
+/// `zernike_noll_m` (Noll order from Z1, m RMS) and radial terms `radial_m` (`Σ c_i ρ^{2i}`, m);
+/// optional
 /// `transmission(wavelength_m)`. All in SI units, the wavefront sign of docs/physics.md. The first
 /// error raised in a callback is kept and raised when the evaluation returns.
 #[derive(Debug)]
@@ -504,7 +506,35 @@ impl PyLens {
                 let (x, y): (f64, f64) = shift.extract()?;
                 wavefront = wavefront.shifted(x, y);
             }
-            orders.push(Order::new(efficiency, Pupil::Full, wavefront));
+            let list = |attr: &str| -> PyResult<Vec<f64>> {
+                let values: Vec<f64> = match get(attr)? {
+                    Some(v) => v.extract()?,
+                    None => Vec::new(),
+                };
+                if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
+                    return Err(PyValueError::new_err(format!(
+                        "{}.orders({wavelength_m:e}): {attr} holds {bad}: expected finite numbers",
+                        self.name
+                    )));
+                }
+                Ok(values)
+            };
+            let zernike = list("zernike_noll_m")?;
+            let radial = list("radial_m")?;
+            if zernike.is_empty() && radial.is_empty() {
+                orders.push(Order::new(efficiency, Pupil::Full, wavefront));
+                continue;
+            }
+            // Zernike terms (Noll order from Z1, m RMS) and radial terms Σ c_i ρ^{2i} (m): a
+            // radial pupil (the radial engine where symmetric, the FFT path otherwise)
+            let invalid =
+                |e: optics::Error| PyValueError::new_err(format!("{}.orders({wavelength_m:e}): {e}", self.name));
+            let terms: Vec<(usize, f64)> =
+                zernike.iter().enumerate().filter(|(_, c)| **c != 0.0).map(|(i, &c)| (i + 1, c)).collect();
+            let profile = optics::radial::RadialProfile::even_polynomial(radial).map_err(invalid)?;
+            let pupil = optics::radial::RadialPupil::new(None, vec![(1.0, std::sync::Arc::new(profile))], terms)
+                .map_err(invalid)?;
+            orders.push(Order::radial(efficiency, std::sync::Arc::new(pupil), wavefront));
         }
         Ok(orders)
     }
