@@ -1258,7 +1258,7 @@ fn compare_lens_keys_are_refused_with_their_message() {
     let cases: [(&[&str], &str); 13] = [
         (
             &["--set", "lens.model=fresnel"],
-            "lens.model = \"fresnel\": expected \"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table) or \"phase\"",
+            "lens.model = \"fresnel\": expected \"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table)",
         ),
         (&["--set", "lens.design_order=3"], "lens.design_order does not apply to lens.model = \"chromatic\""),
         (
