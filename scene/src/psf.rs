@@ -299,36 +299,31 @@ fn npy_values(header: &NpyHeader, data: &[u8]) -> Vec<f64> {
     }
 }
 
-/// A whole `.npy` file in memory: its header checked, its length checked against it, then its
-/// samples.
+/// A whole `.npy` file in memory, read as [`read_npy`] reads a file.
+#[cfg(test)]
 pub(crate) fn parse_npy(bytes: &[u8]) -> Result<Stack, String> {
-    let header = npy_header(bytes)?;
-    let [depth, ny, nx] = header.shape;
-    let data = (depth * ny * nx) * header.dtype.size;
-    let body = bytes.len().saturating_sub(header.offset);
-    if body != data {
-        return Err(format!(
-            "{body} bytes of data after the header: expected {data} ({depth} × {ny} × {nx} values of {} bytes)",
-            header.dtype.size
-        ));
-    }
-    Ok(Stack { depth, ny, nx, values: npy_values(&header, &bytes[header.offset..]) })
+    npy_from(std::io::Cursor::new(bytes), bytes.len() as u64)
 }
 
-/// Reads a `.npy` file: its preamble and header first, the file's length checked against them,
-/// and only then its samples.
+/// Reads a `.npy` file.
 fn read_npy(path: &Path) -> Result<Stack, String> {
-    use std::io::Seek as _;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read it ({e})"))?;
+    let length = file.metadata().map_err(|e| format!("cannot read it ({e})"))?.len();
+    npy_from(std::io::BufReader::new(file), length)
+}
+
+/// Reads a `.npy` array of `length` bytes from `source`: its preamble and header first, the
+/// length checked against them, and only then its samples.
+fn npy_from(mut source: impl std::io::Read + std::io::Seek, length: u64) -> Result<Stack, String> {
     let io = |e: std::io::Error| format!("cannot read it ({e})");
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let length = file.metadata().map_err(io)?.len();
     let mut head = vec![0u8; 12.min(length) as usize];
-    file.read_exact(&mut head).map_err(io)?;
+    source.read_exact(&mut head).map_err(io)?;
     let (len, at) = npy_preamble(&head)?;
     head.truncate(at);
     head.resize(at + len, 0);
-    file.seek(std::io::SeekFrom::Start(at as u64)).map_err(io)?;
-    file.read_exact(&mut head[at..])
+    source.seek(std::io::SeekFrom::Start(at as u64)).map_err(io)?;
+    source
+        .read_exact(&mut head[at..])
         .map_err(|_| format!("a .npy header of {len} bytes, but the file ends after {length} bytes"))?;
     let header = npy_header(&head)?;
     let [depth, ny, nx] = header.shape;
@@ -341,7 +336,7 @@ fn read_npy(path: &Path) -> Result<Stack, String> {
         ));
     }
     let mut bytes = vec![0u8; data];
-    file.read_exact(&mut bytes).map_err(io)?;
+    source.read_exact(&mut bytes).map_err(io)?;
     Ok(Stack { depth, ny, nx, values: npy_values(&header, &bytes) })
 }
 
