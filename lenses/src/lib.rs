@@ -78,7 +78,8 @@ pub use interleaved::{Channel, Interleaved};
 pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
 pub use presets::{preset, preset_names};
 pub use psf::{
-    PSF_BORDER_SAMPLES, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_PADDING, PsfReport, PsfStack,
+    PSF_BORDER_SAMPLES, PSF_CENTRE_TOLERANCE, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_NEGATIVE_MASS,
+    PSF_PADDING, PSF_SYMMETRY_TOLERANCE, PsfReport, PsfStack,
 };
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};

@@ -16,11 +16,18 @@ use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
 
 /// How far below zero a sample may be, as a fraction of its slice's peak, before the stack is
-/// refused: simulated PSFs carry small negative ringing (an FFT's rounding, a band-limited
-/// resampling) and measured ones a background subtracted with its noise; a value below
+/// refused: simulated PSFs carry small negative ringing (an OTF cut at the grid's Nyquist
+/// frequency rings at about 1e-3 of the peak; `asnr psf --stack` at 2 µm on the paper's lens)
+/// and measured ones a background subtracted with its noise; a value below
 /// `−PSF_NEGATIVE_FLOOR × peak` is not noise but a sign error or an offset. The negative samples
-/// accepted are kept as they are (nothing is clipped): they enter the sum and the OTF.
-pub const PSF_NEGATIVE_FLOOR: f64 = 1e-3;
+/// accepted are kept as they are (nothing is clipped): they enter the sum and the OTF, and
+/// together they may hold at most [`PSF_NEGATIVE_MASS`] of the slice's sum.
+pub const PSF_NEGATIVE_FLOOR: f64 = 1e-2;
+
+/// The largest share of a slice's sum its negative samples may hold together (`Σ|v<0| ≤ 1 % Σv`):
+/// beyond it the background was over-subtracted. It bounds the OTF's modulus by
+/// `1 + 2 PSF_NEGATIVE_MASS`.
+pub const PSF_NEGATIVE_MASS: f64 = 1e-2;
 
 /// The width, in samples, of the stack's border band whose light [`PsfReport::border_fraction`]
 /// reports: light there says the PSF was probably cut off by the stack's edge.
@@ -35,6 +42,17 @@ pub const PSF_PADDING: usize = 4;
 /// The largest element count of a stack (`depth × ny × nx`) the readers accept: 2²⁶, 512 MiB as
 /// f64 (a 1024 × 1024 × 64 stack); a file's header giving more is refused before any allocation.
 pub const PSF_MAX_ELEMENTS: usize = 1 << 26;
+
+/// Below this difference between the tangential and the sagittal curves (everywhere) the stack
+/// is taken as symmetric and both curves are their mean: the rounding of a radially symmetric
+/// PSF (a float32 file's 6e-8) must not make the metric treat it as direction dependent.
+pub const PSF_SYMMETRY_TOLERANCE: f64 = 1e-6;
+
+/// Below this distance from the centre sample, in samples, a centroid is taken as the centre
+/// (no lateral shift): a shift of 1e-6 samples turns the OTF's phase by under 1e-5 rad up to the
+/// stack's Nyquist frequency, and a centred PSF's rounding must not send the scene to the
+/// engines of shifted images.
+pub const PSF_CENTRE_TOLERANCE: f64 = 1e-6;
 
 /// The fewest samples along each side of a slice.
 pub const PSF_MIN_SIDE: usize = 8;
@@ -75,7 +93,9 @@ pub struct PsfReport {
 ///   [`PSF_PADDING`]` × max(nx, ny)` points, from 0 to the stack's Nyquist frequency `1/(2p)`.
 /// - The table holds the real part of the re-centred OTF (the even part of the PSF about its
 ///   centroid); the imaginary part (an asymmetric PSF: coma) is dropped and its largest value
-///   reported ([`PsfReport::imaginary`]). Negative samples within [`PSF_NEGATIVE_FLOOR`] can lift
+///   reported ([`PsfReport::imaginary`]). Where the two curves differ by at most
+///   [`PSF_SYMMETRY_TOLERANCE`] both are their mean, and a centroid within
+///   [`PSF_CENTRE_TOLERANCE`] samples of the centre is the centre. Negative samples within [`PSF_NEGATIVE_FLOOR`] can lift
 ///   `|OTF|` above 1 by at most twice their share; such values are held at ±1.
 /// - Between the slices the OTF is linear in λ ([`OtfTable`]); the stack is not extrapolated: the
 ///   end slices' OTF holds beyond them, and the scene refuses a spectrum with weight there.
@@ -212,6 +232,18 @@ impl PsfStack {
                     format!("its samples sum to {sum:e}: expected a sum > 0 (a PSF with light in it)"),
                 ));
             }
+            let negative: f64 = slice.iter().filter(|&&v| v < 0.0).map(|v| -v).sum();
+            if negative > PSF_NEGATIVE_MASS * sum {
+                return Err(refuse(
+                    k,
+                    &wavelengths_m,
+                    format!(
+                        "its negative samples sum to −{:.3} % of its sum: expected at most {} % (noise, not an over-subtracted background)",
+                        100.0 * negative / sum,
+                        100.0 * PSF_NEGATIVE_MASS
+                    ),
+                ));
+            }
             lsf_x.iter_mut().chain(lsf_y.iter_mut()).for_each(|v| *v /= sum);
             let border = border / sum;
             if border > report.border_fraction.0 {
@@ -221,7 +253,8 @@ impl PsfStack {
                 let c = lsf.len() / 2;
                 lsf.iter().enumerate().map(|(j, v)| (j as f64 - c as f64) * v).sum::<f64>()
             };
-            let (cx, cy) = (centroid(&lsf_x), centroid(&lsf_y));
+            let snap = |c: f64| if c.abs() < PSF_CENTRE_TOLERANCE { 0.0 } else { c };
+            let (cx, cy) = (snap(centroid(&lsf_x)), snap(centroid(&lsf_y)));
             report.centroids_m.push([cx * pitch_m, cy * pitch_m]);
             let mut transform = |lsf: &[f64], c: f64| -> Vec<f64> {
                 buffer.iter_mut().for_each(|b| *b = Complex64::new(0.0, 0.0));
@@ -246,7 +279,22 @@ impl PsfStack {
             tangential.push(transform(&lsf_x, cx));
             sagittal.push(transform(&lsf_y, cy));
         }
-        let table = OtfTable::new(wavelengths_m, frequencies, tangential, Some(sagittal)).map_err(Error::Table)?;
+        let symmetric = tangential
+            .iter()
+            .flatten()
+            .zip(sagittal.iter().flatten())
+            .all(|(t, s)| (t - s).abs() <= PSF_SYMMETRY_TOLERANCE);
+        let (tangential, sagittal) = if symmetric {
+            let mean: Vec<Vec<f64>> = tangential
+                .iter()
+                .zip(&sagittal)
+                .map(|(t, s)| t.iter().zip(s).map(|(a, b)| 0.5 * (a + b)).collect())
+                .collect();
+            (mean, None)
+        } else {
+            (tangential, Some(sagittal))
+        };
+        let table = OtfTable::new(wavelengths_m, frequencies, tangential, sagittal).map_err(Error::Table)?;
         Ok(PsfStack {
             f_number,
             focal_length: focal_length_m,
@@ -512,12 +560,16 @@ mod tests {
         let e = err(&nan, vec![8e-7]);
         assert!(e.contains("slice 0 (800 nm)") && e.contains("row 3, column 4 is NaN"), "{e}");
         let mut negative = good.clone();
-        negative[7] = -0.01;
+        negative[7] = -0.02;
         let e = err(&negative, vec![8e-7]);
-        assert!(e.contains("row 0, column 7") && e.contains("-1e-2") && e.contains("0.001"), "{e}");
+        assert!(e.contains("row 0, column 7") && e.contains("-2e-2") && e.contains("0.01"), "{e}");
         let mut noise = good.clone();
-        noise[7] = -1e-4;
+        noise[7] = -0.009;
         assert!(lens(vec![8e-7], [n, n], &noise).is_ok(), "noise within the floor is accepted");
+        // σ = 2 samples: Σ = 8π ≈ 25.1; 40 samples at −0.009 hold 1.4 % of it
+        let offset: Vec<f64> = good.iter().enumerate().map(|(i, &v)| if i < 40 { -0.009 } else { v }).collect();
+        let e = err(&offset, vec![8e-7]);
+        assert!(e.contains("negative samples sum to −1.") && e.contains("at most 1 %"), "{e}");
         let e = err(&[good.clone(), vec![0.0; n * n]].concat(), vec![8e-7, 9e-7]);
         assert!(e.contains("slice 1 (900 nm)") && e.contains("sum to 0e0"), "{e}");
         let e = err(&[good.clone(), good.clone()].concat(), vec![9e-7, 8e-7]);

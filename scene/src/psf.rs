@@ -514,7 +514,7 @@ pub(crate) fn psf_lens(
             format!(
                 "{:.3} % of the light of the slice at {} nm lies within {} samples of the stack's border: the PSF may be cut off (a larger stack would hold it)",
                 border * 100.0,
-                num(at * 1e9),
+                num(optics::round_for_display(at * 1e9)),
                 lenses::PSF_BORDER_SAMPLES
             ),
         );
@@ -526,7 +526,7 @@ pub(crate) fn psf_lens(
             quoted(file),
             format!(
                 "the PSF at {} nm is asymmetric about its centroid: its OTF has an imaginary part of {im:.3} at {:.1} cycles/mm, which the table (the real part) leaves out",
-                num(at * 1e9),
+                num(optics::round_for_display(at * 1e9)),
                 nu * 1e-3
             ),
         );
@@ -577,7 +577,8 @@ pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins
         Err(_) => 0.0, // a one-slice stack covers one wavelength
     };
     let outside = if total.is_finite() { (1.0 - inside / total).max(0.0) } else { 1.0 };
-    let range = format!("{}–{} nm", num(lo * 1e9), num(hi * 1e9));
+    let nm = |l: f64| num(optics::round_for_display(l * 1e9));
+    let range = format!("{}–{} nm", nm(lo), nm(hi));
     if outside > PSF_OUTSIDE_MAX {
         return Err(o.bad(
             "lens.psf_wavelengths_nm",
