@@ -52,6 +52,9 @@ pub(crate) struct PsfLimits {
     pub pitch_m: f64,
     pub range_m: (f64, f64),
     pub efficiency: Spectrum,
+    /// What the stack showed (border light, asymmetry), `(value, hint)` for `lens.psf`: warned
+    /// once the scene's checks have passed (they are not unit slips to name beside an error).
+    pub notices: Vec<(String, String)>,
 }
 
 /// What the file formats accept, for messages.
@@ -506,10 +509,10 @@ pub(crate) fn psf_lens(
         info.design_wavelength_m = Some(v * 1e-9);
     }
     let report = lens.report().clone();
+    let mut notices = Vec::new();
     let (border, at) = report.border_fraction;
     if border > BORDER_WARNED {
-        o.warn(
-            key,
+        notices.push((
             quoted(file),
             format!(
                 "{:.3} % of the light of the slice at {} nm lies within {} samples of the stack's border: the PSF may be cut off (a larger stack would hold it)",
@@ -517,19 +520,18 @@ pub(crate) fn psf_lens(
                 num(optics::round_for_display(at * 1e9)),
                 lenses::PSF_BORDER_SAMPLES
             ),
-        );
+        ));
     }
     let (im, at, nu) = report.imaginary;
     if im > IMAGINARY_WARNED {
-        o.warn(
-            key,
+        notices.push((
             quoted(file),
             format!(
                 "the PSF at {} nm is asymmetric about its centroid: its OTF has an imaginary part of {im:.3} at {:.1} cycles/mm, which the table (the real part) leaves out",
                 num(optics::round_for_display(at * 1e9)),
                 nu * 1e-3
             ),
-        );
+        ));
     }
     let shifts = report.centroids_m.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max);
     info.notes.push(format!(
@@ -543,13 +545,13 @@ pub(crate) fn psf_lens(
         lenses::PSF_PADDING,
         shifts * 1e6
     ));
-    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, range_m: range, efficiency: efficiency_spectrum });
+    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, range_m: range, efficiency: efficiency_spectrum, notices });
     Ok(lens)
 }
 
 /// The checks of a PSF-stack lens that need the rest of the scene: the stack's Nyquist frequency
 /// above the camera's, and the signal (detected spectrum × efficiency) inside the stack's
-/// wavelengths but for at most [`PSF_OUTSIDE_MAX`] of it.
+/// wavelengths but for at most [`PSF_OUTSIDE_MAX`] of it; then the stack's notices are warned.
 pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins) -> Result<(), Error> {
     let camera = scene.camera();
     let stack_nyquist = 0.5 / limits.pitch_m;
@@ -599,6 +601,9 @@ pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins
                 outside
             ),
         );
+    }
+    for (value, hint) in &limits.notices {
+        o.warn("lens.psf", value.clone(), hint.clone());
     }
     Ok(())
 }
@@ -697,6 +702,170 @@ mod tests {
         bad[20] = b'#';
         assert!(err(bad).contains("malformed .npy header"));
         assert!(err(b"PK\x03\x04".to_vec()).contains("not a .npy file"));
+    }
+
+    /// A folder of its own for one test's files.
+    fn folder(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("asnr-psf-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// `slices` Gaussian PSFs of σ = `sigma` samples on `n × n`, f8, as a .npy file.
+    fn gaussian_npy(dir: &Path, name: &str, n: usize, sigmas: &[f64]) -> std::path::PathBuf {
+        let c = (n / 2) as f64;
+        let mut data = Vec::new();
+        for &sigma in sigmas {
+            for i in 0..n * n {
+                let (y, x) = ((i / n) as f64 - c, (i % n) as f64 - c);
+                data.extend_from_slice(&(-(x * x + y * y) / (2.0 * sigma * sigma)).exp().to_le_bytes());
+            }
+        }
+        let path = dir.join(name);
+        std::fs::write(&path, npy("<f8", false, &[sigmas.len(), n, n], &data, 1)).unwrap();
+        path
+    }
+
+    /// The paper scene with a `[lens] model = "psf"` of `keys` (F/2.5, f0 = 3.36 mm).
+    fn psf_scene(keys: &str) -> String {
+        crate::PAPER_SCENE.replace(
+            &crate::PAPER_SCENE
+                [crate::PAPER_SCENE.find("[lens]").unwrap()..crate::PAPER_SCENE.find("[source]").unwrap()],
+            &format!("[lens]\nmodel = \"psf\"\nf_number = 2.5\nfocal_length_mm = 3.36\n{keys}\n\n"),
+        )
+    }
+
+    fn load(dir: &Path, keys: &str, overrides: &[&str]) -> Result<crate::Loaded, Error> {
+        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        crate::build_with_warnings(&crate::Source::from_text(psf_scene(keys), "s.toml", dir), &overrides)
+    }
+
+    /// A Gaussian PSF of σ = 2 samples at 1 µm, seen through a line at 800 nm: the mean MTF to
+    /// the camera's Nyquist frequency ν_N is the closed form
+    /// `(1/ν_N) ∫_0^{ν_N} e^{−2π²σ²ν²} dν = √π erf(a)/(2a)`, `a = √2 π σ ν_N` (the Gaussian's
+    /// Fourier transform), to the table's linear interpolation in ν (step 1/(4 n p); bound
+    /// (Δν²/8)·4π²σ² = 3e-4) — a reference that is not the engine under test.
+    #[test]
+    fn a_gaussian_stack_gives_the_closed_form_mean_mtf() {
+        let dir = folder("gauss");
+        gaussian_npy(&dir, "g.npy", 64, &[2.0, 2.0, 2.0]);
+        let keys = "psf = \"g.npy\"\npsf_pitch_um = 1\npsf_wavelengths_nm = [780, 800, 820]\nefficiency = 0.15";
+        let loaded = load(&dir, keys, &["spectrum.shape=line"]).unwrap();
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let e = metric::evaluate(&loaded.scene).unwrap();
+        let nyquist = 0.5 / 5.2e-6;
+        let a = std::f64::consts::SQRT_2 * std::f64::consts::PI * 2e-6 * nyquist;
+        // erf by its series (a ≈ 0.85: 30 terms reach 1e-16)
+        let erf = |x: f64| -> f64 {
+            let (mut term, mut sum) = (x, x);
+            for k in 1..30 {
+                term *= -x * x / k as f64;
+                sum += term / (2 * k + 1) as f64;
+            }
+            2.0 / std::f64::consts::PI.sqrt() * sum
+        };
+        let want = std::f64::consts::PI.sqrt() * erf(a) / (2.0 * a);
+        assert!((e.mean_mtf - want).abs() < 3e-4, "{} vs {want}", e.mean_mtf);
+        assert!(loaded.scene.lens().describe().contains("3 slices of 64 × 64 at 1 µm"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Every refusal names the file or key, the value and what is accepted.
+    #[test]
+    fn psf_refusals_name_the_key_and_the_numbers() {
+        let dir = folder("refusals");
+        gaussian_npy(&dir, "g.npy", 32, &[2.0, 2.0, 2.0]);
+        let good = "psf = \"g.npy\"\npsf_pitch_um = 1\npsf_wavelengths_nm = [780, 800, 820]\nefficiency = 0.15";
+        let line = ["spectrum.shape=line"];
+        let err = |keys: &str, overrides: &[&str]| match load(&dir, keys, overrides) {
+            Ok(_) => panic!("{keys} loads"),
+            Err(e) => e.to_string(),
+        };
+        // the Gaussian spectrum of 50 nm range (σ = 17.7 nm) reaches beyond 780–820 nm
+        let e = err(good, &[]);
+        assert!(e.contains("lens.psf_wavelengths_nm = [780–820 nm]") && e.contains("% of the signal"), "{e}");
+        assert!(e.contains("at most 0.1 % accepted"), "{e}");
+        let e = err(&good.replace("psf_pitch_um = 1", "psf_pitch_um = 6"), &line);
+        assert!(e.contains("lens.psf_pitch_um = 6") && e.contains("83.3 cycles/mm") && e.contains("96.2"), "{e}");
+        let e = err(&good.replace("[780, 800, 820]", "[780, 800]"), &line);
+        assert!(e.contains("lens.psf_wavelengths_nm = a list of 2") && e.contains("3 × 32 × 32"), "{e}");
+        let e = err(&good.replace("[780, 800, 820]", "[780, 770, 820]"), &line);
+        assert!(e.contains("lens.psf_wavelengths_nm[1] = 770") && e.contains("strictly increasing"), "{e}");
+        let e = err(&good.replace("\nefficiency = 0.15", ""), &line);
+        assert!(e.contains("lens.efficiency is missing") && e.contains("carries no efficiency"), "{e}");
+        let e = err(&good.replace("g.npy", "absent.npy"), &line);
+        assert!(e.contains("lens.psf = \"absent.npy\"") && e.contains("cannot read it"), "{e}");
+        // a NaN, a zero-sum slice, a negative sample beyond the floor
+        let c = 32 / 2;
+        for (name, index, value, want) in [
+            ("nan.npy", 5 * 32 + 7, f64::NAN, "slice 1 (800 nm): row 5, column 7 is NaN"),
+            ("neg.npy", c * 32 + c + 1, -0.5, "row 16, column 17 is -5e-1"),
+        ] {
+            let mut bytes = std::fs::read(dir.join("g.npy")).unwrap();
+            let at = bytes.len() - 2 * 32 * 32 * 8 + index * 8;
+            bytes[at..at + 8].copy_from_slice(&value.to_le_bytes());
+            std::fs::write(dir.join(name), bytes).unwrap();
+            let e = err(&good.replace("g.npy", name), &line);
+            assert!(e.contains(&format!("lens.psf = \"{name}\"")) && e.contains(want), "{e}");
+        }
+        let mut bytes = std::fs::read(dir.join("g.npy")).unwrap();
+        let end = bytes.len();
+        bytes[end - 32 * 32 * 8..].fill(0);
+        std::fs::write(dir.join("zero.npy"), bytes).unwrap();
+        let e = err(&good.replace("g.npy", "zero.npy"), &line);
+        assert!(e.contains("slice 2 (820 nm): its samples sum to 0e0"), "{e}");
+        std::fs::write(dir.join("text.npy"), "wavelength,x\n").unwrap();
+        let e = err(&good.replace("g.npy", "text.npy"), &line);
+        assert!(e.contains("neither a .npy file nor a TIFF") && e.contains("<f4"), "{e}");
+        let e = err(&format!("{good}\nmtf = \"x.csv\""), &line);
+        assert!(e.contains("lens.mtf does not apply to lens.model = \"psf\""), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A multi-page float TIFF reads as the .npy of the same samples; pages of different sizes
+    /// are refused before decoding; light at the border is warned about with its fraction.
+    #[test]
+    fn tiff_stacks_and_border_warnings() {
+        use tiff::encoder::{TiffEncoder, colortype};
+        let dir = folder("tiff");
+        let n = 32;
+        gaussian_npy(&dir, "g.npy", n, &[2.0, 2.5]);
+        let stack = read_stack(&dir.join("g.npy")).unwrap();
+        let mut file = std::fs::File::create(dir.join("g.tif")).unwrap();
+        let mut tiff = TiffEncoder::new(&mut file).unwrap();
+        for slice in stack.values.chunks(n * n) {
+            let page: Vec<f32> = slice.iter().map(|&v| v as f32).collect();
+            tiff.write_image::<colortype::Gray32Float>(n as u32, n as u32, &page).unwrap();
+        }
+        drop(file);
+        let keys =
+            |f: &str| format!("psf = \"{f}\"\npsf_pitch_um = 1\npsf_wavelengths_nm = [790, 810]\nefficiency = 0.15");
+        let line = ["spectrum.shape=line"];
+        let a = metric::evaluate(&load(&dir, &keys("g.npy"), &line).unwrap().scene).unwrap();
+        let b = metric::evaluate(&load(&dir, &keys("g.tif"), &line).unwrap().scene).unwrap();
+        assert!((a.mean_mtf - b.mean_mtf).abs() < 1e-7, "{} vs {} (float32 pages)", a.mean_mtf, b.mean_mtf);
+        let mut file = std::fs::File::create(dir.join("sizes.tif")).unwrap();
+        let mut tiff = TiffEncoder::new(&mut file).unwrap();
+        tiff.write_image::<colortype::Gray64Float>(16, 16, &[1.0; 256]).unwrap();
+        tiff.write_image::<colortype::Gray64Float>(16, 8, &[1.0; 128]).unwrap();
+        drop(file);
+        let e = load(&dir, &keys("sizes.tif"), &line).unwrap_err().to_string();
+        assert!(e.contains("page 1 is 16 × 8 pixels, page 0 16 × 16") && e.contains("lens.psf"), "{e}");
+        let mut file = std::fs::File::create(dir.join("int.tif")).unwrap();
+        TiffEncoder::new(&mut file).unwrap().write_image::<colortype::Gray16>(16, 16, &[1; 256]).unwrap();
+        drop(file);
+        let e = load(&dir, &keys("int.tif"), &line).unwrap_err().to_string();
+        assert!(e.contains("page 0 holds Gray(16)") && e.contains("float"), "{e}");
+        // a PSF as wide as the stack: its border light is warned about
+        gaussian_npy(&dir, "wide.npy", n, &[2.0, 8.0]);
+        let loaded = load(&dir, &keys("wide.npy"), &line).unwrap();
+        let w: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
+        assert!(
+            w.iter()
+                .any(|w| w.contains("of the light of the slice at 810 nm lies within 3 samples of the stack's border")),
+            "{w:?}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     proptest! {
