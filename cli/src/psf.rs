@@ -181,7 +181,7 @@ fn parse_wavelengths(text: &str) -> Result<Vec<f64>> {
         [a, b, step] => {
             let (a, b, step) = (number(a).ok_or_else(bad)?, number(b).ok_or_else(bad)?, number(step).ok_or_else(bad)?);
             let count = ((b - a) / step + 1e-9).floor();
-            if !(count >= 0.0 && count < 4096.0) {
+            if !(0.0..4096.0).contains(&count) {
                 return Err(bad());
             }
             (0..=count as usize).map(|i| a + step * i as f64).collect()
