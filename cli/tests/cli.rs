@@ -1214,11 +1214,12 @@ fn compare_lens_keys_are_refused_with_their_message() {
     let dir = scratch("lens-keys");
     let refractive = with_lens(&dir, "refractive.toml", REFRACTIVE_LENS);
     let r = refractive.to_str().unwrap();
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 14] = [
         (
             &["--set", "lens.model=fresnel"],
-            "lens.model = \"fresnel\": expected \"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table) or \"phase\"",
+            "lens.model = \"fresnel\": expected \"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table)",
         ),
+        (&["--set", "lens.model=fresnel"], "\"psf\" (a PSF stack)"),
         (&["--set", "lens.design_order=3"], "lens.design_order does not apply to lens.model = \"chromatic\""),
         (
             &["--set", "lens.aperture_diameter_mm=1"],

@@ -3,6 +3,7 @@
 
 mod phase;
 mod photons;
+mod psf;
 mod reference;
 mod segmented;
 mod tabulated;
