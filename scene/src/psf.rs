@@ -437,7 +437,6 @@ pub(crate) fn read_stack(path: &Path) -> Result<Stack, String> {
 }
 
 /// The `model = "psf"` lens of a `[lens]` table.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn psf_lens(
     l: &RawLens,
     o: &Origins,
