@@ -27,6 +27,9 @@
 //!   (geometric phase, a diffractive kinoform of design order p, a fixed optical path), evaluated
 //!   against the exact reference sphere ([`optics::Pupil::Radial`]; off axis the oblique wave's
 //!   field aberrations).
+//! - [`LibraryLens`]: a metalens of meta-atoms from a [`Library`] (complex transmission against
+//!   parameters and wavelength) placed by a layout of rings, in the local periodic approximation:
+//!   the first order's pupil from the zone-Fourier coefficient `c_1(ρ)`, τ1 and T from the field.
 //! - [`PsfStack`]: a lens given by its PSFs at a few wavelengths (a simulated or measured stack):
 //!   each slice normalized, its centroid the order's image shift, its OTF about the centroid by
 //!   FFT into an [`optics::OtfTable`] (tangential along x, sagittal along y) up to the stack's
@@ -64,6 +67,7 @@ mod chromatic;
 mod dispersion;
 mod harmonic;
 mod interleaved;
+mod library;
 mod phase;
 pub mod presets;
 mod psf;
@@ -75,6 +79,7 @@ pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
+pub use library::{Library, LibraryLens};
 pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
 pub use presets::{preset, preset_names};
 pub use psf::{

@@ -17,7 +17,7 @@ use crate::error::{Error, num, quoted};
 use crate::load::{NumberOrFile, Origins};
 
 /// The models a scene file accepts, as messages list them.
-pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table), \"phase\" (your design's phase profile) or \"psf\" (a PSF stack)";
+pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table), \"phase\" (your design's phase profile), \"library\" (a meta-atom library and its layout) or \"psf\" (a PSF stack)";
 
 /// The lens presets, by the names of `lenses::preset_names`: a name and the `[lens]` keys it
 /// stands for (keys given beside `preset` override them). Each is the lens of `lenses::preset`
@@ -106,6 +106,7 @@ pub(crate) struct RawLens {
     pub phase_csv: Option<String>,
     pub dispersion: Option<String>,
     pub zernike_noll_rms_um: Option<Vec<f64>>,
+    pub library: Option<String>,
     pub psf: Option<String>,
     pub psf_pitch_um: Option<f64>,
     pub psf_wavelengths_nm: Option<Vec<f64>>,
@@ -121,6 +122,7 @@ pub(crate) enum Model {
     Multiplexed,
     Tabulated,
     Phase,
+    Library,
     Psf,
 }
 
@@ -134,6 +136,7 @@ impl Model {
             Model::Multiplexed => "multiplexed",
             Model::Tabulated => "tabulated",
             Model::Phase => "phase",
+            Model::Library => "library",
             Model::Psf => "psf",
         }
     }
@@ -174,6 +177,7 @@ impl Model {
             Model::Harmonic => {
                 &["design_wavelength_nm", "design_order", "efficiency", "transmission", "zernike_noll_rms_um"]
             }
+            Model::Library => &["design_wavelength_nm", "library", "layout", "zernike_noll_rms_um"],
             Model::Phase => &[
                 "design_wavelength_nm",
                 "efficiency",
@@ -232,8 +236,9 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 40] {
+    fn given(&self) -> [(&'static str, bool); 41] {
         [
+            ("library", self.library.is_some()),
             ("psf", self.psf.is_some()),
             ("psf_pitch_um", self.psf_pitch_um.is_some()),
             ("psf_wavelengths_nm", self.psf_wavelengths_nm.is_some()),
@@ -288,6 +293,7 @@ pub(crate) fn model(l: &RawLens, o: &Origins) -> Result<Model, Error> {
         "multiplexed" => Model::Multiplexed,
         "tabulated" => Model::Tabulated,
         "phase" => Model::Phase,
+        "library" => Model::Library,
         "psf" => Model::Psf,
         other => return Err(o.bad("lens.model", quoted(other), MODELS)),
     })
@@ -808,6 +814,17 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             info.notes.push(format!("OTF table from {}", crate::error::shorten(&file)));
             Arc::new(lens)
         }
+        Model::Library => {
+            let l0 = design_wavelength(o)?;
+            let lens = library_lens(l, o, f_number, f0_m, l0)?;
+            info.design_wavelength_m = Some(l0);
+            info.notes.push(format!(
+                "at λ0: τ1 = {:.4}, T = {:.4} (first order from the zones' Fourier coefficients; the other orders are background)",
+                lens.efficiency(l0),
+                lens.transmission(l0)
+            ));
+            Arc::new(lens)
+        }
         Model::Phase => {
             let l0 = design_wavelength(o)?;
             let lens = phase_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?;
@@ -828,6 +845,120 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         _ => lens,
     };
     Ok(BuiltLens { lens, info })
+}
+
+/// The `model = "library"` lens: `lens.library` (columns: parameters, `wavelength_nm`,
+/// `amplitude` or `transmittance`, `phase_rad`) and `lens.layout` (`r_mm` and the same
+/// parameter columns).
+fn library_lens(l: &RawLens, o: &Origins, f_number: f64, f0_m: f64, l0: f64) -> Result<lenses::LibraryLens, Error> {
+    let expected =
+        "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
+    let file = o.require("lens.library", l.library.as_deref(), expected)?;
+    let (headers, rows) = crate::tables::read_columns(&o.path(file), "meta-atom library")
+        .map_err(|e| o.table_error("lens.library", file, e, expected))?;
+    let ctx = format!("lens.library = {}", quoted(file));
+    let col = |name: &str| headers.iter().position(|h| h == name);
+    let reserved = ["wavelength_nm", "amplitude", "transmittance", "phase_rad"];
+    let (Some(iw), Some(ip)) = (col("wavelength_nm"), col("phase_rad")) else {
+        return Err(o.bad(
+            "lens.library",
+            quoted(file),
+            &format!("{expected} (its header is `{}`)", headers.join(",")),
+        ));
+    };
+    let amplitude = match (col("amplitude"), col("transmittance")) {
+        (Some(i), None) => (i, false),
+        (None, Some(i)) => (i, true),
+        _ => {
+            return Err(o.bad(
+                "lens.library",
+                quoted(file),
+                &format!("one of the columns amplitude (|t|) or transmittance (|t|²), not both or neither (its header is `{}`)", headers.join(",")),
+            ));
+        }
+    };
+    let names: Vec<&String> = headers.iter().filter(|h| !reserved.contains(&h.as_str())).collect();
+    if names.is_empty() {
+        return Err(o.bad(
+            "lens.library",
+            quoted(file),
+            "at least one parameter column (e.g. diameter_nm) beside wavelength_nm, amplitude and phase_rad",
+        ));
+    }
+    let mut table = Vec::with_capacity(rows.len());
+    for (_, values) in &rows {
+        let params: Vec<f64> = names.iter().map(|n| values[col(n).unwrap_or(0)]).collect();
+        let a = values[amplitude.0];
+        let a = if amplitude.1 { if a >= 0.0 { a.sqrt() } else { f64::NAN } } else { a };
+        table.push((params, values[iw] * 1e-9, a, values[ip]));
+    }
+    let library = lenses::Library::new(&table).map_err(|e| o.domain("lens.library", &ctx, e))?;
+    let expected = "a CSV of the layout: r_mm at each ring's centre (equal pitch) and the library's parameter columns";
+    let file = o.require("lens.layout", l.layout.as_deref(), expected)?;
+    let (lheaders, lrows) = crate::tables::read_columns(&o.path(file), "layout")
+        .map_err(|e| o.table_error("lens.layout", file, e, expected))?;
+    let lctx = format!("lens.layout = {}", quoted(file));
+    let Some(ir) = lheaders.iter().position(|h| h == "r_mm") else {
+        return Err(o.bad(
+            "lens.layout",
+            quoted(file),
+            &format!("{expected} (its header is `{}`)", lheaders.join(",")),
+        ));
+    };
+    let mut indices = Vec::new();
+    for n in &names {
+        match lheaders.iter().position(|h| h == *n) {
+            Some(i) => indices.push(i),
+            None => {
+                return Err(o.bad(
+                    "lens.layout",
+                    quoted(file),
+                    &format!("the library's parameter column `{n}` (its header is `{}`)", lheaders.join(",")),
+                ));
+            }
+        }
+    }
+    let ranges = library.ranges();
+    let mut radii = Vec::with_capacity(lrows.len());
+    let mut params = Vec::with_capacity(lrows.len());
+    for (line, values) in &lrows {
+        let p: Vec<f64> = indices.iter().map(|&i| values[i]).collect();
+        for ((v, (lo, hi)), n) in p.iter().zip(&ranges).zip(&names) {
+            if v < lo || v > hi {
+                return Err(o.bad(
+                    "lens.layout",
+                    quoted(file),
+                    &format!(
+                        "every atom's {n} inside the library's range [{}, {}]: line {} has {}",
+                        num(*lo),
+                        num(*hi),
+                        line.map_or("?".to_owned(), |l| l.to_string()),
+                        num(*v)
+                    ),
+                ));
+            }
+        }
+        radii.push(values[ir] * 1e-3);
+        params.push(p);
+    }
+    let (lo, hi) = library.wavelength_range();
+    if !(l0 >= lo && l0 <= hi) {
+        return Err(o.bad(
+            "lens.design_wavelength_nm",
+            num(l0 * 1e9),
+            &format!("a wavelength inside the library's, {}–{} nm", num(lo * 1e9), num(hi * 1e9)),
+        ));
+    }
+    let source = format!(
+        "library {} ({} parameter{}: {}), layout {}",
+        crate::error::shorten(l.library.as_deref().unwrap_or_default()),
+        names.len(),
+        if names.len() == 1 { "" } else { "s" },
+        names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", "),
+        crate::error::shorten(file)
+    );
+    lenses::LibraryLens::new(f_number, f0_m, l0, Arc::new(library), radii, params, source)
+        .map_err(|e| o.domain("lens.layout", &lctx, e))
 }
 
 /// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.

@@ -226,6 +226,15 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             efficiency(out)?;
             transmission(out)?;
         }
+        Model::Library => {
+            out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
+            if let Some(file) = &l.library {
+                out.string("library", &path(o, "lens.library", file)?);
+            }
+            if let Some(file) = &l.layout {
+                out.string("layout", &path(o, "lens.layout", file)?);
+            }
+        }
         Model::Phase => {
             out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
             if let Some(a) = &l.binary2 {

@@ -520,3 +520,54 @@ pub(crate) fn read_phase_table(path: &Path, aperture_radius_mm: f64) -> Result<P
     };
     Ok(PhaseTable { r_mm: r, phase_rad: phase, amplitude })
 }
+
+/// Columns of a CSV table by their header names (`#` comments, a header row), every field a
+/// finite number: the header's names (lower-cased) and the rows in order, each with the line it
+/// came from.
+pub(crate) type Columns = (Vec<String>, Vec<(Option<u64>, Vec<f64>)>);
+
+/// Reads a CSV of named numeric columns (module docs of [`Columns`]); `what` names the table in
+/// messages ("meta-atom library").
+pub(crate) fn read_columns(path: &Path, what: &str) -> Result<Columns, Error> {
+    let file = path.display().to_string();
+    let text = read_text(path, "CSV file")?;
+    let err = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
+    let mut reader = csv_reader(&text, true);
+    let headers: Vec<String> = reader
+        .headers()
+        .map_err(|e| err(None, format!("cannot read the header of the {what}: {e}")))?
+        .iter()
+        .map(|h| h.trim().to_lowercase())
+        .collect();
+    if headers.iter().any(|h| numeric_looking(h)) {
+        return Err(err(
+            Some(1),
+            format!("the first row `{}` is not a header: the {what} needs its column names", headers.join(",")),
+        ));
+    }
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| err(None, format!("{e}")))?;
+        let line = record.position().map(|p| p.line());
+        if record.len() != headers.len() {
+            return Err(err(
+                line,
+                format!("{} fields: expected {} (the header's columns)", record.len(), headers.len()),
+            ));
+        }
+        let mut values = Vec::with_capacity(headers.len());
+        for (name, raw) in headers.iter().zip(record.iter()) {
+            let v = raw
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(line, format!("{name} = `{}`: expected a finite number", shorten(raw))))?;
+            values.push(v);
+        }
+        rows.push((line, values));
+    }
+    if rows.is_empty() {
+        return Err(err(None, format!("no rows: the {what} is empty")));
+    }
+    Ok((headers, rows))
+}

@@ -21,6 +21,14 @@
 //! (the paper's aperture: F/2.5, f0 = 3.36 mm, R = 0.672 mm, λ0 = 800 nm), as a designer's script
 //! would export it: 801 rows `r_mm,phase_rad` from 0 to R, the unwrapped
 //! `φ0(r) = −(2π/λ0)(√(r² + f0²) − f0)` with 9 decimals (read by `examples/phase-table.toml`).
+//!
+//! `examples/data/library-tio2-like.csv` is an ILLUSTRATIVE meta-atom library, not a simulation:
+//! TiO2-like pillars 800 nm high, diameters 100–300 nm every 5 nm, 700–900 nm every 10 nm, whose
+//! transmission follows a simple effective-index model (`pillar` below: the phase
+//! `2π H (n_eff − 1)/λ` with `n_eff = 1 + 0.9 (n(λ) − 1)(d/300 nm)^1.5`, `n(λ) = 2.3 + 0.08/λ²`
+//! (λ in µm), and the amplitude `0.95 − 0.15 (d/300 nm)^4`). `examples/data/layout-paper-lens.csv`
+//! places it on the paper's lens: 1680 rings of 400 nm pitch, each the diameter whose field at
+//! 800 nm is nearest to the hyperbolic phase (read by `examples/library.toml`).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -96,6 +104,79 @@ pub(crate) fn spectrometer_table() -> String {
     text
 }
 
+/// The illustrative meta-atom library and its layout, relative to the workspace root.
+pub(crate) const LIBRARY: &str = "examples/data/library-tio2-like.csv";
+pub(crate) const LAYOUT: &str = "examples/data/layout-paper-lens.csv";
+
+/// The illustrative library's pillar: height (nm), lattice period (nm), diameters (nm).
+const PILLAR_HEIGHT_NM: f64 = 800.0;
+const DIAMETERS_NM: (f64, f64, f64) = (100.0, 300.0, 5.0);
+
+/// The illustrative pillar's transmission at `d_nm`, `lambda_nm` (module docs): an effective
+/// index between air and a TiO2-like Cauchy index, `n_eff = 1 + 0.9 (n(λ) − 1)(d/300)^1.5`, the
+/// phase `2π H (n_eff − 1)/λ` wrapped to (−π, π], the amplitude `0.95 − 0.15 (d/300)^4`.
+fn pillar(d_nm: f64, lambda_nm: f64) -> (f64, f64) {
+    let n = 2.3 + 0.08 / (lambda_nm * 1e-3).powi(2);
+    let fill = (d_nm / DIAMETERS_NM.1).powf(1.5);
+    let n_eff = 1.0 + 0.9 * (n - 1.0) * fill;
+    let phase = std::f64::consts::TAU * PILLAR_HEIGHT_NM * (n_eff - 1.0) / lambda_nm;
+    let wrapped = phase - std::f64::consts::TAU * (phase / std::f64::consts::TAU).round();
+    (0.95 - 0.15 * (d_nm / DIAMETERS_NM.1).powi(4), wrapped)
+}
+
+fn diameters() -> Vec<f64> {
+    let (lo, hi, step) = DIAMETERS_NM;
+    let count = ((hi - lo) / step).round() as usize;
+    (0..=count).map(|i| lo + step * i as f64).collect()
+}
+
+/// The illustrative library table (module docs).
+pub(crate) fn library_table() -> String {
+    let mut text = String::from(
+        "# ILLUSTRATIVE TiO2-pillar-like meta-atom library, not a simulation (cargo xtask data):\n\
+         # effective-index model of an 800 nm pillar, see xtask/src/data.rs\n\
+         diameter_nm,wavelength_nm,amplitude,phase_rad\n",
+    );
+    for d in diameters() {
+        for k in 0..=20 {
+            let lambda = 700.0 + 10.0 * k as f64;
+            let (a, phase) = pillar(d, lambda);
+            let _ = writeln!(text, "{d:.1},{lambda:.1},{a:.6},{phase:.6}");
+        }
+    }
+    text
+}
+
+/// The layout of the paper's lens in the illustrative library: rings of 400 nm pitch from the
+/// axis to R = 0.672 mm, each the diameter whose field at 800 nm is nearest the hyperbolic phase.
+pub(crate) fn layout_table() -> String {
+    let (f0_nm, radius_nm, pitch_nm) = (3.36e6_f64, 0.672e6_f64, 400.0);
+    let rows = (radius_nm / pitch_nm).round() as usize;
+    let fields: Vec<(f64, f64, f64)> = diameters()
+        .into_iter()
+        .map(|d| {
+            let (a, phase) = pillar(d, 800.0);
+            (d, a * phase.cos(), a * phase.sin())
+        })
+        .collect();
+    let mut text = String::from(
+        "# layout of the paper's lens (F/2.5, f0 = 3.36 mm, 800 nm) in the ILLUSTRATIVE library (cargo xtask data)\nr_mm,diameter_nm\n",
+    );
+    for i in 0..rows {
+        let r = (i as f64 + 0.5) * pitch_nm;
+        let target = -std::f64::consts::TAU / 800.0 * ((r * r + f0_nm * f0_nm).sqrt() - f0_nm);
+        let (tx, ty) = (target.cos(), target.sin());
+        let best = fields
+            .iter()
+            .min_by(|a, b| {
+                ((a.1 - tx).powi(2) + (a.2 - ty).powi(2)).total_cmp(&((b.1 - tx).powi(2) + (b.2 - ty).powi(2)))
+            })
+            .map_or(0.0, |f| f.0);
+        let _ = writeln!(text, "{:.7},{best:.1}", r * 1e-6);
+    }
+    text
+}
+
 /// The hyperbolic phase table, relative to the workspace root.
 pub(crate) const PHASE_TABLE: &str = "examples/data/phase-hyperbolic-f2.5.csv";
 
@@ -120,7 +201,13 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         [flag] if flag == "--check" => true,
         [bad, ..] => bail!("unknown argument `{bad}` (usage: cargo xtask data [--check])"),
     };
-    for (name, text) in [(SPECTROMETER, spectrometer_table()), (PHASE_TABLE, phase_table())] {
+    let files = [
+        (SPECTROMETER, spectrometer_table()),
+        (PHASE_TABLE, phase_table()),
+        (LIBRARY, library_table()),
+        (LAYOUT, layout_table()),
+    ];
+    for (name, text) in files {
         let path = root.join(name);
         if check {
             let current = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -189,6 +276,10 @@ mod tests {
         assert!(committed == spectrometer_table(), "run `cargo xtask data` and commit {SPECTROMETER}");
         let committed = std::fs::read_to_string(root.join(PHASE_TABLE)).unwrap();
         assert!(committed == phase_table(), "run `cargo xtask data` and commit {PHASE_TABLE}");
+        for (name, text) in [(LIBRARY, library_table()), (LAYOUT, layout_table())] {
+            let committed = std::fs::read_to_string(root.join(name)).unwrap();
+            assert!(committed == text, "run `cargo xtask data` and commit {name}");
+        }
     }
 
     /// The phase table is the hyperbola: at the rim −(2π/λ0)(√(R² + f0²) − f0) = −527.79 rad.

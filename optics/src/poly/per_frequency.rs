@@ -63,13 +63,15 @@ const VALUE_SHARE: f64 = 0.1;
 const NARROWEST_PANEL: f64 = 1e-9;
 
 /// One order at one wavelength, as the exact 1-D OTF reads it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct OrderAt {
     /// `λ F# / r`: `s = ν` times this (r the pupil's radius relative to the full aperture)
     s_per_frequency: f64,
     /// defocus in waves, `W020/λ`
     waves: f64,
     efficiency: f64,
+    /// a radially symmetric pupil given as data, computed by the radial engine instead
+    radial: Option<Arc<crate::radial::RadialOrder>>,
 }
 
 /// The lens at the points a level adds: their orders one after the other, and where each
@@ -153,6 +155,7 @@ impl Levelled {
                         s_per_frequency: scene.f_number * lambda / node.scale,
                         waves: node.w020 / lambda,
                         efficiency: o.efficiency,
+                        radial: node.radial.clone(),
                     }
                 }));
                 fresh.ends.push(fresh.orders.len());
@@ -181,7 +184,17 @@ impl Levelled {
         otfs.clear();
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
-        crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
+        if fresh.orders.iter().any(|o| o.radial.is_some()) {
+            // radial pupils one at a time (the radial engine), the rest as a batch
+            for ((o, &(s, w)), otf) in fresh.orders.iter().zip(pairs.iter()).zip(otfs.iter_mut()) {
+                *otf = match &o.radial {
+                    Some(r) => r.otf(s, accuracy),
+                    None => crate::otf::defocus_otf(s, w),
+                };
+            }
+        } else {
+            crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
+        }
         evaluations.set(evaluations.get() + pairs.len());
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
         for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
@@ -295,8 +308,9 @@ impl<'a> PerFrequency<'a> {
             }
             nodes.panels.push(Panel { lo: p.panel.a, hi: p.panel.b, start, end: nodes.nodes.len() });
         }
-        // only centred circles with defocus: no FFT grid, no table, no image shift
-        if nodes.needs_grid || nodes.shifted() || nodes.nodes.iter().any(|n| !n.is_defocused_circle()) {
+        // only centred circles with defocus, or radially symmetric pupils (the radial engine):
+        // no FFT grid, no table, no image shift
+        if nodes.needs_grid || nodes.shifted() || nodes.nodes.iter().any(|n| n.table.is_some()) {
             return None;
         }
         nodes.sum_weights();

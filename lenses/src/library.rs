@@ -1,0 +1,592 @@
+//! A metalens given as a meta-atom library and the layout that places its atoms, in the local
+//! periodic approximation (docs/physics.md, "Designs given as data").
+
+use std::sync::Arc;
+
+use num_complex::Complex64;
+use optics::radial::{RadialProfile, RadialPupil};
+use optics::{Field, LensModel, Order, Wavefront};
+
+use crate::Error;
+use crate::chromatic::check;
+
+/// Degree in `q = ρ²` of the even polynomial fitted to the layout's design phase.
+const DESIGN_FIT_DEGREE: usize = 10;
+
+/// A meta-atom library: the complex transmission `t(p, λ)` of one atom (in its periodic cell) on
+/// a full grid of parameters (one or more, each sorted) and wavelengths. Between grid points the
+/// complex transmission is interpolated multilinearly (in every parameter and in λ): the field,
+/// not the amplitude and phase apart, so that a phase wrapping from π to −π between two atoms
+/// interpolates through the short way.
+#[derive(Clone, Debug)]
+pub struct Library {
+    axes: Vec<Vec<f64>>,
+    wavelengths: Vec<f64>,
+    /// `t` at every grid point, the wavelength fastest, then the last parameter, …
+    field: Vec<Complex64>,
+}
+
+impl Library {
+    /// A library from rows `(parameters, wavelength_m, amplitude, phase_rad)`: the rows must
+    /// hold every combination of the distinct parameter values and wavelengths exactly once
+    /// (a full grid, in any order), each amplitude in `[0, 1]`.
+    pub fn new(rows: &[(Vec<f64>, f64, f64, f64)]) -> Result<Library, Error> {
+        let Some(first) = rows.first() else {
+            return Err(Error::OutOfRange { name: "library rows", value: 0.0, expected: "at least one row" });
+        };
+        let dims = first.0.len();
+        if dims == 0 {
+            return Err(Error::OutOfRange {
+                name: "library parameters",
+                value: 0.0,
+                expected: "at least one parameter column",
+            });
+        }
+        let distinct = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        };
+        let mut axes = Vec::new();
+        for d in 0..dims {
+            axes.push(distinct(rows.iter().map(|r| r.0.get(d).copied().unwrap_or(f64::NAN)).collect()));
+        }
+        let wavelengths = distinct(rows.iter().map(|r| r.1).collect());
+        let size: usize = axes.iter().map(Vec::len).product::<usize>() * wavelengths.len();
+        if size != rows.len() {
+            return Err(Error::OutOfRange {
+                name: "library rows",
+                value: rows.len() as f64,
+                expected: "a full grid: one row for every combination of the parameters' and wavelengths' distinct values",
+            });
+        }
+        let mut field = vec![Complex64::new(f64::NAN, 0.0); size];
+        for (p, lambda, amplitude, phase) in rows {
+            for v in p.iter().chain([lambda, amplitude, phase]) {
+                check("library value", *v, true, "finite")?;
+            }
+            check("library amplitude", *amplitude, (0.0..=1.0).contains(amplitude), "an amplitude |t| in [0, 1]")?;
+            let mut index = 0;
+            for (d, axis) in axes.iter().enumerate() {
+                index = index * axis.len() + axis.partition_point(|&a| a < p[d]);
+            }
+            index = index * wavelengths.len() + wavelengths.partition_point(|&l| l < *lambda);
+            if !field[index].re.is_nan() {
+                return Err(Error::OutOfRange {
+                    name: "library row repeated at wavelength (m)",
+                    value: *lambda,
+                    expected: "one row per parameter combination and wavelength",
+                });
+            }
+            field[index] = Complex64::from_polar(*amplitude, *phase);
+        }
+        Ok(Library { axes, wavelengths, field })
+    }
+
+    /// The parameter ranges `(min, max)`, one per parameter.
+    pub fn ranges(&self) -> Vec<(f64, f64)> {
+        self.axes.iter().map(|a| (a[0], a[a.len() - 1])).collect()
+    }
+
+    /// The wavelength range (m).
+    pub fn wavelength_range(&self) -> (f64, f64) {
+        (self.wavelengths[0], self.wavelengths[self.wavelengths.len() - 1])
+    }
+
+    /// The number of parameters.
+    pub fn dimensions(&self) -> usize {
+        self.axes.len()
+    }
+
+    /// `t(p, λ)`, multilinear in the parameters and λ (clamped to the grid's ends).
+    pub fn transmission(&self, params: &[f64], wavelength_m: f64) -> Complex64 {
+        // the cell and the fractions along every axis (the wavelength last)
+        let mut cells: Vec<(usize, f64)> = Vec::with_capacity(self.axes.len() + 1);
+        for (axis, &p) in self.axes.iter().zip(params).chain(std::iter::once((&self.wavelengths, &wavelength_m))) {
+            if axis.len() == 1 {
+                cells.push((0, 0.0));
+                continue;
+            }
+            let i = axis.partition_point(|&a| a <= p).clamp(1, axis.len() - 1) - 1;
+            let f = ((p - axis[i]) / (axis[i + 1] - axis[i])).clamp(0.0, 1.0);
+            cells.push((i, f));
+        }
+        let lens: Vec<usize> = self.axes.iter().map(Vec::len).chain([self.wavelengths.len()]).collect();
+        let mut sum = Complex64::new(0.0, 0.0);
+        for corner in 0..(1usize << cells.len()) {
+            let mut index = 0;
+            let mut weight = 1.0;
+            for (d, &(i, f)) in cells.iter().enumerate() {
+                let up = (corner >> d) & 1 == 1 && lens[d] > 1;
+                if (corner >> d) & 1 == 1 && lens[d] == 1 {
+                    weight = 0.0;
+                }
+                index = index * lens[d] + i + usize::from(up);
+                weight *= if up { f } else { 1.0 - f };
+            }
+            if weight != 0.0 {
+                sum += self.field[index] * weight;
+            }
+        }
+        sum
+    }
+}
+
+/// A metalens of meta-atoms from a [`Library`] placed in rings of equal pitch (a layout), in the
+/// local periodic approximation (docs/physics.md, "Designs given as data"):
+///
+/// - atom `i` fills the ring `[r_i − Λ/2, r_i + Λ/2]` (Λ the pitch) with its library field
+///   `t(p_i, λ)`, held over its cell;
+/// - the design phase `ψ(r)` is the atoms' phase at λ0, unwrapped along the radius and fitted by
+///   an even polynomial in `ρ²` (degree [`DESIGN_FIT_DEGREE`]); its `2π` steps are the zones;
+/// - at each wavelength and in each zone the field, as a function of `ψ` over one period, has the
+///   Fourier coefficients `c_m = (1/2π) ∫ f(ψ) e^{−imψ} dψ` (each atom's constant field over its
+///   interval of `ψ`); order 1 carries `|c_1|²` of the zone's light with the phase `ψ + arg c_1`
+///   (the imaging order: its coherent part, a least-squares polynomial in `ρ²` through the zones'
+///   `c_1`, gives a radial pupil of amplitude `|c_1(ρ)|` and wavefront
+///   `W = (λ/2π)(ψ + arg c_1) + sag` against the exact reference sphere); the zone-to-zone
+///   scatter about it (the atoms' discreteness) and every other order (order m focuses at `f/m`)
+///   are background;
+/// - `τ1(λ) = ∫|c_1|² dA/(πR²)` of the coherent part, `T(λ) = Σ_atoms |t_i|² × area` (fractions
+///   of the light on the aperture; Parseval: `Σ_m |c_m|²` is the zone's mean `|t|²`).
+///
+/// A staircase of N equal phase levels per zone gives `c_1 = sinc(1/N)` (tested).
+#[derive(Debug)]
+pub struct LibraryLens {
+    f_number: f64,
+    focal_length: f64,
+    design_wavelength: f64,
+    library: Arc<Library>,
+    /// ring centres, m
+    radii: Vec<f64>,
+    pitch: f64,
+    params: Vec<Vec<f64>>,
+    /// the design phase as an even polynomial in q = ρ² (radians)
+    design: Arc<RadialProfile>,
+    design_coefficients: Vec<f64>,
+    sphere: Arc<RadialProfile>,
+    source: String,
+    /// the distinct parameter sets, each atom's index into them and its area fraction
+    unique: Vec<Vec<f64>>,
+    atoms: Vec<(usize, f64)>,
+    /// the atoms' cells split at the zones, and the zones' (q at their middle, area fraction)
+    cells: Vec<Cell>,
+    zones: Vec<(f64, f64)>,
+    /// the first order at the wavelengths asked so far: (λ bits, τ1, T, pupil)
+    cache: std::sync::Mutex<Vec<(u64, f64, f64, Option<Arc<RadialPupil>>)>>,
+}
+
+impl Clone for LibraryLens {
+    fn clone(&self) -> LibraryLens {
+        LibraryLens {
+            f_number: self.f_number,
+            focal_length: self.focal_length,
+            design_wavelength: self.design_wavelength,
+            library: self.library.clone(),
+            radii: self.radii.clone(),
+            pitch: self.pitch,
+            params: self.params.clone(),
+            design: self.design.clone(),
+            design_coefficients: self.design_coefficients.clone(),
+            sphere: self.sphere.clone(),
+            source: self.source.clone(),
+            unique: self.unique.clone(),
+            atoms: self.atoms.clone(),
+            cells: self.cells.clone(),
+            zones: self.zones.clone(),
+            cache: std::sync::Mutex::new(Vec::new()),
+        }
+    }
+}
+
+impl LibraryLens {
+    /// A library lens of working F-number `f_number` with the detector at `focal_length_m`,
+    /// designed at `design_wavelength_m`, from `library` and the layout's ring centres
+    /// `radii_m` (equal pitch, from the axis outwards, covering the aperture `f0/(2F#)`) with
+    /// each atom's parameters `params` (inside the library's ranges).
+    pub fn new(
+        f_number: f64,
+        focal_length_m: f64,
+        design_wavelength_m: f64,
+        library: Arc<Library>,
+        radii_m: Vec<f64>,
+        params: Vec<Vec<f64>>,
+        source: String,
+    ) -> Result<LibraryLens, Error> {
+        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+        check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
+        let radius = 0.5 * focal_length_m / f_number;
+        if radii_m.len() < 4 || radii_m.len() != params.len() {
+            return Err(Error::OutOfRange {
+                name: "layout atoms",
+                value: radii_m.len() as f64,
+                expected: "at least 4 rings, each with its parameters",
+            });
+        }
+        let pitch = radii_m[1] - radii_m[0];
+        check("layout pitch (m)", pitch, pitch > 0.0, "> 0: ring centres increasing")?;
+        for (i, w) in radii_m.windows(2).enumerate() {
+            let step = w[1] - w[0];
+            if (step - pitch).abs() > 1e-6 * pitch {
+                return Err(Error::OutOfRange {
+                    name: "layout ring spacing (m)",
+                    value: step,
+                    expected: if i == 0 { "equal pitch" } else { "equal to the first spacing (an equal pitch)" },
+                });
+            }
+        }
+        check(
+            "layout first ring centre (m)",
+            radii_m[0],
+            (radii_m[0] - 0.5 * pitch).abs() <= 1e-6 * pitch || radii_m[0].abs() <= 1e-6 * pitch,
+            "half a pitch (cells from the axis) or 0",
+        )?;
+        let outer = radii_m[radii_m.len() - 1] + 0.5 * pitch;
+        check("layout outer edge (m)", outer, outer >= radius * (1.0 - 1e-9), "at least the aperture radius f0/(2F#)")?;
+        let ranges = library.ranges();
+        for p in &params {
+            if p.len() != ranges.len() {
+                return Err(Error::OutOfRange {
+                    name: "layout parameters per atom",
+                    value: p.len() as f64,
+                    expected: "as many as the library's parameter columns",
+                });
+            }
+            for (&v, &(lo, hi)) in p.iter().zip(&ranges) {
+                check("layout parameter", v, v >= lo && v <= hi, "inside the library's range of that parameter")?;
+            }
+        }
+        let (lo, hi) = library.wavelength_range();
+        check(
+            "design_wavelength",
+            design_wavelength_m,
+            design_wavelength_m >= lo && design_wavelength_m <= hi,
+            "inside the library's wavelengths",
+        )?;
+        // the design phase: the atoms' phase at λ0, unwrapped, fitted in q over the aperture
+        let mut unwrapped: Vec<f64> = Vec::with_capacity(radii_m.len());
+        for p in &params {
+            let phase = library.transmission(p, design_wavelength_m).arg();
+            let value = match unwrapped.last() {
+                None => phase,
+                Some(&last) => {
+                    let turns = ((last - phase) / std::f64::consts::TAU).round();
+                    let value = phase + turns * std::f64::consts::TAU;
+                    // a step near π cannot be unwrapped: which way the phase went is unknown
+                    check(
+                        "layout phase step between neighbouring atoms at λ0 (rad)",
+                        (value - last).abs(),
+                        (value - last).abs() <= 0.9 * std::f64::consts::PI,
+                        "at most 0.9π: the design phase is the atoms' phase unwrapped along the radius, which needs at least three atoms a zone and more than two phase levels",
+                    )?;
+                    value
+                }
+            };
+            unwrapped.push(value);
+        }
+        let inside: Vec<(f64, f64)> = radii_m
+            .iter()
+            .zip(&unwrapped)
+            .filter(|(r, _)| **r <= radius)
+            .map(|(r, phi)| ((r / radius).powi(2), *phi))
+            .collect();
+        let design_coefficients = fit_even(&inside, DESIGN_FIT_DEGREE);
+        let design = Arc::new(RadialProfile::even_polynomial(design_coefficients.clone()).map_err(Error::Pupil)?);
+        let sphere = Arc::new(RadialProfile::reference_sphere(radius, focal_length_m).map_err(Error::Pupil)?);
+        // the cells, split where ψ crosses a whole turn from the axis (the zones), λ-independent
+        let area = std::f64::consts::PI * radius * radius;
+        let psi = |r: f64| design.value((r / radius).powi(2));
+        let psi0 = psi(0.0);
+        let turns = |r: f64| ((psi(r) - psi0).abs() / std::f64::consts::TAU).floor();
+        let mut unique: Vec<Vec<f64>> = Vec::new();
+        let mut atoms = Vec::new();
+        let mut cells = Vec::new();
+        let mut zone_edges: Vec<(f64, f64)> = Vec::new();
+        for (r, p) in radii_m.iter().zip(&params) {
+            let (a, b) = ((r - 0.5 * pitch).max(0.0), (r + 0.5 * pitch).min(radius));
+            if b <= a {
+                continue;
+            }
+            let u = match unique.iter().position(|x| x == p) {
+                Some(u) => u,
+                None => {
+                    unique.push(p.clone());
+                    unique.len() - 1
+                }
+            };
+            atoms.push((u, std::f64::consts::PI * (b * b - a * a) / area));
+            let mut start = a;
+            while start < b {
+                let k = turns(start);
+                let mut end = b;
+                if turns(b) > k {
+                    let (mut lo, mut hi) = (start, b);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        if turns(mid) > k { hi = mid } else { lo = mid }
+                    }
+                    end = hi;
+                }
+                let (pa, pb) = (psi(start), psi(end));
+                let zone = k as usize;
+                if zone_edges.len() <= zone {
+                    zone_edges.resize(zone + 1, (f64::NAN, f64::NAN));
+                }
+                let edges = &mut zone_edges[zone];
+                if edges.0.is_nan() {
+                    edges.0 = start;
+                }
+                edges.1 = end;
+                let kernel = (Complex64::from_polar(1.0, -pb) - Complex64::from_polar(1.0, -pa)) * Complex64::i();
+                cells.push(Cell { unique: u, zone, kernel, span: pb - pa });
+                if end <= start {
+                    break;
+                }
+                start = end;
+            }
+        }
+        let zones = zone_edges
+            .iter()
+            .map(|&(r_in, r_out)| {
+                if r_in.is_nan() {
+                    (0.0, 0.0)
+                } else {
+                    let q = 0.5 * (r_in * r_in + r_out * r_out) / (radius * radius);
+                    (q, std::f64::consts::PI * (r_out * r_out - r_in * r_in) / area)
+                }
+            })
+            .collect();
+        Ok(LibraryLens {
+            f_number,
+            focal_length: focal_length_m,
+            design_wavelength: design_wavelength_m,
+            library,
+            radii: radii_m,
+            pitch,
+            params,
+            design,
+            design_coefficients,
+            sphere,
+            source,
+            unique,
+            atoms,
+            cells,
+            zones,
+            cache: std::sync::Mutex::new(Vec::new()),
+        })
+    }
+
+    /// The family's name.
+    pub fn kind(&self) -> &'static str {
+        "library"
+    }
+
+    /// The aperture radius, m.
+    pub fn aperture_radius(&self) -> f64 {
+        0.5 * self.focal_length / self.f_number
+    }
+
+    /// The design phase (radians) at normalized radius `rho`.
+    pub fn design_phase(&self, rho: f64) -> f64 {
+        self.design.value(rho * rho)
+    }
+
+    /// `(T, zones' (q_centre, area fraction, c_1))` at `wavelength_m` (the cells precomputed).
+    fn decompose(&self, wavelength_m: f64) -> (f64, Vec<(f64, f64, Complex64)>) {
+        let t: Vec<Complex64> = self.unique.iter().map(|p| self.library.transmission(p, wavelength_m)).collect();
+        let transmission: f64 = self.atoms.iter().map(|&(u, area)| t[u].norm_sqr() * area).sum();
+        let mut sums = vec![(Complex64::new(0.0, 0.0), 0.0); self.zones.len()];
+        for cell in &self.cells {
+            // ∫ t e^{−iψ} dψ over [ψa, ψb] = i t (e^{−iψb} − e^{−iψa})
+            let z = &mut sums[cell.zone];
+            z.0 += t[cell.unique] * cell.kernel;
+            z.1 += cell.span;
+        }
+        let zones = self
+            .zones
+            .iter()
+            .zip(&sums)
+            .filter(|(_, s)| s.1 != 0.0)
+            .map(|(&(q, area), s)| (q, area, s.0 / s.1))
+            .collect();
+        (transmission, zones)
+    }
+
+    /// The imaging order's pupil at `wavelength_m` and its efficiency τ1: the coherent part of
+    /// the zones' `c_1(q)`, a least-squares polynomial of degree [`COHERENT_FIT_DEGREE`] in `q`
+    /// weighted by the zones' areas (its amplitude `|c_1|` and phase `ψ + arg c_1` through
+    /// tables of [`PUPIL_KNOTS`] radii); `τ1 = ∫|c_1|² dq`. The zone-to-zone scatter about the
+    /// fit (the atoms' discreteness) is light spread far from the image: background, within T.
+    fn first_order(&self, wavelength_m: f64) -> (f64, f64, Option<Arc<RadialPupil>>) {
+        let key = wavelength_m.to_bits();
+        if let Ok(cache) = self.cache.lock()
+            && let Some(hit) = cache.iter().find(|c| c.0 == key)
+        {
+            return (hit.1, hit.2, hit.3.clone());
+        }
+        let (transmission, zones) = self.decompose(wavelength_m);
+        let result = if zones.is_empty() {
+            (0.0, transmission, None)
+        } else {
+            let points_re: Vec<(f64, f64, f64)> = zones.iter().map(|&(q, a, c)| (q, c.re, a)).collect();
+            let points_im: Vec<(f64, f64, f64)> = zones.iter().map(|&(q, a, c)| (q, c.im, a)).collect();
+            let re = fit_weighted(&points_re, COHERENT_FIT_DEGREE);
+            let im = fit_weighted(&points_im, COHERENT_FIT_DEGREE);
+            let eval = |c: &[f64], q: f64| c.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
+            let rho: Vec<f64> = (0..PUPIL_KNOTS).map(|i| i as f64 / (PUPIL_KNOTS - 1) as f64).collect();
+            let mut amp = Vec::with_capacity(PUPIL_KNOTS);
+            let mut arg: Vec<f64> = Vec::with_capacity(PUPIL_KNOTS);
+            for &r in &rho {
+                let c = Complex64::new(eval(&re, r * r), eval(&im, r * r));
+                amp.push(c.norm());
+                let a = c.arg();
+                arg.push(match arg.last() {
+                    Some(&last) => a + ((last - a) / std::f64::consts::TAU).round() * std::f64::consts::TAU,
+                    None => a,
+                });
+            }
+            let per_radian = wavelength_m / std::f64::consts::TAU;
+            match (RadialProfile::table(rho.clone(), amp), RadialProfile::table(rho, arg)) {
+                (Ok(amplitude), Ok(residual)) => {
+                    let tau = amplitude.mean_square().min(transmission);
+                    let terms = vec![
+                        (per_radian, self.design.clone()),
+                        (1.0, self.sphere.clone()),
+                        (per_radian, Arc::new(residual)),
+                    ];
+                    let pupil = RadialPupil::new(Some(Arc::new(amplitude)), terms, vec![]).ok().map(Arc::new);
+                    (if pupil.is_some() { tau } else { 0.0 }, transmission, pupil)
+                }
+                _ => (0.0, transmission, None),
+            }
+        };
+        if let Ok(mut cache) = self.cache.lock() {
+            if cache.len() >= CACHE_WAVELENGTHS {
+                cache.clear();
+            }
+            cache.push((key, result.0, result.1, result.2.clone()));
+        }
+        result
+    }
+}
+
+/// Degree in `q` of the coherent first-order field fitted over the zones.
+const COHERENT_FIT_DEGREE: usize = 8;
+
+/// Radii of the imaging order's amplitude and phase tables (uniform in ρ, from the axis to the rim).
+const PUPIL_KNOTS: usize = 33;
+
+/// Wavelengths whose first order a lens keeps (an evaluation asks the same ones many times).
+const CACHE_WAVELENGTHS: usize = 4096;
+
+/// One atom's cell (or the part of it in one zone): its unique parameter set, its zone, and
+/// `i (e^{−iψb} − e^{−iψa})` and `ψb − ψa` over it.
+#[derive(Clone, Debug)]
+struct Cell {
+    unique: usize,
+    zone: usize,
+    kernel: Complex64,
+    span: f64,
+}
+
+/// [`fit_even`] with weights: `points` are `(q, value, weight)`.
+fn fit_weighted(points: &[(f64, f64, f64)], degree: usize) -> Vec<f64> {
+    let degree = degree.min(points.len().saturating_sub(1));
+    let n = degree + 1;
+    let mut a = vec![vec![0.0; n + 1]; n];
+    for &(q, v, w) in points {
+        let powers: Vec<f64> = (0..n).map(|i| q.powi(i as i32)).collect();
+        for i in 0..n {
+            for j in 0..n {
+                a[i][j] += w * powers[i] * powers[j];
+            }
+            a[i][n] += w * powers[i] * v;
+        }
+    }
+    solve(a)
+}
+
+/// Least-squares coefficients `c_0 … c_degree` of `Σ c_i q^i` through the points `(q, value)`
+/// (the degree lowered to the points available).
+fn fit_even(points: &[(f64, f64)], degree: usize) -> Vec<f64> {
+    let weighted: Vec<(f64, f64, f64)> = points.iter().map(|&(q, v)| (q, v, 1.0)).collect();
+    fit_weighted(&weighted, degree)
+}
+
+/// The solution of the normal equations `a` (rows `[A | b]`), by Gauss–Jordan elimination with
+/// partial pivoting (a singular column gives 0).
+fn solve(mut a: Vec<Vec<f64>>) -> Vec<f64> {
+    let n = a.len();
+    for col in 0..n {
+        let pivot = (col..n).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
+        a.swap(col, pivot);
+        let p = a[col][col];
+        if p == 0.0 {
+            continue;
+        }
+        for row in 0..n {
+            if row != col {
+                let factor = a[row][col] / p;
+                for k in col..=n {
+                    a[row][k] -= factor * a[col][k];
+                }
+            }
+        }
+    }
+    (0..n).map(|i| if a[i][i] != 0.0 { a[i][n] / a[i][i] } else { 0.0 }).collect()
+}
+
+impl LensModel for LibraryLens {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        let (tau, _, pupil) = self.first_order(wavelength_m);
+        let Some(mut pupil) = pupil else { return Vec::new() };
+        if !field.is_on_axis()
+            && let Ok(o) =
+                optics::radial::Oblique::new(self.aperture_radius(), self.focal_length, field.x_rad, field.y_rad)
+        {
+            pupil = Arc::new((*pupil).clone().with_oblique(o));
+        }
+        vec![Order::radial(tau, pupil, Wavefront::default())]
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.first_order(wavelength_m).1
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        self.library.wavelengths.clone()
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        Some(self.design_wavelength)
+    }
+
+    fn describe(&self) -> String {
+        let r = optics::round_for_display;
+        format!(
+            "meta-atom library lens F/{} f0 = {} mm at λ0 = {} nm ({}; {} atoms at {} µm pitch, local periodic approximation), against the exact reference sphere",
+            r(self.f_number),
+            r(self.focal_length * 1e3),
+            r(self.design_wavelength * 1e9),
+            self.source,
+            self.radii.len(),
+            r(self.pitch * 1e6),
+        )
+    }
+}
+
+impl LibraryLens {
+    /// The design phase's coefficients in `q = ρ²` (radians), as fitted.
+    pub fn design_coefficients(&self) -> &[f64] {
+        &self.design_coefficients
+    }
+}
