@@ -172,9 +172,12 @@ pub struct LibraryLens {
     /// the atoms' cells split at the zones, and the zones' (q at their middle, area fraction)
     cells: Vec<Cell>,
     zones: Vec<(f64, f64)>,
-    /// the first order at the wavelengths asked so far: (λ bits, τ1, T, pupil)
-    cache: std::sync::Mutex<Vec<(u64, f64, f64, Option<Arc<RadialPupil>>)>>,
+    /// the first order at the wavelengths asked so far
+    cache: std::sync::Mutex<Vec<CachedOrder>>,
 }
+
+/// The first order at one wavelength: (λ bits, τ1, T, pupil).
+type CachedOrder = (u64, f64, f64, Option<Arc<RadialPupil>>);
 
 impl Clone for LibraryLens {
     fn clone(&self) -> LibraryLens {
@@ -525,11 +528,12 @@ fn solve(mut a: Vec<Vec<f64>>) -> Vec<f64> {
         if p == 0.0 {
             continue;
         }
-        for row in 0..n {
+        let pivot_row = a[col].clone();
+        for (row, values) in a.iter_mut().enumerate() {
             if row != col {
-                let factor = a[row][col] / p;
-                for k in col..=n {
-                    a[row][k] -= factor * a[col][k];
+                let factor = values[col] / p;
+                for (v, &q) in values[col..=n].iter_mut().zip(&pivot_row[col..=n]) {
+                    *v -= factor * q;
                 }
             }
         }
