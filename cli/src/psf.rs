@@ -17,8 +17,8 @@ pub struct GridArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
     /// Folder for the PNG, the CSV matrices and the JSON description (created if missing).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
+    #[arg(long, value_name = "DIR", required_unless_present = "stack")]
+    pub out: Option<PathBuf>,
     /// Samples along each side of the grid (even, 16–2048).
     #[arg(long, default_value_t = 256, value_name = "N")]
     pub size: usize,
@@ -29,6 +29,18 @@ pub struct GridArgs {
     /// Draw the PNG on a logarithmic scale (4 decades below the peak), to see the PSF's tails.
     #[arg(long)]
     pub log: bool,
+    /// `asnr psf` only: write the scene lens's monochromatic PSFs at `--wavelengths-nm` as a PSF
+    /// stack, a .npy float array [wavelength, y, x] (the input of `[lens] model = "psf"`),
+    /// instead of the polychromatic PSF; its description and the `[lens]` keys that read it
+    /// back are printed.
+    #[arg(long, value_name = "FILE.npy", requires = "wavelengths_nm", conflicts_with = "log")]
+    pub stack: Option<PathBuf>,
+    /// The stack's wavelengths, nm: a list `700,750,800` or a range `start:stop:step`.
+    #[arg(long, value_name = "LIST", requires = "stack")]
+    pub wavelengths_nm: Option<String>,
+    /// The stack's sample type: `f4` (32-bit float, half the file) or `f8`.
+    #[arg(long, value_name = "TYPE", default_value = "f4", requires = "stack")]
+    pub dtype: String,
 }
 
 /// The JSON description written beside the matrices.
@@ -72,6 +84,13 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
     if !(16..=2048).contains(&n) || n % 2 == 1 {
         anyhow::bail!("--size {n}: expected an even number of samples from 16 to 2048");
     }
+    if let Some(stack) = &args.stack {
+        if kind == Kind::Otf {
+            anyhow::bail!("--stack: only with asnr psf (a stack of PSFs)");
+        }
+        return write_stack(args, stack);
+    }
+    let Some(out_dir) = &args.out else { anyhow::bail!("--out: expected the folder to write to") };
     let label = args.scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
     let scene = crate::load(args.scene.as_deref(), &args.set)?;
     let detected = metric::detected_spectrum(&scene);
@@ -86,8 +105,8 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
     let transfer = imaging::transfer(&scene, n, n, spacing);
     spinner.finish_and_clear();
     let transfer = transfer.map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("--out {}: cannot create the folder", args.out.display()))?;
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("--out {}: cannot create the folder", out_dir.display()))?;
     let centre = n / 2;
     // the full spectrum from the half one (the PSF is real: OTF(−ν) = OTF(ν)*), DC at the centre
     let full = |kx: usize, ky: usize| -> Complex64 {
@@ -105,8 +124,8 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
             let grid: Vec<f64> = (0..n * n).map(|i| psf[shifted(i / n) * n + shifted(i % n)]).collect();
             sum = Some(grid.iter().sum::<f64>());
             peak = Some(grid.iter().copied().fold(f64::MIN, f64::max));
-            files.push(write_csv(&args.out.join("psf.csv"), n, &grid)?);
-            files.push(write_image(&args.out.join("psf.png"), n, &grid, args.log)?);
+            files.push(write_csv(&out_dir.join("psf.csv"), n, &grid)?);
+            files.push(write_image(&out_dir.join("psf.png"), n, &grid, args.log)?);
             layout = "psf.csv: row r, column c is the PSF at y = (r − n/2)·spacing, x = (c − n/2)·spacing (rows along the detector's y), a fraction of the energy per sample";
         }
         Kind::Otf => {
@@ -115,10 +134,10 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
             let im: Vec<f64> = (0..n * n).map(|i| value(i).im).collect();
             let mtf: Vec<f64> = (0..n * n).map(|i| value(i).norm()).collect();
             (sum, peak) = (None, None);
-            files.push(write_csv(&args.out.join("otf-real.csv"), n, &re)?);
-            files.push(write_csv(&args.out.join("otf-imag.csv"), n, &im)?);
-            files.push(write_csv(&args.out.join("mtf.csv"), n, &mtf)?);
-            files.push(write_image(&args.out.join("mtf.png"), n, &mtf, args.log)?);
+            files.push(write_csv(&out_dir.join("otf-real.csv"), n, &re)?);
+            files.push(write_csv(&out_dir.join("otf-imag.csv"), n, &im)?);
+            files.push(write_csv(&out_dir.join("mtf.csv"), n, &mtf)?);
+            files.push(write_image(&out_dir.join("mtf.png"), n, &mtf, args.log)?);
             layout = "row r, column c is the OTF at ν_y = (r − n/2)·step, ν_x = (c − n/2)·step (step = frequency_step_cyc_per_mm); mtf = |OTF|";
         }
     }
@@ -140,7 +159,7 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
         files,
     };
     let json = serde_json::to_string_pretty(&description)?;
-    let path = args.out.join(if kind == Kind::Psf { "psf.json" } else { "otf.json" });
+    let path = out_dir.join(if kind == Kind::Psf { "psf.json" } else { "otf.json" });
     std::fs::write(&path, &json).with_context(|| format!("{}: cannot write", path.display()))?;
     outln!("{json}");
     if 0.5 / spacing < cutoff {
@@ -151,6 +170,150 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The wavelengths of `--wavelengths-nm`, nm: `a,b,c` or `start:stop:step` (stop included when
+/// it falls on the step, to 1e-9 of it).
+fn parse_wavelengths(text: &str) -> Result<Vec<f64>> {
+    let bad = || {
+        anyhow::anyhow!(
+            "--wavelengths-nm {text}: expected wavelengths in nm, > 0 and increasing, as a list `700,750,800` or a range `start:stop:step` (at most 4096)"
+        )
+    };
+    let number = |t: &str| t.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0);
+    let list: Vec<f64> = match text.split(':').collect::<Vec<_>>().as_slice() {
+        [a, b, step] => {
+            let (a, b, step) = (number(a).ok_or_else(bad)?, number(b).ok_or_else(bad)?, number(step).ok_or_else(bad)?);
+            let count = ((b - a) / step + 1e-9).floor();
+            if !(0.0..4096.0).contains(&count) {
+                return Err(bad());
+            }
+            (0..=count as usize).map(|i| a + step * i as f64).collect()
+        }
+        [one] => one.split(',').map(|t| number(t).ok_or_else(bad)).collect::<Result<_>>()?,
+        _ => return Err(bad()),
+    };
+    if list.is_empty() || list.len() > 4096 || list.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(bad());
+    }
+    Ok(list)
+}
+
+/// The description `asnr psf --stack` prints.
+#[derive(Serialize)]
+struct StackDescription {
+    scene: String,
+    quantity: &'static str,
+    file: String,
+    /// [wavelength, y, x]
+    shape: [usize; 3],
+    dtype: String,
+    spacing_um: f64,
+    wavelengths_nm: Vec<f64>,
+    /// Row and column of the centre sample (x = y = 0): index size/2.
+    centre_index: usize,
+    layout: &'static str,
+    field_deg: [f64; 2],
+    /// The `[lens]` keys that read the stack back (efficiency and transmission to be given).
+    lens_keys: String,
+}
+
+/// `asnr psf --stack`: the lens's PSF at each wavelength, each the inverse FFT of the scene's
+/// OTF at that one wavelength (a line spectrum, the camera's QE set to 1: the PSF does not
+/// depend on them), unit sum, as a .npy array [wavelength, y, x].
+fn write_stack(args: &GridArgs, path: &Path) -> Result<()> {
+    let n = args.size;
+    let wavelengths = parse_wavelengths(args.wavelengths_nm.as_deref().unwrap_or_default())?;
+    let size = match args.dtype.as_str() {
+        "f4" => 4,
+        "f8" => 8,
+        other => anyhow::bail!("--dtype {other}: expected f4 (32-bit float) or f8 (64-bit float)"),
+    };
+    if wavelengths.len() * n * n > lenses::PSF_MAX_ELEMENTS {
+        anyhow::bail!(
+            "--wavelengths-nm and --size {n}: {} values, more than a PSF stack holds ({})",
+            wavelengths.len() * n * n,
+            lenses::PSF_MAX_ELEMENTS
+        );
+    }
+    let label = args.scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+    let scene = crate::load(args.scene.as_deref(), &args.set)?;
+    let lens = scene.lens();
+    let spacing = match args.spacing_um {
+        Some(s) if s.is_finite() && s > 0.0 && s < 1e4 => s * 1e-6,
+        Some(s) => anyhow::bail!("--spacing-um {s}: expected a sample spacing > 0 and below 10000 µm"),
+        // the shortest wavelength's cutoff 1/(λ F#) at the grid's Nyquist frequency
+        None => 0.5 * wavelengths[0] * 1e-9 * lens.f_number(),
+    };
+    let camera = metric::Camera::new(scene.camera().pixel_pitch(), radiometry::Spectrum::Constant(1.0), false)?;
+    let centre = n / 2;
+    let shifted = |i: usize| (i + centre) % n;
+    let fft = imaging::render::Fft2::new(n, n);
+    let mut data = Vec::with_capacity(wavelengths.len() * n * n * size);
+    for &nm in &wavelengths {
+        let line = radiometry::Spectrum::Line(radiometry::Line::new(nm * 1e-9, 1e-9, 1.0)?);
+        let mono =
+            metric::Scene::new(scene.lens_arc(), line, camera.clone(), scene.exposure(), scene.options().clone())
+                .and_then(|s| s.at_field(scene.field()))
+                .with_context(|| format!("{label}: at {nm} nm"))?;
+        let transfer =
+            imaging::transfer(&mono, n, n, spacing).map_err(|e| anyhow::anyhow!("{label}: at {nm} nm: {e}"))?;
+        let psf = fft.inverse(transfer.values);
+        for i in 0..n * n {
+            let v = psf[shifted(i / n) * n + shifted(i % n)];
+            if size == 4 {
+                data.extend_from_slice(&(v as f32).to_le_bytes());
+            } else {
+                data.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    let descr = if size == 4 { "<f4" } else { "<f8" };
+    let mut header =
+        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': ({}, {n}, {n}), }}", wavelengths.len());
+    // NPY 1.0: magic, version, u16 header length, the header padded with spaces to a multiple of 64
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    bytes.extend_from_slice(&data);
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("--stack {}: cannot create its folder", path.display()))?;
+    }
+    std::fs::write(path, &bytes).with_context(|| format!("--stack {}: cannot write", path.display()))?;
+    let list: Vec<String> = wavelengths.iter().map(|w| format!("{w}")).collect();
+    let field = scene.field();
+    let description = StackDescription {
+        scene: label,
+        quantity: "psf-stack",
+        file: path.display().to_string(),
+        shape: [wavelengths.len(), n, n],
+        dtype: descr.to_owned(),
+        spacing_um: optics::round_for_display(spacing * 1e6),
+        wavelengths_nm: wavelengths.clone(),
+        centre_index: centre,
+        layout: "slice k, row r, column c is the PSF at wavelength k, y = (r − n/2)·spacing, x = (c − n/2)·spacing (rows along the detector's y), a fraction of the energy per sample",
+        field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
+        lens_keys: format!(
+            "model = \"psf\"\npsf = {}\npsf_pitch_um = {}\npsf_wavelengths_nm = [{}]\nf_number = {}\nfocal_length_mm = {}\n",
+            toml_string(&path.display().to_string()),
+            optics::round_for_display(spacing * 1e6),
+            list.join(", "),
+            optics::round_for_display(lens.f_number()),
+            optics::round_for_display(lens.focal_length() * 1e3)
+        ),
+    };
+    outln!("{}", serde_json::to_string_pretty(&description)?);
+    Ok(())
+}
+
+/// `s` as a TOML basic string.
+fn toml_string(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
 }
 
 /// A matrix as CSV, one row per line.

@@ -30,6 +30,10 @@
 //! - [`LibraryLens`]: a metalens of meta-atoms from a [`Library`] (complex transmission against
 //!   parameters and wavelength) placed by a layout of rings, in the local periodic approximation:
 //!   the first order's pupil from the zone-Fourier coefficient `c_1(ρ)`, τ1 and T from the field.
+//! - [`PsfStack`]: a lens given by its PSFs at a few wavelengths (a simulated or measured stack):
+//!   each slice normalized, its centroid the order's image shift, its OTF about the centroid by
+//!   FFT into an [`optics::OtfTable`] (tangential along x, sagittal along y) up to the stack's
+//!   Nyquist frequency.
 //! - [`presets`]: the paper's lens and published devices by name ([`preset`], [`preset_names`]).
 //!
 //! The wavefront sign is one (docs/physics.md, "Sign of the wavefront"): `W020 > 0` focuses
@@ -66,6 +70,7 @@ mod interleaved;
 mod library;
 mod phase;
 pub mod presets;
+mod psf;
 mod refractive;
 mod segmented;
 mod tabulated;
@@ -77,6 +82,10 @@ pub use interleaved::{Channel, Interleaved};
 pub use library::{Library, LibraryLens};
 pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
 pub use presets::{preset, preset_names};
+pub use psf::{
+    PSF_BORDER_SAMPLES, PSF_CENTRE_TOLERANCE, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_NEGATIVE_MASS,
+    PSF_PADDING, PSF_SYMMETRY_TOLERANCE, PsfReport, PsfStack,
+};
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
 pub use tabulated::{
@@ -149,6 +158,10 @@ pub enum Error {
         /// The names known, comma-separated.
         known: String,
     },
+    /// A PSF stack that cannot be used (a NaN or negative sample, a slice without light, a
+    /// shape that does not fit): the message names the slice, its wavelength and the sample.
+    #[error("PSF stack: {0}")]
+    PsfStack(String),
     /// A table said to contain the pixel MTF exceeds 1 once divided by it.
     #[error(
         "the table divided by the pixel MTF of {pitch_um} µm is {value} > 1 at {wavelength_nm} nm, {frequency_cyc_per_mm} cycles/mm: the table does not contain that pixel MTF (check the pitch, or give none)"

@@ -138,7 +138,7 @@ impl Library {
 /// - atom `i` fills the ring `[r_i − Λ/2, r_i + Λ/2]` (Λ the pitch) with its library field
 ///   `t(p_i, λ)`, held over its cell;
 /// - the design phase `ψ(r)` is the atoms' phase at λ0, unwrapped along the radius and fitted by
-///   an even polynomial in `ρ²` (degree [`DESIGN_FIT_DEGREE`]); its `2π` steps are the zones;
+///   an even polynomial in `ρ²` (degree `DESIGN_FIT_DEGREE`); its `2π` steps are the zones;
 /// - at each wavelength and in each zone the field, as a function of `ψ` over one period, has the
 ///   Fourier coefficients `c_m = (1/2π) ∫ f(ψ) e^{−imψ} dψ` (each atom's constant field over its
 ///   interval of `ψ`); order 1 carries `|c_1|²` of the zone's light with the phase `ψ + arg c_1`

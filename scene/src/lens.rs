@@ -17,7 +17,7 @@ use crate::error::{Error, num, quoted};
 use crate::load::{NumberOrFile, Origins};
 
 /// The models a scene file accepts, as messages list them.
-pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table), \"phase\" (your design's phase profile) or \"library\" (a meta-atom library and its layout)";
+pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table), \"phase\" (your design's phase profile), \"library\" (a meta-atom library and its layout) or \"psf\" (a PSF stack)";
 
 /// The lens presets, by the names of `lenses::preset_names`: a name and the `[lens]` keys it
 /// stands for (keys given beside `preset` override them). Each is the lens of `lenses::preset`
@@ -107,6 +107,9 @@ pub(crate) struct RawLens {
     pub dispersion: Option<String>,
     pub zernike_noll_rms_um: Option<Vec<f64>>,
     pub library: Option<String>,
+    pub psf: Option<String>,
+    pub psf_pitch_um: Option<f64>,
+    pub psf_wavelengths_nm: Option<Vec<f64>>,
 }
 
 /// A lens family of the scene format.
@@ -120,6 +123,7 @@ pub(crate) enum Model {
     Tabulated,
     Phase,
     Library,
+    Psf,
 }
 
 impl Model {
@@ -133,6 +137,7 @@ impl Model {
             Model::Tabulated => "tabulated",
             Model::Phase => "phase",
             Model::Library => "library",
+            Model::Psf => "psf",
         }
     }
 
@@ -201,6 +206,9 @@ impl Model {
             Model::Tabulated => {
                 &["mtf", "mtf_includes_pixel_um", "mtf_field", "design_wavelength_nm", "efficiency", "transmission"]
             }
+            Model::Psf => {
+                &["psf", "psf_pitch_um", "psf_wavelengths_nm", "design_wavelength_nm", "efficiency", "transmission"]
+            }
         };
         keys.contains(&key)
     }
@@ -228,9 +236,12 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 38] {
+    fn given(&self) -> [(&'static str, bool); 41] {
         [
             ("library", self.library.is_some()),
+            ("psf", self.psf.is_some()),
+            ("psf_pitch_um", self.psf_pitch_um.is_some()),
+            ("psf_wavelengths_nm", self.psf_wavelengths_nm.is_some()),
             ("binary2", self.binary2.is_some()),
             ("norm_radius_mm", self.norm_radius_mm.is_some()),
             ("diffraction_order", self.diffraction_order.is_some()),
@@ -283,6 +294,7 @@ pub(crate) fn model(l: &RawLens, o: &Origins) -> Result<Model, Error> {
         "tabulated" => Model::Tabulated,
         "phase" => Model::Phase,
         "library" => Model::Library,
+        "psf" => Model::Psf,
         other => return Err(o.bad("lens.model", quoted(other), MODELS)),
     })
 }
@@ -338,6 +350,8 @@ pub(crate) struct LensInfo {
     pub channels_m: Vec<f64>,
     /// Facts of the design a reader needs (group delay, β, glass, efficiency per channel).
     pub notes: Vec<String>,
+    /// A PSF stack's pitch and wavelengths, checked against the camera and the spectrum.
+    pub psf: Option<crate::psf::PsfLimits>,
 }
 
 /// A lens built from its table.
@@ -817,6 +831,7 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             info.design_wavelength_m = Some(l0);
             Arc::new(lens)
         }
+        Model::Psf => Arc::new(crate::psf::psf_lens(l, o, f_number, f0_m, &transmission, &mut info)?),
     };
     let lens = match zernike(l, o)? {
         Some(terms) if model != Model::Phase => {

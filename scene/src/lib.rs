@@ -57,6 +57,7 @@ mod compare;
 mod error;
 mod lens;
 mod load;
+mod psf;
 mod resolved;
 pub mod sweep;
 mod tables;

@@ -982,6 +982,9 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
     }
     let options = options(raw.options.as_ref(), o)?;
     let scene = Scene::new(lens, radiance, camera, t * 1e-3, options).map_err(|e| o.domain("", "", e))?;
+    if let Some(limits) = &info.psf {
+        crate::psf::check_scene(&scene, limits, o)?;
+    }
     let angle = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())

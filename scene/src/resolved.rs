@@ -266,6 +266,19 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             efficiency(out)?;
             transmission(out)?;
         }
+        Model::Psf => {
+            if let Some(file) = &l.psf {
+                out.string("psf", &path(o, &o.key("lens.psf"), file)?);
+            }
+            out.number("psf_pitch_um", l.psf_pitch_um.unwrap_or_default());
+            out.value("psf_wavelengths_nm", &list(l.psf_wavelengths_nm.as_deref().unwrap_or_default()));
+            match l.design_wavelength_nm {
+                Some(w) => out.number("design_wavelength_nm", w),
+                None => out.line("# design_wavelength_nm not given: none (the Fraunhofer check has no reference)"),
+            }
+            efficiency(out)?;
+            transmission(out)?;
+        }
     }
     if let Some(z) = &l.zernike_noll_rms_um {
         out.value("zernike_noll_rms_um", &list(z));

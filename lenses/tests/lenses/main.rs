@@ -4,6 +4,7 @@
 mod library;
 mod phase;
 mod photons;
+mod psf;
 mod reference;
 mod segmented;
 mod tabulated;

@@ -19,7 +19,8 @@
 //! the default settings at tolerances 1e-2 … 1e-10 — the spectrometer table (against the
 //! per-interval spectral rule at 1e-12, with the numpy baseline `xtask/baselines/numpy_table.py`
 //! beside it), the decentred iris 0.15 (against the exact reduction of [`iris`]) and coma 0.5 µm
-//! (against a Richardson extrapolation) — the 40 × 100 map through the release `asnr` ([`map`]),
+//! (against a Richardson extrapolation) — the 40 × 100 map and a 384 × 384 × 45 PSF stack through
+//! the release `asnr` ([`map`], [`psf_stack`]),
 //! and the targets against them ([`targets`]).
 //!
 //! Times are medians of repeated single-threaded calls in this (release) process.
@@ -33,6 +34,7 @@ mod iris;
 mod kernels;
 mod map;
 mod plot;
+mod psf_stack;
 mod report;
 mod spectral;
 mod targets;
@@ -229,6 +231,8 @@ struct Context {
     notes: tolerance::Notes,
     /// The map, when the `asnr` binary was given.
     map: Option<map::Map>,
+    /// The 384 × 384 × 45 PSF stack, when the `asnr` binary was given.
+    psf_stack: Option<psf_stack::PsfBench>,
     /// The load average (1, 5, 15 min) at the start and at the end of the run.
     load: (String, String),
 }
@@ -327,6 +331,7 @@ fn main() {
         decentred: None,
         notes: tolerance::Notes::new(),
         map: None,
+        psf_stack: None,
         load: (String::new(), String::new()),
     };
     let mut decentred_rows = Vec::new();
@@ -459,6 +464,7 @@ fn main() {
         m.python = asnr_python.as_deref().and_then(|py| map::measure_python(py, bin, &out, grid.map_runs));
         m
     });
+    context.psf_stack = asnr.as_deref().and_then(|bin| psf_stack::measure(bin, &out, grid.map_runs));
     let kernel_rows = kernels::measure(quick);
     context.load = (load_at_start, load_average());
     let md = report::markdown(&rows, &kernel_rows, &context);

@@ -1,0 +1,582 @@
+//! A lens given by its point spread functions: a stack of PSFs at a few wavelengths, simulated
+//! (a designer's FDTD or angular-spectrum run, `asnr psf`) or measured, sampled on a square grid
+//! at the detector.
+//!
+//! The stack becomes one imaging order whose OTF is a table against wavelength and frequency
+//! ([`optics::Pupil::Table`]), each wavelength's lateral offset kept as the order's image shift
+//! (docs/physics.md, "Designs given as data", PSF stacks).
+
+use std::sync::Arc;
+
+use optics::{Field, LensModel, Order, OtfTable, Pupil, Wavefront};
+use rustfft::FftPlanner;
+use rustfft::num_complex::Complex64;
+
+use crate::Error;
+use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
+
+/// How far below zero a sample may be, as a fraction of its slice's peak, before the stack is
+/// refused: simulated PSFs carry small negative ringing (an OTF cut at the grid's Nyquist
+/// frequency rings at about 1e-3 of the peak; `asnr psf --stack` at 2 µm on the paper's lens)
+/// and measured ones a background subtracted with its noise; a value below
+/// `−PSF_NEGATIVE_FLOOR × peak` is not noise but a sign error or an offset. The negative samples
+/// accepted are kept as they are (nothing is clipped): they enter the sum and the OTF, and
+/// together they may hold at most [`PSF_NEGATIVE_MASS`] of the slice's sum.
+pub const PSF_NEGATIVE_FLOOR: f64 = 1e-2;
+
+/// The largest share of a slice's sum its negative samples may hold together (`Σ|v<0| ≤ 1 % Σv`):
+/// beyond it the background was over-subtracted. It bounds the OTF's modulus by
+/// `1 + 2 PSF_NEGATIVE_MASS`.
+pub const PSF_NEGATIVE_MASS: f64 = 1e-2;
+
+/// The width, in samples, of the stack's border band whose light [`PsfReport::border_fraction`]
+/// reports: light there says the PSF was probably cut off by the stack's edge.
+pub const PSF_BORDER_SAMPLES: usize = 3;
+
+/// Zero padding of the transforms: each line spread function of `n` samples is transformed on
+/// `PSF_PADDING × max(nx, ny)` points, so the table's frequency step is `1/(PSF_PADDING n p)`, a
+/// quarter of the grid's own `1/(n p)` (the OTF between the grid's frequencies is the exact
+/// transform of the samples, not an interpolation of the table).
+pub const PSF_PADDING: usize = 4;
+
+/// The largest element count of a stack (`depth × ny × nx`) the readers accept: 2²⁶, 512 MiB as
+/// f64 (a 1024 × 1024 × 64 stack); a file's header giving more is refused before any allocation.
+pub const PSF_MAX_ELEMENTS: usize = 1 << 26;
+
+/// Below this difference between the tangential and the sagittal curves (everywhere) the stack
+/// is taken as symmetric and both curves are their mean: the rounding of a radially symmetric
+/// PSF (a float32 file's 6e-8) must not make the metric treat it as direction dependent.
+pub const PSF_SYMMETRY_TOLERANCE: f64 = 1e-6;
+
+/// Below this distance from the centre sample, in samples, a centroid is taken as the centre
+/// (no lateral shift): a shift of 1e-6 samples turns the OTF's phase by under 1e-5 rad up to the
+/// stack's Nyquist frequency, and a centred PSF's rounding must not send the scene to the
+/// engines of shifted images.
+pub const PSF_CENTRE_TOLERANCE: f64 = 1e-6;
+
+/// The fewest samples along each side of a slice.
+pub const PSF_MIN_SIDE: usize = 8;
+
+/// What [`PsfStack::new`] found in a stack besides its OTF: what the scene reports or warns
+/// about.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct PsfReport {
+    /// Slices, rows (y) and columns (x).
+    pub shape: [usize; 3],
+    /// The transform length of each line spread function (after zero padding).
+    pub transform_length: usize,
+    /// The largest fraction of a slice's light within [`PSF_BORDER_SAMPLES`] of the stack's
+    /// border, and the wavelength (m) of that slice.
+    pub border_fraction: (f64, f64),
+    /// The largest |imaginary part| of a re-centred OTF below the stack's Nyquist frequency
+    /// (the PSF's asymmetry about its centroid beyond the shift; the table holds the real part),
+    /// with its wavelength (m) and frequency (cycles/m).
+    pub imaginary: (f64, f64, f64),
+    /// The centroid of each slice from the stack's centre sample `(⌊nx/2⌋, ⌊ny/2⌋)`, `[x, y]`, m.
+    pub centroids_m: Vec<[f64; 2]>,
+}
+
+/// A lens whose single imaging order is given by its PSFs at a few wavelengths (module docs).
+///
+/// - The PSF of slice `k` is sampled at `x = (j − ⌊nx/2⌋) p`, `y = (i − ⌊ny/2⌋) p` (column `j`,
+///   row `i`, pitch `p` at the detector; the centre sample as numpy's `fftshift` puts it and as
+///   `asnr psf` writes it), `+x` the field direction (the tangential curve), `+y` across it.
+/// - Each slice is divided by its sum (a PSF carries its shape, not its power: the efficiency
+///   `τ(λ)` and transmission `T(λ)` are given beside it, fractions of the light incident on the
+///   aperture, `τ ≤ T ≤ 1`).
+/// - Its centroid `c` is the order's `image_shift_m` at that wavelength (lateral colour, linear
+///   in λ between the slices, the end slices' beyond), and the OTF is taken about it:
+///   `OTF(ν) = Σ p(x) e^{−2πi ν·(x − c)}`. Along the two axes that is the 1-D transform of the
+///   line spread function (the projection-slice theorem: the 2-D transform on the line `ν_y = 0`
+///   is the 1-D transform of `Σ_y p`; tested against the direct 2-D sum), zero padded to
+///   [`PSF_PADDING`]` × max(nx, ny)` points, from 0 to the stack's Nyquist frequency `1/(2p)`.
+/// - The table holds the real part of the re-centred OTF (the even part of the PSF about its
+///   centroid); the imaginary part (an asymmetric PSF: coma) is dropped and its largest value
+///   reported ([`PsfReport::imaginary`]). Where the two curves differ by at most
+///   [`PSF_SYMMETRY_TOLERANCE`] both are their mean, and a centroid within
+///   [`PSF_CENTRE_TOLERANCE`] samples of the centre is the centre. Negative samples within [`PSF_NEGATIVE_FLOOR`] can lift
+///   `|OTF|` above 1 by at most twice their share; such values are held at ±1.
+/// - Between the slices the OTF is linear in λ ([`OtfTable`]); the stack is not extrapolated: the
+///   end slices' OTF holds beyond them, and the scene refuses a spectrum with weight there.
+/// - The Fraunhofer check: a stack is the PSF at the detector, its blur already in it; the order
+///   carries no defocus, so the check sees none (as for a tabulated OTF).
+#[derive(Clone, Debug)]
+pub struct PsfStack {
+    f_number: f64,
+    focal_length: f64,
+    pitch: f64,
+    table: Arc<OtfTable>,
+    efficiency: Curve,
+    transmission: Curve,
+    design_wavelength: Option<f64>,
+    report: PsfReport,
+}
+
+/// A refusal naming the slice (from 0), its wavelength and what is accepted.
+fn refuse(k: usize, wavelengths_m: &[f64], what: String) -> Error {
+    Error::PsfStack(format!("slice {k} ({} nm): {what}", optics::round_for_display(wavelengths_m[k] * 1e9)))
+}
+
+impl PsfStack {
+    /// A PSF-stack lens of working F-number `f_number` (≥ 0.5) and focal length `focal_length_m`
+    /// (> 0) whose PSFs at `wavelengths_m` (≥ 1, finite, > 0, strictly increasing) are `values`:
+    /// `wavelengths_m.len()` slices of `ny × nx` samples (each side ≥ [`PSF_MIN_SIDE`], at most
+    /// [`PSF_MAX_ELEMENTS`] in all), in C order `[slice][row y][column x]`, at pitch `pitch_m`
+    /// (> 0) on the detector; with `efficiency` and `transmission` fractions (`τ ≤ T`).
+    ///
+    /// Refused (naming the slice, its wavelength, the sample and the value): a value not finite, a
+    /// value below `−`[`PSF_NEGATIVE_FLOOR`]` ×` the slice's peak, a slice whose sum is not > 0.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        f_number: f64,
+        focal_length_m: f64,
+        pitch_m: f64,
+        wavelengths_m: Vec<f64>,
+        [ny, nx]: [usize; 2],
+        values: &[f64],
+        efficiency: Curve,
+        transmission: Curve,
+    ) -> Result<Self, Error> {
+        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+        check("psf_pitch", pitch_m, pitch_m > 0.0, "a finite sample pitch > 0 m")?;
+        check_fraction("efficiency", &efficiency)?;
+        check_fraction("transmission", &transmission)?;
+        let depth = wavelengths_m.len();
+        if depth == 0 {
+            return Err(Error::PsfStack("no slice: expected at least one wavelength".into()));
+        }
+        for (k, &l) in wavelengths_m.iter().enumerate() {
+            if !(l.is_finite() && l > 0.0) || (k > 0 && l <= wavelengths_m[k - 1]) {
+                return Err(Error::PsfStack(format!(
+                    "wavelength {k} = {l} m: expected finite wavelengths > 0, strictly increasing"
+                )));
+            }
+        }
+        if ny < PSF_MIN_SIDE || nx < PSF_MIN_SIDE {
+            return Err(Error::PsfStack(format!(
+                "slices of {ny} × {nx} samples: expected at least {PSF_MIN_SIDE} × {PSF_MIN_SIDE}"
+            )));
+        }
+        let elements = depth.checked_mul(ny).and_then(|v| v.checked_mul(nx));
+        if elements.is_none_or(|e| e > PSF_MAX_ELEMENTS || e != values.len()) {
+            return Err(Error::PsfStack(format!(
+                "{} values for {depth} slices of {ny} × {nx}: expected their product, at most {PSF_MAX_ELEMENTS}",
+                values.len()
+            )));
+        }
+        check_efficiency_below_transmission(&|l| efficiency.value(l), &[&efficiency], &transmission, wavelengths_m[0])?;
+
+        let n = PSF_PADDING * nx.max(ny);
+        let fft = FftPlanner::<f64>::new().plan_fft_forward(n);
+        let mut buffer = vec![Complex64::new(0.0, 0.0); n];
+        let mut scratch = vec![Complex64::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+        let half = n / 2;
+        let frequencies: Vec<f64> = (0..=half).map(|k| k as f64 / (n as f64 * pitch_m)).collect();
+        let (mut tangential, mut sagittal) = (Vec::with_capacity(depth), Vec::with_capacity(depth));
+        let mut report = PsfReport {
+            shape: [depth, ny, nx],
+            transform_length: n,
+            border_fraction: (0.0, wavelengths_m[0]),
+            imaginary: (0.0, wavelengths_m[0], 0.0),
+            centroids_m: Vec::with_capacity(depth),
+        };
+        let (mut lsf_x, mut lsf_y) = (vec![0.0; nx], vec![0.0; ny]);
+        for (k, slice) in values.chunks_exact(ny * nx).enumerate() {
+            let mut peak = f64::NEG_INFINITY;
+            for (index, &v) in slice.iter().enumerate() {
+                if !v.is_finite() {
+                    return Err(refuse(
+                        k,
+                        &wavelengths_m,
+                        format!("row {}, column {} is {v}: expected finite values", index / nx, index % nx),
+                    ));
+                }
+                peak = peak.max(v);
+            }
+            let floor = -PSF_NEGATIVE_FLOOR * peak.max(0.0);
+            if let Some(index) = slice.iter().position(|&v| v < floor) {
+                return Err(refuse(
+                    k,
+                    &wavelengths_m,
+                    format!(
+                        "row {}, column {} is {:e}: expected values ≥ 0, or above −{PSF_NEGATIVE_FLOOR} × the slice's peak {:e} (noise)",
+                        index / nx,
+                        index % nx,
+                        slice[index],
+                        peak
+                    ),
+                ));
+            }
+            // line spread functions (unnormalized), the sum, the border's light
+            lsf_x.iter_mut().for_each(|v| *v = 0.0);
+            let mut border = 0.0;
+            for (i, row) in slice.chunks_exact(nx).enumerate() {
+                let edge_row = i < PSF_BORDER_SAMPLES || i + PSF_BORDER_SAMPLES >= ny;
+                let mut row_sum = 0.0;
+                for (j, &v) in row.iter().enumerate() {
+                    lsf_x[j] += v;
+                    row_sum += v;
+                    if edge_row || j < PSF_BORDER_SAMPLES || j + PSF_BORDER_SAMPLES >= nx {
+                        border += v;
+                    }
+                }
+                lsf_y[i] = row_sum;
+            }
+            let sum: f64 = lsf_y.iter().sum();
+            if !(sum > 0.0 && sum.is_finite()) {
+                return Err(refuse(
+                    k,
+                    &wavelengths_m,
+                    format!("its samples sum to {sum:e}: expected a sum > 0 (a PSF with light in it)"),
+                ));
+            }
+            let negative: f64 = slice.iter().filter(|&&v| v < 0.0).map(|v| -v).sum();
+            if negative > PSF_NEGATIVE_MASS * sum {
+                return Err(refuse(
+                    k,
+                    &wavelengths_m,
+                    format!(
+                        "its negative samples sum to −{:.3} % of its sum: expected at most {} % (noise, not an over-subtracted background)",
+                        100.0 * negative / sum,
+                        100.0 * PSF_NEGATIVE_MASS
+                    ),
+                ));
+            }
+            lsf_x.iter_mut().chain(lsf_y.iter_mut()).for_each(|v| *v /= sum);
+            let border = border / sum;
+            if border > report.border_fraction.0 {
+                report.border_fraction = (border, wavelengths_m[k]);
+            }
+            let centroid = |lsf: &[f64]| -> f64 {
+                let c = lsf.len() / 2;
+                lsf.iter().enumerate().map(|(j, v)| (j as f64 - c as f64) * v).sum::<f64>()
+            };
+            let snap = |c: f64| if c.abs() < PSF_CENTRE_TOLERANCE { 0.0 } else { c };
+            let (cx, cy) = (snap(centroid(&lsf_x)), snap(centroid(&lsf_y)));
+            report.centroids_m.push([cx * pitch_m, cy * pitch_m]);
+            let mut transform = |lsf: &[f64], c: f64| -> Vec<f64> {
+                buffer.iter_mut().for_each(|b| *b = Complex64::new(0.0, 0.0));
+                for (b, &v) in buffer.iter_mut().zip(lsf) {
+                    b.re = v;
+                }
+                fft.process_with_scratch(&mut buffer, &mut scratch);
+                // sample j sits at (j − ⌊n/2⌋) p; about the centroid c p the phase is
+                // e^{−2πi ν (x_j − c p)} = e^{−2πi jm/N} e^{+2πi m (⌊n/2⌋ + c)/N}, ν = m/(N p)
+                let origin = (lsf.len() / 2) as f64 + c;
+                (0..=half)
+                    .map(|m| {
+                        let turn = std::f64::consts::TAU * (m as f64 * origin / n as f64).fract();
+                        let value = buffer[m] * Complex64::from_polar(1.0, turn);
+                        if value.im.abs() > report.imaginary.0 {
+                            report.imaginary = (value.im.abs(), wavelengths_m[k], frequencies[m]);
+                        }
+                        value.re.clamp(-1.0, 1.0)
+                    })
+                    .collect()
+            };
+            tangential.push(transform(&lsf_x, cx));
+            sagittal.push(transform(&lsf_y, cy));
+        }
+        let symmetric = tangential
+            .iter()
+            .flatten()
+            .zip(sagittal.iter().flatten())
+            .all(|(t, s)| (t - s).abs() <= PSF_SYMMETRY_TOLERANCE);
+        let (tangential, sagittal) = if symmetric {
+            let mean: Vec<Vec<f64>> = tangential
+                .iter()
+                .zip(&sagittal)
+                .map(|(t, s)| t.iter().zip(s).map(|(a, b)| 0.5 * (a + b)).collect())
+                .collect();
+            (mean, None)
+        } else {
+            (tangential, Some(sagittal))
+        };
+        let table = OtfTable::new(wavelengths_m, frequencies, tangential, sagittal).map_err(Error::Table)?;
+        Ok(PsfStack {
+            f_number,
+            focal_length: focal_length_m,
+            pitch: pitch_m,
+            table: Arc::new(table),
+            efficiency,
+            transmission,
+            design_wavelength: None,
+            report,
+        })
+    }
+
+    /// This lens with a design wavelength (finite, > 0 m): the reference of the Fraunhofer check
+    /// (paper SI eq. S15). Without one the lens reports none.
+    pub fn with_design_wavelength(self, wavelength_m: f64) -> Result<Self, Error> {
+        check("design_wavelength", wavelength_m, wavelength_m > 0.0, "a finite wavelength > 0 m")?;
+        Ok(PsfStack { design_wavelength: Some(wavelength_m), ..self })
+    }
+
+    /// The family's name.
+    pub fn kind(&self) -> &'static str {
+        "psf"
+    }
+
+    /// The OTF table made from the stack.
+    pub fn table(&self) -> &OtfTable {
+        &self.table
+    }
+
+    /// The stack's sample pitch, m.
+    pub fn pitch(&self) -> f64 {
+        self.pitch
+    }
+
+    /// The stack's Nyquist frequency `1/(2p)`, cycles/m: the table's last frequency.
+    pub fn nyquist(&self) -> f64 {
+        self.table.max_frequency()
+    }
+
+    /// The stack's wavelengths, m.
+    pub fn wavelengths(&self) -> &[f64] {
+        self.table.wavelengths()
+    }
+
+    /// What the stack showed (border light, asymmetry, centroids).
+    pub fn report(&self) -> &PsfReport {
+        &self.report
+    }
+
+    /// The image shift at `wavelength_m`: the centroids linear in λ, the end ones beyond.
+    fn shift(&self, wavelength_m: f64) -> [f64; 2] {
+        let (w, c) = (self.table.wavelengths(), &self.report.centroids_m);
+        if wavelength_m <= w[0] {
+            return c[0];
+        }
+        if wavelength_m >= w[w.len() - 1] {
+            return c[w.len() - 1];
+        }
+        let i = w.partition_point(|&x| x <= wavelength_m);
+        let u = (wavelength_m - w[i - 1]) / (w[i] - w[i - 1]);
+        [c[i - 1][0] + u * (c[i][0] - c[i - 1][0]), c[i - 1][1] + u * (c[i][1] - c[i - 1][1])]
+    }
+}
+
+impl LensModel for PsfStack {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    fn orders(&self, wavelength_m: f64, _field: Field) -> Vec<Order> {
+        let [x, y] = self.shift(wavelength_m);
+        vec![Order::new(
+            self.efficiency.value(wavelength_m),
+            Pupil::Table(Arc::clone(&self.table)),
+            Wavefront::default().shifted(x, y),
+        )]
+    }
+
+    fn efficiency(&self, wavelength_m: f64) -> f64 {
+        self.efficiency.value(wavelength_m)
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.transmission.value(wavelength_m)
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        self.design_wavelength
+    }
+
+    /// The curves' samples and the stack's wavelengths (the OTF is linear in λ between them).
+    fn breakpoints(&self) -> Vec<f64> {
+        let mut b: Vec<f64> = self
+            .efficiency
+            .breakpoints()
+            .iter()
+            .chain(self.transmission.breakpoints())
+            .chain(self.table.wavelengths())
+            .copied()
+            .collect();
+        b.sort_by(f64::total_cmp);
+        b.dedup();
+        b
+    }
+
+    fn describe(&self) -> String {
+        let r = optics::round_for_display;
+        let w = self.table.wavelengths();
+        let [depth, ny, nx] = self.report.shape;
+        format!(
+            "PSF-stack lens F/{} f0 = {} mm, {depth} slice{} of {ny} × {nx} at {} µm from {} to {} nm",
+            r(self.f_number),
+            r(self.focal_length * 1e3),
+            if depth == 1 { "" } else { "s" },
+            r(self.pitch * 1e6),
+            r(w[0] * 1e9),
+            r(w[w.len() - 1] * 1e9),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PITCH: f64 = 1e-6;
+
+    fn lens(wavelengths: Vec<f64>, [ny, nx]: [usize; 2], values: &[f64]) -> Result<PsfStack, Error> {
+        PsfStack::new(2.5, 3.36e-3, PITCH, wavelengths, [ny, nx], values, Curve::Constant(0.15), Curve::Constant(0.5))
+    }
+
+    /// A Gaussian PSF `exp(−r²/(2σ²))` centred at `(x0, y0)` samples from the centre sample.
+    fn gaussian(n: usize, sigma: f64, x0: f64, y0: f64, sx: f64) -> Vec<f64> {
+        let c = (n / 2) as f64;
+        (0..n * n)
+            .map(|i| {
+                let (y, x) = ((i / n) as f64 - c - y0, (i % n) as f64 - c - x0);
+                (-(x * x / (sx * sx) + y * y) / (2.0 * sigma * sigma)).exp()
+            })
+            .collect()
+    }
+
+    /// The OTF of a sampled Gaussian of σ samples is `exp(−2π² σ² ν²)` (σ in m, ν in cycles/m):
+    /// the Fourier transform of the continuous Gaussian; the sampled one differs by its aliases,
+    /// `exp(−2π² σ²/p² ·(1 − 2|νp|)…)` ≤ e^{−2π²σ²/p²·…}: below 1e-12 for σ ≥ 2 samples at ν
+    /// up to a quarter of the sampling rate, which is where the test looks. Its centroid shift
+    /// becomes the image shift, and the tangential curve is along x.
+    #[test]
+    fn a_gaussian_psf_has_the_closed_form_otf() {
+        let n = 64;
+        let (sigma, x0, y0) = (2.5, 3.25, -1.5);
+        let values = gaussian(n, sigma, x0, y0, 1.0);
+        let lens = lens(vec![800e-9], [n, n], &values).unwrap();
+        let r = lens.report();
+        assert!((r.centroids_m[0][0] - x0 * PITCH).abs() < 1e-12 * PITCH, "{:?}", r.centroids_m);
+        assert!((r.centroids_m[0][1] - y0 * PITCH).abs() < 1e-12 * PITCH, "{:?}", r.centroids_m);
+        assert!(r.imaginary.0 < 1e-12, "a symmetric PSF about its centroid: {:?}", r.imaginary);
+        assert!(r.border_fraction.0 < 1e-12, "{:?}", r.border_fraction);
+        let s = sigma * PITCH;
+        for nu in [0.0, 2e4, 5.5e4, 1e5, 1.25e5] {
+            let want = (-2.0 * std::f64::consts::PI.powi(2) * s * s * nu * nu).exp();
+            let got = lens.table().value(800e-9, nu, 0.0);
+            // linear interpolation between the table's frequencies (step 1/(4 n p)): the
+            // curvature bound (Δν²/8) max|OTF''| = (Δν²/8)(4π²σ²) ≈ 1.2e-3 at most
+            let step = 1.0 / (PSF_PADDING as f64 * n as f64 * PITCH);
+            let bound = step * step / 8.0 * 4.0 * std::f64::consts::PI.powi(2) * s * s;
+            assert!((got - want).abs() <= bound, "ν = {nu}: {got} vs {want} (bound {bound})");
+        }
+        // at the table's own frequencies the transform is the closed form to 1e-12
+        for (m, &nu) in lens.table().frequencies().iter().enumerate().take(n) {
+            let want = (-2.0 * std::f64::consts::PI.powi(2) * s * s * nu * nu).exp();
+            assert!((lens.table().value(800e-9, nu, 0.0) - want).abs() < 1e-12, "m = {m}");
+        }
+        let order = &lens.orders(800e-9, Field::ON_AXIS)[0];
+        assert_eq!(order.wavefront.image_shift_m, r.centroids_m[0]);
+        assert_eq!(order.efficiency, 0.15);
+    }
+
+    /// An elliptical Gaussian (σx = 1.6 σy) has a narrower tangential curve (along x) than its
+    /// sagittal one, each its own closed form, at the table's frequencies.
+    #[test]
+    fn tangential_is_along_x_and_sagittal_along_y() {
+        let n = 64;
+        let values = gaussian(n, 2.0, 0.0, 0.0, 1.6);
+        let lens = lens(vec![600e-9], [n, n], &values).unwrap();
+        assert!(lens.table().is_direction_dependent());
+        let nu = lens.table().frequencies()[20];
+        let g = |s: f64| (-2.0 * std::f64::consts::PI.powi(2) * s * s * nu * nu).exp();
+        let t = lens.table().value(600e-9, nu, 0.0);
+        let s = lens.table().value(600e-9, nu, std::f64::consts::FRAC_PI_2);
+        assert!((t - g(3.2 * PITCH)).abs() < 1e-12, "{t} vs {}", g(3.2 * PITCH));
+        assert!((s - g(2.0 * PITCH)).abs() < 1e-12, "{s} vs {}", g(2.0 * PITCH));
+    }
+
+    /// The 1-D transforms of the line spread functions equal the direct 2-D sum
+    /// `Σ_{x,y} p(x, y) e^{−2πi ν·(x − c)}` on the axes (the slow reference: every sample of an
+    /// asymmetric, shifted PSF), and the imaginary part is reported.
+    #[test]
+    fn projection_slice_equals_the_direct_two_dimensional_sum() {
+        let (ny, nx) = (12, 16);
+        let mut values: Vec<f64> =
+            (0..ny * nx).map(|i| ((i * 37 % 11) as f64 + 0.5) * ((i % nx) as f64 + 1.0)).collect();
+        values[5 * nx + 9] += 300.0;
+        let lens = lens(vec![700e-9], [ny, nx], &values).unwrap();
+        let sum: f64 = values.iter().sum();
+        let [cx, cy] = lens.report().centroids_m[0];
+        let n = lens.report().transform_length as f64;
+        let mut largest_imaginary: f64 = 0.0;
+        for m in 0..=(n as usize / 2) {
+            let nu = m as f64 / (n * PITCH);
+            let direct = |along_x: bool| -> Complex64 {
+                let mut acc = Complex64::new(0.0, 0.0);
+                for i in 0..ny {
+                    for j in 0..nx {
+                        let x = (j as f64 - (nx / 2) as f64) * PITCH - cx;
+                        let y = (i as f64 - (ny / 2) as f64) * PITCH - cy;
+                        let d = if along_x { x } else { y };
+                        acc += Complex64::from_polar(values[i * nx + j] / sum, -std::f64::consts::TAU * nu * d);
+                    }
+                }
+                acc
+            };
+            let (t, s) = (direct(true), direct(false));
+            largest_imaginary = largest_imaginary.max(t.im.abs()).max(s.im.abs());
+            assert!((lens.table().value(700e-9, nu, 0.0) - t.re).abs() < 1e-12, "m = {m}");
+            assert!((lens.table().value(700e-9, nu, std::f64::consts::FRAC_PI_2) - s.re).abs() < 1e-12, "m = {m}");
+        }
+        assert!((lens.report().imaginary.0 - largest_imaginary).abs() < 1e-12);
+        assert!(largest_imaginary > 0.01, "an asymmetric PSF: {largest_imaginary}");
+    }
+
+    /// Two slices: the centroids interpolate linearly in λ as the image shift; the border's
+    /// light is reported with its wavelength.
+    #[test]
+    fn shifts_interpolate_and_border_light_is_reported() {
+        let n = 32;
+        let mut values = gaussian(n, 1.5, -2.0, 0.0, 1.0);
+        let mut wide = gaussian(n, 6.0, 2.0, 0.0, 1.0);
+        values.append(&mut wide);
+        let lens = lens(vec![700e-9, 900e-9], [n, n], &values).unwrap();
+        let mid = lens.orders(800e-9, Field::ON_AXIS)[0].wavefront.image_shift_m;
+        let [a, b] = [lens.report().centroids_m[0][0], lens.report().centroids_m[1][0]];
+        assert!((mid[0] - 0.5 * (a + b)).abs() < 1e-18, "{mid:?}");
+        assert!(a < -1.9e-6 && b > 1.5e-6, "{a} {b}");
+        let (fraction, at) = lens.report().border_fraction;
+        assert_eq!(at, 900e-9);
+        assert!(fraction > 0.05 && fraction < 0.5, "{fraction}");
+        assert_eq!(lens.breakpoints(), vec![700e-9, 900e-9]);
+    }
+
+    /// Bad stacks are refused naming the slice, the sample, the value and what is accepted.
+    #[test]
+    fn bad_stacks_are_refused() {
+        let n = 16;
+        let good = gaussian(n, 2.0, 0.0, 0.0, 1.0);
+        let err = |values: &[f64], w: Vec<f64>| lens(w, [n, n], values).unwrap_err().to_string();
+        let mut nan = good.clone();
+        nan[3 * n + 4] = f64::NAN;
+        let e = err(&nan, vec![8e-7]);
+        assert!(e.contains("slice 0 (800 nm)") && e.contains("row 3, column 4 is NaN"), "{e}");
+        let mut negative = good.clone();
+        negative[7] = -0.02;
+        let e = err(&negative, vec![8e-7]);
+        assert!(e.contains("row 0, column 7") && e.contains("-2e-2") && e.contains("0.01"), "{e}");
+        let mut noise = good.clone();
+        noise[7] = -0.009;
+        assert!(lens(vec![8e-7], [n, n], &noise).is_ok(), "noise within the floor is accepted");
+        // σ = 2 samples: Σ = 8π ≈ 25.1; 40 samples at −0.009 hold 1.4 % of it
+        let offset: Vec<f64> = good.iter().enumerate().map(|(i, &v)| if i < 40 { -0.009 } else { v }).collect();
+        let e = err(&offset, vec![8e-7]);
+        assert!(e.contains("negative samples sum to −1.") && e.contains("at most 1 %"), "{e}");
+        let e = err(&[good.clone(), vec![0.0; n * n]].concat(), vec![8e-7, 9e-7]);
+        assert!(e.contains("slice 1 (900 nm)") && e.contains("sum to 0e0"), "{e}");
+        let e = err(&[good.clone(), good.clone()].concat(), vec![9e-7, 8e-7]);
+        assert!(e.contains("strictly increasing"), "{e}");
+        let e = err(&good, vec![8e-7, 9e-7]);
+        assert!(e.contains("256 values for 2 slices"), "{e}");
+        let e = lens(vec![8e-7], [4, 4], &good[..16]).unwrap_err().to_string();
+        assert!(e.contains("at least 8 × 8"), "{e}");
+    }
+}

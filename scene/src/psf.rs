@@ -1,0 +1,903 @@
+//! The `model = "psf"` lens: a PSF stack read from a `.npy` array or a multi-page float TIFF
+//! (docs/physics.md, "Designs given as data"), and the checks that need the rest of the scene
+//! (the camera's Nyquist frequency, the detected spectrum's extent).
+//!
+//! Both readers check a file's sizes before they allocate for its samples: a header that
+//! promises more than [`lenses::PSF_MAX_ELEMENTS`] values, or a file whose length does not match
+//! its header, is refused unread.
+
+use std::io::Read as _;
+use std::path::Path;
+
+use lenses::{Curve, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PsfStack};
+use radiometry::Spectrum;
+
+use crate::error::{Error, num, quoted};
+use crate::lens::{LensInfo, RawLens};
+use crate::load::Origins;
+
+/// The most pages a TIFF stack may have (one per wavelength).
+const MAX_PAGES: usize = 10_000;
+
+/// The longest `.npy` header read, bytes (numpy writes 128 or a few hundred).
+const MAX_NPY_HEADER: usize = 1 << 16;
+
+/// The largest fraction of the signal (the detected spectrum times the lens efficiency) that may
+/// lie outside the stack's wavelengths, where the end slices' OTF would stand for it; above it
+/// the scene is refused, above [`OUTSIDE_WARNED`] warned about.
+pub(crate) const PSF_OUTSIDE_MAX: f64 = 1e-3;
+
+/// Above this fraction of the signal outside the stack's wavelengths the scene warns.
+const OUTSIDE_WARNED: f64 = 1e-6;
+
+/// The fraction of a slice's light in the stack's border band above which the scene warns.
+const BORDER_WARNED: f64 = 1e-3;
+
+/// The largest |imaginary part| of a re-centred OTF above which the scene warns (the table holds
+/// the real part).
+const IMAGINARY_WARNED: f64 = 0.01;
+
+/// A stack in memory: `depth` slices of `ny × nx`, C order `[slice][row][column]`.
+#[derive(Debug)]
+pub(crate) struct Stack {
+    pub depth: usize,
+    pub ny: usize,
+    pub nx: usize,
+    pub values: Vec<f64>,
+}
+
+/// What the scene checks once the camera and the spectrum are known.
+#[derive(Clone, Debug)]
+pub(crate) struct PsfLimits {
+    pub pitch_m: f64,
+    pub range_m: (f64, f64),
+    pub efficiency: Spectrum,
+    /// What the stack showed (border light, asymmetry), `(value, hint)` for `lens.psf`: warned
+    /// once the scene's checks have passed (they are not unit slips to name beside an error).
+    pub notices: Vec<(String, String)>,
+}
+
+/// What the file formats accept, for messages.
+const ACCEPTED: &str = "a .npy float array [wavelength, y, x] (dtype <f4, <f8, >f4 or >f8, C or Fortran order, NPY format 1.0–3.0) or a multi-page TIFF of 32- or 64-bit float samples (one page per wavelength)";
+
+/// An element type of a `.npy` array.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Dtype {
+    size: usize,
+    little: bool,
+}
+
+/// A parsed `.npy` header.
+#[derive(Debug, PartialEq)]
+struct NpyHeader {
+    dtype: Dtype,
+    fortran: bool,
+    shape: [usize; 3],
+    /// Where the data start, bytes from the file's start.
+    offset: usize,
+}
+
+/// The fixed start of a `.npy` file: the header's length and where it starts.
+fn npy_preamble(bytes: &[u8]) -> Result<(usize, usize), String> {
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err("not a .npy file (it does not start with \\x93NUMPY)".into());
+    }
+    let (major, minor) = (bytes[6], bytes[7]);
+    let (len, start) = match major {
+        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+        2 | 3 if bytes.len() >= 12 => (u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize, 12),
+        2 | 3 => return Err("a .npy file cut inside its preamble".into()),
+        _ => return Err(format!("NPY format version {major}.{minor}: expected 1.0, 2.0 or 3.0")),
+    };
+    if len > MAX_NPY_HEADER {
+        return Err(format!("a .npy header of {len} bytes: expected at most {MAX_NPY_HEADER}"));
+    }
+    Ok((len, start))
+}
+
+/// A value of the header's Python dict literal.
+#[derive(Debug, PartialEq)]
+enum PyValue {
+    Str(String),
+    Bool(bool),
+    Tuple(Vec<u64>),
+}
+
+/// A minimal reader of the Python literal numpy writes: `{'descr': '<f8', 'fortran_order':
+/// False, 'shape': (3, 4, 5), }` (strings in single or double quotes, True/False, tuples of
+/// whole numbers with an optional `L` suffix, trailing commas).
+struct Literal<'a> {
+    s: &'a [u8],
+    at: usize,
+}
+
+impl Literal<'_> {
+    fn skip(&mut self) {
+        while self.at < self.s.len() && self.s[self.at].is_ascii_whitespace() {
+            self.at += 1;
+        }
+    }
+
+    fn eat(&mut self, c: u8) -> bool {
+        self.skip();
+        if self.s.get(self.at) == Some(&c) {
+            self.at += 1;
+            true
+        } else {
+            false
+        }
+    }
+
+    fn expect(&mut self, c: u8) -> Result<(), String> {
+        if self.eat(c) { Ok(()) } else { Err(self.unexpected(&format!("`{}`", c as char))) }
+    }
+
+    fn unexpected(&self, what: &str) -> String {
+        let rest = String::from_utf8_lossy(&self.s[self.at.min(self.s.len())..]);
+        let rest: String = rest.chars().take(24).collect();
+        format!("a malformed .npy header: expected {what} at byte {}, found `{rest}`", self.at)
+    }
+
+    fn string(&mut self) -> Result<String, String> {
+        self.skip();
+        let quote = match self.s.get(self.at) {
+            Some(&q @ (b'\'' | b'"')) => q,
+            _ => return Err(self.unexpected("a quoted string")),
+        };
+        let start = self.at + 1;
+        let end = self.s[start..].iter().position(|&c| c == quote).ok_or_else(|| self.unexpected("a closing quote"))?;
+        self.at = start + end + 1;
+        Ok(String::from_utf8_lossy(&self.s[start..start + end]).into_owned())
+    }
+
+    fn value(&mut self) -> Result<PyValue, String> {
+        self.skip();
+        match self.s.get(self.at) {
+            Some(b'\'' | b'"') => Ok(PyValue::Str(self.string()?)),
+            Some(b'(') => {
+                self.at += 1;
+                let mut items = Vec::new();
+                loop {
+                    if self.eat(b')') {
+                        return Ok(PyValue::Tuple(items));
+                    }
+                    self.skip();
+                    let start = self.at;
+                    while self.at < self.s.len() && self.s[self.at].is_ascii_digit() {
+                        self.at += 1;
+                    }
+                    let digits = std::str::from_utf8(&self.s[start..self.at]).unwrap_or("");
+                    let n: u64 = digits.parse().map_err(|_| {
+                        self.at = start;
+                        self.unexpected("a whole number ≥ 0 in the shape")
+                    })?;
+                    self.eat(b'L');
+                    items.push(n);
+                    if !self.eat(b',') {
+                        self.expect(b')')?;
+                        return Ok(PyValue::Tuple(items));
+                    }
+                }
+            }
+            _ if self.s[self.at..].starts_with(b"True") => {
+                self.at += 4;
+                Ok(PyValue::Bool(true))
+            }
+            _ if self.s[self.at..].starts_with(b"False") => {
+                self.at += 5;
+                Ok(PyValue::Bool(false))
+            }
+            _ => Err(self.unexpected("a string, True, False or a tuple")),
+        }
+    }
+
+    fn dict(&mut self) -> Result<Vec<(String, PyValue)>, String> {
+        self.expect(b'{')?;
+        let mut entries = Vec::new();
+        loop {
+            if self.eat(b'}') {
+                break;
+            }
+            let key = self.string()?;
+            self.expect(b':')?;
+            let value = self.value()?;
+            entries.push((key, value));
+            if !self.eat(b',') {
+                self.expect(b'}')?;
+                break;
+            }
+        }
+        self.skip();
+        if self.at != self.s.len() {
+            return Err(self.unexpected("the end of the header after the dict"));
+        }
+        Ok(entries)
+    }
+}
+
+/// Parses a `.npy` header from the file's first bytes (at least the preamble and the header);
+/// checks the dtype, the shape (3 axes, or 2 for one slice; each side ≥
+/// [`PSF_MIN_SIDE`] but the first) and the element count (≤ [`PSF_MAX_ELEMENTS`]).
+fn npy_header(bytes: &[u8]) -> Result<NpyHeader, String> {
+    let (len, start) = npy_preamble(bytes)?;
+    let Some(text) = bytes.get(start..start + len) else {
+        return Err(format!("a .npy header of {len} bytes, but the file ends after {} bytes", bytes.len()));
+    };
+    let entries = Literal { s: text, at: 0 }.dict()?;
+    let mut descr = None;
+    let mut fortran = None;
+    let mut shape = None;
+    for (key, value) in entries {
+        match (key.as_str(), value) {
+            ("descr", PyValue::Str(s)) => descr = Some(s),
+            ("fortran_order", PyValue::Bool(b)) => fortran = Some(b),
+            ("shape", PyValue::Tuple(t)) => shape = Some(t),
+            (k, v) => {
+                return Err(format!(
+                    "the .npy header's `{k}`: {v:?}: expected the keys descr (a string), fortran_order (True or False) and shape (a tuple)"
+                ));
+            }
+        }
+    }
+    let descr = descr.ok_or("a .npy header without `descr`")?;
+    let dtype = match descr.as_str() {
+        "<f4" => Dtype { size: 4, little: true },
+        "<f8" => Dtype { size: 8, little: true },
+        ">f4" => Dtype { size: 4, little: false },
+        ">f8" => Dtype { size: 8, little: false },
+        other => {
+            return Err(format!(
+                "dtype '{other}': expected float samples, '<f4', '<f8', '>f4' or '>f8' (save with astype('float32') or 'float64')"
+            ));
+        }
+    };
+    let fortran = fortran.ok_or("a .npy header without `fortran_order`")?;
+    let shape = shape.ok_or("a .npy header without `shape`")?;
+    let shape = match shape.as_slice() {
+        &[d, y, x] => [d, y, x],
+        &[y, x] => [1, y, x],
+        other => {
+            return Err(format!(
+                "an array of shape {other:?}: expected 3 axes [wavelength, y, x] (or 2, [y, x], for one wavelength)"
+            ));
+        }
+    };
+    let count = shape.iter().try_fold(1u64, |a, &b| a.checked_mul(b));
+    if shape[0] == 0 || shape[1] < PSF_MIN_SIDE as u64 || shape[2] < PSF_MIN_SIDE as u64 {
+        return Err(format!(
+            "an array of shape {shape:?}: expected at least one slice of at least {PSF_MIN_SIDE} × {PSF_MIN_SIDE} samples"
+        ));
+    }
+    if count.is_none_or(|c| c > PSF_MAX_ELEMENTS as u64) {
+        return Err(format!(
+            "an array of shape {shape:?}: more than {PSF_MAX_ELEMENTS} values (2^26): expected a smaller stack (crop or bin it)"
+        ));
+    }
+    let shape = shape.map(|v| v as usize);
+    Ok(NpyHeader { dtype, fortran, shape, offset: start + len })
+}
+
+/// The samples of `data` (exactly `depth·ny·nx` values of `dtype`) in C order.
+fn npy_values(header: &NpyHeader, data: &[u8]) -> Vec<f64> {
+    let [d, ny, nx] = header.shape;
+    let read = |i: usize| -> f64 {
+        let b = &data[i * header.dtype.size..(i + 1) * header.dtype.size];
+        match (header.dtype.size, header.dtype.little) {
+            (4, true) => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            (4, false) => f64::from(f32::from_be_bytes([b[0], b[1], b[2], b[3]])),
+            (_, true) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+            (_, false) => f64::from_be_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+        }
+    };
+    if header.fortran {
+        // element (k, y, x) at k + d (y + ny x)
+        (0..d * ny * nx)
+            .map(|c| {
+                let (k, y, x) = (c / (ny * nx), (c / nx) % ny, c % nx);
+                read(k + d * (y + ny * x))
+            })
+            .collect()
+    } else {
+        (0..d * ny * nx).map(read).collect()
+    }
+}
+
+/// A whole `.npy` file in memory, read as [`read_npy`] reads a file.
+#[cfg(test)]
+pub(crate) fn parse_npy(bytes: &[u8]) -> Result<Stack, String> {
+    npy_from(std::io::Cursor::new(bytes), bytes.len() as u64)
+}
+
+/// Reads a `.npy` file.
+fn read_npy(path: &Path) -> Result<Stack, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read it ({e})"))?;
+    let length = file.metadata().map_err(|e| format!("cannot read it ({e})"))?.len();
+    npy_from(std::io::BufReader::new(file), length)
+}
+
+/// Reads a `.npy` array of `length` bytes from `source`: its preamble and header first, the
+/// length checked against them, and only then its samples.
+fn npy_from(mut source: impl std::io::Read + std::io::Seek, length: u64) -> Result<Stack, String> {
+    let io = |e: std::io::Error| format!("cannot read it ({e})");
+    let mut head = vec![0u8; 12.min(length) as usize];
+    source.read_exact(&mut head).map_err(io)?;
+    let (len, at) = npy_preamble(&head)?;
+    head.truncate(at);
+    head.resize(at + len, 0);
+    source.seek(std::io::SeekFrom::Start(at as u64)).map_err(io)?;
+    source
+        .read_exact(&mut head[at..])
+        .map_err(|_| format!("a .npy header of {len} bytes, but the file ends after {length} bytes"))?;
+    let header = npy_header(&head)?;
+    let [depth, ny, nx] = header.shape;
+    let data = (depth * ny * nx) * header.dtype.size;
+    if length != (header.offset + data) as u64 {
+        return Err(format!(
+            "{} bytes of data after the header: expected {data} ({depth} × {ny} × {nx} values of {} bytes)",
+            length.saturating_sub(header.offset as u64),
+            header.dtype.size
+        ));
+    }
+    let mut bytes = vec![0u8; data];
+    source.read_exact(&mut bytes).map_err(io)?;
+    Ok(Stack { depth, ny, nx, values: npy_values(&header, &bytes) })
+}
+
+/// Reads a multi-page float TIFF: every page's size and sample format checked first (one size,
+/// 32- or 64-bit IEEE float, one sample per pixel), then the pages decoded.
+fn read_tiff(path: &Path) -> Result<Stack, String> {
+    use tiff::decoder::{Decoder, DecodingResult};
+    use tiff::tags::Tag;
+    let open = || -> Result<Decoder<std::io::BufReader<std::fs::File>>, String> {
+        let file = std::fs::File::open(path).map_err(|e| format!("cannot read it ({e})"))?;
+        Decoder::new(std::io::BufReader::new(file)).map_err(|e| format!("not a readable TIFF ({e})"))
+    };
+    let tiff = |e: tiff::TiffError| format!("not a readable TIFF ({e})");
+    let mut decoder = open()?;
+    let mut size = None;
+    let mut pages = 0usize;
+    loop {
+        let (w, h) = decoder.dimensions().map_err(tiff)?;
+        let color = decoder.colortype().map_err(tiff)?;
+        let format: u16 = decoder.get_tag_unsigned(Tag::SampleFormat).unwrap_or(1);
+        let float = matches!(color, tiff::ColorType::Gray(32 | 64)) && format == 3;
+        if !float {
+            return Err(format!(
+                "page {pages} holds {color:?} samples of format {format}: expected one 32- or 64-bit float sample per pixel (SampleFormat 3)"
+            ));
+        }
+        let (w, h) = (w as usize, h as usize);
+        match size {
+            None => size = Some((w, h)),
+            Some((w0, h0)) if (w0, h0) != (w, h) => {
+                return Err(format!(
+                    "page {pages} is {w} × {h} pixels, page 0 {w0} × {h0}: expected pages of one size (one slice per wavelength)"
+                ));
+            }
+            Some(_) => {}
+        }
+        pages += 1;
+        let count = (pages as u64) * (w as u64) * (h as u64);
+        if count > PSF_MAX_ELEMENTS as u64 || pages > MAX_PAGES {
+            return Err(format!(
+                "{pages} pages of {w} × {h} pixels or more: expected at most {PSF_MAX_ELEMENTS} values (2^26) and {MAX_PAGES} pages"
+            ));
+        }
+        if !decoder.more_images() {
+            break;
+        }
+        decoder.next_image().map_err(tiff)?;
+    }
+    let (nx, ny) = size.unwrap_or_default();
+    if nx < PSF_MIN_SIDE || ny < PSF_MIN_SIDE {
+        return Err(format!("pages of {nx} × {ny} pixels: expected at least {PSF_MIN_SIDE} × {PSF_MIN_SIDE}"));
+    }
+    let mut decoder = open()?;
+    let mut values = Vec::with_capacity(pages * nx * ny);
+    for page in 0..pages {
+        if page > 0 {
+            decoder.next_image().map_err(tiff)?;
+        }
+        let before = values.len();
+        match decoder.read_image().map_err(tiff)? {
+            DecodingResult::F32(v) => values.extend(v.into_iter().map(f64::from)),
+            DecodingResult::F64(v) => values.extend(v),
+            _ => return Err(format!("page {page}: samples that are not 32- or 64-bit floats")),
+        }
+        if values.len() - before != nx * ny {
+            return Err(format!("page {page}: {} samples for {nx} × {ny} pixels", values.len() - before));
+        }
+    }
+    Ok(Stack { depth: pages, ny, nx, values })
+}
+
+/// Reads a PSF stack, `.npy` or TIFF by its first bytes.
+pub(crate) fn read_stack(path: &Path) -> Result<Stack, String> {
+    let mut magic = [0u8; 6];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| {
+            let mut got = 0;
+            while got < magic.len() {
+                match f.read(&mut magic[got..])? {
+                    0 => break,
+                    k => got += k,
+                }
+            }
+            Ok(got)
+        })
+        .map_err(|e| format!("cannot read it ({e})"))?;
+    match &magic[..n] {
+        [0x93, b'N', b'U', b'M', b'P', b'Y'] => read_npy(path),
+        [b'I', b'I', 42 | 43, 0, ..] | [b'M', b'M', 0, 42 | 43, ..] => read_tiff(path),
+        _ => Err(format!(
+            "neither a .npy file nor a TIFF (its first bytes are {:02x?}): expected {ACCEPTED}",
+            &magic[..n]
+        )),
+    }
+}
+
+/// The `model = "psf"` lens of a `[lens]` table.
+pub(crate) fn psf_lens(
+    l: &RawLens,
+    o: &Origins,
+    f_number: f64,
+    f0_m: f64,
+    transmission: &dyn Fn(&Origins, &Curve) -> Result<Curve, Error>,
+    info: &mut LensInfo,
+) -> Result<PsfStack, Error> {
+    let key = "lens.psf";
+    let file = o.require(key, l.psf.as_deref(), &format!("the path of a PSF stack: {ACCEPTED}"))?;
+    let expected = "the stack's sample pitch at the detector, > 0 µm";
+    let pitch = o.require("lens.psf_pitch_um", l.psf_pitch_um, expected)?;
+    let pitch = o.number("lens.psf_pitch_um", pitch, pitch > 0.0 && pitch < 1e6, expected)?;
+    let wkey = "lens.psf_wavelengths_nm";
+    let expected = "the wavelength of each slice of the stack, nm, > 0 and strictly increasing";
+    let wavelengths = o.require(wkey, l.psf_wavelengths_nm.as_ref(), expected)?;
+    for (i, &w) in wavelengths.iter().enumerate() {
+        let ok = w > 0.0 && (i == 0 || w > wavelengths[i - 1]);
+        o.number(&format!("{wkey}[{i}]"), w, ok, expected)?;
+        o.wavelength(&format!("{wkey}[{i}]"), w);
+    }
+    let e = o.require(
+        "lens.efficiency",
+        l.efficiency.as_ref(),
+        "the imaging efficiency τ(λ), a fraction in [0, 1] or a CSV path: required with a PSF stack, which is normalized and carries no efficiency",
+    )?;
+    let efficiency = o.curve("lens.efficiency", e, "efficiency")?;
+    let transmission = transmission(o, &efficiency)?;
+    let path = o.path(file);
+    let stack = read_stack(&path).map_err(|message| Error::Table {
+        origin: o.of(key),
+        key: o.key(key),
+        file: crate::error::shorten(file),
+        cause: Box::new(Error::Csv { file: path.display().to_string(), line: None, message }),
+    })?;
+    let shape = format!("{} × {} × {}", stack.depth, stack.ny, stack.nx);
+    if stack.depth != wavelengths.len() {
+        return Err(o.bad(
+            wkey,
+            format!("a list of {}", wavelengths.len()),
+            &format!(
+                "one wavelength per slice of lens.psf = {}: {} (its shape is {shape}, [wavelength, y, x])",
+                quoted(file),
+                stack.depth
+            ),
+        ));
+    }
+    let efficiency_spectrum = match &efficiency {
+        Curve::Constant(v) => Spectrum::Constant(*v),
+        Curve::Table(t) => Spectrum::Sampled(t.clone()),
+    };
+    let range = (wavelengths[0] * 1e-9, wavelengths[wavelengths.len() - 1] * 1e-9);
+    let mut lens = PsfStack::new(
+        f_number,
+        f0_m,
+        pitch * 1e-6,
+        wavelengths.iter().map(|w| w * 1e-9).collect(),
+        [stack.ny, stack.nx],
+        &stack.values,
+        efficiency,
+        transmission,
+    )
+    .map_err(|e| o.domain(key, &format!("{key} = {}", quoted(file)), e))?;
+    if l.design_wavelength_nm.is_some() {
+        let v = l.design_wavelength_nm.unwrap_or_default();
+        let v = o.number("lens.design_wavelength_nm", v, v > 0.0, "a wavelength > 0 nm")?;
+        o.wavelength("lens.design_wavelength_nm", v);
+        lens = lens.with_design_wavelength(v * 1e-9).map_err(|e| o.domain("lens", "[lens]", e))?;
+        info.design_wavelength_m = Some(v * 1e-9);
+    }
+    let report = lens.report().clone();
+    let mut notices = Vec::new();
+    let (border, at) = report.border_fraction;
+    if border > BORDER_WARNED {
+        notices.push((
+            quoted(file),
+            format!(
+                "{:.3} % of the light of the slice at {} nm lies within {} samples of the stack's border: the PSF may be cut off (a larger stack would hold it)",
+                border * 100.0,
+                num(optics::round_for_display(at * 1e9)),
+                lenses::PSF_BORDER_SAMPLES
+            ),
+        ));
+    }
+    let (im, at, nu) = report.imaginary;
+    if im > IMAGINARY_WARNED {
+        notices.push((
+            quoted(file),
+            format!(
+                "the PSF at {} nm is asymmetric about its centroid: its OTF has an imaginary part of {im:.3} at {:.1} cycles/mm, which the table (the real part) leaves out",
+                num(optics::round_for_display(at * 1e9)),
+                nu * 1e-3
+            ),
+        ));
+    }
+    let shifts = report.centroids_m.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max);
+    info.notes.push(format!(
+        "PSF stack {}: {shape} at {} µm, {}–{} nm; OTF to the stack's Nyquist {:.1} cycles/mm (transforms of {} points, zero padded ×{}), linear in λ between slices; centroid offsets up to {:.3} µm kept as lateral shifts",
+        crate::error::shorten(file),
+        num(pitch),
+        num(wavelengths[0]),
+        num(wavelengths[wavelengths.len() - 1]),
+        lens.nyquist() * 1e-3,
+        report.transform_length,
+        lenses::PSF_PADDING,
+        shifts * 1e6
+    ));
+    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, range_m: range, efficiency: efficiency_spectrum, notices });
+    Ok(lens)
+}
+
+/// The checks of a PSF-stack lens that need the rest of the scene: the stack's Nyquist frequency
+/// above the camera's, and the signal (detected spectrum × efficiency) inside the stack's
+/// wavelengths but for at most [`PSF_OUTSIDE_MAX`] of it; then the stack's notices are warned.
+pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins) -> Result<(), Error> {
+    let camera = scene.camera();
+    let stack_nyquist = 0.5 / limits.pitch_m;
+    if stack_nyquist <= camera.nyquist() {
+        return Err(o.bad(
+            "lens.psf_pitch_um",
+            num(limits.pitch_m * 1e6),
+            &format!(
+                "a pitch under {} µm: the stack's Nyquist frequency 1/(2p) = {:.1} cycles/mm must exceed the camera's {:.1} cycles/mm (camera.pixel_pitch_um = {}), up to which the metric needs the MTF",
+                num(camera.pixel_pitch() * 1e6),
+                stack_nyquist * 1e-3,
+                camera.nyquist() * 1e-3,
+                num(camera.pixel_pitch() * 1e6)
+            ),
+        ));
+    }
+    let (lo, hi) = limits.range_m;
+    let signal = Spectrum::product(vec![metric::detected_spectrum(scene), limits.efficiency.clone()]);
+    let total = signal.integral();
+    if total.is_nan() || total <= 0.0 {
+        return Ok(()); // no light: the evaluation says so
+    }
+    let inside = match radiometry::TopHat::new(lo, hi, 1.0) {
+        Ok(band) => Spectrum::product(vec![signal, Spectrum::TopHat(band)]).integral(),
+        Err(_) => 0.0, // a one-slice stack covers one wavelength
+    };
+    let outside = if total.is_finite() { (1.0 - inside / total).max(0.0) } else { 1.0 };
+    let nm = |l: f64| num(optics::round_for_display(l * 1e9));
+    let range = format!("{}–{} nm", nm(lo), nm(hi));
+    if outside > PSF_OUTSIDE_MAX {
+        return Err(o.bad(
+            "lens.psf_wavelengths_nm",
+            format!("[{range}]"),
+            &format!(
+                "wavelengths covering the detected spectrum: {:.4} % of the signal (detected spectrum × lens.efficiency) lies outside the stack's {range}, at most {} % accepted (the end slices would stand for it); extend the stack or narrow the spectrum",
+                outside * 100.0,
+                PSF_OUTSIDE_MAX * 100.0
+            ),
+        ));
+    }
+    if outside > OUTSIDE_WARNED {
+        o.warn(
+            "lens.psf_wavelengths_nm",
+            format!("[{range}]"),
+            format!(
+                "{:.2e} of the signal lies outside the stack's wavelengths: the end slices' OTF stands for it",
+                outside
+            ),
+        );
+    }
+    for (value, hint) in &limits.notices {
+        o.warn("lens.psf", value.clone(), hint.clone());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A `.npy` file of `values` with `descr`, `fortran` and `shape`, format 1.0 (or 2.0).
+    pub(crate) fn npy(descr: &str, fortran: bool, shape: &[usize], data: &[u8], version: u8) -> Vec<u8> {
+        let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+        let dims = if dims.len() == 1 { format!("{},", dims[0]) } else { dims.join(", ") };
+        let mut dict = format!(
+            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': ({dims}), }}",
+            if fortran { "True" } else { "False" }
+        );
+        let pre = if version == 1 { 10 } else { 12 };
+        while (pre + dict.len() + 1) % 64 != 0 {
+            dict.push(' ');
+        }
+        dict.push('\n');
+        let mut out = b"\x93NUMPY".to_vec();
+        out.push(version);
+        out.push(0);
+        if version == 1 {
+            out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        } else {
+            out.extend_from_slice(&(dict.len() as u32).to_le_bytes());
+        }
+        out.extend_from_slice(dict.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    fn ramp(n: usize) -> Vec<f64> {
+        (0..n).map(|i| i as f64).collect()
+    }
+
+    /// Every dtype and both orders give the same C-order values; versions 1 and 2 (3 differs
+    /// only in the header's encoding) read alike.
+    #[test]
+    fn npy_dtypes_and_orders() {
+        let (d, y, x) = (2, 8, 9);
+        let c = ramp(d * y * x);
+        // Fortran order: element (k, i, j) at k + d (i + y j)
+        let mut f = vec![0.0; c.len()];
+        for k in 0..d {
+            for i in 0..y {
+                for j in 0..x {
+                    f[k + d * (i + y * j)] = c[(k * y + i) * x + j];
+                }
+            }
+        }
+        for (descr, fortran, source) in
+            [("<f8", false, &c), ("<f4", false, &c), (">f8", false, &c), (">f4", true, &f), ("<f8", true, &f)]
+        {
+            let data: Vec<u8> = source
+                .iter()
+                .flat_map(|&v| match descr {
+                    "<f8" => v.to_le_bytes().to_vec(),
+                    ">f8" => v.to_be_bytes().to_vec(),
+                    "<f4" => (v as f32).to_le_bytes().to_vec(),
+                    _ => (v as f32).to_be_bytes().to_vec(),
+                })
+                .collect();
+            for version in [1, 2, 3] {
+                let s = parse_npy(&npy(descr, fortran, &[d, y, x], &data, version)).unwrap();
+                assert_eq!((s.depth, s.ny, s.nx), (d, y, x));
+                assert_eq!(s.values, c, "{descr} fortran={fortran} v{version}");
+            }
+        }
+        let two = parse_npy(&npy("<f8", false, &[y, x], &vec![0u8; y * x * 8], 1)).unwrap();
+        assert_eq!(two.depth, 1);
+    }
+
+    /// Headers that cannot be a stack are refused with what is accepted, before any allocation
+    /// for the data (a shape of 2^40 values in a 100-byte file).
+    #[test]
+    fn npy_refusals() {
+        let err = |bytes: Vec<u8>| parse_npy(&bytes).unwrap_err();
+        let e = err(npy("<i4", false, &[1, 8, 8], &[0; 256], 1));
+        assert!(e.contains("dtype '<i4'") && e.contains("'<f8'"), "{e}");
+        let e = err(npy("<f8", false, &[1 << 20, 1 << 10, 1 << 10], &[], 1));
+        assert!(e.contains("more than 67108864 values"), "{e}");
+        let e = err(npy("<f8", false, &[2, 8, 8], &[0; 100], 1));
+        assert!(e.contains("100 bytes of data") && e.contains("expected 1024"), "{e}");
+        let e = err(npy("<f8", false, &[8], &[0; 64], 1));
+        assert!(e.contains("expected 3 axes"), "{e}");
+        let e = err(npy("<f8", false, &[1, 4, 8], &[0; 256], 1));
+        assert!(e.contains("at least 8 × 8"), "{e}");
+        let mut v9 = npy("<f8", false, &[1, 8, 8], &[0; 512], 1);
+        v9[6] = 9;
+        assert!(err(v9).contains("version 9.0"));
+        let mut bad = npy("<f8", false, &[1, 8, 8], &[0; 512], 1);
+        bad[20] = b'#';
+        assert!(err(bad).contains("malformed .npy header"));
+        assert!(err(b"PK\x03\x04".to_vec()).contains("not a .npy file"));
+    }
+
+    /// A folder of its own for one test's files.
+    fn folder(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("asnr-psf-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// `slices` Gaussian PSFs of σ = `sigma` samples on `n × n`, f8, as a .npy file.
+    fn gaussian_npy(dir: &Path, name: &str, n: usize, sigmas: &[f64]) -> std::path::PathBuf {
+        let c = (n / 2) as f64;
+        let mut data = Vec::new();
+        for &sigma in sigmas {
+            for i in 0..n * n {
+                let (y, x) = ((i / n) as f64 - c, (i % n) as f64 - c);
+                data.extend_from_slice(&(-(x * x + y * y) / (2.0 * sigma * sigma)).exp().to_le_bytes());
+            }
+        }
+        let path = dir.join(name);
+        std::fs::write(&path, npy("<f8", false, &[sigmas.len(), n, n], &data, 1)).unwrap();
+        path
+    }
+
+    /// The paper scene with a `[lens] model = "psf"` of `keys` (F/2.5, f0 = 3.36 mm).
+    fn psf_scene(keys: &str) -> String {
+        crate::PAPER_SCENE.replace(
+            &crate::PAPER_SCENE
+                [crate::PAPER_SCENE.find("[lens]").unwrap()..crate::PAPER_SCENE.find("[source]").unwrap()],
+            &format!("[lens]\nmodel = \"psf\"\nf_number = 2.5\nfocal_length_mm = 3.36\n{keys}\n\n"),
+        )
+    }
+
+    fn load(dir: &Path, keys: &str, overrides: &[&str]) -> Result<crate::Loaded, Error> {
+        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        crate::build_with_warnings(&crate::Source::from_text(psf_scene(keys), "s.toml", dir), &overrides)
+    }
+
+    /// A Gaussian PSF of σ = 2 samples at 1 µm, seen through a line at 800 nm: the mean MTF to
+    /// the camera's Nyquist frequency ν_N is the closed form
+    /// `(1/ν_N) ∫_0^{ν_N} e^{−2π²σ²ν²} dν = √π erf(a)/(2a)`, `a = √2 π σ ν_N` (the Gaussian's
+    /// Fourier transform), to the table's linear interpolation in ν (step 1/(4 n p); bound
+    /// (Δν²/8)·4π²σ² = 3e-4) — a reference that is not the engine under test.
+    #[test]
+    fn a_gaussian_stack_gives_the_closed_form_mean_mtf() {
+        let dir = folder("gauss");
+        gaussian_npy(&dir, "g.npy", 64, &[2.0, 2.0, 2.0]);
+        let keys = "psf = \"g.npy\"\npsf_pitch_um = 1\npsf_wavelengths_nm = [780, 800, 820]\nefficiency = 0.15";
+        let loaded = load(&dir, keys, &["spectrum.shape=line"]).unwrap();
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let e = metric::evaluate(&loaded.scene).unwrap();
+        let nyquist = 0.5 / 5.2e-6;
+        let a = std::f64::consts::SQRT_2 * std::f64::consts::PI * 2e-6 * nyquist;
+        // erf by its series (a ≈ 0.85: 30 terms reach 1e-16)
+        let erf = |x: f64| -> f64 {
+            let (mut term, mut sum) = (x, x);
+            for k in 1..30 {
+                term *= -x * x / k as f64;
+                sum += term / (2 * k + 1) as f64;
+            }
+            2.0 / std::f64::consts::PI.sqrt() * sum
+        };
+        let want = std::f64::consts::PI.sqrt() * erf(a) / (2.0 * a);
+        assert!((e.mean_mtf - want).abs() < 3e-4, "{} vs {want}", e.mean_mtf);
+        assert!(loaded.scene.lens().describe().contains("3 slices of 64 × 64 at 1 µm"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Every refusal names the file or key, the value and what is accepted.
+    #[test]
+    fn psf_refusals_name_the_key_and_the_numbers() {
+        let dir = folder("refusals");
+        gaussian_npy(&dir, "g.npy", 32, &[2.0, 2.0, 2.0]);
+        let good = "psf = \"g.npy\"\npsf_pitch_um = 1\npsf_wavelengths_nm = [780, 800, 820]\nefficiency = 0.15";
+        let line = ["spectrum.shape=line"];
+        let err = |keys: &str, overrides: &[&str]| match load(&dir, keys, overrides) {
+            Ok(_) => panic!("{keys} loads"),
+            Err(e) => e.to_string(),
+        };
+        // the Gaussian spectrum of 50 nm range (σ = 17.7 nm) reaches beyond 780–820 nm
+        let e = err(good, &[]);
+        assert!(e.contains("lens.psf_wavelengths_nm = [780–820 nm]") && e.contains("% of the signal"), "{e}");
+        assert!(e.contains("at most 0.1 % accepted"), "{e}");
+        let e = err(&good.replace("psf_pitch_um = 1", "psf_pitch_um = 6"), &line);
+        assert!(e.contains("lens.psf_pitch_um = 6") && e.contains("83.3 cycles/mm") && e.contains("96.2"), "{e}");
+        let e = err(&good.replace("[780, 800, 820]", "[780, 800]"), &line);
+        assert!(e.contains("lens.psf_wavelengths_nm = a list of 2") && e.contains("3 × 32 × 32"), "{e}");
+        let e = err(&good.replace("[780, 800, 820]", "[780, 770, 820]"), &line);
+        assert!(e.contains("lens.psf_wavelengths_nm[1] = 770") && e.contains("strictly increasing"), "{e}");
+        let e = err(&good.replace("\nefficiency = 0.15", ""), &line);
+        assert!(e.contains("lens.efficiency is missing") && e.contains("carries no efficiency"), "{e}");
+        let e = err(&good.replace("g.npy", "absent.npy"), &line);
+        assert!(e.contains("lens.psf = \"absent.npy\"") && e.contains("cannot read it"), "{e}");
+        // a NaN, a zero-sum slice, a negative sample beyond the floor
+        let c = 32 / 2;
+        for (name, index, value, want) in [
+            ("nan.npy", 5 * 32 + 7, f64::NAN, "slice 1 (800 nm): row 5, column 7 is NaN"),
+            ("neg.npy", c * 32 + c + 1, -0.5, "row 16, column 17 is -5e-1"),
+        ] {
+            let mut bytes = std::fs::read(dir.join("g.npy")).unwrap();
+            let at = bytes.len() - 2 * 32 * 32 * 8 + index * 8;
+            bytes[at..at + 8].copy_from_slice(&value.to_le_bytes());
+            std::fs::write(dir.join(name), bytes).unwrap();
+            let e = err(&good.replace("g.npy", name), &line);
+            assert!(e.contains(&format!("lens.psf = \"{name}\"")) && e.contains(want), "{e}");
+        }
+        let mut bytes = std::fs::read(dir.join("g.npy")).unwrap();
+        let end = bytes.len();
+        bytes[end - 32 * 32 * 8..].fill(0);
+        std::fs::write(dir.join("zero.npy"), bytes).unwrap();
+        let e = err(&good.replace("g.npy", "zero.npy"), &line);
+        assert!(e.contains("slice 2 (820 nm): its samples sum to 0e0"), "{e}");
+        std::fs::write(dir.join("text.npy"), "wavelength,x\n").unwrap();
+        let e = err(&good.replace("g.npy", "text.npy"), &line);
+        assert!(e.contains("neither a .npy file nor a TIFF") && e.contains("<f4"), "{e}");
+        let e = err(&format!("{good}\nmtf = \"x.csv\""), &line);
+        assert!(e.contains("lens.mtf does not apply to lens.model = \"psf\""), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A multi-page float TIFF reads as the .npy of the same samples; pages of different sizes
+    /// are refused before decoding; light at the border is warned about with its fraction.
+    #[test]
+    fn tiff_stacks_and_border_warnings() {
+        use tiff::encoder::{TiffEncoder, colortype};
+        let dir = folder("tiff");
+        let n = 32;
+        gaussian_npy(&dir, "g.npy", n, &[2.0, 2.5]);
+        let stack = read_stack(&dir.join("g.npy")).unwrap();
+        let mut file = std::fs::File::create(dir.join("g.tif")).unwrap();
+        let mut tiff = TiffEncoder::new(&mut file).unwrap();
+        for slice in stack.values.chunks(n * n) {
+            let page: Vec<f32> = slice.iter().map(|&v| v as f32).collect();
+            tiff.write_image::<colortype::Gray32Float>(n as u32, n as u32, &page).unwrap();
+        }
+        drop(file);
+        let keys =
+            |f: &str| format!("psf = \"{f}\"\npsf_pitch_um = 1\npsf_wavelengths_nm = [790, 810]\nefficiency = 0.15");
+        let line = ["spectrum.shape=line"];
+        let a = metric::evaluate(&load(&dir, &keys("g.npy"), &line).unwrap().scene).unwrap();
+        let b = metric::evaluate(&load(&dir, &keys("g.tif"), &line).unwrap().scene).unwrap();
+        assert!((a.mean_mtf - b.mean_mtf).abs() < 1e-7, "{} vs {} (float32 pages)", a.mean_mtf, b.mean_mtf);
+        let mut file = std::fs::File::create(dir.join("sizes.tif")).unwrap();
+        let mut tiff = TiffEncoder::new(&mut file).unwrap();
+        tiff.write_image::<colortype::Gray64Float>(16, 16, &[1.0; 256]).unwrap();
+        tiff.write_image::<colortype::Gray64Float>(16, 8, &[1.0; 128]).unwrap();
+        drop(file);
+        let e = load(&dir, &keys("sizes.tif"), &line).unwrap_err().to_string();
+        assert!(e.contains("page 1 is 16 × 8 pixels, page 0 16 × 16") && e.contains("lens.psf"), "{e}");
+        let mut file = std::fs::File::create(dir.join("int.tif")).unwrap();
+        TiffEncoder::new(&mut file).unwrap().write_image::<colortype::Gray16>(16, 16, &[1; 256]).unwrap();
+        drop(file);
+        let e = load(&dir, &keys("int.tif"), &line).unwrap_err().to_string();
+        assert!(e.contains("page 0 holds Gray(16)") && e.contains("float"), "{e}");
+        // a PSF as wide as the stack: its border light is warned about
+        gaussian_npy(&dir, "wide.npy", n, &[2.0, 8.0]);
+        let loaded = load(&dir, &keys("wide.npy"), &line).unwrap();
+        let w: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
+        assert!(
+            w.iter()
+                .any(|w| w.contains("of the light of the slice at 810 nm lies within 3 samples of the stack's border")),
+            "{w:?}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+        /// Random bytes, and random headers (dtypes, orders, shapes up to 2^40 values, lengths
+        /// that do not match) never panic: each is read or refused with a message; what is read
+        /// has the shape its header gives.
+        #[test]
+        fn the_npy_reader_never_panics(
+            raw in proptest::collection::vec(any::<u8>(), 0..300),
+            descr in prop::sample::select(vec!["<f8", ">f4", "<i8", "|u1", "<f2", "f8", "<f8 "]),
+            fortran in any::<bool>(),
+            shape in proptest::collection::vec(0usize..(1 << 14), 0..5),
+            extra in 0usize..20,
+            version in 0u8..5,
+            cut in 0usize..400,
+        ) {
+            match parse_npy(&raw) {
+                Ok(s) => prop_assert_eq!(s.values.len(), s.depth * s.ny * s.nx),
+                Err(e) => prop_assert!(!e.is_empty()),
+            }
+            let count: usize = shape.iter().product::<usize>().min(4096);
+            let mut bytes = npy(descr, fortran, &shape, &vec![0u8; count * 4 + extra], version.max(1));
+            bytes[6] = version;
+            for candidate in [bytes.clone(), bytes[..cut.min(bytes.len())].to_vec()] {
+                match parse_npy(&candidate) {
+                    Ok(s) => {
+                        prop_assert_eq!(s.values.len(), s.depth * s.ny * s.nx);
+                        prop_assert!(s.values.len() <= candidate.len() / 4);
+                    }
+                    Err(e) => prop_assert!(!e.is_empty()),
+                }
+            }
+        }
+    }
+}
