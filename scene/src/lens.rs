@@ -1265,7 +1265,7 @@ mod tests {
             ("short.csv", "r_mm,phase_rad\n0,0\n0.1,-1\n0.2,-2\n0.5,-3\n", "aperture radius 0.672"),
             ("wrapped.csv", "r_mm,phase_rad\n0,0\n0.3,-1\n0.5,-5\n0.7,-6\n", "more than π"),
             ("offaxis.csv", "r_mm,phase_rad\n0.1,0\n0.3,-1\n0.5,-2\n0.7,-3\n", "expected 0"),
-            ("noheader.csv", "0,0\n0.3,-1\n0.5,-2\n0.7,-3\n", "lacks r_mm"),
+            ("noheader.csv", "0,0\n0.3,-1\n0.5,-2\n0.7,-3\n", "not a header"),
         ];
         for (name, text, want) in cases {
             std::fs::write(dir.join(name), text).unwrap();

@@ -432,15 +432,8 @@ pub(crate) struct PhaseTable {
 /// message gives both); the amplitude finite, ≥ 0, not zero everywhere.
 pub(crate) fn read_phase_table(path: &Path, aperture_radius_mm: f64) -> Result<PhaseTable, Error> {
     let file = path.display().to_string();
-    let text = read_text(path, "CSV file")?;
     let err = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
-    let mut reader = csv_reader(&text, true);
-    let headers: Vec<String> = reader
-        .headers()
-        .map_err(|e| err(None, format!("cannot read the header: {e}")))?
-        .iter()
-        .map(|h| h.trim().to_lowercase())
-        .collect();
+    let (headers, rows) = read_columns(path, "phase table")?;
     let find = |name: &str| headers.iter().position(|h| h == name);
     let (Some(ir), Some(ip)) = (find("r_mm"), find("phase_rad")) else {
         return Err(err(
@@ -453,26 +446,17 @@ pub(crate) fn read_phase_table(path: &Path, aperture_radius_mm: f64) -> Result<P
     };
     let ia = find("amplitude");
     let (mut r, mut phase, mut amp) = (Vec::new(), Vec::new(), Vec::new());
-    for record in reader.records() {
-        let record = record.map_err(|e| err(None, format!("{e}")))?;
-        let line = record.position().map(|p| p.line());
-        let field = |i: usize, name: &str| -> Result<f64, Error> {
-            let raw = record.get(i).unwrap_or("");
-            raw.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| err(line, format!("{name} = `{}`: expected a finite number", shorten(raw))))
-        };
-        let ri = field(ir, "r_mm")?;
+    for (line, values) in &rows {
+        let ri = values[ir];
         if ri < 0.0 || r.last().is_some_and(|&last| ri <= last) {
-            return Err(err(line, format!("r_mm = {ri}: expected ≥ 0 and strictly increasing")));
+            return Err(err(*line, format!("r_mm = {ri}: expected ≥ 0 and strictly increasing")));
         }
         r.push(ri);
-        phase.push(field(ip, "phase_rad")?);
+        phase.push(values[ip]);
         if let Some(ia) = ia {
-            let a = field(ia, "amplitude")?;
+            let a = values[ia];
             if a < 0.0 {
-                return Err(err(line, format!("amplitude = {a}: expected ≥ 0 (a field amplitude)")));
+                return Err(err(*line, format!("amplitude = {a}: expected ≥ 0 (a field amplitude)")));
             }
             amp.push(a);
         }

@@ -118,24 +118,7 @@ pub(crate) fn spectrometer(grid: &Grid, python: Option<&Path>, rows: &mut Vec<Ro
     // the reference: the same scene, today's per-interval rule at 1e-12, straight through optics
     // (the detected spectrum built as metric::evaluate builds it, radiance × QE × λ, paper SI
     // eq. S8, and the optics called directly: the reference's mean is the optics' alone)
-    let scene = load("examples/spectrometer.toml", &[]);
-    let camera = scene.camera();
-    let detected = Spectrum::product(vec![
-        scene.radiance().clone(),
-        camera.quantum_efficiency().clone(),
-        Spectrum::Linear { slope: 1.0 },
-    ]);
-    let settings = Settings { spectral_rule: SpectralRule::Panels, tolerance: 1e-12, ..Settings::default() };
-    let started = Instant::now();
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let poly = Polychromatic::with_settings(scene.lens(), &detected, scene.field(), camera.nyquist(), pixel, settings)
-        .unwrap();
-    let (reference, w) = poly.mean_mtf();
-    let seconds = started.elapsed().as_secs_f64();
-    let reference_work = format!(
-        "{} spectral panels, {} spectral nodes, {} OTF values, {} sign changes",
-        w.spectral_panels, w.spectral_nodes, w.otf_evaluations, w.sign_changes
-    );
+    let (reference, seconds, reference_work) = panels_reference("examples/spectrometer.toml");
     eprintln!("  reference (Panels, 1e-12) {reference:.15} in {seconds:.1} s ({reference_work})");
     notes.spectrometer = Some((reference, seconds, reference_work));
     for &t in grid.ladder {
@@ -170,8 +153,8 @@ fn panels_reference(file: &str) -> (f64, f64, String) {
     let (reference, w) = poly.mean_mtf();
     let seconds = started.elapsed().as_secs_f64();
     let work = format!(
-        "{} spectral panels, {} spectral nodes, {} OTF values",
-        w.spectral_panels, w.spectral_nodes, w.otf_evaluations
+        "{} spectral panels, {} spectral nodes, {} OTF values, {} sign changes",
+        w.spectral_panels, w.spectral_nodes, w.otf_evaluations, w.sign_changes
     );
     (reference, seconds, work)
 }
