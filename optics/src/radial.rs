@@ -21,10 +21,11 @@
 //!
 //! For `A = 1` and `W = W020 q` the inner integral is `cos(a(cos t − s))` with `a = 8π w s`,
 //! `w = W020/λ`: the 1-D integral of [`crate::defocus_otf`]. The rule is a tensor product of
-//! Gauss–Legendre panels whose count follows the phase the integrand can turn through
-//! (bounds from the wavefront's first and second derivatives in `q`, sampled when the order is
-//! prepared) and the accuracy asked (module [`crate::quad`]: a 16-point panel turning through
-//! `θ` radians errs by about `(θ/2)^32/32!`).
+//! Gauss–Legendre panels whose count follows the phase the integrand can turn through and the
+//! accuracy asked (module [`crate::quad`]: a 16-point panel turning through `θ` radians errs by
+//! about `(θ/2)^32/32!`). The phase bounds come from the wavefront sampled when the order is
+//! prepared: along t `k (4s(1 − s) max|W′| + osc_δ(W′) acos s)`, across v `k osc_δ(W′)`, with
+//! `osc_δ(W′)` the largest change of `W′(q)` over a window of the shift's width `δ = 4s(1 − s)`.
 //!
 //! Wavefront sign: as [`crate::Wavefront`] (docs/physics.md, "Sign of the wavefront"). A radial
 //! pupil's OPD is `W020 q + (Σ c_k f_k(q) − q Σ c_k b_k)`: the order's defocus `W020` plus the
