@@ -190,31 +190,21 @@ pub(crate) fn designs(grid: &Grid, python: Option<&Path>, rows: &mut Vec<Row>, n
 fn numpy_radial(grid: &Grid, python: &Path, reference: f64, rows: &mut Vec<Row>) -> Result<String, String> {
     let mut version = String::new();
     for &(nl, nnu, nt, nv) in grid.numpy_radial_settings {
-        let output = Command::new(python)
-            .arg(root().join(NUMPY_RADIAL))
-            .args(["--nl", &nl.to_string(), "--nnu", &nnu.to_string(), "--nt", &nt.to_string()])
-            .args(["--nv", &nv.to_string(), "--seconds", &format!("{}", grid.numpy_seconds)])
-            .envs([("OMP_NUM_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"), ("MKL_NUM_THREADS", "1")])
-            .output()
-            .map_err(|e| format!("numpy radial row skipped ({} could not be started: {e})", python.display()))?;
-        if !output.status.success() {
-            let stderr = String::from_utf8_lossy(&output.stderr);
-            return Err(format!(
-                "numpy radial row skipped ({NUMPY_RADIAL} failed: {})",
-                stderr.lines().last().unwrap_or("no message")
-            ));
-        }
-        let text = String::from_utf8_lossy(&output.stdout);
-        let value = |key: &str| {
-            text.lines()
-                .find_map(|l| l.strip_prefix(key).and_then(|v| v.strip_prefix('=')))
-                .map(str::to_owned)
-                .ok_or_else(|| format!("numpy radial row skipped: {NUMPY_RADIAL} printed no `{key}=`"))
-        };
-        let mean: f64 = value("mean_mtf")?.parse().map_err(|e| format!("numpy radial: mean_mtf: {e}"))?;
-        let millis: f64 = value("median_ms")?.parse().map_err(|e| format!("numpy radial: median_ms: {e}"))?;
-        let runs: usize = value("runs")?.parse().map_err(|e| format!("numpy radial: runs: {e}"))?;
-        version = value("numpy")?;
+        let args = [
+            "--nl".to_owned(),
+            nl.to_string(),
+            "--nnu".to_owned(),
+            nnu.to_string(),
+            "--nt".to_owned(),
+            nt.to_string(),
+            "--nv".to_owned(),
+            nv.to_string(),
+            "--seconds".to_owned(),
+            format!("{}", grid.numpy_seconds),
+        ];
+        let run = baseline(python, NUMPY_RADIAL, &args, "numpy radial row skipped")?;
+        let (mean, millis, runs) = (run.mean, run.millis, run.runs);
+        version = run.version;
         let work = format!("{nl} λ × {nnu} ν × {nt} t × {nv} v = {} integrand values", nl * nnu * nt * nv);
         rows.push(row(
             BINARY2,
@@ -227,39 +217,65 @@ fn numpy_radial(grid: &Grid, python: &Path, reference: f64, rows: &mut Vec<Row>)
     Ok(version)
 }
 
+/// What a baseline script printed: its mean MTF, median time (ms), runs and numpy version.
+struct Baseline {
+    mean: f64,
+    millis: f64,
+    runs: usize,
+    version: String,
+}
+
+/// Runs the baseline `script` (relative to the root) with `args`, numpy's BLAS held to one
+/// thread, and reads its `key=value` lines; a message starting with `skipped` if it cannot.
+fn baseline(python: &Path, script: &str, args: &[String], skipped: &str) -> Result<Baseline, String> {
+    let output = Command::new(python)
+        .arg(root().join(script))
+        .args(args)
+        .envs([("OMP_NUM_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"), ("MKL_NUM_THREADS", "1")])
+        .output()
+        .map_err(|e| format!("numpy not available: {skipped} ({} could not be started: {e})", python.display()))?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        return Err(format!(
+            "numpy not available: {skipped} ({script} failed: {})",
+            stderr.lines().last().unwrap_or("no message")
+        ));
+    }
+    let text = String::from_utf8_lossy(&output.stdout);
+    let value = |key: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(key).and_then(|v| v.strip_prefix('=')))
+            .map(str::to_owned)
+            .ok_or_else(|| format!("{skipped}: {script} printed no `{key}=`"))
+    };
+    let number =
+        |key: &str| -> Result<f64, String> { value(key)?.parse().map_err(|e| format!("{skipped}: {key}: {e}")) };
+    Ok(Baseline {
+        mean: number("mean_mtf")?,
+        millis: number("median_ms")?,
+        runs: value("runs")?.parse().map_err(|e| format!("{skipped}: runs: {e}"))?,
+        version: value("numpy")?,
+    })
+}
+
 /// Runs the numpy script at each of its settings; the interpreter and numpy version, or why not.
 fn numpy(grid: &Grid, python: &Path, reference: f64, rows: &mut Vec<Row>) -> Result<(String, String), String> {
     let mut version = String::new();
     for &(nl, nnu, nt) in grid.numpy_settings {
-        let output = Command::new(python)
-            .arg(root().join(NUMPY_SCRIPT))
-            .arg(root().join(TABLE))
-            .args(["--nl", &nl.to_string(), "--nnu", &nnu.to_string(), "--nt", &nt.to_string()])
-            .args(["--seconds", &format!("{}", grid.numpy_seconds)])
-            .envs([("OMP_NUM_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"), ("MKL_NUM_THREADS", "1")])
-            .output()
-            .map_err(|e| {
-                format!("numpy not available: row skipped ({} could not be started: {e})", python.display())
-            })?;
-        if !output.status.success() {
-            let stderr = String::from_utf8_lossy(&output.stderr);
-            return Err(format!(
-                "numpy not available: row skipped ({} failed: {})",
-                NUMPY_SCRIPT,
-                stderr.lines().last().unwrap_or("no message")
-            ));
-        }
-        let text = String::from_utf8_lossy(&output.stdout);
-        let value = |key: &str| {
-            text.lines()
-                .find_map(|l| l.strip_prefix(key).and_then(|v| v.strip_prefix('=')))
-                .map(str::to_owned)
-                .ok_or_else(|| format!("numpy row skipped: {NUMPY_SCRIPT} printed no `{key}=`"))
-        };
-        let mean: f64 = value("mean_mtf")?.parse().map_err(|e| format!("numpy row skipped: mean_mtf: {e}"))?;
-        let millis: f64 = value("median_ms")?.parse().map_err(|e| format!("numpy row skipped: median_ms: {e}"))?;
-        let runs: usize = value("runs")?.parse().map_err(|e| format!("numpy row skipped: runs: {e}"))?;
-        version = value("numpy")?;
+        let args = [
+            root().join(TABLE).display().to_string(),
+            "--nl".to_owned(),
+            nl.to_string(),
+            "--nnu".to_owned(),
+            nnu.to_string(),
+            "--nt".to_owned(),
+            nt.to_string(),
+            "--seconds".to_owned(),
+            format!("{}", grid.numpy_seconds),
+        ];
+        let run = baseline(python, NUMPY_SCRIPT, &args, "numpy row skipped")?;
+        let (mean, millis, runs) = (run.mean, run.millis, run.runs);
+        version = run.version;
         let work = format!("{nl} λ nodes × {nnu} ν × {nt} t = {} kernel values", nl * nnu * nt);
         rows.push(row(
             SPECTROMETER,
