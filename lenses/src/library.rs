@@ -432,10 +432,11 @@ impl LibraryLens {
         let result = if zones.is_empty() {
             (0.0, transmission, None)
         } else {
-            let points_re: Vec<(f64, f64, f64)> = zones.iter().map(|&(q, a, c)| (q, c.re, a)).collect();
-            let points_im: Vec<(f64, f64, f64)> = zones.iter().map(|&(q, a, c)| (q, c.im, a)).collect();
-            let re = fit_weighted(&points_re, COHERENT_FIT_DEGREE);
-            let im = fit_weighted(&points_im, COHERENT_FIT_DEGREE);
+            let qw: Vec<(f64, f64)> = zones.iter().map(|&(q, a, _)| (q, a)).collect();
+            let c_re: Vec<f64> = zones.iter().map(|z| z.2.re).collect();
+            let c_im: Vec<f64> = zones.iter().map(|z| z.2.im).collect();
+            let mut fits = fit_columns(&qw, &[&c_re, &c_im], COHERENT_FIT_DEGREE).into_iter();
+            let (re, im) = (fits.next().unwrap_or_default(), fits.next().unwrap_or_default());
             let eval = |c: &[f64], q: f64| c.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
             // |c_1| and arg c_1 (unwrapped) at Chebyshev points in q, as polynomials in q
             let qs: Vec<f64> = (0..=PUPIL_KNOTS)
@@ -454,8 +455,11 @@ impl LibraryLens {
                 arg.push((q, a, 1.0));
             }
             let per_radian = wavelength_m / std::f64::consts::TAU;
-            let amp = fit_weighted(&amp, PUPIL_KNOTS);
-            let arg = fit_weighted(&arg, PUPIL_KNOTS);
+            let qw: Vec<(f64, f64)> = qs.iter().map(|&q| (q, 1.0)).collect();
+            let amp: Vec<f64> = amp.iter().map(|a| a.1).collect();
+            let arg: Vec<f64> = arg.iter().map(|a| a.1).collect();
+            let mut fits = fit_columns(&qw, &[&amp, &arg], PUPIL_KNOTS).into_iter();
+            let (amp, arg) = (fits.next().unwrap_or_default(), fits.next().unwrap_or_default());
             match (RadialProfile::even_polynomial(amp), RadialProfile::even_polynomial(arg)) {
                 (Ok(amplitude), Ok(residual)) => {
                     let tau = amplitude.mean_square().min(transmission);
@@ -500,28 +504,48 @@ struct Cell {
     span: f64,
 }
 
-/// [`fit_even`] with weights: `points` are `(q, value, weight)`.
-fn fit_weighted(points: &[(f64, f64, f64)], degree: usize) -> Vec<f64> {
+/// Weighted least-squares polynomials `Σ c_i q^i` of `degree` (lowered to the points available)
+/// through `points` `(q, weight)` and each column of `values` (`values[r][i]` at `points[i]`):
+/// the normal equations, whose matrix `Σ w q^{i+j}` is the same for every column and is built
+/// from the `2 degree + 1` moments `Σ w q^k` (one pass over the points, not `(degree + 1)²`
+/// products a point).
+fn fit_columns(points: &[(f64, f64)], values: &[&[f64]], degree: usize) -> Vec<Vec<f64>> {
     let degree = degree.min(points.len().saturating_sub(1));
     let n = degree + 1;
-    let mut a = vec![vec![0.0; n + 1]; n];
-    for &(q, v, w) in points {
-        let powers: Vec<f64> = (0..n).map(|i| q.powi(i as i32)).collect();
-        for i in 0..n {
-            for j in 0..n {
-                a[i][j] += w * powers[i] * powers[j];
+    let mut moments = vec![0.0; 2 * n - 1];
+    let mut rhs = vec![vec![0.0; n]; values.len()];
+    for (idx, &(q, w)) in points.iter().enumerate() {
+        let mut p = w;
+        for (k, m) in moments.iter_mut().enumerate() {
+            *m += p;
+            if k < n {
+                for (r, column) in rhs.iter_mut().zip(values) {
+                    r[k] += p * column[idx];
+                }
             }
-            a[i][n] += w * powers[i] * v;
+            p *= q;
         }
     }
-    solve(a)
+    rhs.into_iter()
+        .map(|b| {
+            let a = (0..n)
+                .map(|i| {
+                    let mut row: Vec<f64> = moments[i..i + n].to_vec();
+                    row.push(b[i]);
+                    row
+                })
+                .collect();
+            solve(a)
+        })
+        .collect()
 }
 
 /// Least-squares coefficients `c_0 … c_degree` of `Σ c_i q^i` through the points `(q, value)`
 /// (the degree lowered to the points available).
 fn fit_even(points: &[(f64, f64)], degree: usize) -> Vec<f64> {
-    let weighted: Vec<(f64, f64, f64)> = points.iter().map(|&(q, v)| (q, v, 1.0)).collect();
-    fit_weighted(&weighted, degree)
+    let qw: Vec<(f64, f64)> = points.iter().map(|&(q, _)| (q, 1.0)).collect();
+    let v: Vec<f64> = points.iter().map(|&(_, v)| v).collect();
+    fit_columns(&qw, &[&v], degree).remove(0)
 }
 
 /// The solution of the normal equations `a` (rows `[A | b]`), by Gauss–Jordan elimination with

@@ -6,7 +6,10 @@
 //!   tolerance and at 1e-7, and the spectral quadrature);
 //! - the same lens at F/1.4 with a 200 nm range (the costly corner of the paper's design space:
 //!   up to ±7σ = ±495 nm around 800 nm, 44 waves of defocus at the widest kept wavelength);
-//! - the paper scene through the decentred iris of SI Fig. S3 (the FFT path, 256 pupil samples).
+//! - the paper scene through the decentred iris of SI Fig. S3 (the FFT path, 256 pupil samples);
+//! - designs given as data, read from their example files: the Binary 2 metalens
+//!   (`examples/phase-binary2.toml`, the radial engine at 1e-6) and the meta-atom library lens
+//!   (`examples/library.toml`; its per-wavelength fits cached after the first evaluation).
 //!
 //! `cargo bench -p asnr-metric --bench evaluate` (about a minute). Timings are measured here and never
 //! asserted (STYLE.md).
@@ -35,6 +38,12 @@ fn scene(lens: ChromaticMetalens, range_m: f64) -> Scene {
     Scene::new(Arc::new(lens), radiance, camera, 1.23e-3, Options::default()).unwrap()
 }
 
+/// An example scene file of the repository, as `asnr evaluate` reads it.
+fn example(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples").join(name);
+    scene::load(Some(&path), &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("evaluate");
     group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(5));
@@ -55,6 +64,8 @@ fn bench(c: &mut Criterion) {
             let iris = optics::fft::Aperture::circle().decentred(0.1, 0.0).unwrap();
             scene(lens(2.5).with_aperture(iris), 50e-9)
         }),
+        ("Binary 2 metalens F2.5 50nm", example("phase-binary2.toml")),
+        ("library lens F2.5 50nm", example("library.toml")),
     ];
     for (name, scene) in &cases {
         group.bench_function(*name, |b| b.iter(|| evaluate(black_box(scene)).unwrap().asnr));

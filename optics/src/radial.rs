@@ -374,6 +374,20 @@ impl RadialPupil {
         w
     }
 
+    /// `|fit q| + Σ |c p(q)| + |Zernike terms|` (m): the size of the terms
+    /// [`opd_beyond_defocus_m`](Self::opd_beyond_defocus_m) adds, which sets its rounding (a
+    /// geometric-phase lens's phase and reference sphere cancel to a few percent of either).
+    pub fn opd_magnitude_m(&self, q: f64) -> f64 {
+        let mut w = (self.fit * q).abs();
+        for (c, p) in &self.terms {
+            w += (c * p.value(q)).abs();
+        }
+        if !self.zernike_even.is_empty() {
+            w += self.zernike_even.iter().rev().fold(0.0, |acc, &ci| acc * q + ci).abs();
+        }
+        w
+    }
+
     /// The field amplitude at `q = ρ²` (1 where none is given).
     #[inline]
     pub fn amplitude(&self, q: f64) -> f64 {
@@ -467,9 +481,10 @@ pub struct RadialOrder {
     oscillation: Vec<f64>,
     /// extra phase-equivalent (radians) for an amplitude table's knots
     amplitude_turns: f64,
-    /// the phase `k W(q)` (radians) as a Chebyshev series in `x = 2q − 1`, where one of at most
-    /// [`PROXY_MAX_DEGREE`] holds it to [`PROXY_PHASE_ERROR`] (evaluated by Clenshaw's
-    /// recurrence instead of the profile's own terms: a table's spline search, a sphere's root)
+    /// the phase beyond the defocus, `k (W(q) − W020 q)` (radians), as a Chebyshev series in
+    /// `x = 2q − 1`, where one of at most [`PROXY_MAX_DEGREE`] holds it to
+    /// [`PROXY_PHASE_ERROR`] (evaluated by Clenshaw's recurrence instead of the profile's own
+    /// terms: a table's spline search, a sphere's root)
     proxy: Option<Vec<f64>>,
 }
 
@@ -514,17 +529,92 @@ fn clenshaw(c: &[f64], q: f64) -> f64 {
     c[0] + 0.5 * x2 * b1 - b2
 }
 
-/// The proxy of `phase` ([`RadialOrder`]): the first degree of 16, 32, 64 whose last four
+/// `out[i] = Σ c_k T_k(2q_i − 1)` for every lane, by Clenshaw's recurrence run over eight lanes
+/// at once (coefficient by coefficient): the same operations as [`clenshaw`] on each lane, in
+/// loops the compiler vectorizes.
+fn clenshaw_lanes(c: &[f64], q: &[f64], out: &mut [f64]) {
+    // blocks of eight lanes whose recurrences stay in registers through the coefficients
+    const L: usize = 8;
+    let block = |q: &[f64], out: &mut [f64]| {
+        let mut x2 = [0.0; L];
+        for l in 0..L {
+            x2[l] = 2.0 * (2.0 * q[l] - 1.0);
+        }
+        let (mut b1, mut b2) = ([0.0; L], [0.0; L]);
+        for &ck in c[1..].iter().rev() {
+            for l in 0..L {
+                (b1[l], b2[l]) = (crate::quad::fused(x2[l], b1[l], ck - b2[l]), b1[l]);
+            }
+        }
+        for l in 0..L {
+            out[l] = c[0] + 0.5 * x2[l] * b1[l] - b2[l];
+        }
+    };
+    let n = q.len() / L * L;
+    for (q, out) in q[..n].chunks_exact(L).zip(out[..n].chunks_exact_mut(L)) {
+        block(q, out);
+    }
+    for (o, &q) in out[n..].iter_mut().zip(&q[n..]) {
+        *o = clenshaw(c, q);
+    }
+}
+
+/// `Σ_i w_i cos(a_i − b_i)` in eight partial sums (the cosine of each lane vectorizes; one chain
+/// of dependent adds would be bound by its latency).
+fn cosine_sum(w: &[f64], a: &[f64], b: &[f64]) -> f64 {
+    const L: usize = 8;
+    let mut acc = [0.0; L];
+    let n = w.len() / L * L;
+    for ((w, a), b) in w[..n].chunks_exact(L).zip(a[..n].chunks_exact(L)).zip(b[..n].chunks_exact(L)) {
+        for l in 0..L {
+            acc[l] += w[l] * crate::fft::cis::sin_cos(a[l] - b[l]).1;
+        }
+    }
+    let mut total: f64 = acc.iter().sum();
+    for i in n..w.len() {
+        total += w[i] * crate::fft::cis::sin_cos(a[i] - b[i]).1;
+    }
+    total
+}
+
+/// Fills the lanes `row..row + v_nodes.len()` of one t node: `q₁` at `q[l]`, `q₂` at
+/// `q[lanes + l]`, the weight `scale × w_v` at `weight[l]`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn fill_row(
+    s: f64,
+    sin_t: f64,
+    cos_t: f64,
+    v_nodes: &[(f64, f64)],
+    scale: f64,
+    q: &mut [f64],
+    weight: &mut [f64],
+    row: usize,
+    lanes: usize,
+) {
+    let sin2 = sin_t * sin_t;
+    let delta = 4.0 * s * (cos_t - s);
+    for (j, &(v, wv)) in v_nodes.iter().enumerate() {
+        let q1 = cos_t * cos_t + v * v * sin2;
+        q[row + j] = q1;
+        // q₂ = (cos t − 2s)² + v² sin²t ≥ 0; the clamp holds it there through rounding
+        q[lanes + row + j] = (q1 - delta).max(0.0);
+        weight[row + j] = scale * wv;
+    }
+}
+
+/// The proxy of `phase` ([`RadialOrder`]): the first degree of 8, 16, 32, 64 whose last four
 /// coefficients sum below a tenth of the error allowed and whose values at the midpoints of the
 /// next finer grid agree within it; `None` otherwise. The error allowed is
 /// [`PROXY_PHASE_ERROR`], or the rounding of the phase's own size (1e-15 of its largest
-/// coefficient: the exact evaluation rounds as much).
-fn phase_proxy(phase: &dyn Fn(f64) -> f64) -> Option<Vec<f64>> {
-    let mut n = 16;
+/// coefficient), or `rounding`, the rounding of the exact evaluation's terms (radians): the
+/// proxy is then as accurate as the evaluation it replaces.
+fn phase_proxy(phase: &dyn Fn(f64) -> f64, rounding: f64) -> Option<Vec<f64>> {
+    let mut n = 8;
     while n <= PROXY_MAX_DEGREE {
         let c = chebyshev_fit(phase, n);
         let size = c.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        let allowed = PROXY_PHASE_ERROR.max(1e-15 * size);
+        let allowed = PROXY_PHASE_ERROR.max(1e-15 * size).max(rounding);
         let tail: f64 = c[n - 3..].iter().map(|v| v.abs()).sum();
         if tail <= 0.1 * allowed {
             let checked = (0..2 * n).all(|j| {
@@ -545,9 +635,9 @@ impl RadialOrder {
     /// `pupil` with the order's defocus `w020_m` (m at the rim) at `wavelength_m`.
     pub fn new(pupil: Arc<RadialPupil>, w020_m: f64, wavelength_m: f64) -> RadialOrder {
         let h = 1.0 / BOUND_SAMPLES as f64;
-        let values: Vec<f64> =
-            (0..=BOUND_SAMPLES).map(|i| w020_m * (i as f64 * h) + pupil.opd_beyond_defocus_m(i as f64 * h)).collect();
-        let slopes: Vec<f64> = values.windows(2).map(|w| (w[1] - w[0]) / h).collect();
+        let residual: Vec<f64> = (0..=BOUND_SAMPLES).map(|i| pupil.opd_beyond_defocus_m(i as f64 * h)).collect();
+        let residual_slopes: Vec<f64> = residual.windows(2).map(|w| (w[1] - w[0]) / h).collect();
+        let slopes: Vec<f64> = residual_slopes.iter().map(|d| w020_m + d).collect();
         let slope = 1.25 * slopes.iter().map(|v| v.abs()).fold(0.0, f64::max);
         // windows of 2^j samples by doubling: max and min over [i, i + 2m) from those of m
         let (mut hi, mut lo) = (slopes.clone(), slopes.clone());
@@ -574,7 +664,14 @@ impl RadialOrder {
             0.25 * a.knots() as f64 + 4.0 * d1 / scale
         });
         let k = std::f64::consts::TAU / wavelength_m;
-        let proxy = phase_proxy(&|q| k * (w020_m * q + pupil.opd_beyond_defocus_m(q)));
+        // the exact evaluation's rounding: a few units in the last place of its largest term
+        // (its size, not its exact maximum: 17 samples)
+        let magnitude = (0..=16)
+            .map(|i| i as f64 / 16.0)
+            .map(|q| (w020_m * q).abs() + pupil.opd_magnitude_m(q))
+            .fold(0.0, f64::max);
+        let rounding = 4.0 * f64::EPSILON * k * magnitude;
+        let proxy = phase_proxy(&|q| k * pupil.opd_beyond_defocus_m(q), rounding);
         RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, proxy }
     }
 
@@ -611,47 +708,73 @@ impl RadialOrder {
         let v_rule = small_rule(phase_v, accuracy);
         let v_panels = if v_rule.is_some() { 1 } else { (phase_v / theta).ceil().max(1.0) as usize };
         let rule16 = crate::quad::rule();
-        let pupil = &*self.pupil;
-        let w020 = self.w020_m;
-        let proxy = self.proxy.as_deref();
-        let phase_of = |q: f64| match proxy {
-            Some(c) => clenshaw(c, q),
-            None => k * (w020 * q + pupil.opd_beyond_defocus_m(q)),
+        // the v nodes on [0, 1] with their weights: one short rule, or 16-point panels
+        let v_nodes: Vec<(f64, f64)> = match v_rule {
+            Some(r) => r.iter().map(|&(xv, wv)| (0.5 + 0.5 * xv, 0.5 * wv)).collect(),
+            None => {
+                let hv = 0.5 / v_panels as f64;
+                (0..v_panels)
+                    .flat_map(|pv| {
+                        let vc = (2 * pv + 1) as f64 * hv;
+                        rule16.iter().map(move |&(xv, wv)| (vc + hv * xv, hv * wv))
+                    })
+                    .collect()
+            }
         };
-        let uniform = pupil.amplitude.is_none();
+        let total = self.direct(s, t_end, t_panels, &v_nodes);
+        4.0 * total / (std::f64::consts::PI * self.pupil.power())
+    }
+
+    /// The phase `k W(q)` at every lane of `q` into `phase`; the field amplitudes multiply `weight`
+    /// (`q₁` in the first half of `q`, `q₂` in the second, `weight` as long as a half).
+    fn lanes(&self, q: &[f64], phase: &mut [f64], weight: &mut [f64]) {
+        let k = std::f64::consts::TAU / self.wavelength_m;
+        let a = k * self.w020_m;
+        let pupil = &*self.pupil;
+        match self.proxy.as_deref() {
+            Some(c) => {
+                clenshaw_lanes(c, q, phase);
+                for (p, &qi) in phase.iter_mut().zip(q) {
+                    *p += a * qi;
+                }
+            }
+            None => {
+                for (p, &qi) in phase.iter_mut().zip(q) {
+                    *p = a * qi + k * pupil.opd_beyond_defocus_m(qi);
+                }
+            }
+        }
+        if pupil.amplitude.is_some() {
+            let half = weight.len();
+            for (i, w) in weight.iter_mut().enumerate() {
+                *w *= pupil.amplitude(q[i]) * pupil.amplitude(q[half + i]);
+            }
+        }
+    }
+
+    /// The tensor rule, every node's whole phase: `t_panels` 16-point panels on `[0, acos s]`
+    /// times `v_nodes`, one t panel at a time, its `(t, v)` nodes as lanes (the phase and the
+    /// cosine run as loops over lanes the compiler vectorizes).
+    fn direct(&self, s: f64, t_end: f64, t_panels: usize, v_nodes: &[(f64, f64)]) -> f64 {
+        let rule16 = crate::quad::rule();
+        let lanes = rule16.len() * v_nodes.len();
+        let mut q = vec![0.0; 2 * lanes];
+        let mut weight = vec![0.0; lanes];
+        let mut phase = vec![0.0; 2 * lanes];
         let mut total = 0.0;
         let ht = 0.5 * t_end / t_panels as f64;
         for pt in 0..t_panels {
             let tc = (2 * pt + 1) as f64 * ht;
-            for &(xt, wt) in rule16 {
+            for (i, &(xt, wt)) in rule16.iter().enumerate() {
                 let t = tc + ht * xt;
-                let (sin_t, cos_t) = t.sin_cos();
+                let (sin_t, cos_t) = crate::fft::cis::sin_cos(t);
                 let sin2 = sin_t * sin_t;
-                let delta = 4.0 * s * (cos_t - s);
-                let mut inner = 0.0;
-                let mut visit = |v: f64, wv: f64| {
-                    let q1 = cos_t * cos_t + v * v * sin2;
-                    let q2 = (q1 - delta).max(0.0);
-                    let phase = phase_of(q1) - phase_of(q2);
-                    let amp = if uniform { 1.0 } else { pupil.amplitude(q1) * pupil.amplitude(q2) };
-                    inner += wv * amp * crate::fft::cis::sin_cos(phase).1;
-                };
-                match v_rule {
-                    Some(r) => r.iter().for_each(|&(xv, wv)| visit(0.5 + 0.5 * xv, 0.5 * wv)),
-                    None => {
-                        let hv = 0.5 / v_panels as f64;
-                        for pv in 0..v_panels {
-                            let vc = (2 * pv + 1) as f64 * hv;
-                            for &(xv, wv) in rule16 {
-                                visit(vc + hv * xv, hv * wv);
-                            }
-                        }
-                    }
-                }
-                total += ht * wt * sin2 * inner;
+                fill_row(s, sin_t, cos_t, v_nodes, ht * wt * sin2, &mut q, &mut weight, i * v_nodes.len(), lanes);
             }
+            self.lanes(&q, &mut phase, &mut weight);
+            total += cosine_sum(&weight, &phase[..lanes], &phase[lanes..]);
         }
-        4.0 * total / (std::f64::consts::PI * pupil.power())
+        total
     }
 }
 
@@ -736,5 +859,26 @@ mod tests {
             })
             .sum();
         assert!((p.fitted_slope() - slope).abs() < 1e-10 * slope.abs(), "{} vs {slope}", p.fitted_slope());
+    }
+
+    /// The lane-wise Clenshaw recurrence is the scalar one lane by lane (the same operations:
+    /// equal to the bit), also for lane counts that are not a multiple of the block, and the
+    /// lane-wise cosine sum is the plain sum within rounding.
+    #[test]
+    fn lanes_match_the_scalar_recurrence() {
+        let c: Vec<f64> = (0..18).map(|k| (k as f64 + 1.0).recip() * if k % 2 == 0 { 3.0 } else { -2.0 }).collect();
+        for n in [1, 7, 8, 13, 64, 67] {
+            let q: Vec<f64> = (0..n).map(|i| ((i as f64 + 0.5) / n as f64).powi(2)).collect();
+            let mut out = vec![0.0; n];
+            clenshaw_lanes(&c, &q, &mut out);
+            for (o, &q) in out.iter().zip(&q) {
+                assert_eq!(o.to_bits(), clenshaw(&c, q).to_bits(), "q = {q}");
+            }
+            let w: Vec<f64> = q.iter().map(|q| 1.0 - q).collect();
+            let a: Vec<f64> = q.iter().map(|q| 40.0 * q).collect();
+            let b: Vec<f64> = q.iter().map(|q| 3.0 * q * q).collect();
+            let plain: f64 = (0..n).map(|i| w[i] * (a[i] - b[i]).cos()).sum();
+            assert!((cosine_sum(&w, &a, &b) - plain).abs() < 1e-13 * n as f64, "n = {n}");
+        }
     }
 }
