@@ -639,22 +639,27 @@ impl RadialOrder {
         let residual_slopes: Vec<f64> = residual.windows(2).map(|w| (w[1] - w[0]) / h).collect();
         let slopes: Vec<f64> = residual_slopes.iter().map(|d| w020_m + d).collect();
         let slope = 1.25 * slopes.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        // windows of 2^j samples by doubling: max and min over [i, i + 2m) from those of m
+        // windows of 2^j samples by doubling: max and min over [i, i + 2m) from those of m, in
+        // place (entry i reads entry i + m before it is overwritten)
         let (mut hi, mut lo) = (slopes.clone(), slopes.clone());
+        // two neighbouring slopes differ by the second difference: a window of one sample holds
+        // the change across it
+        let across = slopes.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f64::max);
         let mut oscillation = Vec::new();
         let mut width = 1;
         loop {
-            // two neighbouring slopes differ by the second difference: a window of one sample
-            // holds the change across it
-            let osc = (0..hi.len()).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
-            let across = slopes.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f64::max);
+            let osc = hi.iter().zip(&lo).map(|(h, l)| h - l).fold(0.0, f64::max);
             oscillation.push(1.25 * (osc + across));
             if width >= BOUND_SAMPLES {
                 break;
             }
             let n = hi.len() - width;
-            hi = (0..n).map(|i| hi[i].max(hi[i + width])).collect();
-            lo = (0..n).map(|i| lo[i].min(lo[i + width])).collect();
+            for i in 0..n {
+                hi[i] = hi[i].max(hi[i + width]);
+                lo[i] = lo[i].min(lo[i + width]);
+            }
+            hi.truncate(n);
+            lo.truncate(n);
             width *= 2;
         }
         let amplitude_turns = pupil.amplitude.as_ref().map_or(0.0, |a| {

@@ -1,4 +1,5 @@
-//! `cargo xtask accuracy [--quick]`: the accuracy-versus-time report. Builds and runs the example
+//! `cargo xtask accuracy [--quick] [--designs]`: the accuracy-versus-time report (`--designs`: the
+//! rows of the designs given as data alone, into `target/BENCHMARKS-designs.md`). Builds and runs the example
 //! `metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
 //! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
 //! workspace root.
@@ -24,8 +25,8 @@ const REQUIREMENTS: &str = "xtask/baselines/requirements.txt";
 
 /// Build and run the report from the workspace `root`.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    if let Some(bad) = args.iter().find(|a| a.as_str() != "--quick") {
-        bail!("unknown argument `{bad}` (usage: cargo xtask accuracy [--quick])");
+    if let Some(bad) = args.iter().find(|a| !matches!(a.as_str(), "--quick" | "--designs")) {
+        bail!("unknown argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs])");
     }
     cmd::run(&mut cmd::cargo(root, &["build", "--release", "--quiet", "--package", "asnr", "--bin", "asnr"]))?;
     let asnr = target_dir(root).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));

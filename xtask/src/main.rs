@@ -3,7 +3,8 @@
 //! shell scripts. `.cargo/config.toml` aliases `cargo xtask` to this binary.
 //!
 //! Tasks:
-//! - `accuracy [--quick]`: the accuracy-versus-time report (`BENCHMARKS.md`).
+//! - `accuracy [--quick] [--designs]`: the accuracy-versus-time report (`BENCHMARKS.md`; `--designs`:
+//!   the designs given as data alone, into `target/BENCHMARKS-designs.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `data [--check]`: the generated data files of `examples/data/` (`data.rs`).
 //! - `emva`: `asnr characterize` against the `emva1288` package's camera model (`emva.rs`).
@@ -35,7 +36,10 @@ use std::process::ExitCode;
 
 /// Every task with its one-line description, in the order `cargo xtask help` lists them.
 const TASKS: &[(&str, &str)] = &[
-    ("accuracy", "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings)"),
+    (
+        "accuracy",
+        "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings; --designs: the designs given as data alone)",
+    ),
     (
         "ci",
         "full check: fmt, tidy, clippy -D warnings, tests, the Python package's tests, the emva1288 cross-check, README commands, reduced stress grid, docs -D warnings",

@@ -25,8 +25,9 @@
 //!
 //! Times are medians of repeated single-threaded calls in this (release) process.
 //!
-//! Run: `cargo run --release -p asnr-metric --example accuracy -- [--quick] [--asnr BIN] [--python PY]
-//! [OUT_DIR]`: `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
+//! Run: `cargo run --release -p asnr-metric --example accuracy -- [--quick] [--designs] [--asnr BIN]
+//! [--python PY] [OUT_DIR]` (`--designs`: the rows of the designs given as data alone, written to
+//! `OUT_DIR/target/BENCHMARKS-designs.md`, not BENCHMARKS.md): `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
 //! numpy for the baseline (`cargo xtask accuracy` builds the one and prepares the other); the
 //! map or the numpy rows are skipped, and the report says so, without them.
 
@@ -305,11 +306,13 @@ const QUICK: Grid = Grid {
 
 fn main() {
     let (mut quick, mut asnr, mut python, mut out) = (false, None, None, PathBuf::from("."));
+    let mut designs_only = false;
     let mut asnr_python: Option<PathBuf> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--quick" => quick = true,
+            "--designs" => designs_only = true,
             "--asnr" => asnr = Some(PathBuf::from(args.next().expect("--asnr BIN"))),
             "--python" => python = Some(PathBuf::from(args.next().expect("--python PY"))),
             "--asnr-python" => asnr_python = Some(PathBuf::from(args.next().expect("--asnr-python PY"))),
@@ -334,6 +337,18 @@ fn main() {
         psf_stack: None,
         load: (String::new(), String::new()),
     };
+    if designs_only {
+        // the designs' rows alone, in a file beside BENCHMARKS.md (their section and targets)
+        tolerance::designs(&grid, python.as_deref(), &mut rows, &mut context.notes);
+        context.load = (load_at_start, load_average());
+        let md = report::markdown(&rows, &[], &context);
+        std::fs::create_dir_all(&out).unwrap();
+        let path = out.join("target/BENCHMARKS-designs.md");
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, md).unwrap();
+        eprintln!("wrote {}", path.display());
+        return;
+    }
     let mut decentred_rows = Vec::new();
     let mut decentred_exact = None;
     for (index, case) in cases.iter().enumerate() {
