@@ -985,6 +985,12 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
     if let Some(limits) = &info.psf {
         crate::psf::check_scene(&scene, limits, o)?;
     }
+    if let Some(range) = &info.table_range {
+        crate::psf::check_table_range(&scene, range, o)?;
+    }
+    if let Some(limits) = &info.psf {
+        crate::psf::warn_notices(limits, o);
+    }
     let angle = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())

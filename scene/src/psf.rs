@@ -23,11 +23,12 @@ const MAX_PAGES: usize = 10_000;
 const MAX_NPY_HEADER: usize = 1 << 16;
 
 /// The largest fraction of the signal (the detected spectrum times the lens efficiency) that may
-/// lie outside the stack's wavelengths, where the end slices' OTF would stand for it; above it
-/// the scene is refused, above [`OUTSIDE_WARNED`] warned about.
+/// lie outside the wavelengths of a lens given as data (a PSF stack's slices, an MTF table's
+/// rows), where the end slices' or rows' OTF would stand for it; above it the scene is refused,
+/// above [`OUTSIDE_WARNED`] warned about.
 pub(crate) const PSF_OUTSIDE_MAX: f64 = 1e-3;
 
-/// Above this fraction of the signal outside the stack's wavelengths the scene warns.
+/// Above this fraction of the signal outside a data lens's wavelengths the scene warns.
 const OUTSIDE_WARNED: f64 = 1e-6;
 
 /// The fraction of a slice's light in the stack's border band above which the scene warns.
@@ -50,8 +51,6 @@ pub(crate) struct Stack {
 #[derive(Clone, Debug)]
 pub(crate) struct PsfLimits {
     pub pitch_m: f64,
-    pub range_m: (f64, f64),
-    pub efficiency: Spectrum,
     /// What the stack showed (border light, asymmetry), `(value, hint)` for `lens.psf`: warned
     /// once the scene's checks have passed (they are not unit slips to name beside an error).
     pub notices: Vec<(String, String)>,
@@ -544,13 +543,20 @@ pub(crate) fn psf_lens(
         lenses::PSF_PADDING,
         shifts * 1e6
     ));
-    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, range_m: range, efficiency: efficiency_spectrum, notices });
+    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, notices });
+    info.table_range = Some(TableRange {
+        key: "lens.psf_wavelengths_nm",
+        value: None,
+        what: "stack",
+        ends: "end slices",
+        range_m: range,
+        efficiency: efficiency_spectrum,
+    });
     Ok(lens)
 }
 
-/// The checks of a PSF-stack lens that need the rest of the scene: the stack's Nyquist frequency
-/// above the camera's, and the signal (detected spectrum × efficiency) inside the stack's
-/// wavelengths but for at most [`PSF_OUTSIDE_MAX`] of it; then the stack's notices are warned.
+/// The check of a PSF-stack lens that needs the camera: the stack's Nyquist frequency above the
+/// camera's (the signal inside the stack's wavelengths is [`check_table_range`]'s).
 pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins) -> Result<(), Error> {
     let camera = scene.camera();
     let stack_nyquist = 0.5 / limits.pitch_m;
@@ -567,42 +573,84 @@ pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins
             ),
         ));
     }
-    let (lo, hi) = limits.range_m;
-    let signal = Spectrum::product(vec![metric::detected_spectrum(scene), limits.efficiency.clone()]);
+    Ok(())
+}
+
+/// Warns what the stack showed (border light, asymmetry), once the scene's checks have passed.
+pub(crate) fn warn_notices(limits: &PsfLimits, o: &Origins) {
+    for (value, hint) in &limits.notices {
+        o.warn("lens.psf", value.clone(), hint.clone());
+    }
+}
+
+/// The wavelengths a lens given as data covers (a PSF stack's slices, an MTF table's rows):
+/// its OTF is not extrapolated, so the end slices or rows would stand for the light beyond.
+#[derive(Clone, Debug)]
+pub(crate) struct TableRange {
+    /// The key errors and warnings name.
+    pub key: &'static str,
+    /// The value they show (the file); `None`: the range itself.
+    pub value: Option<String>,
+    /// "stack" or "table".
+    pub what: &'static str,
+    /// "end slices" or "end rows".
+    pub ends: &'static str,
+    /// The first and last wavelength, m.
+    pub range_m: (f64, f64),
+    /// The lens efficiency τ1(λ), the weight of the signal beside the detected spectrum.
+    pub efficiency: Spectrum,
+}
+
+/// The fraction of the signal (paper SI eq. S8: the detected spectrum `L η λ` × `τ1`, as the
+/// engine weighs the spectral nodes) at wavelengths outside `range`.
+pub(crate) fn fraction_outside(scene: &metric::Scene, range: &TableRange) -> f64 {
+    let (lo, hi) = range.range_m;
+    let signal = Spectrum::product(vec![metric::detected_spectrum(scene), range.efficiency.clone()]);
     let total = signal.integral();
     if total.is_nan() || total <= 0.0 {
-        return Ok(()); // no light: the evaluation says so
+        return 0.0; // no light: the evaluation says so
     }
     let inside = match radiometry::TopHat::new(lo, hi, 1.0) {
         Ok(band) => Spectrum::product(vec![signal, Spectrum::TopHat(band)]).integral(),
-        Err(_) => 0.0, // a one-slice stack covers one wavelength
+        Err(_) => 0.0, // a one-slice stack or one-row table covers one wavelength
     };
-    let outside = if total.is_finite() { (1.0 - inside / total).max(0.0) } else { 1.0 };
+    if total.is_finite() { (1.0 - inside / total).max(0.0) } else { 1.0 }
+}
+
+/// Refuses a scene whose signal lies outside a data lens's wavelengths for more than
+/// [`PSF_OUTSIDE_MAX`] of it (the end slices or rows would stand for it), and warns above
+/// [`OUTSIDE_WARNED`], with the fraction.
+pub(crate) fn check_table_range(scene: &metric::Scene, range: &TableRange, o: &Origins) -> Result<(), Error> {
+    let outside = fraction_outside(scene, range);
+    let (lo, hi) = range.range_m;
     let nm = |l: f64| num(optics::round_for_display(l * 1e9));
-    let range = format!("{}–{} nm", nm(lo), nm(hi));
+    let span = format!("{}–{} nm", nm(lo), nm(hi));
+    let value = match &range.value {
+        Some(v) => format!("{v} ({span})"),
+        None => format!("[{span}]"),
+    };
+    let what = range.what;
     if outside > PSF_OUTSIDE_MAX {
         return Err(o.bad(
-            "lens.psf_wavelengths_nm",
-            format!("[{range}]"),
+            range.key,
+            value,
             &format!(
-                "wavelengths covering the detected spectrum: {:.4} % of the signal (detected spectrum × lens.efficiency) lies outside the stack's {range}, at most {} % accepted (the end slices would stand for it); extend the stack or narrow the spectrum",
+                "wavelengths covering the detected spectrum: {:.4} % of the signal (detected spectrum × lens.efficiency) lies outside the {what}'s {span}, at most {} % accepted (the {} would stand for it); extend the {what} or narrow the spectrum",
                 outside * 100.0,
-                PSF_OUTSIDE_MAX * 100.0
+                PSF_OUTSIDE_MAX * 100.0,
+                range.ends
             ),
         ));
     }
     if outside > OUTSIDE_WARNED {
         o.warn(
-            "lens.psf_wavelengths_nm",
-            format!("[{range}]"),
+            range.key,
+            value,
             format!(
-                "{:.2e} of the signal lies outside the stack's wavelengths: the end slices' OTF stands for it",
-                outside
+                "{outside:.2e} of the signal lies outside the {what}'s wavelengths: the {}' OTF stands for it",
+                range.ends
             ),
         );
-    }
-    for (value, hint) in &limits.notices {
-        o.warn("lens.psf", value.clone(), hint.clone());
     }
     Ok(())
 }
