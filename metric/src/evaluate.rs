@@ -17,10 +17,17 @@ pub struct Fraunhofer {
     pub valid: bool,
     /// Blur-radius threshold, mm.
     pub threshold_mm: f64,
-    /// The largest wavelength shift from the design wavelength whose blur radius stays under the
-    /// threshold (eq. S15 solved for Δλ), nm; `None` if the lens has no design wavelength or no
-    /// shift reaches the threshold.
+    /// The largest wavelength shift from `reference_nm` whose blur radius stays under the
+    /// threshold (eq. S15 solved for Δλ), nm; `None` if there is no reference or no shift reaches
+    /// the threshold.
     pub max_shift_nm: Option<f64>,
+    /// The wavelength `max_shift_nm` is measured from, nm: the design wavelength, or for a lens
+    /// given as data (an OTF table, a PSF stack) without one, the mean detected wavelength.
+    pub reference_nm: Option<f64>,
+    /// For a lens given as data: the wavelengths its OTF tables cover, nm. Its blur is the one
+    /// the table's OTF implies (docs/physics.md, "Fraunhofer validity"), and the light outside
+    /// these wavelengths, whose blur no one gave, counts as beyond the threshold.
+    pub table_nm: Option<[f64; 2]>,
     /// Fraction of the detected signal at wavelengths blurred beyond the threshold.
     pub fraction_outside: f64,
     /// The allowance for `fraction_outside`.
@@ -368,7 +375,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let asnr_mean = snr0 * weighted_mean;
     let asnr_integral = snr0 * weighted_mean * nyquist * 1e-3;
 
-    let fraunhofer = fraunhofer(scene, &poly);
+    let fraunhofer = fraunhofer(scene, &poly, mean_wavelength);
     let glare = glare(lens, &poly);
 
     let mut warnings = Vec::new();
@@ -894,18 +901,24 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     })
 }
 
-fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>) -> Fraunhofer {
+/// The Fraunhofer check (paper SI eq. S15) of `scene` whose detected mean wavelength is
+/// `mean_wavelength` (m): the fraction of the signal blurred beyond the threshold, and the largest
+/// shift from the reference wavelength that stays within it. A lens given as data (tabulated
+/// orders) blurs as its tables imply and is not known outside them
+/// ([`optics::fraunhofer::table_blur_radius`]).
+fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>, mean_wavelength: f64) -> Fraunhofer {
     let options = scene.options();
     let threshold = options.fraunhofer_threshold;
-    let max_shift = scene
-        .lens()
-        .design_wavelength()
-        .and_then(|l0| optics::fraunhofer::max_wavelength_shift(scene.lens(), l0, threshold));
+    let table = optics::fraunhofer::table_range(scene.lens(), mean_wavelength, scene.field());
+    let reference = scene.lens().design_wavelength().or(table.map(|_| mean_wavelength));
+    let max_shift = reference.and_then(|l0| optics::fraunhofer::max_wavelength_shift(scene.lens(), l0, threshold));
     let fraction_outside = poly.fraction_blurred_beyond(threshold);
     Fraunhofer {
         valid: fraction_outside <= options.fraunhofer_max_fraction,
         threshold_mm: threshold * 1e3,
         max_shift_nm: max_shift.map(|s| s * 1e9),
+        reference_nm: reference.map(|l| l * 1e9),
+        table_nm: table.map(|(lo, hi)| [lo * 1e9, hi * 1e9]),
         fraction_outside,
         max_fraction: options.fraunhofer_max_fraction,
     }

@@ -169,7 +169,20 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
     );
     let _ = writeln!(s);
     let f = &r.fraunhofer;
-    let shift = f.max_shift_nm.map_or("no limit".to_owned(), |v| format!("±{v:.1} nm"));
+    let shift = match (f.max_shift_nm, f.table_nm) {
+        // a lens given as data: the blur its tables imply, known over their wavelengths only
+        (Some(v), Some([lo, hi])) => format!(
+            "±{v:.1} nm of {:.1} nm (as its table's OTF implies; known over {}–{} nm)",
+            f.reference_nm.unwrap_or_default(),
+            crate::number(lo),
+            crate::number(hi)
+        ),
+        (None, Some([lo, hi])) => {
+            format!("the table's {}–{} nm (the blur its OTF implies)", crate::number(lo), crate::number(hi))
+        }
+        (Some(v), None) => format!("±{v:.1} nm"),
+        (None, None) => "no limit".to_owned(),
+    };
     let _ = writeln!(
         s,
         "  Fraunhofer (SI eq. S15)     {:>12}   blur ≤ {} mm up to {shift}; {:.3} % of the signal beyond",

@@ -817,6 +817,43 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
+    /// An MTF table of 770–830 nm (the case): the paper scene's 50 nm Gaussian range
+    /// (σ = 17.7 nm) puts 2 Q(30/17.7) ≈ 9 % of its signal outside, refused with the numbers; a
+    /// 20 nm range (σ = 7.07 nm), 2 Q(4.243) = 2.21e-5, warned with the fraction; a line
+    /// inside, neither. The Fraunhofer check then knows the blur over the table's rows only.
+    #[test]
+    fn a_spectrum_outside_an_mtf_table_is_refused_or_warned() {
+        let dir = folder("mtf-range");
+        let mut csv = String::from("wavelength_nm, frequency_cyc_per_mm, mtf\n");
+        for l in [770, 800, 830] {
+            csv.push_str(&format!("{l}, 0, 1\n{l}, 50, 0.6\n{l}, 100, 0.3\n"));
+        }
+        std::fs::write(dir.join("narrow.csv"), csv).unwrap();
+        let text = crate::PAPER_SCENE.replace(
+            &crate::PAPER_SCENE
+                [crate::PAPER_SCENE.find("[lens]").unwrap()..crate::PAPER_SCENE.find("[source]").unwrap()],
+            "[lens]\nmodel = \"tabulated\"\nmtf = \"narrow.csv\"\nf_number = 2.5\nfocal_length_mm = 3.36\nefficiency = 0.15\n\n",
+        );
+        let load = |overrides: &[&str]| {
+            let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+            crate::build_with_warnings(&crate::Source::from_text(text.clone(), "s.toml", &dir), &overrides)
+        };
+        let e = load(&[]).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("s.toml: lens.mtf = \"narrow.csv\" (770–830 nm)"), "{e}");
+        assert!(e.contains("lies outside the table's 770–830 nm, at most 0.1 % accepted (the end rows"), "{e}");
+        let percent: f64 = e.split(" % of the signal").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
+        assert!((percent - 8.97).abs() < 0.2, "{percent}");
+        let loaded = load(&["spectrum.range_nm=20"]).unwrap();
+        let w: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+        assert!(w.iter().any(|w| w.contains("lens.mtf") && w.contains("2.21e-5 of the signal lies outside")), "{w:?}");
+        let f = metric::evaluate(&loaded.scene).unwrap().fraunhofer;
+        assert_eq!(f.table_nm, Some([770.0, 830.0]));
+        assert!(f.max_shift_nm.is_some_and(|s| s < 30.1), "{f:?}");
+        let loaded = load(&["spectrum.shape=line"]).unwrap();
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     /// Every refusal names the file or key, the value and what is accepted.
     #[test]
     fn psf_refusals_name_the_key_and_the_numbers() {
