@@ -110,6 +110,9 @@ pub(crate) struct RawLens {
     pub psf: Option<String>,
     pub psf_pitch_um: Option<f64>,
     pub psf_wavelengths_nm: Option<Vec<f64>>,
+    /// Every family's: read by [`crate::load`] into the scene (docs/physics.md, "Relative
+    /// illumination").
+    pub relative_illumination: Option<NumberOrFile>,
 }
 
 /// A lens family of the scene format.

@@ -283,6 +283,19 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
     if let Some(z) = &l.zernike_noll_rms_um {
         out.value("zernike_noll_rms_um", &list(z));
     }
+    match &l.relative_illumination {
+        None => {
+            out.line(
+                "# relative_illumination not given: none (every field point as bright as the axis, as in the paper)",
+            );
+            out.string("relative_illumination", "none");
+        }
+        Some(NumberOrFile::Number(v)) => out.number("relative_illumination", *v),
+        Some(NumberOrFile::File(word)) if word == "none" || word == "cos4" => out.string("relative_illumination", word),
+        Some(NumberOrFile::File(file)) => {
+            out.string("relative_illumination", &path(o, &o.key("lens.relative_illumination"), file)?)
+        }
+    }
     Ok(())
 }
 
