@@ -52,7 +52,7 @@ impl RelativeIllumination {
         }
         for (i, &a) in angles_rad.iter().enumerate() {
             let increasing = i == 0 || a > angles_rad[i - 1];
-            if !(a.is_finite() && a >= 0.0 && a < std::f64::consts::FRAC_PI_2 && increasing) {
+            if !((0.0..std::f64::consts::FRAC_PI_2).contains(&a) && increasing) {
                 return Err(Error::OutOfRange {
                     name: "relative illumination field angle (degrees)",
                     value: a.to_degrees(),
