@@ -224,7 +224,10 @@ def test_relative_illumination_reaches_a_dict_with_and_a_python_lens():
     theirs = json.loads(
         cli("evaluate", str(PAPER), "--json", "--set", "field.x_deg=10", "--set", 'lens.relative_illumination="cos4"')
     )
-    assert ours.to_dict() == theirs
+    # the same report but for the scene's name (a dict has none of its own)
+    assert {k: v for k, v in ours.to_dict().items() if k != "scene"} == {
+        k: v for k, v in theirs.items() if k != "scene"
+    }
     assert ours.relative_illumination["model"] == "cos4"
     plain = asnr.load(PAPER).with_({"field.x_deg": 10.0})
     off = asnr.evaluate(plain).photoelectrons
