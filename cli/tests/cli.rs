@@ -1596,12 +1596,17 @@ fn zemax_export(wavelength_um: f64) -> Vec<u8> {
 #[test]
 fn tabulated_lens_reads_a_list_of_zemax_exports() {
     let dir = scratch("zemax-list");
-    for (name, um) in [("z750.txt", 0.75), ("z800.txt", 0.8), ("z850.txt", 0.85)] {
+    // 700–900 nm: the paper scene's 50 nm range (σ = 17.7 nm) has 1.5e-8 of its signal beyond
+    // (750–850 nm would leave 0.47 % outside the table, refused)
+    for (name, um) in [("z700.txt", 0.7), ("z750.txt", 0.75), ("z800.txt", 0.8), ("z850.txt", 0.85), ("z900.txt", 0.9)]
+    {
         std::fs::write(dir.join(name), zemax_export(um)).unwrap();
     }
-    let lens = "model = \"tabulated\"\nmtf = [\"z850.txt\", \"z750.txt\", \"z800.txt\"]\nf_number = 2.5\nfocal_length_mm = 3.36\nefficiency = 0.15\ntransmission = 0.55";
+    let lens = "model = \"tabulated\"\nmtf = [\"z850.txt\", \"z700.txt\", \"z750.txt\", \"z900.txt\", \"z800.txt\"]\nf_number = 2.5\nfocal_length_mm = 3.36\nefficiency = 0.15\ntransmission = 0.55";
     let file = with_lens(&dir, "zemax.toml", lens);
     let f = file.to_str().unwrap();
+    let err = fails(&["evaluate", f, "--set", "lens.mtf=[\"z750.txt\", \"z800.txt\", \"z850.txt\"]"]);
+    assert!(err.contains("0.4678 % of the signal") && err.contains("outside the table's 750–850 nm"), "{err}");
     let mean = json(&["evaluate", f, "--json"])["mean_mtf"].as_f64().unwrap();
     // the diffraction-limited mean over 0–96 cycles/mm at F/2.5 near 800 nm is 0.876 (the N-BK7
     // singlet of the comparison: 0.87597); the table's 10 cycles/mm rows interpolate it linearly

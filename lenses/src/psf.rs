@@ -100,7 +100,9 @@ pub struct PsfReport {
 /// - Between the slices the OTF is linear in λ ([`OtfTable`]); the stack is not extrapolated: the
 ///   end slices' OTF holds beyond them, and the scene refuses a spectrum with weight there.
 /// - The Fraunhofer check: a stack is the PSF at the detector, its blur already in it; the order
-///   carries no defocus, so the check sees none (as for a tabulated OTF).
+///   carries no defocus, and the check takes the blur its OTF implies
+///   ([`optics::fraunhofer::table_blur_radius`]), unknown (beyond any threshold) outside the
+///   stack's wavelengths, as for a tabulated OTF.
 #[derive(Clone, Debug)]
 pub struct PsfStack {
     f_number: f64,

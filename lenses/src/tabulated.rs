@@ -28,6 +28,11 @@ use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_
 ///   docs/physics.md, "Sign of the wavefront", is the table's business). The polychromatic OTF
 ///   is the signed sum of the rows with the photoelectron weights; a table of moduli (an MTF)
 ///   drops the sign of the rows where the OTF is negative, which the metric then cannot see.
+/// - Nothing is extrapolated in wavelength: the end rows hold beyond the table, and the scene
+///   refuses a detected spectrum with more than 0.1 % of its signal there. The Fraunhofer check
+///   (paper SI eq. S15) takes the blur each row's OTF implies
+///   ([`optics::fraunhofer::table_blur_radius`]) and counts the light outside the table as
+///   beyond it.
 /// - A measured MTF often already contains the camera's pixel MTF; the metric multiplies by the
 ///   pixel MTF itself when asked to, so such a table must not carry it twice:
 ///   [`new`](Self::new) divides it out (`includes_pixel_mtf`).

@@ -17,10 +17,21 @@ pub struct Fraunhofer {
     pub valid: bool,
     /// Blur-radius threshold, mm.
     pub threshold_mm: f64,
-    /// The largest wavelength shift from the design wavelength whose blur radius stays under the
-    /// threshold (eq. S15 solved for Δλ), nm; `None` if the lens has no design wavelength or no
-    /// shift reaches the threshold.
+    /// The largest wavelength shift from `reference_nm` whose blur radius stays under the
+    /// threshold (eq. S15 solved for Δλ), nm; `None` if there is no reference or no shift reaches
+    /// the threshold.
     pub max_shift_nm: Option<f64>,
+    /// The wavelength `max_shift_nm` is measured from, nm: the design wavelength, or for a lens
+    /// given as data (an OTF table, a PSF stack) without one, the mean detected wavelength
+    /// (absent from the JSON when there is none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_nm: Option<f64>,
+    /// For a lens given as data: the wavelengths its OTF tables cover, nm. Its blur is the one
+    /// the table's OTF implies (docs/physics.md, "Fraunhofer validity"), and the light outside
+    /// these wavelengths, whose blur no one gave, counts as beyond the threshold (absent from the
+    /// JSON for a lens given by its formula).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub table_nm: Option<[f64; 2]>,
     /// Fraction of the detected signal at wavelengths blurred beyond the threshold.
     pub fraction_outside: f64,
     /// The allowance for `fraction_outside`.
@@ -47,6 +58,8 @@ pub struct FieldPoint {
     pub field_deg: [f64; 2],
     /// Relative weight.
     pub weight: f64,
+    /// The relative illumination there, the factor on its signal.
+    pub relative_illumination: f64,
     /// Mean MTF there.
     pub mean_mtf: f64,
     /// Tangential mean MTF there (along the field direction).
@@ -151,8 +164,11 @@ pub struct Evaluation {
     pub snr0: f64,
     /// Which noise `snr0` counts.
     pub glare_mode: GlareMode,
-    /// Signal photoelectrons per pixel `N` (paper SI eq. S7–S8).
+    /// Signal photoelectrons per pixel `N` (paper SI eq. S7–S8), times the relative
+    /// illumination at the field point.
     pub photoelectrons: f64,
+    /// The relative illumination used: which, and its factor at the field point.
+    pub relative_illumination: crate::IlluminationReport,
     /// Photoelectrons per pixel from all transmitted light, imaged or stray, `N_T` (eq. S8 with
     /// τ1 → T): the shot noise of the glare-inclusive SNR.
     pub transmitted_photoelectrons: f64,
@@ -208,6 +224,10 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
     combined.mean_mtf_sagittal = mean(&|e| e.mean_mtf_sagittal);
     combined.mtf_integral_cyc_per_mm = mean(&|e| e.mtf_integral_cyc_per_mm);
     combined.snr0 = mean(&|e| e.snr0);
+    // the relative illumination makes the signal differ from point to point
+    combined.photoelectrons = mean(&|e| e.photoelectrons);
+    combined.transmitted_photoelectrons = mean(&|e| e.transmitted_photoelectrons);
+    combined.relative_illumination.factor = mean(&|e| e.relative_illumination.factor);
     combined.fraunhofer.valid = points.iter().all(|(e, _)| e.fraunhofer.valid);
     combined.warnings = points.iter().flat_map(|(e, _)| e.warnings.clone()).collect();
     combined.warnings.dedup();
@@ -216,6 +236,7 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
         .map(|(e, w)| FieldPoint {
             field_deg: e.field_deg,
             weight: *w,
+            relative_illumination: e.relative_illumination.factor,
             mean_mtf: e.mean_mtf,
             mean_mtf_tangential: e.mean_mtf_tangential,
             mean_mtf_sagittal: e.mean_mtf_sagittal,
@@ -298,8 +319,13 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
 
     let na = lens.numerical_aperture();
     let pitch = camera.pixel_pitch();
-    // eq. S7–S8, N = p² t π NA² /(h c) ∫ ρ τ1 dλ, in the same order of operations as the plain
-    // product but with the binary exponent kept aside, so that no partial product overflows
+    // the relative illumination at this field point: a factor on the camera-plane irradiance
+    // of eq. S7, so on the signal and on every photon's shot noise (docs/physics.md, "Relative
+    // illumination")
+    let illumination = scene.relative_illumination().at(field)?;
+    // eq. S7–S8, N = RI p² t π NA² /(h c) ∫ ρ τ1 dλ, in the same order of operations as the
+    // plain product but with the binary exponent kept aside, so that no partial product
+    // overflows
     let photoelectrons = Scaled::of(pitch)
         .times(pitch)
         .times(scene.exposure())
@@ -308,7 +334,8 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         .times(na)
         .over(PLANCK * SPEED_OF_LIGHT)
         .times(poly.total_weight())
-        .value();
+        .value()
+        * illumination;
     if !photoelectrons.is_finite() {
         return Err(overflow(
             "the photoelectrons per pixel N (paper SI eq. S7–S8)",
@@ -368,7 +395,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let asnr_mean = snr0 * weighted_mean;
     let asnr_integral = snr0 * weighted_mean * nyquist * 1e-3;
 
-    let fraunhofer = fraunhofer(scene, &poly);
+    let fraunhofer = fraunhofer(scene, &poly, mean_wavelength);
     let glare = glare(lens, &poly);
 
     let mut warnings = Vec::new();
@@ -409,6 +436,11 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         snr0,
         glare_mode: scene.options().glare,
         photoelectrons,
+        relative_illumination: crate::IlluminationReport {
+            model: scene.relative_illumination().name(),
+            description: scene.relative_illumination().describe(),
+            factor: illumination,
+        },
         transmitted_photoelectrons: transmitted,
         noise: NoiseReport {
             terms: [
@@ -894,18 +926,24 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     })
 }
 
-fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>) -> Fraunhofer {
+/// The Fraunhofer check (paper SI eq. S15) of `scene` whose detected mean wavelength is
+/// `mean_wavelength` (m): the fraction of the signal blurred beyond the threshold, and the largest
+/// shift from the reference wavelength that stays within it. A lens given as data (tabulated
+/// orders) blurs as its tables imply and is not known outside them
+/// ([`optics::fraunhofer::table_blur_radius`]).
+fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>, mean_wavelength: f64) -> Fraunhofer {
     let options = scene.options();
     let threshold = options.fraunhofer_threshold;
-    let max_shift = scene
-        .lens()
-        .design_wavelength()
-        .and_then(|l0| optics::fraunhofer::max_wavelength_shift(scene.lens(), l0, threshold));
+    let table = optics::fraunhofer::table_range(scene.lens(), mean_wavelength, scene.field());
+    let reference = scene.lens().design_wavelength().or(table.map(|_| mean_wavelength));
+    let max_shift = reference.and_then(|l0| optics::fraunhofer::max_wavelength_shift(scene.lens(), l0, threshold));
     let fraction_outside = poly.fraction_blurred_beyond(threshold);
     Fraunhofer {
         valid: fraction_outside <= options.fraunhofer_max_fraction,
         threshold_mm: threshold * 1e3,
         max_shift_nm: max_shift.map(|s| s * 1e9),
+        reference_nm: reference.map(|l| l * 1e9),
+        table_nm: table.map(|(lo, hi)| [lo * 1e9, hi * 1e9]),
         fraction_outside,
         max_fraction: options.fraunhofer_max_fraction,
     }

@@ -38,12 +38,14 @@
 //! Units: SI inside (m, s, W); reports use nm, mm and cycles/mm as their field names say.
 
 mod evaluate;
+mod illumination;
 mod scene;
 
 pub use evaluate::{
     Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MAX_DEFOCUS_WAVES, MtfCurve, NoiseReport,
     Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
+pub use illumination::{IlluminationReport, RelativeIllumination};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

@@ -189,6 +189,8 @@ pub struct Scene {
     fields: Vec<(Field, f64)>,
     /// the scene's title (scene files: `title`), for reports and plots
     title: Option<String>,
+    /// the fall of the irradiance with the field angle (default: none, as in the paper)
+    relative_illumination: crate::RelativeIllumination,
 }
 
 impl Scene {
@@ -213,6 +215,7 @@ impl Scene {
             field: Field::ON_AXIS,
             fields: Vec::new(),
             title: None,
+            relative_illumination: crate::RelativeIllumination::None,
         })
     }
 
@@ -239,6 +242,18 @@ impl Scene {
     /// The field point.
     pub fn field(&self) -> Field {
         self.field
+    }
+
+    /// This scene with a relative illumination (docs/physics.md, "Relative illumination"): the
+    /// signal of each field point times its factor (default: none, as in the paper). A table
+    /// must reach every field point's angle when the scene is evaluated.
+    pub fn with_relative_illumination(self, relative_illumination: crate::RelativeIllumination) -> Self {
+        Scene { relative_illumination, ..self }
+    }
+
+    /// The relative illumination.
+    pub fn relative_illumination(&self) -> &crate::RelativeIllumination {
+        &self.relative_illumination
     }
 
     /// This scene averaged over weighted field points (paper SI, end of the veiling-glare

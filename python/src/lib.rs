@@ -65,7 +65,8 @@ impl Scene {
     fn check_keys<'a>(&self, keys: impl IntoIterator<Item = &'a str>) -> PyResult<()> {
         if let Some(lens) = &self.lens {
             for key in keys {
-                if key.starts_with("lens.") {
+                // the relative illumination is the scene's (every family's), not the lens model's
+                if key.starts_with("lens.") && key != "lens.relative_illumination" {
                     return Err(SceneError::new_err(format!(
                         "{}: {key}: the scene's lens is the Python object {}; its keys are set in Python, not as scene keys",
                         self.source.label(),
@@ -129,7 +130,10 @@ impl Scene {
         let lens = PyLens::new(lens)?;
         let mut next = Scene { lens: Some(Arc::new(lens)), ..self.clone() };
         // the file's lens keys no longer apply, but the overrides of the others still do
-        next.overrides.retain(|o| !o.trim_start().starts_with("lens."));
+        next.overrides.retain(|o| {
+            let o = o.trim_start();
+            !o.starts_with("lens.") || o.starts_with("lens.relative_illumination=")
+        });
         next.build().map_err(scene_error)?;
         Ok(next)
     }

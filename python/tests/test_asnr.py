@@ -212,6 +212,32 @@ def test_a_python_lens_gives_the_file_lens_asnr():
     assert many["asnr"][1] == ours.asnr
 
 
+def test_relative_illumination_reaches_a_dict_with_and_a_python_lens():
+    """cos⁴θ at 10°: the signal falls by cos⁴10° = 0.940609, as `asnr evaluate` says."""
+    import math
+    import tomllib
+
+    as_dict = tomllib.loads(PAPER.read_text())
+    as_dict["lens"]["relative_illumination"] = "cos4"
+    as_dict["field"] = {"x_deg": 10.0}
+    ours = asnr.evaluate(asnr.load(as_dict))
+    theirs = json.loads(
+        cli("evaluate", str(PAPER), "--json", "--set", "field.x_deg=10", "--set", 'lens.relative_illumination="cos4"')
+    )
+    # the same report but for the scene's name (a dict has none of its own)
+    assert {k: v for k, v in ours.to_dict().items() if k != "scene"} == {
+        k: v for k, v in theirs.items() if k != "scene"
+    }
+    assert ours.relative_illumination["model"] == "cos4"
+    plain = asnr.load(PAPER).with_({"field.x_deg": 10.0})
+    off = asnr.evaluate(plain).photoelectrons
+    assert ours.photoelectrons / off == pytest.approx(math.cos(math.radians(10)) ** 4, rel=1e-14)
+    # with_ and a Python lens: the key is the scene's, not the lens model's
+    python_lens = plain.with_lens(Chromatic()).with_({"lens.relative_illumination": "cos4"})
+    report = asnr.evaluate(python_lens)
+    assert report.relative_illumination["factor"] == pytest.approx(math.cos(math.radians(10)) ** 4, rel=1e-15)
+
+
 class ChromaticZ11(Chromatic):
     """The chromatic lens with 0.05 µm RMS of Z11 (Noll), given as Zernike terms."""
 

@@ -121,6 +121,14 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         );
     }
     let _ = writeln!(s, "  photoelectrons N            {:>12.1}   per pixel (SI eq. S7–S8)", r.photoelectrons);
+    let ri = &r.relative_illumination;
+    let _ = writeln!(
+        s,
+        "  relative illumination       {:>12.4}   {}{}",
+        ri.factor,
+        ri.description,
+        if r.field_points.is_empty() { "" } else { " (weighted mean over the field points)" }
+    );
     let _ = writeln!(
         s,
         "  mean MTF                    {:>12.6}   over 0–{:.2} cycles/mm (Nyquist){}",
@@ -150,9 +158,14 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
         } else {
             format!(" (tangential {:.6} / sagittal {:.6})", p.mean_mtf_tangential, p.mean_mtf_sagittal)
         };
+        let ri = if r.relative_illumination.model == "none" {
+            String::new()
+        } else {
+            format!(", relative illumination {:.4}", p.relative_illumination)
+        };
         let _ = writeln!(
             s,
-            "    field ({:>5.2}°, {:>5.2}°) × {:<6} mean MTF {:.6}{split}, ASNR {:.4}",
+            "    field ({:>5.2}°, {:>5.2}°) × {:<6} mean MTF {:.6}{split}, ASNR {:.4}{ri}",
             p.field_deg[0], p.field_deg[1], p.weight, p.mean_mtf, p.asnr
         );
     }
@@ -169,7 +182,20 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
     );
     let _ = writeln!(s);
     let f = &r.fraunhofer;
-    let shift = f.max_shift_nm.map_or("no limit".to_owned(), |v| format!("±{v:.1} nm"));
+    let shift = match (f.max_shift_nm, f.table_nm) {
+        // a lens given as data: the blur its tables imply, known over their wavelengths only
+        (Some(v), Some([lo, hi])) => format!(
+            "±{v:.1} nm of {:.1} nm (as its table's OTF implies; known over {}–{} nm)",
+            f.reference_nm.unwrap_or_default(),
+            crate::number(lo),
+            crate::number(hi)
+        ),
+        (None, Some([lo, hi])) => {
+            format!("the table's {}–{} nm (the blur its OTF implies)", crate::number(lo), crate::number(hi))
+        }
+        (Some(v), None) => format!("±{v:.1} nm"),
+        (None, None) => "no limit".to_owned(),
+    };
     let _ = writeln!(
         s,
         "  Fraunhofer (SI eq. S15)     {:>12}   blur ≤ {} mm up to {shift}; {:.3} % of the signal beyond",

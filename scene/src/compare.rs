@@ -249,7 +249,9 @@ fn twin(scene: &Scene, centre_m: f64, o: &Origins) -> Result<Scene, Error> {
     } else {
         twin.over_fields(scene.fields().to_vec())
     };
-    let twin = twin.map_err(|e| o.domain("lens", context, e))?;
+    let twin = twin
+        .map_err(|e| o.domain("lens", context, e))?
+        .with_relative_illumination(scene.relative_illumination().clone());
     Ok(match scene.title() {
         Some(title) => twin.with_title(title),
         None => twin,

@@ -110,6 +110,9 @@ pub(crate) struct RawLens {
     pub psf: Option<String>,
     pub psf_pitch_um: Option<f64>,
     pub psf_wavelengths_nm: Option<Vec<f64>>,
+    /// Every family's: read by [`crate::load`] into the scene (docs/physics.md, "Relative
+    /// illumination").
+    pub relative_illumination: Option<NumberOrFile>,
 }
 
 /// A lens family of the scene format.
@@ -350,8 +353,11 @@ pub(crate) struct LensInfo {
     pub channels_m: Vec<f64>,
     /// Facts of the design a reader needs (group delay, β, glass, efficiency per channel).
     pub notes: Vec<String>,
-    /// A PSF stack's pitch and wavelengths, checked against the camera and the spectrum.
+    /// A PSF stack's pitch, checked against the camera.
     pub psf: Option<crate::psf::PsfLimits>,
+    /// The wavelengths a lens given as data covers (a PSF stack, an MTF table), checked against
+    /// the detected spectrum.
+    pub table_range: Option<crate::psf::TableRange>,
 }
 
 /// A lens built from its table.
@@ -793,6 +799,7 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             let file = files.join(", ");
             let efficiency = efficiency(o)?;
             let transmission = transmission(o, &efficiency)?;
+            let lens_efficiency = efficiency.clone();
             let pixel = match l.mtf_includes_pixel_um {
                 Some(p) => Some(
                     o.number(
@@ -812,6 +819,18 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                 info.design_wavelength_m = Some(l0);
             }
             info.notes.push(format!("OTF table from {}", crate::error::shorten(&file)));
+            let rows = lens.table().wavelengths();
+            info.table_range = Some(crate::psf::TableRange {
+                key,
+                value: Some(files.iter().map(|f| quoted(&crate::error::shorten(f))).collect::<Vec<_>>().join(", ")),
+                what: "table",
+                ends: "end rows",
+                range_m: (rows[0], rows[rows.len() - 1]),
+                efficiency: match lens_efficiency {
+                    Curve::Constant(v) => radiometry::Spectrum::Constant(v),
+                    Curve::Table(t) => radiometry::Spectrum::Sampled(t),
+                },
+            });
             Arc::new(lens)
         }
         Model::Library => {

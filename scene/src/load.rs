@@ -985,6 +985,12 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
     if let Some(limits) = &info.psf {
         crate::psf::check_scene(&scene, limits, o)?;
     }
+    if let Some(range) = &info.table_range {
+        crate::psf::check_table_range(&scene, range, o)?;
+    }
+    if let Some(limits) = &info.psf {
+        crate::psf::warn_notices(limits, o);
+    }
     let angle = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())
@@ -1019,7 +1025,61 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
         Some(title) => scene.with_title(title.clone()),
         None => scene,
     };
+    let scene = relative_illumination(&raw.lens, scene, o)?;
     Ok((scene, info))
+}
+
+/// What `lens.relative_illumination` accepts.
+const RELATIVE_ILLUMINATION: &str = "\"none\" (the default, as in the paper), \"cos4\" (cos⁴ of the field angle), a fraction in [0, 1] at every field point, or the path of a CSV table field_deg, relative illumination (angles from 0 to below 90°, increasing; values in [0, 1])";
+
+/// The field angle of a relative-illumination table, degrees, ≥ 0.
+const FIELD_ANGLE: crate::tables::Axis = crate::tables::Axis { name: "field_angle", unit: "deg", zero_allowed: true };
+
+/// `scene` with the relative illumination `lens.relative_illumination` names (every family's
+/// key; default none), a table checked to reach every field point.
+fn relative_illumination(l: &crate::lens::RawLens, scene: Scene, o: &Origins) -> Result<Scene, Error> {
+    use metric::RelativeIllumination;
+    let key = "lens.relative_illumination";
+    let ri = match &l.relative_illumination {
+        None => return Ok(scene),
+        Some(NumberOrFile::Number(v)) => {
+            RelativeIllumination::Constant(o.number(key, *v, (0.0..=1.0).contains(v), RELATIVE_ILLUMINATION)?)
+        }
+        Some(NumberOrFile::File(name)) => match name.as_str() {
+            "none" => RelativeIllumination::None,
+            "cos4" => RelativeIllumination::Cos4,
+            file => {
+                // a word that is no file (a misspelt model) is named as such, not as a missing file
+                let path = o.path(file);
+                if !path.exists() && !file.contains(['.', '/', '\\']) {
+                    return Err(o.bad(key, quoted(file), RELATIVE_ILLUMINATION));
+                }
+                let (degrees, values) = read_pairs(&path, &FIELD_ANGLE, 0.0, 1.0, "relative illumination")
+                    .map_err(|e| o.table_error(key, file, e, RELATIVE_ILLUMINATION))?;
+                let radians = degrees.iter().map(|d| d.to_radians()).collect();
+                RelativeIllumination::table(shorten(file), radians, values)
+                    .map_err(|e| o.domain(key, &format!("{key} = {}", quoted(file)), e))?
+            }
+        },
+    };
+    let points: Vec<(String, optics::Field)> = if scene.fields().is_empty() {
+        vec![("field".to_owned(), scene.field())]
+    } else {
+        scene.fields().iter().enumerate().map(|(i, f)| (format!("fields[{i}]"), f.0)).collect()
+    };
+    for (name, field) in points {
+        if ri.at(field).is_err() {
+            return Err(o.bad(
+                key,
+                format!("{} ({})", quoted(&ri.name()), ri.describe()),
+                &format!(
+                    "a table reaching every field angle: {name} is at {}° from the axis (the table is not extrapolated)",
+                    num(optics::round_for_display(RelativeIllumination::field_angle(field).to_degrees()))
+                ),
+            ));
+        }
+    }
+    Ok(scene.with_relative_illumination(ri))
 }
 
 /// `[options]`: [`Options::default`] with the keys given.
@@ -1482,6 +1542,59 @@ mod tests {
              [exposure]\ntime_ms = 1.23\n"
         );
         (text, dir)
+    }
+
+    /// `lens.relative_illumination` (every family's key, default none): cos⁴θ at 10° scales the
+    /// signal by cos⁴10° = 0.940 609 and changes nothing on axis; a table (field_deg, RI)
+    /// interpolates (0.875 at 15° between 0.95 at 10° and 0.8 at 20°) and must reach every field
+    /// point; a value outside [0, 1], NaN or an unknown word is refused with the file, the key
+    /// and the value; `asnr scene` writes it back and it loads to the same scene.
+    #[test]
+    fn relative_illumination_is_every_familys_key() {
+        let dir = std::env::temp_dir().join(format!("scene-ri-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("ri.csv"), "field_deg,ri\n0,1\n10,0.95\n20,0.8\n").unwrap();
+        let source = Source::from_text(PAPER_SCENE, "p.toml", &dir);
+        let build = |set: &[&str]| build_from(&source, &set.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        let signal = |set: &[&str]| metric::evaluate(&build(set).unwrap()).unwrap().photoelectrons;
+        let axis = signal(&[]);
+        assert_eq!(signal(&["lens.relative_illumination=\"cos4\""]), axis);
+        let off = signal(&["field.x_deg=10"]);
+        let cos4 = signal(&["field.x_deg=10", "lens.relative_illumination=\"cos4\""]);
+        assert!((cos4 / off - 10f64.to_radians().cos().powi(4)).abs() < 1e-15, "{}", cos4 / off);
+        let table = signal(&["field.x_deg=15", "lens.relative_illumination=\"ri.csv\""]);
+        assert!((table / off - 0.875).abs() < 1e-12, "{}", table / off);
+        assert!((signal(&["lens.relative_illumination=0.5"]) / axis - 0.5).abs() < 1e-15);
+        // every family's key: the harmonic lens takes it too
+        let harmonic =
+            build(&["lens.model=\"harmonic\"", "lens.design_order=5", "lens.relative_illumination=\"cos4\""]).unwrap();
+        assert_eq!(harmonic.relative_illumination(), &metric::RelativeIllumination::Cos4);
+        for (value, shown) in [("-0.1", "-0.1"), ("1.5", "1.5"), ("nan", "NaN"), ("\"cos3\"", "\"cos3\"")] {
+            let e = build(&[&format!("lens.relative_illumination={value}")]).unwrap_err().to_string();
+            assert!(e.contains(&format!("p.toml (--set lens.relative_illumination={value}): lens.relative_illumination = {shown}: expected \"none\"")), "{e}");
+        }
+        let e = build(&["field.x_deg=25", "lens.relative_illumination=\"ri.csv\""]).unwrap_err().to_string();
+        assert!(
+            e.contains("lens.relative_illumination = \"ri.csv\"") && e.contains("field is at 25° from the axis"),
+            "{e}"
+        );
+        std::fs::write(dir.join("bad.csv"), "field_deg,ri\n0,1\n10,1.2\n").unwrap();
+        let e = build(&["lens.relative_illumination=\"bad.csv\""]).unwrap_err().to_string();
+        assert!(
+            e.contains("lens.relative_illumination = \"bad.csv\"") && e.contains("line 3: relative illumination 1.2"),
+            "{e}"
+        );
+        let set = ["field.x_deg=15".to_owned(), "lens.relative_illumination=\"ri.csv\"".to_owned()];
+        let resolved = resolved_toml(&source, &set).unwrap().toml;
+        assert!(
+            resolved.contains(&format!("relative_illumination = \"{}\"", dir.join("ri.csv").display())),
+            "{resolved}"
+        );
+        let again = build_from(&Source::from_text(resolved, "r", std::env::temp_dir()), &[]).unwrap();
+        assert_eq!(metric::evaluate(&again).unwrap().photoelectrons, table);
+        let plain = resolved_toml(&source, &[]).unwrap().toml;
+        assert!(plain.contains("relative_illumination = \"none\""), "{plain}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// The radiance-meter source gives the target radiance of the hand-worked example: S1 ∫E_rel

@@ -23,11 +23,12 @@ const MAX_PAGES: usize = 10_000;
 const MAX_NPY_HEADER: usize = 1 << 16;
 
 /// The largest fraction of the signal (the detected spectrum times the lens efficiency) that may
-/// lie outside the stack's wavelengths, where the end slices' OTF would stand for it; above it
-/// the scene is refused, above [`OUTSIDE_WARNED`] warned about.
+/// lie outside the wavelengths of a lens given as data (a PSF stack's slices, an MTF table's
+/// rows), where the end slices' or rows' OTF would stand for it; above it the scene is refused,
+/// above [`OUTSIDE_WARNED`] warned about.
 pub(crate) const PSF_OUTSIDE_MAX: f64 = 1e-3;
 
-/// Above this fraction of the signal outside the stack's wavelengths the scene warns.
+/// Above this fraction of the signal outside a data lens's wavelengths the scene warns.
 const OUTSIDE_WARNED: f64 = 1e-6;
 
 /// The fraction of a slice's light in the stack's border band above which the scene warns.
@@ -50,8 +51,6 @@ pub(crate) struct Stack {
 #[derive(Clone, Debug)]
 pub(crate) struct PsfLimits {
     pub pitch_m: f64,
-    pub range_m: (f64, f64),
-    pub efficiency: Spectrum,
     /// What the stack showed (border light, asymmetry), `(value, hint)` for `lens.psf`: warned
     /// once the scene's checks have passed (they are not unit slips to name beside an error).
     pub notices: Vec<(String, String)>,
@@ -544,13 +543,20 @@ pub(crate) fn psf_lens(
         lenses::PSF_PADDING,
         shifts * 1e6
     ));
-    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, range_m: range, efficiency: efficiency_spectrum, notices });
+    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, notices });
+    info.table_range = Some(TableRange {
+        key: "lens.psf_wavelengths_nm",
+        value: None,
+        what: "stack",
+        ends: "end slices",
+        range_m: range,
+        efficiency: efficiency_spectrum,
+    });
     Ok(lens)
 }
 
-/// The checks of a PSF-stack lens that need the rest of the scene: the stack's Nyquist frequency
-/// above the camera's, and the signal (detected spectrum × efficiency) inside the stack's
-/// wavelengths but for at most [`PSF_OUTSIDE_MAX`] of it; then the stack's notices are warned.
+/// The check of a PSF-stack lens that needs the camera: the stack's Nyquist frequency above the
+/// camera's (the signal inside the stack's wavelengths is [`check_table_range`]'s).
 pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins) -> Result<(), Error> {
     let camera = scene.camera();
     let stack_nyquist = 0.5 / limits.pitch_m;
@@ -567,42 +573,84 @@ pub(crate) fn check_scene(scene: &metric::Scene, limits: &PsfLimits, o: &Origins
             ),
         ));
     }
-    let (lo, hi) = limits.range_m;
-    let signal = Spectrum::product(vec![metric::detected_spectrum(scene), limits.efficiency.clone()]);
+    Ok(())
+}
+
+/// Warns what the stack showed (border light, asymmetry), once the scene's checks have passed.
+pub(crate) fn warn_notices(limits: &PsfLimits, o: &Origins) {
+    for (value, hint) in &limits.notices {
+        o.warn("lens.psf", value.clone(), hint.clone());
+    }
+}
+
+/// The wavelengths a lens given as data covers (a PSF stack's slices, an MTF table's rows):
+/// its OTF is not extrapolated, so the end slices or rows would stand for the light beyond.
+#[derive(Clone, Debug)]
+pub(crate) struct TableRange {
+    /// The key errors and warnings name.
+    pub key: &'static str,
+    /// The value they show (the file); `None`: the range itself.
+    pub value: Option<String>,
+    /// "stack" or "table".
+    pub what: &'static str,
+    /// "end slices" or "end rows".
+    pub ends: &'static str,
+    /// The first and last wavelength, m.
+    pub range_m: (f64, f64),
+    /// The lens efficiency τ1(λ), the weight of the signal beside the detected spectrum.
+    pub efficiency: Spectrum,
+}
+
+/// The fraction of the signal (paper SI eq. S8: the detected spectrum `L η λ` × `τ1`, as the
+/// engine weighs the spectral nodes) at wavelengths outside `range`.
+pub(crate) fn fraction_outside(scene: &metric::Scene, range: &TableRange) -> f64 {
+    let (lo, hi) = range.range_m;
+    let signal = Spectrum::product(vec![metric::detected_spectrum(scene), range.efficiency.clone()]);
     let total = signal.integral();
     if total.is_nan() || total <= 0.0 {
-        return Ok(()); // no light: the evaluation says so
+        return 0.0; // no light: the evaluation says so
     }
     let inside = match radiometry::TopHat::new(lo, hi, 1.0) {
         Ok(band) => Spectrum::product(vec![signal, Spectrum::TopHat(band)]).integral(),
-        Err(_) => 0.0, // a one-slice stack covers one wavelength
+        Err(_) => 0.0, // a one-slice stack or one-row table covers one wavelength
     };
-    let outside = if total.is_finite() { (1.0 - inside / total).max(0.0) } else { 1.0 };
+    if total.is_finite() { (1.0 - inside / total).max(0.0) } else { 1.0 }
+}
+
+/// Refuses a scene whose signal lies outside a data lens's wavelengths for more than
+/// [`PSF_OUTSIDE_MAX`] of it (the end slices or rows would stand for it), and warns above
+/// [`OUTSIDE_WARNED`], with the fraction.
+pub(crate) fn check_table_range(scene: &metric::Scene, range: &TableRange, o: &Origins) -> Result<(), Error> {
+    let outside = fraction_outside(scene, range);
+    let (lo, hi) = range.range_m;
     let nm = |l: f64| num(optics::round_for_display(l * 1e9));
-    let range = format!("{}–{} nm", nm(lo), nm(hi));
+    let span = format!("{}–{} nm", nm(lo), nm(hi));
+    let value = match &range.value {
+        Some(v) => format!("{v} ({span})"),
+        None => format!("[{span}]"),
+    };
+    let what = range.what;
     if outside > PSF_OUTSIDE_MAX {
         return Err(o.bad(
-            "lens.psf_wavelengths_nm",
-            format!("[{range}]"),
+            range.key,
+            value,
             &format!(
-                "wavelengths covering the detected spectrum: {:.4} % of the signal (detected spectrum × lens.efficiency) lies outside the stack's {range}, at most {} % accepted (the end slices would stand for it); extend the stack or narrow the spectrum",
+                "wavelengths covering the detected spectrum: {:.4} % of the signal (detected spectrum × lens.efficiency) lies outside the {what}'s {span}, at most {} % accepted (the {} would stand for it); extend the {what} or narrow the spectrum",
                 outside * 100.0,
-                PSF_OUTSIDE_MAX * 100.0
+                PSF_OUTSIDE_MAX * 100.0,
+                range.ends
             ),
         ));
     }
     if outside > OUTSIDE_WARNED {
         o.warn(
-            "lens.psf_wavelengths_nm",
-            format!("[{range}]"),
+            range.key,
+            value,
             format!(
-                "{:.2e} of the signal lies outside the stack's wavelengths: the end slices' OTF stands for it",
-                outside
+                "{outside:.2e} of the signal lies outside the {what}'s wavelengths: the {}' OTF stands for it",
+                range.ends
             ),
         );
-    }
-    for (value, hint) in &limits.notices {
-        o.warn("lens.psf", value.clone(), hint.clone());
     }
     Ok(())
 }
@@ -766,6 +814,43 @@ mod tests {
         let want = std::f64::consts::PI.sqrt() * erf(a) / (2.0 * a);
         assert!((e.mean_mtf - want).abs() < 3e-4, "{} vs {want}", e.mean_mtf);
         assert!(loaded.scene.lens().describe().contains("3 slices of 64 × 64 at 1 µm"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// An MTF table of 770–830 nm (the case): the paper scene's 50 nm Gaussian range
+    /// (σ = 17.7 nm) puts 2 Q(30/17.7) ≈ 9 % of its signal outside, refused with the numbers; a
+    /// 20 nm range (σ = 7.07 nm), 2 Q(4.243) = 2.21e-5, warned with the fraction; a line
+    /// inside, neither. The Fraunhofer check then knows the blur over the table's rows only.
+    #[test]
+    fn a_spectrum_outside_an_mtf_table_is_refused_or_warned() {
+        let dir = folder("mtf-range");
+        let mut csv = String::from("wavelength_nm, frequency_cyc_per_mm, mtf\n");
+        for l in [770, 800, 830] {
+            csv.push_str(&format!("{l}, 0, 1\n{l}, 50, 0.6\n{l}, 100, 0.3\n"));
+        }
+        std::fs::write(dir.join("narrow.csv"), csv).unwrap();
+        let text = crate::PAPER_SCENE.replace(
+            &crate::PAPER_SCENE
+                [crate::PAPER_SCENE.find("[lens]").unwrap()..crate::PAPER_SCENE.find("[source]").unwrap()],
+            "[lens]\nmodel = \"tabulated\"\nmtf = \"narrow.csv\"\nf_number = 2.5\nfocal_length_mm = 3.36\nefficiency = 0.15\n\n",
+        );
+        let load = |overrides: &[&str]| {
+            let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+            crate::build_with_warnings(&crate::Source::from_text(text.clone(), "s.toml", &dir), &overrides)
+        };
+        let e = load(&[]).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("s.toml: lens.mtf = \"narrow.csv\" (770–830 nm)"), "{e}");
+        assert!(e.contains("lies outside the table's 770–830 nm, at most 0.1 % accepted (the end rows"), "{e}");
+        let percent: f64 = e.split(" % of the signal").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
+        assert!((percent - 8.97).abs() < 0.2, "{percent}");
+        let loaded = load(&["spectrum.range_nm=20"]).unwrap();
+        let w: Vec<String> = loaded.warnings.iter().map(ToString::to_string).collect();
+        assert!(w.iter().any(|w| w.contains("lens.mtf") && w.contains("2.21e-5 of the signal lies outside")), "{w:?}");
+        let f = metric::evaluate(&loaded.scene).unwrap().fraunhofer;
+        assert_eq!(f.table_nm, Some([770.0, 830.0]));
+        assert!(f.max_shift_nm.is_some_and(|s| s < 30.1), "{f:?}");
+        let loaded = load(&["spectrum.shape=line"]).unwrap();
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
         std::fs::remove_dir_all(&dir).ok();
     }
 

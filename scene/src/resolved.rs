@@ -283,7 +283,25 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
     if let Some(z) = &l.zernike_noll_rms_um {
         out.value("zernike_noll_rms_um", &list(z));
     }
+    match &l.relative_illumination {
+        // the default, given or not, in the same words (a resolved scene is a fixed point)
+        None => default_illumination(out),
+        Some(NumberOrFile::File(word)) if word == "none" => default_illumination(out),
+        Some(NumberOrFile::Number(v)) => out.number("relative_illumination", *v),
+        Some(NumberOrFile::File(word)) if word == "cos4" => out.string("relative_illumination", word),
+        Some(NumberOrFile::File(file)) => {
+            out.string("relative_illumination", &path(o, &o.key("lens.relative_illumination"), file)?)
+        }
+    }
     Ok(())
+}
+
+/// `relative_illumination = "none"`, the default, and what it means.
+fn default_illumination(out: &mut Out) {
+    out.line(
+        "# relative_illumination \"none\" (the default): every field point as bright as the axis, as in the paper",
+    );
+    out.string("relative_illumination", "none");
 }
 
 /// The resolved TOML of an already validated scene.

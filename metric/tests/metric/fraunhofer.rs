@@ -126,3 +126,84 @@ fn range_sweep_has_no_flicker() {
     // the test has teeth: the node sum it replaces is far off somewhere in the sweep
     assert!(worst_nodes > 1e-4, "{worst_nodes:e}");
 }
+
+/// A tabulated lens of `rows` (one per wavelength, m) of the paper lens's exact signed OTF at
+/// `freqs` (cycles/m): the chromatic lens as data.
+fn chromatic_table(wavelengths: &[f64], freqs: &[f64]) -> optics::OtfTable {
+    let f_number = 2.5;
+    let rows = wavelengths
+        .iter()
+        .map(|&l| {
+            // W020 = (1 − λ/λ0) f0/(8F#²) (docs/physics.md, "Chromatic lens"), in waves at λ
+            let w = (1.0 - l / LAMBDA0) * F0 / (8.0 * f_number * f_number) / l;
+            freqs.iter().map(|&nu| optics::defocus_otf((nu * l * f_number).min(1.0), w)).collect()
+        })
+        .collect();
+    optics::OtfTable::new(wavelengths.to_vec(), freqs.to_vec(), rows, None).unwrap()
+}
+
+fn tabulated_scene(table: optics::OtfTable, filter: Spectrum, design: Option<f64>) -> metric::Scene {
+    let mut lens = lenses::Tabulated::new(2.5, F0, table, Curve::Constant(0.15), Curve::Constant(0.55), None).unwrap();
+    if let Some(l0) = design {
+        lens = lens.with_design_wavelength(l0).unwrap();
+    }
+    let radiance = Spectrum::product(vec![Spectrum::Constant(0.025e9), filter]);
+    let camera = metric::Camera::new(5.2e-6, Spectrum::Constant(0.2), false).unwrap();
+    metric::Scene::new(std::sync::Arc::new(lens), radiance, camera, 1.23e-3, metric::Options::default()).unwrap()
+}
+
+/// A table's blur is known over its rows only: under a top-hat band wider than the table, the
+/// light outside counts as beyond the threshold, exactly its share `∫ λ dλ` of the band (flat
+/// source, constant QE and efficiency), and the largest shift is the distance to the table's
+/// nearer end (from the design wavelength, or without one from the mean detected wavelength).
+#[test]
+fn a_tables_light_outside_it_is_beyond() {
+    let freqs: Vec<f64> = (0..=400).map(|k| 2e3 * k as f64).collect();
+    let table = chromatic_table(&[770e-9, 800e-9, 830e-9], &freqs);
+    let band = || Spectrum::TopHat(TopHat::new(700e-9, 900e-9, 1.0).unwrap());
+    let e = metric::evaluate(&tabulated_scene(table.clone(), band(), Some(LAMBDA0))).unwrap();
+    let square = |x: f64, y: f64| y * y - x * x;
+    let exact = (square(700e-9, 770e-9) + square(830e-9, 900e-9)) / square(700e-9, 900e-9);
+    let f = &e.fraunhofer;
+    assert!((f.fraction_outside - exact).abs() < 1e-12, "{} vs {exact}", f.fraction_outside);
+    assert!(!f.valid && e.warnings.iter().any(|w| w.contains("Fraunhofer")), "{f:?}");
+    assert_eq!(f.table_nm, Some([770.0, 830.0]));
+    assert!((f.max_shift_nm.unwrap() - 30.0).abs() < 1e-6, "{f:?}");
+    assert!((f.reference_nm.unwrap() - 800.0).abs() < 1e-9);
+    // no design wavelength: the shift is measured from the mean detected wavelength
+    let narrow = || Spectrum::TopHat(TopHat::new(780e-9, 810e-9, 1.0).unwrap());
+    let e = metric::evaluate(&tabulated_scene(table, narrow(), None)).unwrap();
+    let f = &e.fraunhofer;
+    let mean = e.mean_wavelength_nm;
+    assert!((f.reference_nm.unwrap() - mean).abs() < 1e-9 && f.valid && f.fraction_outside == 0.0, "{f:?}");
+    assert!((f.max_shift_nm.unwrap() - (830.0 - mean).min(mean - 770.0)).abs() < 1e-6, "{f:?}");
+}
+
+/// The paper lens as a table of its exact OTFs (every 5 nm, 200–1400 nm) under a 600 nm Gaussian
+/// range: with its frequencies 0.25 cycles/mm apart (up to 100 cycles/mm) the blur its rows imply
+/// puts the same share of the signal beyond 0.25 mm as the lens's own defocus (eq. S15:
+/// |λ − λ0| > 297.6 nm; measured 0.16043 against 0.16062, held to 0.5 %) and the largest shift
+/// agrees to 0.1 nm (297.64 nm). With 2 cycles/mm between frequencies the table cannot resolve a
+/// 0.25 mm blur (its OTF falls to one half at 1.41 cycles/mm, before the first sample) and the
+/// linear interpolation overestimates it: 0.209 beyond, more than the lens, never less.
+#[test]
+fn a_table_of_the_chromatic_lens_is_as_blurred_as_the_lens() {
+    let wavelengths: Vec<f64> = (0..=240).map(|k| (200.0 + 5.0 * k as f64) * 1e-9).collect();
+    let filter = || Spectrum::Gaussian(Gaussian::from_range(LAMBDA0, 600e-9, 1.0).unwrap());
+    let lens = lens(2.5);
+    let beyond = |step: f64, count: usize| {
+        let freqs: Vec<f64> = (0..=count).map(|k| step * k as f64).collect();
+        let table = tabulated_scene(chromatic_table(&wavelengths, &freqs), filter(), Some(LAMBDA0));
+        let spectrum = metric::detected_spectrum(&table);
+        let poly = Polychromatic::new(table.lens(), &spectrum, Field::ON_AXIS, NYQUIST, None).unwrap();
+        let shift = optics::fraunhofer::max_wavelength_shift(table.lens(), LAMBDA0, 0.25e-3).unwrap();
+        let poly_lens = Polychromatic::new(&lens, &spectrum, Field::ON_AXIS, NYQUIST, None).unwrap();
+        (poly.fraction_blurred_beyond(0.25e-3), poly_lens.fraction_blurred_beyond(0.25e-3), shift)
+    };
+    let (got, want, got_shift) = beyond(250.0, 400);
+    assert!((got / want - 1.0).abs() < 0.005, "{got} vs {want}");
+    assert!((got_shift - shift(2.5, 0.25e-3)).abs() < 0.1e-9, "{got_shift:e}");
+    let (coarse, want, coarse_shift) = beyond(2e3, 50);
+    assert!(coarse > want && (coarse - 0.209).abs() < 0.001, "{coarse} vs {want}");
+    assert!(coarse_shift < got_shift, "{coarse_shift:e}");
+}

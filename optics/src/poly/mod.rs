@@ -302,7 +302,15 @@ trait OtfEngine: std::fmt::Debug {
         let nodes = self.nodes();
         if nodes.line.is_some() {
             // one wavelength: each order is beyond or not (0 or 1 for a single order)
-            let beyond: f64 = nodes.nodes.iter().filter(|n| n.w020.abs() > w020_limit).map(|n| n.weight).sum();
+            let na = lens.numerical_aperture();
+            let beyond: f64 = nodes
+                .nodes
+                .iter()
+                .filter(|n| {
+                    crate::fraunhofer::node_blur_w020(n.w020, n.table.as_deref(), n.lambda, na).abs() > w020_limit
+                })
+                .map(|n| n.weight)
+                .sum();
             return beyond / nodes.total_weight;
         }
         let panels: Vec<(f64, f64)> = nodes.panels.iter().map(|p| (p.lo, p.hi)).collect();

@@ -1,0 +1,186 @@
+//! Relative illumination: the image-plane irradiance at a field point relative to the axis
+//! (docs/physics.md, "Relative illumination"). Off by default, as in the paper.
+
+use optics::Field;
+use serde::Serialize;
+
+use crate::Error;
+
+/// How the irradiance falls off with the field angle θ, as a factor `RI(θ) ∈ [0, 1]` on the
+/// signal (paper SI eq. S7: the camera-plane irradiance) of each field point.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum RelativeIllumination {
+    /// None: every field point is as bright as the axis (the paper's on-axis analysis).
+    #[default]
+    None,
+    /// The cosine-fourth law of a thin lens imaging a Lambertian object, `RI = cos⁴θ`: the
+    /// pupil seen obliquely (cos θ), the longer path to the image point (cos²θ) and the
+    /// oblique incidence on the detector (cos θ).
+    Cos4,
+    /// The same factor at every field point.
+    Constant(f64),
+    /// The lens's own, against the field angle (a lens design program's relative illumination
+    /// analysis): linear between the points, refused beyond them.
+    Table {
+        /// Where it came from (a file name), for reports.
+        label: String,
+        /// Field angles, radians, ≥ 0, strictly increasing.
+        angles_rad: Vec<f64>,
+        /// The factor at each angle, in `[0, 1]`.
+        values: Vec<f64>,
+    },
+}
+
+impl RelativeIllumination {
+    /// A constant factor `value` in `[0, 1]`.
+    pub fn constant(value: f64) -> Result<Self, Error> {
+        if !(value.is_finite() && (0.0..=1.0).contains(&value)) {
+            return Err(Error::OutOfRange { name: "relative illumination", value, expected: "a fraction in [0, 1]" });
+        }
+        Ok(RelativeIllumination::Constant(value))
+    }
+
+    /// The lens's own table: `angles_rad` (≥ 1, finite, ≥ 0, below 90°, strictly increasing) and
+    /// `values` (as many, each in `[0, 1]`), `label` naming it in reports.
+    pub fn table(label: impl Into<String>, angles_rad: Vec<f64>, values: Vec<f64>) -> Result<Self, Error> {
+        if angles_rad.is_empty() || angles_rad.len() != values.len() {
+            return Err(Error::OutOfRange {
+                name: "relative illumination table length",
+                value: values.len() as f64,
+                expected: "at least one point, one value per field angle",
+            });
+        }
+        for (i, &a) in angles_rad.iter().enumerate() {
+            let increasing = i == 0 || a > angles_rad[i - 1];
+            if !((0.0..std::f64::consts::FRAC_PI_2).contains(&a) && increasing) {
+                return Err(Error::OutOfRange {
+                    name: "relative illumination field angle (degrees)",
+                    value: a.to_degrees(),
+                    expected: "field angles from 0 to below 90°, strictly increasing",
+                });
+            }
+        }
+        for &v in &values {
+            RelativeIllumination::constant(v)?;
+        }
+        Ok(RelativeIllumination::Table { label: label.into(), angles_rad, values })
+    }
+
+    /// The field angle θ of `field` from the axis, radians: `tan²θ = tan²θx + tan²θy` (the image
+    /// point at `f0 (tan θx, tan θy)`).
+    pub fn field_angle(field: Field) -> f64 {
+        field.x_rad.tan().hypot(field.y_rad.tan()).atan()
+    }
+
+    /// The factor at `field`, or the error naming the angle when a table does not reach it.
+    pub fn at(&self, field: Field) -> Result<f64, Error> {
+        let theta = Self::field_angle(field);
+        Ok(match self {
+            RelativeIllumination::None => 1.0,
+            // cos²θ = 1/(1 + tan²θ), exact on axis
+            RelativeIllumination::Cos4 => {
+                let t2 = field.x_rad.tan().powi(2) + field.y_rad.tan().powi(2);
+                1.0 / ((1.0 + t2) * (1.0 + t2))
+            }
+            RelativeIllumination::Constant(v) => *v,
+            RelativeIllumination::Table { angles_rad, values, .. } => {
+                let (first, last) = (angles_rad[0], angles_rad[angles_rad.len() - 1]);
+                // a table's end angles, given in degrees, may differ from θ by rounding
+                let slack = 1e-12;
+                if theta < first - slack || theta > last + slack {
+                    return Err(Error::OutOfRange {
+                        name: "field angle (degrees) for the relative illumination table",
+                        value: theta.to_degrees(),
+                        expected: "a field angle the table covers (it is not extrapolated)",
+                    });
+                }
+                if angles_rad.len() == 1 {
+                    return Ok(values[0]);
+                }
+                let theta = theta.clamp(first, last);
+                let k = angles_rad.partition_point(|&a| a <= theta).clamp(1, angles_rad.len() - 1);
+                let (a0, a1) = (angles_rad[k - 1], angles_rad[k]);
+                let u = (theta - a0) / (a1 - a0);
+                values[k - 1] + u * (values[k] - values[k - 1])
+            }
+        })
+    }
+
+    /// The scene-file spelling: `none`, `cos4`, the constant, or the table's label.
+    pub fn name(&self) -> String {
+        match self {
+            RelativeIllumination::None => "none".to_owned(),
+            RelativeIllumination::Cos4 => "cos4".to_owned(),
+            RelativeIllumination::Constant(v) => format!("{v}"),
+            RelativeIllumination::Table { label, .. } => label.clone(),
+        }
+    }
+
+    /// What a report says of it.
+    pub fn describe(&self) -> String {
+        match self {
+            RelativeIllumination::None => "none (every field point as bright as the axis, as in the paper)".to_owned(),
+            RelativeIllumination::Cos4 => "cos⁴θ (thin lens, Lambertian object)".to_owned(),
+            RelativeIllumination::Constant(v) => format!("{v} at every field point"),
+            RelativeIllumination::Table { label, angles_rad, .. } => format!(
+                "the lens's own, {label} ({} point{}, {}–{}°)",
+                angles_rad.len(),
+                if angles_rad.len() == 1 { "" } else { "s" },
+                optics::round_for_display(angles_rad[0].to_degrees()),
+                optics::round_for_display(angles_rad[angles_rad.len() - 1].to_degrees())
+            ),
+        }
+    }
+}
+
+/// The relative illumination an evaluation used: which, and its factor at the field point.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct IlluminationReport {
+    /// `"none"`, `"cos4"`, the constant, or the table's label (the scene-file value).
+    pub model: String,
+    /// What it is, in words.
+    pub description: String,
+    /// The factor on the signal at the field point (over a field-of-view average, the weighted
+    /// mean; each point's is in `field_points`).
+    pub factor: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// cos⁴θ: 1 on axis; at 20° along x, cos⁴(20°) = 0.779 751 …; along a diagonal the angle from
+    /// the axis, `tan²θ = tan²θx + tan²θy`.
+    #[test]
+    fn cos4_is_the_fourth_power_of_the_angle_from_the_axis() {
+        let ri = RelativeIllumination::Cos4;
+        assert_eq!(ri.at(Field::ON_AXIS).unwrap(), 1.0);
+        let x = 20f64.to_radians();
+        assert!((ri.at(Field::new(x, 0.0)).unwrap() - x.cos().powi(4)).abs() < 1e-15);
+        assert!((ri.at(Field::new(0.0, -x)).unwrap() - x.cos().powi(4)).abs() < 1e-15);
+        let (a, b) = (10f64.to_radians(), 15f64.to_radians());
+        let theta = (a.tan().powi(2) + b.tan().powi(2)).sqrt().atan();
+        assert!((ri.at(Field::new(a, b)).unwrap() - theta.cos().powi(4)).abs() < 1e-15);
+        assert_eq!(RelativeIllumination::None.at(Field::new(x, x)).unwrap(), 1.0);
+    }
+
+    /// A table interpolates linearly in the angle and is not extrapolated.
+    #[test]
+    fn a_table_interpolates_and_stops_at_its_ends() {
+        let deg = |d: f64| d.to_radians();
+        let ri = RelativeIllumination::table("ri.csv", vec![0.0, deg(10.0), deg(20.0)], vec![1.0, 0.9, 0.7]).unwrap();
+        assert_eq!(ri.at(Field::ON_AXIS).unwrap(), 1.0);
+        assert!((ri.at(Field::new(deg(15.0), 0.0)).unwrap() - 0.8).abs() < 1e-12);
+        assert!((ri.at(Field::new(deg(20.0), 0.0)).unwrap() - 0.7).abs() < 1e-12);
+        let e = ri.at(Field::new(deg(25.0), 0.0)).unwrap_err().to_string();
+        assert!(e.contains("25") && e.contains("not extrapolated"), "{e}");
+        assert!(ri.describe().contains("ri.csv (3 points, 0–20°)"), "{}", ri.describe());
+        for bad in [-0.1, 1.5, f64::NAN] {
+            assert!(RelativeIllumination::constant(bad).is_err(), "{bad}");
+            assert!(RelativeIllumination::table("t", vec![0.0], vec![bad]).is_err(), "{bad}");
+        }
+        assert!(RelativeIllumination::table("t", vec![0.2, 0.1], vec![1.0, 1.0]).is_err());
+        assert!(RelativeIllumination::table("t", vec![-0.1], vec![1.0]).is_err());
+        assert!(RelativeIllumination::table("t", vec![], vec![]).is_err());
+    }
+}
