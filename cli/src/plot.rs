@@ -1957,3 +1957,32 @@ mod tests {
         assert!(legend.placed[0].0.len() >= 2, "{:?}", legend.placed);
     }
 }
+
+/// Writes the plots of `asnr optimize` over several keys: the convergence (the objective at each
+/// evaluation and the best so far, against the evaluation's number, the start of COBYLA marked)
+/// into `path`. Points outside the Fraunhofer model are drawn at their penalized score, 0.
+pub fn optimize_plots(
+    path: &Path,
+    figure: &Figure,
+    outcome: &report::optimize::Outcome,
+    many: &report::optimize::ManyOptimum,
+) -> Result<()> {
+    let label = outcome.objective.label();
+    let each: Vec<(f64, f64)> = many.history.iter().enumerate().map(|(i, e)| ((i + 1) as f64, e.score())).collect();
+    let mut best = f64::NEG_INFINITY;
+    let running: Vec<(f64, f64)> = each
+        .iter()
+        .map(|&(i, v)| {
+            best = best.max(v);
+            (i, best)
+        })
+        .collect();
+    let series = [
+        Series { label: format!("{label} at each evaluation"), points: each, shaded: Vec::new(), best: None },
+        Series { label: format!("best {label} so far"), points: running, shaded: Vec::new(), best: None },
+    ];
+    let marks = [Mark { x: many.search.starts as f64 + 0.5, label: Some("COBYLA starts".to_owned()) }];
+    let title = format!("{}: {} over {} keys", outcome.label, label, many.ranges.len());
+    let labels = Labels { title: &title, x: "evaluation", y: label, ..Labels::default() };
+    lines_plot("--plot", path, figure, &labels, &series, &marks, false)
+}

@@ -89,6 +89,13 @@ pub struct Optimum {
     pub evaluations: usize,
     /// Whether `best` is within `tolerance` of `lo` or `hi`: the maximum may lie outside the range.
     pub at_bound: bool,
+    /// What was maximized (written only when it is not the ASNR).
+    #[serde(skip_serializing_if = "is_asnr")]
+    pub objective: crate::objective::Objective,
+}
+
+fn is_asnr(o: &crate::objective::Objective) -> bool {
+    *o == crate::objective::Objective::Asnr
 }
 
 /// The warning when the best value is on a bound of the search range.
@@ -106,10 +113,11 @@ pub fn bound_warning(o: &Optimum) -> Option<String> {
 /// The text report: the value found, by which method, and how many evaluations it took.
 pub fn report(o: &Optimum) -> String {
     format!(
-        "best {} = {:.6} (±{:.2e}, golden-section search after a {SCAN_POINTS}-point scan) → ASNR {:.6}   [{} evaluations over {}…{}]{}\n",
+        "best {} = {:.6} (±{:.2e}, golden-section search after a {SCAN_POINTS}-point scan) → {} {:.6}   [{} evaluations over {}…{}]{}\n",
         o.key,
         o.best,
         o.tolerance,
+        o.objective.label(),
         o.asnr,
         o.evaluations,
         o.lo,
@@ -184,6 +192,7 @@ pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<
         tolerance,
         evaluations,
         at_bound: best.0 - lo <= tolerance || hi - best.0 <= tolerance,
+        objective: crate::objective::Objective::Asnr,
     })
 }
 
@@ -591,6 +600,102 @@ pub fn many_bound_warnings(o: &ManyOptimum) -> Vec<String> {
             )
         })
         .collect()
+}
+
+// ---- one search of a scene, as the command line and the Python package run it ----
+
+/// What [`search_scene`] found: one key's golden-section optimum, or several keys' COBYLA one.
+#[derive(Clone, Debug)]
+pub enum Found {
+    /// One key ([`maximize`]).
+    One(Optimum),
+    /// Several keys ([`maximize_many`]).
+    Many(ManyOptimum),
+}
+
+/// A search of a scene: the objective, its value at the scene as given, and the optimum.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// How the scene is named.
+    pub label: String,
+    /// What was maximized.
+    pub objective: crate::objective::Objective,
+    /// The objective at the scene as given (its own values of the keys).
+    pub scene_value: crate::objective::Value,
+    /// The optimum.
+    pub found: Found,
+}
+
+/// Refuses an `--xtol` outside [1e-12, 1): a finer bracket is below the float spacing.
+pub fn check_xtol(xtol: f64) -> Result<()> {
+    if !(1e-12..1.0).contains(&xtol) {
+        // as typed: 1e-17, not 0.00000000000000001
+        let xtol = if xtol != 0.0 && xtol.abs() < 1e-4 { format!("{xtol:e}") } else { format!("{xtol}") };
+        bail!(
+            "--xtol {xtol}: expected a fraction of the range in [1e-12, 1) (a finer bracket is below the float spacing of the range's values)"
+        );
+    }
+    Ok(())
+}
+
+/// Maximizes `objective` of the scene `source` with `overrides` over `ranges`: one key by
+/// [`maximize`] (a scan and golden section to `search.xtol` of the range, every point counted,
+/// as `asnr optimize` always did), several by [`maximize_many`]. The command line and the Python
+/// package's `asnr.optimize` both call it, so they print the same numbers.
+pub fn search_scene(
+    source: scene::Source,
+    overrides: Vec<String>,
+    ranges: &[Range],
+    objective: crate::objective::Objective,
+    search: &Search,
+    progress: &dyn crate::Progress,
+) -> Result<Outcome> {
+    check_xtol(search.xtol)?;
+    check_over_keys(&overrides, ranges)?;
+    let keys: Vec<String> = ranges.iter().map(|r| r.key.clone()).collect();
+    let label = source.label().to_owned();
+    let target = crate::objective::Target::new(source, overrides, objective, &keys)?;
+    let scene_value = target.value(&[], &[])?;
+    let found = if let [range] = ranges {
+        if search.starts != 0 || search.max_evaluations != Search::DEFAULT_MAX_EVALUATIONS {
+            bail!(
+                "--starts and --max-evaluations apply to a search over several keys; one key is searched by a {SCAN_POINTS}-point scan and golden section"
+            );
+        }
+        let mut best = maximize(range, search.xtol * (range.hi - range.lo), |x| {
+            Ok(target.value(std::slice::from_ref(&range.key), &[x])?.value)
+        })?;
+        best.objective = objective;
+        Found::One(best)
+    } else {
+        Found::Many(maximize_many(ranges, search, &|x| target.value(&keys, x), progress)?)
+    };
+    Ok(Outcome { label, objective, scene_value, found })
+}
+
+/// The JSON of a search: one key's as `asnr optimize --json` always printed it, several keys'
+/// by [`many_json`].
+pub fn outcome_json(o: &Outcome) -> Result<String> {
+    match &o.found {
+        Found::One(best) => Ok(serde_json::to_string_pretty(best)?),
+        Found::Many(many) => many_json(&o.label, o.objective, &o.scene_value, many),
+    }
+}
+
+/// The text report of a search.
+pub fn outcome_report(o: &Outcome) -> String {
+    match &o.found {
+        Found::One(best) => report(best),
+        Found::Many(many) => many_report(&o.label, o.objective, &o.scene_value, many),
+    }
+}
+
+/// The warnings of a search: each key whose best value is at a bound.
+pub fn outcome_warnings(o: &Outcome) -> Vec<String> {
+    match &o.found {
+        Found::One(best) => bound_warning(best).into_iter().collect(),
+        Found::Many(many) => many_bound_warnings(many),
+    }
 }
 
 #[cfg(test)]
