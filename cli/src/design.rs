@@ -62,3 +62,92 @@ pub(crate) fn optimize(args: OptimizeArgs, tolerance: Option<f64>) -> Result<()>
     }
     Ok(())
 }
+
+/// The arguments of `asnr tolerance`.
+#[derive(clap::Args)]
+pub struct ToleranceArgs {
+    /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+    scene: Option<PathBuf>,
+    /// Override a scene key by its dotted path (repeatable): the nominal design.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// A key to draw around its nominal value (repeatable): KEY=normal:SIGMA (the key's units),
+    /// KEY=normal:SIGMA% (of its value) or KEY=uniform:LO:HI, e.g. --vary lens.binary2[1]=normal:2%.
+    #[arg(long, value_name = "KEY=DIST", required = true)]
+    vary: Vec<String>,
+    /// Samples drawn.
+    #[arg(long, default_value_t = 1000, value_name = "N")]
+    samples: usize,
+    /// Seed of the draws: the same seed gives the same samples and results, on any number of threads.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+    /// What to sample: asnr, asnr_glare (SI eq. S14), fov_mean or worst_channel.
+    #[arg(long, default_value = "asnr", value_name = "NAME")]
+    objective: String,
+    /// Refuse a run estimated (from the nominal evaluation's time) to take longer, seconds.
+    #[arg(long, default_value_t = report::tolerance::DEFAULT_BUDGET_S, value_name = "SECONDS")]
+    budget: f64,
+    /// Worker threads (0 = all cores). The results do not depend on it.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    threads: usize,
+    /// Relative error allowed in each ASNR evaluated (sets options.tolerance).
+    #[arg(long, value_name = "REL")]
+    tolerance: Option<f64>,
+    /// Print one JSON object.
+    #[arg(long, conflicts_with = "csv")]
+    json: bool,
+    /// Print the samples as CSV (sample, the keys, asnr, fraunhofer_valid).
+    #[arg(long)]
+    csv: bool,
+    /// Draw the histogram of the samples' ASNR, the nominal and the percentiles marked (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+}
+
+/// Runs `asnr tolerance`.
+pub(crate) fn tolerance(args: ToleranceArgs) -> Result<()> {
+    let figure = crate::plot::Figure::new(None, None)?;
+    let objective = Objective::parse(&args.objective)?;
+    let max_threads = report::optimize::max_threads();
+    if args.threads > max_threads {
+        anyhow::bail!(
+            "--threads {}: expected 0 (all cores) to {max_threads} (4 × the {} available cores)",
+            args.threads,
+            max_threads / 4
+        );
+    }
+    let varies = args.vary.iter().map(|v| report::tolerance::parse_vary(v)).collect::<Result<Vec<_>>>()?;
+    let set = crate::with_tolerance(args.set, args.tolerance);
+    scene::check_overrides(args.scene.as_deref(), &set)?;
+    let source = scene::read(args.scene.as_deref())?;
+    let loaded = scene::build_with_warnings(&source, &set)?;
+    crate::warn(&loaded.warnings);
+    let keys: Vec<String> = varies.iter().map(|v| v.key.clone()).collect();
+    let target = report::objective::Target::new(source, set, objective, &keys)?;
+    let settings = report::tolerance::Settings {
+        samples: args.samples,
+        seed: args.seed,
+        budget_s: args.budget,
+        threads: args.threads,
+    };
+    let bar = crate::comparecmd::Bar(crate::sweep::progress_bar(0, "samples")?);
+    let t = report::tolerance::tolerance(&target, &varies, &settings, &bar)?;
+    if t.invalid() > 0 {
+        eprintln!(
+            "warning: {} of {} samples are outside the Fraunhofer model (SI eq. S15); they are kept in the statistics",
+            t.invalid(),
+            t.samples.len()
+        );
+    }
+    if let Some(path) = &args.plot {
+        crate::plot::tolerance_plot(path, &figure, &t)?;
+    }
+    if args.json {
+        outln!("{}", report::tolerance::json(&t)?);
+    } else if args.csv {
+        out!("{}", report::tolerance::csv(&t));
+    } else {
+        out!("{}", report::tolerance::report(&t));
+    }
+    Ok(())
+}

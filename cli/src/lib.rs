@@ -161,6 +161,9 @@ pub enum Command {
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
+    /// How the ASNR survives fabrication: Monte Carlo over distributions of scene keys (seeded,
+    /// parallel), with the nominal ASNR, the mean, σ, percentiles and each key's sensitivity.
+    Tolerance(design::ToleranceArgs),
     /// Simulated and Wiener-restored images of a USAF-1951 target (or a PNG) through the scene,
     /// one per spectral range (the paper's Fig. 4), with the measured bar contrast.
     Render(render::RenderArgs),
@@ -246,7 +249,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Optimize { scene, set, over, objective, xtol, starts, max_evaluations, plot, tolerance, json } => {
             let objective = report::objective::Objective::parse(&objective)?;
             if over.len() > 1 || objective != report::objective::Objective::Asnr {
-                let args = design::OptimizeArgs { scene, set, over, objective, xtol, starts, max_evaluations, plot, json };
+                let args =
+                    design::OptimizeArgs { scene, set, over, objective, xtol, starts, max_evaluations, plot, json };
                 return design::optimize(args, tolerance);
             }
             for (given, flag) in [(starts.is_some(), "--starts"), (max_evaluations.is_some(), "--max-evaluations")] {
@@ -391,6 +395,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
         Command::Otf(args) => psf::run(&args, psf::Kind::Otf),
         Command::Characterize(args) => characterize::run(&args),
+        Command::Tolerance(args) => design::tolerance(args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;

@@ -1986,3 +1986,37 @@ pub fn optimize_plots(
     let labels = Labels { title: &title, x: "evaluation", y: label, ..Labels::default() };
     lines_plot("--plot", path, figure, &labels, &series, &marks, false)
 }
+
+/// Writes the histogram of a tolerance run's samples (40 bins over their range, drawn as steps),
+/// the nominal value and the 5th, 50th and 95th percentiles marked.
+pub fn tolerance_plot(path: &Path, figure: &Figure, t: &report::tolerance::Tolerance) -> Result<()> {
+    const BINS: usize = 40;
+    let s = &t.statistics;
+    let (lo, hi) = if s.max > s.min { (s.min, s.max) } else { (s.min - 0.5, s.max + 0.5) };
+    let width = (hi - lo) / BINS as f64;
+    let mut counts = vec![0usize; BINS];
+    for sample in &t.samples {
+        counts[(((sample.asnr - lo) / width) as usize).min(BINS - 1)] += 1;
+    }
+    let mut steps = Vec::with_capacity(2 * BINS + 2);
+    steps.push((lo, 0.0));
+    for (i, &c) in counts.iter().enumerate() {
+        let x0 = lo + width * i as f64;
+        steps.push((x0, c as f64));
+        steps.push((x0 + width, c as f64));
+    }
+    steps.push((hi, 0.0));
+    let label = t.objective.label();
+    let series =
+        [Series { label: format!("samples per bin ({BINS} bins)"), points: steps, shaded: Vec::new(), best: None }];
+    let marks = [
+        Mark { x: t.nominal.value, label: Some(format!("nominal {}", number(t.nominal.value))) },
+        Mark { x: s.p5, label: Some("5th, 50th, 95th percentiles".to_owned()) },
+        Mark { x: s.p50, label: Some("5th, 50th, 95th percentiles".to_owned()) },
+        Mark { x: s.p95, label: Some("5th, 50th, 95th percentiles".to_owned()) },
+    ];
+    let keys: Vec<String> = t.keys.iter().map(|k| format!("{} {}", k.key, k.distribution)).collect();
+    let title = format!("{}: {} samples, {}", t.label, t.samples.len(), keys.join(", "));
+    let labels = Labels { title: &title, x: label, y: "samples", ..Labels::default() };
+    lines_plot("--plot", path, figure, &labels, &series, &marks, false)
+}

@@ -95,8 +95,15 @@ fn bad_multi_key_optimize_arguments() {
     assert!(err.contains("lens.model"), "{err}");
     let err = fails(&["optimize", "--over", "lens.f_number=2:3", "--starts", "5"]);
     assert!(err.contains("--starts: applies to a search over several keys"), "{err}");
-    let err =
-        fails(&["optimize", "--over", "lens.f_number=2:3", "--over", "spectrum.range_nm=1:9", "--max-evaluations", "10"]);
+    let err = fails(&[
+        "optimize",
+        "--over",
+        "lens.f_number=2:3",
+        "--over",
+        "spectrum.range_nm=1:9",
+        "--max-evaluations",
+        "10",
+    ]);
     assert!(err.contains("--max-evaluations 10: expected more than the 20 points"), "{err}");
     let err = fails(&["optimize", "--over", "lens.f_number=2:3", "--objective", "fov_mean"]);
     assert!(err.contains("single field point"), "{err}");
@@ -111,4 +118,51 @@ fn another_objective_with_one_key() {
     let best = v["best"].as_f64().unwrap();
     let at = asnr_at(&[format!("spectrum.range_nm={best}"), "options.glare=\"included\"".to_owned()]);
     assert_eq!(v["asnr"].as_f64().unwrap(), at);
+}
+
+// ---- asnr tolerance ----
+
+/// The same seed gives the same CSV and JSON byte for byte, on 1 or 2 threads; another seed
+/// other samples. The nominal ASNR is `asnr evaluate`'s.
+#[test]
+fn tolerance_seeds_reproduce_byte_for_byte() {
+    let args = ["tolerance", "--vary", "lens.f_number=normal:2%", "--vary", "spectrum.range_nm=uniform:40:60"];
+    let run = |extra: &[&str]| {
+        let out = asnr(&[&args[..], extra].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+        out.stdout
+    };
+    let csv = run(&["--samples", "200", "--seed", "5", "--csv", "--threads", "1"]);
+    assert_eq!(csv, run(&["--samples", "200", "--seed", "5", "--csv", "--threads", "2"]));
+    assert_ne!(csv, run(&["--samples", "200", "--seed", "6", "--csv"]));
+    let text = String::from_utf8(csv).unwrap();
+    assert!(text.starts_with("sample,lens.f_number,spectrum.range_nm,asnr,fraunhofer_valid\n0,"), "{text}");
+    assert_eq!(text.lines().count(), 201);
+    let json1 = run(&["--samples", "200", "--seed", "5", "--json", "--threads", "1"]);
+    assert_eq!(json1, run(&["--samples", "200", "--seed", "5", "--json", "--threads", "2"]));
+    let v: serde_json::Value = serde_json::from_slice(&json1).unwrap();
+    assert_eq!(v["nominal_asnr"].as_f64().unwrap(), asnr_at(&[]));
+    let (p5, p50, p95) = (v["p5"].as_f64().unwrap(), v["p50"].as_f64().unwrap(), v["p95"].as_f64().unwrap());
+    assert!(p5 < p50 && p50 < p95, "{v}");
+    assert_eq!(v["keys"][0]["sigma"].as_f64().unwrap(), 0.05);
+    // a faster lens gathers more light: the ASNR falls with the F-number
+    assert!(v["keys"][0]["sensitivity_per_sigma"].as_f64().unwrap() < 0.0, "{v}");
+}
+
+/// Bad input to `tolerance`: a key twice, an unknown distribution, a non-numeric key, a key also
+/// given by --set, too many samples for the time budget.
+#[test]
+fn bad_tolerance_arguments() {
+    let err = fails(&["tolerance", "--vary", "lens.f_number=normal:1%", "--vary", "lens.f_number=uniform:2:3"]);
+    assert!(err.contains("--vary lens.f_number: the key is given to --vary twice"), "{err}");
+    let err = fails(&["tolerance", "--vary", "lens.f_number=poisson:3"]);
+    assert!(err.contains("unknown distribution `poisson`"), "{err}");
+    let err = fails(&["tolerance", "--vary", "lens.model=normal:1"]);
+    assert!(err.contains("lens.model = \"chromatic\": not a number"), "{err}");
+    let err = fails(&["tolerance", "--vary", "lens.f_number=normal:1%", "--set", "lens.f_number=3"]);
+    assert!(err.contains("also given by --set lens.f_number=3"), "{err}");
+    let err = fails(&["tolerance", "--vary", "lens.f_number=normal:1%", "--samples", "1000000", "--budget", "0.001"]);
+    assert!(err.contains("--samples 1000000: about") && err.contains("beyond the --budget of 0.001 s"), "{err}");
+    let err = fails(&["tolerance", "--vary", "lens.f_number=normal:1%", "--samples", "0"]);
+    assert!(err.contains("--samples 0: expected 1 to 1000000"), "{err}");
 }

@@ -258,9 +258,10 @@ mod tests {
         assert_eq!(v, direct.asnr);
         let plain = Target::new(source.clone(), Vec::new(), Objective::Asnr, &[]).unwrap();
         assert!(plain.value(&[], &[]).unwrap().value > v);
-        let e = Target::new(source.clone(), vec!["options.glare=\"first_order\"".to_owned()], Objective::AsnrGlare, &[])
-            .unwrap_err()
-            .to_string();
+        let e =
+            Target::new(source.clone(), vec!["options.glare=\"first_order\"".to_owned()], Objective::AsnrGlare, &[])
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("sets options.glare itself"), "{e}");
         let e = Target::new(source.clone(), Vec::new(), Objective::FovMean, &[]).unwrap_err().to_string();
         assert!(e.contains("single field point"), "{e}");

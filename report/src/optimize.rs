@@ -427,7 +427,10 @@ pub fn maximize_many(
             ("converged: COBYLA's step fell below --xtol × each key's range".to_owned(), true)
         }
         Ok((cobyla::SuccessStatus::MaxEvalReached, _, _)) => (
-            format!("not converged: stopped at --max-evaluations {} (raise it, or loosen --xtol)", search.max_evaluations),
+            format!(
+                "not converged: stopped at --max-evaluations {} (raise it, or loosen --xtol)",
+                search.max_evaluations
+            ),
             false,
         ),
         Ok((status, _, _)) => (format!("stopped: {status:?}"), true),
@@ -444,8 +447,16 @@ pub fn maximize_many(
             history.len()
         );
     }
-    let mut optimum =
-        ManyOptimum { ranges: ranges.to_vec(), history, best, best_start, stopped, converged, at_bound: Vec::new(), search };
+    let mut optimum = ManyOptimum {
+        ranges: ranges.to_vec(),
+        history,
+        best,
+        best_start,
+        stopped,
+        converged,
+        at_bound: Vec::new(),
+        search,
+    };
     let tol = optimum.bound_tolerance();
     optimum.at_bound = ranges
         .iter()
@@ -580,7 +591,8 @@ pub fn many_report(
         o.search.starts,
         o.stopped
     );
-    let _ = writeln!(s, "{} of {} evaluations outside the Fraunhofer model ({PENALTY})", o.penalized(), o.history.len());
+    let _ =
+        writeln!(s, "{} of {} evaluations outside the Fraunhofer model ({PENALTY})", o.penalized(), o.history.len());
     s
 }
 
@@ -844,7 +856,8 @@ mod tests {
         let f = |x: &[f64]| value((3.0 * x[0]).sin() * (2.0 * x[1]).cos());
         let run = || maximize_many(&ranges(&[(0.0, 2.0), (-1.0, 1.0)]), &SEARCH, &f, &()).unwrap();
         let (a, b) = (run(), run());
-        let bits = |o: &ManyOptimum| o.history.iter().flat_map(|e| e.values.clone()).map(f64::to_bits).collect::<Vec<_>>();
+        let bits =
+            |o: &ManyOptimum| o.history.iter().flat_map(|e| e.values.clone()).map(f64::to_bits).collect::<Vec<_>>();
         assert_eq!(bits(&a), bits(&b));
         assert_eq!(halton(1, 2), 0.5);
         assert!((halton(5, 3) - 7.0 / 9.0).abs() < 1e-15);
