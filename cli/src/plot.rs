@@ -1981,7 +1981,7 @@ pub fn optimize_plots(
         Series { label: format!("{label} at each evaluation"), points: each, shaded: Vec::new(), best: None },
         Series { label: format!("best {label} so far"), points: running, shaded: Vec::new(), best: None },
     ];
-    let marks = [Mark { x: many.search.starts as f64 + 0.5, label: Some("COBYLA starts".to_owned()) }];
+    let marks = [Mark { x: many.start_count() as f64 + 0.5, label: Some("COBYLA starts".to_owned()) }];
     let title = format!("{}: {} over {} keys", outcome.label, label, many.ranges.len());
     let labels = Labels { title: &title, x: "evaluation", y: label, ..Labels::default() };
     lines_plot("--plot", path, figure, &labels, &series, &marks, false)

@@ -278,7 +278,7 @@ pub struct Evaluated {
     /// Whether the Fraunhofer model holds there (SI eq. S15); where it does not, the search
     /// counts the point as ASNR 0 (penalized).
     pub fraunhofer_valid: bool,
-    /// `start` (the Halton set) or `local` (COBYLA).
+    /// `scene` (the design's own values), `start` (the Halton set) or `local` (COBYLA).
     pub stage: &'static str,
 }
 
@@ -322,6 +322,12 @@ impl ManyOptimum {
         &self.history[self.best]
     }
 
+    /// Evaluations before COBYLA's: the Halton set, and the scene's own values when inside the
+    /// bounds.
+    pub fn start_count(&self) -> usize {
+        self.history.iter().filter(|e| e.stage != "local").count()
+    }
+
     /// Evaluations where the Fraunhofer model fails (counted as ASNR 0).
     pub fn penalized(&self) -> usize {
         self.history.iter().filter(|e| !e.fraunhofer_valid).count()
@@ -340,15 +346,28 @@ pub fn maximize_many(
     f: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
     progress: &dyn crate::Progress,
 ) -> Result<ManyOptimum> {
+    maximize_many_from(ranges, search, None, f, progress)
+}
+
+/// [`maximize_many`] with `initial`, the design's own values of the keys, among the start points
+/// when it lies inside the bounds (first, as stage `scene`): the search then never ends below
+/// the design it started from.
+pub fn maximize_many_from(
+    ranges: &[Range],
+    search: &Search,
+    initial: Option<&[f64]>,
+    f: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
+    progress: &dyn crate::Progress,
+) -> Result<ManyOptimum> {
     use rayon::prelude::*;
     let d = ranges.len();
     if d == 0 || d > MAX_KEYS {
         bail!("--over: {d} keys; expected 1 to {MAX_KEYS}");
     }
     let starts = if search.starts == 0 { Search::default_starts(d) } else { search.starts };
-    if search.max_evaluations <= starts {
+    if search.max_evaluations <= starts + 1 {
         bail!(
-            "--max-evaluations {}: expected more than the {starts} points of the start set (--starts)",
+            "--max-evaluations {}: expected more than the {starts} points of the start set (--starts) and the scene's own",
             search.max_evaluations
         );
     }
@@ -357,8 +376,13 @@ pub fn maximize_many(
         ranges.iter().zip(u).map(|(r, &u)| (r.lo + u.clamp(0.0, 1.0) * (r.hi - r.lo)).clamp(r.lo, r.hi)).collect()
     };
     progress.start(search.max_evaluations as u64);
-    let start_points: Vec<Vec<f64>> =
-        (1..=starts as u64).map(|i| to_key(&PRIMES[..d].iter().map(|&b| halton(i, b)).collect::<Vec<_>>())).collect();
+    let inside = initial.filter(|x| x.len() == d && ranges.iter().zip(*x).all(|(r, &v)| (r.lo..=r.hi).contains(&v)));
+    let start_points: Vec<Vec<f64>> = inside
+        .map(<[f64]>::to_vec)
+        .into_iter()
+        .chain((1..=starts as u64).map(|i| to_key(&PRIMES[..d].iter().map(|&b| halton(i, b)).collect::<Vec<_>>())))
+        .collect();
+    let stages = std::iter::repeat_n("scene", usize::from(inside.is_some())).chain(std::iter::repeat("start"));
     let evaluated: Vec<Result<crate::objective::Value>> = start_points
         .par_iter()
         .map(|x| {
@@ -368,10 +392,11 @@ pub fn maximize_many(
         })
         .collect();
     let mut history = Vec::with_capacity(search.max_evaluations);
-    for (x, v) in start_points.into_iter().zip(evaluated) {
+    for ((x, v), stage) in start_points.into_iter().zip(evaluated).zip(stages) {
         let v = v.inspect_err(|_| progress.finish())?;
-        history.push(Evaluated { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage: "start" });
+        history.push(Evaluated { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage });
     }
+    let first_local = history.len();
     let best_of = |h: &[Evaluated]| {
         h.iter().enumerate().fold(0, |best, (i, e)| if e.score() > h[best].score() { i } else { best })
     };
@@ -413,7 +438,7 @@ pub fn maximize_many(
         &vec![(0.0, 1.0); d],
         &no_constraints,
         (),
-        search.max_evaluations - starts,
+        search.max_evaluations - first_local,
         cobyla::RhoBeg::All(rho),
         Some(tolerances),
     );
@@ -522,7 +547,7 @@ pub fn many_json(
         fraunhofer_valid: best.fraunhofer_valid,
         at_bound: KeyMap(&o.ranges, o.at_bound.clone()),
         evaluations: o.history.len(),
-        start_points: o.search.starts,
+        start_points: o.start_count(),
         stopped: &o.stopped,
         converged: o.converged,
         scene_asnr: scene_value.value,
@@ -584,11 +609,13 @@ pub fn many_report(
         o.history[o.best_start].asnr
     );
     let local = o.history.iter().filter(|e| e.stage == "local").count();
+    let own =
+        if o.history.first().is_some_and(|e| e.stage == "scene") { ", the scene's own values among them" } else { "" };
     let _ = writeln!(
         s,
-        "{} evaluations ({} start points + {local} by COBYLA); {}",
+        "{} evaluations ({} start points{own} + {local} by COBYLA); {}",
         o.history.len(),
-        o.search.starts,
+        o.start_count(),
         o.stopped
     );
     let _ =
@@ -680,7 +707,11 @@ pub fn search_scene(
         best.objective = objective;
         Found::One(best)
     } else {
-        Found::Many(maximize_many(ranges, search, &|x| target.value(&keys, x), progress)?)
+        // the design's own values of the keys, where the scene has them (a key it lacks is set by
+        // the search alone)
+        let initial: Option<Vec<f64>> =
+            keys.iter().map(|k| crate::objective::number_at(target.source(), target.overrides(), k).ok()).collect();
+        Found::Many(maximize_many_from(ranges, search, initial.as_deref(), &|x| target.value(&keys, x), progress)?)
     };
     Ok(Outcome { label, objective, scene_value, found })
 }
@@ -845,9 +876,12 @@ mod tests {
         let f = |x: &[f64]| if x[0] > 0.9 { Err(anyhow::anyhow!("at k0={}: bad", x[0])) } else { value(x[0]) };
         let e = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &SEARCH, &f, &()).unwrap_err();
         assert!(e.to_string().contains(": bad"), "{e}");
-        let few = Search { max_evaluations: 20, ..SEARCH };
+        let few = Search { max_evaluations: 21, ..SEARCH };
         let e = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &few, &f, &()).unwrap_err();
-        assert!(e.to_string().contains("--max-evaluations 20: expected more than the 20 points"), "{e}");
+        assert!(
+            e.to_string().contains("--max-evaluations 21: expected more than the 20 points of the start set"),
+            "{e}"
+        );
     }
 
     /// The same search twice gives the same points, bit for bit.
