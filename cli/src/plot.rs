@@ -1721,6 +1721,69 @@ impl Plot for MtfPlot<'_> {
     }
 }
 
+/// Writes the plots of `asnr optimize` over several keys: the convergence (the objective at each
+/// evaluation and the best so far, against the evaluation's number, the start of COBYLA marked)
+/// into `path`. Points outside the Fraunhofer model are drawn at their penalized score, 0.
+pub fn optimize_plots(
+    path: &Path,
+    figure: &Figure,
+    outcome: &report::optimize::Outcome,
+    many: &report::optimize::ManyOptimum,
+) -> Result<()> {
+    let label = outcome.objective.label();
+    let each: Vec<(f64, f64)> = many.history.iter().enumerate().map(|(i, e)| ((i + 1) as f64, e.score())).collect();
+    let mut best = f64::NEG_INFINITY;
+    let running: Vec<(f64, f64)> = each
+        .iter()
+        .map(|&(i, v)| {
+            best = best.max(v);
+            (i, best)
+        })
+        .collect();
+    let series = [
+        Series { label: format!("{label} at each evaluation"), points: each, shaded: Vec::new(), best: None },
+        Series { label: format!("best {label} so far"), points: running, shaded: Vec::new(), best: None },
+    ];
+    let marks = [Mark { x: many.start_count() as f64 + 0.5, label: Some("COBYLA starts".to_owned()) }];
+    let title = format!("{}: {} over {} keys", outcome.label, label, many.ranges.len());
+    let labels = Labels { title: &title, x: "evaluation", y: label, ..Labels::default() };
+    lines_plot("--plot", path, figure, &labels, &series, &marks, false)
+}
+
+/// Writes the histogram of a tolerance run's samples (40 bins over their range, drawn as steps),
+/// the nominal value and the 5th, 50th and 95th percentiles marked.
+pub fn tolerance_plot(path: &Path, figure: &Figure, t: &report::tolerance::Tolerance) -> Result<()> {
+    const BINS: usize = 40;
+    let s = &t.statistics;
+    let (lo, hi) = if s.max > s.min { (s.min, s.max) } else { (s.min - 0.5, s.max + 0.5) };
+    let width = (hi - lo) / BINS as f64;
+    let mut counts = vec![0usize; BINS];
+    for sample in &t.samples {
+        counts[(((sample.asnr - lo) / width) as usize).min(BINS - 1)] += 1;
+    }
+    let mut steps = Vec::with_capacity(2 * BINS + 2);
+    steps.push((lo, 0.0));
+    for (i, &c) in counts.iter().enumerate() {
+        let x0 = lo + width * i as f64;
+        steps.push((x0, c as f64));
+        steps.push((x0 + width, c as f64));
+    }
+    steps.push((hi, 0.0));
+    let label = t.objective.label();
+    let series =
+        [Series { label: format!("samples per bin ({BINS} bins)"), points: steps, shaded: Vec::new(), best: None }];
+    let marks = [
+        Mark { x: t.nominal.value, label: Some(format!("nominal {}", number(t.nominal.value))) },
+        Mark { x: s.p5, label: Some("5th, 50th, 95th percentiles".to_owned()) },
+        Mark { x: s.p50, label: Some("5th, 50th, 95th percentiles".to_owned()) },
+        Mark { x: s.p95, label: Some("5th, 50th, 95th percentiles".to_owned()) },
+    ];
+    let keys: Vec<String> = t.keys.iter().map(|k| format!("{} {}", k.key, k.distribution)).collect();
+    let title = format!("{}: {} samples, {}", t.label, t.samples.len(), keys.join(", "));
+    let labels = Labels { title: &title, x: label, y: "samples", ..Labels::default() };
+    lines_plot("--plot", path, figure, &labels, &series, &marks, false)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1956,67 +2019,4 @@ mod tests {
         assert!(legend.box_w <= 1050 - 2 * ctx.px(MARGIN_PT), "{}", legend.box_w);
         assert!(legend.placed[0].0.len() >= 2, "{:?}", legend.placed);
     }
-}
-
-/// Writes the plots of `asnr optimize` over several keys: the convergence (the objective at each
-/// evaluation and the best so far, against the evaluation's number, the start of COBYLA marked)
-/// into `path`. Points outside the Fraunhofer model are drawn at their penalized score, 0.
-pub fn optimize_plots(
-    path: &Path,
-    figure: &Figure,
-    outcome: &report::optimize::Outcome,
-    many: &report::optimize::ManyOptimum,
-) -> Result<()> {
-    let label = outcome.objective.label();
-    let each: Vec<(f64, f64)> = many.history.iter().enumerate().map(|(i, e)| ((i + 1) as f64, e.score())).collect();
-    let mut best = f64::NEG_INFINITY;
-    let running: Vec<(f64, f64)> = each
-        .iter()
-        .map(|&(i, v)| {
-            best = best.max(v);
-            (i, best)
-        })
-        .collect();
-    let series = [
-        Series { label: format!("{label} at each evaluation"), points: each, shaded: Vec::new(), best: None },
-        Series { label: format!("best {label} so far"), points: running, shaded: Vec::new(), best: None },
-    ];
-    let marks = [Mark { x: many.start_count() as f64 + 0.5, label: Some("COBYLA starts".to_owned()) }];
-    let title = format!("{}: {} over {} keys", outcome.label, label, many.ranges.len());
-    let labels = Labels { title: &title, x: "evaluation", y: label, ..Labels::default() };
-    lines_plot("--plot", path, figure, &labels, &series, &marks, false)
-}
-
-/// Writes the histogram of a tolerance run's samples (40 bins over their range, drawn as steps),
-/// the nominal value and the 5th, 50th and 95th percentiles marked.
-pub fn tolerance_plot(path: &Path, figure: &Figure, t: &report::tolerance::Tolerance) -> Result<()> {
-    const BINS: usize = 40;
-    let s = &t.statistics;
-    let (lo, hi) = if s.max > s.min { (s.min, s.max) } else { (s.min - 0.5, s.max + 0.5) };
-    let width = (hi - lo) / BINS as f64;
-    let mut counts = vec![0usize; BINS];
-    for sample in &t.samples {
-        counts[(((sample.asnr - lo) / width) as usize).min(BINS - 1)] += 1;
-    }
-    let mut steps = Vec::with_capacity(2 * BINS + 2);
-    steps.push((lo, 0.0));
-    for (i, &c) in counts.iter().enumerate() {
-        let x0 = lo + width * i as f64;
-        steps.push((x0, c as f64));
-        steps.push((x0 + width, c as f64));
-    }
-    steps.push((hi, 0.0));
-    let label = t.objective.label();
-    let series =
-        [Series { label: format!("samples per bin ({BINS} bins)"), points: steps, shaded: Vec::new(), best: None }];
-    let marks = [
-        Mark { x: t.nominal.value, label: Some(format!("nominal {}", number(t.nominal.value))) },
-        Mark { x: s.p5, label: Some("5th, 50th, 95th percentiles".to_owned()) },
-        Mark { x: s.p50, label: Some("5th, 50th, 95th percentiles".to_owned()) },
-        Mark { x: s.p95, label: Some("5th, 50th, 95th percentiles".to_owned()) },
-    ];
-    let keys: Vec<String> = t.keys.iter().map(|k| format!("{} {}", k.key, k.distribution)).collect();
-    let title = format!("{}: {} samples, {}", t.label, t.samples.len(), keys.join(", "));
-    let labels = Labels { title: &title, x: label, y: "samples", ..Labels::default() };
-    lines_plot("--plot", path, figure, &labels, &series, &marks, false)
 }

@@ -434,6 +434,7 @@ fn optimize(
 /// is released while it runs.
 #[pyfunction]
 #[pyo3(signature = (scene, vary, samples=1000, seed=1, objective="asnr", budget_s=600.0, threads=0))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, each one of `asnr tolerance`'s options
 fn tolerance(
     py: Python<'_>,
     scene: &Scene,
