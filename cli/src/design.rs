@@ -48,12 +48,18 @@ pub(crate) fn optimize(args: OptimizeArgs, tolerance: Option<f64>) -> Result<()>
         anyhow::bail!("--starts 0: expected at least 1 start point (default 10 per key)");
     }
     let bar = crate::comparecmd::Bar(crate::sweep::progress_bar(0, "evaluations")?);
-    let outcome = optimize::search_scene(source, set, &ranges, args.objective, &search, &bar)?;
+    let overrides = set.clone();
+    let outcome = optimize::search_scene(source.clone(), set, &ranges, args.objective, &search, &bar)?;
     for w in optimize::outcome_warnings(&outcome) {
         eprintln!("warning: {w}");
     }
     if let (Some(path), Found::Many(many)) = (&args.plot, &outcome.found) {
         crate::plot::optimize_plots(path, &figure, &outcome, many)?;
+        if many.ranges.len() == 2 {
+            let bar = crate::comparecmd::Bar(crate::sweep::progress_bar(0, "landscape points")?);
+            let grid = optimize::landscape(&source, &overrides, args.objective, &ranges, &bar)?;
+            crate::plot::landscape_plot(&crate::plot::landscape_path(path), &figure, &outcome, many, grid)?;
+        }
     }
     if args.json {
         outln!("{}", optimize::outcome_json(&outcome)?);

@@ -98,7 +98,8 @@ pub enum Command {
         #[arg(long, value_name = "N")]
         max_evaluations: Option<usize>,
         /// Several keys: draw the convergence (the ASNR of each evaluation and the best so far)
-        /// into FILE.svg|png.
+        /// into FILE.svg|png; for two keys also the landscape (the ASNR on a 21 × 21 grid, 441
+        /// more evaluations) with the search's path, into FILE-landscape.svg|png.
         #[arg(long, value_name = "FILE")]
         plot: Option<PathBuf>,
         /// Relative error allowed in each ASNR evaluated (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).

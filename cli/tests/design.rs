@@ -166,3 +166,36 @@ fn bad_tolerance_arguments() {
     let err = fails(&["tolerance", "--vary", "lens.f_number=normal:1%", "--samples", "0"]);
     assert!(err.contains("--samples 0: expected 1 to 1000000"), "{err}");
 }
+
+/// `--plot` with two keys writes the convergence and, beside it, the landscape with the path;
+/// `tolerance --plot` the histogram.
+#[test]
+fn the_plots_of_a_search_and_a_tolerance_run() {
+    let dir = std::env::temp_dir().join(format!("asnr-design-plots-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("search.svg");
+    let out = asnr(&[
+        "optimize",
+        "--over",
+        "spectrum.range_nm=1:200",
+        "--over",
+        "lens.f_number=2:6",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let convergence = std::fs::read_to_string(&svg).unwrap();
+    assert!(convergence.contains("best ASNR so far") && convergence.contains("COBYLA starts"), "convergence plot");
+    let landscape = std::fs::read_to_string(dir.join("search-landscape.svg")).unwrap();
+    assert!(landscape.contains("the search&apos;s path") || landscape.contains("the search's path"), "landscape plot");
+    assert!(landscape.contains("21 × 21 grid"));
+    let hist = dir.join("tolerance.svg");
+    let out =
+        asnr(&["tolerance", "--vary", "lens.f_number=normal:2%", "--samples", "100", "--plot", hist.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&hist).unwrap();
+    assert!(text.contains("samples per bin") && text.contains("5th, 50th, 95th percentiles"), "histogram");
+    let err = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--plot", dir.join("x.svg").to_str().unwrap()]);
+    assert!(err.contains("--plot: draws a search over several keys"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -641,6 +641,39 @@ pub fn many_bound_warnings(o: &ManyOptimum) -> Vec<String> {
         .collect()
 }
 
+/// Points per axis of [`landscape`].
+pub const LANDSCAPE_POINTS: usize = 21;
+
+/// The objective of a search over two keys on a [`LANDSCAPE_POINTS`]² grid of their ranges (the
+/// first key slowest, `scene::sweep::axis` values), penalized as the search scores it
+/// ([`Evaluated::score`]), in parallel and collected in order: the map behind the search's path.
+pub fn landscape(
+    source: &scene::Source,
+    overrides: &[String],
+    objective: crate::objective::Objective,
+    ranges: &[Range],
+    progress: &dyn crate::Progress,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    use rayon::prelude::*;
+    let [x, y] = ranges else { bail!("a landscape takes two keys, not {}", ranges.len()) };
+    let keys = [x.key.clone(), y.key.clone()];
+    let target = crate::objective::Target::new(source.clone(), overrides.to_vec(), objective, &keys)?;
+    let (xs, ys) = (scene::sweep::axis(x.lo, x.hi, LANDSCAPE_POINTS), scene::sweep::axis(y.lo, y.hi, LANDSCAPE_POINTS));
+    progress.start((xs.len() * ys.len()) as u64);
+    let z: Vec<Result<f64>> = (0..xs.len() * ys.len())
+        .into_par_iter()
+        .map(|i| {
+            let v = target.value(&keys, &[xs[i / ys.len()], ys[i % ys.len()]]);
+            progress.advance(1);
+            v.map(|v| {
+                Evaluated { values: Vec::new(), asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage: "" }.score()
+            })
+        })
+        .collect();
+    progress.finish();
+    Ok((xs, ys, z.into_iter().collect::<Result<_>>()?))
+}
+
 // ---- one search of a scene, as the command line and the Python package run it ----
 
 /// What [`search_scene`] found: one key's golden-section optimum, or several keys' COBYLA one.
