@@ -268,4 +268,31 @@ mod tests {
         let e = Target::new(source, Vec::new(), Objective::WorstChannel, &[]).unwrap_err().to_string();
         assert!(e.contains("has no channels"), "{e}");
     }
+
+    /// The worst channel of an interleaved multiplexed lens is the lowest of the three
+    /// evaluations with the spectrum centred at each channel (as `asnr evaluate --set
+    /// spectrum.center_nm=…` gives them), and the search may not set the centre itself.
+    #[test]
+    fn the_worst_channel_is_the_lowest_channel_evaluation() {
+        let paper = scene::read(None).unwrap();
+        let text = paper.text();
+        let lens_at = text.find("[lens]").unwrap();
+        let rest = &text[text[lens_at..].find("\n[").map(|i| lens_at + i).unwrap()..];
+        let lens = "[lens]\nmodel = \"multiplexed\"\nlayout = \"interleaved\"\nf_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [750.0, 800.0, 850.0]\nefficiency = 0.15\ntransmission = 0.55\n";
+        let source = Source::from_text(format!("{lens}{rest}"), "multiplexed", ".");
+        let target = Target::new(source.clone(), Vec::new(), Objective::WorstChannel, &[]).unwrap();
+        let worst = target.value(&[], &[]).unwrap().value;
+        let each: Vec<f64> = [750, 800, 850]
+            .iter()
+            .map(|c| {
+                let built = scene::build_from(&source, &[format!("spectrum.center_nm={c}")]).unwrap();
+                metric::evaluate(&built).unwrap().asnr
+            })
+            .collect();
+        assert_eq!(worst, each.iter().copied().fold(f64::INFINITY, f64::min), "{each:?}");
+        let e = Target::new(source, Vec::new(), Objective::WorstChannel, &["spectrum.center_nm".to_owned()])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sets spectrum.center_nm itself"), "{e}");
+    }
 }
