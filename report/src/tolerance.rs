@@ -412,7 +412,7 @@ pub fn tolerance(target: &Target, varies: &[Vary], settings: &Settings, progress
     })
 }
 
-/// The JSON report (without the samples: [`csv`] has them).
+/// The JSON report (without the samples: [`csv()`] has them).
 pub fn json(t: &Tolerance) -> Result<String> {
     #[derive(Serialize)]
     struct Key<'a> {
