@@ -102,7 +102,7 @@ fn plot(path: &std::path::Path, figure: &crate::plot::Figure, base: &Comparison,
 }
 
 /// The terminal's progress bar as the comparison's [`report::Progress`].
-struct Bar(indicatif::ProgressBar);
+pub(crate) struct Bar(pub(crate) indicatif::ProgressBar);
 
 impl report::Progress for Bar {
     fn start(&self, total: u64) {

@@ -23,6 +23,7 @@ macro_rules! outln {
 
 mod characterize;
 mod comparecmd;
+mod design;
 mod measure;
 mod merge;
 mod panel;
@@ -70,19 +71,37 @@ pub enum Command {
         #[arg(long)]
         explain: bool,
     },
-    /// The value of one numeric scene key that maximizes the ASNR (scan, then golden section).
+    /// The values of numeric scene keys that maximize the ASNR: one key by a scan and golden
+    /// section, several by COBYLA from the best of a Halton start set.
     Optimize {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
         scene: Option<PathBuf>,
         /// Override a scene key by its dotted path (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
-        /// The key to vary and its range, e.g. --over spectrum.range_nm=1:200.
-        #[arg(long, value_name = "KEY=LO:HI")]
-        over: String,
-        /// Stop when the bracket is narrower than this fraction of HI − LO.
+        /// A key to vary and its bounds, e.g. --over spectrum.range_nm=1:200 (repeatable: several
+        /// keys are searched jointly).
+        #[arg(long, value_name = "KEY=LO:HI", required = true)]
+        over: Vec<String>,
+        /// What to maximize: asnr, asnr_glare (SI eq. S14), fov_mean (over [[fields]]) or
+        /// worst_channel (a multiplexed lens's lowest channel).
+        #[arg(long, default_value = "asnr", value_name = "NAME")]
+        objective: String,
+        /// One key: stop when the bracket is narrower than this fraction of HI − LO. Several:
+        /// stop when COBYLA's step is below this fraction of each key's range.
         #[arg(long, default_value_t = 1e-4, value_name = "FRACTION")]
         xtol: f64,
+        /// Several keys: points of the Halton start set (default 10 per key).
+        #[arg(long, value_name = "N")]
+        starts: Option<usize>,
+        /// Several keys: the most evaluations, start set included.
+        #[arg(long, value_name = "N")]
+        max_evaluations: Option<usize>,
+        /// Several keys: draw the convergence (the ASNR of each evaluation and the best so far)
+        /// into FILE.svg|png; for two keys also the landscape (the ASNR on a 21 × 21 grid, 441
+        /// more evaluations) with the search's path, into FILE-landscape.svg|png.
+        #[arg(long, value_name = "FILE")]
+        plot: Option<PathBuf>,
         /// Relative error allowed in each ASNR evaluated (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
         #[arg(long, value_name = "REL")]
         tolerance: Option<f64>,
@@ -143,6 +162,9 @@ pub enum Command {
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
+    /// How the ASNR survives fabrication: Monte Carlo over distributions of scene keys (seeded,
+    /// parallel), with the nominal ASNR, the mean, σ, percentiles and each key's sensitivity.
+    Tolerance(design::ToleranceArgs),
     /// Simulated and Wiener-restored images of a USAF-1951 target (or a PNG) through the scene,
     /// one per spectral range (the paper's Fig. 4), with the measured bar contrast.
     Render(render::RenderArgs),
@@ -225,7 +247,27 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Optimize { scene, set, over, xtol, tolerance, json } => {
+        Command::Optimize { scene, set, over, objective, xtol, starts, max_evaluations, plot, tolerance, json } => {
+            let objective = report::objective::Objective::parse(&objective)?;
+            if over.len() > 1 || objective != report::objective::Objective::Asnr {
+                let args =
+                    design::OptimizeArgs { scene, set, over, objective, xtol, starts, max_evaluations, plot, json };
+                return design::optimize(args, tolerance);
+            }
+            for (given, flag) in [(starts.is_some(), "--starts"), (max_evaluations.is_some(), "--max-evaluations")] {
+                if given {
+                    anyhow::bail!(
+                        "{flag}: applies to a search over several keys; one key is searched by a {}-point scan and golden section",
+                        optimize::SCAN_POINTS
+                    );
+                }
+            }
+            if plot.is_some() {
+                anyhow::bail!(
+                    "--plot: draws a search over several keys; for one key, asnr sweep --over KEY=LO:HI:N --plot FILE draws the curve"
+                );
+            }
+            let over = &over[0];
             if !(1e-12..1.0).contains(&xtol) {
                 // as typed: 1e-17, not 0.00000000000000001
                 let xtol = if xtol != 0.0 && xtol.abs() < 1e-4 { format!("{xtol:e}") } else { format!("{xtol}") };
@@ -234,7 +276,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 );
             }
             let set = with_tolerance(set, tolerance);
-            let range = optimize::parse_range(&over, false)?;
+            let range = optimize::parse_range(over, false)?;
             check_over_keys(&set, std::slice::from_ref(&range))?;
             // validate the scene (and print its warnings) once, at the low end of the range
             let mut first = set.clone();
@@ -354,6 +396,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
         Command::Otf(args) => psf::run(&args, psf::Kind::Otf),
         Command::Characterize(args) => characterize::run(&args),
+        Command::Tolerance(args) => design::tolerance(args),
         Command::Scene { scene, set } => {
             scene::check_overrides(scene.as_deref(), &set)?;
             let source = scene::read(scene.as_deref())?;

@@ -4,7 +4,8 @@ The `asnr` command line's computation from Python: a scene is read once (a scene
 text or a dict), changed with :meth:`Scene.with_`, and evaluated at one point
 (:func:`evaluate`), at many (:func:`evaluate_many`, numpy arrays in and out, in parallel with the
 GIL released), over a grid (:func:`sweep`, a pandas DataFrame), or compared with other designs
-(:func:`compare`). :func:`mtf` gives the polychromatic MTF. Every number is the one ``asnr``
+(:func:`compare`). :func:`mtf` gives the polychromatic MTF; :func:`optimize` searches the keys
+that maximize the ASNR and :func:`tolerance` samples how it survives fabrication errors. Every number is the one ``asnr``
 prints for the same scene (the same Rust functions compute it): ``evaluate_many`` over a grid
 is ``asnr sweep --csv`` to the last digit, and :func:`to_csv` writes its bytes.
 
@@ -46,8 +47,10 @@ __all__ = [
     "grid",
     "load",
     "mtf",
+    "optimize",
     "sweep",
     "to_csv",
+    "tolerance",
 ]
 
 __version__ = "0.1.0"
@@ -269,6 +272,70 @@ def compare(
     text, scene_warnings = _asnr.compare(None if path is None else os.fspath(path), overrides, tolerance, over, threads)
     _warn(scene_warnings)
     return json.loads(text)
+
+
+def optimize(
+    scene: Scene,
+    over: Mapping[str, tuple[float, float]],
+    *,
+    objective: str = "asnr",
+    xtol: float = 1e-4,
+    starts: int | None = None,
+    max_evaluations: int | None = None,
+) -> dict[str, Any]:
+    """The values of scene keys that maximize the ASNR: ``asnr optimize --json`` with one
+    ``--over KEY=LO:HI`` per entry of ``over`` (``{key: (lo, hi)}``), the same search and so the
+    same numbers. One key: a 17-point scan and golden section (``best`` a number); several:
+    COBYLA from the best of a Halton start set of ``starts`` points (default 10 per key), at
+    most ``max_evaluations`` evaluations (default 500; ``best`` and ``at_bound`` dicts keyed by
+    the keys, ``history`` every point evaluated). ``objective``: ``"asnr"``, ``"asnr_glare"``
+    (SI eq. S14), ``"fov_mean"`` or ``"worst_channel"``."""
+    ranges = [(str(k), float(lo), float(hi)) for k, (lo, hi) in over.items()]
+    text = _asnr.optimize(
+        _scene(scene),
+        ranges,
+        objective,
+        float(xtol),
+        0 if starts is None else int(starts),
+        500 if max_evaluations is None else int(max_evaluations),
+    )
+    return json.loads(text)
+
+
+def tolerance(
+    scene: Scene,
+    vary: Mapping[str, str],
+    *,
+    n: int = 1000,
+    seed: int = 1,
+    objective: str = "asnr",
+    budget_s: float = 600.0,
+    threads: int = 0,
+) -> dict[str, Any]:
+    """How the ASNR survives fabrication: ``asnr tolerance --json`` with one ``--vary KEY=DIST``
+    per entry of ``vary`` (``{key: "normal:0.02"}`` in the key's units, ``"normal:2%"`` of its
+    value, or ``"uniform:LO:HI"``), ``n`` samples drawn from ``seed`` (the same run as the command
+    line's: the same numbers). The dict has the JSON's fields (``nominal_asnr``, ``mean``,
+    ``std``, ``p5``, ``p50``, ``p95``, ``keys`` with each key's ``sensitivity_per_sigma``, …),
+    ``csv`` (the ``--csv`` text, byte for byte) and ``table`` (its columns as numpy arrays)."""
+    pairs = [(str(k), str(v)) for k, v in vary.items()]
+    report, csv = _asnr.tolerance(_scene(scene), pairs, int(n), int(seed), objective, float(budget_s), int(threads))
+    out = json.loads(report)
+    out["csv"] = csv
+    lines = csv.splitlines()
+    header = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:]]
+    table: dict[str, np.ndarray] = {}
+    for j, name in enumerate(header):
+        column = [r[j] for r in rows]
+        if name == "fraunhofer_valid":
+            table[name] = np.array([c == "true" for c in column], dtype=bool)
+        elif name == "sample":
+            table[name] = np.array([int(c) for c in column], dtype=np.int64)
+        else:
+            table[name] = np.array([float(c) for c in column], dtype=np.float64)
+    out["table"] = table
+    return out
 
 
 @dataclasses.dataclass(frozen=True)

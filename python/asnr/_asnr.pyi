@@ -46,3 +46,20 @@ def compare(
     over: str | None = None,
     threads: int = 0,
 ) -> tuple[str, list[str]]: ...
+def optimize(
+    scene: Scene,
+    over: list[tuple[str, float, float]],
+    objective: str = "asnr",
+    xtol: float = 1e-4,
+    starts: int = 0,
+    max_evaluations: int = 500,
+) -> str: ...
+def tolerance(
+    scene: Scene,
+    vary: list[tuple[str, str]],
+    samples: int = 1000,
+    seed: int = 1,
+    objective: str = "asnr",
+    budget_s: float = 600.0,
+    threads: int = 0,
+) -> tuple[str, str]: ...

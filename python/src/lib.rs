@@ -385,6 +385,89 @@ fn compare(
     Ok((serde_json::to_string(&report).map_err(|e| PyValueError::new_err(e.to_string()))?, warnings))
 }
 
+/// Refuses a scene whose lens is a Python object for a design search (its keys are not scene keys).
+fn scene_lens_only(scene: &Scene, what: &str) -> PyResult<()> {
+    match &scene.lens {
+        Some(lens) => Err(SceneError::new_err(format!(
+            "{what}: the scene's lens is the Python object {}; a design search varies scene keys, so it needs the scene file's lens",
+            lens.name
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// `asnr optimize --json` for `scene` over `over` (`(key, lo, hi)` each, as `--over KEY=LO:HI`):
+/// the same search (`report::optimize::search_scene`), so the same numbers. The GIL is
+/// released while it runs.
+#[pyfunction]
+#[pyo3(signature = (scene, over, objective="asnr", xtol=1e-4, starts=0, max_evaluations=500))]
+fn optimize(
+    py: Python<'_>,
+    scene: &Scene,
+    over: Vec<(String, f64, f64)>,
+    objective: &str,
+    xtol: f64,
+    starts: usize,
+    max_evaluations: usize,
+) -> PyResult<String> {
+    scene_lens_only(scene, "optimize")?;
+    let ranges = over
+        .iter()
+        .map(|(k, lo, hi)| report::optimize::parse_range(&format!("{k}={lo}:{hi}"), false))
+        .collect::<anyhow::Result<Vec<_>>>()
+        .map_err(scene_error)?;
+    let objective = report::objective::Objective::parse(objective).map_err(scene_error)?;
+    let search = report::optimize::Search { xtol, starts, max_evaluations };
+    let outcome = py
+        .detach(|| {
+            report::optimize::search_scene(
+                scene.source.clone(),
+                scene.overrides.clone(),
+                &ranges,
+                objective,
+                &search,
+                &(),
+            )
+        })
+        .map_err(scene_error)?;
+    report::optimize::outcome_json(&outcome).map_err(scene_error)
+}
+
+/// `asnr tolerance` for `scene`: `vary` holds `(key, distribution)` pairs as `--vary KEY=DIST`
+/// takes them. Returns its `--json` and `--csv` texts (the same run: the same numbers). The GIL
+/// is released while it runs.
+#[pyfunction]
+#[pyo3(signature = (scene, vary, samples=1000, seed=1, objective="asnr", budget_s=600.0, threads=0))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, each one of `asnr tolerance`'s options
+fn tolerance(
+    py: Python<'_>,
+    scene: &Scene,
+    vary: Vec<(String, String)>,
+    samples: usize,
+    seed: u64,
+    objective: &str,
+    budget_s: f64,
+    threads: usize,
+) -> PyResult<(String, String)> {
+    scene_lens_only(scene, "tolerance")?;
+    let varies = vary
+        .iter()
+        .map(|(k, d)| report::tolerance::parse_vary(&format!("{k}={d}")))
+        .collect::<anyhow::Result<Vec<_>>>()
+        .map_err(scene_error)?;
+    let objective = report::objective::Objective::parse(objective).map_err(scene_error)?;
+    let keys: Vec<String> = varies.iter().map(|v| v.key.clone()).collect();
+    let settings = report::tolerance::Settings { samples, seed, budget_s, threads };
+    let t = py
+        .detach(|| {
+            let target =
+                report::objective::Target::new(scene.source.clone(), scene.overrides.clone(), objective, &keys)?;
+            report::tolerance::tolerance(&target, &varies, &settings, &())
+        })
+        .map_err(scene_error)?;
+    Ok((report::tolerance::json(&t).map_err(scene_error)?, report::tolerance::csv(&t)))
+}
+
 /// A lens written in Python: `f_number`, `focal_length_m`, optional `design_wavelength_m`, and
 /// `orders(wavelength_m, (field_x_rad, field_y_rad))` returning the imaging orders, each an object
 /// (or dict) with `efficiency` and `defocus_m` and optionally `image_shift_m` (x, y), the Seidel
@@ -609,5 +692,7 @@ fn _asnr(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep_csv, m)?)?;
     m.add_function(wrap_pyfunction!(mtf, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(optimize, m)?)?;
+    m.add_function(wrap_pyfunction!(tolerance, m)?)?;
     Ok(())
 }

@@ -327,3 +327,35 @@ def test_the_fig2b_example_runs_and_its_curve_is_the_sweeps(tmp_path):
     assert (tmp_path / "fig2b.png").stat().st_size > 10_000
     theory = (tmp_path / "fig2b-theory.csv").read_bytes()
     assert theory == cli("sweep", "--set", "lens.f_number=2.5", "--over", "spectrum.range_nm=2:200:100", "--csv")
+
+
+# --- designing with the ASNR ---------------------------------------------------------------
+
+
+def test_optimize_is_the_command_lines_search_to_the_last_digit():
+    scene = asnr.load()
+    ours = asnr.optimize(scene, {"spectrum.range_nm": (1, 200), "spectrum.center_nm": (700, 900)})
+    theirs = json.loads(cli("optimize", "--json", "--over", "spectrum.range_nm=1:200", "--over", "spectrum.center_nm=700:900"))
+    assert ours == theirs
+    assert abs(ours["best"]["spectrum.range_nm"] - 33.1) < 0.2
+    assert ours["at_bound"] == {"spectrum.range_nm": False, "spectrum.center_nm": False}
+    # one key: today's golden-section search, its JSON as the command line prints it
+    one = asnr.optimize(scene, {"spectrum.range_nm": (1, 200)}, xtol=1e-3)
+    assert one == json.loads(cli("optimize", "--json", "--over", "spectrum.range_nm=1:200", "--xtol", "1e-3"))
+    with pytest.raises(asnr.SceneError, match="LO = 3 must be below HI = 2"):
+        asnr.optimize(scene, {"lens.f_number": (3, 2), "spectrum.range_nm": (1, 2)})
+
+
+def test_tolerance_is_the_command_lines_run_to_the_last_digit():
+    scene = asnr.load().with_({"spectrum.range_nm": 40})
+    vary = {"lens.f_number": "normal:2%", "spectrum.center_nm": "uniform:790:810"}
+    ours = asnr.tolerance(scene, vary, n=300, seed=9, threads=2)
+    args = ["tolerance", "--set", "spectrum.range_nm=40", "--vary", "lens.f_number=normal:2%"]
+    args += ["--vary", "spectrum.center_nm=uniform:790:810", "--samples", "300", "--seed", "9"]
+    theirs = json.loads(cli(*args, "--json"))
+    assert {k: v for k, v in ours.items() if k not in ("csv", "table")} == theirs
+    assert ours["csv"].encode() == cli(*args, "--csv")
+    assert ours["table"]["asnr"].shape == (300,)
+    assert float(np.mean(ours["table"]["asnr"])) == pytest.approx(ours["mean"], rel=1e-12)
+    with pytest.raises(asnr.SceneError, match="unknown distribution `gamma`"):
+        asnr.tolerance(scene, {"lens.f_number": "gamma:2"})

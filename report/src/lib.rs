@@ -7,8 +7,10 @@
 //! progress bars and plots); long computations report their progress through [`Progress`].
 
 pub mod compare;
+pub mod objective;
 pub mod optimize;
 pub mod output;
+pub mod tolerance;
 
 /// Progress of a long computation: its number of steps once known, then the steps as they are
 /// done (from any thread), then its end. `()` ignores it.

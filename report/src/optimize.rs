@@ -1,4 +1,6 @@
-//! `asnr optimize`: the value of one numeric scene key that maximizes the ASNR.
+//! `asnr optimize`: the values of numeric scene keys that maximize the ASNR: one key by a scan and
+//! golden-section search ([`maximize`]), several by COBYLA from the best of a Halton start set
+//! ([`maximize_many`]).
 
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
@@ -87,6 +89,13 @@ pub struct Optimum {
     pub evaluations: usize,
     /// Whether `best` is within `tolerance` of `lo` or `hi`: the maximum may lie outside the range.
     pub at_bound: bool,
+    /// What was maximized (written only when it is not the ASNR).
+    #[serde(skip_serializing_if = "is_asnr")]
+    pub objective: crate::objective::Objective,
+}
+
+fn is_asnr(o: &crate::objective::Objective) -> bool {
+    *o == crate::objective::Objective::Asnr
 }
 
 /// The warning when the best value is on a bound of the search range.
@@ -104,10 +113,11 @@ pub fn bound_warning(o: &Optimum) -> Option<String> {
 /// The text report: the value found, by which method, and how many evaluations it took.
 pub fn report(o: &Optimum) -> String {
     format!(
-        "best {} = {:.6} (±{:.2e}, golden-section search after a {SCAN_POINTS}-point scan) → ASNR {:.6}   [{} evaluations over {}…{}]{}\n",
+        "best {} = {:.6} (±{:.2e}, golden-section search after a {SCAN_POINTS}-point scan) → {} {:.6}   [{} evaluations over {}…{}]{}\n",
         o.key,
         o.best,
         o.tolerance,
+        o.objective.label(),
         o.asnr,
         o.evaluations,
         o.lo,
@@ -182,6 +192,7 @@ pub fn maximize(range: &Range, tolerance: f64, mut f: impl FnMut(f64) -> Result<
         tolerance,
         evaluations,
         at_bound: best.0 - lo <= tolerance || hi - best.0 <= tolerance,
+        objective: crate::objective::Objective::Asnr,
     })
 }
 
@@ -212,6 +223,555 @@ pub fn check_keys(what: &str, set: &[String], ranges: &[Range]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+// ---- several keys ----
+
+/// How [`maximize_many`] finds `best` (the JSON's `method`).
+pub const METHOD_MANY: &str = "COBYLA (Powell 1994, bounded, NLopt 2.7.1's) from the best of a Halton start set";
+
+/// The most keys one search varies (the Halton start set takes one prime base per key).
+pub const MAX_KEYS: usize = 16;
+
+/// The first [`MAX_KEYS`] primes: the bases of the Halton sequence, one per key.
+const PRIMES: [u64; MAX_KEYS] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53];
+
+/// Settings of a search over several keys.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Search {
+    /// The search stops when COBYLA's steps fall below this fraction of each key's range.
+    pub xtol: f64,
+    /// Points of the Halton start set (0: [`Search::default_starts`]).
+    pub starts: usize,
+    /// The most evaluations, start set included.
+    pub max_evaluations: usize,
+}
+
+impl Search {
+    /// The default start set: 10 points per key.
+    pub fn default_starts(keys: usize) -> usize {
+        10 * keys
+    }
+
+    /// The default evaluation limit.
+    pub const DEFAULT_MAX_EVALUATIONS: usize = 500;
+}
+
+/// `u` in [0, 1) at `index` of the Halton sequence in `base` (the radical inverse).
+pub fn halton(mut index: u64, base: u64) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while index > 0 {
+        f /= base as f64;
+        r += f * (index % base) as f64;
+        index /= base;
+    }
+    r
+}
+
+/// One evaluated point of a search.
+#[derive(Clone, Debug, Serialize)]
+pub struct Evaluated {
+    /// The keys' values.
+    pub values: Vec<f64>,
+    /// The objective there.
+    pub asnr: f64,
+    /// Whether the Fraunhofer model holds there (SI eq. S15); where it does not, the search
+    /// counts the point as ASNR 0 (penalized).
+    pub fraunhofer_valid: bool,
+    /// `scene` (the design's own values), `start` (the Halton set) or `local` (COBYLA).
+    pub stage: &'static str,
+}
+
+impl Evaluated {
+    /// What the search maximizes: the objective, or 0 where the Fraunhofer model fails.
+    pub fn score(&self) -> f64 {
+        if self.fraunhofer_valid && self.asnr.is_finite() { self.asnr } else { 0.0 }
+    }
+}
+
+/// The result of [`maximize_many`].
+#[derive(Clone, Debug)]
+pub struct ManyOptimum {
+    /// The ranges searched.
+    pub ranges: Vec<Range>,
+    /// Every point evaluated, in order: the start set, then COBYLA's.
+    pub history: Vec<Evaluated>,
+    /// The index in `history` of the best point (the highest score).
+    pub best: usize,
+    /// The index in `history` of the best start point (COBYLA's first point).
+    pub best_start: usize,
+    /// How COBYLA stopped.
+    pub stopped: String,
+    /// Whether it stopped by converging (not at the evaluation limit).
+    pub converged: bool,
+    /// Per key: whether the best value is within [`ManyOptimum::bound_tolerance`] of a bound.
+    pub at_bound: Vec<bool>,
+    /// The settings.
+    pub search: Search,
+}
+
+impl ManyOptimum {
+    /// A value within this fraction of its range from a bound is at the bound: 10 × xtol, at
+    /// least 1e-6 (COBYLA steps to a bound, but stops within about xtol of where it aims).
+    pub fn bound_tolerance(&self) -> f64 {
+        (10.0 * self.search.xtol).max(1e-6)
+    }
+
+    /// The best point.
+    pub fn best(&self) -> &Evaluated {
+        &self.history[self.best]
+    }
+
+    /// Evaluations before COBYLA's: the Halton set, and the scene's own values when inside the
+    /// bounds.
+    pub fn start_count(&self) -> usize {
+        self.history.iter().filter(|e| e.stage != "local").count()
+    }
+
+    /// Evaluations where the Fraunhofer model fails (counted as ASNR 0).
+    pub fn penalized(&self) -> usize {
+        self.history.iter().filter(|e| !e.fraunhofer_valid).count()
+    }
+}
+
+/// Maximizes `f` over the box of `ranges`: `f` at a Halton start set of [`Search::starts`] points
+/// (in parallel, collected in order), then COBYLA (Powell's linear-approximation trust region,
+/// which keeps to the bounds) from the best of them in coordinates scaled to [0, 1] per key,
+/// until its step is below `xtol` or the evaluations reach `max_evaluations`. A point where the
+/// Fraunhofer model fails scores 0 ([`Evaluated::score`]). Repeated points are evaluated once.
+/// Deterministic: the same ranges and settings give the same points.
+pub fn maximize_many(
+    ranges: &[Range],
+    search: &Search,
+    f: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
+    progress: &dyn crate::Progress,
+) -> Result<ManyOptimum> {
+    maximize_many_from(ranges, search, None, f, progress)
+}
+
+/// [`maximize_many`] with `initial`, the design's own values of the keys, among the start points
+/// when it lies inside the bounds (first, as stage `scene`): the search then never ends below
+/// the design it started from.
+pub fn maximize_many_from(
+    ranges: &[Range],
+    search: &Search,
+    initial: Option<&[f64]>,
+    f: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
+    progress: &dyn crate::Progress,
+) -> Result<ManyOptimum> {
+    use rayon::prelude::*;
+    let d = ranges.len();
+    if d == 0 || d > MAX_KEYS {
+        bail!("--over: {d} keys; expected 1 to {MAX_KEYS}");
+    }
+    let starts = if search.starts == 0 { Search::default_starts(d) } else { search.starts };
+    if search.max_evaluations <= starts + 1 {
+        bail!(
+            "--max-evaluations {}: expected more than the {starts} points of the start set (--starts) and the scene's own",
+            search.max_evaluations
+        );
+    }
+    let search = Search { starts, ..search.clone() };
+    let to_key = |u: &[f64]| -> Vec<f64> {
+        ranges.iter().zip(u).map(|(r, &u)| (r.lo + u.clamp(0.0, 1.0) * (r.hi - r.lo)).clamp(r.lo, r.hi)).collect()
+    };
+    progress.start(search.max_evaluations as u64);
+    let inside = initial.filter(|x| x.len() == d && ranges.iter().zip(*x).all(|(r, &v)| (r.lo..=r.hi).contains(&v)));
+    let start_points: Vec<Vec<f64>> = inside
+        .map(<[f64]>::to_vec)
+        .into_iter()
+        .chain((1..=starts as u64).map(|i| to_key(&PRIMES[..d].iter().map(|&b| halton(i, b)).collect::<Vec<_>>())))
+        .collect();
+    let stages = std::iter::repeat_n("scene", usize::from(inside.is_some())).chain(std::iter::repeat("start"));
+    let evaluated: Vec<Result<crate::objective::Value>> = start_points
+        .par_iter()
+        .map(|x| {
+            let v = f(x);
+            progress.advance(1);
+            v
+        })
+        .collect();
+    let mut history = Vec::with_capacity(search.max_evaluations);
+    for ((x, v), stage) in start_points.into_iter().zip(evaluated).zip(stages) {
+        let v = v.inspect_err(|_| progress.finish())?;
+        history.push(Evaluated { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage });
+    }
+    let first_local = history.len();
+    let best_of = |h: &[Evaluated]| {
+        h.iter().enumerate().fold(0, |best, (i, e)| if e.score() > h[best].score() { i } else { best })
+    };
+    let best_start = best_of(&history);
+    let x0: Vec<f64> =
+        ranges.iter().zip(&history[best_start].values).map(|(r, &x)| (x - r.lo) / (r.hi - r.lo)).collect();
+
+    let state = std::cell::RefCell::new((history, None::<anyhow::Error>));
+    let objective = |u: &[f64], _: &mut ()| -> f64 {
+        let x = to_key(u);
+        let mut s = state.borrow_mut();
+        if s.1.is_some() {
+            return 0.0;
+        }
+        if let Some(seen) = s.0.iter().find(|e| e.values == x) {
+            return -seen.score();
+        }
+        match f(&x) {
+            Ok(v) => {
+                progress.advance(1);
+                let e = Evaluated { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage: "local" };
+                let score = e.score();
+                s.0.push(e);
+                -score
+            }
+            Err(e) => {
+                s.1 = Some(e);
+                0.0
+            }
+        }
+    };
+    // the first step: about half the spacing of the start set, at most a quarter of each range
+    let rho = (0.5 * (starts as f64).powf(-1.0 / d as f64)).min(0.25).max(4.0 * search.xtol);
+    let tolerances = cobyla::StopTols { xtol_abs: vec![search.xtol; d], ..cobyla::StopTols::default() };
+    let no_constraints: Vec<&dyn cobyla::Func<()>> = Vec::new();
+    let outcome = cobyla::minimize(
+        objective,
+        &x0,
+        &vec![(0.0, 1.0); d],
+        &no_constraints,
+        (),
+        search.max_evaluations - first_local,
+        cobyla::RhoBeg::All(rho),
+        Some(tolerances),
+    );
+    progress.finish();
+    let (history, error) = state.into_inner();
+    if let Some(e) = error {
+        return Err(e);
+    }
+    let (stopped, converged) = match outcome {
+        Ok((cobyla::SuccessStatus::XtolReached | cobyla::SuccessStatus::Success, _, _)) => {
+            ("converged: COBYLA's step fell below --xtol × each key's range".to_owned(), true)
+        }
+        Ok((cobyla::SuccessStatus::MaxEvalReached, _, _)) => (
+            format!(
+                "not converged: stopped at --max-evaluations {} (raise it, or loosen --xtol)",
+                search.max_evaluations
+            ),
+            false,
+        ),
+        Ok((status, _, _)) => (format!("stopped: {status:?}"), true),
+        Err((cobyla::FailStatus::RoundoffLimited, _, _)) => {
+            ("converged to roundoff: the ASNR's own numerical noise limits the step".to_owned(), true)
+        }
+        Err((status, _, _)) => bail!("internal error: COBYLA failed ({status:?})"),
+    };
+    let best = best_of(&history);
+    if history[best].score() <= 0.0 {
+        bail!(
+            "no point of the search has a positive ASNR inside the Fraunhofer model (SI eq. S15): {} of {} points fail it; narrow the --over ranges to designs the model holds for",
+            history.iter().filter(|e| !e.fraunhofer_valid).count(),
+            history.len()
+        );
+    }
+    let mut optimum = ManyOptimum {
+        ranges: ranges.to_vec(),
+        history,
+        best,
+        best_start,
+        stopped,
+        converged,
+        at_bound: Vec::new(),
+        search,
+    };
+    let tol = optimum.bound_tolerance();
+    optimum.at_bound = ranges
+        .iter()
+        .zip(&optimum.history[best].values)
+        .map(|(r, &x)| x - r.lo <= tol * (r.hi - r.lo) || r.hi - x <= tol * (r.hi - r.lo))
+        .collect();
+    Ok(optimum)
+}
+
+/// A JSON object of keys to values, in the keys' order.
+struct KeyMap<'a, T: Serialize>(&'a [Range], Vec<T>);
+
+impl<T: Serialize> Serialize for KeyMap<'_, T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (r, v) in self.0.iter().zip(&self.1) {
+            map.serialize_entry(&r.key, v)?;
+        }
+        map.end()
+    }
+}
+
+/// The JSON report of a search over several keys (`asnr optimize --json` with two or more
+/// `--over`): `best` and `at_bound` are objects keyed by the dotted keys.
+pub fn many_json(
+    label: &str,
+    objective: crate::objective::Objective,
+    scene_value: &crate::objective::Value,
+    o: &ManyOptimum,
+) -> Result<String> {
+    #[derive(Serialize)]
+    struct Json<'a> {
+        scene: &'a str,
+        objective: &'static str,
+        method: &'static str,
+        best: KeyMap<'a, f64>,
+        asnr: f64,
+        fraunhofer_valid: bool,
+        at_bound: KeyMap<'a, bool>,
+        evaluations: usize,
+        start_points: usize,
+        stopped: &'a str,
+        converged: bool,
+        scene_asnr: f64,
+        scene_fraunhofer_valid: bool,
+        best_start: KeyMap<'a, f64>,
+        best_start_asnr: f64,
+        penalized: usize,
+        penalty: &'static str,
+        ranges: KeyMap<'a, [f64; 2]>,
+        xtol: f64,
+        bound_tolerance: f64,
+        history: &'a [Evaluated],
+    }
+    let best = o.best();
+    let json = Json {
+        scene: label,
+        objective: objective.name(),
+        method: METHOD_MANY,
+        best: KeyMap(&o.ranges, best.values.clone()),
+        asnr: best.asnr,
+        fraunhofer_valid: best.fraunhofer_valid,
+        at_bound: KeyMap(&o.ranges, o.at_bound.clone()),
+        evaluations: o.history.len(),
+        start_points: o.start_count(),
+        stopped: &o.stopped,
+        converged: o.converged,
+        scene_asnr: scene_value.value,
+        scene_fraunhofer_valid: scene_value.fraunhofer_valid,
+        best_start: KeyMap(&o.ranges, o.history[o.best_start].values.clone()),
+        best_start_asnr: o.history[o.best_start].asnr,
+        penalized: o.penalized(),
+        penalty: PENALTY,
+        ranges: KeyMap(&o.ranges, o.ranges.iter().map(|r| [r.lo, r.hi]).collect()),
+        xtol: o.search.xtol,
+        bound_tolerance: o.bound_tolerance(),
+        history: &o.history,
+    };
+    Ok(serde_json::to_string_pretty(&json)?)
+}
+
+/// How a search treats a point outside the Fraunhofer model.
+pub const PENALTY: &str = "points where the Fraunhofer model fails (SI eq. S15) are penalized: counted as ASNR 0";
+
+/// The text report of a search over several keys.
+pub fn many_report(
+    label: &str,
+    objective: crate::objective::Objective,
+    scene_value: &crate::objective::Value,
+    o: &ManyOptimum,
+) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let best = o.best();
+    let _ = writeln!(
+        s,
+        "{label}: the {} maximized over {} keys ({METHOD_MANY}, {} start points)",
+        objective.label(),
+        o.ranges.len(),
+        o.search.starts
+    );
+    let width = o.ranges.iter().map(|r| r.key.chars().count()).max().unwrap_or(3).max(3);
+    let _ = writeln!(s, "  {:<width$}  {:>14}  {:>14}  {:>14}", "key", "best", "LO", "HI");
+    for ((r, &x), &bound) in o.ranges.iter().zip(&best.values).zip(&o.at_bound) {
+        let side = if x - r.lo <= r.hi - x { "LO" } else { "HI" };
+        let _ = writeln!(
+            s,
+            "  {:<width$}  {:>14.6}  {:>14}  {:>14}{}",
+            r.key,
+            x,
+            r.lo,
+            r.hi,
+            if bound { format!("   AT THE BOUND {side}: the maximum may lie outside") } else { String::new() }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "{} {:.6} at the optimum{}   (the scene as given: {:.6}{}; the best start point: {:.6})",
+        objective.label(),
+        best.asnr,
+        if best.fraunhofer_valid { "" } else { " (outside the Fraunhofer model)" },
+        scene_value.value,
+        if scene_value.fraunhofer_valid { "" } else { ", outside the Fraunhofer model" },
+        o.history[o.best_start].asnr
+    );
+    let local = o.history.iter().filter(|e| e.stage == "local").count();
+    let own =
+        if o.history.first().is_some_and(|e| e.stage == "scene") { ", the scene's own values among them" } else { "" };
+    let _ = writeln!(
+        s,
+        "{} evaluations ({} start points{own} + {local} by COBYLA); {}",
+        o.history.len(),
+        o.start_count(),
+        o.stopped
+    );
+    let _ =
+        writeln!(s, "{} of {} evaluations outside the Fraunhofer model ({PENALTY})", o.penalized(), o.history.len());
+    s
+}
+
+/// The warnings of a search over several keys: each key whose best value is at a bound.
+pub fn many_bound_warnings(o: &ManyOptimum) -> Vec<String> {
+    let best = o.best();
+    o.ranges
+        .iter()
+        .zip(&best.values)
+        .zip(&o.at_bound)
+        .filter(|(_, b)| **b)
+        .map(|((r, &x), _)| {
+            let (end, value) = if x - r.lo <= r.hi - x { ("LO", r.lo) } else { ("HI", r.hi) };
+            format!(
+                "the best {} = {x} is at the bound {end} = {value} of --over {}={}:{}: the maximum may lie outside LO:HI; widen the range",
+                r.key, r.key, r.lo, r.hi
+            )
+        })
+        .collect()
+}
+
+/// Points per axis of [`landscape`].
+pub const LANDSCAPE_POINTS: usize = 21;
+
+/// The objective of a search over two keys on a [`LANDSCAPE_POINTS`]² grid of their ranges (the
+/// first key slowest, `scene::sweep::axis` values), penalized as the search scores it
+/// ([`Evaluated::score`]), in parallel and collected in order: the map behind the search's path.
+pub fn landscape(
+    source: &scene::Source,
+    overrides: &[String],
+    objective: crate::objective::Objective,
+    ranges: &[Range],
+    progress: &dyn crate::Progress,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    use rayon::prelude::*;
+    let [x, y] = ranges else { bail!("a landscape takes two keys, not {}", ranges.len()) };
+    let keys = [x.key.clone(), y.key.clone()];
+    let target = crate::objective::Target::new(source.clone(), overrides.to_vec(), objective, &keys)?;
+    let (xs, ys) = (scene::sweep::axis(x.lo, x.hi, LANDSCAPE_POINTS), scene::sweep::axis(y.lo, y.hi, LANDSCAPE_POINTS));
+    progress.start((xs.len() * ys.len()) as u64);
+    let z: Vec<Result<f64>> = (0..xs.len() * ys.len())
+        .into_par_iter()
+        .map(|i| {
+            let v = target.value(&keys, &[xs[i / ys.len()], ys[i % ys.len()]]);
+            progress.advance(1);
+            v.map(|v| {
+                Evaluated { values: Vec::new(), asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage: "" }.score()
+            })
+        })
+        .collect();
+    progress.finish();
+    Ok((xs, ys, z.into_iter().collect::<Result<_>>()?))
+}
+
+// ---- one search of a scene, as the command line and the Python package run it ----
+
+/// What [`search_scene`] found: one key's golden-section optimum, or several keys' COBYLA one.
+#[derive(Clone, Debug)]
+pub enum Found {
+    /// One key ([`maximize`]).
+    One(Optimum),
+    /// Several keys ([`maximize_many`]).
+    Many(ManyOptimum),
+}
+
+/// A search of a scene: the objective, its value at the scene as given, and the optimum.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// How the scene is named.
+    pub label: String,
+    /// What was maximized.
+    pub objective: crate::objective::Objective,
+    /// The objective at the scene as given (its own values of the keys).
+    pub scene_value: crate::objective::Value,
+    /// The optimum.
+    pub found: Found,
+}
+
+/// Refuses an `--xtol` outside [1e-12, 1): a finer bracket is below the float spacing.
+pub fn check_xtol(xtol: f64) -> Result<()> {
+    if !(1e-12..1.0).contains(&xtol) {
+        // as typed: 1e-17, not 0.00000000000000001
+        let xtol = if xtol != 0.0 && xtol.abs() < 1e-4 { format!("{xtol:e}") } else { format!("{xtol}") };
+        bail!(
+            "--xtol {xtol}: expected a fraction of the range in [1e-12, 1) (a finer bracket is below the float spacing of the range's values)"
+        );
+    }
+    Ok(())
+}
+
+/// Maximizes `objective` of the scene `source` with `overrides` over `ranges`: one key by
+/// [`maximize`] (a scan and golden section to `search.xtol` of the range, every point counted,
+/// as `asnr optimize` always did), several by [`maximize_many`]. The command line and the Python
+/// package's `asnr.optimize` both call it, so they print the same numbers.
+pub fn search_scene(
+    source: scene::Source,
+    overrides: Vec<String>,
+    ranges: &[Range],
+    objective: crate::objective::Objective,
+    search: &Search,
+    progress: &dyn crate::Progress,
+) -> Result<Outcome> {
+    check_xtol(search.xtol)?;
+    check_over_keys(&overrides, ranges)?;
+    let keys: Vec<String> = ranges.iter().map(|r| r.key.clone()).collect();
+    let label = source.label().to_owned();
+    let target = crate::objective::Target::new(source, overrides, objective, &keys)?;
+    let scene_value = target.value(&[], &[])?;
+    let found = if let [range] = ranges {
+        if search.starts != 0 || search.max_evaluations != Search::DEFAULT_MAX_EVALUATIONS {
+            bail!(
+                "--starts and --max-evaluations apply to a search over several keys; one key is searched by a {SCAN_POINTS}-point scan and golden section"
+            );
+        }
+        let mut best = maximize(range, search.xtol * (range.hi - range.lo), |x| {
+            Ok(target.value(std::slice::from_ref(&range.key), &[x])?.value)
+        })?;
+        best.objective = objective;
+        Found::One(best)
+    } else {
+        // the design's own values of the keys, where the scene has them (a key it lacks is set by
+        // the search alone)
+        let initial: Option<Vec<f64>> =
+            keys.iter().map(|k| crate::objective::number_at(target.source(), target.overrides(), k).ok()).collect();
+        Found::Many(maximize_many_from(ranges, search, initial.as_deref(), &|x| target.value(&keys, x), progress)?)
+    };
+    Ok(Outcome { label, objective, scene_value, found })
+}
+
+/// The JSON of a search: one key's as `asnr optimize --json` always printed it, several keys'
+/// by [`many_json`].
+pub fn outcome_json(o: &Outcome) -> Result<String> {
+    match &o.found {
+        Found::One(best) => Ok(serde_json::to_string_pretty(best)?),
+        Found::Many(many) => many_json(&o.label, o.objective, &o.scene_value, many),
+    }
+}
+
+/// The text report of a search.
+pub fn outcome_report(o: &Outcome) -> String {
+    match &o.found {
+        Found::One(best) => report(best),
+        Found::Many(many) => many_report(&o.label, o.objective, &o.scene_value, many),
+    }
+}
+
+/// The warnings of a search: each key whose best value is at a bound.
+pub fn outcome_warnings(o: &Outcome) -> Vec<String> {
+    match &o.found {
+        Found::One(best) => bound_warning(best).into_iter().collect(),
+        Found::Many(many) => many_bound_warnings(many),
+    }
 }
 
 #[cfg(test)]
@@ -268,5 +828,105 @@ mod tests {
         assert!(parse_range("a=1:x", false).unwrap_err().to_string().contains("HI `x` is not a finite number"));
         assert!(parse_range("a", false).unwrap_err().to_string().contains("expected KEY=LO:HI"));
         assert!(parse_range("a=-1e308:1e308", false).unwrap_err().to_string().contains("overflows"));
+    }
+
+    fn value(v: f64) -> Result<crate::objective::Value> {
+        Ok(crate::objective::Value { value: v, fraunhofer_valid: true })
+    }
+
+    fn ranges(bounds: &[(f64, f64)]) -> Vec<Range> {
+        bounds.iter().enumerate().map(|(i, &(lo, hi))| Range { key: format!("k{i}"), lo, hi, points: None }).collect()
+    }
+
+    const SEARCH: Search = Search { xtol: 1e-6, starts: 0, max_evaluations: 2000 };
+
+    /// A quadratic bowl in three keys: the optimum to about xtol, inside the bounds, converged.
+    #[test]
+    fn several_keys_find_the_maximum_of_a_quadratic() {
+        let f = |x: &[f64]| value(5.0 - (x[0] - 1.0).powi(2) - 2.0 * (x[1] + 0.5).powi(2) - 0.5 * (x[2] - 3.0).powi(2));
+        let o = maximize_many(&ranges(&[(-5.0, 5.0), (-5.0, 5.0), (0.0, 10.0)]), &SEARCH, &f, &()).unwrap();
+        let best = &o.best().values;
+        for (x, want, range) in [(best[0], 1.0, 10.0), (best[1], -0.5, 10.0), (best[2], 3.0, 10.0)] {
+            assert!((x - want).abs() < 1e-3 * range, "{best:?}");
+        }
+        assert!(o.converged && o.at_bound.iter().all(|b| !b), "{} {:?}", o.stopped, o.at_bound);
+        assert_eq!(o.history.iter().filter(|e| e.stage == "start").count(), 30);
+        assert!(o.history.len() < 400, "{}", o.history.len());
+    }
+
+    /// Two peaks (the higher of the two bumps, so each peak is exactly where its bump is): the
+    /// start set finds the basin of the higher one, narrower and farther from the centre, which a
+    /// local search from the centre would miss.
+    #[test]
+    fn the_start_set_finds_the_higher_of_two_peaks() {
+        let f = |x: &[f64]| {
+            let bump = |cx: f64, cy: f64, w: f64| (-((x[0] - cx).powi(2) + (x[1] - cy).powi(2)) / w).exp();
+            value((2.0 * bump(0.8, 0.15, 0.01)).max(bump(0.45, 0.55, 0.2)))
+        };
+        let o = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &SEARCH, &f, &()).unwrap();
+        let best = &o.best().values;
+        assert!((best[0] - 0.8).abs() < 1e-4 && (best[1] - 0.15).abs() < 1e-4, "{best:?}");
+        assert!((o.best().asnr - 2.0).abs() < 1e-6, "{}", o.best().asnr);
+    }
+
+    /// A maximum on a bound is found there and flagged, key by key.
+    #[test]
+    fn a_maximum_on_a_bound_is_flagged() {
+        let f = |x: &[f64]| value(x[0] - (x[1] - 0.3).powi(2));
+        let o = maximize_many(&ranges(&[(1.0, 2.0), (0.0, 1.0)]), &SEARCH, &f, &()).unwrap();
+        assert_eq!(o.at_bound, vec![true, false]);
+        assert!((o.best().values[0] - 2.0).abs() < 1e-5, "{:?}", o.best().values);
+        let w = many_bound_warnings(&o);
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("the best k0 = ") && w[0].contains("at the bound HI = 2"), "{w:?}");
+        let scene = crate::objective::Value { value: 1.0, fraunhofer_valid: true };
+        let text = many_report("toy", crate::objective::Objective::Asnr, &scene, &o);
+        assert!(text.contains("AT THE BOUND HI"), "{text}");
+        let json: serde_json::Value =
+            serde_json::from_str(&many_json("toy", crate::objective::Objective::Asnr, &scene, &o).unwrap()).unwrap();
+        assert_eq!(json["at_bound"]["k0"], true);
+        assert_eq!(json["at_bound"]["k1"], false);
+        assert!((json["best"]["k1"].as_f64().unwrap() - 0.3).abs() < 1e-4, "{json}");
+        assert_eq!(json["evaluations"].as_u64().unwrap() as usize, o.history.len());
+    }
+
+    /// Points outside the Fraunhofer model score 0: the higher ASNR beyond x = 0.5 is not taken.
+    #[test]
+    fn points_outside_the_fraunhofer_model_are_penalized() {
+        let f = |x: &[f64]| Ok(crate::objective::Value { value: 1.0 + x[0] + x[1], fraunhofer_valid: x[0] <= 0.5 });
+        let o = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &SEARCH, &f, &()).unwrap();
+        assert!(o.best().fraunhofer_valid && o.best().values[0] <= 0.5, "{:?}", o.best());
+        assert!((o.best().values[0] - 0.5).abs() < 1e-3, "{:?}", o.best().values);
+        assert!(o.penalized() > 0);
+        let all_invalid = |_: &[f64]| Ok(crate::objective::Value { value: 1.0, fraunhofer_valid: false });
+        let e = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &SEARCH, &all_invalid, &()).unwrap_err();
+        assert!(e.to_string().contains("inside the Fraunhofer model"), "{e}");
+    }
+
+    /// An evaluation's error stops the search and is returned, the point named by the caller.
+    #[test]
+    fn an_evaluation_error_is_returned() {
+        let f = |x: &[f64]| if x[0] > 0.9 { Err(anyhow::anyhow!("at k0={}: bad", x[0])) } else { value(x[0]) };
+        let e = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &SEARCH, &f, &()).unwrap_err();
+        assert!(e.to_string().contains(": bad"), "{e}");
+        let few = Search { max_evaluations: 21, ..SEARCH };
+        let e = maximize_many(&ranges(&[(0.0, 1.0), (0.0, 1.0)]), &few, &f, &()).unwrap_err();
+        assert!(
+            e.to_string().contains("--max-evaluations 21: expected more than the 20 points of the start set"),
+            "{e}"
+        );
+    }
+
+    /// The same search twice gives the same points, bit for bit.
+    #[test]
+    fn a_search_is_deterministic() {
+        let f = |x: &[f64]| value((3.0 * x[0]).sin() * (2.0 * x[1]).cos());
+        let run = || maximize_many(&ranges(&[(0.0, 2.0), (-1.0, 1.0)]), &SEARCH, &f, &()).unwrap();
+        let (a, b) = (run(), run());
+        let bits =
+            |o: &ManyOptimum| o.history.iter().flat_map(|e| e.values.clone()).map(f64::to_bits).collect::<Vec<_>>();
+        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(halton(1, 2), 0.5);
+        assert!((halton(5, 3) - 7.0 / 9.0).abs() < 1e-15);
     }
 }

@@ -31,6 +31,7 @@
 //! numpy for the baseline (`cargo xtask accuracy` builds the one and prepares the other); the
 //! map or the numpy rows are skipped, and the report says so, without them.
 
+mod design;
 mod iris;
 mod kernels;
 mod map;
@@ -234,6 +235,8 @@ struct Context {
     map: Option<map::Map>,
     /// The 384 × 384 × 45 PSF stack, when the `asnr` binary was given.
     psf_stack: Option<psf_stack::PsfBench>,
+    /// The design search and tolerance run, when the `asnr` binary was given (not with --quick).
+    design: Option<design::DesignBench>,
     /// The load average (1, 5, 15 min) at the start and at the end of the run.
     load: (String, String),
 }
@@ -335,6 +338,7 @@ fn main() {
         notes: tolerance::Notes::new(),
         map: None,
         psf_stack: None,
+        design: None,
         load: (String::new(), String::new()),
     };
     if designs_only {
@@ -480,6 +484,9 @@ fn main() {
         m
     });
     context.psf_stack = asnr.as_deref().and_then(|bin| psf_stack::measure(bin, &out, grid.map_runs));
+    if !quick {
+        context.design = asnr.as_deref().and_then(|bin| design::measure(bin, &out));
+    }
     let kernel_rows = kernels::measure(quick);
     context.load = (load_at_start, load_average());
     let md = report::markdown(&rows, &kernel_rows, &context);

@@ -1,0 +1,593 @@
+//! `asnr tolerance`: how a design's ASNR survives fabrication, by Monte Carlo over distributions
+//! of its keys (as Zemax's tolerancing does for a lens prescription).
+//!
+//! Each `--vary KEY=DIST` draws the key around its nominal value (the scene's, every default
+//! filled in): `normal:S` (σ = S in the key's units), `normal:S%` (σ = S % of the nominal
+//! value) or `uniform:LO:HI` (the key's value uniform in [LO, HI]). All draws are made first, in
+//! sample order, from one `rand_pcg::Pcg64` seeded by `--seed` ([`draw`]); the samples are then
+//! evaluated in parallel and collected in order, so the results depend on the seed alone, not on
+//! the number of threads. The report: the nominal ASNR, the samples' mean, standard deviation
+//! and percentiles, and each key's sensitivity, the change of the ASNR per σ of the key (the
+//! coefficients of the least-squares fit of the ASNR to the keys' standardized deviations:
+//! exact for an ASNR linear in the keys).
+
+use std::fmt::Write as _;
+
+use anyhow::{Context, Result, bail};
+use rand::SeedableRng;
+use rand_distr::{Distribution as _, StandardNormal, Uniform};
+use rand_pcg::Pcg64;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::Progress;
+use crate::objective::{Target, Value};
+
+/// The most samples one run draws.
+pub const MAX_SAMPLES: usize = 1_000_000;
+
+/// The default time budget of a run, seconds.
+pub const DEFAULT_BUDGET_S: f64 = 600.0;
+
+/// How a key is drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Distribution {
+    /// Normal around the nominal value with standard deviation `sigma` (in the key's units; a
+    /// percentage of the nominal value when `relative`).
+    Normal {
+        /// The standard deviation, or its percentage of the nominal value.
+        sigma: f64,
+        /// Whether `sigma` is a percentage of the nominal value.
+        relative: bool,
+    },
+    /// Uniform in `[lo, hi]` (the key's values).
+    Uniform {
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+    },
+}
+
+/// A `--vary KEY=DIST`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vary {
+    /// Dotted scene key.
+    pub key: String,
+    /// Its distribution.
+    pub distribution: Distribution,
+    /// The distribution as given (`normal:2%`).
+    pub text: String,
+}
+
+/// The forms `--vary` takes.
+const FORMS: &str =
+    "KEY=normal:SIGMA (in the key's units), KEY=normal:SIGMA% (of the key's value) or KEY=uniform:LO:HI";
+
+/// Parses `KEY=normal:S`, `KEY=normal:S%` or `KEY=uniform:LO:HI`.
+pub fn parse_vary(arg: &str) -> Result<Vary> {
+    let Some((key, spec)) = arg.split_once('=') else {
+        bail!("--vary {arg}: expected {FORMS}, e.g. --vary lens.f_number=normal:1%");
+    };
+    let key = key.trim();
+    if key.is_empty() {
+        bail!("--vary {arg}: no key; expected {FORMS}");
+    }
+    let parts: Vec<&str> = spec.trim().split(':').collect();
+    let num = |s: &str, what: &str| -> Result<f64> {
+        s.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .with_context(|| format!("--vary {arg}: {what} `{s}` is not a finite number"))
+    };
+    let distribution = match parts.as_slice() {
+        ["normal", sigma] => {
+            let (text, relative) = match sigma.trim().strip_suffix('%') {
+                Some(s) => (s, true),
+                None => (*sigma, false),
+            };
+            let sigma = num(text, "SIGMA")?;
+            if sigma <= 0.0 {
+                bail!("--vary {arg}: SIGMA = {sigma} must be above 0");
+            }
+            Distribution::Normal { sigma, relative }
+        }
+        ["uniform", lo, hi] => {
+            let (lo, hi) = (num(lo, "LO")?, num(hi, "HI")?);
+            if lo >= hi || !(hi - lo).is_finite() {
+                bail!("--vary {arg}: LO = {lo} must be below HI = {hi}");
+            }
+            Distribution::Uniform { lo, hi }
+        }
+        [name, ..] if !["normal", "uniform"].contains(name) => {
+            bail!("--vary {arg}: unknown distribution `{name}`; expected {FORMS}")
+        }
+        _ => bail!("--vary {arg}: expected {FORMS}"),
+    };
+    Ok(Vary { key: key.to_owned(), distribution, text: spec.trim().to_owned() })
+}
+
+/// A key's distribution around its nominal value.
+#[derive(Clone, Debug, Serialize)]
+pub struct Resolved {
+    /// Dotted scene key.
+    pub key: String,
+    /// The distribution as given.
+    pub distribution: String,
+    /// The key's value in the scene.
+    pub nominal: f64,
+    /// The standard deviation of its draws, in the key's units (`(HI − LO)/√12` for uniform).
+    pub sigma: f64,
+    /// The mean of its draws (the nominal value for a normal, the centre for a uniform).
+    #[serde(skip)]
+    pub mean: f64,
+    #[serde(skip)]
+    distribution_kind: Distribution,
+}
+
+impl Resolved {
+    /// `vary` around `nominal`: refused when a relative σ meets a nominal value of 0.
+    pub fn new(vary: &Vary, nominal: f64) -> Result<Resolved> {
+        let (sigma, mean) = match vary.distribution {
+            Distribution::Normal { sigma, relative: false } => (sigma, nominal),
+            Distribution::Normal { sigma, relative: true } => {
+                if nominal == 0.0 {
+                    bail!(
+                        "--vary {}={}: a relative σ of a key whose value is 0; give σ in the key's units (normal:SIGMA)",
+                        vary.key,
+                        vary.text
+                    );
+                }
+                (sigma / 100.0 * nominal.abs(), nominal)
+            }
+            Distribution::Uniform { lo, hi } => ((hi - lo) / 12f64.sqrt(), 0.5 * (lo + hi)),
+        };
+        Ok(Resolved {
+            key: vary.key.clone(),
+            distribution: vary.text.clone(),
+            nominal,
+            sigma,
+            mean,
+            distribution_kind: vary.distribution.clone(),
+        })
+    }
+}
+
+/// `n` samples of the keys, sample-major: all drawn in order from one `Pcg64` seeded by `seed`
+/// (per sample, each key in the given order: a standard normal or a uniform draw).
+pub fn draw(keys: &[Resolved], n: usize, seed: u64) -> Result<Vec<Vec<f64>>> {
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let uniforms: Vec<Option<Uniform<f64>>> = keys
+        .iter()
+        .map(|k| match k.distribution_kind {
+            Distribution::Uniform { lo, hi } => {
+                Uniform::new_inclusive(lo, hi).map(Some).map_err(|e| anyhow::anyhow!("--vary {}: {e}", k.key))
+            }
+            Distribution::Normal { .. } => Ok(None),
+        })
+        .collect::<Result<_>>()?;
+    Ok((0..n)
+        .map(|_| {
+            keys.iter()
+                .zip(&uniforms)
+                .map(|(k, u)| match u {
+                    Some(u) => u.sample(&mut rng),
+                    None => {
+                        let z: f64 = StandardNormal.sample(&mut rng);
+                        k.nominal + k.sigma * z
+                    }
+                })
+                .collect()
+        })
+        .collect())
+}
+
+/// Mean, sample standard deviation and percentiles of a set of values.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Statistics {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (n − 1).
+    pub std: f64,
+    /// 5th percentile (linear interpolation between order statistics, numpy's default).
+    pub p5: f64,
+    /// Median.
+    pub p50: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// The `p`-th percentile (0–100) of sorted `values`: linear interpolation between the order
+/// statistics at rank `p/100 (n − 1)` (Hyndman & Fan type 7, numpy's default).
+pub fn percentile(sorted: &[f64], p: f64) -> f64 {
+    let h = p / 100.0 * (sorted.len() - 1) as f64;
+    let lo = h.floor() as usize;
+    let hi = (lo + 1).min(sorted.len() - 1);
+    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+}
+
+/// The statistics of `values` (at least one).
+pub fn statistics(values: &[f64]) -> Statistics {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = if values.len() > 1 { values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) } else { 0.0 };
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    Statistics {
+        mean,
+        std: var.sqrt(),
+        p5: percentile(&sorted, 5.0),
+        p50: percentile(&sorted, 50.0),
+        p95: percentile(&sorted, 95.0),
+        min: sorted[0],
+        max: sorted[sorted.len() - 1],
+    }
+}
+
+/// Each key's sensitivity: the coefficient `b_k` of the least-squares fit
+/// `y ≈ b_0 + Σ b_k (x_k − mean_k)/σ_k` over the samples (the normal equations, solved by LU):
+/// the change of `y` per σ of key `k`. `None` (not determined) with fewer samples than keys + 2.
+pub fn sensitivities(keys: &[Resolved], samples: &[Vec<f64>], y: &[f64]) -> Vec<Option<f64>> {
+    let k = keys.len();
+    if samples.len() < k + 2 {
+        return vec![None; k];
+    }
+    let mut ata = nalgebra::DMatrix::<f64>::zeros(k + 1, k + 1);
+    let mut aty = nalgebra::DVector::<f64>::zeros(k + 1);
+    let mut row = vec![1.0; k + 1];
+    for (x, &y) in samples.iter().zip(y) {
+        for (j, key) in keys.iter().enumerate() {
+            row[j + 1] = (x[j] - key.mean) / key.sigma;
+        }
+        for a in 0..=k {
+            aty[a] += row[a] * y;
+            for b in 0..=k {
+                ata[(a, b)] += row[a] * row[b];
+            }
+        }
+    }
+    match ata.lu().solve(&aty) {
+        Some(b) => (1..=k).map(|j| Some(b[j]).filter(|v| v.is_finite())).collect(),
+        None => vec![None; k],
+    }
+}
+
+/// One sample.
+#[derive(Clone, Debug, Serialize)]
+pub struct Sample {
+    /// The keys' values.
+    pub values: Vec<f64>,
+    /// The objective there.
+    pub asnr: f64,
+    /// Whether the Fraunhofer model holds there.
+    pub fraunhofer_valid: bool,
+}
+
+/// The result of a tolerance run.
+#[derive(Clone, Debug)]
+pub struct Tolerance {
+    /// How the scene is named.
+    pub label: String,
+    /// What was sampled.
+    pub objective: crate::objective::Objective,
+    /// The keys, their nominal values and σ.
+    pub keys: Vec<Resolved>,
+    /// The seed.
+    pub seed: u64,
+    /// The objective at the nominal scene.
+    pub nominal: Value,
+    /// The samples, in order.
+    pub samples: Vec<Sample>,
+    /// The samples' statistics (all samples, Fraunhofer-valid or not).
+    pub statistics: Statistics,
+    /// Per key: the change of the objective per σ of the key.
+    pub sensitivity: Vec<Option<f64>>,
+}
+
+impl Tolerance {
+    /// Samples outside the Fraunhofer model (kept in the statistics, and counted).
+    pub fn invalid(&self) -> usize {
+        self.samples.iter().filter(|s| !s.fraunhofer_valid).count()
+    }
+}
+
+/// The samples of `f` at `n` draws of `keys` from `seed` ([`draw`]), evaluated in parallel
+/// (on the current rayon pool) and collected in order, with their statistics and sensitivities.
+pub fn sample(
+    keys: &[Resolved],
+    n: usize,
+    seed: u64,
+    f: &(dyn Fn(&[f64]) -> Result<Value> + Sync),
+    progress: &dyn Progress,
+) -> Result<(Vec<Sample>, Statistics, Vec<Option<f64>>)> {
+    if n == 0 || n > MAX_SAMPLES {
+        bail!("--samples {n}: expected 1 to {MAX_SAMPLES}");
+    }
+    let draws = draw(keys, n, seed)?;
+    progress.start(n as u64);
+    let values: Vec<Result<Value>> = draws
+        .par_iter()
+        .map(|x| {
+            let v = f(x);
+            progress.advance(1);
+            v
+        })
+        .collect();
+    progress.finish();
+    let mut samples = Vec::with_capacity(n);
+    for (i, (x, v)) in draws.into_iter().zip(values).enumerate() {
+        let v = v.with_context(|| format!("sample {i}"))?;
+        samples.push(Sample { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid });
+    }
+    let y: Vec<f64> = samples.iter().map(|s| s.asnr).collect();
+    let stats = statistics(&y);
+    let xs: Vec<Vec<f64>> = samples.iter().map(|s| s.values.clone()).collect();
+    let sensitivity = sensitivities(keys, &xs, &y);
+    Ok((samples, stats, sensitivity))
+}
+
+/// Refuses a run whose estimated time, `n` evaluations of `seconds_each` on `threads` threads,
+/// is beyond `budget_s` seconds.
+pub fn check_budget(n: usize, seconds_each: f64, threads: usize, budget_s: f64) -> Result<()> {
+    let estimate = seconds_each * n as f64 / threads.max(1) as f64;
+    if estimate > budget_s {
+        bail!(
+            "--samples {n}: about {estimate:.0} s of work ({n} samples × {:.3} ms per evaluation, the nominal scene's, on {threads} threads), beyond the --budget of {budget_s} s; lower --samples, loosen --tolerance, or raise --budget",
+            seconds_each * 1e3
+        );
+    }
+    Ok(())
+}
+
+/// Settings of a tolerance run.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    /// Samples.
+    pub samples: usize,
+    /// The seed of the draws.
+    pub seed: u64,
+    /// The most seconds the run may take (estimated from the nominal evaluation's time).
+    pub budget_s: f64,
+    /// Worker threads (0: all cores).
+    pub threads: usize,
+}
+
+/// A tolerance run of `target` (its objective sampled) with `varies`: checked (each key once,
+/// not also overridden, numeric in the scene), the nominal scene evaluated and timed, the time
+/// budget checked, then [`sample`]. The command line and the Python package's `asnr.tolerance`
+/// both call it.
+pub fn tolerance(target: &Target, varies: &[Vary], settings: &Settings, progress: &dyn Progress) -> Result<Tolerance> {
+    if varies.is_empty() {
+        bail!("--vary: no key to vary; expected at least one {FORMS}");
+    }
+    if settings.samples == 0 || settings.samples > MAX_SAMPLES {
+        bail!("--samples {}: expected 1 to {MAX_SAMPLES}", settings.samples);
+    }
+    if !(settings.budget_s.is_finite() && settings.budget_s > 0.0) {
+        bail!("--budget {}: expected a time in seconds above 0", settings.budget_s);
+    }
+    for (i, v) in varies.iter().enumerate() {
+        if varies[..i].iter().any(|e| e.key == v.key) {
+            bail!("--vary {}: the key is given to --vary twice; give each key once", v.key);
+        }
+        if let Some(s) = target.overrides().iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == v.key)) {
+            bail!(
+                "--vary {}: the key is also given by --set {s}; --vary draws it around the scene's value: give it in one place",
+                v.key
+            );
+        }
+    }
+    let keys: Vec<Resolved> = varies
+        .iter()
+        .map(|v| {
+            let nominal = crate::objective::number_at(target.source(), target.overrides(), &v.key)
+                .with_context(|| format!("--vary {}={}", v.key, v.text))?;
+            Resolved::new(v, nominal)
+        })
+        .collect::<Result<_>>()?;
+    let names: Vec<String> = keys.iter().map(|k| k.key.clone()).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build()
+        .map_err(|e| anyhow::anyhow!("--threads {}: {e}", settings.threads))?;
+    let started = std::time::Instant::now();
+    let nominal = target.value(&[], &[])?;
+    check_budget(settings.samples, started.elapsed().as_secs_f64(), pool.current_num_threads(), settings.budget_s)?;
+    let (samples, statistics, sensitivity) =
+        pool.install(|| sample(&keys, settings.samples, settings.seed, &|x| target.value(&names, x), progress))?;
+    Ok(Tolerance {
+        label: target.source().label().to_owned(),
+        objective: target.objective(),
+        keys,
+        seed: settings.seed,
+        nominal,
+        samples,
+        statistics,
+        sensitivity,
+    })
+}
+
+/// The JSON report (without the samples: [`csv()`] has them).
+pub fn json(t: &Tolerance) -> Result<String> {
+    #[derive(Serialize)]
+    struct Key<'a> {
+        #[serde(flatten)]
+        key: &'a Resolved,
+        /// The change of the objective per σ.
+        sensitivity_per_sigma: Option<f64>,
+    }
+    #[derive(Serialize)]
+    struct Json<'a> {
+        scene: &'a str,
+        objective: &'static str,
+        samples: usize,
+        seed: u64,
+        nominal_asnr: f64,
+        nominal_fraunhofer_valid: bool,
+        mean: f64,
+        std: f64,
+        p5: f64,
+        p50: f64,
+        p95: f64,
+        min: f64,
+        max: f64,
+        fraunhofer_invalid_samples: usize,
+        keys: Vec<Key<'a>>,
+        sensitivity: &'static str,
+    }
+    let s = &t.statistics;
+    let json = Json {
+        scene: &t.label,
+        objective: t.objective.name(),
+        samples: t.samples.len(),
+        seed: t.seed,
+        nominal_asnr: t.nominal.value,
+        nominal_fraunhofer_valid: t.nominal.fraunhofer_valid,
+        mean: s.mean,
+        std: s.std,
+        p5: s.p5,
+        p50: s.p50,
+        p95: s.p95,
+        min: s.min,
+        max: s.max,
+        fraunhofer_invalid_samples: t.invalid(),
+        keys: t.keys.iter().zip(&t.sensitivity).map(|(key, s)| Key { key, sensitivity_per_sigma: *s }).collect(),
+        sensitivity: SENSITIVITY,
+    };
+    Ok(serde_json::to_string_pretty(&json)?)
+}
+
+/// What the sensitivity is.
+pub const SENSITIVITY: &str = "the change of the ASNR per σ of the key: the least-squares fit of the samples' ASNR to the keys' standardized deviations";
+
+/// The samples as CSV: `sample`, one column per key, `asnr`, `fraunhofer_valid`.
+pub fn csv(t: &Tolerance) -> String {
+    let mut s = String::from("sample");
+    for k in &t.keys {
+        s.push(',');
+        s.push_str(&scene::sweep::csv_field(&k.key));
+    }
+    s.push_str(",asnr,fraunhofer_valid\n");
+    for (i, sample) in t.samples.iter().enumerate() {
+        let _ = write!(s, "{i}");
+        for v in &sample.values {
+            let _ = write!(s, ",{v}");
+        }
+        let _ = writeln!(s, ",{},{}", sample.asnr, sample.fraunhofer_valid);
+    }
+    s
+}
+
+/// The text report.
+pub fn report(t: &Tolerance) -> String {
+    let s = &t.statistics;
+    let mut out = String::new();
+    let label = t.objective.label();
+    let _ = writeln!(out, "{}: tolerance of the {label}, {} samples (seed {})", t.label, t.samples.len(), t.seed);
+    let _ = writeln!(out, "  nominal          {:.6}", t.nominal.value);
+    let _ = writeln!(out, "  mean ± std       {:.6} ± {:.6}", s.mean, s.std);
+    let _ = writeln!(out, "  percentiles      5 %: {:.6}   50 %: {:.6}   95 %: {:.6}", s.p5, s.p50, s.p95);
+    let _ = writeln!(out, "  range            {:.6} … {:.6}", s.min, s.max);
+    let width = t.keys.iter().map(|k| k.key.chars().count()).max().unwrap_or(3).max(3);
+    let _ =
+        writeln!(out, "  {:<width$}  {:>14}  {:>12}  {:>14}  {:>14}", "key", "distribution", "nominal", "σ", "Δ per σ");
+    for (k, sens) in t.keys.iter().zip(&t.sensitivity) {
+        let sens = sens.map_or("–".to_owned(), |v| format!("{v:+.6}"));
+        let _ = writeln!(
+            out,
+            "  {:<width$}  {:>14}  {:>12}  {:>14.6e}  {:>14}",
+            k.key, k.distribution, k.nominal, k.sigma, sens
+        );
+    }
+    let _ = writeln!(out, "  (Δ per σ: {SENSITIVITY})");
+    if t.invalid() > 0 {
+        let _ = writeln!(
+            out,
+            "  {} of {} samples outside the Fraunhofer model (SI eq. S15), kept in the statistics",
+            t.invalid(),
+            t.samples.len()
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn resolved(arg: &str, nominal: f64) -> Resolved {
+        Resolved::new(&parse_vary(arg).unwrap(), nominal).unwrap()
+    }
+
+    /// A model linear in its keys, `y = 3 + 2 x1 − 0.5 x2`, x1 normal (1, 0.1), x2 uniform on
+    /// [0, 2]: the samples' mean and σ match the analytic 4.5 and √(2²·0.1² + 0.5²·2²/12) within
+    /// five standard errors, and the sensitivities are the exact 2·0.1 and −0.5·2/√12.
+    #[test]
+    fn a_linear_model_matches_the_analytic_mean_and_sigma() {
+        let keys = [resolved("x1=normal:10%", 1.0), resolved("x2=uniform:0:2", 1.0)];
+        let f = |x: &[f64]| Ok(Value { value: 3.0 + 2.0 * x[0] - 0.5 * x[1], fraunhofer_valid: true });
+        let n = 40_000;
+        let (samples, stats, sens) = sample(&keys, n, 7, &f, &()).unwrap();
+        assert_eq!(samples.len(), n);
+        let sigma = (4.0 * 0.01 + 0.25 * 4.0 / 12.0_f64).sqrt();
+        let se_mean = sigma / (n as f64).sqrt();
+        assert!((stats.mean - 4.5).abs() < 5.0 * se_mean, "{} vs 4.5 ± {se_mean}", stats.mean);
+        // σ's standard error is at most σ/√(2n)·√(1 + kurtosis excess/2) ≤ σ/√n here
+        assert!((stats.std - sigma).abs() < 5.0 * sigma / (n as f64).sqrt(), "{} vs {sigma}", stats.std);
+        assert!((sens[0].unwrap() - 0.2).abs() < 1e-9, "{sens:?}");
+        assert!((sens[1].unwrap() + 0.5 * 2.0 / 12f64.sqrt()).abs() < 1e-9, "{sens:?}");
+        assert!(stats.p5 < stats.p50 && stats.p50 < stats.p95);
+    }
+
+    /// One normal key: the percentiles of the linear model are the normal's, mean ∓ 1.645 σ.
+    #[test]
+    fn percentiles_of_a_normal() {
+        let keys = [resolved("x=normal:0.5", 2.0)];
+        let f = |x: &[f64]| Ok(Value { value: 10.0 - 4.0 * x[0], fraunhofer_valid: true });
+        let (_, stats, _) = sample(&keys, 40_000, 3, &f, &()).unwrap();
+        // mean 2, σ 2; the 5th and 95th percentiles at 2 ∓ 1.6449 · 2, to a few standard errors
+        assert!((stats.p5 - (2.0 - 1.644_854 * 2.0)).abs() < 0.05, "{stats:?}");
+        assert!((stats.p95 - (2.0 + 1.644_854 * 2.0)).abs() < 0.05, "{stats:?}");
+        assert!((stats.p50 - 2.0).abs() < 0.05, "{stats:?}");
+        assert_eq!(percentile(&[1.0, 2.0, 3.0, 4.0], 50.0), 2.5);
+        assert_eq!(percentile(&[1.0, 2.0, 3.0, 4.0], 100.0), 4.0);
+    }
+
+    /// The draws depend on the seed alone: the same seed, the same bits, on 1 or 2 threads.
+    #[test]
+    fn seeds_reproduce_the_samples_bit_for_bit() {
+        let keys = [resolved("a=normal:1%", 5.0), resolved("b=uniform:-1:1", 0.0)];
+        let f = |x: &[f64]| Ok(Value { value: x[0] * x[1].cos(), fraunhofer_valid: true });
+        let run = |threads: usize, seed: u64| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (s, _, _) = pool.install(|| sample(&keys, 500, seed, &f, &())).unwrap();
+            s.iter().flat_map(|s| s.values.iter().chain([&s.asnr]).map(|v| v.to_bits())).collect::<Vec<_>>()
+        };
+        assert_eq!(run(1, 11), run(2, 11));
+        assert_ne!(run(1, 11), run(1, 12));
+    }
+
+    #[test]
+    fn bad_distributions_are_refused() {
+        let e = |arg: &str| parse_vary(arg).unwrap_err().to_string();
+        assert!(e("k=lognormal:1").contains("unknown distribution `lognormal`"), "{}", e("k=lognormal:1"));
+        assert!(e("k=normal:0").contains("SIGMA = 0 must be above 0"));
+        assert!(e("k=normal:x%").contains("SIGMA `x` is not a finite number"));
+        assert!(e("k=uniform:2:1").contains("LO = 2 must be below HI = 1"));
+        assert!(e("k=uniform:1").contains("expected KEY=normal:SIGMA"));
+        assert!(e("k").contains("expected KEY=normal:SIGMA"));
+        let zero = Resolved::new(&parse_vary("k=normal:2%").unwrap(), 0.0).unwrap_err().to_string();
+        assert!(zero.contains("a relative σ of a key whose value is 0"), "{zero}");
+        let budget = check_budget(1_000_000, 0.02, 2, 600.0).unwrap_err().to_string();
+        assert!(
+            budget.contains("about 10000 s of work") && budget.contains("beyond the --budget of 600 s"),
+            "{budget}"
+        );
+        assert!(check_budget(1000, 0.02, 2, 600.0).is_ok());
+    }
+}
