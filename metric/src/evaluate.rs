@@ -94,7 +94,8 @@ pub struct Numerics {
     /// for the closed-form spectral integral, or `"monochromatic (line spectrum): …"` followed by
     /// one of the first two for a line spectrum (one wavelength, no spectral quadrature).
     pub engine: String,
-    /// The relative tolerance asked of the mean MTF.
+    /// The relative tolerance of the mean MTF the engine worked to: `options.tolerance`, or
+    /// on the FFT path `options.fft_tolerance` where that is larger (1e-4 by default).
     pub tolerance: f64,
     /// Evaluations of the closed-form spectral integral (closed-form engine only).
     pub closed_form_evaluations: usize,
@@ -440,10 +441,15 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         warnings,
         numerics: Numerics {
             engine: match poly.engine() {
-                optics::Engine::Fft { pupil_samples, padded, coarse } => match coarse {
-                    Some(c) => format!(
+                optics::Engine::Fft { pupil_samples, padded, coarse, extrapolated } => match coarse {
+                    Some(c) if extrapolated => format!(
                         "fft: {pupil_samples} pupil samples, padded to {padded} (chosen from the tolerance; \
                              Richardson with {c})"
+                    ),
+                    Some(c) => format!(
+                        "fft: {pupil_samples} pupil samples, padded to {padded} (chosen from the tolerance; \
+                             its error from the convergence of {}, {c} and {pupil_samples})",
+                        c / 2
                     ),
                     None => format!("fft: {pupil_samples} pupil samples, padded to {padded}"),
                 },
@@ -462,7 +468,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
                     "closed-form spectral integral (Gaussian spectrum, affine defocus)".to_owned()
                 }
             },
-            tolerance: options.tolerance,
+            tolerance: poly.tolerance(),
             closed_form_evaluations: work.closed_form_evaluations,
             spectral_evaluations: work.spectral_evaluations,
             noise_spectrum: camera.noise_spectrum().is_some(),
