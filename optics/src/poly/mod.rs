@@ -380,7 +380,8 @@ pub struct Polychromatic<'a> {
     f_number: f64,
     max_frequency: f64,
     pixel_pitch: Option<f64>,
-    tolerance: f64,
+    /// the settings' tolerance (the frequency rule's)
+    asked_tolerance: f64,
     /// the tolerance the engine worked to ([`Polychromatic::tolerance`])
     engine_tolerance: f64,
     engine: Box<dyn OtfEngine + 'a>,
@@ -531,7 +532,7 @@ impl<'a> Polychromatic<'a> {
             f_number,
             max_frequency,
             pixel_pitch,
-            tolerance: settings.tolerance,
+            asked_tolerance: settings.tolerance,
             engine_tolerance,
             engine,
             w020_max: 0.0,
