@@ -3,8 +3,8 @@
 use std::sync::Arc;
 
 use optics::fft::Aperture;
-use optics::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront};
-use radiometry::Sampled;
+use optics::{AffineDefocus, FactoredEfficiency, Field, LensModel, Order, Pupil, Wavefront};
+use radiometry::{Sampled, Spectrum};
 
 use crate::Error;
 
@@ -235,6 +235,23 @@ impl LensModel for ChromaticMetalens {
 
     fn design_wavelength(&self) -> Option<f64> {
         Some(self.design_wavelength)
+    }
+
+    /// With τ1 a table: the table, factored out of the one order (`relative` has τ1 = 1 × the
+    /// iris' area fraction).
+    fn factored_efficiency(&self) -> Option<FactoredEfficiency> {
+        let Curve::Table(table) = &self.efficiency else {
+            return None;
+        };
+        let transmission = match &self.transmission {
+            Curve::Constant(t) => Spectrum::Constant(self.area_fraction * t),
+            Curve::Table(t) => {
+                Spectrum::product(vec![Spectrum::Constant(self.area_fraction), Spectrum::Sampled(t.clone())])
+            }
+        };
+        let relative =
+            ChromaticMetalens { efficiency: Curve::Constant(1.0), transmission: Curve::Constant(1.0), ..self.clone() };
+        Some(FactoredEfficiency { table: Spectrum::Sampled(table.clone()), transmission, relative: Arc::new(relative) })
     }
 
     fn breakpoints(&self) -> Vec<f64> {

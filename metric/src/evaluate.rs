@@ -107,7 +107,8 @@ pub struct Numerics {
     /// for the closed-form spectral integral, or `"monochromatic (line spectrum): …"` followed by
     /// one of the first two for a line spectrum (one wavelength, no spectral quadrature).
     pub engine: String,
-    /// The relative tolerance asked of the mean MTF.
+    /// The relative tolerance of the mean MTF the engine worked to: `options.tolerance`, or
+    /// on the FFT path `options.fft_tolerance` where that is larger (1e-4 by default).
     pub tolerance: f64,
     /// Evaluations of the closed-form spectral integral (closed-form engine only).
     pub closed_form_evaluations: usize,
@@ -257,7 +258,9 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let field = scene.field();
     let options = scene.options();
     let settings = options.settings();
-    let poly = Polychromatic::with_settings(lens, &detected, field, nyquist, pixel, settings).map_err(|e| match e {
+    let folded = Folded::of(lens, &detected);
+    let (optics_lens, optics_detected) = folded.optics(lens, &detected);
+    let poly = Polychromatic::with_settings(optics_lens, optics_detected, field, nyquist, pixel, settings).map_err(|e| match e {
         // a detected integral beyond f64::MAX is too much light, not none
         optics::Error::NoSignal { total } if total == f64::INFINITY => overflow(
             "the detected spectral integral ∫ L η λ τ1 dλ",
@@ -347,11 +350,9 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             ),
         ));
     }
+    let integrals = folded.integrals(lens, &detected, &poly);
     // eq. S8 with τ1 → T: every photoelectron the lens transmits, imaged or stray
-    let transmitted = Scaled::of(photoelectrons)
-        .over(poly.total_weight())
-        .times(poly.detected_integral(|l| lens.transmission(l)))
-        .value();
+    let transmitted = Scaled::of(photoelectrons).over(poly.total_weight()).times(integrals.transmission).value();
     if !transmitted.is_finite() {
         return Err(overflow(
             "the transmitted photoelectrons N_T (paper SI eq. S8 with τ1 → T)",
@@ -396,7 +397,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let asnr_integral = snr0 * weighted_mean * nyquist * 1e-3;
 
     let fraunhofer = fraunhofer(scene, &poly, mean_wavelength);
-    let glare = glare(lens, &poly);
+    let glare = glare(&integrals);
 
     let mut warnings = Vec::new();
     for (what, spectrum) in [("radiance", scene.radiance()), ("quantum efficiency", camera.quantum_efficiency())] {
@@ -472,10 +473,15 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         warnings,
         numerics: Numerics {
             engine: match poly.engine() {
-                optics::Engine::Fft { pupil_samples, padded, coarse } => match coarse {
-                    Some(c) => format!(
+                optics::Engine::Fft { pupil_samples, padded, coarse, extrapolated } => match coarse {
+                    Some(c) if extrapolated => format!(
                         "fft: {pupil_samples} pupil samples, padded to {padded} (chosen from the tolerance; \
                              Richardson with {c})"
+                    ),
+                    Some(c) => format!(
+                        "fft: {pupil_samples} pupil samples, padded to {padded} (chosen from the tolerance; \
+                             its error from the convergence of {}, {c} and {pupil_samples})",
+                        c / 2
                     ),
                     None => format!("fft: {pupil_samples} pupil samples, padded to {padded}"),
                 },
@@ -494,7 +500,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
                     "closed-form spectral integral (Gaussian spectrum, affine defocus)".to_owned()
                 }
             },
-            tolerance: options.tolerance,
+            tolerance: poly.tolerance(),
             closed_form_evaluations: work.closed_form_evaluations,
             spectral_evaluations: work.spectral_evaluations,
             noise_spectrum: camera.noise_spectrum().is_some(),
@@ -949,10 +955,63 @@ fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>, mean_wavelength: f64) -> 
     }
 }
 
-fn glare(lens: &dyn LensModel, poly: &Polychromatic<'_>) -> Glare {
-    let detected = poly.detected_integral(|_| 1.0);
-    let efficiency = poly.detected_integral(|l| lens.efficiency(l)) / detected;
-    let transmission = poly.detected_integral(|l| lens.transmission(l)) / detected;
+/// The lens and the detected spectrum as the optics integrate them: where the lens has an
+/// efficiency table ([`optics::FactoredEfficiency`]), the table folded into the detected
+/// spectrum and the lens with it divided out, so that its rows cost what a spectrum table's do
+/// (exact moments, no spectral panel cut at each row); otherwise the two as they are.
+struct Folded {
+    factored: Option<(optics::FactoredEfficiency, Spectrum)>,
+}
+
+/// `∫ ρ dλ`, `∫ ρ τ1 dλ` and `∫ ρ T dλ` over the detected spectrum ρ (before the lens; paper SI
+/// eq. S8, S13), in its units.
+struct SignalIntegrals {
+    detected: f64,
+    efficiency: f64,
+    transmission: f64,
+}
+
+impl Folded {
+    fn of(lens: &dyn LensModel, detected: &Spectrum) -> Folded {
+        Folded {
+            factored: lens.factored_efficiency().map(|f| {
+                let folded = Spectrum::product(vec![detected.clone(), f.table.clone()]);
+                (f, folded)
+            }),
+        }
+    }
+
+    /// The lens and spectrum to hand to the optics.
+    fn optics<'a>(&'a self, lens: &'a dyn LensModel, detected: &'a Spectrum) -> (&'a dyn LensModel, &'a Spectrum) {
+        match &self.factored {
+            Some((f, folded)) => (&*f.relative, folded),
+            None => (lens, detected),
+        }
+    }
+
+    /// The signal integrals: by the optics' spectral nodes (weights `ρ`), or, with the table
+    /// folded (weights `ρ t`), `∫ ρ τ1 = Σ w (τ1/t)` by the nodes and `∫ ρ`, `∫ ρ T` exactly from
+    /// the spectra (radiometry's `Spectrum::integral`).
+    fn integrals(&self, lens: &dyn LensModel, detected: &Spectrum, poly: &Polychromatic<'_>) -> SignalIntegrals {
+        match &self.factored {
+            None => SignalIntegrals {
+                detected: poly.detected_integral(|_| 1.0),
+                efficiency: poly.detected_integral(|l| lens.efficiency(l)),
+                transmission: poly.detected_integral(|l| lens.transmission(l)),
+            },
+            Some((f, _)) => SignalIntegrals {
+                detected: detected.integral(),
+                efficiency: poly.detected_integral(|l| f.relative.efficiency(l)),
+                transmission: Spectrum::product(vec![detected.clone(), f.transmission.clone()]).integral(),
+            },
+        }
+    }
+}
+
+fn glare(integrals: &SignalIntegrals) -> Glare {
+    let detected = integrals.detected;
+    let efficiency = integrals.efficiency / detected;
+    let transmission = integrals.transmission / detected;
     let m0 = noise::buralli_morris_modulation(efficiency, transmission);
     Glare { efficiency, transmission, m0, vg: noise::glare_from_modulation(m0) }
 }

@@ -228,6 +228,28 @@ pub struct AffineDefocus {
     pub w020_slope: f64,
 }
 
+/// A lens's efficiency table factored out of its orders ([`LensModel::factored_efficiency`]):
+/// every order's efficiency is `table(λ)` times that of the same order of `relative`.
+///
+/// The spectral rules integrate the detected spectrum against the interpolation basis by its
+/// exact moments, whatever its number of table rows (docs/physics.md, "Spectral quadrature"); a
+/// table in the lens's efficiency instead kinks the lens's part of the integrand at every row,
+/// and each row cuts a spectral panel. Multiplied into the detected spectrum, the table costs no
+/// more than a spectrum table: `ρ(λ) τ_o(λ) = [ρ(λ) t(λ)] r_o(λ)` with `r_o` the efficiency of
+/// `relative`'s order `o`, smooth in λ.
+#[derive(Clone, Debug)]
+pub struct FactoredEfficiency {
+    /// `t(λ)`, a factor of every order's efficiency (piecewise linear: a table).
+    pub table: radiometry::Spectrum,
+    /// The lens's total transmission `T(λ)` as a spectrum factor (the glare estimate integrates
+    /// the detected spectrum times it, paper SI eq. S13).
+    pub transmission: radiometry::Spectrum,
+    /// The same lens with `t` divided out: the same orders, pupils and wavefronts, each order's
+    /// efficiency `τ_o(λ)/t(λ)`, defined where `t(λ) = 0` too, with no row of `t` among its
+    /// [`breakpoints`](LensModel::breakpoints). Its transmission is not read.
+    pub relative: Arc<dyn LensModel>,
+}
+
 /// What a lens does to light: the trait every lens family implements.
 ///
 /// Object safe (`&dyn LensModel`, `Box<dyn LensModel>` work), `Send + Sync + Debug`, plain `f64` in SI
@@ -321,6 +343,13 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         Vec::new()
     }
 
+    /// The lens's efficiency table factored out of its orders ([`FactoredEfficiency`]), where it
+    /// has one: `metric::evaluate` then folds the table into the detected spectrum, so that its
+    /// rows cost what a spectrum table's do. Default: `None`.
+    fn factored_efficiency(&self) -> Option<FactoredEfficiency> {
+        None
+    }
+
     /// The wavelength the lens was designed for (m), if it has one: the reference of the
     /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
     fn design_wavelength(&self) -> Option<f64> {
@@ -378,6 +407,7 @@ macro_rules! forward_lens_model {
             fn efficiency(&self, wavelength_m: f64) -> f64 { (**self).efficiency(wavelength_m) }
             fn transmission(&self, wavelength_m: f64) -> f64 { (**self).transmission(wavelength_m) }
             fn breakpoints(&self) -> Vec<f64> { (**self).breakpoints() }
+            fn factored_efficiency(&self) -> Option<FactoredEfficiency> { (**self).factored_efficiency() }
             fn numerical_aperture(&self) -> f64 { (**self).numerical_aperture() }
             fn design_wavelength(&self) -> Option<f64> { (**self).design_wavelength() }
             fn describe(&self) -> String { (**self).describe() }

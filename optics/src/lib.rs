@@ -46,7 +46,7 @@ pub mod testkit;
 
 pub use closed::GaussianDefocus;
 pub use error::Error;
-pub use lens::{AffineDefocus, Field, LensModel, Order, Pupil, Wavefront, Zone, round_for_display};
+pub use lens::{AffineDefocus, FactoredEfficiency, Field, LensModel, Order, Pupil, Wavefront, Zone, round_for_display};
 pub use otf::{
     ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_asymptotic,
     defocus_otf_bessel, defocus_otf_many, defocus_otf_many_within, defocus_otf_panels, defocus_otf_quadrature,

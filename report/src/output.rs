@@ -437,7 +437,10 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
         n.otf_evaluations,
         n.sign_changes
     );
-    let budget = if n.engine.starts_with("fft") && n.engine.contains("chosen") {
+    let budget = if n.engine.starts_with("fft") && n.engine.contains("convergence of") {
+        "a quarter to the spectral rule, half to the pupil sampling (a composite pupil: the mean at N, its error the \
+         grid convergence index of N/4, N/2 and N), the frequency rule converged below both"
+    } else if n.engine.starts_with("fft") && n.engine.contains("chosen") {
         "a quarter to the spectral rule, half to the pupil sampling (Richardson on N/2 and N, its order checked at N/4, or only its direction where N/4 aliases the pupil phase), the frequency \
          rule converged below both"
     } else if n.spectral_interpolated && n.spectral_evaluations > 0 {

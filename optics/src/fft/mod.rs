@@ -219,8 +219,9 @@ pub use aperture::{Aperture, MASK_SUPERSAMPLING, MaskFn, ReducedCircle, reduce_d
 pub use convergence::{convergence_table, defocus_mean_mtf};
 pub use plan::{INTERPOLATION_POINTS, MAX_SAMPLES, MIN_SAMPLES, Otf, OtfPlan, SampledPupil, fast_fft_len};
 pub use sampling::{
-    ERROR_MODEL, EXTRAPOLATED_MODEL, Extrapolated, MAX_CHOSEN_SAMPLES, MIN_CHOSEN_SAMPLES, RICHARDSON_ORDER, SAFETY,
-    SamplingPlan, extrapolation_gain, observed_order, pupil_samples_for, reachable,
+    ERROR_MODEL, EXTRAPOLATED_MODEL, ErrorRule, Extrapolated, FINEST_MAX_ORDER, FINEST_SAFETY, MAX_CHOSEN_SAMPLES,
+    MIN_CHOSEN_SAMPLES, RICHARDSON_ORDER, SAFETY, SamplingPlan, extrapolation_gain, observed_order, pupil_samples_for,
+    reachable,
 };
 pub use wavefront::{Aberrations, MAX_NOLL_INDEX, noll_to_nm};
 pub use zones::{SampledZones, ZoneField};

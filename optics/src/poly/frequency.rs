@@ -20,9 +20,9 @@ impl Polychromatic<'_> {
     /// [`SPECTRAL_SHARE`](super::spectral::SPECTRAL_SHARE) where product integration spent that.
     fn frequency_tolerance(&self) -> f64 {
         if self.engine.nodes().interpolated {
-            (1.0 - super::spectral::SPECTRAL_SHARE) * self.tolerance
+            (1.0 - super::spectral::SPECTRAL_SHARE) * self.asked_tolerance
         } else {
-            self.tolerance
+            self.asked_tolerance
         }
     }
 

@@ -237,12 +237,16 @@ impl<'a> Grids<'a> {
         // composite pupil's ring edges can make N/2 and N agree by chance: the concentric
         // segmented lens went 0.3104, 0.3087, 0.3110 at N = 32, 64, 128 and settles at 0.3119)
         let aliased = |n: usize| FftPath::aliases_phase(&scene, &nodes, n).map(|a| a == Some(true));
+        // a composite pupil: the mean at N, its error by the observed order (fft::sampling)
+        if FftPath::aliases_phase(&scene, &nodes, plan.coarse() / 2)?.is_none() {
+            plan.rule = crate::fft::ErrorRule::FinestLevel;
+        }
         let mut quarter = (mean(&FftPath::build(&scene, &nodes, plan.coarse() / 2)?), aliased(plan.coarse() / 2)?);
         let mut coarse = FftPath::build(&scene, &nodes, plan.coarse())?;
         let mut fine = FftPath::build(&scene, &nodes, plan.samples)?;
         loop {
             let (half, full) = (mean(&coarse), mean(&fine));
-            let estimate = plan.extrapolate(half, full);
+            let estimate = plan.estimate(quarter.0, half, full);
             // accepted where the estimate passes and the levels converge at least at first order
             // (or have settled far below the tolerance)
             let order = crate::fft::observed_order(quarter.0, half, full);
@@ -309,6 +313,7 @@ impl OtfEngine for Grids<'_> {
             pupil_samples: self.fft.pupil_samples,
             padded: self.fft.padded,
             coarse: self.coarse.as_ref().map(|(c, _)| c.pupil_samples),
+            extrapolated: self.richardson().is_some(),
         }
     }
 
@@ -338,7 +343,7 @@ impl OtfEngine for Grids<'_> {
     }
 
     fn richardson(&self) -> Option<crate::fft::SamplingPlan> {
-        self.coarse.as_ref().map(|(_, plan)| *plan)
+        self.coarse.as_ref().map(|(_, plan)| *plan).filter(|p| p.rule == crate::fft::ErrorRule::Richardson)
     }
 
     fn read_coarse(&self, on: bool) {

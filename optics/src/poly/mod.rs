@@ -98,9 +98,12 @@ pub enum Engine {
         pupil_samples: usize,
         /// FFT length after padding.
         padded: usize,
-        /// `Some(N/2)` when the tolerance chose the sampling: the mean is the Richardson
-        /// extrapolation of the means at `N/2` and `N` (`fft::SamplingPlan`).
+        /// `Some(N/2)` when the tolerance chose the sampling (`fft::SamplingPlan`).
         coarse: Option<usize>,
+        /// Whether the mean is the Richardson extrapolation of the means at `N/2` and `N`
+        /// (single apertures); otherwise, with `coarse`, it is the mean at `N`, its error the
+        /// observed convergence of `N/4`, `N/2` and `N` (composite pupils, `fft::ErrorRule`).
+        extrapolated: bool,
     },
     /// A line spectrum ([`Spectrum::as_line`]): one wavelength, one node per imaging order, no
     /// spectral quadrature. The OTF is the efficiency-weighted sum of the orders' exact OTFs
@@ -385,7 +388,10 @@ pub struct Polychromatic<'a> {
     f_number: f64,
     max_frequency: f64,
     pixel_pitch: Option<f64>,
-    tolerance: f64,
+    /// the settings' tolerance (the frequency rule's)
+    asked_tolerance: f64,
+    /// the tolerance the engine worked to ([`Polychromatic::tolerance`])
+    engine_tolerance: f64,
     engine: Box<dyn OtfEngine + 'a>,
     /// largest |W020| among significant nodes, m
     w020_max: f64,
@@ -522,6 +528,11 @@ impl<'a> Polychromatic<'a> {
         let irises = settings.exact_irises.then(|| lens.numerical_aperture());
         let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises };
         let engine = choose(scene, settings)?;
+        // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
+        let engine_tolerance = match engine.engine() {
+            Engine::Fft { .. } => settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance),
+            _ => settings.tolerance,
+        };
         let mut this = Polychromatic {
             lens,
             detected,
@@ -529,7 +540,8 @@ impl<'a> Polychromatic<'a> {
             f_number,
             max_frequency,
             pixel_pitch,
-            tolerance: settings.tolerance,
+            asked_tolerance: settings.tolerance,
+            engine_tolerance,
             engine,
             w020_max: 0.0,
             w020_rms: 0.0,
@@ -547,6 +559,13 @@ impl<'a> Polychromatic<'a> {
         // (product-integration weights may be negative: the average of W020² too, by rounding)
         this.w020_rms = this.spectral_average(|_, w020| w020 * w020).max(0.0).sqrt();
         Ok(this)
+    }
+
+    /// The relative tolerance of the mean MTF the engine worked to: the settings' `tolerance`,
+    /// or on the FFT path ([`Engine::Fft`]) their `fft_tolerance` where it is larger (its
+    /// spectral nodes and, unless the settings fix it, its pupil sampling follow it).
+    pub fn tolerance(&self) -> f64 {
+        self.engine_tolerance
     }
 
     /// The OTF engine in use.
