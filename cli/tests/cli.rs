@@ -1826,6 +1826,10 @@ fn psf_and_otf_export_the_scenes_2d_transfer() {
     assert!((v["sum"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{v}");
     let psf = std::fs::read_to_string(dir.join("psf.csv")).unwrap();
     assert_eq!(psf.lines().count(), 64);
+    // the image is a figure (axes, colour bar: RGB, the default 900 px wide), not the bare grid
+    let png = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(dir.join("psf.png")).unwrap()));
+    let info = png.read_info().unwrap();
+    assert_eq!((info.info().width, info.info().color_type), (900, png::ColorType::Rgb));
     let v = json(&["otf", "--out", out, "--size", "64"]);
     let step = v["frequency_step_cyc_per_mm"].as_f64().unwrap() * 1e3;
     let real = std::fs::read_to_string(dir.join("otf-real.csv")).unwrap();
