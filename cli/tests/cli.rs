@@ -1628,13 +1628,10 @@ fn tabulated_lens_reads_a_list_of_zemax_exports() {
 /// deterministic ±`noise` pattern (a third of it on the black half) that changes with `k`.
 fn measure_frame(path: &Path, k: usize, white: f64, black: f64, noise: f64) {
     let (w, h) = (32usize, 16usize);
-    let mut seed = 0x2545_f491_4f6c_dd1d_u64 ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    let mut rng: rand_pcg::Pcg64Mcg = rand::SeedableRng::seed_from_u64(k as u64);
     let bytes: Vec<u8> = (0..w * h)
         .flat_map(|i| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            let u = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let u = rand::RngExt::random::<f64>(&mut rng) - 0.5;
             let level = if i % w < w / 2 { white + 2.0 * noise * u } else { black + 2.0 * noise / 3.0 * u };
             (level.round() as u16).to_be_bytes()
         })
