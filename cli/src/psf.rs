@@ -1,7 +1,6 @@
 //! `asnr psf` and `asnr otf`: the scene's 2-D polychromatic PSF and OTF at its field point and
 //! pupil, as PNG images and numbers (CSV matrices and a JSON description of the grid).
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -345,8 +344,7 @@ fn toml_string(s: &str) -> String {
 fn write_csv(path: &Path, n: usize, values: &[f64]) -> Result<String> {
     let mut out = String::with_capacity(n * n * 12);
     for row in values.chunks_exact(n) {
-        let line: Vec<String> = row.iter().map(|v| format!("{v:e}")).collect();
-        let _ = writeln!(out, "{}", line.join(","));
+        out.push_str(&scene::sweep::csv_line(row.iter().map(|v| format!("{v:e}"))));
     }
     std::fs::write(path, out).with_context(|| format!("{}: cannot write", path.display()))?;
     Ok(path.display().to_string())
