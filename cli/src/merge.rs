@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 
-use scene::sweep::{INDEX_COLUMN, csv_field};
+use scene::sweep::{INDEX_COLUMN, csv_line};
 
 /// Arguments of `asnr merge`.
 #[derive(clap::Args)]
@@ -142,14 +142,9 @@ pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
             if beyond > 0 { format!(", and {beyond_text}") } else { String::new() }
         );
     }
-    let mut out = String::new();
-    let columns: Vec<String> = names.iter().skip(1).map(|n| csv_field(n)).collect();
-    out.push_str(&columns.join(","));
-    out.push('\n');
+    let mut out = csv_line(names.iter().skip(1));
     for (_, fields, _, _) in &rows {
-        let fields: Vec<String> = fields.iter().map(|x| csv_field(x)).collect();
-        out.push_str(&fields.join(","));
-        out.push('\n');
+        out.push_str(&csv_line(fields));
     }
     Ok(out)
 }

@@ -21,9 +21,14 @@ pub struct Column {
 /// Tiles are scaled up by a whole factor until they are at least this wide.
 const MIN_TILE: usize = 320;
 const GAP: usize = 12;
-const TITLE: usize = 40;
-const HEADING: usize = 30;
 const SIDE: usize = 30;
+/// Title and heading sizes (pixels of plotters' font size) and their line heights.
+const TITLE_SIZE: f64 = 18.0;
+const TITLE_LINE: usize = 24;
+const HEADING_SIZE: f64 = 15.0;
+const HEADING_LINE: usize = 20;
+/// Room above and below the title's and the headings' lines.
+const PAD: usize = 8;
 
 /// Writes the panel of `columns` (images `width × height`) as an 8-bit grayscale PNG.
 pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[Column]) -> Result<()> {
@@ -32,9 +37,15 @@ pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[C
     let (tw, th) = (width * k, height * k);
     let n = columns.len();
     let w = SIDE + n * tw + (n + 1) * GAP;
-    let h = TITLE + HEADING + 2 * th + 3 * GAP;
+    // the title over the whole width and each heading over its column, wrapped so none is clipped
+    let title_lines = wrap(title, TITLE_SIZE, w - 2 * GAP);
+    let headings: Vec<Vec<String>> = columns.iter().map(|c| wrap(&c.heading, HEADING_SIZE, tw)).collect();
+    let title_h = title_lines.len() * TITLE_LINE + 2 * PAD;
+    let heading_h = headings.iter().map(Vec::len).max().unwrap_or(0) * HEADING_LINE + PAD;
+    let top = title_h + heading_h;
+    let h = top + 2 * th + 3 * GAP;
     let mut rgb = vec![255_u8; w * h * 3];
-    let origin = |col: usize, row: usize| (SIDE + GAP + col * (tw + GAP), TITLE + HEADING + GAP + row * (th + GAP));
+    let origin = |col: usize, row: usize| (SIDE + GAP + col * (tw + GAP), top + GAP + row * (th + GAP));
     for (c, column) in columns.iter().enumerate() {
         for (row, image) in [&column.raw, &column.restored].into_iter().enumerate() {
             let (x0, y0) = origin(c, row);
@@ -53,12 +64,16 @@ pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[C
         let root = BitMapBackend::with_buffer(&mut rgb, (pw, ph)).into_drawing_area();
         let text = |size: f64| ("sans-serif", size).into_font().color(&BLACK);
         let centre = Pos::new(HPos::Center, VPos::Center);
-        root.draw(&Text::new(title.to_owned(), (to_i32(w / 2), to_i32(TITLE / 2)), text(18.0).pos(centre)))
-            .map_err(|e| fail(&e))?;
-        for (c, column) in columns.iter().enumerate() {
+        for (i, line) in title_lines.into_iter().enumerate() {
+            let at = (to_i32(w / 2), to_i32(PAD + i * TITLE_LINE + TITLE_LINE / 2));
+            root.draw(&Text::new(line, at, text(TITLE_SIZE).pos(centre))).map_err(|e| fail(&e))?;
+        }
+        for (c, lines) in headings.into_iter().enumerate() {
             let (x0, _) = origin(c, 0);
-            let at = (to_i32(x0 + tw / 2), to_i32(TITLE + HEADING / 2));
-            root.draw(&Text::new(column.heading.clone(), at, text(15.0).pos(centre))).map_err(|e| fail(&e))?;
+            for (i, line) in lines.into_iter().enumerate() {
+                let at = (to_i32(x0 + tw / 2), to_i32(title_h + i * HEADING_LINE + HEADING_LINE / 2));
+                root.draw(&Text::new(line, at, text(HEADING_SIZE).pos(centre))).map_err(|e| fail(&e))?;
+            }
             for row in 0..2 {
                 let (x, y) = origin(c, row);
                 let letter = format!("({})", char::from(b'a' + (row * n + c) as u8));
@@ -83,6 +98,49 @@ pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[C
     Ok(())
 }
 
+/// `text` broken into lines at spaces so each is at most `width` pixels wide in the embedded font
+/// at `size` (a single word wider than that is a line of its own).
+fn wrap(text: &str, size: f64, width: usize) -> Vec<String> {
+    let font = ("sans-serif", size).into_font();
+    let fits = |t: &str| font.box_size(t).is_ok_and(|(w, _)| w as usize <= width);
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        let longer = if line.is_empty() { word.to_owned() } else { format!("{line} {word}") };
+        if line.is_empty() || fits(&longer) {
+            line = longer;
+        } else {
+            lines.push(std::mem::replace(&mut line, word.to_owned()));
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
 fn to_i32(v: usize) -> i32 {
     i32::try_from(v).unwrap_or(i32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn titles_wrap_to_the_width_and_keep_every_word() {
+        crate::plot::register_font();
+        let title = "USAF-1951 target: raw (top) and Wiener-restored (bottom), with veiling glare";
+        let width = 320;
+        let lines = wrap(title, TITLE_SIZE, width);
+        assert!(lines.len() >= 2, "{lines:?}");
+        let font = ("sans-serif", TITLE_SIZE).into_font();
+        for line in &lines {
+            let (w, _) = font.box_size(line).unwrap();
+            assert!(w as usize <= width, "{line:?} is {w} px wide");
+        }
+        assert_eq!(lines.join(" "), title);
+        // a word wider than the width is a line of its own, not dropped
+        assert_eq!(wrap("a Wiener-restored b", TITLE_SIZE, 10), ["a", "Wiener-restored", "b"]);
+    }
 }

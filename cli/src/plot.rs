@@ -330,7 +330,18 @@ pub fn heatmap_plot(
     if grid.xs.is_empty() || grid.ys.is_empty() || grid.z.len() != grid.xs.len() * grid.ys.len() {
         bail!("{flag} {}: the heatmap grid is empty or incomplete", path.display());
     }
-    render(flag, path, figure, &HeatmapPlot { labels, grid, marks, path: &[] })
+    render(flag, path, figure, &HeatmapPlot { labels, grid, marks, path: &[], square: false })
+}
+
+/// Writes `grid` as an image: a heatmap whose x and y are the same quantity (a PSF over the
+/// detector, an OTF over frequency), one unit as long on both axes, with its colour bar and no
+/// ridge. SVG or PNG by the file's extension; errors name `flag`.
+pub fn image_plot(flag: &str, path: &Path, figure: &Figure, labels: &Labels, grid: &Grid) -> Result<()> {
+    if grid.xs.is_empty() || grid.ys.is_empty() || grid.z.len() != grid.xs.len() * grid.ys.len() {
+        bail!("{flag} {}: the image grid is empty or incomplete", path.display());
+    }
+    let labels = Labels { ridge: "", ..*labels };
+    render(flag, path, figure, &HeatmapPlot { labels: &labels, grid, marks: &[], path: &[], square: true })
 }
 
 /// The maximum of sampled `(x, y)` (increasing x): the largest sample, refined by the vertex of
@@ -570,6 +581,10 @@ fn fail(e: &dyn std::fmt::Display) -> String {
 trait Plot {
     fn title(&self) -> &str;
     fn entries(&self) -> Vec<Entry>;
+    /// Height of the axes block over the figure's width.
+    fn aspect(&self) -> f64 {
+        ASPECT
+    }
     /// Draws the axes and the data into `area` (the figure less title and legend).
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, ctx: Ctx) -> Result<(), String>
     where
@@ -607,11 +622,11 @@ const ROW_PT: f64 = LEGEND_PT * 1.6;
 const PAD_PT: f64 = 5.0;
 
 impl Layout {
-    fn new(ctx: Ctx, width: i32, title: &str, entries: &[Entry]) -> Self {
+    fn new(ctx: Ctx, width: i32, title: &str, entries: &[Entry], aspect: f64) -> Self {
         let margin = ctx.px(MARGIN_PT);
         let title = wrap(ctx, TITLE_PT, title, width - 2 * margin);
         let title_h = if title.is_empty() { 0 } else { ctx.px(TITLE_PT * 1.3) * title.len() as i32 + ctx.px(4.0) };
-        let axes_h = (f64::from(width) * ASPECT).round() as i32;
+        let axes_h = (f64::from(width) * aspect).round() as i32;
         let legend = (!entries.is_empty()).then(|| {
             let available = width - 2 * margin - 2 * ctx.px(PAD_PT);
             let swatch = ctx.px(SWATCH_PT) + ctx.px(SWATCH_GAP_PT);
@@ -1025,7 +1040,7 @@ fn svg<P: Plot>(figure: &Figure, plot: &P) -> Result<String, String> {
     let ctx = Ctx { k: figure.px_per_pt() * f64::from(SVG_FINE) };
     let entries = plot.entries();
     let width = figure.width * SVG_FINE;
-    let layout = Layout::new(ctx, i32::try_from(width).unwrap_or(i32::MAX), plot.title(), &entries);
+    let layout = Layout::new(ctx, i32::try_from(width).unwrap_or(i32::MAX), plot.title(), &entries, plot.aspect());
     let shown = (figure.width, layout.height(ctx).unsigned_abs().div_ceil(SVG_FINE));
     let fine = (width, shown.1 * SVG_FINE);
     let mut text = String::new();
@@ -1043,7 +1058,8 @@ fn svg<P: Plot>(figure: &Figure, plot: &P) -> Result<String, String> {
 /// How many times larger a PNG is drawn than written: 3, or 2 for very large figures.
 fn supersampling<P: Plot>(figure: &Figure, plot: &P) -> u32 {
     let ctx = Ctx { k: figure.px_per_pt() };
-    let layout = Layout::new(ctx, i32::try_from(figure.width).unwrap_or(i32::MAX), plot.title(), &plot.entries());
+    let layout =
+        Layout::new(ctx, i32::try_from(figure.width).unwrap_or(i32::MAX), plot.title(), &plot.entries(), plot.aspect());
     let pixels = u64::from(figure.width) * u64::from(layout.height(ctx).unsigned_abs());
     if pixels * 9 <= MAX_SUPERSAMPLED { 3 } else { 2 }
 }
@@ -1053,7 +1069,7 @@ fn rasterize<P: Plot>(figure: &Figure, plot: &P, s: u32) -> Result<((u32, u32), 
     let ctx = Ctx { k: figure.px_per_pt() * f64::from(s) };
     let entries = plot.entries();
     let width = figure.width * s;
-    let layout = Layout::new(ctx, i32::try_from(width).unwrap_or(i32::MAX), plot.title(), &entries);
+    let layout = Layout::new(ctx, i32::try_from(width).unwrap_or(i32::MAX), plot.title(), &entries, plot.aspect());
     let size = (figure.width, layout.height(ctx).unsigned_abs().div_ceil(s));
     let big_size = (width, size.1 * s);
     let mut big = vec![255u8; big_size.0 as usize * big_size.1 as usize * 3];
@@ -1111,13 +1127,96 @@ struct LinesPlot<'a> {
     mark_best: bool,
 }
 
+/// Width of a line where no later line lies on it, points; each later line lying on it there
+/// widens it by [`COVER_PT`], so the line under shows on both sides of the one over.
+const LINE_PT: f64 = 1.6;
+const COVER_PT: f64 = 1.3;
+/// A line lies on an earlier one where they are closer than this fraction of the y axis (about a
+/// line's width at the default figure size).
+const COINCIDENT: f64 = 0.01;
+
+/// Series as drawn, the x range and the y range ([`LinesPlot::view`]).
+type View<'a> = (std::borrow::Cow<'a, [Series]>, (f64, f64), (f64, f64));
+
+/// A run of a line's segments drawn alike: (dashed, lines over it) and its points.
+type Run = ((bool, usize), Vec<(f64, f64)>);
+
 impl LinesPlot<'_> {
     fn stroke(i: usize) -> Stroke {
-        Stroke::solid(PALETTE[i % PALETTE.len()], 1.6)
+        Stroke::solid(PALETTE[i % PALETTE.len()], LINE_PT)
+    }
+
+    /// For each point of each series (see [`LinesPlot::view`] for `series` and `y`), how many
+    /// later series pass within [`COINCIDENT`] of it (linear between their points): the lines
+    /// drawn over it there.
+    fn covers(series: &[Series], y: (f64, f64)) -> Vec<Vec<usize>> {
+        let close = (y.1 - y.0) * COINCIDENT;
+        let near = |(x, v): (f64, f64), over: &Series| {
+            let p = &over.points;
+            let (Some(first), Some(last)) = (p.first(), p.last()) else { return false };
+            if x < first.0 || x > last.0 {
+                return false;
+            }
+            let j = p.partition_point(|q| q.0 < x).min(p.len() - 1);
+            let at = if j == 0 || p[j].0 == x {
+                p[j].1
+            } else {
+                p[j - 1].1 + (p[j].1 - p[j - 1].1) * (x - p[j - 1].0) / (p[j].0 - p[j - 1].0)
+            };
+            (v - at).abs() <= close
+        };
+        series
+            .iter()
+            .enumerate()
+            .map(|(i, s)| s.points.iter().map(|&q| series[i + 1..].iter().filter(|o| near(q, o)).count()).collect())
+            .collect()
     }
 
     fn shaded(&self) -> bool {
         self.series.iter().any(|s| s.shaded.iter().any(|&f| f))
+    }
+
+    /// The series as drawn (log10 of their positive values on a log axis), the x range and the
+    /// y range of the axes.
+    fn view(&self) -> View<'_> {
+        let (log_x, log_y) = (self.labels.log_x, self.labels.log_y);
+        let series: std::borrow::Cow<'_, [Series]> = if log_x || log_y {
+            let log = |(x, y): (f64, f64)| {
+                let x = if log_x { (x > 0.0).then(|| x.log10())? } else { x };
+                let y = if log_y { (y > 0.0).then(|| y.log10())? } else { y };
+                Some((x, y))
+            };
+            self.series
+                .iter()
+                .map(|s| Series {
+                    label: s.label.clone(),
+                    points: s.points.iter().copied().filter_map(log).collect(),
+                    shaded: if s.points.iter().all(|&p| log(p).is_some()) { s.shaded.clone() } else { Vec::new() },
+                    best: s.best.as_ref().and_then(|(p, how)| log(*p).map(|p| (p, how.clone()))),
+                })
+                .collect::<Vec<_>>()
+                .into()
+        } else {
+            self.series.into()
+        };
+        let all = || series.iter().flat_map(|s| s.points.iter());
+        let (mut x0, mut x1) = extent(all().map(|p| p.0));
+        if x1 <= x0 {
+            (x0, x1) = (x0 - 0.5, x1 + 0.5);
+        }
+        let (lo, hi) = extent(all().map(|p| p.1));
+        let y = if log_y {
+            // whole decades around the data, or 4 % of the span beyond it where that is tighter
+            let pad = 0.04 * (hi - lo).max(1.0);
+            ((lo - pad).max(lo.floor()), (hi + pad).min(hi.ceil().max(hi + 1e-9)))
+        } else {
+            let (lo, hi) = (lo.min(0.0), hi.max(0.0));
+            // 6 % of the span above (and below, for negative values); all zeros span 0 to 1
+            let span = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) { hi - lo } else { hi.abs().max(1.0) / 0.06 };
+            let pad = 0.06 * span;
+            (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad)
+        };
+        (series, (x0, x1), y)
     }
 }
 
@@ -1180,45 +1279,9 @@ impl Plot for LinesPlot<'_> {
         DB::ErrorType: 'static,
     {
         // on a log axis the series are drawn as log10 of their positive values
-        let log_series: Vec<Series>;
+        let (series, (x0, x1), y) = self.view();
         let (log_x, log_y) = (self.labels.log_x, self.labels.log_y);
-        let series: &[Series] = if log_x || log_y {
-            let log = |(x, y): (f64, f64)| {
-                let x = if log_x { (x > 0.0).then(|| x.log10())? } else { x };
-                let y = if log_y { (y > 0.0).then(|| y.log10())? } else { y };
-                Some((x, y))
-            };
-            log_series = self
-                .series
-                .iter()
-                .map(|s| Series {
-                    label: s.label.clone(),
-                    points: s.points.iter().copied().filter_map(log).collect(),
-                    shaded: if s.points.iter().all(|&p| log(p).is_some()) { s.shaded.clone() } else { Vec::new() },
-                    best: s.best.as_ref().and_then(|(p, how)| log(*p).map(|p| (p, how.clone()))),
-                })
-                .collect();
-            &log_series
-        } else {
-            self.series
-        };
-        let all = || series.iter().flat_map(|s| s.points.iter());
-        let (mut x0, mut x1) = extent(all().map(|p| p.0));
-        if x1 <= x0 {
-            (x0, x1) = (x0 - 0.5, x1 + 0.5);
-        }
-        let (lo, hi) = extent(all().map(|p| p.1));
-        let y = if self.labels.log_y {
-            // whole decades around the data, or 4 % of the span beyond it where that is tighter
-            let pad = 0.04 * (hi - lo).max(1.0);
-            ((lo - pad).max(lo.floor()), (hi + pad).min(hi.ceil().max(hi + 1e-9)))
-        } else {
-            let (lo, hi) = (lo.min(0.0), hi.max(0.0));
-            // 6 % of the span above (and below, for negative values); all zeros span 0 to 1
-            let span = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) { hi - lo } else { hi.abs().max(1.0) / 0.06 };
-            let pad = 0.06 * span;
-            (if lo < 0.0 { lo - pad } else { 0.0 }, hi + pad)
-        };
+        let covers = Self::covers(&series, y);
         let axes = Axes {
             x: (x0, x1),
             y,
@@ -1251,25 +1314,43 @@ impl Plot for LinesPlot<'_> {
             }
             chart.draw_series(rects).map_err(|e| fail(&e))?;
         }
-        for (i, s) in series.iter().enumerate() {
+        for (i, (s, cover)) in series.iter().zip(&covers).enumerate() {
             let stroke = Self::stroke(i);
             let dashed = |j: usize| s.shaded.get(j).copied().unwrap_or(false);
-            // runs of segments, solid, or dashed where they end in a shaded point
-            let mut runs: Vec<(bool, Vec<(f64, f64)>)> = Vec::new();
+            // where later lines lie on this one, it is drawn wider under them
+            let widened = |j: usize| cover.get(j).copied().unwrap_or(0).min(cover.get(j + 1).copied().unwrap_or(0));
+            // runs of segments, solid, or dashed where they end in a shaded point, and as wide
+            let mut runs: Vec<Run> = Vec::new();
             for (j, w) in s.points.windows(2).enumerate() {
+                let kind = (dashed(j + 1), widened(j));
                 match runs.last_mut() {
-                    Some((kind, run)) if *kind == dashed(j + 1) => run.push(w[1]),
-                    _ => runs.push((dashed(j + 1), vec![w[0], w[1]])),
+                    Some((k, run)) if *k == kind => run.push(w[1]),
+                    _ => runs.push((kind, vec![w[0], w[1]])),
                 }
             }
             if runs.is_empty() {
-                runs.push((false, s.points.clone()));
+                runs.push(((false, 0), s.points.clone()));
             }
-            for (kind, run) in runs {
-                draw_curve(&mut chart, ctx, &run, if kind { stroke.with_dashes() } else { stroke })?;
+            for ((dashes, under), run) in runs {
+                let stroke = Stroke { width: LINE_PT + COVER_PT * under as f64, ..stroke };
+                draw_curve(&mut chart, ctx, &run, if dashes { stroke.with_dashes() } else { stroke })?;
             }
-            if let (Some(best), true) = (s.best.as_ref().map(|b| b.0).or_else(|| peak(&s.points)), self.mark_best) {
-                let (r, ring) = (ctx.px(2.5), WHITE.stroke_width(ctx.stroke(0.5)));
+        }
+        // the maxima over all the lines, each dot wider by a ring for each later dot over it
+        let bests: Vec<Option<(f64, f64)>> = series
+            .iter()
+            .map(|s| s.best.as_ref().map(|b| b.0).or_else(|| peak(&s.points)).filter(|_| self.mark_best))
+            .collect();
+        let pixels: Vec<Option<(i32, i32)>> = bests.iter().map(|b| b.map(|p| chart.backend_coord(&p))).collect();
+        for (i, best) in bests.iter().enumerate() {
+            let stroke = Self::stroke(i);
+            if let (Some(best), Some((x, y))) = (*best, pixels[i]) {
+                let over = pixels[i + 1..]
+                    .iter()
+                    .flatten()
+                    .filter(|&&(qx, qy)| f64::from(qx - x).hypot(f64::from(qy - y)) < f64::from(ctx.px(5.0)))
+                    .count();
+                let (r, ring) = (ctx.px(2.5 + 1.3 * over as f64), WHITE.stroke_width(ctx.stroke(0.5)));
                 chart
                     .draw_series([Circle::new(best, r, stroke.colour.filled()), Circle::new(best, r, ring)])
                     .map_err(|e| fail(&e))?;
@@ -1474,7 +1555,14 @@ struct HeatmapPlot<'a> {
     /// A path drawn over the map (an optimizer's points in order), with its legend entry; empty
     /// for none.
     path: &'a [(f64, f64)],
+    /// x and y in the same unit: the plotting area is as many pixels per unit on both axes
+    /// (within a pixel), and taller than a chart's
+    square: bool,
 }
+
+/// The axes block of an image ([`HeatmapPlot::square`]) over the figure's width: room for a
+/// square plotting area beside the colour bar at the default size.
+const IMAGE_ASPECT: f64 = 0.8;
 
 /// An optimizer's path over a heatmap.
 const PATH: Stroke = Stroke::solid(RGBColor(230, 30, 30), 1.2);
@@ -1493,6 +1581,10 @@ impl HeatmapPlot<'_> {
 impl Plot for HeatmapPlot<'_> {
     fn title(&self) -> &str {
         self.labels.title
+    }
+
+    fn aspect(&self) -> f64 {
+        if self.square { IMAGE_ASPECT } else { ASPECT }
     }
 
     fn entries(&self) -> Vec<Entry> {
@@ -1544,6 +1636,19 @@ impl Plot for HeatmapPlot<'_> {
             y_log: false,
             x_log: false,
         };
+        // an image: the area trimmed on both sides (or above and below) to the plotting area whose
+        // width over height is the data's
+        let (w, h) = area.dim_in_pixel();
+        let (w, h) = (i32::try_from(w).unwrap_or(i32::MAX), i32::try_from(h).unwrap_or(i32::MAX));
+        let m = axes.margins(ctx, (w, h), bar_w);
+        let (pw, ph) = (w - m.left - m.right - m.y_labels, h - m.top - m.bottom - m.x_labels);
+        let wide = f64::from(ph) * (x1 - x0) / (y1 - y0);
+        let (trim_x, trim_y) = match self.square {
+            false => (0, 0),
+            true if wide <= f64::from(pw) => ((f64::from(pw) - wide) as i32 / 2, 0),
+            true => (0, (f64::from(ph) - f64::from(pw) * (y1 - y0) / (x1 - x0)) as i32 / 2),
+        };
+        let area = &area.margin(trim_y, trim_y, trim_x, trim_x);
         let (mut chart, margins) = axes.build(area, ctx, bar_w)?;
         let cell = |i: usize, j: usize| [(ex[i], ey[j]), (ex[i + 1], ey[j + 1])];
         // each cell reaches halfway into the next (which is drawn later and covers it), so no
@@ -1578,10 +1683,12 @@ impl Plot for HeatmapPlot<'_> {
                 Some((x, peak(&samples)?.0))
             })
             .collect();
-        draw_curve(&mut chart, ctx, &ridge, RIDGE)?;
+        if !self.labels.ridge.is_empty() {
+            draw_curve(&mut chart, ctx, &ridge, RIDGE)?;
+        }
         // a dot at each sample of the ridge, when they are at least 8 pt apart
         let plot_w = f64::from(chart.plotting_area().dim_in_pixel().0) / ctx.k;
-        if ridge.len() as f64 * 8.0 <= plot_w {
+        if !self.labels.ridge.is_empty() && ridge.len() as f64 * 8.0 <= plot_w {
             let (r, ring) = (ctx.px(1.8), RGBColor(30, 30, 30).stroke_width(ctx.stroke(0.5)));
             chart
                 .draw_series(ridge.iter().flat_map(|&p| [Circle::new(p, r, WHITE.filled()), Circle::new(p, r, ring)]))
@@ -1697,8 +1804,16 @@ impl Plot for MtfPlot<'_> {
             (n, _) => format!("polychromatic MTF, weighted mean of {n} field points"),
         };
         let mut entries = vec![Entry { label: poly, swatch: Swatch::Line(POLY) }];
-        for ((_, label), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
-            entries.push(Entry { label: label.to_owned(), swatch: Swatch::Line(stroke) });
+        for ((ys, label), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
+            // a directional curve on the mean (on axis in all but name): said, as the dashes
+            // over the mean are all that show of it
+            let apart = ys.iter().zip(&curve.mtf).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let label = if apart < COINCIDENT {
+                format!("{label}, within {:.3} of the mean", ((apart * 1e3).ceil() / 1e3).max(1e-3))
+            } else {
+                label.to_owned()
+            };
+            entries.push(Entry { label, swatch: Swatch::Line(stroke) });
         }
         for (i, wl) in curve.wavelengths_nm.iter().enumerate() {
             entries.push(Entry { label: format!("{wl:.1} nm"), swatch: Swatch::Line(Self::mono(i)) });
@@ -1726,13 +1841,15 @@ impl Plot for MtfPlot<'_> {
         let (mut chart, _) = axes.build(area, ctx, 0)?;
         let xs = &curve.frequency_cyc_per_mm;
         let series = |ys: &[f64]| xs.iter().copied().zip(ys.iter().copied()).collect::<Vec<_>>();
+        // the wide polychromatic line first, the thinner and dashed ones over it, so where they
+        // coincide each still shows (the mean through the dashes' gaps)
+        draw_curve(&mut chart, ctx, &series(&curve.mtf), POLY)?;
         for (i, ys) in curve.monochromatic.iter().enumerate() {
             draw_curve(&mut chart, ctx, &series(ys), Self::mono(i))?;
         }
         for ((ys, _), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
             draw_curve(&mut chart, ctx, &series(ys), stroke)?;
         }
-        draw_curve(&mut chart, ctx, &series(&curve.mtf), POLY)?;
         // references last, on top: the diffraction limit often coincides with the curve at the
         // design wavelength
         draw_curve(&mut chart, ctx, &series(&curve.diffraction_limited), REFERENCE)?;
@@ -1807,7 +1924,12 @@ pub fn landscape_plot(
     if grid.xs.is_empty() || grid.ys.is_empty() || grid.z.len() != grid.xs.len() * grid.ys.len() {
         bail!("--plot {}: the heatmap grid is empty or incomplete", path.display());
     }
-    render("--plot", path, figure, &HeatmapPlot { labels: &labels, grid: &grid, marks: &[], path: &points })
+    render(
+        "--plot",
+        path,
+        figure,
+        &HeatmapPlot { labels: &labels, grid: &grid, marks: &[], path: &points, square: false },
+    )
 }
 
 /// Writes the histogram of a tolerance run's samples (40 bins over their range, drawn as steps),
@@ -1847,6 +1969,30 @@ pub fn tolerance_plot(path: &Path, figure: &Figure, t: &report::tolerance::Toler
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_line_under_a_later_one_is_covered_only_where_they_meet() {
+        let line = |label: &str, f: &dyn Fn(f64) -> f64| Series {
+            label: label.to_owned(),
+            points: (0..=10).map(|i| (f64::from(i), f(f64::from(i)))).collect(),
+            shaded: Vec::new(),
+            best: None,
+        };
+        // b lies on a for x ≤ 4 (then 1 apart on an axis 10 high); c rises through both, its
+        // samples between theirs (x + 0.5, where they are interpolated) and at least 0.5 off
+        let a = line("a", &|_| 5.0);
+        let b = line("b", &|x| if x <= 4.0 { 5.0 } else { 6.0 });
+        let mut c = line("c", &|x| 5.0 + x);
+        c.points.iter_mut().for_each(|p| p.0 += 0.5);
+        let covers = LinesPlot::covers(&[a, b, c], (0.0, 10.0));
+        assert_eq!(covers[0], [1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(covers[1], [0; 11]);
+        assert_eq!(covers[2], [0; 11]);
+        let d = line("d", &|_| 5.0 + 0.05);
+        let e = line("e", &|_| 5.0);
+        let covers = LinesPlot::covers(&[d, e], (0.0, 10.0));
+        assert_eq!(covers[0], [1; 11], "0.05 apart on an axis 10 high: within 1 %");
+    }
 
     #[test]
     fn peak_is_exact_for_a_parabola_and_a_sample_at_the_ends() {
@@ -1997,7 +2143,7 @@ mod tests {
         // 300 dpi is 11 811 pixels per metre
         let dims = reader.info().pixel_dims.unwrap();
         assert_eq!((dims.xppu, dims.yppu, dims.unit), (11_811, 11_811, png::Unit::Meter));
-        let mut pixels = vec![0; reader.output_buffer_size()];
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
         reader.next_frame(&mut pixels).unwrap();
         assert_eq!(pixels, rgb);
         std::fs::remove_file(&path).unwrap();
@@ -2068,14 +2214,15 @@ mod tests {
         let ctx = Ctx { k: Figure::new(Some(1050), Some(300.0)).unwrap().px_per_pt() };
         let entries: Vec<Entry> =
             (0..8).map(|i| Entry { label: format!("entry {i}"), swatch: Swatch::Line(POLY) }).collect();
-        let layout = Layout::new(ctx, 1050, "a title long enough to need two lines at this size, surely", &entries);
+        let layout =
+            Layout::new(ctx, 1050, "a title long enough to need two lines at this size, surely", &entries, ASPECT);
         let legend = layout.legend.unwrap();
         assert!(legend.box_w <= 1050 - 2 * ctx.px(MARGIN_PT), "{}", legend.box_w);
         assert!(legend.columns.len() >= 2 && legend.columns.len() < 8, "{:?}", legend.columns);
         assert_eq!(layout.title.len(), 2, "{:?}", layout.title);
         // a label wider than the figure is wrapped onto lines of its own
         let long = [Entry { label: "a very long legend entry indeed, ".repeat(4), swatch: Swatch::Line(POLY) }];
-        let legend = Layout::new(ctx, 1050, "", &long).legend.unwrap();
+        let legend = Layout::new(ctx, 1050, "", &long, ASPECT).legend.unwrap();
         assert!(legend.box_w <= 1050 - 2 * ctx.px(MARGIN_PT), "{}", legend.box_w);
         assert!(legend.placed[0].0.len() >= 2, "{:?}", legend.placed);
     }

@@ -1,7 +1,6 @@
 //! `asnr psf` and `asnr otf`: the scene's 2-D polychromatic PSF and OTF at its field point and
 //! pupil, as PNG images and numbers (CSV matrices and a JSON description of the grid).
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -114,6 +113,18 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
     };
     let shifted = |i: usize| (i + centre) % n;
     let mut files = Vec::new();
+    // the images' titles: the scene's (or its lens), and the field point off axis
+    let name = scene.title().map_or_else(|| scene.lens().describe(), str::to_owned);
+    let field = scene.field();
+    let off_axis = if field.x_rad == 0.0 && field.y_rad == 0.0 {
+        String::new()
+    } else {
+        format!(
+            ", field ({}°, {}°)",
+            optics::round_for_display(field.x_rad.to_degrees()),
+            optics::round_for_display(field.y_rad.to_degrees())
+        )
+    };
     let (sum, peak);
     let layout;
     match kind {
@@ -125,7 +136,14 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
             sum = Some(grid.iter().sum::<f64>());
             peak = Some(grid.iter().copied().fold(f64::MIN, f64::max));
             files.push(write_csv(&out_dir.join("psf.csv"), n, &grid)?);
-            files.push(write_image(&out_dir.join("psf.png"), n, &grid, args.log)?);
+            let title = format!("Polychromatic PSF: {name}{off_axis}");
+            let picture = Picture {
+                title: &title,
+                axes: ["x (µm)", "y (µm)"],
+                value: ["PSF (fraction of the energy per sample)", "log₁₀ of the PSF over its peak"],
+                step: spacing * 1e6,
+            };
+            files.push(write_image(&out_dir.join("psf.png"), n, &grid, args.log, &picture)?);
             layout = "psf.csv: row r, column c is the PSF at y = (r − n/2)·spacing, x = (c − n/2)·spacing (rows along the detector's y), a fraction of the energy per sample";
         }
         Kind::Otf => {
@@ -137,11 +155,17 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
             files.push(write_csv(&out_dir.join("otf-real.csv"), n, &re)?);
             files.push(write_csv(&out_dir.join("otf-imag.csv"), n, &im)?);
             files.push(write_csv(&out_dir.join("mtf.csv"), n, &mtf)?);
-            files.push(write_image(&out_dir.join("mtf.png"), n, &mtf, args.log)?);
+            let title = format!("Polychromatic MTF: {name}{off_axis}");
+            let picture = Picture {
+                title: &title,
+                axes: ["frequency along x (cycles/mm)", "frequency along y (cycles/mm)"],
+                value: ["MTF", "log₁₀ MTF"],
+                step: 1e-3 / (n as f64 * spacing),
+            };
+            files.push(write_image(&out_dir.join("mtf.png"), n, &mtf, args.log, &picture)?);
             layout = "row r, column c is the OTF at ν_y = (r − n/2)·step, ν_x = (c − n/2)·step (step = frequency_step_cyc_per_mm); mtf = |OTF|";
         }
     }
-    let field = scene.field();
     let description = Description {
         scene: label,
         quantity: if kind == Kind::Psf { "psf" } else { "otf" },
@@ -320,24 +344,40 @@ fn toml_string(s: &str) -> String {
 fn write_csv(path: &Path, n: usize, values: &[f64]) -> Result<String> {
     let mut out = String::with_capacity(n * n * 12);
     for row in values.chunks_exact(n) {
-        let line: Vec<String> = row.iter().map(|v| format!("{v:e}")).collect();
-        let _ = writeln!(out, "{}", line.join(","));
+        out.push_str(&scene::sweep::csv_line(row.iter().map(|v| format!("{v:e}"))));
     }
     std::fs::write(path, out).with_context(|| format!("{}: cannot write", path.display()))?;
     Ok(path.display().to_string())
 }
 
-/// A matrix as a 16-bit grayscale PNG, scaled to its largest value (or 4 decades of log).
-fn write_image(path: &Path, n: usize, values: &[f64], log: bool) -> Result<String> {
+/// What [`write_image`] draws: the quantity, its axes' sample step and unit.
+struct Picture<'a> {
+    title: &'a str,
+    /// Axis descriptions of x and y.
+    axes: [&'a str; 2],
+    /// The colour bar's description: linear, and on the log scale.
+    value: [&'a str; 2],
+    /// Sample step along both axes, in the axes' unit.
+    step: f64,
+}
+
+/// A centred `n × n` matrix (row r at y = (r − n/2)·step, column c at x = (c − n/2)·step) as
+/// an image with labelled axes and a colour bar: its values, or with `log` log10 of the values
+/// over their largest, 4 decades deep.
+fn write_image(path: &Path, n: usize, values: &[f64], log: bool, picture: &Picture) -> Result<String> {
     let top = values.iter().copied().fold(0.0, f64::max);
-    let levels: Vec<u16> = values
-        .iter()
-        .map(|&v| {
-            let r = if top > 0.0 { (v / top).max(0.0) } else { 0.0 };
-            let r = if log { (1.0 + r.max(1e-4).log10() / 4.0).max(0.0) } else { r };
-            (r * 65535.0).round() as u16
-        })
-        .collect();
-    imaging::write_png(path, n, n, &levels, 16)?;
+    let shown = |v: f64| if log { (v / top).max(1e-4).log10() } else { v };
+    let axis: Vec<f64> = (0..n).map(|i| (i as f64 - (n / 2) as f64) * picture.step).collect();
+    // the heatmap's layout: column-major, z[i·n + j] at (x_i, y_j)
+    let z = (0..n * n).map(|k| shown(values[(k % n) * n + k / n])).collect();
+    let grid = crate::plot::Grid { xs: axis.clone(), ys: axis, z, shaded: Vec::new() };
+    let labels = crate::plot::Labels {
+        title: picture.title,
+        x: picture.axes[0],
+        y: picture.axes[1],
+        z: picture.value[usize::from(log)],
+        ..crate::plot::Labels::default()
+    };
+    crate::plot::image_plot("--out", path, &crate::plot::Figure::default(), &labels, &grid)?;
     Ok(path.display().to_string())
 }

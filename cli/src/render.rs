@@ -135,9 +135,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let progress = crate::sweep::progress_bar(ranges.len() as u64, "ranges")?;
     let mut reports = Vec::new();
     let mut columns = Vec::new();
-    let mut csv = String::from(
-        "range_nm,group,element,frequency_cyc_per_mm,orientation,above_nyquist,expected,raw,restored,cnr_raw,cnr_restored\n",
-    );
+    let mut csv = scene::sweep::csv_line([
+        "range_nm",
+        "group",
+        "element",
+        "frequency_cyc_per_mm",
+        "orientation",
+        "above_nyquist",
+        "expected",
+        "raw",
+        "restored",
+        "cnr_raw",
+        "cnr_restored",
+    ]);
     for (range, scene) in ranges.iter().zip(&scenes) {
         let evaluation = metric::evaluate(scene).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
         let rendering = imaging::render(scene, &evaluation, &object, &settings)?;
@@ -155,24 +165,23 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let tag = range.map_or("scene".to_owned(), |r| format!("{}nm", crate::plot::number(r)));
         let (files, png16_per_e) = write_images(&args.out, &tag, &rendering)?;
         for b in &rendering.bars {
-            let _ = writeln!(
-                csv,
-                "{},{},{},{},{},{},{},{},{},{},{}",
+            let orientation = match b.orientation {
+                target::Orientation::Vertical => "vertical",
+                target::Orientation::Horizontal => "horizontal",
+            };
+            csv.push_str(&scene::sweep::csv_line([
                 range.map_or(String::new(), |r| r.to_string()),
-                b.group,
-                b.element,
-                b.frequency_cyc_per_mm,
-                match b.orientation {
-                    target::Orientation::Vertical => "vertical",
-                    target::Orientation::Horizontal => "horizontal",
-                },
-                b.above_nyquist,
-                b.expected,
-                b.raw,
-                b.restored,
+                b.group.to_string(),
+                b.element.to_string(),
+                b.frequency_cyc_per_mm.to_string(),
+                orientation.to_owned(),
+                b.above_nyquist.to_string(),
+                b.expected.to_string(),
+                b.raw.to_string(),
+                b.restored.to_string(),
                 b.cnr_raw.map_or(String::new(), |v| v.to_string()),
-                b.cnr_restored.map_or(String::new(), |v| v.to_string())
-            );
+                b.cnr_restored.map_or(String::new(), |v| v.to_string()),
+            ]));
         }
         let heading = match range {
             Some(r) => format!("{} nm", crate::plot::number(*r)),

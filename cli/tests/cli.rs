@@ -1633,13 +1633,10 @@ fn tabulated_lens_reads_a_list_of_zemax_exports() {
 /// deterministic ±`noise` pattern (a third of it on the black half) that changes with `k`.
 fn measure_frame(path: &Path, k: usize, white: f64, black: f64, noise: f64) {
     let (w, h) = (32usize, 16usize);
-    let mut seed = 0x2545_f491_4f6c_dd1d_u64 ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    let mut rng: rand_pcg::Pcg64Mcg = rand::SeedableRng::seed_from_u64(k as u64);
     let bytes: Vec<u8> = (0..w * h)
         .flat_map(|i| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            let u = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let u = rand::RngExt::random::<f64>(&mut rng) - 0.5;
             let level = if i % w < w / 2 { white + 2.0 * noise * u } else { black + 2.0 * noise / 3.0 * u };
             (level.round() as u16).to_be_bytes()
         })
@@ -1831,6 +1828,10 @@ fn psf_and_otf_export_the_scenes_2d_transfer() {
     assert!((v["sum"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{v}");
     let psf = std::fs::read_to_string(dir.join("psf.csv")).unwrap();
     assert_eq!(psf.lines().count(), 64);
+    // the image is a figure (axes, colour bar: RGB, the default 900 px wide), not the bare grid
+    let png = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(dir.join("psf.png")).unwrap()));
+    let info = png.read_info().unwrap();
+    assert_eq!((info.info().width, info.info().color_type), (900, png::ColorType::Rgb));
     let v = json(&["otf", "--out", out, "--size", "64"]);
     let step = v["frequency_step_cyc_per_mm"].as_f64().unwrap() * 1e3;
     let real = std::fs::read_to_string(dir.join("otf-real.csv")).unwrap();

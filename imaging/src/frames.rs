@@ -52,7 +52,11 @@ pub fn read_frame(path: &Path) -> Result<Frame, Error> {
     if color != png::ColorType::Grayscale {
         return Err(Error::NotGrayscale { path: path.to_owned(), color: format!("{color:?}").to_lowercase() });
     }
-    let mut buffer = vec![0; reader.output_buffer_size()];
+    // the size was checked against the limit above, so it fits in memory (None: it overflows)
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| read(format!("{w} × {h} pixels: the decoded frame would not fit in memory")))?;
+    let mut buffer = vec![0; size];
     let info = reader.next_frame(&mut buffer).map_err(|e| read(format!("cannot decode ({e})")))?;
     let (width, height) = (info.width as usize, info.height as usize);
     let data: Vec<f64> = match depth {

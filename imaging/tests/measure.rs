@@ -1,23 +1,22 @@
-//! `imaging::measure` on synthetic 16-bit PNG stacks of known truth, made by a generator written
-//! here (xorshift64 + Box–Muller, independent of the project's sensor model), and the errors.
+//! `imaging::measure` on synthetic 16-bit PNG stacks of known truth, made by a Gaussian model written
+//! here (independent of the project's sensor model; deviates from PCG-64 MCG and rand_distr), and
+//! the errors.
 
 use std::path::{Path, PathBuf};
 
 use imaging::{Error, Region, measure, read_stack};
 
-/// Gaussian deviates from xorshift64 and Box–Muller.
-struct Normal(u64);
+/// Gaussian deviates from the project's one generator family (PCG-64 MCG, seeded; rand_distr's
+/// standard normal).
+struct Normal(rand_pcg::Pcg64Mcg);
 
 impl Normal {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    fn new(seed: u64) -> Normal {
+        Normal(rand::SeedableRng::seed_from_u64(seed))
     }
     fn sample(&mut self, mean: f64, sigma: f64) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        mean + sigma * (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+        let z: f64 = rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut self.0);
+        mean + sigma * z
     }
 }
 
@@ -43,7 +42,7 @@ const H: usize = 64;
 
 /// `frames` frames: the left half white (mean, σ), the right half black (mean, σ).
 fn stack(dir: &Path, prefix: &str, frames: usize, white: (f64, f64), black: (f64, f64), seed: u64) -> Vec<PathBuf> {
-    let mut normal = Normal(seed);
+    let mut normal = Normal::new(seed);
     (0..frames)
         .map(|k| {
             let levels: Vec<f64> = (0..W * H)

@@ -21,7 +21,7 @@
 //! - [`Tabulated`]: one order whose OTF is a measured or simulated table
 //!   ([`optics::Pupil::Table`]) with efficiency and transmission tables, a contained pixel MTF
 //!   divided out; the tables come from text: [`parse_zemax_fft_mtf`] (Zemax FFT MTF listings in
-//!   UTF-16, UTF-8 or Latin-1) with [`zemax_otf_table`], or [`parse_mtf_csv`].
+//!   UTF-16, UTF-8 or Latin-1) with [`zemax_otf_table`], or [`mtf_table_from_rows`] (the rows of a long CSV, read by `scene`).
 //! - [`PhaseLens`]: a designer's lens given by its phase profile at λ0 (Zemax Binary 2
 //!   coefficients, [`binary2_profile`], or a radial table), with an explicit [`Dispersion`]
 //!   (geometric phase, a diffractive kinoform of design order p, a fixed optical path), evaluated
@@ -89,7 +89,7 @@ pub use psf::{
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};
 pub use tabulated::{
-    FieldChoice, PIXEL_DIVISION_LIMIT, Tabulated, ZemaxField, ZemaxMtf, decode_text, parse_mtf_csv,
+    FieldChoice, PIXEL_DIVISION_LIMIT, Tabulated, ZemaxField, ZemaxMtf, decode_text, mtf_table_from_rows,
     parse_zemax_fft_mtf, zemax_otf_table,
 };
 

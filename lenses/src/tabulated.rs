@@ -8,7 +8,8 @@
 //! - [`parse_zemax_fft_mtf`]: the text listing of an FFT MTF analysis as Zemax (OpticStudio)
 //!   writes it (UTF-16 with a byte-order mark, UTF-8, or Latin-1), one wavelength or a range per
 //!   listing, one block per field; [`zemax_otf_table`] stacks monochromatic listings into a table.
-//! - [`parse_mtf_csv`]: a long-format CSV, `wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]`.
+//! - [`mtf_table_from_rows`]: a long-format CSV, `wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]`,
+//!   from its rows (read by `scene` with the project's CSV reader).
 
 use std::sync::Arc;
 
@@ -579,43 +580,32 @@ pub fn zemax_otf_table(listings: &[ZemaxMtf], field: FieldChoice) -> Result<OtfT
     OtfTable::new(wavelengths, frequencies, tangential, Some(sagittal)).map_err(Error::Table)
 }
 
-/// Parses a long-format CSV of transfer functions: one row per wavelength and frequency,
-/// `wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]` (the MTF, or the signed OTF; the
-/// optional fourth column the sagittal curve). Lines starting with `#` and blank lines are
-/// skipped; a first line that is not numbers is a header. Rows may come in any order; every
-/// wavelength must have the same frequencies, the first 0. Errors name the line (from 1).
-pub fn parse_mtf_csv(text: &str) -> Result<OtfTable, Error> {
-    let mut rows: Vec<(f64, f64, f64, Option<f64>, usize)> = Vec::new();
-    let mut seen_data_or_header = false;
-    for (index, raw) in text.lines().enumerate() {
-        let line_no = index + 1;
-        let line = raw.trim().trim_start_matches('\u{feff}');
-        if line.is_empty() || line.starts_with('#') {
-            continue;
+/// The table of a long-format CSV of transfer functions, from its rows as read (the CSV rules
+/// are the reader's: `scene` reads it with the project's one CSV reader): one row per wavelength
+/// and frequency, `wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]` (the MTF, or the signed
+/// OTF; the optional fourth column the sagittal curve), each with the line it came from (from
+/// 1). Rows may come in any order; every wavelength must have the same frequencies, the first 0.
+/// Errors name the line.
+pub fn mtf_table_from_rows(input: &[(usize, Vec<f64>)]) -> Result<OtfTable, Error> {
+    let mut rows: Vec<(f64, f64, f64, Option<f64>, usize)> = Vec::with_capacity(input.len());
+    for (line_no, v) in input {
+        let line_no = *line_no;
+        let shown = || v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ");
+        if !(v.len() == 3 || v.len() == 4) || v.iter().any(|x| !x.is_finite()) {
+            return Err(Error::Parse {
+                line: line_no,
+                expected: "wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]: three or four numbers".into(),
+                found: shown(),
+            });
         }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let parsed: Option<Vec<f64>> = cells.iter().map(|c| c.parse::<f64>().ok().filter(|v| v.is_finite())).collect();
-        match parsed {
-            Some(v) if v.len() == 3 || v.len() == 4 => {
-                if v[0] <= 0.0 || v[1] < 0.0 {
-                    return Err(Error::Parse {
-                        line: line_no,
-                        expected: "a wavelength > 0 nm and a frequency ≥ 0 cycles/mm".into(),
-                        found: line.to_owned(),
-                    });
-                }
-                rows.push((v[0] / 1e9, v[1] * 1e3, v[2], v.get(3).copied(), line_no));
-            }
-            None if !seen_data_or_header => {}
-            _ => {
-                return Err(Error::Parse {
-                    line: line_no,
-                    expected: "wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]: three or four numbers".into(),
-                    found: line.to_owned(),
-                });
-            }
+        if v[0] <= 0.0 || v[1] < 0.0 {
+            return Err(Error::Parse {
+                line: line_no,
+                expected: "a wavelength > 0 nm and a frequency ≥ 0 cycles/mm".into(),
+                found: shown(),
+            });
         }
-        seen_data_or_header = true;
+        rows.push((v[0] / 1e9, v[1] * 1e3, v[2], v.get(3).copied(), line_no));
     }
     if rows.is_empty() {
         return Err(Error::Parse { line: 0, expected: "data rows".into(), found: "none".into() });
@@ -784,19 +774,36 @@ mod tests {
     }
 
     #[test]
-    fn reads_a_long_csv() {
-        let text = "# measured\nwavelength_nm, frequency_cyc_per_mm, mtf\n600, 0, 1\n600, 100, 0.4\n500, 0, 1\n500, 100, 0.6\n";
-        let t = parse_mtf_csv(text).unwrap();
+    fn tables_a_long_csv() {
+        // rows as the CSV reader hands them: numbers and their lines (from 1)
+        let rows = |list: &[&[f64]]| -> Vec<(usize, Vec<f64>)> {
+            list.iter().enumerate().map(|(i, r)| (i + 3, r.to_vec())).collect()
+        };
+        let t = mtf_table_from_rows(&rows(&[
+            &[600.0, 0.0, 1.0],
+            &[600.0, 100.0, 0.4],
+            &[500.0, 0.0, 1.0],
+            &[500.0, 100.0, 0.6],
+        ]))
+        .unwrap();
         assert_eq!(t.wavelengths(), &[500e-9, 600e-9]);
         assert_eq!(t.frequencies(), &[0.0, 1e5]);
         assert!((t.value(550e-9, 1e5, 0.0) - 0.5).abs() < 1e-15);
-        let e = parse_mtf_csv("500, 0, 1\n500, 100\n").unwrap_err();
-        assert!(e.to_string().starts_with("line 2: expected wavelength_nm, frequency_cyc_per_mm, mtf"), "{e}");
-        let e = parse_mtf_csv("500, 0, 1\n500, 100, 0.5\n600, 0, 1\n600, 90, 0.5\n").unwrap_err();
+        let e = mtf_table_from_rows(&rows(&[&[500.0, 0.0, 1.0], &[500.0, 100.0]])).unwrap_err();
+        assert!(e.to_string().starts_with("line 4: expected wavelength_nm, frequency_cyc_per_mm, mtf"), "{e}");
+        let e = mtf_table_from_rows(&rows(&[&[-500.0, 0.0, 1.0]])).unwrap_err();
+        assert!(e.to_string().contains("line 3") && e.to_string().contains("a wavelength > 0 nm"), "{e}");
+        let e = mtf_table_from_rows(&rows(&[
+            &[500.0, 0.0, 1.0],
+            &[500.0, 100.0, 0.5],
+            &[600.0, 0.0, 1.0],
+            &[600.0, 90.0, 0.5],
+        ]))
+        .unwrap_err();
         assert!(e.to_string().contains("the same frequencies at every wavelength"), "{e}");
-        let e = parse_mtf_csv("500, 0, 1, 1\n500, 100, 0.5\n").unwrap_err();
+        let e = mtf_table_from_rows(&rows(&[&[500.0, 0.0, 1.0, 1.0], &[500.0, 100.0, 0.5]])).unwrap_err();
         assert!(e.to_string().contains("4 columns on every row"), "{e}");
-        let sag = parse_mtf_csv("500, 0, 1, 1\n500, 100, 0.5, 0.3\n").unwrap();
+        let sag = mtf_table_from_rows(&rows(&[&[500.0, 0.0, 1.0, 1.0], &[500.0, 100.0, 0.5, 0.3]])).unwrap();
         assert!(sag.is_direction_dependent());
     }
 }

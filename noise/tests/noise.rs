@@ -16,37 +16,19 @@ const TIGHT: f64 = 1e-12;
 const ULPS: f64 = 4.0 * f64::EPSILON;
 
 // ---------------------------------------------------------------------------------------------
-// A deterministic normal generator: xorshift64* (Vigna 2016) and Box–Muller.
+// A deterministic normal generator: the project's one family (PCG-64 MCG from rand_pcg, seeded;
+// rand_distr's standard normal).
 
-struct Normal {
-    state: u64,
-    spare: Option<f64>,
-}
+struct Normal(rand_pcg::Pcg64Mcg);
 
 impl Normal {
     fn new(seed: u64) -> Normal {
-        Normal { state: seed.max(1), spare: None }
+        Normal(rand::SeedableRng::seed_from_u64(seed))
     }
 
-    /// Uniform in (0, 1]: the top 53 bits of xorshift64*, shifted away from 0 for the logarithm.
-    fn uniform(&mut self) -> f64 {
-        self.state ^= self.state >> 12;
-        self.state ^= self.state << 25;
-        self.state ^= self.state >> 27;
-        let bits = self.state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
-        (bits as f64 + 1.0) / (1_u64 << 53) as f64
-    }
-
-    /// Standard normal by Box–Muller, two per pair of uniforms.
+    /// A standard normal deviate.
     fn sample(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let phi = 2.0 * std::f64::consts::PI * u2;
-        self.spare = Some(r * phi.sin());
-        r * phi.cos()
+        rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut self.0)
     }
 }
 

@@ -220,33 +220,26 @@ pub fn table(label: &str, scene: &Scene, r: &Evaluation) -> String {
 /// weighted means and `fields[i].mtf` (with `fields[i].mtf_tangential`, `fields[i].mtf_sagittal`
 /// where they differ) are the curves of the scene's field point `fields[i]`.
 pub fn mtf_csv(c: &MtfCurve) -> String {
-    let mut s = String::from("frequency_cyc_per_mm,otf,mtf,diffraction_limited");
-    let mut columns: Vec<&Vec<f64>> = Vec::new();
+    let mut header: Vec<String> =
+        ["frequency_cyc_per_mm", "otf", "mtf", "diffraction_limited"].map(str::to_owned).into();
+    let mut columns: Vec<&Vec<f64>> = vec![&c.frequency_cyc_per_mm, &c.otf, &c.mtf, &c.diffraction_limited];
     if let (Some(t), Some(g)) = (&c.mtf_tangential, &c.mtf_sagittal) {
-        s.push_str(",mtf_tangential,mtf_sagittal");
+        header.extend(["mtf_tangential".to_owned(), "mtf_sagittal".to_owned()]);
         columns.extend([t, g]);
     }
     for (i, p) in c.field_points.iter().enumerate() {
-        let _ = write!(s, ",fields[{i}].mtf");
+        header.push(format!("fields[{i}].mtf"));
         columns.push(&p.mtf);
         if let (Some(t), Some(g)) = (&p.mtf_tangential, &p.mtf_sagittal) {
-            let _ = write!(s, ",fields[{i}].mtf_tangential,fields[{i}].mtf_sagittal");
+            header.extend([format!("fields[{i}].mtf_tangential"), format!("fields[{i}].mtf_sagittal")]);
             columns.extend([t, g]);
         }
     }
-    for wl in &c.wavelengths_nm {
-        let _ = write!(s, ",mtf_{wl}nm");
-    }
-    s.push('\n');
+    header.extend(c.wavelengths_nm.iter().map(|wl| format!("mtf_{wl}nm")));
+    columns.extend(&c.monochromatic);
+    let mut s = scene::sweep::csv_line(&header);
     for i in 0..c.frequency_cyc_per_mm.len() {
-        let _ = write!(s, "{},{},{},{}", c.frequency_cyc_per_mm[i], c.otf[i], c.mtf[i], c.diffraction_limited[i]);
-        for curve in &columns {
-            let _ = write!(s, ",{}", curve[i]);
-        }
-        for mono in &c.monochromatic {
-            let _ = write!(s, ",{}", mono[i]);
-        }
-        s.push('\n');
+        s.push_str(&scene::sweep::csv_line(columns.iter().map(|curve| curve[i].to_string())));
     }
     s
 }

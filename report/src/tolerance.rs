@@ -467,18 +467,15 @@ pub const SENSITIVITY: &str = "the change of the ASNR per σ of the key: the lea
 
 /// The samples as CSV: `sample`, one column per key, `asnr`, `fraunhofer_valid`.
 pub fn csv(t: &Tolerance) -> String {
-    let mut s = String::from("sample");
-    for k in &t.keys {
-        s.push(',');
-        s.push_str(&scene::sweep::csv_field(&k.key));
-    }
-    s.push_str(",asnr,fraunhofer_valid\n");
+    let header = std::iter::once("sample".to_owned())
+        .chain(t.keys.iter().map(|k| k.key.clone()))
+        .chain(["asnr".to_owned(), "fraunhofer_valid".to_owned()]);
+    let mut s = scene::sweep::csv_line(header);
     for (i, sample) in t.samples.iter().enumerate() {
-        let _ = write!(s, "{i}");
-        for v in &sample.values {
-            let _ = write!(s, ",{v}");
-        }
-        let _ = writeln!(s, ",{},{}", sample.asnr, sample.fraunhofer_valid);
+        let row = std::iter::once(i.to_string())
+            .chain(sample.values.iter().map(|v| v.to_string()))
+            .chain([sample.asnr.to_string(), sample.fraunhofer_valid.to_string()]);
+        s.push_str(&scene::sweep::csv_line(row));
     }
     s
 }

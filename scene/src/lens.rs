@@ -774,7 +774,8 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                         return Err(o.bad(&item, quoted(file), "a Zemax export: a list holds one Zemax FFT MTF export per wavelength (a CSV table holds every wavelength itself: give it alone)"));
                     }
                     let text = lenses::decode_text(&bytes).map_err(|e| o.domain(&item, &ctx, e))?;
-                    csv_table = Some(lenses::parse_mtf_csv(&text).map_err(|e| o.domain(&item, &ctx, e))?);
+                    let rows = crate::tables::mtf_rows(&text).map_err(|e| o.domain(&item, &ctx, e))?;
+                    csv_table = Some(lenses::mtf_table_from_rows(&rows).map_err(|e| o.domain(&item, &ctx, e))?);
                 } else {
                     listings.push(lenses::parse_zemax_fft_mtf(&bytes).map_err(|e| o.domain(&item, &ctx, e))?);
                 }

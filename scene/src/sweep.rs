@@ -17,7 +17,6 @@
 //! assert!(point.asnr > 0.0 && point.mean_mtf < 1.0);
 //! ```
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -180,44 +179,43 @@ pub const RESULT_COLUMNS: [&str; 6] = ["mean_mtf", "snr0", "asnr", "photoelectro
 /// The column a sharded sweep writes first: the point's index in the whole sweep.
 pub const INDEX_COLUMN: &str = "index";
 
-/// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
-pub fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_owned() }
+/// One CSV line (with its `\n`) of `fields`, written by the `csv` crate: a field is quoted when
+/// it holds a comma, a quote or a line break (RFC 4180), the one rule of every CSV the project
+/// writes (sweeps, merges, the MTF curve, render's contrast table, the PSF matrices).
+pub fn csv_line<I, S>(fields: I) -> String
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<[u8]>,
+{
+    let mut writer = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
+    // writing to memory cannot fail, and the fields are the caller's UTF-8 text
+    let _ = writer.write_record(fields);
+    let bytes = writer.into_inner().unwrap_or_default();
+    String::from_utf8(bytes).unwrap_or_default()
 }
 
 /// The header line (with its `\n`): `index` first when `indexed`, one column per key (its dotted
 /// name), then [`RESULT_COLUMNS`].
 pub fn csv_header(keys: &[String], indexed: bool) -> String {
-    let mut fields: Vec<String> = Vec::with_capacity(keys.len() + RESULT_COLUMNS.len() + 1);
+    let mut fields: Vec<&str> = Vec::with_capacity(keys.len() + RESULT_COLUMNS.len() + 1);
     if indexed {
-        fields.push(INDEX_COLUMN.to_owned());
+        fields.push(INDEX_COLUMN);
     }
-    fields.extend(keys.iter().map(|k| csv_field(k)));
-    fields.extend(RESULT_COLUMNS.iter().map(|c| (*c).to_owned()));
-    fields.join(",") + "\n"
+    fields.extend(keys.iter().map(String::as_str));
+    fields.extend(RESULT_COLUMNS);
+    csv_line(fields)
 }
 
 /// One point's line (with its `\n`): its index first when given, the keys' values, the results
 /// (shortest round-trip decimals), the Fraunhofer validity and the warnings joined by ` | `.
 pub fn csv_row(point: &Point, index: Option<usize>) -> String {
-    let mut s = String::new();
-    if let Some(i) = index {
-        let _ = write!(s, "{i},");
-    }
-    for v in &point.values {
-        let _ = write!(s, "{v},");
-    }
-    let _ = writeln!(
-        s,
-        "{},{},{},{},{},{}",
-        point.mean_mtf,
-        point.snr0,
-        point.asnr,
-        point.photoelectrons,
-        point.fraunhofer_valid,
-        csv_field(&point.warnings.join(" | "))
-    );
-    s
+    let mut fields: Vec<String> = Vec::with_capacity(point.values.len() + RESULT_COLUMNS.len() + 1);
+    fields.extend(index.map(|i| i.to_string()));
+    fields.extend(point.values.iter().map(f64::to_string));
+    fields.extend([point.mean_mtf, point.snr0, point.asnr, point.photoelectrons].map(|v| v.to_string()));
+    fields.push(point.fraunhofer_valid.to_string());
+    fields.push(point.warnings.join(" | "));
+    csv_line(fields)
 }
 
 /// The most rows a points file may hold (as many as a sweep's grid).

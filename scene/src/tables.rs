@@ -555,3 +555,61 @@ pub(crate) fn read_columns(path: &Path, what: &str) -> Result<Columns, Error> {
     }
     Ok((headers, rows))
 }
+
+/// The long MTF CSV of `lens.mtf` (`wavelength_nm, frequency_cyc_per_mm, mtf[, sagittal]`) read
+/// by the project's CSV reader ([`csv_reader`]: `#` comments, blank lines, quoting, fields
+/// trimmed): a first row that is not all numbers is the header; every other row is numbers, each
+/// with its line (from 1), for [`lenses::mtf_table_from_rows`]. Errors name the line, the
+/// column and the value.
+pub(crate) fn mtf_rows(text: &str) -> Result<Vec<(usize, Vec<f64>)>, lenses::Error> {
+    let mut reader = csv_reader(text.trim_start_matches('\u{feff}'), false);
+    let mut rows = Vec::new();
+    let mut first = true;
+    for record in reader.records() {
+        let record = record.map_err(|e| lenses::Error::Parse {
+            line: e.position().map_or(0, |p| p.line() as usize),
+            expected: "a CSV row".into(),
+            found: e.to_string(),
+        })?;
+        let line = record.position().map_or(0, |p| p.line() as usize);
+        let numbers: Vec<Option<f64>> =
+            record.iter().map(|f| f.parse::<f64>().ok().filter(|v| v.is_finite())).collect();
+        match numbers.iter().position(Option::is_none) {
+            // the header: names, not numbers, before any data
+            Some(_) if first && rows.is_empty() => {}
+            Some(column) => {
+                const NAMES: [&str; 4] = ["wavelength_nm", "frequency_cyc_per_mm", "mtf", "sagittal"];
+                let name = NAMES.get(column).map_or(String::new(), |n| format!(" ({n})"));
+                return Err(lenses::Error::Parse {
+                    line,
+                    expected: format!("a finite number in column {}{name}", column + 1),
+                    found: format!("`{}`", crate::error::shorten(&record[column])),
+                });
+            }
+            None => rows.push((line, numbers.into_iter().flatten().collect())),
+        }
+        first = false;
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod mtf_rows_tests {
+    use super::*;
+
+    /// The long MTF CSV by the shared reader: comments, a header, quoted and padded fields, rows
+    /// with their lines; a bad field named by line, column and value.
+    #[test]
+    fn reads_rows_by_the_shared_rules() {
+        let text = "\u{feff}# measured\nwavelength_nm, frequency_cyc_per_mm, mtf\n600, 0, 1\n\"600\", 100 , 0.4\n";
+        let rows = mtf_rows(text).unwrap();
+        assert_eq!(rows, [(3, vec![600.0, 0.0, 1.0]), (4, vec![600.0, 100.0, 0.4])]);
+        let table = lenses::mtf_table_from_rows(&rows).unwrap();
+        assert_eq!(table.frequencies(), &[0.0, 1e5]);
+        let e = mtf_rows("600, 0, 1\n600, 100, x\n").unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("column 3 (mtf)") && e.contains("`x`"), "{e}");
+        // a header after data is a bad row, not a second header
+        let e = mtf_rows("600, 0, 1\nwavelength_nm, frequency_cyc_per_mm, mtf\n").unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("column 1 (wavelength_nm)"), "{e}");
+    }
+}

@@ -26,8 +26,14 @@ warm-up call) is reported, numpy's BLAS held to one thread (OMP/OPENBLAS/MKL_NUM
 already set), as our rows are single-threaded and exclude reading the CSV too.
 
 Usage: python3 xtask/baselines/numpy_table.py TABLE.csv [--f-number 2.5] [--pixel-um 5.2]
-           [--nl 96] [--nnu 32] [--nt 32] [--seconds 2]
+           [--nl 96] [--nnu 32] [--nt 32] [--seconds 2] [--sweep-f-numbers LO:HI:N]
 Prints `key=value` lines: mean_mtf, median_ms, runs, nl, nnu, nt, numpy.
+
+With `--sweep-f-numbers LO:HI:N` it is the baseline of a sweep instead (BENCHMARKS.md, "A sweep
+point"): the mean MTF at N F-numbers evenly spaced from LO to HI (both included), each computed
+once, as `asnr sweep --over lens.f_number=LO:HI:N` computes its points; it prints `points`,
+`first_mean_mtf`, `last_mean_mtf`, `per_point_ms` (the loop's wall time over N) and `numpy`, and
+the whole process is timed from outside.
 """
 import argparse
 import os
@@ -101,8 +107,21 @@ def main():
     parser.add_argument("--nnu", type=int, default=32)
     parser.add_argument("--nt", type=int, default=32)
     parser.add_argument("--seconds", type=float, default=2.0, help="time budget of the repeated runs")
+    parser.add_argument("--sweep-f-numbers", help="LO:HI:N, a sweep over the F-number instead")
     args = parser.parse_args()
     lam, trans = read_table(args.table)
+    if args.sweep_f_numbers:
+        lo, hi, n = args.sweep_f_numbers.split(":")
+        f_numbers = np.linspace(float(lo), float(hi), int(n))
+        start = time.perf_counter()
+        means = [mean_mtf(lam, trans, f, args.pixel_um * 1e-6, args.nl, args.nnu, args.nt) for f in f_numbers]
+        elapsed = time.perf_counter() - start
+        print(f"points={len(means)}")
+        print(f"first_mean_mtf={means[0]!r}")
+        print(f"last_mean_mtf={means[-1]!r}")
+        print(f"per_point_ms={elapsed / len(means) * 1e3!r}")
+        print(f"numpy={np.__version__}")
+        return
     run = lambda: mean_mtf(lam, trans, args.f_number, args.pixel_um * 1e-6, args.nl, args.nnu, args.nt)  # noqa: E731
     value = run()  # warm-up
     samples = []

@@ -13,7 +13,7 @@
 //! an 8th-power super-Gaussian (peak 0.9, half of the band above the floor at 825 ± 26 nm,
 //! 10–90 % edges 9.7 nm wide) on a 0.2 % floor, plus measurement noise `n`: the sum of two
 //! uniform deviates in ±0.0005 (triangular on ±0.001, standard deviation 0.00041, so that every
-//! value stays ≥ 0.001) drawn in wavelength order from xorshift64* seeded with [`SEED`]. It is
+//! value stays ≥ 0.001) drawn in wavelength order from PCG-64 MCG (`rand_pcg`) seeded with [`SEED`]. It is
 //! the issue's spectrometer case ("a spectrometer table at 0.25 nm over 600–1000 nm"), read by
 //! `examples/spectrometer.toml` and the accuracy report.
 //!
@@ -57,23 +57,16 @@ const NOISE_HALF_WIDTH: f64 = 0.0005;
 /// Seed of the noise generator.
 pub(crate) const SEED: u64 = 825_052;
 
-/// xorshift64* (Vigna, "An experimental exploration of Marsaglia's xorshift generators,
-/// scrambled", 2016): a fixed, dependency-free generator, so the table never changes.
-struct XorShift64Star(u64);
+/// The project's one generator family: PCG-64 MCG (O'Neill 2014, `rand_pcg::Pcg64Mcg`), seeded
+/// by `rand`'s `seed_from_u64`. Its 64-bit outputs are fixed by the algorithm (rand_pcg's
+/// reproducibility promise); the uniform deviates are made from them here (the top 53 bits), so
+/// the table does not depend on how a `rand` version turns bits into floats.
+struct Uniform(rand_pcg::Pcg64Mcg);
 
-impl XorShift64Star {
-    fn next_u64(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        self.0 = x;
-        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    /// Uniform in [0, 1): the top 53 bits.
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+impl Uniform {
+    /// Uniform in [0, 1): the top 53 bits of the next output.
+    fn next(&mut self) -> f64 {
+        (rand::Rng::next_u64(&mut self.0) >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
@@ -92,13 +85,13 @@ pub(crate) fn spectrometer_table() -> String {
          # A band-pass filter of 52 nm FWHM at 825 nm, sampled every 0.25 nm over 600-1000 nm (1601 rows):\n\
          # T = 0.002 + 0.898 exp(-ln2 (2|lambda - 825 nm|/52 nm)^8) + noise, an 8th-power super-Gaussian\n\
          # (peak 0.9, 10-90 % edges 9.7 nm wide) on a 0.2 % floor; the noise is the sum of two uniform\n\
-         # deviates in +-0.0005 from xorshift64* seeded with {SEED}, drawn in wavelength order.\n\
+         # deviates in +-0.0005 from PCG-64 MCG seeded with {SEED}, drawn in wavelength order.\n\
          wavelength_nm,transmission"
     );
-    let mut rng = XorShift64Star(SEED);
+    let mut rng = Uniform(rand::SeedableRng::seed_from_u64(SEED));
     for i in 0..ROWS {
         let lambda = START_NM + STEP_NM * i as f64;
-        let noise = NOISE_HALF_WIDTH * (2.0 * rng.uniform() - 1.0) + NOISE_HALF_WIDTH * (2.0 * rng.uniform() - 1.0);
+        let noise = NOISE_HALF_WIDTH * (2.0 * rng.next() - 1.0) + NOISE_HALF_WIDTH * (2.0 * rng.next() - 1.0);
         let _ = writeln!(text, "{lambda:.2},{:.5}", band(lambda) + noise);
     }
     text

@@ -209,6 +209,7 @@
 
 mod aperture;
 pub(crate) mod cis;
+pub use cis::sin_cos;
 mod convergence;
 mod plan;
 mod sampling;

@@ -1526,15 +1526,11 @@ pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> 
 mod tests {
     use super::*;
 
-    /// Uniform numbers in [−½, ½) from a xorshift stream seeded with `seed`: deterministic
-    /// noise for test tables.
-    fn uniform_noise(mut seed: u64) -> impl FnMut() -> f64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
+    /// Uniform numbers in [−½, ½) from PCG-64 MCG seeded with `seed` (the project's one
+    /// generator family): deterministic noise for test tables.
+    fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
+        let mut rng: rand_pcg::Pcg64Mcg = rand::SeedableRng::seed_from_u64(seed);
+        move || rand::RngExt::random::<f64>(&mut rng) - 0.5
     }
 
     /// The spectrometer scene's kind of table: an 8th-power super-Gaussian band of 0.9 at

@@ -43,15 +43,12 @@ impl LensModel for Chromatic {
 /// A spectrometer-like table over `lo`–`hi` nm at `step` nm: a steep band of 52 nm at 825 nm, a
 /// 0.2 % floor and ±0.05 % of seeded noise, times λ (photon counts), piecewise linear.
 fn table(lo: f64, hi: f64, step: f64) -> Spectrum {
-    let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut rng: rand_pcg::Pcg64Mcg = rand::SeedableRng::seed_from_u64(0x2545_f491_4f6c_dd1d);
     let n = ((hi - lo) / step).round() as usize + 1;
     let (mut waves, mut values) = (Vec::new(), Vec::new());
     for i in 0..n {
         let nm = lo + step * i as f64;
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        let noise = ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e-3;
+        let noise = (rand::RngExt::random::<f64>(&mut rng) - 0.5) * 1e-3;
         let band = 0.9 / (1.0 + ((nm - 825.0) / 26.0).powi(10));
         waves.push(nm * 1e-9);
         values.push((band + 0.002 + noise).max(0.0));
