@@ -25,8 +25,8 @@ const REQUIREMENTS: &str = "xtask/baselines/requirements.txt";
 
 /// Build and run the report from the workspace `root`.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    if let Some(bad) = args.iter().find(|a| !matches!(a.as_str(), "--quick" | "--designs")) {
-        bail!("unknown argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs])");
+    if let Some(bad) = args.iter().find(|a| !matches!(a.as_str(), "--quick" | "--designs" | "--sweep")) {
+        bail!("unknown argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs] [--sweep])");
     }
     cmd::run(&mut cmd::cargo(root, &["build", "--release", "--quiet", "--package", "asnr", "--bin", "asnr"]))?;
     let asnr = target_dir(root).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));

@@ -50,7 +50,7 @@ pub(crate) struct DesignBench {
     pub std: f64,
 }
 
-fn json_field(text: &str, name: &str) -> Option<f64> {
+pub(crate) fn json_field(text: &str, name: &str) -> Option<f64> {
     let at = text.find(&format!("\"{name}\":"))? + name.len() + 3;
     text[at..].split([',', '}', '\n']).next()?.trim().parse().ok()
 }

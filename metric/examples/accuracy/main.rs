@@ -27,7 +27,8 @@
 //!
 //! Run: `cargo run --release -p asnr-metric --example accuracy -- [--quick] [--designs] [--asnr BIN]
 //! [--python PY] [OUT_DIR]` (`--designs`: the rows of the designs given as data alone, written to
-//! `OUT_DIR/target/BENCHMARKS-designs.md`, not BENCHMARKS.md): `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
+//! `OUT_DIR/target/BENCHMARKS-designs.md`, not BENCHMARKS.md; `--sweep`: the sweep against numpy
+//! and the 5000-row efficiency table ([`sweep`]) alone, into `OUT_DIR/target/BENCHMARKS-sweep.md`): `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
 //! numpy for the baseline (`cargo xtask accuracy` builds the one and prepares the other); the
 //! map or the numpy rows are skipped, and the report says so, without them.
 
@@ -39,6 +40,7 @@ mod plot;
 mod psf_stack;
 mod report;
 mod spectral;
+mod sweep;
 mod targets;
 mod tolerance;
 
@@ -237,6 +239,8 @@ struct Context {
     psf_stack: Option<psf_stack::PsfBench>,
     /// The design search and tolerance run, when the `asnr` binary was given (not with --quick).
     design: Option<design::DesignBench>,
+    /// The sweep against numpy and the 5000-row efficiency table.
+    sweep: Option<sweep::SweepBench>,
     /// The load average (1, 5, 15 min) at the start and at the end of the run.
     load: (String, String),
 }
@@ -310,12 +314,14 @@ const QUICK: Grid = Grid {
 fn main() {
     let (mut quick, mut asnr, mut python, mut out) = (false, None, None, PathBuf::from("."));
     let mut designs_only = false;
+    let mut sweep_only = false;
     let mut asnr_python: Option<PathBuf> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--quick" => quick = true,
             "--designs" => designs_only = true,
+            "--sweep" => sweep_only = true,
             "--asnr" => asnr = Some(PathBuf::from(args.next().expect("--asnr BIN"))),
             "--python" => python = Some(PathBuf::from(args.next().expect("--python PY"))),
             "--asnr-python" => asnr_python = Some(PathBuf::from(args.next().expect("--asnr-python PY"))),
@@ -339,8 +345,21 @@ fn main() {
         map: None,
         psf_stack: None,
         design: None,
+        sweep: None,
         load: (String::new(), String::new()),
     };
+    if sweep_only {
+        // the sweep section alone, in a file beside BENCHMARKS.md
+        let Some(bin) = asnr.as_deref() else { panic!("--sweep needs --asnr BIN") };
+        context.sweep = sweep::measure(bin, python.as_deref(), &out, grid.map_runs);
+        context.load = (load_at_start, load_average());
+        let md = report::markdown(&rows, &[], &context);
+        let path = out.join("target/BENCHMARKS-sweep.md");
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, md).unwrap();
+        eprintln!("wrote {}", path.display());
+        return;
+    }
     if designs_only {
         // the designs' rows alone, in a file beside BENCHMARKS.md (their section and targets)
         tolerance::designs(&grid, python.as_deref(), &mut rows, &mut context.notes);
@@ -486,6 +505,7 @@ fn main() {
     context.psf_stack = asnr.as_deref().and_then(|bin| psf_stack::measure(bin, &out, grid.map_runs));
     if !quick {
         context.design = asnr.as_deref().and_then(|bin| design::measure(bin, &out));
+        context.sweep = asnr.as_deref().and_then(|bin| sweep::measure(bin, python.as_deref(), &out, grid.map_runs));
     }
     let kernel_rows = kernels::measure(quick);
     context.load = (load_at_start, load_average());

@@ -352,6 +352,9 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
     if let Some(d) = &context.design {
         s.push_str(&design::markdown(d));
     }
+    if let Some(b) = &context.sweep {
+        s.push_str(&crate::sweep::markdown(b));
+    }
     s.push_str(&targets::markdown(rows, context.map.as_ref()));
     s
 }
