@@ -612,6 +612,8 @@ mod tests {
         assert!(e("k=normal:x%").contains("SIGMA `x` is not a finite number"));
         assert!(e("k=uniform:2:1").contains("LO = 2 must be below HI = 1"));
         assert!(e("k=uniform:1").contains("expected KEY=normal:SIGMA"));
+        assert!(e("k=seed:3").contains("KEY=seed"), "{}", e("k=seed:3"));
+        assert_eq!(parse_vary("k=seed").unwrap().distribution, Distribution::Seed);
         assert!(e("k").contains("expected KEY=normal:SIGMA"));
         let zero = Resolved::new(&parse_vary("k=normal:2%").unwrap(), 0.0).unwrap_err().to_string();
         assert!(zero.contains("a relative σ of a key whose value is 0"), "{zero}");
