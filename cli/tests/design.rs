@@ -222,7 +222,8 @@ fn library_asnr(set: &[&str]) -> f64 {
 #[test]
 fn library_fabrication_errors_from_the_scene() {
     let nominal = library_asnr(&[]);
-    let zero = library_asnr(&["lens.atom_phase_error_rad=0", "lens.atom_transmission_error=0", "lens.atom_error_seed=9"]);
+    let zero =
+        library_asnr(&["lens.atom_phase_error_rad=0", "lens.atom_transmission_error=0", "lens.atom_error_seed=9"]);
     assert_eq!(zero.to_bits(), nominal.to_bits());
     assert_eq!(library_asnr(&["lens.parameter_bias=[0]"]).to_bits(), nominal.to_bits());
     let a = library_asnr(&["lens.atom_phase_error_rad=0.5", "lens.atom_error_seed=1"]);

@@ -181,7 +181,9 @@ pub fn draw(keys: &[Resolved], n: usize, seed: u64) -> Result<Vec<Vec<f64>>> {
                 Uniform::new_inclusive(lo, hi).map(Some).map_err(|e| anyhow::anyhow!("--vary {}: {e}", k.key))
             }
             Distribution::Normal { .. } => Ok(None),
-            Distribution::Seed => Uniform::new(0.0, SEEDS).map(Some).map_err(|e| anyhow::anyhow!("--vary {}: {e}", k.key)),
+            Distribution::Seed => {
+                Uniform::new(0.0, SEEDS).map(Some).map_err(|e| anyhow::anyhow!("--vary {}: {e}", k.key))
+            }
         })
         .collect::<Result<_>>()?;
     Ok((0..n)

@@ -1050,7 +1050,8 @@ fn library_fabrication(
                 let values: Vec<f64> = lens.layout_parameters().iter().map(|p| p[d] + v).collect();
                 let out = values.iter().filter(|&&x| x < lo || x > hi).count();
                 if out > 0 {
-                    let (min, max) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &x| (a.min(x), c.max(x)));
+                    let (min, max) =
+                        values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &x| (a.min(x), c.max(x)));
                     return Err(o.bad(
                         "lens.parameter_bias",
                         list(b),

@@ -4,7 +4,9 @@
 
 use std::sync::Arc;
 
-use lenses::{AtomErrors, Curve, Dispersion, Library, LibraryLens, PhaseLens, binary2_profile, hyperbolic_binary2, sinc};
+use lenses::{
+    AtomErrors, Curve, Dispersion, Library, LibraryLens, PhaseLens, binary2_profile, hyperbolic_binary2, sinc,
+};
 use optics::{Field, LensModel, Polychromatic, Settings};
 use radiometry::{Gaussian, Spectrum};
 
