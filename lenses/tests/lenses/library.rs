@@ -177,8 +177,8 @@ fn no_fabrication_error_is_the_nominal_lens_bit_for_bit() {
 fn phase_errors_reduce_tau1_by_exp_minus_sigma_squared() {
     let nominal = fine_lens();
     let (tau0, t0) = (nominal.orders(L0, Field::ON_AXIS)[0].efficiency, nominal.transmission(L0));
-    for sigma in [0.3, 0.6] {
-        let want = (-sigma * sigma as f64).exp();
+    for sigma in [0.3f64, 0.6] {
+        let want = (-sigma * sigma).exp();
         let seeds = 16;
         let mut mean = 0.0;
         for seed in 0..seeds {
