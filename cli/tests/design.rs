@@ -199,3 +199,88 @@ fn the_plots_of_a_search_and_a_tolerance_run() {
     assert!(err.contains("--plot: draws a search over several keys"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+// ---- a library lens's fabrication errors ----
+
+/// The example library lens (examples/library.toml).
+fn library_scene() -> String {
+    format!("{}/../examples/library.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The library scene's ASNR with `set`.
+fn library_asnr(set: &[&str]) -> f64 {
+    let scene = library_scene();
+    let mut args = vec!["evaluate", scene.as_str(), "--json"];
+    for s in set {
+        args.extend(["--set", s]);
+    }
+    json(&args)["asnr"].as_f64().unwrap()
+}
+
+/// σ = 0 and a bias of 0 give the nominal ASNR bit for bit; a phase error lowers it, and its
+/// seed picks another draw; a bias that leaves the library is refused with the numbers.
+#[test]
+fn library_fabrication_errors_from_the_scene() {
+    let nominal = library_asnr(&[]);
+    let zero =
+        library_asnr(&["lens.atom_phase_error_rad=0", "lens.atom_transmission_error=0", "lens.atom_error_seed=9"]);
+    assert_eq!(zero.to_bits(), nominal.to_bits());
+    assert_eq!(library_asnr(&["lens.parameter_bias=[0]"]).to_bits(), nominal.to_bits());
+    let a = library_asnr(&["lens.atom_phase_error_rad=0.5", "lens.atom_error_seed=1"]);
+    assert_eq!(a.to_bits(), library_asnr(&["lens.atom_phase_error_rad=0.5", "lens.atom_error_seed=1"]).to_bits());
+    assert_ne!(a, library_asnr(&["lens.atom_phase_error_rad=0.5", "lens.atom_error_seed=2"]));
+    assert!(a < nominal, "{a} vs {nominal}");
+    let scene = library_scene();
+    let err = fails(&["evaluate", &scene, "--set", "lens.parameter_bias=[500]"]);
+    assert!(
+        err.contains("lens.parameter_bias = [500]")
+            && err.contains("1680 of 1680 atoms leave the library's range [100, 300] of diameter_nm"),
+        "{err}"
+    );
+    let err = fails(&["evaluate", &scene, "--set", "lens.parameter_bias=[1, 2]"]);
+    assert!(err.contains("one bias per library parameter column, 1 (diameter_nm)"), "{err}");
+    let err = fails(&["evaluate", &scene, "--set", "lens.atom_transmission_error=0.5"]);
+    assert!(err.contains("in [0, 0.5)"), "{err}");
+    let err = fails(&["evaluate", "--set", "lens.atom_phase_error_rad=0.1"]);
+    assert!(err.contains("lens.atom_phase_error_rad"), "{err}");
+}
+
+/// `--vary lens.atom_error_seed=seed` draws a new set of atom errors each sample: the samples
+/// are the same on 1 or 2 threads byte for byte, their seeds whole numbers, their ASNR spread;
+/// the seed has no σ and no sensitivity.
+#[test]
+fn tolerance_of_a_library_lens_with_atom_errors() {
+    let scene = library_scene();
+    let args = [
+        "tolerance",
+        scene.as_str(),
+        "--set",
+        "lens.atom_phase_error_rad=0.3",
+        "--vary",
+        "lens.atom_error_seed=seed",
+        "--samples",
+        "6",
+        "--seed",
+        "3",
+    ];
+    let run = |extra: &[&str]| {
+        let out = asnr(&[&args[..], extra].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+        out.stdout
+    };
+    let csv = run(&["--csv", "--threads", "1"]);
+    assert_eq!(csv, run(&["--csv", "--threads", "2"]));
+    let text = String::from_utf8(csv).unwrap();
+    let rows: Vec<Vec<f64>> =
+        text.lines().skip(1).map(|l| l.split(',').take(3).map(|v| v.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 6);
+    for r in &rows {
+        assert!(r[1].fract() == 0.0 && (0.0..4_294_967_296.0).contains(&r[1]), "{text}");
+    }
+    assert!(rows.iter().any(|r| r[2] != rows[0][2]), "{text}");
+    let v: serde_json::Value = serde_json::from_slice(&run(&["--json"])).unwrap();
+    assert_eq!(v["keys"][0]["distribution"], "seed");
+    assert!(v["keys"][0]["sensitivity_per_sigma"].is_null(), "{v}");
+    let err = fails(&["tolerance", "--vary", "lens.f_number=seed"]);
+    assert!(err.contains("is not a seed (an integer ≥ 0)"), "{err}");
+}

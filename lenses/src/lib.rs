@@ -79,7 +79,7 @@ pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
-pub use library::{Library, LibraryLens};
+pub use library::{AtomErrors, Library, LibraryLens};
 pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
 pub use presets::{preset, preset_names};
 pub use psf::{

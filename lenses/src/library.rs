@@ -6,6 +6,9 @@ use std::sync::Arc;
 use num_complex::Complex64;
 use optics::radial::{RadialProfile, RadialPupil};
 use optics::{Field, LensModel, Order, Wavefront};
+use rand::SeedableRng;
+use rand_distr::{Distribution as _, StandardNormal};
+use rand_pcg::Pcg64;
 
 use crate::Error;
 use crate::chromatic::check;
@@ -169,6 +172,13 @@ pub struct LibraryLens {
     /// the distinct parameter sets, each atom's index into them and its area fraction
     unique: Vec<Vec<f64>>,
     atoms: Vec<(usize, f64)>,
+    /// each atom's fabrication error factor `(1 + ε_i) e^{iδ_i}` (aligned with `atoms`), when
+    /// [`LibraryLens::with_fabrication`] gave errors
+    factors: Option<Vec<Complex64>>,
+    /// how many atoms' amplitude factor `1 + ε_i` was drawn below 0 and taken as 0
+    clamped: usize,
+    /// each atom's layout row
+    rows: Vec<usize>,
     /// the atoms' cells split at the zones, and the zones' (q at their middle, area fraction)
     cells: Vec<Cell>,
     zones: Vec<(f64, f64)>,
@@ -195,6 +205,9 @@ impl Clone for LibraryLens {
             source: self.source.clone(),
             unique: self.unique.clone(),
             atoms: self.atoms.clone(),
+            factors: self.factors.clone(),
+            clamped: self.clamped,
+            rows: self.rows.clone(),
             cells: self.cells.clone(),
             zones: self.zones.clone(),
             cache: std::sync::Mutex::new(Vec::new()),
@@ -306,7 +319,8 @@ impl LibraryLens {
         let mut atoms = Vec::new();
         let mut cells = Vec::new();
         let mut zone_edges: Vec<(f64, f64)> = Vec::new();
-        for (r, p) in radii_m.iter().zip(&params) {
+        let mut rows = Vec::new();
+        for (row, (r, p)) in radii_m.iter().zip(&params).enumerate() {
             let (a, b) = ((r - 0.5 * pitch).max(0.0), (r + 0.5 * pitch).min(radius));
             if b <= a {
                 continue;
@@ -319,6 +333,8 @@ impl LibraryLens {
                 }
             };
             atoms.push((u, std::f64::consts::PI * (b * b - a * a) / area));
+            rows.push(row);
+            let atom = atoms.len() - 1;
             let mut start = a;
             while start < b {
                 let k = turns(start);
@@ -342,7 +358,7 @@ impl LibraryLens {
                 }
                 edges.1 = end;
                 let kernel = (Complex64::from_polar(1.0, -pb) - Complex64::from_polar(1.0, -pa)) * Complex64::i();
-                cells.push(Cell { unique: u, zone, kernel, span: pb - pa });
+                cells.push(Cell { atom, zone, kernel, span: pb - pa });
                 if end <= start {
                     break;
                 }
@@ -374,10 +390,110 @@ impl LibraryLens {
             source,
             unique,
             atoms,
+            factors: None,
+            clamped: 0,
+            rows,
             cells,
             zones,
             cache: std::sync::Mutex::new(Vec::new()),
         })
+    }
+
+    /// The lens as fabricated (docs/physics.md, "Fabrication errors of a library lens"): every
+    /// atom's parameters shifted by `bias` (one per parameter, in the library's units; an atom
+    /// pushed outside the library's range is refused) and, per atom `i` of the layout (a layout
+    /// row, in order), an independent fabrication error of its complex transmission,
+    /// `t_i(λ) → t_i(λ) (1 + ε_i) e^{iδ_i}` with `δ_i ~ N(0, σ_φ²)` (radians, the same at every
+    /// wavelength: an error of the pillar's phase) and `ε_i ~ N(0, σ_t²)` (relative amplitude),
+    /// drawn from `Pcg64::seed_from_u64(errors.seed)`, per row `δ` then `ε` (both drawn for every
+    /// row, so a row's phase error does not depend on σ_t). `1 + ε_i < 0` is taken as 0 (an atom
+    /// that transmits nothing; [`LibraryLens::clamped_atoms`] counts them: σ_t < 0.5 is required,
+    /// so that is below 2.3 % of the atoms), and `|t_i|` is capped at 1 (a passive atom). The
+    /// design phase ψ and the zones stay the nominal layout's (the design intent). With no bias
+    /// and σ = 0 the lens is the nominal one, bit for bit.
+    pub fn with_fabrication(mut self, bias: &[f64], errors: AtomErrors) -> Result<LibraryLens, Error> {
+        check(
+            "atom_phase_error_rad",
+            errors.phase_sigma_rad,
+            errors.phase_sigma_rad >= 0.0,
+            "a finite standard deviation ≥ 0 rad",
+        )?;
+        check(
+            "atom_transmission_error",
+            errors.transmission_sigma,
+            (0.0..0.5).contains(&errors.transmission_sigma),
+            "a finite relative standard deviation in [0, 0.5) (the amplitude factor 1 + ε must stay positive but for rare atoms)",
+        )?;
+        let ranges = self.library.ranges();
+        if bias.len() != ranges.len() {
+            return Err(Error::OutOfRange {
+                name: "parameter_bias entries",
+                value: bias.len() as f64,
+                expected: "one per library parameter column",
+            });
+        }
+        for b in bias {
+            check("parameter_bias", *b, true, "finite")?;
+        }
+        if bias.iter().any(|&b| b != 0.0) {
+            for p in &mut self.params {
+                for (v, b) in p.iter_mut().zip(bias) {
+                    *v += b;
+                }
+            }
+            for (d, &(lo, hi)) in ranges.iter().enumerate() {
+                if let Some(p) = self.params.iter().find(|p| p[d] < lo || p[d] > hi) {
+                    return Err(Error::OutOfRange {
+                        name: "layout parameter with parameter_bias",
+                        value: p[d],
+                        expected: "inside the library's range of that parameter",
+                    });
+                }
+            }
+            for p in &mut self.unique {
+                for (v, b) in p.iter_mut().zip(bias) {
+                    *v += b;
+                }
+            }
+        }
+        if errors.phase_sigma_rad > 0.0 || errors.transmission_sigma > 0.0 {
+            let mut rng = Pcg64::seed_from_u64(errors.seed);
+            let mut per_row = Vec::with_capacity(self.radii.len());
+            let mut clamped = 0;
+            for _ in 0..self.radii.len() {
+                let delta: f64 = StandardNormal.sample(&mut rng);
+                let epsilon: f64 = StandardNormal.sample(&mut rng);
+                let amplitude = 1.0 + errors.transmission_sigma * epsilon;
+                if amplitude < 0.0 {
+                    clamped += 1;
+                }
+                per_row.push(Complex64::from_polar(amplitude.max(0.0), errors.phase_sigma_rad * delta));
+            }
+            self.factors = Some(self.rows.iter().map(|&r| per_row[r]).collect());
+            self.clamped = clamped;
+        }
+        self.cache = std::sync::Mutex::new(Vec::new());
+        Ok(self)
+    }
+
+    /// How many atoms' amplitude factor `1 + ε` was drawn below 0 and taken as 0.
+    pub fn clamped_atoms(&self) -> usize {
+        self.clamped
+    }
+
+    /// The meta-atom library.
+    pub fn library(&self) -> &Library {
+        &self.library
+    }
+
+    /// Every layout atom's parameters (a layout row each, as fabricated).
+    pub fn layout_parameters(&self) -> &[Vec<f64>] {
+        &self.params
+    }
+
+    /// The number of atoms of the layout (its rows).
+    pub fn layout_atoms(&self) -> usize {
+        self.radii.len()
     }
 
     /// The family's name.
@@ -398,12 +514,26 @@ impl LibraryLens {
     /// `(T, zones' (q_centre, area fraction, c_1))` at `wavelength_m` (the cells precomputed).
     fn decompose(&self, wavelength_m: f64) -> (f64, Vec<(f64, f64, Complex64)>) {
         let t: Vec<Complex64> = self.unique.iter().map(|p| self.library.transmission(p, wavelength_m)).collect();
-        let transmission: f64 = self.atoms.iter().map(|&(u, area)| t[u].norm_sqr() * area).sum();
+        // each atom's field: its library field, times its fabrication error (|t| ≤ 1) if any
+        let t: Vec<Complex64> = match &self.factors {
+            None => self.atoms.iter().map(|&(u, _)| t[u]).collect(),
+            Some(f) => self
+                .atoms
+                .iter()
+                .zip(f)
+                .map(|(&(u, _), &f)| {
+                    let v = t[u] * f;
+                    let n = v.norm();
+                    if n > 1.0 { v / n } else { v }
+                })
+                .collect(),
+        };
+        let transmission: f64 = self.atoms.iter().zip(&t).map(|(&(_, area), t)| t.norm_sqr() * area).sum();
         let mut sums = vec![(Complex64::new(0.0, 0.0), 0.0); self.zones.len()];
         for cell in &self.cells {
             // ∫ t e^{−iψ} dψ over [ψa, ψb] = i t (e^{−iψb} − e^{−iψa})
             let z = &mut sums[cell.zone];
-            z.0 += t[cell.unique] * cell.kernel;
+            z.0 += t[cell.atom] * cell.kernel;
             z.1 += cell.span;
         }
         let zones = self
@@ -494,11 +624,22 @@ const PUPIL_KNOTS: usize = 12;
 /// Wavelengths whose first order a lens keeps (an evaluation asks the same ones many times).
 const CACHE_WAVELENGTHS: usize = 4096;
 
-/// One atom's cell (or the part of it in one zone): its unique parameter set, its zone, and
-/// `i (e^{−iψb} − e^{−iψa})` and `ψb − ψa` over it.
+/// The fabrication errors of a library lens's atoms ([`LibraryLens::with_fabrication`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AtomErrors {
+    /// σ of each atom's phase error, radians.
+    pub phase_sigma_rad: f64,
+    /// σ of each atom's relative amplitude error.
+    pub transmission_sigma: f64,
+    /// The seed of the draws.
+    pub seed: u64,
+}
+
+/// One atom's cell (or the part of it in one zone): its atom (index into the lens's atoms), its
+/// zone, and `i (e^{−iψb} − e^{−iψa})` and `ψb − ψa` over it.
 #[derive(Clone, Debug)]
 struct Cell {
-    unique: usize,
+    atom: usize,
     zone: usize,
     kernel: Complex64,
     span: f64,

@@ -314,7 +314,8 @@ def tolerance(
 ) -> dict[str, Any]:
     """How the ASNR survives fabrication: ``asnr tolerance --json`` with one ``--vary KEY=DIST``
     per entry of ``vary`` (``{key: "normal:0.02"}`` in the key's units, ``"normal:2%"`` of its
-    value, or ``"uniform:LO:HI"``), ``n`` samples drawn from ``seed`` (the same run as the command
+    value, ``"uniform:LO:HI"``, or ``"seed"``: a fresh whole-number seed each sample, for
+    ``lens.atom_error_seed``, a new draw of a library lens's atom errors), ``n`` samples drawn from ``seed`` (the same run as the command
     line's: the same numbers). The dict has the JSON's fields (``nominal_asnr``, ``mean``,
     ``std``, ``p5``, ``p50``, ``p95``, ``keys`` with each key's ``sensitivity_per_sigma``, …),
     ``csv`` (the ``--csv`` text, byte for byte) and ``table`` (its columns as numpy arrays)."""

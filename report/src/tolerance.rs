@@ -47,6 +47,9 @@ pub enum Distribution {
         /// Upper end.
         hi: f64,
     },
+    /// A fresh integer seed per sample, uniform in `[0, 2³²)` (`lens.atom_error_seed`: a new
+    /// draw of a library lens's per-atom errors each sample); no sensitivity is fitted to it.
+    Seed,
 }
 
 /// A `--vary KEY=DIST`.
@@ -61,10 +64,9 @@ pub struct Vary {
 }
 
 /// The forms `--vary` takes.
-const FORMS: &str =
-    "KEY=normal:SIGMA (in the key's units), KEY=normal:SIGMA% (of the key's value) or KEY=uniform:LO:HI";
+const FORMS: &str = "KEY=normal:SIGMA (in the key's units), KEY=normal:SIGMA% (of the key's value), KEY=uniform:LO:HI or KEY=seed (a fresh integer seed per sample, e.g. lens.atom_error_seed)";
 
-/// Parses `KEY=normal:S`, `KEY=normal:S%` or `KEY=uniform:LO:HI`.
+/// Parses `KEY=normal:S`, `KEY=normal:S%`, `KEY=uniform:LO:HI` or `KEY=seed`.
 pub fn parse_vary(arg: &str) -> Result<Vary> {
     let Some((key, spec)) = arg.split_once('=') else {
         bail!("--vary {arg}: expected {FORMS}, e.g. --vary lens.f_number=normal:1%");
@@ -100,7 +102,8 @@ pub fn parse_vary(arg: &str) -> Result<Vary> {
             }
             Distribution::Uniform { lo, hi }
         }
-        [name, ..] if !["normal", "uniform"].contains(name) => {
+        ["seed"] => Distribution::Seed,
+        [name, ..] if !["normal", "uniform", "seed"].contains(name) => {
             bail!("--vary {arg}: unknown distribution `{name}`; expected {FORMS}")
         }
         _ => bail!("--vary {arg}: expected {FORMS}"),
@@ -142,6 +145,15 @@ impl Resolved {
                 (sigma / 100.0 * nominal.abs(), nominal)
             }
             Distribution::Uniform { lo, hi } => ((hi - lo) / 12f64.sqrt(), 0.5 * (lo + hi)),
+            Distribution::Seed => {
+                if nominal.fract() != 0.0 || nominal < 0.0 {
+                    bail!(
+                        "--vary {}=seed: the key's value {nominal} is not a seed (an integer ≥ 0); `seed` is for integer seed keys such as lens.atom_error_seed",
+                        vary.key
+                    );
+                }
+                (0.0, nominal)
+            }
         };
         Ok(Resolved {
             key: vary.key.clone(),
@@ -154,8 +166,12 @@ impl Resolved {
     }
 }
 
+/// The seeds a `seed` key draws from: the integers in `[0, 2³²)`.
+const SEEDS: f64 = 4_294_967_296.0;
+
 /// `n` samples of the keys, sample-major: all drawn in order from one `Pcg64` seeded by `seed`
-/// (per sample, each key in the given order: a standard normal or a uniform draw).
+/// (per sample, each key in the given order: a standard normal, a uniform draw, or for a `seed`
+/// key a uniform draw in `[0, 2³²)` rounded down to an integer).
 pub fn draw(keys: &[Resolved], n: usize, seed: u64) -> Result<Vec<Vec<f64>>> {
     let mut rng = Pcg64::seed_from_u64(seed);
     let uniforms: Vec<Option<Uniform<f64>>> = keys
@@ -165,6 +181,9 @@ pub fn draw(keys: &[Resolved], n: usize, seed: u64) -> Result<Vec<Vec<f64>>> {
                 Uniform::new_inclusive(lo, hi).map(Some).map_err(|e| anyhow::anyhow!("--vary {}: {e}", k.key))
             }
             Distribution::Normal { .. } => Ok(None),
+            Distribution::Seed => {
+                Uniform::new(0.0, SEEDS).map(Some).map_err(|e| anyhow::anyhow!("--vary {}: {e}", k.key))
+            }
         })
         .collect::<Result<_>>()?;
     Ok((0..n)
@@ -172,6 +191,7 @@ pub fn draw(keys: &[Resolved], n: usize, seed: u64) -> Result<Vec<Vec<f64>>> {
             keys.iter()
                 .zip(&uniforms)
                 .map(|(k, u)| match u {
+                    Some(u) if k.distribution_kind == Distribution::Seed => u.sample(&mut rng).floor(),
                     Some(u) => u.sample(&mut rng),
                     None => {
                         let z: f64 = StandardNormal.sample(&mut rng);
@@ -233,6 +253,18 @@ pub fn statistics(values: &[f64]) -> Statistics {
 /// `y ≈ b_0 + Σ b_k (x_k − mean_k)/σ_k` over the samples (the normal equations, solved by LU):
 /// the change of `y` per σ of key `k`. `None` (not determined) with fewer samples than keys + 2.
 pub fn sensitivities(keys: &[Resolved], samples: &[Vec<f64>], y: &[f64]) -> Vec<Option<f64>> {
+    // a seed key has no σ: it is left out of the fit (its spread is in the samples' scatter)
+    let fitted: Vec<usize> = (0..keys.len()).filter(|&j| keys[j].distribution_kind != Distribution::Seed).collect();
+    if fitted.len() < keys.len() {
+        let sub: Vec<Resolved> = fitted.iter().map(|&j| keys[j].clone()).collect();
+        let xs: Vec<Vec<f64>> = samples.iter().map(|x| fitted.iter().map(|&j| x[j]).collect()).collect();
+        let b = if sub.is_empty() { Vec::new() } else { sensitivities(&sub, &xs, y) };
+        let mut out = vec![None; keys.len()];
+        for (&j, v) in fitted.iter().zip(b) {
+            out[j] = v;
+        }
+        return out;
+    }
     let k = keys.len();
     if samples.len() < k + 2 {
         return vec![None; k];
@@ -495,10 +527,12 @@ pub fn report(t: &Tolerance) -> String {
         writeln!(out, "  {:<width$}  {:>14}  {:>12}  {:>14}  {:>14}", "key", "distribution", "nominal", "σ", "Δ per σ");
     for (k, sens) in t.keys.iter().zip(&t.sensitivity) {
         let sens = sens.map_or("–".to_owned(), |v| format!("{v:+.6}"));
+        let sigma =
+            if k.distribution_kind == Distribution::Seed { "–".to_owned() } else { format!("{:.6e}", k.sigma) };
         let _ = writeln!(
             out,
-            "  {:<width$}  {:>14}  {:>12}  {:>14.6e}  {:>14}",
-            k.key, k.distribution, k.nominal, k.sigma, sens
+            "  {:<width$}  {:>14}  {:>12}  {:>14}  {:>14}",
+            k.key, k.distribution, k.nominal, sigma, sens
         );
     }
     let _ = writeln!(out, "  (Δ per σ: {SENSITIVITY})");
@@ -577,6 +611,8 @@ mod tests {
         assert!(e("k=normal:x%").contains("SIGMA `x` is not a finite number"));
         assert!(e("k=uniform:2:1").contains("LO = 2 must be below HI = 1"));
         assert!(e("k=uniform:1").contains("expected KEY=normal:SIGMA"));
+        assert!(e("k=seed:3").contains("KEY=seed"), "{}", e("k=seed:3"));
+        assert_eq!(parse_vary("k=seed").unwrap().distribution, Distribution::Seed);
         assert!(e("k").contains("expected KEY=normal:SIGMA"));
         let zero = Resolved::new(&parse_vary("k=normal:2%").unwrap(), 0.0).unwrap_err().to_string();
         assert!(zero.contains("a relative σ of a key whose value is 0"), "{zero}");

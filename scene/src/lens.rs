@@ -107,6 +107,10 @@ pub(crate) struct RawLens {
     pub dispersion: Option<String>,
     pub zernike_noll_rms_um: Option<Vec<f64>>,
     pub library: Option<String>,
+    pub atom_phase_error_rad: Option<f64>,
+    pub atom_transmission_error: Option<f64>,
+    pub atom_error_seed: Option<u64>,
+    pub parameter_bias: Option<Vec<f64>>,
     pub psf: Option<String>,
     pub psf_pitch_um: Option<f64>,
     pub psf_wavelengths_nm: Option<Vec<f64>>,
@@ -180,7 +184,16 @@ impl Model {
             Model::Harmonic => {
                 &["design_wavelength_nm", "design_order", "efficiency", "transmission", "zernike_noll_rms_um"]
             }
-            Model::Library => &["design_wavelength_nm", "library", "layout", "zernike_noll_rms_um"],
+            Model::Library => &[
+                "design_wavelength_nm",
+                "library",
+                "layout",
+                "atom_phase_error_rad",
+                "atom_transmission_error",
+                "atom_error_seed",
+                "parameter_bias",
+                "zernike_noll_rms_um",
+            ],
             Model::Phase => &[
                 "design_wavelength_nm",
                 "efficiency",
@@ -239,9 +252,13 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 41] {
+    fn given(&self) -> [(&'static str, bool); 45] {
         [
             ("library", self.library.is_some()),
+            ("atom_phase_error_rad", self.atom_phase_error_rad.is_some()),
+            ("atom_transmission_error", self.atom_transmission_error.is_some()),
+            ("atom_error_seed", self.atom_error_seed.is_some()),
+            ("parameter_bias", self.parameter_bias.is_some()),
             ("psf", self.psf.is_some()),
             ("psf_pitch_um", self.psf_pitch_um.is_some()),
             ("psf_wavelengths_nm", self.psf_wavelengths_nm.is_some()),
@@ -836,7 +853,8 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         }
         Model::Library => {
             let l0 = design_wavelength(o)?;
-            let lens = library_lens(l, o, f_number, f0_m, l0)?;
+            let (lens, names) = library_lens(l, o, f_number, f0_m, l0)?;
+            let lens = library_fabrication(l, o, lens, &names, &mut info)?;
             info.design_wavelength_m = Some(l0);
             info.notes.push(format!(
                 "at λ0: τ1 = {:.4}, T = {:.4} (first order from the zones' Fourier coefficients; the other orders are background)",
@@ -870,7 +888,13 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
 /// The `model = "library"` lens: `lens.library` (columns: parameters, `wavelength_nm`,
 /// `amplitude` or `transmittance`, `phase_rad`) and `lens.layout` (`r_mm` and the same
 /// parameter columns).
-fn library_lens(l: &RawLens, o: &Origins, f_number: f64, f0_m: f64, l0: f64) -> Result<lenses::LibraryLens, Error> {
+fn library_lens(
+    l: &RawLens,
+    o: &Origins,
+    f_number: f64,
+    f0_m: f64,
+    l0: f64,
+) -> Result<(lenses::LibraryLens, Vec<String>), Error> {
     let expected =
         "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
     let file = o.require("lens.library", l.library.as_deref(), expected)?;
@@ -977,8 +1001,94 @@ fn library_lens(l: &RawLens, o: &Origins, f_number: f64, f0_m: f64, l0: f64) -> 
         names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", "),
         crate::error::shorten(file)
     );
+    let names = names.iter().map(|n| n.to_string()).collect();
     lenses::LibraryLens::new(f_number, f0_m, l0, Arc::new(library), radii, params, source)
+        .map(|lens| (lens, names))
         .map_err(|e| o.domain("lens.layout", &lctx, e))
+}
+
+/// The library lens as fabricated: `lens.parameter_bias` (one per parameter column, added to
+/// every layout atom's parameters) and the atoms' independent phase and amplitude errors
+/// (`lens.atom_phase_error_rad`, `lens.atom_transmission_error`, drawn from
+/// `lens.atom_error_seed`; docs/physics.md, "Fabrication errors of a library lens").
+fn library_fabrication(
+    l: &RawLens,
+    o: &Origins,
+    lens: lenses::LibraryLens,
+    names: &[String],
+    info: &mut LensInfo,
+) -> Result<lenses::LibraryLens, Error> {
+    let phase = l.atom_phase_error_rad.unwrap_or(0.0);
+    let phase = o.number("lens.atom_phase_error_rad", phase, phase >= 0.0, "a standard deviation ≥ 0 rad")?;
+    let amplitude = l.atom_transmission_error.unwrap_or(0.0);
+    let amplitude = o.number(
+        "lens.atom_transmission_error",
+        amplitude,
+        (0.0..0.5).contains(&amplitude),
+        "a relative standard deviation in [0, 0.5): the amplitude factor 1 + ε of an atom must stay positive but for rare atoms (those drawn below 0 are taken as 0 and counted in the notes)",
+    )?;
+    let seed = l.atom_error_seed.unwrap_or(0);
+    let ranges = lens.library().ranges();
+    let list = |b: &[f64]| format!("[{}]", b.iter().map(|&v| num(v)).collect::<Vec<_>>().join(", "));
+    let bias = match &l.parameter_bias {
+        None => vec![0.0; ranges.len()],
+        Some(b) => {
+            if b.len() != ranges.len() {
+                return Err(o.bad(
+                    "lens.parameter_bias",
+                    list(b),
+                    &format!(
+                        "one bias per library parameter column, {} ({}), in that column's units",
+                        ranges.len(),
+                        names.join(", ")
+                    ),
+                ));
+            }
+            for (d, (&v, &(lo, hi))) in b.iter().zip(&ranges).enumerate() {
+                if !v.is_finite() {
+                    return Err(o.bad("lens.parameter_bias", list(b), "finite numbers"));
+                }
+                let values: Vec<f64> = lens.layout_parameters().iter().map(|p| p[d] + v).collect();
+                let out = values.iter().filter(|&&x| x < lo || x > hi).count();
+                if out > 0 {
+                    let (min, max) =
+                        values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &x| (a.min(x), c.max(x)));
+                    return Err(o.bad(
+                        "lens.parameter_bias",
+                        list(b),
+                        &format!(
+                            "a bias that keeps every atom inside the library: with {} = {} added, {out} of {} atoms leave the library's range [{}, {}] of {} (the biased layout spans [{}, {}])",
+                            names[d],
+                            num(v),
+                            values.len(),
+                            num(lo),
+                            num(hi),
+                            names[d],
+                            num(min),
+                            num(max)
+                        ),
+                    ));
+                }
+            }
+            b.clone()
+        }
+    };
+    let errors = lenses::AtomErrors { phase_sigma_rad: phase, transmission_sigma: amplitude, seed };
+    let lens = lens.with_fabrication(&bias, errors).map_err(|e| o.domain("lens.parameter_bias", "[lens]", e))?;
+    if phase > 0.0 || amplitude > 0.0 || bias.iter().any(|&b| b != 0.0) {
+        info.notes.push(format!(
+            "fabrication errors: parameter bias [{}], per-atom phase σ = {} rad and relative amplitude σ = {} over {} atoms (seed {seed}){}",
+            bias.iter().map(|&b| num(b)).collect::<Vec<_>>().join(", "),
+            num(phase),
+            num(amplitude),
+            lens.layout_atoms(),
+            match lens.clamped_atoms() {
+                0 => String::new(),
+                n => format!("; {n} atoms' amplitude factor 1 + ε drawn below 0, taken as 0"),
+            }
+        ));
+    }
+    Ok(lens)
 }
 
 /// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.

@@ -234,6 +234,12 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             if let Some(file) = &l.layout {
                 out.string("layout", &path(o, "lens.layout", file)?);
             }
+            out.number("atom_phase_error_rad", l.atom_phase_error_rad.unwrap_or(0.0));
+            out.number("atom_transmission_error", l.atom_transmission_error.unwrap_or(0.0));
+            out.value("atom_error_seed", &l.atom_error_seed.unwrap_or(0).to_string());
+            if let Some(b) = &l.parameter_bias {
+                out.value("parameter_bias", &list(b));
+            }
         }
         Model::Phase => {
             out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());

@@ -4,7 +4,9 @@
 
 use std::sync::Arc;
 
-use lenses::{Curve, Dispersion, Library, LibraryLens, PhaseLens, binary2_profile, hyperbolic_binary2, sinc};
+use lenses::{
+    AtomErrors, Curve, Dispersion, Library, LibraryLens, PhaseLens, binary2_profile, hyperbolic_binary2, sinc,
+};
 use optics::{Field, LensModel, Polychromatic, Settings};
 use radiometry::{Gaussian, Spectrum};
 
@@ -126,4 +128,111 @@ fn library_and_layout_errors() {
     let n = radii.len() / 2;
     let e = LibraryLens::new(10.0, F0, L0, library, radii[..n].to_vec(), params[..n].to_vec(), "t".into()).unwrap_err();
     assert!(e.to_string().contains("aperture radius"), "{e}");
+}
+
+/// The fine library lens of [`fine_library_is_the_geometric_phase_lens`] (64 levels, F/10,
+/// 50 nm pitch: 300+ atoms a zone at the rim), `|t|² = 0.5`.
+fn fine_lens() -> LibraryLens {
+    let library = Arc::new(levels_library(64, 0.5f64.sqrt()));
+    let (radii, params) = hyperbolic_layout(10.0, 0.05e-6, 64);
+    LibraryLens::new(10.0, F0, L0, library, radii, params, "test".into()).unwrap()
+}
+
+/// τ1 and T at three wavelengths and the mean MTF over a 50 nm band, as bits (to compare two
+/// lenses bit for bit).
+fn fingerprint(lens: &LibraryLens) -> Vec<u64> {
+    let mut out = Vec::new();
+    for lambda in [780e-9, 800e-9, 820e-9] {
+        out.push(lens.orders(lambda, Field::ON_AXIS)[0].efficiency.to_bits());
+        out.push(lens.transmission(lambda).to_bits());
+    }
+    let spectrum = Spectrum::Gaussian(Gaussian::from_range(L0, 50e-9, 1.0).unwrap());
+    let settings = Settings { tolerance: 1e-4, ..Settings::default() };
+    let poly = Polychromatic::with_settings(lens, &spectrum, Field::ON_AXIS, 1.0 / (2.0 * 5.2e-6), None, settings);
+    out.push(poly.unwrap().mean_mtf().0.to_bits());
+    out
+}
+
+fn errors(phase: f64, amplitude: f64, seed: u64) -> AtomErrors {
+    AtomErrors { phase_sigma_rad: phase, transmission_sigma: amplitude, seed }
+}
+
+/// σ = 0 and a bias of 0 give the nominal lens bit for bit, whatever the seed.
+#[test]
+fn no_fabrication_error_is_the_nominal_lens_bit_for_bit() {
+    let nominal = fingerprint(&fine_lens());
+    let fabricated = fine_lens().with_fabrication(&[0.0], errors(0.0, 0.0, 12345)).unwrap();
+    assert_eq!(fingerprint(&fabricated), nominal);
+}
+
+/// Independent per-atom phase errors δ ~ N(0, σ²): each zone's first-order coefficient is the
+/// mean of its atoms' `t e^{iδ}`, whose expectation is `t e^{−σ²/2}` (the normal's
+/// characteristic function), so τ1 → τ1(0) e^{−σ²} (a Strehl-like factor; the light lost goes
+/// into the zone-to-zone scatter and the other orders) with many atoms a zone, and T is
+/// unchanged (a phase error). This lens has ~5 zones of ~300 atoms: one draw's τ1 scatters by
+/// ~2 sd(cos δ)/(e^{−σ²/2} √N) ≈ 1.3 % (σ = 0.6, over the zones) about the expectation, biased
+/// up by (e^{σ²} − 1)/N ≈ 0.15 % (the incoherent part of a finite zone); the mean of 16 seeds
+/// is then within 1 % (3 standard errors).
+#[test]
+fn phase_errors_reduce_tau1_by_exp_minus_sigma_squared() {
+    let nominal = fine_lens();
+    let (tau0, t0) = (nominal.orders(L0, Field::ON_AXIS)[0].efficiency, nominal.transmission(L0));
+    for sigma in [0.3f64, 0.6] {
+        let want = (-sigma * sigma).exp();
+        let seeds = 16;
+        let mut mean = 0.0;
+        for seed in 0..seeds {
+            let lens = fine_lens().with_fabrication(&[0.0], errors(sigma, 0.0, seed)).unwrap();
+            mean += lens.orders(L0, Field::ON_AXIS)[0].efficiency / tau0 / seeds as f64;
+            let t = lens.transmission(L0);
+            assert!((t - t0).abs() < 1e-12, "σ = {sigma}: T = {t} vs {t0}");
+        }
+        assert!((mean - want).abs() < 1e-2 * want, "σ = {sigma}: mean τ1/τ1(0) = {mean} vs e^(−σ²) = {want}");
+    }
+    // an amplitude error ε ~ N(0, σ_t²) leaves the coherent c_1 (E[1 + ε] = 1: τ1 to 1 %), and
+    // T = E|1 + ε|² |t|² = (1 + σ_t²) |t|² (to its standard error over 16 seeds, ~1e-3); at
+    // σ_t = 0.1 the cap |t| ≤ 1 (here 1 + ε > √2, a 4σ draw) and 1 + ε < 0 (10σ) never act
+    let (mut tau, mut t) = (0.0, 0.0);
+    for seed in 0..16 {
+        let lens = fine_lens().with_fabrication(&[0.0], errors(0.0, 0.1, seed)).unwrap();
+        tau += lens.orders(L0, Field::ON_AXIS)[0].efficiency / tau0 / 16.0;
+        t += lens.transmission(L0) / t0 / 16.0;
+        assert_eq!(lens.clamped_atoms(), 0);
+    }
+    assert!((tau - 1.0).abs() < 1e-2, "σ_t = 0.1: mean τ1/τ1(0) = {tau}");
+    assert!((t - 1.01).abs() < 3e-3, "σ_t = 0.1: mean T/T(0) = {t} vs 1 + σ_t² = 1.01");
+}
+
+/// The same seed gives the same lens bit for bit; another seed another lens.
+#[test]
+fn atom_errors_are_reproducible_from_their_seed() {
+    let a = fingerprint(&fine_lens().with_fabrication(&[0.0], errors(0.4, 0.1, 7)).unwrap());
+    let b = fingerprint(&fine_lens().with_fabrication(&[0.0], errors(0.4, 0.1, 7)).unwrap());
+    let c = fingerprint(&fine_lens().with_fabrication(&[0.0], errors(0.4, 0.1, 8)).unwrap());
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+}
+
+/// A parameter bias shifts every atom (here by a whole level: the phase ramp moves by 2π/64,
+/// a constant piston, so τ1 is the nominal one to 1e-3); one that pushes an atom outside the
+/// library, or of the wrong length, or σ_t ≥ 0.5, is refused.
+#[test]
+fn parameter_bias_and_bad_errors() {
+    // the levels library ends at level 63: shift the layout's atoms off the top level first
+    let library = Arc::new(levels_library(64, 0.5f64.sqrt()));
+    let (radii, params) = hyperbolic_layout(10.0, 0.05e-6, 64);
+    let params: Vec<Vec<f64>> = params.into_iter().map(|p| vec![p[0].min(62.0)]).collect();
+    let lens = || LibraryLens::new(10.0, F0, L0, library.clone(), radii.clone(), params.clone(), "t".into()).unwrap();
+    let tau0 = lens().orders(L0, Field::ON_AXIS)[0].efficiency;
+    let shifted = lens().with_fabrication(&[1.0], errors(0.0, 0.0, 0)).unwrap();
+    let tau = shifted.orders(L0, Field::ON_AXIS)[0].efficiency;
+    assert!((tau - tau0).abs() < 1e-3, "bias of one level: τ1 = {tau} vs {tau0}");
+    let e = lens().with_fabrication(&[2.0], errors(0.0, 0.0, 0)).unwrap_err();
+    assert!(e.to_string().contains("library's range"), "{e}");
+    let e = lens().with_fabrication(&[0.0, 0.0], errors(0.0, 0.0, 0)).unwrap_err();
+    assert!(e.to_string().contains("one per library parameter"), "{e}");
+    let e = lens().with_fabrication(&[0.0], errors(0.0, 0.5, 0)).unwrap_err();
+    assert!(e.to_string().contains("[0, 0.5)"), "{e}");
+    let e = lens().with_fabrication(&[0.0], errors(-0.1, 0.0, 0)).unwrap_err();
+    assert!(e.to_string().contains("≥ 0"), "{e}");
 }
