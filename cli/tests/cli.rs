@@ -6,35 +6,13 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+
+use common::{asnr, fails, json, stderr};
+
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml");
 const TABULATED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/tabulated.toml");
 const MONOCHROMATIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/monochromatic.toml");
-
-fn asnr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_asnr")).args(args).output().expect("the asnr binary runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// Runs `asnr` expecting failure; returns stderr after checking the exit code and that it did not panic.
-fn fails(args: &[&str]) -> String {
-    let out = asnr(args);
-    let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "args {args:?}: expected exit 1, stderr: {err}");
-    assert!(!err.contains("panicked"), "args {args:?} panicked: {err}");
-    // the error message, after any plausibility warnings about the values (unit slips)
-    let error = err.find("error: ").unwrap_or_else(|| panic!("args {args:?}: no error message: {err}"));
-    assert!(err[..error].lines().all(|l| l.starts_with("warning: ")), "args {args:?}: {err}");
-    err
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let out = asnr(args);
-    assert!(out.status.success(), "args {args:?}: {}", stderr(&out));
-    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
-}
 
 /// A scratch directory unique to one test.
 fn scratch(name: &str) -> PathBuf {

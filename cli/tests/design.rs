@@ -2,31 +2,9 @@
 //! another objective) and `asnr tolerance`, on the embedded paper scene (its closed-form engine
 //! evaluates a point in well under a millisecond).
 
-use std::process::{Command, Output};
+mod common;
 
-fn asnr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_asnr")).args(args).output().expect("the asnr binary runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// Runs `asnr` expecting failure; returns stderr after checking the exit code and that it did not panic.
-fn fails(args: &[&str]) -> String {
-    let out = asnr(args);
-    let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "args {args:?}: expected exit 1, stderr: {err}");
-    assert!(!err.contains("panicked"), "args {args:?} panicked: {err}");
-    assert!(err.contains("error: "), "args {args:?}: no error message: {err}");
-    err
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let out = asnr(args);
-    assert!(out.status.success(), "args {args:?}: {}", stderr(&out));
-    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
-}
+use common::{asnr, fails, json, stderr};
 
 fn asnr_at(set: &[String]) -> f64 {
     let mut args = vec!["evaluate", "--json"];

@@ -8,30 +8,15 @@
 //! column (or option), the value and what is accepted.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn asnr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_asnr")).args(args).output().expect("the asnr binary runs")
-}
+mod common;
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use common::{asnr, fails, stderr};
 
 /// Runs `asnr` expecting success.
 fn succeeds(args: &[&str]) {
     let out = asnr(args);
     assert!(out.status.success(), "args {args:?}: {}", stderr(&out));
-}
-
-/// Runs `asnr` expecting failure; returns stderr after checking the exit code and that it did not panic.
-fn fails(args: &[&str]) -> String {
-    let out = asnr(args);
-    let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "args {args:?}: expected exit 1, stderr: {err}");
-    assert!(!err.contains("panicked"), "args {args:?} panicked: {err}");
-    assert!(err.starts_with("error: "), "args {args:?}: {err}");
-    err
 }
 
 /// A scratch directory unique to one test.
