@@ -102,21 +102,7 @@ pub fn write(path: &Path, title: &str, width: usize, height: usize, columns: &[C
 /// at `size` (a single word wider than that is a line of its own).
 fn wrap(text: &str, size: f64, width: usize) -> Vec<String> {
     let font = ("sans-serif", size).into_font();
-    let fits = |t: &str| font.box_size(t).is_ok_and(|(w, _)| w as usize <= width);
-    let mut lines = Vec::new();
-    let mut line = String::new();
-    for word in text.split_whitespace() {
-        let longer = if line.is_empty() { word.to_owned() } else { format!("{line} {word}") };
-        if line.is_empty() || fits(&longer) {
-            line = longer;
-        } else {
-            lines.push(std::mem::replace(&mut line, word.to_owned()));
-        }
-    }
-    if !line.is_empty() {
-        lines.push(line);
-    }
-    lines
+    crate::plot::wrap_words(text, |t| font.box_size(t).is_ok_and(|(w, _)| w as usize <= width))
 }
 
 fn to_i32(v: usize) -> i32 {

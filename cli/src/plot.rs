@@ -684,11 +684,17 @@ impl Layout {
 /// `text` broken into lines at spaces so each is at most `width` pixels wide at `pt` points (a
 /// single word wider than that is a line of its own).
 fn wrap(ctx: Ctx, pt: f64, text: &str, width: i32) -> Vec<String> {
+    wrap_words(text, |line| ctx.text_width(pt, line) <= width)
+}
+
+/// `text` broken into lines at spaces, each as long as `fits` allows (a single word that does
+/// not fit is a line of its own).
+pub(crate) fn wrap_words(text: &str, fits: impl Fn(&str) -> bool) -> Vec<String> {
     let mut lines = Vec::new();
     let mut line = String::new();
     for word in text.split_whitespace() {
         let longer = if line.is_empty() { word.to_owned() } else { format!("{line} {word}") };
-        if line.is_empty() || ctx.text_width(pt, &longer) <= width {
+        if line.is_empty() || fits(&longer) {
             line = longer;
         } else {
             lines.push(std::mem::replace(&mut line, word.to_owned()));
