@@ -80,6 +80,38 @@ fn ladder(rows: &[&Row]) -> (String, String) {
 }
 
 /// The targets section.
+/// Our row `ours` of `case` against numpy's cheapest row of it within 1e-6 (the 20× target):
+/// the measured text and the status; `what` names numpy's rows when none is within 1e-6.
+fn against_numpy(rows: &[Row], case: &str, ours: Option<&Row>, what: &str) -> (String, String) {
+    let numpy = rows
+        .iter()
+        .filter(|r| r.case == case && r.family == Family::Numpy && r.error <= 1e-6)
+        .min_by(|a, b| a.micros.total_cmp(&b.micros));
+    match (ours, numpy) {
+        (Some(ours), Some(theirs)) => {
+            let speedup = theirs.micros / ours.micros;
+            let how = if speedup >= 1.0 {
+                format!("{speedup:.1}× faster")
+            } else {
+                format!("{:.1}× slower", 1.0 / speedup)
+            };
+            (
+                format!(
+                    "{how}: {} (error {:.1e}) against numpy's {} ({}, error {:.1e})",
+                    duration(ours.micros),
+                    ours.error,
+                    duration(theirs.micros),
+                    theirs.setting,
+                    theirs.error
+                ),
+                verdict(20.0, speedup),
+            )
+        }
+        (Some(_), None) => (format!("no {what} within 1e-6 in this run"), "—".to_owned()),
+        _ => ("not measured in this run".to_owned(), "—".to_owned()),
+    }
+}
+
 pub(crate) fn markdown(rows: &[Row], map: Option<&Map>) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "## Targets: every engine does only the work its tolerance needs\n");
@@ -103,33 +135,7 @@ pub(crate) fn markdown(rows: &[Row], map: Option<&Map>) -> String {
     let spectro = find(rows, SPECTROMETER, Family::Default, "tol 1e-6");
     let (m, v) = spectro.map_or_else(absent, |r| (duration(r.micros), verdict(r.micros, 1000.0)));
     line("spectrometer table, tol 1e-6: ≤ 1 ms", m, v);
-    // numpy: the cheapest setting that reaches 1e-6
-    let numpy = rows
-        .iter()
-        .filter(|r| r.case == SPECTROMETER && r.family == Family::Numpy && r.error <= 1e-6)
-        .min_by(|a, b| a.micros.total_cmp(&b.micros));
-    let (m, v) = match (spectro, numpy) {
-        (Some(ours), Some(theirs)) => {
-            let speedup = theirs.micros / ours.micros;
-            let how = if speedup >= 1.0 {
-                format!("{speedup:.1}× faster")
-            } else {
-                format!("{:.0}× slower", 1.0 / speedup)
-            };
-            (
-                format!(
-                    "{how}: {} against numpy's {} ({}, error {:.1e})",
-                    duration(ours.micros),
-                    duration(theirs.micros),
-                    theirs.setting,
-                    theirs.error
-                ),
-                verdict(20.0, speedup),
-            )
-        }
-        (Some(_), None) => ("no numpy row within 1e-6 in this run".to_owned(), "—".to_owned()),
-        _ => absent(),
-    };
+    let (m, v) = against_numpy(rows, SPECTROMETER, spectro, "numpy row");
     line(
         "spectrometer table, tol 1e-6: ≥ 20× faster than the numpy script (the cheapest of its settings within 1e-6)",
         m,
@@ -140,33 +146,7 @@ pub(crate) fn markdown(rows: &[Row], map: Option<&Map>) -> String {
 
     // designs given as data: the Binary 2 metalens against numpy's radial script, the library lens
     let binary2 = find(rows, BINARY2, Family::Default, "tol 1e-6");
-    let numpy = rows
-        .iter()
-        .filter(|r| r.case == BINARY2 && r.family == Family::Numpy && r.error <= 1e-6)
-        .min_by(|a, b| a.micros.total_cmp(&b.micros));
-    let (m, v) = match (binary2, numpy) {
-        (Some(ours), Some(theirs)) => {
-            let speedup = theirs.micros / ours.micros;
-            let how = if speedup >= 1.0 {
-                format!("{speedup:.1}× faster")
-            } else {
-                format!("{:.1}× slower", 1.0 / speedup)
-            };
-            (
-                format!(
-                    "{how}: {} (error {:.1e}) against numpy's {} ({}, error {:.1e})",
-                    duration(ours.micros),
-                    ours.error,
-                    duration(theirs.micros),
-                    theirs.setting,
-                    theirs.error
-                ),
-                verdict(20.0, speedup),
-            )
-        }
-        (Some(_), None) => ("no numpy radial row within 1e-6 in this run".to_owned(), "—".to_owned()),
-        _ => absent(),
-    };
+    let (m, v) = against_numpy(rows, BINARY2, binary2, "numpy radial row");
     line("Binary 2 metalens, tol 1e-6: ≥ 20× faster than the numpy radial script at equal or better accuracy", m, v);
     let (m, v) = binary2.map_or_else(absent, |r| (format!("{:.1e}", r.error), verdict(r.error, 1e-6)));
     line("Binary 2 metalens, tol 1e-6: error ≤ 1e-6 against the per-interval rule", m, v);
