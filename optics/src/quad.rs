@@ -238,9 +238,19 @@ pub const TAIL: usize = 4;
 /// assumption (the nested estimate makes it too): the level must resolve the integrand's
 /// oscillation for it to be trusted.
 pub fn chebyshev_tail(values: &[f64]) -> f64 {
+    match chebyshev_tail_parts(values) {
+        Some((size, rate)) if rate < 0.8 => 2.0 * size * rate / (1.0 - rate),
+        _ => f64::INFINITY,
+    }
+}
+
+/// The size of the last [`TAIL`] Chebyshev coefficients of `values` and their rate of decay per
+/// degree against the [`TAIL`] before them ([`chebyshev_tail`], which sums them), or `None`
+/// where the level is too short or not a nested one (`2^k + 1` points). A size of 0 has rate 0.
+pub fn chebyshev_tail_parts(values: &[f64]) -> Option<(f64, f64)> {
     let n = values.len();
     if !(2 * TAIL + 1..=129).contains(&n) || !(n - 1).is_power_of_two() {
-        return f64::INFINITY;
+        return None;
     }
     let m = n - 1;
     let coefficient = |j: usize| {
@@ -251,13 +261,13 @@ pub fn chebyshev_tail(values: &[f64]) -> f64 {
     };
     let size = (n - TAIL..n).map(coefficient).fold(0.0, f64::max);
     if size == 0.0 {
-        return 0.0;
+        return Some((0.0, 0.0));
     }
     let before = (n - 2 * TAIL..n - TAIL).map(coefficient).fold(0.0, f64::max);
     // the fourth root ([`TAIL`] = 4) by two square roots, not `powf`
     const _: () = assert!(TAIL == 4);
     let rate = (size / before).sqrt().sqrt();
-    if rate < 0.8 { 2.0 * size * rate / (1.0 - rate) } else { f64::INFINITY }
+    Some((size, if rate.is_nan() { f64::INFINITY } else { rate }))
 }
 
 /// A zero of `f` in `[x0, x1]`, where `f0 = f(x0)` and `f1 = f(x1)` have opposite signs: the

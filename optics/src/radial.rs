@@ -65,6 +65,29 @@ pub struct RadialProfile {
     bounds: (f64, f64),
     /// `∫_0^1 f(q)² dq` (the power of an amplitude profile)
     mean_square: f64,
+    /// the values at the bound samples and the Chebyshev series, made when first asked
+    /// ([`RadialProfile::sampled`]): a lens's profiles are shared by every wavelength's pupil
+    sampled: Cache,
+}
+
+/// A [`Sampled`] made once, when first asked; not part of a profile's value (two profiles are
+/// equal whether or not either has made it).
+#[derive(Clone, Debug, Default)]
+struct Cache(OnceLock<Sampled>);
+
+impl PartialEq for Cache {
+    fn eq(&self, _: &Cache) -> bool {
+        true
+    }
+}
+
+/// A profile at the [`BOUND_SAMPLES`] + 1 points `q = i/BOUND_SAMPLES` and as a Chebyshev series
+/// in `x = 2q − 1` with the largest error of the series on `[0, 1]` (`None` where one of degree
+/// at most [`PROXY_MAX_DEGREE`] does not hold it to the rounding of its values: a table).
+#[derive(Clone, Debug, PartialEq)]
+struct Sampled {
+    values: Vec<f64>,
+    series: Option<(Vec<f64>, f64)>,
 }
 
 impl RadialProfile {
@@ -105,7 +128,7 @@ impl RadialProfile {
     }
 
     fn finish(kind: Kind) -> RadialProfile {
-        let mut p = RadialProfile { kind, fit: 0.0, bounds: (0.0, 0.0), mean_square: 0.0 };
+        let mut p = RadialProfile { kind, fit: 0.0, bounds: (0.0, 0.0), mean_square: 0.0, sampled: Cache::default() };
         // least-squares slope 12 ∫(q − ½) f dq and the mean square, by 8 panels of 16 points
         let (mut slope, mut square) = (0.0, 0.0);
         crate::quad::for_each_node(0.0, 1.0, 8, |q, w| {
@@ -128,6 +151,18 @@ impl RadialProfile {
             Kind::Sphere { r2, z } => r2 * q / ((z * z + r2 * q).sqrt() + z),
             Kind::Table(s) => s.value(q.max(0.0).sqrt()),
         }
+    }
+
+    /// The profile at the bound samples and as a Chebyshev series ([`Sampled`]), computed once.
+    fn sampled(&self) -> &Sampled {
+        self.sampled.0.get_or_init(|| {
+            let h = 1.0 / BOUND_SAMPLES as f64;
+            let values: Vec<f64> = (0..=BOUND_SAMPLES).map(|i| self.value(i as f64 * h)).collect();
+            let size = values.iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
+            // to the rounding of the values (a few units in the last place of the largest)
+            let series = fit_series(&|q| self.value(q), 8.0 * f64::EPSILON * size);
+            Sampled { values, series }
+        })
     }
 
     /// The least-squares slope of the profile in `q = ρ²` over the pupil (uniform in area):
@@ -374,6 +409,54 @@ impl RadialPupil {
         w
     }
 
+    /// The OPD beyond the order's defocus ([`opd_beyond_defocus_m`](Self::opd_beyond_defocus_m))
+    /// from its terms' cached samples and series ([`RadialProfile::sampled`]), a sum with the
+    /// pupil's own coefficients, so that a wavelength's pupil costs no profile evaluation:
+    /// `None` where a term has no series (a table).
+    fn residual(&self) -> Option<Residual> {
+        let h = 1.0 / BOUND_SAMPLES as f64;
+        let q = |i: usize| i as f64 * h;
+        let mut samples: Vec<f64> = (0..=BOUND_SAMPLES).map(|i| -self.fit * q(i)).collect();
+        let mut magnitude: Vec<f64> = (0..=16).map(|j| (self.fit * q(16 * j)).abs()).collect();
+        // −fit q = −fit (½ + ½ T₁(2q − 1))
+        let mut series = vec![-0.5 * self.fit, -0.5 * self.fit];
+        let mut error = 0.0;
+        let add = |series: &mut Vec<f64>, c: f64, terms: &[f64]| {
+            if series.len() < terms.len() {
+                series.resize(terms.len(), 0.0);
+            }
+            for (acc, t) in series.iter_mut().zip(terms) {
+                *acc += c * t;
+            }
+        };
+        for (c, p) in &self.terms {
+            let sampled = p.sampled();
+            let (terms, e) = sampled.series.as_ref()?;
+            for (s, v) in samples.iter_mut().zip(&sampled.values) {
+                *s += c * v;
+            }
+            for (j, m) in magnitude.iter_mut().enumerate() {
+                *m += (c * sampled.values[16 * j]).abs();
+            }
+            add(&mut series, *c, terms);
+            error += c.abs() * e;
+        }
+        if !self.zernike_even.is_empty() {
+            let z = |q: f64| self.zernike_even.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
+            for (i, s) in samples.iter_mut().enumerate() {
+                *s += z(q(i));
+            }
+            for (j, m) in magnitude.iter_mut().enumerate() {
+                *m += z(q(16 * j)).abs();
+            }
+            // a polynomial of degree d is its interpolant on d + 1 points or more: exact
+            let terms = chebyshev_fit(&z, (self.zernike_even.len() - 1).max(2));
+            error += 4.0 * f64::EPSILON * terms.iter().map(|t| t.abs()).sum::<f64>();
+            add(&mut series, 1.0, &terms);
+        }
+        Some(Residual { samples, series, error, magnitude })
+    }
+
     /// `|fit q| + Σ |c p(q)| + |Zernike terms|` (m): the size of the terms
     /// [`opd_beyond_defocus_m`](Self::opd_beyond_defocus_m) adds, which sets its rounding (a
     /// geometric-phase lens's phase and reference sphere cancel to a few percent of either).
@@ -405,6 +488,16 @@ impl RadialPupil {
         all.extend_from_slice(zernike_noll_m);
         RadialPupil::new(self.amplitude.clone(), self.terms.clone(), all)
     }
+}
+
+/// A pupil's OPD beyond its order's defocus, m ([`RadialPupil::residual`]): at the bound samples
+/// `q = i/BOUND_SAMPLES`, as a Chebyshev series in `2q − 1` with its largest error, and the size
+/// of its terms at `q = j/16` (their rounding).
+struct Residual {
+    samples: Vec<f64>,
+    series: Vec<f64>,
+    error: f64,
+    magnitude: Vec<f64>,
 }
 
 /// A plane wave from a field point off axis through a thin lens whose aperture is its stop
@@ -484,8 +577,36 @@ pub struct RadialOrder {
     /// the phase beyond the defocus, `k (W(q) − W020 q)` (radians), as a Chebyshev series in
     /// `x = 2q − 1`, where one of at most [`PROXY_MAX_DEGREE`] holds it to
     /// [`PROXY_PHASE_ERROR`] (evaluated by Clenshaw's recurrence instead of the profile's own
-    /// terms: a table's spline search, a sphere's root)
-    proxy: Option<Vec<f64>>,
+    /// terms: a table's spline search, a sphere's root), cut per OTF to the accuracy asked
+    proxy: Option<Proxy>,
+}
+
+/// A phase proxy's Chebyshev coefficients and, for each degree it may be cut to, the largest
+/// phase error of the cut series: `tails[d] = Σ_{k ≥ d} |c_k|` plus the fit's own error (a
+/// Chebyshev polynomial is at most 1 in size on `[−1, 1]`), so that [`RadialOrder::otf`] reads
+/// only the terms its accuracy needs.
+#[derive(Clone, Debug)]
+struct Proxy {
+    coefficients: Vec<f64>,
+    tails: Vec<f64>,
+}
+
+impl Proxy {
+    fn new(coefficients: Vec<f64>, fit_error: f64) -> Proxy {
+        let mut tails = vec![fit_error; coefficients.len() + 1];
+        for d in (0..coefficients.len()).rev() {
+            tails[d] = tails[d + 1] + coefficients[d].abs();
+        }
+        Proxy { coefficients, tails }
+    }
+
+    /// The fewest leading coefficients (at least one) whose series is within `phase_error`
+    /// radians of the phase everywhere on the pupil; all of them where none is.
+    fn cut(&self, phase_error: f64) -> &[f64] {
+        let n = self.coefficients.len();
+        let d = (1..=n).find(|&d| self.tails[d] <= phase_error).unwrap_or(n);
+        &self.coefficients[..d]
+    }
 }
 
 /// Largest degree of a phase proxy ([`RadialOrder`]).
@@ -529,50 +650,63 @@ fn clenshaw(c: &[f64], q: f64) -> f64 {
     c[0] + 0.5 * x2 * b1 - b2
 }
 
-/// `out[i] = Σ c_k T_k(2q_i − 1)` for every lane, by Clenshaw's recurrence run over eight lanes
-/// at once (coefficient by coefficient): the same operations as [`clenshaw`] on each lane, in
-/// loops the compiler vectorizes.
-fn clenshaw_lanes(c: &[f64], q: &[f64], out: &mut [f64]) {
-    // blocks of eight lanes whose recurrences stay in registers through the coefficients
-    const L: usize = 8;
-    let block = |q: &[f64], out: &mut [f64]| {
-        let mut x2 = [0.0; L];
-        for l in 0..L {
-            x2[l] = 2.0 * (2.0 * q[l] - 1.0);
-        }
-        let (mut b1, mut b2) = ([0.0; L], [0.0; L]);
-        for &ck in c[1..].iter().rev() {
-            for l in 0..L {
-                (b1[l], b2[l]) = (crate::quad::fused(x2[l], b1[l], ck - b2[l]), b1[l]);
-            }
-        }
-        for l in 0..L {
-            out[l] = c[0] + 0.5 * x2[l] * b1[l] - b2[l];
-        }
-    };
-    let n = q.len() / L * L;
-    for (q, out) in q[..n].chunks_exact(L).zip(out[..n].chunks_exact_mut(L)) {
-        block(q, out);
+/// `Σ c_k T_k(2q − 1)` on eight lanes at once by Clenshaw's recurrence (`wide::f64x8`, one
+/// AVX-512 register where the build has it): the same fused operations as [`clenshaw`] on each
+/// lane.
+#[inline(always)]
+fn clenshaw8(c: &[f64], q: wide::f64x8) -> wide::f64x8 {
+    use wide::f64x8;
+    let x2 = f64x8::splat(2.0) * q.mul_add(f64x8::splat(2.0), f64x8::splat(-1.0));
+    let (mut b1, mut b2) = (f64x8::ZERO, f64x8::ZERO);
+    for &ck in c[1..].iter().rev() {
+        (b1, b2) = (x2.mul_add(b1, f64x8::splat(ck) - b2), b1);
     }
-    for (o, &q) in out[n..].iter_mut().zip(&q[n..]) {
-        *o = clenshaw(c, q);
-    }
+    // as the scalar recurrence rounds it: the product, then the two sums
+    f64x8::splat(c[0]) + f64x8::splat(0.5) * x2 * b1 - b2
 }
 
-/// `Σ_i w_i cos(a_i − b_i)` in eight partial sums (the cosine of each lane vectorizes; one chain
-/// of dependent adds would be bound by its latency).
+/// Eight values from `x[at..at + 8]`.
+#[inline(always)]
+fn load8(x: &[f64], at: usize) -> wide::f64x8 {
+    let mut a = [0.0; 8];
+    a.copy_from_slice(&x[at..at + 8]);
+    wide::f64x8::new(a)
+}
+
+/// `Σ_i w_i cos(a_i − b_i)`: eight lanes at a time by `wide::f64x8::sin_cos` (Agner Fog's vector
+/// sine and cosine, as the FFT path's pupil rows, `fft::cis`), the rest by the scalar
+/// [`sin_cos`](crate::fft::cis::sin_cos).
 fn cosine_sum(w: &[f64], a: &[f64], b: &[f64]) -> f64 {
-    const L: usize = 8;
-    let mut acc = [0.0; L];
-    let n = w.len() / L * L;
-    for ((w, a), b) in w[..n].chunks_exact(L).zip(a[..n].chunks_exact(L)).zip(b[..n].chunks_exact(L)) {
-        for l in 0..L {
-            acc[l] += w[l] * crate::fft::cis::sin_cos(a[l] - b[l]).1;
-        }
+    let n = w.len() / 8 * 8;
+    let mut acc = wide::f64x8::ZERO;
+    for i in (0..n).step_by(8) {
+        let (_, cos) = (load8(a, i) - load8(b, i)).sin_cos();
+        acc = load8(w, i).mul_add(cos, acc);
     }
-    let mut total: f64 = acc.iter().sum();
+    let mut total = acc.reduce_add();
     for i in n..w.len() {
         total += w[i] * crate::fft::cis::sin_cos(a[i] - b[i]).1;
+    }
+    total
+}
+
+/// `Σ_i w_i cos(a (q₁ − q₂) + p(q₁) − p(q₂))` with `p` the Chebyshev series `c` in `2q − 1`
+/// ([`clenshaw8`]), `q₁ = q1[i]`, `q₂ = q2[i]`: the phase and its cosine fused eight lanes at a
+/// time, nothing stored between them; the rest lane by lane.
+fn proxy_cosine_sum(c: &[f64], a: f64, q1: &[f64], q2: &[f64], w: &[f64]) -> f64 {
+    use wide::f64x8;
+    let n = w.len() / 8 * 8;
+    let a8 = f64x8::splat(a);
+    let mut acc = f64x8::ZERO;
+    for i in (0..n).step_by(8) {
+        let (x, y) = (load8(q1, i), load8(q2, i));
+        let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
+        acc = load8(w, i).mul_add(phase.sin_cos().1, acc);
+    }
+    let mut total = acc.reduce_add();
+    for i in n..w.len() {
+        let phase = a * (q1[i] - q2[i]) + (clenshaw(c, q1[i]) - clenshaw(c, q2[i]));
+        total += w[i] * crate::fft::cis::sin_cos(phase).1;
     }
     total
 }
@@ -603,27 +737,33 @@ fn fill_row(
     }
 }
 
-/// The proxy of `phase` ([`RadialOrder`]): the first degree of 8, 16, 32, 64 whose last four
-/// coefficients sum below a tenth of the error allowed and whose values at the midpoints of the
-/// next finer grid agree within it; `None` otherwise. The error allowed is
-/// [`PROXY_PHASE_ERROR`], or the rounding of the phase's own size (1e-15 of its largest
-/// coefficient), or `rounding`, the rounding of the exact evaluation's terms (radians): the
+/// The proxy of `phase` ([`RadialOrder`]): [`fit_series`] to [`PROXY_PHASE_ERROR`] or
+/// `rounding`, the rounding of the exact evaluation's terms (radians), whichever is larger: the
 /// proxy is then as accurate as the evaluation it replaces.
-fn phase_proxy(phase: &dyn Fn(f64) -> f64, rounding: f64) -> Option<Vec<f64>> {
+fn phase_proxy(phase: &dyn Fn(f64) -> f64, rounding: f64) -> Option<Proxy> {
+    fit_series(phase, PROXY_PHASE_ERROR.max(rounding)).map(|(c, error)| Proxy::new(c, error))
+}
+
+/// The Chebyshev series of `f` on `q ∈ [0, 1]` and its error: the first degree of 8, 16, 32, 64
+/// whose last four coefficients sum below a tenth of the error allowed and whose values at the
+/// midpoints of the next finer grid agree with `f` within it; `None` otherwise. The error
+/// allowed is `floor`, or the rounding of the series' own size (1e-15 of its largest
+/// coefficient), whichever is larger.
+fn fit_series(f: &dyn Fn(f64) -> f64, floor: f64) -> Option<(Vec<f64>, f64)> {
     let mut n = 8;
     while n <= PROXY_MAX_DEGREE {
-        let c = chebyshev_fit(phase, n);
+        let c = chebyshev_fit(f, n);
         let size = c.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        let allowed = PROXY_PHASE_ERROR.max(1e-15 * size).max(rounding);
+        let allowed = floor.max(1e-15 * size);
         let tail: f64 = c[n - 3..].iter().map(|v| v.abs()).sum();
         if tail <= 0.1 * allowed {
             let checked = (0..2 * n).all(|j| {
                 let x = (std::f64::consts::PI * (j as f64 + 0.5) / (2 * n) as f64).cos();
                 let q = 0.5 * (x + 1.0);
-                (clenshaw(&c, q) - phase(q)).abs() <= allowed
+                (clenshaw(&c, q) - f(q)).abs() <= allowed
             });
             if checked {
-                return Some(c);
+                return Some((c, allowed));
             }
         }
         n *= 2;
@@ -635,7 +775,12 @@ impl RadialOrder {
     /// `pupil` with the order's defocus `w020_m` (m at the rim) at `wavelength_m`.
     pub fn new(pupil: Arc<RadialPupil>, w020_m: f64, wavelength_m: f64) -> RadialOrder {
         let h = 1.0 / BOUND_SAMPLES as f64;
-        let residual: Vec<f64> = (0..=BOUND_SAMPLES).map(|i| pupil.opd_beyond_defocus_m(i as f64 * h)).collect();
+        // from the terms' cached samples and series where they have them
+        let parts = pupil.residual();
+        let residual: Vec<f64> = match &parts {
+            Some(parts) => parts.samples.clone(),
+            None => (0..=BOUND_SAMPLES).map(|i| pupil.opd_beyond_defocus_m(i as f64 * h)).collect(),
+        };
         let residual_slopes: Vec<f64> = residual.windows(2).map(|w| (w[1] - w[0]) / h).collect();
         let slopes: Vec<f64> = residual_slopes.iter().map(|d| w020_m + d).collect();
         let slope = 1.25 * slopes.iter().map(|v| v.abs()).fold(0.0, f64::max);
@@ -672,11 +817,17 @@ impl RadialOrder {
         // the exact evaluation's rounding: a few units in the last place of its largest term
         // (its size, not its exact maximum: 17 samples)
         let magnitude = (0..=16)
-            .map(|i| i as f64 / 16.0)
-            .map(|q| (w020_m * q).abs() + pupil.opd_magnitude_m(q))
+            .map(|j| {
+                let q = j as f64 / 16.0;
+                (w020_m * q).abs() + parts.as_ref().map_or_else(|| pupil.opd_magnitude_m(q), |p| p.magnitude[j])
+            })
             .fold(0.0, f64::max);
         let rounding = 4.0 * f64::EPSILON * k * magnitude;
-        let proxy = phase_proxy(&|q| k * pupil.opd_beyond_defocus_m(q), rounding);
+        let proxy = match parts {
+            // the terms' series summed: as accurate as they are, plus the sum's rounding
+            Some(parts) => Some(Proxy::new(parts.series.iter().map(|c| k * c).collect(), k * parts.error + rounding)),
+            None => phase_proxy(&|q| k * pupil.opd_beyond_defocus_m(q), rounding),
+        };
         RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, proxy }
     }
 
@@ -726,29 +877,18 @@ impl RadialOrder {
                     .collect()
             }
         };
-        let total = self.direct(s, t_end, t_panels, &v_nodes);
+        // the proxy cut to a phase error of a quarter of the accuracy: a phase error e moves
+        // the OTF by at most 2e (|cos(φ + e) − cos φ| ≤ e at each of the two points, and
+        // ∫A(q₁)A(q₂) ≤ ∫A² by Cauchy–Schwarz), half the accuracy; the quadrature has the rest
+        let proxy = self.proxy.as_ref().map(|p| p.cut(0.25 * accuracy));
+        let total = self.direct(s, t_end, t_panels, &v_nodes, proxy);
         4.0 * total / (std::f64::consts::PI * self.pupil.power())
     }
 
-    /// The phase `k W(q)` at every lane of `q` into `phase`; the field amplitudes multiply `weight`
-    /// (`q₁` in the first half of `q`, `q₂` in the second, `weight` as long as a half).
-    fn lanes(&self, q: &[f64], phase: &mut [f64], weight: &mut [f64]) {
-        let k = std::f64::consts::TAU / self.wavelength_m;
-        let a = k * self.w020_m;
+    /// The field amplitudes at every lane into `weight` (`q₁` in the first half of `q`, `q₂` in
+    /// the second, `weight` as long as a half), where the pupil has an amplitude profile.
+    fn amplitudes(&self, q: &[f64], weight: &mut [f64]) {
         let pupil = &*self.pupil;
-        match self.proxy.as_deref() {
-            Some(c) => {
-                clenshaw_lanes(c, q, phase);
-                for (p, &qi) in phase.iter_mut().zip(q) {
-                    *p += a * qi;
-                }
-            }
-            None => {
-                for (p, &qi) in phase.iter_mut().zip(q) {
-                    *p = a * qi + k * pupil.opd_beyond_defocus_m(qi);
-                }
-            }
-        }
         if pupil.amplitude.is_some() {
             let half = weight.len();
             for (i, w) in weight.iter_mut().enumerate() {
@@ -758,28 +898,55 @@ impl RadialOrder {
     }
 
     /// The tensor rule, every node's whole phase: `t_panels` 16-point panels on `[0, acos s]`
-    /// times `v_nodes`, one t panel at a time, its `(t, v)` nodes as lanes (the phase and the
-    /// cosine run as loops over lanes the compiler vectorizes).
-    fn direct(&self, s: f64, t_end: f64, t_panels: usize, v_nodes: &[(f64, f64)]) -> f64 {
+    /// times `v_nodes`, one t panel at a time, its `(t, v)` nodes as lanes. The phase beyond the
+    /// defocus is `proxy` (a cut of the order's, [`proxy_cosine_sum`]: phase and cosine fused
+    /// eight lanes at a time), or without one the profile's own terms, then [`cosine_sum`].
+    fn direct(&self, s: f64, t_end: f64, t_panels: usize, v_nodes: &[(f64, f64)], proxy: Option<&[f64]>) -> f64 {
         let rule16 = crate::quad::rule();
         let lanes = rule16.len() * v_nodes.len();
-        let mut q = vec![0.0; 2 * lanes];
-        let mut weight = vec![0.0; lanes];
-        let mut phase = vec![0.0; 2 * lanes];
-        let mut total = 0.0;
-        let ht = 0.5 * t_end / t_panels as f64;
-        for pt in 0..t_panels {
-            let tc = (2 * pt + 1) as f64 * ht;
-            for (i, &(xt, wt)) in rule16.iter().enumerate() {
-                let t = tc + ht * xt;
-                let (sin_t, cos_t) = crate::fft::cis::sin_cos(t);
-                let sin2 = sin_t * sin_t;
-                fill_row(s, sin_t, cos_t, v_nodes, ht * wt * sin2, &mut q, &mut weight, i * v_nodes.len(), lanes);
-            }
-            self.lanes(&q, &mut phase, &mut weight);
-            total += cosine_sum(&weight, &phase[..lanes], &phase[lanes..]);
+        let k = std::f64::consts::TAU / self.wavelength_m;
+        let a = k * self.w020_m;
+        // the lanes' buffers, kept by the thread from one OTF to the next (no allocation per OTF)
+        thread_local! {
+            static BUFFERS: std::cell::RefCell<[Vec<f64>; 3]> = const { std::cell::RefCell::new([Vec::new(), Vec::new(), Vec::new()]) };
         }
-        total
+        BUFFERS.with_borrow_mut(|[q, weight, phase]| {
+            q.resize(2 * lanes, 0.0);
+            weight.resize(lanes, 0.0);
+            if proxy.is_none() {
+                phase.resize(2 * lanes, 0.0);
+            }
+            // the 16 nodes' t, and their sines and cosines eight at a time
+            let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+            let mut total = 0.0;
+            let ht = 0.5 * t_end / t_panels as f64;
+            for pt in 0..t_panels {
+                let tc = (2 * pt + 1) as f64 * ht;
+                for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
+                    *ti = tc + ht * xt;
+                }
+                for half in 0..2 {
+                    let (sin, cos) = load8(&t, 8 * half).sin_cos();
+                    sin_t[8 * half..8 * half + 8].copy_from_slice(&sin.to_array());
+                    cos_t[8 * half..8 * half + 8].copy_from_slice(&cos.to_array());
+                }
+                for (i, &(_, wt)) in rule16.iter().enumerate() {
+                    let sin2 = sin_t[i] * sin_t[i];
+                    fill_row(s, sin_t[i], cos_t[i], v_nodes, ht * wt * sin2, q, weight, i * v_nodes.len(), lanes);
+                }
+                self.amplitudes(q, weight);
+                total += match proxy {
+                    Some(c) => proxy_cosine_sum(c, a, &q[..lanes], &q[lanes..], weight),
+                    None => {
+                        for (p, &qi) in phase.iter_mut().zip(q.iter()) {
+                            *p = a * qi + k * self.pupil.opd_beyond_defocus_m(qi);
+                        }
+                        cosine_sum(weight, &phase[..lanes], &phase[lanes..])
+                    }
+                };
+            }
+            total
+        })
     }
 }
 
@@ -866,24 +1033,83 @@ mod tests {
         assert!((p.fitted_slope() - slope).abs() < 1e-10 * slope.abs(), "{} vs {slope}", p.fitted_slope());
     }
 
-    /// The lane-wise Clenshaw recurrence is the scalar one lane by lane (the same operations:
-    /// equal to the bit), also for lane counts that are not a multiple of the block, and the
-    /// lane-wise cosine sum is the plain sum within rounding.
+    /// The paper's aperture as a geometric-phase metalens at `lambda` (m): the hyperbolic phase as
+    /// four Binary 2 terms and the exact reference sphere, the order's defocus the pupil's fit.
+    fn binary2_order(lambda: f64) -> RadialOrder {
+        let (r, f, l0): (f64, f64, f64) = (0.672e-3, 3.36e-3, 800e-9);
+        let k0 = std::f64::consts::TAU / l0;
+        let a = [
+            0.0,
+            -k0 * r.powi(2) / (2.0 * f),
+            k0 * r.powi(4) / (8.0 * f.powi(3)),
+            -k0 * r.powi(6) / (16.0 * f.powi(5)),
+            k0 * 5.0 * r.powi(8) / (128.0 * f.powi(7)),
+        ];
+        let phase = Arc::new(RadialProfile::even_polynomial(a.to_vec()).unwrap());
+        let sphere = Arc::new(RadialProfile::reference_sphere(r, f).unwrap());
+        let terms = vec![(lambda / std::f64::consts::TAU, phase), (1.0, sphere)];
+        let pupil = Arc::new(RadialPupil::new(None, terms, vec![]).unwrap());
+        let w020 = pupil.fitted_defocus_m();
+        RadialOrder::new(pupil, w020, lambda)
+    }
+
+    /// The phase proxy a wavelength's pupil sums from its terms' cached series equals, within the
+    /// two error bounds, the proxy fitted to the pupil's own phase (the slow path, evaluating
+    /// the profiles), and both the phase itself; the OTF cut to a loose accuracy drops terms and
+    /// stays within that accuracy of the full series' OTF.
+    #[test]
+    fn summed_and_cut_proxies_hold_their_bounds() {
+        for lambda in [700e-9, 800e-9, 905e-9] {
+            let order = binary2_order(lambda);
+            let summed = order.proxy.as_ref().expect("polynomial and sphere terms have series");
+            let k = std::f64::consts::TAU / lambda;
+            let pupil = order.pupil.clone();
+            let exact = |q: f64| k * pupil.opd_beyond_defocus_m(q);
+            // to the rounding of the exact evaluation's terms, as `RadialOrder::new` fits it
+            let size = (0..=16).map(|j| pupil.opd_magnitude_m(j as f64 / 16.0)).fold(0.0, f64::max);
+            let fitted = phase_proxy(&exact, 4.0 * f64::EPSILON * k * size).expect("the phase has a series");
+            let bound = summed.tails[summed.coefficients.len()] + fitted.tails[fitted.coefficients.len()];
+            for i in 0..=200 {
+                let q = i as f64 / 200.0;
+                let (a, b) = (clenshaw(&summed.coefficients, q), clenshaw(&fitted.coefficients, q));
+                assert!((a - b).abs() <= bound, "λ {lambda:e}, q {q}: {a} vs {b} (bound {bound:e})");
+                assert!((a - exact(q)).abs() <= 2.0 * bound, "λ {lambda:e}, q {q}");
+            }
+            // cut to an OTF accuracy of 1e-4: fewer terms, the OTF within 1e-4 of the full one's
+            let (loose, tight) = (summed.cut(0.25e-4).len(), summed.cut(0.25e-14).len());
+            assert!(loose < tight, "λ {lambda:e}: {loose} vs {tight} terms");
+            for s in [0.02, 0.1, 0.19, 0.5] {
+                let (a, b) = (order.otf(s, 1e-4), order.otf(s, 1e-13));
+                assert!((a - b).abs() <= 1e-4, "λ {lambda:e}, s {s}: {a} vs {b}");
+            }
+        }
+    }
+
+    /// The eight-lane Clenshaw recurrence is the scalar one lane by lane (the same fused
+    /// operations: equal to the bit), and the lane-wise sums are the plain sums within rounding,
+    /// also for lane counts that are not a multiple of eight.
     #[test]
     fn lanes_match_the_scalar_recurrence() {
         let c: Vec<f64> = (0..18).map(|k| (k as f64 + 1.0).recip() * if k % 2 == 0 { 3.0 } else { -2.0 }).collect();
         for n in [1, 7, 8, 13, 64, 67] {
             let q: Vec<f64> = (0..n).map(|i| ((i as f64 + 0.5) / n as f64).powi(2)).collect();
-            let mut out = vec![0.0; n];
-            clenshaw_lanes(&c, &q, &mut out);
-            for (o, &q) in out.iter().zip(&q) {
-                assert_eq!(o.to_bits(), clenshaw(&c, q).to_bits(), "q = {q}");
+            for block in q.chunks_exact(8) {
+                let lanes = clenshaw8(&c, load8(block, 0)).to_array();
+                for (o, &q) in lanes.iter().zip(block) {
+                    assert_eq!(o.to_bits(), clenshaw(&c, q).to_bits(), "q = {q}");
+                }
             }
             let w: Vec<f64> = q.iter().map(|q| 1.0 - q).collect();
             let a: Vec<f64> = q.iter().map(|q| 40.0 * q).collect();
             let b: Vec<f64> = q.iter().map(|q| 3.0 * q * q).collect();
             let plain: f64 = (0..n).map(|i| w[i] * (a[i] - b[i]).cos()).sum();
             assert!((cosine_sum(&w, &a, &b) - plain).abs() < 1e-13 * n as f64, "n = {n}");
+            // the fused phase: 37 (q₁ − q₂) + p(q₁) − p(q₂), q₂ = q₁²
+            let q2: Vec<f64> = q.iter().map(|q| q * q).collect();
+            let fused = proxy_cosine_sum(&c, 37.0, &q, &q2, &w);
+            let plain: f64 =
+                (0..n).map(|i| w[i] * (37.0 * (q[i] - q2[i]) + clenshaw(&c, q[i]) - clenshaw(&c, q2[i])).cos()).sum();
+            assert!((fused - plain).abs() < 1e-13 * n as f64, "n = {n}: {fused} vs {plain}");
         }
     }
 }

@@ -25,11 +25,14 @@ Method (all rules fixed, vectorized over every node at once):
   below Nyquist in this scene).
 
 Timing: the median wall time of repeated calls of `mean_mtf` (after one warm-up call), numpy's
-BLAS held to one thread (OMP/OPENBLAS/MKL_NUM_THREADS=1 unless already set).
+BLAS held to one thread (OMP/OPENBLAS/MKL_NUM_THREADS=1 unless already set). With `--once`, one
+call and no timing: the script as a user runs it, for a whole-process time measured from outside
+(the interpreter's start and numpy's import included, as `asnr evaluate`'s start is).
 
 Usage: python3 xtask/baselines/numpy_radial.py [--nl 24] [--nnu 16] [--nt 24] [--nv 6]
-           [--seconds 2]
-Prints `key=value` lines: mean_mtf, median_ms, runs, nl, nnu, nt, nv, numpy.
+           [--seconds 2 | --once]
+Prints `key=value` lines: mean_mtf, median_ms, runs, nl, nnu, nt, nv, numpy (`--once`: mean_mtf,
+nl, nnu, nt, nv, numpy).
 """
 import argparse
 import os
@@ -101,8 +104,15 @@ def main():
     parser.add_argument("--nt", type=int, default=24)
     parser.add_argument("--nv", type=int, default=6)
     parser.add_argument("--seconds", type=float, default=2.0)
+    parser.add_argument("--once", action="store_true")
     args = parser.parse_args()
     value = mean_mtf(args.nl, args.nnu, args.nt, args.nv)
+    if args.once:
+        print(f"mean_mtf={value:.15f}")
+        for key in ("nl", "nnu", "nt", "nv"):
+            print(f"{key}={getattr(args, key)}")
+        print(f"numpy={np.__version__}")
+        return
     times = []
     deadline = time.perf_counter() + args.seconds
     while len(times) < 3 or time.perf_counter() < deadline:

@@ -37,6 +37,7 @@ mod iris;
 mod kernels;
 mod map;
 mod plot;
+mod process;
 mod psf_stack;
 mod report;
 mod spectral;
@@ -241,6 +242,9 @@ struct Context {
     design: Option<design::DesignBench>,
     /// The sweep against numpy and the 5000-row efficiency table.
     sweep: Option<sweep::SweepBench>,
+    /// The Binary 2 metalens as a whole process against numpy's script, when the `asnr` binary
+    /// and Python were given.
+    binary2_process: Option<process::ProcessBench>,
     /// The load average (1, 5, 15 min) at the start and at the end of the run.
     load: (String, String),
 }
@@ -346,6 +350,7 @@ fn main() {
         psf_stack: None,
         design: None,
         sweep: None,
+        binary2_process: None,
         load: (String::new(), String::new()),
     };
     if sweep_only {
@@ -363,6 +368,7 @@ fn main() {
     if designs_only {
         // the designs' rows alone, in a file beside BENCHMARKS.md (their section and targets)
         tolerance::designs(&grid, python.as_deref(), &mut rows, &mut context.notes);
+        context.binary2_process = binary2_process(asnr.as_deref(), python.as_deref(), &out, &rows, &context.notes);
         context.load = (load_at_start, load_average());
         let md = report::markdown(&rows, &[], &context);
         std::fs::create_dir_all(&out).unwrap();
@@ -497,6 +503,7 @@ fn main() {
     tolerance::spectrometer(&grid, python.as_deref(), &mut rows, &mut context.notes);
     tolerance::coma(&grid, &mut rows, &mut context.notes);
     tolerance::designs(&grid, python.as_deref(), &mut rows, &mut context.notes);
+    context.binary2_process = binary2_process(asnr.as_deref(), python.as_deref(), &out, &rows, &context.notes);
     context.map = asnr.as_deref().map(|bin| {
         let mut m = map::measure(bin, grid.map_runs);
         m.python = asnr_python.as_deref().and_then(|py| map::measure_python(py, bin, &out, grid.map_runs));
@@ -522,6 +529,19 @@ fn main() {
         .collect();
     plot::draw(&svg, &rows, &kernel_rows, &names);
     eprintln!("wrote {} and {}", path.display(), svg.display());
+}
+
+/// The Binary 2 metalens as a whole process against numpy's script ([`process`]), when the
+/// binary, Python and the designs' reference are there.
+fn binary2_process(
+    asnr: Option<&Path>,
+    python: Option<&Path>,
+    root: &Path,
+    rows: &[Row],
+    notes: &tolerance::Notes,
+) -> Option<process::ProcessBench> {
+    let reference = notes.binary2.as_ref()?.0;
+    process::measure(asnr?, python?, root, rows, reference)
 }
 
 /// `/proc/loadavg`'s 1, 5 and 15 minute averages, or "unknown".

@@ -294,6 +294,10 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
             r.work
         );
     }
+    if let Some(p) = &context.binary2_process {
+        let _ = writeln!(s);
+        s.push_str(&crate::process::markdown(p));
+    }
 
     let _ = writeln!(s, "\n## OTF kernels\n");
     let _ = writeln!(
@@ -355,7 +359,7 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
     if let Some(b) = &context.sweep {
         s.push_str(&crate::sweep::markdown(b));
     }
-    s.push_str(&targets::markdown(rows, context.map.as_ref()));
+    s.push_str(&targets::markdown(rows, context.map.as_ref(), context.binary2_process.as_ref()));
     s
 }
 

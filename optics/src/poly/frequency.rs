@@ -258,6 +258,9 @@ impl Polychromatic<'_> {
         if resolved > 65.0 {
             return None;
         }
+        let tail_resolved = 0.5 * self.defocus_phase(a, b, self.w020_resolved) + 1.0;
+        // |OTF| P(ν) (× ν in ln ν) at the level's points, k = 0 at b, for its Chebyshev tail
+        let mut integrand: Vec<f64> = Vec::with_capacity(65);
         for &points in &[3usize, 5, 9, 17, 33, 65] {
             if points > 3 {
                 let old = std::mem::take(&mut values);
@@ -289,18 +292,36 @@ impl Polychromatic<'_> {
             let weights = clenshaw_curtis(points);
             let mut integral = 0.0;
             let mut largest: f64 = 0.0;
+            integrand.clear();
             for (k, (&v, &w)) in values.iter().zip(weights).enumerate() {
                 let nu = point(k, points);
-                let f = v.abs() * self.pixel_factor(nu);
+                let f = v.abs() * self.pixel_factor(nu) * if logarithmic { nu } else { 1.0 };
                 largest = largest.max(f);
-                integral += w * h * f * if logarithmic { nu } else { 1.0 };
+                integrand.push(f);
+                integral += w * h * f;
             }
             if let Some(before) = previous {
                 let moved = (integral - before).abs();
                 // the next move predicted from the ratio of the last two (geometric convergence)
                 moves.push(moved);
                 let error = level_error(&moves, points as f64 >= resolved, nested_error);
-                if error <= budget || moved <= noise || moved <= 1e3 * f64::EPSILON * largest * (b - a) {
+                // once the level resolves the panel's phase (0.5 points a radian), the tail of
+                // its own Chebyshev coefficients bounds the rule's error (module `quad`'s test:
+                // the tail times the constant weight's largest moment from degree (n − 1)/2 up,
+                // 2/(((n − 1)/2)² − 1), times the half-width), which credits the super-geometric
+                // fall the nested estimate cannot see: the Binary 2 metalens at 1e-6 accepted at
+                // 17 points where the nested estimate asked for 33 (its 17-point mean 2.5e-8 off)
+                let tail_error = if points >= 9 && points as f64 >= tail_resolved {
+                    let half = ((points - 1) / 2) as f64;
+                    quad::chebyshev_tail(&integrand) * 2.0 / (half * half - 1.0) * h
+                } else {
+                    f64::INFINITY
+                };
+                if error <= budget
+                    || tail_error <= budget
+                    || moved <= noise
+                    || moved <= 1e3 * f64::EPSILON * largest * (b - a)
+                {
                     work.frequency_panels += 1;
                     return Some(integral);
                 }

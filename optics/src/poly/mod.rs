@@ -397,9 +397,67 @@ pub struct Polychromatic<'a> {
     w020_max: f64,
     /// weighted RMS of W020, m
     w020_rms: f64,
-    /// largest |W020| among the nodes whose weight could move the mean by a hundredth of the
-    /// tolerance, m: the defocus phase a frequency rule must resolve
+    /// the defocus beyond which the nodes' signal together could move the mean by at most a
+    /// hundredth of the tolerance, m ([`resolved_defocus`]): the defocus phase a frequency rule
+    /// must resolve
     w020_resolved: f64,
+}
+
+/// The defocus (m) the frequency rule must resolve: the largest `|W020|` such that the nodes at
+/// that defocus and beyond carry more than `relevant` of the detected signal together (those
+/// beyond it, at most `relevant`, move the mean by at most that much however their oscillation
+/// is sampled: an OTF is at most 1).
+///
+/// A node's signal is its order's efficiency times the detected spectrum's mass around its
+/// wavelength: the largest density at it and its two neighbours times half the distance between
+/// them (an upper envelope of the spectrum over the node's share of the band). Not the node's
+/// rule weight: product-integration weights of a panel on a Gaussian's tail alternate in sign
+/// at ±1e-6 of the total where the spectrum holds 1e-9 (the Binary 2 metalens at 50 nm), and
+/// read as weights they made the rule resolve the defocus at 7σ. A single wavelength (a line)
+/// keeps its weight.
+fn resolved_defocus(nodes: &Nodes, detected: &Spectrum, relevant: f64) -> f64 {
+    let mut samples: Vec<(f64, f64)> = nodes.samples.iter().copied().filter(|s| s.0.is_finite()).collect();
+    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut lambdas: Vec<f64> = samples.iter().map(|s| s.0).collect();
+    lambdas.dedup();
+    // a node's rule weight: the sample at its wavelength (one per wavelength)
+    let rule_weight = |lambda: f64| {
+        let i = samples.partition_point(|s| s.0 < lambda);
+        samples.get(i).filter(|s| s.0 == lambda).map_or(0.0, |s| s.1)
+    };
+    let mass_around = |lambda: f64| -> Option<f64> {
+        if lambdas.len() < 3 {
+            return None;
+        }
+        let i = lambdas.partition_point(|&l| l < lambda);
+        if i >= lambdas.len() || lambdas[i] != lambda {
+            return None;
+        }
+        let (lo, hi) = (lambdas[i.saturating_sub(1)], lambdas[(i + 1).min(lambdas.len() - 1)]);
+        let density = [lo, lambda, hi].iter().map(|&l| detected.value(l).abs()).fold(0.0, f64::max);
+        Some(density * 0.5 * (hi - lo))
+    };
+    let mut signal: Vec<(f64, f64)> = nodes
+        .nodes
+        .iter()
+        .map(|n| {
+            let w = rule_weight(n.lambda);
+            let mass = match mass_around(n.lambda) {
+                Some(m) if w != 0.0 && m.is_finite() => m * (n.weight / w).abs(),
+                _ => n.weight.abs(),
+            };
+            (n.w020.abs(), mass)
+        })
+        .collect();
+    signal.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut beyond = 0.0;
+    for (w020, mass) in signal {
+        beyond += mass;
+        if beyond > relevant {
+            return w020;
+        }
+    }
+    0.0
 }
 
 /// The engine for a scene: the closed form where it applies (and is allowed), a line's engine
@@ -554,8 +612,7 @@ impl<'a> Polychromatic<'a> {
         this.w020_max =
             nodes.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
         let relevant = 1e-2 * settings.tolerance * nodes.total_weight.abs();
-        this.w020_resolved =
-            nodes.nodes.iter().filter(|n| n.weight.abs() > relevant).map(|n| n.w020.abs()).fold(0.0, f64::max);
+        this.w020_resolved = resolved_defocus(nodes, detected, relevant);
         // (product-integration weights may be negative: the average of W020² too, by rounding)
         this.w020_rms = this.spectral_average(|_, w020| w020 * w020).max(0.0).sqrt();
         Ok(this)
@@ -675,4 +732,52 @@ pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, 
         None => spectral_extent(detected)?.0,
     };
     Ok(if lo > 0.0 { 1.0 / (lo * lens.f_number()) } else { f64::INFINITY })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`resolved_defocus`] reads a node's signal from the spectrum around it, not from its rule
+    /// weight: a Gaussian band's tail whose product weights alternate at ±1e-6 of the total
+    /// (where the spectrum holds far less) does not make the outermost node's defocus the one to
+    /// resolve. Reference: the defocus at which the Gaussian's two tails beyond hold the relevant
+    /// share, from erfc (σ = 10 nm, W020 = (λ − 800 nm) × 1000).
+    #[test]
+    fn resolved_defocus_follows_the_spectrum_not_the_rule_weights() {
+        let filter = radiometry::Gaussian::from_range(800e-9, 2.0 * 2f64.sqrt() * 10e-9, 1.0).unwrap();
+        let detected = Spectrum::Gaussian(filter);
+        // nodes every 2 nm over ±70 nm; weights: the density × 2 nm within ±40 nm, ±1e-6 of the
+        // total beyond (as a tail panel's interpolatory weights are)
+        let lambdas: Vec<f64> = (-35..=35).map(|k| 800e-9 + 2e-9 * k as f64).collect();
+        let total: f64 = lambdas.iter().map(|&l| detected.value(l) * 2e-9).sum();
+        let mut nodes = Nodes::default();
+        for (k, &lambda) in lambdas.iter().enumerate() {
+            let w = if (lambda - 800e-9).abs() > 40e-9 {
+                if k % 2 == 0 { 1e-6 * total } else { -1e-6 * total }
+            } else {
+                detected.value(lambda) * 2e-9
+            };
+            nodes.samples.push((lambda, w));
+            nodes.nodes.push(spectral::Node {
+                lambda,
+                weight: w,
+                w020: (lambda - 800e-9) * 1e3,
+                scale: 1.0,
+                shift: [0.0; 2],
+                table: None,
+                radial: None,
+            });
+        }
+        nodes.sum_weights();
+        let resolved = resolved_defocus(&nodes, &detected, 1e-8 * total);
+        // read as weights, every node beyond 40 nm is relevant: the outermost defocus, 70 µm
+        assert!(resolved < 0.9 * 70e-9 * 1e3, "{resolved:e}");
+        // the Gaussian's two tails beyond x σ hold erfc(x/√2) of the total, 1e-8 at x = 5.73;
+        // the envelope (the largest density at a node and its two neighbours) errs on the side of
+        // more signal, by up to two node spacings
+        let want = 5.73 * 10e-9 * 1e3;
+        let spacing = 2e-9 * 1e3;
+        assert!(resolved >= want - 0.5 * spacing && resolved <= want + 2.5 * spacing, "{resolved:e} vs {want:e}");
+    }
 }

@@ -474,7 +474,7 @@ pub(super) const LEVELS: [usize; 7] = [3, 5, 9, 17, 33, 65, 129];
 
 /// The degree a panel's moment rule is first built for: the levels up to 33 points (most
 /// panels stop there; a finer level rebuilds it, [`Interpolant::moments`]).
-const FIRST_MOMENT_DEGREE: usize = 32;
+pub(super) const FIRST_MOMENT_DEGREE: usize = 32;
 
 /// Bound on the Lebesgue constant of Chebyshev–Lobatto interpolation up to 129 points
 /// (`(2/π) ln(n) + 1` < 4): an interpolant of a function bounded by 1 is bounded by this, so a
@@ -1511,10 +1511,14 @@ fn table_wavelengths(lens: &dyn LensModel, field: Field, lo: f64, hi: f64) -> Ve
 /// The wavelength interval the spectral rules cover: the spectrum's support, with Gaussian
 /// factors cut at ±[`GAUSSIAN_HALF_WIDTH_SIGMAS`] σ.
 pub(crate) fn spectral_extent(detected: &Spectrum) -> Result<(f64, f64), Error> {
+    extent_at(detected, GAUSSIAN_HALF_WIDTH_SIGMAS)
+}
+
+fn extent_at(detected: &Spectrum, sigmas: f64) -> Result<(f64, f64), Error> {
     let (mut lo, mut hi) = detected.support();
     for g in detected.gaussians() {
-        lo = lo.max(g.center() - GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
-        hi = hi.min(g.center() + GAUSSIAN_HALF_WIDTH_SIGMAS * g.sigma());
+        lo = lo.max(g.center() - sigmas * g.sigma());
+        hi = hi.min(g.center() + sigmas * g.sigma());
     }
     lo = lo.max(0.0);
     if !(hi.is_finite() && hi > lo) {
