@@ -697,13 +697,22 @@ fn proxy_cosine_sum(c: &[f64], a: f64, q1: &[f64], q2: &[f64], w: &[f64]) -> f64
     use wide::f64x8;
     let n = w.len() / 8 * 8;
     let a8 = f64x8::splat(a);
-    let mut acc = f64x8::ZERO;
-    for i in (0..n).step_by(8) {
+    // two blocks of eight a step: independent recurrences the core overlaps
+    let (mut acc, mut acc2) = (f64x8::ZERO, f64x8::ZERO);
+    let pairs = n / 16 * 16;
+    for i in (0..pairs).step_by(16) {
+        let (x, y, x2, y2) = (load8(q1, i), load8(q2, i), load8(q1, i + 8), load8(q2, i + 8));
+        let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
+        let phase2 = a8.mul_add(x2 - y2, clenshaw8(c, x2) - clenshaw8(c, y2));
+        acc = load8(w, i).mul_add(phase.sin_cos().1, acc);
+        acc2 = load8(w, i + 8).mul_add(phase2.sin_cos().1, acc2);
+    }
+    for i in (pairs..n).step_by(8) {
         let (x, y) = (load8(q1, i), load8(q2, i));
         let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
         acc = load8(w, i).mul_add(phase.sin_cos().1, acc);
     }
-    let mut total = acc.reduce_add();
+    let mut total = (acc + acc2).reduce_add();
     for i in n..w.len() {
         let phase = a * (q1[i] - q2[i]) + (clenshaw(c, q1[i]) - clenshaw(c, q2[i]));
         total += w[i] * crate::fft::cis::sin_cos(phase).1;
@@ -784,25 +793,33 @@ impl RadialOrder {
         let residual_slopes: Vec<f64> = residual.windows(2).map(|w| (w[1] - w[0]) / h).collect();
         let slopes: Vec<f64> = residual_slopes.iter().map(|d| w020_m + d).collect();
         let slope = 1.25 * slopes.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        // windows of 2^j samples by doubling: max and min over [i, i + 2m) from those of m, in
-        // place (entry i reads entry i + m before it is overwritten)
+
+        // (the slopes are finite: plain comparisons, which vectorize, not `f64::max`)
+        let larger = |a: f64, b: f64| if a > b { a } else { b };
+        let smaller = |a: f64, b: f64| if a < b { a } else { b };
         let (mut hi, mut lo) = (slopes.clone(), slopes.clone());
+        let (mut next_hi, mut next_lo) = (vec![0.0; slopes.len()], vec![0.0; slopes.len()]);
         // two neighbouring slopes differ by the second difference: a window of one sample holds
         // the change across it
-        let across = slopes.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f64::max);
+        let across = slopes.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, larger);
         let mut oscillation = Vec::new();
         let mut width = 1;
         loop {
-            let osc = hi.iter().zip(&lo).map(|(h, l)| h - l).fold(0.0, f64::max);
+            let osc = hi.iter().zip(&lo).map(|(h, l)| h - l).fold(0.0, larger);
             oscillation.push(1.25 * (osc + across));
             if width >= BOUND_SAMPLES {
                 break;
             }
+            // max and min over [i, i + 2·width) from those over width, into the other buffers
             let n = hi.len() - width;
-            for i in 0..n {
-                hi[i] = hi[i].max(hi[i + width]);
-                lo[i] = lo[i].min(lo[i + width]);
+            for ((o, a), b) in next_hi[..n].iter_mut().zip(&hi[..n]).zip(&hi[width..width + n]) {
+                *o = larger(*a, *b);
             }
+            for ((o, a), b) in next_lo[..n].iter_mut().zip(&lo[..n]).zip(&lo[width..width + n]) {
+                *o = smaller(*a, *b);
+            }
+            std::mem::swap(&mut hi, &mut next_hi);
+            std::mem::swap(&mut lo, &mut next_lo);
             hi.truncate(n);
             lo.truncate(n);
             width *= 2;

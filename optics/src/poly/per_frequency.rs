@@ -102,6 +102,10 @@ struct Levelled {
     amplification: Vec<f64>,
     /// the points level ℓ adds to level ℓ − 1 (all three for level 0)
     fresh: Vec<Fresh>,
+    /// the lens at the wavelengths whose nodes the engine already made (the averages' level):
+    /// a level's point found here is not prepared again (a radial pupil's preparation is the
+    /// costly part of a wavelength)
+    known: Vec<(f64, Vec<OrderAt>)>,
     scratch: Scratch,
 }
 
@@ -128,6 +132,7 @@ impl Levelled {
             weights: vec![Vec::new(); LEVELS.len()],
             amplification: vec![f64::NAN; LEVELS.len()],
             fresh: vec![Fresh::default(); LEVELS.len()],
+            known: Vec::new(),
             scratch: Scratch::default(),
         }
     }
@@ -148,6 +153,11 @@ impl Levelled {
             let mut orders = Vec::new();
             for k in (0..points).filter(|&k| level == 0 || k % 2 == 1) {
                 let lambda = lambdas[k];
+                if let Some((_, known)) = self.known.iter().find(|(l, _)| *l == lambda) {
+                    fresh.orders.extend_from_slice(known);
+                    fresh.ends.push(fresh.orders.len());
+                    continue;
+                }
                 orders.clear();
                 scene.lens.orders_into(lambda, scene.field, &mut orders);
                 fresh.orders.extend(orders.iter().map(|o| {
@@ -318,15 +328,30 @@ impl<'a> PerFrequency<'a> {
             if p.panel.mass == 0.0 {
                 continue;
             }
-            p.prepare(&scene, AVERAGE_LEVEL);
+            let points = LEVELS[AVERAGE_LEVEL];
+            p.weights[AVERAGE_LEVEL] = lobatto_weights(p.panel.moments(scene.detected, points - 1), points);
             let start = nodes.nodes.len();
-            let lambdas = lobatto_lambdas(p.panel.a, p.panel.b, LEVELS[AVERAGE_LEVEL]);
+            let lambdas = lobatto_lambdas(p.panel.a, p.panel.b, points);
             for (&lambda, &w) in lambdas.iter().zip(&p.weights[AVERAGE_LEVEL]) {
                 nodes.samples.push((lambda, w));
                 if w != 0.0 {
+                    let first = nodes.nodes.len();
                     nodes.emit(&scene, lambda, w);
+                    // the same orders as `prepare` reads them (the efficiency from the node's
+                    // weight `w τ_o`), so that the levels do not prepare these wavelengths again
+                    let orders = nodes.nodes[first..]
+                        .iter()
+                        .map(|n| OrderAt {
+                            s_per_frequency: scene.f_number * lambda / n.scale,
+                            waves: n.w020 / lambda,
+                            efficiency: n.weight / w,
+                            radial: n.radial.clone(),
+                        })
+                        .collect();
+                    p.known.push((lambda, orders));
                 }
             }
+            p.prepare(&scene, AVERAGE_LEVEL);
             nodes.panels.push(Panel { lo: p.panel.a, hi: p.panel.b, start, end: nodes.nodes.len() });
         }
         // only centred circles with defocus, or radially symmetric pupils (the radial engine):
