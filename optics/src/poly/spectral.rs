@@ -1006,7 +1006,7 @@ pub(super) struct Density {
 #[derive(Default)]
 struct Rules {
     panels: HashMap<(u64, u64), Remembered>,
-    /// the points (breakpoints and quadrature points) of the rules held
+    /// the points (breakpoints and quadrature points) of the rules held and their moments
     points: usize,
 }
 
@@ -1026,9 +1026,10 @@ impl std::fmt::Debug for Rules {
 /// without an efficiency table folded in.
 const DENSITIES: usize = 4;
 
-/// The points (breakpoints, quadrature points) of the moment rules one density remembers, about
-/// 60 bytes each: past this it forgets them all and starts again. A 1601-row table's panels hold
-/// about 1600 per evaluation; the bound keeps some 80 evaluations' panels in 16 MB.
+/// The numbers one density remembers, counted as its rules' points (breakpoints, quadrature
+/// points: at most 7 `f64` each) and its moments (one each): past this it forgets them all and
+/// starts again, so that it holds at most ~7 MB. A 1601-row table's panels take some 5000 per
+/// evaluation (1600 breakpoints, 33 and 129 moments a panel): the bound keeps ~25 evaluations'.
 const REMEMBERED_POINTS: usize = 1 << 17;
 
 impl Density {
@@ -1106,10 +1107,13 @@ impl Density {
         }
         let mu = rule.moments(degree);
         let mut exact = self.exact.lock().unwrap_or_else(PoisonError::into_inner);
+        let held = exact.points + mu.len();
         if let Some(r) = exact.panels.get_mut(&key).filter(|r| Arc::ptr_eq(&r.rule, rule))
             && !r.moments.iter().any(|(n, _)| *n == degree)
+            && held <= REMEMBERED_POINTS
         {
             r.moments.push((degree, mu.as_slice().into()));
+            exact.points = held;
         }
         mu
     }
