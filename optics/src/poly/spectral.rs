@@ -1750,6 +1750,18 @@ mod tests {
         let zero = Density::of(&build(&plus));
         assert!(!Arc::ptr_eq(&zero, &Density::of(&build(&minus))));
         assert!(Arc::ptr_eq(&zero, &Density::of(&build(&plus))));
+        // past its bound a density forgets its panels and starts again: it never holds more,
+        // and what it gives stays the fresh moments
+        for k in 0..120 {
+            let (a, b) = (595e-9 + 1e-11 * f64::from(k), 1005e-9);
+            let rule = density.rule(&first, a, b, FIRST_MOMENT_DEGREE);
+            let got = density.moments(&rule, a, b, FIRST_MOMENT_DEGREE);
+            assert!(density.exact.lock().unwrap().points <= REMEMBERED_POINTS);
+            if k % 40 == 0 {
+                assert_eq!(got, MomentRule::exact(&pieces, a, b).moments(FIRST_MOMENT_DEGREE), "[{a}, {b}]");
+            }
+        }
+        assert!(density.exact.lock().unwrap().panels.len() < 120, "forgotten at the bound");
         // a Gaussian spectrum: quadrature rules, built each time
         let gaussian = Spectrum::Gaussian(radiometry::Gaussian::new(800e-9, 20e-9, 1.0).unwrap());
         let quadrature = Density::of(&gaussian);
