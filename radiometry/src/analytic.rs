@@ -24,6 +24,11 @@ pub struct Gaussian {
 }
 
 impl Gaussian {
+    /// Its numbers' bits (center, σ, peak): equal only for the very same Gaussian.
+    pub(crate) fn bits(&self) -> [u64; 3] {
+        [self.center_m, self.sigma_m, self.peak].map(f64::to_bits)
+    }
+
     /// Validates: `center_m` finite and > 0 m, `sigma_m` finite and > 0 m, `peak` finite and ≥ 0.
     ///
     /// # Errors
@@ -119,6 +124,11 @@ pub struct TopHat {
 }
 
 impl TopHat {
+    /// Its numbers' bits (lo, hi, value): equal only for the very same band.
+    pub(crate) fn bits(&self) -> [u64; 3] {
+        [self.lo_m, self.hi_m, self.value].map(f64::to_bits)
+    }
+
     /// Validates: `lo_m` finite and ≥ 0 m, `hi_m` finite and > `lo_m`, `value` finite and ≥ 0.
     ///
     /// # Errors
@@ -186,6 +196,11 @@ pub struct Line {
 }
 
 impl Line {
+    /// Its numbers' bits (center, width, peak): equal only for the very same line.
+    pub(crate) fn bits(&self) -> [u64; 3] {
+        [self.center_m, self.width_m, self.peak].map(f64::to_bits)
+    }
+
     /// Validates: `center_m` finite and > 0 m, `width_m` (the equivalent width) finite, > 0 and
     /// < 2 `center_m` (the band stays at λ > 0), `peak` finite and ≥ 0.
     ///
@@ -253,6 +268,11 @@ pub struct Blackbody {
 }
 
 impl Blackbody {
+    /// Its temperature's bits: equal only for the very same blackbody.
+    pub(crate) fn bits(&self) -> u64 {
+        self.temperature_k.to_bits()
+    }
+
     /// Highest accepted temperature, K. It keeps the spectral radiance (peak ≈ 4.1e-6·T⁵
     /// W/(m² sr m)) finite at every wavelength.
     pub const MAX_TEMPERATURE_K: f64 = 1e12;

@@ -64,6 +64,6 @@ pub use chain::{
 pub use error::Error;
 pub use sampled::Sampled;
 pub use spectrum::{
-    GAUSSIAN_WINDOW_SIGMAS, GaussianPolynomial, MAX_PIECE_DEGREE, NEGLIGIBLE_TRUNCATION, PiecewisePolynomial,
-    QuadratureNode, Spectrum, Truncation,
+    GAUSSIAN_WINDOW_SIGMAS, GaussianPolynomial, MAX_PIECE_DEGREE, MEMO_ENTRIES, MEMO_MIN_SAMPLES,
+    NEGLIGIBLE_TRUNCATION, PiecewisePolynomial, QuadratureNode, Spectrum, Truncation,
 };

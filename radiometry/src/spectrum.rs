@@ -6,6 +6,8 @@ use crate::analytic::{Blackbody, Gaussian, Line, TopHat};
 use crate::quadrature;
 use crate::sampled::Sampled;
 
+use std::sync::Arc;
+
 /// Half-width, in σ, of the window a Gaussian factor restricts a numerical integral to. The
 /// neglected area is erfc(12/√2) ≈ 1.8e-33 of the Gaussian's.
 pub const GAUSSIAN_WINDOW_SIGMAS: f64 = 12.0;
@@ -102,6 +104,23 @@ impl PiecewisePolynomial {
         let t = wavelength_m - self.edges[i];
         self.pieces[i].iter().rev().fold(0.0, |acc, c| acc * t + c)
     }
+}
+
+/// Table rows (over all its tables) from which a spectrum's piecewise polynomial is remembered
+/// ([`Spectrum::piecewise_polynomial`]); below, building it costs about what finding it would.
+pub const MEMO_MIN_SAMPLES: usize = 64;
+
+/// How many spectra's piecewise polynomials are remembered: the last ones built (a sweep's
+/// detected spectrum, with and without an efficiency table folded in, and its transmission
+/// product), each a few hundred kB at most for a 5000-row table.
+pub const MEMO_ENTRIES: usize = 8;
+
+/// The remembered piecewise polynomials with their integrals, the last built first.
+type Memo = Vec<(Spectrum, Option<(Arc<PiecewisePolynomial>, f64)>)>;
+thread_local! {
+    /// Per thread: a sweep's worker threads each keep theirs (no lock; the same numbers in each,
+    /// the polynomial being a function of the spectrum's bits).
+    static PIECEWISE_MEMO: std::cell::RefCell<Memo> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// A spectrum of the form `P(λ) · exp(−(λ − center)²/(2σ²))` for λ > 0, `P` a polynomial
@@ -341,7 +360,74 @@ impl Spectrum {
     /// between the table's samples); `None` otherwise (Gaussians, blackbodies, lines, or no
     /// bounded factor). Moments of such a spectrum are sums of polynomial integrals, exact
     /// whatever the number of samples.
-    pub fn piecewise_polynomial(&self) -> Option<PiecewisePolynomial> {
+    ///
+    /// Remembered, with its integral: a spectrum with a table of [`MEMO_MIN_SAMPLES`] rows or more (a measured
+    /// filter, radiance or QE) keeps its polynomial in a small memo of the last [`MEMO_ENTRIES`]
+    /// such spectra (one per thread), found again for a spectrum whose every number has the same
+    /// bits ([`same_bits`](Self::same_bits)): the points of a sweep that leaves the spectrum alone
+    /// (an F-number sweep of a measured-spectrum scene) build it once, not two times a point,
+    /// and get the very same polynomial (the same `Arc`) each time, which the optics' moment
+    /// rules are remembered by.
+    pub fn piecewise_polynomial(&self) -> Option<Arc<PiecewisePolynomial>> {
+        self.remembered_piecewise().map(|(p, _)| p)
+    }
+
+    /// [`piecewise_polynomial`](Self::piecewise_polynomial) with its
+    /// [`integral`](PiecewisePolynomial::integral), both remembered.
+    fn remembered_piecewise(&self) -> Option<(Arc<PiecewisePolynomial>, f64)> {
+        let mut rows = 0;
+        self.visit(&mut |f| {
+            if let Spectrum::Sampled(t) = f {
+                rows += t.wavelengths().len();
+            }
+        });
+        let build = || {
+            self.build_piecewise_polynomial().map(|p| {
+                let integral = p.integral();
+                (Arc::new(p), integral)
+            })
+        };
+        if rows < MEMO_MIN_SAMPLES {
+            return build();
+        }
+        PIECEWISE_MEMO.with_borrow_mut(|memo| {
+            if let Some((_, found)) = memo.iter().find(|(s, _)| s.same_bits(self)) {
+                return found.clone();
+            }
+            let built = build();
+            memo.insert(0, (self.clone(), built.clone()));
+            memo.truncate(MEMO_ENTRIES);
+            built
+        })
+    }
+
+    /// Whether `self` and `other` are the same product of the same factors with numbers of the
+    /// same bits (so that every computation from them gives the same bits: `0.0` and `-0.0`
+    /// differ here, unlike `==`, and a NaN equals its own bits).
+    pub fn same_bits(&self, other: &Spectrum) -> bool {
+        let same =
+            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        match (self, other) {
+            (Spectrum::Constant(a), Spectrum::Constant(b)) => a.to_bits() == b.to_bits(),
+            (Spectrum::Linear { slope: a }, Spectrum::Linear { slope: b }) => a.to_bits() == b.to_bits(),
+            (Spectrum::Sampled(a), Spectrum::Sampled(b)) => {
+                same(a.wavelengths(), b.wavelengths()) && same(a.values(), b.values())
+            }
+            (Spectrum::Gaussian(a), Spectrum::Gaussian(b)) => a.bits() == b.bits(),
+            (Spectrum::TopHat(a), Spectrum::TopHat(b)) => a.bits() == b.bits(),
+            (Spectrum::Line(a), Spectrum::Line(b)) => a.bits() == b.bits(),
+            (Spectrum::Blackbody { source: a, scale: x }, Spectrum::Blackbody { source: b, scale: y }) => {
+                a.bits() == b.bits() && x.to_bits() == y.to_bits()
+            }
+            (Spectrum::Product(a), Spectrum::Product(b)) => {
+                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.same_bits(y))
+            }
+            _ => false,
+        }
+    }
+
+    /// [`piecewise_polynomial`](Self::piecewise_polynomial), built.
+    fn build_piecewise_polynomial(&self) -> Option<PiecewisePolynomial> {
         let mut factors = Vec::new();
         self.visit(&mut |f| factors.push(f));
         let (lo, hi) = self.support();
@@ -514,9 +600,9 @@ impl Spectrum {
         // pieces, a pass over its breakpoints (the quadrature below evaluates every factor at
         // several nodes of every piece: half of a measured-spectrum sweep point's time)
         if exact.is_none()
-            && let Some(p) = self.piecewise_polynomial()
+            && let Some((_, integral)) = self.remembered_piecewise()
         {
-            return p.integral();
+            return integral;
         }
         match exact {
             Some(v) if v.is_infinite() && constant == 0.0 => 0.0,
@@ -686,6 +772,39 @@ mod tests {
 
     fn table(w_nm: &[f64], v: &[f64]) -> Sampled {
         Sampled::new(w_nm.iter().map(|w| w / 1e9).collect(), v.to_vec()).unwrap()
+    }
+
+    /// A spectrum built twice from the same numbers finds its piecewise polynomial remembered
+    /// (the same `Arc`), whose integral is the one built afresh; `same_bits` tells `0.0` from
+    /// `-0.0` (which `==` does not) and a table's rows from a coarser one's, and below
+    /// [`MEMO_MIN_SAMPLES`] rows nothing is remembered.
+    #[test]
+    fn piecewise_polynomials_are_remembered_by_their_bits() {
+        let spectrum = |rows: u32, last: f64| {
+            let w: Vec<f64> = (0..rows).map(|i| 600e-9 + 0.25e-9 * f64::from(i)).collect();
+            let mut v: Vec<f64> = (0..rows).map(|i| 0.5 + 0.3 * (0.1 * f64::from(i)).sin()).collect();
+            v[rows as usize - 1] = last;
+            Spectrum::product(vec![
+                Spectrum::Sampled(Sampled::new(w, v).unwrap()),
+                Spectrum::Linear { slope: 1.0 },
+                Spectrum::Constant(0.2),
+            ])
+        };
+        let (a, b) = (spectrum(1601, 0.0), spectrum(1601, 0.0));
+        let (pa, pb) = (a.piecewise_polynomial().unwrap(), b.piecewise_polynomial().unwrap());
+        assert!(Arc::ptr_eq(&pa, &pb), "the same bits: remembered");
+        let fresh = a.build_piecewise_polynomial().unwrap();
+        assert_eq!(*pa, fresh);
+        assert_eq!(b.integral().to_bits(), fresh.integral().to_bits());
+        let negative = spectrum(1601, -0.0);
+        assert!(a == negative && !a.same_bits(&negative), "0 and −0: equal, not the same bits");
+        assert!(!Arc::ptr_eq(&pa, &negative.piecewise_polynomial().unwrap()));
+        assert!(!a.same_bits(&spectrum(1600, 0.0)));
+        let small = spectrum(MEMO_MIN_SAMPLES as u32 - 1, 0.0);
+        assert!(!Arc::ptr_eq(&small.piecewise_polynomial().unwrap(), &small.piecewise_polynomial().unwrap()));
+        let g = Gaussian::new(800e-9, 20e-9, 1.0).unwrap();
+        assert!(Spectrum::Gaussian(g).same_bits(&Spectrum::Gaussian(g)));
+        assert!(!Spectrum::Gaussian(g).same_bits(&Spectrum::Gaussian(Gaussian::new(800e-9, 21e-9, 1.0).unwrap())));
     }
 
     #[test]

@@ -22,8 +22,9 @@
 //!   engine does), which product integration cannot, so bands whose cutoffs fall below the
 //!   frequency limit take this rule.
 
+use std::collections::HashMap;
 use std::f64::consts::PI;
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 use num_complex::Complex64;
 use radiometry::Spectrum;
@@ -569,7 +570,7 @@ pub(super) fn start(scene: &Scene<'_>, lo: f64, hi: f64) -> Option<Start> {
     if top * hi * scene.f_number >= 1.0 - 1e-6 || lo <= 0.0 {
         return None;
     }
-    let density = Arc::new(Density::of(scene.detected));
+    let density = Density::of(scene.detected);
     let mut panels: Vec<Interpolant> = Vec::new();
     let mut lens_cuts = cuts(scene, lo, hi, false);
     lens_cuts.extend(order_changes(scene, &lens_cuts));
@@ -674,7 +675,7 @@ pub(super) struct Interpolant {
     pub phase: f64,
     /// `∫ ρ` over the panel
     pub mass: f64,
-    rule: MomentRule,
+    rule: Arc<MomentRule>,
     /// the Chebyshev moments `μ_0 …` computed so far (see [`moments`](Self::moments))
     mu: Vec<f64>,
     /// the detected spectrum as the moment rules read it (for a rule of higher degree)
@@ -693,11 +694,11 @@ pub(super) struct Interpolant {
 
 impl Interpolant {
     pub fn new(detected: &Spectrum, density: &Arc<Density>, a: f64, b: f64, phase: f64) -> Interpolant {
-        let rule = MomentRule::new(detected, density, a, b, FIRST_MOMENT_DEGREE);
+        let rule = density.rule(detected, a, b, FIRST_MOMENT_DEGREE);
         // all the moments the first levels will ask for, in the one pass over the breakpoints
         // that the mass alone would take (a second pass for them cost 2 % of a spectrometer
         // evaluation)
-        let mu = rule.moments(FIRST_MOMENT_DEGREE.min(rule.degree()));
+        let mu = density.moments(&rule, a, b, FIRST_MOMENT_DEGREE.min(rule.degree()));
         Interpolant {
             a,
             b,
@@ -721,16 +722,16 @@ impl Interpolant {
     pub fn moments(&mut self, detected: &Spectrum, degree: usize) -> &[f64] {
         if degree > self.rule.degree() {
             let most = LEVELS[LEVELS.len() - 1] - 1;
-            self.rule = MomentRule::new(detected, &self.density, self.a, self.b, most);
+            self.rule = self.density.rule(detected, self.a, self.b, most);
             self.mu.clear();
         }
         if self.mu.len() <= degree {
             // a quadrature rule's moments all at once up to its degree; exact ones as asked
-            let up_to = match self.rule {
+            let up_to = match *self.rule {
                 MomentRule::Points { degree: built, .. } => built,
                 MomentRule::Exact { .. } => degree.max(FIRST_MOMENT_DEGREE),
             };
-            self.mu = self.rule.moments(up_to);
+            self.mu = self.density.moments(&self.rule, self.a, self.b, up_to);
         }
         &self.mu[..=degree]
     }
@@ -880,7 +881,7 @@ impl Interpolant {
             b: self.b,
             phase: self.phase,
             mass: self.mass,
-            rule: MomentRule::Points { cos: Vec::new(), weight: Vec::new(), degree: 0 },
+            rule: Arc::new(MomentRule::Points { cos: Vec::new(), weight: Vec::new(), degree: 0 }),
             mu: Vec::new(),
             density: self.density.clone(),
             level: self.level,
@@ -983,23 +984,138 @@ fn gauss_rule(points: usize) -> &'static [(f64, f64)] {
 /// The detected spectrum as the moment rules read it: its kinks and smoothness scale (for the
 /// quadrature form), and its [`PiecewisePolynomial`](radiometry::PiecewisePolynomial) where it
 /// is one (for the exact form), found once per scene.
+///
+/// A piecewise-polynomial density is shared by every evaluation of the same spectrum (see
+/// [`of`](Self::of)) and remembers its panels' exact moment rules and moments: the points of a
+/// sweep that leaves the spectrum alone cut most of their panels where the points before did
+/// (the panels of `[lo, hi]` are equal parts of it, and their count changes only now and then
+/// along an F-number axis), and find those panels' moments made, the same numbers bit for bit.
 #[derive(Debug)]
 pub(super) struct Density {
     /// the breakpoints, where the quadrature form reads them (empty beside `pieces`, whose
     /// edges hold them: a 1601-sample table's were collected twice per evaluation)
     kinks: Vec<f64>,
     smooth: f64,
-    pieces: Option<radiometry::PiecewisePolynomial>,
+    pieces: Option<Arc<radiometry::PiecewisePolynomial>>,
+    /// the exact moment rules of the panels `(a, b)` met so far (by their bits), and their
+    /// moments `μ_0 … μ_n` by `n`
+    exact: Mutex<Rules>,
 }
 
+/// The panels' exact moment rules a [`Density`] remembers, with the points they hold.
+#[derive(Default)]
+struct Rules {
+    panels: HashMap<(u64, u64), Remembered>,
+    /// the points (breakpoints and quadrature points) of the rules held and their moments
+    points: usize,
+}
+
+/// One panel's exact moment rule and the moments asked of it so far.
+struct Remembered {
+    rule: Arc<MomentRule>,
+    moments: Vec<(usize, Arc<[f64]>)>,
+}
+
+impl std::fmt::Debug for Rules {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Rules").field("panels", &self.panels.len()).field("points", &self.points).finish()
+    }
+}
+
+/// The densities each thread remembers ([`Density::of`]): a sweep's detected spectrum, with and
+/// without an efficiency table folded in.
+const DENSITIES: usize = 4;
+
+/// The numbers one density remembers, counted as its rules' points (breakpoints, quadrature
+/// points: at most 7 `f64` each) and its moments (one each): past this it forgets them all and
+/// starts again, so that it holds at most ~7 MB. A 1601-row table's panels take some 5000 per
+/// evaluation (1600 breakpoints, 33 and 129 moments a panel): the bound keeps ~25 evaluations'.
+const REMEMBERED_POINTS: usize = 1 << 17;
+
 impl Density {
-    pub fn of(detected: &Spectrum) -> Density {
-        let pieces = detected.piecewise_polynomial();
-        Density {
-            kinks: if pieces.is_some() { Vec::new() } else { detected.breakpoints() },
-            smooth: smoothness_scale(detected),
-            pieces,
+    /// The density of `detected`: where it is a piecewise polynomial remembered by radiometry
+    /// (`Spectrum::piecewise_polynomial` returns the same `Arc` for a spectrum of the same bits),
+    /// the density this thread built for that polynomial before, with the moments it remembers
+    /// (the last [`DENSITIES`] ones, per thread like radiometry's memo); else a new one.
+    pub fn of(detected: &Spectrum) -> Arc<Density> {
+        thread_local! {
+            static MEMO: std::cell::RefCell<Vec<Arc<Density>>> = const { std::cell::RefCell::new(Vec::new()) };
         }
+        let pieces = detected.piecewise_polynomial();
+        let build = |pieces: Option<Arc<radiometry::PiecewisePolynomial>>| {
+            Arc::new(Density {
+                kinks: if pieces.is_some() { Vec::new() } else { detected.breakpoints() },
+                smooth: smoothness_scale(detected),
+                pieces,
+                exact: Mutex::new(Rules::default()),
+            })
+        };
+        let Some(p) = pieces else { return build(None) };
+        MEMO.with_borrow_mut(|memo| {
+            // the same polynomial, the same spectrum: its smoothness scale too (a pure function
+            // of it)
+            if let Some(d) = memo.iter().find(|d| d.pieces.as_ref().is_some_and(|q| Arc::ptr_eq(q, &p))) {
+                return d.clone();
+            }
+            let d = build(Some(p));
+            memo.insert(0, d.clone());
+            memo.truncate(DENSITIES);
+            d
+        })
+    }
+
+    /// [`MomentRule::new`] for the panel `[a, b]`: an exact rule remembered, a quadrature rule
+    /// built (it depends on `degree`, and no measured spectrum takes it).
+    fn rule(&self, detected: &Spectrum, a: f64, b: f64, degree: usize) -> Arc<MomentRule> {
+        if self.pieces.is_none() {
+            return Arc::new(MomentRule::new(detected, self, a, b, degree));
+        }
+        let key = (a.to_bits(), b.to_bits());
+        if let Some(r) = self.exact.lock().unwrap_or_else(PoisonError::into_inner).panels.get(&key) {
+            return r.rule.clone();
+        }
+        let rule = Arc::new(MomentRule::new(detected, self, a, b, degree));
+        let mut exact = self.exact.lock().unwrap_or_else(PoisonError::into_inner);
+        if exact.points + rule.held() > REMEMBERED_POINTS {
+            *exact = Rules::default();
+        }
+        if let Some(r) = exact.panels.get(&key) {
+            // another thread built it meanwhile: one panel, one rule
+            return r.rule.clone();
+        }
+        exact.points += rule.held();
+        exact.panels.insert(key, Remembered { rule: rule.clone(), moments: Vec::new() });
+        rule
+    }
+
+    /// `rule.moments(degree)` of the panel `[a, b]` whose rule [`rule`](Self::rule) gave:
+    /// remembered for an exact rule.
+    fn moments(&self, rule: &Arc<MomentRule>, a: f64, b: f64, degree: usize) -> Vec<f64> {
+        let key = (a.to_bits(), b.to_bits());
+        let remembered = |exact: &Rules| {
+            exact
+                .panels
+                .get(&key)
+                .filter(|r| Arc::ptr_eq(&r.rule, rule))
+                .and_then(|r| r.moments.iter().find(|(n, _)| *n == degree).map(|(_, mu)| mu.to_vec()))
+        };
+        if self.pieces.is_none() {
+            return rule.moments(degree);
+        }
+        if let Some(mu) = remembered(&self.exact.lock().unwrap_or_else(PoisonError::into_inner)) {
+            return mu;
+        }
+        let mu = rule.moments(degree);
+        let mut exact = self.exact.lock().unwrap_or_else(PoisonError::into_inner);
+        let held = exact.points + mu.len();
+        if let Some(r) = exact.panels.get_mut(&key).filter(|r| Arc::ptr_eq(&r.rule, rule))
+            && !r.moments.iter().any(|(n, _)| *n == degree)
+            && held <= REMEMBERED_POINTS
+        {
+            r.moments.push((degree, mu.as_slice().into()));
+            exact.points = held;
+        }
+        mu
     }
 }
 
@@ -1085,6 +1201,20 @@ impl MomentRule {
         match &density.pieces {
             Some(pieces) => Self::exact(pieces, a, b),
             None => Self::points(detected, &density.kinks, density.smooth, a, b, degree),
+        }
+    }
+
+    /// The points it holds, breakpoints and quadrature points (for [`Density`]'s bound).
+    fn held(&self) -> usize {
+        match self {
+            MomentRule::Points { cos, .. } => cos.len(),
+            MomentRule::Exact { x, continuous, cos, .. } => {
+                x.len()
+                    + cos.len()
+                    + match continuous {
+                        Continuous::Parallel { x, .. } | Continuous::General { x, .. } => x.len(),
+                    }
+            }
         }
     }
 
@@ -1571,7 +1701,12 @@ mod tests {
         ] {
             let exact = Density::of(detected);
             assert!(exact.pieces.is_some());
-            let quadrature = Density { pieces: None, kinks: detected.breakpoints(), smooth: exact.smooth };
+            let quadrature = Density {
+                pieces: None,
+                kinks: detected.breakpoints(),
+                smooth: exact.smooth,
+                exact: Mutex::new(Rules::default()),
+            };
             for &(a, b) in panels {
                 let degree = 128;
                 let want = MomentRule::new(detected, &quadrature, a, b, degree).moments(degree);
@@ -1582,6 +1717,61 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The remembered rules and moments: a spectrum of the same bits, built again (as each point
+    /// of a sweep builds its scene), finds the same density, and a panel met before the same rule
+    /// and moments, bit for bit those of a rule built afresh from the polynomial
+    /// ([`MomentRule::exact`], the slow path, never remembered); a spectrum differing in one
+    /// sample (a zero's sign) gets a density of its own, and a quadrature density remembers nothing.
+    #[test]
+    fn remembered_moments_are_the_fresh_ones() {
+        let (wavelengths, values) = noisy_band(&mut uniform_noise(0x51_7cc1_b727_220a));
+        let build = |values: &[f64]| {
+            let table = radiometry::Sampled::new(wavelengths.clone(), values.to_vec()).unwrap();
+            Spectrum::product(vec![Spectrum::Sampled(table), Spectrum::Linear { slope: 1.0 }, Spectrum::Constant(0.3)])
+        };
+        let (first, again) = (build(&values), build(&values));
+        let density = Density::of(&first);
+        assert!(Arc::ptr_eq(&density, &Density::of(&again)), "the same bits, the same density");
+        let pieces = density.pieces.clone().expect("a piecewise polynomial");
+        for (a, b) in [(600e-9, 680e-9), (650.1e-9, 650.4e-9), (590e-9, 1010e-9)] {
+            let fresh = MomentRule::exact(&pieces, a, b);
+            for degree in [FIRST_MOMENT_DEGREE, 128] {
+                let want: Vec<u64> = fresh.moments(degree).iter().map(|v| v.to_bits()).collect();
+                for _ in 0..2 {
+                    let rule = density.rule(&again, a, b, FIRST_MOMENT_DEGREE);
+                    assert!(Arc::ptr_eq(&rule, &density.rule(&first, a, b, FIRST_MOMENT_DEGREE)));
+                    let got: Vec<u64> = density.moments(&rule, a, b, degree).iter().map(|v| v.to_bits()).collect();
+                    assert_eq!(got, want, "[{a}, {b}] to degree {degree}");
+                }
+            }
+        }
+        // one sample 0 in one table and −0 in the other (equal by `==`): other bits, another
+        // density; the first found again
+        let (mut plus, mut minus) = (values.clone(), values.clone());
+        (plus[800], minus[800]) = (0.0, -0.0);
+        let zero = Density::of(&build(&plus));
+        assert!(!Arc::ptr_eq(&zero, &Density::of(&build(&minus))));
+        assert!(Arc::ptr_eq(&zero, &Density::of(&build(&plus))));
+        // past its bound a density forgets its panels and starts again: it never holds more,
+        // and what it gives stays the fresh moments
+        for k in 0..120 {
+            let (a, b) = (595e-9 + 1e-11 * f64::from(k), 1005e-9);
+            let rule = density.rule(&first, a, b, FIRST_MOMENT_DEGREE);
+            let got = density.moments(&rule, a, b, FIRST_MOMENT_DEGREE);
+            assert!(density.exact.lock().unwrap().points <= REMEMBERED_POINTS);
+            if k % 40 == 0 {
+                assert_eq!(got, MomentRule::exact(&pieces, a, b).moments(FIRST_MOMENT_DEGREE), "[{a}, {b}]");
+            }
+        }
+        assert!(density.exact.lock().unwrap().panels.len() < 120, "forgotten at the bound");
+        // a Gaussian spectrum: quadrature rules, built each time
+        let gaussian = Spectrum::Gaussian(radiometry::Gaussian::new(800e-9, 20e-9, 1.0).unwrap());
+        let quadrature = Density::of(&gaussian);
+        let rule = quadrature.rule(&gaussian, 700e-9, 900e-9, 16);
+        assert!(!Arc::ptr_eq(&rule, &quadrature.rule(&gaussian, 700e-9, 900e-9, 16)));
+        assert!(quadrature.exact.lock().unwrap().panels.is_empty());
     }
 
     /// The exact moments with the continuous breakpoints factored (one sum per breakpoint for a
@@ -1631,7 +1821,7 @@ mod tests {
             ("gapped table × top-hat × λ", Spectrum::product(vec![gapped, band, linear()]), &gap_panels[..]),
         ];
         for (name, detected, panels) in &cases {
-            let pieces = Density::of(detected).pieces.expect("a piecewise polynomial");
+            let pieces = Density::of(detected).pieces.clone().expect("a piecewise polynomial");
             for &(a, b) in *panels {
                 let factored = MomentRule::exact_with(&pieces, a, b, true);
                 let reference = MomentRule::exact_with(&pieces, a, b, false);
