@@ -54,7 +54,7 @@ pub use otf::{
 };
 pub use poly::{
     DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET,
-    GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Polychromatic, Settings, SpectralRule, Work, highest_cutoff,
-    monochromatic_mtf,
+    GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Polychromatic, Settings, SpectralRule, Work, forget_remembered,
+    highest_cutoff, monochromatic_mtf,
 };
 pub use table::{OtfTable, TABLE_ZERO_FREQUENCY_TOLERANCE};

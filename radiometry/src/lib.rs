@@ -65,5 +65,5 @@ pub use error::Error;
 pub use sampled::Sampled;
 pub use spectrum::{
     GAUSSIAN_WINDOW_SIGMAS, GaussianPolynomial, MAX_PIECE_DEGREE, MEMO_ENTRIES, MEMO_MIN_SAMPLES,
-    NEGLIGIBLE_TRUNCATION, PiecewisePolynomial, QuadratureNode, Spectrum, Truncation,
+    NEGLIGIBLE_TRUNCATION, PiecewisePolynomial, QuadratureNode, Spectrum, Truncation, forget_remembered,
 };

@@ -123,6 +123,13 @@ thread_local! {
     static PIECEWISE_MEMO: std::cell::RefCell<Memo> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
+/// Forgets the piecewise polynomials this thread remembers ([`Spectrum::piecewise_polynomial`]),
+/// so that the next evaluation builds its own: for a time per evaluation measured by repeating
+/// one scene (the accuracy report), which would otherwise find them made after the first.
+pub fn forget_remembered() {
+    PIECEWISE_MEMO.with_borrow_mut(Vec::clear);
+}
+
 /// A spectrum of the form `P(λ) · exp(−(λ − center)²/(2σ²))` for λ > 0, `P` a polynomial
 /// (see [`Spectrum::gaussian_polynomial`]).
 #[derive(Clone, Debug, PartialEq)]

@@ -134,7 +134,14 @@ type Measured = (f64, usize, f64, String);
 /// and the first run's result. At least `min_repeats` runs follow the first, or one if the first
 /// took over a second; when the first alone exceeds the budget and `min_repeats` is 0, it is the
 /// only sample.
+///
+/// Each call starts with nothing remembered of a measured spectrum (`optics::forget_remembered`:
+/// a sweep's points share a table's polynomial and moments, one evaluation does not).
 fn time<T>(budget: Duration, min_repeats: usize, mut f: impl FnMut() -> T) -> (f64, usize, T) {
+    let mut f = move || {
+        optics::forget_remembered();
+        f()
+    };
     let first = Instant::now();
     let result = f();
     let once = first.elapsed().as_secs_f64();

@@ -58,6 +58,7 @@ mod spectral;
 
 pub use grid::monochromatic_mtf;
 pub use noise::NoiseShape;
+pub use spectral::forget_remembered;
 pub(crate) use spectral::spectral_extent;
 
 use spectral::{Nodes, Scene};

@@ -1032,15 +1032,25 @@ const DENSITIES: usize = 4;
 /// evaluation (1600 breakpoints, 33 and 129 moments a panel): the bound keeps ~25 evaluations'.
 const REMEMBERED_POINTS: usize = 1 << 17;
 
+thread_local! {
+    /// The densities this thread built for remembered piecewise polynomials ([`Density::of`]).
+    static DENSITY_MEMO: std::cell::RefCell<Vec<Arc<Density>>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Forgets what this thread remembers of measured spectra (the densities with their panels'
+/// moments, and radiometry's piecewise polynomials), so that the next evaluation makes its own:
+/// for a time per evaluation measured by repeating one scene (the accuracy report).
+pub fn forget_remembered() {
+    DENSITY_MEMO.with_borrow_mut(Vec::clear);
+    radiometry::forget_remembered();
+}
+
 impl Density {
     /// The density of `detected`: where it is a piecewise polynomial remembered by radiometry
     /// (`Spectrum::piecewise_polynomial` returns the same `Arc` for a spectrum of the same bits),
     /// the density this thread built for that polynomial before, with the moments it remembers
     /// (the last [`DENSITIES`] ones, per thread like radiometry's memo); else a new one.
     pub fn of(detected: &Spectrum) -> Arc<Density> {
-        thread_local! {
-            static MEMO: std::cell::RefCell<Vec<Arc<Density>>> = const { std::cell::RefCell::new(Vec::new()) };
-        }
         let pieces = detected.piecewise_polynomial();
         let build = |pieces: Option<Arc<radiometry::PiecewisePolynomial>>| {
             Arc::new(Density {
@@ -1051,7 +1061,7 @@ impl Density {
             })
         };
         let Some(p) = pieces else { return build(None) };
-        MEMO.with_borrow_mut(|memo| {
+        DENSITY_MEMO.with_borrow_mut(|memo| {
             // the same polynomial, the same spectrum: its smoothness scale too (a pure function
             // of it)
             if let Some(d) = memo.iter().find(|d| d.pieces.as_ref().is_some_and(|q| Arc::ptr_eq(q, &p))) {
