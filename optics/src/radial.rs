@@ -720,29 +720,40 @@ fn proxy_cosine_sum(c: &[f64], a: f64, q1: &[f64], q2: &[f64], w: &[f64]) -> f64
     total
 }
 
-/// Fills the lanes `row..row + v_nodes.len()` of one t node: `q₁` at `q[l]`, `q₂` at
-/// `q[lanes + l]`, the weight `scale × w_v` at `weight[l]`.
+/// Fills the lanes of one t panel, v node by v node (`16 j + i` for the t node `i` and the v node
+/// `j`: each v node's column of 16 t nodes runs as vector loops): `q₁` at `q[l]`, `q₂` at
+/// `q[lanes + l]`, the weight `scale_i × w_v` at `weight[l]`.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn fill_row(
+fn fill_columns(
     s: f64,
-    sin_t: f64,
-    cos_t: f64,
+    sin_t: &[f64; 16],
+    cos_t: &[f64; 16],
+    scale: &[f64; 16],
     v_nodes: &[(f64, f64)],
-    scale: f64,
     q: &mut [f64],
     weight: &mut [f64],
-    row: usize,
     lanes: usize,
 ) {
-    let sin2 = sin_t * sin_t;
-    let delta = 4.0 * s * (cos_t - s);
+    let (mut cos2, mut sin2, mut delta) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+    for i in 0..16 {
+        cos2[i] = cos_t[i] * cos_t[i];
+        sin2[i] = sin_t[i] * sin_t[i];
+        delta[i] = 4.0 * s * (cos_t[i] - s);
+    }
     for (j, &(v, wv)) in v_nodes.iter().enumerate() {
-        let q1 = cos_t * cos_t + v * v * sin2;
-        q[row + j] = q1;
-        // q₂ = (cos t − 2s)² + v² sin²t ≥ 0; the clamp holds it there through rounding
-        q[lanes + row + j] = (q1 - delta).max(0.0);
-        weight[row + j] = scale * wv;
+        let v2 = v * v;
+        let (first, second, weights) = (&mut q[16 * j..16 * j + 16], 16 * j + lanes, &mut weight[16 * j..16 * j + 16]);
+        let mut q2 = [0.0; 16];
+        for i in 0..16 {
+            let q1 = cos2[i] + v2 * sin2[i];
+            first[i] = q1;
+            // q₂ = (cos t − 2s)² + v² sin²t ≥ 0; the clamp holds it there through rounding
+            let d = q1 - delta[i];
+            q2[i] = if d > 0.0 { d } else { 0.0 };
+            weights[i] = scale[i] * wv;
+        }
+        q[second..second + 16].copy_from_slice(&q2);
     }
 }
 
@@ -802,10 +813,23 @@ impl RadialOrder {
         // two neighbouring slopes differ by the second difference: a window of one sample holds
         // the change across it
         let across = slopes.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, larger);
+        // the largest `h − l`, eight running maxima (one chain of dependent maxima would not
+        // vectorize)
+        let widest = |hi: &[f64], lo: &[f64]| {
+            let mut acc = [0.0_f64; 8];
+            let n = hi.len().min(lo.len()) / 8 * 8;
+            for (h, l) in hi[..n].chunks_exact(8).zip(lo[..n].chunks_exact(8)) {
+                for k in 0..8 {
+                    acc[k] = larger(acc[k], h[k] - l[k]);
+                }
+            }
+            let rest = hi[n..].iter().zip(&lo[n..]).map(|(h, l)| h - l).fold(0.0, larger);
+            acc.iter().copied().fold(rest, larger)
+        };
         let mut oscillation = Vec::new();
         let mut width = 1;
         loop {
-            let osc = hi.iter().zip(&lo).map(|(h, l)| h - l).fold(0.0, larger);
+            let osc = widest(&hi, &lo);
             oscillation.push(1.25 * (osc + across));
             if width >= BOUND_SAMPLES {
                 break;
@@ -882,8 +906,8 @@ impl RadialOrder {
         let v_panels = if v_rule.is_some() { 1 } else { (phase_v / theta).ceil().max(1.0) as usize };
         let rule16 = crate::quad::rule();
         // the v nodes on [0, 1] with their weights: one short rule, or 16-point panels
-        let v_nodes: Vec<(f64, f64)> = match v_rule {
-            Some(r) => r.iter().map(|&(xv, wv)| (0.5 + 0.5 * xv, 0.5 * wv)).collect(),
+        let v_nodes: std::borrow::Cow<'_, [(f64, f64)]> = match v_rule {
+            Some(r) => r.into(),
             None => {
                 let hv = 0.5 / v_panels as f64;
                 (0..v_panels)
@@ -891,7 +915,8 @@ impl RadialOrder {
                         let vc = (2 * pv + 1) as f64 * hv;
                         rule16.iter().map(move |&(xv, wv)| (vc + hv * xv, hv * wv))
                     })
-                    .collect()
+                    .collect::<Vec<_>>()
+                    .into()
             }
         };
         // the proxy cut to a phase error of a quarter of the accuracy: a phase error e moves
@@ -947,10 +972,11 @@ impl RadialOrder {
                     sin_t[8 * half..8 * half + 8].copy_from_slice(&sin.to_array());
                     cos_t[8 * half..8 * half + 8].copy_from_slice(&cos.to_array());
                 }
-                for (i, &(_, wt)) in rule16.iter().enumerate() {
-                    let sin2 = sin_t[i] * sin_t[i];
-                    fill_row(s, sin_t[i], cos_t[i], v_nodes, ht * wt * sin2, q, weight, i * v_nodes.len(), lanes);
+                let mut scale = [0.0; 16];
+                for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
+                    *c = ht * wt * st * st;
                 }
+                fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, q, weight, lanes);
                 self.amplitudes(q, weight);
                 total += match proxy {
                     Some(c) => proxy_cosine_sum(c, a, &q[..lanes], &q[lanes..], weight),
@@ -970,26 +996,41 @@ impl RadialOrder {
 /// The phase (radians) a 16-point Gauss–Legendre panel may turn through for an error of about
 /// `accuracy`: `(θ/2)^32/32! = accuracy`, between 6 and 16 rad.
 fn panel_phase(accuracy: f64) -> f64 {
+    // the last accuracy asked and its phase, per thread: a level's OTFs ask the same one
+    thread_local! {
+        static LAST: std::cell::Cell<(f64, f64)> = const { std::cell::Cell::new((f64::NAN, 0.0)) };
+    }
+    let (asked, theta) = LAST.get();
+    if asked == accuracy {
+        return theta;
+    }
     // 32! = 2.63e35
     let acc = accuracy.clamp(1e-300, 1.0);
-    (2.0 * (acc * 2.631_308_369_336_935e35).powf(1.0 / 32.0)).clamp(6.0, 16.0)
+    let theta = (2.0 * (acc * 2.631_308_369_336_935e35).powf(1.0 / 32.0)).clamp(6.0, 16.0);
+    LAST.set((accuracy, theta));
+    theta
 }
 
-/// A shorter Gauss–Legendre rule (4 or 8 points on `[−1, 1]`) that integrates a factor turning
-/// through `phase` radians to `accuracy`, if one does: `(θ/2)^{2n}/(2n)! ≤ accuracy`.
+/// A shorter Gauss–Legendre rule (3, 4, 6 or 8 points, the fewest that will do; nodes and
+/// weights on `[0, 1]`) that integrates a factor turning through `phase` radians to `accuracy`,
+/// if one does: `(θ/2)^{2n}/(2n)! ≤ accuracy / 100` (θ over `[−1, 1]`).
 fn small_rule(phase: f64, accuracy: f64) -> Option<&'static [(f64, f64)]> {
-    type Rule = Vec<(f64, f64)>;
-    static RULES: OnceLock<(Rule, Rule)> = OnceLock::new();
-    let (four, eight) = RULES.get_or_init(|| (crate::quad::gauss_legendre(4), crate::quad::gauss_legendre(8)));
+    /// (points n, (2n)!, nodes and weights on [0, 1])
+    type Rule = (usize, f64, Vec<(f64, f64)>);
+    static RULES: OnceLock<[Rule; 4]> = OnceLock::new();
+    // (n, (2n)!): 3, 4, 6 and 8 points (16 t nodes times any of them fill whole blocks of eight
+    // lanes)
+    let rules = RULES.get_or_init(|| {
+        [(3, 720.0), (4, 40_320.0), (6, 479_001_600.0), (8, 2.092_278_988_8e13)].map(|(n, factorial)| {
+            let on_unit = crate::quad::gauss_legendre(n).iter().map(|&(x, w)| (0.5 + 0.5 * x, 0.5 * w)).collect();
+            (n, factorial, on_unit)
+        })
+    });
     let half = 0.5 * phase.max(1e-3);
-    // (2n)! for n = 4, 8: 40320, 2.09e13
-    if half.powi(8) / 40_320.0 <= accuracy * 1e-2 {
-        Some(four)
-    } else if half.powi(16) / 2.092_278_988_8e13 <= accuracy * 1e-2 {
-        Some(eight)
-    } else {
-        None
-    }
+    rules
+        .iter()
+        .find(|(n, factorial, _)| half.powi(2 * *n as i32) / factorial <= accuracy * 1e-2)
+        .map(|(_, _, rule)| rule.as_slice())
 }
 
 #[cfg(test)]

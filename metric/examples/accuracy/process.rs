@@ -36,6 +36,19 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// `command` run from the workspace `root` as a whole process: its standard output and wall
+/// time, s; None (and its standard error on ours) when it fails.
+pub(crate) fn timed(command: &mut Command, root: &Path) -> Option<(String, f64)> {
+    let started = Instant::now();
+    let output = command.current_dir(root).stderr(Stdio::piped()).output().ok()?;
+    let wall = started.elapsed().as_secs_f64();
+    if !output.status.success() {
+        eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
+        return None;
+    }
+    Some((String::from_utf8_lossy(&output.stdout).into_owned(), wall))
+}
+
 /// numpy's cheapest Binary 2 row within 1e-6, as the script's arguments.
 fn cheapest_numpy(rows: &[Row]) -> Option<(Vec<String>, String)> {
     let row = rows
@@ -53,16 +66,7 @@ fn cheapest_numpy(rows: &[Row]) -> Option<(Vec<String>, String)> {
 /// (and a note on stderr) when a run fails or no numpy row is within 1e-6.
 pub(crate) fn measure(asnr: &Path, python: &Path, root: &Path, rows: &[Row], reference: f64) -> Option<ProcessBench> {
     let (numpy_args, numpy_setting) = cheapest_numpy(rows)?;
-    let timed = |command: &mut Command| -> Option<(String, f64)> {
-        let started = Instant::now();
-        let output = command.current_dir(root).stderr(Stdio::piped()).output().ok()?;
-        let wall = started.elapsed().as_secs_f64();
-        if !output.status.success() {
-            eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
-            return None;
-        }
-        Some((String::from_utf8_lossy(&output.stdout).into_owned(), wall))
-    };
+    let timed = |command: &mut Command| timed(command, root);
     let script = root.join(NUMPY_RADIAL);
     let (mut ours, mut theirs) = (Vec::new(), Vec::new());
     let (mut our_mean, mut numpy_mean) = (f64::NAN, f64::NAN);

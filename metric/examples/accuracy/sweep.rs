@@ -7,9 +7,8 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::sync::Arc;
-use std::time::Instant;
 
 use lenses::{ChromaticMetalens, Curve};
 use metric::{Camera, Options, Scene, evaluate};
@@ -68,16 +67,7 @@ pub(crate) fn measure(asnr: &Path, python: Option<&Path>, root: &Path, runs: usi
         crate::time(std::time::Duration::from_millis(500), 3, || evaluate(&scene).unwrap());
     eprintln!("5000-row τ1 table: {table_micros:.1} µs an evaluation");
     let python = python?;
-    let timed = |command: &mut Command| -> Option<(String, f64)> {
-        let started = Instant::now();
-        let output = command.current_dir(root).stderr(Stdio::piped()).output().ok()?;
-        let wall = started.elapsed().as_secs_f64();
-        if !output.status.success() {
-            eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
-            return None;
-        }
-        Some((String::from_utf8_lossy(&output.stdout).into_owned(), wall))
-    };
+    let timed = |command: &mut Command| crate::process::timed(command, root);
     let script = root.join("xtask/baselines/numpy_table.py");
     let table = root.join("examples/data/spectrometer-825-52.csv");
     let (mut ours, mut theirs) = (Vec::new(), Vec::new());
