@@ -1029,8 +1029,8 @@ fn panel_phase(accuracy: f64) -> f64 {
 /// not a band-limited one: a defocus and a spherical term make it `θ v²`, a term q³ adds `v⁴`,
 /// and a term of degree j in q puts `v^{2(j−1)}` in, which n points hold exactly to first order
 /// while `2(j − 1) ≤ 2n − 1`. The error models, measured for `cos(φ₀ + θ p(v))` against 200
-/// points (φ₀ from 0 to 2.3, `cargo xtask accuracy` rows aside; the largest θ of each is where
-/// the measurements stop): `p = v²`, 4 points `1.2e-6 θ⁴` (θ ≤ 0.87), 8 points `4e-14 θ^9.4`
+/// points (φ₀ from 0 to 2.3; `python3 xtask/baselines/short_rules.py` prints the largest θ of each
+/// rule per accuracy, where the models stop): `p = v²`, 4 points `1.2e-6 θ⁴` (θ ≤ 0.87), 8 points `4e-14 θ^9.4`
 /// (θ ≤ 6.1); `p = v⁴`, 4 points `1.2e-5 θ²` (θ ≤ 0.19), 8 points `4e-9 θ⁵` (θ ≤ 2.7); the
 /// terms beyond the rule's degree, 4 × their phase. The band-limited estimate
 /// `(θ/2)^{2n}/(2n)!` this replaced promised far more than the rules hold (the 4-point rule was

@@ -1,0 +1,42 @@
+"""The short Gauss-Legendre rules across the pupil's v coordinate (optics/src/radial.rs,
+`small_rule`): the largest phase turn theta for which an n-point rule on [0, 1] integrates
+cos(phi0 + theta p(v)) to eps, for p = v^2 and p = v^4 (the phase across v is a function of v^2:
+docs/physics.md, "Designs given as data"), against a 200-point rule, over phi0 in
+{0, 0.5, 1, 1.5, 2.3}. The error models in `small_rule` are fitted to this table.
+
+Usage: python3 xtask/baselines/short_rules.py
+Prints one line per shape and rule: `shape n eps:theta ...`.
+"""
+import numpy as np
+from numpy.polynomial.legendre import leggauss
+
+RULES = {n: leggauss(n) for n in (4, 8, 200)}
+
+
+def integral(n, f):
+    x, w = RULES[n]
+    return 0.5 * (w * f(0.5 * (x + 1.0))).sum()
+
+
+def largest_theta(n, shape, eps):
+    best = 0.0
+    for theta in np.geomspace(1e-4, 20.0, 600):
+        error = max(
+            abs(integral(n, lambda v: np.cos(p0 + theta * shape(v))) - integral(200, lambda v: np.cos(p0 + theta * shape(v))))
+            for p0 in (0.0, 0.5, 1.0, 1.5, 2.3)
+        )
+        if error > eps:
+            break
+        best = theta
+    return best
+
+
+def main():
+    for name, shape in (("v2", lambda v: v * v), ("v4", lambda v: v**4)):
+        for n in (4, 8):
+            cells = [f"{eps:.0e}:{largest_theta(n, shape, eps):.3g}" for eps in (1e-12, 1e-10, 1e-8, 1e-6)]
+            print(name, n, " ".join(cells))
+
+
+if __name__ == "__main__":
+    main()
