@@ -222,6 +222,11 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// its tail, and as many before them for its rate of decay.
 pub const TAIL: usize = 4;
 
+/// The fastest decay rate per degree [`chebyshev_tail`] (and the estimates built on
+/// [`chebyshev_tail_parts`]) still read as a falling tail: above it the coefficients are not
+/// falling, and no bound follows.
+pub const TAIL_MAX_RATE: f64 = 0.8;
+
 /// The size of the Chebyshev coefficients a level of `values` cannot hold, from those it holds
 /// (Trefethen, *Approximation Theory and Approximation Practice*, ch. 8 and 19).
 ///
@@ -239,7 +244,7 @@ pub const TAIL: usize = 4;
 /// oscillation for it to be trusted.
 pub fn chebyshev_tail(values: &[f64]) -> f64 {
     match chebyshev_tail_parts(values) {
-        Some((size, rate)) if rate < 0.8 => 2.0 * size * rate / (1.0 - rate),
+        Some((size, rate)) if rate < TAIL_MAX_RATE => 2.0 * size * rate / (1.0 - rate),
         _ => f64::INFINITY,
     }
 }

@@ -796,16 +796,16 @@ impl RadialOrder {
     pub fn new(pupil: Arc<RadialPupil>, w020_m: f64, wavelength_m: f64) -> RadialOrder {
         let h = 1.0 / BOUND_SAMPLES as f64;
         // from the terms' cached samples and series where they have them
-        let parts = pupil.residual();
-        let residual: Vec<f64> = match &parts {
-            Some(parts) => parts.samples.clone(),
+        let mut parts = pupil.residual();
+        let residual: Vec<f64> = match &mut parts {
+            Some(parts) => std::mem::take(&mut parts.samples),
             None => (0..=BOUND_SAMPLES).map(|i| pupil.opd_beyond_defocus_m(i as f64 * h)).collect(),
         };
         let residual_slopes: Vec<f64> = residual.windows(2).map(|w| (w[1] - w[0]) / h).collect();
         let slopes: Vec<f64> = residual_slopes.iter().map(|d| w020_m + d).collect();
         let slope = 1.25 * slopes.iter().map(|v| v.abs()).fold(0.0, f64::max);
-
-        // (the slopes are finite: plain comparisons, which vectorize, not `f64::max`)
+        // windows of 2^j samples by doubling: max and min over [i, i + 2m) from those of m (the
+        // slopes are finite: plain comparisons, which vectorize, not `f64::max`)
         let larger = |a: f64, b: f64| if a > b { a } else { b };
         let smaller = |a: f64, b: f64| if a < b { a } else { b };
         let (mut hi, mut lo) = (slopes.clone(), slopes.clone());
@@ -1004,19 +1004,9 @@ impl RadialOrder {
 /// The phase (radians) a 16-point Gauss–Legendre panel may turn through for an error of about
 /// `accuracy`: `(θ/2)^32/32! = accuracy`, between 6 and 16 rad.
 fn panel_phase(accuracy: f64) -> f64 {
-    // the last accuracy asked and its phase, per thread: a level's OTFs ask the same one
-    thread_local! {
-        static LAST: std::cell::Cell<(f64, f64)> = const { std::cell::Cell::new((f64::NAN, 0.0)) };
-    }
-    let (asked, theta) = LAST.get();
-    if asked == accuracy {
-        return theta;
-    }
     // 32! = 2.63e35
     let acc = accuracy.clamp(1e-300, 1.0);
-    let theta = (2.0 * (acc * 2.631_308_369_336_935e35).powf(1.0 / 32.0)).clamp(6.0, 16.0);
-    LAST.set((accuracy, theta));
-    theta
+    (2.0 * (acc * 2.631_308_369_336_935e35).powf(1.0 / 32.0)).clamp(6.0, 16.0)
 }
 
 /// A shorter Gauss–Legendre rule across v (4 or 8 points; nodes and weights on `[0, 1]`) that

@@ -137,12 +137,18 @@ impl Levelled {
         }
     }
 
+    /// Makes level `level`'s product-integration weights ready.
+    fn prepare_weights(&mut self, scene: &Scene<'_>, level: usize) {
+        if self.weights[level].is_empty() {
+            let points = LEVELS[level];
+            self.weights[level] = lobatto_weights(self.panel.moments(scene.detected, points - 1), points);
+        }
+    }
+
     /// Makes level `level`'s weights and points ready.
     fn prepare(&mut self, scene: &Scene<'_>, level: usize) {
         let points = LEVELS[level];
-        if self.weights[level].is_empty() {
-            self.weights[level] = lobatto_weights(self.panel.moments(scene.detected, points - 1), points);
-        }
+        self.prepare_weights(scene, level);
         if self.fresh[level].ends.is_empty() {
             let lambdas = lobatto_lambdas(self.panel.a, self.panel.b, points);
             let fresh = &mut self.fresh[level];
@@ -235,7 +241,7 @@ impl Levelled {
         if size == 0.0 {
             return 0.0;
         }
-        if rate >= 0.8 {
+        if rate >= quad::TAIL_MAX_RATE {
             return f64::INFINITY;
         }
         let m = self.scratch.values.len() - 1;
@@ -329,7 +335,7 @@ impl<'a> PerFrequency<'a> {
                 continue;
             }
             let points = LEVELS[AVERAGE_LEVEL];
-            p.weights[AVERAGE_LEVEL] = lobatto_weights(p.panel.moments(scene.detected, points - 1), points);
+            p.prepare_weights(&scene, AVERAGE_LEVEL);
             let start = nodes.nodes.len();
             let lambdas = lobatto_lambdas(p.panel.a, p.panel.b, points);
             for (&lambda, &w) in lambdas.iter().zip(&p.weights[AVERAGE_LEVEL]) {
