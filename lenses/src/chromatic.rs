@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use optics::fft::Aperture;
-use optics::{AffineDefocus, FactoredEfficiency, Field, LensModel, Order, Pupil, Wavefront};
+use optics::{AffineDefocus, FactoredEfficiency, FactoredPart, Field, LensModel, Order, Pupil, Wavefront};
 use radiometry::{Sampled, Spectrum};
 
 use crate::Error;
@@ -17,6 +17,39 @@ pub enum Curve {
     Constant(f64),
     /// Samples against wavelength (m).
     Table(Sampled),
+}
+
+/// The factoring ([`LensModel::factored_efficiency`]) of a lens whose orders all carry the one
+/// efficiency curve `efficiency` and whose transmission is `scale × transmission`: `None` where
+/// both are constants (nothing to fold); else one part, the efficiency's table (or 1 where it
+/// is a constant) with `relative`, the lens rebuilt by `rebuild(efficiency, transmission)` with
+/// that table divided out (efficiency 1, or the constant) and transmission 1.
+pub(crate) fn factor_one_curve(
+    efficiency: &Curve,
+    transmission: &Curve,
+    scale: f64,
+    rebuild: impl FnOnce(Curve, Curve) -> Arc<dyn LensModel>,
+) -> Option<FactoredEfficiency> {
+    if matches!((efficiency, transmission), (Curve::Constant(_), Curve::Constant(_))) {
+        return None;
+    }
+    let (table, relative) = match efficiency {
+        Curve::Table(t) => (Spectrum::Sampled(t.clone()), Curve::Constant(1.0)),
+        Curve::Constant(c) => (Spectrum::Constant(1.0), Curve::Constant(*c)),
+    };
+    Some(FactoredEfficiency {
+        parts: vec![FactoredPart { table, relative: rebuild(relative, Curve::Constant(1.0)) }],
+        transmission: transmission_spectrum(scale, transmission),
+    })
+}
+
+/// `scale × T(λ)` as a spectrum factor: a constant, or the table times the scale.
+pub(crate) fn transmission_spectrum(scale: f64, transmission: &Curve) -> Spectrum {
+    match transmission {
+        Curve::Constant(t) => Spectrum::Constant(scale * t),
+        Curve::Table(t) if scale == 1.0 => Spectrum::Sampled(t.clone()),
+        Curve::Table(t) => Spectrum::product(vec![Spectrum::Constant(scale), Spectrum::Sampled(t.clone())]),
+    }
 }
 
 impl Curve {
@@ -237,21 +270,12 @@ impl LensModel for ChromaticMetalens {
         Some(self.design_wavelength)
     }
 
-    /// With τ1 a table: the table, factored out of the one order (`relative` has τ1 = 1 × the
-    /// iris' area fraction).
+    /// With τ1 or T a table: τ1's table (or 1) factored out of the one order (`relative` has
+    /// τ1 = 1 × the iris' area fraction, or τ1 itself where it is a constant), T as a spectrum.
     fn factored_efficiency(&self) -> Option<FactoredEfficiency> {
-        let Curve::Table(table) = &self.efficiency else {
-            return None;
-        };
-        let transmission = match &self.transmission {
-            Curve::Constant(t) => Spectrum::Constant(self.area_fraction * t),
-            Curve::Table(t) => {
-                Spectrum::product(vec![Spectrum::Constant(self.area_fraction), Spectrum::Sampled(t.clone())])
-            }
-        };
-        let relative =
-            ChromaticMetalens { efficiency: Curve::Constant(1.0), transmission: Curve::Constant(1.0), ..self.clone() };
-        Some(FactoredEfficiency { table: Spectrum::Sampled(table.clone()), transmission, relative: Arc::new(relative) })
+        factor_one_curve(&self.efficiency, &self.transmission, self.area_fraction, |efficiency, transmission| {
+            Arc::new(ChromaticMetalens { efficiency, transmission, ..self.clone() })
+        })
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -218,6 +218,13 @@ impl LensModel for DispersionEngineered {
         Some(self.centre())
     }
 
+    /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {
+            std::sync::Arc::new(DispersionEngineered { efficiency, transmission, ..self.clone() })
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         let mut b: Vec<f64> = [self.band.0, self.band.1]
             .into_iter()

@@ -137,6 +137,14 @@ impl LensModel for Harmonic {
         Some(self.design_wavelength)
     }
 
+    /// With a transmission table: one part (no efficiency table: the orders' efficiencies are
+    /// smooth), the lens with transmission 1, so that the table's rows cut no spectral panel.
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        crate::chromatic::factor_one_curve(&Curve::Constant(1.0), &self.transmission, 1.0, |_, transmission| {
+            std::sync::Arc::new(Harmonic { transmission, ..self.clone() })
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         self.transmission.breakpoints().to_vec()
     }

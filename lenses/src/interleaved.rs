@@ -1,5 +1,7 @@
 //! The spatially multiplexed (interleaved) metalens.
 
+use std::sync::Arc;
+
 use optics::{Field, LensModel, Order, Pupil, Wavefront};
 
 use crate::Error;
@@ -135,6 +137,38 @@ impl LensModel for Interleaved {
     /// The centre of the channels' range, `(λ_1 + λ_N)/2`.
     fn design_wavelength(&self) -> Option<f64> {
         Some(self.centre())
+    }
+
+    /// With some table: one part per channel (its table `η_j/N²`, or that constant, and the
+    /// channel alone, efficiency 1 and no table) where a channel's efficiency is a table; one
+    /// part (the lens with transmission 1) where only the transmission is.
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        let channel_tables = self.channels.iter().any(|c| matches!(c.efficiency, Curve::Table(_)));
+        if !channel_tables {
+            return crate::chromatic::factor_one_curve(
+                &Curve::Constant(1.0),
+                &self.transmission,
+                1.0,
+                |_, transmission| Arc::new(Interleaved { transmission, ..self.clone() }),
+            );
+        }
+        let n2 = (self.channels.len() * self.channels.len()) as f64;
+        let parts = self
+            .channels
+            .iter()
+            .map(|c| optics::FactoredPart {
+                table: crate::chromatic::transmission_spectrum(1.0 / n2, &c.efficiency),
+                relative: Arc::new(Interleaved {
+                    channels: vec![Channel { wavelength_m: c.wavelength_m, efficiency: Curve::Constant(1.0) }],
+                    transmission: Curve::Constant(1.0),
+                    ..self.clone()
+                }),
+            })
+            .collect();
+        Some(optics::FactoredEfficiency {
+            parts,
+            transmission: crate::chromatic::transmission_spectrum(1.0, &self.transmission),
+        })
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -232,6 +232,13 @@ impl LensModel for PhaseLens {
         Some(self.design_wavelength)
     }
 
+    /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {
+            std::sync::Arc::new(PhaseLens { efficiency, transmission, ..self.clone() })
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         let mut out = self.efficiency.breakpoints().to_vec();
         out.extend_from_slice(self.transmission.breakpoints());
@@ -358,6 +365,15 @@ impl<L: LensModel> LensModel for WithZernike<L> {
 
     fn transmission(&self, wavelength_m: f64) -> f64 {
         self.inner.transmission(wavelength_m)
+    }
+
+    /// The inner lens's factoring, each part's relative lens carrying the same terms.
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        let mut factored = self.inner.factored_efficiency()?;
+        for part in &mut factored.parts {
+            part.relative = Arc::new(WithZernike { inner: part.relative.clone(), pupil: self.pupil.clone() });
+        }
+        Some(factored)
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -392,6 +392,13 @@ impl LensModel for PsfStack {
     }
 
     /// The curves' samples and the stack's wavelengths (the OTF is linear in λ between them).
+    /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {
+            std::sync::Arc::new(PsfStack { efficiency, transmission, ..self.clone() })
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         let mut b: Vec<f64> = self
             .efficiency

@@ -389,6 +389,42 @@ impl LensModel for Segmented {
     }
 
     /// The curves' samples, and with [`OtherChannels::Background`] the band edges.
+    /// With some table: one part where every channel has the same efficiency curve (its table
+    /// scales each zone's field by `√t`, so the composite pupil's OTF × efficiency by `t`); with
+    /// [`OtherChannels::Background`], where at each wavelength only one zone is lit, one part
+    /// per channel whose efficiency is a table (the lens with only that zone lit, efficiency 1).
+    /// `None` where channels of different efficiency curves are all signal: the coherent zone
+    /// sum mixes them as `√(η_j η_k)`, which no table factors, and the rows then cut the
+    /// spectral panels.
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        let first = &self.channels[0].efficiency;
+        let rebuilt = |efficiencies: &dyn Fn(usize) -> Curve| Segmented {
+            channels: (0..self.channels.len())
+                .map(|j| Channel { wavelength_m: self.channels[j].wavelength_m, efficiency: efficiencies(j) })
+                .collect(),
+            transmission: Curve::Constant(1.0),
+            ..self.clone()
+        };
+        if self.channels.iter().all(|c| c.efficiency == *first) {
+            return crate::chromatic::factor_one_curve(first, &self.transmission, 1.0, |efficiency, _| {
+                Arc::new(rebuilt(&|_| efficiency.clone()))
+            });
+        }
+        if self.other_channels != OtherChannels::Background {
+            return None;
+        }
+        let parts = (0..self.channels.len())
+            .map(|j| optics::FactoredPart {
+                table: crate::chromatic::transmission_spectrum(1.0, &self.channels[j].efficiency),
+                relative: Arc::new(rebuilt(&|k| Curve::Constant(if k == j { 1.0 } else { 0.0 }))),
+            })
+            .collect();
+        Some(optics::FactoredEfficiency {
+            parts,
+            transmission: crate::chromatic::transmission_spectrum(1.0, &self.transmission),
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         let edges: Vec<f64> = if self.other_channels == OtherChannels::Background {
             self.bands.iter().flat_map(|&(lo, hi)| [lo, hi]).filter(|l| l.is_finite() && *l > 0.0).collect()

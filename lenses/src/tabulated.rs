@@ -189,6 +189,13 @@ impl LensModel for Tabulated {
     }
 
     /// The curves' samples and the table's wavelengths (the OTF is linear in λ between them).
+    /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {
+            std::sync::Arc::new(Tabulated { efficiency, transmission, ..self.clone() })
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         let mut b: Vec<f64> = self
             .efficiency

@@ -1,6 +1,7 @@
 //! Evaluation of a scene: photoelectrons, SNR0, mean MTF, ASNR and the validity report.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use optics::{LensModel, Polychromatic};
 use radiometry::Spectrum;
@@ -259,8 +260,8 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let options = scene.options();
     let settings = options.settings();
     let folded = Folded::of(lens, &detected);
-    let (optics_lens, optics_detected) = folded.optics(lens, &detected);
-    let poly = Polychromatic::with_settings(optics_lens, optics_detected, field, nyquist, pixel, settings).map_err(|e| match e {
+    let parts = folded.parts();
+    let poly = Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).map_err(|e| match e {
         // a detected integral beyond f64::MAX is too much light, not none
         optics::Error::NoSignal { total } if total == f64::INFINITY => overflow(
             "the detected spectral integral ∫ L η λ τ1 dλ",
@@ -873,7 +874,9 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     let field = scene.field();
     let options = scene.options();
     let settings = options.settings();
-    let poly = Polychromatic::with_settings(lens, &detected, field, max_frequency, pixel, settings)?;
+    let folded = Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let poly = Polychromatic::with_parts(lens, &detected, &parts, field, max_frequency, pixel, settings)?;
     let mean_wavelength = poly.spectral_average(|lambda, _| lambda);
     let frequencies: Vec<f64> = match sampling {
         Sampling::Grid(_, points) => {
@@ -955,12 +958,20 @@ fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>, mean_wavelength: f64) -> 
     }
 }
 
-/// The lens and the detected spectrum as the optics integrate them: where the lens has an
-/// efficiency table ([`optics::FactoredEfficiency`]), the table folded into the detected
-/// spectrum and the lens with it divided out, so that its rows cost what a spectrum table's do
-/// (exact moments, no spectral panel cut at each row); otherwise the two as they are.
+/// The lens and the detected spectrum as the optics integrate them: where the lens has
+/// efficiency or transmission tables ([`optics::FactoredEfficiency`]), each part's table folded
+/// into the detected spectrum, handed to the optics as that part's spectrum beside its relative
+/// orders ([`optics::Part`]), so that the rows cost what a spectrum table's do (exact moments,
+/// no spectral panel cut at each row); otherwise no parts.
 struct Folded {
-    factored: Option<(optics::FactoredEfficiency, Spectrum)>,
+    factored: Option<Factored>,
+}
+
+struct Factored {
+    /// the lens's total transmission as a spectrum factor
+    transmission: Spectrum,
+    /// each part's relative lens and `ρ t_p`
+    parts: Vec<(Arc<dyn LensModel>, Spectrum)>,
 }
 
 /// `∫ ρ dλ`, `∫ ρ τ1 dλ` and `∫ ρ T dλ` over the detected spectrum ρ (before the lens; paper SI
@@ -974,34 +985,41 @@ struct SignalIntegrals {
 impl Folded {
     fn of(lens: &dyn LensModel, detected: &Spectrum) -> Folded {
         Folded {
-            factored: lens.factored_efficiency().map(|f| {
-                let folded = Spectrum::product(vec![detected.clone(), f.table.clone()]);
-                (f, folded)
+            factored: lens.factored_efficiency().map(|f| Factored {
+                transmission: f.transmission,
+                parts: f
+                    .parts
+                    .into_iter()
+                    .map(|p| (p.relative, Spectrum::product(vec![detected.clone(), p.table])))
+                    .collect(),
             }),
         }
     }
 
-    /// The lens and spectrum to hand to the optics.
-    fn optics<'a>(&'a self, lens: &'a dyn LensModel, detected: &'a Spectrum) -> (&'a dyn LensModel, &'a Spectrum) {
-        match &self.factored {
-            Some((f, folded)) => (&*f.relative, folded),
-            None => (lens, detected),
-        }
+    /// The parts to hand to the optics (none without tables).
+    fn parts(&self) -> Vec<optics::Part<'_>> {
+        self.factored.as_ref().map_or_else(Vec::new, |f| {
+            f.parts.iter().map(|(lens, detected)| optics::Part { lens: &**lens, detected }).collect()
+        })
     }
 
-    /// The signal integrals: by the optics' spectral nodes (weights `ρ`), or, with the table
-    /// folded (weights `ρ t`), `∫ ρ τ1 = Σ w (τ1/t)` by the nodes and `∫ ρ`, `∫ ρ T` exactly from
-    /// the spectra (radiometry's `Spectrum::integral`).
+    /// The signal integrals: by the optics' spectral nodes (weights `ρ`), or, with the tables
+    /// folded, `∫ ρ τ1 = Σ_p ∫ ρ t_p r_p`, the nodes' total weight, and `∫ ρ`, `∫ ρ T` exactly
+    /// from the spectra (radiometry's `Spectrum::integral`).
     fn integrals(&self, lens: &dyn LensModel, detected: &Spectrum, poly: &Polychromatic<'_>) -> SignalIntegrals {
         match &self.factored {
-            None => SignalIntegrals {
-                detected: poly.detected_integral(|_| 1.0),
-                efficiency: poly.detected_integral(|l| lens.efficiency(l)),
-                transmission: poly.detected_integral(|l| lens.transmission(l)),
-            },
-            Some((f, _)) => SignalIntegrals {
+            None => {
+                // (without parts the nodes integrate ρ itself: `detected_integral` is `Some`)
+                let by_nodes = |f: &dyn Fn(f64) -> f64| poly.detected_integral(f).unwrap_or(f64::NAN);
+                SignalIntegrals {
+                    detected: by_nodes(&|_| 1.0),
+                    efficiency: by_nodes(&|l| lens.efficiency(l)),
+                    transmission: by_nodes(&|l| lens.transmission(l)),
+                }
+            }
+            Some(f) => SignalIntegrals {
                 detected: detected.integral(),
-                efficiency: poly.detected_integral(|l| f.relative.efficiency(l)),
+                efficiency: poly.total_weight(),
                 transmission: Spectrum::product(vec![detected.clone(), f.transmission.clone()]).integral(),
             },
         }

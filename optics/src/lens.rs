@@ -228,25 +228,39 @@ pub struct AffineDefocus {
     pub w020_slope: f64,
 }
 
-/// A lens's efficiency table factored out of its orders ([`LensModel::factored_efficiency`]):
-/// every order's efficiency is `table(λ)` times that of the same order of `relative`.
+/// A lens's efficiency tables factored out of its orders ([`LensModel::factored_efficiency`]):
+/// the lens's orders at λ are the orders of every part's `relative` lens together, each
+/// order's efficiency `t_p(λ)` times that of the same order of its part's `relative`.
 ///
 /// The spectral rules integrate the detected spectrum against the interpolation basis by its
 /// exact moments, whatever its number of table rows (docs/physics.md, "Spectral quadrature"); a
 /// table in the lens's efficiency instead kinks the lens's part of the integrand at every row,
-/// and each row cuts a spectral panel. Multiplied into the detected spectrum, the table costs no
-/// more than a spectrum table: `ρ(λ) τ_o(λ) = [ρ(λ) t(λ)] r_o(λ)` with `r_o` the efficiency of
-/// `relative`'s order `o`, smooth in λ.
+/// and each row cuts a spectral panel. Multiplied into the detected spectrum, a table costs no
+/// more than a spectrum table: `ρ(λ) τ_o(λ) = [ρ(λ) t_p(λ)] r_o(λ)` with `r_o` the efficiency
+/// of order `o` of part `p`'s `relative`, smooth in λ. A lens whose orders carry different
+/// tables (the channels of a multiplexed lens) has one part per table; the polychromatic OTF is
+/// linear in the orders, so each part is integrated with the moments of its own `ρ t_p`
+/// ([`crate::Polychromatic::with_parts`]).
 #[derive(Clone, Debug)]
 pub struct FactoredEfficiency {
-    /// `t(λ)`, a factor of every order's efficiency (piecewise linear: a table).
-    pub table: radiometry::Spectrum,
+    /// The parts, at least one.
+    pub parts: Vec<FactoredPart>,
     /// The lens's total transmission `T(λ)` as a spectrum factor (the glare estimate integrates
-    /// the detected spectrum times it, paper SI eq. S13).
+    /// the detected spectrum times it exactly, paper SI eq. S13): a transmission table then cuts
+    /// no spectral panel either.
     pub transmission: radiometry::Spectrum,
-    /// The same lens with `t` divided out: the same orders, pupils and wavefronts, each order's
-    /// efficiency `τ_o(λ)/t(λ)`, defined where `t(λ) = 0` too, with no row of `t` among its
-    /// [`breakpoints`](LensModel::breakpoints). Its transmission is not read.
+}
+
+/// One part of a [`FactoredEfficiency`]: a table and the orders it multiplies.
+#[derive(Clone, Debug)]
+pub struct FactoredPart {
+    /// `t_p(λ)`, a factor of the efficiency of each of this part's orders (a table, or a
+    /// product of a constant and a table; `Constant(1)` where only the transmission was a
+    /// table).
+    pub table: radiometry::Spectrum,
+    /// The part's orders with `t_p` divided out: the same pupils and wavefronts, each order's
+    /// efficiency `τ_o(λ)/t_p(λ)`, defined where `t_p(λ) = 0` too, with no row of any table
+    /// among its [`breakpoints`](LensModel::breakpoints). Its transmission is not read.
     pub relative: Arc<dyn LensModel>,
 }
 
@@ -343,9 +357,10 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         Vec::new()
     }
 
-    /// The lens's efficiency table factored out of its orders ([`FactoredEfficiency`]), where it
-    /// has one: `metric::evaluate` then folds the table into the detected spectrum, so that its
-    /// rows cost what a spectrum table's do. Default: `None`.
+    /// The lens's efficiency and transmission tables factored out of its orders
+    /// ([`FactoredEfficiency`]), where it has some: `metric::evaluate` then folds each part's
+    /// table into the detected spectrum, so that their rows cost what a spectrum table's do.
+    /// Default: `None`.
     fn factored_efficiency(&self) -> Option<FactoredEfficiency> {
         None
     }

@@ -46,7 +46,9 @@ pub mod testkit;
 
 pub use closed::GaussianDefocus;
 pub use error::Error;
-pub use lens::{AffineDefocus, FactoredEfficiency, Field, LensModel, Order, Pupil, Wavefront, Zone, round_for_display};
+pub use lens::{
+    AffineDefocus, FactoredEfficiency, FactoredPart, Field, LensModel, Order, Pupil, Wavefront, Zone, round_for_display,
+};
 pub use otf::{
     ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_asymptotic,
     defocus_otf_bessel, defocus_otf_many, defocus_otf_many_within, defocus_otf_panels, defocus_otf_quadrature,
@@ -54,7 +56,7 @@ pub use otf::{
 };
 pub use poly::{
     DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET,
-    GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Polychromatic, Settings, SpectralRule, Work, forget_remembered,
+    GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Part, Polychromatic, Settings, SpectralRule, Work, forget_remembered,
     highest_cutoff, monochromatic_mtf,
 };
 pub use table::{OtfTable, TABLE_ZERO_FREQUENCY_TOLERANCE};

@@ -19,6 +19,12 @@
 //!   [`area_fraction`](crate::Pupil::area_fraction) (photon counts follow the pupil area: a
 //!   10° sector cannot collect the light of the full lens); every wavefront coefficient and
 //!   image shift finite, the zones' too, and every zone amplitude finite and ≥ 0;
+//! - where the lens factors its tables out ([`LensModel::factored_efficiency`]), on the same
+//!   grid and field points: the parts' relative orders, in part order, each efficiency times its
+//!   part's table, are the lens's orders, those of zero efficiency aside (efficiency within
+//!   1e-12 relative, the same wavefront and image shift, the same kind of pupil); the transmission spectrum is the lens's
+//!   transmission (1e-12); no part's relative lens has breakpoints at most of its table's rows
+//!   (they would cut the spectral panels the fold exists to spare);
 //! - the polychromatic MTF on axis: 1 at zero frequency, within `[0, 1]` and finite up to the
 //!   cutoff of the shortest wavelength, and zero beyond it.
 //!
@@ -49,6 +55,7 @@ pub fn check_lens(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), Strin
         return Err(format!("f_number() = {f_number}: expected finite and > 0"));
     }
     check_description(lens, detected)?;
+    check_factoring(lens, detected)?;
     let cutoff =
         crate::highest_cutoff(lens, detected).map_err(|e| format!("cannot prepare the polychromatic OTF: {e}"))?;
     let poly = Polychromatic::new(lens, detected, Field::ON_AXIS, cutoff, None)
@@ -68,6 +75,75 @@ pub fn check_lens(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), Strin
         let m = poly.mtf(cutoff * factor);
         if m != 0.0 {
             return Err(format!("MTF = {m} at {factor} × the cutoff {cutoff:e} cycles/m: expected 0"));
+        }
+    }
+    Ok(())
+}
+
+/// The factoring of `lens`'s tables, where it has one, against its own orders over the
+/// `detected` spectrum's extent (module docs; part of [`check_lens`], alone for a lens whose
+/// polychromatic checks cost more than a test should spend, a composite pupil on the FFT path).
+pub fn check_factoring(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), String> {
+    let Some(factored) = lens.factored_efficiency() else { return Ok(()) };
+    if factored.parts.is_empty() {
+        return Err("factored_efficiency() has no parts: expected at least one".into());
+    }
+    for (p, part) in factored.parts.iter().enumerate() {
+        let rows = part.table.breakpoints();
+        let cut = part.relative.breakpoints().iter().filter(|b| rows.contains(b)).count();
+        // (a few may coincide: a band edge of the relative lens on a row)
+        if rows.len() > 4 && 2 * cut > rows.len() {
+            return Err(format!(
+                "factored part {p}: its relative lens has {cut} breakpoints at its table's {} rows: expected the table divided out",
+                rows.len()
+            ));
+        }
+    }
+    let close = |a: f64, b: f64| (a - b).abs() <= RELATIVE_SLACK * a.abs().max(b.abs()) + 1e-300;
+    for lambda in check_wavelengths(detected)? {
+        let nm = lambda * 1e9;
+        let t = factored.transmission.value(lambda);
+        if !close(t, lens.transmission(lambda)) {
+            return Err(format!(
+                "at λ = {nm} nm: the factored transmission {t} differs from transmission() = {}",
+                lens.transmission(lambda)
+            ));
+        }
+        for field in [Field::ON_AXIS, OFF_AXIS_FIELD] {
+            // (orders of zero efficiency aside: a part may keep an order where it carries no light)
+            let whole: Vec<Order> = lens.orders(lambda, field).into_iter().filter(|o| o.efficiency != 0.0).collect();
+            let mut parts = Vec::new();
+            for part in &factored.parts {
+                let table = part.table.value(lambda);
+                let lit = part.relative.orders(lambda, field).into_iter().filter(|o| table * o.efficiency != 0.0);
+                parts.extend(lit.map(|o| (table, o)));
+            }
+            if parts.len() != whole.len() {
+                return Err(format!(
+                    "at λ = {nm} nm, field {field:?}: the factored parts have {} orders, the lens {}",
+                    parts.len(),
+                    whole.len()
+                ));
+            }
+            for (k, ((table, part), order)) in parts.iter().zip(&whole).enumerate() {
+                let efficiency = table * part.efficiency;
+                let same_pupil = std::mem::discriminant(&part.pupil) == std::mem::discriminant(&order.pupil);
+                if !close(efficiency, order.efficiency)
+                    || part.wavefront.defocus_m != order.wavefront.defocus_m
+                    || part.wavefront.image_shift_m != order.wavefront.image_shift_m
+                    || !same_pupil
+                {
+                    return Err(format!(
+                        "at λ = {nm} nm, field {field:?}, order {k}: the factored part's order (table {table} × efficiency {}, W020 {} m, shift {:?} m) is not the lens's (efficiency {}, W020 {} m, shift {:?} m) or goes through another kind of pupil",
+                        part.efficiency,
+                        part.wavefront.defocus_m,
+                        part.wavefront.image_shift_m,
+                        order.efficiency,
+                        order.wavefront.defocus_m,
+                        order.wavefront.image_shift_m
+                    ));
+                }
+            }
         }
     }
     Ok(())

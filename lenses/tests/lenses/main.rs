@@ -352,3 +352,118 @@ fn interleaved_channels_are_chromatic_lenses() {
         assert!(got[i] < optics::mtf_diffraction_limited(s));
     }
 }
+
+/// A table of `values` evenly over 650–950 nm.
+fn rows(values: &[f64]) -> Curve {
+    let n = values.len();
+    let wavelengths = (0..n).map(|k| 650e-9 + 300e-9 * k as f64 / (n - 1) as f64).collect();
+    Curve::Table(Sampled::new(wavelengths, values.to_vec()).unwrap())
+}
+
+/// Lenses whose tables are factored out (`LensModel::factored_efficiency`) pass the checks,
+/// among them that the parts' orders times their tables are the lens's orders: a chromatic lens
+/// with a T table only, an interleaved lens with a table per channel, a harmonic lens with a T
+/// table, a dispersion-engineered achromat with a τ table, and segmented lenses with one table
+/// for every zone and with a table per zone, other channels as background (for those, the
+/// factoring check alone: their polychromatic MTF on the FFT path costs seconds).
+#[test]
+fn factored_lenses_conform() {
+    use lenses::{
+        Channel, DelayOverflow, DispersionEngineered, Harmonic, Interleaved, Layout, OtherChannels, Segmented,
+    };
+    use optics::LensModel;
+    let ripple =
+        |mean: f64, k: f64| -> Vec<f64> { (0..31).map(|i| mean * (1.0 + 0.1 * (k * i as f64).sin())).collect() };
+    let channels = |tables: &[Curve]| -> Vec<Channel> {
+        [780e-9, 800e-9, 820e-9]
+            .iter()
+            .zip(tables)
+            .map(|(&wavelength_m, efficiency)| Channel { wavelength_m, efficiency: efficiency.clone() })
+            .collect()
+    };
+    let distinct = [rows(&ripple(0.6, 0.7)), rows(&ripple(0.7, 1.1)), rows(&ripple(0.65, 0.3))];
+    let common = [rows(&ripple(0.6, 0.7)), rows(&ripple(0.6, 0.7)), rows(&ripple(0.6, 0.7))];
+    let t = rows(&ripple(0.9, 0.5));
+    let lenses: Vec<(&str, Box<dyn LensModel>)> = vec![
+        (
+            "chromatic, T table",
+            Box::new(ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), t.clone()).unwrap()),
+        ),
+        ("interleaved", Box::new(Interleaved::new(2.5, 3.36e-3, channels(&distinct), t.clone()).unwrap())),
+        ("harmonic", Box::new(Harmonic::new(2.5, 3.36e-3, 800e-9, 5, 0.4, rows(&ripple(0.6, 0.9))).unwrap())),
+        (
+            "dispersion-engineered",
+            Box::new(
+                DispersionEngineered::new(
+                    2.5,
+                    3.36e-3,
+                    (760e-9, 840e-9),
+                    1e-12,
+                    rows(&ripple(0.3, 0.8)),
+                    Curve::Constant(0.6),
+                    DelayOverflow::Reduced,
+                )
+                .unwrap(),
+            ),
+        ),
+        (
+            "segmented, one table",
+            Box::new(
+                Segmented::new(5.0, 3.36e-3, channels(&common), Layout::Concentric, None, Curve::Constant(0.9))
+                    .unwrap(),
+            ),
+        ),
+        (
+            "segmented, a table per zone, background",
+            Box::new(
+                Segmented::new(5.0, 3.36e-3, channels(&distinct), Layout::Sectors, None, Curve::Constant(0.9))
+                    .unwrap()
+                    .with_other_channels(OtherChannels::Background),
+            ),
+        ),
+    ];
+    for (name, lens) in &lenses {
+        assert!(lens.factored_efficiency().is_some(), "{name}");
+        if name.starts_with("segmented") {
+            // (composite pupils on the FFT path: the polychromatic checks cost seconds here)
+            optics::testkit::check_factoring(lens.as_ref(), &band(800.0, 30.0))
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+        } else {
+            check_lens(lens.as_ref(), &band(800.0, 30.0)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
+}
+
+/// A lens whose factoring does not give its orders: a chromatic lens's, its table doubled.
+#[derive(Debug)]
+struct Misfactored(ChromaticMetalens);
+
+impl optics::LensModel for Misfactored {
+    fn f_number(&self) -> f64 {
+        self.0.f_number()
+    }
+    fn focal_length(&self) -> f64 {
+        self.0.focal_length()
+    }
+    fn orders(&self, wavelength_m: f64, field: optics::Field) -> Vec<optics::Order> {
+        self.0.orders(wavelength_m, field)
+    }
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.0.transmission(wavelength_m)
+    }
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        let mut f = self.0.factored_efficiency()?;
+        f.parts[0].table = Spectrum::product(vec![Spectrum::Constant(2.0), f.parts[0].table.clone()]);
+        Some(f)
+    }
+}
+
+/// The factoring check fails a factoring whose parts do not give the lens's orders, naming the
+/// wavelength and both efficiencies.
+#[test]
+fn a_wrong_factoring_is_caught() {
+    let lens = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, rows(&[0.1, 0.15, 0.12]), Curve::Constant(0.55)).unwrap();
+    optics::testkit::check_factoring(&lens, &band(800.0, 30.0)).unwrap();
+    let e = optics::testkit::check_factoring(&Misfactored(lens), &band(800.0, 30.0)).unwrap_err();
+    assert!(e.contains("at λ = ") && e.contains("is not the lens's"), "{e}");
+}

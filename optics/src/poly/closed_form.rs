@@ -12,7 +12,7 @@ use crate::closed::GaussianDefocus;
 use crate::lens::{Field, LensModel, Pupil};
 use crate::quad;
 
-use super::spectral::{Node, Nodes, Panel};
+use super::spectral::{Node, Nodes, Panel, WHOLE};
 use super::{Engine, FrequencyRule, GAUSSIAN_HALF_WIDTH_SIGMAS, OtfEngine};
 
 /// Evaluations of the closed-form spectral integral E(c) one mean may take (100–180 ns each: about
@@ -55,7 +55,7 @@ impl Closed {
         let mut nodes = Nodes::default();
         quad::for_each_node(lo, hi, 8, |lambda, q| {
             let q_rho = q * detected.value(lambda);
-            nodes.samples.push((lambda, q_rho));
+            nodes.samples.push((lambda, q_rho, WHOLE));
             nodes.nodes.push(Node {
                 lambda,
                 weight: q_rho * affine.efficiency,
@@ -64,9 +64,10 @@ impl Closed {
                 shift: [0.0, 0.0],
                 table: None,
                 radial: None,
+                part: WHOLE,
             });
         });
-        nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len() });
+        nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len(), part: WHOLE });
         nodes.total_weight = closed.total_weight();
         let weight: f64 = nodes.nodes.iter().map(|n| n.weight).sum();
         let mean_defocus = nodes.nodes.iter().map(|n| n.weight * n.w020).sum::<f64>() / weight;
@@ -199,13 +200,7 @@ impl OtfEngine for Closed {
         self.evaluations.get()
     }
 
-    fn fraction_blurred_beyond(
-        &self,
-        _lens: &dyn LensModel,
-        _detected: &Spectrum,
-        _field: Field,
-        w020_limit: f64,
-    ) -> f64 {
+    fn fraction_blurred_beyond(&self, _scene: &super::spectral::Scene<'_>, w020_limit: f64) -> f64 {
         self.closed.fraction_defocused_beyond(w020_limit)
     }
 }

@@ -67,11 +67,15 @@ impl FftPath {
             });
         }
         let mut out = Vec::new();
-        for &(lambda, weight) in &nodes.samples {
+        for &(lambda, weight, part) in &nodes.samples {
             if weight == 0.0 {
                 continue;
             }
-            for order in scene.lens.orders(lambda, scene.field) {
+            for order in scene.part(part).lens.orders(lambda, scene.field) {
+                if order.efficiency == 0.0 {
+                    // no light in this order here (a factored part's zone outside its band): no grid
+                    continue;
+                }
                 out.push(FftNode {
                     lambda,
                     weight: weight * order.efficiency,
@@ -91,11 +95,11 @@ impl FftPath {
         // (the layer's plan is not used: the smallest one)
         let mut layer = FftLayer::new(pupil_samples, 1e-9, scene.lens.numerical_aperture())?;
         let mut aliased = false;
-        for &(lambda, weight) in &nodes.samples {
+        for &(lambda, weight, part) in &nodes.samples {
             if weight == 0.0 {
                 continue;
             }
-            for order in scene.lens.orders(lambda, scene.field) {
+            for order in scene.part(part).lens.orders(lambda, scene.field) {
                 match &order.pupil {
                     Pupil::Table(_) => {}
                     Pupil::Zones(_) => return Ok(None),

@@ -63,6 +63,18 @@ pub(crate) use spectral::spectral_extent;
 
 use spectral::{Nodes, Scene};
 
+/// One part of a lens whose efficiency tables are factored out
+/// ([`crate::FactoredEfficiency`]), as [`Polychromatic::with_parts`] takes it: the part's
+/// orders (`lens`, its relative lens) and the detected spectrum times the part's table
+/// (`detected`, `ρ t_p`).
+#[derive(Clone, Copy, Debug)]
+pub struct Part<'a> {
+    /// The part's orders, each efficiency relative to the part's table.
+    pub lens: &'a dyn LensModel,
+    /// The detected spectrum times the part's table, `ρ(λ) t_p(λ)`.
+    pub detected: &'a Spectrum,
+}
+
 /// Half-width, in standard deviations, kept of each Gaussian spectral factor: the area beyond
 /// ±7σ is `erfc(7/√2)` = 2.6e-12 of the total, so neither the photoelectron count nor the
 /// normalized polychromatic OTF moves by more than that (the OTF is bounded by 1). Wider windows
@@ -302,11 +314,13 @@ trait OtfEngine: std::fmt::Debug {
         1.0 / (self.nodes().shortest() * self.f_number())
     }
     /// Photoelectron-weighted fraction of the signal whose `|W020|` exceeds `w020_limit`.
-    fn fraction_blurred_beyond(&self, lens: &dyn LensModel, detected: &Spectrum, field: Field, w020_limit: f64) -> f64 {
+    /// `scene` is the [`Polychromatic`]'s (with its parts): each panel is integrated with its
+    /// own part's lens and spectrum.
+    fn fraction_blurred_beyond(&self, scene: &Scene<'_>, w020_limit: f64) -> f64 {
         let nodes = self.nodes();
         if nodes.line.is_some() {
             // one wavelength: each order is beyond or not (0 or 1 for a single order)
-            let na = lens.numerical_aperture();
+            let na = scene.lens.numerical_aperture();
             let beyond: f64 = nodes
                 .nodes
                 .iter()
@@ -317,9 +331,17 @@ trait OtfEngine: std::fmt::Debug {
                 .sum();
             return beyond / nodes.total_weight;
         }
-        let panels: Vec<(f64, f64)> = nodes.panels.iter().map(|p| (p.lo, p.hi)).collect();
-        let density = |lambda: f64| detected.value(lambda);
-        let beyond = crate::fraunhofer::weight_defocused_beyond(lens, field, &density, &panels, w020_limit);
+        let mut parts: Vec<usize> = nodes.panels.iter().map(|p| p.part).collect();
+        parts.sort_unstable();
+        parts.dedup();
+        let mut beyond = 0.0;
+        for part in parts {
+            let panels: Vec<(f64, f64)> =
+                nodes.panels.iter().filter(|p| p.part == part).map(|p| (p.lo, p.hi)).collect();
+            let part = scene.part(part);
+            let density = |lambda: f64| part.detected.value(lambda);
+            beyond += crate::fraunhofer::weight_defocused_beyond(part.lens, part.field, &density, &panels, w020_limit);
+        }
         (beyond / nodes.total_weight).clamp(0.0, 1.0)
     }
 }
@@ -384,8 +406,10 @@ fn sort_cuts(mut cuts: Vec<f64>) -> Vec<f64> {
 #[derive(Debug)]
 pub struct Polychromatic<'a> {
     lens: &'a dyn LensModel,
-    detected: &'a Spectrum,
-    field: Field,
+    /// the factored parts ([`with_parts`](Self::with_parts)); empty without
+    parts: &'a [Part<'a>],
+    /// the scene with its parts, for the Fraunhofer fraction
+    scene: Scene<'a>,
     f_number: f64,
     max_frequency: f64,
     pixel_pitch: Option<f64>,
@@ -416,8 +440,39 @@ pub struct Polychromatic<'a> {
 /// at ±1e-6 of the total where the spectrum holds 1e-9 (the Binary 2 metalens at 50 nm), and
 /// read as weights they made the rule resolve the defocus at 7σ. A single wavelength (a line)
 /// keeps its weight.
-fn resolved_defocus(nodes: &Nodes, detected: &Spectrum, relevant: f64) -> f64 {
-    let mut samples: Vec<(f64, f64)> = nodes.samples.iter().copied().filter(|s| s.0.is_finite()).collect();
+///
+/// With parts ([`Polychromatic::with_parts`]), each node's signal is read from its own part's
+/// samples and spectrum.
+fn resolved_defocus(nodes: &Nodes, scene: &Scene<'_>, relevant: f64) -> f64 {
+    let mut parts: Vec<usize> = nodes.samples.iter().map(|s| s.2).collect();
+    parts.sort_unstable();
+    parts.dedup();
+    let mut signal: Vec<(f64, f64)> = Vec::with_capacity(nodes.nodes.len());
+    for part in parts {
+        part_signal(nodes, part, scene.part(part).detected, &mut signal);
+    }
+    defocus_beyond(signal, relevant)
+}
+
+/// The largest `|W020|` of `signal` (`(|W020|, signal)` pairs) such that the signal at that
+/// defocus and beyond exceeds `relevant`; 0 where none does.
+fn defocus_beyond(mut signal: Vec<(f64, f64)>, relevant: f64) -> f64 {
+    signal.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut beyond = 0.0;
+    for (w020, mass) in signal {
+        beyond += mass;
+        if beyond > relevant {
+            return w020;
+        }
+    }
+    0.0
+}
+
+/// `(|W020|, signal)` of each node of `part` ([`resolved_defocus`]) appended to `signal`;
+/// `detected` is the part's spectrum.
+fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec<(f64, f64)>) {
+    let mut samples: Vec<(f64, f64)> =
+        nodes.samples.iter().filter(|s| s.2 == part && s.0.is_finite()).map(|s| (s.0, s.1)).collect();
     samples.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut lambdas: Vec<f64> = samples.iter().map(|s| s.0).collect();
     lambdas.dedup();
@@ -438,27 +493,14 @@ fn resolved_defocus(nodes: &Nodes, detected: &Spectrum, relevant: f64) -> f64 {
         let density = [lo, lambda, hi].iter().map(|&l| detected.value(l).abs()).fold(0.0, f64::max);
         Some(density * 0.5 * (hi - lo))
     };
-    let mut signal: Vec<(f64, f64)> = nodes
-        .nodes
-        .iter()
-        .map(|n| {
-            let w = rule_weight(n.lambda);
-            let mass = match mass_around(n.lambda) {
-                Some(m) if w != 0.0 && m.is_finite() => m * (n.weight / w).abs(),
-                _ => n.weight.abs(),
-            };
-            (n.w020.abs(), mass)
-        })
-        .collect();
-    signal.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let mut beyond = 0.0;
-    for (w020, mass) in signal {
-        beyond += mass;
-        if beyond > relevant {
-            return w020;
-        }
-    }
-    0.0
+    signal.extend(nodes.nodes.iter().filter(|n| n.part == part).map(|n| {
+        let w = rule_weight(n.lambda);
+        let mass = match mass_around(n.lambda) {
+            Some(m) if w != 0.0 && m.is_finite() => m * (n.weight / w).abs(),
+            _ => n.weight.abs(),
+        };
+        (n.w020.abs(), mass)
+    }));
 }
 
 /// The engine for a scene: the closed form where it applies (and is allowed), a line's engine
@@ -468,6 +510,7 @@ fn resolved_defocus(nodes: &Nodes, detected: &Spectrum, relevant: f64) -> f64 {
 fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine + 'a>, Error> {
     let pupil_samples = settings.pupil_samples.unwrap_or(DEFAULT_PUPIL_SAMPLES);
     if let Some(l) = scene.detected.as_line() {
+        let scene = scene.whole();
         let nodes = spectral::line(&scene, l);
         check_signal(&nodes)?;
         let fft = if nodes.needs_grid { Some(grid::FftPath::build(&scene, &nodes, pupil_samples)?) } else { None };
@@ -475,6 +518,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     }
     let (lo, hi) = spectral_extent(scene.detected)?;
     if settings.closed_form
+        && scene.parts.is_empty()
         && let Some((closed, affine)) = closed_form::closed_form(scene.lens, scene.detected, scene.field)
     {
         let engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number, settings.tolerance);
@@ -492,9 +536,11 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         SpectralRule::Interpolated => spectral::interpolated(&scene, lo, hi, settings.tolerance),
         SpectralRule::Panels => None,
     };
-    let mut nodes = match interpolated {
-        Some(nodes) => nodes,
-        None => spectral::panels(&scene, lo, hi),
+    // the reference panels do not factor: the whole lens through the detected spectrum, cut
+    // at every row of its tables
+    let (scene, mut nodes) = match interpolated {
+        Some(nodes) => (scene, nodes),
+        None => (scene.whole(), spectral::panels(&scene.whole(), lo, hi)),
     };
     check_signal(&nodes)?;
     if nodes.needs_grid {
@@ -569,6 +615,26 @@ impl<'a> Polychromatic<'a> {
         pixel_pitch: Option<f64>,
         settings: Settings,
     ) -> Result<Self, Error> {
+        Self::with_parts(lens, detected, &[], field, max_frequency, pixel_pitch, settings)
+    }
+
+    /// [`with_settings`](Self::with_settings) for a lens whose efficiency tables are factored
+    /// out ([`crate::FactoredEfficiency`]): `lens` and `detected` as there, and `parts` the
+    /// lens's parts, each its relative orders and `ρ t_p` ([`Part`]). Product integration (on
+    /// the exact path, per frequency and on the FFT path) then integrates each part with the
+    /// exact moments of its own spectrum, so that no table row cuts a spectral panel; the rules
+    /// that do not factor (a line, the closed form, the reference panels) take `lens` and
+    /// `detected` as they are. The parts' orders together must be the lens's orders, their
+    /// efficiencies times the tables, or the results are those of the parts.
+    pub fn with_parts(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        parts: &'a [Part<'a>],
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+    ) -> Result<Self, Error> {
         if !(settings.tolerance.is_finite() && settings.tolerance > 0.0 && settings.tolerance < 1.0) {
             return Err(Error::InvalidParameter {
                 name: "tolerance",
@@ -585,7 +651,7 @@ impl<'a> Polychromatic<'a> {
         }
         let f_number = lens.f_number();
         let irises = settings.exact_irises.then(|| lens.numerical_aperture());
-        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises };
+        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, parts };
         let engine = choose(scene, settings)?;
         // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
         let engine_tolerance = match engine.engine() {
@@ -594,8 +660,8 @@ impl<'a> Polychromatic<'a> {
         };
         let mut this = Polychromatic {
             lens,
-            detected,
-            field,
+            parts,
+            scene,
             f_number,
             max_frequency,
             pixel_pitch,
@@ -613,7 +679,7 @@ impl<'a> Polychromatic<'a> {
         this.w020_max =
             nodes.nodes.iter().filter(|n| n.weight.abs() > threshold).map(|n| n.w020.abs()).fold(0.0, f64::max);
         let relevant = 1e-2 * settings.tolerance * nodes.total_weight.abs();
-        this.w020_resolved = resolved_defocus(nodes, detected, relevant);
+        this.w020_resolved = resolved_defocus(nodes, &scene, relevant);
         // (product-integration weights may be negative: the average of W020² too, by rounding)
         this.w020_rms = this.spectral_average(|_, w020| w020 * w020).max(0.0).sqrt();
         Ok(this)
@@ -644,9 +710,14 @@ impl<'a> Polychromatic<'a> {
     }
 
     /// `∫ ρ(λ) f(λ) dλ` over the detected spectrum *before* the lens (no efficiency factor),
-    /// with the same spectral rule.
-    pub fn detected_integral(&self, mut f: impl FnMut(f64) -> f64) -> f64 {
-        self.engine.nodes().samples.iter().map(|&(lambda, w)| w * f(lambda)).sum()
+    /// with the same spectral rule; `None` where the nodes integrate the parts' spectra `ρ t_p`
+    /// instead ([`with_parts`](Self::with_parts) on a product-integration engine).
+    pub fn detected_integral(&self, mut f: impl FnMut(f64) -> f64) -> Option<f64> {
+        let samples = &self.engine.nodes().samples;
+        if !self.parts.is_empty() && samples.iter().any(|s| s.2 != spectral::WHOLE) {
+            return None;
+        }
+        Some(samples.iter().map(|&(lambda, w, _)| w * f(lambda)).sum())
     }
 
     /// Weighted average of `f(λ, W020)` over the detected spectrum (weights `ρ τ`).
@@ -721,7 +792,7 @@ impl<'a> Polychromatic<'a> {
     /// step never falls between nodes and the fraction is continuous in every parameter.
     pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
         let limit = 0.5 * radius_m * self.lens.numerical_aperture();
-        self.engine.fraction_blurred_beyond(self.lens, self.detected, self.field, limit)
+        self.engine.fraction_blurred_beyond(&self.scene, limit)
     }
 }
 
@@ -759,7 +830,7 @@ mod tests {
             } else {
                 detected.value(lambda) * 2e-9
             };
-            nodes.samples.push((lambda, w));
+            nodes.samples.push((lambda, w, 0));
             nodes.nodes.push(spectral::Node {
                 lambda,
                 weight: w,
@@ -768,10 +839,13 @@ mod tests {
                 shift: [0.0; 2],
                 table: None,
                 radial: None,
+                part: 0,
             });
         }
         nodes.sum_weights();
-        let resolved = resolved_defocus(&nodes, &detected, 1e-8 * total);
+        let mut signal = Vec::new();
+        part_signal(&nodes, 0, &detected, &mut signal);
+        let resolved = defocus_beyond(signal, 1e-8 * total);
         // read as weights, every node beyond 40 nm is relevant: the outermost defocus, 70 µm
         assert!(resolved < 0.9 * 70e-9 * 1e3, "{resolved:e}");
         // the Gaussian's two tails beyond x σ hold erfc(x/√2) of the total, 1e-8 at x = 5.73;

@@ -30,7 +30,7 @@ use std::sync::Arc;
 use num_complex::Complex64;
 
 use super::spectral::{
-    Density, FIRST_MOMENT_DEGREE, Interpolant, LEBESGUE, LEVELS, Node, Nodes, Panel, Scene, Start, lobatto_lambdas,
+    FIRST_MOMENT_DEGREE, Interpolant, LEBESGUE, LEVELS, Node, Nodes, Panel, Scene, Start, lobatto_lambdas,
     lobatto_weights,
 };
 use super::{Engine, FrequencyRule, OtfEngine, level_error, nested_error};
@@ -314,7 +314,6 @@ pub(super) struct PerFrequency<'a> {
     /// the 17-point level of every panel, for the averages over the spectrum
     nodes: Nodes,
     panels: RefCell<Vec<Levelled>>,
-    density: Arc<Density>,
     total_mass: f64,
     /// absolute tolerance of one OTF value (set by the frequency rule; before it, for single
     /// values, 5 % of the relative tolerance)
@@ -327,7 +326,7 @@ impl<'a> PerFrequency<'a> {
     /// The engine for `scene` over `[lo, hi]`, where product integration applies and every
     /// order is a centred circle with defocus; else `None`.
     pub fn new(scene: Scene<'a>, lo: f64, hi: f64, tolerance: f64) -> Option<PerFrequency<'a>> {
-        let Start { panels, density, total_mass } = super::spectral::start(&scene, lo, hi)?;
+        let Start { panels, total_mass } = super::spectral::start(&scene, lo, hi)?;
         let mut panels: Vec<Levelled> = panels.into_iter().map(Levelled::new).collect();
         let mut nodes = Nodes { interpolated: true, ..Nodes::default() };
         for p in &mut panels {
@@ -335,14 +334,16 @@ impl<'a> PerFrequency<'a> {
                 continue;
             }
             let points = LEVELS[AVERAGE_LEVEL];
-            p.prepare_weights(&scene, AVERAGE_LEVEL);
+            let part = p.panel.part;
+            let part_scene = scene.part(part);
+            p.prepare_weights(&part_scene, AVERAGE_LEVEL);
             let start = nodes.nodes.len();
             let lambdas = lobatto_lambdas(p.panel.a, p.panel.b, points);
             for (&lambda, &w) in lambdas.iter().zip(&p.weights[AVERAGE_LEVEL]) {
-                nodes.samples.push((lambda, w));
+                nodes.samples.push((lambda, w, part));
                 if w != 0.0 {
                     let first = nodes.nodes.len();
-                    nodes.emit(&scene, lambda, w);
+                    nodes.emit(&part_scene, lambda, w, part);
                     // the same orders as `prepare` reads them (the efficiency from the node's
                     // weight `w τ_o`), so that the levels do not prepare these wavelengths again
                     let orders = nodes.nodes[first..]
@@ -357,8 +358,8 @@ impl<'a> PerFrequency<'a> {
                     p.known.push((lambda, orders));
                 }
             }
-            p.prepare(&scene, AVERAGE_LEVEL);
-            nodes.panels.push(Panel { lo: p.panel.a, hi: p.panel.b, start, end: nodes.nodes.len() });
+            p.prepare(&part_scene, AVERAGE_LEVEL);
+            nodes.panels.push(Panel { lo: p.panel.a, hi: p.panel.b, start, end: nodes.nodes.len(), part });
         }
         // only centred circles with defocus, or radially symmetric pupils (the radial engine):
         // no FFT grid, no table, no image shift
@@ -370,7 +371,6 @@ impl<'a> PerFrequency<'a> {
             scene,
             nodes,
             panels: RefCell::new(panels),
-            density,
             total_mass,
             otf_tolerance: Cell::new(0.05 * tolerance),
             evaluations: Cell::new(0),
@@ -419,20 +419,16 @@ impl OtfEngine for PerFrequency<'_> {
                     continue;
                 }
                 let allowed = budget * self.nodes.total_weight.abs() / self.total_mass / (weighted * share);
-                match panels[k].integral(&self.scene, nu, allowed, &self.evaluations) {
+                let part = self.scene.part(panels[k].panel.part);
+                match panels[k].integral(&part, nu, allowed, &self.evaluations) {
                     Ok(v) => sum += v,
                     // the narrowest panel: its finest level's value, whatever its error
                     Err(v) if panels[k].panel.b - panels[k].panel.a <= NARROWEST_PANEL * self.band() => sum += v,
                     Err(_) => {
                         // halve the panel (its phase halves with it) and start this value again
-                        let p = panels.remove(k).panel;
-                        let mid = 0.5 * (p.a + p.b);
-                        let detected = self.scene.detected;
-                        let half = |a: f64, b: f64| {
-                            Levelled::new(Interpolant::new(detected, &self.density, a, b, 0.5 * p.phase))
-                        };
-                        panels.insert(k, half(mid, p.b));
-                        panels.insert(k, half(p.a, mid));
+                        let (low, high) = panels.remove(k).panel.halves(part.detected);
+                        panels.insert(k, Levelled::new(high));
+                        panels.insert(k, Levelled::new(low));
                         continue 'restart;
                     }
                 }

@@ -56,6 +56,8 @@ pub(super) struct Node {
     /// the order's radially symmetric pupil ([`Pupil::Radial`]) prepared at this wavelength,
     /// computed by the radial engine instead of the defocused OTF (where it needs no grid)
     pub radial: Option<Arc<RadialOrder>>,
+    /// the scene's part whose order this is ([`Scene::part`]; [`WHOLE`] for the whole lens)
+    pub part: usize,
 }
 
 impl Node {
@@ -81,6 +83,7 @@ impl Node {
                 }
                 _ => None,
             },
+            part: WHOLE,
         };
         if let Some(r) = irises.and_then(|na| reduced_circle(order, na)) {
             node.w020 = r.defocus_m;
@@ -160,21 +163,25 @@ pub(super) fn needs_grid(order: &Order, irises: bool) -> bool {
     }
 }
 
-/// A spectral panel: its interval and its nodes `nodes[start..end]`.
+/// A spectral panel: its interval, its nodes `nodes[start..end]` and the scene's part they
+/// belong to ([`Scene::part`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Panel {
     pub lo: f64,
     pub hi: f64,
     pub start: usize,
     pub end: usize,
+    pub part: usize,
 }
 
 /// What a spectral rule produces.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Nodes {
     pub nodes: Vec<Node>,
-    /// (λ, rule weight) at every node wavelength, before the lens: `∫ ρ f ≈ Σ w f(λ)`
-    pub samples: Vec<(f64, f64)>,
+    /// (λ, rule weight, part) at every node wavelength, before the lens: `∫ ρ_p f ≈ Σ w f(λ)`
+    /// over the samples of part p, `ρ_p` the part's spectrum ([`Scene::part`]; the detected
+    /// spectrum for a scene of one part)
+    pub samples: Vec<(f64, f64, usize)>,
     pub panels: Vec<Panel>,
     /// Σ node weights, panel by panel in the order the engines sum (so that OTF(0) is 1)
     pub total_weight: f64,
@@ -188,11 +195,14 @@ pub(super) struct Nodes {
 }
 
 impl Nodes {
-    /// Appends the nodes of every order of the scene's lens at `lambda` with rule weight `q`.
-    pub fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64) {
+    /// Appends the nodes of every order of the scene's lens at `lambda` with rule weight `q`,
+    /// marked as of `part` (`scene` is that part's, [`Scene::part`]).
+    pub fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64, part: usize) {
         for order in scene.lens.orders(lambda, scene.field) {
             self.needs_grid |= needs_grid(&order, scene.irises.is_some());
-            self.nodes.push(Node::of(&order, lambda, q * order.efficiency, scene.irises));
+            let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises);
+            node.part = part;
+            self.nodes.push(node);
         }
     }
 
@@ -218,6 +228,10 @@ impl Nodes {
     }
 }
 
+/// The part index of nodes and panels of the whole lens through the detected spectrum (the rules
+/// that do not factor): [`Scene::part`] of it is the scene's whole lens and spectrum.
+pub(super) const WHOLE: usize = usize::MAX;
+
 /// The scene as the spectral rules see it.
 #[derive(Clone, Copy)]
 pub(super) struct Scene<'a> {
@@ -230,9 +244,33 @@ pub(super) struct Scene<'a> {
     /// the lens's numerical aperture where circular irises go to the exact path
     /// ([`Settings::exact_irises`](super::Settings::exact_irises)), else `None`
     pub irises: Option<f64>,
+    /// the lens's factored parts ([`Polychromatic::with_parts`](super::Polychromatic::with_parts)):
+    /// product integration sums each part's orders with the moments of the part's own spectrum;
+    /// empty, the lens and the detected spectrum are the one part
+    pub parts: &'a [super::Part<'a>],
 }
 
-impl Scene<'_> {
+impl<'a> Scene<'a> {
+    /// How many parts product integration sums ([`parts`](Self::parts); 1 without any).
+    pub fn part_count(&self) -> usize {
+        self.parts.len().max(1)
+    }
+
+    /// The scene of part `p`: its lens and spectrum, no parts; the scene itself without parts,
+    /// and for [`WHOLE`].
+    pub fn part(&self, p: usize) -> Scene<'a> {
+        match self.parts.get(p) {
+            Some(part) => Scene { lens: part.lens, detected: part.detected, parts: &[], ..*self },
+            None => *self,
+        }
+    }
+
+    /// The whole lens through the detected spectrum, as one part (the rules that do not
+    /// factor: the reference panels, a line, the closed form).
+    pub fn whole(&self) -> Scene<'a> {
+        Scene { parts: &[], ..*self }
+    }
+
     /// The field direction on the detector, radians from `+x`: `atan2(y, x)` of the field
     /// angles, `+x` on axis (docs/physics.md, "Off-axis MTFs: tangential and sagittal"); a
     /// tabulated order's tangential curve lies along it.
@@ -422,12 +460,12 @@ pub(super) fn panels(scene: &Scene<'_>, lo: f64, hi: f64) -> Nodes {
             let start = out.nodes.len();
             quad::for_each_node(plo, phi, 1, |lambda, q| {
                 let q_rho = q * detected.value(lambda);
-                out.samples.push((lambda, q_rho));
+                out.samples.push((lambda, q_rho, WHOLE));
                 if q_rho != 0.0 {
-                    out.emit(scene, lambda, q_rho);
+                    out.emit(scene, lambda, q_rho, WHOLE);
                 }
             });
-            out.panels.push(Panel { lo: plo, hi: phi, start, end: out.nodes.len() });
+            out.panels.push(Panel { lo: plo, hi: phi, start, end: out.nodes.len(), part: WHOLE });
         }
     }
     out.sum_weights();
@@ -455,8 +493,8 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
 /// weight × the order's efficiency.
 pub(super) fn line(scene: &Scene<'_>, line: radiometry::QuadratureNode) -> Nodes {
     let lambda = line.wavelength_m;
-    let mut out = Nodes { line: Some(lambda), samples: vec![(lambda, line.weight)], ..Nodes::default() };
-    out.emit(scene, lambda, line.weight);
+    let mut out = Nodes { line: Some(lambda), samples: vec![(lambda, line.weight, WHOLE)], ..Nodes::default() };
+    out.emit(scene, lambda, line.weight, WHOLE);
     out.total_weight = out.nodes.iter().map(|n| n.weight).sum();
     out
 }
@@ -497,7 +535,7 @@ pub(super) const LEBESGUE: f64 = 4.0;
 /// Chebyshev–Lobatto points within its share of the accepted level ([`Interpolant::trim`]).
 pub(super) fn interpolated(scene: &Scene<'_>, lo: f64, hi: f64, tolerance: f64) -> Option<Nodes> {
     let top = scene.max_frequency;
-    let Start { mut panels, density, total_mass } = start(scene, lo, hi)?;
+    let Start { mut panels, total_mass } = start(scene, lo, hi)?;
     // the budget is shared in proportion to √(weight share): a panel of little weight may be
     // less accurate per unit weight, and the sum of the shares' errors stays within it
     let allowance = |panels: &[Interpolant], estimate: f64| {
@@ -519,14 +557,14 @@ pub(super) fn interpolated(scene: &Scene<'_>, lo: f64, hi: f64, tolerance: f64) 
                 continue;
             }
             let allowed = allowed_of(&panels[k]);
-            if panels[k].refine(scene, top, allowed) {
+            let part = scene.part(panels[k].part);
+            if panels[k].refine(&part, top, allowed) {
                 k += 1;
             } else {
                 // beyond the most points: halve the panel (its phase halves with it)
-                let p = panels.remove(k);
-                let mid = 0.5 * (p.a + p.b);
-                panels.insert(k, Interpolant::new(scene.detected, &density, mid, p.b, 0.5 * p.phase));
-                panels.insert(k, Interpolant::new(scene.detected, &density, p.a, mid, 0.5 * p.phase));
+                let (low, high) = panels.remove(k).halves(part.detected);
+                panels.insert(k, high);
+                panels.insert(k, low);
             }
         }
         let nodes = emit(scene, &panels);
@@ -546,21 +584,20 @@ pub(super) fn interpolated(scene: &Scene<'_>, lo: f64, hi: f64, tolerance: f64) 
     for p in &mut panels {
         if p.mass != 0.0 {
             let allowed = allowed_of(p);
-            p.trim(scene, top, allowed);
+            p.trim(&scene.part(p.part), top, allowed);
         }
     }
     Some(emit(scene, &panels))
 }
 
-/// The product-integration panels of `[lo, hi]` before any point is placed: cut at the lens's
-/// breakpoints and where its set of orders changes, each turning by at most
-/// [`INTERPOLATION_PANEL_PHASE`] at the frequency limit, with their moment rules; `None` where
-/// the rule does not apply (a cutoff `1/(λ F#)` below the limit, or no weight).
+/// The product-integration panels of `[lo, hi]` before any point is placed, part by part
+/// ([`Scene::part`]): cut at the part's lens's breakpoints and where its set of orders changes,
+/// each turning by at most [`INTERPOLATION_PANEL_PHASE`] at the frequency limit, with their
+/// moment rules of the part's spectrum; `None` where the rule does not apply (a cutoff
+/// `1/(λ F#)` below the limit, or no weight in any part).
 pub(super) struct Start {
     pub panels: Vec<Interpolant>,
-    /// the detected spectrum as the moment rules read it (for panels split later)
-    pub density: Arc<Density>,
-    /// `Σ |∫ ρ|` over the panels
+    /// `Σ |∫ ρ_p|` over the panels
     pub total_mass: f64,
 }
 
@@ -570,8 +607,18 @@ pub(super) fn start(scene: &Scene<'_>, lo: f64, hi: f64) -> Option<Start> {
     if top * hi * scene.f_number >= 1.0 - 1e-6 || lo <= 0.0 {
         return None;
     }
-    let density = Density::of(scene.detected);
     let mut panels: Vec<Interpolant> = Vec::new();
+    for part in 0..scene.part_count() {
+        part_panels(&scene.part(part), part, lo, hi, &mut panels);
+    }
+    let total_mass: f64 = panels.iter().map(|p| p.mass.abs()).sum();
+    (total_mass > 0.0 && total_mass.is_finite()).then_some(Start { panels, total_mass })
+}
+
+/// [`start`]'s panels of one part (`scene` is the part's) appended to `panels`.
+fn part_panels(scene: &Scene<'_>, part: usize, lo: f64, hi: f64, panels: &mut Vec<Interpolant>) {
+    let top = scene.max_frequency;
+    let density = Density::of(scene.detected);
     let mut lens_cuts = cuts(scene, lo, hi, false);
     lens_cuts.extend(order_changes(scene, &lens_cuts));
     lens_cuts.sort_by(f64::total_cmp);
@@ -586,11 +633,9 @@ pub(super) fn start(scene: &Scene<'_>, lo: f64, hi: f64) -> Option<Start> {
         for k in 0..n {
             let (pa, pb) = (a + h * k as f64, if k + 1 == n { b } else { a + h * (k + 1) as f64 });
             let phase = overlap_sum(&turns, a, b, pa, pb);
-            panels.push(Interpolant::new(scene.detected, &density, pa, pb, phase));
+            panels.push(Interpolant::new(scene.detected, &density, pa, pb, phase, part));
         }
     }
-    let total_mass: f64 = panels.iter().map(|p| p.mass.abs()).sum();
-    (total_mass > 0.0 && total_mass.is_finite()).then_some(Start { panels, density, total_mass })
 }
 
 /// The nodes of the accepted rules, panel by panel.
@@ -601,13 +646,14 @@ fn emit(scene: &Scene<'_>, panels: &[Interpolant]) -> Nodes {
             continue;
         }
         let start = out.nodes.len();
+        let part = scene.part(p.part);
         for (&lambda, &w) in p.lambdas().iter().zip(&p.weights) {
-            out.samples.push((lambda, w));
+            out.samples.push((lambda, w, p.part));
             if w != 0.0 {
-                out.emit(scene, lambda, w);
+                out.emit(&part, lambda, w, p.part);
             }
         }
-        out.panels.push(Panel { lo: p.a, hi: p.b, start, end: out.nodes.len() });
+        out.panels.push(Panel { lo: p.a, hi: p.b, start, end: out.nodes.len(), part: p.part });
     }
     out.sum_weights();
     out
@@ -673,8 +719,11 @@ pub(super) struct Interpolant {
     pub b: f64,
     /// the lens's defocus phase turn across the panel at the frequency limit, rad
     pub phase: f64,
-    /// `∫ ρ` over the panel
+    /// `∫ ρ_p` over the panel
     pub mass: f64,
+    /// the scene's part whose spectrum weights the panel and whose orders it sums
+    /// ([`Scene::part`])
+    pub part: usize,
     rule: Arc<MomentRule>,
     /// the Chebyshev moments `μ_0 …` computed so far (see [`moments`](Self::moments))
     mu: Vec<f64>,
@@ -693,7 +742,7 @@ pub(super) struct Interpolant {
 }
 
 impl Interpolant {
-    pub fn new(detected: &Spectrum, density: &Arc<Density>, a: f64, b: f64, phase: f64) -> Interpolant {
+    pub fn new(detected: &Spectrum, density: &Arc<Density>, a: f64, b: f64, phase: f64, part: usize) -> Interpolant {
         let rule = density.rule(detected, a, b, FIRST_MOMENT_DEGREE);
         // all the moments the first levels will ask for, in the one pass over the breakpoints
         // that the mass alone would take (a second pass for them cost 2 % of a spectrometer
@@ -704,6 +753,7 @@ impl Interpolant {
             b,
             phase,
             mass: mu[0],
+            part,
             rule,
             mu,
             density: density.clone(),
@@ -734,6 +784,14 @@ impl Interpolant {
             self.mu = self.density.moments(&self.rule, self.a, self.b, up_to);
         }
         &self.mu[..=degree]
+    }
+
+    /// The panel's two halves, fresh (the phase halves with each), for a panel whose finest
+    /// level does not settle; `detected` is the spectrum of its part.
+    pub fn halves(&self, detected: &Spectrum) -> (Interpolant, Interpolant) {
+        let mid = 0.5 * (self.a + self.b);
+        let half = |a: f64, b: f64| Interpolant::new(detected, &self.density, a, b, 0.5 * self.phase, self.part);
+        (half(self.a, mid), half(mid, self.b))
     }
 
     /// The wavelengths of the current level's points (k = 0 at `b`), moved 1e-12 of the panel
@@ -881,6 +939,7 @@ impl Interpolant {
             b: self.b,
             phase: self.phase,
             mass: self.mass,
+            part: self.part,
             rule: Arc::new(MomentRule::Points { cos: Vec::new(), weight: Vec::new(), degree: 0 }),
             mu: Vec::new(),
             density: self.density.clone(),
