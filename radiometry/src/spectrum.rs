@@ -611,6 +611,13 @@ impl Spectrum {
         {
             return integral;
         }
+        // a Gaussian filter times tables (a measured transmission or QE): the tables' exact
+        // polynomial pieces against the Gaussian, a few points a piece
+        if exact.is_none()
+            && let Some(integral) = self.gaussian_piecewise_integral()
+        {
+            return integral;
+        }
         match exact {
             Some(v) if v.is_infinite() && constant == 0.0 => 0.0,
             Some(v) => constant * v,
@@ -628,6 +635,65 @@ impl Spectrum {
             }
             None => self.quadrature_nodes().iter().map(|n| n.weight).sum(),
         }
+    }
+
+    /// `∫ p(λ) G(λ) dλ` where the spectrum is Gaussian factors `G` (combined into one) times a
+    /// product `p` of tables, top-hats, constants and linear factors with a
+    /// [`piecewise_polynomial`](Self::piecewise_polynomial); `None` otherwise. Over the window
+    /// the quadrature keeps (± [`GAUSSIAN_WINDOW_SIGMAS`] σ), each piece is integrated by
+    /// Gauss–Legendre on `n` points, exact for `p` (degree `d`) times the Gaussian's Taylor
+    /// polynomial of degree `2n − 1 − d` about the piece's centre: the rest is at most
+    /// `(w/2σ)^{2n−d}` of the piece's integral (`w` its width; the Hermite factor
+    /// `He_k(0)/k!` < 1 left out), and `n` (2 to 8) is the fewest points that bring it below
+    /// 1e-17; a piece wider than σ/4 is cut into equal parts no wider. A 5000-row table at
+    /// 0.08 nm under a 21 nm σ takes 3 points a row (the 16-point panels of the general
+    /// quadrature, each point a lookup of every factor, took 40 % of an evaluation).
+    fn gaussian_piecewise_integral(&self) -> Option<f64> {
+        let mut gaussians = Vec::new();
+        let mut rest = Vec::new();
+        let mut bounded = false;
+        let mut other = false;
+        self.visit(&mut |f| match f {
+            Spectrum::Gaussian(_) => gaussians.push(f.clone()),
+            Spectrum::Sampled(_) | Spectrum::TopHat(_) => {
+                bounded = true;
+                rest.push(f.clone());
+            }
+            Spectrum::Constant(_) | Spectrum::Linear { .. } => rest.push(f.clone()),
+            _ => other = true,
+        });
+        if other || !bounded || gaussians.is_empty() {
+            return None;
+        }
+        let g = Spectrum::Product(gaussians).gaussian_polynomial()?;
+        let (center, sigma, peak) = (g.center_m, g.sigma_m, g.coefficients[0]);
+        let (p, _) = Spectrum::Product(rest).remembered_piecewise()?;
+        let (lo, hi) = (center - GAUSSIAN_WINDOW_SIGMAS * sigma, center + GAUSSIAN_WINDOW_SIGMAS * sigma);
+        let d = p.degree as i32;
+        let mut sum = 0.0;
+        for (piece, edge) in p.pieces.iter().zip(p.edges.windows(2)) {
+            let (a, b) = (edge[0].max(lo).max(0.0), edge[1].min(hi));
+            if a >= b {
+                continue;
+            }
+            let parts = ((b - a) / (0.25 * sigma)).ceil().max(1.0);
+            let w = (b - a) / parts;
+            let ratio = w / (2.0 * sigma);
+            let points = (2..=8).find(|&n| ratio.powi(2 * n - d) <= 1e-17).unwrap_or(8) as usize;
+            let rule = gauss_legendre(points);
+            for k in 0..parts as usize {
+                let (pa, pb) = (a + w * k as f64, if k + 1 == parts as usize { b } else { a + w * (k + 1) as f64 });
+                let (half, mid) = (0.5 * (pb - pa), 0.5 * (pa + pb));
+                for &(x, weight) in rule {
+                    let l = mid + half * x;
+                    let t = l - edge[0];
+                    let value = piece[..=p.degree].iter().rev().fold(0.0, |acc, c| acc * t + c);
+                    let z = (l - center) / sigma;
+                    sum += half * weight * value * (-0.5 * z * z).exp();
+                }
+            }
+        }
+        Some(peak * sum)
     }
 
     /// Quadrature nodes for weighting by this spectrum: `Σ weight · g(λ)` ≈ `∫ spectrum · g dλ`,
@@ -690,6 +756,21 @@ impl Spectrum {
         }
         nodes
     }
+}
+
+/// The Gauss–Legendre rule of `points` (1 to 8) on [−1, 1]: (node, weight) pairs, from
+/// `gauss-quad` (the project's one Gauss–Legendre source), made once.
+fn gauss_legendre(points: usize) -> &'static [(f64, f64)] {
+    static RULES: std::sync::OnceLock<Vec<Vec<(f64, f64)>>> = std::sync::OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        (1..=8)
+            .map(|n| {
+                let n = std::num::NonZeroUsize::new(n).unwrap_or(std::num::NonZeroUsize::MIN);
+                gauss_quad::legendre::GaussLegendre::new(n).as_node_weight_pairs().to_vec()
+            })
+            .collect()
+    });
+    &rules[points.clamp(1, 8) - 1]
 }
 
 fn push(nodes: &mut Vec<QuadratureNode>, wavelength_m: f64, weight: f64) {
@@ -776,6 +857,45 @@ mod tests {
         assert!(Spectrum::Constant(1.0).gaussian_polynomial().is_none());
     }
     use super::*;
+
+    /// A Gaussian times tables ([`Spectrum::gaussian_piecewise_integral`]) against the 16-point
+    /// panels of the general quadrature (the slow, obviously correct reference, cut at every row
+    /// and every σ): a 5000-row table at 0.08 nm × λ (3 points a row), a 3-row table (pieces of
+    /// 5σ, cut into parts), a top-hat, two Gaussians, a table reaching past the window; within
+    /// 1e-13.
+    #[test]
+    fn a_gaussian_times_tables_integrates_as_the_general_quadrature() {
+        let g = |center_nm: f64, range_nm: f64| {
+            Spectrum::Gaussian(Gaussian::from_range(center_nm * 1e-9, range_nm * 1e-9, 1.7).unwrap())
+        };
+        let long: Vec<f64> = (0..5000).map(|k| 600e-9 + 0.08e-9 * k as f64).collect();
+        let ripple = long.iter().map(|&l| 0.5 + 0.1 * (l / 7e-9).sin() + 0.02 * (l / 0.77e-9).cos()).collect();
+        let long = Spectrum::Sampled(Sampled::new(long, ripple).unwrap());
+        let short = Spectrum::Sampled(Sampled::new(vec![700e-9, 800e-9, 900e-9], vec![0.2, 0.9, 0.4]).unwrap());
+        let hat = Spectrum::TopHat(TopHat::new(780e-9, 830e-9, 0.8).unwrap());
+        let cases = [
+            Spectrum::product(vec![g(800.0, 50.0), long.clone(), Spectrum::Linear { slope: 2.0 }]),
+            Spectrum::product(vec![g(800.0, 50.0), short.clone(), Spectrum::Constant(3.0)]),
+            Spectrum::product(vec![g(810.0, 30.0), hat]),
+            Spectrum::product(vec![g(800.0, 50.0), g(790.0, 80.0), long.clone(), short]),
+            Spectrum::product(vec![g(620.0, 100.0), long]),
+        ];
+        for (k, s) in cases.iter().enumerate() {
+            let fast = s.gaussian_piecewise_integral().unwrap();
+            let slow: f64 = s.quadrature_nodes().iter().map(|n| n.weight).sum();
+            assert!(
+                (fast - slow).abs() <= 1e-13 * slow.abs(),
+                "case {k}: {fast} vs {slow} ({:e})",
+                (fast - slow) / slow
+            );
+            assert_eq!(s.integral(), fast, "case {k}");
+        }
+        // not this form: a blackbody, a lone Gaussian, no bounded factor
+        assert!(
+            Spectrum::product(vec![g(800.0, 50.0), Spectrum::Constant(2.0)]).gaussian_piecewise_integral().is_none()
+        );
+        assert!(g(800.0, 50.0).gaussian_piecewise_integral().is_none());
+    }
 
     fn table(w_nm: &[f64], v: &[f64]) -> Sampled {
         Sampled::new(w_nm.iter().map(|w| w / 1e9).collect(), v.to_vec()).unwrap()
