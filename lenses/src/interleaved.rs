@@ -139,9 +139,10 @@ impl LensModel for Interleaved {
         Some(self.centre())
     }
 
-    /// With some table: one part per channel (its table `η_j/N²`, or that constant, and the
-    /// channel alone, efficiency 1 and no table) where a channel's efficiency is a table; one
-    /// part (the lens with transmission 1) where only the transmission is.
+    /// With some table: one part per distinct efficiency curve among the channels (those
+    /// channels alone, efficiency 1, the table `η k²/N²` for `k` of the `N` channels: a part's
+    /// lens divides by its own `k²`), so that channels on one table (`lens.efficiency` a CSV)
+    /// share one part; one part (the lens with transmission 1) where only the transmission is.
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
         let channel_tables = self.channels.iter().any(|c| matches!(c.efficiency, Curve::Table(_)));
         if !channel_tables {
@@ -152,17 +153,29 @@ impl LensModel for Interleaved {
                 |_, transmission| Arc::new(Interleaved { transmission, ..self.clone() }),
             );
         }
-        let n2 = (self.channels.len() * self.channels.len()) as f64;
-        let parts = self
-            .channels
-            .iter()
-            .map(|c| optics::FactoredPart {
-                table: crate::chromatic::transmission_spectrum(1.0 / n2, &c.efficiency),
-                relative: Arc::new(Interleaved {
-                    channels: vec![Channel { wavelength_m: c.wavelength_m, efficiency: Curve::Constant(1.0) }],
-                    transmission: Curve::Constant(1.0),
-                    ..self.clone()
-                }),
+        let mut groups: Vec<(&Curve, Vec<f64>)> = Vec::new();
+        for c in &self.channels {
+            match groups.iter_mut().find(|(curve, _)| **curve == c.efficiency) {
+                Some((_, waves)) => waves.push(c.wavelength_m),
+                None => groups.push((&c.efficiency, vec![c.wavelength_m])),
+            }
+        }
+        let n = self.channels.len() as f64;
+        let parts = groups
+            .into_iter()
+            .map(|(curve, waves)| {
+                let k = waves.len() as f64;
+                optics::FactoredPart {
+                    table: crate::chromatic::transmission_spectrum(k * k / (n * n), curve),
+                    relative: Arc::new(Interleaved {
+                        channels: waves
+                            .into_iter()
+                            .map(|wavelength_m| Channel { wavelength_m, efficiency: Curve::Constant(1.0) })
+                            .collect(),
+                        transmission: Curve::Constant(1.0),
+                        ..self.clone()
+                    }),
+                }
             })
             .collect();
         Some(optics::FactoredEfficiency {

@@ -20,8 +20,8 @@
 //!   10° sector cannot collect the light of the full lens); every wavefront coefficient and
 //!   image shift finite, the zones' too, and every zone amplitude finite and ≥ 0;
 //! - where the lens factors its tables out ([`LensModel::factored_efficiency`]), on the same
-//!   grid and field points: the parts' relative orders, in part order, each efficiency times its
-//!   part's table, are the lens's orders, those of zero efficiency aside (efficiency within
+//!   grid and field points: the parts' relative orders, each efficiency times its part's table,
+//!   are the lens's orders in some order, those of zero efficiency aside (efficiency within
 //!   1e-12 relative, the same wavefront and image shift, the same kind of pupil); the transmission spectrum is the lens's
 //!   transmission (1e-12); no part's relative lens has breakpoints at most of its table's rows
 //!   (they would cut the spectral panels the fold exists to spare);
@@ -125,23 +125,35 @@ pub fn check_factoring(lens: &dyn LensModel, detected: &Spectrum) -> Result<(), 
                     whole.len()
                 ));
             }
-            for (k, ((table, part), order)) in parts.iter().zip(&whole).enumerate() {
-                let efficiency = table * part.efficiency;
-                let same_pupil = std::mem::discriminant(&part.pupil) == std::mem::discriminant(&order.pupil);
-                if !close(efficiency, order.efficiency)
-                    || part.wavefront.defocus_m != order.wavefront.defocus_m
-                    || part.wavefront.image_shift_m != order.wavefront.image_shift_m
-                    || !same_pupil
-                {
-                    return Err(format!(
-                        "at λ = {nm} nm, field {field:?}, order {k}: the factored part's order (table {table} × efficiency {}, W020 {} m, shift {:?} m) is not the lens's (efficiency {}, W020 {} m, shift {:?} m) or goes through another kind of pupil",
-                        part.efficiency,
-                        part.wavefront.defocus_m,
-                        part.wavefront.image_shift_m,
-                        order.efficiency,
-                        order.wavefront.defocus_m,
-                        order.wavefront.image_shift_m
-                    ));
+            // each of the lens's orders matched to one of the parts' (in any order: a part may
+            // gather orders that are not neighbours in the lens's list)
+            let mut unused: Vec<(f64, Order)> = parts;
+            for (k, order) in whole.iter().enumerate() {
+                let same = |(table, part): &(f64, Order)| {
+                    close(table * part.efficiency, order.efficiency)
+                        && part.wavefront.defocus_m == order.wavefront.defocus_m
+                        && part.wavefront.image_shift_m == order.wavefront.image_shift_m
+                        && std::mem::discriminant(&part.pupil) == std::mem::discriminant(&order.pupil)
+                };
+                match unused.iter().position(same) {
+                    Some(found) => {
+                        unused.swap_remove(found);
+                    }
+                    None => {
+                        let offered: Vec<String> = unused
+                            .iter()
+                            .map(|(t, o)| {
+                                format!("(efficiency {}, W020 {} m)", t * o.efficiency, o.wavefront.defocus_m)
+                            })
+                            .collect();
+                        return Err(format!(
+                            "at λ = {nm} nm, field {field:?}, order {k}: the lens's order (efficiency {}, W020 {} m, shift {:?} m) is not among the factored parts' orders through the same kind of pupil (each its table × its efficiency: {})",
+                            order.efficiency,
+                            order.wavefront.defocus_m,
+                            order.wavefront.image_shift_m,
+                            offered.join(", ")
+                        ));
+                    }
                 }
             }
         }

@@ -362,10 +362,11 @@ fn rows(values: &[f64]) -> Curve {
 
 /// Lenses whose tables are factored out (`LensModel::factored_efficiency`) pass the checks,
 /// among them that the parts' orders times their tables are the lens's orders: a chromatic lens
-/// with a T table only, an interleaved lens with a table per channel, a harmonic lens with a T
-/// table, a dispersion-engineered achromat with a τ table, and segmented lenses with one table
-/// for every zone and with a table per zone, other channels as background (for those, the
-/// factoring check alone: their polychromatic MTF on the FFT path costs seconds).
+/// with a T table only, an interleaved lens with a table per channel (three parts) and with its
+/// outer channels on one table (two parts, its orders not in the lens's order), a harmonic lens
+/// with a T table, a dispersion-engineered achromat with a τ table, and segmented lenses with
+/// one table for every zone and with a table per zone, other channels as background (for
+/// those, the factoring check alone: their polychromatic MTF on the FFT path costs seconds).
 #[test]
 fn factored_lenses_conform() {
     use lenses::{
@@ -383,6 +384,8 @@ fn factored_lenses_conform() {
     };
     let distinct = [rows(&ripple(0.6, 0.7)), rows(&ripple(0.7, 1.1)), rows(&ripple(0.65, 0.3))];
     let common = [rows(&ripple(0.6, 0.7)), rows(&ripple(0.6, 0.7)), rows(&ripple(0.6, 0.7))];
+    // the outer channels on one table: one part for both, the inner channel's part between
+    let shared = [rows(&ripple(0.6, 0.7)), rows(&ripple(0.7, 1.1)), rows(&ripple(0.6, 0.7))];
     let t = rows(&ripple(0.9, 0.5));
     let lenses: Vec<(&str, Box<dyn LensModel>)> = vec![
         (
@@ -390,6 +393,10 @@ fn factored_lenses_conform() {
             Box::new(ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), t.clone()).unwrap()),
         ),
         ("interleaved", Box::new(Interleaved::new(2.5, 3.36e-3, channels(&distinct), t.clone()).unwrap())),
+        (
+            "interleaved, two channels on one table",
+            Box::new(Interleaved::new(2.5, 3.36e-3, channels(&shared), t.clone()).unwrap()),
+        ),
         ("harmonic", Box::new(Harmonic::new(2.5, 3.36e-3, 800e-9, 5, 0.4, rows(&ripple(0.6, 0.9))).unwrap())),
         (
             "dispersion-engineered",
@@ -422,6 +429,8 @@ fn factored_lenses_conform() {
             ),
         ),
     ];
+    let parts = |k: usize| lenses[k].1.factored_efficiency().map(|f| f.parts.len());
+    assert_eq!((parts(1), parts(2)), (Some(3), Some(2)));
     for (name, lens) in &lenses {
         assert!(lens.factored_efficiency().is_some(), "{name}");
         if name.starts_with("segmented") {
@@ -465,5 +474,5 @@ fn a_wrong_factoring_is_caught() {
     let lens = ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, rows(&[0.1, 0.15, 0.12]), Curve::Constant(0.55)).unwrap();
     optics::testkit::check_factoring(&lens, &band(800.0, 30.0)).unwrap();
     let e = optics::testkit::check_factoring(&Misfactored(lens), &band(800.0, 30.0)).unwrap_err();
-    assert!(e.contains("at λ = ") && e.contains("is not the lens's"), "{e}");
+    assert!(e.contains("at λ = ") && e.contains("is not among the factored parts' orders"), "{e}");
 }
