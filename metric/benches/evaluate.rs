@@ -12,7 +12,9 @@
 //!   (`examples/library.toml`; its per-wavelength fits cached after the first evaluation);
 //! - the paper scene with a 5000-row τ1 table (0.08 nm from 600 to 1000 nm), folded into the
 //!   detected spectrum's exact moments (`optics::FactoredEfficiency`; before, its rows cut
-//!   52 598 spectral nodes and the work budget refused it).
+//!   52 598 spectral nodes and the work budget refused it), and the same scene through an
+//!   interleaved lens of three channels (775, 800, 825 nm), each channel's efficiency its own
+//!   5000-row table (one part per channel, `optics::Polychromatic::with_parts`).
 //!
 //! `cargo bench -p asnr-metric --bench evaluate` (about a minute). Timings are measured here and never
 //! asserted (STYLE.md).
@@ -28,6 +30,11 @@ use radiometry::{Gaussian, Spectrum};
 
 const F0: f64 = 3.36e-3;
 const LAMBDA0: f64 = 800e-9;
+
+/// The long tables shared with the accuracy report.
+#[path = "../examples/accuracy/tables.rs"]
+mod tables;
+use tables::rows;
 
 fn lens(f_number: f64) -> ChromaticMetalens {
     ChromaticMetalens::new(f_number, F0, LAMBDA0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
@@ -70,12 +77,16 @@ fn bench(c: &mut Criterion) {
         ("Binary 2 metalens F2.5 50nm", example("phase-binary2.toml")),
         ("library lens F2.5 50nm", example("library.toml")),
         ("paper F2.5 50nm efficiency table 5000 rows", {
-            let wavelengths: Vec<f64> = (0..5000).map(|k| 600e-9 + 0.08e-9 * k as f64).collect();
-            let values =
-                wavelengths.iter().map(|&l| 0.12 + 0.02 * (l / 7e-9).sin() + 0.005 * (l / 0.77e-9).cos()).collect();
-            let table = radiometry::Sampled::new(wavelengths, values).unwrap();
-            let lens = ChromaticMetalens::new(2.5, F0, LAMBDA0, Curve::Table(table), Curve::Constant(0.55)).unwrap();
+            let lens = ChromaticMetalens::new(2.5, F0, LAMBDA0, rows(0.12, 1.0), Curve::Constant(0.55)).unwrap();
             scene(lens, 50e-9)
+        }),
+        ("interleaved 3 channels 50nm, a 5000-row table each", {
+            let channels = [(775e-9, 0.7, 0.8), (800e-9, 0.8, 1.0), (825e-9, 0.75, 1.3)]
+                .iter()
+                .map(|&(wavelength_m, mean, stretch)| lenses::Channel { wavelength_m, efficiency: rows(mean, stretch) })
+                .collect();
+            let interleaved = lenses::Interleaved::new(2.5, F0, channels, Curve::Constant(0.9)).unwrap();
+            scene(lens(2.5), 50e-9).with_lens(Arc::new(interleaved))
         }),
     ];
     for (name, scene) in &cases {

@@ -42,6 +42,7 @@ mod psf_stack;
 mod report;
 mod spectral;
 mod sweep;
+mod tables;
 mod targets;
 mod tolerance;
 

@@ -13,8 +13,9 @@ use std::sync::Arc;
 
 use lenses::{Channel, ChromaticMetalens, Curve, Harmonic, Interleaved};
 use metric::{Camera, Options, Scene, evaluate};
-use radiometry::{Gaussian, Sampled, Spectrum};
+use radiometry::{Gaussian, Spectrum};
 
+use crate::tables::rows;
 use crate::{F0, LAMBDA0, PIXEL_PITCH};
 
 /// The sweep, after the binary (run from the workspace root).
@@ -53,17 +54,6 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn value(text: &str, key: &str) -> Option<String> {
     text.lines().find_map(|l| l.strip_prefix(key).and_then(|v| v.strip_prefix('=')).map(str::to_owned))
-}
-
-/// A 5000-row table (0.08 nm from 600 to 1000 nm) of `mean` with a ripple of 7 nm × `stretch`
-/// and one of 0.77 nm.
-fn rows(mean: f64, stretch: f64) -> Curve {
-    let wavelengths: Vec<f64> = (0..5000).map(|k| 600e-9 + 0.08e-9 * k as f64).collect();
-    let values = wavelengths
-        .iter()
-        .map(|&l| mean * (1.0 + (l / (7e-9 * stretch)).sin() / 6.0 + (l / 0.77e-9).cos() / 24.0))
-        .collect();
-    Curve::Table(Sampled::new(wavelengths, values).unwrap())
 }
 
 /// The paper scene with a 5000-row τ1 table (0.08 nm from 600 to 1000 nm).
