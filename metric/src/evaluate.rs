@@ -130,6 +130,11 @@ pub struct Numerics {
     /// Whether the spectral nodes are product-integration nodes (the OTF interpolated in λ,
     /// weights the moments of the detected spectrum) rather than Gauss–Legendre panels.
     pub spectral_interpolated: bool,
+    /// Parts of the lens whose tables product integration folded into the detected spectrum's
+    /// moments (`LensModel::factored_efficiency`, `optics::Polychromatic::with_parts`): 0 where
+    /// the lens has no table to fold or the rule does not factor (the reference panels, a line,
+    /// the closed form).
+    pub factored_parts: usize,
 }
 
 /// The ASNR of a scene and the numbers behind it.
@@ -511,6 +516,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             otf_evaluations: work.otf_evaluations,
             sign_changes: work.sign_changes,
             spectral_interpolated: work.spectral_interpolated,
+            factored_parts: if work.spectral_interpolated { parts.len() } else { 0 },
         },
     };
     check_finite(&evaluation)?;

@@ -408,6 +408,16 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
                 n.spectral_panels, n.spectral_nodes
             )
         };
+        let rule = match n.factored_parts {
+            0 => rule,
+            1 => format!(
+                "{rule}; the lens's table folded into those moments (the spectrum × the table: no table row cuts a panel)"
+            ),
+            k => format!(
+                "{rule}; the lens's tables folded into those moments in {k} parts (each part's orders with the moments \
+                 of the spectrum × its table: no table row cuts a panel)"
+            ),
+        };
         if n.engine.starts_with("fft") { format!("{rule}; one FFT OTF grid per node") } else { rule }
     };
     let _ = writeln!(s, "  spectrum     {spectral}");

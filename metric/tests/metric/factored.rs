@@ -86,9 +86,12 @@ fn agree(
     tolerance: f64,
     within: f64,
 ) -> (usize, usize) {
-    assert!(lens.factored_efficiency().is_some(), "{name}: no factoring");
+    let parts = lens.factored_efficiency().map_or(0, |f| f.parts.len());
+    assert!(parts > 0, "{name}: no factoring");
     let folded = evaluation(lens.clone(), range_m, field, tolerance);
     let nodes = evaluation(Arc::new(Unfactored(lens)), range_m, field, tolerance);
+    // the fold is what ran, and the report says so
+    assert_eq!((folded.numerics.factored_parts, nodes.numerics.factored_parts), (parts, 0), "{name}");
     let pairs = [
         ("asnr", folded.asnr, nodes.asnr),
         ("mean_mtf", folded.mean_mtf, nodes.mean_mtf),
