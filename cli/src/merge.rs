@@ -54,10 +54,9 @@ pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
     let mut rows: Vec<(usize, Vec<String>, usize, u64)> = Vec::new();
     for (f, path) in files.iter().enumerate() {
         let shown = path.display();
-        let mut reader = csv::ReaderBuilder::new()
-            .has_headers(true)
-            .from_path(path)
-            .with_context(|| format!("cannot read the shard {shown}"))?;
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read the shard {shown}"))?;
+        let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
+        let mut lines = scene::CsvLines::new(&text, None);
         let names: Vec<String> = reader
             .headers()
             .with_context(|| format!("{shown}: cannot read its header"))?
@@ -81,7 +80,7 @@ pub fn merge(files: &[PathBuf], expect: Option<usize>) -> Result<String> {
         }
         for record in reader.records() {
             let record = record.with_context(|| format!("{shown}: a malformed row"))?;
-            let line = record.position().map_or(0, csv::Position::line);
+            let line = lines.of(record.position()).unwrap_or(0);
             let index: usize = record[0].parse().ok().with_context(|| {
                 format!("{shown}: line {line}: index `{}`: expected a whole number ≥ 0", &record[0])
             })?;

@@ -172,12 +172,13 @@ impl Table {
             .map(str::to_owned)
             .collect();
         let mut rows = Vec::new();
+        let mut lines = scene::CsvLines::new(&text, Some(b'#'));
         for record in reader.records() {
             let record = record.map_err(|e| {
-                let line = e.position().map_or(String::new(), |p| format!(" line {}", p.line()));
+                let line = lines.of(e.position()).map_or(String::new(), |l| format!(" line {l}"));
                 anyhow::anyhow!("{name}{line}: {e}; expected {} comma-separated fields as in the header", headers.len())
             })?;
-            let line = record.position().map_or(0, |p| p.line());
+            let line = lines.of(record.position()).unwrap_or(0);
             rows.push((line, record.iter().map(str::to_owned).collect()));
         }
         if rows.is_empty() {

@@ -72,7 +72,7 @@ pub use load::{
     WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, check_overrides, load, load_with_warnings, read,
     resolved_toml,
 };
-pub use tables::{Axis, FREQUENCY, MAX_FILE_BYTES, WAVELENGTH, read_pairs, read_table};
+pub use tables::{Axis, CsvLines, FREQUENCY, MAX_FILE_BYTES, WAVELENGTH, read_pairs, read_table};
 
 #[cfg(test)]
 mod tests {

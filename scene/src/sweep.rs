@@ -270,9 +270,10 @@ pub fn read_points(path: &Path) -> Result<PointsFile, Error> {
         ));
     }
     let mut rows = Vec::new();
+    let mut lines = crate::tables::CsvLines::new(&text, Some(b'#'));
     for record in reader.records() {
-        let record = record.map_err(|e| bad(e.position().map(|p| p.line()), format!("{e}")))?;
-        let line = record.position().map(|p| p.line());
+        let record = record.map_err(|e| bad(lines.of(e.position()), format!("{e}")))?;
+        let line = lines.of(record.position());
         if record.iter().all(str::is_empty) {
             continue;
         }

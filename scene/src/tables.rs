@@ -65,6 +65,53 @@ pub(crate) fn read_text(path: &Path, what: &'static str) -> Result<String, Error
 
 /// The reader of the project's CSV inputs (tables, points files): `#` comments and blank lines
 /// skipped, fields trimmed, rows of any length (the caller names a wrong count with its line).
+/// Line numbers (from 1) of CSV records in their text. The csv crate's `Position` of a record is
+/// where the reader began looking for it, before the blank lines (and comment lines) it skipped:
+/// a row after two blank lines was named as line 3 where it stood on line 5. So the line is
+/// counted here from that byte offset (`csv::Position::byte`), past the lines the reader skips.
+/// Records come in order, so the newlines are counted once, from the last record on.
+#[derive(Clone, Debug)]
+pub struct CsvLines<'a> {
+    text: &'a [u8],
+    comment: Option<u8>,
+    byte: usize,
+    line: u64,
+}
+
+impl<'a> CsvLines<'a> {
+    /// The lines of `text`, the very text the reader reads, whose lines starting with `comment`
+    /// the reader skips (`Some(b'#')` for the project's reader, [`csv_reader`]).
+    pub fn new(text: &'a str, comment: Option<u8>) -> Self {
+        CsvLines { text: text.as_bytes(), comment, byte: 0, line: 1 }
+    }
+
+    /// The line at which the record at `position` stands (`None` without a position).
+    pub fn of(&mut self, position: Option<&csv::Position>) -> Option<u64> {
+        let mut target = usize::try_from(position?.byte()).unwrap_or(usize::MAX).min(self.text.len());
+        if target < self.byte {
+            (self.byte, self.line) = (0, 1);
+        }
+        self.line += self.text[self.byte..target].iter().filter(|&&b| b == b'\n').count() as u64;
+        // past the empty and comment lines the reader skipped to reach the record
+        loop {
+            let rest = &self.text[target..];
+            let skipped = match rest.first() {
+                Some(b'\n') => 1,
+                Some(b'\r') if rest.get(1) == Some(&b'\n') => 2,
+                Some(c) if Some(*c) == self.comment => match rest.iter().position(|&b| b == b'\n') {
+                    Some(end) => end + 1,
+                    None => break,
+                },
+                _ => break,
+            };
+            target += skipped;
+            self.line += 1;
+        }
+        self.byte = target;
+        Some(self.line)
+    }
+}
+
 pub(crate) fn csv_reader(text: &str, has_headers: bool) -> csv::Reader<&[u8]> {
     csv::ReaderBuilder::new()
         .has_headers(has_headers)
@@ -138,15 +185,16 @@ pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Res
     let err = |line: Option<u64>, message: String| Error::Csv { file: file.clone(), line, message };
     let text = read_text(path, "CSV file")?;
     let mut reader = csv_reader(&text, false);
+    let mut lines = CsvLines::new(&text, Some(b'#'));
     // the first column kept as typed (the caller converts units)
     let (mut xs, mut values): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut first = true;
     for (index, record) in reader.records().enumerate() {
         let record = record.map_err(|e| {
-            let line = e.position().map(csv::Position::line);
+            let line = lines.of(e.position());
             err(line, format!("malformed CSV: {}", shorten(&e.to_string())))
         })?;
-        let line = record.position().map_or(index as u64 + 1, csv::Position::line);
+        let line = lines.of(record.position()).unwrap_or(index as u64 + 1);
         if record.iter().all(str::is_empty) {
             continue;
         }
@@ -243,6 +291,36 @@ pub fn read_pairs(path: &Path, axis: &Axis, lo: f64, hi: f64, what: &str) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each record's line, counted by hand: blank lines (LF and CRLF) and `#` comments before a
+    /// record, which the csv crate's own `Position::line` leaves out; without a comment character
+    /// a `#` line is a record.
+    #[test]
+    fn csv_lines_count_the_skipped_lines() {
+        let text = "h,v\n1,2\n\n\r\n# a comment\n3,4\n#x,y\n5,6\n";
+        let lines_of = |comment: Option<u8>| -> Vec<u64> {
+            let mut reader = csv::ReaderBuilder::new()
+                .has_headers(false)
+                .comment(comment)
+                .flexible(true)
+                .from_reader(text.as_bytes());
+            let mut lines = CsvLines::new(text, comment);
+            reader.records().map(|r| lines.of(r.unwrap().position()).unwrap()).collect()
+        };
+        assert_eq!(lines_of(Some(b'#')), vec![1, 2, 6, 8]);
+        assert_eq!(lines_of(None), vec![1, 2, 5, 6, 7, 8]);
+        // the crate's own count, for the record: it names line 3 for the row on line 6
+        let mut reader = csv_reader(text, false);
+        let third = reader.records().nth(2).unwrap().unwrap();
+        assert_eq!(third.position().map(csv::Position::line), Some(3));
+    }
+
+    /// A bad row after blank lines and a comment is named by the line it stands on.
+    #[test]
+    fn a_bad_row_after_blank_lines_names_its_own_line() {
+        let e = table("blank-lines.csv", b"wavelength_nm,value\n700,0.1\n\n\n# measured\n800,abc\n").unwrap_err();
+        assert!(e.to_string().contains("line 6: `800,abc`"), "{e}");
+    }
 
     fn table(name: &str, text: &[u8]) -> Result<(Vec<f64>, Vec<f64>), Error> {
         let dir = std::env::temp_dir().join(format!("scene-tables-{}", std::process::id()));
@@ -530,9 +608,10 @@ pub(crate) fn read_columns(path: &Path, what: &str) -> Result<Columns, Error> {
         ));
     }
     let mut rows = Vec::new();
+    let mut lines = CsvLines::new(&text, Some(b'#'));
     for record in reader.records() {
-        let record = record.map_err(|e| err(None, format!("{e}")))?;
-        let line = record.position().map(|p| p.line());
+        let record = record.map_err(|e| err(lines.of(e.position()), format!("{e}")))?;
+        let line = lines.of(record.position());
         if record.len() != headers.len() {
             return Err(err(
                 line,
@@ -562,16 +641,18 @@ pub(crate) fn read_columns(path: &Path, what: &str) -> Result<Columns, Error> {
 /// with its line (from 1), for [`lenses::mtf_table_from_rows`]. Errors name the line, the
 /// column and the value.
 pub(crate) fn mtf_rows(text: &str) -> Result<Vec<(usize, Vec<f64>)>, lenses::Error> {
-    let mut reader = csv_reader(text.trim_start_matches('\u{feff}'), false);
+    let text = text.trim_start_matches('\u{feff}');
+    let mut reader = csv_reader(text, false);
+    let mut lines = CsvLines::new(text, Some(b'#'));
     let mut rows = Vec::new();
     let mut first = true;
     for record in reader.records() {
         let record = record.map_err(|e| lenses::Error::Parse {
-            line: e.position().map_or(0, |p| p.line() as usize),
+            line: lines.of(e.position()).map_or(0, |l| l as usize),
             expected: "a CSV row".into(),
             found: e.to_string(),
         })?;
-        let line = record.position().map_or(0, |p| p.line() as usize);
+        let line = lines.of(record.position()).map_or(0, |l| l as usize);
         let numbers: Vec<Option<f64>> =
             record.iter().map(|f| f.parse::<f64>().ok().filter(|v| v.is_finite())).collect();
         match numbers.iter().position(Option::is_none) {
