@@ -80,7 +80,7 @@ pub struct CsvLines<'a> {
 
 impl<'a> CsvLines<'a> {
     /// The lines of `text`, the very text the reader reads, whose lines starting with `comment`
-    /// the reader skips (`Some(b'#')` for the project's reader, [`csv_reader`]).
+    /// the reader skips (`Some(b'#')` for the project's reader, which reads `#` lines as comments).
     pub fn new(text: &'a str, comment: Option<u8>) -> Self {
         CsvLines { text: text.as_bytes(), comment, byte: 0, line: 1 }
     }
