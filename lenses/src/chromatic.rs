@@ -39,13 +39,14 @@ pub(crate) fn factor_one_curve(
     };
     Some(FactoredEfficiency {
         parts: vec![FactoredPart { table, relative: rebuild(relative, Curve::Constant(1.0)) }],
-        transmission: transmission_spectrum(scale, transmission),
+        transmission: curve_spectrum(scale, transmission),
     })
 }
 
-/// `scale × T(λ)` as a spectrum factor: a constant, or the table times the scale.
-pub(crate) fn transmission_spectrum(scale: f64, transmission: &Curve) -> Spectrum {
-    match transmission {
+/// `scale ×` a curve (a transmission, or an efficiency table a part multiplies) as a spectrum
+/// factor: a constant, or the table times the scale.
+pub(crate) fn curve_spectrum(scale: f64, curve: &Curve) -> Spectrum {
+    match curve {
         Curve::Constant(t) => Spectrum::Constant(scale * t),
         Curve::Table(t) if scale == 1.0 => Spectrum::Sampled(t.clone()),
         Curve::Table(t) => Spectrum::product(vec![Spectrum::Constant(scale), Spectrum::Sampled(t.clone())]),

@@ -166,7 +166,7 @@ impl LensModel for Interleaved {
             .map(|(curve, waves)| {
                 let k = waves.len() as f64;
                 optics::FactoredPart {
-                    table: crate::chromatic::transmission_spectrum(k * k / (n * n), curve),
+                    table: crate::chromatic::curve_spectrum(k * k / (n * n), curve),
                     relative: Arc::new(Interleaved {
                         channels: waves
                             .into_iter()
@@ -180,7 +180,7 @@ impl LensModel for Interleaved {
             .collect();
         Some(optics::FactoredEfficiency {
             parts,
-            transmission: crate::chromatic::transmission_spectrum(1.0, &self.transmission),
+            transmission: crate::chromatic::curve_spectrum(1.0, &self.transmission),
         })
     }
 

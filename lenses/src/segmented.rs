@@ -415,13 +415,13 @@ impl LensModel for Segmented {
         }
         let parts = (0..self.channels.len())
             .map(|j| optics::FactoredPart {
-                table: crate::chromatic::transmission_spectrum(1.0, &self.channels[j].efficiency),
+                table: crate::chromatic::curve_spectrum(1.0, &self.channels[j].efficiency),
                 relative: Arc::new(rebuilt(&|k| Curve::Constant(if k == j { 1.0 } else { 0.0 }))),
             })
             .collect();
         Some(optics::FactoredEfficiency {
             parts,
-            transmission: crate::chromatic::transmission_spectrum(1.0, &self.transmission),
+            transmission: crate::chromatic::curve_spectrum(1.0, &self.transmission),
         })
     }
 

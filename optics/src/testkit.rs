@@ -22,9 +22,10 @@
 //! - where the lens factors its tables out ([`LensModel::factored_efficiency`]), on the same
 //!   grid and field points: the parts' relative orders, each efficiency times its part's table,
 //!   are the lens's orders in some order, those of zero efficiency aside (efficiency within
-//!   1e-12 relative, the same wavefront and image shift, the same kind of pupil); the transmission spectrum is the lens's
-//!   transmission (1e-12); no part's relative lens has breakpoints at most of its table's rows
-//!   (they would cut the spectral panels the fold exists to spare);
+//!   1e-12 relative, the same wavefront and image shift, the same kind of pupil); the
+//!   transmission spectrum is the lens's transmission (1e-12); no part's relative lens has
+//!   breakpoints at most of its table's rows (they would cut the spectral panels the fold
+//!   exists to spare);
 //! - the polychromatic MTF on axis: 1 at zero frequency, within `[0, 1]` and finite up to the
 //!   cutoff of the shortest wavelength, and zero beyond it.
 //!

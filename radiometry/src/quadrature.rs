@@ -35,6 +35,21 @@ fn rule() -> &'static Rule {
     })
 }
 
+/// The Gauss–Legendre rule of `points` (1 to 8) on [−1, 1]: (node, weight) pairs, from
+/// `gauss-quad` (the project's one Gauss–Legendre source), made once.
+pub(crate) fn gauss_legendre(points: usize) -> &'static [(f64, f64)] {
+    static RULES: OnceLock<Vec<Vec<(f64, f64)>>> = OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        (1..=8)
+            .map(|n| {
+                let n = std::num::NonZeroUsize::new(n).unwrap_or(std::num::NonZeroUsize::MIN);
+                gauss_quad::legendre::GaussLegendre::new(n).as_node_weight_pairs().to_vec()
+            })
+            .collect()
+    });
+    &rules[points.clamp(1, 8) - 1]
+}
+
 /// Calls `visit(x, w)` for each node x of the rule mapped to [a, b], with its weight w
 /// (already multiplied by the panel half-width).
 pub(crate) fn for_each_node(a: f64, b: f64, mut visit: impl FnMut(f64, f64)) {

@@ -88,7 +88,7 @@ impl Polychromatic<'_> {
             work.otf_evaluations = evaluations;
             let mean = || {
                 quad::composite_fixed(0.0, top, panels, |nu| value(nu).abs() * self.pixel_factor(nu))
-                    / self.max_frequency
+                    / self.scene.max_frequency
             };
             let fine = mean();
             // the sampling chosen from the tolerance: the same mean at N/2, extrapolated
@@ -109,7 +109,7 @@ impl Polychromatic<'_> {
         // budget, spent on that fraction only, is divided by it, so that the tolerance stays
         // relative to the OTF there (a 1e-206 m pixel puts the fraction at 1e-200: the budget of
         // the whole range asked 1e-15 of the OTF, its rounding noise, for 6000 sign changes)
-        let active = (self.active_top() / self.max_frequency).clamp(f64::MIN_POSITIVE, 1.0);
+        let active = (self.active_top() / self.scene.max_frequency).clamp(f64::MIN_POSITIVE, 1.0);
         let mut guess = 0.25 * active;
         loop {
             let closed_before = self.engine.value_evaluations();
@@ -149,12 +149,12 @@ impl Polychromatic<'_> {
         // (`OtfEngine::smooth_in_frequency`: product-integration nodes, or the closed form
         // where every wavelength of its ±7σ passes the limit); elsewhere (cutoff kinks, the
         // reference panels) the adaptive rule alone
-        let smooth_rule = self.engine.smooth_in_frequency(self.max_frequency);
-        for pair in self.engine.frequency_cuts(self.max_frequency).windows(2) {
+        let smooth_rule = self.engine.smooth_in_frequency(self.scene.max_frequency);
+        for pair in self.engine.frequency_cuts(self.scene.max_frequency).windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts
             // (2 on the closed-form engine, whose OTF has no kinks)
-            let floor = (min_panels * (b - a) / self.max_frequency).ceil();
+            let floor = (min_panels * (b - a) / self.scene.max_frequency).ceil();
             // beyond the highest cutoff the OTF is zero: one panel (a range up to 1e199 cycles/m
             // past it, from a 1e-206 m pixel, would otherwise ask for more panels than exist)
             let n = if a >= self.max_cutoff() {
@@ -190,7 +190,7 @@ impl Polychromatic<'_> {
                 left = right;
             }
         }
-        (total / self.max_frequency, work)
+        (total / self.scene.max_frequency, work)
     }
 
     /// The defocus phase the OTF turns through over `[a, b]` (radians), with `w020` the defocus
@@ -200,7 +200,7 @@ impl Polychromatic<'_> {
     /// `w020` is replaced by the mean defocus plus the spread `|w1| σ = 1/(8π F# ν_s)`, damped as
     /// the averaging damps the oscillation, `exp(−(a/ν_s)²/2)` at the panel's start.
     fn defocus_phase(&self, a: f64, b: f64, w020: f64) -> f64 {
-        let rate = 8.0 * PI * self.f_number;
+        let rate = 8.0 * PI * self.scene.f_number;
         match self.engine.averaged_defocus() {
             Some((averaging, mean)) => {
                 let damping = (-0.5 * (a / averaging).powi(2)).exp();
@@ -419,7 +419,7 @@ impl Polychromatic<'_> {
     /// highest cutoff if that is below it (the frequency rule's lengths scale with it: a 1e-206 m
     /// pixel puts `max_frequency` 1e200 times above it).
     fn active_top(&self) -> f64 {
-        self.max_cutoff().min(self.max_frequency)
+        self.max_cutoff().min(self.scene.max_frequency)
     }
 
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: `OTF_poly` is zero beyond.

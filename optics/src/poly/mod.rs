@@ -331,11 +331,8 @@ trait OtfEngine: std::fmt::Debug {
                 .sum();
             return beyond / nodes.total_weight;
         }
-        let mut parts: Vec<usize> = nodes.panels.iter().map(|p| p.part).collect();
-        parts.sort_unstable();
-        parts.dedup();
         let mut beyond = 0.0;
-        for part in parts {
+        for part in nodes.parts() {
             let panels: Vec<(f64, f64)> =
                 nodes.panels.iter().filter(|p| p.part == part).map(|p| (p.lo, p.hi)).collect();
             let part = scene.part(part);
@@ -405,14 +402,9 @@ fn sort_cuts(mut cuts: Vec<f64>) -> Vec<f64> {
 /// frequency integration needs.
 #[derive(Debug)]
 pub struct Polychromatic<'a> {
-    lens: &'a dyn LensModel,
-    /// the factored parts ([`with_parts`](Self::with_parts)); empty without
-    parts: &'a [Part<'a>],
-    /// the scene with its parts, for the Fraunhofer fraction
+    /// the lens, the detected spectrum and the factored parts ([`with_parts`](Self::with_parts)),
+    /// the field, the F-number, the frequency limit and the pixel pitch
     scene: Scene<'a>,
-    f_number: f64,
-    max_frequency: f64,
-    pixel_pitch: Option<f64>,
     /// the settings' tolerance (the frequency rule's)
     asked_tolerance: f64,
     /// the tolerance the engine worked to ([`Polychromatic::tolerance`])
@@ -444,11 +436,8 @@ pub struct Polychromatic<'a> {
 /// With parts ([`Polychromatic::with_parts`]), each node's signal is read from its own part's
 /// samples and spectrum.
 fn resolved_defocus(nodes: &Nodes, scene: &Scene<'_>, relevant: f64) -> f64 {
-    let mut parts: Vec<usize> = nodes.samples.iter().map(|s| s.2).collect();
-    parts.sort_unstable();
-    parts.dedup();
     let mut signal: Vec<(f64, f64)> = Vec::with_capacity(nodes.nodes.len());
-    for part in parts {
+    for part in nodes.parts() {
         part_signal(nodes, part, scene.part(part).detected, &mut signal);
     }
     defocus_beyond(signal, relevant)
@@ -659,12 +648,7 @@ impl<'a> Polychromatic<'a> {
             _ => settings.tolerance,
         };
         let mut this = Polychromatic {
-            lens,
-            parts,
             scene,
-            f_number,
-            max_frequency,
-            pixel_pitch,
             asked_tolerance: settings.tolerance,
             engine_tolerance,
             engine,
@@ -714,7 +698,7 @@ impl<'a> Polychromatic<'a> {
     /// instead ([`with_parts`](Self::with_parts) on a product-integration engine).
     pub fn detected_integral(&self, mut f: impl FnMut(f64) -> f64) -> Option<f64> {
         let samples = &self.engine.nodes().samples;
-        if !self.parts.is_empty() && samples.iter().any(|s| s.2 != spectral::WHOLE) {
+        if !self.scene.parts.is_empty() && samples.iter().any(|s| s.2 != spectral::WHOLE) {
             return None;
         }
         Some(samples.iter().map(|&(lambda, w, _)| w * f(lambda)).sum())
@@ -763,7 +747,7 @@ impl<'a> Polychromatic<'a> {
     }
 
     fn pixel_factor(&self, frequency: f64) -> f64 {
-        self.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, frequency))
+        self.scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, frequency))
     }
 
     /// Why the last mean stopped before it converged (a work budget), if it did: its value is
@@ -791,7 +775,7 @@ impl<'a> Polychromatic<'a> {
     /// by Gauss–Legendre on the sub-intervals (`fraunhofer::weight_defocused_beyond`), so the
     /// step never falls between nodes and the fraction is continuous in every parameter.
     pub fn fraction_blurred_beyond(&self, radius_m: f64) -> f64 {
-        let limit = 0.5 * radius_m * self.lens.numerical_aperture();
+        let limit = 0.5 * radius_m * self.scene.lens.numerical_aperture();
         self.engine.fraction_blurred_beyond(&self.scene, limit)
     }
 }

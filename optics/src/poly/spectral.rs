@@ -222,6 +222,14 @@ impl Nodes {
         self.line.or(self.panels.first().map(|p| p.lo)).unwrap_or(0.0)
     }
 
+    /// The parts the samples (and so the nodes and panels) belong to, each once, in order.
+    pub fn parts(&self) -> Vec<usize> {
+        let mut parts: Vec<usize> = self.samples.iter().map(|s| s.2).collect();
+        parts.sort_unstable();
+        parts.dedup();
+        parts
+    }
+
     pub fn sum_weights(&mut self) {
         self.total_weight =
             self.panels.iter().map(|p| self.nodes[p.start..p.end].iter().map(|n| n.weight).sum::<f64>()).sum();
