@@ -104,6 +104,15 @@ fn agree(
     for (quantity, f, n) in pairs {
         assert!((f - n).abs() <= within * n.abs(), "{name} {quantity}: folded {f} vs node-based {n}");
     }
+    // (the numbers of the closing notes: `cargo test -p asnr-metric --test metric factored -- --nocapture`)
+    eprintln!(
+        "{name}: ASNR folded {} vs node-based {} ({:.1e} relative); spectral nodes {} vs {}",
+        folded.asnr,
+        nodes.asnr,
+        (folded.asnr - nodes.asnr) / nodes.asnr,
+        folded.numerics.spectral_nodes,
+        nodes.numerics.spectral_nodes
+    );
     (folded.numerics.spectral_nodes, nodes.numerics.spectral_nodes)
 }
 
