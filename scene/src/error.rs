@@ -133,6 +133,16 @@ pub enum Error {
         /// What is wrong and what is accepted.
         message: String,
     },
+    /// A Zemax OpticStudio `.zmx` file that does not hold a lens the scene can take.
+    #[error("{file}: {}{message}", line.map(|l| format!("line {l}: ")).unwrap_or_default())]
+    Zemax {
+        /// The file's path.
+        file: String,
+        /// 1-based line, when the problem has one.
+        line: Option<usize>,
+        /// What is wrong (the surface number and TYPE) and what is accepted.
+        message: String,
+    },
     /// A CSV table named by a key that cannot be used.
     #[error("{origin}: {key} = \"{file}\": {cause}")]
     Table {

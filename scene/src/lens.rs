@@ -114,6 +114,10 @@ pub(crate) struct RawLens {
     pub psf: Option<String>,
     pub psf_pitch_um: Option<f64>,
     pub psf_wavelengths_nm: Option<Vec<f64>>,
+    /// Read by [`apply_zemax`] before deserializing (it fills the phase lens's keys); here to be
+    /// known keys.
+    pub zemax: Option<String>,
+    pub zemax_surface: Option<u32>,
     /// Every family's: read by [`crate::load`] into the scene (docs/physics.md, "Relative
     /// illumination").
     pub relative_illumination: Option<NumberOrFile>,
@@ -206,6 +210,8 @@ impl Model {
                 "design_order",
                 "glass",
                 "zernike_noll_rms_um",
+                "zemax",
+                "zemax_surface",
             ],
             Model::Multiplexed => &[
                 "channels_nm",
@@ -252,8 +258,10 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 45] {
+    fn given(&self) -> [(&'static str, bool); 47] {
         [
+            ("zemax", self.zemax.is_some()),
+            ("zemax_surface", self.zemax_surface.is_some()),
             ("library", self.library.is_some()),
             ("atom_phase_error_rad", self.atom_phase_error_rad.is_some()),
             ("atom_transmission_error", self.atom_transmission_error.is_some()),
@@ -357,6 +365,96 @@ pub(crate) fn apply_preset(lens: &mut toml::Table, o: &Origins) -> Result<Option
         }
     }
     Ok(Some((name.to_owned(), supplied)))
+}
+
+/// What a `.zmx` file gave a lens table ([`apply_zemax`]), for `asnr scene` and the lens's notes.
+#[derive(Clone, Debug)]
+pub(crate) struct ZemaxSource {
+    /// The path as given in the scene.
+    pub file: String,
+    /// The Binary 2 surface read.
+    pub surface: usize,
+    /// The keys the file supplied.
+    pub keys: Vec<String>,
+    /// How the values were found.
+    pub notes: Vec<String>,
+}
+
+/// Fills the phase lens's keys from the Zemax file `lens.zemax` names (docs/physics.md, "Zemax
+/// OpticStudio files"): `binary2`, `norm_radius_mm`, `diffraction_order`,
+/// `aperture_diameter_mm`, `focal_length_mm`, `design_wavelength_nm`, and `model = "phase"`.
+/// A key the scene file also gives is refused (one source for each number); a `--set` of it
+/// overrides the file's value (a sweep over the focal length).
+pub(crate) fn apply_zemax(lens: &mut toml::Table, o: &Origins) -> Result<Option<ZemaxSource>, Error> {
+    let Some(value) = lens.get("zemax").cloned() else {
+        if lens.contains_key("zemax_surface") {
+            return Err(o.conflict(
+                "lens.zemax_surface",
+                "lens.zemax_surface without lens.zemax: it chooses the Binary 2 surface of the .zmx file lens.zemax names".to_owned(),
+            ));
+        }
+        return Ok(None);
+    };
+    let expected = "the path of a Zemax OpticStudio .zmx file (sequential, one Binary 2 surface on a plane substrate)";
+    let Some(file) = value.as_str() else { return Err(o.bad("lens.zemax", &value, expected)) };
+    match lens.get("model") {
+        None => {
+            lens.insert("model".to_owned(), toml::Value::String("phase".to_owned()));
+        }
+        Some(m) if m.as_str() == Some("phase") => {}
+        Some(m) => {
+            return Err(o.conflict(
+                "lens.model",
+                format!("lens.zemax gives a phase lens, but lens.model = {m}: give model = \"phase\" or none"),
+            ));
+        }
+    }
+    let surface = match lens.get("zemax_surface") {
+        None => None,
+        Some(v) => match v.as_integer().and_then(|i| u32::try_from(i).ok()).filter(|&i| i >= 1) {
+            Some(i) => Some(i),
+            None => return Err(o.bad("lens.zemax_surface", v, "the number of a BINARY_2 surface of the file (≥ 1)")),
+        },
+    };
+    let path = o.path(file);
+    let z = crate::zemax::read(&path, &path.display().to_string(), surface)
+        .map_err(|e| o.table_error("lens.zemax", file, e, expected))?;
+    for w in &z.warnings {
+        o.warn("lens.zemax", quoted(file), w.clone());
+    }
+    let supplied: [(&str, toml::Value); 6] = [
+        ("binary2", toml::Value::Array(z.coefficients.iter().map(|&a| toml::Value::Float(a)).collect())),
+        ("norm_radius_mm", toml::Value::Float(z.norm_radius_mm)),
+        ("diffraction_order", toml::Value::Float(z.diffraction_order)),
+        ("aperture_diameter_mm", toml::Value::Float(z.aperture_diameter_mm)),
+        ("focal_length_mm", toml::Value::Float(z.focal_length_mm)),
+        ("design_wavelength_nm", toml::Value::Float(z.design_wavelength_nm)),
+    ];
+    let mut keys = Vec::new();
+    for (key, v) in supplied {
+        let dotted = format!("lens.{key}");
+        let set = |k: &str| o.overrides.contains_key(&o.key(&format!("lens.{k}")));
+        let given = lens
+            .contains_key(key)
+            .then_some(key)
+            .or_else(|| (key == "aperture_diameter_mm" && lens.contains_key("f_number")).then_some("f_number"));
+        match given {
+            Some(k) if set(k) => continue,
+            Some(k) => {
+                return Err(o.conflict(
+                    &format!("lens.{k}"),
+                    format!(
+                        "lens.{k} given with lens.zemax, whose file gives {dotted}: give the number once (remove lens.{k}; --set lens.{k}=… overrides the file's)"
+                    ),
+                ));
+            }
+            None => {
+                lens.insert(key.to_owned(), v);
+                keys.push(key.to_owned());
+            }
+        }
+    }
+    Ok(Some(ZemaxSource { file: file.to_owned(), surface: z.surface, keys, notes: z.notes }))
 }
 
 /// What a comparison reports of a lens besides its [`LensModel`].
@@ -864,6 +962,15 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             Arc::new(lens)
         }
         Model::Phase => {
+            if let Some(z) = &o.zemax {
+                info.notes.push(format!(
+                    "from the Zemax file {}, surface {} (BINARY_2): {}{}",
+                    crate::error::shorten(&z.file),
+                    z.surface,
+                    z.keys.join(", "),
+                    z.notes.iter().map(|n| format!("; {n}")).collect::<String>()
+                ));
+            }
             let l0 = design_wavelength(o)?;
             let lens = phase_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?;
             info.design_wavelength_m = Some(l0);

@@ -61,6 +61,7 @@ mod psf;
 mod resolved;
 pub mod sweep;
 mod tables;
+mod zemax;
 
 pub use compare::{
     Comparison, DESIGNS_SCENE, Design, build_comparison, is_comparison, load_comparison, read_comparison,

@@ -182,6 +182,8 @@ pub(crate) struct Origins {
     pub lens: String,
     /// The preset the lens table named, and the keys it supplied (not given in the table).
     pub preset: Option<(String, Vec<String>)>,
+    /// The Zemax file the lens table named, and what it supplied.
+    pub zemax: Option<crate::lens::ZemaxSource>,
     /// The steps of a radiance-meter source (SI eq. S1–S6), kept for reports.
     meter: RefCell<Option<radiometry::RadianceMeterSteps>>,
     /// The tables its source's scenes have read.
@@ -235,6 +237,7 @@ impl Origins {
             warnings: RefCell::new(Vec::new()),
             lens,
             preset: None,
+            zemax: None,
             meter: RefCell::new(None),
             tables: self.tables.clone(),
         }
@@ -707,6 +710,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
         warnings: RefCell::new(Vec::new()),
         lens: "lens".to_owned(),
         preset: None,
+        zemax: None,
         meter: RefCell::new(None),
         tables: source.tables.clone(),
     };
@@ -737,6 +741,7 @@ pub(crate) fn raw_scene(
 ) -> Result<RawScene, Error> {
     if let Some(toml::Value::Table(lens)) = table.get_mut("lens") {
         origins.preset = crate::lens::apply_preset(lens, origins)?;
+        origins.zemax = crate::lens::apply_zemax(lens, origins)?;
     }
     serde_path_to_error::deserialize(toml::Value::Table(table))
         .map_err(|e| schema_error(&e, &rebuild().unwrap_or_default(), origins))

@@ -96,6 +96,15 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             if keys.is_empty() { "nothing".to_owned() } else { keys.join(", ") }
         ));
     }
+    if let Some(z) = &o.zemax {
+        out.line(&format!(
+            "# from the Zemax file {}, surface {} (BINARY_2): {}{}",
+            toml::Value::String(z.file.clone()),
+            z.surface,
+            if z.keys.is_empty() { "nothing (every key overridden)".to_owned() } else { z.keys.join(", ") },
+            z.notes.iter().map(|n| format!("; {n}")).collect::<String>()
+        ));
+    }
     out.string("model", model.name());
     match (l.f_number, l.aperture_diameter_mm) {
         (_, Some(d)) => out.number("aperture_diameter_mm", d),
