@@ -55,6 +55,7 @@
 
 mod compare;
 mod error;
+pub mod gds;
 mod lens;
 mod load;
 mod psf;
