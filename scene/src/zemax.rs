@@ -639,7 +639,35 @@ mod tests {
         let written = parse(&zmx(&example_coefficients(), &|t| t), "w", None).unwrap();
         assert_eq!((committed.coefficients, committed.focal_length_mm), (written.coefficients.clone(), 3.36));
         assert_eq!(written.design_wavelength_nm, 800.0);
+        // the committed example scene, which names the committed file, gives the same numbers
+        let scene = crate::load(Some(Path::new("../examples/phase-binary2-zmx.toml")), &[]).unwrap();
+        let d = metric::evaluate(&scene).unwrap();
+        assert_eq!((d.asnr, d.mean_mtf), (b.asnr, b.mean_mtf));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+        /// Any text, and the example file with any line dropped or cut short, is read or refused
+        /// naming the file: never a panic.
+        #[test]
+        fn any_text_is_read_or_refused(text in "[ -~\n]{0,400}", drop in 0usize..64, cut in 0usize..40) {
+            if let Err(e) = parse(&text, "t.zmx", None) {
+                proptest::prop_assert!(e.to_string().starts_with("t.zmx: "));
+            }
+            let good = zmx(&example_coefficients(), &|t| t);
+            let lines: Vec<&str> = good.lines().collect();
+            let edited: Vec<String> = lines
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != drop % lines.len())
+                .map(|(i, l)| if i % 7 == cut % 7 { l.chars().take(cut).collect() } else { (*l).to_owned() })
+                .collect();
+            if let Err(e) = parse(&edited.join("\n"), "t.zmx", None) {
+                proptest::prop_assert!(e.to_string().starts_with("t.zmx: "));
+            }
+        }
     }
 
     /// What the file gives and where a scene key clashes with it.
