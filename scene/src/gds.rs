@@ -705,7 +705,8 @@ fn reduce(points: &[(f64, f64)], offset: u64, kind: AtomKind, max_deviation: &mu
 
 // ---- expansion ----
 
-/// The expanded atom count of each cell (saturating), refusing cycles and missing cells.
+/// The expanded atom count of each cell (saturating; an instance of a cell without atoms counts
+/// as one, so that the count bounds the expansion's work), refusing cycles and missing cells.
 fn counts(lib: &Library) -> Result<HashMap<&str, u64>, GdsError> {
     let mut done: HashMap<&str, u64> = HashMap::new();
     // iterative depth-first with an explicit stack (no recursion depth from the file)
@@ -736,7 +737,8 @@ fn counts(lib: &Library) -> Result<HashMap<&str, u64>, GdsError> {
             let mut total = cell.atoms.len() as u64;
             for r in &cell.refs {
                 let n = u64::from(r.cols) * u64::from(r.rows);
-                total = total.saturating_add(n.saturating_mul(done[r.cell.as_str()]));
+                // an empty cell's instance counts as one: the expansion visits it
+                total = total.saturating_add(n.saturating_mul(done[r.cell.as_str()].max(1)));
             }
             done.insert(name, total);
             on_path.pop();
@@ -806,13 +808,14 @@ pub fn layout<R: Read>(input: R, o: &GdsOptions) -> Result<AtomGrid, GdsError> {
         }
     };
     let total = counts[top.as_str()];
+    let atoms = count_atoms(&lib, &top, &counts);
     if total > o.max_atoms {
         return Err(general(format!(
-            "cell {top:?} expands to {total} atoms on layer {}/{} (references and arrays nested): more than the {} the lattice holds; refused before expanding",
+            "cell {top:?} expands to {total} atoms and instances on layer {}/{} (references and arrays nested): more than the {} the lattice holds; refused before expanding",
             o.layer, o.datatype, o.max_atoms
         )));
     }
-    if total == 0 {
+    if atoms == 0 {
         return Err(general(format!(
             "no atoms on layer {} datatype {} in cell {top:?}: expected BOUNDARY polygons there",
             o.layer, o.datatype
@@ -918,6 +921,27 @@ pub fn layout<R: Read>(input: R, o: &GdsOptions) -> Result<AtomGrid, GdsError> {
         theta_deg: theta,
         stats,
     })
+}
+
+/// Whether `cell` holds any atom once expanded (1) or none (0).
+fn count_atoms(lib: &Library, cell: &str, counts: &HashMap<&str, u64>) -> u64 {
+    let c = &lib.cells[cell];
+    if !c.atoms.is_empty() {
+        return 1;
+    }
+    let mut seen = std::collections::HashSet::new();
+    let mut stack = vec![cell];
+    while let Some(name) = stack.pop() {
+        if !seen.insert(name) {
+            continue;
+        }
+        let c = &lib.cells[name];
+        if !c.atoms.is_empty() {
+            return 1;
+        }
+        stack.extend(c.refs.iter().filter(|r| counts.contains_key(r.cell.as_str())).map(|r| r.cell.as_str()));
+    }
+    0
 }
 
 fn list(names: &[String]) -> String {
@@ -1229,7 +1253,17 @@ mod tests {
         w.aref("A", 32767, 32767, (0, 0), (1000, 0), (0, 1000), 0.0).unwrap();
         w.end_cell().unwrap();
         let e = message(&w.finish().unwrap(), &o);
-        assert!(e.contains("1073676289 atoms") && e.contains("refused before expanding"), "{e}");
+        assert!(e.contains("1073676289 atoms and instances") && e.contains("refused before expanding"), "{e}");
+        // an array of an empty cell: its instances bound the work too
+        let mut w = Writer::new(Vec::new(), UNIT).unwrap();
+        w.begin_cell("EMPTY").unwrap();
+        w.end_cell().unwrap();
+        w.begin_cell("TOP").unwrap();
+        w.polygon(1, 0, &ngon((0.0, 0.0), 100e3, 9, 0.0)).unwrap();
+        w.aref("EMPTY", 32767, 32767, (0, 0), (1000, 0), (0, 1000), 0.0).unwrap();
+        w.end_cell().unwrap();
+        let e = message(&w.finish().unwrap(), &o);
+        assert!(e.contains("refused before expanding"), "{e}");
         // a bow-tie, an open polygon, another layer only
         let bow = one(&|w| w.polygon(1, 0, &[(0, 0), (1000, 1000), (1000, 0), (0, 1000)]).unwrap());
         assert!(message(&bow, &o).contains("self-intersecting"), "{}", message(&bow, &o));
