@@ -952,7 +952,9 @@ fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>, mean_wavelength: f64) -> 
     let table = optics::fraunhofer::table_range(scene.lens(), mean_wavelength, scene.field());
     let reference = scene.lens().design_wavelength().or(table.map(|_| mean_wavelength));
     let max_shift = reference.and_then(|l0| optics::fraunhofer::max_wavelength_shift(scene.lens(), l0, threshold));
-    let fraction_outside = poly.fraction_blurred_beyond(threshold);
+    // a fraction ≥ 0: the rounding of 1 − inside/total (a one-slice PSF stack under a line gave
+    // −1e-16, printed "-0.000 %"); + 0.0 turns −0 into 0
+    let fraction_outside = poly.fraction_blurred_beyond(threshold).max(0.0) + 0.0;
     Fraunhofer {
         valid: fraction_outside <= options.fraunhofer_max_fraction,
         threshold_mm: threshold * 1e3,

@@ -1172,6 +1172,33 @@ fn phase_lens(
                 m != 0.0 && m.abs() <= 1e3,
                 "Zemax's diffraction order M, non-zero (default 1)",
             )?;
+            // each term M A_i (r/R_norm)^{2i} at the aperture's edge must be a number: a tiny
+            // R_norm (1e-300 mm) overflows it to ∞, which the profile then refused naming no key
+            let scale = (radius / norm).powi(2);
+            let mut power = 1.0_f64;
+            for (i, &a) in coefficients.iter().enumerate() {
+                power *= scale;
+                if !(m * a * power).is_finite() {
+                    let given = l.norm_radius_mm.is_some();
+                    let (key, value) = if given && !power.is_finite() {
+                        ("lens.norm_radius_mm".to_owned(), num(norm * 1e3))
+                    } else {
+                        (format!("lens.binary2[{i}]"), num(a))
+                    };
+                    return Err(o.bad(
+                        &key,
+                        value,
+                        &format!(
+                            "a profile whose term M·A{} (r/R_norm)^{} stays finite at the aperture's edge, r = {} mm (R_norm = {} mm, M = {}): it is beyond the largest number, about 1.8e308",
+                            i + 1,
+                            2 * (i + 1),
+                            num(radius * 1e3),
+                            num(norm * 1e3),
+                            num(m)
+                        ),
+                    ));
+                }
+            }
             let profile = lenses::binary2_profile(coefficients, m, norm, radius)
                 .map_err(|e| o.domain("lens.binary2", "[lens]", e))?;
             (
