@@ -237,3 +237,69 @@ fn phase_table_amplitude_is_shape_only() {
     let (with, without) = (mean(dir.join("tiny.toml").to_str().unwrap()), mean(&example("phase-table.toml")));
     assert!((with - without).abs() < 1e-5 * without, "amplitude 1e-200: {with}, no amplitude: {without}");
 }
+
+/// A phase or library lens at 80° or more: its oblique wave is modelled below 80°, and beyond it
+/// the lens fell back to the axis (85° returned the on-axis mean MTF 0.4411 with no warning).
+#[test]
+fn phase_and_library_lenses_refuse_fields_beyond_their_oblique_model() {
+    for scene in ["phase-binary2.toml", "phase-table.toml", "library.toml"] {
+        let err = fails(&["evaluate", &example(scene), "--set", "field.x_deg=85"]);
+        assert!(err.contains("field.x_deg = 85: expected an angle in degrees within ±80"), "{scene}: {err}");
+        let err = fails(&["evaluate", &example(scene), "--set", "field.y_deg=-80"]);
+        assert!(err.contains("field.y_deg = -80: expected"), "{scene}: {err}");
+    }
+}
+
+/// Profiles whose work is far beyond seconds are refused up front, before any rule is built,
+/// naming the key: a defocus phase `8π F# ν |W020|` beyond the budget at every sampled
+/// wavelength (`lens.binary2 = [1e8]` grew to 10.7 GB in 60 s; `[1e300]`, `A1 = 1e7`,
+/// `norm_radius_mm = 0.01`, a table of phase 1e300), and a phase beyond the defocus whose slope
+/// turns the radial engine's integrand too far (Z11 = 10 µm did not finish in 120 s; 500 terms
+/// of 1e-3 rad in 30 s). Run under the memory cap they answer alike (no allocation).
+#[test]
+fn hopeless_profiles_are_refused_up_front() {
+    let phase = example("phase-binary2.toml");
+    for set in ["lens.binary2=[1e8]", "lens.binary2=[1e300]", "lens.binary2=[1e7]", "lens.norm_radius_mm=0.01"] {
+        // the defocus check, or (1e300: rounding leaves a residual of 4e287 rad) the radial one
+        let up_front =
+            |e: &str| (e.contains("the defocus") || e.contains("radial engine")) && e.contains("lens.binary2");
+        let err = fails(&["evaluate", &phase, "--set", set]);
+        assert!(up_front(&err), "{set}: {err}");
+        let err = fails(&["mtf", &phase, "--set", set]);
+        assert!(up_front(&err), "mtf {set}: {err}");
+    }
+    let dir = scratch("hopeless");
+    let table = std::fs::read_to_string(example("data/phase-hyperbolic-f2.5.csv")).unwrap();
+    let rows: Vec<String> = table
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| format!("{},1e300", l.split(',').next().unwrap()))
+        .collect();
+    std::fs::write(dir.join("huge.csv"), format!("r_mm,phase_rad\n{}\n", rows.join("\n"))).unwrap();
+    let scene = std::fs::read_to_string(example("phase-table.toml"))
+        .unwrap()
+        .replace("data/phase-hyperbolic-f2.5.csv", dir.join("huge.csv").to_str().unwrap());
+    std::fs::write(dir.join("huge.toml"), scene).unwrap();
+    let err = fails(&["evaluate", dir.join("huge.toml").to_str().unwrap()]);
+    assert!((err.contains("the defocus") || err.contains("radial engine")) && err.contains("lens.phase_csv"), "{err}");
+    // beyond the defocus: Z11 (its slope in ρ² runs over 12√5 c, 2.1e3 rad at 10 µm and 800 nm)
+    for scene in [&phase, &example("paper-theory.toml")] {
+        let z11 = "lens.zernike_noll_rms_um=[0,0,0,0,0,0,0,0,0,0,10]";
+        let err = fails(&["evaluate", scene, "--set", z11]);
+        assert!(
+            err.contains("lens.zernike_noll_rms_um = Zernike terms (Noll, RMS): Z11 = 10 µm")
+                && err.contains("turns the phase by 2.105e3 rad at 800 nm"),
+            "{err}"
+        );
+    }
+    let many = format!("lens.binary2=[-527.7875658030853, 5.277875658030851, {}]", vec!["1e-3"; 500].join(", "));
+    let err = fails(&["evaluate", &phase, "--set", &many]);
+    assert!(err.contains("lens.binary2 = [502 coefficients]") && err.contains("with 502 terms"), "{err}");
+    // and what the engine does in seconds still runs: Z11 = 1 µm, 200 terms (on a line)
+    let few = format!("lens.binary2=[-527.7875658030853, 5.277875658030851, {}]", vec!["1e-3"; 200].join(", "));
+    for set in ["lens.zernike_noll_rms_um=[0,0,0,0,0,0,0,0,0,0,1]", few.as_str()] {
+        let v = json(&["evaluate", &phase, "--set", set, "--set", "spectrum.shape=line", "--json"]);
+        assert!(v["mean_mtf"].as_f64().is_some_and(|m| m > 0.0 && m < 1.0), "{set}: {v}");
+    }
+}
