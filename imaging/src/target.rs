@@ -174,7 +174,8 @@ pub fn usaf(pitch_m: f64, groups: (i32, i32), polarity: Polarity, oversample: us
     // a group is 12 bar widths of its first element wide: refused before any size is computed
     // from it (group −2000's bars are ∞ pixels wide, and a width of ∞ pixels saturates a usize)
     let coarsest = bar_px(first, 1);
-    if !(12.0 * coarsest * oversample as f64 <= MAX_FINE_SIDE as f64) {
+    let side = 12.0 * coarsest * oversample as f64;
+    if side.is_nan() || side > MAX_FINE_SIDE as f64 {
         return Err(Error::Render {
             message: format!(
                 "USAF group {first}'s bars are {coarsest:.3e} pixels wide, a target beyond {MAX_FINE_SIDE} cells a side at {oversample} cells a pixel: draw a higher first group (finer bars), or lower the oversampling"

@@ -933,7 +933,9 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     let field = scene.field();
     let options = scene.options();
     let settings = options.settings();
-    defocus_up_front(scene, &detected, max_frequency)?;
+    // the budget of `evaluate`, at Nyquist: an axis to the cutoff costs more, but is not refused
+    // where the mean MTF is computed
+    defocus_up_front(scene, &detected, camera.nyquist())?;
     let folded = Folded::of(lens, &detected);
     let parts = folded.parts();
     let poly = Polychromatic::with_parts(lens, &detected, &parts, field, max_frequency, pixel, settings)?;

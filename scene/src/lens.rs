@@ -1327,7 +1327,7 @@ fn radial_work(
         let (lo, hi) = slopes.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
         let phase = std::f64::consts::TAU / probe_m * (hi - lo);
         let work = (1.0 + phase / 16.0).powi(2) * (terms as f64 / 16.0).max(1.0);
-        if !(work <= MAX_RADIAL_WORK) {
+        if work.is_nan() || work > MAX_RADIAL_WORK {
             return Err(o.bad(
                 key,
                 value,

@@ -613,7 +613,7 @@ pub(crate) fn fraction_outside(scene: &metric::Scene, range: &TableRange) -> f64
     // (800–800 nm, whose band has no width) covers it
     if let Some(line) = signal.as_line() {
         let inside = (lo..=hi).contains(&line.wavelength_m);
-        return if inside || !(line.weight > 0.0) { 0.0 } else { 1.0 };
+        return if inside || line.weight <= 0.0 || line.weight.is_nan() { 0.0 } else { 1.0 };
     }
     let total = signal.integral();
     if total.is_nan() || total <= 0.0 {
