@@ -22,9 +22,24 @@ pub(crate) struct OptimizeArgs {
     pub json: bool,
 }
 
+/// The most evaluations `--max-evaluations` (and points `--starts`) may ask for: a thousand
+/// times the default budget, and the search's history, allocated for all of them, stays bounded.
+const MAX_EVALUATIONS: usize = 1_000_000;
+
 /// Runs `asnr optimize` with several `--over` keys, or one with an `--objective` other than the
 /// ASNR.
 pub(crate) fn optimize(args: OptimizeArgs, tolerance: Option<f64>) -> Result<()> {
+    // checked before the search sizes anything from them: its history is allocated for the
+    // whole budget (1e12 evaluations asked for 56 TB), and the start set's capacity overflowed
+    if let Some(n) = args.max_evaluations.filter(|&n| n > MAX_EVALUATIONS) {
+        anyhow::bail!(
+            "--max-evaluations {n}: expected at most {MAX_EVALUATIONS} evaluations (default {})",
+            Search::DEFAULT_MAX_EVALUATIONS
+        );
+    }
+    if let Some(n) = args.starts.filter(|&n| n > MAX_EVALUATIONS) {
+        anyhow::bail!("--starts {n}: expected at most {MAX_EVALUATIONS} start points (default 10 per key)");
+    }
     let set = crate::with_tolerance(args.set, tolerance);
     let ranges = args.over.iter().map(|o| optimize::parse_range(o, false)).collect::<Result<Vec<_>>>()?;
     crate::check_over_keys(&set, &ranges)?;

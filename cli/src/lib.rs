@@ -214,6 +214,9 @@ pub enum Command {
         /// Monochromatic curves at these wavelengths, nm (comma-separated, e.g. 780,800,820).
         #[arg(long, value_delimiter = ',', value_name = "NM")]
         wavelengths: Vec<f64>,
+        /// Relative error allowed in the MTF (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
     },
 }
 
@@ -248,6 +251,7 @@ pub fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Optimize { scene, set, over, objective, xtol, starts, max_evaluations, plot, tolerance, json } => {
+            check_over_names(&over)?;
             let objective = report::objective::Objective::parse(&objective)?;
             if over.len() > 1 || objective != report::objective::Objective::Asnr {
                 let args =
@@ -331,6 +335,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     (ranges, sweep::Design::List(file.rows), what, origins)
                 }
                 None => {
+                    check_over_names(&over)?;
                     let ranges = over.iter().map(|o| optimize::parse_range(o, true)).collect::<Result<Vec<_>>>()?;
                     // the product of the axes, checked: four axes of 65536 points wrap a usize to 0
                     let total = ranges.iter().try_fold(1_usize, |n, r| n.checked_mul(r.points.unwrap_or(1)));
@@ -376,7 +381,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 eprintln!("{line}");
             }
             if let Some(path) = &plot {
-                let title = plot::sweep_title(&ranges, &built.lens().describe());
+                let title = plot::sweep_title(&ranges, &built.lens().describe(), &plot::field_label(&built));
                 plot::sweep_plot(path, &figure, &title, &ranges, &points)?;
             }
             if json {
@@ -405,7 +410,7 @@ pub fn run(cli: Cli) -> Result<()> {
             out!("{}", resolved.toml);
             Ok(())
         }
-        Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths } => {
+        Command::Mtf { scene, set, json, csv, plot, width, dpi, to_cutoff, points, wavelengths, tolerance } => {
             let figure = plot::Figure::new(width, dpi)?;
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
             if !(2..=100_000).contains(&points) {
@@ -421,13 +426,14 @@ pub fn run(cli: Cli) -> Result<()> {
                 };
                 anyhow::bail!("--wavelengths: {bad} nm: expected wavelengths from 1 nm to 1e6 nm (1 mm)");
             }
-            let loaded = load(scene.as_deref(), &set)?;
+            let loaded = load(scene.as_deref(), &with_tolerance(set, tolerance))?;
             let range = if to_cutoff { metric::FrequencyRange::Cutoff } else { metric::FrequencyRange::Nyquist };
             let metres: Vec<f64> = wavelengths.iter().map(|w| w * 1e-9).collect();
             let curve =
                 metric::mtf_curve(&loaded, range, points, &metres).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if let Some(path) = &plot {
-                let title = loaded.title().map_or_else(|| loaded.lens().describe(), str::to_owned);
+                let name = loaded.title().map_or_else(|| loaded.lens().describe(), str::to_owned);
+                let title = format!("{name}, {}", plot::field_label(&loaded));
                 plot::mtf_plot(path, &figure, &title, &curve)?;
             }
             if json {
@@ -496,6 +502,20 @@ fn parse_shard(arg: &str) -> Result<(usize, usize)> {
         Some((i, n)) if n >= 1 && (1..=n).contains(&i) => Ok((i, n)),
         _ => anyhow::bail!("--shard {arg}: expected I/N with whole numbers 1 ≤ I ≤ N, e.g. --shard 3/8 (shard 3 of 8)"),
     }
+}
+
+/// Refuses an `--over` whose key is empty or has an empty part (`--over =0.5:1`), as `--over`:
+/// the key reaches the scene as an override, whose message would blame `--set`.
+fn check_over_names(over: &[String]) -> Result<()> {
+    for arg in over {
+        let key = arg.split_once('=').map_or(arg.as_str(), |(k, _)| k).trim();
+        if key.is_empty() || key.split('.').any(str::is_empty) {
+            anyhow::bail!(
+                "--over {arg}: `{key}` is not a dotted key; expected a scene key before `=`, e.g. spectrum.range_nm"
+            );
+        }
+    }
+    Ok(())
 }
 
 /// `--tolerance REL` as the override `options.tolerance=REL` (validated with the scene).

@@ -171,12 +171,31 @@ pub fn quantity(key: &str) -> (String, Option<&'static str>) {
     (if name.is_empty() { key.to_owned() } else { name }, None)
 }
 
+/// The field point a scene's curves are computed at, for a plot's title: "on axis", "field
+/// (5°, 0°)", or "3 field points (weighted)" for a scene's `[[fields]]`.
+pub fn field_label(scene: &metric::Scene) -> String {
+    let fields = scene.fields();
+    if fields.len() > 1 {
+        return format!("{} field points (weighted)", fields.len());
+    }
+    let field = fields.first().map_or(scene.field(), |f| f.0);
+    if field.x_rad == 0.0 && field.y_rad == 0.0 {
+        "on axis".to_owned()
+    } else {
+        format!(
+            "field ({}°, {}°)",
+            optics::round_for_display(field.x_rad.to_degrees()),
+            optics::round_for_display(field.y_rad.to_degrees())
+        )
+    }
+}
+
 /// The axis label of a scene key or result column: its human name with the unit in parentheses,
 /// e.g. `spectrum.range_nm` → "spectral range (nm)" (see [`quantity`]).
 /// The title of a sweep's plot: what was swept, over which range, and the lens unless a lens key
 /// is swept ("ASNR over spectral range 10–50 nm and exposure time 1–2 ms: chromatic metalens
 /// F/2.5 …"); not the scene's title, whose band or F-number the sweep replaces.
-pub fn sweep_title(ranges: &[Range], lens: &str) -> String {
+pub fn sweep_title(ranges: &[Range], lens: &str, field: &str) -> String {
     let swept: Vec<String> = ranges
         .iter()
         .map(|r| {
@@ -185,7 +204,9 @@ pub fn sweep_title(ranges: &[Range], lens: &str) -> String {
         })
         .collect();
     let title = format!("ASNR over {}", swept.join(" and "));
-    if ranges.iter().any(|r| r.key.starts_with("lens.")) { title } else { format!("{title}: {lens}") }
+    let title = if ranges.iter().any(|r| r.key.starts_with("lens.")) { title } else { format!("{title}: {lens}") };
+    // the field point, unless it is swept
+    if ranges.iter().any(|r| r.key.starts_with("field.")) { title } else { format!("{title}, {field}") }
 }
 
 /// The axis label of a scene key: its name and unit, "spectral range (nm)".

@@ -151,6 +151,10 @@ fn stem(path: &Path) -> String {
     path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned())
 }
 
+/// The largest magnitude of a plotted value: an axis pads its range by a few percent and places
+/// ticks over it, which overflows near the largest double (about 1.8e308).
+const AXIS_LIMIT: f64 = 1e307;
+
 /// One CSV file: its header and its data rows, each with its line number.
 struct Table {
     path: PathBuf,
@@ -171,6 +175,15 @@ impl Table {
             .iter()
             .map(str::to_owned)
             .collect();
+        // a column named twice: which one a flag means is not known (one was silently used)
+        if let Some((i, twice)) = headers.iter().enumerate().find(|(i, h)| headers[..*i].contains(h)) {
+            let first = headers.iter().position(|h| h == twice).unwrap_or(0);
+            bail!(
+                "{name}: the header names column `{twice}` twice (fields {} and {}); expected each column named once",
+                first + 1,
+                i + 1
+            );
+        }
         let mut rows = Vec::new();
         let mut lines = scene::CsvLines::new(&text, Some(b'#'));
         for record in reader.records() {
@@ -198,8 +211,24 @@ impl Table {
         })
     }
 
-    /// Column `name` as finite numbers.
+    /// Column `name` as finite numbers whose magnitude an axis can span: at most
+    /// [`AXIS_LIMIT`] (an axis's margin beyond values near the largest double overflows).
     fn numbers(&self, name: &str, flag: &str) -> Result<Vec<f64>> {
+        let values = self.finite(name, flag)?;
+        if flag != "--group"
+            && let Some((k, v)) = values.iter().enumerate().find(|(_, v)| v.abs() > AXIS_LIMIT)
+        {
+            bail!(
+                "{} line {}, column `{name}` ({flag}): {v:e} is beyond what an axis can span with its margin; expected values of magnitude at most {AXIS_LIMIT:e} (the largest number is about 1.8e308)",
+                self.path.display(),
+                self.rows[k].0
+            );
+        }
+        Ok(values)
+    }
+
+    /// Column `name` as finite numbers.
+    fn finite(&self, name: &str, flag: &str) -> Result<Vec<f64>> {
         let c = self.column(name, flag)?;
         self.rows
             .iter()

@@ -40,6 +40,9 @@ pub struct GridArgs {
     /// The stack's sample type: `f4` (32-bit float, half the file) or `f8`.
     #[arg(long, value_name = "TYPE", default_value = "f4", requires = "stack")]
     pub dtype: String,
+    /// Relative error allowed in the OTF (sets options.tolerance; default 1e-6, and 1e-4 on the FFT path).
+    #[arg(long, value_name = "REL")]
+    pub tolerance: Option<f64>,
 }
 
 /// The JSON description written beside the matrices.
@@ -91,9 +94,15 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
     }
     let Some(out_dir) = &args.out else { anyhow::bail!("--out: expected the folder to write to") };
     let label = args.scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
-    let scene = crate::load(args.scene.as_deref(), &args.set)?;
+    let scene = crate::load(args.scene.as_deref(), &crate::with_tolerance(args.set.clone(), args.tolerance))?;
     let detected = metric::detected_spectrum(&scene);
     let cutoff = optics::highest_cutoff(scene.lens(), &detected).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+    if !cutoff.is_finite() {
+        // the grid is sized from the shortest wavelength's cutoff 1/(λ F#), which has no end
+        anyhow::bail!(
+            "{label}: the detected spectrum reaches λ = 0 nm (spectrum.range_nm, spectrum.center_nm or the tables), where the cutoff 1/(λ F#) is infinite and no grid holds the OTF: keep the band above 0 nm"
+        );
+    }
     let spacing = match args.spacing_um {
         Some(s) if s.is_finite() && s > 0.0 && s < 1e4 => s * 1e-6,
         Some(s) => anyhow::bail!("--spacing-um {s}: expected a sample spacing > 0 and below 10000 µm"),
@@ -116,15 +125,7 @@ pub fn run(args: &GridArgs, kind: Kind) -> Result<()> {
     // the images' titles: the scene's (or its lens), and the field point off axis
     let name = scene.title().map_or_else(|| scene.lens().describe(), str::to_owned);
     let field = scene.field();
-    let off_axis = if field.x_rad == 0.0 && field.y_rad == 0.0 {
-        String::new()
-    } else {
-        format!(
-            ", field ({}°, {}°)",
-            optics::round_for_display(field.x_rad.to_degrees()),
-            optics::round_for_display(field.y_rad.to_degrees())
-        )
-    };
+    let off_axis = format!(", {}", crate::plot::field_label(&scene));
     let (sum, peak);
     let layout;
     match kind {
@@ -261,7 +262,7 @@ fn write_stack(args: &GridArgs, path: &Path) -> Result<()> {
         );
     }
     let label = args.scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
-    let scene = crate::load(args.scene.as_deref(), &args.set)?;
+    let scene = crate::load(args.scene.as_deref(), &crate::with_tolerance(args.set.clone(), args.tolerance))?;
     let lens = scene.lens();
     let spacing = match args.spacing_um {
         Some(s) if s.is_finite() && s > 0.0 && s < 1e4 => s * 1e-6,

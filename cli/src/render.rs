@@ -347,6 +347,23 @@ fn make_target(args: &RenderArgs, pitch: f64, nyquist_cyc_per_mm: f64) -> Result
     };
     let given =
         args.groups.as_deref().map_or_else(|| format!("{}:{} (the default)", groups.0, groups.1), str::to_owned);
+    // the coarsest bars of the first group must lie at or below Nyquist: above it the camera
+    // resolves none of the bars, and their contrast and frequency (2^2000 cycles/mm is ∞) mean
+    // nothing
+    let coarsest = target::usaf_frequency(groups.0, 1);
+    if groups.0 <= groups.1 && !(coarsest.is_finite() && coarsest <= nyquist_cyc_per_mm) {
+        anyhow::bail!(
+            "--groups {given}: group {}'s coarsest bars ({} cycles/mm) lie above the camera's Nyquist frequency {:.1} cycles/mm: the camera resolves none of them; expected a first group of at most {} (the group holding Nyquist)",
+            groups.0,
+            if coarsest.is_finite() {
+                format!("{}", optics::round_for_display(coarsest))
+            } else {
+                format!("2^{}", groups.0)
+            },
+            nyquist_cyc_per_mm,
+            target::usaf_groups_for(nyquist_cyc_per_mm).1
+        );
+    }
     target::usaf(pitch, groups, polarity, args.oversample).map_err(|e| match e {
         imaging::Error::Render { message } => anyhow::anyhow!("--groups {given}: {message}"),
         e => e.into(),

@@ -171,7 +171,18 @@ pub fn usaf(pitch_m: f64, groups: (i32, i32), polarity: Polarity, oversample: us
     let pitch_mm = pitch_m * 1e3;
     // bar width in pixels of element 1 of the coarsest group
     let bar_px = |g: i32, e: u8| 1.0 / (2.0 * usaf_frequency(g, e) * pitch_mm);
-    let margin = (2.0 * bar_px(first, 1)).ceil().max(16.0);
+    // a group is 12 bar widths of its first element wide: refused before any size is computed
+    // from it (group −2000's bars are ∞ pixels wide, and a width of ∞ pixels saturates a usize)
+    let coarsest = bar_px(first, 1);
+    let side = 12.0 * coarsest * oversample as f64;
+    if side.is_nan() || side > MAX_FINE_SIDE as f64 {
+        return Err(Error::Render {
+            message: format!(
+                "USAF group {first}'s bars are {coarsest:.3e} pixels wide, a target beyond {MAX_FINE_SIDE} cells a side at {oversample} cells a pixel: draw a higher first group (finer bars), or lower the oversampling"
+            ),
+        });
+    }
+    let margin = (2.0 * coarsest).ceil().max(16.0);
     let mut bars = Vec::new();
     let mut x = margin;
     let mut height: f64 = 0.0;

@@ -82,7 +82,8 @@ pub enum Error {
         "the defocus reaches {waves:.3e} waves (W020 = {w020_m:.3e} m, at the mean wavelength {wavelength_nm:.1} nm): beyond the \
          {limit:e} waves the MTF integration resolves (the blur is far beyond the Fraunhofer threshold, paper SI \
          eq. S15); reduce lens.focal_length_mm, the distance of the spectrum from lens.design_wavelength_nm, or \
-         the spectral range"
+         the spectral range; for a lens given as data, check its profile (lens.binary2 with lens.norm_radius_mm, \
+         lens.phase_csv, the layout)"
     )]
     Defocus {
         /// Largest defocus, waves.
@@ -100,7 +101,8 @@ pub enum Error {
          beyond the {limit:e} rad the MTF integration does in seconds (its work grows as the square of that \
          phase; the blur is far beyond the Fraunhofer threshold, paper SI eq. S15); reduce \
          lens.focal_length_mm, the distance of the spectrum from lens.design_wavelength_nm, the spectral \
-         range, or camera.pixel_pitch_um's Nyquist frequency"
+         range, or camera.pixel_pitch_um's Nyquist frequency; for a lens given as data, check its profile \
+         (lens.binary2 with lens.norm_radius_mm, lens.phase_csv, the layout)"
     )]
     DefocusPhase {
         /// `8π F# ν_N |W020|`, rad.

@@ -363,13 +363,26 @@ fn check_light(radiance: &Spectrum, camera: &Camera) -> Result<(), Error> {
     let detected = crate::evaluate::detected_spectrum_of(radiance, camera);
     // a Gaussian × polynomial (the sweeps' usual spectrum) is zero everywhere only where its
     // polynomial is (a numerical integral would cost 5 % of a sweep point); else the integral
-    let none = match detected.gaussian_polynomial() {
-        Some(gp) => gp.coefficients.iter().all(|&c| c == 0.0),
+    let (none, overflows) = match detected.gaussian_polynomial() {
+        Some(gp) => (gp.coefficients.iter().all(|&c| c == 0.0), gp.coefficients.iter().any(|c| !c.is_finite())),
         None => {
             let integral = detected.integral();
-            integral == 0.0 || integral.is_nan()
+            // a radiance beyond f64::MAX is ∞, and ∞ × 0 (a table's zero outside its range) NaN:
+            // too much light, not none
+            (integral == 0.0, !integral.is_finite())
         }
     };
+    if overflows {
+        return Err(Error::Overflow {
+            quantity: "the detected spectrum L η λ",
+            detail: format!(
+                "the radiance (source.radiance_w_m2_sr_nm, source.scale or the source table, times the spectrum \
+                 filter) times the quantum efficiency exceeds the largest number, about {:e}: expected a radiance \
+                 that a double can hold",
+                f64::MAX
+            ),
+        });
+    }
     if none {
         return Err(Error::NoLight {
             reason: "the radiance (source.radiance_w_m2_sr_nm or the source table, times the spectrum filter) \

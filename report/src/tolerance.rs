@@ -146,6 +146,16 @@ impl Resolved {
             }
             Distribution::Uniform { lo, hi } => ((hi - lo) / 12f64.sqrt(), 0.5 * (lo + hi)),
             Distribution::Seed => {
+                // a seed is drawn from [0, 2³²): a wavelength or a coefficient drawn there means
+                // nothing, so only a seed key (its name ends in `seed`) takes it
+                let name = vary.key.rsplit('.').next().unwrap_or_default();
+                if !name.ends_with("seed") {
+                    bail!(
+                        "--vary {}=seed: `{}` is not a seed key; `seed` draws integers in [0, 2³²) for seed keys such as lens.atom_error_seed; vary this key by normal:SIGMA, normal:SIGMA% or uniform:LO:HI",
+                        vary.key,
+                        vary.key
+                    );
+                }
                 if nominal.fract() != 0.0 || nominal < 0.0 {
                     bail!(
                         "--vary {}=seed: the key's value {nominal} is not a seed (an integer ≥ 0); `seed` is for integer seed keys such as lens.atom_error_seed",
@@ -614,6 +624,11 @@ mod tests {
         assert!(e("k=seed:3").contains("KEY=seed"), "{}", e("k=seed:3"));
         assert_eq!(parse_vary("k=seed").unwrap().distribution, Distribution::Seed);
         assert!(e("k").contains("expected KEY=normal:SIGMA"));
+        // a wavelength drawn as a seed, in [0, 2³²) nm
+        let seed =
+            Resolved::new(&parse_vary("lens.design_wavelength_nm=seed").unwrap(), 800.0).unwrap_err().to_string();
+        assert!(seed.contains("`lens.design_wavelength_nm` is not a seed key"), "{seed}");
+        assert!(Resolved::new(&parse_vary("lens.atom_error_seed=seed").unwrap(), 3.0).is_ok());
         let zero = Resolved::new(&parse_vary("k=normal:2%").unwrap(), 0.0).unwrap_err().to_string();
         assert!(zero.contains("a relative σ of a key whose value is 0"), "{zero}");
         let budget = check_budget(1_000_000, 0.02, 2, 600.0).unwrap_err().to_string();

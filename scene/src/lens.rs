@@ -982,10 +982,13 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         Some(terms) if model != Model::Phase => {
             let probe = info.design_wavelength_m.or(info.channels_m.first().copied()).unwrap_or(550e-9);
             info.notes.push(zernike_note(&terms));
-            Arc::new(
+            let (count, given) = (terms.len(), zernike_note(&terms));
+            let lens: Arc<dyn LensModel> = Arc::new(
                 lenses::WithZernike::new(lens, terms, probe)
                     .map_err(|e| o.domain("lens.zernike_noll_rms_um", "[lens]", e))?,
-            )
+            );
+            radial_work(lens.as_ref(), probe, count, o, "lens.zernike_noll_rms_um", &given)?;
+            lens
         }
         _ => lens,
     };
@@ -1222,7 +1225,8 @@ fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error>
 }
 
 fn zernike_note(terms: &[(usize, f64)]) -> String {
-    let list: Vec<String> = terms.iter().map(|(j, c)| format!("Z{j} = {} µm", num(c * 1e6))).collect();
+    let list: Vec<String> =
+        terms.iter().map(|(j, c)| format!("Z{j} = {} µm", num(optics::round_for_display(c * 1e6)))).collect();
     if list.is_empty() {
         "Zernike terms (Noll, RMS): all zero".to_owned()
     } else {
@@ -1279,6 +1283,33 @@ fn phase_lens(
                 m != 0.0 && m.abs() <= 1e3,
                 "Zemax's diffraction order M, non-zero (default 1)",
             )?;
+            // each term M A_i (r/R_norm)^{2i} at the aperture's edge must be a number: a tiny
+            // R_norm (1e-300 mm) overflows it to ∞, which the profile then refused naming no key
+            let scale = (radius / norm).powi(2);
+            let mut power = 1.0_f64;
+            for (i, &a) in coefficients.iter().enumerate() {
+                power *= scale;
+                if !(m * a * power).is_finite() {
+                    let given = l.norm_radius_mm.is_some();
+                    let (key, value) = if given && !power.is_finite() {
+                        ("lens.norm_radius_mm".to_owned(), num(norm * 1e3))
+                    } else {
+                        (format!("lens.binary2[{i}]"), num(a))
+                    };
+                    return Err(o.bad(
+                        &key,
+                        value,
+                        &format!(
+                            "a profile whose term M·A{} (r/R_norm)^{} stays finite at the aperture's edge, r = {} mm (R_norm = {} mm, M = {}): it is beyond the largest number, about 1.8e308",
+                            i + 1,
+                            2 * (i + 1),
+                            num(radius * 1e3),
+                            num(norm * 1e3),
+                            num(m)
+                        ),
+                    ));
+                }
+            }
             let profile = lenses::binary2_profile(coefficients, m, norm, radius)
                 .map_err(|e| o.domain("lens.binary2", "[lens]", e))?;
             (
@@ -1351,11 +1382,72 @@ fn phase_lens(
     let mut lens =
         lenses::PhaseLens::new(f_number, f0_m, l0, phase, amplitude, dispersion, efficiency, transmission, source)
             .map_err(|e| o.domain("lens", "[lens]", e))?;
+    // the profile alone, then with the Zernike terms: each refusal names what made it
+    let mut count = l.binary2.as_ref().map_or(RADIAL_TABLE_TERMS, Vec::len);
+    match &l.binary2 {
+        Some(b) => radial_work(&lens, l0, count, o, "lens.binary2", &format!("[{} coefficients]", b.len()))?,
+        None => radial_work(&lens, l0, count, o, "lens.phase_csv", &quoted(l.phase_csv.as_deref().unwrap_or("")))?,
+    }
     if let Some(terms) = zernike(l, o)? {
         info.notes.push(zernike_note(&terms));
+        count += terms.len();
+        let given = zernike_note(&terms);
         lens = lens.with_zernike(terms).map_err(|e| o.domain("lens.zernike_noll_rms_um", "[lens]", e))?;
+        radial_work(&lens, l0, count, o, "lens.zernike_noll_rms_um", &given)?;
     }
     Ok(lens)
+}
+
+/// The cost of a term of a radial table's phase, in units of a polynomial term (a spline piece).
+const RADIAL_TABLE_TERMS: usize = 4;
+
+/// The largest work the radial engine is given, in units of `(1 + Φ/16)² max(1, terms/16)`
+/// ([`radial_work`]). Release timings on the F/2.5 phase lens of examples/phase-binary2.toml
+/// over its 50 nm band: Z11 = 1 µm (`--set 'lens.zernike_noll_rms_um=[0,0,0,0,0,0,0,0,0,0,1]'`,
+/// Φ = 210 rad, 199 units) 3.5 s and 5 µm (4440 units) more than 60 s; a Binary 2 profile of
+/// A1, A2 and 200 terms of 1e-3 rad (Φ = 20 rad, 64 units) 2.4 s and of 400 terms (900 units)
+/// 40 s. 600 units: about 10 s at most.
+pub(crate) const MAX_RADIAL_WORK: f64 = 600.0;
+
+/// Refuses, before any rule is built, a lens whose radial pupil would cost the radial engine
+/// more than [`MAX_RADIAL_WORK`]: its autocorrelation integral takes Gauss–Legendre panels of 16
+/// points turning by at most 16 rad each along both of its variables (`optics::radial`, module
+/// docs), so each OTF value costs about `(1 + Φ/16)²` panels, where `Φ = (2π/λ) osc W'` is the
+/// phase by which the OPD's slope in `q = ρ²` can turn the integrand (`osc` its largest less its
+/// smallest value on `[0, 1]`; the best-fit defocus, linear in `q`, does not change it); each
+/// node evaluates the phase's Chebyshev series (at most 64 terms), or beyond it the profile's
+/// own terms: `max(1, terms/16)`. `W'` is taken by differences at 1024 points at `probe_m`, on
+/// axis. `key` and `value` name what sets the profile.
+fn radial_work(
+    lens: &dyn LensModel,
+    probe_m: f64,
+    terms: usize,
+    o: &Origins,
+    key: &str,
+    value: &str,
+) -> Result<(), Error> {
+    for order in lens.orders(probe_m, optics::Field::ON_AXIS) {
+        let optics::Pupil::Radial(pupil) = &order.pupil else { continue };
+        const N: usize = 1024;
+        let w: Vec<f64> = (0..=N).map(|i| pupil.opd_beyond_defocus_m(i as f64 / N as f64)).collect();
+        let slopes = w.windows(2).map(|p| (p[1] - p[0]) * N as f64);
+        let (lo, hi) = slopes.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+        let phase = std::f64::consts::TAU / probe_m * (hi - lo);
+        let work = (1.0 + phase / 16.0).powi(2) * (terms as f64 / 16.0).max(1.0);
+        if work.is_nan() || work > MAX_RADIAL_WORK {
+            return Err(o.bad(
+                key,
+                value,
+                &format!(
+                    "a profile the radial engine integrates in seconds: the slope of its path beyond the best-fit defocus turns the phase by {} rad at {} nm across the pupil, with {terms} terms, about {} units of work (1 + phase/16)² max(1, terms/16), beyond the {MAX_RADIAL_WORK} allowed (about 10 s; the work grows as the square of that phase, and with the terms beyond 16); reduce {key}",
+                    if phase.is_finite() { format!("{phase:.3e}") } else { "more than 1.8e308".to_owned() },
+                    num(optics::round_for_display(probe_m * 1e9)),
+                    if work.is_finite() { format!("{work:.2e}") } else { "more than 1.8e308".to_owned() },
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The working F-number from `lens.f_number` or `lens.aperture_diameter_mm` (exactly one).

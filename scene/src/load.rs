@@ -996,8 +996,16 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
     if let Some(limits) = &info.psf {
         crate::psf::warn_notices(limits, o);
     }
+    // a lens given by its phase profile or a meta-atom library images an oblique wave
+    // (`optics::radial::Oblique`) below 80° only: beyond, its orders fell back to the axis and
+    // 85° returned the on-axis numbers
+    let oblique = matches!(raw.lens.model.as_deref(), Some("phase" | "library"));
     let angle = |key: &str, v: Option<f64>| -> Result<f64, Error> {
         let v = v.unwrap_or(0.0);
+        if oblique {
+            let expected = "an angle in degrees within ±80 for a lens given by its phase profile or meta-atom library (its oblique incidence is modelled below 80°)";
+            return Ok(o.number(key, v, v.abs() < MAX_OBLIQUE_DEG, expected)?.to_radians());
+        }
         Ok(o.number(key, v, v.abs() < 90.0, "an angle in degrees, within ±90")?.to_radians())
     };
     let scene = match (&raw.field, &raw.fields) {
@@ -1033,6 +1041,10 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
     let scene = relative_illumination(&raw.lens, scene, o)?;
     Ok((scene, info))
 }
+
+/// The largest field angle, degrees, of a lens whose orders carry the oblique wave
+/// (`optics::radial::Oblique::new` refuses |θ| ≥ 80° on either axis).
+const MAX_OBLIQUE_DEG: f64 = 80.0;
 
 /// What `lens.relative_illumination` accepts.
 const RELATIVE_ILLUMINATION: &str = "\"none\" (the default, as in the paper), \"cos4\" (cos⁴ of the field angle), a fraction in [0, 1] at every field point, or the path of a CSV table field_deg, relative illumination (angles from 0 to below 90°, increasing; values in [0, 1])";

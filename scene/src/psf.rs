@@ -446,9 +446,11 @@ pub(crate) fn psf_lens(
 ) -> Result<PsfStack, Error> {
     let key = "lens.psf";
     let file = o.require(key, l.psf.as_deref(), &format!("the path of a PSF stack: {ACCEPTED}"))?;
-    let expected = "the stack's sample pitch at the detector, > 0 µm";
+    // from 1 nm: a finer pitch is far below any wavelength the stack samples, and 1e-304 µm
+    // made the OTF table's frequencies 1/(n p) infinite
+    let expected = "the stack's sample pitch at the detector, from 0.001 µm (1 nm) to below 1e6 µm";
     let pitch = o.require("lens.psf_pitch_um", l.psf_pitch_um, expected)?;
-    let pitch = o.number("lens.psf_pitch_um", pitch, pitch > 0.0 && pitch < 1e6, expected)?;
+    let pitch = o.number("lens.psf_pitch_um", pitch, (1e-3..1e6).contains(&pitch), expected)?;
     let wkey = "lens.psf_wavelengths_nm";
     let expected = "the wavelength of each slice of the stack, nm, > 0 and strictly increasing";
     let wavelengths = o.require(wkey, l.psf_wavelengths_nm.as_ref(), expected)?;
@@ -606,6 +608,13 @@ pub(crate) struct TableRange {
 pub(crate) fn fraction_outside(scene: &metric::Scene, range: &TableRange) -> f64 {
     let (lo, hi) = range.range_m;
     let signal = Spectrum::product(vec![metric::detected_spectrum(scene), range.efficiency.clone()]);
+    // a line spectrum is seen by the engines at its centre alone (`Spectrum::as_line`): the
+    // signal is inside or outside whole, and a one-slice stack at the line's wavelength
+    // (800–800 nm, whose band has no width) covers it
+    if let Some(line) = signal.as_line() {
+        let inside = (lo..=hi).contains(&line.wavelength_m);
+        return if inside || line.weight <= 0.0 || line.weight.is_nan() { 0.0 } else { 1.0 };
+    }
     let total = signal.integral();
     if total.is_nan() || total <= 0.0 {
         return 0.0; // no light: the evaluation says so

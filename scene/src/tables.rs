@@ -576,7 +576,11 @@ pub(crate) fn read_phase_table(path: &Path, aperture_radius_mm: f64) -> Result<P
                 "the amplitude is 0 everywhere: expected a field amplitude > 0 somewhere".to_owned(),
             ));
         }
-        Some(amp)
+        // the amplitude is shape only (docs/physics.md): scaled to a largest value of 1 before
+        // use, so that a uniform 1e-200 is the column of 1 it stands for (it gave a mean MTF of
+        // 0.878 where the table without it gives 0.441)
+        let top = amp.iter().copied().fold(0.0, f64::max);
+        Some(amp.iter().map(|a| a / top).collect())
     } else {
         None
     };
