@@ -70,6 +70,23 @@ pub enum Command {
         /// Print how the result is computed (engine, quadratures, error budget, work) after it.
         #[arg(long)]
         explain: bool,
+        /// Also the NEQ, the information capacity per pixel, the ideal lens of the same aperture
+        /// and the ASNR's ratio to it, and with --task the detectability d′ (docs/physics.md,
+        /// "Metrics beyond the ASNR").
+        #[arg(long)]
+        metrics: bool,
+        /// The object's power spectrum for the capacity: flat (default) or power-law:BETA (0 ≤ β < 2).
+        #[arg(long, value_name = "flat|power-law:BETA", requires = "metrics")]
+        object: Option<String>,
+        /// The object's contrast for the capacity (default 1: a white/black target).
+        #[arg(long, value_name = "C", requires = "metrics")]
+        contrast: Option<f64>,
+        /// A frame rate for the capacity per second, Hz.
+        #[arg(long, value_name = "HZ", requires = "metrics")]
+        frame_rate_hz: Option<f64>,
+        /// A detection task for d′: disk:DIAMETER_UM:CONTRAST (diameter in the image plane).
+        #[arg(long, value_name = "disk:DIAMETER_UM:CONTRAST", requires = "metrics")]
+        task: Option<String>,
     },
     /// The values of numeric scene keys that maximize the ASNR: one key by a scan and golden
     /// section, several by COBYLA from the best of a Halton start set.
@@ -220,15 +237,25 @@ pub enum Command {
 /// Runs the command line `cli`.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Evaluate { scene, set, json, tolerance, explain } => {
+        Command::Evaluate { scene, set, json, tolerance, explain, metrics, object, contrast, frame_rate_hz, task } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+            let metrics_options = metrics
+                .then(|| report::metrics::options(object.as_deref(), contrast, frame_rate_hz, task.as_deref()))
+                .transpose()?;
             let set = with_tolerance(set, tolerance);
             let read = scene::load_with_warnings(scene.as_deref(), &set)?;
             warn(&read.warnings);
             let (loaded, meter) = (read.scene, read.radiance_meter);
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            let metrics = metrics_options
+                .map(|o| metric::metrics(&loaded, &result, &o))
+                .transpose()
+                .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if json {
-                let report = output::json(&label, &loaded, &result)?;
+                let report = match &metrics {
+                    Some(m) => report::metrics::json(&label, &loaded, &result, m)?,
+                    None => output::json(&label, &loaded, &result)?,
+                };
                 // with --json, stdout stays one JSON document: the explanation is its `explain` field
                 let report = if explain {
                     with_explain(&report, &output::explain(&loaded, &result, meter.as_ref()))?
@@ -238,6 +265,9 @@ pub fn run(cli: Cli) -> Result<()> {
                 outln!("{report}");
             } else {
                 out!("{}", output::table(&label, &loaded, &result));
+                if let Some(m) = &metrics {
+                    out!("{}", report::metrics::table(m, &result));
+                }
                 for w in &result.warnings {
                     eprintln!("warning: {w}");
                 }

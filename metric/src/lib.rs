@@ -46,11 +46,11 @@ pub use evaluate::{
     Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MAX_DEFOCUS_WAVES, MtfCurve, NoiseReport,
     Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
-pub use metrics::{
-    Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, SquareMetrics, Symmetry, jinc,
-    metrics, power_law_mean, square_metrics,
-};
 pub use illumination::{IlluminationReport, RelativeIllumination};
+pub use metrics::{
+    Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, SquareMetrics, Symmetry,
+    jinc, metrics, power_law_mean, square_metrics,
+};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

@@ -595,10 +595,7 @@ fn integrate_square(
         let error: Vec<f64> = current.iter().zip(&previous).map(|(c, p)| (c - p).abs()).collect();
         let converged = current.iter().zip(&error).all(|(c, e)| *e <= tolerance * c.abs().max(1e-12));
         let next = 2 * panels;
-        if converged
-            || next > max_panels
-            || (directional && evaluations(next) > MAX_DIRECTIONAL_EVALUATIONS)
-        {
+        if converged || next > max_panels || (directional && evaluations(next) > MAX_DIRECTIONAL_EVALUATIONS) {
             let mut e = [0.0; 5];
             e.copy_from_slice(&error);
             return (current, e);

@@ -86,9 +86,7 @@ fn perfect_lens_capacity_is_shannons() {
     let power = MetricsOptions { object: ObjectSpectrum::PowerLaw { beta }, ..MetricsOptions::default() };
     let p = square_metrics(&one, None, snr0, 5e-6, &power, Symmetry::Radial, f64::INFINITY, 1e-10);
     let scale = metric::power_law_mean(beta);
-    let slow = brute_force(200, &|x, y| {
-        0.5 * (1.0 + snr0 * snr0 * (x * x + y * y).sqrt().powf(-beta) / scale).log2()
-    });
+    let slow = brute_force(200, &|x, y| 0.5 * (1.0 + snr0 * snr0 * (x * x + y * y).sqrt().powf(-beta) / scale).log2());
     eprintln!("power law β = 1: {:.10} bits, brute force {slow:.10}, flat {exact:.10}", p.capacity_bits_per_pixel);
     assert!(p.capacity_bits_per_pixel < exact);
     assert!((p.capacity_bits_per_pixel - slow).abs() < 1e-5 * slow);
@@ -121,7 +119,9 @@ fn disk_detectability_matches_brute_force() {
         })
         .sqrt();
         let slow_energy = brute_force(60, &|x, y| spectrum(x, y).powi(2)) / (PI * r * r);
-        eprintln!("disk {diameter_um} µm: d′ {d:.10}, reference {slow:.10}; energy in band {energy:.8} ({slow_energy:.8})");
+        eprintln!(
+            "disk {diameter_um} µm: d′ {d:.10}, reference {slow:.10}; energy in band {energy:.8} ({slow_energy:.8})"
+        );
         assert!((d - slow).abs() < 1e-8 * slow);
         assert!((energy - slow_energy).abs() < 1e-8);
         let matched = contrast * snr0 * (PI * r * r).sqrt() * energy.sqrt();
