@@ -26,6 +26,7 @@ mod comparecmd;
 mod design;
 mod measure;
 mod merge;
+mod nps;
 mod panel;
 mod plot;
 mod plotcmd;
@@ -176,6 +177,9 @@ pub enum Command {
     /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
     /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
     Measure(measure::MeasureArgs),
+    /// The noise power spectrum of flat frames, temporal and spatial (EMVA 1288), and with
+    /// --mtf-csv the measured NEQ and information capacity.
+    Nps(nps::NpsArgs),
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
@@ -422,6 +426,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => comparecmd::run(args),
         Command::Measure(args) => measure::run(&args),
+        Command::Nps(args) => nps::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
         Command::Otf(args) => psf::run(&args, psf::Kind::Otf),
