@@ -228,9 +228,7 @@ pub fn measured_metrics(
         snr0,
         1.0,
         &options,
-        metric::Symmetry::Radial,
-        f64::INFINITY,
-        1e-6,
+        metric::Quadrature { symmetry: metric::Symmetry::Radial, cutoff: f64::INFINITY, tolerance: 1e-6 },
     );
     Ok(MeasuredMetrics {
         frequency_cyc_per_px: xs,

@@ -48,8 +48,8 @@ pub use evaluate::{
 };
 pub use illumination::{IlluminationReport, RelativeIllumination};
 pub use metrics::{
-    Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, SquareMetrics, Symmetry,
-    jinc, metrics, power_law_mean, square_metrics,
+    Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, Quadrature, SquareMetrics,
+    Symmetry, jinc, metrics, power_law_mean, square_metrics,
 };
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 

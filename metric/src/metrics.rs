@@ -345,9 +345,7 @@ fn at_field(scene: &Scene, snr0: f64, options: &MetricsOptions) -> Result<FieldM
         snr0,
         pitch,
         options,
-        symmetry,
-        cutoff,
-        tolerance,
+        Quadrature { symmetry, cutoff, tolerance },
     );
     let mtf_2d = match (directional, pixel) {
         (false, false) => "radial: the polychromatic OTF along |ν| (radially symmetric)",
@@ -379,6 +377,18 @@ pub enum Symmetry {
     HalfPlane,
 }
 
+/// How [`square_metrics`] integrates over the Nyquist square.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quadrature {
+    /// How the integrand depends on direction.
+    pub symmetry: Symmetry,
+    /// Where the radial panels break (the incoherent cutoff), cycles/pixel; beyond the square's
+    /// corner (e.g. infinity): nowhere.
+    pub cutoff: f64,
+    /// The relative tolerance the panels are doubled to.
+    pub tolerance: f64,
+}
+
 /// The integrals over the Nyquist square behind [`Metrics`].
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SquareMetrics {
@@ -396,19 +406,18 @@ pub struct SquareMetrics {
 /// pixel, θ the direction from the x axis, pixel MTF included), a relative noise power spectrum
 /// `nps(ν')` (`n²`; `None`: white) and the zero-frequency SNR `snr0`, on pixels of pitch
 /// `pixel_pitch_m` (the task's disk is given in m), integrated over the
-/// Nyquist square `|ν'x|, |ν'y| ≤ ½` with the given `symmetry`, the radial panels broken at
-/// `cutoff` (cycles/pixel; beyond the square: none), to the relative `tolerance` (the panels
-/// doubled until two levels agree; at a work limit, the estimated error says how far).
+/// Nyquist square `|ν'x|, |ν'y| ≤ ½` as `quadrature` says (its symmetry, the radial panels'
+/// break at the cutoff, the relative tolerance the panels are doubled to; at a work limit, the
+/// estimated error says how far it got).
 pub fn square_metrics(
     mtf: &dyn Fn(f64, f64) -> f64,
     nps: Option<&dyn Fn(f64) -> f64>,
     snr0: f64,
     pixel_pitch_m: f64,
     options: &MetricsOptions,
-    symmetry: Symmetry,
-    cutoff: f64,
-    tolerance: f64,
+    quadrature: Quadrature,
 ) -> SquareMetrics {
+    let Quadrature { symmetry, cutoff, tolerance } = quadrature;
     let snr2 = snr0 * snr0;
     // W(ν') relative to the mean level squared
     let c2 = options.contrast * options.contrast;

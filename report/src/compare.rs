@@ -631,6 +631,9 @@ mod tests {
             best_range_nm: 33.0,
             best_asnr: 10.6,
             best_at_bound: false,
+            mean_neq: 100.0,
+            capacity_bits_per_pixel: 2.5,
+            ideal_lens_ratio: 0.2,
             rank: 2 - index,
             rank_at_best: 2 - index,
             channels: Vec::new(),
@@ -651,6 +654,7 @@ mod tests {
             designs: vec![design(0, "plain", &[]), design(1, "F/2.5, \"reduced\"", &["a, b", "line\nbreak"])],
             ranking: Vec::new(),
             ranking_at_best: Vec::new(),
+            rankings: Vec::new(),
         };
         let text = csv(&report).unwrap();
         assert!(text.starts_with("index,name,kind,asnr,"), "{text}");

@@ -4,7 +4,7 @@
 
 use std::f64::consts::{LN_2, PI};
 
-use metric::{DiskTask, MetricsOptions, ObjectSpectrum, Symmetry, jinc, square_metrics};
+use metric::{DiskTask, MetricsOptions, ObjectSpectrum, Quadrature, Symmetry, jinc, square_metrics};
 
 use super::*;
 
@@ -44,14 +44,28 @@ fn capacity_of_a_gaussian_mtf_matches_brute_force() {
     let sinc = |x: f64| if x == 0.0 { 1.0 } else { ((PI * x).sin() / (PI * x)).abs() };
     let s = 0.2;
     // radial
-    let fast = square_metrics(&gaussian(s), None, snr0, 5e-6, &options, Symmetry::Radial, f64::INFINITY, 1e-12);
+    let fast = square_metrics(
+        &gaussian(s),
+        None,
+        snr0,
+        5e-6,
+        &options,
+        Quadrature { symmetry: Symmetry::Radial, cutoff: f64::INFINITY, tolerance: 1e-12 },
+    );
     let slow = brute_force(40, &|x, y| log_term((-0.5 * (x * x + y * y) / (s * s)).exp()));
     eprintln!("radial: capacity {:.12} bits, reference {slow:.12}", fast.capacity_bits_per_pixel);
     assert!((fast.capacity_bits_per_pixel - slow).abs() < 1e-9 * slow);
     assert!(fast.capacity_error_bits < 1e-9 * slow);
     // the pixel MTF in 2-D
     let with_pixel = |nu: f64, theta: f64| gaussian(s)(nu, theta) * sinc(nu * theta.cos()) * sinc(nu * theta.sin());
-    let fast = square_metrics(&with_pixel, None, snr0, 5e-6, &options, Symmetry::Octant, f64::INFINITY, 1e-12);
+    let fast = square_metrics(
+        &with_pixel,
+        None,
+        snr0,
+        5e-6,
+        &options,
+        Quadrature { symmetry: Symmetry::Octant, cutoff: f64::INFINITY, tolerance: 1e-12 },
+    );
     let slow = brute_force(40, &|x, y| log_term((-0.5 * (x * x + y * y) / (s * s)).exp() * sinc(x) * sinc(y)));
     eprintln!("octant: capacity {:.12} bits, reference {slow:.12}", fast.capacity_bits_per_pixel);
     assert!((fast.capacity_bits_per_pixel - slow).abs() < 1e-9 * slow);
@@ -62,7 +76,14 @@ fn capacity_of_a_gaussian_mtf_matches_brute_force() {
         (-0.5 * (u * u / 0.04 + v * v / 0.01)).exp()
     };
     let polar = |nu: f64, theta: f64| ellipse(nu * theta.cos(), nu * theta.sin());
-    let fast = square_metrics(&polar, None, snr0, 5e-6, &options, Symmetry::HalfPlane, f64::INFINITY, 1e-10);
+    let fast = square_metrics(
+        &polar,
+        None,
+        snr0,
+        5e-6,
+        &options,
+        Quadrature { symmetry: Symmetry::HalfPlane, cutoff: f64::INFINITY, tolerance: 1e-10 },
+    );
     let slow = brute_force(40, &|x, y| log_term(ellipse(x, y)));
     eprintln!("half-plane: capacity {:.12} bits, reference {slow:.12}", fast.capacity_bits_per_pixel);
     assert!((fast.capacity_bits_per_pixel - slow).abs() < 1e-8 * slow);
@@ -79,12 +100,26 @@ fn perfect_lens_capacity_is_shannons() {
     let flat = MetricsOptions::default();
     let one = |_: f64, _: f64| 1.0;
     let white = |_: f64| 1.0;
-    let m = square_metrics(&one, Some(&white), snr0, 5e-6, &flat, Symmetry::Radial, f64::INFINITY, 1e-12);
+    let m = square_metrics(
+        &one,
+        Some(&white),
+        snr0,
+        5e-6,
+        &flat,
+        Quadrature { symmetry: Symmetry::Radial, cutoff: f64::INFINITY, tolerance: 1e-12 },
+    );
     assert!((m.capacity_bits_per_pixel - exact).abs() < 1e-12 * exact, "{} vs {exact}", m.capacity_bits_per_pixel);
     assert!((m.capacity_perfect_lens_bits_per_pixel - exact).abs() < 1e-12 * exact);
     let beta = 1.0;
     let power = MetricsOptions { object: ObjectSpectrum::PowerLaw { beta }, ..MetricsOptions::default() };
-    let p = square_metrics(&one, None, snr0, 5e-6, &power, Symmetry::Radial, f64::INFINITY, 1e-10);
+    let p = square_metrics(
+        &one,
+        None,
+        snr0,
+        5e-6,
+        &power,
+        Quadrature { symmetry: Symmetry::Radial, cutoff: f64::INFINITY, tolerance: 1e-10 },
+    );
     let scale = metric::power_law_mean(beta);
     let slow = brute_force(200, &|x, y| 0.5 * (1.0 + snr0 * snr0 * (x * x + y * y).sqrt().powf(-beta) / scale).log2());
     eprintln!("power law β = 1: {:.10} bits, brute force {slow:.10}, flat {exact:.10}", p.capacity_bits_per_pixel);
@@ -104,7 +139,14 @@ fn disk_detectability_matches_brute_force() {
         let task = DiskTask { diameter_m: diameter_um * 1e-6, contrast };
         let options = MetricsOptions { task: Some(task), ..MetricsOptions::default() };
         let s = 0.25;
-        let fast = square_metrics(&gaussian(s), None, snr0, pitch, &options, Symmetry::Radial, f64::INFINITY, 1e-10);
+        let fast = square_metrics(
+            &gaussian(s),
+            None,
+            snr0,
+            pitch,
+            &options,
+            Quadrature { symmetry: Symmetry::Radial, cutoff: f64::INFINITY, tolerance: 1e-10 },
+        );
         let (d, d_perfect, energy) = fast.detectability.unwrap();
         let r = 0.5 * diameter_um * 1e-6 / pitch;
         let spectrum = |x: f64, y: f64| {
