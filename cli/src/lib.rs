@@ -26,6 +26,7 @@ mod comparecmd;
 mod design;
 mod measure;
 mod merge;
+mod nps;
 mod panel;
 mod plot;
 mod plotcmd;
@@ -70,6 +71,23 @@ pub enum Command {
         /// Print how the result is computed (engine, quadratures, error budget, work) after it.
         #[arg(long)]
         explain: bool,
+        /// Also the NEQ, the information capacity per pixel, the ideal lens of the same aperture
+        /// and the ASNR's ratio to it, and with --task the detectability d′ (docs/physics.md,
+        /// "Metrics beyond the ASNR").
+        #[arg(long)]
+        metrics: bool,
+        /// The object's power spectrum for the capacity: flat (default) or power-law:BETA (0 ≤ β < 2).
+        #[arg(long, value_name = "flat|power-law:BETA", requires = "metrics")]
+        object: Option<String>,
+        /// The object's contrast for the capacity (default 1: a white/black target).
+        #[arg(long, value_name = "C", requires = "metrics")]
+        contrast: Option<f64>,
+        /// A frame rate for the capacity per second, Hz.
+        #[arg(long, value_name = "HZ", requires = "metrics")]
+        frame_rate_hz: Option<f64>,
+        /// A detection task for d′: disk:DIAMETER_UM:CONTRAST (diameter in the image plane).
+        #[arg(long, value_name = "disk:DIAMETER_UM:CONTRAST", requires = "metrics")]
+        task: Option<String>,
     },
     /// The values of numeric scene keys that maximize the ASNR: one key by a scan and golden
     /// section, several by COBYLA from the best of a Halton start set.
@@ -159,6 +177,9 @@ pub enum Command {
     /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
     /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
     Measure(measure::MeasureArgs),
+    /// The noise power spectrum of flat frames, temporal and spatial (EMVA 1288), and with
+    /// --mtf-csv the measured NEQ and information capacity.
+    Nps(nps::NpsArgs),
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
@@ -223,15 +244,25 @@ pub enum Command {
 /// Runs the command line `cli`.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Evaluate { scene, set, json, tolerance, explain } => {
+        Command::Evaluate { scene, set, json, tolerance, explain, metrics, object, contrast, frame_rate_hz, task } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
+            let metrics_options = metrics
+                .then(|| report::metrics::options(object.as_deref(), contrast, frame_rate_hz, task.as_deref()))
+                .transpose()?;
             let set = with_tolerance(set, tolerance);
             let read = scene::load_with_warnings(scene.as_deref(), &set)?;
             warn(&read.warnings);
             let (loaded, meter) = (read.scene, read.radiance_meter);
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            let metrics = metrics_options
+                .map(|o| metric::metrics(&loaded, &result, &o))
+                .transpose()
+                .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             if json {
-                let report = output::json(&label, &loaded, &result)?;
+                let report = match &metrics {
+                    Some(m) => report::metrics::json(&label, &loaded, &result, m)?,
+                    None => output::json(&label, &loaded, &result)?,
+                };
                 // with --json, stdout stays one JSON document: the explanation is its `explain` field
                 let report = if explain {
                     with_explain(&report, &output::explain(&loaded, &result, meter.as_ref()))?
@@ -241,6 +272,9 @@ pub fn run(cli: Cli) -> Result<()> {
                 outln!("{report}");
             } else {
                 out!("{}", output::table(&label, &loaded, &result));
+                if let Some(m) = &metrics {
+                    out!("{}", report::metrics::table(m, &result));
+                }
                 for w in &result.warnings {
                     eprintln!("warning: {w}");
                 }
@@ -397,6 +431,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => comparecmd::run(args),
         Command::Measure(args) => measure::run(&args),
+        Command::Nps(args) => nps::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
         Command::Otf(args) => psf::run(&args, psf::Kind::Otf),

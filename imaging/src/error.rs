@@ -103,6 +103,24 @@ pub enum Error {
     /// The scene could not be evaluated.
     #[error(transparent)]
     Scene(#[from] metric::Error),
+    /// Frames too small for a noise power spectrum.
+    #[error("{}: {width} × {height} pixels; a noise power spectrum needs frames of at least {min} × {min}", path.display())]
+    TooSmall {
+        /// The first frame.
+        path: PathBuf,
+        /// Its width.
+        width: usize,
+        /// Its height.
+        height: usize,
+        /// The least side accepted.
+        min: usize,
+    },
+    /// A measured NEQ or capacity that the data do not define.
+    #[error("noise power spectrum: {message}")]
+    Measurement {
+        /// Why, with the values.
+        message: String,
+    },
     /// A characterization series that cannot be fitted.
     #[error("camera characterization: {message}")]
     Characterization {

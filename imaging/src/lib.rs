@@ -9,6 +9,9 @@
 //!   Fig. S6–S8, EMVA 1288): STF and PTC log-log slopes with their standard errors, with and
 //!   without the capped black subtracted, the conversion gain K, read noise and saturation.
 //!
+//! - [`nps`](mod@nps): the noise power spectrum of flat frames, temporal and spatial parts
+//!   (EMVA 1288), and the measured NEQ and information capacity from it and an MTF;
+//!
 //! - [`target`](mod@target): test objects, a procedural USAF-1951 target or a user's PNG, and the
 //!   measured modulation of a bar set;
 //! - [`render`](mod@render): the forward model of the paper's Fig. 4 (object → photoelectrons →
@@ -21,6 +24,7 @@ pub mod characterize;
 pub mod error;
 pub mod frames;
 pub mod measure;
+pub mod nps;
 pub mod render;
 pub mod target;
 
@@ -28,5 +32,6 @@ pub use characterize::{Characterization, Fit, Level, characterize, fit_line, fit
 pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack, write_png};
 pub use measure::{Measurement, Region, measure};
+pub use nps::{MeasuredMetrics, Nps, measured_metrics, nps};
 pub use render::{Rendering, Transfer, render, transfer};
 pub use target::{Polarity, Target};

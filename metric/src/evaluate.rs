@@ -1027,7 +1027,7 @@ fn fraunhofer(scene: &Scene, poly: &Polychromatic<'_>, mean_wavelength: f64) -> 
 /// into the detected spectrum, handed to the optics as that part's spectrum beside its relative
 /// orders ([`optics::Part`]), so that the rows cost what a spectrum table's do (exact moments,
 /// no spectral panel cut at each row); otherwise no parts.
-struct Folded {
+pub(crate) struct Folded {
     factored: Option<Factored>,
 }
 
@@ -1047,7 +1047,7 @@ struct SignalIntegrals {
 }
 
 impl Folded {
-    fn of(lens: &dyn LensModel, detected: &Spectrum) -> Folded {
+    pub(crate) fn of(lens: &dyn LensModel, detected: &Spectrum) -> Folded {
         Folded {
             factored: lens.factored_efficiency().map(|f| Factored {
                 transmission: f.transmission,
@@ -1061,7 +1061,7 @@ impl Folded {
     }
 
     /// The parts to hand to the optics (none without tables).
-    fn parts(&self) -> Vec<optics::Part<'_>> {
+    pub(crate) fn parts(&self) -> Vec<optics::Part<'_>> {
         self.factored.as_ref().map_or_else(Vec::new, |f| {
             f.parts.iter().map(|(lens, detected)| optics::Part { lens: &**lens, detected }).collect()
         })

@@ -39,6 +39,7 @@
 
 mod evaluate;
 mod illumination;
+mod metrics;
 mod scene;
 
 pub use evaluate::{
@@ -46,6 +47,10 @@ pub use evaluate::{
     Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
 pub use illumination::{IlluminationReport, RelativeIllumination};
+pub use metrics::{
+    Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, Quadrature, SquareMetrics,
+    Symmetry, jinc, metrics, power_law_mean, square_metrics,
+};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

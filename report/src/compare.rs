@@ -91,6 +91,12 @@ pub struct DesignReport {
     pub best_asnr: f64,
     /// Whether the best range is at an end of the grid.
     pub best_at_bound: bool,
+    /// Mean NEQ to Nyquist at the scene band, quanta per pixel (`metric::metrics`).
+    pub mean_neq: f64,
+    /// Information capacity at the scene band, bits per pixel (flat object, contrast 1).
+    pub capacity_bits_per_pixel: f64,
+    /// The ASNR over that of the ideal lens of the same aperture.
+    pub ideal_lens_ratio: f64,
     /// Rank by ASNR at the scene band (1 = best).
     pub rank: usize,
     /// Rank by ASNR at each design's best band.
@@ -125,6 +131,20 @@ pub struct Report {
     pub ranking: Vec<String>,
     /// Design names by ASNR at their best band, best first.
     pub ranking_at_best: Vec<String>,
+    /// Design names by each other metric at the scene band, best first: `mean_neq`,
+    /// `capacity_bits_per_pixel`, `ideal_lens_ratio`.
+    pub rankings: Vec<MetricRanking>,
+}
+
+/// The designs ranked by one metric.
+#[derive(Clone, Debug, Serialize)]
+pub struct MetricRanking {
+    /// The metric, as the design's field names it.
+    pub metric: &'static str,
+    /// Design names, best first.
+    pub ranking: Vec<String>,
+    /// Whether this ranking differs from the ASNR's at the scene band.
+    pub differs: bool,
 }
 
 /// A design at the scene band: its evaluation, the glare-free and glare-inclusive ASNR, and its
@@ -300,6 +320,8 @@ fn compute(
     for (i, (d, scene_result)) in base.designs.iter().zip(at_scene).enumerate() {
         let (r, free, inclusive, twin) = scene_result?;
         let (best, curve) = &bests[i];
+        let options = metric::MetricsOptions { points: 2, ..metric::MetricsOptions::default() };
+        let m = metric::metrics(&d.scene, &r, &options).map_err(|e| anyhow::anyhow!("design {}: {e}", d.name))?;
         let channels = searches
             .iter()
             .zip(&bests)
@@ -327,6 +349,9 @@ fn compute(
             best_range_nm: best.range_nm,
             best_asnr: best.asnr,
             best_at_bound: best.at_bound,
+            mean_neq: m.mean_neq,
+            capacity_bits_per_pixel: m.capacity_bits_per_pixel,
+            ideal_lens_ratio: m.ideal_lens.ratio,
             rank: 0,
             rank_at_best: 0,
             channels,
@@ -342,6 +367,9 @@ fn compute(
     };
     let ranking = order(&|d| d.asnr);
     let ranking_at_best = order(&|d| d.best_asnr);
+    let by_neq = order(&|d| d.mean_neq);
+    let by_capacity = order(&|d| d.capacity_bits_per_pixel);
+    let by_ratio = order(&|d| d.ideal_lens_ratio);
     for (place, &i) in ranking.iter().enumerate() {
         designs[i].rank = place + 1;
     }
@@ -349,6 +377,10 @@ fn compute(
         designs[i].rank_at_best = place + 1;
     }
     let names = |idx: &[usize]| idx.iter().map(|&i| designs[i].name.clone()).collect::<Vec<_>>();
+    let rankings = [("mean_neq", by_neq), ("capacity_bits_per_pixel", by_capacity), ("ideal_lens_ratio", by_ratio)]
+        .into_iter()
+        .map(|(metric, idx)| MetricRanking { metric, differs: idx != ranking, ranking: names(&idx) })
+        .collect();
     let (ranking, ranking_at_best) = (names(&ranking), names(&ranking_at_best));
     Ok(Report {
         scene: base.label.clone(),
@@ -365,6 +397,7 @@ fn compute(
         designs,
         ranking,
         ranking_at_best,
+        rankings,
     })
 }
 
@@ -498,6 +531,18 @@ pub fn table(r: &Report) -> String {
     } else {
         let _ = writeln!(s, "At each design's best band the ranking is the same.");
     }
+    for m in &r.rankings {
+        let what = match m.metric {
+            "mean_neq" => "mean NEQ",
+            "capacity_bits_per_pixel" => "information capacity",
+            _ => "ASNR / ideal lens",
+        };
+        if m.differs {
+            let _ = writeln!(s, "By {what} the ranking differs: {}", numbered(&m.ranking));
+        } else {
+            let _ = writeln!(s, "By {what} the ranking is the same.");
+        }
+    }
     let noted: Vec<&DesignReport> = r.designs.iter().filter(|d| !d.notes.is_empty()).collect();
     if !noted.is_empty() {
         let _ = writeln!(s, "\nNotes");
@@ -586,6 +631,9 @@ mod tests {
             best_range_nm: 33.0,
             best_asnr: 10.6,
             best_at_bound: false,
+            mean_neq: 100.0,
+            capacity_bits_per_pixel: 2.5,
+            ideal_lens_ratio: 0.2,
             rank: 2 - index,
             rank_at_best: 2 - index,
             channels: Vec::new(),
@@ -606,6 +654,7 @@ mod tests {
             designs: vec![design(0, "plain", &[]), design(1, "F/2.5, \"reduced\"", &["a, b", "line\nbreak"])],
             ranking: Vec::new(),
             ranking_at_best: Vec::new(),
+            rankings: Vec::new(),
         };
         let text = csv(&report).unwrap();
         assert!(text.starts_with("index,name,kind,asnr,"), "{text}");

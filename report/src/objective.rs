@@ -12,7 +12,7 @@ use scene::Source;
 use scene::sweep::assignment;
 
 /// The merit a design search maximizes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Objective {
     /// The scene's ASNR (paper eq. 1, with the scene's options).
@@ -26,10 +26,15 @@ pub enum Objective {
     /// The lowest ASNR over a multiplexed lens's channels, the spectrum centred at each channel's
     /// wavelength (as `asnr compare` does per channel).
     WorstChannel,
+    /// The Shannon information capacity per pixel, bits (`metric::metrics`: a flat object of
+    /// contrast 1, Fellgett–Linfoot over the Nyquist square).
+    Capacity,
+    /// The ideal observer's detectability d′ of a disk (`metric::metrics`).
+    Detectability(metric::DiskTask),
 }
 
 /// The objectives as `--objective` takes them.
-pub const OBJECTIVES: &str = "asnr (the scene's ASNR), asnr_glare (the glare-inclusive ASNR, SI eq. S14), fov_mean (the mean over the scene's [[fields]]) or worst_channel (the lowest over a multiplexed lens's channels)";
+pub const OBJECTIVES: &str = "asnr (the scene's ASNR), asnr_glare (the glare-inclusive ASNR, SI eq. S14), fov_mean (the mean over the scene's [[fields]]) worst_channel (the lowest over a multiplexed lens's channels), capacity (the information capacity per pixel, bits, of a flat object of contrast 1) or detectability:disk:DIAMETER_UM:CONTRAST (an ideal observer's d′ of that disk)";
 
 impl Objective {
     /// Parses an `--objective` name.
@@ -39,7 +44,14 @@ impl Objective {
             "asnr_glare" => Objective::AsnrGlare,
             "fov_mean" => Objective::FovMean,
             "worst_channel" => Objective::WorstChannel,
-            other => bail!("--objective {other}: expected {OBJECTIVES}"),
+            "capacity" => Objective::Capacity,
+            "detectability" => bail!(
+                "--objective detectability: name the task, detectability:disk:DIAMETER_UM:CONTRAST (e.g. detectability:disk:20:0.05)"
+            ),
+            other => match other.strip_prefix("detectability:") {
+                Some(task) => Objective::Detectability(crate::metrics::parse_task(task)?),
+                None => bail!("--objective {other}: expected {OBJECTIVES}"),
+            },
         })
     }
 
@@ -50,6 +62,8 @@ impl Objective {
             Objective::AsnrGlare => "asnr_glare",
             Objective::FovMean => "fov_mean",
             Objective::WorstChannel => "worst_channel",
+            Objective::Capacity => "capacity",
+            Objective::Detectability(_) => "detectability",
         }
     }
 
@@ -60,6 +74,8 @@ impl Objective {
             Objective::AsnrGlare => "glare-inclusive ASNR (SI eq. S14)",
             Objective::FovMean => "field-of-view mean ASNR",
             Objective::WorstChannel => "worst-channel ASNR",
+            Objective::Capacity => "information capacity (bits/pixel)",
+            Objective::Detectability(_) => "detectability d′",
         }
     }
 }
@@ -99,7 +115,7 @@ impl Target {
         let own = match objective {
             Objective::AsnrGlare => Some("options.glare"),
             Objective::WorstChannel => Some("spectrum.center_nm"),
-            Objective::Asnr | Objective::FovMean => None,
+            Objective::Asnr | Objective::FovMean | Objective::Capacity | Objective::Detectability(_) => None,
         };
         if let Some(own) = own
             && (sets(&overrides, own) || keys.iter().any(|k| k == own))
@@ -149,6 +165,7 @@ impl Target {
         };
         match self.objective {
             Objective::Asnr | Objective::FovMean => self.evaluate(&set),
+            Objective::Capacity | Objective::Detectability(_) => self.metric(&set),
             Objective::AsnrGlare => {
                 set.push(GLARE_INCLUDED.to_owned());
                 self.evaluate(&set)
@@ -167,6 +184,23 @@ impl Target {
             }
         }
         .with_context(at)
+    }
+
+    /// The capacity or d′ of the scene with `set` (`metric::metrics` on its evaluation).
+    fn metric(&self, set: &[String]) -> Result<Value> {
+        let built = scene::build_from(&self.source, set)?;
+        let r = metric::evaluate(&built).map_err(|e| anyhow!("{}: {e}", self.source.label()))?;
+        let task = match self.objective {
+            Objective::Detectability(task) => Some(task),
+            _ => None,
+        };
+        let options = metric::MetricsOptions { task, points: 2, ..metric::MetricsOptions::default() };
+        let m = metric::metrics(&built, &r, &options).map_err(|e| anyhow!("{}: {e}", self.source.label()))?;
+        let value = match &m.detectability {
+            Some(d) => d.d_prime,
+            None => m.capacity_bits_per_pixel,
+        };
+        Ok(Value { value, fraunhofer_valid: r.fraunhofer.valid })
     }
 
     fn evaluate(&self, set: &[String]) -> Result<Value> {
@@ -226,6 +260,18 @@ pub fn number_at(source: &Source, overrides: &[String], key: &str) -> Result<f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The metric objectives by name; detectability without its task is refused with the form.
+    #[test]
+    fn metric_objectives_parse() {
+        assert_eq!(Objective::parse("capacity").unwrap(), Objective::Capacity);
+        match Objective::parse("detectability:disk:20:0.05").unwrap() {
+            Objective::Detectability(t) => assert!((t.diameter_m - 20e-6).abs() < 1e-18 && t.contrast == 0.05),
+            other => panic!("{other:?}"),
+        }
+        let e = Objective::parse("detectability").unwrap_err().to_string();
+        assert!(e.contains("detectability:disk:DIAMETER_UM:CONTRAST"), "{e}");
+    }
 
     #[test]
     fn objectives_parse_and_refuse_unknown_names() {

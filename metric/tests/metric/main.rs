@@ -623,6 +623,7 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
 mod factored;
 mod fraunhofer;
 mod line;
+mod metrics;
 mod properties;
 mod robust;
 
