@@ -689,7 +689,10 @@ pub fn maximize_many_gradient(
         determination: Determination::default(),
     };
     optimum.determination = determination(ranges, &optimum.history, best, optimum.search.xtol);
-    optimum.determination.weak_direction = weak_direction(&found.inverse_curvature, found.value);
+    // only where the pairs span the keys: elsewhere L-BFGS's curvature is its scaling, a guess
+    if found.pairs >= d {
+        optimum.determination.weak_direction = weak_direction(&found.inverse_curvature, found.value);
+    }
     let tol = optimum.bound_tolerance();
     optimum.at_bound = ranges
         .iter()
@@ -1210,6 +1213,89 @@ mod tests {
             e.to_string().contains("--max-evaluations 21: expected more than the 20 points of the start set"),
             "{e}"
         );
+    }
+
+    /// The gradient search on a concave quadratic in 20 keys (more than COBYLA's 16), its
+    /// maximum inside the box but for two keys cut off by a bound: the optimum to 2.5e-5 of each
+    /// range (the projected gradient's tolerance, 1e-7 of the objective), the two at their bounds and flagged, the projected gradient small, the gradient
+    /// reported per unit of each key, the near-equal points bracketing it; a flat direction (one
+    /// key the objective ignores) is reported as ill-determined by the near-equal points' spread.
+    #[test]
+    fn the_gradient_search_finds_a_bounded_optimum_in_twenty_keys() {
+        let d = 20;
+        let centre: Vec<f64> = (0..d).map(|i| if i < 2 { 3.0 } else { 0.1 * i as f64 - 0.5 }).collect();
+        let weight: Vec<f64> = (0..d).map(|i| 1.0 + 0.25 * i as f64).collect();
+        let f =
+            |x: &[f64]| 1000.0 - x.iter().zip(&centre).zip(&weight).map(|((x, c), w)| w * (x - c).powi(2)).sum::<f64>();
+        let grad = |x: &[f64]| -> Vec<f64> {
+            x.iter().zip(&centre).zip(&weight).map(|((x, c), w)| -2.0 * w * (x - c)).collect()
+        };
+        let r = ranges(&vec![(-2.0, 2.0); d]);
+        let mut with_gradient =
+            |x: &[f64]| Ok((crate::objective::Value { value: f(x), fraunhofer_valid: true }, grad(x)));
+        let o = maximize_many_gradient(&r, &SEARCH, None, &|x: &[f64]| value(f(x)), &mut with_gradient, &()).unwrap();
+        let best = &o.best().values;
+        for (i, (x, c)) in best.iter().zip(&centre).enumerate() {
+            let want = c.clamp(-2.0, 2.0);
+            assert!((x - want).abs() < 1e-4, "key {i}: {x} vs {want} ({})", o.stopped);
+            assert_eq!(o.at_bound[i], i < 2, "key {i}");
+        }
+        assert!(o.converged && o.method == METHOD_GRADIENT, "{}", o.stopped);
+        let (g, projected) = o.gradient.clone().unwrap();
+        // the projected gradient below GRADIENT_GTOL of the objective (1e-4 per range here)
+        assert!((g[0] - 2.0).abs() < 1e-3 && projected < 1e-4, "{g:?} {projected}");
+        assert!(o.history.len() < 400, "{} evaluations", o.history.len());
+        // the near-equal points (within 1e-4 of 1000: 0.1) bracket the optimum; the keys at a
+        // bound are pinned there
+        for (i, [lo, hi]) in o.determination.spread.iter().enumerate() {
+            assert!(*lo <= best[i] && best[i] <= *hi, "key {i}");
+            assert_eq!(o.determination.ill_determined[i], i >= 2 && hi - lo > 10.0 * SEARCH.xtol * 4.0, "key {i}");
+        }
+        let text = many_report(
+            "toy",
+            crate::objective::Objective::Asnr,
+            &crate::objective::Value { value: 1.0, fraunhofer_valid: true },
+            &o,
+        );
+        assert!(text.contains("projected L-BFGS") && text.contains("gradient at the optimum"), "{text}");
+
+        // a ridge: near-equal points (within 1e-4 of the best) spread along the second key
+        let r = ranges(&[(0.0, 1.0), (0.0, 1.0)]);
+        let point =
+            |x: f64, y: f64, v: f64| Evaluated { values: vec![x, y], asnr: v, fraunhofer_valid: true, stage: "local" };
+        let history =
+            vec![point(0.3, 0.2, 0.99995), point(0.3, 0.5, 1.0), point(0.3001, 0.8, 0.99992), point(0.6, 0.5, 0.9)];
+        let d = determination(&r, &history, 1, 1e-3);
+        assert_eq!((d.points, d.ill_determined.clone()), (3, vec![false, true]), "{d:?}");
+        assert_eq!(d.spread[1], [0.2, 0.8]);
+        let o = ManyOptimum {
+            ranges: r,
+            history,
+            best: 1,
+            best_start: 1,
+            at_bound: vec![false, false],
+            gradient: Some((vec![0.0, 0.0], 0.0)),
+            determination: d,
+            ..o
+        };
+        let text = determination_report(&o);
+        assert!(
+            text.contains("ILL-DETERMINED") && text.contains("k1 from 0.2000 to 0.8000") && text.contains("flat ridge"),
+            "{text}"
+        );
+        let json: serde_json::Value = serde_json::from_str(
+            &many_json(
+                "toy",
+                crate::objective::Objective::Asnr,
+                &crate::objective::Value { value: 1.0, fraunhofer_valid: true },
+                &o,
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        assert_eq!(json["determination"]["ill_determined"], true, "{json}");
+        assert_eq!(json["determination"]["ill_determined_keys"][0], "k1", "{json}");
+        assert!(json["gradient"]["k0"].as_f64().unwrap().abs() < 1e-3, "{json}");
     }
 
     /// The same search twice gives the same points, bit for bit.

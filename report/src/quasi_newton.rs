@@ -103,6 +103,9 @@ pub struct Found {
     /// L-BFGS's `H`, row by row; exact along the directions the search moved (for a quadratic),
     /// its scaling `γ = s·y/y·y` elsewhere.
     pub inverse_curvature: Vec<Vec<f64>>,
+    /// Curvature pairs behind `inverse_curvature` (fewer than the keys: it is a guess in the
+    /// directions the search did not move).
+    pub pairs: usize,
 }
 
 /// The clamp of `x` into `[lo, hi]` key by key.
@@ -296,7 +299,8 @@ pub fn maximize(
             memory.apply(&e, &all)
         })
         .collect();
-    Ok(Found { x, value, gradient, projected_gradient: projected, history, iterations, stop, inverse_curvature })
+    let pairs = memory.pairs.len();
+    Ok(Found { x, value, gradient, projected_gradient: projected, history, iterations, stop, inverse_curvature, pairs })
 }
 
 #[cfg(test)]
