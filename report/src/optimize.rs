@@ -613,6 +613,9 @@ pub const METHOD_GRADIENT: &str =
 /// start's value.
 pub const GRADIENT_GTOL: f64 = 1e-7;
 
+/// The objective and its gradient (per unit of each key) at a point of a search.
+pub type ValueAndGradient<'a> = dyn FnMut(&[f64]) -> Result<(crate::objective::Value, Vec<f64>)> + 'a;
+
 /// Maximizes over the box of `ranges` by a bounded quasi-Newton search: `value` at the start
 /// set ([`Search::starts`] Halton points and `initial`, in parallel, as [`maximize_many_from`]),
 /// then projected L-BFGS ([`crate::quasi_newton::maximize`]) from the best of them with
@@ -628,7 +631,7 @@ pub fn maximize_many_gradient(
     search: &Search,
     initial: Option<&[f64]>,
     value: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
-    value_and_gradient: &mut dyn FnMut(&[f64]) -> Result<(crate::objective::Value, Vec<f64>)>,
+    value_and_gradient: &mut ValueAndGradient<'_>,
     progress: &dyn crate::Progress,
 ) -> Result<ManyOptimum> {
     let d = ranges.len();

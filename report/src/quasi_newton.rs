@@ -18,6 +18,10 @@
 
 use anyhow::Result;
 
+/// What the objective returns at a point: its value and gradient, or `None` where it refuses to
+/// score the point.
+pub type Scored = Option<(f64, Vec<f64>)>;
+
 /// The sufficient-increase constant `c₁` of the Armijo condition.
 const ARMIJO: f64 = 1e-4;
 
@@ -192,7 +196,7 @@ pub fn maximize(
     hi: &[f64],
     x0: &[f64],
     settings: &Settings,
-    mut f: impl FnMut(&[f64]) -> Result<Option<(f64, Vec<f64>)>>,
+    mut f: impl FnMut(&[f64]) -> Result<Scored>,
 ) -> Result<Found> {
     let n = x0.len();
     anyhow::ensure!(
@@ -203,7 +207,7 @@ pub fn maximize(
     );
     anyhow::ensure!(lo.iter().zip(hi).all(|(l, h)| l < h), "internal error: a bound with LO ≥ HI");
     let mut history: Vec<(Vec<f64>, Option<f64>)> = Vec::new();
-    let mut evaluate = |x: &[f64], history: &mut Vec<(Vec<f64>, Option<f64>)>| -> Result<Option<(f64, Vec<f64>)>> {
+    let mut evaluate = |x: &[f64], history: &mut Vec<(Vec<f64>, Option<f64>)>| -> Result<Scored> {
         let v = f(x)?.filter(|(v, g)| v.is_finite() && g.len() == n && g.iter().all(|g| g.is_finite()));
         history.push((x.to_vec(), v.as_ref().map(|(v, _)| *v)));
         Ok(v)
@@ -308,7 +312,7 @@ mod tests {
     use super::*;
 
     /// A concave quadratic `f = −½ (x − c)ᵀ A (x − c)` with its gradient.
-    fn quadratic(a: Vec<Vec<f64>>, c: Vec<f64>) -> impl Fn(&[f64]) -> Result<Option<(f64, Vec<f64>)>> {
+    fn quadratic(a: Vec<Vec<f64>>, c: Vec<f64>) -> impl Fn(&[f64]) -> Result<Scored> {
         move |x: &[f64]| {
             let r: Vec<f64> = x.iter().zip(&c).map(|(x, c)| x - c).collect();
             let ar: Vec<f64> = a.iter().map(|row| dot(row, &r)).collect();
@@ -357,7 +361,7 @@ mod tests {
         // f = −(x0 − 2)² − (x1 − 0.3)² − (x0 − x1)²/2 on [−1, 1]²: x0 = 1 on its bound, then
         // ∂f/∂x1 = −2(x1 − 0.3) + (1 − x1) = 0 gives x1 = 1.6/3, and ∂f/∂x0 = 2 − (1 − x1) > 0
         // there pushes x0 out of the box (the KKT conditions of the bounded maximum)
-        let f = |x: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+        let f = |x: &[f64]| -> Result<Scored> {
             let v = -(x[0] - 2.0).powi(2) - (x[1] - 0.3).powi(2) - 0.5 * (x[0] - x[1]).powi(2);
             let g0 = -2.0 * (x[0] - 2.0) - (x[0] - x[1]);
             let g1 = -2.0 * (x[1] - 0.3) + (x[0] - x[1]);
@@ -383,7 +387,7 @@ mod tests {
     /// conditions (projected gradient small, the gradient pushing outward at every bound key).
     #[test]
     fn rosenbrock_in_ten_keys() {
-        let rosenbrock = |x: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+        let rosenbrock = |x: &[f64]| -> Result<Scored> {
             let n = x.len();
             let mut v = 0.0;
             let mut g = vec![0.0; n];
@@ -425,18 +429,18 @@ mod tests {
     #[test]
     fn refused_points_the_evaluation_limit_and_errors() {
         // the maximum at 0.8 lies beyond the refused region x > 0.6: the search ends near 0.6
-        let f = |x: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+        let f = |x: &[f64]| -> Result<Scored> {
             Ok((x[0] <= 0.6).then(|| (-(x[0] - 0.8).powi(2), vec![-2.0 * (x[0] - 0.8)])))
         };
         let found = maximize(&[0.0], &[1.0], &[0.1], &Settings::default(), f).unwrap();
         assert!(found.x[0] <= 0.6 && found.x[0] > 0.59, "{:?} {:?}", found.x, found.stop);
         assert!(found.history.iter().any(|(_, v)| v.is_none()));
         let few = Settings { max_evaluations: 3, ..Settings::default() };
-        let slow = |x: &[f64]| -> Result<Option<(f64, Vec<f64>)>> { Ok(Some((x[0], vec![1e-3]))) };
+        let slow = |x: &[f64]| -> Result<Scored> { Ok(Some((x[0], vec![1e-3]))) };
         let found = maximize(&[0.0], &[100.0], &[0.0], &few, slow).unwrap();
         assert_eq!(found.stop, Stop::Evaluations);
         assert!(!found.stop.converged() && found.history.len() == 3);
-        let bad = |x: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+        let bad = |x: &[f64]| -> Result<Scored> {
             if x[0] > 0.05 { anyhow::bail!("bad at {}", x[0]) } else { Ok(Some((x[0], vec![1.0]))) }
         };
         assert!(

@@ -227,11 +227,12 @@ fn two_piece_spline(y: [f64; 3]) -> impl Fn(f64) -> f64 {
     for col in 0..8 {
         let pivot = (col..8).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs())).unwrap();
         a.swap(col, pivot);
-        for r in 0..8 {
+        let pivot_row = a[col];
+        for (r, row) in a.iter_mut().enumerate() {
             if r != col {
-                let w = a[r][col] / a[col][col];
-                for k in col..9 {
-                    a[r][k] -= w * a[col][k];
+                let w = row[col] / pivot_row[col];
+                for (x, p) in row.iter_mut().zip(&pivot_row).skip(col) {
+                    *x -= w * p;
                 }
             }
         }
