@@ -338,9 +338,20 @@ pub struct ManyOptimum {
 pub const NEAR_EQUAL: f64 = 1e-4;
 
 /// A key is ill-determined when its near-equal points span more than this many times the
-/// search's step tolerance (`--xtol` of its range): the optimum's value of the key is not known
-/// to the resolution the search reports it with.
+/// search's step tolerance (`--xtol` of its range), and more than [`ILL_DETERMINED_FRACTION`]
+/// of its range: the optimum's value of the key is not known to the resolution the search
+/// reports it with.
 pub const ILL_DETERMINED_XTOLS: f64 = 10.0;
+
+/// The smallest span (a fraction of a key's range) that makes a key ill-determined: near a
+/// smooth maximum the points within [`NEAR_EQUAL`] of it lie within about √NEAR_EQUAL = 1 % of
+/// the peak's width, which is no ridge.
+pub const ILL_DETERMINED_FRACTION: f64 = 0.01;
+
+/// The span (a fraction of a key's range) beyond which a key is ill-determined.
+pub fn ill_determined_span(xtol: f64) -> f64 {
+    (ILL_DETERMINED_XTOLS * xtol).max(ILL_DETERMINED_FRACTION)
+}
 
 /// How well a search's evaluations determine its optimum (issue of a flat ridge): the points
 /// whose objective is within [`NEAR_EQUAL`] of the best, the span of each key over them, and
@@ -353,7 +364,7 @@ pub struct Determination {
     pub points: usize,
     /// Per key: the smallest and largest value over the near-equal points.
     pub spread: Vec<[f64; 2]>,
-    /// Per key: whether its spread exceeds [`ILL_DETERMINED_XTOLS`] × xtol of its range.
+    /// Per key: whether its spread exceeds [`ill_determined_span`] of its range.
     pub ill_determined: Vec<bool>,
     /// The gradient search only: the direction (per unit of each key, unit length in ranges) in
     /// which the objective is flattest by the L-BFGS curvature, and how far along it (in units
@@ -375,7 +386,7 @@ pub fn determination(ranges: &[Range], history: &[Evaluated], best: usize, xtol:
         })
         .collect();
     let ill_determined =
-        spread.iter().zip(ranges).map(|([lo, hi], r)| hi - lo > ILL_DETERMINED_XTOLS * xtol * (r.hi - r.lo)).collect();
+        spread.iter().zip(ranges).map(|([lo, hi], r)| hi - lo > ill_determined_span(xtol) * (r.hi - r.lo)).collect();
     Determination { near_equal: NEAR_EQUAL, points: near.len(), spread, ill_determined, weak_direction: None }
 }
 
@@ -900,8 +911,10 @@ pub fn determination_report(o: &ManyOptimum) -> String {
     if loose.is_empty() {
         let _ = writeln!(
             s,
-            "well determined: the {} points within {:.0e} of the best objective span at most {ILL_DETERMINED_XTOLS} × --xtol of each range",
-            d.points, d.near_equal
+            "well determined: the {} points within {:.0e} of the best objective span at most {} % of each key's range",
+            d.points,
+            d.near_equal,
+            100.0 * ill_determined_span(o.search.xtol)
         );
     } else {
         let _ = writeln!(
@@ -1252,7 +1265,11 @@ mod tests {
         // bound are pinned there
         for (i, [lo, hi]) in o.determination.spread.iter().enumerate() {
             assert!(*lo <= best[i] && best[i] <= *hi, "key {i}");
-            assert_eq!(o.determination.ill_determined[i], i >= 2 && hi - lo > 10.0 * SEARCH.xtol * 4.0, "key {i}");
+            assert_eq!(
+                o.determination.ill_determined[i],
+                i >= 2 && hi - lo > ill_determined_span(SEARCH.xtol) * 4.0,
+                "key {i}"
+            );
         }
         let text = many_report(
             "toy",
