@@ -23,7 +23,8 @@
 //!   divided out; the tables come from text: [`parse_zemax_fft_mtf`] (Zemax FFT MTF listings in
 //!   UTF-16, UTF-8 or Latin-1) with [`zemax_otf_table`], or [`mtf_table_from_rows`] (the rows of a long CSV, read by `scene`).
 //! - [`PhaseLens`]: a designer's lens given by its phase profile at λ0 (Zemax Binary 2
-//!   coefficients, [`binary2_profile`], or a radial table), with an explicit [`Dispersion`]
+//!   coefficients, [`binary2_profile`], or a radial table, plus a freeform spline of knots,
+//!   [`spline_profile`]), with an explicit [`Dispersion`]
 //!   (geometric phase, a diffractive kinoform of design order p, a fixed optical path), evaluated
 //!   against the exact reference sphere ([`optics::Pupil::Radial`]; off axis the oblique wave's
 //!   field aberrations).
@@ -80,7 +81,10 @@ pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use library::{AtomErrors, Library, LibraryLens};
-pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
+pub use phase::{
+    Dispersion, PhaseLens, SPLINE_MAX_KNOTS, SPLINE_MIN_KNOTS, WithZernike, binary2_profile, hyperbolic_binary2,
+    spline_profile,
+};
 pub use presets::{preset, preset_names};
 pub use psf::{
     PSF_BORDER_SAMPLES, PSF_CENTRE_TOLERANCE, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_NEGATIVE_MASS,

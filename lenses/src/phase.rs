@@ -64,7 +64,8 @@ pub struct PhaseLens {
     f_number: f64,
     focal_length: f64,
     design_wavelength: f64,
-    phase: Arc<RadialProfile>,
+    /// the phase at λ0 as a sum of profiles (a Binary 2 polynomial or a table, and a spline)
+    phase: Vec<Arc<RadialProfile>>,
     amplitude: Option<Arc<RadialProfile>>,
     sphere: Arc<RadialProfile>,
     dispersion: Dispersion,
@@ -118,7 +119,7 @@ impl PhaseLens {
             f_number,
             focal_length: focal_length_m,
             design_wavelength: design_wavelength_m,
-            phase,
+            phase: vec![phase],
             amplitude,
             sphere,
             dispersion,
@@ -135,6 +136,15 @@ impl PhaseLens {
         RadialPupil::new(None, vec![], zernike_noll_m.clone()).map_err(optics_error)?;
         self.zernike_noll_m = zernike_noll_m;
         Ok(self)
+    }
+
+    /// This lens with `profile` (radians at λ0 against `ρ = r/R`, as the phase of
+    /// [`PhaseLens::new`]) added to its phase, `what` added to how the profile was given: a
+    /// freeform spline ([`spline_profile`]) on top of a Binary 2 polynomial or a table.
+    pub fn with_added_phase(mut self, profile: Arc<RadialProfile>, what: &str) -> PhaseLens {
+        self.phase.push(profile);
+        self.source = format!("{} + {what}", self.source);
+        self
     }
 
     /// The family's name.
@@ -154,7 +164,7 @@ impl PhaseLens {
 
     /// The phase at λ0 (radians) at normalized radius `rho`.
     pub fn phase_at(&self, rho: f64) -> f64 {
-        self.phase.value(rho * rho)
+        self.phase.iter().map(|p| p.value(rho * rho)).sum()
     }
 
     /// `(m, efficiency, metres of path per radian of φ0)` of each order at `wavelength_m`.
@@ -189,7 +199,9 @@ impl PhaseLens {
     /// The pupil of one order: the phase term scaled to metres, the reference sphere, the
     /// amplitude, the Zernike terms, and off axis the oblique incidence.
     fn pupil(&self, path_per_radian: f64, field: Field) -> RadialPupil {
-        let terms = vec![(path_per_radian, self.phase.clone()), (1.0, self.sphere.clone())];
+        let mut terms: Vec<(f64, Arc<RadialProfile>)> =
+            self.phase.iter().map(|p| (path_per_radian, p.clone())).collect();
+        terms.push((1.0, self.sphere.clone()));
         // validated at construction: the terms are finite, the Zernike indices in range
         let pupil = RadialPupil::new(self.amplitude.clone(), terms, self.zernike_noll_m.clone()).unwrap_or_default();
         if field.is_on_axis() {
@@ -300,6 +312,55 @@ pub fn binary2_profile(
         poly.push(diffraction_order * a * power);
     }
     RadialProfile::even_polynomial(poly).map_err(optics_error)
+}
+
+/// The fewest knots of a [`spline_profile`]: the axis, one inside the aperture, the edge.
+pub const SPLINE_MIN_KNOTS: usize = 3;
+
+/// The most knots of a [`spline_profile`] (a freeform profile for a gradient search has tens).
+pub const SPLINE_MAX_KNOTS: usize = 1024;
+
+/// A freeform phase profile (`lens.phase_spline_rad`, docs/physics.md, "Designs given as data"):
+/// `knots_rad[i]` is the phase (radians at λ0) at `ρ_i = i/N`, `N + 1` knots equally spaced from
+/// the axis to the aperture's edge, read through the cubic spline of a phase table
+/// ([`RadialProfile::table`]: zero slope on the axis, as a radially symmetric profile has, and
+/// zero curvature at the edge, the natural end). At least [`SPLINE_MIN_KNOTS`], at most
+/// [`SPLINE_MAX_KNOTS`], every one finite.
+///
+/// The profile is linear in the knots (a spline's values solve a linear system whose right-hand
+/// side is the data): the profile of `knots` is `Σ knots[i] b_i(ρ)` with `b_i` the spline
+/// through the unit vector `e_i`, so a knot's derivative is the profile of `e_i`.
+///
+/// [`RadialProfile::table`] takes four knots or more; three (`ρ = 0, ½, 1`) are given to it with
+/// a fourth at `ρ = ¾` on the same spline, its value from the spline's two-piece solution (a
+/// spline stays the same spline when a knot is added on it: the added knot carries no jump).
+pub fn spline_profile(knots_rad: &[f64]) -> Result<RadialProfile, Error> {
+    let n = knots_rad.len();
+    check(
+        "phase_spline_rad knots",
+        n as f64,
+        (SPLINE_MIN_KNOTS..=SPLINE_MAX_KNOTS).contains(&n),
+        "3 to 1024 knots (the phase at equally spaced radii from the axis to the edge)",
+    )?;
+    for &v in knots_rad {
+        check("phase_spline_rad", v, true, "a finite phase in radians")?;
+    }
+    let (rho, values) = if n == 3 {
+        let [y0, y1, y2] = [knots_rad[0], knots_rad[1], knots_rad[2]];
+        // knots 0, h, 2h (h = ½), second derivatives m0, m1, m2 = 0 (natural end):
+        // zero slope at 0:  (h/3) m0 + (h/6) m1 = (y1 − y0)/h
+        // C² at h:          (h/6) m0 + (2h/3) m1 = (y2 − 2y1 + y0)/h
+        // so m1 = 12 (d1 − d0/2) / (7h); the piece on [h, 2h] at its middle ¾ is
+        // (y1 + y2)/2 − m1 h²/16 (the cubic spline's piece at a = b = ½, m2 = 0)
+        let h = 0.5;
+        let (d0, d1) = ((y1 - y0) / h, (y2 - 2.0 * y1 + y0) / h);
+        let m1 = 12.0 * (d1 - 0.5 * d0) / (7.0 * h);
+        (vec![0.0, 0.5, 0.75, 1.0], vec![y0, y1, 0.5 * (y1 + y2) - m1 * h * h / 16.0, y2])
+    } else {
+        let last = (n - 1) as f64;
+        ((0..n).map(|i| i as f64 / last).collect(), knots_rad.to_vec())
+    };
+    RadialProfile::table(rho, values).map_err(optics_error)
 }
 
 /// Any lens with Zernike terms `(Noll index, metres RMS)` added to every order's wavefront: an

@@ -11,6 +11,7 @@ pub mod metrics;
 pub mod objective;
 pub mod optimize;
 pub mod output;
+pub mod quasi_newton;
 pub mod tolerance;
 
 /// Progress of a long computation: its number of steps once known, then the steps as they are

@@ -42,6 +42,13 @@ pub fn parse_range(arg: &str, with_points: bool) -> Result<Range> {
             .filter(|v| v.is_finite())
             .with_context(|| format!("--over {arg}: {what} `{s}` is not a finite number"))
     };
+    let key = key.trim();
+    if key.is_empty() {
+        bail!("--over {arg}: no key before `=`; expected {form} with a dotted key, e.g. --over lens.f_number=2:4");
+    }
+    // one spelling per entry: lens.binary2[01] is lens.binary2[1]
+    let key = scene::canonical_key(key)
+        .with_context(|| format!("--over {arg}: `{key}` is not a dotted key or a list entry (e.g. lens.binary2[1])"))?;
     let (lo, hi) = (num(parts[0], "LO")?, num(parts[1], "HI")?);
     if lo >= hi {
         bail!("--over {arg}: LO = {lo} must be below HI = {hi}");
@@ -59,7 +66,7 @@ pub fn parse_range(arg: &str, with_points: bool) -> Result<Range> {
         } else {
             None
         };
-    Ok(Range { key: key.trim().to_owned(), lo, hi, points })
+    Ok(Range { key, lo, hi, points })
 }
 
 /// How [`maximize`] finds `best` (the JSON's `method`), to tell it from a sweep's best grid point
@@ -213,7 +220,8 @@ pub fn check_keys(what: &str, set: &[String], ranges: &[Range]) -> Result<()> {
         if ranges[..i].iter().any(|earlier| earlier.key == r.key) {
             anyhow::bail!("{what} {}: the key is given to {what} twice; give each key once", r.key);
         }
-        if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == r.key)) {
+        let same = |k: &str| scene::canonical_key(k).is_some_and(|k| k == r.key);
+        if let Some(s) = set.iter().find(|s| s.split_once('=').is_some_and(|(k, _)| same(k))) {
             let given =
                 if r.key == "options.tolerance" { format!("--set {s} or --tolerance") } else { format!("--set {s}") };
             anyhow::bail!(
@@ -233,8 +241,16 @@ pub const METHOD_MANY: &str = "COBYLA (Powell 1994, bounded, NLopt 2.7.1's) from
 /// The most keys one search varies (the Halton start set takes one prime base per key).
 pub const MAX_KEYS: usize = 16;
 
-/// The first [`MAX_KEYS`] primes: the bases of the Halton sequence, one per key.
-const PRIMES: [u64; MAX_KEYS] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53];
+/// The most keys the gradient search varies ([`maximize_many_gradient`]): a freeform profile of
+/// tens of terms or knots.
+pub const MAX_KEYS_GRADIENT: usize = 64;
+
+/// The first [`MAX_KEYS_GRADIENT`] primes: the bases of the Halton sequence, one per key.
+const PRIMES: [u64; MAX_KEYS_GRADIENT] = [
+    2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73, 79, 83, 89, 97, 101, 103, 107, 109,
+    113, 127, 131, 137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193, 197, 199, 211, 223, 227, 229, 233, 239,
+    241, 251, 257, 263, 269, 271, 277, 281, 283, 293, 307, 311,
+];
 
 /// Settings of a search over several keys.
 #[derive(Clone, Debug, PartialEq)]
@@ -308,6 +324,88 @@ pub struct ManyOptimum {
     pub at_bound: Vec<bool>,
     /// The settings.
     pub search: Search,
+    /// How the local search ran: [`METHOD_MANY`] or [`METHOD_GRADIENT`].
+    pub method: &'static str,
+    /// The gradient search only: the gradient at the best point (per unit of each key) and the
+    /// largest component of its projection on the box (per whole range of each key).
+    pub gradient: Option<(Vec<f64>, f64)>,
+    /// How well the data determine the optimum ([`determination`]).
+    pub determination: Determination,
+}
+
+/// Points whose objective is within this fraction of the best are near-equal: a difference the
+/// evaluations' own tolerance (10⁻⁴ of the mean MTF for the README's searches) can hide.
+pub const NEAR_EQUAL: f64 = 1e-4;
+
+/// A key is ill-determined when its near-equal points span more than this many times the
+/// search's step tolerance (`--xtol` of its range), and more than [`ILL_DETERMINED_FRACTION`]
+/// of its range: the optimum's value of the key is not known to the resolution the search
+/// reports it with.
+pub const ILL_DETERMINED_XTOLS: f64 = 10.0;
+
+/// The smallest span (a fraction of a key's range) that makes a key ill-determined: near a
+/// smooth maximum the points within [`NEAR_EQUAL`] of it lie within about √NEAR_EQUAL = 1 % of
+/// the peak's width, which is no ridge.
+pub const ILL_DETERMINED_FRACTION: f64 = 0.01;
+
+/// The span (a fraction of a key's range) beyond which a key is ill-determined.
+pub fn ill_determined_span(xtol: f64) -> f64 {
+    (ILL_DETERMINED_XTOLS * xtol).max(ILL_DETERMINED_FRACTION)
+}
+
+/// How well a search's evaluations determine its optimum (issue of a flat ridge): the points
+/// whose objective is within [`NEAR_EQUAL`] of the best, the span of each key over them, and
+/// for the gradient search the flattest direction of the curvature L-BFGS estimated.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Determination {
+    /// The fraction of the best objective within which points are near-equal.
+    pub near_equal: f64,
+    /// Near-equal points (the best among them).
+    pub points: usize,
+    /// Per key: the smallest and largest value over the near-equal points.
+    pub spread: Vec<[f64; 2]>,
+    /// Per key: whether its spread exceeds [`ill_determined_span`] of its range.
+    pub ill_determined: Vec<bool>,
+    /// The gradient search only: the direction (per unit of each key, unit length in ranges) in
+    /// which the objective is flattest by the L-BFGS curvature, and how far along it (in units
+    /// of the ranges) the objective falls by [`NEAR_EQUAL`] of itself.
+    pub weak_direction: Option<(Vec<f64>, f64)>,
+}
+
+/// The near-equal points of `history` around its best point `best` over `ranges` (module
+/// [`Determination`]).
+pub fn determination(ranges: &[Range], history: &[Evaluated], best: usize, xtol: f64) -> Determination {
+    let top = history[best].score();
+    let threshold = top - NEAR_EQUAL * top.abs();
+    let near: Vec<&Evaluated> = history.iter().filter(|e| e.score() >= threshold && e.score() > 0.0).collect();
+    let spread: Vec<[f64; 2]> = (0..ranges.len())
+        .map(|k| {
+            near.iter()
+                .map(|e| e.values[k])
+                .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(v), hi.max(v)])
+        })
+        .collect();
+    let ill_determined =
+        spread.iter().zip(ranges).map(|([lo, hi], r)| hi - lo > ill_determined_span(xtol) * (r.hi - r.lo)).collect();
+    Determination { near_equal: NEAR_EQUAL, points: near.len(), spread, ill_determined, weak_direction: None }
+}
+
+/// The flattest direction of the curvature whose inverse is `inverse` (rows, in the ranges'
+/// scaled coordinates): the eigenvector of its largest eigenvalue μ (the inverse curvature),
+/// and the distance `√(2 δ μ)` along it where a quadratic with that curvature falls by
+/// `δ = NEAR_EQUAL × |value|`.
+fn weak_direction(inverse: &[Vec<f64>], value: f64) -> Option<(Vec<f64>, f64)> {
+    let n = inverse.len();
+    let m = nalgebra::DMatrix::from_fn(n, n, |i, j| 0.5 * (inverse[i][j] + inverse[j][i]));
+    let eigen = m.symmetric_eigen();
+    let (k, mu) = eigen.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    if !(mu.is_finite() && *mu > 0.0) {
+        return None;
+    }
+    let v: Vec<f64> = eigen.eigenvectors.column(k).iter().copied().collect();
+    // a sign convention: the largest component positive
+    let sign = v.iter().copied().max_by(|a, b| a.abs().total_cmp(&b.abs())).map_or(1.0, f64::signum);
+    Some((v.iter().map(|x| sign * x).collect(), (2.0 * NEAR_EQUAL * value.abs() * mu).sqrt()))
 }
 
 impl ManyOptimum {
@@ -349,23 +447,26 @@ pub fn maximize_many(
     maximize_many_from(ranges, search, None, f, progress)
 }
 
-/// [`maximize_many`] with `initial`, the design's own values of the keys, among the start points
-/// when it lies inside the bounds (first, as stage `scene`): the search then never ends below
-/// the design it started from.
-pub fn maximize_many_from(
+/// The start set of a search over several keys: the scene's own values `initial` when inside
+/// the bounds (stage `scene`), then [`Search::starts`] points of the Halton sequence (default 10
+/// per key), evaluated in parallel and collected in order; the search's settings with the start
+/// count filled in. Refused: no keys, more than `max_keys`, an evaluation limit the start set
+/// fills.
+fn start_set(
     ranges: &[Range],
     search: &Search,
     initial: Option<&[f64]>,
+    max_keys: usize,
     f: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
     progress: &dyn crate::Progress,
-) -> Result<ManyOptimum> {
+) -> Result<(Search, Vec<Evaluated>)> {
     use rayon::prelude::*;
     let d = ranges.len();
-    if d == 0 || d > MAX_KEYS {
-        bail!("--over: {d} keys; expected 1 to {MAX_KEYS}");
+    if d == 0 || d > max_keys {
+        bail!("--over: {d} keys; expected 1 to {max_keys}");
     }
     let starts = if search.starts == 0 { Search::default_starts(d) } else { search.starts };
-    if search.max_evaluations <= starts + 1 {
+    if search.max_evaluations <= starts.saturating_add(1) {
         bail!(
             "--max-evaluations {}: expected more than the {starts} points of the start set (--starts) and the scene's own",
             search.max_evaluations
@@ -391,11 +492,30 @@ pub fn maximize_many_from(
             v
         })
         .collect();
-    let mut history = Vec::with_capacity(search.max_evaluations);
+    let mut history = Vec::with_capacity(start_points.len());
     for ((x, v), stage) in start_points.into_iter().zip(evaluated).zip(stages) {
         let v = v.inspect_err(|_| progress.finish())?;
         history.push(Evaluated { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage });
     }
+    Ok((search, history))
+}
+
+/// [`maximize_many`] with `initial`, the design's own values of the keys, among the start points
+/// when it lies inside the bounds (first, as stage `scene`): the search then never ends below
+/// the design it started from.
+pub fn maximize_many_from(
+    ranges: &[Range],
+    search: &Search,
+    initial: Option<&[f64]>,
+    f: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
+    progress: &dyn crate::Progress,
+) -> Result<ManyOptimum> {
+    let d = ranges.len();
+    let (search, history) = start_set(ranges, search, initial, MAX_KEYS, f, progress)?;
+    let to_key = |u: &[f64]| -> Vec<f64> {
+        ranges.iter().zip(u).map(|(r, &u)| (r.lo + u.clamp(0.0, 1.0) * (r.hi - r.lo)).clamp(r.lo, r.hi)).collect()
+    };
+    let starts = search.starts;
     let first_local = history.len();
     let best_of = |h: &[Evaluated]| {
         h.iter().enumerate().fold(0, |best, (i, e)| if e.score() > h[best].score() { i } else { best })
@@ -481,7 +601,112 @@ pub fn maximize_many_from(
         converged,
         at_bound: Vec::new(),
         search,
+        method: METHOD_MANY,
+        gradient: None,
+        determination: Determination::default(),
     };
+    optimum.determination = determination(ranges, &optimum.history, best, optimum.search.xtol);
+    let tol = optimum.bound_tolerance();
+    optimum.at_bound = ranges
+        .iter()
+        .zip(&optimum.history[best].values)
+        .map(|(r, &x)| x - r.lo <= tol * (r.hi - r.lo) || r.hi - x <= tol * (r.hi - r.lo))
+        .collect();
+    Ok(optimum)
+}
+
+/// How [`maximize_many_gradient`] finds `best` (the JSON's `method`).
+pub const METHOD_GRADIENT: &str =
+    "projected L-BFGS (bounded quasi-Newton, Armijo along the projected path) from the best of a Halton start set";
+
+/// The gradient search's stopping tolerance on the projected gradient, relative to the
+/// objective: its largest component (per whole range of a key) below this fraction of the best
+/// start's value.
+pub const GRADIENT_GTOL: f64 = 1e-7;
+
+/// The objective and its gradient (per unit of each key) at a point of a search.
+pub type ValueAndGradient<'a> = dyn FnMut(&[f64]) -> Result<(crate::objective::Value, Vec<f64>)> + 'a;
+
+/// Maximizes over the box of `ranges` by a bounded quasi-Newton search: `value` at the start
+/// set ([`Search::starts`] Halton points and `initial`, in parallel, as [`maximize_many_from`]),
+/// then projected L-BFGS ([`crate::quasi_newton::maximize`]) from the best of them with
+/// `value_and_gradient` (the objective and its gradient per unit of each key), in coordinates
+/// scaled to [0, 1] per key, until the projected gradient is below [`GRADIENT_GTOL`] of the
+/// objective, a step below `xtol` of each range, an iteration's rise below the objective's
+/// rounding, or the evaluations reach `max_evaluations` (each gradient evaluation counts once).
+/// A point where the Fraunhofer model fails is stepped back from. Up to [`MAX_KEYS_GRADIENT`]
+/// keys. The result carries the gradient at the optimum, its projection's size, and the
+/// curvature's flattest direction ([`Determination::weak_direction`]).
+pub fn maximize_many_gradient(
+    ranges: &[Range],
+    search: &Search,
+    initial: Option<&[f64]>,
+    value: &(dyn Fn(&[f64]) -> Result<crate::objective::Value> + Sync),
+    value_and_gradient: &mut ValueAndGradient<'_>,
+    progress: &dyn crate::Progress,
+) -> Result<ManyOptimum> {
+    let d = ranges.len();
+    let (search, mut history) = start_set(ranges, search, initial, MAX_KEYS_GRADIENT, value, progress)?;
+    let best_of = |h: &[Evaluated]| {
+        h.iter().enumerate().fold(0, |best, (i, e)| if e.score() > h[best].score() { i } else { best })
+    };
+    let best_start = best_of(&history);
+    if history[best_start].score() <= 0.0 {
+        progress.finish();
+        bail!(
+            "no start point has a positive ASNR inside the Fraunhofer model (SI eq. S15): {} of {} points fail it; narrow the --over ranges to designs the model holds for",
+            history.iter().filter(|e| !e.fraunhofer_valid).count(),
+            history.len()
+        );
+    }
+    let width: Vec<f64> = ranges.iter().map(|r| r.hi - r.lo).collect();
+    let to_key = |u: &[f64]| -> Vec<f64> {
+        ranges.iter().zip(u).map(|(r, &u)| (r.lo + u.clamp(0.0, 1.0) * (r.hi - r.lo)).clamp(r.lo, r.hi)).collect()
+    };
+    let u0: Vec<f64> =
+        ranges.iter().zip(&history[best_start].values).map(|(r, &x)| (x - r.lo) / (r.hi - r.lo)).collect();
+    let scale = history[best_start].score().abs().max(f64::MIN_POSITIVE);
+    let settings = crate::quasi_newton::Settings {
+        gtol: GRADIENT_GTOL * scale,
+        xtol: search.xtol,
+        ftol: 1e-12,
+        first_step: 0.1,
+        max_evaluations: search.max_evaluations - history.len(),
+        ..crate::quasi_newton::Settings::default()
+    };
+    let mut local: Vec<Evaluated> = Vec::new();
+    let found = crate::quasi_newton::maximize(&vec![0.0; d], &vec![1.0; d], &u0, &settings, |u| {
+        let x = to_key(u);
+        let (v, g) = value_and_gradient(&x)?;
+        progress.advance(1);
+        let e = Evaluated { values: x, asnr: v.value, fraunhofer_valid: v.fraunhofer_valid, stage: "local" };
+        let score = (e.fraunhofer_valid && e.asnr.is_finite()).then_some(e.asnr);
+        local.push(e);
+        Ok(score.map(|s| (s, g.iter().zip(&width).map(|(g, w)| g * w).collect())))
+    });
+    progress.finish();
+    let found = found?;
+    history.extend(local);
+    let best = best_of(&history);
+    let gradient: Vec<f64> = found.gradient.iter().zip(&width).map(|(g, w)| g / w).collect();
+    let mut optimum = ManyOptimum {
+        ranges: ranges.to_vec(),
+        history,
+        best,
+        best_start,
+        stopped: found.stop.describe().to_owned(),
+        converged: found.stop.converged(),
+        at_bound: Vec::new(),
+        search,
+        method: METHOD_GRADIENT,
+        gradient: Some((gradient, found.projected_gradient)),
+        determination: Determination::default(),
+    };
+    optimum.determination = determination(ranges, &optimum.history, best, optimum.search.xtol);
+    // only where the pairs span the keys: elsewhere L-BFGS's curvature is its scaling, a guess
+    if found.pairs >= d {
+        optimum.determination.weak_direction = weak_direction(&found.inverse_curvature, found.value);
+    }
     let tol = optimum.bound_tolerance();
     optimum.at_bound = ranges
         .iter()
@@ -535,13 +760,30 @@ pub fn many_json(
         ranges: KeyMap<'a, [f64; 2]>,
         xtol: f64,
         bound_tolerance: f64,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        gradient: Option<KeyMap<'a, f64>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        projected_gradient: Option<f64>,
+        determination: DeterminationJson<'a>,
         history: &'a [Evaluated],
+    }
+    #[derive(Serialize)]
+    struct DeterminationJson<'a> {
+        ill_determined: bool,
+        near_equal: f64,
+        near_equal_points: usize,
+        spread: KeyMap<'a, [f64; 2]>,
+        ill_determined_keys: Vec<&'a str>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        weak_direction: Option<KeyMap<'a, f64>>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        weak_direction_reach: Option<f64>,
     }
     let best = o.best();
     let json = Json {
         scene: label,
         objective: objective.name(),
-        method: METHOD_MANY,
+        method: o.method,
         best: KeyMap(&o.ranges, best.values.clone()),
         asnr: best.asnr,
         fraunhofer_valid: best.fraunhofer_valid,
@@ -559,6 +801,23 @@ pub fn many_json(
         ranges: KeyMap(&o.ranges, o.ranges.iter().map(|r| [r.lo, r.hi]).collect()),
         xtol: o.search.xtol,
         bound_tolerance: o.bound_tolerance(),
+        gradient: o.gradient.as_ref().map(|(g, _)| KeyMap(&o.ranges, g.clone())),
+        projected_gradient: o.gradient.as_ref().map(|(_, p)| *p),
+        determination: DeterminationJson {
+            ill_determined: o.determination.ill_determined.iter().any(|b| *b),
+            near_equal: o.determination.near_equal,
+            near_equal_points: o.determination.points,
+            spread: KeyMap(&o.ranges, o.determination.spread.clone()),
+            ill_determined_keys: o
+                .ranges
+                .iter()
+                .zip(&o.determination.ill_determined)
+                .filter(|(_, b)| **b)
+                .map(|(r, _)| r.key.as_str())
+                .collect(),
+            weak_direction: o.determination.weak_direction.as_ref().map(|(v, _)| KeyMap(&o.ranges, v.clone())),
+            weak_direction_reach: o.determination.weak_direction.as_ref().map(|(_, r)| *r),
+        },
         history: &o.history,
     };
     Ok(serde_json::to_string_pretty(&json)?)
@@ -579,9 +838,10 @@ pub fn many_report(
     let best = o.best();
     let _ = writeln!(
         s,
-        "{label}: the {} maximized over {} keys ({METHOD_MANY}, {} start points)",
+        "{label}: the {} maximized over {} keys ({}, {} start points)",
         objective.label(),
         o.ranges.len(),
+        o.method,
         o.search.starts
     );
     let width = o.ranges.iter().map(|r| r.key.chars().count()).max().unwrap_or(3).max(3);
@@ -620,6 +880,60 @@ pub fn many_report(
     );
     let _ =
         writeln!(s, "{} of {} evaluations outside the Fraunhofer model ({PENALTY})", o.penalized(), o.history.len());
+    if let Some((gradient, projected)) = &o.gradient {
+        let list: Vec<String> = o.ranges.iter().zip(gradient).map(|(r, g)| format!("{} {g:.3e}", r.key)).collect();
+        let _ = writeln!(
+            s,
+            "gradient at the optimum (per unit of each key): {}; its projection on the box, largest component per whole range: {projected:.2e}",
+            list.join(", ")
+        );
+    }
+    s.push_str(&determination_report(o));
+    s
+}
+
+/// The text on how well the optimum is determined: the near-equal points' spread of each
+/// ill-determined key, and the gradient search's flattest direction.
+pub fn determination_report(o: &ManyOptimum) -> String {
+    use std::fmt::Write as _;
+    let d = &o.determination;
+    let mut s = String::new();
+    let loose: Vec<String> = o
+        .ranges
+        .iter()
+        .zip(&d.spread)
+        .zip(&d.ill_determined)
+        .filter(|(_, b)| **b)
+        .map(|((r, [lo, hi]), _)| {
+            format!("{} from {lo:.4} to {hi:.4} ({:.1} % of its range)", r.key, 100.0 * (hi - lo) / (r.hi - r.lo))
+        })
+        .collect();
+    if loose.is_empty() {
+        let _ = writeln!(
+            s,
+            "well determined: the {} points within {:.0e} of the best objective span at most {} % of each key's range",
+            d.points,
+            d.near_equal,
+            100.0 * ill_determined_span(o.search.xtol)
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "ILL-DETERMINED: {} of the evaluated points are within {:.0e} of the best objective (a difference the evaluations' tolerance can hide), and they span {}: the optimum lies on a flat ridge, and these keys' best values mean nothing finer than that span",
+            d.points,
+            d.near_equal,
+            loose.join(", ")
+        );
+    }
+    if let Some((v, reach)) = &d.weak_direction {
+        let list: Vec<String> = o.ranges.iter().zip(v).map(|(r, x)| format!("{x:+.3} {}", r.key)).collect();
+        let _ = writeln!(
+            s,
+            "flattest direction of the L-BFGS curvature (in units of each key's range): {}; along it the objective falls by {:.0e} of itself only {reach:.3} of the ranges away",
+            list.join(", "),
+            d.near_equal
+        );
+    }
     s
 }
 
@@ -915,6 +1229,93 @@ mod tests {
             e.to_string().contains("--max-evaluations 21: expected more than the 20 points of the start set"),
             "{e}"
         );
+    }
+
+    /// The gradient search on a concave quadratic in 20 keys (more than COBYLA's 16), its
+    /// maximum inside the box but for two keys cut off by a bound: the optimum to 2.5e-5 of each
+    /// range (the projected gradient's tolerance, 1e-7 of the objective), the two at their bounds and flagged, the projected gradient small, the gradient
+    /// reported per unit of each key, the near-equal points bracketing it; a flat direction (one
+    /// key the objective ignores) is reported as ill-determined by the near-equal points' spread.
+    #[test]
+    fn the_gradient_search_finds_a_bounded_optimum_in_twenty_keys() {
+        let d = 20;
+        let centre: Vec<f64> = (0..d).map(|i| if i < 2 { 3.0 } else { 0.1 * i as f64 - 0.5 }).collect();
+        let weight: Vec<f64> = (0..d).map(|i| 1.0 + 0.25 * i as f64).collect();
+        let f =
+            |x: &[f64]| 1000.0 - x.iter().zip(&centre).zip(&weight).map(|((x, c), w)| w * (x - c).powi(2)).sum::<f64>();
+        let grad = |x: &[f64]| -> Vec<f64> {
+            x.iter().zip(&centre).zip(&weight).map(|((x, c), w)| -2.0 * w * (x - c)).collect()
+        };
+        let r = ranges(&vec![(-2.0, 2.0); d]);
+        let mut with_gradient =
+            |x: &[f64]| Ok((crate::objective::Value { value: f(x), fraunhofer_valid: true }, grad(x)));
+        let o = maximize_many_gradient(&r, &SEARCH, None, &|x: &[f64]| value(f(x)), &mut with_gradient, &()).unwrap();
+        let best = &o.best().values;
+        for (i, (x, c)) in best.iter().zip(&centre).enumerate() {
+            let want = c.clamp(-2.0, 2.0);
+            assert!((x - want).abs() < 1e-4, "key {i}: {x} vs {want} ({})", o.stopped);
+            assert_eq!(o.at_bound[i], i < 2, "key {i}");
+        }
+        assert!(o.converged && o.method == METHOD_GRADIENT, "{}", o.stopped);
+        let (g, projected) = o.gradient.clone().unwrap();
+        // the projected gradient below GRADIENT_GTOL of the objective (1e-4 per range here)
+        assert!((g[0] - 2.0).abs() < 1e-3 && projected < 1e-4, "{g:?} {projected}");
+        assert!(o.history.len() < 400, "{} evaluations", o.history.len());
+        // the near-equal points (within 1e-4 of 1000: 0.1) bracket the optimum; the keys at a
+        // bound are pinned there
+        for (i, [lo, hi]) in o.determination.spread.iter().enumerate() {
+            assert!(*lo <= best[i] && best[i] <= *hi, "key {i}");
+            assert_eq!(
+                o.determination.ill_determined[i],
+                i >= 2 && hi - lo > ill_determined_span(SEARCH.xtol) * 4.0,
+                "key {i}"
+            );
+        }
+        let text = many_report(
+            "toy",
+            crate::objective::Objective::Asnr,
+            &crate::objective::Value { value: 1.0, fraunhofer_valid: true },
+            &o,
+        );
+        assert!(text.contains("projected L-BFGS") && text.contains("gradient at the optimum"), "{text}");
+
+        // a ridge: near-equal points (within 1e-4 of the best) spread along the second key
+        let r = ranges(&[(0.0, 1.0), (0.0, 1.0)]);
+        let point =
+            |x: f64, y: f64, v: f64| Evaluated { values: vec![x, y], asnr: v, fraunhofer_valid: true, stage: "local" };
+        let history =
+            vec![point(0.3, 0.2, 0.99995), point(0.3, 0.5, 1.0), point(0.3001, 0.8, 0.99992), point(0.6, 0.5, 0.9)];
+        let d = determination(&r, &history, 1, 1e-3);
+        assert_eq!((d.points, d.ill_determined.clone()), (3, vec![false, true]), "{d:?}");
+        assert_eq!(d.spread[1], [0.2, 0.8]);
+        let o = ManyOptimum {
+            ranges: r,
+            history,
+            best: 1,
+            best_start: 1,
+            at_bound: vec![false, false],
+            gradient: Some((vec![0.0, 0.0], 0.0)),
+            determination: d,
+            ..o
+        };
+        let text = determination_report(&o);
+        assert!(
+            text.contains("ILL-DETERMINED") && text.contains("k1 from 0.2000 to 0.8000") && text.contains("flat ridge"),
+            "{text}"
+        );
+        let json: serde_json::Value = serde_json::from_str(
+            &many_json(
+                "toy",
+                crate::objective::Objective::Asnr,
+                &crate::objective::Value { value: 1.0, fraunhofer_valid: true },
+                &o,
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        assert_eq!(json["determination"]["ill_determined"], true, "{json}");
+        assert_eq!(json["determination"]["ill_determined_keys"][0], "k1", "{json}");
+        assert!(json["gradient"]["k0"].as_f64().unwrap().abs() < 1e-3, "{json}");
     }
 
     /// The same search twice gives the same points, bit for bit.

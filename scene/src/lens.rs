@@ -104,6 +104,7 @@ pub(crate) struct RawLens {
     pub norm_radius_mm: Option<f64>,
     pub diffraction_order: Option<f64>,
     pub phase_csv: Option<String>,
+    pub phase_spline_rad: Option<Vec<f64>>,
     pub dispersion: Option<String>,
     pub zernike_noll_rms_um: Option<Vec<f64>>,
     pub library: Option<String>,
@@ -206,6 +207,7 @@ impl Model {
                 "norm_radius_mm",
                 "diffraction_order",
                 "phase_csv",
+                "phase_spline_rad",
                 "dispersion",
                 "design_order",
                 "glass",
@@ -258,7 +260,7 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 47] {
+    fn given(&self) -> [(&'static str, bool); 48] {
         [
             ("zemax", self.zemax.is_some()),
             ("zemax_surface", self.zemax_surface.is_some()),
@@ -274,6 +276,7 @@ impl RawLens {
             ("norm_radius_mm", self.norm_radius_mm.is_some()),
             ("diffraction_order", self.diffraction_order.is_some()),
             ("phase_csv", self.phase_csv.is_some()),
+            ("phase_spline_rad", self.phase_spline_rad.is_some()),
             ("dispersion", self.dispersion.is_some()),
             ("zernike_noll_rms_um", self.zernike_noll_rms_um.is_some()),
             ("design_wavelength_nm", self.design_wavelength_nm.is_some()),
@@ -1247,21 +1250,50 @@ fn phase_lens(
     info: &mut LensInfo,
 ) -> Result<lenses::PhaseLens, Error> {
     let radius = 0.5 * f0_m / f_number;
-    let (phase, amplitude, source) = match (&l.binary2, &l.phase_csv) {
-        (Some(_), Some(_)) => {
+    let spline = match &l.phase_spline_rad {
+        Some(knots) => {
+            for (i, &v) in knots.iter().enumerate() {
+                o.number(&format!("lens.phase_spline_rad[{i}]"), v, v.is_finite(), "a finite phase in radians")?;
+            }
+            if !(lenses::SPLINE_MIN_KNOTS..=lenses::SPLINE_MAX_KNOTS).contains(&knots.len()) {
+                return Err(o.bad(
+                    "lens.phase_spline_rad",
+                    format!("{} knots", knots.len()),
+                    "3 to 1024 knots: the phase (radians at λ0) at equally spaced radii from the axis to the aperture's edge",
+                ));
+            }
+            let profile = lenses::spline_profile(knots).map_err(|e| o.domain("lens.phase_spline_rad", "[lens]", e))?;
+            Some((Arc::new(profile), format!("a spline of {} knots", knots.len())))
+        }
+        None => None,
+    };
+    let (phase, amplitude, source) = match (&l.binary2, &l.phase_csv, &spline) {
+        (None, None, Some((profile, what))) => {
+            for key in ["norm_radius_mm", "diffraction_order"] {
+                if l.given().iter().any(|(k, g)| *k == key && *g) {
+                    return Err(o.bad(
+                        &format!("lens.{key}"),
+                        "given",
+                        "only with lens.binary2 (lens.phase_spline_rad is in radians at ρ = r/R)",
+                    ));
+                }
+            }
+            (profile.clone(), None, what.clone())
+        }
+        (Some(_), Some(_), _) => {
             return Err(o.conflict(
                 "lens.phase_csv",
                 "lens.binary2 and lens.phase_csv both given: give one profile (Zemax Binary 2 coefficients, or a radial table)".to_owned(),
             ));
         }
-        (None, None) => {
+        (None, None, None) => {
             return Err(o.bad(
                 "lens.binary2",
                 "nothing",
-                "the phase at λ0: binary2 = [A1, A2, …] (radians, Zemax Binary 2 with norm_radius_mm), or phase_csv = \"file.csv\" (columns r_mm, phase_rad, optional amplitude)",
+                "the phase at λ0: binary2 = [A1, A2, …] (radians, Zemax Binary 2 with norm_radius_mm), phase_csv = \"file.csv\" (columns r_mm, phase_rad, optional amplitude), or phase_spline_rad = [φ0, …, φN] (radians at N + 1 equally spaced radii, axis to edge)",
             ));
         }
-        (Some(coefficients), None) => {
+        (Some(coefficients), None, _) => {
             o.forbid("lens.phase_csv", &l.phase_csv, "lens.binary2")?;
             for (i, &a) in coefficients.iter().enumerate() {
                 o.number(&format!("lens.binary2[{i}]"), a, a.is_finite(), "a finite coefficient in radians")?;
@@ -1323,7 +1355,7 @@ fn phase_lens(
                 ),
             )
         }
-        (None, Some(file)) => {
+        (None, Some(file), _) => {
             for key in ["norm_radius_mm", "diffraction_order"] {
                 if l.given().iter().any(|(k, g)| *k == key && *g) {
                     return Err(o.bad(
@@ -1379,14 +1411,25 @@ fn phase_lens(
         other => return Err(o.bad("lens.dispersion", quoted(other), dispersions)),
     };
     let transmission = transmission(o, &efficiency)?;
+    let alone = l.binary2.is_none() && l.phase_csv.is_none();
     let mut lens =
         lenses::PhaseLens::new(f_number, f0_m, l0, phase, amplitude, dispersion, efficiency, transmission, source)
             .map_err(|e| o.domain("lens", "[lens]", e))?;
+    let spline_what = spline.as_ref().map(|(_, what)| what.clone());
+    if let Some((profile, what)) = spline
+        && !alone
+    {
+        lens = lens.with_added_phase(profile, &what);
+    }
     // the profile alone, then with the Zernike terms: each refusal names what made it
-    let mut count = l.binary2.as_ref().map_or(RADIAL_TABLE_TERMS, Vec::len);
-    match &l.binary2 {
-        Some(b) => radial_work(&lens, l0, count, o, "lens.binary2", &format!("[{} coefficients]", b.len()))?,
-        None => radial_work(&lens, l0, count, o, "lens.phase_csv", &quoted(l.phase_csv.as_deref().unwrap_or("")))?,
+    let mut count = l.binary2.as_ref().map_or(0, Vec::len)
+        + if l.phase_csv.is_some() { RADIAL_TABLE_TERMS } else { 0 }
+        + if spline_what.is_some() { RADIAL_TABLE_TERMS } else { 0 };
+    match (&l.binary2, &l.phase_csv, &spline_what) {
+        (Some(b), _, _) => radial_work(&lens, l0, count, o, "lens.binary2", &format!("[{} coefficients]", b.len()))?,
+        (None, Some(file), _) => radial_work(&lens, l0, count, o, "lens.phase_csv", &quoted(file))?,
+        (None, None, Some(what)) => radial_work(&lens, l0, count, o, "lens.phase_spline_rad", what)?,
+        (None, None, None) => {}
     }
     if let Some(terms) = zernike(l, o)? {
         info.notes.push(zernike_note(&terms));
@@ -1552,6 +1595,73 @@ mod tests {
     fn build_text(text: String, overrides: &[&str]) -> Result<metric::Scene, crate::Error> {
         let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
         crate::build_from(&crate::Source::from_text(text, "test.toml", std::env::temp_dir()), &overrides)
+    }
+
+    /// A freeform spline profile (`lens.phase_spline_rad`) alone is the lens of its knots; on a
+    /// Binary 2 profile it adds to it (the knots of zero change nothing); a knot is a `--set`
+    /// key; too few knots, a knot not finite, Binary 2's own keys without Binary 2, and a knot
+    /// past the list's end are refused naming the key.
+    #[test]
+    fn phase_spline_keys_and_errors() {
+        let hyperbolic = "binary2 = [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]";
+        let geometric = "dispersion = \"geometric-phase\"";
+        let mean = |text: String, set: &[&str]| metric::evaluate(&build_text(text, set).unwrap()).unwrap().mean_mtf;
+        let plain = mean(phase_scene(&format!("{hyperbolic}\n{geometric}")), &[]);
+        let zero = phase_scene(&format!("{hyperbolic}\nphase_spline_rad = [0.0, 0.0, 0.0, 0.0, 0.0]\n{geometric}"));
+        assert_eq!(mean(zero.clone(), &[]), plain);
+        let scene = build_text(zero.clone(), &[]).unwrap();
+        assert!(scene.lens().describe().contains("+ a spline of 5 knots"), "{}", scene.lens().describe());
+        let bent = mean(zero.clone(), &["lens.phase_spline_rad[2]=3"]);
+        assert!(bent < 0.95 * plain, "3 rad at mid-radius is an aberration: {plain} -> {bent}");
+        // the hyperbola sampled at 33 knots is the Binary 2 lens to 1e-4 of the mean MTF
+        let (f0, radius, k) = (3.36e-3, 0.672e-3, std::f64::consts::TAU / 800e-9);
+        let knots: Vec<String> = (0..33)
+            .map(|i| {
+                let r = radius * i as f64 / 32.0;
+                format!("{}", -k * ((r * r + f0 * f0).sqrt() - f0))
+            })
+            .collect();
+        let alone = mean(phase_scene(&format!("phase_spline_rad = [{}]\n{geometric}", knots.join(", "))), &[]);
+        assert!((alone - plain).abs() < 1e-4, "{alone} vs {plain}");
+        let err = |text: String, set: &[&str]| build_text(text, set).unwrap_err().to_string();
+        let e = err(phase_scene(&format!("phase_spline_rad = [0.0, 1.0]\n{geometric}")), &[]);
+        assert!(e.contains("lens.phase_spline_rad") && e.contains("2 knots") && e.contains("3 to 1024"), "{e}");
+        let e = err(zero.clone(), &["lens.phase_spline_rad[1]=nan"]);
+        assert!(e.contains("lens.phase_spline_rad[1]"), "{e}");
+        let e = err(phase_scene(&format!("phase_spline_rad = [0.0, 1.0, 0.0]\nnorm_radius_mm = 1\n{geometric}")), &[]);
+        assert!(e.contains("lens.norm_radius_mm") && e.contains("only with lens.binary2"), "{e}");
+        let e = err(zero, &["lens.phase_spline_rad[5]=1"]);
+        assert!(e.contains("another knot moves every one"), "{e}");
+    }
+
+    /// `--set` of a numeric list's entry past its end extends the list with zeros (a Binary 2
+    /// profile gains a term: A5 = 0 is the same lens, A5 ≠ 0 another); an index spelled with a
+    /// leading zero is the same key (given twice it is refused); a list of tables does not grow.
+    #[test]
+    fn set_past_a_lists_end_extends_it_with_zeros() {
+        let hyperbolic = "binary2 = [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]";
+        let text = phase_scene(&format!("{hyperbolic}\ndispersion = \"geometric-phase\""));
+        let mean = |set: &[&str]| metric::evaluate(&build_text(text.clone(), set).unwrap()).unwrap().mean_mtf;
+        let plain = mean(&[]);
+        assert_eq!(mean(&["lens.binary2[5]=0"]), plain);
+        let source = crate::Source::from_text(text.clone(), "test.toml", std::env::temp_dir());
+        let resolved = crate::resolved_toml(&source, &["lens.binary2[5]=0.5".to_owned()]).unwrap().toml;
+        assert!(
+            resolved.contains("0.002638937829015425, 0, 0.5]") || resolved.contains("0.002638937829015425, 0.0, 0.5]"),
+            "{resolved}"
+        );
+        assert!(mean(&["lens.binary2[5]=0.5"]) != plain);
+        assert_eq!(mean(&["lens.binary2[01]=0"]), mean(&["lens.binary2[1]=0"]));
+        let e = build_text(text.clone(), &["lens.binary2[1]=0", "lens.binary2[01]=1"]).unwrap_err().to_string();
+        assert!(e.contains("lens.binary2[1] is given twice"), "{e}");
+        let e = build_text(text.clone(), &["lens.binary2[5000]=1"]).unwrap_err().to_string();
+        assert!(e.contains("up to 1024 entries"), "{e}");
+        assert_eq!(crate::canonical_key("lens.binary2[03]").as_deref(), Some("lens.binary2[3]"));
+        assert_eq!(crate::canonical_key(" designs[ 1 ].lens.f_number").as_deref(), Some("designs[1].lens.f_number"));
+        assert_eq!(crate::canonical_key("lens.binary2[x]"), None);
+        let fields = format!("{text}\n[[fields]]\nx_deg = 0\n");
+        let e = build_text(fields, &["fields[3].x_deg=1"]).unwrap_err().to_string();
+        assert!(e.contains("has 1 entries"), "{e}");
     }
 
     /// The hyperbolic Binary 2 metalens loads, `--set lens.binary2[1]` reaches one coefficient,

@@ -902,6 +902,24 @@ fn apply_override(table: &mut toml::Table, arg: &str, check_only: bool) -> Resul
             )));
         };
         let len = list.len();
+        let number = |v: &toml::Value| matches!(v, toml::Value::Float(_) | toml::Value::Integer(_));
+        if index >= len && last && number(&parsed) && list.iter().all(number) && !list.is_empty() {
+            // a numeric list grows with zeros up to the entry set (a Binary 2 profile gains terms)
+            if name == "phase_spline_rad" {
+                return Err(refuse(format!(
+                    "`{}`: `{name}` has {len} knots ({name}[0] to {name}[{}]); the knots are equally spaced from the axis to the edge, so another knot moves every one: give the whole list (--set lens.{name}=[…])",
+                    shorten(&here),
+                    len - 1
+                )));
+            }
+            if index >= MAX_EXTENDED_LIST {
+                return Err(refuse(format!(
+                    "`{}`: {index} is past the end of `{name}` ({len} entries); a list grows with zeros up to {MAX_EXTENDED_LIST} entries at most",
+                    shorten(&here)
+                )));
+            }
+            list.resize(index + 1, toml::Value::Float(0.0));
+        }
         let Some(item) = list.get_mut(index) else {
             let range = if len == 0 { "none".to_owned() } else { format!("{name}[0] to {name}[{}]", len - 1) };
             return Err(refuse(format!("`{}`: `{name}` has {len} entries ({range})", shorten(&here))));
@@ -912,7 +930,28 @@ fn apply_override(table: &mut toml::Table, arg: &str, check_only: bool) -> Resul
         }
         cursor = item.as_table_mut().ok_or_else(|| refuse(format!("`{}` is a value, not a table", shorten(&here))))?;
     }
-    Ok((key.to_owned(), arg.to_owned()))
+    let canonical = canonical_key(key).unwrap_or_else(|| key.to_owned());
+    Ok((canonical, arg.to_owned()))
+}
+
+/// The most entries a numeric list may grow to when `--set` (or `--over`) gives an entry past
+/// its end: the list is extended with zeros up to that entry.
+pub const MAX_EXTENDED_LIST: usize = 1024;
+
+/// The canonical spelling of a dotted key: each list index a plain decimal, 0-based, without
+/// leading zeros or spaces (`lens.binary2[03]` and `lens.binary2[ 3 ]` are `lens.binary2[3]`),
+/// so that one entry is one key whichever way it is written; `None` where a segment is not
+/// `name` or `name[index]`.
+pub fn canonical_key(key: &str) -> Option<String> {
+    let parts = key
+        .trim()
+        .split('.')
+        .map(|part| {
+            let (name, index) = split_index(part)?;
+            Some(index.map_or_else(|| name.to_owned(), |i| format!("{name}[{i}]")))
+        })
+        .collect::<Option<Vec<String>>>()?;
+    Some(parts.join("."))
 }
 
 /// `name` or `name[index]` of one segment of a dotted key; `None` for a malformed index.

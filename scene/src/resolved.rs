@@ -270,6 +270,9 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             if let Some(file) = &l.phase_csv {
                 out.string("phase_csv", &path(o, "lens.phase_csv", file)?);
             }
+            if let Some(knots) = &l.phase_spline_rad {
+                out.value("phase_spline_rad", &list(knots));
+            }
             let dispersion = l.dispersion.as_deref().unwrap_or_default();
             out.string("dispersion", dispersion);
             if dispersion == "diffractive" {
