@@ -145,7 +145,7 @@ impl OtfTable {
     }
 
     /// This table with the sampled line spread functions it was computed from (pitch `pitch_m`
-    /// > 0, per wavelength one or more lines whose transforms are averaged, each line's samples
+    /// above 0, per wavelength one or more lines whose transforms are averaged, each line's samples
     /// summing to 1 within 1e-9): from then on [`value`](OtfTable::value) below the last
     /// frequency is the exact transform of those samples at the frequency asked, not the
     /// linear interpolation between the tabulated frequencies (which stay, for the callers that
