@@ -98,7 +98,10 @@ pub struct PsfReport {
 ///   `OTF(ν) = Σ p(x) e^{−2πi ν·(x − c)}`. Along the two axes that is the 1-D transform of the
 ///   line spread function (the projection-slice theorem: the 2-D transform on the line `ν_y = 0`
 ///   is the 1-D transform of `Σ_y p`; tested against the direct 2-D sum), zero padded to
-///   [`PSF_PADDING`]` × max(nx, ny)` points, from 0 to the stack's Nyquist frequency `1/(2p)`.
+///   [`PSF_PADDING`]` × max(nx, ny)` points, from 0 to the stack's Nyquist frequency `1/(2p)`;
+///   the table keeps the line spread functions ([`OtfTable::with_samples`]) and reads their
+///   exact transform at any other frequency (not the linear interpolation between the grid's).
+/// - The aliasing estimate [`PsfReport::aliasing`] is half the transform at `1/(2p)`.
 /// - The table holds the real part of the re-centred OTF (the even part of the PSF about its
 ///   centroid); the imaginary part (an asymmetric PSF: coma) is dropped and its largest value
 ///   reported ([`PsfReport::imaginary`]). Where the two curves differ by at most

@@ -565,7 +565,7 @@ pub(crate) fn psf_lens(
     }
     let shifts = report.centroids_m.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max);
     info.notes.push(format!(
-        "PSF stack {}: {shape} at {} µm, {}–{} nm; OTF to the stack's Nyquist {:.1} cycles/mm (transforms of {} points, zero padded ×{}), linear in λ between slices; centroid offsets up to {:.3} µm kept as lateral shifts",
+        "PSF stack {}: {shape} at {} µm, {}–{} nm; OTF to the stack's Nyquist {:.1} cycles/mm, the samples' exact transform at every frequency (tabulated on {} points, zero padded ×{}), linear in λ between slices; aliasing estimate {:.1e}; centroid offsets up to {:.3} µm kept as lateral shifts",
         crate::error::shorten(file),
         num(pitch),
         num(wavelengths[0]),
@@ -573,6 +573,7 @@ pub(crate) fn psf_lens(
         lens.nyquist() * 1e-3,
         report.transform_length,
         lenses::PSF_PADDING,
+        report.aliasing.0,
         shifts * 1e6
     ));
     info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, notices });
