@@ -18,15 +18,23 @@ const DESIGN_FIT_DEGREE: usize = 10;
 
 /// A meta-atom library: the complex transmission `t(p, λ)` of one atom (in its periodic cell) on
 /// a full grid of parameters (one or more, each sorted) and wavelengths. Between grid points the
-/// complex transmission is interpolated multilinearly (in every parameter and in λ): the field,
-/// not the amplitude and phase apart, so that a phase wrapping from π to −π between two atoms
-/// interpolates through the short way.
+/// amplitude `|t|` and the unwrapped phase are interpolated multilinearly (in every parameter and
+/// in λ), apart: the field follows the arc from one row to the next, not the chord (the chord's
+/// `|t|` dips by `1 − cos(Δφ/2)` midway, which cost a lossless library of 64 levels over 2π
+/// `Δφ²/6 ≈ 1.6e-3` of its first-order efficiency). The phases of a cell's corners are unwrapped
+/// against its first corner's (each within ±π of it), so that a phase wrapping from π to −π
+/// between two atoms interpolates through the short way. What remains is linear
+/// interpolation's error, `h²/8` times the second derivative of `|t|` or `φ` along the
+/// parameter (or λ) with `h` the library's step there: it falls as the square of the library's
+/// density (docs/physics.md, "Meta-atom library").
 #[derive(Clone, Debug)]
 pub struct Library {
     axes: Vec<Vec<f64>>,
     wavelengths: Vec<f64>,
-    /// `t` at every grid point, the wavelength fastest, then the last parameter, …
-    field: Vec<Complex64>,
+    /// `|t|` and `arg t` (as given, rad) at every grid point, the wavelength fastest, then the
+    /// last parameter, …
+    amplitude: Vec<f64>,
+    phase: Vec<f64>,
 }
 
 impl Library {
@@ -63,27 +71,34 @@ impl Library {
                 expected: "a full grid: one row for every combination of the parameters' and wavelengths' distinct values",
             });
         }
-        let mut field = vec![Complex64::new(f64::NAN, 0.0); size];
-        for (p, lambda, amplitude, phase) in rows {
-            for v in p.iter().chain([lambda, amplitude, phase]) {
+        let mut amplitude = vec![f64::NAN; size];
+        let mut phase = vec![f64::NAN; size];
+        for (p, lambda, row_amplitude, row_phase) in rows {
+            for v in p.iter().chain([lambda, row_amplitude, row_phase]) {
                 check("library value", *v, true, "finite")?;
             }
-            check("library amplitude", *amplitude, (0.0..=1.0).contains(amplitude), "an amplitude |t| in [0, 1]")?;
+            check(
+                "library amplitude",
+                *row_amplitude,
+                (0.0..=1.0).contains(row_amplitude),
+                "an amplitude |t| in [0, 1]",
+            )?;
             let mut index = 0;
             for (d, axis) in axes.iter().enumerate() {
                 index = index * axis.len() + axis.partition_point(|&a| a < p[d]);
             }
             index = index * wavelengths.len() + wavelengths.partition_point(|&l| l < *lambda);
-            if !field[index].re.is_nan() {
+            if !amplitude[index].is_nan() {
                 return Err(Error::OutOfRange {
                     name: "library row repeated at wavelength (m)",
                     value: *lambda,
                     expected: "one row per parameter combination and wavelength",
                 });
             }
-            field[index] = Complex64::from_polar(*amplitude, *phase);
+            amplitude[index] = *row_amplitude;
+            phase[index] = *row_phase;
         }
-        Ok(Library { axes, wavelengths, field })
+        Ok(Library { axes, wavelengths, amplitude, phase })
     }
 
     /// The parameter ranges `(min, max)`, one per parameter.
@@ -101,7 +116,8 @@ impl Library {
         self.axes.len()
     }
 
-    /// `t(p, λ)`, multilinear in the parameters and λ (clamped to the grid's ends).
+    /// `t(p, λ)`: `|t|` and the phase multilinear in the parameters and λ (clamped to the grid's
+    /// ends), the corners' phases unwrapped against the cell's first corner (type docs).
     pub fn transmission(&self, params: &[f64], wavelength_m: f64) -> Complex64 {
         // the cell and the fractions along every axis (the wavelength last)
         let mut cells: Vec<(usize, f64)> = Vec::with_capacity(self.axes.len() + 1);
@@ -115,7 +131,8 @@ impl Library {
             cells.push((i, f));
         }
         let lens: Vec<usize> = self.axes.iter().map(Vec::len).chain([self.wavelengths.len()]).collect();
-        let mut sum = Complex64::new(0.0, 0.0);
+        let (mut amplitude, mut phase) = (0.0, 0.0);
+        let mut reference = None;
         for corner in 0..(1usize << cells.len()) {
             let mut index = 0;
             let mut weight = 1.0;
@@ -127,11 +144,16 @@ impl Library {
                 index = index * lens[d] + i + usize::from(up);
                 weight *= if up { f } else { 1.0 - f };
             }
+            // corner 0 (every axis at its cell's lower end) exists and comes first
+            let base = *reference.get_or_insert(self.phase[index]);
             if weight != 0.0 {
-                sum += self.field[index] * weight;
+                let step = self.phase[index] - base;
+                let unwrapped = step - std::f64::consts::TAU * (step / std::f64::consts::TAU).round();
+                amplitude += weight * self.amplitude[index];
+                phase += weight * unwrapped;
             }
         }
-        sum
+        Complex64::from_polar(amplitude, reference.unwrap_or(0.0) + phase)
     }
 }
 

@@ -59,4 +59,4 @@ pub use poly::{
     GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Part, Polychromatic, Settings, SpectralRule, Work, forget_remembered,
     highest_cutoff, monochromatic_mtf,
 };
-pub use table::{OtfTable, TABLE_ZERO_FREQUENCY_TOLERANCE};
+pub use table::{OtfTable, SampledLine, TABLE_ZERO_FREQUENCY_TOLERANCE};

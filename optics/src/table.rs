@@ -5,7 +5,10 @@
 //! [`Pupil::Table`](crate::Pupil::Table) carries. Between tabulated wavelengths the value is
 //! linear in λ; below the first and above the last wavelength it is the end row's (a table is
 //! not extrapolated in λ: the lens that holds it states its wavelength range and efficiency).
-//! Between tabulated frequencies it is linear in ν, and zero beyond the last frequency. Off
+//! Between tabulated frequencies it is linear in ν, and zero beyond the last frequency — unless
+//! the table was made from sampled line spread functions ([`OtfTable::with_samples`], a PSF
+//! stack): then the value at any ν is the exact transform of those samples (a trigonometric
+//! polynomial in ν, summed directly), and only the wavelength is interpolated. Off
 //! axis a table may give tangential (along the field) and sagittal curves; along an azimuth `φ`
 //! measured from the field direction the value is `T cos²φ + S sin²φ` (the two are equal on
 //! axis). Each row is normalized to 1 at zero frequency, as an OTF is by definition.
@@ -22,6 +25,53 @@ pub struct OtfTable {
     /// whether the two curves differ somewhere (compared once: [`value`](OtfTable::value) is
     /// called for every spectral node and frequency)
     directional: bool,
+    /// the sampled line spread functions whose exact transform the value is, when given
+    samples: Option<Samples>,
+}
+
+/// One line spread function sampled at a pitch `p`: sample `j` at `x_j = (j − origin) p` from
+/// the point its transform is taken about (a PSF's centroid), the samples summing to 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampledLine {
+    /// Where the transform's origin lies, in samples from sample 0 (fractional).
+    pub origin: f64,
+    /// The samples, summing to 1 (the transform is 1 at ν = 0).
+    pub values: Vec<f64>,
+}
+
+impl SampledLine {
+    /// The real part of the transform of the samples at `frequency` (cycles/m) for the pitch
+    /// `pitch_m`: `Re Σ_j v_j e^{−2πi ν (j − origin) p}`, summed directly (Horner's scheme in
+    /// `z = e^{−2πiνp}`: `n` complex multiply-adds, rounding error about `n ε Σ|v_j|`).
+    pub fn transform(&self, pitch_m: f64, frequency: f64) -> f64 {
+        let turns = frequency * pitch_m;
+        let z = num_complex::Complex64::from_polar(1.0, -std::f64::consts::TAU * turns);
+        let mut acc = num_complex::Complex64::new(0.0, 0.0);
+        for &v in self.values.iter().rev() {
+            acc = acc * z + v;
+        }
+        // e^{+2πi ν p origin}, its angle reduced to one turn before the sine and cosine
+        let turn = std::f64::consts::TAU * (turns * self.origin).fract();
+        (acc * num_complex::Complex64::from_polar(1.0, turn)).re
+    }
+}
+
+/// The samples behind a table made from a PSF stack ([`OtfTable::with_samples`]).
+#[derive(Clone, Debug, PartialEq)]
+struct Samples {
+    pitch_m: f64,
+    /// per wavelength, the lines whose transforms are averaged (one, or the two axes' lines of a
+    /// symmetric PSF)
+    tangential: Vec<Vec<SampledLine>>,
+    sagittal: Vec<Vec<SampledLine>>,
+}
+
+impl Samples {
+    fn value(&self, rows: &[Vec<SampledLine>], k: usize, frequency: f64) -> f64 {
+        let lines = &rows[k];
+        let sum: f64 = lines.iter().map(|l| l.transform(self.pitch_m, frequency)).sum();
+        (sum / lines.len() as f64).clamp(-1.0, 1.0)
+    }
 }
 
 fn bad<T>(name: &'static str, value: f64, expected: &'static str) -> Result<T, Error> {
@@ -91,7 +141,45 @@ impl OtfTable {
             None => tangential.clone(),
         };
         let directional = tangential != sagittal;
-        Ok(OtfTable { wavelengths_m, frequencies, tangential, sagittal, directional })
+        Ok(OtfTable { wavelengths_m, frequencies, tangential, sagittal, directional, samples: None })
+    }
+
+    /// This table with the sampled line spread functions it was computed from (pitch `pitch_m`
+    /// above 0, per wavelength one or more lines whose transforms are averaged, each line's samples
+    /// summing to 1 within 1e-9): from then on [`value`](OtfTable::value) below the last
+    /// frequency is the exact transform of those samples at the frequency asked, not the
+    /// linear interpolation between the tabulated frequencies (which stay, for the callers that
+    /// walk them). `sagittal` `None`: the tangential lines for both.
+    pub fn with_samples(
+        self,
+        pitch_m: f64,
+        tangential: Vec<Vec<SampledLine>>,
+        sagittal: Option<Vec<Vec<SampledLine>>>,
+    ) -> Result<OtfTable, Error> {
+        if !(pitch_m.is_finite() && pitch_m > 0.0) {
+            return bad("table sample pitch", pitch_m, "a finite pitch > 0 m");
+        }
+        let sagittal = sagittal.unwrap_or_else(|| tangential.clone());
+        for rows in [&tangential, &sagittal] {
+            if rows.len() != self.wavelengths_m.len() {
+                return bad("table sampled rows", rows.len() as f64, "one set of lines per wavelength");
+            }
+            for line in rows.iter().flatten() {
+                let sum: f64 = line.values.iter().sum();
+                if !(line.origin.is_finite() && (sum - 1.0).abs() <= 1e-9) {
+                    return bad("table sampled line sum", sum, "finite samples summing to 1 about a finite origin");
+                }
+            }
+            if rows.iter().any(Vec::is_empty) {
+                return bad("table sampled lines", 0.0, "at least one line per wavelength");
+            }
+        }
+        Ok(OtfTable { samples: Some(Samples { pitch_m, tangential, sagittal }), ..self })
+    }
+
+    /// Whether the values are the exact transforms of sampled lines ([`with_samples`](OtfTable::with_samples)).
+    pub fn is_sampled(&self) -> bool {
+        self.samples.is_some()
     }
 
     /// The tabulated wavelengths, m.
@@ -117,6 +205,19 @@ impl OtfTable {
     /// The OTF at `wavelength_m` and `frequency` (cycles/m, sign ignored) along the direction at
     /// angle `azimuth_from_field_rad` from the field direction: `T cos²φ + S sin²φ`.
     pub fn value(&self, wavelength_m: f64, frequency: f64, azimuth_from_field_rad: f64) -> f64 {
+        if let Some(samples) = &self.samples {
+            let nu = frequency.abs();
+            if nu > self.max_frequency() {
+                return 0.0;
+            }
+            let t = self.blend(wavelength_m, |k| samples.value(&samples.tangential, k, nu));
+            if !self.is_direction_dependent() {
+                return t;
+            }
+            let s = self.blend(wavelength_m, |k| samples.value(&samples.sagittal, k, nu));
+            let c2 = azimuth_from_field_rad.cos().powi(2);
+            return t * c2 + s * (1.0 - c2);
+        }
         let t = self.interpolate(&self.tangential, wavelength_m, frequency.abs());
         if !self.is_direction_dependent() {
             return t;
@@ -139,16 +240,22 @@ impl OtfTable {
 
     /// Column `k` of the rows, linear in wavelength, the end rows beyond the table.
     fn row_at(&self, rows: &[Vec<f64>], wavelength_m: f64, k: usize) -> f64 {
+        self.blend(wavelength_m, |i| rows[i][k])
+    }
+
+    /// `row(i)` of the wavelength rows, linear in wavelength, the end rows beyond the table.
+    fn blend(&self, wavelength_m: f64, row: impl Fn(usize) -> f64) -> f64 {
         let w = &self.wavelengths_m;
         if wavelength_m <= w[0] {
-            return rows[0][k];
+            return row(0);
         }
         if wavelength_m >= w[w.len() - 1] {
-            return rows[w.len() - 1][k];
+            return row(w.len() - 1);
         }
         let i = w.partition_point(|&x| x <= wavelength_m);
         let u = (wavelength_m - w[i - 1]) / (w[i] - w[i - 1]);
-        rows[i - 1][k] + u * (rows[i][k] - rows[i - 1][k])
+        let (a, b) = (row(i - 1), row(i));
+        a + u * (b - a)
     }
 }
 
@@ -181,6 +288,37 @@ mod tests {
         assert_eq!(t.value(600e-9, 2e5, 0.0), 0.3);
         assert_eq!(t.value(600e-9, 2.0001e5, 0.0), 0.0);
         assert_eq!(t.value(600e-9, -1e5, 0.0), 0.7);
+    }
+
+    /// A table with samples reads their exact transform (here two samples of 1/2 at ±p/2 about
+    /// the origin: `cos(πνp)`, written out) between its frequencies, linear in λ between the
+    /// wavelengths; bad samples are refused.
+    #[test]
+    fn sampled_tables_read_the_exact_transform() {
+        let p = 1e-6;
+        let line = |origin: f64| SampledLine { origin, values: vec![0.5, 0.5] };
+        let frequencies = vec![0.0, 2.5e5, 5e5];
+        let rows = vec![vec![1.0, 0.7, 0.0]; 2];
+        let t = OtfTable::new(vec![5e-7, 6e-7], frequencies.clone(), rows.clone(), None).unwrap();
+        let t = t.with_samples(p, vec![vec![line(0.5)], vec![line(0.5), line(0.0)]], None).unwrap();
+        assert!(t.is_sampled());
+        let nu = 1.7e5;
+        let half = (std::f64::consts::PI * nu * p).cos();
+        // the second wavelength averages the centred pair with the pair at 0 and p about 0:
+        // Re(½ + ½ e^{−2πiνp}) = ½(1 + cos 2πνp)
+        let shifted = 0.5 * (1.0 + (std::f64::consts::TAU * nu * p).cos());
+        assert!((t.value(5e-7, nu, 0.0) - half).abs() < 1e-15);
+        assert!((t.value(6e-7, nu, 1.0) - 0.5 * (half + shifted)).abs() < 1e-15);
+        assert!((t.value(5.5e-7, -nu, 0.0) - 0.5 * (half + 0.5 * (half + shifted))).abs() < 1e-15);
+        assert_eq!(t.value(5e-7, 5.0001e5, 0.0), 0.0);
+        let base = OtfTable::new(vec![5e-7, 6e-7], frequencies, rows, None).unwrap();
+        let e = base.clone().with_samples(p, vec![vec![line(0.5)]], None).unwrap_err();
+        assert!(e.to_string().contains("one set of lines per wavelength"), "{e}");
+        let bad_sum = SampledLine { origin: 0.0, values: vec![0.5, 0.6] };
+        let e = base.clone().with_samples(p, vec![vec![line(0.5)], vec![bad_sum]], None).unwrap_err();
+        assert!(e.to_string().contains("summing to 1"), "{e}");
+        let e = base.with_samples(0.0, vec![vec![line(0.5)]; 2], None).unwrap_err();
+        assert!(e.to_string().contains("pitch"), "{e}");
     }
 
     #[test]

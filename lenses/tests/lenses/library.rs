@@ -236,3 +236,31 @@ fn parameter_bias_and_bad_errors() {
     let e = lens().with_fabrication(&[0.0], errors(-0.1, 0.0, 0)).unwrap_err();
     assert!(e.to_string().contains("≥ 0"), "{e}");
 }
+
+/// A library of constant `|t|` (64 phase levels over 2π, |t| = 0.9) keeps `|t|` between its rows:
+/// the field follows the arc, not the chord (whose `|t|` dips midway by `1 − cos(π/64)` =
+/// 1.2e-3, a first-order efficiency loss of `Δφ²/6` ≈ 1.6e-3 averaged over a row's step). The
+/// phase midway is the rows' mean, through the short way where it wraps from π to −π (levels 32
+/// and 33: π and −π + 2π·33/64 − 2π … written out here), and in λ the same.
+#[test]
+fn a_constant_amplitude_library_keeps_its_amplitude_between_rows() {
+    let levels = 64;
+    let library = levels_library(levels, 0.9);
+    let step = std::f64::consts::TAU / levels as f64;
+    for k in 0..levels - 1 {
+        for u in [0.25, 0.5, 0.9] {
+            let p = k as f64 + u;
+            let t = library.transmission(&[p], 750e-9);
+            assert!((t.norm() - 0.9).abs() < 1e-14, "p = {p}: |t| = {}", t.norm());
+            // the phase step · p, as a point on the circle
+            let want = num_complex::Complex64::from_polar(0.9, step * p);
+            assert!((t - want).norm() < 1e-13, "p = {p}: {t} vs {want}");
+        }
+    }
+    // 32 → 33 crosses the wrap (π, then −π + π/32): midway the phase is π + π/64
+    let t = library.transmission(&[32.5], 800e-9);
+    assert!((t.arg().rem_euclid(std::f64::consts::TAU) - (std::f64::consts::PI + step / 2.0)).abs() < 1e-13, "{t}");
+    // the chord the field used to follow, for scale
+    let chord = 0.5 * (num_complex::Complex64::from_polar(0.9, 0.0) + num_complex::Complex64::from_polar(0.9, step));
+    assert!(0.9 - chord.norm() > 1e-3, "{}", chord.norm());
+}
