@@ -620,6 +620,7 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
     assert!(ramp.asnr < base.asnr && ramp.asnr > flat.asnr);
 }
 
+mod azimuth;
 mod factored;
 mod fraunhofer;
 mod line;
