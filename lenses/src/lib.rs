@@ -69,6 +69,7 @@ mod harmonic;
 mod interleaved;
 mod library;
 mod phase;
+mod phase_map;
 pub mod presets;
 mod psf;
 mod refractive;
@@ -81,6 +82,7 @@ pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use library::{AtomErrors, Library, LibraryLens};
 pub use phase::{Dispersion, PhaseLens, WithZernike, binary2_profile, hyperbolic_binary2};
+pub use phase_map::PhaseMapLens;
 pub use presets::{preset, preset_names};
 pub use psf::{
     PSF_BORDER_SAMPLES, PSF_CENTRE_TOLERANCE, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_NEGATIVE_MASS,

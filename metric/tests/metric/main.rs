@@ -624,6 +624,7 @@ mod azimuth;
 mod factored;
 mod fraunhofer;
 mod line;
+mod phase_map;
 mod properties;
 mod robust;
 
