@@ -185,13 +185,13 @@ impl LensModel for PhaseMapLens {
         };
         format!(
             "phase-map lens F/{} f0 = {} mm at λ0 = {} nm ({}: {nx} × {ny} cells of {} µm, {aperture}; {dispersion}; \
-             the cells' staircase keeps {} % of the light in the design order), against the exact reference sphere",
+             the cells' staircase keeps {:.2} % of the light in the design order), against the exact reference sphere",
             r(self.f_number),
             r(self.focal_length * 1e3),
             r(self.design_wavelength * 1e9),
             self.source,
             r(self.map.pitch() * 1e6),
-            r(100.0 * self.map.design_share()),
+            100.0 * self.map.design_share(),
         )
     }
 }

@@ -301,7 +301,7 @@ impl PhaseMap {
             }
         }
         let var = sqq * sw - sq * sq;
-        if !(var > 0.0) {
+        if var.is_nan() || var <= 0.0 {
             return (0.0, 0.0);
         }
         ((sqp * sw - sq * sp) / var, (sqs * sw - sq * ss) / var)
