@@ -70,6 +70,7 @@ mod harmonic;
 mod interleaved;
 mod library;
 mod phase;
+mod phase_map;
 pub mod presets;
 mod psf;
 mod refractive;
@@ -85,6 +86,7 @@ pub use phase::{
     Dispersion, PhaseLens, SPLINE_MAX_KNOTS, SPLINE_MIN_KNOTS, WithZernike, binary2_profile, hyperbolic_binary2,
     spline_profile,
 };
+pub use phase_map::PhaseMapLens;
 pub use presets::{preset, preset_names};
 pub use psf::{
     PSF_BORDER_SAMPLES, PSF_CENTRE_TOLERANCE, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_NEGATIVE_MASS,

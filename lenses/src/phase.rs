@@ -169,31 +169,7 @@ impl PhaseLens {
 
     /// `(m, efficiency, metres of path per radian of φ0)` of each order at `wavelength_m`.
     fn order_list(&self, wavelength_m: f64) -> Vec<(i64, f64, f64)> {
-        let tau = self.efficiency.value(wavelength_m);
-        let per_radian = wavelength_m / std::f64::consts::TAU;
-        match &self.dispersion {
-            Dispersion::GeometricPhase => vec![(1, tau, per_radian)],
-            Dispersion::Refractive { glass } => {
-                let g = glass.as_ref().map_or(1.0, |g| {
-                    let n0 = g.index(self.design_wavelength).unwrap_or(1.5);
-                    g.index(wavelength_m).map_or(1.0, |n| (n - 1.0) / (n0 - 1.0))
-                });
-                vec![(1, tau, self.design_wavelength / std::f64::consts::TAU * g)]
-            }
-            Dispersion::Diffractive { design_order } => {
-                let p = f64::from(*design_order);
-                let alpha = p * self.design_wavelength / wavelength_m;
-                let lo = (alpha - HARMONIC_ORDER_REACH).ceil().max(1.0);
-                let hi = (alpha + HARMONIC_ORDER_REACH).floor();
-                let mut out = Vec::new();
-                let mut m = lo;
-                while m <= hi {
-                    out.push((m as i64, tau * sinc(alpha - m).powi(2), per_radian * m / p));
-                    m += 1.0;
-                }
-                out
-            }
-        }
+        order_list(&self.dispersion, self.design_wavelength, self.efficiency.value(wavelength_m), wavelength_m)
     }
 
     /// The pupil of one order: the phase term scaled to metres, the reference sphere, the
@@ -214,7 +190,42 @@ impl PhaseLens {
     }
 }
 
-fn optics_error(e: optics::Error) -> Error {
+/// `(m, efficiency, metres of path per radian of φ0)` of each order at `wavelength_m` of a phase
+/// given at `design_wavelength` with `dispersion` and efficiency `tau` there (docs/physics.md,
+/// "Designs given as data").
+pub(crate) fn order_list(
+    dispersion: &Dispersion,
+    design_wavelength: f64,
+    tau: f64,
+    wavelength_m: f64,
+) -> Vec<(i64, f64, f64)> {
+    let per_radian = wavelength_m / std::f64::consts::TAU;
+    match dispersion {
+        Dispersion::GeometricPhase => vec![(1, tau, per_radian)],
+        Dispersion::Refractive { glass } => {
+            let g = glass.as_ref().map_or(1.0, |g| {
+                let n0 = g.index(design_wavelength).unwrap_or(1.5);
+                g.index(wavelength_m).map_or(1.0, |n| (n - 1.0) / (n0 - 1.0))
+            });
+            vec![(1, tau, design_wavelength / std::f64::consts::TAU * g)]
+        }
+        Dispersion::Diffractive { design_order } => {
+            let p = f64::from(*design_order);
+            let alpha = p * design_wavelength / wavelength_m;
+            let lo = (alpha - HARMONIC_ORDER_REACH).ceil().max(1.0);
+            let hi = (alpha + HARMONIC_ORDER_REACH).floor();
+            let mut out = Vec::new();
+            let mut m = lo;
+            while m <= hi {
+                out.push((m as i64, tau * sinc(alpha - m).powi(2), per_radian * m / p));
+                m += 1.0;
+            }
+            out
+        }
+    }
+}
+
+pub(crate) fn optics_error(e: optics::Error) -> Error {
     Error::Pupil(e)
 }
 

@@ -374,10 +374,29 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure())?;
     let snr0 = budget.snr;
     // where the OTF depends on direction, a mean along the field direction (tangential) and one
-    // across it (sagittal), averaged; otherwise one mean
-    let directional = |mean_along: &dyn Fn(f64) -> (f64, optics::Work)| {
-        if poly.direction_dependent() {
-            let along_field = field.y_rad.atan2(field.x_rad);
+    // across it (sagittal); the ASNR takes, for a sampled pupil's 2-D OTF, the mean averaged over
+    // azimuth (docs/physics.md, "Pupils without rotational symmetry": the same lens turned gives
+    // the same ASNR), and where only the two directions exist (image shifts, T and S tables)
+    // their average; otherwise one mean
+    let along_field = field.y_rad.atan2(field.x_rad);
+    let mut azimuth_warning = None;
+    let mut directional = |noise: Option<&optics::NoiseShape>| {
+        let mean_along = |azimuth: f64| match noise {
+            None => poly.mean_mtf_along(azimuth),
+            Some(shape) => poly.mean_mtf_over_noise(shape, azimuth),
+        };
+        if poly.has_pupil_grid() {
+            let a = poly.mean_mtf_over_azimuth(along_field, noise);
+            if a.change > optics::AZIMUTH_SHARE * poly.tolerance() * a.mean.abs() {
+                azimuth_warning = Some(format!(
+                    "the mean MTF over azimuth is not converged at {} azimuths: its last doubling changed it by {:.2e} (relative), more than the {:.1e} allowed",
+                    a.azimuths,
+                    a.change / a.mean.abs().max(f64::MIN_POSITIVE),
+                    optics::AZIMUTH_SHARE * poly.tolerance()
+                ));
+            }
+            (a.mean, a.tangential, a.sagittal, a.work)
+        } else if poly.direction_dependent() {
             let (t, w1) = mean_along(along_field);
             let (s, w2) = mean_along(along_field + 0.5 * PI);
             (0.5 * (t + s), t, s, add_work(w1, w2))
@@ -386,13 +405,13 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             (m, m, m, work)
         }
     };
-    let (mean_mtf, mean_mtf_tangential, mean_mtf_sagittal, work) = directional(&|azimuth| poly.mean_mtf_along(azimuth));
+    let (mean_mtf, mean_mtf_tangential, mean_mtf_sagittal, work) = directional(None);
     // a non-white noise spectrum puts the SNR inside the integral (eq. 1 text): the mean of
-    // MTF(ν)/n(ν), tangential and sagittal averaged as for the MTF
+    // MTF(ν)/n(ν), over azimuth or tangential and sagittal averaged as for the MTF
     let (weighted_mean, work) = match camera.noise_spectrum() {
         None => (mean_mtf, work),
         Some(shape) => {
-            let (m, _, _, w) = directional(&|azimuth| poly.mean_mtf_over_noise(shape, azimuth));
+            let (m, _, _, w) = directional(Some(shape));
             (m, add_work(work, w))
         }
     };
@@ -420,6 +439,7 @@ fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             budget.signal_e
         ));
     }
+    warnings.extend(azimuth_warning);
     if !fraunhofer.valid {
         warnings.push(format!(
             "{:.2} % of the signal is blurred beyond the Fraunhofer threshold of {} mm (paper SI eq. S15): the MTF model is not valid there",
@@ -961,9 +981,10 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     } else {
         (None, None)
     };
-    // where the OTF depends on direction the headline curve is the tangential–sagittal average,
-    // as `mean_mtf` is
+    // where the OTF depends on direction the headline curve is, as `mean_mtf` is, the average
+    // over azimuth for a sampled pupil's 2-D OTF, else the tangential–sagittal average
     let mtf = match (&mtf_tangential, &mtf_sagittal) {
+        _ if poly.has_pupil_grid() => frequencies.iter().map(|&nu| poly.mtf_over_azimuth(nu, along_field)).collect(),
         (Some(t), Some(s)) => t.iter().zip(s).map(|(a, b)| 0.5 * (a + b)).collect(),
         _ => mtf,
     };

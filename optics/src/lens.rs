@@ -77,6 +77,12 @@ pub enum Pupil {
     /// (every Zernike term `m = 0`, no other Seidel term) it is computed by the radial engine
     /// (the autocorrelation integral, `radial` module); otherwise on the FFT path.
     Radial(Arc<crate::radial::RadialPupil>),
+    /// A 2-D map of cells ([`crate::map::MapPupil`]: a designer's phase map, each sample held
+    /// over its cell, in a circular or square aperture), computed on the FFT path. The order's
+    /// `defocus_m` is the map's best-fit defocus (build it with [`Order::map`]); its other
+    /// wavefront terms are not used. The square collects `4/π` of the circle's light
+    /// ([`area_fraction`](Pupil::area_fraction)).
+    Map(Arc<crate::map::MapPupil>),
 }
 
 impl Pupil {
@@ -90,6 +96,7 @@ impl Pupil {
             Pupil::Full | Pupil::Table(_) | Pupil::Radial(_) => 1.0,
             Pupil::Aperture(a) => a.area_fraction(),
             Pupil::Zones(zones) => zones.iter().map(|z| z.amplitude * z.amplitude * z.aperture.area_fraction()).sum(),
+            Pupil::Map(m) => m.map().aperture().area_fraction(),
         }
     }
 }
@@ -211,6 +218,14 @@ impl Order {
     pub fn radial(efficiency: f64, pupil: Arc<crate::radial::RadialPupil>, wavefront: Wavefront) -> Order {
         let wavefront = Wavefront { defocus_m: wavefront.defocus_m + pupil.fitted_defocus_m(), ..wavefront };
         Order { efficiency, pupil: Pupil::Radial(pupil), wavefront }
+    }
+
+    /// An order through the 2-D map `pupil` ([`Pupil::Map`]) whose `defocus_m` is the map's
+    /// best-fit defocus ([`MapPupil::fitted_defocus_m`](crate::map::MapPupil::fitted_defocus_m)):
+    /// it sizes the spectral panels and the Fraunhofer check.
+    pub fn map(efficiency: f64, pupil: Arc<crate::map::MapPupil>) -> Order {
+        let wavefront = Wavefront { defocus_m: pupil.fitted_defocus_m(), ..Wavefront::default() };
+        Order { efficiency, pupil: Pupil::Map(pupil), wavefront }
     }
 }
 

@@ -35,6 +35,7 @@ pub mod faddeeva;
 pub mod fft;
 pub mod fraunhofer;
 mod lens;
+pub mod map;
 mod otf;
 mod poly;
 pub mod quad;
@@ -55,8 +56,8 @@ pub use otf::{
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
 pub use poly::{
-    DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine, FFT_MEMORY_BUDGET,
-    GAUSSIAN_HALF_WIDTH_SIGMAS, NoiseShape, Part, Polychromatic, Settings, SpectralRule, Work, forget_remembered,
-    highest_cutoff, monochromatic_mtf,
+    AZIMUTH_SHARE, AzimuthalMean, DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine,
+    FFT_MEMORY_BUDGET, FIRST_AZIMUTHS, GAUSSIAN_HALF_WIDTH_SIGMAS, MAX_AZIMUTHS, NoiseShape, Part, Polychromatic,
+    Settings, SpectralRule, Work, forget_remembered, highest_cutoff, monochromatic_mtf,
 };
 pub use table::{OtfTable, SampledLine, TABLE_ZERO_FREQUENCY_TOLERANCE};

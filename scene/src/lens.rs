@@ -105,6 +105,10 @@ pub(crate) struct RawLens {
     pub diffraction_order: Option<f64>,
     pub phase_csv: Option<String>,
     pub phase_spline_rad: Option<Vec<f64>>,
+    pub phase_map: Option<String>,
+    pub amplitude_map: Option<String>,
+    pub phase_map_pitch_um: Option<f64>,
+    pub aperture: Option<String>,
     pub dispersion: Option<String>,
     pub zernike_noll_rms_um: Option<Vec<f64>>,
     pub library: Option<String>,
@@ -208,6 +212,10 @@ impl Model {
                 "diffraction_order",
                 "phase_csv",
                 "phase_spline_rad",
+                "phase_map",
+                "amplitude_map",
+                "phase_map_pitch_um",
+                "aperture",
                 "dispersion",
                 "design_order",
                 "glass",
@@ -260,10 +268,14 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 48] {
+    fn given(&self) -> [(&'static str, bool); 52] {
         [
             ("zemax", self.zemax.is_some()),
             ("zemax_surface", self.zemax_surface.is_some()),
+            ("phase_map", self.phase_map.is_some()),
+            ("amplitude_map", self.amplitude_map.is_some()),
+            ("phase_map_pitch_um", self.phase_map_pitch_um.is_some()),
+            ("aperture", self.aperture.is_some()),
             ("library", self.library.is_some()),
             ("atom_phase_error_rad", self.atom_phase_error_rad.is_some()),
             ("atom_transmission_error", self.atom_transmission_error.is_some()),
@@ -975,9 +987,12 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                 ));
             }
             let l0 = design_wavelength(o)?;
-            let lens = phase_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?;
             info.design_wavelength_m = Some(l0);
-            Arc::new(lens)
+            if l.phase_map.is_some() {
+                Arc::new(phase_map_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?)
+            } else {
+                Arc::new(phase_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?)
+            }
         }
         Model::Psf => Arc::new(crate::psf::psf_lens(l, o, f_number, f0_m, &transmission, &mut info)?),
     };
@@ -1381,35 +1396,7 @@ fn phase_lens(
             (Arc::new(phase), amplitude, format!("phase table {}", crate::error::shorten(file)))
         }
     };
-    let dispersions = "\"geometric-phase\" (radian phase fixed: one order, f ∝ 1/λ), \"diffractive\" (a kinoform wrapped at 2πp: orders m, τ_m = τ sinc²(pλ0/λ − m)) or \"refractive\" (optical path fixed)";
-    let dispersion = match o.require("lens.dispersion", l.dispersion.as_deref(), dispersions)? {
-        "geometric-phase" => {
-            o.forbid("lens.design_order", &l.design_order, "lens.dispersion = \"geometric-phase\"")?;
-            o.forbid("lens.glass", &l.glass, "lens.dispersion = \"geometric-phase\"")?;
-            lenses::Dispersion::GeometricPhase
-        }
-        "diffractive" => {
-            o.forbid("lens.glass", &l.glass, "lens.dispersion = \"diffractive\"")?;
-            let p = l.design_order.unwrap_or(1);
-            if !(1..=1000).contains(&p) {
-                return Err(o.bad("lens.design_order", p, "a whole number from 1 to 1000 (the phase wraps at 2πp)"));
-            }
-            if l.design_order.is_none() {
-                info.notes.push("design_order not given: p = 1 (the ordinary diffractive lens)".to_owned());
-            }
-            lenses::Dispersion::Diffractive { design_order: p }
-        }
-        "refractive" => {
-            o.forbid("lens.design_order", &l.design_order, "lens.dispersion = \"refractive\"")?;
-            let glass = match l.glass.as_deref() {
-                None => None,
-                Some("N-BK7") => Some(Sellmeier::N_BK7),
-                Some(other) => return Err(o.bad("lens.glass", quoted(other), GLASSES)),
-            };
-            lenses::Dispersion::Refractive { glass }
-        }
-        other => return Err(o.bad("lens.dispersion", quoted(other), dispersions)),
-    };
+    let dispersion = dispersion(l, o, info)?;
     let transmission = transmission(o, &efficiency)?;
     let alone = l.binary2.is_none() && l.phase_csv.is_none();
     let mut lens =
@@ -1439,6 +1426,204 @@ fn phase_lens(
         radial_work(&lens, l0, count, o, "lens.zernike_noll_rms_um", &given)?;
     }
     Ok(lens)
+}
+
+/// `lens.dispersion` (with `design_order`, `glass`) of a phase lens.
+fn dispersion(l: &RawLens, o: &Origins, info: &mut LensInfo) -> Result<lenses::Dispersion, Error> {
+    let dispersions = "\"geometric-phase\" (radian phase fixed: one order, f ∝ 1/λ), \"diffractive\" (a kinoform wrapped at 2πp: orders m, τ_m = τ sinc²(pλ0/λ − m)) or \"refractive\" (optical path fixed)";
+    let dispersion = match o.require("lens.dispersion", l.dispersion.as_deref(), dispersions)? {
+        "geometric-phase" => {
+            o.forbid("lens.design_order", &l.design_order, "lens.dispersion = \"geometric-phase\"")?;
+            o.forbid("lens.glass", &l.glass, "lens.dispersion = \"geometric-phase\"")?;
+            lenses::Dispersion::GeometricPhase
+        }
+        "diffractive" => {
+            o.forbid("lens.glass", &l.glass, "lens.dispersion = \"diffractive\"")?;
+            let p = l.design_order.unwrap_or(1);
+            if !(1..=1000).contains(&p) {
+                return Err(o.bad("lens.design_order", p, "a whole number from 1 to 1000 (the phase wraps at 2πp)"));
+            }
+            if l.design_order.is_none() {
+                info.notes.push("design_order not given: p = 1 (the ordinary diffractive lens)".to_owned());
+            }
+            lenses::Dispersion::Diffractive { design_order: p }
+        }
+        "refractive" => {
+            o.forbid("lens.design_order", &l.design_order, "lens.dispersion = \"refractive\"")?;
+            let glass = match l.glass.as_deref() {
+                None => None,
+                Some("N-BK7") => Some(Sellmeier::N_BK7),
+                Some(other) => return Err(o.bad("lens.glass", quoted(other), GLASSES)),
+            };
+            lenses::Dispersion::Refractive { glass }
+        }
+        other => return Err(o.bad("lens.dispersion", quoted(other), dispersions)),
+    };
+    Ok(dispersion)
+}
+
+#[allow(clippy::too_many_arguments)]
+/// The `model = "phase"` lens given by a 2-D map (`phase_map`, docs/physics.md "Phase maps"):
+/// the `.npy` maps read (sizes checked against the file before the samples), the map's coverage
+/// of the aperture, its values and its cells' phase steps checked with the numbers.
+fn phase_map_lens(
+    l: &RawLens,
+    o: &Origins,
+    f_number: f64,
+    f0_m: f64,
+    l0: f64,
+    efficiency: Curve,
+    transmission: &dyn Fn(&Origins, &Curve) -> Result<Curve, Error>,
+    info: &mut LensInfo,
+) -> Result<lenses::PhaseMapLens, Error> {
+    for (key, given) in [
+        ("binary2", l.binary2.is_some()),
+        ("phase_csv", l.phase_csv.is_some()),
+        ("phase_spline_rad", l.phase_spline_rad.is_some()),
+        ("norm_radius_mm", l.norm_radius_mm.is_some()),
+        ("diffraction_order", l.diffraction_order.is_some()),
+        ("zernike_noll_rms_um", l.zernike_noll_rms_um.is_some()),
+    ] {
+        if given {
+            return Err(o.bad(
+                &format!("lens.{key}"),
+                "given",
+                "not with lens.phase_map (the map is the whole phase: add any other term to it)",
+            ));
+        }
+    }
+    let file = l.phase_map.as_deref().unwrap_or_default();
+    let pitch = o.require(
+        "lens.phase_map_pitch_um",
+        l.phase_map_pitch_um,
+        "the map's cell pitch in µm (each sample is held over its cell)",
+    )?;
+    let pitch = o.number("lens.phase_map_pitch_um", pitch, pitch > 0.0, "a pitch > 0 µm")? * 1e-6;
+    let aperture = match l.aperture.as_deref().unwrap_or("circle") {
+        "circle" => optics::map::MapAperture::Circle,
+        "square" => optics::map::MapAperture::Square,
+        other => {
+            return Err(o.bad(
+                "lens.aperture",
+                quoted(other),
+                "\"circle\" (default: diameter f0/F#) or \"square\" (side f0/F#, 4/π of the circle's light)",
+            ));
+        }
+    };
+    let read = |key: &str, file: &str| {
+        let path = o.path(file);
+        crate::psf::read_npy_map(&path).map_err(|message| Error::Table {
+            origin: o.of(key),
+            key: o.key(key),
+            file: crate::error::shorten(file),
+            cause: Box::new(Error::Csv { file: path.display().to_string(), line: None, message }),
+        })
+    };
+    let phase = read("lens.phase_map", file)?;
+    let amplitude = match &l.amplitude_map {
+        Some(a) => {
+            let map = read("lens.amplitude_map", a)?;
+            if (map.ny, map.nx) != (phase.ny, phase.nx) {
+                return Err(o.bad(
+                    "lens.amplitude_map",
+                    format!("an array of {} × {} [y, x]", map.ny, map.nx),
+                    &format!("the phase map's shape, {} × {}", phase.ny, phase.nx),
+                ));
+            }
+            Some(map.values)
+        }
+        None => None,
+    };
+    let radius = 0.5 * f0_m / f_number;
+    let r = optics::round_for_display;
+    let (nx, ny) = (phase.nx, phase.ny);
+    let half = 0.5 * (nx.min(ny)) as f64 * pitch;
+    if half < radius * (1.0 - 1e-12) {
+        return Err(o.bad(
+            "lens.phase_map",
+            format!("{ny} × {nx} cells of {} µm ({} × {} mm)", r(pitch * 1e6), r(ny as f64 * pitch * 1e3), r(nx as f64 * pitch * 1e3)),
+            &format!(
+                "a map covering the aperture ({} mm across: f0/F#), centred on the axis: at least {} cells a side at this pitch",
+                r(2.0 * radius * 1e3),
+                (2.0 * radius / pitch * (1.0 - 1e-12)).ceil()
+            ),
+        ));
+    }
+    let dispersion = dispersion(l, o, info)?;
+    let stored = lenses::PhaseMapLens::stored_phase(&dispersion);
+    // the values inside the aperture first: a NaN is named with its cell
+    let centre = |i: usize, j: usize| {
+        [(i as f64 - 0.5 * (nx as f64 - 1.0)) * pitch * 1e3, (j as f64 - 0.5 * (ny as f64 - 1.0)) * pitch * 1e3]
+    };
+    let inside = |i: usize, j: usize| {
+        let [x, y] = centre(i, j);
+        let near = |c: f64| (c.abs() - 0.5 * pitch * 1e3).max(0.0) / (radius * 1e3);
+        aperture.contains(near(x), near(y))
+    };
+    for (key, values) in [("lens.phase_map", Some(&phase.values)), ("lens.amplitude_map", amplitude.as_ref())] {
+        let Some(values) = values else { continue };
+        for j in 0..ny {
+            for i in 0..nx {
+                let v = values[j * nx + i];
+                let ok = v.is_finite() && (key == "lens.phase_map" || v >= 0.0);
+                if !ok && inside(i, j) {
+                    let [x, y] = centre(i, j);
+                    return Err(o.bad(
+                        key,
+                        format!("{} at [y, x] = [{j}, {i}] (x = {} mm, y = {} mm)", num(v), r(x), r(y)),
+                        if key == "lens.phase_map" {
+                            "finite radians inside the aperture"
+                        } else {
+                            "finite and ≥ 0 inside the aperture"
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    let map = optics::map::PhaseMap::new(nx, ny, pitch, phase.values, amplitude, aperture, radius, f0_m, l0, stored)
+        .map_err(|e| o.domain("lens.phase_map", "[lens]", lenses::Error::Pupil(e)))?;
+    // the cell must resolve the focusing phase: the reference sphere's step per cell ≤ π
+    let (step, cell) = map.largest_sphere_step();
+    if step > std::f64::consts::PI {
+        return Err(o.bad(
+            "lens.phase_map_pitch_um",
+            num(pitch * 1e6),
+            &format!(
+                "cells that resolve the lens's phase gradient: at x = {} mm, y = {} mm ([y, x] = [{}, {}]) the focusing phase turns by {} rad a cell, more than π (a pitch ≤ {} µm there)",
+                r(cell.centre_m[0] * 1e3),
+                r(cell.centre_m[1] * 1e3),
+                cell.index[1],
+                cell.index[0],
+                r(step),
+                r(pitch * 1e6 * std::f64::consts::PI / step)
+            ),
+        ));
+    }
+    // refractive and diffractive lenses scale φ0 with λ: the map must be unwrapped
+    if stored == optics::map::StoredPhase::Given
+        && let Some(cell) = map.first_jump()
+    {
+        return Err(o.bad(
+            "lens.phase_map",
+            format!(
+                "a step of {} rad between neighbouring cells at x = {} mm, y = {} mm ([y, x] = [{}, {}])",
+                r(cell.value),
+                r(cell.centre_m[0] * 1e3),
+                r(cell.centre_m[1] * 1e3),
+                cell.index[1],
+                cell.index[0]
+            ),
+            &format!(
+                "the unwrapped phase φ0 for dispersion = \"{}\" (neighbours within π: a wrapped map is allowed with \"geometric-phase\" only), on cells fine enough for its gradient",
+                dispersion.name()
+            ),
+        ));
+    }
+    let transmission = transmission(o, &efficiency)?;
+    let source = format!("phase map {}", crate::error::shorten(file));
+    lenses::PhaseMapLens::new(f_number, f0_m, l0, Arc::new(map), dispersion, efficiency, transmission, source)
+        .map_err(|e| o.domain("lens", "[lens]", e))
 }
 
 /// The cost of a term of a radial table's phase, in units of a polynomial term (a spline piece).
@@ -1692,6 +1877,85 @@ mod tests {
         );
         let e = err(iris);
         assert!(e.contains("zernike"), "{e}");
+    }
+
+    /// A `.npy` float64 map `[y, x]` of `values(x_mm, y_mm)` on `n × n` cells of `pitch_um`,
+    /// written to the temporary folder as `name`.
+    fn write_map(name: &str, n: usize, pitch_um: f64, values: impl Fn(f64, f64) -> f64) -> String {
+        let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({n}, {n}), }}");
+        while (10 + header.len() + 1) % 64 != 0 {
+            header.push(' ');
+        }
+        header.push('\n');
+        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+        bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        bytes.extend_from_slice(header.as_bytes());
+        for j in 0..n {
+            for i in 0..n {
+                let c = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch_um * 1e-3;
+                bytes.extend_from_slice(&values(c(i), c(j)).to_le_bytes());
+            }
+        }
+        let path = std::env::temp_dir().join(format!("asnr-map-{}-{name}", std::process::id()));
+        std::fs::write(&path, bytes).unwrap();
+        path.display().to_string()
+    }
+
+    /// A small lens (f0 = 0.125 mm, F/2.5, R = 25 µm) given as a map: the hyperbolic design loads
+    /// (wrapped too, with a geometric phase), and the map's mistakes are refused with the key and
+    /// the numbers: a NaN inside the aperture, a map that does not cover it, cells too coarse
+    /// for the focusing phase, a wrapped map for a refractive lens, an amplitude map of another
+    /// shape, a header promising more data than the file holds.
+    #[test]
+    fn phase_maps_are_checked() {
+        let small = |keys: &str| phase_scene(keys).replace("focal_length_mm = 3.36", "focal_length_mm = 0.125");
+        let k0 = 2.0 * std::f64::consts::PI / 800e-6; // per mm
+        let hyperbolic = move |x: f64, y: f64| -k0 * ((x * x + y * y + 0.125f64.powi(2)).sqrt() - 0.125);
+        let wrap = |v: f64| v - 2.0 * std::f64::consts::PI * (v / (2.0 * std::f64::consts::PI)).floor();
+        let good = write_map("good.npy", 50, 1.0, hyperbolic);
+        let keys = |file: &str, extra: &str| format!("phase_map = \"{file}\"\nphase_map_pitch_um = 1.0\n{extra}");
+        let scene = build_text(small(&keys(&good, "dispersion = \"geometric-phase\"")), &[]).unwrap();
+        assert!(scene.lens().describe().contains("50 × 50 cells"), "{}", scene.lens().describe());
+        let wrapped = write_map("wrapped.npy", 50, 1.0, move |x, y| wrap(hyperbolic(x, y)));
+        let a = metric::evaluate(&scene).unwrap().mean_mtf;
+        let w = build_text(small(&keys(&wrapped, "dispersion = \"geometric-phase\"")), &[]).unwrap();
+        let b = metric::evaluate(&w).unwrap().mean_mtf;
+        assert!((a - b).abs() < 1e-9, "wrapped {b} vs unwrapped {a}");
+        let err = |text: String| build_text(text, &[]).unwrap_err().to_string();
+        let e = err(small(&keys(&wrapped, "dispersion = \"refractive\"")));
+        assert!(
+            e.contains("lens.phase_map") && e.contains("between neighbouring cells") && e.contains("unwrapped"),
+            "{e}"
+        );
+        let nan = write_map("nan.npy", 50, 1.0, |x, y| if x.abs() < 1e-3 && y.abs() < 1e-3 { f64::NAN } else { 0.0 });
+        let e = err(small(&keys(&nan, "dispersion = \"geometric-phase\"")));
+        assert!(e.contains("NaN") && e.contains("[y, x] = [24, 24]"), "{e}");
+        let short = write_map("short.npy", 40, 1.0, hyperbolic);
+        let e = err(small(&keys(&short, "dispersion = \"geometric-phase\"")));
+        assert!(
+            e.contains("40 × 40 cells") && e.contains("covering the aperture") && e.contains("at least 50 cells"),
+            "{e}"
+        );
+        let coarse = write_map("coarse.npy", 13, 4.0, hyperbolic);
+        let e = err(small(&format!(
+            "phase_map = \"{coarse}\"\nphase_map_pitch_um = 4.0\ndispersion = \"geometric-phase\""
+        )));
+        assert!(e.contains("lens.phase_map_pitch_um") && e.contains("more than π") && e.contains("a pitch ≤"), "{e}");
+        let other = write_map("other.npy", 52, 1.0, |_, _| 1.0);
+        let e = err(small(&keys(&good, &format!("amplitude_map = \"{other}\"\ndispersion = \"geometric-phase\""))));
+        assert!(e.contains("lens.amplitude_map") && e.contains("52 × 52"), "{e}");
+        // a header of 1000 × 1000 over the data of 50 × 50: refused before reading the samples
+        let bytes = std::fs::read(&good).unwrap();
+        let text = String::from_utf8_lossy(&bytes[10..]).replace("(50, 50)", "(1000, 1000)");
+        let mut lying = bytes[..10].to_vec();
+        lying.extend_from_slice(&text.as_bytes()[..bytes.len() - 10 - (50 * 50 * 8)]);
+        lying.extend_from_slice(&bytes[bytes.len() - 50 * 50 * 8..]);
+        let path = std::env::temp_dir().join(format!("asnr-map-{}-lying.npy", std::process::id()));
+        std::fs::write(&path, lying).unwrap();
+        let e = err(small(&keys(&path.display().to_string(), "dispersion = \"geometric-phase\"")));
+        assert!(e.contains("bytes of data after the header") && e.contains("1000 × 1000"), "{e}");
+        let e = err(small(&keys(&good, "dispersion = \"geometric-phase\"\naperture = \"hexagon\"")));
+        assert!(e.contains("lens.aperture") && e.contains("square"), "{e}");
     }
 
     /// A phase table that is wrapped, too short, or not from the axis is refused naming the

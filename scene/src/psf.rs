@@ -226,7 +226,9 @@ impl Literal<'_> {
 /// Parses a `.npy` header from the file's first bytes (at least the preamble and the header);
 /// checks the dtype, the shape (3 axes, or 2 for one slice; each side ≥
 /// [`PSF_MIN_SIDE`] but the first) and the element count (≤ [`PSF_MAX_ELEMENTS`]).
-fn npy_header(bytes: &[u8]) -> Result<NpyHeader, String> {
+/// With `map`, for a 2-D map `[y, x]` instead: at least 2 × 2 and at most
+/// [`optics::map::MAP_MAX_CELLS`] values.
+fn npy_header_as(bytes: &[u8], map: bool) -> Result<NpyHeader, String> {
     let (len, start) = npy_preamble(bytes)?;
     let Some(text) = bytes.get(start..start + len) else {
         return Err(format!("a .npy header of {len} bytes, but the file ends after {} bytes", bytes.len()));
@@ -261,6 +263,19 @@ fn npy_header(bytes: &[u8]) -> Result<NpyHeader, String> {
     };
     let fortran = fortran.ok_or("a .npy header without `fortran_order`")?;
     let shape = shape.ok_or("a .npy header without `shape`")?;
+    if map {
+        let &[y, x] = shape.as_slice() else {
+            return Err(format!("an array of shape {shape:?}: expected 2 axes [y, x]"));
+        };
+        let count = y.checked_mul(x);
+        if y < 2 || x < 2 || count.is_none_or(|c| c > optics::map::MAP_MAX_CELLS as u64) {
+            return Err(format!(
+                "an array of shape {shape:?}: expected at least 2 × 2 and at most {} values (2^26)",
+                optics::map::MAP_MAX_CELLS
+            ));
+        }
+        return Ok(NpyHeader { dtype, fortran, shape: [1, y as usize, x as usize], offset: start + len });
+    }
     let shape = match shape.as_slice() {
         &[d, y, x] => [d, y, x],
         &[y, x] => [1, y, x],
@@ -325,7 +340,20 @@ fn read_npy(path: &Path) -> Result<Stack, String> {
 
 /// Reads a `.npy` array of `length` bytes from `source`: its preamble and header first, the
 /// length checked against them, and only then its samples.
-fn npy_from(mut source: impl std::io::Read + std::io::Seek, length: u64) -> Result<Stack, String> {
+fn npy_from(source: impl std::io::Read + std::io::Seek, length: u64) -> Result<Stack, String> {
+    npy_from_as(source, length, false)
+}
+
+/// Reads a 2-D `.npy` map `[y, x]` (float32 or float64): its header and sizes checked against the
+/// file's length before its samples are read; one slice of `ny × nx` values in C order.
+pub(crate) fn read_npy_map(path: &Path) -> Result<Stack, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read it ({e})"))?;
+    let length = file.metadata().map_err(|e| format!("cannot read it ({e})"))?.len();
+    npy_from_as(std::io::BufReader::new(file), length, true)
+}
+
+/// [`npy_from`] for a stack or (`map`) a 2-D map.
+fn npy_from_as(mut source: impl std::io::Read + std::io::Seek, length: u64, map: bool) -> Result<Stack, String> {
     let io = |e: std::io::Error| format!("cannot read it ({e})");
     let mut head = vec![0u8; 12.min(length) as usize];
     source.read_exact(&mut head).map_err(io)?;
@@ -336,7 +364,7 @@ fn npy_from(mut source: impl std::io::Read + std::io::Seek, length: u64) -> Resu
     source
         .read_exact(&mut head[at..])
         .map_err(|_| format!("a .npy header of {len} bytes, but the file ends after {length} bytes"))?;
-    let header = npy_header(&head)?;
+    let header = npy_header_as(&head, map)?;
     let [depth, ny, nx] = header.shape;
     let data = (depth * ny * nx) * header.dtype.size;
     if length != (header.offset + data) as u64 {

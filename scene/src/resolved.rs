@@ -273,6 +273,14 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             if let Some(knots) = &l.phase_spline_rad {
                 out.value("phase_spline_rad", &list(knots));
             }
+            if let Some(file) = &l.phase_map {
+                out.string("phase_map", &path(o, "lens.phase_map", file)?);
+                out.number("phase_map_pitch_um", l.phase_map_pitch_um.unwrap_or_default());
+                if let Some(file) = &l.amplitude_map {
+                    out.string("amplitude_map", &path(o, "lens.amplitude_map", file)?);
+                }
+                out.string("aperture", l.aperture.as_deref().unwrap_or("circle"));
+            }
             let dispersion = l.dispersion.as_deref().unwrap_or_default();
             out.string("dispersion", dispersion);
             if dispersion == "diffractive" {

@@ -187,12 +187,60 @@ pub(crate) fn phase_table() -> String {
     text
 }
 
-/// Write (or with `--check`, compare) every generated file under the workspace `root`.
+/// The 2-D phase maps of the examples (`cargo xtask data --maps`), written under `target/` (each
+/// is 29 MB, too large to commit): the paper's aperture (F/2.5, f0 = 3.36 mm, λ0 = 800 nm) on
+/// 0.5 µm cells, 2688 × 2688 (1.344 mm), the phase wrapped to [0, 2π) (geometric phase) as
+/// float32 `[y, x]`, row j at y = (j − 1343.5) p.
+pub(crate) const MAPS: [(&str, f64); 2] =
+    [("target/phase-maps/hyperbolic-f2.5.npy", 0.0), ("target/phase-maps/cubic-f2.5.npy", 30.0)];
+
+/// The cells of a map side and their pitch, m.
+const MAP_CELLS: usize = 2688;
+const MAP_PITCH: f64 = 0.5e-6;
+
+/// A `.npy` float32 map of the hyperbolic phase `−(2π/λ0)(√(r² + f0²) − f0)` plus the cubic term
+/// `alpha ((x/R)³ + (y/R)³)` (radians; R = 0.672 mm), wrapped to [0, 2π).
+pub(crate) fn phase_map(alpha: f64) -> Vec<u8> {
+    let (f0, lambda0, radius) = (3.36e-3, 800e-9, 0.672e-3);
+    let k0 = 2.0 * std::f64::consts::PI / lambda0;
+    let n = MAP_CELLS;
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({n}, {n}), }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    bytes.reserve(n * n * 4);
+    let centre = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * MAP_PITCH;
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (centre(i), centre(j));
+            let phase =
+                -k0 * ((x * x + y * y + f0 * f0).sqrt() - f0) + alpha * ((x / radius).powi(3) + (y / radius).powi(3));
+            bytes.extend_from_slice(&(phase.rem_euclid(std::f64::consts::TAU) as f32).to_le_bytes());
+        }
+    }
+    bytes
+}
+
+/// Write (or with `--check`, compare) every generated file under the workspace `root`; with
+/// `--maps`, the examples' 2-D phase maps under `target/phase-maps/` instead.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     let check = match args {
         [] => false,
         [flag] if flag == "--check" => true,
-        [bad, ..] => bail!("unknown argument `{bad}` (usage: cargo xtask data [--check])"),
+        [flag] if flag == "--maps" => {
+            std::fs::create_dir_all(root.join("target/phase-maps")).context("cannot create target/phase-maps")?;
+            for (name, alpha) in MAPS {
+                let path = root.join(name);
+                std::fs::write(&path, phase_map(alpha)).with_context(|| format!("cannot write {}", path.display()))?;
+                eprintln!("data: wrote {name} ({MAP_CELLS} × {MAP_CELLS} cells of 0.5 µm, cubic term {alpha} rad)");
+            }
+            return Ok(());
+        }
+        [bad, ..] => bail!("unknown argument `{bad}` (usage: cargo xtask data [--check | --maps])"),
     };
     let files = [
         (SPECTROMETER, spectrometer_table()),

@@ -6,7 +6,8 @@
 //! - `accuracy [--quick] [--designs]`: the accuracy-versus-time report (`BENCHMARKS.md`; `--designs`:
 //!   the designs given as data alone, into `target/BENCHMARKS-designs.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
-//! - `data [--check]`: the generated data files of `examples/data/` (`data.rs`).
+//! - `data [--check | --maps]`: the generated data files of `examples/data/` (`data.rs`); `--maps`
+//!   the examples' 2-D phase maps under `target/phase-maps/`.
 //! - `emva`: `asnr characterize` against the `emva1288` package's camera model (`emva.rs`).
 //! - `python`: the wheel installed into a fresh virtual environment, its pytest suite and the
 //!   README's Python blocks (`python.rs`).
@@ -44,7 +45,10 @@ const TASKS: &[(&str, &str)] = &[
         "ci",
         "full check: fmt, tidy, clippy -D warnings, tests, the Python package's tests, the emva1288 cross-check, README commands, reduced stress grid, docs -D warnings",
     ),
-    ("data", "(re)write the generated data files of examples/data/ (the spectrometer table; --check: compare only)"),
+    (
+        "data",
+        "(re)write the generated data files of examples/data/ (the spectrometer table; --check: compare only; --maps: the 2-D phase maps of the examples under target/phase-maps/)",
+    ),
     (
         "emva",
         "asnr characterize checked on a series from the emva1288 package's camera model (a pinned venv in target/)",

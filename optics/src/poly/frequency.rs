@@ -12,6 +12,47 @@ use super::{Engine, FrequencyRule, MAX_DEPTH, MAX_PANELS, NoiseShape, Polychroma
 /// average over the defocus spread, decaying about as `C/ν`: one panel in `ln ν`, where
 /// `ν |OTF|` is about constant, takes the rest of the range.
 pub(super) const AVERAGED_DECAY: f64 = 8.0;
+
+/// Azimuths of the first level of the nested trapezoid rule over azimuth, on `[0, π)` (the
+/// tangential and sagittal directions among them).
+pub const FIRST_AZIMUTHS: usize = 8;
+
+/// The most azimuths the nested trapezoid rule over azimuth takes on `[0, π)`.
+pub const MAX_AZIMUTHS: usize = 256;
+
+/// Share of the tolerance the rule over azimuth may spend (relative to the mean).
+pub const AZIMUTH_SHARE: f64 = 0.25;
+
+/// The mean MTF of a pupil without rotational symmetry averaged over azimuth
+/// ([`Polychromatic::mean_mtf_over_azimuth`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AzimuthalMean {
+    /// The mean over azimuth of the mean MTF along each direction.
+    pub mean: f64,
+    /// The mean along the first azimuth (the field direction: tangential).
+    pub tangential: f64,
+    /// The mean across it (sagittal).
+    pub sagittal: f64,
+    /// Azimuths on `[0, π)` the trapezoid rule took.
+    pub azimuths: usize,
+    /// The change of the average at the last doubling (absolute): the error estimate of the
+    /// rule over azimuth, within [`AZIMUTH_SHARE`] of the tolerance times the mean unless
+    /// [`MAX_AZIMUTHS`] was reached.
+    pub change: f64,
+    /// What the means along every azimuth took, summed.
+    pub work: Work,
+}
+
+fn add(a: Work, b: Work) -> Work {
+    Work {
+        frequency_panels: a.frequency_panels + b.frequency_panels,
+        otf_evaluations: a.otf_evaluations + b.otf_evaluations,
+        sign_changes: a.sign_changes + b.sign_changes,
+        closed_form_evaluations: a.closed_form_evaluations + b.closed_form_evaluations,
+        spectral_evaluations: a.spectral_evaluations + b.spectral_evaluations,
+        ..b
+    }
+}
 use crate::quad;
 
 impl Polychromatic<'_> {
@@ -61,6 +102,81 @@ impl Polychromatic<'_> {
         } else {
             self.mean_of(&|nu| self.otf(nu) / noise.value(nu))
         }
+    }
+
+    /// Whether the OTF is a 2-D grid of a sampled pupil (the FFT engine, or a line spectrum's
+    /// FFT grids): a pupil with no rotational symmetry, whose ASNR takes the mean MTF averaged
+    /// over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)).
+    pub fn has_pupil_grid(&self) -> bool {
+        matches!(self.engine(), Engine::Fft { .. } | Engine::Monochromatic { fft: Some(_) })
+    }
+
+    /// The mean MTF averaged over azimuth (docs/physics.md, "Pupils without rotational
+    /// symmetry"): `(1/ν_max) ∫_0^{ν_max} (1/π) ∫_0^π P(ν) |OTF(ν, φ)| dφ dν`, the mean of
+    /// `P |OTF|` over the disc of radius `ν_max` in polar measure `dν dφ` (the radial integral of
+    /// the 1-D mean, averaged over directions; `|OTF|` is π-periodic in φ since
+    /// `OTF(−ν) = OTF(ν)*`). With a non-white `noise` spectrum, of `P |OTF| / n` instead.
+    ///
+    /// The φ integral is the trapezoid rule on `M` azimuths `φ_k = first + kπ/M` (spectrally
+    /// accurate for a smooth periodic function), nested: `M` = 8, 16, … until two successive
+    /// averages differ by at most [`AZIMUTH_SHARE`] of the tolerance relative to the mean (their
+    /// difference bounds the error of the coarser one), or [`MAX_AZIMUTHS`]. Each azimuth's mean
+    /// is [`mean_mtf_along`](Self::mean_mtf_along)'s. The tangential (along `first`) and sagittal
+    /// (across) means are two of the azimuths.
+    pub fn mean_mtf_over_azimuth(&self, first: f64, noise: Option<&NoiseShape>) -> AzimuthalMean {
+        let along = |azimuth: f64| match noise {
+            None => self.mean_mtf_along(azimuth),
+            Some(shape) => self.mean_mtf_over_noise(shape, azimuth),
+        };
+        let mut work = Work::default();
+        let mut means: Vec<f64> = Vec::with_capacity(MAX_AZIMUTHS);
+        let mut count = FIRST_AZIMUTHS;
+        for k in 0..count {
+            let (m, w) = along(first + PI * k as f64 / count as f64);
+            means.push(m);
+            work = add(work, w);
+        }
+        let tangential = means[0];
+        let sagittal = means[count / 2];
+        let mut average = means.iter().sum::<f64>() / count as f64;
+        let mut change = f64::INFINITY;
+        while count < MAX_AZIMUTHS {
+            // the new azimuths sit halfway between the old ones
+            let mut added = 0.0;
+            for k in 0..count {
+                let (m, w) = along(first + PI * (2 * k + 1) as f64 / (2 * count) as f64);
+                added += m;
+                work = add(work, w);
+            }
+            count *= 2;
+            let refined = 0.5 * average + added / count as f64;
+            change = (refined - average).abs();
+            average = refined;
+            if change <= AZIMUTH_SHARE * self.tolerance() * average.abs() {
+                break;
+            }
+        }
+        AzimuthalMean { mean: average, tangential, sagittal, azimuths: count, change, work }
+    }
+
+    /// The MTF at `frequency` averaged over azimuth, `(1/π) ∫_0^π |OTF(ν, φ)| dφ`, by the
+    /// nested trapezoid rule of [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) (to the
+    /// same share of the tolerance, absolute), pixel MTF included.
+    pub fn mtf_over_azimuth(&self, frequency: f64, first: f64) -> f64 {
+        let at = |k: usize, count: usize| self.mtf_along(frequency, first + PI * k as f64 / count as f64);
+        let mut count = FIRST_AZIMUTHS;
+        let mut average = (0..count).map(|k| at(k, count)).sum::<f64>() / count as f64;
+        while count < MAX_AZIMUTHS {
+            let added: f64 = (0..count).map(|k| at(2 * k + 1, 2 * count)).sum();
+            count *= 2;
+            let refined = 0.5 * average + added / count as f64;
+            let change = (refined - average).abs();
+            average = refined;
+            if change <= AZIMUTH_SHARE * self.tolerance() {
+                break;
+            }
+        }
+        average
     }
 
     /// Adaptive mean over `[0, max_frequency]` of `P(ν) |value(ν)|`, where `value` is a signed

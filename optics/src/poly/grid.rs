@@ -102,7 +102,7 @@ impl FftPath {
             for order in scene.part(part).lens.orders(lambda, scene.field) {
                 match &order.pupil {
                     Pupil::Table(_) => {}
-                    Pupil::Zones(_) => return Ok(None),
+                    Pupil::Zones(_) | Pupil::Map(_) => return Ok(None),
                     _ => {
                         let slot = layer.pupil(&order)?;
                         aliased |= layer.pupils[slot].1.max_opd_step_m() > PHASE_NYQUIST_WAVES * lambda;
@@ -365,6 +365,7 @@ struct FftLayer {
     plan: OtfPlan,
     numerical_aperture: f64,
     circle: Arc<Aperture>,
+    square: Arc<Aperture>,
     pupils: Vec<(Arc<Aperture>, SampledPupil)>,
     zones: Vec<SampledZones>,
     fields: Vec<ZoneField>,
@@ -377,6 +378,7 @@ impl FftLayer {
             plan: OtfPlan::new(n, s_max)?,
             numerical_aperture,
             circle: Arc::new(Aperture::circle()),
+            square: Arc::new(Aperture::mask(|x, y| x.abs() <= 1.0 && y.abs() <= 1.0)),
             pupils: Vec::new(),
             zones: Vec::new(),
             fields: Vec::new(),
@@ -393,6 +395,11 @@ impl FftLayer {
         };
         let mut otf = Otf::new();
         match &order.pupil {
+            Pupil::Map(map) => {
+                let sampled = &self.pupils[slot].1;
+                let (field, weight) = map.field(sampled.n(), sampled.amplitude(), lambda);
+                self.plan.otf_of_field(&field, weight, &mut otf);
+            }
             Pupil::Radial(radial) => {
                 let (field, weight) = radial_field(&self.pupils[slot].1, radial, lambda);
                 self.plan.otf_of_field(&field, weight, &mut otf);
@@ -407,9 +414,15 @@ impl FftLayer {
     fn pupil(&mut self, order: &Order) -> Result<usize, Error> {
         let aperture = match &order.pupil {
             Pupil::Aperture(a) => a.clone(),
+            Pupil::Map(m) if m.map().aperture() == crate::map::MapAperture::Square => self.square.clone(),
             _ => self.circle.clone(),
         };
         let mut aberrations = order.wavefront.aberrations();
+        if let Pupil::Map(_) = &order.pupil {
+            // the map's field holds its whole wavefront (`MapPupil::field`): the sampled pupil
+            // gives the edge pixels' areas only
+            aberrations = crate::fft::Aberrations::default();
+        }
         if let Pupil::Radial(radial) = &order.pupil {
             // the symmetric part is added per pixel (`radial_field`); the rest is sampled here
             aberrations.zernike_noll_m = radial.asymmetric_zernike();

@@ -56,6 +56,7 @@ mod noise;
 mod per_frequency;
 mod spectral;
 
+pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, FIRST_AZIMUTHS, MAX_AZIMUTHS};
 pub use grid::monochromatic_mtf;
 pub use noise::NoiseShape;
 pub use spectral::forget_remembered;

@@ -1,0 +1,197 @@
+//! A lens given by a 2-D phase map (docs/physics.md, "Phase maps"): a designer's phase
+//! `φ0[y, x]` at the design wavelength, each sample held over its cell, in a circular or square
+//! aperture, with the dispersion models of [`PhaseLens`](crate::PhaseLens).
+
+use std::sync::Arc;
+
+use optics::map::{MapAperture, MapPupil, PhaseMap, StoredPhase};
+use optics::radial::Oblique;
+use optics::{Field, LensModel, Order};
+
+use crate::Error;
+use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
+use crate::phase::{Dispersion, order_list};
+
+/// A lens given by a 2-D phase map ([`optics::map::PhaseMap`]): working F-number `f0/D` (`D` the
+/// circle's diameter or the square's side), the detector at `f0`, the dispersion, and the
+/// efficiency τ(λ) and transmission T(λ) as fractions of the light on the aperture (circle or
+/// square). Against the circle of eq. S7 the square collects `4/π` of the light: its orders'
+/// efficiencies and its transmission are the given ones times `4/π`
+/// ([`optics::Pupil::area_fraction`]).
+///
+/// Every order goes through [`optics::Pupil::Map`] with the wavefront
+/// `W_λ = (path per radian)·φ0 + S` (geometric phase: `(λ/2π) φ0`; refractive: `(λ0/2π) φ0 g`;
+/// diffractive order m: `(λ/2π)(m/p) φ0`) against the exact reference sphere `S`; off axis the
+/// oblique wave adds its path ([`Oblique`]). With a geometric phase the map may be wrapped
+/// (it is held as its residual against the sphere, exact mod 2π).
+#[derive(Clone, Debug)]
+pub struct PhaseMapLens {
+    f_number: f64,
+    focal_length: f64,
+    design_wavelength: f64,
+    map: Arc<PhaseMap>,
+    dispersion: Dispersion,
+    efficiency: Curve,
+    transmission: Curve,
+    source: String,
+}
+
+impl PhaseMapLens {
+    /// A lens of working F-number `f_number` (≥ 0.5) with the detector at `focal_length_m`,
+    /// the phase map `map` (built with [`PhaseMapLens::stored_phase`] for `dispersion`, its
+    /// aperture radius `f0/(2F#)` and detector distance `f0`), efficiency and transmission
+    /// (fractions of the light on the map's aperture, τ ≤ T), and `source` (for reports).
+    ///
+    /// # Errors
+    /// A parameter out of range, or a map built for another aperture, distance or storage.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        f_number: f64,
+        focal_length_m: f64,
+        design_wavelength_m: f64,
+        map: Arc<PhaseMap>,
+        dispersion: Dispersion,
+        efficiency: Curve,
+        transmission: Curve,
+        source: String,
+    ) -> Result<PhaseMapLens, Error> {
+        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+        check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
+        if let Dispersion::Diffractive { design_order } = dispersion {
+            let p = f64::from(design_order);
+            check("design_order", p, (1.0..=1000.0).contains(&p), "a whole number from 1 to 1000")?;
+        }
+        if let Dispersion::Refractive { glass: Some(g) } = &dispersion
+            && g.index(design_wavelength_m).is_none()
+        {
+            return Err(Error::OutOfRange {
+                name: "design_wavelength",
+                value: design_wavelength_m,
+                expected: "inside the glass's Sellmeier range",
+            });
+        }
+        let radius = 0.5 * focal_length_m / f_number;
+        check(
+            "phase map aperture radius",
+            map.radius(),
+            (map.radius() - radius).abs() <= 1e-12 * radius,
+            "the lens's aperture radius f0/(2F#)",
+        )?;
+        if map.stored() != Self::stored_phase(&dispersion) {
+            return Err(Error::OutOfRange {
+                name: "phase map storage",
+                value: f64::NAN,
+                expected: "the residual against the sphere for a geometric phase, the phase as given otherwise",
+            });
+        }
+        check_fraction("efficiency", &efficiency)?;
+        check_fraction("transmission", &transmission)?;
+        let eff = efficiency.clone();
+        check_efficiency_below_transmission(&|l| eff.value(l), &[&efficiency], &transmission, design_wavelength_m)?;
+        Ok(PhaseMapLens {
+            f_number,
+            focal_length: focal_length_m,
+            design_wavelength: design_wavelength_m,
+            map,
+            dispersion,
+            efficiency,
+            transmission,
+            source,
+        })
+    }
+
+    /// How a map must be stored for `dispersion`: its residual against the reference sphere for
+    /// a geometric phase (a wrapped map is then exact), as given otherwise.
+    pub fn stored_phase(dispersion: &Dispersion) -> StoredPhase {
+        match dispersion {
+            Dispersion::GeometricPhase => StoredPhase::Residual,
+            _ => StoredPhase::Given,
+        }
+    }
+
+    /// The phase map.
+    pub fn map(&self) -> &PhaseMap {
+        &self.map
+    }
+
+    /// The family's name.
+    pub fn kind(&self) -> &'static str {
+        "phase"
+    }
+
+    /// The aperture radius `R = f0/(2F#)` (half the square's side), m.
+    pub fn aperture_radius(&self) -> f64 {
+        0.5 * self.focal_length / self.f_number
+    }
+}
+
+impl LensModel for PhaseMapLens {
+    fn f_number(&self) -> f64 {
+        self.f_number
+    }
+
+    fn focal_length(&self) -> f64 {
+        self.focal_length
+    }
+
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        let area = self.map.aperture().area_fraction();
+        let oblique = if field.is_on_axis() {
+            None
+        } else {
+            Oblique::new(self.aperture_radius(), self.focal_length, field.x_rad, field.y_rad).ok()
+        };
+        // a geometric phase is held as its residual ψ0 = φ0 + k0 S: W = (λ/2π) ψ0 + (1 − λ/λ0) S
+        let sphere = match self.dispersion {
+            Dispersion::GeometricPhase => 1.0 - wavelength_m / self.design_wavelength,
+            _ => 1.0,
+        };
+        order_list(&self.dispersion, self.design_wavelength, self.efficiency.value(wavelength_m), wavelength_m)
+            .into_iter()
+            .map(|(_, efficiency, per_radian)| {
+                Order::map(area * efficiency, Arc::new(MapPupil::new(self.map.clone(), per_radian, sphere, oblique)))
+            })
+            .collect()
+    }
+
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.map.aperture().area_fraction() * self.transmission.value(wavelength_m)
+    }
+
+    fn design_wavelength(&self) -> Option<f64> {
+        Some(self.design_wavelength)
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        let mut out = self.efficiency.breakpoints().to_vec();
+        out.extend_from_slice(self.transmission.breakpoints());
+        out.sort_by(f64::total_cmp);
+        out.dedup();
+        out
+    }
+
+    fn describe(&self) -> String {
+        let r = optics::round_for_display;
+        let dispersion = match &self.dispersion {
+            Dispersion::Diffractive { design_order } => format!("diffractive, design order p = {design_order}"),
+            Dispersion::Refractive { glass: Some(_) } => "refractive, glass dispersion".to_string(),
+            other => other.name().to_string(),
+        };
+        let (nx, ny) = self.map.shape();
+        let aperture = match self.map.aperture() {
+            MapAperture::Circle => "circular aperture",
+            MapAperture::Square => "square aperture (4/π of the circle's light)",
+        };
+        format!(
+            "phase-map lens F/{} f0 = {} mm at λ0 = {} nm ({}: {nx} × {ny} cells of {} µm, {aperture}; {dispersion}; \
+             the cells' staircase keeps {:.2} % of the light in the design order), against the exact reference sphere",
+            r(self.f_number),
+            r(self.focal_length * 1e3),
+            r(self.design_wavelength * 1e9),
+            self.source,
+            r(self.map.pitch() * 1e6),
+            100.0 * self.map.design_share(),
+        )
+    }
+}
