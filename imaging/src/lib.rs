@@ -9,6 +9,9 @@
 //!   Fig. S6–S8, EMVA 1288): STF and PTC log-log slopes with their standard errors, with and
 //!   without the capped black subtracted, the conversion gain K, read noise and saturation.
 //!
+//! - [`sfr`](mod@sfr): the MTF from slanted-edge images, the e-SFR of ISO 12233 (4× oversampled
+//!   ESF, windowed LSF, the derivative's and the bins' transfer divided out), with standard errors.
+//!
 //! - [`target`](mod@target): test objects, a procedural USAF-1951 target or a user's PNG, and the
 //!   measured modulation of a bar set;
 //! - [`render`](mod@render): the forward model of the paper's Fig. 4 (object → photoelectrons →
@@ -22,6 +25,7 @@ pub mod error;
 pub mod frames;
 pub mod measure;
 pub mod render;
+pub mod sfr;
 pub mod target;
 
 pub use characterize::{Characterization, Fit, Level, characterize, fit_line, fit_line_weighted, level_of};
@@ -29,4 +33,5 @@ pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack, write_png};
 pub use measure::{Measurement, Region, measure};
 pub use render::{Rendering, Transfer, render, transfer};
+pub use sfr::{EdgeSfr, Sfr, sfr};
 pub use target::{Polarity, Target};

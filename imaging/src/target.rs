@@ -282,7 +282,16 @@ pub fn from_png(path: &Path, oversample: usize) -> Result<Target, Error> {
         });
     }
     let frame = crate::read_frame(path)?;
-    let full = if frame.bit_depth == 16 { 65535.0 } else { 255.0 };
+    let full = match frame.bit_depth {
+        8 => 255.0,
+        16 => 65535.0,
+        bits => {
+            return Err(Error::Read {
+                path: path.to_owned(),
+                message: format!("{bits}-bit floating-point samples: a target image must be 8- or 16-bit grey levels"),
+            });
+        }
+    };
     let (width, height) = (frame.width, frame.height);
     check_side(width * oversample, height * oversample)?;
     let fw = width * oversample;
