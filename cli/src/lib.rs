@@ -31,6 +31,7 @@ mod plot;
 mod plotcmd;
 mod psf;
 mod render;
+mod sfrcmd;
 mod sweep;
 
 // the reports shared with the Python package, under the names the subcommands use
@@ -159,6 +160,9 @@ pub enum Command {
     /// The SNR of a stack of camera frames (eq. 2–4) from a white and a black region, and with
     /// capped-black frames the veiling glare and modulation (SI eq. S10–S12).
     Measure(measure::MeasureArgs),
+    /// The MTF of slanted edges in camera frames (ISO 12233 e-SFR): the MTF to Nyquist and
+    /// beyond, the mean MTF to Nyquist, MTF50 and MTF at Nyquist, with standard errors.
+    Sfr(sfrcmd::SfrArgs),
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
@@ -392,6 +396,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Plot(args) => plotcmd::run(&args),
         Command::Compare(args) => comparecmd::run(args),
         Command::Measure(args) => measure::run(&args),
+        Command::Sfr(args) => sfrcmd::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
         Command::Otf(args) => psf::run(&args, psf::Kind::Otf),
