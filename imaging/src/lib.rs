@@ -31,7 +31,7 @@ pub mod target;
 pub use characterize::{Characterization, Fit, Level, characterize, fit_line, fit_line_weighted, level_of};
 pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack, write_png};
-pub use measure::{Measurement, Region, measure};
+pub use measure::{MeasuredAsnr, Measurement, Region, measure};
 pub use render::{Rendering, Transfer, render, transfer};
 pub use sfr::{EdgeSfr, Sfr, sfr};
 pub use target::{Polarity, Target};
