@@ -335,3 +335,40 @@ fn a_rendered_edge_recovers_the_scenes_mtf() {
     assert!((e.mean_mtf / mean_expected - 1.0).abs() < 3e-3);
     assert!(worst < 2e-3);
 }
+
+/// The measured ASNR (SNR of the white and black regions × the edge's mean MTF) of rendered
+/// frames, Poisson noise and the scene's sensor, recovers the scene's ASNR (pixel aperture on,
+/// no glare) within its stated standard error: 100 seeds of 4 frames of a 96 × 96 edge of
+/// contrast 1; the fraction within 1.96 σ is near 95 % (measured: printed).
+#[test]
+fn the_measured_asnr_of_rendered_frames_covers_the_scenes() {
+    let scene = scene::load(None, &["camera.pixel_mtf=true".to_owned(), "spectrum.range_nm=50".to_owned()]).unwrap();
+    let evaluation = metric::evaluate(&scene).unwrap();
+    let target = imaging::target::slanted_edge(96, 5.0, 1.0, 3).unwrap();
+    let settings = imaging::render::Settings { seed: 1, frames: 1, glare: false, subtract_black: false };
+    let r = imaging::render(&scene, &evaluation, &target, &settings).unwrap();
+    let (white, black) = (target.white.unwrap(), target.black.unwrap());
+    let sensor = scene.camera().sensor();
+    let mut z = Vec::new();
+    for seed in 0..100_u64 {
+        let frames: Vec<Frame> = (0..4)
+            .map(|i| Frame {
+                path: format!("seed-{seed}-{i}").into(),
+                width: r.width,
+                height: r.height,
+                bit_depth: 16,
+                data: imaging::render::expose(&r.expected_e, sensor, 1000 * seed + i).unwrap(),
+            })
+            .collect();
+        let m = imaging::measure(&frames, white, black, None, false).unwrap();
+        let result = sfr(&frames, &[], &Options::default()).unwrap();
+        let e = result.single().unwrap();
+        let a = imaging::MeasuredAsnr::new(m.snr, m.snr_sigma, e.mean_mtf, e.mean_mtf_sigma);
+        z.push((a.asnr - evaluation.asnr) / a.asnr_sigma);
+    }
+    let inside = z.iter().filter(|v| v.abs() < 1.96).count();
+    let mean = z.iter().sum::<f64>() / z.len() as f64;
+    println!("scene ASNR {:.4}; {inside}/100 measured within 1.96 σ; mean z {mean:+.3}", evaluation.asnr);
+    assert!((88..=100).contains(&inside), "{inside} of 100 within 1.96 standard errors");
+    assert!(mean.abs() < 0.5, "mean z {mean}: a bias");
+}
