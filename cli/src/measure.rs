@@ -71,15 +71,18 @@ struct Measured {
     edge_angle_deg: Option<f64>,
 }
 
-/// The mean MTF of `--edge` or `--mtf-csv` (value, standard error, source, edge angle).
-fn measured_mtf(args: &MeasureArgs, pitch_m: Option<f64>) -> Result<Option<(f64, f64, String, Option<f64>)>> {
+/// A measured mean MTF: value, standard error, where it came from, the edge's angle.
+struct MeanMtf(f64, f64, String, Option<f64>);
+
+/// The mean MTF of `--edge` or `--mtf-csv`.
+fn measured_mtf(args: &MeasureArgs, pitch_m: Option<f64>) -> Result<Option<MeanMtf>> {
     if !args.edge.is_empty() {
         let options =
             crate::sfrcmd::options(args.edge_roi.as_deref(), None, None, pitch_m.map(|p| p * 1e6), false, None)?;
         let (frames, _) = crate::sfrcmd::read(&args.edge, &[])?;
         let result = imaging::sfr(&frames, &[], &options)?;
         let e = result.single()?;
-        return Ok(Some((
+        return Ok(Some(MeanMtf(
             e.mean_mtf,
             e.mean_mtf_sigma,
             format!("slanted edge, {} frame(s) from {}", result.frames, frames[0].path.display()),
@@ -98,7 +101,7 @@ fn measured_mtf(args: &MeasureArgs, pitch_m: Option<f64>) -> Result<Option<(f64,
         .with_context(|| format!("--mtf-csv {}", path.display()))?;
     let nyquist = 1.0 / (2.0 * pitch * 1e3);
     let mean = imaging::measure::mean_mtf_of_table(path, &f, &m, nyquist)?;
-    Ok(Some((mean, 0.0, format!("table {} (no standard error given)", path.display()), None)))
+    Ok(Some(MeanMtf(mean, 0.0, format!("table {} (no standard error given)", path.display()), None)))
 }
 
 /// Runs `asnr measure`.
@@ -144,7 +147,7 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
         }
     };
     let pitch_m = args.pixel_pitch_um.map(|p| p * 1e-6).or(simulated.as_ref().map(|s| s.1));
-    let measured = measured_mtf(args, pitch_m)?.map(|(mean, sigma, source, angle)| Measured {
+    let measured = measured_mtf(args, pitch_m)?.map(|MeanMtf(mean, sigma, source, angle)| Measured {
         asnr: imaging::MeasuredAsnr::new(m.snr, m.snr_sigma, mean, sigma),
         mtf_source: source,
         edge_angle_deg: angle,

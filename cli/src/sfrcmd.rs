@@ -137,10 +137,10 @@ pub fn run(args: &SfrArgs) -> Result<()> {
     if args.json {
         let mut value = serde_json::to_value(&result)?;
         // one edge: its fields at the top level too
-        if let ([edge], Some(object)) = (&result.edges[..], value.as_object_mut()) {
-            if let serde_json::Value::Object(fields) = serde_json::to_value(edge)? {
-                object.extend(fields);
-            }
+        if let ([edge], Some(object)) = (&result.edges[..], value.as_object_mut())
+            && let serde_json::Value::Object(fields) = serde_json::to_value(edge)?
+        {
+            object.extend(fields);
         }
         outln!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());

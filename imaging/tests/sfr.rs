@@ -309,10 +309,7 @@ fn a_rendered_edge_recovers_the_scenes_mtf() {
     let s = angle.to_radians().sin();
     let expected: Vec<f64> =
         curve.mtf.iter().zip(&e.frequency_cyc_per_px).map(|(m, f)| m * sinc(f * s).abs()).collect();
-    let mut worst: f64 = 0.0;
-    for j in 0..=50 {
-        worst = worst.max((e.mtf[j] - expected[j]).abs());
-    }
+    let worst = e.mtf.iter().zip(&expected).take(51).map(|(m, x)| (m - x).abs()).fold(0.0, f64::max);
     let mean_expected = {
         let s: f64 = (0..=50)
             .map(|j| {
