@@ -188,7 +188,7 @@ pub fn measure(
 
 /// The measured ASNR (paper eq. 1 with measured factors, as the paper's Fig. 2b set it beside
 /// the simulated one): `ASNR = SNR · mean MTF`, the SNR of [`measure`] and the mean MTF to
-/// Nyquist of a slanted edge ([`crate::sfr`]) or a table, with the standard error propagated
+/// Nyquist of a slanted edge ([`crate::sfr()`]) or a table, with the standard error propagated
 /// (independent factors): `σ_A / A = √((σ_SNR/SNR)² + (σ_M/M)²)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MeasuredAsnr {
