@@ -32,6 +32,7 @@ mod plot;
 mod plotcmd;
 mod psf;
 mod render;
+mod sfrcmd;
 mod sweep;
 
 // the reports shared with the Python package, under the names the subcommands use
@@ -180,6 +181,9 @@ pub enum Command {
     /// The noise power spectrum of flat frames, temporal and spatial (EMVA 1288), and with
     /// --mtf-csv the measured NEQ and information capacity.
     Nps(nps::NpsArgs),
+    /// The MTF of slanted edges in camera frames (ISO 12233 e-SFR): the MTF to Nyquist and
+    /// beyond, the mean MTF to Nyquist, MTF50 and MTF at Nyquist, with standard errors.
+    Sfr(sfrcmd::SfrArgs),
     /// A camera's STF and PTC slopes, conversion gain, read noise and saturation from stacks at
     /// increasing illumination (SI Fig. S6–S8, EMVA 1288), listed in a series file.
     Characterize(characterize::CharacterizeArgs),
@@ -432,6 +436,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => comparecmd::run(args),
         Command::Measure(args) => measure::run(&args),
         Command::Nps(args) => nps::run(&args),
+        Command::Sfr(args) => sfrcmd::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Psf(args) => psf::run(&args, psf::Kind::Psf),
         Command::Otf(args) => psf::run(&args, psf::Kind::Otf),

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 
 /// Arguments of `asnr measure`.
 #[derive(clap::Args)]
@@ -26,9 +26,82 @@ pub struct MeasureArgs {
     /// σ_s = σ_w instead of √(σ_w² − σ_b²): glare and camera noise count (the SI's variant).
     #[arg(long)]
     pub include_glare: bool,
+    /// Frames of a slanted edge taken with the same camera: their e-SFR's mean MTF to Nyquist
+    /// times the SNR is the measured ASNR (eq. 1; `asnr sfr` for the edge alone).
+    #[arg(long, num_args = 1.., value_name = "IMAGE", conflicts_with = "mtf_csv")]
+    pub edge: Vec<PathBuf>,
+    /// The edge's region of interest, X,Y,W,H in pixels (default: the whole frame); one edge.
+    #[arg(long, value_name = "X,Y,W,H", requires = "edge")]
+    pub edge_roi: Option<String>,
+    /// A measured MTF instead of an edge: CSV with columns frequency_cyc_per_mm, mtf, from 0 to
+    /// at least Nyquist (needs --pixel-pitch-um or --compare for Nyquist).
+    #[arg(long, value_name = "FILE")]
+    pub mtf_csv: Option<PathBuf>,
+    /// Pixel pitch, µm (Nyquist of --mtf-csv; default: the --compare scene's).
+    #[arg(long, value_name = "UM")]
+    pub pixel_pitch_um: Option<f64>,
+    /// A scene file: its simulated ASNR, SNR0 and mean MTF (with the pixel aperture, as a
+    /// measured edge has it) beside the measured ones, and the ratios (the paper's Fig. 2b).
+    #[arg(long, value_name = "SCENE")]
+    pub compare: Option<PathBuf>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The simulated values `--compare` sets beside the measured ones.
+#[derive(serde::Serialize)]
+struct Comparison {
+    scene: String,
+    asnr: f64,
+    snr0: f64,
+    mean_mtf: f64,
+    /// Measured over simulated.
+    asnr_ratio: f64,
+    snr_ratio: f64,
+    mean_mtf_ratio: f64,
+}
+
+/// The measured ASNR, with where its MTF came from.
+#[derive(serde::Serialize)]
+struct Measured {
+    #[serde(flatten)]
+    asnr: imaging::MeasuredAsnr,
+    mtf_source: String,
+    edge_angle_deg: Option<f64>,
+}
+
+/// A measured mean MTF: value, standard error, where it came from, the edge's angle.
+struct MeanMtf(f64, f64, String, Option<f64>);
+
+/// The mean MTF of `--edge` or `--mtf-csv`.
+fn measured_mtf(args: &MeasureArgs, pitch_m: Option<f64>) -> Result<Option<MeanMtf>> {
+    if !args.edge.is_empty() {
+        let options =
+            crate::sfrcmd::options(args.edge_roi.as_deref(), None, None, pitch_m.map(|p| p * 1e6), false, None)?;
+        let (frames, _) = crate::sfrcmd::read(&args.edge, &[])?;
+        let result = imaging::sfr(&frames, &[], &options)?;
+        let e = result.single()?;
+        return Ok(Some(MeanMtf(
+            e.mean_mtf,
+            e.mean_mtf_sigma,
+            format!("slanted edge, {} frame(s) from {}", result.frames, frames[0].path.display()),
+            Some(e.edge_angle_deg),
+        )));
+    }
+    let Some(path) = &args.mtf_csv else { return Ok(None) };
+    let Some(pitch) = pitch_m else {
+        anyhow::bail!(
+            "--mtf-csv {}: Nyquist needs the pixel pitch: give --pixel-pitch-um or --compare SCENE",
+            path.display()
+        );
+    };
+    // `frequency_cyc_per_mm, mtf` rows, the frequencies increasing (the scene's table reader)
+    let (f, m) = scene::read_pairs(path, &scene::FREQUENCY, 0.0, 1.0, "MTF")
+        .with_context(|| format!("--mtf-csv {}", path.display()))?;
+    let nyquist = 1.0 / (2.0 * pitch * 1e3);
+    let mean = imaging::measure::mean_mtf_of_table(path, &f, &m, nyquist)?;
+    Ok(Some(MeanMtf(mean, 0.0, format!("table {} (no standard error given)", path.display()), None)))
 }
 
 /// Runs `asnr measure`.
@@ -59,8 +132,50 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
         Some(capped)
     };
     let m = imaging::measure(&frames, white, black, capped.as_deref(), args.include_glare)?;
+    if let Some(p) = args.pixel_pitch_um
+        && !(p.is_finite() && p > 0.0 && p < 1000.0)
+    {
+        anyhow::bail!("--pixel-pitch-um {p}: expected a pitch > 0 and < 1000 µm");
+    }
+    // the scene with the pixel aperture, as a measured edge has it
+    let simulated = match &args.compare {
+        None => None,
+        Some(path) => {
+            let scene = crate::load(Some(path), &["camera.pixel_mtf=true".to_owned()])?;
+            let evaluation = metric::evaluate(&scene).with_context(|| format!("--compare {}", path.display()))?;
+            Some((path.display().to_string(), scene.camera().pixel_pitch(), evaluation))
+        }
+    };
+    let pitch_m = args.pixel_pitch_um.map(|p| p * 1e-6).or(simulated.as_ref().map(|s| s.1));
+    let measured = measured_mtf(args, pitch_m)?.map(|MeanMtf(mean, sigma, source, angle)| Measured {
+        asnr: imaging::MeasuredAsnr::new(m.snr, m.snr_sigma, mean, sigma),
+        mtf_source: source,
+        edge_angle_deg: angle,
+    });
+    let comparison = match (&simulated, &measured) {
+        (Some((scene, _, e)), Some(measured)) => Some(Comparison {
+            scene: scene.clone(),
+            asnr: e.asnr,
+            snr0: e.snr0,
+            mean_mtf: e.mean_mtf,
+            asnr_ratio: measured.asnr.asnr / e.asnr,
+            snr_ratio: m.snr / e.snr0,
+            mean_mtf_ratio: measured.asnr.mean_mtf / e.mean_mtf,
+        }),
+        (Some(_), None) => anyhow::bail!("--compare needs the measured MTF too: give --edge IMAGE… or --mtf-csv FILE"),
+        _ => None,
+    };
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&m)?);
+        let mut value = serde_json::to_value(&m)?;
+        if let Some(object) = value.as_object_mut() {
+            if let Some(measured) = &measured {
+                object.insert("measured_asnr".to_owned(), serde_json::to_value(measured)?);
+            }
+            if let Some(c) = &comparison {
+                object.insert("compare".to_owned(), serde_json::to_value(c)?);
+            }
+        }
+        outln!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
     let noise = if m.include_glare {
@@ -86,6 +201,27 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
         );
         outln!("VG                {:>12.4}   (black − capped)/(white − capped) (SI eq. S10)", vg);
         outln!("M                 {:>12.4}   (1 − VG)/(1 + VG) (SI eq. S11–S12)", mo);
+    }
+    if let Some(measured) = &measured {
+        let a = &measured.asnr;
+        let angle = measured.edge_angle_deg.map(|d| format!(", edge {d:+.2}°")).unwrap_or_default();
+        outln!(
+            "mean MTF          {:>12.5}   ± {:.5}, 0 to Nyquist: {}{angle}",
+            a.mean_mtf,
+            a.mean_mtf_sigma,
+            measured.mtf_source
+        );
+        outln!(
+            "measured ASNR     {:>12.4}   ± {:.4} = SNR × mean MTF (eq. 1), errors propagated",
+            a.asnr,
+            a.asnr_sigma
+        );
+    }
+    if let Some(c) = &comparison {
+        outln!("simulated         {:>12}   {} (with the pixel aperture)", "", c.scene);
+        outln!("  ASNR            {:>12.4}   measured/simulated {:.4}", c.asnr, c.asnr_ratio);
+        outln!("  SNR0            {:>12.4}   measured/simulated {:.4}", c.snr0, c.snr_ratio);
+        outln!("  mean MTF        {:>12.5}   measured/simulated {:.4}", c.mean_mtf, c.mean_mtf_ratio);
     }
     Ok(())
 }

@@ -28,9 +28,20 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub seed: u64,
     /// The object: `usaf` (dark bars on a clear ground), `usaf-negative` (clear bars on a dark
-    /// ground), or a grayscale PNG (one file pixel per detector pixel, white = the scene's radiance).
-    #[arg(long, default_value = "usaf", value_name = "usaf|usaf-negative|FILE.png")]
+    /// ground), `slanted-edge` (for `asnr sfr`: see --angle, --contrast, --size), or a grayscale
+    /// PNG (one file pixel per detector pixel, white = the scene's radiance).
+    #[arg(long, default_value = "usaf", value_name = "usaf|usaf-negative|slanted-edge|FILE.png")]
     pub target: String,
+    /// Slanted edge: degrees off vertical (ISO 12233: about 5°).
+    #[arg(long, default_value_t = 5.0, value_name = "DEG")]
+    pub angle: f64,
+    /// Slanted edge: Michelson contrast, (bright − dark)/(bright + dark) (ISO 12233: about 0.6;
+    /// 1 for a black dark side, which `asnr measure` can also read the SNR from).
+    #[arg(long, default_value_t = 0.6, value_name = "C")]
+    pub contrast: f64,
+    /// Slanted edge: frame size, pixels a side.
+    #[arg(long, default_value_t = 160, value_name = "PX")]
+    pub size: usize,
     /// USAF groups to draw, FIRST:LAST (default: from Nyquist/16 to the group holding Nyquist).
     #[arg(long, value_name = "FIRST:LAST")]
     pub groups: Option<String>,
@@ -321,6 +332,12 @@ fn table(report: &Report, object: &Target) -> String {
 
 /// The object of `--target`.
 fn make_target(args: &RenderArgs, pitch: f64, nyquist_cyc_per_mm: f64) -> Result<Target> {
+    if args.target == "slanted-edge" {
+        if args.groups.is_some() {
+            anyhow::bail!("--groups: only for --target usaf or usaf-negative, not a slanted edge");
+        }
+        return Ok(target::slanted_edge(args.size, args.angle, args.contrast, args.oversample)?);
+    }
     let polarity = match args.target.as_str() {
         "usaf" => Some(Polarity::Positive),
         "usaf-negative" => Some(Polarity::Negative),
@@ -332,7 +349,10 @@ fn make_target(args: &RenderArgs, pitch: f64, nyquist_cyc_per_mm: f64) -> Result
         }
         let path = Path::new(&args.target);
         if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-            anyhow::bail!("--target {}: expected usaf, usaf-negative or a grayscale .png file", args.target);
+            anyhow::bail!(
+                "--target {}: expected usaf, usaf-negative, slanted-edge or a grayscale .png file",
+                args.target
+            );
         }
         return Ok(target::from_png(path, args.oversample)?);
     };

@@ -1755,7 +1755,10 @@ fn render_writes_images_whose_frames_measure_the_scenes_snr0() {
     assert!((snr - snr0).abs() < 3.0 * sigma, "measured {snr} ± {sigma} against SNR0 {snr0}");
     // bad input names the option, the value and what is accepted
     let err = fails(&["render", "--out", out, "--target", "bars.txt"]);
-    assert!(err.contains("--target bars.txt") && err.contains("usaf, usaf-negative or a grayscale .png"), "{err}");
+    assert!(
+        err.contains("--target bars.txt") && err.contains("usaf, usaf-negative, slanted-edge or a grayscale .png"),
+        "{err}"
+    );
     let err = fails(&["render", "--out", out, "--oversample", "2"]);
     assert!(err.contains("oversampling 2") && err.contains("odd"), "{err}");
     let err = fails(&["render", "--out", out, "--groups", "6:x"]);

@@ -127,6 +127,15 @@ pub enum Error {
         /// What is wrong and what is needed.
         message: String,
     },
+    /// A slanted-edge analysis that cannot be made (no edge, a saturated edge, an angle outside
+    /// ISO 12233's range, …).
+    #[error("{}: {message}", path.display())]
+    Edge {
+        /// The first frame (or what is wrong, e.g. `response`).
+        path: PathBuf,
+        /// What is wrong and what is accepted.
+        message: String,
+    },
     /// Capped-black levels at or above the levels they are subtracted from.
     #[error(
         "the capped black level {capped:.6} is not below the {region} level {level:.6}: the capped-black frames cannot be the camera's dark output for these frames"

@@ -1,5 +1,5 @@
 //! Stacks of grayscale frames: 8- and 16-bit PNG (1-, 2- and 4-bit grey is expanded to 8-bit) and
-//! TIFF (`.tif`, `.tiff`), grey levels as read (DN), no scaling.
+//! TIFF (`.tif`, `.tiff`; also 32-bit floating point), grey levels as read (DN), no scaling.
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,7 @@ pub struct Frame {
     pub width: usize,
     /// Rows.
     pub height: usize,
-    /// Bits per sample of the file (8 or 16).
+    /// Bits per sample of the file: 8 or 16 (unsigned integers), 32 (a floating-point TIFF).
     pub bit_depth: u8,
     /// Grey levels, `data[y · width + x]`.
     pub data: Vec<f64>,
@@ -128,7 +128,7 @@ pub fn write_png(path: &Path, width: usize, height: usize, levels: &[u16], bit_d
     writer.finish().map_err(|e| fail(format!("cannot write ({e})")))
 }
 
-/// Reads one grayscale TIFF (8- or 16-bit, first image of the file).
+/// Reads one grayscale TIFF (8- or 16-bit unsigned or 32-bit float, first image of the file).
 fn read_tiff(path: &Path) -> Result<Frame, Error> {
     use tiff::decoder::{Decoder, DecodingResult};
     let read = |message: String| Error::Read { path: path.to_owned(), message };
@@ -139,6 +139,8 @@ fn read_tiff(path: &Path) -> Result<Frame, Error> {
     let bit_depth = match color {
         tiff::ColorType::Gray(8) => 8,
         tiff::ColorType::Gray(16) => 16,
+        // 32-bit samples: read below only as IEEE floats (e.g. a linear float export)
+        tiff::ColorType::Gray(32) => 32,
         other => return Err(Error::NotGrayscale { path: path.to_owned(), color: format!("{other:?}").to_lowercase() }),
     };
     let (width, height) = decoder.dimensions().map_err(|e| read(format!("cannot decode ({e})")))?;
@@ -146,7 +148,17 @@ fn read_tiff(path: &Path) -> Result<Frame, Error> {
     let data: Vec<f64> = match decoder.read_image().map_err(|e| read(format!("cannot decode ({e})")))? {
         DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
         DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
-        _ => return Err(read("samples that are not 8- or 16-bit unsigned grey levels".to_owned())),
+        DecodingResult::F32(v) if bit_depth == 32 => {
+            if let Some(bad) = v.iter().find(|x| !x.is_finite()) {
+                return Err(read(format!("a sample of {bad}: expected finite floating-point grey levels")));
+            }
+            v.into_iter().map(f64::from).collect()
+        }
+        _ => {
+            return Err(read(
+                "samples that are not 8- or 16-bit unsigned or 32-bit floating-point grey levels".to_owned(),
+            ));
+        }
     };
     let (width, height) = (width as usize, height as usize);
     if data.len() != width * height {
@@ -230,6 +242,15 @@ pub fn frame_paths(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
 /// Those of [`frame_paths`] and [`read_frame`], [`Error::SizeMismatch`],
 /// [`Error::DepthMismatch`], [`Error::TooLarge`] and [`Error::TooFewFrames`].
 pub fn read_stack(what: &'static str, inputs: &[PathBuf]) -> Result<Vec<Frame>, Error> {
+    read_frames(what, inputs, 2)
+}
+
+/// [`read_stack`] with at least `min_frames` frames (1 for an edge image, whose standard error
+/// can come from the ESF's bins).
+///
+/// # Errors
+/// Those of [`read_stack`].
+pub fn read_frames(what: &'static str, inputs: &[PathBuf], min_frames: usize) -> Result<Vec<Frame>, Error> {
     let paths = frame_paths(inputs)?;
     let mut frames: Vec<Frame> = Vec::with_capacity(paths.len().min(1024));
     let mut samples = 0_u64;
@@ -250,7 +271,7 @@ pub fn read_stack(what: &'static str, inputs: &[PathBuf]) -> Result<Vec<Frame>, 
         }
         frames.push(frame);
     }
-    if frames.len() < 2 {
+    if frames.len() < min_frames.max(1) {
         return Err(Error::TooFewFrames { what, frames: frames.len() });
     }
     Ok(frames)

@@ -11,6 +11,8 @@
 //!
 //! - [`nps`](mod@nps): the noise power spectrum of flat frames, temporal and spatial parts
 //!   (EMVA 1288), and the measured NEQ and information capacity from it and an MTF;
+//! - [`sfr`](mod@sfr): the MTF from slanted-edge images, the e-SFR of ISO 12233 (4× oversampled
+//!   ESF, windowed LSF, the derivative's and the bins' transfer divided out), with standard errors.
 //!
 //! - [`target`](mod@target): test objects, a procedural USAF-1951 target or a user's PNG, and the
 //!   measured modulation of a bar set;
@@ -26,12 +28,14 @@ pub mod frames;
 pub mod measure;
 pub mod nps;
 pub mod render;
+pub mod sfr;
 pub mod target;
 
 pub use characterize::{Characterization, Fit, Level, characterize, fit_line, fit_line_weighted, level_of};
 pub use error::Error;
 pub use frames::{Frame, read_frame, read_stack, write_png};
-pub use measure::{Measurement, Region, measure};
+pub use measure::{MeasuredAsnr, Measurement, Region, measure};
 pub use nps::{MeasuredMetrics, Nps, measured_metrics, nps};
 pub use render::{Rendering, Transfer, render, transfer};
+pub use sfr::{EdgeSfr, Sfr, sfr};
 pub use target::{Polarity, Target};
