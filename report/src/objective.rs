@@ -169,6 +169,35 @@ impl Target {
         .with_context(at)
     }
 
+    /// The objective with `keys[i] = values[i]` after the overrides, and its gradient with
+    /// respect to `keys` (each in its own units; `∂/∂keys[i]`), from the engines
+    /// ([`crate::gradient::gradient`]; docs/physics.md, "Gradients"). `asnr`, `asnr_glare` and
+    /// `fov_mean` are smooth; `worst_channel`, a minimum over channels, is refused.
+    pub fn value_and_gradient(&self, keys: &[String], values: &[f64]) -> Result<(Value, Vec<f64>)> {
+        if self.objective == Objective::WorstChannel {
+            bail!(
+                "--objective worst_channel: a minimum over channels has no gradient where two channels tie; use                  asnr, asnr_glare or fov_mean with a gradient"
+            );
+        }
+        if keys.len() != values.len() {
+            bail!("{} keys but {} values", keys.len(), values.len());
+        }
+        let mut set = self.overrides.clone();
+        set.extend(keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
+        if self.objective == Objective::AsnrGlare {
+            set.push(GLARE_INCLUDED.to_owned());
+        }
+        let (g, evaluation) = crate::gradient::gradient_and_evaluation(&self.source, &set, keys)?;
+        if g.keys.len() != keys.len() {
+            bail!(
+                "the keys {} expand to {} entries: give each list entry as its own key (lens.binary2[0], …)",
+                keys.join(", "),
+                g.keys.len()
+            );
+        }
+        Ok((Value { value: g.asnr, fraunhofer_valid: evaluation.fraunhofer.valid }, g.d_asnr))
+    }
+
     fn evaluate(&self, set: &[String]) -> Result<Value> {
         let built = scene::build_from(&self.source, set)?;
         let r = metric::evaluate(&built).map_err(|e| anyhow!("{}: {e}", self.source.label()))?;
@@ -187,7 +216,7 @@ fn channels_nm(source: &Source, overrides: &[String]) -> Result<Vec<f64>> {
 }
 
 /// The scene with every default filled in, as a TOML table.
-fn resolved(source: &Source, overrides: &[String]) -> Result<toml::Table> {
+pub(crate) fn resolved(source: &Source, overrides: &[String]) -> Result<toml::Table> {
     let text = scene::resolved_toml(source, overrides)?.toml;
     text.parse::<toml::Table>().map_err(|e| anyhow!("internal error: the resolved scene is not TOML: {e}"))
 }
