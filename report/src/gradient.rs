@@ -299,8 +299,8 @@ pub fn table(g: &Gradient) -> String {
     );
     for (i, k) in g.keys.iter().enumerate() {
         out.push_str(&format!(
-            "{k:<width$}  {:>14.6e}  {:>14.6e}  {:>16.6}\n",
-            g.values[i],
+            "{k:<width$}  {:>14}  {:>14.6e}  {:>16.6}\n",
+            g.values[i].to_string(),
             g.d_asnr[i],
             g.relative(i)
         ));

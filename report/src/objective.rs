@@ -298,6 +298,44 @@ mod tests {
         assert!(e.contains("has no channels"), "{e}");
     }
 
+    /// `value_and_gradient` of the field-of-view mean and of the glare-inclusive ASNR against
+    /// central differences of `value` at tolerance 1e-10 (step (3e-10)^{1/3} of the value,
+    /// docs/physics.md, "Gradients"), within 10× the 1e-6 asked relative to the gradient's
+    /// norm; the worst channel is refused.
+    #[test]
+    fn value_and_gradient_match_differences_of_the_value() {
+        let paper = scene::read(None).unwrap();
+        let text = format!("{}\n[[fields]]\nx_deg = 0.0\n\n[[fields]]\nx_deg = 4.0\nweight = 0.5\n", paper.text());
+        let fields = Source::from_text(text, "fields", ".");
+        let keys: Vec<String> = ["exposure.time_ms", "camera.pixel_pitch_um"].map(str::to_owned).to_vec();
+        for (source, objective) in [(fields, Objective::FovMean), (paper.clone(), Objective::AsnrGlare)] {
+            let values: Vec<f64> = keys.iter().map(|k| number_at(&source, &[], k).unwrap()).collect();
+            let target = Target::new(source.clone(), Vec::new(), objective, &keys).unwrap();
+            let (value, gradient) = target.value_and_gradient(&keys, &values).unwrap();
+            assert_eq!(value.value, target.value(&keys, &values).unwrap().value);
+            let converged = Target::new(source, vec!["options.tolerance=1e-10".to_owned()], objective, &keys).unwrap();
+            let norm = gradient.iter().zip(&values).map(|(g, v)| (g * v).powi(2)).sum::<f64>().sqrt();
+            for i in 0..keys.len() {
+                let h = 3e-10_f64.cbrt() * values[i];
+                let at = |x: f64| {
+                    let mut v = values.clone();
+                    v[i] = x;
+                    converged.value(&keys, &v).unwrap().value
+                };
+                let reference = (at(values[i] + h) - at(values[i] - h)) / (2.0 * h);
+                let error = (gradient[i] - reference).abs() * values[i];
+                assert!(error <= 1e-5 * norm, "{objective:?} {}: {} vs {reference}", keys[i], gradient[i]);
+            }
+        }
+        let e = Target::new(paper, Vec::new(), Objective::Asnr, &[])
+            .map(|t| Target { objective: Objective::WorstChannel, ..t })
+            .unwrap()
+            .value_and_gradient(&keys, &[1.0, 5.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("worst_channel"), "{e}");
+    }
+
     /// The worst channel of an interleaved multiplexed lens is the lowest of the three
     /// evaluations with the spectrum centred at each channel (as `asnr evaluate --set
     /// spectrum.center_nm=…` gives them), and the search may not set the centre itself.
