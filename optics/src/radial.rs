@@ -609,6 +609,10 @@ impl Proxy {
     }
 }
 
+/// A radial OTF's rule ([`RadialOrder::otf`]): `acos s`, the t panels, the v nodes with their
+/// weights, the proxy's cut.
+type Rule<'a> = (f64, usize, std::borrow::Cow<'static, [(f64, f64)]>, Option<&'a [f64]>);
+
 /// Largest degree of a phase proxy ([`RadialOrder`]).
 const PROXY_MAX_DEGREE: usize = 64;
 
@@ -935,7 +939,7 @@ impl RadialOrder {
 
     /// The rule [`otf`](Self::otf) uses at `s` for `accuracy`: `acos s`, the t panels, the v
     /// nodes and the proxy's cut.
-    fn rule(&self, s: f64, accuracy: f64) -> (f64, usize, std::borrow::Cow<'static, [(f64, f64)]>, Option<&[f64]>) {
+    fn rule(&self, s: f64, accuracy: f64) -> Rule<'_> {
         let k = std::f64::consts::TAU / self.wavelength_m;
         let (g1, osc) = (self.slope, self.oscillation_over(4.0 * s * (1.0 - s)));
         let t_end = s.acos();
