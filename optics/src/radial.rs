@@ -1000,6 +1000,15 @@ impl RadialOrder {
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         let (mut q, mut weight) = (vec![0.0; 2 * lanes], vec![0.0; lanes]);
+        // every direction an even polynomial: its degree's moments, eight lanes at a time
+        let degree = directions
+            .iter()
+            .map(|d| match &d.kind {
+                Kind::Even(c) => Some(c.len()),
+                _ => None,
+            })
+            .try_fold(1, |n, d| d.map(|d| n.max(d)));
+        let mut moments = degree.filter(|_| proxy.is_some()).map(|n| vec![wide::f64x8::ZERO; n]);
         let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
         let mut total = 0.0;
         let ht = 0.5 * t_end / t_panels as f64;
@@ -1017,7 +1026,33 @@ impl RadialOrder {
             }
             fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, &mut q, &mut weight, lanes);
             self.amplitudes(&q, &mut weight);
-            for (l, &w) in weight.iter().enumerate() {
+            // even polynomials with the proxy: the phase as the value's lanes, and the moments
+            // `Σ_l −w sin(Δφ) (q₁^m − q₂^m)` once for all the directions
+            let start = match (proxy, moments.as_mut()) {
+                (Some(c), Some(moments)) => {
+                    use wide::f64x8;
+                    let n = lanes / 8 * 8;
+                    let a8 = f64x8::splat(a);
+                    let mut acc = f64x8::ZERO;
+                    for i in (0..n).step_by(8) {
+                        let (x, y) = (load8(&q, i), load8(&q, lanes + i));
+                        let (sin, cos) = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y)).sin_cos();
+                        let w = load8(&weight, i);
+                        acc = w.mul_add(cos, acc);
+                        let slope = -(w * sin);
+                        let (mut p1, mut p2) = (x, y);
+                        for m in moments.iter_mut().skip(1) {
+                            *m = slope.mul_add(p1 - p2, *m);
+                            p1 *= x;
+                            p2 *= y;
+                        }
+                    }
+                    total += acc.reduce_add();
+                    n
+                }
+                _ => 0,
+            };
+            for (l, &w) in weight.iter().enumerate().skip(start) {
                 let (q1, q2) = (q[l], q[lanes + l]);
                 let beyond = match proxy {
                     Some(c) => clenshaw(c, q1) - clenshaw(c, q2),
@@ -1028,6 +1063,14 @@ impl RadialOrder {
                 let slope = -w * sin * k;
                 for (d, direction) in derivatives.iter_mut().zip(directions) {
                     *d += slope * (direction.value(q1) - direction.value(q2));
+                }
+            }
+        }
+        if let Some(moments) = moments {
+            let moments: Vec<f64> = moments.iter().map(|m| m.reduce_add()).collect();
+            for (d, direction) in derivatives.iter_mut().zip(directions) {
+                if let Kind::Even(c) = &direction.kind {
+                    *d += k * c.iter().zip(&moments).skip(1).map(|(c, m)| c * m).sum::<f64>();
                 }
             }
         }
