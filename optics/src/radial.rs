@@ -1341,14 +1341,15 @@ mod tests {
             -k0 * r.powi(6) / (16.0 * f.powi(5)),
             k0 * 5.0 * r.powi(8) / (128.0 * f.powi(7)),
         ];
-        let order = |lambda: f64, a: &[f64]| {
+        let order_with = |lambda: f64, a: &[f64], sphere_coefficient: f64| {
             let phase = Arc::new(RadialProfile::even_polynomial(a.to_vec()).unwrap());
             let sphere = Arc::new(RadialProfile::reference_sphere(r, f).unwrap());
-            let terms = vec![(lambda / std::f64::consts::TAU, phase), (1.0, sphere)];
+            let terms = vec![(lambda / std::f64::consts::TAU, phase), (sphere_coefficient, sphere)];
             let pupil = Arc::new(RadialPupil::new(None, terms, vec![]).unwrap());
             let w020 = pupil.fitted_defocus_m();
             RadialOrder::new(pupil, w020, lambda)
         };
+        let order = |lambda: f64, a: &[f64]| order_with(lambda, a, 1.0);
         let h = 1e-4;
         for lambda in [760e-9, 800e-9, 850e-9] {
             // a small defocus of the design too, so that the sine part is not small
@@ -1378,6 +1379,26 @@ mod tests {
                         got[j - 1]
                     );
                 }
+                // a direction that is not an even polynomial (the sphere's sag, m per unit of
+                // its term's coefficient, ~530 rad per unit: h = 2e-7) takes the lane-by-lane
+                // path for all five: the same four derivatives, and the fifth against its own
+                // central difference
+                let mut with_sphere: Vec<RadialProfile> = directions.clone();
+                with_sphere.push(RadialProfile::reference_sphere(r, f).unwrap());
+                let mut lane = [0.0; 5];
+                at.otf_and_derivatives(s, 1e-13, &with_sphere, &mut lane);
+                for j in 0..4 {
+                    assert!((lane[j] - got[j]).abs() <= 1e-12 * norm.max(1.0), "λ {lambda:e}, s {s}, a{}", j + 1);
+                }
+                let hs = 2e-7;
+                let fd = (order_with(lambda, &design, 1.0 + hs).otf(s, 1e-13)
+                    - order_with(lambda, &design, 1.0 - hs).otf(s, 1e-13))
+                    / (2.0 * hs);
+                assert!(
+                    (lane[4] - fd).abs() <= 1e-8 * lane[4].abs().max(1.0),
+                    "λ {lambda:e}, s {s}: {} vs {fd}",
+                    lane[4]
+                );
             }
         }
     }
