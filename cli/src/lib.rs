@@ -128,6 +128,28 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The exact gradient of the ASNR, mean MTF, SNR0 and photoelectrons with respect to scene
+    /// keys, computed by the engines (docs/physics.md, "Gradients"); keys not supported yet are
+    /// refused, never differenced.
+    Gradient {
+        /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
+        scene: Option<PathBuf>,
+        /// A key to differentiate with respect to, e.g. --wrt exposure.time_ms (repeatable; a list
+        /// key without an index, --wrt lens.binary2, means every entry).
+        #[arg(long, value_name = "KEY", required = true)]
+        wrt: Vec<String>,
+        /// Override a scene key by its dotted path (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Relative error allowed in the mean MTF and its derivatives (sets options.tolerance;
+        /// default 1e-6, and 1e-4 on the FFT path).
+        #[arg(long, value_name = "REL")]
+        tolerance: Option<f64>,
+        /// Print one JSON object: asnr, mean_mtf, snr0, photoelectrons, and gradient,
+        /// mean_mtf_gradient, snr0_gradient, photoelectrons_gradient as {KEY: derivative}.
+        #[arg(long)]
+        json: bool,
+    },
     /// The ASNR over a grid of one or more keys (cartesian product), in parallel.
     Sweep {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
@@ -341,6 +363,17 @@ pub fn run(cli: Cli) -> Result<()> {
                 outln!("{}", serde_json::to_string_pretty(&best)?);
             } else {
                 out!("{}", optimize::report(&best));
+            }
+            Ok(())
+        }
+        Command::Gradient { scene, wrt, set, tolerance, json } => {
+            let set = with_tolerance(set, tolerance);
+            let source = scene::read(scene.as_deref())?;
+            let gradient = report::gradient::gradient(&source, &set, &wrt)?;
+            if json {
+                outln!("{}", serde_json::to_string_pretty(&gradient)?);
+            } else {
+                out!("{}", report::gradient::table(&gradient));
             }
             Ok(())
         }

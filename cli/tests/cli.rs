@@ -416,6 +416,47 @@ fn bad_optimize_arguments() {
     assert!(err.contains("--xtol 1e-17: expected a fraction of the range in [1e-12, 1)"), "{err}");
 }
 
+// ---- asnr gradient ----
+
+/// `asnr gradient --json` has the documented fields, its ASNR is `asnr evaluate`'s, and with
+/// shot noise alone ∂ASNR/∂t = ASNR/(2t) (SNR0 = √N, N ∝ t).
+#[test]
+fn gradient_json_has_the_documented_fields() {
+    let t = 2.0;
+    let set = ["--set", "exposure.time_ms=2"];
+    let v = json(
+        &[&["gradient", "--wrt", "exposure.time_ms", "--wrt", "camera.pixel_pitch_um", "--json"][..], &set].concat(),
+    );
+    let evaluated = json(&[&["evaluate", "--json"][..], &set].concat());
+    assert_eq!(v["asnr"], evaluated["asnr"]);
+    for field in ["mean_mtf", "snr0", "photoelectrons"] {
+        assert!(v[field].is_f64(), "{field}: {v}");
+    }
+    for field in ["gradient", "mean_mtf_gradient", "snr0_gradient", "photoelectrons_gradient"] {
+        assert_eq!(v[field].as_object().unwrap().len(), 2, "{field}: {v}");
+    }
+    let d = v["gradient"]["exposure.time_ms"].as_f64().unwrap();
+    let value = v["asnr"].as_f64().unwrap();
+    assert!((d - value / (2.0 * t)).abs() < 1e-12 * d, "{d} vs {}", value / (2.0 * t));
+    let text = asnr(&["gradient", "--wrt", "exposure.time_ms"]);
+    let out = String::from_utf8_lossy(&text.stdout);
+    assert!(out.contains("exposure.time_ms") && out.contains("0.500000"), "{out}");
+}
+
+#[test]
+fn bad_gradient_keys_are_refused_naming_the_key() {
+    let err = fails(&["gradient", "--wrt", "lens.colour"]);
+    assert!(err.contains("--wrt lens.colour") && err.contains("no such key"), "{err}");
+    let err = fails(&["gradient", "--wrt", "exposure.time_ms", "--wrt", "exposure.time_ms"]);
+    assert!(err.contains("exposure.time_ms is given twice"), "{err}");
+    let err = fails(&["gradient", "--wrt", "lens.f_number"]);
+    assert!(err.contains("--wrt lens.f_number: not differentiable here yet"), "{err}");
+    let err = fails(&["gradient", "--wrt", "options.tolerance"]);
+    assert!(err.contains("--wrt options.tolerance: not differentiable"), "{err}");
+    let err = fails(&["gradient", "--wrt", "camera.read_noise_e", "--set", "lens.colour=1"]);
+    assert!(err.contains("colour"), "{err}");
+}
+
 // ---- asnr sweep ----
 
 /// Issue 4: a 4,000-point sweep (40 F-numbers × 100 spectral ranges, the grid of Fig. 2a) gives

@@ -255,7 +255,7 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
 }
 
 /// The evaluation at the scene's single field point.
-fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
+pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     let lens = scene.lens();
     let camera = scene.camera();
     let detected = detected_spectrum(scene);

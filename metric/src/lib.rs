@@ -38,6 +38,7 @@
 //! Units: SI inside (m, s, W); reports use nm, mm and cycles/mm as their field names say.
 
 mod evaluate;
+mod gradient;
 mod illumination;
 mod metrics;
 mod scene;
@@ -46,6 +47,7 @@ pub use evaluate::{
     Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MAX_DEFOCUS_WAVES, MtfCurve, NoiseReport,
     Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
+pub use gradient::{Gradient, Parameter, gradient};
 pub use illumination::{IlluminationReport, RelativeIllumination};
 pub use metrics::{
     Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, Quadrature, SquareMetrics,
@@ -141,6 +143,15 @@ pub enum Error {
         phase: f64,
         /// The estimated time, s.
         seconds: f64,
+    },
+    /// The value is not differentiable in a parameter at this scene (a kink, or a dependence the
+    /// gradient does not follow yet).
+    #[error("the ASNR is not differentiable with respect to {parameter} here: {reason}")]
+    NotDifferentiable {
+        /// What the derivative was asked against.
+        parameter: &'static str,
+        /// Why not.
+        reason: String,
     },
     /// The noise budget could not be formed.
     #[error(transparent)]

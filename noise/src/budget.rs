@@ -212,6 +212,33 @@ impl NoiseBudget {
     pub fn noise_e(&self) -> f64 {
         self.total_variance_e2.sqrt()
     }
+
+    /// The partial derivatives of `snr = S/√V`, `V = S + B + D + σ_r² + σ_q²/K²`, with respect to
+    /// the signal S and to each variance term (docs/physics.md, "Gradients"):
+    /// `∂SNR/∂S = (2V − S)/(2V^{3/2})` and `∂SNR/∂X = −S/(2V^{3/2})` for X = B, D, σ_r², σ_q²/K²
+    /// (with σ_r alone, `∂SNR/∂S = (S + 2σ_r²)/(2(S + σ_r²)^{3/2})`; shot noise alone, `1/(2√S)`).
+    ///
+    /// `None` where the SNR is not differentiable in its charges: a saturated pixel (the charges
+    /// are clipped, a kink at the well) or no signal.
+    pub fn snr_partials(&self) -> Option<SnrPartials> {
+        if self.saturated || self.signal_e <= 0.0 {
+            return None;
+        }
+        let v = self.total_variance_e2;
+        let v32 = v * v.sqrt();
+        let variance = -self.signal_e / (2.0 * v32);
+        Some(SnrPartials { signal: (2.0 * v - self.signal_e) / (2.0 * v32), variance })
+    }
+}
+
+/// The partial derivatives of a [`NoiseBudget`]'s SNR ([`NoiseBudget::snr_partials`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SnrPartials {
+    /// `∂SNR/∂S`, per e⁻ of signal (the signal's own shot noise included).
+    pub signal: f64,
+    /// `∂SNR/∂X`, per e⁻² of any other variance term X (background or dark shot noise, σ_r²,
+    /// σ_q²/K²): `−S/(2V^{3/2})`.
+    pub variance: f64,
 }
 
 /// The noise budget of `signal_e` photoelectrons from the imaging order on top of
@@ -296,6 +323,29 @@ pub fn budget(sensor: &Sensor, signal_e: f64, background_e: f64, exposure_s: f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The SNR's partials against central differences of the budget itself (step 1e-3 e⁻: the
+    /// truncation h²|f‴|/6 is far below the 1e-9 asked) and against the closed form with read
+    /// noise alone (docs/physics.md, "Gradients").
+    #[test]
+    fn snr_partials_match_differences_and_the_closed_form() {
+        let sensor = Sensor::new(3.0, 50.0, 1e6, 0.5, 16).unwrap();
+        let (s, b, t) = (2500.0, 400.0, 0.01);
+        let p = budget(&sensor, s, b, t).unwrap().snr_partials().unwrap();
+        let h = 1e-3;
+        let d_s = (budget(&sensor, s + h, b, t).unwrap().snr - budget(&sensor, s - h, b, t).unwrap().snr) / (2.0 * h);
+        let d_b = (budget(&sensor, s, b + h, t).unwrap().snr - budget(&sensor, s, b - h, t).unwrap().snr) / (2.0 * h);
+        assert!((p.signal - d_s).abs() < 1e-9 * d_s.abs(), "{} vs {d_s}", p.signal);
+        assert!((p.variance - d_b).abs() < 1e-9 * d_b.abs(), "{} vs {d_b}", p.variance);
+        // read noise alone: ∂SNR/∂N = (N + 2σ_r²)/(2(N + σ_r²)^{3/2})
+        let read = Sensor::without_adc(3.0, 0.0, f64::INFINITY).unwrap();
+        let p = budget(&read, s, 0.0, t).unwrap().snr_partials().unwrap();
+        let closed = (s + 18.0) / (2.0 * (s + 9.0_f64).powf(1.5));
+        assert!((p.signal - closed).abs() < 1e-15, "{} vs {closed}", p.signal);
+        // saturated or dark: no derivative
+        assert!(budget(&sensor, 2e6, 0.0, t).unwrap().snr_partials().is_none());
+        assert!(budget(&sensor, 0.0, 0.0, t).unwrap().snr_partials().is_none());
+    }
 
     #[test]
     fn adc_range_limits_saturation() {

@@ -66,7 +66,7 @@ mod glare;
 mod measured;
 mod transfer;
 
-pub use budget::{NoiseBudget, QUANTIZATION_VARIANCE_DN2, Sensor, budget};
+pub use budget::{NoiseBudget, QUANTIZATION_VARIANCE_DN2, Sensor, SnrPartials, budget};
 pub use error::Error;
 pub use glare::{
     buralli_morris_modulation, glare_from_modulation, modulation, modulation_from_glare, snr_with_glare, veiling_glare,

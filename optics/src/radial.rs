@@ -609,6 +609,10 @@ impl Proxy {
     }
 }
 
+/// A radial OTF's rule ([`RadialOrder::otf`]): `acos s`, the t panels, the v nodes with their
+/// weights, the proxy's cut.
+type Rule<'a> = (f64, usize, std::borrow::Cow<'static, [(f64, f64)]>, Option<&'a [f64]>);
+
 /// Largest degree of a phase proxy ([`RadialOrder`]).
 const PROXY_MAX_DEGREE: usize = 64;
 
@@ -893,6 +897,49 @@ impl RadialOrder {
         if s <= 0.0 {
             return 1.0;
         }
+        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let total = self.direct(s, t_end, t_panels, &v_nodes, proxy);
+        4.0 * total / (std::f64::consts::PI * self.pupil.power())
+    }
+
+    /// The real OTF at `s` as [`otf`](Self::otf), and into `derivatives` its derivative with
+    /// respect to each parameter `p_j` whose change of the whole OPD is `directions[j]` (m per
+    /// unit of `p_j`, as a function of `q = ρ²`; the OPD's part the order carries as defocus
+    /// included: a coefficient's best-fit defocus moves with it, so the whole wavefront's
+    /// change is what the phase difference sees). On the same nodes and with the same phases as
+    /// the value (docs/physics.md, "Gradients"):
+    ///
+    /// ```text
+    /// ∂OTF/∂p_j = −4/N ∫ sin²t ∫ A(q₁) A(q₂) sin(k[W(q₁) − W(q₂)]) k [D_j(q₁) − D_j(q₂)] dv dt
+    /// ```
+    ///
+    /// The integrand turns through the same phase as the value's, times a polynomial factor of
+    /// the directions' low degree, so the value's rule holds it to about the same accuracy
+    /// relative to `k max|D_j|`.
+    pub fn otf_and_derivatives(
+        &self,
+        s: f64,
+        accuracy: f64,
+        directions: &[RadialProfile],
+        derivatives: &mut [f64],
+    ) -> f64 {
+        derivatives.iter_mut().for_each(|d| *d = 0.0);
+        if s >= 1.0 {
+            return 0.0;
+        }
+        if s <= 0.0 {
+            return 1.0;
+        }
+        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let total = self.direct_derivatives(s, t_end, t_panels, &v_nodes, proxy, directions, derivatives);
+        let norm = 4.0 / (std::f64::consts::PI * self.pupil.power());
+        derivatives.iter_mut().for_each(|d| *d *= norm);
+        norm * total
+    }
+
+    /// The rule [`otf`](Self::otf) uses at `s` for `accuracy`: `acos s`, the t panels, the v
+    /// nodes and the proxy's cut.
+    fn rule(&self, s: f64, accuracy: f64) -> Rule<'_> {
         let k = std::f64::consts::TAU / self.wavelength_m;
         let (g1, osc) = (self.slope, self.oscillation_over(4.0 * s * (1.0 - s)));
         let t_end = s.acos();
@@ -914,7 +961,7 @@ impl RadialOrder {
         let v_panels = if v_rule.is_some() { 1 } else { (phase_v / theta).ceil().max(1.0) as usize };
         let rule16 = crate::quad::rule();
         // the v nodes on [0, 1] with their weights: one short rule, or 16-point panels
-        let v_nodes: std::borrow::Cow<'_, [(f64, f64)]> = match v_rule {
+        let v_nodes: std::borrow::Cow<'static, [(f64, f64)]> = match v_rule {
             Some(r) => r.into(),
             None => {
                 let hv = 0.5 / v_panels as f64;
@@ -931,8 +978,103 @@ impl RadialOrder {
         // the OTF by at most 2e (|cos(φ + e) − cos φ| ≤ e at each of the two points, and
         // ∫A(q₁)A(q₂) ≤ ∫A² by Cauchy–Schwarz), half the accuracy; the quadrature has the rest
         let proxy = self.proxy.as_ref().map(|p| p.cut(0.25 * accuracy));
-        let total = self.direct(s, t_end, t_panels, &v_nodes, proxy);
-        4.0 * total / (std::f64::consts::PI * self.pupil.power())
+        (t_end, t_panels, v_nodes, proxy)
+    }
+
+    /// [`direct`](Self::direct) with the derivatives along `directions` added into
+    /// `derivatives` ([`otf_and_derivatives`](Self::otf_and_derivatives)): each lane's phase
+    /// once, its sine and cosine once, then one multiply-add per lane and direction.
+    #[allow(clippy::too_many_arguments)]
+    fn direct_derivatives(
+        &self,
+        s: f64,
+        t_end: f64,
+        t_panels: usize,
+        v_nodes: &[(f64, f64)],
+        proxy: Option<&[f64]>,
+        directions: &[RadialProfile],
+        derivatives: &mut [f64],
+    ) -> f64 {
+        let rule16 = crate::quad::rule();
+        let lanes = rule16.len() * v_nodes.len();
+        let k = std::f64::consts::TAU / self.wavelength_m;
+        let a = k * self.w020_m;
+        let (mut q, mut weight) = (vec![0.0; 2 * lanes], vec![0.0; lanes]);
+        // every direction an even polynomial: its degree's moments, eight lanes at a time
+        let degree = directions
+            .iter()
+            .map(|d| match &d.kind {
+                Kind::Even(c) => Some(c.len()),
+                _ => None,
+            })
+            .try_fold(1, |n, d| d.map(|d| n.max(d)));
+        let mut moments = degree.filter(|_| proxy.is_some()).map(|n| vec![wide::f64x8::ZERO; n]);
+        let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+        let mut total = 0.0;
+        let ht = 0.5 * t_end / t_panels as f64;
+        for pt in 0..t_panels {
+            let tc = (2 * pt + 1) as f64 * ht;
+            for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
+                *ti = tc + ht * xt;
+            }
+            for i in 0..16 {
+                (sin_t[i], cos_t[i]) = t[i].sin_cos();
+            }
+            let mut scale = [0.0; 16];
+            for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
+                *c = ht * wt * st * st;
+            }
+            fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, &mut q, &mut weight, lanes);
+            self.amplitudes(&q, &mut weight);
+            // even polynomials with the proxy: the phase as the value's lanes, and the moments
+            // `Σ_l −w sin(Δφ) (q₁^m − q₂^m)` once for all the directions
+            let start = match (proxy, moments.as_mut()) {
+                (Some(c), Some(moments)) => {
+                    use wide::f64x8;
+                    let n = lanes / 8 * 8;
+                    let a8 = f64x8::splat(a);
+                    let mut acc = f64x8::ZERO;
+                    for i in (0..n).step_by(8) {
+                        let (x, y) = (load8(&q, i), load8(&q, lanes + i));
+                        let (sin, cos) = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y)).sin_cos();
+                        let w = load8(&weight, i);
+                        acc = w.mul_add(cos, acc);
+                        let slope = -(w * sin);
+                        let (mut p1, mut p2) = (x, y);
+                        for m in moments.iter_mut().skip(1) {
+                            *m = slope.mul_add(p1 - p2, *m);
+                            p1 *= x;
+                            p2 *= y;
+                        }
+                    }
+                    total += acc.reduce_add();
+                    n
+                }
+                _ => 0,
+            };
+            for (l, &w) in weight.iter().enumerate().skip(start) {
+                let (q1, q2) = (q[l], q[lanes + l]);
+                let beyond = match proxy {
+                    Some(c) => clenshaw(c, q1) - clenshaw(c, q2),
+                    None => k * (self.pupil.opd_beyond_defocus_m(q1) - self.pupil.opd_beyond_defocus_m(q2)),
+                };
+                let (sin, cos) = crate::fft::cis::sin_cos(a * (q1 - q2) + beyond);
+                total += w * cos;
+                let slope = -w * sin * k;
+                for (d, direction) in derivatives.iter_mut().zip(directions) {
+                    *d += slope * (direction.value(q1) - direction.value(q2));
+                }
+            }
+        }
+        if let Some(moments) = moments {
+            let moments: Vec<f64> = moments.iter().map(|m| m.reduce_add()).collect();
+            for (d, direction) in derivatives.iter_mut().zip(directions) {
+                if let Kind::Even(c) = &direction.kind {
+                    *d += k * c.iter().zip(&moments).skip(1).map(|(c, m)| c * m).sum::<f64>();
+                }
+            }
+        }
+        total
     }
 
     /// The field amplitudes at every lane into `weight` (`q₁` in the first half of `q`, `q₂` in
@@ -1178,6 +1320,85 @@ mod tests {
                 let fine = 4.0 * order.direct(s, t_end, 12, &v_fine, full) / std::f64::consts::PI;
                 let got = order.otf(s, 1e-12);
                 assert!((got - fine).abs() <= 1e-12, "λ {lambda:e}, s {s}: {got} vs {fine}");
+            }
+        }
+    }
+
+    /// The OTF's derivatives with respect to the Binary 2 coefficients (radians of phase at
+    /// `q^j`, the geometric-phase dispersion: `∂W/∂a_j = (λ/2π) q^j`), on the value's nodes,
+    /// against central differences of converged OTFs (accuracy 1e-13) of pupils rebuilt with
+    /// `a_j ± h` (their best-fit defocus, carried by the order, refitted), with
+    /// `h = (3 · 1e-13 / |f‴|)^{1/3}` ≈ 1e-4 (docs/physics.md, "Gradients"; `f‴` of order one
+    /// per radian³): truncation `h²/6` and rounding `1e-13/h` both below 2e-9.
+    #[test]
+    fn binary2_derivatives_match_central_differences() {
+        let (r, f, l0): (f64, f64, f64) = (0.672e-3, 3.36e-3, 800e-9);
+        let k0 = std::f64::consts::TAU / l0;
+        let base = [
+            0.0,
+            -k0 * r.powi(2) / (2.0 * f),
+            k0 * r.powi(4) / (8.0 * f.powi(3)),
+            -k0 * r.powi(6) / (16.0 * f.powi(5)),
+            k0 * 5.0 * r.powi(8) / (128.0 * f.powi(7)),
+        ];
+        let order_with = |lambda: f64, a: &[f64], sphere_coefficient: f64| {
+            let phase = Arc::new(RadialProfile::even_polynomial(a.to_vec()).unwrap());
+            let sphere = Arc::new(RadialProfile::reference_sphere(r, f).unwrap());
+            let terms = vec![(lambda / std::f64::consts::TAU, phase), (sphere_coefficient, sphere)];
+            let pupil = Arc::new(RadialPupil::new(None, terms, vec![]).unwrap());
+            let w020 = pupil.fitted_defocus_m();
+            RadialOrder::new(pupil, w020, lambda)
+        };
+        let order = |lambda: f64, a: &[f64]| order_with(lambda, a, 1.0);
+        let h = 1e-4;
+        for lambda in [760e-9, 800e-9, 850e-9] {
+            // a small defocus of the design too, so that the sine part is not small
+            let mut design = base.to_vec();
+            design[1] += 3.0;
+            let directions: Vec<RadialProfile> = (1..=4)
+                .map(|j| {
+                    let mut c = vec![0.0; j + 1];
+                    c[j] = lambda / std::f64::consts::TAU;
+                    RadialProfile::even_polynomial(c).unwrap()
+                })
+                .collect();
+            let at = order(lambda, &design);
+            for s in [0.02, 0.1, 0.19, 0.38, 0.7] {
+                let mut got = [0.0; 4];
+                let value = at.otf_and_derivatives(s, 1e-13, &directions, &mut got);
+                assert!((value - at.otf(s, 1e-13)).abs() <= 1e-12, "λ {lambda:e}, s {s}");
+                let norm = got.iter().map(|g| g * g).sum::<f64>().sqrt();
+                for j in 1..=4 {
+                    let (mut up, mut down) = (design.clone(), design.clone());
+                    up[j] += h;
+                    down[j] -= h;
+                    let fd = (order(lambda, &up).otf(s, 1e-13) - order(lambda, &down).otf(s, 1e-13)) / (2.0 * h);
+                    assert!(
+                        (got[j - 1] - fd).abs() <= 1e-8 * norm.max(1e-3),
+                        "λ {lambda:e}, s {s}, a{j}: {} vs {fd} (norm {norm:e})",
+                        got[j - 1]
+                    );
+                }
+                // a direction that is not an even polynomial (the sphere's sag, m per unit of
+                // its term's coefficient, ~530 rad per unit: h = 2e-7) takes the lane-by-lane
+                // path for all five: the same four derivatives, and the fifth against its own
+                // central difference
+                let mut with_sphere: Vec<RadialProfile> = directions.clone();
+                with_sphere.push(RadialProfile::reference_sphere(r, f).unwrap());
+                let mut lane = [0.0; 5];
+                at.otf_and_derivatives(s, 1e-13, &with_sphere, &mut lane);
+                for j in 0..4 {
+                    assert!((lane[j] - got[j]).abs() <= 1e-12 * norm.max(1.0), "λ {lambda:e}, s {s}, a{}", j + 1);
+                }
+                let hs = 2e-7;
+                let fd = (order_with(lambda, &design, 1.0 + hs).otf(s, 1e-13)
+                    - order_with(lambda, &design, 1.0 - hs).otf(s, 1e-13))
+                    / (2.0 * hs);
+                assert!(
+                    (lane[4] - fd).abs() <= 1e-8 * lane[4].abs().max(1.0),
+                    "λ {lambda:e}, s {s}: {} vs {fd}",
+                    lane[4]
+                );
             }
         }
     }

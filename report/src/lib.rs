@@ -7,6 +7,7 @@
 //! progress bars and plots); long computations report their progress through [`Progress`].
 
 pub mod compare;
+pub mod gradient;
 pub mod metrics;
 pub mod objective;
 pub mod optimize;

@@ -203,6 +203,41 @@ impl Target {
         Ok(Value { value, fraunhofer_valid: r.fraunhofer.valid })
     }
 
+    /// The objective with `keys[i] = values[i]` after the overrides, and its gradient with
+    /// respect to `keys` (each in its own units; `∂/∂keys[i]`), from the engines
+    /// ([`crate::gradient::gradient`]; docs/physics.md, "Gradients"). `asnr`, `asnr_glare` and
+    /// `fov_mean` are smooth; `worst_channel`, a minimum over channels, is refused.
+    pub fn value_and_gradient(&self, keys: &[String], values: &[f64]) -> Result<(Value, Vec<f64>)> {
+        if self.objective == Objective::WorstChannel {
+            bail!(
+                "--objective worst_channel: a minimum over channels has no gradient where two channels tie; use asnr, asnr_glare or fov_mean with a gradient"
+            );
+        }
+        if matches!(self.objective, Objective::Capacity | Objective::Detectability(_)) {
+            bail!(
+                "--objective {}: its gradient is not computed yet; use asnr, asnr_glare or fov_mean with a gradient",
+                self.objective.name()
+            );
+        }
+        if keys.len() != values.len() {
+            bail!("{} keys but {} values", keys.len(), values.len());
+        }
+        let mut set = self.overrides.clone();
+        set.extend(keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
+        if self.objective == Objective::AsnrGlare {
+            set.push(GLARE_INCLUDED.to_owned());
+        }
+        let (g, evaluation) = crate::gradient::gradient_and_evaluation(&self.source, &set, keys)?;
+        if g.keys.len() != keys.len() {
+            bail!(
+                "the keys {} expand to {} entries: give each list entry as its own key (lens.binary2[0], …)",
+                keys.join(", "),
+                g.keys.len()
+            );
+        }
+        Ok((Value { value: g.asnr, fraunhofer_valid: evaluation.fraunhofer.valid }, g.d_asnr))
+    }
+
     fn evaluate(&self, set: &[String]) -> Result<Value> {
         let built = scene::build_from(&self.source, set)?;
         let r = metric::evaluate(&built).map_err(|e| anyhow!("{}: {e}", self.source.label()))?;
@@ -221,7 +256,7 @@ fn channels_nm(source: &Source, overrides: &[String]) -> Result<Vec<f64>> {
 }
 
 /// The scene with every default filled in, as a TOML table.
-fn resolved(source: &Source, overrides: &[String]) -> Result<toml::Table> {
+pub(crate) fn resolved(source: &Source, overrides: &[String]) -> Result<toml::Table> {
     let text = scene::resolved_toml(source, overrides)?.toml;
     text.parse::<toml::Table>().map_err(|e| anyhow!("internal error: the resolved scene is not TOML: {e}"))
 }
@@ -313,6 +348,44 @@ mod tests {
         assert!(e.contains("single field point"), "{e}");
         let e = Target::new(source, Vec::new(), Objective::WorstChannel, &[]).unwrap_err().to_string();
         assert!(e.contains("has no channels"), "{e}");
+    }
+
+    /// `value_and_gradient` of the field-of-view mean and of the glare-inclusive ASNR against
+    /// central differences of `value` at tolerance 1e-10 (step (3e-10)^{1/3} of the value,
+    /// docs/physics.md, "Gradients"), within 10× the 1e-6 asked relative to the gradient's
+    /// norm; the worst channel is refused.
+    #[test]
+    fn value_and_gradient_match_differences_of_the_value() {
+        let paper = scene::read(None).unwrap();
+        let text = format!("{}\n[[fields]]\nx_deg = 0.0\n\n[[fields]]\nx_deg = 4.0\nweight = 0.5\n", paper.text());
+        let fields = Source::from_text(text, "fields", ".");
+        let keys: Vec<String> = ["exposure.time_ms", "camera.pixel_pitch_um"].map(str::to_owned).to_vec();
+        for (source, objective) in [(fields, Objective::FovMean), (paper.clone(), Objective::AsnrGlare)] {
+            let values: Vec<f64> = keys.iter().map(|k| number_at(&source, &[], k).unwrap()).collect();
+            let target = Target::new(source.clone(), Vec::new(), objective, &keys).unwrap();
+            let (value, gradient) = target.value_and_gradient(&keys, &values).unwrap();
+            assert_eq!(value.value, target.value(&keys, &values).unwrap().value);
+            let converged = Target::new(source, vec!["options.tolerance=1e-10".to_owned()], objective, &keys).unwrap();
+            let norm = gradient.iter().zip(&values).map(|(g, v)| (g * v).powi(2)).sum::<f64>().sqrt();
+            for i in 0..keys.len() {
+                let h = 3e-10_f64.cbrt() * values[i];
+                let at = |x: f64| {
+                    let mut v = values.clone();
+                    v[i] = x;
+                    converged.value(&keys, &v).unwrap().value
+                };
+                let reference = (at(values[i] + h) - at(values[i] - h)) / (2.0 * h);
+                let error = (gradient[i] - reference).abs() * values[i];
+                assert!(error <= 1e-5 * norm, "{objective:?} {}: {} vs {reference}", keys[i], gradient[i]);
+            }
+        }
+        let e = Target::new(paper, Vec::new(), Objective::Asnr, &[])
+            .map(|t| Target { objective: Objective::WorstChannel, ..t })
+            .unwrap()
+            .value_and_gradient(&keys, &[1.0, 5.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("worst_channel"), "{e}");
     }
 
     /// The worst channel of an interleaved multiplexed lens is the lowest of the three

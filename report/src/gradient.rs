@@ -1,0 +1,523 @@
+//! `asnr gradient`: the exact gradient of the ASNR, mean MTF, SNR0 and photoelectrons with respect
+//! to scene keys (docs/physics.md, "Gradients").
+//!
+//! The keys are read, checked and spelled here (`lens.binary2[3]`: 0-based, no leading zeros;
+//! `lens.binary2` means every entry); the derivatives come from the engines
+//! ([`metric::gradient`]), each key mapped to the scene quantity it sets. A key the value does
+//! not depend on smoothly, or whose derivative the engines do not compute yet, is refused naming
+//! it: never a finite difference in its place.
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde::Serialize;
+use serde::ser::{SerializeMap, SerializeStruct, Serializer};
+
+use metric::Parameter;
+use scene::Source;
+
+/// The gradient at one scene: its keys in their canonical spelling, their values, the value of
+/// the ASNR, mean MTF, SNR0 and photoelectrons there, and the derivative of each with respect to
+/// each key, in the key's own units (per ms for `exposure.time_ms`, per µm for
+/// `camera.pixel_pitch_um`, …).
+///
+/// Serialized as `asnr gradient --json` prints it: `asnr`, `mean_mtf`, `snr0`,
+/// `photoelectrons`, then `gradient`, `mean_mtf_gradient`, `snr0_gradient` and
+/// `photoelectrons_gradient`, each an object `{KEY: derivative}` in the order of `keys`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradient {
+    /// The keys, canonical spelling.
+    pub keys: Vec<String>,
+    /// Their values in the scene.
+    pub values: Vec<f64>,
+    /// The ASNR (in the scene's form).
+    pub asnr: f64,
+    /// The mean MTF.
+    pub mean_mtf: f64,
+    /// The zero-frequency SNR.
+    pub snr0: f64,
+    /// Signal photoelectrons per pixel.
+    pub photoelectrons: f64,
+    /// `∂ASNR/∂key`.
+    pub d_asnr: Vec<f64>,
+    /// `∂ mean MTF/∂key`.
+    pub d_mean_mtf: Vec<f64>,
+    /// `∂SNR0/∂key`.
+    pub d_snr0: Vec<f64>,
+    /// `∂N/∂key`.
+    pub d_photoelectrons: Vec<f64>,
+}
+
+impl Gradient {
+    /// The relative sensitivity `∂ln ASNR/∂ln key = (∂ASNR/∂key)·key/ASNR` of key `i`.
+    pub fn relative(&self, i: usize) -> f64 {
+        self.d_asnr[i] * self.values[i] / self.asnr
+    }
+}
+
+/// `{KEY: value}` in the order of the keys.
+struct ByKey<'a>(&'a [String], &'a [f64]);
+
+impl Serialize for ByKey<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0.iter().zip(self.1) {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+impl Serialize for Gradient {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut s = serializer.serialize_struct("Gradient", 8)?;
+        s.serialize_field("asnr", &self.asnr)?;
+        s.serialize_field("mean_mtf", &self.mean_mtf)?;
+        s.serialize_field("snr0", &self.snr0)?;
+        s.serialize_field("photoelectrons", &self.photoelectrons)?;
+        s.serialize_field("gradient", &ByKey(&self.keys, &self.d_asnr))?;
+        s.serialize_field("mean_mtf_gradient", &ByKey(&self.keys, &self.d_mean_mtf))?;
+        s.serialize_field("snr0_gradient", &ByKey(&self.keys, &self.d_snr0))?;
+        s.serialize_field("photoelectrons_gradient", &ByKey(&self.keys, &self.d_photoelectrons))?;
+        s.end()
+    }
+}
+
+/// The keys whose derivative the engines compute, the scene quantity each sets, and whether the
+/// quantity's derivative is taken per relative change (`∂/∂ln`, so `∂/∂key = (∂/∂ln)/key`).
+const SUPPORTED: [(&str, Parameter); 10] = [
+    ("exposure.time_ms", Parameter::Exposure),
+    ("source.radiance_w_m2_sr_nm", Parameter::SignalScale),
+    ("source.scale", Parameter::SignalScale),
+    ("camera.quantum_efficiency", Parameter::SignalScale),
+    ("spectrum.peak", Parameter::SignalScale),
+    ("lens.efficiency", Parameter::Efficiency),
+    ("lens.transmission", Parameter::Transmission),
+    ("camera.read_noise_e", Parameter::ReadNoise),
+    ("camera.dark_current_e_per_s", Parameter::DarkCurrent),
+    ("camera.gain_dn_per_e", Parameter::Gain),
+];
+
+/// The pixel pitch, kept apart: its derivative also moves the Nyquist frequency.
+const PIXEL_PITCH: &str = "camera.pixel_pitch_um";
+
+/// The lens families whose `efficiency` and `transmission` are one factor on the imaging order
+/// and on the transmitted light at every wavelength (one order, no relative weights between
+/// orders), so that they leave the OTF as it is.
+const SCALAR_EFFICIENCY_MODELS: [&str; 2] = ["chromatic", "phase"];
+
+/// Keys the value does not depend on smoothly: integers, switches, seeds and limits.
+const NOT_SMOOTH: [(&str, &str); 8] = [
+    ("design_order", "an integer (the design's diffraction order)"),
+    ("diffraction_order", "an integer (the diffraction order)"),
+    ("adc_bits", "an integer (the ADC's resolution)"),
+    ("pupil_samples", "an integer (the FFT path's sampling)"),
+    ("seed", "a random seed"),
+    ("elements", "an integer (a number of elements)"),
+    ("full_well_e", "a limit: the value does not depend on it until the pixel saturates, where it has a kink"),
+    ("black_level_dn", "a limit on the ADC's range: the value has a kink where the pixel saturates"),
+];
+
+/// Whether a parameter's derivative is per relative change.
+fn logarithmic(p: Parameter) -> bool {
+    !matches!(p, Parameter::ReadNoise | Parameter::DarkCurrent | Parameter::Gain)
+}
+
+/// A key as written, parsed: its dotted name and its index, if any.
+struct KeyPath {
+    name: String,
+    index: Option<usize>,
+}
+
+impl KeyPath {
+    fn parse(key: &str) -> Result<KeyPath> {
+        let key = key.trim();
+        let (name, index) = match key.split_once('[') {
+            Some((name, rest)) => {
+                let index = rest
+                    .strip_suffix(']')
+                    .and_then(|i| i.trim().parse::<usize>().ok())
+                    .with_context(|| format!("--wrt {key}: `{rest}` is not a list index (e.g. lens.binary2[1])"))?;
+                (name.trim(), Some(index))
+            }
+            None => (key, None),
+        };
+        if name.is_empty() || name.split('.').any(|p| p.trim().is_empty()) {
+            bail!("--wrt {key}: not a scene key (e.g. exposure.time_ms, lens.binary2[1])");
+        }
+        Ok(KeyPath { name: name.split('.').map(str::trim).collect::<Vec<_>>().join("."), index })
+    }
+
+    fn canonical(&self) -> String {
+        match self.index {
+            Some(i) => format!("{}[{i}]", self.name),
+            None => self.name.clone(),
+        }
+    }
+}
+
+/// The resolved scene's value at a dotted name, if it has one.
+fn lookup<'a>(table: &'a toml::Table, name: &str) -> Option<&'a toml::Value> {
+    let mut parts = name.split('.');
+    let mut cursor = table.get(parts.next()?)?;
+    for part in parts {
+        cursor = cursor.get(part)?;
+    }
+    Some(cursor)
+}
+
+/// The keys of `keys` in their canonical spelling with their values in the scene: a list key
+/// without an index expanded to every entry; refused, naming the key, when the scene has no such
+/// key, its value is not a number, or a key comes twice.
+fn expand(source: &Source, table: &toml::Table, keys: &[String]) -> Result<Vec<(String, f64)>> {
+    let mut out: Vec<(String, f64, String)> = Vec::new();
+    for key in keys {
+        let path = KeyPath::parse(key)?;
+        refuse_by_name(&path.canonical())?;
+        let value = lookup(table, &path.name)
+            .ok_or_else(|| anyhow!("--wrt {key}: {} has no such key (`asnr scene` lists its keys)", source.label()))?;
+        let entries: Vec<(String, &toml::Value)> = match (path.index, value) {
+            (Some(i), toml::Value::Array(list)) => vec![(
+                path.canonical(),
+                list.get(i).ok_or_else(|| {
+                    anyhow!("--wrt {key}: {} has {} entries in {} (0-based)", source.label(), list.len(), path.name)
+                })?,
+            )],
+            (Some(_), _) => bail!("--wrt {key}: {} is not a list", path.name),
+            (None, toml::Value::Array(list)) => {
+                list.iter().enumerate().map(|(i, v)| (format!("{}[{i}]", path.name), v)).collect()
+            }
+            (None, v) => vec![(path.canonical(), v)],
+        };
+        for (canonical, v) in entries {
+            let number = match v {
+                toml::Value::Float(v) => *v,
+                toml::Value::Integer(v) => *v as f64,
+                other => bail!("--wrt {key}: {canonical} = {other} is not a number; only numeric keys have a gradient"),
+            };
+            if let Some((_, _, first)) = out.iter().find(|(k, _, _)| *k == canonical) {
+                bail!("--wrt {key}: {canonical} is given twice (as `{first}` and `{}`)", key.trim());
+            }
+            out.push((canonical, number, key.trim().to_owned()));
+        }
+    }
+    Ok(out.into_iter().map(|(k, v, _)| (k, v)).collect())
+}
+
+/// Refuses a key whose name says the value is not smooth in it (an integer, a seed, a limit, a
+/// numerical option), whether or not the scene gives it.
+fn refuse_by_name(key: &str) -> Result<()> {
+    let last = key.rsplit('.').next().unwrap_or(key);
+    let last = last.split('[').next().unwrap_or(last);
+    if let Some((_, what)) = NOT_SMOOTH.iter().find(|(k, _)| last == *k || last.ends_with(&format!("_{k}"))) {
+        bail!("--wrt {key}: not differentiable: it is {what}");
+    }
+    if key.starts_with("options.") {
+        bail!("--wrt {key}: not differentiable: a numerical option of the evaluation, not a property of the design");
+    }
+    Ok(())
+}
+
+/// The scene quantity a canonical key sets, or why its gradient is refused.
+fn parameter(key: &str, lens_model: &str) -> Result<Parameter> {
+    refuse_by_name(key)?;
+    if key == PIXEL_PITCH {
+        return Ok(Parameter::PixelPitch);
+    }
+    if let Some((_, p)) = SUPPORTED.iter().find(|(k, _)| *k == key) {
+        if matches!(p, Parameter::Efficiency | Parameter::Transmission)
+            && !SCALAR_EFFICIENCY_MODELS.contains(&lens_model)
+        {
+            bail!(
+                "--wrt {key}: not differentiable here yet for lens.model = \"{lens_model}\" (its {} weighs orders \
+                 against each other); supported for lens.model = {}",
+                key.trim_start_matches("lens."),
+                SCALAR_EFFICIENCY_MODELS.map(|m| format!("\"{m}\"")).join(" or ")
+            );
+        }
+        return Ok(*p);
+    }
+    bail!(
+        "--wrt {key}: not differentiable here yet: the gradient is computed for {} and {PIXEL_PITCH}; this key's \
+         derivative is not computed by the engines (it is never replaced by a finite difference)",
+        SUPPORTED.map(|(k, _)| k).join(", ")
+    )
+}
+
+/// The gradient of the ASNR, mean MTF, SNR0 and photoelectrons of the scene of `source` with
+/// `overrides`, with respect to `keys` (`--wrt`: dotted, `lens.binary2[3]` for a list entry,
+/// `lens.binary2` for all of them). Refused, naming the key: an unknown key or one the scene
+/// lacks, a key given twice (`[1]` and `[01]` are one key), a key that is not a number, a key
+/// the value does not depend on smoothly, a key whose derivative the engines do not compute yet.
+pub fn gradient(source: &Source, overrides: &[String], keys: &[String]) -> Result<Gradient> {
+    Ok(gradient_and_evaluation(source, overrides, keys)?.0)
+}
+
+/// [`gradient`] and the evaluation it was taken at.
+pub(crate) fn gradient_and_evaluation(
+    source: &Source,
+    overrides: &[String],
+    keys: &[String],
+) -> Result<(Gradient, metric::Evaluation)> {
+    if keys.is_empty() {
+        bail!("no key to differentiate with respect to: give one or more --wrt KEY");
+    }
+    let table = crate::objective::resolved(source, overrides)?;
+    let expanded = expand(source, &table, keys)?;
+    let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
+    let parameters: Vec<Parameter> = expanded.iter().map(|(k, _)| parameter(k, &lens_model)).collect::<Result<_>>()?;
+    let built = scene::build_from(source, overrides)?;
+    let g = metric::gradient(&built, &parameters).map_err(|e| anyhow!("{}: {e}", source.label()))?;
+    // per relative change → per unit of the key
+    let per_key = |d: &[f64]| -> Vec<f64> {
+        d.iter()
+            .zip(&parameters)
+            .zip(&expanded)
+            .map(|((d, p), (_, v))| if logarithmic(*p) { d / v } else { *d })
+            .collect()
+    };
+    let e = &g.evaluation;
+    let gradient = Gradient {
+        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
+        values: expanded.iter().map(|(_, v)| *v).collect(),
+        asnr: e.asnr,
+        mean_mtf: e.mean_mtf,
+        snr0: e.snr0,
+        photoelectrons: e.photoelectrons,
+        d_asnr: per_key(&g.asnr),
+        d_mean_mtf: per_key(&g.mean_mtf),
+        d_snr0: per_key(&g.snr0),
+        d_photoelectrons: per_key(&g.photoelectrons),
+    };
+    Ok((gradient, g.evaluation))
+}
+
+/// The gradient as a table: each key, its value, `∂ASNR/∂key` and `∂ln ASNR/∂ln key`.
+pub fn table(g: &Gradient) -> String {
+    let width = g.keys.iter().map(|k| k.chars().count()).max().unwrap_or(3).max(3);
+    let mut out = format!(
+        "ASNR {:.6}  (mean MTF {:.6}, SNR0 {:.6}, N {:.6e} e⁻)\n\n{:<width$}  {:>14}  {:>14}  {:>16}\n",
+        g.asnr, g.mean_mtf, g.snr0, g.photoelectrons, "key", "value", "∂ASNR/∂key", "∂ln ASNR/∂ln key"
+    );
+    for (i, k) in g.keys.iter().enumerate() {
+        out.push_str(&format!(
+            "{k:<width$}  {:>14}  {:>14.6e}  {:>16.6}\n",
+            g.values[i].to_string(),
+            g.d_asnr[i],
+            g.relative(i)
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scene::sweep::assignment;
+
+    /// The tolerance of the converged evaluations the references difference (docs/physics.md,
+    /// "Gradients": ≤ 1e-10).
+    const REFERENCE_TOLERANCE: f64 = 1e-10;
+
+    fn example(name: &str) -> Source {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples").join(name);
+        scene::read(Some(&path)).unwrap()
+    }
+
+    fn owned(list: &[&str]) -> Vec<String> {
+        list.iter().map(|s| (*s).to_owned()).collect()
+    }
+
+    /// (ASNR, mean MTF, SNR0, N) of a converged evaluation with `key = value`.
+    fn converged(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 4] {
+        // the key's own override replaced by the stepped value
+        let mut set: Vec<String> =
+            overrides.iter().filter(|o| o.split_once('=').is_none_or(|(k, _)| k.trim() != key)).cloned().collect();
+        set.push(format!("options.tolerance={REFERENCE_TOLERANCE:e}"));
+        set.push(assignment(key, value));
+        let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
+        [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
+    }
+
+    /// The reference written here: central differences of converged evaluations, the step from
+    /// the rule of docs/physics.md, h = (3 tol/|f‴|)^{1/3} with |f‴| ~ 1 in relative units, so
+    /// h = (3e-10)^{1/3} |v| ≈ 6.7e-4 |v| (truncation and rounding both ~1e-7 relative).
+    fn central(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 4] {
+        let h = (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs();
+        let up = converged(source, overrides, key, value + h);
+        let down = converged(source, overrides, key, value - h);
+        std::array::from_fn(|i| (up[i] - down[i]) / (2.0 * h))
+    }
+
+    /// Every key's gradient (ASNR, mean MTF, SNR0, N) against the central differences, as
+    /// relative sensitivities ∂/∂ln key (dimensionless), within 10× the tolerance the gradient
+    /// was asked at (the scene's 1e-6) relative to the gradient's norm.
+    fn check_against_differences(source: &Source, overrides: &[String], keys: &[&str]) {
+        let tolerance = 1e-6;
+        let g = gradient(source, overrides, &owned(keys)).unwrap();
+        assert_eq!(g.keys, owned(keys));
+        let references: Vec<[f64; 4]> =
+            g.keys.iter().zip(&g.values).map(|(k, v)| central(source, overrides, k, *v)).collect();
+        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            let relative =
+                |d: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..g.keys.len()).map(|i| d(i) * g.values[i]).collect() };
+            let mine = relative(&|i| ours[q][i]);
+            let theirs = relative(&|i| references[i][q]);
+            // a gradient that is zero (the mean MTF of keys that change N only) against the
+            // quantity's own size: its differences are rounding
+            let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
+            let norm = match mine.iter().map(|x| x * x).sum::<f64>().sqrt() {
+                0.0 => quantity,
+                norm => norm,
+            };
+            for (i, k) in g.keys.iter().enumerate() {
+                let error = (mine[i] - theirs[i]).abs();
+                println!(
+                    "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {:.1e}",
+                    mine[i],
+                    theirs[i],
+                    error / norm
+                );
+                assert!(error <= 10.0 * tolerance * norm, "{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]);
+            }
+        }
+    }
+
+    /// The Binary 2 lens on the radial engine with a full sensor (read noise, dark current, an
+    /// ADC) and the glare-inclusive SNR: every radiometric, exposure and camera key.
+    #[test]
+    fn camera_and_radiometric_keys_match_central_differences() {
+        let source = example("phase-binary2.toml");
+        let overrides = owned(&[
+            "camera.read_noise_e=3",
+            "camera.dark_current_e_per_s=20000",
+            "camera.gain_dn_per_e=0.5",
+            "camera.adc_bits=12",
+            "options.glare=\"included\"",
+            "spectrum.peak=0.8",
+        ]);
+        check_against_differences(
+            &source,
+            &overrides,
+            &[
+                "exposure.time_ms",
+                "source.radiance_w_m2_sr_nm",
+                "camera.quantum_efficiency",
+                "spectrum.peak",
+                "lens.efficiency",
+                "lens.transmission",
+                "camera.read_noise_e",
+                "camera.dark_current_e_per_s",
+                "camera.gain_dn_per_e",
+                "camera.pixel_pitch_um",
+            ],
+        );
+    }
+
+    /// The paper's chromatic lens on the closed form: the pixel pitch moves N and the Nyquist
+    /// frequency (Leibniz' rule on the mean MTF), in the mean and in the integral form.
+    #[test]
+    fn pixel_pitch_matches_central_differences_in_both_forms() {
+        let source = scene::read(None).unwrap();
+        let keys = ["camera.pixel_pitch_um", "exposure.time_ms", "lens.efficiency"];
+        check_against_differences(&source, &[], &keys);
+        check_against_differences(&source, &owned(&["options.form=\"integral\"", "camera.read_noise_e=2"]), &keys);
+    }
+
+    /// A blackbody's scale (a factor constant in λ) on the paper's lens, and the temperature
+    /// refused (its spectrum's shape moves the OTF's weights: not yet).
+    #[test]
+    fn a_blackbody_scale_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        let text = paper
+            .text()
+            .replace("kind = \"flat\"", "kind = \"blackbody\"\ntemperature_k = 3000.0\nscale = 2e-3")
+            .replace("radiance_w_m2_sr_nm = 0.025", "");
+        assert!(text.contains("blackbody") && !text.contains("radiance_w_m2_sr_nm"), "{text}");
+        let source = Source::from_text(text, "blackbody", ".");
+        check_against_differences(&source, &owned(&["camera.read_noise_e=2"]), &["source.scale", "exposure.time_ms"]);
+        let e = gradient(&source, &[], &owned(&["source.temperature_k"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt source.temperature_k: not differentiable here yet"), "{e}");
+    }
+
+    /// ∂SNR0 analytic: with shot noise alone SNR0 = √N and N ∝ t, so ∂SNR0/∂t = SNR0/(2t) and
+    /// ∂ASNR/∂t = ASNR/(2t) (docs/physics.md, "Gradients"); with read noise σ_r,
+    /// ∂SNR0/∂N = (N + 2σ_r²)/(2(N + σ_r²)^{3/2}).
+    #[test]
+    fn snr0_gradient_is_the_closed_form() {
+        let source = example("phase-binary2.toml");
+        let g = gradient(&source, &[], &owned(&["exposure.time_ms"])).unwrap();
+        let t = g.values[0];
+        assert!((g.d_snr0[0] - g.snr0 / (2.0 * t)).abs() <= 1e-14 * g.d_snr0[0], "{g:?}");
+        assert!((g.d_asnr[0] - g.asnr / (2.0 * t)).abs() <= 1e-14 * g.d_asnr[0], "{g:?}");
+        assert!((g.d_photoelectrons[0] - g.photoelectrons / t).abs() <= 1e-14 * g.d_photoelectrons[0]);
+        assert_eq!(g.d_mean_mtf[0], 0.0);
+        assert!((g.relative(0) - 0.5).abs() < 1e-14);
+        let g = gradient(&source, &owned(&["camera.read_noise_e=4"]), &owned(&["exposure.time_ms"])).unwrap();
+        let (n, r2) = (g.photoelectrons, 16.0);
+        let closed = (n + 2.0 * r2) / (2.0 * (n + r2).powf(1.5)) * n / g.values[0];
+        assert!((g.d_snr0[0] - closed).abs() <= 1e-13 * closed, "{} vs {closed}", g.d_snr0[0]);
+    }
+
+    /// Bad keys are refused naming the key.
+    #[test]
+    fn bad_keys_are_refused_naming_the_key() {
+        let source = example("phase-binary2.toml");
+        let refused = |keys: &[&str]| gradient(&source, &[], &owned(keys)).unwrap_err().to_string();
+        let e = refused(&["lens.colour"]);
+        assert!(e.contains("--wrt lens.colour") && e.contains("has no such key"), "{e}");
+        let e = refused(&["camera.gain_dn_per_e"]);
+        assert!(e.contains("--wrt camera.gain_dn_per_e") && e.contains("has no such key"), "{e}");
+        let e = refused(&["exposure.time_ms", "exposure.time_ms"]);
+        assert!(e.contains("exposure.time_ms is given twice"), "{e}");
+        let e = refused(&["lens.binary2[1]", "lens.binary2[01]"]);
+        assert!(e.contains("lens.binary2[1] is given twice (as `lens.binary2[1]` and `lens.binary2[01]`)"), "{e}");
+        let e = refused(&["lens.binary2", "lens.binary2[3]"]);
+        assert!(e.contains("lens.binary2[3] is given twice"), "{e}");
+        let e = refused(&["lens.binary2[7]"]);
+        assert!(e.contains("--wrt lens.binary2[7]") && e.contains("has 4 entries"), "{e}");
+        let e = refused(&["lens.diffraction_order"]);
+        assert!(e.contains("--wrt lens.diffraction_order: not differentiable: it is an integer"), "{e}");
+        let e = refused(&["options.tolerance"]);
+        assert!(e.contains("--wrt options.tolerance: not differentiable"), "{e}");
+        let e = refused(&["lens.model"]);
+        assert!(e.contains("lens.model = \"phase\" is not a number"), "{e}");
+        let e = refused(&["lens.f_number"]);
+        assert!(
+            e.contains("--wrt lens.f_number: not differentiable here yet")
+                && e.contains("never replaced by a finite difference"),
+            "{e}"
+        );
+        let e = refused(&[]);
+        assert!(e.contains("--wrt"), "{e}");
+        // saturation is a kink
+        let e = gradient(&source, &owned(&["camera.full_well_e=100"]), &owned(&["exposure.time_ms"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not differentiable") && e.contains("saturates"), "{e}");
+        // the pixel pitch with the pixel MTF is not followed yet
+        let e = gradient(&source, &owned(&["camera.pixel_mtf=true"]), &owned(&["camera.pixel_pitch_um"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not differentiable") && e.contains("pixel_mtf"), "{e}");
+    }
+
+    /// The JSON has the fields `asnr gradient --json` promises, keys in their canonical spelling.
+    #[test]
+    fn json_has_the_promised_fields() {
+        let source = scene::read(None).unwrap();
+        let g = gradient(&source, &[], &owned(&[" exposure . time_ms ", "camera.pixel_pitch_um"])).unwrap();
+        let json = serde_json::to_value(&g).unwrap();
+        for field in ["asnr", "mean_mtf", "snr0", "photoelectrons"] {
+            assert!(json[field].is_f64(), "{field}: {json}");
+        }
+        for field in ["gradient", "mean_mtf_gradient", "snr0_gradient", "photoelectrons_gradient"] {
+            let object = json[field].as_object().unwrap();
+            let mut keys: Vec<&String> = object.keys().collect();
+            keys.sort();
+            assert_eq!(keys, ["camera.pixel_pitch_um", "exposure.time_ms"], "{json}");
+        }
+        assert_eq!(json["gradient"]["exposure.time_ms"].as_f64().unwrap(), g.d_asnr[0]);
+        let text = table(&g);
+        assert!(text.contains("exposure.time_ms") && text.contains("∂ln ASNR/∂ln key"), "{text}");
+    }
+}
