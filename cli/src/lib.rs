@@ -91,7 +91,8 @@ pub enum Command {
         task: Option<String>,
     },
     /// The values of numeric scene keys that maximize the ASNR: one key by a scan and golden
-    /// section, several by COBYLA from the best of a Halton start set.
+    /// section, several by COBYLA (or, with --method gradient, projected L-BFGS on the exact
+    /// gradient) from the best of a Halton start set.
     Optimize {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
         scene: Option<PathBuf>,
