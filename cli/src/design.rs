@@ -18,6 +18,7 @@ pub(crate) struct OptimizeArgs {
     pub xtol: f64,
     pub starts: Option<usize>,
     pub max_evaluations: Option<usize>,
+    pub method: Option<optimize::Method>,
     pub plot: Option<PathBuf>,
     pub json: bool,
 }
@@ -27,7 +28,7 @@ pub(crate) struct OptimizeArgs {
 const MAX_EVALUATIONS: usize = 1_000_000;
 
 /// Runs `asnr optimize` with several `--over` keys, or one with an `--objective` other than the
-/// ASNR.
+/// ASNR or a `--method`.
 pub(crate) fn optimize(args: OptimizeArgs, tolerance: Option<f64>) -> Result<()> {
     // checked before the search sizes anything from them: its history is allocated for the
     // whole budget (1e12 evaluations asked for 56 TB), and the start set's capacity overflowed
@@ -64,7 +65,7 @@ pub(crate) fn optimize(args: OptimizeArgs, tolerance: Option<f64>) -> Result<()>
     }
     let bar = crate::comparecmd::Bar(crate::sweep::progress_bar(0, "evaluations")?);
     let overrides = set.clone();
-    let outcome = optimize::search_scene(source.clone(), set, &ranges, args.objective, &search, &bar)?;
+    let outcome = optimize::search_scene_by(source.clone(), set, &ranges, args.objective, &search, args.method, &bar)?;
     for w in optimize::outcome_warnings(&outcome) {
         eprintln!("warning: {w}");
     }

@@ -91,7 +91,8 @@ pub enum Command {
         task: Option<String>,
     },
     /// The values of numeric scene keys that maximize the ASNR: one key by a scan and golden
-    /// section, several by COBYLA from the best of a Halton start set.
+    /// section, several by COBYLA (or, with --method gradient, projected L-BFGS on the exact
+    /// gradient) from the best of a Halton start set.
     Optimize {
         /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).
         scene: Option<PathBuf>,
@@ -106,8 +107,8 @@ pub enum Command {
         /// worst_channel (a multiplexed lens's lowest channel).
         #[arg(long, default_value = "asnr", value_name = "NAME")]
         objective: String,
-        /// One key: stop when the bracket is narrower than this fraction of HI − LO. Several:
-        /// stop when COBYLA's step is below this fraction of each key's range.
+        /// One key: stop when the bracket is narrower than this fraction of HI − LO. Several (or
+        /// --method): stop when the local search's step is below this fraction of each key's range.
         #[arg(long, default_value_t = 1e-4, value_name = "FRACTION")]
         xtol: f64,
         /// Several keys: points of the Halton start set (default 10 per key).
@@ -116,6 +117,12 @@ pub enum Command {
         /// Several keys: the most evaluations, start set included.
         #[arg(long, value_name = "N")]
         max_evaluations: Option<usize>,
+        /// The local search after the Halton start set: cobyla (derivative-free, the default: any
+        /// key, up to 16) or gradient (projected L-BFGS on the exact gradient, up to 64 keys, only
+        /// the keys `asnr gradient` differentiates and the objectives asnr, asnr_glare, fov_mean).
+        /// One key without --method: a scan and golden section.
+        #[arg(long, value_name = "cobyla|gradient")]
+        method: Option<String>,
         /// Several keys: draw the convergence (the ASNR of each evaluation and the best so far)
         /// into FILE.svg|png; for two keys also the landscape (the ASNR on a 21 × 21 grid, 441
         /// more evaluations) with the search's path, into FILE-landscape.svg|png.
@@ -310,12 +317,35 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Optimize { scene, set, over, objective, xtol, starts, max_evaluations, plot, tolerance, json } => {
+        Command::Optimize {
+            scene,
+            set,
+            over,
+            objective,
+            xtol,
+            starts,
+            max_evaluations,
+            method,
+            plot,
+            tolerance,
+            json,
+        } => {
             check_over_names(&over)?;
             let objective = report::objective::Objective::parse(&objective)?;
-            if over.len() > 1 || objective != report::objective::Objective::Asnr {
-                let args =
-                    design::OptimizeArgs { scene, set, over, objective, xtol, starts, max_evaluations, plot, json };
+            let method = method.as_deref().map(optimize::Method::parse).transpose()?;
+            if over.len() > 1 || objective != report::objective::Objective::Asnr || method.is_some() {
+                let args = design::OptimizeArgs {
+                    scene,
+                    set,
+                    over,
+                    objective,
+                    xtol,
+                    starts,
+                    max_evaluations,
+                    method,
+                    plot,
+                    json,
+                };
                 return design::optimize(args, tolerance);
             }
             for (given, flag) in [(starts.is_some(), "--starts"), (max_evaluations.is_some(), "--max-evaluations")] {

@@ -873,9 +873,10 @@ pub fn many_report(
         if o.history.first().is_some_and(|e| e.stage == "scene") { ", the scene's own values among them" } else { "" };
     let _ = writeln!(
         s,
-        "{} evaluations ({} start points{own} + {local} by COBYLA); {}",
+        "{} evaluations ({} start points{own} + {local} by {}); {}",
         o.history.len(),
         o.start_count(),
+        if o.method == METHOD_GRADIENT { "L-BFGS" } else { "COBYLA" },
         o.stopped
     );
     let _ =
@@ -1024,6 +1025,36 @@ pub fn check_xtol(xtol: f64) -> Result<()> {
     Ok(())
 }
 
+/// The local search of `asnr optimize --method` over the keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// COBYLA, derivative-free ([`maximize_many`]): up to [`MAX_KEYS`] keys, any objective.
+    Cobyla,
+    /// Projected L-BFGS on the engines' exact gradient ([`maximize_many_gradient`]): up to
+    /// [`MAX_KEYS_GRADIENT`] keys, the smooth objectives (`asnr`, `asnr_glare`, `fov_mean`) and the
+    /// keys `asnr gradient` differentiates.
+    Gradient,
+}
+
+impl Method {
+    /// `cobyla` or `gradient`, as `--method` takes it.
+    pub fn parse(name: &str) -> Result<Method> {
+        match name.trim() {
+            "cobyla" => Ok(Method::Cobyla),
+            "gradient" => Ok(Method::Gradient),
+            other => bail!("--method {other}: expected cobyla (derivative-free, the default) or gradient"),
+        }
+    }
+
+    /// The name `--method` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Cobyla => "cobyla",
+            Method::Gradient => "gradient",
+        }
+    }
+}
+
 /// Maximizes `objective` of the scene `source` with `overrides` over `ranges`: one key by
 /// [`maximize`] (a scan and golden section to `search.xtol` of the range, every point counted,
 /// as `asnr optimize` always did), several by [`maximize_many`]. The command line and the Python
@@ -1036,13 +1067,41 @@ pub fn search_scene(
     search: &Search,
     progress: &dyn crate::Progress,
 ) -> Result<Outcome> {
+    search_scene_by(source, overrides, ranges, objective, search, None, progress)
+}
+
+/// [`search_scene`] by `method` when given: [`Method::Cobyla`] runs [`maximize_many`] even over
+/// one key, [`Method::Gradient`] [`maximize_many_gradient`] with
+/// [`crate::objective::Target::value_and_gradient`]. Without a method one key is searched by golden
+/// section and several by COBYLA. The gradient method first takes the gradient once at the
+/// centre of the box, so that an objective or a key without a gradient is refused, named, before
+/// any search.
+pub fn search_scene_by(
+    source: scene::Source,
+    overrides: Vec<String>,
+    ranges: &[Range],
+    objective: crate::objective::Objective,
+    search: &Search,
+    method: Option<Method>,
+    progress: &dyn crate::Progress,
+) -> Result<Outcome> {
     check_xtol(search.xtol)?;
     check_over_keys(&overrides, ranges)?;
     let keys: Vec<String> = ranges.iter().map(|r| r.key.clone()).collect();
     let label = source.label().to_owned();
     let target = crate::objective::Target::new(source, overrides, objective, &keys)?;
+    if method == Some(Method::Gradient) {
+        if ranges.len() > MAX_KEYS_GRADIENT {
+            bail!("--over: {} keys; expected 1 to {MAX_KEYS_GRADIENT} with --method gradient", ranges.len());
+        }
+        let centre: Vec<f64> = ranges.iter().map(|r| 0.5 * (r.lo + r.hi)).collect();
+        target.value_and_gradient(&keys, &centre).map_err(|e| {
+            // the gradient's messages name its own flag; here the keys come from --over
+            anyhow::anyhow!("--method gradient: {}", format!("{e:#}").replace("--wrt ", "--over "))
+        })?;
+    }
     let scene_value = target.value(&[], &[])?;
-    let found = if let [range] = ranges {
+    let found = if let (None, [range]) = (method, ranges) {
         if search.starts != 0 || search.max_evaluations != Search::DEFAULT_MAX_EVALUATIONS {
             bail!(
                 "--starts and --max-evaluations apply to a search over several keys; one key is searched by a {SCAN_POINTS}-point scan and golden section"
@@ -1058,7 +1117,18 @@ pub fn search_scene(
         // the search alone)
         let initial: Option<Vec<f64>> =
             keys.iter().map(|k| crate::objective::number_at(target.source(), target.overrides(), k).ok()).collect();
-        Found::Many(maximize_many_from(ranges, search, initial.as_deref(), &|x| target.value(&keys, x), progress)?)
+        let value = |x: &[f64]| target.value(&keys, x);
+        Found::Many(match method {
+            Some(Method::Gradient) => maximize_many_gradient(
+                ranges,
+                search,
+                initial.as_deref(),
+                &value,
+                &mut |x: &[f64]| target.value_and_gradient(&keys, x),
+                progress,
+            )?,
+            None | Some(Method::Cobyla) => maximize_many_from(ranges, search, initial.as_deref(), &value, progress)?,
+        })
     };
     Ok(Outcome { label, objective, scene_value, found })
 }
@@ -1329,5 +1399,50 @@ mod tests {
         assert_eq!(bits(&a), bits(&b));
         assert_eq!(halton(1, 2), 0.5);
         assert!((halton(5, 3) - 7.0 / 9.0).abs() < 1e-15);
+    }
+
+    /// `--method gradient` refuses a key without a gradient and an objective without one before
+    /// the search evaluates anything (no progress started), naming the flag and the key; the same
+    /// search by COBYLA runs.
+    #[test]
+    fn the_gradient_method_refuses_before_searching() {
+        struct Count(std::sync::atomic::AtomicU64);
+        impl crate::Progress for Count {
+            fn start(&self, _: u64) {
+                self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+            fn advance(&self, steps: u64) {
+                self.0.fetch_add(steps, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+        let source = scene::read(None).unwrap();
+        let r = [
+            Range { key: "camera.pixel_pitch_um".into(), lo: 2.0, hi: 8.0, points: None },
+            Range { key: "lens.f_number".into(), lo: 2.0, hi: 3.0, points: None },
+        ];
+        let search = Search { xtol: 1e-4, starts: 0, max_evaluations: Search::DEFAULT_MAX_EVALUATIONS };
+        let asnr = crate::objective::Objective::Asnr;
+        let count = Count(0.into());
+        let e = search_scene_by(source.clone(), vec![], &r, asnr, &search, Some(Method::Gradient), &count).unwrap_err();
+        let e = format!("{e:#}");
+        assert!(e.starts_with("--method gradient: --over lens.f_number: not differentiable here yet"), "{e}");
+        assert_eq!(count.0.load(std::sync::atomic::Ordering::Relaxed), 0);
+        let capacity = crate::objective::Objective::Capacity;
+        let one = &r[..1];
+        let e = search_scene_by(source.clone(), vec![], one, capacity, &search, Some(Method::Gradient), &count);
+        let e = format!("{:#}", e.unwrap_err());
+        assert!(e.starts_with("--method gradient: --objective capacity"), "{e}");
+        assert_eq!(count.0.load(std::sync::atomic::Ordering::Relaxed), 0);
+        let o = search_scene_by(source, vec![], &r, asnr, &search, Some(Method::Cobyla), &count).unwrap();
+        assert!(matches!(o.found, Found::Many(ref m) if m.method == METHOD_MANY));
+        assert!(count.0.load(std::sync::atomic::Ordering::Relaxed) > 0);
+    }
+
+    #[test]
+    fn methods_parse_by_name() {
+        assert_eq!(Method::parse("gradient").unwrap(), Method::Gradient);
+        assert_eq!(Method::parse(Method::Cobyla.name()).unwrap(), Method::Cobyla);
+        let e = Method::parse("lbfgs").unwrap_err().to_string();
+        assert!(e.contains("--method lbfgs: expected cobyla") && e.contains("gradient"), "{e}");
     }
 }

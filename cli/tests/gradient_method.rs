@@ -1,0 +1,118 @@
+//! `asnr optimize --method gradient`: the bounded quasi-Newton search on the engines' exact
+//! gradient (docs/physics.md, "Gradients"), against COBYLA on the embedded paper scene, and its
+//! refusals.
+
+mod common;
+
+use common::{fails, json};
+
+/// The ASNR of the paper scene with `set`, evaluated directly.
+fn asnr_at(set: &[String]) -> f64 {
+    let mut args = vec!["evaluate", "--json"];
+    for s in set {
+        args.extend(["--set", s.as_str()]);
+    }
+    json(&args)["asnr"].as_f64().unwrap()
+}
+
+/// Over the pixel pitch alone and jointly with the exposure time, the gradient method reaches the
+/// optimum COBYLA reaches, within --xtol of each range (1e-4, the default). The ASNR rises with
+/// both keys (a larger pixel lowers the Nyquist frequency and collects more light, a longer
+/// exposure more photoelectrons: `asnr sweep --over camera.pixel_pitch_um=0.5:40:12` rises
+/// throughout), so the optimum is the upper bounds: the gradient points out of the box there
+/// (positive), its projection on the box is zero, and the ASNR reported is the evaluation's at
+/// the point reported. The one-key golden section (no --method) agrees too.
+#[test]
+fn the_gradient_method_reaches_cobylas_optimum() {
+    let golden = json(&["optimize", "--over", "camera.pixel_pitch_um=2:8", "--json"]);
+    for over in [&["camera.pixel_pitch_um=2:8"][..], &["camera.pixel_pitch_um=2:8", "exposure.time_ms=0.5:2"]] {
+        let run = |method: &str| {
+            let mut args = vec!["optimize", "--method", method, "--json"];
+            for o in over {
+                args.extend(["--over", o]);
+            }
+            json(&args)
+        };
+        let (cobyla, gradient) = (run("cobyla"), run("gradient"));
+        assert!(cobyla["method"].as_str().unwrap().starts_with("COBYLA"), "{cobyla}");
+        assert!(gradient["method"].as_str().unwrap().starts_with("projected L-BFGS"), "{gradient}");
+        assert_eq!(gradient["converged"], true, "{gradient}");
+        let mut set = Vec::new();
+        for o in over {
+            let (key, bounds) = o.split_once('=').unwrap();
+            let (lo, hi) = bounds.split_once(':').unwrap();
+            let (lo, hi): (f64, f64) = (lo.parse().unwrap(), hi.parse().unwrap());
+            let xtol = 1e-4 * (hi - lo);
+            let (c, g) = (cobyla["best"][key].as_f64().unwrap(), gradient["best"][key].as_f64().unwrap());
+            assert!((c - g).abs() <= xtol, "{key}: COBYLA {c}, gradient {g}");
+            assert!((g - hi).abs() <= xtol, "{key}: {g}, expected the bound {hi}");
+            assert_eq!(gradient["at_bound"][key], true);
+            assert!(gradient["gradient"][key].as_f64().unwrap() > 0.0, "{gradient}");
+            set.push(format!("{key}={g}"));
+        }
+        assert_eq!(gradient["projected_gradient"].as_f64().unwrap(), 0.0, "{gradient}");
+        let best = gradient["asnr"].as_f64().unwrap();
+        assert_eq!(asnr_at(&set), best, "the reported ASNR is the evaluation's at the reported point");
+        let c = cobyla["asnr"].as_f64().unwrap();
+        assert!((best - c).abs() <= 1e-3 * c, "gradient {best}, COBYLA {c}");
+        assert!(best > gradient["best_start_asnr"].as_f64().unwrap(), "{gradient}");
+        if over.len() == 1 {
+            let b = golden["best"].as_f64().unwrap();
+            let g = gradient["best"]["camera.pixel_pitch_um"].as_f64().unwrap();
+            assert!((b - g).abs() <= golden["tolerance"].as_f64().unwrap() + 6e-4, "golden {b}, gradient {g}");
+        }
+    }
+}
+
+/// The text report names the method, counts the L-BFGS evaluations, and gives the gradient at the
+/// optimum and its projection.
+#[test]
+fn the_text_report_names_the_gradient_search() {
+    let out = common::asnr(&["optimize", "--over", "exposure.time_ms=0.5:2", "--method", "gradient"]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("projected L-BFGS") && text.contains("by L-BFGS"), "{text}");
+    assert!(text.contains("gradient at the optimum (per unit of each key): exposure.time_ms"), "{text}");
+}
+
+/// Refused before any search, naming `--method gradient` and what has no gradient: keys the
+/// engines do not differentiate yet (one beside a key they do, and one alone), the objectives without a gradient
+/// (worst_channel is a minimum over channels; capacity and detectability not computed yet); an
+/// unknown method.
+#[test]
+fn the_gradient_method_refuses_what_has_no_gradient() {
+    let e = fails(&[
+        "optimize",
+        "--over",
+        "camera.pixel_pitch_um=2:8",
+        "--over",
+        "lens.f_number=2:3",
+        "--method",
+        "gradient",
+    ]);
+    assert!(e.contains("--method gradient: --over lens.f_number: not differentiable here yet"), "{e}");
+    let e = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--method", "gradient"]);
+    assert!(e.contains("--method gradient: --over spectrum.range_nm: not differentiable here yet"), "{e}");
+    for objective in ["capacity", "detectability:disk:20:0.1"] {
+        let e =
+            fails(&["optimize", "--over", "exposure.time_ms=1:2", "--objective", objective, "--method", "gradient"]);
+        assert!(e.contains("--method gradient: --objective") && e.contains("gradient is not computed yet"), "{e}");
+    }
+    let dir = std::env::temp_dir().join(format!("asnr-gradient-method-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let paper = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml")).unwrap();
+    let (start, end) = (paper.find("[lens]").unwrap(), paper.find("[source]").unwrap());
+    let lens = "model = \"multiplexed\"\nlayout = \"interleaved\"\nf_number = 2.5\nfocal_length_mm = 3.36\n\
+                channels_nm = [750, 800, 850]\nefficiency = 0.15\ntransmission = 0.55\n";
+    let path = dir.join("interleaved.toml");
+    std::fs::write(&path, format!("{}[lens]\n{lens}\n{}", &paper[..start], &paper[end..])).unwrap();
+    let scene = path.to_str().unwrap();
+    let args = ["optimize", scene, "--over", "exposure.time_ms=1:2", "--objective", "worst_channel"];
+    let e = fails(&[&args[..], &["--method", "gradient"]].concat());
+    assert!(e.contains("--method gradient: --objective worst_channel: a minimum over channels"), "{e}");
+    // the same search by COBYLA runs
+    let v = json(&[&args[..], &["--method", "cobyla", "--json", "--max-evaluations", "40"]].concat());
+    assert!(v["asnr"].as_f64().unwrap() > 0.0, "{v}");
+    let e = fails(&["optimize", "--over", "exposure.time_ms=1:2", "--method", "newton"]);
+    assert!(e.contains("--method newton: expected cobyla (derivative-free, the default) or gradient"), "{e}");
+}
