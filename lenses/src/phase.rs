@@ -72,6 +72,9 @@ pub struct PhaseLens {
     efficiency: Curve,
     transmission: Curve,
     zernike_noll_m: Vec<(usize, f64)>,
+    /// the phase at λ0 per unit of each Binary 2 coefficient: `M (R/R_norm)^{2j}` on `q^j`
+    /// (`j = 1, 2, …`), empty without Binary 2 coefficients
+    binary2_terms: Vec<f64>,
     /// how the profile was given, for reports
     source: String,
 }
@@ -126,6 +129,7 @@ impl PhaseLens {
             efficiency,
             transmission,
             zernike_noll_m: Vec::new(),
+            binary2_terms: Vec::new(),
             source,
         })
     }
@@ -144,6 +148,15 @@ impl PhaseLens {
     pub fn with_added_phase(mut self, profile: Arc<RadialProfile>, what: &str) -> PhaseLens {
         self.phase.push(profile);
         self.source = format!("{} + {what}", self.source);
+        self
+    }
+
+    /// This lens with its phase's Binary 2 structure recorded: `terms[j]` is the phase at λ0
+    /// (radians) per unit of the coefficient `A_{j+1}`, on `q^{j+1}` (`M (R/R_norm)^{2(j+1)}`, as
+    /// [`binary2_profile`] forms it), so that [`LensModel::binary2_directions`] gives the
+    /// wavefront's change per coefficient.
+    pub fn with_binary2_terms(mut self, terms: Vec<f64>) -> PhaseLens {
+        self.binary2_terms = terms;
         self
     }
 
@@ -253,6 +266,29 @@ impl LensModel for PhaseLens {
 
     fn design_wavelength(&self) -> Option<f64> {
         Some(self.design_wavelength)
+    }
+
+    /// Per order, the path per radian of φ0 times each coefficient's phase term: the order's
+    /// wavefront is `path_per_radian · φ0(q)` (plus the sphere and the Zernike terms, which do
+    /// not move), so `∂W/∂A_j = path_per_radian · M (R/R_norm)^{2j} q^j` (docs/physics.md,
+    /// "Gradients": geometric phase `λ/2π`, refractive `λ0/2π` times the glass factor,
+    /// diffractive `(m/p) λ/2π`).
+    fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<RadialProfile>>> {
+        if self.binary2_terms.is_empty() {
+            return None;
+        }
+        let orders = self.order_list(wavelength_m);
+        let mut out = Vec::with_capacity(orders.len());
+        for (_, _, per_radian) in orders {
+            let mut order = Vec::with_capacity(self.binary2_terms.len());
+            for (j, &term) in self.binary2_terms.iter().enumerate() {
+                let mut poly = vec![0.0; j + 2];
+                poly[j + 1] = per_radian * term;
+                order.push(RadialProfile::even_polynomial(poly).ok()?);
+            }
+            out.push(order);
+        }
+        Some(out)
     }
 
     /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).

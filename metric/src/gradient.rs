@@ -40,6 +40,11 @@ pub enum Parameter {
     /// The pixel pitch p: `N ∝ p²` and `ν_N = 1/(2p)`. `∂/∂ln p`. Refused with the pixel MTF
     /// (its sinc moves with p inside the integral) or a non-white noise spectrum.
     PixelPitch,
+    /// The lens's Binary 2 coefficient `A_{i+1}` (`lens.binary2[i]`, radians): it moves the
+    /// wavefront of every order (`optics::LensModel::binary2_directions`), so the OTF, not the
+    /// photon count. `∂/∂A`, per radian. On axis, on the radial engine, without the pixel MTF or
+    /// a noise spectrum.
+    Binary2(usize),
 }
 
 impl Parameter {
@@ -54,6 +59,7 @@ impl Parameter {
             Parameter::DarkCurrent => "the dark current",
             Parameter::Gain => "the conversion gain",
             Parameter::PixelPitch => "the pixel pitch",
+            Parameter::Binary2(_) => "a Binary 2 coefficient of the lens's phase",
         }
     }
 }
@@ -158,6 +164,10 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
     };
     // the stray light B = max(N_T − N, 0) with glare included: its derivative where it is > 0
     let stray = matches!(scene.options().glare, GlareMode::Included) && background > 0.0;
+    let binary2 = match parameters.iter().find(|p| matches!(p, Parameter::Binary2(_))) {
+        Some(&p) => Some(binary2_mean_mtf(scene, e, p)?),
+        None => None,
+    };
     for &p in parameters {
         let Some(partials) = partials else {
             return Err(not_smooth(
@@ -210,6 +220,17 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
+            Parameter::Binary2(i) => {
+                let all = binary2.as_deref().unwrap_or(&[]);
+                let Some(&d_mtf) = all.get(i) else {
+                    return Err(not_smooth(p, format!("the lens has {} Binary 2 coefficients (0-based)", all.len())));
+                };
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
         };
         let d_snr0 = partials.signal * d_n + partials.variance * (d_b + d_dark + d_read + d_quant);
         out.photoelectrons.push(d_n);
@@ -218,4 +239,30 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
         out.asnr.push(d_snr0 * g + e.snr0 * d_g);
     }
     Ok(out)
+}
+
+/// `∂M̄/∂A_j` for every Binary 2 coefficient of the lens at the evaluation `e`
+/// ([`optics::binary2_mean_mtf_gradient`]: the radial engine's OTF derivatives on a fixed
+/// Gauss–Legendre rule in λ and ν, split at the OTF's sign changes; each OTF to a hundredth of
+/// the tolerance).
+fn binary2_mean_mtf(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Vec<f64>, Error> {
+    let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
+    let camera = scene.camera();
+    if camera.pixel_mtf() {
+        return Err(not_smooth(
+            "with camera.pixel_mtf = true the Binary 2 gradient is not computed here yet (set camera.pixel_mtf = false)",
+        ));
+    }
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth("with camera.noise_spectrum the Binary 2 gradient is not computed here yet"));
+    }
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let accuracy = (1e-2 * scene.options().settings().tolerance).max(1e-13);
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    optics::binary2_mean_mtf_gradient(scene.lens(), &detected, scene.field(), nyquist, accuracy)?.ok_or_else(|| {
+        not_smooth(
+            "the Binary 2 gradient is computed on axis for a lens whose every order is a radially symmetric pupil \
+             (the exact radial engine); this scene's lens or field is not",
+        )
+    })
 }

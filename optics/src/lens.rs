@@ -380,6 +380,14 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// The change of each imaging order's whole wavefront (m, as a function of `q = ρ²`) per unit
+    /// of each Binary 2 coefficient `A_j` of the lens's phase, at `wavelength_m` on axis: one list
+    /// per order of [`orders`](Self::orders), one profile per coefficient (docs/physics.md,
+    /// "Gradients"). `None` (the default) where the lens has no such coefficients.
+    fn binary2_directions(&self, _wavelength_m: f64) -> Option<Vec<Vec<crate::radial::RadialProfile>>> {
+        None
+    }
+
     /// The wavelength the lens was designed for (m), if it has one: the reference of the
     /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
     fn design_wavelength(&self) -> Option<f64> {
@@ -440,6 +448,9 @@ macro_rules! forward_lens_model {
             fn factored_efficiency(&self) -> Option<FactoredEfficiency> { (**self).factored_efficiency() }
             fn numerical_aperture(&self) -> f64 { (**self).numerical_aperture() }
             fn design_wavelength(&self) -> Option<f64> { (**self).design_wavelength() }
+            fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<crate::radial::RadialProfile>>> {
+                (**self).binary2_directions(wavelength_m)
+            }
             fn describe(&self) -> String { (**self).describe() }
             fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> { (**self).affine_defocus(field) }
         }

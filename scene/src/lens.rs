@@ -1282,6 +1282,8 @@ fn phase_lens(
         }
         None => None,
     };
+    // the phase per unit of each Binary 2 coefficient (the gradient's directions)
+    let mut binary2_terms: Vec<f64> = Vec::new();
     let (phase, amplitude, source) = match (&l.binary2, &l.phase_csv, &spline) {
         (None, None, Some((profile, what))) => {
             for key in ["norm_radius_mm", "diffraction_order"] {
@@ -1357,6 +1359,13 @@ fn phase_lens(
                     ));
                 }
             }
+            let mut power = 1.0_f64;
+            binary2_terms = (0..coefficients.len())
+                .map(|_| {
+                    power *= scale;
+                    m * power
+                })
+                .collect();
             let profile = lenses::binary2_profile(coefficients, m, norm, radius)
                 .map_err(|e| o.domain("lens.binary2", "[lens]", e))?;
             (
@@ -1401,7 +1410,8 @@ fn phase_lens(
     let alone = l.binary2.is_none() && l.phase_csv.is_none();
     let mut lens =
         lenses::PhaseLens::new(f_number, f0_m, l0, phase, amplitude, dispersion, efficiency, transmission, source)
-            .map_err(|e| o.domain("lens", "[lens]", e))?;
+            .map_err(|e| o.domain("lens", "[lens]", e))?
+            .with_binary2_terms(binary2_terms);
     let spline_what = spline.as_ref().map(|(_, what)| what.clone());
     if let Some((profile, what)) = spline
         && !alone
