@@ -242,9 +242,9 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
 }
 
 /// `∂M̄/∂A_j` for every Binary 2 coefficient of the lens at the evaluation `e`
-/// ([`optics::binary2_mean_mtf_gradient`]: the radial engine's OTF derivatives on a fixed
-/// Gauss–Legendre rule in λ and ν, split at the OTF's sign changes; each OTF to a hundredth of
-/// the tolerance).
+/// ([`optics::binary2_mean_mtf_gradient`]: the radial engine's OTF derivatives on Gauss–Legendre
+/// panels in λ and ν, split at the OTF's sign changes and doubled until the gradient moves by
+/// at most the tolerance; each OTF to a hundredth of the tolerance).
 fn binary2_mean_mtf(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Vec<f64>, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     let camera = scene.camera();
@@ -257,9 +257,9 @@ fn binary2_mean_mtf(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Vec<f
         return Err(not_smooth("with camera.noise_spectrum the Binary 2 gradient is not computed here yet"));
     }
     let detected = crate::evaluate::detected_spectrum(scene);
-    let accuracy = (1e-2 * scene.options().settings().tolerance).max(1e-13);
+    let tolerance = scene.options().settings().tolerance;
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
-    optics::binary2_mean_mtf_gradient(scene.lens(), &detected, scene.field(), nyquist, accuracy)?.ok_or_else(|| {
+    optics::binary2_mean_mtf_gradient(scene.lens(), &detected, scene.field(), nyquist, tolerance)?.ok_or_else(|| {
         not_smooth(
             "the Binary 2 gradient is computed on axis for a lens whose every order is a radially symmetric pupil \
              (the exact radial engine); this scene's lens or field is not",

@@ -1,15 +1,16 @@
 //! The derivative of the polychromatic mean MTF with respect to a lens's Binary 2 coefficients
 //! (docs/physics.md, "Gradients"), from the radial engine's OTF derivatives
-//! ([`RadialOrder::otf_and_derivatives`]) summed on a fixed product rule: no finite differences.
+//! ([`RadialOrder::otf_and_derivatives`]) summed on its own product rule: no finite differences.
 //!
 //! `M̄ = (1/ν_max) ∫_0^{ν_max} |O(ν)| dν` with `O(ν) = Σ_λ w_λ OTF_λ(ν λ F#) / Σ_λ w_λ` (the
 //! weights `ρ(λ) τ(λ)` of the detected photons, which the coefficients do not move), so
 //! `∂M̄/∂A_j = (1/ν_max) ∫ sign(O) Σ_λ w_λ ∂OTF_λ/∂A_j / Σ w dν`. The rule: in λ, 16-point
-//! Gauss–Legendre on [`SPECTRAL_PANELS`] panels between the spectrum's ends and breakpoints and
-//! the lens's; in ν, 16-point Gauss–Legendre on [`FREQUENCY_PANELS`] panels, each split where
-//! `O` changes sign (the kink of `|O|`, found by bisection), so the integrand is smooth on every
-//! piece. The OTF's oscillation in λ and ν comes from the defocus the band spans; the rule is
-//! checked against central differences of converged evaluations in the report's tests.
+//! Gauss–Legendre on panels between the spectrum's ends and breakpoints and the lens's; in ν,
+//! 16-point Gauss–Legendre on panels of `[0, ν_max]`, each split where `O` changes sign (the
+//! kink of `|O|`, found by bisection), so the integrand is smooth on every piece. The panels
+//! start at [`SPECTRAL_PANELS`] × [`FREQUENCY_PANELS`] and double together until the gradient
+//! moves by at most the tolerance times its norm (at most [`MAX_SPECTRAL_PANELS`] in λ); the
+//! result is checked against central differences of converged evaluations in the report's tests.
 
 use radiometry::Spectrum;
 
@@ -19,11 +20,15 @@ use crate::{Error, quad};
 
 use super::spectral::{Node, spectral_extent};
 
-/// Gauss–Legendre panels across the spectral band (between breakpoints, each at least one).
-const SPECTRAL_PANELS: usize = 24;
+/// Gauss–Legendre panels across the spectral band (between breakpoints) of the first rule.
+const SPECTRAL_PANELS: usize = 2;
 
-/// Gauss–Legendre panels across `[0, ν_max]` (each split at a sign change of the OTF).
-const FREQUENCY_PANELS: usize = 32;
+/// Gauss–Legendre panels across `[0, ν_max]` (each split at a sign change of the OTF) of the
+/// first rule.
+const FREQUENCY_PANELS: usize = 4;
+
+/// The most spectral panels: the rule stops doubling there.
+const MAX_SPECTRAL_PANELS: usize = 128;
 
 /// One wavelength's radial order, its weight, and its derivative directions.
 struct Sample {
@@ -46,7 +51,36 @@ pub fn binary2_mean_mtf_gradient(
     detected: &Spectrum,
     field: Field,
     max_frequency: f64,
+    tolerance: f64,
+) -> Result<Option<Vec<f64>>, Error> {
+    let accuracy = (1e-2 * tolerance).max(1e-13);
+    let (mut spectral, mut frequency) = (SPECTRAL_PANELS, FREQUENCY_PANELS);
+    let rule = |s, f| on_rule(lens, detected, field, max_frequency, accuracy, s, f);
+    let Some(mut previous) = rule(spectral, frequency)? else { return Ok(None) };
+    while spectral < MAX_SPECTRAL_PANELS {
+        spectral *= 2;
+        frequency *= 2;
+        let Some(next) = rule(spectral, frequency)? else { return Ok(None) };
+        let norm = next.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let change = next.iter().zip(&previous).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+        previous = next;
+        if change <= tolerance * norm {
+            break;
+        }
+    }
+    Ok(Some(previous))
+}
+
+/// The gradient on one rule: `spectral_panels` in λ, `frequency_panels` in ν.
+#[allow(clippy::too_many_arguments)]
+fn on_rule(
+    lens: &dyn LensModel,
+    detected: &Spectrum,
+    field: Field,
+    max_frequency: f64,
     accuracy: f64,
+    spectral_panels: usize,
+    frequency_panels: usize,
 ) -> Result<Option<Vec<f64>>, Error> {
     if !field.is_on_axis() {
         return Ok(None);
@@ -66,8 +100,8 @@ pub fn binary2_mean_mtf_gradient(
         cuts.dedup();
         let rule = quad::rule();
         for w in cuts.windows(2) {
-            let h = (w[1] - w[0]) / SPECTRAL_PANELS as f64;
-            for p in 0..SPECTRAL_PANELS {
+            let h = (w[1] - w[0]) / spectral_panels as f64;
+            for p in 0..spectral_panels {
                 let c = w[0] + (p as f64 + 0.5) * h;
                 for &(x, wx) in rule.iter() {
                     let lambda = c + 0.5 * h * x;
@@ -111,10 +145,10 @@ pub fn binary2_mean_mtf_gradient(
     };
     // the ν pieces: panel ends and the sign changes between them
     let mut ends = vec![0.0];
-    let h = max_frequency / FREQUENCY_PANELS as f64;
+    let h = max_frequency / frequency_panels as f64;
     let mut previous = (0.0, 1.0);
-    for p in 1..=FREQUENCY_PANELS {
-        let nu = if p == FREQUENCY_PANELS { max_frequency } else { p as f64 * h };
+    for p in 1..=frequency_panels {
+        let nu = if p == frequency_panels { max_frequency } else { p as f64 * h };
         let value = otf(nu);
         if value * previous.1 < 0.0 {
             let (mut a, mut b, fa) = (previous.0, nu, previous.1);
