@@ -96,22 +96,7 @@ impl PhaseLens {
         transmission: Curve,
         source: String,
     ) -> Result<PhaseLens, Error> {
-        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
-        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
-        check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
-        if let Dispersion::Diffractive { design_order } = dispersion {
-            let p = f64::from(design_order);
-            check("design_order", p, (1.0..=1000.0).contains(&p), "a whole number from 1 to 1000")?;
-        }
-        if let Dispersion::Refractive { glass: Some(g) } = &dispersion
-            && g.index(design_wavelength_m).is_none()
-        {
-            return Err(Error::OutOfRange {
-                name: "design_wavelength",
-                value: design_wavelength_m,
-                expected: "inside the glass's Sellmeier range",
-            });
-        }
+        check_design(f_number, focal_length_m, design_wavelength_m, &dispersion)?;
         check_fraction("efficiency", &efficiency)?;
         check_fraction("transmission", &transmission)?;
         let eff = efficiency.clone();
@@ -501,4 +486,32 @@ impl<L: LensModel> LensModel for WithZernike<L> {
             .collect();
         format!("{} + Zernike (Noll, RMS) {}", self.inner.describe(), terms.join(", "))
     }
+}
+
+/// The checks a phase lens's design takes, whether its phase is radial or a 2-D map: the
+/// F-number (NA ≤ 1), the focal length, the design wavelength (inside the glass's Sellmeier range
+/// for a refractive lens on a glass) and a diffractive lens's design order.
+pub(crate) fn check_design(
+    f_number: f64,
+    focal_length_m: f64,
+    design_wavelength_m: f64,
+    dispersion: &Dispersion,
+) -> Result<(), Error> {
+    check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
+    check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
+    check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
+    if let Dispersion::Diffractive { design_order } = *dispersion {
+        let p = f64::from(design_order);
+        check("design_order", p, (1.0..=1000.0).contains(&p), "a whole number from 1 to 1000")?;
+    }
+    if let Dispersion::Refractive { glass: Some(g) } = dispersion
+        && g.index(design_wavelength_m).is_none()
+    {
+        return Err(Error::OutOfRange {
+            name: "design_wavelength",
+            value: design_wavelength_m,
+            expected: "inside the glass's Sellmeier range",
+        });
+    }
+    Ok(())
 }

@@ -10,7 +10,7 @@ use optics::{Field, LensModel, Order};
 
 use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
-use crate::phase::{Dispersion, order_list};
+use crate::phase::{Dispersion, check_design, order_list};
 
 /// A lens given by a 2-D phase map ([`optics::map::PhaseMap`]): working F-number `f0/D` (`D` the
 /// circle's diameter or the square's side), the detector at `f0`, the dispersion, and the
@@ -55,22 +55,7 @@ impl PhaseMapLens {
         transmission: Curve,
         source: String,
     ) -> Result<PhaseMapLens, Error> {
-        check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
-        check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
-        check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
-        if let Dispersion::Diffractive { design_order } = dispersion {
-            let p = f64::from(design_order);
-            check("design_order", p, (1.0..=1000.0).contains(&p), "a whole number from 1 to 1000")?;
-        }
-        if let Dispersion::Refractive { glass: Some(g) } = &dispersion
-            && g.index(design_wavelength_m).is_none()
-        {
-            return Err(Error::OutOfRange {
-                name: "design_wavelength",
-                value: design_wavelength_m,
-                expected: "inside the glass's Sellmeier range",
-            });
-        }
+        check_design(f_number, focal_length_m, design_wavelength_m, &dispersion)?;
         let radius = 0.5 * focal_length_m / f_number;
         check(
             "phase map aperture radius",
