@@ -460,6 +460,25 @@ impl LensModel for PsfStack {
 mod tests {
     use super::*;
 
+    /// `(1/to) ∫_0^to f dν` by Simpson's rule on 2000 intervals (the tests' integrands are smooth).
+    fn simpson_mean(to: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+        let intervals = 2000;
+        let h = to / intervals as f64;
+        let sum: f64 = (0..=intervals)
+            .map(|i| {
+                let w = if i == 0 || i == intervals {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * f(i as f64 * h)
+            })
+            .sum();
+        sum * h / 3.0 / to
+    }
+
     const PITCH: f64 = 1e-6;
 
     fn lens(wavelengths: Vec<f64>, [ny, nx]: [usize; 2], values: &[f64]) -> Result<PsfStack, Error> {
@@ -589,20 +608,7 @@ mod tests {
             let a = std::f64::consts::SQRT_2 * std::f64::consts::PI * sigma * nyquist;
             let want = std::f64::consts::PI.sqrt() * erf(a) / (2.0 * a);
             // Simpson's rule on 2000 intervals (the integrand is smooth: error ~1e-14)
-            let intervals = 2000;
-            let h = nyquist / intervals as f64;
-            let mut sum = 0.0;
-            for i in 0..=intervals {
-                let w = if i == 0 || i == intervals {
-                    1.0
-                } else if i % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                sum += w * lens.table().value(l, i as f64 * h, 0.0).abs();
-            }
-            let got = sum * h / 3.0 / nyquist;
+            let got = simpson_mean(nyquist, |nu| lens.table().value(l, nu, 0.0).abs());
             eprintln!("{:.1} nm: mean MTF {got:.9} vs {want:.9}: {:+.2e}", l * 1e9, got - want);
             assert!((got - want).abs() < 3e-5, "{} nm: {got} vs {want}", l * 1e9);
             worst = worst.max((got - want).abs());
@@ -613,20 +619,9 @@ mod tests {
         let grid = lens.table().frequencies().to_vec();
         let row: Vec<f64> = grid.iter().map(|&nu| lens.table().value(800e-9, nu, 0.0)).collect();
         let linear = OtfTable::new(vec![800e-9], grid, vec![row], None).unwrap();
-        let (intervals, mut sum) = (2000, 0.0);
-        let h = nyquist / intervals as f64;
-        for i in 0..=intervals {
-            let w = if i == 0 || i == intervals {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            sum += w * linear.value(800e-9, i as f64 * h, 0.0).abs();
-        }
+        let linear_mean = simpson_mean(nyquist, |nu| linear.value(800e-9, nu, 0.0).abs());
         let a = std::f64::consts::SQRT_2 * std::f64::consts::PI * 3e-6 * nyquist;
-        let before = sum * h / 3.0 / nyquist - std::f64::consts::PI.sqrt() * erf(a) / (2.0 * a);
+        let before = linear_mean - std::f64::consts::PI.sqrt() * erf(a) / (2.0 * a);
         eprintln!("800 nm, linear in ν between the grid's frequencies: {before:+.2e}");
         assert!(before < -5e-5, "the linear interpolation's error: {before}");
     }
@@ -666,21 +661,11 @@ mod tests {
             assert!((alias - want).abs() < 1e-3, "{alias}");
             // the OTF's error below the stack's Nyquist frequency, and the mean MTF's to the camera's
             let mut worst: f64 = 0.0;
-            let (intervals, mut error) = (2000, 0.0);
-            let h = camera_nyquist / intervals as f64;
-            for i in 0..=intervals {
-                let nu = i as f64 * h;
+            let error = simpson_mean(camera_nyquist, |nu| {
                 let e = lens.table().value(8e-7, nu, 0.0) - otf(nu);
                 worst = worst.max(e.abs());
-                let w = if i == 0 || i == intervals {
-                    1.0
-                } else if i % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                error += w * e * h / 3.0 / camera_nyquist;
-            }
+                e
+            });
             eprintln!(
                 "σ = {sigma:e} m at {pitch:e} m: estimate {alias:.4}, OTF error ≤ {worst:.4}, mean MTF error {error:+.3e}"
             );
