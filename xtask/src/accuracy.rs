@@ -1,5 +1,6 @@
-//! `cargo xtask accuracy [--quick] [--designs]`: the accuracy-versus-time report (`--designs`: the
-//! rows of the designs given as data alone, into `target/BENCHMARKS-designs.md`). Builds and runs the example
+//! `cargo xtask accuracy [--quick] [--designs] [--only NAME[,NAME]]`: the accuracy-versus-time report (`--designs`: the
+//! rows of the designs given as data alone, into `target/BENCHMARKS-designs.md`; `--only`: the named
+//! stand-alone sections alone, each replacing its own section of `BENCHMARKS.md`). Builds and runs the example
 //! `metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
 //! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
 //! workspace root.
@@ -25,8 +26,15 @@ const REQUIREMENTS: &str = "xtask/baselines/requirements.txt";
 
 /// Build and run the report from the workspace `root`.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    if let Some(bad) = args.iter().find(|a| !matches!(a.as_str(), "--quick" | "--designs" | "--sweep")) {
-        bail!("unknown argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs] [--sweep])");
+    let mut rest = args.iter();
+    while let Some(arg) = rest.next() {
+        match arg.as_str() {
+            "--quick" | "--designs" | "--sweep" => {}
+            "--only" if rest.next().is_some() => {}
+            bad => bail!(
+                "unknown or incomplete argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs] [--sweep] [--only NAME[,NAME]])"
+            ),
+        }
     }
     cmd::run(&mut cmd::cargo(root, &["build", "--release", "--quiet", "--package", "asnr", "--bin", "asnr"]))?;
     let asnr = target_dir(root).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));

@@ -3,7 +3,7 @@
 //! shell scripts. `.cargo/config.toml` aliases `cargo xtask` to this binary.
 //!
 //! Tasks:
-//! - `accuracy [--quick] [--designs]`: the accuracy-versus-time report (`BENCHMARKS.md`; `--designs`:
+//! - `accuracy [--quick] [--designs] [--only NAME[,NAME]]`: the accuracy-versus-time report (`BENCHMARKS.md`; `--designs`:
 //!   the designs given as data alone, into `target/BENCHMARKS-designs.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `data [--check | --maps]`: the generated data files of `examples/data/` (`data.rs`); `--maps`

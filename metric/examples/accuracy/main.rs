@@ -30,7 +30,9 @@
 //! `OUT_DIR/target/BENCHMARKS-designs.md`, not BENCHMARKS.md; `--sweep`: the sweep against numpy
 //! and the 5000-row efficiency table ([`sweep`]) alone, into `OUT_DIR/target/BENCHMARKS-sweep.md`): `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
 //! numpy for the baseline (`cargo xtask accuracy` builds the one and prepares the other); the
-//! map or the numpy rows are skipped, and the report says so, without them.
+//! map or the numpy rows are skipped, and the report says so, without them. `--only NAME[,NAME]`:
+//! only the named stand-alone sections ([`sections`]), each replacing its own section of the
+//! existing `OUT_DIR/BENCHMARKS.md`.
 
 mod design;
 mod iris;
@@ -40,6 +42,7 @@ mod plot;
 mod process;
 mod psf_stack;
 mod report;
+mod sections;
 mod spectral;
 mod sweep;
 mod tables;
@@ -328,6 +331,7 @@ fn main() {
     let mut designs_only = false;
     let mut sweep_only = false;
     let mut asnr_python: Option<PathBuf> = None;
+    let mut only: Option<String> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -337,11 +341,32 @@ fn main() {
             "--asnr" => asnr = Some(PathBuf::from(args.next().expect("--asnr BIN"))),
             "--python" => python = Some(PathBuf::from(args.next().expect("--python PY"))),
             "--asnr-python" => asnr_python = Some(PathBuf::from(args.next().expect("--asnr-python PY"))),
+            "--only" => only = Some(args.next().expect("--only NAME[,NAME]")),
             flag if flag.starts_with("--") => panic!("unknown flag {flag}"),
             _ => out = PathBuf::from(arg),
         }
     }
     let grid = if quick { QUICK } else { FULL };
+    let tools = sections::Tools {
+        asnr: asnr.clone(),
+        python: python.clone(),
+        asnr_python: asnr_python.clone(),
+        root: out.clone(),
+        quick,
+    };
+    if let Some(names) = only {
+        // the named stand-alone sections alone, spliced into the existing BENCHMARKS.md
+        let chosen = sections::select(&names).unwrap_or_else(|e| {
+            eprintln!("accuracy: {e}");
+            std::process::exit(2)
+        });
+        let path = sections::benchmarks(&out);
+        let mut md = std::fs::read_to_string(&path).unwrap_or_default();
+        sections::render_into(&mut md, &chosen, &tools);
+        std::fs::write(&path, md).unwrap();
+        eprintln!("wrote {}", path.display());
+        return;
+    }
     let load_at_start = load_average();
     let cases = [
         Case { name: "paper: F/2.5, 50 nm", f_number: 2.5, range_m: 50e-9 },
@@ -524,9 +549,11 @@ fn main() {
     }
     let kernel_rows = kernels::measure(quick);
     context.load = (load_at_start, load_average());
-    let md = report::markdown(&rows, &kernel_rows, &context);
+    let mut md = report::markdown(&rows, &kernel_rows, &context);
+    let every: Vec<&sections::Section> = sections::SECTIONS.iter().collect();
+    sections::render_into(&mut md, &every, &tools);
     std::fs::create_dir_all(&out).unwrap();
-    let path = out.join("BENCHMARKS.md");
+    let path = sections::benchmarks(&out);
     std::fs::write(&path, md).unwrap();
     let svg = out.join("docs/benchmarks/accuracy.svg");
     std::fs::create_dir_all(svg.parent().unwrap()).unwrap();
