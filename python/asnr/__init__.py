@@ -5,7 +5,11 @@ text or a dict), changed with :meth:`Scene.with_`, and evaluated at one point
 (:func:`evaluate`), at many (:func:`evaluate_many`, numpy arrays in and out, in parallel with the
 GIL released), over a grid (:func:`sweep`, a pandas DataFrame), or compared with other designs
 (:func:`compare`). :func:`mtf` gives the polychromatic MTF; :func:`optimize` searches the keys
-that maximize the ASNR and :func:`tolerance` samples how it survives fabrication errors. Every number is the one ``asnr``
+that maximize the ASNR and :func:`tolerance` samples how it survives fabrication errors.
+:func:`gradient` is the exact gradient of the ASNR with respect to scene keys (``asnr gradient``),
+and :func:`value_and_grad` the objective and its gradient as a function of a numpy vector (for
+``scipy.optimize.minimize(jac=True)``); ``asnr.jax`` and ``asnr.torch`` make the ASNR a
+differentiable function of a JAX array or a torch tensor. Every number is the one ``asnr``
 prints for the same scene (the same Rust functions compute it): ``evaluate_many`` over a grid
 is ``asnr sweep --csv`` to the last digit, and :func:`to_csv` writes its bytes.
 
@@ -44,6 +48,7 @@ __all__ = [
     "concat",
     "evaluate",
     "evaluate_many",
+    "gradient",
     "grid",
     "load",
     "mtf",
@@ -51,6 +56,8 @@ __all__ = [
     "sweep",
     "to_csv",
     "tolerance",
+    "value_and_grad",
+    "ValueAndGrad",
 ]
 
 __version__ = "0.1.0"
@@ -282,61 +289,141 @@ def optimize(
     xtol: float = 1e-4,
     starts: int | None = None,
     max_evaluations: int | None = None,
+    method: str | None = None,
+    tolerance: float | None = None,
 ) -> dict[str, Any]:
     """The values of scene keys that maximize the ASNR: ``asnr optimize --json`` with one
     ``--over KEY=LO:HI`` per entry of ``over`` (``{key: (lo, hi)}``), the same search and so the
     same numbers. One key: a 17-point scan and golden section (``best`` a number); several:
     COBYLA from the best of a Halton start set of ``starts`` points (default 10 per key), at
     most ``max_evaluations`` evaluations (default 500; ``best`` and ``at_bound`` dicts keyed by
-    the keys, ``history`` every point evaluated). ``objective``: ``"asnr"``, ``"asnr_glare"``
-    (SI eq. S14), ``"fov_mean"`` or ``"worst_channel"``."""
+    the keys, ``history`` every point evaluated). ``method``: ``"cobyla"`` (the default for
+    several keys) or ``"gradient"`` (``--method gradient``: projected L-BFGS on the exact
+    gradient, up to 64 keys, the keys :func:`gradient` differentiates; the dict adds
+    ``gradient`` at the optimum). ``objective``: ``"asnr"``, ``"asnr_glare"`` (SI eq. S14),
+    ``"fov_mean"`` or ``"worst_channel"`` (not with ``method="gradient"``). ``tolerance``:
+    ``--tolerance``, the relative error allowed in each ASNR (``options.tolerance``)."""
+    scene = _scene(scene)
+    if tolerance is not None:
+        scene = scene.with_({"options.tolerance": float(tolerance)})
     ranges = [(str(k), float(lo), float(hi)) for k, (lo, hi) in over.items()]
     text = _asnr.optimize(
-        _scene(scene),
+        scene,
         ranges,
         objective,
         float(xtol),
         0 if starts is None else int(starts),
         500 if max_evaluations is None else int(max_evaluations),
+        None if method is None else str(method),
     )
     return json.loads(text)
 
 
-def tolerance(
-    scene: Scene,
-    vary: Mapping[str, str],
-    *,
-    n: int = 1000,
-    seed: int = 1,
-    objective: str = "asnr",
-    budget_s: float = 600.0,
-    threads: int = 0,
-) -> dict[str, Any]:
-    """How the ASNR survives fabrication: ``asnr tolerance --json`` with one ``--vary KEY=DIST``
-    per entry of ``vary`` (``{key: "normal:0.02"}`` in the key's units, ``"normal:2%"`` of its
-    value, ``"uniform:LO:HI"``, or ``"seed"``: a fresh whole-number seed each sample, for
-    ``lens.atom_error_seed``, a new draw of a library lens's atom errors), ``n`` samples drawn from ``seed`` (the same run as the command
-    line's: the same numbers). The dict has the JSON's fields (``nominal_asnr``, ``mean``,
-    ``std``, ``p5``, ``p50``, ``p95``, ``keys`` with each key's ``sensitivity_per_sigma``, …),
-    ``csv`` (the ``--csv`` text, byte for byte) and ``table`` (its columns as numpy arrays)."""
-    pairs = [(str(k), str(v)) for k, v in vary.items()]
-    report, csv = _asnr.tolerance(_scene(scene), pairs, int(n), int(seed), objective, float(budget_s), int(threads))
-    out = json.loads(report)
-    out["csv"] = csv
-    lines = csv.splitlines()
-    header = lines[0].split(",")
-    rows = [line.split(",") for line in lines[1:]]
-    table: dict[str, np.ndarray] = {}
-    for j, name in enumerate(header):
-        column = [r[j] for r in rows]
-        if name == "fraunhofer_valid":
-            table[name] = np.array([c == "true" for c in column], dtype=bool)
-        elif name == "sample":
-            table[name] = np.array([int(c) for c in column], dtype=np.int64)
-        else:
-            table[name] = np.array([float(c) for c in column], dtype=np.float64)
-    out["table"] = table
+def _keys(keys: str | Iterable[str]) -> list[str]:
+    """One key or several, as a list of strings (a lone string is one key, not its letters)."""
+    out = [keys] if isinstance(keys, str) else [str(k) for k in keys]
+    if not out:
+        raise ValueError("no key to differentiate with respect to: give one or more dotted scene keys")
     return out
+
+
+def gradient(
+    scene: Scene,
+    keys: str | Iterable[str],
+    *,
+    set: Mapping[str, Any] | Sequence[str] | None = None,  # noqa: A002 - the command line's name
+    tolerance: float | None = None,
+) -> dict[str, Any]:
+    """The exact gradient of the ASNR, mean MTF, SNR0 and photoelectrons with respect to scene
+    keys: ``asnr gradient --json`` with one ``--wrt KEY`` per entry of ``keys`` (one key, or a
+    list; ``"lens.binary2"`` means every entry, spelled ``lens.binary2[0]``, …), the overrides
+    ``set`` (a dict, or ``key=value`` strings as ``--set`` takes them) after the scene's own, and
+    ``tolerance`` (``--tolerance``: the relative error allowed in the mean MTF and its
+    derivatives). The same function computes it, so the dict is the command line's JSON: ``asnr``,
+    ``mean_mtf``, ``snr0``, ``photoelectrons``, and ``gradient``, ``mean_mtf_gradient``,
+    ``snr0_gradient``, ``photoelectrons_gradient``, each ``{KEY: derivative}`` (per unit of the
+    key: per ms for ``exposure.time_ms``, per radian for ``lens.binary2[i]``) in the order of the
+    keys, each key spelled one canonical way.
+
+    Computed inside the engines (docs/physics.md, "Gradients"), never by finite differences: a
+    key the value does not depend on smoothly (an integer, a switch, a seed), one whose derivative
+    is not computed yet, an unknown key, a key the scene lacks or a key given twice raises
+    :class:`SceneError` naming the key."""
+    overrides: Any = None
+    if set is not None:
+        overrides = dict(set) if isinstance(set, Mapping) else [str(s) for s in set]
+    text, _values = _asnr.gradient(_scene(scene), _keys(keys), overrides, None if tolerance is None else float(tolerance))
+    return json.loads(text)
+
+
+class ValueAndGrad:
+    """The objective of a scene as a function of a vector of its keys' values, and its exact
+    gradient: ``f(x)`` returns ``(value, gradient)``, a float and a float64 array of the keys'
+    length, the form ``scipy.optimize.minimize(fun, x0, jac=True)`` takes (negate both to
+    minimize: ``lambda x: tuple(-v for v in f(x))``, or build it with ``sign=-1``).
+
+    Made by :func:`value_and_grad`. ``keys`` are the keys, one entry each (``lens.binary2`` given
+    as a whole is spelled out), ``x0`` their values in the scene, ``objective`` the objective's
+    name; :meth:`value` is the objective alone (one evaluation, cheaper than its gradient)."""
+
+    def __init__(self, scene: Scene, keys: list[str], x0: np.ndarray, objective: str, sign: float):
+        self.scene = scene
+        self.keys = keys
+        self.x0 = x0
+        self.objective = objective
+        self.sign = sign
+
+    def _values(self, x: Any) -> np.ndarray:
+        values = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1))
+        if values.shape != (len(self.keys),):
+            raise ValueError(f"{np.shape(x)}: expected a 1-D array of {len(self.keys)} values, one per key ({', '.join(self.keys)})")
+        return values
+
+    def __call__(self, x: Any) -> tuple[float, np.ndarray]:
+        value, grad = _asnr.objective_value_and_gradient(self.scene, self.keys, self._values(x), self.objective)
+        return self.sign * value, self.sign * grad
+
+    def value(self, x: Any) -> float:
+        """The objective at ``x`` without its gradient (times ``sign``)."""
+        return self.sign * _asnr.objective_value(self.scene, self.keys, self._values(x), self.objective)
+
+    def __repr__(self) -> str:
+        return f"ValueAndGrad(objective={self.objective!r}, keys={self.keys!r}, sign={self.sign:+g})"
+
+
+def value_and_grad(
+    scene: Scene,
+    keys: str | Iterable[str],
+    objective: str = "asnr",
+    *,
+    tolerance: float | None = None,
+    sign: float = 1.0,
+) -> ValueAndGrad:
+    """The objective of ``scene`` (``"asnr"``, ``"asnr_glare"`` or ``"fov_mean"``, as ``asnr
+    optimize --objective`` takes them) as a function of the values of ``keys``:
+    ``f = asnr.value_and_grad(scene, keys)``; ``f(x)`` returns ``(value, gradient)`` with ``x``,
+    the gradient a numpy float64 array, one entry per key in the order of ``f.keys``, per unit of
+    each key. ``sign=-1`` returns −value and −gradient, for a minimizer:
+    ``scipy.optimize.minimize(asnr.value_and_grad(scene, keys, sign=-1), f.x0, jac=True)``.
+    ``tolerance`` sets ``options.tolerance``.
+
+    Each call is one evaluation with its exact gradient from the engines (what ``asnr optimize
+    --method gradient`` follows; docs/physics.md, "Gradients"). The keys are checked now, with
+    one gradient at the scene's own values (which gives ``f.x0``): an unknown, non-differentiable
+    or missing key raises :class:`SceneError` naming it. A key the scene lacks may be set by
+    ``scene.with_`` first."""
+    scene = _scene(scene)
+    if tolerance is not None:
+        scene = scene.with_({"options.tolerance": float(tolerance)})
+    if objective not in ("asnr", "asnr_glare", "fov_mean"):
+        raise SceneError(
+            f"objective {objective!r}: the objectives with a gradient are 'asnr', 'asnr_glare' and 'fov_mean' "
+            "(worst_channel is a minimum over channels, with no gradient where two tie)"
+        )
+    text, values = _asnr.gradient(scene, _keys(keys), None, None)
+    names = list(json.loads(text)["gradient"])
+    _asnr.check_objective(scene, names, objective)  # a key it sets itself, fov_mean without [[fields]]
+    return ValueAndGrad(scene, names, np.array(values, dtype=np.float64), objective, float(sign))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -53,7 +53,21 @@ def optimize(
     xtol: float = 1e-4,
     starts: int = 0,
     max_evaluations: int = 500,
+    method: str | None = None,
 ) -> str: ...
+def gradient(
+    scene: Scene,
+    keys: list[str],
+    overrides: dict[str, float | int | bool | str] | list[str] | None = None,
+    tolerance: float | None = None,
+) -> tuple[str, list[float]]: ...
+def check_objective(scene: Scene, keys: list[str], objective: str) -> None: ...
+def objective_value(
+    scene: Scene, keys: list[str], values: npt.NDArray[np.float64], objective: str = "asnr"
+) -> float: ...
+def objective_value_and_gradient(
+    scene: Scene, keys: list[str], values: npt.NDArray[np.float64], objective: str = "asnr"
+) -> tuple[float, npt.NDArray[np.float64]]: ...
 def tolerance(
     scene: Scene,
     vary: list[tuple[str, str]],

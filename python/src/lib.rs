@@ -98,6 +98,20 @@ fn override_text(key: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
     }
 }
 
+/// Overrides given in Python: a dict is written as `Scene.with_` writes it; a list holds
+/// `key=value` strings as typed (`--set`'s).
+fn override_list(overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+    Ok(match overrides {
+        None => Vec::new(),
+        Some(o) => match o.cast::<PyDict>() {
+            Ok(dict) => {
+                dict.iter().map(|(k, v)| override_text(&k.extract::<String>()?, &v)).collect::<PyResult<_>>()?
+            }
+            Err(_) => o.extract()?,
+        },
+    })
+}
+
 #[pymethods]
 impl Scene {
     /// How messages name the scene (its file, or "embedded paper scene").
@@ -368,16 +382,7 @@ fn compare(
     over: Option<String>,
     threads: usize,
 ) -> PyResult<(String, Vec<String>)> {
-    // a dict is written as `Scene.with_` writes it; a list holds `key=value` strings as typed
-    let overrides: Vec<String> = match overrides {
-        None => Vec::new(),
-        Some(o) => match o.cast::<PyDict>() {
-            Ok(dict) => {
-                dict.iter().map(|(k, v)| override_text(&k.extract::<String>()?, &v)).collect::<PyResult<_>>()?
-            }
-            Err(_) => o.extract()?,
-        },
-    };
+    let overrides = override_list(overrides)?;
     let (base, report) = py
         .detach(|| report::compare::compare(path.as_deref(), &overrides, tolerance, over.as_deref(), threads, &()))
         .map_err(scene_error)?;
@@ -400,7 +405,8 @@ fn scene_lens_only(scene: &Scene, what: &str) -> PyResult<()> {
 /// the same search (`report::optimize::search_scene`), so the same numbers. The GIL is
 /// released while it runs.
 #[pyfunction]
-#[pyo3(signature = (scene, over, objective="asnr", xtol=1e-4, starts=0, max_evaluations=500))]
+#[pyo3(signature = (scene, over, objective="asnr", xtol=1e-4, starts=0, max_evaluations=500, method=None))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, each one of `asnr optimize`'s options
 fn optimize(
     py: Python<'_>,
     scene: &Scene,
@@ -409,6 +415,7 @@ fn optimize(
     xtol: f64,
     starts: usize,
     max_evaluations: usize,
+    method: Option<&str>,
 ) -> PyResult<String> {
     scene_lens_only(scene, "optimize")?;
     let ranges = over
@@ -417,20 +424,114 @@ fn optimize(
         .collect::<anyhow::Result<Vec<_>>>()
         .map_err(scene_error)?;
     let objective = report::objective::Objective::parse(objective).map_err(scene_error)?;
+    let method = method.map(report::optimize::Method::parse).transpose().map_err(scene_error)?;
     let search = report::optimize::Search { xtol, starts, max_evaluations };
     let outcome = py
         .detach(|| {
-            report::optimize::search_scene(
+            report::optimize::search_scene_by(
                 scene.source.clone(),
                 scene.overrides.clone(),
                 &ranges,
                 objective,
                 &search,
+                method,
                 &(),
             )
         })
         .map_err(scene_error)?;
     report::optimize::outcome_json(&outcome).map_err(scene_error)
+}
+
+/// `asnr gradient --json` for `scene` with the further `overrides` (a dict, or `key=value`
+/// strings as `--set` takes them) and `tolerance` (`--tolerance`: `options.tolerance`), with
+/// respect to `keys` (`--wrt`): the same function (`report::gradient::gradient`), so the same
+/// JSON text, and the keys' values in the scene (in the JSON's order of keys). The GIL is
+/// released while it runs.
+#[pyfunction]
+#[pyo3(signature = (scene, keys, overrides=None, tolerance=None))]
+fn gradient(
+    py: Python<'_>,
+    scene: &Scene,
+    keys: Vec<String>,
+    overrides: Option<&Bound<'_, PyAny>>,
+    tolerance: Option<f64>,
+) -> PyResult<(String, Vec<f64>)> {
+    scene_lens_only(scene, "gradient")?;
+    let mut set = scene.overrides.clone();
+    set.extend(override_list(overrides)?);
+    if let Some(t) = tolerance {
+        set.push(format!("options.tolerance={t}"));
+    }
+    let g = py.detach(|| report::gradient::gradient(&scene.source, &set, &keys)).map_err(scene_error)?;
+    Ok((serde_json::to_string_pretty(&g).map_err(|e| PyValueError::new_err(e.to_string()))?, g.values))
+}
+
+/// The design target of `asnr optimize` for `scene` (`objective`, varying `keys`), checked.
+fn target(scene: &Scene, objective: &str, keys: &[String]) -> PyResult<report::objective::Target> {
+    scene_lens_only(scene, "value_and_grad")?;
+    let objective = report::objective::Objective::parse(objective).map_err(scene_error)?;
+    report::objective::Target::new(scene.source.clone(), scene.overrides.clone(), objective, keys).map_err(scene_error)
+}
+
+/// Checks the design target of `scene` (`objective`, varying `keys`) without evaluating it: the
+/// objective's name, the keys it sets itself, `[[fields]]` for `fov_mean`.
+#[pyfunction]
+fn check_objective(scene: &Scene, keys: Vec<String>, objective: &str) -> PyResult<()> {
+    target(scene, objective, &keys).map(|_| ())
+}
+
+/// The values of the keys, checked: as many as the keys, finite.
+fn key_values(keys: &[String], values: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
+    let values = values
+        .as_slice()
+        .map_err(|e| PyValueError::new_err(format!("the values must be a contiguous float64 array: {e}")))?
+        .to_vec();
+    if values.len() != keys.len() {
+        return Err(PyValueError::new_err(format!(
+            "{} values for the {} keys {}: expected one value per key",
+            values.len(),
+            keys.len(),
+            keys.join(", ")
+        )));
+    }
+    if let Some((k, v)) = keys.iter().zip(&values).find(|(_, v)| !v.is_finite()) {
+        return Err(PyValueError::new_err(format!("{k} = {v}: expected a finite number")));
+    }
+    Ok(values)
+}
+
+/// The objective (`asnr optimize --objective`'s) of `scene` with `keys[i] = values[i]`
+/// (`report::objective::Target::value`, what `asnr optimize` evaluates). The GIL is released.
+#[pyfunction]
+#[pyo3(signature = (scene, keys, values, objective="asnr"))]
+fn objective_value(
+    py: Python<'_>,
+    scene: &Scene,
+    keys: Vec<String>,
+    values: PyReadonlyArray1<'_, f64>,
+    objective: &str,
+) -> PyResult<f64> {
+    let target = target(scene, objective, &keys)?;
+    let values = key_values(&keys, &values)?;
+    Ok(py.detach(|| target.value(&keys, &values)).map_err(scene_error)?.value)
+}
+
+/// The objective of `scene` with `keys[i] = values[i]` and its gradient with respect to the
+/// keys, each in its own units (`report::objective::Target::value_and_gradient`, what
+/// `asnr optimize --method gradient` follows). The GIL is released.
+#[pyfunction]
+#[pyo3(signature = (scene, keys, values, objective="asnr"))]
+fn objective_value_and_gradient<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    keys: Vec<String>,
+    values: PyReadonlyArray1<'py, f64>,
+    objective: &str,
+) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
+    let target = target(scene, objective, &keys)?;
+    let values = key_values(&keys, &values)?;
+    let (value, gradient) = py.detach(|| target.value_and_gradient(&keys, &values)).map_err(scene_error)?;
+    Ok((value.value, PyArray1::from_vec(py, gradient)))
 }
 
 /// `asnr tolerance` for `scene`: `vary` holds `(key, distribution)` pairs as `--vary KEY=DIST`
@@ -694,5 +795,9 @@ fn _asnr(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(optimize, m)?)?;
     m.add_function(wrap_pyfunction!(tolerance, m)?)?;
+    m.add_function(wrap_pyfunction!(gradient, m)?)?;
+    m.add_function(wrap_pyfunction!(check_objective, m)?)?;
+    m.add_function(wrap_pyfunction!(objective_value, m)?)?;
+    m.add_function(wrap_pyfunction!(objective_value_and_gradient, m)?)?;
     Ok(())
 }

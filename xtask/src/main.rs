@@ -11,6 +11,8 @@
 //! - `emva`: `asnr characterize` against the `emva1288` package's camera model (`emva.rs`).
 //! - `python`: the wheel installed into a fresh virtual environment, its pytest suite and the
 //!   README's Python blocks (`python.rs`).
+//! - `torch`: the PyTorch bridge `asnr.torch` tested in a pinned `target/torch-venv` (`torch.rs`;
+//!   not in `ci`: torch's download takes minutes).
 //! - `wheel`: the Python package as one portable wheel, built and checked (`wheel.rs`).
 //! - `figures`: the paper's Fig. 2a, 2b and SI Fig. S9, regenerated into `docs/figures/`.
 //! - `readme`: every command of the README's ```` ```sh ```` blocks, run as written (`readme.rs`).
@@ -30,6 +32,7 @@ mod python;
 mod readme;
 mod stress;
 mod tidy;
+mod torch;
 mod wheel;
 
 use std::path::{Path, PathBuf};
@@ -56,6 +59,10 @@ const TASKS: &[(&str, &str)] = &[
     (
         "python",
         "the wheel installed with its extras into a fresh target/python-venv (pinned), no Rust on PATH: its pytest suite against the CLI and the README's Python blocks",
+    ),
+    (
+        "torch",
+        "the PyTorch bridge (asnr.torch) tested against the CLI, the wheel in a pinned target/torch-venv (reused; not in ci: torch's download takes minutes)",
     ),
     ("figures", "the paper's Fig. 2a, 2b and S9 (SVG + CSV) into docs/figures/, from a release build"),
     ("readme", "run every command of the README's ```sh blocks as written; none may change git status"),
@@ -91,6 +98,7 @@ fn main() -> ExitCode {
         Some("python") => python::run(&root),
         Some("readme") => readme::run(&root),
         Some("tidy") => tidy::run(&root),
+        Some("torch") => torch::run(&root),
         Some("wheel") => wheel::run(&root),
         Some("stress") => stress::run(&root, &args[1..]),
         Some(other) => {

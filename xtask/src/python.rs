@@ -2,12 +2,15 @@
 //!
 //! 1. The portable wheel, built and checked by `cargo xtask wheel` (`wheel.rs`).
 //! 2. A fresh virtual environment, `target/python-venv` (made anew each run), into which pip
-//!    installs the wheel with its extras, `asnr-….whl[plot,dask]`, and pytest, every version
-//!    pinned by the constraints file `python/requirements-test.txt`.
+//!    installs the wheel with its extras, `asnr-….whl[plot,dask,jax]`, and pytest, every version
+//!    pinned by the constraints file `python/requirements-test.txt` (jax's CPU package among
+//!    them: the JAX bridge `asnr.jax` is tested here; the PyTorch bridge in `cargo xtask torch`).
 //! 3. With no Rust toolchain on `PATH` (every folder holding `cargo` or `rustc` left out, checked
 //!    from inside Python first): the pytest suite `python/tests` against the debug `asnr` binary
-//!    (`ASNR_BIN`), and every ```` ```python ```` block of the README, each as a script of its
-//!    own in `target/readme-python/`, as a user pastes it.
+//!    (`ASNR_BIN`), with `ASNR_REQUIRE=jax,scipy` so that a missing jax or scipy fails the JAX
+//!    bridge's tests instead of skipping them; every ```` ```python ```` block of the README,
+//!    each as a script of its own in `target/readme-python/`, as a user pastes it; and
+//!    `examples/python/asnr_in_a_loss.py` (the ASNR in a loss, by scipy and by JAX).
 //!
 //! The developer's install, `pip install ./python` (maturin's PEP 517 build from the clone), is
 //! the same build without the portable flags.
@@ -25,6 +28,11 @@ const VENV: &str = "target/python-venv";
 const CONSTRAINTS: &str = "python/requirements-test.txt";
 /// Where the README's Python blocks are written and run.
 const SNIPPETS: &str = "target/readme-python";
+/// The packages whose absence fails the tests that need them (`ASNR_REQUIRE`), rather than
+/// skipping them: the JAX bridge's, with scipy for `scipy.optimize.minimize(jac=True)`.
+const REQUIRED: &str = "jax,scipy";
+/// The example where the ASNR is one term of a loss, run after the tests.
+const LOSS_EXAMPLE: &str = "examples/python/asnr_in_a_loss.py";
 
 /// Build the wheel, install it into a fresh environment, run the tests and the README's Python.
 pub(crate) fn run(root: &Path) -> Result<()> {
@@ -35,14 +43,16 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         bail!("python3 -m venv {VENV} failed");
     }
     let python = if cfg!(windows) { dir.join("Scripts").join("python.exe") } else { dir.join("bin").join("python") };
-    // the user's command, `pip install asnr-….whl[plot,dask]`, with pytest; versions pinned
+    // the user's command, `pip install asnr-….whl[plot,dask,jax]`, with pytest; versions pinned
     let mut install = Command::new(&python);
     install
         .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-c"])
         .arg(root.join(CONSTRAINTS))
-        .arg(format!("{}[plot,dask]", wheel.display()))
+        .arg(format!("{}[plot,dask,jax]", wheel.display()))
         .arg("pytest");
+    let started = std::time::Instant::now();
     cmd::run(&mut install)?;
+    eprintln!("python: the wheel, its extras and pytest installed in {:.1} s", started.elapsed().as_secs_f64());
 
     let path = without_rust()?;
     let mut check = Command::new(&python);
@@ -58,9 +68,22 @@ pub(crate) fn run(root: &Path) -> Result<()> {
 
     let asnr = crate::accuracy::target_dir(root).join("debug").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut pytest = Command::new(&python);
-    pytest.args(["-m", "pytest", "-q", "python/tests"]).env("ASNR_BIN", &asnr).env("PATH", &path).current_dir(root);
+    pytest
+        .args(["-m", "pytest", "-q", "python/tests"])
+        .env("ASNR_BIN", &asnr)
+        .env("ASNR_REQUIRE", REQUIRED)
+        .env("PATH", &path)
+        .current_dir(root);
+    let started = std::time::Instant::now();
     cmd::run(&mut pytest)?;
-    readme_snippets(root, &python, &path)
+    eprintln!("python: pytest ran in {:.1} s", started.elapsed().as_secs_f64());
+    readme_snippets(root, &python, &path)?;
+    let mut example = Command::new(&python);
+    example.arg(root.join(LOSS_EXAMPLE)).env("PATH", &path).current_dir(root);
+    let started = std::time::Instant::now();
+    cmd::run(&mut example).with_context(|| LOSS_EXAMPLE.to_owned())?;
+    eprintln!("python: {LOSS_EXAMPLE} ran in {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
 }
 
 /// `PATH` without the folders that hold `cargo` or `rustc`: the user of a wheel has no Rust

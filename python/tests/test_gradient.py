@@ -1,0 +1,264 @@
+"""The gradient from Python, and the JAX and PyTorch bridges, against the command line.
+
+`asnr.gradient` must be `asnr gradient --json` (the binary `$ASNR_BIN`, or `target/debug/asnr`)
+to the last digit; `asnr.value_and_grad`, `jax.grad` of `asnr.jax.asnr_function` and torch's
+autograd of `asnr.torch.asnr_function` must give that gradient. The exactness of the gradient
+itself is tested in Rust against central differences of converged evaluations
+(`cargo test -p asnr-report --lib gradient`); here one independent check is repeated: the
+gradient against central differences of `asnr.evaluate` written in this file.
+
+A bridge's tests are skipped when its package is missing, except where `ASNR_REQUIRE` names it
+(`cargo xtask python` sets `ASNR_REQUIRE=jax,scipy`, `cargo xtask torch` `ASNR_REQUIRE=torch`):
+there a missing package is a failure.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+import pytest
+
+import asnr
+
+ROOT = Path(__file__).resolve().parents[2]
+BINARY2 = ROOT / "examples" / "phase-binary2.toml"
+BIN = Path(os.environ.get("ASNR_BIN", ROOT / "target" / "debug" / "asnr"))
+REQUIRED = {name.strip() for name in os.environ.get("ASNR_REQUIRE", "").split(",") if name.strip()}
+
+#: Keys of the paper scene whose derivatives the engines compute, with read noise and dark
+#: current set so that their derivatives are not zero.
+PAPER_SET = ["camera.read_noise_e=3", "camera.dark_current_e_per_s=40"]
+PAPER_KEYS = ["exposure.time_ms", "camera.pixel_pitch_um", "camera.read_noise_e", "camera.dark_current_e_per_s", "lens.efficiency"]
+
+
+def require(name: str) -> ModuleType:
+    """The module `name`; skipped if it is missing, unless `ASNR_REQUIRE` names it."""
+    if name.split(".")[0] in REQUIRED:
+        return importlib.import_module(name)
+    return pytest.importorskip(name)
+
+
+def cli(*args: str) -> bytes:
+    """The `asnr` command's stdout (it must succeed)."""
+    done = subprocess.run([str(BIN), *args], capture_output=True, check=False)
+    assert done.returncode == 0, done.stderr.decode()
+    return done.stdout
+
+
+def cli_gradient(keys: list[str], scene: Path | None = None, set_: list[str] = (), tolerance: str | None = None) -> dict:
+    args = ["gradient", "--json"] + ([str(scene)] if scene else [])
+    for key in keys:
+        args += ["--wrt", key]
+    for s in set_:
+        args += ["--set", s]
+    if tolerance is not None:
+        args += ["--tolerance", tolerance]
+    return json.loads(cli(*args))
+
+
+# --- asnr.gradient --------------------------------------------------------------------------
+
+
+def test_gradient_is_the_command_lines_json_to_the_last_digit():
+    ours = asnr.gradient(asnr.load(), PAPER_KEYS, set=PAPER_SET)
+    theirs = cli_gradient(PAPER_KEYS, set_=PAPER_SET)
+    assert ours == theirs
+    assert list(ours) == ["asnr", "mean_mtf", "snr0", "photoelectrons", "gradient", "mean_mtf_gradient", "snr0_gradient", "photoelectrons_gradient"]
+    assert list(ours["gradient"]) == PAPER_KEYS
+    assert all(v != 0 for v in ours["gradient"].values()), ours["gradient"]
+    # set as a dict, and the overrides of the scene itself, give the same
+    as_dict = asnr.gradient(asnr.load().with_({"camera.read_noise_e": 3}), PAPER_KEYS, set={"camera.dark_current_e_per_s": 40})
+    assert as_dict == theirs
+    # a list key as a whole is every entry, each spelled one way; a tolerance is --tolerance's
+    ours = asnr.gradient(asnr.load(BINARY2), "lens.binary2", tolerance=1e-8)
+    assert ours == cli_gradient(["lens.binary2"], BINARY2, tolerance="1e-8")
+    assert list(ours["gradient"]) == [f"lens.binary2[{i}]" for i in range(4)]
+    assert list(asnr.gradient(asnr.load(BINARY2), ["lens.binary2[01]"])["gradient"]) == ["lens.binary2[1]"]
+
+
+def test_gradient_is_the_central_difference_of_evaluations():
+    """∂ASNR/∂key against (ASNR(v + h) − ASNR(v − h))/2h of `asnr.evaluate` at a tolerance of
+    1e-10. The keys enter the ASNR smoothly: N ∝ t and ε (f‴ of order f/v³), SNR0 through the
+    read and dark noise, and the pixel pitch through N ∝ p² and the Nyquist band; with h = 1e-3 v
+    the truncation error is ~h²f‴/6 ≈ 2e-7 f/v and the rounding ~1e-10 f/h, both well under the
+    bound, 1e-5 of the gradient's norm (10× the default tolerance of 1e-6)."""
+    at = {"exposure.time_ms": 1.23, "camera.pixel_pitch_um": 5.2, "camera.read_noise_e": 3.0, "camera.dark_current_e_per_s": 40.0, "lens.efficiency": 0.15}
+    tight = {"options.tolerance": 1e-10}
+    g = asnr.gradient(asnr.load().with_({**at, **tight}), PAPER_KEYS)
+    norm = np.linalg.norm(list(g["gradient"].values()))
+    for key in PAPER_KEYS:
+        h = 1e-3 * at[key]
+        up = asnr.evaluate(asnr.load().with_({**at, **tight, key: at[key] + h})).asnr
+        down = asnr.evaluate(asnr.load().with_({**at, **tight, key: at[key] - h})).asnr
+        difference = (up - down) / (2 * h)
+        assert abs(difference - g["gradient"][key]) < 1e-5 * norm, (key, difference, g["gradient"][key])
+
+
+def test_a_key_without_a_gradient_is_refused_naming_it():
+    scene = asnr.load()
+    cases = {
+        "lens.f_number": "lens.f_number: not differentiable here yet",
+        "camera.adc_bits": "camera.adc_bits: not differentiable: it is an integer",
+        "lens.nonsense": "lens.nonsense: embedded paper scene has no such key",
+    }
+    for key, message in cases.items():
+        with pytest.raises(asnr.SceneError, match=message.replace(".", r"\.")):
+            asnr.gradient(scene, [key])
+        with pytest.raises(asnr.SceneError, match=message.replace(".", r"\.")):
+            asnr.value_and_grad(scene, [key])
+    with pytest.raises(asnr.SceneError, match=r"lens\.binary2\[1\] is given twice"):
+        asnr.gradient(asnr.load(BINARY2), ["lens.binary2[1]", "lens.binary2[01]"])
+    with pytest.raises(ValueError, match="no key"):
+        asnr.gradient(scene, [])
+    with pytest.raises(asnr.SceneError, match="worst_channel"):
+        asnr.value_and_grad(scene, ["exposure.time_ms"], "worst_channel")
+
+
+# --- asnr.value_and_grad and scipy ----------------------------------------------------------
+
+
+def test_value_and_grad_is_the_gradient_at_any_point():
+    scene = asnr.load(BINARY2)
+    f = asnr.value_and_grad(scene, "lens.binary2")
+    assert f.keys == [f"lens.binary2[{i}]" for i in range(4)]
+    assert f.x0.tolist() == [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]
+    value, grad = f(f.x0)
+    g = asnr.gradient(scene, "lens.binary2")
+    assert value == pytest.approx(g["asnr"], rel=1e-14)
+    np.testing.assert_allclose(grad, list(g["gradient"].values()), rtol=1e-12)
+    # away from the scene's values: the command line's gradient with --set there
+    x = f.x0 + np.array([3.0, -1.0, 0.5, 0.0])
+    value, grad = f(x)
+    theirs = cli_gradient(["lens.binary2"], BINARY2, set_=[f"lens.binary2[{i}]={float(v)!r}" for i, v in enumerate(x)])
+    assert value == theirs["asnr"]
+    assert grad.tolist() == list(theirs["gradient"].values())
+    assert f.value(x) == pytest.approx(value, rel=1e-6)  # the evaluation alone, at its own tolerance
+    minus = asnr.value_and_grad(scene, "lens.binary2", sign=-1)
+    assert minus(x)[0] == -value and minus(x)[1].tolist() == (-grad).tolist()
+    with pytest.raises(ValueError, match="expected a 1-D array of 4 values"):
+        f(np.zeros(3))
+    with pytest.raises(ValueError, match=r"lens\.binary2\[0\] = NaN: expected a finite number"):
+        f(np.array([np.nan, 0, 0, 0]))
+
+
+def test_scipy_minimize_with_the_gradient_finds_the_golden_sections_optimum():
+    """The best defocus coefficient A1 of the Binary 2 lens (its others fixed) by
+    scipy.optimize.minimize(jac=True, L-BFGS-B) on −ASNR, against `asnr.optimize`'s golden
+    section over the same range, which uses values only: the same maximum, to the golden
+    section's bracket (1e-4 of the range) in A1 and 1e-7 in the ASNR (a smooth maximum: the error
+    in the ASNR is quadratic in that in A1)."""
+    optimize = require("scipy.optimize")
+    scene = asnr.load(BINARY2)
+    lo, hi = -540.0, -515.0
+    golden = asnr.optimize(scene, {"lens.binary2[0]": (lo, hi)}, xtol=1e-5)
+    f = asnr.value_and_grad(scene, "lens.binary2[0]", sign=-1)
+    result = optimize.minimize(f, f.x0, jac=True, method="L-BFGS-B", bounds=[(lo, hi)])
+    assert result.success, result.message
+    assert abs(result.x[0] - golden["best"]) < 1e-4 * (hi - lo), (result.x, golden["best"])
+    assert -result.fun == pytest.approx(golden["asnr"], rel=1e-7)
+    assert lo + 1 < result.x[0] < hi - 1  # an interior optimum: the gradient is zero there
+
+
+def test_optimize_by_gradient_is_the_command_lines_search():
+    scene = asnr.load()
+    over = {"camera.pixel_pitch_um": (2, 8), "exposure.time_ms": (0.5, 2)}
+    ours = asnr.optimize(scene, over, method="gradient")
+    args = ["optimize", "--json", "--method", "gradient", "--over", "camera.pixel_pitch_um=2:8", "--over", "exposure.time_ms=0.5:2"]
+    assert ours == json.loads(cli(*args))
+    assert "gradient" in ours
+    assert ours["best"] == {"camera.pixel_pitch_um": 8.0, "exposure.time_ms": 2.0}
+    tight = asnr.optimize(scene, over, method="gradient", tolerance=1e-8)
+    assert tight == json.loads(cli(*args, "--tolerance", "1e-8"))
+    with pytest.raises(asnr.SceneError, match="--method newton"):
+        asnr.optimize(scene, over, method="newton")
+    with pytest.raises(asnr.SceneError, match=r"lens\.f_number: not differentiable here yet"):
+        asnr.optimize(scene, {"lens.f_number": (2, 3)}, method="gradient")
+
+
+# --- the JAX bridge ---------------------------------------------------------------------------
+
+
+def test_jax_grad_of_the_asnr_is_the_command_lines_gradient():
+    jax = require("jax")
+    import jax.numpy as jnp
+
+    import asnr.jax
+
+    jax.config.update("jax_enable_x64", True)
+    scene = asnr.load(BINARY2)
+    f = asnr.jax.asnr_function(scene, "lens.binary2")
+    theirs = cli_gradient(["lens.binary2"], BINARY2)
+    expected = np.array(list(theirs["gradient"].values()))
+    x0 = jnp.asarray(f.x0)
+    assert x0.dtype == jnp.float64
+    np.testing.assert_allclose(np.asarray(jax.grad(f)(x0)), expected, rtol=1e-12)
+    value, grad = jax.jit(jax.value_and_grad(f))(x0)
+    assert float(value) == pytest.approx(theirs["asnr"], rel=1e-14)
+    np.testing.assert_allclose(np.asarray(grad), expected, rtol=1e-12)
+    # the value alone under jit: one evaluation, the command line's ASNR to its tolerance
+    assert float(jax.jit(f)(x0)) == pytest.approx(theirs["asnr"], rel=1e-6)
+
+    # one term of a loss: the chain rule through jax's own operations
+    def loss(x):
+        return -f(x) + 0.5 * jnp.sum(jnp.diff(x) ** 2)
+
+    slope = np.diff(f.x0)
+    penalty = np.zeros(4)
+    penalty[:-1] -= slope
+    penalty[1:] += slope
+    np.testing.assert_allclose(np.asarray(jax.jit(jax.grad(loss))(x0)), -expected + penalty, rtol=1e-12)
+    # vmap: one point after another
+    points = jnp.stack([x0, x0 + jnp.array([2.0, 0.0, 0.0, 0.0])])
+    values = jax.vmap(f)(points)
+    assert float(values[0]) == pytest.approx(theirs["asnr"], rel=1e-6)
+    assert float(values[1]) == pytest.approx(asnr.evaluate(scene.with_({"lens.binary2[0]": f.x0[0] + 2.0})).asnr, rel=1e-12)
+    with pytest.raises(ValueError, match="expected a 1-D array of 4 values"):
+        f(jnp.zeros(3))
+    with pytest.raises(asnr.SceneError, match=r"lens\.f_number"):
+        asnr.jax.asnr_function(scene, ["lens.f_number"])
+
+
+# --- the PyTorch bridge -----------------------------------------------------------------------
+
+
+def test_torch_autograd_of_the_asnr_is_the_command_lines_gradient():
+    torch = require("torch")
+    import asnr.torch
+
+    scene = asnr.load(BINARY2)
+    f = asnr.torch.asnr_function(scene, "lens.binary2")
+    theirs = cli_gradient(["lens.binary2"], BINARY2)
+    expected = np.array(list(theirs["gradient"].values()))
+    x = torch.tensor(f.x0, dtype=torch.float64, requires_grad=True)
+    value = f(x)
+    assert value.dtype == torch.float64 and value.shape == ()
+    assert float(value) == pytest.approx(theirs["asnr"], rel=1e-14)
+    (grad,) = torch.autograd.grad(value, x)
+    np.testing.assert_allclose(grad.numpy(), expected, rtol=1e-12)
+    # one term of a loss
+    x = torch.tensor(f.x0, dtype=torch.float64, requires_grad=True)
+    loss = -f(x) + 0.5 * torch.sum(torch.diff(x) ** 2)
+    loss.backward()
+    slope = np.diff(f.x0)
+    penalty = np.zeros(4)
+    penalty[:-1] -= slope
+    penalty[1:] += slope
+    np.testing.assert_allclose(x.grad.numpy(), -expected + penalty, rtol=1e-12)
+    # without a gradient: the value alone
+    with torch.no_grad():
+        assert float(f(torch.tensor(f.x0))) == pytest.approx(theirs["asnr"], rel=1e-6)
+    with pytest.raises(ValueError, match="expected a 1-D tensor of 4 values"):
+        f(torch.zeros(3, dtype=torch.float64))
+
+
+def test_import_asnr_needs_neither_jax_nor_torch():
+    code = "import sys, asnr; assert 'jax' not in sys.modules and 'torch' not in sys.modules, sorted(sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, check=False)
+    assert done.returncode == 0, done.stderr.decode()
