@@ -410,8 +410,9 @@ def value_and_grad(
     Each call is one evaluation with its exact gradient from the engines (what ``asnr optimize
     --method gradient`` follows; docs/physics.md, "Gradients"). The keys are checked now, with
     one gradient at the scene's own values (which gives ``f.x0``): an unknown, non-differentiable
-    or missing key raises :class:`SceneError` naming it. A key the scene lacks may be set by
-    ``scene.with_`` first."""
+    or missing key raises :class:`SceneError` naming it. A key the scene's overrides set
+    (``scene.with_({key: v})``) starts at ``v`` and is then set by each call; a key the scene
+    lacks (a Binary 2 term past the list's end) may be added that way."""
     scene = _scene(scene)
     if tolerance is not None:
         scene = scene.with_({"options.tolerance": float(tolerance)})
@@ -424,6 +425,43 @@ def value_and_grad(
     names = list(json.loads(text)["gradient"])
     _asnr.check_objective(scene, names, objective)  # a key it sets itself, fov_mean without [[fields]]
     return ValueAndGrad(scene, names, np.array(values, dtype=np.float64), objective, float(sign))
+
+
+def tolerance(
+    scene: Scene,
+    vary: Mapping[str, str],
+    *,
+    n: int = 1000,
+    seed: int = 1,
+    objective: str = "asnr",
+    budget_s: float = 600.0,
+    threads: int = 0,
+) -> dict[str, Any]:
+    """How the ASNR survives fabrication: ``asnr tolerance --json`` with one ``--vary KEY=DIST``
+    per entry of ``vary`` (``{key: "normal:0.02"}`` in the key's units, ``"normal:2%"`` of its
+    value, ``"uniform:LO:HI"``, or ``"seed"``: a fresh whole-number seed each sample, for
+    ``lens.atom_error_seed``, a new draw of a library lens's atom errors), ``n`` samples drawn from ``seed`` (the same run as the command
+    line's: the same numbers). The dict has the JSON's fields (``nominal_asnr``, ``mean``,
+    ``std``, ``p5``, ``p50``, ``p95``, ``keys`` with each key's ``sensitivity_per_sigma``, …),
+    ``csv`` (the ``--csv`` text, byte for byte) and ``table`` (its columns as numpy arrays)."""
+    pairs = [(str(k), str(v)) for k, v in vary.items()]
+    report, csv = _asnr.tolerance(_scene(scene), pairs, int(n), int(seed), objective, float(budget_s), int(threads))
+    out = json.loads(report)
+    out["csv"] = csv
+    lines = csv.splitlines()
+    header = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:]]
+    table: dict[str, np.ndarray] = {}
+    for j, name in enumerate(header):
+        column = [r[j] for r in rows]
+        if name == "fraunhofer_valid":
+            table[name] = np.array([c == "true" for c in column], dtype=bool)
+        elif name == "sample":
+            table[name] = np.array([int(c) for c in column], dtype=np.int64)
+        else:
+            table[name] = np.array([float(c) for c in column], dtype=np.float64)
+    out["table"] = table
+    return out
 
 
 @dataclasses.dataclass(frozen=True)

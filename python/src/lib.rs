@@ -466,11 +466,19 @@ fn gradient(
     Ok((serde_json::to_string_pretty(&g).map_err(|e| PyValueError::new_err(e.to_string()))?, g.values))
 }
 
-/// The design target of `asnr optimize` for `scene` (`objective`, varying `keys`), checked.
+/// The design target of `asnr optimize` for `scene` (`objective`, varying `keys`), checked. An
+/// override of the scene that sets one of the keys (`scene.with_({key: x0})`, the point a search
+/// starts from) is left out: the key's value is the one each call gives.
 fn target(scene: &Scene, objective: &str, keys: &[String]) -> PyResult<report::objective::Target> {
     scene_lens_only(scene, "value_and_grad")?;
     let objective = report::objective::Objective::parse(objective).map_err(scene_error)?;
-    report::objective::Target::new(scene.source.clone(), scene.overrides.clone(), objective, keys).map_err(scene_error)
+    let overrides: Vec<String> = scene
+        .overrides
+        .iter()
+        .filter(|o| o.split_once('=').is_none_or(|(k, _)| !keys.iter().any(|key| key == k.trim())))
+        .cloned()
+        .collect();
+    report::objective::Target::new(scene.source.clone(), overrides, objective, keys).map_err(scene_error)
 }
 
 /// Checks the design target of `scene` (`objective`, varying `keys`) without evaluating it: the
