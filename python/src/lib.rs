@@ -401,9 +401,10 @@ fn scene_lens_only(scene: &Scene, what: &str) -> PyResult<()> {
     }
 }
 
-/// `asnr optimize --json` for `scene` over `over` (`(key, lo, hi)` each, as `--over KEY=LO:HI`):
-/// the same search (`report::optimize::search_scene`), so the same numbers. The GIL is
-/// released while it runs.
+/// `asnr optimize --json` for `scene` over `over` (`(key, lo, hi)` each, as `--over KEY=LO:HI`)
+/// by `method` (`--method cobyla|gradient`; None: as without the flag): the same search
+/// (`report::optimize::search_scene_by`), so the same numbers. The GIL is released while it
+/// runs.
 #[pyfunction]
 #[pyo3(signature = (scene, over, objective="asnr", xtol=1e-4, starts=0, max_evaluations=500, method=None))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, each one of `asnr optimize`'s options
