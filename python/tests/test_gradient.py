@@ -63,6 +63,25 @@ def cli_gradient(keys: list[str], scene: Path | None = None, set_: list[str] = (
     return json.loads(cli(*args))
 
 
+def assert_same_json(ours: dict, theirs: dict, rel: float) -> None:
+    """The same fields and keys in the same order, each number within `rel` of the other's."""
+    assert list(ours) == list(theirs)
+    for field, value in theirs.items():
+        if isinstance(value, dict):
+            assert list(ours[field]) == list(value), field
+            assert list(ours[field].values()) == pytest.approx(list(value.values()), rel=rel), field
+        else:
+            assert ours[field] == pytest.approx(value, rel=rel), field
+
+
+#: How far the Binary 2 derivatives of the wheel may be from the command line's: the wheel is
+#: built for x86-64-v3 and the `asnr` binary for the native CPU, and the fused multiply-adds of the
+#: derivatives' sums round differently (ARCHITECTURE.md, "Build settings"); measured 1 to 3 units
+#: in the last place (below 4e-15 relative), so 1e-12 leaves room and still catches any other
+#: difference. The paper scene's derivatives (no Binary 2 sums) are equal to the last digit.
+ROUNDING = 1e-12
+
+
 # --- asnr.gradient --------------------------------------------------------------------------
 
 
@@ -78,7 +97,7 @@ def test_gradient_is_the_command_lines_json_to_the_last_digit():
     assert as_dict == theirs
     # a list key as a whole is every entry, each spelled one way; a tolerance is --tolerance's
     ours = asnr.gradient(asnr.load(BINARY2), "lens.binary2", tolerance=1e-8)
-    assert ours == cli_gradient(["lens.binary2"], BINARY2, tolerance="1e-8")
+    assert_same_json(ours, cli_gradient(["lens.binary2"], BINARY2, tolerance="1e-8"), ROUNDING)
     assert list(ours["gradient"]) == [f"lens.binary2[{i}]" for i in range(4)]
     assert list(asnr.gradient(asnr.load(BINARY2), ["lens.binary2[01]"])["gradient"]) == ["lens.binary2[1]"]
 
@@ -137,8 +156,8 @@ def test_value_and_grad_is_the_gradient_at_any_point():
     x = f.x0 + np.array([3.0, -1.0, 0.5, 0.0])
     value, grad = f(x)
     theirs = cli_gradient(["lens.binary2"], BINARY2, set_=[f"lens.binary2[{i}]={float(v)!r}" for i, v in enumerate(x)])
-    assert value == theirs["asnr"]
-    assert grad.tolist() == list(theirs["gradient"].values())
+    assert value == pytest.approx(theirs["asnr"], rel=ROUNDING)
+    assert grad.tolist() == pytest.approx(list(theirs["gradient"].values()), rel=ROUNDING)
     assert f.value(x) == pytest.approx(value, rel=1e-6)  # the evaluation alone, at its own tolerance
     minus = asnr.value_and_grad(scene, "lens.binary2", sign=-1)
     assert minus(x)[0] == -value and minus(x)[1].tolist() == (-grad).tolist()
