@@ -116,3 +116,32 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
     let e = fails(&["optimize", "--over", "exposure.time_ms=1:2", "--method", "newton"]);
     assert!(e.contains("--method newton: expected cobyla (derivative-free, the default) or gradient"), "{e}");
 }
+
+/// `asnr tolerance` gives each key's ∂ASNR/∂key × σ from the exact gradient beside the fitted
+/// slope: `gradient_per_sigma` is `asnr gradient --json`'s derivative times the key's σ, and a
+/// key without a gradient has none and is named in `gradient_note`.
+#[test]
+fn tolerance_shows_the_gradient_sensitivity() {
+    let t = json(&[
+        "tolerance",
+        "--vary",
+        "exposure.time_ms=normal:1%",
+        "--vary",
+        "spectrum.range_nm=normal:0.5",
+        "--vary",
+        "lens.f_number=normal:0.01",
+        "--samples",
+        "40",
+        "--json",
+    ]);
+    let g = json(&["gradient", "--wrt", "exposure.time_ms", "--wrt", "spectrum.range_nm", "--json"]);
+    for (i, key) in ["exposure.time_ms", "spectrum.range_nm"].iter().enumerate() {
+        let entry = &t["keys"][i];
+        assert_eq!(entry["key"], *key, "{t}");
+        let want = g["gradient"][key].as_f64().unwrap() * entry["sigma"].as_f64().unwrap();
+        let got = entry["gradient_per_sigma"].as_f64().unwrap();
+        assert!((got - want).abs() <= 1e-12 * want.abs(), "{key}: {got} vs {want}");
+    }
+    assert!(t["keys"][2]["gradient_per_sigma"].is_null(), "{t}");
+    assert!(t["gradient_note"].as_str().unwrap().contains("--wrt lens.f_number"), "{t}");
+}
