@@ -145,3 +145,39 @@ fn tolerance_shows_the_gradient_sensitivity() {
     assert!(t["keys"][2]["gradient_per_sigma"].is_null(), "{t}");
     assert!(t["gradient_note"].as_str().unwrap().contains("--wrt lens.f_number"), "{t}");
 }
+
+/// `asnr compare --wrt`: each design's exact gradient at the scene band, taken on the design as a
+/// scene of its own (the shared tables with its lens): its ASNR is the comparison's for that
+/// design, and every design has either a gradient over the keys or the refusal naming why.
+#[test]
+fn compare_gives_each_designs_gradient() {
+    let v = json(&[
+        "compare",
+        "--over",
+        "spectrum.range_nm=20:80:2",
+        "--wrt",
+        "exposure.time_ms",
+        "--wrt",
+        "spectrum.range_nm",
+        "--json",
+    ]);
+    let designs = v["designs"].as_array().unwrap();
+    let mut with = 0;
+    for d in designs {
+        match d.get("gradient") {
+            Some(g) => {
+                with += 1;
+                let (mine, theirs) = (g["asnr"].as_f64().unwrap(), d["asnr"].as_f64().unwrap());
+                assert!((mine - theirs).abs() <= 1e-12 * theirs, "{}: {mine} vs {theirs}", d["name"]);
+                assert!(g["gradient"]["spectrum.range_nm"].as_f64().unwrap().is_finite(), "{g}");
+                assert!(g["gradient"]["exposure.time_ms"].as_f64().unwrap() > 0.0, "{g}");
+            }
+            None => {
+                let note = d["gradient_note"].as_str().unwrap();
+                assert!(note.contains("not differentiable"), "{}: {note}", d["name"]);
+            }
+        }
+    }
+    assert!(with >= 1, "{v}");
+    assert!(designs[0].get("gradient").is_some(), "the paper's chromatic lens: {}", designs[0]);
+}
