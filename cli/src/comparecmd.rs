@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use report::compare::{KEY, Report, compare, csv, sig, table};
+use report::compare::{KEY, Report, compare, csv, gradient_table, gradients, sig, table};
 use scene::Comparison;
 
 /// The arguments of `asnr compare`.
@@ -43,14 +43,19 @@ pub struct CompareArgs {
     /// Relative error allowed in each ASNR (sets options.tolerance; default 1e-6).
     #[arg(long, value_name = "REL")]
     pub tolerance: Option<f64>,
+    /// A key to take each design's exact gradient over at the scene band (repeatable; as
+    /// `asnr gradient --wrt`): the table adds ∂ln ASNR/∂ln key, --json each design's `gradient`.
+    #[arg(long, value_name = "KEY")]
+    pub wrt: Vec<String>,
 }
 
 /// Runs `asnr compare`.
 pub fn run(args: CompareArgs) -> Result<()> {
     let figure = crate::plot::Figure::new(args.width, args.dpi)?;
     let bar = Bar(crate::sweep::progress_bar(0, "evaluations")?);
-    let (base, report) =
+    let (base, mut report) =
         compare(args.scene.as_deref(), &args.set, args.tolerance, args.over.as_deref(), args.threads, &bar)?;
+    gradients(args.scene.as_deref(), &args.set, args.tolerance, &args.wrt, &mut report)?;
     crate::warn(&base.warnings);
     if let Some(path) = &args.plot {
         plot(path, &figure, &base, &report)?;
@@ -66,6 +71,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
         out!("{}", csv(&report)?);
     } else {
         out!("{}", table(&report));
+        if !args.wrt.is_empty() {
+            out!("{}", gradient_table(&report));
+        }
     }
     Ok(())
 }

@@ -91,7 +91,16 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
         "gradient",
     ]);
     assert!(e.contains("--method gradient: --over lens.f_number: not differentiable here yet"), "{e}");
-    let e = fails(&["optimize", "--over", "spectrum.range_nm=1:200", "--method", "gradient"]);
+    // a top-hat's edges are not followed (a Gaussian's range is: see the test below)
+    let e = fails(&[
+        "optimize",
+        "--set",
+        "spectrum.shape=\"tophat\"",
+        "--over",
+        "spectrum.range_nm=1:200",
+        "--method",
+        "gradient",
+    ]);
     assert!(e.contains("--method gradient: --over spectrum.range_nm: not differentiable here yet"), "{e}");
     for objective in ["capacity", "detectability:disk:20:0.1"] {
         let e =
@@ -115,4 +124,89 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
     assert!(v["asnr"].as_f64().unwrap() > 0.0, "{v}");
     let e = fails(&["optimize", "--over", "exposure.time_ms=1:2", "--method", "newton"]);
     assert!(e.contains("--method newton: expected cobyla (derivative-free, the default) or gradient"), "{e}");
+}
+
+/// `asnr tolerance` gives each key's ∂ASNR/∂key × σ from the exact gradient beside the fitted
+/// slope: `gradient_per_sigma` is `asnr gradient --json`'s derivative times the key's σ, and a
+/// key without a gradient has none and is named in `gradient_note`.
+#[test]
+fn tolerance_shows_the_gradient_sensitivity() {
+    let t = json(&[
+        "tolerance",
+        "--vary",
+        "exposure.time_ms=normal:1%",
+        "--vary",
+        "spectrum.range_nm=normal:0.5",
+        "--vary",
+        "lens.f_number=normal:0.01",
+        "--samples",
+        "40",
+        "--json",
+    ]);
+    let g = json(&["gradient", "--wrt", "exposure.time_ms", "--wrt", "spectrum.range_nm", "--json"]);
+    for (i, key) in ["exposure.time_ms", "spectrum.range_nm"].iter().enumerate() {
+        let entry = &t["keys"][i];
+        assert_eq!(entry["key"], *key, "{t}");
+        let want = g["gradient"][key].as_f64().unwrap() * entry["sigma"].as_f64().unwrap();
+        let got = entry["gradient_per_sigma"].as_f64().unwrap();
+        assert!((got - want).abs() <= 1e-12 * want.abs(), "{key}: {got} vs {want}");
+    }
+    assert!(t["keys"][2]["gradient_per_sigma"].is_null(), "{t}");
+    assert!(t["gradient_note"].as_str().unwrap().contains("--wrt lens.f_number"), "{t}");
+}
+
+/// `asnr compare --wrt`: each design's exact gradient at the scene band, taken on the design as a
+/// scene of its own (the shared tables with its lens): its ASNR is the comparison's for that
+/// design, and every design has either a gradient over the keys or the refusal naming why.
+#[test]
+fn compare_gives_each_designs_gradient() {
+    let v = json(&[
+        "compare",
+        "--over",
+        "spectrum.range_nm=20:80:2",
+        "--wrt",
+        "exposure.time_ms",
+        "--wrt",
+        "spectrum.range_nm",
+        "--json",
+    ]);
+    let designs = v["designs"].as_array().unwrap();
+    let mut with = 0;
+    for d in designs {
+        match d.get("gradient") {
+            Some(g) => {
+                with += 1;
+                let (mine, theirs) = (g["asnr"].as_f64().unwrap(), d["asnr"].as_f64().unwrap());
+                assert!((mine - theirs).abs() <= 1e-12 * theirs, "{}: {mine} vs {theirs}", d["name"]);
+                assert!(g["gradient"]["spectrum.range_nm"].as_f64().unwrap().is_finite(), "{g}");
+                assert!(g["gradient"]["exposure.time_ms"].as_f64().unwrap() > 0.0, "{g}");
+            }
+            None => {
+                let note = d["gradient_note"].as_str().unwrap();
+                assert!(note.contains("not differentiable"), "{}: {note}", d["name"]);
+            }
+        }
+    }
+    assert!(with >= 1, "{v}");
+    assert!(designs[0].get("gradient").is_some(), "the paper's chromatic lens: {}", designs[0]);
+}
+
+/// The paper's best band by the gradient method (the Gaussian's range has an exact gradient)
+/// and by golden section agree within --xtol of the range searched (1e-4 × 190 nm), over the
+/// range and the exposure together.
+#[test]
+fn the_gradient_method_finds_the_best_band() {
+    let golden = json(&["optimize", "--over", "spectrum.range_nm=10:200", "--json"]);
+    let gradient = json(&[
+        "optimize",
+        "--over",
+        "spectrum.range_nm=10:200",
+        "--over",
+        "exposure.time_ms=0.5:2",
+        "--method",
+        "gradient",
+        "--json",
+    ]);
+    let (b, g) = (golden["best"].as_f64().unwrap(), gradient["best"]["spectrum.range_nm"].as_f64().unwrap());
+    assert!((b - g).abs() <= 1e-4 * 190.0 * 2.0, "golden section {b} nm, gradient {g} nm");
 }

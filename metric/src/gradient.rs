@@ -45,6 +45,12 @@ pub enum Parameter {
     /// photon count. `∂/∂A`, per radian. On axis, on the radial engine, without the pixel MTF or
     /// a noise spectrum.
     Binary2(usize),
+    /// The centre `c` of the scene's Gaussian spectrum (`spectrum.center_nm`): `∂/∂c`, per m. It
+    /// moves the photon count and the OTF's spectral weights (docs/physics.md, "Gradients").
+    SpectrumCenter,
+    /// The spectral range `r = 2√2 σ` of the scene's Gaussian spectrum (`spectrum.range_nm`),
+    /// peak held: `∂/∂r`, per m.
+    SpectrumRange,
 }
 
 impl Parameter {
@@ -60,6 +66,8 @@ impl Parameter {
             Parameter::Gain => "the conversion gain",
             Parameter::PixelPitch => "the pixel pitch",
             Parameter::Binary2(_) => "a Binary 2 coefficient of the lens's phase",
+            Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
+            Parameter::SpectrumRange => "the range of the Gaussian spectrum",
         }
     }
 }
@@ -168,6 +176,10 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
         Some(&p) => Some(binary2_mean_mtf(scene, e, p)?),
         None => None,
     };
+    let spectral = match parameters.iter().find(|p| matches!(p, Parameter::SpectrumCenter | Parameter::SpectrumRange)) {
+        Some(&p) => Some(spectral_partials(scene, e, p)?),
+        None => None,
+    };
     for &p in parameters {
         let Some(partials) = partials else {
             return Err(not_smooth(
@@ -231,6 +243,23 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
                 };
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
+            Parameter::SpectrumCenter | Parameter::SpectrumRange => {
+                let s = spectral.as_ref().expect("computed above for a spectral parameter");
+                let (d_ln_n, d_mtf) = if p == Parameter::SpectrumCenter { s.center } else { s.range };
+                if stray {
+                    return Err(not_smooth(
+                        p,
+                        "with options.glare = \"included\" the transmitted light's spectral derivative is not computed here yet"
+                            .to_owned(),
+                    ));
+                }
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                // the stray light B = 0 here; N = (constants) ∫ ρ τ1 dλ
+                (n * d_ln_n, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
         };
         let d_snr0 = partials.signal * d_n + partials.variance * (d_b + d_dark + d_read + d_quant);
         out.photoelectrons.push(d_n);
@@ -265,4 +294,140 @@ fn binary2_mean_mtf(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Vec<f
              (the exact radial engine); this scene's lens or field is not",
         )
     })
+}
+
+/// `(∂ln N, ∂M̄)` with respect to the centre and to the range of the Gaussian spectrum.
+struct SpectralPartials {
+    center: (f64, f64),
+    range: (f64, f64),
+}
+
+/// The first Gaussian factor of a spectrum (a product's factors searched in order), and how many
+/// there are.
+fn gaussians(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Gaussian>) {
+    match spectrum {
+        radiometry::Spectrum::Gaussian(g) => found.push(*g),
+        radiometry::Spectrum::Product(factors) => factors.iter().for_each(|f| gaussians(f, found)),
+        _ => {}
+    }
+}
+
+/// The derivatives of `ln N` and of the mean MTF with respect to the centre `c` and the range
+/// `r = 2√2 σ` of the scene's Gaussian spectrum `G = p exp(−(λ − c)²/(2σ²))` (docs/physics.md,
+/// "Gradients"). `∂ln G/∂c = (λ − c)/σ²` and `∂ln G/∂σ = (λ − c)²/σ³`, so with the detected
+/// weights `ρ τ1` and their moments `A_k = ∫ ρ τ1 λ^k dλ`:
+/// - `∂ln N/∂c = ⟨λ − c⟩/σ²`, `∂ln N/∂σ = ⟨(λ − c)²⟩/σ³` (the engine's spectral average);
+/// - the normalized OTF `O = ∫ ρ τ1 OTF_λ / A_0` moves as `∂O/∂c = A_1 (O_1 − O_0)/(σ² A_0)` and
+///   `∂O/∂σ = (A_2 (O_2 − O_0) − 2c A_1 (O_1 − O_0))/(σ³ A_0)`, where `O_k` is the polychromatic
+///   OTF of the spectrum `ρ λ^k`: a Gaussian times a polynomial again, which the engine integrates
+///   on its own product-integration rule with the same moments (the closed form where the value
+///   has it). The differences lose `(c/σ)^k` of the engine's relative accuracy, so these OTFs are
+///   taken at the tolerance times `(σ/c)²/10`;
+/// - `∂M̄ = (1/ν_N) ∫ sign(O) ∂O dν` (times the pixel MTF where it applies) on 16-point
+///   Gauss–Legendre panels split at the sign changes of `O` (the kink of `|O|`), doubled until
+///   the two derivatives move by at most the tolerance times their size.
+fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<SpectralPartials, Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let camera = scene.camera();
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
+    }
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let mut found = Vec::new();
+    gaussians(&detected, &mut found);
+    let [g] = found[..] else {
+        return Err(not_smooth(format!(
+            "the spectral gradient needs exactly one Gaussian factor in the detected spectrum (spectrum.shape = \"gaussian\"); this scene has {}",
+            found.len()
+        )));
+    };
+    let (c, sigma) = (g.center(), g.sigma());
+    let lens = scene.lens();
+    let field = scene.field();
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let mut settings = scene.options().settings();
+    let tolerance = settings.tolerance;
+    settings.tolerance = (0.1 * tolerance * (sigma / c).powi(2)).max(1e-13);
+    let linear = radiometry::Spectrum::Linear { slope: 1.0 };
+    let spectra = [
+        detected.clone(),
+        radiometry::Spectrum::product(vec![detected.clone(), linear.clone()]),
+        radiometry::Spectrum::product(vec![detected, linear.clone(), linear]),
+    ];
+    let engines = spectra
+        .iter()
+        .map(|s| optics::Polychromatic::with_settings(lens, s, field, nyquist, None, settings))
+        .collect::<Result<Vec<_>, _>>()?;
+    if engines[0].direction_dependent() {
+        return Err(not_smooth(
+            "the OTF depends on direction here (lateral colour or a non-symmetric pupil): the spectral gradient is computed for a rotationally symmetric OTF"
+                .to_owned(),
+        ));
+    }
+    let a: Vec<f64> = engines.iter().map(optics::Polychromatic::total_weight).collect();
+    let d_ln_n_c = engines[0].spectral_average(|l, _| (l - c) / (sigma * sigma));
+    let d_ln_n_s = engines[0].spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    // (O, ∂O/∂c, ∂O/∂σ) at ν, the pixel MTF on the derivatives
+    let at = |nu: f64| -> (f64, f64, f64) {
+        let o: Vec<f64> = engines.iter().map(|eng| eng.otf(nu)).collect();
+        let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+        let (d1, d2) = (o[1] - o[0], o[2] - o[0]);
+        let dc = a[1] * d1 / (sigma * sigma * a[0]);
+        let ds = (a[2] * d2 - 2.0 * c * a[1] * d1) / (sigma.powi(3) * a[0]);
+        (o[0], pix * dc, pix * ds)
+    };
+    let integrate = |panels: usize| -> (f64, f64) {
+        let mut ends = vec![0.0];
+        let h = nyquist / panels as f64;
+        let mut previous = (0.0, 1.0);
+        for i in 1..=panels {
+            let nu = if i == panels { nyquist } else { i as f64 * h };
+            let value = engines[0].otf(nu);
+            if value * previous.1 < 0.0 {
+                let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
+                while hi - lo > 1e-15 * hi {
+                    let m = 0.5 * (lo + hi);
+                    if engines[0].otf(m) * f_lo > 0.0 {
+                        lo = m;
+                    } else {
+                        hi = m;
+                    }
+                }
+                ends.push(0.5 * (lo + hi));
+            }
+            ends.push(nu);
+            previous = (nu, value);
+        }
+        let (mut dc, mut ds) = (0.0, 0.0);
+        for w in ends.windows(2) {
+            let half = 0.5 * (w[1] - w[0]);
+            if half <= 0.0 {
+                continue;
+            }
+            let centre = 0.5 * (w[0] + w[1]);
+            for &(x, wx) in optics::quad::rule() {
+                let (o, c_, s_) = at(centre + half * x);
+                let sign = if o < 0.0 { -1.0 } else { 1.0 };
+                dc += half * wx * sign * c_;
+                ds += half * wx * sign * s_;
+            }
+        }
+        (dc / nyquist, ds / nyquist)
+    };
+    let mut panels = 4;
+    let mut previous = integrate(panels);
+    let (dc, ds) = loop {
+        panels *= 2;
+        let next = integrate(panels);
+        // each derivative against its own scale: per relative change of c and of σ
+        let change = ((next.0 - previous.0) * c).abs().max(((next.1 - previous.1) * sigma).abs());
+        let size = (next.0 * c).abs().max((next.1 * sigma).abs()).max(e.mean_mtf);
+        previous = next;
+        if change <= tolerance * size || panels >= 1024 {
+            break previous;
+        }
+    };
+    let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
+    Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
 }

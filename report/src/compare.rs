@@ -110,6 +110,13 @@ pub struct DesignReport {
     pub warnings: Vec<String>,
     /// The ASNR at each grid range, `[range_nm, asnr]`.
     pub curve: Vec<[f64; 2]>,
+    /// With `--wrt`: the exact gradient at the scene band over the named keys
+    /// ([`crate::gradient::Gradient`]: `gradient` {KEY: ∂ASNR/∂KEY}, …), if this design has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gradient: Option<crate::gradient::Gradient>,
+    /// With `--wrt`: why this design has no gradient (the refusal, naming the key).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gradient_note: Option<String>,
 }
 
 /// The whole comparison.
@@ -358,6 +365,8 @@ fn compute(
             notes: d.notes.clone(),
             warnings: r.warnings.clone(),
             curve: curve.iter().map(|&(x, y)| [x, y]).collect(),
+            gradient: None,
+            gradient_note: None,
         });
     }
     let order = |key: &dyn Fn(&DesignReport) -> f64| -> Vec<usize> {
@@ -553,6 +562,86 @@ pub fn table(r: &Report) -> String {
     s
 }
 
+/// Design `index` of the comparison file `source` as a scene of its own: the shared tables with
+/// the design's lens as `[lens]`; of the overrides `set`, the shared ones kept, this design's
+/// (`designs[index].lens.KEY`) as `lens.KEY`, the other designs' left out. Refused for a design
+/// with keys besides `name` and `lens`.
+fn design_source(source: &Source, set: &[String], index: usize) -> Result<(Source, Vec<String>)> {
+    let mut table: toml::Table = source.text().parse().map_err(|e| anyhow!("{}: not TOML: {e}", source.label()))?;
+    let designs = match table.remove("designs") {
+        Some(toml::Value::Array(list)) => list,
+        _ => bail!("{}: no [[designs]]", source.label()),
+    };
+    table.remove("allow_different_focal_lengths");
+    let Some(toml::Value::Table(design)) = designs.get(index) else {
+        bail!("{}: no designs[{index}]", source.label());
+    };
+    if let Some(other) = design.keys().find(|k| *k != "name" && *k != "lens") {
+        bail!("designs[{index}].{other}: a design with keys besides name and lens has no gradient here yet");
+    }
+    let lens = design.get("lens").cloned().ok_or_else(|| anyhow!("designs[{index}]: no lens"))?;
+    table.insert("lens".to_owned(), lens);
+    let text = toml::to_string(&table).map_err(|e| anyhow!("designs[{index}]: {e}"))?;
+    let own = format!("designs[{index}].");
+    let overrides = set
+        .iter()
+        .filter_map(|o| match o.trim_start().strip_prefix(&own) {
+            Some(rest) => Some(rest.to_owned()),
+            None if o.trim_start().starts_with("designs[") => None,
+            None => Some(o.clone()),
+        })
+        .collect();
+    Ok((Source::from_text(text, format!("{} designs[{index}]", source.label()), source.dir()), overrides))
+}
+
+/// `compare --wrt KEY…`: each design's exact gradient at the scene band over `wrt`
+/// ([`crate::gradient::gradient`]), put into `report`; a design where it is refused gets the
+/// refusal as its `gradient_note` instead.
+pub fn gradients(
+    scene: Option<&std::path::Path>,
+    set: &[String],
+    tolerance: Option<f64>,
+    wrt: &[String],
+    report: &mut Report,
+) -> Result<()> {
+    if wrt.is_empty() {
+        return Ok(());
+    }
+    let mut set = set.to_vec();
+    if let Some(t) = tolerance {
+        set.push(format!("options.tolerance={t}"));
+    }
+    let source = scene::read_comparison(scene)?;
+    for d in &mut report.designs {
+        let result = design_source(&source, &set, d.index)
+            .and_then(|(s, overrides)| crate::gradient::gradient(&s, &overrides, wrt));
+        match result {
+            Ok(g) => d.gradient = Some(g),
+            Err(e) => d.gradient_note = Some(format!("{e:#}")),
+        }
+    }
+    Ok(())
+}
+
+/// The `--wrt` part of the table: each design's `∂ln ASNR/∂ln key` at the scene band.
+pub fn gradient_table(r: &Report) -> String {
+    let mut s = String::from("\n∂ln ASNR/∂ln key at the scene band (exact gradient)\n");
+    for d in &r.designs {
+        match (&d.gradient, &d.gradient_note) {
+            (Some(g), _) => {
+                let parts: Vec<String> =
+                    g.keys.iter().enumerate().map(|(i, k)| format!("{k} {:+.6}", g.relative(i))).collect();
+                let _ = writeln!(s, "  {}: {}", d.name, parts.join(", "));
+            }
+            (None, Some(note)) => {
+                let _ = writeln!(s, "  {}: none ({note})", d.name);
+            }
+            (None, None) => {}
+        }
+    }
+    s
+}
+
 fn numbered(names: &[String]) -> String {
     names.iter().enumerate().map(|(i, n)| format!("{}. {n}", i + 1)).collect::<Vec<_>>().join(", ")
 }
@@ -640,6 +729,8 @@ mod tests {
             notes: notes.iter().map(|n| (*n).to_owned()).collect(),
             warnings: Vec::new(),
             curve: Vec::new(),
+            gradient: None,
+            gradient_note: None,
         }
     }
 

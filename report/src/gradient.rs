@@ -118,8 +118,28 @@ const NOT_SMOOTH: [(&str, &str); 8] = [
 
 /// Whether a parameter's derivative is per relative change.
 fn logarithmic(p: Parameter) -> bool {
-    !matches!(p, Parameter::ReadNoise | Parameter::DarkCurrent | Parameter::Gain | Parameter::Binary2(_))
+    !matches!(
+        p,
+        Parameter::ReadNoise
+            | Parameter::DarkCurrent
+            | Parameter::Gain
+            | Parameter::Binary2(_)
+            | Parameter::SpectrumCenter
+            | Parameter::SpectrumRange
+    )
 }
+
+/// The key's unit per the engine's unit: the spectral keys are in nm, their derivatives per m.
+fn unit(p: Parameter) -> f64 {
+    match p {
+        Parameter::SpectrumCenter | Parameter::SpectrumRange => 1e-9,
+        _ => 1.0,
+    }
+}
+
+/// The spectral keys: the Gaussian spectrum's centre and range.
+const SPECTRAL: [(&str, Parameter); 2] =
+    [("spectrum.center_nm", Parameter::SpectrumCenter), ("spectrum.range_nm", Parameter::SpectrumRange)];
 
 /// A key as written, parsed: its dotted name and its index, if any.
 struct KeyPath {
@@ -217,8 +237,17 @@ fn refuse_by_name(key: &str) -> Result<()> {
 }
 
 /// The scene quantity a canonical key sets, or why its gradient is refused.
-fn parameter(key: &str, lens_model: &str) -> Result<Parameter> {
+fn parameter(key: &str, lens_model: &str, spectrum_shape: &str) -> Result<Parameter> {
     refuse_by_name(key)?;
+    if let Some((_, p)) = SPECTRAL.iter().find(|(k, _)| *k == key) {
+        if spectrum_shape != "gaussian" {
+            bail!(
+                "--wrt {key}: not differentiable here yet for spectrum.shape = \"{spectrum_shape}\"; supported for \
+                 spectrum.shape = \"gaussian\" (a top-hat's edges or a line's wavelength are not followed yet)"
+            );
+        }
+        return Ok(*p);
+    }
     if key == PIXEL_PITCH {
         return Ok(Parameter::PixelPitch);
     }
@@ -245,8 +274,8 @@ fn parameter(key: &str, lens_model: &str) -> Result<Parameter> {
         return Ok(*p);
     }
     bail!(
-        "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} and \
-         lens.binary2[i] (lens.model = \"phase\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+        "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian spectrum) and lens.binary2[i] (lens.model = \"phase\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -272,7 +301,9 @@ pub(crate) fn gradient_and_evaluation(
     let table = crate::objective::resolved(source, overrides)?;
     let expanded = expand(source, &table, keys)?;
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
-    let parameters: Vec<Parameter> = expanded.iter().map(|(k, _)| parameter(k, &lens_model)).collect::<Result<_>>()?;
+    let shape = lookup(&table, "spectrum.shape").and_then(toml::Value::as_str).unwrap_or("").to_owned();
+    let parameters: Vec<Parameter> =
+        expanded.iter().map(|(k, _)| parameter(k, &lens_model, &shape)).collect::<Result<_>>()?;
     let built = scene::build_from(source, overrides)?;
     let g = metric::gradient(&built, &parameters).map_err(|e| anyhow!("{}: {e}", source.label()))?;
     // per relative change → per unit of the key
@@ -280,7 +311,7 @@ pub(crate) fn gradient_and_evaluation(
         d.iter()
             .zip(&parameters)
             .zip(&expanded)
-            .map(|((d, p), (_, v))| if logarithmic(*p) { d / v } else { *d })
+            .map(|((d, p), (_, v))| if logarithmic(*p) { d / v } else { d * unit(*p) })
             .collect()
     };
     let e = &g.evaluation;
@@ -346,25 +377,34 @@ mod tests {
         [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
     }
 
-    /// The reference written here: central differences of converged evaluations, the step from
-    /// the rule of docs/physics.md, h = (3 tol/|f‴|)^{1/3} with |f‴| ~ 1 in relative units, so
-    /// h = (3e-10)^{1/3} |v| ≈ 6.7e-4 |v| (truncation and rounding both ~1e-7 relative).
-    fn central(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 4] {
-        let h = (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs();
+    /// The reference written here: central differences of converged evaluations with step `h`.
+    fn central(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
         let up = converged(source, overrides, key, value + h);
         let down = converged(source, overrides, key, value - h);
         std::array::from_fn(|i| (up[i] - down[i]) / (2.0 * h))
+    }
+
+    /// The step of the rule of docs/physics.md, h = (3 tol/|f‴|)^{1/3}, for a key on which the
+    /// value varies on the scale of the key itself: |f‴| ~ 1 in relative units, so
+    /// h = (3e-10)^{1/3} |v| ≈ 6.7e-4 |v| (truncation and rounding both ~1e-7 relative).
+    fn relative_step(_key: &str, value: f64) -> f64 {
+        (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs()
     }
 
     /// Every key's gradient (ASNR, mean MTF, SNR0, N) against the central differences, as
     /// relative sensitivities ∂/∂ln key (dimensionless), within 10× the tolerance the gradient
     /// was asked at (the scene's 1e-6) relative to the gradient's norm.
     fn check_against_differences(source: &Source, overrides: &[String], keys: &[&str]) {
+        check_with_steps(source, overrides, keys, &relative_step);
+    }
+
+    /// [`check_against_differences`] with the step `step(key, value)`.
+    fn check_with_steps(source: &Source, overrides: &[String], keys: &[&str], step: &dyn Fn(&str, f64) -> f64) {
         let tolerance = 1e-6;
         let g = gradient(source, overrides, &owned(keys)).unwrap();
         assert_eq!(g.keys, owned(keys));
         let references: Vec<[f64; 4]> =
-            g.keys.iter().zip(&g.values).map(|(k, v)| central(source, overrides, k, *v)).collect();
+            g.keys.iter().zip(&g.values).map(|(k, v)| central(source, overrides, k, *v, step(k, *v))).collect();
         let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
         for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
             let relative =
@@ -446,6 +486,48 @@ mod tests {
         check_against_differences(&source, &owned(&["camera.read_noise_e=2"]), &["source.scale", "exposure.time_ms"]);
         let e = gradient(&source, &[], &owned(&["source.temperature_k"])).unwrap_err().to_string();
         assert!(e.contains("--wrt source.temperature_k: not differentiable here yet"), "{e}");
+    }
+
+    /// The Gaussian spectrum's centre and range: they move N and the OTF's spectral weights
+    /// (the engine's OTFs of ρλ and ρλ², docs/physics.md "Gradients"). The value varies on the
+    /// scale of σ = range/(2√2), not of the key's value, so the step is (3e-10)^{1/3} σ
+    /// (h/σ ≈ 6.7e-4: truncation and rounding both ~1e-7 relative). On the paper's chromatic
+    /// lens (the closed form) in both forms and with the pixel MTF, and on the Binary 2 lens
+    /// (the radial engine), within 10× the tolerance (1e-6) of the gradient's norm.
+    #[test]
+    fn spectral_keys_match_central_differences() {
+        let keys = ["spectrum.center_nm", "spectrum.range_nm", "exposure.time_ms"];
+        let sigma = |range_nm: f64| range_nm / (2.0 * std::f64::consts::SQRT_2);
+        for (source, overrides, range) in [
+            (scene::read(None).unwrap(), owned(&[]), 50.0),
+            (
+                scene::read(None).unwrap(),
+                owned(&["options.form=\"integral\"", "camera.pixel_mtf=true", "spectrum.range_nm=100"]),
+                100.0,
+            ),
+            (example("phase-binary2.toml"), owned(&["camera.read_noise_e=2"]), 50.0),
+        ] {
+            let step = move |k: &str, v: f64| {
+                if k.starts_with("spectrum.") {
+                    (3.0 * REFERENCE_TOLERANCE).cbrt() * sigma(range)
+                } else {
+                    relative_step(k, v)
+                }
+            };
+            check_with_steps(&source, &overrides, &keys, &step);
+        }
+        // a top-hat's edges are not followed
+        let e = gradient(
+            &scene::read(None).unwrap(),
+            &owned(&["spectrum.shape=\"tophat\""]),
+            &owned(&["spectrum.center_nm"]),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("--wrt spectrum.center_nm: not differentiable here yet for spectrum.shape = \"tophat\""),
+            "{e}"
+        );
     }
 
     /// ∂SNR0 analytic: with shot noise alone SNR0 = √N and N ∝ t, so ∂SNR0/∂t = SNR0/(2t) and
