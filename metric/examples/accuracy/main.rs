@@ -38,6 +38,7 @@ mod design;
 mod iris;
 mod kernels;
 mod map;
+mod phase_maps;
 mod plot;
 mod process;
 mod psf_stack;

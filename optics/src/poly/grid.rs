@@ -189,7 +189,8 @@ const SECONDS_PER_GRID_256: f64 = 2.1e-3;
 const PHASE_NYQUIST_WAVES: f64 = 0.5;
 
 /// The time the grids of one sampling level may take: past it the scene stops with the numbers
-/// (two levels are held, and a refinement builds one more).
+/// (three levels are held, N/4 with about a sixteenth of the grids of N, and a refinement builds
+/// one more).
 const GRID_TIME_BUDGET: f64 = 3.0;
 
 impl<'a> Grids<'a> {
