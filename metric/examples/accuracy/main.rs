@@ -35,9 +35,11 @@
 //! existing `OUT_DIR/BENCHMARKS.md`.
 
 mod design;
+mod fft_azimuth;
 mod iris;
 mod kernels;
 mod map;
+mod phase_maps;
 mod plot;
 mod process;
 mod psf_stack;

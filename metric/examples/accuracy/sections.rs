@@ -28,7 +28,14 @@ pub(crate) struct Section {
 }
 
 /// Every stand-alone section, in the order a full run appends them.
-pub(crate) const SECTIONS: &[Section] = &[];
+pub(crate) const SECTIONS: &[Section] = &[
+    Section { name: "phase-maps", title: "2-D phase maps against the radial engine", run: crate::phase_maps::section },
+    Section {
+        name: "fft-azimuth",
+        title: "The FFT path's sampling judged over azimuth",
+        run: crate::fft_azimuth::section,
+    },
+];
 
 /// The sections `--only` names, or an error listing the known names.
 pub(crate) fn select(names: &str) -> Result<Vec<&'static Section>, String> {
