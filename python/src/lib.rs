@@ -271,8 +271,7 @@ fn frames_from(what: &'static str, inputs: &[FrameInput<'_>]) -> PyResult<Vec<im
                 imaging::frames::read_frames(what, std::slice::from_ref(path), 1).map_err(input_error)?
             }
             FrameInput::Array(name, array, bits) => {
-                let shape = array.shape();
-                let (height, width) = (shape[0], shape[1]);
+                let (height, width) = array.as_array().dim();
                 if width == 0 || height == 0 || (width * height) as u64 > imaging::frames::MAX_FRAME_PIXELS {
                     return Err(PyValueError::new_err(format!(
                         "{what}[{i}] ({name}): {width} × {height} pixels: expected 1 to {} pixels",
