@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 
 /// Arguments of `asnr measure`.
 #[derive(clap::Args)]
@@ -49,61 +49,6 @@ pub struct MeasureArgs {
     pub json: bool,
 }
 
-/// The simulated values `--compare` sets beside the measured ones.
-#[derive(serde::Serialize)]
-struct Comparison {
-    scene: String,
-    asnr: f64,
-    snr0: f64,
-    mean_mtf: f64,
-    /// Measured over simulated.
-    asnr_ratio: f64,
-    snr_ratio: f64,
-    mean_mtf_ratio: f64,
-}
-
-/// The measured ASNR, with where its MTF came from.
-#[derive(serde::Serialize)]
-struct Measured {
-    #[serde(flatten)]
-    asnr: imaging::MeasuredAsnr,
-    mtf_source: String,
-    edge_angle_deg: Option<f64>,
-}
-
-/// A measured mean MTF: value, standard error, where it came from, the edge's angle.
-struct MeanMtf(f64, f64, String, Option<f64>);
-
-/// The mean MTF of `--edge` or `--mtf-csv`.
-fn measured_mtf(args: &MeasureArgs, pitch_m: Option<f64>) -> Result<Option<MeanMtf>> {
-    if !args.edge.is_empty() {
-        let options =
-            crate::sfrcmd::options(args.edge_roi.as_deref(), None, None, pitch_m.map(|p| p * 1e6), false, None)?;
-        let (frames, _) = crate::sfrcmd::read(&args.edge, &[])?;
-        let result = imaging::sfr(&frames, &[], &options)?;
-        let e = result.single()?;
-        return Ok(Some(MeanMtf(
-            e.mean_mtf,
-            e.mean_mtf_sigma,
-            format!("slanted edge, {} frame(s) from {}", result.frames, frames[0].path.display()),
-            Some(e.edge_angle_deg),
-        )));
-    }
-    let Some(path) = &args.mtf_csv else { return Ok(None) };
-    let Some(pitch) = pitch_m else {
-        anyhow::bail!(
-            "--mtf-csv {}: Nyquist needs the pixel pitch: give --pixel-pitch-um or --compare SCENE",
-            path.display()
-        );
-    };
-    // `frequency_cyc_per_mm, mtf` rows, the frequencies increasing (the scene's table reader)
-    let (f, m) = scene::read_pairs(path, &scene::FREQUENCY, 0.0, 1.0, "MTF")
-        .with_context(|| format!("--mtf-csv {}", path.display()))?;
-    let nyquist = 1.0 / (2.0 * pitch * 1e3);
-    let mean = imaging::measure::mean_mtf_of_table(path, &f, &m, nyquist)?;
-    Ok(Some(MeanMtf(mean, 0.0, format!("table {} (no standard error given)", path.display()), None)))
-}
-
 /// Runs `asnr measure`.
 pub fn run(args: &MeasureArgs) -> Result<()> {
     let white = imaging::Region::parse("white", &args.white)?;
@@ -131,53 +76,34 @@ pub fn run(args: &MeasureArgs) -> Result<()> {
         }
         Some(capped)
     };
-    let m = imaging::measure(&frames, white, black, capped.as_deref(), args.include_glare)?;
-    if let Some(p) = args.pixel_pitch_um
-        && !(p.is_finite() && p > 0.0 && p < 1000.0)
-    {
-        anyhow::bail!("--pixel-pitch-um {p}: expected a pitch > 0 and < 1000 µm");
-    }
     // the scene with the pixel aperture, as a measured edge has it
     let simulated = match &args.compare {
         None => None,
         Some(path) => {
-            let scene = crate::load(Some(path), &["camera.pixel_mtf=true".to_owned()])?;
-            let evaluation = metric::evaluate(&scene).with_context(|| format!("--compare {}", path.display()))?;
-            Some((path.display().to_string(), scene.camera().pixel_pitch(), evaluation))
+            Some((path.display().to_string(), crate::load(Some(path), &["camera.pixel_mtf=true".to_owned()])?))
         }
     };
-    let pitch_m = args.pixel_pitch_um.map(|p| p * 1e-6).or(simulated.as_ref().map(|s| s.1));
-    let measured = measured_mtf(args, pitch_m)?.map(|MeanMtf(mean, sigma, source, angle)| Measured {
-        asnr: imaging::MeasuredAsnr::new(m.snr, m.snr_sigma, mean, sigma),
-        mtf_source: source,
-        edge_angle_deg: angle,
-    });
-    let comparison = match (&simulated, &measured) {
-        (Some((scene, _, e)), Some(measured)) => Some(Comparison {
-            scene: scene.clone(),
-            asnr: e.asnr,
-            snr0: e.snr0,
-            mean_mtf: e.mean_mtf,
-            asnr_ratio: measured.asnr.asnr / e.asnr,
-            snr_ratio: m.snr / e.snr0,
-            mean_mtf_ratio: measured.asnr.mean_mtf / e.mean_mtf,
-        }),
-        (Some(_), None) => anyhow::bail!("--compare needs the measured MTF too: give --edge IMAGE… or --mtf-csv FILE"),
-        _ => None,
+    let edge_frames = if args.edge.is_empty() { None } else { Some(crate::sfrcmd::read(&args.edge, &[])?.0) };
+    let mtf = match (&edge_frames, &args.mtf_csv) {
+        (Some(frames), _) => Some(report::measure::MtfFrom::Edge { frames, roi: args.edge_roi.as_deref() }),
+        (None, Some(path)) => Some(report::measure::MtfFrom::Table(path)),
+        (None, None) => None,
     };
+    let inputs = report::measure::MeasureInputs {
+        white,
+        black,
+        capped: capped.as_deref(),
+        include_glare: args.include_glare,
+        mtf,
+        pixel_pitch_um: args.pixel_pitch_um,
+        compare: simulated.as_ref().map(|(label, scene)| (label.as_str(), scene)),
+    };
+    let report = report::measure::measure(&frames, &inputs)?;
     if args.json {
-        let mut value = serde_json::to_value(&m)?;
-        if let Some(object) = value.as_object_mut() {
-            if let Some(measured) = &measured {
-                object.insert("measured_asnr".to_owned(), serde_json::to_value(measured)?);
-            }
-            if let Some(c) = &comparison {
-                object.insert("compare".to_owned(), serde_json::to_value(c)?);
-            }
-        }
-        outln!("{}", serde_json::to_string_pretty(&value)?);
+        outln!("{}", serde_json::to_string_pretty(&report.json()?)?);
         return Ok(());
     }
+    let (m, measured, comparison) = (&report.measurement, &report.measured, &report.comparison);
     let noise = if m.include_glare {
         "σ_s = σ_w: glare and camera noise included (SI)"
     } else {

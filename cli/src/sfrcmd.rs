@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 
 /// Arguments of `asnr sfr`.
 #[derive(clap::Args)]
@@ -47,71 +47,6 @@ pub struct SfrArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// The response of a `--transfer` file: `asnr characterize --json`'s levels.
-pub fn read_transfer(path: &Path) -> Result<imaging::sfr::Response> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("--transfer {}: cannot read", path.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text).with_context(|| {
-        format!("--transfer {}: not JSON (expected `asnr characterize --json`'s output)", path.display())
-    })?;
-    let number = |v: &serde_json::Value, key: &str| v.get(key).and_then(serde_json::Value::as_f64);
-    let dark = value.get("dark").and_then(|d| number(d, "mean"));
-    let levels = value.get("levels").and_then(serde_json::Value::as_array);
-    let (Some(dark), Some(levels)) = (dark, levels) else {
-        bail!(
-            "--transfer {}: no `dark.mean` and `levels` (expected `asnr characterize --json`'s output)",
-            path.display()
-        );
-    };
-    let mut points = Vec::new();
-    for (i, level) in levels.iter().enumerate() {
-        let (Some(mean), Some(illumination)) = (number(level, "mean"), number(level, "illumination")) else {
-            bail!("--transfer {}: levels[{i}] has no `mean` and `illumination`", path.display());
-        };
-        points.push((mean - dark, illumination));
-    }
-    points.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let response = imaging::sfr::Response::Table {
-        dn: points.iter().map(|p| p.0).collect(),
-        exposure: points.iter().map(|p| p.1).collect(),
-    };
-    response.check().with_context(|| format!("--transfer {}", path.display()))?;
-    Ok(response)
-}
-
-/// The analysis `args` ask for, of frames already read.
-pub fn options(
-    roi: Option<&str>,
-    gamma: Option<f64>,
-    transfer: Option<&Path>,
-    pixel_pitch_um: Option<f64>,
-    curved: bool,
-    reach: Option<f64>,
-) -> Result<imaging::sfr::Options> {
-    let roi = roi.map(|r| imaging::Region::parse("ROI", r)).transpose()?;
-    let response = match (gamma, transfer) {
-        (Some(g), _) => imaging::sfr::Response::Gamma(g),
-        (None, Some(path)) => read_transfer(path)?,
-        (None, None) => imaging::sfr::Response::Linear,
-    };
-    if let Some(p) = pixel_pitch_um
-        && !(p.is_finite() && p > 0.0 && p < 1000.0)
-    {
-        bail!("--pixel-pitch-um {p}: expected a pitch > 0 and < 1000 µm");
-    }
-    if let Some(r) = reach
-        && !(r.is_finite() && (4.0..=1000.0).contains(&r))
-    {
-        bail!("--reach {r}: expected 4 to 1000 pixels");
-    }
-    Ok(imaging::sfr::Options {
-        roi,
-        response,
-        pixel_pitch_m: pixel_pitch_um.map(|p| p * 1e-6),
-        degree: if curved { 2 } else { 1 },
-        reach_px: reach,
-    })
-}
-
 /// Reads the edge frames and the dark frames (one or more each, of one size and bit depth).
 pub fn read(images: &[PathBuf], dark: &[PathBuf]) -> Result<(Vec<imaging::Frame>, Vec<imaging::Frame>)> {
     let frames = imaging::frames::read_frames("edge frames", images, 1)?;
@@ -121,7 +56,7 @@ pub fn read(images: &[PathBuf], dark: &[PathBuf]) -> Result<(Vec<imaging::Frame>
 
 /// Runs `asnr sfr`.
 pub fn run(args: &SfrArgs) -> Result<()> {
-    let options = options(
+    let options = report::measure::sfr_options(
         args.roi.as_deref(),
         args.gamma,
         args.transfer.as_deref(),
@@ -135,14 +70,8 @@ pub fn run(args: &SfrArgs) -> Result<()> {
         plot(path, &result, options.pixel_pitch_m)?;
     }
     if args.json {
-        let mut value = serde_json::to_value(&result)?;
         // one edge: its fields at the top level too
-        if let ([edge], Some(object)) = (&result.edges[..], value.as_object_mut())
-            && let serde_json::Value::Object(fields) = serde_json::to_value(edge)?
-        {
-            object.extend(fields);
-        }
-        outln!("{}", serde_json::to_string_pretty(&value)?);
+        outln!("{}", serde_json::to_string_pretty(&report::measure::sfr_json(&result)?)?);
         return Ok(());
     }
     let mm = options.pixel_pitch_m.is_some();

@@ -9,7 +9,9 @@ that maximize the ASNR and :func:`tolerance` samples how it survives fabrication
 :func:`gradient` is the exact gradient of the ASNR with respect to scene keys (``asnr gradient``),
 and :func:`value_and_grad` the objective and its gradient as a function of a numpy vector (for
 ``scipy.optimize.minimize(jac=True)``); ``asnr.jax`` and ``asnr.torch`` make the ASNR a
-differentiable function of a JAX array or a torch tensor. Every number is the one ``asnr``
+differentiable function of a JAX array or a torch tensor. :func:`sfr` measures the MTF of slanted
+edges in camera frames and :func:`measure` the SNR and the measured ASNR of a stack (``asnr sfr``,
+``asnr measure``). Every number is the one ``asnr``
 prints for the same scene (the same Rust functions compute it): ``evaluate_many`` over a grid
 is ``asnr sweep --csv`` to the last digit, and :func:`to_csv` writes its bytes.
 
@@ -51,8 +53,10 @@ __all__ = [
     "gradient",
     "grid",
     "load",
+    "measure",
     "mtf",
     "optimize",
+    "sfr",
     "sweep",
     "to_csv",
     "tolerance",
@@ -126,14 +130,159 @@ def _warn(messages: Iterable[str]) -> None:
         warnings.warn(m, SceneWarning, stacklevel=3)
 
 
-def evaluate(scene: Scene) -> Report:
+def evaluate(
+    scene: Scene,
+    *,
+    metrics: bool = False,
+    object: str | None = None,  # noqa: A002 - the command line's name
+    contrast: float | None = None,
+    frame_rate_hz: float | None = None,
+    task: str | None = None,
+) -> Report:
     """The ASNR of ``scene`` and how it was computed (the report of ``asnr evaluate --json``).
+
+    With ``metrics=True`` (implied by any of the four options after it) the report also has the
+    fields of ``asnr evaluate --metrics --json``: ``neq`` (the curve), ``mean_neq``,
+    ``neq_zero``, ``capacity_bits_per_pixel`` (Fellgett–Linfoot, for the ``object`` spectrum
+    ``"flat"`` or ``"power-law:BETA"`` at ``contrast``, default 1) with
+    ``capacity_error_bits`` and ``capacity_perfect_lens_bits_per_pixel``,
+    ``capacity_bits_per_pixel_per_second`` (with ``frame_rate_hz``), ``detectability`` (d′ of
+    ``task``, ``"disk:DIAMETER_UM:CONTRAST"``) and ``ideal_lens`` (the ASNR of a
+    diffraction-limited lens of the same aperture and the ratio); docs/physics.md, "Metrics
+    beyond the ASNR", defines them.
 
     Values that look like a unit slip are warned about (:class:`SceneWarning`); the evaluation's
     own warnings are in ``report.warnings``."""
-    text, _lens, scene_warnings = _asnr.evaluate(_scene(scene))
+    words = (object, None if contrast is None else float(contrast), None if frame_rate_hz is None else float(frame_rate_hz), task)
+    wanted = metrics or any(w is not None for w in words)
+    text, _lens, scene_warnings = _asnr.evaluate(_scene(scene), words if wanted else None)
     _warn(scene_warnings)
     return Report(json.loads(text))
+
+
+def _frames(what: str, images: Any) -> list[Any]:
+    """Frames as the native module takes them: paths as strings, arrays as ``(name, float64
+    array, bits)`` with the bits of their dtype (uint8: 8, uint16: 16, floating point: 32)."""
+    if images is None:
+        return []
+    if isinstance(images, np.ndarray) and images.ndim == 3:
+        images = list(images)  # a stack: frames along the first axis
+    elif isinstance(images, (str, os.PathLike, np.ndarray)):
+        images = [images]
+    out: list[Any] = []
+    for i, image in enumerate(images):
+        if isinstance(image, (str, os.PathLike)):
+            out.append(os.fspath(image))
+            continue
+        array = np.asarray(image)
+        if array.ndim != 2:
+            raise ValueError(f"{what}[{i}]: an array of shape {array.shape}: expected one 2-D grayscale frame (rows, columns)")
+        if array.dtype == np.uint8:
+            bits = 8
+        elif array.dtype == np.uint16:
+            bits = 16
+        elif np.issubdtype(array.dtype, np.floating):
+            bits = 32
+        else:
+            raise ValueError(f"{what}[{i}]: an array of {array.dtype}: expected uint8, uint16 or floating-point grey levels")
+        out.append((f"{what}[{i}] (array)", np.ascontiguousarray(array, dtype=np.float64), bits))
+    return out
+
+
+def _region(name: str, region: Any) -> str | None:
+    """``X,Y,W,H`` as the command line takes it, from a string or four whole numbers."""
+    if region is None or isinstance(region, str):
+        return region
+    values = list(region)
+    if len(values) != 4:
+        raise ValueError(f"{name}: {values!r}: expected X,Y,W,H (four whole numbers of pixels)")
+    return ",".join(str(int(v)) if float(v).is_integer() else str(v) for v in values)
+
+
+def sfr(
+    images: Any,
+    *,
+    roi: str | Sequence[int] | None = None,
+    dark: Any = None,
+    gamma: float | None = None,
+    transfer: str | os.PathLike[str] | None = None,
+    pixel_pitch_um: float | None = None,
+    curved: bool = False,
+    reach: float | None = None,
+) -> dict[str, Any]:
+    """The MTF of slanted edges (ISO 12233 e-SFR): ``asnr sfr --json``'s fields, the same
+    analysis and so the same numbers.
+
+    ``images`` is one frame or a list of them, each a path (a PNG or TIFF file, a folder or a
+    pattern, as the command line takes them) or a 2-D numpy array of grey levels (uint8 and
+    uint16 arrays clip at their largest code, as 8- and 16-bit files do; floating point is a
+    32-bit float TIFF's), or a 3-D array (frames along its first axis); several frames are averaged and their spread gives the standard errors.
+    ``roi`` is ``"X,Y,W,H"`` or ``(x, y, w, h)`` in pixels (default the whole frame), ``dark``
+    frames are subtracted, the response is linear, ``gamma`` or the ``transfer`` curve of
+    ``asnr characterize --json``; ``pixel_pitch_um`` adds cycles/mm; ``curved`` fits a parabola;
+    ``reach`` is the LSF's half-width in pixels.
+
+    The dict has ``edges`` (one dict each) and, when the ROI holds one edge, its fields at the
+    top level: ``mean_mtf`` (to Nyquist, the ASNR's factor) and ``mean_mtf_sigma``,
+    ``mtf50_cyc_per_px``, ``mtf_nyquist``, ``edge_angle_deg``, ``frequency_cyc_per_px`` and
+    ``mtf`` (arrays, as lists), … Bad input (no edge, two edges, an angle outside 1°–35°, a
+    clipped edge, frames of different sizes, a ROI outside the frame) raises ``ValueError``
+    with the command line's message, naming the file (or array) and the reason."""
+    text = _asnr.sfr(
+        _frames("images", images),
+        _region("roi", roi),
+        _frames("dark", dark),
+        None if gamma is None else float(gamma),
+        None if transfer is None else os.fspath(transfer),
+        None if pixel_pitch_um is None else float(pixel_pitch_um),
+        bool(curved),
+        None if reach is None else float(reach),
+    )
+    return json.loads(text)
+
+
+def measure(
+    frames: Any,
+    *,
+    white: str | Sequence[int],
+    black: str | Sequence[int],
+    capped_black: Any = None,
+    include_glare: bool = False,
+    edge: Any = None,
+    edge_roi: str | Sequence[int] | None = None,
+    mtf_csv: str | os.PathLike[str] | None = None,
+    pixel_pitch_um: float | None = None,
+    compare: Scene | None = None,
+) -> dict[str, Any]:
+    """The SNR of a stack of frames (paper eq. 2–4) and, with an MTF, the measured ASNR:
+    ``asnr measure --json``'s fields, the same computation and so the same numbers.
+
+    ``frames`` (two or more) and ``capped_black`` are taken as :func:`sfr` takes images;
+    ``white`` and ``black`` are the regions, ``"X,Y,W,H"`` or ``(x, y, w, h)``. The measured
+    MTF comes from ``edge`` frames (their e-SFR, one edge, in ``edge_roi``) or a CSV table
+    ``mtf_csv`` (``frequency_cyc_per_mm, mtf``; Nyquist from ``pixel_pitch_um`` or the scene).
+    ``compare`` is a :class:`Scene` evaluated with the pixel aperture (``camera.pixel_mtf =
+    true``), set beside the measured values with the ratios (``compare`` in the dict).
+
+    The dict has ``snr``, ``snr_sigma``, ``signal``, ``white``, ``black``, ``sigma_*``, ``vg``,
+    ``modulation``, …; ``measured_asnr`` (``asnr``, ``asnr_sigma``, ``mean_mtf``, ``snr``, …,
+    ``mtf_source``, ``edge_angle_deg``) with an MTF. Bad input raises ``ValueError`` naming the
+    file (or array) and the reason; a scene that cannot be evaluated, :class:`SceneError`."""
+    if compare is not None:
+        compare = _scene(compare)
+    text = _asnr.measure(
+        _frames("frames", frames),
+        _region("white", white),
+        _region("black", black),
+        _frames("capped_black", capped_black),
+        bool(include_glare),
+        _frames("edge", edge),
+        _region("edge_roi", edge_roi),
+        None if mtf_csv is None else os.fspath(mtf_csv),
+        None if pixel_pitch_um is None else float(pixel_pitch_um),
+        compare,
+    )
+    return json.loads(text)
 
 
 def _scene(scene: Any) -> Scene:

@@ -28,7 +28,9 @@ def load_json(json: str, label: str, directory: str | os.PathLike[str]) -> Scene
 def _rebuild_scene(
     text: str, label: str, directory: str | os.PathLike[str], overrides: list[str], lens: Any | None
 ) -> Scene: ...
-def evaluate(scene: Scene) -> tuple[str, str, list[str]]: ...
+def evaluate(
+    scene: Scene, metrics: tuple[str | None, float | None, float | None, str | None] | None = None
+) -> tuple[str, str, list[str]]: ...
 def evaluate_many(
     scene: Scene,
     keys: list[str],
@@ -77,3 +79,29 @@ def tolerance(
     budget_s: float = 600.0,
     threads: int = 0,
 ) -> tuple[str, str]: ...
+
+# a frame: a path (file, folder or pattern) or (name, 2-D float64 array, bits 8 | 16 | 32)
+_Frame = str | tuple[str, npt.NDArray[np.float64], int]
+
+def sfr(
+    images: list[_Frame],
+    roi: str | None = None,
+    dark: list[_Frame] = ...,
+    gamma: float | None = None,
+    transfer: str | os.PathLike[str] | None = None,
+    pixel_pitch_um: float | None = None,
+    curved: bool = False,
+    reach: float | None = None,
+) -> str: ...
+def measure(
+    frames: list[_Frame],
+    white: str,
+    black: str,
+    capped_black: list[_Frame] = ...,
+    include_glare: bool = False,
+    edge: list[_Frame] = ...,
+    edge_roi: str | None = None,
+    mtf_csv: str | os.PathLike[str] | None = None,
+    pixel_pitch_um: float | None = None,
+    compare: Scene | None = None,
+) -> str: ...

@@ -218,8 +218,19 @@ fn _rebuild_scene(
 
 /// The evaluation of a scene (`asnr evaluate --json`'s `result`, as JSON text) and the scene's
 /// plausibility warnings. The GIL is released while it runs.
+///
+/// With `metrics` (`(object, contrast, frame_rate_hz, task)` in `asnr evaluate --metrics`'s
+/// words, each optional) the report also holds the metrics' fields, as `--metrics --json` prints
+/// them (`report::metrics::json`).
 #[pyfunction]
-fn evaluate(py: Python<'_>, scene: &Scene) -> PyResult<(String, String, Vec<String>)> {
+#[pyo3(signature = (scene, metrics=None))]
+fn evaluate(py: Python<'_>, scene: &Scene, metrics: Option<MetricsWords>) -> PyResult<(String, String, Vec<String>)> {
+    let metrics_options = metrics
+        .map(|(object, contrast, frame_rate_hz, task)| {
+            report::metrics::options(object.as_deref(), contrast, frame_rate_hz, task.as_deref())
+        })
+        .transpose()
+        .map_err(scene_error)?;
     let loaded = scene::build_with_warnings(&scene.source, &scene.overrides).map_err(scene_error)?;
     let warnings = loaded.warnings.iter().map(ToString::to_string).collect();
     let built = match &scene.lens {
@@ -231,8 +242,182 @@ fn evaluate(py: Python<'_>, scene: &Scene) -> PyResult<(String, String, Vec<Stri
         lens.raise()?;
     }
     let result = result.map_err(|e| SceneError::new_err(format!("{}: {e}", scene.source.label())))?;
-    let report = report::output::json(scene.source.label(), &built, &result).map_err(scene_error)?;
+    let report = match metrics_options {
+        None => report::output::json(scene.source.label(), &built, &result).map_err(scene_error)?,
+        Some(options) => {
+            let m = py.detach(|| metric::metrics(&built, &result, &options));
+            if let Some(lens) = &scene.lens {
+                lens.raise()?;
+            }
+            let m = m.map_err(|e| SceneError::new_err(format!("{}: {e}", scene.source.label())))?;
+            report::metrics::json(scene.source.label(), &built, &result, &m).map_err(scene_error)?
+        }
+    };
     Ok((report, built.lens().describe(), warnings))
+}
+
+/// The words of `asnr evaluate --metrics`: `--object`, `--contrast`, `--frame-rate-hz`, `--task`.
+type MetricsWords = (Option<String>, Option<f64>, Option<f64>, Option<String>);
+
+/// A frame given from Python: a path (a file, a folder or a pattern, as the command line takes
+/// them), or `(name, 2-D float64 array, bits)` where bits is the camera's 8 or 16 (unsigned
+/// integers: the largest code is the clip level) or 32 (floating point).
+#[derive(FromPyObject)]
+enum FrameInput<'py> {
+    Path(std::path::PathBuf),
+    Array(String, numpy::PyReadonlyArray2<'py, f64>, u8),
+}
+
+/// A bad measurement input: the command line's message (the file or array, the reason).
+fn input_error(e: impl Into<anyhow::Error>) -> PyErr {
+    PyValueError::new_err(format!("{:#}", e.into()))
+}
+
+/// The frames `inputs` name or hold, in order, one size and bit depth; `what` names them in
+/// messages. Memory stays bounded as the command line's: at most
+/// `imaging::frames::MAX_STACK_SAMPLES` grey levels in all.
+fn frames_from(what: &'static str, inputs: &[FrameInput<'_>]) -> PyResult<Vec<imaging::Frame>> {
+    let mut frames: Vec<imaging::Frame> = Vec::new();
+    let mut samples = 0_u64;
+    for (i, input) in inputs.iter().enumerate() {
+        let read = match input {
+            FrameInput::Path(path) => {
+                imaging::frames::read_frames(what, std::slice::from_ref(path), 1).map_err(input_error)?
+            }
+            FrameInput::Array(name, array, bits) => {
+                let (height, width) = array.as_array().dim();
+                if width == 0 || height == 0 || (width * height) as u64 > imaging::frames::MAX_FRAME_PIXELS {
+                    return Err(PyValueError::new_err(format!(
+                        "{what}[{i}] ({name}): {width} × {height} pixels: expected 1 to {} pixels",
+                        imaging::frames::MAX_FRAME_PIXELS
+                    )));
+                }
+                if ![8, 16, 32].contains(bits) {
+                    return Err(PyValueError::new_err(format!(
+                        "{what}[{i}] ({name}): {bits} bits: expected 8 or 16 (unsigned integers) or 32 (floating point)"
+                    )));
+                }
+                let data: Vec<f64> = array.as_array().iter().copied().collect();
+                if let Some(k) = data.iter().position(|v| !v.is_finite()) {
+                    return Err(PyValueError::new_err(format!(
+                        "{what}[{i}] ({name}): {} at row {}, column {}: expected finite grey levels",
+                        data[k],
+                        k / width,
+                        k % width
+                    )));
+                }
+                vec![imaging::Frame { path: name.into(), width, height, bit_depth: *bits, data }]
+            }
+        };
+        for frame in read {
+            if let Some(first) = frames.first() {
+                imaging::frames::same_format(first, &frame).map_err(input_error)?;
+            }
+            samples += (frame.width * frame.height) as u64;
+            if samples > imaging::frames::MAX_STACK_SAMPLES {
+                return Err(PyValueError::new_err(format!(
+                    "{what}: more than the {} grey levels a stack may hold (at {})",
+                    imaging::frames::MAX_STACK_SAMPLES,
+                    frame.path.display()
+                )));
+            }
+            frames.push(frame);
+        }
+    }
+    Ok(frames)
+}
+
+/// `asnr sfr --json` of the frames `images` (and `dark`), as JSON text: the same options, the
+/// same analysis (`imaging::sfr`), the same object (`report::measure::sfr_json`). The GIL is
+/// released while it runs.
+#[pyfunction]
+#[pyo3(signature = (images, roi=None, dark=Vec::new(), gamma=None, transfer=None, pixel_pitch_um=None, curved=false, reach=None))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, each one of `asnr sfr`'s options
+fn sfr(
+    py: Python<'_>,
+    images: Vec<FrameInput<'_>>,
+    roi: Option<String>,
+    dark: Vec<FrameInput<'_>>,
+    gamma: Option<f64>,
+    transfer: Option<std::path::PathBuf>,
+    pixel_pitch_um: Option<f64>,
+    curved: bool,
+    reach: Option<f64>,
+) -> PyResult<String> {
+    let options =
+        report::measure::sfr_options(roi.as_deref(), gamma, transfer.as_deref(), pixel_pitch_um, curved, reach)
+            .map_err(input_error)?;
+    if images.is_empty() {
+        return Err(PyValueError::new_err("sfr: no images; expected one or more frames of the edge"));
+    }
+    let frames = frames_from("images", &images)?;
+    let dark = frames_from("dark", &dark)?;
+    let result = py.detach(|| imaging::sfr(&frames, &dark, &options)).map_err(input_error)?;
+    let value = report::measure::sfr_json(&result).map_err(input_error)?;
+    serde_json::to_string(&value).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// `asnr measure --json` of the stack `frames`, as JSON text: the same computation
+/// (`report::measure::measure`). `compare` is a scene evaluated with `camera.pixel_mtf = true`
+/// (a measured edge contains the pixel aperture), as `--compare` does.
+#[pyfunction]
+#[pyo3(signature = (frames, white, black, capped_black=Vec::new(), include_glare=false, edge=Vec::new(), edge_roi=None, mtf_csv=None, pixel_pitch_um=None, compare=None))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, each one of `asnr measure`'s options
+fn measure(
+    py: Python<'_>,
+    frames: Vec<FrameInput<'_>>,
+    white: String,
+    black: String,
+    capped_black: Vec<FrameInput<'_>>,
+    include_glare: bool,
+    edge: Vec<FrameInput<'_>>,
+    edge_roi: Option<String>,
+    mtf_csv: Option<std::path::PathBuf>,
+    pixel_pitch_um: Option<f64>,
+    compare: Option<&Scene>,
+) -> PyResult<String> {
+    let white = imaging::Region::parse("white", &white).map_err(input_error)?;
+    let black = imaging::Region::parse("black", &black).map_err(input_error)?;
+    if !edge.is_empty() && mtf_csv.is_some() {
+        return Err(PyValueError::new_err("measure: an edge and an MTF table: give one of edge and mtf_csv"));
+    }
+    if edge_roi.is_some() && edge.is_empty() {
+        return Err(PyValueError::new_err("measure: edge_roi without edge frames: give edge too"));
+    }
+    let frames = frames_from("frames", &frames)?;
+    if frames.len() < 2 {
+        return Err(input_error(imaging::Error::TooFewFrames { what: "frames", frames: frames.len() }));
+    }
+    let capped = if capped_black.is_empty() { None } else { Some(frames_from("capped_black", &capped_black)?) };
+    let edge = if edge.is_empty() { None } else { Some(frames_from("edge", &edge)?) };
+    let simulated = match compare {
+        None => None,
+        Some(scene) => {
+            let mut with_pixel = scene.clone();
+            with_pixel.overrides.push("camera.pixel_mtf=true".to_owned());
+            Some((scene.source.label().to_owned(), with_pixel.build().map_err(scene_error)?))
+        }
+    };
+    let mtf = match (&edge, &mtf_csv) {
+        (Some(frames), _) => Some(report::measure::MtfFrom::Edge { frames, roi: edge_roi.as_deref() }),
+        (None, Some(path)) => Some(report::measure::MtfFrom::Table(path)),
+        (None, None) => None,
+    };
+    let inputs = report::measure::MeasureInputs {
+        white,
+        black,
+        capped: capped.as_deref(),
+        include_glare,
+        mtf,
+        pixel_pitch_um,
+        compare: simulated.as_ref().map(|(label, scene)| (label.as_str(), scene)),
+    };
+    let report = py.detach(|| report::measure::measure(&frames, &inputs));
+    if let Some(lens) = compare.and_then(|s| s.lens.as_ref()) {
+        lens.raise()?;
+    }
+    let report = report.map_err(input_error)?;
+    serde_json::to_string(&report.json().map_err(input_error)?).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// The ASNR at many points: `columns[k][i]` is key `keys[k]` at point `i`. Returns a dict of
@@ -808,5 +993,7 @@ fn _asnr(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_objective, m)?)?;
     m.add_function(wrap_pyfunction!(objective_value, m)?)?;
     m.add_function(wrap_pyfunction!(objective_value_and_gradient, m)?)?;
+    m.add_function(wrap_pyfunction!(sfr, m)?)?;
+    m.add_function(wrap_pyfunction!(measure, m)?)?;
     Ok(())
 }

@@ -1,13 +1,15 @@
 //! ASNR reports, shared by the `asnr` command line and the Python package so that both print
 //! and return the same numbers: the evaluation's table and JSON object ([`output`]), the MTF
 //! curve's, the value of one scene key that maximizes the ASNR ([`optimize`]), and the
-//! comparison of lens designs under one scene ([`compare`]).
+//! comparison of lens designs under one scene ([`compare`]), and the measurements of camera frames
+//! (the slanted-edge MTF and the measured ASNR, [`measure`]).
 //!
 //! No terminal, plotting or argument-parsing code lives here (the command line draws the
 //! progress bars and plots); long computations report their progress through [`Progress`].
 
 pub mod compare;
 pub mod gradient;
+pub mod measure;
 pub mod metrics;
 pub mod objective;
 pub mod optimize;

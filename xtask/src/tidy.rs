@@ -53,10 +53,11 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     ("metric", Allowed::Only(&["optics", "noise", "radiometry"])),
     ("scene", Allowed::Only(&["metric", "lenses", "optics", "noise", "radiometry"])),
     ("imaging", Allowed::Only(&["metric", "noise", "optics", "radiometry"])),
-    ("report", Allowed::Only(&["metric", "scene", "radiometry"])),
+    // report: also imaging, whose measurements (edge MTF, measured ASNR) it reports for both front ends
+    ("report", Allowed::Only(&["imaging", "metric", "scene", "radiometry"])),
     ("cli", Allowed::Any),
     // the Python extension: libraries only, never the command line (clap, plotters, image, …)
-    ("python", Allowed::Only(&["report", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
+    ("python", Allowed::Only(&["report", "imaging", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
     ("xtask", Allowed::Only(&[])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only
     ("custom-lens", Allowed::Any),

@@ -45,6 +45,7 @@ mod process;
 mod psf_stack;
 mod report;
 mod sections;
+mod sfr;
 mod spectral;
 mod sweep;
 mod tables;

@@ -35,6 +35,7 @@ pub(crate) const SECTIONS: &[Section] = &[
         title: "The FFT path's sampling judged over azimuth",
         run: crate::fft_azimuth::section,
     },
+    Section { name: "sfr", title: crate::sfr::TITLE, run: crate::sfr::section },
 ];
 
 /// The sections `--only` names, or an error listing the known names.

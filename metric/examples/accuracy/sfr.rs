@@ -1,18 +1,20 @@
-//! The slanted-edge e-SFR beside its numpy baseline (`xtask/baselines/numpy_sfr.py`, the same
-//! algorithm): the BENCHMARKS.md row. Run with
-//! `cargo run -p asnr-imaging --example sfr_baseline --release [-- PYTHON]` (PYTHON: an
-//! interpreter with numpy; default `target/baselines-venv/bin/python`, the environment
-//! `cargo xtask accuracy` makes from xtask/baselines/requirements.txt).
+//! The slanted-edge e-SFR (`asnr sfr`, `imaging::sfr`) beside its numpy baseline
+//! (`xtask/baselines/numpy_sfr.py`, the same algorithm): the section "Slanted-edge MTF against
+//! numpy" (`cargo xtask accuracy --only sfr`).
 //!
 //! The edge: the exact image of a step blurred by a Gaussian of σ = 0.7 px and integrated over
 //! square pixels, 5° off vertical, 160 × 160 pixels, levels 0.2 and 1 (imaging/tests/sfr.rs),
 //! whose MTF along the normal is exp(−2π²σ²f²) · sinc(f cos θ) · sinc(f sin θ). Times: the median
-//! of 21 calls after a warm-up, each side in its own process, one thread.
+//! of 21 calls after a warm-up, each side in its own process, one thread. `imaging` is a
+//! dev-dependency of `metric` (the examples may use any project crate), so the e-SFR runs in
+//! process, as the numpy script's does in its own.
 
 use std::f64::consts::PI;
+use std::fmt::Write as _;
 use std::io::Write as _;
-use std::path::PathBuf;
 use std::time::Instant;
+
+use crate::sections::Tools;
 
 fn phi(t: f64) -> f64 {
     0.5 * libm::erfc(-t / 2f64.sqrt())
@@ -22,7 +24,13 @@ fn h2(t: f64) -> f64 {
     (t * t + 1.0) / 2.0 * phi(t) + t / 2.0 * (-t * t / 2.0).exp() / (2.0 * PI).sqrt()
 }
 
-fn main() {
+/// The section's markdown, or None (the reason printed) without a Python with numpy.
+pub(crate) fn section(tools: &Tools) -> Option<String> {
+    let Some(python) = tools.python.as_deref() else {
+        eprintln!("sfr: no Python with numpy (--python PY)");
+        return None;
+    };
+
     let (size, angle, sigma) = (160_usize, 5.0_f64, 0.7);
     let theta = angle.to_radians();
     let (a, c) = (theta.cos(), -theta.sin());
@@ -81,29 +89,49 @@ fn main() {
     bytes.extend(header.as_bytes());
     bytes.extend(image.iter().flat_map(|v| v.to_le_bytes()));
     std::fs::File::create(&npy).and_then(|mut f| f.write_all(&bytes)).expect("the .npy is written");
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let python = std::env::args().nth(1).map_or_else(|| root.join("target/baselines-venv/bin/python"), PathBuf::from);
-    let output = std::process::Command::new(&python)
-        .arg(root.join("xtask/baselines/numpy_sfr.py"))
+    let output = match std::process::Command::new(python)
+        .arg(tools.root.join("xtask/baselines/numpy_sfr.py"))
         .arg(&npy)
         .output()
-        .unwrap_or_else(|e| panic!("{}: {e} (give an interpreter with numpy as the argument)", python.display()));
+    {
+        Ok(output) => output,
+        Err(e) => {
+            eprintln!("sfr: {}: {e}", python.display());
+            return None;
+        }
+    };
     std::fs::remove_dir_all(&dir).ok();
     let text = String::from_utf8_lossy(&output.stdout);
-    assert!(output.status.success(), "numpy baseline failed: {}", String::from_utf8_lossy(&output.stderr));
-    let field = |name: &str| -> f64 {
-        let at = text.find(&format!("\"{name}\": ")).expect("the field") + name.len() + 4;
-        text[at..].split([',', '}']).next().and_then(|v| v.trim().parse().ok()).expect("a number")
+    if !output.status.success() {
+        eprintln!("sfr: the numpy baseline failed: {}", String::from_utf8_lossy(&output.stderr));
+        return None;
+    }
+    let field = |name: &str| -> Option<f64> {
+        let at = text.find(&format!("\"{name}\": "))? + name.len() + 4;
+        text[at..].split([',', '}']).next().and_then(|v| v.trim().parse().ok())
     };
-    let version = std::process::Command::new(&python)
+    let version = std::process::Command::new(python)
         .args(["-c", "import numpy; print(numpy.__version__)"])
         .output()
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
         .unwrap_or_default();
-    println!("Slanted edge, 160 × 160, 5°, σ = 0.7 px, exact: mean MTF to Nyquist {truth:.6}");
-    println!("| implementation | mean MTF | error | MTF(Nyquist) | angle | time |");
-    println!("|---|---|---|---|---|---|");
-    println!(
+    let mut s = String::new();
+    let _ = writeln!(s, "## {TITLE}\n");
+    let _ = writeln!(
+        s,
+        "`cargo xtask accuracy --only sfr` (numpy from the virtual environment `cargo xtask accuracy` makes in\n\
+         target/baselines-venv): the e-SFR of `asnr sfr` (`imaging::sfr`) beside\n\
+         `xtask/baselines/numpy_sfr.py`, the same algorithm in numpy (edge centroids, quarter-pixel ESF\n\
+         bins, windowed LSF, the bins' and the derivative's transfer divided out), on the exact image of a\n\
+         Gaussian-blurred (σ = {sigma} px), pixel-integrated edge {angle}° off vertical, {size} × {size} pixels; exact\n\
+         mean MTF to Nyquist {truth:.6}. Times: medians of 21 calls after a warm-up, one thread; ours\n\
+         includes finding the edge in the frame and the standard errors propagated from the ESF bins,\n\
+         which the numpy script leaves out.\n"
+    );
+    let _ = writeln!(s, "| implementation | mean MTF | error | MTF(Nyquist) | angle | time |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
         "| `imaging::sfr` | {:.6} | {:+.4} % | {:.5} | {:.4}° | {:.2} ms |",
         e.mean_mtf,
         100.0 * (e.mean_mtf / truth - 1.0),
@@ -111,13 +139,18 @@ fn main() {
         e.edge_angle_deg,
         1e3 * ours_time
     );
-    println!(
+    let _ = writeln!(
+        s,
         "| numpy {version} (`xtask/baselines/numpy_sfr.py`) | {:.6} | {:+.4} % | {:.5} | {:.4}° | {:.2} ms |",
-        field("mean_mtf"),
-        100.0 * (field("mean_mtf") / truth - 1.0),
-        field("mtf_nyquist"),
-        field("edge_angle_deg"),
-        1e3 * field("seconds")
+        field("mean_mtf")?,
+        100.0 * (field("mean_mtf")? / truth - 1.0),
+        field("mtf_nyquist")?,
+        field("edge_angle_deg")?,
+        1e3 * field("seconds")?
     );
-    println!("agreement: mean MTF differs by {:.2e}", (e.mean_mtf - field("mean_mtf")).abs());
+    let _ = writeln!(s, "\nAgreement: the two mean MTFs differ by {:.1e}.", (e.mean_mtf - field("mean_mtf")?).abs());
+    Some(s)
 }
+
+/// The section's heading.
+pub(crate) const TITLE: &str = "Slanted-edge MTF against numpy";
