@@ -11,7 +11,6 @@ use crate::sections::Tools;
 /// One lens: the example file and what it is.
 const CASES: &[(&str, &str)] = &[
     ("examples/phase-binary2.toml", "Binary 2 metalens F/2.5, 50 nm band"),
-    ("examples/phase-binary2.toml@f_number=1.2", "the same profile's scene at F/1.2"),
     ("examples/library.toml", "meta-atom library lens"),
 ];
 
