@@ -285,8 +285,13 @@ pub fn run(cli: Cli) -> Result<()> {
             let set = with_tolerance(set, tolerance);
             let read = scene::load_with_warnings(scene.as_deref(), &set)?;
             warn(&read.warnings);
+            let mapping = read.pupil_mapping;
             let (loaded, meter) = (read.scene, read.radiance_meter);
             let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            let mapping = mapping
+                .map(|used| mapping_check(scene.as_deref(), &set, used, result.mean_mtf))
+                .transpose()
+                .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             let metrics = metrics_options
                 .map(|o| metric::metrics(&loaded, &result, &o))
                 .transpose()
@@ -302,9 +307,22 @@ pub fn run(cli: Cli) -> Result<()> {
                 } else {
                     report
                 };
+                let report = match &mapping {
+                    Some(m) => with_field(&report, "pupil_mapping", &m.json())?,
+                    None => report,
+                };
                 outln!("{report}");
+                if let Some(w) = mapping.as_ref().and_then(MappingCheck::warning) {
+                    eprintln!("warning: {w}");
+                }
             } else {
                 out!("{}", output::table(&label, &loaded, &result));
+                if let Some(m) = &mapping {
+                    outln!("{}", m.line());
+                    if let Some(w) = m.warning() {
+                        eprintln!("warning: {w}");
+                    }
+                }
                 if let Some(m) = &metrics {
                     out!("{}", report::metrics::table(m, &result));
                 }
@@ -577,6 +595,86 @@ fn with_explain(report: &str, explain: &str) -> Result<String> {
     let lines: Vec<String> =
         explain.lines().filter(|l| !l.trim().is_empty()).map(serde_json::to_string).collect::<Result<_, _>>()?;
     let out = format!("{body},\n  \"explain\": [\n    {}\n  ]\n}}", lines.join(",\n    "));
+    serde_json::from_str::<serde_json::Value>(&out)?;
+    Ok(out)
+}
+
+/// A flat lens's pupil mapping in a report (`options.pupil_mapping`, docs/physics.md "The flat
+/// lens's exact image"): the map used, and the paraxial map's error estimated by evaluating the
+/// scene again with the other map at tolerance [`MAPPING_CHECK_TOLERANCE`].
+struct MappingCheck {
+    used: scene::PupilMapping,
+    /// the other map's mean MTF
+    other: f64,
+    /// (paraxial − exact)/exact of the mean MTF
+    paraxial_error: f64,
+}
+
+/// The tolerance the other pupil map is evaluated at for the report's comparison.
+const MAPPING_CHECK_TOLERANCE: f64 = 1e-4;
+
+/// The paraxial map's error above which the report warns.
+const MAPPING_WARNING: f64 = 0.01;
+
+fn mapping_check(
+    file: Option<&std::path::Path>,
+    set: &[String],
+    used: scene::PupilMapping,
+    mean_mtf: f64,
+) -> Result<MappingCheck> {
+    // the other map, at the check's tolerance: the two keys replaced where they were set
+    let replaced = |o: &String| {
+        let key = o.split_once('=').and_then(|(k, _)| scene::canonical_key(k));
+        matches!(key.as_deref(), Some("options.pupil_mapping" | "options.tolerance"))
+    };
+    let mut set: Vec<String> = set.iter().filter(|o| !replaced(o)).cloned().collect();
+    set.push(format!("options.pupil_mapping={}", used.other().name()));
+    set.push(format!("options.tolerance={MAPPING_CHECK_TOLERANCE:e}"));
+    let other = metric::evaluate(&scene::load(file, &set)?)?.mean_mtf;
+    let (paraxial, exact) = match used {
+        scene::PupilMapping::Paraxial => (mean_mtf, other),
+        scene::PupilMapping::Exact => (other, mean_mtf),
+    };
+    let paraxial_error = if exact > 0.0 { (paraxial - exact) / exact } else { 0.0 };
+    Ok(MappingCheck { used, other, paraxial_error })
+}
+
+impl MappingCheck {
+    fn line(&self) -> String {
+        format!(
+            "pupil mapping: {} (with the {} map the mean MTF is {:.6}: the paraxial map is {:+.2} % off the flat lens's exact image, evaluated at tolerance {MAPPING_CHECK_TOLERANCE:e}; options.pupil_mapping)",
+            self.used.name(),
+            self.used.other().name(),
+            self.other,
+            100.0 * self.paraxial_error
+        )
+    }
+
+    fn warning(&self) -> Option<String> {
+        (self.used == scene::PupilMapping::Paraxial && self.paraxial_error.abs() > MAPPING_WARNING).then(|| {
+            format!(
+                "the paraxial pupil map is {:+.2} % off the flat lens's exact image in the mean MTF (more than {} %): set options.pupil_mapping = \"exact\"",
+                100.0 * self.paraxial_error,
+                100.0 * MAPPING_WARNING
+            )
+        })
+    }
+
+    fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "used": self.used.name(),
+            "other_mean_mtf": self.other,
+            "paraxial_relative_error": self.paraxial_error,
+            "check_tolerance": MAPPING_CHECK_TOLERANCE,
+        })
+    }
+}
+
+/// `report` (a JSON object) with `key: value` added.
+fn with_field(report: &str, key: &str, value: &serde_json::Value) -> Result<String> {
+    let body = report.trim_end().strip_suffix('}').map(str::trim_end);
+    let Some(body) = body else { anyhow::bail!("internal error: the JSON report is not an object") };
+    let out = format!("{body},\n  {}: {}\n}}", serde_json::to_string(key)?, serde_json::to_string(value)?);
     serde_json::from_str::<serde_json::Value>(&out)?;
     Ok(out)
 }

@@ -303,3 +303,53 @@ fn hopeless_profiles_are_refused_up_front() {
         assert!(v["mean_mtf"].as_f64().is_some_and(|m| m > 0.0 && m < 1.0), "{set}: {v}");
     }
 }
+
+/// `options.pupil_mapping`: the report says which map was used and how far the paraxial map is
+/// from the flat lens's exact image (the other map evaluated at tolerance 1e-4); `"exact"` is
+/// refused, naming the key, where the map does not apply (another family, off axis) and a value
+/// that is neither is named.
+#[test]
+fn pupil_mapping_is_reported_and_refused_where_it_does_not_apply() {
+    let phase = example("phase-binary2.toml");
+    let line = ["--set", "spectrum.shape=line", "--tolerance", "1e-4", "--json"];
+    let run = |mapping: &str| {
+        let mut args = vec!["evaluate", &phase, "--set"];
+        let set = format!("options.pupil_mapping={mapping}");
+        args.push(&set);
+        args.extend(line);
+        json(&args)
+    };
+    let (paraxial, exact) = (run("paraxial"), run("exact"));
+    let used = |r: &serde_json::Value| r["pupil_mapping"]["used"].as_str().unwrap().to_owned();
+    assert_eq!((used(&paraxial), used(&exact)), ("paraxial".to_owned(), "exact".to_owned()));
+    let (p, e) = (paraxial["mean_mtf"].as_f64().unwrap(), exact["mean_mtf"].as_f64().unwrap());
+    // at F/2.5 on a line at λ0 the exact image is below the paraxial one (a cutoff 2 % lower)
+    assert!(e < p, "exact {e}, paraxial {p}");
+    // each report's estimate of the other map agrees with the other run (both at 1e-4)
+    let error = paraxial["pupil_mapping"]["paraxial_relative_error"].as_f64().unwrap();
+    assert!((error - (p - e) / e).abs() < 1e-3, "{error} vs {}", (p - e) / e);
+    assert!((exact["pupil_mapping"]["other_mean_mtf"].as_f64().unwrap() - p).abs() < 1e-3 * p);
+    let err = fails(&["evaluate", "--set", "options.pupil_mapping=exact"]);
+    assert!(err.contains("options.pupil_mapping = \"exact\": expected \"paraxial\" for this lens"), "{err}");
+    let err = fails(&["evaluate", &phase, "--set", "options.pupil_mapping=exact", "--set", "field.x_deg=5"]);
+    assert!(err.contains("options.pupil_mapping = \"exact\": expected \"paraxial\" off axis"), "{err}");
+    let err = fails(&["evaluate", &phase, "--set", "options.pupil_mapping=sphere"]);
+    assert!(err.contains("options.pupil_mapping = \"sphere\": expected \"paraxial\" (the default"), "{err}");
+}
+
+/// A library lens's per-atom phase errors of σ = 3 rad (did not finish in 60 s) and 1.5 rad
+/// (49 s of CPU) leave a first order whose phase and amplitude turn too fast for the radial
+/// engine: refused up front by the library's work budget, naming the key.
+#[test]
+fn library_atom_phase_errors_beyond_the_budget_are_refused_up_front() {
+    for sigma in ["3", "1.5"] {
+        let set = format!("lens.atom_phase_error_rad={sigma}");
+        let err = fails(&["evaluate", &example("library.toml"), "--set", &set]);
+        assert!(
+            err.contains(&format!(
+                "lens.atom_phase_error_rad = {sigma}: expected a profile the radial engine integrates in seconds"
+            )) && err.contains("beyond the 60 allowed"),
+            "{sigma}: {err}"
+        );
+    }
+}

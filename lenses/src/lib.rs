@@ -66,6 +66,7 @@
 
 mod chromatic;
 mod dispersion;
+mod exact;
 mod harmonic;
 mod interleaved;
 mod library;
@@ -79,6 +80,7 @@ mod tabulated;
 
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
+pub use exact::ExactPupilMap;
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use library::{AtomErrors, Library, LibraryLens};

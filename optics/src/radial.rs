@@ -52,6 +52,11 @@ enum Kind {
     Sphere { r2: f64, z: f64 },
     /// A cubic spline through `(ρ_i, value_i)`, zero slope at `ρ = 0`.
     Table(Spline),
+    /// A lens-plane profile read in direction cosines ([`DirectionCosines`]): at `q` (the
+    /// squared direction cosine over its largest, `E = e_max²`) the profile `inner` (1 where
+    /// none) at the lens-plane `q_r = q (1 − E)/(1 − qE)`, divided by `c² = 1 − qE` where
+    /// `obliquity` (the flat lens's amplitude factor).
+    Mapped { inner: Option<Arc<RadialProfile>>, e2: f64, obliquity: bool },
 }
 
 /// A function of the normalized pupil radius `ρ ∈ [0, 1]`: a wavefront term (metres, or radians
@@ -150,6 +155,11 @@ impl RadialProfile {
             // written without the cancellation of √(z² + R²q) − z at small q
             Kind::Sphere { r2, z } => r2 * q / ((z * z + r2 * q).sqrt() + z),
             Kind::Table(s) => s.value(q.max(0.0).sqrt()),
+            Kind::Mapped { inner, e2, obliquity } => {
+                let c2 = 1.0 - q * e2;
+                let v = inner.as_ref().map_or(1.0, |p| p.value(q * (1.0 - e2) / c2));
+                if *obliquity { v / c2 } else { v }
+            }
         }
     }
 
@@ -181,6 +191,7 @@ impl RadialProfile {
     fn knots(&self) -> usize {
         match &self.kind {
             Kind::Table(s) => s.x.len(),
+            Kind::Mapped { inner: Some(p), .. } => p.knots(),
             _ => 0,
         }
     }
@@ -301,6 +312,9 @@ impl Spline {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RadialPupil {
     oblique: Option<Oblique>,
+    /// `Some(k)` for a pupil in direction cosines ([`DirectionCosines`]): the paraxial
+    /// normalized frequency `s = ν λ F#` is `s/k` of this pupil's, `k = √(1 + NA0²)`
+    frequency_scale: Option<f64>,
     amplitude: Option<Arc<RadialProfile>>,
     terms: Vec<(f64, Arc<RadialProfile>)>,
     zernike_noll_m: Vec<(usize, f64)>,
@@ -349,7 +363,15 @@ impl RadialPupil {
                 *acc += c * p;
             }
         }
-        let mut pupil = RadialPupil { oblique: None, amplitude, terms, zernike_noll_m, zernike_even, fit: 0.0 };
+        let mut pupil = RadialPupil {
+            oblique: None,
+            frequency_scale: None,
+            amplitude,
+            terms,
+            zernike_noll_m,
+            zernike_even,
+            fit: 0.0,
+        };
         let even_fit = if pupil.zernike_even.is_empty() {
             0.0
         } else {
@@ -378,6 +400,13 @@ impl RadialPupil {
     pub fn with_oblique(mut self, oblique: Oblique) -> RadialPupil {
         self.oblique = Some(oblique);
         self
+    }
+
+    /// The factor `k` from the paraxial normalized frequency `s = ν λ F#` to this pupil's own
+    /// (1 for a pupil on the lens plane; `√(1 + NA0²)` in direction cosines,
+    /// [`DirectionCosines`]): the OTF at `s` is the autocorrelation at `k s`, zero from `s ≥ 1/k`.
+    pub fn frequency_scale(&self) -> f64 {
+        self.frequency_scale.unwrap_or(1.0)
     }
 
     /// The off-axis part of the OPD (m) at normalized pupil coordinates `(x, y)` (0 on axis).
@@ -484,6 +513,13 @@ impl RadialPupil {
 
     /// This pupil with `zernike_noll_m` added to its Zernike terms.
     pub fn with_zernike(&self, zernike_noll_m: &[(usize, f64)]) -> Result<RadialPupil, Error> {
+        if self.frequency_scale.is_some() {
+            return Err(Error::InvalidParameter {
+                name: "Zernike terms on a pupil in direction cosines",
+                value: zernike_noll_m.len() as f64,
+                expected: "Zernike terms added on the lens plane, before the pupil is mapped",
+            });
+        }
         let mut all = self.zernike_noll_m.clone();
         all.extend_from_slice(zernike_noll_m);
         RadialPupil::new(self.amplitude.clone(), self.terms.clone(), all)
@@ -557,6 +593,120 @@ fn zernike_radial_q(n: usize) -> Vec<f64> {
         out[half - k] = sign * fact(n - k) / (fact(k) * fact(half - k) * fact(half - k)) * norm;
     }
     out
+}
+
+/// The flat lens's exact pupil mapping (docs/physics.md, "The flat lens's exact image"): a lens
+/// whose field `U(r) e^{ikW(r)}` lives on its plane images, on axis through the Rayleigh–Sommerfeld
+/// integral in the Fraunhofer approximation about the image point, the Fourier transform in the
+/// direction cosines `e = r/√(r² + z²)` of `P̃(e) = U(r(e)) e^{ikW(r(e))}/c²`, `c² = 1 − e²` (the
+/// Jacobian `z²/c⁴` times the obliquity `c` and the `c/z` of the distance). The OTF is the
+/// normalized autocorrelation of `P̃` at the lag `λν`, so the pupil's radius is
+/// `e_max = R/√(R² + z²)`, not the paraxial `NA0 = R/z`.
+///
+/// In the pupil's own normalized variable `q = e²/e_max²` the lens-plane `q_r = (r/R)²` is
+/// `q (1 − E)/(1 − qE)` with `E = e_max²`, and the cutoff `2 e_max/λ` is `1/k` of the paraxial
+/// one, `k = √(1 + NA0²)`. [`map`](DirectionCosines::map) rewrites a lens-plane
+/// [`RadialPupil`] so: every profile read through the map, the amplitude divided by `c²`, the
+/// frequency scaled by `k`; the radial engine then runs unchanged (the map is radial on axis).
+/// The mapped profiles are kept by the profile they map (a lens's profiles are shared by every
+/// wavelength's pupil), so that each is fitted once.
+#[derive(Debug)]
+pub struct DirectionCosines {
+    e2: f64,
+    scale: f64,
+    obliquity: Arc<RadialProfile>,
+    cache: std::sync::Mutex<Vec<(Arc<RadialProfile>, Arc<RadialProfile>)>>,
+}
+
+/// Mapped profiles a [`DirectionCosines`] keeps (a lens has a few; a library's per-wavelength
+/// amplitudes are new each time and pass through).
+const MAPPED_CACHE: usize = 32;
+
+impl DirectionCosines {
+    /// The map of a lens of paraxial numerical aperture `na0 = R/z` (aperture radius over the
+    /// distance to the detector; finite, > 0).
+    pub fn new(na0: f64) -> Result<DirectionCosines, Error> {
+        if !(na0.is_finite() && na0 > 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "paraxial numerical aperture",
+                value: na0,
+                expected: "finite and > 0",
+            });
+        }
+        let e2 = na0 * na0 / (1.0 + na0 * na0);
+        let obliquity = Arc::new(RadialProfile::finish(Kind::Mapped { inner: None, e2, obliquity: true }));
+        Ok(DirectionCosines { e2, scale: (1.0 + na0 * na0).sqrt(), obliquity, cache: Default::default() })
+    }
+
+    /// `k = √(1 + NA0²)`: the exact pupil's cutoff is `1/k` of the paraxial one.
+    pub fn frequency_scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// `e_max² = NA0²/(1 + NA0²)`, the squared sine of the rim ray's angle.
+    pub fn rim_sine_squared(&self) -> f64 {
+        self.e2
+    }
+
+    /// A lens-plane profile (a wavefront term) read through the map, at the same ray (not
+    /// kept: a new profile is fitted when first sampled).
+    pub fn profile(&self, profile: RadialProfile) -> RadialProfile {
+        RadialProfile::finish(Kind::Mapped { inner: Some(Arc::new(profile)), e2: self.e2, obliquity: false })
+    }
+
+    fn mapped(&self, profile: &Arc<RadialProfile>, obliquity: bool) -> Arc<RadialProfile> {
+        let make =
+            || Arc::new(RadialProfile::finish(Kind::Mapped { inner: Some(profile.clone()), e2: self.e2, obliquity }));
+        let Ok(mut cache) = self.cache.lock() else { return make() };
+        if let Some((_, m)) = cache.iter().find(|(p, m)| {
+            Arc::ptr_eq(p, profile) && matches!(m.kind, Kind::Mapped { obliquity: o, .. } if o == obliquity)
+        }) {
+            return m.clone();
+        }
+        let m = make();
+        if cache.len() >= MAPPED_CACHE {
+            cache.remove(0);
+        }
+        cache.push((profile.clone(), m.clone()));
+        m
+    }
+
+    /// `pupil` (on the lens plane, with an order's own defocus `w020_m` beyond the pupil's fit,
+    /// m at the rim in `q_r`) in direction cosines: its terms, its `m = 0` Zernike terms and the
+    /// defocus read through the map, its amplitude divided by `c²`. Refused for a pupil seen
+    /// off axis or with Zernike terms of `m ≠ 0` (the map is radial on axis only).
+    pub fn map(&self, pupil: &RadialPupil, w020_m: f64) -> Result<RadialPupil, Error> {
+        if pupil.frequency_scale.is_some() {
+            return Ok(pupil.clone());
+        }
+        if !pupil.is_symmetric() {
+            return Err(Error::InvalidParameter {
+                name: "pupil mapped to direction cosines",
+                value: pupil.asymmetric_zernike().len() as f64,
+                expected: "a radially symmetric pupil on axis (the exact map is radial on axis only)",
+            });
+        }
+        let amplitude = Some(match &pupil.amplitude {
+            Some(a) => self.mapped(a, true),
+            None => self.obliquity.clone(),
+        });
+        let mut terms: Vec<(f64, Arc<RadialProfile>)> =
+            pupil.terms.iter().map(|(c, p)| (*c, self.mapped(p, false))).collect();
+        let mut even = pupil.zernike_even.clone();
+        if w020_m != 0.0 {
+            if even.len() < 2 {
+                even.resize(2, 0.0);
+            }
+            even[1] += w020_m;
+        }
+        if even.iter().any(|&c| c != 0.0) {
+            let poly = Arc::new(RadialProfile::even_polynomial(even)?);
+            terms.push((1.0, self.mapped(&poly, false)));
+        }
+        let mut out = RadialPupil::new(amplitude, terms, vec![])?;
+        out.frequency_scale = Some(self.scale);
+        Ok(out)
+    }
 }
 
 /// A radial pupil prepared for one order at one wavelength: its OPD's derivative bounds, which
@@ -888,9 +1038,11 @@ impl RadialOrder {
         &self.pupil
     }
 
-    /// The real OTF at `s = ν λ F#` (normalized frequency, `0 ≤ s`; 0 from `s ≥ 1`), within
+    /// The real OTF at `s = ν λ F#` (normalized frequency, `0 ≤ s`; 0 from `s ≥ 1/k`, `k` the
+    /// pupil's [`frequency_scale`](RadialPupil::frequency_scale)), within
     /// about `accuracy` (absolute) of the autocorrelation integral (module docs).
     pub fn otf(&self, s: f64, accuracy: f64) -> f64 {
+        let s = s * self.pupil.frequency_scale();
         if s >= 1.0 {
             return 0.0;
         }
@@ -924,6 +1076,7 @@ impl RadialOrder {
         derivatives: &mut [f64],
     ) -> f64 {
         derivatives.iter_mut().for_each(|d| *d = 0.0);
+        let s = s * self.pupil.frequency_scale();
         if s >= 1.0 {
             return 0.0;
         }

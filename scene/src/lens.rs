@@ -968,6 +968,16 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             let l0 = design_wavelength(o)?;
             let (lens, names) = library_lens(l, o, f_number, f0_m, l0)?;
             let lens = library_fabrication(l, o, lens, &names, &mut info)?;
+            // the first order's pupil (a polynomial amplitude and phase in q, three terms) under
+            // the radial engine's work budget: the atoms' phase errors or a layout that does not
+            // follow the design phase leave a first order whose phase and amplitude turn fast
+            let sigma = l.atom_phase_error_rad.unwrap_or(0.0);
+            let (key, value) = if sigma > 0.0 {
+                ("lens.atom_phase_error_rad", num(sigma))
+            } else {
+                ("lens.layout", quoted(l.layout.as_deref().unwrap_or_default()))
+            };
+            radial_work_within(&lens, l0, 3, o, key, &value, MAX_LIBRARY_WORK)?;
             info.design_wavelength_m = Some(l0);
             info.notes.push(format!(
                 "at λ0: τ1 = {:.4}, T = {:.4} (first order from the zones' Fourier coefficients; the other orders are background)",
@@ -1647,6 +1657,14 @@ const RADIAL_TABLE_TERMS: usize = 4;
 /// 40 s. 600 units: about 10 s at most.
 pub(crate) const MAX_RADIAL_WORK: f64 = 600.0;
 
+/// The [`radial_work`] budget of a meta-atom library lens's first order, whose unit costs about
+/// ten times a phase profile's (its pupil is refitted at every wavelength of the spectral rule,
+/// and its amplitude turns too). Release timings on examples/library.toml over its 50 nm band,
+/// CPU time of `asnr evaluate` (which evaluates a second time for the pupil-mapping check):
+/// `lens.atom_phase_error_rad` 0 (1.1 units) 0.25 s, 1 (25 units) 5.7 s, 1.5 (237 units) 49 s;
+/// 2 is 2450 units and 3 is 1.06e4. 60 units stand for about 10 s.
+pub(crate) const MAX_LIBRARY_WORK: f64 = 60.0;
+
 /// Refuses, before any rule is built, a lens whose radial pupil would cost the radial engine
 /// more than [`MAX_RADIAL_WORK`]: its autocorrelation integral takes Gauss–Legendre panels of 16
 /// points turning by at most 16 rad each along both of its variables (`optics::radial`, module
@@ -1664,6 +1682,19 @@ fn radial_work(
     key: &str,
     value: &str,
 ) -> Result<(), Error> {
+    radial_work_within(lens, probe_m, terms, o, key, value, MAX_RADIAL_WORK)
+}
+
+/// [`radial_work`] against `limit` units.
+fn radial_work_within(
+    lens: &dyn LensModel,
+    probe_m: f64,
+    terms: usize,
+    o: &Origins,
+    key: &str,
+    value: &str,
+    limit: f64,
+) -> Result<(), Error> {
     for order in lens.orders(probe_m, optics::Field::ON_AXIS) {
         let optics::Pupil::Radial(pupil) = &order.pupil else { continue };
         const N: usize = 1024;
@@ -1671,13 +1702,21 @@ fn radial_work(
         let slopes = w.windows(2).map(|p| (p[1] - p[0]) * N as f64);
         let (lo, hi) = slopes.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
         let phase = std::f64::consts::TAU / probe_m * (hi - lo);
+        // an amplitude's relative slope turns the integrand too: the engine counts
+        // 4 max|A'(q)|/rms(A) radians for it (`optics::radial`, `amplitude_turns`)
+        let a: Vec<f64> = (0..=N).map(|i| pupil.amplitude(i as f64 / N as f64)).collect();
+        let a_slope = a.windows(2).map(|p| ((p[1] - p[0]) * N as f64).abs()).fold(0.0, f64::max);
+        let a_rms = (a.iter().map(|v| v * v).sum::<f64>() / a.len() as f64).sqrt();
+        let turns = if a_slope == 0.0 { 0.0 } else { 4.0 * a_slope / a_rms.max(f64::MIN_POSITIVE) };
+        let phase = phase + turns;
         let work = (1.0 + phase / 16.0).powi(2) * (terms as f64 / 16.0).max(1.0);
-        if work.is_nan() || work > MAX_RADIAL_WORK {
+        if work.is_nan() || work > limit {
             return Err(o.bad(
                 key,
                 value,
                 &format!(
-                    "a profile the radial engine integrates in seconds: the slope of its path beyond the best-fit defocus turns the phase by {} rad at {} nm across the pupil, with {terms} terms, about {} units of work (1 + phase/16)² max(1, terms/16), beyond the {MAX_RADIAL_WORK} allowed (about 10 s; the work grows as the square of that phase, and with the terms beyond 16); reduce {key}",
+                    "a profile the radial engine integrates in seconds: the slope of its path beyond the best-fit defocus{} turns the phase by {} rad at {} nm across the pupil, with {terms} terms, about {} units of work (1 + phase/16)² max(1, terms/16), beyond the {limit} allowed (about 10 s; the work grows as the square of that phase, and with the terms beyond 16); reduce {key}",
+                    if turns > 1.0 { format!(" and its amplitude's relative slope ({turns:.3e} rad)") } else { String::new() },
                     if phase.is_finite() { format!("{phase:.3e}") } else { "more than 1.8e308".to_owned() },
                     num(optics::round_for_display(probe_m * 1e9)),
                     if work.is_finite() { format!("{work:.2e}") } else { "more than 1.8e308".to_owned() },

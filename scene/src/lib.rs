@@ -71,8 +71,8 @@ pub use error::{Error, SHOWN, Warning};
 pub use lens::PRESETS;
 pub use load::{
     EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, Loaded, MAX_EXTENDED_LIST, PAPER_SCENE, PIXEL_PITCH_PLAUSIBLE_UM,
-    Resolved, Source, WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, canonical_key, check_overrides, load,
-    load_with_warnings, read, resolved_toml,
+    PupilMapping, Resolved, Source, WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, canonical_key,
+    check_overrides, load, load_with_warnings, read, resolved_toml,
 };
 pub use tables::{Axis, CsvLines, FREQUENCY, MAX_FILE_BYTES, WAVELENGTH, read_pairs, read_table};
 

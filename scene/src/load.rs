@@ -169,6 +169,7 @@ pub(crate) struct RawOptions {
     pub glare: Option<String>,
     pub tolerance: Option<f64>,
     pub spectral_rule: Option<String>,
+    pub pupil_mapping: Option<String>,
 }
 
 /// Where a scene came from, and which keys `--set` overrode: every message names its origin.
@@ -186,6 +187,9 @@ pub(crate) struct Origins {
     pub zemax: Option<crate::lens::ZemaxSource>,
     /// The steps of a radiance-meter source (SI eq. S1–S6), kept for reports.
     meter: RefCell<Option<radiometry::RadianceMeterSteps>>,
+    /// The pupil mapping a phase or library lens on axis was imaged with (`options.pupil_mapping`),
+    /// `None` for a lens the option does not apply to.
+    mapping: std::cell::Cell<Option<PupilMapping>>,
     /// The tables its source's scenes have read.
     tables: TableCache,
 }
@@ -239,6 +243,7 @@ impl Origins {
             preset: None,
             zemax: None,
             meter: RefCell::new(None),
+            mapping: std::cell::Cell::new(None),
             tables: self.tables.clone(),
         }
     }
@@ -568,6 +573,37 @@ pub struct Loaded {
     /// With `[source] kind = "radiance_meter"`: every step from the meter's readings to the
     /// target's spectral radiance (SI eq. S1–S6), for reports (`asnr evaluate --explain`).
     pub radiance_meter: Option<radiometry::RadianceMeterSteps>,
+    /// For a lens given by its phase profile or meta-atom library, imaged on axis: the pupil
+    /// mapping used (`options.pupil_mapping`); `None` where the option does not apply.
+    pub pupil_mapping: Option<PupilMapping>,
+}
+
+/// How a flat lens's pupil maps to the image's spatial frequencies (`options.pupil_mapping`,
+/// docs/physics.md "The flat lens's exact image").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PupilMapping {
+    /// The paraxial map `sin θ ≈ r/f0` (the paper's and Zemax's FFT-MTF convention; default).
+    Paraxial,
+    /// The flat lens's exact map `sin θ = r/√(r² + f0²)` with its obliquity and distance factors.
+    Exact,
+}
+
+impl PupilMapping {
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            PupilMapping::Paraxial => "paraxial",
+            PupilMapping::Exact => "exact",
+        }
+    }
+
+    /// The other mapping.
+    pub fn other(self) -> PupilMapping {
+        match self {
+            PupilMapping::Paraxial => PupilMapping::Exact,
+            PupilMapping::Exact => PupilMapping::Paraxial,
+        }
+    }
 }
 
 /// Reads a scene file (None = the embedded paper scene).
@@ -614,7 +650,9 @@ fn build_checked(raw: &RawScene, origins: &Origins) -> Result<Loaded, Error> {
     let built = build(raw, origins);
     let warnings = origins.warnings.take();
     match built {
-        Ok(scene) => Ok(Loaded { scene, warnings, radiance_meter: origins.meter.take() }),
+        Ok(scene) => {
+            Ok(Loaded { scene, warnings, radiance_meter: origins.meter.take(), pupil_mapping: origins.mapping.get() })
+        }
         Err(error) if warnings.is_empty() => Err(error),
         Err(error) => Err(Error::WithWarnings { error: Box::new(error), warnings }),
     }
@@ -712,6 +750,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
         preset: None,
         zemax: None,
         meter: RefCell::new(None),
+        mapping: std::cell::Cell::new(None),
         tables: source.tables.clone(),
     };
     Ok((table, origins))
@@ -969,6 +1008,7 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene, Error> {
 pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::lens::LensInfo), Error> {
     // [lens]
     let crate::lens::BuiltLens { lens, info } = crate::lens::build(&raw.lens, o)?;
+    let lens = pupil_mapping(raw, lens, &info, o)?;
 
     // [source] × [spectrum]
     let radiance = source(&raw.source, o)?;
@@ -1079,6 +1119,60 @@ pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::
     };
     let scene = relative_illumination(&raw.lens, scene, o)?;
     Ok((scene, info))
+}
+
+/// What `options.pupil_mapping` accepts.
+const PUPIL_MAPPING: &str = "\"paraxial\" (the default: sin θ ≈ r/f0, the paper's and Zemax's FFT-MTF convention) or \"exact\" (the flat lens's sin θ = r/√(r² + f0²) with its obliquity, on axis, for a lens given by its radial phase profile or meta-atom library)";
+
+/// `options.pupil_mapping` (docs/physics.md, "The flat lens's exact image"): the lens imaged
+/// through the flat lens's exact map where asked ([`lenses::ExactPupilMap`]), and the mapping
+/// recorded for the report where the option applies (a radial phase profile or a library on axis).
+/// `"exact"` is refused, naming the key, for other families, 2-D phase maps and layouts, and
+/// off-axis field points (the map is radial on axis only).
+fn pupil_mapping(
+    raw: &RawScene,
+    lens: std::sync::Arc<dyn optics::LensModel>,
+    info: &crate::lens::LensInfo,
+    o: &Origins,
+) -> Result<std::sync::Arc<dyn optics::LensModel>, Error> {
+    let key = "options.pupil_mapping";
+    let given = raw.options.as_ref().and_then(|p| p.pupil_mapping.as_deref());
+    let mapping = match given {
+        None | Some("paraxial") => PupilMapping::Paraxial,
+        Some("exact") => PupilMapping::Exact,
+        Some(other) => return Err(o.bad(key, quoted(other), PUPIL_MAPPING)),
+    };
+    let radial = matches!(raw.lens.model.as_deref(), Some("phase" | "library")) && raw.lens.phase_map.is_none();
+    let on_axis = |x: Option<f64>, y: Option<f64>| x.unwrap_or(0.0) == 0.0 && y.unwrap_or(0.0) == 0.0;
+    let axial = match (&raw.field, &raw.fields) {
+        (Some(f), _) => on_axis(f.x_deg, f.y_deg),
+        (None, Some(list)) => list.iter().all(|f| on_axis(f.x_deg, f.y_deg)),
+        (None, None) => true,
+    };
+    if mapping == PupilMapping::Paraxial {
+        if radial && axial {
+            o.mapping.set(Some(mapping));
+        }
+        return Ok(lens);
+    }
+    if !radial {
+        return Err(o.bad(
+            key,
+            quoted("exact"),
+            "\"paraxial\" for this lens: \"exact\" maps the pupil of a lens given by its radial phase profile (lens.binary2, lens.phase_csv, lens.phase_spline_rad) or a meta-atom library's radial layout; 2-D phase maps and the other families are imaged paraxially",
+        ));
+    }
+    if !axial {
+        return Err(o.bad(
+            key,
+            quoted("exact"),
+            "\"paraxial\" off axis: the exact map is radial on axis only (set the field to 0°, or use the paraxial map)",
+        ));
+    }
+    let probe = info.design_wavelength_m.unwrap_or(550e-9);
+    let mapped = lenses::ExactPupilMap::new(lens, probe).map_err(|e| o.domain(key, "[options]", e))?;
+    o.mapping.set(Some(mapping));
+    Ok(std::sync::Arc::new(mapped))
 }
 
 /// The largest field angle, degrees, of a lens whose orders carry the oblique wave

@@ -457,6 +457,7 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
         optics::SpectralRule::Panels => "panels",
     };
     out.string("spectral_rule", opt.and_then(|p| p.spectral_rule.as_deref()).unwrap_or(rule));
+    out.string("pupil_mapping", opt.and_then(|p| p.pupil_mapping.as_deref()).unwrap_or("paraxial"));
 
     match (&raw.field, &raw.fields) {
         (_, Some(list)) => {

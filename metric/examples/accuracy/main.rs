@@ -36,6 +36,7 @@
 
 mod design;
 mod fft_azimuth;
+mod exact_map;
 mod iris;
 mod kernels;
 mod map;

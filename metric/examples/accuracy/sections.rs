@@ -36,6 +36,11 @@ pub(crate) const SECTIONS: &[Section] = &[
         run: crate::fft_azimuth::section,
     },
     Section { name: "sfr", title: crate::sfr::TITLE, run: crate::sfr::section },
+    Section {
+        name: "exact",
+        title: "The flat lens's exact image: the cost of `pupil_mapping = \"exact\"`",
+        run: crate::exact_map::section,
+    },
 ];
 
 /// The sections `--only` names, or an error listing the known names.

@@ -576,6 +576,7 @@ fn radial_field(
     let h = 2.0 / n as f64;
     let k = 2.0 * PI / lambda;
     let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let scale2 = radial.frequency_scale().powi(2);
     let mut field = vec![Complex64::new(0.0, 0.0); n * n];
     let mut weight = 0.0;
     for j in 0..n {
@@ -586,7 +587,13 @@ fn radial_field(
                 continue;
             }
             let x = -1.0 + (i as f64 + 0.5) * h;
-            let q = (x * x + y * y).min(1.0);
+            // a pupil in direction cosines fills the circle of radius 1/k of the paraxial one
+            // (its rim pixel by pixel, not by area fraction)
+            let q = (x * x + y * y) * scale2;
+            if scale2 > 1.0 && q > 1.0 {
+                continue;
+            }
+            let q = q.min(1.0);
             let a = radial.amplitude(q);
             weight += area[idx] * a * a;
             let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
