@@ -995,8 +995,7 @@ impl RadialOrder {
         directions: &[RadialProfile],
         derivatives: &mut [f64],
     ) -> f64 {
-        let rule16 = crate::quad::rule();
-        let lanes = rule16.len() * v_nodes.len();
+        let lanes = crate::quad::rule().len() * v_nodes.len();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         let (mut q, mut weight) = (vec![0.0; 2 * lanes], vec![0.0; lanes]);
@@ -1009,23 +1008,9 @@ impl RadialOrder {
             })
             .try_fold(1, |n, d| d.map(|d| n.max(d)));
         let mut moments = degree.filter(|_| proxy.is_some()).map(|n| vec![wide::f64x8::ZERO; n]);
-        let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
         let mut total = 0.0;
-        let ht = 0.5 * t_end / t_panels as f64;
         for pt in 0..t_panels {
-            let tc = (2 * pt + 1) as f64 * ht;
-            for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
-                *ti = tc + ht * xt;
-            }
-            for i in 0..16 {
-                (sin_t[i], cos_t[i]) = t[i].sin_cos();
-            }
-            let mut scale = [0.0; 16];
-            for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
-                *c = ht * wt * st * st;
-            }
-            fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, &mut q, &mut weight, lanes);
-            self.amplitudes(&q, &mut weight);
+            self.panel_lanes(s, t_end, t_panels, pt, v_nodes, &mut q, &mut weight);
             // even polynomials with the proxy: the phase as the value's lanes, and the moments
             // `Σ_l −w sin(Δφ) (q₁^m − q₂^m)` once for all the directions
             let start = match (proxy, moments.as_mut()) {
@@ -1077,6 +1062,44 @@ impl RadialOrder {
         total
     }
 
+    /// The lanes of t panel `pt` of the rule ([`rule`](Self::rule): `t_panels` 16-point panels
+    /// on `[0, t_end]` times `v_nodes`), the one node builder of the value ([`direct`](Self::direct))
+    /// and of its derivatives ([`direct_derivatives`](Self::direct_derivatives)): each node's
+    /// `q₁` and `q₂` into `q` (first and second half) and its weight (the t and v rule's, `sin²t`
+    /// and the field amplitudes) into `weight`.
+    #[allow(clippy::too_many_arguments)]
+    fn panel_lanes(
+        &self,
+        s: f64,
+        t_end: f64,
+        t_panels: usize,
+        pt: usize,
+        v_nodes: &[(f64, f64)],
+        q: &mut [f64],
+        weight: &mut [f64],
+    ) {
+        let rule16 = crate::quad::rule();
+        let lanes = weight.len();
+        let ht = 0.5 * t_end / t_panels as f64;
+        let tc = (2 * pt + 1) as f64 * ht;
+        // the 16 nodes' t, and their sines and cosines eight at a time
+        let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+        for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
+            *ti = tc + ht * xt;
+        }
+        for half in 0..2 {
+            let (sin, cos) = load8(&t, 8 * half).sin_cos();
+            sin_t[8 * half..8 * half + 8].copy_from_slice(&sin.to_array());
+            cos_t[8 * half..8 * half + 8].copy_from_slice(&cos.to_array());
+        }
+        let mut scale = [0.0; 16];
+        for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
+            *c = ht * wt * st * st;
+        }
+        fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, q, weight, lanes);
+        self.amplitudes(q, weight);
+    }
+
     /// The field amplitudes at every lane into `weight` (`q₁` in the first half of `q`, `q₂` in
     /// the second, `weight` as long as a half), where the pupil has an amplitude profile.
     fn amplitudes(&self, q: &[f64], weight: &mut [f64]) {
@@ -1094,8 +1117,7 @@ impl RadialOrder {
     /// defocus is `proxy` (a cut of the order's, [`proxy_cosine_sum`]: phase and cosine fused
     /// eight lanes at a time), or without one the profile's own terms, then [`cosine_sum`].
     fn direct(&self, s: f64, t_end: f64, t_panels: usize, v_nodes: &[(f64, f64)], proxy: Option<&[f64]>) -> f64 {
-        let rule16 = crate::quad::rule();
-        let lanes = rule16.len() * v_nodes.len();
+        let lanes = crate::quad::rule().len() * v_nodes.len();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         // the lanes' buffers, kept by the thread from one OTF to the next (no allocation per OTF)
@@ -1108,26 +1130,9 @@ impl RadialOrder {
             if proxy.is_none() {
                 phase.resize(2 * lanes, 0.0);
             }
-            // the 16 nodes' t, and their sines and cosines eight at a time
-            let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
             let mut total = 0.0;
-            let ht = 0.5 * t_end / t_panels as f64;
             for pt in 0..t_panels {
-                let tc = (2 * pt + 1) as f64 * ht;
-                for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
-                    *ti = tc + ht * xt;
-                }
-                for half in 0..2 {
-                    let (sin, cos) = load8(&t, 8 * half).sin_cos();
-                    sin_t[8 * half..8 * half + 8].copy_from_slice(&sin.to_array());
-                    cos_t[8 * half..8 * half + 8].copy_from_slice(&cos.to_array());
-                }
-                let mut scale = [0.0; 16];
-                for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
-                    *c = ht * wt * st * st;
-                }
-                fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, q, weight, lanes);
-                self.amplitudes(q, weight);
+                self.panel_lanes(s, t_end, t_panels, pt, v_nodes, q, weight);
                 total += match proxy {
                     Some(c) => proxy_cosine_sum(c, a, &q[..lanes], &q[lanes..], weight),
                     None => {

@@ -35,6 +35,7 @@
 //! existing `OUT_DIR/BENCHMARKS.md`.
 
 mod design;
+mod gradients;
 mod iris;
 mod kernels;
 mod map;

@@ -28,7 +28,11 @@ pub(crate) struct Section {
 }
 
 /// Every stand-alone section, in the order a full run appends them.
-pub(crate) const SECTIONS: &[Section] = &[];
+pub(crate) const SECTIONS: &[Section] = &[Section {
+    name: "gradients",
+    title: "Gradients: the value and its gradient side by side",
+    run: crate::gradients::section,
+}];
 
 /// The sections `--only` names, or an error listing the known names.
 pub(crate) fn select(names: &str) -> Result<Vec<&'static Section>, String> {
