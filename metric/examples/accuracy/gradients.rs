@@ -123,11 +123,16 @@ fn radial(repeats: usize) -> Option<(f64, Vec<(usize, f64)>)> {
 /// The section's markdown.
 pub(crate) fn section(tools: &Tools) -> Option<String> {
     let repeats = if tools.quick { 5 } else { 21 };
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map_or_else(|| "unknown".to_owned(), |s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+
     let rows: Vec<Row> = [4, 12, 32].iter().filter_map(|&k| measure(&tools.root, k, repeats)).collect();
     if rows.is_empty() {
         eprintln!("gradients: examples/phase-binary2.toml did not evaluate");
         return None;
     }
+    let profile = if cfg!(debug_assertions) { "Dev profile" } else { "Release" };
     let mut md = String::from("## Gradients: the value and its gradient side by side\n\n");
     md.push_str(&format!(
         "`cargo xtask accuracy --only gradients` (metric/examples/accuracy/gradients.rs): the Binary 2 metalens of \
@@ -136,8 +141,8 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
          (`metric::evaluate`); the gradient is the scene built, evaluated and differentiated with respect to all K \
          coefficients (`metric::gradient`), where the radial engine returns each OTF with its K derivatives on the \
          spectral level the value accepts and the frequency rule's accepted panels integrate them with the value's \
-         weights, in the same pass (docs/physics.md, \"Gradients\"). Release, medians of {repeats} runs in one \
-         process.\n\n"
+         weights, in the same pass (docs/physics.md, \"Gradients\"). {profile}, medians of {repeats} runs in one \
+         process, load average {load} at the start.\n\n"
     ));
     md.push_str("| K | ASNR | ‖∂ASNR/∂A‖ | value | value and gradient | ratio |\n|---|---|---|---|---|---|\n");
     for r in &rows {
