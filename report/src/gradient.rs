@@ -564,7 +564,7 @@ mod tests {
         let coefficients: Vec<String> =
             [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]
                 .into_iter()
-                .chain((4..32).map(|j| if j % 2 == 0 { 2e-3 } else { -2e-3 } / j as f64))
+                .chain((4..32usize).map(|j| if j.is_multiple_of(2) { 2e-3 } else { -2e-3 } / j as f64))
                 .map(|c| format!("{c:e}"))
                 .collect();
         let overrides = vec![format!("lens.binary2=[{}]", coefficients.join(", "))];

@@ -23,7 +23,7 @@ const HYPERBOLIC: [f64; 4] = [-527.7875658030853, 5.277875658030851, -0.10555751
 /// The coefficients past the fourth: small, alternating (radians at the normalization radius),
 /// so that every term moves the wavefront a little and none dominates.
 fn extra(j: usize) -> f64 {
-    let sign = if j % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = if j.is_multiple_of(2) { 1.0 } else { -1.0 };
     sign * 2e-3 / (j as f64)
 }
 
