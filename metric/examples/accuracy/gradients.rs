@@ -35,13 +35,18 @@ fn coefficients(k: usize) -> String {
 
 /// The median of `repeats` timings of `f`, seconds.
 fn median_seconds(repeats: usize, mut f: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..repeats)
-        .map(|_| {
-            let start = Instant::now();
-            f();
-            start.elapsed().as_secs_f64()
-        })
-        .collect();
+    let mut times: Vec<f64> = (0..repeats).map(|_| seconds(&mut f)).collect();
+    median(&mut times)
+}
+
+/// One run of `f`, seconds.
+fn seconds(f: &mut impl FnMut()) -> f64 {
+    let start = Instant::now();
+    f();
+    start.elapsed().as_secs_f64()
+}
+
+fn median(times: &mut [f64]) -> f64 {
     times.sort_by(f64::total_cmp);
     times[times.len() / 2]
 }
@@ -51,6 +56,9 @@ struct Row {
     k: usize,
     value: f64,
     both: f64,
+    /// the fastest runs: on a loaded machine, the nearest to the work itself
+    value_min: f64,
+    both_min: f64,
     asnr: f64,
     norm: f64,
 }
@@ -62,16 +70,23 @@ fn measure(root: &Path, k: usize, repeats: usize) -> Option<Row> {
     // one run of each first, so that neither pays for the per-thread caches the other reuses
     let built = scene::build_from(&source, &overrides).ok()?;
     let first = metric::gradient(&built, &parameters).ok()?;
-    let value = median_seconds(repeats, || {
-        let built = scene::build_from(&source, &overrides).unwrap();
-        std::hint::black_box(metric::evaluate(&built).unwrap());
-    });
-    let both = median_seconds(repeats, || {
-        let built = scene::build_from(&source, &overrides).unwrap();
-        std::hint::black_box(metric::gradient(&built, &parameters).unwrap());
-    });
+    // the value and the gradient run alternately, so that a change of the machine's load
+    // falls on both
+    let (mut values, mut boths) = (Vec::with_capacity(repeats), Vec::with_capacity(repeats));
+    for _ in 0..repeats {
+        values.push(seconds(&mut || {
+            let built = scene::build_from(&source, &overrides).unwrap();
+            std::hint::black_box(metric::evaluate(&built).unwrap());
+        }));
+        boths.push(seconds(&mut || {
+            let built = scene::build_from(&source, &overrides).unwrap();
+            std::hint::black_box(metric::gradient(&built, &parameters).unwrap());
+        }));
+    }
+    let (value, both) = (median(&mut values), median(&mut boths));
+    let (value_min, both_min) = (values[0], boths[0]);
     let norm = first.asnr.iter().map(|g| g * g).sum::<f64>().sqrt();
-    Some(Row { k, value, both, asnr: first.evaluation.asnr, norm })
+    Some(Row { k, value, both, value_min, both_min, asnr: first.evaluation.asnr, norm })
 }
 
 /// The radial engine at 800 nm: the OTF alone and with K derivatives on 200 frequencies to
@@ -122,7 +137,7 @@ fn radial(repeats: usize) -> Option<(f64, Vec<(usize, f64)>)> {
 
 /// The section's markdown.
 pub(crate) fn section(tools: &Tools) -> Option<String> {
-    let repeats = if tools.quick { 5 } else { 21 };
+    let repeats = if tools.quick { 11 } else { 31 };
     let load = std::fs::read_to_string("/proc/loadavg")
         .ok()
         .map_or_else(|| "unknown".to_owned(), |s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
@@ -142,26 +157,35 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
          coefficients (`metric::gradient`), where the radial engine returns each OTF with its K derivatives on the \
          spectral level the value accepts and the frequency rule's accepted panels integrate them with the value's \
          weights, in the same pass (docs/physics.md, \"Gradients\"). {profile}, medians of {repeats} runs in one \
-         process, load average {load} at the start.\n\n"
+         process, the value and the gradient run alternately, load average {load} at the start.\n\n"
     ));
-    md.push_str("| K | ASNR | ‖∂ASNR/∂A‖ | value | value and gradient | ratio |\n|---|---|---|---|---|---|\n");
+    md.push_str(
+        "| K | ASNR | ‖∂ASNR/∂A‖ | value, median (fastest) | value and gradient, median (fastest) | ratio of \
+         medians | ratio of fastest |\n|---|---|---|---|---|---|---|\n",
+    );
     for r in &rows {
         md.push_str(&format!(
-            "| {} | {:.4} | {:.3e} | {:.2} ms | {:.2} ms | {:.2}× |\n",
+            "| {} | {:.4} | {:.3e} | {:.2} ms ({:.2} ms) | {:.2} ms ({:.2} ms) | {:.2}× | {:.2}× |\n",
             r.k,
             r.asnr,
             r.norm,
             1e3 * r.value,
+            1e3 * r.value_min,
             1e3 * r.both,
-            r.both / r.value
+            1e3 * r.both_min,
+            r.both / r.value,
+            r.both_min / r.value_min
         ));
     }
-    let worst = rows.iter().map(|r| r.both / r.value).fold(0.0, f64::max);
+    let status = |r: &Row| match (r.both <= 3.0 * r.value, r.both_min <= 3.0 * r.value_min) {
+        (true, true) => "met",
+        (false, false) => "not met",
+        (true, false) => "met by the medians, not by the fastest runs",
+        (false, true) => "met by the fastest runs, not by the medians",
+    };
     md.push_str(&format!(
-        "\nTarget (issue: the gradient over K ≤ 16 keys at most 3× one evaluation): {} for K = {} (largest ratio \
-         {worst:.2}×).\n",
-        if worst <= 3.0 { "met" } else { "not met" },
-        rows.iter().map(|r| r.k.to_string()).collect::<Vec<_>>().join(", ")
+        "\nTarget (issue: the gradient over K ≤ 16 keys at most 3× one evaluation; here K = 4, 12 and 32): {}.\n",
+        rows.iter().map(|r| format!("K = {}: {}", r.k, status(r))).collect::<Vec<_>>().join("; ")
     ));
     if let Some((value, radial)) = radial(repeats) {
         md.push_str(
