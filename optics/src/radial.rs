@@ -1045,9 +1045,9 @@ impl RadialOrder {
                         let a8 = f64x8::splat(a);
                         let mut acc = f64x8::ZERO;
                         for i in (0..n).step_by(8) {
-                            let (x, y) = (load8(&q, i), load8(&q, lanes + i));
+                            let (x, y) = (load8(q, i), load8(q, lanes + i));
                             let (sin, cos) = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y)).sin_cos();
-                            let w = load8(&weight, i);
+                            let w = load8(weight, i);
                             acc = w.mul_add(cos, acc);
                             let slope = -(w * sin);
                             let (mut p1, mut p2) = (x, y);
