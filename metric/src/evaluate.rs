@@ -256,6 +256,14 @@ pub fn evaluate(scene: &Scene) -> Result<Evaluation, Error> {
 
 /// The evaluation at the scene's single field point.
 pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
+    evaluate_field_with(scene, false).map(|(e, _)| e)
+}
+
+/// [`evaluate_field`] and, with `binary2`, the mean MTF's derivative with respect to each Binary 2
+/// coefficient of the lens, computed in the same pass as the mean
+/// ([`Polychromatic::mean_mtf_and_binary2_gradient`]); `None` where that does not apply (off
+/// axis, a direction-dependent OTF, an engine other than the per-frequency exact one).
+pub(crate) fn evaluate_field_with(scene: &Scene, binary2: bool) -> Result<(Evaluation, Option<Vec<f64>>), Error> {
     let lens = scene.lens();
     let camera = scene.camera();
     let detected = detected_spectrum(scene);
@@ -380,6 +388,7 @@ pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
     // their average; otherwise one mean
     let along_field = field.y_rad.atan2(field.x_rad);
     let mut azimuth_warning = None;
+    let mut binary2_gradient = None;
     let mut directional = |noise: Option<&optics::NoiseShape>| {
         let mean_along = |azimuth: f64| match noise {
             None => poly.mean_mtf_along(azimuth),
@@ -401,6 +410,13 @@ pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
             let (s, w2) = mean_along(along_field + 0.5 * PI);
             (0.5 * (t + s), t, s, add_work(w1, w2))
         } else {
+            if noise.is_none()
+                && binary2
+                && let Some((m, gradient, work)) = poly.mean_mtf_and_binary2_gradient()
+            {
+                binary2_gradient = Some(gradient);
+                return (m, m, m, work);
+            }
             let (m, work) = mean_along(0.0);
             (m, m, m, work)
         }
@@ -541,7 +557,7 @@ pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
         },
     };
     check_finite(&evaluation)?;
-    Ok(evaluation)
+    Ok((evaluation, binary2_gradient))
 }
 
 /// The largest defocus, in waves at the mean wavelength, that [`evaluate`] integrates: far beyond

@@ -11,7 +11,7 @@
 
 use noise::SnrPartials;
 
-use crate::evaluate::{Evaluation, evaluate_field, mtf_at};
+use crate::evaluate::{Evaluation, evaluate_field_with, mtf_at};
 use crate::{Error, GlareMode, MetricForm, Scene};
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
@@ -98,9 +98,11 @@ pub struct Gradient {
 /// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with the pixel
 /// MTF or a noise spectrum, the conversion gain without an ADC.
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
-    let evaluation = crate::evaluate(scene)?;
+    let binary2 = parameters.iter().any(|p| matches!(p, Parameter::Binary2(_)));
     if scene.fields().is_empty() {
-        let point = point_gradient(scene, &evaluation, parameters)?;
+        // one pass: the evaluation and the Binary 2 derivatives of its mean MTF together
+        let (evaluation, d_binary2) = evaluate_field_with(scene, binary2)?;
+        let point = point_gradient(scene, &evaluation, parameters, d_binary2)?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -109,6 +111,7 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
             photoelectrons: point.photoelectrons,
         });
     }
+    let evaluation = crate::evaluate(scene)?;
     // the weighted mean of the points' derivatives, with evaluate's relative weights
     let largest = scene.fields().iter().map(|f| f.1).fold(0.0, f64::max);
     let relative: Vec<f64> = scene.fields().iter().map(|f| f.1 / largest).collect();
@@ -118,7 +121,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         PointGradient { asnr: zeros.clone(), mean_mtf: zeros.clone(), snr0: zeros.clone(), photoelectrons: zeros };
     for (&(field, _), w) in scene.fields().iter().zip(&relative) {
         let single = scene.single_field(field);
-        let point = point_gradient(&single, &evaluate_field(&single)?, parameters)?;
+        let (e, d_binary2) = evaluate_field_with(&single, binary2)?;
+        let point = point_gradient(&single, &e, parameters, d_binary2)?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -146,8 +150,14 @@ struct PointGradient {
     photoelectrons: Vec<f64>,
 }
 
-/// The derivatives at one field point whose evaluation is `e`.
-fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Result<PointGradient, Error> {
+/// The derivatives at one field point whose evaluation is `e`; `d_binary2` the mean MTF's
+/// Binary 2 derivatives computed with it, where they were.
+fn point_gradient(
+    scene: &Scene,
+    e: &Evaluation,
+    parameters: &[Parameter],
+    d_binary2: Option<Vec<f64>>,
+) -> Result<PointGradient, Error> {
     let camera = scene.camera();
     let sensor = camera.sensor();
     let exposure = scene.exposure();
@@ -173,7 +183,7 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
     // the stray light B = max(N_T − N, 0) with glare included: its derivative where it is > 0
     let stray = matches!(scene.options().glare, GlareMode::Included) && background > 0.0;
     let binary2 = match parameters.iter().find(|p| matches!(p, Parameter::Binary2(_))) {
-        Some(&p) => Some(binary2_mean_mtf(scene, e, p)?),
+        Some(&p) => Some(binary2_mean_mtf(scene, p, d_binary2)?),
         None => None,
     };
     let spectral = match parameters.iter().find(|p| matches!(p, Parameter::SpectrumCenter | Parameter::SpectrumRange)) {
@@ -270,11 +280,11 @@ fn point_gradient(scene: &Scene, e: &Evaluation, parameters: &[Parameter]) -> Re
     Ok(out)
 }
 
-/// `∂M̄/∂A_j` for every Binary 2 coefficient of the lens at the evaluation `e`
-/// ([`optics::binary2_mean_mtf_gradient`]: the radial engine's OTF derivatives on Gauss–Legendre
-/// panels in λ and ν, split at the OTF's sign changes and doubled until the gradient moves by
-/// at most the tolerance; each OTF to a hundredth of the tolerance).
-fn binary2_mean_mtf(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Vec<f64>, Error> {
+/// `∂M̄/∂A_j` for every Binary 2 coefficient of the lens, as the evaluation computed them
+/// (`d_binary2`: [`optics::Polychromatic::mean_mtf_and_binary2_gradient`], the radial engine's
+/// OTF derivatives on the value's own spectral levels and frequency panels), or why there are
+/// none.
+fn binary2_mean_mtf(scene: &Scene, p: Parameter, d_binary2: Option<Vec<f64>>) -> Result<Vec<f64>, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     let camera = scene.camera();
     if camera.pixel_mtf() {
@@ -285,13 +295,10 @@ fn binary2_mean_mtf(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Vec<f
     if camera.noise_spectrum().is_some() {
         return Err(not_smooth("with camera.noise_spectrum the Binary 2 gradient is not computed here yet"));
     }
-    let detected = crate::evaluate::detected_spectrum(scene);
-    let tolerance = scene.options().settings().tolerance;
-    let nyquist = e.nyquist_cyc_per_mm * 1e3;
-    optics::binary2_mean_mtf_gradient(scene.lens(), &detected, scene.field(), nyquist, tolerance)?.ok_or_else(|| {
+    d_binary2.ok_or_else(|| {
         not_smooth(
             "the Binary 2 gradient is computed on axis for a lens whose every order is a radially symmetric pupil \
-             (the exact radial engine); this scene's lens or field is not",
+             on the exact per-frequency engine (a band, not a line); this scene's lens, spectrum or field is not",
         )
     })
 }

@@ -58,6 +58,6 @@ pub use otf::{
 pub use poly::{
     AZIMUTH_SHARE, AzimuthalMean, DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine,
     FFT_MEMORY_BUDGET, FIRST_AZIMUTHS, GAUSSIAN_HALF_WIDTH_SIGMAS, MAX_AZIMUTHS, NoiseShape, Part, Polychromatic,
-    Settings, SpectralRule, Work, binary2_mean_mtf_gradient, forget_remembered, highest_cutoff, monochromatic_mtf,
+    Settings, SpectralRule, Work, forget_remembered, highest_cutoff, monochromatic_mtf,
 };
 pub use table::{OtfTable, SampledLine, TABLE_ZERO_FREQUENCY_TOLERANCE};

@@ -344,6 +344,19 @@ impl GaussKronrod {
         x
     }
 
+    /// The Kronrod weights on `[-1, 1]` in the order of [`nodes`](Self::nodes) (times the
+    /// half-width, the weights of the panel's Kronrod sum).
+    pub fn kronrod_weights(&self) -> [f64; MAX_POINTS] {
+        let m = self.xgk.len() - 1;
+        let mut w = [0.0; MAX_POINTS];
+        for j in 0..m {
+            w[j] = self.wgk[j];
+            w[2 * m - j] = self.wgk[j];
+        }
+        w[m] = self.wgk[m];
+        w
+    }
+
     /// The Kronrod and Gauss sums, `resabs` (`∫|f|`) and `resasc` (`∫|f − mean|`) of one panel of
     /// half-width `half` from the function values at [`nodes`](Self::nodes).
     pub fn sums(&self, half: f64, fx: &[f64]) -> Sums {

@@ -64,15 +64,35 @@ enum Kind {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RadialProfile {
     kind: Kind,
+    /// its fitted slope, derivative bounds and mean square, made when first asked: a profile
+    /// that only serves as a derivative's direction (`RadialOrder::otf_and_derivatives`, K of
+    /// them at every wavelength) never needs them
+    summary: Lazy,
+    /// the values at the bound samples and the Chebyshev series, made when first asked
+    /// ([`RadialProfile::sampled`]): a lens's profiles are shared by every wavelength's pupil
+    sampled: Cache,
+}
+
+/// A profile's [`Summary`] made once, when first asked; not part of its value (a function of
+/// its kind).
+#[derive(Clone, Debug, Default)]
+struct Lazy(OnceLock<Summary>);
+
+impl PartialEq for Lazy {
+    fn eq(&self, _: &Lazy) -> bool {
+        true
+    }
+}
+
+/// What the rule reads of a profile besides its values.
+#[derive(Clone, Copy, Debug)]
+struct Summary {
     /// least-squares slope in `q` over `[0, 1]` (the best-fit defocus per unit of the profile)
     fit: f64,
     /// `max |f'(q)|`, `max |f''(q)|` on `[0, 1]`, sampled
     bounds: (f64, f64),
     /// `∫_0^1 f(q)² dq` (the power of an amplitude profile)
     mean_square: f64,
-    /// the values at the bound samples and the Chebyshev series, made when first asked
-    /// ([`RadialProfile::sampled`]): a lens's profiles are shared by every wavelength's pupil
-    sampled: Cache,
 }
 
 /// A [`Sampled`] made once, when first asked; not part of a profile's value (two profiles are
@@ -133,18 +153,21 @@ impl RadialProfile {
     }
 
     fn finish(kind: Kind) -> RadialProfile {
-        let mut p = RadialProfile { kind, fit: 0.0, bounds: (0.0, 0.0), mean_square: 0.0, sampled: Cache::default() };
-        // least-squares slope 12 ∫(q − ½) f dq and the mean square, by 8 panels of 16 points
-        let (mut slope, mut square) = (0.0, 0.0);
-        crate::quad::for_each_node(0.0, 1.0, 8, |q, w| {
-            let f = p.value(q);
-            slope += w * 12.0 * (q - 0.5) * f;
-            square += w * f * f;
-        });
-        p.fit = slope;
-        p.mean_square = square;
-        p.bounds = derivative_bounds(|q| p.value(q));
-        p
+        RadialProfile { kind, summary: Lazy::default(), sampled: Cache::default() }
+    }
+
+    /// The fitted slope, derivative bounds and mean square, computed once.
+    fn summary(&self) -> &Summary {
+        self.summary.0.get_or_init(|| {
+            // least-squares slope 12 ∫(q − ½) f dq and the mean square, by 8 panels of 16 points
+            let (mut slope, mut square) = (0.0, 0.0);
+            crate::quad::for_each_node(0.0, 1.0, 8, |q, w| {
+                let f = self.value(q);
+                slope += w * 12.0 * (q - 0.5) * f;
+                square += w * f * f;
+            });
+            Summary { fit: slope, mean_square: square, bounds: derivative_bounds(|q| self.value(q)) }
+        })
     }
 
     /// The value at `q = ρ²` (`q ∈ [0, 1]`; the table's last piece continues beyond).
@@ -178,13 +201,13 @@ impl RadialProfile {
     /// The least-squares slope of the profile in `q = ρ²` over the pupil (uniform in area):
     /// its best-fit defocus per unit.
     pub fn fitted_slope(&self) -> f64 {
-        self.fit
+        self.summary().fit
     }
 
     /// `∫_0^1 f(q)² dq`: the power of an amplitude profile over the pupil, relative to a
     /// uniform amplitude of 1.
     pub fn mean_square(&self) -> f64 {
-        self.mean_square
+        self.summary().mean_square
     }
 
     /// Whether the profile is a table (knots limit the smoothness the rule may assume).
@@ -1004,7 +1027,7 @@ impl RadialOrder {
         }
         let amplitude_turns = pupil.amplitude.as_ref().map_or(0.0, |a| {
             // an amplitude table: about one radian of "turn" a knot interval, beside its own slope
-            let (d1, _) = a.bounds;
+            let (d1, _) = a.summary().bounds;
             let scale = a.mean_square().sqrt().max(f64::MIN_POSITIVE);
             0.25 * a.knots() as f64 + 4.0 * d1 / scale
         });
@@ -1148,86 +1171,112 @@ impl RadialOrder {
         directions: &[RadialProfile],
         derivatives: &mut [f64],
     ) -> f64 {
-        let rule16 = crate::quad::rule();
-        let lanes = rule16.len() * v_nodes.len();
+        let lanes = crate::quad::rule().len() * v_nodes.len();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
-        let (mut q, mut weight) = (vec![0.0; 2 * lanes], vec![0.0; lanes]);
-        // every direction an even polynomial: its degree's moments, eight lanes at a time
-        let degree = directions
-            .iter()
-            .map(|d| match &d.kind {
-                Kind::Even(c) => Some(c.len()),
-                _ => None,
-            })
-            .try_fold(1, |n, d| d.map(|d| n.max(d)));
-        let mut moments = degree.filter(|_| proxy.is_some()).map(|n| vec![wide::f64x8::ZERO; n]);
-        let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
-        let mut total = 0.0;
-        let ht = 0.5 * t_end / t_panels as f64;
-        for pt in 0..t_panels {
-            let tc = (2 * pt + 1) as f64 * ht;
-            for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
-                *ti = tc + ht * xt;
-            }
-            for i in 0..16 {
-                (sin_t[i], cos_t[i]) = t[i].sin_cos();
-            }
-            let mut scale = [0.0; 16];
-            for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
-                *c = ht * wt * st * st;
-            }
-            fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, &mut q, &mut weight, lanes);
-            self.amplitudes(&q, &mut weight);
-            // even polynomials with the proxy: the phase as the value's lanes, and the moments
-            // `Σ_l −w sin(Δφ) (q₁^m − q₂^m)` once for all the directions
-            let start = match (proxy, moments.as_mut()) {
-                (Some(c), Some(moments)) => {
-                    use wide::f64x8;
-                    let n = lanes / 8 * 8;
-                    let a8 = f64x8::splat(a);
-                    let mut acc = f64x8::ZERO;
-                    for i in (0..n).step_by(8) {
-                        let (x, y) = (load8(&q, i), load8(&q, lanes + i));
-                        let (sin, cos) = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y)).sin_cos();
-                        let w = load8(&weight, i);
-                        acc = w.mul_add(cos, acc);
-                        let slope = -(w * sin);
-                        let (mut p1, mut p2) = (x, y);
-                        for m in moments.iter_mut().skip(1) {
-                            *m = slope.mul_add(p1 - p2, *m);
-                            p1 *= x;
-                            p2 *= y;
+        LANE_BUFFERS.with_borrow_mut(|[q, weight, _]| {
+            q.resize(2 * lanes, 0.0);
+            weight.resize(lanes, 0.0);
+            // every direction an even polynomial: its degree's moments, eight lanes at a time
+            let degree = directions
+                .iter()
+                .map(|d| match &d.kind {
+                    Kind::Even(c) => Some(c.len()),
+                    _ => None,
+                })
+                .try_fold(1, |n, d| d.map(|d| n.max(d)));
+            let mut moments = degree.filter(|_| proxy.is_some()).map(|n| vec![wide::f64x8::ZERO; n]);
+            let mut total = 0.0;
+            for pt in 0..t_panels {
+                self.panel_lanes(s, t_end, t_panels, pt, v_nodes, q, weight);
+                // even polynomials with the proxy: the phase as the value's lanes, and the moments
+                // `Σ_l −w sin(Δφ) (q₁^m − q₂^m)` once for all the directions
+                let start = match (proxy, moments.as_mut()) {
+                    (Some(c), Some(moments)) => {
+                        use wide::f64x8;
+                        let n = lanes / 8 * 8;
+                        let a8 = f64x8::splat(a);
+                        let mut acc = f64x8::ZERO;
+                        for i in (0..n).step_by(8) {
+                            let (x, y) = (load8(q, i), load8(q, lanes + i));
+                            let (sin, cos) = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y)).sin_cos();
+                            let w = load8(weight, i);
+                            acc = w.mul_add(cos, acc);
+                            let slope = -(w * sin);
+                            let (mut p1, mut p2) = (x, y);
+                            for m in moments.iter_mut().skip(1) {
+                                *m = slope.mul_add(p1 - p2, *m);
+                                p1 *= x;
+                                p2 *= y;
+                            }
                         }
+                        total += acc.reduce_add();
+                        n
                     }
-                    total += acc.reduce_add();
-                    n
-                }
-                _ => 0,
-            };
-            for (l, &w) in weight.iter().enumerate().skip(start) {
-                let (q1, q2) = (q[l], q[lanes + l]);
-                let beyond = match proxy {
-                    Some(c) => clenshaw(c, q1) - clenshaw(c, q2),
-                    None => k * (self.pupil.opd_beyond_defocus_m(q1) - self.pupil.opd_beyond_defocus_m(q2)),
+                    _ => 0,
                 };
-                let (sin, cos) = crate::fft::cis::sin_cos(a * (q1 - q2) + beyond);
-                total += w * cos;
-                let slope = -w * sin * k;
+                for (l, &w) in weight.iter().enumerate().skip(start) {
+                    let (q1, q2) = (q[l], q[lanes + l]);
+                    let beyond = match proxy {
+                        Some(c) => clenshaw(c, q1) - clenshaw(c, q2),
+                        None => k * (self.pupil.opd_beyond_defocus_m(q1) - self.pupil.opd_beyond_defocus_m(q2)),
+                    };
+                    let (sin, cos) = crate::fft::cis::sin_cos(a * (q1 - q2) + beyond);
+                    total += w * cos;
+                    let slope = -w * sin * k;
+                    for (d, direction) in derivatives.iter_mut().zip(directions) {
+                        *d += slope * (direction.value(q1) - direction.value(q2));
+                    }
+                }
+            }
+            if let Some(moments) = moments {
+                let moments: Vec<f64> = moments.iter().map(|m| m.reduce_add()).collect();
                 for (d, direction) in derivatives.iter_mut().zip(directions) {
-                    *d += slope * (direction.value(q1) - direction.value(q2));
+                    if let Kind::Even(c) = &direction.kind {
+                        *d += k * c.iter().zip(&moments).skip(1).map(|(c, m)| c * m).sum::<f64>();
+                    }
                 }
             }
+            total
+        })
+    }
+
+    /// The lanes of t panel `pt` of the rule ([`rule`](Self::rule): `t_panels` 16-point panels
+    /// on `[0, t_end]` times `v_nodes`), the one node builder of the value ([`direct`](Self::direct))
+    /// and of its derivatives ([`direct_derivatives`](Self::direct_derivatives)): each node's
+    /// `q₁` and `q₂` into `q` (first and second half) and its weight (the t and v rule's, `sin²t`
+    /// and the field amplitudes) into `weight`.
+    #[allow(clippy::too_many_arguments)]
+    fn panel_lanes(
+        &self,
+        s: f64,
+        t_end: f64,
+        t_panels: usize,
+        pt: usize,
+        v_nodes: &[(f64, f64)],
+        q: &mut [f64],
+        weight: &mut [f64],
+    ) {
+        let rule16 = crate::quad::rule();
+        let lanes = weight.len();
+        let ht = 0.5 * t_end / t_panels as f64;
+        let tc = (2 * pt + 1) as f64 * ht;
+        // the 16 nodes' t, and their sines and cosines eight at a time
+        let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+        for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
+            *ti = tc + ht * xt;
         }
-        if let Some(moments) = moments {
-            let moments: Vec<f64> = moments.iter().map(|m| m.reduce_add()).collect();
-            for (d, direction) in derivatives.iter_mut().zip(directions) {
-                if let Kind::Even(c) = &direction.kind {
-                    *d += k * c.iter().zip(&moments).skip(1).map(|(c, m)| c * m).sum::<f64>();
-                }
-            }
+        for half in 0..2 {
+            let (sin, cos) = load8(&t, 8 * half).sin_cos();
+            sin_t[8 * half..8 * half + 8].copy_from_slice(&sin.to_array());
+            cos_t[8 * half..8 * half + 8].copy_from_slice(&cos.to_array());
         }
-        total
+        let mut scale = [0.0; 16];
+        for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
+            *c = ht * wt * st * st;
+        }
+        fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, q, weight, lanes);
+        self.amplitudes(q, weight);
     }
 
     /// The field amplitudes at every lane into `weight` (`q₁` in the first half of `q`, `q₂` in
@@ -1247,40 +1296,18 @@ impl RadialOrder {
     /// defocus is `proxy` (a cut of the order's, [`proxy_cosine_sum`]: phase and cosine fused
     /// eight lanes at a time), or without one the profile's own terms, then [`cosine_sum`].
     fn direct(&self, s: f64, t_end: f64, t_panels: usize, v_nodes: &[(f64, f64)], proxy: Option<&[f64]>) -> f64 {
-        let rule16 = crate::quad::rule();
-        let lanes = rule16.len() * v_nodes.len();
+        let lanes = crate::quad::rule().len() * v_nodes.len();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
-        // the lanes' buffers, kept by the thread from one OTF to the next (no allocation per OTF)
-        thread_local! {
-            static BUFFERS: std::cell::RefCell<[Vec<f64>; 3]> = const { std::cell::RefCell::new([Vec::new(), Vec::new(), Vec::new()]) };
-        }
-        BUFFERS.with_borrow_mut(|[q, weight, phase]| {
+        LANE_BUFFERS.with_borrow_mut(|[q, weight, phase]| {
             q.resize(2 * lanes, 0.0);
             weight.resize(lanes, 0.0);
             if proxy.is_none() {
                 phase.resize(2 * lanes, 0.0);
             }
-            // the 16 nodes' t, and their sines and cosines eight at a time
-            let (mut t, mut sin_t, mut cos_t) = ([0.0; 16], [0.0; 16], [0.0; 16]);
             let mut total = 0.0;
-            let ht = 0.5 * t_end / t_panels as f64;
             for pt in 0..t_panels {
-                let tc = (2 * pt + 1) as f64 * ht;
-                for (ti, &(xt, _)) in t.iter_mut().zip(rule16) {
-                    *ti = tc + ht * xt;
-                }
-                for half in 0..2 {
-                    let (sin, cos) = load8(&t, 8 * half).sin_cos();
-                    sin_t[8 * half..8 * half + 8].copy_from_slice(&sin.to_array());
-                    cos_t[8 * half..8 * half + 8].copy_from_slice(&cos.to_array());
-                }
-                let mut scale = [0.0; 16];
-                for ((c, &(_, wt)), &st) in scale.iter_mut().zip(rule16).zip(&sin_t) {
-                    *c = ht * wt * st * st;
-                }
-                fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, q, weight, lanes);
-                self.amplitudes(q, weight);
+                self.panel_lanes(s, t_end, t_panels, pt, v_nodes, q, weight);
                 total += match proxy {
                     Some(c) => proxy_cosine_sum(c, a, &q[..lanes], &q[lanes..], weight),
                     None => {
@@ -1294,6 +1321,14 @@ impl RadialOrder {
             total
         })
     }
+}
+
+thread_local! {
+    /// The lanes' buffers (`q₁ | q₂`, weights, phases) of [`RadialOrder::direct`] and
+    /// [`RadialOrder::direct_derivatives`], kept by the thread from one OTF to the next (no
+    /// allocation per OTF).
+    static LANE_BUFFERS: std::cell::RefCell<[Vec<f64>; 3]> =
+        const { std::cell::RefCell::new([Vec::new(), Vec::new(), Vec::new()]) };
 }
 
 /// The phase (radians) a 16-point Gauss–Legendre panel may turn through for an error of about

@@ -584,7 +584,7 @@ mod tests {
     }
 
     /// Every Binary 2 coefficient of the geometric-phase lens (the OTF's derivative inside the
-    /// radial engine, `optics::binary2_mean_mtf_gradient`), the example's four and two more
+    /// radial engine, on the value's own rules: `optics::Polychromatic::mean_mtf_and_binary2_gradient`), the example's four and two more
     /// terms, against central differences of evaluations converged at 1e-10: ∂/∂A_j (per radian
     /// of phase at the edge, as R = R_norm and M = 1 here) within 10× the scene's tolerance
     /// (1e-6) of the gradient's norm; SNR0 and N do not move with the phase. The step balances
@@ -632,6 +632,34 @@ mod tests {
         let dips = mtf.windows(3).filter(|w| w[1] < w[0] && w[1] < w[2] && w[1] < 1e-3).count();
         assert!(dips >= 1, "no zero of the OTF below Nyquist: {mtf:?}");
         check_binary2(&source, &overrides, &owned(&["lens.binary2[0]", "lens.binary2[1]"]));
+    }
+
+    /// K = 32: the example's four coefficients and 28 small ones (±2e-3/j rad, as the cost rows
+    /// of BENCHMARKS.md), every lane computed in the one pass; eight of them (the first five,
+    /// then j = 8, 16 and the last, ρ^64) against central differences of evaluations converged at
+    /// 1e-10 (the step of [`binary2_coefficients_match_central_differences`]), within 10× the
+    /// scene's tolerance of the gradient's norm over them. Eight, not 32, to keep the test within
+    /// seconds: the lanes share one rule, so a wrong lane would show in any of them.
+    #[test]
+    fn binary2_gradient_over_32_coefficients() {
+        let source = example("phase-binary2.toml");
+        let coefficients: Vec<String> =
+            [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]
+                .into_iter()
+                .chain((4..32usize).map(|j| if j.is_multiple_of(2) { 2e-3 } else { -2e-3 } / j as f64))
+                .map(|c| format!("{c:e}"))
+                .collect();
+        let overrides = vec![format!("lens.binary2=[{}]", coefficients.join(", "))];
+        let keys: Vec<String> = [0, 1, 2, 3, 4, 8, 16, 31].iter().map(|i| format!("lens.binary2[{i}]")).collect();
+        let (g, _) = check_binary2(&source, &overrides, &keys);
+        assert_eq!(g.keys, keys);
+        // all 32 at once: the same derivatives as the eight asked alone (the same pass)
+        let all = gradient(&source, &overrides, &owned(&["lens.binary2"])).unwrap();
+        assert_eq!(all.keys.len(), 32);
+        for (k, d) in g.keys.iter().zip(&g.d_asnr) {
+            let i = all.keys.iter().position(|a| a == k).unwrap();
+            assert!((all.d_asnr[i] - d).abs() <= 1e-12 * d.abs().max(1e-6), "{k}: {} vs {d}", all.d_asnr[i]);
+        }
     }
 
     /// Bad keys are refused naming the key.

@@ -37,6 +37,7 @@
 mod design;
 mod fft_azimuth;
 mod exact_map;
+mod gradients;
 mod iris;
 mod kernels;
 mod map;

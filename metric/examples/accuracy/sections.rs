@@ -41,6 +41,11 @@ pub(crate) const SECTIONS: &[Section] = &[
         title: "The flat lens's exact image: the cost of `pupil_mapping = \"exact\"`",
         run: crate::exact_map::section,
     },
+    Section {
+        name: "gradients",
+        title: "Gradients: the value and its gradient side by side",
+        run: crate::gradients::section,
+    },
 ];
 
 /// The sections `--only` names, or an error listing the known names.

@@ -55,7 +55,101 @@ fn add(a: Work, b: Work) -> Work {
 }
 use crate::quad;
 
+/// What [`Polychromatic::mean_mtf_and_binary2_gradient`] gathers as the value's frequency rule
+/// runs: the OTF's derivatives at each frequency read (`lanes` a frequency), and the nodes and
+/// weights of the rule's accepted panels (each weight times `P(ν)` and the sign of the OTF
+/// there: `∂|O| = sign(O) ∂O`).
+#[derive(Debug, Default)]
+pub(super) struct Recording {
+    lanes: usize,
+    /// the frequency's bits → its derivatives' place in `derivatives`
+    at: std::collections::HashMap<u64, usize>,
+    derivatives: Vec<f64>,
+    accepted: Vec<(f64, f64)>,
+    /// an OTF the engine gave no derivatives for
+    failed: bool,
+}
+
 impl Polychromatic<'_> {
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)) and, in the same pass, its derivative with
+    /// respect to each Binary 2 coefficient of the lens (`LensModel::binary2_directions`; per
+    /// radian) (docs/physics.md, "Gradients"):
+    ///
+    /// ```text
+    /// ∂M̄/∂A_j = (1/ν_max) ∫ P(ν) sign(O(ν)) ∂O(ν)/∂A_j dν
+    /// ```
+    ///
+    /// on the value's own rules: the engine returns each OTF with its derivatives on the spectral
+    /// level it accepts for the value, and the frequency rule's accepted panels (split at the
+    /// OTF's sign changes, where `|O|` has its kink) integrate them with the value's weights. No
+    /// second search: the derivatives ride on the value's evaluations. `None` where no gradient
+    /// is given this way: the lens has no Binary 2 coefficients, the field is off axis, the OTF
+    /// depends on direction, or the engine is not the per-frequency exact one of radially
+    /// symmetric orders.
+    pub fn mean_mtf_and_binary2_gradient(&self) -> Option<(f64, Vec<f64>, Work)> {
+        if !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let lambda = self.engine.nodes().nodes.first()?.lambda;
+        let lanes = self.scene.lens.binary2_directions(lambda)?.first()?.len();
+        if lanes == 0 {
+            return None;
+        }
+        *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.recorded_otf(nu));
+        let recording = self.gradient.borrow_mut().take()?;
+        if recording.failed {
+            return None;
+        }
+        let mut gradient = vec![0.0; lanes];
+        for &(nu, w) in &recording.accepted {
+            let i = *recording.at.get(&nu.to_bits())?;
+            for (g, d) in gradient.iter_mut().zip(&recording.derivatives[i..i + lanes]) {
+                *g += w * d;
+            }
+        }
+        gradient.iter_mut().for_each(|g| *g /= self.scene.max_frequency);
+        Some((mean, gradient, work))
+    }
+
+    /// The OTF at `nu` with its derivatives kept in the recording.
+    fn recorded_otf(&self, nu: f64) -> f64 {
+        let lanes = self.gradient.borrow().as_ref().map_or(0, |r| r.lanes);
+        let mut derivatives = vec![0.0; lanes];
+        let value = if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_gradient(nu, &mut derivatives) };
+        let mut recording = self.gradient.borrow_mut();
+        let Some(r) = recording.as_mut() else { return value.unwrap_or(f64::NAN) };
+        match value {
+            Some(v) => {
+                let place = r.derivatives.len();
+                r.derivatives.extend_from_slice(&derivatives);
+                r.at.insert(nu.to_bits(), place);
+                v
+            }
+            None => {
+                r.failed = true;
+                drop(recording);
+                self.otf(nu)
+            }
+        }
+    }
+
+    /// Keeps an accepted node of the frequency rule (ν, its weight in `∫ P |O| dν` times the
+    /// sign of the OTF there) while a gradient is recorded.
+    fn accept(&self, nu: f64, weight: f64) {
+        if let Some(r) = self.gradient.borrow_mut().as_mut() {
+            r.accepted.push((nu, weight));
+        }
+    }
+
+    /// Whether a gradient is being recorded.
+    fn recording(&self) -> bool {
+        self.gradient.borrow().is_some()
+    }
+
     /// The frequency rule's share of the tolerance: all of it where the spectral integral is
     /// exact to rounding (closed form, panels rule, a line), the rest after
     /// [`SPECTRAL_SHARE`](super::spectral::SPECTRAL_SHARE) where product integration spent that.
@@ -251,6 +345,12 @@ impl Polychromatic<'_> {
     /// below `max_frequency`).
     fn mean_pass(&self, value: &dyn Fn(f64) -> f64, absolute: f64) -> (f64, Work) {
         let mut work = Work::default();
+        // a new pass reads every value again, to its own tolerance: only its rule counts
+        if let Some(r) = self.gradient.borrow_mut().as_mut() {
+            r.accepted.clear();
+            r.at.clear();
+            r.derivatives.clear();
+        }
         // each closed-form OTF value may be off by half the budget: the mean is a weighted
         // average of them (and the ν rule below treats differences within that as their noise)
         self.engine.set_value_tolerance(0.5 * absolute);
@@ -439,6 +539,13 @@ impl Polychromatic<'_> {
                     || moved <= 1e3 * f64::EPSILON * largest * (b - a)
                 {
                     work.frequency_panels += 1;
+                    if self.recording() {
+                        for (k, (&v, &w)) in values.iter().zip(weights).enumerate() {
+                            let nu = point(k, points);
+                            let jacobian = if logarithmic { nu } else { 1.0 };
+                            self.accept(nu, w * h * self.pixel_factor(nu) * jacobian * sign(v));
+                        }
+                    }
                     return Some(integral);
                 }
             }
@@ -524,6 +631,12 @@ impl Polychromatic<'_> {
             || depth >= MAX_DEPTH
         {
             work.frequency_panels += 1;
+            if self.recording() {
+                let weights = quad::GK15.kronrod_weights();
+                for (&(nu, f), &w) in samples[1..16].iter().zip(&weights) {
+                    self.accept(nu, half * w * self.pixel_factor(nu) * sign(f));
+                }
+            }
             return kronrod;
         }
         let centre = samples[8];
@@ -541,6 +654,17 @@ impl Polychromatic<'_> {
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: `OTF_poly` is zero beyond.
     pub fn max_cutoff(&self) -> f64 {
         self.engine.max_cutoff()
+    }
+}
+
+/// The derivative of `|x|`: `sign(x)`, 0 at 0 (a kink the frequency rule puts at a panel's end).
+fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
     }
 }
 

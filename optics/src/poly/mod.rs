@@ -49,9 +49,7 @@ use crate::lens::{Field, LensModel};
 mod closed_form;
 mod exact;
 mod frequency;
-mod gradient;
 pub(crate) use frequency::clenshaw_curtis;
-pub use gradient::binary2_mean_mtf_gradient;
 mod grid;
 mod line;
 mod noise;
@@ -301,6 +299,13 @@ trait OtfEngine: std::fmt::Debug {
     fn value_evaluations(&self) -> usize {
         0
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf), and into `gradient` its derivative
+    /// with respect to each Binary 2 coefficient of the lens (`LensModel::binary2_directions`,
+    /// one lane each), on the value's own spectral rule; `None` where the engine does not give
+    /// them (the default).
+    fn otf_and_gradient(&self, _frequency: f64, _gradient: &mut [f64]) -> Option<f64> {
+        None
+    }
     /// The sampling plan whose coarse level the engine also holds (the FFT engine when the
     /// tolerance chose its sampling): the frequency rule then extrapolates the two means.
     fn richardson(&self) -> Option<crate::fft::SamplingPlan> {
@@ -421,6 +426,9 @@ pub struct Polychromatic<'a> {
     /// hundredth of the tolerance, m ([`resolved_defocus`]): the defocus phase a frequency rule
     /// must resolve
     w020_resolved: f64,
+    /// while [`mean_mtf_and_binary2_gradient`](Polychromatic::mean_mtf_and_binary2_gradient)
+    /// runs: the OTF's derivatives at every frequency the rule read, and the rule it accepted
+    gradient: std::cell::RefCell<Option<frequency::Recording>>,
 }
 
 /// The defocus (m) the frequency rule must resolve: the largest `|W020|` such that the nodes at
@@ -658,6 +666,7 @@ impl<'a> Polychromatic<'a> {
             w020_max: 0.0,
             w020_rms: 0.0,
             w020_resolved: 0.0,
+            gradient: std::cell::RefCell::new(None),
         };
         // the largest |W020| among the nodes that carry weight, and the weighted RMS of W020
         // (the frequency rule's initial panels)

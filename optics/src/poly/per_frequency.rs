@@ -81,6 +81,10 @@ struct OrderAt {
 struct Fresh {
     orders: Vec<OrderAt>,
     ends: Vec<usize>,
+    /// per order, the change of its wavefront per unit of each Binary 2 coefficient
+    /// (`LensModel::binary2_directions`), made when a gradient first climbs to the level; `None`
+    /// before, `Some(None)` where the lens or an order has none (no gradient on this engine)
+    directions: Option<Option<Vec<Vec<crate::radial::RadialProfile>>>>,
 }
 
 impl Fresh {
@@ -116,6 +120,10 @@ struct Scratch {
     pairs: Vec<(f64, f64)>,
     otfs: Vec<f64>,
     values: Vec<f64>,
+    /// with a gradient: `∂g/∂A_j` on the current level's points, point after point (`lanes`
+    /// each, k = 0 at b), and one OTF's derivatives
+    derivatives: Vec<f64>,
+    one: Vec<f64>,
 }
 
 impl std::fmt::Debug for Levelled {
@@ -189,18 +197,64 @@ impl Levelled {
         }
     }
 
+    /// Makes level `level`'s derivative directions ready ([`Fresh::directions`]); whether every
+    /// order of its points has `lanes` of them on the radial engine.
+    fn prepare_directions(&mut self, scene: &Scene<'_>, level: usize, lanes: usize) -> bool {
+        let points = LEVELS[level];
+        let fresh = &mut self.fresh[level];
+        if fresh.directions.is_none() {
+            let lambdas = lobatto_lambdas(self.panel.a, self.panel.b, points);
+            let mut all = Vec::with_capacity(fresh.orders.len());
+            let mut ok = true;
+            for (point, k) in (0..points).filter(|&k| level == 0 || k % 2 == 1).enumerate() {
+                let range = fresh.range(point);
+                match scene.lens.binary2_directions(lambdas[k]) {
+                    Some(d) if d.len() == range.len() && fresh.orders[range].iter().all(|o| o.radial.is_some()) => {
+                        ok &= d.iter().all(|d| d.len() == lanes);
+                        all.extend(d);
+                    }
+                    _ => ok = false,
+                }
+            }
+            fresh.directions = Some(ok.then_some(all));
+        }
+        matches!(fresh.directions, Some(Some(_)))
+    }
+
     /// `g(ν, λ)` at the points level `level` adds, into `values` at their slots (all three for
     /// level 0, the odd ones above; `values` holds the level's points).
     /// Each OTF to a tenth of `allowed` (per unit weight) over the level's amplification: an
     /// error δ per OTF moves the product integral by at most δ Σ τ_o Σ|w_k|.
-    fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>) {
-        let Scratch { pairs, otfs, values } = &mut self.scratch;
+    fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>, lanes: usize) {
+        let Scratch { pairs, otfs, values, derivatives, one } = &mut self.scratch;
         let fresh = &self.fresh[level];
         pairs.clear();
         pairs.extend(fresh.orders.iter().map(|o| (nu * o.s_per_frequency, o.waves)));
         otfs.clear();
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
+        let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
+        if lanes > 0 {
+            // the gradient's lanes: each order's OTF and its derivatives on the same rule
+            // (`RadialOrder::otf_and_derivatives`), summed per point as the values are
+            let Some(Some(directions)) = &fresh.directions else { return };
+            one.resize(lanes, 0.0);
+            for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
+                let (mut value, slot) = (0.0, &mut derivatives[k * lanes..(k + 1) * lanes]);
+                slot.iter_mut().for_each(|d| *d = 0.0);
+                for i in fresh.range(point) {
+                    let (o, (s, _)) = (&fresh.orders[i], pairs[i]);
+                    let Some(radial) = &o.radial else { continue };
+                    value += o.efficiency * radial.otf_and_derivatives(s, accuracy, &directions[i], one);
+                    for (d, x) in slot.iter_mut().zip(one.iter()) {
+                        *d += o.efficiency * x;
+                    }
+                }
+                values[k] = value;
+            }
+            evaluations.set(evaluations.get() + pairs.len());
+            return;
+        }
         if fresh.orders.iter().any(|o| o.radial.is_some()) {
             // radial pupils one at a time (the radial engine), the rest as a batch
             for ((o, &(s, w)), otf) in fresh.orders.iter().zip(pairs.iter()).zip(otfs.iter_mut()) {
@@ -213,7 +267,6 @@ impl Levelled {
             crate::otf::defocus_otf_many_within(pairs, otfs, accuracy);
         }
         evaluations.set(evaluations.get() + pairs.len());
-        let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
         for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
             let range = fresh.range(point);
             values[k] = fresh.orders[range.clone()].iter().zip(&otfs[range]).map(|(o, v)| o.efficiency * v).sum();
@@ -259,8 +312,42 @@ impl Levelled {
     }
 
     /// `∫ ρ g(ν, ·)` over the panel to within `allowed` per unit of its weight, or, where the
-    /// finest level does not settle, `Err` with that level's integral.
-    fn integral(&mut self, scene: &Scene<'_>, nu: f64, allowed: f64, evaluations: &Cell<usize>) -> Result<f64, f64> {
+    /// finest level does not settle, `Err` with that level's integral. With `gradient` (one lane
+    /// per Binary 2 coefficient), `∫ ρ ∂g/∂A_j` into it on the level the value accepts: the
+    /// value's own nodes and weights (docs/physics.md, "Gradients"); the caller has made the
+    /// directions ready ([`prepare_directions`](Self::prepare_directions)).
+    fn integral(
+        &mut self,
+        scene: &Scene<'_>,
+        nu: f64,
+        allowed: f64,
+        evaluations: &Cell<usize>,
+        gradient: Option<&mut [f64]>,
+    ) -> Result<f64, f64> {
+        let lanes = gradient.as_ref().map_or(0, |g| g.len());
+        let result = self.climb(scene, nu, allowed, evaluations, lanes);
+        if let Some(gradient) = gradient {
+            let weights = &self.weights[LEVELS.iter().position(|&p| p == self.scratch.values.len()).unwrap_or(0)];
+            gradient.iter_mut().for_each(|g| *g = 0.0);
+            for (w, point) in weights.iter().zip(self.scratch.derivatives.chunks_exact(lanes)) {
+                for (g, d) in gradient.iter_mut().zip(point) {
+                    *g += w * d;
+                }
+            }
+        }
+        result
+    }
+
+    /// [`integral`](Self::integral)'s climb through the levels, `lanes` derivatives a point
+    /// beside each value (none for 0).
+    fn climb(
+        &mut self,
+        scene: &Scene<'_>,
+        nu: f64,
+        allowed: f64,
+        evaluations: &Cell<usize>,
+        lanes: usize,
+    ) -> Result<f64, f64> {
         let mass = self.panel.mass.abs();
         // the phase the points must resolve at this frequency (∝ ν: the defocus phase is)
         let resolved = POINTS_PER_RADIAN * self.panel.phase * nu / scene.max_frequency + 1.0;
@@ -272,15 +359,20 @@ impl Levelled {
         let (mut moves, mut counted) = ([0.0; LEVELS.len()], 0);
         for (level, &points) in LEVELS.iter().enumerate() {
             self.prepare(scene, level);
+            if lanes > 0 && !self.prepare_directions(scene, level, lanes) {
+                return Err(f64::NAN);
+            }
             // the level below's points to the even slots (from the top down), the new ones between
-            let values = &mut self.scratch.values;
+            let Scratch { values, derivatives, .. } = &mut self.scratch;
             values.resize(points, 0.0);
+            derivatives.resize(points * lanes, 0.0);
             if level > 0 {
                 for k in (0..=points / 2).rev() {
                     values[2 * k] = values[k];
+                    derivatives.copy_within(k * lanes..(k + 1) * lanes, 2 * k * lanes);
                 }
             }
-            self.fresh_values(level, nu, allowed, evaluations);
+            self.fresh_values(level, nu, allowed, evaluations, lanes);
             let values = &self.scratch.values;
             let integral = quad::dot(values, &self.weights[level]);
             if level < first {
@@ -377,6 +469,70 @@ impl<'a> PerFrequency<'a> {
         })
     }
 
+    /// The OTF at `frequency` and, with `gradient`, its derivative with respect to each Binary 2
+    /// coefficient into it, on the same spectral levels ([`Levelled::integral`]); `None` where
+    /// the lens has no such derivatives on this engine.
+    fn value(&self, frequency: f64, mut gradient: Option<&mut [f64]>) -> Option<f64> {
+        let nu = frequency.abs();
+        let budget = self.otf_tolerance.get();
+        let mut panels = self.panels.borrow_mut();
+        'restart: loop {
+            // the budget shared equally between the panels that carry weight: per unit of a
+            // panel's weight, `budget / (panels × share)`. A panel's points grow with the log of
+            // its accuracy (the Chebyshev tail falls geometrically and faster), so equal shares
+            // of the error minimize their sum (Lagrange); a light panel far from focus takes a
+            // looser rule, not the heavy one's (the spectrometer scene at 1e-6: 6 % fewer
+            // single-wavelength OTFs than shares in proportion to √weight, the same error)
+            let weighted = panels.iter().filter(|p| p.panel.mass != 0.0).count().max(1) as f64;
+            let mut sum = 0.0;
+            let lanes = gradient.as_ref().map_or(0, |g| g.len());
+            let mut part_gradient = vec![0.0; lanes];
+            if let Some(g) = gradient.as_deref_mut() {
+                g.iter_mut().for_each(|g| *g = 0.0);
+            }
+            for k in 0..panels.len() {
+                let share = panels[k].panel.mass.abs() / self.total_mass;
+                if share == 0.0 {
+                    continue;
+                }
+                let allowed = budget * self.nodes.total_weight.abs() / self.total_mass / (weighted * share);
+                let part = self.scene.part(panels[k].panel.part);
+                let lanes_of_panel = gradient.is_some().then_some(part_gradient.as_mut_slice());
+                let result = panels[k].integral(&part, nu, allowed, &self.evaluations, lanes_of_panel);
+                if let Err(v) = result
+                    && v.is_nan()
+                {
+                    // an order without derivative directions: no gradient here
+                    return None;
+                }
+                let kept = result.is_ok() || panels[k].panel.b - panels[k].panel.a <= NARROWEST_PANEL * self.band();
+                if let Some(g) = gradient.as_deref_mut()
+                    && kept
+                {
+                    for (g, d) in g.iter_mut().zip(&part_gradient) {
+                        *g += d;
+                    }
+                }
+                match result {
+                    Ok(v) => sum += v,
+                    // the narrowest panel: its finest level's value, whatever its error
+                    Err(v) if panels[k].panel.b - panels[k].panel.a <= NARROWEST_PANEL * self.band() => sum += v,
+                    Err(_) => {
+                        // halve the panel (its phase halves with it) and start this value again
+                        let (low, high) = panels.remove(k).panel.halves(part.detected);
+                        panels.insert(k, Levelled::new(high));
+                        panels.insert(k, Levelled::new(low));
+                        continue 'restart;
+                    }
+                }
+            }
+            if let Some(g) = gradient {
+                g.iter_mut().for_each(|g| *g /= self.nodes.total_weight);
+            }
+            return Some(sum / self.nodes.total_weight);
+        }
+    }
+
     /// The band's extent, for the narrowest panel a split may make.
     fn band(&self) -> f64 {
         let panels = &self.nodes.panels;
@@ -401,40 +557,11 @@ impl OtfEngine for PerFrequency<'_> {
     }
 
     fn otf(&self, frequency: f64) -> f64 {
-        let nu = frequency.abs();
-        let budget = self.otf_tolerance.get();
-        let mut panels = self.panels.borrow_mut();
-        'restart: loop {
-            // the budget shared equally between the panels that carry weight: per unit of a
-            // panel's weight, `budget / (panels × share)`. A panel's points grow with the log of
-            // its accuracy (the Chebyshev tail falls geometrically and faster), so equal shares
-            // of the error minimize their sum (Lagrange); a light panel far from focus takes a
-            // looser rule, not the heavy one's (the spectrometer scene at 1e-6: 6 % fewer
-            // single-wavelength OTFs than shares in proportion to √weight, the same error)
-            let weighted = panels.iter().filter(|p| p.panel.mass != 0.0).count().max(1) as f64;
-            let mut sum = 0.0;
-            for k in 0..panels.len() {
-                let share = panels[k].panel.mass.abs() / self.total_mass;
-                if share == 0.0 {
-                    continue;
-                }
-                let allowed = budget * self.nodes.total_weight.abs() / self.total_mass / (weighted * share);
-                let part = self.scene.part(panels[k].panel.part);
-                match panels[k].integral(&part, nu, allowed, &self.evaluations) {
-                    Ok(v) => sum += v,
-                    // the narrowest panel: its finest level's value, whatever its error
-                    Err(v) if panels[k].panel.b - panels[k].panel.a <= NARROWEST_PANEL * self.band() => sum += v,
-                    Err(_) => {
-                        // halve the panel (its phase halves with it) and start this value again
-                        let (low, high) = panels.remove(k).panel.halves(part.detected);
-                        panels.insert(k, Levelled::new(high));
-                        panels.insert(k, Levelled::new(low));
-                        continue 'restart;
-                    }
-                }
-            }
-            return sum / self.nodes.total_weight;
-        }
+        self.value(frequency, None).unwrap_or(f64::NAN)
+    }
+
+    fn otf_and_gradient(&self, frequency: f64, gradient: &mut [f64]) -> Option<f64> {
+        self.value(frequency, Some(gradient))
     }
 
     fn otf_along(&self, frequency: f64, _azimuth: f64) -> Complex64 {
