@@ -208,8 +208,6 @@ pub fn field_label(scene: &metric::Scene) -> String {
     }
 }
 
-/// The axis label of a scene key or result column: its human name with the unit in parentheses,
-/// e.g. `spectrum.range_nm` → "spectral range (nm)" (see [`quantity`]).
 /// The title of a sweep's plot: what was swept, over which range, and the lens unless a lens key
 /// is swept ("ASNR over spectral range 10–50 nm and exposure time 1–2 ms: chromatic metalens
 /// F/2.5 …"); not the scene's title, whose band or F-number the sweep replaces.

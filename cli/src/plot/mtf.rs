@@ -1,6 +1,9 @@
 //! The MTF chart of `asnr mtf --plot`: the polychromatic MTF, the monochromatic curves, the
-//! diffraction limit and Nyquist, and where the OTF depends on direction the tangential and
-//! sagittal curves beside the mean.
+//! diffraction limit and Nyquist, and where the OTF depends on direction (off axis with lateral
+//! colour, a 2-D pupil: a phase map, non-radial Zernike terms, a decentred iris) the tangential
+//! and sagittal curves beside their mean — over azimuth for a 2-D pupil — for the single field
+//! point, or for each point of a field-of-view average (up to four), labelled with the point's
+//! field angles in degrees; frequencies in cycles/mm.
 
 use super::*;
 
@@ -31,13 +34,83 @@ pub(super) const MONO: [RGBColor; 5] = [
 pub(super) const OFF_AXIS: [Stroke; 2] =
     [Stroke::dashed(RGBColor(90, 160, 240), 1.3, 5.0, 2.0), Stroke::dashed(RGBColor(10, 30, 110), 1.3, 2.0, 1.5)];
 
-/// The off-axis MTFs of `curve` (frequencies along the field direction, then across it) with
-/// their legend labels; `None` on axis. The only place that names the directional fields.
+/// The directional MTFs of a single field's `curve` (frequencies along the field direction, then
+/// across it; on axis along x, then y) with their legend labels; `None` where the OTF does not
+/// depend on direction. The only place that names the directional fields.
 pub(super) fn off_axis(curve: &MtfCurve) -> Option<[(&[f64], &'static str); 2]> {
-    Some([
-        (curve.mtf_tangential.as_deref()?, "tangential (along the field)"),
-        (curve.mtf_sagittal.as_deref()?, "sagittal (across the field)"),
-    ])
+    let [t, s] = direction_names(curve.field_deg);
+    Some([(curve.mtf_tangential.as_deref()?, t), (curve.mtf_sagittal.as_deref()?, s)])
+}
+
+/// The two directions' names at a field point: along x and along y on axis (where no direction
+/// is the field's, as the text table says), else tangential and sagittal.
+fn direction_names(field_deg: [f64; 2]) -> [&'static str; 2] {
+    if field_deg == [0.0, 0.0] {
+        ["along x", "along y"]
+    } else {
+        ["tangential (along the field)", "sagittal (across the field)"]
+    }
+}
+
+/// At most this many field points of a field-of-view average get their own directional curves
+/// (three each); beyond, the weighted means' are drawn, as for a single field (`--csv` and
+/// `--json` carry every point's).
+const FIELD_POINTS_DRAWN: usize = 4;
+
+/// One field point's directional curves: where it is, degrees, its mean MTF and its tangential
+/// and sagittal MTFs.
+struct FieldDirections<'a> {
+    field_deg: [f64; 2],
+    mean: &'a [f64],
+    tangential: &'a [f64],
+    sagittal: &'a [f64],
+}
+
+/// The field points of a field-of-view average whose OTF depends on direction, each drawn with
+/// its own three curves; empty for a single field (drawn by [`off_axis`] beside the headline
+/// curve) and above [`FIELD_POINTS_DRAWN`] points.
+fn field_directions(curve: &MtfCurve) -> Vec<FieldDirections<'_>> {
+    if curve.field_points.len() > FIELD_POINTS_DRAWN {
+        return Vec::new();
+    }
+    curve
+        .field_points
+        .iter()
+        .filter_map(|p| {
+            Some(FieldDirections {
+                field_deg: p.field_deg,
+                mean: &p.mtf,
+                tangential: p.mtf_tangential.as_deref()?,
+                sagittal: p.mtf_sagittal.as_deref()?,
+            })
+        })
+        .collect()
+}
+
+/// A field point as the legend names it: "on axis" or "field (8°, 0°)".
+fn field_name(field_deg: [f64; 2]) -> String {
+    if field_deg == [0.0, 0.0] {
+        "on axis".to_owned()
+    } else {
+        format!(
+            "field ({}°, {}°)",
+            number(optics::round_for_display(field_deg[0])),
+            number(optics::round_for_display(field_deg[1]))
+        )
+    }
+}
+
+/// What the mean of the directions is: over azimuth for a sampled (2-D) pupil, else the
+/// tangential–sagittal average (the curve's `mtf`, as the mean MTF is).
+fn mean_name(curve: &MtfCurve) -> &'static str {
+    if curve.mtf_over_azimuth { "mean over azimuth" } else { "mean of both directions" }
+}
+
+/// A field point's three strokes: its mean solid and wider, tangential dashed, sagittal dotted,
+/// in the point's colour (the palette after the polychromatic blue).
+fn field_strokes(i: usize) -> [Stroke; 3] {
+    let colour = PALETTE[(i + 1) % PALETTE.len()];
+    [Stroke::solid(colour, 1.6), Stroke::dashed(colour, 1.1, 5.0, 2.0), Stroke::dashed(colour, 1.1, 1.5, 1.5)]
 }
 
 impl MtfPlot<'_> {
@@ -60,13 +133,18 @@ impl Plot for MtfPlot<'_> {
 
     fn entries(&self) -> Vec<Entry> {
         let curve = self.curve;
+        let fields = field_directions(curve);
         let poly = match (curve.field_points.len(), off_axis(curve).is_some()) {
             (0, false) => "polychromatic MTF".to_owned(),
+            (0, true) if curve.mtf_over_azimuth => {
+                format!("polychromatic MTF, {} ({})", mean_name(curve), field_name(curve.field_deg))
+            }
             (0, true) => "polychromatic MTF (mean of both directions)".to_owned(),
             (n, _) => format!("polychromatic MTF, weighted mean of {n} field points"),
         };
         let mut entries = vec![Entry { label: poly, swatch: Swatch::Line(POLY) }];
-        for ((ys, label), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
+        let single = if fields.is_empty() { off_axis(curve) } else { None };
+        for ((ys, label), stroke) in single.into_iter().flatten().zip(OFF_AXIS) {
             // a directional curve on the mean (on axis in all but name): said, as the dashes
             // over the mean are all that show of it
             let apart = ys.iter().zip(&curve.mtf).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -76,6 +154,14 @@ impl Plot for MtfPlot<'_> {
                 label.to_owned()
             };
             entries.push(Entry { label, swatch: Swatch::Line(stroke) });
+        }
+        for (i, f) in fields.iter().enumerate() {
+            let at = field_name(f.field_deg);
+            let [mean, tangential, sagittal] = field_strokes(i);
+            let [t, s] = direction_names(f.field_deg);
+            entries.push(Entry { label: format!("{at}: {}", mean_name(curve)), swatch: Swatch::Line(mean) });
+            entries.push(Entry { label: format!("{at}: {t}"), swatch: Swatch::Line(tangential) });
+            entries.push(Entry { label: format!("{at}: {s}"), swatch: Swatch::Line(sagittal) });
         }
         for (i, wl) in curve.wavelengths_nm.iter().enumerate() {
             entries.push(Entry { label: format!("{wl:.1} nm"), swatch: Swatch::Line(Self::mono(i)) });
@@ -109,8 +195,15 @@ impl Plot for MtfPlot<'_> {
         for (i, ys) in curve.monochromatic.iter().enumerate() {
             draw_curve(&mut chart, ctx, &series(ys), Self::mono(i))?;
         }
-        for ((ys, _), stroke) in off_axis(curve).into_iter().flatten().zip(OFF_AXIS) {
+        let fields = field_directions(curve);
+        let single = if fields.is_empty() { off_axis(curve) } else { None };
+        for ((ys, _), stroke) in single.into_iter().flatten().zip(OFF_AXIS) {
             draw_curve(&mut chart, ctx, &series(ys), stroke)?;
+        }
+        for (i, f) in fields.iter().enumerate() {
+            for (ys, stroke) in [f.mean, f.tangential, f.sagittal].into_iter().zip(field_strokes(i)) {
+                draw_curve(&mut chart, ctx, &series(ys), stroke)?;
+            }
         }
         // references last, on top: the diffraction limit often coincides with the curve at the
         // design wavelength
