@@ -20,7 +20,7 @@
 //! per-interval spectral rule at 1e-12, with the numpy baseline `xtask/baselines/numpy_table.py`
 //! beside it), the decentred iris 0.15 (against the exact reduction of [`iris`]) and coma 0.5 µm
 //! (against a Richardson extrapolation) — the 40 × 100 map and a 384 × 384 × 45 PSF stack through
-//! the release `asnr` ([`map`], [`psf_stack`]),
+//! the release `asnr` ([`map`], and the stand-alone section [`psf_stack`]),
 //! and the targets against them ([`targets`]).
 //!
 //! Times are medians of repeated single-threaded calls in this (release) process.
@@ -247,8 +247,6 @@ struct Context {
     notes: tolerance::Notes,
     /// The map, when the `asnr` binary was given.
     map: Option<map::Map>,
-    /// The 384 × 384 × 45 PSF stack, when the `asnr` binary was given.
-    psf_stack: Option<psf_stack::PsfBench>,
     /// The design search and tolerance run, when the `asnr` binary was given (not with --quick).
     design: Option<design::DesignBench>,
     /// The sweep against numpy and the 5000-row efficiency table.
@@ -380,7 +378,6 @@ fn main() {
         decentred: None,
         notes: tolerance::Notes::new(),
         map: None,
-        psf_stack: None,
         design: None,
         sweep: None,
         binary2_process: None,
@@ -542,7 +539,6 @@ fn main() {
         m.python = asnr_python.as_deref().and_then(|py| map::measure_python(py, bin, &out, grid.map_runs));
         m
     });
-    context.psf_stack = asnr.as_deref().and_then(|bin| psf_stack::measure(bin, &out, grid.map_runs));
     if !quick {
         context.design = asnr.as_deref().and_then(|bin| design::measure(bin, &out));
         context.sweep = asnr.as_deref().and_then(|bin| sweep::measure(bin, python.as_deref(), &out, grid.map_runs));

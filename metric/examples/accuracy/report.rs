@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use crate::kernels::{DEFOCUS_WAVES, Kernel, KernelRow};
 use crate::tolerance::{BINARY2, COMA, IRIS, LIBRARY, NUMPY_RADIAL, NUMPY_SCRIPT, SPECTROMETER, TABLE};
-use crate::{Context, Family, Row, design, map, psf_stack, targets};
+use crate::{Context, Family, Row, design, map, targets};
 
 /// One line per mean-MTF method: what it is.
 fn explain(family: Family) -> String {
@@ -349,9 +349,6 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
                  and passes `--asnr`).\n"
             );
         }
-    }
-    if let Some(p) = &context.psf_stack {
-        s.push_str(&psf_stack::markdown(p));
     }
     if let Some(d) = &context.design {
         s.push_str(&design::markdown(d));

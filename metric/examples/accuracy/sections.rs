@@ -28,7 +28,8 @@ pub(crate) struct Section {
 }
 
 /// Every stand-alone section, in the order a full run appends them.
-pub(crate) const SECTIONS: &[Section] = &[];
+pub(crate) const SECTIONS: &[Section] =
+    &[Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section }];
 
 /// The sections `--only` names, or an error listing the known names.
 pub(crate) fn select(names: &str) -> Result<Vec<&'static Section>, String> {
