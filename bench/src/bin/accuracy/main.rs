@@ -25,7 +25,7 @@
 //!
 //! Times are medians of repeated single-threaded calls in this (release) process.
 //!
-//! Run: `cargo run --release -p asnr-metric --example accuracy -- [--quick] [--designs] [--asnr BIN]
+//! Run: `cargo run --release -p asnr-bench --bin accuracy -- [--quick] [--designs] [--asnr BIN]
 //! [--python PY] [OUT_DIR]` (`--designs`: the rows of the designs given as data alone, written to
 //! `OUT_DIR/target/BENCHMARKS-designs.md`, not BENCHMARKS.md; `--sweep`: the sweep against numpy
 //! and the 5000-row efficiency table ([`sweep`]) alone, into `OUT_DIR/target/BENCHMARKS-sweep.md`): `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
