@@ -252,9 +252,9 @@ pub fn load(file: Option<&Path>, overrides: &[String]) -> Result<Scene, Error> {
 }
 
 /// [`load`], with the plausibility warnings: a pixel pitch outside
-/// [`PIXEL_PITCH_PLAUSIBLE_UM`], a focal length outside [`FOCAL_LENGTH_PLAUSIBLE_MM`], a
+/// [`PIXEL_PITCH_PLAUSIBLE_UM`], a focal length outside [`FOCAL_LENGTH_PLAUSIBLE_MM`](crate::FOCAL_LENGTH_PLAUSIBLE_MM), a
 /// wavelength (`design_wavelength_nm`, `center_nm`, or a whole table's) outside
-/// [`WAVELENGTH_PLAUSIBLE_NM`], an exposure outside [`EXPOSURE_PLAUSIBLE_MS`]. Each names the
+/// [`WAVELENGTH_PLAUSIBLE_NM`](crate::WAVELENGTH_PLAUSIBLE_NM), an exposure outside [`EXPOSURE_PLAUSIBLE_MS`]. Each names the
 /// key, the value and the unit it was probably typed in.
 pub fn load_with_warnings(file: Option<&Path>, overrides: &[String]) -> Result<Loaded, Error> {
     check_overrides(file, overrides)?;

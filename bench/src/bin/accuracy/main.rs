@@ -193,7 +193,7 @@ fn scene(case: &Case, aperture: bool, options: Options) -> Scene {
     scene_with(case, aperture, Spectrum::Gaussian(filter), options)
 }
 
-/// [`scene`] with the Gaussian filter tabulated every `spacing_m` over ±7σ (the production
+/// [`scene()`] with the Gaussian filter tabulated every `spacing_m` over ±7σ (the production
 /// window of a Gaussian factor, 2.6e-12 of its area outside): piecewise linear between samples.
 /// The λ of eq. S8 is applied by `evaluate`, as for every scene. Returns the sample count too.
 fn table_scene(case: &Case, spacing_m: f64, options: Options) -> (Scene, usize) {
