@@ -437,6 +437,55 @@ fn mtf_references_are_drawn_last_and_dashed_lines_have_dashed_swatches() {
     assert_eq!(dashed, 3);
 }
 
+/// `mtf --plot` of a field-of-view average whose pupil is 2-D (coma, the non-radial Zernike term
+/// Z7, sampled on the pupil grid): each field point's mean over azimuth, tangential and sagittal
+/// MTFs are drawn inside the axes in the point's colour (the mean solid and wider, the two
+/// directions dashed), each with a legend entry naming the point's field angles and the direction, on axes
+/// labelled with their units; the JSON says what the mean is.
+#[test]
+fn mtf_plot_draws_each_field_points_directional_curves() {
+    let dir = scratch("mtf-directions");
+    let fields = "[[fields]]\nx_deg = 0\nweight = 1\n\n[[fields]]\nx_deg = 8\nweight = 3\n\n[camera]";
+    let scene = file(&dir, "fields.toml", &std::fs::read_to_string(PAPER).unwrap().replace("[camera]", fields));
+    let coma = "lens.zernike_noll_rms_um=[0,0,0,0,0,0,0.1]";
+    let out = dir.join("mtf.svg");
+    succeeds(&["mtf", &scene, "--set", coma, "--points", "21", "--plot", out.to_str().unwrap()]);
+    let text = svg(&out);
+    let all = texts(&text);
+    for needle in [
+        "polychromatic MTF, weighted mean of 2 field points",
+        "on axis: mean over azimuth",
+        "on axis: along x",
+        "on axis: along y",
+        "field (8°, 0°): mean over azimuth",
+        "field (8°, 0°): tangential (along the field)",
+        "field (8°, 0°): sagittal (across the field)",
+        "spatial frequency (cycles/mm)",
+        "MTF",
+    ] {
+        assert!(all.iter().any(|t| t == needle), "missing {needle:?} in {all:?}");
+    }
+    // each point's curves in its colour (the palette's second and third) inside the frame: the
+    // mean one solid line, the widest, the two directions dashed (many thinner pieces)
+    let lines = polylines(&text);
+    let frame = outline(&lines, FRAME).unwrap();
+    for colour in ["#D72828", "#EBA000"] {
+        let inside: Vec<&Polyline> =
+            lines.iter().filter(|l| l.stroke == colour && frame.contains(&l.bounds())).collect();
+        let widths: Vec<f64> = inside.iter().map(|l| l.width).collect();
+        let widest = widths.iter().copied().fold(0.0, f64::max);
+        let solid = inside.iter().filter(|l| l.width == widest).count();
+        let dashed = inside.iter().filter(|l| l.width < widest).count();
+        assert_eq!(solid, 1, "{colour}: the mean as one solid line ({widths:?})");
+        assert!(dashed > 10, "{colour}: the two directions in {dashed} dashes");
+    }
+    let out = asnr(&["mtf", &scene, "--set", coma, "--points", "5", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(json.contains("\"mtf_over_azimuth\": true"), "{json}");
+    assert!(json.contains("weighted mean over 2 field points of the means over azimuth"), "{json}");
+}
+
 /// The texts of the title: those above the plotting area.
 fn title(svg: &str) -> String {
     let frame = outline(&polylines(svg), FRAME).unwrap();

@@ -32,7 +32,7 @@ const F0: f64 = 3.36e-3;
 const LAMBDA0: f64 = 800e-9;
 
 /// The long tables shared with the accuracy report.
-#[path = "../examples/accuracy/tables.rs"]
+#[path = "../../bench/src/bin/accuracy/tables.rs"]
 mod tables;
 use tables::rows;
 

@@ -831,6 +831,12 @@ pub struct MtfCurve {
     /// Where the OTF depends on direction: the sagittal MTF, for frequencies across the field
     /// direction (on axis, along y).
     pub mtf_sagittal: Option<Vec<f64>>,
+    /// Whether `mtf` (and each field point's) is the mean over azimuth of a sampled pupil's 2-D
+    /// OTF (a phase map, non-radial Zernike terms, a decentred iris: docs/physics.md, "Pupils
+    /// without rotational symmetry"), as `Evaluation::mean_mtf` is, rather than the
+    /// tangential–sagittal average; the directional curves are then two of the azimuths it
+    /// averages.
+    pub mtf_over_azimuth: bool,
     /// Field angles `(x, y)`, degrees, of a single field point (the first point of a
     /// field-of-view average).
     pub field_deg: [f64; 2],
@@ -932,6 +938,7 @@ fn curves_over_fields(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     // a field point whose OTF does not depend on direction has tangential = sagittal = mtf
     combined.mtf_tangential = split.then(|| mean(&|c| c.mtf_tangential.as_ref().unwrap_or(&c.mtf)));
     combined.mtf_sagittal = split.then(|| mean(&|c| c.mtf_sagittal.as_ref().unwrap_or(&c.mtf)));
+    combined.mtf_over_azimuth = curves.iter().any(|(c, _)| c.mtf_over_azimuth);
     combined.field_points = curves
         .into_iter()
         .map(|(c, weight)| FieldCurve {
@@ -999,6 +1006,7 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     };
     // where the OTF depends on direction the headline curve is, as `mean_mtf` is, the average
     // over azimuth for a sampled pupil's 2-D OTF, else the tangential–sagittal average
+    let mtf_over_azimuth = poly.has_pupil_grid();
     let mtf = match (&mtf_tangential, &mtf_sagittal) {
         _ if poly.has_pupil_grid() => frequencies.iter().map(|&nu| poly.mtf_over_azimuth(nu, along_field)).collect(),
         (Some(t), Some(s)) => t.iter().zip(s).map(|(a, b)| 0.5 * (a + b)).collect(),
@@ -1026,6 +1034,7 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
         monochromatic,
         mtf_tangential,
         mtf_sagittal,
+        mtf_over_azimuth,
         field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
         field_points: Vec::new(),
         nyquist_cyc_per_mm: camera.nyquist() * 1e-3,

@@ -281,8 +281,19 @@ fn mtf_meaning(c: &MtfCurve) -> String {
         format!(
             "MTF: weighted mean over {} field points{}: {}",
             c.field_points.len(),
-            if split { " of the tangential–sagittal averages" } else { "" },
+            match (split, c.mtf_over_azimuth) {
+                (_, true) => " of the means over azimuth",
+                (true, false) => " of the tangential–sagittal averages",
+                (false, false) => "",
+            },
             points.join(", ")
+        )
+    } else if c.mtf_over_azimuth && c.field_deg == [0.0, 0.0] {
+        "MTF: mean over azimuth (on axis; a sampled 2-D pupil, whose OTF depends on direction)".to_owned()
+    } else if c.mtf_over_azimuth {
+        format!(
+            "MTF: mean over azimuth at field ({}°, {}°) (a sampled 2-D pupil, whose OTF depends on direction)",
+            c.field_deg[0], c.field_deg[1]
         )
     } else if split && c.field_deg == [0.0, 0.0] {
         "MTF: mean of the MTFs along x and along y (on axis; the OTF depends on direction)".to_owned()

@@ -24,7 +24,8 @@ use lenses::{ChromaticMetalens, Curve};
 use metric::Scene;
 
 use crate::error::{Error, Warning, num, quoted};
-use crate::load::{Origins, Source, build_parts, merged, raw_scene};
+use crate::load::{Source, build_parts, merged, raw_scene};
+use crate::origins::Origins;
 
 /// The built-in comparison of the lens families at the paper's focal length, sensor, scene and
 /// exposure (`examples/designs.toml`), embedded as the paper scene is.

@@ -7,14 +7,19 @@
 use std::sync::Arc;
 
 use lenses::{
-    Channel, ChromaticMetalens, Curve, DelayOverflow, DispersionEngineered, Glass, Harmonic, Interleaved, Refractive,
-    Sellmeier, Surfaces, max_diameter, required_group_delay,
+    Channel, ChromaticMetalens, Curve, DelayOverflow, DispersionEngineered, Glass, Harmonic, Interleaved, PsfStack,
+    Refractive, Sellmeier, Surfaces, max_diameter, required_group_delay,
 };
 use optics::LensModel;
+use radiometry::Spectrum;
 use serde::Deserialize;
 
 use crate::error::{Error, num, quoted};
-use crate::load::{NumberOrFile, Origins};
+use crate::origins::{NumberOrFile, Origins};
+use crate::psf::{
+    ACCEPTED, ALIASING_MAX, ALIASING_WARNED, BORDER_WARNED, IMAGINARY_WARNED, PsfLimits, TableRange, read_stack,
+};
+use crate::zemax::ZemaxSource;
 
 /// The models a scene file accepts, as messages list them.
 pub(crate) const MODELS: &str = "\"chromatic\", \"refractive\", \"dispersion-engineered\", \"harmonic\", \"multiplexed\" (layout \"interleaved\" or \"segmented\"), \"tabulated\" (an MTF table), \"phase\" (your design's phase profile), \"library\" (a meta-atom library and its layout) or \"psf\" (a PSF stack)";
@@ -382,19 +387,6 @@ pub(crate) fn apply_preset(lens: &mut toml::Table, o: &Origins) -> Result<Option
     Ok(Some((name.to_owned(), supplied)))
 }
 
-/// What a `.zmx` file gave a lens table ([`apply_zemax`]), for `asnr scene` and the lens's notes.
-#[derive(Clone, Debug)]
-pub(crate) struct ZemaxSource {
-    /// The path as given in the scene.
-    pub file: String,
-    /// The Binary 2 surface read.
-    pub surface: usize,
-    /// The keys the file supplied.
-    pub keys: Vec<String>,
-    /// How the values were found.
-    pub notes: Vec<String>,
-}
-
 /// Fills the phase lens's keys from the Zemax file `lens.zemax` names (docs/physics.md, "Zemax
 /// OpticStudio files"): `binary2`, `norm_radius_mm`, `diffraction_order`,
 /// `aperture_diameter_mm`, `focal_length_mm`, `design_wavelength_nm`, and `model = "phase"`.
@@ -511,7 +503,7 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
     }
     let f0 = o.require("lens.focal_length_mm", l.focal_length_mm, "a length > 0 mm")?;
     let f0 = o.number("lens.focal_length_mm", f0, f0 > 0.0, "a length > 0 mm")?;
-    let (lo, hi) = crate::FOCAL_LENGTH_PLAUSIBLE_MM;
+    let (lo, hi) = crate::origins::FOCAL_LENGTH_PLAUSIBLE_MM;
     if f0 < lo {
         o.warn("lens.focal_length_mm", num(f0), format!("below {lo} mm: looks like m ({} mm?)", rounded(f0 * 1e3)));
     } else if f0 > hi {
@@ -1004,7 +996,7 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
                 Arc::new(phase_lens(l, o, f_number, f0_m, l0, efficiency(o)?, &transmission, &mut info)?)
             }
         }
-        Model::Psf => Arc::new(crate::psf::psf_lens(l, o, f_number, f0_m, &transmission, &mut info)?),
+        Model::Psf => Arc::new(psf_lens(l, o, f_number, f0_m, &transmission, &mut info)?),
     };
     let lens = match zernike(l, o)? {
         Some(terms) if model != Model::Phase => {
@@ -1725,6 +1717,152 @@ fn radial_work_within(
         }
     }
     Ok(())
+}
+
+/// The `model = "psf"` lens of a `[lens]` table.
+pub(crate) fn psf_lens(
+    l: &RawLens,
+    o: &Origins,
+    f_number: f64,
+    f0_m: f64,
+    transmission: &dyn Fn(&Origins, &Curve) -> Result<Curve, Error>,
+    info: &mut LensInfo,
+) -> Result<PsfStack, Error> {
+    let key = "lens.psf";
+    let file = o.require(key, l.psf.as_deref(), &format!("the path of a PSF stack: {ACCEPTED}"))?;
+    // from 1 nm: a finer pitch is far below any wavelength the stack samples, and 1e-304 µm
+    // made the OTF table's frequencies 1/(n p) infinite
+    let expected = "the stack's sample pitch at the detector, from 0.001 µm (1 nm) to below 1e6 µm";
+    let pitch = o.require("lens.psf_pitch_um", l.psf_pitch_um, expected)?;
+    let pitch = o.number("lens.psf_pitch_um", pitch, (1e-3..1e6).contains(&pitch), expected)?;
+    let wkey = "lens.psf_wavelengths_nm";
+    let expected = "the wavelength of each slice of the stack, nm, > 0 and strictly increasing";
+    let wavelengths = o.require(wkey, l.psf_wavelengths_nm.as_ref(), expected)?;
+    for (i, &w) in wavelengths.iter().enumerate() {
+        let ok = w > 0.0 && (i == 0 || w > wavelengths[i - 1]);
+        o.number(&format!("{wkey}[{i}]"), w, ok, expected)?;
+        o.wavelength(&format!("{wkey}[{i}]"), w);
+    }
+    let e = o.require(
+        "lens.efficiency",
+        l.efficiency.as_ref(),
+        "the imaging efficiency τ(λ), a fraction in [0, 1] or a CSV path: required with a PSF stack, which is normalized and carries no efficiency",
+    )?;
+    let efficiency = o.curve("lens.efficiency", e, "efficiency")?;
+    let transmission = transmission(o, &efficiency)?;
+    let path = o.path(file);
+    let stack = read_stack(&path).map_err(|message| Error::Table {
+        origin: o.of(key),
+        key: o.key(key),
+        file: crate::error::shorten(file),
+        cause: Box::new(Error::Csv { file: path.display().to_string(), line: None, message }),
+    })?;
+    let shape = format!("{} × {} × {}", stack.depth, stack.ny, stack.nx);
+    if stack.depth != wavelengths.len() {
+        return Err(o.bad(
+            wkey,
+            format!("a list of {}", wavelengths.len()),
+            &format!(
+                "one wavelength per slice of lens.psf = {}: {} (its shape is {shape}, [wavelength, y, x])",
+                quoted(file),
+                stack.depth
+            ),
+        ));
+    }
+    let efficiency_spectrum = match &efficiency {
+        Curve::Constant(v) => Spectrum::Constant(*v),
+        Curve::Table(t) => Spectrum::Sampled(t.clone()),
+    };
+    let range = (wavelengths[0] * 1e-9, wavelengths[wavelengths.len() - 1] * 1e-9);
+    let mut lens = PsfStack::new(
+        f_number,
+        f0_m,
+        pitch * 1e-6,
+        wavelengths.iter().map(|w| w * 1e-9).collect(),
+        [stack.ny, stack.nx],
+        &stack.values,
+        efficiency,
+        transmission,
+    )
+    .map_err(|e| o.domain(key, &format!("{key} = {}", quoted(file)), e))?;
+    if l.design_wavelength_nm.is_some() {
+        let v = l.design_wavelength_nm.unwrap_or_default();
+        let v = o.number("lens.design_wavelength_nm", v, v > 0.0, "a wavelength > 0 nm")?;
+        o.wavelength("lens.design_wavelength_nm", v);
+        lens = lens.with_design_wavelength(v * 1e-9).map_err(|e| o.domain("lens", "[lens]", e))?;
+        info.design_wavelength_m = Some(v * 1e-9);
+    }
+    let report = lens.report().clone();
+    let (alias, at) = report.aliasing;
+    let aliasing = |alias: f64| {
+        format!(
+            "the stack's spectrum at its Nyquist frequency 1/(2p) = {:.1} cycles/mm is {:.3e} (slice at {} nm): the PSF is undersampled, and the aliases folded about that frequency may add up to {:.3e} to the MTF below it and to the mean MTF (half the spectrum there, the OTF at 1/(2p), if the MTF does not rise beyond it)",
+            lens.nyquist() * 1e-3,
+            2.0 * alias,
+            num(optics::round_for_display(at * 1e9)),
+            alias
+        )
+    };
+    if alias > ALIASING_MAX {
+        return Err(o.bad(
+            "lens.psf_pitch_um",
+            num(pitch),
+            &format!(
+                "a pitch that samples the PSF ({}; at most {ALIASING_MAX} accepted, warned above {ALIASING_WARNED:e}): sample it finer, e.g. at λ F#/2 (`asnr psf --stack` does)",
+                aliasing(alias)
+            ),
+        ));
+    }
+    let mut notices = Vec::new();
+    if alias > ALIASING_WARNED {
+        notices.push((quoted(file), aliasing(alias)));
+    }
+    let (border, at) = report.border_fraction;
+    if border > BORDER_WARNED {
+        notices.push((
+            quoted(file),
+            format!(
+                "{:.3} % of the light of the slice at {} nm lies within {} samples of the stack's border: the PSF may be cut off (a larger stack would hold it)",
+                border * 100.0,
+                num(optics::round_for_display(at * 1e9)),
+                lenses::PSF_BORDER_SAMPLES
+            ),
+        ));
+    }
+    let (im, at, nu) = report.imaginary;
+    if im > IMAGINARY_WARNED {
+        notices.push((
+            quoted(file),
+            format!(
+                "the PSF at {} nm is asymmetric about its centroid: its OTF has an imaginary part of {im:.3} at {:.1} cycles/mm, which the table (the real part) leaves out",
+                num(optics::round_for_display(at * 1e9)),
+                nu * 1e-3
+            ),
+        ));
+    }
+    let shifts = report.centroids_m.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max);
+    info.notes.push(format!(
+        "PSF stack {}: {shape} at {} µm, {}–{} nm; OTF to the stack's Nyquist {:.1} cycles/mm, the samples' exact transform at every frequency (tabulated on {} points, zero padded ×{}), linear in λ between slices; aliasing estimate {:.1e}; centroid offsets up to {:.3} µm kept as lateral shifts",
+        crate::error::shorten(file),
+        num(pitch),
+        num(wavelengths[0]),
+        num(wavelengths[wavelengths.len() - 1]),
+        lens.nyquist() * 1e-3,
+        report.transform_length,
+        lenses::PSF_PADDING,
+        report.aliasing.0,
+        shifts * 1e6
+    ));
+    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, notices });
+    info.table_range = Some(TableRange {
+        key: "lens.psf_wavelengths_nm",
+        value: None,
+        what: "stack",
+        ends: "end slices",
+        range_m: range,
+        efficiency: efficiency_spectrum,
+    });
+    Ok(lens)
 }
 
 /// The working F-number from `lens.f_number` or `lens.aperture_diameter_mm` (exactly one).

@@ -58,6 +58,7 @@ mod error;
 pub mod gds;
 mod lens;
 mod load;
+mod origins;
 mod psf;
 mod resolved;
 pub mod sweep;
@@ -70,10 +71,13 @@ pub use compare::{
 pub use error::{Error, SHOWN, Warning};
 pub use lens::PRESETS;
 pub use load::{
-    EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, Loaded, MAX_EXTENDED_LIST, PAPER_SCENE, PIXEL_PITCH_PLAUSIBLE_UM,
-    PupilMapping, Resolved, Source, WAVELENGTH_PLAUSIBLE_NM, build_from, build_with_warnings, canonical_key,
-    check_overrides, load, load_with_warnings, read, resolved_toml,
+    Loaded, MAX_EXTENDED_LIST, PAPER_SCENE, PupilMapping, Source, build_from, build_with_warnings, canonical_key,
+    check_overrides, load, load_with_warnings, read,
 };
+pub use origins::{
+    EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, PIXEL_PITCH_PLAUSIBLE_UM, WAVELENGTH_PLAUSIBLE_NM,
+};
+pub use resolved::{Resolved, resolved_toml};
 pub use tables::{Axis, CsvLines, FREQUENCY, MAX_FILE_BYTES, WAVELENGTH, read_pairs, read_table};
 
 #[cfg(test)]

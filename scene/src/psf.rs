@@ -9,12 +9,11 @@
 use std::io::Read as _;
 use std::path::Path;
 
-use lenses::{Curve, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PsfStack};
+use lenses::{PSF_MAX_ELEMENTS, PSF_MIN_SIDE};
 use radiometry::Spectrum;
 
-use crate::error::{Error, num, quoted};
-use crate::lens::{LensInfo, RawLens};
-use crate::load::Origins;
+use crate::error::{Error, num};
+use crate::origins::Origins;
 
 /// The most pages a TIFF stack may have (one per wavelength).
 const MAX_PAGES: usize = 10_000;
@@ -32,20 +31,20 @@ pub(crate) const PSF_OUTSIDE_MAX: f64 = 1e-3;
 const OUTSIDE_WARNED: f64 = 1e-6;
 
 /// The fraction of a slice's light in the stack's border band above which the scene warns.
-const BORDER_WARNED: f64 = 1e-3;
+pub(crate) const BORDER_WARNED: f64 = 1e-3;
 
 /// The largest |imaginary part| of a re-centred OTF above which the scene warns (the table holds
 /// the real part).
-const IMAGINARY_WARNED: f64 = 0.01;
+pub(crate) const IMAGINARY_WARNED: f64 = 0.01;
 
 /// The largest aliasing estimate of a stack ([`lenses::PsfReport::aliasing`]: half its
 /// transform's modulus at its Nyquist frequency, the OTF there) accepted: above it the aliases
 /// may move the MTF below the stack's Nyquist frequency by more than 1 % and the stack is
 /// refused; above [`ALIASING_WARNED`] warned about.
-const ALIASING_MAX: f64 = 1e-2;
+pub(crate) const ALIASING_MAX: f64 = 1e-2;
 
 /// Above this aliasing estimate the scene warns: the default tolerance of the metric (1e-6).
-const ALIASING_WARNED: f64 = 1e-6;
+pub(crate) const ALIASING_WARNED: f64 = 1e-6;
 
 /// A stack in memory: `depth` slices of `ny × nx`, C order `[slice][row][column]`.
 #[derive(Debug)]
@@ -66,7 +65,7 @@ pub(crate) struct PsfLimits {
 }
 
 /// What the file formats accept, for messages.
-const ACCEPTED: &str = "a .npy float array [wavelength, y, x] (dtype <f4, <f8, >f4 or >f8, C or Fortran order, NPY format 1.0–3.0) or a multi-page TIFF of 32- or 64-bit float samples (one page per wavelength)";
+pub(crate) const ACCEPTED: &str = "a .npy float array [wavelength, y, x] (dtype <f4, <f8, >f4 or >f8, C or Fortran order, NPY format 1.0–3.0) or a multi-page TIFF of 32- or 64-bit float samples (one page per wavelength)";
 
 /// An element type of a `.npy` array.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -470,152 +469,6 @@ pub(crate) fn read_stack(path: &Path) -> Result<Stack, String> {
             &magic[..n]
         )),
     }
-}
-
-/// The `model = "psf"` lens of a `[lens]` table.
-pub(crate) fn psf_lens(
-    l: &RawLens,
-    o: &Origins,
-    f_number: f64,
-    f0_m: f64,
-    transmission: &dyn Fn(&Origins, &Curve) -> Result<Curve, Error>,
-    info: &mut LensInfo,
-) -> Result<PsfStack, Error> {
-    let key = "lens.psf";
-    let file = o.require(key, l.psf.as_deref(), &format!("the path of a PSF stack: {ACCEPTED}"))?;
-    // from 1 nm: a finer pitch is far below any wavelength the stack samples, and 1e-304 µm
-    // made the OTF table's frequencies 1/(n p) infinite
-    let expected = "the stack's sample pitch at the detector, from 0.001 µm (1 nm) to below 1e6 µm";
-    let pitch = o.require("lens.psf_pitch_um", l.psf_pitch_um, expected)?;
-    let pitch = o.number("lens.psf_pitch_um", pitch, (1e-3..1e6).contains(&pitch), expected)?;
-    let wkey = "lens.psf_wavelengths_nm";
-    let expected = "the wavelength of each slice of the stack, nm, > 0 and strictly increasing";
-    let wavelengths = o.require(wkey, l.psf_wavelengths_nm.as_ref(), expected)?;
-    for (i, &w) in wavelengths.iter().enumerate() {
-        let ok = w > 0.0 && (i == 0 || w > wavelengths[i - 1]);
-        o.number(&format!("{wkey}[{i}]"), w, ok, expected)?;
-        o.wavelength(&format!("{wkey}[{i}]"), w);
-    }
-    let e = o.require(
-        "lens.efficiency",
-        l.efficiency.as_ref(),
-        "the imaging efficiency τ(λ), a fraction in [0, 1] or a CSV path: required with a PSF stack, which is normalized and carries no efficiency",
-    )?;
-    let efficiency = o.curve("lens.efficiency", e, "efficiency")?;
-    let transmission = transmission(o, &efficiency)?;
-    let path = o.path(file);
-    let stack = read_stack(&path).map_err(|message| Error::Table {
-        origin: o.of(key),
-        key: o.key(key),
-        file: crate::error::shorten(file),
-        cause: Box::new(Error::Csv { file: path.display().to_string(), line: None, message }),
-    })?;
-    let shape = format!("{} × {} × {}", stack.depth, stack.ny, stack.nx);
-    if stack.depth != wavelengths.len() {
-        return Err(o.bad(
-            wkey,
-            format!("a list of {}", wavelengths.len()),
-            &format!(
-                "one wavelength per slice of lens.psf = {}: {} (its shape is {shape}, [wavelength, y, x])",
-                quoted(file),
-                stack.depth
-            ),
-        ));
-    }
-    let efficiency_spectrum = match &efficiency {
-        Curve::Constant(v) => Spectrum::Constant(*v),
-        Curve::Table(t) => Spectrum::Sampled(t.clone()),
-    };
-    let range = (wavelengths[0] * 1e-9, wavelengths[wavelengths.len() - 1] * 1e-9);
-    let mut lens = PsfStack::new(
-        f_number,
-        f0_m,
-        pitch * 1e-6,
-        wavelengths.iter().map(|w| w * 1e-9).collect(),
-        [stack.ny, stack.nx],
-        &stack.values,
-        efficiency,
-        transmission,
-    )
-    .map_err(|e| o.domain(key, &format!("{key} = {}", quoted(file)), e))?;
-    if l.design_wavelength_nm.is_some() {
-        let v = l.design_wavelength_nm.unwrap_or_default();
-        let v = o.number("lens.design_wavelength_nm", v, v > 0.0, "a wavelength > 0 nm")?;
-        o.wavelength("lens.design_wavelength_nm", v);
-        lens = lens.with_design_wavelength(v * 1e-9).map_err(|e| o.domain("lens", "[lens]", e))?;
-        info.design_wavelength_m = Some(v * 1e-9);
-    }
-    let report = lens.report().clone();
-    let (alias, at) = report.aliasing;
-    let aliasing = |alias: f64| {
-        format!(
-            "the stack's spectrum at its Nyquist frequency 1/(2p) = {:.1} cycles/mm is {:.3e} (slice at {} nm): the PSF is undersampled, and the aliases folded about that frequency may add up to {:.3e} to the MTF below it and to the mean MTF (half the spectrum there, the OTF at 1/(2p), if the MTF does not rise beyond it)",
-            lens.nyquist() * 1e-3,
-            2.0 * alias,
-            num(optics::round_for_display(at * 1e9)),
-            alias
-        )
-    };
-    if alias > ALIASING_MAX {
-        return Err(o.bad(
-            "lens.psf_pitch_um",
-            num(pitch),
-            &format!(
-                "a pitch that samples the PSF ({}; at most {ALIASING_MAX} accepted, warned above {ALIASING_WARNED:e}): sample it finer, e.g. at λ F#/2 (`asnr psf --stack` does)",
-                aliasing(alias)
-            ),
-        ));
-    }
-    let mut notices = Vec::new();
-    if alias > ALIASING_WARNED {
-        notices.push((quoted(file), aliasing(alias)));
-    }
-    let (border, at) = report.border_fraction;
-    if border > BORDER_WARNED {
-        notices.push((
-            quoted(file),
-            format!(
-                "{:.3} % of the light of the slice at {} nm lies within {} samples of the stack's border: the PSF may be cut off (a larger stack would hold it)",
-                border * 100.0,
-                num(optics::round_for_display(at * 1e9)),
-                lenses::PSF_BORDER_SAMPLES
-            ),
-        ));
-    }
-    let (im, at, nu) = report.imaginary;
-    if im > IMAGINARY_WARNED {
-        notices.push((
-            quoted(file),
-            format!(
-                "the PSF at {} nm is asymmetric about its centroid: its OTF has an imaginary part of {im:.3} at {:.1} cycles/mm, which the table (the real part) leaves out",
-                num(optics::round_for_display(at * 1e9)),
-                nu * 1e-3
-            ),
-        ));
-    }
-    let shifts = report.centroids_m.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max);
-    info.notes.push(format!(
-        "PSF stack {}: {shape} at {} µm, {}–{} nm; OTF to the stack's Nyquist {:.1} cycles/mm, the samples' exact transform at every frequency (tabulated on {} points, zero padded ×{}), linear in λ between slices; aliasing estimate {:.1e}; centroid offsets up to {:.3} µm kept as lateral shifts",
-        crate::error::shorten(file),
-        num(pitch),
-        num(wavelengths[0]),
-        num(wavelengths[wavelengths.len() - 1]),
-        lens.nyquist() * 1e-3,
-        report.transform_length,
-        lenses::PSF_PADDING,
-        report.aliasing.0,
-        shifts * 1e6
-    ));
-    info.psf = Some(PsfLimits { pitch_m: pitch * 1e-6, notices });
-    info.table_range = Some(TableRange {
-        key: "lens.psf_wavelengths_nm",
-        value: None,
-        what: "stack",
-        ends: "end slices",
-        range_m: range,
-        efficiency: efficiency_spectrum,
-    });
-    Ok(lens)
 }
 
 /// The check of a PSF-stack lens that needs the camera: the stack's Nyquist frequency above the

@@ -9,9 +9,28 @@ use std::fmt::Write as _;
 
 use metric::{GlareMode, MetricForm, Options};
 
-use crate::error::{Error, shorten};
+use crate::error::{Error, Warning, shorten};
 use crate::lens::{Model, RawLens};
-use crate::load::{NumberOrFile, Origins, RawScene};
+use crate::load::{RawScene, Source, build_checked, prepare};
+use crate::origins::{NumberOrFile, Origins};
+
+/// A scene as read ([`resolved_toml`]) and its plausibility warnings.
+#[derive(Clone, Debug)]
+pub struct Resolved {
+    /// TOML with every default filled in and every CSV path resolved (absolute).
+    pub toml: String,
+    /// Values that are valid but almost surely a unit slip, as [`crate::Loaded::warnings`].
+    pub warnings: Vec<Warning>,
+}
+
+/// The scene of `source` with `overrides` as TOML with every default filled in and every CSV
+/// path resolved (absolute): what was read. It is validated (built) once, and loads again to the
+/// same scene.
+pub fn resolved_toml(source: &Source, overrides: &[String]) -> Result<Resolved, Error> {
+    let (raw, origins) = prepare(source, overrides)?;
+    let warnings = build_checked(&raw, &origins)?.warnings;
+    Ok(Resolved { toml: write(&raw, &origins)?, warnings })
+}
 
 struct Out {
     text: String,

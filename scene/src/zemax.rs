@@ -557,6 +557,19 @@ pub(crate) fn parse(text: &str, file: &str, chosen: Option<u32>) -> Result<Zemax
     })
 }
 
+/// What a `.zmx` file gave a lens table (`lens::apply_zemax`), for `asnr scene` and the lens's notes.
+#[derive(Clone, Debug)]
+pub(crate) struct ZemaxSource {
+    /// The path as given in the scene.
+    pub file: String,
+    /// The Binary 2 surface read.
+    pub surface: usize,
+    /// The keys the file supplied.
+    pub keys: Vec<String>,
+    /// How the values were found.
+    pub notes: Vec<String>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

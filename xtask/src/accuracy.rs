@@ -1,7 +1,7 @@
 //! `cargo xtask accuracy [--quick] [--designs] [--only NAME[,NAME]]`: the accuracy-versus-time report (`--designs`: the
 //! rows of the designs given as data alone, into `target/BENCHMARKS-designs.md`; `--only`: the named
 //! stand-alone sections alone, each replacing its own section of `BENCHMARKS.md`). Builds and runs the example
-//! `metric/examples/accuracy/` (`main.rs` and its modules) in release (xtask depends on no
+//! `bench/src/bin/accuracy/` (`main.rs` and its modules, the `asnr-bench` crate) in release (xtask depends on no
 //! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
 //! workspace root.
 //!
@@ -39,7 +39,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     cmd::run(&mut cmd::cargo(root, &["build", "--release", "--quiet", "--package", "asnr", "--bin", "asnr"]))?;
     let asnr = target_dir(root).join("release").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut command =
-        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "asnr-metric", "--example", "accuracy", "--"]);
+        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "asnr-bench", "--bin", "accuracy", "--"]);
     command.args(args).arg("--asnr").arg(&asnr);
     match python(root) {
         Ok(python) => {

@@ -103,7 +103,7 @@ fn test(root: &Path) -> Result<()> {
 fn stress(root: &Path) -> Result<()> {
     cmd::run(&mut cmd::cargo(
         root,
-        &["run", "--locked", "--quiet", "--package", "asnr-metric", "--example", "stress", "--", "--quick"],
+        &["run", "--locked", "--quiet", "--package", "asnr-bench", "--bin", "stress", "--", "--quick"],
     ))
 }
 

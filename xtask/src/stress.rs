@@ -2,7 +2,7 @@
 //! stress sweep of the metric over the corners of the physical parameter space.
 //!
 //! xtask depends on no project crate (`tidy` enforces it), so the sweep itself is the example
-//! `metric/examples/stress.rs`; this task builds it in release and runs it, passing the
+//! `bench/src/bin/stress.rs`; this task builds it in release and runs it, passing the
 //! arguments on. It prints a table (engine and time of every point), the failures, warnings,
 //! fallbacks and slowest points, and `stress: N points, M failures`, and fails on any failure.
 //! `--quick` is the CI-sized grid (well under a minute in release).
@@ -21,7 +21,7 @@ const OPTIONS: &[&str] = &["--timeout", "--only"];
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     check_args(args)?;
     let mut command =
-        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "asnr-metric", "--example", "stress", "--"]);
+        cmd::cargo(root, &["run", "--release", "--quiet", "--package", "asnr-bench", "--bin", "stress", "--"]);
     command.args(args);
     cmd::run(&mut command)
 }

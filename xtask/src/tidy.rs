@@ -2,7 +2,7 @@
 //! `Cargo.toml` (with the `toml` crate) and crate root.
 //!
 //! The layout (the user's design card): every workspace member is a folder at the repository
-//! root (`radiometry/ optics/ noise/ metric/ lenses/ scene/ cli/ xtask/`, and the crates added
+//! root (`radiometry/ optics/ noise/ metric/ lenses/ scene/ cli/ bench/ xtask/`, and the crates added
 //! beside them); there is no `crates/` folder. For every member of the root manifest:
 //! Downstream example crates are the one exception to the layout: `examples/<name>/` (one level,
 //! e.g. `examples/custom-lens`), each a user's crate built with the public API only.
@@ -17,7 +17,8 @@
 //! - every dependency is `name.workspace = true`, so versions and paths live only in the root
 //!   `[workspace.dependencies]`;
 //! - it has `[lints] workspace = true`;
-//! - `src/lib.rs` and `src/main.rs`, whichever exist, open with a `//!` crate doc comment;
+//! - `src/lib.rs`, `src/main.rs` and the binaries of `src/bin/`, whichever exist, open with a
+//!   `//!` crate doc comment;
 //! - every dependency it declares is named by its sources ([`unused_dependencies`]).
 //!
 //! And for the whole build: no package in `cargo metadata` needs a newer Rust than the
@@ -59,6 +60,9 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
     // the Python extension: libraries only, never the command line (clap, plotters, image, …)
     ("python", Allowed::Only(&["report", "imaging", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
     ("xtask", Allowed::Only(&[])),
+    // the benchmark harness (binaries, not published): the libraries it measures, never the
+    // command line, which it runs as a subprocess
+    ("bench", Allowed::Only(&["imaging", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only
     ("custom-lens", Allowed::Any),
 ];
@@ -70,6 +74,7 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
 pub(crate) const PACKAGE_NAMES: &[(&str, &str)] = &[
     ("cli", "asnr"),
     ("python", "asnr-python"),
+    ("bench", "asnr-bench"),
     ("radiometry", "asnr-radiometry"),
     ("optics", "asnr-optics"),
     ("noise", "asnr-noise"),
@@ -177,8 +182,33 @@ fn check_member(root: &Path, folder: &str, violations: &mut Vec<String>) -> Resu
             violations.push(format!("{path}: does not open with a `//!` crate doc comment"));
         }
     }
+    // binaries under src/bin/ (`NAME.rs` or `NAME/main.rs`, the benchmark harness's) are crate
+    // roots too
+    let bins = root.join(folder).join("src/bin");
+    let mut binaries: Vec<String> = fs::read_dir(&bins)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|entry| {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if entry.path().is_dir() && entry.path().join("main.rs").exists() {
+                Some(format!("{folder}/src/bin/{name}/main.rs"))
+            } else {
+                name.ends_with(".rs").then(|| format!("{folder}/src/bin/{name}"))
+            }
+        })
+        .collect();
+    binaries.sort();
+    for path in binaries {
+        crate_roots += 1;
+        let full = root.join(&path);
+        let source = fs::read_to_string(&full).with_context(|| format!("cannot read {}", full.display()))?;
+        if !opens_with_crate_doc(&source) {
+            violations.push(format!("{path}: does not open with a `//!` crate doc comment"));
+        }
+    }
     if crate_roots == 0 {
-        violations.push(format!("{folder}: has neither src/lib.rs nor src/main.rs"));
+        violations.push(format!("{folder}: has neither src/lib.rs, src/main.rs nor src/bin/"));
     }
     Ok(())
 }
@@ -201,7 +231,8 @@ pub(crate) fn check_manifest(folder: &str, text: &str) -> Vec<String> {
         Some(name) => problems.push(format!("package name `{name}`: the package in `{folder}/` is `{expected}`")),
         None => problems.push("has no [package] name".to_owned()),
     }
-    if expected == format!("asnr-{folder}") && folder != "python" {
+    // the Python extension's library is named by its module, the harness has binaries only
+    if expected == format!("asnr-{folder}") && !matches!(folder, "python" | "bench") {
         let lib = manifest.get("lib").and_then(|lib| lib.get("name")).and_then(Value::as_str);
         if lib != Some(folder) {
             problems.push(format!(

@@ -2,7 +2,7 @@
 //! corners of the physical parameter space, every point checked and timed.
 //!
 //! ```text
-//! cargo run --release -p asnr-metric --example stress -- [--quick] [--timeout SECONDS] [--only TEXT] [--list]
+//! cargo run --release -p asnr-bench --bin stress -- [--quick] [--timeout SECONDS] [--only TEXT] [--list]
 //! ```
 //!
 //! The grid: F/0.5–F/50; Gaussian spectral ranges 1e-3–600 nm; pixels 0.3–50 µm; efficiencies

@@ -75,7 +75,7 @@ impl Notes {
 
 /// The workspace root (inputs are read from the repository, whatever the output folder).
 pub(crate) fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("metric is one level below the root").to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("bench is one level below the root").to_path_buf()
 }
 
 /// A scene file of the repository with `--set` overrides, as `asnr evaluate` reads it.

@@ -46,6 +46,7 @@ pub(crate) const SECTIONS: &[Section] = &[
         title: "Gradients: the value and its gradient side by side",
         run: crate::gradients::section,
     },
+    Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section },
 ];
 
 /// The sections `--only` names, or an error listing the known names.

@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use crate::kernels::{DEFOCUS_WAVES, Kernel, KernelRow};
 use crate::tolerance::{BINARY2, COMA, IRIS, LIBRARY, NUMPY_RADIAL, NUMPY_SCRIPT, SPECTROMETER, TABLE};
-use crate::{Context, Family, Row, design, map, psf_stack, targets};
+use crate::{Context, Family, Row, design, map, targets};
 
 /// One line per mean-MTF method: what it is.
 fn explain(family: Family) -> String {
@@ -171,7 +171,7 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
         let _ = writeln!(
             s,
             "Decentred iris (SI Fig. S3; {IRIS} and the fixed-N rows' 0.1): exact reference, written for this \
-             report (metric/examples/accuracy/iris.rs). On the defocus-only chromatic lens a full-size iris \
+             report (bench/src/bin/accuracy/iris.rs). On the defocus-only chromatic lens a full-size iris \
              decentred by d radii is exactly the centred circular pupil with the same defocus W020(λ) plus a tilt \
              2 d W020(λ), i.e. an image shift Δ(λ) = −4 d F# W020(λ) along the decentre: the OTF along it is the \
              exact defocus OTF times exp(−i d a), a = 8π w s, summed over λ as a complex number, and across it \
@@ -349,9 +349,6 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
                  and passes `--asnr`).\n"
             );
         }
-    }
-    if let Some(p) = &context.psf_stack {
-        s.push_str(&psf_stack::markdown(p));
     }
     if let Some(d) = &context.design {
         s.push_str(&design::markdown(d));

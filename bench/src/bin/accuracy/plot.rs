@@ -10,7 +10,7 @@ use crate::Row;
 use crate::kernels::{DEFOCUS_WAVES, Kernel, KernelRow};
 use crate::tolerance::{COMA, IRIS, SPECTROMETER};
 
-static FONT: &[u8] = include_bytes!("../../../cli/assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../../../cli/assets/DejaVuSans.ttf");
 
 type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
 

@@ -2,10 +2,10 @@
 //! runs on (the numbers of an optimization are measured on it), with the median time per call.
 //!
 //! ```text
-//! cargo build --release -p asnr-metric --example repeat
-//! target/release/examples/repeat examples/spectrometer.toml [TOLERANCE [RUNS]]
-//! valgrind --tool=callgrind target/release/examples/repeat examples/spectrometer.toml 1e-6 20
-//! perf record target/release/examples/repeat examples/spectrometer.toml 1e-6 1500
+//! cargo build --release -p asnr-bench --bin repeat
+//! target/release/repeat examples/spectrometer.toml [TOLERANCE [RUNS]]
+//! valgrind --tool=callgrind target/release/repeat examples/spectrometer.toml 1e-6 20
+//! perf record target/release/repeat examples/spectrometer.toml 1e-6 1500
 //! ```
 //!
 //! The tolerance (default 1e-6) is set as `--set options.tolerance=…` would set it; 200 runs by

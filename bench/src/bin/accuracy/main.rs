@@ -20,12 +20,12 @@
 //! per-interval spectral rule at 1e-12, with the numpy baseline `xtask/baselines/numpy_table.py`
 //! beside it), the decentred iris 0.15 (against the exact reduction of [`iris`]) and coma 0.5 µm
 //! (against a Richardson extrapolation) — the 40 × 100 map and a 384 × 384 × 45 PSF stack through
-//! the release `asnr` ([`map`], [`psf_stack`]),
+//! the release `asnr` ([`map`], and the stand-alone section [`psf_stack`]),
 //! and the targets against them ([`targets`]).
 //!
 //! Times are medians of repeated single-threaded calls in this (release) process.
 //!
-//! Run: `cargo run --release -p asnr-metric --example accuracy -- [--quick] [--designs] [--asnr BIN]
+//! Run: `cargo run --release -p asnr-bench --bin accuracy -- [--quick] [--designs] [--asnr BIN]
 //! [--python PY] [OUT_DIR]` (`--designs`: the rows of the designs given as data alone, written to
 //! `OUT_DIR/target/BENCHMARKS-designs.md`, not BENCHMARKS.md; `--sweep`: the sweep against numpy
 //! and the 5000-row efficiency table ([`sweep`]) alone, into `OUT_DIR/target/BENCHMARKS-sweep.md`): `--asnr` the release `asnr` binary for the map, `--python` an interpreter with
@@ -35,8 +35,8 @@
 //! existing `OUT_DIR/BENCHMARKS.md`.
 
 mod design;
-mod fft_azimuth;
 mod exact_map;
+mod fft_azimuth;
 mod gradients;
 mod iris;
 mod kernels;
@@ -198,7 +198,7 @@ fn scene(case: &Case, aperture: bool, options: Options) -> Scene {
     scene_with(case, aperture, Spectrum::Gaussian(filter), options)
 }
 
-/// [`scene`] with the Gaussian filter tabulated every `spacing_m` over ±7σ (the production
+/// [`scene()`] with the Gaussian filter tabulated every `spacing_m` over ±7σ (the production
 /// window of a Gaussian factor, 2.6e-12 of its area outside): piecewise linear between samples.
 /// The λ of eq. S8 is applied by `evaluate`, as for every scene. Returns the sample count too.
 fn table_scene(case: &Case, spacing_m: f64, options: Options) -> (Scene, usize) {
@@ -252,8 +252,6 @@ struct Context {
     notes: tolerance::Notes,
     /// The map, when the `asnr` binary was given.
     map: Option<map::Map>,
-    /// The 384 × 384 × 45 PSF stack, when the `asnr` binary was given.
-    psf_stack: Option<psf_stack::PsfBench>,
     /// The design search and tolerance run, when the `asnr` binary was given (not with --quick).
     design: Option<design::DesignBench>,
     /// The sweep against numpy and the 5000-row efficiency table.
@@ -385,7 +383,6 @@ fn main() {
         decentred: None,
         notes: tolerance::Notes::new(),
         map: None,
-        psf_stack: None,
         design: None,
         sweep: None,
         binary2_process: None,
@@ -547,7 +544,6 @@ fn main() {
         m.python = asnr_python.as_deref().and_then(|py| map::measure_python(py, bin, &out, grid.map_runs));
         m
     });
-    context.psf_stack = asnr.as_deref().and_then(|bin| psf_stack::measure(bin, &out, grid.map_runs));
     if !quick {
         context.design = asnr.as_deref().and_then(|bin| design::measure(bin, &out));
         context.sweep = asnr.as_deref().and_then(|bin| sweep::measure(bin, python.as_deref(), &out, grid.map_runs));
