@@ -1,7 +1,7 @@
 """numpy baseline of the slanted-edge e-SFR (`asnr sfr`, imaging/src/sfr.rs; docs/physics.md,
 "Slanted-edge MTF"), the same algorithm written as a careful numpy script would, so that
 BENCHMARKS.md can set our time and mean MTF beside it
-(`cargo xtask accuracy --only sfr`, metric/examples/accuracy/sfr.rs).
+(`cargo xtask accuracy --only sfr`, bench/src/bin/accuracy/sfr.rs).
 
 Input: a .npy file holding one 2-D float64 image with one near-vertical edge filling it (the
 example writes the exact image of a Gaussian-blurred, pixel-integrated edge). Steps:

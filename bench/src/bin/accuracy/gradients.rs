@@ -150,7 +150,7 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
     let profile = if cfg!(debug_assertions) { "Dev profile" } else { "Release" };
     let mut md = String::from("## Gradients: the value and its gradient side by side\n\n");
     md.push_str(&format!(
-        "`cargo xtask accuracy --only gradients` (metric/examples/accuracy/gradients.rs): the Binary 2 metalens of \
+        "`cargo xtask accuracy --only gradients` (bench/src/bin/accuracy/gradients.rs): the Binary 2 metalens of \
          examples/phase-binary2.toml at its tolerance (1e-6) with K Binary 2 coefficients (the example's four, then \
          small alternating ones, ±2e-3/j rad), on axis. The value is the scene built and evaluated \
          (`metric::evaluate`); the gradient is the scene built, evaluated and differentiated with respect to all K \
