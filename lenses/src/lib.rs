@@ -64,6 +64,7 @@
 //! Units: SI (m). Efficiencies are fractions of the light incident on the full aperture. This
 //! crate reads no files: the parsers take text.
 
+mod atom_grid;
 mod chromatic;
 mod dispersion;
 mod harmonic;
@@ -77,6 +78,7 @@ mod refractive;
 mod segmented;
 mod tabulated;
 
+pub use atom_grid::{AtomGrid, LayoutStats};
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
