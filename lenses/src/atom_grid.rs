@@ -15,7 +15,7 @@ pub struct AtomGrid {
     /// Sites along y.
     pub ny: usize,
     /// The parameter columns: `diameter_nm`, or `width_nm`, `length_nm`.
-    pub parameters: Vec<&'static str>,
+    pub parameters: Vec<String>,
     /// `[parameter, y, x]`, nm.
     pub values: Vec<f64>,
     /// `[y, x]`: no atom on the site.
@@ -48,5 +48,6 @@ pub struct LayoutStats {
     /// The largest relative distance of a pillar's vertex from its circle (0 for a regular
     /// polygon): how far the vertex-count correction is from exact.
     pub max_vertex_deviation: f64,
+    /// The drawing's resolution (a GDSII file's database unit), m; 0 for a grid of numbers.
+    pub database_unit_m: f64,
 }
-

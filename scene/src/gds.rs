@@ -831,6 +831,7 @@ pub fn layout<R: Read>(input: R, o: &GdsOptions) -> Result<AtomGrid, GdsError> {
         cells: lib.cells.len(),
         parameter_range: vec![(f64::INFINITY, f64::NEG_INFINITY); np],
         max_vertex_deviation: lib.max_deviation,
+        database_unit_m: unit,
         ..LayoutStats::default()
     };
     let mut extra_sites = std::collections::HashSet::new();
@@ -869,7 +870,7 @@ pub fn layout<R: Read>(input: R, o: &GdsOptions) -> Result<AtomGrid, GdsError> {
         origin_m: ((x0 + lo.0 as f64 * p) * unit, (y0 + lo.1 as f64 * p) * unit),
         nx,
         ny,
-        parameters: if fins { vec!["width_nm", "length_nm"] } else { vec!["diameter_nm"] },
+        parameters: if fins { vec!["width_nm".into(), "length_nm".into()] } else { vec!["diameter_nm".into()] },
         values,
         empty,
         theta_deg: theta,
