@@ -214,6 +214,14 @@ pub(crate) fn library_map_lens(
             num(tolerance)
         ));
     }
+    // the stated lattice error against the radial design (docs/physics.md, "2-D library layouts")
+    let radius = 0.5 * f0_m / f_number;
+    let g = std::f64::consts::FRAC_1_SQRT_2 * radius / (radius * radius + f0_m * f0_m).sqrt();
+    let s_min = lenses::sinc(pitch * g / l0).powi(2);
+    info.notes.push(format!(
+        "lattice error against the radial design of the same layout: mean MTF and τ1 within 2 (1 − S_min) = {:.2e} at λ0 (S_min the cells' design-order amplitude at the aperture's edge)",
+        2.0 * (1.0 - s_min)
+    ));
     let (tau, t) = lens.efficiency_and_transmission(l0);
     info.notes.push(format!(
         "at λ0: τ1 = {tau:.4}, T = {t:.4} (each cell's mean against the reference sphere is the design order; the rest of T is background)"

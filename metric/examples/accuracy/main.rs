@@ -35,6 +35,7 @@
 //! existing `OUT_DIR/BENCHMARKS.md`.
 
 mod design;
+mod gds_scale;
 mod iris;
 mod kernels;
 mod map;

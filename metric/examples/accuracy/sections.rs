@@ -28,7 +28,8 @@ pub(crate) struct Section {
 }
 
 /// Every stand-alone section, in the order a full run appends them.
-pub(crate) const SECTIONS: &[Section] = &[];
+pub(crate) const SECTIONS: &[Section] =
+    &[Section { name: "gds_scale", title: "GDS layout at scale", run: super::gds_scale::run }];
 
 /// The sections `--only` names, or an error listing the known names.
 pub(crate) fn select(names: &str) -> Result<Vec<&'static Section>, String> {
