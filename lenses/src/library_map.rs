@@ -190,7 +190,7 @@ impl LibraryMapLens {
             let s = origin / p;
             let mut n = ((2.0 * radius / p).ceil() as usize).max(2);
             let half_site = (s - s.floor() - 0.5).abs() < 0.25;
-            if (n % 2 == 0) != half_site {
+            if n.is_multiple_of(2) != half_site {
                 n += 1;
             }
             let d = s + 0.5 * (n as f64 - 1.0);
