@@ -77,6 +77,8 @@ pub struct LibraryMapLens {
     empty_in_aperture: u64,
     clamped: u64,
     source: String,
+    /// the layout's statistics, for the description
+    layout: String,
     scalars: Mutex<Vec<(u64, f64, f64)>>,
     maps: Mutex<Vec<CachedMap>>,
 }
@@ -99,6 +101,7 @@ impl Clone for LibraryMapLens {
             empty_in_aperture: self.empty_in_aperture,
             clamped: self.clamped,
             source: self.source.clone(),
+            layout: self.layout.clone(),
             scalars: Mutex::new(Vec::new()),
             maps: Mutex::new(Vec::new()),
         }
@@ -297,6 +300,23 @@ impl LibraryMapLens {
         if atoms_in == 0 {
             return layout("no atom inside the aperture".into());
         }
+        let st = &grid.stats;
+        let ranges_text: Vec<String> = library_columns
+            .iter()
+            .enumerate()
+            .filter_map(|(q, c)| {
+                let &(a, b) = st.parameter_range.get(index[q])?;
+                let r = optics::round_for_display;
+                Some(format!("{c} {}–{} (library {}–{})", r(a), r(b), r(ranges[q].0), r(ranges[q].1)))
+            })
+            .collect();
+        let layout_text = format!(
+            "layout: {} atoms, {}, largest off-lattice distance {} nm, {} doubly occupied sites",
+            st.atoms,
+            ranges_text.join(", "),
+            optics::round_for_display(st.max_off_lattice_m * 1e9),
+            st.doubly_occupied_sites
+        );
         Ok(LibraryMapLens {
             f_number,
             focal_length: focal_length_m,
@@ -313,6 +333,7 @@ impl LibraryMapLens {
             empty_in_aperture: empty_in,
             clamped,
             source,
+            layout: layout_text,
             scalars: Mutex::new(Vec::new()),
             maps: Mutex::new(Vec::new()),
         })
@@ -522,7 +543,7 @@ impl LensModel for LibraryMapLens {
             String::new()
         };
         format!(
-            "2-D meta-atom library lens F/{} f0 = {} mm at λ0 = {} nm ({}; {} atoms in the aperture on {nx} × {ny} sites of {} µm{empty}; lattice {} × {} nm off the axis; local periodic approximation, each cell's mean against the exact reference sphere)",
+            "2-D meta-atom library lens F/{} f0 = {} mm at λ0 = {} nm ({}; {} atoms in the aperture on {nx} × {ny} sites of {} µm{empty}; lattice {} × {} nm off the axis; {}; local periodic approximation, each cell's mean against the exact reference sphere)",
             r(self.f_number),
             r(self.focal_length * 1e3),
             r(self.design_wavelength * 1e9),
@@ -531,6 +552,7 @@ impl LensModel for LibraryMapLens {
             r(self.pitch * 1e6),
             r(self.offset.0 * 1e9),
             r(self.offset.1 * 1e9),
+            self.layout,
         )
     }
 }
