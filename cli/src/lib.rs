@@ -89,6 +89,10 @@ pub enum Command {
         /// A detection task for d′: disk:DIAMETER_UM:CONTRAST (diameter in the image plane).
         #[arg(long, value_name = "disk:DIAMETER_UM:CONTRAST", requires = "metrics")]
         task: Option<String>,
+        /// The intended design's scene (e.g. the radial library lens or the phase design of a
+        /// layout as drawn): its ASNR and mean MTF printed beside the scene's.
+        #[arg(long, value_name = "SCENE")]
+        compare_design: Option<PathBuf>,
     },
     /// The values of numeric scene keys that maximize the ASNR: one key by a scan and golden
     /// section, several by COBYLA (or, with --method gradient, projected L-BFGS on the exact
@@ -277,7 +281,19 @@ pub enum Command {
 /// Runs the command line `cli`.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Evaluate { scene, set, json, tolerance, explain, metrics, object, contrast, frame_rate_hz, task } => {
+        Command::Evaluate {
+            scene,
+            set,
+            json,
+            tolerance,
+            explain,
+            metrics,
+            object,
+            contrast,
+            frame_rate_hz,
+            task,
+            compare_design,
+        } => {
             let label = scene.as_ref().map_or("embedded paper scene".to_owned(), |p| p.display().to_string());
             let metrics_options = metrics
                 .then(|| report::metrics::options(object.as_deref(), contrast, frame_rate_hz, task.as_deref()))
@@ -292,6 +308,17 @@ pub fn run(cli: Cli) -> Result<()> {
                 .map(|used| mapping_check(scene.as_deref(), &set, used, result.mean_mtf))
                 .transpose()
                 .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            // the intended design, evaluated as given (without --set: it is another scene)
+            let design = match &compare_design {
+                Some(path) => {
+                    let read = scene::load_with_warnings(Some(path), &[])?;
+                    warn(&read.warnings);
+                    let d = metric::evaluate(&read.scene)
+                        .map_err(|e| anyhow::anyhow!("--compare-design {}: {e}", path.display()))?;
+                    Some((path.display().to_string(), d))
+                }
+                None => None,
+            };
             let metrics = metrics_options
                 .map(|o| metric::metrics(&loaded, &result, &o))
                 .transpose()
@@ -309,6 +336,10 @@ pub fn run(cli: Cli) -> Result<()> {
                 };
                 let report = match &mapping {
                     Some(m) => with_field(&report, "pupil_mapping", &m.json())?,
+                    None => report,
+                };
+                let report = match &design {
+                    Some((path, d)) => with_design(&report, path, d, &result)?,
                     None => report,
                 };
                 outln!("{report}");
@@ -331,6 +362,9 @@ pub fn run(cli: Cli) -> Result<()> {
                 }
                 if explain {
                     out!("{}", output::explain(&loaded, &result, meter.as_ref()));
+                }
+                if let Some((path, d)) = &design {
+                    out!("{}", design_table(path, d, &result));
                 }
             }
             Ok(())
@@ -589,6 +623,42 @@ const MAX_GRID_POINTS: usize = 10_000_000;
 
 /// The JSON object `report` with the `--explain` text as a last field `explain`, one string
 /// per line.
+/// The drawn lens's ASNR and mean MTF beside the intended design's (`--compare-design`).
+fn design_table(path: &str, design: &metric::Evaluation, drawn: &metric::Evaluation) -> String {
+    format!(
+        "\nAs drawn against the design ({path}):\n  {:<10} {:>10} {:>10}\n  {:<10} {:>10.3} {:>10.4}\n  {:<10} {:>10.3} {:>10.4}\n  {:<10} {:>+9.2}% {:>+10.4}\n",
+        "",
+        "ASNR",
+        "mean MTF",
+        "as drawn",
+        drawn.asnr,
+        drawn.mean_mtf,
+        "design",
+        design.asnr,
+        design.mean_mtf,
+        "difference",
+        100.0 * (drawn.asnr / design.asnr - 1.0),
+        drawn.mean_mtf - design.mean_mtf,
+    )
+}
+
+/// The JSON report with a `compare_design` object (`--compare-design`).
+fn with_design(report: &str, path: &str, design: &metric::Evaluation, drawn: &metric::Evaluation) -> Result<String> {
+    let Some(body) = report.trim_end().strip_suffix('}').map(str::trim_end) else {
+        anyhow::bail!("internal error: the JSON report is not an object")
+    };
+    let object = serde_json::json!({
+        "scene": path,
+        "asnr": design.asnr,
+        "mean_mtf": design.mean_mtf,
+        "asnr_relative_difference": drawn.asnr / design.asnr - 1.0,
+        "mean_mtf_difference": drawn.mean_mtf - design.mean_mtf,
+    });
+    let out = format!("{body},\n  \"compare_design\": {object}\n}}");
+    serde_json::from_str::<serde_json::Value>(&out)?;
+    Ok(out)
+}
+
 fn with_explain(report: &str, explain: &str) -> Result<String> {
     let body = report.trim_end().strip_suffix('}').map(str::trim_end);
     let Some(body) = body else { anyhow::bail!("internal error: the JSON report is not an object") };

@@ -31,6 +31,9 @@
 //! - [`LibraryLens`]: a metalens of meta-atoms from a [`Library`] (complex transmission against
 //!   parameters and wavelength) placed by a layout of rings, in the local periodic approximation:
 //!   the first order's pupil from the zone-Fourier coefficient `c_1(ρ)`, τ1 and T from the field.
+//! - [`LibraryMapLens`]: the same library's atoms on a 2-D square lattice ([`AtomGrid`], from a
+//!   grid or a GDSII layout as drawn): each cell's field held over it, its mean against the
+//!   reference sphere the design order, on the FFT path ([`optics::Pupil::Map`]).
 //! - [`PsfStack`]: a lens given by its PSFs at a few wavelengths (a simulated or measured stack):
 //!   each slice normalized, its centroid the order's image shift, its OTF about the centroid by
 //!   FFT into an [`optics::OtfTable`] (tangential along x, sagittal along y) up to the stack's
@@ -64,12 +67,14 @@
 //! Units: SI (m). Efficiencies are fractions of the light incident on the full aperture. This
 //! crate reads no files: the parsers take text.
 
+mod atom_grid;
 mod chromatic;
 mod dispersion;
 mod exact;
 mod harmonic;
 mod interleaved;
 mod library;
+mod library_map;
 mod phase;
 mod phase_map;
 pub mod presets;
@@ -78,12 +83,14 @@ mod refractive;
 mod segmented;
 mod tabulated;
 
+pub use atom_grid::{AtomGrid, LayoutStats};
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
 pub use exact::ExactPupilMap;
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use library::{AtomErrors, Library, LibraryLens};
+pub use library_map::{Handedness, LibraryMapLens};
 pub use phase::{
     Dispersion, PhaseLens, SPLINE_MAX_KNOTS, SPLINE_MIN_KNOTS, WithZernike, binary2_profile, hyperbolic_binary2,
     spline_profile,
@@ -166,6 +173,9 @@ pub enum Error {
         /// The names known, comma-separated.
         known: String,
     },
+    /// A 2-D meta-atom layout the library lens cannot take (the numbers in the message).
+    #[error("{0}")]
+    Layout(String),
     /// A PSF stack that cannot be used (a NaN or negative sample, a slice without light, a
     /// shape that does not fit): the message names the slice, its wavelength and the sample.
     #[error("PSF stack: {0}")]

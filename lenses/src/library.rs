@@ -111,6 +111,11 @@ impl Library {
         (self.wavelengths[0], self.wavelengths[self.wavelengths.len() - 1])
     }
 
+    /// The library's wavelengths (m), sorted.
+    pub fn wavelengths(&self) -> &[f64] {
+        &self.wavelengths
+    }
+
     /// The number of parameters.
     pub fn dimensions(&self) -> usize {
         self.axes.len()

@@ -66,53 +66,7 @@ pub struct GdsOptions {
     pub max_sites: u64,
 }
 
-/// A layout on a square lattice: `values[p][y][x]` (row-major, parameter `p` of
-/// [`AtomGrid::parameters`], nm), `NaN` and `empty[y][x]` where a site has no atom.
-#[derive(Clone, Debug)]
-pub struct AtomGrid {
-    /// Lattice pitch, m.
-    pub pitch_m: f64,
-    /// Position (x, y) of site `[0][0]`, m.
-    pub origin_m: (f64, f64),
-    /// Sites along x.
-    pub nx: usize,
-    /// Sites along y.
-    pub ny: usize,
-    /// The parameter columns: `diameter_nm`, or `width_nm`, `length_nm`.
-    pub parameters: Vec<&'static str>,
-    /// `[parameter, y, x]`, nm.
-    pub values: Vec<f64>,
-    /// `[y, x]`: no atom on the site.
-    pub empty: Vec<bool>,
-    /// `[y, x]`: a fin's angle θ in [0°, 180°) (fins only).
-    pub theta_deg: Option<Vec<f64>>,
-    /// The layout's statistics.
-    pub stats: LayoutStats,
-}
-
-/// What a designer checks before fabrication.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct LayoutStats {
-    /// Records read.
-    pub records: u64,
-    /// Bytes read (decompressed).
-    pub bytes: u64,
-    /// Cells in the library.
-    pub cells: usize,
-    /// Atoms after expansion.
-    pub atoms: u64,
-    /// Each parameter's (min, max), nm.
-    pub parameter_range: Vec<(f64, f64)>,
-    /// The largest distance of an atom's centre from its lattice site, m.
-    pub max_off_lattice_m: f64,
-    /// Sites with two or more atoms (the first one is kept).
-    pub doubly_occupied_sites: u64,
-    /// Sites inside the grid's bounding box without an atom.
-    pub empty_sites: u64,
-    /// The largest relative distance of a pillar's vertex from its circle (0 for a regular
-    /// polygon): how far the vertex-count correction is from exact.
-    pub max_vertex_deviation: f64,
-}
+pub use lenses::{AtomGrid, LayoutStats};
 
 /// `n`-gon with its vertices on a circle of diameter D has the area `(n/8) D² sin(2π/n)`: the
 /// diameter of a polygon of area `A` and `n` vertices (docs/physics.md, "GDSII layouts").
@@ -877,6 +831,7 @@ pub fn layout<R: Read>(input: R, o: &GdsOptions) -> Result<AtomGrid, GdsError> {
         cells: lib.cells.len(),
         parameter_range: vec![(f64::INFINITY, f64::NEG_INFINITY); np],
         max_vertex_deviation: lib.max_deviation,
+        database_unit_m: unit,
         ..LayoutStats::default()
     };
     let mut extra_sites = std::collections::HashSet::new();
@@ -915,7 +870,7 @@ pub fn layout<R: Read>(input: R, o: &GdsOptions) -> Result<AtomGrid, GdsError> {
         origin_m: ((x0 + lo.0 as f64 * p) * unit, (y0 + lo.1 as f64 * p) * unit),
         nx,
         ny,
-        parameters: if fins { vec!["width_nm", "length_nm"] } else { vec!["diameter_nm"] },
+        parameters: if fins { vec!["width_nm".into(), "length_nm".into()] } else { vec!["diameter_nm".into()] },
         values,
         empty,
         theta_deg: theta,

@@ -121,6 +121,15 @@ pub(crate) struct RawLens {
     pub atom_transmission_error: Option<f64>,
     pub atom_error_seed: Option<u64>,
     pub parameter_bias: Option<Vec<f64>>,
+    pub layout_grid: Option<String>,
+    pub layout_gds: Option<String>,
+    pub gds_cell: Option<String>,
+    pub gds_layer: Option<i64>,
+    pub gds_datatype: Option<i64>,
+    pub lattice_pitch_um: Option<f64>,
+    pub atom: Option<String>,
+    pub handedness: Option<String>,
+    pub empty_cell: Option<toml::Value>,
     pub psf: Option<String>,
     pub psf_pitch_um: Option<f64>,
     pub psf_wavelengths_nm: Option<Vec<f64>>,
@@ -207,6 +216,15 @@ impl Model {
                 "atom_error_seed",
                 "parameter_bias",
                 "zernike_noll_rms_um",
+                "layout_grid",
+                "layout_gds",
+                "gds_cell",
+                "gds_layer",
+                "gds_datatype",
+                "lattice_pitch_um",
+                "atom",
+                "handedness",
+                "empty_cell",
             ],
             Model::Phase => &[
                 "design_wavelength_nm",
@@ -273,8 +291,17 @@ impl OneOrMany {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 52] {
+    fn given(&self) -> [(&'static str, bool); 61] {
         [
+            ("layout_grid", self.layout_grid.is_some()),
+            ("layout_gds", self.layout_gds.is_some()),
+            ("gds_cell", self.gds_cell.is_some()),
+            ("gds_layer", self.gds_layer.is_some()),
+            ("gds_datatype", self.gds_datatype.is_some()),
+            ("lattice_pitch_um", self.lattice_pitch_um.is_some()),
+            ("atom", self.atom.is_some()),
+            ("handedness", self.handedness.is_some()),
+            ("empty_cell", self.empty_cell.is_some()),
             ("zemax", self.zemax.is_some()),
             ("zemax_surface", self.zemax_surface.is_some()),
             ("phase_map", self.phase_map.is_some()),
@@ -956,6 +983,10 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
             });
             Arc::new(lens)
         }
+        Model::Library if l.layout_grid.is_some() || l.layout_gds.is_some() => {
+            let l0 = design_wavelength(o)?;
+            Arc::new(crate::layout2d::library_map_lens(l, o, f_number, f0_m, l0, &mut info)?)
+        }
         Model::Library => {
             let l0 = design_wavelength(o)?;
             let (lens, names) = library_lens(l, o, f_number, f0_m, l0)?;
@@ -1015,16 +1046,9 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
     Ok(BuiltLens { lens, info })
 }
 
-/// The `model = "library"` lens: `lens.library` (columns: parameters, `wavelength_nm`,
-/// `amplitude` or `transmittance`, `phase_rad`) and `lens.layout` (`r_mm` and the same
-/// parameter columns).
-fn library_lens(
-    l: &RawLens,
-    o: &Origins,
-    f_number: f64,
-    f0_m: f64,
-    l0: f64,
-) -> Result<(lenses::LibraryLens, Vec<String>), Error> {
+/// `lens.library` (columns: parameters, `wavelength_nm`, `amplitude` or `transmittance`,
+/// `phase_rad`): the library and its parameter columns' names.
+pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library, Vec<String>), Error> {
     let expected =
         "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
     let file = o.require("lens.library", l.library.as_deref(), expected)?;
@@ -1067,6 +1091,20 @@ fn library_lens(
         table.push((params, values[iw] * 1e-9, a, values[ip]));
     }
     let library = lenses::Library::new(&table).map_err(|e| o.domain("lens.library", &ctx, e))?;
+    Ok((library, names.iter().map(|n| n.to_string()).collect()))
+}
+
+/// The `model = "library"` lens: `lens.library` ([`read_library`]) and `lens.layout` (`r_mm`
+/// and the same parameter columns).
+fn library_lens(
+    l: &RawLens,
+    o: &Origins,
+    f_number: f64,
+    f0_m: f64,
+    l0: f64,
+) -> Result<(lenses::LibraryLens, Vec<String>), Error> {
+    let (library, names) = read_library(l, o)?;
+    let names: Vec<&String> = names.iter().collect();
     let expected = "a CSV of the layout: r_mm at each ring's centre (equal pitch) and the library's parameter columns";
     let file = o.require("lens.layout", l.layout.as_deref(), expected)?;
     let (lheaders, lrows) = crate::tables::read_columns(&o.path(file), "layout")

@@ -56,6 +56,7 @@
 mod compare;
 mod error;
 pub mod gds;
+mod layout2d;
 mod lens;
 mod load;
 mod origins;

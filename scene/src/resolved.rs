@@ -262,6 +262,29 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             if let Some(file) = &l.layout {
                 out.string("layout", &path(o, "lens.layout", file)?);
             }
+            if let Some(file) = &l.layout_grid {
+                out.string("layout_grid", &path(o, "lens.layout_grid", file)?);
+            }
+            if let Some(file) = &l.layout_gds {
+                out.string("layout_gds", &path(o, "lens.layout_gds", file)?);
+                match &l.gds_cell {
+                    Some(c) => out.string("gds_cell", c),
+                    None => out.line("# gds_cell not given: the single top cell"),
+                }
+                out.value("gds_layer", &l.gds_layer.unwrap_or_default().to_string());
+                out.value("gds_datatype", &l.gds_datatype.unwrap_or_default().to_string());
+                out.string("atom", l.atom.as_deref().unwrap_or("pillar"));
+                if let Some(h) = &l.handedness {
+                    out.string("handedness", h);
+                }
+            }
+            if l.layout_grid.is_some() || l.layout_gds.is_some() {
+                out.number("lattice_pitch_um", l.lattice_pitch_um.unwrap_or_default());
+                match &l.empty_cell {
+                    Some(v) => out.value("empty_cell", &v.to_string()),
+                    None => out.line("# empty_cell not given: every site in the aperture must hold an atom"),
+                }
+            }
             out.number("atom_phase_error_rad", l.atom_phase_error_rad.unwrap_or(0.0));
             out.number("atom_transmission_error", l.atom_transmission_error.unwrap_or(0.0));
             out.value("atom_error_seed", &l.atom_error_seed.unwrap_or(0).to_string());

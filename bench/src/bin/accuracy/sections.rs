@@ -47,6 +47,7 @@ pub(crate) const SECTIONS: &[Section] = &[
         run: crate::gradients::section,
     },
     Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section },
+    Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
 ];
 
 /// The sections `--only` names, or an error listing the known names.
