@@ -635,7 +635,7 @@ mod tests {
                       asnr.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(
             check_manifest("python", python),
-            vec!["depends on cli (allowed: report, scene, metric, lenses, optics, noise, radiometry)"]
+            vec!["depends on cli (allowed: report, imaging, scene, metric, lenses, optics, noise, radiometry)"]
         );
     }
 
