@@ -108,6 +108,9 @@ pub(crate) fn run(root: &Path) -> Result<()> {
     violations.extend(check_outside_references(root)?);
     violations.extend(check_rust_version(root, &text)?);
     violations.extend(check_versions(&text));
+    if let Ok(lock) = fs::read_to_string(root.join("Cargo.lock")) {
+        violations.extend(check_held(&lock));
+    }
     if let Ok(citation) = fs::read_to_string(root.join("CITATION.cff")) {
         violations.extend(check_citation_version(&text, &citation));
     }
@@ -119,6 +122,33 @@ pub(crate) fn run(root: &Path) -> Result<()> {
     }
     eprintln!("tidy: {} crates checked, no violations", folders.len());
     Ok(())
+}
+
+/// Crates held at a version in Cargo.lock, and why (ARCHITECTURE.md, "Why each dependency is
+/// there"): `cargo update` would move them.
+const HELD: &[(&str, &str, &str)] = &[(
+    "crc32fast",
+    "1.4.2",
+    "1.5 adds a runtime-dispatched AVX-512 path the wheel's x86-64-v3 check refuses; restore with `cargo update -p crc32fast --precise 1.4.2`",
+)];
+
+/// Each [`HELD`] crate found in the Cargo.lock `lock` at another version.
+pub(crate) fn check_held(lock: &str) -> Vec<String> {
+    let mut problems = Vec::new();
+    let mut name = None;
+    for line in lock.lines() {
+        if let Some(n) = line.strip_prefix("name = ") {
+            name = Some(n.trim_matches('"').to_owned());
+        } else if let Some(v) = line.strip_prefix("version = ") {
+            let version = v.trim_matches('"');
+            if let Some((crate_name, held, why)) = HELD.iter().find(|(c, _, _)| name.as_deref() == Some(*c))
+                && version != *held
+            {
+                problems.push(format!("Cargo.lock: {crate_name} {version}, held at {held}: {why}"));
+            }
+        }
+    }
+    problems
 }
 
 /// The `[workspace] members` of the root manifest `text`, as written.
@@ -627,6 +657,16 @@ mod tests {
         assert_eq!(check_manifest("cli", "[package").len(), 1);
         let named_cli = "[package]\nname = \"cli\"\nversion.workspace = true\n[lints]\nworkspace = true\n";
         assert_eq!(check_manifest("cli", named_cli), vec!["package name `cli`: the package in `cli/` is `asnr`"]);
+    }
+
+    #[test]
+    fn a_held_crate_at_another_version_is_named() {
+        let held = "[[package]]\nname = \"crc32fast\"\nversion = \"1.4.2\"\n";
+        assert!(check_held(held).is_empty());
+        let moved = "[[package]]\nname = \"crc32fast\"\nversion = \"1.5.4\"\n";
+        let problems = check_held(moved);
+        assert_eq!(problems.len(), 1);
+        assert!(problems[0].contains("crc32fast 1.5.4, held at 1.4.2"), "{problems:?}");
     }
 
     #[test]
