@@ -67,19 +67,26 @@ pub struct RadialProfile {
     /// its fitted slope, derivative bounds and mean square, made when first asked: a profile
     /// that only serves as a derivative's direction (`RadialOrder::otf_and_derivatives`, K of
     /// them at every wavelength) never needs them
-    summary: Lazy,
+    summary: Lazy<Summary>,
     /// the values at the bound samples and the Chebyshev series, made when first asked
     /// ([`RadialProfile::sampled`]): a lens's profiles are shared by every wavelength's pupil
-    sampled: Cache,
+    sampled: Lazy<Sampled>,
 }
 
-/// A profile's [`Summary`] made once, when first asked; not part of its value (a function of
-/// its kind).
-#[derive(Clone, Debug, Default)]
-struct Lazy(OnceLock<Summary>);
+/// Something derived from a profile's kind (its [`Summary`], its [`Sampled`] values), made once
+/// when first asked; not part of the profile's value: two profiles are equal whether or not
+/// either has made it.
+#[derive(Clone, Debug)]
+struct Lazy<T>(OnceLock<T>);
 
-impl PartialEq for Lazy {
-    fn eq(&self, _: &Lazy) -> bool {
+impl<T> Default for Lazy<T> {
+    fn default() -> Self {
+        Lazy(OnceLock::new())
+    }
+}
+
+impl<T> PartialEq for Lazy<T> {
+    fn eq(&self, _: &Lazy<T>) -> bool {
         true
     }
 }
@@ -93,17 +100,6 @@ struct Summary {
     bounds: (f64, f64),
     /// `∫_0^1 f(q)² dq` (the power of an amplitude profile)
     mean_square: f64,
-}
-
-/// A [`Sampled`] made once, when first asked; not part of a profile's value (two profiles are
-/// equal whether or not either has made it).
-#[derive(Clone, Debug, Default)]
-struct Cache(OnceLock<Sampled>);
-
-impl PartialEq for Cache {
-    fn eq(&self, _: &Cache) -> bool {
-        true
-    }
 }
 
 /// A profile at the [`BOUND_SAMPLES`] + 1 points `q = i/BOUND_SAMPLES` and as a Chebyshev series
@@ -153,7 +149,7 @@ impl RadialProfile {
     }
 
     fn finish(kind: Kind) -> RadialProfile {
-        RadialProfile { kind, summary: Lazy::default(), sampled: Cache::default() }
+        RadialProfile { kind, summary: Lazy::default(), sampled: Lazy::default() }
     }
 
     /// The fitted slope, derivative bounds and mean square, computed once.
