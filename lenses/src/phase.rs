@@ -44,6 +44,25 @@ impl Dispersion {
             Dispersion::Refractive { .. } => "refractive",
         }
     }
+
+    /// How a lens's description names it: the design order of a diffractive lens, the glass of
+    /// a refractive one.
+    pub(crate) fn describe(&self) -> String {
+        match self {
+            Dispersion::Diffractive { design_order } => format!("diffractive, design order p = {design_order}"),
+            Dispersion::Refractive { glass: Some(_) } => "refractive, glass dispersion".to_string(),
+            other => other.name().to_string(),
+        }
+    }
+}
+
+/// The breakpoints of a lens's efficiency and transmission curves, sorted, each once.
+pub(crate) fn curve_breakpoints(efficiency: &Curve, transmission: &Curve) -> Vec<f64> {
+    let mut out = efficiency.breakpoints().to_vec();
+    out.extend_from_slice(transmission.breakpoints());
+    out.sort_by(f64::total_cmp);
+    out.dedup();
+    out
 }
 
 /// A lens given by its phase `φ0(ρ)` at the design wavelength (radians, `ρ = r/R` with `R` the
@@ -284,20 +303,12 @@ impl LensModel for PhaseLens {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        let mut out = self.efficiency.breakpoints().to_vec();
-        out.extend_from_slice(self.transmission.breakpoints());
-        out.sort_by(f64::total_cmp);
-        out.dedup();
-        out
+        curve_breakpoints(&self.efficiency, &self.transmission)
     }
 
     fn describe(&self) -> String {
         let r = optics::round_for_display;
-        let dispersion = match &self.dispersion {
-            Dispersion::Diffractive { design_order } => format!("diffractive, design order p = {design_order}"),
-            Dispersion::Refractive { glass: Some(_) } => "refractive, glass dispersion".to_string(),
-            other => other.name().to_string(),
-        };
+        let dispersion = self.dispersion.describe();
         let zernike: String = self.zernike_noll_m.iter().map(|(j, c)| format!(", Z{j} = {} µm", r(c * 1e6))).collect();
         format!(
             "phase-profile lens F/{} f0 = {} mm at λ0 = {} nm ({}; {dispersion}{zernike}), against the exact reference sphere",

@@ -10,7 +10,7 @@ use optics::{Field, LensModel, Order};
 
 use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
-use crate::phase::{Dispersion, check_design, order_list};
+use crate::phase::{Dispersion, check_design, curve_breakpoints, order_list};
 
 /// A lens given by a 2-D phase map ([`optics::map::PhaseMap`]): working F-number `f0/D` (`D` the
 /// circle's diameter or the square's side), the detector at `f0`, the dispersion, and the
@@ -149,20 +149,12 @@ impl LensModel for PhaseMapLens {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        let mut out = self.efficiency.breakpoints().to_vec();
-        out.extend_from_slice(self.transmission.breakpoints());
-        out.sort_by(f64::total_cmp);
-        out.dedup();
-        out
+        curve_breakpoints(&self.efficiency, &self.transmission)
     }
 
     fn describe(&self) -> String {
         let r = optics::round_for_display;
-        let dispersion = match &self.dispersion {
-            Dispersion::Diffractive { design_order } => format!("diffractive, design order p = {design_order}"),
-            Dispersion::Refractive { glass: Some(_) } => "refractive, glass dispersion".to_string(),
-            other => other.name().to_string(),
-        };
+        let dispersion = self.dispersion.describe();
         let (nx, ny) = self.map.shape();
         let aperture = match self.map.aperture() {
             MapAperture::Circle => "circular aperture",
