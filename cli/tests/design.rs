@@ -4,15 +4,7 @@
 
 mod common;
 
-use common::{asnr, fails, json, stderr};
-
-fn asnr_at(set: &[String]) -> f64 {
-    let mut args = vec!["evaluate", "--json"];
-    for s in set {
-        args.extend(["--set", s.as_str()]);
-    }
-    json(&args)["asnr"].as_f64().unwrap()
-}
+use common::{asnr, asnr_at, fails, json, stderr};
 
 // ---- asnr optimize over several keys ----
 

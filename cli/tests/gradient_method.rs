@@ -4,16 +4,7 @@
 
 mod common;
 
-use common::{fails, json};
-
-/// The ASNR of the paper scene with `set`, evaluated directly.
-fn asnr_at(set: &[String]) -> f64 {
-    let mut args = vec!["evaluate", "--json"];
-    for s in set {
-        args.extend(["--set", s.as_str()]);
-    }
-    json(&args)["asnr"].as_f64().unwrap()
-}
+use common::{asnr_at, fails, json};
 
 /// Over the pixel pitch alone and jointly with the exposure time, the gradient method reaches the
 /// optimum COBYLA reaches, within --xtol of each range (1e-4, the default). The ASNR rises with

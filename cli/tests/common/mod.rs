@@ -33,3 +33,12 @@ pub fn json(args: &[&str]) -> serde_json::Value {
     assert!(out.status.success(), "args {args:?}: {}", stderr(&out));
     serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
 }
+
+/// The ASNR of the paper scene with each of `set` given as `--set`, from `asnr evaluate --json`.
+pub fn asnr_at(set: &[String]) -> f64 {
+    let mut args = vec!["evaluate", "--json"];
+    for s in set {
+        args.extend(["--set", s.as_str()]);
+    }
+    json(&args)["asnr"].as_f64().unwrap()
+}
