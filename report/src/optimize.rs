@@ -415,6 +415,17 @@ impl ManyOptimum {
         (10.0 * self.search.xtol).max(1e-6)
     }
 
+    /// For each key, whether the best point's value is within
+    /// [`bound_tolerance`](Self::bound_tolerance) of its range from either bound.
+    fn at_bounds(&self) -> Vec<bool> {
+        let tol = self.bound_tolerance();
+        self.ranges
+            .iter()
+            .zip(&self.best().values)
+            .map(|(r, &x)| x - r.lo <= tol * (r.hi - r.lo) || r.hi - x <= tol * (r.hi - r.lo))
+            .collect()
+    }
+
     /// The best point.
     pub fn best(&self) -> &Evaluated {
         &self.history[self.best]
@@ -606,12 +617,7 @@ pub fn maximize_many_from(
         determination: Determination::default(),
     };
     optimum.determination = determination(ranges, &optimum.history, best, optimum.search.xtol);
-    let tol = optimum.bound_tolerance();
-    optimum.at_bound = ranges
-        .iter()
-        .zip(&optimum.history[best].values)
-        .map(|(r, &x)| x - r.lo <= tol * (r.hi - r.lo) || r.hi - x <= tol * (r.hi - r.lo))
-        .collect();
+    optimum.at_bound = optimum.at_bounds();
     Ok(optimum)
 }
 
@@ -707,12 +713,7 @@ pub fn maximize_many_gradient(
     if found.pairs >= d {
         optimum.determination.weak_direction = weak_direction(&found.inverse_curvature, found.value);
     }
-    let tol = optimum.bound_tolerance();
-    optimum.at_bound = ranges
-        .iter()
-        .zip(&optimum.history[best].values)
-        .map(|(r, &x)| x - r.lo <= tol * (r.hi - r.lo) || r.hi - x <= tol * (r.hi - r.lo))
-        .collect();
+    optimum.at_bound = optimum.at_bounds();
     Ok(optimum)
 }
 
