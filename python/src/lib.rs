@@ -79,6 +79,34 @@ impl Scene {
     }
 }
 
+/// `scene` with the numpy array `value` for `key` (one of [`scene::ARRAY_KEYS`]) in place of a
+/// `.npy` file: its values copied once (float32 or float64, any memory order, read in C order as
+/// a `.npy` file is), the key set to a text naming the array (`<numpy float64 array 512 × 512>`),
+/// which messages and `to_toml` show. A layout grid's leading parameter axis of one is dropped.
+fn with_array(mut scene: Scene, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Scene> {
+    let (dtype, mut shape, values): (&str, Vec<u64>, Vec<f64>) =
+        if let Ok(a) = value.extract::<numpy::PyReadonlyArrayDyn<'_, f64>>() {
+            let a = a.as_array();
+            ("float64", a.shape().iter().map(|&n| n as u64).collect(), a.iter().copied().collect())
+        } else if let Ok(a) = value.extract::<numpy::PyReadonlyArrayDyn<'_, f32>>() {
+            let a = a.as_array();
+            ("float32", a.shape().iter().map(|&n| n as u64).collect(), a.iter().map(|&v| f64::from(v)).collect())
+        } else {
+            return Err(PyTypeError::new_err(format!(
+                "{key}: a {}: expected a numpy float array (float32 or float64) [y, x], or the path of a .npy file",
+                value.get_type().name()?
+            )));
+        };
+    if key == "lens.layout_grid" && shape.len() == 3 && shape[0] == 1 {
+        shape.remove(0);
+    }
+    let label =
+        format!("<numpy {dtype} array {}>", shape.iter().map(ToString::to_string).collect::<Vec<_>>().join(" × "));
+    scene.source = scene.source.with_array(key, label.clone(), shape, values).map_err(SceneError::new_err)?;
+    scene.overrides.push(format!("{key}={}", toml::Value::String(label)));
+    Ok(scene)
+}
+
 /// `key=value` for an override given in Python: numbers as `asnr sweep` writes them (the shortest
 /// decimal that reads back to the same float), integers and booleans as TOML's, strings quoted.
 fn override_text(key: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
@@ -126,14 +154,60 @@ impl Scene {
         self.overrides.clone()
     }
 
-    /// This scene with more overrides (a dict of dotted keys to values), validated now.
+    /// This scene with more overrides (a dict of dotted keys to values), validated now. The keys
+    /// that name a `.npy` map (`lens.phase_map`, `lens.amplitude_map`, `lens.layout_grid`) also
+    /// take a numpy array (see [`with_array`]).
     fn with_(&self, overrides: &Bound<'_, PyDict>) -> PyResult<Scene> {
         let mut next = self.clone();
         for (key, value) in overrides.iter() {
             let key: String = key.extract()?;
             self.check_keys([key.as_str()])?;
-            next.overrides.push(override_text(&key, &value)?);
+            if scene::ARRAY_KEYS.contains(&key.as_str()) && !value.is_instance_of::<PyString>() {
+                next = with_array(next, &key, &value)?;
+            } else {
+                next.overrides.push(override_text(&key, &value)?);
+            }
         }
+        next.build().map_err(scene_error)?;
+        Ok(next)
+    }
+
+    /// This scene's lens as the 2-D phase map `phase` (radians at the design wavelength, `[y, x]`,
+    /// a numpy float array) with cells of `pitch_um`, and optionally the map `amplitude` of the
+    /// same shape and the `aperture` ("circle" or "square"): `lens.model = "phase"` with the keys
+    /// a scene file gives as `.npy` files, checked as theirs are.
+    #[pyo3(signature = (phase, *, pitch_um, amplitude=None, aperture=None))]
+    fn with_phase_map(
+        &self,
+        phase: &Bound<'_, PyAny>,
+        pitch_um: &Bound<'_, PyAny>,
+        amplitude: Option<&Bound<'_, PyAny>>,
+        aperture: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Scene> {
+        self.check_keys(["lens.phase_map"])?;
+        let mut next = with_array(self.clone(), "lens.phase_map", phase)?;
+        if let Some(amplitude) = amplitude {
+            next = with_array(next, "lens.amplitude_map", amplitude)?;
+        }
+        next.overrides.push("lens.model=\"phase\"".to_owned());
+        next.overrides.push(override_text("lens.phase_map_pitch_um", pitch_um)?);
+        if let Some(aperture) = aperture {
+            next.overrides.push(override_text("lens.aperture", aperture)?);
+        }
+        next.build().map_err(scene_error)?;
+        Ok(next)
+    }
+
+    /// This scene's lens as the library lens laid out on the square lattice `grid` (the library's
+    /// one parameter per site, `[y, x]` or `[1, y, x]`, NaN where a site has no atom; a numpy float
+    /// array) of `pitch_um`: `lens.model = "library"` with `lens.layout_grid`, checked as a `.npy`
+    /// grid is.
+    #[pyo3(signature = (grid, *, pitch_um))]
+    fn with_layout(&self, grid: &Bound<'_, PyAny>, pitch_um: &Bound<'_, PyAny>) -> PyResult<Scene> {
+        self.check_keys(["lens.layout_grid"])?;
+        let mut next = with_array(self.clone(), "lens.layout_grid", grid)?;
+        next.overrides.push("lens.model=\"library\"".to_owned());
+        next.overrides.push(override_text("lens.lattice_pitch_um", pitch_um)?);
         next.build().map_err(scene_error)?;
         Ok(next)
     }
@@ -158,13 +232,27 @@ impl Scene {
     }
 
     /// Pickling (Dask and multiprocessing send scenes to workers): the scene's text, label,
-    /// folder and overrides, and the Python lens object if it has one.
+    /// folder and overrides, the Python lens object if it has one, and the arrays it was given
+    /// in memory (each key, its text, shape and values).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let rebuild = py.import("asnr._asnr")?.getattr("_rebuild_scene")?;
         let lens = self.lens.as_ref().map(|l| l.object.clone_ref(py));
-        let args =
-            (self.source.text(), self.source.label(), self.source.dir().to_path_buf(), self.overrides.clone(), lens)
-                .into_pyobject(py)?;
+        let arrays: Vec<PickledArray<Bound<'py, PyArray1<f64>>>> = self
+            .source
+            .arrays()
+            .map(|(key, label, shape, values)| {
+                (key.to_owned(), label.to_owned(), shape.to_vec(), PyArray1::from_slice(py, values))
+            })
+            .collect();
+        let args = (
+            self.source.text(),
+            self.source.label(),
+            self.source.dir().to_path_buf(),
+            self.overrides.clone(),
+            lens,
+            arrays,
+        )
+            .into_pyobject(py)?;
         Ok((rebuild, args))
     }
 
@@ -203,17 +291,26 @@ fn load_json(json: &str, label: String, directory: std::path::PathBuf) -> PyResu
     load_text(table.to_string(), label, directory)
 }
 
+/// An array given in memory, as a pickle holds it: its key, its text, its shape and its values.
+type PickledArray<A> = (String, String, Vec<u64>, A);
+
 /// The scene [`Scene::__reduce__`] pickled.
 #[pyfunction]
+#[pyo3(signature = (text, label, directory, overrides, lens, arrays=None))]
 fn _rebuild_scene(
     text: String,
     label: String,
     directory: std::path::PathBuf,
     overrides: Vec<String>,
     lens: Option<Bound<'_, PyAny>>,
+    arrays: Option<Vec<PickledArray<PyReadonlyArray1<'_, f64>>>>,
 ) -> PyResult<Scene> {
     let lens = lens.map(|l| PyLens::new(&l).map(Arc::new)).transpose()?;
-    Ok(Scene { source: Source::from_text(text, label, directory), overrides, lens })
+    let mut source = Source::from_text(text, label, directory);
+    for (key, label, shape, values) in arrays.unwrap_or_default() {
+        source = source.with_array(&key, label, shape, values.as_array().to_vec()).map_err(SceneError::new_err)?;
+    }
+    Ok(Scene { source, overrides, lens })
 }
 
 /// The evaluation of a scene (`asnr evaluate --json`'s `result`, as JSON text) and the scene's

@@ -104,7 +104,7 @@ pub(crate) fn library_map_lens(
                 &format!("a library of one parameter column for a [y, x] grid; this library has {}", names.join(", ")),
             ));
         }
-        let stack = crate::psf::read_npy_map(&o.path(file))
+        let stack = crate::psf::map_of(o, "lens.layout_grid", file)
             .map_err(|m| o.bad("lens.layout_grid", quoted(file), &format!("a .npy float array [y, x]: {m}")))?;
         let (nx, ny) = (stack.nx, stack.ny);
         if (nx as u64).saturating_mul(ny as u64) > MAX_SITES {

@@ -1562,7 +1562,7 @@ fn phase_map_lens(
     };
     let read = |key: &str, file: &str| {
         let path = o.path(file);
-        crate::psf::read_npy_map(&path).map_err(|message| Error::Table {
+        crate::psf::map_of(o, key, file).map_err(|message| Error::Table {
             origin: o.of(key),
             key: o.key(key),
             file: crate::error::shorten(file),

@@ -76,7 +76,7 @@ pub use load::{
     check_overrides, load, load_with_warnings, read,
 };
 pub use origins::{
-    EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, PIXEL_PITCH_PLAUSIBLE_UM, WAVELENGTH_PLAUSIBLE_NM,
+    ARRAY_KEYS, EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, PIXEL_PITCH_PLAUSIBLE_UM, WAVELENGTH_PLAUSIBLE_NM,
 };
 pub use resolved::{Resolved, resolved_toml};
 pub use tables::{Axis, CsvLines, FREQUENCY, MAX_FILE_BYTES, WAVELENGTH, read_pairs, read_table};

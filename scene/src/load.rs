@@ -192,6 +192,7 @@ pub struct Source {
     dir: PathBuf,
     parsed: std::sync::OnceLock<Result<toml::Table, TomlFailure>>,
     tables: TableCache,
+    arrays: crate::origins::Arrays,
 }
 
 impl Source {
@@ -218,7 +219,42 @@ impl Source {
             dir: dir.into(),
             parsed: std::sync::OnceLock::new(),
             tables: TableCache::default(),
+            arrays: crate::origins::Arrays::default(),
         }
+    }
+
+    /// This source with a 2-D array given in memory for `key` (one of
+    /// [`ARRAY_KEYS`](crate::ARRAY_KEYS): `lens.phase_map`, `lens.amplitude_map`,
+    /// `lens.layout_grid`) in place of a `.npy` file: a scene built from it whose `key` has the
+    /// value `label` (an override `key="label"`) reads `values` (C order, `shape` as given) as it
+    /// would read the file, with the same checks and messages; a value naming a file reads the
+    /// file. The values are kept once, shared by every scene built from the source. An unknown
+    /// key is refused here; the shape and values are checked when a scene is built, as a file's.
+    pub fn with_array(
+        mut self,
+        key: &str,
+        label: impl Into<String>,
+        shape: Vec<u64>,
+        values: Vec<f64>,
+    ) -> Result<Source, String> {
+        if !crate::ARRAY_KEYS.contains(&key) {
+            return Err(format!(
+                "{key}: not a key that takes an array (expected one of {})",
+                crate::ARRAY_KEYS.join(", ")
+            ));
+        }
+        let count = shape.iter().try_fold(1u64, |a, &b| a.checked_mul(b));
+        if count != Some(values.len() as u64) {
+            return Err(format!("{key}: {} values for the shape {shape:?}", values.len()));
+        }
+        let array = crate::origins::InMemory { label: label.into(), shape, values: std::sync::Arc::new(values) };
+        std::sync::Arc::make_mut(&mut self.arrays.0).insert(key.to_owned(), array);
+        Ok(self)
+    }
+
+    /// The arrays given in memory ([`Source::with_array`]): each key, its label, shape and values.
+    pub fn arrays(&self) -> impl Iterator<Item = (&str, &str, &[u64], &[f64])> {
+        self.arrays.0.iter().map(|(k, a)| (k.as_str(), a.label.as_str(), a.shape.as_slice(), a.values.as_slice()))
     }
 }
 
@@ -394,6 +430,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
         meter: RefCell::new(None),
         mapping: std::cell::Cell::new(None),
         tables: source.tables.clone(),
+        arrays: source.arrays.clone(),
     };
     Ok((table, origins))
 }

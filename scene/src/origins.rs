@@ -68,6 +68,34 @@ pub(crate) struct Origins {
     pub(crate) mapping: std::cell::Cell<Option<crate::load::PupilMapping>>,
     /// The tables its source's scenes have read.
     pub(crate) tables: TableCache,
+    /// The 2-D arrays its source was given in memory in place of `.npy` files.
+    pub(crate) arrays: Arrays,
+}
+
+/// The scene keys a 2-D array may be given for in memory ([`crate::Source::with_array`]) in
+/// place of a `.npy` file: the phase map, its amplitude map and the library lens's layout grid.
+pub const ARRAY_KEYS: [&str; 3] = ["lens.phase_map", "lens.amplitude_map", "lens.layout_grid"];
+
+/// One array given in memory: the text that stands for it as the key's value, its shape as given
+/// and its values in C order (`[y, x]`: `values[y·nx + x]`), shared by every scene built from the
+/// source.
+#[derive(Clone, Debug)]
+pub(crate) struct InMemory {
+    pub label: String,
+    pub shape: Vec<u64>,
+    pub values: std::sync::Arc<Vec<f64>>,
+}
+
+/// The arrays a [`crate::Source`] was given in memory, by scene key (one of [`ARRAY_KEYS`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Arrays(pub(crate) std::sync::Arc<BTreeMap<String, InMemory>>);
+
+impl Arrays {
+    /// The array given for `key` if the key's value is still its label (a later override that
+    /// names a file takes the file).
+    pub(crate) fn get(&self, key: &str, value: &str) -> Option<&InMemory> {
+        self.0.get(key).filter(|a| a.label == value)
+    }
 }
 
 /// The CSV tables the scenes of one [`Source`] have read, each kept while its file's size and
@@ -121,6 +149,7 @@ impl Origins {
             meter: RefCell::new(None),
             mapping: std::cell::Cell::new(None),
             tables: self.tables.clone(),
+            arrays: self.arrays.clone(),
         }
     }
 

@@ -263,17 +263,8 @@ fn npy_header_as(bytes: &[u8], map: bool) -> Result<NpyHeader, String> {
     let fortran = fortran.ok_or("a .npy header without `fortran_order`")?;
     let shape = shape.ok_or("a .npy header without `shape`")?;
     if map {
-        let &[y, x] = shape.as_slice() else {
-            return Err(format!("an array of shape {shape:?}: expected 2 axes [y, x]"));
-        };
-        let count = y.checked_mul(x);
-        if y < 2 || x < 2 || count.is_none_or(|c| c > optics::map::MAP_MAX_CELLS as u64) {
-            return Err(format!(
-                "an array of shape {shape:?}: expected at least 2 × 2 and at most {} values (2^26)",
-                optics::map::MAP_MAX_CELLS
-            ));
-        }
-        return Ok(NpyHeader { dtype, fortran, shape: [1, y as usize, x as usize], offset: start + len });
+        let (y, x) = map_shape(&shape)?;
+        return Ok(NpyHeader { dtype, fortran, shape: [1, y, x], offset: start + len });
     }
     let shape = match shape.as_slice() {
         &[d, y, x] => [d, y, x],
@@ -341,6 +332,35 @@ fn read_npy(path: &Path) -> Result<Stack, String> {
 /// length checked against them, and only then its samples.
 fn npy_from(source: impl std::io::Read + std::io::Seek, length: u64) -> Result<Stack, String> {
     npy_from_as(source, length, false)
+}
+
+/// The sides `(ny, nx)` of a 2-D map's shape: 2 axes, at least 2 × 2 and at most
+/// [`optics::map::MAP_MAX_CELLS`] values (a `.npy` file's header and an array given in memory).
+fn map_shape(shape: &[u64]) -> Result<(usize, usize), String> {
+    let &[y, x] = shape else {
+        return Err(format!("an array of shape {shape:?}: expected 2 axes [y, x]"));
+    };
+    let count = y.checked_mul(x);
+    if y < 2 || x < 2 || count.is_none_or(|c| c > optics::map::MAP_MAX_CELLS as u64) {
+        return Err(format!(
+            "an array of shape {shape:?}: expected at least 2 × 2 and at most {} values (2^26)",
+            optics::map::MAP_MAX_CELLS
+        ));
+    }
+    Ok((y as usize, x as usize))
+}
+
+/// The 2-D map of `key` whose value is `file`: the array given in memory for it
+/// ([`crate::Source::with_array`], its shape checked as a file's header is), else the `.npy`
+/// file [`read_npy_map`] reads.
+pub(crate) fn map_of(o: &crate::origins::Origins, key: &str, file: &str) -> Result<Stack, String> {
+    match o.arrays.get(key, file) {
+        Some(array) => {
+            let (ny, nx) = map_shape(&array.shape)?;
+            Ok(Stack { depth: 1, ny, nx, values: array.values.as_ref().clone() })
+        }
+        None => read_npy_map(&o.path(file)),
+    }
 }
 
 /// Reads a 2-D `.npy` map `[y, x]` (float32 or float64): its header and sizes checked against the

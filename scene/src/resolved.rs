@@ -82,6 +82,10 @@ fn in_unit(si: f64, to_si: f64) -> f64 {
 
 /// A CSV path as the loader resolves it, made absolute so the text loads from any folder.
 fn path(o: &Origins, key: &str, file: &str) -> Result<String, Error> {
+    // an array given in memory keeps the text that stands for it
+    if o.arrays.get(key, file).is_some() {
+        return Ok(file.to_owned());
+    }
     let resolved = o.path(file);
     let resolved = std::path::absolute(&resolved).unwrap_or(resolved);
     resolved.to_str().map(str::to_owned).ok_or_else(|| Error::Value {
