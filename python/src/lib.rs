@@ -61,6 +61,24 @@ impl Scene {
         })
     }
 
+    /// This scene without the lens keys `keys` (`lens.KEY`), in its file and in its overrides:
+    /// the design that `with_phase_map` or `with_layout` gives anew.
+    fn without_lens_keys(&self, keys: &[&str]) -> Scene {
+        let source = self.source.without_lens_keys(keys);
+        let overrides = self
+            .overrides
+            .iter()
+            .filter(|o| {
+                let key = o.split('=').next().unwrap_or_default().trim();
+                let key = key.strip_prefix("lens.").unwrap_or_default();
+                let base = key.split('[').next().unwrap_or_default();
+                !keys.contains(&base)
+            })
+            .cloned()
+            .collect();
+        Scene { source, overrides, lens: self.lens.clone() }
+    }
+
     /// Refuses lens keys when the lens is Python's: they would not reach it.
     fn check_keys<'a>(&self, keys: impl IntoIterator<Item = &'a str>) -> PyResult<()> {
         if let Some(lens) = &self.lens {
@@ -78,6 +96,25 @@ impl Scene {
         Ok(())
     }
 }
+
+/// The lens keys that give a phase lens's phase: `Scene.with_phase_map` gives the phase anew and
+/// leaves them out (the keys a map is refused with, and an earlier map's).
+const PHASE_DESIGN_KEYS: [&str; 9] = [
+    "binary2",
+    "norm_radius_mm",
+    "diffraction_order",
+    "phase_csv",
+    "phase_spline_rad",
+    "phase_map",
+    "amplitude_map",
+    "zemax",
+    "zemax_surface",
+];
+
+/// The lens keys that give a library lens's layout: `Scene.with_layout` gives the layout anew and
+/// leaves them out.
+const LAYOUT_KEYS: [&str; 8] =
+    ["layout", "layout_grid", "layout_gds", "gds_cell", "gds_layer", "gds_datatype", "atom", "handedness"];
 
 /// `scene` with the numpy array `value` for `key` (one of [`scene::ARRAY_KEYS`]) in place of a
 /// `.npy` file: its values copied once (float32 or float64, any memory order, read in C order as
@@ -175,7 +212,8 @@ impl Scene {
     /// This scene's lens as the 2-D phase map `phase` (radians at the design wavelength, `[y, x]`,
     /// a numpy float array) with cells of `pitch_um`, and optionally the map `amplitude` of the
     /// same shape and the `aperture` ("circle" or "square"): `lens.model = "phase"` with the keys
-    /// a scene file gives as `.npy` files, checked as theirs are.
+    /// a scene file gives as `.npy` files, checked as theirs are. The phase given anew replaces
+    /// the lens's own: its [`PHASE_DESIGN_KEYS`] are left out; every other lens key is kept.
     #[pyo3(signature = (phase, *, pitch_um, amplitude=None, aperture=None))]
     fn with_phase_map(
         &self,
@@ -185,7 +223,8 @@ impl Scene {
         aperture: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Scene> {
         self.check_keys(["lens.phase_map"])?;
-        let mut next = with_array(self.clone(), "lens.phase_map", phase)?;
+        let mut next = self.without_lens_keys(&PHASE_DESIGN_KEYS);
+        next = with_array(next, "lens.phase_map", phase)?;
         if let Some(amplitude) = amplitude {
             next = with_array(next, "lens.amplitude_map", amplitude)?;
         }
@@ -201,11 +240,13 @@ impl Scene {
     /// This scene's lens as the library lens laid out on the square lattice `grid` (the library's
     /// one parameter per site, `[y, x]` or `[1, y, x]`, NaN where a site has no atom; a numpy float
     /// array) of `pitch_um`: `lens.model = "library"` with `lens.layout_grid`, checked as a `.npy`
-    /// grid is.
+    /// grid is. The layout given anew replaces the lens's own: its [`LAYOUT_KEYS`] are left out;
+    /// every other lens key is kept.
     #[pyo3(signature = (grid, *, pitch_um))]
     fn with_layout(&self, grid: &Bound<'_, PyAny>, pitch_um: &Bound<'_, PyAny>) -> PyResult<Scene> {
         self.check_keys(["lens.layout_grid"])?;
-        let mut next = with_array(self.clone(), "lens.layout_grid", grid)?;
+        let mut next = self.without_lens_keys(&LAYOUT_KEYS);
+        next = with_array(next, "lens.layout_grid", grid)?;
         next.overrides.push("lens.model=\"library\"".to_owned());
         next.overrides.push(override_text("lens.lattice_pitch_um", pitch_um)?);
         next.build().map_err(scene_error)?;

@@ -249,6 +249,131 @@ def test_jax_grad_of_the_asnr_is_the_command_lines_gradient():
         asnr.jax.asnr_function(scene, ["lens.f_number"])
 
 
+# --- the geometric-phase lens's Binary 2 gradient against a numpy radial reference ----------
+
+#: examples/phase-binary2.toml, as numbers: F/2.5, f0 = 3.36 mm, λ0 = 800 nm, R = R_norm = f0/(2F#),
+#: M = 1, a geometric-phase lens (the radian phase the same at every wavelength), a flat source
+#: behind a Gaussian of range 2√2σ = 50 nm at 800 nm, constant efficiencies, 5.2 µm pixels without
+#: the pixel MTF. The test checks these against the file through the mean MTF itself.
+B2_F0_M = 3.36e-3
+B2_LAMBDA0_M = 800e-9
+B2_F_NUMBER = 2.5
+B2_RADIUS_M = 0.5 * B2_F0_M / B2_F_NUMBER
+B2_RANGE_M = 50e-9
+B2_PIXEL_M = 5.2e-6
+B2_COEFFICIENTS = [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]
+
+
+def numpy_binary2_mean_mtf_and_gradient(coefficients, nl: int, nnu: int, nt: int, nv: int):
+    """The mean MTF of the Binary 2 geometric-phase lens and its derivative with respect to each
+    coefficient A_i (per radian), written here in numpy with fixed rules (the method of
+    xtask/baselines/numpy_radial.py, not its code).
+
+    Pupil phase at q = ρ² (ρ = r/R, R_norm = R, M = 1; docs/physics.md, "Sign of the wavefront",
+    the field A·exp(+i 2π W/λ)): Φ(q) = Σ_i A_i q^(i+1) + (2π/λ)(√(R²q + f0²) − f0), the exact
+    reference sphere at the detector. The OTF of the radially symmetric pupil at s = νλF#
+    (docs/physics.md, "General pupils"):
+
+        O(s) = (4/π) ∫_0^{acos s} sin²t ∫_0^1 cos(Φ(q1) − Φ(q2)) dv dt,
+        q1 = cos²t + v² sin²t,  q2 = q1 − 4s(cos t − s),
+
+    and, since ∂(Φ(q1) − Φ(q2))/∂A_i = q1^(i+1) − q2^(i+1) (the geometric phase does not scale
+    with λ),
+
+        ∂O/∂A_i = −(4/π) ∫ sin²t ∫ sin(Φ(q1) − Φ(q2)) (q1^(i+1) − q2^(i+1)) dv dt.
+
+    The polychromatic OTF is the average over λ with the detected weight λG(λ) (paper SI eq. S8;
+    nothing else depends on λ here), Gauss–Hermite nodes of the Gaussian; the mean MTF
+    (1/ν_N) ∫_0^{ν_N} |O| dν by Gauss–Legendre in ν (O keeps its sign below Nyquist in this
+    scene, so ∂|O| = sign(O) ∂O and the rule needs no split); t and v by Gauss–Legendre. Returns
+    (mean MTF, array of the derivatives)."""
+    from numpy.polynomial.hermite import hermgauss
+    from numpy.polynomial.legendre import leggauss
+
+    a = np.asarray(coefficients, dtype=float)
+    sigma = B2_RANGE_M / (2.0 * np.sqrt(2.0))
+    x, w = hermgauss(nl)
+    lam = B2_LAMBDA0_M + np.sqrt(2.0) * sigma * x
+    weight = w * lam
+    weight /= weight.sum()
+    nyquist = 1.0 / (2.0 * B2_PIXEL_M)
+    xn, wn = leggauss(nnu)
+    nu = 0.5 * nyquist * (xn + 1.0)
+    xt, wt = leggauss(nt)
+    xv, wv = leggauss(nv)
+    v = 0.5 * (xv + 1.0)
+    wv = 0.5 * wv
+    # axes [λ, ν, t, v]
+    s = (nu[None, :] * lam[:, None] * B2_F_NUMBER)[:, :, None, None]
+    assert np.all(s < 1.0), "the band reaches the cutoff: the rule would need a split"
+    t_end = np.arccos(s)
+    t = 0.5 * t_end * (xt[None, None, :, None] + 1.0)
+    cos_t, sin_t = np.cos(t), np.sin(t)
+    q1 = cos_t * cos_t + (v * v)[None, None, None, :] * sin_t * sin_t
+    q2 = np.maximum(q1 - 4.0 * s * (cos_t - s), 0.0)
+
+    def sag(q):  # √(R²q + f0²) − f0 without cancellation
+        r2 = B2_RADIUS_M * B2_RADIUS_M * q
+        return r2 / (np.sqrt(r2 + B2_F0_M * B2_F0_M) + B2_F0_M)
+
+    k = (2.0 * np.pi / lam)[:, None, None, None]
+    powers1 = [q1 ** (i + 1) for i in range(len(a))]
+    powers2 = [q2 ** (i + 1) for i in range(len(a))]
+    dphi = sum(c * (p1 - p2) for c, p1, p2 in zip(a, powers1, powers2)) + k * (sag(q1) - sag(q2))
+    outer = (4.0 / np.pi) * 0.5 * t_end[..., 0] * wt[None, None, :] * sin_t[..., 0] ** 2  # [λ, ν, t]
+
+    def mean_over_band(pupil):  # ∫∫ pupil dv dt, averaged over λ: the polychromatic OTF [ν]
+        otf = (outer * (pupil * wv).sum(axis=3)).sum(axis=2)
+        return (weight[:, None] * otf).sum(axis=0)
+
+    poly = mean_over_band(np.cos(dphi))
+    sine = np.sin(dphi)
+    derivatives = [mean_over_band(-sine * (p1 - p2)) for p1, p2 in zip(powers1, powers2)]
+    sign = np.sign(poly)
+    assert np.all(sign == sign[0]), "the polychromatic OTF changes sign below Nyquist"
+    value = 0.5 * (np.abs(poly) * wn).sum()
+    gradient = np.array([0.5 * (sign * d * wn).sum() for d in derivatives])
+    return value, gradient
+
+
+@pytest.mark.parametrize("shift", [None, (0, 12.0)], ids=["design", "defocused"])
+def test_binary2_gradient_of_the_geometric_phase_lens_is_the_numpy_radial_references(shift):
+    """`asnr.gradient`'s mean_mtf_gradient of examples/phase-binary2.toml with respect to every
+    Binary 2 coefficient against the numpy reference above, at the example's coefficients and
+    with 12 rad of defocus added to A1.
+
+    The reference's own error: its rule of 48 λ × 32 ν × 48 t × 12 v nodes agrees with one of
+    64 × 40 × 64 × 16 within 1.1e-13 of the gradient's norm and 4e-15 in the mean MTF (measured
+    for both points); here it must agree with a coarser rule (36 × 24 × 36 × 8) within 1e-6 of the
+    norm (measured 6.8e-8 and 1.1e-9), so that a rule that stopped converging fails. The engine's
+    mean MTF and gradient, asked for a tolerance of 1e-9, must be within 10× that relative to the
+    gradient's norm (docs/physics.md, "Gradients": the rule that holds the value holds its
+    derivatives to about the same accuracy relative to their norm), its mean MTF within 1e-8."""
+    coefficients = list(B2_COEFFICIENTS)
+    overrides = {}
+    if shift is not None:
+        i, delta = shift
+        coefficients[i] += delta
+        overrides[f"lens.binary2[{i}]"] = coefficients[i]
+    coarse_value, coarse = numpy_binary2_mean_mtf_and_gradient(coefficients, 36, 24, 36, 8)
+    finer_value, finer = numpy_binary2_mean_mtf_and_gradient(coefficients, 48, 32, 48, 12)
+    norm = np.linalg.norm(finer)
+    assert abs(coarse_value - finer_value) < 1e-9, (coarse_value, finer_value)
+    assert np.linalg.norm(coarse - finer) < 1e-6 * norm, (coarse, finer)
+
+    tolerance = 1e-9
+    ours = asnr.gradient(asnr.load(BINARY2), "lens.binary2", set=overrides, tolerance=tolerance)
+    gradient = np.array(list(ours["mean_mtf_gradient"].values()))
+    error = np.linalg.norm(gradient - finer) / norm
+    print(f"{shift}: mean MTF {ours['mean_mtf']:.12f} (numpy {finer_value:.12f}); gradient {gradient} "
+          f"against numpy {finer}: {error:.2e} of its norm")
+    assert list(ours["mean_mtf_gradient"]) == [f"lens.binary2[{i}]" for i in range(4)]
+    assert abs(ours["mean_mtf"] - finer_value) < 1e-8, (ours["mean_mtf"], finer_value)
+    assert error < 10 * tolerance, (gradient, finer, error)
+    # a check that can fail: each derivative is well above the error allowed
+    assert np.all(np.abs(finer) > 1e3 * 10 * tolerance * norm), finer
+
+
 # --- the PyTorch bridge -----------------------------------------------------------------------
 
 

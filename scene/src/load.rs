@@ -252,6 +252,23 @@ impl Source {
         Ok(self)
     }
 
+    /// This source with the keys `keys` of its lens table left out (a design given anew in place
+    /// of the one the file gives: `Scene.with_phase_map` and `with_layout` in Python). The other
+    /// keys, the label, the folder and the arrays are kept; the text is the table written anew
+    /// (its comments dropped). A text that is not TOML is returned as it is: building it names the
+    /// error.
+    pub fn without_lens_keys(&self, keys: &[&str]) -> Source {
+        let Ok(mut table) = toml::from_str::<toml::Table>(&self.text) else { return self.clone() };
+        let Some(toml::Value::Table(lens)) = table.get_mut("lens") else { return self.clone() };
+        if !keys.iter().any(|k| lens.contains_key(*k)) {
+            return self.clone();
+        }
+        for key in keys {
+            lens.remove(*key);
+        }
+        Source { text: table.to_string(), parsed: std::sync::OnceLock::new(), ..self.clone() }
+    }
+
     /// The arrays given in memory ([`Source::with_array`]): each key, its label, shape and values.
     pub fn arrays(&self) -> impl Iterator<Item = (&str, &str, &[u64], &[f64])> {
         self.arrays.0.iter().map(|(k, a)| (k.as_str(), a.label.as_str(), a.shape.as_slice(), a.values.as_slice()))
