@@ -211,16 +211,19 @@ impl Scene {
 
     /// This scene's lens as the 2-D phase map `phase` (radians at the design wavelength, `[y, x]`,
     /// a numpy float array) with cells of `pitch_um`, and optionally the map `amplitude` of the
-    /// same shape and the `aperture` ("circle" or "square"): `lens.model = "phase"` with the keys
+    /// same shape, the `aperture` ("circle" or "square") and the `dispersion` ("geometric-phase",
+    /// "diffractive", "refractive"; a scene whose lens is not a phase lens has none), each given
+    /// as `lens.KEY`: `lens.model = "phase"` with the keys
     /// a scene file gives as `.npy` files, checked as theirs are. The phase given anew replaces
     /// the lens's own: its [`PHASE_DESIGN_KEYS`] are left out; every other lens key is kept.
-    #[pyo3(signature = (phase, *, pitch_um, amplitude=None, aperture=None))]
+    #[pyo3(signature = (phase, *, pitch_um, amplitude=None, aperture=None, dispersion=None))]
     fn with_phase_map(
         &self,
         phase: &Bound<'_, PyAny>,
         pitch_um: &Bound<'_, PyAny>,
         amplitude: Option<&Bound<'_, PyAny>>,
         aperture: Option<&Bound<'_, PyAny>>,
+        dispersion: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Scene> {
         self.check_keys(["lens.phase_map"])?;
         let mut next = self.without_lens_keys(&PHASE_DESIGN_KEYS);
@@ -232,6 +235,9 @@ impl Scene {
         next.overrides.push(override_text("lens.phase_map_pitch_um", pitch_um)?);
         if let Some(aperture) = aperture {
             next.overrides.push(override_text("lens.aperture", aperture)?);
+        }
+        if let Some(dispersion) = dispersion {
+            next.overrides.push(override_text("lens.dispersion", dispersion)?);
         }
         next.build().map_err(scene_error)?;
         Ok(next)

@@ -206,3 +206,33 @@ def test_a_gds_drawn_by_gdstk_reproduces_the_radial_library_lens(tmp_path):
     base = asnr.load(tmp_path / "scene.toml")
     drawn = asnr.evaluate(base.with_layout(grid, pitch_um=0.4))
     assert drawn.photoelectrons == pytest.approx(polygons.photoelectrons, rel=2e-3)
+
+
+def test_a_layout_grid_given_as_an_array_equals_its_npy_file(tmp_path):
+    """`Scene.with_layout` (and `with_` of `lens.layout_grid`) of the drawn layout equals the
+    scene naming the grid saved with `np.save`, to 1e-12; it replaces the radial layout of the
+    scene it starts from; a bad grid is refused naming the key, as the file is."""
+    grid = sites()
+    rows = "".join(f"{(i + 0.5) * PITCH_NM * 1e-6:.7f},{d:.1f}\n" for i, d in enumerate(rings()))
+    (tmp_path / "layout.csv").write_text("r_mm,diameter_nm\n" + rows)
+    np.save(tmp_path / "grid.npy", grid)
+    (tmp_path / "grid.toml").write_text(scene_text('layout_grid = "grid.npy"\nlattice_pitch_um = 0.4'))
+    (tmp_path / "radial.toml").write_text(scene_text('layout = "layout.csv"'))
+    files = asnr.evaluate(asnr.load(tmp_path / "grid.toml"))
+    radial = asnr.load(tmp_path / "radial.toml")
+    for given in (
+        radial.with_layout(grid, pitch_um=0.4),
+        radial.with_layout(grid[None, :, :], pitch_um=0.4),  # [parameter, y, x] of one parameter
+        asnr.load(tmp_path / "grid.toml").with_({"lens.layout_grid": grid}),
+    ):
+        e = asnr.evaluate(given)
+        for field in ("asnr", "mean_mtf", "snr0", "photoelectrons"):
+            assert getattr(e, field) == pytest.approx(getattr(files, field), rel=1e-12, abs=0), field
+    assert "layout.csv" not in radial.with_layout(grid, pitch_um=0.4).to_toml()
+    bad = grid.copy()
+    bad[3, 60] = np.inf
+    side = f"{grid.shape[0]} × {grid.shape[1]}"
+    with pytest.raises(asnr.SceneError, match=rf"lens\.layout_grid.*<numpy float64 array {side}>.*site \(60, 3\) is infinite"):
+        radial.with_layout(bad, pitch_um=0.4)
+    with pytest.raises(asnr.SceneError, match=r"lens\.layout_grid.*expected 2 axes"):
+        radial.with_layout(np.stack([grid, grid]), pitch_um=0.4)

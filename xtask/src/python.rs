@@ -2,13 +2,14 @@
 //!
 //! 1. The portable wheel, built and checked by `cargo xtask wheel` (`wheel.rs`).
 //! 2. A fresh virtual environment, `target/python-venv` (made anew each run), into which pip
-//!    installs the wheel with its extras, `asnr-….whl[plot,dask,jax]`, and pytest, every version
-//!    pinned by the constraints file `python/requirements-test.txt` (jax's CPU package among
-//!    them: the JAX bridge `asnr.jax` is tested here; the PyTorch bridge in `cargo xtask torch`).
+//!    installs the wheel with its extras, `asnr-….whl[plot,dask,jax]`, pytest and gdstk (the
+//!    GDS writer of `python/tests/test_gds.py`), every version pinned by the constraints file
+//!    `python/requirements-test.txt` (jax's CPU package among them: the JAX bridge `asnr.jax` is
+//!    tested here; the PyTorch bridge in `cargo xtask torch`).
 //! 3. With no Rust toolchain on `PATH` (every folder holding `cargo` or `rustc` left out, checked
 //!    from inside Python first): the pytest suite `python/tests` against the debug `asnr` binary
-//!    (`ASNR_BIN`), with `ASNR_REQUIRE=jax,scipy` so that a missing jax or scipy fails the JAX
-//!    bridge's tests instead of skipping them; every ```` ```python ```` block of the README,
+//!    (`ASNR_BIN`), with `ASNR_REQUIRE=jax,scipy,gdstk` so that a missing jax, scipy or gdstk
+//!    fails the JAX bridge's and the GDS tests instead of skipping them; every ```` ```python ```` block of the README,
 //!    each as a script of its own in `target/readme-python/`, as a user pastes it; and
 //!    `examples/python/asnr_in_a_loss.py` (the ASNR in a loss, by scipy and by JAX).
 //!
@@ -29,8 +30,11 @@ const CONSTRAINTS: &str = "python/requirements-test.txt";
 /// Where the README's Python blocks are written and run.
 const SNIPPETS: &str = "target/readme-python";
 /// The packages whose absence fails the tests that need them (`ASNR_REQUIRE`), rather than
-/// skipping them: the JAX bridge's, with scipy for `scipy.optimize.minimize(jac=True)`.
-const REQUIRED: &str = "jax,scipy";
+/// skipping them: the JAX bridge's, with scipy for `scipy.optimize.minimize(jac=True)`, and
+/// gdstk, which writes the GDS of `python/tests/test_gds.py`.
+const REQUIRED: &str = "jax,scipy,gdstk";
+/// What the tests need beyond the wheel and its extras (pinned by the constraints file).
+const TEST_ONLY: [&str; 2] = ["pytest", "gdstk"];
 /// The example where the ASNR is one term of a loss, run after the tests.
 const LOSS_EXAMPLE: &str = "examples/python/asnr_in_a_loss.py";
 
@@ -49,7 +53,7 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-c"])
         .arg(root.join(CONSTRAINTS))
         .arg(format!("{}[plot,dask,jax]", wheel.display()))
-        .arg("pytest");
+        .args(TEST_ONLY);
     let started = std::time::Instant::now();
     cmd::run(&mut install)?;
     eprintln!("python: the wheel, its extras and pytest installed in {:.1} s", started.elapsed().as_secs_f64());
