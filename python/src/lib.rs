@@ -140,8 +140,15 @@ fn with_array(mut scene: Scene, key: &str, value: &Bound<'_, PyAny>) -> PyResult
     let label =
         format!("<numpy {dtype} array {}>", shape.iter().map(ToString::to_string).collect::<Vec<_>>().join(" × "));
     scene.source = scene.source.with_array(key, label.clone(), shape, values).map_err(SceneError::new_err)?;
-    scene.overrides.push(format!("{key}={}", toml::Value::String(label)));
+    replace_override(&mut scene.overrides, key, format!("{key}={}", toml::Value::String(label)));
     Ok(scene)
+}
+
+/// `overrides` with `text` (`key=value`) in place of any earlier override of `key`: a value given
+/// anew by `with_phase_map`, `with_layout` or an array (an override may name a key once).
+fn replace_override(overrides: &mut Vec<String>, key: &str, text: String) {
+    overrides.retain(|o| o.split('=').next().unwrap_or_default().trim() != key);
+    overrides.push(text);
 }
 
 /// `key=value` for an override given in Python: numbers as `asnr sweep` writes them (the shortest
@@ -231,13 +238,17 @@ impl Scene {
         if let Some(amplitude) = amplitude {
             next = with_array(next, "lens.amplitude_map", amplitude)?;
         }
-        next.overrides.push("lens.model=\"phase\"".to_owned());
-        next.overrides.push(override_text("lens.phase_map_pitch_um", pitch_um)?);
+        replace_override(&mut next.overrides, "lens.model", "lens.model=\"phase\"".to_owned());
+        replace_override(
+            &mut next.overrides,
+            "lens.phase_map_pitch_um",
+            override_text("lens.phase_map_pitch_um", pitch_um)?,
+        );
         if let Some(aperture) = aperture {
-            next.overrides.push(override_text("lens.aperture", aperture)?);
+            replace_override(&mut next.overrides, "lens.aperture", override_text("lens.aperture", aperture)?);
         }
         if let Some(dispersion) = dispersion {
-            next.overrides.push(override_text("lens.dispersion", dispersion)?);
+            replace_override(&mut next.overrides, "lens.dispersion", override_text("lens.dispersion", dispersion)?);
         }
         next.build().map_err(scene_error)?;
         Ok(next)
@@ -253,8 +264,12 @@ impl Scene {
         self.check_keys(["lens.layout_grid"])?;
         let mut next = self.without_lens_keys(&LAYOUT_KEYS);
         next = with_array(next, "lens.layout_grid", grid)?;
-        next.overrides.push("lens.model=\"library\"".to_owned());
-        next.overrides.push(override_text("lens.lattice_pitch_um", pitch_um)?);
+        replace_override(&mut next.overrides, "lens.model", "lens.model=\"library\"".to_owned());
+        replace_override(
+            &mut next.overrides,
+            "lens.lattice_pitch_um",
+            override_text("lens.lattice_pitch_um", pitch_um)?,
+        );
         next.build().map_err(scene_error)?;
         Ok(next)
     }

@@ -2126,6 +2126,64 @@ mod tests {
         path.display().to_string()
     }
 
+    /// A map given in memory (`Source::with_array`) is the map of the `.npy` file holding the same
+    /// values: the same lens to the last digit, the same refusal naming the key (the array's text
+    /// in place of the file's name), and a later override naming a file reads the file.
+    #[test]
+    fn a_map_given_in_memory_is_its_npy_file() {
+        let small = |keys: &str| phase_scene(keys).replace("focal_length_mm = 3.36", "focal_length_mm = 0.125");
+        let k0 = 2.0 * std::f64::consts::PI / 800e-6; // per mm
+        let n = 50;
+        let c = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * 1e-3;
+        let phase =
+            |x: f64, y: f64| -k0 * ((x * x + y * y + 0.125f64.powi(2)).sqrt() - 0.125) + 2.0 * x * x * x / 1.25e-4;
+        let values: Vec<f64> = (0..n * n).map(|i| phase(c(i % n), c(i / n))).collect();
+        let file = write_map("memory.npy", n, 1.0, phase);
+        let text = small("phase_map = \"given\"\nphase_map_pitch_um = 1.0\ndispersion = \"geometric-phase\"");
+        let source = crate::Source::from_text(text.clone(), "test.toml", std::env::temp_dir());
+        let source = source.with_array("lens.phase_map", "<array>", vec![n as u64, n as u64], values.clone()).unwrap();
+        let label = ["lens.phase_map=\"<array>\"".to_owned()];
+        let given = metric::evaluate(&crate::build_from(&source, &label).unwrap()).unwrap();
+        let from_file = build_text(text, &[&format!("lens.phase_map=\"{file}\"")]).unwrap();
+        let from_file = metric::evaluate(&from_file).unwrap();
+        assert_eq!(given.mean_mtf.to_bits(), from_file.mean_mtf.to_bits());
+        assert_eq!(given.asnr.to_bits(), from_file.asnr.to_bits());
+        // a value naming a file (here the scene's own) reads the file, whatever arrays are given
+        let named =
+            small(&format!("phase_map = \"{file}\"\nphase_map_pitch_um = 1.0\ndispersion = \"geometric-phase\""));
+        let named = crate::Source::from_text(named, "test.toml", std::env::temp_dir())
+            .with_array("lens.phase_map", "<array>", vec![n as u64, n as u64], vec![0.0; n * n])
+            .unwrap();
+        assert_eq!(
+            metric::evaluate(&crate::build_from(&named, &[]).unwrap()).unwrap().asnr.to_bits(),
+            given.asnr.to_bits()
+        );
+        // the same checks: a NaN in the aperture, a shape of one axis, a key that takes no array
+        let mut bad = values.clone();
+        bad[(n / 2) * n + n / 2] = f64::NAN;
+        let bad = crate::Source::from_text(
+            small("phase_map = \"x\"\nphase_map_pitch_um = 1.0\ndispersion = \"geometric-phase\""),
+            "t",
+            ".",
+        )
+        .with_array("lens.phase_map", "<array>", vec![n as u64, n as u64], bad)
+        .unwrap();
+        let e = crate::build_from(&bad, &label).unwrap_err().to_string();
+        assert!(e.contains("lens.phase_map") && e.contains("[y, x] = [25, 25]"), "{e}");
+        let flat =
+            source.clone().with_array("lens.phase_map", "<array>", vec![(n * n) as u64], values.clone()).unwrap();
+        let e = crate::build_from(&flat, &label).unwrap_err().to_string();
+        assert!(e.contains("lens.phase_map") && e.contains("<array>") && e.contains("expected 2 axes [y, x]"), "{e}");
+        let e = source.clone().with_array("lens.binary2", "<array>", vec![2, 2], vec![0.0; 4]).unwrap_err();
+        assert!(
+            e.contains("lens.binary2") && e.contains("lens.phase_map, lens.amplitude_map, lens.layout_grid"),
+            "{e}"
+        );
+        let e = source.with_array("lens.phase_map", "<array>", vec![3, 3], vec![0.0; 4]).unwrap_err();
+        assert!(e.contains("4 values for the shape [3, 3]"), "{e}");
+        std::fs::remove_file(file).ok();
+    }
+
     /// A small lens (f0 = 0.125 mm, F/2.5, R = 25 µm) given as a map: the hyperbolic design loads
     /// (wrapped too, with a geometric phase), and the map's mistakes are refused with the key and
     /// the numbers: a NaN inside the aperture, a map that does not cover it, cells too coarse
