@@ -95,6 +95,37 @@ impl PhaseMapLens {
         }
     }
 
+    /// The hyperbolic design `−k0 (√(x² + y² + f0²) − f0)` (`k0 = 2π/λ0`, aberration-free at
+    /// λ0 on axis) plus `extra(x, y)` (radians), sampled at the centres of `n × n` cells of
+    /// `pitch_m` centred on the axis, stored for a geometric phase ([`stored_phase`](Self::stored_phase)):
+    /// the map a designer exports from a hyperbolic metalens, and the one the phase-map tests and
+    /// the benchmark compare with the same hyperbola on the radial engine.
+    pub fn sampled_hyperbola(
+        n: usize,
+        pitch_m: f64,
+        aperture: MapAperture,
+        radius_m: f64,
+        f0_m: f64,
+        lambda0_m: f64,
+        extra: impl Fn(f64, f64) -> f64,
+    ) -> Result<PhaseMap, optics::Error> {
+        let stored = Self::stored_phase(&Dispersion::GeometricPhase);
+        if n.saturating_mul(n) > optics::map::MAP_MAX_CELLS {
+            // refused by the map's own size check, before any sample is computed
+            return PhaseMap::new(n, n, pitch_m, Vec::new(), None, aperture, radius_m, f0_m, lambda0_m, stored);
+        }
+        let k0 = 2.0 * std::f64::consts::PI / lambda0_m;
+        let centre = 0.5 * (n as f64 - 1.0);
+        let mut phase = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = ((i as f64 - centre) * pitch_m, (j as f64 - centre) * pitch_m);
+                phase.push(-k0 * ((x * x + y * y + f0_m * f0_m).sqrt() - f0_m) + extra(x, y));
+            }
+        }
+        PhaseMap::new(n, n, pitch_m, phase, None, aperture, radius_m, f0_m, lambda0_m, stored)
+    }
+
     /// The phase map.
     pub fn map(&self) -> &PhaseMap {
         &self.map

@@ -35,19 +35,10 @@ fn scene(lens: impl LensModel + 'static, filter: Spectrum) -> Evaluation {
     evaluate(&Scene::new(Arc::new(lens), radiance, camera, 1.23e-3, options).unwrap()).unwrap()
 }
 
-/// The hyperbolic phase `−k0 (√(x² + y² + f0²) − f0)` plus `extra(x, y)` (radians) at the centres
-/// of `n × n` cells of `pitch` centred on the axis.
+/// The hyperbolic phase plus `extra(x, y)` (radians) at the centres of `n × n` cells of `pitch`
+/// centred on the axis (`PhaseMapLens::sampled_hyperbola`).
 fn map(n: usize, pitch: f64, aperture: MapAperture, extra: impl Fn(f64, f64) -> f64) -> PhaseMap {
-    let k0 = 2.0 * PI / LAMBDA0;
-    let mut phase = Vec::with_capacity(n * n);
-    for j in 0..n {
-        for i in 0..n {
-            let (x, y) = ((i as f64 - 0.5 * (n as f64 - 1.0)) * pitch, (j as f64 - 0.5 * (n as f64 - 1.0)) * pitch);
-            phase.push(-k0 * ((x * x + y * y + F0 * F0).sqrt() - F0) + extra(x, y));
-        }
-    }
-    let stored = PhaseMapLens::stored_phase(&Dispersion::GeometricPhase);
-    PhaseMap::new(n, n, pitch, phase, None, aperture, radius(), F0, LAMBDA0, stored).unwrap()
+    PhaseMapLens::sampled_hyperbola(n, pitch, aperture, radius(), F0, LAMBDA0, extra).unwrap()
 }
 
 fn map_lens(map: PhaseMap) -> PhaseMapLens {

@@ -42,6 +42,7 @@ mod gradients;
 mod iris;
 mod kernels;
 mod map;
+mod map_numpy;
 mod phase_maps;
 mod plot;
 mod process;

@@ -43,7 +43,7 @@ fn children_cpu() -> f64 {
 }
 
 /// One run: wall seconds, CPU seconds, (mean MTF, ASNR) per point in the CSV's order.
-fn run(asnr: &Path, extra: &[&str]) -> (f64, f64, Vec<(f64, f64)>) {
+pub(crate) fn run(asnr: &Path, extra: &[&str]) -> (f64, f64, Vec<(f64, f64)>) {
     let cpu = children_cpu();
     let started = Instant::now();
     let output = Command::new(asnr).args(ARGS).args(extra).output().expect("asnr runs");

@@ -12,7 +12,7 @@ use std::time::Instant;
 use lenses::{Curve, Dispersion, PhaseLens, PhaseMapLens};
 use metric::{Camera, Evaluation, Options, Scene, evaluate};
 use optics::LensModel;
-use optics::map::{MapAperture, PhaseMap};
+use optics::map::MapAperture;
 use radiometry::{Gaussian, Spectrum};
 
 use crate::sections::Tools;
@@ -31,20 +31,10 @@ fn evaluate_lens(lens: impl LensModel + 'static) -> Evaluation {
 }
 
 /// The hyperbolic phase `−k0 (√(x² + y² + f0²) − f0)` at the centres of `n × n` cells spanning
-/// the diameter, as a lens.
+/// the diameter (`PhaseMapLens::sampled_hyperbola`), as a lens.
 fn map_lens(n: usize) -> PhaseMapLens {
     let pitch = 2.0 * RADIUS / n as f64;
-    let k0 = 2.0 * PI / LAMBDA0;
-    let centre = 0.5 * (n as f64 - 1.0);
-    let mut phase = Vec::with_capacity(n * n);
-    for j in 0..n {
-        for i in 0..n {
-            let (x, y) = ((i as f64 - centre) * pitch, (j as f64 - centre) * pitch);
-            phase.push(-k0 * ((x * x + y * y + F0 * F0).sqrt() - F0));
-        }
-    }
-    let stored = PhaseMapLens::stored_phase(&Dispersion::GeometricPhase);
-    let map = PhaseMap::new(n, n, pitch, phase, None, MapAperture::Circle, RADIUS, F0, LAMBDA0, stored).unwrap();
+    let map = PhaseMapLens::sampled_hyperbola(n, pitch, MapAperture::Circle, RADIUS, F0, LAMBDA0, |_, _| 0.0).unwrap();
     PhaseMapLens::new(
         F_NUMBER,
         F0,

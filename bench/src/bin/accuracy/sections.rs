@@ -48,6 +48,7 @@ pub(crate) const SECTIONS: &[Section] = &[
     },
     Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section },
     Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
+    Section { name: "map", title: crate::map_numpy::TITLE, run: crate::map_numpy::section },
 ];
 
 /// The sections `--only` names, or an error listing the known names.

@@ -1,0 +1,190 @@
+//! The map per point, against numpy: the 40 × 100 F-number × band map of the paper scene
+//! (`asnr sweep`, [`crate::map::ARGS`]) as a whole release process, its CPU time per point beside
+//! the numpy script `xtask/baselines/numpy_map.py` computing the same grid (whole process too),
+//! each point's mean MTF against the sweep at `--tolerance 1e-12`; and the paper point
+//! (F/2.5, 50 nm) at tolerance 1e-7, one `metric::evaluate` call timed in process.
+//! A stand-alone section ([`crate::sections`]): `cargo xtask accuracy --only map` regenerates it.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+/// The section's heading.
+pub(crate) const TITLE: &str = "The map per point, against numpy";
+
+/// CPU seconds (user + system) used by this process's waited-for children so far (fields 16 and
+/// 17 of `/proc/self/stat`, in ticks of 1/100 s, Linux's USER_HZ); 0 where it is not readable.
+fn children_cpu() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest: Vec<&str> = s.rsplit_once(')')?.1.split_whitespace().collect();
+            let ticks = |i: usize| rest.get(i).and_then(|v| v.parse::<f64>().ok());
+            Some((ticks(13)? + ticks(14)?) / 100.0)
+        })
+        .unwrap_or(0.0)
+}
+
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map_or_else(|| "unknown".to_owned(), |s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The numpy script's run: whole-process wall and CPU seconds, its own timing of the map (after
+/// numpy's import), and its mean MTF per point in the sweep's order.
+struct Numpy {
+    wall_s: f64,
+    cpu_s: f64,
+    inner_s: f64,
+    values: Vec<f64>,
+    version: String,
+}
+
+fn run_numpy(python: &Path, root: &Path) -> Option<Numpy> {
+    let script = root.join("xtask").join("baselines").join("numpy_map.py");
+    eprintln!("map (numpy): {} {}", python.display(), script.display());
+    let cpu = children_cpu();
+    let started = Instant::now();
+    let output = Command::new(python).arg(&script).output().ok()?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let cpu_s = children_cpu() - cpu;
+    if !output.status.success() {
+        eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
+        return None;
+    }
+    let text = String::from_utf8_lossy(&output.stdout);
+    let (head, values) = text.split_once("values:\n")?;
+    let key = |name: &str| head.lines().find_map(|l| l.strip_prefix(&format!("{name}=")).map(str::to_owned));
+    let values: Option<Vec<f64>> = values.lines().map(|l| l.rsplit(',').next()?.trim().parse().ok()).collect();
+    let numpy =
+        Numpy { wall_s, cpu_s, inner_s: key("seconds")?.parse().ok()?, values: values?, version: key("numpy")? };
+    eprintln!("  {wall_s:.2} s wall, {cpu_s:.2} s CPU ({:.2} s after the import)", numpy.inner_s);
+    Some(numpy)
+}
+
+/// The paper point at tolerance 1e-7: the median time of `metric::evaluate` on the built scene
+/// (s), its mean MTF, its E(c) evaluations and OTF values, and the same scene's mean MTF at 1e-12.
+fn paper_point(root: &Path, repeats: usize) -> Option<(f64, f64, usize, usize, f64)> {
+    let source = scene::read(Some(&root.join("examples/paper-theory.toml"))).ok()?;
+    let at = |tolerance: &str| scene::build_from(&source, &[format!("options.tolerance={tolerance}")]).ok();
+    let (scene, reference) = (at("1e-7")?, at("1e-12")?);
+    let first = metric::evaluate(&scene).ok()?;
+    let reference = metric::evaluate(&reference).ok()?.mean_mtf;
+    let times: Vec<f64> = (0..repeats)
+        .map(|_| {
+            let start = Instant::now();
+            std::hint::black_box(metric::evaluate(&scene).unwrap());
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    let n = &first.numerics;
+    Some((median(times), first.mean_mtf, n.closed_form_evaluations, n.otf_evaluations, reference))
+}
+
+/// The section's markdown (None without the release `asnr`).
+pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
+    let Some(asnr) = tools.asnr.as_deref() else {
+        eprintln!("map: needs the release `asnr` binary (--asnr BIN; `cargo xtask accuracy` passes it)");
+        return None;
+    };
+    let runs = if tools.quick { 1 } else { 3 };
+    let load_before = load_average();
+    eprintln!("map: {} {}", asnr.display(), crate::map::ARGS.join(" "));
+    let (mut walls, mut cpus, mut points) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let (wall, cpu, p) = crate::map::run(asnr, &[]);
+        eprintln!("  {wall:.2} s wall, {cpu:.2} s CPU");
+        walls.push(wall);
+        cpus.push(cpu);
+        points = p;
+    }
+    let (_, _, reference) = crate::map::run(asnr, &["--tolerance", "1e-12"]);
+    let relative = |a: f64, b: f64| if b == 0.0 { a.abs() } else { (a - b).abs() / b.abs() };
+    let ours_error = points.iter().zip(&reference).map(|(p, r)| relative(p.0, r.0)).fold(0.0, f64::max);
+    let n = points.len() as f64;
+    let (wall, cpu) = (median(walls), median(cpus));
+    let numpy = tools.python.as_deref().and_then(|py| run_numpy(py, &tools.root));
+    let paper = paper_point(&tools.root, if tools.quick { 51 } else { 501 });
+    let load_after = load_average();
+
+    let profile = if cfg!(debug_assertions) { "dev profile" } else { "release" };
+    let mut md = format!("## {TITLE}\n\n");
+    md += &format!(
+        "`asnr {}` (the paper scene, examples/paper-theory.toml; {} points; release binary, 2 worker threads) timed from \
+         outside as a whole process: wall clock and CPU time (user + system, `/proc/self/stat` of the waiting process), \
+         median of {runs} run(s); per point: the CPU time over the points. Beside it the numpy script \
+         `xtask/baselines/numpy_map.py` (the same grid and scene: fixed composite Gauss–Legendre rules in λ, t and ν, their \
+         node counts set per point from the defocus phases they must resolve, vectorized over each point's nodes; numpy's \
+         BLAS on one thread), one run, whole process too (the interpreter's start and numpy's import included). \
+         Agreement: each point's mean MTF against the same sweep at `--tolerance 1e-12` (largest relative difference). \
+         The paper point: `metric::evaluate` of examples/paper-theory.toml at `options.tolerance = 1e-7`, in this \
+         {profile} process, median of repeats (one thread), its mean MTF against the same scene at 1e-12. Load average \
+         (1, 5, 15 min) before: {load_before}; after: {load_after}. Regenerate this section alone: \
+         `cargo xtask accuracy --only map`.\n\n",
+        crate::map::ARGS.join(" "),
+        points.len()
+    );
+    md += "| map | wall | CPU | CPU per point | largest mean-MTF difference from the 1e-12 sweep |\n|---|---|---|---|---|\n";
+    md += &format!(
+        "| `asnr sweep`, tolerance 1e-6 (default) | {wall:.2} s | {cpu:.2} s | {:.0} µs | {ours_error:.1e} |\n",
+        1e6 * cpu / n
+    );
+    match &numpy {
+        Some(np) if np.values.len() == reference.len() => {
+            let error = np.values.iter().zip(&reference).map(|(v, r)| relative(*v, r.0)).fold(0.0, f64::max);
+            md += &format!(
+                "| numpy {} (`numpy_map.py`; the map alone after the import: {:.2} s) | {:.2} s | {:.2} s | {:.0} µs | {error:.1e} |\n",
+                np.version,
+                np.inner_s,
+                np.wall_s,
+                np.cpu_s,
+                1e6 * np.cpu_s / n
+            );
+            if cpu > 0.0 {
+                md += &format!(
+                    "\nCPU per point, numpy over ours (same run): {:.1}× (wall: {:.1}×).\n",
+                    np.cpu_s / cpu,
+                    np.wall_s / wall
+                );
+            }
+        }
+        Some(np) => {
+            md += &format!("| numpy: {} values for {} points: not compared | — | — | — | — |\n", np.values.len(), n);
+        }
+        None => md += "| numpy: not run (no `--python` with numpy, or the script failed) | — | — | — | — |\n",
+    }
+    if let Some((seconds, mean, evaluations, otf_values, exact)) = paper {
+        md += &format!(
+            "\nThe paper point at tolerance 1e-7: {:.1} µs a `metric::evaluate` call, mean MTF {mean:.12} ({:.1e} from \
+             {exact:.12} at 1e-12), {otf_values} OTF values, {evaluations} E(c).\n",
+            1e6 * seconds,
+            relative(mean, exact)
+        );
+        if evaluations > 0 && otf_values > 0 {
+            let per = seconds / evaluations as f64;
+            md += &format!(
+                "\nWhat 40 µs and 20 µs a point would take: the closed form's time is its count of E(c) times their cost \
+                 (here {:.0} ns each, the call's time over its count, everything else in the call included). At that \
+                 cost 40 µs is about {:.0} E(c) and 20 µs about {:.0}, against {evaluations} here ({:.0} per OTF value: \
+                 the nested Clenshaw–Curtis rule in the pupil angle takes 17 points on most of its 3–4 pieces, 33 on a \
+                 few; at 1e-6 on the paper point the 9-point level's error, the next level's move, is about 1.6× the \
+                 per-piece tolerance, and the 17-point level is 1e4× within it). \
+                 So 20 µs needs both fewer values and fewer points: about 9 OTF values of 2 pieces at 9–13 points each (a \
+                 rule whose error is known without the next level, e.g. Gauss–Legendre pieces sized from the phase of \
+                 E(c) with a bound on its Chebyshev coefficients), or E(c) itself 4× cheaper (the Faddeeva function and \
+                 the moment recurrence are most of it), or a surrogate for the OTF in (ν, F#, σ) with a stated bound.\n",
+                1e9 * per,
+                40e-6 / per,
+                20e-6 / per,
+                evaluations as f64 / otf_values as f64
+            );
+        }
+    }
+    Some(md)
+}
