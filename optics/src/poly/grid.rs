@@ -170,9 +170,16 @@ pub(super) struct Grids<'a> {
     pub coarse: Option<(FftPath, crate::fft::SamplingPlan)>,
     /// whether the OTF is read from the coarse sampling (while the frequency rule takes its mean)
     pub reading_coarse: std::cell::Cell<bool>,
-    /// the means along the azimuths the sampling choice read at the accepted pair of levels:
-    /// slot `j` at `first + π j / MAX_AZIMUTHS` holds `(M_{N/2}, M_N)` by [`fixed_mean`]
-    read: Option<(f64, Vec<Option<(f64, f64)>>)>,
+    /// the means along the azimuths the sampling choice read at the accepted pair of levels
+    read: Option<ReadMeans>,
+}
+
+/// The means along azimuths that the sampling choice read at its accepted levels: slot `j`, at
+/// `first + π j / MAX_AZIMUTHS`, holds `(M_{N/2}, M_N)` by [`fixed_mean`] where it was read.
+#[derive(Debug)]
+struct ReadMeans {
+    first: f64,
+    means: Vec<Option<(f64, f64)>>,
 }
 
 /// Share of the tolerance the FFT sampling may spend (the spectral rule spends its own share,
@@ -321,14 +328,14 @@ impl<'a> Grids<'a> {
             }
             fine = level(plan.samples)?;
         }
-        let read = coarse.means.iter().zip(&fine.means).map(|(c, f)| c.zip(*f)).collect();
+        let means = coarse.means.iter().zip(&fine.means).map(|(c, f)| c.zip(*f)).collect();
         Ok(Grids {
             scene,
             nodes,
             fft: fine.path,
             coarse: Some((coarse.path, plan)),
             reading_coarse: std::cell::Cell::new(false),
-            read: Some((first, read)),
+            read: Some(ReadMeans { first, means }),
         })
     }
 
@@ -454,7 +461,7 @@ impl OtfEngine for Grids<'_> {
     }
 
     fn means_along(&self, azimuth: f64) -> Option<(f64, f64)> {
-        let (first, means) = self.read.as_ref()?;
+        let ReadMeans { first, means } = self.read.as_ref()?;
         // the slot of `azimuth`, if it is one (the rule over azimuth reads `first + π k / M`)
         let slot = (azimuth - first) / PI * MAX_AZIMUTHS as f64;
         let j = slot.round();
