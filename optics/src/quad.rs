@@ -94,11 +94,14 @@ pub fn gauss_hermite(n: usize) -> Vec<(f64, f64)> {
 }
 
 /// Points per panel of the fixed frequency rule on FFT grids ([`composite_fixed`]): its panels
-/// are a quarter of the finest grid cell, and the bicubic interpolant is smooth inside a cell,
-/// so half of [`ORDER`] moves the mean by 4e-11 (coma 0.5 µm) and 3e-10 (the concentric
-/// segmented lens) at N = 256 against 16 points, far below the FFT path's own error (4 points:
-/// 2e-9 and 6e-9).
-pub const FIXED_ORDER: usize = 8;
+/// are half of the finest grid cell, and the bicubic interpolant is smooth inside a cell. Four
+/// points on half cells (8 OTF readings a cell) moved the mean over azimuth of 0.5 µm coma on
+/// the paper scene (`cargo test -p asnr-metric --test metric fft_path_with_an_aliased`) by
+/// 1.4e-8, 9e-9 and 9e-10 at N = 128, 256 and 512 against the former 8 points on quarter cells
+/// (32 readings a cell), far below the FFT path's own error, for a quarter of the readings
+/// (one full cell of 4 points: 6.6e-8 at N = 128; at quarter cells 4 points had moved coma by
+/// 2e-9 and the concentric segmented lens by 6e-9 at N = 256).
+pub const FIXED_ORDER: usize = 4;
 
 /// Integrates `f` over `[a, b]` with `panels` equal panels of the [`FIXED_ORDER`]-point rule.
 pub fn composite_fixed<F: FnMut(f64) -> f64>(a: f64, b: f64, panels: usize, mut f: F) -> f64 {

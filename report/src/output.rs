@@ -438,7 +438,7 @@ pub fn explain(scene: &Scene, r: &Evaluation, meter: Option<&radiometry::Radianc
          sign changes located",
         r.nyquist_cyc_per_mm,
         if n.engine.starts_with("fft") {
-            "a fixed composite Gauss–Legendre rule at a quarter of the finest grid cell"
+            "a fixed composite Gauss–Legendre rule at half the finest grid cell"
         } else if n.engine.starts_with("closed-form") {
             "nested Clenshaw–Curtis on panels from the band's averaging of defocus (one in ln ν past 8 ν_s), \
              adaptive Gauss–Kronrod 7/15 where it does not settle"

@@ -182,6 +182,23 @@ impl Polychromatic<'_> {
         if !self.direction_dependent() {
             return self.mean_mtf();
         }
+        // the FFT engine's sampling choice read this azimuth at both levels with the same fixed
+        // rule: its two means, extrapolated as `mean_of` would
+        if let (Some(plan), Some((coarse, fine)), FrequencyRule::Fixed { cell }) =
+            (self.engine.richardson(), self.engine.means_along(azimuth), self.engine.frequency_rule())
+        {
+            let nodes = self.engine.nodes();
+            let (panels, evaluations) = super::grid::fixed_rule(self.active_top(), cell);
+            let work = Work {
+                spectral_panels: nodes.panels.len(),
+                spectral_nodes: nodes.nodes.len(),
+                spectral_interpolated: nodes.interpolated,
+                frequency_panels: panels,
+                otf_evaluations: 2 * evaluations,
+                ..Work::default()
+            };
+            return (plan.extrapolate(coarse, fine).value, work);
+        }
         // |OTF| ≥ 0: no sign changes to split at, only isolated zeros the adaptive rule resolves
         self.mean_of(&|nu| self.otf_along(nu, azimuth).norm())
     }
@@ -289,7 +306,7 @@ impl Polychromatic<'_> {
         };
         if let FrequencyRule::Fixed { cell } = self.engine.frequency_rule() {
             // The interpolated grid is only continuous across its cells (kinks at every grid line
-            // of every node): a fixed composite rule at a quarter of the finest cell, not an
+            // of every node): a fixed composite rule at half the finest cell, not an
             // adaptive one, integrates it to well below the FFT path's own error.
             // over [0, highest cutoff] where that is below max_frequency: the OTF is zero beyond
             let top = self.active_top();

@@ -170,6 +170,16 @@ pub(super) struct Grids<'a> {
     pub coarse: Option<(FftPath, crate::fft::SamplingPlan)>,
     /// whether the OTF is read from the coarse sampling (while the frequency rule takes its mean)
     pub reading_coarse: std::cell::Cell<bool>,
+    /// the means along the azimuths the sampling choice read at the accepted pair of levels
+    read: Option<ReadMeans>,
+}
+
+/// The means along azimuths that the sampling choice read at its accepted levels: slot `j`, at
+/// `first + π j / MAX_AZIMUTHS`, holds `(M_{N/2}, M_N)` by [`fixed_mean`] where it was read.
+#[derive(Debug)]
+struct ReadMeans {
+    first: f64,
+    means: Vec<Option<(f64, f64)>>,
 }
 
 /// Share of the tolerance the FFT sampling may spend (the spectral rule spends its own share,
@@ -218,7 +228,14 @@ impl<'a> Grids<'a> {
     fn sampled(scene: Scene<'a>, nodes: Nodes, pupil_samples: Option<usize>, tolerance: f64) -> Result<Self, Error> {
         if let Some(n) = pupil_samples {
             let fft = FftPath::build(&scene, &nodes, n)?;
-            return Ok(Grids { scene, nodes, fft, coarse: None, reading_coarse: std::cell::Cell::new(false) });
+            return Ok(Grids {
+                scene,
+                nodes,
+                fft,
+                coarse: None,
+                reading_coarse: std::cell::Cell::new(false),
+                read: None,
+            });
         }
         let lambda_max = nodes.samples.iter().map(|s| s.0).fold(0.0, f64::max);
         let s_max = (scene.max_frequency * lambda_max * scene.f_number).clamp(1e-6, 1.0);
@@ -311,13 +328,14 @@ impl<'a> Grids<'a> {
             }
             fine = level(plan.samples)?;
         }
-        let coarse = coarse.path;
+        let means = coarse.means.iter().zip(&fine.means).map(|(c, f)| c.zip(*f)).collect();
         Ok(Grids {
             scene,
             nodes,
             fft: fine.path,
-            coarse: Some((coarse, plan)),
+            coarse: Some((coarse.path, plan)),
             reading_coarse: std::cell::Cell::new(false),
+            read: Some(ReadMeans { first, means }),
         })
     }
 
@@ -380,7 +398,7 @@ impl Level {
 
 /// The mean over `[0, top]` (top the frequency limit, or the highest cutoff below it) of
 /// `P(ν) value(ν)` on the FFT path: the interpolated grid is only continuous across its cells
-/// (kinks at every grid line of every node), so a fixed composite rule at a quarter of the finest
+/// (kinks at every grid line of every node), so a fixed composite rule at half the finest
 /// cell ([`fixed_rule`]), not an adaptive one, integrates it to well below the FFT path's own
 /// error. The integral is divided by `max_frequency` (the OTF is zero beyond `top`).
 fn fixed_mean(scene: &Scene<'_>, path: &FftPath, value: &dyn Fn(f64) -> f64) -> f64 {
@@ -392,9 +410,10 @@ fn fixed_mean(scene: &Scene<'_>, path: &FftPath, value: &dyn Fn(f64) -> f64) -> 
 }
 
 /// The panels of the fixed composite rule over `[0, top]` for grids whose finest cell in ν is
-/// `cell`: a quarter of a cell each (at least 8, at most 65 536), and the OTF evaluations.
+/// `cell`: half a cell each (at least 8, at most 65 536; the error this leaves is measured at
+/// [`crate::quad::FIXED_ORDER`]), and the OTF evaluations.
 pub(super) fn fixed_rule(top: f64, cell: f64) -> (usize, usize) {
-    let panels = ((4.0 * top / cell).ceil() as usize).clamp(8, 1 << 16);
+    let panels = ((2.0 * top / cell).ceil() as usize).clamp(8, 1 << 16);
     (panels, panels * crate::quad::FIXED_ORDER)
 }
 
@@ -439,6 +458,17 @@ impl OtfEngine for Grids<'_> {
 
     fn read_coarse(&self, on: bool) {
         self.reading_coarse.set(on && self.coarse.is_some());
+    }
+
+    fn means_along(&self, azimuth: f64) -> Option<(f64, f64)> {
+        let ReadMeans { first, means } = self.read.as_ref()?;
+        // the slot of `azimuth`, if it is one (the rule over azimuth reads `first + π k / M`)
+        let slot = (azimuth - first) / PI * MAX_AZIMUTHS as f64;
+        let j = slot.round();
+        if (slot - j).abs() > 1e-9 || j < 0.0 || j >= MAX_AZIMUTHS as f64 {
+            return None;
+        }
+        means[j as usize]
     }
 }
 

@@ -227,7 +227,7 @@ enum FrequencyRule {
         /// Initial panels over `[0, ν_max]` (at least).
         min_panels: f64,
     },
-    /// A fixed composite rule at a quarter of `cell` (cycles/m), the finest cell of the FFT
+    /// A fixed composite rule at half of `cell` (cycles/m), the finest cell of the FFT
     /// grids, whose interpolation kinks at every cell edge.
     Fixed {
         /// The finest grid cell in ν, cycles/m.
@@ -313,6 +313,13 @@ trait OtfEngine: std::fmt::Debug {
     }
     /// Reads the OTF from the coarse level (`on`) or the fine one.
     fn read_coarse(&self, _on: bool) {}
+    /// The means along `azimuth` at the coarse and fine levels, `(M_{N/2}, M_N)`, where the
+    /// engine has already computed them by the fixed frequency rule (the FFT engine's sampling
+    /// choice judges the same azimuths): the frequency rule extrapolates them instead of reading
+    /// the grids again.
+    fn means_along(&self, _azimuth: f64) -> Option<(f64, f64)> {
+        None
+    }
     /// Why the engine stopped before its result converged (a work budget), if it did.
     fn over_budget(&self) -> Option<String> {
         None
