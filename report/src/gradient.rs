@@ -739,12 +739,6 @@ mod tests {
         Source::from_text(text, "phase-lens scene written in the test", std::env::temp_dir())
     }
 
-    /// `φ(ρ) = Σ_j A_j ρ^{2j}` (`a[0]` is `A_1`): the phase of Binary 2 coefficients at the
-    /// aperture's edge radius (R_norm = R, M = 1).
-    fn binary2_phase(a: &[f64], rho: f64) -> f64 {
-        a.iter().enumerate().map(|(j, c)| c * rho.powi(2 * (j as i32 + 1))).sum()
-    }
-
     /// Each knot of a freeform spline added on the Binary 2 profile (six knots, ±0.5 rad)
     /// against central differences of evaluations converged at 1e-10 (step [`KNOT_STEP`]): within 10× the scene's tolerance of
     /// the gradient's norm. The profile is linear in the knots, so each knot's direction is the
@@ -773,22 +767,26 @@ mod tests {
         assert!(sum.abs() <= 1e-5 * norm, "Σ ∂M̄/∂φ_i = {sum:e} (norm {norm:e})");
     }
 
-    /// A spline alone (no Binary 2), 8 knots sampled from the hyperbolic profile defocused to
-    /// A1 = −480 rad on a 5 nm band: the polychromatic OTF changes sign below Nyquist (the |OTF|
-    /// kink); knots 0, 3 and 7 against central differences within 10× the tolerance.
+    /// A spline added on the Binary 2 lens defocused to A1 = −480 rad on a 5 nm band: the
+    /// polychromatic OTF changes sign below Nyquist (the |OTF| kink); the middle knot of five
+    /// (±0.3 rad) against central differences within 10× the tolerance of the gradient. One knot:
+    /// a table phase has no polynomial proxy, so each converged evaluation of this defocused lens
+    /// at 1e-10 takes the engine's slow path (the other knots share its lanes and its rule).
     #[test]
     fn phase_spline_gradient_through_otf_zeros() {
-        let a = [-480.0, 5.277875658030851, -0.105557513160617, 0.002638937829015425];
-        let knots: Vec<String> = (0..8).map(|i| format!("{:e}", binary2_phase(&a, f64::from(i) / 7.0))).collect();
-        let source = phase_scene_with(&format!("phase_spline_rad = [{}]", knots.join(", ")));
-        let overrides = owned(&["spectrum.range_nm=5"]);
+        let source = example("phase-binary2.toml");
+        let overrides = owned(&[
+            "spectrum.range_nm=5",
+            "lens.binary2[0]=-480",
+            "lens.phase_spline_rad=[0.0, 0.3, -0.2, 0.3, -0.1]",
+        ]);
         let built = scene::build_from(&source, &overrides).unwrap();
         let nyquist = built.camera().nyquist() * 1e-3;
-        let axis: Vec<f64> = (1..=400).map(|i| nyquist * f64::from(i) / 400.0).collect();
+        let axis: Vec<f64> = (1..=200).map(|i| nyquist * f64::from(i) / 200.0).collect();
         let mtf = metric::mtf_at(&built, &axis, &[]).unwrap().mtf;
-        let dips = mtf.windows(3).filter(|w| w[1] < w[0] && w[1] < w[2] && w[1] < 1e-3).count();
+        let dips = mtf.windows(3).filter(|w| w[1] < w[0] && w[1] < w[2] && w[1] < 1e-2).count();
         assert!(dips >= 1, "no zero of the OTF below Nyquist: {mtf:?}");
-        let keys: Vec<String> = [0, 3, 7].iter().map(|i| format!("lens.phase_spline_rad[{i}]")).collect();
+        let keys = owned(&["lens.phase_spline_rad[2]"]);
         check_wavefront(&source, &overrides, &keys, &phase_or_knot_step);
     }
 
