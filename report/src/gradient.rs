@@ -772,7 +772,12 @@ mod tests {
     /// (±0.3 rad) against central differences within 10× the tolerance of the gradient. One knot:
     /// a table phase has no polynomial proxy, so each converged evaluation of this defocused lens
     /// at 1e-10 takes the engine's slow path (the other knots share its lanes and its rule).
+    /// Ignored by default: the two reference evaluations at 1e-10 took over 10 minutes on a
+    /// loaded machine (the gradient itself is one pass); run it with
+    /// `cargo test -p asnr-report --lib phase_spline_gradient_through_otf_zeros -- --ignored`.
+    /// The rule through the kink is the one [`binary2_gradient_through_otf_zeros`] checks.
     #[test]
+    #[ignore = "slow: the references' evaluations at 1e-10 of a defocused table phase take minutes"]
     fn phase_spline_gradient_through_otf_zeros() {
         let source = example("phase-binary2.toml");
         let overrides = owned(&[
