@@ -94,6 +94,12 @@ pub struct PhaseLens {
     /// the phase at λ0 per unit of each Binary 2 coefficient: `M (R/R_norm)^{2j}` on `q^j`
     /// (`j = 1, 2, …`), empty without Binary 2 coefficients
     binary2_terms: Vec<f64>,
+    /// the number of knots of the freeform spline (`lens.phase_spline_rad`), whose cardinal
+    /// basis functions are the gradient's directions after the Binary 2 ones; 0 without a spline
+    spline_knots: usize,
+    /// the wavefront (m) per µm RMS of each `m = 0` Zernike term the gradient follows (Noll
+    /// 1, 4, 11, … up to the scene's list), after the spline's directions
+    zernike_directions: Vec<RadialProfile>,
     /// how the profile was given, for reports
     source: String,
 }
@@ -134,6 +140,8 @@ impl PhaseLens {
             transmission,
             zernike_noll_m: Vec::new(),
             binary2_terms: Vec::new(),
+            spline_knots: 0,
+            zernike_directions: Vec::new(),
             source,
         })
     }
@@ -161,6 +169,26 @@ impl PhaseLens {
     /// wavefront's change per coefficient.
     pub fn with_binary2_terms(mut self, terms: Vec<f64>) -> PhaseLens {
         self.binary2_terms = terms;
+        self
+    }
+
+    /// This lens with the freeform spline of `knots` knots ([`spline_profile`]) recorded, so
+    /// that [`LensModel::binary2_directions`] gives, after the Binary 2 coefficients', the
+    /// wavefront's change per radian of each knot: the profile is linear in the knots, so the
+    /// direction of knot `i` is the same spline through the unit vector `e_i` (its cardinal
+    /// basis function), times the order's path per radian.
+    pub fn with_spline_knots(mut self, knots: usize) -> PhaseLens {
+        self.spline_knots = knots;
+        self
+    }
+
+    /// This lens with the `m = 0` Zernike terms of a list of `terms` coefficients (Noll 1 to
+    /// `terms`, µm RMS: `lens.zernike_noll_rms_um`) recorded as directions of
+    /// [`LensModel::binary2_directions`], after the spline's: each term adds `c √(n+1) R_n^0(ρ)`
+    /// metres to every order's wavefront (Noll 1976), so its direction per µm is
+    /// `1e-6 √(n+1) R_n^0`, the same for every order and wavelength.
+    pub fn with_zernike_directions(mut self, terms: usize) -> PhaseLens {
+        self.zernike_directions = zernike_directions(terms);
         self
     }
 
@@ -277,19 +305,31 @@ impl LensModel for PhaseLens {
     /// not move), so `∂W/∂A_j = path_per_radian · M (R/R_norm)^{2j} q^j` (docs/physics.md,
     /// "Gradients": geometric phase `λ/2π`, refractive `λ0/2π` times the glass factor,
     /// diffractive `(m/p) λ/2π`).
+    ///
+    /// After them, each spline knot's (`path_per_radian` times the spline's cardinal basis
+    /// function, [`with_spline_knots`](PhaseLens::with_spline_knots)), then each `m = 0` Zernike
+    /// term's ([`with_zernike_directions`](PhaseLens::with_zernike_directions)).
     fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<RadialProfile>>> {
-        if self.binary2_terms.is_empty() {
+        let lanes = self.binary2_terms.len() + self.spline_knots + self.zernike_directions.len();
+        if lanes == 0 {
             return None;
         }
         let orders = self.order_list(wavelength_m);
         let mut out = Vec::with_capacity(orders.len());
         for (_, _, per_radian) in orders {
-            let mut order = Vec::with_capacity(self.binary2_terms.len());
+            let mut order = Vec::with_capacity(lanes);
             for (j, &term) in self.binary2_terms.iter().enumerate() {
                 let mut poly = vec![0.0; j + 2];
                 poly[j + 1] = per_radian * term;
                 order.push(RadialProfile::even_polynomial(poly).ok()?);
             }
+            let mut unit = vec![0.0; self.spline_knots];
+            for i in 0..self.spline_knots {
+                unit[i] = per_radian;
+                order.push(spline_profile(&unit).ok()?);
+                unit[i] = 0.0;
+            }
+            order.extend(self.zernike_directions.iter().cloned());
             out.push(order);
         }
         Some(out)
@@ -404,6 +444,17 @@ pub fn spline_profile(knots_rad: &[f64]) -> Result<RadialProfile, Error> {
         ((0..n).map(|i| i as f64 / last).collect(), knots_rad.to_vec())
     };
     RadialProfile::table(rho, values).map_err(optics_error)
+}
+
+/// The wavefront (m) per µm RMS of each `m = 0` Zernike term among Noll 1 to `terms`, in Noll
+/// order: `1e-6 √(n+1) R_n^0(ρ)` (Noll 1976; [`optics::radial::zernike_radial_profile`]).
+pub(crate) fn zernike_directions(terms: usize) -> Vec<RadialProfile> {
+    (1..=terms)
+        .filter_map(|j| {
+            let (n, m) = optics::fft::noll_to_nm(j);
+            (m == 0).then(|| optics::radial::zernike_radial_profile(n, 1e-6))
+        })
+        .collect()
 }
 
 /// Any lens with Zernike terms `(Noll index, metres RMS)` added to every order's wavefront: an

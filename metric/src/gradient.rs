@@ -45,6 +45,17 @@ pub enum Parameter {
     /// photon count. `∂/∂A`, per radian. On axis, on the radial engine, without the pixel MTF or
     /// a noise spectrum.
     Binary2(usize),
+    /// A knot of the lens's freeform phase spline (`lens.phase_spline_rad[i]`, radians): the
+    /// profile is linear in its knots, so the knot moves each order's wavefront along the
+    /// spline's cardinal basis function times the order's path per radian. The index is the
+    /// knot's lane among the lens's wavefront directions (after the Binary 2 coefficients:
+    /// `optics::LensModel::binary2_directions`). `∂/∂φ_i`, per radian; where `Binary2` applies.
+    PhaseSpline(usize),
+    /// An `m = 0` Zernike coefficient of the lens (`lens.zernike_noll_rms_um[j − 1]` for Noll
+    /// `j` = 1, 4, 11, 22, …, µm RMS): it adds `√(n+1) R_n^0(ρ)` to every order's wavefront. The
+    /// index is its lane among the lens's wavefront directions (after the Binary 2 coefficients
+    /// and the spline's knots). `∂/∂c`, per µm; where `Binary2` applies.
+    Zernike(usize),
     /// The centre `c` of the scene's Gaussian spectrum (`spectrum.center_nm`): `∂/∂c`, per m. It
     /// moves the photon count and the OTF's spectral weights (docs/physics.md, "Gradients").
     SpectrumCenter,
@@ -54,6 +65,16 @@ pub enum Parameter {
 }
 
 impl Parameter {
+    /// The lane among the lens's wavefront directions (`optics::LensModel::binary2_directions`)
+    /// of a parameter that moves the wavefront: Binary 2 coefficients, spline knots and `m = 0`
+    /// Zernike terms.
+    pub fn lane(self) -> Option<usize> {
+        match self {
+            Parameter::Binary2(i) | Parameter::PhaseSpline(i) | Parameter::Zernike(i) => Some(i),
+            _ => None,
+        }
+    }
+
     /// What the derivative is taken against, for messages and docs.
     pub fn describe(self) -> &'static str {
         match self {
@@ -66,9 +87,21 @@ impl Parameter {
             Parameter::Gain => "the conversion gain",
             Parameter::PixelPitch => "the pixel pitch",
             Parameter::Binary2(_) => "a Binary 2 coefficient of the lens's phase",
+            Parameter::PhaseSpline(_) => "a knot of the lens's phase spline",
+            Parameter::Zernike(_) => "an m = 0 Zernike coefficient of the lens",
             Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
             Parameter::SpectrumRange => "the range of the Gaussian spectrum",
         }
+    }
+}
+
+/// The place of the Zernike term of Noll index `noll` among the `m = 0` terms the lens's wavefront
+/// directions follow (Noll 1, 4, 11, 22, … in order: [`Parameter::Zernike`]), or its `(n, m)`
+/// where `m ≠ 0` (a term whose OTF depends on direction, not on the radial engine).
+pub fn zernike_m0_place(noll: usize) -> Result<usize, (usize, i64)> {
+    match optics::fft::noll_to_nm(noll) {
+        (_, 0) => Ok((1..noll).filter(|&j| optics::fft::noll_to_nm(j).1 == 0).count()),
+        nm => Err(nm),
     }
 }
 
@@ -98,7 +131,7 @@ pub struct Gradient {
 /// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with the pixel
 /// MTF or a noise spectrum, the conversion gain without an ADC.
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
-    let binary2 = parameters.iter().any(|p| matches!(p, Parameter::Binary2(_)));
+    let binary2 = parameters.iter().any(|p| p.lane().is_some());
     if scene.fields().is_empty() {
         // one pass: the evaluation and the Binary 2 derivatives of its mean MTF together
         let (evaluation, d_binary2) = evaluate_field_with(scene, binary2)?;
@@ -182,7 +215,7 @@ fn point_gradient(
     };
     // the stray light B = max(N_T − N, 0) with glare included: its derivative where it is > 0
     let stray = matches!(scene.options().glare, GlareMode::Included) && background > 0.0;
-    let binary2 = match parameters.iter().find(|p| matches!(p, Parameter::Binary2(_))) {
+    let binary2 = match parameters.iter().find(|p| p.lane().is_some()) {
         Some(&p) => Some(binary2_mean_mtf(scene, p, d_binary2)?),
         None => None,
     };
@@ -242,10 +275,16 @@ fn point_gradient(
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
-            Parameter::Binary2(i) => {
+            Parameter::Binary2(i) | Parameter::PhaseSpline(i) | Parameter::Zernike(i) => {
                 let all = binary2.as_deref().unwrap_or(&[]);
                 let Some(&d_mtf) = all.get(i) else {
-                    return Err(not_smooth(p, format!("the lens has {} Binary 2 coefficients (0-based)", all.len())));
+                    return Err(not_smooth(
+                        p,
+                        format!(
+                            "the lens has {} wavefront directions (Binary 2 coefficients, spline knots, m = 0 Zernike terms; 0-based)",
+                            all.len()
+                        ),
+                    ));
                 };
                 let d_g = match scene.options().form {
                     MetricForm::Mean => d_mtf,
@@ -297,8 +336,10 @@ fn binary2_mean_mtf(scene: &Scene, p: Parameter, d_binary2: Option<Vec<f64>>) ->
     }
     d_binary2.ok_or_else(|| {
         not_smooth(
-            "the Binary 2 gradient is computed on axis for a lens whose every order is a radially symmetric pupil \
-             on the exact per-frequency engine (a band, not a line); this scene's lens, spectrum or field is not",
+            "the wavefront gradient (Binary 2 coefficients, spline knots, m = 0 Zernike terms) is computed on axis \
+             for a lens whose every order is a radially symmetric pupil on the radial engine (a band on the exact \
+             per-frequency engine, or a line); this scene's lens, spectrum or field is not (off axis the oblique \
+             wave's coma and astigmatism take the FFT path, whose derivative is not computed)",
         )
     })
 }

@@ -600,6 +600,13 @@ impl Oblique {
     }
 }
 
+/// `scale · √(n+1) R_n^0(ρ)` as a profile in `q = ρ²` (Noll 1976; `n` even): the wavefront of an
+/// `m = 0` Zernike term per unit of its RMS coefficient times `scale`, the direction of that
+/// coefficient's derivative (`LensModel::binary2_directions`).
+pub fn zernike_radial_profile(n: usize, scale: f64) -> RadialProfile {
+    RadialProfile::finish(Kind::Even(zernike_radial_q(n).into_iter().map(|c| c * scale).collect()))
+}
+
 /// `√(n+1) R_n^0(ρ)` as ascending coefficients in `q = ρ²` (Noll 1976; `n` even).
 fn zernike_radial_q(n: usize) -> Vec<f64> {
     let half = n / 2;

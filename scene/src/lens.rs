@@ -1451,7 +1451,9 @@ fn phase_lens(
     let mut lens =
         lenses::PhaseLens::new(f_number, f0_m, l0, phase, amplitude, dispersion, efficiency, transmission, source)
             .map_err(|e| o.domain("lens", "[lens]", e))?
-            .with_binary2_terms(binary2_terms);
+            .with_binary2_terms(binary2_terms)
+            .with_spline_knots(l.phase_spline_rad.as_ref().map_or(0, Vec::len))
+            .with_zernike_directions(l.zernike_noll_rms_um.as_ref().map_or(0, Vec::len));
     let spline_what = spline.as_ref().map(|(_, what)| what.clone());
     if let Some((profile, what)) = spline
         && !alone

@@ -345,3 +345,46 @@ fn spline_added_to_binary2_and_bad_knots() {
         assert!(e.contains(says), "{e}");
     }
 }
+
+/// The gradient's directions of a phase lens with 4 Binary 2 terms, a spline of 5 knots and
+/// Zernike terms up to Noll 11 (`LensModel::binary2_directions`): 4 + 5 + 3 lanes (Noll 1, 4
+/// and 11 are the m = 0 terms). The spline is linear in its knots, so each knot's lane is the
+/// change of the spline when that knot moves by 1 rad (the difference of two splines written
+/// here), times the order's path per radian (λ/2π, geometric phase); the Zernike lanes are
+/// `1e-6 √(n+1) R_n^0` (Noll 1976: `√3 (2ρ² − 1)`, `√5 (6ρ⁴ − 6ρ² + 1)`), metres per µm.
+#[test]
+fn directions_of_the_binary2_terms_spline_knots_and_m0_zernike_terms() {
+    let knots = [0.5, 0.2, -0.3, 0.1, 0.4];
+    let lens = hyperbolic(2.5, Dispersion::GeometricPhase)
+        .with_binary2_terms(vec![1.0; 4])
+        .with_spline_knots(knots.len())
+        .with_zernike_directions(11);
+    let lambda = 780e-9;
+    let directions = lens.binary2_directions(lambda).unwrap();
+    assert_eq!(directions.len(), 1);
+    let lanes = &directions[0];
+    assert_eq!(lanes.len(), 4 + 5 + 3);
+    let per_radian = lambda / std::f64::consts::TAU;
+    let base = lenses::spline_profile(&knots).unwrap();
+    for i in 0..knots.len() {
+        let mut moved = knots;
+        moved[i] += 1.0;
+        let moved = lenses::spline_profile(&moved).unwrap();
+        for j in 0..=20 {
+            let q = f64::from(j) / 20.0;
+            let want = per_radian * (moved.value(q) - base.value(q));
+            let got = lanes[4 + i].value(q);
+            assert!((got - want).abs() <= 1e-12 * per_radian, "knot {i}, q = {q}: {got} vs {want}");
+        }
+    }
+    for j in 0..=20 {
+        let q = f64::from(j) / 20.0;
+        let z = [1.0, 3f64.sqrt() * (2.0 * q - 1.0), 5f64.sqrt() * (6.0 * q * q - 6.0 * q + 1.0)];
+        for (k, z) in z.iter().enumerate() {
+            let got = lanes[9 + k].value(q);
+            assert!((got - 1e-6 * z).abs() <= 1e-18, "Zernike lane {k}, q = {q}: {got} vs {}", 1e-6 * z);
+        }
+    }
+    // no Binary 2 terms, no spline, no Zernike terms: no directions
+    assert!(hyperbolic(2.5, Dispersion::GeometricPhase).binary2_directions(lambda).is_none());
+}

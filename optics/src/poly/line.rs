@@ -6,7 +6,7 @@ use num_complex::Complex64;
 
 use super::exact::{contributions, exact_along};
 use super::grid::FftPath;
-use super::spectral::{Nodes, Scene};
+use super::spectral::{Nodes, RADIAL_ACCURACY, Scene};
 use super::{Engine, FrequencyRule, OtfEngine};
 
 /// A line spectrum's nodes, with the FFT grids of its orders where some order needs them.
@@ -37,6 +37,41 @@ impl OtfEngine for Line<'_> {
         let mut sum = 0.0;
         contributions(&self.scene, &self.nodes, frequency, -self.scene.field_direction(), |v, _| sum += v);
         sum / self.nodes.total_weight
+    }
+
+    /// The line's OTF and its derivatives along the lens's wavefront directions
+    /// (`LensModel::binary2_directions` at the line's wavelength, one list per order): each
+    /// order's radial OTF and derivatives on the value's own rule
+    /// (`RadialOrder::otf_and_derivatives` at the accuracy [`Node::otf`](super::spectral::Node::otf)
+    /// reads the value at), summed with the orders' weights as the value is. `None` where some
+    /// order is not a radial pupil on the radial engine, the OTF depends on direction, or the
+    /// lens gives no directions.
+    fn otf_and_gradient(&self, frequency: f64, gradient: &mut [f64]) -> Option<f64> {
+        if self.fft.is_some() || self.nodes.direction_dependent() {
+            return None;
+        }
+        let lambda = self.nodes.line?;
+        let directions = self.scene.lens.binary2_directions(lambda)?;
+        if directions.len() != self.nodes.nodes.len() {
+            return None;
+        }
+        gradient.iter_mut().for_each(|g| *g = 0.0);
+        let nuf = frequency.abs() * self.scene.f_number;
+        let mut one = vec![0.0; gradient.len()];
+        let mut value = 0.0;
+        for (node, direction) in self.nodes.nodes.iter().zip(&directions) {
+            let radial = match (&node.table, &node.radial) {
+                (None, Some(r)) if direction.len() == gradient.len() => r,
+                _ => return None,
+            };
+            value += node.weight * radial.otf_and_derivatives(nuf * node.lambda, RADIAL_ACCURACY, direction, &mut one);
+            for (g, d) in gradient.iter_mut().zip(&one) {
+                *g += node.weight * d;
+            }
+        }
+        let total = self.nodes.total_weight;
+        gradient.iter_mut().for_each(|g| *g /= total);
+        Some(value / total)
     }
 
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {

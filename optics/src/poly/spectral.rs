@@ -112,7 +112,7 @@ impl Node {
 
 /// Absolute accuracy of one radial pupil's OTF value (`radial::RadialOrder::otf`): well below
 /// any tolerance of the mean, as the exact 1-D OTF is exact to rounding.
-const RADIAL_ACCURACY: f64 = 1e-12;
+pub(super) const RADIAL_ACCURACY: f64 = 1e-12;
 
 /// [`Node::otf`] of each of `nodes` at `nu` (cycles/m; `f_number` of the lens, a table read along
 /// `azimuth_from_field`), in order: the defocused ones all at once
