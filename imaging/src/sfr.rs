@@ -545,7 +545,7 @@ fn separation_problem(found: &[Candidate], roi: Region, reach: f64) -> Option<St
         if c.unseparated.0 >= UNSEPARATED_LINES {
             let [x, y] = c.unseparated.1;
             return Some(format!(
-                "two edges touch or cross near column {}, row {}: {} lines of strong gradient there are not one edge's band (wider by more than {MIN_SEPARATION_PX} pixels, or two bands side by side), so neither edge's ESF can be taken apart from the other's; {fix}",
+                "two edges touch or cross near column {}, row {}: {} lines of strong gradient from there on are not one edge's band (wider than the others by more than {MIN_SEPARATION_PX} pixels, two bands side by side, or both contrasts in one band), so neither edge's ESF can be taken apart from the other's; {fix}",
                 x + roi.x,
                 y + roi.y,
                 c.unseparated.0

@@ -1121,7 +1121,9 @@ pub fn search_scene_by(
         let own = |k: &String| {
             crate::objective::number_at(target.source(), target.overrides(), k).ok().or_else(|| {
                 let (list, _) = k.strip_suffix(']')?.rsplit_once('[')?;
-                crate::objective::number_at(target.source(), target.overrides(), &format!("{list}[0]")).ok().map(|_| 0.0)
+                crate::objective::number_at(target.source(), target.overrides(), &format!("{list}[0]"))
+                    .ok()
+                    .map(|_| 0.0)
             })
         };
         let initial: Option<Vec<f64>> = keys.iter().map(own).collect();
