@@ -242,3 +242,32 @@ fn the_binary2_gradient_over_a_wide_band_matches_differences() {
         assert!((g - d).abs() < 1e-5 * norm, "{key}: {g} vs {d}");
     }
 }
+
+/// A search over a list entry past the end of the scene's list (`lens.binary2[5]` of a 4-term
+/// profile, which `--over` extends with zeros) starts from the scene as given: its own values,
+/// 0 for the entry it lacks, are the first point of the history (stage `scene`), and their ASNR
+/// is the scene's.
+#[test]
+fn a_search_over_terms_the_scene_lacks_starts_from_the_scene() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml");
+    let value = json(&[
+        "optimize",
+        scene,
+        "--over",
+        "lens.binary2[1]=0:10",
+        "--over",
+        "lens.binary2[5]=-1:1",
+        "--starts",
+        "2",
+        "--max-evaluations",
+        "6",
+        "--tolerance",
+        "1e-4",
+        "--json",
+    ]);
+    let first = &value["history"][0];
+    assert_eq!(first["stage"], "scene", "{value}");
+    assert_eq!(first["values"][0].as_f64(), Some(5.277875658030851), "{first}");
+    assert_eq!(first["values"][1].as_f64(), Some(0.0), "{first}");
+    assert_eq!(first["asnr"].as_f64(), value["scene_asnr"].as_f64(), "{value}");
+}
