@@ -201,3 +201,73 @@ fn the_gradient_method_finds_the_best_band() {
     let (b, g) = (golden["best"].as_f64().unwrap(), gradient["best"]["spectrum.range_nm"].as_f64().unwrap());
     assert!((b - g).abs() <= 1e-4 * 190.0 * 2.0, "golden section {b} nm, gradient {g} nm");
 }
+
+/// The Binary 2 gradient over a 100 nm band (examples/phase-binary2.toml), where the frequency
+/// rule integrates the MTF's decay in ln ν: it used to be refused there (the rule's end points,
+/// exp(ln ν), missed the frequencies its derivatives were recorded at by a last bit). Against
+/// central differences of evaluations converged at 1e-10, step 0.016 rad (the (3·tol/|f‴|)^{1/3}
+/// rule for this lens, docs/physics.md "Gradients"): within 1e-5 of the gradient's norm.
+#[test]
+fn the_binary2_gradient_over_a_wide_band_matches_differences() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml");
+    let keys = ["lens.binary2[1]", "lens.binary2[2]", "lens.binary2[3]"];
+    let mut args = vec!["gradient", scene, "--set", "spectrum.range_nm=100", "--tolerance", "1e-10", "--json"];
+    for k in keys {
+        args.extend(["--wrt", k]);
+    }
+    let exact = json(&args);
+    let at = |key: &str, value: f64| {
+        let set = format!("{key}={value}");
+        json(&["evaluate", scene, "--set", "spectrum.range_nm=100", "--set", &set, "--tolerance", "1e-10", "--json"])
+            ["asnr"]
+            .as_f64()
+            .unwrap()
+    };
+    let nominal = [5.277875658030851, -0.105557513160617, 0.002638937829015425];
+    let h = 0.016;
+    let mut norm = 0.0;
+    let mut errors = Vec::new();
+    for (key, x) in keys.iter().zip(nominal) {
+        let g = exact["gradient"][*key].as_f64().unwrap();
+        let difference = (at(key, x + h) - at(key, x - h)) / (2.0 * h);
+        norm += g * g;
+        errors.push((key, g, difference));
+    }
+    let norm = norm.sqrt();
+    for (key, g, d) in errors {
+        eprintln!(
+            "{key}: gradient {g:.9e}, central difference {d:.9e}, error {:.1e} of the norm",
+            (g - d).abs() / norm
+        );
+        assert!((g - d).abs() < 1e-5 * norm, "{key}: {g} vs {d}");
+    }
+}
+
+/// A search over a list entry past the end of the scene's list (`lens.binary2[5]` of a 4-term
+/// profile, which `--over` extends with zeros) starts from the scene as given: its own values,
+/// 0 for the entry it lacks, are the first point of the history (stage `scene`), and their ASNR
+/// is the scene's.
+#[test]
+fn a_search_over_terms_the_scene_lacks_starts_from_the_scene() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml");
+    let value = json(&[
+        "optimize",
+        scene,
+        "--over",
+        "lens.binary2[1]=0:10",
+        "--over",
+        "lens.binary2[5]=-1:1",
+        "--starts",
+        "2",
+        "--max-evaluations",
+        "6",
+        "--tolerance",
+        "1e-4",
+        "--json",
+    ]);
+    let first = &value["history"][0];
+    assert_eq!(first["stage"], "scene", "{value}");
+    assert_eq!(first["values"][0].as_f64(), Some(5.277875658030851), "{first}");
+    assert_eq!(first["values"][1].as_f64(), Some(0.0), "{first}");
+    assert_eq!(first["asnr"].as_f64(), value["scene_asnr"].as_f64(), "{value}");
+}

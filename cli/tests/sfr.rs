@@ -204,3 +204,92 @@ fn bad_input_fails_with_the_file_and_the_reason() {
     assert!(e.contains("missing.png"), "{e}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The ROI's edges each reported when they stand apart, refused when they cannot be taken apart.
+/// Several edges well apart (a bright bar 40 pixels wide: two edges 40 pixels apart along their
+/// normal, more than the 8 pixels two ESFs need) give one entry each in the table, `--json`'s
+/// `edges` and the CSV's `edge` column, each edge's MTF the same within the ESF's bins (the two
+/// edges are mirror images of one blur); two edges 5 pixels apart, a corner where two edges
+/// cross, and two near-vertical edges crossing in an X are refused, naming the ROI and where
+/// the edges are; `asnr measure --edge` refuses two edges it could tell apart, naming the option
+/// that picks one.
+#[test]
+fn each_separate_edge_is_reported_and_edges_that_cannot_be_separated_are_refused() {
+    let dir = folder("two");
+    let size = 96;
+    let c = size as f64 / 2.0 + 0.3;
+    let write = |name: &str, levels: &[u16]| {
+        let path = dir.join(name);
+        imaging::write_png(&path, size, size, levels, 16).unwrap();
+        path
+    };
+
+    // a bar 40 pixels wide: both edges, each with its own MTF
+    let bar =
+        frame(size, size, 2000.0, 40000.0, 65535.0, |x, y| step(x, y, c - 20.0, c, 5.0) - step(x, y, c + 20.0, c, 5.0));
+    let path = write("bar.png", &bar);
+    let value = json(&["sfr", text(&path), "--json"]);
+    let edges = value["edges"].as_array().unwrap();
+    assert_eq!(edges.len(), 2, "{value}");
+    let column = |e: &serde_json::Value| e["centre_px"][0].as_f64().unwrap();
+    assert!((column(&edges[0]) - (c - 20.0)).abs() < 1.0 && (column(&edges[1]) - (c + 20.0)).abs() < 1.0, "{value}");
+    let means: Vec<f64> = edges.iter().map(|e| e["mean_mtf"].as_f64().unwrap()).collect();
+    assert!((means[0] - means[1]).abs() < 0.01 * means[0], "mirror-image edges: {means:?}");
+    // the CSV: every frequency of edge 1, then of edge 2
+    let out = asnr(&["sfr", text(&path), "--csv"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let csv = String::from_utf8(out.stdout).unwrap();
+    let per_edge = edges[0]["mtf"].as_array().unwrap().len();
+    for k in ["1", "2"] {
+        assert_eq!(csv.lines().skip(1).filter(|l| l.split(',').next() == Some(k)).count(), per_edge, "{csv}");
+    }
+    // the table: one block per edge
+    let out = asnr(&["sfr", text(&path)]);
+    let table = String::from_utf8(out.stdout).unwrap();
+    assert!(table.contains("edge 1") && table.contains("edge 2"), "{table}");
+
+    // the measured ASNR needs one edge's MTF: refused, the option that picks one named
+    let noisy = |k: usize| -> Vec<u16> {
+        bar.iter().enumerate().map(|(p, &v)| v + ((p * 31 + k * 17) % 7) as u16 * (v / 2000)).collect()
+    };
+    let stack = [write("s0.png", &noisy(0)), write("s1.png", &noisy(1))];
+    let measure = |extra: &[&str]| {
+        let mut args = vec!["measure", text(&stack[0]), text(&stack[1]), "--white", "44,40,8,8", "--black", "4,40,8,8"];
+        args.extend_from_slice(extra);
+        args.iter().map(|s| s.to_string()).collect::<Vec<String>>()
+    };
+    let args = measure(&["--edge", text(&path)]);
+    let e = fails(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(e.contains("2 edges") && e.contains("--edge-roi") && e.contains("ROI 0,0,96,96"), "{e}");
+    // ... and with --edge-roi around the left edge it measures
+    let args = measure(&["--edge", text(&path), "--edge-roi", "8,0,48,96"]);
+    let out = asnr(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    // a bar 5 pixels wide: its two edges closer than two ESFs allow
+    let narrow =
+        frame(size, size, 2000.0, 40000.0, 65535.0, |x, y| step(x, y, c - 2.5, c, 5.0) - step(x, y, c + 2.5, c, 5.0));
+    let path = write("narrow.png", &narrow);
+    let e = fails(&["sfr", text(&path)]);
+    assert!(e.contains("narrow.png") && e.contains("ROI 0,0,96,96") && e.contains("--roi"), "{e}");
+    assert!(e.contains("column ") && e.contains(", row "), "where: {e}");
+
+    // a corner of four quadrants, bright where the two edges' steps agree: the edges cross
+    let corner = frame(size, size, 2000.0, 40000.0, 65535.0, |x, y| {
+        let (v, h) = (step(x, y, c, c, 5.0), step(y, x, c, c, -5.0));
+        v * h + (1.0 - v) * (1.0 - h)
+    });
+    let path = write("corner.png", &corner);
+    let e = fails(&["sfr", text(&path)]);
+    assert!(e.contains("corner.png") && e.contains("cross") && e.contains(", row "), "{e}");
+
+    // two near-vertical edges crossing in an X: bright between them above and below the crossing
+    let x = frame(size, size, 2000.0, 40000.0, 65535.0, |x, y| {
+        let (a, b) = (step(x, y, c, c, 8.0), step(x, y, c, c, -8.0));
+        a + b - 2.0 * a * b
+    });
+    let path = write("x.png", &x);
+    let e = fails(&["sfr", text(&path)]);
+    assert!(e.contains("x.png") && e.contains("cross") && e.contains("--roi"), "{e}");
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -313,6 +313,9 @@ pub fn sfr(frames: &[Frame], dark: &[Frame], options: &Options) -> Result<Sfr, E
             roi.x, roi.y, roi.width, roi.height
         )));
     }
+    if let Some(problem) = separation_problem(&found, roi, options.reach_px.unwrap_or(DEFAULT_REACH_PX)) {
+        return Err(edge_error(format!("ROI {},{},{},{}: {problem}", roi.x, roi.y, roi.width, roi.height)));
+    }
     let mut edges = Vec::with_capacity(found.len());
     for (i, candidate) in found.iter().enumerate() {
         let others: Vec<&Candidate> = found.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| c).collect();
@@ -338,7 +341,19 @@ struct Candidate {
     span: Vec<Option<(usize, usize)>>,
     /// A rough straight line `across = a + b·along` through the component's pixels.
     line: (f64, f64),
+    /// Lines where the component is not one edge's narrow band: wider than the median line by
+    /// more than [`MIN_SEPARATION_PX`] (another edge runs across it) or split by a gap of two
+    /// pixels or more (two edges side by side), with the first such line's (column, row).
+    unseparated: (usize, [usize; 2]),
 }
+
+/// The least distance along their normals between two edges analysed in one ROI, pixels: each
+/// keeps the half of the gap on its side, and an ESF needs at least 4 pixels on each side.
+pub const MIN_SEPARATION_PX: f64 = 8.0;
+
+/// Lines of a component that are not one edge's band before it counts as two edges that touch
+/// or cross (one line can be noise; a crossing edge's band is two or more lines wide).
+const UNSEPARATED_LINES: usize = 2;
 
 /// The edges of `image` (`width × height`): 8-connected components of the pixels whose
 /// smoothed gradient exceeds both a quarter of the largest and four times the median (the
@@ -434,13 +449,158 @@ fn find_edges(image: &[f64], width: usize, height: usize) -> Vec<Candidate> {
         let points: Vec<(f64, f64)> =
             span.iter().enumerate().filter_map(|(i, s)| s.map(|(a, b)| (i as f64, (a + b) as f64 / 2.0))).collect();
         let Some(coefficients) = fit_polynomial(&points, 1) else { continue };
-        out.push(Candidate { orientation, span, line: (coefficients[0], coefficients[1]) });
+        let across_gradient = match orientation {
+            Orientation::Vertical => &gx,
+            Orientation::Horizontal => &gy,
+        };
+        let unseparated = unseparated_lines(&pixels, &span, width, orientation, across_gradient);
+        out.push(Candidate { orientation, span, line: (coefficients[0], coefficients[1]), unseparated });
     }
     out.sort_by(|a, b| {
         let key = |c: &Candidate| (c.orientation == Orientation::Horizontal, c.line.0);
         key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal)
     });
     out
+}
+
+/// How many lines of a component (its `pixels`, `span` per line) are not one edge's narrow band,
+/// and where the first of them is (column, row of its middle): wider than the median line by
+/// more than [`MIN_SEPARATION_PX`], with fewer pixels than its span less one (a gap of two or
+/// more pixels between two bands), or holding both signs of the gradient across the edge
+/// (`across`), each at least half the line's largest (two edges of opposite contrast merged,
+/// as the two sides of a narrow bar; one edge's band has one sign).
+fn unseparated_lines(
+    pixels: &[usize],
+    span: &[Option<(usize, usize)>],
+    width: usize,
+    orientation: Orientation,
+    across: &[f64],
+) -> (usize, [usize; 2]) {
+    let mut count = vec![0_usize; span.len()];
+    let mut largest = vec![0.0_f64; span.len()];
+    let along_of = |p: usize| match orientation {
+        Orientation::Vertical => p / width,
+        Orientation::Horizontal => p % width,
+    };
+    for &p in pixels {
+        count[along_of(p)] += 1;
+        largest[along_of(p)] = largest[along_of(p)].max(across[p].abs());
+    }
+    // [positive, negative] lobes at least half the line's largest
+    let mut signs = vec![[false; 2]; span.len()];
+    for &p in pixels {
+        let l = along_of(p);
+        if across[p].abs() >= 0.5 * largest[l] && largest[l] > 0.0 {
+            signs[l][usize::from(across[p] < 0.0)] = true;
+        }
+    }
+    let mut widths: Vec<usize> = span.iter().flatten().map(|(a, b)| b - a + 1).collect();
+    widths.sort_unstable();
+    let median = widths.get(widths.len() / 2).copied().unwrap_or(0) as f64;
+    let mut found = 0;
+    let mut first = [0, 0];
+    for (along, s) in span.iter().enumerate() {
+        let Some((a, b)) = *s else { continue };
+        let w = b - a + 1;
+        if w as f64 > median + MIN_SEPARATION_PX || count[along] + 1 < w || signs[along] == [true, true] {
+            if found == 0 {
+                let across = (a + b) / 2;
+                first = match orientation {
+                    Orientation::Vertical => [across, along],
+                    Orientation::Horizontal => [along, across],
+                };
+            }
+            found += 1;
+        }
+    }
+    (found, first)
+}
+
+/// Why the edges `found` in `roi` cannot each be analysed apart, if they cannot: a component
+/// that holds two edges touching or crossing, two edges along one axis that cross inside the
+/// ROI or come closer than [`MIN_SEPARATION_PX`] along their normal, or two edges along
+/// different axes whose bands, each widened by the `reach` its ESF takes, meet (one would run
+/// through the other's ESF).
+fn separation_problem(found: &[Candidate], roi: Region, reach: f64) -> Option<String> {
+    let at = |c: &Candidate| -> [f64; 2] {
+        let lines: Vec<usize> = c.span.iter().enumerate().filter_map(|(l, s)| s.map(|_| l)).collect();
+        let mid = (lines[0] + lines[lines.len() - 1]) as f64 / 2.0;
+        let across = c.line.0 + c.line.1 * mid;
+        let (x, y) = match c.orientation {
+            Orientation::Vertical => (across, mid),
+            Orientation::Horizontal => (mid, across),
+        };
+        [x + roi.x as f64, y + roi.y as f64]
+    };
+    let name = |c: &Candidate| {
+        let [x, y] = at(c);
+        let axis = match c.orientation {
+            Orientation::Vertical => "near-vertical",
+            Orientation::Horizontal => "near-horizontal",
+        };
+        format!("a {axis} edge at column {x:.0}, row {y:.0}")
+    };
+    let fix = "give a ROI (--roi X,Y,W,H) around one edge, away from the other";
+    for c in found {
+        if c.unseparated.0 >= UNSEPARATED_LINES {
+            let [x, y] = c.unseparated.1;
+            return Some(format!(
+                "two edges touch or cross near column {}, row {}: {} lines of strong gradient from there on are not one edge's band (wider than the others by more than {MIN_SEPARATION_PX} pixels, two bands side by side, or both contrasts in one band), so neither edge's ESF can be taken apart from the other's; {fix}",
+                x + roi.x,
+                y + roi.y,
+                c.unseparated.0
+            ));
+        }
+    }
+    for (i, a) in found.iter().enumerate() {
+        for b in &found[i + 1..] {
+            let lines = |c: &Candidate| {
+                let l: Vec<usize> = c.span.iter().enumerate().filter_map(|(l, s)| s.map(|_| l)).collect();
+                (l[0], l[l.len() - 1])
+            };
+            let ((a0, a1), (b0, b1)) = (lines(a), lines(b));
+            if a.orientation == b.orientation {
+                // their separation along the normal over the lines both cover
+                let (lo, hi) = (a0.max(b0), a1.min(b1));
+                if lo > hi {
+                    continue;
+                }
+                let gap = |l: usize| {
+                    let t = l as f64;
+                    let slope = (a.line.1 + b.line.1) / 2.0;
+                    (b.line.0 + b.line.1 * t - a.line.0 - a.line.1 * t) / (1.0 + slope * slope).sqrt()
+                };
+                let (g0, g1) = (gap(lo), gap(hi));
+                if g0.signum() != g1.signum() {
+                    return Some(format!("{} and {} cross inside the ROI; {fix}", name(a), name(b)));
+                }
+                let least = g0.abs().min(g1.abs());
+                if least < MIN_SEPARATION_PX {
+                    return Some(format!(
+                        "{} and {} are {least:.1} pixels apart along their normal, less than the {MIN_SEPARATION_PX} pixels two ESFs need (4 on each side of each edge); {fix}",
+                        name(a),
+                        name(b)
+                    ));
+                }
+            } else {
+                // different axes: the bands' boxes, each widened by the ESF's reach, must not meet
+                let bbox = |c: &Candidate, l0: usize, l1: usize| -> [f64; 4] {
+                    let across = c.span.iter().flatten();
+                    let lo = across.clone().map(|s| s.0).min().unwrap_or(0) as f64 - reach;
+                    let hi = across.map(|s| s.1).max().unwrap_or(0) as f64 + reach;
+                    match c.orientation {
+                        Orientation::Vertical => [lo, hi, l0 as f64, l1 as f64],
+                        Orientation::Horizontal => [l0 as f64, l1 as f64, lo, hi],
+                    }
+                };
+                let (p, q) = (bbox(a, a0, a1), bbox(b, b0, b1));
+                if p[0] <= q[1] && q[0] <= p[1] && p[2] <= q[3] && q[2] <= p[3] {
+                    return Some(format!("{} and {} meet: one runs through the other's ESF; {fix}", name(a), name(b)));
+                }
+            }
+        }
+    }
+    None
 }
 
 /// Least-squares polynomial `c₀ + c₁ t + c₂ t² …` of `degree` through `(t, value)` points

@@ -258,7 +258,14 @@ fn measured_mtf(from: &MtfFrom<'_>, pitch_m: Option<f64>) -> Result<(f64, f64, S
         MtfFrom::Edge { frames, roi } => {
             let options = sfr_options(*roi, None, None, pitch_m.map(|p| p * 1e6), false, None)?;
             let result = imaging::sfr(frames, &[], &options)?;
-            let e = result.single()?;
+            // one MTF is required: several edges are refused with the option that picks one
+            let e = result.single().map_err(|e| match e {
+                imaging::Error::Edge { path, message } => imaging::Error::Edge {
+                    path,
+                    message: format!("{message} (asnr measure --edge-roi X,Y,W,H; edge_roi=\"X,Y,W,H\" in Python)"),
+                },
+                other => other,
+            })?;
             let first = frames.first().map_or_else(String::new, |f| f.path.display().to_string());
             Ok((
                 e.mean_mtf,

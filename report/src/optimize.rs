@@ -1115,9 +1115,18 @@ pub fn search_scene_by(
         Found::One(best)
     } else {
         // the design's own values of the keys, where the scene has them (a key it lacks is set by
-        // the search alone)
-        let initial: Option<Vec<f64>> =
-            keys.iter().map(|k| crate::objective::number_at(target.source(), target.overrides(), k).ok()).collect();
+        // the search alone); an element past the end of a list the scene has is 0, as `--set`
+        // and `--over` extend a list with zeros: the scene as given is that point (a Binary 2
+        // profile searched with terms it lacks starts from its own profile too)
+        let own = |k: &String| {
+            crate::objective::number_at(target.source(), target.overrides(), k).ok().or_else(|| {
+                let (list, _) = k.strip_suffix(']')?.rsplit_once('[')?;
+                crate::objective::number_at(target.source(), target.overrides(), &format!("{list}[0]"))
+                    .ok()
+                    .map(|_| 0.0)
+            })
+        };
+        let initial: Option<Vec<f64>> = keys.iter().map(own).collect();
         let value = |x: &[f64]| target.value(&keys, x);
         Found::Many(match method {
             Some(Method::Gradient) => maximize_many_gradient(

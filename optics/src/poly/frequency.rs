@@ -473,7 +473,16 @@ impl Polychromatic<'_> {
         } else {
             (0.5 * (a + b), 0.5 * (b - a))
         };
+        // the end points exactly `a` and `b` (their values are `left` and `right`): in ln ν,
+        // exp(ln b) may differ from b in its last bit, and a gradient's recording, which finds
+        // each accepted node's derivatives by its frequency, would then miss the end points
         let point = |k: usize, points: usize| {
+            if k == 0 {
+                return b;
+            }
+            if k == points - 1 {
+                return a;
+            }
             let x = c + h * (std::f64::consts::PI * k as f64 / (points - 1) as f64).cos();
             if logarithmic { x.exp() } else { x }
         };

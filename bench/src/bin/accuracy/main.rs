@@ -37,6 +37,7 @@
 mod design;
 mod exact_map;
 mod fft_azimuth;
+mod freeform;
 mod gds_scale;
 mod gradients;
 mod iris;

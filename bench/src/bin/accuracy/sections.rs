@@ -47,6 +47,7 @@ pub(crate) const SECTIONS: &[Section] = &[
         run: crate::gradients::section,
     },
     Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section },
+    Section { name: "freeform", title: crate::freeform::TITLE, run: crate::freeform::section },
     Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
     Section { name: "map", title: crate::map_numpy::TITLE, run: crate::map_numpy::section },
 ];
