@@ -820,11 +820,13 @@ impl MapPupil {
         (v, t.norm_sqr() * s * s)
     }
 
-    /// A site map on samples at least one cell wide: each sample is the mean of the cells whose
-    /// centre is in it and in the aperture, `t_{u(c)} e^{i(k0 S_c + γ_c)}`, times the design
-    /// order's share and the chromatic and oblique phases at the sample's centre; the power is
-    /// the cells' mean `|t|²` times the share² (docs/physics.md, "Resampling a layout to the pupil
-    /// grid"). Rows of samples in parallel; the weight summed in row order.
+    /// A site map on samples at least one cell wide: each sample is the mean of the design-order
+    /// fields of the cells whose centre is in it and in the aperture, `t_{u(c)} e^{i(k0 S_c +
+    /// γ_c)} e^{iφ(X_c)}`, with the smooth phase `φ = k((1 − λ/λ0) S + oblique)` taken linear
+    /// across the sample (its gradient at the sample's centre: separable, one factor a cell
+    /// column and one a cell row), times the design order's share at the sample's centre; the
+    /// power is the cells' mean `|t|²` times the share² (docs/physics.md, "Resampling a layout to
+    /// the pupil grid"). Rows of samples in parallel; the weight summed in row order.
     fn sites_block_field(
         &self,
         sites: &SiteMap,
@@ -853,31 +855,65 @@ impl MapPupil {
         let power: Vec<f64> = table.iter().map(|t| t.norm_sqr()).collect();
         let k = 2.0 * PI / lambda;
         let u = sites.pitch / lambda;
+        let centre = |i: usize| (-1.0 + (i as f64 + 0.5) * h) * radius;
+        // the smooth phase φ (radians) at (x, y) metres
+        let smooth =
+            |x: f64, y: f64| k * (self.sphere_factor * sites.sphere(x, y) + self.oblique_m(x / radius, y / radius));
         let mut field = vec![Complex64::new(0.0, 0.0); n * n];
         let weights: Vec<f64> = field
             .par_chunks_mut(n)
             .enumerate()
             .map(|(js, out)| {
+                if first[js] >= last[js] {
+                    return 0.0;
+                }
+                let ys = centre(js);
+                // φ and its gradient at each sample's centre (central differences over a cell)
+                let d = 0.5 * sites.pitch;
+                let phase: Vec<[f64; 3]> = (0..n)
+                    .map(|i| {
+                        let xs = centre(i);
+                        [
+                            smooth(xs, ys),
+                            (smooth(xs + d, ys) - smooth(xs - d, ys)) / (2.0 * d),
+                            (smooth(xs, ys + d) - smooth(xs, ys - d)) / (2.0 * d),
+                        ]
+                    })
+                    .collect();
+                // each cell column's factor e^{i φ_x (x_c − x_s)} within its sample
+                let column: Vec<Complex64> = (0..sites.nx)
+                    .map(|i| match columns[i] {
+                        s if s < n => Complex64::from_polar(1.0, phase[s][1] * (sites.x(i) - centre(s))),
+                        _ => Complex64::new(0.0, 0.0),
+                    })
+                    .collect();
                 let mut sum = vec![Complex64::new(0.0, 0.0); n];
+                let mut row_sum = vec![Complex64::new(0.0, 0.0); n];
                 let mut pow = vec![0.0f64; n];
                 let mut count = vec![0u32; n];
                 for j in first[js]..last[js] {
                     let Some((i0, i1)) = sites.inside_columns(j) else { continue };
-                    let row = j * sites.nx;
+                    let (s0, s1) = (columns[i0], columns[i1 - 1]);
+                    let cells = j * sites.nx;
                     for i in i0..i1 {
                         let s = columns[i];
                         if s == n {
                             continue;
                         }
-                        let c = row + i;
+                        let c = cells + i;
                         let a = sites.atoms[c] as usize;
                         let r = sites.reference[c];
-                        sum[s] += table[a] * Complex64::new(f64::from(r.re), f64::from(r.im));
+                        row_sum[s] += table[a] * Complex64::new(f64::from(r.re), f64::from(r.im)) * column[i];
                         pow[s] += power[a];
                         count[s] += 1;
                     }
+                    // each sample's row factor e^{i φ_y (y_c − y_s)}
+                    let dy = sites.y(j) - ys;
+                    for s in s0.min(n - 1)..=s1.min(n - 1) {
+                        sum[s] += row_sum[s] * Complex64::from_polar(1.0, phase[s][2] * dy);
+                        row_sum[s] = Complex64::new(0.0, 0.0);
+                    }
                 }
-                let y = -1.0 + (js as f64 + 0.5) * h;
                 let mut weight = 0.0;
                 for (i, v) in out.iter_mut().enumerate() {
                     let a = area[js * n + i];
@@ -887,17 +923,15 @@ impl MapPupil {
                     let x = -1.0 + (i as f64 + 0.5) * h;
                     if count[i] == 0 {
                         // an edge sample without a cell centre in the aperture: its cell
-                        let (f, p) = self.site_at(sites, table, x, y, lambda);
+                        let (f, p) = self.site_at(sites, table, x, ys / radius, lambda);
                         *v = f * a;
                         weight += a * p;
                         continue;
                     }
-                    let (cx, cy) = (x * radius, y * radius);
-                    let (gx, gy) = self.gradient(cx, cy, sites.pitch, radius, sites.distance);
+                    let (gx, gy) = self.gradient(x * radius, ys, sites.pitch, radius, sites.distance);
                     let share = sinc(u * gx) * sinc(u * gy);
-                    let w = self.sphere_factor * sites.sphere(cx, cy) + self.oblique_m(x, y);
                     let inv = 1.0 / f64::from(count[i]);
-                    *v = sum[i] * Complex64::from_polar(a * share * inv, k * w);
+                    *v = sum[i] * Complex64::from_polar(a * share * inv, phase[i][0]);
                     weight += a * share * share * pow[i] * inv;
                 }
                 weight
