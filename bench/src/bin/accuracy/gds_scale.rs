@@ -143,13 +143,28 @@ pub(crate) fn run(tools: &Tools) -> Option<String> {
     };
     let load = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let drawn = metric::evaluate(&scene).ok()?;
+    let drawn = match metric::evaluate(&scene) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("gds_scale: the drawn lens: {e}");
+            return None;
+        }
+    };
     let evaluate = t.elapsed().as_secs_f64();
     let peak = peak_gib().unwrap_or(f64::NAN);
     let cpu = cpu_seconds().unwrap_or(f64::NAN) - cpu_start;
     let load_end = super::load_average();
     drop(scene);
-    let radial = metric::evaluate(&scene::load(Some(&example), &[]).ok()?).ok()?;
+    let radial = match scene::load(Some(&example), &[])
+        .map_err(|e| e.to_string())
+        .and_then(|s| metric::evaluate(&s).map_err(|e| e.to_string()))
+    {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("gds_scale: the radial lens: {e}");
+            return None;
+        }
+    };
     std::fs::remove_file(&gds).ok();
     let total = load + evaluate;
     Some(format!(
@@ -157,8 +172,9 @@ pub(crate) fn run(tools: &Tools) -> Option<String> {
          `examples/library.toml`'s lens (the paper's aperture, 1.344 mm, F/2.5, on a 400 nm lattice) drawn as a GDSII \
          layout of 9-vertex pillars on a 1 nm grid (written by `cargo xtask accuracy --only gds_scale` into \
          `target/gds-scale/`, {written:.0} s, then deleted), read (`scene::gds`, streamed) and evaluated as the 2-D \
-         library lens (`lens.layout_gds`) by the release build, one process; the target is 60 s and 6 GB on a \
-         2-core machine. The times are wall times on the machine as loaded (its load average beside them); the CPU \
+         library lens (`lens.layout_gds`: the layout held as a site map, each pupil sample the mean of its cells; \
+         docs/physics.md, \"Resampling a layout to the pupil grid\") by the release build, one process; the target \
+         is 60 s and 6 GB on a 2-core machine. The times are wall times on the machine as loaded (its load average beside them); the CPU \
          time is the process's own work.\n\n\
          | pillars | GDS | records | parse alone | scene load (parse + lens) | evaluation (maps, OTFs) | load + evaluation | CPU time (all three) | peak memory | load average (start → end) |\n\
          |---|---|---|---|---|---|---|---|---|---|\n\
