@@ -547,7 +547,8 @@ impl SiteMap {
     /// `(Σ |t_c|² S_c, Σ |t_c|²)` over the cells whose centre is in the aperture at
     /// `wavelength_m`, with the atoms' table `t` and `S_c = sinc²(g_x p/λ) sinc²(g_y p/λ)` the
     /// cell's design-order share on axis (`g = X/√(|X|² + z²)`), held constant over each block
-    /// of [`BLOCK`]² cells at the centroid of its cells (docs/physics.md: below 1e-6 of the sum).
+    /// of 16² cells at the centroid of its cells (docs/physics.md: `(π p b/(λ z))²/18` of the sum
+    /// to leading order, b the block's side; 5e-7 on the paper's lens).
     ///
     /// # Panics
     /// If `t` is not the table's length.
