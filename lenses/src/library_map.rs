@@ -13,17 +13,17 @@
 //! `T(λ) = Σ_c |t_c|² p²/(πR²)` over the cells whose centre is in the aperture.
 
 use std::collections::HashMap;
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 use std::sync::{Arc, Mutex};
 
 use num_complex::Complex64;
-use optics::map::{MAP_MAX_CELLS, MapAperture, MapPupil, PhaseMap, StoredPhase};
+use optics::map::{MAP_MAX_CELLS, MapPupil, SiteMap};
 use optics::radial::Oblique;
 use optics::{Field, LensModel, Order};
 
 use crate::atom_grid::AtomGrid;
 use crate::chromatic::check;
-use crate::{Error, Library, sinc};
+use crate::{Error, Library};
 
 /// The circular polarization a fin layout is lit with: the converted light carries `e^{iσ2θ}`,
 /// σ = +1 for left-circular (LCP), −1 for right-circular (RCP) light (docs/physics.md, "2-D
@@ -46,14 +46,11 @@ impl Handedness {
     }
 }
 
-/// A map cell without an atom.
-const EMPTY: u32 = u32::MAX;
+/// The most wavelengths whose atoms' tables a lens keeps.
+const TABLE_CACHE: usize = 4096;
 
-/// The most bytes of per-wavelength maps a lens keeps (each `16 B` a cell).
-const MAP_CACHE_BYTES: usize = 1 << 30;
-
-/// A wavelength's map: (λ bits, map).
-type CachedMap = (u64, Arc<PhaseMap>);
+/// A wavelength's atoms' table: (λ bits, `t_u(λ)` with the empty cell last).
+type CachedTable = (u64, Arc<[Complex64]>);
 
 /// A 2-D meta-atom library lens (see the module's documentation).
 #[derive(Debug)]
@@ -65,11 +62,10 @@ pub struct LibraryMapLens {
     pitch: f64,
     /// map cells along x and y (centred on the axis, covering the aperture)
     shape: (usize, usize),
-    /// each map cell's atom (index into `unique`) or [`EMPTY`]
-    cells: Vec<u32>,
+    /// each map cell's atom (index into `unique`, or `unique.len()`: the empty cell) and
+    /// geometric phase `σ 2θ` (fins)
+    sites: Arc<SiteMap>,
     unique: Vec<Vec<f64>>,
-    /// each map cell's geometric phase `σ 2θ` (fins)
-    geometric: Option<Vec<f64>>,
     empty_cell: Complex64,
     /// the lattice's residual offset from the axis, m (at most a quarter pitch a direction)
     offset: (f64, f64),
@@ -80,7 +76,7 @@ pub struct LibraryMapLens {
     /// the layout's statistics, for the description
     layout: String,
     scalars: Mutex<Vec<(u64, f64, f64)>>,
-    maps: Mutex<Vec<CachedMap>>,
+    tables: Mutex<Vec<CachedTable>>,
 }
 
 impl Clone for LibraryMapLens {
@@ -92,9 +88,8 @@ impl Clone for LibraryMapLens {
             library: self.library.clone(),
             pitch: self.pitch,
             shape: self.shape,
-            cells: self.cells.clone(),
+            sites: self.sites.clone(),
             unique: self.unique.clone(),
-            geometric: self.geometric.clone(),
             empty_cell: self.empty_cell,
             offset: self.offset,
             atoms_in_aperture: self.atoms_in_aperture,
@@ -103,7 +98,7 @@ impl Clone for LibraryMapLens {
             source: self.source.clone(),
             layout: self.layout.clone(),
             scalars: Mutex::new(Vec::new()),
-            maps: Mutex::new(Vec::new()),
+            tables: Mutex::new(Vec::new()),
         }
     }
 }
@@ -242,13 +237,16 @@ impl LibraryMapLens {
                 (grid.origin_m.1 + j as f64 * p) * 1e6,
             ));
         }
-        // each map cell's atom: the distinct parameter sets
+        // each map cell's atom: the distinct parameter sets (the empty cell is `u32::MAX` until
+        // their count is known)
+        const EMPTY: u32 = u32::MAX;
         let mut unique: Vec<Vec<f64>> = Vec::new();
         let mut seen: HashMap<Vec<u64>, u32> = HashMap::new();
         let mut cells = vec![EMPTY; nx * ny];
         let mut geometric = grid.theta_deg.as_ref().map(|_| vec![0.0; nx * ny]);
         let sign = handedness.map_or(0.0, Handedness::sign);
         let (mut atoms_in, mut empty_in, mut first_empty) = (0u64, 0u64, None);
+        let (mut params, mut key, mut last) = (vec![0.0; ranges.len()], vec![0u64; ranges.len()], None::<u32>);
         for jm in 0..ny {
             for im in 0..nx {
                 let cell = jm * nx + im;
@@ -268,19 +266,34 @@ impl LibraryMapLens {
                 if inside {
                     atoms_in += 1;
                 }
-                let params: Vec<f64> = (0..ranges.len())
-                    .map(|q| grid.values[index[q] * sites + site].clamp(ranges[q].0, ranges[q].1))
-                    .collect();
-                let key: Vec<u64> = params.iter().map(|v| v.to_bits()).collect();
-                let next = unique.len() as u32;
-                let u = *seen.entry(key).or_insert_with(|| {
-                    unique.push(params);
-                    next
-                });
+                for (q, range) in ranges.iter().enumerate() {
+                    params[q] = grid.values[index[q] * sites + site].clamp(range.0, range.1);
+                    key[q] = params[q].to_bits();
+                }
+                // neighbours mostly hold the same atom: the last one is checked before the table
+                let u = match last {
+                    Some(u) if unique[u as usize] == params => u,
+                    _ => match seen.get(key.as_slice()) {
+                        Some(&u) => u,
+                        None => {
+                            let next = unique.len() as u32;
+                            seen.insert(key.clone(), next);
+                            unique.push(params.clone());
+                            next
+                        }
+                    },
+                };
+                last = Some(u);
                 cells[cell] = u;
                 if let (Some(g), Some(t)) = (geometric.as_mut(), grid.theta_deg.as_ref()) {
                     g[cell] = sign * 2.0 * t[site].to_radians();
                 }
+            }
+        }
+        let empty_index = unique.len() as u32;
+        for c in &mut cells {
+            if *c == EMPTY {
+                *c = empty_index;
             }
         }
         let empty_cell = match (empty_cell, first_empty) {
@@ -317,6 +330,18 @@ impl LibraryMapLens {
             optics::round_for_display(st.max_off_lattice_m * 1e9),
             st.doubly_occupied_sites
         );
+        let sites = SiteMap::new(
+            nx,
+            ny,
+            p,
+            cells,
+            unique.len() + 1,
+            geometric.as_deref(),
+            radius,
+            focal_length_m,
+            design_wavelength_m,
+        )
+        .map_err(|e| Error::Layout(format!("the layout's site map: {e}")))?;
         Ok(LibraryMapLens {
             f_number,
             focal_length: focal_length_m,
@@ -324,9 +349,8 @@ impl LibraryMapLens {
             library,
             pitch: p,
             shape: (nx, ny),
-            cells,
+            sites: Arc::new(sites),
             unique,
-            geometric,
             empty_cell,
             offset: (ox, oy),
             atoms_in_aperture: atoms_in,
@@ -335,7 +359,7 @@ impl LibraryMapLens {
             source,
             layout: layout_text,
             scalars: Mutex::new(Vec::new()),
-            maps: Mutex::new(Vec::new()),
+            tables: Mutex::new(Vec::new()),
         })
     }
 
@@ -380,29 +404,28 @@ impl LibraryMapLens {
         self.shape
     }
 
-    /// Each distinct atom's field at `wavelength_m`.
-    fn fields(&self, wavelength_m: f64) -> Vec<Complex64> {
-        self.unique.iter().map(|p| self.library.transmission(p, wavelength_m)).collect()
-    }
-
-    /// The field of map cell `c` from the atoms' fields `t`.
-    fn cell_field(&self, t: &[Complex64], c: usize) -> Complex64 {
-        match self.cells[c] {
-            EMPTY => self.empty_cell,
-            u => {
-                let v = t[u as usize];
-                match &self.geometric {
-                    Some(g) => v * Complex64::from_polar(1.0, g[c]),
-                    None => v,
-                }
-            }
+    /// Each distinct atom's field at `wavelength_m`, the empty cell's last (the site map's
+    /// table; computed once a wavelength).
+    fn table(&self, wavelength_m: f64) -> Arc<[Complex64]> {
+        let key = wavelength_m.to_bits();
+        if let Ok(cache) = self.tables.lock()
+            && let Some(hit) = cache.iter().find(|c| c.0 == key)
+        {
+            return hit.1.clone();
         }
-    }
-
-    /// The centre of map cell `(i, j)`, m.
-    fn centre(&self, i: usize, j: usize) -> (f64, f64) {
-        let (nx, ny) = self.shape;
-        ((i as f64 - 0.5 * (nx as f64 - 1.0)) * self.pitch, (j as f64 - 0.5 * (ny as f64 - 1.0)) * self.pitch)
+        let table: Arc<[Complex64]> = self
+            .unique
+            .iter()
+            .map(|p| self.library.transmission(p, wavelength_m))
+            .chain(std::iter::once(self.empty_cell))
+            .collect();
+        if let Ok(mut cache) = self.tables.lock() {
+            if cache.len() >= TABLE_CACHE {
+                cache.clear();
+            }
+            cache.push((key, table.clone()));
+        }
+        table
     }
 
     /// `(τ1, T)` at `wavelength_m`: the design order's and all the light of the cells whose
@@ -414,85 +437,16 @@ impl LibraryMapLens {
         {
             return (hit.1, hit.2);
         }
-        let t = self.fields(wavelength_m);
-        let (nx, ny) = self.shape;
-        let r2 = self.aperture_radius().powi(2);
-        let z2 = self.focal_length * self.focal_length;
-        let u = self.pitch / wavelength_m;
-        let (mut tau, mut all) = (0.0, 0.0);
-        for j in 0..ny {
-            for i in 0..nx {
-                let (x, y) = self.centre(i, j);
-                let q = x * x + y * y;
-                if q > r2 {
-                    continue;
-                }
-                let a2 = self.cell_field(&t, j * nx + i).norm_sqr();
-                let r = (q + z2).sqrt();
-                all += a2;
-                tau += a2 * (sinc(u * x / r) * sinc(u * y / r)).powi(2);
-            }
-        }
-        let scale = self.pitch * self.pitch / (PI * r2);
+        let (tau, all) = self.sites.powers(&self.table(wavelength_m), wavelength_m);
+        let scale = self.pitch * self.pitch / (PI * self.aperture_radius().powi(2));
         let out = (tau * scale, all * scale);
         if let Ok(mut cache) = self.scalars.lock() {
-            if cache.len() >= 4096 {
+            if cache.len() >= TABLE_CACHE {
                 cache.clear();
             }
             cache.push((key, out.0, out.1));
         }
         out
-    }
-
-    /// The field at `wavelength_m` as a map: amplitude `|t_c|` and the residual
-    /// `ψ_c = arg t_c + k0 S(X_c)` (wrapped to (−π, π]; `k0 = 2π/λ0`), held with the wavefront
-    /// `W = (λ/2π) ψ + (1 − λ/λ0) S`, so that `k W ≡ arg t_c + k S` (mod 2π).
-    fn map(&self, wavelength_m: f64) -> Option<Arc<PhaseMap>> {
-        let key = wavelength_m.to_bits();
-        if let Ok(cache) = self.maps.lock()
-            && let Some(hit) = cache.iter().find(|c| c.0 == key)
-        {
-            return Some(hit.1.clone());
-        }
-        let t = self.fields(wavelength_m);
-        let (nx, ny) = self.shape;
-        let k0 = TAU / self.design_wavelength;
-        let z = self.focal_length;
-        let mut phase = Vec::with_capacity(nx * ny);
-        let mut amplitude = Vec::with_capacity(nx * ny);
-        for j in 0..ny {
-            for i in 0..nx {
-                let (x, y) = self.centre(i, j);
-                let q = x * x + y * y;
-                let sphere = q / ((q + z * z).sqrt() + z);
-                let f = self.cell_field(&t, j * nx + i);
-                let v = f.arg() + k0 * sphere;
-                phase.push(v - TAU * (v / TAU).round());
-                amplitude.push(f.norm());
-            }
-        }
-        let map = PhaseMap::new(
-            nx,
-            ny,
-            self.pitch,
-            phase,
-            Some(amplitude),
-            MapAperture::Circle,
-            self.aperture_radius(),
-            self.focal_length,
-            self.design_wavelength,
-            StoredPhase::Given,
-        )
-        .ok()
-        .map(Arc::new)?;
-        if let Ok(mut cache) = self.maps.lock() {
-            let keep = (MAP_CACHE_BYTES / (16 * nx * ny).max(1)).max(1);
-            if cache.len() >= keep {
-                cache.remove(0);
-            }
-            cache.push((key, map.clone()));
-        }
-        Some(map)
     }
 }
 
@@ -507,13 +461,12 @@ impl LensModel for LibraryMapLens {
 
     fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
         let (tau, _) = self.efficiency_and_transmission(wavelength_m);
-        let Some(map) = self.map(wavelength_m) else { return Vec::new() };
         let oblique = if field.is_on_axis() {
             None
         } else {
             Oblique::new(self.aperture_radius(), self.focal_length, field.x_rad, field.y_rad).ok()
         };
-        let pupil = MapPupil::new(map, wavelength_m / TAU, 1.0 - wavelength_m / self.design_wavelength, oblique);
+        let pupil = MapPupil::sites(self.sites.clone(), self.table(wavelength_m), wavelength_m, oblique);
         vec![Order::map(tau, Arc::new(pupil))]
     }
 

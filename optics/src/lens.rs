@@ -96,7 +96,7 @@ impl Pupil {
             Pupil::Full | Pupil::Table(_) | Pupil::Radial(_) => 1.0,
             Pupil::Aperture(a) => a.area_fraction(),
             Pupil::Zones(zones) => zones.iter().map(|z| z.amplitude * z.amplitude * z.aperture.area_fraction()).sum(),
-            Pupil::Map(m) => m.map().aperture().area_fraction(),
+            Pupil::Map(m) => m.aperture().area_fraction(),
         }
     }
 }

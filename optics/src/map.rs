@@ -16,7 +16,7 @@
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-use num_complex::Complex64;
+use num_complex::{Complex32, Complex64};
 
 use crate::Error;
 use crate::radial::Oblique;
@@ -359,40 +359,384 @@ impl PhaseMap {
     }
 }
 
-/// One order's view of a [`PhaseMap`]: the wavefront `W = path_per_radian·Φ + sphere_factor·S
-/// (+ the oblique wave's path off axis)` with `Φ` the stored phase ([`StoredPhase`]).
+/// A lattice of sites, each holding one of a few atoms (a meta-atom layout; docs/physics.md,
+/// "2-D library layouts" and "Resampling a layout to the pupil grid"): `nx × ny` cells of
+/// `pitch` centred on the axis as a [`PhaseMap`]'s, site `c` holding atom `u(c)` of a table the
+/// lens gives per wavelength (`t_u(λ)`, its complex transmission), and a fixed phase factor
+/// `e^{i(k0 S(X_c) + γ_c)}` (the reference sphere at λ0 and a geometric phase `γ_c`). The site's
+/// field against the reference sphere at λ is `t_{u(c)}(λ) e^{i(k0 S(X_c) + γ_c)}` times the
+/// chromatic defocus `e^{ik(1 − λ/λ0) S(X_c)}` (and the oblique wave off axis): a pass over the
+/// sites is a gather from the atoms' table, not a new map per wavelength.
+#[derive(Clone, Debug)]
+pub struct SiteMap {
+    nx: usize,
+    ny: usize,
+    pitch: f64,
+    radius: f64,
+    distance: f64,
+    design_wavelength: f64,
+    /// each cell's atom, `[y][x]`
+    atoms: Vec<u32>,
+    /// the atoms in the table (`atoms[c] < table`)
+    table: usize,
+    /// each cell's `e^{i(k0 S(X_c) + γ_c)}`
+    reference: Vec<Complex32>,
+    /// the cells inside the aperture (centre in the circle) per block of [`BLOCK`]² cells: per
+    /// block `table` counts (row-major blocks, atom fastest) and the block's centroid (m)
+    block_counts: Vec<u32>,
+    block_centroid: Vec<[f64; 2]>,
+}
+
+/// The side, in cells, of the blocks over which [`SiteMap::powers`] holds the cells' design-order
+/// share constant (docs/physics.md: its error is below 1e-6 of τ1).
+const BLOCK: usize = 16;
+
+/// The most cells the per-wavelength fit of [`MapPupil::fitted_defocus_m`] visits on a site map
+/// (every `s`-th row and column beyond it: the fit sizes panels, it is not the value).
+const FIT_CELLS: usize = 1 << 16;
+
+impl SiteMap {
+    /// A site map of `nx × ny` cells of `pitch_m` (`[y][x]`, centred as a [`PhaseMap`]'s), cell
+    /// `c` holding atom `atoms[c]` of a table of `table` atoms and the geometric phase
+    /// `geometric[c]` (radians; none: 0), in the circle of radius `radius_m` with the detector at
+    /// `distance_m`, designed at `design_wavelength_m`.
+    ///
+    /// # Errors
+    /// Sizes that disagree, fewer than 2 × 2 or more than [`MAP_MAX_CELLS`] cells, an atom index
+    /// past the table, a map that does not cover the aperture, a non-finite length or phase.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        nx: usize,
+        ny: usize,
+        pitch_m: f64,
+        atoms: Vec<u32>,
+        table: usize,
+        geometric: Option<&[f64]>,
+        radius_m: f64,
+        distance_m: f64,
+        design_wavelength_m: f64,
+    ) -> Result<SiteMap, Error> {
+        let bad =
+            |name: &'static str, value: f64, expected: &'static str| Error::InvalidParameter { name, value, expected };
+        if nx < 2 || ny < 2 || nx.saturating_mul(ny) > MAP_MAX_CELLS || atoms.len() != nx * ny {
+            return Err(bad("site map size", (nx * ny) as f64, "at least 2 × 2 cells, at most 2^26, one atom a cell"));
+        }
+        if geometric.is_some_and(|g| g.len() != atoms.len()) {
+            return Err(bad("geometric phase map size", geometric.map_or(0, <[f64]>::len) as f64, "one a cell"));
+        }
+        if let Some(&u) = atoms.iter().find(|&&u| u as usize >= table) {
+            return Err(bad("site atom index", f64::from(u), "an index into the atoms' table"));
+        }
+        for (name, v) in [
+            ("site pitch", pitch_m),
+            ("aperture radius", radius_m),
+            ("focal length", distance_m),
+            ("design wavelength", design_wavelength_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(name, v, "a finite length > 0 m"));
+            }
+        }
+        if let Some(v) = geometric.and_then(|g| g.iter().find(|v| !v.is_finite())) {
+            return Err(bad("geometric phase", *v, "finite radians"));
+        }
+        let short = 0.5 * nx.min(ny) as f64 * pitch_m;
+        if short < radius_m * (1.0 - 1e-12) {
+            return Err(bad(
+                "site map half width",
+                short,
+                "at least the aperture radius (the map must cover the aperture)",
+            ));
+        }
+        let mut map = SiteMap {
+            nx,
+            ny,
+            pitch: pitch_m,
+            radius: radius_m,
+            distance: distance_m,
+            design_wavelength: design_wavelength_m,
+            atoms,
+            table,
+            reference: Vec::new(),
+            block_counts: Vec::new(),
+            block_centroid: Vec::new(),
+        };
+        let k0 = 2.0 * PI / design_wavelength_m;
+        let mut reference = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            let y = map.y(j);
+            for i in 0..nx {
+                let x = map.x(i);
+                let g = geometric.map_or(0.0, |g| g[j * nx + i]);
+                // k0 S reduced mod 2π in f64 before the f32 factor: its phase is good to 1e-7
+                let v = k0 * map.sphere(x, y) + g;
+                let (s, c) = (v - 2.0 * PI * (v / (2.0 * PI)).round()).sin_cos();
+                reference.push(Complex32::new(c as f32, s as f32));
+            }
+        }
+        map.reference = reference;
+        // the blocks' counts and centroids of the cells inside the aperture
+        let (bx, by) = (nx.div_ceil(BLOCK), ny.div_ceil(BLOCK));
+        let mut counts = vec![0u32; bx * by * table];
+        let mut sums = vec![[0.0f64; 3]; bx * by];
+        for j in 0..ny {
+            let Some((i0, i1)) = map.inside_columns(j) else { continue };
+            let y = map.y(j);
+            for i in i0..i1 {
+                let b = (j / BLOCK) * bx + i / BLOCK;
+                counts[b * table + map.atoms[j * nx + i] as usize] += 1;
+                let s = &mut sums[b];
+                s[0] += map.x(i);
+                s[1] += y;
+                s[2] += 1.0;
+            }
+        }
+        map.block_counts = counts;
+        map.block_centroid =
+            sums.iter().map(|s| if s[2] > 0.0 { [s[0] / s[2], s[1] / s[2]] } else { [0.0, 0.0] }).collect();
+        Ok(map)
+    }
+
+    fn x(&self, i: usize) -> f64 {
+        (i as f64 - 0.5 * (self.nx as f64 - 1.0)) * self.pitch
+    }
+
+    fn y(&self, j: usize) -> f64 {
+        (j as f64 - 0.5 * (self.ny as f64 - 1.0)) * self.pitch
+    }
+
+    /// The columns `[i0, i1)` of row `j` whose cell centre is inside the aperture (none: `None`).
+    fn inside_columns(&self, j: usize) -> Option<(usize, usize)> {
+        let y = self.y(j);
+        let r2 = self.radius * self.radius - y * y;
+        if r2 < 0.0 {
+            return None;
+        }
+        // x_i = (i − c) p with c = (nx − 1)/2: |x_i| ≤ √r2 ⇔ c − √r2/p ≤ i ≤ c + √r2/p
+        let c = 0.5 * (self.nx as f64 - 1.0);
+        let w = r2.sqrt() / self.pitch;
+        let lo = (c - w).ceil().max(0.0) as usize;
+        let hi = ((c + w).floor() + 1.0).clamp(0.0, self.nx as f64) as usize;
+        // the boundary cells to the exact test (rounding at the rim)
+        let inside = |i: usize| {
+            let x = self.x(i);
+            x * x + y * y <= self.radius * self.radius
+        };
+        let (mut lo, mut hi) = (lo, hi);
+        while lo < hi && !inside(lo) {
+            lo += 1;
+        }
+        while hi > lo && !inside(hi - 1) {
+            hi -= 1;
+        }
+        while lo > 0 && inside(lo - 1) {
+            lo -= 1;
+        }
+        while hi < self.nx && inside(hi) {
+            hi += 1;
+        }
+        (lo < hi).then_some((lo, hi))
+    }
+
+    /// The reference sphere's path `√(x² + y² + z²) − z` (m) at `(x, y)` metres.
+    fn sphere(&self, x: f64, y: f64) -> f64 {
+        let r2 = x * x + y * y;
+        r2 / ((r2 + self.distance * self.distance).sqrt() + self.distance)
+    }
+
+    /// `(Σ |t_c|² S_c, Σ |t_c|²)` over the cells whose centre is in the aperture at
+    /// `wavelength_m`, with the atoms' table `t` and `S_c = sinc²(g_x p/λ) sinc²(g_y p/λ)` the
+    /// cell's design-order share on axis (`g = X/√(|X|² + z²)`), held constant over each block
+    /// of 16² cells at the centroid of its cells (docs/physics.md: `(π p b/(λ z))²/18` of the sum
+    /// to leading order, b the block's side; 5e-7 on the paper's lens).
+    ///
+    /// # Panics
+    /// If `t` is not the table's length.
+    pub fn powers(&self, t: &[Complex64], wavelength_m: f64) -> (f64, f64) {
+        assert_eq!(t.len(), self.table, "an atoms' table of {} for {} atoms", t.len(), self.table);
+        let power: Vec<f64> = t.iter().map(|v| v.norm_sqr()).collect();
+        let u = self.pitch / wavelength_m;
+        let (mut design, mut all) = (0.0, 0.0);
+        for (b, counts) in self.block_counts.chunks_exact(self.table).enumerate() {
+            let p: f64 = counts.iter().zip(&power).map(|(&n, &a)| f64::from(n) * a).sum();
+            if p == 0.0 {
+                continue;
+            }
+            let [x, y] = self.block_centroid[b];
+            let r = (x * x + y * y + self.distance * self.distance).sqrt();
+            all += p;
+            design += p * (sinc(u * x / r) * sinc(u * y / r)).powi(2);
+        }
+        (design, all)
+    }
+
+    /// `(nx, ny)`.
+    pub fn shape(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// The cell pitch, m.
+    pub fn pitch(&self) -> f64 {
+        self.pitch
+    }
+
+    /// The aperture radius, m.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// The atoms in the table.
+    pub fn table(&self) -> usize {
+        self.table
+    }
+
+    /// Least-squares `c ρ²` fits `(c_ψ, c_S)` of the residual phase `ψ_c = arg(t_c e^{i(k0 S_c +
+    /// γ_c)})` (wrapped) and of the sphere `S` over the aperture's cells (`|t_c|²` weighted), on
+    /// every `s`-th row and column so that at most [`FIT_CELLS`] are visited.
+    fn fit(&self, t: &[Complex64]) -> (f64, f64) {
+        let stride = ((self.nx * self.ny) as f64 / FIT_CELLS as f64).sqrt().ceil().max(1.0) as usize;
+        let (mut sw, mut sq, mut sqq, mut sp, mut sqp, mut ss, mut sqs) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for j in (0..self.ny).step_by(stride) {
+            let Some((i0, i1)) = self.inside_columns(j) else { continue };
+            let y = self.y(j);
+            for i in (i0.div_ceil(stride) * stride..i1).step_by(stride) {
+                let c = j * self.nx + i;
+                let r = self.reference[c];
+                let f = t[self.atoms[c] as usize] * Complex64::new(f64::from(r.re), f64::from(r.im));
+                let w = f.norm_sqr();
+                let x = self.x(i);
+                let q = (x * x + y * y) / (self.radius * self.radius);
+                let (p, s) = (f.arg(), self.sphere(x, y));
+                sw += w;
+                sq += w * q;
+                sqq += w * q * q;
+                sp += w * p;
+                sqp += w * q * p;
+                ss += w * s;
+                sqs += w * q * s;
+            }
+        }
+        let var = sqq * sw - sq * sq;
+        if var.is_nan() || var <= 0.0 {
+            return (0.0, 0.0);
+        }
+        ((sqp * sw - sq * sp) / var, (sqs * sw - sq * ss) / var)
+    }
+}
+
+/// What a [`MapPupil`] reads its cells from.
+#[derive(Clone, Debug)]
+enum Cells {
+    /// A designer's map: phase and amplitude per cell.
+    Map(Arc<PhaseMap>),
+    /// A layout: atoms per site and the atoms' table at the pupil's wavelength.
+    Sites { sites: Arc<SiteMap>, table: Arc<[Complex64]> },
+}
+
+/// One order's view of a [`PhaseMap`] or a [`SiteMap`]: the wavefront `W = path_per_radian·Φ +
+/// sphere_factor·S (+ the oblique wave's path off axis)` with `Φ` the stored phase
+/// ([`StoredPhase`]); for a site map `k Φ path_per_radian` is the sites' own phase
+/// `arg(t_{u(c)} e^{i(k0 S_c + γ_c)})`.
 #[derive(Clone, Debug)]
 pub struct MapPupil {
-    map: Arc<PhaseMap>,
+    cells: Cells,
     path_per_radian: f64,
     sphere_factor: f64,
     oblique: Option<Oblique>,
+    /// `(c_Φ, c_S)`: the map's fits, or a site map's at the table's wavelength
+    fits: (f64, f64),
 }
 
 impl MapPupil {
     /// The order of `map` whose wavefront is `path_per_radian_m · Φ + sphere_factor · S` with
     /// the oblique incidence `oblique` off axis.
     pub fn new(map: Arc<PhaseMap>, path_per_radian_m: f64, sphere_factor: f64, oblique: Option<Oblique>) -> MapPupil {
-        MapPupil { map, path_per_radian: path_per_radian_m, sphere_factor, oblique }
+        let fits = map.fits;
+        MapPupil { cells: Cells::Map(map), path_per_radian: path_per_radian_m, sphere_factor, oblique, fits }
     }
 
-    /// The map.
-    pub fn map(&self) -> &PhaseMap {
-        &self.map
+    /// The design order of the layout `sites` at `wavelength_m`, its atoms transmitting `table`
+    /// (`t_u(λ)`, one per atom of the site map), with the oblique incidence `oblique` off axis:
+    /// the sites' field `t_{u(c)} e^{i(k0 S_c + γ_c)}` times `e^{ik(1 − λ/λ0) S}`, each cell's
+    /// design order its mean against the reference sphere (module docs).
+    ///
+    /// # Panics
+    /// If `table` is not the site map's table length.
+    pub fn sites(
+        sites: Arc<SiteMap>,
+        table: Arc<[Complex64]>,
+        wavelength_m: f64,
+        oblique: Option<Oblique>,
+    ) -> MapPupil {
+        assert_eq!(table.len(), sites.table, "an atoms' table of {} for {} atoms", table.len(), sites.table);
+        let fits = sites.fit(&table);
+        let path_per_radian = wavelength_m / (2.0 * PI);
+        let sphere_factor = 1.0 - wavelength_m / sites.design_wavelength;
+        MapPupil { cells: Cells::Sites { sites, table }, path_per_radian, sphere_factor, oblique, fits }
+    }
+
+    /// The map's aperture (a site map's is the circle).
+    pub fn aperture(&self) -> MapAperture {
+        match &self.cells {
+            Cells::Map(m) => m.aperture,
+            Cells::Sites { .. } => MapAperture::Circle,
+        }
+    }
+
+    /// The phase map, if the pupil is one (not a site map).
+    pub fn phase_map(&self) -> Option<&PhaseMap> {
+        match &self.cells {
+            Cells::Map(m) => Some(m),
+            Cells::Sites { .. } => None,
+        }
     }
 
     /// The best-fit defocus `W020` (m) of the order's wavefront on axis (least squares against
     /// `ρ²` over the aperture): sizes the spectral panels and the Fraunhofer check.
     pub fn fitted_defocus_m(&self) -> f64 {
-        let (phase, sphere) = self.map.fits;
+        let (phase, sphere) = self.fits;
         self.path_per_radian * phase + self.sphere_factor * sphere
+    }
+
+    /// The oblique wave's path (m) at `(u, v)` (units of `R`), 0 on axis.
+    fn oblique_m(&self, u: f64, v: f64) -> f64 {
+        self.oblique.map_or(0.0, |o| o.opd_m(u, v))
+    }
+
+    /// The reference path's gradient `(g_x, g_y)` at `(cx, cy)` metres (sphere and oblique wave)
+    /// for cells of `pitch` in an aperture of `radius` with the detector at `distance`.
+    fn gradient(&self, cx: f64, cy: f64, pitch: f64, radius: f64, distance: f64) -> (f64, f64) {
+        let r = (cx * cx + cy * cy + distance * distance).sqrt();
+        let (ux, uy) = (cx / radius, cy / radius);
+        let d = 0.5 * pitch / radius;
+        match self.oblique {
+            None => (cx / r, cy / r),
+            Some(_) => (
+                cx / r + (self.oblique_m(ux + d, uy) - self.oblique_m(ux - d, uy)) / pitch,
+                cy / r + (self.oblique_m(ux, uy + d) - self.oblique_m(ux, uy - d)) / pitch,
+            ),
+        }
     }
 
     /// The design-order field on `n × n` samples of `[−1, 1]²` (units of `R`), each sample
     /// times its transmitting area fraction `area` (the circle's edge pixels), at `lambda`, and
-    /// its power `Σ |field|²` (the OTF's normalization).
+    /// its power `Σ |field|²` (the OTF's normalization; for a site map sampled coarser than
+    /// its cells, the cells' mean power: docs/physics.md, "Resampling a layout to the pupil
+    /// grid").
     pub fn field(&self, n: usize, area: &[f64], lambda: f64) -> (Vec<Complex64>, f64) {
-        let map = &*self.map;
+        match &self.cells {
+            Cells::Map(map) => self.map_field(map, n, area, lambda),
+            Cells::Sites { sites, table } => {
+                if 2.0 * sites.radius / n as f64 >= sites.pitch {
+                    self.sites_block_field(sites, table, n, area, lambda)
+                } else {
+                    self.sites_point_field(sites, table, n, area, lambda)
+                }
+            }
+        }
+    }
+
+    fn map_field(&self, map: &PhaseMap, n: usize, area: &[f64], lambda: f64) -> (Vec<Complex64>, f64) {
         let h = 2.0 / n as f64;
         let k = 2.0 * PI / lambda;
         let mut field = vec![Complex64::new(0.0, 0.0); n * n];
@@ -413,28 +757,187 @@ impl MapPupil {
                 let (ci, cj) = (cell(x, offset[0], map.nx), cell(y, offset[1], map.ny));
                 let [cx, cy] = map.centre(ci, cj);
                 let a = map.amplitude.as_ref().map_or(1.0, |v| v[cj * map.nx + ci]);
-                let (ux, uy) = (cx / map.radius, cy / map.radius);
-                let oblique = |u: f64, v: f64| self.oblique.map_or(0.0, |o| o.opd_m(u, v));
                 // the reference path's gradient across the cell (sphere and oblique wave)
-                let r = (cx * cx + cy * cy + map.distance * map.distance).sqrt();
-                let d = 0.5 * map.pitch / map.radius;
-                let (gx, gy) = match self.oblique {
-                    None => (cx / r, cy / r),
-                    Some(_) => (
-                        cx / r + (oblique(ux + d, uy) - oblique(ux - d, uy)) / map.pitch,
-                        cy / r + (oblique(ux, uy + d) - oblique(ux, uy - d)) / map.pitch,
-                    ),
-                };
+                let (gx, gy) = self.gradient(cx, cy, map.pitch, map.radius, map.distance);
                 let u = map.pitch / lambda;
                 let design = a * sinc(u * gx) * sinc(u * gy);
                 let w = self.path_per_radian * map.phase[cj * map.nx + ci]
                     + self.sphere_factor * map.sphere(cx, cy)
-                    + oblique(ux, uy);
+                    + self.oblique_m(cx / map.radius, cy / map.radius);
                 let amp = area[idx] * design;
                 weight += area[idx] * design * design;
                 field[idx] = Complex64::from_polar(amp, k * w);
             }
         }
         (field, weight)
+    }
+
+    /// A site map on samples finer than its cells: each sample takes the cell holding it (as
+    /// [`map_field`](Self::map_field)).
+    fn sites_point_field(
+        &self,
+        sites: &SiteMap,
+        table: &[Complex64],
+        n: usize,
+        area: &[f64],
+        lambda: f64,
+    ) -> (Vec<Complex64>, f64) {
+        let h = 2.0 / n as f64;
+        let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+        let mut weight = 0.0;
+        for j in 0..n {
+            let y = -1.0 + (j as f64 + 0.5) * h;
+            for i in 0..n {
+                let idx = j * n + i;
+                if area[idx] <= 0.0 {
+                    continue;
+                }
+                let x = -1.0 + (i as f64 + 0.5) * h;
+                let (v, p) = self.site_at(sites, table, x, y, lambda);
+                field[idx] = v * area[idx];
+                weight += area[idx] * p;
+            }
+        }
+        (field, weight)
+    }
+
+    /// The design-order field of the cell holding `(x, y)` (units of `R`; clamped at the map's
+    /// edge) and its power.
+    fn site_at(&self, sites: &SiteMap, table: &[Complex64], x: f64, y: f64, lambda: f64) -> (Complex64, f64) {
+        let cell = |v: f64, len: usize| {
+            ((v * sites.radius / sites.pitch + 0.5 * len as f64).floor().max(0.0) as usize).min(len - 1)
+        };
+        let (ci, cj) = (cell(x, sites.nx), cell(y, sites.ny));
+        let (cx, cy) = (sites.x(ci), sites.y(cj));
+        let c = cj * sites.nx + ci;
+        let (gx, gy) = self.gradient(cx, cy, sites.pitch, sites.radius, sites.distance);
+        let u = sites.pitch / lambda;
+        let s = sinc(u * gx) * sinc(u * gy);
+        let r = sites.reference[c];
+        let t = table[sites.atoms[c] as usize];
+        let k = 2.0 * PI / lambda;
+        let w = self.sphere_factor * sites.sphere(cx, cy) + self.oblique_m(cx / sites.radius, cy / sites.radius);
+        let v = t * Complex64::new(f64::from(r.re), f64::from(r.im)) * Complex64::from_polar(s, k * w);
+        (v, t.norm_sqr() * s * s)
+    }
+
+    /// A site map on samples at least one cell wide: each sample is the mean of the design-order
+    /// fields of the cells whose centre is in it and in the aperture, `t_{u(c)} e^{i(k0 S_c +
+    /// γ_c)} e^{iφ(X_c)}`, with the smooth phase `φ = k((1 − λ/λ0) S + oblique)` taken linear
+    /// across the sample (its gradient at the sample's centre: separable, one factor a cell
+    /// column and one a cell row), times the design order's share at the sample's centre; the
+    /// power is the cells' mean `|t|²` times the share² (docs/physics.md, "Resampling a layout to
+    /// the pupil grid"). Rows of samples in parallel; the weight summed in row order.
+    fn sites_block_field(
+        &self,
+        sites: &SiteMap,
+        table: &[Complex64],
+        n: usize,
+        area: &[f64],
+        lambda: f64,
+    ) -> (Vec<Complex64>, f64) {
+        use rayon::prelude::*;
+        let h = 2.0 / n as f64;
+        let radius = sites.radius;
+        // each cell column's (row's) sample, or n past the grid
+        let bin = |v: f64| {
+            let s = ((v / radius + 1.0) / h).floor();
+            if s >= 0.0 && s < n as f64 { s as usize } else { n }
+        };
+        let columns: Vec<usize> = (0..sites.nx).map(|i| bin(sites.x(i))).collect();
+        let rows: Vec<usize> = (0..sites.ny).map(|j| bin(sites.y(j))).collect();
+        // the cell rows of each sample row (rows are monotone in j)
+        let mut first = vec![sites.ny; n + 1];
+        let mut last = vec![0usize; n + 1];
+        for (j, &r) in rows.iter().enumerate() {
+            first[r] = first[r].min(j);
+            last[r] = last[r].max(j + 1);
+        }
+        let power: Vec<f64> = table.iter().map(|t| t.norm_sqr()).collect();
+        let k = 2.0 * PI / lambda;
+        let u = sites.pitch / lambda;
+        let centre = |i: usize| (-1.0 + (i as f64 + 0.5) * h) * radius;
+        // the smooth phase φ (radians) at (x, y) metres
+        let smooth =
+            |x: f64, y: f64| k * (self.sphere_factor * sites.sphere(x, y) + self.oblique_m(x / radius, y / radius));
+        let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+        let weights: Vec<f64> = field
+            .par_chunks_mut(n)
+            .enumerate()
+            .map(|(js, out)| {
+                if first[js] >= last[js] {
+                    return 0.0;
+                }
+                let ys = centre(js);
+                // φ and its gradient at each sample's centre (central differences over a cell)
+                let d = 0.5 * sites.pitch;
+                let phase: Vec<[f64; 3]> = (0..n)
+                    .map(|i| {
+                        let xs = centre(i);
+                        [
+                            smooth(xs, ys),
+                            (smooth(xs + d, ys) - smooth(xs - d, ys)) / (2.0 * d),
+                            (smooth(xs, ys + d) - smooth(xs, ys - d)) / (2.0 * d),
+                        ]
+                    })
+                    .collect();
+                // each cell column's factor e^{i φ_x (x_c − x_s)} within its sample
+                let column: Vec<Complex64> = (0..sites.nx)
+                    .map(|i| match columns[i] {
+                        s if s < n => Complex64::from_polar(1.0, phase[s][1] * (sites.x(i) - centre(s))),
+                        _ => Complex64::new(0.0, 0.0),
+                    })
+                    .collect();
+                let mut sum = vec![Complex64::new(0.0, 0.0); n];
+                let mut row_sum = vec![Complex64::new(0.0, 0.0); n];
+                let mut pow = vec![0.0f64; n];
+                let mut count = vec![0u32; n];
+                for j in first[js]..last[js] {
+                    let Some((i0, i1)) = sites.inside_columns(j) else { continue };
+                    let (s0, s1) = (columns[i0], columns[i1 - 1]);
+                    let cells = j * sites.nx;
+                    for i in i0..i1 {
+                        let s = columns[i];
+                        if s == n {
+                            continue;
+                        }
+                        let c = cells + i;
+                        let a = sites.atoms[c] as usize;
+                        let r = sites.reference[c];
+                        row_sum[s] += table[a] * Complex64::new(f64::from(r.re), f64::from(r.im)) * column[i];
+                        pow[s] += power[a];
+                        count[s] += 1;
+                    }
+                    // each sample's row factor e^{i φ_y (y_c − y_s)}
+                    let dy = sites.y(j) - ys;
+                    for s in s0.min(n - 1)..=s1.min(n - 1) {
+                        sum[s] += row_sum[s] * Complex64::from_polar(1.0, phase[s][2] * dy);
+                        row_sum[s] = Complex64::new(0.0, 0.0);
+                    }
+                }
+                let mut weight = 0.0;
+                for (i, v) in out.iter_mut().enumerate() {
+                    let a = area[js * n + i];
+                    if a <= 0.0 {
+                        continue;
+                    }
+                    let x = -1.0 + (i as f64 + 0.5) * h;
+                    if count[i] == 0 {
+                        // an edge sample without a cell centre in the aperture: its cell
+                        let (f, p) = self.site_at(sites, table, x, ys / radius, lambda);
+                        *v = f * a;
+                        weight += a * p;
+                        continue;
+                    }
+                    let (gx, gy) = self.gradient(x * radius, ys, sites.pitch, radius, sites.distance);
+                    let share = sinc(u * gx) * sinc(u * gy);
+                    let inv = 1.0 / f64::from(count[i]);
+                    *v = sum[i] * Complex64::from_polar(a * share * inv, phase[i][0]);
+                    weight += a * share * share * pow[i] * inv;
+                }
+                weight
+            })
+            .collect();
+        (field, weights.iter().sum())
     }
 }

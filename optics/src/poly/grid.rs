@@ -531,7 +531,7 @@ impl FftLayer {
     fn pupil(&mut self, order: &Order) -> Result<usize, Error> {
         let aperture = match &order.pupil {
             Pupil::Aperture(a) => a.clone(),
-            Pupil::Map(m) if m.map().aperture() == crate::map::MapAperture::Square => self.square.clone(),
+            Pupil::Map(m) if m.aperture() == crate::map::MapAperture::Square => self.square.clone(),
             _ => self.circle.clone(),
         };
         let mut aberrations = order.wavefront.aberrations();

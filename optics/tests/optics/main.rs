@@ -8,6 +8,7 @@ mod otf;
 mod properties;
 mod radial;
 mod reference;
+mod site_map;
 mod spectral;
 mod tables;
 mod zones;
