@@ -37,6 +37,7 @@ pub mod fraunhofer;
 mod lens;
 pub mod map;
 mod otf;
+mod plane;
 mod poly;
 pub mod quad;
 pub mod radial;
@@ -60,4 +61,5 @@ pub use poly::{
     FFT_MEMORY_BUDGET, FIRST_AZIMUTHS, GAUSSIAN_HALF_WIDTH_SIGMAS, MAX_AZIMUTHS, NoiseShape, Part, Polychromatic,
     Settings, SpectralRule, Work, forget_remembered, highest_cutoff, monochromatic_mtf,
 };
+pub use plane::{PLANE_TAU, PLANE_WIDTH, SampledPlane};
 pub use table::{OtfTable, SampledLine, TABLE_ZERO_FREQUENCY_TOLERANCE};
