@@ -31,7 +31,7 @@ pub const PLANE_TAU: f64 = 1.0;
 pub const PLANE_WIDTH: usize = 22;
 
 /// One PSF's samples prepared for their 2-D transform at any frequency (module docs).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub struct SampledPlane {
     /// grid points per turn along each axis (`2 max(n_x, n_y)`)
     n: usize,
@@ -42,6 +42,17 @@ pub struct SampledPlane {
     centroid: [f64; 2],
     /// `Σ |d_l|` (1 for samples ≥ 0)
     absolute_sum: f64,
+}
+
+impl std::fmt::Debug for SampledPlane {
+    /// The grid's size, not its values (a few million).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SampledPlane")
+            .field("grid", &format_args!("{} × {}", self.grid.len() / self.n, self.n))
+            .field("centroid", &self.centroid)
+            .field("absolute_sum", &self.absolute_sum)
+            .finish()
+    }
 }
 
 /// `φ̂(f)` of the Gaussian kernel (module docs).
@@ -159,7 +170,8 @@ mod tests {
     #[test]
     fn the_gridded_transform_is_the_direct_sum_within_its_bound() {
         let (ny, nx) = (12, 17);
-        let mut values: Vec<f64> = (0..ny * nx).map(|i| ((i * 37 % 11) as f64 + 0.5) * ((i % nx) as f64 + 1.0)).collect();
+        let mut values: Vec<f64> =
+            (0..ny * nx).map(|i| ((i * 37 % 11) as f64 + 0.5) * ((i % nx) as f64 + 1.0)).collect();
         values[5 * nx + 9] += 300.0;
         values[3] = -2.0;
         let sum: f64 = values.iter().sum();
