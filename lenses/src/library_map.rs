@@ -10,7 +10,9 @@
 //! ([`optics::Pupil::Map`]): the cell's design-order component is its mean against the exact
 //! reference sphere, `t_c sinc(g_x p/λ) sinc(g_y p/λ)` (the blazed staircase of the phase maps),
 //! the rest stray light. `τ1(λ) = Σ_c |t_c|² sinc² sinc² p²/(πR²)` and
-//! `T(λ) = Σ_c |t_c|² p²/(πR²)` over the cells whose centre is in the aperture.
+//! `T(λ) = Σ_c (|t_c|² + |t_co,c|²) p²/(πR²)` over the cells whose centre is in the aperture,
+//! `|t_co|` a fin's unconverted light where the library gives it (`co_amplitude`: zero-order
+//! light, stray).
 
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
@@ -177,6 +179,9 @@ impl LibraryMapLens {
                 return layout("a handedness is for fins (atom = \"fin\"): these atoms have no angle".into());
             }
             _ => {}
+        }
+        if grid.theta_deg.is_none() && library.has_co_amplitude() {
+            return layout("the library's co_amplitude column is a fin's unconverted light (atom = \"fin\"): these atoms have no angle".into());
         }
         let sites = grid.nx * grid.ny;
         if grid.empty.len() != sites
@@ -415,6 +420,8 @@ impl LibraryMapLens {
             return (hit.1, hit.2);
         }
         let t = self.fields(wavelength_m);
+        // a fin's unconverted light, |t_co|²: zero-order light, in T and not in τ1
+        let co: Vec<f64> = self.unique.iter().map(|p| self.library.co_amplitude(p, wavelength_m).powi(2)).collect();
         let (nx, ny) = self.shape;
         let r2 = self.aperture_radius().powi(2);
         let z2 = self.focal_length * self.focal_length;
@@ -429,7 +436,7 @@ impl LibraryMapLens {
                 }
                 let a2 = self.cell_field(&t, j * nx + i).norm_sqr();
                 let r = (q + z2).sqrt();
-                all += a2;
+                all += a2 + self.cells.get(j * nx + i).and_then(|&u| co.get(u as usize)).unwrap_or(&0.0);
                 tau += a2 * (sinc(u * x / r) * sinc(u * y / r)).powi(2);
             }
         }

@@ -1047,7 +1047,8 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
 }
 
 /// `lens.library` (columns: parameters, `wavelength_nm`, `amplitude` or `transmittance`,
-/// `phase_rad`): the library and its parameter columns' names.
+/// `phase_rad`, and for fins an optional `co_amplitude`, their unconverted light): the library
+/// and its parameter columns' names.
 pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library, Vec<String>), Error> {
     let expected =
         "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
@@ -1056,7 +1057,7 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
         .map_err(|e| o.table_error("lens.library", file, e, expected))?;
     let ctx = format!("lens.library = {}", quoted(file));
     let col = |name: &str| headers.iter().position(|h| h == name);
-    let reserved = ["wavelength_nm", "amplitude", "transmittance", "phase_rad"];
+    let reserved = ["wavelength_nm", "amplitude", "transmittance", "phase_rad", "co_amplitude"];
     let (Some(iw), Some(ip)) = (col("wavelength_nm"), col("phase_rad")) else {
         return Err(o.bad(
             "lens.library",
@@ -1091,6 +1092,14 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
         table.push((params, values[iw] * 1e-9, a, values[ip]));
     }
     let library = lenses::Library::new(&table).map_err(|e| o.domain("lens.library", &ctx, e))?;
+    // a fin's unconverted light (zero-order light: in T, not in τ1)
+    let library = match col("co_amplitude") {
+        Some(ic) => {
+            let co: Vec<f64> = rows.iter().map(|(_, values)| values[ic]).collect();
+            library.with_co_amplitude(&table, &co).map_err(|e| o.domain("lens.library", &ctx, e))?
+        }
+        None => library,
+    };
     Ok((library, names.iter().map(|n| n.to_string()).collect()))
 }
 
