@@ -2116,20 +2116,9 @@ mod tests {
     /// A `.npy` float64 map `[y, x]` of `values(x_mm, y_mm)` on `n × n` cells of `pitch_um`,
     /// written to the temporary folder as `name`.
     fn write_map(name: &str, n: usize, pitch_um: f64, values: impl Fn(f64, f64) -> f64) -> String {
-        let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({n}, {n}), }}");
-        while (10 + header.len() + 1) % 64 != 0 {
-            header.push(' ');
-        }
-        header.push('\n');
-        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-        bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-        bytes.extend_from_slice(header.as_bytes());
-        for j in 0..n {
-            for i in 0..n {
-                let c = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch_um * 1e-3;
-                bytes.extend_from_slice(&values(c(i), c(j)).to_le_bytes());
-            }
-        }
+        let c = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch_um * 1e-3;
+        let grid: Vec<f64> = (0..n * n).map(|k| values(c(k % n), c(k / n))).collect();
+        let bytes = crate::npy::npy_f64(&[n, n], &grid).unwrap();
         let path = std::env::temp_dir().join(format!("asnr-map-{}-{name}", std::process::id()));
         std::fs::write(&path, bytes).unwrap();
         path.display().to_string()
