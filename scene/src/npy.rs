@@ -1,6 +1,6 @@
 //! The `.npy` writer (format 1.0, little-endian, C order) of the project's own files: `asnr psf
 //! --stack`, and the maps, layouts and images the tests and the benchmarks write. The reader is
-//! [`crate::psf`]'s (it takes more: format 2.0, big-endian, Fortran order).
+//! the PSF stack reader in `psf.rs` (it takes more: format 2.0, big-endian, Fortran order).
 //!
 //! The format (numpy's `format.py`, "NPY format version 1.0"): the magic `\x93NUMPY`, the
 //! version bytes `1, 0`, the header's length as a little-endian u16, the header — the Python
