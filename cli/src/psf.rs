@@ -293,17 +293,9 @@ fn write_stack(args: &GridArgs, path: &Path) -> Result<()> {
             }
         }
     }
-    let descr = if size == 4 { "<f4" } else { "<f8" };
-    let mut header =
-        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': ({}, {n}, {n}), }}", wavelengths.len());
-    // NPY 1.0: magic, version, u16 header length, the header padded with spaces to a multiple of 64
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
+    let kind = if size == 4 { scene::npy::NpyType::F32 } else { scene::npy::NpyType::F64 };
+    let descr = kind.descr();
+    let mut bytes = scene::npy::npy_header(kind, &[wavelengths.len(), n, n]);
     bytes.extend_from_slice(&data);
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)

@@ -146,17 +146,7 @@ fn tiny_lengths_name_their_key() {
 
 /// A `.npy` (format 1.0) of little-endian f64 `values` with `shape`.
 fn npy(shape: &[usize], values: &[f64]) -> Vec<u8> {
-    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
-    let mut dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({}), }}", dims.join(", "));
-    while (10 + dict.len() + 1) % 64 != 0 {
-        dict.push(' ');
-    }
-    dict.push('\n');
-    let mut out = b"\x93NUMPY\x01\x00".to_vec();
-    out.extend_from_slice(&u16::try_from(dict.len()).unwrap().to_le_bytes());
-    out.extend_from_slice(dict.as_bytes());
-    values.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
-    out
+    scene::npy::npy_f64(shape, values).expect("as many values as the shape holds")
 }
 
 /// A one-wavelength PSF stack (a 2-D `.npy`, or one slice of a 3-D one, psf_wavelengths_nm =

@@ -99,7 +99,7 @@ pub use phase_map::PhaseMapLens;
 pub use presets::{preset, preset_names};
 pub use psf::{
     PSF_BORDER_SAMPLES, PSF_CENTRE_TOLERANCE, PSF_MAX_ELEMENTS, PSF_MIN_SIDE, PSF_NEGATIVE_FLOOR, PSF_NEGATIVE_MASS,
-    PSF_PADDING, PSF_SYMMETRY_TOLERANCE, PsfReport, PsfStack,
+    PSF_PADDING, PSF_SYMMETRY_AZIMUTHS, PSF_SYMMETRY_STRIDE, PSF_SYMMETRY_TOLERANCE, PsfReport, PsfStack,
 };
 pub use refractive::{Glass, Refractive, Sellmeier, Surfaces, fresnel_reflectance};
 pub use segmented::{Layout, OtherChannels, Segmented, ZoneMap};

@@ -35,6 +35,9 @@ pub struct Library {
     /// last parameter, …
     amplitude: Vec<f64>,
     phase: Vec<f64>,
+    /// a fin's unconverted (co-polarized) amplitude at every grid point, where given
+    /// ([`with_co_amplitude`](Library::with_co_amplitude))
+    co_amplitude: Option<Vec<f64>>,
 }
 
 impl Library {
@@ -83,11 +86,7 @@ impl Library {
                 (0.0..=1.0).contains(row_amplitude),
                 "an amplitude |t| in [0, 1]",
             )?;
-            let mut index = 0;
-            for (d, axis) in axes.iter().enumerate() {
-                index = index * axis.len() + axis.partition_point(|&a| a < p[d]);
-            }
-            index = index * wavelengths.len() + wavelengths.partition_point(|&l| l < *lambda);
+            let index = grid_index(&axes, &wavelengths, p, *lambda);
             if !amplitude[index].is_nan() {
                 return Err(Error::OutOfRange {
                     name: "library row repeated at wavelength (m)",
@@ -98,7 +97,78 @@ impl Library {
             amplitude[index] = *row_amplitude;
             phase[index] = *row_phase;
         }
-        Ok(Library { axes, wavelengths, amplitude, phase })
+        Ok(Library { axes, wavelengths, amplitude, phase, co_amplitude: None })
+    }
+
+    /// This library with the unconverted amplitude `|t_co|` of a fin (the light that keeps the
+    /// incident circular polarization, without the geometric phase: zero-order light;
+    /// docs/physics.md, "2-D library layouts"), one value per row of `rows` (the rows this
+    /// library was made from), each in `[0, 1]` with `|t|² + |t_co|² ≤ 1` (1e-9 allowed for
+    /// rounding).
+    pub fn with_co_amplitude(self, rows: &[(Vec<f64>, f64, f64, f64)], co: &[f64]) -> Result<Library, Error> {
+        if co.len() != rows.len() {
+            return Err(Error::OutOfRange {
+                name: "library co_amplitude values",
+                value: co.len() as f64,
+                expected: "one per library row",
+            });
+        }
+        let mut values = vec![0.0; self.amplitude.len()];
+        for ((p, lambda, a, _), &c) in rows.iter().zip(co) {
+            check("library co_amplitude", c, (0.0..=1.0).contains(&c), "an unconverted amplitude |t_co| in [0, 1]")?;
+            check(
+                "library co_amplitude",
+                c,
+                a * a + c * c <= 1.0 + 1e-9,
+                "|t|² + |t_co|² ≤ 1 (a fin transmits at most the light on it)",
+            )?;
+            values[grid_index(&self.axes, &self.wavelengths, p, *lambda)] = c;
+        }
+        Ok(Library { co_amplitude: Some(values), ..self })
+    }
+
+    /// Whether the library gives a fin's unconverted amplitude.
+    pub fn has_co_amplitude(&self) -> bool {
+        self.co_amplitude.is_some()
+    }
+
+    /// `|t_co(p, λ)|`, multilinear in the parameters and λ as `|t|` is (0 where the library
+    /// gives none).
+    pub fn co_amplitude(&self, params: &[f64], wavelength_m: f64) -> f64 {
+        let Some(co) = &self.co_amplitude else { return 0.0 };
+        self.corners(params, wavelength_m).iter().map(|&(index, weight)| weight * co[index]).sum()
+    }
+
+    /// The grid points around `(params, λ)` and their multilinear weights, the cell's first
+    /// corner (every axis at its lower end) first; corners off a one-point axis weigh 0.
+    fn corners(&self, params: &[f64], wavelength_m: f64) -> Vec<(usize, f64)> {
+        // the cell and the fractions along every axis (the wavelength last)
+        let mut cells: Vec<(usize, f64)> = Vec::with_capacity(self.axes.len() + 1);
+        for (axis, &p) in self.axes.iter().zip(params).chain(std::iter::once((&self.wavelengths, &wavelength_m))) {
+            if axis.len() == 1 {
+                cells.push((0, 0.0));
+                continue;
+            }
+            let i = axis.partition_point(|&a| a <= p).clamp(1, axis.len() - 1) - 1;
+            let f = ((p - axis[i]) / (axis[i + 1] - axis[i])).clamp(0.0, 1.0);
+            cells.push((i, f));
+        }
+        let lens: Vec<usize> = self.axes.iter().map(Vec::len).chain([self.wavelengths.len()]).collect();
+        (0..(1usize << cells.len()))
+            .map(|corner| {
+                let mut index = 0;
+                let mut weight = 1.0;
+                for (d, &(i, f)) in cells.iter().enumerate() {
+                    let up = (corner >> d) & 1 == 1 && lens[d] > 1;
+                    if (corner >> d) & 1 == 1 && lens[d] == 1 {
+                        weight = 0.0;
+                    }
+                    index = index * lens[d] + i + usize::from(up);
+                    weight *= if up { f } else { 1.0 - f };
+                }
+                (index, weight)
+            })
+            .collect()
     }
 
     /// The parameter ranges `(min, max)`, one per parameter.
@@ -124,31 +194,9 @@ impl Library {
     /// `t(p, λ)`: `|t|` and the phase multilinear in the parameters and λ (clamped to the grid's
     /// ends), the corners' phases unwrapped against the cell's first corner (type docs).
     pub fn transmission(&self, params: &[f64], wavelength_m: f64) -> Complex64 {
-        // the cell and the fractions along every axis (the wavelength last)
-        let mut cells: Vec<(usize, f64)> = Vec::with_capacity(self.axes.len() + 1);
-        for (axis, &p) in self.axes.iter().zip(params).chain(std::iter::once((&self.wavelengths, &wavelength_m))) {
-            if axis.len() == 1 {
-                cells.push((0, 0.0));
-                continue;
-            }
-            let i = axis.partition_point(|&a| a <= p).clamp(1, axis.len() - 1) - 1;
-            let f = ((p - axis[i]) / (axis[i + 1] - axis[i])).clamp(0.0, 1.0);
-            cells.push((i, f));
-        }
-        let lens: Vec<usize> = self.axes.iter().map(Vec::len).chain([self.wavelengths.len()]).collect();
         let (mut amplitude, mut phase) = (0.0, 0.0);
         let mut reference = None;
-        for corner in 0..(1usize << cells.len()) {
-            let mut index = 0;
-            let mut weight = 1.0;
-            for (d, &(i, f)) in cells.iter().enumerate() {
-                let up = (corner >> d) & 1 == 1 && lens[d] > 1;
-                if (corner >> d) & 1 == 1 && lens[d] == 1 {
-                    weight = 0.0;
-                }
-                index = index * lens[d] + i + usize::from(up);
-                weight *= if up { f } else { 1.0 - f };
-            }
+        for (index, weight) in self.corners(params, wavelength_m) {
             // corner 0 (every axis at its cell's lower end) exists and comes first
             let base = *reference.get_or_insert(self.phase[index]);
             if weight != 0.0 {
@@ -160,6 +208,16 @@ impl Library {
         }
         Complex64::from_polar(amplitude, reference.unwrap_or(0.0) + phase)
     }
+}
+
+/// The place of the grid point `(p, λ)` in a library's values (the wavelength fastest, then the
+/// last parameter, …); `p` and `λ` must be values of the axes.
+fn grid_index(axes: &[Vec<f64>], wavelengths: &[f64], p: &[f64], lambda: f64) -> usize {
+    let mut index = 0;
+    for (d, axis) in axes.iter().enumerate() {
+        index = index * axis.len() + axis.partition_point(|&a| a < p[d]);
+    }
+    index * wavelengths.len() + wavelengths.partition_point(|&l| l < lambda)
 }
 
 /// A metalens of meta-atoms from a [`Library`] placed in rings of equal pitch (a layout), in the
@@ -259,6 +317,11 @@ impl LibraryLens {
         check("f_number", f_number, f_number >= 0.5, "a finite number ≥ 0.5 (NA = 1/(2F#) ≤ 1)")?;
         check("focal_length", focal_length_m, focal_length_m > 0.0, "a finite length > 0 m")?;
         check("design_wavelength", design_wavelength_m, design_wavelength_m > 0.0, "a finite wavelength > 0 m")?;
+        if library.has_co_amplitude() {
+            return Err(Error::Layout(
+                "the library's co_amplitude column is a fin's unconverted light (a 2-D layout of fins): a radial layout's atoms have no angle".into(),
+            ));
+        }
         let radius = 0.5 * focal_length_m / f_number;
         if radii_m.len() < 4 || radii_m.len() != params.len() {
             return Err(Error::OutOfRange {

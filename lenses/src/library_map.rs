@@ -10,7 +10,9 @@
 //! ([`optics::Pupil::Map`]): the cell's design-order component is its mean against the exact
 //! reference sphere, `t_c sinc(g_x p/λ) sinc(g_y p/λ)` (the blazed staircase of the phase maps),
 //! the rest stray light. `τ1(λ) = Σ_c |t_c|² sinc² sinc² p²/(πR²)` and
-//! `T(λ) = Σ_c |t_c|² p²/(πR²)` over the cells whose centre is in the aperture.
+//! `T(λ) = Σ_c (|t_c|² + |t_co,c|²) p²/(πR²)` over the cells whose centre is in the aperture,
+//! `|t_co|` a fin's unconverted light where the library gives it (`co_amplitude`: zero-order
+//! light, stray).
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -172,6 +174,9 @@ impl LibraryMapLens {
                 return layout("a handedness is for fins (atom = \"fin\"): these atoms have no angle".into());
             }
             _ => {}
+        }
+        if grid.theta_deg.is_none() && library.has_co_amplitude() {
+            return layout("the library's co_amplitude column is a fin's unconverted light (atom = \"fin\"): these atoms have no angle".into());
         }
         let sites = grid.nx * grid.ny;
         if grid.empty.len() != sites
@@ -437,7 +442,16 @@ impl LibraryMapLens {
         {
             return (hit.1, hit.2);
         }
-        let (tau, all) = self.sites.powers(&self.table(wavelength_m), wavelength_m);
+        let (tau, mut all) = self.sites.powers(&self.table(wavelength_m), wavelength_m);
+        // a fin's unconverted light, |t_co|²: zero-order light, in T and not in τ1 (the empty
+        // cell, last in the table, has none)
+        let co: Vec<f64> = self
+            .unique
+            .iter()
+            .map(|p| self.library.co_amplitude(p, wavelength_m).powi(2))
+            .chain(std::iter::once(0.0))
+            .collect();
+        all += self.sites.count_weighted(&co);
         let scale = self.pitch * self.pitch / (PI * self.aperture_radius().powi(2));
         let out = (tau * scale, all * scale);
         if let Ok(mut cache) = self.scalars.lock() {

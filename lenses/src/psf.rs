@@ -8,7 +8,7 @@
 
 use std::sync::Arc;
 
-use optics::{Field, LensModel, Order, OtfTable, Pupil, SampledLine, Wavefront};
+use optics::{Field, LensModel, Order, OtfTable, Pupil, SampledLine, SampledPlane, Wavefront};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64;
 
@@ -43,10 +43,24 @@ pub const PSF_PADDING: usize = 4;
 /// f64 (a 1024 × 1024 × 64 stack); a file's header giving more is refused before any allocation.
 pub const PSF_MAX_ELEMENTS: usize = 1 << 26;
 
-/// Below this difference between the tangential and the sagittal curves (everywhere) the stack
-/// is taken as symmetric and both curves are their mean: the rounding of a radially symmetric
-/// PSF (a float32 file's 6e-8) must not make the metric treat it as direction dependent.
+/// Below this difference between the tangential and the sagittal curves (everywhere), and
+/// between the tangential curve and the 2-D transform along [`PSF_SYMMETRY_AZIMUTHS`] azimuths
+/// (at every [`PSF_SYMMETRY_STRIDE`]th frequency), the stack is taken as round and both curves
+/// are their mean: the rounding of a radially symmetric PSF (a float32 file's 6e-8) must not
+/// make the metric treat it as direction dependent. Any other stack keeps each slice's 2-D
+/// transform ([`optics::SampledPlane`]) and its ASNR takes the mean MTF over azimuth.
 pub const PSF_SYMMETRY_TOLERANCE: f64 = 1e-6;
+
+/// Azimuths on `[0, π)` (from the field direction, every `π/8`) along which a stack's 2-D
+/// transform is compared with its tangential curve to take it as round
+/// ([`PSF_SYMMETRY_TOLERANCE`]).
+pub const PSF_SYMMETRY_AZIMUTHS: usize = 8;
+
+/// Every how many of the table's frequencies the 2-D transform is compared with the tangential
+/// curve along the [`PSF_SYMMETRY_AZIMUTHS`] azimuths: every second step `2/(n p)` of the
+/// samples' own frequency grid (the table's step is a quarter of it). A sampled check: a PSF
+/// that is round at these points and not between them would be taken as round.
+pub const PSF_SYMMETRY_STRIDE: usize = 8;
 
 /// Below this distance from the centre sample, in samples, a centroid is taken as the centre
 /// (no lateral shift): a shift of 1e-6 samples turns the OTF's phase by under 1e-5 rad up to the
@@ -101,6 +115,12 @@ pub struct PsfReport {
 ///   [`PSF_PADDING`]` × max(nx, ny)` points, from 0 to the stack's Nyquist frequency `1/(2p)`;
 ///   the table keeps the line spread functions ([`OtfTable::with_samples`]) and reads their
 ///   exact transform at any other frequency (not the linear interpolation between the grid's).
+/// - Along any other azimuth `φ` the OTF is the 2-D transform of the slice along `φ`
+///   (`Re Σ p(x) e^{−2πi ν·(x − c)}`, `ν = ν(cos φ, sin φ)`), read from the slice's transform on
+///   a 2×-padded grid by Gaussian gridding ([`optics::SampledPlane`], error bound about 5e-9,
+///   [`OtfTable::plane_error_bound`]), unless the stack is round
+///   ([`PSF_SYMMETRY_TOLERANCE`]); the metric then averages the mean MTF over azimuth, as for
+///   any 2-D OTF (docs/physics.md, "Pupils without rotational symmetry").
 /// - The aliasing estimate [`PsfReport::aliasing`] is half the transform at `1/(2p)`.
 /// - The table holds the real part of the re-centred OTF (the even part of the PSF about its
 ///   centroid); the imaginary part (an asymmetric PSF: coma) is dropped and its largest value
@@ -198,6 +218,8 @@ impl PsfStack {
         };
         let (mut lsf_x, mut lsf_y) = (vec![0.0; nx], vec![0.0; ny]);
         let (mut lines_x, mut lines_y) = (Vec::with_capacity(depth), Vec::with_capacity(depth));
+        let mut planes = Vec::with_capacity(depth);
+        let mut planner = FftPlanner::<f64>::new();
         for (k, slice) in values.chunks_exact(ny * nx).enumerate() {
             let mut peak = f64::NEG_INFINITY;
             for (index, &v) in slice.iter().enumerate() {
@@ -300,12 +322,27 @@ impl PsfStack {
             sagittal.push(transform(&lsf_y, cy));
             lines_x.push(SampledLine { origin: (nx / 2) as f64 + cx, values: lsf_x.clone() });
             lines_y.push(SampledLine { origin: (ny / 2) as f64 + cy, values: lsf_y.clone() });
+            let normalized: Vec<f64> = slice.iter().map(|v| v / sum).collect();
+            planes.push(SampledPlane::new(&normalized, [ny, nx], [cx, cy], &mut planner));
         }
+        // round: the two cuts and the transform along the azimuths between them agree
+        let round = |k: usize| -> bool {
+            let t = &tangential[k];
+            (0..=half).step_by(PSF_SYMMETRY_STRIDE).all(|m| {
+                (1..PSF_SYMMETRY_AZIMUTHS).all(|a| {
+                    let phi = std::f64::consts::PI * a as f64 / PSF_SYMMETRY_AZIMUTHS as f64;
+                    let turns = frequencies[m] * pitch_m;
+                    let v = planes[k].transform([turns * phi.cos(), turns * phi.sin()]).clamp(-1.0, 1.0);
+                    (v - t[m]).abs() <= PSF_SYMMETRY_TOLERANCE
+                })
+            })
+        };
         let symmetric = tangential
             .iter()
             .flatten()
             .zip(sagittal.iter().flatten())
-            .all(|(t, s)| (t - s).abs() <= PSF_SYMMETRY_TOLERANCE);
+            .all(|(t, s)| (t - s).abs() <= PSF_SYMMETRY_TOLERANCE)
+            && (0..depth).all(round);
         let (tangential, sagittal, lines) = if symmetric {
             let mean: Vec<Vec<f64>> = tangential
                 .iter()
@@ -323,6 +360,7 @@ impl PsfStack {
         };
         let table = OtfTable::new(wavelengths_m, frequencies, tangential, sagittal)
             .and_then(|t| t.with_samples(pitch_m, lines.0, lines.1))
+            .and_then(|t| if symmetric { Ok(t) } else { t.with_planes(planes) })
             .map_err(Error::Table)?;
         Ok(PsfStack {
             f_number,
@@ -692,9 +730,9 @@ mod tests {
         assert!((s - g(2.0 * PITCH)).abs() < 1e-12, "{s} vs {}", g(2.0 * PITCH));
     }
 
-    /// The 1-D transforms of the line spread functions equal the direct 2-D sum
-    /// `Σ_{x,y} p(x, y) e^{−2πi ν·(x − c)}` on the axes (the slow reference: every sample of an
-    /// asymmetric, shifted PSF), and the imaginary part is reported.
+    /// The table equals the direct 2-D sum `Σ_{x,y} p(x, y) e^{−2πi ν·(x − c)}` (the slow
+    /// reference: every sample of an asymmetric, shifted PSF) on the axes and along 30° and
+    /// 135°, within the planes' stated bound (below 1e-8), and the imaginary part is reported.
     #[test]
     fn projection_slice_equals_the_direct_two_dimensional_sum() {
         let (ny, nx) = (12, 16);
@@ -705,25 +743,30 @@ mod tests {
         let sum: f64 = values.iter().sum();
         let [cx, cy] = lens.report().centroids_m[0];
         let n = lens.report().transform_length as f64;
+        assert!(lens.table().is_two_dimensional());
+        let bound = lens.table().plane_error_bound();
+        assert!(bound > 0.0 && bound < 1e-8, "{bound}");
         let mut largest_imaginary: f64 = 0.0;
         for m in 0..=(n as usize / 2) {
             let nu = m as f64 / (n * PITCH);
-            let direct = |along_x: bool| -> Complex64 {
+            let direct = |phi: f64| -> Complex64 {
                 let mut acc = Complex64::new(0.0, 0.0);
                 for i in 0..ny {
                     for j in 0..nx {
                         let x = (j as f64 - (nx / 2) as f64) * PITCH - cx;
                         let y = (i as f64 - (ny / 2) as f64) * PITCH - cy;
-                        let d = if along_x { x } else { y };
+                        let d = x * phi.cos() + y * phi.sin();
                         acc += Complex64::from_polar(values[i * nx + j] / sum, -std::f64::consts::TAU * nu * d);
                     }
                 }
                 acc
             };
-            let (t, s) = (direct(true), direct(false));
+            let (t, s) = (direct(0.0), direct(std::f64::consts::FRAC_PI_2));
             largest_imaginary = largest_imaginary.max(t.im.abs()).max(s.im.abs());
-            assert!((lens.table().value(700e-9, nu, 0.0) - t.re).abs() < 1e-12, "m = {m}");
-            assert!((lens.table().value(700e-9, nu, std::f64::consts::FRAC_PI_2) - s.re).abs() < 1e-12, "m = {m}");
+            for phi in [0.0, std::f64::consts::FRAC_PI_2, 30f64.to_radians(), 135f64.to_radians()] {
+                let (got, want) = (lens.table().value(700e-9, nu, phi), direct(phi).re);
+                assert!((got - want).abs() < bound, "m = {m}, φ = {phi}: {got} vs {want}");
+            }
         }
         assert!((lens.report().imaginary.0 - largest_imaginary).abs() < 1e-12);
         assert!(largest_imaginary > 0.01, "an asymmetric PSF: {largest_imaginary}");

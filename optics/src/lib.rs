@@ -37,6 +37,7 @@ pub mod fraunhofer;
 mod lens;
 pub mod map;
 mod otf;
+mod plane;
 mod poly;
 pub mod quad;
 pub mod radial;
@@ -55,6 +56,7 @@ pub use otf::{
     defocus_otf_bessel, defocus_otf_many, defocus_otf_many_within, defocus_otf_panels, defocus_otf_quadrature,
     mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
+pub use plane::{PLANE_TAU, PLANE_WIDTH, SampledPlane};
 pub use poly::{
     AZIMUTH_SHARE, AzimuthalMean, DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, Engine,
     FFT_MEMORY_BUDGET, FIRST_AZIMUTHS, GAUSSIAN_HALF_WIDTH_SIGMAS, MAX_AZIMUTHS, NoiseShape, Part, Polychromatic,

@@ -570,6 +570,20 @@ impl SiteMap {
         (design, all)
     }
 
+    /// `Σ_c w[a_c]` over the cells whose centre is in the aperture, `a_c` the cell's atom: a
+    /// per-atom quantity (e.g. a fin's unconverted power `|t_co|²`) summed over the layout.
+    ///
+    /// # Panics
+    /// If `w` is not the table's length.
+    pub fn count_weighted(&self, w: &[f64]) -> f64 {
+        assert_eq!(w.len(), self.table, "a weights' table of {} for {} atoms", w.len(), self.table);
+        self.block_counts
+            .chunks_exact(self.table)
+            .flat_map(|counts| counts.iter().zip(w))
+            .map(|(&n, &a)| f64::from(n) * a)
+            .sum()
+    }
+
     /// `(nx, ny)`.
     pub fn shape(&self) -> (usize, usize) {
         (self.nx, self.ny)

@@ -11,9 +11,11 @@
 //! polynomial in ν, summed directly), and only the wavelength is interpolated. Off
 //! axis a table may give tangential (along the field) and sagittal curves; along an azimuth `φ`
 //! measured from the field direction the value is `T cos²φ + S sin²φ` (the two are equal on
-//! axis). Each row is normalized to 1 at zero frequency, as an OTF is by definition.
+//! axis), unless the table holds each wavelength's whole PSF ([`OtfTable::with_planes`]): then
+//! it is the PSF's 2-D transform along `φ` ([`crate::SampledPlane`]). Each row is normalized to 1 at zero frequency, as an OTF is by definition.
 
 use crate::Error;
+use crate::SampledPlane;
 
 /// The OTF of one order against wavelength and frequency (module docs).
 #[derive(Clone, Debug, PartialEq)]
@@ -64,9 +66,57 @@ struct Samples {
     /// symmetric PSF)
     tangential: Vec<Vec<SampledLine>>,
     sagittal: Vec<Vec<SampledLine>>,
+    /// per wavelength, the PSF's 2-D transform ([`OtfTable::with_planes`]): then the value along
+    /// any azimuth is read from it, not `T cos²φ + S sin²φ`
+    planes: Option<Vec<SampledPlane>>,
+    /// the planes' values at the last frequency and azimuth read (every spectral node reads
+    /// the same one, two slices each)
+    cache: PlaneCache,
+}
+
+/// The last `(ν, φ)` read from the planes and each slice's value there (NaN: not yet read).
+#[derive(Debug, Default)]
+struct PlaneCache(std::sync::Mutex<Option<(u64, u64, Vec<f64>)>>);
+
+impl Clone for PlaneCache {
+    fn clone(&self) -> Self {
+        PlaneCache::default()
+    }
+}
+
+impl PartialEq for PlaneCache {
+    /// A cache is no part of a table's value.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 impl Samples {
+    /// Slice `k`'s plane at `frequency` along `azimuth` (from +x, the field direction), through
+    /// the cache when no other thread holds it.
+    fn plane_value(&self, planes: &[SampledPlane], k: usize, frequency: f64, azimuth: f64) -> f64 {
+        let turns = frequency * self.pitch_m;
+        let theta = [turns * azimuth.cos(), turns * azimuth.sin()];
+        let read = || planes[k].transform(theta).clamp(-1.0, 1.0);
+        let Ok(mut cache) = self.cache.0.try_lock() else { return read() };
+        let key = (frequency.to_bits(), azimuth.to_bits());
+        match cache.as_mut() {
+            Some((f, a, values)) if (*f, *a) == key => {
+                if values[k].is_nan() {
+                    values[k] = read();
+                }
+                values[k]
+            }
+            _ => {
+                let mut values = vec![f64::NAN; planes.len()];
+                values[k] = read();
+                let v = values[k];
+                *cache = Some((key.0, key.1, values));
+                v
+            }
+        }
+    }
+
     fn value(&self, rows: &[Vec<SampledLine>], k: usize, frequency: f64) -> f64 {
         let lines = &rows[k];
         let sum: f64 = lines.iter().map(|l| l.transform(self.pitch_m, frequency)).sum();
@@ -174,7 +224,39 @@ impl OtfTable {
                 return bad("table sampled lines", 0.0, "at least one line per wavelength");
             }
         }
-        Ok(OtfTable { samples: Some(Samples { pitch_m, tangential, sagittal }), ..self })
+        Ok(OtfTable {
+            samples: Some(Samples { pitch_m, tangential, sagittal, planes: None, cache: PlaneCache::default() }),
+            ..self
+        })
+    }
+
+    /// This table (made [`with_samples`](OtfTable::with_samples)) with each wavelength's PSF
+    /// as a [`SampledPlane`] (one per wavelength): from then on the value along an azimuth `φ`
+    /// from the field direction is the 2-D transform of the samples along that direction
+    /// (within [`SampledPlane::error_bound`]), not `T cos²φ + S sin²φ`, and the table is
+    /// direction dependent; the tabulated curves and the lines stay (the tangential and sagittal
+    /// cuts, the same transform on the axes).
+    pub fn with_planes(self, planes: Vec<SampledPlane>) -> Result<OtfTable, Error> {
+        let Some(samples) = self.samples else {
+            return bad("table planes", 0.0, "a table made with_samples first");
+        };
+        if planes.len() != self.wavelengths_m.len() {
+            return bad("table planes", planes.len() as f64, "one plane per wavelength");
+        }
+        Ok(OtfTable { directional: true, samples: Some(Samples { planes: Some(planes), ..samples }), ..self })
+    }
+
+    /// Whether the value along an azimuth is read from the 2-D transform of each wavelength's
+    /// PSF ([`with_planes`](OtfTable::with_planes)).
+    pub fn is_two_dimensional(&self) -> bool {
+        self.samples.as_ref().is_some_and(|s| s.planes.is_some())
+    }
+
+    /// The largest error bound of the planes' values ([`SampledPlane::error_bound`]); 0
+    /// without planes.
+    pub fn plane_error_bound(&self) -> f64 {
+        let planes = self.samples.as_ref().and_then(|s| s.planes.as_deref()).unwrap_or(&[]);
+        planes.iter().map(SampledPlane::error_bound).fold(0.0, f64::max)
     }
 
     /// Whether the values are the exact transforms of sampled lines ([`with_samples`](OtfTable::with_samples)).
@@ -203,12 +285,17 @@ impl OtfTable {
     }
 
     /// The OTF at `wavelength_m` and `frequency` (cycles/m, sign ignored) along the direction at
-    /// angle `azimuth_from_field_rad` from the field direction: `T cos²φ + S sin²φ`.
+    /// angle `azimuth_from_field_rad` from the field direction: `T cos²φ + S sin²φ`, or with
+    /// planes ([`with_planes`](OtfTable::with_planes)) the 2-D transform along that direction.
     pub fn value(&self, wavelength_m: f64, frequency: f64, azimuth_from_field_rad: f64) -> f64 {
         if let Some(samples) = &self.samples {
             let nu = frequency.abs();
             if nu > self.max_frequency() {
                 return 0.0;
+            }
+            if let Some(planes) = &samples.planes {
+                let azimuth = azimuth_from_field_rad;
+                return self.blend(wavelength_m, |k| samples.plane_value(planes, k, nu, azimuth));
             }
             let t = self.blend(wavelength_m, |k| samples.value(&samples.tangential, k, nu));
             if !self.is_direction_dependent() {

@@ -1047,7 +1047,8 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
 }
 
 /// `lens.library` (columns: parameters, `wavelength_nm`, `amplitude` or `transmittance`,
-/// `phase_rad`): the library and its parameter columns' names.
+/// `phase_rad`, and for fins an optional `co_amplitude`, their unconverted light): the library
+/// and its parameter columns' names.
 pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library, Vec<String>), Error> {
     let expected =
         "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
@@ -1056,7 +1057,7 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
         .map_err(|e| o.table_error("lens.library", file, e, expected))?;
     let ctx = format!("lens.library = {}", quoted(file));
     let col = |name: &str| headers.iter().position(|h| h == name);
-    let reserved = ["wavelength_nm", "amplitude", "transmittance", "phase_rad"];
+    let reserved = ["wavelength_nm", "amplitude", "transmittance", "phase_rad", "co_amplitude"];
     let (Some(iw), Some(ip)) = (col("wavelength_nm"), col("phase_rad")) else {
         return Err(o.bad(
             "lens.library",
@@ -1091,6 +1092,14 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
         table.push((params, values[iw] * 1e-9, a, values[ip]));
     }
     let library = lenses::Library::new(&table).map_err(|e| o.domain("lens.library", &ctx, e))?;
+    // a fin's unconverted light (zero-order light: in T, not in τ1)
+    let library = match col("co_amplitude") {
+        Some(ic) => {
+            let co: Vec<f64> = rows.iter().map(|(_, values)| values[ic]).collect();
+            library.with_co_amplitude(&table, &co).map_err(|e| o.domain("lens.library", &ctx, e))?
+        }
+        None => library,
+    };
     Ok((library, names.iter().map(|n| n.to_string()).collect()))
 }
 
@@ -2109,20 +2118,9 @@ mod tests {
     /// A `.npy` float64 map `[y, x]` of `values(x_mm, y_mm)` on `n × n` cells of `pitch_um`,
     /// written to the temporary folder as `name`.
     fn write_map(name: &str, n: usize, pitch_um: f64, values: impl Fn(f64, f64) -> f64) -> String {
-        let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({n}, {n}), }}");
-        while (10 + header.len() + 1) % 64 != 0 {
-            header.push(' ');
-        }
-        header.push('\n');
-        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-        bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-        bytes.extend_from_slice(header.as_bytes());
-        for j in 0..n {
-            for i in 0..n {
-                let c = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch_um * 1e-3;
-                bytes.extend_from_slice(&values(c(i), c(j)).to_le_bytes());
-            }
-        }
+        let c = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch_um * 1e-3;
+        let grid: Vec<f64> = (0..n * n).map(|k| values(c(k % n), c(k / n))).collect();
+        let bytes = crate::npy::npy_f64(&[n, n], &grid).unwrap();
         let path = std::env::temp_dir().join(format!("asnr-map-{}-{name}", std::process::id()));
         std::fs::write(&path, bytes).unwrap();
         path.display().to_string()

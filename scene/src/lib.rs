@@ -59,6 +59,7 @@ pub mod gds;
 mod layout2d;
 mod lens;
 mod load;
+pub mod npy;
 mod origins;
 mod psf;
 mod resolved;

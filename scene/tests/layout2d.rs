@@ -100,20 +100,8 @@ fn write_gds(path: &Path, diameter: impl Fn(usize, usize) -> Option<f64>, n: usi
 
 /// A `.npy` float64 `[n, n]` of `value(i, j)` (NaN for no atom).
 fn write_npy(path: &Path, n: usize, value: impl Fn(usize, usize) -> f64) {
-    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({n}, {n}), }}");
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    for j in 0..n {
-        for i in 0..n {
-            bytes.extend_from_slice(&value(i, j).to_le_bytes());
-        }
-    }
-    std::fs::write(path, bytes).unwrap();
+    let grid: Vec<f64> = (0..n * n).map(|k| value(k % n, k / n)).collect();
+    std::fs::write(path, scene::npy::npy_f64(&[n, n], &grid).unwrap()).unwrap();
 }
 
 /// A scene of the small lens with `lens_keys` (the library given).

@@ -264,3 +264,88 @@ fn a_constant_amplitude_library_keeps_its_amplitude_between_rows() {
     let chord = 0.5 * (num_complex::Complex64::from_polar(0.9, 0.0) + num_complex::Complex64::from_polar(0.9, step));
     assert!(0.9 - chord.norm() > 1e-3, "{}", chord.norm());
 }
+
+/// A fin library over width 50–100 nm, length 200–300 nm and 700–900 nm: converted amplitude
+/// `a`, phase 0 (a fin's phase is its angle's), and with `co` the unconverted amplitude
+/// `co(w) = co · w/100 nm` (linear in the width: interpolated as `|t|` is).
+fn fin_library(a: f64, co: Option<f64>) -> Library {
+    let mut rows = Vec::new();
+    let mut unconverted = Vec::new();
+    for w in [50.0, 100.0] {
+        for l in [200.0, 300.0] {
+            for lambda in [700e-9, 800e-9, 900e-9] {
+                rows.push((vec![w, l], lambda, a, 0.0));
+                unconverted.push(co.unwrap_or(0.0) * w / 100.0);
+            }
+        }
+    }
+    let library = Library::new(&rows).unwrap();
+    match co {
+        Some(_) => library.with_co_amplitude(&rows, &unconverted).unwrap(),
+        None => library,
+    }
+}
+
+/// A 50 × 50 lattice of 400 nm holding fins of width 75 nm and length 250 nm (θ = 0), covering
+/// the aperture of F/2.5 at f0 = 50 µm (R = 10 µm), through `library`.
+fn fin_lens(library: Library, fins: bool) -> Result<lenses::LibraryMapLens, lenses::Error> {
+    let (n, pitch) = (50, 400e-9);
+    let grid = lenses::AtomGrid {
+        pitch_m: pitch,
+        origin_m: (-0.5 * (n as f64 - 1.0) * pitch, -0.5 * (n as f64 - 1.0) * pitch),
+        nx: n,
+        ny: n,
+        parameters: vec!["width_nm".into(), "length_nm".into()],
+        values: [vec![75.0; n * n], vec![250.0; n * n]].concat(),
+        empty: vec![false; n * n],
+        theta_deg: fins.then(|| vec![0.0; n * n]),
+        stats: lenses::LayoutStats::default(),
+    };
+    lenses::LibraryMapLens::new(
+        2.5,
+        50e-6,
+        L0,
+        Arc::new(library),
+        &["width_nm".into(), "length_nm".into()],
+        &grid,
+        None,
+        fins.then_some(lenses::Handedness::Lcp),
+        0.0,
+        "fins".into(),
+    )
+}
+
+/// A fin's unconverted light (`co_amplitude`) is zero-order light: it adds `|t_co|²` to the
+/// transmission T of every cell in the aperture and nothing to τ1. Against the same lens
+/// without the column: τ1 equal, and `T = T_0 (a² + co²)/a²` (every cell holds the same fin, so
+/// `T_0/a²` is the aperture's fill), with `co` = 0.5 × 75/100 interpolated in the width. The
+/// library refuses `|t|² + |t_co|² > 1`, and pillars (no angle) and radial layouts refuse the
+/// column.
+#[test]
+fn a_fins_unconverted_light_counts_in_the_transmission_not_in_tau1() {
+    let a = 0.8;
+    let plain = fin_lens(fin_library(a, None), true).unwrap();
+    let with = fin_lens(fin_library(a, Some(0.5)), true).unwrap();
+    let co = 0.5 * 0.75;
+    for lambda in [720e-9, 800e-9, 880e-9] {
+        let (tau0, t0) = plain.efficiency_and_transmission(lambda);
+        let (tau, t) = with.efficiency_and_transmission(lambda);
+        assert_eq!(tau, tau0, "τ1 at {lambda}");
+        let want = t0 * (a * a + co * co) / (a * a);
+        assert!((t - want).abs() < 1e-12 * want, "T at {lambda}: {t} vs {want}");
+        assert!(t > t0 && t <= 1.0, "{t} {t0}");
+        assert!((with.transmission(lambda) - t).abs() < 1e-15);
+    }
+    let e = fin_lens(fin_library(a, Some(0.5)), false).unwrap_err().to_string();
+    assert!(e.contains("co_amplitude") && e.contains("no angle"), "{e}");
+    let rows = vec![(vec![1.0], 8e-7, 0.9, 0.0), (vec![2.0], 8e-7, 0.9, 0.0)];
+    let e = Library::new(&rows).unwrap().with_co_amplitude(&rows, &[0.3, 0.5]).unwrap_err().to_string();
+    assert!(e.contains("co_amplitude") && e.contains("≤ 1"), "{e}");
+    let library = Library::new(&rows).unwrap().with_co_amplitude(&rows, &[0.3, 0.4]).unwrap();
+    assert!((library.co_amplitude(&[1.25], 8e-7) - 0.325).abs() < 1e-15);
+    let radii: Vec<f64> = (0..8).map(|i| (i as f64 + 0.5) * 1e-4).collect();
+    let e = LibraryLens::new(2.5, F0, L0, Arc::new(library), radii, vec![vec![1.5]; 8], "radial".into())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("co_amplitude"), "{e}");
+}

@@ -215,11 +215,14 @@ impl Polychromatic<'_> {
         }
     }
 
-    /// Whether the OTF is a 2-D grid of a sampled pupil (the FFT engine, or a line spectrum's
-    /// FFT grids): a pupil with no rotational symmetry, whose ASNR takes the mean MTF averaged
-    /// over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)).
+    /// Whether the OTF is 2-D: a grid of a sampled pupil (the FFT engine, or a line spectrum's
+    /// FFT grids), or a table holding each wavelength's whole PSF (a PSF stack without
+    /// rotational symmetry, [`OtfTable::with_planes`](crate::OtfTable::with_planes)): an OTF
+    /// with no rotational symmetry, whose ASNR takes the mean MTF averaged over azimuth
+    /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)).
     pub fn has_pupil_grid(&self) -> bool {
         matches!(self.engine(), Engine::Fft { .. } | Engine::Monochromatic { fft: Some(_) })
+            || self.engine.nodes().nodes.iter().any(|n| n.table.as_ref().is_some_and(|t| t.is_two_dimensional()))
     }
 
     /// The mean MTF averaged over azimuth (docs/physics.md, "Pupils without rotational

@@ -37,6 +37,10 @@ pub(crate) struct PsfBench {
     /// Mean MTF of the stack's scene and of the embedded scene at 1e-12.
     pub mean_mtf: f64,
     pub reference: f64,
+    /// Whether the stack was read in 2-D (not round: the mean MTF over azimuth), from `asnr mtf
+    /// --json`'s `mtf_over_azimuth`, and its tangential and sagittal mean MTFs.
+    pub over_azimuth: Option<bool>,
+    pub cuts: Option<(f64, f64)>,
 }
 
 fn json_field(text: &str, name: &str) -> Option<f64> {
@@ -87,6 +91,7 @@ pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench>
     let mut walls = Vec::new();
     let mut cpus = Vec::new();
     let mut mean_mtf = 0.0;
+    let mut cuts = None;
     for _ in 0..runs {
         let cpu_before = children_cpu_s();
         let started = Instant::now();
@@ -95,14 +100,23 @@ pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench>
         let cpu = cpu_before.zip(children_cpu_s()).map(|(before, after)| after - before);
         cpus.extend(cpu);
         mean_mtf = json_field(&text, "mean_mtf")?;
+        cuts = json_field(&text, "mean_mtf_tangential").zip(json_field(&text, "mean_mtf_sagittal"));
         eprintln!("  {:.2} s wall, {cpu:?} s CPU, mean MTF {mean_mtf}", walls[walls.len() - 1]);
     }
+    let curve = run(&["mtf", scene.to_str()?, "--json"]).unwrap_or_default();
+    let over_azimuth = if curve.contains("\"mtf_over_azimuth\": true") {
+        Some(true)
+    } else if curve.contains("\"mtf_over_azimuth\": false") {
+        Some(false)
+    } else {
+        None
+    };
     let bytes = std::fs::metadata(&stack).ok()?.len();
     std::fs::remove_dir_all(&dir).ok();
     walls.sort_by(f64::total_cmp);
     cpus.sort_by(f64::total_cmp);
     let cpu_s = (cpus.len() == runs).then(|| cpus[runs / 2]);
-    Some(PsfBench { wall_s: walls[walls.len() / 2], runs, cpu_s, bytes, mean_mtf, reference })
+    Some(PsfBench { wall_s: walls[walls.len() / 2], runs, cpu_s, bytes, mean_mtf, reference, over_azimuth, cuts })
 }
 
 /// The report's section.
@@ -118,7 +132,7 @@ pub(crate) fn markdown(p: &PsfBench) -> String {
          the stack's wavelength sampling (the OTF linear in λ between slices 5 nm apart; docs/physics.md, \
          \"Designs given as data\"). The stack's OTF is the exact transform of its samples at every \
          frequency the metric asks (`optics::OtfTable::with_samples`, a direct sum), and the \
-         time includes it; the linear interpolation in ν on the 4×-padded grid \
+         time includes it. {} The linear interpolation in ν on the 4×-padded grid \
          it replaced is no longer selectable (its time and mean MTF beside the exact transform's are in \
          CHANGELOG.md). CPU: the user + system time of the same runs, median (`/proc/self/stat`). \
          Regenerate this section alone: `cargo xtask accuracy --only psf-stack`.\n\n\
@@ -128,6 +142,19 @@ pub(crate) fn markdown(p: &PsfBench) -> String {
         p.bytes as f64 / 1e6,
         p.runs,
         if p.runs == 1 { "" } else { "s" },
+        match (p.over_azimuth, p.cuts) {
+            (None, _) | (Some(true), None) => String::new(),
+            (Some(false), _) => "The time includes the check that the stack is round (its two cuts and its 2-D transform along 7 azimuths \
+             between them agree within 1e-6, `lenses::PSF_SYMMETRY_TOLERANCE`), which builds each slice's 2-D \
+             transform on a 2×-padded grid (`optics::SampledPlane`); this stack passed it and kept its 1-D lines."
+                .to_owned(),
+            (Some(true), Some((t, s))) => format!(
+                "This stack is not round within 1e-6 (`lenses::PSF_SYMMETRY_TOLERANCE`; `asnr mtf --json`: \
+                 `mtf_over_azimuth`; its x and y cuts' means are {:.7} / {:.7}): each slice's 2-D transform is read from a 2×-padded grid by Gaussian gridding \
+                 (`optics::SampledPlane`) and the mean MTF is averaged over azimuth; the time includes the grids.",
+                t, s
+            ),
+        },
         p.wall_s,
         p.cpu_s.map_or_else(|| "—".to_owned(), |c| format!("{c:.2} s")),
         error,

@@ -79,15 +79,7 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
     let dir = std::env::temp_dir().join(format!("asnr-sfr-baseline-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a temporary folder");
     let npy = dir.join("edge.npy");
-    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({size}, {size}), }}");
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend((header.len() as u16).to_le_bytes());
-    bytes.extend(header.as_bytes());
-    bytes.extend(image.iter().flat_map(|v| v.to_le_bytes()));
+    let bytes = scene::npy::npy_f64(&[size, size], &image).expect("the image fills its shape");
     std::fs::File::create(&npy).and_then(|mut f| f.write_all(&bytes)).expect("the .npy is written");
     let output = match std::process::Command::new(python)
         .arg(tools.root.join("xtask/baselines/numpy_sfr.py"))
