@@ -182,6 +182,62 @@ impl RadialProfile {
         }
     }
 
+    /// Whether [`value8`](Self::value8) reads the profile (every kind but a table, and a table
+    /// read through the map).
+    fn vectorizes(&self) -> bool {
+        match &self.kind {
+            Kind::Table(_) => false,
+            Kind::Mapped { inner, .. } => inner.as_ref().is_none_or(|p| p.vectorizes()),
+            _ => true,
+        }
+    }
+
+    /// [`value`](Self::value) at eight points at once (`wide::f64x8`), by the same operations
+    /// in the same order on each lane, so each lane is the scalar value to the last bit; a
+    /// table (see [`vectorizes`](Self::vectorizes)) lane by lane.
+    #[inline]
+    fn value8(&self, q: wide::f64x8) -> wide::f64x8 {
+        use wide::f64x8;
+        match &self.kind {
+            Kind::Even(c) => c.iter().rev().fold(f64x8::ZERO, |acc, &ci| acc * q + f64x8::splat(ci)),
+            Kind::Sphere { r2, z } => {
+                let (r2, z) = (f64x8::splat(*r2), f64x8::splat(*z));
+                r2 * q / ((z * z + r2 * q).sqrt() + z)
+            }
+            Kind::Table(_) => f64x8::new(q.to_array().map(|qi| self.value(qi))),
+            Kind::Mapped { inner, e2, obliquity } => {
+                let e2 = f64x8::splat(*e2);
+                let c2 = f64x8::ONE - q * e2;
+                let v = inner.as_ref().map_or(f64x8::ONE, |p| p.value8(q * (f64x8::ONE - e2) / c2));
+                if *obliquity { v / c2 } else { v }
+            }
+        }
+    }
+
+    /// `value(q₁) value(q₂)` on eight lanes ([`value8`](Self::value8)); in direction cosines
+    /// (`c² = 1 − qE`) with one division a lane, not four: `r = 1/(c₁² c₂²)`, the lens-plane
+    /// `q_r = q (1 − E)/c²` of each point as `q (1 − E) c̄² r` with `c̄²` the other point's (a few
+    /// units in the last place from the scalar reading).
+    #[inline]
+    fn product8(&self, q1: wide::f64x8, q2: wide::f64x8) -> wide::f64x8 {
+        use wide::f64x8;
+        match &self.kind {
+            Kind::Mapped { inner, e2, obliquity: true } => {
+                let e2 = f64x8::splat(*e2);
+                let (c1, c2) = (f64x8::ONE - q1 * e2, f64x8::ONE - q2 * e2);
+                let r = f64x8::ONE / (c1 * c2);
+                match inner {
+                    None => r,
+                    Some(p) => {
+                        let scale = (f64x8::ONE - e2) * r;
+                        p.value8(q1 * c2 * scale) * p.value8(q2 * c1 * scale) * r
+                    }
+                }
+            }
+            _ => self.value8(q1) * self.value8(q2),
+        }
+    }
+
     /// The profile at the bound samples and as a Chebyshev series ([`Sampled`]), computed once.
     fn sampled(&self) -> &Sampled {
         self.sampled.0.get_or_init(|| {
@@ -748,8 +804,12 @@ pub struct RadialOrder {
     /// shift apart can change (module docs)
     slope: f64,
     oscillation: Vec<f64>,
-    /// extra phase-equivalent (radians) for an amplitude table's knots
+    /// extra phase-equivalent (radians) for the amplitude: a table's knots, or the change of
+    /// `ln A` across the rule for a smooth amplitude kept from zero
     amplitude_turns: f64,
+    /// the part of it from the terms of `ln A` of degree 2 and up in `q` (what puts `v⁴` and
+    /// beyond across v: the short rules' second model)
+    amplitude_higher: f64,
     /// the phase beyond the defocus, `k (W(q) − W020 q)` (radians), as a Chebyshev series in
     /// `x = 2q − 1`, where one of at most [`PROXY_MAX_DEGREE`] holds it to
     /// [`PROXY_PHASE_ERROR`] (evaluated by Clenshaw's recurrence instead of the profile's own
@@ -1028,11 +1088,24 @@ impl RadialOrder {
             lo.truncate(n);
             width *= 2;
         }
-        let amplitude_turns = pupil.amplitude.as_ref().map_or(0.0, |a| {
-            // an amplitude table: about one radian of "turn" a knot interval, beside its own slope
-            let (d1, _) = a.summary().bounds;
+        let (amplitude_turns, amplitude_higher) = pupil.amplitude.as_ref().map_or((0.0, 0.0), |a| {
+            let (d1, d2) = a.summary().bounds;
             let scale = a.mean_square().sqrt().max(f64::MIN_POSITIVE);
-            0.25 * a.knots() as f64 + 4.0 * d1 / scale
+            let low = a.sampled().values.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
+            if a.knots() == 0 && low >= 0.1 * scale {
+                // a smooth amplitude kept from zero (a polynomial, the obliquity 1/c² of a pupil
+                // in direction cosines): the product A(q₁)A(q₂) is exp(ln A(q₁) + ln A(q₂)), a
+                // real exponent the rules integrate as they do a phase of the same size. Across
+                // v it changes by at most 2 max|(ln A)′| (q₁ and q₂ each move by at most 1), of
+                // which the curvature of ln A (v⁴ and up) by at most max|(ln A)″|
+                let slope = d1 / low;
+                (2.0 * slope, d2 / low + slope * slope)
+            } else {
+                // a table, or an amplitude near zero: about one radian of "turn" a knot
+                // interval, beside its own slope
+                let turns = 0.25 * a.knots() as f64 + 4.0 * d1 / scale;
+                (turns, turns)
+            }
         });
         let k = std::f64::consts::TAU / wavelength_m;
         // the exact evaluation's rounding: a few units in the last place of its largest term
@@ -1049,7 +1122,7 @@ impl RadialOrder {
             Some(parts) => Some(Proxy::new(parts.series.iter().map(|c| k * c).collect(), k * parts.error + rounding)),
             None => phase_proxy(&|q| k * pupil.opd_beyond_defocus_m(q), rounding),
         };
-        RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, proxy }
+        RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, amplitude_higher, proxy }
     }
 
     /// The oscillation of `W'` (m) over windows of width `delta` in `q` (the next dyadic window).
@@ -1135,7 +1208,7 @@ impl RadialOrder {
         };
         // the part of the v phase from the terms of degree 3 and up (v⁴ and beyond), and an
         // amplitude table's turns
-        let higher = (k * osc).min(beyond(3)) + self.amplitude_turns;
+        let higher = (k * osc).min(beyond(3)) + self.amplitude_higher;
         let v_rule = small_rule(phase_v, higher, accuracy, &beyond);
         let v_panels = if v_rule.is_some() { 1 } else { (phase_v / theta).ceil().max(1.0) as usize };
         let rule16 = crate::quad::rule();
@@ -1284,13 +1357,23 @@ impl RadialOrder {
 
     /// The field amplitudes at every lane into `weight` (`q₁` in the first half of `q`, `q₂` in
     /// the second, `weight` as long as a half), where the pupil has an amplitude profile.
+    ///
+    ///
+    /// A profile [`RadialProfile::product8`] reads (a polynomial, a sphere, the obliquity
+    /// `1/c²` of a pupil in direction cosines and any of those read through that map) is read
+    /// eight lanes at a time, to within a few units in the last place of the scalar
+    /// [`RadialProfile::value`]; a table lane by lane.
     fn amplitudes(&self, q: &[f64], weight: &mut [f64]) {
-        let pupil = &*self.pupil;
-        if pupil.amplitude.is_some() {
-            let half = weight.len();
-            for (i, w) in weight.iter_mut().enumerate() {
-                *w *= pupil.amplitude(q[i]) * pupil.amplitude(q[half + i]);
-            }
+        let Some(amplitude) = &self.pupil.amplitude else { return };
+        let half = weight.len();
+        let (q1, q2) = q.split_at(half);
+        let n = if amplitude.vectorizes() { half / 8 * 8 } else { 0 };
+        for i in (0..n).step_by(8) {
+            let w = amplitude.product8(load8(q1, i), load8(q2, i)) * load8(weight, i);
+            weight[i..i + 8].copy_from_slice(&w.to_array());
+        }
+        for i in n..half {
+            weight[i] *= amplitude.value(q1[i]) * amplitude.value(q2[i]);
         }
     }
 
@@ -1402,6 +1485,50 @@ mod tests {
         for i in 0..300 {
             let r = 0.8 * i as f64 / 300.0;
             assert!((s.value(r) - f(r)).abs() < 2e-6, "r = {r}: {} vs {}", s.value(r), f(r));
+        }
+    }
+
+    /// The eight-lane reading of a profile ([`RadialProfile::value8`], the amplitudes' fast
+    /// path) is the scalar reading to the last bit, for every kind it takes (a polynomial, a
+    /// sphere, the obliquity `1/c²` and a polynomial through the direction-cosine map) and for
+    /// a table (lane by lane), at points over the whole pupil.
+    #[test]
+    fn eight_lanes_read_as_one() {
+        let map = DirectionCosines::new(0.7).unwrap();
+        let poly = RadialProfile::even_polynomial(vec![0.9, -0.31, 0.17, -0.05, 0.013]).unwrap();
+        let x: Vec<f64> = (0..=12).map(|i| i as f64 / 12.0).collect();
+        let table = RadialProfile::table(x.clone(), x.iter().map(|r| 1.0 - 0.4 * r * r).collect()).unwrap();
+        let profiles = [
+            poly.clone(),
+            RadialProfile::reference_sphere(0.672e-3, 3.36e-3).unwrap(),
+            (*map.obliquity).clone(),
+            (*map.mapped(&Arc::new(poly), true)).clone(),
+            map.profile(RadialProfile::reference_sphere(1e-3, 2e-3).unwrap()),
+            table.clone(),
+            (*map.mapped(&Arc::new(table), true)).clone(),
+        ];
+        for (k, p) in profiles.iter().enumerate() {
+            for start in 0..40 {
+                let q: [f64; 8] = std::array::from_fn(|i| ((start * 8 + i) as f64 / 319.0).min(1.0));
+                let lanes = p.value8(wide::f64x8::new(q)).to_array();
+                for (qi, got) in q.iter().zip(lanes) {
+                    assert_eq!(got.to_bits(), p.value(*qi).to_bits(), "profile {k} at q = {qi}");
+                }
+            }
+        }
+        assert!(!profiles[5].vectorizes() && !profiles[6].vectorizes() && profiles[3].vectorizes());
+        // the product of two points' values, one division a lane in direction cosines
+        for (k, p) in profiles.iter().enumerate() {
+            for start in 0..40 {
+                let q1: [f64; 8] = std::array::from_fn(|i| ((start * 8 + i) as f64 / 319.0).min(1.0));
+                let q2: [f64; 8] = std::array::from_fn(|i| 1.0 - q1[i] * q1[i]);
+                let lanes = p.product8(wide::f64x8::new(q1), wide::f64x8::new(q2)).to_array();
+                for i in 0..8 {
+                    let want = p.value(q1[i]) * p.value(q2[i]);
+                    let error = (lanes[i] - want).abs() / want.abs().max(f64::MIN_POSITIVE);
+                    assert!(error < 8.0 * f64::EPSILON, "profile {k} at {}, {}: {}", q1[i], q2[i], error);
+                }
+            }
         }
     }
 
