@@ -33,6 +33,27 @@ pub enum MapAperture {
     Square,
 }
 
+/// The reference sphere's path `√(x² + y² + z²) − z` (m) at `(x, y)` metres, `z` the focal
+/// distance (written so that it keeps its digits near the axis).
+fn sphere_path(x: f64, y: f64, z: f64) -> f64 {
+    let r2 = x * x + y * y;
+    r2 / ((r2 + z * z).sqrt() + z)
+}
+
+/// A map of `nx × ny` cells of `pitch_m` must reach the aperture's bounding square: its shorter
+/// half extent (`name` in the error) at least the aperture radius.
+fn covers(name: &'static str, nx: usize, ny: usize, pitch_m: f64, radius_m: f64) -> Result<(), Error> {
+    let short = 0.5 * nx.min(ny) as f64 * pitch_m;
+    if short < radius_m * (1.0 - 1e-12) {
+        return Err(Error::InvalidParameter {
+            name,
+            value: short,
+            expected: "at least the aperture radius (the map must cover the aperture)",
+        });
+    }
+    Ok(())
+}
+
 impl MapAperture {
     /// Its area over the circle's `π R²`: 1, or `4/π` for the square.
     pub fn area_fraction(self) -> f64 {
@@ -147,15 +168,7 @@ impl PhaseMap {
             return Err(bad("design wavelength", design_wavelength_m, "a finite wavelength > 0 m"));
         }
         // the map's half extent must reach the aperture's bounding square
-        let half = [0.5 * nx as f64 * pitch_m, 0.5 * ny as f64 * pitch_m];
-        let short = half[0].min(half[1]);
-        if short < radius_m * (1.0 - 1e-12) {
-            return Err(bad(
-                "phase map half width",
-                short,
-                "at least the aperture radius (the map must cover the aperture)",
-            ));
-        }
+        covers("phase map half width", nx, ny, pitch_m, radius_m)?;
         let mut map = PhaseMap {
             nx,
             ny,
@@ -228,8 +241,7 @@ impl PhaseMap {
 
     /// The reference sphere's path `√(x² + y² + z²) − z` (m) at `(x, y)` metres.
     fn sphere(&self, x: f64, y: f64) -> f64 {
-        let r2 = x * x + y * y;
-        r2 / ((r2 + self.distance * self.distance).sqrt() + self.distance)
+        sphere_path(x, y, self.distance)
     }
 
     /// The largest step of the reference sphere's phase `k0 S` between neighbouring cells inside
@@ -440,14 +452,7 @@ impl SiteMap {
         if let Some(v) = geometric.and_then(|g| g.iter().find(|v| !v.is_finite())) {
             return Err(bad("geometric phase", *v, "finite radians"));
         }
-        let short = 0.5 * nx.min(ny) as f64 * pitch_m;
-        if short < radius_m * (1.0 - 1e-12) {
-            return Err(bad(
-                "site map half width",
-                short,
-                "at least the aperture radius (the map must cover the aperture)",
-            ));
-        }
+        covers("site map half width", nx, ny, pitch_m, radius_m)?;
         let mut map = SiteMap {
             nx,
             ny,
@@ -540,8 +545,7 @@ impl SiteMap {
 
     /// The reference sphere's path `√(x² + y² + z²) − z` (m) at `(x, y)` metres.
     fn sphere(&self, x: f64, y: f64) -> f64 {
-        let r2 = x * x + y * y;
-        r2 / ((r2 + self.distance * self.distance).sqrt() + self.distance)
+        sphere_path(x, y, self.distance)
     }
 
     /// `(Σ |t_c|² S_c, Σ |t_c|²)` over the cells whose centre is in the aperture at
