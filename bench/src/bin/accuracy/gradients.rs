@@ -35,8 +35,8 @@ fn coefficients(k: usize) -> String {
 
 /// The median of `repeats` timings of `f`, seconds.
 fn median_seconds(repeats: usize, mut f: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..repeats).map(|_| seconds(&mut f)).collect();
-    median(&mut times)
+    let times: Vec<f64> = (0..repeats).map(|_| seconds(&mut f)).collect();
+    crate::median(times)
 }
 
 /// One run of `f`, seconds.
@@ -44,11 +44,6 @@ fn seconds(f: &mut impl FnMut()) -> f64 {
     let start = Instant::now();
     f();
     start.elapsed().as_secs_f64()
-}
-
-fn median(times: &mut [f64]) -> f64 {
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
 }
 
 /// One row: K, the value's time, the value and gradient's time (s).
@@ -83,8 +78,9 @@ fn measure(root: &Path, k: usize, repeats: usize) -> Option<Row> {
             std::hint::black_box(metric::gradient(&built, &parameters).unwrap());
         }));
     }
-    let (value, both) = (median(&mut values), median(&mut boths));
-    let (value_min, both_min) = (values[0], boths[0]);
+    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let (value_min, both_min) = (least(&values), least(&boths));
+    let (value, both) = (crate::median(values), crate::median(boths));
     let norm = first.asnr.iter().map(|g| g * g).sum::<f64>().sqrt();
     Some(Row { k, value, both, value_min, both_min, asnr: first.evaluation.asnr, norm })
 }

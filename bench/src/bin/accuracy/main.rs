@@ -58,6 +58,7 @@ mod targets;
 mod tolerance;
 
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -584,7 +585,7 @@ fn binary2_process(
 }
 
 /// `/proc/loadavg`'s 1, 5 and 15 minute averages, or "unknown".
-fn load_average() -> String {
+pub(crate) fn load_average() -> String {
     std::fs::read_to_string(Path::new("/proc/loadavg"))
         .ok()
         .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
@@ -593,4 +594,23 @@ fn load_average() -> String {
 
 fn max(values: &[usize]) -> usize {
     values.iter().copied().max().unwrap_or(1)
+}
+
+/// The CPU time (user + system) of this process's waited-for children so far, s: fields 16 and
+/// 17 (`cutime`, `cstime`) of `/proc/self/stat` in clock ticks, over `getconf CLK_TCK`. None
+/// where either is not there.
+pub(crate) fn children_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // the fields after the command name in parentheses start at field 3
+    let fields: Vec<&str> = stat[stat.rfind(')')? + 1..].split_whitespace().collect();
+    let ticks = fields.get(13)?.parse::<f64>().ok()? + fields.get(14)?.parse::<f64>().ok()?;
+    let output = Command::new("getconf").arg("CLK_TCK").output().ok()?;
+    let per_second: f64 = String::from_utf8_lossy(&output.stdout).trim().parse().ok()?;
+    (per_second > 0.0).then(|| ticks / per_second)
+}
+
+/// The median of `v` (the upper one of an even count); `v` is not empty.
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }

@@ -29,26 +29,13 @@ pub(crate) struct Map {
     pub python: Option<(f64, f64)>,
 }
 
-/// CPU seconds (user + system) used by this process's waited-for children so far: fields 16 and
-/// 17 of /proc/self/stat, in clock ticks of 1/100 s (Linux's USER_HZ).
-fn children_cpu() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest: Vec<&str> = s.rsplit_once(')')?.1.split_whitespace().collect();
-            let ticks = |i: usize| rest.get(i).and_then(|v| v.parse::<f64>().ok());
-            Some((ticks(13)? + ticks(14)?) / 100.0)
-        })
-        .unwrap_or(0.0)
-}
-
 /// One run: wall seconds, CPU seconds, (mean MTF, ASNR) per point in the CSV's order.
 pub(crate) fn run(asnr: &Path, extra: &[&str]) -> (f64, f64, Vec<(f64, f64)>) {
-    let cpu = children_cpu();
+    let cpu = crate::children_cpu_s().unwrap_or(0.0);
     let started = Instant::now();
     let output = Command::new(asnr).args(ARGS).args(extra).output().expect("asnr runs");
     let wall = started.elapsed().as_secs_f64();
-    let cpu = children_cpu() - cpu;
+    let cpu = crate::children_cpu_s().unwrap_or(0.0) - cpu;
     assert!(output.status.success(), "asnr sweep failed: {}", String::from_utf8_lossy(&output.stderr));
     let text = String::from_utf8(output.stdout).unwrap();
     let mut lines = text.lines();
@@ -63,11 +50,6 @@ pub(crate) fn run(asnr: &Path, extra: &[&str]) -> (f64, f64, Vec<(f64, f64)>) {
         })
         .collect();
     (wall, cpu, points)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// Times `runs` sweeps at the default tolerance and one at 1e-12 with the release binary `asnr`.
@@ -92,9 +74,9 @@ pub(crate) fn measure(asnr: &Path, runs: usize) -> Map {
         "  at 1e-12: {reference_wall_s:.2} s; largest error: ASNR {asnr_error:.1e}, mean MTF {mean_mtf_error:.1e}"
     );
     Map {
-        wall_s: median(walls),
+        wall_s: crate::median(walls),
         runs,
-        cpu_s: median(cpus),
+        cpu_s: crate::median(cpus),
         points: points.len(),
         asnr_error,
         mean_mtf_error,

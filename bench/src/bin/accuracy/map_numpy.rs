@@ -12,30 +12,6 @@ use std::time::Instant;
 /// The section's heading.
 pub(crate) const TITLE: &str = "The map per point, against numpy";
 
-/// CPU seconds (user + system) used by this process's waited-for children so far (fields 16 and
-/// 17 of `/proc/self/stat`, in ticks of 1/100 s, Linux's USER_HZ); 0 where it is not readable.
-fn children_cpu() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest: Vec<&str> = s.rsplit_once(')')?.1.split_whitespace().collect();
-            let ticks = |i: usize| rest.get(i).and_then(|v| v.parse::<f64>().ok());
-            Some((ticks(13)? + ticks(14)?) / 100.0)
-        })
-        .unwrap_or(0.0)
-}
-
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .map_or_else(|| "unknown".to_owned(), |s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// The numpy script's run: whole-process wall and CPU seconds, its own timing of the map (after
 /// numpy's import), and its mean MTF per point in the sweep's order.
 struct Numpy {
@@ -49,11 +25,11 @@ struct Numpy {
 fn run_numpy(python: &Path, root: &Path) -> Option<Numpy> {
     let script = root.join("xtask").join("baselines").join("numpy_map.py");
     eprintln!("map (numpy): {} {}", python.display(), script.display());
-    let cpu = children_cpu();
+    let cpu = crate::children_cpu_s().unwrap_or(0.0);
     let started = Instant::now();
     let output = Command::new(python).arg(&script).output().ok()?;
     let wall_s = started.elapsed().as_secs_f64();
-    let cpu_s = children_cpu() - cpu;
+    let cpu_s = crate::children_cpu_s().unwrap_or(0.0) - cpu;
     if !output.status.success() {
         eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
         return None;
@@ -84,7 +60,7 @@ fn paper_point(root: &Path, repeats: usize) -> Option<(f64, f64, usize, usize, f
         })
         .collect();
     let n = &first.numerics;
-    Some((median(times), first.mean_mtf, n.closed_form_evaluations, n.otf_evaluations, reference))
+    Some((crate::median(times), first.mean_mtf, n.closed_form_evaluations, n.otf_evaluations, reference))
 }
 
 /// The section's markdown (None without the release `asnr`).
@@ -94,7 +70,7 @@ pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
         return None;
     };
     let runs = if tools.quick { 1 } else { 3 };
-    let load_before = load_average();
+    let load_before = crate::load_average();
     eprintln!("map: {} {}", asnr.display(), crate::map::ARGS.join(" "));
     let (mut walls, mut cpus, mut points) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..runs {
@@ -108,10 +84,10 @@ pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
     let relative = |a: f64, b: f64| if b == 0.0 { a.abs() } else { (a - b).abs() / b.abs() };
     let ours_error = points.iter().zip(&reference).map(|(p, r)| relative(p.0, r.0)).fold(0.0, f64::max);
     let n = points.len() as f64;
-    let (wall, cpu) = (median(walls), median(cpus));
+    let (wall, cpu) = (crate::median(walls), crate::median(cpus));
     let numpy = tools.python.as_deref().and_then(|py| run_numpy(py, &tools.root));
     let paper = paper_point(&tools.root, if tools.quick { 51 } else { 501 });
-    let load_after = load_average();
+    let load_after = crate::load_average();
 
     let profile = if cfg!(debug_assertions) { "dev profile" } else { "release" };
     let mut md = format!("## {TITLE}\n\n");

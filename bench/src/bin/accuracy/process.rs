@@ -31,11 +31,6 @@ pub(crate) struct ProcessBench {
     pub numpy_setting: String,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// `command` run from the workspace `root` as a whole process: its standard output and wall
 /// time, s; None (and its standard error on ours) when it fails.
 pub(crate) fn timed(command: &mut Command, root: &Path) -> Option<(String, f64)> {
@@ -83,8 +78,8 @@ pub(crate) fn measure(asnr: &Path, python: &Path, root: &Path, rows: &[Row], ref
         numpy_mean = text.lines().find_map(|l| l.strip_prefix("mean_mtf="))?.parse().ok()?;
     }
     let b = ProcessBench {
-        ours_s: median(ours),
-        numpy_s: median(theirs),
+        ours_s: crate::median(ours),
+        numpy_s: crate::median(theirs),
         runs: RUNS,
         ours_error: (our_mean - reference).abs() / reference,
         numpy_error: (numpy_mean - reference).abs() / reference,

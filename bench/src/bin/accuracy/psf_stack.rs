@@ -48,19 +48,6 @@ fn json_field(text: &str, name: &str) -> Option<f64> {
     text[at..].split([',', '}']).next()?.trim().parse().ok()
 }
 
-/// The CPU time (user + system) of this process's waited-for children so far, s: fields 16 and
-/// 17 (`cutime`, `cstime`) of `/proc/self/stat` in clock ticks, over `getconf CLK_TCK`. None
-/// where either is not there.
-fn children_cpu_s() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // the fields after the command name in parentheses start at field 3
-    let fields: Vec<&str> = stat[stat.rfind(')')? + 1..].split_whitespace().collect();
-    let ticks = fields.get(13)?.parse::<f64>().ok()? + fields.get(14)?.parse::<f64>().ok()?;
-    let output = Command::new("getconf").arg("CLK_TCK").output().ok()?;
-    let per_second: f64 = String::from_utf8_lossy(&output.stdout).trim().parse().ok()?;
-    (per_second > 0.0).then(|| ticks / per_second)
-}
-
 /// Exports the stack under the temporary folder, then times `runs` evaluations of it; `root` is
 /// the workspace (for examples/paper-theory.toml). None (and a note on stderr) when a step fails.
 pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench> {
@@ -93,11 +80,11 @@ pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench>
     let mut mean_mtf = 0.0;
     let mut cuts = None;
     for _ in 0..runs {
-        let cpu_before = children_cpu_s();
+        let cpu_before = crate::children_cpu_s();
         let started = Instant::now();
         let text = run(&["evaluate", scene.to_str()?, "--json"])?;
         walls.push(started.elapsed().as_secs_f64());
-        let cpu = cpu_before.zip(children_cpu_s()).map(|(before, after)| after - before);
+        let cpu = cpu_before.zip(crate::children_cpu_s()).map(|(before, after)| after - before);
         cpus.extend(cpu);
         mean_mtf = json_field(&text, "mean_mtf")?;
         cuts = json_field(&text, "mean_mtf_tangential").zip(json_field(&text, "mean_mtf_sagittal"));

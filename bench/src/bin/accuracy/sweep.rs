@@ -47,11 +47,6 @@ pub(crate) struct SweepBench {
     pub harmonic_repeats: usize,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn value(text: &str, key: &str) -> Option<String> {
     text.lines().find_map(|l| l.strip_prefix(key).and_then(|v| v.strip_prefix('=')).map(str::to_owned))
 }
@@ -133,8 +128,8 @@ pub(crate) fn measure(asnr: &Path, python: Option<&Path>, root: &Path, runs: usi
     let reference = crate::design::json_field(&reference, "mean_mtf")?;
     let numpy_first: f64 = value(&numpy_text, "first_mean_mtf")?.parse().ok()?;
     Some(SweepBench {
-        ours_s: median(ours),
-        numpy_s: median(theirs),
+        ours_s: crate::median(ours),
+        numpy_s: crate::median(theirs),
         runs: runs.max(1),
         ours_error: (our_first? - reference).abs() / reference,
         numpy_error: (numpy_first - reference).abs() / reference,
