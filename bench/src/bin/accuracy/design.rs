@@ -5,7 +5,6 @@
 
 use std::path::Path;
 use std::process::Command;
-use std::time::Instant;
 
 /// The README's search, after the binary (run from the workspace root).
 pub(crate) const SEARCH: [&str; 13] = [
@@ -59,15 +58,9 @@ pub(crate) fn json_field(text: &str, name: &str) -> Option<f64> {
 pub(crate) fn measure(asnr: &Path, root: &Path) -> Option<DesignBench> {
     let run = |args: &[&str]| -> Option<(String, f64)> {
         eprintln!("design: {} {}", asnr.display(), args.join(" "));
-        let started = Instant::now();
-        let output = Command::new(asnr).args(args).current_dir(root).output().ok()?;
-        let wall = started.elapsed().as_secs_f64();
-        if !output.status.success() {
-            eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
-            return None;
-        }
+        let (stdout, wall) = crate::process::timed(Command::new(asnr).args(args), root)?;
         eprintln!("  {wall:.2} s wall");
-        Some((String::from_utf8_lossy(&output.stdout).into_owned(), wall))
+        Some((stdout, wall))
     };
     let (search, search_s) = run(&SEARCH)?;
     let (tolerance, tolerance_s) = run(&TOLERANCE)?;

@@ -7,7 +7,6 @@
 
 use std::path::Path;
 use std::process::Command;
-use std::time::Instant;
 
 use serde_json::Value;
 
@@ -34,15 +33,9 @@ pub(crate) fn free_terms() -> Vec<String> {
 /// One run of the release binary from the workspace root: its JSON and wall time.
 fn run(asnr: &Path, root: &Path, args: &[String]) -> Option<(Value, f64)> {
     eprintln!("  freeform: asnr {}", args.join(" "));
-    let started = Instant::now();
-    let output = Command::new(asnr).args(args).current_dir(root).output().ok()?;
-    let wall = started.elapsed().as_secs_f64();
-    if !output.status.success() {
-        eprintln!("  failed: {}", String::from_utf8_lossy(&output.stderr));
-        return None;
-    }
+    let (stdout, wall) = crate::process::timed(Command::new(asnr).args(args), root)?;
     eprintln!("  {wall:.2} s wall");
-    Some((serde_json::from_slice(&output.stdout).ok()?, wall))
+    Some((serde_json::from_str(&stdout).ok()?, wall))
 }
 
 fn strings(words: &[&str]) -> Vec<String> {
