@@ -33,6 +33,40 @@ pub enum MapAperture {
     Square,
 }
 
+/// Weighted least-squares fits `c ρ²` (with a constant) of a phase `p` and of the sphere's path `s`
+/// against `q = ρ²`: the sums the phase map's and the site map's fits accumulate cell by cell.
+#[derive(Default)]
+struct RhoSquaredFit {
+    sw: f64,
+    sq: f64,
+    sqq: f64,
+    sp: f64,
+    sqp: f64,
+    ss: f64,
+    sqs: f64,
+}
+
+impl RhoSquaredFit {
+    /// One cell of weight `w` at `q = ρ²` with phase `p` and sphere path `s`.
+    fn add(&mut self, w: f64, q: f64, p: f64, s: f64) {
+        self.sw += w;
+        self.sq += w * q;
+        self.sqq += w * q * q;
+        self.sp += w * p;
+        self.sqp += w * q * p;
+        self.ss += w * s;
+        self.sqs += w * q * s;
+    }
+
+    /// The slopes `(c_p, c_s)`; `(0, 0)` where the cells do not determine them.
+    fn solve(&self) -> (f64, f64) {
+        let var = self.sqq * self.sw - self.sq * self.sq;
+        if var.is_nan() || var <= 0.0 {
+            return (0.0, 0.0);
+        }
+        ((self.sqp * self.sw - self.sq * self.sp) / var, (self.sqs * self.sw - self.sq * self.ss) / var)
+    }
+}
 /// The reference sphere's path `√(x² + y² + z²) − z` (m) at `(x, y)` metres, `z` the focal
 /// distance (written so that it keeps its digits near the axis).
 fn sphere_path(x: f64, y: f64, z: f64) -> f64 {
@@ -293,7 +327,7 @@ impl PhaseMap {
 
     /// Least-squares `c ρ²` fits of the stored phase and of the sphere over the aperture's cells.
     fn fit(&self) -> (f64, f64) {
-        let (mut sw, mut sq, mut sqq, mut sp, mut sqp, mut ss, mut sqs) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut fit = RhoSquaredFit::default();
         for j in 0..self.ny {
             for i in 0..self.nx {
                 let [x, y] = self.centre(i, j);
@@ -303,20 +337,10 @@ impl PhaseMap {
                 let w = self.amplitude.as_ref().map_or(1.0, |a| a[j * self.nx + i].powi(2));
                 let q = (x * x + y * y) / (self.radius * self.radius);
                 let (p, s) = (self.phase[j * self.nx + i], self.sphere(x, y));
-                sw += w;
-                sq += w * q;
-                sqq += w * q * q;
-                sp += w * p;
-                sqp += w * q * p;
-                ss += w * s;
-                sqs += w * q * s;
+                fit.add(w, q, p, s);
             }
         }
-        let var = sqq * sw - sq * sq;
-        if var.is_nan() || var <= 0.0 {
-            return (0.0, 0.0);
-        }
-        ((sqp * sw - sq * sp) / var, (sqs * sw - sq * ss) / var)
+        fit.solve()
     }
 
     /// The design order's share of the light at λ0 on axis: `Σ a² sinc²(g_x p/λ) sinc²(g_y p/λ)
@@ -613,7 +637,7 @@ impl SiteMap {
     /// every `s`-th row and column so that at most [`FIT_CELLS`] are visited.
     fn fit(&self, t: &[Complex64]) -> (f64, f64) {
         let stride = ((self.nx * self.ny) as f64 / FIT_CELLS as f64).sqrt().ceil().max(1.0) as usize;
-        let (mut sw, mut sq, mut sqq, mut sp, mut sqp, mut ss, mut sqs) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut fit = RhoSquaredFit::default();
         for j in (0..self.ny).step_by(stride) {
             let Some((i0, i1)) = self.inside_columns(j) else { continue };
             let y = self.y(j);
@@ -625,20 +649,10 @@ impl SiteMap {
                 let x = self.x(i);
                 let q = (x * x + y * y) / (self.radius * self.radius);
                 let (p, s) = (f.arg(), self.sphere(x, y));
-                sw += w;
-                sq += w * q;
-                sqq += w * q * q;
-                sp += w * p;
-                sqp += w * q * p;
-                ss += w * s;
-                sqs += w * q * s;
+                fit.add(w, q, p, s);
             }
         }
-        let var = sqq * sw - sq * sq;
-        if var.is_nan() || var <= 0.0 {
-            return (0.0, 0.0);
-        }
-        ((sqp * sw - sq * sp) / var, (sqs * sw - sq * ss) / var)
+        fit.solve()
     }
 }
 
