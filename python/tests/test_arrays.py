@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import asnr
+from scenes import NOT_THE_LENS
 
-ROOT = Path(__file__).resolve().parents[2]
 
 #: A small geometric-phase metalens (F/2.5, f0 = 125 µm, R = 25 µm, λ0 = 800 nm: the OTF depends
 #: on ν λ F# only) on 0.5 µm cells, so that a map of 104 × 104 cells covers it and each
@@ -38,25 +38,7 @@ dispersion = "geometric-phase"
 efficiency = 0.15
 transmission = 0.55
 {lens_keys}
-
-[source]
-kind = "flat"
-radiance_w_m2_sr_nm = 0.025
-
-[spectrum]
-shape = "gaussian"
-center_nm = 800.0
-range_nm = 50.0
-peak = 1.0
-
-[camera]
-pixel_pitch_um = 5.2
-pixel_mtf = false
-quantum_efficiency = 0.2
-
-[exposure]
-time_ms = 1.23
-"""
+{NOT_THE_LENS}"""
 
 
 #: The same lens given by its Binary 2 phase (the hyperbolic profile's first term): the scene a

@@ -30,8 +30,8 @@ import numpy as np
 import pytest
 
 import asnr
+from scenes import NOT_THE_LENS, ROOT
 
-ROOT = Path(__file__).resolve().parents[2]
 LIBRARY = ROOT / "examples" / "data" / "library-tio2-like.csv"
 REQUIRED = {name.strip() for name in os.environ.get("ASNR_REQUIRE", "").split(",") if name.strip()}
 
@@ -140,25 +140,7 @@ focal_length_mm = {f0_nm * 1e-6}
 design_wavelength_nm = 800.0
 library = "{LIBRARY.as_posix()}"
 {lens_keys}
-
-[source]
-kind = "flat"
-radiance_w_m2_sr_nm = 0.025
-
-[spectrum]
-shape = "gaussian"
-center_nm = 800.0
-range_nm = 50.0
-peak = 1.0
-
-[camera]
-pixel_pitch_um = 5.2
-pixel_mtf = false
-quantum_efficiency = 0.2
-
-[exposure]
-time_ms = 1.23
-
+{NOT_THE_LENS}
 [options]
 pupil_samples = 256
 """
