@@ -497,25 +497,7 @@ impl LensModel for PsfStack {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// `(1/to) ∫_0^to f dν` by Simpson's rule on 2000 intervals (the tests' integrands are smooth).
-    fn simpson_mean(to: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
-        let intervals = 2000;
-        let h = to / intervals as f64;
-        let sum: f64 = (0..=intervals)
-            .map(|i| {
-                let w = if i == 0 || i == intervals {
-                    1.0
-                } else if i % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                w * f(i as f64 * h)
-            })
-            .sum();
-        sum * h / 3.0 / to
-    }
+    use optics::testkit::simpson_mean;
 
     const PITCH: f64 = 1e-6;
 

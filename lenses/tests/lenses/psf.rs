@@ -1,7 +1,7 @@
 //! The PSF-stack lens through the conformance check every lens model passes.
 
 use lenses::{Curve, PsfStack};
-use optics::testkit::check_lens;
+use optics::testkit::{check_lens, simpson_mean};
 
 use crate::band;
 
@@ -47,25 +47,6 @@ fn bessel_i0(x: f64) -> f64 {
         sum += term;
     }
     sum
-}
-
-/// `(1/to) ∫_0^to f dν` by Simpson's rule on 2000 intervals (smooth integrands).
-fn simpson_mean(to: f64, f: impl Fn(f64) -> f64) -> f64 {
-    let intervals = 2000;
-    let h = to / intervals as f64;
-    let sum: f64 = (0..=intervals)
-        .map(|i| {
-            let w = if i == 0 || i == intervals {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            w * f(i as f64 * h)
-        })
-        .sum();
-    sum * h / 3.0 / to
 }
 
 /// The engine's settings at a tolerance of 1e-7.
