@@ -285,6 +285,26 @@ fn check_wavefront(w: &Wavefront, which: &str) -> Result<(), String> {
     }
 }
 
+/// `(1/to) ∫_0^to f(ν) dν` by composite Simpson's rule on 2000 intervals: the plain, independent
+/// mean a test holds an engine's mean MTF against (its integrands are smooth on `[0, to]`).
+pub fn simpson_mean(to: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    const INTERVALS: u32 = 2000;
+    let h = to / f64::from(INTERVALS);
+    let sum: f64 = (0..=INTERVALS)
+        .map(|i| {
+            let w = if i == 0 || i == INTERVALS {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            w * f(f64::from(i) * h)
+        })
+        .sum();
+    sum * h / 3.0 / to
+}
+
 #[cfg(test)]
 mod tests {
     use std::f64::consts::TAU;
@@ -436,24 +456,4 @@ mod tests {
         });
         fails_with(&defocus, &["zone 1 of 1", "defocus_m = NaN"]);
     }
-}
-
-/// `(1/to) ∫_0^to f(ν) dν` by composite Simpson's rule on 2000 intervals: the plain, independent
-/// mean a test holds an engine's mean MTF against (its integrands are smooth on `[0, to]`).
-pub fn simpson_mean(to: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
-    const INTERVALS: u32 = 2000;
-    let h = to / f64::from(INTERVALS);
-    let sum: f64 = (0..=INTERVALS)
-        .map(|i| {
-            let w = if i == 0 || i == INTERVALS {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            w * f(f64::from(i) * h)
-        })
-        .sum();
-    sum * h / 3.0 / to
 }
