@@ -126,6 +126,7 @@ fn logarithmic(p: Parameter) -> bool {
             | Parameter::Binary2(_)
             | Parameter::PhaseSpline(_)
             | Parameter::Zernike(_)
+            | Parameter::ZernikeNoll(_)
             | Parameter::SpectrumCenter
             | Parameter::SpectrumRange
     )
@@ -279,6 +280,10 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     for (name, kind) in wavefront {
         let Some(index) = entry_of(key, name) else { continue };
         let i = index?;
+        if kind == 2 && lens_model != "phase" {
+            // any family's Zernike terms: on the FFT path (docs/physics.md, "Gradients: 2-D pupils")
+            return Ok(Parameter::ZernikeNoll(i + 1));
+        }
         if lens_model != "phase" {
             bail!(
                 "--wrt {key}: not differentiable here yet for lens.model = \"{lens_model}\"; supported for lens.model = \"phase\""
@@ -289,12 +294,8 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
             1 => Parameter::PhaseSpline(lanes.binary2 + i),
             _ => match metric::zernike_m0_place(i + 1) {
                 Ok(place) => Parameter::Zernike(lanes.binary2 + lanes.spline + place),
-                Err((n, m)) => bail!(
-                    "--wrt {key}: not differentiable here yet: Noll {} (n = {n}, m = {m}) is not rotationally symmetric, \
-                     so the OTF depends on direction; the gradient follows the m = 0 terms (Noll 1, 4, 11, 22, 37, …: \
-                     lens.zernike_noll_rms_um[0], [3], [10], [21], [36], …)",
-                    i + 1
-                ),
+                // m ≠ 0: the OTF depends on direction, the FFT path's gradient
+                Err(_) => Parameter::ZernikeNoll(i + 1),
             },
         });
     }
@@ -313,7 +314,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian spectrum), and lens.binary2[i], lens.phase_spline_rad[i] and the m = 0 terms of lens.zernike_noll_rms_um (lens.model = \"phase\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         spectrum.center_nm and spectrum.range_nm (a Gaussian spectrum), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), and lens.zernike_noll_rms_um[i] (every family that takes it); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -968,5 +969,49 @@ mod tests {
         assert_eq!(json["gradient"]["exposure.time_ms"].as_f64().unwrap(), g.d_asnr[0]);
         let text = table(&g);
         assert!(text.contains("exposure.time_ms") && text.contains("∂ln ASNR/∂ln key"), "{text}");
+    }
+
+    /// (ASNR, mean MTF) of an evaluation with `key = value` and `overrides` (no tolerance added).
+    fn evaluated(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 2] {
+        let mut set: Vec<String> =
+            overrides.iter().filter(|o| o.split_once('=').is_none_or(|(k, _)| k.trim() != key)).cloned().collect();
+        set.push(assignment(key, value));
+        let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
+        [e.asnr, e.mean_mtf]
+    }
+
+    #[test]
+    fn explore_fft_gradient() {
+        let source = scene::read(None).unwrap();
+        let overrides = owned(&[
+            "spectrum.range_nm=4",
+            "options.pupil_samples=64",
+            "lens.zernike_noll_rms_um=[0, 0, 0, 0.05, 0.1, 0.0, 0.05]",
+        ]);
+        for tol in ["1e-4", "1e-6", "1e-8"] {
+            let mut o = overrides.clone();
+            o.push(format!("options.tolerance={tol}"));
+            let k = "lens.zernike_noll_rms_um[3]";
+            let g = gradient(&source, &o, &owned(&[k])).unwrap();
+            for h in [1e-3, 1e-4, 1e-5] {
+                let up = evaluated(&source, &o, k, 0.05 + h);
+                let down = evaluated(&source, &o, k, 0.05 - h);
+                println!("tol {tol} h {h}: {:.9e} vs {:.9e}", (up[1] - down[1]) / (2.0 * h), g.d_mean_mtf[0]);
+            }
+        }
+        let keys = owned(&["lens.zernike_noll_rms_um"]);
+        let t = std::time::Instant::now();
+        let g = gradient(&source, &overrides, &keys).unwrap();
+        println!("gradient {:?} in {:?}", g.d_mean_mtf, t.elapsed());
+        for (k, &v) in g.keys.iter().zip(&g.values) {
+            let h = 1e-4;
+            let up = evaluated(&source, &overrides, k, v + h);
+            let down = evaluated(&source, &overrides, k, v - h);
+            println!(
+                "{k}: {:.9e} vs {:.9e}",
+                (up[1] - down[1]) / (2.0 * h),
+                g.d_mean_mtf[g.keys.iter().position(|x| x == k).unwrap()]
+            );
+        }
     }
 }
