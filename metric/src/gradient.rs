@@ -406,10 +406,11 @@ fn binary2_mean_mtf(scene: &Scene, p: Parameter, d_binary2: Option<Vec<f64>>) ->
     }
     d_binary2.ok_or_else(|| {
         not_smooth(
-            "the wavefront gradient (Binary 2 coefficients, spline knots, m = 0 Zernike terms) is computed on axis \
-             for a lens whose every order is a radially symmetric pupil on the radial engine (a band on the exact \
-             per-frequency engine, or a line); this scene's lens, spectrum or field is not (off axis the oblique \
-             wave's coma and astigmatism take the FFT path, whose derivative is not computed)",
+            "the wavefront gradient (Binary 2 coefficients, spline knots, m = 0 Zernike terms) is computed for a \
+             lens whose every order is a radial pupil: on axis on the radial engine (a band on the exact \
+             per-frequency engine, or a line), and on the FFT path of a band (off axis, or with Zernike terms of \
+             m ≠ 0); this scene's lens, spectrum or field is neither (a line spectrum's FFT grids, or an order \
+             through an iris, zones, a map or a table)",
         )
     })
 }
