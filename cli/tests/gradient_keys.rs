@@ -1,4 +1,4 @@
-//! `asnr gradient` over the freeform spline's knots and the `m = 0` Zernike terms: the keys are
+//! `asnr gradient` over the freeform spline's knots and the Zernike terms: the keys are
 //! accepted, and a bad spline (fewer than 3 knots, a NaN knot) is refused naming the key, with a
 //! non-zero exit and no panic.
 
@@ -47,14 +47,36 @@ fn a_bad_spline_is_refused_naming_the_key() {
         "lens.phase_spline_rad[0]",
     ]);
     assert!(e.contains("lens.phase_spline_rad[1]") && e.contains("finite"), "{e}");
-    // a Zernike term that is not rotationally symmetric is refused by name
+    // an m = 0 Zernike term of a family other than the phase lens, on a pupil that stays
+    // rotationally symmetric (the radial engine follows the phase lens's terms only), is refused
+    // by name with the reason
+    let paper = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml");
     let e = fails(&[
+        "gradient",
+        paper,
+        "--set",
+        "lens.zernike_noll_rms_um=[0, 0, 0, 0.02]",
+        "--wrt",
+        "lens.zernike_noll_rms_um[3]",
+    ]);
+    assert!(e.contains("Noll 4") && e.contains("radial engine"), "{e}");
+}
+
+/// A Zernike term that is not rotationally symmetric (Noll 5) has its gradient on the FFT path.
+#[test]
+fn a_term_with_m_not_zero_has_a_gradient() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml");
+    let g = json(&[
         "gradient",
         scene,
         "--set",
-        "lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.01]",
+        "lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.05]",
+        "--set",
+        "options.tolerance=1e-3",
         "--wrt",
         "lens.zernike_noll_rms_um[4]",
+        "--json",
     ]);
-    assert!(e.contains("--wrt lens.zernike_noll_rms_um[4]") && e.contains("m = 0 terms"), "{e}");
+    let d = g["mean_mtf_gradient"]["lens.zernike_noll_rms_um[4]"].as_f64().unwrap();
+    assert!(d.is_finite() && d < 0.0, "{g}");
 }

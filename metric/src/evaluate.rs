@@ -264,6 +264,35 @@ pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
 /// ([`Polychromatic::mean_mtf_and_binary2_gradient`]); `None` where that does not apply (off
 /// axis, a direction-dependent OTF, an engine other than the per-frequency exact one).
 pub(crate) fn evaluate_field_with(scene: &Scene, binary2: bool) -> Result<(Evaluation, Option<Vec<f64>>), Error> {
+    evaluate_field_differentiated(scene, binary2, &[]).map(|(e, d, _)| (e, d))
+}
+
+/// The wavefront derivatives of the mean MTF on the FFT path
+/// ([`evaluate_field_differentiated`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum GridGradient {
+    /// None asked.
+    NotAsked,
+    /// `∂M̄` along each direction asked, on the value's own FFT rules
+    /// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_gradient`]).
+    Computed(Vec<f64>),
+    /// The OTF is rotationally symmetric here (one order set of radial pupils on axis, on the
+    /// radial or exact engines): not computed on the grids.
+    Symmetric,
+    /// The OTF depends on direction but the engine gives no derivative (an order not a radial
+    /// pupil on the grids, a line spectrum's grids, a noise spectrum).
+    Unavailable,
+}
+
+/// [`evaluate_field_with`] and, for each of `grid` (wavefront directions), the mean MTF's
+/// derivative on the FFT path, in the same evaluation (the value's grids, rules and
+/// extrapolation; docs/physics.md, "Gradients: 2-D pupils").
+pub(crate) fn evaluate_field_differentiated(
+    scene: &Scene,
+    binary2: bool,
+    grid: &[optics::WavefrontDirection],
+) -> Result<(Evaluation, Option<Vec<f64>>, GridGradient), Error> {
+    let mut grid_gradient = if grid.is_empty() { GridGradient::NotAsked } else { GridGradient::Unavailable };
     let lens = scene.lens();
     let camera = scene.camera();
     let detected = detected_spectrum(scene);
@@ -395,7 +424,21 @@ pub(crate) fn evaluate_field_with(scene: &Scene, binary2: bool) -> Result<(Evalu
             Some(shape) => poly.mean_mtf_over_noise(shape, azimuth),
         };
         if poly.has_pupil_grid() {
-            let a = poly.mean_mtf_over_azimuth(along_field, noise);
+            let mut a = None;
+            if noise.is_none() && !grid.is_empty() {
+                match poly.mean_mtf_over_azimuth_and_gradient(along_field, grid) {
+                    Ok(Some((mean, gradient))) => {
+                        grid_gradient = GridGradient::Computed(gradient);
+                        a = Some(mean);
+                    }
+                    Ok(None) => {}
+                    Err(e) => return Err(Error::Optics(e)),
+                }
+            }
+            let a = match a {
+                Some(a) => a,
+                None => poly.mean_mtf_over_azimuth(along_field, noise),
+            };
             if a.change > optics::AZIMUTH_SHARE * poly.tolerance() * a.mean.abs() {
                 azimuth_warning = Some(format!(
                     "the mean MTF over azimuth is not converged at {} azimuths: its last doubling changed it by {:.2e} (relative), more than the {:.1e} allowed",
@@ -404,30 +447,33 @@ pub(crate) fn evaluate_field_with(scene: &Scene, binary2: bool) -> Result<(Evalu
                     optics::AZIMUTH_SHARE * poly.tolerance()
                 ));
             }
-            (a.mean, a.tangential, a.sagittal, a.work)
+            Ok((a.mean, a.tangential, a.sagittal, a.work))
         } else if poly.direction_dependent() {
             let (t, w1) = mean_along(along_field);
             let (s, w2) = mean_along(along_field + 0.5 * PI);
-            (0.5 * (t + s), t, s, add_work(w1, w2))
+            Ok((0.5 * (t + s), t, s, add_work(w1, w2)))
         } else {
+            if !grid.is_empty() && field.is_on_axis() {
+                grid_gradient = GridGradient::Symmetric;
+            }
             if noise.is_none()
                 && binary2
                 && let Some((m, gradient, work)) = poly.mean_mtf_and_binary2_gradient()
             {
                 binary2_gradient = Some(gradient);
-                return (m, m, m, work);
+                return Ok((m, m, m, work));
             }
             let (m, work) = mean_along(0.0);
-            (m, m, m, work)
+            Ok((m, m, m, work))
         }
     };
-    let (mean_mtf, mean_mtf_tangential, mean_mtf_sagittal, work) = directional(None);
+    let (mean_mtf, mean_mtf_tangential, mean_mtf_sagittal, work) = directional(None)?;
     // a non-white noise spectrum puts the SNR inside the integral (eq. 1 text): the mean of
     // MTF(ν)/n(ν), over azimuth or tangential and sagittal averaged as for the MTF
     let (weighted_mean, work) = match camera.noise_spectrum() {
         None => (mean_mtf, work),
         Some(shape) => {
-            let (m, _, _, w) = directional(Some(shape));
+            let (m, _, _, w) = directional(Some(shape))?;
             (m, add_work(work, w))
         }
     };
@@ -557,7 +603,7 @@ pub(crate) fn evaluate_field_with(scene: &Scene, binary2: bool) -> Result<(Evalu
         },
     };
     check_finite(&evaluation)?;
-    Ok((evaluation, binary2_gradient))
+    Ok((evaluation, binary2_gradient, grid_gradient))
 }
 
 /// The largest defocus, in waves at the mean wavelength, that [`evaluate`] integrates: far beyond

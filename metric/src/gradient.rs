@@ -11,7 +11,7 @@
 
 use noise::SnrPartials;
 
-use crate::evaluate::{Evaluation, evaluate_field_with, mtf_at};
+use crate::evaluate::{Evaluation, GridGradient, evaluate_field_differentiated, mtf_at};
 use crate::{Error, GlareMode, MetricForm, Scene};
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
@@ -56,6 +56,15 @@ pub enum Parameter {
     /// index is its lane among the lens's wavefront directions (after the Binary 2 coefficients
     /// and the spline's knots). `∂/∂c`, per µm; where `Binary2` applies.
     Zernike(usize),
+    /// The Zernike coefficient of Noll index `j` (`lens.zernike_noll_rms_um[j − 1]`, µm RMS) of
+    /// any lens family that takes Zernike terms, where the OTF is computed on the FFT path (a term
+    /// with `m ≠ 0`, or the `m = 0` terms of a pupil made 2-D by such a term or by an oblique
+    /// field): `∂W = 10⁻⁶ Z_j(x, y)` on every order, differentiated by forward mode through the
+    /// FFT (docs/physics.md, "Gradients: 2-D pupils"). `∂/∂c`, per µm. Where the OTF is
+    /// rotationally symmetric on axis (every `m ≠ 0` coefficient zero), a term with `m ≠ 0` has
+    /// derivative 0 by symmetry: the term and its negative are one pupil turned by `π/|m|`,
+    /// whose mean over azimuth is the same.
+    ZernikeNoll(usize),
     /// The centre `c` of the scene's Gaussian spectrum (`spectrum.center_nm`): `∂/∂c`, per m. It
     /// moves the photon count and the OTF's spectral weights (docs/physics.md, "Gradients").
     SpectrumCenter,
@@ -75,6 +84,15 @@ impl Parameter {
         }
     }
 
+    /// The direction a wavefront parameter moves the wavefront in, for the gradient on the FFT
+    /// path: a lane of the lens's wavefront directions, or a Zernike term by its Noll index.
+    pub fn grid_direction(self) -> Option<optics::WavefrontDirection> {
+        match self {
+            Parameter::ZernikeNoll(j) => Some(optics::WavefrontDirection::Zernike(j)),
+            p => p.lane().map(optics::WavefrontDirection::Lane),
+        }
+    }
+
     /// What the derivative is taken against, for messages and docs.
     pub fn describe(self) -> &'static str {
         match self {
@@ -89,6 +107,7 @@ impl Parameter {
             Parameter::Binary2(_) => "a Binary 2 coefficient of the lens's phase",
             Parameter::PhaseSpline(_) => "a knot of the lens's phase spline",
             Parameter::Zernike(_) => "an m = 0 Zernike coefficient of the lens",
+            Parameter::ZernikeNoll(_) => "a Zernike coefficient of the lens",
             Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
             Parameter::SpectrumRange => "the range of the Gaussian spectrum",
         }
@@ -132,10 +151,12 @@ pub struct Gradient {
 /// MTF or a noise spectrum, the conversion gain without an ADC.
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
     let binary2 = parameters.iter().any(|p| p.lane().is_some());
+    // the wavefront directions for the FFT path, one per wavefront parameter in their order
+    let grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
     if scene.fields().is_empty() {
-        // one pass: the evaluation and the Binary 2 derivatives of its mean MTF together
-        let (evaluation, d_binary2) = evaluate_field_with(scene, binary2)?;
-        let point = point_gradient(scene, &evaluation, parameters, d_binary2)?;
+        // one pass: the evaluation and the wavefront derivatives of its mean MTF together
+        let (evaluation, d_binary2, d_grid) = evaluate_field_differentiated(scene, binary2, &grid)?;
+        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid)?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -154,8 +175,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         PointGradient { asnr: zeros.clone(), mean_mtf: zeros.clone(), snr0: zeros.clone(), photoelectrons: zeros };
     for (&(field, _), w) in scene.fields().iter().zip(&relative) {
         let single = scene.single_field(field);
-        let (e, d_binary2) = evaluate_field_with(&single, binary2)?;
-        let point = point_gradient(&single, &e, parameters, d_binary2)?;
+        let (e, d_binary2, d_grid) = evaluate_field_differentiated(&single, binary2, &grid)?;
+        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid)?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -184,12 +205,14 @@ struct PointGradient {
 }
 
 /// The derivatives at one field point whose evaluation is `e`; `d_binary2` the mean MTF's
-/// Binary 2 derivatives computed with it, where they were.
+/// Binary 2 derivatives computed with it, where they were; `d_grid` the wavefront derivatives on
+/// the FFT path, one per wavefront parameter of `parameters` in their order.
 fn point_gradient(
     scene: &Scene,
     e: &Evaluation,
     parameters: &[Parameter],
     d_binary2: Option<Vec<f64>>,
+    d_grid: &GridGradient,
 ) -> Result<PointGradient, Error> {
     let camera = scene.camera();
     let sensor = camera.sensor();
@@ -215,10 +238,23 @@ fn point_gradient(
     };
     // the stray light B = max(N_T − N, 0) with glare included: its derivative where it is > 0
     let stray = matches!(scene.options().glare, GlareMode::Included) && background > 0.0;
+    // the radial engine's lanes, or the FFT path's derivatives (`d_grid`), whichever the
+    // evaluation computed
+    let on_grid = matches!(d_grid, GridGradient::Computed(_));
     let binary2 = match parameters.iter().find(|p| p.lane().is_some()) {
-        Some(&p) => Some(binary2_mean_mtf(scene, p, d_binary2)?),
-        None => None,
+        Some(&p) if !on_grid => Some(binary2_mean_mtf(scene, p, d_binary2)?),
+        _ => None,
     };
+    if let Some(&p) = parameters.iter().find(|p| p.grid_direction().is_some())
+        && scene.camera().noise_spectrum().is_some()
+    {
+        return Err(not_smooth(
+            p,
+            "with camera.noise_spectrum the wavefront gradient is not computed here yet".to_owned(),
+        ));
+    }
+    // each parameter's place among the FFT path's directions
+    let mut grid_place = 0;
     let spectral = match parameters.iter().find(|p| matches!(p, Parameter::SpectrumCenter | Parameter::SpectrumRange)) {
         Some(&p) => Some(spectral_partials(scene, e, p)?),
         None => None,
@@ -274,6 +310,40 @@ fn point_gradient(
                     MetricForm::Integral => -e.nyquist_cyc_per_mm * edge,
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::Binary2(_) | Parameter::PhaseSpline(_) | Parameter::Zernike(_) | Parameter::ZernikeNoll(_)
+                if on_grid =>
+            {
+                let GridGradient::Computed(all) = d_grid else { unreachable!("on_grid") };
+                let d_mtf = all[grid_place];
+                grid_place += 1;
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::ZernikeNoll(j) => {
+                let (n_radial, m) = optics::fft::noll_to_nm(j);
+                if m == 0 || *d_grid != GridGradient::Symmetric {
+                    return Err(not_smooth(
+                        p,
+                        format!(
+                            "Noll {j} (n = {n_radial}, m = {m}): the Zernike gradient is computed on the FFT path for a lens whose \
+                             every order is a radially symmetric pupil carrying the terms (with m = 0 terms on the radial \
+                             engine for lens.model = \"phase\" only); this scene's OTF is {}",
+                            match d_grid {
+                                GridGradient::Symmetric =>
+                                    "rotationally symmetric, on the radial engine, which follows the m = 0 terms of a phase lens only",
+                                _ =>
+                                    "not on those grids (an iris, zones, a map, a table, a line spectrum's grids, or an order of another kind)",
+                            }
+                        ),
+                    ));
+                }
+                // every m ≠ 0 term is zero and the pupil radially symmetric: c and −c are one
+                // pupil turned by π/|m|, whose mean over azimuth is the same (an even function of c)
+                (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             }
             Parameter::Binary2(i) | Parameter::PhaseSpline(i) | Parameter::Zernike(i) => {
                 let all = binary2.as_deref().unwrap_or(&[]);
@@ -336,10 +406,11 @@ fn binary2_mean_mtf(scene: &Scene, p: Parameter, d_binary2: Option<Vec<f64>>) ->
     }
     d_binary2.ok_or_else(|| {
         not_smooth(
-            "the wavefront gradient (Binary 2 coefficients, spline knots, m = 0 Zernike terms) is computed on axis \
-             for a lens whose every order is a radially symmetric pupil on the radial engine (a band on the exact \
-             per-frequency engine, or a line); this scene's lens, spectrum or field is not (off axis the oblique \
-             wave's coma and astigmatism take the FFT path, whose derivative is not computed)",
+            "the wavefront gradient (Binary 2 coefficients, spline knots, m = 0 Zernike terms) is computed for a \
+             lens whose every order is a radial pupil: on axis on the radial engine (a band on the exact \
+             per-frequency engine, or a line), and on the FFT path of a band (off axis, or with Zernike terms of \
+             m ≠ 0); this scene's lens, spectrum or field is neither (a line spectrum's FFT grids, or an order \
+             through an iris, zones, a map or a table)",
         )
     })
 }

@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use num_complex::Complex64;
 
+use super::{AzimuthalMean, Polychromatic};
 use crate::Error;
 use crate::fft::{Aperture, Otf, OtfPlan, SampledPupil, SampledZones, ZoneField};
 use crate::lens::{Field, LensModel, Order, Pupil};
@@ -460,6 +461,15 @@ impl OtfEngine for Grids<'_> {
         self.reading_coarse.set(on && self.coarse.is_some());
     }
 
+    fn wavefront_gradient_over_azimuth(
+        &self,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<Vec<f64>>, Error> {
+        self.gradient_over_azimuth(first, count, directions)
+    }
+
     fn means_along(&self, azimuth: f64) -> Option<(f64, f64)> {
         let ReadMeans { first, means } = self.read.as_ref()?;
         // the slot of `azimuth`, if it is one (the rule over azimuth reads `first + π k / M`)
@@ -680,4 +690,278 @@ pub fn monochromatic_mtf(
         }
     }
     Ok(sum.iter().map(|z| if total > 0.0 { z.norm() / total } else { 0.0 }).collect())
+}
+
+/// A direction in which a scene key moves the wavefront of every order, for the gradient on
+/// the FFT path ([`Polychromatic::mean_mtf_over_azimuth_and_gradient`](super::Polychromatic::mean_mtf_over_azimuth_and_gradient);
+/// docs/physics.md, "Gradients: 2-D pupils").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WavefrontDirection {
+    /// Lane `i` of the lens's wavefront directions (`LensModel::binary2_directions`: Binary 2
+    /// coefficients, spline knots, `m = 0` Zernike terms of a phase lens), a radial profile in
+    /// `q = ρ²` per order: the derivative per unit of that key.
+    Lane(usize),
+    /// The Zernike term of Noll index `j` (≥ 1) added to every order's wavefront
+    /// (`lens.zernike_noll_rms_um[j − 1]`): `∂W = 10⁻⁶ Z_j(x, y)` per µm RMS (Noll 1976
+    /// normalization, as the value samples it).
+    Zernike(usize),
+}
+
+/// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
+/// and direction) may take.
+const GRADIENT_MEMORY_BUDGET: f64 = 1.0 * (1u64 << 30) as f64;
+
+impl FftPath {
+    /// The derivative of the mean MTF averaged over `count` azimuths from `first`, as the value
+    /// takes it on this level ([`fixed_mean`] along each azimuth `first + πk/count`, averaged),
+    /// with respect to each of `directions` (docs/physics.md, "Gradients: 2-D pupils"): every
+    /// grid's OTF and its derivatives from the same field
+    /// ([`OtfPlan::otf_and_derivatives_of_field`](crate::fft::OtfPlan::otf_and_derivatives_of_field)),
+    /// read at the value's frequencies and azimuths with the value's interpolation, weights and
+    /// lateral-colour phases, and `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`: the kink of `|O|`,
+    /// a set of measure zero on the fixed rule). `None` where an order is not a radial pupil on
+    /// the grid path (apertures, zones and maps do not carry these keys), a lane is missing, or
+    /// the accumulators would pass their memory budget.
+    fn gradient_over_azimuth(
+        &self,
+        scene: &Scene<'_>,
+        nodes: &Nodes,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<Vec<f64>>, Error> {
+        let k_dirs = directions.len();
+        if k_dirs == 0 {
+            return Ok(Some(Vec::new()));
+        }
+        // the value's fixed rule ([`fixed_mean`]) and its azimuths
+        let lo = self.nodes.iter().map(|n| n.lambda).fold(f64::INFINITY, f64::min);
+        let top = scene.max_frequency.min(1.0 / (lo * scene.f_number));
+        let (panels, _) = fixed_rule(top, self.finest_cell(scene.f_number));
+        let rule = crate::quad::gauss_legendre(crate::quad::FIXED_ORDER);
+        let h = top / panels as f64;
+        let mut frequencies = Vec::with_capacity(panels * rule.len());
+        for p in 0..panels {
+            let mid = h * (p as f64 + 0.5);
+            for &(x, w) in &rule {
+                frequencies.push((mid + 0.5 * h * x, 0.5 * h * w));
+            }
+        }
+        let azimuths: Vec<f64> = (0..count).map(|j| first + PI * j as f64 / count as f64).collect();
+        let points = frequencies.len() * azimuths.len();
+        if (points * k_dirs * std::mem::size_of::<Complex64>()) as f64 > GRADIENT_MEMORY_BUDGET {
+            return Ok(None);
+        }
+        let mut d_sum = vec![Complex64::new(0.0, 0.0); points * k_dirs];
+        // the grids again, node by node in `build`'s order, each with its derivatives
+        let lambda_max = nodes.samples.iter().map(|s| s.0).fold(0.0, f64::max);
+        let s_max = (scene.max_frequency * lambda_max * scene.f_number).min(1.0);
+        let mut layer = FftLayer::new(self.pupil_samples, s_max, scene.lens.numerical_aperture())?;
+        let n = self.pupil_samples;
+        let mut zernike: Vec<(usize, Vec<f64>)> = Vec::new();
+        let mut d_grids: Vec<Otf> = (0..k_dirs).map(|_| Otf::new()).collect();
+        let mut otf = Otf::new();
+        let mut stored = self.nodes.iter();
+        for &(lambda, weight, part) in &nodes.samples {
+            if weight == 0.0 {
+                continue;
+            }
+            let lens = scene.part(part).lens;
+            let lanes = if directions.iter().any(|d| matches!(d, WavefrontDirection::Lane(_))) {
+                match lens.binary2_directions(lambda) {
+                    Some(l) => Some(l),
+                    None => return Ok(None),
+                }
+            } else {
+                None
+            };
+            for (index, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
+                if order.efficiency == 0.0 {
+                    continue;
+                }
+                let Some(node) = stored.next() else { return Ok(None) };
+                let radial = match (&order.pupil, &node.kind) {
+                    (Pupil::Radial(radial), FftKind::Grid(_)) => radial.clone(),
+                    // a table is data: the wavefront keys do not move it
+                    (_, FftKind::Table(_)) => continue,
+                    _ => return Ok(None),
+                };
+                let slot = layer.pupil(&order)?;
+                let (field, power) = radial_field(&layer.pupils[slot].1, &radial, lambda);
+                // each direction's OPD per unit key at the pixels the field transmits
+                let mut opd: Vec<Vec<f64>> = Vec::with_capacity(k_dirs);
+                for d in directions {
+                    let values = match *d {
+                        WavefrontDirection::Lane(i) => {
+                            let Some(profile) = lanes.as_ref().and_then(|l| l.get(index)).and_then(|o| o.get(i)) else {
+                                return Ok(None);
+                            };
+                            radial_direction(n, &radial, &field, profile)
+                        }
+                        WavefrontDirection::Zernike(j) => {
+                            let (_, m) = crate::fft::noll_to_nm(j);
+                            if m == 0 {
+                                // in the radial profile at q (`opd_beyond_defocus_m`)
+                                let profile = crate::radial::zernike_radial_profile(crate::fft::noll_to_nm(j).0, 1e-6);
+                                radial_direction(n, &radial, &field, &profile)
+                            } else {
+                                // sampled on the pupil's (x, y) as the value samples it
+                                let at = match zernike.iter().position(|(jj, _)| *jj == j) {
+                                    Some(p) => p,
+                                    None => {
+                                        let unit = crate::fft::Aberrations {
+                                            zernike_noll_m: vec![(j, 1e-6)],
+                                            ..crate::fft::Aberrations::default()
+                                        };
+                                        let sampled = SampledPupil::new(n, &Aperture::circle(), &unit)?;
+                                        zernike.push((j, sampled.opd_m().to_vec()));
+                                        zernike.len() - 1
+                                    }
+                                };
+                                zernike[at].1.clone()
+                            }
+                        }
+                    };
+                    opd.push(values);
+                }
+                let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
+                layer.plan.otf_and_derivatives_of_field(
+                    &field,
+                    power,
+                    2.0 * PI / lambda,
+                    &refs,
+                    &mut otf,
+                    &mut d_grids,
+                );
+                // read as `sum_along` reads the node's grid
+                let nuf = scene.f_number * node.lambda;
+                let s_grid = d_grids[0].s_max();
+                for (a, &azimuth) in azimuths.iter().enumerate() {
+                    let (sin_a, cos_a) = azimuth.sin_cos();
+                    let [dx, dy] = node.shift;
+                    for (f, &(nu, _)) in frequencies.iter().enumerate() {
+                        let s = nu.abs() * nuf;
+                        if s >= 1.0 || s > s_grid {
+                            continue;
+                        }
+                        let mut factor = Complex64::new(node.weight, 0.0);
+                        if dx != 0.0 || dy != 0.0 {
+                            let (ps, pc) = (-2.0 * PI * nu * (dx * cos_a + dy * sin_a)).sin_cos();
+                            factor *= Complex64::new(pc, ps);
+                        }
+                        let base = (a * frequencies.len() + f) * k_dirs;
+                        for (slot, grid) in d_sum[base..base + k_dirs].iter_mut().zip(&d_grids) {
+                            *slot += grid.at_xy(s * cos_a, s * sin_a) * factor;
+                        }
+                    }
+                }
+            }
+        }
+        if stored.next().is_some() {
+            return Ok(None);
+        }
+        let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+        let mut gradient = vec![0.0; k_dirs];
+        for (a, &azimuth) in azimuths.iter().enumerate() {
+            for (f, &(nu, w)) in frequencies.iter().enumerate() {
+                let o = self.sum_along(scene, nu, azimuth);
+                let modulus = o.norm();
+                if modulus == 0.0 {
+                    continue;
+                }
+                let base = (a * frequencies.len() + f) * k_dirs;
+                let scale = w * pixel(nu) / modulus;
+                for (g, d) in gradient.iter_mut().zip(&d_sum[base..base + k_dirs]) {
+                    *g += scale * (o.conj() * d).re;
+                }
+            }
+        }
+        // O = sum / total weight: Re(O* ∂O)/|O| = Re(sum* ∂sum)/(|sum| total)
+        let norm = nodes.total_weight * scene.max_frequency * count as f64;
+        gradient.iter_mut().for_each(|g| *g /= norm);
+        Ok(Some(gradient))
+    }
+}
+
+/// The OPD per unit of a radial direction `profile` at the pixels where `field` transmits (0
+/// elsewhere), as the value's field moves with it: the pupil carries `profile(q)` less its
+/// best-fit defocus `b q` ([`RadialPupil::opd_beyond_defocus_m`](crate::radial::RadialPupil::opd_beyond_defocus_m),
+/// `q` as [`radial_field`] computes it: `(x² + y²)` times the pupil's frequency scale squared,
+/// at most 1), and the order's sampled defocus carries `b (x² + y²)` (`Order::radial`), so the
+/// pixel moves by `profile(q) + b (x² + y² − q)`: the two differ where `q` is clamped at the rim
+/// (edge pixels whose centre lies outside the circle) or scaled.
+fn radial_direction(
+    n: usize,
+    radial: &crate::radial::RadialPupil,
+    field: &[Complex64],
+    profile: &crate::radial::RadialProfile,
+) -> Vec<f64> {
+    let slope = profile.fitted_slope();
+    let h = 2.0 / n as f64;
+    let scale2 = radial.frequency_scale().powi(2);
+    let mut out = vec![0.0; n * n];
+    for j in 0..n {
+        let y = -1.0 + (j as f64 + 0.5) * h;
+        for i in 0..n {
+            let idx = j * n + i;
+            if field[idx] == Complex64::new(0.0, 0.0) {
+                continue;
+            }
+            let x = -1.0 + (i as f64 + 0.5) * h;
+            let r2 = x * x + y * y;
+            let q = (r2 * scale2).min(1.0);
+            out[idx] = profile.value(q) + slope * (r2 - q);
+        }
+    }
+    out
+}
+
+impl Grids<'_> {
+    /// The derivative of the mean MTF averaged over `count` azimuths from `first` (the value's
+    /// rule, [`Polychromatic::mean_mtf_over_azimuth`](super::Polychromatic::mean_mtf_over_azimuth))
+    /// with respect to each of `directions`: each level's ([`FftPath::gradient_over_azimuth`]),
+    /// extrapolated as the value is (Richardson, linear in the two levels' means: the
+    /// derivative of the extrapolated value is the extrapolation of the derivatives).
+    pub(super) fn gradient_over_azimuth(
+        &self,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<Vec<f64>>, Error> {
+        let Some(fine) = self.fft.gradient_over_azimuth(&self.scene, &self.nodes, first, count, directions)? else {
+            return Ok(None);
+        };
+        let Some(plan) = self.richardson() else { return Ok(Some(fine)) };
+        let Some((coarse_path, _)) = &self.coarse else { return Ok(Some(fine)) };
+        let Some(coarse) = coarse_path.gradient_over_azimuth(&self.scene, &self.nodes, first, count, directions)?
+        else {
+            return Ok(None);
+        };
+        Ok(Some(fine.iter().zip(&coarse).map(|(&f, &c)| plan.extrapolate(c, f).value).collect()))
+    }
+}
+
+impl Polychromatic<'_> {
+    /// The mean MTF averaged over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth),
+    /// white noise) and its derivative with respect to each of `directions` on the same rules
+    /// (docs/physics.md, "Gradients: 2-D pupils"): the same azimuths, frequencies, grids,
+    /// interpolation, spectral weights, pixel MTF and Richardson extrapolation as the value, each
+    /// grid's derivative by forward mode through the FFT
+    /// ([`OtfPlan::otf_and_derivatives_of_field`](crate::fft::OtfPlan::otf_and_derivatives_of_field)).
+    /// `Ok(None)` where the engine is not the FFT engine of a band, or an order is not a radial
+    /// pupil on the grids (the keys are defined on those).
+    ///
+    /// # Errors
+    /// Building the grids again ([`Error`] of the FFT layer).
+    pub fn mean_mtf_over_azimuth_and_gradient(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<(AzimuthalMean, Vec<f64>)>, Error> {
+        if !matches!(self.engine(), Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        let mean = self.mean_mtf_over_azimuth(first, None);
+        Ok(self.engine.wavefront_gradient_over_azimuth(first, mean.azimuths, directions)?.map(|g| (mean, g)))
+    }
 }

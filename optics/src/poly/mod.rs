@@ -57,7 +57,7 @@ mod per_frequency;
 mod spectral;
 
 pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, FIRST_AZIMUTHS, MAX_AZIMUTHS};
-pub use grid::monochromatic_mtf;
+pub use grid::{WavefrontDirection, monochromatic_mtf};
 pub use noise::NoiseShape;
 pub use spectral::forget_remembered;
 pub(crate) use spectral::spectral_extent;
@@ -319,6 +319,18 @@ trait OtfEngine: std::fmt::Debug {
     /// the grids again.
     fn means_along(&self, _azimuth: f64) -> Option<(f64, f64)> {
         None
+    }
+    /// The derivative of the mean MTF averaged over the `count` azimuths from `first` with
+    /// respect to each of `directions`, on the value's own rules (the FFT engine:
+    /// `grid::FftPath::gradient_over_azimuth`); `Ok(None)` where the engine does not give it
+    /// (the default).
+    fn wavefront_gradient_over_azimuth(
+        &self,
+        _first: f64,
+        _count: usize,
+        _directions: &[WavefrontDirection],
+    ) -> Result<Option<Vec<f64>>, Error> {
+        Ok(None)
     }
     /// Why the engine stopped before its result converged (a work budget), if it did.
     fn over_budget(&self) -> Option<String> {
