@@ -704,9 +704,17 @@ pub struct DirectionCosines {
     scale: f64,
     obliquity: Arc<RadialProfile>,
     cache: std::sync::Mutex<Vec<(Arc<RadialProfile>, Arc<RadialProfile>)>>,
-    /// the mapped monomials `q_r^i` (index 0), and `q_r^i/c²` (index 1), made when first asked
+    /// the mapped monomials `q_r^i` (index 0), and `q_r^i/c²` (index 1), made when the map has
+    /// prepared [`MAPPED_BEFORE_MONOMIALS`] polynomials the generic way
     bases: [OnceLock<MappedMonomials>; 2],
+    /// polynomials mapped so far
+    polynomials: std::sync::atomic::AtomicUsize,
 }
+
+/// Polynomials a map prepares point by point before it makes its [`MappedMonomials`] (which
+/// cost about as much as 20 of them): a phase profile's few shared terms never need them, a
+/// library's new ones at every wavelength do.
+const MAPPED_BEFORE_MONOMIALS: usize = 24;
 
 /// The mapped monomials `m_i(q) = q_r(q)^i` (divided by `c² = 1 − qE` for an amplitude),
 /// `i ≤` [`MAPPED_MONOMIALS`], at every point the preparation of a profile reads
@@ -813,6 +821,7 @@ impl DirectionCosines {
             obliquity,
             cache: Default::default(),
             bases: Default::default(),
+            polynomials: Default::default(),
         })
     }
 
@@ -837,9 +846,15 @@ impl DirectionCosines {
             let mapped = RadialProfile::finish(Kind::Mapped { inner: Some(profile.clone()), e2: self.e2, obliquity });
             // a polynomial: prepared from the mapped monomials
             let prepared = match &profile.kind {
-                Kind::Even(c) if c.len() <= MAPPED_MONOMIALS + 1 => self.bases[usize::from(obliquity)]
-                    .get_or_init(|| MappedMonomials::new(self.e2, obliquity))
-                    .prepare(c, mapped.clone()),
+                Kind::Even(c)
+                    if c.len() <= MAPPED_MONOMIALS + 1
+                        && self.polynomials.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+                            >= MAPPED_BEFORE_MONOMIALS =>
+                {
+                    self.bases[usize::from(obliquity)]
+                        .get_or_init(|| MappedMonomials::new(self.e2, obliquity))
+                        .prepare(c, mapped.clone())
+                }
                 _ => None,
             };
             Arc::new(prepared.unwrap_or(mapped))
@@ -1611,6 +1626,11 @@ mod tests {
         let mut series_compared = 0;
         for na in [0.2, 0.5] {
             let map = DirectionCosines::new(na).unwrap();
+            // past the polynomials a map prepares point by point
+            for i in 0..MAPPED_BEFORE_MONOMIALS {
+                let p = Arc::new(RadialProfile::even_polynomial(vec![1.0, i as f64]).unwrap());
+                assert!(map.mapped(&p, false).sampled.0.get().is_none(), "prepared early");
+            }
             for (c, obliquity) in [(&amplitude, true), (&phase, false), (&amplitude, false)] {
                 let poly = Arc::new(RadialProfile::even_polynomial(c.clone()).unwrap());
                 let fast = map.mapped(&poly, obliquity);
