@@ -20,7 +20,13 @@ use crate::Error;
 pub struct ExactPupilMap<L> {
     inner: L,
     map: Arc<DirectionCosines>,
+    /// the mapped orders on axis by wavelength (its bits): an evaluation asks a wavelength's
+    /// orders more than once, and the mapped pupils are prepared once
+    cache: std::sync::Mutex<Vec<(u64, Vec<Order>)>>,
 }
+
+/// Wavelengths whose mapped orders a map keeps (as a library lens keeps its first orders).
+const CACHE_WAVELENGTHS: usize = 4096;
 
 impl<L: LensModel> ExactPupilMap<L> {
     /// `inner` with its radial pupils mapped to direction cosines; refused where an order of
@@ -29,7 +35,7 @@ impl<L: LensModel> ExactPupilMap<L> {
     pub fn new(inner: L, probe_wavelength_m: f64) -> Result<Self, Error> {
         let na0 = 0.5 / inner.f_number();
         let map = Arc::new(DirectionCosines::new(na0).map_err(Error::Pupil)?);
-        let lens = ExactPupilMap { inner, map };
+        let lens = ExactPupilMap { inner, map, cache: Default::default() };
         for order in lens.inner.orders(probe_wavelength_m, Field::ON_AXIS) {
             lens.map_order(&order).ok_or(Error::OutOfRange {
                 name: "pupil_mapping",
@@ -70,11 +76,27 @@ impl<L: LensModel> LensModel for ExactPupilMap<L> {
     }
 
     fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
-        self.inner
+        let key = wavelength_m.to_bits();
+        let on_axis = field.is_on_axis();
+        if on_axis
+            && let Ok(cache) = self.cache.lock()
+            && let Some((_, orders)) = cache.iter().find(|c| c.0 == key)
+        {
+            return orders.clone();
+        }
+        let orders: Vec<Order> = self
+            .inner
             .orders(wavelength_m, field)
             .into_iter()
             .map(|order| self.map_order(&order).unwrap_or(order))
-            .collect()
+            .collect();
+        if on_axis && let Ok(mut cache) = self.cache.lock() {
+            if cache.len() >= CACHE_WAVELENGTHS {
+                cache.clear();
+            }
+            cache.push((key, orders.clone()));
+        }
+        orders
     }
 
     fn transmission(&self, wavelength_m: f64) -> f64 {
@@ -89,7 +111,11 @@ impl<L: LensModel> LensModel for ExactPupilMap<L> {
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
         let mut factored = self.inner.factored_efficiency()?;
         for part in &mut factored.parts {
-            part.relative = Arc::new(ExactPupilMap { inner: part.relative.clone(), map: self.map.clone() });
+            part.relative = Arc::new(ExactPupilMap {
+                inner: part.relative.clone(),
+                map: self.map.clone(),
+                cache: Default::default(),
+            });
         }
         Some(factored)
     }

@@ -277,6 +277,12 @@ impl RadialProfile {
 fn derivative_bounds(f: impl Fn(f64) -> f64) -> (f64, f64) {
     let h = 1.0 / BOUND_SAMPLES as f64;
     let values: Vec<f64> = (0..=BOUND_SAMPLES).map(|i| f(i as f64 * h)).collect();
+    bounds_of_samples(&values)
+}
+
+/// [`derivative_bounds`] from the values at the [`BOUND_SAMPLES`] + 1 points `q = i/BOUND_SAMPLES`.
+fn bounds_of_samples(values: &[f64]) -> (f64, f64) {
+    let h = 1.0 / BOUND_SAMPLES as f64;
     let d1 = values.windows(2).map(|w| ((w[1] - w[0]) / h).abs()).fold(0.0, f64::max);
     let d2 = values.windows(3).map(|w| ((w[2] - 2.0 * w[1] + w[0]) / (h * h)).abs()).fold(0.0, f64::max);
     (1.25 * d1, 1.25 * d2)
@@ -698,6 +704,98 @@ pub struct DirectionCosines {
     scale: f64,
     obliquity: Arc<RadialProfile>,
     cache: std::sync::Mutex<Vec<(Arc<RadialProfile>, Arc<RadialProfile>)>>,
+    /// the mapped monomials `q_r^i` (index 0), and `q_r^i/c²` (index 1), made when the map has
+    /// prepared [`MAPPED_BEFORE_MONOMIALS`] polynomials the generic way
+    bases: [OnceLock<MappedMonomials>; 2],
+    /// polynomials mapped so far
+    polynomials: std::sync::atomic::AtomicUsize,
+}
+
+/// Polynomials a map prepares point by point before it makes its [`MappedMonomials`] (which
+/// cost about as much as 20 of them): a phase profile's few shared terms never need them, a
+/// library's new ones at every wavelength do.
+const MAPPED_BEFORE_MONOMIALS: usize = 24;
+
+/// The mapped monomials `m_i(q) = q_r(q)^i` (divided by `c² = 1 − qE` for an amplitude),
+/// `i ≤` [`MAPPED_MONOMIALS`], at every point the preparation of a profile reads
+/// ([`RadialProfile::sampled`], its [`Summary`]) and as their Chebyshev interpolants at the
+/// degrees [`fit_series`] tries: a mapped polynomial `Σ c_i q_r^i` is prepared as the sums
+/// `Σ c_i m_i` (the interpolant is linear in the function), not by evaluating and fitting it
+/// again. A library lens's imaging order has a new amplitude and residual polynomial at every
+/// wavelength (lenses/src/library.rs).
+#[derive(Debug)]
+struct MappedMonomials {
+    /// `m_i` at `q = k/`[`BOUND_SAMPLES`]
+    samples: Vec<Vec<f64>>,
+    /// the summary's nodes `(q, w)` (8 Gauss panels on `[0, 1]`) and `m_i` there
+    nodes: Vec<(f64, f64)>,
+    at_nodes: Vec<Vec<f64>>,
+    /// `chebyshev_fit(m_i, n)` for `n = 8, 16, 32, 64` (index `log2 n − 3`)
+    series: Vec<Vec<Vec<f64>>>,
+}
+
+/// The highest power of `q_r` a mapped polynomial may have to be prepared from
+/// [`MappedMonomials`] (a library's amplitude and phase have 12; higher ones are fitted as
+/// any other profile).
+const MAPPED_MONOMIALS: usize = 16;
+
+impl MappedMonomials {
+    fn new(e2: f64, obliquity: bool) -> MappedMonomials {
+        let monomial = |i: usize, q: f64| {
+            let c2 = 1.0 - q * e2;
+            let v = (q * (1.0 - e2) / c2).powi(i as i32);
+            if obliquity { v / c2 } else { v }
+        };
+        let h = 1.0 / BOUND_SAMPLES as f64;
+        let mut nodes = Vec::new();
+        crate::quad::for_each_node(0.0, 1.0, 8, |q, w| nodes.push((q, w)));
+        let degrees = (0..=MAPPED_MONOMIALS).map(|i| {
+            let samples: Vec<f64> = (0..=BOUND_SAMPLES).map(|k| monomial(i, k as f64 * h)).collect();
+            let at_nodes: Vec<f64> = nodes.iter().map(|&(q, _)| monomial(i, q)).collect();
+            let mut series = Vec::new();
+            let mut n = 8;
+            while n <= PROXY_MAX_DEGREE {
+                series.push(chebyshev_fit(&|q| monomial(i, q), n));
+                n *= 2;
+            }
+            (samples, at_nodes, series)
+        });
+        let (mut samples, mut at_nodes, mut series) = (Vec::new(), Vec::new(), Vec::new());
+        for (s, a, c) in degrees {
+            samples.push(s);
+            at_nodes.push(a);
+            series.push(c);
+        }
+        MappedMonomials { samples, nodes, at_nodes, series }
+    }
+
+    /// `mapped` (the map of the polynomial `coefficients`) with its samples, series and summary
+    /// made from the monomials' (equal to its own preparation up to rounding); `None` for a
+    /// polynomial of degree above [`MAPPED_MONOMIALS`].
+    fn prepare(&self, coefficients: &[f64], mapped: RadialProfile) -> Option<RadialProfile> {
+        if coefficients.len() > MAPPED_MONOMIALS + 1 {
+            return None;
+        }
+        let sum = |table: &[Vec<f64>], k: usize| -> f64 { coefficients.iter().zip(table).map(|(c, m)| c * m[k]).sum() };
+        let values: Vec<f64> = (0..=BOUND_SAMPLES).map(|k| sum(&self.samples, k)).collect();
+        let size = values.iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
+        let fit = |n: usize| -> Vec<f64> {
+            let level = n.trailing_zeros() as usize - 3;
+            let series: Vec<&Vec<f64>> = self.series.iter().map(|s| &s[level]).collect();
+            (0..=n).map(|j| coefficients.iter().zip(&series).map(|(c, s)| c * s[j]).sum()).collect()
+        };
+        let series = fit_series_with(&|q| mapped.value(q), 8.0 * f64::EPSILON * size, &fit);
+        let (mut slope, mut square) = (0.0, 0.0);
+        for (m, &(q, w)) in self.nodes.iter().enumerate() {
+            let f = sum(&self.at_nodes, m);
+            slope += w * 12.0 * (q - 0.5) * f;
+            square += w * f * f;
+        }
+        let summary = Summary { fit: slope, mean_square: square, bounds: bounds_of_samples(&values) };
+        let _ = mapped.summary.0.set(summary);
+        let _ = mapped.sampled.0.set(Sampled { values, series });
+        Some(mapped)
+    }
 }
 
 /// Mapped profiles a [`DirectionCosines`] keeps (a lens has a few; a library's per-wavelength
@@ -717,7 +815,14 @@ impl DirectionCosines {
         }
         let e2 = na0 * na0 / (1.0 + na0 * na0);
         let obliquity = Arc::new(RadialProfile::finish(Kind::Mapped { inner: None, e2, obliquity: true }));
-        Ok(DirectionCosines { e2, scale: (1.0 + na0 * na0).sqrt(), obliquity, cache: Default::default() })
+        Ok(DirectionCosines {
+            e2,
+            scale: (1.0 + na0 * na0).sqrt(),
+            obliquity,
+            cache: Default::default(),
+            bases: Default::default(),
+            polynomials: Default::default(),
+        })
     }
 
     /// `k = √(1 + NA0²)`: the exact pupil's cutoff is `1/k` of the paraxial one.
@@ -737,8 +842,23 @@ impl DirectionCosines {
     }
 
     fn mapped(&self, profile: &Arc<RadialProfile>, obliquity: bool) -> Arc<RadialProfile> {
-        let make =
-            || Arc::new(RadialProfile::finish(Kind::Mapped { inner: Some(profile.clone()), e2: self.e2, obliquity }));
+        let make = || {
+            let mapped = RadialProfile::finish(Kind::Mapped { inner: Some(profile.clone()), e2: self.e2, obliquity });
+            // a polynomial: prepared from the mapped monomials
+            let prepared = match &profile.kind {
+                Kind::Even(c)
+                    if c.len() <= MAPPED_MONOMIALS + 1
+                        && self.polynomials.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+                            >= MAPPED_BEFORE_MONOMIALS =>
+                {
+                    self.bases[usize::from(obliquity)]
+                        .get_or_init(|| MappedMonomials::new(self.e2, obliquity))
+                        .prepare(c, mapped.clone())
+                }
+                _ => None,
+            };
+            Arc::new(prepared.unwrap_or(mapped))
+        };
         let Ok(mut cache) = self.cache.lock() else { return make() };
         if let Some((_, m)) = cache.iter().find(|(p, m)| {
             Arc::ptr_eq(p, profile) && matches!(m.kind, Kind::Mapped { obliquity: o, .. } if o == obliquity)
@@ -1010,9 +1130,15 @@ fn phase_proxy(phase: &dyn Fn(f64) -> f64, rounding: f64) -> Option<Proxy> {
 /// allowed is `floor`, or the rounding of the series' own size (1e-15 of its largest
 /// coefficient), whichever is larger.
 fn fit_series(f: &dyn Fn(f64) -> f64, floor: f64) -> Option<(Vec<f64>, f64)> {
+    fit_series_with(f, floor, &|n| chebyshev_fit(f, n))
+}
+
+/// [`fit_series`] with the degree-`n` fit given by `fit` (the same interpolant by another route:
+/// [`DirectionCosines`]'s sums of mapped monomials), each checked against `f` as there.
+fn fit_series_with(f: &dyn Fn(f64) -> f64, floor: f64, fit: &dyn Fn(usize) -> Vec<f64>) -> Option<(Vec<f64>, f64)> {
     let mut n = 8;
     while n <= PROXY_MAX_DEGREE {
-        let c = chebyshev_fit(f, n);
+        let c = fit(n);
         let size = c.iter().map(|v| v.abs()).fold(0.0, f64::max);
         let allowed = floor.max(1e-15 * size);
         let tail: f64 = c[n - 3..].iter().map(|v| v.abs()).sum();
@@ -1486,6 +1612,59 @@ mod tests {
             let r = 0.8 * i as f64 / 300.0;
             assert!((s.value(r) - f(r)).abs() < 2e-6, "r = {r}: {} vs {}", s.value(r), f(r));
         }
+    }
+
+    /// A mapped polynomial prepared from the mapped monomials (`MappedMonomials`) reads as the
+    /// same polynomial mapped and prepared point by point (the generic path: `value` at every
+    /// sample, `fit_series` of its own values): samples, series, slope, mean square and
+    /// derivative bounds, a library-like amplitude and phase of degree 12 at NA0 = 0.2 and 0.5,
+    /// with and without the obliquity.
+    #[test]
+    fn mapped_polynomials_prepare_as_their_own_fits() {
+        let amplitude: Vec<f64> = (0..=12).map(|i| [0.93, -0.04, 0.011, -0.002][i % 4] / (1.0 + i as f64)).collect();
+        let phase: Vec<f64> = (0..=12).map(|i| [0.0, -3.1, 1.7, -0.6][i % 4] * 0.5_f64.powi(i as i32)).collect();
+        let mut series_compared = 0;
+        for na in [0.2, 0.5] {
+            let map = DirectionCosines::new(na).unwrap();
+            // past the polynomials a map prepares point by point
+            for i in 0..MAPPED_BEFORE_MONOMIALS {
+                let p = Arc::new(RadialProfile::even_polynomial(vec![1.0, i as f64]).unwrap());
+                assert!(map.mapped(&p, false).sampled.0.get().is_none(), "prepared early");
+            }
+            for (c, obliquity) in [(&amplitude, true), (&phase, false), (&amplitude, false)] {
+                let poly = Arc::new(RadialProfile::even_polynomial(c.clone()).unwrap());
+                let fast = map.mapped(&poly, obliquity);
+                let slow = RadialProfile::finish(Kind::Mapped { inner: Some(poly.clone()), e2: map.e2, obliquity });
+                assert!(fast.sampled.0.get().is_some() && fast.summary.0.get().is_some(), "not prepared");
+                assert!(slow.sampled.0.get().is_none(), "the reference is generic");
+                let size = slow.sampled().values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                for (a, b) in fast.sampled().values.iter().zip(&slow.sampled().values) {
+                    assert!((a - b).abs() <= 1e-14 * size, "NA {na}: sample {a} vs {b}");
+                }
+                // both fitted to the rounding of their values, or neither (a series of degree
+                // 64 does not hold it)
+                match (&fast.sampled().series, &slow.sampled().series) {
+                    (None, None) => {}
+                    (Some((cf, ef)), Some((cs, es))) => {
+                        series_compared += 1;
+                        assert_eq!(cf.len(), cs.len(), "NA {na}: the same degree");
+                        assert!((ef - es).abs() <= 1e-14 * size, "NA {na}: error {ef} vs {es}");
+                        for k in 0..=64 {
+                            let q = k as f64 / 64.0;
+                            let (a, b) = (clenshaw(cf, q), clenshaw(cs, q));
+                            assert!((a - b).abs() <= 1e-14 * size, "NA {na}: series at {q}: {a} vs {b}");
+                        }
+                    }
+                    (f, s) => panic!("NA {na}, obliquity {obliquity}: series {} vs {}", f.is_some(), s.is_some()),
+                }
+                let (f, s) = (fast.summary(), slow.summary());
+                assert!((f.fit - s.fit).abs() <= 1e-14 * size, "NA {na}: slope {} vs {}", f.fit, s.fit);
+                assert!((f.mean_square - s.mean_square).abs() <= 1e-14 * size * size, "NA {na}: mean square");
+                assert!((f.bounds.0 - s.bounds.0).abs() <= 1e-10 * s.bounds.0.max(size), "NA {na}: bound 1");
+                assert!((f.bounds.1 - s.bounds.1).abs() <= 1e-8 * s.bounds.1.max(size), "NA {na}: bound 2");
+            }
+        }
+        assert!(series_compared >= 2, "{series_compared} series compared");
     }
 
     /// The eight-lane reading of a profile ([`RadialProfile::value8`], the amplitudes' fast
