@@ -537,7 +537,8 @@ fn nested(
                         // (within COEFFICIENT_CONSISTENCY of the tolerance: the coarser level was
                         // already close, so the integrand is resolved and no coincidence of small
                         // last coefficients is trusted)
-                        if moved <= COEFFICIENT_CONSISTENCY * tol {
+                        // (read only where the moves do not already accept the level)
+                        if by_moves > tol.max(noise) && moved <= COEFFICIENT_CONSISTENCY * tol {
                             by_moves.min(h * chebyshev_tail(&values[..points]))
                         } else {
                             by_moves
