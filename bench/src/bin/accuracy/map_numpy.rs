@@ -95,9 +95,12 @@ pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
         "`asnr {}` (the paper scene, examples/paper-theory.toml; {} points; release binary, 2 worker threads) timed from \
          outside as a whole process: wall clock and CPU time (user + system, `/proc/self/stat` of the waiting process), \
          median of {runs} run(s); per point: the CPU time over the points. Beside it the numpy script \
-         `xtask/baselines/numpy_map.py` (the same grid and scene: fixed composite Gauss–Legendre rules in λ, t and ν, their \
-         node counts set per point from the defocus phases they must resolve, vectorized over each point's nodes; numpy's \
-         BLAS on one thread), one run, whole process too (the interpreter's start and numpy's import included). \
+         `xtask/baselines/numpy_map.py` (the same grid and scene, and the same closed form of the spectral integral as \
+         the sweep: E(c) by the complex error function, Weideman's 36-term series vectorized; then fixed composite \
+         Gauss–Legendre rules in the pupil angle, over the cut and the uncut zone, and in ν, their node counts set per \
+         point and frequency from the phases they must resolve; every (point, frequency) of the whole grid that takes \
+         the same rules evaluated as one array; numpy's BLAS on one thread), one run, whole process too (the \
+         interpreter's start and numpy's import included). \
          Agreement: each point's mean MTF against the same sweep at `--tolerance 1e-12` (largest relative difference). \
          The paper point: `metric::evaluate` of examples/paper-theory.toml at `options.tolerance = 1e-7`, in this \
          {profile} process, median of repeats (one thread), its mean MTF against the same scene at 1e-12. Load average \
@@ -147,14 +150,13 @@ pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
             md += &format!(
                 "\nWhat 40 µs and 20 µs a point would take: the closed form's time is its count of E(c) times their cost \
                  (here {:.0} ns each, the call's time over its count, everything else in the call included). At that \
-                 cost 40 µs is about {:.0} E(c) and 20 µs about {:.0}, against {evaluations} here ({:.0} per OTF value: \
-                 the nested Clenshaw–Curtis rule in the pupil angle takes 17 points on most of its 3–4 pieces, 33 on a \
-                 few; at 1e-6 on the paper point the 9-point level's error, the next level's move, is about 1.6× the \
-                 per-piece tolerance, and the 17-point level is 1e4× within it). \
-                 So 20 µs needs both fewer values and fewer points: about 9 OTF values of 2 pieces at 9–13 points each (a \
-                 rule whose error is known without the next level, e.g. Gauss–Legendre pieces sized from the phase of \
-                 E(c) with a bound on its Chebyshev coefficients), or E(c) itself 4× cheaper (the Faddeeva function and \
-                 the moment recurrence are most of it), or a surrogate for the OTF in (ν, F#, σ) with a stated bound.\n",
+                 cost 40 µs is about {:.0} E(c) and 20 µs about {:.0}, against {evaluations} here ({:.0} per OTF value). \
+                 The nested Clenshaw–Curtis rule in the pupil angle accepts a piece at 9 points where its own even \
+                 Chebyshev coefficients bound the error within the piece's share of the tolerance, else at 17 (33 on \
+                 a few): 8 or 16 E(c) a piece with the ends shared, 3–4 pieces an OTF value. So 20 µs needs both fewer \
+                 values and fewer points: about 9 OTF values of 2 pieces at 9 points each, or E(c) itself 4× cheaper \
+                 (the Faddeeva function and the moment recurrence are most of it; a shorter rational series where the \
+                 tolerance allows it), or a surrogate for the OTF in (ν, F#, σ) with a stated bound.\n",
                 1e9 * per,
                 40e-6 / per,
                 20e-6 / per,
