@@ -303,9 +303,18 @@ pub fn run(cli: Cli) -> Result<()> {
             warn(&read.warnings);
             let mapping = read.pupil_mapping;
             let (loaded, meter) = (read.scene, read.radiance_meter);
-            let result = metric::evaluate(&loaded).map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+            // the pupil-mapping check is a second, independent evaluation: it runs on its own
+            // thread beside this one, so the report waits for the slower of the two, not their sum
+            let (result, other) = std::thread::scope(|threads| {
+                let other = mapping.map(|used| threads.spawn(move || other_map_mean_mtf(scene.as_deref(), &set, used)));
+                let result = metric::evaluate(&loaded);
+                let other = other.map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)));
+                (result, other)
+            });
+            let result = result.map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             let mapping = mapping
-                .map(|used| mapping_check(scene.as_deref(), &set, used, result.mean_mtf))
+                .zip(other)
+                .map(|(used, other)| other.map(|other| MappingCheck::new(used, other, result.mean_mtf)))
                 .transpose()
                 .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             // the intended design, evaluated as given (without --set: it is another scene)
@@ -686,13 +695,9 @@ const MAPPING_CHECK_TOLERANCE: f64 = 1e-4;
 /// The paraxial map's error above which the report warns.
 const MAPPING_WARNING: f64 = 0.01;
 
-fn mapping_check(
-    file: Option<&std::path::Path>,
-    set: &[String],
-    used: scene::PupilMapping,
-    mean_mtf: f64,
-) -> Result<MappingCheck> {
-    // the other map, at the check's tolerance: the two keys replaced where they were set
+/// The mean MTF with the other pupil map than `used`, at the check's tolerance: the scene
+/// loaded again with the two keys replaced where they were set.
+fn other_map_mean_mtf(file: Option<&std::path::Path>, set: &[String], used: scene::PupilMapping) -> Result<f64> {
     let replaced = |o: &String| {
         let key = o.split_once('=').and_then(|(k, _)| scene::canonical_key(k));
         matches!(key.as_deref(), Some("options.pupil_mapping" | "options.tolerance"))
@@ -700,16 +705,20 @@ fn mapping_check(
     let mut set: Vec<String> = set.iter().filter(|o| !replaced(o)).cloned().collect();
     set.push(format!("options.pupil_mapping={}", used.other().name()));
     set.push(format!("options.tolerance={MAPPING_CHECK_TOLERANCE:e}"));
-    let other = metric::evaluate(&scene::load(file, &set)?)?.mean_mtf;
-    let (paraxial, exact) = match used {
-        scene::PupilMapping::Paraxial => (mean_mtf, other),
-        scene::PupilMapping::Exact => (other, mean_mtf),
-    };
-    let paraxial_error = if exact > 0.0 { (paraxial - exact) / exact } else { 0.0 };
-    Ok(MappingCheck { used, other, paraxial_error })
+    Ok(metric::evaluate(&scene::load(file, &set)?)?.mean_mtf)
 }
 
 impl MappingCheck {
+    /// The check from the used map's mean MTF and the other map's.
+    fn new(used: scene::PupilMapping, other: f64, mean_mtf: f64) -> Self {
+        let (paraxial, exact) = match used {
+            scene::PupilMapping::Paraxial => (mean_mtf, other),
+            scene::PupilMapping::Exact => (other, mean_mtf),
+        };
+        let paraxial_error = if exact > 0.0 { (paraxial - exact) / exact } else { 0.0 };
+        MappingCheck { used, other, paraxial_error }
+    }
+
     fn line(&self) -> String {
         format!(
             "pupil mapping: {} (with the {} map the mean MTF is {:.6}: the paraxial map is {:+.2} % off the flat lens's exact image, evaluated at tolerance {MAPPING_CHECK_TOLERANCE:e}; options.pupil_mapping)",
