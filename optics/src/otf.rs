@@ -121,10 +121,11 @@ pub fn defocus_otf_log_derivative(s: f64, w: f64) -> f64 {
     let a = 8.0 * PI * w * s;
     let theta = s.acos();
     let panels = 2 * defocus_otf_panels(s, w);
+    // sines and cosines by the branch-free polynomial of `fft::cis`, as the value's quadrature
     let integral = quad::composite(0.0, theta, panels, |t| {
-        let (sin_t, cos_t) = t.sin_cos();
+        let (sin_t, cos_t) = crate::fft::cis::sin_cos(t);
         let phase = a * (cos_t - s);
-        sin_t * sin_t * phase * phase.sin()
+        sin_t * sin_t * phase * crate::fft::cis::sin_cos(phase).0
     });
     -(4.0 / PI) * integral
 }
