@@ -159,7 +159,8 @@ fn aperture_parameter(key: &str, lens_model: &str, diameter_given: bool) -> Opti
     if !APERTURE_MODELS.contains(&lens_model) {
         let why = match lens_model {
             "phase" | "library" => {
-                "its aperture radius R = f0/(2F#) moves the profile in the normalized pupil, which the radial                  engine's derivative pass does not follow yet"
+                "its aperture radius R = f0/(2F#) moves the profile and the reference sphere in the normalized \
+                 pupil, which the radial engine's derivative pass does not follow yet"
             }
             _ => "its defocus is not followed through the F-number and focal length for this family yet",
         };
@@ -624,8 +625,8 @@ mod tests {
 
     /// The relative step for the F-number and the focal length: the defocus at a band's edge is
     /// several waves (N_z Δλ/λ0 ≈ 5 for the paper's lens at 50 nm), so the value turns on a
-    /// relative scale of K = f0/(8F#²) of a few per cent, not of 1: |f‴| ≈ 1e4 in relative units
-    /// and h = (3e-10/1e4)^{1/3} ≈ 3e-5.
+    /// relative scale of K = f0/(8F#²) of a few per cent, not of 1: |f‴| of order (1/0.05)³ ≈ 1e4
+    /// in relative units (an estimate from that scale) and h = (3e-10/1e4)^{1/3} ≈ 3e-5.
     const APERTURE_STEP: f64 = 3e-5;
 
     /// The paper's chromatic lens (the closed form) in both forms, with read noise and the stray
