@@ -449,8 +449,8 @@ fn bad_gradient_keys_are_refused_naming_the_key() {
     assert!(err.contains("--wrt lens.colour") && err.contains("no such key"), "{err}");
     let err = fails(&["gradient", "--wrt", "exposure.time_ms", "--wrt", "exposure.time_ms"]);
     assert!(err.contains("exposure.time_ms is given twice"), "{err}");
-    let err = fails(&["gradient", "--wrt", "lens.f_number"]);
-    assert!(err.contains("--wrt lens.f_number: not differentiable here yet"), "{err}");
+    let err = fails(&["gradient", "--wrt", "lens.design_wavelength_nm"]);
+    assert!(err.contains("--wrt lens.design_wavelength_nm: not differentiable here yet"), "{err}");
     let err = fails(&["gradient", "--wrt", "options.tolerance"]);
     assert!(err.contains("--wrt options.tolerance: not differentiable"), "{err}");
     let err = fails(&["gradient", "--wrt", "camera.read_noise_e", "--set", "lens.colour=1"]);

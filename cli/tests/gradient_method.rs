@@ -77,11 +77,11 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
         "--over",
         "camera.pixel_pitch_um=2:8",
         "--over",
-        "lens.f_number=2:3",
+        "lens.design_wavelength_nm=790:810",
         "--method",
         "gradient",
     ]);
-    assert!(e.contains("--method gradient: --over lens.f_number: not differentiable here yet"), "{e}");
+    assert!(e.contains("--method gradient: --over lens.design_wavelength_nm: not differentiable here yet"), "{e}");
     // a top-hat's edges are not followed (a Gaussian's range is: see the test below)
     let e = fails(&[
         "optimize",
@@ -129,7 +129,7 @@ fn tolerance_shows_the_gradient_sensitivity() {
         "--vary",
         "spectrum.range_nm=normal:0.5",
         "--vary",
-        "lens.f_number=normal:0.01",
+        "lens.design_wavelength_nm=normal:0.5",
         "--samples",
         "40",
         "--json",
@@ -143,7 +143,7 @@ fn tolerance_shows_the_gradient_sensitivity() {
         assert!((got - want).abs() <= 1e-12 * want.abs(), "{key}: {got} vs {want}");
     }
     assert!(t["keys"][2]["gradient_per_sigma"].is_null(), "{t}");
-    assert!(t["gradient_note"].as_str().unwrap().contains("--wrt lens.f_number"), "{t}");
+    assert!(t["gradient_note"].as_str().unwrap().contains("--wrt lens.design_wavelength_nm"), "{t}");
 }
 
 /// `asnr compare --wrt`: each design's exact gradient at the scene band, taken on the design as a

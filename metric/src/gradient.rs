@@ -65,6 +65,16 @@ pub enum Parameter {
     /// derivative 0 by symmetry: the term and its negative are one pupil turned by `π/|m|`,
     /// whose mean over azimuth is the same.
     ZernikeNoll(usize),
+    /// The lens's F-number F# (`lens.f_number`), focal length held: `∂/∂ln F#`. It scales the
+    /// photon count as `NA² = 1/(4F#²)` (SI eq. S7), each wavelength's normalized frequency
+    /// `s = νλF#` and the defocus `W020 ∝ f0/F#²` of a lens whose every order is the full
+    /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
+    /// docs/physics.md, "Gradients").
+    FNumber,
+    /// The lens's focal length f0 (`lens.focal_length_mm`), F-number held: `∂/∂ln f0`. It scales
+    /// the defocus `W020 ∝ f0/F#²` only (the cutoff `1/(λF#)` and `NA` stay); where
+    /// [`FNumber`](Parameter::FNumber) applies.
+    FocalLength,
     /// The centre `c` of the scene's Gaussian spectrum (`spectrum.center_nm`): `∂/∂c`, per m. It
     /// moves the photon count and the OTF's spectral weights (docs/physics.md, "Gradients").
     SpectrumCenter,
@@ -110,6 +120,8 @@ impl Parameter {
             Parameter::ZernikeNoll(_) => "a Zernike coefficient of the lens",
             Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
             Parameter::SpectrumRange => "the range of the Gaussian spectrum",
+            Parameter::FNumber => "the lens's F-number",
+            Parameter::FocalLength => "the lens's focal length",
         }
     }
 }
@@ -259,6 +271,10 @@ fn point_gradient(
         Some(&p) => Some(spectral_partials(scene, e, p)?),
         None => None,
     };
+    let aperture = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
+        Some(&p) => Some(aperture_partials(scene, e, p)?),
+        None => None,
+    };
     for &p in parameters {
         let Some(partials) = partials else {
             return Err(not_smooth(
@@ -361,6 +377,21 @@ fn point_gradient(
                     MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
                 };
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::FNumber | Parameter::FocalLength => {
+                let (d_f_number, d_focal_length) = aperture.expect("computed above for an aperture parameter");
+                let d_mtf = if p == Parameter::FNumber { d_f_number } else { d_focal_length };
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                if p == Parameter::FNumber {
+                    // N and N_T ∝ NA² = 1/(4F#²) (SI eq. S7–S8, S14): ∂ln/∂ln F# = −2 for both,
+                    // so the stray light N_T − N too
+                    (-2.0 * n, -2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
+                } else {
+                    (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+                }
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
                 let s = spectral.as_ref().expect("computed above for a spectral parameter");
@@ -549,4 +580,196 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     };
     let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` for a lens whose every order is the full circular pupil with a
+/// defocus `W020 ∝ K = f0/(8F#²)` alone (docs/physics.md, "Gradients"). Each wavelength's OTF
+/// is `H(νλF#, W020/λ)` ([`optics::defocus_otf`]), so
+/// - `F#` moves the normalized frequency: `∂O/∂ln F#` at fixed `K` is `ν ∂O/∂ν`, and by parts
+///   `(1/ν_N) ∫_0^{ν_N} sign(O) ν ∂O/∂ν dν = |O(ν_N)| − M̄` (|O| is continuous through its
+///   kinks): one OTF value at Nyquist and the evaluation's mean MTF;
+/// - `K` moves every order's defocus in proportion: `∂O/∂ln K = Σ_λ w_λ Σ_o τ_o w_o ∂H/∂w_o /
+///   Σ_λ w_λ Σ_o τ_o` ([`optics::defocus_otf_log_derivative`]), `D_K = (1/ν_N) ∫ sign(O) ∂O/∂ln K dν`;
+/// - `∂ln K/∂ln F# = −2`, `∂ln K/∂ln f0 = 1`: `∂M̄/∂ln F# = |O(ν_N)| − M̄ − 2 D_K`, `∂M̄/∂ln f0 = D_K`.
+///
+/// `D_K` by composite 16-point Gauss–Legendre in λ (over the detected spectrum's support, split
+/// at its and the lens's breakpoints; a Gaussian's tails cut at 9σ, where it is below 3e-18 of
+/// its peak; a line at its wavelength) and in ν (panels split at the sign changes of `O`, the
+/// kink of |O|): the λ rule doubled on 8 ν panels, then the ν rule on it, each until `D_K` moves
+/// by at most the tolerance times `max(|D_K|, M̄)`. Its cost is that of these OTF pairs, not the
+/// value's: on the paper's lens about 1 s in a debug build, 13 s for the harmonic lens's six
+/// orders (`asnr gradient examples/harmonic.toml --wrt lens.f_number`).
+fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let camera = scene.camera();
+    if camera.pixel_mtf() {
+        return Err(not_smooth(
+            "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet \
+             (set camera.pixel_mtf = false)"
+                .to_owned(),
+        ));
+    }
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth(
+            "with camera.noise_spectrum the F-number and focal-length gradient is not computed here yet".to_owned(),
+        ));
+    }
+    let lens = scene.lens();
+    let field = scene.field();
+    let f_number = lens.f_number();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let tolerance = scene.options().settings().tolerance;
+    // each spectral node: (λ, ρ(λ) × the rule's weight, [(τ_o, w_o)] per order)
+    type Node = (f64, f64, Vec<(f64, f64)>);
+    let node = |lambda: f64, weight: f64| -> Result<Node, Error> {
+        let mut orders = Vec::new();
+        for o in lens.orders(lambda, field) {
+            let w = &o.wavefront;
+            let plain = matches!(o.pupil, optics::Pupil::Full)
+                && w.image_shift_m == [0.0, 0.0]
+                && [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4];
+            if !plain {
+                return Err(not_smooth(
+                    "the F-number and focal-length gradient is computed for a lens whose every order is the full \
+                     circular pupil with a defocus alone (the chromatic, refractive and harmonic families on axis, \
+                     paraxial, without an iris or Seidel terms); this scene's lens has other pupils or aberrations"
+                        .to_owned(),
+                ));
+            }
+            orders.push((o.efficiency, w.defocus_m / lambda));
+        }
+        Ok((lambda, weight, orders))
+    };
+    // the spectral interval and its breakpoints
+    let (lo, hi) = match detected.as_line() {
+        Some(_) => (0.0, 0.0),
+        None => {
+            let (mut lo, mut hi) = detected.support();
+            for g in detected.gaussians() {
+                lo = lo.max(g.center() - 9.0 * g.sigma());
+                hi = hi.min(g.center() + 9.0 * g.sigma());
+            }
+            if !(hi.is_finite() && hi > lo) {
+                return Err(not_smooth(
+                    "the detected spectrum has no bounded support (a Gaussian factor, a table or a band) to integrate over"
+                        .to_owned(),
+                ));
+            }
+            (lo, hi)
+        }
+    };
+    let mut ends: Vec<f64> = vec![lo];
+    ends.extend(detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&x| x > lo && x < hi));
+    ends.push(hi);
+    ends.sort_by(f64::total_cmp);
+    ends.dedup();
+    let spectral_rule = |panels: usize| -> Result<Vec<Node>, Error> {
+        if let Some(line) = detected.as_line() {
+            return Ok(vec![node(line.wavelength_m, line.weight)?]);
+        }
+        let mut nodes = Vec::new();
+        for w in ends.windows(2) {
+            let h = (w[1] - w[0]) / panels as f64;
+            for i in 0..panels {
+                let centre = w[0] + h * (i as f64 + 0.5);
+                for &(x, wx) in optics::quad::rule() {
+                    let lambda = centre + 0.5 * h * x;
+                    let rho = detected.value(lambda);
+                    if rho != 0.0 {
+                        nodes.push(node(lambda, 0.5 * h * wx * rho)?);
+                    }
+                }
+            }
+        }
+        Ok(nodes)
+    };
+    // O at ν on the nodes (for its sign and its zeros), and (O, ∂O/∂ln K)
+    let value = |nodes: &[Node], nu: f64| -> f64 {
+        let (mut total, mut o) = (0.0, 0.0);
+        for (lambda, weight, orders) in nodes {
+            for &(tau, w) in orders {
+                total += weight * tau;
+                o += weight * tau * optics::defocus_otf(nu * lambda * f_number, w);
+            }
+        }
+        o / total
+    };
+    let at = |nodes: &[Node], nu: f64| -> (f64, f64) {
+        let (mut total, mut o, mut d) = (0.0, 0.0, 0.0);
+        for (lambda, weight, orders) in nodes {
+            let s = nu * lambda * f_number;
+            for &(tau, w) in orders {
+                total += weight * tau;
+                o += weight * tau * optics::defocus_otf(s, w);
+                d += weight * tau * optics::defocus_otf_log_derivative(s, w);
+            }
+        }
+        (o / total, d / total)
+    };
+    let integrate = |nodes: &[Node], panels: usize| -> f64 {
+        let mut cuts = vec![0.0];
+        let h = nyquist / panels as f64;
+        let mut previous = (0.0, 1.0);
+        for i in 1..=panels {
+            let nu = if i == panels { nyquist } else { i as f64 * h };
+            let here = value(nodes, nu);
+            if here * previous.1 < 0.0 {
+                let (mut a, mut b, f_a) = (previous.0, nu, previous.1);
+                while b - a > 1e-13 * nyquist {
+                    let m = 0.5 * (a + b);
+                    if value(nodes, m) * f_a > 0.0 {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                cuts.push(0.5 * (a + b));
+            }
+            cuts.push(nu);
+            previous = (nu, here);
+        }
+        let mut sum = 0.0;
+        for w in cuts.windows(2) {
+            let half = 0.5 * (w[1] - w[0]);
+            if half <= 0.0 {
+                continue;
+            }
+            let centre = 0.5 * (w[0] + w[1]);
+            for &(x, wx) in optics::quad::rule() {
+                let (o, d) = at(nodes, centre + half * x);
+                sum += half * wx * if o < 0.0 { -d } else { d };
+            }
+        }
+        sum / nyquist
+    };
+    let converged = |change: f64, next: f64| change <= tolerance * next.abs().max(e.mean_mtf);
+    // the spectral rule doubled on a coarse frequency rule (its nodes reach 0.99 ν_N, where the
+    // defocus turns the OTF fastest in λ), then the frequency rule on that spectral rule
+    let nu_coarse = 8;
+    let mut lambda_panels = 2;
+    let mut nodes = spectral_rule(lambda_panels)?;
+    let mut previous = integrate(&nodes, nu_coarse);
+    loop {
+        lambda_panels *= 2;
+        let finer = spectral_rule(lambda_panels)?;
+        let next = integrate(&finer, nu_coarse);
+        let change = (next - previous).abs();
+        (nodes, previous) = (finer, next);
+        if converged(change, next) || lambda_panels >= 256 {
+            break;
+        }
+    }
+    let mut nu_panels = nu_coarse;
+    let d_k = loop {
+        nu_panels *= 2;
+        let next = integrate(&nodes, nu_panels);
+        let change = (next - previous).abs();
+        previous = next;
+        if converged(change, next) || nu_panels >= 1024 {
+            break next;
+        }
+    };
+    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
 }

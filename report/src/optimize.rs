@@ -1428,14 +1428,17 @@ mod tests {
         let source = scene::read(None).unwrap();
         let r = [
             Range { key: "camera.pixel_pitch_um".into(), lo: 2.0, hi: 8.0, points: None },
-            Range { key: "lens.f_number".into(), lo: 2.0, hi: 3.0, points: None },
+            Range { key: "lens.design_wavelength_nm".into(), lo: 790.0, hi: 810.0, points: None },
         ];
         let search = Search { xtol: 1e-4, starts: 0, max_evaluations: Search::DEFAULT_MAX_EVALUATIONS };
         let asnr = crate::objective::Objective::Asnr;
         let count = Count(0.into());
         let e = search_scene_by(source.clone(), vec![], &r, asnr, &search, Some(Method::Gradient), &count).unwrap_err();
         let e = format!("{e:#}");
-        assert!(e.starts_with("--method gradient: --over lens.f_number: not differentiable here yet"), "{e}");
+        assert!(
+            e.starts_with("--method gradient: --over lens.design_wavelength_nm: not differentiable here yet"),
+            "{e}"
+        );
         assert_eq!(count.0.load(std::sync::atomic::Ordering::Relaxed), 0);
         let capacity = crate::objective::Objective::Capacity;
         let one = &r[..1];

@@ -694,7 +694,7 @@ mod tests {
         let varies = [
             parse_vary("exposure.time_ms=normal:0.2%").unwrap(),
             parse_vary("spectrum.range_nm=normal:0.5").unwrap(),
-            parse_vary("lens.f_number=normal:0.01").unwrap(),
+            parse_vary("lens.design_wavelength_nm=normal:0.5").unwrap(),
         ];
         let settings = Settings { samples: 400, seed: 1, budget_s: 600.0, threads: 1 };
         let t = tolerance(&target, &varies, &settings, &()).unwrap();
@@ -710,7 +710,7 @@ mod tests {
         }
         assert_eq!(t.gradient_sensitivity[2], None);
         let note = t.gradient_note.as_deref().unwrap();
-        assert!(note.contains("--wrt lens.f_number: not differentiable here yet"), "{note}");
+        assert!(note.contains("--wrt lens.design_wavelength_nm: not differentiable here yet"), "{note}");
         let text = report(&t);
         assert!(text.contains("∂ASNR/∂key × σ") && text.contains("no gradient for some keys"), "{text}");
         let json: serde_json::Value = serde_json::from_str(&json(&t).unwrap()).unwrap();
