@@ -1029,8 +1029,10 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         }
         Model::Psf => Arc::new(psf_lens(l, o, f_number, f0_m, &transmission, &mut info)?),
     };
+    // a phase lens and a 2-D layout take the terms themselves
+    let two_d_layout = model == Model::Library && (l.layout_grid.is_some() || l.layout_gds.is_some());
     let lens = match zernike(l, o)? {
-        Some(terms) if model != Model::Phase => {
+        Some(terms) if model != Model::Phase && !two_d_layout => {
             let probe = info.design_wavelength_m.or(info.channels_m.first().copied()).unwrap_or(550e-9);
             info.notes.push(zernike_note(&terms));
             let (count, given) = (terms.len(), zernike_note(&terms));
@@ -1269,7 +1271,7 @@ fn library_fabrication(
 }
 
 /// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.
-fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error> {
+pub(crate) fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error> {
     let Some(list) = &l.zernike_noll_rms_um else { return Ok(None) };
     let key = "lens.zernike_noll_rms_um";
     let max = optics::fft::MAX_NOLL_INDEX;
@@ -1291,7 +1293,7 @@ fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error>
     Ok(Some(out))
 }
 
-fn zernike_note(terms: &[(usize, f64)]) -> String {
+pub(crate) fn zernike_note(terms: &[(usize, f64)]) -> String {
     let list: Vec<String> =
         terms.iter().map(|(j, c)| format!("Z{j} = {} µm", num(optics::round_for_display(c * 1e6)))).collect();
     if list.is_empty() {
