@@ -291,7 +291,11 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             }
             out.number("atom_phase_error_rad", l.atom_phase_error_rad.unwrap_or(0.0));
             out.number("atom_transmission_error", l.atom_transmission_error.unwrap_or(0.0));
-            out.value("atom_error_seed", &l.atom_error_seed.unwrap_or(0).to_string());
+            if l.layout_grid.is_some() || l.layout_gds.is_some() {
+                out.line("# no atom_error_seed: a 2-D layout takes the atoms' errors in expectation");
+            } else {
+                out.value("atom_error_seed", &l.atom_error_seed.unwrap_or(0).to_string());
+            }
             if let Some(b) = &l.parameter_bias {
                 out.value("parameter_bias", &list(b));
             }
