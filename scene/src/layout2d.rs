@@ -11,7 +11,7 @@ use num_complex::Complex64;
 use crate::Error;
 use crate::error::{num, quoted};
 use crate::gds::{AtomKind, GdsOptions};
-use crate::lens::{LensInfo, RawLens};
+use crate::lens_table::{LensInfo, RawLens};
 use crate::origins::Origins;
 
 /// The most atoms and lattice sites a layout may hold (the paper's aperture on a 400 nm
@@ -62,7 +62,7 @@ pub(crate) fn library_map_lens(
             }
         }
     }
-    let (library, names) = crate::lens::read_library(l, o)?;
+    let (library, names) = crate::lens_table::read_library(l, o)?;
     let pitch = o.require("lens.lattice_pitch_um", l.lattice_pitch_um, "the lattice pitch, µm (> 0)")?;
     let pitch = o.number("lens.lattice_pitch_um", pitch, pitch > 0.0, "the lattice pitch, µm (> 0)")? * 1e-6;
     let (grid, key, file, tolerance) = if let Some(file) = &l.layout_gds {
@@ -284,8 +284,8 @@ fn fabrication(
             num(amplitude),
         ));
     }
-    if let Some(terms) = crate::lens::zernike(l, o)? {
-        info.notes.push(crate::lens::zernike_note(&terms));
+    if let Some(terms) = crate::lens_table::zernike(l, o)? {
+        info.notes.push(crate::lens_table::zernike_note(&terms));
         lens = lens.with_zernike(terms).map_err(|e| o.domain("lens.zernike_noll_rms_um", "[lens]", e))?;
     }
     Ok(lens)

@@ -10,7 +10,8 @@ use std::fmt::Write as _;
 use metric::{GlareMode, MetricForm, Options};
 
 use crate::error::{Error, Warning, shorten};
-use crate::lens::{Model, RawLens};
+use crate::lens::Model;
+use crate::lens_table::RawLens;
 use crate::load::{RawScene, Source, build_checked, prepare};
 use crate::origins::{NumberOrFile, Origins};
 
@@ -235,7 +236,7 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
         Model::Tabulated => {
             let key = o.key("lens.mtf");
             match &l.mtf {
-                Some(crate::lens::OneOrMany::Many(files)) => {
+                Some(crate::lens_table::OneOrMany::Many(files)) => {
                     let resolved: Vec<String> = files
                         .iter()
                         .map(|f| path(o, &key, f).map(|p| toml::Value::String(p).to_string()))
