@@ -254,3 +254,112 @@ fn tolerance_of_a_library_lens_with_atom_errors() {
     let err = fails(&["tolerance", "--vary", "lens.f_number=seed"]);
     assert!(err.contains("`lens.f_number` is not a seed key"), "{err}");
 }
+
+/// A small 2-D layout (a `.npy` grid of the example library's pillars, F/2.5, f0 = 125 µm,
+/// R = 25 µm on a 400 nm lattice: each site the diameter whose field at 800 nm is nearest the
+/// hyperbolic phase at its centre, among those 10 nm inside the library's range) and its scene in
+/// `dir`.
+fn small_grid_scene(dir: &std::path::Path) -> String {
+    let library = format!("{}/../examples/data/library-tio2-like.csv", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&library).unwrap();
+    let mut rows = Vec::new();
+    for line in text.lines().filter(|l| !l.starts_with('#') && !l.starts_with("diameter")) {
+        let v: Vec<f64> = line.split(',').map(|s| s.trim().parse().unwrap()).collect();
+        if v[1] == 800.0 {
+            rows.push((v[0], v[2] * v[3].cos(), v[2] * v[3].sin()));
+        }
+    }
+    let (pitch, f0, half) = (400.0f64, 125e3f64, 64usize);
+    let n = 2 * half + 1;
+    let mut grid = Vec::with_capacity(n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = ((i as f64 - half as f64) * pitch, (j as f64 - half as f64) * pitch);
+            let target = -std::f64::consts::TAU / 800.0 * ((x * x + y * y + f0 * f0).sqrt() - f0);
+            let (tx, ty) = (target.cos(), target.sin());
+            let d = |r: &(f64, f64, f64)| (r.1 - tx).powi(2) + (r.2 - ty).powi(2);
+            // atoms 10 nm inside the library's 100–300 nm, room for a bias
+            let inner = rows.iter().filter(|r| (110.0..=290.0).contains(&r.0));
+            grid.push(inner.min_by(|a, b| d(a).total_cmp(&d(b))).unwrap().0);
+        }
+    }
+    std::fs::write(dir.join("lens.npy"), scene::npy::npy_f64(&[n, n], &grid).unwrap()).unwrap();
+    let scene = format!(
+        r#"[lens]
+model = "library"
+f_number = 2.5
+focal_length_mm = 0.125
+design_wavelength_nm = 800.0
+library = "{library}"
+layout_grid = "lens.npy"
+lattice_pitch_um = 0.4
+parameter_bias = [0.0]
+zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0]
+
+[source]
+kind = "flat"
+radiance_w_m2_sr_nm = 0.025
+
+[spectrum]
+shape = "line"
+center_nm = 800.0
+range_nm = 50.0
+peak = 1.0
+
+[camera]
+pixel_pitch_um = 5.2
+pixel_mtf = false
+quantum_efficiency = 0.2
+
+[exposure]
+time_ms = 1.23
+
+[options]
+pupil_samples = 128
+"#
+    );
+    let path = dir.join("grid.toml");
+    std::fs::write(&path, scene).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+/// `asnr tolerance` on a 2-D layout varies its fabrication-error keys (a parameter bias, the
+/// atoms' random phase and amplitude errors, a Zernike coma term): every key gets a finite
+/// sensitivity and the samples' ASNR spread; a seed key is refused for the layout, which takes
+/// the atoms' errors in expectation.
+#[test]
+fn tolerance_of_a_2d_layout_varies_its_fabrication_errors() {
+    let dir = std::env::temp_dir().join(format!("asnr-grid-tolerance-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = small_grid_scene(&dir);
+    let keys = [
+        "lens.parameter_bias[0]=uniform:-5:5",
+        "lens.atom_phase_error_rad=uniform:0:0.4",
+        "lens.atom_transmission_error=uniform:0:0.2",
+        "lens.zernike_noll_rms_um[6]=normal:0.03",
+    ];
+    let mut args = vec!["tolerance", scene.as_str(), "--samples", "6", "--seed", "2"];
+    for k in &keys {
+        args.extend(["--vary", k]);
+    }
+    let v = json(&[&args[..], &["--json"]].concat());
+    let listed = v["keys"].as_array().unwrap();
+    assert_eq!(listed.len(), keys.len(), "{v}");
+    for k in listed {
+        assert!(k["sensitivity_per_sigma"].as_f64().is_some_and(f64::is_finite), "{k}");
+    }
+    let csv = asnr(&[&args[..], &["--csv"]].concat());
+    assert!(csv.status.success(), "{}", stderr(&csv));
+    let text = String::from_utf8(csv.stdout).unwrap();
+    // columns: sample, the keys, asnr, fraunhofer_valid
+    let asnr_column: Vec<f64> =
+        text.lines().skip(1).map(|l| l.split(',').nth(1 + keys.len()).unwrap().parse().unwrap()).collect();
+    assert_eq!(asnr_column.len(), 6, "{text}");
+    assert!(asnr_column.iter().any(|a| (a - asnr_column[0]).abs() > 1e-6), "{text}");
+    let err = fails(&["tolerance", &scene, "--vary", "lens.atom_error_seed=seed", "--samples", "2"]);
+    // the layout's resolved scene has no seed key (`asnr scene` says why: no draws)
+    assert!(err.contains("lens.atom_error_seed") && err.contains("has no such key"), "{err}");
+    let out = asnr(&["scene", &scene]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("# no atom_error_seed"), "{}", stderr(&out));
+    std::fs::remove_dir_all(&dir).ok();
+}

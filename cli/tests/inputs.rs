@@ -343,3 +343,14 @@ fn library_atom_phase_errors_beyond_the_budget_are_refused_up_front() {
         );
     }
 }
+
+/// `asnr mtf` names a PSF stack's 2-D OTF as the stack's (examples/psf-stack.toml is not round,
+/// so its MTF is the mean over azimuth), and a phase map's as a sampled 2-D pupil's.
+#[test]
+fn mtf_names_the_source_of_a_2d_otf() {
+    let out = asnr(&["mtf", &example("psf-stack.toml")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("mean over azimuth (on axis; a PSF stack, whose OTF depends on direction)"), "{text}");
+    assert!(!text.contains("sampled 2-D pupil"), "{text}");
+}

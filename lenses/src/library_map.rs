@@ -25,7 +25,7 @@ use optics::{Field, LensModel, Order};
 
 use crate::atom_grid::AtomGrid;
 use crate::chromatic::check;
-use crate::{Error, Library};
+use crate::{AtomErrors, Error, Library};
 
 /// The circular polarization a fin layout is lit with: the converted light carries `e^{iσ2θ}`,
 /// σ = +1 for left-circular (LCP), −1 for right-circular (RCP) light (docs/physics.md, "2-D
@@ -77,6 +77,12 @@ pub struct LibraryMapLens {
     source: String,
     /// the layout's statistics, for the description
     layout: String,
+    /// the atoms' random fabrication errors `(σ_φ, σ_t)` ([`LibraryMapLens::with_fabrication`])
+    errors: Option<(f64, f64)>,
+    /// the parameter bias added to every atom (none: zeros)
+    bias: Vec<f64>,
+    /// Zernike terms `(Noll index, metres RMS)` added to the design order's wavefront
+    zernike: Vec<(usize, f64)>,
     scalars: Mutex<Vec<(u64, f64, f64)>>,
     tables: Mutex<Vec<CachedTable>>,
 }
@@ -99,6 +105,9 @@ impl Clone for LibraryMapLens {
             clamped: self.clamped,
             source: self.source.clone(),
             layout: self.layout.clone(),
+            errors: self.errors,
+            bias: self.bias.clone(),
+            zernike: self.zernike.clone(),
             scalars: Mutex::new(Vec::new()),
             tables: Mutex::new(Vec::new()),
         }
@@ -363,9 +372,108 @@ impl LibraryMapLens {
             clamped,
             source,
             layout: layout_text,
+            errors: None,
+            bias: Vec::new(),
+            zernike: Vec::new(),
             scalars: Mutex::new(Vec::new()),
             tables: Mutex::new(Vec::new()),
         })
+    }
+
+    /// The lens as fabricated (docs/physics.md, "Fabrication errors of a 2-D layout"): every
+    /// atom's parameters shifted by `bias` (one per parameter column, in the library's units,
+    /// before the library is read; an atom pushed outside the library's range is refused with
+    /// the count and the worst), and every atom's complex transmission given the radial lens's
+    /// independent random error `t → t (1 + ε) e^{iδ}`, `δ ~ N(0, σ_φ²)`, `ε ~ N(0, σ_t²)`,
+    /// `1 + ε` taken as 0 below 0 and `|t|` capped at 1 ([`crate::LibraryLens::with_fabrication`]),
+    /// in expectation over the draws: the design order's field is the expected field, each atom's
+    /// table entry times `E[a e^{iδ}]`, and the rest of the atoms' mean
+    /// power `|t|² E[a²] − |E[t a e^{iδ}]|²`, uncorrelated from atom to atom, is light spread over
+    /// the cell's diffraction angles: stray light, in T and not in τ1. `errors.seed` is not
+    /// used (there are no draws). With no bias and σ = 0 the lens is the nominal one, bit for
+    /// bit.
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] for σ outside its range (as the radial lens's), a bias of the
+    /// wrong length or not finite, or an atom pushed outside the library's range.
+    pub fn with_fabrication(mut self, bias: &[f64], errors: AtomErrors) -> Result<LibraryMapLens, Error> {
+        check(
+            "atom_phase_error_rad",
+            errors.phase_sigma_rad,
+            errors.phase_sigma_rad >= 0.0,
+            "a finite standard deviation ≥ 0 rad",
+        )?;
+        check(
+            "atom_transmission_error",
+            errors.transmission_sigma,
+            (0.0..0.5).contains(&errors.transmission_sigma),
+            "a finite relative standard deviation in [0, 0.5) (the amplitude factor 1 + ε must stay positive but for rare atoms)",
+        )?;
+        let ranges = self.library.ranges();
+        if bias.len() != ranges.len() {
+            return Err(Error::OutOfRange {
+                name: "parameter_bias entries",
+                value: bias.len() as f64,
+                expected: "one per library parameter column",
+            });
+        }
+        for b in bias {
+            check("parameter_bias", *b, true, "finite")?;
+        }
+        if bias.iter().any(|&b| b != 0.0) {
+            let shifted: Vec<Vec<f64>> =
+                self.unique.iter().map(|p| p.iter().zip(bias).map(|(v, b)| v + b).collect::<Vec<f64>>()).collect();
+            // the atoms pushed out: their count over the aperture's cells and the worst
+            let mut outside = vec![0.0; shifted.len() + 1];
+            let mut worst: Option<(f64, usize, f64)> = None;
+            for (u, p) in shifted.iter().enumerate() {
+                for (d, (&v, &(lo, hi))) in p.iter().zip(&ranges).enumerate() {
+                    let excess = (lo - v).max(v - hi);
+                    if excess > 0.0 {
+                        outside[u] = 1.0;
+                        if worst.is_none_or(|w| excess > w.0) {
+                            worst = Some((excess, d, v));
+                        }
+                    }
+                }
+            }
+            if let Some((_, d, v)) = worst {
+                let count = self.sites.count_weighted(&outside);
+                return Err(Error::Layout(format!(
+                    "parameter_bias {} pushes {count} atoms in the aperture outside the library's range: the worst has parameter {} = {v} against the library's [{}, {}]",
+                    bias[d],
+                    d + 1,
+                    ranges[d].0,
+                    ranges[d].1
+                )));
+            }
+            self.unique = shifted;
+            self.bias = bias.to_vec();
+        }
+        self.errors = (errors.phase_sigma_rad > 0.0 || errors.transmission_sigma > 0.0)
+            .then_some((errors.phase_sigma_rad, errors.transmission_sigma));
+        self.scalars = Mutex::new(Vec::new());
+        self.tables = Mutex::new(Vec::new());
+        Ok(self)
+    }
+
+    /// This lens with Zernike terms `(Noll index, metres RMS)` added to its design order's
+    /// wavefront over the aperture's circle (`lens.zernike_noll_rms_um`; Noll 1976, as for the
+    /// radial families), each cell taking the terms' path at its centre
+    /// ([`optics::map::MapPupil::with_zernike`]).
+    ///
+    /// # Errors
+    /// [`Error::OutOfRange`] for a Noll index outside `1..=`[`optics::fft::MAX_NOLL_INDEX`] or a
+    /// non-finite coefficient.
+    pub fn with_zernike(mut self, zernike_noll_m: Vec<(usize, f64)>) -> Result<LibraryMapLens, Error> {
+        let aberrations = optics::fft::Aberrations { zernike_noll_m, ..optics::fft::Aberrations::default() };
+        aberrations.validate().map_err(|_| Error::OutOfRange {
+            name: "zernike_noll_rms_um",
+            value: f64::NAN,
+            expected: "Noll indices 1 to the largest the FFT path takes, finite coefficients",
+        })?;
+        self.zernike = aberrations.zernike_noll_m;
+        Ok(self)
     }
 
     /// The family's name.
@@ -418,10 +526,17 @@ impl LibraryMapLens {
         {
             return hit.1.clone();
         }
+        // the atoms' expected fields under their random errors (none: the fields)
         let table: Arc<[Complex64]> = self
             .unique
             .iter()
-            .map(|p| self.library.transmission(p, wavelength_m))
+            .map(|p| {
+                let t = self.library.transmission(p, wavelength_m);
+                match self.errors {
+                    None => t,
+                    Some((phase, amplitude)) => t * expected_factor(t.norm(), phase, amplitude).0,
+                }
+            })
             .chain(std::iter::once(self.empty_cell))
             .collect();
         if let Ok(mut cache) = self.tables.lock() {
@@ -452,6 +567,20 @@ impl LibraryMapLens {
             .chain(std::iter::once(0.0))
             .collect();
         all += self.sites.count_weighted(&co);
+        // the atoms' random errors' incoherent power, |t|² E[a²] − |E[t a e^{iδ}]|²: in T, not in τ1
+        if let Some((phase, amplitude)) = self.errors {
+            let spread: Vec<f64> = self
+                .unique
+                .iter()
+                .map(|p| {
+                    let t = self.library.transmission(p, wavelength_m).norm();
+                    let (mean, square) = expected_factor(t, phase, amplitude);
+                    (t * t * (square - mean * mean)).max(0.0)
+                })
+                .chain(std::iter::once(0.0))
+                .collect();
+            all += self.sites.count_weighted(&spread);
+        }
         let scale = self.pitch * self.pitch / (PI * self.aperture_radius().powi(2));
         let out = (tau * scale, all * scale);
         if let Ok(mut cache) = self.scalars.lock() {
@@ -481,7 +610,12 @@ impl LensModel for LibraryMapLens {
             Oblique::new(self.aperture_radius(), self.focal_length, field.x_rad, field.y_rad).ok()
         };
         let pupil = MapPupil::sites(self.sites.clone(), self.table(wavelength_m), wavelength_m, oblique);
-        vec![Order::map(tau, Arc::new(pupil))]
+        // the terms were checked by `with_zernike`
+        let pupil = if self.zernike.is_empty() { Ok(pupil) } else { pupil.with_zernike(&self.zernike) };
+        match pupil {
+            Ok(pupil) => vec![Order::map(tau, Arc::new(pupil))],
+            Err(_) => Vec::new(),
+        }
     }
 
     fn transmission(&self, wavelength_m: f64) -> f64 {
@@ -509,8 +643,24 @@ impl LensModel for LibraryMapLens {
         } else {
             String::new()
         };
+        let mut fabrication = String::new();
+        if !self.bias.is_empty() {
+            let b: Vec<String> = self.bias.iter().map(|&b| r(b).to_string()).collect();
+            fabrication.push_str(&format!("; parameter bias {}", b.join(", ")));
+        }
+        if let Some((phase, amplitude)) = self.errors {
+            fabrication.push_str(&format!(
+                "; atom errors σ_φ = {} rad, σ_t = {} (expected field coherent, the rest stray light)",
+                r(phase),
+                r(amplitude)
+            ));
+        }
+        if !self.zernike.is_empty() {
+            let z: Vec<String> = self.zernike.iter().map(|(j, c)| format!("Z{j} = {} µm", r(c * 1e6))).collect();
+            fabrication.push_str(&format!("; Zernike (Noll, RMS) {}", z.join(", ")));
+        }
         format!(
-            "2-D meta-atom library lens F/{} f0 = {} mm at λ0 = {} nm ({}; {} atoms in the aperture on {nx} × {ny} sites of {} µm{empty}; lattice {} × {} nm off the axis; {}; local periodic approximation, each cell's mean against the exact reference sphere)",
+            "2-D meta-atom library lens F/{} f0 = {} mm at λ0 = {} nm ({}; {} atoms in the aperture on {nx} × {ny} sites of {} µm{empty}; lattice {} × {} nm off the axis; {}{fabrication}; local periodic approximation, each cell's mean against the exact reference sphere)",
             r(self.f_number),
             r(self.focal_length * 1e3),
             r(self.design_wavelength * 1e9),
@@ -521,5 +671,75 @@ impl LensModel for LibraryMapLens {
             r(self.offset.1 * 1e9),
             self.layout,
         )
+    }
+}
+
+/// `(E[a e^{iδ}], E[a²])` of an atom of amplitude `|t|` under the random errors `δ ~ N(0, σ_φ²)`,
+/// `ε ~ N(0, σ_t²)` with `a = min(max(1 + ε, 0), 1/|t|)` (the radial lens's draws: `1 + ε < 0`
+/// taken as 0, `|t a|` capped at 1): `E[e^{iδ}] = e^{−σ_φ²/2}` (the normal's characteristic
+/// function, real) and, with `Z` standard normal, `α = −1/σ_t`, `β = (1/|t| − 1)/σ_t`, the moments
+/// of the normal clipped to `[0, 1/|t|]` (Johnson, Kotz & Balakrishnan, *Continuous Univariate
+/// Distributions* 1, §10.1, the truncated normal's moments, plus the mass at the cap):
+/// `E[a] = Φ(β) − Φ(α) + σ_t (φ(α) − φ(β)) + (1 − Φ(β))/|t|`,
+/// `E[a²] = (1 + σ_t²)(Φ(β) − Φ(α)) + 2σ_t (φ(α) − φ(β)) + σ_t² (α φ(α) − β φ(β)) + (1 − Φ(β))/|t|²`.
+fn expected_factor(t: f64, phase_sigma: f64, transmission_sigma: f64) -> (f64, f64) {
+    let phase = (-0.5 * phase_sigma * phase_sigma).exp();
+    let s = transmission_sigma;
+    if s == 0.0 {
+        // a ≤ 1/|t| is 1 for |t| ≤ 1
+        return (phase, 1.0);
+    }
+    let pdf = |z: f64| if z.is_finite() { (-0.5 * z * z).exp() / (2.0 * PI).sqrt() } else { 0.0 };
+    let cdf = |z: f64| 0.5 * libm::erfc(-z / std::f64::consts::SQRT_2);
+    let alpha = -1.0 / s;
+    let cap = if t > 0.0 { 1.0 / t } else { f64::INFINITY };
+    let beta = (cap - 1.0) / s;
+    let above = if cap.is_finite() { 1.0 - cdf(beta) } else { 0.0 };
+    let (top, mass) = if cap.is_finite() { (cap, above) } else { (0.0, 0.0) };
+    let inside = cdf(beta) - cdf(alpha);
+    let edge = pdf(alpha) - pdf(beta);
+    let moment = if beta.is_finite() { alpha * pdf(alpha) - beta * pdf(beta) } else { alpha * pdf(alpha) };
+    let mean = inside + s * edge + top * mass;
+    let square = (1.0 + s * s) * inside + 2.0 * s * edge + s * s * moment + top * top * mass;
+    (phase * mean, square)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The clipped moments against a direct quadrature of the normal's density (the composite
+    /// Simpson rule on [−12, 12] in z, 24 001 points, the clipping applied pointwise).
+    #[test]
+    fn expected_factor_matches_a_quadrature() {
+        for &(t, sp, st) in
+            &[(0.9f64, 0.0f64, 0.3f64), (0.99, 0.5, 0.1), (0.5, 0.2, 0.49), (1.0, 0.0, 0.2), (0.0, 0.3, 0.3)]
+        {
+            let n = 24_000;
+            let h = 24.0 / n as f64;
+            let cap = if t > 0.0 { 1.0 / t } else { f64::INFINITY };
+            let (mut m1, mut m2) = (0.0, 0.0);
+            for i in 0..=n {
+                let z = -12.0 + i as f64 * h;
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                let density = (-0.5 * z * z).exp() / (2.0 * PI).sqrt();
+                let a = (1.0 + st * z).max(0.0).min(cap);
+                m1 += w * a * density;
+                m2 += w * a * a * density;
+            }
+            let (m1, m2) = (m1 * h / 3.0 * (-0.5 * sp * sp).exp(), m2 * h / 3.0);
+            let (e1, e2) = expected_factor(t, sp, st);
+            // the kink at the clip points limits Simpson's rule to O(h²): 1e-7 at h = 1e-3
+            assert!(
+                (e1 - m1).abs() < 1e-7 && (e2 - m2).abs() < 1e-7,
+                "|t| {t} σφ {sp} σt {st}: ({e1}, {e2}) vs ({m1}, {m2})"
+            );
+        }
     }
 }

@@ -192,6 +192,21 @@ impl PsfStack {
                 "slices of {ny} × {nx} samples: expected at least {PSF_MIN_SIDE} × {PSF_MIN_SIDE}"
             )));
         }
+        // the slices' 2-D transforms (`SampledPlane`: a grid of about 32 max(nx, ny)² bytes a
+        // slice, kept) against the FFT path's memory budget, before any is made
+        let (kept, building) = SampledPlane::bytes(ny, nx);
+        let planes_bytes = depth as f64 * kept + building;
+        if planes_bytes > optics::FFT_MEMORY_BUDGET {
+            let gib = |b: f64| b / f64::from(1u32 << 30);
+            return Err(Error::PsfStack(format!(
+                "{depth} slices of {ny} × {nx}: their 2-D transforms need {:.2} GiB ({:.1} MB a slice, {:.1} MB while one is built: a grid of 2 max(nx, ny) = {} points a side) against the memory budget of {:.0} GiB; crop the slices around the PSF (a square window) or give fewer wavelengths",
+                gib(planes_bytes),
+                kept / 1e6,
+                building / 1e6,
+                2 * nx.max(ny),
+                gib(optics::FFT_MEMORY_BUDGET)
+            )));
+        }
         let elements = depth.checked_mul(ny).and_then(|v| v.checked_mul(nx));
         if elements.is_none_or(|e| e > PSF_MAX_ELEMENTS || e != values.len()) {
             return Err(Error::PsfStack(format!(
@@ -503,6 +518,19 @@ mod tests {
 
     fn lens(wavelengths: Vec<f64>, [ny, nx]: [usize; 2], values: &[f64]) -> Result<PsfStack, Error> {
         PsfStack::new(2.5, 3.36e-3, PITCH, wavelengths, [ny, nx], values, Curve::Constant(0.15), Curve::Constant(0.5))
+    }
+
+    /// A stack whose 2-D transforms would pass the memory budget is refused with the numbers
+    /// before anything is made: 16 × 2²² samples (a strip) needs a grid of 2²³ points a side, about
+    /// 32 · (2²²)² bytes; a 384 × 384 × 45 stack (212 MB of grids) is within it.
+    #[test]
+    fn planes_past_the_memory_budget_are_refused_before_allocating() {
+        let e = lens(vec![800e-9], [16, 1 << 22], &[]).unwrap_err().to_string();
+        assert!(e.contains("memory budget of 4 GiB") && e.contains("1 slices of 16 × 4194304"), "{e}");
+        let (kept, building) = SampledPlane::bytes(384, 384);
+        // the grid: (384 + 23) rows of 768 complex values, and the 768² transform it is built through
+        assert_eq!((kept, building), (407.0 * 768.0 * 16.0, 768.0 * 768.0 * 16.0));
+        assert!(45.0 * kept + building < optics::FFT_MEMORY_BUDGET);
     }
 
     /// A Gaussian PSF `exp(−r²/(2σ²))` centred at `(x0, y0)` samples from the centre sample.

@@ -883,6 +883,10 @@ pub struct MtfCurve {
     /// tangential–sagittal average; the directional curves are then two of the azimuths it
     /// averages.
     pub mtf_over_azimuth: bool,
+    /// Whether that 2-D OTF is a PSF stack's (each wavelength's whole PSF, `model = "psf"`)
+    /// rather than a sampled pupil's: it names the curve's source in the reports.
+    #[serde(skip)]
+    pub otf_from_psf_stack: bool,
     /// Field angles `(x, y)`, degrees, of a single field point (the first point of a
     /// field-of-view average).
     pub field_deg: [f64; 2],
@@ -985,6 +989,7 @@ fn curves_over_fields(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     combined.mtf_tangential = split.then(|| mean(&|c| c.mtf_tangential.as_ref().unwrap_or(&c.mtf)));
     combined.mtf_sagittal = split.then(|| mean(&|c| c.mtf_sagittal.as_ref().unwrap_or(&c.mtf)));
     combined.mtf_over_azimuth = curves.iter().any(|(c, _)| c.mtf_over_azimuth);
+    combined.otf_from_psf_stack = curves.iter().any(|(c, _)| c.otf_from_psf_stack);
     combined.field_points = curves
         .into_iter()
         .map(|(c, weight)| FieldCurve {
@@ -1081,6 +1086,7 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
         mtf_tangential,
         mtf_sagittal,
         mtf_over_azimuth,
+        otf_from_psf_stack: poly.has_psf_planes(),
         field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
         field_points: Vec::new(),
         nyquist_cyc_per_mm: camera.nyquist() * 1e-3,

@@ -677,6 +677,9 @@ pub struct MapPupil {
     oblique: Option<Oblique>,
     /// `(c_Φ, c_S)`: the map's fits, or a site map's at the table's wavelength
     fits: (f64, f64),
+    /// Zernike terms added to the wavefront ([`MapPupil::with_zernike`]): their evaluation
+    /// form (in units of `R`) and their least-squares `ρ²` slope, m
+    zernike: Option<(Arc<crate::fft::Compiled>, f64)>,
 }
 
 impl MapPupil {
@@ -684,7 +687,14 @@ impl MapPupil {
     /// the oblique incidence `oblique` off axis.
     pub fn new(map: Arc<PhaseMap>, path_per_radian_m: f64, sphere_factor: f64, oblique: Option<Oblique>) -> MapPupil {
         let fits = map.fits;
-        MapPupil { cells: Cells::Map(map), path_per_radian: path_per_radian_m, sphere_factor, oblique, fits }
+        MapPupil {
+            cells: Cells::Map(map),
+            path_per_radian: path_per_radian_m,
+            sphere_factor,
+            oblique,
+            fits,
+            zernike: None,
+        }
     }
 
     /// The design order of the layout `sites` at `wavelength_m`, its atoms transmitting `table`
@@ -704,7 +714,35 @@ impl MapPupil {
         let fits = sites.fit(&table);
         let path_per_radian = wavelength_m / (2.0 * PI);
         let sphere_factor = 1.0 - wavelength_m / sites.design_wavelength;
-        MapPupil { cells: Cells::Sites { sites, table }, path_per_radian, sphere_factor, oblique, fits }
+        MapPupil { cells: Cells::Sites { sites, table }, path_per_radian, sphere_factor, oblique, fits, zernike: None }
+    }
+
+    /// This order with Zernike terms `(Noll index, metres RMS)` added to its wavefront (Noll
+    /// 1976, over the circle of radius `R`: a fabrication or alignment error on top of the map).
+    /// Each cell takes the terms' path at its centre (as the sphere's and the oblique wave's);
+    /// on samples coarser than the cells the terms join the smooth phase taken linear across the
+    /// sample (docs/physics.md, "Resampling a layout to the pupil grid"). Their `ρ²` slope (the
+    /// least-squares fit over the disk: `2√3 c_4`, the other terms orthogonal to `1` and `ρ²`)
+    /// joins [`MapPupil::fitted_defocus_m`].
+    ///
+    /// # Errors
+    /// A Noll index outside `1..=`[`crate::fft::MAX_NOLL_INDEX`] or a non-finite coefficient.
+    pub fn with_zernike(mut self, zernike_noll_m: &[(usize, f64)]) -> Result<MapPupil, Error> {
+        let aberrations =
+            crate::fft::Aberrations { zernike_noll_m: zernike_noll_m.to_vec(), ..crate::fft::Aberrations::default() };
+        aberrations.validate()?;
+        if zernike_noll_m.iter().all(|&(_, c)| c == 0.0) {
+            self.zernike = None;
+            return Ok(self);
+        }
+        let slope: f64 = zernike_noll_m.iter().filter(|&&(j, _)| j == 4).map(|&(_, c)| 2.0 * 3f64.sqrt() * c).sum();
+        self.zernike = Some((Arc::new(crate::fft::Compiled::new(&aberrations)), slope));
+        Ok(self)
+    }
+
+    /// The added Zernike terms' path (m) at `(u, v)` (units of `R`), 0 without terms.
+    fn zernike_m(&self, u: f64, v: f64) -> f64 {
+        self.zernike.as_ref().map_or(0.0, |(z, _)| z.opd_m(u, v))
     }
 
     /// The map's aperture (a site map's is the circle).
@@ -727,7 +765,7 @@ impl MapPupil {
     /// `ρ²` over the aperture): sizes the spectral panels and the Fraunhofer check.
     pub fn fitted_defocus_m(&self) -> f64 {
         let (phase, sphere) = self.fits;
-        self.path_per_radian * phase + self.sphere_factor * sphere
+        self.path_per_radian * phase + self.sphere_factor * sphere + self.zernike.as_ref().map_or(0.0, |z| z.1)
     }
 
     /// The oblique wave's path (m) at `(u, v)` (units of `R`), 0 on axis.
@@ -795,7 +833,8 @@ impl MapPupil {
                 let design = a * sinc(u * gx) * sinc(u * gy);
                 let w = self.path_per_radian * map.phase[cj * map.nx + ci]
                     + self.sphere_factor * map.sphere(cx, cy)
-                    + self.oblique_m(cx / map.radius, cy / map.radius);
+                    + self.oblique_m(cx / map.radius, cy / map.radius)
+                    + self.zernike_m(cx / map.radius, cy / map.radius);
                 let amp = area[idx] * design;
                 weight += area[idx] * design * design;
                 field[idx] = Complex64::from_polar(amp, k * w);
@@ -848,14 +887,15 @@ impl MapPupil {
         let r = sites.reference[c];
         let t = table[sites.atoms[c] as usize];
         let k = 2.0 * PI / lambda;
-        let w = self.sphere_factor * sites.sphere(cx, cy) + self.oblique_m(cx / sites.radius, cy / sites.radius);
+        let (u_c, v_c) = (cx / sites.radius, cy / sites.radius);
+        let w = self.sphere_factor * sites.sphere(cx, cy) + self.oblique_m(u_c, v_c) + self.zernike_m(u_c, v_c);
         let v = t * Complex64::new(f64::from(r.re), f64::from(r.im)) * Complex64::from_polar(s, k * w);
         (v, t.norm_sqr() * s * s)
     }
 
     /// A site map on samples at least one cell wide: each sample is the mean of the design-order
     /// fields of the cells whose centre is in it and in the aperture, `t_{u(c)} e^{i(k0 S_c +
-    /// γ_c)} e^{iφ(X_c)}`, with the smooth phase `φ = k((1 − λ/λ0) S + oblique)` taken linear
+    /// γ_c)} e^{iφ(X_c)}`, with the smooth phase `φ = k((1 − λ/λ0) S + oblique + Zernike terms)` taken linear
     /// across the sample (its gradient at the sample's centre: separable, one factor a cell
     /// column and one a cell row), times the design order's share at the sample's centre; the
     /// power is the cells' mean `|t|²` times the share² (docs/physics.md, "Resampling a layout to
@@ -890,8 +930,10 @@ impl MapPupil {
         let u = sites.pitch / lambda;
         let centre = |i: usize| (-1.0 + (i as f64 + 0.5) * h) * radius;
         // the smooth phase φ (radians) at (x, y) metres
-        let smooth =
-            |x: f64, y: f64| k * (self.sphere_factor * sites.sphere(x, y) + self.oblique_m(x / radius, y / radius));
+        let smooth = |x: f64, y: f64| {
+            let (u, v) = (x / radius, y / radius);
+            k * (self.sphere_factor * sites.sphere(x, y) + self.oblique_m(u, v) + self.zernike_m(u, v))
+        };
         let mut field = vec![Complex64::new(0.0, 0.0); n * n];
         let weights: Vec<f64> = field
             .par_chunks_mut(n)

@@ -73,6 +73,17 @@ fn weights(u: f64) -> (i64, [f64; PLANE_WIDTH]) {
 }
 
 impl SampledPlane {
+    /// Bytes a plane of `ny × nx` samples holds, `(kept, while built)`: the half-plane grid it
+    /// keeps, `(N/2 + PLANE_WIDTH + 1) × N` complex values with `N = 2 max(n_x, n_y)` (about
+    /// `32 max(n_x, n_y)²` bytes), and the `N × N` transform it is built through (freed after).
+    /// A stack's caller checks `slices × kept + while built` against its memory budget before
+    /// any plane is made.
+    pub fn bytes(ny: usize, nx: usize) -> (f64, f64) {
+        let n = 2.0 * nx.max(ny) as f64;
+        let value = std::mem::size_of::<Complex64>() as f64;
+        ((0.5 * n + (PLANE_WIDTH + 1) as f64) * n * value, n * n * value)
+    }
+
     /// The plane of `values` (C order `[row y][column x]`, `ny × nx`, summing to 1 within 1e-9)
     /// about `centroid` (samples from the centre sample `(⌊nx/2⌋, ⌊ny/2⌋)`, `[x, y]`).
     /// `planner` is shared between the slices of a stack.

@@ -288,13 +288,17 @@ fn mtf_meaning(c: &MtfCurve) -> String {
             },
             points.join(", ")
         )
-    } else if c.mtf_over_azimuth && c.field_deg == [0.0, 0.0] {
-        "MTF: mean over azimuth (on axis; a sampled 2-D pupil, whose OTF depends on direction)".to_owned()
     } else if c.mtf_over_azimuth {
-        format!(
-            "MTF: mean over azimuth at field ({}°, {}°) (a sampled 2-D pupil, whose OTF depends on direction)",
-            c.field_deg[0], c.field_deg[1]
-        )
+        // the 2-D OTF's source: a PSF stack's planes or a sampled pupil
+        let source = if c.otf_from_psf_stack { "a PSF stack" } else { "a sampled 2-D pupil" };
+        if c.field_deg == [0.0, 0.0] {
+            format!("MTF: mean over azimuth (on axis; {source}, whose OTF depends on direction)")
+        } else {
+            format!(
+                "MTF: mean over azimuth at field ({}°, {}°) ({source}, whose OTF depends on direction)",
+                c.field_deg[0], c.field_deg[1]
+            )
+        }
     } else if split && c.field_deg == [0.0, 0.0] {
         "MTF: mean of the MTFs along x and along y (on axis; the OTF depends on direction)".to_owned()
     } else if split {

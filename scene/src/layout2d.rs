@@ -11,7 +11,7 @@ use num_complex::Complex64;
 use crate::Error;
 use crate::error::{num, quoted};
 use crate::gds::{AtomKind, GdsOptions};
-use crate::lens::{LensInfo, RawLens};
+use crate::lens_table::{LensInfo, RawLens};
 use crate::origins::Origins;
 
 /// The most atoms and lattice sites a layout may hold (the paper's aperture on a 400 nm
@@ -28,22 +28,20 @@ pub(crate) fn library_map_lens(
     info: &mut LensInfo,
 ) -> Result<lenses::LibraryMapLens, Error> {
     let two_d = if l.layout_gds.is_some() { "lens.layout_gds" } else { "lens.layout_grid" };
-    for (key, given) in [
-        ("layout", l.layout.is_some()),
-        ("atom_phase_error_rad", l.atom_phase_error_rad.is_some()),
-        ("atom_transmission_error", l.atom_transmission_error.is_some()),
-        ("atom_error_seed", l.atom_error_seed.is_some()),
-        ("parameter_bias", l.parameter_bias.is_some()),
-        ("zernike_noll_rms_um", l.zernike_noll_rms_um.is_some()),
-    ] {
-        if given {
-            return Err(o.conflict(
-                &format!("lens.{key}"),
-                format!(
-                    "lens.{key} is not taken with {two_d} (the 2-D layout is the lens as drawn; fabrication errors and added terms are for radial layouts)"
-                ),
-            ));
-        }
+    if l.layout.is_some() {
+        return Err(o.conflict(
+            "lens.layout",
+            format!("lens.layout (a radial layout) is not taken with {two_d}: give one of them"),
+        ));
+    }
+    if let Some(seed) = l.atom_error_seed {
+        return Err(o.bad(
+            "lens.atom_error_seed",
+            seed,
+            &format!(
+                "no seed with {two_d}: the 2-D layout takes the atoms' random errors in expectation over the draws (the mean over seeds; docs/physics.md, \"Fabrication errors of a 2-D layout\"), so there is nothing to draw"
+            ),
+        ));
     }
     if l.layout_gds.is_some() && l.layout_grid.is_some() {
         return Err(o.conflict("lens.layout_grid", "give one of lens.layout_grid and lens.layout_gds".into()));
@@ -64,7 +62,7 @@ pub(crate) fn library_map_lens(
             }
         }
     }
-    let (library, names) = crate::lens::read_library(l, o)?;
+    let (library, names) = crate::lens_table::read_library(l, o)?;
     let pitch = o.require("lens.lattice_pitch_um", l.lattice_pitch_um, "the lattice pitch, µm (> 0)")?;
     let pitch = o.number("lens.lattice_pitch_um", pitch, pitch > 0.0, "the lattice pitch, µm (> 0)")? * 1e-6;
     let (grid, key, file, tolerance) = if let Some(file) = &l.layout_gds {
@@ -222,11 +220,74 @@ pub(crate) fn library_map_lens(
         "lattice error against the radial design of the same layout: mean MTF and τ1 within 2 (1 − S_min) = {:.2e} at λ0 (S_min the cells' design-order amplitude at the aperture's edge)",
         2.0 * (1.0 - s_min)
     ));
+    let lens = fabrication(l, o, lens, &names, info)?;
     let (tau, t) = lens.efficiency_and_transmission(l0);
     info.notes.push(format!(
         "at λ0: τ1 = {tau:.4}, T = {t:.4} (each cell's mean against the reference sphere is the design order; the rest of T is background)"
     ));
     info.design_wavelength_m = Some(l0);
+    Ok(lens)
+}
+
+/// The 2-D layout as fabricated (docs/physics.md, "Fabrication errors of a 2-D layout"):
+/// `lens.parameter_bias` (one per parameter column, added to every atom's parameters before the
+/// library is read), the atoms' random phase and amplitude errors (`lens.atom_phase_error_rad`,
+/// `lens.atom_transmission_error`, in expectation) and `lens.zernike_noll_rms_um` on the design
+/// order's wavefront.
+fn fabrication(
+    l: &RawLens,
+    o: &Origins,
+    lens: lenses::LibraryMapLens,
+    names: &[String],
+    info: &mut LensInfo,
+) -> Result<lenses::LibraryMapLens, Error> {
+    let phase = l.atom_phase_error_rad.unwrap_or(0.0);
+    let phase = o.number("lens.atom_phase_error_rad", phase, phase >= 0.0, "a standard deviation ≥ 0 rad")?;
+    let amplitude = l.atom_transmission_error.unwrap_or(0.0);
+    let amplitude = o.number(
+        "lens.atom_transmission_error",
+        amplitude,
+        (0.0..0.5).contains(&amplitude),
+        "a relative standard deviation in [0, 0.5): the amplitude factor 1 + ε of an atom must stay positive but for rare atoms (those below 0 are taken as 0)",
+    )?;
+    let list = |b: &[f64]| format!("[{}]", b.iter().map(|&v| num(v)).collect::<Vec<_>>().join(", "));
+    let dims = lens.library().dimensions();
+    let bias = match &l.parameter_bias {
+        None => vec![0.0; dims],
+        Some(b) if b.len() != dims => {
+            return Err(o.bad(
+                "lens.parameter_bias",
+                list(b),
+                &format!(
+                    "one bias per library parameter column, {dims} ({}), in that column's units",
+                    names.join(", ")
+                ),
+            ));
+        }
+        Some(b) if b.iter().any(|v| !v.is_finite()) => {
+            return Err(o.bad("lens.parameter_bias", list(b), "finite numbers"));
+        }
+        Some(b) => b.clone(),
+    };
+    let errors = lenses::AtomErrors { phase_sigma_rad: phase, transmission_sigma: amplitude, seed: 0 };
+    let mut lens = lens.with_fabrication(&bias, errors).map_err(|e| match e {
+        lenses::Error::Layout(m) => {
+            o.bad("lens.parameter_bias", list(&bias), &format!("a bias that keeps every atom inside the library: {m}"))
+        }
+        e => o.domain("lens.parameter_bias", "[lens]", e),
+    })?;
+    if phase > 0.0 || amplitude > 0.0 || bias.iter().any(|&b| b != 0.0) {
+        info.notes.push(format!(
+            "fabrication errors: parameter bias {}, per-atom phase σ = {} rad and relative amplitude σ = {} in expectation over the draws (the expected field is the design order; the rest of the atoms' power is stray light, in T)",
+            list(&bias),
+            num(phase),
+            num(amplitude),
+        ));
+    }
+    if let Some(terms) = crate::lens_table::zernike(l, o)? {
+        info.notes.push(crate::lens_table::zernike_note(&terms));
+        lens = lens.with_zernike(terms).map_err(|e| o.domain("lens.zernike_noll_rms_um", "[lens]", e))?;
+    }
     Ok(lens)
 }
 

@@ -12,9 +12,9 @@ use lenses::{
 };
 use optics::LensModel;
 use radiometry::Spectrum;
-use serde::Deserialize;
 
 use crate::error::{Error, num, quoted};
+use crate::lens_table::{LensInfo, RawLens, read_library, zernike, zernike_note};
 use crate::origins::{NumberOrFile, Origins};
 use crate::psf::{
     ACCEPTED, ALIASING_MAX, ALIASING_WARNED, BORDER_WARNED, IMAGINARY_WARNED, PsfLimits, TableRange, read_stack,
@@ -65,82 +65,6 @@ pub const PRESETS: [(&str, &str); 6] = [
 
 /// The glasses `lens.glass` names.
 const GLASSES: &str = "\"N-BK7\" (Schott, Sellmeier 300–2500 nm)";
-
-#[derive(Deserialize, Clone, Default)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawLens {
-    pub model: Option<String>,
-    /// Read from the table by [`apply_preset`] before deserializing; here to be a known key.
-    #[serde(rename = "preset")]
-    pub _preset: Option<toml::Value>,
-    pub f_number: Option<f64>,
-    pub aperture_diameter_mm: Option<f64>,
-    pub focal_length_mm: Option<f64>,
-    pub design_wavelength_nm: Option<f64>,
-    pub design_band_nm: Option<[f64; 2]>,
-    pub group_delay_range_fs: Option<f64>,
-    pub delay_overflow: Option<String>,
-    pub design_order: Option<u32>,
-    pub channels_nm: Option<Vec<f64>>,
-    pub layout: Option<String>,
-    pub zones: Option<String>,
-    pub zone_mask: Option<String>,
-    pub area_fractions: Option<Vec<f64>>,
-    pub other_channels: Option<String>,
-    pub glass: Option<String>,
-    pub refractive_index: Option<f64>,
-    pub elements: Option<u32>,
-    pub coating_reflectance: Option<f64>,
-    pub efficiency: Option<NumberOrFile>,
-    pub transmission: Option<NumberOrFile>,
-    pub channel_efficiencies: Option<Vec<NumberOrFile>>,
-    pub mtf: Option<OneOrMany>,
-    pub mtf_includes_pixel_um: Option<f64>,
-    pub mtf_field: Option<u32>,
-    pub iris_decentre_x: Option<f64>,
-    pub iris_decentre_y: Option<f64>,
-    pub obscuration: Option<f64>,
-    pub sector_deg: Option<[f64; 2]>,
-    pub spherical_um: Option<f64>,
-    pub coma_um: Option<f64>,
-    pub astigmatism_um: Option<f64>,
-    pub field_curvature_um: Option<f64>,
-    pub binary2: Option<Vec<f64>>,
-    pub norm_radius_mm: Option<f64>,
-    pub diffraction_order: Option<f64>,
-    pub phase_csv: Option<String>,
-    pub phase_spline_rad: Option<Vec<f64>>,
-    pub phase_map: Option<String>,
-    pub amplitude_map: Option<String>,
-    pub phase_map_pitch_um: Option<f64>,
-    pub aperture: Option<String>,
-    pub dispersion: Option<String>,
-    pub zernike_noll_rms_um: Option<Vec<f64>>,
-    pub library: Option<String>,
-    pub atom_phase_error_rad: Option<f64>,
-    pub atom_transmission_error: Option<f64>,
-    pub atom_error_seed: Option<u64>,
-    pub parameter_bias: Option<Vec<f64>>,
-    pub layout_grid: Option<String>,
-    pub layout_gds: Option<String>,
-    pub gds_cell: Option<String>,
-    pub gds_layer: Option<i64>,
-    pub gds_datatype: Option<i64>,
-    pub lattice_pitch_um: Option<f64>,
-    pub atom: Option<String>,
-    pub handedness: Option<String>,
-    pub empty_cell: Option<toml::Value>,
-    pub psf: Option<String>,
-    pub psf_pitch_um: Option<f64>,
-    pub psf_wavelengths_nm: Option<Vec<f64>>,
-    /// Read by [`apply_zemax`] before deserializing (it fills the phase lens's keys); here to be
-    /// known keys.
-    pub zemax: Option<String>,
-    pub zemax_surface: Option<u32>,
-    /// Every family's: read by [`crate::load`] into the scene (docs/physics.md, "Relative
-    /// illumination").
-    pub relative_illumination: Option<NumberOrFile>,
-}
 
 /// A lens family of the scene format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -266,26 +190,6 @@ impl Model {
             }
         };
         keys.contains(&key)
-    }
-}
-
-/// A path, or a list of paths (`lens.mtf`: one Zemax export per wavelength).
-#[derive(Clone, Debug, serde::Deserialize)]
-#[serde(untagged)]
-pub(crate) enum OneOrMany {
-    /// One path.
-    One(String),
-    /// Several paths.
-    Many(Vec<String>),
-}
-
-impl OneOrMany {
-    /// The paths, in the order given.
-    pub(crate) fn paths(&self) -> Vec<&str> {
-        match self {
-            OneOrMany::One(p) => vec![p.as_str()],
-            OneOrMany::Many(list) => list.iter().map(String::as_str).collect(),
-        }
     }
 }
 
@@ -489,24 +393,6 @@ pub(crate) fn apply_zemax(lens: &mut toml::Table, o: &Origins) -> Result<Option<
         }
     }
     Ok(Some(ZemaxSource { file: file.to_owned(), surface: z.surface, keys, notes: z.notes }))
-}
-
-/// What a comparison reports of a lens besides its [`LensModel`].
-#[derive(Clone, Debug, Default)]
-pub(crate) struct LensInfo {
-    /// The family, as `Design::kind` names it.
-    pub kind: &'static str,
-    /// Its design wavelength (a dispersion-engineered lens: the band's centre), m.
-    pub design_wavelength_m: Option<f64>,
-    /// A multiplexed lens's channel wavelengths, m.
-    pub channels_m: Vec<f64>,
-    /// Facts of the design a reader needs (group delay, β, glass, efficiency per channel).
-    pub notes: Vec<String>,
-    /// A PSF stack's pitch, checked against the camera.
-    pub psf: Option<crate::psf::PsfLimits>,
-    /// The wavelengths a lens given as data covers (a PSF stack, an MTF table), checked against
-    /// the detected spectrum.
-    pub table_range: Option<crate::psf::TableRange>,
 }
 
 /// A lens built from its table.
@@ -1029,8 +915,10 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         }
         Model::Psf => Arc::new(psf_lens(l, o, f_number, f0_m, &transmission, &mut info)?),
     };
+    // a phase lens and a 2-D layout take the terms themselves
+    let two_d_layout = model == Model::Library && (l.layout_grid.is_some() || l.layout_gds.is_some());
     let lens = match zernike(l, o)? {
-        Some(terms) if model != Model::Phase => {
+        Some(terms) if model != Model::Phase && !two_d_layout => {
             let probe = info.design_wavelength_m.or(info.channels_m.first().copied()).unwrap_or(550e-9);
             info.notes.push(zernike_note(&terms));
             let (count, given) = (terms.len(), zernike_note(&terms));
@@ -1044,63 +932,6 @@ pub(crate) fn build(l: &RawLens, o: &Origins) -> Result<BuiltLens, Error> {
         _ => lens,
     };
     Ok(BuiltLens { lens, info })
-}
-
-/// `lens.library` (columns: parameters, `wavelength_nm`, `amplitude` or `transmittance`,
-/// `phase_rad`, and for fins an optional `co_amplitude`, their unconverted light): the library
-/// and its parameter columns' names.
-pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library, Vec<String>), Error> {
-    let expected =
-        "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
-    let file = o.require("lens.library", l.library.as_deref(), expected)?;
-    let (headers, rows) = crate::tables::read_columns(&o.path(file), "meta-atom library")
-        .map_err(|e| o.table_error("lens.library", file, e, expected))?;
-    let ctx = format!("lens.library = {}", quoted(file));
-    let col = |name: &str| headers.iter().position(|h| h == name);
-    let reserved = ["wavelength_nm", "amplitude", "transmittance", "phase_rad", "co_amplitude"];
-    let (Some(iw), Some(ip)) = (col("wavelength_nm"), col("phase_rad")) else {
-        return Err(o.bad(
-            "lens.library",
-            quoted(file),
-            &format!("{expected} (its header is `{}`)", headers.join(",")),
-        ));
-    };
-    let amplitude = match (col("amplitude"), col("transmittance")) {
-        (Some(i), None) => (i, false),
-        (None, Some(i)) => (i, true),
-        _ => {
-            return Err(o.bad(
-                "lens.library",
-                quoted(file),
-                &format!("one of the columns amplitude (|t|) or transmittance (|t|²), not both or neither (its header is `{}`)", headers.join(",")),
-            ));
-        }
-    };
-    let names: Vec<&String> = headers.iter().filter(|h| !reserved.contains(&h.as_str())).collect();
-    if names.is_empty() {
-        return Err(o.bad(
-            "lens.library",
-            quoted(file),
-            "at least one parameter column (e.g. diameter_nm) beside wavelength_nm, amplitude and phase_rad",
-        ));
-    }
-    let mut table = Vec::with_capacity(rows.len());
-    for (_, values) in &rows {
-        let params: Vec<f64> = names.iter().map(|n| values[col(n).unwrap_or(0)]).collect();
-        let a = values[amplitude.0];
-        let a = if amplitude.1 { if a >= 0.0 { a.sqrt() } else { f64::NAN } } else { a };
-        table.push((params, values[iw] * 1e-9, a, values[ip]));
-    }
-    let library = lenses::Library::new(&table).map_err(|e| o.domain("lens.library", &ctx, e))?;
-    // a fin's unconverted light (zero-order light: in T, not in τ1)
-    let library = match col("co_amplitude") {
-        Some(ic) => {
-            let co: Vec<f64> = rows.iter().map(|(_, values)| values[ic]).collect();
-            library.with_co_amplitude(&table, &co).map_err(|e| o.domain("lens.library", &ctx, e))?
-        }
-        None => library,
-    };
-    Ok((library, names.iter().map(|n| n.to_string()).collect()))
 }
 
 /// The `model = "library"` lens: `lens.library` ([`read_library`]) and `lens.layout` (`r_mm`
@@ -1266,39 +1097,6 @@ fn library_fabrication(
         ));
     }
     Ok(lens)
-}
-
-/// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.
-fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error> {
-    let Some(list) = &l.zernike_noll_rms_um else { return Ok(None) };
-    let key = "lens.zernike_noll_rms_um";
-    let max = optics::fft::MAX_NOLL_INDEX;
-    if list.is_empty() || list.len() > max {
-        return Err(o.bad(
-            key,
-            format!("{} terms", list.len()),
-            &format!("1 to {max} coefficients, Z1 first (Noll order, µm RMS of path)"),
-        ));
-    }
-    let mut out = Vec::new();
-    for (i, &c) in list.iter().enumerate() {
-        let item = format!("{key}[{i}]");
-        o.number(&item, c, c.abs() <= 1e3, "a Zernike coefficient in µm RMS, |c| ≤ 1000 µm")?;
-        if c != 0.0 {
-            out.push((i + 1, c * 1e-6));
-        }
-    }
-    Ok(Some(out))
-}
-
-fn zernike_note(terms: &[(usize, f64)]) -> String {
-    let list: Vec<String> =
-        terms.iter().map(|(j, c)| format!("Z{j} = {} µm", num(optics::round_for_display(c * 1e6)))).collect();
-    if list.is_empty() {
-        "Zernike terms (Noll, RMS): all zero".to_owned()
-    } else {
-        format!("Zernike terms (Noll, RMS): {}", list.join(", "))
-    }
 }
 
 /// The `model = "phase"` lens: its profile (`binary2` or `phase_csv`), dispersion, efficiency.

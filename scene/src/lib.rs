@@ -58,6 +58,7 @@ mod error;
 pub mod gds;
 mod layout2d;
 mod lens;
+mod lens_table;
 mod load;
 pub mod npy;
 mod origins;

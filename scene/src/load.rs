@@ -14,7 +14,7 @@ use radiometry::{Blackbody, Gaussian, Line, Spectrum, TopHat};
 use serde::Deserialize;
 
 use crate::error::{Error, Warning, num, quoted, shorten, shorten_quoted};
-use crate::lens::RawLens;
+use crate::lens_table::RawLens;
 use crate::origins::{
     EXPOSURE_PLAUSIBLE_MS, NumberOrFile, Origins, PIXEL_PITCH_PLAUSIBLE_UM, TableCache, number_prefix, rounded, unit_of,
 };
@@ -701,7 +701,7 @@ fn build(raw: &RawScene, o: &Origins) -> Result<Scene, Error> {
 }
 
 /// The scene and what the comparison needs to know of its lens.
-pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::lens::LensInfo), Error> {
+pub(crate) fn build_parts(raw: &RawScene, o: &Origins) -> Result<(Scene, crate::lens_table::LensInfo), Error> {
     // [lens]
     let crate::lens::BuiltLens { lens, info } = crate::lens::build(&raw.lens, o)?;
     let lens = pupil_mapping(raw, lens, &info, o)?;
@@ -828,7 +828,7 @@ const PUPIL_MAPPING: &str = "\"paraxial\" (the default: sin θ ≈ r/f0, the pap
 fn pupil_mapping(
     raw: &RawScene,
     lens: std::sync::Arc<dyn optics::LensModel>,
-    info: &crate::lens::LensInfo,
+    info: &crate::lens_table::LensInfo,
     o: &Origins,
 ) -> Result<std::sync::Arc<dyn optics::LensModel>, Error> {
     let key = "options.pupil_mapping";
@@ -883,7 +883,7 @@ const FIELD_ANGLE: crate::tables::Axis = crate::tables::Axis { name: "field_angl
 
 /// `scene` with the relative illumination `lens.relative_illumination` names (every family's
 /// key; default none), a table checked to reach every field point.
-fn relative_illumination(l: &crate::lens::RawLens, scene: Scene, o: &Origins) -> Result<Scene, Error> {
+fn relative_illumination(l: &crate::lens_table::RawLens, scene: Scene, o: &Origins) -> Result<Scene, Error> {
     use metric::RelativeIllumination;
     let key = "lens.relative_illumination";
     let ri = match &l.relative_illumination {

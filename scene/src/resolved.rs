@@ -10,7 +10,8 @@ use std::fmt::Write as _;
 use metric::{GlareMode, MetricForm, Options};
 
 use crate::error::{Error, Warning, shorten};
-use crate::lens::{Model, RawLens};
+use crate::lens::Model;
+use crate::lens_table::RawLens;
 use crate::load::{RawScene, Source, build_checked, prepare};
 use crate::origins::{NumberOrFile, Origins};
 
@@ -235,7 +236,7 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
         Model::Tabulated => {
             let key = o.key("lens.mtf");
             match &l.mtf {
-                Some(crate::lens::OneOrMany::Many(files)) => {
+                Some(crate::lens_table::OneOrMany::Many(files)) => {
                     let resolved: Vec<String> = files
                         .iter()
                         .map(|f| path(o, &key, f).map(|p| toml::Value::String(p).to_string()))
@@ -291,7 +292,11 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             }
             out.number("atom_phase_error_rad", l.atom_phase_error_rad.unwrap_or(0.0));
             out.number("atom_transmission_error", l.atom_transmission_error.unwrap_or(0.0));
-            out.value("atom_error_seed", &l.atom_error_seed.unwrap_or(0).to_string());
+            if l.layout_grid.is_some() || l.layout_gds.is_some() {
+                out.line("# no atom_error_seed: a 2-D layout takes the atoms' errors in expectation");
+            } else {
+                out.value("atom_error_seed", &l.atom_error_seed.unwrap_or(0).to_string());
+            }
             if let Some(b) = &l.parameter_bias {
                 out.value("parameter_bias", &list(b));
             }

@@ -244,3 +244,80 @@ fn a_layer_without_atoms_and_empty_sites_are_refused() {
     assert!(dark < full && substrate != dark, "{full} {substrate} {dark}");
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// [`load`] with 128 pupil samples (0.39 µm, a lattice pitch: the 2-D pupil's cells resolved),
+/// to keep the many evaluations of the fabrication test fast.
+fn load_128(dir: &Path, lens_keys: &str) -> Result<metric::Scene, String> {
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, scene_text(lens_keys).replace("pupil_samples = 256", "pupil_samples = 128")).unwrap();
+    scene::load(Some(&path), &[]).map_err(|e| e.to_string())
+}
+
+/// Mean MTF and τ1 of a scene (τ1 at 800 nm, on axis).
+fn mtf_and_tau(scene: &metric::Scene) -> (f64, f64) {
+    (metric::evaluate(scene).unwrap().mean_mtf, tau1(scene))
+}
+
+/// The fabrication-error keys on the 2-D layout give the radial lens's τ1 and mean MTF within the
+/// stated lattice error, each error on its own: a parameter bias, the atoms' random phase and
+/// amplitude errors (the 2-D lens takes their expectation; the radial lens draws one error a
+/// ring, so it is averaged over 4 seeds; its few rings a zone add `(e^{σ²} − 1)/N` of
+/// incoherent power, docs/physics.md), and Zernike terms (a symmetric Z11 and a coma Z7).
+#[test]
+fn fabrication_errors_on_a_2d_layout_follow_the_radial_lens() {
+    let d = dir("fabrication");
+    let rings = rings();
+    let mut csv = String::from("r_mm,diameter_nm\n");
+    for (i, dia) in rings.iter().enumerate() {
+        csv.push_str(&format!("{:.7},{dia:.1}\n", (i as f64 + 0.5) * PITCH_NM * 1e-6));
+    }
+    std::fs::write(d.join("layout.csv"), csv).unwrap();
+    let (n, at) = sites();
+    write_npy(&d.join("lens.npy"), n, |i, j| at(i, j).unwrap_or(f64::NAN));
+    // a bias of 6 nm that keeps every ring inside the library's 100–300 nm
+    let (lo, hi) = rings.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let bias = if hi + 6.0 <= 300.0 { 6.0 } else { -6.0 };
+    assert!(lo + bias >= 100.0 && hi + bias <= 300.0, "rings {lo}–{hi}");
+    let bound = lattice_bound();
+    let cases: [(&str, String, usize); 5] = [
+        ("bias", format!("parameter_bias = [{bias}]"), 1),
+        ("phase σ 0.3 rad", "atom_phase_error_rad = 0.3".into(), 4),
+        ("amplitude σ 0.2", "atom_transmission_error = 0.2".into(), 4),
+        ("Z11 0.05 µm", "zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.05]".into(), 1),
+        ("Z7 0.05 µm", "zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0.05]".into(), 1),
+    ];
+    let (m_nominal, t_nominal) =
+        mtf_and_tau(&load_128(&d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4").unwrap());
+    println!("stated lattice error {bound:.4}; nominal 2-D: mean MTF {m_nominal:.5}, τ1 {t_nominal:.5}");
+    for (name, keys, seeds) in cases {
+        let (mut m_radial, mut t_radial) = (0.0, 0.0);
+        for seed in 0..seeds {
+            let radial = load_128(&d, &format!("layout = \"layout.csv\"\n{keys}\natom_error_seed = {seed}")).unwrap();
+            let (m, t) = mtf_and_tau(&radial);
+            m_radial += m / seeds as f64;
+            t_radial += t / seeds as f64;
+        }
+        let grid = load_128(&d, &format!("layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\n{keys}")).unwrap();
+        let (m, t) = mtf_and_tau(&grid);
+        println!(
+            "{name}: radial mean MTF {m_radial:.5}, τ1 {t_radial:.5}; 2-D mean MTF {m:.5} ({:+.2e}), τ1 {t:.5} ({:+.2e} relative)",
+            m - m_radial,
+            t / t_radial - 1.0
+        );
+        assert!((m - m_radial).abs() <= bound, "{name}: mean MTF {m} vs radial {m_radial}: beyond {bound}");
+        assert!((t / t_radial - 1.0).abs() <= bound, "{name}: τ1 {t} vs radial {t_radial}: beyond {bound}");
+        // each error moves the lens: the comparison is not of two nominal lenses
+        assert!((m - m_nominal).abs() > 1e-4 || (t - t_nominal).abs() > 1e-4, "{name}: no change");
+        if seeds > 1 && keys.contains("phase") {
+            // in expectation every atom's field is scaled by e^{−σ²/2}: τ1 by e^{−σ²} exactly
+            let ratio = t / t_nominal;
+            assert!((ratio - (-0.09f64).exp()).abs() < 1e-9, "{name}: τ1 ratio {ratio} vs e^(−σ²)");
+        }
+    }
+    // a bias past the library's range is refused naming the key and the atoms; a seed has no draws
+    let e = load(&d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\nparameter_bias = [150]").unwrap_err();
+    assert!(e.contains("lens.parameter_bias") && e.contains("outside the library's range"), "{e}");
+    let e = load(&d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\natom_error_seed = 3").unwrap_err();
+    assert!(e.contains("lens.atom_error_seed") && e.contains("expectation"), "{e}");
+    std::fs::remove_dir_all(&d).ok();
+}

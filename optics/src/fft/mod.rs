@@ -224,5 +224,7 @@ pub use sampling::{
     MIN_CHOSEN_SAMPLES, RICHARDSON_ORDER, SAFETY, SamplingPlan, extrapolation_gain, observed_order, pupil_samples_for,
     reachable,
 };
+/// Zernike terms in evaluation form, for a 2-D map's added wavefront (`crate::map::MapPupil`).
+pub(crate) use wavefront::Compiled;
 pub use wavefront::{Aberrations, MAX_NOLL_INDEX, noll_to_nm};
 pub use zones::{SampledZones, ZoneField};

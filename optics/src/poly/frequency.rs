@@ -221,8 +221,13 @@ impl Polychromatic<'_> {
     /// with no rotational symmetry, whose ASNR takes the mean MTF averaged over azimuth
     /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)).
     pub fn has_pupil_grid(&self) -> bool {
-        matches!(self.engine(), Engine::Fft { .. } | Engine::Monochromatic { fft: Some(_) })
-            || self.engine.nodes().nodes.iter().any(|n| n.table.as_ref().is_some_and(|t| t.is_two_dimensional()))
+        matches!(self.engine(), Engine::Fft { .. } | Engine::Monochromatic { fft: Some(_) }) || self.has_psf_planes()
+    }
+
+    /// Whether the 2-D OTF comes from a table of each wavelength's whole PSF (a PSF stack read
+    /// in 2-D, [`OtfTable::with_planes`](crate::OtfTable::with_planes)), not a sampled pupil.
+    pub fn has_psf_planes(&self) -> bool {
+        self.engine.nodes().nodes.iter().any(|n| n.table.as_ref().is_some_and(|t| t.is_two_dimensional()))
     }
 
     /// The mean MTF averaged over azimuth (docs/physics.md, "Pupils without rotational
