@@ -155,6 +155,7 @@ impl Options {
             spectral_rule: self.spectral_rule,
             fft_tolerance: self.fft_tolerance,
             exact_irises: self.exact_irises,
+            overlap: true,
         }
     }
 }

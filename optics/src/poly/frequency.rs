@@ -221,7 +221,7 @@ impl Polychromatic<'_> {
     /// with no rotational symmetry, whose ASNR takes the mean MTF averaged over azimuth
     /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)).
     pub fn has_pupil_grid(&self) -> bool {
-        matches!(self.engine(), Engine::Fft { .. } | Engine::Monochromatic { fft: Some(_) })
+        matches!(self.engine(), Engine::Fft { .. } | Engine::Overlap { .. } | Engine::Monochromatic { fft: Some(_) })
             || self.engine.nodes().nodes.iter().any(|n| n.table.as_ref().is_some_and(|t| t.is_two_dimensional()))
     }
 
