@@ -7,8 +7,11 @@
 //! vector `e`, `e⊥` across it), the OTF is the normalized autocorrelation
 //!
 //! ```text
-//! O(s, φ) = (1/π) ∬_{|p₊| ≤ 1, |p₋| ≤ 1} exp(i k [W(p₊) − W(p₋)]) dx dy,   p± = (x ± s) e + y e⊥
+//! O(s, φ) = (1/π) ∬_{|p₊| ≤ 1, |p₋| ≤ 1} exp(i k [W(p₋) − W(p₊)]) dx dy,   p± = (x ± s) e + y e⊥
 //! ```
+//!
+//! (the sign that gives a tilt `W = NA Δ·ρ` the image-shift phase `exp(−2πi ν·Δ)`; the rules
+//! below integrate `exp(i k [W(p₊) − W(p₋)])` and take the conjugate).
 //!
 //! The overlap is `|y| ≤ sin T`, `|x| ≤ X(y) = √(1 − y²) − s`, `T = acos s`. With `y = sin t`
 //! (dy = cos t dt) and `x = X u`, `X = cos t − s` is analytic in t and the square-root edge is
@@ -300,7 +303,11 @@ impl<'a> Overlap<'a> {
                 excess += term.weight.abs() * 2.0 / total;
                 continue;
             };
-            let (mut v, error) = term_otf(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps);
+            let (v, error) = term_otf(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps);
+            // the project's sign (docs/physics.md, "Sign of the wavefront"): a tilt
+            // W = NA Δ·ρ multiplies the OTF by exp(−2πi ν·Δ), as an image shift does, so the OTF
+            // is ∫ P(p₋) P*(p₊), the conjugate of the integral above
+            let mut v = v.conj();
             if error > (1.0 - X_SHARE) * eps {
                 // |O| ≤ 1: never off by more than 1 + |v|
                 excess += term.weight.abs() * error.min(1.0 + v.norm()) / total;

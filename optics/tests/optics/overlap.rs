@@ -50,8 +50,9 @@ fn opd(w: &Wavefront, x: f64, y: f64) -> f64 {
     w.defocus_m * r2 + w.spherical_m * r2 * r2 + w.coma_m * r2 * x + w.astigmatism_m * x * x
 }
 
-/// The monochromatic OTF by brute force: `(1/π) ∬ exp(i k [W(p₊) − W(p₋)])` over the overlap of
-/// the pupils centred at `∓s e`, a plain product Gauss–Legendre rule in the pupil's lag frame
+/// The monochromatic OTF by brute force: `(1/π) ∬ exp(i k [W(p₋) − W(p₊)])` over the overlap of
+/// the pupils centred at `∓s e` (the project's sign: a tilt `W = NA Δ·ρ` gives the image-shift
+/// phase `exp(−2πi ν·Δ)`), a plain product Gauss–Legendre rule in the pupil's lag frame
 /// (`points` in y over the overlap's height, `points` in x over its width at each y), no
 /// substitution, no analytic part.
 fn brute_force(w: &Wavefront, lambda: f64, s: f64, phi: f64, rule: &[(f64, f64)]) -> Complex64 {
@@ -65,7 +66,7 @@ fn brute_force(w: &Wavefront, lambda: f64, s: f64, phi: f64, rule: &[(f64, f64)]
         for &(u, wx) in rule {
             let x = half * u;
             let (xp, xm) = (x + s, x - s);
-            let phase = k * (opd(w, xp * c - y * sn, xp * sn + y * c) - opd(w, xm * c - y * sn, xm * sn + y * c));
+            let phase = k * (opd(w, xm * c - y * sn, xm * sn + y * c) - opd(w, xp * c - y * sn, xp * sn + y * c));
             sum += Complex64::from_polar(wy * wx * half * height, phase);
         }
     }
