@@ -585,6 +585,11 @@ pub(crate) fn evaluate_field_differentiated(
                     "exact-1d, complex sum with lateral colour".to_owned()
                 }
                 optics::Engine::Exact1d => "exact-1d".to_owned(),
+                optics::Engine::Overlap { skipped } => format!(
+                    "overlap quadrature: the full pupil's Seidel wavefront integrated over the two pupils' \
+                     overlap at each frequency and azimuth (defocus exact across the lag, nested \
+                     Clenshaw–Curtis along it); {skipped} lightest spectral nodes left out"
+                ),
                 optics::Engine::ClosedForm => {
                     "closed-form spectral integral (Gaussian spectrum, affine defocus)".to_owned()
                 }

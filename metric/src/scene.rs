@@ -143,6 +143,10 @@ pub struct Options {
     /// Whether a circular iris on a defocus-only lens goes to the exact path (default; off: the
     /// FFT path, for cross-checks): [`optics::Settings::exact_irises`].
     pub exact_irises: bool,
+    /// Whether a full circular pupil with Seidel terms beyond defocus is computed by the
+    /// quadrature over the pupils' overlap (default; off: the FFT path, for cross-checks):
+    /// [`optics::Settings::overlap`].
+    pub overlap: bool,
 }
 
 impl Options {
@@ -155,6 +159,7 @@ impl Options {
             spectral_rule: self.spectral_rule,
             fft_tolerance: self.fft_tolerance,
             exact_irises: self.exact_irises,
+            overlap: self.overlap,
         }
     }
 }
@@ -172,6 +177,7 @@ impl Default for Options {
             spectral_rule: optics::SpectralRule::Interpolated,
             fft_tolerance: Some(optics::DEFAULT_FFT_TOLERANCE),
             exact_irises: true,
+            overlap: true,
         }
     }
 }

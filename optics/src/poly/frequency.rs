@@ -221,7 +221,8 @@ impl Polychromatic<'_> {
     /// with no rotational symmetry, whose ASNR takes the mean MTF averaged over azimuth
     /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)).
     pub fn has_pupil_grid(&self) -> bool {
-        matches!(self.engine(), Engine::Fft { .. } | Engine::Monochromatic { fft: Some(_) }) || self.has_psf_planes()
+        matches!(self.engine(), Engine::Fft { .. } | Engine::Overlap { .. } | Engine::Monochromatic { fft: Some(_) })
+            || self.has_psf_planes()
     }
 
     /// Whether the 2-D OTF comes from a table of each wavelength's whole PSF (a PSF stack read

@@ -53,6 +53,7 @@ pub(crate) use frequency::clenshaw_curtis;
 mod grid;
 mod line;
 mod noise;
+mod overlap;
 mod per_frequency;
 mod spectral;
 
@@ -119,6 +120,15 @@ pub enum Engine {
         /// observed convergence of `N/4`, `N/2` and `N` (composite pupils, `fft::ErrorRule`).
         extrapolated: bool,
     },
+    /// A full circular pupil with Seidel terms beyond defocus, by quadrature over the two
+    /// pupils' overlap at each frequency and azimuth the rules read (`overlap` module;
+    /// docs/physics.md, "Analytic 2-D pupils by quadrature over the overlap"): the defocus
+    /// integrated exactly across the lag, nested Clenshaw–Curtis along it.
+    Overlap {
+        /// Spectral nodes left out: the lightest, whose weights together are at most a
+        /// thousandth of the tolerance.
+        skipped: usize,
+    },
     /// A line spectrum ([`Spectrum::as_line`]): one wavelength, one node per imaging order, no
     /// spectral quadrature. The OTF is the efficiency-weighted sum of the orders' exact OTFs
     /// there (complex with lateral shifts), each by the 1-D integral or, where its pupil or
@@ -183,6 +193,10 @@ pub struct Settings {
     /// decentring adds (exact; docs/physics.md, "General pupils"); off, it is sampled on the FFT
     /// path, for cross-checks.
     pub exact_irises: bool,
+    /// Whether full circular pupils with Seidel terms beyond defocus are computed by the
+    /// quadrature over the pupils' overlap ([`Engine::Overlap`]) where `pupil_samples` is
+    /// `None`; off (or with `pupil_samples` set) they are sampled on the FFT path.
+    pub overlap: bool,
 }
 
 impl Default for Settings {
@@ -194,6 +208,7 @@ impl Default for Settings {
             closed_form: true,
             spectral_rule: SpectralRule::default(),
             exact_irises: true,
+            overlap: true,
         }
     }
 }
@@ -573,6 +588,12 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
             nodes = coarser;
             check_signal(&nodes)?;
         }
+        if settings.overlap
+            && settings.pupil_samples.is_none()
+            && let Some(engine) = overlap::Overlap::new(scene, nodes.clone(), tolerance)
+        {
+            return Ok(Box::new(engine));
+        }
         return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, tolerance)?));
     }
     Ok(Box::new(exact::Quadrature { scene, nodes }))
@@ -674,7 +695,9 @@ impl<'a> Polychromatic<'a> {
         let engine = choose(scene, settings)?;
         // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
         let engine_tolerance = match engine.engine() {
-            Engine::Fft { .. } => settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance),
+            Engine::Fft { .. } | Engine::Overlap { .. } => {
+                settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance)
+            }
             _ => settings.tolerance,
         };
         let mut this = Polychromatic {

@@ -5,6 +5,7 @@ mod fft;
 mod line;
 mod orders;
 mod otf;
+mod overlap;
 mod properties;
 mod radial;
 mod reference;

@@ -252,7 +252,7 @@ pub(crate) fn markdown(rows: &[Row], kernels: &[KernelRow], context: &Context) -
         let means: Vec<String> = samplings.iter().map(|(n, m)| format!("N = {n}: {m:.12}")).collect();
         let _ = writeln!(
             s,
-            "Coma ({COMA}): `examples/paper-theory.toml` with `lens.coma_um=0.5` (FFT path). Reference: the \
+            "Coma ({COMA}): `examples/paper-theory.toml` with `lens.coma_um=0.5` (the overlap quadrature). Reference: the \
              Richardson extrapolation M_fine + (M_fine − M_mid)/(2^p − 1) of fixed pupil samplings ({}; \
              `options.pupil_samples`), observed order p = {order:.2}: {reference:.12}. Its own error is about the \
              size of the last correction, {:.1e}.\n",

@@ -222,7 +222,7 @@ pub(crate) fn markdown(rows: &[Row], map: Option<&Map>, process: Option<&crate::
         let error = verdict(r.error, 1e-4);
         (format!("{} at error {:.1e}", duration(r.micros), r.error), format!("time {time}; error {error}"))
     });
-    line("coma 0.5 µm (FFT), tol 1e-4: ≤ 50 ms at error ≤ 1e-4", m, v);
+    line("coma 0.5 µm (overlap quadrature), tol 1e-4: ≤ 50 ms at error ≤ 1e-4", m, v);
 
     let (m, v) = map.map_or_else(absent, |map| {
         (

@@ -312,8 +312,8 @@ pub(crate) fn decentred_iris(grid: &Grid, case: &Case, sagittal: f64, rows: &mut
     0.5 * (iris::tangential_mean_mtf(case, 0.1, 1e-12) + sagittal)
 }
 
-/// The coma rows (FFT path, default settings) against the Richardson extrapolation of fixed
-/// samplings.
+/// The coma rows (default settings: the overlap quadrature) against the Richardson
+/// extrapolation of fixed FFT samplings.
 pub(crate) fn coma(grid: &Grid, rows: &mut Vec<Row>, notes: &mut Notes) {
     eprintln!("{COMA}:");
     let coma = |extra: String| load("examples/paper-theory.toml", &["lens.coma_um=0.5".to_owned(), extra]);

@@ -1,0 +1,656 @@
+//! The overlap engine: the OTF of a full circular pupil with a polynomial wavefront (defocus and
+//! the Seidel terms) as a quadrature over the two pupils' overlap, at exactly the frequencies and
+//! azimuths the metric's rules ask for (docs/physics.md, "Analytic 2-D pupils by quadrature over
+//! the overlap").
+//!
+//! In units of the pupil radius, at normalized frequency `s = ν λ F#` along the azimuth φ (unit
+//! vector `e`, `e⊥` across it), the OTF is the normalized autocorrelation
+//!
+//! ```text
+//! O(s, φ) = (1/π) ∬_{|p₊| ≤ 1, |p₋| ≤ 1} exp(i k [W(p₋) − W(p₊)]) dx dy,   p± = (x ± s) e + y e⊥
+//! ```
+//!
+//! (the sign that gives a tilt `W = NA Δ·ρ` the image-shift phase `exp(−2πi ν·Δ)`; the rules
+//! below integrate `exp(i k [W(p₊) − W(p₋)])` and take the conjugate).
+//!
+//! The overlap is `|y| ≤ sin T`, `|x| ≤ X(y) = √(1 − y²) − s`, `T = acos s`. With `y = sin t`
+//! (dy = cos t dt) and `x = X u`, `X = cos t − s` is analytic in t and the square-root edge is
+//! gone (the t-form of the 1-D defocused OTF, docs/physics.md "Exact defocused OTF"). Defocus
+//! (and field curvature) give the difference `4 s (W020 + W220) x`, linear in x: its factor
+//! `e^{i a X u}`, `a = 8π s (W020 + W220)/λ`, is integrated exactly against the Legendre
+//! interpolant of the rest `h(u) = exp(i k ΔW_rest)` at `n` Gauss–Legendre points
+//! (`∫_{−1}^{1} P_m(u) e^{ibu} du = 2 i^m j_m(b)`, spherical Bessel functions; a Filon-type
+//! rule), so the defocus of the chromatic lens costs no points in x. The t integral is nested
+//! Clenshaw–Curtis, its error bounded by the tail of its own Chebyshev coefficients.
+
+use std::cell::Cell;
+use std::f64::consts::PI;
+use std::sync::OnceLock;
+
+use num_complex::Complex64;
+
+use super::spectral::{Nodes, Scene};
+use super::{Engine, FrequencyRule, OtfEngine};
+use crate::fft::sin_cos;
+use crate::lens::Pupil;
+
+/// The Gauss–Legendre levels of the x rule (points), coarsest first.
+const X_LEVELS: [usize; 8] = [6, 8, 12, 16, 24, 32, 48, 64];
+
+/// The nested Clenshaw–Curtis levels of the t rule (points).
+const T_LEVELS: [usize; 6] = [5, 9, 17, 33, 65, 129];
+
+/// Share of the value tolerance the x rule may spend (the t rule takes the rest).
+const X_SHARE: f64 = 0.25;
+
+/// The most a skipped node's weight may add up to, relative to the total weight and the
+/// tolerance: the OTF of a node is at most 1 in modulus, so skipping them moves the normalized
+/// OTF by at most this times the tolerance.
+const SKIP_SHARE: f64 = 1e-3;
+
+/// One spectral node's order: its wavelength, weight and wavefront (m at the pupil edge, the
+/// field along +x at `H = 1`), with the x rule's level chosen for it.
+#[derive(Clone)]
+struct Term {
+    lambda: f64,
+    weight: f64,
+    shift: [f64; 2],
+    /// W020 + W220 (m): the part whose difference is linear in x
+    defocus: f64,
+    spherical: f64,
+    coma: f64,
+    astigmatism: f64,
+    /// the node's highest normalized frequency (at the frequency limit), where its x rule is
+    /// probed
+    s_top: f64,
+}
+
+impl Term {
+    /// `k [W_rest(p₊) − W_rest(p₋)]`, the wavefront difference without the defocus part, with
+    /// `W_rest = W040 r⁴ + W131 r² x + W222 x²` (radians).
+    #[inline]
+    fn rest_phase(&self, k: f64, xa: f64, ya: f64, xb: f64, yb: f64) -> f64 {
+        let w = |x: f64, y: f64| {
+            let r2 = x * x + y * y;
+            r2 * (self.spherical * r2 + self.coma * x) + self.astigmatism * x * x
+        };
+        k * (w(xa, ya) - w(xb, yb))
+    }
+
+    fn has_rest(&self) -> bool {
+        self.spherical != 0.0 || self.coma != 0.0 || self.astigmatism != 0.0
+    }
+}
+
+/// A Gauss–Legendre level of the x rule with its Legendre projection: `a[m][j] = (2m + 1)/2 ·
+/// w_j P_m(u_j)`, so that `c_m = Σ_j a[m][j] h(u_j)` are the interpolant's Legendre coefficients.
+struct XRule {
+    nodes: Vec<f64>,
+    projection: Vec<Vec<f64>>,
+}
+
+fn x_rule(level: usize) -> &'static XRule {
+    static RULES: OnceLock<Vec<XRule>> = OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        X_LEVELS
+            .iter()
+            .map(|&n| {
+                let gl = crate::quad::gauss_legendre(n);
+                let nodes: Vec<f64> = gl.iter().map(|p| p.0).collect();
+                let mut projection = vec![vec![0.0; n]; n];
+                for (j, &(u, w)) in gl.iter().enumerate() {
+                    // P_m(u) by the three-term recurrence
+                    let (mut p0, mut p1) = (1.0, u);
+                    for (m, row) in projection.iter_mut().enumerate() {
+                        let p = if m == 0 { p0 } else { p1 };
+                        row[j] = 0.5 * (2 * m + 1) as f64 * w * p;
+                        if m >= 1 {
+                            let next = ((2 * m + 1) as f64 * u * p1 - m as f64 * p0) / (m + 1) as f64;
+                            (p0, p1) = (p1, next);
+                        }
+                    }
+                }
+                XRule { nodes, projection }
+            })
+            .collect()
+    });
+    &rules[level]
+}
+
+/// The spherical Bessel functions `j_m(b)`, `m = 0 … out.len() − 1`, by Miller's downward
+/// recurrence `j_{m−1} = (2m + 1)/b j_m − j_{m+1}` from well above both `m` and `|b|`,
+/// normalized by `Σ (2m + 1) j_m² = 1` (Abramowitz & Stegun 10.1.50) and signed by the larger of
+/// `j_0 = sin b/b` and `j_1`.
+fn spherical_bessel(b: f64, out: &mut [f64]) {
+    let n = out.len();
+    let x = b.abs();
+    if x < 1e-8 {
+        out.iter_mut().enumerate().for_each(|(m, o)| *o = if m == 0 { 1.0 } else { 0.0 });
+        return;
+    }
+    let start = n.max(x as usize) + 24 + (x.sqrt() as usize);
+    let (mut above, mut here) = (0.0_f64, 1e-30_f64);
+    let mut norm = 0.0;
+    for m in (0..=start).rev() {
+        // here = j_m (unnormalized), above = j_{m+1}
+        norm += (2 * m + 1) as f64 * here * here;
+        if m < n {
+            out[m] = here;
+        }
+        if m == 0 {
+            break;
+        }
+        let below = (2 * m + 1) as f64 / x * here - above;
+        (above, here) = (here, below);
+        if here.abs() > 1e150 {
+            // rescale what is held so far (the stored orders and the running sum)
+            let f = 1e-150;
+            here *= f;
+            above *= f;
+            norm *= f * f;
+            out.iter_mut().skip(m.saturating_sub(1)).for_each(|o| *o *= f);
+        }
+    }
+    let mut scale = 1.0 / norm.sqrt();
+    let (j0, j1) = (x.sin() / x, (x.sin() / x - x.cos()) / x);
+    let sign = if j0.abs() >= j1.abs() { j0 * out[0] } else { j1 * out.get(1).copied().unwrap_or(j1) };
+    if sign < 0.0 {
+        scale = -scale;
+    }
+    for (m, o) in out.iter_mut().enumerate() {
+        *o *= scale;
+        if b < 0.0 && m % 2 == 1 {
+            *o = -*o;
+        }
+    }
+}
+
+/// Clenshaw–Curtis weights at `points` (one of [`T_LEVELS`]) on [−1, 1].
+fn cc_weights(points: usize) -> &'static [f64] {
+    static RULES: OnceLock<Vec<Vec<f64>>> = OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        T_LEVELS
+            .iter()
+            .map(|&m| {
+                let mu: Vec<f64> =
+                    (0..m).map(|j| if j % 2 == 0 { 2.0 / (1.0 - (j * j) as f64) } else { 0.0 }).collect();
+                super::spectral::lobatto_weights(&mu, m)
+            })
+            .collect()
+    });
+    &rules[T_LEVELS.iter().position(|&m| m == points).unwrap_or(0)]
+}
+
+/// The overlap engine over the spectral nodes of a scene whose every order is the full circle
+/// with a polynomial wavefront.
+#[derive(Debug)]
+pub(super) struct Overlap<'a> {
+    scene: Scene<'a>,
+    nodes: Nodes,
+    terms: Vec<Term>,
+    /// the absolute error allowed in one OTF value (the frequency rule sets it)
+    value_tolerance: Cell<f64>,
+    /// the largest t-rule error estimate accepted beyond its share (at the last level)
+    worst: Cell<f64>,
+    /// per node, the x rule's probed tail at each level computed so far ([`x_tail`])
+    tails: std::cell::RefCell<Vec<Vec<f64>>>,
+    /// whether every image shift is along x (the Seidel pupil is symmetric about x): then
+    /// `O(ν, π − φ) = O(ν, φ)*` and a mirrored azimuth's values are reused
+    mirror: bool,
+    /// values by (frequency, value tolerance, azimuth mod π in nrad)
+    mirrored: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Complex64>>,
+}
+
+impl std::fmt::Debug for Term {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Term {{ λ = {} m, weight {} }}", self.lambda, self.weight)
+    }
+}
+
+impl<'a> Overlap<'a> {
+    /// The engine for `scene` and its `nodes`, or `None` where some order is not the full circle
+    /// with Seidel terms (an aperture, a map, a radial profile, a table) or its wavefront is too
+    /// strong for the rules' largest levels (the FFT path takes it).
+    pub fn new(scene: Scene<'a>, nodes: Nodes, tolerance: f64) -> Option<Overlap<'a>> {
+        let mut terms = Vec::new();
+        for &(lambda, weight, part) in &nodes.samples {
+            if weight == 0.0 {
+                continue;
+            }
+            for order in scene.part(part).lens.orders(lambda, scene.field) {
+                if order.efficiency == 0.0 {
+                    continue;
+                }
+                if !matches!(order.pupil, Pupil::Full) {
+                    return None;
+                }
+                let w = order.wavefront;
+                terms.push(Term {
+                    lambda,
+                    weight: weight * order.efficiency,
+                    shift: w.image_shift_m,
+                    defocus: w.defocus_m + w.field_curvature_m,
+                    spherical: w.spherical_m,
+                    coma: w.coma_m,
+                    astigmatism: w.astigmatism_m,
+                    s_top: 0.0,
+                });
+            }
+        }
+        let total = nodes.total_weight;
+        if terms.is_empty() || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        // skip the lightest nodes while their weights add up to at most SKIP_SHARE of the
+        // tolerance (their OTFs are at most 1)
+        let mut order: Vec<usize> = (0..terms.len()).collect();
+        order.sort_by(|&a, &b| terms[a].weight.abs().total_cmp(&terms[b].weight.abs()));
+        let mut skipped = 0.0;
+        let mut keep = vec![true; terms.len()];
+        for i in order {
+            if skipped + terms[i].weight.abs() > SKIP_SHARE * tolerance * total {
+                break;
+            }
+            skipped += terms[i].weight.abs();
+            keep[i] = false;
+        }
+        let mut kept: Vec<Term> = terms.into_iter().zip(keep).filter(|(_, k)| *k).map(|(t, _)| t).collect();
+        let mut engine = Overlap {
+            scene,
+            nodes,
+            terms: Vec::new(),
+            value_tolerance: Cell::new(0.05 * tolerance),
+            worst: Cell::new(0.0),
+            tails: std::cell::RefCell::new(Vec::new()),
+            mirror: false,
+            mirrored: std::cell::RefCell::new(std::collections::HashMap::new()),
+        };
+        let top = engine.scene.max_frequency.min(engine.max_cutoff());
+        for term in &mut kept {
+            term.s_top = (top * engine.scene.f_number * term.lambda).min(0.999);
+        }
+        engine.tails = std::cell::RefCell::new(vec![Vec::new(); kept.len()]);
+        engine.mirror = kept.iter().all(|t| t.shift[1] == 0.0);
+        engine.terms = kept;
+        Some(engine)
+    }
+
+    /// The polychromatic OTF at `frequency` along `azimuth`, each node to its share of the
+    /// value tolerance.
+    fn compute(&self, frequency: f64, azimuth: f64) -> Complex64 {
+        let (sn, c) = azimuth.sin_cos();
+        let nuf = frequency.abs() * self.scene.f_number;
+        // O(−ν) = O(ν)*: the azimuth turned by π
+        let (cr, sr) = if frequency < 0.0 { (-c, -sn) } else { (c, sn) };
+        let total = self.nodes.total_weight;
+        // each node's share of the value tolerance ε: ε W/(n |w|), at most 2 (|O| ≤ 1), so that
+        // Σ |w| ε_node / W ≤ ε; light nodes (the spectrum's tails) are computed more loosely
+        let share = self.value_tolerance.get() * total / self.terms.len() as f64;
+        let k = -2.0 * PI * frequency;
+        let mut sum = Complex64::new(0.0, 0.0);
+        let mut excess = 0.0;
+        for (index, term) in self.terms.iter().enumerate() {
+            let s = nuf * term.lambda;
+            if s >= 1.0 {
+                continue;
+            }
+            let eps = share / term.weight.abs();
+            if eps >= 1.0 {
+                // |O| ≤ 1: leaving the node out moves the sum by at most its share
+                continue;
+            }
+            let Some(x_level) = self.x_level(index, X_SHARE * eps) else {
+                excess += term.weight.abs() * 2.0 / total;
+                continue;
+            };
+            let (v, error) = term_otf(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps);
+            // the project's sign (docs/physics.md, "Sign of the wavefront"): a tilt
+            // W = NA Δ·ρ multiplies the OTF by exp(−2πi ν·Δ), as an image shift does, so the OTF
+            // is ∫ P(p₋) P*(p₊), the conjugate of the integral above
+            let mut v = v.conj();
+            if error > (1.0 - X_SHARE) * eps {
+                // |O| ≤ 1: never off by more than 1 + |v|
+                excess += term.weight.abs() * error.min(1.0 + v.norm()) / total;
+            }
+            let [dx, dy] = term.shift;
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (k * (dx * c + dy * sn)).sin_cos();
+                v *= Complex64::new(pc, ps);
+            }
+            sum += v * term.weight;
+        }
+        if excess > self.value_tolerance.get() {
+            self.worst.set(self.worst.get().max(excess));
+        }
+        sum / total
+    }
+
+    /// The first x level of node `index` whose probed Legendre tail ([`x_tail`]) is within
+    /// `target`, probing levels as they are first needed; `None` past the last.
+    fn x_level(&self, index: usize, target: f64) -> Option<usize> {
+        let mut tails = self.tails.borrow_mut();
+        let known = &mut tails[index];
+        if let Some(level) = known.iter().position(|&t| t <= target) {
+            return Some(level);
+        }
+        while known.len() < X_LEVELS.len() {
+            let tail = x_tail(&self.terms[index], known.len());
+            known.push(tail);
+            if tail <= target {
+                return Some(known.len() - 1);
+            }
+        }
+        None
+    }
+}
+
+/// The OTF of `term` at normalized frequency `s` along the unit vector `(c, sn)`, to the
+/// absolute error `eps`: the nested t rule until its Chebyshev tail is within `eps`; with the
+/// error estimate of the level returned (beyond `eps` only at the last level).
+fn term_otf(term: &Term, x_level: usize, s: f64, c: f64, sn: f64, eps: f64) -> (Complex64, f64) {
+    if s >= 1.0 {
+        return (Complex64::new(0.0, 0.0), 0.0);
+    }
+    let k = 2.0 * PI / term.lambda;
+    let a = 4.0 * s * k * term.defocus;
+    let big_t = s.acos();
+    let rule = x_rule(x_level);
+    let n = rule.nodes.len();
+    let rest = term.has_rest();
+    // without spherical aberration the difference W(p₊) − W(p₋) is quadratic in x
+    let quadratic = term.spherical == 0.0;
+    // the integrand at τ ∈ [−1, 1] (t = T τ): cos t · X · ∫ e^{i a X u} h(u) du
+    let integrand = |tau: f64| -> Complex64 {
+        let t = big_t * tau;
+        let (y, ct) = sin_cos(t);
+        let x_half = ct - s;
+        if x_half <= 0.0 {
+            return Complex64::new(0.0, 0.0);
+        }
+        if quadratic {
+            // the whole phase is quadratic in x: a x + g(x) = α x² + β x + γ from its values
+            // at −X, 0, X, and the x integral in closed form
+            let f = |x: f64| {
+                let (xp, xm) = (x + s, x - s);
+                a * x + term.rest_phase(k, xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c)
+            };
+            let (lo, mid, hi) = (f(-x_half), f(0.0), f(x_half));
+            let alpha = (hi + lo - 2.0 * mid) / (2.0 * x_half * x_half);
+            let beta = (hi - lo) / (2.0 * x_half);
+            let (si, co) = sin_cos(mid);
+            return Complex64::new(co, si) * quadratic_phase_integral(alpha, beta, x_half) * ct;
+        }
+        let b = a * x_half;
+        let mut bessel = [0.0; 64];
+        let bessel = &mut bessel[..n];
+        spherical_bessel(b, bessel);
+        // K_j = Σ_m a[m][j] 2 i^m j_m(b)
+        let mut kernel = [Complex64::new(0.0, 0.0); 64];
+        let kernel = &mut kernel[..n];
+        for (m, row) in rule.projection.iter().enumerate() {
+            let v = 2.0 * bessel[m];
+            match m % 4 {
+                0 => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.re += p * v),
+                1 => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.im += p * v),
+                2 => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.re -= p * v),
+                _ => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.im -= p * v),
+            }
+        }
+        let mut sum = Complex64::new(0.0, 0.0);
+        for (j, &u) in rule.nodes.iter().enumerate() {
+            let h = if rest {
+                let x = x_half * u;
+                // p± = (x ± s) e + y e⊥ in the pupil's own axes
+                let (xp, xm) = (x + s, x - s);
+                let phase = term.rest_phase(k, xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c);
+                let (si, co) = sin_cos(phase);
+                Complex64::new(co, si)
+            } else {
+                Complex64::new(1.0, 0.0)
+            };
+            sum += kernel[j] * h;
+        }
+        sum * (ct * x_half)
+    };
+    // nested Clenshaw–Curtis in τ: start where the level resolves the defocus phase
+    // a (1 − s) on each side at half a point a radian
+    let phase = a.abs() * (1.0 - s);
+    let mut level = T_LEVELS.iter().position(|&p| p as f64 >= phase + 5.0).unwrap_or(T_LEVELS.len() - 1);
+    let mut values: Vec<Complex64> = Vec::new();
+    loop {
+        let points = T_LEVELS[level];
+        let m = points - 1;
+        if values.len() == points {
+            // nothing new
+        } else if !values.is_empty() && (values.len() - 1) * 2 == m {
+            let mut next = Vec::with_capacity(points);
+            for i in 0..points {
+                next.push(if i % 2 == 0 { values[i / 2] } else { integrand((PI * i as f64 / m as f64).cos()) });
+            }
+            values = next;
+        } else {
+            values = (0..points).map(|i| integrand((PI * i as f64 / m as f64).cos())).collect();
+        }
+        let weights = cc_weights(points);
+        let sum: Complex64 = values.iter().zip(weights).map(|(v, w)| v * *w).sum();
+        let scale = big_t / PI;
+        let error = scale * t_error(&values);
+        if error <= eps || level + 1 == T_LEVELS.len() {
+            return (sum * scale, error);
+        }
+        level += 1;
+    }
+}
+
+/// `∫_{−X}^{X} exp(i(α x² + β x)) dx` in closed form (Abramowitz & Stegun 7.1.1–7.1.2, 7.4.32):
+/// with `ζ = √(−iα)` (`Re ζ > 0`), `x₀ = β/(2α)` and `u = x₀ ± X`, it is
+/// `√π/(2ζ) e^{−iαx₀²} [erf(ζ u₊) − erf(ζ u₋)]`; each `erf(ζu) = σ(1 − e^{−ζ²u²} erfcx(σζu))`,
+/// `σ = sign u` (so that `erfcx` is read where `Re ≥ 0`, `faddeeva::erfcx`), and the phases
+/// combine to `e^{i(αX² ± βX)}` before they are formed: no large phase `β²/(4α)` is rounded. The
+/// constant parts survive only where the stationary point `−x₀` lies inside `[−X, X]`. Where
+/// `|α| X² < 1e-9` the quadratic term is left out (`2 sin(βX)/β`; off by at most `2e-9 X`).
+fn quadratic_phase_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
+    if alpha.abs() * x * x < 1e-9 {
+        let bx = beta * x;
+        let sinc = if bx.abs() < 1e-4 { 1.0 - bx * bx / 6.0 } else { bx.sin() / bx };
+        return Complex64::new(2.0 * x * sinc, 0.0);
+    }
+    let zeta = Complex64::new(0.0, -alpha).sqrt();
+    let x0 = beta / (2.0 * alpha);
+    let (u1, u2) = (x0 + x, x0 - x);
+    let (s1, s2) = (if u1 >= 0.0 { 1.0 } else { -1.0 }, if u2 >= 0.0 { 1.0 } else { -1.0 });
+    let cis = |phase: f64| {
+        let (si, co) = sin_cos(phase);
+        Complex64::new(co, si)
+    };
+    let aa = alpha * x * x;
+    let mut sum = cis(aa - beta * x) * crate::faddeeva::erfcx(zeta * (s2 * u2)) * s2
+        - cis(aa + beta * x) * crate::faddeeva::erfcx(zeta * (s1 * u1)) * s1;
+    if s1 != s2 {
+        sum += cis(-alpha * x0 * x0) * (s1 - s2);
+    }
+    sum * (PI.sqrt() / (2.0 * zeta))
+}
+
+/// The error bound of a Clenshaw–Curtis level from the tail of its Chebyshev coefficients
+/// (`quad::chebyshev_tail_parts`, real and imaginary parts): `Σ_i size rⁱ (|μ_{n−1+i}| +
+/// |μ_{n−1−i}|)` with the constant weight's moments `μ_j = 2/(1 − j²)` (even j).
+fn t_error(values: &[Complex64]) -> f64 {
+    let n = values.len();
+    let re: Vec<f64> = values.iter().map(|v| v.re).collect();
+    let im: Vec<f64> = values.iter().map(|v| v.im).collect();
+    let moment = |j: usize| if j.is_multiple_of(2) { 2.0 / ((j * j) as f64 - 1.0).abs() } else { 0.0 };
+    let mut total = 0.0;
+    let largest = values.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    for part in [re, im] {
+        match crate::quad::chebyshev_tail_parts(&part) {
+            // at rounding: nothing left to resolve (a part that is zero but for rounding has
+            // no falling tail to read)
+            Some((size, _)) if size <= 1e-13 * largest => {}
+            Some((size, rate)) if rate < crate::quad::TAIL_MAX_RATE => {
+                let mut r = 1.0;
+                for i in 1..n {
+                    r *= rate;
+                    total += size * r * (moment(n - 1 + i) + moment(n - 1 - i));
+                }
+            }
+            _ => return f64::INFINITY,
+        }
+    }
+    total
+}
+
+/// The x rule's error at `level` for `term`: its probed Legendre tail, the last two of the
+/// coefficients of `h(u) = exp(i k ΔW_rest)` times 4 (for the tail beyond them), the largest
+/// along 8 azimuths and at 5 heights across the overlap at the node's highest frequency (the
+/// phase differences grow with s); 0 without terms beyond defocus.
+fn x_tail(term: &Term, level: usize) -> f64 {
+    if !term.has_rest() {
+        return 0.0;
+    }
+    let s = term.s_top;
+    let k = 2.0 * PI / term.lambda;
+    let big_t = s.acos();
+    let rule = x_rule(level);
+    let n = rule.nodes.len();
+    let mut worst = 0.0_f64;
+    for q in 0..8 {
+        let (sn, c) = (PI * q as f64 / 8.0).sin_cos();
+        for tau in [-0.9, -0.5, 0.0, 0.5, 0.9] {
+            let (y, ct) = (big_t * tau).sin_cos();
+            let x_half = ct - s;
+            let h: Vec<Complex64> = rule
+                .nodes
+                .iter()
+                .map(|&u| {
+                    let x = x_half * u;
+                    let (xp, xm) = (x + s, x - s);
+                    let phase = term.rest_phase(k, xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c);
+                    Complex64::from_polar(1.0, phase)
+                })
+                .collect();
+            let coefficient =
+                |m: usize| rule.projection[m].iter().zip(&h).map(|(p, v)| v * *p).sum::<Complex64>().norm();
+            worst = worst.max(4.0 * (coefficient(n - 1) + coefficient(n - 2)));
+        }
+    }
+    worst
+}
+
+impl OtfEngine for Overlap<'_> {
+    fn engine(&self) -> Engine {
+        Engine::Overlap { skipped: self.nodes.nodes.len().saturating_sub(self.terms.len()) }
+    }
+
+    fn nodes(&self) -> &Nodes {
+        &self.nodes
+    }
+
+    fn f_number(&self) -> f64 {
+        self.scene.f_number
+    }
+
+    fn otf(&self, frequency: f64) -> f64 {
+        self.otf_along(frequency, 0.0).re
+    }
+
+    fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
+        if !self.mirror {
+            return self.compute(frequency, azimuth);
+        }
+        // a pupil symmetric about x with images shifted along x: O(ν, π − φ) = O(ν, φ)*
+        let key = |phi: f64| (phi.rem_euclid(PI) * 1e9).round() as i64 % (PI * 1e9).round() as i64;
+        let tolerance = self.value_tolerance.get().to_bits();
+        let cache = self.mirrored.borrow();
+        if let Some(v) = cache.get(&(frequency.to_bits(), tolerance, key(PI - azimuth))) {
+            return v.conj();
+        }
+        if let Some(v) = cache.get(&(frequency.to_bits(), tolerance, key(azimuth))) {
+            return *v;
+        }
+        drop(cache);
+        let v = self.compute(frequency, azimuth);
+        let mut cache = self.mirrored.borrow_mut();
+        if cache.len() > 1 << 16 {
+            cache.clear();
+        }
+        cache.insert((frequency.to_bits(), tolerance, key(azimuth)), v);
+        v
+    }
+
+    fn direction_dependent(&self) -> bool {
+        true
+    }
+
+    fn frequency_rule(&self) -> FrequencyRule {
+        FrequencyRule::Adaptive { min_panels: 1.0 }
+    }
+
+    fn set_value_tolerance(&self, absolute: f64) {
+        self.value_tolerance.set(absolute.max(1e-15));
+    }
+
+    fn value_noise(&self) -> f64 {
+        self.value_tolerance.get()
+    }
+
+    fn over_budget(&self) -> Option<String> {
+        let worst = self.worst.get();
+        (worst > 0.0).then(|| {
+            format!(
+                "the overlap quadrature's t rule reached {} points with an OTF error estimate of {worst:.1e}",
+                T_LEVELS[T_LEVELS.len() - 1]
+            )
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed form of `∫ e^{i(αx² + βx)}` against a 400-point Gauss–Legendre sum, across the
+    /// stationary point, beside it, far from it and for tiny α.
+    #[test]
+    fn quadratic_phase_integral_matches_a_quadrature() {
+        let rule = crate::quad::gauss_legendre(400);
+        for &(alpha, beta, x) in &[
+            (3.0, 1.0, 0.9),
+            (-3.0, 1.0, 0.9),
+            (0.7, 12.0, 0.5),
+            (-20.0, 45.0, 1.0),
+            (1e-4, 30.0, 0.8),
+            (1e-7, -2.0, 1.0),
+            (5.0, 0.0, 0.3),
+            (1e-12, 0.0, 1.0),
+        ] {
+            let reference: Complex64 =
+                rule.iter().map(|&(u, w)| Complex64::from_polar(w * x, alpha * x * x * u * u + beta * x * u)).sum();
+            let closed = quadratic_phase_integral(alpha, beta, x);
+            assert!((closed - reference).norm() < 1e-12, "α {alpha}, β {beta}, X {x}: {closed} vs {reference}");
+        }
+    }
+
+    /// `j_m(b)` against the closed forms `j_0 = sin b/b`, `j_1 = sin b/b² − cos b/b`,
+    /// `j_2 = (3/b² − 1) sin b/b − 3 cos b/b²`, and the small-argument series for high orders.
+    #[test]
+    fn spherical_bessel_matches_closed_forms() {
+        for &b in &[0.3, 1.0, 3.1, 7.5, 20.0, -4.0, 60.0, 150.0] {
+            let mut out = [0.0; 40];
+            spherical_bessel(b, &mut out);
+            let (s, c) = b.sin_cos();
+            let j0 = s / b;
+            let j1 = s / (b * b) - c / b;
+            let j2 = (3.0 / (b * b) - 1.0) * s / b - 3.0 * c / (b * b);
+            for (m, exact) in [j0, j1, j2].iter().enumerate() {
+                assert!((out[m] - exact).abs() < 1e-12, "b = {b}, m = {m}: {} vs {exact}", out[m]);
+            }
+        }
+        // j_30(1) = 1/(61!!) (1 − 1/(2·63) + …)
+        let mut out = [0.0; 31];
+        spherical_bessel(1.0, &mut out);
+        let double_factorial: f64 = (1..=30).map(|i| (2 * i + 1) as f64).product();
+        let series = (1.0 - 1.0 / 126.0 + 1.0 / (8.0 * 63.0 * 65.0)) / double_factorial;
+        assert!((out[30] / series - 1.0).abs() < 1e-6, "{} vs {series}", out[30]);
+    }
+}
