@@ -233,8 +233,7 @@ impl PsfStack {
         };
         let (mut lsf_x, mut lsf_y) = (vec![0.0; nx], vec![0.0; ny]);
         let (mut lines_x, mut lines_y) = (Vec::with_capacity(depth), Vec::with_capacity(depth));
-        let mut planes = Vec::with_capacity(depth);
-        let mut planner = FftPlanner::<f64>::new();
+        let (mut sums, mut centroids) = (Vec::with_capacity(depth), Vec::with_capacity(depth));
         for (k, slice) in values.chunks_exact(ny * nx).enumerate() {
             let mut peak = f64::NEG_INFINITY;
             for (index, &v) in slice.iter().enumerate() {
@@ -337,9 +336,13 @@ impl PsfStack {
             sagittal.push(transform(&lsf_y, cy));
             lines_x.push(SampledLine { origin: (nx / 2) as f64 + cx, values: lsf_x.clone() });
             lines_y.push(SampledLine { origin: (ny / 2) as f64 + cy, values: lsf_y.clone() });
-            let normalized: Vec<f64> = slice.iter().map(|v| v / sum).collect();
-            planes.push(SampledPlane::new(&normalized, [ny, nx], [cx, cy], &mut planner));
+            sums.push(sum);
+            centroids.push([cx, cy]);
         }
+        // the 2-D transforms, slices in parallel: as many built at once as the memory budget
+        // left after the kept grids allows (checked above for one)
+        let workers = ((optics::FFT_MEMORY_BUDGET - depth as f64 * kept) / building).floor().max(1.0) as usize;
+        let planes = SampledPlane::stack(values, [ny, nx], &sums, &centroids, workers);
         // round: the two cuts and the transform along the azimuths between them agree
         let round = |k: usize| -> bool {
             let t = &tangential[k];

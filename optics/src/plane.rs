@@ -87,7 +87,61 @@ impl SampledPlane {
     /// The plane of `values` (C order `[row y][column x]`, `ny × nx`, summing to 1 within 1e-9)
     /// about `centroid` (samples from the centre sample `(⌊nx/2⌋, ⌊ny/2⌋)`, `[x, y]`).
     /// `planner` is shared between the slices of a stack.
-    pub fn new(values: &[f64], [ny, nx]: [usize; 2], centroid: [f64; 2], planner: &mut FftPlanner<f64>) -> Self {
+    pub fn new(values: &[f64], shape: [usize; 2], centroid: [f64; 2], planner: &mut FftPlanner<f64>) -> Self {
+        Self::scaled(values, 1.0, shape, centroid, planner)
+    }
+
+    /// The planes of a stack's slices (`values`: `[slice][row y][column x]`, each slice divided
+    /// by its `sums[k]` so that it sums to 1; `centroids[k]` as in [`new`](Self::new)), built in
+    /// parallel (rayon), one slice at a time per worker: at most `workers` (≥ 1; and at most
+    /// rayon's threads) transforms are
+    /// being built at once, each taking the `while built` bytes of [`bytes`](Self::bytes), so a
+    /// caller bounds the memory by the number of workers it gives. The same planes as
+    /// [`new`](Self::new) of each slice divided by its sum, in order.
+    pub fn stack(
+        values: &[f64],
+        [ny, nx]: [usize; 2],
+        sums: &[f64],
+        centroids: &[[f64; 2]],
+        workers: usize,
+    ) -> Vec<Self> {
+        use rayon::prelude::*;
+        assert_eq!(values.len(), sums.len() * ny * nx, "SampledPlane::stack: {} values", values.len());
+        assert_eq!(
+            sums.len(),
+            centroids.len(),
+            "SampledPlane::stack: {} sums, {} centroids",
+            sums.len(),
+            centroids.len()
+        );
+        let depth = sums.len();
+        if depth == 0 {
+            return Vec::new();
+        }
+        let per_worker = depth.div_ceil(workers.clamp(1, rayon::current_num_threads()));
+        let size = ny * nx;
+        (0..depth.div_ceil(per_worker))
+            .into_par_iter()
+            .flat_map_iter(|w| {
+                let mut planner = FftPlanner::new();
+                (w * per_worker..((w + 1) * per_worker).min(depth))
+                    .map(|k| {
+                        let slice = &values[k * size..(k + 1) * size];
+                        Self::scaled(slice, sums[k], [ny, nx], centroids[k], &mut planner)
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    /// [`new`](Self::new) of `values / sum`, each value divided as it is read.
+    fn scaled(
+        values: &[f64],
+        sum: f64,
+        [ny, nx]: [usize; 2],
+        centroid: [f64; 2],
+        planner: &mut FftPlanner<f64>,
+    ) -> Self {
         assert_eq!(values.len(), ny * nx, "SampledPlane: {} values for {ny} × {nx}", values.len());
         let n = 2 * nx.max(ny);
         let fft = planner.plan_fft_forward(n);
@@ -100,25 +154,32 @@ impl SampledPlane {
             let out = &mut full[wrap(ly) * n..(wrap(ly) + 1) * n];
             for (j, &v) in row.iter().enumerate() {
                 let lx = j as i64 - (nx / 2) as i64;
-                out[wrap(lx)] = Complex64::new(v * cy * correction(lx), 0.0);
+                out[wrap(lx)] = Complex64::new(v / sum * cy * correction(lx), 0.0);
             }
             fft.process(out);
         }
-        // the columns: one at a time through a buffer
+        // the columns: one at a time through a buffer, half of them. The samples are real, so
+        // the 2-D transform is Hermitian, G(−g_x, −g_y) = G(g_x, g_y)*: column N − x is column x
+        // read at −g_y and conjugated (x = 0 and x = N/2 are their own mirrors)
         let half = PLANE_WIDTH / 2;
         let rows = n / 2 + 2 * half + 1;
         let mut grid = vec![Complex64::new(0.0, 0.0); rows * n];
         let mut column = vec![Complex64::new(0.0, 0.0); n];
-        for x in 0..n {
+        for x in 0..=n / 2 {
             for (y, c) in column.iter_mut().enumerate() {
                 *c = full[y * n + x];
             }
             fft.process(&mut column);
+            let mirror = (n - x) % n;
             for r in 0..rows {
-                grid[r * n + x] = column[wrap(r as i64 - half as i64)];
+                let gy = r as i64 - half as i64;
+                grid[r * n + x] = column[wrap(gy)];
+                if mirror != x {
+                    grid[r * n + mirror] = column[wrap(-gy)].conj();
+                }
             }
         }
-        SampledPlane { n, grid, centroid, absolute_sum: values.iter().map(|v| v.abs()).sum() }
+        SampledPlane { n, grid, centroid, absolute_sum: values.iter().map(|v| (v / sum).abs()).sum() }
     }
 
     /// `Re Σ_l d_l e^{−2πi θ·(l − c)}` at `theta = [θ_x, θ_y]` cycles per sample (each within
@@ -174,6 +235,30 @@ impl SampledPlane {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A stack's planes, built in parallel from unnormalized slices, are each slice's plane
+    /// built alone from its normalized samples, bit for bit and in order, whatever the workers.
+    #[test]
+    fn a_stack_is_its_slices_one_by_one() {
+        let (depth, ny, nx) = (5, 9, 14);
+        let values: Vec<f64> =
+            (0..depth * ny * nx).map(|i| ((i * 29 % 13) as f64 + 0.25) * (1 + i / (ny * nx)) as f64).collect();
+        let sums: Vec<f64> = values.chunks_exact(ny * nx).map(|s| s.iter().sum()).collect();
+        let centroids: Vec<[f64; 2]> = (0..depth).map(|k| [0.1 * k as f64, -0.2 * k as f64]).collect();
+        let alone: Vec<SampledPlane> = values
+            .chunks_exact(ny * nx)
+            .zip(&sums)
+            .zip(&centroids)
+            .map(|((slice, sum), &c)| {
+                let normalized: Vec<f64> = slice.iter().map(|v| v / sum).collect();
+                SampledPlane::new(&normalized, [ny, nx], c, &mut FftPlanner::new())
+            })
+            .collect();
+        for workers in [1, 2, 3, 64] {
+            assert!(SampledPlane::stack(&values, [ny, nx], &sums, &centroids, workers) == alone, "{workers} workers");
+        }
+        assert!(SampledPlane::stack(&[], [ny, nx], &[], &[], 2).is_empty());
+    }
 
     /// The gridded transform against the direct sum `Σ d_l cos(2π θ·(l − c))` written here, at
     /// frequencies off the grid's, on an asymmetric, shifted, non-square set of samples with
