@@ -502,29 +502,8 @@ impl LibraryLens {
     /// design phase ψ and the zones stay the nominal layout's (the design intent). With no bias
     /// and σ = 0 the lens is the nominal one, bit for bit.
     pub fn with_fabrication(mut self, bias: &[f64], errors: AtomErrors) -> Result<LibraryLens, Error> {
-        check(
-            "atom_phase_error_rad",
-            errors.phase_sigma_rad,
-            errors.phase_sigma_rad >= 0.0,
-            "a finite standard deviation ≥ 0 rad",
-        )?;
-        check(
-            "atom_transmission_error",
-            errors.transmission_sigma,
-            (0.0..0.5).contains(&errors.transmission_sigma),
-            "a finite relative standard deviation in [0, 0.5) (the amplitude factor 1 + ε must stay positive but for rare atoms)",
-        )?;
+        errors.check(bias, &self.library)?;
         let ranges = self.library.ranges();
-        if bias.len() != ranges.len() {
-            return Err(Error::OutOfRange {
-                name: "parameter_bias entries",
-                value: bias.len() as f64,
-                expected: "one per library parameter column",
-            });
-        }
-        for b in bias {
-            check("parameter_bias", *b, true, "finite")?;
-        }
         if bias.iter().any(|&b| b != 0.0) {
             for p in &mut self.params {
                 for (v, b) in p.iter_mut().zip(bias) {
@@ -723,6 +702,34 @@ pub struct AtomErrors {
     pub transmission_sigma: f64,
     /// The seed of the draws.
     pub seed: u64,
+}
+
+impl AtomErrors {
+    /// Checks the errors and a parameter bias for `library` as both layouts take them: σ_φ ≥ 0,
+    /// σ_t in [0, 0.5) (the amplitude factor 1 + ε must stay positive but for rare atoms), one
+    /// finite bias per parameter column.
+    pub(crate) fn check(&self, bias: &[f64], library: &Library) -> Result<(), Error> {
+        check(
+            "atom_phase_error_rad",
+            self.phase_sigma_rad,
+            self.phase_sigma_rad >= 0.0,
+            "a finite standard deviation ≥ 0 rad",
+        )?;
+        check(
+            "atom_transmission_error",
+            self.transmission_sigma,
+            (0.0..0.5).contains(&self.transmission_sigma),
+            "a finite relative standard deviation in [0, 0.5) (the amplitude factor 1 + ε must stay positive but for rare atoms)",
+        )?;
+        if bias.len() != library.ranges().len() {
+            return Err(Error::OutOfRange {
+                name: "parameter_bias entries",
+                value: bias.len() as f64,
+                expected: "one per library parameter column",
+            });
+        }
+        bias.iter().try_for_each(|b| check("parameter_bias", *b, true, "finite"))
+    }
 }
 
 /// One atom's cell (or the part of it in one zone): its atom (index into the lens's atoms), its

@@ -397,29 +397,8 @@ impl LibraryMapLens {
     /// [`Error::OutOfRange`] for σ outside its range (as the radial lens's), a bias of the
     /// wrong length or not finite, or an atom pushed outside the library's range.
     pub fn with_fabrication(mut self, bias: &[f64], errors: AtomErrors) -> Result<LibraryMapLens, Error> {
-        check(
-            "atom_phase_error_rad",
-            errors.phase_sigma_rad,
-            errors.phase_sigma_rad >= 0.0,
-            "a finite standard deviation ≥ 0 rad",
-        )?;
-        check(
-            "atom_transmission_error",
-            errors.transmission_sigma,
-            (0.0..0.5).contains(&errors.transmission_sigma),
-            "a finite relative standard deviation in [0, 0.5) (the amplitude factor 1 + ε must stay positive but for rare atoms)",
-        )?;
+        errors.check(bias, &self.library)?;
         let ranges = self.library.ranges();
-        if bias.len() != ranges.len() {
-            return Err(Error::OutOfRange {
-                name: "parameter_bias entries",
-                value: bias.len() as f64,
-                expected: "one per library parameter column",
-            });
-        }
-        for b in bias {
-            check("parameter_bias", *b, true, "finite")?;
-        }
         if bias.iter().any(|&b| b != 0.0) {
             let shifted: Vec<Vec<f64>> =
                 self.unique.iter().map(|p| p.iter().zip(bias).map(|(v, b)| v + b).collect::<Vec<f64>>()).collect();

@@ -241,15 +241,7 @@ fn fabrication(
     names: &[String],
     info: &mut LensInfo,
 ) -> Result<lenses::LibraryMapLens, Error> {
-    let phase = l.atom_phase_error_rad.unwrap_or(0.0);
-    let phase = o.number("lens.atom_phase_error_rad", phase, phase >= 0.0, "a standard deviation ≥ 0 rad")?;
-    let amplitude = l.atom_transmission_error.unwrap_or(0.0);
-    let amplitude = o.number(
-        "lens.atom_transmission_error",
-        amplitude,
-        (0.0..0.5).contains(&amplitude),
-        "a relative standard deviation in [0, 0.5): the amplitude factor 1 + ε of an atom must stay positive but for rare atoms (those below 0 are taken as 0)",
-    )?;
+    let (phase, amplitude) = crate::lens_table::atom_error_sigmas(l, o, "those below 0 are taken as 0")?;
     let list = |b: &[f64]| format!("[{}]", b.iter().map(|&v| num(v)).collect::<Vec<_>>().join(", "));
     let dims = lens.library().dimensions();
     let bias = match &l.parameter_bias {

@@ -1026,15 +1026,8 @@ fn library_fabrication(
     names: &[String],
     info: &mut LensInfo,
 ) -> Result<lenses::LibraryLens, Error> {
-    let phase = l.atom_phase_error_rad.unwrap_or(0.0);
-    let phase = o.number("lens.atom_phase_error_rad", phase, phase >= 0.0, "a standard deviation ≥ 0 rad")?;
-    let amplitude = l.atom_transmission_error.unwrap_or(0.0);
-    let amplitude = o.number(
-        "lens.atom_transmission_error",
-        amplitude,
-        (0.0..0.5).contains(&amplitude),
-        "a relative standard deviation in [0, 0.5): the amplitude factor 1 + ε of an atom must stay positive but for rare atoms (those drawn below 0 are taken as 0 and counted in the notes)",
-    )?;
+    let (phase, amplitude) =
+        crate::lens_table::atom_error_sigmas(l, o, "those drawn below 0 are taken as 0 and counted in the notes")?;
     let seed = l.atom_error_seed.unwrap_or(0);
     let ranges = lens.library().ranges();
     let list = |b: &[f64]| format!("[{}]", b.iter().map(|&v| num(v)).collect::<Vec<_>>().join(", "));

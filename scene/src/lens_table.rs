@@ -180,6 +180,20 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
 }
 
 /// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.
+/// The atoms' random errors, `(σ_φ, σ_t)` (`lens.atom_phase_error_rad`,
+/// `lens.atom_transmission_error`, 0 where not given), checked as both layouts take them;
+/// `below_zero` says what becomes of an amplitude factor drawn below 0.
+pub(crate) fn atom_error_sigmas(l: &RawLens, o: &Origins, below_zero: &str) -> Result<(f64, f64), Error> {
+    let phase = l.atom_phase_error_rad.unwrap_or(0.0);
+    let phase = o.number("lens.atom_phase_error_rad", phase, phase >= 0.0, "a standard deviation ≥ 0 rad")?;
+    let amplitude = l.atom_transmission_error.unwrap_or(0.0);
+    let expected = format!(
+        "a relative standard deviation in [0, 0.5): the amplitude factor 1 + ε of an atom must stay positive but for rare atoms ({below_zero})"
+    );
+    let amplitude = o.number("lens.atom_transmission_error", amplitude, (0.0..0.5).contains(&amplitude), &expected)?;
+    Ok((phase, amplitude))
+}
+
 pub(crate) fn zernike(l: &RawLens, o: &Origins) -> Result<Option<Vec<(usize, f64)>>, Error> {
     let Some(list) = &l.zernike_noll_rms_um else { return Ok(None) };
     let key = "lens.zernike_noll_rms_um";

@@ -163,17 +163,22 @@ fn lattice_bound() -> f64 {
     2.0 * (1.0 - sinc(u) * sinc(u))
 }
 
+/// The rings' diameters as the radial layout's CSV (`r_mm, diameter_nm`, ring i at (i + ½) p).
+fn write_radial_layout(path: &std::path::Path, rings: &[f64]) {
+    let mut csv = String::from("r_mm,diameter_nm\n");
+    for (i, dia) in rings.iter().enumerate() {
+        csv.push_str(&format!("{:.7},{dia:.1}\n", (i as f64 + 0.5) * PITCH_NM * 1e-6));
+    }
+    std::fs::write(path, csv).unwrap();
+}
+
 /// The radial layout drawn in 2-D, read from a GDS written here and from a `.npy` grid, gives the
 /// radial library lens's τ1 and mean MTF within the stated lattice error.
 #[test]
 fn a_gds_and_a_grid_of_the_radial_layout_reproduce_the_radial_library_lens() {
     let d = dir("same");
     let rings = rings();
-    let mut csv = String::from("r_mm,diameter_nm\n");
-    for (i, dia) in rings.iter().enumerate() {
-        csv.push_str(&format!("{:.7},{dia:.1}\n", (i as f64 + 0.5) * PITCH_NM * 1e-6));
-    }
-    std::fs::write(d.join("layout.csv"), csv).unwrap();
+    write_radial_layout(&d.join("layout.csv"), &rings);
     let (n, at) = sites();
     write_gds(&d.join("lens.gds"), &at, n);
     write_npy(&d.join("lens.npy"), n, |i, j| at(i, j).unwrap_or(f64::NAN));
@@ -267,11 +272,7 @@ fn mtf_and_tau(scene: &metric::Scene) -> (f64, f64) {
 fn fabrication_errors_on_a_2d_layout_follow_the_radial_lens() {
     let d = dir("fabrication");
     let rings = rings();
-    let mut csv = String::from("r_mm,diameter_nm\n");
-    for (i, dia) in rings.iter().enumerate() {
-        csv.push_str(&format!("{:.7},{dia:.1}\n", (i as f64 + 0.5) * PITCH_NM * 1e-6));
-    }
-    std::fs::write(d.join("layout.csv"), csv).unwrap();
+    write_radial_layout(&d.join("layout.csv"), &rings);
     let (n, at) = sites();
     write_npy(&d.join("lens.npy"), n, |i, j| at(i, j).unwrap_or(f64::NAN));
     // a bias of 6 nm that keeps every ring inside the library's 100–300 nm

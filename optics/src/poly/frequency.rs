@@ -703,13 +703,16 @@ fn sign(x: f64) -> f64 {
     }
 }
 
+/// The point counts [`clenshaw_curtis`] has weights for.
+pub(crate) const CLENSHAW_CURTIS_POINTS: [usize; 7] = [3, 5, 9, 17, 33, 65, 129];
+
 /// Clenshaw–Curtis weights on [−1, 1] at the `points` Chebyshev–Lobatto points
-/// `cos(πk/(points − 1))` (3, 5, 9, 17, 33 or 65): the product-integration weights of the
+/// `cos(πk/(points − 1))` (one of [`CLENSHAW_CURTIS_POINTS`]): the product-integration weights of the
 /// constant weight, whose Chebyshev moments are `∫ T_j = 2/(1 − j²)` for even j, 0 for odd.
 pub(crate) fn clenshaw_curtis(points: usize) -> &'static [f64] {
     static RULES: std::sync::OnceLock<Vec<Vec<f64>>> = std::sync::OnceLock::new();
     let rules = RULES.get_or_init(|| {
-        [3usize, 5, 9, 17, 33, 65]
+        CLENSHAW_CURTIS_POINTS
             .iter()
             .map(|&m| {
                 let mu: Vec<f64> =
@@ -718,6 +721,6 @@ pub(crate) fn clenshaw_curtis(points: usize) -> &'static [f64] {
             })
             .collect()
     });
-    let index = [3usize, 5, 9, 17, 33, 65].iter().position(|&m| m == points).unwrap_or(0);
+    let index = CLENSHAW_CURTIS_POINTS.iter().position(|&m| m == points).unwrap_or(0);
     &rules[index]
 }

@@ -167,18 +167,7 @@ fn spherical_bessel(b: f64, out: &mut [f64]) {
 
 /// Clenshaw–Curtis weights at `points` (one of [`T_LEVELS`]) on [−1, 1].
 fn cc_weights(points: usize) -> &'static [f64] {
-    static RULES: OnceLock<Vec<Vec<f64>>> = OnceLock::new();
-    let rules = RULES.get_or_init(|| {
-        T_LEVELS
-            .iter()
-            .map(|&m| {
-                let mu: Vec<f64> =
-                    (0..m).map(|j| if j % 2 == 0 { 2.0 / (1.0 - (j * j) as f64) } else { 0.0 }).collect();
-                super::spectral::lobatto_weights(&mu, m)
-            })
-            .collect()
-    });
-    &rules[T_LEVELS.iter().position(|&m| m == points).unwrap_or(0)]
+    super::frequency::clenshaw_curtis(points)
 }
 
 /// The overlap engine over the spectral nodes of a scene whose every order is the full circle

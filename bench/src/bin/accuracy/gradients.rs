@@ -62,27 +62,7 @@ fn measure(root: &Path, k: usize, repeats: usize) -> Option<Row> {
     let source = scene::read(Some(&root.join("examples/phase-binary2.toml"))).ok()?;
     let overrides = vec![coefficients(k)];
     let parameters: Vec<Parameter> = (0..k).map(Parameter::Binary2).collect();
-    // one run of each first, so that neither pays for the per-thread caches the other reuses
-    let built = scene::build_from(&source, &overrides).ok()?;
-    let first = metric::gradient(&built, &parameters).ok()?;
-    // the value and the gradient run alternately, so that a change of the machine's load
-    // falls on both
-    let (mut values, mut boths) = (Vec::with_capacity(repeats), Vec::with_capacity(repeats));
-    for _ in 0..repeats {
-        values.push(seconds(&mut || {
-            let built = scene::build_from(&source, &overrides).unwrap();
-            std::hint::black_box(metric::evaluate(&built).unwrap());
-        }));
-        boths.push(seconds(&mut || {
-            let built = scene::build_from(&source, &overrides).unwrap();
-            std::hint::black_box(metric::gradient(&built, &parameters).unwrap());
-        }));
-    }
-    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let (value_min, both_min) = (least(&values), least(&boths));
-    let (value, both) = (crate::median(values), crate::median(boths));
-    let norm = first.asnr.iter().map(|g| g * g).sum::<f64>().sqrt();
-    Some(Row { k, value, both, value_min, both_min, asnr: first.evaluation.asnr, norm })
+    side_by_side(&source, &overrides, &parameters, repeats)
 }
 
 /// The 2-D row: the paper's lens (`examples/paper-theory.toml`, its Gaussian 50 nm band) with
@@ -96,24 +76,7 @@ fn measure_2d(root: &Path, tolerance: f64, repeats: usize) -> Option<Row> {
         format!("options.tolerance={tolerance:e}"),
     ];
     let parameters: Vec<Parameter> = (5..=8).map(Parameter::ZernikeNoll).collect();
-    let built = scene::build_from(&source, &overrides).ok()?;
-    let first = metric::gradient(&built, &parameters).ok()?;
-    let (mut values, mut boths) = (Vec::with_capacity(repeats), Vec::with_capacity(repeats));
-    for _ in 0..repeats {
-        values.push(seconds(&mut || {
-            let built = scene::build_from(&source, &overrides).unwrap();
-            std::hint::black_box(metric::evaluate(&built).unwrap());
-        }));
-        boths.push(seconds(&mut || {
-            let built = scene::build_from(&source, &overrides).unwrap();
-            std::hint::black_box(metric::gradient(&built, &parameters).unwrap());
-        }));
-    }
-    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let (value_min, both_min) = (least(&values), least(&boths));
-    let (value, both) = (crate::median(values), crate::median(boths));
-    let norm = first.asnr.iter().map(|g| g * g).sum::<f64>().sqrt();
-    Some(Row { k: 4, value, both, value_min, both_min, asnr: first.evaluation.asnr, norm })
+    side_by_side(&source, &overrides, &parameters, repeats)
 }
 
 /// The radial engine at 800 nm: the OTF alone and with K derivatives on 200 frequencies to
@@ -257,4 +220,29 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
         }
     }
     Some(md)
+}
+
+/// The value and the value with its gradient over `parameters`, each `repeats` times, of
+/// `source` with `overrides` (the scene built inside each timing). One run of each first, so
+/// that neither pays for the per-thread caches the other reuses; then alternately, so that a
+/// change of the machine's load falls on both. The row's `k` is the number of parameters.
+fn side_by_side(source: &scene::Source, overrides: &[String], parameters: &[Parameter], repeats: usize) -> Option<Row> {
+    let built = scene::build_from(source, overrides).ok()?;
+    let first = metric::gradient(&built, parameters).ok()?;
+    let (mut values, mut boths) = (Vec::with_capacity(repeats), Vec::with_capacity(repeats));
+    for _ in 0..repeats {
+        values.push(seconds(&mut || {
+            let built = scene::build_from(source, overrides).unwrap();
+            std::hint::black_box(metric::evaluate(&built).unwrap());
+        }));
+        boths.push(seconds(&mut || {
+            let built = scene::build_from(source, overrides).unwrap();
+            std::hint::black_box(metric::gradient(&built, parameters).unwrap());
+        }));
+    }
+    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let (value_min, both_min) = (least(&values), least(&boths));
+    let (value, both) = (crate::median(values), crate::median(boths));
+    let norm = first.asnr.iter().map(|g| g * g).sum::<f64>().sqrt();
+    Some(Row { k: parameters.len(), value, both, value_min, both_min, asnr: first.evaluation.asnr, norm })
 }
