@@ -49,7 +49,7 @@ const ROUNDING_FLOOR: f64 = 1e-12;
 /// Factor on the error estimate of [`GaussianDefocus::otf_estimated`]: the true error was up to
 /// 0.67 times the rule's own estimate against a resolved reference (test
 /// `estimated_error_bounds_the_true_error`; 2.1 with the G10–K21 rule used before).
-const ESTIMATE_SAFETY: f64 = 10.0;
+pub(crate) const ESTIMATE_SAFETY: f64 = 10.0;
 
 /// Largest phase of `E` across one piece of the rule in `t` (radians): a longer piece is split
 /// into equal ones up front (65 points resolve it, see `RESOLVING_POINTS_PER_RADIAN`), not
@@ -323,7 +323,8 @@ impl GaussianDefocus {
     /// [`otf`](Self::otf) and its estimated absolute error: `ESTIMATE_SAFETY` × (the nested
     /// rule's estimates of the pieces it accepted, plus what the tolerance let it leave out: the
     /// Gaussian's tails beyond `tail` σ and the skipped stretch of the uncut zone, each up to 1e-3
-    /// of `tolerance`). A value whose estimate is within a later, tighter tolerance serves it.
+    /// of `tolerance`). A value serves a later, tighter tolerance where the estimate without the
+    /// factor is within it (the criterion the rule accepts its pieces on).
     pub fn otf_estimated(&self, frequency: f64, tolerance: f64) -> (f64, usize, f64) {
         let nu = frequency.abs();
         if nu == 0.0 {
