@@ -34,6 +34,7 @@
 //! only the named stand-alone sections ([`sections`]), each replacing its own section of the
 //! existing `OUT_DIR/BENCHMARKS.md`.
 
+mod closed_ladder;
 mod design;
 mod exact_map;
 mod fft_azimuth;

@@ -50,6 +50,7 @@ pub(crate) const SECTIONS: &[Section] = &[
     Section { name: "freeform", title: crate::freeform::TITLE, run: crate::freeform::section },
     Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
     Section { name: "map", title: crate::map_numpy::TITLE, run: crate::map_numpy::section },
+    Section { name: "closed", title: crate::closed_ladder::TITLE, run: crate::closed_ladder::section },
 ];
 
 /// The sections `--only` names, or an error listing the known names.
