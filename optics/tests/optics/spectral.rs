@@ -174,9 +174,8 @@ fn closed_form_meets_a_tight_tolerance_on_a_broad_band() {
 /// F/1.4 over 200 nm at 1e-6 (the accuracy report's hard scene): its mean, 0.11, is below half the
 /// first pass's guess (0.25), so the mean is computed twice, the second pass 2.2× tighter. A value
 /// of the first pass whose own estimate meets the tighter tolerance is kept, not recomputed: 1428
-/// E(c) over the two passes, where recomputing every value took 2253 (the 26 values of one pass
-/// from the right guess take 1372). The work is a count, the same on every machine; the mean
-/// stays within the tolerance of the panels rule at 1e-12.
+/// E(c) over the two passes, where recomputing every value took 2253. The work is a count, the
+/// same on every machine; the mean stays within the tolerance of the panels rule at 1e-12.
 #[test]
 fn closed_form_second_pass_keeps_the_values_that_meet_it() {
     let lens = Chromatic { f_number: 1.4, lateral: 0.0 };
