@@ -127,6 +127,7 @@ fn logarithmic(p: Parameter) -> bool {
             | Parameter::PhaseSpline(_)
             | Parameter::Zernike(_)
             | Parameter::ZernikeNoll(_)
+            | Parameter::Seidel(_)
             | Parameter::SpectrumCenter
             | Parameter::SpectrumRange
     )
@@ -139,6 +140,15 @@ fn unit(p: Parameter) -> f64 {
         _ => 1.0,
     }
 }
+
+/// The chromatic lens's Seidel terms, per µm: their gradient on the overlap engine
+/// (docs/physics.md, "Gradients: Seidel terms on the overlap engine").
+const SEIDEL: [(&str, metric::SeidelTerm); 4] = [
+    ("lens.spherical_um", metric::SeidelTerm::Spherical),
+    ("lens.coma_um", metric::SeidelTerm::Coma),
+    ("lens.astigmatism_um", metric::SeidelTerm::Astigmatism),
+    ("lens.field_curvature_um", metric::SeidelTerm::FieldCurvature),
+];
 
 /// The spectral keys: the Gaussian spectrum's centre and range.
 const SPECTRAL: [(&str, Parameter); 2] =
@@ -312,6 +322,15 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     if key == PIXEL_PITCH {
         return Ok(Parameter::PixelPitch);
     }
+    if let Some((_, term)) = SEIDEL.iter().find(|(k, _)| *k == key) {
+        if lens_model != "chromatic" {
+            bail!(
+                "--wrt {key}: not differentiable here for lens.model = \"{lens_model}\"; the Seidel terms are keys of \
+                 lens.model = \"chromatic\""
+            );
+        }
+        return Ok(Parameter::Seidel(*term));
+    }
     let wavefront = [("lens.binary2", 0), ("lens.phase_spline_rad", 1), ("lens.zernike_noll_rms_um", 2)];
     for (name, kind) in wavefront {
         let Some(index) = entry_of(key, name) else { continue };
@@ -351,7 +370,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
          spectrum.center_nm and spectrum.range_nm (a Gaussian spectrum), lens.f_number and lens.focal_length_mm \
-         (lens.model = \"chromatic\", \"refractive\" or \"harmonic\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), and lens.zernike_noll_rms_um[i] (every family that takes it); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\" or \"harmonic\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -1206,6 +1225,60 @@ mod tests {
         println!("∂M̄/∂Z5 {:.9e}, ∂M̄/∂Z6 turned {:.9e}", z5.d_mean_mtf[0], z6.d_mean_mtf[0]);
         assert!(z5.d_mean_mtf[0] < 0.0);
         assert!((z5.d_mean_mtf[0] - z6.d_mean_mtf[0]).abs() <= 1e-2 * z5.d_mean_mtf[0].abs(), "{z5:?} {z6:?}");
+    }
+
+    /// The Seidel keys' gradient on the overlap engine at the tolerance `tolerance` against
+    /// central differences of evaluations converged to 1e-10, Richardson-extrapolated from the
+    /// steps 2h and h (`(4 D(h) − D(2h))/3`, truncation O(h⁴); the mean MTF turns fast in coma,
+    /// so a plain central difference would need a step whose rounding, 1e-10/h, is the larger
+    /// error), within 10× `tolerance` of the gradient's norm: ASNR, mean MTF, SNR0 (whose
+    /// derivative is 0: the Seidel terms move the OTF only) and N.
+    fn check_seidel(overrides: &[&str], keys: &[&str], tolerance: f64, h: f64) -> Gradient {
+        let source = scene::read(None).unwrap();
+        let mut set = owned(overrides);
+        set.push(format!("options.tolerance={tolerance:e}"));
+        let g = gradient(&source, &set, &owned(keys)).unwrap();
+        let base = owned(overrides);
+        let norm = g.d_asnr.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!(norm > 0.0, "a zero gradient: {g:?}");
+        let norm_mtf = g.d_mean_mtf.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for (i, k) in g.keys.iter().enumerate() {
+            let coarse = central(&source, &base, k, g.values[i], 2.0 * h);
+            let fine = central(&source, &base, k, g.values[i], h);
+            let theirs: [f64; 4] = std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0);
+            let error = (g.d_asnr[i] - theirs[0]).abs() / norm;
+            let error_mtf = (g.d_mean_mtf[i] - theirs[1]).abs() / norm_mtf;
+            println!(
+                "tolerance {tolerance:e} {k}: ∂ASNR {:.9e}, differences {:.9e}, error/norm {error:.1e}; ∂M̄ {:.9e}, \
+                 differences {:.9e}, error/norm {error_mtf:.1e}",
+                g.d_asnr[i], theirs[0], g.d_mean_mtf[i], theirs[1]
+            );
+            assert!(error <= 10.0 * tolerance, "{k}: ∂ASNR {} vs {} (norm {norm})", g.d_asnr[i], theirs[0]);
+            assert!(error_mtf <= 10.0 * tolerance, "{k}: ∂M̄ {} vs {} (norm {norm_mtf})", g.d_mean_mtf[i], theirs[1]);
+            assert_eq!(g.d_snr0[i], 0.0);
+            assert_eq!(g.d_photoelectrons[i], 0.0);
+            assert!(theirs[2].abs() <= 1e-9 * g.snr0 && theirs[3].abs() <= 1e-9 * g.photoelectrons, "{theirs:?}");
+        }
+        g
+    }
+
+    /// The four Seidel keys on the paper's chromatic lens on axis, each term present (the
+    /// Filon rule of spherical aberration and the closed form of a quadratic phase both),
+    /// at the tolerance 1e-6.
+    #[test]
+    fn seidel_gradient_matches_central_differences() {
+        check_seidel(
+            &[
+                "spectrum.range_nm=20",
+                "lens.spherical_um=0.15",
+                "lens.coma_um=0.3",
+                "lens.astigmatism_um=0.2",
+                "lens.field_curvature_um=0.1",
+            ],
+            &["lens.spherical_um", "lens.coma_um", "lens.astigmatism_um", "lens.field_curvature_um"],
+            1e-6,
+            1e-3,
+        );
     }
 
     /// What the FFT path's gradient does not do stays refused by name, with the reason; and a
