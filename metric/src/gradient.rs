@@ -361,8 +361,9 @@ fn point_gradient(
                     return Err(not_smooth(
                         p,
                         format!(
-                            "{t:?}: the Seidel gradient is computed on the overlap engine, for a lens whose every order is \
+                            "{}: the Seidel gradient is computed on the overlap engine, for a lens whose every order is \
                              the full circle with Seidel terms and a white noise spectrum; this scene's OTF is {}",
+                            t.key(),
                             match d_grid {
                                 GridGradient::Symmetric =>
                                     "rotationally symmetric on the 1-D engines (every Seidel term zero): give a Seidel term a \

@@ -546,6 +546,16 @@ pub enum SeidelTerm {
 }
 
 impl SeidelTerm {
+    /// The scene key that sets the term (`lens.coma_um` …).
+    pub fn key(self) -> &'static str {
+        match self {
+            SeidelTerm::Spherical => "lens.spherical_um",
+            SeidelTerm::Coma => "lens.coma_um",
+            SeidelTerm::Astigmatism => "lens.astigmatism_um",
+            SeidelTerm::FieldCurvature => "lens.field_curvature_um",
+        }
+    }
+
     /// The wavefront this term adds per µm at the pupil point `(x, y)` (units of the pupil
     /// radius, the field along +x), m.
     #[inline]
