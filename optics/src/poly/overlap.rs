@@ -189,8 +189,11 @@ pub(super) struct Overlap<'a> {
     /// values by (frequency, value tolerance, azimuth mod π in nrad)
     mirrored: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Complex64>>,
     /// values and Seidel derivatives by the same keys ([`OtfEngine::otf_along_and_gradient`])
-    differentiated: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), (Complex64, Vec<Complex64>)>>,
+    differentiated: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Differentiated>>,
 }
+
+/// An OTF value with its Seidel derivatives ([`OtfEngine::otf_along_and_gradient`]).
+type Differentiated = (Complex64, Vec<Complex64>);
 
 impl std::fmt::Debug for Term {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
