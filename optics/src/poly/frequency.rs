@@ -299,7 +299,7 @@ impl Polychromatic<'_> {
     /// `directions` on the same rules (docs/physics.md, "Gradients: Seidel terms on the overlap
     /// engine"): at each azimuth the value's adaptive frequency rule runs on
     /// `|O|` with each OTF's derivatives from the engine
-    /// ([`OtfEngine::otf_along_and_gradient`]: forward mode on the overlap quadrature's own
+    /// (`OtfEngine::otf_along_and_gradient`: forward mode on the overlap quadrature's own
     /// nodes), `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`, the kink of `|O|`) kept per frequency
     /// read, and the accepted panels' nodes and weights (pixel MTF included) integrate them;
     /// the azimuths' derivatives are averaged as their means are. `None` where the engine gives
