@@ -81,6 +81,13 @@ pub enum Parameter {
     /// The spectral range `r = 2√2 σ` of the scene's Gaussian spectrum (`spectrum.range_nm`),
     /// peak held: `∂/∂r`, per m.
     SpectrumRange,
+    /// A Seidel term of the chromatic lens (`lens.spherical_um`, `lens.coma_um`,
+    /// `lens.astigmatism_um`, `lens.field_curvature_um`): `∂/∂W`, per µm. Where the scene's
+    /// orders are the full circle with Seidel terms (the overlap engine), forward mode on the
+    /// overlap quadrature (docs/physics.md, "Gradients: Seidel terms on the overlap engine").
+    /// With every Seidel term zero the OTF is on the 1-D engines: coma's derivative is 0 by
+    /// symmetry there (`W131` and `−W131` are one pupil turned by π), the others are refused.
+    Seidel(optics::SeidelTerm),
 }
 
 impl Parameter {
@@ -99,6 +106,7 @@ impl Parameter {
     pub fn grid_direction(self) -> Option<optics::WavefrontDirection> {
         match self {
             Parameter::ZernikeNoll(j) => Some(optics::WavefrontDirection::Zernike(j)),
+            Parameter::Seidel(t) => Some(optics::WavefrontDirection::Seidel(t)),
             p => p.lane().map(optics::WavefrontDirection::Lane),
         }
     }
@@ -118,6 +126,7 @@ impl Parameter {
             Parameter::PhaseSpline(_) => "a knot of the lens's phase spline",
             Parameter::Zernike(_) => "an m = 0 Zernike coefficient of the lens",
             Parameter::ZernikeNoll(_) => "a Zernike coefficient of the lens",
+            Parameter::Seidel(_) => "a Seidel coefficient of the lens",
             Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
             Parameter::SpectrumRange => "the range of the Gaussian spectrum",
             Parameter::FNumber => "the lens's F-number",
@@ -327,7 +336,11 @@ fn point_gradient(
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
-            Parameter::Binary2(_) | Parameter::PhaseSpline(_) | Parameter::Zernike(_) | Parameter::ZernikeNoll(_)
+            Parameter::Binary2(_)
+            | Parameter::PhaseSpline(_)
+            | Parameter::Zernike(_)
+            | Parameter::ZernikeNoll(_)
+            | Parameter::Seidel(_)
                 if on_grid =>
             {
                 let GridGradient::Computed(all) = d_grid else { unreachable!("on_grid") };
@@ -338,6 +351,30 @@ fn point_gradient(
                     MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
                 };
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::Seidel(t) => {
+                // every Seidel term zero on axis: the 1-D engines, rotationally symmetric; coma
+                // at ±c is one pupil turned by π, whose mean over azimuth is the same
+                if t == optics::SeidelTerm::Coma && *d_grid == GridGradient::Symmetric {
+                    (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                } else {
+                    return Err(not_smooth(
+                        p,
+                        format!(
+                            "{}: the Seidel gradient is computed on the overlap engine, for a lens whose every order is \
+                             the full circle with Seidel terms and a white noise spectrum; this scene's OTF is {}",
+                            t.key(),
+                            match d_grid {
+                                GridGradient::Symmetric =>
+                                    "rotationally symmetric on the 1-D engines (every Seidel term zero): give a Seidel term a \
+                                     non-zero value to put it on the overlap engine",
+                                _ =>
+                                    "not on the overlap engine (an iris, Zernike terms, a table, a wavefront too strong for \
+                                     its rules, a noise spectrum, or other wavefront keys asked with it)",
+                            }
+                        ),
+                    ));
+                }
             }
             Parameter::ZernikeNoll(j) => {
                 let (n_radial, m) = optics::fft::noll_to_nm(j);

@@ -53,6 +53,8 @@ pub use metrics::{
     Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, Quadrature, SquareMetrics,
     Symmetry, jinc, metrics, power_law_mean, square_metrics,
 };
+/// The Seidel terms a [`Parameter::Seidel`] names.
+pub use optics::SeidelTerm;
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

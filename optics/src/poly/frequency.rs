@@ -4,7 +4,12 @@
 
 use std::f64::consts::PI;
 
-use super::{Engine, FrequencyRule, MAX_DEPTH, MAX_PANELS, NoiseShape, Polychromatic, Work, level_error, nested_error};
+use num_complex::Complex64;
+
+use super::{
+    Engine, FrequencyRule, MAX_DEPTH, MAX_PANELS, NoiseShape, Polychromatic, WavefrontDirection, Work, level_error,
+    nested_error,
+};
 
 /// Where the oscillations of the OTF in ν have averaged out over the spectrum, in units of the
 /// averaging frequency `ν_s` ([`OtfEngine::averaged_defocus`](super::OtfEngine::averaged_defocus)):
@@ -68,6 +73,10 @@ pub(super) struct Recording {
     accepted: Vec<(f64, f64)>,
     /// an OTF the engine gave no derivatives for
     failed: bool,
+    /// the wavefront directions the engine differentiates along an azimuth
+    /// ([`Polychromatic::mean_mtf_over_azimuth_and_overlap_gradient`]); empty for the radial
+    /// engine's lanes
+    directions: Vec<WavefrontDirection>,
 }
 
 impl Polychromatic<'_> {
@@ -244,10 +253,16 @@ impl Polychromatic<'_> {
     /// is [`mean_mtf_along`](Self::mean_mtf_along)'s. The tangential (along `first`) and sagittal
     /// (across) means are two of the azimuths.
     pub fn mean_mtf_over_azimuth(&self, first: f64, noise: Option<&NoiseShape>) -> AzimuthalMean {
-        let along = |azimuth: f64| match noise {
+        self.azimuthal_mean(first, &mut |azimuth: f64| match noise {
             None => self.mean_mtf_along(azimuth),
             Some(shape) => self.mean_mtf_over_noise(shape, azimuth),
-        };
+        })
+    }
+
+    /// The nested trapezoid rule over azimuth of [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)
+    /// with each azimuth's mean from `along`. The average is the plain mean over every azimuth
+    /// read (each doubling halves the old average and adds the new azimuths' share).
+    fn azimuthal_mean(&self, first: f64, along: &mut dyn FnMut(f64) -> (f64, Work)) -> AzimuthalMean {
         let mut work = Work::default();
         let mut means: Vec<f64> = Vec::with_capacity(MAX_AZIMUTHS);
         let mut count = FIRST_AZIMUTHS;
@@ -277,6 +292,83 @@ impl Polychromatic<'_> {
             }
         }
         AzimuthalMean { mean: average, tangential, sagittal, azimuths: count, change, work }
+    }
+
+    /// The mean MTF averaged over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth),
+    /// white noise) on the overlap engine, and its derivative with respect to each of
+    /// `directions` on the same rules (docs/physics.md, "Gradients: Seidel terms on the overlap
+    /// engine"): at each azimuth the value's adaptive frequency rule runs on
+    /// `|O|` with each OTF's derivatives from the engine
+    /// (`OtfEngine::otf_along_and_gradient`: forward mode on the overlap quadrature's own
+    /// nodes), `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`, the kink of `|O|`) kept per frequency
+    /// read, and the accepted panels' nodes and weights (pixel MTF included) integrate them;
+    /// the azimuths' derivatives are averaged as their means are. `None` where the engine gives
+    /// no derivative for some direction.
+    pub fn mean_mtf_over_azimuth_and_overlap_gradient(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+    ) -> Option<(AzimuthalMean, Vec<f64>)> {
+        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
+            return None;
+        }
+        let lanes = directions.len();
+        let mut sum = vec![0.0; lanes];
+        let mut read = 0usize;
+        let mut failed = false;
+        let mean = self.azimuthal_mean(first, &mut |azimuth: f64| {
+            *self.gradient.borrow_mut() =
+                Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
+            let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+            match self.gradient.borrow_mut().take() {
+                Some(r) if !r.failed => {
+                    for &(nu, w) in &r.accepted {
+                        match r.at.get(&nu.to_bits()) {
+                            Some(&i) => {
+                                for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
+                                    *g += w * d;
+                                }
+                            }
+                            None => failed = true,
+                        }
+                    }
+                }
+                _ => failed = true,
+            }
+            read += 1;
+            (mean, work)
+        });
+        if failed || read != mean.azimuths {
+            return None;
+        }
+        // each azimuth's mean is (1/ν_max) ∫ P |O| dν; the average is over every azimuth read
+        let scale = 1.0 / (self.scene.max_frequency * read as f64);
+        Some((mean, sum.into_iter().map(|g| g * scale).collect()))
+    }
+
+    /// `|O(ν, φ)|` at `nu` along `azimuth` with `∂|O| = Re(O* ∂O)/|O|` for each recorded
+    /// direction kept in the recording.
+    fn recorded_modulus_along(&self, nu: f64, azimuth: f64) -> f64 {
+        let directions = self.gradient.borrow().as_ref().map_or_else(Vec::new, |r| r.directions.clone());
+        let mut derivatives = vec![Complex64::new(0.0, 0.0); directions.len()];
+        let value = self.engine.otf_along_and_gradient(nu, azimuth, &directions, &mut derivatives);
+        let mut recording = self.gradient.borrow_mut();
+        let Some(r) = recording.as_mut() else { return value.map_or(f64::NAN, |v| v.norm()) };
+        match value {
+            Some(v) => {
+                let modulus = v.norm();
+                let place = r.derivatives.len();
+                r.derivatives
+                    .extend(derivatives.iter().map(|d| if modulus > 0.0 { (v.conj() * d).re / modulus } else { 0.0 }));
+                r.at.insert(nu.to_bits(), place);
+                modulus
+            }
+            None => {
+                r.failed = true;
+                drop(recording);
+                self.otf_along(nu, azimuth).norm()
+            }
+        }
     }
 
     /// The MTF at `frequency` averaged over azimuth, `(1/π) ∫_0^π |OTF(ν, φ)| dφ`, by the

@@ -705,6 +705,11 @@ pub enum WavefrontDirection {
     /// (`lens.zernike_noll_rms_um[j − 1]`): `∂W = 10⁻⁶ Z_j(x, y)` per µm RMS (Noll 1976
     /// normalization, as the value samples it).
     Zernike(usize),
+    /// A Seidel term of the chromatic lens's wavefront (`lens.spherical_um`, `lens.coma_um`,
+    /// `lens.astigmatism_um`, `lens.field_curvature_um`), per µm at the pupil's edge: the
+    /// overlap engine's gradient ([`SeidelTerm`](super::SeidelTerm); docs/physics.md,
+    /// "Gradients: Seidel terms on the overlap engine"). The FFT path does not carry it.
+    Seidel(super::SeidelTerm),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -821,6 +826,8 @@ impl FftPath {
                                 zernike[at].1.clone()
                             }
                         }
+                        // the Seidel terms' orders are the full circle (the overlap engine)
+                        WavefrontDirection::Seidel(_) => return Ok(None),
                     };
                     opd.push(values);
                 }
@@ -958,6 +965,9 @@ impl Polychromatic<'_> {
         first: f64,
         directions: &[WavefrontDirection],
     ) -> Result<Option<(AzimuthalMean, Vec<f64>)>, Error> {
+        if matches!(self.engine(), Engine::Overlap { .. }) {
+            return Ok(self.mean_mtf_over_azimuth_and_overlap_gradient(first, directions));
+        }
         if !matches!(self.engine(), Engine::Fft { .. }) {
             return Ok(None);
         }

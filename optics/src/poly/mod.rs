@@ -60,6 +60,7 @@ mod spectral;
 pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, FIRST_AZIMUTHS, MAX_AZIMUTHS};
 pub use grid::{WavefrontDirection, monochromatic_mtf};
 pub use noise::NoiseShape;
+pub use overlap::SeidelTerm;
 pub use spectral::forget_remembered;
 pub(crate) use spectral::spectral_extent;
 
@@ -346,6 +347,19 @@ trait OtfEngine: std::fmt::Debug {
         _directions: &[WavefrontDirection],
     ) -> Result<Option<Vec<f64>>, Error> {
         Ok(None)
+    }
+    /// The complex OTF at `frequency` along `azimuth` ([`otf_along`](Self::otf_along)'s rule
+    /// at the current value tolerance), and into `gradient` its derivative with respect to each
+    /// of `directions`, forward mode on the same rule (the overlap engine's Seidel terms);
+    /// `None` where the engine does not give them (the default).
+    fn otf_along_and_gradient(
+        &self,
+        _frequency: f64,
+        _azimuth: f64,
+        _directions: &[WavefrontDirection],
+        _gradient: &mut [Complex64],
+    ) -> Option<Complex64> {
+        None
     }
     /// Why the engine stopped before its result converged (a work budget), if it did.
     fn over_budget(&self) -> Option<String> {

@@ -30,7 +30,7 @@ use std::sync::OnceLock;
 use num_complex::Complex64;
 
 use super::spectral::{Nodes, Scene};
-use super::{Engine, FrequencyRule, OtfEngine};
+use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
 use crate::fft::sin_cos;
 use crate::lens::Pupil;
 
@@ -188,7 +188,12 @@ pub(super) struct Overlap<'a> {
     mirror: bool,
     /// values by (frequency, value tolerance, azimuth mod π in nrad)
     mirrored: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Complex64>>,
+    /// values and Seidel derivatives by the same keys ([`OtfEngine::otf_along_and_gradient`])
+    differentiated: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Differentiated>>,
 }
+
+/// An OTF value with its Seidel derivatives ([`OtfEngine::otf_along_and_gradient`]).
+type Differentiated = (Complex64, Vec<Complex64>);
 
 impl std::fmt::Debug for Term {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -253,6 +258,7 @@ impl<'a> Overlap<'a> {
             tails: std::cell::RefCell::new(Vec::new()),
             mirror: false,
             mirrored: std::cell::RefCell::new(std::collections::HashMap::new()),
+            differentiated: std::cell::RefCell::new(std::collections::HashMap::new()),
         };
         let top = engine.scene.max_frequency.min(engine.max_cutoff());
         for term in &mut kept {
@@ -526,6 +532,256 @@ fn x_tail(term: &Term, level: usize) -> f64 {
     worst
 }
 
+/// A Seidel term of the chromatic lens's wavefront, as a direction of the overlap engine's
+/// gradient ([`WavefrontDirection::Seidel`]): per µm at the pupil's edge (the key's unit,
+/// `lens.spherical_um` …), the field along +x, with the sign of
+/// [`Wavefront`](crate::Wavefront).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeidelTerm {
+    /// Spherical aberration `W040 ρ⁴` (`lens.spherical_um`).
+    Spherical,
+    /// Coma `W131 ρ³ cos φ = W131 r² x` (`lens.coma_um`).
+    Coma,
+    /// Astigmatism `W222 ρ² cos² φ = W222 x²` (`lens.astigmatism_um`).
+    Astigmatism,
+    /// Field curvature `W220 ρ²` (`lens.field_curvature_um`): it adds to every order's defocus.
+    FieldCurvature,
+}
+
+impl SeidelTerm {
+    /// The scene key that sets the term (`lens.coma_um` …).
+    pub fn key(self) -> &'static str {
+        match self {
+            SeidelTerm::Spherical => "lens.spherical_um",
+            SeidelTerm::Coma => "lens.coma_um",
+            SeidelTerm::Astigmatism => "lens.astigmatism_um",
+            SeidelTerm::FieldCurvature => "lens.field_curvature_um",
+        }
+    }
+
+    /// The wavefront this term adds per µm at the pupil point `(x, y)` (units of the pupil
+    /// radius, the field along +x), m.
+    #[inline]
+    fn opd(self, x: f64, y: f64) -> f64 {
+        let r2 = x * x + y * y;
+        1e-6 * match self {
+            SeidelTerm::Spherical => r2 * r2,
+            SeidelTerm::Coma => r2 * x,
+            SeidelTerm::Astigmatism => x * x,
+            SeidelTerm::FieldCurvature => r2,
+        }
+    }
+}
+
+/// The Filon kernel of an x level at `b = a X`: `K_j = Σ_m a[m][j] 2 i^m j_m(b)`, so that
+/// `∫_{−1}^{1} e^{ibu} g(u) du ≈ Σ_j K_j g(u_j)` for `g` interpolated at the level's nodes.
+fn filon_kernel(rule: &XRule, b: f64, kernel: &mut [Complex64]) {
+    let n = kernel.len();
+    let mut bessel = [0.0; 64];
+    let bessel = &mut bessel[..n];
+    spherical_bessel(b, bessel);
+    kernel.iter_mut().for_each(|k| *k = Complex64::new(0.0, 0.0));
+    for (m, row) in rule.projection.iter().enumerate() {
+        let v = 2.0 * bessel[m];
+        match m % 4 {
+            0 => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.re += p * v),
+            1 => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.im += p * v),
+            2 => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.re -= p * v),
+            _ => row.iter().zip(kernel.iter_mut()).for_each(|(p, kk)| kk.im -= p * v),
+        }
+    }
+}
+
+/// [`term_otf`] and, into `out`, the derivative of the same integral with respect to each of
+/// `terms` (docs/physics.md, "Gradients: Seidel terms on the overlap engine"): a term moves the
+/// wavefront by `c D(p)`, so the integrand `exp(i k [W(p₊) − W(p₋)])` by the factor
+/// `i k [D(p₊) − D(p₋)]`, a polynomial in x of degree at most 3. Forward mode on the value's
+/// nodes: at each of the t rule's nodes the x integral of the factor times the integrand is
+/// the value's Filon rule (the defocus phase `e^{i a X u}` exactly, the rest interpolated at the
+/// value's x level's Gauss–Legendre points, where the value's closed form for a quadratic phase
+/// has no points of its own), and the t rule is the level the value accepts, with its weights.
+/// The value is [`term_otf`]'s, computed the same way.
+#[allow(clippy::too_many_arguments)]
+fn term_otf_and_derivatives(
+    term: &Term,
+    x_level: usize,
+    s: f64,
+    c: f64,
+    sn: f64,
+    eps: f64,
+    terms: &[SeidelTerm],
+    out: &mut [Complex64],
+) -> (Complex64, f64) {
+    out.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
+    if s >= 1.0 {
+        return (Complex64::new(0.0, 0.0), 0.0);
+    }
+    let lanes = terms.len();
+    let k = 2.0 * PI / term.lambda;
+    let a = 4.0 * s * k * term.defocus;
+    let big_t = s.acos();
+    let rule = x_rule(x_level);
+    let n = rule.nodes.len();
+    let rest = term.has_rest();
+    let quadratic = term.spherical == 0.0;
+    // the value and the derivatives at τ ∈ [−1, 1], into `row` (1 + lanes values)
+    let integrand = |tau: f64, row: &mut [Complex64]| {
+        row.iter_mut().for_each(|r| *r = Complex64::new(0.0, 0.0));
+        let t = big_t * tau;
+        let (y, ct) = sin_cos(t);
+        let x_half = ct - s;
+        if x_half <= 0.0 {
+            return;
+        }
+        // p± = (x ± s) e + y e⊥ in the pupil's own axes
+        let points = |x: f64| {
+            let (xp, xm) = (x + s, x - s);
+            (xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c)
+        };
+        let mut kernel = [Complex64::new(0.0, 0.0); 64];
+        let kernel = &mut kernel[..n];
+        filon_kernel(rule, a * x_half, kernel);
+        let scale = ct * x_half;
+        let mut value = Complex64::new(0.0, 0.0);
+        for (j, &u) in rule.nodes.iter().enumerate() {
+            let (xa, ya, xb, yb) = points(x_half * u);
+            let h = if rest {
+                let (si, co) = sin_cos(term.rest_phase(k, xa, ya, xb, yb));
+                Complex64::new(co, si)
+            } else {
+                Complex64::new(1.0, 0.0)
+            };
+            let kh = kernel[j] * h;
+            value += kh;
+            for (r, d) in row[1..].iter_mut().zip(terms) {
+                // i k [D(p₊) − D(p₋)]
+                let factor = k * (d.opd(xa, ya) - d.opd(xb, yb));
+                *r += Complex64::new(-kh.im * factor, kh.re * factor);
+            }
+        }
+        row[1..].iter_mut().for_each(|r| *r *= scale);
+        row[0] = if quadratic {
+            // the value's closed form, as `term_otf` takes it
+            let f = |x: f64| {
+                let (xa, ya, xb, yb) = points(x);
+                a * x + term.rest_phase(k, xa, ya, xb, yb)
+            };
+            let (lo, mid, hi) = (f(-x_half), f(0.0), f(x_half));
+            let alpha = (hi + lo - 2.0 * mid) / (2.0 * x_half * x_half);
+            let beta = (hi - lo) / (2.0 * x_half);
+            let (si, co) = sin_cos(mid);
+            Complex64::new(co, si) * quadratic_phase_integral(alpha, beta, x_half) * ct
+        } else {
+            value * scale
+        };
+    };
+    let phase = a.abs() * (1.0 - s);
+    let mut level = T_LEVELS.iter().position(|&p| p as f64 >= phase + 5.0).unwrap_or(T_LEVELS.len() - 1);
+    let width = 1 + lanes;
+    // the rows at the current level's points (point i at τ = cos(πi/m))
+    let mut rows: Vec<Complex64> = Vec::new();
+    loop {
+        let points = T_LEVELS[level];
+        let m = points - 1;
+        let held = rows.len() / width;
+        if held == points {
+            // nothing new
+        } else if held > 0 && (held - 1) * 2 == m {
+            let mut next = vec![Complex64::new(0.0, 0.0); points * width];
+            for (i, row) in next.chunks_mut(width).enumerate() {
+                if i % 2 == 0 {
+                    row.copy_from_slice(&rows[(i / 2) * width..(i / 2 + 1) * width]);
+                } else {
+                    integrand((PI * i as f64 / m as f64).cos(), row);
+                }
+            }
+            rows = next;
+        } else {
+            rows = vec![Complex64::new(0.0, 0.0); points * width];
+            for (i, row) in rows.chunks_mut(width).enumerate() {
+                integrand((PI * i as f64 / m as f64).cos(), row);
+            }
+        }
+        let weights = cc_weights(points);
+        let values: Vec<Complex64> = rows.chunks(width).map(|r| r[0]).collect();
+        let scale = big_t / PI;
+        let error = scale * t_error(&values);
+        if error <= eps || level + 1 == T_LEVELS.len() {
+            let mut sum = Complex64::new(0.0, 0.0);
+            for (row, w) in rows.chunks(width).zip(weights) {
+                sum += row[0] * *w;
+                for (o, r) in out.iter_mut().zip(&row[1..]) {
+                    *o += r * *w;
+                }
+            }
+            out.iter_mut().for_each(|o| *o *= scale);
+            return (sum * scale, error);
+        }
+        level += 1;
+    }
+}
+
+impl Overlap<'_> {
+    /// [`compute`](Self::compute) and, into `out`, the polychromatic OTF's derivative with
+    /// respect to each of `terms`, every node on the value's rules ([`term_otf_and_derivatives`]);
+    /// the lateral-colour phases and the spectral weights do not depend on the Seidel terms.
+    fn compute_with_derivatives(
+        &self,
+        frequency: f64,
+        azimuth: f64,
+        terms: &[SeidelTerm],
+        out: &mut [Complex64],
+    ) -> Complex64 {
+        out.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
+        let (sn, c) = azimuth.sin_cos();
+        let nuf = frequency.abs() * self.scene.f_number;
+        let (cr, sr) = if frequency < 0.0 { (-c, -sn) } else { (c, sn) };
+        let total = self.nodes.total_weight;
+        let share = self.value_tolerance.get() * total / self.terms.len() as f64;
+        let k = -2.0 * PI * frequency;
+        let mut sum = Complex64::new(0.0, 0.0);
+        let mut excess = 0.0;
+        let mut node = vec![Complex64::new(0.0, 0.0); terms.len()];
+        for (index, term) in self.terms.iter().enumerate() {
+            let s = nuf * term.lambda;
+            if s >= 1.0 {
+                continue;
+            }
+            let eps = share / term.weight.abs();
+            if eps >= 1.0 {
+                continue;
+            }
+            let Some(x_level) = self.x_level(index, X_SHARE * eps) else {
+                excess += term.weight.abs() * 2.0 / total;
+                continue;
+            };
+            let (v, error) =
+                term_otf_and_derivatives(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps, terms, &mut node);
+            // the conjugate, as in `compute` (the project's sign)
+            let mut v = v.conj();
+            let mut turn = Complex64::new(1.0, 0.0);
+            if error > (1.0 - X_SHARE) * eps {
+                excess += term.weight.abs() * error.min(1.0 + v.norm()) / total;
+            }
+            let [dx, dy] = term.shift;
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (k * (dx * c + dy * sn)).sin_cos();
+                turn = Complex64::new(pc, ps);
+                v *= turn;
+            }
+            sum += v * term.weight;
+            for (o, d) in out.iter_mut().zip(&node) {
+                *o += d.conj() * turn * term.weight;
+            }
+        }
+        if excess > self.value_tolerance.get() {
+            self.worst.set(self.worst.get().max(excess));
+        }
+        out.iter_mut().for_each(|o| *o /= total);
+        sum / total
+    }
+}
+
 impl OtfEngine for Overlap<'_> {
     fn engine(&self) -> Engine {
         Engine::Overlap { skipped: self.nodes.nodes.len().saturating_sub(self.terms.len()) }
@@ -569,6 +825,45 @@ impl OtfEngine for Overlap<'_> {
 
     fn direction_dependent(&self) -> bool {
         true
+    }
+
+    /// Seidel directions only; a pupil symmetric about x with images shifted along x reads a
+    /// mirrored azimuth's value and derivatives as the conjugates (every Seidel term is even in
+    /// y, so its derivative keeps the symmetry), as [`otf_along`](Self::otf_along) does.
+    fn otf_along_and_gradient(
+        &self,
+        frequency: f64,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+        gradient: &mut [Complex64],
+    ) -> Option<Complex64> {
+        let terms: Vec<SeidelTerm> = directions
+            .iter()
+            .map(|d| match d {
+                WavefrontDirection::Seidel(t) => Some(*t),
+                _ => None,
+            })
+            .collect::<Option<_>>()?;
+        if !self.mirror {
+            return Some(self.compute_with_derivatives(frequency, azimuth, &terms, gradient));
+        }
+        let key = |phi: f64| (phi.rem_euclid(PI) * 1e9).round() as i64 % (PI * 1e9).round() as i64;
+        let tolerance = self.value_tolerance.get().to_bits();
+        let cache = self.differentiated.borrow();
+        if let Some((v, d)) = cache.get(&(frequency.to_bits(), tolerance, key(PI - azimuth)))
+            && d.len() == gradient.len()
+        {
+            gradient.iter_mut().zip(d).for_each(|(g, d)| *g = d.conj());
+            return Some(v.conj());
+        }
+        drop(cache);
+        let v = self.compute_with_derivatives(frequency, azimuth, &terms, gradient);
+        let mut cache = self.differentiated.borrow_mut();
+        if cache.len() > 1 << 16 {
+            cache.clear();
+        }
+        cache.insert((frequency.to_bits(), tolerance, key(azimuth)), (v, gradient.to_vec()));
+        Some(v)
     }
 
     fn frequency_rule(&self) -> FrequencyRule {
