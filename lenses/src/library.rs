@@ -93,8 +93,7 @@ fn slope_stencils(axis: &[f64]) -> Vec<(usize, Vec<f64>)> {
                     if start + k == i {
                         (0..width).filter(|&m| m != k).map(|m| 1.0 / (xi - xs[m])).sum()
                     } else {
-                        let num: f64 =
-                            (0..width).filter(|&m| m != k && start + m != i).map(|m| xi - xs[m]).product();
+                        let num: f64 = (0..width).filter(|&m| m != k && start + m != i).map(|m| xi - xs[m]).product();
                         let den: f64 = (0..width).filter(|&m| m != k).map(|m| xs[k] - xs[m]).product();
                         num / den
                     }

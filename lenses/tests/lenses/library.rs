@@ -402,7 +402,10 @@ fn cubic_rows_converge_as_h4_and_linear_as_h2() {
     for two_d in [false, true] {
         let s_steps = |n: usize| if two_d { n / 3 } else { 0 };
         let errors = |interpolation| -> Vec<f64> {
-            [12, 24, 48, 96].iter().map(|&n| worst_error(&smooth_library(n, s_steps(n), interpolation), two_d)).collect()
+            [12, 24, 48, 96]
+                .iter()
+                .map(|&n| worst_error(&smooth_library(n, s_steps(n), interpolation), two_d))
+                .collect()
         };
         let (linear, cubic) = (errors(Interpolation::Linear), errors(Interpolation::Cubic));
         println!("2-D {two_d}: linear {linear:?}, cubic {cubic:?}");
