@@ -571,6 +571,14 @@ impl LibraryLens {
             .filter(|(r, _)| **r <= radius)
             .map(|(r, phi)| ((r / radius).powi(2), *phi))
             .collect();
+        // a flat plate (every atom's phase alike): ψ has no zones, so no first order to image
+        if let Some(&(_, first)) = inside.first()
+            && inside.iter().all(|&(_, phi)| phi == first)
+        {
+            return Err(Error::Layout(format!(
+                "every atom inside the aperture has the same phase at λ0 ({first:.6} rad): the layout is a flat plate, which focuses nothing (its design phase has no zones, so no imaging order: all its light is zero order); a lens's atoms follow a focusing phase profile"
+            )));
+        }
         let design_coefficients = fit_even(&inside, DESIGN_FIT_DEGREE);
         let design = Arc::new(RadialProfile::even_polynomial(design_coefficients.clone()).map_err(Error::Pupil)?);
         let sphere = Arc::new(RadialProfile::reference_sphere(radius, focal_length_m).map_err(Error::Pupil)?);
@@ -920,7 +928,7 @@ struct Cell {
 /// through `points` `(q, weight)` and each column of `values` (`values[r][i]` at `points[i]`):
 /// the normal equations, whose matrix `Σ w q^{i+j}` is the same for every column and is built
 /// from the `2 degree + 1` moments `Σ w q^k` (one pass over the points, not `(degree + 1)²`
-/// products a point).
+/// products a point). A column of one value gives that constant.
 fn fit_columns(points: &[(f64, f64)], values: &[&[f64]], degree: usize) -> Vec<Vec<f64>> {
     let degree = degree.min(points.len().saturating_sub(1));
     let n = degree + 1;
@@ -939,7 +947,18 @@ fn fit_columns(points: &[(f64, f64)], values: &[&[f64]], degree: usize) -> Vec<V
         }
     }
     rhs.into_iter()
-        .map(|b| {
+        .zip(values)
+        .map(|(b, column)| {
+            // a column of one value is that constant: exactly what the fit should give, but the
+            // monomial normal equations (ill-conditioned at degree 8–12) would give it as
+            // coefficients of up to 0.3 that cancel to its value (a flat plate's layout, all
+            // atoms alike: its wiggles of rounding size made the radial engine's phase series
+            // long, each OTF 7× dearer)
+            if let Some(&first) = column.first()
+                && column.iter().all(|&v| v == first)
+            {
+                return vec![first];
+            }
             let a = (0..n)
                 .map(|i| {
                     let mut row: Vec<f64> = moments[i..i + n].to_vec();
