@@ -344,6 +344,38 @@ fn library_atom_phase_errors_beyond_the_budget_are_refused_up_front() {
     }
 }
 
+/// A layout whose atoms are all alike (every diameter 200 nm in examples/library.toml's layout: a
+/// flat plate) did not finish in 100 s: its constant design phase was fitted as a polynomial of
+/// degree 10 whose coefficients (up to 5e-3 rad) cancelled to the constant, and the radial engine
+/// integrated their rounding-sized wiggles. A flat plate focuses nothing (its design phase has no
+/// zones, so no imaging order): refused, naming the layout, before any integral.
+#[test]
+fn a_flat_plate_library_layout_is_refused_naming_the_layout() {
+    let dir = scratch("flat-plate");
+    let layout = std::fs::read_to_string(example("data/layout-paper-lens.csv")).unwrap();
+    let flat: String = layout
+        .lines()
+        .map(|l| match l.split_once(',') {
+            Some((r, _)) if !l.starts_with('#') && !l.starts_with("r_mm") => format!("{r},200.0\n"),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    assert_eq!(flat.matches(",200.0").count(), 1680, "{flat}");
+    std::fs::write(dir.join("flat.csv"), flat).unwrap();
+    let scene = std::fs::read_to_string(example("library.toml"))
+        .unwrap()
+        .replace("data/library-tio2-like.csv", &example("data/library-tio2-like.csv"))
+        .replace("data/layout-paper-lens.csv", "flat.csv");
+    std::fs::write(dir.join("flat.toml"), scene).unwrap();
+    let path = dir.join("flat.toml");
+    for interpolation in ["linear", "cubic"] {
+        let set = format!("lens.library_interpolation=\"{interpolation}\"");
+        let err = fails(&["evaluate", path.to_str().unwrap(), "--set", &set]);
+        assert!(err.contains("lens.layout") && err.contains("flat plate"), "{err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `asnr mtf` names a PSF stack's 2-D OTF as the stack's (examples/psf-stack.toml is not round,
 /// so its MTF is the mean over azimuth), and a phase map's as a sampled 2-D pupil's.
 #[test]

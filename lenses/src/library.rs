@@ -27,6 +27,10 @@ const DESIGN_FIT_DEGREE: usize = 10;
 /// interpolation's error, `h²/8` times the second derivative of `|t|` or `φ` along the
 /// parameter (or λ) with `h` the library's step there: it falls as the square of the library's
 /// density (docs/physics.md, "Meta-atom library").
+///
+/// With [`Interpolation::Cubic`] ([`with_interpolation`](Library::with_interpolation)) the
+/// amplitude and unwrapped phase are instead a C¹ piecewise cubic in every parameter (λ stays
+/// linear): error `O(h⁴)`, and a derivative in the parameters that is continuous across the rows.
 #[derive(Clone, Debug)]
 pub struct Library {
     axes: Vec<Vec<f64>>,
@@ -38,6 +42,82 @@ pub struct Library {
     /// a fin's unconverted (co-polarized) amplitude at every grid point, where given
     /// ([`with_co_amplitude`](Library::with_co_amplitude))
     co_amplitude: Option<Vec<f64>>,
+    /// how the values are interpolated in the parameters
+    interpolation: Interpolation,
+    /// per parameter axis and row, the slope stencil of [`Interpolation::Cubic`]: its first row
+    /// and the weights of the rows from there (the derivative at the row of the polynomial
+    /// through its up to 5 nearest rows)
+    slopes: Vec<Vec<(usize, Vec<f64>)>>,
+}
+
+/// How a [`Library`] interpolates `|t|` and the unwrapped phase between its rows in each
+/// parameter (in λ both are linear).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Interpolation {
+    /// Multilinear (the default): error `h²/8 max|f''|` with `h` the rows' step; the derivative
+    /// in a parameter jumps at every row.
+    #[default]
+    Linear,
+    /// Piecewise cubic Hermite in each parameter (tensor product), the slope at each row that of
+    /// the polynomial through the 5 nearest rows (fewer on an axis of fewer rows): C¹ in every
+    /// parameter, error `h⁴/384 max|f⁗|` plus the slopes' `O(h⁴)` (docs/physics.md, "Meta-atom
+    /// library"). `|t|` is clamped to `[0, 1]` where the cubic would leave it (near rows of
+    /// `|t|` at 0 or 1 with curvature; a kink there, and only there).
+    Cubic,
+}
+
+impl Interpolation {
+    /// The scene's spelling, `"linear"` or `"cubic"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Interpolation::Linear => "linear",
+            Interpolation::Cubic => "cubic",
+        }
+    }
+}
+
+/// The weights of the slope at every row of `axis`: the derivative at the row of the Lagrange
+/// polynomial through the `min(5, n)` rows nearest it (centred where the axis allows):
+/// `ℓ_k'(x_i) = Π_{m≠k,i}(x_i − x_m) / Π_{m≠k}(x_k − x_m)` for `k ≠ i` and
+/// `ℓ_i'(x_i) = Σ_{m≠i} 1/(x_i − x_m)`.
+fn slope_stencils(axis: &[f64]) -> Vec<(usize, Vec<f64>)> {
+    let n = axis.len();
+    let width = n.min(5);
+    (0..n)
+        .map(|i| {
+            let start = i.saturating_sub(2).min(n - width);
+            let xs = &axis[start..start + width];
+            let xi = axis[i];
+            let weights = (0..width)
+                .map(|k| {
+                    if start + k == i {
+                        (0..width).filter(|&m| m != k).map(|m| 1.0 / (xi - xs[m])).sum()
+                    } else {
+                        let num: f64 = (0..width).filter(|&m| m != k && start + m != i).map(|m| xi - xs[m]).product();
+                        let den: f64 = (0..width).filter(|&m| m != k).map(|m| xs[k] - xs[m]).product();
+                        num / den
+                    }
+                })
+                .collect();
+            (start, weights)
+        })
+        .collect()
+}
+
+/// The cell `i` (`axis[i] ≤ x ≤ axis[i + 1]`) and the fraction along it, clamped to the axis's
+/// ends; `(0, 0)` on a one-point axis.
+fn cell_of(axis: &[f64], x: f64) -> (usize, f64) {
+    if axis.len() == 1 {
+        return (0, 0.0);
+    }
+    let i = axis.partition_point(|&a| a <= x).clamp(1, axis.len() - 1) - 1;
+    (i, ((x - axis[i]) / (axis[i + 1] - axis[i])).clamp(0.0, 1.0))
+}
+
+/// `b − a` brought within ±π (the short way round).
+fn wrapped_step(a: f64, b: f64) -> f64 {
+    let step = b - a;
+    step - std::f64::consts::TAU * (step / std::f64::consts::TAU).round()
 }
 
 impl Library {
@@ -97,7 +177,16 @@ impl Library {
             amplitude[index] = *row_amplitude;
             phase[index] = *row_phase;
         }
-        Ok(Library { axes, wavelengths, amplitude, phase, co_amplitude: None })
+        let slopes = axes.iter().map(|a| slope_stencils(a)).collect();
+        Ok(Library {
+            axes,
+            wavelengths,
+            amplitude,
+            phase,
+            co_amplitude: None,
+            interpolation: Interpolation::Linear,
+            slopes,
+        })
     }
 
     /// This library with the unconverted amplitude `|t_co|` of a fin (the light that keeps the
@@ -127,15 +216,28 @@ impl Library {
         Ok(Library { co_amplitude: Some(values), ..self })
     }
 
+    /// This library interpolated in the parameters by `interpolation`.
+    pub fn with_interpolation(self, interpolation: Interpolation) -> Library {
+        Library { interpolation, ..self }
+    }
+
+    /// How the library interpolates in the parameters.
+    pub fn interpolation(&self) -> Interpolation {
+        self.interpolation
+    }
+
     /// Whether the library gives a fin's unconverted amplitude.
     pub fn has_co_amplitude(&self) -> bool {
         self.co_amplitude.is_some()
     }
 
-    /// `|t_co(p, λ)|`, multilinear in the parameters and λ as `|t|` is (0 where the library
+    /// `|t_co(p, λ)|`, interpolated in the parameters and λ as `|t|` is (0 where the library
     /// gives none).
     pub fn co_amplitude(&self, params: &[f64], wavelength_m: f64) -> f64 {
         let Some(co) = &self.co_amplitude else { return 0.0 };
+        if self.interpolation == Interpolation::Cubic {
+            return self.cubic(params, wavelength_m, &|index| (co[index], 0.0)).0.clamp(0.0, 1.0);
+        }
         self.corners(params, wavelength_m).iter().map(|&(index, weight)| weight * co[index]).sum()
     }
 
@@ -192,8 +294,14 @@ impl Library {
     }
 
     /// `t(p, λ)`: `|t|` and the phase multilinear in the parameters and λ (clamped to the grid's
-    /// ends), the corners' phases unwrapped against the cell's first corner (type docs).
+    /// ends), the corners' phases unwrapped against the cell's first corner (type docs); with
+    /// [`Interpolation::Cubic`], cubic in the parameters ([`Interpolation`]).
     pub fn transmission(&self, params: &[f64], wavelength_m: f64) -> Complex64 {
+        if self.interpolation == Interpolation::Cubic {
+            let (amplitude, phase) =
+                self.cubic(params, wavelength_m, &|index| (self.amplitude[index], self.phase[index]));
+            return Complex64::from_polar(amplitude.clamp(0.0, 1.0), phase);
+        }
         let (mut amplitude, mut phase) = (0.0, 0.0);
         let mut reference = None;
         for (index, weight) in self.corners(params, wavelength_m) {
@@ -207,6 +315,72 @@ impl Library {
             }
         }
         Complex64::from_polar(amplitude, reference.unwrap_or(0.0) + phase)
+    }
+}
+
+impl Library {
+    /// The cubic interpolant ([`Interpolation::Cubic`]) of the grid values `values(index) =
+    /// (amplitude, phase)` at `(params, λ)`, unclamped.
+    fn cubic(&self, params: &[f64], wavelength_m: f64, values: &dyn Fn(usize) -> (f64, f64)) -> (f64, f64) {
+        let (li, lf) = cell_of(&self.wavelengths, wavelength_m);
+        self.cubic_axis(0, 0, params, (li, lf), values)
+    }
+
+    /// The interpolant along parameter axes `d…` (tensor product, the first axis outermost) of
+    /// the values whose earlier axes' indices make `base`; λ linear in the cell `lambda`. Along
+    /// each axis the stencil's values are unwrapped in phase one after the next (each step within
+    /// ±π), then interpolated by the cubic Hermite of the rows' slopes.
+    fn cubic_axis(
+        &self,
+        d: usize,
+        base: usize,
+        params: &[f64],
+        lambda: (usize, f64),
+        values: &dyn Fn(usize) -> (f64, f64),
+    ) -> (f64, f64) {
+        if d == self.axes.len() {
+            let n = self.wavelengths.len();
+            let (a0, p0) = values(base * n + lambda.0);
+            if n == 1 || lambda.1 == 0.0 {
+                return (a0, p0);
+            }
+            let (a1, p1) = values(base * n + lambda.0 + 1);
+            let f = lambda.1;
+            return ((1.0 - f) * a0 + f * a1, p0 + f * wrapped_step(p0, p1));
+        }
+        let axis = &self.axes[d];
+        let n = axis.len();
+        if n == 1 {
+            return self.cubic_axis(d + 1, base * n, params, lambda, values);
+        }
+        let (i, t) = cell_of(axis, params.get(d).copied().unwrap_or(f64::NAN));
+        let (s0, w0) = &self.slopes[d][i];
+        let (s1, w1) = &self.slopes[d][i + 1];
+        let lo = (*s0).min(*s1);
+        let hi = (s0 + w0.len()).max(s1 + w1.len());
+        let mut local: Vec<(f64, f64)> = Vec::with_capacity(hi - lo);
+        for j in lo..hi {
+            let (a, p) = self.cubic_axis(d + 1, base * n + j, params, lambda, values);
+            let p = match local.last() {
+                Some(&(_, last)) => last + wrapped_step(last, p),
+                None => p,
+            };
+            local.push((a, p));
+        }
+        let slope = |start: usize, weights: &[f64]| {
+            weights.iter().enumerate().fold((0.0, 0.0), |(sa, sp), (k, w)| {
+                let (a, p) = local[start + k - lo];
+                (sa + w * a, sp + w * p)
+            })
+        };
+        let (m0, m1) = (slope(*s0, w0), slope(*s1, w1));
+        let (y0, y1) = (local[i - lo], local[i + 1 - lo]);
+        let h = axis[i + 1] - axis[i];
+        // the cubic Hermite basis on [0, 1]
+        let (t2, t3) = (t * t, t * t * t);
+        let (h00, h10, h01, h11) = (2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, -2.0 * t3 + 3.0 * t2, t3 - t2);
+        let hermite = |y0: f64, m0: f64, y1: f64, m1: f64| h00 * y0 + h10 * h * m0 + h01 * y1 + h11 * h * m1;
+        (hermite(y0.0, m0.0, y1.0, m1.0), hermite(y0.1, m0.1, y1.1, m1.1))
     }
 }
 
@@ -397,6 +571,14 @@ impl LibraryLens {
             .filter(|(r, _)| **r <= radius)
             .map(|(r, phi)| ((r / radius).powi(2), *phi))
             .collect();
+        // a flat plate (every atom's phase alike): ψ has no zones, so no first order to image
+        if let Some(&(_, first)) = inside.first()
+            && inside.iter().all(|&(_, phi)| phi == first)
+        {
+            return Err(Error::Layout(format!(
+                "every atom inside the aperture has the same phase at λ0 ({first:.6} rad): the layout is a flat plate, which focuses nothing (its design phase has no zones, so no imaging order: all its light is zero order); a lens's atoms follow a focusing phase profile"
+            )));
+        }
         let design_coefficients = fit_even(&inside, DESIGN_FIT_DEGREE);
         let design = Arc::new(RadialProfile::even_polynomial(design_coefficients.clone()).map_err(Error::Pupil)?);
         let sphere = Arc::new(RadialProfile::reference_sphere(radius, focal_length_m).map_err(Error::Pupil)?);
@@ -746,7 +928,7 @@ struct Cell {
 /// through `points` `(q, weight)` and each column of `values` (`values[r][i]` at `points[i]`):
 /// the normal equations, whose matrix `Σ w q^{i+j}` is the same for every column and is built
 /// from the `2 degree + 1` moments `Σ w q^k` (one pass over the points, not `(degree + 1)²`
-/// products a point).
+/// products a point). A column of one value gives that constant.
 fn fit_columns(points: &[(f64, f64)], values: &[&[f64]], degree: usize) -> Vec<Vec<f64>> {
     let degree = degree.min(points.len().saturating_sub(1));
     let n = degree + 1;
@@ -765,7 +947,18 @@ fn fit_columns(points: &[(f64, f64)], values: &[&[f64]], degree: usize) -> Vec<V
         }
     }
     rhs.into_iter()
-        .map(|b| {
+        .zip(values)
+        .map(|(b, column)| {
+            // a column of one value is that constant: exactly what the fit should give, but the
+            // monomial normal equations (ill-conditioned at degree 8–12) would give it as
+            // coefficients of up to 0.3 that cancel to its value (a flat plate's layout, all
+            // atoms alike: its wiggles of rounding size made the radial engine's phase series
+            // long, each OTF 7× dearer)
+            if let Some(&first) = column.first()
+                && column.iter().all(|&v| v == first)
+            {
+                return vec![first];
+            }
             let a = (0..n)
                 .map(|i| {
                     let mut row: Vec<f64> = moments[i..i + n].to_vec();

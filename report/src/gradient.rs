@@ -307,6 +307,32 @@ fn entry_of(key: &str, name: &str) -> Option<Result<usize>> {
     Some(index.parse::<usize>().with_context(|| format!("--wrt {key}: `{index}` is not a list index")))
 }
 
+/// Why the gradient with respect to `lens.parameter_bias[i]` is refused; `None` for another key.
+/// With `lens.library_interpolation = "linear"` (the default) the rows are joined by straight
+/// lines: every atom's field has a kink wherever the bias moves its parameter across a row, so
+/// the value is only piecewise smooth in the bias. With `"cubic"` it is C¹ in the bias, but the
+/// engines do not follow the derivative yet.
+fn library_bias(key: &str, table: &toml::Table) -> Option<Result<Parameter>> {
+    if let Err(e) = entry_of(key, "lens.parameter_bias")? {
+        return Some(Err(e));
+    }
+    let interpolation = lookup(table, "lens.library_interpolation").and_then(toml::Value::as_str).unwrap_or("linear");
+    Some(Err(if interpolation == "cubic" {
+        anyhow!(
+            "--wrt {key}: not differentiable here yet: with lens.library_interpolation = \"cubic\" the value is C¹ in \
+             the bias, but the engines do not compute its derivative yet (the bias moves the first order's amplitude \
+             and phase, τ1 and T; it is never replaced by a finite difference)"
+        )
+    } else {
+        anyhow!(
+            "--wrt {key}: not differentiable with lens.library_interpolation = \"{interpolation}\": the library's rows \
+             are joined by straight lines, so each atom's field has a kink wherever the bias moves its parameter \
+             across a row; lens.library_interpolation = \"cubic\" (a C¹ cubic between the rows) makes the value \
+             smooth in the bias, though its gradient is not computed yet"
+        )
+    }))
+}
+
 /// The scene quantity a canonical key sets, or why its gradient is refused.
 fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) -> Result<Parameter> {
     refuse_by_name(key)?;
@@ -410,6 +436,7 @@ pub(crate) fn gradient_and_evaluation(
         .iter()
         .map(|(k, _)| {
             aperture_parameter(k, &lens_model, diameter_given)
+                .or_else(|| library_bias(k, &table))
                 .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
         })
         .collect::<Result<_>>()?;
@@ -1027,6 +1054,24 @@ mod tests {
         let mut diffractive = line.clone();
         diffractive.extend(owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]));
         check_binary2(&source, &diffractive, &owned(&["lens.binary2[0]", "lens.binary2[1]"]));
+    }
+
+    /// `lens.parameter_bias[i]` is refused naming the interpolation: linear rows put a kink at
+    /// every row (the option that makes the value smooth named), cubic rows are smooth but not
+    /// followed yet.
+    #[test]
+    fn a_library_bias_is_refused_naming_the_interpolation() {
+        let source = example("library.toml");
+        let keys = owned(&["lens.parameter_bias[0]"]);
+        let e = gradient(&source, &owned(&["lens.parameter_bias=[0]"]), &keys).unwrap_err().to_string();
+        assert!(
+            e.contains("--wrt lens.parameter_bias[0]: not differentiable with lens.library_interpolation = \"linear\"")
+                && e.contains("lens.library_interpolation = \"cubic\""),
+            "{e}"
+        );
+        let cubic = owned(&["lens.parameter_bias=[0]", "lens.library_interpolation=\"cubic\""]);
+        let e = gradient(&source, &cubic, &keys).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.parameter_bias[0]: not differentiable here yet") && e.contains("C¹"), "{e}");
     }
 
     /// Bad keys are refused naming the key.

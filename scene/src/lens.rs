@@ -139,6 +139,7 @@ impl Model {
                 "atom_transmission_error",
                 "atom_error_seed",
                 "parameter_bias",
+                "library_interpolation",
                 "zernike_noll_rms_um",
                 "layout_grid",
                 "layout_gds",
@@ -195,7 +196,7 @@ impl Model {
 
 impl RawLens {
     /// Every family-specific key and whether the table gives it.
-    fn given(&self) -> [(&'static str, bool); 61] {
+    fn given(&self) -> [(&'static str, bool); 62] {
         [
             ("layout_grid", self.layout_grid.is_some()),
             ("layout_gds", self.layout_gds.is_some()),
@@ -217,6 +218,7 @@ impl RawLens {
             ("atom_transmission_error", self.atom_transmission_error.is_some()),
             ("atom_error_seed", self.atom_error_seed.is_some()),
             ("parameter_bias", self.parameter_bias.is_some()),
+            ("library_interpolation", self.library_interpolation.is_some()),
             ("psf", self.psf.is_some()),
             ("psf_pitch_um", self.psf_pitch_um.is_some()),
             ("psf_wavelengths_nm", self.psf_wavelengths_nm.is_some()),

@@ -63,6 +63,7 @@ pub(crate) struct RawLens {
     pub atom_transmission_error: Option<f64>,
     pub atom_error_seed: Option<u64>,
     pub parameter_bias: Option<Vec<f64>>,
+    pub library_interpolation: Option<String>,
     pub layout_grid: Option<String>,
     pub layout_gds: Option<String>,
     pub gds_cell: Option<String>,
@@ -123,8 +124,9 @@ pub(crate) struct LensInfo {
 }
 
 /// `lens.library` (columns: parameters, `wavelength_nm`, `amplitude` or `transmittance`,
-/// `phase_rad`, and for fins an optional `co_amplitude`, their unconverted light): the library
-/// and its parameter columns' names.
+/// `phase_rad`, and for fins an optional `co_amplitude`, their unconverted light), interpolated
+/// in the parameters as `lens.library_interpolation` says ([`library_interpolation`]): the
+/// library and its parameter columns' names.
 pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library, Vec<String>), Error> {
     let expected =
         "a CSV of the meta-atom library: parameter columns, wavelength_nm, amplitude or transmittance, phase_rad";
@@ -167,7 +169,9 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
         let a = if amplitude.1 { if a >= 0.0 { a.sqrt() } else { f64::NAN } } else { a };
         table.push((params, values[iw] * 1e-9, a, values[ip]));
     }
-    let library = lenses::Library::new(&table).map_err(|e| o.domain("lens.library", &ctx, e))?;
+    let library = lenses::Library::new(&table)
+        .map_err(|e| o.domain("lens.library", &ctx, e))?
+        .with_interpolation(library_interpolation(l, o)?);
     // a fin's unconverted light (zero-order light: in T, not in τ1)
     let library = match col("co_amplitude") {
         Some(ic) => {
@@ -177,6 +181,20 @@ pub(crate) fn read_library(l: &RawLens, o: &Origins) -> Result<(lenses::Library,
         None => library,
     };
     Ok((library, names.iter().map(|n| n.to_string()).collect()))
+}
+
+/// `lens.library_interpolation`: `"linear"` (the default: multilinear in the parameters) or
+/// `"cubic"` (a C¹ cubic in each parameter; docs/physics.md, "Meta-atom library").
+pub(crate) fn library_interpolation(l: &RawLens, o: &Origins) -> Result<lenses::Interpolation, Error> {
+    match l.library_interpolation.as_deref() {
+        None | Some("linear") => Ok(lenses::Interpolation::Linear),
+        Some("cubic") => Ok(lenses::Interpolation::Cubic),
+        Some(other) => Err(o.bad(
+            "lens.library_interpolation",
+            quoted(other),
+            "\"linear\" (|t| and the unwrapped phase multilinear in the parameters, the default) or \"cubic\" (a C¹ piecewise cubic in each parameter, error O(h⁴): needed for the gradient with respect to lens.parameter_bias)",
+        )),
+    }
 }
 
 /// `lens.zernike_noll_rms_um` as `(Noll index, metres RMS)`, the first entry Z1.

@@ -838,7 +838,11 @@ fn pupil_mapping(
         Some("exact") => PupilMapping::Exact,
         Some(other) => return Err(o.bad(key, quoted(other), PUPIL_MAPPING)),
     };
-    let radial = matches!(raw.lens.model.as_deref(), Some("phase" | "library")) && raw.lens.phase_map.is_none();
+    // a library's 2-D layout (layout_grid, layout_gds) is a 2-D pupil, as a phase map is
+    let radial = matches!(raw.lens.model.as_deref(), Some("phase" | "library"))
+        && raw.lens.phase_map.is_none()
+        && raw.lens.layout_grid.is_none()
+        && raw.lens.layout_gds.is_none();
     let on_axis = |x: Option<f64>, y: Option<f64>| x.unwrap_or(0.0) == 0.0 && y.unwrap_or(0.0) == 0.0;
     let axial = match (&raw.field, &raw.fields) {
         (Some(f), _) => on_axis(f.x_deg, f.y_deg),

@@ -300,6 +300,13 @@ fn lens(out: &mut Out, o: &Origins, l: &RawLens) -> Result<(), Error> {
             if let Some(b) = &l.parameter_bias {
                 out.value("parameter_bias", &list(b));
             }
+            match &l.library_interpolation {
+                Some(i) => out.string("library_interpolation", i),
+                None => {
+                    out.line("# library_interpolation not given: linear in the parameters");
+                    out.string("library_interpolation", "linear");
+                }
+            }
         }
         Model::Phase => {
             out.number("design_wavelength_nm", l.design_wavelength_nm.unwrap_or_default());
