@@ -205,16 +205,20 @@ impl SampledPlane {
         let first_row = -((n / 2 + half) as i64);
         let mut grid = Vec::with_capacity((n / 2 + 2 * half + 1) * height);
         for gx in -(half as i64)..=(n / 2 + half) as i64 {
-            let (source, mirrored) = if (0..=(n / 2) as i64).contains(&gx) {
-                (gx as usize, false)
-            } else {
-                (wrap(-gx), true)
-            };
+            let (source, mirrored) =
+                if (0..=(n / 2) as i64).contains(&gx) { (gx as usize, false) } else { (wrap(-gx), true) };
             let column = &spectrum[source * n..(source + 1) * n];
-            grid.extend((0..height as i64).map(|r| {
-                let gy = first_row + r;
-                if mirrored { column[wrap(-gy)].conj() } else { column[wrap(gy)] }
-            }));
+            // row g_y of the column is column[wrap(±g_y)], stepped by one (wrapping) per row
+            let mut at = if mirrored { wrap(-first_row) } else { wrap(first_row) };
+            for _ in 0..height {
+                if mirrored {
+                    grid.push(column[at].conj());
+                    at = if at == 0 { n - 1 } else { at - 1 };
+                } else {
+                    grid.push(column[at]);
+                    at = if at + 1 == n { 0 } else { at + 1 };
+                }
+            }
         }
         SampledPlane { n, grid, centroid, absolute_sum: values.iter().map(|v| (v / sum).abs()).sum() }
     }
