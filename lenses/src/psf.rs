@@ -525,7 +525,7 @@ mod tests {
 
     /// A stack whose 2-D transforms would pass the memory budget is refused with the numbers
     /// before anything is made: 16 × 2²² samples (a strip) needs a grid of 2²³ points a side, about
-    /// 32 · (2²²)² bytes; a 384 × 384 × 45 stack (212 MB of grids) is within it.
+    /// 32 · (2²²)² bytes; a 384 × 384 × 45 stack (232 MB of grids) is within it.
     #[test]
     fn planes_past_the_memory_budget_are_refused_before_allocating() {
         let e = lens(vec![800e-9], [16, 1 << 22], &[]).unwrap_err().to_string();
