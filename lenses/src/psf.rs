@@ -525,14 +525,15 @@ mod tests {
 
     /// A stack whose 2-D transforms would pass the memory budget is refused with the numbers
     /// before anything is made: 16 × 2²² samples (a strip) needs a grid of 2²³ points a side, about
-    /// 32 · (2²²)² bytes; a 384 × 384 × 45 stack (212 MB of grids) is within it.
+    /// 32 · (2²²)² bytes; a 384 × 384 × 45 stack (232 MB of grids) is within it.
     #[test]
     fn planes_past_the_memory_budget_are_refused_before_allocating() {
         let e = lens(vec![800e-9], [16, 1 << 22], &[]).unwrap_err().to_string();
         assert!(e.contains("memory budget of 4 GiB") && e.contains("1 slices of 16 × 4194304"), "{e}");
         let (kept, building) = SampledPlane::bytes(384, 384);
-        // the grid: (384 + 23) rows of 768 complex values, and the 768² transform it is built through
-        assert_eq!((kept, building), (407.0 * 768.0 * 16.0, 768.0 * 768.0 * 16.0));
+        // the grid: (384 + 23) columns of 768 + 23 complex values, and the half spectrum of
+        // 385 columns of 768 it is built through, with its real rows' buffers
+        assert_eq!((kept, building), (407.0 * 791.0 * 16.0, 386.0 * 768.0 * 16.0));
         assert!(45.0 * kept + building < optics::FFT_MEMORY_BUDGET);
     }
 

@@ -19,6 +19,7 @@
 use std::f64::consts::PI;
 
 use num_complex::Complex64;
+use realfft::RealFftPlanner;
 use rustfft::FftPlanner;
 
 /// The Gaussian kernel's variance parameter τ, in grid cells² (`φ(x) = e^{−x²/(4τ)}`): the
@@ -35,8 +36,10 @@ pub const PLANE_WIDTH: usize = 22;
 pub struct SampledPlane {
     /// grid points per turn along each axis (`2 max(n_x, n_y)`)
     n: usize,
-    /// rows `g_y` from `−PLANE_WIDTH/2` to `N/2 + PLANE_WIDTH/2` (the half-plane `θ_y ≥ 0`; the
-    /// other half is the conjugate), each of `N` columns `g_x` (periodic)
+    /// the half-plane `θ_x ≥ 0` (the other half is the conjugate), column by column: columns
+    /// `g_x` from `−PLANE_WIDTH/2` to `N/2 + PLANE_WIDTH/2`, each holding the [`COLUMN`](Self::column)
+    /// rows `g_y` from `−N/2 − PLANE_WIDTH/2` to `N/2 + PLANE_WIDTH/2` (periodic in `g_y`,
+    /// unrolled so that the kernel reads each column's points in one contiguous run)
     grid: Vec<Complex64>,
     /// the point the transform is taken about, in samples from the centre sample `[x, y]`
     centroid: [f64; 2],
@@ -48,7 +51,7 @@ impl std::fmt::Debug for SampledPlane {
     /// The grid's size, not its values (a few million).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SampledPlane")
-            .field("grid", &format_args!("{} × {}", self.grid.len() / self.n, self.n))
+            .field("grid", &format_args!("{} × {}", self.grid.len() / self.column(), self.column()))
             .field("centroid", &self.centroid)
             .field("absolute_sum", &self.absolute_sum)
             .finish()
@@ -60,35 +63,54 @@ fn kernel_transform(f: f64) -> f64 {
     (4.0 * PI * PLANE_TAU).sqrt() * (-4.0 * PI * PI * PLANE_TAU * f * f).exp()
 }
 
+/// `e^{−k²/(4τ)}` for `k` from 0 to `PLANE_WIDTH − 1`, computed once.
+fn kernel_steps() -> &'static [f64; PLANE_WIDTH] {
+    static STEPS: std::sync::OnceLock<[f64; PLANE_WIDTH]> = std::sync::OnceLock::new();
+    STEPS.get_or_init(|| std::array::from_fn(|k| (-((k * k) as f64) / (4.0 * PLANE_TAU)).exp()))
+}
+
 /// The kernel's weights `φ(u − g)` at the [`PLANE_WIDTH`] grid points `g` nearest `u` (from the
-/// first, which is returned).
+/// first, which is returned). With `d = u − first` the weights are
+/// `e^{−(d−k)²/(4τ)} = e^{−d²/(4τ)} (e^{d/(2τ)})^k e^{−k²/(4τ)}` (Greengard & Lee's fast
+/// Gaussian gridding): two exponentials a point, not one a weight; the powers' rounding is
+/// below `PLANE_WIDTH ε` relative ([`SampledPlane::error_bound`]).
 fn weights(u: f64) -> (i64, [f64; PLANE_WIDTH]) {
     let first = u.floor() as i64 - (PLANE_WIDTH / 2) as i64 + 1;
+    let d = u - first as f64;
+    let ratio = (d / (2.0 * PLANE_TAU)).exp();
+    let mut power = (-d * d / (4.0 * PLANE_TAU)).exp();
+    let steps = kernel_steps();
     let mut w = [0.0; PLANE_WIDTH];
-    for (k, w) in w.iter_mut().enumerate() {
-        let d = u - (first + k as i64) as f64;
-        *w = (-d * d / (4.0 * PLANE_TAU)).exp();
+    for (w, &step) in w.iter_mut().zip(steps) {
+        *w = power * step;
+        power *= ratio;
     }
     (first, w)
 }
 
 impl SampledPlane {
+    /// Rows `g_y` each column holds: `N + PLANE_WIDTH + 1`.
+    fn column(&self) -> usize {
+        self.n + PLANE_WIDTH + 1
+    }
+
     /// Bytes a plane of `ny × nx` samples holds, `(kept, while built)`: the half-plane grid it
-    /// keeps, `(N/2 + PLANE_WIDTH + 1) × N` complex values with `N = 2 max(n_x, n_y)` (about
-    /// `32 max(n_x, n_y)²` bytes), and the `N × N` transform it is built through (freed after).
-    /// A stack's caller checks `slices × kept + while built` against its memory budget before
-    /// any plane is made.
+    /// keeps, `(N/2 + PLANE_WIDTH + 1) × (N + PLANE_WIDTH + 1)` complex values with
+    /// `N = 2 max(n_x, n_y)` (about `32 max(n_x, n_y)²` bytes), and the `(N/2 + 1) × N` half
+    /// spectrum it is built through with its rows' real buffer (freed after). A stack's caller
+    /// checks `slices × kept + while built` against its memory budget before any plane is made.
     pub fn bytes(ny: usize, nx: usize) -> (f64, f64) {
         let n = 2.0 * nx.max(ny) as f64;
         let value = std::mem::size_of::<Complex64>() as f64;
-        ((0.5 * n + (PLANE_WIDTH + 1) as f64) * n * value, n * n * value)
+        let width = PLANE_WIDTH as f64;
+        ((0.5 * n + width + 1.0) * (n + width + 1.0) * value, (0.5 * n + 2.0) * n * value)
     }
 
     /// The plane of `values` (C order `[row y][column x]`, `ny × nx`, summing to 1 within 1e-9)
     /// about `centroid` (samples from the centre sample `(⌊nx/2⌋, ⌊ny/2⌋)`, `[x, y]`).
-    /// `planner` is shared between the slices of a stack.
+    /// `planner` (the columns' complex transforms) is shared between the slices of a stack.
     pub fn new(values: &[f64], shape: [usize; 2], centroid: [f64; 2], planner: &mut FftPlanner<f64>) -> Self {
-        Self::scaled(values, 1.0, shape, centroid, planner)
+        Self::scaled(values, 1.0, shape, centroid, &mut RealFftPlanner::new(), planner)
     }
 
     /// The planes of a stack's slices (`values`: `[slice][row y][column x]`, each slice divided
@@ -123,59 +145,78 @@ impl SampledPlane {
         (0..depth.div_ceil(per_worker))
             .into_par_iter()
             .flat_map_iter(|w| {
-                let mut planner = FftPlanner::new();
+                let (mut real, mut complex) = (RealFftPlanner::new(), FftPlanner::new());
                 (w * per_worker..((w + 1) * per_worker).min(depth))
                     .map(|k| {
                         let slice = &values[k * size..(k + 1) * size];
-                        Self::scaled(slice, sums[k], [ny, nx], centroids[k], &mut planner)
+                        Self::scaled(slice, sums[k], [ny, nx], centroids[k], &mut real, &mut complex)
                     })
                     .collect::<Vec<_>>()
             })
             .collect()
     }
 
-    /// [`new`](Self::new) of `values / sum`, each value divided as it is read.
+    /// [`new`](Self::new) of `values / sum`, each value divided as it is read. The rows are real:
+    /// each goes to its half spectrum `g_x = 0 … N/2` by a real-to-complex transform (realfft),
+    /// then those `N/2 + 1` columns are transformed along `y`; the other half-plane is never
+    /// formed (the transform is Hermitian, `G(−g) = G(g)*`, and [`transform`](Self::transform)
+    /// reads `θ_x ≥ 0`).
     fn scaled(
         values: &[f64],
         sum: f64,
         [ny, nx]: [usize; 2],
         centroid: [f64; 2],
-        planner: &mut FftPlanner<f64>,
+        real: &mut RealFftPlanner<f64>,
+        complex: &mut FftPlanner<f64>,
     ) -> Self {
         assert_eq!(values.len(), ny * nx, "SampledPlane: {} values for {ny} × {nx}", values.len());
         let n = 2 * nx.max(ny);
-        let fft = planner.plan_fft_forward(n);
-        let mut full = vec![Complex64::new(0.0, 0.0); n * n];
-        let correction = |l: i64| 1.0 / kernel_transform(l as f64 / n as f64);
+        let (rows_fft, columns_fft) = (real.plan_fft_forward(n), complex.plan_fft_forward(n));
         let wrap = |l: i64| l.rem_euclid(n as i64) as usize;
+        // the kernel's deconvolution 1/φ̂(l/N) along each axis, once per index
+        let correction = |count: usize| -> Vec<f64> {
+            (0..count).map(|j| 1.0 / kernel_transform((j as i64 - (count / 2) as i64) as f64 / n as f64)).collect()
+        };
+        let (cx, cy) = (correction(nx), correction(ny));
+        // the half spectrum, column-major: column g_x (0 … N/2) holds N rows g_y (wrapped)
+        let half_width = n / 2 + 1;
+        let mut spectrum = vec![Complex64::new(0.0, 0.0); half_width * n];
+        let mut line = rows_fft.make_input_vec();
+        let mut out = rows_fft.make_output_vec();
+        let mut scratch = rows_fft.make_scratch_vec();
         for (i, row) in values.chunks_exact(nx).enumerate() {
             let ly = i as i64 - (ny / 2) as i64;
-            let cy = correction(ly);
-            let out = &mut full[wrap(ly) * n..(wrap(ly) + 1) * n];
-            for (j, &v) in row.iter().enumerate() {
-                let lx = j as i64 - (nx / 2) as i64;
-                out[wrap(lx)] = Complex64::new(v / sum * cy * correction(lx), 0.0);
+            line.iter_mut().for_each(|v| *v = 0.0);
+            for (j, (&v, &c)) in row.iter().zip(&cx).enumerate() {
+                line[wrap(j as i64 - (nx / 2) as i64)] = v / sum * cy[i] * c;
             }
-            fft.process(out);
+            rows_fft.process_with_scratch(&mut line, &mut out, &mut scratch).expect("realfft: buffers of its own plan");
+            let y = wrap(ly);
+            for (x, &v) in out.iter().enumerate() {
+                spectrum[x * n + y] = v;
+            }
         }
-        // the columns: one at a time through a buffer, half of them. The samples are real, so
-        // the 2-D transform is Hermitian, G(−g_x, −g_y) = G(g_x, g_y)*: column N − x is column x
-        // read at −g_y and conjugated (x = 0 and x = N/2 are their own mirrors)
+        columns_fft.process(&mut spectrum);
+        // the kept columns g_x = −PLANE_WIDTH/2 … N/2 + PLANE_WIDTH/2, rows unrolled from
+        // g_y = −N/2 − PLANE_WIDTH/2; outside 0 … N/2 a column is its mirror's conjugate read
+        // at −g_y (G(g_x, g_y) = G(g_x − N, g_y) = G(N − g_x, −g_y)*)
         let half = PLANE_WIDTH / 2;
-        let rows = n / 2 + 2 * half + 1;
-        let mut grid = vec![Complex64::new(0.0, 0.0); rows * n];
-        let mut column = vec![Complex64::new(0.0, 0.0); n];
-        for x in 0..=n / 2 {
-            for (y, c) in column.iter_mut().enumerate() {
-                *c = full[y * n + x];
-            }
-            fft.process(&mut column);
-            let mirror = (n - x) % n;
-            for r in 0..rows {
-                let gy = r as i64 - half as i64;
-                grid[r * n + x] = column[wrap(gy)];
-                if mirror != x {
-                    grid[r * n + mirror] = column[wrap(-gy)].conj();
+        let height = n + PLANE_WIDTH + 1;
+        let first_row = -((n / 2 + half) as i64);
+        let mut grid = Vec::with_capacity((n / 2 + 2 * half + 1) * height);
+        for gx in -(half as i64)..=(n / 2 + half) as i64 {
+            let (source, mirrored) =
+                if (0..=(n / 2) as i64).contains(&gx) { (gx as usize, false) } else { (wrap(-gx), true) };
+            let column = &spectrum[source * n..(source + 1) * n];
+            // row g_y of the column is column[wrap(±g_y)], stepped by one (wrapping) per row
+            let mut at = if mirrored { wrap(-first_row) } else { wrap(first_row) };
+            for _ in 0..height {
+                if mirrored {
+                    grid.push(column[at].conj());
+                    at = if at == 0 { n - 1 } else { at - 1 };
+                } else {
+                    grid.push(column[at]);
+                    at = if at + 1 == n { 0 } else { at + 1 };
                 }
             }
         }
@@ -186,22 +227,24 @@ impl SampledPlane {
     /// ±1/2), `c` the centroid: the real part of the samples' transform about their centroid,
     /// to within [`error_bound`](Self::error_bound).
     pub fn transform(&self, theta: [f64; 2]) -> f64 {
-        // Re F(−θ) = Re F(θ)* = Re F(θ): read the half-plane θ_y ≥ 0
-        let [tx, ty] = if theta[1] < 0.0 { [-theta[0], -theta[1]] } else { theta };
-        let n = self.n as i64;
+        // Re F(−θ) = Re F(θ)* = Re F(θ): read the half-plane θ_x ≥ 0
+        let [tx, ty] = if theta[0] < 0.0 { [-theta[0], -theta[1]] } else { theta };
         let (x0, wx) = weights(tx * self.n as f64);
         let (y0, wy) = weights(ty * self.n as f64);
         let half = (PLANE_WIDTH / 2) as i64;
-        let columns: Vec<usize> = (0..PLANE_WIDTH as i64).map(|k| (x0 + k).rem_euclid(n) as usize).collect();
+        let height = self.column();
+        // column g_x sits at (g_x + PLANE_WIDTH/2) × height, row g_y at g_y + N/2 + PLANE_WIDTH/2
+        let row = (y0 + (self.n / 2) as i64 + half) as usize;
         let mut acc = Complex64::new(0.0, 0.0);
-        for (k, &wy) in wy.iter().enumerate() {
-            let row = (y0 + k as i64 + half) as usize * self.n;
-            let line = &self.grid[row..row + self.n];
-            let mut inner = Complex64::new(0.0, 0.0);
-            for (&c, &wx) in columns.iter().zip(&wx) {
-                inner += line[c] * wx;
+        for (k, &wx) in wx.iter().enumerate() {
+            let start = (x0 + k as i64 + half) as usize * height + row;
+            let run = &self.grid[start..start + PLANE_WIDTH];
+            let (mut re, mut im) = (0.0, 0.0);
+            for (g, &wy) in run.iter().zip(&wy) {
+                re += g.re * wy;
+                im += g.im * wy;
             }
-            acc += inner * wy;
+            acc += Complex64::new(re, im) * wx;
         }
         // about the centroid: e^{+2πi θ·c}, its angle reduced to one turn
         let turn = 2.0 * PI * (tx * self.centroid[0] + ty * self.centroid[1]).fract();
@@ -211,7 +254,8 @@ impl SampledPlane {
     /// A bound on `|transform − exact|` (module docs): the aliases, `Σ|d| ((1 + a)² − 1)` with
     /// `a = max_{|f| ≤ 1/4} Σ_{r≠0} φ̂(f + r)/φ̂(f)`, plus the points left out,
     /// `2 max|G| S t` with `max|G| ≤ Σ|d| / φ̂(1/4)²`, `S = Σ_g φ(u − g) ≤ √(4πτ)(1 + 2 Σ_k e^{−4π²τk²})`
-    /// and `t = 2 Σ_{m≥0} φ(PLANE_WIDTH/2 + m)`; plus the rounding of the `PLANE_WIDTH²` terms.
+    /// and `t = 2 Σ_{m≥0} φ(PLANE_WIDTH/2 + m)`; plus the rounding of the transforms
+    /// (`4 log₂N ε` relative), of the weights' powers (`PLANE_WIDTH ε`) and of the `PLANE_WIDTH²` terms.
     pub fn error_bound(&self) -> f64 {
         let alias = (0..=64)
             .map(|i| {
@@ -227,7 +271,8 @@ impl SampledPlane {
         let sum = (4.0 * PI * PLANE_TAU).sqrt() * (1.0 + 2.0 * poisson);
         let tail: f64 =
             2.0 * (0..64).map(|m| (-((PLANE_WIDTH / 2 + m) as f64).powi(2) / (4.0 * PLANE_TAU)).exp()).sum::<f64>();
-        let rounding = 4.0 * f64::EPSILON * largest * sum * sum * (self.n as f64).log2();
+        let relative = 4.0 * (self.n as f64).log2() + 2.0 * PLANE_WIDTH as f64 + 2.0;
+        let rounding = relative * f64::EPSILON * largest * sum * sum;
         self.absolute_sum * ((1.0 + alias).powi(2) - 1.0) + 2.0 * largest * sum * tail + rounding
     }
 }

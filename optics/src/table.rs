@@ -95,9 +95,12 @@ impl Samples {
     /// Slice `k`'s plane at `frequency` along `azimuth` (from +x, the field direction), through
     /// the cache when no other thread holds it.
     fn plane_value(&self, planes: &[SampledPlane], k: usize, frequency: f64, azimuth: f64) -> f64 {
-        let turns = frequency * self.pitch_m;
-        let theta = [turns * azimuth.cos(), turns * azimuth.sin()];
-        let read = || planes[k].transform(theta).clamp(-1.0, 1.0);
+        // the direction's sine and cosine only when a slice is read, not on every hit
+        let read = || {
+            let turns = frequency * self.pitch_m;
+            let (sin, cos) = azimuth.sin_cos();
+            planes[k].transform([turns * cos, turns * sin]).clamp(-1.0, 1.0)
+        };
         let Ok(mut cache) = self.cache.0.try_lock() else { return read() };
         let key = (frequency.to_bits(), azimuth.to_bits());
         match cache.as_mut() {

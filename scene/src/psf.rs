@@ -290,29 +290,34 @@ fn npy_header_as(bytes: &[u8], map: bool) -> Result<NpyHeader, String> {
     Ok(NpyHeader { dtype, fortran, shape, offset: start + len })
 }
 
-/// The samples of `data` (exactly `depth·ny·nx` values of `dtype`) in C order.
+/// Values a C-order `.npy` file's data are read and converted by at a time (512 KiB as f64).
+const NPY_BLOCK_VALUES: usize = 1 << 16;
+
+/// `values` extended by the samples of `data` (whole values of `dtype`), the byte order's match
+/// taken once.
+fn extend_values(values: &mut Vec<f64>, dtype: &Dtype, data: &[u8]) {
+    let c = data.chunks_exact(dtype.size);
+    match (dtype.size, dtype.little) {
+        (4, true) => values.extend(c.map(|b| f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])))),
+        (4, false) => values.extend(c.map(|b| f64::from(f32::from_be_bytes([b[0], b[1], b[2], b[3]])))),
+        (_, true) => values.extend(c.map(|b| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))),
+        (_, false) => values.extend(c.map(|b| f64::from_be_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))),
+    }
+}
+
+/// The samples of a Fortran-order file's `data` (exactly `depth·ny·nx` values of `dtype`),
+/// returned in C order.
 fn npy_values(header: &NpyHeader, data: &[u8]) -> Vec<f64> {
     let [d, ny, nx] = header.shape;
-    let read = |i: usize| -> f64 {
-        let b = &data[i * header.dtype.size..(i + 1) * header.dtype.size];
-        match (header.dtype.size, header.dtype.little) {
-            (4, true) => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            (4, false) => f64::from(f32::from_be_bytes([b[0], b[1], b[2], b[3]])),
-            (_, true) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
-            (_, false) => f64::from_be_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
-        }
-    };
-    if header.fortran {
-        // element (k, y, x) at k + d (y + ny x)
-        (0..d * ny * nx)
-            .map(|c| {
-                let (k, y, x) = (c / (ny * nx), (c / nx) % ny, c % nx);
-                read(k + d * (y + ny * x))
-            })
-            .collect()
-    } else {
-        (0..d * ny * nx).map(read).collect()
-    }
+    let mut flat = Vec::with_capacity(d * ny * nx);
+    extend_values(&mut flat, &header.dtype, data);
+    // element (k, y, x) at k + d (y + ny x)
+    (0..d * ny * nx)
+        .map(|c| {
+            let (k, y, x) = (c / (ny * nx), (c / nx) % ny, c % nx);
+            flat[k + d * (y + ny * x)]
+        })
+        .collect()
 }
 
 /// A whole `.npy` file in memory, read as [`read_npy`] reads a file.
@@ -393,9 +398,21 @@ fn npy_from_as(mut source: impl std::io::Read + std::io::Seek, length: u64, map:
             header.dtype.size
         ));
     }
-    let mut bytes = vec![0u8; data];
-    source.read_exact(&mut bytes).map_err(io)?;
-    Ok(Stack { depth, ny, nx, values: npy_values(&header, &bytes) })
+    if header.fortran {
+        let mut bytes = vec![0u8; data];
+        source.read_exact(&mut bytes).map_err(io)?;
+        return Ok(Stack { depth, ny, nx, values: npy_values(&header, &bytes) });
+    }
+    // C order: converted as read, a block at a time (no copy of the file's bytes in memory)
+    let count = depth * ny * nx;
+    let mut values = Vec::with_capacity(count);
+    let mut block = vec![0u8; NPY_BLOCK_VALUES.min(count) * header.dtype.size];
+    while values.len() < count {
+        let take = (count - values.len()).min(NPY_BLOCK_VALUES) * header.dtype.size;
+        source.read_exact(&mut block[..take]).map_err(io)?;
+        extend_values(&mut values, &header.dtype, &block[..take]);
+    }
+    Ok(Stack { depth, ny, nx, values })
 }
 
 /// Reads a multi-page float TIFF: every page's size and sample format checked first (one size,
@@ -668,6 +685,18 @@ mod tests {
         }
         let two = parse_npy(&npy("<f8", false, &[y, x], &vec![0u8; y * x * 8], 1)).unwrap();
         assert_eq!(two.depth, 1);
+    }
+
+    /// A C-order file longer than one read block (`NPY_BLOCK_VALUES`) is read whole and in
+    /// order across the blocks' seams, its last block partial.
+    #[test]
+    fn npy_reads_across_blocks() {
+        let (d, y, x) = (3, 211, 223);
+        assert!(d * y * x > 2 * NPY_BLOCK_VALUES && (d * y * x) % NPY_BLOCK_VALUES != 0);
+        let c = ramp(d * y * x);
+        let data: Vec<u8> = c.iter().flat_map(|&v| (v as f32).to_le_bytes()).collect();
+        let s = parse_npy(&npy("<f4", false, &[d, y, x], &data, 1)).unwrap();
+        assert_eq!(s.values, c);
     }
 
     /// Headers that cannot be a stack are refused with what is accepted, before any allocation

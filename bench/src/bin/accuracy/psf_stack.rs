@@ -41,6 +41,9 @@ pub(crate) struct PsfBench {
     /// --json`'s `mtf_over_azimuth`, and its tangential and sagittal mean MTFs.
     pub over_azimuth: Option<bool>,
     pub cuts: Option<(f64, f64)>,
+    /// The load average (1, 5, 15 min) before and after the timed runs, and the cores.
+    pub load: (String, String),
+    pub cores: usize,
 }
 
 fn json_field(text: &str, name: &str) -> Option<f64> {
@@ -79,6 +82,7 @@ pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench>
     let mut cpus = Vec::new();
     let mut mean_mtf = 0.0;
     let mut cuts = None;
+    let load_before = crate::load_average();
     for _ in 0..runs {
         let cpu_before = crate::children_cpu_s();
         let started = Instant::now();
@@ -90,6 +94,8 @@ pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench>
         cuts = json_field(&text, "mean_mtf_tangential").zip(json_field(&text, "mean_mtf_sagittal"));
         eprintln!("  {:.2} s wall, {cpu:?} s CPU, mean MTF {mean_mtf}", walls[walls.len() - 1]);
     }
+    let load = (load_before, crate::load_average());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let curve = run(&["mtf", scene.to_str()?, "--json"]).unwrap_or_default();
     let over_azimuth = if curve.contains("\"mtf_over_azimuth\": true") {
         Some(true)
@@ -103,7 +109,18 @@ pub(crate) fn measure(asnr: &Path, root: &Path, runs: usize) -> Option<PsfBench>
     walls.sort_by(f64::total_cmp);
     cpus.sort_by(f64::total_cmp);
     let cpu_s = (cpus.len() == runs).then(|| cpus[runs / 2]);
-    Some(PsfBench { wall_s: walls[walls.len() / 2], runs, cpu_s, bytes, mean_mtf, reference, over_azimuth, cuts })
+    Some(PsfBench {
+        wall_s: walls[walls.len() / 2],
+        runs,
+        cpu_s,
+        bytes,
+        mean_mtf,
+        reference,
+        over_azimuth,
+        cuts,
+        load,
+        cores,
+    })
 }
 
 /// The report's section.
@@ -122,7 +139,9 @@ pub(crate) fn markdown(p: &PsfBench) -> String {
          time includes it. {} The linear interpolation in ν on the 4×-padded grid \
          it replaced is no longer selectable (its time and mean MTF beside the exact transform's are in \
          CHANGELOG.md). CPU: the user + system time of the same runs, median (`/proc/self/stat`). \
-         Regenerate this section alone: `cargo xtask accuracy --only psf-stack`.\n\n\
+         Load average (1, 5, 15 min) before the runs: {}; after: {}, on {} cores: a wall time taken \
+         while the load exceeds the cores is the machine's, not the program's, and the status \
+         then says so beside the CPU time. Regenerate this section alone: `cargo xtask accuracy --only psf-stack`.\n\n\
          | target | measured | CPU | error | status |\n|---|---|---|---|---|\n\
          | 384 × 384 × 45 PSF stack, whole process: ≤ 1 s | {:.2} s | {} | {:.1e} (mean MTF {:.7} against {:.7}) | {} |\n\n",
         EXPORT.join(" "),
@@ -142,15 +161,33 @@ pub(crate) fn markdown(p: &PsfBench) -> String {
                 t, s
             ),
         },
+        p.load.0,
+        p.load.1,
+        p.cores,
         p.wall_s,
         p.cpu_s.map_or_else(|| "—".to_owned(), |c| format!("{c:.2} s")),
         error,
         p.mean_mtf,
         p.reference,
-        if p.wall_s <= 1.0 {
-            format!("met ({:.2}× the bound)", p.wall_s)
-        } else {
-            format!("missed by {:.1}×", p.wall_s)
-        }
+        status(p)
     )
+}
+
+/// The row's status: the wall time against the bound; when it misses under a load above the
+/// cores while the CPU time is within the bound, that too.
+fn status(p: &PsfBench) -> String {
+    if p.wall_s <= 1.0 {
+        return format!("met ({:.2}× the bound)", p.wall_s);
+    }
+    let busy = [&p.load.0, &p.load.1]
+        .iter()
+        .filter_map(|l| l.split_whitespace().next()?.parse::<f64>().ok())
+        .any(|one_minute| one_minute > p.cores as f64);
+    match p.cpu_s {
+        Some(cpu) if busy && cpu <= 1.0 => format!(
+            "missed by {:.1}× in wall time on a machine loaded past its {} cores; the CPU time, {cpu:.2} s, is within it",
+            p.wall_s, p.cores
+        ),
+        _ => format!("missed by {:.1}×", p.wall_s),
+    }
 }
