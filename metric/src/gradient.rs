@@ -599,7 +599,66 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
 /// by at most the tolerance times `max(|D_K|, M̄)`. Its cost is that of these OTF pairs, not the
 /// value's: on the paper's lens about 1 s in a debug build, 13 s for the harmonic lens's six
 /// orders (`asnr gradient examples/harmonic.toml --wrt lens.f_number`).
+///
+/// Where the value's own engine gives `∂O/∂ln K` beside each OTF value (the closed form, a line:
+/// [`defocus_on_value_rule`]), `D_K` rides on the value's rules instead, and the pixel MTF is
+/// followed (its term of the integration by parts); this function's own rule stays as the
+/// reference ([`aperture_partials_by_own_rule`]).
 fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+    if scene.camera().noise_spectrum().is_none()
+        && let Some(found) = defocus_on_value_rule(scene, e)?
+    {
+        return Ok(found);
+    }
+    aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` ([`aperture_partials`]) on the value's own rules: the mean computed
+/// again with `∂O/∂ln K` beside each OTF value ([`optics::Polychromatic::mean_mtf_and_defocus_derivative`]:
+/// the closed form's lane on its rule in `t`, a line's orders; the frequency rule's accepted
+/// weights, the pixel MTF `P` included), so that
+/// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν − 2 D_K` and `∂M̄/∂ln f0 = D_K`
+/// (docs/physics.md, "Gradients: the F-number and the focal length on the value's rule").
+/// `None` where the engine has no such lane (the per-frequency product rule of the refractive
+/// and harmonic lenses, the FFT path) or an order is not the full circular pupil with a defocus
+/// alone.
+fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let lambda = match detected.as_line() {
+        Some(line) => line.wavelength_m,
+        None => e.mean_wavelength_nm * 1e-9,
+    };
+    let plain = lens.orders(lambda, field).iter().all(|o| {
+        let w = &o.wavefront;
+        matches!(o.pupil, optics::Pupil::Full)
+            && w.image_shift_m == [0.0, 0.0]
+            && [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
+    });
+    if !plain {
+        return Ok(None);
+    }
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    // the value's engine exactly (its parts, its settings)
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings) else {
+        return Ok(None);
+    };
+    let Some(found) = poly.mean_mtf_and_defocus_derivative() else { return Ok(None) };
+    let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    let d_k = found.defocus;
+    Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * d_k, d_k)))
+}
+
+/// [`aperture_partials`] on this function's own Gauss–Legendre rules in λ and ν (described
+/// above): where the value's engine has no defocus lane, and the reference the tests hold the
+/// lane against.
+pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
     if camera.pixel_mtf() {

@@ -653,9 +653,23 @@ mod tests {
         );
         check_aperture(&refractive, &owned(&["spectrum.range_nm=100"]));
         check_aperture(&example("harmonic.toml"), &[]);
-        // the pixel MTF moves inside the integral: refused, naming the quantity and why
-        let e =
-            gradient(&paper, &owned(&["camera.pixel_mtf=true"]), &owned(&["lens.f_number"])).unwrap_err().to_string();
+        // the pixel MTF inside the integral: its term ∫ν P′|O| dν of the integration by parts,
+        // on the closed form and on a line (the value's own rules)
+        check_aperture(&paper, &owned(&["camera.pixel_mtf=true"]));
+        check_aperture(
+            &paper,
+            &owned(&[
+                "camera.pixel_mtf=true",
+                "spectrum.shape=\"line\"",
+                "spectrum.center_nm=803",
+                "spectrum.range_nm=1",
+            ]),
+        );
+        // where the engine has no defocus lane (the harmonic lens's per-frequency rule) the
+        // pixel MTF is refused, naming the quantity and why
+        let e = gradient(&example("harmonic.toml"), &owned(&["camera.pixel_mtf=true"]), &owned(&["lens.f_number"]))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("F-number") && e.contains("camera.pixel_mtf"), "{e}");
         // an iris (not the full pupil) is refused by the engine's check
         let e =
