@@ -82,17 +82,17 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
         "gradient",
     ]);
     assert!(e.contains("--method gradient: --over lens.design_wavelength_nm: not differentiable here yet"), "{e}");
-    // a top-hat's edges are not followed (a Gaussian's range is: see the test below)
+    // a line's wavelength is not followed (a Gaussian's range and a top-hat's edges are)
     let e = fails(&[
         "optimize",
         "--set",
-        "spectrum.shape=\"tophat\"",
+        "spectrum.shape=\"line\"",
         "--over",
-        "spectrum.range_nm=1:200",
+        "spectrum.center_nm=790:810",
         "--method",
         "gradient",
     ]);
-    assert!(e.contains("--method gradient: --over spectrum.range_nm: not differentiable here yet"), "{e}");
+    assert!(e.contains("--method gradient: --over spectrum.center_nm: not differentiable here yet"), "{e}");
     for objective in ["capacity", "detectability:disk:20:0.1"] {
         let e =
             fails(&["optimize", "--over", "exposure.time_ms=1:2", "--objective", objective, "--method", "gradient"]);

@@ -522,6 +522,11 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     let detected = crate::evaluate::detected_spectrum(scene);
     let mut found = Vec::new();
     gaussians(&detected, &mut found);
+    if found.is_empty()
+        && let Some(band) = top_hat(&detected)
+    {
+        return top_hat_partials(scene, e, &detected, band, p);
+    }
     let [g] = found[..] else {
         return Err(not_smooth(format!(
             "the spectral gradient needs exactly one Gaussian factor in the detected spectrum (spectrum.shape = \"gaussian\"); this scene has {}",
@@ -619,6 +624,126 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
 }
 
+/// The top-hat factor of a spectrum (itself or one factor of a product), if there is exactly one.
+fn top_hat(spectrum: &radiometry::Spectrum) -> Option<radiometry::TopHat> {
+    fn collect(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::TopHat>) {
+        match spectrum {
+            radiometry::Spectrum::TopHat(t) => found.push(*t),
+            radiometry::Spectrum::Product(factors) => factors.iter().for_each(|f| collect(f, found)),
+            _ => {}
+        }
+    }
+    let mut found = Vec::new();
+    collect(spectrum, &mut found);
+    match found[..] {
+        [t] => Some(t),
+        _ => None,
+    }
+}
+
+/// The derivatives of `ln N` and of the mean MTF with respect to the centre `c` and the range
+/// `r` of a top-hat band `[a, b] = [c − r/2, c + r/2]` (docs/physics.md, "Gradients: a top-hat's
+/// edges"): the edges are the integrals' limits, so by Leibniz's rule, with `D = ∫_a^b ρ Σ_o τ_o dλ`
+/// the detected weight and `T_x = ρ(x) Σ_o τ_o(x)` its density at an edge,
+/// - `∂ln N/∂b = T_b/D`, `∂ln N/∂a = −T_a/D`;
+/// - the normalized OTF `O = ∫_a^b ρ Σ_o τ_o H_o dλ / D` moves as `∂O/∂b = (T_b/D)(O_b − O)` and
+///   `∂O/∂a = −(T_a/D)(O_a − O)`, `O_x` the OTF at the single wavelength `x` (the line engine);
+/// - `∂M̄/∂b = (T_b/D)((1/ν_N) ∫ P sign(O) O_b dν − M̄)`, as `(1/ν_N) ∫ P sign(O) O dν = M̄`;
+/// - `∂/∂c = ∂/∂a + ∂/∂b`, `∂/∂r = (∂/∂b − ∂/∂a)/2`.
+///
+/// The integrals `∫ P sign(O) O_x dν` on 16-point Gauss–Legendre panels of `[0, ν_N]` split at
+/// the sign changes of `O` (the kink of |O|), doubled until they move by at most the tolerance
+/// times `M̄`.
+fn top_hat_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    detected: &radiometry::Spectrum,
+    band: radiometry::TopHat,
+    p: Parameter,
+) -> Result<SpectralPartials, Error> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let settings = scene.options().settings();
+    let tolerance = settings.tolerance;
+    let camera = scene.camera();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let whole = optics::Polychromatic::with_settings(lens, detected, field, nyquist, None, settings)?;
+    let (a, b) = (band.lo(), band.hi());
+    // each edge's single wavelength (a line of any weight: its OTF is normalized)
+    let lines =
+        [radiometry::Line::new(a, 1e-9, 1.0)?, radiometry::Line::new(b, 1e-9, 1.0)?].map(radiometry::Spectrum::Line);
+    let at_a = optics::Polychromatic::with_settings(lens, &lines[0], field, nyquist, None, settings)?;
+    let at_b = optics::Polychromatic::with_settings(lens, &lines[1], field, nyquist, None, settings)?;
+    // T_x/D: the detected density times the orders' efficiency at the edge, over the weight
+    let density = |x: f64| {
+        let efficiency: f64 = lens.orders(x, field).iter().map(|o| o.efficiency).sum();
+        detected.value(x) * efficiency / whole.total_weight()
+    };
+    let (t_a, t_b) = (density(a), density(b));
+    if whole.direction_dependent() || at_a.direction_dependent() || at_b.direction_dependent() {
+        return Err(Error::NotDifferentiable {
+            parameter: p.describe(),
+            reason: "the OTF depends on direction here (lateral colour or a non-symmetric pupil): the spectral \
+                     gradient is computed for a rotationally symmetric OTF"
+                .to_owned(),
+        });
+    }
+    // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
+    let integrate = |panels: usize| -> [f64; 2] {
+        let mut ends = vec![0.0];
+        let h = nyquist / panels as f64;
+        let mut previous = (0.0, 1.0);
+        for i in 1..=panels {
+            let nu = if i == panels { nyquist } else { i as f64 * h };
+            let value = whole.otf(nu);
+            if value * previous.1 < 0.0 {
+                let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
+                while hi - lo > 1e-15 * hi {
+                    let m = 0.5 * (lo + hi);
+                    if whole.otf(m) * f_lo > 0.0 {
+                        lo = m;
+                    } else {
+                        hi = m;
+                    }
+                }
+                ends.push(0.5 * (lo + hi));
+            }
+            ends.push(nu);
+            previous = (nu, value);
+        }
+        let mut sums = [0.0; 2];
+        for w in ends.windows(2) {
+            let half = 0.5 * (w[1] - w[0]);
+            if half <= 0.0 {
+                continue;
+            }
+            let centre = 0.5 * (w[0] + w[1]);
+            for &(x, wx) in optics::quad::rule() {
+                let nu = centre + half * x;
+                let weight = half * wx * pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * whole.otf(nu).signum();
+                sums[0] += weight * at_a.otf(nu);
+                sums[1] += weight * at_b.otf(nu);
+            }
+        }
+        sums.map(|s| s / nyquist)
+    };
+    let mut panels = 8;
+    let mut previous = integrate(panels);
+    let [i_a, i_b] = loop {
+        panels *= 2;
+        let next = integrate(panels);
+        let change = (next[0] - previous[0]).abs().max((next[1] - previous[1]).abs());
+        previous = next;
+        if change <= tolerance * e.mean_mtf || panels >= 1024 {
+            break previous;
+        }
+    };
+    let (d_a, d_b) = (-t_a * (i_a - e.mean_mtf), t_b * (i_b - e.mean_mtf));
+    let (n_a, n_b) = (-t_a, t_b);
+    Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
+}
+
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` for a lens whose every order is the full circular pupil with a
 /// defocus `W020 ∝ K = f0/(8F#²)` alone (docs/physics.md, "Gradients"). Each wavelength's OTF
 /// is `H(νλF#, W020/λ)` ([`optics::defocus_otf`]), so
@@ -636,12 +761,73 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
 /// by at most the tolerance times `max(|D_K|, M̄)`. Its cost is that of these OTF pairs, not the
 /// value's: on the paper's lens about 1 s in a debug build, 13 s for the harmonic lens's six
 /// orders (`asnr gradient examples/harmonic.toml --wrt lens.f_number`).
+///
+/// Where the value's own engine gives `∂O/∂ln K` beside each OTF value (the closed form, a line:
+/// [`defocus_on_value_rule`]), `D_K` rides on the value's rules instead, and the pixel MTF is
+/// followed (its term of the integration by parts); this function's own rule stays as the
+/// reference ([`aperture_partials_by_own_rule`]).
 fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+    if scene.camera().noise_spectrum().is_none()
+        && let Some(found) = defocus_on_value_rule(scene, e)?
+    {
+        return Ok(found);
+    }
+    aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` ([`aperture_partials`]) on the value's own rules: the mean computed
+/// again with `∂O/∂ln K` beside each OTF value ([`optics::Polychromatic::mean_mtf_and_defocus_derivative`]:
+/// the closed form's lane on its rule in `t`, a line's orders; the frequency rule's accepted
+/// weights, the pixel MTF `P` included), so that
+/// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν − 2 D_K` and `∂M̄/∂ln f0 = D_K`
+/// (docs/physics.md, "Gradients: the F-number and the focal length on the value's rule").
+/// `None` where the engine has no such lane (the per-frequency product rule of the refractive
+/// and harmonic lenses, the FFT path) or an order is not the full circular pupil with a defocus
+/// alone.
+fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let lambda = match detected.as_line() {
+        Some(line) => line.wavelength_m,
+        None => e.mean_wavelength_nm * 1e-9,
+    };
+    let plain = lens.orders(lambda, field).iter().all(|o| {
+        let w = &o.wavefront;
+        matches!(o.pupil, optics::Pupil::Full)
+            && w.image_shift_m == [0.0, 0.0]
+            && [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
+    });
+    if !plain {
+        return Ok(None);
+    }
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    // the value's engine exactly (its parts, its settings)
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings) else {
+        return Ok(None);
+    };
+    let Some(found) = poly.mean_mtf_and_defocus_derivative() else { return Ok(None) };
+    let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    let d_k = found.defocus;
+    Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * d_k, d_k)))
+}
+
+/// [`aperture_partials`] on this function's own Gauss–Legendre rules in λ and ν (described
+/// above): where the value's engine has no defocus lane, and the reference the tests hold the
+/// lane against.
+pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
     if camera.pixel_mtf() {
         return Err(not_smooth(
-            "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet \
+            "with camera.pixel_mtf = true the F-number and focal-length gradient is computed only where the \
+             value's engine carries the defocus derivative (the chromatic lens under a Gaussian × polynomial \
+             spectrum: the closed form; or a line), not on this lens's per-frequency spectral rule yet \
              (set camera.pixel_mtf = false)"
                 .to_owned(),
         ));

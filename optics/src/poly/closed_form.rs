@@ -123,6 +123,22 @@ impl OtfEngine for Closed {
         value
     }
 
+    /// The closed form's defocus lane ([`GaussianDefocus::otf_and_log_derivative`]): the same
+    /// pieces, levels and acceptance as the value, at the value's tolerance; its evaluations of
+    /// E(c) count towards the budget.
+    fn otf_and_defocus_derivative(&self, frequency: f64) -> Option<(f64, f64)> {
+        if frequency == 0.0 {
+            return Some((1.0, 0.0));
+        }
+        if self.evaluations.get() > CLOSED_FORM_BUDGET {
+            return Some((0.0, 0.0));
+        }
+        let (value, derivative, evaluations, _) =
+            self.closed.otf_and_log_derivative(frequency, self.otf_tolerance.get());
+        self.evaluations.set(self.evaluations.get() + evaluations);
+        Some((value, derivative))
+    }
+
     fn over_budget(&self) -> Option<String> {
         (self.evaluations.get() > CLOSED_FORM_BUDGET).then(|| {
             format!(

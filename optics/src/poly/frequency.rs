@@ -79,6 +79,21 @@ pub(super) struct Recording {
     directions: Vec<WavefrontDirection>,
 }
 
+/// What [`Polychromatic::mean_mtf_and_defocus_derivative`] returns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DefocusDerivative {
+    /// The mean MTF, as [`Polychromatic::mean_mtf`] computes it.
+    pub mean: f64,
+    /// `D_K = (1/ν_max) ∫ P sign(O) ∂O/∂ln K dν`: the mean's derivative with respect to a common
+    /// relative change of every order's defocus, `s = νλF#` fixed.
+    pub defocus: f64,
+    /// `(1/ν_max) ∫ ν P′(ν) |O(ν)| dν`, the pixel MTF's term of the integration by parts in ν
+    /// (0 without the pixel MTF).
+    pub pixel_slope: f64,
+    /// What the mean took.
+    pub work: Work,
+}
+
 impl Polychromatic<'_> {
     /// The mean MTF ([`mean_mtf`](Self::mean_mtf)) and, in the same pass, its derivative with
     /// respect to each Binary 2 coefficient of the lens (`LensModel::binary2_directions`; per
@@ -122,6 +137,71 @@ impl Polychromatic<'_> {
         }
         gradient.iter_mut().for_each(|g| *g /= self.scene.max_frequency);
         Some((mean, gradient, work))
+    }
+
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)) and, in the same pass, what its derivatives
+    /// with respect to the F-number and the focal length need (docs/physics.md, "Gradients: the
+    /// F-number and the focal length on the value's rule"):
+    ///
+    /// ```text
+    /// D_K   = (1/ν_max) ∫ P(ν) sign(O(ν)) ∂O(ν)/∂ln K dν
+    /// P_ν   = (1/ν_max) ∫ ν P′(ν) |O(ν)| dν
+    /// ```
+    ///
+    /// `D_K` the derivative with respect to a common relative change of every order's defocus at
+    /// fixed `s = νλF#` (the engine's `∂O/∂ln K` beside each OTF value: the closed form's lane on
+    /// its own rule in `t`, a line's orders), `P_ν` the pixel MTF's part of the integration by
+    /// parts in `ν` (0 without it; `νP′/P = x cot x − 1`, `x = πpν`); both with the frequency
+    /// rule's accepted weights (split at the OTF's sign changes, `P` included). `None` where the
+    /// engine gives no such lane, the field is off axis or the OTF depends on direction.
+    pub fn mean_mtf_and_defocus_derivative(&self) -> Option<DefocusDerivative> {
+        if !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        *self.gradient.borrow_mut() = Some(Recording { lanes: 2, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.recorded_defocus_otf(nu));
+        let recording = self.gradient.borrow_mut().take()?;
+        if recording.failed {
+            return None;
+        }
+        // ν P′(ν)/P(ν) for P = |sin x / x|, x = π p ν (x ≤ π/2 up to Nyquist)
+        let slope = |nu: f64| {
+            self.scene.pixel_pitch.map_or(0.0, |p| {
+                let x = PI * p * nu;
+                if x.abs() < 1e-4 { -x * x / 3.0 - x.powi(4) / 45.0 } else { x / x.tan() - 1.0 }
+            })
+        };
+        let (mut d_k, mut pixel) = (0.0, 0.0);
+        for &(nu, w) in &recording.accepted {
+            let i = *recording.at.get(&nu.to_bits())?;
+            let (d, v) = (recording.derivatives[i], recording.derivatives[i + 1]);
+            d_k += w * d;
+            pixel += w * v * slope(nu);
+        }
+        let top = self.scene.max_frequency;
+        Some(DefocusDerivative { mean, defocus: d_k / top, pixel_slope: pixel / top, work })
+    }
+
+    /// The OTF at `nu` with its defocus derivative and itself kept in the recording.
+    fn recorded_defocus_otf(&self, nu: f64) -> f64 {
+        let value = if nu == 0.0 { Some((1.0, 0.0)) } else { self.engine.otf_and_defocus_derivative(nu) };
+        let mut recording = self.gradient.borrow_mut();
+        let Some(r) = recording.as_mut() else { return value.map_or(f64::NAN, |(v, _)| v) };
+        match value {
+            Some((v, d)) => {
+                r.at.insert(nu.to_bits(), r.derivatives.len());
+                r.derivatives.extend([d, v]);
+                v
+            }
+            None => {
+                r.failed = true;
+                drop(recording);
+                self.otf(nu)
+            }
+        }
     }
 
     /// The OTF at `nu` with its derivatives kept in the recording.

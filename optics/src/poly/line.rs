@@ -74,6 +74,27 @@ impl OtfEngine for Line<'_> {
         Some(value / total)
     }
 
+    /// The line's OTF and `∂O/∂ln K` where every order is a full, centred circle with defocus
+    /// alone (the exact 1-D OTF): `Σ τ_o w_o ∂H/∂w_o / Σ τ_o` ([`crate::defocus_otf_log_derivative`])
+    /// beside `Σ τ_o H / Σ τ_o`; `None` for any other order.
+    fn otf_and_defocus_derivative(&self, frequency: f64) -> Option<(f64, f64)> {
+        if self.fft.is_some() || self.nodes.direction_dependent() {
+            return None;
+        }
+        let nuf = frequency.abs() * self.scene.f_number;
+        let (mut value, mut derivative) = (0.0, 0.0);
+        for node in &self.nodes.nodes {
+            if node.table.is_some() || node.radial.is_some() || node.scale != 1.0 || node.shift != [0.0, 0.0] {
+                return None;
+            }
+            let (s, w) = (nuf * node.lambda, node.w020 / node.lambda);
+            value += node.weight * crate::defocus_otf(s, w);
+            derivative += node.weight * crate::defocus_otf_log_derivative(s, w);
+        }
+        let total = self.nodes.total_weight;
+        Some((value / total, derivative / total))
+    }
+
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
         match &self.fft {
             Some(fft) => fft.sum_along(&self.scene, frequency, azimuth) / self.nodes.total_weight,

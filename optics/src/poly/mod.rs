@@ -57,7 +57,7 @@ mod overlap;
 mod per_frequency;
 mod spectral;
 
-pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, FIRST_AZIMUTHS, MAX_AZIMUTHS};
+pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, DefocusDerivative, FIRST_AZIMUTHS, MAX_AZIMUTHS};
 pub use grid::{WavefrontDirection, monochromatic_mtf};
 pub use noise::NoiseShape;
 pub use overlap::SeidelTerm;
@@ -320,6 +320,13 @@ trait OtfEngine: std::fmt::Debug {
     /// one lane each), on the value's own spectral rule; `None` where the engine does not give
     /// them (the default).
     fn otf_and_gradient(&self, _frequency: f64, _gradient: &mut [f64]) -> Option<f64> {
+        None
+    }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf) and its derivative with respect to a
+    /// common relative change of every order's defocus at fixed `s = νλF#` (`∂O/∂ln K`,
+    /// `W020 ∝ K = f0/(8F#²)`), on the value's own rule; `None` where the engine does not give
+    /// it (the default).
+    fn otf_and_defocus_derivative(&self, _frequency: f64) -> Option<(f64, f64)> {
         None
     }
     /// The sampling plan whose coarse level the engine also holds (the FFT engine when the

@@ -47,15 +47,15 @@ fn seconds(f: &mut impl FnMut()) -> f64 {
 }
 
 /// One row: K, the value's time, the value and gradient's time (s).
-struct Row {
-    k: usize,
-    value: f64,
-    both: f64,
+pub(crate) struct Row {
+    pub(crate) k: usize,
+    pub(crate) value: f64,
+    pub(crate) both: f64,
     /// the fastest runs: on a loaded machine, the nearest to the work itself
-    value_min: f64,
-    both_min: f64,
-    asnr: f64,
-    norm: f64,
+    pub(crate) value_min: f64,
+    pub(crate) both_min: f64,
+    pub(crate) asnr: f64,
+    pub(crate) norm: f64,
 }
 
 impl Row {
@@ -204,6 +204,7 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
             md.push_str(&format!("| {t:e} {}\n", r.cells(1)));
         }
     }
+    md.extend(crate::gradients_aperture::markdown(tools));
     if let Some((value, radial)) = radial(repeats) {
         md.push_str(
             "\nThe radial engine alone, one wavelength: the Binary 2 metalens at 800 nm, 200 frequencies up to s = \
@@ -223,7 +224,12 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
 /// `source` with `overrides` (the scene built inside each timing). One run of each first, so
 /// that neither pays for the per-thread caches the other reuses; then alternately, so that a
 /// change of the machine's load falls on both. The row's `k` is the number of parameters.
-fn side_by_side(source: &scene::Source, overrides: &[String], parameters: &[Parameter], repeats: usize) -> Option<Row> {
+pub(crate) fn side_by_side(
+    source: &scene::Source,
+    overrides: &[String],
+    parameters: &[Parameter],
+    repeats: usize,
+) -> Option<Row> {
     let built = scene::build_from(source, overrides).ok()?;
     let first = metric::gradient(&built, parameters).ok()?;
     let (mut values, mut boths) = (Vec::with_capacity(repeats), Vec::with_capacity(repeats));

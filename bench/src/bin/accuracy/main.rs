@@ -41,6 +41,7 @@ mod fft_azimuth;
 mod freeform;
 mod gds_scale;
 mod gradients;
+mod gradients_aperture;
 mod iris;
 mod kernels;
 mod map;
