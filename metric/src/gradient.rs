@@ -69,7 +69,9 @@ pub enum Parameter {
     /// photon count as `NA² = 1/(4F#²)` (SI eq. S7), each wavelength's normalized frequency
     /// `s = νλF#` and the defocus `W020 ∝ f0/F#²` of a lens whose every order is the full
     /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
-    /// docs/physics.md, "Gradients").
+    /// docs/physics.md, "Gradients"); for a lens that gives its aperture directions
+    /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
+    /// `R = f0/(2F#)` moving its profile and reference sphere, on the radial engine's lanes.
     FNumber,
     /// The lens's focal length f0 (`lens.focal_length_mm`), F-number held: `∂/∂ln f0`. It scales
     /// the defocus `W020 ∝ f0/F#²` only (the cutoff `1/(λF#)` and `NA` stay); where

@@ -1689,6 +1689,47 @@ mod tests {
         }
     }
 
+    /// `radius_log_derivative` against central differences in `ln R` of the profile rebuilt at
+    /// `R e^{±h}` (written here): the sphere `√(R²q + z²) − z` (z held), an even polynomial in
+    /// `(r/R_n)²` read at `ρ = r/R`, and a table in `r` (its knots `r_i/R` move with R; the
+    /// spline's end conditions are scale-free, so it is the same spline in r). Step h = 1e-4:
+    /// truncation h²|f‴|/6 and rounding ε/h both below 1e-8 of the size.
+    #[test]
+    fn radius_log_derivatives_are_the_profiles_own() {
+        let (radius, z, h) = (0.672e-3_f64, 3.36e-3_f64, 1e-4_f64);
+        let r_knots: Vec<f64> = (0..=20).map(|i| 0.7e-3 * i as f64 / 20.0).collect();
+        let phase = |r: f64| -2.0e9 * r * r + 1.0e15 * r.powi(4) + (r * 9e3).sin();
+        let table = |big_r: f64| {
+            let rho = r_knots.iter().map(|r| r / big_r).collect();
+            RadialProfile::table(rho, r_knots.iter().map(|&r| phase(r)).collect()).unwrap()
+        };
+        let poly = |big_r: f64| {
+            let s = (big_r / 0.6e-3).powi(2);
+            RadialProfile::even_polynomial(vec![0.0, -5.0 * s, 0.3 * s * s, -0.01 * s.powi(3)]).unwrap()
+        };
+        let sphere = |big_r: f64| RadialProfile::reference_sphere(big_r, z).unwrap();
+        let builders: [(&str, &dyn Fn(f64) -> RadialProfile); 3] =
+            [("sphere", &sphere), ("polynomial", &poly), ("table", &table)];
+        for (name, build) in builders {
+            let slope = build(radius).radius_log_derivative().unwrap();
+            let (up, down) = (build(radius * h.exp()), build(radius * (-h).exp()));
+            let size = (0..=50).map(|i| build(radius).value(i as f64 / 50.0).abs()).fold(0.0, f64::max);
+            for i in 0..=50 {
+                let q = i as f64 / 50.0;
+                let reference = (up.value(q) - down.value(q)) / (2.0 * h);
+                let error = (slope.value(q) - reference).abs();
+                assert!(error <= 1e-7 * size, "{name} at q = {q}: {} vs {reference}", slope.value(q));
+            }
+        }
+        assert!(sphere(radius).radius_log_derivative().unwrap().radius_log_derivative().is_none());
+        let scaled = table(radius).scaled(-2.5).unwrap();
+        assert!((scaled.value(0.3) + 2.5 * table(radius).value(0.3)).abs() < 1e-12 * size_of(&table(radius)));
+    }
+
+    fn size_of(p: &RadialProfile) -> f64 {
+        (0..=50).map(|i| p.value(i as f64 / 50.0).abs()).fold(0.0, f64::max)
+    }
+
     /// A mapped polynomial prepared from the mapped monomials (`MappedMonomials`) reads as the
     /// same polynomial mapped and prepared point by point (the generic path: `value` at every
     /// sample, `fit_series` of its own values): samples, series, slope, mean square and
