@@ -1,6 +1,6 @@
 //! `asnr gradient` over the freeform spline's knots, the Zernike terms, the F-number and the
 //! focal length: the keys are accepted and spelled canonically in the JSON, and a bad spline
-//! (fewer than 3 knots, a NaN knot) or a family whose F-number is not followed is refused naming
+//! (fewer than 3 knots, a NaN knot) or a family whose F-number is not smooth (the library lens) is refused naming
 //! the key, with a non-zero exit and no panic.
 
 mod common;
@@ -84,7 +84,8 @@ fn a_term_with_m_not_zero_has_a_gradient() {
 
 /// The paper's lens: `lens.f_number` and `lens.focal_length_mm` in every JSON object, spelled as
 /// given; N ∝ NA² = 1/(4F#²) (SI eq. S7), so ∂ln N/∂ln F# = −2 exactly and the focal length does
-/// not move N; the phase lens's F-number is refused naming its family.
+/// not move N; the same for the phase lens (on the radial engine's lanes); the library lens's
+/// F-number is refused naming its family and why.
 #[test]
 fn f_number_and_focal_length_have_a_gradient() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml");
@@ -102,7 +103,20 @@ fn f_number_and_focal_length_have_a_gradient() {
         g["mean_mtf_gradient"]["lens.focal_length_mm"].as_f64().unwrap() < 0.0,
         "a longer lens defocuses more: {g}"
     );
+    // the phase lens: on the radial engine's lanes, the same spelling and the same ∂ln N/∂ln F#
     let phase = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml");
-    let e = fails(&["gradient", phase, "--wrt", "lens.f_number"]);
-    assert!(e.contains("--wrt lens.f_number") && e.contains("lens.model = \"phase\""), "{e}");
+    let g = json(&["gradient", phase, "--wrt", "lens.f_number", "--wrt", "lens.focal_length_mm", "--json"]);
+    for field in ["gradient", "mean_mtf_gradient", "snr0_gradient", "photoelectrons_gradient"] {
+        let keys: Vec<&String> = g[field].as_object().unwrap().keys().collect();
+        assert_eq!(keys, ["lens.f_number", "lens.focal_length_mm"], "{field}: {g}");
+    }
+    let n = g["photoelectrons"].as_f64().unwrap();
+    let d_n = g["photoelectrons_gradient"]["lens.f_number"].as_f64().unwrap();
+    assert!((d_n * 2.5 / n + 2.0).abs() < 1e-12, "∂ln N/∂ln F# = {}: {g}", d_n * 2.5 / n);
+    assert_eq!(g["photoelectrons_gradient"]["lens.focal_length_mm"].as_f64().unwrap(), 0.0, "{g}");
+    // the library lens: refused naming the key and why (its value jumps where the aperture
+    // radius crosses a ring centre)
+    let library = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/library.toml");
+    let e = fails(&["gradient", library, "--wrt", "lens.f_number"]);
+    assert!(e.contains("--wrt lens.f_number") && e.contains("lens.model = \"library\"") && e.contains("ring"), "{e}");
 }

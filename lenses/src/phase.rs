@@ -100,6 +100,11 @@ pub struct PhaseLens {
     /// the wavefront (m) per µm RMS of each `m = 0` Zernike term the gradient follows (Noll
     /// 1, 4, 11, … up to the scene's list), after the spline's directions
     zernike_directions: Vec<RadialProfile>,
+    /// the phase's change at λ0 (radians, in `ρ`) per unit `ln R` of the aperture radius, the
+    /// focal length held (`R ∂φ0/∂R`: the parts given in `r`, a Binary 2 polynomial with its own
+    /// `R_norm` or a table in `r_mm`, move; those given in `ρ` do not), when the scene recorded
+    /// it ([`with_aperture_motion`](PhaseLens::with_aperture_motion)), or why it is not
+    aperture_motion: Result<RadialProfile, String>,
     /// how the profile was given, for reports
     source: String,
 }
@@ -142,6 +147,7 @@ impl PhaseLens {
             binary2_terms: Vec::new(),
             spline_knots: 0,
             zernike_directions: Vec::new(),
+            aperture_motion: Err("the lens's phase was not given with its units (r or ρ)".to_owned()),
             source,
         })
     }
@@ -189,6 +195,18 @@ impl PhaseLens {
     /// `1e-6 √(n+1) R_n^0`, the same for every order and wavelength.
     pub fn with_zernike_directions(mut self, terms: usize) -> PhaseLens {
         self.zernike_directions = zernike_directions(terms);
+        self
+    }
+
+    /// This lens with the phase's change with the aperture radius recorded: `motion` is
+    /// `R ∂φ0/∂R` at λ0 (radians, in `ρ`; the focal length held), so that
+    /// [`LensModel::aperture_directions`] gives each order's `[P, T, S]`
+    /// (`P = path per radian × motion`). A profile given in `ρ` (a spline, a Binary 2
+    /// polynomial normalized to the aperture itself) does not move: zero. `Err(why)` where
+    /// something the directions do not follow moves with `R` (a table's amplitude column in
+    /// `r_mm`).
+    pub fn with_aperture_motion(mut self, motion: Result<RadialProfile, String>) -> PhaseLens {
+        self.aperture_motion = motion;
         self
     }
 
@@ -333,6 +351,24 @@ impl LensModel for PhaseLens {
             out.push(order);
         }
         Some(out)
+    }
+
+    /// Per order `[P, T, S]` ([`LensModel::aperture_directions`]): `P` the path per radian
+    /// times the recorded motion of the phase (`R ∂φ0/∂R`,
+    /// [`with_aperture_motion`](PhaseLens::with_aperture_motion)), `T = R ∂S/∂R` and `S` of the
+    /// exact reference sphere `S = √(R²q + f0²) − f0` (the Zernike terms, given in `ρ`, do not
+    /// move). On axis: off axis the oblique wave moves with `R` too.
+    fn aperture_directions(&self, wavelength_m: f64) -> Option<optics::ApertureDirections> {
+        let motion = match &self.aperture_motion {
+            Ok(m) => m,
+            Err(why) => return Some(Err(why.clone())),
+        };
+        let sphere_slope = self.sphere.radius_log_derivative()?;
+        let mut out = Vec::new();
+        for (_, _, per_radian) in self.order_list(wavelength_m) {
+            out.push([motion.scaled(per_radian)?, sphere_slope.clone(), (*self.sphere).clone()]);
+        }
+        Some(Ok(out))
     }
 
     /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).

@@ -69,7 +69,9 @@ pub enum Parameter {
     /// photon count as `NA² = 1/(4F#²)` (SI eq. S7), each wavelength's normalized frequency
     /// `s = νλF#` and the defocus `W020 ∝ f0/F#²` of a lens whose every order is the full
     /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
-    /// docs/physics.md, "Gradients").
+    /// docs/physics.md, "Gradients"); for a lens that gives its aperture directions
+    /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
+    /// `R = f0/(2F#)` moving its profile and reference sphere, on the radial engine's lanes.
     FNumber,
     /// The lens's focal length f0 (`lens.focal_length_mm`), F-number held: `∂/∂ln f0`. It scales
     /// the defocus `W020 ∝ f0/F#²` only (the cutoff `1/(λF#)` and `NA` stay); where
@@ -171,13 +173,23 @@ pub struct Gradient {
 /// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with the pixel
 /// MTF or a noise spectrum, the conversion gain without an ADC.
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
-    let binary2 = parameters.iter().any(|p| p.lane().is_some());
+    // the F-number and focal length of a lens that gives its aperture directions (a phase
+    // lens): three more lanes of the radial engine, on a lens that appends them
+    let lanes = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
+        Some(&p) => ApertureLanes::of(scene, p)?,
+        None => None,
+    };
+    let (scene, aperture_base) = match &lanes {
+        Some((wrapped, base)) => (wrapped, Some(*base)),
+        None => (scene, None),
+    };
+    let binary2 = aperture_base.is_some() || parameters.iter().any(|p| p.lane().is_some());
     // the wavefront directions for the FFT path, one per wavefront parameter in their order
     let grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
     if scene.fields().is_empty() {
         // one pass: the evaluation and the wavefront derivatives of its mean MTF together
         let (evaluation, d_binary2, d_grid) = evaluate_field_differentiated(scene, binary2, &grid)?;
-        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid)?;
+        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, aperture_base)?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -197,7 +209,7 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     for (&(field, _), w) in scene.fields().iter().zip(&relative) {
         let single = scene.single_field(field);
         let (e, d_binary2, d_grid) = evaluate_field_differentiated(&single, binary2, &grid)?;
-        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid)?;
+        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid, aperture_base)?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -228,12 +240,16 @@ struct PointGradient {
 /// The derivatives at one field point whose evaluation is `e`; `d_binary2` the mean MTF's
 /// Binary 2 derivatives computed with it, where they were; `d_grid` the wavefront derivatives on
 /// the FFT path, one per wavefront parameter of `parameters` in their order.
+///
+/// `aperture_base`: where the F-number and focal length ride the radial engine's lanes (a
+/// phase lens, [`ApertureLanes`]), the first of their three lanes `[P, T, S]`.
 fn point_gradient(
     scene: &Scene,
     e: &Evaluation,
     parameters: &[Parameter],
     d_binary2: Option<Vec<f64>>,
     d_grid: &GridGradient,
+    aperture_base: Option<usize>,
 ) -> Result<PointGradient, Error> {
     let camera = scene.camera();
     let sensor = camera.sensor();
@@ -262,7 +278,10 @@ fn point_gradient(
     // the radial engine's lanes, or the FFT path's derivatives (`d_grid`), whichever the
     // evaluation computed
     let on_grid = matches!(d_grid, GridGradient::Computed(_));
-    let binary2 = match parameters.iter().find(|p| p.lane().is_some()) {
+    let on_lanes = |p: &&Parameter| {
+        p.lane().is_some() || (aperture_base.is_some() && matches!(p, Parameter::FNumber | Parameter::FocalLength))
+    };
+    let binary2 = match parameters.iter().find(on_lanes) {
         Some(&p) if !on_grid => Some(binary2_mean_mtf(scene, p, d_binary2)?),
         _ => None,
     };
@@ -281,7 +300,8 @@ fn point_gradient(
         None => None,
     };
     let aperture = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
-        Some(&p) => Some(aperture_partials(scene, e, p)?),
+        Some(&p) if aperture_base.is_none() => Some(aperture_partials(scene, e, p)?),
+        Some(&p) => Some(aperture_lane_partials(scene, e, p, binary2.as_deref(), aperture_base)?),
         None => None,
     };
     for &p in parameters {
@@ -455,6 +475,139 @@ fn point_gradient(
         out.asnr.push(d_snr0 * g + e.snr0 * d_g);
     }
     Ok(out)
+}
+
+/// A lens whose wavefront directions ([`optics::LensModel::binary2_directions`]) are its own
+/// followed by its aperture directions `[P, T, S]` per order
+/// ([`optics::LensModel::aperture_directions`]), so that one pass of the radial engine carries
+/// the F-number's and the focal length's lanes beside the value (and any Binary 2, spline and
+/// Zernike lanes asked with them). Everything else is the lens's own.
+#[derive(Debug)]
+struct ApertureLanes(std::sync::Arc<dyn optics::LensModel>);
+
+impl ApertureLanes {
+    /// The scene with its lens so wrapped and the index of the first aperture lane, where the
+    /// lens gives aperture directions; `None` where it does not (the families whose F-number
+    /// gradient is [`aperture_partials`]'). Refused off axis (the oblique wave moves with the
+    /// aperture too) and with the pixel MTF.
+    fn of(scene: &Scene, p: Parameter) -> Result<Option<(Scene, usize)>, Error> {
+        let lens = scene.lens();
+        let lambda = lens.design_wavelength().unwrap_or(550e-9);
+        let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
+        match lens.aperture_directions(lambda) {
+            None => return Ok(None),
+            Some(Err(why)) => return Err(not_smooth(&why)),
+            Some(Ok(_)) => {}
+        }
+        let fields: Vec<optics::Field> = match scene.fields() {
+            [] => vec![scene.field()],
+            points => points.iter().map(|f| f.0).collect(),
+        };
+        if fields.iter().any(|f| !f.is_on_axis()) {
+            return Err(not_smooth(
+                "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the                  radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is                  computed on axis",
+            ));
+        }
+        if scene.camera().pixel_mtf() {
+            return Err(not_smooth(
+                "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet                  (set camera.pixel_mtf = false)",
+            ));
+        }
+        let base = lens.binary2_directions(lambda).and_then(|d| d.first().map(Vec::len)).unwrap_or(0);
+        Ok(Some((scene.clone().with_lens(std::sync::Arc::new(ApertureLanes(scene.lens_arc()))), base)))
+    }
+}
+
+impl optics::LensModel for ApertureLanes {
+    fn f_number(&self) -> f64 {
+        self.0.f_number()
+    }
+    fn focal_length(&self) -> f64 {
+        self.0.focal_length()
+    }
+    fn orders(&self, wavelength_m: f64, field: optics::Field) -> Vec<optics::Order> {
+        self.0.orders(wavelength_m, field)
+    }
+    fn orders_into(&self, wavelength_m: f64, field: optics::Field, out: &mut Vec<optics::Order>) {
+        self.0.orders_into(wavelength_m, field, out)
+    }
+    fn efficiency(&self, wavelength_m: f64) -> f64 {
+        self.0.efficiency(wavelength_m)
+    }
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.0.transmission(wavelength_m)
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.0.breakpoints()
+    }
+    /// The lens's factored parts, each part's orders wrapped as well (a factored lens's
+    /// directions are its own: the same pupils).
+    fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
+        let mut f = self.0.factored_efficiency()?;
+        for part in &mut f.parts {
+            part.relative = std::sync::Arc::new(ApertureLanes(part.relative.clone()));
+        }
+        Some(f)
+    }
+    fn numerical_aperture(&self) -> f64 {
+        self.0.numerical_aperture()
+    }
+    fn design_wavelength(&self) -> Option<f64> {
+        self.0.design_wavelength()
+    }
+    fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<optics::radial::RadialProfile>>> {
+        let extra = self.0.aperture_directions(wavelength_m)?.ok()?;
+        let own = self.0.binary2_directions(wavelength_m).unwrap_or_else(|| vec![Vec::new(); extra.len()]);
+        if own.len() != extra.len() {
+            return None;
+        }
+        Some(
+            own.into_iter()
+                .zip(extra)
+                .map(|(mut lanes, e)| {
+                    lanes.extend(e);
+                    lanes
+                })
+                .collect(),
+        )
+    }
+    fn aperture_directions(&self, wavelength_m: f64) -> Option<optics::ApertureDirections> {
+        self.0.aperture_directions(wavelength_m)
+    }
+    fn describe(&self) -> String {
+        self.0.describe()
+    }
+    fn affine_defocus(&self, field: optics::Field) -> Option<optics::AffineDefocus> {
+        self.0.affine_defocus(field)
+    }
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of a lens that gives its aperture directions (a phase lens,
+/// docs/physics.md "Gradients"), from the lanes `[P, T, S]` the evaluation carried
+/// (`all[base..base + 3]`: `∂M̄` along each) and one OTF value at Nyquist:
+/// - `F#` moves each wavelength's normalized frequency `s = νλF#`: by parts
+///   `(1/ν_N) ∫ sign(O) ν ∂O/∂ν dν = |O(ν_N)| − M̄`, as for the other families;
+/// - `R = f0/(2F#)` moves the wavefront along `P + T` per unit `ln R` (f0 held), so
+///   `∂M̄/∂ln F# = |O(ν_N)| − M̄ − (D_P + D_T)`;
+/// - `f0` with `F#` held moves `R` with it, `s` not: the wavefront along `P + S`, so
+///   `∂M̄/∂ln f0 = D_P + D_S`.
+fn aperture_lane_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    all: Option<&[f64]>,
+    base: Option<usize>,
+) -> Result<(f64, f64), Error> {
+    let lanes = base.and_then(|b| all.and_then(|a| a.get(b..b + 3)));
+    let Some(&[d_p, d_t, d_s]) = lanes else {
+        return Err(Error::NotDifferentiable {
+            parameter: p.describe(),
+            reason: "the radial engine did not carry the aperture's lanes here (an order through an iris, zones, a                      map or a table, or the FFT path)"
+                .to_owned(),
+        });
+    };
+    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    Ok((edge - e.mean_mtf - (d_p + d_t), d_p + d_s))
 }
 
 /// `∂M̄/∂A_j` for every Binary 2 coefficient of the lens, as the evaluation computed them

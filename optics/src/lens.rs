@@ -266,6 +266,10 @@ pub struct FactoredEfficiency {
     pub transmission: radiometry::Spectrum,
 }
 
+/// What [`LensModel::aperture_directions`] gives: per order `[P, T, S]`, or why they cannot be
+/// given.
+pub type ApertureDirections = Result<Vec<[crate::radial::RadialProfile; 3]>, String>;
+
 /// One part of a [`FactoredEfficiency`]: a table and the orders it multiplies.
 #[derive(Clone, Debug)]
 pub struct FactoredPart {
@@ -388,6 +392,20 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// How each imaging order's whole wavefront (m, as a function of `q = ρ²`) moves with the
+    /// aperture, at `wavelength_m` on axis: one `[P, T, S]` per order of
+    /// [`orders`](Self::orders), where the aperture radius `R = f0/(2F#)` moving with the focal
+    /// length `f0` held changes the wavefront along `P + T` per unit `ln R` (`P` the profile's
+    /// part, `T` the reference sphere's `R²q/√(R²q + f0²)`), and `f0` moving with `R` held along
+    /// `S − T` (`S` the sphere `√(R²q + f0²) − f0` itself, homogeneous of degree 1 in `R` and
+    /// `f0`). So `∂W/∂ln F#` (f0 held) is `−(P + T)` and `∂W/∂ln f0` (F# held) is `P + S`
+    /// (docs/physics.md, "Gradients": the F-number and focal length of a phase lens). `None`
+    /// (the default) where the lens does not give them; `Some(Err(why))` where it would but
+    /// cannot here (something of it moves with the aperture that the directions do not follow).
+    fn aperture_directions(&self, _wavelength_m: f64) -> Option<ApertureDirections> {
+        None
+    }
+
     /// The wavelength the lens was designed for (m), if it has one: the reference of the
     /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
     fn design_wavelength(&self) -> Option<f64> {
@@ -450,6 +468,9 @@ macro_rules! forward_lens_model {
             fn design_wavelength(&self) -> Option<f64> { (**self).design_wavelength() }
             fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<crate::radial::RadialProfile>>> {
                 (**self).binary2_directions(wavelength_m)
+            }
+            fn aperture_directions(&self, wavelength_m: f64) -> Option<ApertureDirections> {
+                (**self).aperture_directions(wavelength_m)
             }
             fn describe(&self) -> String { (**self).describe() }
             fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> { (**self).affine_defocus(field) }

@@ -50,6 +50,12 @@ enum Kind {
     /// `√(R² q + z²) − z`: the sag of the exact reference sphere of radius `z` over a pupil of
     /// radius `R` (metres when `R`, `z` are).
     Sphere { r2: f64, z: f64 },
+    /// `R²q/√(R²q + z²)`: the sphere's change `R ∂S/∂R` with the aperture radius `R`, `z` held
+    /// ([`RadialProfile::radius_log_derivative`] of a [`Kind::Sphere`]).
+    SphereSlope { r2: f64, z: f64 },
+    /// `ρ s'(ρ)` of a cubic spline `s` ([`RadialProfile::radius_log_derivative`] of a
+    /// [`Kind::Table`]): its change `R ∂/∂R` where it is given in `r = Rρ`.
+    TableSlope(Spline),
     /// A cubic spline through `(ρ_i, value_i)`, zero slope at `ρ = 0`.
     Table(Spline),
     /// A lens-plane profile read in direction cosines ([`DirectionCosines`]): at `q` (the
@@ -148,6 +154,41 @@ impl RadialProfile {
         Ok(RadialProfile::finish(Kind::Table(Spline::new(rho, values)?)))
     }
 
+    /// The profile's change `R ∂/∂R` with the aperture radius `R` where it is given in the
+    /// lens-plane radius `r = Rρ` and read at `ρ` (docs/physics.md, "Gradients": the F-number
+    /// and focal length of a phase lens): `f(Rρ)` moves along `ρ ∂f/∂ρ = 2q ∂f/∂q`. An even
+    /// polynomial `Σ c_i q^i` gives `Σ 2i c_i q^i`; the sphere `√(R²q + z²) − z` (its distance
+    /// `z` held) gives `R²q/√(R²q + z²)`; a table's spline `s` gives `ρ s'(ρ)`, the derivative of
+    /// the same cubic pieces. `None` for a profile read through a map ([`DirectionCosines`]),
+    /// whose map moves with the aperture too.
+    pub fn radius_log_derivative(&self) -> Option<RadialProfile> {
+        let kind = match &self.kind {
+            Kind::Even(c) => Kind::Even(c.iter().enumerate().map(|(i, c)| 2.0 * i as f64 * c).collect()),
+            Kind::Sphere { r2, z } => Kind::SphereSlope { r2: *r2, z: *z },
+            Kind::Table(s) => Kind::TableSlope(s.clone()),
+            Kind::SphereSlope { .. } | Kind::TableSlope(_) | Kind::Mapped { .. } => return None,
+        };
+        Some(RadialProfile::finish(kind))
+    }
+
+    /// The profile times `factor` (finite), where that is a profile of the same kind: an even
+    /// polynomial, a table or a table's slope (each linear in its values); `None` for a sphere
+    /// or a mapped profile.
+    pub fn scaled(&self, factor: f64) -> Option<RadialProfile> {
+        let spline = |s: &Spline| Spline {
+            x: s.x.clone(),
+            y: s.y.iter().map(|y| factor * y).collect(),
+            m: s.m.iter().map(|m| factor * m).collect(),
+        };
+        let kind = match &self.kind {
+            Kind::Even(c) => Kind::Even(c.iter().map(|c| factor * c).collect()),
+            Kind::Table(s) => Kind::Table(spline(s)),
+            Kind::TableSlope(s) => Kind::TableSlope(spline(s)),
+            _ => return None,
+        };
+        factor.is_finite().then(|| RadialProfile::finish(kind))
+    }
+
     fn finish(kind: Kind) -> RadialProfile {
         RadialProfile { kind, summary: Lazy::default(), sampled: Lazy::default() }
     }
@@ -173,7 +214,12 @@ impl RadialProfile {
             Kind::Even(c) => c.iter().rev().fold(0.0, |acc, &ci| acc * q + ci),
             // written without the cancellation of √(z² + R²q) − z at small q
             Kind::Sphere { r2, z } => r2 * q / ((z * z + r2 * q).sqrt() + z),
+            Kind::SphereSlope { r2, z } => r2 * q / (z * z + r2 * q).sqrt(),
             Kind::Table(s) => s.value(q.max(0.0).sqrt()),
+            Kind::TableSlope(s) => {
+                let rho = q.max(0.0).sqrt();
+                rho * s.slope(rho)
+            }
             Kind::Mapped { inner, e2, obliquity } => {
                 let c2 = 1.0 - q * e2;
                 let v = inner.as_ref().map_or(1.0, |p| p.value(q * (1.0 - e2) / c2));
@@ -186,7 +232,7 @@ impl RadialProfile {
     /// read through the map).
     fn vectorizes(&self) -> bool {
         match &self.kind {
-            Kind::Table(_) => false,
+            Kind::Table(_) | Kind::TableSlope(_) => false,
             Kind::Mapped { inner, .. } => inner.as_ref().is_none_or(|p| p.vectorizes()),
             _ => true,
         }
@@ -204,7 +250,11 @@ impl RadialProfile {
                 let (r2, z) = (f64x8::splat(*r2), f64x8::splat(*z));
                 r2 * q / ((z * z + r2 * q).sqrt() + z)
             }
-            Kind::Table(_) => f64x8::new(q.to_array().map(|qi| self.value(qi))),
+            Kind::SphereSlope { r2, z } => {
+                let (r2, z) = (f64x8::splat(*r2), f64x8::splat(*z));
+                r2 * q / (z * z + r2 * q).sqrt()
+            }
+            Kind::Table(_) | Kind::TableSlope(_) => f64x8::new(q.to_array().map(|qi| self.value(qi))),
             Kind::Mapped { inner, e2, obliquity } => {
                 let e2 = f64x8::splat(*e2);
                 let c2 = f64x8::ONE - q * e2;
@@ -265,7 +315,7 @@ impl RadialProfile {
     /// Whether the profile is a table (knots limit the smoothness the rule may assume).
     fn knots(&self) -> usize {
         match &self.kind {
-            Kind::Table(s) => s.x.len(),
+            Kind::Table(s) | Kind::TableSlope(s) => s.x.len(),
             Kind::Mapped { inner: Some(p), .. } => p.knots(),
             _ => 0,
         }
@@ -380,6 +430,16 @@ impl Spline {
         a * self.y[i]
             + b * self.y[i + 1]
             + ((a * a * a - a) * self.m[i] + (b * b * b - b) * self.m[i + 1]) * h * h / 6.0
+    }
+
+    /// `s'(t)`: the derivative of the piece [`value`](Self::value) reads at `t`.
+    fn slope(&self, t: f64) -> f64 {
+        let n = self.x.len();
+        let i = self.x.partition_point(|&xi| xi <= t).clamp(1, n - 1) - 1;
+        let h = self.x[i + 1] - self.x[i];
+        let (a, b) = ((self.x[i + 1] - t) / h, (t - self.x[i]) / h);
+        (self.y[i + 1] - self.y[i]) / h
+            + ((1.0 - 3.0 * a * a) * self.m[i] + (3.0 * b * b - 1.0) * self.m[i + 1]) * h / 6.0
     }
 }
 
@@ -1379,15 +1439,24 @@ impl RadialOrder {
         LANE_BUFFERS.with_borrow_mut(|[q, weight, _]| {
             q.resize(2 * lanes, 0.0);
             weight.resize(lanes, 0.0);
-            // every direction an even polynomial: its degree's moments, eight lanes at a time
+            // every direction an even polynomial or a profile read eight lanes at a time (a
+            // sphere's slope): the polynomials' moments and the others' sums, eight lanes at a
+            // time; a table direction sends every lane through the scalar sum
             let degree = directions
                 .iter()
                 .map(|d| match &d.kind {
                     Kind::Even(c) => Some(c.len()),
+                    _ if d.vectorizes() => Some(1),
                     _ => None,
                 })
                 .try_fold(1, |n, d| d.map(|d| n.max(d)));
             let mut moments = degree.filter(|_| proxy.is_some()).map(|n| vec![wide::f64x8::ZERO; n]);
+            // the directions read eight lanes at a time (not polynomials), with their sums
+            let general: Vec<usize> = match moments {
+                Some(_) => (0..directions.len()).filter(|&j| !matches!(directions[j].kind, Kind::Even(_))).collect(),
+                None => Vec::new(),
+            };
+            let mut sums = vec![wide::f64x8::ZERO; general.len()];
             let mut total = 0.0;
             for pt in 0..t_panels {
                 self.panel_lanes(s, t_end, t_panels, pt, v_nodes, q, weight);
@@ -1410,6 +1479,9 @@ impl RadialOrder {
                                 *m = slope.mul_add(p1 - p2, *m);
                                 p1 *= x;
                                 p2 *= y;
+                            }
+                            for (sum, &j) in sums.iter_mut().zip(&general) {
+                                *sum = slope.mul_add(directions[j].value8(x) - directions[j].value8(y), *sum);
                             }
                         }
                         total += acc.reduce_add();
@@ -1437,6 +1509,9 @@ impl RadialOrder {
                     if let Kind::Even(c) = &direction.kind {
                         *d += k * c.iter().zip(&moments).skip(1).map(|(c, m)| c * m).sum::<f64>();
                     }
+                }
+                for (sum, &j) in sums.iter().zip(&general) {
+                    derivatives[j] += k * sum.reduce_add();
                 }
             }
             total
@@ -1612,6 +1687,47 @@ mod tests {
             let r = 0.8 * i as f64 / 300.0;
             assert!((s.value(r) - f(r)).abs() < 2e-6, "r = {r}: {} vs {}", s.value(r), f(r));
         }
+    }
+
+    /// `radius_log_derivative` against central differences in `ln R` of the profile rebuilt at
+    /// `R e^{±h}` (written here): the sphere `√(R²q + z²) − z` (z held), an even polynomial in
+    /// `(r/R_n)²` read at `ρ = r/R`, and a table in `r` (its knots `r_i/R` move with R; the
+    /// spline's end conditions are scale-free, so it is the same spline in r). Step h = 1e-4:
+    /// truncation h²|f‴|/6 and rounding ε/h both below 1e-8 of the size.
+    #[test]
+    fn radius_log_derivatives_are_the_profiles_own() {
+        let (radius, z, h) = (0.672e-3_f64, 3.36e-3_f64, 1e-4_f64);
+        let r_knots: Vec<f64> = (0..=20).map(|i| 0.7e-3 * i as f64 / 20.0).collect();
+        let phase = |r: f64| -2.0e9 * r * r + 1.0e15 * r.powi(4) + (r * 9e3).sin();
+        let table = |big_r: f64| {
+            let rho = r_knots.iter().map(|r| r / big_r).collect();
+            RadialProfile::table(rho, r_knots.iter().map(|&r| phase(r)).collect()).unwrap()
+        };
+        let poly = |big_r: f64| {
+            let s = (big_r / 0.6e-3).powi(2);
+            RadialProfile::even_polynomial(vec![0.0, -5.0 * s, 0.3 * s * s, -0.01 * s.powi(3)]).unwrap()
+        };
+        let sphere = |big_r: f64| RadialProfile::reference_sphere(big_r, z).unwrap();
+        let builders: [(&str, &dyn Fn(f64) -> RadialProfile); 3] =
+            [("sphere", &sphere), ("polynomial", &poly), ("table", &table)];
+        for (name, build) in builders {
+            let slope = build(radius).radius_log_derivative().unwrap();
+            let (up, down) = (build(radius * h.exp()), build(radius * (-h).exp()));
+            let size = (0..=50).map(|i| build(radius).value(i as f64 / 50.0).abs()).fold(0.0, f64::max);
+            for i in 0..=50 {
+                let q = i as f64 / 50.0;
+                let reference = (up.value(q) - down.value(q)) / (2.0 * h);
+                let error = (slope.value(q) - reference).abs();
+                assert!(error <= 1e-7 * size, "{name} at q = {q}: {} vs {reference}", slope.value(q));
+            }
+        }
+        assert!(sphere(radius).radius_log_derivative().unwrap().radius_log_derivative().is_none());
+        let scaled = table(radius).scaled(-2.5).unwrap();
+        assert!((scaled.value(0.3) + 2.5 * table(radius).value(0.3)).abs() < 1e-12 * size_of(&table(radius)));
+    }
+
+    fn size_of(p: &RadialProfile) -> f64 {
+        (0..=50).map(|i| p.value(i as f64 / 50.0).abs()).fold(0.0, f64::max)
     }
 
     /// A mapped polynomial prepared from the mapped monomials (`MappedMonomials`) reads as the

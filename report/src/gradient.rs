@@ -159,19 +159,35 @@ const SPECTRAL: [(&str, Parameter); 2] =
 const APERTURE: [(&str, Parameter); 2] =
     [("lens.f_number", Parameter::FNumber), ("lens.focal_length_mm", Parameter::FocalLength)];
 
-/// The families [`APERTURE`]'s keys are differentiated for.
-const APERTURE_MODELS: [&str; 3] = ["chromatic", "refractive", "harmonic"];
+/// The families [`APERTURE`]'s keys are differentiated for: the defocus families, and the phase
+/// lens on the radial engine's lanes (its profile and reference sphere moving with the aperture
+/// radius, docs/physics.md "Gradients").
+const APERTURE_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
 
 /// The scene quantity `lens.f_number` or `lens.focal_length_mm` sets, or why its gradient is
 /// refused for this family; `None` for another key. With `lens.aperture_diameter_mm` given (the
-/// F-number follows the focal length) the focal length is refused.
-fn aperture_parameter(key: &str, lens_model: &str, diameter_given: bool) -> Option<Result<Parameter>> {
+/// F-number follows the focal length) the focal length is refused; a phase lens with
+/// `options.pupil_mapping = "exact"` (whose map moves with the aperture) or a phase table with an
+/// amplitude column (an amplitude in r_mm moves with it) is refused naming why.
+fn aperture_parameter(key: &str, lens_model: &str, table: &toml::Table) -> Option<Result<Parameter>> {
     let (_, p) = APERTURE.iter().find(|(k, _)| *k == key)?;
+    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
+    if lens_model == "phase"
+        && let Some(mapping) = lookup(table, "options.pupil_mapping").and_then(toml::Value::as_str)
+        && mapping == "exact"
+    {
+        return Some(Err(anyhow!(
+            "--wrt {key}: not differentiable here yet with options.pupil_mapping = \"exact\" (the map from the \
+             pupil to the image's frequencies, sin θ = r/√(r² + f0²), moves with the aperture too, which the \
+             radial engine's lanes do not follow); supported with options.pupil_mapping = \"paraxial\""
+        )));
+    }
     if !APERTURE_MODELS.contains(&lens_model) {
         let why = match lens_model {
-            "phase" | "library" => {
-                "its aperture radius R = f0/(2F#) moves the profile and the reference sphere in the normalized \
-                 pupil, which the radial engine's derivative pass does not follow yet"
+            "library" => {
+                "its aperture radius R = f0/(2F#) cuts the layout's rings: the design phase is fitted to the rings \
+                 whose centre lies inside R and the outermost atom's cell ends at R, so the value jumps wherever R \
+                 crosses a ring centre (every pitch of R) and has no derivative there"
             }
             _ => "its defocus is not followed through the F-number and focal length for this family yet",
         };
@@ -402,8 +418,8 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian spectrum), lens.f_number and lens.focal_length_mm \
-         (lens.model = \"chromatic\", \"refractive\" or \"harmonic\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat spectrum), lens.f_number and lens.focal_length_mm \
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\" or \"phase\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -431,11 +447,10 @@ pub(crate) fn gradient_and_evaluation(
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
     let shape = lookup(&table, "spectrum.shape").and_then(toml::Value::as_str).unwrap_or("").to_owned();
     let lanes = Lanes::of(&table);
-    let diameter_given = lookup(&table, "lens.aperture_diameter_mm").is_some();
     let parameters: Vec<Parameter> = expanded
         .iter()
         .map(|(k, _)| {
-            aperture_parameter(k, &lens_model, diameter_given)
+            aperture_parameter(k, &lens_model, &table)
                 .or_else(|| library_bias(k, &table))
                 .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
         })
@@ -763,6 +778,91 @@ mod tests {
         let e =
             gradient(&example("decentred-iris.toml"), &[], &owned(&["lens.focal_length_mm"])).unwrap_err().to_string();
         assert!(e.contains("focal length") && e.contains("full circular pupil"), "{e}");
+    }
+
+    /// The hyperbolic phase −(2π/λ0)(√(r² + f0²) − f0) of the example's aperture (F/2.5,
+    /// f0 = 3.36 mm, λ0 = 800 nm) at `knots` equally spaced radii from the axis to the edge, as
+    /// `lens.phase_spline_rad` (radians, in ρ = r/R).
+    fn hyperbolic_knots(knots: usize) -> String {
+        let (f0, radius, k0) = (3.36e-3_f64, 0.672e-3_f64, std::f64::consts::TAU / 800e-9);
+        let values: Vec<String> = (0..knots)
+            .map(|i| {
+                let r = radius * i as f64 / (knots - 1) as f64;
+                format!("{:.12}", -k0 * ((r * r + f0 * f0).sqrt() - f0))
+            })
+            .collect();
+        format!("phase_spline_rad = [{}]", values.join(", "))
+    }
+
+    /// The phase lens's F-number and focal length (docs/physics.md, "Gradients": s = νλF# by
+    /// parts, and the radial engine's lanes along R ∂φ0/∂R of a profile given in r, the
+    /// reference sphere's R ∂S/∂R and S itself) against central differences of evaluations
+    /// converged at 1e-10, within 10× the scene's 1e-6 of the gradient's norm, step
+    /// [`APERTURE_STEP`]: the Binary 2 lens with its own R_norm (its profile moves with R),
+    /// and under a line (the line's own rule). The integral form and the stray light take the
+    /// same lines of `point_gradient` as the chromatic lens's (tested above).
+    #[test]
+    fn phase_lens_f_number_and_focal_length_match_central_differences() {
+        let binary2 = example("phase-binary2.toml");
+        check_aperture(&binary2, &[]);
+        check_aperture(&binary2, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]));
+    }
+
+    /// The example's coefficients normalized to the aperture (R_norm not given: the profile is
+    /// in ρ and does not move, the sphere does), and a diffractive lens's several orders (each
+    /// its own path per radian on the moving profile), as
+    /// [`phase_lens_f_number_and_focal_length_match_central_differences`].
+    #[test]
+    fn phase_lens_in_rho_and_diffractive_f_number_and_focal_length_match_central_differences() {
+        let in_rho = phase_scene_with(
+            "binary2 = [-527.7875658030853, 5.277875658030851, -0.105557513160617, 0.002638937829015425]",
+        );
+        check_aperture(&in_rho, &[]);
+        check_aperture(
+            &example("phase-binary2.toml"),
+            &owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]),
+        );
+    }
+
+    /// A freeform spline alone (17 knots of the hyperbolic profile, in ρ: it does not move with
+    /// R, the sphere does) and a phase table in r_mm (`examples/phase-table.toml` stopped to
+    /// F/2.6, so that R moves inside the table: its profile moves along ρ φ′(ρ), the spline's
+    /// own derivative), against central differences as above.
+    #[test]
+    fn spline_and_table_lenses_f_number_and_focal_length_match_central_differences() {
+        check_aperture(&phase_scene_with(&hyperbolic_knots(17)), &[]);
+        check_aperture(&example("phase-table.toml"), &owned(&["lens.f_number=2.6"]));
+    }
+
+    /// What the phase lens's F-number and focal-length gradient refuses, naming why: the exact
+    /// pupil mapping, off axis, the pixel MTF, a phase table's amplitude column; the library
+    /// lens (its value jumps where R crosses a ring centre).
+    #[test]
+    fn phase_and_library_aperture_refusals_name_why() {
+        let binary2 = example("phase-binary2.toml");
+        let keys = owned(&["lens.f_number"]);
+        let e = gradient(&binary2, &owned(&["options.pupil_mapping=\"exact\""]), &keys).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.f_number") && e.contains("options.pupil_mapping = \"exact\""), "{e}");
+        let e = gradient(&binary2, &owned(&["field.x_deg=5"]), &keys).unwrap_err().to_string();
+        assert!(e.contains("F-number") && e.contains("off axis"), "{e}");
+        let e = gradient(&binary2, &owned(&["camera.pixel_mtf=true"]), &keys).unwrap_err().to_string();
+        assert!(e.contains("F-number") && e.contains("camera.pixel_mtf"), "{e}");
+        let e = gradient(&example("library.toml"), &[], &owned(&["lens.focal_length_mm"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.focal_length_mm") && e.contains("ring centre"), "{e}");
+        // a table with an amplitude column in r_mm: the amplitude moves with R
+        let dir = std::env::temp_dir().join(format!("asnr-amplitude-table-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut csv = String::from("r_mm,phase_rad,amplitude\n");
+        for i in 0..=400 {
+            let r = 0.7e-3 * f64::from(i) / 400.0;
+            let phase = -std::f64::consts::TAU / 800e-9 * ((r * r + 3.36e-3_f64.powi(2)).sqrt() - 3.36e-3);
+            csv.push_str(&format!("{},{phase},{}\n", r * 1e3, 1.0 - 0.2 * (r / 0.7e-3).powi(2)));
+        }
+        std::fs::write(dir.join("table.csv"), csv).unwrap();
+        let text = example("phase-table.toml").text().replace("data/phase-hyperbolic-f2.5.csv", "table.csv");
+        let table = Source::from_text(text, "amplitude table written in the test", &dir);
+        let e = gradient(&table, &[], &keys).unwrap_err().to_string();
+        assert!(e.contains("F-number") && e.contains("amplitude"), "{e}");
     }
 
     /// ∂SNR0 analytic: with shot noise alone SNR0 = √N and N ∝ t, so ∂SNR0/∂t = SNR0/(2t) and
@@ -1146,9 +1246,9 @@ mod tests {
         assert!(e.contains("--wrt options.tolerance: not differentiable"), "{e}");
         let e = refused(&["lens.model"]);
         assert!(e.contains("lens.model = \"phase\" is not a number"), "{e}");
-        let e = refused(&["lens.f_number"]);
+        let e = gradient(&example("library.toml"), &[], &owned(&["lens.f_number"])).unwrap_err().to_string();
         assert!(
-            e.contains("--wrt lens.f_number: not differentiable here yet for lens.model = \"phase\"")
+            e.contains("--wrt lens.f_number: not differentiable here yet for lens.model = \"library\"")
                 && e.contains("aperture radius"),
             "{e}"
         );

@@ -1250,12 +1250,30 @@ fn phase_lens(
     let dispersion = dispersion(l, o, info)?;
     let transmission = transmission(o, &efficiency)?;
     let alone = l.binary2.is_none() && l.phase_csv.is_none();
+    // the phase's change with the aperture radius R = f0/(2F#), the focal length held (the
+    // gradient's F-number and focal length, docs/physics.md "Gradients"): a profile given in r
+    // (Binary 2 with its own R_norm, a table in r_mm) moves along R ∂φ0/∂R, one given in ρ (a
+    // spline, Binary 2 normalized to the aperture) does not; a table's amplitude in r_mm would
+    // move the pupil's amplitude, which the derivative lanes do not follow: not recorded
+    let moves = (l.binary2.is_some() && l.norm_radius_mm.is_some()) || l.phase_csv.is_some();
+    let motion = match (moves, &amplitude) {
+        (false, _) => optics::radial::RadialProfile::even_polynomial(vec![0.0]).map_err(|e| e.to_string()),
+        (true, None) => {
+            phase.radius_log_derivative().ok_or_else(|| "the phase profile has no such derivative".to_owned())
+        }
+        (true, Some(_)) => Err(
+            "the phase table's amplitude column is in r_mm, so the pupil's amplitude moves with the aperture radius \
+             R = f0/(2F#), which the radial engine's lanes (changes of the wavefront) do not follow"
+                .to_owned(),
+        ),
+    };
     let mut lens =
         lenses::PhaseLens::new(f_number, f0_m, l0, phase, amplitude, dispersion, efficiency, transmission, source)
             .map_err(|e| o.domain("lens", "[lens]", e))?
             .with_binary2_terms(binary2_terms)
             .with_spline_knots(l.phase_spline_rad.as_ref().map_or(0, Vec::len))
             .with_zernike_directions(l.zernike_noll_rms_um.as_ref().map_or(0, Vec::len));
+    lens = lens.with_aperture_motion(motion);
     let spline_what = spline.as_ref().map(|(_, what)| what.clone());
     if let Some((profile, what)) = spline
         && !alone

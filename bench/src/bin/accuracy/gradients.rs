@@ -97,6 +97,15 @@ fn measure_2d(root: &Path, tolerance: f64, repeats: usize) -> Option<Row> {
     side_by_side(&source, &overrides, &parameters, repeats)
 }
 
+/// The aperture row: the Binary 2 metalens of `examples/phase-binary2.toml` (its four
+/// coefficients, R_norm given) differentiated with respect to `lens.f_number` and
+/// `lens.focal_length_mm` (the radial engine's three aperture lanes beside its four Binary 2
+/// lanes, and one OTF at Nyquist: docs/physics.md, "Gradients").
+fn measure_aperture(root: &Path, repeats: usize) -> Option<Row> {
+    let source = scene::read(Some(&root.join("examples/phase-binary2.toml"))).ok()?;
+    side_by_side(&source, &[], &[Parameter::FNumber, Parameter::FocalLength], repeats)
+}
+
 /// The radial engine at 800 nm: the OTF alone and with K derivatives on 200 frequencies to
 /// s = 0.38 (twice Nyquist), accuracy 1e-11; (K, OTF time, OTF and derivatives time) in s.
 fn radial(repeats: usize) -> Option<(f64, Vec<(usize, f64)>)> {
@@ -184,6 +193,18 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
         "\nTarget (issue: the gradient over K ≤ 16 keys at most 3× one evaluation; here K = 4, 12 and 32): {}.\n",
         rows.iter().map(|r| format!("K = {}: {}", r.k, status(r))).collect::<Vec<_>>().join("; ")
     ));
+    if let Some(r) = measure_aperture(&tools.root, repeats) {
+        md.push_str(&format!(
+            "\nThe phase lens's F-number and focal length (K = 2: `lens.f_number`, `lens.focal_length_mm` of the same \
+             lens with its four coefficients): three more lanes of the radial engine (the profile's motion with the \
+             aperture radius, the reference sphere's two directions, read eight lanes at a time beside the Binary 2 \
+             moments) and one OTF at Nyquist. The same timing as above.\n\n| keys | ASNR | ‖∂ASNR/∂ln key‖ | value, \
+             median (fastest) | value and gradient, median (fastest) | ratio of medians | ratio of fastest \
+             |\n|---|---|---|---|---|---|---|\n| F#, f0 {}\n\nTarget (at most 3× one evaluation): {}.\n",
+            r.cells(2),
+            status(&r)
+        ));
+    }
     let rows_2d: Vec<(f64, Row)> = [1e-3, 1e-4]
         .iter()
         .filter_map(|&t| measure_2d(&tools.root, t, if t < 1e-3 { 5 } else { repeats }).map(|r| (t, r)))
