@@ -723,27 +723,7 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         (o[0], pix * dc, pix * ds)
     };
     let integrate = |panels: usize| -> (f64, f64) {
-        let mut ends = vec![0.0];
-        let h = nyquist / panels as f64;
-        let mut previous = (0.0, 1.0);
-        for i in 1..=panels {
-            let nu = if i == panels { nyquist } else { i as f64 * h };
-            let value = engines[0].otf(nu);
-            if value * previous.1 < 0.0 {
-                let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
-                while hi - lo > 1e-15 * hi {
-                    let m = 0.5 * (lo + hi);
-                    if engines[0].otf(m) * f_lo > 0.0 {
-                        lo = m;
-                    } else {
-                        hi = m;
-                    }
-                }
-                ends.push(0.5 * (lo + hi));
-            }
-            ends.push(nu);
-            previous = (nu, value);
-        }
+        let ends = sign_change_ends(nyquist, panels, |nu| engines[0].otf(nu));
         let (mut dc, mut ds) = (0.0, 0.0);
         for w in ends.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -844,27 +824,7 @@ fn top_hat_partials(
     }
     // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
     let integrate = |panels: usize| -> [f64; 2] {
-        let mut ends = vec![0.0];
-        let h = nyquist / panels as f64;
-        let mut previous = (0.0, 1.0);
-        for i in 1..=panels {
-            let nu = if i == panels { nyquist } else { i as f64 * h };
-            let value = whole.otf(nu);
-            if value * previous.1 < 0.0 {
-                let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
-                while hi - lo > 1e-15 * hi {
-                    let m = 0.5 * (lo + hi);
-                    if whole.otf(m) * f_lo > 0.0 {
-                        lo = m;
-                    } else {
-                        hi = m;
-                    }
-                }
-                ends.push(0.5 * (lo + hi));
-            }
-            ends.push(nu);
-            previous = (nu, value);
-        }
+        let ends = sign_change_ends(nyquist, panels, |nu| whole.otf(nu));
         let mut sums = [0.0; 2];
         for w in ends.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -1148,4 +1108,32 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
     };
     let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+}
+
+/// The ends of `panels` equal panels over `[0, nyquist]` with the sign changes of `otf` between
+/// them added (each found by bisection to 1e-15 of its frequency), so that a Gauss rule on each
+/// piece meets the kink of |O| at a zero only at its ends.
+fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64) -> Vec<f64> {
+    let mut ends = vec![0.0];
+    let h = nyquist / panels as f64;
+    let mut previous = (0.0, 1.0);
+    for i in 1..=panels {
+        let nu = if i == panels { nyquist } else { i as f64 * h };
+        let value = otf(nu);
+        if value * previous.1 < 0.0 {
+            let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
+            while hi - lo > 1e-15 * hi {
+                let m = 0.5 * (lo + hi);
+                if otf(m) * f_lo > 0.0 {
+                    lo = m;
+                } else {
+                    hi = m;
+                }
+            }
+            ends.push(0.5 * (lo + hi));
+        }
+        ends.push(nu);
+        previous = (nu, value);
+    }
+    ends
 }
