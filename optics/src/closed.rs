@@ -43,7 +43,7 @@ const TAIL_SIGMAS: f64 = 10.0;
 pub const MAX_TERMS: usize = 6;
 
 /// Absolute noise of the integrand in `t` (OTF units per radian) below which the nested
-/// rule stops refining (see `nested_in_lanes`).
+/// rule stops refining (see `nested`).
 const ROUNDING_FLOOR: f64 = 1e-12;
 
 /// Factor on the error estimate of [`GaussianDefocus::otf_estimated`]: the true error was up to
@@ -530,7 +530,7 @@ fn nested_in_lanes<const L: usize>(
 }
 
 /// Largest ratio of a level's last move to the tolerance at which [`chebyshev_tail`] may
-/// accept it (see `nested_in_lanes`): the 5-point level within 1000× the tolerance.
+/// accept it (see `nested`): the 5-point level within 1000× the tolerance.
 const COEFFICIENT_CONSISTENCY: f64 = 1e3;
 
 /// The error of the Clenshaw–Curtis rule of the `values` (at `cos(πj/N)`, `N = values.len() − 1`
