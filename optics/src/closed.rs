@@ -225,11 +225,92 @@ impl GaussianDefocus {
     /// the phase vanishes (the cut λ = c/β of [`spectral`](Self::spectral), or any point of a
     /// phase-free integrand at ν = 0).
     fn moments(&self, f: &AtFrequency, phi0: f64, phi1: f64, cut_x: f64) -> Complex64 {
-        match self.lane_moments(f, phi0, phi1, cut_x, self.q.len()) {
-            // Σ_k q_k x^k with x = y + m against the moments of y
-            Some((moments, m)) => taylor_sum(&self.q, &moments, m),
-            None => Complex64::new(0.0, 0.0),
+        let zero = Complex64::new(0.0, 0.0);
+        let upper = (cut_x < f.tail).then_some(cut_x);
+        let lower = self.lower_at(f.tail);
+        match (upper, lower) {
+            (Some(u), _) if u < -f.tail => return zero,
+            (Some(u), Some(l)) if u <= l => return zero,
+            _ => {}
         }
+        // −A(x − m)² + K with m = iφ1/(2A), K = iφ0 + A m²
+        let m = Complex64::new(0.0, phi1) * f.inv_2a;
+        let k = Complex64::new(0.0, phi0) + f.a * m * m;
+        // e^K, only where a term needs it (a cut zone's E below the spectrum's centre does not:
+        // its e^K terms cancel, and are better left out than subtracted)
+        let exp_k = || {
+            let (sin, cos) = cis::sin_cos(k.im);
+            Complex64::new(cos, sin) * k.re.exp()
+        };
+        let mut moments = [zero; MAX_TERMS];
+        let terms = self.q.len();
+        if upper.is_none() && lower.is_none() {
+            // the whole line: M0 = e^K √(π/A), odd moments 0, M_j = (j − 1) M_{j−2}/(2A)
+            moments[0] = exp_k() * f.root_pi_over_root_a;
+            for j in 2..terms {
+                moments[j] = moments[j - 2] * (j - 1) as f64 * f.inv_2a;
+            }
+        } else {
+            // the integrand (without Q) at the finite endpoints, exp(−x²/2 + iφ(x)) = e^{K − A(x−m)²},
+            // each computed once. The upper one is the cut λ = c/β, where the phase
+            // a(λ)(c − βλ) vanishes: it is real (exactly, where the sum φ0 + φ1 x + φ2 x² of terms
+            // up to thousands of radians would leave rounding).
+            let e_hi = upper.map(|x| Complex64::new((-0.5 * x * x).exp(), 0.0));
+            let e_lo = lower.map(|x| {
+                let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
+                Complex64::new(cos, sin) * (-0.5 * x * x).exp()
+            });
+            // e^K · erf(√A y) at y = x − m, in a bounded form (erfcx only where Re z ≥ 0), as
+            // sign · e^K + rest; the ±∞ endpoints give ±e^K
+            let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> (f64, Complex64) {
+                match (x, e) {
+                    (Some(x), Some(e)) => {
+                        let z = f.sqrt_a * (x - m);
+                        if z.re >= 0.0 { (1.0, -e * faddeeva::erfcx(z)) } else { (-1.0, e * faddeeva::erfcx(-z)) }
+                    }
+                    _ => (at_infinity, zero),
+                }
+            };
+            let (sign_hi, rest_hi) = erf_term(upper, e_hi, 1.0);
+            let (sign_lo, rest_lo) = erf_term(lower, e_lo, -1.0);
+            let mut difference = rest_hi - rest_lo;
+            if sign_hi != sign_lo {
+                difference += exp_k() * (sign_hi - sign_lo);
+            }
+            moments[0] = difference * (0.5 * f.root_pi_over_root_a);
+            // higher moments of y = x − m: M_j = ((j−1) M_{j−2} + [y^{j−1} e^{…}]_{hi}^{lo}) / (2A)
+            let (y_lo, y_hi) = (lower.map(|x| x - m), upper.map(|x| x - m));
+            let (mut p_lo, mut p_hi) = (Complex64::new(1.0, 0.0), Complex64::new(1.0, 0.0));
+            for j in 1..terms {
+                let mut boundary = zero;
+                if let (Some(e), Some(y)) = (e_lo, y_lo) {
+                    boundary += p_lo * e;
+                    p_lo *= y;
+                }
+                if let (Some(e), Some(y)) = (e_hi, y_hi) {
+                    boundary -= p_hi * e;
+                    p_hi *= y;
+                }
+                let previous = if j >= 2 { moments[j - 2] * (j - 1) as f64 } else { zero };
+                moments[j] = (previous + boundary) * f.inv_2a;
+            }
+        }
+        // Σ_k q_k x^k with x = y + m: the Taylor coefficients of Q at m (repeated synthetic division)
+        let mut r = [zero; MAX_TERMS];
+        for (slot, &v) in r.iter_mut().zip(&self.q) {
+            *slot = Complex64::new(v, 0.0);
+        }
+        let mut total = zero;
+        for (j, moment) in moments.iter().enumerate().take(terms) {
+            let mut acc = zero;
+            for v in r[..terms - j].iter_mut().rev() {
+                let t = *v + acc * m;
+                *v = acc;
+                acc = t;
+            }
+            total += acc * moment;
+        }
+        total
     }
 
     /// The polychromatic OTF at `frequency` (cycles/m), normalized to 1 at 0, to an absolute
@@ -393,52 +474,25 @@ fn nested(
     evaluations: &mut usize,
     error: &mut f64,
 ) -> (f64, f64) {
-    let lane = |x: f64| [f(x)];
-    let ([integral], [at_a]) =
-        nested_in_lanes(&lane, a, b, ends.map(|e| e.map(|v| [v])), tolerance, resolved, evaluations, error);
-    (integral, at_a)
-}
-
-/// [`nested`] on `L` lanes: `f` gives the integrands at each point (lane 0 the value's, the
-/// others e.g. its derivative's), all integrated with the level's weights; the levels, the
-/// bisections and the acceptance are lane 0's alone, so lane 0 is the integral [`nested`]
-/// returns. Returns the integrals and the integrands at `a`.
-#[allow(clippy::too_many_arguments)]
-fn nested_in_lanes<const L: usize>(
-    f: &dyn Fn(f64) -> [f64; L],
-    a: f64,
-    b: f64,
-    ends: [Option<[f64; L]>; 2],
-    tolerance: f64,
-    resolved: f64,
-    evaluations: &mut usize,
-    error: &mut f64,
-) -> ([f64; L], [f64; L]) {
     #[allow(clippy::too_many_arguments)]
-    fn piece<const L: usize>(
-        f: &dyn Fn(f64) -> [f64; L],
+    fn piece(
+        f: &dyn Fn(f64) -> f64,
         a: f64,
         b: f64,
-        ends: [[f64; L]; 2],
+        ends: [f64; 2],
         tol: f64,
         resolved: f64,
         depth: u32,
         evaluations: &mut usize,
         accepted: &mut f64,
-    ) -> [f64; L] {
+    ) -> f64 {
         let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
         // cos(πk/64): the points of every level, x = c + h cos(πk/(n − 1)), k = 0 at b
         let cosines = cosines();
-        // lane-major: lanes[0] the value's integrand at the level's points, contiguous
-        let mut lanes = [[0.0; 65]; L];
-        let set = |lanes: &mut [[f64; 65]; L], k: usize, v: [f64; L]| {
-            for (lane, v) in lanes.iter_mut().zip(v) {
-                lane[k] = v;
-            }
-        };
+        let mut values = [0.0; 65];
         let mut moves = [0.0; 6];
         let mut previous = 0.0;
-        let mut integral = [0.0; L];
+        let mut integral = 0.0;
         let mut estimate = f64::INFINITY;
         // accept at the tolerance, or at the rounding floor of the integrand itself: E(c) is a
         // difference of terms up to ~1e4 times larger than itself at thousands of waves of
@@ -450,29 +504,28 @@ fn nested_in_lanes<const L: usize>(
             let n = points - 1;
             let stride = 64 / n;
             if level == 0 {
-                set(&mut lanes, 0, ends[1]);
-                set(&mut lanes, 1, f(c));
-                set(&mut lanes, 2, ends[0]);
+                values[..3].copy_from_slice(&[ends[1], f(c), ends[0]]);
                 *evaluations += 1;
             } else {
                 // spread the previous level's values to the even slots, fill the odd ones
-                for lane in lanes.iter_mut() {
-                    for k in (0..=n / 2).rev() {
-                        lane[2 * k] = lane[k];
-                    }
+                for k in (0..=n / 2).rev() {
+                    values[2 * k] = values[k];
                 }
                 for k in (1..n).step_by(2) {
-                    set(&mut lanes, k, f(c + h * cosines[k * stride]));
+                    values[k] = f(c + h * cosines[k * stride]);
                 }
                 *evaluations += n / 2;
             }
             let weights = crate::poly::clenshaw_curtis(points);
-            let largest = lanes[0][..points].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for (sum, lane) in integral.iter_mut().zip(&lanes) {
-                *sum = lane[..points].iter().zip(weights).map(|(&v, &w)| w * v).sum::<f64>() * h;
+            let mut largest: f64 = 0.0;
+            integral = 0.0;
+            for (&v, &w) in values[..points].iter().zip(weights) {
+                largest = largest.max(v.abs());
+                integral += w * v;
             }
+            integral *= h;
             if level > 0 {
-                let moved = (integral[0] - previous).abs();
+                let moved = (integral - previous).abs();
                 moves[level - 1] = moved;
                 if level >= 2 {
                     estimate = if points as f64 >= resolved {
@@ -487,7 +540,7 @@ fn nested_in_lanes<const L: usize>(
                         // last coefficients is trusted)
                         // (read only where the moves do not already accept the level)
                         if by_moves > tol.max(noise) && moved <= COEFFICIENT_CONSISTENCY * tol {
-                            by_moves.min(h * chebyshev_tail(&lanes[0][..points]))
+                            by_moves.min(h * chebyshev_tail(&values[..points]))
                         } else {
                             by_moves
                         }
@@ -500,19 +553,18 @@ fn nested_in_lanes<const L: usize>(
                     }
                 }
             }
-            previous = integral[0];
+            previous = integral;
         }
         if depth >= MAX_DEPTH {
             *accepted += estimate;
             return integral;
         }
         // the halves' ends are known: a, the centre (the first level's middle point) and b
-        let middle = lanes.map(|lane| lane[32]);
-        let left = piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
-        let right = piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
-        std::array::from_fn(|l| left[l] + right[l])
+        let middle = values[32];
+        piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
+            + piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
     }
-    let mut end = |known: Option<[f64; L]>, t: f64| {
+    let mut end = |known: Option<f64>, t: f64| {
         known.unwrap_or_else(|| {
             *evaluations += 1;
             f(t)
@@ -520,7 +572,7 @@ fn nested_in_lanes<const L: usize>(
     };
     let ends = [end(ends[0], a), end(ends[1], b)];
     if b <= a {
-        return ([0.0; L], ends[0]);
+        return (0.0, ends[0]);
     }
     (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
 }
@@ -642,7 +694,7 @@ impl GaussianDefocus {
             let known_a = (hi >= 1.0).then_some([0.0; 2]);
             let (a, b) = (hi.acos(), lo.acos());
             let (integral, at_a) =
-                nested_in_lanes(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
+                nested_lanes(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
             value += integral[0];
             derivative += integral[1];
             shared = Some((hi, at_a));
@@ -730,8 +782,8 @@ impl GaussianDefocus {
     }
 
     /// The moments `M_j = ∫ y^j exp(−A y²) e^K dx` (`y = x − m`), `j < count` (≤ [`LANE_TERMS`]),
-    /// between the endpoints of [`moments`](Self::moments) (the value, `count` = the terms of
-    /// `Q`) and of the derivative's lane (two more), and `m`; `None` where the integral is empty.
+    /// between the same endpoints and in the same bounded forms as
+    /// [`moments`](Self::moments), and `m`; `None` where the integral is empty.
     fn lane_moments(
         &self,
         f: &AtFrequency,
@@ -748,35 +800,25 @@ impl GaussianDefocus {
             (Some(u), Some(l)) if u <= l => return None,
             _ => {}
         }
-        // −A(x − m)² + K with m = iφ1/(2A), K = iφ0 + A m²
         let m = Complex64::new(0.0, phi1) * f.inv_2a;
         let k = Complex64::new(0.0, phi0) + f.a * m * m;
-        // e^K, only where a term needs it (a cut zone's E below the spectrum's centre does not:
-        // its e^K terms cancel, and are better left out than subtracted)
         let exp_k = || {
             let (sin, cos) = cis::sin_cos(k.im);
             Complex64::new(cos, sin) * k.re.exp()
         };
         let mut moments = [zero; LANE_TERMS];
         if upper.is_none() && lower.is_none() {
-            // the whole line: M0 = e^K √(π/A), odd moments 0, M_j = (j − 1) M_{j−2}/(2A)
             moments[0] = exp_k() * f.root_pi_over_root_a;
             for j in 2..count {
                 moments[j] = moments[j - 2] * (j - 1) as f64 * f.inv_2a;
             }
             return Some((moments, m));
         }
-        // the integrand (without Q) at the finite endpoints, exp(−x²/2 + iφ(x)) = e^{K − A(x−m)²},
-        // each computed once. The upper one is the cut λ = c/β, where the phase
-        // a(λ)(c − βλ) vanishes: it is real (exactly, where the sum φ0 + φ1 x + φ2 x² of terms
-        // up to thousands of radians would leave rounding).
         let e_hi = upper.map(|x| Complex64::new((-0.5 * x * x).exp(), 0.0));
         let e_lo = lower.map(|x| {
             let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
             Complex64::new(cos, sin) * (-0.5 * x * x).exp()
         });
-        // e^K · erf(√A y) at y = x − m, in a bounded form (erfcx only where Re z ≥ 0), as
-        // sign · e^K + rest; the ±∞ endpoints give ±e^K
         let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> (f64, Complex64) {
             match (x, e) {
                 (Some(x), Some(e)) => {
@@ -793,7 +835,6 @@ impl GaussianDefocus {
             difference += exp_k() * (sign_hi - sign_lo);
         }
         moments[0] = difference * (0.5 * f.root_pi_over_root_a);
-        // higher moments of y = x − m: M_j = ((j−1) M_{j−2} + [y^{j−1} e^{…}]_{hi}^{lo}) / (2A)
         let (y_lo, y_hi) = (lower.map(|x| x - m), upper.map(|x| x - m));
         let (mut p_lo, mut p_hi) = (Complex64::new(1.0, 0.0), Complex64::new(1.0, 0.0));
         for j in 1..count {
@@ -833,6 +874,115 @@ fn taylor_sum(coefficients: &[f64], moments: &[Complex64; LANE_TERMS], m: Comple
         total += acc * moment;
     }
     total
+}
+
+/// [`nested`] with a second lane: `f` gives the value's integrand and the derivative's at each
+/// point, both integrated with the level's weights; the levels, the bisections and the
+/// acceptance are the value's (lane 0) alone, so the value is the one [`nested`] returns.
+#[allow(clippy::too_many_arguments)]
+fn nested_lanes(
+    f: &dyn Fn(f64) -> [f64; 2],
+    a: f64,
+    b: f64,
+    ends: [Option<[f64; 2]>; 2],
+    tolerance: f64,
+    resolved: f64,
+    evaluations: &mut usize,
+    error: &mut f64,
+) -> ([f64; 2], [f64; 2]) {
+    #[allow(clippy::too_many_arguments)]
+    fn piece(
+        f: &dyn Fn(f64) -> [f64; 2],
+        a: f64,
+        b: f64,
+        ends: [[f64; 2]; 2],
+        tol: f64,
+        resolved: f64,
+        depth: u32,
+        evaluations: &mut usize,
+        accepted: &mut f64,
+    ) -> [f64; 2] {
+        let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
+        let cosines = cosines();
+        let mut values = [0.0; 65];
+        let mut lane = [0.0; 65];
+        let mut moves = [0.0; 6];
+        let mut previous = 0.0;
+        let mut integral = [0.0; 2];
+        let mut estimate = f64::INFINITY;
+        let noise = ROUNDING_FLOOR * (b - a);
+        for (level, &points) in LEVELS.iter().enumerate() {
+            let n = points - 1;
+            let stride = 64 / n;
+            if level == 0 {
+                let middle = f(c);
+                values[..3].copy_from_slice(&[ends[1][0], middle[0], ends[0][0]]);
+                lane[..3].copy_from_slice(&[ends[1][1], middle[1], ends[0][1]]);
+                *evaluations += 1;
+            } else {
+                for k in (0..=n / 2).rev() {
+                    values[2 * k] = values[k];
+                    lane[2 * k] = lane[k];
+                }
+                for k in (1..n).step_by(2) {
+                    [values[k], lane[k]] = f(c + h * cosines[k * stride]);
+                }
+                *evaluations += n / 2;
+            }
+            let weights = crate::poly::clenshaw_curtis(points);
+            let mut largest: f64 = 0.0;
+            integral = [0.0; 2];
+            for ((&v, &d), &w) in values[..points].iter().zip(&lane[..points]).zip(weights) {
+                largest = largest.max(v.abs());
+                integral[0] += w * v;
+                integral[1] += w * d;
+            }
+            integral = integral.map(|x| x * h);
+            if level > 0 {
+                let moved = (integral[0] - previous).abs();
+                moves[level - 1] = moved;
+                if level >= 2 {
+                    estimate = if points as f64 >= resolved {
+                        let ratio = |k: usize| {
+                            if k >= 1 && moves[k - 1] > 0.0 { (moves[k] / moves[k - 1]).min(1.0) } else { 1.0 }
+                        };
+                        let by_moves = moved * ratio(level - 1).max(ratio(level - 2));
+                        if by_moves > tol.max(noise) && moved <= COEFFICIENT_CONSISTENCY * tol {
+                            by_moves.min(h * chebyshev_tail(&values[..points]))
+                        } else {
+                            by_moves
+                        }
+                    } else {
+                        moves[level - 2].max(moved)
+                    };
+                    if estimate <= tol.max(noise) || moved <= 50.0 * f64::EPSILON * largest * (b - a) {
+                        *accepted += estimate;
+                        return integral;
+                    }
+                }
+            }
+            previous = integral[0];
+        }
+        if depth >= MAX_DEPTH {
+            *accepted += estimate;
+            return integral;
+        }
+        let middle = [values[32], lane[32]];
+        let left = piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
+        let right = piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
+        [left[0] + right[0], left[1] + right[1]]
+    }
+    let mut end = |known: Option<[f64; 2]>, t: f64| {
+        known.unwrap_or_else(|| {
+            *evaluations += 1;
+            f(t)
+        })
+    };
+    let ends = [end(ends[0], a), end(ends[1], b)];
+    if b <= a {
+        return ([0.0; 2], ends[0]);
+    }
+    (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
 }
 
 #[cfg(test)]
