@@ -586,6 +586,23 @@ impl LibraryLens {
         let area = std::f64::consts::PI * radius * radius;
         let psi = |r: f64| design.value((r / radius).powi(2));
         let psi0 = psi(0.0);
+        // a nearly flat plate (all atoms alike but a few): the fitted ψ never turns a whole 2π
+        // across the aperture, so there is no zone edge and no imaging order to speak of, only
+        // the zero order's plane wave, defocused against the detector by the whole sag of the
+        // focal length's sphere (about R²/(2 f0 λ0) waves: 84 at F/2.5, f0 = 3.36 mm, 800 nm).
+        // Refused as the flat plate is: its evaluation took minutes (each of its OTFs integrates
+        // that defocus and the fit's wiggles) for a result beyond the Fraunhofer model anyway
+        let span = inside.iter().map(|&(q, _)| (design.value(q) - psi0).abs()).fold(0.0, f64::max);
+        if span < std::f64::consts::TAU {
+            let fresnel = radius * radius / (2.0 * focal_length_m * design_wavelength_m);
+            let unlike = inside.iter().filter(|&&(_, phi)| phi != inside[0].1).count();
+            return Err(Error::Layout(format!(
+                "the atoms' phase at λ0, unwrapped and fitted, changes by {span:.3e} rad across the aperture, less than one zone (2π; {unlike} of the {} atoms inside it differ in phase from the one on the axis): a nearly flat plate has no zone, so no imaging order (its light is the zero order's plane wave); a lens of f0 = {:.4} mm at λ0 = {:.1} nm has about {fresnel:.1} zones across this aperture",
+                inside.len(),
+                focal_length_m * 1e3,
+                design_wavelength_m * 1e9
+            )));
+        }
         let turns = |r: f64| ((psi(r) - psi0).abs() / std::f64::consts::TAU).floor();
         let mut unique: Vec<Vec<f64>> = Vec::new();
         let mut atoms = Vec::new();
