@@ -339,10 +339,10 @@ fn the_mapping_check_warns_where_the_maps_differ_by_more_than_one_percent() {
     let hyperbola = |f_number: f64| {
         let r = f0_mm / (2.0 * f_number);
         let (mut c, mut terms) = (1.0, Vec::new());
-        for n in 1..=12 {
+        for n in 1..=12_i32 {
             // C(1/2, n) = C(1/2, n − 1) (1/2 − (n − 1))/n
-            c *= (0.5 - (n - 1) as f64) / n as f64;
-            let a = -std::f64::consts::TAU / lambda0_mm * f0_mm * c * (r / f0_mm).powi(2 * n as i32);
+            c *= (0.5 - f64::from(n - 1)) / f64::from(n);
+            let a = -std::f64::consts::TAU / lambda0_mm * f0_mm * c * (r / f0_mm).powi(2 * n);
             terms.push(format!("{a:e}"));
         }
         [
