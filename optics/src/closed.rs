@@ -108,7 +108,7 @@ struct AtFrequency {
     /// `1/(β σ)` and `μ/σ`: the cut `x = (c/β − μ)/σ` with a product, not a division
     inv_beta_sigma: f64,
     center_over_sigma: f64,
-    /// the Faddeeva function to the accuracy the tolerance needs ([`erfcx_budget`])
+    /// the Faddeeva function to the accuracy the tolerance needs (`GaussianDefocus::at_frequency_for`)
     erfcx: &'static faddeeva::Erfcx,
 }
 
