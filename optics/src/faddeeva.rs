@@ -14,14 +14,27 @@
 //! against). Beyond `|z| = 12`, where the series' relative error grows, the asymptotic series
 //! (12 terms) takes over.
 
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_2_SQRT_PI, PI};
 use std::sync::OnceLock;
 
 use num_complex::Complex64;
 
-/// Terms of the series.
+/// Most terms of the series (the full-accuracy one).
 const N: usize = 36;
-const _: () = assert!(N.is_multiple_of(4), "four Horner chains");
+
+/// The series' orders and their relative error bounds over `|z| ≤ SERIES_RADIUS`, `Re z ≥ 0`
+/// (measured against the Faddeeva package on a polar grid: 1.4e-8, 4.2e-10, 1.2e-11, 3.1e-13 and
+/// 2.0e-14, the bounds stated here with a margin of 2.5–5; the test
+/// `every_order_meets_its_bound` checks them). Each order is a multiple of four (four Horner
+/// chains); the error falls about tenfold per 2.3 terms.
+const ORDERS: [(usize, f64); 5] = [(20, 5e-8), (24, 2e-9), (28, 5e-11), (32, 1e-12), (36, 1e-13)];
+const _: () = {
+    let mut i = 0;
+    while i < ORDERS.len() {
+        assert!(ORDERS[i].0.is_multiple_of(4) && ORDERS[i].0 <= N, "four Horner chains");
+        i += 1;
+    }
+};
 
 /// Beyond this `|z|` the asymptotic series is used.
 const SERIES_RADIUS: f64 = 12.0;
@@ -30,59 +43,85 @@ const SERIES_RADIUS: f64 = 12.0;
 /// `(2K−1)!!/(2|z|²)^K` = 1e-18 at `K = 12`, `|z| = 12`.
 const ASYMPTOTIC_TERMS: usize = 12;
 
-struct Series {
+/// Weideman's series of one order: `erfcx` to a stated relative error, for a caller whose
+/// error budget allows fewer terms than the full-accuracy [`erfcx`] (the closed form at a
+/// tolerance of 1e-6 or 1e-7, see `closed::GaussianDefocus::otf_estimated`).
+#[derive(Debug)]
+pub struct Erfcx {
     l: f64,
-    /// `b_k = a_{k+1}`: `p(Z) = Σ_k b_k Z^k`
+    /// `b_k = a_{k+1}`: `p(Z) = Σ_k b_k Z^k`, the first `terms` used
     coefficients: [f64; N],
+    terms: usize,
+    relative_error: f64,
 }
 
-fn series() -> &'static Series {
-    static SERIES: OnceLock<Series> = OnceLock::new();
+fn orders() -> &'static [Erfcx; ORDERS.len()] {
+    static SERIES: OnceLock<[Erfcx; ORDERS.len()]> = OnceLock::new();
     SERIES.get_or_init(|| {
-        // Weideman's `cef`: M = 2N, θ_k = kπ/M (k = −M+1 … M−1), f_k = e^{−t²}(L² + t²),
-        // a_n = Re(Σ_k f_k e^{−inθ_k}) / (2M) (the FFT of the shifted samples, done directly)
-        let m = 2 * N;
-        let l = (N as f64 / 2f64.sqrt()).sqrt();
-        let mut a = [0.0; N + 1];
-        for (n, slot) in a.iter_mut().enumerate() {
-            let mut sum = 0.0;
-            for k in -(m as i64) + 1..m as i64 {
-                let theta = k as f64 * PI / m as f64;
-                let t = l * (0.5 * theta).tan();
-                let f = (-t * t).exp() * (l * l + t * t);
-                sum += f * (n as f64 * theta).cos();
+        ORDERS.map(|(terms, relative_error)| {
+            // Weideman's `cef`: M = 2N, θ_k = kπ/M (k = −M+1 … M−1), f_k = e^{−t²}(L² + t²),
+            // a_n = Re(Σ_k f_k e^{−inθ_k}) / (2M) (the FFT of the shifted samples, done directly)
+            let m = 2 * terms;
+            let l = (terms as f64 / 2f64.sqrt()).sqrt();
+            let mut coefficients = [0.0; N];
+            for (n, slot) in coefficients[..terms].iter_mut().enumerate() {
+                let mut sum = 0.0;
+                for k in -(m as i64) + 1..m as i64 {
+                    let theta = k as f64 * PI / m as f64;
+                    let t = l * (0.5 * theta).tan();
+                    let f = (-t * t).exp() * (l * l + t * t);
+                    sum += f * ((n + 1) as f64 * theta).cos();
+                }
+                *slot = sum / (2 * m) as f64;
             }
-            *slot = sum / (2 * m) as f64;
-        }
-        let mut coefficients = [0.0; N];
-        coefficients.copy_from_slice(&a[1..]);
-        Series { l, coefficients }
+            Erfcx { l, coefficients, terms, relative_error }
+        })
     })
+}
+
+impl Erfcx {
+    /// The series of fewest terms whose relative error is within `relative_error` (the full one,
+    /// 1e-13, where none is).
+    pub fn within(relative_error: f64) -> &'static Erfcx {
+        let all = orders();
+        all.iter().find(|s| s.relative_error <= relative_error).unwrap_or(&all[all.len() - 1])
+    }
+
+    /// The bound on its relative error over the half-plane `Re z ≥ 0`.
+    pub fn relative_error(&self) -> f64 {
+        self.relative_error
+    }
+
+    /// `erfcx(z)` for `Re z ≥ 0`, to [`relative_error`](Self::relative_error).
+    pub fn eval(&self, z: Complex64) -> Complex64 {
+        debug_assert!(z.re >= 0.0, "erfcx series used for Re z < 0: {z}");
+        if z.norm_sqr() > SERIES_RADIUS * SERIES_RADIUS {
+            return asymptotic(z);
+        }
+        // ζ = iz
+        let zeta = Complex64::new(-z.im, z.re);
+        let denominator = Complex64::new(self.l + zeta.im, -zeta.re); // L − iζ
+        let inv = denominator.inv();
+        let big_z = Complex64::new(self.l - zeta.im, zeta.re) * inv; // (L + iζ)/(L − iζ)
+        // p(Z) = Σ_j Z^j P_j(Z⁴), four independent Horner chains (the single chain is latency-bound)
+        let z2 = big_z * big_z;
+        let y = z2 * z2;
+        let mut chains = [Complex64::new(0.0, 0.0); 4];
+        for block in self.coefficients[..self.terms].chunks_exact(4).rev() {
+            for (acc, &b) in chains.iter_mut().zip(block) {
+                *acc = *acc * y + b;
+            }
+        }
+        let p = chains[0] + big_z * chains[1] + z2 * (chains[2] + big_z * chains[3]);
+        // (1/√π as a product: a division costs as much as four terms of the series)
+        2.0 * p * inv * inv + inv * (0.5 * FRAC_2_SQRT_PI)
+    }
 }
 
 /// `erfcx(z) = e^{z²} erfc(z)` for `Re z ≥ 0` (bounded by 1 there), to about 1e-13 relative.
 pub fn erfcx(z: Complex64) -> Complex64 {
-    debug_assert!(z.re >= 0.0, "erfcx series used for Re z < 0: {z}");
-    if z.norm_sqr() > SERIES_RADIUS * SERIES_RADIUS {
-        return asymptotic(z);
-    }
-    let s = series();
-    // ζ = iz
-    let zeta = Complex64::new(-z.im, z.re);
-    let denominator = Complex64::new(s.l + zeta.im, -zeta.re); // L − iζ
-    let inv = denominator.inv();
-    let big_z = Complex64::new(s.l - zeta.im, zeta.re) * inv; // (L + iζ)/(L − iζ)
-    // p(Z) = Σ_j Z^j P_j(Z⁴), four independent Horner chains (the single chain is latency-bound)
-    let z2 = big_z * big_z;
-    let y = z2 * z2;
-    let mut chains = [Complex64::new(0.0, 0.0); 4];
-    for block in s.coefficients.chunks_exact(4).rev() {
-        for (acc, &b) in chains.iter_mut().zip(block) {
-            *acc = *acc * y + b;
-        }
-    }
-    let p = chains[0] + big_z * chains[1] + z2 * (chains[2] + big_z * chains[3]);
-    2.0 * p * inv * inv + inv / PI.sqrt()
+    let all = orders();
+    all[all.len() - 1].eval(z)
 }
 
 /// `erfcx(z) ~ (1/(z√π)) Σ_k (−1)^k (2k−1)!!/(2z²)^k` (Abramowitz & Stegun 7.1.23), valid for
@@ -120,6 +159,34 @@ mod tests {
             }
         }
         assert!(worst < 1e-13, "worst relative error {worst:e}");
+    }
+
+    /// Each order of [`Erfcx`] within its stated relative error of the package over the polar
+    /// grid of the test above (|z| ≤ SERIES_RADIUS) and beyond it (the asymptotic series), and
+    /// [`Erfcx::within`] picks the fewest terms that meet the error asked.
+    #[test]
+    fn every_order_meets_its_bound() {
+        for &(terms, bound) in &ORDERS {
+            let series = Erfcx::within(bound);
+            assert_eq!(series.terms, terms);
+            let mut worst: f64 = 0.0;
+            for i in 0..=200 {
+                let r = 1.5 * SERIES_RADIUS * (i as f64 / 200.0).powi(2);
+                for j in 0..=90 {
+                    let z = Complex64::from_polar(r, -0.5 * PI + PI * j as f64 / 90.0);
+                    let z = Complex64::new(z.re.max(0.0), z.im);
+                    let exact = erfcx_with_relerror(z, 1e-15);
+                    worst = worst.max((series.eval(z) - exact).norm() / exact.norm());
+                }
+            }
+            println!("{terms} terms: worst relative error {worst:.1e} (bound {bound:e})");
+            assert!(worst <= bound, "{terms} terms: {worst:e} > {bound:e}");
+            // the bound is not vacuous: within 10× of the measured error
+            assert!(worst > 0.1 * bound, "{terms} terms: {worst:e} far below {bound:e}");
+        }
+        assert_eq!(Erfcx::within(2e-9).terms, 24);
+        assert_eq!(Erfcx::within(1e-9).terms, 28);
+        assert_eq!(Erfcx::within(1e-20).terms, N);
     }
 
     #[test]

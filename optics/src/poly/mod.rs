@@ -536,6 +536,10 @@ fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec
         let i = samples.partition_point(|s| s.0 < lambda);
         samples.get(i).filter(|s| s.0 == lambda).map_or(0.0, |s| s.1)
     };
+    // the detected spectrum once per wavelength (each is read by its node and its two
+    // neighbours: a third of the evaluations, 4 % of the paper point's time)
+    let densities: Vec<f64> =
+        if lambdas.len() < 3 { Vec::new() } else { lambdas.iter().map(|&l| detected.value(l).abs()).collect() };
     let mass_around = |lambda: f64| -> Option<f64> {
         if lambdas.len() < 3 {
             return None;
@@ -544,9 +548,9 @@ fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec
         if i >= lambdas.len() || lambdas[i] != lambda {
             return None;
         }
-        let (lo, hi) = (lambdas[i.saturating_sub(1)], lambdas[(i + 1).min(lambdas.len() - 1)]);
-        let density = [lo, lambda, hi].iter().map(|&l| detected.value(l).abs()).fold(0.0, f64::max);
-        Some(density * 0.5 * (hi - lo))
+        let (lo, hi) = (i.saturating_sub(1), (i + 1).min(lambdas.len() - 1));
+        let density = densities[lo..=hi].iter().copied().fold(0.0, f64::max);
+        Some(density * 0.5 * (lambdas[hi] - lambdas[lo]))
     };
     signal.extend(nodes.nodes.iter().filter(|n| n.part == part).map(|n| {
         let w = rule_weight(n.lambda);
