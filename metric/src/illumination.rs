@@ -106,6 +106,48 @@ impl RelativeIllumination {
         })
     }
 
+    /// `∂ ln RI/∂θ_a` at `field` along the field angle `axis` (0: θx, 1: θy), per radian
+    /// (docs/physics.md, "Gradients: the field point"), or why it has none there:
+    /// - none and a constant: 0;
+    /// - `cos4`: `ln RI = −2 ln(1 + tan²θx + tan²θy)`, so `−4 tan θ_a sec²θ_a/(1 + tan²θ)`;
+    /// - a table, linear in θ between its points: its slope times
+    ///   `∂θ/∂θ_a = tan θ_a sec²θ_a/(tan θ (1 + tan²θ))` (θ = atan √(tan²θx + tan²θy)), over RI;
+    ///   refused on one of its points (a kink, or its end) and on axis, where the table read at
+    ///   |θ| has a kink unless its first slope is 0 (a single point: a constant, 0).
+    pub fn field_log_derivative(&self, field: Field, axis: usize) -> Result<f64, String> {
+        let angle = if axis == 0 { field.x_rad } else { field.y_rad };
+        let (tan, sec2) = (angle.tan(), 1.0 / (angle.cos() * angle.cos()));
+        let t2 = field.x_rad.tan().powi(2) + field.y_rad.tan().powi(2);
+        match self {
+            RelativeIllumination::None | RelativeIllumination::Constant(_) => Ok(0.0),
+            RelativeIllumination::Cos4 => Ok(-4.0 * tan * sec2 / (1.0 + t2)),
+            RelativeIllumination::Table { angles_rad, values, label } => {
+                if angles_rad.len() == 1 {
+                    return Ok(0.0);
+                }
+                let theta = Self::field_angle(field);
+                if let Some(a) = angles_rad.iter().find(|&&a| (theta - a).abs() <= 1e-9 * a.max(1e-3)) {
+                    return Err(format!(
+                        "the relative illumination table {label} is linear between its points, so it has a kink (or \
+                         its end) at {}°, where the field point lies; move the field point off the table's points",
+                        optics::round_for_display(a.to_degrees())
+                    ));
+                }
+                if t2 == 0.0 {
+                    return Err(format!(
+                        "the relative illumination table {label} is read at the field angle |θ|, so on axis it has a \
+                         kink wherever its first slope is not 0"
+                    ));
+                }
+                let k = angles_rad.partition_point(|&a| a <= theta).clamp(1, angles_rad.len() - 1);
+                let slope = (values[k] - values[k - 1]) / (angles_rad[k] - angles_rad[k - 1]);
+                let d_theta = tan * sec2 / (t2.sqrt() * (1.0 + t2));
+                let ri = self.at(field).map_err(|e| e.to_string())?;
+                Ok(slope * d_theta / ri)
+            }
+        }
+    }
+
     /// The scene-file spelling: `none`, `cos4`, the constant, or the table's label.
     pub fn name(&self) -> String {
         match self {
