@@ -1670,6 +1670,7 @@ mod tests {
                 std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
             })
             .collect();
+        let mut failures = Vec::new();
         for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
             let norm = ours[q].iter().map(|x| x * x).sum::<f64>().sqrt();
             // a gradient that is zero against the quantity's own size (per degree)
@@ -1680,9 +1681,12 @@ mod tests {
                     "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {error:.1e}",
                     ours[q][i], references[i][q]
                 );
-                assert!(error <= 10.0 * tolerance, "{name} {k}: {} vs {} (norm {norm})", ours[q][i], references[i][q]);
+                if error > 10.0 * tolerance {
+                    failures.push(format!("{name} {k}: {} vs {} (norm {norm})", ours[q][i], references[i][q]));
+                }
             }
         }
+        assert!(failures.is_empty(), "{failures:#?}");
         g
     }
 
@@ -1750,14 +1754,40 @@ mod tests {
         assert!(g.d_asnr.iter().chain(&g.d_photoelectrons).all(|d| *d == 0.0), "{g:?}");
     }
 
-    /// Refused, naming the key and why: off axis without Seidel terms (the 1-D engine's
-    /// tangential mean has no shift lane), another family, a relative illumination table on
-    /// axis or at one of its points, and a field list's keys.
+    /// Off axis without Seidel terms: the exact 1-D engine's tangential and sagittal means, the
+    /// shift lane on its spectral nodes, and the azimuth lane for the tangential and sagittal
+    /// azimuths turning with atan2(θy, θx) (off the axes not exactly the images' direction). The
+    /// paper's lens at its 50 nm band at (5°, 3°) with cos⁴θ, read noise and the pixel MTF
+    /// (measured 4.1e-7 of the norm; without the azimuth lane 5e-6 at any tolerance), and at 8°
+    /// along x, where ∂/∂θy is 0 (the pupil is rotationally symmetric: M̄ is even in θy), both
+    /// at the scene's 1e-6.
+    #[test]
+    fn field_gradient_without_seidel_terms_matches_central_differences() {
+        let g = check_field(&["field.x_deg=8"], &["field.x_deg", "field.y_deg"], 0.02);
+        assert!(g.d_mean_mtf[0] < 0.0 && g.d_mean_mtf[1].abs() <= 1e-9 * g.d_mean_mtf[0].abs(), "{g:?}");
+        let g = check_field_at(
+            &[
+                "field.x_deg=5",
+                "field.y_deg=3",
+                "lens.relative_illumination=\"cos4\"",
+                "camera.read_noise_e=2",
+                "camera.pixel_mtf=true",
+            ],
+            &["field.x_deg", "field.y_deg"],
+            0.02,
+            1e-6,
+        );
+        assert!(g.d_mean_mtf.iter().all(|d| *d < 0.0), "{g:?}");
+    }
+
+    /// Refused, naming the key and why: off axis with Zernike terms (the FFT path has no shift
+    /// lane), another family.
     #[test]
     fn field_gradient_refusals_name_the_key() {
         let paper = scene::read(None).unwrap();
-        let e = gradient(&paper, &owned(&["field.x_deg=2"]), &owned(&["field.x_deg"])).unwrap_err().to_string();
-        assert!(e.contains("field.x_deg") && e.contains("tangential"), "{e}");
+        let zernike = owned(&["field.x_deg=2", "lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.1]"]);
+        let e = gradient(&paper, &zernike, &owned(&["field.x_deg"])).unwrap_err().to_string();
+        assert!(e.contains("field.x_deg") && e.contains("Zernike terms"), "{e}");
         let binary2 = example("phase-binary2.toml");
         let e = gradient(&binary2, &owned(&["field.x_deg=2"]), &owned(&["field.y_deg"])).unwrap_err().to_string();
         assert!(e.contains("--wrt field.y_deg") && e.contains("oblique wave"), "{e}");

@@ -717,6 +717,11 @@ pub enum WavefrontDirection {
     /// engine's gradient (docs/physics.md, "Gradients: the field point"); the FFT path does not
     /// carry it.
     FieldAngle(usize),
+    /// The azimuth φ of the frequency direction the OTF is read along, per radian: each node's
+    /// turned OTF gains `−2πi ν (u⊥·Δ)` times itself (`u⊥ = (−sin φ, cos φ)`). The exact engine
+    /// gives it beside the field angles, for the tangential and sagittal azimuths that turn
+    /// with the field direction (docs/physics.md, "Gradients: the field point").
+    Azimuth,
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -834,7 +839,9 @@ impl FftPath {
                             }
                         }
                         // the Seidel terms' orders are the full circle (the overlap engine)
-                        WavefrontDirection::Seidel(_) | WavefrontDirection::FieldAngle(_) => return Ok(None),
+                        WavefrontDirection::Seidel(_)
+                        | WavefrontDirection::FieldAngle(_)
+                        | WavefrontDirection::Azimuth => return Ok(None),
                     };
                     opd.push(values);
                 }
