@@ -94,9 +94,9 @@ pub enum Parameter {
     /// (`1`, `field.y_deg`): `∂/∂θ`, per radian. It moves the relative illumination (a factor on
     /// N and N_T) and, for a lens whose orders change with the field only through their image
     /// shifts (`optics::LensModel::image_shift_field_rates`: the chromatic lens's lateral colour),
-    /// each wavelength's OTF phase `exp(−2πi ν·Δ(λ))`: on the overlap engine (a chromatic lens
-    /// with Seidel terms), forward mode on its nodes; on axis with a rotationally symmetric
-    /// pupil, 0 by symmetry (docs/physics.md, "Gradients: the field point").
+    /// each wavelength's OTF phase `exp(−2πi ν·Δ(λ))`: on the exact 1-D engine (off axis, no
+    /// Seidel terms) and the overlap engine (Seidel terms), forward mode on their nodes; on axis
+    /// with a rotationally symmetric pupil, 0 by symmetry (docs/physics.md, "Gradients: the field point").
     FieldAngle(usize),
 }
 
@@ -473,11 +473,11 @@ fn point_gradient(
                         return Err(not_smooth(
                             p,
                             format!(
-                                "{key}: the field angle's OTF lane is computed on the overlap engine (the chromatic lens \
-                                 with a non-zero Seidel term, the lateral colour's shifts as phases on its nodes) and, on \
-                                 axis, is 0 by symmetry for a rotationally symmetric pupil; this scene's OTF is on another \
-                                 engine (off axis without Seidel terms: the 1-D engine's tangential mean, whose shift lane \
-                                 is not written yet; an iris, Zernike terms, a table)",
+                                "{key}: the field angle's OTF lane (the lateral colour's shifts as phases on the nodes) is \
+                                 computed on the exact 1-D engine (off axis without Seidel terms) and the overlap engine \
+                                 (a non-zero Seidel term), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
+                                 this scene's OTF is on another engine (an iris, Zernike terms or a table: the FFT path, \
+                                 whose grids carry no shift lane)",
                                 key = field_key(axis)
                             ),
                         ));

@@ -713,9 +713,9 @@ pub enum WavefrontDirection {
     /// The field angle along x (`0`) or y (`1`), per radian, for a lens whose orders change with
     /// the field only through their image shifts (`LensModel::image_shift_field_rates`: the
     /// lateral colour): each spectral node's OTF turns by `exp(−2πi ν·Δ)`, so it gains
-    /// `−2πi ν_a (∂Δ_a/∂θ_a)` times itself (a tilt of the wavefront, `W = NA Δ·ρ`). The overlap
-    /// engine's gradient (docs/physics.md, "Gradients: the field point"); the FFT path does not
-    /// carry it.
+    /// `−2πi ν_a (∂Δ_a/∂θ_a)` times itself (a tilt of the wavefront, `W = NA Δ·ρ`). The exact
+    /// 1-D and overlap engines' gradient (docs/physics.md, "Gradients: the field point"); the
+    /// FFT path does not carry it.
     FieldAngle(usize),
     /// The azimuth φ of the frequency direction the OTF is read along, per radian: each node's
     /// turned OTF gains `−2πi ν (u⊥·Δ)` times itself (`u⊥ = (−sin φ, cos φ)`). The exact engine
