@@ -271,6 +271,16 @@ impl LensModel for ChromaticMetalens {
         Some(self.design_wavelength)
     }
 
+    /// The lateral colour's `Δ = f0 tan θ (λ0/λ − 1)` on each axis
+    /// ([`lateral_colour`](Self::lateral_colour)) moves as `∂Δx/∂θx = f0 sec²θx (λ0/λ − 1)`
+    /// (and the same in y); the defocus, the Seidel terms, the pupil and the efficiency are the
+    /// same at every field point.
+    fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        let k = self.design_wavelength / wavelength_m - 1.0;
+        let sec2 = |angle: f64| 1.0 / (angle.cos() * angle.cos());
+        Some(vec![[self.focal_length * sec2(field.x_rad) * k, self.focal_length * sec2(field.y_rad) * k]])
+    }
+
     /// With τ1 or T a table: τ1's table (or 1) factored out of the one order (`relative` has
     /// τ1 = 1 × the iris' area fraction, or τ1 itself where it is a constant), T as a spectrum.
     fn factored_efficiency(&self) -> Option<FactoredEfficiency> {

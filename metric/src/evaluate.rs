@@ -449,6 +449,31 @@ pub(crate) fn evaluate_field_differentiated(
             }
             Ok((a.mean, a.tangential, a.sagittal, a.work))
         } else if poly.direction_dependent() {
+            let with_azimuth: Vec<optics::WavefrontDirection> =
+                grid.iter().copied().chain([optics::WavefrontDirection::Azimuth]).collect();
+            // the field angles' lanes on the exact engine (docs/physics.md, "Gradients: the
+            // field point"): the tangential and sagittal means with their derivatives
+            if noise.is_none()
+                && !grid.is_empty()
+                && grid.iter().all(|d| matches!(d, optics::WavefrontDirection::FieldAngle(_)))
+                && let Some((t, w1, dt)) = poly.mean_mtf_along_and_gradient(along_field, &with_azimuth)
+                && let Some((s, w2, ds)) = poly.mean_mtf_along_and_gradient(along_field + 0.5 * PI, &with_azimuth)
+            {
+                // the two azimuths turn with the field direction atan2(θy, θx), which is not
+                // exactly the images' direction atan2(tan θy, tan θx) off the axes: that turn's
+                // share, ∂M̄/∂φ · ∂φ/∂θ_a
+                let k = grid.len();
+                let d_azimuth = 0.5 * (dt[k] + ds[k]);
+                let r2 = field.x_rad * field.x_rad + field.y_rad * field.y_rad;
+                let turn = |d: &optics::WavefrontDirection| match d {
+                    optics::WavefrontDirection::FieldAngle(0) => -field.y_rad / r2,
+                    _ => field.x_rad / r2,
+                };
+                grid_gradient = GridGradient::Computed(
+                    (0..k).map(|i| 0.5 * (dt[i] + ds[i]) + d_azimuth * turn(&grid[i])).collect(),
+                );
+                return Ok((0.5 * (t + s), t, s, add_work(w1, w2)));
+            }
             let (t, w1) = mean_along(along_field);
             let (s, w2) = mean_along(along_field + 0.5 * PI);
             Ok((0.5 * (t + s), t, s, add_work(w1, w2)))

@@ -90,6 +90,14 @@ pub enum Parameter {
     /// With every Seidel term zero the OTF is on the 1-D engines: coma's derivative is 0 by
     /// symmetry there (`W131` and `−W131` are one pupil turned by π), the others are refused.
     Seidel(optics::SeidelTerm),
+    /// The field angle of the scene's single field point along x (`0`, `field.x_deg`) or y
+    /// (`1`, `field.y_deg`): `∂/∂θ`, per radian. It moves the relative illumination (a factor on
+    /// N and N_T) and, for a lens whose orders change with the field only through their image
+    /// shifts (`optics::LensModel::image_shift_field_rates`: the chromatic lens's lateral colour),
+    /// each wavelength's OTF phase `exp(−2πi ν·Δ(λ))`: on the exact 1-D engine (off axis, no
+    /// Seidel terms) and the overlap engine (Seidel terms), forward mode on their nodes; on axis
+    /// with a rotationally symmetric pupil, 0 by symmetry (docs/physics.md, "Gradients: the field point").
+    FieldAngle(usize),
 }
 
 impl Parameter {
@@ -109,6 +117,7 @@ impl Parameter {
         match self {
             Parameter::ZernikeNoll(j) => Some(optics::WavefrontDirection::Zernike(j)),
             Parameter::Seidel(t) => Some(optics::WavefrontDirection::Seidel(t)),
+            Parameter::FieldAngle(a) => Some(optics::WavefrontDirection::FieldAngle(a)),
             p => p.lane().map(optics::WavefrontDirection::Lane),
         }
     }
@@ -129,6 +138,7 @@ impl Parameter {
             Parameter::Zernike(_) => "an m = 0 Zernike coefficient of the lens",
             Parameter::ZernikeNoll(_) => "a Zernike coefficient of the lens",
             Parameter::Seidel(_) => "a Seidel coefficient of the lens",
+            Parameter::FieldAngle(_) => "a field angle",
             Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
             Parameter::SpectrumRange => "the range of the Gaussian spectrum",
             Parameter::FNumber => "the lens's F-number",
@@ -450,6 +460,41 @@ fn point_gradient(
                     (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
                 }
             }
+            Parameter::FieldAngle(axis) => {
+                let d_mtf = match d_grid {
+                    GridGradient::Computed(all) => {
+                        let d = all[grid_place];
+                        grid_place += 1;
+                        d
+                    }
+                    // on axis, a rotationally symmetric pupil: M̄ is even in the angle
+                    GridGradient::Symmetric => 0.0,
+                    _ => {
+                        return Err(not_smooth(
+                            p,
+                            format!(
+                                "{key}: the field angle's OTF lane (the lateral colour's shifts as phases on the nodes) is \
+                                 computed on the exact 1-D engine (off axis without Seidel terms) and the overlap engine \
+                                 (a non-zero Seidel term), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
+                                 this scene's OTF is on another engine (an iris, Zernike terms or a table: the FFT path, \
+                                 whose grids carry no shift lane)",
+                                key = field_key(axis)
+                            ),
+                        ));
+                    }
+                };
+                let d_ln_ri = scene
+                    .relative_illumination()
+                    .field_log_derivative(scene.field(), axis)
+                    .map_err(|why| not_smooth(p, format!("{}: {why}", field_key(axis))))?;
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                // RI scales N and N_T alike (docs/physics.md, "Relative illumination"), so the
+                // stray light N_T − N in proportion
+                (n * d_ln_ri, background * d_ln_ri, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
                 let s = spectral.as_ref().expect("computed above for a spectral parameter");
                 let (d_ln_n, d_mtf) = if p == Parameter::SpectrumCenter { s.center } else { s.range };
@@ -475,6 +520,11 @@ fn point_gradient(
         out.asnr.push(d_snr0 * g + e.snr0 * d_g);
     }
     Ok(out)
+}
+
+/// The scene key of the field angle `axis` (0: x, 1: y).
+fn field_key(axis: usize) -> &'static str {
+    if axis == 0 { "field.x_deg" } else { "field.y_deg" }
 }
 
 /// A lens whose wavefront directions ([`optics::LensModel::binary2_directions`]) are its own

@@ -106,6 +106,52 @@ impl RelativeIllumination {
         })
     }
 
+    /// `∂ ln RI/∂θ_a` at `field` along the field angle `axis` (0: θx, 1: θy), per radian
+    /// (docs/physics.md, "Gradients: the field point"), or why it has none there:
+    /// - none and a constant: 0;
+    /// - `cos4`: `ln RI = −2 ln(1 + tan²θx + tan²θy)`, so `−4 tan θ_a sec²θ_a/(1 + tan²θ)`;
+    /// - a table, linear in θ between its points: its slope times
+    ///   `∂θ/∂θ_a = tan θ_a sec²θ_a/(tan θ (1 + tan²θ))` (θ = atan √(tan²θx + tan²θy)), over RI;
+    ///   refused on one of its points (a kink, or its end) and on axis, where the table read at
+    ///   |θ| has a kink unless its first slope is 0 (then 0; a single point: a constant, 0).
+    pub fn field_log_derivative(&self, field: Field, axis: usize) -> Result<f64, String> {
+        let angle = if axis == 0 { field.x_rad } else { field.y_rad };
+        let (tan, sec2) = (angle.tan(), 1.0 / (angle.cos() * angle.cos()));
+        let t2 = field.x_rad.tan().powi(2) + field.y_rad.tan().powi(2);
+        match self {
+            RelativeIllumination::None | RelativeIllumination::Constant(_) => Ok(0.0),
+            RelativeIllumination::Cos4 => Ok(-4.0 * tan * sec2 / (1.0 + t2)),
+            RelativeIllumination::Table { angles_rad, values, label } => {
+                if angles_rad.len() == 1 {
+                    return Ok(0.0);
+                }
+                let theta = Self::field_angle(field);
+                if t2 == 0.0 {
+                    // RI(|θ|): even in each angle, smooth where the first slope is 0
+                    if values[1] == values[0] {
+                        return Ok(0.0);
+                    }
+                    return Err(format!(
+                        "the relative illumination table {label} is read at the field angle |θ|, so on axis it has a \
+                         kink (its first slope is not 0)"
+                    ));
+                }
+                if let Some(a) = angles_rad.iter().find(|&&a| (theta - a).abs() <= 1e-9 * a.max(1e-3)) {
+                    return Err(format!(
+                        "the relative illumination table {label} is linear between its points, so it has a kink (or \
+                         its end) at {}°, where the field point lies; move the field point off the table's points",
+                        optics::round_for_display(a.to_degrees())
+                    ));
+                }
+                let k = angles_rad.partition_point(|&a| a <= theta).clamp(1, angles_rad.len() - 1);
+                let slope = (values[k] - values[k - 1]) / (angles_rad[k] - angles_rad[k - 1]);
+                let d_theta = tan * sec2 / (t2.sqrt() * (1.0 + t2));
+                let ri = self.at(field).map_err(|e| e.to_string())?;
+                Ok(slope * d_theta / ri)
+            }
+        }
+    }
+
     /// The scene-file spelling: `none`, `cos4`, the constant, or the table's label.
     pub fn name(&self) -> String {
         match self {
@@ -148,6 +194,39 @@ pub struct IlluminationReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `field_log_derivative` against central differences of `ln at` (step 1e-5 rad, truncation
+    /// ~1e-10 relative): cos⁴ and a table between its points, along x and y at (12°, −7°); on
+    /// axis cos⁴'s is 0; a table is refused on axis and on one of its points.
+    #[test]
+    fn field_log_derivative_matches_differences() {
+        let table = RelativeIllumination::table(
+            "ri.csv",
+            [0.0, 10.0, 20.0, 30.0].iter().map(|d: &f64| d.to_radians()).collect(),
+            vec![1.0, 0.97, 0.9, 0.8],
+        )
+        .unwrap();
+        let (x, y) = (12f64.to_radians(), -7f64.to_radians());
+        let h = 1e-5;
+        for ri in [RelativeIllumination::Cos4, table.clone(), RelativeIllumination::Constant(0.7)] {
+            for axis in 0..2 {
+                let at = |d: f64| {
+                    let f = if axis == 0 { Field::new(x + d, y) } else { Field::new(x, y + d) };
+                    ri.at(f).unwrap().ln()
+                };
+                let reference = (at(h) - at(-h)) / (2.0 * h);
+                let ours = ri.field_log_derivative(Field::new(x, y), axis).unwrap();
+                assert!(
+                    (ours - reference).abs() <= 1e-8 * reference.abs().max(1e-3),
+                    "{ri:?} {axis}: {ours} {reference}"
+                );
+            }
+        }
+        assert_eq!(RelativeIllumination::Cos4.field_log_derivative(Field::ON_AXIS, 0).unwrap(), 0.0);
+        assert!(table.field_log_derivative(Field::ON_AXIS, 1).unwrap_err().contains("on axis"));
+        let e = table.field_log_derivative(Field::new(10f64.to_radians(), 0.0), 0).unwrap_err();
+        assert!(e.contains("kink") && e.contains("10°"), "{e}");
+    }
 
     /// cos⁴θ: 1 on axis; at 20° along x, cos⁴(20°) = 0.779 751 …; along a diagonal the angle from
     /// the axis, `tan²θ = tan²θx + tan²θy`.

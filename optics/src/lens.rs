@@ -406,6 +406,17 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// How each imaging order's image shift moves with the field angles, at `wavelength_m` and
+    /// `field`: one `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian) per order of [`orders`](Self::orders),
+    /// for a lens whose orders change with the field point only through their image shifts
+    /// `Δx(λ, θx)`, `Δy(λ, θy)` (lateral colour; every other term of the order the same at every
+    /// field point). `None` (the default) where the orders change otherwise with the field (an
+    /// oblique wave's aberrations) or the lens does not give them (docs/physics.md, "Gradients:
+    /// the field point").
+    fn image_shift_field_rates(&self, _wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        None
+    }
+
     /// The wavelength the lens was designed for (m), if it has one: the reference of the
     /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
     fn design_wavelength(&self) -> Option<f64> {
@@ -471,6 +482,9 @@ macro_rules! forward_lens_model {
             }
             fn aperture_directions(&self, wavelength_m: f64) -> Option<ApertureDirections> {
                 (**self).aperture_directions(wavelength_m)
+            }
+            fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+                (**self).image_shift_field_rates(wavelength_m, field)
             }
             fn describe(&self) -> String { (**self).describe() }
             fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> { (**self).affine_defocus(field) }

@@ -63,6 +63,7 @@ impl Closed {
                 w020: affine.w020_intercept_m + affine.w020_slope * lambda,
                 scale: 1.0,
                 shift: [0.0, 0.0],
+                shift_rate: None,
                 table: None,
                 radial: None,
                 part: WHOLE,

@@ -426,6 +426,39 @@ impl Polychromatic<'_> {
         Some((mean, sum.into_iter().map(|g| g * scale).collect()))
     }
 
+    /// The mean MTF along `azimuth` ([`mean_mtf_along`](Self::mean_mtf_along)'s adaptive rule)
+    /// and its derivative with respect to each of `directions` on the same rule: each OTF's
+    /// derivatives from the engine (`OtfEngine::otf_along_and_gradient`: the exact engine's
+    /// field angles, docs/physics.md "Gradients: the field point"), `∂|O| = Re(O* ∂O)/|O|` (0
+    /// where `O = 0`), integrated with the accepted panels' nodes and weights (pixel MTF
+    /// included). `None` where the rule is not adaptive or the engine gives no derivative.
+    pub fn mean_mtf_along_and_gradient(
+        &self,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+    ) -> Option<(f64, Work, Vec<f64>)> {
+        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
+            return None;
+        }
+        let lanes = directions.len();
+        *self.gradient.borrow_mut() =
+            Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+        let r = self.gradient.borrow_mut().take()?;
+        if r.failed {
+            return None;
+        }
+        let mut sum = vec![0.0; lanes];
+        for &(nu, w) in &r.accepted {
+            let &i = r.at.get(&nu.to_bits())?;
+            for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
+                *g += w * d;
+            }
+        }
+        let scale = 1.0 / self.scene.max_frequency;
+        Some((mean, work, sum.into_iter().map(|g| g * scale).collect()))
+    }
+
     /// `|O(ν, φ)|` at `nu` along `azimuth` with `∂|O| = Re(O* ∂O)/|O|` for each recorded
     /// direction kept in the recording.
     fn recorded_modulus_along(&self, nu: f64, azimuth: f64) -> f64 {

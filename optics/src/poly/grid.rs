@@ -710,6 +710,18 @@ pub enum WavefrontDirection {
     /// overlap engine's gradient ([`SeidelTerm`](super::SeidelTerm); docs/physics.md,
     /// "Gradients: Seidel terms on the overlap engine"). The FFT path does not carry it.
     Seidel(super::SeidelTerm),
+    /// The field angle along x (`0`) or y (`1`), per radian, for a lens whose orders change with
+    /// the field only through their image shifts (`LensModel::image_shift_field_rates`: the
+    /// lateral colour): each spectral node's OTF turns by `exp(−2πi ν·Δ)`, so it gains
+    /// `−2πi ν_a (∂Δ_a/∂θ_a)` times itself (a tilt of the wavefront, `W = NA Δ·ρ`). The exact
+    /// 1-D and overlap engines' gradient (docs/physics.md, "Gradients: the field point"); the
+    /// FFT path does not carry it.
+    FieldAngle(usize),
+    /// The azimuth φ of the frequency direction the OTF is read along, per radian: each node's
+    /// turned OTF gains `−2πi ν (u⊥·Δ)` times itself (`u⊥ = (−sin φ, cos φ)`). The exact engine
+    /// gives it beside the field angles, for the tangential and sagittal azimuths that turn
+    /// with the field direction (docs/physics.md, "Gradients: the field point").
+    Azimuth,
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -827,7 +839,9 @@ impl FftPath {
                             }
                         }
                         // the Seidel terms' orders are the full circle (the overlap engine)
-                        WavefrontDirection::Seidel(_) => return Ok(None),
+                        WavefrontDirection::Seidel(_)
+                        | WavefrontDirection::FieldAngle(_)
+                        | WavefrontDirection::Azimuth => return Ok(None),
                     };
                     opd.push(values);
                 }

@@ -900,6 +900,7 @@ mod tests {
                 w020: (lambda - 800e-9) * 1e3,
                 scale: 1.0,
                 shift: [0.0; 2],
+                shift_rate: None,
                 table: None,
                 radial: None,
                 part: 0,

@@ -55,6 +55,9 @@ struct Term {
     lambda: f64,
     weight: f64,
     shift: [f64; 2],
+    /// `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian), where the lens gives it
+    /// (`LensModel::image_shift_field_rates`): the field angles' lanes
+    shift_rate: Option<[f64; 2]>,
     /// W020 + W220 (m): the part whose difference is linear in x
     defocus: f64,
     spherical: f64,
@@ -211,7 +214,9 @@ impl<'a> Overlap<'a> {
             if weight == 0.0 {
                 continue;
             }
-            for order in scene.part(part).lens.orders(lambda, scene.field) {
+            let lens = &scene.part(part).lens;
+            let rates = lens.image_shift_field_rates(lambda, scene.field);
+            for (o, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
                 if order.efficiency == 0.0 {
                     continue;
                 }
@@ -223,6 +228,7 @@ impl<'a> Overlap<'a> {
                     lambda,
                     weight: weight * order.efficiency,
                     shift: w.image_shift_m,
+                    shift_rate: rates.as_ref().and_then(|r| r.get(o)).copied(),
                     defocus: w.defocus_m + w.field_curvature_m,
                     spherical: w.spherical_m,
                     coma: w.coma_m,
@@ -725,14 +731,22 @@ impl Overlap<'_> {
     /// [`compute`](Self::compute) and, into `out`, the polychromatic OTF's derivative with
     /// respect to each of `terms`, every node on the value's rules ([`term_otf_and_derivatives`]);
     /// the lateral-colour phases and the spectral weights do not depend on the Seidel terms.
+    /// Into `out_field`, the derivative with respect to each field angle of `axes` (0: x, 1: y;
+    /// [`WavefrontDirection::FieldAngle`]): each node's turned value `v e^{ik Δ·u}` (k = −2πν,
+    /// `u` the azimuth's unit vector) times `i k u_a ∂Δ_a/∂θ_a`, on the same nodes (every term
+    /// has its `shift_rate` where `axes` is not empty: [`OtfEngine::otf_along_and_gradient`]).
+    #[allow(clippy::too_many_arguments)]
     fn compute_with_derivatives(
         &self,
         frequency: f64,
         azimuth: f64,
         terms: &[SeidelTerm],
         out: &mut [Complex64],
+        axes: &[usize],
+        out_field: &mut [Complex64],
     ) -> Complex64 {
         out.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
+        out_field.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
         let (sn, c) = azimuth.sin_cos();
         let nuf = frequency.abs() * self.scene.f_number;
         let (cr, sr) = if frequency < 0.0 { (-c, -sn) } else { (c, sn) };
@@ -773,11 +787,19 @@ impl Overlap<'_> {
             for (o, d) in out.iter_mut().zip(&node) {
                 *o += d.conj() * turn * term.weight;
             }
+            if let Some([rx, ry]) = term.shift_rate {
+                // ∂(v e^{ik Δ·u})/∂θ_a = i k u_a (∂Δ_a/∂θ_a) v e^{ik Δ·u}
+                for (o, &axis) in out_field.iter_mut().zip(axes) {
+                    let rate = if axis == 0 { k * rx * c } else { k * ry * sn };
+                    *o += Complex64::new(0.0, rate) * v * term.weight;
+                }
+            }
         }
         if excess > self.value_tolerance.get() {
             self.worst.set(self.worst.get().max(excess));
         }
         out.iter_mut().for_each(|o| *o /= total);
+        out_field.iter_mut().for_each(|o| *o /= total);
         sum / total
     }
 }
@@ -827,9 +849,12 @@ impl OtfEngine for Overlap<'_> {
         true
     }
 
-    /// Seidel directions only; a pupil symmetric about x with images shifted along x reads a
-    /// mirrored azimuth's value and derivatives as the conjugates (every Seidel term is even in
-    /// y, so its derivative keeps the symmetry), as [`otf_along`](Self::otf_along) does.
+    /// Seidel directions and the field angles (where every node has its image shift's rates);
+    /// a pupil symmetric about x with images shifted along x reads a mirrored azimuth's value
+    /// and derivatives as the conjugates (every Seidel term is even in y, so its derivative keeps
+    /// the symmetry; so does the x field angle's, `u_x` changing sign with the conjugate's
+    /// phase), the y field angle's as the conjugates' negatives (`u_y` keeps its sign), as
+    /// [`otf_along`](Self::otf_along) does.
     fn otf_along_and_gradient(
         &self,
         frequency: f64,
@@ -837,15 +862,38 @@ impl OtfEngine for Overlap<'_> {
         directions: &[WavefrontDirection],
         gradient: &mut [Complex64],
     ) -> Option<Complex64> {
-        let terms: Vec<SeidelTerm> = directions
-            .iter()
-            .map(|d| match d {
-                WavefrontDirection::Seidel(t) => Some(*t),
-                _ => None,
-            })
-            .collect::<Option<_>>()?;
+        let mut terms = Vec::new();
+        let mut axes = Vec::new();
+        for d in directions {
+            match d {
+                WavefrontDirection::Seidel(t) => terms.push(*t),
+                WavefrontDirection::FieldAngle(a) if *a < 2 => axes.push(*a),
+                _ => return None,
+            }
+        }
+        if !axes.is_empty() && self.terms.iter().any(|t| t.shift_rate.is_none()) {
+            return None;
+        }
+        // each direction's place in `gradient`: the Seidel lanes, then the field angles', in the
+        // order asked
+        let scatter = |seidel: &[Complex64], field: &[Complex64], gradient: &mut [Complex64]| {
+            let (mut i, mut j) = (0, 0);
+            for (g, d) in gradient.iter_mut().zip(directions) {
+                if matches!(d, WavefrontDirection::Seidel(_)) {
+                    *g = seidel[i];
+                    i += 1;
+                } else {
+                    *g = field[j];
+                    j += 1;
+                }
+            }
+        };
+        let mut seidel = vec![Complex64::new(0.0, 0.0); terms.len()];
+        let mut field = vec![Complex64::new(0.0, 0.0); axes.len()];
         if !self.mirror {
-            return Some(self.compute_with_derivatives(frequency, azimuth, &terms, gradient));
+            let v = self.compute_with_derivatives(frequency, azimuth, &terms, &mut seidel, &axes, &mut field);
+            scatter(&seidel, &field, gradient);
+            return Some(v);
         }
         let key = |phi: f64| (phi.rem_euclid(PI) * 1e9).round() as i64 % (PI * 1e9).round() as i64;
         let tolerance = self.value_tolerance.get().to_bits();
@@ -853,11 +901,17 @@ impl OtfEngine for Overlap<'_> {
         if let Some((v, d)) = cache.get(&(frequency.to_bits(), tolerance, key(PI - azimuth)))
             && d.len() == gradient.len()
         {
-            gradient.iter_mut().zip(d).for_each(|(g, d)| *g = d.conj());
+            for ((g, d), direction) in gradient.iter_mut().zip(d).zip(directions) {
+                *g = match direction {
+                    WavefrontDirection::FieldAngle(1) => -d.conj(),
+                    _ => d.conj(),
+                };
+            }
             return Some(v.conj());
         }
         drop(cache);
-        let v = self.compute_with_derivatives(frequency, azimuth, &terms, gradient);
+        let v = self.compute_with_derivatives(frequency, azimuth, &terms, &mut seidel, &axes, &mut field);
+        scatter(&seidel, &field, gradient);
         let mut cache = self.differentiated.borrow_mut();
         if cache.len() > 1 << 16 {
             cache.clear();

@@ -51,6 +51,9 @@ pub(super) struct Node {
     pub scale: f64,
     /// image displacement on the detector, m
     pub shift: [f64; 2],
+    /// `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian) off axis, where the lens gives it
+    /// (`LensModel::image_shift_field_rates`): the field angles' lanes of the exact engine
+    pub shift_rate: Option<[f64; 2]>,
     /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
     pub table: Option<Arc<OtfTable>>,
     /// the order's radially symmetric pupil ([`Pupil::Radial`]) prepared at this wavelength,
@@ -73,6 +76,7 @@ impl Node {
             w020: crate::fraunhofer::order_defocus(order),
             scale: 1.0,
             shift: order.wavefront.image_shift_m,
+            shift_rate: None,
             table: match &order.pupil {
                 Pupil::Table(t) => Some(t.clone()),
                 _ => None,
@@ -198,10 +202,12 @@ impl Nodes {
     /// Appends the nodes of every order of the scene's lens at `lambda` with rule weight `q`,
     /// marked as of `part` (`scene` is that part's, [`Scene::part`]).
     pub fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64, part: usize) {
-        for order in scene.lens.orders(lambda, scene.field) {
+        let rates = shift_rates(scene, lambda);
+        for (o, order) in scene.lens.orders(lambda, scene.field).into_iter().enumerate() {
             self.needs_grid |= needs_grid(&order, scene.irises.is_some());
             let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises);
             node.part = part;
+            node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
             self.nodes.push(node);
         }
     }
@@ -480,6 +486,12 @@ pub(super) fn panels(scene: &Scene<'_>, lo: f64, hi: f64) -> Nodes {
     out
 }
 
+/// The lens's image shift rates at `lambda` (`LensModel::image_shift_field_rates`), off axis
+/// only: on axis the exact engine's OTF is rotationally symmetric and takes no field lane.
+fn shift_rates(scene: &Scene<'_>, lambda: f64) -> Option<Vec<[f64; 2]>> {
+    if scene.field.is_on_axis() { None } else { scene.lens.image_shift_field_rates(lambda, scene.field) }
+}
+
 /// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for a panel of the reference
 /// rule clipped at the cutoff `cut` (the `(1 − s)^{3/2}` edge of the OTF becomes smooth in `u`).
 pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl FnMut(Node)) {
@@ -491,8 +503,11 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
             return;
         }
         let q = q * 2.0 * len * u * rho;
-        for order in scene.lens.orders(lambda, scene.field) {
-            emit(Node::of(&order, lambda, q * order.efficiency, scene.irises));
+        let rates = shift_rates(scene, lambda);
+        for (o, order) in scene.lens.orders(lambda, scene.field).into_iter().enumerate() {
+            let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises);
+            node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
+            emit(node);
         }
     });
 }
