@@ -31,8 +31,10 @@ use num_complex::Complex64;
 
 use super::spectral::{Nodes, Scene};
 use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
-use crate::fft::sin_cos;
+use crate::fft::{Aberrations, Compiled, noll_to_nm, sin_cos};
 use crate::lens::Pupil;
+use crate::radial::RadialPupil;
+use std::sync::Arc;
 
 /// The Gauss–Legendre levels of the x rule (points), coarsest first.
 const X_LEVELS: [usize; 8] = [6, 8, 12, 16, 24, 32, 48, 64];
@@ -60,6 +62,9 @@ struct Term {
     spherical: f64,
     coma: f64,
     astigmatism: f64,
+    /// the Zernike terms beyond what `defocus` and `spherical` carry (every term with `m ≠ 0`,
+    /// and `m = 0` terms of radial order `n ≥ 6`), m, with the highest radial order among them
+    zernike: Option<(Arc<Compiled>, usize)>,
     /// the node's highest normalized frequency (at the frequency limit), where its x rule is
     /// probed
     s_top: f64,
@@ -67,18 +72,36 @@ struct Term {
 
 impl Term {
     /// `k [W_rest(p₊) − W_rest(p₋)]`, the wavefront difference without the defocus part, with
-    /// `W_rest = W040 r⁴ + W131 r² x + W222 x²` (radians).
+    /// `W_rest = W040 r⁴ + W131 r² x + W222 x² + Σ c_j Z_j` (radians; the Zernike terms
+    /// `defocus` and `spherical` do not carry).
     #[inline]
     fn rest_phase(&self, k: f64, xa: f64, ya: f64, xb: f64, yb: f64) -> f64 {
         let w = |x: f64, y: f64| {
             let r2 = x * x + y * y;
             r2 * (self.spherical * r2 + self.coma * x) + self.astigmatism * x * x
         };
-        k * (w(xa, ya) - w(xb, yb))
+        let mut d = w(xa, ya) - w(xb, yb);
+        if let Some((z, _)) = &self.zernike {
+            d += z.opd_m(xa, ya) - z.opd_m(xb, yb);
+        }
+        k * d
     }
 
     fn has_rest(&self) -> bool {
-        self.spherical != 0.0 || self.coma != 0.0 || self.astigmatism != 0.0
+        self.spherical != 0.0 || self.coma != 0.0 || self.astigmatism != 0.0 || self.zernike.is_some()
+    }
+
+    /// Whether `W(p₊) − W(p₋)` is at most quadratic in x (the wavefront at most cubic: no
+    /// spherical aberration, Zernike terms of radial order ≤ 3), so that the value's x integral
+    /// is in closed form ([`quadratic_phase_integral`]).
+    fn quadratic(&self) -> bool {
+        self.spherical == 0.0 && self.zernike.as_ref().is_none_or(|(_, n)| *n <= 3)
+    }
+
+    /// Whether the wavefront is even in y (no Zernike sine term): with every image shift along
+    /// x the pupil is then symmetric about x.
+    fn even_in_y(&self) -> bool {
+        self.zernike.as_ref().is_none_or(|(z, _)| !z.has_sine_terms())
     }
 }
 
@@ -165,6 +188,43 @@ fn spherical_bessel(b: f64, out: &mut [f64]) {
     }
 }
 
+/// Puts the Zernike terms of `pupil` (the full circle with Zernike terms alone,
+/// [`RadialPupil::is_zernike_only`]) on `term`'s wavefront (docs/physics.md, "Zernike terms on
+/// the overlap engine"). The order's `defocus_m` holds the pupil's best-fit defocus
+/// ([`Order::radial`](crate::Order::radial)), which the pupil's OPD takes off again; of the
+/// `m = 0` terms, `Z4 = √3 (2ρ² − 1)` adds `2√3 c` to the defocus and `Z11 = √5 (6ρ⁴ − 6ρ² + 1)`
+/// adds `6√5 c` to the spherical aberration and `−6√5 c` to the defocus (Noll 1976, Table I;
+/// a piston drops out of `W(p₊) − W(p₋)`), so that the defocus rule takes what is linear in the
+/// lag; every other term stays a polynomial in the pupil coordinates ([`Compiled`], the FFT
+/// path's own evaluation of Noll's polynomials).
+fn add_zernike(term: &mut Term, pupil: &RadialPupil) {
+    term.defocus -= pupil.fitted_defocus_m();
+    let mut rest = Vec::new();
+    let mut degree = 0;
+    for &(j, c) in pupil.zernike_noll_m() {
+        if c == 0.0 {
+            continue;
+        }
+        match noll_to_nm(j) {
+            (0, 0) => {}
+            (2, 0) => term.defocus += 2.0 * 3f64.sqrt() * c,
+            (4, 0) => {
+                let a = 6.0 * 5f64.sqrt() * c;
+                term.spherical += a;
+                term.defocus -= a;
+            }
+            (n, _) => {
+                rest.push((j, c));
+                degree = degree.max(n);
+            }
+        }
+    }
+    if !rest.is_empty() {
+        let compiled = Compiled::new(&Aberrations { zernike_noll_m: rest, ..Aberrations::default() });
+        term.zernike = Some((Arc::new(compiled), degree));
+    }
+}
+
 /// Clenshaw–Curtis weights at `points` (one of [`T_LEVELS`]) on [−1, 1].
 fn cc_weights(points: usize) -> &'static [f64] {
     super::frequency::clenshaw_curtis(points)
@@ -215,11 +275,8 @@ impl<'a> Overlap<'a> {
                 if order.efficiency == 0.0 {
                     continue;
                 }
-                if !matches!(order.pupil, Pupil::Full) {
-                    return None;
-                }
                 let w = order.wavefront;
-                terms.push(Term {
+                let mut term = Term {
                     lambda,
                     weight: weight * order.efficiency,
                     shift: w.image_shift_m,
@@ -227,8 +284,15 @@ impl<'a> Overlap<'a> {
                     spherical: w.spherical_m,
                     coma: w.coma_m,
                     astigmatism: w.astigmatism_m,
+                    zernike: None,
                     s_top: 0.0,
-                });
+                };
+                match &order.pupil {
+                    Pupil::Full => {}
+                    Pupil::Radial(p) if p.is_zernike_only() => add_zernike(&mut term, p),
+                    _ => return None,
+                }
+                terms.push(term);
             }
         }
         let total = nodes.total_weight;
@@ -265,7 +329,7 @@ impl<'a> Overlap<'a> {
             term.s_top = (top * engine.scene.f_number * term.lambda).min(0.999);
         }
         engine.tails = std::cell::RefCell::new(vec![Vec::new(); kept.len()]);
-        engine.mirror = kept.iter().all(|t| t.shift[1] == 0.0);
+        engine.mirror = kept.iter().all(|t| t.shift[1] == 0.0 && t.even_in_y());
         engine.terms = kept;
         Some(engine)
     }
@@ -352,8 +416,9 @@ fn term_otf(term: &Term, x_level: usize, s: f64, c: f64, sn: f64, eps: f64) -> (
     let rule = x_rule(x_level);
     let n = rule.nodes.len();
     let rest = term.has_rest();
-    // without spherical aberration the difference W(p₊) − W(p₋) is quadratic in x
-    let quadratic = term.spherical == 0.0;
+    // without spherical aberration (and Zernike terms of radial order ≥ 4) the difference
+    // W(p₊) − W(p₋) is quadratic in x
+    let quadratic = term.quadratic();
     // the integrand at τ ∈ [−1, 1] (t = T τ): cos t · X · ∫ e^{i a X u} h(u) du
     let integrand = |tau: f64| -> Complex64 {
         let t = big_t * tau;
@@ -573,6 +638,48 @@ impl SeidelTerm {
     }
 }
 
+/// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]) or the Zernike
+/// term of a Noll index per µm RMS (`∂W = 10⁻⁶ Z_j(x, y)`, [`WavefrontDirection::Zernike`]).
+#[derive(Clone, Debug)]
+enum Lane {
+    Seidel(SeidelTerm),
+    Zernike(Compiled),
+}
+
+impl Lane {
+    /// The lane of `direction`, `None` for a direction the overlap engine does not carry (a
+    /// radial profile's lane) or a Noll index out of range.
+    fn of(direction: &WavefrontDirection) -> Option<Lane> {
+        match *direction {
+            WavefrontDirection::Seidel(t) => Some(Lane::Seidel(t)),
+            WavefrontDirection::Zernike(j) if (1..=crate::fft::MAX_NOLL_INDEX).contains(&j) => {
+                Some(Lane::Zernike(Compiled::new(&Aberrations {
+                    zernike_noll_m: vec![(j, 1e-6)],
+                    ..Aberrations::default()
+                })))
+            }
+            _ => None,
+        }
+    }
+
+    /// The wavefront this lane adds per µm at the pupil point `(x, y)`, m.
+    #[inline]
+    fn opd(&self, x: f64, y: f64) -> f64 {
+        match self {
+            Lane::Seidel(t) => t.opd(x, y),
+            Lane::Zernike(z) => z.opd_m(x, y),
+        }
+    }
+
+    /// Whether the lane is even in y (every Seidel term, a Zernike cosine or `m = 0` term).
+    fn even_in_y(&self) -> bool {
+        match self {
+            Lane::Seidel(_) => true,
+            Lane::Zernike(z) => !z.has_sine_terms(),
+        }
+    }
+}
+
 /// The Filon kernel of an x level at `b = a X`: `K_j = Σ_m a[m][j] 2 i^m j_m(b)`, so that
 /// `∫_{−1}^{1} e^{ibu} g(u) du ≈ Σ_j K_j g(u_j)` for `g` interpolated at the level's nodes.
 fn filon_kernel(rule: &XRule, b: f64, kernel: &mut [Complex64]) {
@@ -609,7 +716,7 @@ fn term_otf_and_derivatives(
     c: f64,
     sn: f64,
     eps: f64,
-    terms: &[SeidelTerm],
+    terms: &[Lane],
     out: &mut [Complex64],
 ) -> (Complex64, f64) {
     out.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
@@ -623,7 +730,7 @@ fn term_otf_and_derivatives(
     let rule = x_rule(x_level);
     let n = rule.nodes.len();
     let rest = term.has_rest();
-    let quadratic = term.spherical == 0.0;
+    let quadratic = term.quadratic();
     // the value and the derivatives at τ ∈ [−1, 1], into `row` (1 + lanes values)
     let integrand = |tau: f64, row: &mut [Complex64]| {
         row.iter_mut().for_each(|r| *r = Complex64::new(0.0, 0.0));
@@ -729,7 +836,7 @@ impl Overlap<'_> {
         &self,
         frequency: f64,
         azimuth: f64,
-        terms: &[SeidelTerm],
+        terms: &[Lane],
         out: &mut [Complex64],
     ) -> Complex64 {
         out.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
@@ -827,9 +934,10 @@ impl OtfEngine for Overlap<'_> {
         true
     }
 
-    /// Seidel directions only; a pupil symmetric about x with images shifted along x reads a
-    /// mirrored azimuth's value and derivatives as the conjugates (every Seidel term is even in
-    /// y, so its derivative keeps the symmetry), as [`otf_along`](Self::otf_along) does.
+    /// Seidel and Zernike directions only; a pupil symmetric about x with images shifted along
+    /// x reads a mirrored azimuth's value and derivatives as the conjugates where every
+    /// direction is even in y (the Seidel terms, Zernike cosine and `m = 0` terms: the
+    /// derivative keeps the symmetry), as [`otf_along`](Self::otf_along) does.
     fn otf_along_and_gradient(
         &self,
         frequency: f64,
@@ -837,14 +945,9 @@ impl OtfEngine for Overlap<'_> {
         directions: &[WavefrontDirection],
         gradient: &mut [Complex64],
     ) -> Option<Complex64> {
-        let terms: Vec<SeidelTerm> = directions
-            .iter()
-            .map(|d| match d {
-                WavefrontDirection::Seidel(t) => Some(*t),
-                _ => None,
-            })
-            .collect::<Option<_>>()?;
-        if !self.mirror {
+        let terms: Vec<Lane> = directions.iter().map(Lane::of).collect::<Option<_>>()?;
+        // a lane odd in y breaks the mirror symmetry of the derivative
+        if !self.mirror || !terms.iter().all(Lane::even_in_y) {
             return Some(self.compute_with_derivatives(frequency, azimuth, &terms, gradient));
         }
         let key = |phi: f64| (phi.rem_euclid(PI) * 1e9).round() as i64 % (PI * 1e9).round() as i64;
