@@ -1,5 +1,5 @@
-//! The overlap engine: the OTF of a full circular pupil with a polynomial wavefront (defocus and
-//! the Seidel terms) as a quadrature over the two pupils' overlap, at exactly the frequencies and
+//! The overlap engine: the OTF of a full circular pupil with a polynomial wavefront (defocus,
+//! the Seidel terms and Zernike terms) as a quadrature over the two pupils' overlap, at exactly the frequencies and
 //! azimuths the metric's rules ask for (docs/physics.md, "Analytic 2-D pupils by quadrature over
 //! the overlap").
 //!
@@ -263,8 +263,8 @@ impl std::fmt::Debug for Term {
 
 impl<'a> Overlap<'a> {
     /// The engine for `scene` and its `nodes`, or `None` where some order is not the full circle
-    /// with Seidel terms (an aperture, a map, a radial profile, a table) or its wavefront is too
-    /// strong for the rules' largest levels (the FFT path takes it).
+    /// with Seidel and Zernike terms (an aperture, a map, a radial profile or amplitude, an
+    /// oblique radial pupil, a table): the FFT path takes it.
     pub fn new(scene: Scene<'a>, nodes: Nodes, tolerance: f64) -> Option<Overlap<'a>> {
         let mut terms = Vec::new();
         for &(lambda, weight, part) in &nodes.samples {
