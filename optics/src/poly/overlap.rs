@@ -638,12 +638,36 @@ impl SeidelTerm {
     }
 }
 
+/// The smallest `|α| X²` at which the derivatives take [`quadratic_moments`] (below it the
+/// recurrence divides by a small `α`: the Filon rule takes them). The moments' rounding is
+/// about `1e-16 (1 + |β| X)/(|α| X²)` relative to `X`.
+const MOMENTS_MIN_PHASE: f64 = 1e-2;
+
+/// `[I0, I1, I2]`, `I_m = ∫_{−X}^{X} x^m exp(i(α x² + β x)) dx`: `I0` by
+/// [`quadratic_phase_integral`], and since `d/dx e^{iφ} = i (2αx + β) e^{iφ}`, integration by
+/// parts gives `2α I1 + β I0 = −i [e^{iφ}]` and `2α I2 + β I1 = −i [x e^{iφ}] + i I0` (the
+/// brackets between −X and X).
+fn quadratic_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
+    let i0 = quadratic_phase_integral(alpha, beta, x);
+    let cis = |phase: f64| {
+        let (si, co) = sin_cos(phase);
+        Complex64::new(co, si)
+    };
+    let aa = alpha * x * x;
+    let (up, down) = (cis(aa + beta * x), cis(aa - beta * x));
+    let i = Complex64::new(0.0, 1.0);
+    let i1 = (-i * (up - down) - beta * i0) / (2.0 * alpha);
+    let i2 = (-i * x * (up + down) + i * i0 - beta * i1) / (2.0 * alpha);
+    [i0, i1, i2]
+}
+
 /// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]) or the Zernike
 /// term of a Noll index per µm RMS (`∂W = 10⁻⁶ Z_j(x, y)`, [`WavefrontDirection::Zernike`]).
 #[derive(Clone, Debug)]
 enum Lane {
     Seidel(SeidelTerm),
-    Zernike(Compiled),
+    /// Noll's polynomial per µm and its radial order
+    Zernike(Compiled, usize),
 }
 
 impl Lane {
@@ -653,10 +677,9 @@ impl Lane {
         match *direction {
             WavefrontDirection::Seidel(t) => Some(Lane::Seidel(t)),
             WavefrontDirection::Zernike(j) if (1..=crate::fft::MAX_NOLL_INDEX).contains(&j) => {
-                Some(Lane::Zernike(Compiled::new(&Aberrations {
-                    zernike_noll_m: vec![(j, 1e-6)],
-                    ..Aberrations::default()
-                })))
+                let compiled =
+                    Compiled::new(&Aberrations { zernike_noll_m: vec![(j, 1e-6)], ..Aberrations::default() });
+                Some(Lane::Zernike(compiled, noll_to_nm(j).0))
             }
             _ => None,
         }
@@ -667,7 +690,17 @@ impl Lane {
     fn opd(&self, x: f64, y: f64) -> f64 {
         match self {
             Lane::Seidel(t) => t.opd(x, y),
-            Lane::Zernike(z) => z.opd_m(x, y),
+            Lane::Zernike(z, _) => z.opd_m(x, y),
+        }
+    }
+
+    /// The lane's degree in the pupil coordinates.
+    fn degree(&self) -> usize {
+        match self {
+            Lane::Seidel(SeidelTerm::Spherical) => 4,
+            Lane::Seidel(SeidelTerm::Coma) => 3,
+            Lane::Seidel(_) => 2,
+            Lane::Zernike(_, n) => *n,
         }
     }
 
@@ -675,7 +708,7 @@ impl Lane {
     fn even_in_y(&self) -> bool {
         match self {
             Lane::Seidel(_) => true,
-            Lane::Zernike(z) => !z.has_sine_terms(),
+            Lane::Zernike(z, _) => !z.has_sine_terms(),
         }
     }
 }
@@ -731,6 +764,9 @@ fn term_otf_and_derivatives(
     let n = rule.nodes.len();
     let rest = term.has_rest();
     let quadratic = term.quadratic();
+    // the phase quadratic in x and every lane's factor at most quadratic: the x integrals in
+    // closed form (where the quadratic term is large enough for the moments' recurrence)
+    let moments = quadratic && terms.iter().all(|d| d.degree() <= 3);
     // the value and the derivatives at τ ∈ [−1, 1], into `row` (1 + lanes values)
     let integrand = |tau: f64, row: &mut [Complex64]| {
         row.iter_mut().for_each(|r| *r = Complex64::new(0.0, 0.0));
@@ -745,6 +781,35 @@ fn term_otf_and_derivatives(
             let (xp, xm) = (x + s, x - s);
             (xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c)
         };
+        if moments {
+            // the value's closed form, and each lane's factor g(x) = k [D(p₊) − D(p₋)] (at most
+            // quadratic in x) against the same phase by the moments of `quadratic_moments`
+            let f = |x: f64| {
+                let (xa, ya, xb, yb) = points(x);
+                a * x + term.rest_phase(k, xa, ya, xb, yb)
+            };
+            let (lo, mid, hi) = (f(-x_half), f(0.0), f(x_half));
+            let alpha = (hi + lo - 2.0 * mid) / (2.0 * x_half * x_half);
+            let beta = (hi - lo) / (2.0 * x_half);
+            if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
+                let (si, co) = sin_cos(mid);
+                let front = Complex64::new(co, si) * ct;
+                let [i0, i1, i2] = quadratic_moments(alpha, beta, x_half);
+                row[0] = front * i0;
+                let ((la, lb, lc, ld), (za, zb, zc, zd), (ha, hb, hc, hd)) =
+                    (points(-x_half), points(0.0), points(x_half));
+                for (r, d) in row[1..].iter_mut().zip(terms) {
+                    let g_lo = k * (d.opd(la, lb) - d.opd(lc, ld));
+                    let g_mid = k * (d.opd(za, zb) - d.opd(zc, zd));
+                    let g_hi = k * (d.opd(ha, hb) - d.opd(hc, hd));
+                    let g2 = (g_hi + g_lo - 2.0 * g_mid) / (2.0 * x_half * x_half);
+                    let g1 = (g_hi - g_lo) / (2.0 * x_half);
+                    // i ∫ g e^{iφ}
+                    *r = front * (i0 * g_mid + i1 * g1 + i2 * g2) * Complex64::new(0.0, 1.0);
+                }
+                return;
+            }
+        }
         let mut kernel = [Complex64::new(0.0, 0.0); 64];
         let kernel = &mut kernel[..n];
         filon_kernel(rule, a * x_half, kernel);
