@@ -611,7 +611,7 @@ pub(crate) fn evaluate_field_differentiated(
                 }
                 optics::Engine::Exact1d => "exact-1d".to_owned(),
                 optics::Engine::Overlap { skipped } => format!(
-                    "overlap quadrature: the full pupil's Seidel wavefront integrated over the two pupils' \
+                    "overlap quadrature: the full pupil's polynomial wavefront (Seidel and Zernike terms) integrated over the two pupils' \
                      overlap at each frequency and azimuth (defocus exact across the lag, nested \
                      Clenshaw–Curtis along it); {skipped} lightest spectral nodes left out"
                 ),

@@ -57,10 +57,11 @@ pub enum Parameter {
     /// and the spline's knots). `∂/∂c`, per µm; where `Binary2` applies.
     Zernike(usize),
     /// The Zernike coefficient of Noll index `j` (`lens.zernike_noll_rms_um[j − 1]`, µm RMS) of
-    /// any lens family that takes Zernike terms, where the OTF is computed on the FFT path (a term
-    /// with `m ≠ 0`, or the `m = 0` terms of a pupil made 2-D by such a term or by an oblique
-    /// field): `∂W = 10⁻⁶ Z_j(x, y)` on every order, differentiated by forward mode through the
-    /// FFT (docs/physics.md, "Gradients: 2-D pupils"). `∂/∂c`, per µm. Where the OTF is
+    /// any lens family that takes Zernike terms, where the OTF is 2-D (a term with `m ≠ 0`, or
+    /// the `m = 0` terms of a pupil made 2-D by such a term or by an oblique field): `∂W = 10⁻⁶
+    /// Z_j(x, y)` on every order, differentiated by forward mode on the overlap engine's nodes
+    /// where every order is the full circle with Seidel and Zernike terms (docs/physics.md,
+    /// "Zernike terms on the overlap engine"), else through the FFT ("Gradients: 2-D pupils"). `∂/∂c`, per µm. Where the OTF is
     /// rotationally symmetric on axis (every `m ≠ 0` coefficient zero), a term with `m ≠ 0` has
     /// derivative 0 by symmetry: the term and its negative are one pupil turned by `π/|m|`,
     /// whose mean over azimuth is the same.
@@ -399,7 +400,7 @@ fn point_gradient(
                                     "rotationally symmetric on the 1-D engines (every Seidel term zero): give a Seidel term a \
                                      non-zero value to put it on the overlap engine",
                                 _ =>
-                                    "not on the overlap engine (an iris, Zernike terms, a table, a wavefront too strong for \
+                                    "not on the overlap engine (an iris, a phase profile, a table, a wavefront too strong for \
                                      its rules, a noise spectrum, or other wavefront keys asked with it)",
                             }
                         ),

@@ -555,6 +555,13 @@ impl RadialPupil {
         self.oblique.map_or(0.0, |o| o.opd_m(x, y))
     }
 
+    /// Whether the pupil's field is the uniform full circle with Zernike terms alone (no
+    /// amplitude profile, no profile terms, no oblique incidence, on the lens plane): its
+    /// wavefront is then a polynomial in the pupil coordinates, which the overlap engine takes.
+    pub fn is_zernike_only(&self) -> bool {
+        self.amplitude.is_none() && self.terms.is_empty() && self.oblique.is_none() && self.frequency_scale.is_none()
+    }
+
     /// The Zernike terms `(Noll index, metres RMS)`.
     pub fn zernike_noll_m(&self) -> &[(usize, f64)] {
         &self.zernike_noll_m

@@ -189,6 +189,11 @@ impl Compiled {
         }
     }
 
+    /// Whether some Zernike term is a sine term (odd Noll index, `m ≠ 0`): odd in y.
+    pub(crate) fn has_sine_terms(&self) -> bool {
+        self.zernike.iter().any(|t| t.m < 0)
+    }
+
     /// OPD (m) at `(x, y)` from the lens axis.
     pub(crate) fn opd_m(&self, x: f64, y: f64) -> f64 {
         let r2 = x * x + y * y;

@@ -121,7 +121,8 @@ pub enum Engine {
         /// observed convergence of `N/4`, `N/2` and `N` (composite pupils, `fft::ErrorRule`).
         extrapolated: bool,
     },
-    /// A full circular pupil with Seidel terms beyond defocus, by quadrature over the two
+    /// A full circular pupil with Seidel terms beyond defocus, or Zernike terms (any Noll index;
+    /// a [`Pupil::Radial`](crate::Pupil::Radial) carrying the terms alone), by quadrature over the two
     /// pupils' overlap at each frequency and azimuth the rules read (`overlap` module;
     /// docs/physics.md, "Analytic 2-D pupils by quadrature over the overlap"): the defocus
     /// integrated exactly across the lag, nested Clenshaw–Curtis along it.
@@ -194,8 +195,8 @@ pub struct Settings {
     /// decentring adds (exact; docs/physics.md, "General pupils"); off, it is sampled on the FFT
     /// path, for cross-checks.
     pub exact_irises: bool,
-    /// Whether full circular pupils with Seidel terms beyond defocus are computed by the
-    /// quadrature over the pupils' overlap ([`Engine::Overlap`]) where `pupil_samples` is
+    /// Whether full circular pupils with Seidel terms beyond defocus or Zernike terms are
+    /// computed by the quadrature over the pupils' overlap ([`Engine::Overlap`]) where `pupil_samples` is
     /// `None`; off (or with `pupil_samples` set) they are sampled on the FFT path.
     pub overlap: bool,
 }

@@ -1,5 +1,5 @@
-//! The overlap engine: the OTF of a full circular pupil with a polynomial wavefront (defocus and
-//! the Seidel terms) as a quadrature over the two pupils' overlap, at exactly the frequencies and
+//! The overlap engine: the OTF of a full circular pupil with a polynomial wavefront (defocus,
+//! the Seidel terms and Zernike terms) as a quadrature over the two pupils' overlap, at exactly the frequencies and
 //! azimuths the metric's rules ask for (docs/physics.md, "Analytic 2-D pupils by quadrature over
 //! the overlap").
 //!
@@ -31,8 +31,10 @@ use num_complex::Complex64;
 
 use super::spectral::{Nodes, Scene};
 use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
-use crate::fft::sin_cos;
+use crate::fft::{Aberrations, Compiled, noll_to_nm, sin_cos};
 use crate::lens::Pupil;
+use crate::radial::RadialPupil;
+use std::sync::Arc;
 
 /// The Gauss–Legendre levels of the x rule (points), coarsest first.
 const X_LEVELS: [usize; 8] = [6, 8, 12, 16, 24, 32, 48, 64];
@@ -63,6 +65,9 @@ struct Term {
     spherical: f64,
     coma: f64,
     astigmatism: f64,
+    /// the Zernike terms beyond what `defocus` and `spherical` carry (every term with `m ≠ 0`,
+    /// and `m = 0` terms of radial order `n ≥ 6`), m, with the highest radial order among them
+    zernike: Option<(Arc<Compiled>, usize)>,
     /// the node's highest normalized frequency (at the frequency limit), where its x rule is
     /// probed
     s_top: f64,
@@ -70,18 +75,36 @@ struct Term {
 
 impl Term {
     /// `k [W_rest(p₊) − W_rest(p₋)]`, the wavefront difference without the defocus part, with
-    /// `W_rest = W040 r⁴ + W131 r² x + W222 x²` (radians).
+    /// `W_rest = W040 r⁴ + W131 r² x + W222 x² + Σ c_j Z_j` (radians; the Zernike terms
+    /// `defocus` and `spherical` do not carry).
     #[inline]
     fn rest_phase(&self, k: f64, xa: f64, ya: f64, xb: f64, yb: f64) -> f64 {
         let w = |x: f64, y: f64| {
             let r2 = x * x + y * y;
             r2 * (self.spherical * r2 + self.coma * x) + self.astigmatism * x * x
         };
-        k * (w(xa, ya) - w(xb, yb))
+        let mut d = w(xa, ya) - w(xb, yb);
+        if let Some((z, _)) = &self.zernike {
+            d += z.opd_m(xa, ya) - z.opd_m(xb, yb);
+        }
+        k * d
     }
 
     fn has_rest(&self) -> bool {
-        self.spherical != 0.0 || self.coma != 0.0 || self.astigmatism != 0.0
+        self.spherical != 0.0 || self.coma != 0.0 || self.astigmatism != 0.0 || self.zernike.is_some()
+    }
+
+    /// Whether `W(p₊) − W(p₋)` is at most quadratic in x (the wavefront at most cubic: no
+    /// spherical aberration, Zernike terms of radial order ≤ 3), so that the value's x integral
+    /// is in closed form ([`quadratic_phase_integral`]).
+    fn quadratic(&self) -> bool {
+        self.spherical == 0.0 && self.zernike.as_ref().is_none_or(|(_, n)| *n <= 3)
+    }
+
+    /// Whether the wavefront is even in y (no Zernike sine term): with every image shift along
+    /// x the pupil is then symmetric about x.
+    fn even_in_y(&self) -> bool {
+        self.zernike.as_ref().is_none_or(|(z, _)| !z.has_sine_terms())
     }
 }
 
@@ -168,6 +191,43 @@ fn spherical_bessel(b: f64, out: &mut [f64]) {
     }
 }
 
+/// Puts the Zernike terms of `pupil` (the full circle with Zernike terms alone,
+/// [`RadialPupil::is_zernike_only`]) on `term`'s wavefront (docs/physics.md, "Zernike terms on
+/// the overlap engine"). The order's `defocus_m` holds the pupil's best-fit defocus
+/// ([`Order::radial`](crate::Order::radial)), which the pupil's OPD takes off again; of the
+/// `m = 0` terms, `Z4 = √3 (2ρ² − 1)` adds `2√3 c` to the defocus and `Z11 = √5 (6ρ⁴ − 6ρ² + 1)`
+/// adds `6√5 c` to the spherical aberration and `−6√5 c` to the defocus (Noll 1976, Table I;
+/// a piston drops out of `W(p₊) − W(p₋)`), so that the defocus rule takes what is linear in the
+/// lag; every other term stays a polynomial in the pupil coordinates ([`Compiled`], the FFT
+/// path's own evaluation of Noll's polynomials).
+fn add_zernike(term: &mut Term, pupil: &RadialPupil) {
+    term.defocus -= pupil.fitted_defocus_m();
+    let mut rest = Vec::new();
+    let mut degree = 0;
+    for &(j, c) in pupil.zernike_noll_m() {
+        if c == 0.0 {
+            continue;
+        }
+        match noll_to_nm(j) {
+            (0, 0) => {}
+            (2, 0) => term.defocus += 2.0 * 3f64.sqrt() * c,
+            (4, 0) => {
+                let a = 6.0 * 5f64.sqrt() * c;
+                term.spherical += a;
+                term.defocus -= a;
+            }
+            (n, _) => {
+                rest.push((j, c));
+                degree = degree.max(n);
+            }
+        }
+    }
+    if !rest.is_empty() {
+        let compiled = Compiled::new(&Aberrations { zernike_noll_m: rest, ..Aberrations::default() });
+        term.zernike = Some((Arc::new(compiled), degree));
+    }
+}
+
 /// Clenshaw–Curtis weights at `points` (one of [`T_LEVELS`]) on [−1, 1].
 fn cc_weights(points: usize) -> &'static [f64] {
     super::frequency::clenshaw_curtis(points)
@@ -206,8 +266,8 @@ impl std::fmt::Debug for Term {
 
 impl<'a> Overlap<'a> {
     /// The engine for `scene` and its `nodes`, or `None` where some order is not the full circle
-    /// with Seidel terms (an aperture, a map, a radial profile, a table) or its wavefront is too
-    /// strong for the rules' largest levels (the FFT path takes it).
+    /// with Seidel and Zernike terms (an aperture, a map, a radial profile or amplitude, an
+    /// oblique radial pupil, a table): the FFT path takes it.
     pub fn new(scene: Scene<'a>, nodes: Nodes, tolerance: f64) -> Option<Overlap<'a>> {
         let mut terms = Vec::new();
         for &(lambda, weight, part) in &nodes.samples {
@@ -220,11 +280,8 @@ impl<'a> Overlap<'a> {
                 if order.efficiency == 0.0 {
                     continue;
                 }
-                if !matches!(order.pupil, Pupil::Full) {
-                    return None;
-                }
                 let w = order.wavefront;
-                terms.push(Term {
+                let mut term = Term {
                     lambda,
                     weight: weight * order.efficiency,
                     shift: w.image_shift_m,
@@ -233,8 +290,15 @@ impl<'a> Overlap<'a> {
                     spherical: w.spherical_m,
                     coma: w.coma_m,
                     astigmatism: w.astigmatism_m,
+                    zernike: None,
                     s_top: 0.0,
-                });
+                };
+                match &order.pupil {
+                    Pupil::Full => {}
+                    Pupil::Radial(p) if p.is_zernike_only() => add_zernike(&mut term, p),
+                    _ => return None,
+                }
+                terms.push(term);
             }
         }
         let total = nodes.total_weight;
@@ -271,7 +335,7 @@ impl<'a> Overlap<'a> {
             term.s_top = (top * engine.scene.f_number * term.lambda).min(0.999);
         }
         engine.tails = std::cell::RefCell::new(vec![Vec::new(); kept.len()]);
-        engine.mirror = kept.iter().all(|t| t.shift[1] == 0.0);
+        engine.mirror = kept.iter().all(|t| t.shift[1] == 0.0 && t.even_in_y());
         engine.terms = kept;
         Some(engine)
     }
@@ -358,8 +422,9 @@ fn term_otf(term: &Term, x_level: usize, s: f64, c: f64, sn: f64, eps: f64) -> (
     let rule = x_rule(x_level);
     let n = rule.nodes.len();
     let rest = term.has_rest();
-    // without spherical aberration the difference W(p₊) − W(p₋) is quadratic in x
-    let quadratic = term.spherical == 0.0;
+    // without spherical aberration (and Zernike terms of radial order ≥ 4) the difference
+    // W(p₊) − W(p₋) is quadratic in x
+    let quadratic = term.quadratic();
     // the integrand at τ ∈ [−1, 1] (t = T τ): cos t · X · ∫ e^{i a X u} h(u) du
     let integrand = |tau: f64| -> Complex64 {
         let t = big_t * tau;
@@ -579,6 +644,81 @@ impl SeidelTerm {
     }
 }
 
+/// The smallest `|α| X²` at which the derivatives take [`quadratic_moments`] (below it the
+/// recurrence divides by a small `α`: the Filon rule takes them). The moments' rounding is
+/// about `1e-16 (1 + |β| X)/(|α| X²)` relative to `X`.
+const MOMENTS_MIN_PHASE: f64 = 1e-2;
+
+/// `[I0, I1, I2]`, `I_m = ∫_{−X}^{X} x^m exp(i(α x² + β x)) dx`: `I0` by
+/// [`quadratic_phase_integral`], and since `d/dx e^{iφ} = i (2αx + β) e^{iφ}`, integration by
+/// parts gives `2α I1 + β I0 = −i [e^{iφ}]` and `2α I2 + β I1 = −i [x e^{iφ}] + i I0` (the
+/// brackets between −X and X).
+fn quadratic_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
+    let i0 = quadratic_phase_integral(alpha, beta, x);
+    let cis = |phase: f64| {
+        let (si, co) = sin_cos(phase);
+        Complex64::new(co, si)
+    };
+    let aa = alpha * x * x;
+    let (up, down) = (cis(aa + beta * x), cis(aa - beta * x));
+    let i = Complex64::new(0.0, 1.0);
+    let i1 = (-i * (up - down) - beta * i0) / (2.0 * alpha);
+    let i2 = (-i * x * (up + down) + i * i0 - beta * i1) / (2.0 * alpha);
+    [i0, i1, i2]
+}
+
+/// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]) or the Zernike
+/// term of a Noll index per µm RMS (`∂W = 10⁻⁶ Z_j(x, y)`, [`WavefrontDirection::Zernike`]).
+#[derive(Clone, Debug)]
+enum Lane {
+    Seidel(SeidelTerm),
+    /// Noll's polynomial per µm and its radial order
+    Zernike(Compiled, usize),
+}
+
+impl Lane {
+    /// The lane of `direction`, `None` for a direction the overlap engine does not carry (a
+    /// radial profile's lane) or a Noll index out of range.
+    fn of(direction: &WavefrontDirection) -> Option<Lane> {
+        match *direction {
+            WavefrontDirection::Seidel(t) => Some(Lane::Seidel(t)),
+            WavefrontDirection::Zernike(j) if (1..=crate::fft::MAX_NOLL_INDEX).contains(&j) => {
+                let compiled =
+                    Compiled::new(&Aberrations { zernike_noll_m: vec![(j, 1e-6)], ..Aberrations::default() });
+                Some(Lane::Zernike(compiled, noll_to_nm(j).0))
+            }
+            _ => None,
+        }
+    }
+
+    /// The wavefront this lane adds per µm at the pupil point `(x, y)`, m.
+    #[inline]
+    fn opd(&self, x: f64, y: f64) -> f64 {
+        match self {
+            Lane::Seidel(t) => t.opd(x, y),
+            Lane::Zernike(z, _) => z.opd_m(x, y),
+        }
+    }
+
+    /// The lane's degree in the pupil coordinates.
+    fn degree(&self) -> usize {
+        match self {
+            Lane::Seidel(SeidelTerm::Spherical) => 4,
+            Lane::Seidel(SeidelTerm::Coma) => 3,
+            Lane::Seidel(_) => 2,
+            Lane::Zernike(_, n) => *n,
+        }
+    }
+
+    /// Whether the lane is even in y (every Seidel term, a Zernike cosine or `m = 0` term).
+    fn even_in_y(&self) -> bool {
+        match self {
+            Lane::Seidel(_) => true,
+            Lane::Zernike(z, _) => !z.has_sine_terms(),
+        }
+    }
+}
+
 /// The Filon kernel of an x level at `b = a X`: `K_j = Σ_m a[m][j] 2 i^m j_m(b)`, so that
 /// `∫_{−1}^{1} e^{ibu} g(u) du ≈ Σ_j K_j g(u_j)` for `g` interpolated at the level's nodes.
 fn filon_kernel(rule: &XRule, b: f64, kernel: &mut [Complex64]) {
@@ -615,7 +755,7 @@ fn term_otf_and_derivatives(
     c: f64,
     sn: f64,
     eps: f64,
-    terms: &[SeidelTerm],
+    terms: &[Lane],
     out: &mut [Complex64],
 ) -> (Complex64, f64) {
     out.iter_mut().for_each(|o| *o = Complex64::new(0.0, 0.0));
@@ -629,7 +769,10 @@ fn term_otf_and_derivatives(
     let rule = x_rule(x_level);
     let n = rule.nodes.len();
     let rest = term.has_rest();
-    let quadratic = term.spherical == 0.0;
+    let quadratic = term.quadratic();
+    // the phase quadratic in x and every lane's factor at most quadratic: the x integrals in
+    // closed form (where the quadratic term is large enough for the moments' recurrence)
+    let moments = quadratic && terms.iter().all(|d| d.degree() <= 3);
     // the value and the derivatives at τ ∈ [−1, 1], into `row` (1 + lanes values)
     let integrand = |tau: f64, row: &mut [Complex64]| {
         row.iter_mut().for_each(|r| *r = Complex64::new(0.0, 0.0));
@@ -644,6 +787,35 @@ fn term_otf_and_derivatives(
             let (xp, xm) = (x + s, x - s);
             (xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c)
         };
+        if moments {
+            // the value's closed form, and each lane's factor g(x) = k [D(p₊) − D(p₋)] (at most
+            // quadratic in x) against the same phase by the moments of `quadratic_moments`
+            let f = |x: f64| {
+                let (xa, ya, xb, yb) = points(x);
+                a * x + term.rest_phase(k, xa, ya, xb, yb)
+            };
+            let (lo, mid, hi) = (f(-x_half), f(0.0), f(x_half));
+            let alpha = (hi + lo - 2.0 * mid) / (2.0 * x_half * x_half);
+            let beta = (hi - lo) / (2.0 * x_half);
+            if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
+                let (si, co) = sin_cos(mid);
+                let front = Complex64::new(co, si) * ct;
+                let [i0, i1, i2] = quadratic_moments(alpha, beta, x_half);
+                row[0] = front * i0;
+                let ((la, lb, lc, ld), (za, zb, zc, zd), (ha, hb, hc, hd)) =
+                    (points(-x_half), points(0.0), points(x_half));
+                for (r, d) in row[1..].iter_mut().zip(terms) {
+                    let g_lo = k * (d.opd(la, lb) - d.opd(lc, ld));
+                    let g_mid = k * (d.opd(za, zb) - d.opd(zc, zd));
+                    let g_hi = k * (d.opd(ha, hb) - d.opd(hc, hd));
+                    let g2 = (g_hi + g_lo - 2.0 * g_mid) / (2.0 * x_half * x_half);
+                    let g1 = (g_hi - g_lo) / (2.0 * x_half);
+                    // i ∫ g e^{iφ}
+                    *r = front * (i0 * g_mid + i1 * g1 + i2 * g2) * Complex64::new(0.0, 1.0);
+                }
+                return;
+            }
+        }
         let mut kernel = [Complex64::new(0.0, 0.0); 64];
         let kernel = &mut kernel[..n];
         filon_kernel(rule, a * x_half, kernel);
@@ -740,7 +912,7 @@ impl Overlap<'_> {
         &self,
         frequency: f64,
         azimuth: f64,
-        terms: &[SeidelTerm],
+        terms: &[Lane],
         out: &mut [Complex64],
         axes: &[usize],
         out_field: &mut [Complex64],
@@ -849,11 +1021,12 @@ impl OtfEngine for Overlap<'_> {
         true
     }
 
-    /// Seidel directions and the field angles (where every node has its image shift's rates);
-    /// a pupil symmetric about x with images shifted along x reads a mirrored azimuth's value
-    /// and derivatives as the conjugates (every Seidel term is even in y, so its derivative keeps
-    /// the symmetry; so does the x field angle's, `u_x` changing sign with the conjugate's
-    /// phase), the y field angle's as the conjugates' negatives (`u_y` keeps its sign), as
+    /// Seidel and Zernike directions and the field angles (where every node has its image
+    /// shift's rates); a pupil symmetric about x with images shifted along x reads a mirrored
+    /// azimuth's value and derivatives as the conjugates where every wavefront direction is even
+    /// in y (the Seidel terms, Zernike cosine and `m = 0` terms: the derivative keeps the
+    /// symmetry; so does the x field angle's, `u_x` changing sign with the conjugate's phase),
+    /// the y field angle's as the conjugates' negatives (`u_y` keeps its sign), as
     /// [`otf_along`](Self::otf_along) does.
     fn otf_along_and_gradient(
         &self,
@@ -862,35 +1035,35 @@ impl OtfEngine for Overlap<'_> {
         directions: &[WavefrontDirection],
         gradient: &mut [Complex64],
     ) -> Option<Complex64> {
-        let mut terms = Vec::new();
+        let mut terms: Vec<Lane> = Vec::new();
         let mut axes = Vec::new();
         for d in directions {
             match d {
-                WavefrontDirection::Seidel(t) => terms.push(*t),
                 WavefrontDirection::FieldAngle(a) if *a < 2 => axes.push(*a),
-                _ => return None,
+                _ => terms.push(Lane::of(d)?),
             }
         }
         if !axes.is_empty() && self.terms.iter().any(|t| t.shift_rate.is_none()) {
             return None;
         }
-        // each direction's place in `gradient`: the Seidel lanes, then the field angles', in the
-        // order asked
-        let scatter = |seidel: &[Complex64], field: &[Complex64], gradient: &mut [Complex64]| {
+        // each direction's place in `gradient`: the wavefront lanes, then the field angles', in
+        // the order asked
+        let scatter = |lanes: &[Complex64], field: &[Complex64], gradient: &mut [Complex64]| {
             let (mut i, mut j) = (0, 0);
             for (g, d) in gradient.iter_mut().zip(directions) {
-                if matches!(d, WavefrontDirection::Seidel(_)) {
-                    *g = seidel[i];
-                    i += 1;
-                } else {
+                if matches!(d, WavefrontDirection::FieldAngle(_)) {
                     *g = field[j];
                     j += 1;
+                } else {
+                    *g = lanes[i];
+                    i += 1;
                 }
             }
         };
         let mut seidel = vec![Complex64::new(0.0, 0.0); terms.len()];
         let mut field = vec![Complex64::new(0.0, 0.0); axes.len()];
-        if !self.mirror {
+        // a lane odd in y breaks the mirror symmetry of the derivative
+        if !self.mirror || !terms.iter().all(Lane::even_in_y) {
             let v = self.compute_with_derivatives(frequency, azimuth, &terms, &mut seidel, &axes, &mut field);
             scatter(&seidel, &field, gradient);
             return Some(v);

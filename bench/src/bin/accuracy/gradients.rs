@@ -84,17 +84,23 @@ fn measure(root: &Path, k: usize, repeats: usize) -> Option<Row> {
 }
 
 /// The 2-D row: the paper's lens (`examples/paper-theory.toml`, its Gaussian 50 nm band) with
-/// 0.05 µm RMS of each of Zernike Noll 5–8 (astigmatism and coma: the FFT path), at the FFT
-/// tolerance `tolerance`; the value against the value and its gradient over the four terms
-/// (forward mode through the FFT, docs/physics.md "Gradients: 2-D pupils"). `(tolerance, row)`.
-fn measure_2d(root: &Path, tolerance: f64, repeats: usize) -> Option<Row> {
+/// 0.05 µm RMS of each of Zernike Noll 5–8 (astigmatism and coma), at the tolerance
+/// `tolerance`; the value against the value and its gradient over the four terms. With
+/// `overlap` the overlap engine takes it (forward mode on its nodes, docs/physics.md "Zernike
+/// terms on the overlap engine"); without, the FFT path (`options.overlap` off, as for a map or
+/// a layout, which keep it: forward mode through the FFT, "Gradients: 2-D pupils").
+fn measure_2d(root: &Path, tolerance: f64, overlap: bool, repeats: usize) -> Option<Row> {
     let source = scene::read(Some(&root.join("examples/paper-theory.toml"))).ok()?;
     let overrides = vec![
         "lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.05, 0.05, 0.05, 0.05]".to_owned(),
         format!("options.tolerance={tolerance:e}"),
     ];
     let parameters: Vec<Parameter> = (5..=8).map(Parameter::ZernikeNoll).collect();
-    side_by_side(&source, &overrides, &parameters, repeats)
+    let engine = move |built: metric::Scene| {
+        let options = metric::Options { overlap, ..built.options().clone() };
+        built.with_options(options).unwrap()
+    };
+    side_by_side_with(&source, &overrides, &parameters, repeats, &engine)
 }
 
 /// The aperture row: the Binary 2 metalens of `examples/phase-binary2.toml` (its four
@@ -205,25 +211,41 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
             status(&r)
         ));
     }
-    let rows_2d: Vec<(f64, Row)> = [1e-3, 1e-4]
+    let rows_2d: Vec<(&str, f64, Row)> = [(true, 1e-3), (true, 1e-4), (true, 1e-6), (false, 1e-3), (false, 1e-4)]
         .iter()
-        .filter_map(|&t| measure_2d(&tools.root, t, if t < 1e-3 { 5 } else { repeats }).map(|r| (t, r)))
+        .filter_map(|&(overlap, t)| {
+            let runs = if overlap || t >= 1e-3 { repeats } else { 5 };
+            let engine = if overlap { "overlap" } else { "FFT" };
+            measure_2d(&tools.root, t, overlap, runs).map(|r| (engine, t, r))
+        })
         .collect();
     if !rows_2d.is_empty() {
         md.push_str(
-            "\nA 2-D pupil on the FFT path: the paper's lens (examples/paper-theory.toml, its 50 nm band) with 0.05 µm \
-             RMS of each of Zernike Noll 5–8 (astigmatism and coma), the gradient over the four terms by forward mode \
-             through the FFT (docs/physics.md, \"Gradients: 2-D pupils\"): the value's grids are built again at the two \
-             levels the value extrapolates (N/2 and N), each with one more forward and inverse transform per term, \
-             and read at the value's frequencies and azimuths. The same timing as above (5 runs at 1e-4).\n\n",
+            "\nA 2-D pupil: the paper's lens (examples/paper-theory.toml, its 50 nm band) with 0.05 µm RMS of each of \
+             Zernike Noll 5–8 (astigmatism and coma), the gradient over the four terms. On the overlap engine (the \
+             default for Zernike terms on the full circle) by forward mode on the value's nodes (docs/physics.md, \
+             \"Zernike terms on the overlap engine\"); on the FFT path (`options.overlap` off, the path a map or a \
+             layout keeps) by forward mode through the FFT (\"Gradients: 2-D pupils\"): the value's grids are built \
+             again at the two levels the value extrapolates (N/2 and N), each with one more forward and inverse \
+             transform per term, and read at the value's frequencies and azimuths. The same timing as above (5 runs \
+             for the FFT path at 1e-4).\n\n",
         );
         md.push_str(
-            "| tolerance | ASNR | ‖∂ASNR/∂c‖ (per µm) | value, median (fastest) | value and gradient, median (fastest) | \
-             ratio of medians | ratio of fastest |\n|---|---|---|---|---|---|---|\n",
+            "| engine | tolerance | ASNR | ‖∂ASNR/∂c‖ (per µm) | value, median (fastest) | value and gradient, median \
+             (fastest) | ratio of medians | ratio of fastest |\n|---|---|---|---|---|---|---|---|\n",
         );
-        for (t, r) in &rows_2d {
-            md.push_str(&format!("| {t:e} {}\n", r.cells(1)));
+        for (engine, t, r) in &rows_2d {
+            md.push_str(&format!("| {engine} | {t:e} {}\n", r.cells(1)));
         }
+        let overlap: Vec<String> = rows_2d
+            .iter()
+            .filter(|(e, _, _)| *e == "overlap")
+            .map(|(_, t, r)| format!("{t:e}: {}", status(r)))
+            .collect();
+        md.push_str(&format!(
+            "\nTarget (the Zernike gradient on the overlap engine at most 3× one evaluation): {}.\n",
+            overlap.join("; ")
+        ));
     }
     md.extend(crate::gradients_aperture::markdown(tools));
     if let Some((value, radial)) = radial(repeats) {
@@ -251,16 +273,28 @@ pub(crate) fn side_by_side(
     parameters: &[Parameter],
     repeats: usize,
 ) -> Option<Row> {
-    let built = scene::build_from(source, overrides).ok()?;
+    side_by_side_with(source, overrides, parameters, repeats, &|built| built)
+}
+
+/// [`side_by_side`] with `adjust` applied to each scene built (an option the scene file does
+/// not spell, such as the engine), inside each timing.
+fn side_by_side_with(
+    source: &scene::Source,
+    overrides: &[String],
+    parameters: &[Parameter],
+    repeats: usize,
+    adjust: &dyn Fn(metric::Scene) -> metric::Scene,
+) -> Option<Row> {
+    let built = adjust(scene::build_from(source, overrides).ok()?);
     let first = metric::gradient(&built, parameters).ok()?;
     let (mut values, mut boths) = (Vec::with_capacity(repeats), Vec::with_capacity(repeats));
     for _ in 0..repeats {
         values.push(seconds(&mut || {
-            let built = scene::build_from(source, overrides).unwrap();
+            let built = adjust(scene::build_from(source, overrides).unwrap());
             std::hint::black_box(metric::evaluate(&built).unwrap());
         }));
         boths.push(seconds(&mut || {
-            let built = scene::build_from(source, overrides).unwrap();
+            let built = adjust(scene::build_from(source, overrides).unwrap());
             std::hint::black_box(metric::gradient(&built, parameters).unwrap());
         }));
     }
