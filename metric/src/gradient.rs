@@ -723,7 +723,7 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         (o[0], pix * dc, pix * ds)
     };
     let integrate = |panels: usize| -> (f64, f64) {
-        let ends = sign_change_ends(nyquist, panels, |nu| engines[0].otf(nu));
+        let ends = sign_change_ends(nyquist, panels, |nu| engines[0].otf(nu), |hi| 1e-15 * hi);
         let (mut dc, mut ds) = (0.0, 0.0);
         for w in ends.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -824,7 +824,7 @@ fn top_hat_partials(
     }
     // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
     let integrate = |panels: usize| -> [f64; 2] {
-        let ends = sign_change_ends(nyquist, panels, |nu| whole.otf(nu));
+        let ends = sign_change_ends(nyquist, panels, |nu| whole.otf(nu), |hi| 1e-15 * hi);
         let mut sums = [0.0; 2];
         for w in ends.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -928,6 +928,19 @@ fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f
     let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     let d_k = found.defocus;
     Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * d_k, d_k)))
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of a lens whose every order is the full circular pupil with a
+/// defocus alone ([`aperture_partials`]): with `reference`, by the slow reference rule (its own
+/// Gauss–Legendre panels in λ and ν, split at the sign changes of `O`); else on the value's own
+/// rule, `None` where the value's engine has no defocus lane. For the tests that hold the one
+/// against the other.
+pub fn aperture_mean_mtf_partials(scene: &Scene, e: &Evaluation, reference: bool) -> Result<Option<(f64, f64)>, Error> {
+    if reference {
+        aperture_partials_by_own_rule(scene, e, Parameter::FNumber).map(Some)
+    } else {
+        defocus_on_value_rule(scene, e)
+    }
 }
 
 /// [`aperture_partials`] on this function's own Gauss–Legendre rules in λ and ν (described
@@ -1044,27 +1057,8 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
         (o / total, d / total)
     };
     let integrate = |nodes: &[Node], panels: usize| -> f64 {
-        let mut cuts = vec![0.0];
-        let h = nyquist / panels as f64;
-        let mut previous = (0.0, 1.0);
-        for i in 1..=panels {
-            let nu = if i == panels { nyquist } else { i as f64 * h };
-            let here = value(nodes, nu);
-            if here * previous.1 < 0.0 {
-                let (mut a, mut b, f_a) = (previous.0, nu, previous.1);
-                while b - a > 1e-13 * nyquist {
-                    let m = 0.5 * (a + b);
-                    if value(nodes, m) * f_a > 0.0 {
-                        a = m;
-                    } else {
-                        b = m;
-                    }
-                }
-                cuts.push(0.5 * (a + b));
-            }
-            cuts.push(nu);
-            previous = (nu, here);
-        }
+        // the zeros to 1e-13 of ν_N: this rule's own (coarser than the value's 1e-15 of ν)
+        let cuts = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), |_| 1e-13 * nyquist);
         let mut sum = 0.0;
         for w in cuts.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -1111,9 +1105,11 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
 }
 
 /// The ends of `panels` equal panels over `[0, nyquist]` with the sign changes of `otf` between
-/// them added (each found by bisection to 1e-15 of its frequency), so that a Gauss rule on each
-/// piece meets the kink of |O| at a zero only at its ends.
-fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64) -> Vec<f64> {
+/// them added (each found by bisection until the bracket `[lo, hi]` is at most `width(hi)` wide:
+/// 1e-15 of its frequency for the spectral keys' rules, 1e-13 of `nyquist` for the F-number's
+/// reference rule), so that a Gauss rule on each piece meets the kink of |O| at a zero only at
+/// its ends.
+fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64, width: impl Fn(f64) -> f64) -> Vec<f64> {
     let mut ends = vec![0.0];
     let h = nyquist / panels as f64;
     let mut previous = (0.0, 1.0);
@@ -1122,7 +1118,7 @@ fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64) -> Ve
         let value = otf(nu);
         if value * previous.1 < 0.0 {
             let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
-            while hi - lo > 1e-15 * hi {
+            while hi - lo > width(hi) {
                 let m = 0.5 * (lo + hi);
                 if otf(m) * f_lo > 0.0 {
                     lo = m;

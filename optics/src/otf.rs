@@ -420,7 +420,8 @@ pub fn defocus_otf_many_and_log_derivative_within(
             continue;
         }
         if a.abs() * (1.0 - s) >= ASYMPTOTIC_MIN_PHASE
-            && let Some((value, derivative)) = defocus_otf_asymptotic_and_log_derivative(s, a, 0.5 * accuracy.max(1e-16))
+            && let Some((value, derivative)) =
+                defocus_otf_asymptotic_and_log_derivative(s, a, 0.5 * accuracy.max(1e-16))
         {
             out[i] = value;
             lane[i] = derivative;
@@ -501,7 +502,11 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
 /// out are those of the value (its start): the lane's terms are the value's times factors of
 /// about `m/a`, near 1 where the series ends.
 #[inline(always)]
-fn bessel_lanes_with<const L: usize, const LANE: bool>(s: [f64; L], a: [f64; L], accuracy: f64) -> ([f64; L], [f64; L]) {
+fn bessel_lanes_with<const L: usize, const LANE: bool>(
+    s: [f64; L],
+    a: [f64; L],
+    accuracy: f64,
+) -> ([f64; L], [f64; L]) {
     let x = a.map(f64::abs);
     // the start grows with |a|: the largest lane's
     let start = series_start(x.iter().copied().fold(0.0, f64::max), accuracy);
@@ -962,7 +967,9 @@ mod tests {
     fn bessel_lane_matches_differences_of_the_series() {
         for i in 1..20 {
             let s = i as f64 / 20.0;
-            for &phase in &[1.01e-8, 1e-6, 1e-3, 0.5, 0.999, 1.0, 1.001, 5.0, 17.99, 18.0, 18.01, 23.9, 24.1, 30.0, 200.0, 3000.0] {
+            for &phase in
+                &[1.01e-8, 1e-6, 1e-3, 0.5, 0.999, 1.0, 1.001, 5.0, 17.99, 18.0, 18.01, 23.9, 24.1, 30.0, 200.0, 3000.0]
+            {
                 for &sign in &[1.0, -1.0] {
                     let a = sign * phase / (1.0 - s);
                     let (value, lane) = bessel_lanes_with::<1, true>([s], [a], 0.0);

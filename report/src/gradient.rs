@@ -734,8 +734,7 @@ mod tests {
     const APERTURE_STEP: f64 = 3e-5;
 
     /// The paper's chromatic lens (the closed form) in both forms, with read noise and the stray
-    /// light (N_T ∝ 1/F#² too), and under a line; the refractive singlet and the harmonic lens
-    /// (several orders, each its own defocus ∝ f0/F#²).
+    /// light (N_T ∝ 1/F#² too), and under a line.
     #[test]
     fn f_number_and_focal_length_match_central_differences() {
         let paper = scene::read(None).unwrap();
@@ -745,17 +744,6 @@ mod tests {
             &owned(&["options.form=\"integral\"", "camera.read_noise_e=2", "options.glare=\"included\""]),
         );
         check_aperture(&paper, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]));
-        let singlet: Vec<&str> =
-            paper.text().lines().filter(|l| !(l.starts_with("efficiency") || l.starts_with("transmission"))).collect();
-        let refractive = Source::from_text(
-            singlet
-                .join("\n")
-                .replace("model = \"chromatic\"", "model = \"refractive\"\nglass = \"N-BK7\"\nelements = 1"),
-            "refractive singlet written in the test",
-            ".",
-        );
-        check_aperture(&refractive, &owned(&["spectrum.range_nm=100"]));
-        check_aperture(&example("harmonic.toml"), &[]);
         // the pixel MTF inside the integral: its term ∫ν P′|O| dν of the integration by parts,
         // on the closed form and on a line (the value's own rules)
         check_aperture(&paper, &owned(&["camera.pixel_mtf=true"]));
@@ -768,16 +756,39 @@ mod tests {
                 "spectrum.range_nm=1",
             ]),
         );
-        // where the engine has no defocus lane (the harmonic lens's per-frequency rule) the
-        // pixel MTF is refused, naming the quantity and why
-        let e = gradient(&example("harmonic.toml"), &owned(&["camera.pixel_mtf=true"]), &owned(&["lens.f_number"]))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("F-number") && e.contains("camera.pixel_mtf"), "{e}");
         // an iris (not the full pupil) is refused by the engine's check
         let e =
             gradient(&example("decentred-iris.toml"), &[], &owned(&["lens.focal_length_mm"])).unwrap_err().to_string();
         assert!(e.contains("focal length") && e.contains("full circular pupil"), "{e}");
+    }
+
+    /// The paper's scene with its lens made an N-BK7 singlet (written here).
+    fn refractive_singlet() -> Source {
+        let paper = scene::read(None).unwrap();
+        let singlet: Vec<&str> =
+            paper.text().lines().filter(|l| !(l.starts_with("efficiency") || l.starts_with("transmission"))).collect();
+        Source::from_text(
+            singlet
+                .join("\n")
+                .replace("model = \"chromatic\"", "model = \"refractive\"\nglass = \"N-BK7\"\nelements = 1"),
+            "refractive singlet written in the test",
+            ".",
+        )
+    }
+
+    /// The refractive singlet at a 100 nm band and the harmonic lens (several orders, each its own
+    /// defocus ∝ f0/F#²) on the per-frequency product rule's defocus lane (docs/physics.md,
+    /// "Gradients: the F-number and the focal length on the value's rule"), as
+    /// [`f_number_and_focal_length_match_central_differences`], and with the pixel MTF (its term
+    /// ∫ν P′|O| dν of the integration by parts on the same accepted nodes).
+    #[test]
+    fn f_number_and_focal_length_of_the_refractive_and_harmonic_lenses_match_central_differences() {
+        let refractive = refractive_singlet();
+        check_aperture(&refractive, &owned(&["spectrum.range_nm=100"]));
+        check_aperture(&refractive, &owned(&["spectrum.range_nm=100", "camera.pixel_mtf=true"]));
+        let harmonic = example("harmonic.toml");
+        check_aperture(&harmonic, &[]);
+        check_aperture(&harmonic, &owned(&["camera.pixel_mtf=true"]));
     }
 
     /// The hyperbolic phase −(2π/λ0)(√(r² + f0²) − f0) of the example's aperture (F/2.5,
