@@ -875,8 +875,10 @@ fn top_hat_partials(
 /// value's: on the paper's lens about 1 s in a debug build, 13 s for the harmonic lens's six
 /// orders (`asnr gradient examples/harmonic.toml --wrt lens.f_number`).
 ///
-/// Where the value's own engine gives `∂O/∂ln K` beside each OTF value (the closed form, a line:
-/// [`defocus_on_value_rule`]), `D_K` rides on the value's rules instead, and the pixel MTF is
+/// Where the value's own engine gives `∂O/∂ln K` beside each OTF value (the closed form, a line,
+/// the per-frequency product rule of the refractive and harmonic lenses and of the chromatic lens
+/// under other spectra: [`defocus_on_value_rule`]), `D_K` rides on the value's rules instead, and
+/// the pixel MTF is
 /// followed (its term of the integration by parts); this function's own rule stays as the
 /// reference ([`aperture_partials_by_own_rule`]).
 fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
@@ -890,13 +892,13 @@ fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` ([`aperture_partials`]) on the value's own rules: the mean computed
 /// again with `∂O/∂ln K` beside each OTF value ([`optics::Polychromatic::mean_mtf_and_defocus_derivative`]:
-/// the closed form's lane on its rule in `t`, a line's orders; the frequency rule's accepted
-/// weights, the pixel MTF `P` included), so that
+/// the closed form's lane on its rule in `t`, a line's orders, the per-frequency product rule's
+/// `w ∂H/∂w` of its Bessel and asymptotic forms on the level each panel accepts; the frequency
+/// rule's accepted weights, the pixel MTF `P` included), so that
 /// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν − 2 D_K` and `∂M̄/∂ln f0 = D_K`
 /// (docs/physics.md, "Gradients: the F-number and the focal length on the value's rule").
-/// `None` where the engine has no such lane (the per-frequency product rule of the refractive
-/// and harmonic lenses, the FFT path) or an order is not the full circular pupil with a defocus
-/// alone.
+/// `None` where the engine has no such lane (the reference panels rule, the FFT path) or an order
+/// is not the full circular pupil with a defocus alone.
 fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
     let field = scene.field();
@@ -952,9 +954,9 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
     if camera.pixel_mtf() {
         return Err(not_smooth(
             "with camera.pixel_mtf = true the F-number and focal-length gradient is computed only where the \
-             value's engine carries the defocus derivative (the chromatic lens under a Gaussian × polynomial \
-             spectrum: the closed form; or a line), not on this lens's per-frequency spectral rule yet \
-             (set camera.pixel_mtf = false)"
+             value's engine carries the defocus derivative beside each OTF value (the closed form, a line, the \
+             per-frequency product rule), not on the reference panels rule this scene takes (a wavelength's \
+             cutoff inside the frequency band, or options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
                 .to_owned(),
         ));
     }
