@@ -933,7 +933,7 @@ fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of a lens whose every order is the full circular pupil with a
-/// defocus alone ([`aperture_partials`]): with `reference`, by the slow reference rule (its own
+/// defocus alone (docs/physics.md, "Gradients"): with `reference`, by the slow reference rule (its own
 /// Gauss–Legendre panels in λ and ν, split at the sign changes of `O`); else on the value's own
 /// rule, `None` where the value's engine has no defocus lane. For the tests that hold the one
 /// against the other.

@@ -376,7 +376,7 @@ pub fn defocus_otf_many_within(points: &[(f64, f64)], out: &mut [f64], accuracy:
 /// - the asymptotic expansion, term by term ([`defocus_otf_asymptotic_and_log_derivative`]),
 ///   where it answers the value's accuracy and the lane's (its target times `max(1, a(1 − s))`);
 /// - the Bessel series, on the same recurrence, eight points at a time (the lane of
-///   [`bessel_lanes_with`]);
+///   `bessel_lanes_with`);
 /// - below `|a|(1 − s) = 1e-8`, where the value is the diffraction-limited MTF, 0: the lane is
 ///   `−(4/π) ∫ sin²t · φ sin φ dt` with `|φ| ≤ |a|(1 − s)`, below `2 (|a|(1 − s))² < 2e-16` there.
 ///
