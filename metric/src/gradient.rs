@@ -774,7 +774,7 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         (o[0], pix * dc, pix * ds)
     };
     let integrate = |panels: usize| -> (f64, f64) {
-        let ends = sign_change_ends(nyquist, panels, |nu| engines[0].otf(nu));
+        let ends = sign_change_ends(nyquist, panels, |nu| engines[0].otf(nu), |hi| 1e-15 * hi);
         let (mut dc, mut ds) = (0.0, 0.0);
         for w in ends.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -875,7 +875,7 @@ fn top_hat_partials(
     }
     // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
     let integrate = |panels: usize| -> [f64; 2] {
-        let ends = sign_change_ends(nyquist, panels, |nu| whole.otf(nu));
+        let ends = sign_change_ends(nyquist, panels, |nu| whole.otf(nu), |hi| 1e-15 * hi);
         let mut sums = [0.0; 2];
         for w in ends.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -926,8 +926,10 @@ fn top_hat_partials(
 /// value's: on the paper's lens about 1 s in a debug build, 13 s for the harmonic lens's six
 /// orders (`asnr gradient examples/harmonic.toml --wrt lens.f_number`).
 ///
-/// Where the value's own engine gives `∂O/∂ln K` beside each OTF value (the closed form, a line:
-/// [`defocus_on_value_rule`]), `D_K` rides on the value's rules instead, and the pixel MTF is
+/// Where the value's own engine gives `∂O/∂ln K` beside each OTF value (the closed form, a line,
+/// the per-frequency product rule of the refractive and harmonic lenses and of the chromatic lens
+/// under other spectra: [`defocus_on_value_rule`]), `D_K` rides on the value's rules instead, and
+/// the pixel MTF is
 /// followed (its term of the integration by parts); this function's own rule stays as the
 /// reference ([`aperture_partials_by_own_rule`]).
 fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
@@ -941,13 +943,13 @@ fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` ([`aperture_partials`]) on the value's own rules: the mean computed
 /// again with `∂O/∂ln K` beside each OTF value ([`optics::Polychromatic::mean_mtf_and_defocus_derivative`]:
-/// the closed form's lane on its rule in `t`, a line's orders; the frequency rule's accepted
-/// weights, the pixel MTF `P` included), so that
+/// the closed form's lane on its rule in `t`, a line's orders, the per-frequency product rule's
+/// `w ∂H/∂w` of its Bessel and asymptotic forms on the level each panel accepts; the frequency
+/// rule's accepted weights, the pixel MTF `P` included), so that
 /// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν − 2 D_K` and `∂M̄/∂ln f0 = D_K`
 /// (docs/physics.md, "Gradients: the F-number and the focal length on the value's rule").
-/// `None` where the engine has no such lane (the per-frequency product rule of the refractive
-/// and harmonic lenses, the FFT path) or an order is not the full circular pupil with a defocus
-/// alone.
+/// `None` where the engine has no such lane (the reference panels rule, the FFT path) or an order
+/// is not the full circular pupil with a defocus alone.
 fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
     let field = scene.field();
@@ -981,6 +983,19 @@ fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f
     Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * d_k, d_k)))
 }
 
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of a lens whose every order is the full circular pupil with a
+/// defocus alone (docs/physics.md, "Gradients"): with `reference`, by the slow reference rule (its own
+/// Gauss–Legendre panels in λ and ν, split at the sign changes of `O`); else on the value's own
+/// rule, `None` where the value's engine has no defocus lane. For the tests that hold the one
+/// against the other.
+pub fn aperture_mean_mtf_partials(scene: &Scene, e: &Evaluation, reference: bool) -> Result<Option<(f64, f64)>, Error> {
+    if reference {
+        aperture_partials_by_own_rule(scene, e, Parameter::FNumber).map(Some)
+    } else {
+        defocus_on_value_rule(scene, e)
+    }
+}
+
 /// [`aperture_partials`] on this function's own Gauss–Legendre rules in λ and ν (described
 /// above): where the value's engine has no defocus lane, and the reference the tests hold the
 /// lane against.
@@ -990,9 +1005,9 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
     if camera.pixel_mtf() {
         return Err(not_smooth(
             "with camera.pixel_mtf = true the F-number and focal-length gradient is computed only where the \
-             value's engine carries the defocus derivative (the chromatic lens under a Gaussian × polynomial \
-             spectrum: the closed form; or a line), not on this lens's per-frequency spectral rule yet \
-             (set camera.pixel_mtf = false)"
+             value's engine carries the defocus derivative beside each OTF value (the closed form, a line, the \
+             per-frequency product rule), not on the reference panels rule this scene takes (a wavelength's \
+             cutoff inside the frequency band, or options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
                 .to_owned(),
         ));
     }
@@ -1095,27 +1110,8 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
         (o / total, d / total)
     };
     let integrate = |nodes: &[Node], panels: usize| -> f64 {
-        let mut cuts = vec![0.0];
-        let h = nyquist / panels as f64;
-        let mut previous = (0.0, 1.0);
-        for i in 1..=panels {
-            let nu = if i == panels { nyquist } else { i as f64 * h };
-            let here = value(nodes, nu);
-            if here * previous.1 < 0.0 {
-                let (mut a, mut b, f_a) = (previous.0, nu, previous.1);
-                while b - a > 1e-13 * nyquist {
-                    let m = 0.5 * (a + b);
-                    if value(nodes, m) * f_a > 0.0 {
-                        a = m;
-                    } else {
-                        b = m;
-                    }
-                }
-                cuts.push(0.5 * (a + b));
-            }
-            cuts.push(nu);
-            previous = (nu, here);
-        }
+        // the zeros to 1e-13 of ν_N: this rule's own (coarser than the value's 1e-15 of ν)
+        let cuts = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), |_| 1e-13 * nyquist);
         let mut sum = 0.0;
         for w in cuts.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -1162,9 +1158,11 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
 }
 
 /// The ends of `panels` equal panels over `[0, nyquist]` with the sign changes of `otf` between
-/// them added (each found by bisection to 1e-15 of its frequency), so that a Gauss rule on each
-/// piece meets the kink of |O| at a zero only at its ends.
-fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64) -> Vec<f64> {
+/// them added (each found by bisection until the bracket `[lo, hi]` is at most `width(hi)` wide:
+/// 1e-15 of its frequency for the spectral keys' rules, 1e-13 of `nyquist` for the F-number's
+/// reference rule), so that a Gauss rule on each piece meets the kink of |O| at a zero only at
+/// its ends.
+fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64, width: impl Fn(f64) -> f64) -> Vec<f64> {
     let mut ends = vec![0.0];
     let h = nyquist / panels as f64;
     let mut previous = (0.0, 1.0);
@@ -1173,7 +1171,7 @@ fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64) -> Ve
         let value = otf(nu);
         if value * previous.1 < 0.0 {
             let (mut lo, mut hi, f_lo) = (previous.0, nu, previous.1);
-            while hi - lo > 1e-15 * hi {
+            while hi - lo > width(hi) {
                 let m = 0.5 * (lo + hi);
                 if otf(m) * f_lo > 0.0 {
                     lo = m;

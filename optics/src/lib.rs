@@ -53,8 +53,9 @@ pub use lens::{
     Zone, round_for_display,
 };
 pub use otf::{
-    ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_asymptotic,
-    defocus_otf_bessel, defocus_otf_log_derivative, defocus_otf_many, defocus_otf_many_within, defocus_otf_panels,
+    ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_and_log_derivative,
+    defocus_otf_asymptotic, defocus_otf_asymptotic_and_log_derivative, defocus_otf_bessel, defocus_otf_log_derivative,
+    defocus_otf_many, defocus_otf_many_and_log_derivative_within, defocus_otf_many_within, defocus_otf_panels,
     defocus_otf_quadrature, mtf_diffraction_limited, mtf_diffraction_limited_mean, pixel_mtf,
 };
 pub use plane::{PLANE_TAU, PLANE_WIDTH, SampledPlane};

@@ -195,6 +195,27 @@ const EDGE_RATIOS: [f64; ASYMPTOTIC_TERMS + 1] = {
 /// the remainder while they fall); a term that grows first gives `None`. Tested against the
 /// Bessel series for `a(1 − s)` from 18 to 3e3 over `0 < s < 1`.
 pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
+    asymptotic_with::<false>(s, a, target).map(|(value, _)| value)
+}
+
+/// [`defocus_otf_asymptotic`] and, beside it, `w ∂OTF/∂w = a ∂OTF/∂a` from the same two
+/// expansions differentiated term by term (docs/physics.md, "Gradients: the F-number and the
+/// focal length on the value's rule"): the expansion of `a d/da [e^{−ias} I]`, the integral of
+/// `ia (u − s) √(1 − u²) e^{ia(u − s)}`, is the derivative of `I`'s expansion term by term (the
+/// endpoint expansions of `∫ (u − s) f e^{iau}` are those of `f`'s with `(u − s)` expanded at
+/// each end). The regular end's term `T_k ∝ a^{−(k+1)}` gives `−(k + 1) T_k`; the edge's
+/// `b_k cos(φ_k)`, `b_k ∝ a^{−(k+3/2)}`, `φ_k = a(1 − s) − (2k + 3)π/4`, gives
+/// `−(k + 3/2) b_k cos φ_k − a(1 − s) b_k sin φ_k`. Each series runs until its value's term is
+/// below `target` and its derivative's below `target · max(1, a(1 − s))` (the derivative is about
+/// `a(1 − s)` times the value's size: the same accuracy relative to it); `None` where a term
+/// grows first, as the value.
+pub fn defocus_otf_asymptotic_and_log_derivative(s: f64, a: f64, target: f64) -> Option<(f64, f64)> {
+    asymptotic_with::<true>(s, a, target)
+}
+
+/// [`defocus_otf_asymptotic`], with its log-derivative where `LANE` (else 0).
+#[inline(always)]
+fn asymptotic_with<const LANE: bool>(s: f64, a: f64, target: f64) -> Option<(f64, f64)> {
     let x = a.abs();
     let phase = x * (1.0 - s);
     if !(s > 0.0 && s < 1.0 && phase.is_finite() && phase < 1e6 && target > 0.0) {
@@ -219,11 +240,19 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     // two steps a turn: n = 2j gives the odd order k = 2j + 1 (a term, of sign (−1)^{j+1}),
     // n = 2j + 1 the even one after it
     let mut sign = -1.0;
+    // the derivative's target: its size is about a(1 − s) times the value's
+    let lane_target = target * phase.max(1.0);
+    let mut lane_lower = 0.0;
     for j in 0..ASYMPTOTIC_TERMS / 2 {
         (below, d) = (d, step(2 * j, below, d));
         let term = d * sign;
         lower += term;
-        if term.abs() < target {
+        // a d/da of T_k ∝ a^{−(k+1)}, k = 2j + 1
+        let lane_term = -((2 * j + 2) as f64) * term;
+        if LANE {
+            lane_lower += lane_term;
+        }
+        if term.abs() < target && (!LANE || lane_term.abs() < lane_target) {
             settled = true;
             break;
         }
@@ -240,8 +269,10 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
     // u = 1: Watson's lemma at the square-root edge
     let (sin_p, cos_p) = crate::fft::cis::sin_cos(phase - 0.75 * PI);
     let turns = [cos_p, sin_p, -cos_p, -sin_p];
+    // sin(φ − (2k + 3)π/4) likewise: sin, −cos, −sin, cos
+    let sine_turns = [sin_p, -cos_p, -sin_p, cos_p];
     let mut b = std::f64::consts::SQRT_2 * 0.5 * PI.sqrt() / (x * x.sqrt());
-    let mut upper = 0.0;
+    let (mut upper, mut lane_upper) = (0.0, 0.0);
     let mut previous = f64::INFINITY;
     for (k, &ratio) in EDGE_RATIOS.iter().enumerate() {
         if k > 0 {
@@ -249,8 +280,12 @@ pub fn defocus_otf_asymptotic(s: f64, a: f64, target: f64) -> Option<f64> {
         }
         // cos(φ − (2k + 3)π/4) = cos, sin, −cos, −sin of φ − 3π/4 as k goes round mod 4
         upper += b * turns[k & 3];
-        if b.abs() < target {
-            return Some((4.0 / PI) * (lower + upper));
+        if LANE {
+            // a d/da of b_k cos φ_k: −(k + 3/2) b_k cos φ_k − a(1 − s) b_k sin φ_k
+            lane_upper -= b * fused(k as f64 + 1.5, turns[k & 3], phase * sine_turns[k & 3]);
+        }
+        if b.abs() < target && (!LANE || b.abs() * (k as f64 + 1.5 + phase) < lane_target) {
+            return Some(((4.0 / PI) * (lower + upper), (4.0 / PI) * (lane_lower + lane_upper)));
         }
         if b.abs() > previous {
             return None;
@@ -335,6 +370,84 @@ pub fn defocus_otf_many_within(points: &[(f64, f64)], out: &mut [f64], accuracy:
     }
 }
 
+/// [`defocus_otf_many_within`] and, beside each value, its defocus lane `w ∂OTF/∂w` into `lane`
+/// (docs/physics.md, "Gradients: the F-number and the focal length on the value's rule"): on the
+/// same forms the value takes, each differentiated analytically —
+/// - the asymptotic expansion, term by term ([`defocus_otf_asymptotic_and_log_derivative`]),
+///   where it answers the value's accuracy and the lane's (its target times `max(1, a(1 − s))`);
+/// - the Bessel series, on the same recurrence, eight points at a time (the lane of
+///   `bessel_lanes_with`);
+/// - below `|a|(1 − s) = 1e-8`, where the value is the diffraction-limited MTF, 0: the lane is
+///   `−(4/π) ∫ sin²t · φ sin φ dt` with `|φ| ≤ |a|(1 − s)`, below `2 (|a|(1 − s))² < 2e-16` there.
+///
+/// The values are those of [`defocus_otf_many_within`] (the same forms and starts; the
+/// expansion may sum more terms for the lane, so within the same accuracy).
+///
+/// # Panics
+/// If `points`, `out` and `lane` differ in length.
+pub fn defocus_otf_many_and_log_derivative_within(
+    points: &[(f64, f64)],
+    out: &mut [f64],
+    lane: &mut [f64],
+    accuracy: f64,
+) {
+    assert_eq!(points.len(), out.len(), "one output per point");
+    assert_eq!(points.len(), lane.len(), "one lane per point");
+    let mut lanes = [0usize; BATCH];
+    let mut count = 0;
+    fn run<const L: usize>(points: &[(f64, f64)], lanes: &[usize], out: &mut [f64], lane: &mut [f64], accuracy: f64) {
+        let at = |k: usize| points[lanes[k.min(lanes.len() - 1)]];
+        let s: [f64; L] = std::array::from_fn(|k| at(k).0);
+        let a: [f64; L] = std::array::from_fn(|k| 8.0 * PI * at(k).1 * at(k).0);
+        let (values, derivatives) = bessel_lanes_with::<L, true>(s, a, accuracy);
+        for (k, &i) in lanes.iter().enumerate() {
+            out[i] = values[k];
+            lane[i] = derivatives[k];
+        }
+    }
+    let batch = |lanes: &[usize; BATCH], count: usize, out: &mut [f64], lane: &mut [f64]| match count {
+        1 => run::<1>(points, &lanes[..1], out, lane, accuracy),
+        2 => run::<2>(points, &lanes[..2], out, lane, accuracy),
+        3 | 4 => run::<4>(points, &lanes[..count], out, lane, accuracy),
+        _ => run::<BATCH>(points, &lanes[..count], out, lane, accuracy),
+    };
+    for (i, &(s, w)) in points.iter().enumerate() {
+        let a = 8.0 * PI * w * s;
+        let series = s > 0.0 && s < 1.0 && a.abs() * (1.0 - s) >= 1e-8;
+        if !series {
+            out[i] = defocus_otf(s, w);
+            lane[i] = 0.0;
+            continue;
+        }
+        if a.abs() * (1.0 - s) >= ASYMPTOTIC_MIN_PHASE
+            && let Some((value, derivative)) =
+                defocus_otf_asymptotic_and_log_derivative(s, a, 0.5 * accuracy.max(1e-16))
+        {
+            out[i] = value;
+            lane[i] = derivative;
+            continue;
+        }
+        lanes[count] = i;
+        count += 1;
+        if count == BATCH {
+            batch(&lanes, count, out, lane);
+            count = 0;
+        }
+    }
+    if count > 0 {
+        batch(&lanes, count, out, lane);
+    }
+}
+
+/// [`defocus_otf`] and its defocus lane `w ∂OTF/∂w` at one point, to rounding: the forms of
+/// [`defocus_otf_many_and_log_derivative_within`] (the t-form quadrature's
+/// [`defocus_otf_log_derivative`] is the independent reference the tests hold it against).
+pub fn defocus_otf_and_log_derivative(s: f64, w: f64) -> (f64, f64) {
+    let (mut value, mut lane) = ([0.0], [0.0]);
+    defocus_otf_many_and_log_derivative_within(&[(s, w)], &mut value, &mut lane, 0.0);
+    (value[0], lane[0])
+}
+
 /// Lanes of [`defocus_otf_many`]'s batches: eight. Built for a CPU with AVX-512 (the project's
 /// `target-cpu=native`, `.cargo/config.toml`), eight lanes are one register and the spectrometer
 /// scene at 1e-6 takes 10 % less time than with four; on a baseline x86-64 build (two lanes a
@@ -370,6 +483,30 @@ const BATCH: usize = 8;
 /// 8 % less time).
 #[inline(always)]
 fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64; L] {
+    bessel_lanes_with::<L, false>(s, a, accuracy).0
+}
+
+/// [`bessel_lanes`] and, where `LANE`, `w ∂OTF/∂w = a ∂OTF/∂a` of each lane on the same
+/// recurrence (else 0): with `F = Σ_n iⁿ J_n C_n` and `OTF = (4/π) Re[e^{−ias} F]`,
+/// `a d/da [e^{−ias} F] = e^{−ias} (a F′ − ias F)`, and `a F′ = Σ_m i^m S(m) a K_m[J′]` with `K_m`
+/// linear in the `J`'s, so `K_m[J′] = dK_m/da`; by `J′_n = (n/a) J_n − J_{n+1} = J_{n−1} − (n/a) J_n`,
+///
+/// ```text
+/// a K_m[J′] = J_m + [(m − 1)(m − 2) J_{m−1} − (m + 1)(m + 2) J_{m+1}] / (2a),   a K_0[J′] = −J_2
+/// ```
+///
+/// (Watson, *A Treatise on the Theory of Bessel Functions*, §2.12): the orders at hand at each
+/// step of the downward recurrence, one more multiply-add chain a step. With the value's sums
+/// `E + iO = a F` and the lane's `G_E + i G_O = a F′` (the same signs `i^m`), the lane is
+/// `(4/π) [cos(as)(G_E + s O) + sin(as)(G_O − s E)]` over Miller's normalization. The orders left
+/// out are those of the value (its start): the lane's terms are the value's times factors of
+/// about `m/a`, near 1 where the series ends.
+#[inline(always)]
+fn bessel_lanes_with<const L: usize, const LANE: bool>(
+    s: [f64; L],
+    a: [f64; L],
+    accuracy: f64,
+) -> ([f64; L], [f64; L]) {
     let x = a.map(f64::abs);
     // the start grows with |a|: the largest lane's
     let start = series_start(x.iter().copied().fold(0.0, f64::max), accuracy);
@@ -378,6 +515,9 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
     // (m, 1 − 1/m, 1 + 1/m) for m = 0 … start, read four at a time from the top
     let table = order_coefficients(start + 1);
     let (blocks, _) = table[..=start].as_chunks::<4>();
+    // (2/m, (m − 1)(m − 2)/(2m), (m + 1)(m + 2)/(2m)) for the lane, likewise
+    let lane_table = if LANE { lane_coefficients(start + 1) } else { std::borrow::Cow::Borrowed(&[][..]) };
+    let (lane_blocks, _) = lane_table.as_chunks::<4>();
     let theta = s.map(f64::acos);
     let two_cos = s.map(|s| 2.0 * s);
     let sin_theta = s.map(|s| (1.0 - s * s).max(0.0).sqrt());
@@ -388,15 +528,23 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
     let mut j_above = [0.0_f64; L];
     let mut j = [1e-300_f64; L];
     let (mut even, mut odd, mut norm) = ([0.0_f64; L], [0.0_f64; L], [0.0_f64; L]);
+    let (mut lane_even, mut lane_odd) = ([0.0_f64; L], [0.0_f64; L]);
     // one step at order m ≥ 1: J_{m−1}, the term ±sin(mθ)[(1 − 1/m) J_{m−1} + (1 + 1/m) J_{m+1}]
     // into its sum (J_m into the norm for even m), then everything one order down
     macro_rules! step {
-        ($order:expr, $sum:ident, $sign:expr, $norm:expr) => {{
+        ($order:expr, $lane_order:expr, $sum:ident, $lane_sum:ident, $sign:expr, $norm:expr) => {{
             let [mf, below, above]: [f64; 3] = $order;
             let sign: f64 = $sign;
             let (below_weight, above_weight) = (sign * below, sign * above);
+            let [two_over_m, below_lane, above_lane]: [f64; 3] = $lane_order;
+            let (two_over_m, below_lane, above_lane) = (sign * two_over_m, sign * below_lane, sign * above_lane);
             for l in 0..L {
                 let below = fused(mf * two_over_x[l], j[l], -j_above[l]);
+                if LANE {
+                    // ±sin(mθ) · 2 a K_m[J′]/m (the ±m terms alike)
+                    let inner = two_over_x[l] * fused(below_lane, below, -above_lane * j_above[l]);
+                    $lane_sum[l] = fused(sin_here[l], fused(two_over_m, j[l], inner), $lane_sum[l]);
+                }
                 $sum[l] = fused(sin_here[l], fused(below_weight, below, above_weight * j_above[l]), $sum[l]);
                 if $norm {
                     norm[l] += j[l];
@@ -412,13 +560,14 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
     // block k holds m = 4k … 4k + 3. m ≡ 3: odd −, m ≡ 2: even − and norm, m ≡ 1: odd +,
     // m ≡ 0: even + and norm (none at m = 0)
     for (k, block) in blocks.iter().enumerate().rev() {
-        step!(block[3], odd, -1.0, false);
-        step!(block[2], even, -1.0, true);
-        step!(block[1], odd, 1.0, false);
+        let lane = if LANE { lane_blocks[k] } else { [[0.0; 3]; 4] };
+        step!(block[3], lane[3], odd, lane_odd, -1.0, false);
+        step!(block[2], lane[2], even, lane_even, -1.0, true);
+        step!(block[1], lane[1], odd, lane_odd, 1.0, false);
         if k == 0 {
             break;
         }
-        step!(block[0], even, 1.0, true);
+        step!(block[0], lane[0], even, lane_even, 1.0, true);
         for l in 0..L {
             if j[l].abs() > 1e250 {
                 j_above[l] *= 1e-250;
@@ -426,6 +575,10 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
                 even[l] *= 1e-250;
                 odd[l] *= 1e-250;
                 norm[l] *= 1e-250;
+                if LANE {
+                    lane_even[l] *= 1e-250;
+                    lane_odd[l] *= 1e-250;
+                }
             }
         }
         // the next block's top order: reseeded 64 orders below the last seed, and at m = 3,
@@ -445,14 +598,21 @@ fn bessel_lanes<const L: usize>(s: [f64; L], a: [f64; L], accuracy: f64) -> [f64
     }
     // now j = J_0, j_above = J_1
     let mut out = [0.0; L];
+    let mut lane = [0.0; L];
     for l in 0..L {
         let even = theta[l] * j_above[l] + even[l];
         let norm = j[l] + 2.0 * norm[l];
         // odd terms change sign with a (Jn(−x) = (−1)ⁿ Jn(x)); sin(a s) does too: the product is even
         let (sin_as, cos_as) = crate::fft::cis::sin_cos(x[l] * s[l]);
         out[l] = (4.0 / PI) * (cos_as * even + sin_as * odd[l]) / (x[l] * norm);
+        if LANE {
+            // m = 0: θ a K_0[J′] = −θ J_2, J_2 = (2/a) J_1 − J_0
+            let lane_even = lane_even[l] - theta[l] * fused(two_over_x[l], j_above[l], -j[l]);
+            let (real, imaginary) = (fused(s[l], odd[l], lane_even), fused(-s[l], even, lane_odd[l]));
+            lane[l] = (4.0 / PI) * (cos_as * real + sin_as * imaginary) / norm;
+        }
     }
-    out
+    (out, lane)
 }
 
 /// `sin(mθ)` and `sin((m+1)θ)` in each lane, with `mθ` to the last bit: `θ = θ_hi + θ_lo` with
@@ -540,6 +700,30 @@ fn order_coefficients(up_to: usize) -> std::borrow::Cow<'static, [[f64; 3]]> {
             .map(|m| {
                 let r = if m == 0 { 0.0 } else { 1.0 / m as f64 };
                 [m as f64, 1.0 - r, 1.0 + r]
+            })
+            .collect()
+    };
+    if up_to <= SIZE {
+        std::borrow::Cow::Borrowed(TABLE.get_or_init(|| build(SIZE)).as_slice())
+    } else {
+        std::borrow::Cow::Owned(build(up_to))
+    }
+}
+
+/// `(2/m, (m − 1)(m − 2)/(2m), (m + 1)(m + 2)/(2m))` for `m = 0 …` at least `up_to − 1` (`m = 0`
+/// unused): the per-order constants of the lane of [`bessel_lanes_with`], as
+/// [`order_coefficients`] for the value.
+fn lane_coefficients(up_to: usize) -> std::borrow::Cow<'static, [[f64; 3]]> {
+    static TABLE: std::sync::OnceLock<Vec<[f64; 3]>> = std::sync::OnceLock::new();
+    const SIZE: usize = 4096;
+    let build = |size: usize| -> Vec<[f64; 3]> {
+        (0..size)
+            .map(|m| {
+                if m == 0 {
+                    return [0.0; 3];
+                }
+                let mf = m as f64;
+                [2.0 / mf, (mf - 1.0) * (mf - 2.0) / (2.0 * mf), (mf + 1.0) * (mf + 2.0) / (2.0 * mf)]
             })
             .collect()
     };
@@ -763,6 +947,131 @@ mod tests {
         }
         assert!(answered * 10 >= asked * 8, "answered {answered} of {asked}");
         assert!(answered_near * 10 >= asked_near * 8, "from 18 at 1e-8: answered {answered_near} of {asked_near}");
+    }
+
+    /// Five-point central difference of `f` in `a`, times `a` (written here): the reference for
+    /// each form's lane `a ∂OTF/∂a`.
+    fn log_difference(f: &dyn Fn(f64) -> f64, a: f64, h: f64) -> f64 {
+        a * (f(a - 2.0 * h) - 8.0 * f(a - h) + 8.0 * f(a + h) - f(a + 2.0 * h)) / (12.0 * h)
+    }
+
+    /// The Bessel series' lane (`bessel_lanes_with`) against five-point differences of the
+    /// series itself in `a`, step `h = 1e-3 max(1, |a|/100)` (`1e-3 |a|` below `|a| = 1`): truncation `h⁴ |∂⁵_a OTF|/30 ≤
+    /// h⁴/30` (each `a`-derivative brings a factor `|cos t − s| ≤ 1`), rounding about
+    /// `1e-16 |a|/h`; within `1e-9 max(1, |a|)`. Over `0 < s < 1` and `|a|(1 − s)` from `1e-8`
+    /// (where the series starts: the value's switch to the diffraction-limited MTF) through 1,
+    /// 24 (the single value's switch from the quadrature) and 18 to 30 (the expansion's switch)
+    /// up to 3000, both signs; and against the t-form quadrature of the lane
+    /// ([`defocus_otf_log_derivative`], an independent form) within `1e-11 max(1, |a|)`.
+    #[test]
+    fn bessel_lane_matches_differences_of_the_series() {
+        for i in 1..20 {
+            let s = i as f64 / 20.0;
+            for &phase in
+                &[1.01e-8, 1e-6, 1e-3, 0.5, 0.999, 1.0, 1.001, 5.0, 17.99, 18.0, 18.01, 23.9, 24.1, 30.0, 200.0, 3000.0]
+            {
+                for &sign in &[1.0, -1.0] {
+                    let a = sign * phase / (1.0 - s);
+                    let (value, lane) = bessel_lanes_with::<1, true>([s], [a], 0.0);
+                    assert_eq!(value[0], bessel_lanes([s], [a], 0.0)[0], "the value is the series' own");
+                    let h = if a.abs() < 1.0 { 1e-3 * a.abs() } else { 1e-3 * (a.abs() / 100.0).max(1.0) };
+                    let series = |a: f64| bessel_lanes([s], [a], 0.0)[0];
+                    let reference = log_difference(&series, a, h);
+                    let scale = a.abs().max(1.0);
+                    assert!(
+                        (lane[0] - reference).abs() <= 1e-9 * scale,
+                        "s {s}, a {a}: lane {} vs differences {reference}",
+                        lane[0]
+                    );
+                    let quadrature = defocus_otf_log_derivative(s, a / (8.0 * PI * s));
+                    assert!(
+                        (lane[0] - quadrature).abs() <= 1e-11 * scale,
+                        "s {s}, a {a}: lane {} vs t-form {quadrature}",
+                        lane[0]
+                    );
+                }
+            }
+        }
+    }
+
+    /// The expansion's lane against five-point differences of the expansion itself in `a`
+    /// (at the target 1e-15, step `h = 0.01/(1 − s)`, a hundredth of a radian of the phase
+    /// `a(1 − s)`: truncation about `a(1 − s) h⁴(1 − s)⁴/30`, rounding `1e-15 |a|/h`, both below
+    /// `1e-9 a(1 − s)` relative to the OTF's size), within `1e-9 a(1 − s)`, and against
+    /// the Bessel series' lane within `target · max(1, a(1 − s))` plus rounding, wherever it
+    /// answers: `a(1 − s)` from 18 (its switch) to 3000, both signs, targets 1e-6 to 1e-14.
+    #[test]
+    fn asymptotic_lane_matches_differences_and_the_series() {
+        let mut answered = 0;
+        for i in 1..40 {
+            let s = i as f64 / 40.0;
+            for &phase in &[ASYMPTOTIC_MIN_PHASE, 18.5, 22.0, 26.0, 30.0, 45.0, 80.0, 150.0, 400.0, 3000.0] {
+                for &sign in &[1.0, -1.0] {
+                    let a = sign * phase / (1.0 - s);
+                    let (value, series_lane) = bessel_lanes_with::<1, true>([s], [a], 0.0);
+                    for &target in &[1e-6, 1e-8, 1e-10, 1e-12, 1e-14] {
+                        let Some((fast, lane)) = defocus_otf_asymptotic_and_log_derivative(s, a, target) else {
+                            continue;
+                        };
+                        answered += 1;
+                        assert!((fast - value[0]).abs() <= target + 1e-14, "s {s}, a {a}: {fast} vs {}", value[0]);
+                        assert!(
+                            (lane - series_lane[0]).abs() <= target * phase.max(1.0) + 1e-12 * phase,
+                            "s {s}, a {a}, target {target:e}: lane {lane} vs the series' {}",
+                            series_lane[0]
+                        );
+                        if target == 1e-14 {
+                            let h = 1e-2 / (1.0 - s);
+                            let expansion = |a: f64| defocus_otf_asymptotic(s, a, 1e-15).unwrap_or(f64::NAN);
+                            let reference = log_difference(&expansion, a, h);
+                            if reference.is_finite() {
+                                assert!(
+                                    (lane - reference).abs() <= 1e-9 * phase,
+                                    "s {s}, a {a}: lane {lane} vs differences {reference}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(answered > 1000, "answered {answered}");
+    }
+
+    /// Many points at once (values and lanes) against the single forms: the values equal to
+    /// [`defocus_otf_many_within`] within the accuracy asked, the lanes to the t-form quadrature
+    /// within `accuracy · max(1, |a|(1 − s))` plus rounding, over `|a|(1 − s)` below `1e-8`
+    /// (the lane 0), through the series and the expansion.
+    #[test]
+    fn many_lanes_are_each_alone() {
+        let mut points = Vec::new();
+        for i in 1..30 {
+            let s = i as f64 / 30.0;
+            for &phase in &[1e-10, 1e-7, 0.3, 3.0, 17.0, 19.0, 60.0, 700.0] {
+                points.push((s, phase / (1.0 - s) / (8.0 * PI * s)));
+            }
+        }
+        points.push((0.0, 1.0));
+        points.push((1.0, 1.0));
+        for &accuracy in &[0.0, 1e-12, 1e-9, 1e-6] {
+            let mut values = vec![0.0; points.len()];
+            let mut lanes = vec![0.0; points.len()];
+            let mut plain = vec![0.0; points.len()];
+            defocus_otf_many_and_log_derivative_within(&points, &mut values, &mut lanes, accuracy);
+            defocus_otf_many_within(&points, &mut plain, accuracy);
+            for (k, &(s, w)) in points.iter().enumerate() {
+                let phase = (8.0 * PI * w * s).abs() * (1.0 - s);
+                let loose = accuracy.max(1e-14);
+                assert!((values[k] - plain[k]).abs() <= loose, "s {s}, w {w}: {} vs {}", values[k], plain[k]);
+                let reference = defocus_otf_log_derivative(s, w);
+                assert!(
+                    (lanes[k] - reference).abs() <= loose * phase.max(1.0) * 2.0 + 1e-11 * phase.max(1.0),
+                    "s {s}, w {w}, accuracy {accuracy:e}: {} vs {reference}",
+                    lanes[k]
+                );
+            }
+        }
+        assert_eq!(defocus_otf_and_log_derivative(0.4, 0.0), (mtf_diffraction_limited(0.4), 0.0));
     }
 
     /// Below `|a| = 1`, where [`defocus_otf_many`] takes the series too: within 1e-15 of the

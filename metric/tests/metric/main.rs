@@ -601,6 +601,7 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
     assert!(ramp.asnr < base.asnr && ramp.asnr > flat.asnr);
 }
 
+mod aperture_lane;
 mod azimuth;
 mod factored;
 mod fraunhofer;

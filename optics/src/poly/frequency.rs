@@ -150,7 +150,8 @@ impl Polychromatic<'_> {
     ///
     /// `D_K` the derivative with respect to a common relative change of every order's defocus at
     /// fixed `s = νλF#` (the engine's `∂O/∂ln K` beside each OTF value: the closed form's lane on
-    /// its own rule in `t`, a line's orders), `P_ν` the pixel MTF's part of the integration by
+    /// its own rule in `t`, a line's orders, the per-frequency product rule's `w ∂H/∂w` on the
+    /// spectral level each panel accepts), `P_ν` the pixel MTF's part of the integration by
     /// parts in `ν` (0 without it; `νP′/P = x cot x − 1`, `x = πpν`); both with the frequency
     /// rule's accepted weights (split at the OTF's sign changes, `P` included). `None` where the
     /// engine gives no such lane, the field is off axis or the OTF depends on direction.

@@ -126,6 +126,29 @@ struct Scratch {
     one: Vec<f64>,
 }
 
+/// What a climb carries beside each value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Lanes {
+    /// the value alone
+    None,
+    /// the derivatives along the lens's directions (`LensModel::binary2_directions`), this many
+    Directions(usize),
+    /// one lane: `Σ_o τ_o w_o ∂H/∂w_o`, the derivative with respect to a common relative change
+    /// of every order's defocus (`crate::otf::defocus_otf_many_and_log_derivative_within`)
+    Defocus,
+}
+
+impl Lanes {
+    /// Derivatives a point.
+    fn count(self) -> usize {
+        match self {
+            Lanes::None => 0,
+            Lanes::Directions(n) => n,
+            Lanes::Defocus => 1,
+        }
+    }
+}
+
 impl std::fmt::Debug for Levelled {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let p = &self.panel;
@@ -225,7 +248,7 @@ impl Levelled {
     /// level 0, the odd ones above; `values` holds the level's points).
     /// Each OTF to a tenth of `allowed` (per unit weight) over the level's amplification: an
     /// error δ per OTF moves the product integral by at most δ Σ τ_o Σ|w_k|.
-    fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>, lanes: usize) {
+    fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>, lanes: Lanes) {
         let Scratch { pairs, otfs, values, derivatives, one } = &mut self.scratch;
         let fresh = &self.fresh[level];
         pairs.clear();
@@ -234,6 +257,22 @@ impl Levelled {
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
+        if lanes == Lanes::Defocus {
+            // the defocus lane: each order's w ∂H/∂w beside its OTF on the same forms
+            // (`defocus_otf_many_and_log_derivative_within`), summed per point as the values are
+            one.clear();
+            one.resize(pairs.len(), 0.0);
+            crate::otf::defocus_otf_many_and_log_derivative_within(pairs, otfs, one, accuracy);
+            evaluations.set(evaluations.get() + pairs.len());
+            for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
+                let range = fresh.range(point);
+                let orders = &fresh.orders[range.clone()];
+                values[k] = orders.iter().zip(&otfs[range.clone()]).map(|(o, v)| o.efficiency * v).sum();
+                derivatives[k] = orders.iter().zip(&one[range]).map(|(o, d)| o.efficiency * d).sum();
+            }
+            return;
+        }
+        let lanes = lanes.count();
         if lanes > 0 {
             // the gradient's lanes: each order's OTF and its derivatives on the same rule
             // (`RadialOrder::otf_and_derivatives`), summed per point as the values are
@@ -323,9 +362,15 @@ impl Levelled {
         allowed: f64,
         evaluations: &Cell<usize>,
         gradient: Option<&mut [f64]>,
+        defocus: bool,
     ) -> Result<f64, f64> {
-        let lanes = gradient.as_ref().map_or(0, |g| g.len());
+        let lanes = match (gradient.as_ref().map_or(0, |g| g.len()), defocus) {
+            (0, _) => Lanes::None,
+            (_, true) => Lanes::Defocus,
+            (n, false) => Lanes::Directions(n),
+        };
         let result = self.climb(scene, nu, allowed, evaluations, lanes);
+        let lanes = lanes.count();
         if let Some(gradient) = gradient {
             let weights = &self.weights[LEVELS.iter().position(|&p| p == self.scratch.values.len()).unwrap_or(0)];
             gradient.iter_mut().for_each(|g| *g = 0.0);
@@ -339,15 +384,16 @@ impl Levelled {
     }
 
     /// [`integral`](Self::integral)'s climb through the levels, `lanes` derivatives a point
-    /// beside each value (none for 0).
+    /// beside each value.
     fn climb(
         &mut self,
         scene: &Scene<'_>,
         nu: f64,
         allowed: f64,
         evaluations: &Cell<usize>,
-        lanes: usize,
+        kind: Lanes,
     ) -> Result<f64, f64> {
+        let lanes = kind.count();
         let mass = self.panel.mass.abs();
         // the phase the points must resolve at this frequency (∝ ν: the defocus phase is)
         let resolved = POINTS_PER_RADIAN * self.panel.phase * nu / scene.max_frequency + 1.0;
@@ -359,8 +405,13 @@ impl Levelled {
         let (mut moves, mut counted) = ([0.0; LEVELS.len()], 0);
         for (level, &points) in LEVELS.iter().enumerate() {
             self.prepare(scene, level);
-            if lanes > 0 && !self.prepare_directions(scene, level, lanes) {
-                return Err(f64::NAN);
+            match kind {
+                Lanes::Directions(_) if !self.prepare_directions(scene, level, lanes) => return Err(f64::NAN),
+                // a radial pupil (given as data) has no defocus lane on this engine
+                Lanes::Defocus if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
+                    return Err(f64::NAN);
+                }
+                _ => {}
             }
             // the level below's points to the even slots (from the top down), the new ones between
             let Scratch { values, derivatives, .. } = &mut self.scratch;
@@ -372,7 +423,7 @@ impl Levelled {
                     derivatives.copy_within(k * lanes..(k + 1) * lanes, 2 * k * lanes);
                 }
             }
-            self.fresh_values(level, nu, allowed, evaluations, lanes);
+            self.fresh_values(level, nu, allowed, evaluations, kind);
             let values = &self.scratch.values;
             let integral = quad::dot(values, &self.weights[level]);
             if level < first {
@@ -470,9 +521,10 @@ impl<'a> PerFrequency<'a> {
     }
 
     /// The OTF at `frequency` and, with `gradient`, its derivative with respect to each Binary 2
-    /// coefficient into it, on the same spectral levels ([`Levelled::integral`]); `None` where
-    /// the lens has no such derivatives on this engine.
-    fn value(&self, frequency: f64, mut gradient: Option<&mut [f64]>) -> Option<f64> {
+    /// coefficient into it (or, with `defocus`, its one lane `∂O/∂ln K`: every order's defocus
+    /// scaled together), on the same spectral levels ([`Levelled::integral`]); `None` where the
+    /// lens has no such derivatives on this engine.
+    fn value(&self, frequency: f64, mut gradient: Option<&mut [f64]>, defocus: bool) -> Option<f64> {
         let nu = frequency.abs();
         let budget = self.otf_tolerance.get();
         let mut panels = self.panels.borrow_mut();
@@ -498,7 +550,7 @@ impl<'a> PerFrequency<'a> {
                 let allowed = budget * self.nodes.total_weight.abs() / self.total_mass / (weighted * share);
                 let part = self.scene.part(panels[k].panel.part);
                 let lanes_of_panel = gradient.is_some().then_some(part_gradient.as_mut_slice());
-                let result = panels[k].integral(&part, nu, allowed, &self.evaluations, lanes_of_panel);
+                let result = panels[k].integral(&part, nu, allowed, &self.evaluations, lanes_of_panel, defocus);
                 if let Err(v) = result
                     && v.is_nan()
                 {
@@ -557,11 +609,21 @@ impl OtfEngine for PerFrequency<'_> {
     }
 
     fn otf(&self, frequency: f64) -> f64 {
-        self.value(frequency, None).unwrap_or(f64::NAN)
+        self.value(frequency, None, false).unwrap_or(f64::NAN)
     }
 
     fn otf_and_gradient(&self, frequency: f64, gradient: &mut [f64]) -> Option<f64> {
-        self.value(frequency, Some(gradient))
+        self.value(frequency, Some(gradient), false)
+    }
+
+    /// `(O, ∂O/∂ln K)`: the defocus lane `Σ τ_o w_o ∂H/∂w_o` of every point beside its value,
+    /// integrated with the weights of the level the value accepts (docs/physics.md, "Gradients:
+    /// the F-number and the focal length on the value's rule"); `None` where an order is a
+    /// radial pupil given as data.
+    fn otf_and_defocus_derivative(&self, frequency: f64) -> Option<(f64, f64)> {
+        let mut lane = [0.0];
+        let value = self.value(frequency, Some(&mut lane), true)?;
+        Some((value, lane[0]))
     }
 
     fn otf_along(&self, frequency: f64, _azimuth: f64) -> Complex64 {

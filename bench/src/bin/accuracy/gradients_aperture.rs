@@ -2,9 +2,10 @@
 //! BENCHMARKS.md's "Gradients" section): `asnr evaluate` against `asnr gradient --wrt
 //! lens.f_number --wrt lens.focal_length_mm` on the paper's lens (the closed form: the
 //! derivative on its own rule in t, docs/physics.md "Gradients: the F-number and the focal
-//! length on the value's rule") and on the N-BK7 singlet at 100 nm (the per-frequency product
-//! rule, which has no defocus lane: the gradient's own Gauss–Legendre rule in λ and ν), at the
-//! tolerances 1e-6 and 1e-4. Medians of alternate runs.
+//! length on the value's rule"), on the N-BK7 singlet at 100 nm and on the harmonic lens of
+//! `examples/harmonic.toml` (the per-frequency product rule: the defocus lane `w ∂H/∂w` of its
+//! Bessel and asymptotic forms beside each value), at the tolerances 1e-6 and 1e-4. Medians of
+//! alternate runs.
 
 use std::path::Path;
 use std::process::Command;
@@ -80,7 +81,11 @@ fn in_process(root: &Path, singlet: &Path, repeats: usize) -> Vec<(&'static str,
     let mut rows = Vec::new();
     for tolerance in [1e-6, 1e-4] {
         let set = vec![format!("options.tolerance={tolerance:e}")];
-        for (case, path) in [(PAPER, root.join("examples/paper-theory.toml")), (SINGLET, singlet.to_path_buf())] {
+        for (case, path) in [
+            (PAPER, root.join("examples/paper-theory.toml")),
+            (SINGLET, singlet.to_path_buf()),
+            (HARMONIC, root.join("examples/harmonic.toml")),
+        ] {
             let Ok(source) = scene::read(Some(&path)) else { continue };
             rows.extend(crate::gradients::side_by_side(&source, &set, &keys, repeats).map(|r| (case, tolerance, r)));
         }
@@ -90,17 +95,20 @@ fn in_process(root: &Path, singlet: &Path, repeats: usize) -> Vec<(&'static str,
 
 const PAPER: &str = "paper lens (closed form)";
 const SINGLET: &str = "N-BK7 singlet, 100 nm (per-frequency rule)";
+const HARMONIC: &str = "harmonic lens p = 5, 50 nm (per-frequency rule)";
 
 /// The table and its text, or `None` without the `asnr` binary.
 pub(crate) fn markdown(tools: &Tools) -> Option<String> {
     let asnr = tools.asnr.as_deref()?;
     let repeats = if tools.quick { 5 } else { 11 };
     let paper = tools.root.join("examples/paper-theory.toml");
+    let harmonic = tools.root.join("examples/harmonic.toml");
     let singlet = singlet(&tools.root, &std::env::temp_dir())?;
     let mut rows = Vec::new();
     for tolerance in [1e-6, 1e-4] {
         rows.extend(row(asnr, &tools.root, PAPER, &paper, tolerance, repeats));
         rows.extend(row(asnr, &tools.root, SINGLET, &singlet, tolerance, repeats));
+        rows.extend(row(asnr, &tools.root, HARMONIC, &harmonic, tolerance, repeats));
     }
     let inside = in_process(&tools.root, &singlet, if tools.quick { 11 } else { 31 });
     let _ = std::fs::remove_file(&singlet);
@@ -114,8 +122,11 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
          lens (examples/paper-theory.toml) the closed form carries ∂O/∂ln K on its own rule in t and the frequency \
          rule's accepted weights integrate it (docs/physics.md, \"Gradients: the F-number and the focal length on \
          the value's rule\"): the gradient is one more mean. The N-BK7 singlet (the same scene, the lens one N-BK7 \
-         element, a 100 nm band) takes the per-frequency product rule, which has no such lane yet: its gradient \
-         still integrates ∂O/∂ln K on its own Gauss–Legendre rule in λ and ν.\n\n",
+         element, a 100 nm band) and the harmonic lens (examples/harmonic.toml, six orders) take the per-frequency \
+         product rule, whose Bessel and asymptotic forms of the defocused OTF carry their derivative w ∂H/∂w beside \
+         each value (the lane differentiated analytically on the same recurrence and terms), integrated with the \
+         weights of the spectral level and the frequency panels the value accepts: there too the gradient is one \
+         more mean and one OTF at Nyquist.\n\n",
         crate::load_average()
     );
     md.push_str(
