@@ -647,6 +647,11 @@ impl RadialPupil {
         self.amplitude.as_ref().map_or(1.0, |a| a.value(q))
     }
 
+    /// The field amplitude's profile in `q = ρ²`, where one is given (`None`: uniform).
+    pub fn amplitude_profile(&self) -> Option<&Arc<RadialProfile>> {
+        self.amplitude.as_ref()
+    }
+
     /// `∫|P|² dA / π`: the pupil's power relative to a uniform amplitude of 1.
     pub fn power(&self) -> f64 {
         self.amplitude.as_ref().map_or(1.0, |a| a.mean_square())
