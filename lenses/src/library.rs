@@ -1250,6 +1250,15 @@ impl LensModel for LibraryLens {
         Some(self.design_wavelength)
     }
 
+    fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<optics::OrderDerivatives> {
+        let d = self.first_order_derivative(wavelength_m, parameter)?;
+        Some(optics::OrderDerivatives {
+            efficiencies: vec![d.efficiency_derivative],
+            transmission: d.transmission_derivative,
+            fields: vec![(d.amplitude, d.wavefront_m)],
+        })
+    }
+
     fn describe(&self) -> String {
         let r = optics::round_for_display;
         format!(

@@ -1539,6 +1539,85 @@ impl RadialOrder {
         q: &mut [f64],
         weight: &mut [f64],
     ) {
+        self.panel_nodes(s, t_end, t_panels, pt, v_nodes, q, weight);
+        self.amplitudes(q, weight);
+    }
+
+    /// The real OTF at `s` as [`otf`](Self::otf) and its derivative with respect to a
+    /// parameter that moves the pupil's field amplitude along `amplitude` (`∂A/∂b` as a
+    /// function of `q = ρ²`) and its whole wavefront along `wavefront_m` (`∂W/∂b`, m): forward
+    /// mode on the value's rule, its nodes and phases (docs/physics.md, "Gradients: a
+    /// library's parameter bias"). With `I = ∫ sin²t ∫ A(q₁) A(q₂) cos(k[W(q₁) − W(q₂)]) dv dt`
+    /// and `OTF = 4 I/(π P)`, `P = ∫A² dq`:
+    ///
+    /// ```text
+    /// ∂I = ∫ sin²t ∫ { [∂A(q₁) A(q₂) + A(q₁) ∂A(q₂)] cos(kΔW) − A(q₁) A(q₂) sin(kΔW) k [∂W(q₁) − ∂W(q₂)] } dv dt
+    /// ∂OTF = 4 ∂I/(π P) − OTF ∂P/P,   ∂P = 2 ∫ A ∂A dq
+    /// ```
+    ///
+    /// (`∂P` on the rule of [`RadialProfile::mean_square`], exact for polynomials). Lane by
+    /// lane, not eight at a time: a library lens's bias is one direction.
+    pub fn otf_and_field_derivative(
+        &self,
+        s: f64,
+        accuracy: f64,
+        amplitude: &RadialProfile,
+        wavefront_m: &RadialProfile,
+    ) -> (f64, f64) {
+        let s = s * self.pupil.frequency_scale();
+        if s >= 1.0 {
+            return (0.0, 0.0);
+        }
+        if s <= 0.0 {
+            // the OTF is normalized to 1 at s = 0 whatever the pupil
+            return (1.0, 0.0);
+        }
+        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let lanes = crate::quad::rule().len() * v_nodes.len();
+        let k = std::f64::consts::TAU / self.wavelength_m;
+        let a = k * self.w020_m;
+        let (mut q, mut weight) = (vec![0.0; 2 * lanes], vec![0.0; lanes]);
+        let (mut total, mut derivative) = (0.0, 0.0);
+        for pt in 0..t_panels {
+            // the value's nodes and weights without the amplitudes, which are differentiated here
+            self.panel_nodes(s, t_end, t_panels, pt, &v_nodes, &mut q, &mut weight);
+            for (l, &w) in weight.iter().enumerate() {
+                let (q1, q2) = (q[l], q[lanes + l]);
+                let beyond = match proxy {
+                    Some(c) => clenshaw(c, q1) - clenshaw(c, q2),
+                    None => k * (self.pupil.opd_beyond_defocus_m(q1) - self.pupil.opd_beyond_defocus_m(q2)),
+                };
+                let (sin, cos) = crate::fft::cis::sin_cos(a * (q1 - q2) + beyond);
+                let (a1, a2) = (self.pupil.amplitude(q1), self.pupil.amplitude(q2));
+                total += w * a1 * a2 * cos;
+                derivative += w
+                    * ((amplitude.value(q1) * a2 + a1 * amplitude.value(q2)) * cos
+                        - a1 * a2 * sin * k * (wavefront_m.value(q1) - wavefront_m.value(q2)));
+            }
+        }
+        let power = self.pupil.power();
+        let mut d_power = 0.0;
+        crate::quad::for_each_node(0.0, 1.0, 8, |q, w| {
+            d_power += w * 2.0 * self.pupil.amplitude(q) * amplitude.value(q);
+        });
+        let norm = 4.0 / (std::f64::consts::PI * power);
+        let otf = norm * total;
+        (otf, norm * derivative - otf * d_power / power)
+    }
+
+    /// [`panel_lanes`](Self::panel_lanes) without the field amplitudes: the rule's weights
+    /// (t and v rule, `sin²t`) alone.
+    #[allow(clippy::too_many_arguments)]
+    fn panel_nodes(
+        &self,
+        s: f64,
+        t_end: f64,
+        t_panels: usize,
+        pt: usize,
+        v_nodes: &[(f64, f64)],
+        q: &mut [f64],
+        weight: &mut [f64],
+    ) {
         let rule16 = crate::quad::rule();
         let lanes = weight.len();
         let ht = 0.5 * t_end / t_panels as f64;
@@ -1558,7 +1637,6 @@ impl RadialOrder {
             *c = ht * wt * st * st;
         }
         fill_columns(s, &sin_t, &cos_t, &scale, v_nodes, q, weight, lanes);
-        self.amplitudes(q, weight);
     }
 
     /// The field amplitudes at every lane into `weight` (`q₁` in the first half of `q`, `q₂` in
