@@ -53,7 +53,11 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
     let met = ratios.iter().all(|&r| r <= 3.0);
     md.push_str(&format!(
         "\nTarget (at most 3× one evaluation): {}.\n",
-        if met { "met" } else { "not met: the gradient's own rule evaluates an OTF and its lane at every (λ, ν) node" }
+        if met {
+            "met"
+        } else {
+            "not met: the gradient's own rule evaluates an OTF and its lane at every (λ, ν) node"
+        }
     ));
     Some(md)
 }
