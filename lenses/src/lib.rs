@@ -89,7 +89,7 @@ pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required
 pub use exact::ExactPupilMap;
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
-pub use library::{AtomErrors, Interpolation, Library, LibraryLens};
+pub use library::{AtomErrors, FirstOrderDerivative, Interpolation, Library, LibraryLens};
 pub use library_map::{Handedness, LibraryMapLens};
 pub use phase::{
     Dispersion, PhaseLens, SPLINE_MAX_KNOTS, SPLINE_MIN_KNOTS, WithZernike, binary2_profile, hyperbolic_binary2,

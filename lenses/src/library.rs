@@ -384,6 +384,100 @@ impl Library {
     }
 }
 
+/// A value and its derivative with respect to one parameter: `(|t|, arg t, ∂|t|, ∂ arg t)`.
+type Dual = [f64; 4];
+
+impl Library {
+    /// `t(p, λ)` and its derivative `∂t/∂p_wrt` (per unit of the parameter `wrt`, 0-based) with
+    /// [`Interpolation::Cubic`]: forward mode on [`transmission`](Self::transmission)'s own
+    /// rule. Along each axis the Hermite interpolant is linear in the rows' values and slopes
+    /// (the slope stencils are linear in the rows), so the derivative along an axis other than
+    /// `wrt` is the same interpolant of the inner derivatives; along `wrt` it adds the basis'
+    /// derivative `(h₀₀′ y₀ + h₁₀′ h m₀ + h₀₁′ y₁ + h₁₁′ h m₁)/h` (`t` moves by `1/h` per unit of
+    /// the parameter, 0 where the parameter is clamped to the axis's ends). The phase steps
+    /// unwrapped by whole turns are constants, and where `|t|` is clamped to `[0, 1]` its
+    /// derivative is 0 (the clamp's one-sided value). Then `∂t = (∂|t| + i |t| ∂ arg t) e^{i arg t}`.
+    /// The value is [`transmission`](Self::transmission)'s, bit for bit. `None` with
+    /// [`Interpolation::Linear`] (a kink at every row: no derivative there) or `wrt` out of range.
+    pub fn transmission_and_derivative(
+        &self,
+        params: &[f64],
+        wavelength_m: f64,
+        wrt: usize,
+    ) -> Option<(Complex64, Complex64)> {
+        if self.interpolation != Interpolation::Cubic || wrt >= self.axes.len() {
+            return None;
+        }
+        let (li, lf) = cell_of(&self.wavelengths, wavelength_m);
+        let [a, p, da, dp] = self.cubic_axis_dual(0, 0, params, (li, lf), wrt);
+        let (a, da) = if (0.0..=1.0).contains(&a) { (a, da) } else { (a.clamp(0.0, 1.0), 0.0) };
+        let t = Complex64::from_polar(a, p);
+        Some((t, Complex64::new(da, a * dp) * Complex64::from_polar(1.0, p)))
+    }
+
+    /// [`cubic_axis`](Self::cubic_axis) of `|t|` and `arg t` with the derivative along
+    /// parameter `wrt` carried beside each value ([`transmission_and_derivative`](Self::transmission_and_derivative)).
+    fn cubic_axis_dual(&self, d: usize, base: usize, params: &[f64], lambda: (usize, f64), wrt: usize) -> Dual {
+        if d == self.axes.len() {
+            let n = self.wavelengths.len();
+            let index = base * n + lambda.0;
+            let (a0, p0) = (self.amplitude[index], self.phase[index]);
+            if n == 1 || lambda.1 == 0.0 {
+                return [a0, p0, 0.0, 0.0];
+            }
+            let (a1, p1) = (self.amplitude[index + 1], self.phase[index + 1]);
+            let f = lambda.1;
+            return [(1.0 - f) * a0 + f * a1, p0 + f * wrapped_step(p0, p1), 0.0, 0.0];
+        }
+        let axis = &self.axes[d];
+        let n = axis.len();
+        if n == 1 {
+            return self.cubic_axis_dual(d + 1, base * n, params, lambda, wrt);
+        }
+        let x = params.get(d).copied().unwrap_or(f64::NAN);
+        let (i, t) = cell_of(axis, x);
+        let (s0, w0) = &self.slopes[d][i];
+        let (s1, w1) = &self.slopes[d][i + 1];
+        let lo = (*s0).min(*s1);
+        let hi = (s0 + w0.len()).max(s1 + w1.len());
+        let mut local: Vec<Dual> = Vec::with_capacity(hi - lo);
+        for j in lo..hi {
+            let [a, p, da, dp] = self.cubic_axis_dual(d + 1, base * n + j, params, lambda, wrt);
+            let p = match local.last() {
+                Some(&[_, last, _, _]) => last + wrapped_step(last, p),
+                None => p,
+            };
+            local.push([a, p, da, dp]);
+        }
+        let slope = |start: usize, weights: &[f64]| {
+            weights.iter().enumerate().fold([0.0; 4], |mut s, (k, w)| {
+                let v = local[start + k - lo];
+                for (s, v) in s.iter_mut().zip(v) {
+                    *s += w * v;
+                }
+                s
+            })
+        };
+        let (m0, m1) = (slope(*s0, w0), slope(*s1, w1));
+        let (y0, y1) = (local[i - lo], local[i + 1 - lo]);
+        let h = axis[i + 1] - axis[i];
+        let (t2, t3) = (t * t, t * t * t);
+        let (h00, h10, h01, h11) = (2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, -2.0 * t3 + 3.0 * t2, t3 - t2);
+        let hermite = |c: usize| h00 * y0[c] + h10 * h * m0[c] + h01 * y1[c] + h11 * h * m1[c];
+        let mut out = [hermite(0), hermite(1), hermite(2), hermite(3)];
+        // the parameter inside the axis (not clamped to its ends): t moves by 1/h per unit
+        let raw = (x - axis[i]) / h;
+        if d == wrt && (0.0..=1.0).contains(&raw) {
+            let (g00, g10, g01, g11) =
+                (6.0 * t2 - 6.0 * t, 3.0 * t2 - 4.0 * t + 1.0, -6.0 * t2 + 6.0 * t, 3.0 * t2 - 2.0 * t);
+            for (c, o) in [(0, 2), (1, 3)] {
+                out[o] += (g00 * y0[c] + g10 * h * m0[c] + g01 * y1[c] + g11 * h * m1[c]) / h;
+            }
+        }
+        out
+    }
+}
+
 /// The place of the grid point `(p, λ)` in a library's values (the wavelength fastest, then the
 /// last parameter, …); `p` and `λ` must be values of the axes.
 fn grid_index(axes: &[Vec<f64>], wavelengths: &[f64], p: &[f64], lambda: f64) -> usize {
@@ -882,6 +976,126 @@ impl LibraryLens {
     }
 }
 
+/// The derivative of a library lens's imaging order at one wavelength with respect to one
+/// entry of its parameter bias ([`LibraryLens::first_order_derivative`]).
+#[derive(Clone, Debug)]
+pub struct FirstOrderDerivative {
+    /// `τ1`, as the lens's imaging order gives it ([`LensModel::orders`]).
+    pub efficiency: f64,
+    /// `T` ([`LensModel::transmission`]).
+    pub transmission: f64,
+    /// `∂τ1/∂b`.
+    pub efficiency_derivative: f64,
+    /// `∂T/∂b`.
+    pub transmission_derivative: f64,
+    /// `∂A/∂b`: the change of the pupil's field amplitude, an even polynomial in `q = ρ²`.
+    pub amplitude: RadialProfile,
+    /// `∂W/∂b`: the change of the pupil's whole wavefront (m), an even polynomial in `q`.
+    pub wavefront_m: RadialProfile,
+}
+
+impl LibraryLens {
+    /// The imaging order's derivative at `wavelength_m` with respect to the bias of parameter
+    /// `wrt` (per unit of that parameter: every atom's `p_wrt → p_wrt + b`), by forward mode on
+    /// the order's own rule (docs/physics.md, "Gradients: a library's parameter bias"): each
+    /// distinct atom's `∂t/∂p` ([`Library::transmission_and_derivative`]), times its error
+    /// factor; `∂T = Σ 2 Re(t̄ ∂t) × area`; each zone's `∂c_1` by the same sum over its cells;
+    /// the least-squares fits (linear in their data) applied to the derivatives' data; at the
+    /// Chebyshev points `∂|c| = Re(c̄ ∂c)/|c|` and `∂ arg c = Im(c̄ ∂c)/|c|²`, fitted as the
+    /// value's are; `∂τ1 = 2∫A ∂A dq` on the rule of [`RadialProfile::mean_square`] (or `∂T`
+    /// where `τ1` is capped at `T`). The design phase and the zones are the nominal layout's and
+    /// do not move with the bias. `None` with linear interpolation in the parameters, `wrt` out
+    /// of range, or where the wavelength has no imaging order (no zone, or no pupil).
+    pub fn first_order_derivative(&self, wavelength_m: f64, wrt: usize) -> Option<FirstOrderDerivative> {
+        let (tau, transmission, pupil) = self.first_order(wavelength_m);
+        pupil.as_ref()?;
+        let mut t = Vec::with_capacity(self.unique.len());
+        for p in &self.unique {
+            t.push(self.library.transmission_and_derivative(p, wavelength_m, wrt)?);
+        }
+        // each atom's field and its derivative, with its fabrication error (|t| ≤ 1: v/|v| where
+        // capped, whose derivative is ∂v/|v| − v Re(v̄ ∂v)/|v|³)
+        let t: Vec<(Complex64, Complex64)> = match &self.factors {
+            None => self.atoms.iter().map(|&(u, _)| t[u]).collect(),
+            Some(f) => self
+                .atoms
+                .iter()
+                .zip(f)
+                .map(|(&(u, _), &f)| {
+                    let (v, dv) = (t[u].0 * f, t[u].1 * f);
+                    let n = v.norm();
+                    if n > 1.0 { (v / n, dv / n - v * (v.conj() * dv).re / (n * n * n)) } else { (v, dv) }
+                })
+                .collect(),
+        };
+        let d_transmission: f64 =
+            self.atoms.iter().zip(&t).map(|(&(_, area), (v, dv))| 2.0 * (v.conj() * dv).re * area).sum();
+        let zero = Complex64::new(0.0, 0.0);
+        let mut sums = vec![(zero, zero, 0.0); self.zones.len()];
+        for cell in &self.cells {
+            let z = &mut sums[cell.zone];
+            z.0 += t[cell.atom].0 * cell.kernel;
+            z.1 += t[cell.atom].1 * cell.kernel;
+            z.2 += cell.span;
+        }
+        let zones: Vec<(f64, f64, Complex64, Complex64)> = self
+            .zones
+            .iter()
+            .zip(&sums)
+            .filter(|(_, s)| s.2 != 0.0)
+            .map(|(&(q, area), s)| (q, area, s.0 / s.2, s.1 / s.2))
+            .collect();
+        let qw: Vec<(f64, f64)> = zones.iter().map(|&(q, a, _, _)| (q, a)).collect();
+        let c_re: Vec<f64> = zones.iter().map(|z| z.2.re).collect();
+        let c_im: Vec<f64> = zones.iter().map(|z| z.2.im).collect();
+        let d_re: Vec<f64> = zones.iter().map(|z| z.3.re).collect();
+        let d_im: Vec<f64> = zones.iter().map(|z| z.3.im).collect();
+        let mut fits = fit_columns(&qw, &[&c_re, &c_im, &d_re, &d_im], COHERENT_FIT_DEGREE).into_iter();
+        let mut next = || fits.next().unwrap_or_default();
+        let (re, im, d_re, d_im) = (next(), next(), next(), next());
+        let eval = |c: &[f64], q: f64| c.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
+        let qs: Vec<f64> = (0..=PUPIL_KNOTS)
+            .map(|j| 0.5 * (1.0 - (std::f64::consts::PI * j as f64 / PUPIL_KNOTS as f64).cos()))
+            .collect();
+        let (mut d_amp, mut d_arg) = (Vec::with_capacity(qs.len()), Vec::with_capacity(qs.len()));
+        for &q in &qs {
+            let c = Complex64::new(eval(&re, q), eval(&im, q));
+            let dc = Complex64::new(eval(&d_re, q), eval(&d_im, q));
+            let (n, cross) = (c.norm(), c.conj() * dc);
+            if n == 0.0 {
+                // |c_1| = 0 at a point: its phase is undefined, the fit not differentiable there
+                return None;
+            }
+            d_amp.push(cross.re / n);
+            d_arg.push(cross.im / (n * n));
+        }
+        let qw: Vec<(f64, f64)> = qs.iter().map(|&q| (q, 1.0)).collect();
+        let mut fits = fit_columns(&qw, &[&d_amp, &d_arg], PUPIL_KNOTS).into_iter();
+        let (d_amp, d_arg) = (fits.next().unwrap_or_default(), fits.next().unwrap_or_default());
+        let per_radian = wavelength_m / std::f64::consts::TAU;
+        let amplitude = RadialProfile::even_polynomial(d_amp).ok()?;
+        let wavefront_m = RadialProfile::even_polynomial(d_arg.iter().map(|c| c * per_radian).collect()).ok()?;
+        // τ1 = min(∫A² dq, T): the mean square on its own rule (8 Gauss panels, exact for these
+        // polynomials), or T where it caps τ1
+        let d_tau = match pupil.as_deref().and_then(|p| p.amplitude_profile()) {
+            Some(a) if a.mean_square() <= transmission => {
+                let mut sum = 0.0;
+                optics::quad::for_each_node(0.0, 1.0, 8, |q, w| sum += w * 2.0 * a.value(q) * amplitude.value(q));
+                sum
+            }
+            _ => d_transmission,
+        };
+        Some(FirstOrderDerivative {
+            efficiency: tau,
+            transmission,
+            efficiency_derivative: d_tau,
+            transmission_derivative: d_transmission,
+            amplitude,
+            wavefront_m,
+        })
+    }
+}
+
 /// Degree in `q` of the coherent first-order field fitted over the zones.
 const COHERENT_FIT_DEGREE: usize = 8;
 
@@ -1051,6 +1265,15 @@ impl LensModel for LibraryLens {
 
     fn design_wavelength(&self) -> Option<f64> {
         Some(self.design_wavelength)
+    }
+
+    fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<optics::OrderDerivatives> {
+        let d = self.first_order_derivative(wavelength_m, parameter)?;
+        Some(optics::OrderDerivatives {
+            efficiencies: vec![d.efficiency_derivative],
+            transmission: d.transmission_derivative,
+            fields: vec![(d.amplitude, d.wavefront_m)],
+        })
     }
 
     fn describe(&self) -> String {

@@ -99,6 +99,12 @@ pub enum Parameter {
     /// Seidel terms) and the overlap engine (Seidel terms), forward mode on their nodes; on axis
     /// with a rotationally symmetric pupil, 0 by symmetry (docs/physics.md, "Gradients: the field point").
     FieldAngle(usize),
+    /// The bias of a meta-atom library lens's parameter `i` (`lens.parameter_bias[i]`, in the
+    /// library's units): every atom's parameter `p_i → p_i + b`, which moves each wavelength's
+    /// imaging order (its efficiency τ1, pupil amplitude and wavefront) and the transmission T
+    /// (`optics::LensModel::order_derivatives`). `∂/∂b`, per unit of the parameter. On axis,
+    /// with a white noise spectrum (docs/physics.md, "Gradients: a library's parameter bias").
+    LibraryBias(usize),
 }
 
 impl Parameter {
@@ -144,6 +150,7 @@ impl Parameter {
             Parameter::SpectrumRange => "the range of the Gaussian spectrum",
             Parameter::FNumber => "the lens's F-number",
             Parameter::FocalLength => "the lens's focal length",
+            Parameter::LibraryBias(_) => "a library lens's parameter bias",
         }
     }
 }
@@ -512,6 +519,17 @@ fn point_gradient(
                 };
                 // the stray light B = 0 here; N = (constants) ∫ ρ τ1 dλ
                 (n * d_ln_n, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::LibraryBias(index) => {
+                let bias = library_bias_partials(scene, e, p, index)?;
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => bias.mean_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * bias.mean_mtf,
+                };
+                // N ∝ ∫ρ τ1 dλ and N_T ∝ ∫ρ T dλ (SI eq. S8, S14); the stray light B = N_T − N
+                let d_n = n * bias.ln_photoelectrons;
+                let d_b = if stray { transmitted * bias.ln_transmitted - d_n } else { 0.0 };
+                (d_n, d_b, 0.0, 0.0, 0.0, d_g, bias.mean_mtf)
             }
         };
         let d_snr0 = partials.signal * d_n + partials.variance * (d_b + d_dark + d_read + d_quant);
@@ -1185,4 +1203,223 @@ fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64, width
         previous = (nu, value);
     }
     ends
+}
+
+/// What a library lens's parameter bias moves ([`library_bias_partials`]).
+struct BiasPartials {
+    /// `∂ln N/∂b = ∫ρ Σ_o ∂τ_o dλ / ∫ρ Σ_o τ_o dλ`
+    ln_photoelectrons: f64,
+    /// `∂ln N_T/∂b = ∫ρ ∂T dλ / ∫ρ T dλ`
+    ln_transmitted: f64,
+    /// `∂M̄/∂b`
+    mean_mtf: f64,
+}
+
+/// One spectral node of [`library_bias_partials`]: its rule weight times `ρ(λ)`, `T`, `∂T` and
+/// per order `(τ_o, ∂τ_o, the order on the radial engine, ∂A, ∂W)`.
+struct BiasNode {
+    lambda: f64,
+    weight: f64,
+    transmission: (f64, f64),
+    orders: Vec<BiasOrder>,
+}
+
+type BiasOrder = (f64, f64, optics::radial::RadialOrder, optics::radial::RadialProfile, optics::radial::RadialProfile);
+
+/// The derivatives of `ln N`, `ln N_T` and the mean MTF with respect to the bias of a library
+/// lens's parameter `index` (docs/physics.md, "Gradients: a library's parameter bias"). Each
+/// wavelength's orders move by [`optics::LensModel::order_derivatives`] (forward mode on the
+/// lens's own rule: the cubic rows' `∂t/∂p`, the zones' `c_1`, the fits); the polychromatic OTF
+/// `O = ∫ρ Σ τ_o H_o dλ / ∫ρ Σ τ_o dλ` then moves by
+///
+/// ```text
+/// ∂O = [∫ρ Σ_o (∂τ_o H_o + τ_o ∂H_o) dλ − O ∫ρ Σ_o ∂τ_o dλ] / ∫ρ Σ_o τ_o dλ
+/// ```
+///
+/// with `∂H_o` the radial engine's amplitude and phase lane on the value's rule
+/// ([`optics::radial::RadialOrder::otf_and_field_derivative`]), and
+/// `∂M̄ = (1/ν_N) ∫ P(ν) sign(O) ∂O dν` (`P` the pixel MTF where the camera applies it). The
+/// integrals are this function's own composite 16-point Gauss–Legendre rules, as
+/// [`aperture_partials_by_own_rule`]'s: in λ over the detected spectrum's support (a Gaussian's
+/// tails cut at 9σ), split at its and the lens's breakpoints (the library's wavelengths, where
+/// its rows are linear in λ), doubled on 8 ν panels until `∂M̄` moves by at most the tolerance
+/// times `max(|∂M̄|, M̄)`; then the ν rule (panels split at the sign changes of `O`, the kink
+/// of |O|) doubled the same way. Each OTF and its lane to a tenth of the tolerance.
+fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usize) -> Result<BiasPartials, Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let camera = scene.camera();
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth(
+            "with camera.noise_spectrum the parameter bias's gradient is not computed here yet".to_owned(),
+        ));
+    }
+    let lens = scene.lens();
+    let field = scene.field();
+    if !field.is_on_axis() {
+        return Err(not_smooth(
+            "off axis the library lens's pupil is not rotationally symmetric (the FFT path), where the parameter \
+             bias's amplitude lane is not computed yet"
+                .to_owned(),
+        ));
+    }
+    let f_number = lens.f_number();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let tolerance = scene.options().settings().tolerance;
+    let accuracy = 0.1 * tolerance;
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let node = |lambda: f64, weight: f64| -> Result<BiasNode, Error> {
+        let orders = lens.orders(lambda, field);
+        let Some(d) = lens.order_derivatives(lambda, index) else {
+            return Err(not_smooth(format!(
+                "the lens gives no derivative of its orders in this parameter at {:.3} nm (a library lens with \
+                 lens.library_interpolation = \"cubic\", a bias index below its number of parameters, the lens's \
+                 own pupil mapping, and an imaging order with |c_1| > 0 at every radius)",
+                lambda * 1e9
+            )));
+        };
+        if d.fields.len() != orders.len() || d.efficiencies.len() != orders.len() {
+            return Err(not_smooth("the lens's order derivatives do not match its orders".to_owned()));
+        }
+        let mut out = Vec::with_capacity(orders.len());
+        for ((o, &d_tau), (d_amplitude, d_wavefront)) in orders.iter().zip(&d.efficiencies).zip(d.fields) {
+            let w = &o.wavefront;
+            let optics::Pupil::Radial(pupil) = &o.pupil else {
+                return Err(not_smooth("an order's pupil is not a radial pupil".to_owned()));
+            };
+            if !pupil.is_symmetric()
+                || w.image_shift_m != [0.0, 0.0]
+                || [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] != [0.0; 4]
+            {
+                return Err(not_smooth(
+                    "an order is not a rotationally symmetric radial pupil on axis (Zernike or Seidel terms, an \
+                     image shift)"
+                        .to_owned(),
+                ));
+            }
+            let radial = optics::radial::RadialOrder::new(pupil.clone(), w.defocus_m, lambda);
+            out.push((o.efficiency, d_tau, radial, d_amplitude, d_wavefront));
+        }
+        Ok(BiasNode { lambda, weight, transmission: (lens.transmission(lambda), d.transmission), orders: out })
+    };
+    let (lo, hi) = match detected.as_line() {
+        Some(_) => (0.0, 0.0),
+        None => {
+            let (mut lo, mut hi) = detected.support();
+            for g in detected.gaussians() {
+                lo = lo.max(g.center() - 9.0 * g.sigma());
+                hi = hi.min(g.center() + 9.0 * g.sigma());
+            }
+            if !(hi.is_finite() && hi > lo) {
+                return Err(not_smooth(
+                    "the detected spectrum has no bounded support (a Gaussian factor, a table or a band) to integrate over"
+                        .to_owned(),
+                ));
+            }
+            (lo, hi)
+        }
+    };
+    let mut ends: Vec<f64> = vec![lo];
+    ends.extend(detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&x| x > lo && x < hi));
+    ends.push(hi);
+    ends.sort_by(f64::total_cmp);
+    ends.dedup();
+    let spectral_rule = |panels: usize| -> Result<Vec<BiasNode>, Error> {
+        if let Some(line) = detected.as_line() {
+            return Ok(vec![node(line.wavelength_m, line.weight)?]);
+        }
+        let mut nodes = Vec::new();
+        for w in ends.windows(2) {
+            let h = (w[1] - w[0]) / panels as f64;
+            for i in 0..panels {
+                let centre = w[0] + h * (i as f64 + 0.5);
+                for &(x, wx) in optics::quad::rule() {
+                    let lambda = centre + 0.5 * h * x;
+                    let rho = detected.value(lambda);
+                    if rho != 0.0 {
+                        nodes.push(node(lambda, 0.5 * h * wx * rho)?);
+                    }
+                }
+            }
+        }
+        Ok(nodes)
+    };
+    // ∫ρ Σ τ_o and ∫ρ Σ ∂τ_o over the nodes
+    let sums = |nodes: &[BiasNode]| -> (f64, f64) {
+        nodes.iter().fold((0.0, 0.0), |(s, d), n| {
+            let (tau, d_tau) = n.orders.iter().fold((0.0, 0.0), |(a, b), o| (a + o.0, b + o.1));
+            (s + n.weight * tau, d + n.weight * d_tau)
+        })
+    };
+    let value = |nodes: &[BiasNode], nu: f64| -> f64 {
+        let mut o = 0.0;
+        for n in nodes {
+            for (tau, _, radial, _, _) in &n.orders {
+                o += n.weight * tau * radial.otf(nu * n.lambda * f_number, accuracy);
+            }
+        }
+        o / sums(nodes).0
+    };
+    // (O, ∂O) at ν
+    let at = |nodes: &[BiasNode], nu: f64| -> (f64, f64) {
+        let (total, d_total) = sums(nodes);
+        let (mut o, mut d) = (0.0, 0.0);
+        for n in nodes {
+            for (tau, d_tau, radial, d_amplitude, d_wavefront) in &n.orders {
+                let (h, d_h) =
+                    radial.otf_and_field_derivative(nu * n.lambda * f_number, accuracy, d_amplitude, d_wavefront);
+                o += n.weight * tau * h;
+                d += n.weight * (d_tau * h + tau * d_h);
+            }
+        }
+        let o = o / total;
+        (o, (d - o * d_total) / total)
+    };
+    let integrate = |nodes: &[BiasNode], panels: usize| -> f64 {
+        let ends = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), |hi| 1e-15 * hi);
+        let mut sum = 0.0;
+        for w in ends.windows(2) {
+            let half = 0.5 * (w[1] - w[0]);
+            if half <= 0.0 {
+                continue;
+            }
+            let centre = 0.5 * (w[0] + w[1]);
+            for &(x, wx) in optics::quad::rule() {
+                let nu = centre + half * x;
+                let (o, d) = at(nodes, nu);
+                let weight = half * wx * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
+                sum += weight * if o < 0.0 { -d } else { d };
+            }
+        }
+        sum / nyquist
+    };
+    let converged = |change: f64, next: f64| change <= tolerance * next.abs().max(e.mean_mtf);
+    let nu_coarse = 8;
+    let mut lambda_panels = 1;
+    let mut nodes = spectral_rule(lambda_panels)?;
+    let mut previous = integrate(&nodes, nu_coarse);
+    while detected.as_line().is_none() {
+        lambda_panels *= 2;
+        let finer = spectral_rule(lambda_panels)?;
+        let next = integrate(&finer, nu_coarse);
+        let change = (next - previous).abs();
+        (nodes, previous) = (finer, next);
+        if converged(change, next) || lambda_panels >= 64 {
+            break;
+        }
+    }
+    let mut nu_panels = nu_coarse;
+    let mean_mtf = loop {
+        nu_panels *= 2;
+        let next = integrate(&nodes, nu_panels);
+        let change = (next - previous).abs();
+        previous = next;
+        if converged(change, next) || nu_panels >= 512 {
+            break next;
+        }
+    };
+    let (total, d_total) = sums(&nodes);
+    let (t, d_t) =
+        nodes.iter().fold((0.0, 0.0), |(a, b), n| (a + n.weight * n.transmission.0, b + n.weight * n.transmission.1));
+    Ok(BiasPartials { ln_photoelectrons: d_total / total, ln_transmitted: d_t / t, mean_mtf })
 }

@@ -270,6 +270,19 @@ pub struct FactoredEfficiency {
 /// given.
 pub type ApertureDirections = Result<Vec<[crate::radial::RadialProfile; 3]>, String>;
 
+/// How a lens's imaging orders and transmission move with one of its design parameters at one
+/// wavelength ([`LensModel::order_derivatives`]): per unit of the parameter.
+#[derive(Clone, Debug)]
+pub struct OrderDerivatives {
+    /// `∂τ_o`, one per order of [`LensModel::orders`].
+    pub efficiencies: Vec<f64>,
+    /// `∂T` ([`LensModel::transmission`]).
+    pub transmission: f64,
+    /// Per order (a radial pupil's), the change of its field amplitude `∂A` and of its whole
+    /// wavefront `∂W` (m), as functions of `q = ρ²`.
+    pub fields: Vec<(crate::radial::RadialProfile, crate::radial::RadialProfile)>,
+}
+
 /// One part of a [`FactoredEfficiency`]: a table and the orders it multiplies.
 #[derive(Clone, Debug)]
 pub struct FactoredPart {
@@ -417,6 +430,14 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// How the lens's orders move with its design parameter `parameter` at `wavelength_m` on
+    /// axis ([`OrderDerivatives`]; a library lens's parameter bias, one per library parameter:
+    /// docs/physics.md, "Gradients: a library's parameter bias"). `None` (the default) where the
+    /// lens has no such parameter or its value is not differentiable in it there.
+    fn order_derivatives(&self, _wavelength_m: f64, _parameter: usize) -> Option<OrderDerivatives> {
+        None
+    }
+
     /// The wavelength the lens was designed for (m), if it has one: the reference of the
     /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
     fn design_wavelength(&self) -> Option<f64> {
@@ -485,6 +506,9 @@ macro_rules! forward_lens_model {
             }
             fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
                 (**self).image_shift_field_rates(wavelength_m, field)
+            }
+            fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<OrderDerivatives> {
+                (**self).order_derivatives(wavelength_m, parameter)
             }
             fn describe(&self) -> String { (**self).describe() }
             fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> { (**self).affine_defocus(field) }

@@ -466,3 +466,128 @@ fn cubic_amplitude_stays_between_0_and_1() {
     assert!(range.0 >= 0.0 && range.1 <= 1.0, "{range:?}");
     assert_eq!(range, (0.0, 1.0));
 }
+
+/// `Library::transmission_and_derivative` (forward mode on the cubic's rule) against
+/// differences of `transmission` in each parameter of a 2-D library, at 241 × 5 points: off the
+/// rows, Richardson of central differences of steps 1e-4 and 5e-5 of the range, within 1e-8 of
+/// the derivative's size; on a row (the second derivative jumps there: C¹, not C²) and at the
+/// axis's ends, one-sided differences of step 1e-7 within 1e-5. The value is
+/// `transmission`'s bit for bit. Linear rows have no derivative (`None`).
+#[test]
+fn cubic_derivative_is_the_interpolants_own() {
+    let library = smooth_library(12, 4, Interpolation::Cubic);
+    let mut worst: f64 = 0.0;
+    for i in 0..=240 {
+        let p = 3.0 * i as f64 / 240.0;
+        for j in 0..5 {
+            let s = 0.05 + 0.9 * j as f64 / 4.0;
+            for (wrt, step, rows) in [(0, 3e-4, 0.25), (1, 1e-4, 0.25)] {
+                let (t, dt) = library.transmission_and_derivative(&[p, s], 800e-9, wrt).unwrap();
+                assert_eq!(t, library.transmission(&[p, s], 800e-9));
+                let hi = if wrt == 0 { 3.0 } else { 1.0 };
+                let x = [p, s][wrt];
+                let at = |a: f64, b: f64| {
+                    let mut y = [p, s];
+                    y[wrt] = b.min(hi);
+                    let up = library.transmission(&y, 800e-9);
+                    y[wrt] = a.max(0.0);
+                    (up - library.transmission(&y, 800e-9)) / (b.min(hi) - a.max(0.0))
+                };
+                let off_row = ((x / rows).round() * rows - x).abs() > 2.0 * step;
+                if off_row {
+                    let central = |h: f64| at(x - h, x + h);
+                    let richardson = (4.0 * central(0.5 * step) - central(step)) / 3.0;
+                    worst = worst.max((richardson - dt).norm() / dt.norm().max(1.0));
+                } else {
+                    // both sides inside the axis agree with the derivative (C¹); at an end, the one
+                    for side in [at(x - 1e-7, x), at(x, x + 1e-7)] {
+                        if side.is_finite() {
+                            assert!(
+                                (side - dt).norm() < 1e-5 * dt.norm().max(1.0),
+                                "p {p} s {s} wrt {wrt}: {dt} vs {side}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    println!("cubic derivative: worst relative difference {worst:.2e}");
+    assert!(worst < 1e-8, "{worst:e}");
+    let linear = smooth_library(12, 4, Interpolation::Linear);
+    assert!(linear.transmission_and_derivative(&[1.3, 0.5], 800e-9, 0).is_none());
+    assert!(library.transmission_and_derivative(&[1.3, 0.5], 800e-9, 2).is_none());
+}
+
+/// A 72-level library with cubic rows (parameter 0 … 71, phase `2π (p − 4)/64`, amplitude
+/// `0.75 + 0.15 cos(6π p/64)`), whose hyperbolic layout at F/10 uses levels 4 … 67, so that a
+/// bias of a few levels stays inside the library.
+fn cubic_levels_lens() -> LibraryLens {
+    let mut rows = Vec::new();
+    for p in 0..72 {
+        for lambda in [700e-9, 800e-9, 900e-9] {
+            let phase = std::f64::consts::TAU * (p as f64 - 4.0) / 64.0;
+            let wrapped = phase - std::f64::consts::TAU * (phase / std::f64::consts::TAU).round();
+            let amplitude = 0.75 + 0.15 * (3.0 * std::f64::consts::TAU * p as f64 / 64.0).cos();
+            rows.push((vec![p as f64], lambda, amplitude, wrapped));
+        }
+    }
+    let library = Arc::new(Library::new(&rows).unwrap().with_interpolation(Interpolation::Cubic));
+    let (radii, params) = hyperbolic_layout(10.0, 0.1e-6, 64);
+    let params = params.into_iter().map(|p| vec![p[0] + 4.0]).collect();
+    LibraryLens::new(10.0, F0, L0, library, radii, params, "test".into()).unwrap()
+}
+
+/// `LibraryLens::first_order_derivative` against central differences of the lens's own imaging
+/// order (τ1, T, the pupil's amplitude and whole wavefront at 11 radii) in the parameter bias,
+/// at a bias of 0.3 levels, 780 and 815 nm, without and with atom errors (σ_φ = 0.3 rad,
+/// σ_t = 0.02: no atom reaches the cap |t| = 1, where the value has a kink): Richardson of steps
+/// 0.04 and 0.02 levels (smaller steps meet the fits' rounding, about 1e-9 of A over the step).
+/// Each group (τ1 and T; A; W) within 3e-5 of its largest derivative; measured (this test prints
+/// them; `cargo test -p asnr-lenses --test lenses first_order_derivative -- --nocapture`):
+/// at most 3.1e-6 (τ1 and T), 1.2e-5 (A), 1.4e-7 (W), about the differences' own spread.
+#[test]
+fn first_order_derivative_against_central_differences() {
+    let nominal = cubic_levels_lens();
+    let bias = 0.3;
+    for with_errors in [false, true] {
+        let e = if with_errors { errors(0.3, 0.02, 11) } else { AtomErrors::default() };
+        let lens = |b: f64| nominal.clone().with_fabrication(&[b], e).unwrap();
+        let at_bias = lens(bias);
+        for lambda in [780e-9, 815e-9] {
+            let d = at_bias.first_order_derivative(lambda, 0).unwrap();
+            // the quantities compared: τ1, T, A(q) and W(q) at 11 radii
+            let sample = |l: &LibraryLens| -> Vec<f64> {
+                let orders = l.orders(lambda, Field::ON_AXIS);
+                let optics::Pupil::Radial(pupil) = &orders[0].pupil else { panic!("a radial pupil") };
+                let mut out = vec![orders[0].efficiency, l.transmission(lambda)];
+                out.extend((0..=10).map(|i| pupil.amplitude(i as f64 / 10.0)));
+                out.extend((0..=10).map(|i| {
+                    let q = i as f64 / 10.0;
+                    pupil.opd_beyond_defocus_m(q) + pupil.fitted_defocus_m() * q
+                }));
+                out
+            };
+            let value = sample(&at_bias);
+            assert_eq!(value[0], d.efficiency);
+            assert_eq!(value[1], d.transmission);
+            let difference = |h: f64| -> Vec<f64> {
+                let (up, down) = (sample(&lens(bias + h)), sample(&lens(bias - h)));
+                up.iter().zip(&down).map(|(u, d)| (u - d) / (2.0 * h)).collect()
+            };
+            let (coarse, fine) = (difference(0.04), difference(0.02));
+            let mut ours = vec![d.efficiency_derivative, d.transmission_derivative];
+            ours.extend((0..=10).map(|i| d.amplitude.value(i as f64 / 10.0)));
+            ours.extend((0..=10).map(|i| d.wavefront_m.value(i as f64 / 10.0)));
+            let groups = [0..2, 2..13, 13..24];
+            for group in groups {
+                let size = ours[group.clone()].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                let worst =
+                    group.clone().map(|k| ((4.0 * fine[k] - coarse[k]) / 3.0 - ours[k]).abs()).fold(0.0_f64, f64::max);
+                println!("errors {with_errors} λ {lambda}: quantities {group:?}: {:.1e} of {size:.3e}", worst / size);
+                assert!(worst < 3e-5 * size, "errors {with_errors} λ {lambda}: {group:?}: {ours:?} vs {fine:?}");
+            }
+            assert!(d.efficiency_derivative.abs() > 1e-4, "a derivative to test: {}", d.efficiency_derivative);
+        }
+    }
+}

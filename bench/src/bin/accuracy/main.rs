@@ -42,6 +42,7 @@ mod freeform;
 mod gds_scale;
 mod gradients;
 mod gradients_aperture;
+mod gradients_bias;
 mod iris;
 mod kernels;
 mod map;

@@ -46,6 +46,11 @@ pub(crate) const SECTIONS: &[Section] = &[
         title: "Gradients: the value and its gradient side by side",
         run: crate::gradients::section,
     },
+    Section {
+        name: "gradients-bias",
+        title: "Gradients: a library's parameter bias",
+        run: crate::gradients_bias::section,
+    },
     Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section },
     Section { name: "freeform", title: crate::freeform::TITLE, run: crate::freeform::section },
     Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
