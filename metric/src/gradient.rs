@@ -1037,9 +1037,7 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
     let lens = scene.lens();
     let field = scene.field();
     let f_number = lens.f_number();
-    let detected = crate::evaluate::detected_spectrum(scene);
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
-    let tolerance = scene.options().settings().tolerance;
     // each spectral node: (λ, ρ(λ) × the rule's weight, [(τ_o, w_o)] per order)
     type Node = (f64, f64, Vec<(f64, f64)>);
     let node = |lambda: f64, weight: f64| -> Result<Node, Error> {
@@ -1060,49 +1058,6 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
             orders.push((o.efficiency, w.defocus_m / lambda));
         }
         Ok((lambda, weight, orders))
-    };
-    // the spectral interval and its breakpoints
-    let (lo, hi) = match detected.as_line() {
-        Some(_) => (0.0, 0.0),
-        None => {
-            let (mut lo, mut hi) = detected.support();
-            for g in detected.gaussians() {
-                lo = lo.max(g.center() - 9.0 * g.sigma());
-                hi = hi.min(g.center() + 9.0 * g.sigma());
-            }
-            if !(hi.is_finite() && hi > lo) {
-                return Err(not_smooth(
-                    "the detected spectrum has no bounded support (a Gaussian factor, a table or a band) to integrate over"
-                        .to_owned(),
-                ));
-            }
-            (lo, hi)
-        }
-    };
-    let mut ends: Vec<f64> = vec![lo];
-    ends.extend(detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&x| x > lo && x < hi));
-    ends.push(hi);
-    ends.sort_by(f64::total_cmp);
-    ends.dedup();
-    let spectral_rule = |panels: usize| -> Result<Vec<Node>, Error> {
-        if let Some(line) = detected.as_line() {
-            return Ok(vec![node(line.wavelength_m, line.weight)?]);
-        }
-        let mut nodes = Vec::new();
-        for w in ends.windows(2) {
-            let h = (w[1] - w[0]) / panels as f64;
-            for i in 0..panels {
-                let centre = w[0] + h * (i as f64 + 0.5);
-                for &(x, wx) in optics::quad::rule() {
-                    let lambda = centre + 0.5 * h * x;
-                    let rho = detected.value(lambda);
-                    if rho != 0.0 {
-                        nodes.push(node(lambda, 0.5 * h * wx * rho)?);
-                    }
-                }
-            }
-        }
-        Ok(nodes)
     };
     // O at ν on the nodes (for its sign and its zeros), and (O, ∂O/∂ln K)
     let value = |nodes: &[Node], nu: f64| -> f64 {
@@ -1127,9 +1082,96 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
         }
         (o / total, d / total)
     };
-    let integrate = |nodes: &[Node], panels: usize| -> f64 {
-        // the zeros to 1e-13 of ν_N: this rule's own (coarser than the value's 1e-15 of ν)
-        let cuts = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), |_| 1e-13 * nyquist);
+    // the spectral rule doubled from 2 to 256 panels a piece on a coarse frequency rule (its
+    // nodes reach 0.99 ν_N, where the defocus turns the OTF fastest in λ), then the frequency rule
+    // to 1024 panels; the zeros to 1e-13 of ν_N: this rule's own (coarser than the value's 1e-15 of ν)
+    let refinement = Refinement { lambda_panels: (2, 256), nu_panels: 1024, zero_width: &|_| 1e-13 * nyquist };
+    let (_, d_k) = reference_rule(scene, e, p, refinement, None, node, value, at)?;
+    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+}
+
+/// How [`reference_rule`] refines: its first and last number of λ panels a piece, its last
+/// number of ν panels, and the width (of the bracket's upper end) to which it brackets the
+/// OTF's zeros.
+struct Refinement<'a> {
+    lambda_panels: (usize, usize),
+    nu_panels: usize,
+    zero_width: &'a dyn Fn(f64) -> f64,
+}
+
+/// The slow reference rule of a mean-MTF derivative, shared by the F-number's `D_K`
+/// ([`aperture_partials_by_own_rule`]) and the library bias's `∂M̄`
+/// ([`library_bias_partials`]): composite 16-point Gauss–Legendre rules in λ over the detected
+/// spectrum's support (a Gaussian factor's tails cut at 9σ; a line's single node), split at its
+/// and the lens's breakpoints, each node built by `node(λ, ρ(λ) × the rule's weight)`; and
+/// `(1/ν_N) ∫ P(ν) sign(O) ∂O dν` on Gauss–Legendre panels in ν split at the sign changes of
+/// `value` (the kink of |O|; `P` the pixel MTF where `pixel` is its pitch), `at` giving
+/// `(O, ∂O)`. The λ panels are doubled on 8 ν panels, then the ν panels on those λ nodes, each
+/// until the integral moves by at most the tolerance times `max(|integral|, M̄)` or reaches
+/// its `refinement` limit. Returns the λ nodes and the integral.
+#[allow(clippy::too_many_arguments)]
+fn reference_rule<N>(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    refinement: Refinement,
+    pixel: Option<f64>,
+    node: impl Fn(f64, f64) -> Result<N, Error>,
+    value: impl Fn(&[N], f64) -> f64,
+    at: impl Fn(&[N], f64) -> (f64, f64),
+) -> Result<(Vec<N>, f64), Error> {
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let tolerance = scene.options().settings().tolerance;
+    let line = detected.as_line();
+    // the spectral interval and its breakpoints
+    let (lo, hi) = match line {
+        Some(_) => (0.0, 0.0),
+        None => {
+            let (mut lo, mut hi) = detected.support();
+            for g in detected.gaussians() {
+                lo = lo.max(g.center() - 9.0 * g.sigma());
+                hi = hi.min(g.center() + 9.0 * g.sigma());
+            }
+            if !(hi.is_finite() && hi > lo) {
+                return Err(Error::NotDifferentiable {
+                    parameter: p.describe(),
+                    reason: "the detected spectrum has no bounded support (a Gaussian factor, a table or a band) to \
+                             integrate over"
+                        .to_owned(),
+                });
+            }
+            (lo, hi)
+        }
+    };
+    let mut ends: Vec<f64> = vec![lo];
+    ends.extend(detected.breakpoints().into_iter().chain(scene.lens().breakpoints()).filter(|&x| x > lo && x < hi));
+    ends.push(hi);
+    ends.sort_by(f64::total_cmp);
+    ends.dedup();
+    let spectral_rule = |panels: usize| -> Result<Vec<N>, Error> {
+        if let Some(line) = &line {
+            return Ok(vec![node(line.wavelength_m, line.weight)?]);
+        }
+        let mut nodes = Vec::new();
+        for w in ends.windows(2) {
+            let h = (w[1] - w[0]) / panels as f64;
+            for i in 0..panels {
+                let centre = w[0] + h * (i as f64 + 0.5);
+                for &(x, wx) in optics::quad::rule() {
+                    let lambda = centre + 0.5 * h * x;
+                    let rho = detected.value(lambda);
+                    if rho != 0.0 {
+                        nodes.push(node(lambda, 0.5 * h * wx * rho)?);
+                    }
+                }
+            }
+        }
+        Ok(nodes)
+    };
+    let integrate = |nodes: &[N], panels: usize| -> f64 {
+        let cuts = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), refinement.zero_width);
         let mut sum = 0.0;
         for w in cuts.windows(2) {
             let half = 0.5 * (w[1] - w[0]);
@@ -1138,41 +1180,41 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
             }
             let centre = 0.5 * (w[0] + w[1]);
             for &(x, wx) in optics::quad::rule() {
-                let (o, d) = at(nodes, centre + half * x);
-                sum += half * wx * if o < 0.0 { -d } else { d };
+                let nu = centre + half * x;
+                let (o, d) = at(nodes, nu);
+                let weight = half * wx * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
+                sum += weight * if o < 0.0 { -d } else { d };
             }
         }
         sum / nyquist
     };
     let converged = |change: f64, next: f64| change <= tolerance * next.abs().max(e.mean_mtf);
-    // the spectral rule doubled on a coarse frequency rule (its nodes reach 0.99 ν_N, where the
-    // defocus turns the OTF fastest in λ), then the frequency rule on that spectral rule
     let nu_coarse = 8;
-    let mut lambda_panels = 2;
+    let (first, most) = refinement.lambda_panels;
+    let mut lambda_panels = first;
     let mut nodes = spectral_rule(lambda_panels)?;
     let mut previous = integrate(&nodes, nu_coarse);
-    loop {
+    while line.is_none() {
         lambda_panels *= 2;
         let finer = spectral_rule(lambda_panels)?;
         let next = integrate(&finer, nu_coarse);
         let change = (next - previous).abs();
         (nodes, previous) = (finer, next);
-        if converged(change, next) || lambda_panels >= 256 {
+        if converged(change, next) || lambda_panels >= most {
             break;
         }
     }
     let mut nu_panels = nu_coarse;
-    let d_k = loop {
+    let integral = loop {
         nu_panels *= 2;
         let next = integrate(&nodes, nu_panels);
         let change = (next - previous).abs();
         previous = next;
-        if converged(change, next) || nu_panels >= 1024 {
+        if converged(change, next) || nu_panels >= refinement.nu_panels {
             break next;
         }
     };
-    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+    Ok((nodes, integral))
 }
 
 /// The ends of `panels` equal panels over `[0, nyquist]` with the sign changes of `otf` between
@@ -1263,8 +1305,6 @@ fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usi
         ));
     }
     let f_number = lens.f_number();
-    let detected = crate::evaluate::detected_spectrum(scene);
-    let nyquist = e.nyquist_cyc_per_mm * 1e3;
     let tolerance = scene.options().settings().tolerance;
     let accuracy = 0.1 * tolerance;
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
@@ -1302,48 +1342,6 @@ fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usi
         }
         Ok(BiasNode { lambda, weight, transmission: (lens.transmission(lambda), d.transmission), orders: out })
     };
-    let (lo, hi) = match detected.as_line() {
-        Some(_) => (0.0, 0.0),
-        None => {
-            let (mut lo, mut hi) = detected.support();
-            for g in detected.gaussians() {
-                lo = lo.max(g.center() - 9.0 * g.sigma());
-                hi = hi.min(g.center() + 9.0 * g.sigma());
-            }
-            if !(hi.is_finite() && hi > lo) {
-                return Err(not_smooth(
-                    "the detected spectrum has no bounded support (a Gaussian factor, a table or a band) to integrate over"
-                        .to_owned(),
-                ));
-            }
-            (lo, hi)
-        }
-    };
-    let mut ends: Vec<f64> = vec![lo];
-    ends.extend(detected.breakpoints().into_iter().chain(lens.breakpoints()).filter(|&x| x > lo && x < hi));
-    ends.push(hi);
-    ends.sort_by(f64::total_cmp);
-    ends.dedup();
-    let spectral_rule = |panels: usize| -> Result<Vec<BiasNode>, Error> {
-        if let Some(line) = detected.as_line() {
-            return Ok(vec![node(line.wavelength_m, line.weight)?]);
-        }
-        let mut nodes = Vec::new();
-        for w in ends.windows(2) {
-            let h = (w[1] - w[0]) / panels as f64;
-            for i in 0..panels {
-                let centre = w[0] + h * (i as f64 + 0.5);
-                for &(x, wx) in optics::quad::rule() {
-                    let lambda = centre + 0.5 * h * x;
-                    let rho = detected.value(lambda);
-                    if rho != 0.0 {
-                        nodes.push(node(lambda, 0.5 * h * wx * rho)?);
-                    }
-                }
-            }
-        }
-        Ok(nodes)
-    };
     // ∫ρ Σ τ_o and ∫ρ Σ ∂τ_o over the nodes
     let sums = |nodes: &[BiasNode]| -> (f64, f64) {
         nodes.iter().fold((0.0, 0.0), |(s, d), n| {
@@ -1375,49 +1373,8 @@ fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usi
         let o = o / total;
         (o, (d - o * d_total) / total)
     };
-    let integrate = |nodes: &[BiasNode], panels: usize| -> f64 {
-        let ends = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), |hi| 1e-15 * hi);
-        let mut sum = 0.0;
-        for w in ends.windows(2) {
-            let half = 0.5 * (w[1] - w[0]);
-            if half <= 0.0 {
-                continue;
-            }
-            let centre = 0.5 * (w[0] + w[1]);
-            for &(x, wx) in optics::quad::rule() {
-                let nu = centre + half * x;
-                let (o, d) = at(nodes, nu);
-                let weight = half * wx * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
-                sum += weight * if o < 0.0 { -d } else { d };
-            }
-        }
-        sum / nyquist
-    };
-    let converged = |change: f64, next: f64| change <= tolerance * next.abs().max(e.mean_mtf);
-    let nu_coarse = 8;
-    let mut lambda_panels = 1;
-    let mut nodes = spectral_rule(lambda_panels)?;
-    let mut previous = integrate(&nodes, nu_coarse);
-    while detected.as_line().is_none() {
-        lambda_panels *= 2;
-        let finer = spectral_rule(lambda_panels)?;
-        let next = integrate(&finer, nu_coarse);
-        let change = (next - previous).abs();
-        (nodes, previous) = (finer, next);
-        if converged(change, next) || lambda_panels >= 64 {
-            break;
-        }
-    }
-    let mut nu_panels = nu_coarse;
-    let mean_mtf = loop {
-        nu_panels *= 2;
-        let next = integrate(&nodes, nu_panels);
-        let change = (next - previous).abs();
-        previous = next;
-        if converged(change, next) || nu_panels >= 512 {
-            break next;
-        }
-    };
+    let refinement = Refinement { lambda_panels: (1, 64), nu_panels: 512, zero_width: &|hi| 1e-15 * hi };
+    let (nodes, mean_mtf) = reference_rule(scene, e, p, refinement, pixel, node, value, at)?;
     let (total, d_total) = sums(&nodes);
     let (t, d_t) =
         nodes.iter().fold((0.0, 0.0), |(a, b), n| (a + n.weight * n.transmission.0, b + n.weight * n.transmission.1));

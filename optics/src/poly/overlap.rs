@@ -787,16 +787,20 @@ fn term_otf_and_derivatives(
             let (xp, xm) = (x + s, x - s);
             (xp * c - y * sn, xp * sn + y * c, xm * c - y * sn, xm * sn + y * c)
         };
-        if moments {
-            // the value's closed form, and each lane's factor g(x) = k [D(p₊) − D(p₋)] (at most
-            // quadratic in x) against the same phase by the moments of `quadratic_moments`
+        // the phase a x + rest, quadratic in x where `quadratic`: its α, β and value at x = 0
+        // from its values at −X, 0 and X
+        let quadratic_fit = || {
             let f = |x: f64| {
                 let (xa, ya, xb, yb) = points(x);
                 a * x + term.rest_phase(k, xa, ya, xb, yb)
             };
             let (lo, mid, hi) = (f(-x_half), f(0.0), f(x_half));
-            let alpha = (hi + lo - 2.0 * mid) / (2.0 * x_half * x_half);
-            let beta = (hi - lo) / (2.0 * x_half);
+            ((hi + lo - 2.0 * mid) / (2.0 * x_half * x_half), (hi - lo) / (2.0 * x_half), mid)
+        };
+        if moments {
+            // the value's closed form, and each lane's factor g(x) = k [D(p₊) − D(p₋)] (at most
+            // quadratic in x) against the same phase by the moments of `quadratic_moments`
+            let (alpha, beta, mid) = quadratic_fit();
             if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
                 let (si, co) = sin_cos(mid);
                 let front = Complex64::new(co, si) * ct;
@@ -840,13 +844,7 @@ fn term_otf_and_derivatives(
         row[1..].iter_mut().for_each(|r| *r *= scale);
         row[0] = if quadratic {
             // the value's closed form, as `term_otf` takes it
-            let f = |x: f64| {
-                let (xa, ya, xb, yb) = points(x);
-                a * x + term.rest_phase(k, xa, ya, xb, yb)
-            };
-            let (lo, mid, hi) = (f(-x_half), f(0.0), f(x_half));
-            let alpha = (hi + lo - 2.0 * mid) / (2.0 * x_half * x_half);
-            let beta = (hi - lo) / (2.0 * x_half);
+            let (alpha, beta, mid) = quadratic_fit();
             let (si, co) = sin_cos(mid);
             Complex64::new(co, si) * quadratic_phase_integral(alpha, beta, x_half) * ct
         } else {
