@@ -30,6 +30,7 @@
 //! ```
 
 mod closed;
+mod complex4;
 mod error;
 pub mod faddeeva;
 pub mod fft;

@@ -54,6 +54,41 @@ pub fn sin_cos(phi: f64) -> (f64, f64) {
     (flip * sin, flip * cos)
 }
 
+/// [`sin_cos`] on four lanes, by the same operations in the same order on each (the quadrant
+/// `q mod 4` computed exactly in floating point), so each lane is the scalar result to the last
+/// bit: the closed form's pupil angle and complex exponentials at four nodes at once.
+#[inline(always)]
+pub(crate) fn sin_cos4(phi: wide::f64x4) -> (wide::f64x4, wide::f64x4) {
+    use wide::f64x4;
+    let k = f64x4::splat;
+    let q = (phi * k(std::f64::consts::FRAC_2_PI) + k(ROUND)) - k(ROUND);
+    let r = ((phi - q * k(PIO2_1)) - q * k(PIO2_2)) - q * k(PIO2_3);
+    let r2 = r * r;
+    let s = r
+        * (k(1.0)
+            + r2 * (k(-1.0 / 6.0)
+                + r2 * (k(1.0 / 120.0)
+                    + r2 * (k(-1.0 / 5040.0)
+                        + r2 * (k(1.0 / 362_880.0)
+                            + r2 * (k(-1.0 / 39_916_800.0)
+                                + r2 * (k(1.0 / 6_227_020_800.0) + r2 * k(-1.0 / 1_307_674_368_000.0))))))));
+    let c = k(1.0)
+        + r2 * (k(-0.5)
+            + r2 * (k(1.0 / 24.0)
+                + r2 * (k(-1.0 / 720.0)
+                    + r2 * (k(1.0 / 40_320.0)
+                        + r2 * (k(-1.0 / 3_628_800.0)
+                            + r2 * (k(1.0 / 479_001_600.0)
+                                + r2 * (k(-1.0 / 87_178_291_200.0) + r2 * k(1.0 / 20_922_789_888_000.0))))))));
+    // the quadrant q mod 4 ∈ {0, 1, 2, 3} (exact: q is an integer below 2^51, and so are its
+    // quarter's floor and four times it), as `(q as i64) & 3` for either sign of q
+    let quadrant = q - k(4.0) * (q * k(0.25)).floor();
+    let odd = quadrant.simd_eq(k(1.0)) | quadrant.simd_eq(k(3.0));
+    let (sin, cos) = (odd.select(c, s), odd.select(-s, c));
+    let flip = quadrant.simd_ge(k(2.0)).select(k(-1.0), k(1.0));
+    (flip * sin, flip * cos)
+}
+
 /// `out[i] = a[i] e^{i k w[i]}` where `a[i] > 0`, else 0: four samples at a time by the `wide`
 /// crate's `f64x4::sin_cos` (2.4 times the speed of [`sin_cos`] over a row, as accurate:
 /// `cargo bench -p asnr-optics --bench sincos`, ARCHITECTURE.md), the last `len % 4` by
