@@ -524,17 +524,19 @@ impl GaussianDefocus {
             s * s * self.spectral(&f, c).re * scale
         };
         // four nodes at a time (`spectral4`: each lane the scalar value to the last bit)
+        // (a group of two or three filled up with copies of its last node; a single node alone)
         let batch = |ts: &[f64], out: &mut [f64]| {
-            let split = ts.len() - ts.len() % 4;
-            for (t, o) in ts[..split].chunks_exact(4).zip(out[..split].chunks_exact_mut(4)) {
-                let (s, c) = cis::sin_cos4(f64x4::new([t[0], t[1], t[2], t[3]]));
+            for (t, o) in ts.chunks(4).zip(out.chunks_mut(4)) {
+                let lanes = t.len();
+                if lanes == 1 {
+                    o[0] = integrand(t[0]);
+                    continue;
+                }
+                let (s, c) = cis::sin_cos4(f64x4::new(std::array::from_fn(|l| t[l.min(lanes - 1)])));
                 match self.spectral4(&f, c) {
-                    Some(e) => o.copy_from_slice(&(s * s * e.re * f64x4::splat(scale)).to_array()),
+                    Some(e) => o.copy_from_slice(&(s * s * e.re * f64x4::splat(scale)).to_array()[..lanes]),
                     None => o.iter_mut().zip(t).for_each(|(o, &t)| *o = integrand(t)),
                 }
-            }
-            for (o, &t) in out[split..].iter_mut().zip(&ts[split..]) {
-                *o = integrand(t);
             }
         };
         let mut evaluations = 0;
@@ -635,6 +637,7 @@ fn nested(
         // cos(πk/64): the points of every level, x = c + h cos(πk/(n − 1)), k = 0 at b
         let cosines = cosines();
         let mut values = [0.0; 65];
+        let mut first = [0.0; 7];
         let mut moves = [0.0; 6];
         let mut previous = 0.0;
         let mut integral = 0.0;
@@ -649,10 +652,25 @@ fn nested(
             let n = points - 1;
             let stride = 64 / n;
             if level == 0 {
-                let mut middle = [0.0];
-                f(&[c], &mut middle);
-                values[..3].copy_from_slice(&[ends[1], middle[0], ends[0]]);
+                // the new points of the first three levels, which every piece computes (no level
+                // below 9 points is accepted), in one call: the centre, then the 5-point level's
+                // two and the 9-point level's four, each at the abscissa its level computes
+                let mut points = [c; 7];
+                for (slot, m) in points[1..].iter_mut().zip([16, 48, 8, 24, 40, 56]) {
+                    *slot = c + h * cosines[m];
+                }
+                f(&points, &mut first);
+                values[..3].copy_from_slice(&[ends[1], first[0], ends[0]]);
                 *evaluations += 1;
+            } else if level <= 2 {
+                for k in (0..=n / 2).rev() {
+                    values[2 * k] = values[k];
+                }
+                let fresh = if level == 1 { &first[1..3] } else { &first[3..7] };
+                for (&v, k) in fresh.iter().zip((1..n).step_by(2)) {
+                    values[k] = v;
+                }
+                *evaluations += n / 2;
             } else {
                 // spread the previous level's values to the even slots, fill the odd ones (the
                 // level's new points in one call)
