@@ -597,7 +597,9 @@ const LEVELS: [usize; 6] = [3, 5, 9, 17, 33, 65];
 /// wastes no evaluation), the piece bisected only where 65 points do not settle; the error
 /// estimates of the accepted pieces are added to `error`. `ends` are the integrand at `a` and
 /// `b` where the caller knows them (a neighbouring piece's end, or 0 at t = 0); returns the
-/// integral and the integrand at `a`. A bisection hands each half its two known ends.
+/// integral and the integrand at `a`. A bisection hands each half its two known ends. `f` fills
+/// its second slice with the integrand at the points of its first: a level's new points in one
+/// call (the first three levels' seven together), which the closed form evaluates four at a time.
 ///
 /// The error of a level is estimated from the differences ("moves") between consecutive levels:
 /// for an integrand analytic near the piece the Chebyshev coefficients, and with them the
