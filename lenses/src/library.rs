@@ -879,16 +879,7 @@ impl LibraryLens {
         // each atom's field: its library field, times its fabrication error (|t| ≤ 1) if any
         let t: Vec<Complex64> = match &self.factors {
             None => self.atoms.iter().map(|&(u, _)| t[u]).collect(),
-            Some(f) => self
-                .atoms
-                .iter()
-                .zip(f)
-                .map(|(&(u, _), &f)| {
-                    let v = t[u] * f;
-                    let n = v.norm();
-                    if n > 1.0 { v / n } else { v }
-                })
-                .collect(),
+            Some(f) => self.atoms.iter().zip(f).map(|(&(u, _), &f)| fabricated(t[u], None, f).0).collect(),
         };
         let transmission: f64 = self.atoms.iter().zip(&t).map(|(&(_, area), t)| t.norm_sqr() * area).sum();
         let mut sums = vec![(Complex64::new(0.0, 0.0), 0.0); self.zones.len()];
@@ -1013,8 +1004,8 @@ impl LibraryLens {
         for p in &self.unique {
             t.push(self.library.transmission_and_derivative(p, wavelength_m, wrt)?);
         }
-        // each atom's field and its derivative, with its fabrication error (|t| ≤ 1: v/|v| where
-        // capped, whose derivative is ∂v/|v| − v Re(v̄ ∂v)/|v|³)
+        // each atom's field and its derivative, with its fabrication error (|t| ≤ 1), as the
+        // value forms it (`fabricated`)
         let t: Vec<(Complex64, Complex64)> = match &self.factors {
             None => self.atoms.iter().map(|&(u, _)| t[u]).collect(),
             Some(f) => self
@@ -1022,9 +1013,8 @@ impl LibraryLens {
                 .iter()
                 .zip(f)
                 .map(|(&(u, _), &f)| {
-                    let (v, dv) = (t[u].0 * f, t[u].1 * f);
-                    let n = v.norm();
-                    if n > 1.0 { (v / n, dv / n - v * (v.conj() * dv).re / (n * n * n)) } else { (v, dv) }
+                    let (v, dv) = fabricated(t[u].0, Some(t[u].1), f);
+                    (v, dv.unwrap_or_default())
                 })
                 .collect(),
         };
@@ -1093,6 +1083,23 @@ impl LibraryLens {
             amplitude,
             wavefront_m,
         })
+    }
+}
+
+/// An atom's field `t` times its fabrication error factor `f`, capped at `|t| ≤ 1` (a passive
+/// atom: `v = t f` taken as `v/|v|` where `|v| > 1`), and with `dt` its derivative by the same
+/// steps (`∂v = ∂t f`, and where capped `∂v/|v| − v Re(v̄ ∂v)/|v|³`, one-sided at `|v| = 1`):
+/// the one per-atom rule of the value ([`LibraryLens::decompose`], `dt = None`, where the
+/// derivative's steps are not taken) and of its forward mode
+/// ([`LibraryLens::first_order_derivative`]).
+#[inline(always)]
+fn fabricated(t: Complex64, dt: Option<Complex64>, f: Complex64) -> (Complex64, Option<Complex64>) {
+    let v = t * f;
+    let n = v.norm();
+    if n > 1.0 {
+        (v / n, dt.map(|dt| dt * f).map(|dv| dv / n - v * (v.conj() * dv).re / (n * n * n)))
+    } else {
+        (v, dt.map(|dt| dt * f))
     }
 }
 

@@ -264,7 +264,20 @@ pub(crate) fn evaluate_field(scene: &Scene) -> Result<Evaluation, Error> {
 /// ([`Polychromatic::mean_mtf_and_binary2_gradient`]); `None` where that does not apply (off
 /// axis, a direction-dependent OTF, an engine other than the per-frequency exact one).
 pub(crate) fn evaluate_field_with(scene: &Scene, binary2: bool) -> Result<(Evaluation, Option<Vec<f64>>), Error> {
-    evaluate_field_differentiated(scene, binary2, &[]).map(|(e, d, _)| (e, d))
+    evaluate_field_differentiated(scene, binary2, &[], &[]).map(|(e, d, _, _)| (e, d))
+}
+
+/// What a library lens's parameter bias moves, on the value's own rules
+/// ([`evaluate_field_differentiated`] with `bias`): one entry per parameter asked.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct BiasLanes {
+    /// `∂M̄/∂b`: the OTF's lane beside each value, the frequency rule's accepted weights
+    /// ([`Polychromatic::mean_mtf_and_field_gradient`]).
+    pub mean_mtf: Vec<f64>,
+    /// `∂ln N/∂b = Σ w Σ_o ∂τ_o / Σ w Σ_o τ_o` on the nodes that make N.
+    pub ln_photoelectrons: Vec<f64>,
+    /// `∂ln N_T/∂b = Σ w ∂T / Σ w T` on the nodes that make N_T.
+    pub ln_transmitted: Vec<f64>,
 }
 
 /// The wavefront derivatives of the mean MTF on the FFT path
@@ -284,14 +297,22 @@ pub(crate) enum GridGradient {
     Unavailable,
 }
 
+/// What [`evaluate_field_differentiated`] returns: the evaluation, the mean MTF's Binary 2
+/// derivatives, its derivatives on the FFT path, and a library lens's bias lanes.
+pub(crate) type Differentiated = (Evaluation, Option<Vec<f64>>, GridGradient, Option<BiasLanes>);
+
 /// [`evaluate_field_with`] and, for each of `grid` (wavefront directions), the mean MTF's
 /// derivative on the FFT path, in the same evaluation (the value's grids, rules and
-/// extrapolation; docs/physics.md, "Gradients: 2-D pupils").
+/// extrapolation; docs/physics.md, "Gradients: 2-D pupils"); and for each of `bias` (a library
+/// lens's parameters, `LensModel::order_derivatives`), what its bias moves on the value's own
+/// rules ([`BiasLanes`]; `None` where the engine does not give it: the caller's reference rule
+/// then). The evaluation is the same, bit for bit, with or without `bias`.
 pub(crate) fn evaluate_field_differentiated(
     scene: &Scene,
     binary2: bool,
     grid: &[optics::WavefrontDirection],
-) -> Result<(Evaluation, Option<Vec<f64>>, GridGradient), Error> {
+    bias: &[usize],
+) -> Result<Differentiated, Error> {
     let mut grid_gradient = if grid.is_empty() { GridGradient::NotAsked } else { GridGradient::Unavailable };
     let lens = scene.lens();
     let camera = scene.camera();
@@ -418,6 +439,7 @@ pub(crate) fn evaluate_field_differentiated(
     let along_field = field.y_rad.atan2(field.x_rad);
     let mut azimuth_warning = None;
     let mut binary2_gradient = None;
+    let mut bias_gradient = None;
     let mut directional = |noise: Option<&optics::NoiseShape>| {
         let mean_along = |azimuth: f64| match noise {
             None => poly.mean_mtf_along(azimuth),
@@ -486,6 +508,14 @@ pub(crate) fn evaluate_field_differentiated(
                 && let Some((m, gradient, work)) = poly.mean_mtf_and_binary2_gradient()
             {
                 binary2_gradient = Some(gradient);
+                return Ok((m, m, m, work));
+            }
+            // a library lens's bias: its lanes beside the value's own OTFs, the mean unchanged
+            if noise.is_none()
+                && !bias.is_empty()
+                && let Some((m, gradient, work)) = poly.mean_mtf_and_field_gradient(bias)
+            {
+                bias_gradient = Some(gradient);
                 return Ok((m, m, m, work));
             }
             let (m, work) = mean_along(0.0);
@@ -633,7 +663,44 @@ pub(crate) fn evaluate_field_differentiated(
         },
     };
     check_finite(&evaluation)?;
-    Ok((evaluation, binary2_gradient, grid_gradient))
+    // the bias's signal terms on the nodes that make N and N_T (`Folded::integrals`: the nodes
+    // integrate ρ itself where the lens does not factor)
+    let bias_lanes = match bias_gradient {
+        Some(mean_mtf) if folded.factored.is_none() => bias_signal(lens, &poly, bias, integrals.transmission)
+            .map(|(ln_photoelectrons, ln_transmitted)| BiasLanes { mean_mtf, ln_photoelectrons, ln_transmitted }),
+        _ => None,
+    };
+    Ok((evaluation, binary2_gradient, grid_gradient, bias_lanes))
+}
+
+/// `(∂ln N/∂b, ∂ln N_T/∂b)` along each of `bias` on the nodes that make N and N_T (the nodes
+/// integrate ρ itself: `Σ w ∂τ / Σ w τ` with `Σ w τ` the engine's total weight, and
+/// `Σ w ∂T / Σ w T` with `transmission = Σ w T`, as [`Folded::integrals`] forms them); `None`
+/// where the lens gives no order derivatives at a node.
+fn bias_signal(
+    lens: &dyn LensModel,
+    poly: &Polychromatic<'_>,
+    bias: &[usize],
+    transmission: f64,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    // each node's derivatives once, in the order the nodes are read
+    let mut at: Vec<Option<Vec<optics::OrderDerivatives>>> = Vec::new();
+    poly.detected_integral(|lambda| {
+        at.push(bias.iter().map(|&p| lens.order_derivatives(lambda, p)).collect());
+        0.0
+    })?;
+    let at: Vec<Vec<optics::OrderDerivatives>> = at.into_iter().collect::<Option<_>>()?;
+    let mut ln_n = Vec::with_capacity(bias.len());
+    let mut ln_t = Vec::with_capacity(bias.len());
+    for j in 0..bias.len() {
+        let mut node = at.iter();
+        let d_tau = poly.detected_integral(|_| node.next().map_or(f64::NAN, |d| d[j].efficiencies.iter().sum()))?;
+        let mut node = at.iter();
+        let d_t = poly.detected_integral(|_| node.next().map_or(f64::NAN, |d| d[j].transmission))?;
+        ln_n.push(d_tau / poly.total_weight());
+        ln_t.push(d_t / transmission);
+    }
+    Some((ln_n, ln_t))
 }
 
 /// The largest defocus, in waves at the mean wavelength, that [`evaluate`] integrates: far beyond

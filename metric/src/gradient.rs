@@ -11,7 +11,7 @@
 
 use noise::SnrPartials;
 
-use crate::evaluate::{Evaluation, GridGradient, evaluate_field_differentiated, mtf_at};
+use crate::evaluate::{BiasLanes, Evaluation, GridGradient, evaluate_field_differentiated, mtf_at};
 use crate::{Error, GlareMode, MetricForm, Scene};
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
@@ -204,10 +204,14 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     let binary2 = aperture_base.is_some() || parameters.iter().any(|p| p.lane().is_some());
     // the wavefront directions for the FFT path, one per wavefront parameter in their order
     let grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
+    // a library lens's parameters whose bias is asked, in their order: their lanes ride on the
+    // value's own rules where the engine gives them
+    let bias: Vec<usize> =
+        parameters.iter().filter_map(|p| if let Parameter::LibraryBias(i) = p { Some(*i) } else { None }).collect();
     if scene.fields().is_empty() {
         // one pass: the evaluation and the wavefront derivatives of its mean MTF together
-        let (evaluation, d_binary2, d_grid) = evaluate_field_differentiated(scene, binary2, &grid)?;
-        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, aperture_base)?;
+        let (evaluation, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(scene, binary2, &grid, &bias)?;
+        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, aperture_base, d_bias.as_ref())?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -226,8 +230,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         PointGradient { asnr: zeros.clone(), mean_mtf: zeros.clone(), snr0: zeros.clone(), photoelectrons: zeros };
     for (&(field, _), w) in scene.fields().iter().zip(&relative) {
         let single = scene.single_field(field);
-        let (e, d_binary2, d_grid) = evaluate_field_differentiated(&single, binary2, &grid)?;
-        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid, aperture_base)?;
+        let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
+        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid, aperture_base, d_bias.as_ref())?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -260,7 +264,9 @@ struct PointGradient {
 /// the FFT path, one per wavefront parameter of `parameters` in their order.
 ///
 /// `aperture_base`: where the F-number and focal length ride the radial engine's lanes (a
-/// phase lens, [`ApertureLanes`]), the first of their three lanes `[P, T, S]`.
+/// phase lens, [`ApertureLanes`]), the first of their three lanes `[P, T, S]`. `d_bias`: a
+/// library lens's bias lanes computed with the evaluation, one per `LibraryBias` of
+/// `parameters` in their order, where the value's engine gave them.
 fn point_gradient(
     scene: &Scene,
     e: &Evaluation,
@@ -268,6 +274,7 @@ fn point_gradient(
     d_binary2: Option<Vec<f64>>,
     d_grid: &GridGradient,
     aperture_base: Option<usize>,
+    d_bias: Option<&BiasLanes>,
 ) -> Result<PointGradient, Error> {
     let camera = scene.camera();
     let sensor = camera.sensor();
@@ -311,8 +318,9 @@ fn point_gradient(
             "with camera.noise_spectrum the wavefront gradient is not computed here yet".to_owned(),
         ));
     }
-    // each parameter's place among the FFT path's directions
+    // each parameter's place among the FFT path's directions, and among the bias lanes
     let mut grid_place = 0;
+    let mut bias_place = 0;
     let spectral = match parameters.iter().find(|p| matches!(p, Parameter::SpectrumCenter | Parameter::SpectrumRange)) {
         Some(&p) => Some(spectral_partials(scene, e, p)?),
         None => None,
@@ -521,7 +529,16 @@ fn point_gradient(
                 (n * d_ln_n, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::LibraryBias(index) => {
-                let bias = library_bias_partials(scene, e, p, index)?;
+                let on_value_rule = d_bias.map(|d| BiasPartials {
+                    ln_photoelectrons: d.ln_photoelectrons[bias_place],
+                    ln_transmitted: d.ln_transmitted[bias_place],
+                    mean_mtf: d.mean_mtf[bias_place],
+                });
+                bias_place += 1;
+                let bias = match on_value_rule {
+                    Some(b) if camera.noise_spectrum().is_none() => b,
+                    _ => library_bias_partials(scene, e, p, index)?,
+                };
                 let d_g = match scene.options().form {
                     MetricForm::Mean => bias.mean_mtf,
                     MetricForm::Integral => e.nyquist_cyc_per_mm * bias.mean_mtf,
@@ -1247,6 +1264,31 @@ fn sign_change_ends(nyquist: f64, panels: usize, otf: impl Fn(f64) -> f64, width
     ends
 }
 
+/// `(∂M̄/∂b, ∂ln N/∂b, ∂ln N_T/∂b)` ([`library_bias_mean_mtf_partials`]).
+pub type BiasTriple = (f64, f64, f64);
+
+/// `(∂M̄/∂b, ∂ln N/∂b, ∂ln N_T/∂b)` of a library lens's bias of parameter `index`
+/// (docs/physics.md, "Gradients: a library's parameter bias"): with `reference`, by the slow
+/// reference rule ([`library_bias_partials`]: its own Gauss–Legendre panels in λ and ν); else on
+/// the value's own rules (the lanes beside the evaluation's OTF values), `None` where the
+/// value's engine gives no lanes. The evaluation of `scene` is returned beside them (the same,
+/// bit for bit, either way). For the tests that hold the one against the other.
+pub fn library_bias_mean_mtf_partials(
+    scene: &Scene,
+    index: usize,
+    reference: bool,
+) -> Result<(Evaluation, Option<BiasTriple>), Error> {
+    let bias = if reference { Vec::new() } else { vec![index] };
+    let (e, _, _, lanes) = evaluate_field_differentiated(scene, false, &[], &bias)?;
+    let found = if reference {
+        let b = library_bias_partials(scene, &e, Parameter::LibraryBias(index), index)?;
+        Some((b.mean_mtf, b.ln_photoelectrons, b.ln_transmitted))
+    } else {
+        lanes.map(|l| (l.mean_mtf[0], l.ln_photoelectrons[0], l.ln_transmitted[0]))
+    };
+    Ok((e, found))
+}
+
 /// What a library lens's parameter bias moves ([`library_bias_partials`]).
 struct BiasPartials {
     /// `∂ln N/∂b = ∫ρ Σ_o ∂τ_o dλ / ∫ρ Σ_o τ_o dλ`
@@ -1280,7 +1322,12 @@ type BiasOrder = (f64, f64, optics::radial::RadialOrder, optics::radial::RadialP
 ///
 /// with `∂H_o` the radial engine's amplitude and phase lane on the value's rule
 /// ([`optics::radial::RadialOrder::otf_and_field_derivative`]), and
-/// `∂M̄ = (1/ν_N) ∫ P(ν) sign(O) ∂O dν` (`P` the pixel MTF where the camera applies it). The
+/// `∂M̄ = (1/ν_N) ∫ P(ν) sign(O) ∂O dν` (`P` the pixel MTF where the camera applies it).
+///
+/// The slow reference: where the value's engine carries the lanes, the gradient takes them from
+/// the evaluation's own pass instead ([`crate::evaluate::BiasLanes`],
+/// [`optics::Polychromatic::mean_mtf_and_field_gradient`]); this rule is taken where it does
+/// not, and by the tests ([`library_bias_mean_mtf_partials`]). The
 /// integrals are this function's own composite 16-point Gauss–Legendre rules, as
 /// [`aperture_partials_by_own_rule`]'s: in λ over the detected spectrum's support (a Gaussian's
 /// tails cut at 9σ), split at its and the lens's breakpoints (the library's wavelengths, where

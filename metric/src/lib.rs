@@ -47,7 +47,9 @@ pub use evaluate::{
     Evaluation, FieldCurve, FieldPoint, Fraunhofer, FrequencyRange, Glare, MAX_DEFOCUS_WAVES, MtfCurve, NoiseReport,
     Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
-pub use gradient::{Gradient, Parameter, aperture_mean_mtf_partials, gradient, zernike_m0_place};
+pub use gradient::{
+    Gradient, Parameter, aperture_mean_mtf_partials, gradient, library_bias_mean_mtf_partials, zernike_m0_place,
+};
 pub use illumination::{IlluminationReport, RelativeIllumination};
 pub use metrics::{
     Detectability, DiskTask, IdealLens, Metrics, MetricsOptions, NeqCurve, ObjectSpectrum, Quadrature, SquareMetrics,

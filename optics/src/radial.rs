@@ -1612,6 +1612,158 @@ impl RadialOrder {
         (otf, norm * derivative - otf * d_power / power)
     }
 
+    /// The real OTF at `s` as [`otf`](Self::otf), bit for bit, and into `derivatives` its
+    /// derivative along each of `fields` (`(∂A, ∂W)`: a parameter's change of the field
+    /// amplitude and of the whole wavefront, m, as functions of `q = ρ²`), as
+    /// [`otf_and_field_derivative`](Self::otf_and_field_derivative) gives one: forward mode on
+    /// the value's nodes and phases (docs/physics.md, "Gradients: a library's parameter bias").
+    /// The value's own sums run unchanged (the same lanes, weights, phase series and cosine
+    /// sums as [`direct`](Self::direct)), each lane's sine taken from the same `sin_cos` as its
+    /// cosine, so that a frequency rule reading these values makes the value's decisions: the
+    /// lanes ride on the value's evaluation. Eight lanes at a time where the phase has its
+    /// proxy; else the value by [`direct`](Self::direct)'s sum and the lanes beside it.
+    pub fn otf_and_field_derivatives(
+        &self,
+        s: f64,
+        accuracy: f64,
+        fields: &[(&RadialProfile, &RadialProfile)],
+        derivatives: &mut [f64],
+    ) -> f64 {
+        derivatives.iter_mut().for_each(|d| *d = 0.0);
+        let s = s * self.pupil.frequency_scale();
+        if s >= 1.0 {
+            return 0.0;
+        }
+        if s <= 0.0 {
+            return 1.0;
+        }
+        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let lanes = crate::quad::rule().len() * v_nodes.len();
+        let k = std::f64::consts::TAU / self.wavelength_m;
+        let a = k * self.w020_m;
+        let total = FIELD_BUFFERS.with_borrow_mut(|[q, bare, weight, phase]| {
+            q.resize(2 * lanes, 0.0);
+            bare.resize(lanes, 0.0);
+            weight.resize(lanes, 0.0);
+            if proxy.is_none() {
+                phase.resize(2 * lanes, 0.0);
+            }
+            let mut total = 0.0;
+            for pt in 0..t_panels {
+                // the value's lanes exactly (`panel_lanes`: the nodes, then the amplitudes), and
+                // the rule's weights without the amplitudes, which the lanes differentiate
+                self.panel_nodes(s, t_end, t_panels, pt, &v_nodes, q, bare);
+                weight.copy_from_slice(bare);
+                self.amplitudes(q, weight);
+                let (q1, q2) = q.split_at(lanes);
+                total += match proxy {
+                    Some(c) => self.proxy_cosine_sum_and_lanes(c, a, k, q1, q2, weight, bare, fields, derivatives),
+                    None => {
+                        for (p, &qi) in phase.iter_mut().zip(q.iter()) {
+                            *p = a * qi + k * self.pupil.opd_beyond_defocus_m(qi);
+                        }
+                        let (p1, p2) = phase.split_at(lanes);
+                        for l in 0..lanes {
+                            let (sin, cos) = crate::fft::cis::sin_cos(p1[l] - p2[l]);
+                            let (a1, a2) = (self.pupil.amplitude(q1[l]), self.pupil.amplitude(q2[l]));
+                            for (d, (amplitude, wavefront)) in derivatives.iter_mut().zip(fields) {
+                                *d += bare[l]
+                                    * ((amplitude.value(q1[l]) * a2 + a1 * amplitude.value(q2[l])) * cos
+                                        - a1 * a2 * sin * k * (wavefront.value(q1[l]) - wavefront.value(q2[l])));
+                            }
+                        }
+                        cosine_sum(weight, p1, p2)
+                    }
+                };
+            }
+            total
+        });
+        let power = self.pupil.power();
+        let norm = 4.0 / (std::f64::consts::PI * power);
+        let otf = 4.0 * total / (std::f64::consts::PI * power);
+        for (d, (amplitude, _)) in derivatives.iter_mut().zip(fields) {
+            let mut d_power = 0.0;
+            crate::quad::for_each_node(0.0, 1.0, 8, |q, w| {
+                d_power += w * 2.0 * self.pupil.amplitude(q) * amplitude.value(q);
+            });
+            *d = norm * *d - otf * d_power / power;
+        }
+        otf
+    }
+
+    /// [`proxy_cosine_sum`] of the value's lanes, bit for bit (the same blocks of sixteen and
+    /// eight, the same accumulators, the scalar tail), with each lane's derivative along `fields`
+    /// added into `derivatives` from the same sine and cosine
+    /// ([`otf_and_field_derivatives`](Self::otf_and_field_derivatives)): `bare` the lanes' rule
+    /// weights without the amplitudes.
+    #[allow(clippy::too_many_arguments)]
+    fn proxy_cosine_sum_and_lanes(
+        &self,
+        c: &[f64],
+        a: f64,
+        k: f64,
+        q1: &[f64],
+        q2: &[f64],
+        w: &[f64],
+        bare: &[f64],
+        fields: &[(&RadialProfile, &RadialProfile)],
+        derivatives: &mut [f64],
+    ) -> f64 {
+        use wide::f64x8;
+        let n = w.len() / 8 * 8;
+        let a8 = f64x8::splat(a);
+        let k8 = f64x8::splat(k);
+        let mut sums = [f64x8::ZERO; 8];
+        let mut more = vec![f64x8::ZERO; fields.len().saturating_sub(sums.len())];
+        let amplitude = self.pupil.amplitude.as_deref();
+        // one block of eight lanes' derivatives from their sine and cosine
+        let mut lanes = |i: usize, x: f64x8, y: f64x8, sin: f64x8, cos: f64x8| {
+            let (a1, a2) = amplitude.map_or((f64x8::ONE, f64x8::ONE), |p| (p.value8(x), p.value8(y)));
+            let b = load8(bare, i);
+            let (bc, bs) = (b * cos, b * sin * k8 * a1 * a2);
+            for (j, (d_a, d_w)) in fields.iter().enumerate() {
+                let term = bc * (d_a.value8(x) * a2 + a1 * d_a.value8(y)) - bs * (d_w.value8(x) - d_w.value8(y));
+                let sum = if j < sums.len() { &mut sums[j] } else { &mut more[j - sums.len()] };
+                *sum += term;
+            }
+        };
+        let (mut acc, mut acc2) = (f64x8::ZERO, f64x8::ZERO);
+        let pairs = n / 16 * 16;
+        for i in (0..pairs).step_by(16) {
+            let (x, y, x2, y2) = (load8(q1, i), load8(q2, i), load8(q1, i + 8), load8(q2, i + 8));
+            let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
+            let phase2 = a8.mul_add(x2 - y2, clenshaw8(c, x2) - clenshaw8(c, y2));
+            let ((sin, cos), (sin2, cos2)) = (phase.sin_cos(), phase2.sin_cos());
+            acc = load8(w, i).mul_add(cos, acc);
+            acc2 = load8(w, i + 8).mul_add(cos2, acc2);
+            lanes(i, x, y, sin, cos);
+            lanes(i + 8, x2, y2, sin2, cos2);
+        }
+        for i in (pairs..n).step_by(8) {
+            let (x, y) = (load8(q1, i), load8(q2, i));
+            let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
+            let (sin, cos) = phase.sin_cos();
+            acc = load8(w, i).mul_add(cos, acc);
+            lanes(i, x, y, sin, cos);
+        }
+        let mut total = (acc + acc2).reduce_add();
+        for (j, d) in derivatives.iter_mut().enumerate() {
+            *d += if j < sums.len() { sums[j] } else { more[j - sums.len()] }.reduce_add();
+        }
+        for i in n..w.len() {
+            let phase = a * (q1[i] - q2[i]) + (clenshaw(c, q1[i]) - clenshaw(c, q2[i]));
+            let (sin, cos) = crate::fft::cis::sin_cos(phase);
+            total += w[i] * cos;
+            let (a1, a2) = amplitude.map_or((1.0, 1.0), |p| (p.value(q1[i]), p.value(q2[i])));
+            for (d, (d_a, d_w)) in derivatives.iter_mut().zip(fields) {
+                *d += bare[i]
+                    * ((d_a.value(q1[i]) * a2 + a1 * d_a.value(q2[i])) * cos
+                        - a1 * a2 * sin * k * (d_w.value(q1[i]) - d_w.value(q2[i])));
+            }
+        }
+        total
+    }
+
     /// [`panel_lanes`](Self::panel_lanes) without the field amplitudes: the rule's weights
     /// (t and v rule, `sin²t`) alone.
     #[allow(clippy::too_many_arguments)]
@@ -1698,6 +1850,13 @@ impl RadialOrder {
             total
         })
     }
+}
+
+thread_local! {
+    /// The buffers of [`RadialOrder::otf_and_field_derivatives`] (`q₁ | q₂`, the bare rule
+    /// weights, the value's weights, phases), kept by the thread from one OTF to the next.
+    static FIELD_BUFFERS: std::cell::RefCell<[Vec<f64>; 4]> =
+        const { std::cell::RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
 thread_local! {
@@ -2004,6 +2163,52 @@ mod tests {
             let richardson = (4.0 * central(5e-4) - central(1e-3)) / 3.0;
             println!("s {s}: derivative {derivative:.6e}, differences {richardson:.6e}");
             assert!((derivative - richardson).abs() < 1e-9, "s {s}: {derivative} vs {richardson}");
+        }
+    }
+
+    /// The lanes that ride on the value ([`RadialOrder::otf_and_field_derivatives`]): the value
+    /// is [`RadialOrder::otf`]'s bit for bit (the frequency rule reading it makes the value's
+    /// decisions), and each lane is the lane-by-lane reference
+    /// ([`RadialOrder::otf_and_field_derivative`], whose derivative is tested against
+    /// differences above) to rounding, 1e-12: the test above's pupil with and without its
+    /// amplitude, two directions at once, at three accuracies and six frequencies.
+    #[test]
+    fn field_lanes_ride_on_the_value_bit_for_bit() {
+        let (r, f, l0, lambda): (f64, f64, f64, f64) = (0.672e-3, 3.36e-3, 800e-9, 780e-9);
+        let k0 = std::f64::consts::TAU / l0;
+        let a = vec![0.0, -k0 * r.powi(2) / (2.0 * f), k0 * r.powi(4) / (8.0 * f.powi(3))];
+        let phase = Arc::new(RadialProfile::even_polynomial(a).unwrap());
+        let sphere = Arc::new(RadialProfile::reference_sphere(r, f).unwrap());
+        let directions = [
+            (
+                RadialProfile::even_polynomial(vec![0.1, 0.2]).unwrap(),
+                RadialProfile::even_polynomial(vec![0.0, 40e-9, -40e-9]).unwrap(),
+            ),
+            (
+                RadialProfile::even_polynomial(vec![-0.05, 0.0, 0.3]).unwrap(),
+                RadialProfile::even_polynomial(vec![5e-9, 0.0, 0.0, 20e-9]).unwrap(),
+            ),
+        ];
+        let fields: Vec<(&RadialProfile, &RadialProfile)> = directions.iter().map(|(a, w)| (a, w)).collect();
+        for amplitude in [Some(vec![1.0, -0.3, 0.1]), None] {
+            let amplitude = amplitude.map(|c| Arc::new(RadialProfile::even_polynomial(c).unwrap()));
+            let terms = vec![(lambda / std::f64::consts::TAU, phase.clone()), (1.0, sphere.clone())];
+            let pupil = Arc::new(RadialPupil::new(amplitude, terms, vec![]).unwrap());
+            let w020 = pupil.fitted_defocus_m();
+            let order = RadialOrder::new(pupil, w020, lambda);
+            assert!(order.proxy.is_some());
+            for accuracy in [1e-13, 1e-7, 1e-4] {
+                for s in [0.0, 0.05, 0.2, 0.4, 0.75, 0.9, 1.0] {
+                    let mut lanes = [0.0; 2];
+                    let value = order.otf_and_field_derivatives(s, accuracy, &fields, &mut lanes);
+                    assert_eq!(value.to_bits(), order.otf(s, accuracy).to_bits(), "s {s}, accuracy {accuracy}");
+                    for (lane, (d_a, d_w)) in lanes.iter().zip(&directions) {
+                        let (v, reference) = order.otf_and_field_derivative(s, accuracy, d_a, d_w);
+                        assert!((v - value).abs() < 1e-12, "s {s}: {v} vs {value}");
+                        assert!((lane - reference).abs() < 1e-12, "s {s}, accuracy {accuracy}: {lane} vs {reference}");
+                    }
+                }
+            }
         }
     }
 

@@ -77,6 +77,9 @@ pub(super) struct Recording {
     /// ([`Polychromatic::mean_mtf_over_azimuth_and_overlap_gradient`]); empty for the radial
     /// engine's lanes
     directions: Vec<WavefrontDirection>,
+    /// the parameters of the lens's order derivatives the engine differentiates along
+    /// ([`Polychromatic::mean_mtf_and_field_gradient`]); empty for the other lanes
+    fields: Vec<usize>,
 }
 
 /// What [`Polychromatic::mean_mtf_and_defocus_derivative`] returns.
@@ -123,6 +126,46 @@ impl Polychromatic<'_> {
             return None;
         }
         *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.recorded_otf(nu));
+        let recording = self.gradient.borrow_mut().take()?;
+        if recording.failed {
+            return None;
+        }
+        let mut gradient = vec![0.0; lanes];
+        for &(nu, w) in &recording.accepted {
+            let i = *recording.at.get(&nu.to_bits())?;
+            for (g, d) in gradient.iter_mut().zip(&recording.derivatives[i..i + lanes]) {
+                *g += w * d;
+            }
+        }
+        gradient.iter_mut().for_each(|g| *g /= self.scene.max_frequency);
+        Some((mean, gradient, work))
+    }
+
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass its
+    /// derivative along each of `parameters` of the lens's order derivatives
+    /// (`LensModel::order_derivatives`: a library lens's parameter bias; docs/physics.md,
+    /// "Gradients: a library's parameter bias"):
+    ///
+    /// ```text
+    /// ∂M̄/∂b = (1/ν_max) ∫ P(ν) sign(O(ν)) ∂O(ν)/∂b dν
+    /// ```
+    ///
+    /// each `∂O` beside its OTF value on the spectral level the value accepts (the engine's
+    /// values are the value's own, so the frequency rule makes the value's decisions), integrated
+    /// with the frequency rule's accepted weights. `None` where no such gradient is given: off
+    /// axis, an OTF that depends on direction, an engine other than the per-frequency exact one,
+    /// or an order without derivatives.
+    pub fn mean_mtf_and_field_gradient(&self, parameters: &[usize]) -> Option<(f64, Vec<f64>, Work)> {
+        if parameters.is_empty()
+            || !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let lanes = parameters.len();
+        *self.gradient.borrow_mut() = Some(Recording { lanes, fields: parameters.to_vec(), ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| self.recorded_otf(nu));
         let recording = self.gradient.borrow_mut().take()?;
         if recording.failed {
@@ -207,9 +250,15 @@ impl Polychromatic<'_> {
 
     /// The OTF at `nu` with its derivatives kept in the recording.
     fn recorded_otf(&self, nu: f64) -> f64 {
-        let lanes = self.gradient.borrow().as_ref().map_or(0, |r| r.lanes);
+        let (lanes, fields) = self.gradient.borrow().as_ref().map_or((0, Vec::new()), |r| (r.lanes, r.fields.clone()));
         let mut derivatives = vec![0.0; lanes];
-        let value = if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_gradient(nu, &mut derivatives) };
+        let value = if nu == 0.0 {
+            Some(1.0)
+        } else if fields.is_empty() {
+            self.engine.otf_and_gradient(nu, &mut derivatives)
+        } else {
+            self.engine.otf_and_field_gradient(nu, &fields, &mut derivatives)
+        };
         let mut recording = self.gradient.borrow_mut();
         let Some(r) = recording.as_mut() else { return value.unwrap_or(f64::NAN) };
         match value {

@@ -330,6 +330,13 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_defocus_derivative(&self, _frequency: f64) -> Option<(f64, f64)> {
         None
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf) and into `gradient` its derivative
+    /// along each of `parameters` of the lens's order derivatives
+    /// (`LensModel::order_derivatives`: a library lens's parameter bias), on the value's own
+    /// rule; `None` where the engine does not give them (the default).
+    fn otf_and_field_gradient(&self, _frequency: f64, _parameters: &[usize], _gradient: &mut [f64]) -> Option<f64> {
+        None
+    }
     /// The sampling plan whose coarse level the engine also holds (the FFT engine when the
     /// tolerance chose its sampling): the frequency rule then extrapolates the two means.
     fn richardson(&self) -> Option<crate::fft::SamplingPlan> {

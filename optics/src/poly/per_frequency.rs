@@ -85,7 +85,16 @@ struct Fresh {
     /// (`LensModel::binary2_directions`), made when a gradient first climbs to the level; `None`
     /// before, `Some(None)` where the lens or an order has none (no gradient on this engine)
     directions: Option<Option<Vec<Vec<crate::radial::RadialProfile>>>>,
+    /// per order, its derivatives along each parameter of a field gradient
+    /// (`LensModel::order_derivatives`: `(∂τ_o, ∂A_o, ∂W_o)`), made when such a gradient first
+    /// climbs to the level, for the parameters `field_parameters`; `Some(None)` where the lens or
+    /// an order has none
+    fields: Option<Option<Vec<Vec<FieldLane>>>>,
+    field_parameters: Vec<usize>,
 }
+
+/// One order's derivative along one parameter: `(∂τ_o, ∂A_o, ∂W_o)` ([`Fresh::fields`]).
+type FieldLane = (f64, crate::radial::RadialProfile, crate::radial::RadialProfile);
 
 impl Fresh {
     /// Where the orders of point `k` of the level's new ones stand in `orders` (and their OTFs
@@ -128,7 +137,7 @@ struct Scratch {
 
 /// What a climb carries beside each value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Lanes {
+enum Lanes<'p> {
     /// the value alone
     None,
     /// the derivatives along the lens's directions (`LensModel::binary2_directions`), this many
@@ -136,15 +145,20 @@ enum Lanes {
     /// one lane: `Σ_o τ_o w_o ∂H/∂w_o`, the derivative with respect to a common relative change
     /// of every order's defocus (`crate::otf::defocus_otf_many_and_log_derivative_within`)
     Defocus,
+    /// one lane per parameter of the lens's order derivatives (`LensModel::order_derivatives`:
+    /// a library lens's parameter bias): `Σ_o (∂τ_o H_o + τ_o ∂H_o)`, `∂H_o` the radial
+    /// engine's amplitude and phase lane (`RadialOrder::otf_and_field_derivatives`)
+    Fields(&'p [usize]),
 }
 
-impl Lanes {
+impl Lanes<'_> {
     /// Derivatives a point.
     fn count(self) -> usize {
         match self {
             Lanes::None => 0,
             Lanes::Directions(n) => n,
             Lanes::Defocus => 1,
+            Lanes::Fields(p) => p.len(),
         }
     }
 }
@@ -244,11 +258,46 @@ impl Levelled {
         matches!(fresh.directions, Some(Some(_)))
     }
 
+    /// Makes level `level`'s field derivatives along `parameters` ready ([`Fresh::fields`]);
+    /// whether every order of its points has them, on the radial engine.
+    fn prepare_fields(&mut self, scene: &Scene<'_>, level: usize, parameters: &[usize]) -> bool {
+        let points = LEVELS[level];
+        let fresh = &mut self.fresh[level];
+        if fresh.fields.is_none() || fresh.field_parameters != parameters {
+            let lambdas = lobatto_lambdas(self.panel.a, self.panel.b, points);
+            let mut all: Vec<Vec<FieldLane>> = Vec::with_capacity(fresh.orders.len());
+            let mut ok = true;
+            for (point, k) in (0..points).filter(|&k| level == 0 || k % 2 == 1).enumerate() {
+                let range = fresh.range(point);
+                if !fresh.orders[range.clone()].iter().all(|o| o.radial.is_some()) {
+                    ok = false;
+                    break;
+                }
+                let mut per_order: Vec<Vec<FieldLane>> = vec![Vec::with_capacity(parameters.len()); range.len()];
+                for &p in parameters {
+                    match scene.lens.order_derivatives(lambdas[k], p) {
+                        Some(d) if d.efficiencies.len() == range.len() && d.fields.len() == range.len() => {
+                            for ((lane, &d_tau), (d_a, d_w)) in per_order.iter_mut().zip(&d.efficiencies).zip(d.fields)
+                            {
+                                lane.push((d_tau, d_a, d_w));
+                            }
+                        }
+                        _ => ok = false,
+                    }
+                }
+                all.extend(per_order);
+            }
+            fresh.fields = Some(ok.then_some(all));
+            fresh.field_parameters = parameters.to_vec();
+        }
+        matches!(fresh.fields, Some(Some(_)))
+    }
+
     /// `g(ν, λ)` at the points level `level` adds, into `values` at their slots (all three for
     /// level 0, the odd ones above; `values` holds the level's points).
     /// Each OTF to a tenth of `allowed` (per unit weight) over the level's amplification: an
     /// error δ per OTF moves the product integral by at most δ Σ τ_o Σ|w_k|.
-    fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>, lanes: Lanes) {
+    fn fresh_values(&mut self, level: usize, nu: f64, allowed: f64, evaluations: &Cell<usize>, lanes: Lanes<'_>) {
         let Scratch { pairs, otfs, values, derivatives, one } = &mut self.scratch;
         let fresh = &self.fresh[level];
         pairs.clear();
@@ -270,6 +319,33 @@ impl Levelled {
                 values[k] = orders.iter().zip(&otfs[range.clone()]).map(|(o, v)| o.efficiency * v).sum();
                 derivatives[k] = orders.iter().zip(&one[range]).map(|(o, d)| o.efficiency * d).sum();
             }
+            return;
+        }
+        if let Lanes::Fields(parameters) = lanes {
+            // the field lanes: each order's OTF as the value's (the same radial engine, bit for
+            // bit) with its derivatives from the same nodes and phases, summed per point as the
+            // values are: `Σ_o (∂τ_o H_o + τ_o ∂H_o)`
+            let Some(Some(fields)) = &fresh.fields else { return };
+            let lanes = parameters.len();
+            one.resize(lanes, 0.0);
+            let mut profiles = Vec::with_capacity(lanes);
+            for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
+                let range = fresh.range(point);
+                let slot = &mut derivatives[k * lanes..(k + 1) * lanes];
+                slot.iter_mut().for_each(|d| *d = 0.0);
+                for i in range.clone() {
+                    let (o, (s, _)) = (&fresh.orders[i], pairs[i]);
+                    let Some(radial) = &o.radial else { continue };
+                    profiles.clear();
+                    profiles.extend(fields[i].iter().map(|(_, a, w)| (a, w)));
+                    otfs[i] = radial.otf_and_field_derivatives(s, accuracy, &profiles, one);
+                    for ((d, x), (d_tau, _, _)) in slot.iter_mut().zip(one.iter()).zip(&fields[i]) {
+                        *d += d_tau * otfs[i] + o.efficiency * x;
+                    }
+                }
+                values[k] = fresh.orders[range.clone()].iter().zip(&otfs[range]).map(|(o, v)| o.efficiency * v).sum();
+            }
+            evaluations.set(evaluations.get() + pairs.len());
             return;
         }
         let lanes = lanes.count();
@@ -362,13 +438,8 @@ impl Levelled {
         allowed: f64,
         evaluations: &Cell<usize>,
         gradient: Option<&mut [f64]>,
-        defocus: bool,
+        lanes: Lanes<'_>,
     ) -> Result<f64, f64> {
-        let lanes = match (gradient.as_ref().map_or(0, |g| g.len()), defocus) {
-            (0, _) => Lanes::None,
-            (_, true) => Lanes::Defocus,
-            (n, false) => Lanes::Directions(n),
-        };
         let result = self.climb(scene, nu, allowed, evaluations, lanes);
         let lanes = lanes.count();
         if let Some(gradient) = gradient {
@@ -391,7 +462,7 @@ impl Levelled {
         nu: f64,
         allowed: f64,
         evaluations: &Cell<usize>,
-        kind: Lanes,
+        kind: Lanes<'_>,
     ) -> Result<f64, f64> {
         let lanes = kind.count();
         let mass = self.panel.mass.abs();
@@ -407,6 +478,7 @@ impl Levelled {
             self.prepare(scene, level);
             match kind {
                 Lanes::Directions(_) if !self.prepare_directions(scene, level, lanes) => return Err(f64::NAN),
+                Lanes::Fields(parameters) if !self.prepare_fields(scene, level, parameters) => return Err(f64::NAN),
                 // a radial pupil (given as data) has no defocus lane on this engine
                 Lanes::Defocus if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
                     return Err(f64::NAN);
@@ -463,6 +535,9 @@ pub(super) struct PerFrequency<'a> {
     otf_tolerance: Cell<f64>,
     /// single-wavelength OTFs computed so far
     evaluations: Cell<usize>,
+    /// the parameters of a field gradient and `∫ρ Σ_o ∂τ_o dλ` along each on the averages'
+    /// nodes (the derivative of `nodes.total_weight`), made when first asked
+    field_total: RefCell<Option<(Vec<usize>, Vec<f64>)>>,
 }
 
 impl<'a> PerFrequency<'a> {
@@ -517,6 +592,7 @@ impl<'a> PerFrequency<'a> {
             total_mass,
             otf_tolerance: Cell::new(0.05 * tolerance),
             evaluations: Cell::new(0),
+            field_total: RefCell::new(None),
         })
     }
 
@@ -524,7 +600,7 @@ impl<'a> PerFrequency<'a> {
     /// coefficient into it (or, with `defocus`, its one lane `∂O/∂ln K`: every order's defocus
     /// scaled together), on the same spectral levels ([`Levelled::integral`]); `None` where the
     /// lens has no such derivatives on this engine.
-    fn value(&self, frequency: f64, mut gradient: Option<&mut [f64]>, defocus: bool) -> Option<f64> {
+    fn value(&self, frequency: f64, mut gradient: Option<&mut [f64]>, kind: Lanes<'_>) -> Option<f64> {
         let nu = frequency.abs();
         let budget = self.otf_tolerance.get();
         let mut panels = self.panels.borrow_mut();
@@ -550,7 +626,7 @@ impl<'a> PerFrequency<'a> {
                 let allowed = budget * self.nodes.total_weight.abs() / self.total_mass / (weighted * share);
                 let part = self.scene.part(panels[k].panel.part);
                 let lanes_of_panel = gradient.is_some().then_some(part_gradient.as_mut_slice());
-                let result = panels[k].integral(&part, nu, allowed, &self.evaluations, lanes_of_panel, defocus);
+                let result = panels[k].integral(&part, nu, allowed, &self.evaluations, lanes_of_panel, kind);
                 if let Err(v) = result
                     && v.is_nan()
                 {
@@ -578,11 +654,45 @@ impl<'a> PerFrequency<'a> {
                     }
                 }
             }
+            let value = sum / self.nodes.total_weight;
             if let Some(g) = gradient {
-                g.iter_mut().for_each(|g| *g /= self.nodes.total_weight);
+                match kind {
+                    // O = Σ/∫ρΣτ: ∂O = (∂Σ − O ∂∫ρΣτ)/∫ρΣτ, the normalization's derivative
+                    // on its own nodes
+                    Lanes::Fields(parameters) => {
+                        let d_total = self.field_total(parameters)?;
+                        for (g, d) in g.iter_mut().zip(&d_total) {
+                            *g = (*g - value * d) / self.nodes.total_weight;
+                        }
+                    }
+                    _ => g.iter_mut().for_each(|g| *g /= self.nodes.total_weight),
+                }
             }
-            return Some(sum / self.nodes.total_weight);
+            return Some(value);
         }
+    }
+
+    /// `∂(∫ρ Σ_o τ_o dλ)` along each of `parameters` on the nodes that make `nodes.total_weight`
+    /// (the averages' level: `Σ w Σ_o ∂τ_o(λ)` over its samples, `LensModel::order_derivatives`);
+    /// `None` where the lens gives no order derivatives there.
+    fn field_total(&self, parameters: &[usize]) -> Option<Vec<f64>> {
+        if let Some((p, d)) = self.field_total.borrow().as_ref()
+            && p == parameters
+        {
+            return Some(d.clone());
+        }
+        let mut d_total = vec![0.0; parameters.len()];
+        for &(lambda, w, part) in &self.nodes.samples {
+            if w == 0.0 {
+                continue;
+            }
+            let lens = self.scene.part(part).lens;
+            for (d, &p) in d_total.iter_mut().zip(parameters) {
+                *d += w * lens.order_derivatives(lambda, p)?.efficiencies.iter().sum::<f64>();
+            }
+        }
+        *self.field_total.borrow_mut() = Some((parameters.to_vec(), d_total.clone()));
+        Some(d_total)
     }
 
     /// The band's extent, for the narrowest panel a split may make.
@@ -609,11 +719,22 @@ impl OtfEngine for PerFrequency<'_> {
     }
 
     fn otf(&self, frequency: f64) -> f64 {
-        self.value(frequency, None, false).unwrap_or(f64::NAN)
+        self.value(frequency, None, Lanes::None).unwrap_or(f64::NAN)
     }
 
     fn otf_and_gradient(&self, frequency: f64, gradient: &mut [f64]) -> Option<f64> {
-        self.value(frequency, Some(gradient), false)
+        let lanes = Lanes::Directions(gradient.len());
+        self.value(frequency, Some(gradient), lanes)
+    }
+
+    /// The OTF at `frequency` as [`otf`](OtfEngine::otf), bit for bit, and into `gradient` its
+    /// derivative along each of `parameters` of the lens's order derivatives (a library lens's
+    /// parameter bias): `∂O = (∫ρ Σ_o (∂τ_o H_o + τ_o ∂H_o) − O ∫ρ Σ_o ∂τ_o) / ∫ρ Σ_o τ_o`, the
+    /// first integral with the weights of the level each panel accepts for the value, the second
+    /// on the nodes of the normalization (docs/physics.md, "Gradients: a library's parameter
+    /// bias"); `None` where an order has no derivatives or is not a radial pupil.
+    fn otf_and_field_gradient(&self, frequency: f64, parameters: &[usize], gradient: &mut [f64]) -> Option<f64> {
+        self.value(frequency, Some(gradient), Lanes::Fields(parameters))
     }
 
     /// `(O, ∂O/∂ln K)`: the defocus lane `Σ τ_o w_o ∂H/∂w_o` of every point beside its value,
@@ -622,7 +743,7 @@ impl OtfEngine for PerFrequency<'_> {
     /// radial pupil given as data.
     fn otf_and_defocus_derivative(&self, frequency: f64) -> Option<(f64, f64)> {
         let mut lane = [0.0];
-        let value = self.value(frequency, Some(&mut lane), true)?;
+        let value = self.value(frequency, Some(&mut lane), Lanes::Defocus)?;
         Some((value, lane[0]))
     }
 
