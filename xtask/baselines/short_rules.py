@@ -2,13 +2,14 @@
 `small_rule`): the largest phase turn theta for which an n-point rule on [0, 1] integrates
 cos(phi0 + theta p(v)) to eps, for p = v^2 and p = v^4 (the phase across v is a function of v^2:
 docs/physics.md, "Designs given as data"), against a 200-point rule, over phi0 in
-{0, 0.5, 1, 1.5, 2.3}. The error models in `small_rule` are fitted to this table.
+{0, 0.5, 1, 1.5, 2.3}. The error models in `small_rule` are fitted to the rows `h4` and `h8` of this table.
 
-The rows `h4` and `h8` are the rules `small_rule` could use instead (not used yet): the positive
-half of the 2n-point rule on [-1, 1], n nodes on [0, 1] with the 2n-point rule's weights. The
-integrand is even in v (a function of v^2), so that rule is exact for polynomials of degree
-2n - 1 in v^2 where the n-point rule on [0, 1] is exact to degree n - 1: the same lanes hold a
-larger theta (docs/physics.md, "The flat lens's exact image").
+The rows `h4` and `h8` are the rules `small_rule` uses (since 2026-12-06; the rows `4` and `8`
+are the n-point rules on [0, 1] it used before): the positive half of the 2n-point rule on
+[-1, 1], n nodes on [0, 1] with the 2n-point rule's weights. The integrand is even in v (a
+function of v^2), so that rule is exact for polynomials of degree 2n - 1 in v^2 where the
+n-point rule on [0, 1] is exact to degree n - 1: the same lanes hold a larger theta
+(docs/physics.md, "Designs given as data" and "The flat lens's exact image").
 
 Usage: python3 xtask/baselines/short_rules.py
 Prints one line per shape and rule: `shape n eps:theta ...` (`hn` for the half rules).
