@@ -987,6 +987,16 @@ impl OtfEngine for Overlap<'_> {
         self.scene.f_number
     }
 
+    fn field_lane_bound(&self) -> Option<f64> {
+        let top = self.scene.max_frequency.min(self.max_cutoff());
+        let mut largest = 0.0_f64;
+        for term in &self.terms {
+            let [rx, ry] = term.shift_rate?;
+            largest = largest.max(rx.abs()).max(ry.abs());
+        }
+        Some(2.0 * PI * top * largest)
+    }
+
     fn otf(&self, frequency: f64) -> f64 {
         self.otf_along(frequency, 0.0).re
     }
