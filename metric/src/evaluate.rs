@@ -292,7 +292,7 @@ pub(crate) enum GridGradient {
 /// values times `−2πi ν u·∂Δ/∂θ`, at most `L` = [`optics::Polychromatic::field_lane_bound`]
 /// times the value, so an error ε·M̄ of the value's spectral rule moves it by up to `L ε M̄`;
 /// where that exceeds `ε |∂M̄/∂θ|` (a small gradient: on axis, or a narrow band) the spectral
-/// rule is run again at the tolerance `q ε`, `q = |∂M̄/∂θ|/(L M̄)` (at least 1e-4, the gradient
+/// rule is run again at the tolerance `q ε` (ε the engine's tolerance), `q = |∂M̄/∂θ|/(L M̄)` (at least 1e-4, the gradient
 /// `gradient` from the value's own rules), by `again` (the engine rebuilt with that
 /// `spectral_tolerance`), and the field lanes are taken from it; the value and the other lanes
 /// stay the value's rules'. The other rules (frequency, azimuths, each node's t and x rules)
@@ -316,7 +316,7 @@ fn refine_field_lanes(
     if q >= 1.0 {
         return;
     }
-    let tighter = optics::Settings { spectral_tolerance: Some(q * settings.tolerance), ..settings };
+    let tighter = optics::Settings { spectral_tolerance: Some(q * poly.tolerance()), ..settings };
     let lanes: Vec<optics::WavefrontDirection> = grid.iter().copied().filter(field).collect();
     if let Some(refined) = again(tighter, &lanes) {
         let mut refined = refined.into_iter();

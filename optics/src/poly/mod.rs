@@ -605,13 +605,10 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         check_signal(engine.nodes())?;
         return Ok(Box::new(engine));
     }
+    // the spectral rule's tolerance: the engine's, or `spectral_tolerance` where tighter
+    let spectral = |t: f64| settings.spectral_tolerance.map_or(t, |s| s.min(t));
     let interpolated = match settings.spectral_rule {
-        SpectralRule::Interpolated => spectral::interpolated(
-            &scene,
-            lo,
-            hi,
-            settings.spectral_tolerance.map_or(settings.tolerance, |t| t.min(settings.tolerance)),
-        ),
+        SpectralRule::Interpolated => spectral::interpolated(&scene, lo, hi, spectral(settings.tolerance)),
         SpectralRule::Panels => None,
     };
     // the reference panels do not factor: the whole lens through the detected spectrum, cut
@@ -627,7 +624,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         // finer than it buy nothing
         if nodes.interpolated
             && tolerance > settings.tolerance
-            && let Some(coarser) = spectral::interpolated(&scene, lo, hi, tolerance)
+            && let Some(coarser) = spectral::interpolated(&scene, lo, hi, spectral(tolerance))
         {
             nodes = coarser;
             check_signal(&nodes)?;
