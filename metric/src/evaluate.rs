@@ -284,9 +284,10 @@ pub(crate) enum GridGradient {
     Unavailable,
 }
 
-/// [`evaluate_field_with`] and, for each of `grid` (wavefront directions), the mean MTF's
-/// derivative on the FFT path, in the same evaluation (the value's grids, rules and
-/// extrapolation; docs/physics.md, "Gradients: 2-D pupils").
+/// The field lanes' derivatives of the engine rebuilt with the given settings, along the given
+/// directions ([`refine_field_lanes`]).
+type Recompute<'a> = dyn Fn(optics::Settings, &[optics::WavefrontDirection]) -> Option<Vec<f64>> + 'a;
+
 /// The field angles' lanes of an overlap-engine gradient held to the tolerance relative to
 /// their own size (docs/physics.md, "Gradients: the field point"). Each lane is the nodes'
 /// values times `−2πi ν u·∂Δ/∂θ`, at most `L` = [`optics::Polychromatic::field_lane_bound`]
@@ -304,11 +305,11 @@ fn refine_field_lanes(
     grid: &[optics::WavefrontDirection],
     gradient: &mut [f64],
     mean: f64,
-    again: &dyn Fn(optics::Settings, &[optics::WavefrontDirection]) -> Option<Vec<f64>>,
+    again: &Recompute,
 ) {
     let field = |d: &optics::WavefrontDirection| matches!(d, optics::WavefrontDirection::FieldAngle(_));
     let Some(bound) = poly.field_lane_bound() else { return };
-    if !grid.iter().any(field) || !(bound > 0.0 && mean > 0.0) {
+    if !(grid.iter().any(field) && bound > 0.0 && mean > 0.0) {
         return;
     }
     let norm = grid.iter().zip(gradient.iter()).filter(|(d, _)| field(d)).map(|(_, g)| g * g).sum::<f64>().sqrt();
@@ -330,6 +331,9 @@ fn refine_field_lanes(
     }
 }
 
+/// [`evaluate_field_with`] and, for each of `grid` (wavefront directions), the mean MTF's
+/// derivative on the FFT path, in the same evaluation (the value's grids, rules and
+/// extrapolation; docs/physics.md, "Gradients: 2-D pupils").
 pub(crate) fn evaluate_field_differentiated(
     scene: &Scene,
     binary2: bool,
