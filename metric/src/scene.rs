@@ -160,6 +160,7 @@ impl Options {
             fft_tolerance: self.fft_tolerance,
             exact_irises: self.exact_irises,
             overlap: self.overlap,
+            spectral_tolerance: None,
         }
     }
 }

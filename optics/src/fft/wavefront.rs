@@ -189,6 +189,18 @@ impl Compiled {
         }
     }
 
+    /// The one Zernike term of a compilation that holds nothing else (`m` and the coefficients
+    /// of `R_n^m/ρ^|m|` in ρ², highest first, scaled as [`opd_m`](Self::opd_m) reads them), so
+    /// that several such terms can share `ρ²` and the powers of `x + iy` at a point; `None`
+    /// otherwise.
+    pub(crate) fn single_zernike(&self) -> Option<(i64, &[f64])> {
+        let seidel = [self.w020, self.w040, self.w131h, self.w222h2, self.w220h2];
+        match self.zernike.as_slice() {
+            [t] if seidel.iter().all(|w| *w == 0.0) => Some((t.m, &t.poly)),
+            _ => None,
+        }
+    }
+
     /// Whether some Zernike term is a sine term (odd Noll index, `m ≠ 0`): odd in y.
     pub(crate) fn has_sine_terms(&self) -> bool {
         self.zernike.iter().any(|t| t.m < 0)

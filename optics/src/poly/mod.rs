@@ -199,6 +199,11 @@ pub struct Settings {
     /// computed by the quadrature over the pupils' overlap ([`Engine::Overlap`]) where `pupil_samples` is
     /// `None`; off (or with `pupil_samples` set) they are sampled on the FFT path.
     pub overlap: bool,
+    /// The spectral rule's own tolerance where it is tighter than `tolerance` (`None`: follow
+    /// `tolerance`): a field angle's gradient on the overlap engine asks for it, its lanes being
+    /// the value's times the lateral colour's rate (docs/physics.md, "Gradients: the field
+    /// point").
+    pub spectral_tolerance: Option<f64>,
 }
 
 impl Default for Settings {
@@ -211,6 +216,7 @@ impl Default for Settings {
             spectral_rule: SpectralRule::default(),
             exact_irises: true,
             overlap: true,
+            spectral_tolerance: None,
         }
     }
 }
@@ -301,6 +307,13 @@ trait OtfEngine: std::fmt::Debug {
     /// in `ln ν`; `None` (every other engine): panels by the nodes' RMS and most resolved
     /// defocus, in ν.
     fn averaged_defocus(&self) -> Option<(f64, f64)> {
+        None
+    }
+    /// A bound on how much a field angle's lane amplifies the value: the largest
+    /// `2π ν |∂Δ/∂θ|` (per radian) over the nodes and the frequencies read, where the engine
+    /// carries the field angles' lanes as each node's value times `−2πi ν u·∂Δ/∂θ` (the overlap
+    /// engine); `None` elsewhere.
+    fn field_lane_bound(&self) -> Option<f64> {
         None
     }
     /// The F-number the nodes' `s = ν λ F#` use.
@@ -599,8 +612,10 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         check_signal(engine.nodes())?;
         return Ok(Box::new(engine));
     }
+    // the spectral rule's tolerance: the engine's, or `spectral_tolerance` where tighter
+    let spectral = |t: f64| settings.spectral_tolerance.map_or(t, |s| s.min(t));
     let interpolated = match settings.spectral_rule {
-        SpectralRule::Interpolated => spectral::interpolated(&scene, lo, hi, settings.tolerance),
+        SpectralRule::Interpolated => spectral::interpolated(&scene, lo, hi, spectral(settings.tolerance)),
         SpectralRule::Panels => None,
     };
     // the reference panels do not factor: the whole lens through the detected spectrum, cut
@@ -616,7 +631,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         // finer than it buy nothing
         if nodes.interpolated
             && tolerance > settings.tolerance
-            && let Some(coarser) = spectral::interpolated(&scene, lo, hi, tolerance)
+            && let Some(coarser) = spectral::interpolated(&scene, lo, hi, spectral(tolerance))
         {
             nodes = coarser;
             check_signal(&nodes)?;
@@ -766,6 +781,13 @@ impl<'a> Polychromatic<'a> {
     /// The OTF engine in use.
     pub fn engine(&self) -> Engine {
         self.engine.engine()
+    }
+
+    /// The engine's bound on a field angle's lane relative to the value (the largest
+    /// `2π ν |∂Δ/∂θ|` over its nodes up to the frequency limit, per radian), where its field
+    /// lanes are the nodes' values times that factor (the overlap engine); `None` elsewhere.
+    pub fn field_lane_bound(&self) -> Option<f64> {
+        self.engine.field_lane_bound()
     }
 
     /// Whether the OTF depends on direction (lateral colour, or a non-symmetric pupil or

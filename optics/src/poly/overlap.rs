@@ -253,7 +253,13 @@ pub(super) struct Overlap<'a> {
     mirrored: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Complex64>>,
     /// values and Seidel derivatives by the same keys ([`OtfEngine::otf_along_and_gradient`])
     differentiated: std::cell::RefCell<std::collections::HashMap<(u64, u64, i64), Differentiated>>,
+    /// the wavefront lanes of the directions last asked ([`Lane::of`]: each Zernike lane's
+    /// polynomial compiled once, not at every OTF value), with the field angles' axes
+    lanes: std::cell::RefCell<Option<LaneSet>>,
 }
+
+/// The directions of a gradient, their wavefront lanes and field angles' axes in their order.
+type LaneSet = (Vec<WavefrontDirection>, Arc<Vec<Lane>>, Vec<usize>);
 
 /// An OTF value with its Seidel derivatives ([`OtfEngine::otf_along_and_gradient`]).
 type Differentiated = (Complex64, Vec<Complex64>);
@@ -329,6 +335,7 @@ impl<'a> Overlap<'a> {
             mirror: false,
             mirrored: std::cell::RefCell::new(std::collections::HashMap::new()),
             differentiated: std::cell::RefCell::new(std::collections::HashMap::new()),
+            lanes: std::cell::RefCell::new(None),
         };
         let top = engine.scene.max_frequency.min(engine.max_cutoff());
         for term in &mut kept {
@@ -646,8 +653,10 @@ impl SeidelTerm {
 
 /// The smallest `|α| X²` at which the derivatives take [`quadratic_moments`] (below it the
 /// recurrence divides by a small `α`: the Filon rule takes them). The moments' rounding is
-/// about `1e-16 (1 + |β| X)/(|α| X²)` relative to `X`.
-const MOMENTS_MIN_PHASE: f64 = 1e-2;
+/// about `1e-16 (1 + |β| X)/(|α| X²)` relative to `X`: at most `1e-12 (1 + |β| X)` here. At
+/// 1e-2 the Filon rule took the t rule's nodes near its ends (where `X = cos t − s` is small)
+/// and with them most of the Zernike gradient's time (each x node's lanes, `lanes_opd`).
+const MOMENTS_MIN_PHASE: f64 = 1e-4;
 
 /// `[I0, I1, I2]`, `I_m = ∫_{−X}^{X} x^m exp(i(α x² + β x)) dx`: `I0` by
 /// [`quadratic_phase_integral`], and since `d/dx e^{iφ} = i (2αx + β) e^{iφ}`, integration by
@@ -699,7 +708,41 @@ impl Lane {
             Lane::Zernike(z, _) => z.opd_m(x, y),
         }
     }
+}
 
+/// Every lane's wavefront per µm at the pupil point `(x, y)` into `out` (m), each bit for bit
+/// as [`Lane::opd`] gives it: the Zernike lanes share `ρ²` and the powers `(x + iy)^|m|`
+/// (`Compiled::opd_m` forms them by the same products from 1, and adds the term to a zero
+/// wavefront: `0 + p Re/Im`), each then its own Horner sum in ρ².
+fn lanes_opd(lanes: &[Lane], x: f64, y: f64, out: &mut [f64]) {
+    let r2 = x * x + y * y;
+    let mut powers = [(1.0_f64, 0.0_f64); 32];
+    let mut formed = 0usize;
+    for (o, lane) in out.iter_mut().zip(lanes) {
+        *o = match lane {
+            Lane::Zernike(z, _) => match z.single_zernike() {
+                Some((m, poly)) if (m.unsigned_abs() as usize) < powers.len() => {
+                    let ma = m.unsigned_abs() as usize;
+                    while formed < ma {
+                        let (re, im) = powers[formed];
+                        powers[formed + 1] = (re * x - im * y, re * y + im * x);
+                        formed += 1;
+                    }
+                    let mut p = 0.0;
+                    for &c in poly {
+                        p = p * r2 + c;
+                    }
+                    let (re, im) = powers[ma];
+                    0.0 + p * if m >= 0 { re } else { im }
+                }
+                _ => lane.opd(x, y),
+            },
+            Lane::Seidel(_) => lane.opd(x, y),
+        };
+    }
+}
+
+impl Lane {
     /// The lane's degree in the pupil coordinates.
     fn degree(&self) -> usize {
         match self {
@@ -773,8 +816,10 @@ fn term_otf_and_derivatives(
     // the phase quadratic in x and every lane's factor at most quadratic: the x integrals in
     // closed form (where the quadratic term is large enough for the moments' recurrence)
     let moments = quadratic && terms.iter().all(|d| d.degree() <= 3);
+    // the lanes' wavefronts at two points and their differences at three
+    let mut scratch = vec![0.0; 5 * lanes];
     // the value and the derivatives at τ ∈ [−1, 1], into `row` (1 + lanes values)
-    let integrand = |tau: f64, row: &mut [Complex64]| {
+    let mut integrand = |tau: f64, row: &mut [Complex64]| {
         row.iter_mut().for_each(|r| *r = Complex64::new(0.0, 0.0));
         let t = big_t * tau;
         let (y, ct) = sin_cos(t);
@@ -806,12 +851,19 @@ fn term_otf_and_derivatives(
                 let front = Complex64::new(co, si) * ct;
                 let [i0, i1, i2] = quadratic_moments(alpha, beta, x_half);
                 row[0] = front * i0;
-                let ((la, lb, lc, ld), (za, zb, zc, zd), (ha, hb, hc, hd)) =
-                    (points(-x_half), points(0.0), points(x_half));
-                for (r, d) in row[1..].iter_mut().zip(terms) {
-                    let g_lo = k * (d.opd(la, lb) - d.opd(lc, ld));
-                    let g_mid = k * (d.opd(za, zb) - d.opd(zc, zd));
-                    let g_hi = k * (d.opd(ha, hb) - d.opd(hc, hd));
+                // each lane's k [D(p₊) − D(p₋)] at −X, 0 and X
+                let (plus, rest) = scratch.split_at_mut(lanes);
+                let (minus, g) = rest.split_at_mut(lanes);
+                for (i, x) in [-x_half, 0.0, x_half].into_iter().enumerate() {
+                    let (xa, ya, xb, yb) = points(x);
+                    lanes_opd(terms, xa, ya, plus);
+                    lanes_opd(terms, xb, yb, minus);
+                    for (l, (p, m)) in plus.iter().zip(minus.iter()).enumerate() {
+                        g[3 * l + i] = k * (p - m);
+                    }
+                }
+                for (l, r) in row[1..].iter_mut().enumerate() {
+                    let (g_lo, g_mid, g_hi) = (g[3 * l], g[3 * l + 1], g[3 * l + 2]);
                     let g2 = (g_hi + g_lo - 2.0 * g_mid) / (2.0 * x_half * x_half);
                     let g1 = (g_hi - g_lo) / (2.0 * x_half);
                     // i ∫ g e^{iφ}
@@ -835,9 +887,13 @@ fn term_otf_and_derivatives(
             };
             let kh = kernel[j] * h;
             value += kh;
-            for (r, d) in row[1..].iter_mut().zip(terms) {
+            let (plus, rest) = scratch.split_at_mut(lanes);
+            let minus = &mut rest[..lanes];
+            lanes_opd(terms, xa, ya, plus);
+            lanes_opd(terms, xb, yb, minus);
+            for ((r, p), m) in row[1..].iter_mut().zip(plus.iter()).zip(minus.iter()) {
                 // i k [D(p₊) − D(p₋)]
-                let factor = k * (d.opd(xa, ya) - d.opd(xb, yb));
+                let factor = k * (p - m);
                 *r += Complex64::new(-kh.im * factor, kh.re * factor);
             }
         }
@@ -987,6 +1043,16 @@ impl OtfEngine for Overlap<'_> {
         self.scene.f_number
     }
 
+    fn field_lane_bound(&self) -> Option<f64> {
+        let top = self.scene.max_frequency.min(self.max_cutoff());
+        let mut largest = 0.0_f64;
+        for term in &self.terms {
+            let [rx, ry] = term.shift_rate?;
+            largest = largest.max(rx.abs()).max(ry.abs());
+        }
+        Some(2.0 * PI * top * largest)
+    }
+
     fn otf(&self, frequency: f64) -> f64 {
         self.otf_along(frequency, 0.0).re
     }
@@ -1033,14 +1099,24 @@ impl OtfEngine for Overlap<'_> {
         directions: &[WavefrontDirection],
         gradient: &mut [Complex64],
     ) -> Option<Complex64> {
-        let mut terms: Vec<Lane> = Vec::new();
-        let mut axes = Vec::new();
-        for d in directions {
-            match d {
-                WavefrontDirection::FieldAngle(a) if *a < 2 => axes.push(*a),
-                _ => terms.push(Lane::of(d)?),
+        let cached =
+            self.lanes.borrow().as_ref().filter(|(d, _, _)| d == directions).map(|(_, l, a)| (l.clone(), a.clone()));
+        let (terms, axes) = match cached {
+            Some(set) => set,
+            None => {
+                let mut terms: Vec<Lane> = Vec::new();
+                let mut axes = Vec::new();
+                for d in directions {
+                    match d {
+                        WavefrontDirection::FieldAngle(a) if *a < 2 => axes.push(*a),
+                        _ => terms.push(Lane::of(d)?),
+                    }
+                }
+                let terms = Arc::new(terms);
+                *self.lanes.borrow_mut() = Some((directions.to_vec(), terms.clone(), axes.clone()));
+                (terms, axes)
             }
-        }
+        };
         if !axes.is_empty() && self.terms.iter().any(|t| t.shift_rate.is_none()) {
             return None;
         }
