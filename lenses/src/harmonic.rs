@@ -137,6 +137,25 @@ impl LensModel for Harmonic {
         Some(self.design_wavelength)
     }
 
+    /// Each order's lateral colour `Δ = f0 tan θ (α/m − 1)` on each axis (as
+    /// [`orders`](LensModel::orders) forms it) moves as `∂Δx/∂θx = f0 sec²θx (α/m − 1)` (and the
+    /// same in y); the orders' defocus, efficiency and full pupil are the same at every field
+    /// point (docs/physics.md, "Gradients: the field point"). One entry per order of
+    /// [`orders`](LensModel::orders), in its order.
+    fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        let alpha = self.phase_depth(wavelength_m);
+        let sec2 = |angle: f64| 1.0 / (angle.cos() * angle.cos());
+        let (sx, sy) = (self.focal_length * sec2(field.x_rad), self.focal_length * sec2(field.y_rad));
+        Some(
+            self.order_range(wavelength_m)
+                .map(|m| {
+                    let k = alpha / f64::from(m) - 1.0;
+                    [sx * k, sy * k]
+                })
+                .collect(),
+        )
+    }
+
     /// With a transmission table: one part (no efficiency table: the orders' efficiencies are
     /// smooth), the lens with transmission 1, so that the table's rows cut no spectral panel.
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {

@@ -244,6 +244,14 @@ impl LensModel for Refractive {
         Some(self.design_wavelength)
     }
 
+    /// The lens is its own stop with the image at `f0 tan θ` at every wavelength in this model
+    /// (no lateral colour: [`orders`](LensModel::orders) does not read the field), so its one
+    /// order does not move with the field angle: rate 0 on both axes (docs/physics.md,
+    /// "Gradients: the field point").
+    fn image_shift_field_rates(&self, _wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        Some(vec![[0.0, 0.0]])
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         match self.glass {
             Glass::Constant(_) => Vec::new(),

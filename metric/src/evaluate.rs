@@ -290,7 +290,8 @@ pub(crate) enum GridGradient {
     /// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_gradient`]).
     Computed(Vec<f64>),
     /// The OTF is rotationally symmetric here (one order set of radial pupils on axis, on the
-    /// radial or exact engines): not computed on the grids.
+    /// radial or exact engines; or off axis where the field does not move it,
+    /// [`optics::Polychromatic::field_independent`]): not computed on the grids.
     Symmetric,
     /// The OTF depends on direction but the engine gives no derivative (an order not a radial
     /// pupil on the grids, a line spectrum's grids, a noise spectrum).
@@ -552,7 +553,9 @@ pub(crate) fn evaluate_field_differentiated(
             let (s, w2) = mean_along(along_field + 0.5 * PI);
             Ok((0.5 * (t + s), t, s, add_work(w1, w2)))
         } else {
-            if !grid.is_empty() && field.is_on_axis() {
+            // on axis a rotationally symmetric OTF; off axis one the field does not move (every
+            // order's image-shift rate zero: a refractive lens, its stop at the lens)
+            if !grid.is_empty() && (field.is_on_axis() || poly.field_independent()) {
                 grid_gradient = GridGradient::Symmetric;
             }
             if noise.is_none()

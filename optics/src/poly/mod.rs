@@ -845,6 +845,24 @@ impl<'a> Polychromatic<'a> {
         self.engine.nodes().shifted()
     }
 
+    /// Whether the OTF stays as it is when the field point moves: no image is displaced, and at
+    /// every spectral node's wavelength the lens's orders change with the field only through
+    /// image shifts whose rates ([`LensModel::image_shift_field_rates`]) are all zero (a lens
+    /// whose stop is at the lens, without lateral colour; a line at the design wavelength), so
+    /// the mean MTF's derivative with respect to a field angle is 0 (docs/physics.md,
+    /// "Gradients: the field point").
+    pub fn field_independent(&self) -> bool {
+        let nodes = self.engine.nodes();
+        !nodes.shifted()
+            && !self.direction_dependent()
+            && nodes.nodes.iter().all(|n| {
+                self.scene
+                    .lens
+                    .image_shift_field_rates(n.lambda, self.scene.field)
+                    .is_some_and(|rates| rates.iter().all(|r| *r == [0.0, 0.0]))
+            })
+    }
+
     /// Polychromatic MTF along `azimuth`: `|OTF|` times the pixel MTF along a pixel axis.
     pub fn mtf_along(&self, frequency: f64, azimuth: f64) -> f64 {
         self.otf_along(frequency, azimuth).norm() * self.pixel_factor(frequency)
