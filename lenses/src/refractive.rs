@@ -67,6 +67,16 @@ impl Sellmeier {
         (wavelength_m >= lo && wavelength_m <= hi).then(|| self.index_squared(wavelength_m).sqrt())
     }
 
+    /// `dn/dλ` (per m) at `wavelength_m`, `None` outside the stated range: from
+    /// `n² = 1 + Σ B_i l²/(l² − C_i)` (l in µm), `dn/dλ = (1/2n) Σ −B_i C_i/(l² − C_i)² · 2l dl/dλ`.
+    pub fn index_derivative(&self, wavelength_m: f64) -> Option<f64> {
+        let n = self.index(wavelength_m)?;
+        let l = wavelength_m * 1e6;
+        let l2 = l * l;
+        let d_n2_d_l2: f64 = self.b.iter().zip(&self.c_um2).map(|(b, c)| -b * c / ((l2 - c) * (l2 - c))).sum();
+        Some(d_n2_d_l2 * 2.0 * l * 1e6 / (2.0 * n))
+    }
+
     /// The wavelength range (m) where the formula holds.
     pub fn range(&self) -> (f64, f64) {
         self.range_m

@@ -50,7 +50,7 @@ pub use closed::GaussianDefocus;
 pub use error::Error;
 pub use lens::{
     AffineDefocus, ApertureDirections, FactoredEfficiency, FactoredPart, Field, LensModel, Order, OrderDerivatives,
-    Pupil, Wavefront, Zone, round_for_display,
+    Pupil, WavelengthDirections, Wavefront, Zone, round_for_display,
 };
 pub use otf::{
     ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_and_log_derivative,
