@@ -261,6 +261,29 @@ impl LensModel for Refractive {
         }
     }
 
+    /// `W020 = f0/(8F#²) (n0 − n(λ))/(n0 − 1)` moves as `−f0/(8F#²) n′/(n0 − 1)`; the
+    /// transmission `τ = T = (1 − R)^(2e)` of uncoated surfaces as
+    /// `∂ln τ/∂λ = −2e R′/(1 − R)` with `R = ((n − 1)/(n + 1))²`,
+    /// `R′ = 4 (n − 1)/(n + 1)³ n′` (coated: a constant `R`). `None` outside the glass's range.
+    fn defocus_rates(&self, wavelength_m: f64, _field: Field) -> Option<optics::DefocusRates> {
+        let n0 = self.index(self.design_wavelength)?;
+        let n = self.index(wavelength_m)?;
+        let slope = match self.glass {
+            Glass::Constant(_) => 0.0,
+            Glass::Sellmeier(s) => s.index_derivative(wavelength_m)?,
+        };
+        let defocus = -self.focal_length / (8.0 * self.f_number * self.f_number) * slope / (n0 - 1.0);
+        let ln_through = match self.surfaces {
+            Surfaces::Coated(_) => 0.0,
+            Surfaces::Uncoated => {
+                let r = fresnel_reflectance(n);
+                let r_slope = 4.0 * (n - 1.0) / (n + 1.0).powi(3) * slope;
+                -2.0 * f64::from(self.elements) * r_slope / (1.0 - r)
+            }
+        };
+        Some(optics::DefocusRates { defocus, ln_efficiency: ln_through, ln_transmission: ln_through })
+    }
+
     fn affine_defocus(&self, _field: Field) -> Option<AffineDefocus> {
         // no dispersion: W020 ≡ 0 and a constant τ = T at every field point
         let Glass::Constant(_) = self.glass else { return None };

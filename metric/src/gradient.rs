@@ -526,18 +526,18 @@ fn point_gradient(
                 (n * d_ln_ri, background * d_ln_ri, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange if line.is_some() => {
-                // N ∝ (the line's weight) Σ τ_o(c) and N_T ∝ (the weight) T(c), with τ and T
-                // constant in λ where the wavelength is followed (checked there): the stray
-                // light B = N_T − N moves in proportion
-                let (d_ln_n, d_mtf) = match (p, line) {
-                    (Parameter::SpectrumRange, Some(l)) => (1.0 / l.width(), 0.0),
+                // N ∝ (the line's weight) Σ τ_o(c) and N_T ∝ (the weight) T(c): the stray light
+                // B = N_T − N moves by N_T ∂ln N_T − N ∂ln N
+                let (d_ln_n, d_ln_t, d_mtf) = match (p, line) {
+                    (Parameter::SpectrumRange, Some(l)) => (1.0 / l.width(), 1.0 / l.width(), 0.0),
                     _ => line_center.expect("computed above for a line's wavelength"),
                 };
                 let d_g = match scene.options().form {
                     MetricForm::Mean => d_mtf,
                     MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
                 };
-                (n * d_ln_n, background * d_ln_n, 0.0, 0.0, 0.0, d_g, d_mtf)
+                let d_b = if stray { transmitted * d_ln_t - n * d_ln_n } else { 0.0 };
+                (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::Temperature => {
                 let d_ln_n = temperature_log_derivative(scene, p)?;
@@ -936,25 +936,32 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
 }
 
-/// `(∂ln N/∂c, ∂M̄/∂c)` for the wavelength `c` of the scene's line (docs/physics.md,
+/// `(∂ln N/∂c, ∂ln N_T/∂c, ∂M̄/∂c)` for the wavelength `c` of the scene's line (docs/physics.md,
 /// "Gradients: a line's wavelength"), per m. The line's weight `w` (its `peak · width` times the
 /// detected spectrum's other factors at `c`: the radiance, the quantum efficiency, the photon
-/// factor λ) moves as [`radiometry::Spectrum::line_weight_log_derivative`]; the lens's
-/// efficiency and transmission are constant in λ wherever the OTF's rate is followed (checked
-/// by the lens), so `∂ln N/∂c = ∂ln w/∂c`. The OTF is the lens's at `c` alone,
+/// factor λ) moves as [`radiometry::Spectrum::line_weight_log_derivative`], and `N ∝ w τ(c)`,
+/// `N_T ∝ w T(c)`: `∂ln N/∂c = ∂ln w/∂c + ∂ln τ/∂λ` (the lens's efficiency and transmission
+/// constant in λ where an affine defocus or wavelength directions are given; their rates from
+/// [`optics::LensModel::defocus_rates`] otherwise). The OTF is the lens's at `c` alone,
 /// `H(νcF#; W(c)/c)`, so at a fixed frequency it moves
 /// - by its normalized frequency `s = νcF#`: by parts, as for the F-number,
 ///   `(1/ν_N) ∫ P sign(O) ν ∂O/∂ν dν = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν`, per unit
 ///   `ln c`;
 /// - by its wavefront: for a lens whose one order is the full pupil with a defocus `W020(λ)`
-///   affine in λ ([`optics::LensModel::affine_defocus`]: the chromatic lens on axis, a
-///   refractive lens without dispersion), `w = W020/λ` moves by `∂ln w/∂c = W020′/W020 − 1/c`,
+///   alone, affine in λ ([`optics::LensModel::affine_defocus`]: the chromatic lens on axis) or
+///   with its rates given ([`optics::LensModel::defocus_rates`]: the refractive lens, a glass's
+///   n′(λ)), `w = W020/λ` moves by `∂ln w/∂c = W020′/W020 − 1/c`,
 ///   so by `D_K ∂ln w/∂c` with `D_K = (1/ν_N) ∫ P sign(O) w ∂H/∂w dν` on the value's own rule
 ///   ([`optics::Polychromatic::mean_mtf_and_defocus_derivative`], as the F-number's); for a lens
 ///   that gives its wavelength directions ([`optics::LensModel::wavelength_directions`]: a phase
 ///   lens), by the radial engine's lanes along `δW = ∂W/∂λ − W/λ` (`all[base..]`, the value's
 ///   own rules, without the pixel MTF).
-fn line_center_partials(scene: &Scene, e: &Evaluation, all: Option<&[f64]>, base: Option<usize>) -> Result<(f64, f64), Error> {
+fn line_center_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    all: Option<&[f64]>,
+    base: Option<usize>,
+) -> Result<(f64, f64, f64), Error> {
     let p = Parameter::SpectrumCenter;
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
@@ -982,17 +989,25 @@ fn line_center_partials(scene: &Scene, e: &Evaluation, all: Option<&[f64]>, base
             ));
         };
         let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
-        return Ok((d_ln_n, (edge - e.mean_mtf) / c + along));
+        return Ok((d_ln_n, d_ln_n, (edge - e.mean_mtf) / c + along));
     }
     let family = lens.describe();
-    let Some(affine) = lens.affine_defocus(field) else {
+    let orders = lens.orders(c, field);
+    let plain = matches!(&orders[..], [o] if matches!(o.pupil, optics::Pupil::Full)
+        && o.wavefront.image_shift_m == [0.0, 0.0]
+        && [o.wavefront.spherical_m, o.wavefront.coma_m, o.wavefront.astigmatism_m, o.wavefront.field_curvature_m] == [0.0; 4]);
+    let rates = match lens.affine_defocus(field) {
+        Some(a) => Some(optics::DefocusRates { defocus: a.w020_slope, ln_efficiency: 0.0, ln_transmission: 0.0 }),
+        None => lens.defocus_rates(c, field),
+    };
+    let Some(rates) = rates.filter(|_| plain) else {
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
              pupil with a defocus affine in λ and constant efficiencies, on axis (the chromatic lens without an \
-             iris or Seidel terms, a refractive lens without dispersion), and for a phase lens on the radial \
-             engine; this lens's orders move with λ otherwise (a glass's n(λ) and Fresnel losses, several orders \
-             whose efficiencies move against each other, an iris, Seidel or Zernike terms, lateral colour off \
-             axis), which is not followed yet"
+             iris or Seidel terms), the refractive lens, and a phase lens on the radial engine; this lens's \
+             orders move with λ otherwise (several orders whose efficiencies move against each other, an iris, \
+             Seidel or Zernike terms, an efficiency table's slope, lateral colour off axis), which is not \
+             followed yet"
         )));
     };
     // the value's engine exactly (its parts, its settings), the defocus lane beside each OTF value
@@ -1005,10 +1020,14 @@ fn line_center_partials(scene: &Scene, e: &Evaluation, all: Option<&[f64]>, base
         .ok()
         .and_then(|poly| poly.mean_mtf_and_defocus_derivative())
         .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?;
-    let w020 = affine.w020_intercept_m + affine.w020_slope * c;
+    let w020 = orders[0].wavefront.defocus_m;
     // ∂H/∂w = 0 at w = 0 (H is even in w)
-    let d_defocus = if w020 == 0.0 { 0.0 } else { found.defocus * (affine.w020_slope / w020 - 1.0 / c) };
-    Ok((d_ln_n, (edge - e.mean_mtf - found.pixel_slope) / c + d_defocus))
+    let d_defocus = if w020 == 0.0 { 0.0 } else { found.defocus * (rates.defocus / w020 - 1.0 / c) };
+    Ok((
+        d_ln_n + rates.ln_efficiency,
+        d_ln_n + rates.ln_transmission,
+        (edge - e.mean_mtf - found.pixel_slope) / c + d_defocus,
+    ))
 }
 
 /// `∂ln N/∂T` for the temperature `T` of the scene's blackbody source under a line (Planck's

@@ -270,6 +270,18 @@ pub struct FactoredEfficiency {
 /// given.
 pub type ApertureDirections = Result<Vec<[crate::radial::RadialProfile; 3]>, String>;
 
+/// What [`LensModel::defocus_rates`] gives: per m of wavelength, `∂W020/∂λ` (m per m) of the
+/// one order's defocus, `∂ln τ/∂λ` of its efficiency and `∂ln T/∂λ` of the transmission.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DefocusRates {
+    /// `∂W020/∂λ`.
+    pub defocus: f64,
+    /// `∂ln τ/∂λ`, per m.
+    pub ln_efficiency: f64,
+    /// `∂ln T/∂λ`, per m.
+    pub ln_transmission: f64,
+}
+
 /// What [`LensModel::wavelength_directions`] gives: the coefficients `c_k` and per order the
 /// profiles `p_k` (m, as functions of `q = ρ²`) of the wavefront's rate `δW = Σ_k c_k p_k`, or why
 /// they cannot be given.
@@ -438,6 +450,15 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// For a lens whose one order at `field` is the full circular pupil with a defocus alone:
+    /// how it moves with the wavelength at `wavelength_m` ([`DefocusRates`]), for the gradient
+    /// with respect to a line's wavelength. `None` (the default) where the lens does not give
+    /// them (then a defocus affine in λ with constant efficiencies,
+    /// [`affine_defocus`](Self::affine_defocus), is used where the lens promises one).
+    fn defocus_rates(&self, _wavelength_m: f64, _field: Field) -> Option<DefocusRates> {
+        None
+    }
+
     /// How each imaging order's image shift moves with the field angles, at `wavelength_m` and
     /// `field`: one `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian) per order of [`orders`](Self::orders),
     /// for a lens whose orders change with the field point only through their image shifts
@@ -525,6 +546,9 @@ macro_rules! forward_lens_model {
             }
             fn wavelength_directions(&self, wavelength_m: f64) -> Option<WavelengthDirections> {
                 (**self).wavelength_directions(wavelength_m)
+            }
+            fn defocus_rates(&self, wavelength_m: f64, field: Field) -> Option<DefocusRates> {
+                (**self).defocus_rates(wavelength_m, field)
             }
             fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
                 (**self).image_shift_field_rates(wavelength_m, field)

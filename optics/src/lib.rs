@@ -49,7 +49,7 @@ pub mod testkit;
 pub use closed::GaussianDefocus;
 pub use error::Error;
 pub use lens::{
-    AffineDefocus, ApertureDirections, FactoredEfficiency, FactoredPart, Field, LensModel, Order, OrderDerivatives,
+    AffineDefocus, ApertureDirections, DefocusRates, FactoredEfficiency, FactoredPart, Field, LensModel, Order, OrderDerivatives,
     Pupil, WavelengthDirections, Wavefront, Zone, round_for_display,
 };
 pub use otf::{

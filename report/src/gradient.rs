@@ -796,6 +796,19 @@ mod tests {
         assert!((both.d_asnr[1] - alone.d_asnr[0]).abs() <= 1e-12 * alone.d_asnr[0].abs(), "{both:?} {alone:?}");
     }
 
+    /// The refractive singlet of N-BK7 (uncoated: its Fresnel losses move N with n(λ) too; the
+    /// defocus W020 ∝ n0 − n(λ) through n′) under a line at 650 nm, and with the pixel MTF and
+    /// read noise.
+    #[test]
+    fn a_line_on_the_refractive_lens_matches_central_differences() {
+        let singlet = refractive_singlet();
+        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=650", "spectrum.range_nm=1"];
+        check_line(&singlet, &owned(&line), &["exposure.time_ms"]);
+        let mut with = owned(&line);
+        with.extend(owned(&["camera.pixel_mtf=true", "camera.read_noise_e=2"]));
+        check_line(&singlet, &with, &[]);
+    }
+
     /// The families and scenes whose line's wavelength is not followed are refused naming why:
     /// the harmonic lens (orders whose efficiencies move against each other), a diffractive
     /// phase profile, the chromatic lens off axis (lateral colour), a line on a table's sample.
