@@ -318,6 +318,37 @@ impl LensModel for Refractive {
 mod tests {
     use super::*;
 
+    /// `dn/dλ` of N-BK7 against central differences of `index` written here (step 1e-5 of λ:
+    /// truncation ~1e-10, rounding ~1e-11 of n′), across its range; `None` outside it.
+    #[test]
+    fn sellmeier_index_derivative_matches_differences() {
+        let g = Sellmeier::N_BK7;
+        for l in [400e-9, 546.07e-9, 803e-9, 1500e-9] {
+            let h = 1e-5 * l;
+            let differences = (g.index(l + h).unwrap() - g.index(l - h).unwrap()) / (2.0 * h);
+            let exact = g.index_derivative(l).unwrap();
+            assert!((exact - differences).abs() <= 1e-8 * exact.abs(), "{l}: {exact} vs {differences}");
+        }
+        assert!(g.index_derivative(10e-6).is_none());
+    }
+
+    /// The lens's defocus and transmission rates (`LensModel::defocus_rates`) against central
+    /// differences of `defocus` and of the order's efficiency (step 1e-5 of λ).
+    #[test]
+    fn defocus_rates_match_differences() {
+        let lens = bk7();
+        for l in [480e-9, 650e-9, 803e-9] {
+            let h = 1e-5 * l;
+            let rates = lens.defocus_rates(l, Field::ON_AXIS).unwrap();
+            let w = (lens.defocus(l + h).unwrap() - lens.defocus(l - h).unwrap()) / (2.0 * h);
+            let tau = |x: f64| lens.efficiency(x).ln();
+            let t = (tau(l + h) - tau(l - h)) / (2.0 * h);
+            assert!((rates.defocus - w).abs() <= 1e-7 * w.abs(), "{l}: {} vs {w}", rates.defocus);
+            assert!((rates.ln_efficiency - t).abs() <= 1e-7 * t.abs(), "{l}: {} vs {t}", rates.ln_efficiency);
+            assert_eq!(rates.ln_transmission, rates.ln_efficiency);
+        }
+    }
+
     fn bk7() -> Refractive {
         Refractive::new(2.5, 3.36e-3, 546.07e-9, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap()
     }
