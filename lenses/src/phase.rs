@@ -385,7 +385,9 @@ impl LensModel for PhaseLens {
     fn wavelength_directions(&self, wavelength_m: f64) -> Option<optics::WavelengthDirections> {
         let l = wavelength_m;
         if !matches!((&self.efficiency, &self.transmission), (Curve::Constant(_), Curve::Constant(_))) {
-            return Some(Err("lens.efficiency or lens.transmission is a table, whose slope in λ is not followed".to_owned()));
+            return Some(Err(
+                "lens.efficiency or lens.transmission is a table, whose slope in λ is not followed".to_owned()
+            ));
         }
         let phase = match &self.dispersion {
             Dispersion::GeometricPhase => 0.0,

@@ -211,7 +211,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         Some((wrapped, bases)) => (wrapped, *bases),
         None => (scene, LaneBases::default()),
     };
-    let binary2 = bases.aperture.is_some() || bases.wavelength.is_some() || parameters.iter().any(|p| p.lane().is_some());
+    let binary2 =
+        bases.aperture.is_some() || bases.wavelength.is_some() || parameters.iter().any(|p| p.lane().is_some());
     // the wavefront directions for the FFT path, one per wavefront parameter in their order
     let grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
     if scene.fields().is_empty() {
@@ -976,8 +977,8 @@ fn line_center_partials(
     let d_ln_n = detected.line_weight_log_derivative().map_err(|why| not_smooth(format!("the photon count: {why}")))?;
     let lens = scene.lens();
     let field = scene.field();
-    let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     if let Some(base) = base {
+        let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
         let Some(Ok((coefficients, _))) = lens.wavelength_directions(c) else {
             return Err(not_smooth("the lens gives no wavelength directions here".to_owned()));
         };
@@ -1016,9 +1017,15 @@ fn line_center_partials(
     let folded = crate::evaluate::Folded::of(lens, &detected);
     let parts = folded.parts();
     let settings = scene.options().settings();
-    let found = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
+    // and P(ν_N)|O(ν_N)| from the same engine (a full centred pupil on axis: the OTF is real and
+    // the same along every direction)
+    let (found, edge) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
         .ok()
-        .and_then(|poly| poly.mean_mtf_and_defocus_derivative())
+        .and_then(|poly| {
+            let found = poly.mean_mtf_and_defocus_derivative()?;
+            let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
+            Some((found, edge))
+        })
         .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?;
     let w020 = orders[0].wavefront.defocus_m;
     // ∂H/∂w = 0 at w = 0 (H is even in w)

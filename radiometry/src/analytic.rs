@@ -374,7 +374,8 @@ mod tests {
             let b = Blackbody::new(t).unwrap();
             let (d_l, d_t) = b.log_derivatives(l);
             let h = 1e-5;
-            let by_l = ((b.spectral_radiance(l * (1.0 + h))).ln() - (b.spectral_radiance(l * (1.0 - h))).ln()) / (2.0 * h * l);
+            let by_l =
+                ((b.spectral_radiance(l * (1.0 + h))).ln() - (b.spectral_radiance(l * (1.0 - h))).ln()) / (2.0 * h * l);
             let (up, down) = (Blackbody::new(t * (1.0 + h)).unwrap(), Blackbody::new(t * (1.0 - h)).unwrap());
             let by_t = (up.spectral_radiance(l).ln() - down.spectral_radiance(l).ln()) / (2.0 * h * t);
             assert!((d_l - by_l).abs() <= 1e-8 * d_l.abs().max(1.0 / l), "{t} K {l}: {d_l} vs {by_l}");
