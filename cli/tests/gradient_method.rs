@@ -82,17 +82,16 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
         "gradient",
     ]);
     assert!(e.contains("--method gradient: --over lens.design_wavelength_nm: not differentiable here yet"), "{e}");
-    // a line's wavelength is not followed (a Gaussian's range and a top-hat's edges are)
-    let e = fails(&[
-        "optimize",
-        "--set",
-        "spectrum.shape=\"line\"",
-        "--over",
-        "spectrum.center_nm=790:810",
-        "--method",
-        "gradient",
-    ]);
-    assert!(e.contains("--method gradient: --over spectrum.center_nm: not differentiable here yet"), "{e}");
+    // a blackbody's temperature over a band is not followed (under a line it is)
+    let paper = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml")).unwrap();
+    let blackbody = paper
+        .replace("kind = \"flat\"", "kind = \"blackbody\"\ntemperature_k = 3000.0\nscale = 2e-3")
+        .replace("radiance_w_m2_sr_nm = 0.025", "");
+    let path = std::env::temp_dir().join(format!("asnr-gradient-blackbody-{}.toml", std::process::id()));
+    std::fs::write(&path, blackbody).unwrap();
+    let scene = path.to_str().unwrap();
+    let e = fails(&["optimize", scene, "--over", "source.temperature_k=2500:3500", "--method", "gradient"]);
+    assert!(e.contains("--method gradient: ") && e.contains("blackbody's temperature"), "{e}");
     for objective in ["capacity", "detectability:disk:20:0.1"] {
         let e =
             fails(&["optimize", "--over", "exposure.time_ms=1:2", "--objective", objective, "--method", "gradient"]);

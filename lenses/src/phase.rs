@@ -371,6 +371,67 @@ impl LensModel for PhaseLens {
         Some(Ok(out))
     }
 
+    /// The wavefront's rate `δW = ∂W/∂λ − W/λ` ([`LensModel::wavelength_directions`]) of
+    /// `W_λ = a(λ) φ0 + S + Z` (a the path per radian, S the exact reference sphere, Z the
+    /// `m = 0` Zernike terms, both fixed in metres): `δW = (a′ − a/λ) φ0 − (S + Z)/λ`. For a
+    /// geometric phase `a = λ/2π`, so `a′ − a/λ = 0` (the radian phase is the same at every
+    /// wavelength: only the sphere's and the Zernike terms' phase `2π(S + Z)/λ` turns); for a
+    /// refractive profile `a = (λ0/2π) g(λ)`, `g = (n − 1)/(n0 − 1)` (1 without a glass), so
+    /// `a′ − a/λ = (λ0/2π)(n′/(n0 − 1) − g/λ)`. As lanes: each part of φ0, the sphere and each
+    /// Zernike term, with their coefficients. Refused for the diffractive dispersion (its
+    /// orders' efficiencies `τ sinc²(pλ0/λ − m)` move with λ against each other), an
+    /// efficiency or transmission table (its slope is not followed), and a Zernike term with
+    /// `m ≠ 0` (not on the radial engine).
+    fn wavelength_directions(&self, wavelength_m: f64) -> Option<optics::WavelengthDirections> {
+        let l = wavelength_m;
+        if !matches!((&self.efficiency, &self.transmission), (Curve::Constant(_), Curve::Constant(_))) {
+            return Some(Err(
+                "lens.efficiency or lens.transmission is a table, whose slope in λ is not followed".to_owned()
+            ));
+        }
+        let phase = match &self.dispersion {
+            Dispersion::GeometricPhase => 0.0,
+            Dispersion::Refractive { glass } => {
+                let g = glass.as_ref().map_or(Some((1.0, 0.0)), |g| {
+                    let n0 = g.index(self.design_wavelength)?;
+                    Some(((g.index(l)? - 1.0) / (n0 - 1.0), g.index_derivative(l)? / (n0 - 1.0)))
+                });
+                let Some((g, g_slope)) = g else {
+                    return Some(Err(format!("{:.3} nm is outside the glass's stated range", l * 1e9)));
+                };
+                self.design_wavelength / std::f64::consts::TAU * (g_slope - g / l)
+            }
+            Dispersion::Diffractive { .. } => {
+                return Some(Err(
+                    "lens.dispersion = \"diffractive\": its orders' efficiencies τ sinc²(pλ0/λ − m) move with λ against \
+                     each other, whose derivative is not followed yet"
+                        .to_owned(),
+                ));
+            }
+        };
+        let mut coefficients = Vec::new();
+        let mut profiles = Vec::new();
+        if phase != 0.0 {
+            for p in &self.phase {
+                coefficients.push(phase);
+                profiles.push((**p).clone());
+            }
+        }
+        coefficients.push(-1.0 / l);
+        profiles.push((*self.sphere).clone());
+        for &(j, c) in &self.zernike_noll_m {
+            let (n, m) = optics::fft::noll_to_nm(j);
+            if m != 0 {
+                return Some(Err(format!("the Zernike term Noll {j} (m = {m}) takes the pupil off the radial engine")));
+            }
+            coefficients.push(-1.0 / l);
+            profiles.push(optics::radial::zernike_radial_profile(n, c));
+        }
+        // one order: every dispersion but the diffractive one
+        let orders = self.order_list(l).len();
+        Some(Ok((coefficients, vec![profiles; orders])))
+    }
+
     /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
         crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {

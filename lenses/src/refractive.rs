@@ -67,6 +67,16 @@ impl Sellmeier {
         (wavelength_m >= lo && wavelength_m <= hi).then(|| self.index_squared(wavelength_m).sqrt())
     }
 
+    /// `dn/dλ` (per m) at `wavelength_m`, `None` outside the stated range: from
+    /// `n² = 1 + Σ B_i l²/(l² − C_i)` (l in µm), `dn/dλ = (1/2n) Σ −B_i C_i/(l² − C_i)² · 2l dl/dλ`.
+    pub fn index_derivative(&self, wavelength_m: f64) -> Option<f64> {
+        let n = self.index(wavelength_m)?;
+        let l = wavelength_m * 1e6;
+        let l2 = l * l;
+        let d_n2_d_l2: f64 = self.b.iter().zip(&self.c_um2).map(|(b, c)| -b * c / ((l2 - c) * (l2 - c))).sum();
+        Some(d_n2_d_l2 * 2.0 * l * 1e6 / (2.0 * n))
+    }
+
     /// The wavelength range (m) where the formula holds.
     pub fn range(&self) -> (f64, f64) {
         self.range_m
@@ -259,6 +269,29 @@ impl LensModel for Refractive {
         }
     }
 
+    /// `W020 = f0/(8F#²) (n0 − n(λ))/(n0 − 1)` moves as `−f0/(8F#²) n′/(n0 − 1)`; the
+    /// transmission `τ = T = (1 − R)^(2e)` of uncoated surfaces as
+    /// `∂ln τ/∂λ = −2e R′/(1 − R)` with `R = ((n − 1)/(n + 1))²`,
+    /// `R′ = 4 (n − 1)/(n + 1)³ n′` (coated: a constant `R`). `None` outside the glass's range.
+    fn defocus_rates(&self, wavelength_m: f64, _field: Field) -> Option<optics::DefocusRates> {
+        let n0 = self.index(self.design_wavelength)?;
+        let n = self.index(wavelength_m)?;
+        let slope = match self.glass {
+            Glass::Constant(_) => 0.0,
+            Glass::Sellmeier(s) => s.index_derivative(wavelength_m)?,
+        };
+        let defocus = -self.focal_length / (8.0 * self.f_number * self.f_number) * slope / (n0 - 1.0);
+        let ln_through = match self.surfaces {
+            Surfaces::Coated(_) => 0.0,
+            Surfaces::Uncoated => {
+                let r = fresnel_reflectance(n);
+                let r_slope = 4.0 * (n - 1.0) / (n + 1.0).powi(3) * slope;
+                -2.0 * f64::from(self.elements) * r_slope / (1.0 - r)
+            }
+        };
+        Some(optics::DefocusRates { defocus, ln_efficiency: ln_through, ln_transmission: ln_through })
+    }
+
     fn affine_defocus(&self, _field: Field) -> Option<AffineDefocus> {
         // no dispersion: W020 ≡ 0 and a constant τ = T at every field point
         let Glass::Constant(_) = self.glass else { return None };
@@ -292,6 +325,37 @@ impl LensModel for Refractive {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `dn/dλ` of N-BK7 against central differences of `index` written here (step 1e-5 of λ:
+    /// truncation ~1e-10, rounding ~1e-11 of n′), across its range; `None` outside it.
+    #[test]
+    fn sellmeier_index_derivative_matches_differences() {
+        let g = Sellmeier::N_BK7;
+        for l in [400e-9, 546.07e-9, 803e-9, 1500e-9] {
+            let h = 1e-5 * l;
+            let differences = (g.index(l + h).unwrap() - g.index(l - h).unwrap()) / (2.0 * h);
+            let exact = g.index_derivative(l).unwrap();
+            assert!((exact - differences).abs() <= 1e-8 * exact.abs(), "{l}: {exact} vs {differences}");
+        }
+        assert!(g.index_derivative(10e-6).is_none());
+    }
+
+    /// The lens's defocus and transmission rates (`LensModel::defocus_rates`) against central
+    /// differences of `defocus` and of the order's efficiency (step 1e-5 of λ).
+    #[test]
+    fn defocus_rates_match_differences() {
+        let lens = bk7();
+        for l in [480e-9, 650e-9, 803e-9] {
+            let h = 1e-5 * l;
+            let rates = lens.defocus_rates(l, Field::ON_AXIS).unwrap();
+            let w = (lens.defocus(l + h).unwrap() - lens.defocus(l - h).unwrap()) / (2.0 * h);
+            let tau = |x: f64| lens.efficiency(x).ln();
+            let t = (tau(l + h) - tau(l - h)) / (2.0 * h);
+            assert!((rates.defocus - w).abs() <= 1e-7 * w.abs(), "{l}: {} vs {w}", rates.defocus);
+            assert!((rates.ln_efficiency - t).abs() <= 1e-7 * t.abs(), "{l}: {} vs {t}", rates.ln_efficiency);
+            assert_eq!(rates.ln_transmission, rates.ln_efficiency);
+        }
+    }
 
     fn bk7() -> Refractive {
         Refractive::new(2.5, 3.36e-3, 546.07e-9, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap()

@@ -79,11 +79,19 @@ pub enum Parameter {
     /// [`FNumber`](Parameter::FNumber) applies.
     FocalLength,
     /// The centre `c` of the scene's Gaussian spectrum (`spectrum.center_nm`): `∂/∂c`, per m. It
-    /// moves the photon count and the OTF's spectral weights (docs/physics.md, "Gradients").
+    /// moves the photon count and the OTF's spectral weights (docs/physics.md, "Gradients"). Of a
+    /// line, its wavelength: the photon count through the detected spectrum's factors at `c`,
+    /// and each order's OTF at `c` (docs/physics.md, "Gradients: a line's wavelength").
     SpectrumCenter,
     /// The spectral range `r = 2√2 σ` of the scene's Gaussian spectrum (`spectrum.range_nm`),
-    /// peak held: `∂/∂r`, per m.
+    /// peak held: `∂/∂r`, per m. Of a top-hat, its full width; of a line, its equivalent width
+    /// (the photon count alone, `∂ln N/∂r = 1/r`).
     SpectrumRange,
+    /// The temperature T of the scene's blackbody source (`source.temperature_k`): `∂/∂T`, per
+    /// K. Planck's `∂ln B/∂T` moves the photon count and, over a band, the OTF's spectral
+    /// weights; computed under a line (the photon count alone: docs/physics.md, "Gradients: a
+    /// line's wavelength and a blackbody's temperature").
+    Temperature,
     /// A Seidel term of the chromatic lens (`lens.spherical_um`, `lens.coma_um`,
     /// `lens.astigmatism_um`, `lens.field_curvature_um`): `∂/∂W`, per µm. Where the scene's
     /// orders are the full circle with Seidel terms (the overlap engine), forward mode on the
@@ -146,8 +154,9 @@ impl Parameter {
             Parameter::ZernikeNoll(_) => "a Zernike coefficient of the lens",
             Parameter::Seidel(_) => "a Seidel coefficient of the lens",
             Parameter::FieldAngle(_) => "a field angle",
-            Parameter::SpectrumCenter => "the centre of the Gaussian spectrum",
-            Parameter::SpectrumRange => "the range of the Gaussian spectrum",
+            Parameter::SpectrumCenter => "the spectrum's centre (a line's wavelength)",
+            Parameter::SpectrumRange => "the spectrum's range (a line's equivalent width)",
+            Parameter::Temperature => "the blackbody's temperature",
             Parameter::FNumber => "the lens's F-number",
             Parameter::FocalLength => "the lens's focal length",
             Parameter::LibraryBias(_) => "a library lens's parameter bias",
@@ -193,15 +202,17 @@ pub struct Gradient {
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
     // the F-number and focal length of a lens that gives its aperture directions (a phase
     // lens): three more lanes of the radial engine, on a lens that appends them
-    let lanes = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
-        Some(&p) => ApertureLanes::of(scene, p)?,
-        None => None,
+    // and a line's wavelength on a lens that gives its wavelength directions (a phase lens):
+    // one more lane per term of the wavefront's rate
+    let aperture = parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)).copied();
+    let wavelength = parameters.contains(&Parameter::SpectrumCenter);
+    let lanes = ExtraLanes::of(scene, aperture, wavelength)?;
+    let (scene, bases) = match &lanes {
+        Some((wrapped, bases)) => (wrapped, *bases),
+        None => (scene, LaneBases::default()),
     };
-    let (scene, aperture_base) = match &lanes {
-        Some((wrapped, base)) => (wrapped, Some(*base)),
-        None => (scene, None),
-    };
-    let binary2 = aperture_base.is_some() || parameters.iter().any(|p| p.lane().is_some());
+    let binary2 =
+        bases.aperture.is_some() || bases.wavelength.is_some() || parameters.iter().any(|p| p.lane().is_some());
     // the wavefront directions for the FFT path, one per wavefront parameter in their order
     let grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
     // a library lens's parameters whose bias is asked, in their order: their lanes ride on the
@@ -211,7 +222,7 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     if scene.fields().is_empty() {
         // one pass: the evaluation and the wavefront derivatives of its mean MTF together
         let (evaluation, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(scene, binary2, &grid, &bias)?;
-        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, aperture_base, d_bias.as_ref())?;
+        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, bases, d_bias.as_ref())?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -231,7 +242,7 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     for (&(field, _), w) in scene.fields().iter().zip(&relative) {
         let single = scene.single_field(field);
         let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
-        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid, aperture_base, d_bias.as_ref())?;
+        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid, bases, d_bias.as_ref())?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -263,19 +274,20 @@ struct PointGradient {
 /// Binary 2 derivatives computed with it, where they were; `d_grid` the wavefront derivatives on
 /// the FFT path, one per wavefront parameter of `parameters` in their order.
 ///
-/// `aperture_base`: where the F-number and focal length ride the radial engine's lanes (a
-/// phase lens, [`ApertureLanes`]), the first of their three lanes `[P, T, S]`. `d_bias`: a
-/// library lens's bias lanes computed with the evaluation, one per `LibraryBias` of
-/// `parameters` in their order, where the value's engine gave them.
+/// `bases`: where the F-number and focal length ride the radial engine's lanes (a phase lens,
+/// [`ExtraLanes`]), the first of their three lanes `[P, T, S]`; where a line's wavelength does,
+/// the first of its lanes. `d_bias`: a library lens's bias lanes computed with the evaluation,
+/// one per `LibraryBias` of `parameters` in their order, where the value's engine gave them.
 fn point_gradient(
     scene: &Scene,
     e: &Evaluation,
     parameters: &[Parameter],
     d_binary2: Option<Vec<f64>>,
     d_grid: &GridGradient,
-    aperture_base: Option<usize>,
+    bases: LaneBases,
     d_bias: Option<&BiasLanes>,
 ) -> Result<PointGradient, Error> {
+    let aperture_base = bases.aperture;
     let camera = scene.camera();
     let sensor = camera.sensor();
     let exposure = scene.exposure();
@@ -304,7 +316,9 @@ fn point_gradient(
     // evaluation computed
     let on_grid = matches!(d_grid, GridGradient::Computed(_));
     let on_lanes = |p: &&Parameter| {
-        p.lane().is_some() || (aperture_base.is_some() && matches!(p, Parameter::FNumber | Parameter::FocalLength))
+        p.lane().is_some()
+            || (aperture_base.is_some() && matches!(p, Parameter::FNumber | Parameter::FocalLength))
+            || (bases.wavelength.is_some() && **p == Parameter::SpectrumCenter)
     };
     let binary2 = match parameters.iter().find(on_lanes) {
         Some(&p) if !on_grid => Some(binary2_mean_mtf(scene, p, d_binary2)?),
@@ -321,9 +335,17 @@ fn point_gradient(
     // each parameter's place among the FFT path's directions, and among the bias lanes
     let mut grid_place = 0;
     let mut bias_place = 0;
+    // a line: its wavelength moves N and each order's OTF at it, its equivalent width N alone
+    let line = crate::evaluate::detected_spectrum(scene).line();
     let spectral = match parameters.iter().find(|p| matches!(p, Parameter::SpectrumCenter | Parameter::SpectrumRange)) {
-        Some(&p) => Some(spectral_partials(scene, e, p)?),
-        None => None,
+        Some(&p) if line.is_none() => Some(spectral_partials(scene, e, p)?),
+        _ => None,
+    };
+    let line_center = match line {
+        Some(_) if parameters.contains(&Parameter::SpectrumCenter) => {
+            Some(line_center_partials(scene, e, binary2.as_deref(), bases.wavelength)?)
+        }
+        _ => None,
     };
     let aperture = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
         Some(&p) if aperture_base.is_none() => Some(aperture_partials(scene, e, p)?),
@@ -511,6 +533,26 @@ fn point_gradient(
                 // stray light N_T − N in proportion
                 (n * d_ln_ri, background * d_ln_ri, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
+            Parameter::SpectrumCenter | Parameter::SpectrumRange if line.is_some() => {
+                // N ∝ (the line's weight) Σ τ_o(c) and N_T ∝ (the weight) T(c): the stray light
+                // B = N_T − N moves by N_T ∂ln N_T − N ∂ln N
+                let (d_ln_n, d_ln_t, d_mtf) = match (p, line) {
+                    (Parameter::SpectrumRange, Some(l)) => (1.0 / l.width(), 1.0 / l.width(), 0.0),
+                    _ => line_center.expect("computed above for a line's wavelength"),
+                };
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                let d_b = if stray { transmitted * d_ln_t - n * d_ln_n } else { 0.0 };
+                (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::Temperature => {
+                let d_ln_n = temperature_log_derivative(scene, p)?;
+                // a line: the OTF is the lens's at one wavelength, whatever the weight; N and
+                // N_T both ∝ B(c, T)
+                (n * d_ln_n, background * d_ln_n, 0.0, 0.0, 0.0, 0.0, 0.0)
+            }
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
                 let s = spectral.as_ref().expect("computed above for a spectral parameter");
                 let (d_ln_n, d_mtf) = if p == Parameter::SpectrumCenter { s.center } else { s.range };
@@ -563,108 +605,176 @@ fn field_key(axis: usize) -> &'static str {
     if axis == 0 { "field.x_deg" } else { "field.y_deg" }
 }
 
+/// Where the extra lanes of [`ExtraLanes`] start among the lens's wavefront directions: the
+/// aperture's `[P, T, S]` and the wavelength's terms, where they were asked.
+#[derive(Clone, Copy, Debug, Default)]
+struct LaneBases {
+    aperture: Option<usize>,
+    wavelength: Option<usize>,
+}
+
 /// A lens whose wavefront directions ([`optics::LensModel::binary2_directions`]) are its own
 /// followed by its aperture directions `[P, T, S]` per order
-/// ([`optics::LensModel::aperture_directions`]), so that one pass of the radial engine carries
-/// the F-number's and the focal length's lanes beside the value (and any Binary 2, spline and
-/// Zernike lanes asked with them). Everything else is the lens's own.
+/// ([`optics::LensModel::aperture_directions`]) and its wavelength directions
+/// ([`optics::LensModel::wavelength_directions`]), each where asked, so that one pass of the
+/// radial engine carries the F-number's, the focal length's and a line's wavelength's lanes
+/// beside the value (and any Binary 2, spline and Zernike lanes asked with them). Everything
+/// else is the lens's own.
 #[derive(Debug)]
-struct ApertureLanes(std::sync::Arc<dyn optics::LensModel>);
+struct ExtraLanes {
+    inner: std::sync::Arc<dyn optics::LensModel>,
+    aperture: bool,
+    wavelength: bool,
+}
 
-impl ApertureLanes {
-    /// The scene with its lens so wrapped and the index of the first aperture lane, where the
-    /// lens gives aperture directions; `None` where it does not (the families whose F-number
-    /// gradient is [`aperture_partials`]'). Refused off axis (the oblique wave moves with the
-    /// aperture too) and with the pixel MTF.
-    fn of(scene: &Scene, p: Parameter) -> Result<Option<(Scene, usize)>, Error> {
+impl ExtraLanes {
+    /// The scene with its lens so wrapped and where the extra lanes start, where the lens gives
+    /// aperture directions (`aperture`: the F-number or focal length asked) or wavelength
+    /// directions (`wavelength`: a line's wavelength asked, the scene under a line); `None`
+    /// where it gives neither (the families whose F-number gradient is [`aperture_partials`]',
+    /// whose line's wavelength is [`line_center_partials`]'). The aperture's lanes are refused
+    /// off axis (the oblique wave moves with the aperture too) and with the pixel MTF; the
+    /// wavelength's where the lens says why not.
+    fn of(scene: &Scene, aperture: Option<Parameter>, wavelength: bool) -> Result<Option<(Scene, LaneBases)>, Error> {
         let lens = scene.lens();
         let lambda = lens.design_wavelength().unwrap_or(550e-9);
-        let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
-        match lens.aperture_directions(lambda) {
-            None => return Ok(None),
-            Some(Err(why)) => return Err(not_smooth(&why)),
-            Some(Ok(_)) => {}
-        }
-        let fields: Vec<optics::Field> = match scene.fields() {
-            [] => vec![scene.field()],
-            points => points.iter().map(|f| f.0).collect(),
+        let with_aperture = match aperture {
+            None => false,
+            Some(p) => {
+                let not_smooth =
+                    |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
+                match lens.aperture_directions(lambda) {
+                    None => false,
+                    Some(Err(why)) => return Err(not_smooth(&why)),
+                    Some(Ok(_)) => {
+                        let fields: Vec<optics::Field> = match scene.fields() {
+                            [] => vec![scene.field()],
+                            points => points.iter().map(|f| f.0).collect(),
+                        };
+                        if fields.iter().any(|f| !f.is_on_axis()) {
+                            return Err(not_smooth(
+                                "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the                  radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is                  computed on axis",
+                            ));
+                        }
+                        if scene.camera().pixel_mtf() {
+                            return Err(not_smooth(
+                                "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet                  (set camera.pixel_mtf = false)",
+                            ));
+                        }
+                        true
+                    }
+                }
+            }
         };
-        if fields.iter().any(|f| !f.is_on_axis()) {
-            return Err(not_smooth(
-                "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the                  radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is                  computed on axis",
-            ));
+        let line = if wavelength { crate::evaluate::detected_spectrum(scene).line() } else { None };
+        let with_wavelength = match line.and_then(|l| lens.wavelength_directions(l.center())) {
+            None => false,
+            Some(Err(why)) => {
+                return Err(Error::NotDifferentiable {
+                    parameter: Parameter::SpectrumCenter.describe(),
+                    reason: format!("the line's wavelength moves this lens's orders in a way not followed yet: {why}"),
+                });
+            }
+            Some(Ok(_)) => true,
+        };
+        if !(with_aperture || with_wavelength) {
+            return Ok(None);
         }
-        if scene.camera().pixel_mtf() {
-            return Err(not_smooth(
-                "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet                  (set camera.pixel_mtf = false)",
-            ));
+        let own = |l: f64| lens.binary2_directions(l).and_then(|d| d.first().map(Vec::len)).unwrap_or(0);
+        let mut bases = LaneBases::default();
+        if with_aperture {
+            bases.aperture = Some(own(lambda));
         }
-        let base = lens.binary2_directions(lambda).and_then(|d| d.first().map(Vec::len)).unwrap_or(0);
-        Ok(Some((scene.clone().with_lens(std::sync::Arc::new(ApertureLanes(scene.lens_arc()))), base)))
+        if let Some(l) = line.filter(|_| with_wavelength) {
+            bases.wavelength = Some(own(l.center()) + if with_aperture { 3 } else { 0 });
+        }
+        let wrapped = ExtraLanes { inner: scene.lens_arc(), aperture: with_aperture, wavelength: with_wavelength };
+        Ok(Some((scene.clone().with_lens(std::sync::Arc::new(wrapped)), bases)))
+    }
+
+    fn wrap(&self, inner: std::sync::Arc<dyn optics::LensModel>) -> ExtraLanes {
+        ExtraLanes { inner, aperture: self.aperture, wavelength: self.wavelength }
     }
 }
 
-impl optics::LensModel for ApertureLanes {
+impl optics::LensModel for ExtraLanes {
     fn f_number(&self) -> f64 {
-        self.0.f_number()
+        self.inner.f_number()
     }
     fn focal_length(&self) -> f64 {
-        self.0.focal_length()
+        self.inner.focal_length()
     }
     fn orders(&self, wavelength_m: f64, field: optics::Field) -> Vec<optics::Order> {
-        self.0.orders(wavelength_m, field)
+        self.inner.orders(wavelength_m, field)
     }
     fn orders_into(&self, wavelength_m: f64, field: optics::Field, out: &mut Vec<optics::Order>) {
-        self.0.orders_into(wavelength_m, field, out)
+        self.inner.orders_into(wavelength_m, field, out)
     }
     fn efficiency(&self, wavelength_m: f64) -> f64 {
-        self.0.efficiency(wavelength_m)
+        self.inner.efficiency(wavelength_m)
     }
     fn transmission(&self, wavelength_m: f64) -> f64 {
-        self.0.transmission(wavelength_m)
+        self.inner.transmission(wavelength_m)
     }
     fn breakpoints(&self) -> Vec<f64> {
-        self.0.breakpoints()
+        self.inner.breakpoints()
     }
     /// The lens's factored parts, each part's orders wrapped as well (a factored lens's
     /// directions are its own: the same pupils).
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
-        let mut f = self.0.factored_efficiency()?;
+        let mut f = self.inner.factored_efficiency()?;
         for part in &mut f.parts {
-            part.relative = std::sync::Arc::new(ApertureLanes(part.relative.clone()));
+            part.relative = std::sync::Arc::new(self.wrap(part.relative.clone()));
         }
         Some(f)
     }
     fn numerical_aperture(&self) -> f64 {
-        self.0.numerical_aperture()
+        self.inner.numerical_aperture()
     }
     fn design_wavelength(&self) -> Option<f64> {
-        self.0.design_wavelength()
+        self.inner.design_wavelength()
     }
     fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<optics::radial::RadialProfile>>> {
-        let extra = self.0.aperture_directions(wavelength_m)?.ok()?;
-        let own = self.0.binary2_directions(wavelength_m).unwrap_or_else(|| vec![Vec::new(); extra.len()]);
-        if own.len() != extra.len() {
+        let aperture = match self.aperture {
+            true => Some(self.inner.aperture_directions(wavelength_m)?.ok()?),
+            false => None,
+        };
+        let wavelength = match self.wavelength {
+            true => Some(self.inner.wavelength_directions(wavelength_m)?.ok()?.1),
+            false => None,
+        };
+        let orders = aperture.as_ref().map(Vec::len).or(wavelength.as_ref().map(Vec::len))?;
+        let own = self.inner.binary2_directions(wavelength_m).unwrap_or_else(|| vec![Vec::new(); orders]);
+        if own.len() != orders || wavelength.as_ref().is_some_and(|w| w.len() != orders) {
             return None;
         }
+        let mut aperture = aperture.map(Vec::into_iter);
+        let mut wavelength = wavelength.map(Vec::into_iter);
         Some(
             own.into_iter()
-                .zip(extra)
-                .map(|(mut lanes, e)| {
-                    lanes.extend(e);
+                .map(|mut lanes| {
+                    if let Some(e) = aperture.as_mut().and_then(Iterator::next) {
+                        lanes.extend(e);
+                    }
+                    if let Some(w) = wavelength.as_mut().and_then(Iterator::next) {
+                        lanes.extend(w);
+                    }
                     lanes
                 })
                 .collect(),
         )
     }
     fn aperture_directions(&self, wavelength_m: f64) -> Option<optics::ApertureDirections> {
-        self.0.aperture_directions(wavelength_m)
+        self.inner.aperture_directions(wavelength_m)
+    }
+    fn wavelength_directions(&self, wavelength_m: f64) -> Option<optics::WavelengthDirections> {
+        self.inner.wavelength_directions(wavelength_m)
     }
     fn describe(&self) -> String {
-        self.0.describe()
+        self.inner.describe()
     }
     fn affine_defocus(&self, field: optics::Field) -> Option<optics::AffineDefocus> {
-        self.0.affine_defocus(field)
+        self.inner.affine_defocus(field)
     }
 }
 
@@ -841,6 +951,137 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     };
     let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
+}
+
+/// `(∂ln N/∂c, ∂ln N_T/∂c, ∂M̄/∂c)` for the wavelength `c` of the scene's line (docs/physics.md,
+/// "Gradients: a line's wavelength"), per m. The line's weight `w` (its `peak · width` times the
+/// detected spectrum's other factors at `c`: the radiance, the quantum efficiency, the photon
+/// factor λ) moves as [`radiometry::Spectrum::line_weight_log_derivative`], and `N ∝ w τ(c)`,
+/// `N_T ∝ w T(c)`: `∂ln N/∂c = ∂ln w/∂c + ∂ln τ/∂λ` (the lens's efficiency and transmission
+/// constant in λ where an affine defocus or wavelength directions are given; their rates from
+/// [`optics::LensModel::defocus_rates`] otherwise). The OTF is the lens's at `c` alone,
+/// `H(νcF#; W(c)/c)`, so at a fixed frequency it moves
+/// - by its normalized frequency `s = νcF#`: by parts, as for the F-number,
+///   `(1/ν_N) ∫ P sign(O) ν ∂O/∂ν dν = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν`, per unit
+///   `ln c`;
+/// - by its wavefront: for a lens whose one order is the full pupil with a defocus `W020(λ)`
+///   alone, affine in λ ([`optics::LensModel::affine_defocus`]: the chromatic lens on axis) or
+///   with its rates given ([`optics::LensModel::defocus_rates`]: the refractive lens, a glass's
+///   n′(λ)), `w = W020/λ` moves by `∂ln w/∂c = W020′/W020 − 1/c`,
+///   so by `D_K ∂ln w/∂c` with `D_K = (1/ν_N) ∫ P sign(O) w ∂H/∂w dν` on the value's own rule
+///   ([`optics::Polychromatic::mean_mtf_and_defocus_derivative`], as the F-number's); for a lens
+///   that gives its wavelength directions ([`optics::LensModel::wavelength_directions`]: a phase
+///   lens), by the radial engine's lanes along `δW = ∂W/∂λ − W/λ` (`all[base..]`, the value's
+///   own rules, without the pixel MTF).
+fn line_center_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    all: Option<&[f64]>,
+    base: Option<usize>,
+) -> Result<(f64, f64, f64), Error> {
+    let p = Parameter::SpectrumCenter;
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let camera = scene.camera();
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
+    }
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let Some(line) = detected.line() else {
+        return Err(not_smooth("the detected spectrum has no line".to_owned()));
+    };
+    let c = line.center();
+    let d_ln_n = detected.line_weight_log_derivative().map_err(|why| not_smooth(format!("the photon count: {why}")))?;
+    let lens = scene.lens();
+    let field = scene.field();
+    if let Some(base) = base {
+        let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+        let Some(Ok((coefficients, _))) = lens.wavelength_directions(c) else {
+            return Err(not_smooth("the lens gives no wavelength directions here".to_owned()));
+        };
+        let Some(lanes) = all.and_then(|a| a.get(base..base + coefficients.len())) else {
+            return Err(not_smooth(
+                "the radial engine did not carry the wavelength's lanes here (off axis, an order through an iris, \
+                 zones, a map or a table, or the FFT path)"
+                    .to_owned(),
+            ));
+        };
+        let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
+        return Ok((d_ln_n, d_ln_n, (edge - e.mean_mtf) / c + along));
+    }
+    let family = lens.describe();
+    let orders = lens.orders(c, field);
+    let plain = matches!(&orders[..], [o] if matches!(o.pupil, optics::Pupil::Full)
+        && o.wavefront.image_shift_m == [0.0, 0.0]
+        && [o.wavefront.spherical_m, o.wavefront.coma_m, o.wavefront.astigmatism_m, o.wavefront.field_curvature_m] == [0.0; 4]);
+    let rates = match lens.affine_defocus(field) {
+        Some(a) => Some(optics::DefocusRates { defocus: a.w020_slope, ln_efficiency: 0.0, ln_transmission: 0.0 }),
+        None => lens.defocus_rates(c, field),
+    };
+    let Some(rates) = rates.filter(|_| plain) else {
+        return Err(not_smooth(format!(
+            "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
+             pupil with a defocus affine in λ and constant efficiencies, on axis (the chromatic lens without an \
+             iris or Seidel terms), the refractive lens, and a phase lens on the radial engine; this lens's \
+             orders move with λ otherwise (several orders whose efficiencies move against each other, an iris, \
+             Seidel or Zernike terms, an efficiency table's slope, lateral colour off axis), which is not \
+             followed yet"
+        )));
+    };
+    // the value's engine exactly (its parts, its settings), the defocus lane beside each OTF value
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    // and P(ν_N)|O(ν_N)| from the same engine (a full centred pupil on axis: the OTF is real and
+    // the same along every direction)
+    let (found, edge) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
+        .ok()
+        .and_then(|poly| {
+            let found = poly.mean_mtf_and_defocus_derivative()?;
+            let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
+            Some((found, edge))
+        })
+        .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?;
+    let w020 = orders[0].wavefront.defocus_m;
+    // ∂H/∂w = 0 at w = 0 (H is even in w)
+    let d_defocus = if w020 == 0.0 { 0.0 } else { found.defocus * (rates.defocus / w020 - 1.0 / c) };
+    Ok((
+        d_ln_n + rates.ln_efficiency,
+        d_ln_n + rates.ln_transmission,
+        (edge - e.mean_mtf - found.pixel_slope) / c + d_defocus,
+    ))
+}
+
+/// `∂ln N/∂T` for the temperature `T` of the scene's blackbody source under a line (Planck's
+/// `∂ln B/∂T` at the line's wavelength, [`radiometry::Blackbody::log_derivatives`]): the OTF is
+/// the lens's at that one wavelength, whatever the weight. Over a band the temperature moves the
+/// OTF's spectral weights by `∂ln B/∂T(λ)`, which is not a polynomial in λ (the rule of
+/// [`spectral_partials`] takes the weights' derivatives as `ρ λ^k`): refused there.
+fn temperature_log_derivative(scene: &Scene, p: Parameter) -> Result<f64, Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let detected = crate::evaluate::detected_spectrum(scene);
+    fn blackbodies(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Blackbody>) {
+        match spectrum {
+            radiometry::Spectrum::Blackbody { source, .. } => found.push(*source),
+            radiometry::Spectrum::Product(factors) => factors.iter().for_each(|f| blackbodies(f, found)),
+            _ => {}
+        }
+    }
+    let mut found = Vec::new();
+    blackbodies(&detected, &mut found);
+    let [source] = found[..] else {
+        return Err(not_smooth(format!("the detected spectrum has {} blackbody factors, not one", found.len())));
+    };
+    let Some(line) = detected.line() else {
+        return Err(not_smooth(
+            "over a band the temperature moves the OTF's spectral weights by Planck's ∂ln B/∂T(λ), which is not a \
+             polynomial in λ: the spectral gradient's rule (the OTFs of ρλ and ρλ²) does not reach it yet; \
+             computed under a line (spectrum.shape = \"line\"), where it moves the photon count alone"
+                .to_owned(),
+        ));
+    };
+    Ok(source.log_derivatives(line.center()).1)
 }
 
 /// The top-hat factor of a spectrum (itself or one factor of a product), if there is exactly one.

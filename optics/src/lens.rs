@@ -270,6 +270,23 @@ pub struct FactoredEfficiency {
 /// given.
 pub type ApertureDirections = Result<Vec<[crate::radial::RadialProfile; 3]>, String>;
 
+/// What [`LensModel::defocus_rates`] gives: per m of wavelength, `∂W020/∂λ` (m per m) of the
+/// one order's defocus, `∂ln τ/∂λ` of its efficiency and `∂ln T/∂λ` of the transmission.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DefocusRates {
+    /// `∂W020/∂λ`.
+    pub defocus: f64,
+    /// `∂ln τ/∂λ`, per m.
+    pub ln_efficiency: f64,
+    /// `∂ln T/∂λ`, per m.
+    pub ln_transmission: f64,
+}
+
+/// What [`LensModel::wavelength_directions`] gives: the coefficients `c_k` and per order the
+/// profiles `p_k` (m, as functions of `q = ρ²`) of the wavefront's rate `δW = Σ_k c_k p_k`, or why
+/// they cannot be given.
+pub type WavelengthDirections = Result<(Vec<f64>, Vec<Vec<crate::radial::RadialProfile>>), String>;
+
 /// How a lens's imaging orders and transmission move with one of its design parameters at one
 /// wavelength ([`LensModel::order_derivatives`]): per unit of the parameter.
 #[derive(Clone, Debug)]
@@ -419,6 +436,29 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// How each imaging order's whole wavefront moves with the wavelength, at `wavelength_m` on
+    /// axis, for the gradient with respect to a line's wavelength (docs/physics.md, "Gradients:
+    /// a line's wavelength"): the radial engine turns a wavefront `W` (m) into the phase
+    /// `2πW/λ` and reads the OTF at `s = νλF#`, so at a fixed frequency the OTF moves with λ by
+    /// its `s` (the frequency scaling, taken by parts outside) and by the wavefront direction
+    /// `δW = ∂W/∂λ − W/λ` (m per m) at the phase's fixed `2π/λ`. Given as
+    /// `(coefficients c_k, per order the profiles p_k)`, `δW = Σ_k c_k p_k` with the same `c_k`
+    /// for every order. `None` (the default) where the lens does not give them; `Some(Err(why))`
+    /// where it would but cannot here (the orders' relative efficiencies or the efficiency's
+    /// table move with λ, which the directions do not follow).
+    fn wavelength_directions(&self, _wavelength_m: f64) -> Option<WavelengthDirections> {
+        None
+    }
+
+    /// For a lens whose one order at `field` is the full circular pupil with a defocus alone:
+    /// how it moves with the wavelength at `wavelength_m` ([`DefocusRates`]), for the gradient
+    /// with respect to a line's wavelength. `None` (the default) where the lens does not give
+    /// them (then a defocus affine in λ with constant efficiencies,
+    /// [`affine_defocus`](Self::affine_defocus), is used where the lens promises one).
+    fn defocus_rates(&self, _wavelength_m: f64, _field: Field) -> Option<DefocusRates> {
+        None
+    }
+
     /// How each imaging order's image shift moves with the field angles, at `wavelength_m` and
     /// `field`: one `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian) per order of [`orders`](Self::orders),
     /// for a lens whose orders change with the field point only through their image shifts
@@ -503,6 +543,12 @@ macro_rules! forward_lens_model {
             }
             fn aperture_directions(&self, wavelength_m: f64) -> Option<ApertureDirections> {
                 (**self).aperture_directions(wavelength_m)
+            }
+            fn wavelength_directions(&self, wavelength_m: f64) -> Option<WavelengthDirections> {
+                (**self).wavelength_directions(wavelength_m)
+            }
+            fn defocus_rates(&self, wavelength_m: f64, field: Field) -> Option<DefocusRates> {
+                (**self).defocus_rates(wavelength_m, field)
             }
             fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
                 (**self).image_shift_field_rates(wavelength_m, field)

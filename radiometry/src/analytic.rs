@@ -344,6 +344,16 @@ impl Blackbody {
         ln_b.exp()
     }
 
+    /// The logarithmic derivatives of Planck's B_λ(T) = 2hc²/λ⁵ / (eˣ − 1), x = hc/(λkT), at
+    /// `wavelength_m` (> 0): `(∂ln B/∂λ, ∂ln B/∂T) = ((f − 5)/λ, f/T)` with
+    /// `f = x eˣ/(eˣ − 1) = x/(1 − e⁻ˣ)` (f → 1 as x → 0, the Rayleigh–Jeans limit; f → x as
+    /// x → ∞, Wien's), per m and per K.
+    pub fn log_derivatives(&self, wavelength_m: f64) -> (f64, f64) {
+        let x = SECOND_RADIATION_CONSTANT / wavelength_m / self.temperature_k;
+        let f = if x < 1e-8 { 1.0 + 0.5 * x } else { x / -(-x).exp_m1() };
+        ((f - 5.0) / wavelength_m, f / self.temperature_k)
+    }
+
     /// Exact radiance integral ∫₀^∞ B_λ dλ = σT⁴/π, W/(m² sr) (Stefan–Boltzmann).
     pub fn integral(&self) -> f64 {
         let t2 = self.temperature_k * self.temperature_k;
@@ -354,6 +364,24 @@ impl Blackbody {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Planck's log-derivatives against central differences of `spectral_radiance` written here
+    /// (relative step 1e-5: truncation ~1e-10, rounding ~1e-11), in the Wien and Rayleigh–Jeans
+    /// regimes and between.
+    #[test]
+    fn blackbody_log_derivatives_match_differences_of_the_radiance() {
+        for (t, l) in [(3000.0, 803e-9), (300.0, 500e-9), (5e6, 10e-6), (6000.0, 2e-6)] {
+            let b = Blackbody::new(t).unwrap();
+            let (d_l, d_t) = b.log_derivatives(l);
+            let h = 1e-5;
+            let by_l =
+                ((b.spectral_radiance(l * (1.0 + h))).ln() - (b.spectral_radiance(l * (1.0 - h))).ln()) / (2.0 * h * l);
+            let (up, down) = (Blackbody::new(t * (1.0 + h)).unwrap(), Blackbody::new(t * (1.0 - h)).unwrap());
+            let by_t = (up.spectral_radiance(l).ln() - down.spectral_radiance(l).ln()) / (2.0 * h * t);
+            assert!((d_l - by_l).abs() <= 1e-8 * d_l.abs().max(1.0 / l), "{t} K {l}: {d_l} vs {by_l}");
+            assert!((d_t - by_t).abs() <= 1e-8 * d_t.abs(), "{t} K {l}: {d_t} vs {by_t}");
+        }
+    }
 
     #[test]
     fn gaussian_range_is_two_sqrt_two_sigma() {

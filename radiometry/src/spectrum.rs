@@ -529,6 +529,81 @@ impl Spectrum {
         Some(QuadratureNode { wavelength_m: c, weight: line.integral() * others })
     }
 
+    /// The [`Line`] factor [`as_line`](Spectrum::as_line) takes as the wavelength (the narrowest,
+    /// the first among equals), if any.
+    pub fn line(&self) -> Option<Line> {
+        let mut found: Option<Line> = None;
+        self.visit(&mut |f| {
+            if let Spectrum::Line(l) = f
+                && found.is_none_or(|best| l.width() < best.width())
+            {
+                found = Some(*l);
+            }
+        });
+        found
+    }
+
+    /// How the weight `w` of [`as_line`](Spectrum::as_line) moves with the line's centre `c`:
+    /// `∂ln w/∂c = Σ_f ∂ln f/∂λ` at `c` over the other factors `f` (per m): 0 for a constant, a
+    /// top-hat or another line's equivalent band (strictly inside them), `1/c` for the photon
+    /// factor `λ`, `−(c − c_g)/σ²` for a Gaussian, a table's segment's slope over its value,
+    /// and Planck's `∂ln B/∂λ` ([`Blackbody::log_derivatives`]). The line's own weight
+    /// `peak · width` does not move with its centre. `Err` naming why where `w` is not
+    /// differentiable there: a table's sample or a band's edge at `c` (a kink or a jump), a
+    /// factor that is 0 at `c`, or no line.
+    pub fn line_weight_log_derivative(&self) -> Result<f64, String> {
+        let line = self.line().ok_or_else(|| "the spectrum has no line".to_owned())?;
+        let c = line.center();
+        let mut factors = Vec::new();
+        self.visit(&mut |f| factors.push(f));
+        let mut skipped = false;
+        let mut sum = 0.0;
+        let inside = |lo: f64, hi: f64, what: &str| {
+            if c > lo && c < hi {
+                Ok(0.0)
+            } else {
+                Err(format!(
+                    "the line at {:.6} nm lies on or outside the edge of {what} [{:.6}, {:.6}] nm, where the weight jumps",
+                    c * 1e9,
+                    lo * 1e9,
+                    hi * 1e9
+                ))
+            }
+        };
+        for f in factors {
+            sum += match f {
+                Spectrum::Line(l) if !skipped && *l == line => {
+                    skipped = true;
+                    0.0
+                }
+                Spectrum::Line(l) => inside(l.lo(), l.hi(), "another line's equivalent band")?,
+                Spectrum::TopHat(t) => inside(t.lo(), t.hi(), "a top-hat band")?,
+                Spectrum::Constant(v) if *v != 0.0 => 0.0,
+                Spectrum::Linear { slope } if *slope != 0.0 => 1.0 / c,
+                Spectrum::Gaussian(g) => -(c - g.center()) / (g.sigma() * g.sigma()),
+                Spectrum::Blackbody { source, scale } if *scale != 0.0 => source.log_derivatives(c).0,
+                Spectrum::Sampled(table) => {
+                    let (w, v) = (table.wavelengths(), table.values());
+                    let k = w.partition_point(|&x| x < c);
+                    if k == 0 || k >= w.len() || w[k] == c {
+                        return Err(format!(
+                            "the line at {:.6} nm lies on a sample of a table or outside it (a table is linear \
+                             between its samples, with a kink at each)",
+                            c * 1e9
+                        ));
+                    }
+                    let value = f.value(c);
+                    if value == 0.0 {
+                        return Err(format!("a table is 0 at the line's {:.6} nm", c * 1e9));
+                    }
+                    (v[k] - v[k - 1]) / (w[k] - w[k - 1]) / value
+                }
+                _ => return Err(format!("a factor of the spectrum is 0 at the line's {:.6} nm", c * 1e9)),
+            };
+        }
+        Ok(sum)
+    }
+
     /// Calls `f` on every non-product factor.
     fn visit<'a>(&'a self, f: &mut impl FnMut(&'a Spectrum)) {
         match self {
@@ -843,6 +918,40 @@ mod tests {
         assert!(Spectrum::Constant(1.0).gaussian_polynomial().is_none());
     }
     use super::*;
+
+    /// `∂ln w/∂c` of a line's weight ([`Spectrum::line_weight_log_derivative`]) against central
+    /// differences of [`Spectrum::as_line`]'s weight with the line moved (relative step 1e-6 of
+    /// the centre, truncation and rounding both ~1e-10 of the derivative's scale 1/σ): a line
+    /// through a blackbody, a table, a Gaussian, a constant and the photon factor λ; refused on
+    /// a table's sample and at a band's edge.
+    #[test]
+    fn a_line_weight_moves_with_its_centre_as_its_factors_slopes() {
+        let table = Spectrum::Sampled(Sampled::new(vec![700e-9, 800e-9, 900e-9], vec![0.2, 0.9, 0.4]).unwrap());
+        let with = |c: f64| {
+            Spectrum::product(vec![
+                Spectrum::Blackbody { source: Blackbody::new(3000.0).unwrap(), scale: 2e-3 },
+                table.clone(),
+                Spectrum::Gaussian(Gaussian::new(780e-9, 20e-9, 0.9).unwrap()),
+                Spectrum::Line(Line::new(c, 1e-9, 0.8).unwrap()),
+                Spectrum::Constant(0.2),
+                Spectrum::Linear { slope: 1.0 },
+            ])
+        };
+        for c in [803e-9, 750e-9, 871e-9] {
+            let h = 1e-6 * c;
+            let weight = |c: f64| with(c).as_line().unwrap().weight.ln();
+            let differences = (weight(c + h) - weight(c - h)) / (2.0 * h);
+            let exact = with(c).line_weight_log_derivative().unwrap();
+            assert!((exact - differences).abs() <= 1e-7 / 20e-9, "{c}: {exact} vs {differences}");
+        }
+        let e = with(800e-9).line_weight_log_derivative().unwrap_err();
+        assert!(e.contains("sample"), "{e}");
+        let band = Spectrum::product(vec![
+            Spectrum::TopHat(TopHat::new(780e-9, 803e-9, 1.0).unwrap()),
+            Spectrum::Line(Line::new(803e-9, 1e-9, 1.0).unwrap()),
+        ]);
+        assert!(band.line_weight_log_derivative().unwrap_err().contains("edge"));
+    }
 
     /// A Gaussian times tables ([`Spectrum::gaussian_piecewise_integral`]) against the 16-point
     /// panels of the general quadrature (the slow, obviously correct reference, cut at every row

@@ -96,6 +96,10 @@ const SUPPORTED: [(&str, Parameter); 10] = [
     ("camera.gain_dn_per_e", Parameter::Gain),
 ];
 
+/// A blackbody source's temperature (Planck's ∂B/∂T): under a line (docs/physics.md, "Gradients:
+/// a line's wavelength and a blackbody's temperature").
+const TEMPERATURE: &str = "source.temperature_k";
+
 /// The pixel pitch, kept apart: its derivative also moves the Nyquist frequency.
 const PIXEL_PITCH: &str = "camera.pixel_pitch_um";
 
@@ -130,6 +134,7 @@ fn logarithmic(p: Parameter) -> bool {
             | Parameter::Seidel(_)
             | Parameter::SpectrumCenter
             | Parameter::SpectrumRange
+            | Parameter::Temperature
             | Parameter::FieldAngle(_)
             | Parameter::LibraryBias(_)
     )
@@ -154,7 +159,8 @@ const SEIDEL: [(&str, metric::SeidelTerm); 4] = [
     ("lens.field_curvature_um", metric::SeidelTerm::FieldCurvature),
 ];
 
-/// The spectral keys: the Gaussian spectrum's centre and range.
+/// The spectral keys: the Gaussian or top-hat spectrum's centre and range, a line's wavelength
+/// and equivalent width.
 const SPECTRAL: [(&str, Parameter); 2] =
     [("spectrum.center_nm", Parameter::SpectrumCenter), ("spectrum.range_nm", Parameter::SpectrumRange)];
 
@@ -403,13 +409,16 @@ fn field_parameter(key: &str, lens_model: &str) -> Option<Result<Parameter>> {
 fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) -> Result<Parameter> {
     refuse_by_name(key)?;
     if let Some((_, p)) = SPECTRAL.iter().find(|(k, _)| *k == key) {
-        if spectrum_shape != "gaussian" && spectrum_shape != "tophat" {
+        if !["gaussian", "tophat", "line"].contains(&spectrum_shape) {
             bail!(
                 "--wrt {key}: not differentiable here yet for spectrum.shape = \"{spectrum_shape}\"; supported for \
-                 spectrum.shape = \"gaussian\" and \"tophat\" (a line's wavelength is not followed yet)"
+                 spectrum.shape = \"gaussian\", \"tophat\" and \"line\""
             );
         }
         return Ok(*p);
+    }
+    if key == TEMPERATURE {
+        return Ok(Parameter::Temperature);
     }
     if key == PIXEL_PITCH {
         return Ok(Parameter::PixelPitch);
@@ -471,7 +480,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat spectrum), lens.f_number and lens.focal_length_mm \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian, top-hat or line spectrum), source.temperature_k (a blackbody under a line), lens.f_number and lens.focal_length_mm \
          (lens.model = \"chromatic\", \"refractive\", \"harmonic\" or \"phase\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine), and field.x_deg and field.y_deg (lens.model = \"chromatic\", a single [field] point); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
@@ -687,7 +696,9 @@ mod tests {
     }
 
     /// A blackbody's scale (a factor constant in λ) on the paper's lens, and the temperature
-    /// refused (its spectrum's shape moves the OTF's weights: not yet).
+    /// refused over a band (its spectrum's shape moves the OTF's weights: not yet) and followed
+    /// under a line (Planck's ∂ln B/∂T on the photon count; the line's wavelength through
+    /// ∂ln B/∂λ too), against central differences.
     #[test]
     fn a_blackbody_scale_matches_central_differences() {
         let paper = scene::read(None).unwrap();
@@ -699,7 +710,9 @@ mod tests {
         let source = Source::from_text(text, "blackbody", ".");
         check_against_differences(&source, &owned(&["camera.read_noise_e=2"]), &["source.scale", "exposure.time_ms"]);
         let e = gradient(&source, &[], &owned(&["source.temperature_k"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt source.temperature_k: not differentiable here yet"), "{e}");
+        assert!(e.contains("blackbody's temperature") && e.contains("not a polynomial in λ"), "{e}");
+        let line = owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]);
+        check_line(&source, &line, &["source.temperature_k", "source.scale"]);
     }
 
     /// The Gaussian spectrum's centre and range: they move N and the OTF's spectral weights
@@ -730,18 +743,108 @@ mod tests {
             };
             check_with_steps(&source, &overrides, &keys, &step);
         }
-        // a line's wavelength is not followed
-        let e = gradient(
-            &scene::read(None).unwrap(),
-            &owned(&["spectrum.shape=\"line\"", "spectrum.range_nm=1"]),
-            &owned(&["spectrum.center_nm"]),
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            e.contains("--wrt spectrum.center_nm: not differentiable here yet for spectrum.shape = \"line\""),
-            "{e}"
-        );
+    }
+
+    /// A line's wavelength and equivalent width, with the keys `others` (docs/physics.md,
+    /// "Gradients: a line's wavelength"), against central differences of evaluations converged
+    /// at 1e-10: the width (N ∝ r) and the other keys with the relative step, the wavelength
+    /// Richardson-extrapolated from the steps 2h and h, h = [`LINE_STEP_NM`]
+    /// (`(4 D(h) − D(2h))/3`, truncation O(h⁴)), within 10× the scene's 1e-6 of the gradient's
+    /// norm.
+    fn check_line(source: &Source, overrides: &[String], others: &[&str]) {
+        let mut keys = vec!["spectrum.center_nm", "spectrum.range_nm"];
+        keys.extend_from_slice(others);
+        check_with_references(source, overrides, &keys, &|k, v| {
+            if k != "spectrum.center_nm" {
+                return central(source, overrides, k, v, relative_step(k, v));
+            }
+            let (coarse, fine) =
+                (central(source, overrides, k, v, 2.0 * LINE_STEP_NM), central(source, overrides, k, v, LINE_STEP_NM));
+            std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+        });
+    }
+
+    /// The step of a line's wavelength, nm. The paper's aperture defocuses by
+    /// `f0/(8F#²λ0) ≈ 84` waves per unit of `λ/λ0`, about 0.1 wave per nm, so the OTF at the
+    /// line turns on a scale of a few nm (not of the wavelength's 803): with that scale L ≈ 2 nm,
+    /// h = (3e-10)^{1/3} L ≈ 1.3e-3 nm balances truncation and the evaluations' 1e-10, and the
+    /// extrapolation leaves rounding alone (~1e-10 · 2L/h ≈ 3e-7 of the derivative).
+    const LINE_STEP_NM: f64 = 2e-3;
+
+    /// The line at 803 nm on the paper's chromatic lens (a defocus W020(λ) affine in λ: the line
+    /// engine's defocus lane) alone, with the pixel MTF and read noise, and in the integral form
+    /// with the stray light; a QE table and a Gaussian filter under the line (their slopes in
+    /// the photon count); and a refractive lens without dispersion (the frequency scaling alone).
+    #[test]
+    fn a_line_on_the_chromatic_lens_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"];
+        check_line(&paper, &owned(&line), &["exposure.time_ms"]);
+        let mut with = owned(&line);
+        with.extend(owned(&["camera.pixel_mtf=true", "camera.read_noise_e=2"]));
+        check_line(&paper, &with, &["exposure.time_ms"]);
+        let mut with = owned(&line);
+        with.extend(owned(&["options.form=\"integral\"", "options.glare=\"included\"", "camera.read_noise_e=2"]));
+        check_line(&paper, &with, &["exposure.time_ms"]);
+        // at the design wavelength (W020 = 0: the frequency scaling alone)
+        check_line(&paper, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=800", "spectrum.range_nm=2"]), &[]);
+    }
+
+    /// The Binary 2 lens (the radial engine's wavelength lanes: the sphere's phase 2πS/λ turns,
+    /// the radian profile of a geometric phase stays) under a line at 803 nm, with read noise,
+    /// with its Binary 2 coefficients and the F-number asked beside (the lanes stacked), and as
+    /// a refractive profile of N-BK7 (the glass's n′(λ) on the profile).
+    #[test]
+    fn a_line_on_the_binary2_lens_matches_central_differences() {
+        let binary2 = example("phase-binary2.toml");
+        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"];
+        check_line(&binary2, &owned(&line), &["exposure.time_ms"]);
+        let mut with = owned(&line);
+        with.push("camera.read_noise_e=2".to_owned());
+        check_line(&binary2, &with, &["lens.binary2[1]"]);
+        let mut glass = owned(&line);
+        glass.extend(owned(&["lens.dispersion=\"refractive\"", "lens.glass=\"N-BK7\""]));
+        check_line(&binary2, &glass, &[]);
+        // the F-number's lanes and the wavelength's on one pass: each as when asked alone
+        let both = gradient(&binary2, &owned(&line), &owned(&["lens.f_number", "spectrum.center_nm"])).unwrap();
+        let alone = gradient(&binary2, &owned(&line), &owned(&["spectrum.center_nm"])).unwrap();
+        assert!((both.d_asnr[1] - alone.d_asnr[0]).abs() <= 1e-12 * alone.d_asnr[0].abs(), "{both:?} {alone:?}");
+    }
+
+    /// The refractive singlet of N-BK7 (uncoated: its Fresnel losses move N with n(λ) too; the
+    /// defocus W020 ∝ n0 − n(λ) through n′) under a line at 650 nm, and with the pixel MTF and
+    /// read noise.
+    #[test]
+    fn a_line_on_the_refractive_lens_matches_central_differences() {
+        let singlet = refractive_singlet();
+        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=650", "spectrum.range_nm=1"];
+        check_line(&singlet, &owned(&line), &["exposure.time_ms"]);
+        let mut with = owned(&line);
+        with.extend(owned(&["camera.pixel_mtf=true", "camera.read_noise_e=2"]));
+        check_line(&singlet, &with, &[]);
+    }
+
+    /// The families and scenes whose line's wavelength is not followed are refused naming why:
+    /// the harmonic lens (orders whose efficiencies move against each other), a diffractive
+    /// phase profile, the chromatic lens off axis (lateral colour), a line on a table's sample.
+    #[test]
+    fn a_line_wavelength_refusals_name_why() {
+        let keys = owned(&["spectrum.center_nm"]);
+        let line = owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]);
+        let e = gradient(&example("harmonic.toml"), &line, &keys).unwrap_err().to_string();
+        assert!(e.contains("the line's wavelength is followed through the OTF for"), "{e}");
+        let mut diffractive = line.clone();
+        diffractive.extend(owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]));
+        let e = gradient(&example("phase-binary2.toml"), &diffractive, &keys).unwrap_err().to_string();
+        assert!(e.contains("diffractive") && e.contains("sinc"), "{e}");
+        let mut off_axis = line.clone();
+        off_axis.push("field.x_deg=5".to_owned());
+        let e = gradient(&scene::read(None).unwrap(), &off_axis, &keys).unwrap_err().to_string();
+        assert!(e.contains("not differentiable"), "{e}");
+        // the width alone is followed everywhere: N ∝ r
+        let g = gradient(&example("harmonic.toml"), &line, &owned(&["spectrum.range_nm"])).unwrap();
+        assert!((g.d_photoelectrons[0] - g.photoelectrons / g.values[0]).abs() <= 1e-14 * g.d_photoelectrons[0]);
+        assert_eq!(g.d_mean_mtf[0], 0.0);
     }
 
     /// A top-hat's centre and range (docs/physics.md, "Gradients: a top-hat's edges": Leibniz's

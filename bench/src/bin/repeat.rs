@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo build --release -p asnr-bench --bin repeat
-//! target/release/repeat examples/spectrometer.toml [TOLERANCE [RUNS]]
+//! target/release/repeat examples/spectrometer.toml [TOLERANCE [RUNS [--gradient KEY,KEY…]]]
 //! valgrind --tool=callgrind target/release/repeat examples/spectrometer.toml 1e-6 20
 //! perf record target/release/repeat examples/spectrometer.toml 1e-6 1500
 //! ```
@@ -13,6 +13,12 @@
 //! criterion benches are), the mean MTF, and the work the engines report. The scene is loaded
 //! once, outside the loop; an instruction count of the whole process includes that load
 //! (subtract a run with fewer repeats).
+//!
+//! With `--gradient KEY,…` each call is [`metric::gradient`] with respect to those keys instead
+//! (the engine's parameters of `exposure.time_ms`, `spectrum.center_nm`, `spectrum.range_nm`,
+//! `source.temperature_k`, `lens.f_number`, `lens.focal_length_mm`), and the value alone is
+//! timed interleaved with it (one call of each in turn), so that the two medians and their
+//! ratio are measured side by side.
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -31,6 +37,31 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    let keys: Option<Vec<metric::Parameter>> = match (args.get(3).map(String::as_str), args.get(4)) {
+        (None, _) => None,
+        (Some("--gradient"), Some(list)) => {
+            let mut out = Vec::new();
+            for key in list.split(',') {
+                out.push(match key.trim() {
+                    "exposure.time_ms" => metric::Parameter::Exposure,
+                    "spectrum.center_nm" => metric::Parameter::SpectrumCenter,
+                    "spectrum.range_nm" => metric::Parameter::SpectrumRange,
+                    "source.temperature_k" => metric::Parameter::Temperature,
+                    "lens.f_number" => metric::Parameter::FNumber,
+                    "lens.focal_length_mm" => metric::Parameter::FocalLength,
+                    other => {
+                        eprintln!("--gradient: {other:?} is not one of the keys this loop maps");
+                        return ExitCode::FAILURE;
+                    }
+                });
+            }
+            Some(out)
+        }
+        _ => {
+            eprintln!("usage: repeat SCENE.toml [TOLERANCE [RUNS [--gradient KEY,KEY…]]]");
+            return ExitCode::FAILURE;
+        }
+    };
     let scene = match scene::load(Some(std::path::Path::new(path)), &[format!("options.tolerance={tolerance}")]) {
         Ok(scene) => scene,
         Err(e) => {
@@ -38,6 +69,35 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    if let Some(parameters) = keys {
+        let (mut value, mut both) = (Vec::with_capacity(runs), Vec::with_capacity(runs));
+        for _ in 0..runs {
+            optics::forget_remembered();
+            let started = Instant::now();
+            let e = metric::evaluate(std::hint::black_box(&scene));
+            value.push(started.elapsed().as_secs_f64());
+            optics::forget_remembered();
+            let started = Instant::now();
+            let g = metric::gradient(std::hint::black_box(&scene), &parameters);
+            both.push(started.elapsed().as_secs_f64());
+            if let Err(e) =
+                e.as_ref().map(|_| ()).map_err(ToString::to_string).and(g.map(|_| ()).map_err(|e| e.to_string()))
+            {
+                eprintln!("{path}: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+        value.sort_by(f64::total_cmp);
+        both.sort_by(f64::total_cmp);
+        let (v, b) = (value[runs / 2], both[runs / 2]);
+        println!(
+            "value {:.1} µs, value and gradient {:.1} µs: {:.2}× (medians of {runs} calls each, interleaved)",
+            v * 1e6,
+            b * 1e6,
+            b / v
+        );
+        return ExitCode::SUCCESS;
+    }
     let mut seconds = Vec::with_capacity(runs);
     let mut last = None;
     for _ in 0..runs {
