@@ -48,7 +48,10 @@ fn the_bias_lane_on_the_value_rule_matches_the_reference_rule() {
             m - m_ref
         );
         assert!((m - m_ref).abs() <= 10.0 * 1e-6 * reference_e.mean_mtf, "{extra:?}: {m} vs {m_ref}");
-        assert!((m - m_ref).abs() <= 1e-11, "{extra:?}: {m} vs {m_ref}");
+        // the two rules agree far inside the tolerance: 1.5e-10 (3.4e-10 of M̄) since the radial
+        // engine's rule across v became the half Gauss–Legendre rules (4.4e-13 before), whose
+        // error models are fitted to the value's integrand, not to the bias lane's
+        assert!((m - m_ref).abs() <= 1e-9, "{extra:?}: {m} vs {m_ref}");
         assert!((n - n_ref).abs() <= 1e-9 * n_ref.abs(), "{extra:?}: {n} vs {n_ref}");
         assert!((t - t_ref).abs() <= 1e-9 * t_ref.abs(), "{extra:?}: {t} vs {t_ref}");
     }
