@@ -1510,7 +1510,7 @@ pub type BiasTriple = (f64, f64, f64);
 
 /// `(∂M̄/∂b, ∂ln N/∂b, ∂ln N_T/∂b)` of a library lens's bias of parameter `index`
 /// (docs/physics.md, "Gradients: a library's parameter bias"): with `reference`, by the slow
-/// reference rule ([`library_bias_partials`]: its own Gauss–Legendre panels in λ and ν); else on
+/// reference rule (`library_bias_partials`: its own Gauss–Legendre panels in λ and ν); else on
 /// the value's own rules (the lanes beside the evaluation's OTF values), `None` where the
 /// value's engine gives no lanes. The evaluation of `scene` is returned beside them (the same,
 /// bit for bit, either way). For the tests that hold the one against the other.

@@ -1431,7 +1431,7 @@ impl RadialOrder {
         (t_end, t_panels, v_nodes, proxy)
     }
 
-    /// [`direct`](Self::direct) with the derivatives along `directions` added into
+    /// `direct` with the derivatives along `directions` added into
     /// `derivatives` ([`otf_and_derivatives`](Self::otf_and_derivatives)): each lane's phase
     /// once, its sine and cosine once, then one multiply-add per lane and direction.
     #[allow(clippy::too_many_arguments)]
@@ -1531,7 +1531,7 @@ impl RadialOrder {
     }
 
     /// The lanes of t panel `pt` of the rule ([`rule`](Self::rule): `t_panels` 16-point panels
-    /// on `[0, t_end]` times `v_nodes`), the one node builder of the value ([`direct`](Self::direct))
+    /// on `[0, t_end]` times `v_nodes`), the one node builder of the value (`direct`)
     /// and of its derivatives ([`direct_derivatives`](Self::direct_derivatives)): each node's
     /// `q₁` and `q₂` into `q` (first and second half) and its weight (the t and v rule's, `sin²t`
     /// and the field amplitudes) into `weight`.
@@ -1618,10 +1618,10 @@ impl RadialOrder {
     /// [`otf_and_field_derivative`](Self::otf_and_field_derivative) gives one: forward mode on
     /// the value's nodes and phases (docs/physics.md, "Gradients: a library's parameter bias").
     /// The value's own sums run unchanged (the same lanes, weights, phase series and cosine
-    /// sums as [`direct`](Self::direct)), each lane's sine taken from the same `sin_cos` as its
+    /// sums as `direct`), each lane's sine taken from the same `sin_cos` as its
     /// cosine, so that a frequency rule reading these values makes the value's decisions: the
     /// lanes ride on the value's evaluation. Eight lanes at a time where the phase has its
-    /// proxy; else the value by [`direct`](Self::direct)'s sum and the lanes beside it.
+    /// proxy; else the value by `direct`'s sum and the lanes beside it.
     pub fn otf_and_field_derivatives(
         &self,
         s: f64,
