@@ -1339,14 +1339,10 @@ impl RadialOrder {
     /// pupil's [`frequency_scale`](RadialPupil::frequency_scale)), within
     /// about `accuracy` (absolute) of the autocorrelation integral (module docs).
     pub fn otf(&self, s: f64, accuracy: f64) -> f64 {
-        let s = s * self.pupil.frequency_scale();
-        if s >= 1.0 {
-            return 0.0;
-        }
-        if s <= 0.0 {
-            return 1.0;
-        }
-        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+            Ok(inside) => inside,
+            Err(end) => return end,
+        };
         let total = self.direct(s, t_end, t_panels, &v_nodes, proxy);
         4.0 * total / (std::f64::consts::PI * self.pupil.power())
     }
@@ -1373,18 +1369,29 @@ impl RadialOrder {
         derivatives: &mut [f64],
     ) -> f64 {
         derivatives.iter_mut().for_each(|d| *d = 0.0);
-        let s = s * self.pupil.frequency_scale();
-        if s >= 1.0 {
-            return 0.0;
-        }
-        if s <= 0.0 {
-            return 1.0;
-        }
-        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+            Ok(inside) => inside,
+            Err(end) => return end,
+        };
         let total = self.direct_derivatives(s, t_end, t_panels, &v_nodes, proxy, directions, derivatives);
         let norm = 4.0 / (std::f64::consts::PI * self.pupil.power());
         derivatives.iter_mut().for_each(|d| *d *= norm);
         norm * total
+    }
+
+    /// `s` scaled to the pupil ([`frequency_scale`](RadialPupil::frequency_scale)) and the rule
+    /// there, or the OTF at an end of its support: 0 from the cutoff on, 1 at `s ≤ 0` (the OTF
+    /// normalized there). The one preamble of the OTF and of its derivative forms.
+    #[inline]
+    fn scaled_rule(&self, s: f64, accuracy: f64) -> Result<(f64, Rule<'_>), f64> {
+        let s = s * self.pupil.frequency_scale();
+        if s >= 1.0 {
+            return Err(0.0);
+        }
+        if s <= 0.0 {
+            return Err(1.0);
+        }
+        Ok((s, self.rule(s, accuracy)))
     }
 
     /// The rule [`otf`](Self::otf) uses at `s` for `accuracy`: `acos s`, the t panels, the v
@@ -1571,15 +1578,11 @@ impl RadialOrder {
         amplitude: &RadialProfile,
         wavefront_m: &RadialProfile,
     ) -> (f64, f64) {
-        let s = s * self.pupil.frequency_scale();
-        if s >= 1.0 {
-            return (0.0, 0.0);
-        }
-        if s <= 0.0 {
-            // the OTF is normalized to 1 at s = 0 whatever the pupil
-            return (1.0, 0.0);
-        }
-        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        // the OTF is normalized to 1 at s = 0 whatever the pupil: no derivative there
+        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+            Ok(inside) => inside,
+            Err(end) => return (end, 0.0),
+        };
         let lanes = crate::quad::rule().len() * v_nodes.len();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
@@ -1630,14 +1633,10 @@ impl RadialOrder {
         derivatives: &mut [f64],
     ) -> f64 {
         derivatives.iter_mut().for_each(|d| *d = 0.0);
-        let s = s * self.pupil.frequency_scale();
-        if s >= 1.0 {
-            return 0.0;
-        }
-        if s <= 0.0 {
-            return 1.0;
-        }
-        let (t_end, t_panels, v_nodes, proxy) = self.rule(s, accuracy);
+        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+            Ok(inside) => inside,
+            Err(end) => return end,
+        };
         let lanes = crate::quad::rule().len() * v_nodes.len();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
