@@ -17,7 +17,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::Deserialize;
 
-/// Arguments of `asnr characterize`.
+// Arguments of `asnr characterize`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct CharacterizeArgs {
     /// The series file (TOML: `region`, `[dark] frames`, `[[levels]] illumination, frames`).

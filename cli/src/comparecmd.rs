@@ -8,7 +8,9 @@ use anyhow::Result;
 use report::compare::{KEY, Report, compare, csv, gradient_table, gradients, sig, table};
 use scene::Comparison;
 
-/// The arguments of `asnr compare`.
+// The arguments of `asnr compare`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct CompareArgs {
     /// Comparison file (TOML with [[designs]]). Without it, the embedded comparison of the lens

@@ -85,7 +85,9 @@ pub(crate) fn optimize(args: OptimizeArgs, tolerance: Option<f64>) -> Result<()>
     Ok(())
 }
 
-/// The arguments of `asnr tolerance`.
+// The arguments of `asnr tolerance`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct ToleranceArgs {
     /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).

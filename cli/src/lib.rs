@@ -53,8 +53,11 @@ pub struct Cli {
     command: Command,
 }
 
-/// The subcommands.
+/// The subcommands. Each one's arguments are built only when it is the one run (`defer`):
+/// building all seventeen commands' arguments took about 0.1 ms of every process's start
+/// (ARCHITECTURE.md, "Where the time goes").
 #[derive(Subcommand)]
+#[command(defer = true)]
 pub enum Command {
     /// Evaluate the ASNR of a scene (default: the paper's lens, embedded).
     Evaluate {

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-/// Arguments of `asnr measure`.
+// Arguments of `asnr measure`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct MeasureArgs {
     /// Frames of one stack (8- or 16-bit grayscale PNG or TIFF), directories holding them (their

@@ -13,7 +13,9 @@ use anyhow::{Context, Result, bail};
 
 use scene::sweep::{INDEX_COLUMN, csv_line};
 
-/// Arguments of `asnr merge`.
+// Arguments of `asnr merge`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct MergeArgs {
     /// The shards' CSV files (`asnr sweep --shard I/N --csv > shard-I.csv`), in any order.

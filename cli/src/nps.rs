@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 use serde::Serialize;
 
-/// Arguments of `asnr nps`.
+// Arguments of `asnr nps`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct NpsArgs {
     /// Flat-field frames of one stack (8- or 16-bit grayscale PNG or TIFF), directories holding

@@ -18,7 +18,9 @@ const VALID_COLUMN: &str = "fraunhofer_valid";
 /// Legend entry of the shaded points or cells.
 const SHADE_LABEL: &str = "Fraunhofer approximation not valid (SI eq. S15)";
 
-/// Arguments of `asnr plot`.
+// Arguments of `asnr plot`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args, Debug)]
 pub struct PlotArgs {
     /// Sweep CSV files (as written by `asnr sweep --csv`), each with an optional legend label:

@@ -7,7 +7,9 @@ use anyhow::{Context, Result};
 use num_complex::Complex64;
 use serde::Serialize;
 
-/// Arguments of `asnr psf` and `asnr otf`.
+// Arguments of `asnr psf` and `asnr otf`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct GridArgs {
     /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).

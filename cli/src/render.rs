@@ -9,7 +9,9 @@ use imaging::render::{Rendering, Settings};
 use imaging::target::{self, Polarity, Target};
 use serde::Serialize;
 
-/// Arguments of `asnr render`.
+// Arguments of `asnr render`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct RenderArgs {
     /// Scene file (TOML). Without it, the embedded paper scene (examples/paper-theory.toml).

@@ -4,7 +4,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-/// Arguments of `asnr sfr`.
+// Arguments of `asnr sfr`.
+// (a plain comment, not a doc comment: clap would make it the subcommand's about, over the
+// variant's, when the arguments are built, which is deferred to the subcommand run)
 #[derive(clap::Args)]
 pub struct SfrArgs {
     /// Frames of the edge (8- or 16-bit grayscale PNG or TIFF, or 32-bit float TIFF), directories
