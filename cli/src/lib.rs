@@ -305,22 +305,19 @@ pub fn run(cli: Cli) -> Result<()> {
             let read = scene::load_with_warnings(scene.as_deref(), &set)?;
             warn(&read.warnings);
             let mapping = read.pupil_mapping;
-            let (loaded, meter) = (read.scene, read.radiance_meter);
-            // the pupil-mapping check is a second, independent evaluation: it runs on its own
-            // thread beside this one, so the report waits for the slower of the two, not their sum
-            let (result, other) = std::thread::scope(|threads| {
-                let other = mapping.map(|used| {
-                    let (loaded, set, scene) = (&loaded, &set, &scene);
-                    threads.spawn(move || other_map_mean_mtf(loaded, scene.as_deref(), set, used))
-                });
-                let result = metric::evaluate(&loaded);
-                let other = other.map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)));
-                (result, other)
+            let (loaded, meter) = (std::sync::Arc::new(read.scene), read.radiance_meter);
+            // the pupil-mapping check is a second, independent evaluation: it runs beside this
+            // one on a thread of its own, so the report waits for the slower of the two, not
+            // their sum, when a second core is free (and by this thread after its own when none is)
+            let other = mapping.map(|used| {
+                let (loaded, set, scene) = (loaded.clone(), set.clone(), scene.clone());
+                Beside::start(move || other_map_mean_mtf(&loaded, scene.as_deref(), &set, used))
             });
+            let result = metric::evaluate(&loaded);
             let result = result.map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             let mapping = mapping
                 .zip(other)
-                .map(|(used, other)| other.map(|other| MappingCheck::new(used, other, result.mean_mtf)))
+                .map(|(used, other)| other.finish().map(|other| MappingCheck::new(used, other, result.mean_mtf)))
                 .transpose()
                 .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
             // the intended design, evaluated as given (without --set: it is another scene)
@@ -684,6 +681,66 @@ fn with_explain(report: &str, explain: &str) -> Result<String> {
     Ok(out)
 }
 
+/// Work started beside the calling thread: on a thread of its own, unless the calling thread
+/// comes for the result before that thread has begun, as on a machine whose cores are all busy,
+/// where a new thread may wait milliseconds for one: the caller then does the work itself, with
+/// the core it has. The result is the same either way; only who computes it differs.
+struct Beside<T> {
+    /// the work, until one of the two threads takes it
+    work: std::sync::Arc<std::sync::Mutex<Option<Work<T>>>>,
+    /// the result, when the other thread took the work
+    result: std::sync::mpsc::Receiver<T>,
+    /// the other thread, for its panic (None when it could not be started)
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+/// The work a [`Beside`] holds.
+type Work<T> = Box<dyn FnOnce() -> T + Send>;
+
+impl<T: Send + 'static> Beside<T> {
+    /// `work` offered to a new thread.
+    fn start(work: impl FnOnce() -> T + Send + 'static) -> Self {
+        Self::start_on(work, |run| std::thread::Builder::new().spawn(run).ok())
+    }
+
+    /// `work` offered to the thread that `spawn` starts (None: none could be).
+    fn start_on(
+        work: impl FnOnce() -> T + Send + 'static,
+        spawn: impl FnOnce(Box<dyn FnOnce() + Send>) -> Option<std::thread::JoinHandle<()>>,
+    ) -> Self {
+        let work: Work<T> = Box::new(work);
+        let work = std::sync::Arc::new(std::sync::Mutex::new(Some(work)));
+        let (sender, result) = std::sync::mpsc::channel();
+        let offered = work.clone();
+        // not joined at the end: a thread that never took the work ends with the process
+        let thread = spawn(Box::new(move || {
+            let taken = offered.lock().map(|mut w| w.take()).unwrap_or(None);
+            if let Some(work) = taken {
+                // the receiver is gone only when the caller stopped waiting (an error)
+                let _ = sender.send(work());
+            }
+        }));
+        Beside { work, result, thread }
+    }
+
+    /// The work's result: computed here if the other thread has not taken the work (or could
+    /// not be started), else awaited; the other thread's panic is resumed here.
+    fn finish(self) -> T {
+        let mine = self.work.lock().map(|mut w| w.take()).unwrap_or(None);
+        if let Some(work) = mine {
+            return work();
+        }
+        match self.result.recv() {
+            Ok(result) => result,
+            // the sender dropped without a result: the work panicked on the other thread
+            Err(_) => match self.thread.map(std::thread::JoinHandle::join) {
+                Some(Err(panic)) => std::panic::resume_unwind(panic),
+                _ => unreachable!("the other thread took the work and ended without a result or a panic"),
+            },
+        }
+    }
+}
+
 /// A flat lens's pupil mapping in a report (`options.pupil_mapping`, docs/physics.md "The flat
 /// lens's exact image"): the map used, and the paraxial map's error estimated by evaluating the
 /// scene again with the other map at tolerance [`MAPPING_CHECK_TOLERANCE`].
@@ -829,4 +886,63 @@ fn with_tolerance(mut set: Vec<String>, tolerance: Option<f64>) -> Vec<String> {
         set.push(format!("options.tolerance={t}"));
     }
     set
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Beside;
+    use std::sync::mpsc::channel;
+    use std::thread::{self, ThreadId};
+
+    /// The work of the tests: its thread and a sum.
+    fn work() -> (ThreadId, u64) {
+        (thread::current().id(), (1..=10).sum())
+    }
+
+    /// A thread that has taken the work: the caller waits for it and gets the work's result.
+    #[test]
+    fn the_result_comes_from_the_other_thread_when_it_took_the_work() {
+        let (taken, told) = channel();
+        let beside = Beside::start(move || {
+            let out = work();
+            taken.send(()).unwrap();
+            out
+        });
+        told.recv().unwrap();
+        let (id, sum) = beside.finish();
+        assert_eq!(sum, 55);
+        assert_ne!(id, thread::current().id());
+    }
+
+    /// A thread that has not begun when the caller comes (a busy machine: here it waits for a
+    /// signal sent only after the result), or that could not be started: the caller computes the
+    /// work itself, and the late thread finds nothing to do.
+    #[test]
+    fn the_caller_computes_the_work_when_the_other_thread_has_not_begun() {
+        let (go, wait) = channel::<()>();
+        let beside = Beside::start_on(work, |run| {
+            Some(thread::spawn(move || {
+                wait.recv().unwrap();
+                run();
+            }))
+        });
+        let (id, sum) = beside.finish();
+        assert_eq!((id, sum), (thread::current().id(), 55));
+        go.send(()).unwrap();
+        let beside = Beside::start_on(work, |_| None);
+        assert_eq!(beside.finish(), (thread::current().id(), 55));
+    }
+
+    /// A panic of the work on the other thread is the caller's panic, with its message.
+    #[test]
+    fn a_panic_on_the_other_thread_reaches_the_caller() {
+        let (taken, told) = channel();
+        let beside = Beside::start(move || -> u64 {
+            taken.send(()).unwrap();
+            panic!("the work failed")
+        });
+        told.recv().unwrap();
+        let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| beside.finish())).unwrap_err();
+        assert_eq!(panic.downcast_ref::<&str>(), Some(&"the work failed"));
+    }
 }
