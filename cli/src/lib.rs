@@ -54,7 +54,7 @@ pub struct Cli {
 }
 
 /// The subcommands. Each one's arguments are built only when it is the one run (`defer`):
-/// building all seventeen commands' arguments took about 0.1 ms of every process's start
+/// building all seventeen commands' arguments took about 0.25 ms of CPU at every start
 /// (ARCHITECTURE.md, "Where the time goes").
 #[derive(Subcommand)]
 #[command(defer = true)]
