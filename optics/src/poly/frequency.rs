@@ -23,9 +23,9 @@ pub(super) const AVERAGED_DECAY: f64 = 8.0;
 pub const FIRST_AZIMUTHS: usize = 8;
 
 /// Azimuths of the first level where the tolerance is looser than [`LOOSE_TOLERANCE`] and the
-/// overlap engine computes each azimuth's values (docs/physics.md, "Why its time falls from 1e-4
-/// to 1e-3"): the rule is nested from 4, whose difference from 8 bounds the error of the 4 as
-/// that from 16 bounds the 8's, and the finer is kept.
+/// overlap engine computes each azimuth's values (docs/physics.md, "Zernike terms on the overlap
+/// engine", "Why its time falls from 1e-4 to 1e-3"): the rule is nested from 4, whose difference
+/// from 8 bounds the error of the 4 as that from 16 bounds the 8's, and the finer is kept.
 pub const LOOSE_FIRST_AZIMUTHS: usize = 4;
 
 /// The tolerance (relative) above which the overlap engine's rule over azimuth starts from
