@@ -269,7 +269,8 @@ fn overlap_quadrature_meets_its_tolerance_for_coma() {
     let w131 = 0.5e-6;
     let coma = |x: f64, y: f64| w131 * (x * x + y * y) * x;
     let reference = reference_mean_of(&coma, 32, true);
-    for tolerance in [1e-3, 1e-4, 1e-5] {
+    let mut work = Vec::new();
+    for tolerance in [1e-2, 1e-3, 1e-4, 1e-5] {
         let start = std::time::Instant::now();
         let e = paper_with(paper_lens().with_seidel(0.0, w131, 0.0, 0.0), Options { tolerance, ..Options::default() });
         let seconds = start.elapsed().as_secs_f64();
@@ -280,6 +281,50 @@ fn overlap_quadrature_meets_its_tolerance_for_coma() {
         );
         assert!(e.numerics.engine.starts_with("overlap quadrature"), "{}", e.numerics.engine);
         assert!(rel <= tolerance, "coma at {tolerance:e}: {} vs {reference} ({rel:e})", e.mean_mtf);
+        work.push(e.numerics.otf_evaluations);
+    }
+    // the work falls as the tolerance loosens: the rule over azimuth starts from 4 azimuths
+    // above 1e-4 (docs/physics.md, "Why its time falls from 1e-4 to 1e-3")
+    assert!(work[0] <= work[1] && work[1] < work[2], "OTF evaluations at 1e-2, 1e-3, 1e-4: {work:?}");
+}
+
+/// The overlap engine at loose tolerances (1e-2, 1e-3) against itself at 1e-8, on a 20 nm band
+/// (fewer spectral nodes: quick in a debug build): Noll 5–8 at 0.05 µm each (no mirror
+/// symmetry: Z5 and Z7 are sine terms), and a 5° field point (lateral colour) with 0.5 µm of
+/// coma and 0.2 µm of astigmatism. Each loose value within its tolerance of the tight one, and
+/// the OTF evaluations (the frequency rule's reads over every azimuth) fewer at 1e-3 than at
+/// 1e-4 and no more at 1e-2 than at 1e-3; the numbers printed.
+#[test]
+fn overlap_quadrature_at_loose_tolerances_stays_within_them() {
+    let band = |lens: Arc<dyn LensModel>, field_deg: f64, tolerance: f64| {
+        let filter = Gaussian::from_range(LAMBDA0, 20e-9, 1.0).unwrap();
+        let radiance = Spectrum::product(vec![Spectrum::Constant(0.025e9), Spectrum::Gaussian(filter)]);
+        let camera = Camera::new(PIXEL, Spectrum::Constant(0.2), false).unwrap();
+        let options = Options { tolerance, ..Options::default() };
+        let scene = Scene::new(lens, radiance, camera, 1.23e-3, options)
+            .unwrap()
+            .at_field(optics::Field::new(field_deg.to_radians(), 0.0))
+            .unwrap();
+        evaluate(&scene).unwrap()
+    };
+    let noll: Arc<dyn LensModel> =
+        Arc::new(WithZernike::new(paper_lens(), (5..=8).map(|j| (j, 0.05e-6)).collect(), LAMBDA0).unwrap());
+    let field: Arc<dyn LensModel> = Arc::new(paper_lens().with_seidel(0.0, 0.5e-6, 0.2e-6, 0.0));
+    for (name, lens, field_deg) in [("Noll 5–8", noll, 0.0), ("5° field, coma and astigmatism", field, 5.0)] {
+        let reference = band(lens.clone(), field_deg, 1e-8);
+        assert!(reference.numerics.engine.starts_with("overlap quadrature"), "{}", reference.numerics.engine);
+        let mut work = Vec::new();
+        for tolerance in [1e-2, 1e-3, 1e-4] {
+            let e = band(lens.clone(), field_deg, tolerance);
+            let rel = (e.mean_mtf - reference.mean_mtf).abs() / reference.mean_mtf;
+            eprintln!(
+                "{name} at {tolerance:.0e}: {:.9} ({rel:.1e} from {:.9} at 1e-8), {} OTF evaluations, {} spectral nodes",
+                e.mean_mtf, reference.mean_mtf, e.numerics.otf_evaluations, e.numerics.spectral_nodes
+            );
+            assert!(rel <= tolerance, "{name} at {tolerance:e}: {} vs {} ({rel:e})", e.mean_mtf, reference.mean_mtf);
+            work.push(e.numerics.otf_evaluations);
+        }
+        assert!(work[0] <= work[1] && work[1] < work[2], "{name}: OTF evaluations at 1e-2, 1e-3, 1e-4: {work:?}");
     }
 }
 

@@ -312,7 +312,7 @@ const FULL: Grid = Grid {
     numpy_radial_settings: &[(24, 16, 24, 6), (28, 20, 28, 6), (32, 24, 32, 8), (48, 32, 48, 12)],
     iris_tolerances: &[1e-4, 1e-6, 1e-8],
     coma_reference: &[256, 512, 1024],
-    coma_tolerances: &[1e-3, 1e-4, 1e-5],
+    coma_tolerances: &[1e-2, 1e-3, 1e-4, 1e-5],
     map_runs: 3,
 };
 
@@ -332,7 +332,7 @@ const QUICK: Grid = Grid {
     numpy_radial_settings: &[(32, 24, 32, 8)],
     iris_tolerances: &[1e-6],
     coma_reference: &[64, 128, 256],
-    coma_tolerances: &[1e-4],
+    coma_tolerances: &[1e-3, 1e-4],
     map_runs: 1,
 };
 
