@@ -375,13 +375,17 @@ fn library_bias(key: &str, table: &toml::Table) -> Option<Result<Parameter>> {
 /// The field keys of a single field point (`[field]`), per degree.
 const FIELD: [(&str, usize); 2] = [("field.x_deg", 0), ("field.y_deg", 1)];
 
-/// The families whose orders change with the field point only through their image shifts
-/// (`optics::LensModel::image_shift_field_rates`), so that the field angles' gradient is the
-/// shift lane plus the relative illumination (docs/physics.md, "Gradients: the field point"):
-/// the chromatic lens's lateral colour `f0 tan θ (λ0/λ − 1)` (its Seidel terms are the scene's at
-/// the field point, not scaled with it), the harmonic lens's per order `f0 tan θ (pλ0/(mλ) − 1)`,
-/// and the refractive lens, its stop at the lens, whose orders do not move with the field.
-const FIELD_MODELS: [&str; 3] = ["chromatic", "refractive", "harmonic"];
+/// The families whose field angles' gradient is computed (docs/physics.md, "Gradients: the
+/// field point"). The chromatic, refractive and harmonic lenses' orders change with the field
+/// point only through their image shifts (`optics::LensModel::image_shift_field_rates`), so
+/// that the gradient is the shift lane plus the relative illumination: the chromatic lens's
+/// lateral colour `f0 tan θ (λ0/λ − 1)` (its Seidel terms are the scene's at the field point,
+/// not scaled with it), the harmonic lens's per order `f0 tan θ (pλ0/(mλ) − 1)`, and the
+/// refractive lens, its stop at the lens, whose orders do not move with the field. The phase and
+/// library lenses' orders off axis are radial pupils seen by an oblique wave, on the FFT path:
+/// the wave's path `α·X + |X − P| − |P|` moves with the angle, one more lane of the FFT path's
+/// forward mode (`optics::WavefrontDirection::FieldAngle`).
+const FIELD_MODELS: [&str; 5] = ["chromatic", "refractive", "harmonic", "phase", "library"];
 
 /// The scene quantity `field.x_deg` or `field.y_deg` sets, or why its gradient is refused for
 /// this family; `None` for another key ([`FIELD_MODELS`]).
@@ -390,17 +394,10 @@ fn field_parameter(key: &str, lens_model: &str) -> Option<Result<Parameter>> {
     if FIELD_MODELS.contains(&lens_model) {
         return Some(Ok(Parameter::FieldAngle(*axis)));
     }
-    let why = match lens_model {
-        "phase" | "library" => {
-            "off axis its orders are the oblique wave's pupils on the FFT path, whose wavefront \
-             α·X + |X − P| − |P| (coma, astigmatism and field curvature of a lens designed on axis) moves with the \
-             angle; that direction is not carried by the FFT path's lanes yet"
-        }
-        _ => "its off-axis orders are not followed through the field angle yet",
-    };
     Some(Err(anyhow!(
-        "--wrt {key}: not differentiable here yet for lens.model = \"{lens_model}\" ({why}; it is never replaced by \
-         a finite difference); supported for lens.model = {}",
+        "--wrt {key}: not differentiable here yet for lens.model = \"{lens_model}\" (its off-axis orders are not \
+         followed through the field angle yet; it is never replaced by a finite difference); supported for \
+         lens.model = {}",
         FIELD_MODELS.map(|m| format!("\"{m}\"")).join(", ")
     )))
 }
@@ -1620,6 +1617,20 @@ mod tests {
         ]);
         check_discrete_rule(&source, &overrides, &owned(&["lens.binary2[0]", "lens.binary2[1]"]), 1e-3);
         check_discrete_rule(&source, &overrides, &owned(&["lens.zernike_noll_rms_um[5]"]), 1e-5);
+    }
+
+    /// The phase lens's field angles off axis (the oblique wave's path moving with the angle:
+    /// docs/physics.md, "Gradients: the field point") against the discrete rule's central
+    /// differences (step 1e-3°), at 5° along x (∂/∂θy = 0 there: the pupil is symmetric about
+    /// x) and at (5°, 3°).
+    #[test]
+    fn fft_field_angle_is_the_derivative_of_the_discrete_rule() {
+        let source = example("phase-binary2.toml");
+        for at in [["field.x_deg=5", "field.y_deg=0"], ["field.x_deg=5", "field.y_deg=3"]] {
+            let mut overrides = owned(&["spectrum.range_nm=10", "options.pupil_samples=64"]);
+            overrides.extend(owned(&at));
+            check_discrete_rule(&source, &overrides, &owned(&["field.x_deg", "field.y_deg"]), 1e-3);
+        }
     }
 
     /// The gradient at the sampling the tolerance chooses (Richardson of N/2 and N) at
