@@ -271,7 +271,10 @@ fn expand(source: &Source, table: &toml::Table, keys: &[String]) -> Result<Vec<(
             let name = ["x_deg", "y_deg"][axis];
             let canonical = format!("fields[{index}].{name}");
             let list = lookup(table, "fields").and_then(toml::Value::as_array).ok_or_else(|| {
-                anyhow!("--wrt {key}: {} has no [[fields]] list (a single point's keys are field.x_deg and field.y_deg)", source.label())
+                anyhow!(
+                    "--wrt {key}: {} has no [[fields]] list (a single point's keys are field.x_deg and field.y_deg)",
+                    source.label()
+                )
             })?;
             let entry = list.get(index).ok_or_else(|| {
                 anyhow!("--wrt {key}: {} has {} points in [[fields]] (0-based)", source.label(), list.len())
@@ -1697,8 +1700,7 @@ mod tests {
     #[test]
     fn fft_library_field_angle_is_the_derivative_of_the_discrete_rule() {
         let library = example("library.toml");
-        let overrides =
-            owned(&["spectrum.range_nm=4", "options.pupil_samples=64", "field.x_deg=5", "field.y_deg=3"]);
+        let overrides = owned(&["spectrum.range_nm=4", "options.pupil_samples=64", "field.x_deg=5", "field.y_deg=3"]);
         check_discrete_rule(&library, &overrides, &owned(&["field.x_deg", "field.y_deg"]), 2e-4);
     }
 
@@ -2220,7 +2222,8 @@ mod tests {
     fn phase_lens_field_gradient_matches_converged_differences() {
         let binary2 = example("phase-binary2.toml");
         for at in [["field.x_deg=5", "field.y_deg=0"], ["field.x_deg=5", "field.y_deg=3"]] {
-            let mut overrides = vec!["spectrum.range_nm=4", "lens.relative_illumination=\"cos4\"", "camera.read_noise_e=2"];
+            let mut overrides =
+                vec!["spectrum.range_nm=4", "lens.relative_illumination=\"cos4\"", "camera.read_noise_e=2"];
             overrides.extend(at);
             let g = check_field_against(&binary2, &overrides, &["field.x_deg", "field.y_deg"], 0.25, 1e-4, 1e-5);
             assert!(g.d_mean_mtf[0] < 0.0 && g.d_photoelectrons.iter().all(|d| *d <= 0.0), "{g:?}");
@@ -2304,7 +2307,8 @@ mod tests {
     fn field_of_view_points_match_central_differences() {
         let fov = field_of_view();
         let keys = ["fields[1].x_deg", "fields[0].x_deg"];
-        let g = check_field_of(&fov, &["camera.read_noise_e=2", "lens.relative_illumination=\"cos4\""], &keys, 0.02, 1e-6);
+        let g =
+            check_field_of(&fov, &["camera.read_noise_e=2", "lens.relative_illumination=\"cos4\""], &keys, 0.02, 1e-6);
         assert_eq!(g.keys, owned(&keys));
         assert!(g.d_asnr[0] < 0.0 && g.d_asnr[1] == 0.0, "{g:?}");
         let paper = scene::read(None).unwrap();
