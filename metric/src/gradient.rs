@@ -107,6 +107,17 @@ pub enum Parameter {
     /// Seidel terms) and the overlap engine (Seidel terms), forward mode on their nodes; on axis
     /// with a rotationally symmetric pupil, 0 by symmetry (docs/physics.md, "Gradients: the field point").
     FieldAngle(usize),
+    /// The field angle along x (`axis` 0, `fields[point].x_deg`) or y (1, `fields[point].y_deg`)
+    /// of one point of a field-of-view list (`[[fields]]`), per radian: the value is the
+    /// weighted mean of the points' (fixed weights), so its derivative is that point's
+    /// [`FieldAngle`](Parameter::FieldAngle) derivative times its weight over the weights' sum,
+    /// and 0 from the other points.
+    FieldPointAngle {
+        /// The point's place in the list (0-based).
+        point: usize,
+        /// 0 for x, 1 for y.
+        axis: usize,
+    },
     /// The bias of a meta-atom library lens's parameter `i` (`lens.parameter_bias[i]`, in the
     /// library's units): every atom's parameter `p_i → p_i + b`, which moves each wavelength's
     /// imaging order (its efficiency τ1, pupil amplitude and wavefront) and the transmission T
@@ -154,6 +165,7 @@ impl Parameter {
             Parameter::ZernikeNoll(_) => "a Zernike coefficient of the lens",
             Parameter::Seidel(_) => "a Seidel coefficient of the lens",
             Parameter::FieldAngle(_) => "a field angle",
+            Parameter::FieldPointAngle { .. } => "a field angle of a point of the field-of-view list",
             Parameter::SpectrumCenter => "the spectrum's centre (a line's wavelength)",
             Parameter::SpectrumRange => "the spectrum's range (a line's equivalent width)",
             Parameter::Temperature => "the blackbody's temperature",
@@ -232,6 +244,17 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         });
     }
     let evaluation = crate::evaluate(scene)?;
+    let points = scene.fields().len();
+    for p in parameters {
+        if let Parameter::FieldPointAngle { point, .. } = *p
+            && point >= points
+        {
+            return Err(Error::NotDifferentiable {
+                parameter: p.describe(),
+                reason: format!("fields[{point}]: the scene's [[fields]] list has {points} points (0-based)"),
+            });
+        }
+    }
     // the weighted mean of the points' derivatives, with evaluate's relative weights
     let largest = scene.fields().iter().map(|f| f.1).fold(0.0, f64::max);
     let relative: Vec<f64> = scene.fields().iter().map(|f| f.1 / largest).collect();
@@ -239,18 +262,34 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     let zeros = vec![0.0; parameters.len()];
     let mut sum =
         PointGradient { asnr: zeros.clone(), mean_mtf: zeros.clone(), snr0: zeros.clone(), photoelectrons: zeros };
-    for (&(field, _), w) in scene.fields().iter().zip(&relative) {
+    for (j, (&(field, _), w)) in scene.fields().iter().zip(&relative).enumerate() {
         let single = scene.single_field(field);
+        // a point's own field angles are this point's field angles; another point's do not
+        // move it (derivative 0 here)
+        let local: Vec<Option<Parameter>> = parameters
+            .iter()
+            .map(|p| match *p {
+                Parameter::FieldPointAngle { point, axis } => (point == j).then_some(Parameter::FieldAngle(axis)),
+                p => Some(p),
+            })
+            .collect();
+        let kept: Vec<Parameter> = local.iter().flatten().copied().collect();
+        let grid: Vec<optics::WavefrontDirection> = kept.iter().filter_map(|p| p.grid_direction()).collect();
         let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
-        let point = point_gradient(&single, &e, parameters, d_binary2, &d_grid, bases, d_bias.as_ref())?;
+        let point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref())?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
             (&mut sum.snr0, &point.snr0),
             (&mut sum.photoelectrons, &point.photoelectrons),
         ] {
-            for (s, p) in s.iter_mut().zip(p) {
-                *s += w * p / total;
+            let mut p = p.iter();
+            for (s, l) in s.iter_mut().zip(&local) {
+                if l.is_some()
+                    && let Some(p) = p.next()
+                {
+                    *s += w * p / total;
+                }
             }
         }
     }
@@ -498,6 +537,15 @@ fn point_gradient(
                     (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
                 }
             }
+            Parameter::FieldPointAngle { point, axis } => {
+                return Err(not_smooth(
+                    p,
+                    format!(
+                        "fields[{point}].{}: the scene has a single field point, not a [[fields]] list",
+                        if axis == 0 { "x_deg" } else { "y_deg" }
+                    ),
+                ));
+            }
             Parameter::FieldAngle(axis) => {
                 let d_mtf = match d_grid {
                     GridGradient::Computed(all) => {
@@ -511,11 +559,12 @@ fn point_gradient(
                         return Err(not_smooth(
                             p,
                             format!(
-                                "{key}: the field angle's OTF lane (the lateral colour's shifts as phases on the nodes) is \
-                                 computed on the exact 1-D engine (off axis without Seidel terms) and the overlap engine \
-                                 (a non-zero Seidel term), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
-                                 this scene's OTF is on another engine (an iris, Zernike terms or a table: the FFT path, \
-                                 whose grids carry no shift lane)",
+                                "{key}: the field angle's OTF lane is computed on the exact 1-D engine (off axis without \
+                                 Seidel terms) and the overlap engine (a non-zero Seidel term) as the lateral colour's \
+                                 shifts, on the FFT path as the oblique wave's path of a radial pupil seen off axis (a \
+                                 phase or library lens), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
+                                 this scene's OTF is on another engine or pupil (an iris, zones, a map or a table; Zernike \
+                                 terms on a shifted order or on axis; a line spectrum's grids)",
                                 key = field_key(axis)
                             ),
                         ));

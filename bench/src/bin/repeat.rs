@@ -16,7 +16,8 @@
 //!
 //! With `--gradient KEY,…` each call is [`metric::gradient`] with respect to those keys instead
 //! (the engine's parameters of `exposure.time_ms`, `spectrum.center_nm`, `spectrum.range_nm`,
-//! `source.temperature_k`, `lens.f_number`, `lens.focal_length_mm`), and the value alone is
+//! `source.temperature_k`, `lens.f_number`, `lens.focal_length_mm`, `field.x_deg`,
+//! `field.y_deg`; the gradient is per unit of the engine's parameter), and the value alone is
 //! timed interleaved with it (one call of each in turn), so that the two medians and their
 //! ratio are measured side by side.
 
@@ -49,6 +50,8 @@ fn main() -> ExitCode {
                     "source.temperature_k" => metric::Parameter::Temperature,
                     "lens.f_number" => metric::Parameter::FNumber,
                     "lens.focal_length_mm" => metric::Parameter::FocalLength,
+                    "field.x_deg" => metric::Parameter::FieldAngle(0),
+                    "field.y_deg" => metric::Parameter::FieldAngle(1),
                     other => {
                         eprintln!("--gradient: {other:?} is not one of the keys this loop maps");
                         return ExitCode::FAILURE;

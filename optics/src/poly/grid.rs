@@ -147,6 +147,45 @@ impl FftPath {
         sum
     }
 
+    /// [`sum_along`](Self::sum_along) at `frequency ≥ 0` and its derivative with respect to
+    /// `azimuth`: each grid's interpolant turned (`s (−sin φ, cos φ)·∇`, [`Otf::at_xy_and_slope`]),
+    /// and each shift's phase `−2πi ν u⊥·Δ` (`u⊥ = (−sin φ, cos φ)`). A table is read from the
+    /// field direction, so it turns with it: its derivative is 0 where the azimuth is the
+    /// field direction's (the only use, [`FftPath::gradient_over_azimuth`]'s field lanes).
+    fn sum_along_and_turn(&self, scene: &Scene<'_>, frequency: f64, azimuth: f64) -> (Complex64, Complex64) {
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let k = -2.0 * PI * frequency;
+        let nuf = frequency * scene.f_number;
+        let from_field = azimuth - scene.field_direction();
+        let (mut sum, mut turn) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));
+        for n in &self.nodes {
+            let s = nuf * n.lambda;
+            if s >= 1.0 {
+                continue;
+            }
+            let (mut v, mut d) = match &n.kind {
+                FftKind::Grid(otf) if s <= otf.s_max() => {
+                    let (v, d) = otf.at_xy_and_slope(s * cos_a, s * sin_a, -s * sin_a, s * cos_a);
+                    (v * n.weight, d * n.weight)
+                }
+                FftKind::Grid(_) => continue,
+                FftKind::Table(t) => {
+                    (Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0), Complex64::new(0.0, 0.0))
+                }
+            };
+            let [dx, dy] = n.shift;
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+                let phase = Complex64::new(pc, ps);
+                d = d * phase + v * phase * Complex64::new(0.0, k * (-dx * sin_a + dy * cos_a));
+                v *= phase;
+            }
+            sum += v;
+            turn += d;
+        }
+        (sum, turn)
+    }
+
     /// The finest grid cell in ν (cycles/m): the interpolated grids kink at every cell edge.
     pub fn finest_cell(&self, f_number: f64) -> f64 {
         self.nodes
@@ -714,8 +753,10 @@ pub enum WavefrontDirection {
     /// the field only through their image shifts (`LensModel::image_shift_field_rates`: the
     /// lateral colour): each spectral node's OTF turns by `exp(−2πi ν·Δ)`, so it gains
     /// `−2πi ν_a (∂Δ_a/∂θ_a)` times itself (a tilt of the wavefront, `W = NA Δ·ρ`). The exact
-    /// 1-D and overlap engines' gradient (docs/physics.md, "Gradients: the field point"); the
-    /// FFT path does not carry it.
+    /// 1-D and overlap engines' gradient (docs/physics.md, "Gradients: the field point"). On
+    /// the FFT path, the oblique wave's path of a radial pupil seen off axis (a phase or
+    /// library lens: `RadialPupil::with_oblique`, its orders without image shifts) moves with
+    /// the angle: `∂W = ∂(α·X + |X − P| − |P|)/∂θ_a` at each pixel, a lane as a Zernike term's.
     FieldAngle(usize),
     /// The azimuth φ of the frequency direction the OTF is read along, per radian: each node's
     /// turned OTF gains `−2πi ν (u⊥·Δ)` times itself (`u⊥ = (−sin φ, cos φ)`). The exact engine
@@ -838,6 +879,15 @@ impl FftPath {
                                 zernike[at].1.clone()
                             }
                         }
+                        // an oblique wave's path moves with the angle (an order without image
+                        // shift: the pupil's wavefront is measured from the chief ray's image)
+                        WavefrontDirection::FieldAngle(axis) if axis < 2 => {
+                            let Some(oblique) = radial.oblique() else { return Ok(None) };
+                            if node.shift != [0.0, 0.0] {
+                                return Ok(None);
+                            }
+                            oblique_direction(n, &field, oblique, axis)
+                        }
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
@@ -882,10 +932,20 @@ impl FftPath {
             return Ok(None);
         }
         let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+        // the field angles turn the azimuths' start, the field direction φ_f = atan2(θy, θx):
+        // the rule's mean moves by ∂M̄/∂φ_f · ∂φ_f/∂θ_a (docs/physics.md, "Gradients: the field
+        // point"; 0 on an exact mean over azimuth, the rule's own error otherwise)
+        let field = scene.field;
+        let turns = !field.is_on_axis() && directions.iter().any(|d| matches!(d, WavefrontDirection::FieldAngle(_)));
         let mut gradient = vec![0.0; k_dirs];
+        let mut d_first = 0.0;
         for (a, &azimuth) in azimuths.iter().enumerate() {
             for (f, &(nu, w)) in frequencies.iter().enumerate() {
-                let o = self.sum_along(scene, nu, azimuth);
+                let (o, turn) = if turns {
+                    self.sum_along_and_turn(scene, nu, azimuth)
+                } else {
+                    (self.sum_along(scene, nu, azimuth), Complex64::new(0.0, 0.0))
+                };
                 let modulus = o.norm();
                 if modulus == 0.0 {
                     continue;
@@ -894,6 +954,17 @@ impl FftPath {
                 let scale = w * pixel(nu) / modulus;
                 for (g, d) in gradient.iter_mut().zip(&d_sum[base..base + k_dirs]) {
                     *g += scale * (o.conj() * d).re;
+                }
+                d_first += scale * (o.conj() * turn).re;
+            }
+        }
+        if turns {
+            let r2 = field.x_rad * field.x_rad + field.y_rad * field.y_rad;
+            for (g, d) in gradient.iter_mut().zip(directions) {
+                match d {
+                    WavefrontDirection::FieldAngle(0) => *g += d_first * (-field.y_rad / r2),
+                    WavefrontDirection::FieldAngle(1) => *g += d_first * (field.x_rad / r2),
+                    _ => {}
                 }
             }
         }
@@ -932,6 +1003,28 @@ fn radial_direction(
             let r2 = x * x + y * y;
             let q = (r2 * scale2).min(1.0);
             out[idx] = profile.value(q) + slope * (r2 - q);
+        }
+    }
+    out
+}
+
+/// The OPD per radian of the field angle along x (`axis` 0) or y (1) at the pixels where
+/// `field` transmits (0 elsewhere): the oblique wave's path ([`Oblique::opd_m`](crate::radial::Oblique::opd_m),
+/// which [`radial_field`] adds at the pixel centres `(x, y)`) differentiated in the angle
+/// ([`Oblique::opd_field_rate_m`](crate::radial::Oblique::opd_field_rate_m); docs/physics.md,
+/// "Gradients: the field point").
+fn oblique_direction(n: usize, field: &[Complex64], oblique: &crate::radial::Oblique, axis: usize) -> Vec<f64> {
+    let h = 2.0 / n as f64;
+    let mut out = vec![0.0; n * n];
+    for j in 0..n {
+        let y = -1.0 + (j as f64 + 0.5) * h;
+        for i in 0..n {
+            let idx = j * n + i;
+            if field[idx] == Complex64::new(0.0, 0.0) {
+                continue;
+            }
+            let x = -1.0 + (i as f64 + 0.5) * h;
+            out[idx] = oblique.opd_field_rate_m(x, y, axis);
         }
     }
     out
