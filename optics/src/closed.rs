@@ -681,10 +681,8 @@ fn nested(
                 let mut out = [0.0; 9];
                 f(&points[..count], &mut out[..count]);
                 first.copy_from_slice(&out[..7]);
-                let mut next = 7;
-                for end in ends.iter_mut().filter(|e| e.is_none()) {
+                for (next, end) in (7..).zip(ends.iter_mut().filter(|e| e.is_none())) {
                     *end = Some(out[next]);
-                    next += 1;
                 }
                 *evaluations += count - 6;
                 let [Some(at_a), Some(at_b)] = *ends else { unreachable!("both ends filled above") };
