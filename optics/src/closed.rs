@@ -34,6 +34,7 @@ use num_complex::Complex64;
 use wide::f64x4;
 
 use crate::complex4::Complex4;
+use crate::expo;
 use crate::faddeeva;
 use crate::fft::cis;
 
@@ -261,8 +262,13 @@ impl GaussianDefocus {
             return (full, 0.0);
         }
         let erfcx = faddeeva::Erfcx::within(ERFCX_SHARE * tolerance / gain.max(f64::MIN_POSITIVE));
-        let bound = erfcx.relative_error() * gain;
-        (self.at_frequency_with(nu, tail, erfcx), bound)
+        // the real exponentials' error (`expo`) joins the series': in the cut zone a relative
+        // error of e^{Re K} or of e^{−x²/2} moves M0 as one of erfcx does; in the uncut zone
+        // E = e^K × (the rest) is off by that relative error, and (4/(πW)) ∫ sin²t |E| dt ≤ 1
+        // (|E| ≤ W: the detected spectrum is not negative)
+        let bound = (erfcx.relative_error() + expo::RELATIVE_ERROR) * gain + expo::RELATIVE_ERROR;
+        // (the constants `at_frequency_with` would compute again, the same numbers)
+        (AtFrequency { erfcx, ..full }, bound)
     }
 
     /// `E(c)` in the units of the weight (see the module docs), with the spectrum cut at
@@ -276,8 +282,8 @@ impl GaussianDefocus {
     }
 
     /// [`spectral`](Self::spectral) at four points `c`, by the same operations in the same order
-    /// on each lane (each lane is the scalar `E(c)` to the last bit; the exponentials are the
-    /// scalar ones, lane by lane). `None` where the lanes do not share one case of
+    /// on each lane (each lane is the scalar `E(c)` to the last bit; the real exponentials are
+    /// [`expo::exp4`], whose lanes are the scalar [`expo::exp`]). `None` where the lanes do not share one case of
     /// [`moments`](Self::moments) (some cut and some not, one below the Gaussian's tail, the
     /// Gaussian truncated at λ = 0, a Faddeeva argument beyond its series): the caller then takes
     /// them one by one. The nodes of one piece of the rule in `t` share their case, since the
@@ -303,7 +309,7 @@ impl GaussianDefocus {
         let kk = Complex4::imaginary(phi0).add(Complex4::splat(f.a).mul(m).mul(m));
         let exp_k = || {
             let (sin, cos) = cis::sin_cos4(kk.im);
-            let e = f64x4::new(kk.re.to_array().map(f64::exp));
+            let e = expo::exp4(kk.re);
             Complex4 { re: cos, im: sin }.scale(e)
         };
         let terms = self.q.len();
@@ -315,7 +321,7 @@ impl GaussianDefocus {
             }
         } else {
             let x = cut_x;
-            let e_hi = Complex4::real(f64x4::new((k(-0.5) * x * x).to_array().map(f64::exp)));
+            let e_hi = Complex4::real(expo::exp4(k(-0.5) * x * x));
             let y_hi = Complex4::real_minus(x, m);
             let z = Complex4::splat(f.sqrt_a).mul(y_hi);
             let positive = z.re.simd_ge(f64x4::ZERO);
@@ -371,7 +377,7 @@ impl GaussianDefocus {
         // its e^K terms cancel, and are better left out than subtracted)
         let exp_k = || {
             let (sin, cos) = cis::sin_cos(k.im);
-            Complex64::new(cos, sin) * k.re.exp()
+            Complex64::new(cos, sin) * expo::exp(k.re)
         };
         let mut moments = [zero; MAX_TERMS];
         let terms = self.q.len();
@@ -386,10 +392,10 @@ impl GaussianDefocus {
             // each computed once. The upper one is the cut λ = c/β, where the phase
             // a(λ)(c − βλ) vanishes: it is real (exactly, where the sum φ0 + φ1 x + φ2 x² of terms
             // up to thousands of radians would leave rounding).
-            let e_hi = upper.map(|x| Complex64::new((-0.5 * x * x).exp(), 0.0));
+            let e_hi = upper.map(|x| Complex64::new(expo::exp(-0.5 * x * x), 0.0));
             let e_lo = lower.map(|x| {
                 let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
-                Complex64::new(cos, sin) * (-0.5 * x * x).exp()
+                Complex64::new(cos, sin) * expo::exp(-0.5 * x * x)
             });
             // e^K · erf(√A y) at y = x − m, in a bounded form (erfcx only where Re z ≥ 0), as
             // sign · e^K + rest; the ±∞ endpoints give ±e^K
@@ -599,7 +605,8 @@ const LEVELS: [usize; 6] = [3, 5, 9, 17, 33, 65];
 /// `b` where the caller knows them (a neighbouring piece's end, or 0 at t = 0); returns the
 /// integral and the integrand at `a`. A bisection hands each half its two known ends. `f` fills
 /// its second slice with the integrand at the points of its first: a level's new points in one
-/// call (the first three levels' seven together), which the closed form evaluates four at a time.
+/// call (the first three levels' seven together, with the ends the caller does not know: eight
+/// for the usual one, two full groups), which the closed form evaluates four at a time.
 ///
 /// The error of a level is estimated from the differences ("moves") between consecutive levels:
 /// for an integrand analytic near the piece the Chebyshev coefficients, and with them the
@@ -628,7 +635,7 @@ fn nested(
         f: &dyn Fn(&[f64], &mut [f64]),
         a: f64,
         b: f64,
-        ends: [f64; 2],
+        ends: &mut [Option<f64>; 2],
         tol: f64,
         resolved: f64,
         depth: u32,
@@ -657,13 +664,29 @@ fn nested(
                 // the new points of the first three levels, which every piece computes (no level
                 // below 9 points is accepted), in one call: the centre, then the 5-point level's
                 // two and the 9-point level's four, each at the abscissa its level computes
-                let mut points = [c; 7];
-                for (slot, m) in points[1..].iter_mut().zip([16, 48, 8, 24, 40, 56]) {
+                // (and the piece's ends the caller does not know, a and b themselves, in the same
+                // call: the seven fill a group of four and three of another, whose fourth lane
+                // would otherwise copy the last node)
+                let mut points = [c; 9];
+                for (slot, m) in points[1..7].iter_mut().zip([16, 48, 8, 24, 40, 56]) {
                     *slot = c + h * cosines[m];
                 }
-                f(&points, &mut first);
-                values[..3].copy_from_slice(&[ends[1], first[0], ends[0]]);
-                *evaluations += 1;
+                let mut count = 7;
+                for (end, x) in ends.iter().zip([a, b]) {
+                    if end.is_none() {
+                        points[count] = x;
+                        count += 1;
+                    }
+                }
+                let mut out = [0.0; 9];
+                f(&points[..count], &mut out[..count]);
+                first.copy_from_slice(&out[..7]);
+                for (next, end) in (7..).zip(ends.iter_mut().filter(|e| e.is_none())) {
+                    *end = Some(out[next]);
+                }
+                *evaluations += count - 6;
+                let [Some(at_a), Some(at_b)] = *ends else { unreachable!("both ends filled above") };
+                values[..3].copy_from_slice(&[at_b, first[0], at_a]);
             } else if level <= 2 {
                 for k in (0..=n / 2).rev() {
                     values[2 * k] = values[k];
@@ -733,23 +756,25 @@ fn nested(
             return integral;
         }
         // the halves' ends are known: a, the centre (the first level's middle point) and b
-        let middle = values[32];
-        piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
-            + piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
+        let middle = Some(values[32]);
+        piece(f, a, c, &mut [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
+            + piece(f, c, b, &mut [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted)
     }
-    let mut end = |known: Option<f64>, t: f64| {
-        known.unwrap_or_else(|| {
-            *evaluations += 1;
-            let mut value = [0.0];
-            f(&[t], &mut value);
-            value[0]
-        })
-    };
-    let ends = [end(ends[0], a), end(ends[1], b)];
     if b <= a {
+        let mut end = |known: Option<f64>, t: f64| {
+            known.unwrap_or_else(|| {
+                *evaluations += 1;
+                let mut value = [0.0];
+                f(&[t], &mut value);
+                value[0]
+            })
+        };
+        let ends = [end(ends[0], a), end(ends[1], b)];
         return (0.0, ends[0]);
     }
-    (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
+    let mut ends = ends;
+    let integral = piece(f, a, b, &mut ends, tolerance, resolved, 0, evaluations, error);
+    (integral, ends[0].unwrap_or(0.0))
 }
 
 /// Largest ratio of a level's last move to the tolerance at which [`chebyshev_tail`] may
@@ -979,7 +1004,7 @@ impl GaussianDefocus {
         let k = Complex64::new(0.0, phi0) + f.a * m * m;
         let exp_k = || {
             let (sin, cos) = cis::sin_cos(k.im);
-            Complex64::new(cos, sin) * k.re.exp()
+            Complex64::new(cos, sin) * expo::exp(k.re)
         };
         let mut moments = [zero; LANE_TERMS];
         if upper.is_none() && lower.is_none() {
@@ -989,10 +1014,10 @@ impl GaussianDefocus {
             }
             return Some((moments, m));
         }
-        let e_hi = upper.map(|x| Complex64::new((-0.5 * x * x).exp(), 0.0));
+        let e_hi = upper.map(|x| Complex64::new(expo::exp(-0.5 * x * x), 0.0));
         let e_lo = lower.map(|x| {
             let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
-            Complex64::new(cos, sin) * (-0.5 * x * x).exp()
+            Complex64::new(cos, sin) * expo::exp(-0.5 * x * x)
         });
         let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> (f64, Complex64) {
             match (x, e) {

@@ -32,6 +32,7 @@
 mod closed;
 mod complex4;
 mod error;
+mod expo;
 pub mod faddeeva;
 pub mod fft;
 pub mod fraunhofer;

@@ -4,6 +4,7 @@
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use num_complex::Complex64;
 use radiometry::Spectrum;
@@ -19,6 +20,30 @@ use super::{Engine, FrequencyRule, GAUSSIAN_HALF_WIDTH_SIGMAS, OtfEngine};
 /// 2 s), after which the engine stops and reports it (the valid but hopeless scenes of the stress
 /// list, F/0.5 at f0 = 50 mm over 1000 nm, stop in under 3 s, the whole command included).
 pub const CLOSED_FORM_BUDGET: usize = 12_000_000;
+
+/// The hasher of [`Closed::values`]' keys, the bits of a frequency: one multiplication (Knuth's
+/// multiplicative hashing by 2^64/φ, its well-mixed high half folded onto the low bits the table
+/// indexes by), not the default SipHash,
+/// whose keyed rounds cost more than the look-up they serve (the keys are the frequency rule's
+/// own nodes, not input an adversary chooses).
+#[derive(Default)]
+pub(super) struct BitsHasher(u64);
+
+impl Hasher for BitsHasher {
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 32)
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+
+    fn write_u64(&mut self, bits: u64) {
+        self.0 = (self.0 ^ bits).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
 
 /// The closed-form engine and its counters.
 #[derive(Debug)]
@@ -37,7 +62,7 @@ pub(super) struct Closed {
     /// by the bits of ν: a mean redone to a tighter tolerance (its first pass found a smaller mean
     /// than it assumed) asks most of its frequencies again, and a value whose rule's own estimate
     /// is within the new tolerance is kept (see `otf`).
-    pub values: RefCell<HashMap<u64, (f64, f64)>>,
+    pub values: RefCell<HashMap<u64, (f64, f64), BuildHasherDefault<BitsHasher>>>,
 }
 
 impl Closed {
@@ -53,9 +78,16 @@ impl Closed {
     ) -> Closed {
         let (mu, sigma) = (closed.center(), closed.sigma());
         let (lo, hi) = ((mu - 10.0 * sigma).max(0.0), mu + 10.0 * sigma);
-        let mut nodes = Nodes::default();
+        let mut nodes = Nodes {
+            nodes: Vec::with_capacity(8 * quad::ORDER),
+            samples: Vec::with_capacity(8 * quad::ORDER),
+            ..Nodes::default()
+        };
+        let mut densities = Vec::with_capacity(8 * quad::ORDER);
         quad::for_each_node(lo, hi, 8, |lambda, q| {
-            let q_rho = q * detected.value(lambda);
+            let density = detected.value(lambda);
+            densities.push(density);
+            let q_rho = q * density;
             nodes.samples.push((lambda, q_rho, WHOLE));
             nodes.nodes.push(Node {
                 lambda,
@@ -70,6 +102,7 @@ impl Closed {
             });
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len(), part: WHOLE });
+        nodes.densities = Some(densities);
         nodes.total_weight = closed.total_weight();
         let weight: f64 = nodes.nodes.iter().map(|n| n.weight).sum();
         let mean_defocus = nodes.nodes.iter().map(|n| n.weight * n.w020).sum::<f64>() / weight;
@@ -80,7 +113,7 @@ impl Closed {
             f_number,
             otf_tolerance: Cell::new(0.05 * tolerance),
             evaluations: Cell::new(0),
-            values: RefCell::new(HashMap::new()),
+            values: RefCell::new(HashMap::default()),
         }
     }
 }

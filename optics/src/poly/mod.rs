@@ -549,23 +549,55 @@ fn defocus_beyond(mut signal: Vec<(f64, f64)>, relevant: f64) -> f64 {
 fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec<(f64, f64)>) {
     let mut samples: Vec<(f64, f64)> =
         nodes.samples.iter().filter(|s| s.2 == part && s.0.is_finite()).map(|s| (s.0, s.1)).collect();
-    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // (the rules emit their samples in order: no sort then, the same order a stable sort keeps)
+    if !samples.is_sorted_by(|a, b| a.0.total_cmp(&b.0).is_le()) {
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    // the densities the engine read already, where its samples are these, strictly ascending
+    let known = nodes.densities.as_deref().filter(|d| {
+        d.len() == samples.len()
+            && samples.len() == nodes.samples.len()
+            && samples.windows(2).all(|w| w[0].0 < w[1].0)
+            && nodes.samples.iter().zip(&samples).all(|(s, t)| s.0 == t.0)
+    });
     let mut lambdas: Vec<f64> = samples.iter().map(|s| s.0).collect();
     lambdas.dedup();
+    // the index `partition_point(|x| x < lambda)` of an ascending slice, tried first at `hint`
+    // (the nodes come in the samples' order: each one at the last one's index or the next)
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // (the negated predicate, as partition_point reads it, NaN included)
+    fn first_not_below(values: &[f64], lambda: f64, hint: usize) -> usize {
+        for i in [hint, hint + 1] {
+            if i < values.len() && !(values[i] < lambda) && (i == 0 || values[i - 1] < lambda) {
+                return i;
+            }
+        }
+        values.partition_point(|&x| x < lambda)
+    }
+    let sample_lambdas: Vec<f64> = samples.iter().map(|s| s.0).collect();
     // a node's rule weight: the sample at its wavelength (one per wavelength)
-    let rule_weight = |lambda: f64| {
-        let i = samples.partition_point(|s| s.0 < lambda);
+    let mut sample_hint = 0;
+    let mut rule_weight = |lambda: f64| {
+        let i = first_not_below(&sample_lambdas, lambda, sample_hint);
+        sample_hint = i;
         samples.get(i).filter(|s| s.0 == lambda).map_or(0.0, |s| s.1)
     };
     // the detected spectrum once per wavelength (each is read by its node and its two
-    // neighbours: a third of the evaluations, 4 % of the paper point's time)
-    let densities: Vec<f64> =
-        if lambdas.len() < 3 { Vec::new() } else { lambdas.iter().map(|&l| detected.value(l).abs()).collect() };
-    let mass_around = |lambda: f64| -> Option<f64> {
+    // neighbours: a third of the evaluations, 4 % of the paper point's time), or as the engine
+    // read it
+    let densities: Vec<f64> = if lambdas.len() < 3 {
+        Vec::new()
+    } else if let Some(known) = known {
+        known.iter().map(|d| d.abs()).collect()
+    } else {
+        lambdas.iter().map(|&l| detected.value(l).abs()).collect()
+    };
+    let mut lambda_hint = 0;
+    let mut mass_around = |lambda: f64| -> Option<f64> {
         if lambdas.len() < 3 {
             return None;
         }
-        let i = lambdas.partition_point(|&l| l < lambda);
+        let i = first_not_below(&lambdas, lambda, lambda_hint);
+        lambda_hint = i;
         if i >= lambdas.len() || lambdas[i] != lambda {
             return None;
         }
@@ -573,14 +605,14 @@ fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec
         let density = densities[lo..=hi].iter().copied().fold(0.0, f64::max);
         Some(density * 0.5 * (lambdas[hi] - lambdas[lo]))
     };
-    signal.extend(nodes.nodes.iter().filter(|n| n.part == part).map(|n| {
+    for n in nodes.nodes.iter().filter(|n| n.part == part) {
         let w = rule_weight(n.lambda);
         let mass = match mass_around(n.lambda) {
             Some(m) if w != 0.0 && m.is_finite() => m * (n.weight / w).abs(),
             _ => n.weight.abs(),
         };
-        (n.w020.abs(), mass)
-    }));
+        signal.push((n.w020.abs(), mass));
+    }
 }
 
 /// The engine for a scene: the closed form where it applies (and is allowed), a line's engine
@@ -921,6 +953,132 @@ pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, 
 mod tests {
     use super::*;
 
+    /// `part_signal` as first written: every sample sorted, every node's sample and neighbours
+    /// found by binary search, every density read from the spectrum (the reference its
+    /// hinted searches and an engine's densities must reproduce to the bit).
+    fn part_signal_reference(nodes: &Nodes, part: usize, detected: &Spectrum) -> Vec<(f64, f64)> {
+        let mut samples: Vec<(f64, f64)> =
+            nodes.samples.iter().filter(|s| s.2 == part && s.0.is_finite()).map(|s| (s.0, s.1)).collect();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut lambdas: Vec<f64> = samples.iter().map(|s| s.0).collect();
+        lambdas.dedup();
+        let rule_weight = |lambda: f64| {
+            let i = samples.partition_point(|s| s.0 < lambda);
+            samples.get(i).filter(|s| s.0 == lambda).map_or(0.0, |s| s.1)
+        };
+        let mass_around = |lambda: f64| -> Option<f64> {
+            if lambdas.len() < 3 {
+                return None;
+            }
+            let i = lambdas.partition_point(|&l| l < lambda);
+            if i >= lambdas.len() || lambdas[i] != lambda {
+                return None;
+            }
+            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(lambdas.len() - 1));
+            let density = (lo..=hi).map(|k| detected.value(lambdas[k]).abs()).fold(0.0, f64::max);
+            Some(density * 0.5 * (lambdas[hi] - lambdas[lo]))
+        };
+        nodes
+            .nodes
+            .iter()
+            .filter(|n| n.part == part)
+            .map(|n| {
+                let w = rule_weight(n.lambda);
+                let mass = match mass_around(n.lambda) {
+                    Some(m) if w != 0.0 && m.is_finite() => m * (n.weight / w).abs(),
+                    _ => n.weight.abs(),
+                };
+                (n.w020.abs(), mass)
+            })
+            .collect()
+    }
+
+    /// `part_signal`'s shortcuts (no sort of ordered samples, the searches tried at the last
+    /// node's index first, an engine's densities) against the reference, to the bit: nodes out of
+    /// order, two orders a wavelength, samples of two parts interleaved, a node with no sample,
+    /// and the closed-form engine's nodes with their densities.
+    #[test]
+    fn part_signal_shortcuts_match_the_reference() {
+        let filter = radiometry::Gaussian::from_range(800e-9, 50e-9, 1.0).unwrap();
+        let detected = Spectrum::Gaussian(filter);
+        let node = |lambda: f64, weight: f64, part: usize| spectral::Node {
+            lambda,
+            weight,
+            w020: (lambda - 790e-9) * 1e3,
+            scale: 1.0,
+            shift: [0.0; 2],
+            shift_rate: None,
+            table: None,
+            radial: None,
+            part,
+        };
+        let lambdas: Vec<f64> = (0..40).map(|k| 740e-9 + 3e-9 * k as f64).collect();
+        // in order, two orders per wavelength (the second weaker)
+        let mut ordered = Nodes::default();
+        for &l in &lambdas {
+            ordered.samples.push((l, detected.value(l) * 3e-9, 0));
+            ordered.nodes.push(node(l, detected.value(l) * 3e-9, 0));
+            ordered.nodes.push(node(l, 0.1 * detected.value(l) * 3e-9, 0));
+        }
+        // out of order (a fixed permutation), two parts interleaved, one node off the samples
+        let mut shuffled = Nodes::default();
+        for k in 0..lambdas.len() {
+            let l = lambdas[(k * 17) % lambdas.len()];
+            shuffled.samples.push((l, detected.value(l) * 3e-9, k % 2));
+            shuffled.nodes.push(node(l, detected.value(l) * 3e-9, k % 2));
+        }
+        shuffled.nodes.push(node(801.5e-9, 1e-12, 1));
+        for (nodes, parts) in [(&ordered, 1), (&shuffled, 2)] {
+            for part in 0..parts {
+                let mut signal = Vec::new();
+                part_signal(nodes, part, &detected, &mut signal);
+                assert_eq!(signal, part_signal_reference(nodes, part, &detected), "part {part}");
+            }
+        }
+        // the closed form's nodes carry the densities it read
+        #[derive(Debug)]
+        struct Affine;
+        impl LensModel for Affine {
+            fn f_number(&self) -> f64 {
+                2.5
+            }
+            fn focal_length(&self) -> f64 {
+                3.36e-3
+            }
+            fn orders(&self, lambda: f64, _: Field) -> Vec<crate::Order> {
+                vec![crate::Order::new(
+                    0.15,
+                    crate::Pupil::Full,
+                    crate::Wavefront::defocus(-0.0168e-3 + 0.021 * lambda),
+                )]
+            }
+            fn affine_defocus(&self, _: Field) -> Option<crate::AffineDefocus> {
+                Some(crate::AffineDefocus {
+                    efficiency: 0.15,
+                    transmission: 0.5,
+                    w020_intercept_m: -0.0168e-3,
+                    w020_slope: 0.021,
+                })
+            }
+        }
+        let lens = Affine;
+        let poly = Polychromatic::with_settings(
+            &lens,
+            &detected,
+            Field::ON_AXIS,
+            1.0 / (2.0 * 5.2e-6),
+            None,
+            Settings { tolerance: 1e-7, ..Settings::default() },
+        )
+        .unwrap();
+        assert_eq!(poly.engine(), Engine::ClosedForm);
+        let nodes = poly.engine.nodes();
+        assert!(nodes.densities.is_some());
+        let mut signal = Vec::new();
+        part_signal(nodes, spectral::WHOLE, &detected, &mut signal);
+        assert_eq!(signal, part_signal_reference(nodes, spectral::WHOLE, &detected));
+    }
+
     /// [`resolved_defocus`] reads a node's signal from the spectrum around it, not from its rule
     /// weight: a Gaussian band's tail whose product weights alternate at ±1e-6 of the total
     /// (where the spectrum holds far less) does not make the outermost node's defocus the one to
@@ -957,7 +1115,8 @@ mod tests {
         nodes.sum_weights();
         let mut signal = Vec::new();
         part_signal(&nodes, 0, &detected, &mut signal);
-        let resolved = defocus_beyond(signal, 1e-8 * total);
+        let resolved = defocus_beyond(signal.clone(), 1e-8 * total);
+        assert_eq!(signal, part_signal_reference(&nodes, 0, &detected));
         // read as weights, every node beyond 40 nm is relevant: the outermost defocus, 70 µm
         assert!(resolved < 0.9 * 70e-9 * 1e3, "{resolved:e}");
         // the Gaussian's two tails beyond x σ hold erfc(x/√2) of the total, 1e-8 at x = 5.73;

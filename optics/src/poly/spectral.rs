@@ -196,6 +196,10 @@ pub(super) struct Nodes {
     pub interpolated: bool,
     /// the wavelength of a line spectrum (one node per order, no panels)
     pub line: Option<f64>,
+    /// The detected spectrum's value at each of `samples`' wavelengths, in their order, where
+    /// the engine computed it already (the closed form's nodes, `q ρ(λ)`): the densities the
+    /// frequency rule's `resolved_defocus` reads, not computed twice.
+    pub densities: Option<Vec<f64>>,
 }
 
 impl Nodes {

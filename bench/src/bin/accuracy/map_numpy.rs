@@ -154,18 +154,22 @@ pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
                  The nested Clenshaw–Curtis rule in the pupil angle accepts a piece at 9 points where its own even \
                  Chebyshev coefficients bound the error within the piece's share of the tolerance, else at 17 (33 on \
                  a few): 8 or 16 E(c) a piece with the ends shared, 3–4 pieces an OTF value. So 20 µs needs both fewer \
-                 values and fewer points: about 9 OTF values of 2 pieces at 9 points each, or E(c) itself 4× cheaper, \
-                 or a surrogate for the OTF in (ν, F#, σ) with a stated bound. The Faddeeva series already takes \
-                 the fewest terms the tolerance allows (20–24 of 36 at 1e-6 and 1e-7: 10 % off the paper point); \
-                 what is left of an E(c) is spread over the moment recurrence with its completed square (about a \
-                 third), the series' rational evaluation (a quarter), the nested rule with sin t, cos t and the \
-                 cut (a fifth) and two real exponentials (a tenth) (ARCHITECTURE.md, \"Where the time goes\"): \
-                 no one part whose removal gives 4×. The paper scene's polynomial is of degree one (two \
-                 moments), so fewer moments save nothing there.\n",
+                 values and fewer points: about 9 OTF values of 2 pieces at 9 points each, or the call {:.1}× cheaper per E(c), \
+                 or a surrogate for the OTF in (ν, F#, σ) with a stated bound. The set-up around the kernel (the \
+                 128 spectral nodes and the detected spectrum read at them, the frequency rule's defocus statistics, \
+                 the signal integrals) is about 5 µs of the call since it stopped reading the spectrum twice and \
+                 sorting what comes sorted, so the rest is the kernel and the rule in t. The Faddeeva series already \
+                 takes the fewest terms the tolerance allows (20–24 of 36 at 1e-6 and 1e-7), the real exponentials \
+                 are the project's four-lane `exp` (within 2 × 2⁻⁵² relative) and a piece's unshared ends ride in its first \
+                 call; what is left of an E(c) is the series' rational evaluation, the moments' completed square, sin t, cos t \
+                 and the cut, with no one part whose removal gives 2× (ARCHITECTURE.md, \"Where the time goes\"). \
+                 Eight lanes (AVX-512) would halve the per-group overhead, not the arithmetic. The paper scene's \
+                 polynomial is of degree one (two moments), so fewer moments save nothing there.\n",
                 1e9 * per,
                 40e-6 / per,
                 20e-6 / per,
-                evaluations as f64 / otf_values as f64
+                evaluations as f64 / otf_values as f64,
+                seconds / 20e-6
             );
         }
     }
