@@ -50,7 +50,7 @@ pub mod testkit;
 pub use closed::GaussianDefocus;
 pub use error::Error;
 pub use lens::{
-    AffineDefocus, ApertureDirections, DefocusRates, FactoredEfficiency, FactoredPart, Field, LensModel, Order,
+    AffineDefocus, ApertureDirections, DefocusRates, FactoredEfficiency, FactoredPart, Field, LensModel, Order, OrderWavelengthRates,
     OrderDerivatives, Pupil, Wavefront, WavelengthDirections, Zone, round_for_display,
 };
 pub use otf::{
