@@ -228,16 +228,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         let lane = defocus_lane(scene, parameters, bases);
         let ((evaluation, d_binary2, d_grid, d_bias), found) =
             evaluate_field_with_lanes(scene, binary2, &grid, &bias, lane.as_ref())?;
-        let point = point_gradient(
-            scene,
-            &evaluation,
-            parameters,
-            d_binary2,
-            &d_grid,
-            bases,
-            d_bias.as_ref(),
-            found.as_ref(),
-        )?;
+        let point =
+            point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, bases, d_bias.as_ref(), found.as_ref())?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -1092,7 +1084,8 @@ fn line_center_partials(
                     .ok()
                     .and_then(|poly| {
                         let found = poly.mean_mtf_and_order_lane(&rates)?;
-                        let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
+                        let edge =
+                            poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
                         Some((found, edge))
                     })
                     .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no order lane here")))?
@@ -1305,7 +1298,12 @@ fn top_hat_partials(
 /// the pixel MTF is
 /// followed (its term of the integration by parts); this function's own rule stays as the
 /// reference ([`aperture_partials_by_own_rule`]).
-fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter, pass: Option<&DefocusFound>) -> Result<(f64, f64), Error> {
+fn aperture_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    pass: Option<&DefocusFound>,
+) -> Result<(f64, f64), Error> {
     if scene.camera().noise_spectrum().is_none()
         && let Some(found) = defocus_on_value_rule(scene, e, pass)?
     {

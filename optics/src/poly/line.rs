@@ -130,8 +130,10 @@ impl Line<'_> {
         let nuf = nu * self.scene.f_number;
         let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
         let passing: Vec<usize> = (0..nodes.len()).filter(|&o| nodes[o].lambda < cut).collect();
-        let points: Vec<(f64, f64)> =
-            passing.iter().map(|&o| (nuf * nodes[o].lambda / nodes[o].scale, nodes[o].w020 / nodes[o].lambda)).collect();
+        let points: Vec<(f64, f64)> = passing
+            .iter()
+            .map(|&o| (nuf * nodes[o].lambda / nodes[o].scale, nodes[o].w020 / nodes[o].lambda))
+            .collect();
         let (mut values, mut lanes) = (vec![0.0; points.len()], vec![0.0; points.len()]);
         crate::otf::defocus_otf_many_and_log_derivative_within(&points, &mut values, &mut lanes, 0.0);
         let (mut sum, mut lane) = (0.0, 0.0);
@@ -147,4 +149,3 @@ impl Line<'_> {
         Some((value, (lane - value * moved) / total))
     }
 }
-
