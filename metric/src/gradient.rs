@@ -326,6 +326,8 @@ struct PointGradient {
 /// [`ExtraLanes`]), the first of their three lanes `[P, T, S]`; where a line's wavelength does,
 /// the first of its lanes. `d_bias`: a library lens's bias lanes computed with the evaluation,
 /// one per `LibraryBias` of `parameters` in their order, where the value's engine gave them.
+// the point's evaluation and every lane its pass gave, each its own argument
+#[allow(clippy::too_many_arguments)]
 fn point_gradient(
     scene: &Scene,
     e: &Evaluation,
