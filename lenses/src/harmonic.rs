@@ -1,6 +1,6 @@
 //! The harmonic (multi-order) diffractive lens.
 
-use optics::{Field, LensModel, Order, Pupil, Wavefront};
+use optics::{Field, LensModel, Order, OrderWavelengthRates, Pupil, Wavefront};
 
 use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
@@ -156,6 +156,35 @@ impl LensModel for Harmonic {
         )
     }
 
+    /// Each order's `W020_m = (1 − mλ/(pλ0)) f0/(8F#²)` moves as `−m/(pλ0) f0/(8F#²)` and its
+    /// `τ_m = τ_base sinc²(α − m)`, `α = pλ0/λ`, as `2 τ_base sinc(x) sinc′(x) ∂α/∂λ` with
+    /// `x = α − m`, `∂α/∂λ = −α/λ`, `sinc′(x) = (cos πx − sinc x)/x` (`−π²x/3` near 0); one entry
+    /// per order of [`orders`](LensModel::orders), in its order. The orders entering or leaving
+    /// the range `|m − α| ≤ 3` do so at `sinc²(±3) = 0` with a zero slope, so the sum stays C¹.
+    /// `None` with a transmission table (its slope is not followed) and off axis (lateral colour).
+    fn order_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<OrderWavelengthRates> {
+        if !field.is_on_axis() || !matches!(self.transmission, Curve::Constant(_)) {
+            return None;
+        }
+        let alpha = self.phase_depth(wavelength_m);
+        let d_alpha = -alpha / wavelength_m;
+        let p_lambda0 = f64::from(self.design_order) * self.design_wavelength;
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        let orders = self
+            .order_range(wavelength_m)
+            .map(|m| {
+                let x = alpha - f64::from(m);
+                let slope = if x.abs() < 1e-4 {
+                    -std::f64::consts::PI.powi(2) * x / 3.0
+                } else {
+                    ((std::f64::consts::PI * x).cos() - sinc(x)) / x
+                };
+                [-f64::from(m) / p_lambda0 * k, 2.0 * self.base_efficiency * sinc(x) * slope * d_alpha]
+            })
+            .collect();
+        Some(OrderWavelengthRates { orders, ln_transmission: 0.0 })
+    }
+
     /// With a transmission table: one part (no efficiency table: the orders' efficiencies are
     /// smooth), the lens with transmission 1, so that the table's rows cut no spectral panel.
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
@@ -268,6 +297,25 @@ mod tests {
         assert!(e.to_string().contains("τ1 = 0.7 exceeds transmission T = 0.6"), "{e}");
         let e = Harmonic::new(2.5, 3e-3, f64::NAN, 1, 0.4, Curve::Constant(0.6)).unwrap_err();
         assert!(e.to_string().contains("design_wavelength = NaN"), "{e}");
+    }
+
+    /// Each order's rates against central differences of `order_defocus` and
+    /// `order_efficiency` (step 1e-3 nm: truncation ~1e-12 of the slopes).
+    #[test]
+    fn order_wavelength_rates_match_differences() {
+        let l = lens(5);
+        for &lambda in &[760e-9, 803e-9, 800e-9 * 5.0 / 4.5, 850e-9] {
+            let rates = l.order_wavelength_rates(lambda, Field::ON_AXIS).unwrap();
+            let range: Vec<u32> = l.order_range(lambda).collect();
+            assert_eq!(rates.orders.len(), range.len());
+            let h = 1e-12;
+            for (&m, [d_w020, d_tau]) in range.iter().zip(&rates.orders) {
+                let dw = (l.order_defocus(m, lambda + h) - l.order_defocus(m, lambda - h)) / (2.0 * h);
+                let dt = (l.order_efficiency(m, lambda + h) - l.order_efficiency(m, lambda - h)) / (2.0 * h);
+                assert!((d_w020 - dw).abs() <= 1e-7 * dw.abs(), "m {m}: {d_w020} vs {dw}");
+                assert!((d_tau - dt).abs() <= 1e-6 * dt.abs().max(1e3), "λ {lambda}, m {m}: {d_tau} vs {dt}");
+            }
+        }
     }
 
     #[test]

@@ -360,6 +360,41 @@ pub(crate) fn evaluate_field_differentiated(
     grid: &[optics::WavefrontDirection],
     bias: &[usize],
 ) -> Result<Differentiated, Error> {
+    evaluate_field_with_lanes(scene, binary2, grid, bias, None).map(|(d, _)| d)
+}
+
+/// The defocus lane a gradient asks of the value's own pass ([`evaluate_field_with_lanes`]):
+/// `∂O/∂ln K` (`rates` `None`: the F-number, the focal length, a one-order line's wavelength) or
+/// the order lane of a line whose orders move each by its rates `[α_o, γ_o]`
+/// ([`optics::Polychromatic::mean_mtf_and_order_lane`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct DefocusLane {
+    pub rates: Option<Vec<[f64; 2]>>,
+}
+
+/// What the value's pass gave for a [`DefocusLane`]: the mean with its lane
+/// ([`optics::DefocusDerivative`], its mean the evaluation's bit for bit) and `P(ν_N)|O(ν_N)|`,
+/// the pixel MTF times the OTF at Nyquist (the integration by parts' end term).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct DefocusFound {
+    pub found: optics::DefocusDerivative,
+    pub edge: f64,
+    /// whether the lane is the order lane (rates given), not `∂O/∂ln K`
+    pub order_lane: bool,
+}
+
+/// [`evaluate_field_differentiated`] and, with `defocus`, its lane on the value's own pass
+/// where the value's engine reads each OTF value from the value's own forms with the lane
+/// beside it (the line engine on orders that are full centred circles with a defocus alone:
+/// [`optics::Polychromatic::mean_mtf_and_order_lane`]); the evaluation is the same, bit for bit,
+/// with or without it. `None` where the engine does not give it so (the caller's own pass then).
+pub(crate) fn evaluate_field_with_lanes(
+    scene: &Scene,
+    binary2: bool,
+    grid: &[optics::WavefrontDirection],
+    bias: &[usize],
+    defocus: Option<&DefocusLane>,
+) -> Result<(Differentiated, Option<DefocusFound>), Error> {
     let mut grid_gradient = if grid.is_empty() { GridGradient::NotAsked } else { GridGradient::Unavailable };
     let lens = scene.lens();
     let camera = scene.camera();
@@ -487,6 +522,7 @@ pub(crate) fn evaluate_field_differentiated(
     let mut azimuth_warning = None;
     let mut binary2_gradient = None;
     let mut bias_gradient = None;
+    let mut defocus_found = None;
     let mut directional = |noise: Option<&optics::NoiseShape>| {
         let mean_along = |azimuth: f64| match noise {
             None => poly.mean_mtf_along(azimuth),
@@ -572,6 +608,19 @@ pub(crate) fn evaluate_field_differentiated(
             {
                 bias_gradient = Some(gradient);
                 return Ok((m, m, m, work));
+            }
+            // a line's defocus or order lane beside the value's own OTFs (the line engine reads
+            // them from the value's forms: the mean unchanged bit for bit)
+            if noise.is_none()
+                && let Some(lane) = defocus
+                && matches!(poly.engine(), optics::Engine::Monochromatic { fft: None })
+                && let Some(found) = match &lane.rates {
+                    None => poly.mean_mtf_and_defocus_derivative(),
+                    Some(rates) => poly.mean_mtf_and_order_lane(rates),
+                }
+            {
+                defocus_found = Some(found);
+                return Ok((found.mean, found.mean, found.mean, found.work));
             }
             let (m, work) = mean_along(0.0);
             Ok((m, m, m, work))
@@ -725,7 +774,14 @@ pub(crate) fn evaluate_field_differentiated(
             .map(|(ln_photoelectrons, ln_transmitted)| BiasLanes { mean_mtf, ln_photoelectrons, ln_transmitted }),
         _ => None,
     };
-    Ok((evaluation, binary2_gradient, grid_gradient, bias_lanes))
+    // the integration by parts' end term: the OTF at Nyquist (a full centred pupil on axis: real
+    // and the same along every direction), after the mean so that its decisions are the value's
+    let defocus_found = defocus_found.map(|found| DefocusFound {
+        found,
+        edge: poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist)),
+        order_lane: defocus.is_some_and(|d| d.rates.is_some()),
+    });
+    Ok(((evaluation, binary2_gradient, grid_gradient, bias_lanes), defocus_found))
 }
 
 /// `(∂ln N/∂b, ∂ln N_T/∂b)` along each of `bias` on the nodes that make N and N_T (the nodes

@@ -11,7 +11,10 @@
 
 use noise::SnrPartials;
 
-use crate::evaluate::{BiasLanes, Evaluation, GridGradient, evaluate_field_differentiated, mtf_at};
+use crate::evaluate::{
+    BiasLanes, DefocusFound, DefocusLane, Evaluation, GridGradient, evaluate_field_differentiated,
+    evaluate_field_with_lanes, mtf_at,
+};
 use crate::{Error, GlareMode, MetricForm, Scene};
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
@@ -232,9 +235,13 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     let bias: Vec<usize> =
         parameters.iter().filter_map(|p| if let Parameter::LibraryBias(i) = p { Some(*i) } else { None }).collect();
     if scene.fields().is_empty() {
-        // one pass: the evaluation and the wavefront derivatives of its mean MTF together
-        let (evaluation, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(scene, binary2, &grid, &bias)?;
-        let point = point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, bases, d_bias.as_ref())?;
+        // one pass: the evaluation and the wavefront derivatives of its mean MTF together (and
+        // the defocus or order lane of a line, or of the F-number, where the engine gives it)
+        let lane = defocus_lane(scene, parameters, bases);
+        let ((evaluation, d_binary2, d_grid, d_bias), found) =
+            evaluate_field_with_lanes(scene, binary2, &grid, &bias, lane.as_ref())?;
+        let point =
+            point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, bases, d_bias.as_ref(), found.as_ref())?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -276,7 +283,7 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         let kept: Vec<Parameter> = local.iter().flatten().copied().collect();
         let grid: Vec<optics::WavefrontDirection> = kept.iter().filter_map(|p| p.grid_direction()).collect();
         let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
-        let point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref())?;
+        let point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref(), None)?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -302,6 +309,47 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     })
 }
 
+/// The lane to ask of the value's own pass ([`evaluate_field_with_lanes`]): a line's wavelength
+/// on a lens whose orders are full circles with a defocus alone — the order lane where the lens
+/// gives each order's rates ([`optics::LensModel::order_wavelength_rates`]: the harmonic lens),
+/// else `∂O/∂ln K` — or the F-number and focal length where their lanes are not the radial
+/// engine's. `None` where none of these is asked.
+fn defocus_lane(scene: &Scene, parameters: &[Parameter], bases: LaneBases) -> Option<DefocusLane> {
+    let line = crate::evaluate::detected_spectrum(scene).line();
+    if let Some(line) = line
+        && bases.wavelength.is_none()
+        && parameters.contains(&Parameter::SpectrumCenter)
+    {
+        return Some(DefocusLane { rates: order_lane_rates(scene, line.center()) });
+    }
+    let aperture = parameters.iter().any(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength));
+    (aperture && bases.aperture.is_none()).then_some(DefocusLane { rates: None })
+}
+
+/// Per order at the line's wavelength `c`, `[α_o, γ_o]` of the order lane
+/// ([`optics::Polychromatic::mean_mtf_and_order_lane`]): `α_o = ∂ln w_o/∂c = W020_o′/W020_o − 1/c`
+/// (0 where `W020_o = 0`: `w ∂H/∂w` is 0 there, `H` being even in `w`) and `γ_o = ∂τ_o/∂c`, for a
+/// lens that gives each order's rates ([`optics::LensModel::order_wavelength_rates`]); `None`
+/// otherwise.
+fn order_lane_rates(scene: &Scene, c: f64) -> Option<Vec<[f64; 2]>> {
+    let lens = scene.lens();
+    let rates = lens.order_wavelength_rates(c, scene.field())?;
+    let orders = lens.orders(c, scene.field());
+    if orders.len() != rates.orders.len() {
+        return None;
+    }
+    Some(
+        orders
+            .iter()
+            .zip(&rates.orders)
+            .map(|(o, [d_w020, d_tau])| {
+                let w020 = o.wavefront.defocus_m;
+                [if w020 == 0.0 { 0.0 } else { d_w020 / w020 - 1.0 / c }, *d_tau]
+            })
+            .collect(),
+    )
+}
+
 struct PointGradient {
     asnr: Vec<f64>,
     mean_mtf: Vec<f64>,
@@ -317,6 +365,8 @@ struct PointGradient {
 /// [`ExtraLanes`]), the first of their three lanes `[P, T, S]`; where a line's wavelength does,
 /// the first of its lanes. `d_bias`: a library lens's bias lanes computed with the evaluation,
 /// one per `LibraryBias` of `parameters` in their order, where the value's engine gave them.
+// the point's evaluation and every lane its pass gave, each its own argument
+#[allow(clippy::too_many_arguments)]
 fn point_gradient(
     scene: &Scene,
     e: &Evaluation,
@@ -325,6 +375,7 @@ fn point_gradient(
     d_grid: &GridGradient,
     bases: LaneBases,
     d_bias: Option<&BiasLanes>,
+    found: Option<&DefocusFound>,
 ) -> Result<PointGradient, Error> {
     let aperture_base = bases.aperture;
     let camera = scene.camera();
@@ -382,12 +433,12 @@ fn point_gradient(
     };
     let line_center = match line {
         Some(_) if parameters.contains(&Parameter::SpectrumCenter) => {
-            Some(line_center_partials(scene, e, binary2.as_deref(), bases.wavelength)?)
+            Some(line_center_partials(scene, e, binary2.as_deref(), bases.wavelength, found)?)
         }
         _ => None,
     };
     let aperture = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
-        Some(&p) if aperture_base.is_none() => Some(aperture_partials(scene, e, p)?),
+        Some(&p) if aperture_base.is_none() => Some(aperture_partials(scene, e, p, found.filter(|f| !f.order_lane))?),
         Some(&p) => Some(aperture_lane_partials(scene, e, p, binary2.as_deref(), aperture_base)?),
         None => None,
     };
@@ -1027,6 +1078,7 @@ fn line_center_partials(
     e: &Evaluation,
     all: Option<&[f64]>,
     base: Option<usize>,
+    pass: Option<&DefocusFound>,
 ) -> Result<(f64, f64, f64), Error> {
     let p = Parameter::SpectrumCenter;
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
@@ -1059,9 +1111,46 @@ fn line_center_partials(
     }
     let family = lens.describe();
     let orders = lens.orders(c, field);
-    let plain = matches!(&orders[..], [o] if matches!(o.pupil, optics::Pupil::Full)
-        && o.wavefront.image_shift_m == [0.0, 0.0]
-        && [o.wavefront.spherical_m, o.wavefront.coma_m, o.wavefront.astigmatism_m, o.wavefront.field_curvature_m] == [0.0; 4]);
+    let full = |o: &optics::Order| {
+        matches!(o.pupil, optics::Pupil::Full)
+            && o.wavefront.image_shift_m == [0.0, 0.0]
+            && [o.wavefront.spherical_m, o.wavefront.coma_m, o.wavefront.astigmatism_m, o.wavefront.field_curvature_m]
+                == [0.0; 4]
+    };
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let settings = scene.options().settings();
+    // several orders, each moving by its own rates (the harmonic lens): the order lane
+    // L = (Σ_o [τ_o α_o w ∂H_o/∂w + τ_o′ H_o] − O Σ_o τ_o′)/Σ_o τ_o beside each OTF value
+    if let Some(order_rates) = lens.order_wavelength_rates(c, field)
+        && orders.iter().all(full)
+        && let Some(rates) = order_lane_rates(scene, c)
+    {
+        let (found, edge) = match pass.filter(|f| f.order_lane) {
+            Some(f) => (f.found, f.edge),
+            None => {
+                let folded = crate::evaluate::Folded::of(lens, &detected);
+                let parts = folded.parts();
+                optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
+                    .ok()
+                    .and_then(|poly| {
+                        let found = poly.mean_mtf_and_order_lane(&rates)?;
+                        let edge =
+                            poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
+                        Some((found, edge))
+                    })
+                    .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no order lane here")))?
+            }
+        };
+        let efficiency: f64 = orders.iter().map(|o| o.efficiency).sum();
+        let moved: f64 = order_rates.orders.iter().map(|r| r[1]).sum();
+        return Ok((
+            d_ln_n + moved / efficiency,
+            d_ln_n + order_rates.ln_transmission,
+            (edge - e.mean_mtf - found.pixel_slope) / c + found.defocus,
+        ));
+    }
+    let plain = matches!(&orders[..], [o] if full(o));
     let rates = match lens.affine_defocus(field) {
         Some(a) => Some(optics::DefocusRates { defocus: a.w020_slope, ln_efficiency: 0.0, ln_transmission: 0.0 }),
         None => lens.defocus_rates(c, field),
@@ -1070,28 +1159,31 @@ fn line_center_partials(
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
              pupil with a defocus affine in λ and constant efficiencies, on axis (the chromatic lens without an \
-             iris or Seidel terms), the refractive lens, and a phase lens on the radial engine; this lens's \
-             orders move with λ otherwise (several orders whose efficiencies move against each other, an iris, \
-             Seidel or Zernike terms, an efficiency table's slope, lateral colour off axis), which is not \
+             iris or Seidel terms), the refractive lens, the harmonic lens on axis with a constant transmission, \
+             and a phase lens on the radial engine; this lens's orders move with λ otherwise (an iris, Seidel or \
+             Zernike terms, an efficiency or transmission table's slope, lateral colour off axis), which is not \
              followed yet"
         )));
     };
-    // the value's engine exactly (its parts, its settings), the defocus lane beside each OTF value
-    let nyquist = camera.nyquist();
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, &detected);
-    let parts = folded.parts();
-    let settings = scene.options().settings();
-    // and P(ν_N)|O(ν_N)| from the same engine (a full centred pupil on axis: the OTF is real and
-    // the same along every direction)
-    let (found, edge) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
-        .ok()
-        .and_then(|poly| {
-            let found = poly.mean_mtf_and_defocus_derivative()?;
-            let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
-            Some((found, edge))
-        })
-        .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?;
+    // the value's own pass where it carried the defocus lane (the line engine); else the value's
+    // engine exactly (its parts, its settings), the defocus lane beside each OTF value, and
+    // P(ν_N)|O(ν_N)| from the same engine (a full centred pupil on axis: the OTF is real and the
+    // same along every direction)
+    let (found, edge) = match pass.filter(|f| !f.order_lane) {
+        Some(f) => (f.found, f.edge),
+        None => {
+            let folded = crate::evaluate::Folded::of(lens, &detected);
+            let parts = folded.parts();
+            optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
+                .ok()
+                .and_then(|poly| {
+                    let found = poly.mean_mtf_and_defocus_derivative()?;
+                    let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
+                    Some((found, edge))
+                })
+                .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?
+        }
+    };
     let w020 = orders[0].wavefront.defocus_m;
     // ∂H/∂w = 0 at w = 0 (H is even in w)
     let d_defocus = if w020 == 0.0 { 0.0 } else { found.defocus * (rates.defocus / w020 - 1.0 / c) };
@@ -1257,9 +1349,14 @@ fn top_hat_partials(
 /// the pixel MTF is
 /// followed (its term of the integration by parts); this function's own rule stays as the
 /// reference ([`aperture_partials_by_own_rule`]).
-fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+fn aperture_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    pass: Option<&DefocusFound>,
+) -> Result<(f64, f64), Error> {
     if scene.camera().noise_spectrum().is_none()
-        && let Some(found) = defocus_on_value_rule(scene, e)?
+        && let Some(found) = defocus_on_value_rule(scene, e, pass)?
     {
         return Ok(found);
     }
@@ -1274,8 +1371,18 @@ fn aperture_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64
 /// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − (1/ν_N) ∫ ν P′ |O| dν − 2 D_K` and `∂M̄/∂ln f0 = D_K`
 /// (docs/physics.md, "Gradients: the F-number and the focal length on the value's rule").
 /// `None` where the engine has no such lane (the reference panels rule, the FFT path) or an order
-/// is not the full circular pupil with a defocus alone.
-fn defocus_on_value_rule(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+/// is not the full circular pupil with a defocus alone. `pass`: the lane `∂O/∂ln K` and the end
+/// term where the evaluation's own pass gave them (a line: [`evaluate_field_with_lanes`]); else
+/// the mean is computed again with the lane.
+fn defocus_on_value_rule(
+    scene: &Scene,
+    e: &Evaluation,
+    pass: Option<&DefocusFound>,
+) -> Result<Option<(f64, f64)>, Error> {
+    if let Some(pass) = pass.filter(|f| !f.order_lane) {
+        let d_k = pass.found.defocus;
+        return Ok(Some((pass.edge - e.mean_mtf - pass.found.pixel_slope - 2.0 * d_k, d_k)));
+    }
     let lens = scene.lens();
     let field = scene.field();
     let detected = crate::evaluate::detected_spectrum(scene);
@@ -1317,7 +1424,7 @@ pub fn aperture_mean_mtf_partials(scene: &Scene, e: &Evaluation, reference: bool
     if reference {
         aperture_partials_by_own_rule(scene, e, Parameter::FNumber).map(Some)
     } else {
-        defocus_on_value_rule(scene, e)
+        defocus_on_value_rule(scene, e, None)
     }
 }
 

@@ -282,6 +282,17 @@ pub struct DefocusRates {
     pub ln_transmission: f64,
 }
 
+/// What [`LensModel::order_wavelength_rates`] gives: per m of wavelength, for each order of
+/// [`LensModel::orders`] in its order `[∂W020_o/∂λ, ∂τ_o/∂λ]` (m per m, per m), and `∂ln T/∂λ`
+/// of the transmission.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OrderWavelengthRates {
+    /// `[∂W020_o/∂λ, ∂τ_o/∂λ]` per order.
+    pub orders: Vec<[f64; 2]>,
+    /// `∂ln T/∂λ`, per m.
+    pub ln_transmission: f64,
+}
+
 /// What [`LensModel::wavelength_directions`] gives: the coefficients `c_k` and per order the
 /// profiles `p_k` (m, as functions of `q = ρ²`) of the wavefront's rate `δW = Σ_k c_k p_k`, or why
 /// they cannot be given.
@@ -459,6 +470,15 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// For a lens whose every order at `field` is the full circular pupil with a defocus alone,
+    /// several of them with efficiencies that move against each other with λ (the harmonic
+    /// lens): how each moves with the wavelength at `wavelength_m` ([`OrderWavelengthRates`]),
+    /// for the gradient with respect to a line's wavelength. `None` (the default) where the lens
+    /// does not give them.
+    fn order_wavelength_rates(&self, _wavelength_m: f64, _field: Field) -> Option<OrderWavelengthRates> {
+        None
+    }
+
     /// How each imaging order's image shift moves with the field angles, at `wavelength_m` and
     /// `field`: one `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian) per order of [`orders`](Self::orders),
     /// for a lens whose orders change with the field point only through their image shifts
@@ -552,6 +572,9 @@ macro_rules! forward_lens_model {
             }
             fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
                 (**self).image_shift_field_rates(wavelength_m, field)
+            }
+            fn order_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<OrderWavelengthRates> {
+                (**self).order_wavelength_rates(wavelength_m, field)
             }
             fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<OrderDerivatives> {
                 (**self).order_derivatives(wavelength_m, parameter)

@@ -380,8 +380,10 @@ pub fn defocus_otf_many_within(points: &[(f64, f64)], out: &mut [f64], accuracy:
 /// - below `|a|(1 − s) = 1e-8`, where the value is the diffraction-limited MTF, 0: the lane is
 ///   `−(4/π) ∫ sin²t · φ sin φ dt` with `|φ| ≤ |a|(1 − s)`, below `2 (|a|(1 − s))² < 2e-16` there.
 ///
-/// The values are those of [`defocus_otf_many_within`] (the same forms and starts; the
-/// expansion may sum more terms for the lane, so within the same accuracy).
+/// The values are those of [`defocus_otf_many_within`] bit for bit (the same forms, starts and
+/// batches; the Bessel lanes' value is the value-alone recurrence's, the lane's chain beside it;
+/// where the expansion answers the value but not the lane's target, the lane is the series' at
+/// that point), so a frequency rule that reads them makes the value's decisions.
 ///
 /// # Panics
 /// If `points`, `out` and `lane` differ in length.
@@ -419,12 +421,18 @@ pub fn defocus_otf_many_and_log_derivative_within(
             lane[i] = 0.0;
             continue;
         }
+        // the value exactly as `defocus_otf_many_within` takes it (the expansion where it
+        // reaches the accuracy); the lane from the expansion where it reaches the lane's target
+        // too, else from the series at this one point (its value left aside)
+        let target = 0.5 * accuracy.max(1e-16);
         if a.abs() * (1.0 - s) >= ASYMPTOTIC_MIN_PHASE
-            && let Some((value, derivative)) =
-                defocus_otf_asymptotic_and_log_derivative(s, a, 0.5 * accuracy.max(1e-16))
+            && let Some(value) = defocus_otf_asymptotic(s, a, target)
         {
             out[i] = value;
-            lane[i] = derivative;
+            lane[i] = match defocus_otf_asymptotic_and_log_derivative(s, a, target) {
+                Some((_, derivative)) => derivative,
+                None => bessel_lanes_with::<1, true>([s], [a], accuracy).1[0],
+            };
             continue;
         }
         lanes[count] = i;
@@ -1039,7 +1047,7 @@ mod tests {
     }
 
     /// Many points at once (values and lanes) against the single forms: the values equal to
-    /// [`defocus_otf_many_within`] within the accuracy asked, the lanes to the t-form quadrature
+    /// [`defocus_otf_many_within`] bit for bit, the lanes to the t-form quadrature
     /// within `accuracy · max(1, |a|(1 − s))` plus rounding, over `|a|(1 − s)` below `1e-8`
     /// (the lane 0), through the series and the expansion.
     #[test]
@@ -1062,7 +1070,8 @@ mod tests {
             for (k, &(s, w)) in points.iter().enumerate() {
                 let phase = (8.0 * PI * w * s).abs() * (1.0 - s);
                 let loose = accuracy.max(1e-14);
-                assert!((values[k] - plain[k]).abs() <= loose, "s {s}, w {w}: {} vs {}", values[k], plain[k]);
+                // the value's own forms: bit for bit
+                assert_eq!(values[k].to_bits(), plain[k].to_bits(), "s {s}, w {w}: {} vs {}", values[k], plain[k]);
                 let reference = defocus_otf_log_derivative(s, w);
                 assert!(
                     (lanes[k] - reference).abs() <= loose * phase.max(1.0) * 2.0 + 1e-11 * phase.max(1.0),

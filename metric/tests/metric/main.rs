@@ -607,6 +607,7 @@ mod bias_lane;
 mod factored;
 mod fraunhofer;
 mod line;
+mod line_lane;
 mod metrics;
 mod phase_map;
 mod properties;

@@ -90,6 +90,9 @@ pub(super) struct Recording {
     /// the parameters of the lens's order derivatives the engine differentiates along
     /// ([`Polychromatic::mean_mtf_and_field_gradient`]); empty for the other lanes
     fields: Vec<usize>,
+    /// each node's `[α_o, γ_o]` of the order lane ([`Polychromatic::mean_mtf_and_order_lane`]);
+    /// `None` for the defocus lane `∂O/∂ln K` and the other lanes
+    rates: Option<Vec<[f64; 2]>>,
 }
 
 /// What [`Polychromatic::mean_mtf_and_defocus_derivative`] returns.
@@ -203,13 +206,31 @@ impl Polychromatic<'_> {
     /// rule's accepted weights (split at the OTF's sign changes, `P` included). `None` where the
     /// engine gives no such lane, the field is off axis or the OTF depends on direction.
     pub fn mean_mtf_and_defocus_derivative(&self) -> Option<DefocusDerivative> {
+        self.mean_with_defocus_lane(None)
+    }
+
+    /// [`mean_mtf_and_defocus_derivative`](Self::mean_mtf_and_defocus_derivative) with the lane
+    /// of a line whose orders move each by its own rates (`rates[o] = [α_o, γ_o]`, one per order
+    /// of the lens at the line): `defocus` is then `(1/ν_max) ∫ P sign(O) L dν` with
+    /// `L = (Σ_o [τ_o α_o w ∂H_o/∂w + γ_o H_o] − O Σ_o γ_o) / Σ_o τ_o` (a change of each
+    /// order's `ln W020` by `α_o` and of its efficiency by `γ_o`, `s = νλF#` fixed; docs/physics.md,
+    /// "Gradients: a line's wavelength and a blackbody's temperature"). The mean is
+    /// [`mean_mtf`](Self::mean_mtf)'s bit for bit where the engine reads its values from the
+    /// value's own forms (the line engine). `None` where the engine gives no such lane (not a
+    /// line, an order other than a full centred circle with a defocus alone).
+    pub fn mean_mtf_and_order_lane(&self, rates: &[[f64; 2]]) -> Option<DefocusDerivative> {
+        self.mean_with_defocus_lane(Some(rates.to_vec()))
+    }
+
+    /// The mean with the defocus lane (`rates` `None`) or the order lane recorded beside it.
+    fn mean_with_defocus_lane(&self, rates: Option<Vec<[f64; 2]>>) -> Option<DefocusDerivative> {
         if !self.scene.field.is_on_axis()
             || self.direction_dependent()
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
         {
             return None;
         }
-        *self.gradient.borrow_mut() = Some(Recording { lanes: 2, ..Recording::default() });
+        *self.gradient.borrow_mut() = Some(Recording { lanes: 2, rates, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| self.recorded_defocus_otf(nu));
         let recording = self.gradient.borrow_mut().take()?;
         if recording.failed {
@@ -235,7 +256,12 @@ impl Polychromatic<'_> {
 
     /// The OTF at `nu` with its defocus derivative and itself kept in the recording.
     fn recorded_defocus_otf(&self, nu: f64) -> f64 {
-        let value = if nu == 0.0 { Some((1.0, 0.0)) } else { self.engine.otf_and_defocus_derivative(nu) };
+        let rates = self.gradient.borrow().as_ref().and_then(|r| r.rates.clone());
+        let value = match rates {
+            _ if nu == 0.0 => Some((1.0, 0.0)),
+            None => self.engine.otf_and_defocus_derivative(nu),
+            Some(rates) => self.engine.otf_and_order_lane(nu, &rates),
+        };
         let mut recording = self.gradient.borrow_mut();
         let Some(r) = recording.as_mut() else { return value.map_or(f64::NAN, |(v, _)| v) };
         match value {

@@ -75,24 +75,15 @@ impl OtfEngine for Line<'_> {
     }
 
     /// The line's OTF and `∂O/∂ln K` where every order is a full, centred circle with defocus
-    /// alone (the exact 1-D OTF): `Σ τ_o w_o ∂H/∂w_o / Σ τ_o` ([`crate::defocus_otf_log_derivative`])
-    /// beside `Σ τ_o H / Σ τ_o`; `None` for any other order.
+    /// alone (the exact 1-D OTF): `Σ τ_o w_o ∂H/∂w_o / Σ τ_o` beside `Σ τ_o H / Σ τ_o`, the value
+    /// [`otf`](OtfEngine::otf)'s bit for bit ([`order_lane`](Line::order_lane) with every
+    /// `α_o = 1`, `γ_o = 0`); `None` for any other order.
     fn otf_and_defocus_derivative(&self, frequency: f64) -> Option<(f64, f64)> {
-        if self.fft.is_some() || self.nodes.direction_dependent() {
-            return None;
-        }
-        let nuf = frequency.abs() * self.scene.f_number;
-        let (mut value, mut derivative) = (0.0, 0.0);
-        for node in &self.nodes.nodes {
-            if node.table.is_some() || node.radial.is_some() || node.scale != 1.0 || node.shift != [0.0, 0.0] {
-                return None;
-            }
-            let (s, w) = (nuf * node.lambda, node.w020 / node.lambda);
-            value += node.weight * crate::defocus_otf(s, w);
-            derivative += node.weight * crate::defocus_otf_log_derivative(s, w);
-        }
-        let total = self.nodes.total_weight;
-        Some((value / total, derivative / total))
+        self.order_lane(frequency, None)
+    }
+
+    fn otf_and_order_lane(&self, frequency: f64, rates: &[[f64; 2]]) -> Option<(f64, f64)> {
+        self.order_lane(frequency, Some(rates))
     }
 
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
@@ -111,5 +102,50 @@ impl OtfEngine for Line<'_> {
             Some(fft) => FrequencyRule::Fixed { cell: fft.finest_cell(self.scene.f_number) },
             None => FrequencyRule::Adaptive { min_panels: 4.0 },
         }
+    }
+}
+
+impl Line<'_> {
+    /// The OTF at `frequency` as [`otf`](OtfEngine::otf) computes it, bit for bit (the same
+    /// nodes below the cutoff, the same points through [`crate::otf::defocus_otf_many_and_log_derivative_within`],
+    /// whose values are [`crate::otf::defocus_otf_many`]'s, summed in the same order), and beside
+    /// it the lane of [`OtfEngine::otf_and_order_lane`]: per node `w_o α_o (w ∂H/∂w)_o + q γ_o H_o`
+    /// (`α_o = 1`, `γ_o = 0` without `rates`), minus `O Σ_o q γ_o`, over the total weight. `None`
+    /// where some order is not a full centred circle with a defocus alone (a table, a radial
+    /// pupil, a scaled pupil, an image shift) or `rates` does not give one entry per node.
+    fn order_lane(&self, frequency: f64, rates: Option<&[[f64; 2]]>) -> Option<(f64, f64)> {
+        if self.fft.is_some() || self.nodes.direction_dependent() {
+            return None;
+        }
+        let nodes = &self.nodes.nodes;
+        if rates.is_some_and(|r| r.len() != nodes.len())
+            || nodes.iter().any(|n| !n.is_defocused_circle() || n.scale != 1.0 || n.shift != [0.0, 0.0])
+        {
+            return None;
+        }
+        let rate = |o: usize| rates.map_or([1.0, 0.0], |r| r[o]);
+        // the line's rule weight q (each node's weight is q τ_o)
+        let q = self.nodes.samples.first().map_or(0.0, |s| s.1);
+        let nu = frequency.abs();
+        let nuf = nu * self.scene.f_number;
+        let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
+        let passing: Vec<usize> = (0..nodes.len()).filter(|&o| nodes[o].lambda < cut).collect();
+        let points: Vec<(f64, f64)> = passing
+            .iter()
+            .map(|&o| (nuf * nodes[o].lambda / nodes[o].scale, nodes[o].w020 / nodes[o].lambda))
+            .collect();
+        let (mut values, mut lanes) = (vec![0.0; points.len()], vec![0.0; points.len()]);
+        crate::otf::defocus_otf_many_and_log_derivative_within(&points, &mut values, &mut lanes, 0.0);
+        let (mut sum, mut lane) = (0.0, 0.0);
+        for ((&o, value), d) in passing.iter().zip(&values).zip(&lanes) {
+            let node = &nodes[o];
+            sum += node.weight * value;
+            let [alpha, gamma] = rate(o);
+            lane += node.weight * alpha * d + q * gamma * value;
+        }
+        let total = self.nodes.total_weight;
+        let value = sum / total;
+        let moved: f64 = (0..nodes.len()).map(|o| q * rate(o)[1]).sum();
+        Some((value, (lane - value * moved) / total))
     }
 }

@@ -343,6 +343,16 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_defocus_derivative(&self, _frequency: f64) -> Option<(f64, f64)> {
         None
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf), bit for bit, and the lane
+    /// `(Σ_o [w_o α_o w∂H_o/∂w + q γ_o H_o] − O Σ_o q γ_o) / Σ_o w_o` of a line whose every order
+    /// is a full centred circle with a defocus alone (`rates[o] = [α_o, γ_o]` per node, `w_o` the
+    /// node's weight `q τ_o`): the derivative of `O` at fixed `s = νλF#` along a change of each
+    /// order's `ln w020` by `α_o` and of its efficiency by `γ_o` (docs/physics.md, "Gradients: a
+    /// line's wavelength and a blackbody's temperature"); `None` where the engine does not give
+    /// it (the default).
+    fn otf_and_order_lane(&self, _frequency: f64, _rates: &[[f64; 2]]) -> Option<(f64, f64)> {
+        None
+    }
     /// The signed OTF at `frequency` as [`otf`](Self::otf) and into `gradient` its derivative
     /// along each of `parameters` of the lens's order derivatives
     /// (`LensModel::order_derivatives`: a library lens's parameter bias), on the value's own

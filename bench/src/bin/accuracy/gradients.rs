@@ -112,6 +112,21 @@ fn measure_aperture(root: &Path, repeats: usize) -> Option<Row> {
     side_by_side(&source, &[], &[Parameter::FNumber, Parameter::FocalLength], repeats)
 }
 
+/// The line rows: `example` under a line at 803 nm (1 nm equivalent width) differentiated with
+/// respect to `spectrum.center_nm` (docs/physics.md, "Gradients: a line's wavelength and a
+/// blackbody's temperature"): on the paper's chromatic lens and the harmonic lens the line
+/// engine's defocus or order lane beside each OTF value in the value's own pass, on the Binary 2
+/// lens the radial engine's wavelength lanes. The row's norm is |∂ASNR/∂c| per nm.
+fn measure_line(root: &Path, example: &str, repeats: usize) -> Option<Row> {
+    let source = scene::read(Some(&root.join("examples").join(example))).ok()?;
+    let overrides: Vec<String> = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+    let row = side_by_side(&source, &overrides, &[Parameter::SpectrumCenter], repeats)?;
+    Some(Row { norm: 1e-9 * row.norm, ..row })
+}
+
 /// The radial engine at 800 nm: the OTF alone and with K derivatives on 200 frequencies to
 /// s = 0.38 (twice Nyquist), accuracy 1e-11; (K, OTF time, OTF and derivatives time) in s.
 fn radial(repeats: usize) -> Option<(f64, Vec<(usize, f64)>)> {
@@ -245,6 +260,33 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
         md.push_str(&format!(
             "\nTarget (the Zernike gradient on the overlap engine at most 3× one evaluation): {}.\n",
             overlap.join("; ")
+        ));
+    }
+    let lines: Vec<(&str, Row)> = [
+        ("paper lens (chromatic)", "paper-theory.toml"),
+        ("Binary 2", "phase-binary2.toml"),
+        ("harmonic, p = 5", "harmonic.toml"),
+    ]
+    .iter()
+    .filter_map(|&(name, file)| measure_line(&tools.root, file, repeats).map(|r| (name, r)))
+    .collect();
+    if !lines.is_empty() {
+        md.push_str(
+            "\nA line's wavelength: each example under a line at 803 nm (`--set spectrum.shape=\"line\" --set \
+             spectrum.center_nm=803 --set spectrum.range_nm=1`), the gradient with respect to `spectrum.center_nm` \
+             (docs/physics.md, \"Gradients: a line's wavelength and a blackbody's temperature\"). The paper's lens \
+             (one order) and the harmonic lens (six orders) take the line engine's lane beside each OTF value in the \
+             value's own pass (`w ∂H/∂w` times ∂ln w/∂c; per order ∂ln w_o/∂c and ∂τ_o/∂c), the frequency scaling \
+             by parts (one OTF at Nyquist); the Binary 2 lens the radial engine's wavelength lanes. The same timing \
+             as above.\n\n| lens | ASNR | \\|∂ASNR/∂c\\| (per nm) | value, median (fastest) | value and gradient, median \
+             (fastest) | ratio of medians | ratio of fastest |\n|---|---|---|---|---|---|---|\n",
+        );
+        for (name, r) in &lines {
+            md.push_str(&format!("| {name} {}\n", r.cells(3)));
+        }
+        md.push_str(&format!(
+            "\nTarget (at most 3× one evaluation): {}.\n",
+            lines.iter().map(|(name, r)| format!("{name}: {}", status(r))).collect::<Vec<_>>().join("; ")
         ));
     }
     md.extend(crate::gradients_aperture::markdown(tools));
