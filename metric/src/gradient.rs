@@ -1120,6 +1120,16 @@ fn line_center_partials(
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let settings = scene.options().settings();
+    // where the value's pass did not carry the lane: the value's engine exactly (its parts, its
+    // settings), `lane` beside each OTF value, and P(ν_N)|O(ν_N)| from the same engine
+    let own_engine = |lane: &dyn Fn(&optics::Polychromatic<'_>) -> Option<optics::DefocusDerivative>| {
+        let folded = crate::evaluate::Folded::of(lens, &detected);
+        let parts = folded.parts();
+        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
+        let found = lane(&poly)?;
+        let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
+        Some((found, edge))
+    };
     // several orders, each moving by its own rates (the harmonic lens): the order lane
     // L = (Σ_o [τ_o α_o w ∂H_o/∂w + τ_o′ H_o] − O Σ_o τ_o′)/Σ_o τ_o beside each OTF value
     if let Some(order_rates) = lens.order_wavelength_rates(c, field)
@@ -1128,19 +1138,8 @@ fn line_center_partials(
     {
         let (found, edge) = match pass.filter(|f| f.order_lane) {
             Some(f) => (f.found, f.edge),
-            None => {
-                let folded = crate::evaluate::Folded::of(lens, &detected);
-                let parts = folded.parts();
-                optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
-                    .ok()
-                    .and_then(|poly| {
-                        let found = poly.mean_mtf_and_order_lane(&rates)?;
-                        let edge =
-                            poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
-                        Some((found, edge))
-                    })
-                    .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no order lane here")))?
-            }
+            None => own_engine(&|poly| poly.mean_mtf_and_order_lane(&rates))
+                .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no order lane here")))?,
         };
         let efficiency: f64 = orders.iter().map(|o| o.efficiency).sum();
         let moved: f64 = order_rates.orders.iter().map(|r| r[1]).sum();
@@ -1171,18 +1170,8 @@ fn line_center_partials(
     // same along every direction)
     let (found, edge) = match pass.filter(|f| !f.order_lane) {
         Some(f) => (f.found, f.edge),
-        None => {
-            let folded = crate::evaluate::Folded::of(lens, &detected);
-            let parts = folded.parts();
-            optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
-                .ok()
-                .and_then(|poly| {
-                    let found = poly.mean_mtf_and_defocus_derivative()?;
-                    let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
-                    Some((found, edge))
-                })
-                .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?
-        }
+        None => own_engine(&|poly| poly.mean_mtf_and_defocus_derivative())
+            .ok_or_else(|| not_smooth(format!("{family}: the line's engine gives no defocus lane here")))?,
     };
     let w020 = orders[0].wavefront.defocus_m;
     // ∂H/∂w = 0 at w = 0 (H is even in w)

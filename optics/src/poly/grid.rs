@@ -989,8 +989,18 @@ fn radial_direction(
     profile: &crate::radial::RadialProfile,
 ) -> Vec<f64> {
     let slope = profile.fitted_slope();
-    let h = 2.0 / n as f64;
     let scale2 = radial.frequency_scale().powi(2);
+    at_transmitting_pixels(n, field, |x, y| {
+        let r2 = x * x + y * y;
+        let q = (r2 * scale2).min(1.0);
+        profile.value(q) + slope * (r2 - q)
+    })
+}
+
+/// `value(x, y)` at the centres of the pixels where `field` transmits (0 elsewhere), the pupil
+/// grid's n × n pixels spanning [−1, 1]² row by row.
+fn at_transmitting_pixels(n: usize, field: &[Complex64], value: impl Fn(f64, f64) -> f64) -> Vec<f64> {
+    let h = 2.0 / n as f64;
     let mut out = vec![0.0; n * n];
     for j in 0..n {
         let y = -1.0 + (j as f64 + 0.5) * h;
@@ -999,10 +1009,7 @@ fn radial_direction(
             if field[idx] == Complex64::new(0.0, 0.0) {
                 continue;
             }
-            let x = -1.0 + (i as f64 + 0.5) * h;
-            let r2 = x * x + y * y;
-            let q = (r2 * scale2).min(1.0);
-            out[idx] = profile.value(q) + slope * (r2 - q);
+            out[idx] = value(-1.0 + (i as f64 + 0.5) * h, y);
         }
     }
     out
@@ -1014,20 +1021,7 @@ fn radial_direction(
 /// ([`Oblique::opd_field_rate_m`](crate::radial::Oblique::opd_field_rate_m); docs/physics.md,
 /// "Gradients: the field point").
 fn oblique_direction(n: usize, field: &[Complex64], oblique: &crate::radial::Oblique, axis: usize) -> Vec<f64> {
-    let h = 2.0 / n as f64;
-    let mut out = vec![0.0; n * n];
-    for j in 0..n {
-        let y = -1.0 + (j as f64 + 0.5) * h;
-        for i in 0..n {
-            let idx = j * n + i;
-            if field[idx] == Complex64::new(0.0, 0.0) {
-                continue;
-            }
-            let x = -1.0 + (i as f64 + 0.5) * h;
-            out[idx] = oblique.opd_field_rate_m(x, y, axis);
-        }
-    }
-    out
+    at_transmitting_pixels(n, field, |x, y| oblique.opd_field_rate_m(x, y, axis))
 }
 
 impl Grids<'_> {
