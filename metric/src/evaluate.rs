@@ -774,14 +774,21 @@ pub(crate) fn evaluate_field_with_lanes(
             .map(|(ln_photoelectrons, ln_transmitted)| BiasLanes { mean_mtf, ln_photoelectrons, ln_transmitted }),
         _ => None,
     };
-    // the integration by parts' end term: the OTF at Nyquist (a full centred pupil on axis: real
-    // and the same along every direction), after the mean so that its decisions are the value's
+    // the integration by parts' end term, after the mean so that its decisions are the value's
     let defocus_found = defocus_found.map(|found| DefocusFound {
         found,
-        edge: poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist)),
+        edge: nyquist_edge(&poly, nyquist, pixel),
         order_lane: defocus.is_some_and(|d| d.rates.is_some()),
     });
     Ok(((evaluation, binary2_gradient, grid_gradient, bias_lanes), defocus_found))
+}
+
+/// `P(ν_N)|O(ν_N)|`, the end term of the defocus and order lanes' integration by parts
+/// ([`DefocusFound::edge`]): the pixel MTF (`pixel`, its pitch, where the camera applies it)
+/// times the engine's OTF at Nyquist (a full centred pupil on axis: real and the same along
+/// every direction).
+pub(crate) fn nyquist_edge(poly: &Polychromatic, nyquist: f64, pixel: Option<f64>) -> f64 {
+    poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist))
 }
 
 /// `(∂ln N/∂b, ∂ln N_T/∂b)` along each of `bias` on the nodes that make N and N_T (the nodes

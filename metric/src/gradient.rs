@@ -1126,9 +1126,7 @@ fn line_center_partials(
         let folded = crate::evaluate::Folded::of(lens, &detected);
         let parts = folded.parts();
         let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
-        let found = lane(&poly)?;
-        let edge = poly.otf(nyquist).abs() * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nyquist));
-        Some((found, edge))
+        Some((lane(&poly)?, crate::evaluate::nyquist_edge(&poly, nyquist, pixel)))
     };
     // several orders, each moving by its own rates (the harmonic lens): the order lane
     // L = (Σ_o [τ_o α_o w ∂H_o/∂w + τ_o′ H_o] − O Σ_o τ_o′)/Σ_o τ_o beside each OTF value

@@ -627,6 +627,19 @@ mod tests {
         list.iter().map(|s| (*s).to_owned()).collect()
     }
 
+    /// `base`'s overrides followed by `more`'s, owned.
+    fn joined(base: &[&str], more: &[&str]) -> Vec<String> {
+        owned(&[base, more].concat())
+    }
+
+    /// A line at 803 nm, its equivalent width 1 nm.
+    const LINE_803: [&str; 3] = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"];
+    /// The pixel MTF and a read noise.
+    const PIXEL_AND_READ_NOISE: [&str; 2] = ["camera.pixel_mtf=true", "camera.read_noise_e=2"];
+    /// The integral form with the stray light, and a read noise.
+    const INTEGRAL_WITH_GLARE: [&str; 3] =
+        ["options.form=\"integral\"", "options.glare=\"included\"", "camera.read_noise_e=2"];
+
     /// (ASNR, mean MTF, SNR0, N) of a converged evaluation with `key = value`.
     fn converged(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 4] {
         converged_at(source, overrides, key, value, REFERENCE_TOLERANCE)
@@ -769,7 +782,7 @@ mod tests {
         check_against_differences(&source, &owned(&["camera.read_noise_e=2"]), &["source.scale", "exposure.time_ms"]);
         let e = gradient(&source, &[], &owned(&["source.temperature_k"])).unwrap_err().to_string();
         assert!(e.contains("blackbody's temperature") && e.contains("not a polynomial in λ"), "{e}");
-        let line = owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]);
+        let line = owned(&LINE_803);
         check_line(&source, &line, &["source.temperature_k", "source.scale"]);
     }
 
@@ -836,14 +849,9 @@ mod tests {
     #[test]
     fn a_line_on_the_chromatic_lens_matches_central_differences() {
         let paper = scene::read(None).unwrap();
-        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"];
-        check_line(&paper, &owned(&line), &["exposure.time_ms"]);
-        let mut with = owned(&line);
-        with.extend(owned(&["camera.pixel_mtf=true", "camera.read_noise_e=2"]));
-        check_line(&paper, &with, &["exposure.time_ms"]);
-        let mut with = owned(&line);
-        with.extend(owned(&["options.form=\"integral\"", "options.glare=\"included\"", "camera.read_noise_e=2"]));
-        check_line(&paper, &with, &["exposure.time_ms"]);
+        check_line(&paper, &owned(&LINE_803), &["exposure.time_ms"]);
+        check_line(&paper, &joined(&LINE_803, &PIXEL_AND_READ_NOISE), &["exposure.time_ms"]);
+        check_line(&paper, &joined(&LINE_803, &INTEGRAL_WITH_GLARE), &["exposure.time_ms"]);
         // at the design wavelength (W020 = 0: the frequency scaling alone)
         check_line(&paper, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=800", "spectrum.range_nm=2"]), &[]);
     }
@@ -855,17 +863,12 @@ mod tests {
     #[test]
     fn a_line_on_the_binary2_lens_matches_central_differences() {
         let binary2 = example("phase-binary2.toml");
-        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"];
-        check_line(&binary2, &owned(&line), &["exposure.time_ms"]);
-        let mut with = owned(&line);
-        with.push("camera.read_noise_e=2".to_owned());
-        check_line(&binary2, &with, &["lens.binary2[1]"]);
-        let mut glass = owned(&line);
-        glass.extend(owned(&["lens.dispersion=\"refractive\"", "lens.glass=\"N-BK7\""]));
-        check_line(&binary2, &glass, &[]);
+        check_line(&binary2, &owned(&LINE_803), &["exposure.time_ms"]);
+        check_line(&binary2, &joined(&LINE_803, &["camera.read_noise_e=2"]), &["lens.binary2[1]"]);
+        check_line(&binary2, &joined(&LINE_803, &["lens.dispersion=\"refractive\"", "lens.glass=\"N-BK7\""]), &[]);
         // the F-number's lanes and the wavelength's on one pass: each as when asked alone
-        let both = gradient(&binary2, &owned(&line), &owned(&["lens.f_number", "spectrum.center_nm"])).unwrap();
-        let alone = gradient(&binary2, &owned(&line), &owned(&["spectrum.center_nm"])).unwrap();
+        let both = gradient(&binary2, &owned(&LINE_803), &owned(&["lens.f_number", "spectrum.center_nm"])).unwrap();
+        let alone = gradient(&binary2, &owned(&LINE_803), &owned(&["spectrum.center_nm"])).unwrap();
         assert!((both.d_asnr[1] - alone.d_asnr[0]).abs() <= 1e-12 * alone.d_asnr[0].abs(), "{both:?} {alone:?}");
     }
 
@@ -877,9 +880,7 @@ mod tests {
         let singlet = refractive_singlet();
         let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=650", "spectrum.range_nm=1"];
         check_line(&singlet, &owned(&line), &["exposure.time_ms"]);
-        let mut with = owned(&line);
-        with.extend(owned(&["camera.pixel_mtf=true", "camera.read_noise_e=2"]));
-        check_line(&singlet, &with, &[]);
+        check_line(&singlet, &joined(&line, &PIXEL_AND_READ_NOISE), &[]);
     }
 
     /// The harmonic lens of design order 5 (six orders whose efficiencies τ_base sinc²(pλ0/λ − m)
@@ -889,14 +890,9 @@ mod tests {
     #[test]
     fn a_line_on_the_harmonic_lens_matches_central_differences() {
         let harmonic = example("harmonic.toml");
-        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"];
-        check_line(&harmonic, &owned(&line), &["exposure.time_ms"]);
-        let mut with = owned(&line);
-        with.extend(owned(&["camera.pixel_mtf=true", "camera.read_noise_e=2"]));
-        check_line(&harmonic, &with, &["lens.f_number"]);
-        let mut with = owned(&line);
-        with.extend(owned(&["options.form=\"integral\"", "options.glare=\"included\"", "camera.read_noise_e=2"]));
-        check_line(&harmonic, &with, &[]);
+        check_line(&harmonic, &owned(&LINE_803), &["exposure.time_ms"]);
+        check_line(&harmonic, &joined(&LINE_803, &PIXEL_AND_READ_NOISE), &["lens.f_number"]);
+        check_line(&harmonic, &joined(&LINE_803, &INTEGRAL_WITH_GLARE), &[]);
     }
 
     /// The families and scenes whose line's wavelength is not followed are refused naming why:
@@ -905,7 +901,7 @@ mod tests {
     #[test]
     fn a_line_wavelength_refusals_name_why() {
         let keys = owned(&["spectrum.center_nm"]);
-        let line = owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]);
+        let line = owned(&LINE_803);
         let mut harmonic_off_axis = line.clone();
         harmonic_off_axis.push("field.x_deg=5".to_owned());
         let e = gradient(&example("harmonic.toml"), &harmonic_off_axis, &keys).unwrap_err().to_string();
@@ -986,7 +982,7 @@ mod tests {
             &paper,
             &owned(&["options.form=\"integral\"", "camera.read_noise_e=2", "options.glare=\"included\""]),
         );
-        check_aperture(&paper, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]));
+        check_aperture(&paper, &owned(&LINE_803));
         // the pixel MTF inside the integral: its term ∫ν P′|O| dν of the integration by parts,
         // on the closed form and on a line (the value's own rules)
         check_aperture(&paper, &owned(&["camera.pixel_mtf=true"]));
@@ -1059,7 +1055,7 @@ mod tests {
     fn phase_lens_f_number_and_focal_length_match_central_differences() {
         let binary2 = example("phase-binary2.toml");
         check_aperture(&binary2, &[]);
-        check_aperture(&binary2, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=803", "spectrum.range_nm=1"]));
+        check_aperture(&binary2, &owned(&LINE_803));
     }
 
     /// The example's coefficients normalized to the aperture (R_norm not given: the profile is

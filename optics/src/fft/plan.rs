@@ -555,6 +555,13 @@ impl Otf {
         let (u, v) = (sx * n, sy * n);
         let (i0, j0) = (u.floor(), v.floor());
         let (wx, wy) = (lagrange_weights(u - i0), lagrange_weights(v - j0));
+        self.stencil(i0 as i64, &wx, j0 as i64, &wy)
+    }
+
+    /// `Σ grid · wx · wy` over the interpolation stencils whose cells start at `(i, j)` (grid
+    /// indices from the centre): the reading [`at_xy`](Self::at_xy) takes, and with the
+    /// derivative's weights in one direction, [`at_xy_and_slope`](Self::at_xy_and_slope)'s.
+    fn stencil(&self, i: i64, wx: &[f64; INTERPOLATION_POINTS], j: i64, wy: &[f64; INTERPOLATION_POINTS]) -> Complex64 {
         let lo = 1 - (INTERPOLATION_POINTS as i64) / 2;
         let side = 2 * self.half + 1;
         let h = self.half as i64;
@@ -563,10 +570,10 @@ impl Otf {
             if wyb == 0.0 {
                 continue;
             }
-            let row = ((j0 as i64 + lo + b as i64 + h) as usize) * side;
+            let row = ((j + lo + b as i64 + h) as usize) * side;
             let mut acc = Complex64::new(0.0, 0.0);
             for (a, &wxa) in wx.iter().enumerate() {
-                acc += self.grid[row + (i0 as i64 + lo + a as i64 + h) as usize] * wxa;
+                acc += self.grid[row + (i + lo + a as i64 + h) as usize] * wxa;
             }
             sum += acc * wyb;
         }
@@ -589,25 +596,7 @@ impl Otf {
         let (u, v) = (sx * n, sy * n);
         let (i0, j0) = (u.floor() as i64, v.floor() as i64);
         let (tx, ty) = (u - i0 as f64, v - j0 as f64);
-        let lo = 1 - (INTERPOLATION_POINTS as i64) / 2;
-        let side = 2 * self.half + 1;
-        let h = self.half as i64;
-        // Σ grid · wx · wy on the stencils from (i, j)
-        let stencil = |i: i64, wx: &[f64; INTERPOLATION_POINTS], j: i64, wy: &[f64; INTERPOLATION_POINTS]| {
-            let mut sum = Complex64::new(0.0, 0.0);
-            for (b, &wyb) in wy.iter().enumerate() {
-                if wyb == 0.0 {
-                    continue;
-                }
-                let row = ((j + lo + b as i64 + h) as usize) * side;
-                let mut acc = Complex64::new(0.0, 0.0);
-                for (a, &wxa) in wx.iter().enumerate() {
-                    acc += self.grid[row + (i + lo + a as i64 + h) as usize] * wxa;
-                }
-                sum += acc * wyb;
-            }
-            sum
-        };
+        let stencil = |i, wx: &_, j, wy: &_| self.stencil(i, wx, j, wy);
         let (wx, wy) = (lagrange_weights(tx), lagrange_weights(ty));
         let value = stencil(i0, &wx, j0, &wy);
         // the cell edge a coordinate lies on, to rounding (a reading along an axis turned by

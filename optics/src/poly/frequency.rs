@@ -256,11 +256,13 @@ impl Polychromatic<'_> {
 
     /// The OTF at `nu` with its defocus derivative and itself kept in the recording.
     fn recorded_defocus_otf(&self, nu: f64) -> f64 {
-        let rates = self.gradient.borrow().as_ref().and_then(|r| r.rates.clone());
-        let value = match rates {
-            _ if nu == 0.0 => Some((1.0, 0.0)),
-            None => self.engine.otf_and_defocus_derivative(nu),
-            Some(rates) => self.engine.otf_and_order_lane(nu, &rates),
+        let value = {
+            let recording = self.gradient.borrow();
+            match recording.as_ref().and_then(|r| r.rates.as_deref()) {
+                _ if nu == 0.0 => Some((1.0, 0.0)),
+                None => self.engine.otf_and_defocus_derivative(nu),
+                Some(rates) => self.engine.otf_and_order_lane(nu, rates),
+            }
         };
         let mut recording = self.gradient.borrow_mut();
         let Some(r) = recording.as_mut() else { return value.map_or(f64::NAN, |(v, _)| v) };

@@ -963,6 +963,22 @@ pub fn highest_cutoff(lens: &dyn LensModel, detected: &Spectrum) -> Result<f64, 
 mod tests {
     use super::*;
 
+    /// A spectral node of `part` at `lambda` with `weight`, its defocus `W020 = (λ − focus) × 1000`
+    /// (1 mm of defocus per m of wavelength) and nothing else.
+    fn defocused_node(lambda: f64, weight: f64, focus: f64, part: usize) -> spectral::Node {
+        spectral::Node {
+            lambda,
+            weight,
+            w020: (lambda - focus) * 1e3,
+            scale: 1.0,
+            shift: [0.0; 2],
+            shift_rate: None,
+            table: None,
+            radial: None,
+            part,
+        }
+    }
+
     /// `part_signal` as first written: every sample sorted, every node's sample and neighbours
     /// found by binary search, every density read from the spectrum (the reference its
     /// hinted searches and an engine's densities must reproduce to the bit).
@@ -1011,17 +1027,7 @@ mod tests {
     fn part_signal_shortcuts_match_the_reference() {
         let filter = radiometry::Gaussian::from_range(800e-9, 50e-9, 1.0).unwrap();
         let detected = Spectrum::Gaussian(filter);
-        let node = |lambda: f64, weight: f64, part: usize| spectral::Node {
-            lambda,
-            weight,
-            w020: (lambda - 790e-9) * 1e3,
-            scale: 1.0,
-            shift: [0.0; 2],
-            shift_rate: None,
-            table: None,
-            radial: None,
-            part,
-        };
+        let node = |lambda: f64, weight: f64, part: usize| defocused_node(lambda, weight, 790e-9, part);
         let lambdas: Vec<f64> = (0..40).map(|k| 740e-9 + 3e-9 * k as f64).collect();
         // in order, two orders per wavelength (the second weaker)
         let mut ordered = Nodes::default();
@@ -1110,17 +1116,7 @@ mod tests {
                 detected.value(lambda) * 2e-9
             };
             nodes.samples.push((lambda, w, 0));
-            nodes.nodes.push(spectral::Node {
-                lambda,
-                weight: w,
-                w020: (lambda - 800e-9) * 1e3,
-                scale: 1.0,
-                shift: [0.0; 2],
-                shift_rate: None,
-                table: None,
-                radial: None,
-                part: 0,
-            });
+            nodes.nodes.push(defocused_node(lambda, w, 800e-9, 0));
         }
         nodes.sum_weights();
         let mut signal = Vec::new();
