@@ -488,7 +488,9 @@ impl GaussianDefocus {
         // falling side of the cumulative spectrum) each pass one piece where the whole zone
         // needs a bisection (paper scene, with the G10–K21 rule used before: 42 instead of 63
         // evaluations of E per OTF value)
-        let mut cuts = vec![c_lo, c_cut.min(1.0), f.beta * self.center];
+        // (at most 23 cuts: these three, the narrow envelope's three, 15 between its panels and
+        // the bump's two ends; on the stack, not a vector per OTF value)
+        let mut cuts = Cuts::new([c_lo, c_cut.min(1.0), f.beta * self.center]);
         let (mut from, mut to): (f64, f64) = (c_cut, 1.0);
         if let Some((c_star, width)) = self.envelope(&f) {
             if width < 0.05 {
@@ -521,30 +523,10 @@ impl GaussianDefocus {
         if to > from {
             cuts.extend([from, to]);
         }
-        cuts.retain(|&c| c >= c_lo && c <= 1.0);
-        cuts.sort_by(f64::total_cmp);
-        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-15);
+        let cuts = cuts.ordered(c_lo);
         let scale = 4.0 / (PI * self.weight);
-        let integrand = |t: f64| {
-            let (s, c) = cis::sin_cos(t);
-            s * s * self.spectral(&f, c).re * scale
-        };
         // four nodes at a time (`spectral4`: each lane the scalar value to the last bit)
-        // (a group of two or three filled up with copies of its last node; a single node alone)
-        let batch = |ts: &[f64], out: &mut [f64]| {
-            for (t, o) in ts.chunks(4).zip(out.chunks_mut(4)) {
-                let lanes = t.len();
-                if lanes == 1 {
-                    o[0] = integrand(t[0]);
-                    continue;
-                }
-                let (s, c) = cis::sin_cos4(f64x4::new(std::array::from_fn(|l| t[l.min(lanes - 1)])));
-                match self.spectral4(&f, c) {
-                    Some(e) => o.copy_from_slice(&(s * s * e.re * f64x4::splat(scale)).to_array()[..lanes]),
-                    None => o.iter_mut().zip(t).for_each(|(o, &t)| *o = integrand(t)),
-                }
-            }
-        };
+        let batch = |ts: &[f64], out: &mut [f64]| self.batch(&f, scale, ts, out);
         let mut evaluations = 0;
         let mut error = left_out + erfcx_error;
         // the phase E turns through across a piece: E(c) is a sum of oscillations e^{i a(λ) c} over
@@ -562,26 +544,33 @@ impl GaussianDefocus {
             };
             f.a_mu.abs() + spread * (saddle + tail)
         };
-        let mut pieces: Vec<(f64, f64, f64)> = Vec::new();
-        for w in cuts.windows(2) {
-            // the skipped stretch of the uncut zone between the cut zone and the bump
-            if w[0] >= c_cut.min(1.0) && (w[1] <= from || w[0] >= to) {
-                continue;
-            }
-            let phase = (w[1] - w[0]) * rate(w[0]).max(rate(w[1]));
-            let parts = (phase / MAX_PIECE_PHASE).ceil().clamp(1.0, 64.0) as usize;
-            for k in 0..parts {
-                let lo = w[0] + (w[1] - w[0]) * k as f64 / parts as f64;
-                let hi = if k + 1 == parts { w[1] } else { w[0] + (w[1] - w[0]) * (k + 1) as f64 / parts as f64 };
-                pieces.push((lo, hi, phase / parts as f64));
-            }
-        }
-        let share = (tolerance - erfcx_error).max(0.5 * tolerance) / pieces.len().max(1) as f64;
+        // each window between cuts that is integrated, with the phase E turns through across
+        // it and the equal pieces it is split into (the pieces themselves are made twice, once to
+        // count them for their shares of the tolerance and once to integrate them, rather than
+        // kept in a vector per OTF value)
+        let windows = || {
+            cuts.windows(2)
+                // the skipped stretch of the uncut zone between the cut zone and the bump
+                .filter(|w| !(w[0] >= c_cut.min(1.0) && (w[1] <= from || w[0] >= to)))
+                .map(|w| {
+                    let phase = (w[1] - w[0]) * rate(w[0]).max(rate(w[1]));
+                    (w[0], w[1], phase, (phase / MAX_PIECE_PHASE).ceil().clamp(1.0, 64.0) as usize)
+                })
+        };
+        let pieces = windows().flat_map(|(w0, w1, phase, parts)| {
+            (0..parts).map(move |k| {
+                let lo = w0 + (w1 - w0) * k as f64 / parts as f64;
+                let hi = if k + 1 == parts { w1 } else { w0 + (w1 - w0) * (k + 1) as f64 / parts as f64 };
+                (lo, hi, phase / parts as f64)
+            })
+        });
+        let count: usize = windows().map(|(_, _, _, parts)| parts).sum();
+        let share = (tolerance - erfcx_error).max(0.5 * tolerance) / count.max(1) as f64;
         let mut value = 0.0;
         // the integrand at the end c = hi of the last piece, the start of the next one where they
         // meet (each E(c) once); at c = 1 (t = 0) it is sin²0 × E = 0
         let mut shared: Option<(f64, f64)> = None;
-        for &(lo, hi, phase) in &pieces {
+        for (lo, hi, phase) in pieces {
             let resolved = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
             let known_b = shared.filter(|&(c, _)| c == lo).map(|(_, v)| v);
             let known_a = (hi >= 1.0).then_some(0.0);
@@ -592,6 +581,131 @@ impl GaussianDefocus {
             shared = Some((hi, at_a));
         }
         (value, evaluations, ESTIMATE_SAFETY * error)
+    }
+}
+
+impl GaussianDefocus {
+    /// The integrand in the pupil angle, `sin²t Re E(cos t)` times `scale`, at one node `t`.
+    fn integrand(&self, f: &AtFrequency, scale: f64, t: f64) -> f64 {
+        let (s, c) = cis::sin_cos(t);
+        s * s * self.spectral(f, c).re * scale
+    }
+
+    /// [`integrand`](Self::integrand) at the nodes `ts` into `out`, four at a time
+    /// ([`spectral4`](Self::spectral4): each lane the scalar value to the last bit); a group of
+    /// two or three filled up with copies of its last node, a single node alone.
+    #[inline(always)]
+    fn batch(&self, f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [f64]) {
+        for (t, o) in ts.chunks(4).zip(out.chunks_mut(4)) {
+            let lanes = t.len();
+            if lanes == 1 {
+                o[0] = self.integrand(f, scale, t[0]);
+                continue;
+            }
+            let (s, c) = cis::sin_cos4(f64x4::new(std::array::from_fn(|l| t[l.min(lanes - 1)])));
+            match self.spectral4(f, c) {
+                Some(e) => o.copy_from_slice(&(s * s * e.re * f64x4::splat(scale)).to_array()[..lanes]),
+                None => {
+                    self.mixed(f, scale, t, s, c, o);
+                }
+            }
+        }
+    }
+
+    /// A group of nodes [`spectral4`](Self::spectral4) refused, at `t` with `(sin t, cos t)` =
+    /// `(s, c)` (its lanes beyond `t.len()` copies): where the lanes are cut and uncut both (a
+    /// piece's end at the cut zone's edge `c_cut` beside its inner nodes: about one group per OTF
+    /// value), each side of two or more lanes in a group of its own (filled up with copies of its
+    /// last lane), the rest one by one. Each lane is the value it has alone (`spectral4` and
+    /// `sin_cos4` are the scalar functions lane by lane, and the side is `spectral4`'s own test).
+    /// Returns how many lanes the groups served.
+    #[inline(never)]
+    fn mixed(&self, f: &AtFrequency, scale: f64, t: &[f64], s: f64x4, c: f64x4, out: &mut [f64]) -> usize {
+        let lanes = t.len();
+        let cut_x = (c * f64x4::splat(f.inv_beta_sigma) - f64x4::splat(f.center_over_sigma)).to_array();
+        let upper: [bool; 4] = std::array::from_fn(|l| cut_x[l] < f.tail);
+        let mut done = [false; 4];
+        let mut served = 0;
+        if upper[..lanes].contains(&true) && upper[..lanes].contains(&false) {
+            let (s, c) = (s.to_array(), c.to_array());
+            for side in [true, false] {
+                let mut chosen = [0; 4];
+                let mut n = 0;
+                for l in (0..lanes).filter(|&l| upper[l] == side) {
+                    chosen[n] = l;
+                    n += 1;
+                }
+                if n < 2 {
+                    continue;
+                }
+                let lane = |j: usize| chosen[j.min(n - 1)];
+                let s4 = f64x4::new(std::array::from_fn(|j| s[lane(j)]));
+                let c4 = f64x4::new(std::array::from_fn(|j| c[lane(j)]));
+                if let Some(e) = self.spectral4(f, c4) {
+                    let values = (s4 * s4 * e.re * f64x4::splat(scale)).to_array();
+                    for (j, &l) in chosen[..n].iter().enumerate() {
+                        out[l] = values[j];
+                        done[l] = true;
+                    }
+                    served += n;
+                }
+            }
+        }
+        for l in (0..lanes).filter(|&l| !done[l]) {
+            out[l] = self.integrand(f, scale, t[l]);
+        }
+        served
+    }
+}
+
+/// The cuts of the pupil angle's pieces in `c = cos t` for one OTF value
+/// ([`GaussianDefocus::otf_estimated`]), on the stack: at most [`Cuts::CAPACITY`].
+struct Cuts {
+    values: [f64; Cuts::CAPACITY],
+    len: usize,
+}
+
+impl Cuts {
+    /// Three at the start, three at a narrow envelope's peak and shoulders, 15 between the
+    /// bump's 16 panels and the bump's two ends.
+    const CAPACITY: usize = 23;
+
+    fn new(first: [f64; 3]) -> Cuts {
+        let mut values = [0.0; Cuts::CAPACITY];
+        values[..3].copy_from_slice(&first);
+        Cuts { values, len: 3 }
+    }
+
+    fn extend(&mut self, more: impl IntoIterator<Item = f64>) {
+        for c in more {
+            self.values[self.len] = c;
+            self.len += 1;
+        }
+    }
+
+    /// The cuts in `[c_lo, 1]`, ascending, those within 1e-15 of the one before dropped. (In
+    /// the total order of `f64::total_cmp` equal elements have equal bits, so any sort gives
+    /// these same values.)
+    fn ordered(&mut self, c_lo: f64) -> &[f64] {
+        let mut kept = 0;
+        for i in 0..self.len {
+            let c = self.values[i];
+            if c >= c_lo && c <= 1.0 {
+                self.values[kept] = c;
+                kept += 1;
+            }
+        }
+        let cuts = &mut self.values[..kept];
+        cuts.sort_unstable_by(f64::total_cmp);
+        // `Vec::dedup_by`: each one against the last one kept
+        let mut len = 0;
+        for i in 0..kept {
+            if len == 0 || (cuts[i] - cuts[len - 1]).abs() > 1e-15 {
+                cuts[len] = cuts[i];
+                len += 1;
+            }
+        }
+        &self.values[..len]
     }
 }
 
@@ -905,7 +1019,9 @@ impl GaussianDefocus {
     /// The pieces `(lo, hi, phase)` in `c` of [`otf_estimated`](Self::otf_estimated)'s rule at
     /// the frequency `f` (the same cuts, the same skipped stretch, the same splits by phase).
     fn lane_pieces(&self, f: &AtFrequency, tail: f64, c_lo: f64, c_cut: f64) -> Vec<(f64, f64, f64)> {
-        let mut cuts = vec![c_lo, c_cut.min(1.0), f.beta * self.center];
+        // (at most 23 cuts: these three, the narrow envelope's three, 15 between its panels and
+        // the bump's two ends; on the stack, not a vector per OTF value)
+        let mut cuts = Cuts::new([c_lo, c_cut.min(1.0), f.beta * self.center]);
         let (mut from, mut to): (f64, f64) = (c_cut, 1.0);
         if let Some((c_star, width)) = self.envelope(f) {
             if width < 0.05 {
@@ -930,9 +1046,7 @@ impl GaussianDefocus {
         if to > from {
             cuts.extend([from, to]);
         }
-        cuts.retain(|&c| c >= c_lo && c <= 1.0);
-        cuts.sort_by(f64::total_cmp);
-        cuts.dedup_by(|a, b| (*a - *b).abs() <= 1e-15);
+        let cuts = cuts.ordered(c_lo);
         let spread = (f.a1 * self.sigma).abs();
         let rate = |c: f64| {
             let saddle = if c > c_cut {
@@ -1189,6 +1303,39 @@ fn nested_lanes(
 mod tests {
     use super::*;
     use crate::{defocus_otf, quad};
+
+    /// [`Cuts::ordered`] is the vector's `retain`, `sort_by(f64::total_cmp)` and `dedup_by` it
+    /// replaced, to the bit: random cuts in and around [c_lo, 1], with repeats, neighbours within
+    /// 1e-15 and beyond it, ±0 and the ends themselves.
+    #[test]
+    fn cuts_are_ordered_as_the_vector_did() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(39);
+        for case in 0..20_000 {
+            let c_lo = if case % 5 == 0 { 0.0 } else { rng.random_range(0.0..0.9) };
+            let len = 3 + case % (Cuts::CAPACITY - 2);
+            let mut all = Vec::with_capacity(len);
+            for _ in 0..len {
+                let c = match rng.random_range(0..8) {
+                    0 => c_lo,
+                    1 => 1.0,
+                    2 => -0.0,
+                    3 if !all.is_empty() => all[rng.random_range(0..all.len())],
+                    4 if !all.is_empty() => all[rng.random_range(0..all.len())] + rng.random_range(-2e-15..2e-15),
+                    _ => rng.random_range(-0.2..1.2),
+                };
+                all.push(c);
+            }
+            let mut cuts = Cuts::new([all[0], all[1], all[2]]);
+            cuts.extend(all[3..].iter().copied());
+            let mut reference = all.clone();
+            reference.retain(|&c| c >= c_lo && c <= 1.0);
+            reference.sort_by(f64::total_cmp);
+            reference.dedup_by(|a, b| (*a - *b).abs() <= 1e-15);
+            let bits = |v: &[f64]| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(cuts.ordered(c_lo)), bits(&reference), "case {case}: {all:?}");
+        }
+    }
 
     /// The paper lens: F/2.5, f0 3.36 mm, λ0 800 nm; W020 = (1 − λ/λ0) f0/(8F#²) (docs/physics.md,
     /// "Sign of the wavefront").
@@ -1526,6 +1673,47 @@ mod tests {
                 assert_eq!((s.to_array()[l].to_bits(), c.to_array()[l].to_bits()), (ss.to_bits(), cc.to_bits()), "{t}");
             }
         }
+    }
+
+    /// A group of nodes straddling the cut zone's end `c_cut` (cut and uncut lanes): `batch`
+    /// gives each lane the scalar integrand's value to the last bit, and `mixed` serves the
+    /// sides of two or more lanes as groups of their own.
+    #[test]
+    fn mixed_groups_are_the_scalar_integrand_to_the_last_bit() {
+        let mut served = 0;
+        let mut groups = 0;
+        for_each_resolved_case(|_, g, nu, _| {
+            for tolerance in [1e-7_f64, 1e-12] {
+                let tail = (2.0 * (1e3 / tolerance).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+                let (f, _) = g.at_frequency_for(nu, tail, tolerance);
+                let c_cut = f.beta * (g.center + tail * g.sigma);
+                if !(0.05..0.95).contains(&c_cut) || g.lower_at(tail).is_some() {
+                    continue;
+                }
+                let t_cut = c_cut.acos();
+                let scale = 4.0 / (PI * g.weight);
+                // the cut zone lies at larger t (smaller c): offsets below the edge's t are uncut
+                for split in 1..4 {
+                    for lanes in 2..=4 {
+                        let step = 1e-3 * t_cut;
+                        let ts: Vec<f64> = (0..lanes).map(|l| t_cut + (l as f64 - split as f64 + 0.5) * step).collect();
+                        let mut out = vec![0.0; lanes];
+                        g.batch(&f, scale, &ts, &mut out);
+                        let (s, c) = cis::sin_cos4(f64x4::new(std::array::from_fn(|l| ts[l.min(lanes - 1)])));
+                        let mut again = vec![0.0; lanes];
+                        served += g.mixed(&f, scale, &ts, s, c, &mut again);
+                        groups += 1;
+                        for (l, &t) in ts.iter().enumerate() {
+                            let scalar = g.integrand(&f, scale, t);
+                            assert_eq!(out[l].to_bits(), scalar.to_bits(), "t {t}, ν {nu}: {} vs {scalar}", out[l]);
+                            assert_eq!(again[l].to_bits(), scalar.to_bits(), "t {t}, ν {nu}: {} vs {scalar}", again[l]);
+                        }
+                    }
+                }
+            }
+        });
+        // most straddling groups have a side of two or more lanes
+        assert!(groups > 100 && served > groups, "{served} lanes served in {groups} groups");
     }
 
     #[test]

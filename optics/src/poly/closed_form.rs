@@ -113,7 +113,8 @@ impl Closed {
             f_number,
             otf_tolerance: Cell::new(0.05 * tolerance),
             evaluations: Cell::new(0),
-            values: RefCell::new(HashMap::default()),
+            // (room for the 52 values of the map's broadest bands without growing)
+            values: RefCell::new(HashMap::with_capacity_and_hasher(64, BuildHasherDefault::default())),
         }
     }
 }

@@ -790,7 +790,7 @@ impl Polychromatic<'_> {
             if k == points - 1 {
                 return a;
             }
-            let x = c + h * (std::f64::consts::PI * k as f64 / (points - 1) as f64).cos();
+            let x = c + h * chebyshev_points(points)[k];
             if logarithmic { x.exp() } else { x }
         };
         let budget = tolerance * (b - a);
@@ -999,6 +999,22 @@ fn sign(x: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// `cos(πk/(points − 1))`, k = 0..points, for `points` one of [`CLENSHAW_CURTIS_POINTS`]: the
+/// Chebyshev–Lobatto points of [`smooth_panel`](Polychromatic::smooth_panel)'s levels on
+/// [−1, 1], each computed once by that expression (the same bits as computing it at each
+/// point, which cost two cosines a point and level).
+fn chebyshev_points(points: usize) -> &'static [f64] {
+    static POINTS: std::sync::OnceLock<Vec<Vec<f64>>> = std::sync::OnceLock::new();
+    let all = POINTS.get_or_init(|| {
+        CLENSHAW_CURTIS_POINTS
+            .iter()
+            .map(|&m| (0..m).map(|k| (std::f64::consts::PI * k as f64 / (m - 1) as f64).cos()).collect())
+            .collect()
+    });
+    let index = CLENSHAW_CURTIS_POINTS.iter().position(|&m| m == points).unwrap_or(0);
+    &all[index]
 }
 
 /// The point counts [`clenshaw_curtis`] has weights for.
