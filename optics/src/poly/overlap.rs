@@ -1323,6 +1323,7 @@ mod tests {
             shift: [0.0, 0.0],
             shift_rate: None,
             defocus,
+            lens_defocus: defocus,
             spherical,
             coma,
             astigmatism,
