@@ -73,7 +73,9 @@ pub enum Parameter {
     /// photon count as `NA² = 1/(4F#²)` (SI eq. S7), each wavelength's normalized frequency
     /// `s = νλF#` and the defocus `W020 ∝ f0/F#²` of a lens whose every order is the full
     /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
-    /// docs/physics.md, "Gradients"); for a lens that gives its aperture directions
+    /// docs/physics.md, "Gradients"), or with Seidel terms on axis under a band on the overlap
+    /// engine (the defocus lane on its nodes: "Gradients: the F-number and the focal length
+    /// with Seidel terms"); for a lens that gives its aperture directions
     /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
     /// `R = f0/(2F#)` moving its profile and reference sphere, on the radial engine's lanes.
     FNumber,
@@ -100,7 +102,10 @@ pub enum Parameter {
     /// orders are the full circle with Seidel terms (the overlap engine), forward mode on the
     /// overlap quadrature (docs/physics.md, "Gradients: Seidel terms on the overlap engine").
     /// With every Seidel term zero the OTF is on the 1-D engines: coma's derivative is 0 by
-    /// symmetry there (`W131` and `−W131` are one pupil turned by π), the others are refused.
+    /// symmetry there (`W131` and `−W131` are one pupil turned by π), spherical aberration's and
+    /// field curvature's are taken on the overlap engine with the terms at zero, astigmatism's is
+    /// half field curvature's (`x² = ρ²/2 + ρ² cos 2φ/2`; docs/physics.md, "Gradients: Seidel
+    /// terms at zero").
     Seidel(optics::SeidelTerm),
     /// The field angle of the scene's single field point along x (`0`, `field.x_deg`) or y
     /// (`1`, `field.y_deg`): `∂/∂θ`, per radian. It moves the relative illumination (a factor on
@@ -229,7 +234,12 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     let binary2 =
         bases.aperture.is_some() || bases.wavelength.is_some() || parameters.iter().any(|p| p.lane().is_some());
     // the wavefront directions for the FFT path, one per wavefront parameter in their order
-    let grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
+    let mut grid: Vec<optics::WavefrontDirection> = parameters.iter().filter_map(|p| p.grid_direction()).collect();
+    // the F-number's defocus lane on the overlap engine's own pass, after them (read back by
+    // `aperture_on_overlap`)
+    if aperture.is_some() && bases.aperture.is_none() && defocus_lane_on_overlap(scene) {
+        grid.push(optics::WavefrontDirection::Defocus);
+    }
     // a library lens's parameters whose bias is asked, in their order: their lanes ride on the
     // value's own rules where the engine gives them
     let bias: Vec<usize> =
@@ -437,8 +447,28 @@ fn point_gradient(
         }
         _ => None,
     };
+    // the Seidel terms at zero on a rotationally symmetric OTF: spherical aberration's and field
+    // curvature's lanes on the overlap engine (astigmatism's from field curvature's)
+    let seidel_zero = match parameters.iter().find(|p| {
+        matches!(p, Parameter::Seidel(t) if *t != optics::SeidelTerm::Coma) && *d_grid == GridGradient::Symmetric
+    }) {
+        Some(_) => seidel_at_zero(scene)?,
+        None => None,
+    };
     let aperture = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
-        Some(&p) if aperture_base.is_none() => Some(aperture_partials(scene, e, p, found.filter(|f| !f.order_lane))?),
+        Some(&p) if aperture_base.is_none() => {
+            // the defocus lane the value's pass gave on the overlap engine, after the
+            // parameters' own directions (`gradient`)
+            let lane = match d_grid {
+                GridGradient::Computed(all)
+                    if all.len() == parameters.iter().filter(|p| p.grid_direction().is_some()).count() + 1 =>
+                {
+                    all.last().copied()
+                }
+                _ => None,
+            };
+            Some(aperture_partials(scene, e, p, found.filter(|f| !f.order_lane), lane)?)
+        }
         Some(&p) => Some(aperture_lane_partials(scene, e, p, binary2.as_deref(), aperture_base)?),
         None => None,
     };
@@ -515,6 +545,20 @@ fn point_gradient(
                 // at ±c is one pupil turned by π, whose mean over azimuth is the same
                 if t == optics::SeidelTerm::Coma && *d_grid == GridGradient::Symmetric {
                     (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                } else if let Some([spherical, curvature]) = seidel_zero {
+                    // astigmatism W222 x² = W222 ρ²/2 + W222 ρ² cos 2φ/2: the defocus part half
+                    // field curvature's, the cos 2φ part 0 by symmetry (c and −c are one pupil
+                    // turned by π/2, whose mean over azimuth is the same)
+                    let d_mtf = match t {
+                        optics::SeidelTerm::Spherical => spherical,
+                        optics::SeidelTerm::FieldCurvature => curvature,
+                        _ => 0.5 * curvature,
+                    };
+                    let d_g = match scene.options().form {
+                        MetricForm::Mean => d_mtf,
+                        MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                    };
+                    (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
                 } else {
                     return Err(not_smooth(
                         p,
@@ -524,8 +568,9 @@ fn point_gradient(
                             t.key(),
                             match d_grid {
                                 GridGradient::Symmetric =>
-                                    "rotationally symmetric on the 1-D engines (every Seidel term zero): give a Seidel term a \
-                                     non-zero value to put it on the overlap engine",
+                                    "rotationally symmetric on the 1-D engines (every Seidel term zero), and its pupil is not \
+                                     one the overlap engine takes at zero Seidel terms (an iris, a line spectrum, \
+                                     options.overlap = false or options.pupil_samples)",
                                 _ =>
                                     "not on the overlap engine (an iris, a phase profile, a table, a wavefront too strong for \
                                      its rules, a noise spectrum, or other wavefront keys asked with it)",
@@ -1341,13 +1386,171 @@ fn aperture_partials(
     e: &Evaluation,
     p: Parameter,
     pass: Option<&DefocusFound>,
+    overlap_lane: Option<f64>,
 ) -> Result<(f64, f64), Error> {
     if scene.camera().noise_spectrum().is_none()
         && let Some(found) = defocus_on_value_rule(scene, e, pass)?
     {
         return Ok(found);
     }
+    if scene.camera().noise_spectrum().is_none()
+        && let Some(found) = aperture_on_overlap(scene, e, overlap_lane)
+    {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of the chromatic lens with Seidel terms on axis, on the overlap
+/// engine the value takes (docs/physics.md, "Gradients: the F-number and the focal length with
+/// Seidel terms"). The Seidel coefficients are the wavefront's at the pupil's edge in µm, keys of
+/// their own: the F-number and focal length leave them as they are. What moves is each
+/// wavelength's normalized frequency `s = νλF#` (at fixed wavefront the OTF along every azimuth
+/// is a function of `νF#`, so by parts, per azimuth and then averaged,
+/// `(1/ν_N) ∫ P ν ∂_ν|O| dν = P(ν_N)|O(ν_N)| − M̄ − P_ν`) and the chromatic defocus
+/// `W020 ∝ f0/F#²`, whose lane `D_K = ∂M̄/∂ln K` rides on the overlap quadrature's nodes
+/// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_defocus_lane`]): `∂M̄/∂ln F# =
+/// P(ν_N)|O(ν_N)|‾ − M̄ − P_ν − 2 D_K` (the overbar the mean over azimuth) and `∂M̄/∂ln f0 = D_K`.
+/// `None` where the scene is not that (off axis, where the lateral colour's phase `−2πiν·Δ` does
+/// not scale with F#; an iris or a Zernike pupil; a line; another engine).
+///
+/// `lane`: `D_K` where the value's own pass gave it (the scene's wavefront directions with the
+/// defocus lane after them, [`defocus_lane_on_overlap`]); without the pixel MTF it is taken as
+/// it is (no second pass over the overlap quadrature), else the mean is taken again with the
+/// lane and `|O|` beside it for `P_ν`.
+fn aperture_on_overlap(scene: &Scene, e: &Evaluation, lane: Option<f64>) -> Option<(f64, f64)> {
+    if !defocus_lane_on_overlap(scene) {
+        return None;
+    }
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
+    if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
+        return None;
+    }
+    let (d_k, pixel_slope) = match lane {
+        Some(d_k) if pixel.is_none() => (d_k, 0.0),
+        _ => {
+            let found = poly.mean_mtf_over_azimuth_and_defocus_lane(0.0)?;
+            (found.defocus, found.pixel_slope)
+        }
+    };
+    let edge = poly.mtf_over_azimuth(nyquist, 0.0);
+    let d_f = edge - e.mean_mtf - pixel_slope - 2.0 * d_k;
+    // the lane is each node's value times i k W020 [ρ²(p₊) − ρ²(p₋)], at most L = k_max |W020|max
+    // times it: where the gradient is small against L M̄ the spectral rule's error ε M̄ may move
+    // it by up to L ε M̄, so the lane, the edge and M̄ are taken again with the spectral rule at
+    // max(q, 10⁻⁴) ε, q = |∇|/(L M̄), the other rules as they are (as the field angles' lanes,
+    // `refine_field_lanes`: tightening the whole engine instead gave the same gradient to 3e-8
+    // of its norm on the paper's lens with coma at a 10 nm band, at 1.4× the time)
+    let bound = 2.0 * std::f64::consts::PI * poly.max_defocus() * lens.f_number() * poly.max_cutoff() * e.mean_mtf;
+    let q = if bound > 0.0 { (d_f.hypot(d_k) / bound).max(1e-4) } else { 1.0 };
+    if q < 1.0 {
+        let tighter = optics::Settings { spectral_tolerance: Some(q * poly.tolerance()), ..settings };
+        if let Ok(fine) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, tighter)
+            && matches!(fine.engine(), optics::Engine::Overlap { .. })
+            && let Some(found) = fine.mean_mtf_over_azimuth_and_defocus_lane(0.0)
+            && fine.over_budget().is_none()
+        {
+            let edge = fine.mtf_over_azimuth(nyquist, 0.0);
+            let d_k = found.defocus;
+            return Some((edge - found.mean - found.pixel_slope - 2.0 * d_k, d_k));
+        }
+    }
+    Some((d_f, d_k))
+}
+
+/// Whether the F-number's defocus lane is taken on the overlap engine ([`aperture_on_overlap`]):
+/// on axis, a band (not a line), every order at the mean wavelength the full circle without an
+/// image shift and some with a Seidel term, white noise, and the overlap engine allowed.
+fn defocus_lane_on_overlap(scene: &Scene) -> bool {
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let options = scene.options().settings();
+    if !field.is_on_axis()
+        || detected.as_line().is_some()
+        || scene.camera().noise_spectrum().is_some()
+        || !options.overlap
+        || options.pupil_samples.is_some()
+    {
+        return false;
+    }
+    // the chromatic lens's pupil, Seidel terms and (on axis) image shifts are the same at every
+    // wavelength: its design wavelength, or a wavelength of the spectrum
+    let lambda = lens.design_wavelength().or_else(|| detected.gaussians().first().map(|g| g.center())).or_else(|| {
+        let (lo, hi) = detected.support();
+        (hi.is_finite() && hi > lo).then_some(0.5 * (lo + hi))
+    });
+    let Some(lambda) = lambda.filter(|l| *l > 0.0) else { return false };
+    let orders = lens.orders(lambda, field);
+    orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.image_shift_m == [0.0, 0.0])
+        && orders.iter().any(|o| !o.wavefront.is_defocus_only())
+}
+
+/// `[∂M̄/∂W040, ∂M̄/∂W220]` (per µm) where every Seidel term is zero and the OTF rotationally
+/// symmetric (docs/physics.md, "Gradients: Seidel terms at zero"): the value's own engine (the
+/// closed form, the exact 1-D rules) has no lane along ρ⁴, so the mean is taken again on the
+/// overlap engine with the terms at zero (`optics::Settings::overlap_always`), along one azimuth
+/// (both directions are rotationally symmetric, so every azimuth gives the same), forward mode on
+/// its nodes. `None` where the overlap engine does not take the scene (an iris, a line spectrum,
+/// `options.overlap = false` or `options.pupil_samples`).
+///
+/// Error control: a lane is each node's value times `i k [D(p₊) − D(p₋)]`, with `D` ∈ [0, 10⁻⁶]
+/// per µm on the disc, so at most `L = 2π · 10⁻⁶/λ_min` (per µm) times the value, and an error
+/// `ε M̄` of the value's rules may move it by up to `L ε M̄`. In focus the mean MTF is nearly
+/// stationary in these terms (a narrow band: `|∂M̄| ≪ L M̄`), so the pass is run first at the
+/// engine's tolerance `ε` (the overlap engine's: `options.fft_tolerance` unless the scene sets
+/// `options.tolerance`) and, where `q = |∂M̄|/(L M̄) < 1`, again at `max(q, 10⁻⁴) ε` (as the
+/// field angles' lanes are, `refine_field_lanes`): the gradient to the tolerance relative to
+/// its own norm. With no terms beyond defocus the overlap engine's x integral is in closed form,
+/// so either pass costs little (a 10 nm band at 1e-10: about 10 ms in a debug build).
+fn seidel_at_zero(scene: &Scene) -> Result<Option<[f64; 2]>, Error> {
+    let lens = scene.lens();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if detected.as_line().is_some() {
+        return Ok(None);
+    }
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let directions = [
+        optics::WavefrontDirection::Seidel(optics::SeidelTerm::Spherical),
+        optics::WavefrontDirection::Seidel(optics::SeidelTerm::FieldCurvature),
+    ];
+    // (M̄, the lanes, the engine's tolerance, L M̄)
+    type Pass = (f64, [f64; 2], f64, f64);
+    let run = |settings: optics::Settings| -> Result<Option<Pass>, Error> {
+        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, scene.field(), nyquist, pixel, settings)
+            .map_err(Error::Optics)?;
+        if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
+            return Ok(None);
+        }
+        let bound = 2.0 * std::f64::consts::PI * 1e-6 * poly.max_cutoff() * lens.f_number();
+        let found = poly.mean_mtf_along_and_gradient(0.0, &directions);
+        if poly.over_budget().is_some() {
+            return Ok(None);
+        }
+        Ok(found.map(|(mean, _, d)| (mean, [d[0], d[1]], poly.tolerance(), bound * mean)))
+    };
+    let settings = optics::Settings { overlap_always: true, ..scene.options().settings() };
+    let Some((_, lanes, tolerance, bound)) = run(settings)? else { return Ok(None) };
+    let norm = lanes.iter().map(|d| d * d).sum::<f64>().sqrt();
+    let q = if bound > 0.0 { (norm / bound).max(1e-4) } else { 1.0 };
+    if q >= 1.0 {
+        return Ok(Some(lanes));
+    }
+    let tighter = optics::Settings { tolerance: (q * tolerance).max(1e-14), fft_tolerance: None, ..settings };
+    Ok(run(tighter)?.map(|(_, lanes, _, _)| lanes).or(Some(lanes)))
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` ([`aperture_partials`]) on the value's own rules: the mean computed
@@ -1452,7 +1655,8 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
                 return Err(not_smooth(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil with a defocus alone (the chromatic, refractive and harmonic families on axis, \
-                     paraxial, without an iris or Seidel terms); this scene's lens has other pupils or aberrations"
+                     paraxial, without an iris or Seidel terms), or with Seidel terms on axis under a band (the \
+                     chromatic lens on the overlap engine); this scene's lens has other pupils or aberrations"
                         .to_owned(),
                 ));
             }

@@ -161,6 +161,7 @@ impl Options {
             exact_irises: self.exact_irises,
             overlap: self.overlap,
             spectral_tolerance: None,
+            overlap_always: false,
         }
     }
 }

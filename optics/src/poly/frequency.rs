@@ -519,6 +519,59 @@ impl Polychromatic<'_> {
         Some((mean, sum.into_iter().map(|g| g * scale).collect()))
     }
 
+    /// The mean MTF averaged over azimuth on the overlap engine with the defocus lane
+    /// `D_K = ∂M̄/∂ln K` beside it ([`WavefrontDirection::Defocus`]: every order's own `W020`
+    /// scaled by `1 + ε`, `s = νλF#` fixed; forward mode on the overlap quadrature's nodes, as
+    /// [`mean_mtf_over_azimuth_and_overlap_gradient`](Self::mean_mtf_over_azimuth_and_overlap_gradient)),
+    /// and the pixel MTF's term of the integration by parts in ν, `P_ν = (1/ν_max) ∫ ν P′ |O| dν`
+    /// averaged over the same azimuths (0 without it; `νP′/P = x cot x − 1`, `x = πpν`), both
+    /// with the accepted panels' weights at each azimuth (docs/physics.md, "Gradients: the
+    /// F-number and the focal length with Seidel terms"). `None` where the engine is not the
+    /// overlap engine or gives no lane.
+    pub fn mean_mtf_over_azimuth_and_defocus_lane(&self, first: f64) -> Option<DefocusDerivative> {
+        if !matches!(self.engine.engine(), Engine::Overlap { .. })
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let slope = |nu: f64| {
+            self.scene.pixel_pitch.map_or(0.0, |p| {
+                let x = PI * p * nu;
+                if x.abs() < 1e-4 { -x * x / 3.0 - x.powi(4) / 45.0 } else { x / x.tan() - 1.0 }
+            })
+        };
+        let (mut d_k, mut pixel) = (0.0, 0.0);
+        let mut read = 0usize;
+        let mut failed = false;
+        let mean = self.azimuthal_mean(first, &mut |azimuth: f64| {
+            *self.gradient.borrow_mut() =
+                Some(Recording { lanes: 1, directions: vec![WavefrontDirection::Defocus], ..Recording::default() });
+            let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+            match self.gradient.borrow_mut().take() {
+                Some(r) if !r.failed => {
+                    for &(nu, w) in &r.accepted {
+                        match r.at.get(&nu.to_bits()) {
+                            // the lane, then |O|, at the frequency's place
+                            Some(&i) => {
+                                d_k += w * r.derivatives[i];
+                                pixel += w * r.derivatives[i + 1] * slope(nu);
+                            }
+                            None => failed = true,
+                        }
+                    }
+                }
+                _ => failed = true,
+            }
+            read += 1;
+            (mean, work)
+        });
+        if failed || read != mean.azimuths {
+            return None;
+        }
+        let scale = 1.0 / (self.scene.max_frequency * read as f64);
+        Some(DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work })
+    }
+
     /// The mean MTF along `azimuth` ([`mean_mtf_along`](Self::mean_mtf_along)'s adaptive rule)
     /// and its derivative with respect to each of `directions` on the same rule: each OTF's
     /// derivatives from the engine (`OtfEngine::otf_along_and_gradient`: the exact engine's
@@ -566,6 +619,9 @@ impl Polychromatic<'_> {
                 let place = r.derivatives.len();
                 r.derivatives
                     .extend(derivatives.iter().map(|d| if modulus > 0.0 { (v.conj() * d).re / modulus } else { 0.0 }));
+                // |O| itself after the lanes (the pixel MTF's term of the F-number's integration
+                // by parts: `mean_mtf_over_azimuth_and_defocus_lane`)
+                r.derivatives.push(modulus);
                 r.at.insert(nu.to_bits(), place);
                 modulus
             }

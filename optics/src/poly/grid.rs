@@ -763,6 +763,11 @@ pub enum WavefrontDirection {
     /// gives it beside the field angles, for the tangential and sagittal azimuths that turn
     /// with the field direction (docs/physics.md, "Gradients: the field point").
     Azimuth,
+    /// Each order's own defocus `W020(λ)` (not the field curvature), per relative change:
+    /// `∂W = W020 ρ²` at each spectral node, the lane `∂O/∂ln K` of the F-number and focal
+    /// length (`W020 ∝ f0/F#²`) on the overlap engine (docs/physics.md, "Gradients: the
+    /// F-number and the focal length with Seidel terms"). Only the overlap engine carries it.
+    Defocus,
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -891,7 +896,8 @@ impl FftPath {
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
-                        | WavefrontDirection::Azimuth => return Ok(None),
+                        | WavefrontDirection::Azimuth
+                        | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);
                 }

@@ -204,6 +204,11 @@ pub struct Settings {
     /// the value's times the lateral colour's rate (docs/physics.md, "Gradients: the field
     /// point").
     pub spectral_tolerance: Option<f64>,
+    /// Whether every order that is the full circle with a polynomial wavefront goes to the
+    /// overlap engine ([`Engine::Overlap`]), a defocus alone too (no closed form, no exact 1-D
+    /// path): the Seidel gradient at zero Seidel terms asks for it (docs/physics.md, "Gradients:
+    /// Seidel terms at zero"), the value staying its own engine's. Off by default.
+    pub overlap_always: bool,
 }
 
 impl Default for Settings {
@@ -217,6 +222,7 @@ impl Default for Settings {
             exact_irises: true,
             overlap: true,
             spectral_tolerance: None,
+            overlap_always: false,
         }
     }
 }
@@ -640,6 +646,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     }
     let (lo, hi) = spectral_extent(scene.detected)?;
     if settings.closed_form
+        && !settings.overlap_always
         && scene.parts.is_empty()
         && let Some((closed, affine)) = closed_form::closed_form(scene.lens, scene.detected, scene.field)
     {
@@ -649,6 +656,7 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
     }
     // product integration read per frequency, where every order is a centred circle with defocus
     if settings.spectral_rule == SpectralRule::Interpolated
+        && !settings.overlap_always
         && let Some(engine) = per_frequency::PerFrequency::new(scene, lo, hi, settings.tolerance)
     {
         check_signal(engine.nodes())?;
@@ -667,7 +675,9 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         None => (scene.whole(), spectral::panels(&scene.whole(), lo, hi)),
     };
     check_signal(&nodes)?;
-    if nodes.needs_grid {
+    // the overlap engine asked for where no order needs it: its own tolerance and nodes as for
+    // a Seidel pupil, or the exact path where some order is not the full circle
+    if nodes.needs_grid || (settings.overlap_always && settings.overlap && settings.pupil_samples.is_none()) {
         let tolerance = settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance);
         // the FFT path's tolerance bounds the mean's accuracy: spectral nodes (one grid each)
         // finer than it buy nothing
@@ -683,6 +693,9 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
             && let Some(engine) = overlap::Overlap::new(scene, nodes.clone(), tolerance)
         {
             return Ok(Box::new(engine));
+        }
+        if !nodes.needs_grid {
+            return Ok(Box::new(exact::Quadrature { scene, nodes }));
         }
         return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, tolerance)?));
     }

@@ -62,6 +62,9 @@ struct Term {
     shift_rate: Option<[f64; 2]>,
     /// W020 + W220 (m): the part whose difference is linear in x
     defocus: f64,
+    /// the order's own defocus W020 (m; without the field curvature and a Zernike pupil's
+    /// terms): the scale of the [`WavefrontDirection::Defocus`] lane at this node
+    lens_defocus: f64,
     spherical: f64,
     coma: f64,
     astigmatism: f64,
@@ -259,6 +262,7 @@ fn spherical_bessel(b: f64, out: &mut [f64]) {
 /// path's own evaluation of Noll's polynomials).
 fn add_zernike(term: &mut Term, pupil: &RadialPupil) {
     term.defocus -= pupil.fitted_defocus_m();
+    term.lens_defocus -= pupil.fitted_defocus_m();
     let mut rest = Vec::new();
     let mut degree = 0;
     for &(j, c) in pupil.zernike_noll_m() {
@@ -351,6 +355,7 @@ impl<'a> Overlap<'a> {
                     shift: w.image_shift_m,
                     shift_rate: rates.as_ref().and_then(|r| r.get(o)).copied(),
                     defocus: w.defocus_m + w.field_curvature_m,
+                    lens_defocus: w.defocus_m,
                     spherical: w.spherical_m,
                     coma: w.coma_m,
                     astigmatism: w.astigmatism_m,
@@ -739,11 +744,14 @@ fn quadratic_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
     [i0, i1, i2]
 }
 
-/// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]) or the Zernike
-/// term of a Noll index per µm RMS (`∂W = 10⁻⁶ Z_j(x, y)`, [`WavefrontDirection::Zernike`]).
+/// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]), the Zernike
+/// term of a Noll index per µm RMS (`∂W = 10⁻⁶ Z_j(x, y)`, [`WavefrontDirection::Zernike`]), or
+/// each order's own defocus per relative change ([`WavefrontDirection::Defocus`]: `ρ²` here,
+/// each node's derivative scaled by its `W020`).
 #[derive(Clone, Debug)]
 enum Lane {
     Seidel(SeidelTerm),
+    Defocus,
     /// Noll's polynomial per µm and its radial order
     Zernike(Compiled, usize),
 }
@@ -754,6 +762,7 @@ impl Lane {
     fn of(direction: &WavefrontDirection) -> Option<Lane> {
         match *direction {
             WavefrontDirection::Seidel(t) => Some(Lane::Seidel(t)),
+            WavefrontDirection::Defocus => Some(Lane::Defocus),
             WavefrontDirection::Zernike(j) if (1..=crate::fft::MAX_NOLL_INDEX).contains(&j) => {
                 let compiled =
                     Compiled::new(&Aberrations { zernike_noll_m: vec![(j, 1e-6)], ..Aberrations::default() });
@@ -763,11 +772,13 @@ impl Lane {
         }
     }
 
-    /// The wavefront this lane adds per µm at the pupil point `(x, y)`, m.
+    /// The wavefront this lane adds per µm at the pupil point `(x, y)`, m (the defocus lane:
+    /// `ρ²`, per metre of `W020`).
     #[inline]
     fn opd(&self, x: f64, y: f64) -> f64 {
         match self {
             Lane::Seidel(t) => t.opd(x, y),
+            Lane::Defocus => x * x + y * y,
             Lane::Zernike(z, _) => z.opd_m(x, y),
         }
     }
@@ -800,7 +811,7 @@ fn lanes_opd(lanes: &[Lane], x: f64, y: f64, out: &mut [f64]) {
                 }
                 _ => lane.opd(x, y),
             },
-            Lane::Seidel(_) => lane.opd(x, y),
+            Lane::Seidel(_) | Lane::Defocus => lane.opd(x, y),
         };
     }
 }
@@ -811,7 +822,7 @@ impl Lane {
         match self {
             Lane::Seidel(SeidelTerm::Spherical) => 4,
             Lane::Seidel(SeidelTerm::Coma) => 3,
-            Lane::Seidel(_) => 2,
+            Lane::Seidel(_) | Lane::Defocus => 2,
             Lane::Zernike(_, n) => *n,
         }
     }
@@ -819,7 +830,7 @@ impl Lane {
     /// Whether the lane is even in y (every Seidel term, a Zernike cosine or `m = 0` term).
     fn even_in_y(&self) -> bool {
         match self {
-            Lane::Seidel(_) => true,
+            Lane::Seidel(_) | Lane::Defocus => true,
             Lane::Zernike(z, _) => !z.has_sine_terms(),
         }
     }
@@ -1073,8 +1084,10 @@ impl Overlap<'_> {
                 v *= turn;
             }
             sum += v * term.weight;
-            for (o, d) in out.iter_mut().zip(&node) {
-                *o += d.conj() * turn * term.weight;
+            for ((o, d), lane) in out.iter_mut().zip(&node).zip(terms) {
+                // the defocus lane's ρ² per metre, times this node's own W020: ∂/∂ln K
+                let scale = if matches!(lane, Lane::Defocus) { term.lens_defocus } else { 1.0 };
+                *o += d.conj() * turn * (term.weight * scale);
             }
             if let Some([rx, ry]) = term.shift_rate {
                 // ∂(v e^{ik Δ·u})/∂θ_a = i k u_a (∂Δ_a/∂θ_a) v e^{ik Δ·u}
@@ -1310,6 +1323,7 @@ mod tests {
             shift: [0.0, 0.0],
             shift_rate: None,
             defocus,
+            lens_defocus: defocus,
             spherical,
             coma,
             astigmatism,

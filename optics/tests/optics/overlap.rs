@@ -305,3 +305,96 @@ fn zernike_overlap_matches_the_fft_path() {
         assert!(rel < 1e-4, "{:?}: overlap {quadrature} vs fft {fft}", lens.zernike);
     }
 }
+
+/// [`SeidelLens`] with its chromatic defocus scaled by `scale` (the `K = f0/(8F#²)` of the
+/// F-number's defocus lane), the Seidel terms as they are.
+#[derive(Debug)]
+struct ScaledDefocus {
+    lens: SeidelLens,
+    scale: f64,
+}
+
+impl LensModel for ScaledDefocus {
+    fn f_number(&self) -> f64 {
+        F_NUMBER
+    }
+    fn focal_length(&self) -> f64 {
+        F0
+    }
+    fn orders(&self, lambda: f64, _: Field) -> Vec<Order> {
+        let mut w = self.lens.wavefront(lambda);
+        w.defocus_m *= self.scale;
+        vec![Order::new(0.15, Pupil::Full, w)]
+    }
+}
+
+/// `Settings::overlap_always`: a defocus alone (every Seidel term zero) on the overlap engine
+/// gives the mean MTF of the exact 1-D path (the per-frequency product rule) within the
+/// tolerance 1e-8 (docs/physics.md, "Gradients: Seidel terms at zero"), and without the setting
+/// the scene stays on its own engine.
+#[test]
+fn overlap_always_takes_a_defocus_alone_to_the_same_mean() {
+    let lens = SeidelLens { spherical: 0.0, coma: 0.0, astigmatism: 0.0, shift: 0.0 };
+    let detected = band(20e-9);
+    let nyquist = 1.0 / (2.0 * 5.2e-6);
+    let mean = |overlap_always: bool| {
+        let settings = Settings { tolerance: 1e-8, fft_tolerance: None, overlap_always, ..Settings::default() };
+        let poly =
+            optics::Polychromatic::with_settings(&lens, &detected, Field::ON_AXIS, nyquist, None, settings).unwrap();
+        assert_eq!(matches!(poly.engine(), Engine::Overlap { .. }), overlap_always, "{:?}", poly.engine());
+        poly.mean_mtf_along(0.0).0
+    };
+    let (overlap, exact) = (mean(true), mean(false));
+    let rel = (overlap - exact).abs() / exact;
+    eprintln!("a defocus alone: overlap {overlap:.12}, exact 1-D {exact:.12}: {rel:.1e}");
+    assert!(rel < 3e-8, "overlap {overlap} vs exact {exact}");
+}
+
+/// The defocus lane `D_K = ∂M̄/∂ln K` on the overlap engine
+/// (`Polychromatic::mean_mtf_over_azimuth_and_defocus_lane`, forward mode along `W020 ρ²` on
+/// each node) against central differences in `K` of the mean over azimuth converged to 1e-10
+/// (the chromatic defocus scaled by `1 ± h`, h = 1e-4: the band's edge is under a wave of
+/// defocus here, so the truncation h² |f‴|/6 is far below the tolerance; measured 1.5e-8 of
+/// the mean, and P_ν 7e-10), with coma and spherical aberration and with the pixel MTF (its `P_ν` against the
+/// same term written here on a Gauss–Legendre rule over the MTF averaged over azimuth): within
+/// 10× the tolerance 1e-7 of the mean.
+#[test]
+fn overlap_defocus_lane_matches_central_differences() {
+    let detected = band(10e-9);
+    let nyquist = 1.0 / (2.0 * 5.2e-6);
+    let pitch = 5.2e-6;
+    let seidel = || SeidelLens { spherical: 0.2e-6, coma: 0.3e-6, astigmatism: 0.0, shift: 0.0 };
+    let poly_at = |scale: f64, tolerance: f64| {
+        let lens = ScaledDefocus { lens: seidel(), scale };
+        let settings = Settings { tolerance, fft_tolerance: None, ..Settings::default() };
+        let lens: &'static ScaledDefocus = Box::leak(Box::new(lens));
+        let detected: &'static Spectrum = Box::leak(Box::new(detected.clone()));
+        optics::Polychromatic::with_settings(lens, detected, Field::ON_AXIS, nyquist, Some(pitch), settings).unwrap()
+    };
+    let poly = poly_at(1.0, 1e-7);
+    let found = poly.mean_mtf_over_azimuth_and_defocus_lane(0.0).unwrap();
+    let h = 1e-4;
+    let mean = |scale: f64| poly_at(scale, 1e-10).mean_mtf_over_azimuth(0.0, None).mean;
+    let theirs = (mean(1.0 + h) - mean(1.0 - h)) / (2.0 * h);
+    eprintln!("D_K {:.10e} vs differences {theirs:.10e}; mean {:.10}", found.defocus, found.mean);
+    assert!((found.defocus - theirs).abs() <= 1e-6 * found.mean, "{found:?} vs {theirs}");
+    // P_ν = (1/ν_N) ∫ ν P′(ν) M(ν) dν, M the MTF over azimuth without the pixel (M P is the
+    // engine's), P = sin x/x, x = πpν
+    let reference = poly_at(1.0, 1e-10);
+    let pixel = |nu: f64| {
+        let x = PI * pitch * nu;
+        if x == 0.0 { 1.0 } else { x.sin() / x }
+    };
+    let slope = |nu: f64| {
+        let x = PI * pitch * nu;
+        if x == 0.0 { 0.0 } else { (x * x.cos() - x.sin()) / x }
+    };
+    let rule = optics::quad::gauss_legendre(64);
+    let mut p_nu = 0.0;
+    for &(u, w) in &rule {
+        let nu = 0.5 * nyquist * (1.0 + u);
+        p_nu += 0.5 * w * slope(nu) * reference.mtf_over_azimuth(nu, 0.0) / pixel(nu);
+    }
+    eprintln!("P_ν {:.10e} vs {p_nu:.10e}", found.pixel_slope);
+    assert!((found.pixel_slope - p_nu).abs() <= 1e-6 * found.mean, "{} vs {p_nu}", found.pixel_slope);
+}
