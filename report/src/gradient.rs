@@ -1062,6 +1062,84 @@ mod tests {
         );
     }
 
+    /// The overlap engine (a Seidel coma of 0.3 µm on the paper's lens: the mean over azimuth of
+    /// the overlap quadrature's complex OTF; a 4 nm band so that the references at 1e-10 take
+    /// seconds), asked at 1e-6; and a PSF stack (examples/psf-stack.toml: each slice's OTF with
+    /// its centroid's shift, linear in λ between the slices), asked at the scene's 1e-6 with the
+    /// band centred at 802.5 nm, between slices: a Gaussian of 20 nm (its value is smooth in c
+    /// and σ, the convolution of the stack's continuous piecewise-linear OTF with a smooth band),
+    /// and a top-hat of 20 nm, its edges at 792.5 and 812.5 nm, between slices (its value is C¹
+    /// in the edges: its derivative is the OTF at the edge, whose slope jumps where an edge
+    /// crosses a slice, so a difference straddling a slice would see that kink).
+    #[test]
+    fn spectral_keys_on_the_overlap_engine_and_a_psf_stack_match_central_differences() {
+        let keys = ["spectrum.center_nm", "spectrum.range_nm"];
+        let converged = ["options.tolerance=1e-10"];
+        let paper = scene::read(None).unwrap();
+        let coma = ["lens.coma_um=0.3", "spectrum.range_nm=4"];
+        let e = metric::evaluate(&scene::build_from(&paper, &owned(&coma)).unwrap()).unwrap();
+        assert!(e.numerics.engine.starts_with("overlap"), "{}", e.numerics.engine);
+        check_directional_spectrum(&paper, &coma, &keys, (Some(1e-6), 1e-6), &converged, &spectral_step(4.0, true));
+        let stack = example("psf-stack.toml");
+        for (overrides, range, gaussian) in [
+            (&["spectrum.center_nm=802.5", "spectrum.range_nm=20"][..], 20.0, true),
+            (&["spectrum.center_nm=802.5", "spectrum.range_nm=20", "spectrum.shape=\"tophat\""][..], 20.0, false),
+        ] {
+            check_directional_spectrum(
+                &stack,
+                overrides,
+                &keys,
+                (None, 1e-6),
+                &converged,
+                &spectral_step(range, gaussian),
+            );
+        }
+    }
+
+    /// The FFT path: the cubic-phase map of examples/phase-map-cubic.toml (its formula, written
+    /// here on 1 µm cells, 1344 × 1344; a 10 nm band) with the pupil sampling fixed
+    /// (`options.pupil_samples = 256`), so that the gradient and the differences are of one
+    /// discrete rule (the grids, their interpolation, the azimuths), smooth in c; asked at
+    /// 1e-6, the references at 1e-9 (the spectral nodes' tolerance there; each node's grid is
+    /// exact to rounding at its sampling).
+    #[test]
+    fn spectral_keys_on_the_fft_path_of_a_phase_map_match_central_differences() {
+        let (n, pitch) = (1344usize, 1e-6);
+        let (f0, lambda0, radius, alpha) = (3.36e-3, 800e-9, 0.672e-3, 30.0);
+        let k0 = std::f64::consts::TAU / lambda0;
+        let mut bytes = scene::npy::npy_header(scene::npy::NpyType::F32, &[n, n]);
+        let centre = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch;
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (centre(i), centre(j));
+                let phase = -k0 * ((x * x + y * y + f0 * f0).sqrt() - f0)
+                    + alpha * ((x / radius).powi(3) + (y / radius).powi(3));
+                bytes.extend_from_slice(&(phase.rem_euclid(std::f64::consts::TAU) as f32).to_le_bytes());
+            }
+        }
+        let dir = std::env::temp_dir().join(format!("asnr-spectral-map-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("cubic.npy"), &bytes).unwrap();
+        let text = example("phase-map-cubic.toml")
+            .text()
+            .replace("\"../target/phase-maps/cubic-f2.5.npy\"", "\"cubic.npy\"")
+            .replace("phase_map_pitch_um = 0.5", "phase_map_pitch_um = 1.0");
+        assert!(text.contains("\"cubic.npy\"") && text.contains("pitch_um = 1.0"), "{text}");
+        let source = Source::from_text(text, "the cubic phase map on 1 µm cells", &dir);
+        let fixed = ["spectrum.range_nm=10", "options.pupil_samples=256"];
+        let e = metric::evaluate(&scene::build_from(&source, &owned(&fixed)).unwrap()).unwrap();
+        assert!(e.numerics.engine.starts_with("fft"), "{}", e.numerics.engine);
+        check_directional_spectrum(
+            &source,
+            &fixed,
+            &["spectrum.center_nm", "spectrum.range_nm"],
+            (Some(1e-6), 1e-6),
+            &["options.tolerance=1e-9"],
+            &spectral_step(10.0, true),
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     /// `lens.f_number` and `lens.focal_length_mm` (docs/physics.md, "Gradients": the normalized
     /// frequency s = νλF# by parts, one OTF at Nyquist; the defocus W020 ∝ f0/F#² through
     /// ∂H/∂w; N ∝ 1/F#²) against central differences of evaluations converged at 1e-10, within
