@@ -528,7 +528,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian, top-hat or line spectrum), source.temperature_k (a blackbody under a line), lens.f_number and lens.focal_length_mm \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody under a line), lens.f_number and lens.focal_length_mm \
          (lens.model = \"chromatic\", \"refractive\", \"harmonic\" or \"phase\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
