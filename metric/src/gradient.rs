@@ -962,6 +962,12 @@ fn gaussians(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Gaussi
 /// - `∂M̄ = (1/ν_N) ∫ sign(O) ∂O dν` (times the pixel MTF where it applies) on 16-point
 ///   Gauss–Legendre panels split at the sign changes of `O` (the kink of `|O|`), doubled until
 ///   the two derivatives move by at most the tolerance times their size.
+///
+/// Where the OTF depends on direction (lateral colour, a decentred iris, the overlap engine, the
+/// FFT path, a PSF stack's complex slices), the same combinations of the complex OTFs along each
+/// direction ([`optics::Polychromatic::otf_along`]), `∂|O| = Re(O* ∂O)/|O|`
+/// ([`modulus_derivative`]), on the value's rule over directions ([`DirectionalRule`]); on the
+/// FFT path the engines at the value's sampling levels ([`spectral_engines`]).
 fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<SpectralPartials, Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
@@ -1156,7 +1162,7 @@ impl DirectionalRule {
     /// `(1/ν_N) ∫_0^{ν_N} f(ν, φ) dν` averaged over the directions of the rule, for three
     /// integrands together (`f` gives them at `(ν, φ)`; the first is `P |O|`, the others its
     /// derivatives, each measured against its own `scale`, the key's size, so that they
-    /// converge alike in relative sensitivity). In ν: composite 16-point Gauss–Legendre, from 8
+    /// converge alike in relative sensitivity). In ν: composite 16-point Gauss–Legendre, from 4
     /// panels doubled until the three move by at most the tolerance times the largest (at most
     /// 1024 panels; the kink of `|O|` at a zero and the FFT grids' cell edges are integrated
     /// across, their error falling with the panels' width). Over azimuth: the trapezoid rule on
@@ -1176,7 +1182,7 @@ impl DirectionalRule {
                 });
                 sum.map(|s| s / nyquist)
             };
-            let mut panels = 8;
+            let mut panels = 4;
             let mut previous = integrate(panels);
             loop {
                 panels *= 2;
@@ -1406,7 +1412,9 @@ fn top_hat(spectrum: &radiometry::Spectrum) -> Option<radiometry::TopHat> {
 ///
 /// The integrals `∫ P sign(O) O_x dν` on 16-point Gauss–Legendre panels of `[0, ν_N]` split at
 /// the sign changes of `O` (the kink of |O|), doubled until they move by at most the tolerance
-/// times `M̄`.
+/// times `M̄`. Where the OTF depends on direction, along each direction
+/// `∂|O|/∂b = (T_b/D)(Re(O* O_b)/|O| − |O|)`, both means on the value's rule over directions
+/// ([`DirectionalRule`]).
 fn top_hat_partials(
     scene: &Scene,
     e: &Evaluation,
