@@ -1007,6 +1007,12 @@ fn gaussians(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Gaussi
 /// - `∂M̄ = (1/ν_N) ∫ sign(O) ∂O dν` (times the pixel MTF where it applies) on 16-point
 ///   Gauss–Legendre panels split at the sign changes of `O` (the kink of `|O|`), doubled until
 ///   the two derivatives move by at most the tolerance times their size.
+///
+/// Where the OTF depends on direction (lateral colour, a decentred iris, the overlap engine, the
+/// FFT path, a PSF stack's complex slices), the same combinations of the complex OTFs along each
+/// direction ([`optics::Polychromatic::otf_along`]), `∂|O| = Re(O* ∂O)/|O|`
+/// ([`modulus_derivative`]), on the value's rule over directions ([`DirectionalRule`]); on the
+/// FFT path the engines at the value's sampling levels ([`spectral_engines`]).
 fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<SpectralPartials, Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
@@ -1034,26 +1040,50 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     let mut settings = scene.options().settings();
     let tolerance = settings.tolerance;
     settings.tolerance = (0.1 * tolerance * (sigma / c).powi(2)).max(1e-13);
+    // the FFT path and the overlap engine keep the value's own tolerance for their sampling and
+    // quadrature (a tightened one would ask them for grids beyond reach); their spectral nodes
+    // are tightened from it as the other engines' are from theirs (the differences O_k − O_0 of
+    // engines whose nodes are not the same lose (c/σ)² of the nodes' accuracy)
+    let engine_tolerance = settings.fft_tolerance.unwrap_or(tolerance).max(tolerance);
+    settings.fft_tolerance = Some(engine_tolerance);
+    settings.spectral_tolerance = Some((0.1 * engine_tolerance * (sigma / c).powi(2)).max(1e-13));
     let linear = radiometry::Spectrum::Linear { slope: 1.0 };
     let spectra = [
         detected.clone(),
         radiometry::Spectrum::product(vec![detected.clone(), linear.clone()]),
         radiometry::Spectrum::product(vec![detected, linear.clone(), linear]),
     ];
-    let engines = spectra
-        .iter()
-        .map(|s| optics::Polychromatic::with_settings(lens, s, field, nyquist, None, settings))
-        .collect::<Result<Vec<_>, _>>()?;
-    if engines[0].direction_dependent() {
-        return Err(not_smooth(
-            "the OTF depends on direction here (lateral colour or a non-symmetric pupil): the spectral gradient is computed for a rotationally symmetric OTF"
-                .to_owned(),
-        ));
-    }
+    let levels = spectral_engines(lens, &spectra, field, nyquist, settings)?;
+    let engines = &levels[0].1;
     let a: Vec<f64> = engines.iter().map(optics::Polychromatic::total_weight).collect();
     let d_ln_n_c = engines[0].spectral_average(|l, _| (l - c) / (sigma * sigma));
     let d_ln_n_s = engines[0].spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
+    if engines[0].direction_dependent() {
+        // the complex OTFs of ρ, ρλ, ρλ² along each direction, ∂O/∂c and ∂O/∂σ the same
+        // combinations as below, ∂|O| = Re(O* ∂O)/|O|, on the value's rule over directions;
+        // on the FFT path each sampling level's, combined as the value's Richardson extrapolation
+        let rule = DirectionalRule::of(scene, &engines[0], tolerance);
+        let weights: Vec<Vec<f64>> =
+            levels.iter().map(|(_, l)| l.iter().map(optics::Polychromatic::total_weight).collect()).collect();
+        let [_, dc, ds] = rule.mean(nyquist, [1.0, c, sigma], &|nu, azimuth| {
+            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+            let mut sum = [0.0; 3];
+            for ((share, level), a) in levels.iter().zip(&weights) {
+                let o: Vec<_> = level.iter().map(|eng| eng.otf_along(nu, azimuth)).collect();
+                let (d1, d2) = (o[1] - o[0], o[2] - o[0]);
+                let dc = d1 * (a[1] / (sigma * sigma * a[0]));
+                let ds = (d2 * a[2] - d1 * (2.0 * c * a[1])) / (sigma.powi(3) * a[0]);
+                let o0 = [o[0].re, o[0].im];
+                sum[0] += share * o[0].norm();
+                sum[1] += share * modulus_derivative(o0, [dc.re, dc.im]);
+                sum[2] += share * modulus_derivative(o0, [ds.re, ds.im]);
+            }
+            sum.map(|x| pix * x)
+        });
+        return Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) });
+    }
     // (O, ∂O/∂c, ∂O/∂σ) at ν, the pixel MTF on the derivatives
     let at = |nu: f64| -> (f64, f64, f64) {
         let o: Vec<f64> = engines.iter().map(|eng| eng.otf(nu)).collect();
@@ -1094,8 +1124,149 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
             break previous;
         }
     };
-    let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
+}
+
+/// The engines of the spectra `spectra` (ρ, ρλ, ρλ²) with `settings`, as sampling levels with
+/// their shares: one level of the three engines (share 1), except on the FFT path where the
+/// first engine chose its sampling from the tolerance: there the others take its `N`
+/// (`options.pupil_samples` fixed, so that every `O_k` is read on the same grids' sampling), and
+/// where the value extrapolates the means at `N/2` and `N` (Richardson, order
+/// [`optics::fft::RICHARDSON_ORDER`]), the three at `N/2` too, the levels' shares
+/// `1 + 1/(2^p − 1)` and `−1/(2^p − 1)`: the derivative of the extrapolated mean is the
+/// extrapolation of the levels' derivatives. The cost is that of the grids: about three times
+/// the value's (the first engine's sampling choice, two more at `N`, three at `N/2`).
+fn spectral_engines<'a>(
+    lens: &'a dyn optics::LensModel,
+    spectra: &'a [radiometry::Spectrum],
+    field: optics::Field,
+    nyquist: f64,
+    settings: optics::Settings,
+) -> Result<Vec<(f64, Vec<optics::Polychromatic<'a>>)>, Error> {
+    let build = |s: &'a radiometry::Spectrum, settings: optics::Settings| {
+        optics::Polychromatic::with_settings(lens, s, field, nyquist, None, settings)
+    };
+    let first = build(&spectra[0], settings)?;
+    let optics::Engine::Fft { pupil_samples, coarse, extrapolated, .. } = first.engine() else {
+        let mut engines = vec![first];
+        for s in &spectra[1..] {
+            engines.push(build(s, settings)?);
+        }
+        return Ok(vec![(1.0, engines)]);
+    };
+    let at = |n: usize| optics::Settings { pupil_samples: Some(n), ..settings };
+    let mut fine = vec![first];
+    for s in &spectra[1..] {
+        fine.push(build(s, at(pupil_samples))?);
+    }
+    match coarse.filter(|_| extrapolated && settings.pupil_samples.is_none()) {
+        Some(half) => {
+            let r = 1.0 / (2f64.powf(optics::fft::RICHARDSON_ORDER) - 1.0);
+            let coarse = spectra.iter().map(|s| build(s, at(half))).collect::<Result<Vec<_>, _>>()?;
+            Ok(vec![(1.0 + r, fine), (-r, coarse)])
+        }
+        None => Ok(vec![(1.0, fine)]),
+    }
+}
+
+/// `∂|O| = Re(O* ∂O)/|O|` for a complex OTF `O = [re, im]` moving by `∂O` (docs/physics.md,
+/// "Gradients: the spectrum where the OTF depends on direction"): a cone at `O = 0`, where the
+/// modulus has no derivative but is integrable across; there, and where `|O|` is below 1e-15
+/// (rounding of an OTF normalized to 1 at ν = 0), 0 is taken (`|∂|O|| ≤ |∂O|` everywhere, so
+/// the integrand stays bounded and the set of such frequencies has no measure).
+fn modulus_derivative(o: [f64; 2], d: [f64; 2]) -> f64 {
+    let modulus = o[0].hypot(o[1]);
+    if modulus <= 1e-15 { 0.0 } else { (o[0] * d[0] + o[1] * d[1]) / modulus }
+}
+
+/// The value's rule over directions where the OTF depends on direction (metric's `evaluate`;
+/// docs/physics.md, "Pupils without rotational symmetry"): a 2-D OTF (a sampled pupil's grid,
+/// the overlap engine, a PSF stack's planes) takes the mean over azimuth by the nested trapezoid
+/// rule from the field direction; a 1-D OTF with image shifts (lateral colour) the average of
+/// the tangential and sagittal means.
+struct DirectionalRule {
+    /// the field direction `atan2(θy, θx)`, the first azimuth
+    first: f64,
+    /// the mean over azimuth (else tangential and sagittal)
+    over_azimuth: bool,
+    /// the relative tolerance of each rule: the scene's, or the engine's where looser (the FFT
+    /// path's and the overlap engine's `fft_tolerance`)
+    tolerance: f64,
+}
+
+impl DirectionalRule {
+    fn of(scene: &Scene, engine: &optics::Polychromatic<'_>, tolerance: f64) -> DirectionalRule {
+        let field = scene.field();
+        DirectionalRule {
+            first: field.y_rad.atan2(field.x_rad),
+            over_azimuth: engine.has_pupil_grid(),
+            tolerance: tolerance.max(engine.tolerance()),
+        }
+    }
+
+    /// `(1/ν_N) ∫_0^{ν_N} f(ν, φ) dν` averaged over the directions of the rule, for three
+    /// integrands together (`f` gives them at `(ν, φ)`; the first is `P |O|`, the others its
+    /// derivatives, each measured against its own `scale`, the key's size, so that they
+    /// converge alike in relative sensitivity). In ν: composite 16-point Gauss–Legendre, from 4
+    /// panels doubled until the three move by at most the tolerance times the largest (at most
+    /// 1024 panels; the kink of `|O|` at a zero and the FFT grids' cell edges are integrated
+    /// across, their error falling with the panels' width). Over azimuth: the trapezoid rule on
+    /// [`optics::FIRST_AZIMUTHS`] azimuths from the field direction, doubled until it moves by at
+    /// most [`optics::AZIMUTH_SHARE`] of the tolerance (at most [`optics::MAX_AZIMUTHS`]), as
+    /// the value's; or the tangential and sagittal directions.
+    fn mean(&self, nyquist: f64, scale: [f64; 3], f: &dyn Fn(f64, f64) -> [f64; 3]) -> [f64; 3] {
+        let measure = |x: [f64; 3]| x.iter().zip(&scale).map(|(v, s)| (v * s).abs()).fold(0.0, f64::max);
+        let along = |azimuth: f64| -> [f64; 3] {
+            let integrate = |panels: usize| {
+                let mut sum = [0.0; 3];
+                optics::quad::for_each_node(0.0, nyquist, panels, |nu, w| {
+                    let v = f(nu, azimuth);
+                    for (s, v) in sum.iter_mut().zip(v) {
+                        *s += w * v;
+                    }
+                });
+                sum.map(|s| s / nyquist)
+            };
+            let mut panels = 4;
+            let mut previous = integrate(panels);
+            loop {
+                panels *= 2;
+                let next = integrate(panels);
+                let change = measure(std::array::from_fn(|i| next[i] - previous[i]));
+                previous = next;
+                if change <= self.tolerance * measure(previous) || panels >= 1024 {
+                    return previous;
+                }
+            }
+        };
+        let pi = std::f64::consts::PI;
+        if !self.over_azimuth {
+            let (t, s) = (along(self.first), along(self.first + 0.5 * pi));
+            return std::array::from_fn(|i| 0.5 * (t[i] + s[i]));
+        }
+        let mut count = optics::FIRST_AZIMUTHS;
+        let mut sum = [0.0; 3];
+        for k in 0..count {
+            let v = along(self.first + pi * k as f64 / count as f64);
+            sum.iter_mut().zip(v).for_each(|(s, v)| *s += v);
+        }
+        let mut average = sum.map(|s| s / count as f64);
+        while count < optics::MAX_AZIMUTHS {
+            let mut added = [0.0; 3];
+            for k in 0..count {
+                let v = along(self.first + pi * (2 * k + 1) as f64 / (2 * count) as f64);
+                added.iter_mut().zip(v).for_each(|(s, v)| *s += v);
+            }
+            count *= 2;
+            let refined: [f64; 3] = std::array::from_fn(|i| 0.5 * average[i] + added[i] / count as f64);
+            let change = measure(std::array::from_fn(|i| refined[i] - average[i]));
+            average = refined;
+            if change <= optics::AZIMUTH_SHARE * self.tolerance * measure(average) {
+                break;
+            }
+        }
+        average
+    }
 }
 
 /// `(∂ln N/∂c, ∂ln N_T/∂c, ∂M̄/∂c)` for the wavelength `c` of the scene's line (docs/physics.md,
@@ -1286,13 +1457,15 @@ fn top_hat(spectrum: &radiometry::Spectrum) -> Option<radiometry::TopHat> {
 ///
 /// The integrals `∫ P sign(O) O_x dν` on 16-point Gauss–Legendre panels of `[0, ν_N]` split at
 /// the sign changes of `O` (the kink of |O|), doubled until they move by at most the tolerance
-/// times `M̄`.
+/// times `M̄`. Where the OTF depends on direction, along each direction
+/// `∂|O|/∂b = (T_b/D)(Re(O* O_b)/|O| − |O|)`, both means on the value's rule over directions
+/// ([`DirectionalRule`]).
 fn top_hat_partials(
     scene: &Scene,
     e: &Evaluation,
     detected: &radiometry::Spectrum,
     band: radiometry::TopHat,
-    p: Parameter,
+    _p: Parameter,
 ) -> Result<SpectralPartials, Error> {
     let lens = scene.lens();
     let field = scene.field();
@@ -1314,13 +1487,24 @@ fn top_hat_partials(
         detected.value(x) * efficiency / whole.total_weight()
     };
     let (t_a, t_b) = (density(a), density(b));
+    let (n_a, n_b) = (-t_a, t_b);
     if whole.direction_dependent() || at_a.direction_dependent() || at_b.direction_dependent() {
-        return Err(Error::NotDifferentiable {
-            parameter: p.describe(),
-            reason: "the OTF depends on direction here (lateral colour or a non-symmetric pupil): the spectral \
-                     gradient is computed for a rotationally symmetric OTF"
-                .to_owned(),
+        // along each direction ∂O/∂b = (T_b/D)(O_b − O), so ∂|O|/∂b = (T_b/D)(Re(O* O_b)/|O| − |O|):
+        // J = the mean of P|O| and I_x that of P Re(O* O_x)/|O|, on the same rule
+        let rule = DirectionalRule::of(scene, &whole, settings.tolerance);
+        let [j, i_a, i_b] = rule.mean(nyquist, [1.0; 3], &|nu, azimuth| {
+            let o = whole.otf_along(nu, azimuth);
+            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+            let (x_a, x_b) = (at_a.otf_along(nu, azimuth), at_b.otf_along(nu, azimuth));
+            let o0 = [o.re, o.im];
+            [
+                pix * o.norm(),
+                pix * modulus_derivative(o0, [x_a.re, x_a.im]),
+                pix * modulus_derivative(o0, [x_b.re, x_b.im]),
+            ]
         });
+        let (d_a, d_b) = (-t_a * (i_a - j), t_b * (i_b - j));
+        return Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) });
     }
     // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
     let integrate = |panels: usize| -> [f64; 2] {
@@ -1353,7 +1537,6 @@ fn top_hat_partials(
         }
     };
     let (d_a, d_b) = (-t_a * (i_a - e.mean_mtf), t_b * (i_b - e.mean_mtf));
-    let (n_a, n_b) = (-t_a, t_b);
     Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
 }
 
