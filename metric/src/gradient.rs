@@ -94,8 +94,9 @@ pub enum Parameter {
     SpectrumRange,
     /// The temperature T of the scene's blackbody source (`source.temperature_k`): `∂/∂T`, per
     /// K. Planck's `∂ln B/∂T` moves the photon count and, over a band, the OTF's spectral
-    /// weights; computed under a line (the photon count alone: docs/physics.md, "Gradients: a
-    /// line's wavelength and a blackbody's temperature").
+    /// weights (the OTF of `ρ ∂ln B/∂T` on its own engine, for a rotationally symmetric OTF);
+    /// under a line the photon count alone (docs/physics.md, "Gradients: a line's wavelength and
+    /// a blackbody's temperature").
     Temperature,
     /// A Seidel term of the chromatic lens (`lens.spherical_um`, `lens.coma_um`,
     /// `lens.astigmatism_um`, `lens.field_curvature_um`): `∂/∂W`, per µm. Where the scene's
@@ -693,10 +694,26 @@ fn point_gradient(
                 (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::Temperature => {
-                let d_ln_n = temperature_log_derivative(scene, p)?;
+                let (d_ln_n, d_mtf) = temperature_partials(scene, e, p)?;
                 // a line: the OTF is the lens's at one wavelength, whatever the weight; N and
-                // N_T both ∝ B(c, T)
-                (n * d_ln_n, background * d_ln_n, 0.0, 0.0, 0.0, 0.0, 0.0)
+                // N_T both ∝ B(c, T). Over a band N_T = ∫ ρ T moves by its own average of g
+                let d_b = match line {
+                    Some(_) => background * d_ln_n,
+                    None if stray => {
+                        return Err(not_smooth(
+                            p,
+                            "with options.glare = \"included\" the transmitted light's temperature derivative over a \
+                             band is not computed here yet"
+                                .to_owned(),
+                        ));
+                    }
+                    None => 0.0,
+                };
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
                 let s = spectral.as_ref().expect("computed above for a spectral parameter");
@@ -1397,12 +1414,14 @@ fn line_center_partials(
     ))
 }
 
-/// `∂ln N/∂T` for the temperature `T` of the scene's blackbody source under a line (Planck's
-/// `∂ln B/∂T` at the line's wavelength, [`radiometry::Blackbody::log_derivatives`]): the OTF is
-/// the lens's at that one wavelength, whatever the weight. Over a band the temperature moves the
-/// OTF's spectral weights by `∂ln B/∂T(λ)`, which is not a polynomial in λ (the rule of
-/// [`spectral_partials`] takes the weights' derivatives as `ρ λ^k`): refused there.
-fn temperature_log_derivative(scene: &Scene, p: Parameter) -> Result<f64, Error> {
+/// `(∂ln N/∂T, ∂M̄/∂T)` for the temperature `T` of the scene's blackbody source, per K
+/// (docs/physics.md, "Gradients: a line's wavelength and a blackbody's temperature"), with
+/// Planck's `g(λ) = ∂ln B/∂T = (x/T) eˣ/(eˣ − 1)`, `x = hc/(λkT)`
+/// ([`radiometry::Blackbody::log_derivatives`]).
+/// - Under a line: `∂ln N/∂T = g(c)` at the line's wavelength `c`, and the OTF is the lens's at
+///   that one wavelength, whatever the weight: `∂M̄/∂T = 0`.
+/// - Over a band: [`temperature_band_partials`].
+fn temperature_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let detected = crate::evaluate::detected_spectrum(scene);
     fn blackbodies(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Blackbody>) {
@@ -1417,15 +1436,140 @@ fn temperature_log_derivative(scene: &Scene, p: Parameter) -> Result<f64, Error>
     let [source] = found[..] else {
         return Err(not_smooth(format!("the detected spectrum has {} blackbody factors, not one", found.len())));
     };
-    let Some(line) = detected.line() else {
+    match detected.line() {
+        Some(line) => Ok((source.log_derivatives(line.center()).1, 0.0)),
+        None => temperature_band_partials(scene, e, &detected, source).map_err(|e| match e {
+            Error::NotDifferentiable { reason, .. } => not_smooth(reason),
+            other => other,
+        }),
+    }
+}
+
+/// `(∂ln N/∂T, ∂M̄/∂T)` over a band, for the detected spectrum `ρ` holding the blackbody
+/// `source` (docs/physics.md, "Gradients: a line's wavelength and a blackbody's temperature"):
+/// `∂ρ/∂T = ρ g`, so with the detected weights `ρ τ`, `A_0 = ∫ ρ τ` and `A_g = ∫ ρ τ g`,
+/// - `∂ln N/∂T = ⟨g⟩ = A_g/A_0` (the engine's spectral average);
+/// - the normalized OTF `O = ∫ ρ τ OTF / A_0` moves as `∂O/∂T = (A_g/A_0)(O_g − O_0)`, where
+///   `O_g` is the polychromatic OTF of the spectrum `ρ g` (`ρ` times the factor
+///   [`radiometry::Spectrum::PlanckTemperatureRate`]): its own engine, on the rules the value's
+///   spectrum takes (product integration, the panels, the FFT path), converged to its own
+///   tolerance;
+/// - `∂M̄/∂T = (1/ν_N) ∫ P sign(O) ∂O/∂T dν` ([`sign_split_mean`]).
+///
+/// The difference `O_g − O_0` is the OTF weighted by `g/⟨g⟩ − 1`, of size `s = std(g)/⟨g⟩` (the
+/// relative spread of `g` over the band, from the detected spectrum's own quadrature): it loses
+/// that factor of the engines' relative accuracy, so both OTFs are taken at the tolerance times
+/// `s/10` (at least 1e-13).
+fn temperature_band_partials(
+    scene: &Scene,
+    e: &Evaluation,
+    detected: &radiometry::Spectrum,
+    source: radiometry::Blackbody,
+) -> Result<(f64, f64), Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: Parameter::Temperature.describe(), reason };
+    let camera = scene.camera();
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
+    }
+    let rate = |l: f64| source.log_derivatives(l).1;
+    // the relative spread of g over the detected spectrum, std(g)/⟨g⟩
+    let (mut w, mut m1, mut m2) = (0.0, 0.0, 0.0);
+    for node in detected.quadrature_nodes() {
+        let g = rate(node.wavelength_m);
+        w += node.weight;
+        m1 += node.weight * g;
+        m2 += node.weight * g * g;
+    }
+    let spread = if w > 0.0 && m1 > 0.0 { ((m2 / w - (m1 / w).powi(2)).max(0.0)).sqrt() / (m1 / w) } else { 1.0 };
+    let lens = scene.lens();
+    let field = scene.field();
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let mut settings = scene.options().settings();
+    let tolerance = settings.tolerance;
+    settings.tolerance = (0.1 * tolerance * spread.min(1.0)).max(1e-13);
+    let spectra = [
+        detected.clone(),
+        radiometry::Spectrum::product(vec![detected.clone(), radiometry::Spectrum::PlanckTemperatureRate { source }]),
+    ];
+    let engines = spectra
+        .iter()
+        .map(|s| optics::Polychromatic::with_settings(lens, s, field, nyquist, None, settings))
+        .collect::<Result<Vec<_>, _>>()?;
+    if engines.iter().any(optics::Polychromatic::direction_dependent) {
         return Err(not_smooth(
-            "over a band the temperature moves the OTF's spectral weights by Planck's ∂ln B/∂T(λ), which is not a \
-             polynomial in λ: the spectral gradient's rule (the OTFs of ρλ and ρλ²) does not reach it yet; \
-             computed under a line (spectrum.shape = \"line\"), where it moves the photon count alone"
+            "the OTF depends on direction here (lateral colour or a non-symmetric pupil): the temperature's \
+             gradient over a band is computed for a rotationally symmetric OTF"
                 .to_owned(),
         ));
+    }
+    let mean_rate = engines[1].total_weight() / engines[0].total_weight();
+    let d_ln_n = engines[0].spectral_average(|l, _| rate(l));
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let at = |nu: f64| -> (f64, [f64; 1]) {
+        let (o, o_g) = (engines[0].otf(nu), engines[1].otf(nu));
+        let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+        (o, [pix * mean_rate * (o_g - o)])
     };
-    Ok(source.log_derivatives(line.center()).1)
+    // per relative change of T, against the size the engines' accuracy is relative to
+    let t = source.temperature();
+    let scale = (d_ln_n * t * spread * e.mean_mtf).abs();
+    // from 2 panels (32 points): the lane is as smooth in ν as the OTF between its sign
+    // changes, and the doubling's own check decides where to stop (from 4 panels, as the
+    // Gaussian's centre starts, the gradient took 2–3× as long on the paper's lens and
+    // examples/tabulated.toml at 50 and 200 nm, its error no smaller)
+    let [d_mtf] = sign_split_mean(
+        nyquist,
+        2,
+        |nu| engines[0].otf(nu),
+        at,
+        |change, next| (change[0] * t).abs() <= tolerance * (next[0] * t).abs().max(scale),
+    );
+    Ok((d_ln_n, d_mtf))
+}
+
+/// `(1/ν_N) ∫_0^{ν_N} sign(O) L_k dν` for the lanes `at(ν) = (O(ν), [L_k(ν)])` (the derivatives
+/// of the OTF `O` at ν, times the pixel MTF where it applies), on 16-point Gauss–Legendre panels
+/// of `[0, ν_N]` split at the sign changes of `otf` ([`sign_change_ends`]: the kink of |O| at a
+/// zero meets a panel only at its ends), from `first` panels (the Gaussian's centre: 4) doubled
+/// until `converged(change, next)` holds for the move `change` of the lanes' means between two
+/// doublings, or 1024 panels.
+fn sign_split_mean<const K: usize>(
+    nyquist: f64,
+    first: usize,
+    otf: impl Fn(f64) -> f64,
+    at: impl Fn(f64) -> (f64, [f64; K]),
+    converged: impl Fn(&[f64; K], &[f64; K]) -> bool,
+) -> [f64; K] {
+    let integrate = |panels: usize| -> [f64; K] {
+        let ends = sign_change_ends(nyquist, panels, &otf, |hi| 1e-15 * hi);
+        let mut sums = [0.0; K];
+        for w in ends.windows(2) {
+            let half = 0.5 * (w[1] - w[0]);
+            if half <= 0.0 {
+                continue;
+            }
+            let centre = 0.5 * (w[0] + w[1]);
+            for &(x, wx) in optics::quad::rule() {
+                let (o, lanes) = at(centre + half * x);
+                let sign = if o < 0.0 { -1.0 } else { 1.0 };
+                for (s, l) in sums.iter_mut().zip(lanes) {
+                    *s += half * wx * sign * l;
+                }
+            }
+        }
+        sums.map(|s| s / nyquist)
+    };
+    let mut panels = first.max(1);
+    let mut previous = integrate(panels);
+    loop {
+        panels *= 2;
+        let next = integrate(panels);
+        let change: [f64; K] = std::array::from_fn(|k| next[k] - previous[k]);
+        previous = next;
+        if converged(&change, &previous) || panels >= 1024 {
+            return previous;
+        }
+    }
 }
 
 /// The top-hat factor of a spectrum (itself or one factor of a product), if there is exactly one.

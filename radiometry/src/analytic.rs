@@ -354,6 +354,15 @@ impl Blackbody {
         ((f - 5.0) / wavelength_m, f / self.temperature_k)
     }
 
+    /// `∂ln g/∂λ` of Planck's temperature rate `g = ∂ln B/∂T = f/T` at `wavelength_m` (> 0), per
+    /// m: with `x = hc/(λkT)`, `∂ln f/∂x = 1/x − 1/(eˣ − 1)` and `∂x/∂λ = −x/λ`, so
+    /// `∂ln g/∂λ = −(1 − x/(eˣ − 1))/λ` (→ 0 as x → 0, → −1/λ as x → ∞).
+    pub fn temperature_rate_log_slope(&self, wavelength_m: f64) -> f64 {
+        let x = SECOND_RADIATION_CONSTANT / wavelength_m / self.temperature_k;
+        let ratio = if x < 1e-8 { 1.0 - 0.5 * x } else { x / x.exp_m1() };
+        -(1.0 - ratio) / wavelength_m
+    }
+
     /// Exact radiance integral ∫₀^∞ B_λ dλ = σT⁴/π, W/(m² sr) (Stefan–Boltzmann).
     pub fn integral(&self) -> f64 {
         let t2 = self.temperature_k * self.temperature_k;

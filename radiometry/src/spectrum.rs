@@ -45,6 +45,17 @@ pub enum Spectrum {
         /// Multiplier applied to the spectral radiance.
         scale: f64,
     },
+    /// Planck's `∂ln B_λ/∂T` of `source` at λ > 0 (0 at λ ≤ 0), per K: `g(λ) = (x/T) eˣ/(eˣ − 1)`,
+    /// `x = hc/(λkT)` ([`Blackbody::log_derivatives`]). Not a radiance: a weight that turns
+    /// `ρ` into `∂ρ/∂T` where `ρ` holds the blackbody, so that the spectral rules integrate
+    /// `∫ ρ g τ OTF dλ`, the temperature's move of the polychromatic OTF (docs/physics.md,
+    /// "Gradients: a line's wavelength and a blackbody's temperature"). Smooth and positive on
+    /// (0, +∞) (no breakpoints; it varies on the scale of λ, as the blackbody does), decreasing
+    /// in λ from `hc/(kT²λ)` (Wien) to `1/T` (Rayleigh–Jeans). Support (0, +∞).
+    PlanckTemperatureRate {
+        /// The blackbody whose temperature moves.
+        source: Blackbody,
+    },
     /// The product of the factors (an empty product is 1 for λ > 0).
     Product(Vec<Spectrum>),
 }
@@ -246,6 +257,13 @@ impl Spectrum {
             Spectrum::TopHat(t) => t.value(l),
             Spectrum::Line(line) => line.value(l),
             Spectrum::Blackbody { source, scale } => scale * source.spectral_radiance(l),
+            Spectrum::PlanckTemperatureRate { source } => {
+                if l > 0.0 {
+                    source.log_derivatives(l).1
+                } else {
+                    0.0
+                }
+            }
             Spectrum::Product(fs) => {
                 if l <= 0.0 {
                     return 0.0;
@@ -261,9 +279,11 @@ impl Spectrum {
     /// interval (x, x).
     pub fn support(&self) -> (f64, f64) {
         match self {
-            Spectrum::Constant(_) | Spectrum::Linear { .. } | Spectrum::Gaussian(_) | Spectrum::Blackbody { .. } => {
-                (0.0, f64::INFINITY)
-            }
+            Spectrum::Constant(_)
+            | Spectrum::Linear { .. }
+            | Spectrum::Gaussian(_)
+            | Spectrum::Blackbody { .. }
+            | Spectrum::PlanckTemperatureRate { .. } => (0.0, f64::INFINITY),
             Spectrum::Sampled(s) => s.range(),
             Spectrum::TopHat(t) => (t.lo(), t.hi()),
             Spectrum::Line(line) => (line.lo(), line.hi()),
@@ -426,6 +446,9 @@ impl Spectrum {
             (Spectrum::Blackbody { source: a, scale: x }, Spectrum::Blackbody { source: b, scale: y }) => {
                 a.bits() == b.bits() && x.to_bits() == y.to_bits()
             }
+            (Spectrum::PlanckTemperatureRate { source: a }, Spectrum::PlanckTemperatureRate { source: b }) => {
+                a.bits() == b.bits()
+            }
             (Spectrum::Product(a), Spectrum::Product(b)) => {
                 a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.same_bits(y))
             }
@@ -582,6 +605,7 @@ impl Spectrum {
                 Spectrum::Linear { slope } if *slope != 0.0 => 1.0 / c,
                 Spectrum::Gaussian(g) => -(c - g.center()) / (g.sigma() * g.sigma()),
                 Spectrum::Blackbody { source, scale } if *scale != 0.0 => source.log_derivatives(c).0,
+                Spectrum::PlanckTemperatureRate { source } => source.temperature_rate_log_slope(c),
                 Spectrum::Sampled(table) => {
                     let (w, v) = (table.wavelengths(), table.values());
                     let k = w.partition_point(|&x| x < c);
@@ -951,6 +975,38 @@ mod tests {
             Spectrum::Line(Line::new(803e-9, 1e-9, 1.0).unwrap()),
         ]);
         assert!(band.line_weight_log_derivative().unwrap_err().contains("edge"));
+    }
+
+    /// Planck's temperature rate `g = ∂ln B/∂T` ([`Spectrum::PlanckTemperatureRate`]) against
+    /// central differences in T of the logarithm of Planck's law written here,
+    /// `B = 2hc²/λ⁵/(exp(hc/(λkT)) − 1)` (SI 2019 constants), relative step 1e-5 (truncation
+    /// ~(h/T)² = 1e-10 of g, ln B varying on the scale of T; rounding ~1e-11), from 300 nm to
+    /// 20 µm at 300, 3000 and 30 000 K (x = hc/(λkT) from 0.024 to 160), within 1e-8 relative;
+    /// its slope in λ (the line weight's arm) against central differences of ln g in λ; and
+    /// `∫ B g dλ = ∂(σT⁴/π)/∂T = 4σT³/π` through the spectrum's quadrature, within 1e-12.
+    #[test]
+    fn planck_temperature_rate_is_the_derivative_of_plancks_law() {
+        let (h, c, k): (f64, f64, f64) = (6.626_070_15e-34, 299_792_458.0, 1.380_649e-23);
+        let ln_planck = |l: f64, t: f64| (2.0 * h * c * c).ln() - 5.0 * l.ln() - (h * c / (l * k * t)).exp_m1().ln();
+        for t in [300.0, 3000.0, 30000.0] {
+            let rate = Spectrum::PlanckTemperatureRate { source: Blackbody::new(t).unwrap() };
+            for l in [300e-9, 550e-9, 825e-9, 1.6e-6, 5e-6, 20e-6] {
+                let step = 1e-5 * t;
+                let differences = (ln_planck(l, t + step) - ln_planck(l, t - step)) / (2.0 * step);
+                let g = rate.value(l);
+                assert!(g > 0.0 && ((g - differences) / differences).abs() <= 1e-8, "{t} K {l}: {g} vs {differences}");
+                let dl = 1e-6 * l;
+                let slope = (rate.value(l + dl).ln() - rate.value(l - dl).ln()) / (2.0 * dl);
+                let line = Spectrum::product(vec![rate.clone(), Spectrum::Line(Line::new(l, 1e-12, 1.0).unwrap())]);
+                let exact = line.line_weight_log_derivative().unwrap();
+                assert!((exact - slope).abs() <= 1e-7 / l, "{t} K {l}: slope {exact} vs {slope}");
+            }
+            assert_eq!(rate.value(0.0), 0.0);
+            let source = Blackbody::new(t).unwrap();
+            let weighted = Spectrum::product(vec![Spectrum::from(source), rate]).integral();
+            let exact = 4.0 * crate::constants::STEFAN_BOLTZMANN * t.powi(3) / std::f64::consts::PI;
+            assert!(((weighted - exact) / exact).abs() <= 1e-12, "{t} K: ∫B g = {weighted} vs {exact}");
+        }
     }
 
     /// A Gaussian times tables ([`Spectrum::gaussian_piecewise_integral`]) against the 16-point

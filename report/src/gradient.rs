@@ -96,8 +96,8 @@ const SUPPORTED: [(&str, Parameter); 10] = [
     ("camera.gain_dn_per_e", Parameter::Gain),
 ];
 
-/// A blackbody source's temperature (Planck's ∂B/∂T): under a line (docs/physics.md, "Gradients:
-/// a line's wavelength and a blackbody's temperature").
+/// A blackbody source's temperature (Planck's ∂B/∂T): under a line and over a band (docs/physics.md,
+/// "Gradients: a line's wavelength and a blackbody's temperature").
 const TEMPERATURE: &str = "source.temperature_k";
 
 /// The pixel pitch, kept apart: its derivative also moves the Nyquist frequency.
@@ -528,7 +528,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody under a line), lens.f_number and lens.focal_length_mm \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), lens.f_number and lens.focal_length_mm \
          (lens.model = \"chromatic\", \"refractive\", \"harmonic\" or \"phase\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
@@ -766,24 +766,86 @@ mod tests {
         check_against_differences(&source, &owned(&["options.form=\"integral\"", "camera.read_noise_e=2"]), &keys);
     }
 
-    /// A blackbody's scale (a factor constant in λ) on the paper's lens, and the temperature
-    /// refused over a band (its spectrum's shape moves the OTF's weights: not yet) and followed
-    /// under a line (Planck's ∂ln B/∂T on the photon count; the line's wavelength through
-    /// ∂ln B/∂λ too), against central differences.
-    #[test]
-    fn a_blackbody_scale_matches_central_differences() {
+    /// The paper's scene with its flat source replaced by a 3000 K blackbody (scale 2e-3).
+    fn paper_blackbody() -> Source {
         let paper = scene::read(None).unwrap();
         let text = paper
             .text()
             .replace("kind = \"flat\"", "kind = \"blackbody\"\ntemperature_k = 3000.0\nscale = 2e-3")
             .replace("radiance_w_m2_sr_nm = 0.025", "");
         assert!(text.contains("blackbody") && !text.contains("radiance_w_m2_sr_nm"), "{text}");
-        let source = Source::from_text(text, "blackbody", ".");
+        Source::from_text(text, "blackbody", ".")
+    }
+
+    /// A blackbody's scale (a factor constant in λ) on the paper's lens, and the temperature
+    /// under a line (Planck's ∂ln B/∂T on the photon count; the line's wavelength through
+    /// ∂ln B/∂λ too), against central differences.
+    #[test]
+    fn a_blackbody_scale_matches_central_differences() {
+        let source = paper_blackbody();
         check_against_differences(&source, &owned(&["camera.read_noise_e=2"]), &["source.scale", "exposure.time_ms"]);
-        let e = gradient(&source, &[], &owned(&["source.temperature_k"])).unwrap_err().to_string();
-        assert!(e.contains("blackbody's temperature") && e.contains("not a polynomial in λ"), "{e}");
         let line = owned(&LINE_803);
         check_line(&source, &line, &["source.temperature_k", "source.scale"]);
+    }
+
+    /// A blackbody's temperature over a band (docs/physics.md, "Gradients: a line's wavelength
+    /// and a blackbody's temperature": Planck's ∂ln B/∂T moves N and the OTF's spectral weights,
+    /// the OTF of ρ ∂ln B/∂T on its own engine) against central differences of evaluations
+    /// converged at 1e-10, Richardson-extrapolated from the relative steps 2h and h,
+    /// h = (3e-10)^{1/3} T (`(4 D(h) − D(2h))/3`: the plain difference's truncation, 5e-7 of
+    /// ∂N/∂T and 3e-6 of ∂M̄/∂T on the paper's lens, would hide the gradient's own error), within
+    /// 10× the scene's 1e-6 of each quantity's gradient norm over the keys (the mean MTF's: the
+    /// temperature's alone, as the exposure leaves it). The paper's chromatic lens behind a Gaussian band of 50 nm
+    /// and of 200 nm (with the pixel MTF, read noise and the integral form there), and
+    /// examples/tabulated.toml (a 2800 K lamp behind its 52 nm filter table, the lens's
+    /// efficiency and the QE tables) as it is and behind a 200 nm top-hat.
+    #[test]
+    fn a_blackbody_temperature_over_a_band_matches_central_differences() {
+        let keys = ["source.temperature_k", "exposure.time_ms"];
+        let paper = paper_blackbody();
+        let tabulated = example("tabulated.toml");
+        // its filter table replaced by a 200 nm top-hat inside the lens's and the QE's tables
+        let text = tabulated.text().replace(
+            "shape = \"table\"\ncsv = \"data/filter-825-52.csv\"",
+            "shape = \"tophat\"\ncenter_nm = 825.0\nrange_nm = 200.0",
+        );
+        assert!(text.contains("tophat") && !text.contains("filter-825-52"), "{text}");
+        let wide = Source::from_text(text, "tabulated, 200 nm", tabulated.dir());
+        for (source, overrides) in [
+            (&paper, owned(&[])),
+            (
+                &paper,
+                owned(&[
+                    "spectrum.range_nm=200",
+                    "camera.pixel_mtf=true",
+                    "camera.read_noise_e=2",
+                    "options.form=\"integral\"",
+                ]),
+            ),
+            (&tabulated, owned(&[])),
+            (&wide, owned(&[])),
+        ] {
+            check_with_references(source, &overrides, &keys, &|k, v| {
+                let h = relative_step(k, v);
+                let (coarse, fine) = (central(source, &overrides, k, v, 2.0 * h), central(source, &overrides, k, v, h));
+                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+            });
+        }
+    }
+
+    /// What the temperature's gradient over a band refuses, naming why: the stray light with
+    /// `glare = "included"` (the transmitted light's own average of ∂ln B/∂T is not followed)
+    /// and an OTF that depends on direction (the chromatic lens's lateral colour off axis).
+    #[test]
+    fn a_blackbody_temperature_over_a_band_refusals_name_why() {
+        let source = paper_blackbody();
+        let refused = |overrides: &[&str]| {
+            gradient(&source, &owned(overrides), &owned(&["source.temperature_k"])).unwrap_err().to_string()
+        };
+        let e = refused(&["options.glare=\"included\""]);
+        assert!(e.contains("blackbody's temperature") && e.contains("glare"), "{e}");
+        let e = refused(&["field.x_deg=5"]);
+        assert!(e.contains("blackbody's temperature") && e.contains("depends on direction"), "{e}");
     }
 
     /// The Gaussian spectrum's centre and range: they move N and the OTF's spectral weights
