@@ -711,15 +711,14 @@ fn point_gradient(
     Ok(out)
 }
 
-/// `(∂N, ∂B, ∂dark, ∂σ_r², ∂σ_q², ∂G, ∂M̄)` per relative change of a PSF stack's sample pitch
+/// One parameter's `(∂N, ∂B, ∂(dark charge), ∂σ_r², ∂(σ_q²/K²), ∂G, ∂M̄)` at a field point.
+type PointPartials = (f64, f64, f64, f64, f64, f64, f64);
+
+/// [`PointPartials`] per relative change of a PSF stack's sample pitch
 /// ([`Parameter::PsfPitch`]): the OTF is `O(ν p/p0)` at every wavelength, so on `[0, ν_N]` the
 /// change of variables `u = νp/p0` gives `M̄(p) = (p0/p)/ν_N ∫_0^{ν_N p/p0} MTF(u) du` and
 /// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move.
-fn psf_pitch_partials(
-    scene: &Scene,
-    e: &Evaluation,
-    p: Parameter,
-) -> Result<(f64, f64, f64, f64, f64, f64, f64), Error> {
+fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<PointPartials, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     if scene.camera().pixel_mtf() {
         return Err(not_smooth(
