@@ -133,6 +133,15 @@ pub enum Parameter {
     /// (`optics::LensModel::order_derivatives`). `∂/∂b`, per unit of the parameter. On axis,
     /// with a white noise spectrum (docs/physics.md, "Gradients: a library's parameter bias").
     LibraryBias(usize),
+    /// The sample pitch p of a PSF-stack lens (`lens.psf_pitch_um`): the stack is the PSF at
+    /// the detector sampled at `x = j p`, so the pitch scales the whole PSF (its centroids too)
+    /// and every wavelength's OTF as `O_p(ν) = O(ν p/p0)`; the photon count does not move (each
+    /// slice is normalized). The mean MTF over `[0, ν_N]` of an OTF in `νp`, by the change of
+    /// variables `u = νp/p0`: `∂M̄/∂ln p = MTF(ν_N) − M̄` (the MTF at Nyquist averaged over azimuth
+    /// as `M̄` is), `∂I/∂ln p = ν_N ∂M̄/∂ln p` in the integral form. `∂/∂ln p`. Refused with the
+    /// pixel MTF (its sinc does not scale with p) or a noise spectrum (docs/physics.md,
+    /// "Gradients: a PSF stack's pitch").
+    PsfPitch,
 }
 
 impl Parameter {
@@ -181,6 +190,7 @@ impl Parameter {
             Parameter::FNumber => "the lens's F-number",
             Parameter::FocalLength => "the lens's focal length",
             Parameter::LibraryBias(_) => "a library lens's parameter bias",
+            Parameter::PsfPitch => "a PSF stack's sample pitch",
         }
     }
 }
@@ -525,6 +535,7 @@ fn point_gradient(
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
+            Parameter::PsfPitch => psf_pitch_partials(scene, e, p)?,
             Parameter::Binary2(_)
             | Parameter::PhaseSpline(_)
             | Parameter::Zernike(_)
@@ -760,6 +771,35 @@ fn point_gradient(
         out.asnr.push(d_snr0 * g + e.snr0 * d_g);
     }
     Ok(out)
+}
+
+/// One parameter's `(∂N, ∂B, ∂(dark charge), ∂σ_r², ∂(σ_q²/K²), ∂G, ∂M̄)` at a field point.
+type PointPartials = (f64, f64, f64, f64, f64, f64, f64);
+
+/// [`PointPartials`] per relative change of a PSF stack's sample pitch
+/// ([`Parameter::PsfPitch`]): the OTF is `O(ν p/p0)` at every wavelength, so on `[0, ν_N]` the
+/// change of variables `u = νp/p0` gives `M̄(p) = (p0/p)/ν_N ∫_0^{ν_N p/p0} MTF(u) du` and
+/// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move.
+fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<PointPartials, Error> {
+    let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
+    if scene.camera().pixel_mtf() {
+        return Err(not_smooth(
+            "with camera.pixel_mtf = true the pixel's sinc does not scale with the stack's pitch, so the OTF's \
+             change of scale is not a change of variables of the MTF integral; not computed here yet",
+        ));
+    }
+    if scene.camera().noise_spectrum().is_some() {
+        return Err(not_smooth(
+            "with camera.noise_spectrum the noise weights do not scale with the stack's pitch; not computed here yet",
+        ));
+    }
+    let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    let d_mtf = edge - e.mean_mtf;
+    let d_g = match scene.options().form {
+        MetricForm::Mean => d_mtf,
+        MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+    };
+    Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf))
 }
 
 /// The scene key of the field angle `axis` (0: x, 1: y).

@@ -103,10 +103,12 @@ const TEMPERATURE: &str = "source.temperature_k";
 /// The pixel pitch, kept apart: its derivative also moves the Nyquist frequency.
 const PIXEL_PITCH: &str = "camera.pixel_pitch_um";
 
-/// The lens families whose `efficiency` and `transmission` are one factor on the imaging order
-/// and on the transmitted light at every wavelength (one order, no relative weights between
-/// orders), so that they leave the OTF as it is.
-const SCALAR_EFFICIENCY_MODELS: [&str; 2] = ["chromatic", "phase"];
+/// The lens families whose `efficiency` and `transmission` are one factor on the imaging orders
+/// and on the transmitted light at every wavelength, so that they leave the OTF as it is: one
+/// order (chromatic, phase, a PSF stack's one tabulated order), or the harmonic lens's orders
+/// `τ_m = τ_base sinc²(α − m)`, every one proportional to `efficiency = τ_base` (no relative
+/// weight between orders moves).
+const SCALAR_EFFICIENCY_MODELS: [&str; 4] = ["chromatic", "phase", "harmonic", "psf"];
 
 /// Keys the value does not depend on smoothly: integers, switches, seeds and limits.
 const NOT_SMOOTH: [(&str, &str); 8] = [
@@ -176,13 +178,12 @@ const APERTURE: [(&str, Parameter); 2] =
 const APERTURE_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
 
 /// The scene quantity `lens.f_number` or `lens.focal_length_mm` sets, or why its gradient is
-/// refused for this family; `None` for another key. With `lens.aperture_diameter_mm` given (the
-/// F-number follows the focal length) the focal length is refused; a phase lens with
+/// refused for this family; `None` for another key (the focal length with
+/// `lens.aperture_diameter_mm` given, F# = f0/D, is [`chain_rule`]'s). A phase lens with
 /// `options.pupil_mapping = "exact"` (whose map moves with the aperture) or a phase table with an
 /// amplitude column (an amplitude in r_mm moves with it) is refused naming why.
 fn aperture_parameter(key: &str, lens_model: &str, table: &toml::Table) -> Option<Result<Parameter>> {
     let (_, p) = APERTURE.iter().find(|(k, _)| *k == key)?;
-    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
     if lens_model == "phase"
         && let Some(mapping) = lookup(table, "options.pupil_mapping").and_then(toml::Value::as_str)
         && mapping == "exact"
@@ -208,13 +209,169 @@ fn aperture_parameter(key: &str, lens_model: &str, table: &toml::Table) -> Optio
             APERTURE_MODELS.map(|m| format!("\"{m}\"")).join(", ")
         )));
     }
-    if *p == Parameter::FocalLength && diameter_given {
-        return Some(Err(anyhow!(
-            "--wrt {key}: not differentiable here with lens.aperture_diameter_mm given (the F-number would move \
-             with the focal length); give lens.f_number instead"
-        )));
-    }
     Some(Ok(*p))
+}
+
+/// A key's derivative as a combination of the engines' parameters: `∂/∂key = Σ c ∂/∂p` over
+/// its `(p, c)`, each `∂/∂p` in the engine's units (per relative change for a [`logarithmic`]
+/// parameter, per engine unit otherwise). Most keys set one parameter ([`direct`]); a chain
+/// rule on lanes the engines compute gives the others (docs/physics.md, "Gradients: chain
+/// rules"); an empty chain is a key the value does not depend on (derivative 0).
+type Chain = Vec<(Parameter, f64)>;
+
+/// The chain of a key that sets the parameter `p` itself, at the key's `value`.
+fn direct(p: Parameter, value: f64) -> Chain {
+    vec![(p, if logarithmic(p) { 1.0 / value } else { unit(p) })]
+}
+
+/// A radiance meter's readings (SI eq. S2, S6): the target's radiance is
+/// `L_λ = E_norm(λ) corr P/(π d²/4) (2f/D)²/(π T_lenses)`, each reading a factor constant in λ
+/// with the exponent given here: `∂ln L/∂ln key` (a [`Parameter::SignalScale`] times it).
+const METER: [(&str, f64); 5] = [
+    ("source.power_nw", 1.0),
+    ("source.fiber_core_diameter_um", -2.0),
+    ("source.relay_transmission", -1.0),
+    ("source.relay_iris_mm", -2.0),
+    ("source.relay_focal_length_mm", 2.0),
+];
+
+/// The chain of a key whose derivative is a chain rule on the engines' parameters, or why it
+/// is refused; `None` for a key that sets one parameter itself (or another refusal's).
+fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> Option<Result<Chain>> {
+    if let Some((_, exponent)) = METER.iter().find(|(k, _)| *k == key) {
+        return Some(Ok(vec![(Parameter::SignalScale, exponent / value)]));
+    }
+    if key == "source.calibration_wavelength_nm" {
+        return Some(calibration_wavelength(key, value, table));
+    }
+    if key == "lens.norm_radius_mm" {
+        return Some(norm_radius(key, value, lens_model, table));
+    }
+    if lens_model == "psf"
+        && let Some(chain) = psf_stack(key, value, table)
+    {
+        return Some(chain);
+    }
+    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
+    if key == "lens.aperture_diameter_mm" || (key == "lens.focal_length_mm" && diameter_given) {
+        // F# = f0/D: the F-number's lanes, with its checks for this family
+        let checked = aperture_parameter("lens.f_number", lens_model, table)?;
+        return Some(match checked {
+            Err(e) => Err(anyhow!("{}", e.to_string().replacen("lens.f_number", key, 1))),
+            // ∂/∂D = −(1/D) ∂/∂ln F#
+            Ok(_) if key == "lens.aperture_diameter_mm" => Ok(vec![(Parameter::FNumber, -1.0 / value)]),
+            // D held: ∂/∂ln f0 = ∂/∂ln f0|F# + ∂/∂ln F#
+            Ok(_) => Ok(vec![(Parameter::FocalLength, 1.0 / value), (Parameter::FNumber, 1.0 / value)]),
+        });
+    }
+    let why = match key {
+        "lens.atom_phase_error_rad" => {
+            "the value is smooth in it for a fixed seed (every atom's factor e^{iσδ_i} with its draw δ_i held), but \
+             its derivative is not computed yet: `asnr tolerance` gives the ASNR's sensitivity to it"
+        }
+        "lens.atom_transmission_error" => {
+            "every atom's amplitude factor 1 + σε_i is taken as 0 where it falls below 0 and its |t| capped at 1 (a \
+             passive atom): the value has a kink wherever σ moves an atom across either limit"
+        }
+        "lens.phase_map_pitch_um" => {
+            "each sample's phase is held over its cell, so the pitch moves every cell's edges across the pupil and \
+             the aperture's edge (the phase jumps there): the derivative is an integral along all the moving edges, \
+             not computed yet"
+        }
+        "lens.iris_decentre_x" | "lens.iris_decentre_y" | "lens.obscuration" => {
+            "the value is smooth in it, but the pupil's edge moves with it: the derivative needs the OTF's overlap \
+             integral differentiated along its moving boundary (a line integral on the edge), not computed yet"
+        }
+        _ => return None,
+    };
+    Some(Err(anyhow!("--wrt {key}: not differentiable here yet: {why}")))
+}
+
+/// `source.calibration_wavelength_nm` (SI eq. S3): the broadband correction
+/// `corr = R(λ_cal) ∫ E_norm/R dλ` is the only place λ_cal enters, a factor constant in λ on
+/// the radiance, so `∂ln L/∂λ_cal = R′(λ_cal)/R(λ_cal)`. The responsivity table is linear
+/// between its rows: the slope of the row interval holding λ_cal; on a row the slopes of the
+/// two sides differ (a kink) and the key is refused.
+fn calibration_wavelength(key: &str, value: f64, table: &toml::Table) -> Result<Chain> {
+    let file = lookup(table, "source.responsivity_csv")
+        .and_then(toml::Value::as_str)
+        .ok_or_else(|| anyhow!("--wrt {key}: the scene has no source.responsivity_csv"))?;
+    let r = scene::read_table(std::path::Path::new(file), 0.0, f64::INFINITY, "responsivity")
+        .with_context(|| format!("--wrt {key}: reading source.responsivity_csv"))?;
+    let (w, v) = (r.wavelengths(), r.values());
+    let l = value * 1e-9;
+    // the table's wavelengths are its nm times 1e-9, as λ_cal is: a row is an exact match
+    if let Some(k) = w.iter().position(|&x| x == l) {
+        let slope = |a: usize, b: usize| (v[b] - v[a]) / ((w[b] - w[a]) * 1e9);
+        let sides = match (k.checked_sub(1), (k + 1 < w.len()).then_some(k + 1)) {
+            (Some(a), Some(b)) => format!("R′ is {:.4e} below and {:.4e} above, per nm", slope(a, k), slope(k, b)),
+            _ => "the table ends there".to_owned(),
+        };
+        bail!(
+            "--wrt {key}: not differentiable at {value} nm: a row of the responsivity table, which is linear between \
+             its rows, so R(λ_cal) — a factor on the radiance (SI eq. S3) — has a kink there ({sides}); between two \
+             rows ∂ln L/∂λ_cal = R′/R"
+        );
+    }
+    let k = w.partition_point(|&x| x < l);
+    if k == 0 || k == w.len() {
+        bail!("--wrt {key}: {value} nm is outside the responsivity table");
+    }
+    let slope = (v[k] - v[k - 1]) / (w[k] - w[k - 1]);
+    // per nm
+    Ok(vec![(Parameter::SignalScale, slope / r.value(l) * 1e-9)])
+}
+
+/// `lens.norm_radius_mm` of a phase lens with Binary 2 terms, `φ = M Σ A_i (r/R_n)^{2i}`: R_n
+/// enters only through the terms (a spline is in ρ = r/R, the Zernike terms are normalized to
+/// the aperture, and a phase table, in r_mm, takes no R_n), so
+/// `∂/∂ln R_n = Σ_i −2i A_i ∂/∂A_i` on the Binary 2 lanes.
+fn norm_radius(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> Result<Chain> {
+    let terms = lookup(table, "lens.binary2").and_then(toml::Value::as_array);
+    let Some(terms) = terms.filter(|_| lens_model == "phase") else {
+        bail!(
+            "--wrt {key}: not differentiable here: R_n normalizes lens.binary2 of lens.model = \"phase\", which this scene has not"
+        );
+    };
+    let mut chain = Vec::new();
+    for (i, a) in terms.iter().enumerate() {
+        let a = match a {
+            toml::Value::Float(a) => *a,
+            toml::Value::Integer(a) => *a as f64,
+            other => bail!("--wrt {key}: lens.binary2[{i}] = {other} is not a number"),
+        };
+        if a != 0.0 {
+            chain.push((Parameter::Binary2(i), -2.0 * (i + 1) as f64 * a / value));
+        }
+    }
+    Ok(chain)
+}
+
+/// A PSF stack's keys (docs/physics.md, "Gradients: chain rules"), `None` for another key. The
+/// stack's OTF is a table in absolute frequency: the F-number and focal length move only the
+/// photon count, `N ∝ NA² = 1/(4F#²)` (SI eq. S7), F# = f0/D where the diameter is given (a
+/// [`Parameter::SignalScale`] times −2 per ln F#); the pitch scales the OTF's frequencies
+/// ([`Parameter::PsfPitch`]); a slice's wavelength is a breakpoint of the OTF's interpolation
+/// in λ.
+fn psf_stack(key: &str, value: f64, table: &toml::Table) -> Option<Result<Chain>> {
+    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
+    let scale = |exponent: f64| Some(Ok(vec![(Parameter::SignalScale, exponent / value)]));
+    match key {
+        "lens.f_number" => scale(-2.0),
+        "lens.aperture_diameter_mm" => scale(2.0),
+        "lens.focal_length_mm" if diameter_given => scale(-2.0),
+        // the OTF is the stack's and the F-number is given: nothing moves
+        "lens.focal_length_mm" => Some(Ok(Vec::new())),
+        "lens.psf_pitch_um" => Some(Ok(vec![(Parameter::PsfPitch, 1.0 / value)])),
+        _ if entry_of(key, "lens.psf_wavelengths_nm").is_some() => Some(Err(anyhow!(
+            "--wrt {key}: not differentiable here yet: a slice's wavelength is a breakpoint of the OTF's \
+             interpolation (linear in λ between the slices, the end slices' OTF standing beyond the stack): moving \
+             it moves the kink of every OTF value's λ-dependence there and the interpolation's weights on the two \
+             intervals beside it, and the spectral rules cut their panels at it; that derivative is not computed \
+             (it is never replaced by a finite difference)"
+        ))),
+        _ => None,
+    }
 }
 
 /// A key as written, parsed: its dotted name and its index, if any.
@@ -528,8 +685,10 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), lens.f_number and lens.focal_length_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\" or \"phase\"), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
+         the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
+         lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -557,22 +716,38 @@ pub(crate) fn gradient_and_evaluation(
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
     let shape = lookup(&table, "spectrum.shape").and_then(toml::Value::as_str).unwrap_or("").to_owned();
     let lanes = Lanes::of(&table);
-    let parameters: Vec<Parameter> = expanded
+    let chains: Vec<Chain> = expanded
         .iter()
-        .map(|(k, _)| {
-            aperture_parameter(k, &lens_model, &table)
-                .or_else(|| library_bias(k, &table))
-                .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
+        .map(|(k, v)| {
+            chain_rule(k, *v, &lens_model, &table).unwrap_or_else(|| {
+                aperture_parameter(k, &lens_model, &table)
+                    .or_else(|| library_bias(k, &table))
+                    .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
+                    .map(|p| direct(p, *v))
+            })
         })
         .collect::<Result<_>>()?;
+    // the engines' parameters, each once, in the order the keys first ask them
+    let mut parameters: Vec<Parameter> = Vec::new();
+    for (p, _) in chains.iter().flatten() {
+        if !parameters.contains(p) {
+            parameters.push(*p);
+        }
+    }
+    if parameters.is_empty() {
+        // every key's derivative is 0 (a key the value does not depend on): the evaluation alone
+        parameters.push(Parameter::SignalScale);
+    }
     let built = scene::build_from(source, overrides)?;
     let g = metric::gradient(&built, &parameters).map_err(|e| anyhow!("{}: {e}", source.label()))?;
-    // per relative change → per unit of the key
+    // ∂/∂key = Σ c ∂/∂p over the key's chain
     let per_key = |d: &[f64]| -> Vec<f64> {
-        d.iter()
-            .zip(&parameters)
-            .zip(&expanded)
-            .map(|((d, p), (_, v))| if logarithmic(*p) { d / v } else { d * unit(*p) })
+        chains
+            .iter()
+            .map(|chain| {
+                chain.iter().map(|(p, c)| c * d[parameters.iter().position(|q| q == p).expect("listed")]).sum::<f64>()
+                    + 0.0
+            })
             .collect()
     };
     let e = &g.evaluation;
@@ -591,17 +766,20 @@ pub(crate) fn gradient_and_evaluation(
     Ok((gradient, g.evaluation))
 }
 
-/// The gradient as a table: each key, its value, `∂ASNR/∂key` and `∂ln ASNR/∂ln key`.
+/// The gradient as a table: each key, its value, `∂ASNR/∂key` and `∂ln ASNR/∂ln key`, each
+/// column as wide as its widest entry (a value prints in full: `0.30000000000000004`).
 pub fn table(g: &Gradient) -> String {
     let width = g.keys.iter().map(|k| k.chars().count()).max().unwrap_or(3).max(3);
+    let values: Vec<String> = g.values.iter().map(f64::to_string).collect();
+    let value_width = values.iter().map(|v| v.chars().count()).max().unwrap_or(0).max("value".len());
     let mut out = format!(
-        "ASNR {:.6}  (mean MTF {:.6}, SNR0 {:.6}, N {:.6e} e⁻)\n\n{:<width$}  {:>14}  {:>14}  {:>16}\n",
+        "ASNR {:.6}  (mean MTF {:.6}, SNR0 {:.6}, N {:.6e} e⁻)\n\n{:<width$}  {:>value_width$}  {:>14}  {:>16}\n",
         g.asnr, g.mean_mtf, g.snr0, g.photoelectrons, "key", "value", "∂ASNR/∂key", "∂ln ASNR/∂ln key"
     );
     for (i, k) in g.keys.iter().enumerate() {
         out.push_str(&format!(
-            "{k:<width$}  {:>14}  {:>14.6e}  {:>16.6}\n",
-            g.values[i].to_string(),
+            "{k:<width$}  {:>value_width$}  {:>14.6e}  {:>16.6}\n",
+            values[i],
             g.d_asnr[i],
             g.relative(i)
         ));
@@ -2656,5 +2834,174 @@ mod tests {
         for (ours, point) in [(g.d_asnr[0], single.d_asnr[0]), (g.d_mean_mtf[0], single.d_mean_mtf[0])] {
             assert!((ours - 2.0 / 3.0 * point).abs() <= 1e-12 * point.abs(), "{ours} vs 2/3 of {point}");
         }
+    }
+
+    /// The relative step for `lens.norm_radius_mm`: R_n moves the edge's phase by
+    /// `Σ 2i A_i δ ln R_n ≈ 1055 rad` per unit of ln R_n on the example (A1 = −527.8), so the
+    /// [`PHASE_STEP`] of A1 (0.0155 rad) is `δ ln R_n ≈ 1.5e-5`.
+    const NORM_RADIUS_STEP: f64 = 1.5e-5;
+
+    /// `lens.norm_radius_mm` of the Binary 2 lens (docs/physics.md, "Gradients: chain rules":
+    /// `∂/∂ln R_n = Σ −2i A_i ∂/∂A_i` on the Binary 2 lanes), the example's four terms alone and
+    /// with a freeform spline added (in ρ: it does not move with R_n), against
+    /// central differences of evaluations converged at 1e-10, within 10× the scene's 1e-6 of
+    /// the gradient's norm.
+    #[test]
+    fn norm_radius_matches_central_differences() {
+        let source = example("phase-binary2.toml");
+        let step =
+            |k: &str, v: f64| if k == "lens.norm_radius_mm" { NORM_RADIUS_STEP * v } else { relative_step(k, v) };
+        check_with_steps(&source, &[], &["lens.norm_radius_mm", "exposure.time_ms"], &step);
+        let with_spline = owned(&["lens.phase_spline_rad=[0.0, 0.3, -0.2, 0.1]"]);
+        check_with_steps(&source, &with_spline, &["lens.norm_radius_mm", "exposure.time_ms"], &step);
+        // a phase lens whose profile takes no R_n (a spline alone) has no such key; a
+        // chromatic lens neither
+        let e = gradient(&scene::read(None).unwrap(), &[], &owned(&["lens.norm_radius_mm"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.norm_radius_mm"), "{e}");
+    }
+
+    /// `lens.aperture_diameter_mm` and `lens.focal_length_mm` with the diameter given
+    /// (F# = f0/D: `∂/∂D = −(1/D) ∂/∂ln F#`, `∂/∂ln f0|D = ∂/∂ln f0|F# + ∂/∂ln F#`), on the
+    /// Binary 2 lens read from its .zmx (its profile moves with R, the lanes of the radial
+    /// engine) and on the paper's chromatic lens given by its diameter (the closed form), in
+    /// both forms with the stray light, against central differences with [`APERTURE_STEP`].
+    #[test]
+    fn aperture_diameter_and_focal_length_at_a_given_diameter_match_central_differences() {
+        let keys = ["lens.aperture_diameter_mm", "lens.focal_length_mm", "exposure.time_ms"];
+        let step = |k: &str, v: f64| if k.starts_with("lens.") { APERTURE_STEP * v.abs() } else { relative_step(k, v) };
+        let zmx = example("phase-binary2-zmx.toml");
+        check_with_steps(&zmx, &[], &keys, &step);
+        let paper = scene::read(None).unwrap();
+        assert!(paper.text().contains("f_number = 2.5"));
+        let by_diameter = Source::from_text(
+            paper.text().replace("f_number = 2.5", "aperture_diameter_mm = 1.344"),
+            "the paper's lens by its diameter, written in the test",
+            ".",
+        );
+        check_with_steps(&by_diameter, &[], &keys, &step);
+        check_with_steps(&by_diameter, &owned(&INTEGRAL_WITH_GLARE), &keys, &step);
+        // the library lens's ring crossings refuse the diameter as the F-number
+        let e = gradient(
+            &Source::from_text(
+                example("library.toml").text().replace("f_number = 2.5", "aperture_diameter_mm = 1.344"),
+                "library lens by its diameter",
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples"),
+            ),
+            &[],
+            &owned(&["lens.aperture_diameter_mm"]),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("--wrt lens.aperture_diameter_mm") && e.contains("ring centre"), "{e}");
+    }
+
+    /// The radiance meter's readings (SI eq. S2–S6: factors P, d⁻², T⁻¹, D⁻², f² on the radiance)
+    /// and its calibration wavelength between two rows of the responsivity table (R′/R of the
+    /// row interval), with read noise, the stray light and the integral form, against central
+    /// differences; at a row (the example's 800 nm) the calibration wavelength is refused.
+    #[test]
+    fn radiance_meter_keys_match_central_differences() {
+        let source = example("radiance-meter.toml");
+        let keys = [
+            "source.power_nw",
+            "source.fiber_core_diameter_um",
+            "source.relay_transmission",
+            "source.relay_iris_mm",
+            "source.relay_focal_length_mm",
+            "source.calibration_wavelength_nm",
+            "exposure.time_ms",
+        ];
+        // 820 nm: between the rows 800 and 850, the step 0.55 nm stays inside them
+        check_against_differences(&source, &owned(&["source.calibration_wavelength_nm=820"]), &keys);
+        check_against_differences(
+            &source,
+            &joined(&INTEGRAL_WITH_GLARE, &["source.calibration_wavelength_nm=820", "source.relay_transmission=0.9"]),
+            &keys,
+        );
+        let e = gradient(&source, &[], &owned(&["source.calibration_wavelength_nm"])).unwrap_err().to_string();
+        assert!(
+            e.contains("--wrt source.calibration_wavelength_nm") && e.contains("a row of the responsivity table"),
+            "{e}"
+        );
+    }
+
+    /// The PSF stack's keys (docs/physics.md, "Gradients: chain rules"): the F-number through
+    /// N ∝ 1/F#² alone (its OTF is a table in absolute frequency), the focal length not at all,
+    /// the efficiency and transmission as the one order's constant factors, and the pitch
+    /// scaling the OTF's frequencies (`∂M̄/∂ln p = MTF(ν_N) − M̄`, the stack's 2-D OTF averaged
+    /// over azimuth), in both forms with the stray light, against central differences of
+    /// converged evaluations; a slice's wavelength is refused.
+    #[test]
+    fn psf_stack_keys_match_central_differences() {
+        let source = example("psf-stack.toml");
+        let keys = [
+            "lens.f_number",
+            "lens.focal_length_mm",
+            "lens.efficiency",
+            "lens.transmission",
+            "lens.psf_pitch_um",
+            "exposure.time_ms",
+        ];
+        check_against_differences(&source, &[], &keys);
+        check_against_differences(&source, &owned(&INTEGRAL_WITH_GLARE), &keys);
+        let g = gradient(&source, &[], &owned(&["lens.focal_length_mm"])).unwrap();
+        assert_eq!((g.d_asnr[0], g.d_photoelectrons[0]), (0.0, 0.0));
+        let e = gradient(&source, &[], &owned(&["lens.psf_wavelengths_nm[3]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.psf_wavelengths_nm[3]") && e.contains("breakpoint"), "{e}");
+        let e = gradient(&source, &owned(&["camera.pixel_mtf=true"]), &owned(&["lens.psf_pitch_um"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sample pitch") && e.contains("camera.pixel_mtf"), "{e}");
+    }
+
+    /// The harmonic lens's `efficiency` (τ_base, a factor on every order's τ_m) and
+    /// `transmission`, with the stray light, against central differences.
+    #[test]
+    fn harmonic_efficiency_and_transmission_match_central_differences() {
+        let source = example("harmonic.toml");
+        let keys = ["lens.efficiency", "lens.transmission", "exposure.time_ms"];
+        check_against_differences(&source, &owned(&["options.glare=\"included\"", "camera.read_noise_e=2"]), &keys);
+    }
+
+    /// The keys still refused name the key and why: the library's fabrication errors, a phase
+    /// map's pitch, the iris's decentre and the obscuration.
+    #[test]
+    fn moving_edges_and_random_draws_are_refused_naming_why() {
+        let library = example("library.toml");
+        let e = gradient(&library, &[], &owned(&["lens.atom_phase_error_rad"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.atom_phase_error_rad") && e.contains("asnr tolerance"), "{e}");
+        let e = gradient(&library, &[], &owned(&["lens.atom_transmission_error"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.atom_transmission_error") && e.contains("kink"), "{e}");
+        let paper = scene::read(None).unwrap();
+        for key in ["lens.iris_decentre_x", "lens.iris_decentre_y", "lens.obscuration"] {
+            let e = gradient(&paper, &[], &owned(&[key])).unwrap_err().to_string();
+            assert!(e.contains(&format!("--wrt {key}")) && e.contains("pupil's edge moves"), "{e}");
+        }
+    }
+
+    /// The table's columns stay aligned whatever a value's length (a float printed in full).
+    #[test]
+    fn the_table_is_aligned_for_long_values() {
+        let g = Gradient {
+            keys: owned(&["lens.binary2[3]", "exposure.time_ms"]),
+            values: vec![0.002638937829015425, 1.23],
+            asnr: 10.0,
+            mean_mtf: 0.4,
+            snr0: 25.0,
+            photoelectrons: 625.0,
+            d_asnr: vec![1.5e-2, 4.0],
+            d_mean_mtf: vec![0.0; 2],
+            d_snr0: vec![0.0; 2],
+            d_photoelectrons: vec![0.0; 2],
+        };
+        let text = table(&g);
+        let lines: Vec<&str> = text.lines().skip(2).collect();
+        assert_eq!(lines.len(), 3, "{text}");
+        let widths: Vec<usize> = lines.iter().map(|l| l.chars().count()).collect();
+        assert!(widths.iter().all(|&w| w == widths[0]), "{text}");
+        // each value ends where the header's "value" ends
+        let end = |l: &str, what: &str| l.find(what).map(|i| l[..i].chars().count() + what.chars().count());
+        assert_eq!(end(lines[0], "value"), end(lines[1], "0.002638937829015425"), "{text}");
+        assert_eq!(end(lines[0], "value"), end(lines[2], "1.23"), "{text}");
     }
 }
