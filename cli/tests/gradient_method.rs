@@ -82,7 +82,8 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
         "gradient",
     ]);
     assert!(e.contains("--method gradient: --over lens.design_wavelength_nm: not differentiable here yet"), "{e}");
-    // a blackbody's temperature over a band is not followed (under a line it is)
+    // a blackbody's temperature over a band with the stray light included is not followed (without
+    // it, or under a line, it is)
     let paper = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/paper-theory.toml")).unwrap();
     let blackbody = paper
         .replace("kind = \"flat\"", "kind = \"blackbody\"\ntemperature_k = 3000.0\nscale = 2e-3")
@@ -90,8 +91,15 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
     let path = std::env::temp_dir().join(format!("asnr-gradient-blackbody-{}.toml", std::process::id()));
     std::fs::write(&path, blackbody).unwrap();
     let scene = path.to_str().unwrap();
-    let e = fails(&["optimize", scene, "--over", "source.temperature_k=2500:3500", "--method", "gradient"]);
-    assert!(e.contains("--method gradient: ") && e.contains("blackbody's temperature"), "{e}");
+    let over = ["optimize", scene, "--over", "source.temperature_k=2500:3500", "--method", "gradient"];
+    let e = fails(&[&over[..], &["--set", "options.glare=included"]].concat());
+    assert!(
+        e.contains("--method gradient: ") && e.contains("blackbody's temperature") && e.contains("options.glare"),
+        "{e}"
+    );
+    // without the stray light the search runs on the temperature's gradient
+    let v = json(&[&over[..], &["--json", "--max-evaluations", "20"]].concat());
+    assert!(v["asnr"].as_f64().unwrap() > 0.0, "{v}");
     for objective in ["capacity", "detectability:disk:20:0.1"] {
         let e =
             fails(&["optimize", "--over", "exposure.time_ms=1:2", "--objective", objective, "--method", "gradient"]);
