@@ -322,6 +322,20 @@ impl RadialProfile {
     }
 }
 
+impl RadialProfile {
+    /// The radii `ρ` where the profile's third derivative may jump: a table's knots (read through
+    /// the map of [`DirectionCosines`] at `q = q_r/(1 − E + q_r E)`); none for an analytic kind.
+    fn knot_radii(&self) -> Vec<f64> {
+        match &self.kind {
+            Kind::Table(s) | Kind::TableSlope(s) => s.x.clone(),
+            Kind::Mapped { inner: Some(p), e2, .. } => {
+                p.knot_radii().into_iter().map(|r| (r * r / (1.0 - e2 + r * r * e2)).sqrt()).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+}
+
 /// `(max |f'|, max |f''|)` of `f` on `[0, 1]` from differences at [`BOUND_SAMPLES`] + 1 points,
 /// with a margin of 25 % for what falls between them.
 fn derivative_bounds(f: impl Fn(f64) -> f64) -> (f64, f64) {
@@ -1007,6 +1021,10 @@ pub struct RadialOrder {
     /// [`PROXY_PHASE_ERROR`] (evaluated by Clenshaw's recurrence instead of the profile's own
     /// terms: a table's spline search, a sphere's root), cut per OTF to the accuracy asked
     proxy: Option<Proxy>,
+    /// the knots `0 < ρ_i < 1` of the pupil's tables (its wavefront terms and amplitude), in
+    /// this pupil's radius, ascending: where the integrand's third derivative jumps
+    /// ([`split_nodes`](Self::split_nodes)); empty for analytic profiles
+    knots: Vec<f64>,
 }
 
 /// A phase proxy's Chebyshev coefficients and, for each degree it may be cut to, the largest
@@ -1037,9 +1055,41 @@ impl Proxy {
     }
 }
 
-/// A radial OTF's rule ([`RadialOrder::otf`]): `acos s`, the t panels, the v nodes with their
-/// weights, the proxy's cut.
-type Rule<'a> = (f64, usize, std::borrow::Cow<'static, [(f64, f64)]>, Option<&'a [f64]>);
+/// A radial OTF's rule ([`RadialOrder::otf`]): its nodes and the proxy's cut.
+type Rule<'a> = (Nodes, Option<&'a [f64]>);
+
+/// The nodes of a radial OTF's rule, handed out a panel of lanes at a time
+/// ([`RadialOrder::panel_nodes`]).
+enum Nodes {
+    /// The tensor rule: `t_panels` 16-point panels on `[0, t_end]` (`t_end = acos s`) times
+    /// `v_nodes` across v (a pupil whose profiles are analytic).
+    Tensor { t_end: f64, t_panels: usize, v_nodes: std::borrow::Cow<'static, [(f64, f64)]> },
+    /// The rule split at a table's knots ([`RadialOrder::split_nodes`]): every lane's `q₁`, `q₂`
+    /// and weight (t and v rule, `sin²t`), padded with lanes of weight zero to whole panels of
+    /// [`SPLIT_LANES`].
+    Split { q1: Vec<f64>, q2: Vec<f64>, weight: Vec<f64> },
+}
+
+/// Lanes of a panel of the split rule ([`Nodes::Split`]).
+const SPLIT_LANES: usize = 256;
+
+impl Nodes {
+    /// The lanes of one panel.
+    fn lanes(&self) -> usize {
+        match self {
+            Nodes::Tensor { v_nodes, .. } => crate::quad::rule().len() * v_nodes.len(),
+            Nodes::Split { .. } => SPLIT_LANES,
+        }
+    }
+
+    /// The panels.
+    fn panels(&self) -> usize {
+        match self {
+            Nodes::Tensor { t_panels, .. } => *t_panels,
+            Nodes::Split { weight, .. } => weight.len() / SPLIT_LANES,
+        }
+    }
+}
 
 /// Largest degree of a phase proxy ([`RadialOrder`]).
 const PROXY_MAX_DEGREE: usize = 64;
@@ -1320,7 +1370,18 @@ impl RadialOrder {
             Some(parts) => Some(Proxy::new(parts.series.iter().map(|c| k * c).collect(), k * parts.error + rounding)),
             None => phase_proxy(&|q| k * pupil.opd_beyond_defocus_m(q), rounding),
         };
-        RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, amplitude_higher, proxy }
+        let mut knots: Vec<f64> = pupil
+            .terms
+            .iter()
+            .filter(|(c, _)| *c != 0.0)
+            .map(|(_, p)| p)
+            .chain(pupil.amplitude.as_ref())
+            .flat_map(|p| p.knot_radii())
+            .filter(|&r| r > 0.0 && r < 1.0)
+            .collect();
+        knots.sort_by(f64::total_cmp);
+        knots.dedup();
+        RadialOrder { pupil, w020_m, wavelength_m, slope, oscillation, amplitude_turns, amplitude_higher, proxy, knots }
     }
 
     /// The oscillation of `W'` (m) over windows of width `delta` in `q` (the next dyadic window).
@@ -1339,11 +1400,11 @@ impl RadialOrder {
     /// pupil's [`frequency_scale`](RadialPupil::frequency_scale)), within
     /// about `accuracy` (absolute) of the autocorrelation integral (module docs).
     pub fn otf(&self, s: f64, accuracy: f64) -> f64 {
-        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+        let (s, (nodes, proxy)) = match self.scaled_rule(s, accuracy) {
             Ok(inside) => inside,
             Err(end) => return end,
         };
-        let total = self.direct(s, t_end, t_panels, &v_nodes, proxy);
+        let total = self.direct(s, &nodes, proxy);
         4.0 * total / (std::f64::consts::PI * self.pupil.power())
     }
 
@@ -1369,11 +1430,11 @@ impl RadialOrder {
         derivatives: &mut [f64],
     ) -> f64 {
         derivatives.iter_mut().for_each(|d| *d = 0.0);
-        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+        let (s, (nodes, proxy)) = match self.scaled_rule(s, accuracy) {
             Ok(inside) => inside,
             Err(end) => return end,
         };
-        let total = self.direct_derivatives(s, t_end, t_panels, &v_nodes, proxy, directions, derivatives);
+        let total = self.direct_derivatives(s, &nodes, proxy, directions, derivatives);
         let norm = 4.0 / (std::f64::consts::PI * self.pupil.power());
         derivatives.iter_mut().for_each(|d| *d *= norm);
         norm * total
@@ -1435,7 +1496,113 @@ impl RadialOrder {
         // the OTF by at most 2e (|cos(φ + e) − cos φ| ≤ e at each of the two points, and
         // ∫A(q₁)A(q₂) ≤ ∫A² by Cauchy–Schwarz), half the accuracy; the quadrature has the rest
         let proxy = self.proxy.as_ref().map(|p| p.cut(0.25 * accuracy));
-        (t_end, t_panels, v_nodes, proxy)
+        if !self.knots.is_empty() {
+            return (self.split_nodes(s, accuracy, t_end, phase_t, phase_v), proxy);
+        }
+        (Nodes::Tensor { t_end, t_panels, v_nodes }, proxy)
+    }
+
+    /// The rule of a pupil with a table's knots (docs/physics.md, "The radial engine"): a cubic
+    /// spline's third derivative jumps at each knot `ρ_i`, so the integrand is only piecewise
+    /// analytic, and a Gauss–Legendre panel across a jump converges only algebraically. Here
+    /// every panel lies between the jumps:
+    ///
+    /// - each row (one t node, `c = cos t`, `σ = sin t`) is split across v where either pupil's
+    ///   radius crosses a knot, `q₁ = c² + v²σ² = ρ_i²` and `q₂ = (c − 2s)² + v²σ² = ρ_i²`;
+    /// - t is split where such a crossing enters the rows: at `v = 0` (`c = ρ_i`, `c = 2s ± ρ_i`,
+    ///   and `c = 2s`, the second pupil's axis, where a spline's first piece has its `ρ³`) and at
+    ///   `v = 1` (`q₂ = 1 + 4s² − 4sc = ρ_i²`). A crossing entering at `v = 0` moves as
+    ///   `√(t − t_i)`, which puts `(t − t_i)^{7/2}` into the row integral: a segment next to one
+    ///   takes its nodes through `t = t_a + L w²` (its mirror at the other end, `w²(3 − 2w)` at
+    ///   both), in which the row integral is analytic again.
+    ///
+    /// Each piece takes the fewest Gauss–Legendre points ([`for_each_piece_node`]) for the phase
+    /// it turns through: along t a share of the tensor rule's bound `phase_t` in proportion to
+    /// the segment's length, across v `phase_v (b² − a²)` for the piece `[a, b]` (the phase's
+    /// change along v is `2vσ² k (W′(q₁) − W′(q₂))`, at most `2v k osc`).
+    fn split_nodes(&self, s: f64, accuracy: f64, t_end: f64, phase_t: f64, phase_v: f64) -> Nodes {
+        let allowed = 1e-2 * accuracy;
+        // the t breaks, each with whether a crossing enters at v = 0 there (a square root)
+        let mut breaks: Vec<(f64, bool)> = Vec::with_capacity(4 * self.knots.len() + 1);
+        let mut at = |c: f64, root: bool| {
+            if c > s && c < 1.0 {
+                breaks.push((c.acos(), root));
+            }
+        };
+        at(2.0 * s, true);
+        for &r in &self.knots {
+            at(r, true);
+            at(2.0 * s + r, true);
+            at(2.0 * s - r, true);
+            at((1.0 + 4.0 * s * s - r * r) / (4.0 * s), false);
+        }
+        breaks.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // segments' ends, breaks closer than 1e-12 t_end merged
+        let close = 1e-12 * t_end;
+        let mut ends: Vec<(f64, bool)> = vec![(0.0, false)];
+        for (t, root) in breaks {
+            match ends.last_mut() {
+                Some(last) if t - last.0 <= close => last.1 |= root,
+                _ => ends.push((t, root)),
+            }
+        }
+        let segments = ends.len();
+        match ends.last_mut() {
+            Some(last) if t_end - last.0 <= close && segments > 1 => last.0 = t_end,
+            _ => ends.push((t_end, false)),
+        }
+        let (mut q1, mut q2, mut weight) = (Vec::new(), Vec::new(), Vec::new());
+        let mut v_ends: Vec<f64> = Vec::with_capacity(2 * self.knots.len() + 2);
+        for w in ends.windows(2) {
+            let ((ta, root_a), (tb, root_b)) = (w[0], w[1]);
+            let length = tb - ta;
+            for_each_piece_node(phase_t * length / t_end, allowed, |x, wx| {
+                // through the map that makes a square root at an end analytic
+                let (t, dt) = match (root_a, root_b) {
+                    (false, false) => (ta + length * x, length),
+                    (true, false) => (ta + length * x * x, 2.0 * length * x),
+                    (false, true) => (tb - length * (1.0 - x) * (1.0 - x), 2.0 * length * (1.0 - x)),
+                    (true, true) => (ta + length * x * x * (3.0 - 2.0 * x), 6.0 * length * x * (1.0 - x)),
+                };
+                let (sin_t, cos_t) = t.sin_cos();
+                let sigma2 = sin_t * sin_t;
+                let row = wx * dt * sigma2;
+                let (c1, c2) = (cos_t * cos_t, (cos_t - 2.0 * s) * (cos_t - 2.0 * s));
+                v_ends.clear();
+                v_ends.push(0.0);
+                for &r in &self.knots {
+                    for c in [c1, c2] {
+                        let v2 = (r * r - c) / sigma2;
+                        if v2 > 0.0 && v2 < 1.0 {
+                            v_ends.push(v2.sqrt());
+                        }
+                    }
+                }
+                v_ends.push(1.0);
+                v_ends.sort_by(f64::total_cmp);
+                let delta = 4.0 * s * (cos_t - s);
+                for p in v_ends.windows(2) {
+                    let (va, vb) = (p[0], p[1]);
+                    if vb <= va {
+                        continue;
+                    }
+                    for_each_piece_node(phase_v * (vb * vb - va * va), allowed, |y, wy| {
+                        let v = va + (vb - va) * y;
+                        let first = c1 + v * v * sigma2;
+                        let d = first - delta;
+                        q1.push(first);
+                        // q₂ ≥ 0; the clamp holds it there through rounding
+                        q2.push(if d > 0.0 { d } else { 0.0 });
+                        weight.push(row * wy * (vb - va));
+                    });
+                }
+            });
+        }
+        let padded = weight.len().div_ceil(SPLIT_LANES) * SPLIT_LANES;
+        q1.resize(padded, 0.0);
+        q2.resize(padded, 0.0);
+        weight.resize(padded, 0.0);
+        Nodes::Split { q1, q2, weight }
     }
 
     /// `direct` with the derivatives along `directions` added into
@@ -1445,14 +1612,12 @@ impl RadialOrder {
     fn direct_derivatives(
         &self,
         s: f64,
-        t_end: f64,
-        t_panels: usize,
-        v_nodes: &[(f64, f64)],
+        nodes: &Nodes,
         proxy: Option<&[f64]>,
         directions: &[RadialProfile],
         derivatives: &mut [f64],
     ) -> f64 {
-        let lanes = crate::quad::rule().len() * v_nodes.len();
+        let lanes = nodes.lanes();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         LANE_BUFFERS.with_borrow_mut(|[q, weight, _]| {
@@ -1477,8 +1642,8 @@ impl RadialOrder {
             };
             let mut sums = vec![wide::f64x8::ZERO; general.len()];
             let mut total = 0.0;
-            for pt in 0..t_panels {
-                self.panel_lanes(s, t_end, t_panels, pt, v_nodes, q, weight);
+            for pt in 0..nodes.panels() {
+                self.panel_lanes(s, nodes, pt, q, weight);
                 // even polynomials with the proxy: the phase as the value's lanes, and the moments
                 // `Σ_l −w sin(Δφ) (q₁^m − q₂^m)` once for all the directions
                 let start = match (proxy, moments.as_mut()) {
@@ -1543,17 +1708,8 @@ impl RadialOrder {
     /// `q₁` and `q₂` into `q` (first and second half) and its weight (the t and v rule's, `sin²t`
     /// and the field amplitudes) into `weight`.
     #[allow(clippy::too_many_arguments)]
-    fn panel_lanes(
-        &self,
-        s: f64,
-        t_end: f64,
-        t_panels: usize,
-        pt: usize,
-        v_nodes: &[(f64, f64)],
-        q: &mut [f64],
-        weight: &mut [f64],
-    ) {
-        self.panel_nodes(s, t_end, t_panels, pt, v_nodes, q, weight);
+    fn panel_lanes(&self, s: f64, nodes: &Nodes, pt: usize, q: &mut [f64], weight: &mut [f64]) {
+        self.panel_nodes(s, nodes, pt, q, weight);
         self.amplitudes(q, weight);
     }
 
@@ -1579,18 +1735,18 @@ impl RadialOrder {
         wavefront_m: &RadialProfile,
     ) -> (f64, f64) {
         // the OTF is normalized to 1 at s = 0 whatever the pupil: no derivative there
-        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+        let (s, (nodes, proxy)) = match self.scaled_rule(s, accuracy) {
             Ok(inside) => inside,
             Err(end) => return (end, 0.0),
         };
-        let lanes = crate::quad::rule().len() * v_nodes.len();
+        let lanes = nodes.lanes();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         let (mut q, mut weight) = (vec![0.0; 2 * lanes], vec![0.0; lanes]);
         let (mut total, mut derivative) = (0.0, 0.0);
-        for pt in 0..t_panels {
+        for pt in 0..nodes.panels() {
             // the value's nodes and weights without the amplitudes, which are differentiated here
-            self.panel_nodes(s, t_end, t_panels, pt, &v_nodes, &mut q, &mut weight);
+            self.panel_nodes(s, &nodes, pt, &mut q, &mut weight);
             for (l, &w) in weight.iter().enumerate() {
                 let (q1, q2) = (q[l], q[lanes + l]);
                 let beyond = match proxy {
@@ -1633,11 +1789,11 @@ impl RadialOrder {
         derivatives: &mut [f64],
     ) -> f64 {
         derivatives.iter_mut().for_each(|d| *d = 0.0);
-        let (s, (t_end, t_panels, v_nodes, proxy)) = match self.scaled_rule(s, accuracy) {
+        let (s, (nodes, proxy)) = match self.scaled_rule(s, accuracy) {
             Ok(inside) => inside,
             Err(end) => return end,
         };
-        let lanes = crate::quad::rule().len() * v_nodes.len();
+        let lanes = nodes.lanes();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         let total = FIELD_BUFFERS.with_borrow_mut(|[q, bare, weight, phase]| {
@@ -1648,10 +1804,10 @@ impl RadialOrder {
                 phase.resize(2 * lanes, 0.0);
             }
             let mut total = 0.0;
-            for pt in 0..t_panels {
+            for pt in 0..nodes.panels() {
                 // the value's lanes exactly (`panel_lanes`: the nodes, then the amplitudes), and
                 // the rule's weights without the amplitudes, which the lanes differentiate
-                self.panel_nodes(s, t_end, t_panels, pt, &v_nodes, q, bare);
+                self.panel_nodes(s, &nodes, pt, q, bare);
                 weight.copy_from_slice(bare);
                 self.amplitudes(q, weight);
                 let (q1, q2) = q.split_at(lanes);
@@ -1766,16 +1922,17 @@ impl RadialOrder {
     /// [`panel_lanes`](Self::panel_lanes) without the field amplitudes: the rule's weights
     /// (t and v rule, `sin²t`) alone.
     #[allow(clippy::too_many_arguments)]
-    fn panel_nodes(
-        &self,
-        s: f64,
-        t_end: f64,
-        t_panels: usize,
-        pt: usize,
-        v_nodes: &[(f64, f64)],
-        q: &mut [f64],
-        weight: &mut [f64],
-    ) {
+    fn panel_nodes(&self, s: f64, nodes: &Nodes, pt: usize, q: &mut [f64], weight: &mut [f64]) {
+        let (t_end, t_panels, v_nodes) = match nodes {
+            Nodes::Tensor { t_end, t_panels, v_nodes } => (*t_end, *t_panels, v_nodes),
+            Nodes::Split { q1, q2, weight: w } => {
+                let range = pt * SPLIT_LANES..(pt + 1) * SPLIT_LANES;
+                q[..SPLIT_LANES].copy_from_slice(&q1[range.clone()]);
+                q[SPLIT_LANES..2 * SPLIT_LANES].copy_from_slice(&q2[range.clone()]);
+                weight.copy_from_slice(&w[range]);
+                return;
+            }
+        };
         let rule16 = crate::quad::rule();
         let lanes = weight.len();
         let ht = 0.5 * t_end / t_panels as f64;
@@ -1823,8 +1980,8 @@ impl RadialOrder {
     /// times `v_nodes`, one t panel at a time, its `(t, v)` nodes as lanes. The phase beyond the
     /// defocus is `proxy` (a cut of the order's, [`proxy_cosine_sum`]: phase and cosine fused
     /// eight lanes at a time), or without one the profile's own terms, then [`cosine_sum`].
-    fn direct(&self, s: f64, t_end: f64, t_panels: usize, v_nodes: &[(f64, f64)], proxy: Option<&[f64]>) -> f64 {
-        let lanes = crate::quad::rule().len() * v_nodes.len();
+    fn direct(&self, s: f64, nodes: &Nodes, proxy: Option<&[f64]>) -> f64 {
+        let lanes = nodes.lanes();
         let k = std::f64::consts::TAU / self.wavelength_m;
         let a = k * self.w020_m;
         LANE_BUFFERS.with_borrow_mut(|[q, weight, phase]| {
@@ -1834,8 +1991,8 @@ impl RadialOrder {
                 phase.resize(2 * lanes, 0.0);
             }
             let mut total = 0.0;
-            for pt in 0..t_panels {
-                self.panel_lanes(s, t_end, t_panels, pt, v_nodes, q, weight);
+            for pt in 0..nodes.panels() {
+                self.panel_lanes(s, nodes, pt, q, weight);
                 total += match proxy {
                     Some(c) => proxy_cosine_sum(c, a, &q[..lanes], &q[lanes..], weight),
                     None => {
@@ -1864,6 +2021,39 @@ thread_local! {
     /// allocation per OTF).
     static LANE_BUFFERS: std::cell::RefCell<[Vec<f64>; 3]> =
         const { std::cell::RefCell::new([Vec::new(), Vec::new(), Vec::new()]) };
+}
+
+/// The nodes `x` and weights of a rule on `[0, 1]` for an integrand turning through `theta`
+/// radians there, to about `allowed` of its size: the fewest Gauss–Legendre points `n ≤ 16` with
+/// `(θ/2)^{2n}/(2n)! ≤ allowed` (the error of the n-point rule for `exp(iθx)` on `[0, 1]`, as
+/// [`panel_phase`] for 16), else 16-point panels each turning through at most [`panel_phase`].
+fn for_each_piece_node(theta: f64, allowed: f64, mut visit: impl FnMut(f64, f64)) {
+    static RULES: OnceLock<Vec<Vec<(f64, f64)>>> = OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        (1..=16)
+            .map(|n| crate::quad::gauss_legendre(n).into_iter().map(|(x, w)| (0.5 * (x + 1.0), 0.5 * w)).collect())
+            .collect()
+    });
+    let half = 0.5 * theta;
+    // (θ/2)^{2n}/(2n)! by its recurrence
+    let (mut term, mut n) = (half * half / 2.0, 1);
+    while n < 16 && term > allowed {
+        term *= half * half / ((2 * n + 1) * (2 * n + 2)) as f64;
+        n += 1;
+    }
+    if term <= allowed {
+        for &(x, w) in &rules[n - 1] {
+            visit(x, w);
+        }
+        return;
+    }
+    let panels = (theta / panel_phase(allowed)).ceil().max(1.0) as usize;
+    let h = 1.0 / panels as f64;
+    for p in 0..panels {
+        for &(x, w) in &rules[15] {
+            visit((p as f64 + x) * h, w * h);
+        }
+    }
 }
 
 /// The phase (radians) a 16-point Gauss–Legendre panel may turn through for an error of about
@@ -2318,7 +2508,8 @@ mod tests {
             let full = order.proxy.as_ref().map(|p| p.coefficients.as_slice());
             for s in [0.01, 0.05, 0.1, 0.19, 0.38] {
                 let t_end = f64::acos(s);
-                let fine = 4.0 * order.direct(s, t_end, 12, &v_fine, full) / std::f64::consts::PI;
+                let nodes = Nodes::Tensor { t_end, t_panels: 12, v_nodes: v_fine.clone().into() };
+                let fine = 4.0 * order.direct(s, &nodes, full) / std::f64::consts::PI;
                 let got = order.otf(s, 1e-12);
                 assert!((got - fine).abs() <= 1e-12, "λ {lambda:e}, s {s}: {got} vs {fine}");
             }
@@ -2429,6 +2620,70 @@ mod tests {
             let plain: f64 =
                 (0..n).map(|i| w[i] * (37.0 * (q[i] - q2[i]) + clenshaw(&c, q[i]) - clenshaw(&c, q2[i])).cos()).sum();
             assert!((fused - plain).abs() < 1e-13 * n as f64, "n = {n}: {fused} vs {plain}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod spline_probe {
+    use super::*;
+
+    /// the 17-knot (or `knots`) spline of the hyperbolic phase, geometric-phase lens at `lambda`
+    pub(super) fn spline_order(knots: usize, lambda: f64) -> RadialOrder {
+        let (f0, radius, l0) = (3.36e-3_f64, 0.672e-3_f64, 800e-9_f64);
+        let k0 = std::f64::consts::TAU / l0;
+        let rho: Vec<f64> = (0..knots).map(|i| i as f64 / (knots - 1) as f64).collect();
+        let values = rho.iter().map(|p| -k0 * (((radius * p).powi(2) + f0 * f0).sqrt() - f0)).collect();
+        let spline = Arc::new(RadialProfile::table(rho, values).unwrap());
+        let sphere = Arc::new(RadialProfile::reference_sphere(radius, f0).unwrap());
+        let pupil = RadialPupil::new(None, vec![(lambda / std::f64::consts::TAU, spline), (1.0, sphere)], vec![]).unwrap();
+        let w020 = pupil.fitted_defocus_m();
+        RadialOrder::new(Arc::new(pupil), w020, lambda)
+    }
+
+    /// adaptive Gauss–Legendre 8/16 on [a, b] to `tol` (absolute)
+    pub(super) fn adaptive(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64, depth: usize) -> f64 {
+        let g = |n: usize| {
+            let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
+            crate::quad::gauss_legendre(n).iter().map(|&(x, w)| h * w * f(c + h * x)).sum::<f64>()
+        };
+        let (coarse, fine) = (g(8), g(16));
+        if (fine - coarse).abs() <= tol || depth == 0 {
+            return fine;
+        }
+        let m = 0.5 * (a + b);
+        adaptive(f, a, m, 0.5 * tol, depth - 1) + adaptive(f, m, b, 0.5 * tol, depth - 1)
+    }
+
+    pub(super) fn reference(order: &RadialOrder, s: f64, tol: f64) -> f64 {
+        let k = std::f64::consts::TAU / order.wavelength_m;
+        let w = |q: f64| order.w020_m * q + order.pupil.opd_beyond_defocus_m(q);
+        let inner = |t: f64| {
+            let (st, ct) = t.sin_cos();
+            let f = |v: f64| {
+                let q1 = ct * ct + v * v * st * st;
+                let q2 = (q1 - 4.0 * s * (ct - s)).max(0.0);
+                order.pupil.amplitude(q1) * order.pupil.amplitude(q2) * (k * (w(q1) - w(q2))).cos()
+            };
+            st * st * adaptive(&f, 0.0, 1.0, tol, 30)
+        };
+        4.0 * adaptive(&inner, 0.0, s.acos(), tol, 30) / (std::f64::consts::PI * order.pupil.power())
+    }
+
+    #[test]
+    fn probe() {
+        for lambda in [800e-9, 825e-9] {
+            let order = spline_order(17, lambda);
+            for s in [0.05, 0.2, 0.45] {
+                let t0 = std::time::Instant::now();
+                let r = reference(&order, s, 1e-13);
+                let el = t0.elapsed();
+                for acc in [1e-6, 1e-8, 1e-10] {
+                    let (nodes, px) = order.rule(s, acc);
+                    let got = order.otf(s, acc);
+                    eprintln!("λ {lambda:e} s {s} acc {acc:e}: lanes {} proxy {} err {:.2e} (ref {:?})", nodes.lanes() * nodes.panels(), px.is_some(), got - r, el);
+                }
+            }
         }
     }
 }
