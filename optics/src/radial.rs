@@ -1074,6 +1074,11 @@ enum Nodes {
     Split { q1: Vec<f64>, q2: Vec<f64>, weight: Vec<f64> },
 }
 
+/// The most knots a pupil's tables may have for the split rule ([`Nodes::Split`]; a freeform
+/// spline has tens): its nodes grow with the knots (about 4 t breaks and 2 row crossings a
+/// knot), so a dense table (`examples/phase-table.toml`, 803 rows) keeps the tensor rule.
+const SPLIT_MAX_KNOTS: usize = 64;
+
 /// Lanes of a panel of the split rule ([`Nodes::Split`]).
 const SPLIT_LANES: usize = 256;
 
@@ -1525,7 +1530,7 @@ impl RadialOrder {
         // the OTF by at most 2e (|cos(φ + e) − cos φ| ≤ e at each of the two points, and
         // ∫A(q₁)A(q₂) ≤ ∫A² by Cauchy–Schwarz), half the accuracy; the quadrature has the rest
         let proxy = self.proxy.as_ref().map(|p| p.cut(0.25 * accuracy));
-        if !self.knots.is_empty() {
+        if !self.knots.is_empty() && self.knots.len() <= SPLIT_MAX_KNOTS {
             return (self.split_nodes(s, accuracy, t_end, phase_t), proxy);
         }
         (Nodes::Tensor { t_end, t_panels, v_nodes }, proxy)
