@@ -179,6 +179,7 @@ impl RadialProfile {
             x: s.x.clone(),
             y: s.y.iter().map(|y| factor * y).collect(),
             m: s.m.iter().map(|m| factor * m).collect(),
+            per_radius: s.per_radius,
         };
         let kind = match &self.kind {
             Kind::Even(c) => Kind::Even(c.iter().map(|c| factor * c).collect()),
@@ -359,6 +360,9 @@ struct Spline {
     y: Vec<f64>,
     /// second derivatives at the knots
     m: Vec<f64>,
+    /// `(n − 1)/x_{n−1}`: the piece a radius falls in, were the knots evenly spaced
+    /// ([`piece`](Spline::piece)'s guess)
+    per_radius: f64,
 }
 
 impl Spline {
@@ -433,12 +437,33 @@ impl Spline {
         for i in (0..n - 1).rev() {
             m[i] = (r[i] - c[i] * m[i + 1]) / b[i];
         }
-        Ok(Spline { x, y, m })
+        let per_radius = (n - 1) as f64 / x[n - 1];
+        Ok(Spline { x, y, m, per_radius })
+    }
+
+    /// The piece `i` that [`value`](Self::value) and [`slope`](Self::slope) read at `t`:
+    /// `x_i ≤ t < x_{i+1}`, the first piece continued below the axis and the last beyond the
+    /// rim (`partition_point` of the knots `≤ t`, clamped). Evenly spaced knots (a
+    /// `phase_spline_rad`, most tables) put `t` in the piece `⌊t (n − 1)/x_{n−1}⌋`, which is
+    /// checked against its ends and taken; otherwise the binary search, so the piece is the
+    /// search's in every case.
+    #[inline]
+    fn piece(&self, t: f64) -> usize {
+        let n = self.x.len();
+        let last = n - 2;
+        let guess = t * self.per_radius;
+        // `guess < n − 1` fails for NaN as `partition_point`'s comparisons do
+        if guess >= 0.0 && guess < (last + 1) as f64 {
+            let i = (guess as usize).min(last);
+            if self.x[i] <= t && (i == last || t < self.x[i + 1]) {
+                return i;
+            }
+        }
+        self.x.partition_point(|&xi| xi <= t).clamp(1, n - 1) - 1
     }
 
     fn value(&self, t: f64) -> f64 {
-        let n = self.x.len();
-        let i = self.x.partition_point(|&xi| xi <= t).clamp(1, n - 1) - 1;
+        let i = self.piece(t);
         let h = self.x[i + 1] - self.x[i];
         let (a, b) = ((self.x[i + 1] - t) / h, (t - self.x[i]) / h);
         a * self.y[i]
@@ -448,8 +473,7 @@ impl Spline {
 
     /// `s'(t)`: the derivative of the piece [`value`](Self::value) reads at `t`.
     fn slope(&self, t: f64) -> f64 {
-        let n = self.x.len();
-        let i = self.x.partition_point(|&xi| xi <= t).clamp(1, n - 1) - 1;
+        let i = self.piece(t);
         let h = self.x[i + 1] - self.x[i];
         let (a, b) = ((self.x[i + 1] - t) / h, (t - self.x[i]) / h);
         (self.y[i + 1] - self.y[i]) / h
@@ -2200,6 +2224,30 @@ mod tests {
         for i in 0..300 {
             let r = 0.8 * i as f64 / 300.0;
             assert!((s.value(r) - f(r)).abs() < 2e-6, "r = {r}: {} vs {}", s.value(r), f(r));
+        }
+    }
+
+    /// [`Spline::piece`] is the binary search's piece (`partition_point` of the knots `≤ t`,
+    /// clamped to the pieces) at every point tried: on evenly and unevenly spaced knots, at and
+    /// beside each knot (one unit in the last place either way), between them, below the axis,
+    /// beyond the rim, and at NaN.
+    #[test]
+    fn spline_pieces_are_the_searchs() {
+        let even: Vec<f64> = (0..=16).map(|i| i as f64 / 16.0).collect();
+        let uneven: Vec<f64> = (0..=20).map(|i| (i as f64 / 20.0).powf(1.7) * 1.02).collect();
+        for x in [even, uneven] {
+            let y: Vec<f64> = x.iter().map(|r| r * r).collect();
+            let s = Spline::new(x.clone(), y).unwrap();
+            let n = x.len();
+            let search = |t: f64| x.partition_point(|&xi| xi <= t).clamp(1, n - 1) - 1;
+            let mut points: Vec<f64> = vec![-0.5, -1e-300, 1.5, 1e300, f64::NAN];
+            for &xi in &x {
+                points.extend([xi, f64::from_bits(xi.to_bits() + 1), f64::from_bits(xi.to_bits().max(1) - 1)]);
+            }
+            points.extend((0..=1000).map(|i| 1.1 * i as f64 / 1000.0));
+            for t in points {
+                assert_eq!(s.piece(t), search(t), "t = {t:e}");
+            }
         }
     }
 
