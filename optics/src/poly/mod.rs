@@ -204,6 +204,10 @@ pub struct Settings {
     /// the value's times the lateral colour's rate (docs/physics.md, "Gradients: the field
     /// point").
     pub spectral_tolerance: Option<f64>,
+    /// The radial engine's rule for a pupil with a table's knots (`options.table_rule`):
+    /// [`TableRule::Tensor`](crate::radial::TableRule::Tensor) (default) or the rule split at the
+    /// knots.
+    pub table_rule: crate::radial::TableRule,
 }
 
 impl Default for Settings {
@@ -217,6 +221,7 @@ impl Default for Settings {
             exact_irises: true,
             overlap: true,
             spectral_tolerance: None,
+            table_rule: crate::radial::TableRule::Tensor,
         }
     }
 }
@@ -739,7 +744,8 @@ impl<'a> Polychromatic<'a> {
         }
         let f_number = lens.f_number();
         let irises = settings.exact_irises.then(|| lens.numerical_aperture());
-        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, parts };
+        let table_rule = settings.table_rule;
+        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, table_rule, parts };
         let engine = choose(scene, settings)?;
         // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
         let engine_tolerance = match engine.engine() {
