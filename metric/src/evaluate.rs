@@ -197,6 +197,46 @@ pub struct Evaluation {
     pub numerics: Numerics,
 }
 
+/// The note of a lens with a table's knots (`lens.phase_csv`, `lens.phase_spline_rad`, a table's
+/// amplitude) on the radial engine's tensor rule at a tolerance tighter than that rule's error
+/// there, [`optics::radial::TENSOR_TABLE_ERROR`] (docs/physics.md, "The radial engine"): the
+/// mean MTF is then good to about that, not to the tolerance. `None` with
+/// `options.table_rule = "split"` (up to [`optics::radial::SPLIT_MAX_KNOTS`] knots), at looser
+/// tolerances, on the FFT and overlap engines, and for analytic profiles.
+fn table_rule_note(scene: &Scene, engine: optics::Engine, mean_wavelength: f64) -> Option<String> {
+    use optics::radial::{SPLIT_MAX_KNOTS, TENSOR_TABLE_ERROR, TableRule};
+    let options = scene.options();
+    if options.tolerance >= TENSOR_TABLE_ERROR
+        || !matches!(engine, optics::Engine::Exact1d | optics::Engine::Monochromatic { .. })
+    {
+        return None;
+    }
+    let knots = scene
+        .lens()
+        .orders(mean_wavelength, scene.field())
+        .iter()
+        .filter_map(|o| match &o.pupil {
+            optics::Pupil::Radial(p) => Some(p.table_knots().len()),
+            _ => None,
+        })
+        .max()
+        .filter(|&k| k > 0)?;
+    if options.table_rule == TableRule::Split && knots <= SPLIT_MAX_KNOTS {
+        return None;
+    }
+    let why = if knots <= SPLIT_MAX_KNOTS {
+        "options.table_rule = \"split\" meets the tolerance at about 11× the time".to_owned()
+    } else {
+        format!(
+            "the split rule takes tables of at most {SPLIT_MAX_KNOTS} knots inside the pupil and this one has {knots}, so the tensor rule is used whatever options.table_rule says (the error above is a 17-knot spline's; a denser table's jumps are smaller, its error not measured)"
+        )
+    };
+    Some(format!(
+        "lens.phase_csv, lens.phase_spline_rad or a table's amplitude: the radial engine's tensor rule integrates a cubic spline's profile to about {TENSOR_TABLE_ERROR:e} relative, not to the tolerance {:e} asked (its third derivative jumps at the knots); {why} (docs/physics.md, \"The radial engine\")",
+        options.tolerance
+    ))
+}
+
 /// Evaluates the ASNR of `scene` (paper eq. 1) at its field point (or the weighted average over
 /// its field points).
 ///
@@ -661,6 +701,7 @@ pub(crate) fn evaluate_field_with_lanes(
         ));
     }
     warnings.extend(azimuth_warning);
+    warnings.extend(table_rule_note(scene, poly.engine(), mean_wavelength));
     if !fraunhofer.valid {
         warnings.push(format!(
             "{:.2} % of the signal is blurred beyond the Fraunhofer threshold of {} mm (paper SI eq. S15): the MTF model is not valid there",

@@ -2339,7 +2339,8 @@ fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usi
                         .to_owned(),
                 ));
             }
-            let radial = optics::radial::RadialOrder::new(pupil.clone(), w.defocus_m, lambda);
+            let radial = optics::radial::RadialOrder::new(pupil.clone(), w.defocus_m, lambda)
+                .with_table_rule(scene.options().table_rule);
             out.push((o.efficiency, d_tau, radial, d_amplitude, d_wavefront));
         }
         Ok(BiasNode { lambda, weight, transmission: (lens.transmission(lambda), d.transmission), orders: out })

@@ -136,6 +136,10 @@ pub struct Options {
     /// The spectral rule where no closed form applies: product integration (default) or the
     /// per-interval panels kept as the reference.
     pub spectral_rule: optics::SpectralRule,
+    /// The radial engine's rule for a pupil with a table's knots (`options.table_rule`): the
+    /// tensor rule (default, good to about [`optics::radial::TENSOR_TABLE_ERROR`] relative) or
+    /// the rule split at the knots (within the tolerance, at about 11× the time).
+    pub table_rule: optics::radial::TableRule,
     /// Relative tolerance of the mean MTF on the FFT path: `None` follows `tolerance` (a scene
     /// that sets its tolerance asks it of every engine); the default is
     /// [`optics::DEFAULT_FFT_TOLERANCE`].
@@ -162,6 +166,7 @@ impl Options {
             overlap: self.overlap,
             spectral_tolerance: None,
             overlap_always: false,
+            table_rule: self.table_rule,
         }
     }
 }
@@ -177,6 +182,7 @@ impl Default for Options {
             tolerance: optics::DEFAULT_TOLERANCE,
             closed_form: true,
             spectral_rule: optics::SpectralRule::Interpolated,
+            table_rule: optics::radial::TableRule::Tensor,
             fft_tolerance: Some(optics::DEFAULT_FFT_TOLERANCE),
             exact_irises: true,
             overlap: true,

@@ -139,6 +139,7 @@ pub(crate) struct RawOptions {
     pub tolerance: Option<f64>,
     pub spectral_rule: Option<String>,
     pub pupil_mapping: Option<String>,
+    pub table_rule: Option<String>,
 }
 
 /// The parsed TOML of a source, or how it failed (kept to build the error again).
@@ -967,6 +968,19 @@ fn options(opt: Option<&RawOptions>, o: &Origins) -> Result<Options, Error> {
             }
         };
     }
+    if let Some(r) = &opt.table_rule {
+        options.table_rule = match r.as_str() {
+            "tensor" => optics::radial::TableRule::Tensor,
+            "split" => optics::radial::TableRule::Split,
+            other => {
+                return Err(o.bad(
+                    "options.table_rule",
+                    quoted(other),
+                    "\"tensor\" (the radial engine's tensor rule, the default) or \"split\" (the rule split at a table's knots)",
+                ));
+            }
+        };
+    }
     if let Some(v) = opt.pupil_samples {
         if !(16..=4096).contains(&v) {
             return Err(o.bad("options.pupil_samples", v, "a whole number of pupil samples from 16 to 4096"));
@@ -1369,6 +1383,33 @@ mod tests {
             let body = |t: &str| t.lines().filter(|l| !l.starts_with("# From")).collect::<Vec<_>>().join("\n");
             assert_eq!(body(&twice), body(&text), "{name}");
         }
+    }
+
+    /// `options.table_rule` (docs/physics.md, "The radial engine"): "tensor" by default, "split"
+    /// taken, reaching the engine's settings and the resolved scene; another value refused naming
+    /// the key, the value and what is accepted.
+    #[test]
+    fn table_rule_is_read_and_refused_naming_the_key() {
+        use optics::radial::TableRule;
+        let source = Source::from_text(PAPER_SCENE, "p.toml", std::env::temp_dir());
+        let rule = |set: &[&str]| {
+            let set: Vec<String> = set.iter().map(|s| (*s).to_owned()).collect();
+            build_from(&source, &set).map(|s| s.options().settings().table_rule)
+        };
+        assert_eq!(rule(&[]).unwrap(), TableRule::Tensor);
+        assert_eq!(rule(&["options.table_rule=\"tensor\""]).unwrap(), TableRule::Tensor);
+        assert_eq!(rule(&["options.table_rule=\"split\""]).unwrap(), TableRule::Split);
+        let e = rule(&["options.table_rule=\"spline\""]).unwrap_err().to_string();
+        assert!(
+            e.contains("options.table_rule = \"spline\": expected \"tensor\"") && e.contains("or \"split\""),
+            "{e}"
+        );
+        let text = |set: &[&str]| {
+            let set: Vec<String> = set.iter().map(|s| (*s).to_owned()).collect();
+            resolved_toml(&source, &set).unwrap().toml
+        };
+        assert!(text(&[]).contains("table_rule = \"tensor\""), "{}", text(&[]));
+        assert!(text(&["options.table_rule=\"split\""]).contains("table_rule = \"split\""));
     }
 
     /// A scene with a radiance-meter source on the hand-worked tables of

@@ -516,6 +516,7 @@ pub(crate) fn write(raw: &RawScene, o: &Origins) -> Result<String, Error> {
     };
     out.string("spectral_rule", opt.and_then(|p| p.spectral_rule.as_deref()).unwrap_or(rule));
     out.string("pupil_mapping", opt.and_then(|p| p.pupil_mapping.as_deref()).unwrap_or("paraxial"));
+    out.string("table_rule", opt.and_then(|p| p.table_rule.as_deref()).unwrap_or(defaults.table_rule.name()));
 
     match (&raw.field, &raw.fields) {
         (_, Some(list)) => {

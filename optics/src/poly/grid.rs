@@ -11,6 +11,7 @@ use super::{AzimuthalMean, Polychromatic};
 use crate::Error;
 use crate::fft::{Aperture, Otf, OtfPlan, SampledPupil, SampledZones, ZoneField};
 use crate::lens::{Field, LensModel, Order, Pupil};
+use crate::radial::TableRule;
 use crate::table::OtfTable;
 
 use super::frequency::{FIRST_AZIMUTHS, MAX_AZIMUTHS};
@@ -713,7 +714,7 @@ pub fn monochromatic_mtf(
         } else {
             None
         };
-        let node = Node::of(&order, wavelength_m, order.efficiency, Some(lens.numerical_aperture()));
+        let node = Node::of(&order, wavelength_m, order.efficiency, Some(lens.numerical_aperture()), TableRule::Tensor);
         for (acc, &nu) in sum.iter_mut().zip(frequencies) {
             let s = to_s(nu);
             if s >= 1.0 {

@@ -209,6 +209,10 @@ pub struct Settings {
     /// path): the Seidel gradient at zero Seidel terms asks for it (docs/physics.md, "Gradients:
     /// Seidel terms at zero"), the value staying its own engine's. Off by default.
     pub overlap_always: bool,
+    /// The radial engine's rule for a pupil with a table's knots (`options.table_rule`):
+    /// [`TableRule::Tensor`](crate::radial::TableRule::Tensor) (default) or the rule split at the
+    /// knots.
+    pub table_rule: crate::radial::TableRule,
 }
 
 impl Default for Settings {
@@ -223,6 +227,7 @@ impl Default for Settings {
             overlap: true,
             spectral_tolerance: None,
             overlap_always: false,
+            table_rule: crate::radial::TableRule::Tensor,
         }
     }
 }
@@ -794,7 +799,8 @@ impl<'a> Polychromatic<'a> {
         }
         let f_number = lens.f_number();
         let irises = settings.exact_irises.then(|| lens.numerical_aperture());
-        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, parts };
+        let table_rule = settings.table_rule;
+        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, table_rule, parts };
         let engine = choose(scene, settings)?;
         // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
         let engine_tolerance = match engine.engine() {

@@ -212,7 +212,7 @@ impl Levelled {
                 orders.clear();
                 scene.lens.orders_into(lambda, scene.field, &mut orders);
                 fresh.orders.extend(orders.iter().map(|o| {
-                    let node = Node::of(o, lambda, 0.0, scene.irises);
+                    let node = Node::of(o, lambda, 0.0, scene.irises, scene.table_rule);
                     OrderAt {
                         s_per_frequency: scene.f_number * lambda / node.scale,
                         waves: node.w020 / lambda,

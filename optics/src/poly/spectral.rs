@@ -31,7 +31,7 @@ use radiometry::Spectrum;
 
 use crate::lens::{Field, LensModel, Order, Pupil};
 use crate::otf::{defocus_otf, pixel_mtf};
-use crate::radial::RadialOrder;
+use crate::radial::{RadialOrder, TableRule};
 use crate::table::OtfTable;
 use crate::{Error, quad};
 
@@ -67,7 +67,8 @@ impl Node {
     /// The node of `order` at `lambda` with `weight` (rule weight × efficiency); with `irises`,
     /// the lens's numerical aperture, a circular iris (decentred or not) on a defocus-only order
     /// is reduced to the centred circle of its radius with a tilt ([`reduced_circle`]).
-    pub fn of(order: &Order, lambda: f64, weight: f64, irises: Option<f64>) -> Node {
+    /// A radial pupil takes `table_rule` where it has a table's knots.
+    pub fn of(order: &Order, lambda: f64, weight: f64, irises: Option<f64>, table_rule: TableRule) -> Node {
         let mut node = Node {
             lambda,
             weight,
@@ -82,9 +83,9 @@ impl Node {
                 _ => None,
             },
             radial: match &order.pupil {
-                Pupil::Radial(p) if !needs_grid(order, false) => {
-                    Some(Arc::new(RadialOrder::new(p.clone(), order.wavefront.defocus_m, lambda)))
-                }
+                Pupil::Radial(p) if !needs_grid(order, false) => Some(Arc::new(
+                    RadialOrder::new(p.clone(), order.wavefront.defocus_m, lambda).with_table_rule(table_rule),
+                )),
                 _ => None,
             },
             part: WHOLE,
@@ -209,7 +210,7 @@ impl Nodes {
         let rates = shift_rates(scene, lambda);
         for (o, order) in scene.lens.orders(lambda, scene.field).into_iter().enumerate() {
             self.needs_grid |= needs_grid(&order, scene.irises.is_some());
-            let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises);
+            let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises, scene.table_rule);
             node.part = part;
             node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
             self.nodes.push(node);
@@ -262,6 +263,9 @@ pub(super) struct Scene<'a> {
     /// the lens's numerical aperture where circular irises go to the exact path
     /// ([`Settings::exact_irises`](super::Settings::exact_irises)), else `None`
     pub irises: Option<f64>,
+    /// the radial engine's rule for a pupil with a table's knots
+    /// ([`Settings::table_rule`](super::Settings::table_rule))
+    pub table_rule: crate::radial::TableRule,
     /// the lens's factored parts ([`Polychromatic::with_parts`](super::Polychromatic::with_parts)):
     /// product integration sums each part's orders with the moments of the part's own spectrum;
     /// empty, the lens and the detected spectrum are the one part
@@ -509,7 +513,7 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
         let q = q * 2.0 * len * u * rho;
         let rates = shift_rates(scene, lambda);
         for (o, order) in scene.lens.orders(lambda, scene.field).into_iter().enumerate() {
-            let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises);
+            let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises, scene.table_rule);
             node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
             emit(node);
         }
@@ -713,7 +717,7 @@ fn lens_values(scene: &Scene<'_>, lambdas: &[f64], nu: f64) -> Vec<Complex64> {
     let mut nodes: Vec<(usize, Node, f64)> = Vec::new();
     for (i, &lambda) in lambdas.iter().enumerate() {
         for o in scene.lens.orders(lambda, scene.field) {
-            nodes.push((i, Node::of(&o, lambda, 0.0, scene.irises), o.efficiency));
+            nodes.push((i, Node::of(&o, lambda, 0.0, scene.irises, scene.table_rule), o.efficiency));
         }
     }
     let all: Vec<&Node> = nodes.iter().map(|(_, n, _)| n).collect();
