@@ -1114,7 +1114,7 @@ pub enum TableRule {
     /// (relative) whatever the accuracy asked.
     #[default]
     Tensor,
-    /// The rule split at the knots' crossings ([`RadialOrder::split_nodes`]): within the
+    /// The rule split at the knots' crossings (`RadialOrder::split_nodes`): within the
     /// accuracy asked, at about 11× the tensor rule's time on a 17-knot spline; a pupil whose
     /// tables have more than [`SPLIT_MAX_KNOTS`] knots keeps the tensor rule.
     Split,
@@ -1180,7 +1180,7 @@ enum Nodes {
     Split { q1: Vec<f64>, q2: Vec<f64>, weight: Vec<f64> },
 }
 
-/// The most knots a pupil's tables may have for the split rule ([`Nodes::Split`]; a freeform
+/// The most knots a pupil's tables may have for the split rule (`Nodes::Split`; a freeform
 /// spline has tens): its nodes grow with the knots (about 4 t breaks and 2 row crossings a
 /// knot), so a dense table (`examples/phase-table.toml`, 803 rows) keeps the tensor rule.
 pub const SPLIT_MAX_KNOTS: usize = 64;
