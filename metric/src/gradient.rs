@@ -1150,37 +1150,21 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         let ds = (a[2] * d2 - 2.0 * c * a[1] * d1) / (sigma.powi(3) * a[0]);
         (o[0], pix * dc, pix * ds)
     };
-    let integrate = |panels: usize| -> (f64, f64) {
-        let ends = sign_change_ends(nyquist, panels, |nu| engines[0].otf(nu), |hi| 1e-15 * hi);
-        let (mut dc, mut ds) = (0.0, 0.0);
-        for w in ends.windows(2) {
-            let half = 0.5 * (w[1] - w[0]);
-            if half <= 0.0 {
-                continue;
-            }
-            let centre = 0.5 * (w[0] + w[1]);
-            for &(x, wx) in optics::quad::rule() {
-                let (o, c_, s_) = at(centre + half * x);
-                let sign = if o < 0.0 { -1.0 } else { 1.0 };
-                dc += half * wx * sign * c_;
-                ds += half * wx * sign * s_;
-            }
-        }
-        (dc / nyquist, ds / nyquist)
-    };
-    let mut panels = 4;
-    let mut previous = integrate(panels);
-    let (dc, ds) = loop {
-        panels *= 2;
-        let next = integrate(panels);
-        // each derivative against its own scale: per relative change of c and of σ
-        let change = ((next.0 - previous.0) * c).abs().max(((next.1 - previous.1) * sigma).abs());
-        let size = (next.0 * c).abs().max((next.1 * sigma).abs()).max(e.mean_mtf);
-        previous = next;
-        if change <= tolerance * size || panels >= 1024 {
-            break previous;
-        }
-    };
+    let [dc, ds] = sign_split_mean(
+        nyquist,
+        4,
+        |nu| engines[0].otf(nu),
+        |nu| {
+            let (o, dc, ds) = at(nu);
+            (o, [dc, ds])
+        },
+        |change, next| {
+            // each derivative against its own scale: per relative change of c and of σ
+            let change = (change[0] * c).abs().max((change[1] * sigma).abs());
+            let size = (next[0] * c).abs().max((next[1] * sigma).abs()).max(e.mean_mtf);
+            change <= tolerance * size
+        },
+    );
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
 }
 
@@ -1691,35 +1675,16 @@ fn top_hat_partials(
         return Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) });
     }
     // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
-    let integrate = |panels: usize| -> [f64; 2] {
-        let ends = sign_change_ends(nyquist, panels, |nu| whole.otf(nu), |hi| 1e-15 * hi);
-        let mut sums = [0.0; 2];
-        for w in ends.windows(2) {
-            let half = 0.5 * (w[1] - w[0]);
-            if half <= 0.0 {
-                continue;
-            }
-            let centre = 0.5 * (w[0] + w[1]);
-            for &(x, wx) in optics::quad::rule() {
-                let nu = centre + half * x;
-                let weight = half * wx * pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * whole.otf(nu).signum();
-                sums[0] += weight * at_a.otf(nu);
-                sums[1] += weight * at_b.otf(nu);
-            }
-        }
-        sums.map(|s| s / nyquist)
-    };
-    let mut panels = 8;
-    let mut previous = integrate(panels);
-    let [i_a, i_b] = loop {
-        panels *= 2;
-        let next = integrate(panels);
-        let change = (next[0] - previous[0]).abs().max((next[1] - previous[1]).abs());
-        previous = next;
-        if change <= tolerance * e.mean_mtf || panels >= 1024 {
-            break previous;
-        }
-    };
+    let [i_a, i_b] = sign_split_mean(
+        nyquist,
+        8,
+        |nu| whole.otf(nu),
+        |nu| {
+            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+            (whole.otf(nu), [pix * at_a.otf(nu), pix * at_b.otf(nu)])
+        },
+        |change, _| change[0].abs().max(change[1].abs()) <= tolerance * e.mean_mtf,
+    );
     let (d_a, d_b) = (-t_a * (i_a - e.mean_mtf), t_b * (i_b - e.mean_mtf));
     Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
 }
