@@ -17,7 +17,8 @@
 //! With `--gradient KEY,…` each call is [`metric::gradient`] with respect to those keys instead
 //! (the engine's parameters of `exposure.time_ms`, `spectrum.center_nm`, `spectrum.range_nm`,
 //! `source.temperature_k`, `lens.f_number`, `lens.focal_length_mm`, `field.x_deg`,
-//! `field.y_deg`; the gradient is per unit of the engine's parameter), and the value alone is
+//! `field.y_deg`, `lens.zernike_noll_rms_um[i]`; the gradient is per unit of the engine's
+//! parameter), and the value alone is
 //! timed interleaved with it (one call of each in turn), so that the two medians and their
 //! ratio are measured side by side.
 
@@ -52,6 +53,16 @@ fn main() -> ExitCode {
                     "lens.focal_length_mm" => metric::Parameter::FocalLength,
                     "field.x_deg" => metric::Parameter::FieldAngle(0),
                     "field.y_deg" => metric::Parameter::FieldAngle(1),
+                    // `lens.zernike_noll_rms_um[i]`: 0-based, the Noll index i + 1
+                    other if other.starts_with("lens.zernike_noll_rms_um[") && other.ends_with(']') => {
+                        match other["lens.zernike_noll_rms_um[".len()..other.len() - 1].parse::<usize>() {
+                            Ok(i) => metric::Parameter::ZernikeNoll(i + 1),
+                            Err(_) => {
+                                eprintln!("--gradient: {other:?}: write the index as a whole number");
+                                return ExitCode::FAILURE;
+                            }
+                        }
+                    }
                     other => {
                         eprintln!("--gradient: {other:?} is not one of the keys this loop maps");
                         return ExitCode::FAILURE;

@@ -720,11 +720,14 @@ impl SeidelTerm {
 }
 
 /// The smallest `|α| X²` at which the derivatives take [`quadratic_moments`] (below it the
-/// recurrence divides by a small `α`: the Filon rule takes them). The moments' rounding is
-/// about `1e-16 (1 + |β| X)/(|α| X²)` relative to `X`: at most `1e-12 (1 + |β| X)` here. At
-/// 1e-2 the Filon rule took the t rule's nodes near its ends (where `X = cos t − s` is small)
-/// and with them most of the Zernike gradient's time (each x node's lanes, `lanes_opd`).
-const MOMENTS_MIN_PHASE: f64 = 1e-4;
+/// recurrence divides by a small `α`: [`small_alpha_moments`], the Taylor series in `α`, takes
+/// them). The recurrence's rounding is about `1e-16 (1 + |β| X)/(|α| X²)` relative in `I1` and
+/// that squared over `1e-16` in `I2` (it divides by `2α` twice): at most `1e-12 (1 + |β| X)`
+/// here. The Filon rule took the small `α` before the Taylor series did, at a threshold of
+/// 1e-4 (where `I2` was only good to about 1e-8): it took the t rule's nodes near its ends
+/// (where `X = cos t − s` is small) and with them most of the Zernike gradient's time (each of
+/// its x nodes' lanes, `lanes_opd`).
+const MOMENTS_MIN_PHASE: f64 = 1e-2;
 
 /// `[I0, I1, I2]`, `I_m = ∫_{−X}^{X} x^m exp(i(α x² + β x)) dx`: `I0` by
 /// [`quadratic_phase_integral`], and since `d/dx e^{iφ} = i (2αx + β) e^{iφ}`, integration by
@@ -742,6 +745,92 @@ fn quadratic_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
     let i1 = (-i * (up - down) - beta * i0) / (2.0 * alpha);
     let i2 = (-i * x * (up + down) + i * i0 - beta * i1) / (2.0 * alpha);
     [i0, i1, i2]
+}
+
+/// The Taylor terms of `e^{iαx²}` that [`small_alpha_moments`] keeps: `(iαx²)^j/j!`, `j <
+/// SMALL_ALPHA_TERMS`.
+const SMALL_ALPHA_TERMS: usize = 6;
+
+/// The monomials `u^p` whose Fourier integrals [`monomial_fourier`] gives: `p ≤ 2 + 2 (J − 1)`.
+const MONOMIALS: usize = 2 * SMALL_ALPHA_TERMS + 1;
+
+/// The Legendre coefficients of the monomials: `u^p = Σ_l c[p][l] P_l(u)`, from `u^0 = P_0` by
+/// `u P_l = ((l + 1) P_{l+1} + l P_{l−1})/(2l + 1)` (Abramowitz & Stegun 22.7.10).
+fn monomial_legendre() -> &'static [[f64; MONOMIALS]; MONOMIALS] {
+    static C: OnceLock<[[f64; MONOMIALS]; MONOMIALS]> = OnceLock::new();
+    C.get_or_init(|| {
+        let mut c = [[0.0; MONOMIALS]; MONOMIALS];
+        c[0][0] = 1.0;
+        for p in 0..MONOMIALS - 1 {
+            for l in 0..=p {
+                let v = c[p][l];
+                let d = (2 * l + 1) as f64;
+                c[p + 1][l + 1] += v * (l + 1) as f64 / d;
+                if l > 0 {
+                    c[p + 1][l - 1] += v * l as f64 / d;
+                }
+            }
+        }
+        c
+    })
+}
+
+/// `L_p(b) = ∫_{−1}^{1} u^p e^{ibu} du` for `p < MONOMIALS` into `out`: for `|b| < 1` by the
+/// power series `Σ_k (ib)^k/k! · 2/(p + k + 1)` (`p + k` even; 24 terms, the last below
+/// `1/24! < 2e-24`), else from the Legendre expansion of `u^p` ([`monomial_legendre`]) and
+/// `∫_{−1}^{1} P_l(u) e^{ibu} du = 2 i^l j_l(b)` (the Filon rule's identity, [`spherical_bessel`]).
+fn monomial_fourier(b: f64, out: &mut [Complex64; MONOMIALS]) {
+    if b.abs() < 1.0 {
+        for (p, o) in out.iter_mut().enumerate() {
+            let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
+            for k in 0..24 {
+                if (p + k) % 2 == 0 {
+                    sum += term * (2.0 / (p + k + 1) as f64);
+                }
+                term *= Complex64::new(0.0, b / (k + 1) as f64);
+            }
+            *o = sum;
+        }
+        return;
+    }
+    let mut j = [0.0; MONOMIALS];
+    spherical_bessel(b, &mut j);
+    let c = monomial_legendre();
+    for (p, o) in out.iter_mut().enumerate() {
+        let (mut re, mut im) = (0.0, 0.0);
+        for (l, &jl) in j.iter().enumerate().take(p + 1) {
+            let v = 2.0 * c[p][l] * jl;
+            match l % 4 {
+                0 => re += v,
+                1 => im += v,
+                2 => re -= v,
+                _ => im -= v,
+            }
+        }
+        *o = Complex64::new(re, im);
+    }
+}
+
+/// [`quadratic_moments`] where the quadratic phase is small (`|α| X² <` [`MOMENTS_MIN_PHASE`],
+/// where the recurrence would divide by a small `α`): `e^{iαx²} = Σ_j (iαx²)^j/j!`, so `I_m =
+/// X^{m+1} Σ_j (iαX²)^j/j! L_{m+2j}(βX)` ([`monomial_fourier`]), the terms `j <`
+/// [`SMALL_ALPHA_TERMS`]; the first left out is at most `2 X^{m+1} (|α| X²)^J/J!`, below
+/// `3e-15 X^{m+1}` here.
+fn small_alpha_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
+    let mut l = [Complex64::new(0.0, 0.0); MONOMIALS];
+    monomial_fourier(beta * x, &mut l);
+    let step = Complex64::new(0.0, alpha * x * x);
+    let mut out = [Complex64::new(0.0, 0.0); 3];
+    let mut power = x;
+    for (m, o) in out.iter_mut().enumerate() {
+        let mut term = Complex64::new(power, 0.0);
+        for j in 0..SMALL_ALPHA_TERMS {
+            *o += term * l[m + 2 * j];
+            term *= step / (j + 1) as f64;
+        }
+        power *= x;
+    }
+    out
 }
 
 /// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]), the Zernike
@@ -813,6 +902,64 @@ fn lanes_opd(lanes: &[Lane], x: f64, y: f64, out: &mut [f64]) {
             },
             Lane::Seidel(_) | Lane::Defocus => lane.opd(x, y),
         };
+    }
+}
+
+/// The points [`lanes_opd_at`] takes at once: the moments rule's six (`p₊` and `p₋` at `x = −X,
+/// 0, X`), padded.
+const LANE_POINTS: usize = 8;
+
+/// `(Re, Im)` of a power `(x + iy)^m` at [`LANE_POINTS`] points.
+type LanePowers = ([f64; LANE_POINTS], [f64; LANE_POINTS]);
+
+/// [`lanes_opd`] at [`LANE_POINTS`] points at once, lane `l`'s values into `out[l]`, each bit for
+/// bit as [`lanes_opd`] gives it at that point (the same operations in the same order, point by
+/// point): the powers `(x + iy)^|m|` formed once for every lane, each lane's loops over the
+/// points, which the compiler can take several points a register. `powers` is scratch (kept by
+/// the caller so that nothing is allocated per call).
+fn lanes_opd_at(
+    lanes: &[Lane],
+    x: &[f64; LANE_POINTS],
+    y: &[f64; LANE_POINTS],
+    powers: &mut Vec<LanePowers>,
+    out: &mut [[f64; LANE_POINTS]],
+) {
+    let mut r2 = [0.0; LANE_POINTS];
+    for ((r, &xi), &yi) in r2.iter_mut().zip(x).zip(y) {
+        *r = xi * xi + yi * yi;
+    }
+    // (re, im) of (x + iy)^m at every point, m = 0 … powers.len() − 1
+    powers.clear();
+    powers.push(([1.0; LANE_POINTS], [0.0; LANE_POINTS]));
+    for (o, lane) in out.iter_mut().zip(lanes) {
+        match lane {
+            Lane::Zernike(z, _) => match z.single_zernike() {
+                Some((m, poly)) if (m.unsigned_abs() as usize) < 32 => {
+                    let ma = m.unsigned_abs() as usize;
+                    while powers.len() <= ma {
+                        let (re, im) = powers[powers.len() - 1];
+                        let mut next = ([0.0; LANE_POINTS], [0.0; LANE_POINTS]);
+                        for i in 0..LANE_POINTS {
+                            next.0[i] = re[i] * x[i] - im[i] * y[i];
+                            next.1[i] = re[i] * y[i] + im[i] * x[i];
+                        }
+                        powers.push(next);
+                    }
+                    let mut p = [0.0; LANE_POINTS];
+                    for &c in poly {
+                        for (pi, &ri) in p.iter_mut().zip(&r2) {
+                            *pi = *pi * ri + c;
+                        }
+                    }
+                    let part = if m >= 0 { &powers[ma].0 } else { &powers[ma].1 };
+                    for ((oi, &pi), &qi) in o.iter_mut().zip(&p).zip(part) {
+                        *oi = 0.0 + pi * qi;
+                    }
+                }
+                _ => (0..LANE_POINTS).for_each(|i| o[i] = lane.opd(x[i], y[i])),
+            },
+            Lane::Seidel(_) | Lane::Defocus => (0..LANE_POINTS).for_each(|i| o[i] = lane.opd(x[i], y[i])),
+        }
     }
 }
 
@@ -892,6 +1039,9 @@ fn term_otf_and_derivatives(
     let moments = quadratic && terms.iter().all(|d| d.degree() <= 3);
     // the lanes' wavefronts at two points and their differences at three
     let mut scratch = vec![0.0; 5 * lanes];
+    // the lanes' wavefronts at the moments rule's six points
+    let mut at_points = vec![[0.0; LANE_POINTS]; if moments { lanes } else { 0 }];
+    let mut powers: Vec<LanePowers> = Vec::with_capacity(if moments { 4 } else { 0 });
     // the value and the derivatives at τ ∈ [−1, 1], into `row` (1 + lanes values)
     let mut integrand = |tau: f64, row: &mut [Complex64]| {
         row.iter_mut().for_each(|r| *r = Complex64::new(0.0, 0.0));
@@ -918,33 +1068,37 @@ fn term_otf_and_derivatives(
         };
         if moments {
             // the value's closed form, and each lane's factor g(x) = k [D(p₊) − D(p₋)] (at most
-            // quadratic in x) against the same phase by the moments of `quadratic_moments`
+            // quadratic in x) against the same phase by the moments of `quadratic_moments`, or
+            // where the quadratic term is small (|α| X² below MOMENTS_MIN_PHASE) by its Taylor
+            // series on the moments of e^{iβx} (`small_alpha_moments`)
             let (alpha, beta, mid) = quadratic_fit();
-            if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
-                let (si, co) = sin_cos(mid);
-                let front = Complex64::new(co, si) * ct;
-                let [i0, i1, i2] = quadratic_moments(alpha, beta, x_half);
-                row[0] = front * i0;
-                // each lane's k [D(p₊) − D(p₋)] at −X, 0 and X
-                let (plus, rest) = scratch.split_at_mut(lanes);
-                let (minus, g) = rest.split_at_mut(lanes);
-                for (i, x) in [-x_half, 0.0, x_half].into_iter().enumerate() {
-                    let (xa, ya, xb, yb) = points(x);
-                    lanes_opd(terms, xa, ya, plus);
-                    lanes_opd(terms, xb, yb, minus);
-                    for (l, (p, m)) in plus.iter().zip(minus.iter()).enumerate() {
-                        g[3 * l + i] = k * (p - m);
-                    }
-                }
-                for (l, r) in row[1..].iter_mut().enumerate() {
-                    let (g_lo, g_mid, g_hi) = (g[3 * l], g[3 * l + 1], g[3 * l + 2]);
-                    let g2 = (g_hi + g_lo - 2.0 * g_mid) / (2.0 * x_half * x_half);
-                    let g1 = (g_hi - g_lo) / (2.0 * x_half);
-                    // i ∫ g e^{iφ}
-                    *r = front * (i0 * g_mid + i1 * g1 + i2 * g2) * Complex64::new(0.0, 1.0);
-                }
-                return;
+            let (si, co) = sin_cos(mid);
+            let front = Complex64::new(co, si) * ct;
+            // with the value's closed form `quadratic_phase_integral` (the first of
+            // `quadratic_moments`)
+            let ([i0, i1, i2], closed) = if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
+                let moments = quadratic_moments(alpha, beta, x_half);
+                (moments, moments[0])
+            } else {
+                (small_alpha_moments(alpha, beta, x_half), quadratic_phase_integral(alpha, beta, x_half))
+            };
+            // the value as `term_otf` forms it, bit for bit
+            row[0] = Complex64::new(co, si) * closed * ct;
+            // each lane's k [D(p₊) − D(p₋)] at −X, 0 and X: the six points at once
+            let (mut px, mut py) = ([0.0; LANE_POINTS], [0.0; LANE_POINTS]);
+            for (i, x) in [-x_half, 0.0, x_half].into_iter().enumerate() {
+                let (xa, ya, xb, yb) = points(x);
+                (px[2 * i], py[2 * i], px[2 * i + 1], py[2 * i + 1]) = (xa, ya, xb, yb);
             }
+            lanes_opd_at(terms, &px, &py, &mut powers, &mut at_points);
+            for (r, d) in row[1..].iter_mut().zip(at_points.iter()) {
+                let (g_lo, g_mid, g_hi) = (k * (d[0] - d[1]), k * (d[2] - d[3]), k * (d[4] - d[5]));
+                let g2 = (g_hi + g_lo - 2.0 * g_mid) / (2.0 * x_half * x_half);
+                let g1 = (g_hi - g_lo) / (2.0 * x_half);
+                // i ∫ g e^{iφ}
+                *r = front * (i0 * g_mid + i1 * g1 + i2 * g2) * Complex64::new(0.0, 1.0);
+            }
+            return;
         }
         let mut kernel = [Complex64::new(0.0, 0.0); 64];
         let kernel = &mut kernel[..n];
@@ -1289,6 +1443,76 @@ mod tests {
                 rule.iter().map(|&(u, w)| Complex64::from_polar(w * x, alpha * x * x * u * u + beta * x * u)).sum();
             let closed = quadratic_phase_integral(alpha, beta, x);
             assert!((closed - reference).norm() < 1e-12, "α {alpha}, β {beta}, X {x}: {closed} vs {reference}");
+        }
+    }
+
+    /// The moments `I_m = ∫_{−X}^{X} x^m e^{i(αx² + βx)} dx` (m = 0, 1, 2) where the quadratic
+    /// phase is small ([`small_alpha_moments`]: the Taylor series on `∫ u^p e^{ibu}`, by its
+    /// power series for |βX| < 1 and by spherical Bessel functions above) against a 400-point
+    /// Gauss–Legendre sum of the integrand itself, across |βX| from 0 to 80 and |α| X² up to
+    /// [`MOMENTS_MIN_PHASE`]; and at the threshold, against [`quadratic_moments`].
+    #[test]
+    fn small_alpha_moments_match_a_quadrature() {
+        let rule = crate::quad::gauss_legendre(400);
+        for &x in &[1.0, 0.3, 1e-3] {
+            for &ax2 in &[0.0, 1e-12, -3e-8, 5e-6, -1e-4, 3e-3, -1e-2, 1e-2] {
+                for &bx in &[0.0, 1e-9, -0.4, 0.999, 1.0, -2.5, 7.0, 31.0, -80.0] {
+                    let (alpha, beta) = (ax2 / (x * x), bx / x);
+                    let moments = small_alpha_moments(alpha, beta, x);
+                    for (m, got) in moments.iter().enumerate() {
+                        let reference: Complex64 = rule
+                            .iter()
+                            .map(|&(u, w)| {
+                                let xu = x * u;
+                                Complex64::from_polar(w * x * xu.powi(m as i32), alpha * xu * xu + beta * xu)
+                            })
+                            .sum();
+                        let scale = x.powi(m as i32 + 1);
+                        assert!(
+                            (got - reference).norm() <= 1e-14 * scale,
+                            "α X² {ax2}, β X {bx}, X {x}, m {m}: {got} vs {reference}"
+                        );
+                    }
+                    if ax2.abs() == MOMENTS_MIN_PHASE {
+                        let recurrence = quadratic_moments(alpha, beta, x);
+                        for m in 0..3 {
+                            let scale = x.powi(m as i32 + 1) * (1.0 + bx.abs());
+                            let d = (moments[m] - recurrence[m]).norm();
+                            assert!(d <= 1e-11 * scale, "α X² {ax2}, β X {bx}, X {x}, m {m}: {d:e}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`lanes_opd_at`] against [`lanes_opd`] at each of its points, bit for bit, for Zernike
+    /// lanes of radial orders 1–6 (cosine, sine and `m = 0` terms, in an order that forms the
+    /// powers out of turn), the Seidel terms and the defocus lane.
+    #[test]
+    fn lanes_at_points_match_lanes_one_point_at_a_time() {
+        let mut lanes: Vec<Lane> = [9, 2, 22, 5, 8, 4, 16, 7, 11, 3, 6, 13]
+            .iter()
+            .map(|&j| Lane::of(&WavefrontDirection::Zernike(j)).unwrap())
+            .collect();
+        for t in [SeidelTerm::Spherical, SeidelTerm::Coma, SeidelTerm::Astigmatism, SeidelTerm::FieldCurvature] {
+            lanes.push(Lane::Seidel(t));
+        }
+        lanes.push(Lane::Defocus);
+        let (mut x, mut y) = ([0.0; LANE_POINTS], [0.0; LANE_POINTS]);
+        for i in 0..LANE_POINTS {
+            let (sn, c) = (0.9 * i as f64 + 0.3).sin_cos();
+            (x[i], y[i]) = (0.93 * c * (1.0 - 0.1 * i as f64), 0.93 * sn * (1.0 - 0.07 * i as f64));
+        }
+        let mut out = vec![[0.0; LANE_POINTS]; lanes.len()];
+        let mut powers = Vec::new();
+        lanes_opd_at(&lanes, &x, &y, &mut powers, &mut out);
+        let mut one = vec![0.0; lanes.len()];
+        for i in 0..LANE_POINTS {
+            lanes_opd(&lanes, x[i], y[i], &mut one);
+            for (l, &v) in one.iter().enumerate() {
+                assert_eq!(out[l][i].to_bits(), v.to_bits(), "lane {l}, point {i}: {} vs {v}", out[l][i]);
+            }
         }
     }
 

@@ -56,6 +56,7 @@ mod sections;
 mod sfr;
 mod spectral;
 mod sweep;
+mod table_rule;
 mod tables;
 mod targets;
 mod tolerance;

@@ -51,6 +51,7 @@ pub(crate) const SECTIONS: &[Section] = &[
         title: "Gradients: a library's parameter bias",
         run: crate::gradients_bias::section,
     },
+    Section { name: "table-rule", title: crate::table_rule::TITLE, run: crate::table_rule::section },
     Section { name: "psf-stack", title: crate::psf_stack::TITLE, run: crate::psf_stack::section },
     Section { name: "freeform", title: crate::freeform::TITLE, run: crate::freeform::section },
     Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
