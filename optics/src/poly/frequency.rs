@@ -487,6 +487,32 @@ impl Polychromatic<'_> {
         }
         let lanes = directions.len();
         let mut sum = vec![0.0; lanes];
+        let mean = self.azimuthal_mean_with_lanes(first, directions, &mut |_, w, recorded| {
+            for (g, d) in sum.iter_mut().zip(&recorded[..lanes]) {
+                *g += w * d;
+            }
+        })?;
+        // each azimuth's mean is (1/ν_max) ∫ P |O| dν; the average is over every azimuth read
+        let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
+        Some((mean, sum.into_iter().map(|g| g * scale).collect()))
+    }
+
+    /// The nested rule over azimuth of [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)
+    /// (white noise) with the OTF's lanes along `directions` recorded at each azimuth (forward
+    /// mode on the engine's nodes, `∂|O| = Re(O* ∂O)/|O|`, then `|O|` itself: `lanes + 1` numbers
+    /// per frequency read), and `take(ν, w, recorded)` called for each node the frequency rule
+    /// accepted at each azimuth, with its weight `w` (the pixel MTF included) and the numbers
+    /// recorded at `ν`, azimuth after azimuth in the order they are read. The one recording loop
+    /// of [`mean_mtf_over_azimuth_and_overlap_gradient`](Self::mean_mtf_over_azimuth_and_overlap_gradient)
+    /// and [`mean_mtf_over_azimuth_and_defocus_lane`](Self::mean_mtf_over_azimuth_and_defocus_lane).
+    /// `None` where some OTF had no lanes from the engine or an accepted node was not recorded.
+    fn azimuthal_mean_with_lanes(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        take: &mut dyn FnMut(f64, f64, &[f64]),
+    ) -> Option<AzimuthalMean> {
+        let lanes = directions.len();
         let mut read = 0usize;
         let mut failed = false;
         let mean = self.azimuthal_mean(first, &mut |azimuth: f64| {
@@ -497,11 +523,7 @@ impl Polychromatic<'_> {
                 Some(r) if !r.failed => {
                     for &(nu, w) in &r.accepted {
                         match r.at.get(&nu.to_bits()) {
-                            Some(&i) => {
-                                for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
-                                    *g += w * d;
-                                }
-                            }
+                            Some(&i) => take(nu, w, &r.derivatives[i..=i + lanes]),
                             None => failed = true,
                         }
                     }
@@ -511,12 +533,7 @@ impl Polychromatic<'_> {
             read += 1;
             (mean, work)
         });
-        if failed || read != mean.azimuths {
-            return None;
-        }
-        // each azimuth's mean is (1/ν_max) ∫ P |O| dν; the average is over every azimuth read
-        let scale = 1.0 / (self.scene.max_frequency * read as f64);
-        Some((mean, sum.into_iter().map(|g| g * scale).collect()))
+        (!failed && read == mean.azimuths).then_some(mean)
     }
 
     /// The mean MTF averaged over azimuth on the overlap engine with the defocus lane
@@ -541,34 +558,12 @@ impl Polychromatic<'_> {
             })
         };
         let (mut d_k, mut pixel) = (0.0, 0.0);
-        let mut read = 0usize;
-        let mut failed = false;
-        let mean = self.azimuthal_mean(first, &mut |azimuth: f64| {
-            *self.gradient.borrow_mut() =
-                Some(Recording { lanes: 1, directions: vec![WavefrontDirection::Defocus], ..Recording::default() });
-            let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
-            match self.gradient.borrow_mut().take() {
-                Some(r) if !r.failed => {
-                    for &(nu, w) in &r.accepted {
-                        match r.at.get(&nu.to_bits()) {
-                            // the lane, then |O|, at the frequency's place
-                            Some(&i) => {
-                                d_k += w * r.derivatives[i];
-                                pixel += w * r.derivatives[i + 1] * slope(nu);
-                            }
-                            None => failed = true,
-                        }
-                    }
-                }
-                _ => failed = true,
-            }
-            read += 1;
-            (mean, work)
-        });
-        if failed || read != mean.azimuths {
-            return None;
-        }
-        let scale = 1.0 / (self.scene.max_frequency * read as f64);
+        // the lane, then |O|, at each accepted frequency
+        let mean = self.azimuthal_mean_with_lanes(first, &[WavefrontDirection::Defocus], &mut |nu, w, recorded| {
+            d_k += w * recorded[0];
+            pixel += w * recorded[1] * slope(nu);
+        })?;
+        let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
         Some(DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work })
     }
 

@@ -290,6 +290,7 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
         ));
     }
     md.extend(crate::gradients_aperture::markdown(tools));
+    md.extend(crate::gradients_keys::markdown(tools));
     if let Some((value, radial)) = radial(repeats) {
         md.push_str(
             "\nThe radial engine alone, one wavelength: the Binary 2 metalens at 800 nm, 200 frequencies up to s = \
