@@ -1564,25 +1564,7 @@ fn sign_split_mean<const K: usize>(
     at: impl Fn(f64) -> (f64, [f64; K]),
     converged: impl Fn(&[f64; K], &[f64; K]) -> bool,
 ) -> [f64; K] {
-    let integrate = |panels: usize| -> [f64; K] {
-        let ends = sign_change_ends(nyquist, panels, &otf, |hi| 1e-15 * hi);
-        let mut sums = [0.0; K];
-        for w in ends.windows(2) {
-            let half = 0.5 * (w[1] - w[0]);
-            if half <= 0.0 {
-                continue;
-            }
-            let centre = 0.5 * (w[0] + w[1]);
-            for &(x, wx) in optics::quad::rule() {
-                let (o, lanes) = at(centre + half * x);
-                let sign = if o < 0.0 { -1.0 } else { 1.0 };
-                for (s, l) in sums.iter_mut().zip(lanes) {
-                    *s += half * wx * sign * l;
-                }
-            }
-        }
-        sums.map(|s| s / nyquist)
-    };
+    let integrate = |panels: usize| sign_split_integral(nyquist, panels, &otf, &at, |hi| 1e-15 * hi, None);
     let mut panels = first.max(1);
     let mut previous = integrate(panels);
     loop {
@@ -1594,6 +1576,41 @@ fn sign_split_mean<const K: usize>(
             return previous;
         }
     }
+}
+
+/// `(1/ν_N) ∫_0^{ν_N} P(ν) sign(O) L_k dν` on `panels` equal 16-point Gauss–Legendre panels of
+/// `[0, ν_N]` split at the sign changes of `otf`, each bracketed to `width` ([`sign_change_ends`]),
+/// for the lanes `at(ν) = (O(ν), [L_k(ν)])`; `P` the pixel MTF where `pixel` is its pitch, else 1.
+/// The frequency rule of [`sign_split_mean`] (its doublings) and of [`reference_rule`] (its
+/// own zero width and the pixel MTF).
+fn sign_split_integral<const K: usize>(
+    nyquist: f64,
+    panels: usize,
+    otf: impl Fn(f64) -> f64,
+    at: impl Fn(f64) -> (f64, [f64; K]),
+    width: impl Fn(f64) -> f64,
+    pixel: Option<f64>,
+) -> [f64; K] {
+    let ends = sign_change_ends(nyquist, panels, otf, width);
+    let mut sums = [0.0; K];
+    for w in ends.windows(2) {
+        let half = 0.5 * (w[1] - w[0]);
+        if half <= 0.0 {
+            continue;
+        }
+        let centre = 0.5 * (w[0] + w[1]);
+        for &(x, wx) in optics::quad::rule() {
+            let nu = centre + half * x;
+            let (o, lanes) = at(nu);
+            // the pixel's factor 1 where it does not apply leaves the weight as it is, bit for bit
+            let weight = half * wx * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
+            let sign = if o < 0.0 { -1.0 } else { 1.0 };
+            for (s, l) in sums.iter_mut().zip(lanes) {
+                *s += weight * sign * l;
+            }
+        }
+    }
+    sums.map(|s| s / nyquist)
 }
 
 /// The top-hat factor of a spectrum (itself or one factor of a product), if there is exactly one.
@@ -2108,22 +2125,13 @@ fn reference_rule<N>(
         Ok(nodes)
     };
     let integrate = |nodes: &[N], panels: usize| -> f64 {
-        let cuts = sign_change_ends(nyquist, panels, |nu| value(nodes, nu), refinement.zero_width);
-        let mut sum = 0.0;
-        for w in cuts.windows(2) {
-            let half = 0.5 * (w[1] - w[0]);
-            if half <= 0.0 {
-                continue;
-            }
-            let centre = 0.5 * (w[0] + w[1]);
-            for &(x, wx) in optics::quad::rule() {
-                let nu = centre + half * x;
-                let (o, d) = at(nodes, nu);
-                let weight = half * wx * pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
-                sum += weight * if o < 0.0 { -d } else { d };
-            }
-        }
-        sum / nyquist
+        let value = |nu| value(nodes, nu);
+        let at = |nu| {
+            let (o, d) = at(nodes, nu);
+            (o, [d])
+        };
+        let [sum] = sign_split_integral(nyquist, panels, value, at, refinement.zero_width, pixel);
+        sum
     };
     let converged = |change: f64, next: f64| change <= tolerance * next.abs().max(e.mean_mtf);
     let nu_coarse = 8;
