@@ -140,6 +140,7 @@ fn logarithmic(p: Parameter) -> bool {
             | Parameter::FieldAngle(_)
             | Parameter::FieldPointAngle { .. }
             | Parameter::LibraryBias(_)
+            | Parameter::IrisDecentre(_)
     )
 }
 
@@ -161,6 +162,10 @@ const SEIDEL: [(&str, metric::SeidelTerm); 4] = [
     ("lens.astigmatism_um", metric::SeidelTerm::Astigmatism),
     ("lens.field_curvature_um", metric::SeidelTerm::FieldCurvature),
 ];
+
+/// A circular iris's decentre along x and y, a fraction of the aperture's radius: its lane on the
+/// exact 1-D engine (docs/physics.md, "Gradients: the iris").
+const IRIS_DECENTRE: [&str; 2] = ["lens.iris_decentre_x", "lens.iris_decentre_y"];
 
 /// The spectral keys: the Gaussian or top-hat spectrum's centre and range, a line's wavelength
 /// and equivalent width.
@@ -278,9 +283,15 @@ fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> O
              the aperture's edge (the phase jumps there): the derivative is an integral along all the moving edges, \
              not computed yet"
         }
-        "lens.iris_decentre_x" | "lens.iris_decentre_y" | "lens.obscuration" => {
-            "the value is smooth in it, but the pupil's edge moves with it: the derivative needs the OTF's overlap \
-             integral differentiated along its moving boundary (a line integral on the edge), not computed yet"
+        "lens.obscuration" if value == 0.0 => {
+            // the edge of its domain [0, 1): one-sided, and 0 (docs/physics.md, "Gradients: the iris")
+            return Some(Ok(Vec::new()));
+        }
+        "lens.obscuration" => {
+            "the value is smooth in it for 0 < ε < 1, but the pupil is then an annulus on the FFT path, where the \
+             inner edge's motion (each edge cell's area fraction's derivative, the arc length inside it, carried \
+             through the autocorrelation P ⋆ ∂P + ∂P ⋆ P and the area π(1 − ε²)) is not computed yet; at ε = 0, the \
+             edge of its domain, the one-sided derivative is 0 and is reported"
         }
         _ => return None,
     };
@@ -638,6 +649,9 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
              is not computed yet (it is never replaced by a finite difference)"
         );
     }
+    if let Some(axis) = IRIS_DECENTRE.iter().position(|k| *k == key) {
+        return Ok(Parameter::IrisDecentre(axis));
+    }
     if let Some((_, term)) = SEIDEL.iter().find(|(k, _)| *k == key) {
         if lens_model != "chromatic" {
             bail!(
@@ -688,7 +702,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration at 0 (the edge of its domain: one-sided, 0), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
