@@ -102,7 +102,16 @@ impl Node {
             node.scale = r.radius;
             node.shift = [node.shift[0] + r.image_shift_m[0], node.shift[1] + r.image_shift_m[1]];
             node.iris_shift = r.image_shift_m;
-            node.iris_rate = irises.map_or(0.0, |na| 2.0 * order.wavefront.defocus_m / na);
+        }
+        // the full pupil is the iris of radius 1 at d = 0: a decentre's lane moves it as any
+        // circular iris's (the scene's iris is the full circle moved)
+        let circle = match &order.pupil {
+            Pupil::Full => true,
+            Pupil::Aperture(a) => a.as_circle().is_some(),
+            _ => false,
+        };
+        if let Some(na) = irises.filter(|_| circle && order.wavefront.is_defocus_only()) {
+            node.iris_rate = 2.0 * order.wavefront.defocus_m / na;
         }
         node
     }
