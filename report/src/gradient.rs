@@ -1436,9 +1436,10 @@ mod tests {
         );
         // an iris off axis (its tilt's phase and the lateral colour's: not a function of νF#) is
         // refused by the engine's check
-        let e = gradient(&example("decentred-iris.toml"), &owned(&["field.x_deg=3"]), &owned(&["lens.focal_length_mm"]))
-            .unwrap_err()
-            .to_string();
+        let e =
+            gradient(&example("decentred-iris.toml"), &owned(&["field.x_deg=3"]), &owned(&["lens.focal_length_mm"]))
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("focal length") && e.contains("full circular pupil"), "{e}");
     }
 
@@ -3057,7 +3058,8 @@ mod tests {
         let e = gradient(&library, &[], &owned(&["lens.atom_transmission_error"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.atom_transmission_error") && e.contains("kink"), "{e}");
         let paper = scene::read(None).unwrap();
-        let e = gradient(&paper, &owned(&["lens.obscuration=0.3"]), &owned(&["lens.obscuration"])).unwrap_err().to_string();
+        let e =
+            gradient(&paper, &owned(&["lens.obscuration=0.3"]), &owned(&["lens.obscuration"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.obscuration") && e.contains("annulus on the FFT path"), "{e}");
     }
 
@@ -3083,7 +3085,12 @@ mod tests {
             };
             for (i, (k, _, _)) in keys.iter().enumerate() {
                 let error = (mine[i] - theirs[i]).abs();
-                println!("{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {:.1e}", mine[i], theirs[i], error / norm);
+                println!(
+                    "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {:.1e}",
+                    mine[i],
+                    theirs[i],
+                    error / norm
+                );
                 assert!(error <= 10.0 * tolerance * norm, "{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]);
             }
         }
@@ -3167,7 +3174,8 @@ mod tests {
         assert_eq!([g.d_asnr[0], g.d_mean_mtf[0], g.d_snr0[0], g.d_photoelectrons[0]], [0.0; 4]);
         // the scene's own tolerances (the FFT path at its default, the exact value at 0)
         let at = |e: f64| {
-            let v = metric::evaluate(&scene::build_from(&paper, &[assignment("lens.obscuration", e)]).unwrap()).unwrap();
+            let v =
+                metric::evaluate(&scene::build_from(&paper, &[assignment("lens.obscuration", e)]).unwrap()).unwrap();
             [v.asnr, v.mean_mtf, v.snr0, v.photoelectrons]
         };
         let zero = at(0.0);
