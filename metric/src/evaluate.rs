@@ -606,7 +606,9 @@ pub(crate) fn evaluate_field_with_lanes(
             // field point"): the tangential and sagittal means with their derivatives
             if noise.is_none()
                 && !grid.is_empty()
-                && grid.iter().all(|d| matches!(d, optics::WavefrontDirection::FieldAngle(_)))
+                && grid.iter().all(|d| {
+                    matches!(d, optics::WavefrontDirection::FieldAngle(_) | optics::WavefrontDirection::IrisDecentre(_))
+                })
                 && let Some((t, w1, dt)) = poly.mean_mtf_along_and_gradient(along_field, &with_azimuth)
                 && let Some((s, w2, ds)) = poly.mean_mtf_along_and_gradient(along_field + 0.5 * PI, &with_azimuth)
             {
@@ -616,9 +618,14 @@ pub(crate) fn evaluate_field_with_lanes(
                 let k = grid.len();
                 let d_azimuth = 0.5 * (dt[k] + ds[k]);
                 let r2 = field.x_rad * field.x_rad + field.y_rad * field.y_rad;
+                // (an iris's decentre does not turn them; on axis, where a decentred iris makes the
+                // OTF depend on direction, the field keys move the field along x or y, and the
+                // pair of azimuths {x, y} stays the pair: no turn)
                 let turn = |d: &optics::WavefrontDirection| match d {
+                    _ if r2 == 0.0 => 0.0,
                     optics::WavefrontDirection::FieldAngle(0) => -field.y_rad / r2,
-                    _ => field.x_rad / r2,
+                    optics::WavefrontDirection::FieldAngle(_) => field.x_rad / r2,
+                    _ => 0.0,
                 };
                 grid_gradient = GridGradient::Computed(
                     (0..k).map(|i| 0.5 * (dt[i] + ds[i]) + d_azimuth * turn(&grid[i])).collect(),

@@ -133,6 +133,15 @@ pub enum Parameter {
     /// (`optics::LensModel::order_derivatives`). `∂/∂b`, per unit of the parameter. On axis,
     /// with a white noise spectrum (docs/physics.md, "Gradients: a library's parameter bias").
     LibraryBias(usize),
+    /// The decentre of the lens's circular iris along x (`0`, `lens.iris_decentre_x`) or y (`1`,
+    /// `lens.iris_decentre_y`), per unit of the decentre (a fraction of the aperture's radius).
+    /// On an order whose only aberration is defocus the iris is the centred circle with a tilt
+    /// that moves the image by `Δ = 2 W020 d/NA` (`optics::fft::reduce_decentred_circle`): the
+    /// decentre moves each wavelength's OTF phase `exp(−2πi ν·Δ)` only, a lane of the exact 1-D
+    /// engine as the field angle's lateral colour is; the photon count does not move (the iris
+    /// keeps its area). Where the OTF is rotationally symmetric (the iris centred, on axis) the
+    /// derivative is 0 by the mirror symmetry `d → −d` (docs/physics.md, "Gradients: the iris").
+    IrisDecentre(usize),
     /// The sample pitch p of a PSF-stack lens (`lens.psf_pitch_um`): the stack is the PSF at
     /// the detector sampled at `x = j p`, so the pitch scales the whole PSF (its centroids too)
     /// and every wavelength's OTF as `O_p(ν) = O(ν p/p0)`; the photon count does not move (each
@@ -162,6 +171,7 @@ impl Parameter {
             Parameter::ZernikeNoll(j) => Some(optics::WavefrontDirection::Zernike(j)),
             Parameter::Seidel(t) => Some(optics::WavefrontDirection::Seidel(t)),
             Parameter::FieldAngle(a) => Some(optics::WavefrontDirection::FieldAngle(a)),
+            Parameter::IrisDecentre(a) => Some(optics::WavefrontDirection::IrisDecentre(a)),
             p => p.lane().map(optics::WavefrontDirection::Lane),
         }
     }
@@ -191,6 +201,7 @@ impl Parameter {
             Parameter::FocalLength => "the lens's focal length",
             Parameter::LibraryBias(_) => "a library lens's parameter bias",
             Parameter::PsfPitch => "a PSF stack's sample pitch",
+            Parameter::IrisDecentre(_) => "the decentre of the lens's iris",
         }
     }
 }
@@ -689,6 +700,37 @@ fn point_gradient(
                 // RI scales N and N_T alike (docs/physics.md, "Relative illumination"), so the
                 // stray light N_T − N in proportion
                 (n * d_ln_ri, background * d_ln_ri, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::IrisDecentre(axis) => {
+                let d_mtf = match d_grid {
+                    GridGradient::Computed(all) => {
+                        let d = all[grid_place];
+                        grid_place += 1;
+                        d
+                    }
+                    // the iris centred on a rotationally symmetric OTF: d and −d are one pupil
+                    // mirrored, whose mean over azimuth is the same (M̄ even in d)
+                    GridGradient::Symmetric => 0.0,
+                    _ => {
+                        return Err(not_smooth(
+                            p,
+                            format!(
+                                "lens.iris_decentre_{}: the decentre's lane is computed on the exact 1-D engine, for a \
+                                 circular iris on orders whose only aberration is defocus (the centred circle with the \
+                                 tilt 2 W020 d), and is 0 by symmetry where the OTF is rotationally symmetric; this \
+                                 scene's pupil is on another engine (an obscuration or a sector, Seidel or Zernike \
+                                 terms, the FFT path, a line spectrum's grids, or other wavefront keys asked with it)",
+                                if axis == 0 { "x" } else { "y" }
+                            ),
+                        ));
+                    }
+                };
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                // the iris keeps its area (the full-size circle moved): N and N_T do not move
+                (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange if line.is_some() => {
                 // N ∝ (the line's weight) Σ τ_o(c) and N_T ∝ (the weight) T(c): the stray light
@@ -1747,7 +1789,72 @@ fn aperture_partials(
     {
         return Ok(found);
     }
+    if let Some(found) = aperture_through_iris(scene, e, p)? {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` on axis for a lens whose every order is a circular iris (decentred)
+/// with a defocus alone, on the exact 1-D engine (docs/physics.md, "Gradients: the iris"). Each
+/// node's OTF is `D(νλF#/r, W020 r²/λ) exp(−2πi ν·Δ)` with `Δ = 2 W020 d/NA = 4 F# W020 d`
+/// (`optics::fft::reduce_decentred_circle`) and `W020 = K a(λ)`, `K ∝ f0/F#²`: at fixed `K`
+/// the OTF along every azimuth is a function of `νF#` (the tilt's phase `−8πi νF# K a u·d`
+/// too), so by parts, per azimuth and then averaged over the value's tangential and sagittal
+/// azimuths, `∂M̄/∂ln F#|_K = |O(ν_N)|‾ − M̄`; and at fixed `νF#` every node moves with `ln K`
+/// as `w ∂D/∂w` turned by its phase plus `−2πi ν u·Δ` times itself (the tilt scales with
+/// `W020`): the lane `D_K` ([`optics::WavefrontDirection::Defocus`] on the exact engine, on the
+/// value's adaptive rule along each azimuth). So `∂M̄/∂ln F# = |O(ν_N)|‾ − M̄ − 2 D_K` and
+/// `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that: off axis (the lateral colour's
+/// `Δ ∝ f0 tan θ` is not a function of `νF#`), another pupil, a line, another engine. Refused
+/// with the pixel MTF (its sinc does not scale with F#, a term not computed here).
+fn aperture_through_iris(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Option<(f64, f64)>, Error> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if !field.is_on_axis() || detected.as_line().is_some() || camera.noise_spectrum().is_some() {
+        return Ok(None);
+    }
+    let lambda = e.mean_wavelength_nm * 1e-9;
+    let orders = lens.orders(lambda, field);
+    let circles = !orders.is_empty()
+        && orders.iter().all(|o| {
+            matches!(&o.pupil, optics::Pupil::Aperture(a) if a.as_circle().is_some()) && o.wavefront.is_defocus_only()
+        });
+    if !circles {
+        return Ok(None);
+    }
+    if camera.pixel_mtf() {
+        return Err(Error::NotDifferentiable {
+            parameter: p.describe(),
+            reason: "through a decentred iris with camera.pixel_mtf = true the pixel's sinc does not scale with the \
+                     F-number, a term of the integration by parts not computed here yet (set camera.pixel_mtf = false)"
+                .to_owned(),
+        });
+    }
+    let nyquist = camera.nyquist();
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, None, settings) else {
+        return Ok(None);
+    };
+    if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() {
+        return Ok(None);
+    }
+    // the value's azimuths: the field direction (x on axis) and across it
+    let azimuths = [0.0, 0.5 * std::f64::consts::PI];
+    let mut d_k = 0.0;
+    let mut edge = 0.0;
+    for azimuth in azimuths {
+        let Some((_, _, d)) = poly.mean_mtf_along_and_gradient(azimuth, &[optics::WavefrontDirection::Defocus]) else {
+            return Ok(None);
+        };
+        d_k += 0.5 * d[0];
+        edge += 0.5 * poly.otf_along(nyquist, azimuth).norm();
+    }
+    Ok(Some((edge - e.mean_mtf - 2.0 * d_k, d_k)))
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of the chromatic lens with Seidel terms on axis, on the overlap

@@ -140,6 +140,7 @@ fn logarithmic(p: Parameter) -> bool {
             | Parameter::FieldAngle(_)
             | Parameter::FieldPointAngle { .. }
             | Parameter::LibraryBias(_)
+            | Parameter::IrisDecentre(_)
     )
 }
 
@@ -161,6 +162,10 @@ const SEIDEL: [(&str, metric::SeidelTerm); 4] = [
     ("lens.astigmatism_um", metric::SeidelTerm::Astigmatism),
     ("lens.field_curvature_um", metric::SeidelTerm::FieldCurvature),
 ];
+
+/// A circular iris's decentre along x and y, a fraction of the aperture's radius: its lane on the
+/// exact 1-D engine (docs/physics.md, "Gradients: the iris").
+const IRIS_DECENTRE: [&str; 2] = ["lens.iris_decentre_x", "lens.iris_decentre_y"];
 
 /// The spectral keys: the Gaussian or top-hat spectrum's centre and range, a line's wavelength
 /// and equivalent width.
@@ -278,9 +283,15 @@ fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> O
              the aperture's edge (the phase jumps there): the derivative is an integral along all the moving edges, \
              not computed yet"
         }
-        "lens.iris_decentre_x" | "lens.iris_decentre_y" | "lens.obscuration" => {
-            "the value is smooth in it, but the pupil's edge moves with it: the derivative needs the OTF's overlap \
-             integral differentiated along its moving boundary (a line integral on the edge), not computed yet"
+        "lens.obscuration" if value == 0.0 => {
+            // the edge of its domain [0, 1): one-sided, and 0 (docs/physics.md, "Gradients: the iris")
+            return Some(Ok(Vec::new()));
+        }
+        "lens.obscuration" => {
+            "the value is smooth in it for 0 < ε < 1, but the pupil is then an annulus on the FFT path, where the \
+             inner edge's motion (each edge cell's area fraction's derivative, the arc length inside it, carried \
+             through the autocorrelation P ⋆ ∂P + ∂P ⋆ P and the area π(1 − ε²)) is not computed yet; at ε = 0, the \
+             edge of its domain, the one-sided derivative is 0 and is reported"
         }
         _ => return None,
     };
@@ -638,6 +649,9 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
              is not computed yet (it is never replaced by a finite difference)"
         );
     }
+    if let Some(axis) = IRIS_DECENTRE.iter().position(|k| *k == key) {
+        return Ok(Parameter::IrisDecentre(axis));
+    }
     if let Some((_, term)) = SEIDEL.iter().find(|(k, _)| *k == key) {
         if lens_model != "chromatic" {
             bail!(
@@ -688,7 +702,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration at 0 (the edge of its domain: one-sided, 0), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"library\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -1420,9 +1434,12 @@ mod tests {
                 "spectrum.range_nm=1",
             ]),
         );
-        // an iris (not the full pupil) is refused by the engine's check
+        // an iris off axis (its tilt's phase and the lateral colour's: not a function of νF#) is
+        // refused by the engine's check
         let e =
-            gradient(&example("decentred-iris.toml"), &[], &owned(&["lens.focal_length_mm"])).unwrap_err().to_string();
+            gradient(&example("decentred-iris.toml"), &owned(&["field.x_deg=3"]), &owned(&["lens.focal_length_mm"]))
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("focal length") && e.contains("full circular pupil"), "{e}");
     }
 
@@ -3032,7 +3049,7 @@ mod tests {
     }
 
     /// The keys still refused name the key and why: the library's fabrication errors, a phase
-    /// map's pitch, the iris's decentre and the obscuration.
+    /// map's pitch, and the obscuration where it is not 0 (an annulus on the FFT path).
     #[test]
     fn moving_edges_and_random_draws_are_refused_naming_why() {
         let library = example("library.toml");
@@ -3041,10 +3058,141 @@ mod tests {
         let e = gradient(&library, &[], &owned(&["lens.atom_transmission_error"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.atom_transmission_error") && e.contains("kink"), "{e}");
         let paper = scene::read(None).unwrap();
-        for key in ["lens.iris_decentre_x", "lens.iris_decentre_y", "lens.obscuration"] {
-            let e = gradient(&paper, &[], &owned(&[key])).unwrap_err().to_string();
-            assert!(e.contains(&format!("--wrt {key}")) && e.contains("pupil's edge moves"), "{e}");
+        let e =
+            gradient(&paper, &owned(&["lens.obscuration=0.3"]), &owned(&["lens.obscuration"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.obscuration") && e.contains("annulus on the FFT path"), "{e}");
+    }
+
+    /// Each key's gradient (ASNR, mean MTF, SNR0, N) against central differences of evaluations
+    /// converged at 1e-10 with the step `(3e-10/|f‴|)^{1/3}` for a value turning on the key's
+    /// `scale`, as sensitivities per `scale` (`∂/∂key × scale`: the keys may be 0), within 10× the
+    /// scene's 1e-6 relative to the gradient's norm (or the quantity's size where it is 0).
+    fn check_at_scales(source: &Source, overrides: &[&str], keys: &[(&str, f64, f64)]) {
+        let tolerance = 1e-6;
+        let overrides = owned(overrides);
+        let names: Vec<&str> = keys.iter().map(|k| k.0).collect();
+        let g = gradient(source, &overrides, &owned(&names)).unwrap();
+        let references: Vec<[f64; 4]> =
+            keys.iter().zip(&g.values).map(|((k, _, h), v)| central(source, &overrides, k, *v, *h)).collect();
+        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            let mine: Vec<f64> = keys.iter().enumerate().map(|(i, k)| ours[q][i] * k.1).collect();
+            let theirs: Vec<f64> = keys.iter().enumerate().map(|(i, k)| references[i][q] * k.1).collect();
+            let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
+            let norm = match mine.iter().map(|x| x * x).sum::<f64>().sqrt() {
+                0.0 => quantity,
+                norm => norm,
+            };
+            for (i, (k, _, _)) in keys.iter().enumerate() {
+                let error = (mine[i] - theirs[i]).abs();
+                println!(
+                    "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {:.1e}",
+                    mine[i],
+                    theirs[i],
+                    error / norm
+                );
+                assert!(error <= 10.0 * tolerance * norm, "{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]);
+            }
         }
+    }
+
+    /// The steps of [`check_at_scales`] for the iris's decentre (the value turns on ~0.05 of the
+    /// radius, as the F-number's few per cent: the tilt 2 W020 d is several waves at a 50 nm
+    /// band's edge, [`APERTURE_STEP`]) and the field angles (per degree: the lateral colour
+    /// f0 tan θ (λ0/λ − 1) turns the value over about a degree).
+    const DECENTRE: f64 = APERTURE_STEP;
+    const DEGREE: f64 = 1e-3;
+
+    /// The decentred iris (examples/decentred-iris.toml, 0.15 of the radius along x, on axis):
+    /// its decentre's lane on the exact 1-D engine (x, and y at 0: 0 by the mirror y → −y, which
+    /// the differences must find), the F-number and the focal length through the reduction
+    /// (F#/r, the tilt's shift Δ = 4 F# W020 d), the field angles at 0 (the lateral colour seen
+    /// through the iris; x and y), and off axis at (3°, 2°) every one of them but the aperture.
+    #[test]
+    fn a_decentred_iris_keys_match_central_differences() {
+        let iris = example("decentred-iris.toml");
+        check_at_scales(
+            &iris,
+            &[],
+            &[
+                ("lens.iris_decentre_x", 1.0, DECENTRE),
+                ("lens.iris_decentre_y", 1.0, DECENTRE),
+                ("field.x_deg", 1.0, DEGREE),
+                ("field.y_deg", 1.0, DEGREE),
+                ("exposure.time_ms", 1.23, relative_step("", 1.23)),
+            ],
+        );
+        check_aperture(&iris, &[]);
+        check_aperture(&iris, &owned(&["options.form=\"integral\"", "lens.iris_decentre_y=-0.1"]));
+        check_at_scales(
+            &iris,
+            &["field.x_deg=3", "field.y_deg=2"],
+            &[
+                ("lens.iris_decentre_x", 1.0, DECENTRE),
+                ("lens.iris_decentre_y", 1.0, DECENTRE),
+                ("field.x_deg", 1.0, DEGREE),
+                ("field.y_deg", 1.0, DEGREE),
+            ],
+        );
+        let e = metric::evaluate(&scene::build_from(&iris, &[]).unwrap()).unwrap();
+        assert!(e.numerics.engine.contains("exact-1d"), "{}", e.numerics.engine);
+    }
+
+    /// The decentre at 0: on axis (the paper's lens) the OTF is rotationally symmetric and the
+    /// derivative is 0 by the mirror d → −d; off axis at 3° along x the lateral colour breaks the
+    /// mirror x → −x, and the iris's tilt 2 W020 d moves each wavelength's image against its
+    /// lateral colour (both ∝ λ0/λ − 1): ∂/∂d_x is not 0, ∂/∂d_y is (the mirror y → −y). Each
+    /// against central differences across 0 (evaluations with the iris moved either way).
+    #[test]
+    fn the_decentre_at_zero_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        let keys = [("lens.iris_decentre_x", 1.0, DECENTRE), ("lens.iris_decentre_y", 1.0, DECENTRE)];
+        let on_axis = gradient(&paper, &[], &owned(&["lens.iris_decentre_x", "lens.iris_decentre_y"])).unwrap();
+        assert_eq!(on_axis.d_asnr, vec![0.0, 0.0]);
+        check_at_scales(&paper, &["field.x_deg=3"], &keys);
+        let off_axis = gradient(&paper, &owned(&["field.x_deg=3"]), &owned(&["lens.iris_decentre_x"])).unwrap();
+        assert!(off_axis.d_asnr[0].abs() > 0.1, "{:?}", off_axis.d_asnr);
+        // on axis the differences across 0 find 0 too (to rounding of the ASNR)
+        for k in ["lens.iris_decentre_x", "lens.iris_decentre_y"] {
+            let d = central(&paper, &[], k, 0.0, DECENTRE);
+            assert!(d[0].abs() <= 1e-9 * on_axis.asnr / DECENTRE, "{k}: {d:?}");
+        }
+    }
+
+    /// The obscuration at 0, the edge of its domain [0, 1): the removed disc's area πε² and every
+    /// OTF change are O(ε²), so the one-sided derivative is 0, reported for all four quantities.
+    /// The reference: one-sided differences (f(h) − f(0))/h on the FFT path (the annulus) at
+    /// h = 0.02, 0.04, 0.08 against the exact value at 0; they vanish linearly in h (the
+    /// quotient doubles with h, which a non-zero slope would not let it), and their extrapolation
+    /// to h = 0 (removing the h and h² terms of f(h) − f(0) = a₂h² + a₃h³) is below 5 % of the
+    /// quotient at 0.02 (the FFT path's 3e-6 over h = 0.02 is 1.5e-4 of the ASNR). N exactly
+    /// ∝ 1 − ε².
+    #[test]
+    fn the_obscuration_at_zero_is_zero_one_sided() {
+        let paper = scene::read(None).unwrap();
+        let g = gradient(&paper, &[], &owned(&["lens.obscuration"])).unwrap();
+        assert_eq!([g.d_asnr[0], g.d_mean_mtf[0], g.d_snr0[0], g.d_photoelectrons[0]], [0.0; 4]);
+        // the scene's own tolerances (the FFT path at its default, the exact value at 0)
+        let at = |e: f64| {
+            let v =
+                metric::evaluate(&scene::build_from(&paper, &[assignment("lens.obscuration", e)]).unwrap()).unwrap();
+            [v.asnr, v.mean_mtf, v.snr0, v.photoelectrons]
+        };
+        let zero = at(0.0);
+        let quotient = |h: f64| {
+            let v = at(h);
+            [(v[0] - zero[0]) / h, (v[3] - zero[3]) / h]
+        };
+        let (d1, d2, d4) = (quotient(0.02), quotient(0.04), quotient(0.08));
+        let ratio = d2[0] / d1[0];
+        assert!((1.6..=2.4).contains(&ratio), "{d1:?} {d2:?}");
+        let r1 = 2.0 * d1[0] - d2[0];
+        let r2 = 2.0 * d2[0] - d4[0];
+        let slope = (4.0 * r1 - r2) / 3.0;
+        println!("quotients {d1:?} {d2:?} {d4:?}, slope at 0 {slope:e}");
+        assert!(slope.abs() <= 0.05 * d1[0].abs(), "{slope} against {}", d1[0]);
+        // N = N0 (1 − ε²): its quotient −N0 h
+        assert!((d1[1] + zero[3] * 0.02).abs() <= 1e-9 * zero[3], "{d1:?}");
     }
 
     /// The table's columns stay aligned whatever a value's length (a float printed in full).

@@ -96,6 +96,8 @@ impl Closed {
                 scale: 1.0,
                 shift: [0.0, 0.0],
                 shift_rate: None,
+                iris_shift: [0.0; 2],
+                iris_rate: 0.0,
                 table: None,
                 radial: None,
                 part: WHOLE,

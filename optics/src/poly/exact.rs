@@ -70,11 +70,16 @@ pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azim
     sum / nodes.total_weight
 }
 
-/// [`exact_along`] and, into `gradient`, its derivative with respect to each of `directions`,
-/// which must all be field angles ([`WavefrontDirection::FieldAngle`]; docs/physics.md,
-/// "Gradients: the field point"): each node's turned value `v e^{ik u·Δ}` (k = −2πν) times
-/// `i k u_a ∂Δ_a/∂θ_a`, on the same nodes. `None` for another direction or a node without its
-/// shift's rates.
+/// [`exact_along`] and, into `gradient`, its derivative with respect to each of `directions`:
+/// field angles ([`WavefrontDirection::FieldAngle`]; docs/physics.md, "Gradients: the field
+/// point"), the azimuth, a circular iris's decentre ([`WavefrontDirection::IrisDecentre`]) and
+/// every order's defocus ([`WavefrontDirection::Defocus`]; "Gradients: the iris"). Each node's
+/// turned value `v e^{ik u·Δ}` (k = −2πν) gains `i k u_a ∂Δ_a/∂θ_a` (a field angle),
+/// `i k u_a ∂Δ_a/∂d_a` with `∂Δ_a/∂d_a = 2 W020/NA` (a decentre) times itself; the defocus lane
+/// (`W020` scaled by `1 + ε`, `s` fixed) is `w ∂D/∂w` of the node's defocused OTF turned by its
+/// phase, plus `i k u·Δ_iris` times the turned value (the iris's tilt scales with `W020`; a
+/// lateral colour's shift does not). `None` for another direction, a field angle on a node
+/// without its shift's rates, or the defocus lane on a node that is not a defocused circle.
 pub(super) fn exact_along_and_field_gradient(
     scene: &Scene<'_>,
     nodes: &Nodes,
@@ -83,21 +88,26 @@ pub(super) fn exact_along_and_field_gradient(
     directions: &[WavefrontDirection],
     gradient: &mut [Complex64],
 ) -> Option<Complex64> {
-    // 0, 1: the field angles; 2: the azimuth
+    // 0, 1: the field angles; 2: the azimuth; 3, 4: the iris's decentre; 5: the defocus
     let axes: Vec<usize> = directions
         .iter()
         .map(|d| match d {
             WavefrontDirection::FieldAngle(a) if *a < 2 => Some(*a),
             WavefrontDirection::Azimuth => Some(2),
+            WavefrontDirection::IrisDecentre(a) if *a < 2 => Some(3 + *a),
+            WavefrontDirection::Defocus => Some(5),
             _ => None,
         })
         .collect::<Option<_>>()?;
     let fields = axes.iter().any(|&a| a < 2);
+    let defocus = axes.contains(&5);
     gradient.iter_mut().for_each(|g| *g = Complex64::new(0.0, 0.0));
     let (sin_a, cos_a) = azimuth.sin_cos();
     let k = -2.0 * PI * frequency;
+    let nuf = frequency.abs() * scene.f_number;
     let mut sum = Complex64::new(0.0, 0.0);
     let mut missing = false;
+    let mut not_circle = false;
     contributions(scene, nodes, frequency, azimuth - scene.field_direction(), |v, n| {
         let [dx, dy] = n.shift;
         let (s, c) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
@@ -110,16 +120,31 @@ pub(super) fn exact_along_and_field_gradient(
                 [0.0; 2]
             }
         };
+        // w ∂D/∂w of the node's defocused circle at its own frequency scale, turned
+        let lane = if defocus && n.is_defocused_circle() {
+            let d = n.weight * crate::otf::defocus_otf_log_derivative(nuf * n.lambda / n.scale, n.w020 / n.lambda);
+            Complex64::new(d * c, d * s)
+        } else {
+            not_circle |= defocus;
+            Complex64::new(0.0, 0.0)
+        };
+        let [ix, iy] = n.iris_shift;
         for (g, &axis) in gradient.iter_mut().zip(&axes) {
             let rate = match axis {
                 0 => k * rx * cos_a,
                 1 => k * ry * sin_a,
-                _ => k * (dy * cos_a - dx * sin_a),
+                2 => k * (dy * cos_a - dx * sin_a),
+                3 => k * n.iris_rate * cos_a,
+                4 => k * n.iris_rate * sin_a,
+                _ => {
+                    *g += lane;
+                    k * (ix * cos_a + iy * sin_a)
+                }
             };
             *g += Complex64::new(0.0, rate) * turned;
         }
     });
-    if missing && fields {
+    if (missing && fields) || not_circle {
         return None;
     }
     gradient.iter_mut().for_each(|g| *g /= nodes.total_weight);
@@ -150,7 +175,7 @@ impl OtfEngine for Quadrature<'_> {
         exact_along(&self.scene, &self.nodes, frequency, azimuth)
     }
 
-    /// The field angles' lanes ([`exact_along_and_field_gradient`]).
+    /// The field angles', the iris decentre's and the defocus's lanes ([`exact_along_and_field_gradient`]).
     fn otf_along_and_gradient(
         &self,
         frequency: f64,

@@ -767,8 +767,18 @@ pub enum WavefrontDirection {
     /// Each order's own defocus `W020(λ)` (not the field curvature), per relative change:
     /// `∂W = W020 ρ²` at each spectral node, the lane `∂O/∂ln K` of the F-number and focal
     /// length (`W020 ∝ f0/F#²`) on the overlap engine (docs/physics.md, "Gradients: the
-    /// F-number and the focal length with Seidel terms"). Only the overlap engine carries it.
+    /// F-number and the focal length with Seidel terms"). The overlap engine carries it, and the
+    /// exact engine for a decentred circular iris ([`IrisDecentre`](Self::IrisDecentre)), whose
+    /// tilt `2 W020 d` scales with the defocus: there the node's image displacement
+    /// `Δ = 2 W020 d/NA` moves with it too (docs/physics.md, "Gradients: the iris").
     Defocus,
+    /// The decentre of a circular iris along x (`0`, `lens.iris_decentre_x`) or y (`1`), per unit
+    /// of the decentre (a fraction of the aperture's radius), on an order whose only aberration
+    /// is defocus: the iris is the centred circle with the tilt `2 W020 d` that moves the image by
+    /// `Δ = 2 W020 d/NA` (`fft::reduce_decentred_circle`), so each node's OTF gains
+    /// `−2πi ν_a (2 W020/NA)` times itself, as a field angle's lateral colour does. The exact
+    /// 1-D engine's gradient (docs/physics.md, "Gradients: the iris").
+    IrisDecentre(usize),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -898,6 +908,7 @@ impl FftPath {
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
                         | WavefrontDirection::Azimuth
+                        | WavefrontDirection::IrisDecentre(_)
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);

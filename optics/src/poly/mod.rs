@@ -992,6 +992,8 @@ mod tests {
             scale: 1.0,
             shift: [0.0; 2],
             shift_rate: None,
+            iris_shift: [0.0; 2],
+            iris_rate: 0.0,
             table: None,
             radial: None,
             part,

@@ -54,6 +54,11 @@ pub(super) struct Node {
     /// `[∂Δx/∂θx, ∂Δy/∂θy]` (m per radian) off axis, where the lens gives it
     /// (`LensModel::image_shift_field_rates`): the field angles' lanes of the exact engine
     pub shift_rate: Option<[f64; 2]>,
+    /// a decentred circular iris's share of `shift` ([`reduced_circle`]: `Δ = 2 W020 d/NA`),
+    /// m, and its rate `∂Δ_a/∂d_a = 2 W020/NA` (m per unit of the decentre, a fraction of the
+    /// radius): the iris decentre's and the defocus's lanes of the exact engine; 0 without one
+    pub iris_shift: [f64; 2],
+    pub iris_rate: f64,
     /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
     pub table: Option<Arc<OtfTable>>,
     /// the order's radially symmetric pupil ([`Pupil::Radial`]) prepared at this wavelength,
@@ -78,6 +83,8 @@ impl Node {
             scale: 1.0,
             shift: order.wavefront.image_shift_m,
             shift_rate: None,
+            iris_shift: [0.0; 2],
+            iris_rate: 0.0,
             table: match &order.pupil {
                 Pupil::Table(t) => Some(t.clone()),
                 _ => None,
@@ -94,6 +101,17 @@ impl Node {
             node.w020 = r.defocus_m;
             node.scale = r.radius;
             node.shift = [node.shift[0] + r.image_shift_m[0], node.shift[1] + r.image_shift_m[1]];
+            node.iris_shift = r.image_shift_m;
+        }
+        // the full pupil is the iris of radius 1 at d = 0: a decentre's lane moves it as any
+        // circular iris's (the scene's iris is the full circle moved)
+        let circle = match &order.pupil {
+            Pupil::Full => true,
+            Pupil::Aperture(a) => a.as_circle().is_some(),
+            _ => false,
+        };
+        if let Some(na) = irises.filter(|_| circle && order.wavefront.is_defocus_only()) {
+            node.iris_rate = 2.0 * order.wavefront.defocus_m / na;
         }
         node
     }
@@ -207,8 +225,9 @@ impl Nodes {
     /// Appends the nodes of every order of the scene's lens at `lambda` with rule weight `q`,
     /// marked as of `part` (`scene` is that part's, [`Scene::part`]).
     pub fn emit(&mut self, scene: &Scene<'_>, lambda: f64, q: f64, part: usize) {
-        let rates = shift_rates(scene, lambda);
-        for (o, order) in scene.lens.orders(lambda, scene.field).into_iter().enumerate() {
+        let orders = scene.lens.orders(lambda, scene.field);
+        let rates = shift_rates(scene, lambda, &orders);
+        for (o, order) in orders.into_iter().enumerate() {
             self.needs_grid |= needs_grid(&order, scene.irises.is_some());
             let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises, scene.table_rule);
             node.part = part;
@@ -494,10 +513,14 @@ pub(super) fn panels(scene: &Scene<'_>, lo: f64, hi: f64) -> Nodes {
     out
 }
 
-/// The lens's image shift rates at `lambda` (`LensModel::image_shift_field_rates`), off axis
-/// only: on axis the exact engine's OTF is rotationally symmetric and takes no field lane.
-fn shift_rates(scene: &Scene<'_>, lambda: f64) -> Option<Vec<[f64; 2]>> {
-    if scene.field.is_on_axis() { None } else { scene.lens.image_shift_field_rates(lambda, scene.field) }
+/// The lens's image shift rates at `lambda` (`LensModel::image_shift_field_rates`) for its
+/// `orders` there: the exact engine's field lanes. Off axis, and on axis where an order has an
+/// iris (a decentred iris makes the OTF depend on direction there; docs/physics.md,
+/// "Gradients: the iris"); on axis without one the OTF is rotationally symmetric and takes no
+/// field lane.
+fn shift_rates(scene: &Scene<'_>, lambda: f64, orders: &[Order]) -> Option<Vec<[f64; 2]>> {
+    let iris = || scene.irises.is_some() && orders.iter().any(|o| matches!(o.pupil, Pupil::Aperture(_)));
+    if scene.field.is_on_axis() && !iris() { None } else { scene.lens.image_shift_field_rates(lambda, scene.field) }
 }
 
 /// Emits the nodes of `[lo, cut]` in `u`, `λ = cut − (cut − lo) u²`, for a panel of the reference
@@ -511,8 +534,9 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
             return;
         }
         let q = q * 2.0 * len * u * rho;
-        let rates = shift_rates(scene, lambda);
-        for (o, order) in scene.lens.orders(lambda, scene.field).into_iter().enumerate() {
+        let orders = scene.lens.orders(lambda, scene.field);
+        let rates = shift_rates(scene, lambda, &orders);
+        for (o, order) in orders.into_iter().enumerate() {
             let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises, scene.table_rule);
             node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
             emit(node);
