@@ -15,32 +15,8 @@ use super::{
 /// averaging frequency `ν_s` ([`OtfEngine::averaged_defocus`](super::OtfEngine::averaged_defocus)):
 /// their damping `exp(−(ν/ν_s)²/2)` is `e^{−32}` = 1e-14 there. Beyond, the OTF is the smooth
 /// average over the defocus spread, decaying about as `C/ν`: one panel in `ln ν`, where
-/// `ν |OTF|` is about constant, takes the rest of the range. The range is cut where this lies
-/// below 1/1.5 of the frequency limit; the cut itself is at `averaged_cut` `ν_s`.
+/// `ν |OTF|` is about constant, takes the rest of the range.
 pub(super) const AVERAGED_DECAY: f64 = 8.0;
-
-/// The tightest tolerance (relative) at which the frequency rule cuts at `AVERAGED_CUT_LOOSE`
-/// `ν_s`; tighter, at `AVERAGED_DECAY` `ν_s` (see `averaged_cut`).
-pub(super) const AVERAGED_CUT_TOLERANCE: f64 = 1e-7;
-
-/// Where the frequency rule cuts the range at `AVERAGED_CUT_TOLERANCE` and looser, in units of
-/// `ν_s`: the damping there is `e^{−12.5}` = 3.7e-6.
-pub(super) const AVERAGED_CUT_LOOSE: f64 = 5.0;
-
-/// Where the frequency rule cuts the range (in units of `ν_s`) into the panel in ν below and the
-/// panel in `ln ν` above, at the relative `tolerance`. Below the cut, the OTF falls from 1 like
-/// the average of Gaussians `exp(−(ν/ν_s)² (c − s)²/2)` over the pupil, a feature of width `ν_s`
-/// at the panel's end: the Chebyshev coefficients of `exp(−x²/2)` on `[0, X]` fall below 1e-6
-/// of the integral at about 9 points for X = 5 and need 17 for X = 8 (the coefficients
-/// `2 e^{−X²/4} I_k(X²/4)` of the even extension on `[−X, X]`; the map's 9-point levels on
-/// `[0, 8 ν_s]` were 2e-6 of the integral off, 4× their share at 1e-6). Above it, the panel in
-/// `ln ν` carries what is left of the damped oscillation, `exp(−X²/2)` of its amplitude, which at
-/// 3.7e-6 its 9 points absorb at 1e-7 and looser but not at 1e-8, where its levels climb (the
-/// map's E(c) a point at 1e-8: 2005 with the cut at 5 `ν_s`, 1799 at 8). Either cut is only
-/// where the rule splits the range: the panels' own error estimates accept them.
-pub(super) fn averaged_cut(tolerance: f64) -> f64 {
-    if tolerance >= AVERAGED_CUT_TOLERANCE { AVERAGED_CUT_LOOSE } else { AVERAGED_DECAY }
-}
 
 /// Azimuths of the first level of the nested trapezoid rule over azimuth, on `[0, π)` (the
 /// tangential and sagittal directions among them).
@@ -780,13 +756,12 @@ impl Polychromatic<'_> {
                     .max(floor)
                     .clamp(1.0, MAX_PANELS) as usize
             };
-            // past the averaging frequency's decay (`averaged_cut`), `ν |OTF|` is about
+            // past the averaging frequency's decay (`AVERAGED_DECAY`), `ν |OTF|` is about
             // constant: one panel in ln ν
-            let cut = averaged_cut(self.asked_tolerance);
             let logarithmic = self
                 .engine
                 .averaged_defocus()
-                .is_some_and(|(averaging, _)| a > 0.0 && a >= (1.0 - 1e-9) * cut * averaging);
+                .is_some_and(|(averaging, _)| a > 0.0 && a >= (1.0 - 1e-9) * AVERAGED_DECAY * averaging);
             let h = (b - a) / n as f64;
             let mut left = (a, value(a));
             work.otf_evaluations += 1;
@@ -838,7 +813,7 @@ impl Polychromatic<'_> {
     /// agrees by chance must also follow a fall.
     /// Differences within the engine's own noise per value (closed form) are accepted as such.
     /// `logarithmic`: the points and weights in `u = ln ν` (`∫ f dν = ∫ ν f du`), for the decay
-    /// past `averaged_cut`, where `ν |OTF|` is about constant (F/1.4, 200 nm: one panel from
+    /// past [`AVERAGED_DECAY`], where `ν |OTF|` is about constant (F/1.4, 200 nm: one panel from
     /// 12 to 96 cycles/mm where an octave each took four).
     fn smooth_panel(
         &self,

@@ -314,7 +314,7 @@ trait OtfEngine: std::fmt::Debug {
     /// Where the engine knows that the defocus oscillations of the OTF in ν average out over
     /// the spectrum: `(ν_s, W̄)`, beyond `ν_s` (cycles/m) only the oscillation at the mean defocus
     /// `W̄` (m) survives, damped. The frequency rule then sizes its panels by `W̄` and the spread,
-    /// damped (`Polychromatic::defocus_phase`), and integrates past `frequency::averaged_cut ν_s`
+    /// damped (`Polychromatic::defocus_phase`), and integrates past `frequency::AVERAGED_DECAY ν_s`
     /// in `ln ν`; `None` (every other engine): panels by the nodes' RMS and most resolved
     /// defocus, in ν.
     fn averaged_defocus(&self) -> Option<(f64, f64)> {

@@ -198,31 +198,3 @@ fn closed_form_second_pass_keeps_the_values_that_meet_it() {
         work.closed_form_evaluations
     );
 }
-
-/// F/4 over 200 nm (a broad band of the 40 × 100 map): the closed form's frequency rule cuts the
-/// range at the averaging frequency's decay into a panel in ν and one in `ln ν`. At 1e-6 the cut
-/// is at 5 `ν_s`, where the panel in ν takes 9 values: 18 in all (both panels' shared end counted
-/// twice), where the cut at 8 `ν_s` took 26 (its panel in ν at 17; docs/physics.md, "Spectral
-/// quadrature"). At 1e-8 the cut stays at 8 `ν_s`. At both tolerances the mean stays within them
-/// of the panels rule at 1e-12.
-#[test]
-fn closed_form_cut_at_five_averaging_frequencies_takes_nine_values_below_it() {
-    let lens = Chromatic { f_number: 4.0, lateral: 0.0 };
-    let spectrum = gaussian(800.0, 200.0);
-    let nyquist = 1.0 / (2.0 * 5.2e-6);
-    let at = |tolerance: f64, rule: SpectralRule, closed_form: bool| {
-        let settings = Settings { tolerance, spectral_rule: rule, closed_form, ..Settings::default() };
-        let poly = Polychromatic::with_settings(&lens, &spectrum, Field::ON_AXIS, nyquist, None, settings).unwrap();
-        poly.mean_mtf()
-    };
-    let (want, _) = at(1e-12, SpectralRule::Panels, false);
-    let (got, work) = at(1e-6, SpectralRule::Interpolated, true);
-    let error = ((got - want) / want).abs();
-    assert!(error <= 1e-6, "{got} vs {want} ({error:.1e})");
-    assert_eq!((work.frequency_panels, work.otf_evaluations), (2, 18), "{work:?}");
-    let (got, work) = at(1e-8, SpectralRule::Interpolated, true);
-    let error = ((got - want) / want).abs();
-    assert!(error <= 1e-8, "{got} vs {want} ({error:.1e})");
-    assert_eq!(work.frequency_panels, 2, "{work:?}");
-    eprintln!("1e-8: {work:?}, error {error:.1e}");
-}
