@@ -215,7 +215,13 @@ fn closed_form_frequency_rule_does_not_trust_the_three_point_level() {
     let step = nyquist / intervals as f64;
     let simpson: f64 = (0..=intervals)
         .map(|k| {
-            let weight = if k == 0 || k == intervals { 1.0 } else if k % 2 == 1 { 4.0 } else { 2.0 };
+            let weight = if k == 0 || k == intervals {
+                1.0
+            } else if k % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
             weight * exact.mtf(step * k as f64)
         })
         .sum::<f64>()
@@ -223,7 +229,8 @@ fn closed_form_frequency_rule_does_not_trust_the_three_point_level() {
         / 3.0
         / nyquist;
     for tolerance in [1e-6, 1e-7, 1e-8] {
-        let poly = Polychromatic::with_settings(&lens, &spectrum, Field::ON_AXIS, nyquist, None, settings(tolerance)).unwrap();
+        let poly =
+            Polychromatic::with_settings(&lens, &spectrum, Field::ON_AXIS, nyquist, None, settings(tolerance)).unwrap();
         let (got, work) = poly.mean_mtf();
         let error = ((got - simpson) / simpson).abs();
         assert!(error <= tolerance, "at {tolerance:e}: {got} against Simpson's {simpson} ({error:.1e}; {work:?})");
