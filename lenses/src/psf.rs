@@ -828,7 +828,7 @@ mod tests {
     /// average are the same at every field point (`turns_with_field`; docs/physics.md,
     /// "Gradients: the field point"), for a stack that is not round and whose centroid moves
     /// with λ along both axes (lateral colour). Before the shifts were turned, the field along
-    /// +y put them across the table's frame, and the value depended on the field direction.
+    /// +y put them across the table's frame.
     #[test]
     fn the_mean_mtf_does_not_depend_on_the_field_point() {
         let n = 32;

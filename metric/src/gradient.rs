@@ -584,7 +584,7 @@ fn point_gradient(
                             match d_grid {
                                 GridGradient::Symmetric =>
                                     "rotationally symmetric on the 1-D engines (every Seidel term zero), and its pupil is not \
-                                     one the overlap engine takes at zero Seidel terms (an iris, a line spectrum, \
+                                     one the overlap engine takes at zero Seidel terms (an iris, \
                                      options.overlap = false or options.pupil_samples)",
                                 _ =>
                                     "not on the overlap engine (an iris, a phase profile, a table, a wavefront too strong for \

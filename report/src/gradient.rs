@@ -2658,7 +2658,9 @@ mod tests {
     }
 
     /// Refusals name the key and the reason: a Seidel key of another family; every Seidel term
-    /// zero where the overlap engine does not take the scene (a line's FFT grids, an iris).
+    /// zero where the overlap engine does not take the scene (an iris). Under a line the keys
+    /// at zero are computed (`seidel_gradient_at_zero_under_a_line_matches_a_narrow_band`),
+    /// coma 0 by symmetry.
     #[test]
     fn seidel_gradient_refusals_name_the_key() {
         let paper = scene::read(None).unwrap();
@@ -2666,10 +2668,9 @@ mod tests {
         let e = e.unwrap_err().to_string();
         assert!(e.contains("lens.coma_um"), "{e}");
         let line = owned(&LINE_803);
-        let e = gradient(&paper, &line, &owned(&["lens.astigmatism_um"])).unwrap_err().to_string();
-        assert!(e.contains("lens.astigmatism_um") && e.contains("line spectrum"), "{e}");
-        let g = gradient(&paper, &line, &owned(&["lens.coma_um"])).unwrap();
-        assert_eq!(g.d_mean_mtf[0], 0.0);
+        let g = gradient(&paper, &line, &owned(&["lens.astigmatism_um", "lens.coma_um"])).unwrap();
+        assert!(g.d_mean_mtf[0] != 0.0, "{g:?}");
+        assert_eq!(g.d_mean_mtf[1], 0.0);
         let e = gradient(&example("decentred-iris.toml"), &[], &owned(&["lens.spherical_um"])).unwrap_err().to_string();
         assert!(e.contains("lens.spherical_um"), "{e}");
     }
