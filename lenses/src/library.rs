@@ -528,6 +528,10 @@ pub struct LibraryLens {
     /// each atom's fabrication error factor `(1 + ε_i) e^{iδ_i}` (aligned with `atoms`), when
     /// [`LibraryLens::with_fabrication`] gave errors
     factors: Option<Vec<Complex64>>,
+    /// each atom's phase draw `δ_i` (aligned with `atoms`; its factor's phase is `σ_φ δ_i`),
+    /// drawn whatever σ_φ (the phase error's derivative at σ_φ = 0 needs them); empty before
+    /// [`LibraryLens::with_fabrication`]
+    phase_draws: Vec<f64>,
     /// how many atoms' amplitude factor `1 + ε_i` was drawn below 0 and taken as 0
     clamped: usize,
     /// each atom's layout row
@@ -559,6 +563,7 @@ impl Clone for LibraryLens {
             unique: self.unique.clone(),
             atoms: self.atoms.clone(),
             factors: self.factors.clone(),
+            phase_draws: self.phase_draws.clone(),
             clamped: self.clamped,
             rows: self.rows.clone(),
             cells: self.cells.clone(),
@@ -774,6 +779,7 @@ impl LibraryLens {
             unique,
             atoms,
             factors: None,
+            phase_draws: Vec::new(),
             clamped: 0,
             rows,
             cells,
@@ -818,19 +824,23 @@ impl LibraryLens {
                 }
             }
         }
-        if errors.phase_sigma_rad > 0.0 || errors.transmission_sigma > 0.0 {
-            let mut rng = Pcg64::seed_from_u64(errors.seed);
-            let mut per_row = Vec::with_capacity(self.radii.len());
-            let mut clamped = 0;
-            for _ in 0..self.radii.len() {
-                let delta: f64 = StandardNormal.sample(&mut rng);
-                let epsilon: f64 = StandardNormal.sample(&mut rng);
-                let amplitude = 1.0 + errors.transmission_sigma * epsilon;
-                if amplitude < 0.0 {
-                    clamped += 1;
-                }
-                per_row.push(Complex64::from_polar(amplitude.max(0.0), errors.phase_sigma_rad * delta));
+        // the draws, whatever the σ (the same sequence: δ then ε per layout row)
+        let mut rng = Pcg64::seed_from_u64(errors.seed);
+        let mut per_row = Vec::with_capacity(self.radii.len());
+        let mut deltas = Vec::with_capacity(self.radii.len());
+        let mut clamped = 0;
+        for _ in 0..self.radii.len() {
+            let delta: f64 = StandardNormal.sample(&mut rng);
+            let epsilon: f64 = StandardNormal.sample(&mut rng);
+            let amplitude = 1.0 + errors.transmission_sigma * epsilon;
+            if amplitude < 0.0 {
+                clamped += 1;
             }
+            per_row.push(Complex64::from_polar(amplitude.max(0.0), errors.phase_sigma_rad * delta));
+            deltas.push(delta);
+        }
+        self.phase_draws = self.rows.iter().map(|&r| deltas[r]).collect();
+        if errors.phase_sigma_rad > 0.0 || errors.transmission_sigma > 0.0 {
             self.factors = Some(self.rows.iter().map(|&r| per_row[r]).collect());
             self.clamped = clamped;
         }
@@ -998,8 +1008,7 @@ impl LibraryLens {
     /// do not move with the bias. `None` with linear interpolation in the parameters, `wrt` out
     /// of range, or where the wavelength has no imaging order (no zone, or no pupil).
     pub fn first_order_derivative(&self, wavelength_m: f64, wrt: usize) -> Option<FirstOrderDerivative> {
-        let (tau, transmission, pupil) = self.first_order(wavelength_m);
-        pupil.as_ref()?;
+        self.first_order(wavelength_m).2.as_ref()?;
         let mut t = Vec::with_capacity(self.unique.len());
         for p in &self.unique {
             t.push(self.library.transmission_and_derivative(p, wavelength_m, wrt)?);
@@ -1018,8 +1027,48 @@ impl LibraryLens {
                 })
                 .collect(),
         };
+        self.first_order_derivative_of(wavelength_m, &t)
+    }
+
+    /// The imaging order's derivative at `wavelength_m` with respect to σ_φ, the σ of the
+    /// atoms' phase errors (radians), every atom's draw `δ_i` held (the seed fixed;
+    /// docs/physics.md, "Gradients: a library's atoms' phase errors"): each atom's field
+    /// `v_i = t_i A_i e^{iσ_φ δ_i}` moves by `∂v_i = iδ_i v_i` — also where `|v|` is capped at 1,
+    /// the cap `v/|v|` keeping the phase (`Re(v̄ ∂v) = 0`: σ_φ moves no atom across it) — and
+    /// then the zones, fits and `τ1` as [`first_order_derivative`](Self::first_order_derivative).
+    /// `None` before [`with_fabrication`](Self::with_fabrication) or where the wavelength has no
+    /// imaging order.
+    pub fn phase_error_derivative(&self, wavelength_m: f64) -> Option<FirstOrderDerivative> {
+        if self.phase_draws.len() != self.atoms.len() {
+            return None;
+        }
+        let t: Vec<Complex64> = self.unique.iter().map(|p| self.library.transmission(p, wavelength_m)).collect();
+        let one = Complex64::new(1.0, 0.0);
+        let t: Vec<(Complex64, Complex64)> = self
+            .atoms
+            .iter()
+            .enumerate()
+            .map(|(i, &(u, _))| {
+                let f = self.factors.as_ref().map_or(one, |f| f[i]);
+                let (v, dv) = fabricated(t[u], Some(Complex64::new(0.0, self.phase_draws[i]) * t[u]), f);
+                (v, dv.unwrap_or_default())
+            })
+            .collect();
+        self.first_order_derivative_of(wavelength_m, &t)
+    }
+
+    /// The imaging order's derivative at `wavelength_m` from each atom's field and its
+    /// derivative `t` (aligned with `atoms`, fabricated), by the order's own rule (the steps of
+    /// [`first_order_derivative`](Self::first_order_derivative) after the atoms').
+    fn first_order_derivative_of(
+        &self,
+        wavelength_m: f64,
+        t: &[(Complex64, Complex64)],
+    ) -> Option<FirstOrderDerivative> {
+        let (tau, transmission, pupil) = self.first_order(wavelength_m);
+        pupil.as_ref()?;
         let d_transmission: f64 =
-            self.atoms.iter().zip(&t).map(|(&(_, area), (v, dv))| 2.0 * (v.conj() * dv).re * area).sum();
+            self.atoms.iter().zip(t).map(|(&(_, area), (v, dv))| 2.0 * (v.conj() * dv).re * area).sum();
         let zero = Complex64::new(0.0, 0.0);
         let mut sums = vec![(zero, zero, 0.0); self.zones.len()];
         for cell in &self.cells {
@@ -1275,7 +1324,11 @@ impl LensModel for LibraryLens {
     }
 
     fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<optics::OrderDerivatives> {
-        let d = self.first_order_derivative(wavelength_m, parameter)?;
+        let d = if parameter == optics::ATOM_PHASE_ERROR {
+            self.phase_error_derivative(wavelength_m)?
+        } else {
+            self.first_order_derivative(wavelength_m, parameter)?
+        };
         Some(optics::OrderDerivatives {
             efficiencies: vec![d.efficiency_derivative],
             transmission: d.transmission_derivative,

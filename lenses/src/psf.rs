@@ -453,8 +453,21 @@ impl LensModel for PsfStack {
         self.focal_length
     }
 
-    fn orders(&self, wavelength_m: f64, _field: Field) -> Vec<Order> {
-        let [x, y] = self.shift(wavelength_m);
+    /// The one order: the stack's table, read from the field direction, and its centroid's
+    /// shift, in the stack's frame (`+x` the field direction), turned onto the detector's axes
+    /// with it (`x cos φ − y sin φ`, `x sin φ + y cos φ`, `φ = atan2(θy, θx)`, 0 on axis), so that
+    /// the shift turns with the table (`turns_with_field`).
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        let [cx, cy] = self.shift(wavelength_m);
+        // the field direction as the engines read the table from it
+        let direction = field.y_rad.atan2(field.x_rad);
+        let [x, y] = if direction == 0.0 {
+            // along +x (and on axis): the frames are one, the shift as it is
+            [cx, cy]
+        } else {
+            let (s, c) = direction.sin_cos();
+            [cx * c - cy * s, cx * s + cy * c]
+        };
         vec![Order::new(
             self.efficiency.value(wavelength_m),
             Pupil::Table(Arc::clone(&self.table)),
@@ -472,6 +485,11 @@ impl LensModel for PsfStack {
 
     fn design_wavelength(&self) -> Option<f64> {
         self.design_wavelength
+    }
+
+    /// The PSFs of one field point, in its frame: the same at every field point.
+    fn turns_with_field(&self) -> bool {
+        true
     }
 
     /// The curves' samples and the stack's wavelengths (the OTF is linear in λ between them).
@@ -803,6 +821,44 @@ mod tests {
         assert_eq!(at, 900e-9);
         assert!(fraction > 0.05 && fraction < 0.5, "{fraction}");
         assert_eq!(lens.breakpoints(), vec![700e-9, 900e-9]);
+    }
+
+    /// The stack's frame (`+x` the field direction) turns with the field point, its centroids'
+    /// shifts with its table: the mean MTF over azimuth and the tangential and sagittal means'
+    /// average are the same at every field point (`turns_with_field`; docs/physics.md,
+    /// "Gradients: the field point"), for a stack that is not round and whose centroid moves
+    /// with λ along both axes (lateral colour). Before the shifts were turned, the field along
+    /// +y put them across the table's frame.
+    #[test]
+    fn the_mean_mtf_does_not_depend_on_the_field_point() {
+        let n = 32;
+        let mut values = gaussian(n, 1.5, -2.0, 0.5, 1.6);
+        values.append(&mut gaussian(n, 2.0, 1.5, -0.5, 1.3));
+        let lens = lens(vec![780e-9, 820e-9], [n, n], &values).unwrap();
+        assert!(lens.turns_with_field());
+        let detected = radiometry::Spectrum::TopHat(radiometry::TopHat::new(780e-9, 820e-9, 1.0).unwrap());
+        let nyquist = 0.5 / 5.2e-6;
+        let means = |x_deg: f64, y_deg: f64| {
+            let field = Field::new(x_deg.to_radians(), y_deg.to_radians());
+            let poly = optics::Polychromatic::new(&lens, &detected, field, nyquist, None).unwrap();
+            let direction = field.y_rad.atan2(field.x_rad);
+            let over = poly.mean_mtf_over_azimuth(direction, None).mean;
+            let t = poly.mean_mtf_along(direction).0;
+            let s = poly.mean_mtf_along(direction + 0.5 * std::f64::consts::PI).0;
+            [over, 0.5 * (t + s)]
+        };
+        let along_x = means(5.0, 0.0);
+        assert!(along_x[0] > 0.1 && (along_x[0] - along_x[1]).abs() > 1e-6, "{along_x:?}");
+        for (x, y) in [(0.0, 5.0), (3.0, 4.0), (-5.0, 0.0), (1.0, -2.0), (0.0, 0.0)] {
+            let there = means(x, y);
+            for q in 0..2 {
+                assert!((there[q] - along_x[q]).abs() < 1e-12, "({x}°, {y}°): {there:?} vs {along_x:?}");
+            }
+        }
+        // the shift turned with the field direction: (0, 5°)'s is (5°, 0)'s turned by π/2
+        let [a, b] = lens.orders(800e-9, Field::new(5f64.to_radians(), 0.0))[0].wavefront.image_shift_m;
+        let [c, d] = lens.orders(800e-9, Field::new(0.0, 5f64.to_radians()))[0].wavefront.image_shift_m;
+        assert!((c + b).abs() < 1e-20 && (d - a).abs() < 1e-20, "{:?}", [a, b, c, d]);
     }
 
     /// Bad stacks are refused naming the slice, the sample, the value and what is accepted.

@@ -199,6 +199,7 @@ impl Parameter {
             Parameter::Temperature => "the blackbody's temperature",
             Parameter::FNumber => "the lens's F-number",
             Parameter::FocalLength => "the lens's focal length",
+            Parameter::LibraryBias(optics::ATOM_PHASE_ERROR) => "the σ of a library lens's atoms' phase errors",
             Parameter::LibraryBias(_) => "a library lens's parameter bias",
             Parameter::PsfPitch => "a PSF stack's sample pitch",
             Parameter::IrisDecentre(_) => "the decentre of the lens's iris",
@@ -582,6 +583,8 @@ fn point_gradient(
                         MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
                     };
                     (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+                } else if let Some(why) = seidel_zero_off_axis(scene, e, t) {
+                    return Err(not_smooth(p, why));
                 } else {
                     return Err(not_smooth(
                         p,
@@ -592,7 +595,7 @@ fn point_gradient(
                             match d_grid {
                                 GridGradient::Symmetric =>
                                     "rotationally symmetric on the 1-D engines (every Seidel term zero), and its pupil is not \
-                                     one the overlap engine takes at zero Seidel terms (an iris, a line spectrum, \
+                                     one the overlap engine takes at zero Seidel terms (an iris, \
                                      options.overlap = false or options.pupil_samples)",
                                 _ =>
                                     "not on the overlap engine (an iris, a phase profile, a table, a wavefront too strong for \
@@ -667,6 +670,14 @@ fn point_gradient(
             }
             Parameter::FieldAngle(axis) => {
                 let d_mtf = match d_grid {
+                    // orders the same at every field point in its frame (a PSF stack): the mean
+                    // MTF does not depend on the field angles (`LensModel::turns_with_field`)
+                    _ if scene.lens().turns_with_field() => {
+                        if matches!(d_grid, GridGradient::Computed(_)) {
+                            grid_place += 1;
+                        }
+                        0.0
+                    }
                     GridGradient::Computed(all) => {
                         let d = all[grid_place];
                         grid_place += 1;
@@ -1951,13 +1962,46 @@ fn defocus_lane_on_overlap(scene: &Scene) -> bool {
         && orders.iter().any(|o| !o.wavefront.is_defocus_only())
 }
 
+/// Why a Seidel key is refused off axis where every Seidel term is zero, naming the field point
+/// and what is accepted; `None` on axis or where some term is not zero. Off axis the images of
+/// the wavelengths are shifted apart (lateral colour), and the mean MTF is taken differently on
+/// either side of zero (docs/physics.md, "Pupils without rotational symmetry"): with every term
+/// zero, the average of the tangential and sagittal means (the exact 1-D engine); with any term
+/// not zero, the mean over azimuth (the overlap engine). The value jumps there (e.g. by 1.9e-4
+/// of itself at 5° on the paper's lens), so it has no derivative at zero.
+fn seidel_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm) -> Option<String> {
+    let field = scene.field();
+    if field.is_on_axis() {
+        return None;
+    }
+    let lambda = e.mean_wavelength_nm * 1e-9;
+    let zero = scene.lens().orders(lambda, field).iter().all(|o| {
+        let w = &o.wavefront;
+        [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
+    });
+    zero.then(|| {
+        format!(
+            "{}: at the field point field.x_deg = {}, field.y_deg = {} (off axis) with every Seidel term zero, the mean \
+             MTF is the average of the tangential and sagittal means (the lateral colour's image shifts on the exact \
+             1-D engine), and with any Seidel term not zero the mean over azimuth (the overlap engine): the value jumps \
+             at zero and has no derivative there. Accepted: the Seidel keys at zero on axis (field.x_deg = field.y_deg \
+             = 0), or off axis with some Seidel term not zero (e.g. --set {}=1e-6)",
+            t.key(),
+            field.x_rad.to_degrees(),
+            field.y_rad.to_degrees(),
+            t.key()
+        )
+    })
+}
+
 /// `[∂M̄/∂W040, ∂M̄/∂W220]` (per µm) where every Seidel term is zero and the OTF rotationally
 /// symmetric (docs/physics.md, "Gradients: Seidel terms at zero"): the value's own engine (the
 /// closed form, the exact 1-D rules) has no lane along ρ⁴, so the mean is taken again on the
 /// overlap engine with the terms at zero (`optics::Settings::overlap_always`), along one azimuth
 /// (both directions are rotationally symmetric, so every azimuth gives the same), forward mode on
-/// its nodes. `None` where the overlap engine does not take the scene (an iris, a line spectrum,
-/// `options.overlap = false` or `options.pupil_samples`).
+/// its nodes (a line: its one wavelength, each order a node, as the line's value is). `None`
+/// where the overlap engine does not take the scene (an iris, `options.overlap = false` or
+/// `options.pupil_samples`).
 ///
 /// Error control: a lane is each node's value times `i k [D(p₊) − D(p₋)]`, with `D` ∈ [0, 10⁻⁶]
 /// per µm on the disc, so at most `L = 2π · 10⁻⁶/λ_min` (per µm) times the value, and an error
@@ -1971,9 +2015,6 @@ fn defocus_lane_on_overlap(scene: &Scene) -> bool {
 fn seidel_at_zero(scene: &Scene) -> Result<Option<[f64; 2]>, Error> {
     let lens = scene.lens();
     let detected = crate::evaluate::detected_spectrum(scene);
-    if detected.as_line().is_some() {
-        return Ok(None);
-    }
     let camera = scene.camera();
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());

@@ -56,7 +56,7 @@ pub use metrics::{
     Symmetry, jinc, metrics, power_law_mean, square_metrics,
 };
 /// The Seidel terms a [`Parameter::Seidel`] names.
-pub use optics::SeidelTerm;
+pub use optics::{ATOM_PHASE_ERROR, SeidelTerm};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

@@ -324,6 +324,11 @@ pub struct FactoredPart {
     pub relative: Arc<dyn LensModel>,
 }
 
+/// The `parameter` of [`LensModel::order_derivatives`] that stands for the σ (radians) of a
+/// library lens's per-atom phase errors `e^{iσδ_i}`, each atom's draw `δ_i` held (a fixed seed):
+/// docs/physics.md, "Gradients: a library's atoms' phase errors".
+pub const ATOM_PHASE_ERROR: usize = usize::MAX;
+
 /// What a lens does to light: the trait every lens family implements.
 ///
 /// Object safe (`&dyn LensModel`, `Box<dyn LensModel>` work), `Send + Sync + Debug`, plain `f64` in SI
@@ -490,10 +495,21 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// Whether the orders are the same at every field point in the field's own frame (`+x` the
+    /// field direction `atan2(θy, θx)`, their pupils, tables and image shifts turning with it
+    /// and changing with nothing else: a PSF stack, the PSFs of one field point): the OTF along
+    /// the detector's azimuth `φ` is then the frame's along `φ − atan2(θy, θx)`, so the mean MTF
+    /// (over azimuth, or the tangential and sagittal means' average) does not depend on the field
+    /// angles (docs/physics.md, "Gradients: the field point"). `false` (the default) otherwise.
+    fn turns_with_field(&self) -> bool {
+        false
+    }
+
     /// How the lens's orders move with its design parameter `parameter` at `wavelength_m` on
     /// axis ([`OrderDerivatives`]; a library lens's parameter bias, one per library parameter:
-    /// docs/physics.md, "Gradients: a library's parameter bias"). `None` (the default) where the
-    /// lens has no such parameter or its value is not differentiable in it there.
+    /// docs/physics.md, "Gradients: a library's parameter bias"; [`ATOM_PHASE_ERROR`]: the σ of
+    /// its atoms' phase errors, every draw held). `None` (the default) where the lens has no such
+    /// parameter or its value is not differentiable in it there.
     fn order_derivatives(&self, _wavelength_m: f64, _parameter: usize) -> Option<OrderDerivatives> {
         None
     }
@@ -573,6 +589,7 @@ macro_rules! forward_lens_model {
             fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
                 (**self).image_shift_field_rates(wavelength_m, field)
             }
+            fn turns_with_field(&self) -> bool { (**self).turns_with_field() }
             fn order_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<OrderWavelengthRates> {
                 (**self).order_wavelength_rates(wavelength_m, field)
             }

@@ -206,8 +206,9 @@ pub struct Settings {
     pub spectral_tolerance: Option<f64>,
     /// Whether every order that is the full circle with a polynomial wavefront goes to the
     /// overlap engine ([`Engine::Overlap`]), a defocus alone too (no closed form, no exact 1-D
-    /// path): the Seidel gradient at zero Seidel terms asks for it (docs/physics.md, "Gradients:
-    /// Seidel terms at zero"), the value staying its own engine's. Off by default.
+    /// path; a line's one wavelength too, where no order needs the grids): the Seidel gradient
+    /// at zero Seidel terms asks for it (docs/physics.md, "Gradients: Seidel terms at zero"), the
+    /// value staying its own engine's. Off by default.
     pub overlap_always: bool,
     /// The radial engine's rule for a pupil with a table's knots (`options.table_rule`):
     /// [`TableRule::Tensor`](crate::radial::TableRule::Tensor) (default) or the rule split at the
@@ -646,6 +647,15 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         let scene = scene.whole();
         let nodes = spectral::line(&scene, l);
         check_signal(&nodes)?;
+        // the overlap engine asked for at the line's one wavelength (the Seidel gradient at zero
+        // Seidel terms: docs/physics.md, "Gradients: Seidel terms at zero"), where no order
+        // needs the grids; the value stays its own engine's
+        if settings.overlap_always && settings.overlap && settings.pupil_samples.is_none() && !nodes.needs_grid {
+            let tolerance = settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance);
+            if let Some(engine) = overlap::Overlap::new(scene, nodes.clone(), tolerance) {
+                return Ok(Box::new(engine));
+            }
+        }
         let fft = if nodes.needs_grid { Some(grid::FftPath::build(&scene, &nodes, pupil_samples)?) } else { None };
         return Ok(Box::new(line::Line { scene, nodes, fft }));
     }
