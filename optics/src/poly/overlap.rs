@@ -589,12 +589,14 @@ fn term_otf(term: &Term, x_level: usize, s: f64, c: f64, sn: f64, eps: f64) -> (
 /// `σ = sign u` (so that `erfcx` is read where `Re ≥ 0`, `faddeeva::erfcx`), and the phases
 /// combine to `e^{i(αX² ± βX)}` before they are formed: no large phase `β²/(4α)` is rounded. The
 /// constant parts survive only where the stationary point `−x₀` lies inside `[−X, X]`. Where
-/// `|α| X² < 1e-9` the quadratic term is left out (`2 sin(βX)/β`; off by at most `2e-9 X`).
+/// `|α| X² <` [`MOMENTS_MIN_PHASE`], the Taylor series of [`small_alpha_moments`] (within
+/// `3e-15 X`), continuous in α: the quadratic term was once left out below `|α| X² = 1e-9`, a
+/// jump of up to `1e-9 X` in the t rule's integrand wherever the term crossed it (a coma of
+/// 1e-4 µm on the paper's lens: the t rule's tail never fell, and the evaluation was refused with
+/// an error estimate of 1.3).
 fn quadratic_phase_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
-    if alpha.abs() * x * x < 1e-9 {
-        let bx = beta * x;
-        let sinc = if bx.abs() < 1e-4 { 1.0 - bx * bx / 6.0 } else { bx.sin() / bx };
-        return Complex64::new(2.0 * x * sinc, 0.0);
+    if alpha.abs() * x * x < MOMENTS_MIN_PHASE {
+        return small_alpha_moments(alpha, beta, x)[0];
     }
     let zeta = Complex64::new(0.0, -alpha).sqrt();
     let x0 = beta / (2.0 * alpha);
@@ -1080,7 +1082,9 @@ fn term_otf_and_derivatives(
                 let moments = quadratic_moments(alpha, beta, x_half);
                 (moments, moments[0])
             } else {
-                (small_alpha_moments(alpha, beta, x_half), quadratic_phase_integral(alpha, beta, x_half))
+                // which is also `quadratic_phase_integral`'s value there
+                let moments = small_alpha_moments(alpha, beta, x_half);
+                (moments, moments[0])
             };
             // the value as `term_otf` forms it, bit for bit
             row[0] = Complex64::new(co, si) * closed * ct;
@@ -1438,6 +1442,11 @@ mod tests {
             (1e-7, -2.0, 1.0),
             (5.0, 0.0, 0.3),
             (1e-12, 0.0, 1.0),
+            // on both sides of 1e-9, where the quadratic term was once left out (a jump of
+            // 2.4e-11 here), and past |βX| = 80
+            (0.8e-9, 60.0, 1.0),
+            (1.2e-9, 60.0, 1.0),
+            (5e-3, 300.0, 1.0),
         ] {
             let reference: Complex64 =
                 rule.iter().map(|&(u, w)| Complex64::from_polar(w * x, alpha * x * x * u * u + beta * x * u)).sum();
