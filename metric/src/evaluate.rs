@@ -338,6 +338,24 @@ pub(crate) enum GridGradient {
     Unavailable,
 }
 
+impl GridGradient {
+    /// The next lane's `∂M̄` for a key whose lane, where the grids computed lanes, is the one at
+    /// `*place` (then `*place` moves past it): `Some(0)` where the OTF is rotationally symmetric
+    /// (a key whose mean MTF is even about the symmetric point), `None` where the engine gives
+    /// no lane (the caller refuses the key, saying why).
+    pub(crate) fn next_lane(&self, place: &mut usize) -> Option<f64> {
+        match self {
+            GridGradient::Computed(all) => {
+                let d = all[*place];
+                *place += 1;
+                Some(d)
+            }
+            GridGradient::Symmetric => Some(0.0),
+            GridGradient::NotAsked | GridGradient::Unavailable => None,
+        }
+    }
+}
+
 /// What [`evaluate_field_differentiated`] returns: the evaluation, the mean MTF's Binary 2
 /// derivatives, its derivatives on the FFT path, and a library lens's bias lanes.
 pub(crate) type Differentiated = (Evaluation, Option<Vec<f64>>, GridGradient, Option<BiasLanes>);

@@ -678,27 +678,24 @@ fn point_gradient(
                         }
                         0.0
                     }
-                    GridGradient::Computed(all) => {
-                        let d = all[grid_place];
-                        grid_place += 1;
-                        d
-                    }
-                    // on axis, a rotationally symmetric pupil: M̄ is even in the angle
-                    GridGradient::Symmetric => 0.0,
-                    _ => {
-                        return Err(not_smooth(
-                            p,
-                            format!(
-                                "{key}: the field angle's OTF lane is computed on the exact 1-D engine (off axis without \
+                    // on axis, a rotationally symmetric pupil: M̄ is even in the angle (0)
+                    _ => match d_grid.next_lane(&mut grid_place) {
+                        Some(d) => d,
+                        None => {
+                            return Err(not_smooth(
+                                p,
+                                format!(
+                                    "{key}: the field angle's OTF lane is computed on the exact 1-D engine (off axis without \
                                  Seidel terms) and the overlap engine (a non-zero Seidel term) as the lateral colour's \
                                  shifts, on the FFT path as the oblique wave's path of a radial pupil seen off axis (a \
                                  phase or library lens), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
                                  this scene's OTF is on another engine or pupil (an iris, zones, a map or a table; Zernike \
                                  terms on a shifted order or on axis; a line spectrum's grids)",
-                                key = field_key(axis)
-                            ),
-                        ));
-                    }
+                                    key = field_key(axis)
+                                ),
+                            ));
+                        }
+                    },
                 };
                 let d_ln_ri = scene
                     .relative_illumination()
@@ -713,16 +710,11 @@ fn point_gradient(
                 (n * d_ln_ri, background * d_ln_ri, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::IrisDecentre(axis) => {
-                let d_mtf = match d_grid {
-                    GridGradient::Computed(all) => {
-                        let d = all[grid_place];
-                        grid_place += 1;
-                        d
-                    }
-                    // the iris centred on a rotationally symmetric OTF: d and −d are one pupil
-                    // mirrored, whose mean over azimuth is the same (M̄ even in d)
-                    GridGradient::Symmetric => 0.0,
-                    _ => {
+                // the iris centred on a rotationally symmetric OTF: d and −d are one pupil
+                // mirrored, whose mean over azimuth is the same (M̄ even in d: the lane 0)
+                let d_mtf = match d_grid.next_lane(&mut grid_place) {
+                    Some(d) => d,
+                    None => {
                         return Err(not_smooth(
                             p,
                             format!(

@@ -1373,19 +1373,7 @@ mod tests {
     /// exact to rounding at its sampling).
     #[test]
     fn spectral_keys_on_the_fft_path_of_a_phase_map_match_central_differences() {
-        let (n, pitch) = (1344usize, 1e-6);
-        let (f0, lambda0, radius, alpha) = (3.36e-3, 800e-9, 0.672e-3, 30.0);
-        let k0 = std::f64::consts::TAU / lambda0;
-        let mut bytes = scene::npy::npy_header(scene::npy::NpyType::F32, &[n, n]);
-        let centre = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch;
-        for j in 0..n {
-            for i in 0..n {
-                let (x, y) = (centre(i), centre(j));
-                let phase = -k0 * ((x * x + y * y + f0 * f0).sqrt() - f0)
-                    + alpha * ((x / radius).powi(3) + (y / radius).powi(3));
-                bytes.extend_from_slice(&(phase.rem_euclid(std::f64::consts::TAU) as f32).to_le_bytes());
-            }
-        }
+        let bytes = scene::npy::hyperbolic_cubic_map(1344, 1e-6, 3.36e-3, 800e-9, 0.672e-3, 30.0);
         let dir = std::env::temp_dir().join(format!("asnr-spectral-map-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("cubic.npy"), &bytes).unwrap();

@@ -199,7 +199,9 @@ const MAP_CELLS: usize = 2688;
 const MAP_PITCH: f64 = 0.5e-6;
 
 /// A `.npy` float32 map of the hyperbolic phase `−(2π/λ0)(√(r² + f0²) − f0)` plus the cubic term
-/// `alpha ((x/R)³ + (y/R)³)` (radians; R = 0.672 mm), wrapped to [0, 2π).
+/// `alpha ((x/R)³ + (y/R)³)` (radians; R = 0.672 mm), wrapped to [0, 2π): the formula of
+/// `scene::npy::hyperbolic_cubic_map`, which the tests and benchmarks call; written out here because
+/// the task runner depends on no workspace crate (it builds in seconds, before them).
 pub(crate) fn phase_map(alpha: f64) -> Vec<u8> {
     let (f0, lambda0, radius) = (3.36e-3, 800e-9, 0.672e-3);
     let k0 = 2.0 * std::f64::consts::PI / lambda0;

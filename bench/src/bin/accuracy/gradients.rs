@@ -63,17 +63,32 @@ impl Row {
     /// ms to `digits` decimals) and their ratios, each cell opened by `|`, the row closed.
     fn cells(&self, digits: usize) -> String {
         format!(
-            "| {:.4} | {:.3e} | {:.digits$} ms ({:.digits$} ms) | {:.digits$} ms ({:.digits$} ms) | {:.2}× | {:.2}× |",
+            "| {:.4} | {:.3e} {}",
             self.asnr,
             self.norm,
-            1e3 * self.value,
-            1e3 * self.value_min,
-            1e3 * self.both,
-            1e3 * self.both_min,
-            self.both / self.value,
-            self.both_min / self.value_min
+            timing_cells([self.value, self.value_min, self.both, self.both_min], digits)
         )
     }
+}
+
+/// The cells of a value's time against the value and gradient's: `| value ms (fastest ms) |
+/// both ms (fastest ms) | ratio of medians× | ratio of fastest× |` from `[value, value_min,
+/// both, both_min]` (s), the times in ms to `digits` decimals, the row closed.
+pub(crate) fn timing_cells([value, value_min, both, both_min]: [f64; 4], digits: usize) -> String {
+    format!(
+        "| {:.digits$} ms ({:.digits$} ms) | {:.digits$} ms ({:.digits$} ms) | {:.2}× | {:.2}× |",
+        1e3 * value,
+        1e3 * value_min,
+        1e3 * both,
+        1e3 * both_min,
+        both / value,
+        both_min / value_min
+    )
+}
+
+/// The target for the value and gradient against the value alone: at most 3×.
+pub(crate) fn within_three(both: f64, value: f64) -> &'static str {
+    if both <= 3.0 * value { "met" } else { "not met" }
 }
 
 fn measure(root: &Path, k: usize, repeats: usize) -> Option<Row> {

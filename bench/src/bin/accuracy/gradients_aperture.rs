@@ -135,15 +135,10 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
     );
     for r in &rows {
         md.push_str(&format!(
-            "| {} | {:e} | {:.1} ms ({:.1} ms) | {:.1} ms ({:.1} ms) | {:.2}× | {:.2}× |\n",
+            "| {} | {:e} {}\n",
             r.case,
             r.tolerance,
-            1e3 * r.value,
-            1e3 * r.value_min,
-            1e3 * r.both,
-            1e3 * r.both_min,
-            r.both / r.value,
-            r.both_min / r.value_min
+            crate::gradients::timing_cells([r.value, r.value_min, r.both, r.both_min], 1)
         ));
     }
     if !inside.is_empty() {
@@ -155,25 +150,15 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
         );
         for (case, tolerance, r) in &inside {
             md.push_str(&format!(
-                "| {case} | {tolerance:e} | {:.2} ms ({:.2} ms) | {:.2} ms ({:.2} ms) | {:.2}× | {:.2}× |\n",
-                1e3 * r.value,
-                1e3 * r.value_min,
-                1e3 * r.both,
-                1e3 * r.both_min,
-                r.both / r.value,
-                r.both_min / r.value_min
+                "| {case} | {tolerance:e} {}\n",
+                crate::gradients::timing_cells([r.value, r.value_min, r.both, r.both_min], 2)
             ));
         }
     }
     md.push_str(&format!(
         "\nTarget (issue: at most 3× one evaluation; whole process): {}.\n",
         rows.iter()
-            .map(|r| format!(
-                "{} at {:e}: {}",
-                r.case,
-                r.tolerance,
-                if r.both <= 3.0 * r.value { "met" } else { "not met" }
-            ))
+            .map(|r| format!("{} at {:e}: {}", r.case, r.tolerance, crate::gradients::within_three(r.both, r.value)))
             .collect::<Vec<_>>()
             .join("; ")
     ));

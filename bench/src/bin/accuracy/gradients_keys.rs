@@ -61,19 +61,7 @@ fn blackbody(root: &Path, dir: &Path) -> Option<PathBuf> {
 /// (1344 × 1344, as the spectral test of report/src/gradient.rs), and the scene reading it,
 /// both in `dir`; the scene's path.
 fn cubic_map(root: &Path, dir: &Path) -> Option<PathBuf> {
-    let (n, pitch) = (1344usize, 1e-6);
-    let (f0, lambda0, radius, alpha) = (3.36e-3, 800e-9, 0.672e-3, 30.0);
-    let k0 = std::f64::consts::TAU / lambda0;
-    let mut bytes = scene::npy::npy_header(scene::npy::NpyType::F32, &[n, n]);
-    let centre = |k: usize| (k as f64 - 0.5 * (n as f64 - 1.0)) * pitch;
-    for j in 0..n {
-        for i in 0..n {
-            let (x, y) = (centre(i), centre(j));
-            let phase =
-                -k0 * ((x * x + y * y + f0 * f0).sqrt() - f0) + alpha * ((x / radius).powi(3) + (y / radius).powi(3));
-            bytes.extend_from_slice(&(phase.rem_euclid(std::f64::consts::TAU) as f32).to_le_bytes());
-        }
-    }
+    let bytes = scene::npy::hyperbolic_cubic_map(1344, 1e-6, 3.36e-3, 800e-9, 0.672e-3, 30.0);
     std::fs::write(dir.join("asnr-bench-cubic.npy"), &bytes).ok()?;
     let text = std::fs::read_to_string(root.join("examples/phase-map-cubic.toml"))
         .ok()?
@@ -211,10 +199,6 @@ fn whole_process(asnr: &Path, root: &Path, case: &Case, repeats: usize) -> Optio
     Some(Wall { value: crate::median(values), both: crate::median(boths), value_min, both_min })
 }
 
-fn status(both: f64, value: f64) -> &'static str {
-    if both <= 3.0 * value { "met" } else { "not met" }
-}
-
 /// The tables and their text.
 pub(crate) fn markdown(tools: &Tools) -> Option<String> {
     let repeats = if tools.quick { 7 } else { 15 };
@@ -260,21 +244,20 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
     );
     for (case, r) in &inside {
         md.push_str(&format!(
-            "| {} | {} | {:.4} | {:.2} ms ({:.2} ms) | {:.2} ms ({:.2} ms) | {:.2}× | {:.2}× |\n",
+            "| {} | {} | {:.4} {}\n",
             case.name,
             case.keys.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", "),
             r.asnr,
-            1e3 * r.value,
-            1e3 * r.value_min,
-            1e3 * r.both,
-            1e3 * r.both_min,
-            r.both / r.value,
-            r.both_min / r.value_min
+            crate::gradients::timing_cells([r.value, r.value_min, r.both, r.both_min], 2)
         ));
     }
     md.push_str(&format!(
         "\nTarget (at most 3× one evaluation, in one process): {}.\n",
-        inside.iter().map(|(c, r)| format!("{}: {}", c.name, status(r.both, r.value))).collect::<Vec<_>>().join("; ")
+        inside
+            .iter()
+            .map(|(c, r)| format!("{}: {}", c.name, crate::gradients::within_three(r.both, r.value)))
+            .collect::<Vec<_>>()
+            .join("; ")
     ));
     if !outside.is_empty() {
         md.push_str(&format!(
@@ -287,21 +270,16 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
         ));
         for (case, w) in &outside {
             md.push_str(&format!(
-                "| {} | {:.1} ms ({:.1} ms) | {:.1} ms ({:.1} ms) | {:.2}× | {:.2}× |\n",
+                "| {} {}\n",
                 case.name,
-                1e3 * w.value,
-                1e3 * w.value_min,
-                1e3 * w.both,
-                1e3 * w.both_min,
-                w.both / w.value,
-                w.both_min / w.value_min
+                crate::gradients::timing_cells([w.value, w.value_min, w.both, w.both_min], 1)
             ));
         }
         md.push_str(&format!(
             "\nTarget (at most 3× one evaluation, whole process): {}.\n",
             outside
                 .iter()
-                .map(|(c, w)| format!("{}: {}", c.name, status(w.both, w.value)))
+                .map(|(c, w)| format!("{}: {}", c.name, crate::gradients::within_three(w.both, w.value)))
                 .collect::<Vec<_>>()
                 .join("; ")
         ));
