@@ -295,9 +295,9 @@ fn hopeless_profiles_are_refused_up_front() {
 }
 
 /// `options.pupil_mapping`: the report says which map was used and how far the paraxial map is
-/// from the flat lens's exact image (the other map evaluated at tolerance 1e-3); `"exact"` is
-/// refused, naming the key, where the map does not apply (another family, off axis) and a value
-/// that is neither is named.
+/// from the flat lens's exact image (the other map evaluated at tolerance 1e-1, and at 1e-3 where
+/// that cannot tell the side of 1 %); `"exact"` is refused, naming the key, where the map does
+/// not apply (another family, off axis) and a value that is neither is named.
 #[test]
 fn pupil_mapping_is_reported_and_refused_where_it_does_not_apply() {
     let phase = example("phase-binary2.toml");
