@@ -325,6 +325,22 @@ fn pupil_mapping_is_reported_and_refused_where_it_does_not_apply() {
     assert!(err.contains("options.pupil_mapping = \"exact\": expected \"paraxial\" off axis"), "{err}");
     let err = fails(&["evaluate", &phase, "--set", "options.pupil_mapping=sphere"]);
     assert!(err.contains("options.pupil_mapping = \"sphere\": expected \"paraxial\" (the default"), "{err}");
+    // a pupil with a Zernike term off m = 0 (coma, Z8): the exact map is radial, so the paraxial
+    // report evaluates without the check and says so (it had failed as a whole), and "exact"
+    // is refused saying why
+    let coma = "lens.zernike_noll_rms_um=[0,0,0,0,0,0,0,0.02]";
+    let out = asnr(&["evaluate", &phase, "--set", coma, "--set", "spectrum.shape=line", "--json"]);
+    let warned = stderr(&out);
+    assert!(out.status.success(), "{warned}");
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(report.get("pupil_mapping").is_none(), "{report}");
+    assert!(report["mean_mtf"].as_f64().is_some_and(|m| m > 0.0 && m < 1.0), "{report}");
+    assert!(warned.contains("not estimated for this lens: the exact pupil map is radial on axis only"), "{warned}");
+    let err = fails(&["evaluate", &phase, "--set", coma, "--set", "options.pupil_mapping=exact"]);
+    assert!(
+        err.contains("options.pupil_mapping") && err.contains("Zernike terms that are not radially symmetric"),
+        "{err}"
+    );
 }
 
 /// The mapping check's warning: where the paraxial map is more than 1 % off the exact image and

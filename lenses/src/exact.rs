@@ -28,20 +28,53 @@ pub struct ExactPupilMap<L> {
 /// Wavelengths whose mapped orders a map keeps (as a library lens keeps its first orders).
 const CACHE_WAVELENGTHS: usize = 4096;
 
+/// Why the exact map refuses a lens: an order not a radially symmetric pupil on the lens plane.
+const NOT_RADIAL: &str = "the exact pupil map takes orders that are radially symmetric pupils on the lens plane (a phase \
+     profile, a meta-atom library's radial layout) with defocus as their only aberration";
+
+/// Why [`ExactPupilMap::new`] would refuse `lens` (its orders at `probe_wavelength_m` on axis),
+/// without mapping anything: `None` where every order is the full aperture or a radial pupil,
+/// with no aberration beyond defocus, no image shift and no Zernike term off `m = 0` (the map is
+/// radial on axis only). The pupil-mapping check of a paraxial report asks this first.
+pub fn exact_map_refusal(lens: &dyn LensModel, probe_wavelength_m: f64) -> Option<&'static str> {
+    let takes = |order: &Order| {
+        let w = &order.wavefront;
+        w.is_defocus_only()
+            && w.image_shift_m == [0.0, 0.0]
+            && match &order.pupil {
+                Pupil::Radial(p) => p.is_symmetric(),
+                Pupil::Full => true,
+                _ => false,
+            }
+    };
+    if lens.orders(probe_wavelength_m, Field::ON_AXIS).iter().all(takes) {
+        return None;
+    }
+    let asymmetric = lens
+        .orders(probe_wavelength_m, Field::ON_AXIS)
+        .iter()
+        .any(|o| matches!(&o.pupil, Pupil::Radial(p) if !p.is_symmetric()));
+    Some(if asymmetric {
+        "the exact pupil map is radial on axis only, and this lens's pupil has Zernike terms that are not \
+         radially symmetric (m ≠ 0)"
+    } else {
+        NOT_RADIAL
+    })
+}
+
 impl<L: LensModel> ExactPupilMap<L> {
     /// `inner` with its radial pupils mapped to direction cosines; refused where an order of
     /// `inner` at `probe_wavelength_m` on axis is not a radially symmetric pupil without other
     /// aberrations than defocus.
     pub fn new(inner: L, probe_wavelength_m: f64) -> Result<Self, Error> {
+        if let Some(why) = exact_map_refusal(&inner, probe_wavelength_m) {
+            return Err(Error::Mapping(why.to_owned()));
+        }
         let na0 = 0.5 / inner.f_number();
         let map = Arc::new(DirectionCosines::new(na0).map_err(Error::Pupil)?);
         let lens = ExactPupilMap { inner, map, cache: Default::default() };
         for order in lens.inner.orders(probe_wavelength_m, Field::ON_AXIS) {
-            lens.map_order(&order).ok_or(Error::OutOfRange {
-                name: "pupil_mapping",
-                value: f64::NAN,
-                expected: "\"paraxial\" for this lens: \"exact\" maps radially symmetric pupils on the lens plane (a phase profile, a meta-atom library) with defocus only",
-            })?;
+            lens.map_order(&order).ok_or_else(|| Error::Mapping(NOT_RADIAL.to_owned()))?;
         }
         Ok(lens)
     }

@@ -86,7 +86,7 @@ mod tabulated;
 pub use atom_grid::{AtomGrid, LayoutStats};
 pub use chromatic::{ChromaticMetalens, Curve};
 pub use dispersion::{DelayOverflow, DispersionEngineered, max_diameter, required_group_delay};
-pub use exact::ExactPupilMap;
+pub use exact::{ExactPupilMap, exact_map_refusal};
 pub use harmonic::{HARMONIC_ORDER_REACH, Harmonic, sinc};
 pub use interleaved::{Channel, Interleaved};
 pub use library::{AtomErrors, FirstOrderDerivative, Interpolation, Library, LibraryLens};
@@ -176,6 +176,10 @@ pub enum Error {
     /// A 2-D meta-atom layout the library lens cannot take (the numbers in the message).
     #[error("{0}")]
     Layout(String),
+    /// A lens the flat lens's exact pupil map cannot take (`options.pupil_mapping = "exact"`):
+    /// the message says why and what it takes.
+    #[error("{0}")]
+    Mapping(String),
     /// A PSF stack that cannot be used (a NaN or negative sample, a slice without light, a
     /// shape that does not fit): the message names the slice, its wavelength and the sample.
     #[error("PSF stack: {0}")]

@@ -850,9 +850,21 @@ fn pupil_mapping(
         (None, Some(list)) => list.iter().all(|f| on_axis(f.x_deg, f.y_deg)),
         (None, None) => true,
     };
+    let probe = info.design_wavelength_m.unwrap_or(550e-9);
     if mapping == PupilMapping::Paraxial {
         if radial && axial {
-            o.mapping.set(Some(mapping));
+            // the report's check evaluates the lens through the exact map: where that map does
+            // not take the lens (Zernike terms off m = 0), no check, and a warning says so
+            match lenses::exact_map_refusal(lens.as_ref(), probe) {
+                None => o.mapping.set(Some(mapping)),
+                Some(why) => o.warn(
+                    key,
+                    quoted("paraxial"),
+                    format!(
+                        "the paraxial map's error against the flat lens's exact image is not estimated for this lens: {why}"
+                    ),
+                ),
+            }
         }
         return Ok(lens);
     }
@@ -870,7 +882,6 @@ fn pupil_mapping(
             "\"paraxial\" off axis: the exact map is radial on axis only (set the field to 0°, or use the paraxial map)",
         ));
     }
-    let probe = info.design_wavelength_m.unwrap_or(550e-9);
     let mapped = lenses::ExactPupilMap::new(lens, probe).map_err(|e| o.domain(key, "[options]", e))?;
     o.mapping.set(Some(mapping));
     Ok(std::sync::Arc::new(mapped))
