@@ -1,7 +1,8 @@
 //! Sweeps: one scene evaluated at many values of its keys, the same way for every front end.
 //!
 //! `asnr sweep` (grids, `--points` files, `--shard I/N`), `asnr merge` and the Python package's
-//! `evaluate_many` all build each point with [`evaluate_point`] and write it with [`csv_row`], so a
+//! `evaluate_many` all build each point with [`evaluate_point`] (`asnr sweep` through [`Points`],
+//! which reads the scene file once and builds the same scene) and write it with [`csv_row`], so a
 //! point computed by any of them is the same `f64`s and, in CSV, the same bytes. A grid is the
 //! cartesian product of its axes, the first key varying slowest ([`Grid`]); a point's *index* is
 //! its position in that order (or its row in a points file), which shards and merges keep.
