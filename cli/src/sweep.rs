@@ -10,7 +10,7 @@ use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 pub use scene::sweep::Point;
-use scene::sweep::{Grid, PointError, evaluate_point};
+use scene::sweep::{Grid, PointError, Points};
 
 use crate::optimize::Range;
 use scene::Source;
@@ -79,10 +79,15 @@ pub fn relabel(message: &str, keys: &[String], values: &[f64], origins: &[String
 }
 
 impl Sweep<'_> {
-    /// Evaluates point `index`; an error names where it is.
-    fn point(&self, index: usize) -> Result<Point> {
+    /// Its points' evaluator (the scene file read once for all of them).
+    fn points(&self) -> Points<'_> {
+        Points::new(self.source, self.overrides, &self.keys)
+    }
+
+    /// Evaluates point `index` (of `points`, [`Sweep::points`]); an error names where it is.
+    fn point(&self, points: &Points, index: usize) -> Result<Point> {
         let values = self.design.values(index);
-        evaluate_point(self.source, self.overrides, &self.keys, &values).map_err(|e: PointError| {
+        points.evaluate(&values).map_err(|e: PointError| {
             let at: Vec<String> = self.keys.iter().zip(&values).map(|(k, v)| format!("{k}={v}")).collect();
             anyhow!(relabel(&e.to_string(), &self.keys, &values, &self.origins))
                 .context(format!("at sweep point {} (index {index})", at.join(", ")))
@@ -97,11 +102,12 @@ pub fn run(sweep: &Sweep, threads: usize) -> Result<Vec<Point>> {
     let total = sweep.design.len();
     let bar = progress_bar(total as u64, "points")?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let points = sweep.points();
     let results: Vec<Result<Point>> = pool.install(|| {
         (0..total)
             .into_par_iter()
             .map(|i| {
-                let p = sweep.point(i);
+                let p = sweep.point(&points, i);
                 bar.inc(1);
                 p
             })
@@ -121,9 +127,10 @@ pub fn stream(sweep: &Sweep, indices: &[usize], threads: usize, out: &mut (dyn s
     let bar = progress_bar(indices.len() as u64, "points")?;
     let out = Mutex::new(out);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let points = sweep.points();
     pool.install(|| {
         indices.par_iter().try_for_each(|&i| -> Result<()> {
-            let point = sweep.point(i)?;
+            let point = sweep.point(&points, i)?;
             let line = scene::sweep::csv_row(&point, Some(i));
             let mut out = out.lock().map_err(|_| anyhow!("internal error: the output lock is poisoned"))?;
             out.write_all(line.as_bytes())?;

@@ -23,7 +23,7 @@ use crate::tables::{FREQUENCY, read_pairs, read_text};
 /// The paper's theory scene, embedded in the binary (`examples/paper-theory.toml`).
 pub const PAPER_SCENE: &str = include_str!("../../examples/paper-theory.toml");
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawScene {
     #[serde(default)]
@@ -42,7 +42,7 @@ pub(crate) struct RawScene {
     pub fields: Option<Vec<RawFieldPoint>>,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawFieldPoint {
     pub x_deg: Option<f64>,
@@ -50,14 +50,14 @@ pub(crate) struct RawFieldPoint {
     pub weight: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawField {
     pub x_deg: Option<f64>,
     pub y_deg: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSource {
     pub kind: String,
@@ -96,7 +96,7 @@ impl RawSource {
     }
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSpectrum {
     pub shape: String,
@@ -106,7 +106,7 @@ pub(crate) struct RawSpectrum {
     pub csv: Option<String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawCamera {
     pub pixel_pitch_um: f64,
@@ -122,13 +122,13 @@ pub(crate) struct RawCamera {
     pub noise_spectrum: Option<String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawExposure {
     pub time_ms: f64,
 }
 
-#[derive(Deserialize)]
+#[derive(Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawOptions {
     pub form: Option<String>,
@@ -464,6 +464,128 @@ pub(crate) fn prepare(source: &Source, overrides: &[String]) -> Result<(RawScene
     }
     let raw = raw_scene(table, &mut origins, &|| merged(source, overrides).ok().map(|(table, _)| table))?;
     Ok((raw, origins))
+}
+
+/// The sections whose keys [`Prepared`] sets on a prepared raw scene.
+const PREPARED_SECTIONS: [&str; 7] = ["lens", "source", "spectrum", "camera", "exposure", "options", "field"];
+
+/// A scene's source with its `--set` overrides, read once for many builds that change only the
+/// values of some keys (a sweep's points): the merged table and the raw scene, deserialized at
+/// one point. A point then re-applies each of its assignments to a copy of its section's table
+/// (the same [`apply_override`] as [`merged`]), deserializes that section alone and builds the
+/// scene from the raw scene with those sections replaced ([`build_checked`], the same
+/// validation and warnings). A struct's fields deserialize independently of one another, so
+/// the raw scene is the one [`prepare`] makes of the whole merged table with the point's
+/// assignments; wherever a step fails, [`Prepared::build`] answers `None` and the caller builds
+/// the point the whole way ([`build_with_warnings`]), whose error is then the one reported.
+pub(crate) struct Prepared {
+    /// The merged table at the point it was prepared at.
+    table: toml::Table,
+    /// Its raw scene.
+    raw: RawScene,
+    /// Each key with the override that gave it, at that point.
+    overrides: BTreeMap<String, String>,
+    label: String,
+    dir: PathBuf,
+    tables: TableCache,
+    arrays: crate::origins::Arrays,
+    /// The swept keys' sections, each once.
+    sections: Vec<&'static str>,
+}
+
+impl Prepared {
+    /// Prepares `source` with `overrides`, whose last `keys.len()` entries assign `keys` (one
+    /// point's [`crate::sweep::assignment`]s). `None` where a point could not be built this way
+    /// and be the same scene: a key that is not `SECTION.KEY` of one of [`PREPARED_SECTIONS`]
+    /// (a list entry, a comparison's design, a table), a lens preset or Zemax file (which fill
+    /// the lens table from what it holds), a warning while reading, or any error (the points
+    /// are then built the whole way, which reports it).
+    pub(crate) fn new(source: &Source, overrides: &[String], keys: &[String]) -> Option<Prepared> {
+        let mut sections = Vec::new();
+        for key in keys {
+            let (section, leaf) = key.trim().split_once('.')?;
+            let section = PREPARED_SECTIONS.iter().find(|s| **s == section)?;
+            if leaf.is_empty() || leaf.contains(['.', '[', ']']) || ["preset", "zemax", "zemax_surface"].contains(&leaf)
+            {
+                return None;
+            }
+            if !sections.contains(section) {
+                sections.push(*section);
+            }
+        }
+        let (table, mut origins) = merged(source, overrides).ok()?;
+        if table.contains_key("designs") {
+            return None;
+        }
+        // each swept key's section is a table holding the key
+        for key in keys {
+            let (section, leaf) = key.trim().split_once('.')?;
+            table.get(section)?.as_table()?.get(leaf)?;
+        }
+        let kept = table.clone();
+        let raw = raw_scene(table, &mut origins, &|| None).ok()?;
+        if origins.preset.is_some() || origins.zemax.is_some() || !origins.warnings.borrow().is_empty() {
+            return None;
+        }
+        Some(Prepared {
+            table: kept,
+            raw,
+            overrides: origins.overrides,
+            label: origins.file,
+            dir: origins.dir,
+            tables: origins.tables,
+            arrays: origins.arrays,
+            sections,
+        })
+    }
+
+    /// The scene with `assignments` (`KEY=VALUE`, the prepared keys, each once), built and
+    /// checked as [`build_with_warnings`] builds it; `None` where any step fails (build it
+    /// that way for the error).
+    pub(crate) fn build(&self, assignments: &[String]) -> Option<Loaded> {
+        let mut holder = toml::Table::new();
+        for section in &self.sections {
+            holder.insert((*section).to_owned(), self.table.get(*section)?.clone());
+        }
+        let mut overrides = self.overrides.clone();
+        for arg in assignments {
+            let (key, arg) = apply_override(&mut holder, arg, false).ok()?;
+            // only the prepared sections' keys, given before (the checks of a key given twice
+            // or inside a table given after it ran when the point was prepared)
+            overrides.get(&key)?;
+            overrides.insert(key, arg);
+        }
+        if holder.len() != self.sections.len() {
+            return None;
+        }
+        let mut raw = self.raw.clone();
+        for (section, value) in holder {
+            match section.as_str() {
+                "lens" => raw.lens = RawLens::deserialize(value).ok()?,
+                "source" => raw.source = RawSource::deserialize(value).ok()?,
+                "spectrum" => raw.spectrum = Some(RawSpectrum::deserialize(value).ok()?),
+                "camera" => raw.camera = RawCamera::deserialize(value).ok()?,
+                "exposure" => raw.exposure = RawExposure::deserialize(value).ok()?,
+                "options" => raw.options = Some(RawOptions::deserialize(value).ok()?),
+                "field" => raw.field = Some(RawField::deserialize(value).ok()?),
+                _ => return None,
+            }
+        }
+        let origins = Origins {
+            file: self.label.clone(),
+            dir: self.dir.clone(),
+            overrides,
+            warnings: RefCell::new(Vec::new()),
+            lens: "lens".to_owned(),
+            preset: None,
+            zemax: None,
+            meter: RefCell::new(None),
+            mapping: std::cell::Cell::new(None),
+            tables: self.tables.clone(),
+            arrays: self.arrays.clone(),
+        };
+        build_checked(&raw, &origins).ok()
+    }
 }
 
 /// A scene's merged table (its lens's preset filled in) as the raw scene. The table is moved
@@ -1287,6 +1409,80 @@ fn filter(s: &RawSpectrum, o: &Origins) -> Result<Option<Spectrum>, Error> {
 mod tests {
     use super::*;
     use crate::resolved_toml;
+
+    /// A prepared scene's point is the scene built the whole way (the reference: the merged TOML
+    /// deserialized and built at each point, `build_with_warnings`): the same evaluation to the
+    /// bit, the same plausibility warnings in the same order, and a refusal where that refuses.
+    #[test]
+    fn a_prepared_point_is_the_scene_built_the_whole_way() {
+        let paper = read(None).unwrap();
+        let set = |keys: &[&str], values: &[f64]| -> Vec<String> {
+            keys.iter().zip(values).map(|(k, v)| crate::sweep::assignment(k, *v)).collect()
+        };
+        let cases: [(&[&str], &[&[f64]]); 3] = [
+            // the map's keys; a band of 1e-3 nm and F/40
+            (&["lens.f_number", "spectrum.range_nm"], &[&[2.5, 50.0], &[1.4, 300.0], &[40.0, 1e-3], &[5.0, 2.0]]),
+            // sections the file does not hold ([field]) and the unit-slip warnings (5e-3 µm, 1e5 ms)
+            (
+                &["camera.pixel_pitch_um", "exposure.time_ms", "field.x_deg", "spectrum.center_nm"],
+                &[&[5.2, 1.23, 0.0, 800.0], &[5e-3, 1e5, 3.0, 550.0], &[2.0, 10.0, 1.5, 2e4]],
+            ),
+            // an integer key of [options]
+            (&["options.pupil_samples", "lens.focal_length_mm"], &[&[64.0, 3.36], &[128.0, 1.0]]),
+        ];
+        let fixed = ["source.radiance_w_m2_sr_nm=0.05".to_owned()];
+        for (keys, points) in cases {
+            let keys: Vec<String> = keys.iter().map(|k| (*k).to_owned()).collect();
+            let mut first = fixed.to_vec();
+            first.extend(set(&keys.iter().map(String::as_str).collect::<Vec<_>>(), points[0]));
+            let prepared = Prepared::new(&paper, &first, &keys).expect("the paper scene's keys are prepared");
+            for values in points {
+                let assignments = set(&keys.iter().map(String::as_str).collect::<Vec<_>>(), values);
+                let mut all = fixed.to_vec();
+                all.extend(assignments.iter().cloned());
+                let whole = build_with_warnings(&paper, &all).unwrap();
+                let fast = prepared.build(&assignments).expect("a valid point is built prepared");
+                assert_eq!(fast.warnings, whole.warnings, "{keys:?} = {values:?}");
+                let (a, b) = match (metric::evaluate(&fast.scene), metric::evaluate(&whole.scene)) {
+                    (Ok(a), Ok(b)) => (a, b),
+                    // (a pixel of 5 nm: the defocus phase at its Nyquist frequency is refused)
+                    (a, b) => {
+                        assert_eq!(format!("{:?}", a.err()), format!("{:?}", b.err()));
+                        continue;
+                    }
+                };
+                assert_eq!(
+                    [a.mean_mtf, a.snr0, a.asnr, a.photoelectrons].map(f64::to_bits),
+                    [b.mean_mtf, b.snr0, b.asnr, b.photoelectrons].map(f64::to_bits),
+                    "{keys:?} = {values:?}"
+                );
+                assert_eq!(a.warnings, b.warnings);
+            }
+            // a refused value: no prepared scene (the whole way then names the error)
+            let mut bad = points[0].to_vec();
+            bad[0] = -1.0;
+            let assignments = set(&keys.iter().map(String::as_str).collect::<Vec<_>>(), &bad);
+            assert!(prepared.build(&assignments).is_none(), "{keys:?} = {bad:?}");
+            let mut all = fixed.to_vec();
+            all.extend(assignments);
+            assert!(build_with_warnings(&paper, &all).is_err());
+        }
+        // keys it does not set: a list entry, a table, the top level, a preset's lens
+        let none = |source: &Source, keys: &[&str], values: &[&str]| {
+            let keys: Vec<String> = keys.iter().map(|k| (*k).to_owned()).collect();
+            let set: Vec<String> = keys.iter().zip(values).map(|(k, v)| format!("{k}={v}")).collect();
+            Prepared::new(source, &set, &keys).is_none()
+        };
+        assert!(none(&paper, &["lens.binary2[0]"], &["1"]));
+        assert!(none(&paper, &["lens"], &["1"]));
+        assert!(none(&paper, &["title"], &["1"]));
+        assert!(none(&paper, &["designs.lens.f_number"], &["1"]));
+        let preset =
+            Source::from_text(PAPER_SCENE.replace("model = \"chromatic\"", "preset = \"paper-chromatic\""), "p", ".");
+        assert!(build_from(&preset, &[]).is_ok());
+        assert!(none(&preset, &["lens.f_number"], &["2"]));
+        assert!(!none(&paper, &["lens.f_number"], &["2"]));
+    }
 
     /// A sweep's scenes read each CSV table once: a second build of one source takes the table
     /// from its cache while the file's length and modification time are unchanged (here the

@@ -1,7 +1,8 @@
 //! Sweeps: one scene evaluated at many values of its keys, the same way for every front end.
 //!
 //! `asnr sweep` (grids, `--points` files, `--shard I/N`), `asnr merge` and the Python package's
-//! `evaluate_many` all build each point with [`evaluate_point`] and write it with [`csv_row`], so a
+//! `evaluate_many` all build each point with [`evaluate_point`] (`asnr sweep` through [`Points`],
+//! which reads the scene file once and builds the same scene) and write it with [`csv_row`], so a
 //! point computed by any of them is the same `f64`s and, in CSV, the same bytes. A grid is the
 //! cartesian product of its axes, the first key varying slowest ([`Grid`]); a point's *index* is
 //! its position in that order (or its row in a points file), which shards and merges keep.
@@ -156,7 +157,17 @@ pub fn evaluate_point_with_lens(
 ) -> Result<Point, PointError> {
     let mut set = overrides.to_vec();
     set.extend(keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
-    let mut scene = crate::build_from(source, &set)?;
+    let scene = crate::build_from(source, &set)?;
+    evaluate_scene(source, scene, values, lens)
+}
+
+/// The point of `scene` (its lens replaced by `lens` when given), evaluated.
+fn evaluate_scene(
+    source: &Source,
+    mut scene: metric::Scene,
+    values: &[f64],
+    lens: Option<Arc<dyn LensModel>>,
+) -> Result<Point, PointError> {
     if let Some(lens) = lens {
         scene = scene.with_lens(lens);
     }
@@ -171,6 +182,46 @@ pub fn evaluate_point_with_lens(
         fraunhofer_valid: r.fraunhofer.valid,
         warnings: r.warnings,
     })
+}
+
+/// Many points of one scene and its overrides over the same keys: [`evaluate_point`] at each,
+/// the same `f64`s and errors, with the scene file read once. The first point builds its scene
+/// the whole way and keeps the merged table and its deserialized form; the next ones set their
+/// keys' values on the sections that hold them and deserialize those sections alone, then build
+/// and validate the scene as [`crate::build_from`] does. Keys it cannot set that way (list
+/// entries, a lens preset, …) and any point whose scene fails to build go the whole way, so
+/// every message is the same. Shared by threads (`&self`).
+pub struct Points<'a> {
+    source: &'a Source,
+    overrides: &'a [String],
+    keys: &'a [String],
+    prepared: std::sync::OnceLock<Option<crate::load::Prepared>>,
+}
+
+impl<'a> Points<'a> {
+    /// The points of `source` with `overrides` and then `keys` set.
+    pub fn new(source: &'a Source, overrides: &'a [String], keys: &'a [String]) -> Points<'a> {
+        Points { source, overrides, keys, prepared: std::sync::OnceLock::new() }
+    }
+
+    /// [`evaluate_point`] at `values` (one per key).
+    pub fn evaluate(&self, values: &[f64]) -> Result<Point, PointError> {
+        self.evaluate_with_lens(values, None)
+    }
+
+    /// [`evaluate_point_with_lens`] at `values` (one per key).
+    pub fn evaluate_with_lens(&self, values: &[f64], lens: Option<Arc<dyn LensModel>>) -> Result<Point, PointError> {
+        let assignments: Vec<String> = self.keys.iter().zip(values).map(|(k, v)| assignment(k, *v)).collect();
+        let prepared = self.prepared.get_or_init(|| {
+            let mut set = self.overrides.to_vec();
+            set.extend(assignments.iter().cloned());
+            crate::load::Prepared::new(self.source, &set, self.keys)
+        });
+        match prepared.as_ref().and_then(|p| p.build(&assignments)) {
+            Some(loaded) => evaluate_scene(self.source, loaded.scene, values, lens),
+            None => evaluate_point_with_lens(self.source, self.overrides, self.keys, values, lens),
+        }
+    }
 }
 
 /// The result columns of a sweep's CSV, after the keys' columns.
@@ -326,6 +377,29 @@ mod tests {
             }
             assert_eq!(literal.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{text}");
         }
+    }
+
+    /// `Points` gives each point [`evaluate_point`]'s answer (the reference: the scene built
+    /// from its TOML at each point): the same `f64`s and warnings, and the same refusal.
+    #[test]
+    fn points_answer_as_evaluate_point_does() {
+        let source = crate::read(None).unwrap();
+        let overrides = ["exposure.time_ms=2".to_owned()];
+        let keys = ["lens.f_number".to_owned(), "spectrum.range_nm".to_owned()];
+        let points = Points::new(&source, &overrides, &keys);
+        // F/1.4 over 300 nm: blurred beyond the Fraunhofer threshold (a warning); F/0: refused
+        for values in [[2.5, 50.0], [1.4, 300.0], [0.0, 50.0], [5.0, 2.0], [-1.0, 3.0]] {
+            let (a, b) = (points.evaluate(&values), evaluate_point(&source, &overrides, &keys, &values));
+            match (a, b) {
+                (Ok(a), Ok(b)) => {
+                    assert_eq!(csv_row(&a, None), csv_row(&b, None));
+                    assert_eq!(a.asnr.to_bits(), b.asnr.to_bits());
+                }
+                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                (a, b) => panic!("{values:?}: {a:?} against {b:?}"),
+            }
+        }
+        assert!(points.prepared.get().is_some_and(Option::is_some), "the paper scene's keys are prepared");
     }
 
     #[test]
