@@ -7,7 +7,7 @@
 //!
 //! - a scene is a [`scene::Source`] (a file's or a text's TOML, parsed once) and its overrides,
 //!   `key=value` as `--set` takes them, built by `scene::build_from`;
-//! - a point of `evaluate_many` is `scene::sweep::evaluate_point`, the function every
+//! - a point of `evaluate_many` is `scene::sweep::Points::evaluate_with_lens`, the function every
 //!   `asnr sweep` point goes through, so its values are the sweep CSV's to the last digit;
 //! - reports are the command line's JSON (`metric::Evaluation`, the comparison's `Report`),
 //!   decoded in Python;
@@ -26,7 +26,7 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 use optics::{Field, LensModel, Order, Pupil, Wavefront};
 use scene::Source;
-use scene::sweep::{Point, PointError, assignment, evaluate_point_with_lens};
+use scene::sweep::{Point, PointError, Points, assignment};
 
 create_exception!(
     asnr,
@@ -619,6 +619,8 @@ fn evaluate_many<'py>(
         .build()
         .map_err(|e| PyValueError::new_err(format!("threads = {threads}: {e}")))?;
     let chunk = chunk.max(1);
+    // the scene's text parsed and merged once for every point (`scene::sweep::Points`, as a sweep)
+    let prepared = Points::new(&scene.source, &scene.overrides, &keys);
     let mut points: Vec<Point> = Vec::with_capacity(n);
     let mut start = 0;
     while start < n {
@@ -630,7 +632,7 @@ fn evaluate_many<'py>(
                     .map(|i| {
                         let values: Vec<f64> = columns.iter().map(|c| c[i]).collect();
                         let lens = scene.lens.clone().map(|l| l as Arc<dyn LensModel>);
-                        evaluate_point_with_lens(&scene.source, &scene.overrides, &keys, &values, lens)
+                        prepared.evaluate_with_lens(&values, lens)
                     })
                     .collect()
             })
