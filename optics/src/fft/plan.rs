@@ -420,7 +420,12 @@ impl OtfPlan {
         self.autocorrelation(weight, out);
         let zero = self.half * (2 * self.half + 1) + self.half;
         for (&(d_field, d_weight), grid) in moves.iter().zip(derivatives.iter_mut()) {
-            assert_eq!(d_field.len(), n * n, "a field's derivative of {} values for a plan with N = {n}", d_field.len());
+            assert_eq!(
+                d_field.len(),
+                n * n,
+                "a field's derivative of {} values for a plan with N = {n}",
+                d_field.len()
+            );
             self.spectrum_of(|j, row| row.copy_from_slice(&d_field[j * n..(j + 1) * n]));
             self.autocorrelation_of(weight, grid, Some(&spectrum));
             let rate = if weight > 0.0 { d_weight / weight } else { 0.0 };
