@@ -3275,7 +3275,7 @@ mod tests {
     /// 0.01 and 0.005 (`(4 D(h) − D(2h))/3`, truncation O(h⁴); the mean MTF is smooth in ε on
     /// that scale: D(0.01) and D(0.02) differ by 1.6e-4 of it), on the paper's lens at ε = 0.3
     /// and a 4 nm band: the mean MTF's and the ASNR's within 10× the tolerance of their norms
-    /// (measured 5.1e-3 and 2.0e-3; at the tolerance 1e-4, 1.2e-3 and 5.7e-4: the edge's
+    /// (measured 5.1e-3 and 2.5e-3; at the tolerance 1e-4, 1.2e-3 and 5.7e-4: the edge's
     /// sampling error in the derivative is about ten times the value's, docs/physics.md).
     #[test]
     fn obscuration_gradient_matches_converged_differences() {
