@@ -200,6 +200,17 @@ fn aperture_parameter(key: &str, lens_model: &str, table: &toml::Table) -> Optio
              radial engine's lanes do not follow); supported with options.pupil_mapping = \"paraxial\""
         )));
     }
+    if lens_model == "phase" && lookup(table, "lens.phase_map").is_some() {
+        return Some(Err(anyhow!(
+            "--wrt {key}: not differentiable here yet for a phase map (lens.phase_map): the aperture's radius \
+             R = f0/(2F#) scales the pupil against the map's cells (the pupil point v, in units of R, reads the cell \
+             holding v R/p, p = lens.phase_map_pitch_um), so, as the pitch does, it moves every cell's edges across \
+             the pupil: on the FFT path, which reads the cell holding each pupil sample's centre, the value at a fixed \
+             sampling is a step function of R, and the derivative of the value itself is an integral of the phase's \
+             jumps along all the moving cell edges, not computed yet (the solid angle's part, N ∝ 1/F#², and the \
+             frequency scale are not the obstacle)"
+        )));
+    }
     if !APERTURE_MODELS.contains(&lens_model) {
         let why = match lens_model {
             "library" => {
@@ -294,7 +305,8 @@ fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> O
         "lens.phase_map_pitch_um" => {
             "each sample's phase is held over its cell, so the pitch moves every cell's edges across the pupil and \
              the aperture's edge (the phase jumps there): the derivative is an integral along all the moving edges, \
-             not computed yet"
+             not computed yet (on the FFT path, which reads the cell holding each pupil sample's centre, the value at \
+             a fixed sampling is a step function of the pitch, so no forward mode on its grids gives it)"
         }
         "lens.obscuration" if value == 0.0 => {
             // the edge of its domain [0, 1): one-sided, and 0 (docs/physics.md, "Gradients: the iris")
@@ -1404,6 +1416,12 @@ mod tests {
         let fixed = ["spectrum.range_nm=10", "options.pupil_samples=256"];
         let e = metric::evaluate(&scene::build_from(&source, &owned(&fixed)).unwrap()).unwrap();
         assert!(e.numerics.engine.starts_with("fft"), "{}", e.numerics.engine);
+        // the map's aperture keys scale the pupil against its cells, as its pitch does: refused
+        // naming why (a step function of R at a fixed sampling)
+        for key in ["lens.f_number", "lens.focal_length_mm", "lens.phase_map_pitch_um"] {
+            let e = gradient(&source, &owned(&fixed), &owned(&[key])).unwrap_err().to_string();
+            assert!(e.contains(&format!("--wrt {key}")) && e.contains("step function"), "{e}");
+        }
         check_directional_spectrum(
             &source,
             &fixed,
