@@ -151,6 +151,15 @@ pub enum Parameter {
     /// pixel MTF (its sinc does not scale with p) or a noise spectrum (docs/physics.md,
     /// "Gradients: a PSF stack's pitch").
     PsfPitch,
+    /// The obscuration ε of the chromatic lens's annular iris (`lens.obscuration`, the inner
+    /// radius in units of the aperture's), per unit ε, where `0 < ε < 1`: the pupil's inner edge
+    /// moves on the FFT path (`optics::WavefrontDirection::Obscuration`: each edge pixel's area
+    /// fraction by minus the inner circle's arc length in it, through the autocorrelation and
+    /// its normalization; docs/physics.md, "Gradients: the edge's motion on the FFT path"). The
+    /// mean MTF's part only: the photon count's, `∂ln N/∂ε = ∂ln N_T/∂ε = −2ε/(1 − ε²)` (the
+    /// area fraction on τ1 and T), is the chain rule of the scene's key on
+    /// [`Efficiency`](Parameter::Efficiency) and [`Transmission`](Parameter::Transmission).
+    Obscuration,
 }
 
 impl Parameter {
@@ -172,6 +181,7 @@ impl Parameter {
             Parameter::Seidel(t) => Some(optics::WavefrontDirection::Seidel(t)),
             Parameter::FieldAngle(a) => Some(optics::WavefrontDirection::FieldAngle(a)),
             Parameter::IrisDecentre(a) => Some(optics::WavefrontDirection::IrisDecentre(a)),
+            Parameter::Obscuration => Some(optics::WavefrontDirection::Obscuration),
             p => p.lane().map(optics::WavefrontDirection::Lane),
         }
     }
@@ -203,6 +213,7 @@ impl Parameter {
             Parameter::LibraryBias(_) => "a library lens's parameter bias",
             Parameter::PsfPitch => "a PSF stack's sample pitch",
             Parameter::IrisDecentre(_) => "the decentre of the lens's iris",
+            Parameter::Obscuration => "the obscuration of the lens's iris",
         }
     }
 }
@@ -733,6 +744,24 @@ fn point_gradient(
                     MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
                 };
                 // the iris keeps its area (the full-size circle moved): N and N_T do not move
+                (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::Obscuration => {
+                let GridGradient::Computed(all) = d_grid else {
+                    return Err(not_smooth(
+                        p,
+                        "lens.obscuration: the inner edge's motion is computed on the FFT path, for orders through                          the annulus (or annular sector) with its wavefront and a white noise spectrum, asked with                          no wavefront key; this scene's OTF is on another engine (a line spectrum's grids, a noise                          spectrum, or wavefront keys asked with it)"
+                            .to_owned(),
+                    ));
+                };
+                let d_mtf = all[grid_place];
+                grid_place += 1;
+                let d_g = match scene.options().form {
+                    MetricForm::Mean => d_mtf,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+                };
+                // N and N_T move with the area fraction: the key's chain on Efficiency and
+                // Transmission (`Parameter::Obscuration`)
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange if line.is_some() => {

@@ -224,6 +224,23 @@ impl Aperture {
         total / PI
     }
 
+    /// The rate at which the area of the rectangle `[x0, x1] × [y0, y1]` (grid coordinates, as
+    /// [`area_in`](Self::area_in)) that transmits moves with the obscuration ε (the inner
+    /// radius of a disc shape, in units of the full aperture's radius): minus the length of the
+    /// inner circle `r = ε` (inside the sector, if any) that lies in the rectangle, since
+    /// `∂/∂ε ∫∫_{r ≥ ε} dA = −∮_{r = ε} ds` (docs/physics.md, "Gradients: the edge's motion on
+    /// the FFT path"). Exact to rounding: the circle's crossings of the rectangle's sides and the
+    /// sector's edges cut it into arcs, each wholly in or out. `None` for a mask (its edges are
+    /// not a parameter).
+    pub fn obscuration_rate_in(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
+        match &self.shape {
+            Shape::Disc { obscuration, sector, .. } => {
+                Some(-arc_length_in(&Rect { x0, x1, y0, y1 }, *obscuration, *sector))
+            }
+            Shape::Mask(_) => None,
+        }
+    }
+
     /// Area of the rectangle `[x0, x1] × [y0, y1]` (grid coordinates) that transmits.
     pub fn area_in(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
         let rect = Rect { x0, x1, y0, y1 };
@@ -509,6 +526,63 @@ fn disc_area_in(rect: &Rect, obscuration: f64, outer: f64, sector: Option<(f64, 
     }
 }
 
+/// Length of the circle `r = radius` (centred on the origin) inside `rect` and, if given, inside
+/// the wedge of angles `[a, b]` (counter-clockwise from `+x`, `0 < b − a < 2π`): the angles where
+/// the circle crosses the rectangle's four sides and the wedge's two edges cut `[0, 2π)` into
+/// arcs, each wholly inside or outside; the arcs whose midpoint is inside add `radius` times
+/// their angle.
+fn arc_length_in(rect: &Rect, radius: f64, sector: Option<(f64, f64)>) -> f64 {
+    if radius <= 0.0 {
+        return 0.0;
+    }
+    let (near, far) = rect.distance_range();
+    if near > radius || far < radius {
+        return 0.0;
+    }
+    let mut cuts = [0.0; 12];
+    cuts[1] = TAU;
+    let mut count = 2;
+    let mut cut = |t: f64| {
+        cuts[count] = t.rem_euclid(TAU);
+        count += 1;
+    };
+    for x in [rect.x0, rect.x1] {
+        if x.abs() < radius {
+            let t = (x / radius).acos();
+            cut(t);
+            cut(-t);
+        }
+    }
+    for y in [rect.y0, rect.y1] {
+        if y.abs() < radius {
+            let t = (y / radius).asin();
+            cut(t);
+            cut(PI - t);
+        }
+    }
+    if let Some((a, b)) = sector {
+        cut(a);
+        cut(b);
+    }
+    let cuts = &mut cuts[..count];
+    cuts.sort_by(f64::total_cmp);
+    let in_sector = |t: f64| sector.is_none_or(|(a, b)| (t - a).rem_euclid(TAU) <= b - a);
+    let mut length = 0.0;
+    for w in cuts.windows(2) {
+        let (lo, hi) = (w[0], w[1]);
+        if hi <= lo {
+            continue;
+        }
+        let mid = 0.5 * (lo + hi);
+        let (s, c) = mid.sin_cos();
+        let (x, y) = (radius * c, radius * s);
+        if x >= rect.x0 && x <= rect.x1 && y >= rect.y0 && y <= rect.y1 && in_sector(mid) {
+            length += radius * (hi - lo);
+        }
+    }
+    length
+}
+
 /// Area of `rect` where `inside` holds: nine probes, then a 16 × 16 supersampling if they disagree.
 fn mask_area_in(rect: &Rect, inside: &MaskFn) -> f64 {
     let (w, h) = (rect.x1 - rect.x0, rect.y1 - rect.y0);
@@ -534,6 +608,42 @@ fn mask_area_in(rect: &Rect, inside: &MaskFn) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The obscuration's rate per pixel against central differences of the pixel's exact area
+    /// (step 1e-6, truncation ~1e-12 of a pixel's area per unit ε; the radii are chosen off the
+    /// grid lines, where the circle would be tangent to a pixel's side and the area not smooth
+    /// in ε), for an annulus, an annular sector and a decentred annulus, and their
+    /// sum against `∂(exact area)/∂ε = −ε × (the sector's angle)`.
+    #[test]
+    fn obscuration_rates_are_the_areas_derivatives() {
+        let shapes = [
+            (0.3, None, (0.0, 0.0)),
+            (0.45, Some((-0.4, 1.9)), (0.0, 0.0)),
+            (0.47, Some((1.0, 1.0 + TAU / 3.0)), (0.0, 0.0)),
+            (0.3, None, (0.15, 0.0)),
+        ];
+        for (eps, sector, (dx, dy)) in shapes {
+            let build = |e: f64| Aperture::disc(e, sector).unwrap().decentred(dx, dy).unwrap();
+            let (ap, up, down) = (build(eps), build(eps + 1e-6), build(eps - 1e-6));
+            for n in [7usize, 16, 33] {
+                let h = 2.0 / n as f64;
+                let mut total = 0.0;
+                for j in 0..n {
+                    for i in 0..n {
+                        let (x0, y0) = (-1.0 + i as f64 * h, -1.0 + j as f64 * h);
+                        let rate = ap.obscuration_rate_in(x0, x0 + h, y0, y0 + h).unwrap();
+                        let d = (up.area_in(x0, x0 + h, y0, y0 + h) - down.area_in(x0, x0 + h, y0, y0 + h)) / 2e-6;
+                        assert!((rate - d).abs() <= 1e-7, "ε {eps}, n {n}, ({i}, {j}): {rate} vs {d}");
+                        total += rate;
+                    }
+                }
+                let angle = sector.map_or(TAU, |(a, b)| b - a);
+                assert!((total + eps * angle).abs() <= 1e-12, "ε {eps}, n {n}: {total} vs {}", -eps * angle);
+            }
+        }
+        assert_eq!(Aperture::mask(|_, _| true).obscuration_rate_in(0.0, 0.1, 0.0, 0.1), None);
+        assert_eq!(Aperture::circle().obscuration_rate_in(-0.1, 0.1, -0.1, 0.1), Some(0.0));
+    }
 
     /// The exact pixel fractions sum to the exact area, for every disc shape, at coarse grids.
     #[test]

@@ -779,6 +779,15 @@ pub enum WavefrontDirection {
     /// `−2πi ν_a (2 W020/NA)` times itself, as a field angle's lateral colour does. The exact
     /// 1-D engine's gradient (docs/physics.md, "Gradients: the iris").
     IrisDecentre(usize),
+    /// The obscuration ε of an order's annular aperture (`lens.obscuration`, the inner radius
+    /// in units of the full aperture's radius), per unit ε: not a wavefront but the pupil's
+    /// inner edge, which moves each edge pixel's area fraction by minus the inner circle's arc
+    /// length in it over the pixel's area ([`Aperture::obscuration_rate_in`]). The FFT path
+    /// carries it for orders through such an aperture
+    /// ([`OtfPlan::otf_and_field_derivatives`](crate::fft::OtfPlan::otf_and_field_derivatives):
+    /// `∂P = ∂A · P/A` at each edge pixel and the normalization `Σ A` moving by `Σ ∂A`;
+    /// docs/physics.md, "Gradients: the edge's motion on the FFT path").
+    Obscuration,
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -854,6 +863,22 @@ impl FftPath {
                     continue;
                 }
                 let Some(node) = stored.next() else { return Ok(None) };
+                // an order through an aperture of disc shape: the obscuration moves its inner
+                // edge (the only key this path differentiates there)
+                if let (Pupil::Aperture(aperture), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
+                    if !directions.iter().all(|d| *d == WavefrontDirection::Obscuration) {
+                        return Ok(None);
+                    }
+                    let slot = layer.pupil(&order)?;
+                    let Some((field, weight, moved)) = edge_field(&layer.pupils[slot].1, aperture, lambda) else {
+                        return Ok(None);
+                    };
+                    let moves: Vec<(&[Complex64], f64)> =
+                        directions.iter().map(|_| (moved.0.as_slice(), moved.1)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, weight, &moves, &mut otf, &mut d_grids);
+                    read_derivatives(&mut d_sum, &d_grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
                 let radial = match (&order.pupil, &node.kind) {
                     (Pupil::Radial(radial), FftKind::Grid(_)) => radial.clone(),
                     // a table is data: the wavefront keys do not move it
@@ -909,6 +934,7 @@ impl FftPath {
                         | WavefrontDirection::FieldAngle(_)
                         | WavefrontDirection::Azimuth
                         | WavefrontDirection::IrisDecentre(_)
+                        | WavefrontDirection::Obscuration
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);
@@ -922,28 +948,7 @@ impl FftPath {
                     &mut otf,
                     &mut d_grids,
                 );
-                // read as `sum_along` reads the node's grid
-                let nuf = scene.f_number * node.lambda;
-                let s_grid = d_grids[0].s_max();
-                for (a, &azimuth) in azimuths.iter().enumerate() {
-                    let (sin_a, cos_a) = azimuth.sin_cos();
-                    let [dx, dy] = node.shift;
-                    for (f, &(nu, _)) in frequencies.iter().enumerate() {
-                        let s = nu.abs() * nuf;
-                        if s >= 1.0 || s > s_grid {
-                            continue;
-                        }
-                        let mut factor = Complex64::new(node.weight, 0.0);
-                        if dx != 0.0 || dy != 0.0 {
-                            let (ps, pc) = (-2.0 * PI * nu * (dx * cos_a + dy * sin_a)).sin_cos();
-                            factor *= Complex64::new(pc, ps);
-                        }
-                        let base = (a * frequencies.len() + f) * k_dirs;
-                        for (slot, grid) in d_sum[base..base + k_dirs].iter_mut().zip(&d_grids) {
-                            *slot += grid.at_xy(s * cos_a, s * sin_a) * factor;
-                        }
-                    }
-                }
+                read_derivatives(&mut d_sum, &d_grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
             }
         }
         if stored.next().is_some() {
@@ -991,6 +996,78 @@ impl FftPath {
         gradient.iter_mut().for_each(|g| *g /= norm);
         Ok(Some(gradient))
     }
+}
+
+/// Adds one node's derivative grids `d_grids`, read as `sum_along` reads the node's grid (its
+/// weight, its lateral-colour phase, the same interpolation), to `d_sum` at each of `azimuths`
+/// and `frequencies` (`k_dirs` values per point, azimuth-major).
+fn read_derivatives(
+    d_sum: &mut [Complex64],
+    d_grids: &[Otf],
+    node: &FftNode,
+    f_number: f64,
+    frequencies: &[(f64, f64)],
+    azimuths: &[f64],
+    k_dirs: usize,
+) {
+    let nuf = f_number * node.lambda;
+    let s_grid = d_grids[0].s_max();
+    for (a, &azimuth) in azimuths.iter().enumerate() {
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let [dx, dy] = node.shift;
+        for (f, &(nu, _)) in frequencies.iter().enumerate() {
+            let s = nu.abs() * nuf;
+            if s >= 1.0 || s > s_grid {
+                continue;
+            }
+            let mut factor = Complex64::new(node.weight, 0.0);
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (-2.0 * PI * nu * (dx * cos_a + dy * sin_a)).sin_cos();
+                factor *= Complex64::new(pc, ps);
+            }
+            let base = (a * frequencies.len() + f) * k_dirs;
+            for (slot, grid) in d_sum[base..base + k_dirs].iter_mut().zip(d_grids) {
+                *slot += grid.at_xy(s * cos_a, s * sin_a) * factor;
+            }
+        }
+    }
+}
+
+/// The field of an order through `aperture` sampled as `sampled` (each pixel's area fraction
+/// `A` times `exp(i k W)` at its centre, as [`OtfPlan::otf`](crate::fft::OtfPlan::otf) builds
+/// it), its weight `Σ A`, and their derivatives in the obscuration ε: `∂A` at each pixel from
+/// [`Aperture::obscuration_rate_in`] (minus the inner circle's arc length in the pixel over its
+/// area), so `∂P = ∂A exp(i k W)` and `∂(Σ A) = Σ ∂A` (docs/physics.md, "Gradients: the edge's
+/// motion on the FFT path"). An edge pixel has `A > 0` (the circle passes through it), so its
+/// OPD is sampled. `None` for a mask.
+#[allow(clippy::type_complexity)]
+fn edge_field(
+    sampled: &SampledPupil,
+    aperture: &Aperture,
+    lambda: f64,
+) -> Option<(Vec<Complex64>, f64, (Vec<Complex64>, f64))> {
+    let n = sampled.n();
+    let h = 2.0 / n as f64;
+    let k = 2.0 * PI / lambda;
+    let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+    crate::fft::cis::fill(&mut field, area, k, opd);
+    let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
+    let mut d_weight = 0.0;
+    for j in 0..n {
+        let y0 = -1.0 + j as f64 * h;
+        for i in 0..n {
+            let x0 = -1.0 + i as f64 * h;
+            let rate = aperture.obscuration_rate_in(x0, x0 + h, y0, y0 + h)? / (h * h);
+            if rate == 0.0 {
+                continue;
+            }
+            let idx = j * n + i;
+            d_weight += rate;
+            moved[idx] = Complex64::from_polar(rate, k * opd[idx]);
+        }
+    }
+    Some((field, area.iter().sum::<f64>(), (moved, d_weight)))
 }
 
 /// The OPD per unit of a radial direction `profile` at the pixels where `field` transmits (0

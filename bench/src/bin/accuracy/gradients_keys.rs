@@ -3,8 +3,9 @@
 //! F-number and focal length beside Seidel terms on axis (the overlap engine's defocus lane),
 //! the Gaussian band's centre and range where the OTF depends on direction (the overlap engine,
 //! the FFT path of a phase map, lateral colour off axis, a decentred iris), a blackbody's
-//! temperature over a band, and the Seidel terms at zero (the overlap quadrature beside the
-//! value's 1-D engine). In one process (`metric::evaluate` against `metric::gradient`, the scene
+//! temperature over a band, the Seidel terms at zero (the overlap quadrature beside the
+//! value's 1-D engine), and the obscuration above 0 (the annulus's inner edge moving on the FFT
+//! path). In one process (`metric::evaluate` against `metric::gradient`, the scene
 //! built inside each timing, alternately, medians: `gradients::side_by_side`) and, where the
 //! work is short beside the process's start, whole process (`asnr evaluate` against `asnr
 //! gradient`, alternately, medians).
@@ -147,6 +148,15 @@ fn cases(root: &Path, dir: &Path) -> Vec<Case> {
             whole_process: true,
         });
     }
+    cases.push(Case {
+        name: "obscuration 0.3 (the annulus's inner edge on the FFT path)",
+        scene: paper.clone(),
+        overrides: owned(&["lens.obscuration=0.3"]),
+        keys: &["lens.obscuration"],
+        parameters: vec![Parameter::Obscuration],
+        slow: false,
+        whole_process: true,
+    });
     cases.push(Case {
         name: "Seidel terms at zero (overlap quadrature beside the 1-D value)",
         scene: paper,
