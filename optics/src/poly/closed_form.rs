@@ -176,6 +176,23 @@ impl OtfEngine for Closed {
         Some((value, derivative))
     }
 
+    /// The closed form's Seidel lanes at zero ([`GaussianDefocus::otf_and_seidel_lanes`]): the
+    /// same pieces, levels and acceptance as the value, at the value's tolerance; its
+    /// evaluations of E(c) count towards the budget.
+    fn otf_and_seidel_lanes(&self, frequency: f64, lanes: &mut [f64; 2]) -> Option<f64> {
+        *lanes = [0.0; 2];
+        if frequency == 0.0 {
+            return Some(1.0);
+        }
+        if self.evaluations.get() > CLOSED_FORM_BUDGET {
+            return Some(0.0);
+        }
+        let (value, found, evaluations, _) = self.closed.otf_and_seidel_lanes(frequency, self.otf_tolerance.get())?;
+        self.evaluations.set(self.evaluations.get() + evaluations);
+        *lanes = found;
+        Some(value)
+    }
+
     fn over_budget(&self) -> Option<String> {
         (self.evaluations.get() > CLOSED_FORM_BUDGET).then(|| {
             format!(
