@@ -186,7 +186,7 @@ impl Polychromatic<'_> {
         if !self.scene.field.is_on_axis()
             || self.direction_dependent()
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
-            || self.engine.otf_and_seidel_lanes(self.scene.max_frequency, &mut [0.0; 2]).is_none()
+            || self.engine.engine() != Engine::ClosedForm
         {
             return None;
         }
