@@ -45,6 +45,9 @@ impl Hasher for BitsHasher {
     }
 }
 
+/// An OTF value, its Seidel lanes at zero and its estimated error ([`Closed::seidel_values`]).
+pub(super) type SeidelValue = (f64, [f64; 2], f64);
+
 /// The closed-form engine and its counters.
 #[derive(Debug)]
 pub(super) struct Closed {
@@ -66,7 +69,7 @@ pub(super) struct Closed {
     /// The OTF values with their Seidel lanes at zero ([`GaussianDefocus::otf_and_seidel_lanes`])
     /// and their estimated errors, by the bits of ν, kept as [`values`](Self::values) are: a
     /// mean redone to a tighter tolerance reads a lane whose value's estimate meets it.
-    pub seidel_values: RefCell<HashMap<u64, (f64, [f64; 2], f64), BuildHasherDefault<BitsHasher>>>,
+    pub seidel_values: RefCell<HashMap<u64, SeidelValue, BuildHasherDefault<BitsHasher>>>,
 }
 
 impl Closed {
