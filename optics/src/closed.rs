@@ -1299,6 +1299,333 @@ fn nested_lanes(
     (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
 }
 
+// The Seidel lanes at zero (docs/physics.md, "Gradients: Seidel terms at zero"): with every
+// Seidel term zero the pupil carries the defocus alone, and the derivatives of the OTF along a
+// spherical aberration `W040 ρ⁴` and a constant defocus `W220 ρ²` (field curvature) are
+// integrals on the same overlap as the value, whose y integral is in closed form and whose
+// spectral integral is the value's completed square with a polynomial of three degrees more.
+// Beside the value's functions (they do not change it), on the value's pieces and levels.
+
+/// Moments the Seidel lanes read: `Q(x)` times a cubic in `x` has three more terms.
+const SEIDEL_TERMS: usize = MAX_TERMS + 3;
+
+impl GaussianDefocus {
+    /// The OTF at `frequency` as [`otf_and_log_derivative`](Self::otf_and_log_derivative)
+    /// computes it (the value's pieces, levels and acceptance), and beside it its derivatives
+    /// per metre along `W040 ρ⁴` and `W220 ρ²` (a defocus the same at every wavelength) at
+    /// `W040 = W220 = 0`, on axis.
+    ///
+    /// One wavelength, pupil radius 1, the normalized frequency `s = βλ` (`β = νF#`), the two
+    /// pupils at `p± = (x ± s, y)`: `ρ₊² − ρ₋² = 4xs` and `ρ₊⁴ − ρ₋⁴ = 8xs (x² + y² + s²)`, so
+    /// `∂O/∂W = (1/π) ∫∫ i k [D(p₊) − D(p₋)] e^{ik W020 4xs} dA`. At fixed `x > 0` the overlap
+    /// is `|y| ≤ Y = √(1 − (x + s)²)`, and `∫(x² + y² + s²) dy = 2Y (x² + s²) + 2Y³/3`; the odd
+    /// factor `x` pairs `x` with `−x` into `2i sin`; with `x + s = cos t` (`Y = sin t`,
+    /// `dx = −sin t dt`, the value's own change of variable) and `4ks = 8πβ`:
+    ///
+    /// ```text
+    /// ∂O/∂W220 = −(4/π) ∫_0^{acos s} sin²t · 8πβ u sin φ dt
+    /// ∂O/∂W040 = −(4/π) ∫_0^{acos s} sin²t · 16πβ u (u² + s² + sin²t/3) sin φ dt
+    /// ```
+    ///
+    /// with `u = c − s`, `φ = a(λ) u` the value's phase. Over the spectrum the factor `k s` does
+    /// not depend on λ, and `u = d − βσx`, `s = βμ + βσx` (`d = c − βμ`) are affine in the
+    /// spectral variable `x`: each lane is `Re i ∫ Q g e^{−x²/2 + iφ} dx` with `g` a polynomial
+    /// of degree one and three in `x`, the value's completed square with three moments more
+    /// (no boundary term: the cut `λ = c/β` does not move with W040 or W220). The rule in `t`
+    /// accepts on the value's estimate (as the defocus lane does); the lanes' error is held by
+    /// the caller (`Polychromatic::mean_mtf_and_seidel_lanes`). Returns `(OTF, [∂/∂W040,
+    /// ∂/∂W220] per metre, evaluations of E, the value's estimated error)`; `None` where `Q`
+    /// has more than `MAX_TERMS` terms for the moments kept.
+    pub fn otf_and_seidel_lanes(&self, frequency: f64, tolerance: f64) -> Option<(f64, [f64; 2], usize, f64)> {
+        let nu = frequency.abs();
+        if nu == 0.0 {
+            return Some((1.0, [0.0; 2], 0, 0.0));
+        }
+        if self.q.len() + 3 > SEIDEL_TERMS {
+            return None;
+        }
+        let left_out = 2e-3 * tolerance;
+        let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+        let (f, erfcx_error) = self.at_frequency_for(nu, tail, tolerance);
+        let c_lo = (f.beta * (self.center - tail * self.sigma)).max(0.0);
+        if c_lo >= 1.0 {
+            return Some((0.0, [0.0; 2], 0, left_out));
+        }
+        let c_cut = f.beta * (self.center + tail * self.sigma);
+        let pieces = self.lane_pieces(&f, tail, c_lo, c_cut);
+        let scale = 4.0 / (PI * self.weight);
+        let integrand = |t: f64| {
+            let (s, c) = cis::sin_cos(t);
+            let (e, [w040, w220]) = self.spectral_and_seidel_lanes(&f, c, s * s);
+            let w = s * s * scale;
+            [w * e.re, w * w040.re, w * w220.re]
+        };
+        let mut evaluations = 0;
+        let mut error = left_out + erfcx_error;
+        let share = (tolerance - erfcx_error).max(0.5 * tolerance) / pieces.len().max(1) as f64;
+        let mut total = [0.0; 3];
+        let mut shared: Option<(f64, [f64; 3])> = None;
+        for &(lo, hi, phase) in &pieces {
+            let resolved = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
+            let known_b = shared.filter(|&(c, _)| c == lo).map(|(_, v)| v);
+            let known_a = (hi >= 1.0).then_some([0.0; 3]);
+            let (a, b) = (hi.acos(), lo.acos());
+            let (integral, at_a) =
+                nested_lanes_n(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
+            total.iter_mut().zip(integral).for_each(|(t, i)| *t += i);
+            shared = Some((hi, at_a));
+        }
+        Some((total[0], [total[1], total[2]], evaluations, ESTIMATE_SAFETY * error))
+    }
+
+    /// `E(c)` as [`spectral`](Self::spectral) and the two Seidel lanes' spectral integrals
+    /// `i ∫ Q g e^{…} dx` ([`otf_and_seidel_lanes`](Self::otf_and_seidel_lanes)), `g` the
+    /// W040 lane's `16πβ u (u² + s² + sin²t/3)` and the W220 lane's `8πβ u`, from the same
+    /// moments; `sin2` is `sin²t = 1 − c²`.
+    fn spectral_and_seidel_lanes(&self, f: &AtFrequency, c: f64, sin2: f64) -> (Complex64, [Complex64; 2]) {
+        let d = c - f.beta * self.center;
+        let phi0 = f.a_mu * d;
+        let phi1 = self.sigma * (f.a1 * d - f.beta * f.a_mu);
+        let cut_x = if f.beta > 0.0 { c * f.inv_beta_sigma - f.center_over_sigma } else { f64::INFINITY };
+        let terms = self.q.len();
+        let zero = Complex64::new(0.0, 0.0);
+        let Some((moments, m)) = self.seidel_moments(f, phi0, phi1, cut_x, terms + 3) else {
+            return (zero, [zero; 2]);
+        };
+        // u = d − βσx, s = βμ + βσx in powers of x
+        let bs = f.beta * self.sigma;
+        let (u0, u1) = (d, -bs);
+        let (s0, s1) = (f.beta * self.center, bs);
+        // h = u² + s² + sin²t/3
+        let h = [u0 * u0 + s0 * s0 + sin2 / 3.0, 2.0 * (u0 * u1 + s0 * s1), u1 * u1 + s1 * s1];
+        // the W040 factor 16πβ u h (a cubic) and the W220 factor 8πβ u (affine)
+        let k040 = 16.0 * PI * f.beta;
+        let g040 = [k040 * u0 * h[0], k040 * (u0 * h[1] + u1 * h[0]), k040 * (u0 * h[2] + u1 * h[1]), k040 * u1 * h[2]];
+        let k220 = 8.0 * PI * f.beta;
+        let g220 = [k220 * u0, k220 * u1];
+        let mut p040 = [0.0; SEIDEL_TERMS];
+        let mut p220 = [0.0; SEIDEL_TERMS];
+        for (k, &v) in self.q.iter().enumerate() {
+            for (j, &g) in g040.iter().enumerate() {
+                p040[k + j] += v * g;
+            }
+            for (j, &g) in g220.iter().enumerate() {
+                p220[k + j] += v * g;
+            }
+        }
+        let i = Complex64::new(0.0, 1.0);
+        let value = seidel_taylor_sum(&self.q, &moments, m);
+        let w040 = seidel_taylor_sum(&p040[..terms + 3], &moments, m) * i;
+        let w220 = seidel_taylor_sum(&p220[..terms + 1], &moments, m) * i;
+        (value, [w040, w220])
+    }
+
+    /// The moments `M_j = ∫ y^j exp(−A y²) e^K dx` (`y = x − m`), `j < count` (≤
+    /// [`SEIDEL_TERMS`]), as [`lane_moments`](Self::lane_moments) computes them (the same
+    /// endpoints, bounded forms and recurrence), and `m`; `None` where the integral is empty.
+    fn seidel_moments(
+        &self,
+        f: &AtFrequency,
+        phi0: f64,
+        phi1: f64,
+        cut_x: f64,
+        count: usize,
+    ) -> Option<([Complex64; SEIDEL_TERMS], Complex64)> {
+        let zero = Complex64::new(0.0, 0.0);
+        let upper = (cut_x < f.tail).then_some(cut_x);
+        let lower = self.lower_at(f.tail);
+        match (upper, lower) {
+            (Some(u), _) if u < -f.tail => return None,
+            (Some(u), Some(l)) if u <= l => return None,
+            _ => {}
+        }
+        let m = Complex64::new(0.0, phi1) * f.inv_2a;
+        let k = Complex64::new(0.0, phi0) + f.a * m * m;
+        let exp_k = || {
+            let (sin, cos) = cis::sin_cos(k.im);
+            Complex64::new(cos, sin) * expo::exp(k.re)
+        };
+        let mut moments = [zero; SEIDEL_TERMS];
+        if upper.is_none() && lower.is_none() {
+            moments[0] = exp_k() * f.root_pi_over_root_a;
+            for j in 2..count {
+                moments[j] = moments[j - 2] * (j - 1) as f64 * f.inv_2a;
+            }
+            return Some((moments, m));
+        }
+        let e_hi = upper.map(|x| Complex64::new(expo::exp(-0.5 * x * x), 0.0));
+        let e_lo = lower.map(|x| {
+            let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
+            Complex64::new(cos, sin) * expo::exp(-0.5 * x * x)
+        });
+        let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> (f64, Complex64) {
+            match (x, e) {
+                (Some(x), Some(e)) => {
+                    let z = f.sqrt_a * (x - m);
+                    if z.re >= 0.0 { (1.0, -e * f.erfcx.eval(z)) } else { (-1.0, e * f.erfcx.eval(-z)) }
+                }
+                _ => (at_infinity, zero),
+            }
+        };
+        let (sign_hi, rest_hi) = erf_term(upper, e_hi, 1.0);
+        let (sign_lo, rest_lo) = erf_term(lower, e_lo, -1.0);
+        let mut difference = rest_hi - rest_lo;
+        if sign_hi != sign_lo {
+            difference += exp_k() * (sign_hi - sign_lo);
+        }
+        moments[0] = difference * (0.5 * f.root_pi_over_root_a);
+        let (y_lo, y_hi) = (lower.map(|x| x - m), upper.map(|x| x - m));
+        let (mut p_lo, mut p_hi) = (Complex64::new(1.0, 0.0), Complex64::new(1.0, 0.0));
+        for j in 1..count {
+            let mut boundary = zero;
+            if let (Some(e), Some(y)) = (e_lo, y_lo) {
+                boundary += p_lo * e;
+                p_lo *= y;
+            }
+            if let (Some(e), Some(y)) = (e_hi, y_hi) {
+                boundary -= p_hi * e;
+                p_hi *= y;
+            }
+            let previous = if j >= 2 { moments[j - 2] * (j - 1) as f64 } else { zero };
+            moments[j] = (previous + boundary) * f.inv_2a;
+        }
+        Some((moments, m))
+    }
+}
+
+/// [`taylor_sum`] over [`SEIDEL_TERMS`] moments.
+fn seidel_taylor_sum(coefficients: &[f64], moments: &[Complex64; SEIDEL_TERMS], m: Complex64) -> Complex64 {
+    let zero = Complex64::new(0.0, 0.0);
+    let terms = coefficients.len();
+    let mut r = [zero; SEIDEL_TERMS];
+    for (slot, &v) in r.iter_mut().zip(coefficients) {
+        *slot = Complex64::new(v, 0.0);
+    }
+    let mut total = zero;
+    for (j, moment) in moments.iter().enumerate().take(terms) {
+        let mut acc = zero;
+        for v in r[..terms - j].iter_mut().rev() {
+            let t = *v + acc * m;
+            *v = acc;
+            acc = t;
+        }
+        total += acc * moment;
+    }
+    total
+}
+
+/// [`nested_lanes`] with `N − 1` lanes beside the value: the levels, the bisections and the
+/// acceptance are the value's (lane 0) alone, every lane integrated with the level's weights.
+#[allow(clippy::too_many_arguments)]
+fn nested_lanes_n<const N: usize>(
+    f: &dyn Fn(f64) -> [f64; N],
+    a: f64,
+    b: f64,
+    ends: [Option<[f64; N]>; 2],
+    tolerance: f64,
+    resolved: f64,
+    evaluations: &mut usize,
+    error: &mut f64,
+) -> ([f64; N], [f64; N]) {
+    #[allow(clippy::too_many_arguments)]
+    fn piece<const N: usize>(
+        f: &dyn Fn(f64) -> [f64; N],
+        a: f64,
+        b: f64,
+        ends: [[f64; N]; 2],
+        tol: f64,
+        resolved: f64,
+        depth: u32,
+        evaluations: &mut usize,
+        accepted: &mut f64,
+    ) -> [f64; N] {
+        let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
+        let cosines = cosines();
+        let mut values = [0.0; 65];
+        let mut lanes = [[0.0; N]; 65];
+        let mut moves = [0.0; 6];
+        let mut previous = 0.0;
+        let mut integral = [0.0; N];
+        let mut estimate = f64::INFINITY;
+        let noise = ROUNDING_FLOOR * (b - a);
+        for (level, &points) in LEVELS.iter().enumerate() {
+            let n = points - 1;
+            let stride = 64 / n;
+            if level == 0 {
+                let middle = f(c);
+                lanes[..3].copy_from_slice(&[ends[1], middle, ends[0]]);
+                *evaluations += 1;
+            } else {
+                for k in (0..=n / 2).rev() {
+                    lanes[2 * k] = lanes[k];
+                }
+                for k in (1..n).step_by(2) {
+                    lanes[k] = f(c + h * cosines[k * stride]);
+                }
+                *evaluations += n / 2;
+            }
+            for (v, l) in values[..points].iter_mut().zip(&lanes[..points]) {
+                *v = l[0];
+            }
+            let weights = crate::poly::clenshaw_curtis(points);
+            let mut largest: f64 = 0.0;
+            integral = [0.0; N];
+            for (l, &w) in lanes[..points].iter().zip(weights) {
+                largest = largest.max(l[0].abs());
+                for (i, &x) in integral.iter_mut().zip(l) {
+                    *i += w * x;
+                }
+            }
+            integral = integral.map(|x| x * h);
+            if level > 0 {
+                let moved = (integral[0] - previous).abs();
+                moves[level - 1] = moved;
+                if level >= 2 {
+                    estimate = if points as f64 >= resolved {
+                        let ratio = |k: usize| {
+                            if k >= 1 && moves[k - 1] > 0.0 { (moves[k] / moves[k - 1]).min(1.0) } else { 1.0 }
+                        };
+                        let by_moves = moved * ratio(level - 1).max(ratio(level - 2));
+                        if by_moves > tol.max(noise) && moved <= COEFFICIENT_CONSISTENCY * tol {
+                            by_moves.min(h * chebyshev_tail(&values[..points]))
+                        } else {
+                            by_moves
+                        }
+                    } else {
+                        moves[level - 2].max(moved)
+                    };
+                    if estimate <= tol.max(noise) || moved <= 50.0 * f64::EPSILON * largest * (b - a) {
+                        *accepted += estimate;
+                        return integral;
+                    }
+                }
+            }
+            previous = integral[0];
+        }
+        if depth >= MAX_DEPTH {
+            *accepted += estimate;
+            return integral;
+        }
+        let middle = lanes[32];
+        let left = piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
+        let right = piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
+        let mut sum = left;
+        sum.iter_mut().zip(right).for_each(|(s, r)| *s += r);
+        sum
+    }
+    let mut end = |known: Option<[f64; N]>, t: f64| {
+        known.unwrap_or_else(|| {
+            *evaluations += 1;
+            f(t)
+        })
+    };
+    let ends = [end(ends[0], a), end(ends[1], b)];
+    if b <= a {
+        return ([0.0; N], ends[0]);
+    }
+    (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1360,6 +1687,62 @@ mod tests {
             den += p;
         }
         num / den
+    }
+
+    /// The Seidel lanes at zero ([`GaussianDefocus::otf_and_seidel_lanes`]) against a reference
+    /// written here from the definition `∂O/∂W = (1/(πW)) ∫dλ ρ(λ) ∫∫ Re{i k [D(p₊) − D(p₋)]
+    /// e^{ik W020(λ) [ρ²(p₊) − ρ²(p₋)]}} dA` over the two pupils' overlap (`p± = (x ± s, y)`,
+    /// `D` = ρ⁴ or ρ²): composite Gauss–Legendre in λ over μ ± 8σ, in the pupil angle `t` of
+    /// `|x| + s = cos t` on both halves `±x` separately, and in `y` across the overlap
+    /// (4 points: the integrand is a quadratic in `y`), the powers of `ρ±` taken from the points
+    /// themselves, not the lanes' closed y integral, pairing of ±x or spectral moments. A 10 nm
+    /// σ with half a wave of defocus a σ from focus and 0.1 µm off focus at the centre; within
+    /// 1e-9 of the lane's bound `k_max` (the lane per metre is at most `2π/λ_min` times the OTF).
+    #[test]
+    fn seidel_lanes_match_a_quadrature_over_the_overlap() {
+        let (mu, sigma, f_number) = (800e-9, 10e-9, 2.5);
+        let w1 = 0.5 * mu / sigma;
+        let w0 = -w1 * mu + 0.1e-6;
+        let g = GaussianDefocus::new(mu, sigma, &[1.0], 1.0, w0, w1, f_number);
+        for s_mu in [0.1, 0.3, 0.6] {
+            let nu = s_mu / (mu * f_number);
+            let (value, lanes, _, _) = g.otf_and_seidel_lanes(nu, 1e-12).unwrap();
+            let (mut o, mut d040, mut d220, mut total) = (0.0, 0.0, 0.0, 0.0);
+            quad::for_each_node(mu - 8.0 * sigma, mu + 8.0 * sigma, 64, |lambda, q| {
+                let rho = q * (-0.5 * ((lambda - mu) / sigma).powi(2)).exp();
+                total += rho;
+                let (k, s, w020) = (2.0 * PI / lambda, nu * f_number * lambda, w0 + w1 * lambda);
+                if s >= 1.0 {
+                    return;
+                }
+                quad::for_each_node(0.0, s.acos(), 64, |t, qt| {
+                    let (sin_t, cos_t) = t.sin_cos();
+                    for x in [cos_t - s, s - cos_t] {
+                        // dx = sin t dt on either half
+                        quad::for_each_node(-sin_t, sin_t, 1, |y, qy| {
+                            let (r_plus, r_minus) = ((x + s).powi(2) + y * y, (x - s).powi(2) + y * y);
+                            let phase = k * w020 * (r_plus - r_minus);
+                            let (sin_p, cos_p) = phase.sin_cos();
+                            let weight = rho * qt * sin_t * qy / PI;
+                            o += weight * cos_p;
+                            // Re{i k ΔD e^{iφ}} = −k ΔD sin φ
+                            d040 -= weight * k * (r_plus * r_plus - r_minus * r_minus) * sin_p;
+                            d220 -= weight * k * (r_plus - r_minus) * sin_p;
+                        });
+                    }
+                });
+            });
+            let (o, d040, d220) = (o / total, d040 / total, d220 / total);
+            let bound = 2.0 * PI / (mu - 8.0 * sigma);
+            println!(
+                "s = {s_mu}: OTF {value:.12e} vs {o:.12e}; ∂/∂W040 {:.12e} vs {d040:.12e}; ∂/∂W220 {:.12e} vs {d220:.12e}",
+                lanes[0], lanes[1]
+            );
+            assert!((value - o).abs() <= 1e-10, "{value} vs {o}");
+            assert!((lanes[0] - d040).abs() <= 1e-9 * bound, "{} vs {d040}", lanes[0]);
+            assert!((lanes[1] - d220).abs() <= 1e-9 * bound, "{} vs {d220}", lanes[1]);
+            assert!(d040.abs() > 1e-3 * bound && d220.abs() > 1e-3 * bound, "a test that can fail: {d040} {d220}");
+        }
     }
 
     /// The defocus lane ([`GaussianDefocus::otf_and_log_derivative`]) against two references

@@ -45,6 +45,9 @@ impl Hasher for BitsHasher {
     }
 }
 
+/// An OTF value, its Seidel lanes at zero and its estimated error ([`Closed::seidel_values`]).
+pub(super) type SeidelValue = (f64, [f64; 2], f64);
+
 /// The closed-form engine and its counters.
 #[derive(Debug)]
 pub(super) struct Closed {
@@ -63,6 +66,10 @@ pub(super) struct Closed {
     /// than it assumed) asks most of its frequencies again, and a value whose rule's own estimate
     /// is within the new tolerance is kept (see `otf`).
     pub values: RefCell<HashMap<u64, (f64, f64), BuildHasherDefault<BitsHasher>>>,
+    /// The OTF values with their Seidel lanes at zero ([`GaussianDefocus::otf_and_seidel_lanes`])
+    /// and their estimated errors, by the bits of ν, kept as [`values`](Self::values) are: a
+    /// mean redone to a tighter tolerance reads a lane whose value's estimate meets it.
+    pub seidel_values: RefCell<HashMap<u64, SeidelValue, BuildHasherDefault<BitsHasher>>>,
 }
 
 impl Closed {
@@ -117,6 +124,7 @@ impl Closed {
             evaluations: Cell::new(0),
             // (room for the 52 values of the map's broadest bands without growing)
             values: RefCell::new(HashMap::with_capacity_and_hasher(64, BuildHasherDefault::default())),
+            seidel_values: RefCell::new(HashMap::default()),
         }
     }
 }
@@ -174,6 +182,31 @@ impl OtfEngine for Closed {
             self.closed.otf_and_log_derivative(frequency, self.otf_tolerance.get());
         self.evaluations.set(self.evaluations.get() + evaluations);
         Some((value, derivative))
+    }
+
+    /// The closed form's Seidel lanes at zero ([`GaussianDefocus::otf_and_seidel_lanes`]): the
+    /// same pieces, levels and acceptance as the value, at the value's tolerance; its
+    /// evaluations of E(c) count towards the budget.
+    fn otf_and_seidel_lanes(&self, frequency: f64, lanes: &mut [f64; 2]) -> Option<f64> {
+        *lanes = [0.0; 2];
+        if frequency == 0.0 {
+            return Some(1.0);
+        }
+        if self.evaluations.get() > CLOSED_FORM_BUDGET {
+            return Some(0.0);
+        }
+        let tolerance = self.otf_tolerance.get();
+        if let Some(&(value, found, error)) = self.seidel_values.borrow().get(&frequency.to_bits())
+            && error <= crate::closed::ESTIMATE_SAFETY * tolerance
+        {
+            *lanes = found;
+            return Some(value);
+        }
+        let (value, found, evaluations, error) = self.closed.otf_and_seidel_lanes(frequency, tolerance)?;
+        self.evaluations.set(self.evaluations.get() + evaluations);
+        self.seidel_values.borrow_mut().insert(frequency.to_bits(), (value, found, error));
+        *lanes = found;
+        Some(value)
     }
 
     fn over_budget(&self) -> Option<String> {

@@ -90,6 +90,9 @@ pub(super) struct Recording {
     /// the parameters of the lens's order derivatives the engine differentiates along
     /// ([`Polychromatic::mean_mtf_and_field_gradient`]); empty for the other lanes
     fields: Vec<usize>,
+    /// the Seidel lanes at zero ([`Polychromatic::mean_mtf_and_seidel_lanes`]) instead of the
+    /// Binary 2 lanes
+    seidel: bool,
     /// each node's `[α_o, γ_o]` of the order lane ([`Polychromatic::mean_mtf_and_order_lane`]);
     /// `None` for the defocus lane `∂O/∂ln K` and the other lanes
     rates: Option<Vec<[f64; 2]>>,
@@ -165,6 +168,31 @@ impl Polychromatic<'_> {
         }
         let lanes = parameters.len();
         self.recorded_mean_and_gradient(Recording { lanes, fields: parameters.to_vec(), ..Recording::default() })
+    }
+
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)) and, in the same pass, its derivatives per
+    /// metre along a spherical aberration `W040 ρ⁴` and a constant defocus `W220 ρ²` at zero
+    /// (docs/physics.md, "Gradients: Seidel terms at zero"):
+    ///
+    /// ```text
+    /// ∂M̄/∂W = (1/ν_max) ∫ P(ν) sign(O(ν)) ∂O(ν)/∂W dν
+    /// ```
+    ///
+    /// each `∂O` beside its OTF value from the engine's own rule (the closed form's, on its
+    /// pieces in the pupil angle), integrated with the frequency rule's accepted weights (split
+    /// at the OTF's sign changes, `P` included). `None` where the engine gives no such lanes
+    /// (every engine but the closed form), off axis, or where the OTF depends on direction.
+    pub fn mean_mtf_and_seidel_lanes(&self) -> Option<(f64, [f64; 2], Work)> {
+        if !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || self.engine.engine() != Engine::ClosedForm
+        {
+            return None;
+        }
+        let (mean, lanes, work) =
+            self.recorded_mean_and_gradient(Recording { lanes: 2, seidel: true, ..Recording::default() })?;
+        Some((mean, [lanes[0], lanes[1]], work))
     }
 
     /// The mean MTF with `recording` set, and the recorded lanes integrated with the frequency
@@ -282,10 +310,16 @@ impl Polychromatic<'_> {
 
     /// The OTF at `nu` with its derivatives kept in the recording.
     fn recorded_otf(&self, nu: f64) -> f64 {
-        let (lanes, fields) = self.gradient.borrow().as_ref().map_or((0, Vec::new()), |r| (r.lanes, r.fields.clone()));
+        let (lanes, fields, seidel) =
+            self.gradient.borrow().as_ref().map_or((0, Vec::new(), false), |r| (r.lanes, r.fields.clone(), r.seidel));
         let mut derivatives = vec![0.0; lanes];
         let value = if nu == 0.0 {
             Some(1.0)
+        } else if seidel {
+            let mut two = [0.0; 2];
+            let value = self.engine.otf_and_seidel_lanes(nu, &mut two);
+            derivatives.copy_from_slice(&two);
+            value
         } else if fields.is_empty() {
             self.engine.otf_and_gradient(nu, &mut derivatives)
         } else {

@@ -372,6 +372,14 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_field_gradient(&self, _frequency: f64, _parameters: &[usize], _gradient: &mut [f64]) -> Option<f64> {
         None
     }
+    /// The signed OTF at `frequency` and into `lanes` its derivatives per metre along a
+    /// spherical aberration `W040 ρ⁴` and a constant defocus `W220 ρ²` (field curvature) at
+    /// zero, where every order carries a defocus alone (docs/physics.md, "Gradients: Seidel
+    /// terms at zero"), on the value's own rule; `None` where the engine does not give them
+    /// (the default).
+    fn otf_and_seidel_lanes(&self, _frequency: f64, _lanes: &mut [f64; 2]) -> Option<f64> {
+        None
+    }
     /// The sampling plan whose coarse level the engine also holds (the FFT engine when the
     /// tolerance chose its sampling): the frequency rule then extrapolates the two means.
     fn richardson(&self) -> Option<crate::fft::SamplingPlan> {

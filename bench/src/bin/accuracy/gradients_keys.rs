@@ -3,9 +3,9 @@
 //! F-number and focal length beside Seidel terms on axis (the overlap engine's defocus lane),
 //! the Gaussian band's centre and range where the OTF depends on direction (the overlap engine,
 //! the FFT path of a phase map, lateral colour off axis, a decentred iris), a blackbody's
-//! temperature over a band, the Seidel terms at zero (the overlap quadrature beside the
-//! value's 1-D engine), and the obscuration above 0 (the annulus's inner edge moving on the FFT
-//! path). In one process (`metric::evaluate` against `metric::gradient`, the scene
+//! temperature over a band, the Seidel terms at zero (the closed form's lanes along ρ⁴ and
+//! ρ² on its own rule, a pass beside the value's), and the obscuration above 0 (the annulus's
+//! inner edge moving on the FFT path). In one process (`metric::evaluate` against `metric::gradient`, the scene
 //! built inside each timing, alternately, medians: `gradients::side_by_side`) and, where the
 //! work is short beside the process's start, whole process (`asnr evaluate` against `asnr
 //! gradient`, alternately, medians).
@@ -154,11 +154,12 @@ fn cases(root: &Path, dir: &Path) -> Vec<Case> {
         overrides: owned(&["lens.obscuration=0.3"]),
         keys: &["lens.obscuration"],
         parameters: vec![Parameter::Obscuration],
-        slow: false,
-        whole_process: true,
+        // about 2 s a value on the FFT path: three runs, no whole-process row
+        slow: true,
+        whole_process: false,
     });
     cases.push(Case {
-        name: "Seidel terms at zero (overlap quadrature beside the 1-D value)",
+        name: "Seidel terms at zero (the closed form's lanes)",
         scene: paper,
         overrides: vec![],
         keys: SEIDEL,
@@ -246,9 +247,10 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
          defocus lane `W020 ρ²` on the value's nodes, docs/physics.md \"Gradients: the F-number and the focal length \
          with Seidel terms\"), the Gaussian band's centre and range where the OTF depends on direction (\"Gradients: \
          the spectrum where the OTF depends on direction\"), a 3000 K blackbody's temperature over the paper's band, \
-         and the Seidel terms at zero on the paper's lens (the overlap quadrature with the terms at zero, the value \
-         on its 1-D engine). In one process: {profile}, the scene built inside each timing, medians (and fastest) of \
-         {repeats} alternate runs after one of each (3 for the phase map), load average {load} at the start.\n\n| \
+         and the Seidel terms at zero on the paper's lens (the closed form's lanes along ρ⁴ and ρ² on its own rule, \
+         \"Gradients: Seidel terms at zero\"), and an obscuration of 0.3 (the annulus's inner edge moving on the FFT \
+         path, \"Gradients: the edge's motion on the FFT path\"). In one process: {profile}, the scene built inside each timing, medians (and fastest) of \
+         {repeats} alternate runs after one of each (3 for the phase map and the obscuration), load average {load} at the start.\n\n| \
          case | keys | ASNR | value, median (fastest) | value and gradient, median (fastest) | ratio of medians | \
          ratio of fastest |\n|---|---|---|---|---|---|---|\n"
     );
