@@ -1118,11 +1118,12 @@ fn gaussians(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Gaussi
 ///   Gauss–Legendre panels split at the sign changes of `O` (the kink of `|O|`), doubled until
 ///   the two derivatives move by at most the tolerance times their size.
 ///
-/// Where the OTF depends on direction (lateral colour, a decentred iris, the overlap engine, the
-/// FFT path, a PSF stack's complex slices), the same combinations of the complex OTFs along each
-/// direction ([`optics::Polychromatic::otf_along`]), `∂|O| = Re(O* ∂O)/|O|`
-/// ([`modulus_derivative`]), on the value's rule over directions ([`DirectionalRule`]); on the
-/// FFT path the engines at the value's sampling levels ([`spectral_engines`]).
+/// Where the OTF depends on direction on the exact 1-D engine (lateral colour, a decentred iris,
+/// a PSF stack's complex slices) or the overlap engine, the lanes on the value's own nodes and
+/// rules ([`spectral_lanes_on_value_rule`]); on the FFT path, the same combinations of the
+/// complex OTFs along each direction ([`optics::Polychromatic::otf_along`]),
+/// `∂|O| = Re(O* ∂O)/|O|` ([`modulus_derivative`]), on the value's rule over directions
+/// ([`DirectionalRule`]), the engines at the value's sampling levels ([`spectral_engines`]).
 fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<SpectralPartials, Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
