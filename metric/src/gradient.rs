@@ -1265,8 +1265,12 @@ type BandPartials = ((f64, f64), (f64, f64));
 const LANE_GRADIENT_SHARE: f64 = 0.1;
 
 fn spectral_lanes_on_value_rule(scene: &Scene, e: &Evaluation, c: f64, sigma: f64) -> Option<BandPartials> {
+    // the overlap engine, the exact engine's complex sums (lateral colour, an iris's tilt), or
+    // its tables whose tangential and sagittal curves differ (a direction-independent OTF has
+    // the two means equal to the mean): no engine built for an OTF the lanes do not serve
     let engine = &e.numerics.engine;
-    if !(engine.starts_with("overlap") || engine.starts_with("exact-1d")) {
+    let directional_table = engine == "exact-1d" && e.mean_mtf_tangential != e.mean_mtf_sagittal;
+    if !(engine.starts_with("overlap") || engine.starts_with("exact-1d, complex") || directional_table) {
         return None;
     }
     let lens = scene.lens();
