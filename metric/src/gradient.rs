@@ -1139,11 +1139,12 @@ fn gaussians(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Gaussi
 ///   Gauss–Legendre panels split at the sign changes of `O` (the kink of `|O|`), doubled until
 ///   the two derivatives move by at most the tolerance times their size.
 ///
-/// Where the OTF depends on direction (lateral colour, a decentred iris, the overlap engine, the
-/// FFT path, a PSF stack's complex slices), the same combinations of the complex OTFs along each
-/// direction ([`optics::Polychromatic::otf_along`]), `∂|O| = Re(O* ∂O)/|O|`
-/// ([`modulus_derivative`]), on the value's rule over directions ([`DirectionalRule`]); on the
-/// FFT path the engines at the value's sampling levels ([`spectral_engines`]).
+/// Where the OTF depends on direction on the exact 1-D engine (lateral colour, a decentred iris,
+/// a PSF stack's complex slices) or the overlap engine, the lanes on the value's own nodes and
+/// rules ([`spectral_lanes_on_value_rule`]); on the FFT path, the same combinations of the
+/// complex OTFs along each direction ([`optics::Polychromatic::otf_along`]),
+/// `∂|O| = Re(O* ∂O)/|O|` ([`modulus_derivative`]), on the value's rule over directions
+/// ([`DirectionalRule`]), the engines at the value's sampling levels ([`spectral_engines`]).
 fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<SpectralPartials, Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
@@ -1165,6 +1166,10 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         )));
     };
     let (c, sigma) = (g.center(), g.sigma());
+    let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
+    if let Some(((d_ln_n_c, dc), (d_ln_n_s, ds))) = spectral_lanes_on_value_rule(scene, e, c, sigma) {
+        return Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) });
+    }
     let lens = scene.lens();
     let field = scene.field();
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
@@ -1190,7 +1195,6 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     let d_ln_n_c = engines[0].spectral_average(|l, _| (l - c) / (sigma * sigma));
     let d_ln_n_s = engines[0].spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
     if engines[0].direction_dependent() {
         // the complex OTFs of ρ, ρλ, ρλ² along each direction, ∂O/∂c and ∂O/∂σ the same
         // combinations as below, ∂|O| = Re(O* ∂O)/|O|, on the value's rule over directions;
@@ -1240,6 +1244,105 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         },
     );
     Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) })
+}
+
+/// `((∂ln N/∂c, ∂M̄/∂c), (∂ln N/∂σ, ∂M̄/∂σ))` of a Gaussian band `G = p exp(−(λ − c)²/(2σ²))`
+/// where the OTF depends on direction and the value's engine is the exact 1-D one (lateral
+/// colour, a decentred iris, a PSF stack's planes) or the overlap engine (docs/physics.md,
+/// "Gradients: the spectrum where the OTF depends on direction"): the lanes on the value's own
+/// spectral nodes and its own rules over ν and azimuth, `None` elsewhere (the FFT path, an OTF
+/// that does not depend on direction: the caller's engines of ρ, ρλ, ρλ²).
+///
+/// `∂ln G/∂c = (λ − c)/σ²` and `∂ln G/∂σ = (λ − c)²/σ³` move each node's weight `w` (its
+/// moment of `ρ τ`) by these factors, so with `u = λ − λ̄` about the nodes' mean `λ̄`
+/// (`d = λ̄ − c`) and the engine's lanes `L₁ = Σ w u O_λ / Σ w`, `L₂ = Σ w (u² − ⟨u²⟩) O_λ / Σ w`
+/// ([`optics::WavefrontDirection::SpectralMoment`]; each complex, the lateral colour's phase
+/// included):
+///
+/// ```text
+/// ∂O/∂c = L₁/σ²,   ∂O/∂σ = (L₂ + 2 d L₁)/σ³,   ∂|O| = Re(O* ∂O)/|O|
+/// ```
+///
+/// (the normalization's term `−O ⟨∂ln G⟩` is in the centring: `Σ w u = 0`); no differences of
+/// nearly equal OTFs, so nothing to tighten for cancellation. The lanes ride on the value's
+/// pass: the tangential and sagittal means of the exact engine
+/// ([`optics::Polychromatic::mean_mtf_along_and_gradient`]) or the nested rule over azimuth
+/// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_overlap_gradient`]), each with the
+/// frequency rule's accepted nodes and weights. The spectral error: the lanes interpolate
+/// `g(λ) O_λ` (`g` of degree ≤ 2) on the value's nodes, whose nested estimate holds `O_λ`'s
+/// interpolation to the spectral share of the tolerance; a derivative per relative change of
+/// `c` is `(c/σ) L₁/σ`, which carries that error times `c/σ` (the band's relative narrowness),
+/// so the spectral rule is taken at `q` times the tolerance, `q = |∇| / ((c/σ) M̄)` with `|∇|`
+/// the gradient per relative change of `c` and `σ`: first at `q = 0.1 σ/c`
+/// ([`LANE_GRADIENT_SHARE`]: a gradient of at least a tenth of `M̄`), and where the gradient
+/// found is smaller, again at its own `q` (at least `10⁻³ σ/c`); the other rules (frequency,
+/// azimuth, the overlap quadrature) as the value's.
+type BandPartials = ((f64, f64), (f64, f64));
+
+/// The least size of the band's gradient per relative change of `c` and `σ`, relative to the
+/// mean MTF, that the spectral lanes' first pass assumes ([`spectral_lanes_on_value_rule`]):
+/// its spectral rule at this share of the tolerance over `c/σ`; a gradient found smaller takes
+/// a second pass at its own ratio.
+const LANE_GRADIENT_SHARE: f64 = 0.1;
+
+fn spectral_lanes_on_value_rule(scene: &Scene, e: &Evaluation, c: f64, sigma: f64) -> Option<BandPartials> {
+    // the overlap engine, the exact engine's complex sums (lateral colour, an iris's tilt), or
+    // its tables whose tangential and sagittal curves differ (a direction-independent OTF has
+    // the two means equal to the mean): no engine built for an OTF the lanes do not serve
+    let engine = &e.numerics.engine;
+    let directional_table = engine == "exact-1d" && e.mean_mtf_tangential != e.mean_mtf_sagittal;
+    if !(engine.starts_with("overlap") || engine.starts_with("exact-1d, complex") || directional_table) {
+        return None;
+    }
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let first = field.y_rad.atan2(field.x_rad);
+    let directions = [optics::WavefrontDirection::SpectralMoment(1), optics::WavefrontDirection::SpectralMoment(2)];
+    // (∂ln N/∂c, ∂M̄/∂c, ∂ln N/∂σ, ∂M̄/∂σ) on the engine of `settings`
+    let pass = |settings: optics::Settings| -> Option<[f64; 4]> {
+        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
+        if !poly.direction_dependent()
+            || !matches!(poly.engine(), optics::Engine::Exact1d | optics::Engine::Overlap { .. })
+        {
+            return None;
+        }
+        let lanes = if poly.has_pupil_grid() {
+            poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1
+        } else {
+            let (_, _, t) = poly.mean_mtf_along_and_gradient(first, &directions)?;
+            let (_, _, s) = poly.mean_mtf_along_and_gradient(first + 0.5 * std::f64::consts::PI, &directions)?;
+            vec![0.5 * (t[0] + s[0]), 0.5 * (t[1] + s[1])]
+        };
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        let (mean, _) = poly.node_wavelength_moments();
+        let d = mean - c;
+        let d_ln_n_c = poly.spectral_average(|l, _| (l - c) / (sigma * sigma));
+        let d_ln_n_s = poly.spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
+        Some([d_ln_n_c, lanes[0] / (sigma * sigma), d_ln_n_s, (lanes[1] + 2.0 * d * lanes[0]) / sigma.powi(3)])
+    };
+    // the spectral rule at `share` times the engine's tolerance (the scene's, or the overlap
+    // engine's `fft_tolerance`)
+    let tolerance = e.numerics.tolerance;
+    let at = |share: f64| optics::Settings { spectral_tolerance: Some((share * tolerance).max(1e-14)), ..settings };
+    let narrowness = c / sigma;
+    let share = LANE_GRADIENT_SHARE / narrowness;
+    let [nc, dc, ns, ds] = pass(at(share))?;
+    // q: the gradient per relative change of c and σ against (c/σ) M̄
+    let q = (c * dc).hypot(sigma * ds) / (narrowness * e.mean_mtf.abs().max(f64::MIN_POSITIVE));
+    if q < share {
+        let [nc, dc, ns, ds] = pass(at(q.max(1e-3 / narrowness)))?;
+        return Some(((nc, dc), (ns, ds)));
+    }
+    Some(((nc, dc), (ns, ds)))
 }
 
 /// The engines of the spectra `spectra` (ρ, ρλ, ρλ²) with `settings`, as sampling levels with

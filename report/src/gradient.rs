@@ -1349,6 +1349,33 @@ mod tests {
         );
     }
 
+    /// A broad band (200 nm, σ = 70.7 nm: the lanes' weights `(λ − c)/σ²` and `(λ − c)²/σ³`
+    /// reach ±7σ = ±495 nm, where the band's product-integration nodes must resolve them) with
+    /// lateral colour at 5° (the exact 1-D engine's tangential and sagittal means) and through
+    /// the decentred iris, at the scene's 1e-6 against differences converged at 1e-10, within 10×
+    /// the tolerance of the gradient's norm (docs/physics.md, "Gradients: the spectrum where the
+    /// OTF depends on direction").
+    #[test]
+    fn spectral_keys_of_a_broad_band_with_lateral_colour_and_an_iris_match_central_differences() {
+        let keys = ["spectrum.center_nm", "spectrum.range_nm"];
+        let converged = ["options.tolerance=1e-10"];
+        for (source, overrides) in [
+            (scene::read(None).unwrap(), &["field.x_deg=5", "spectrum.range_nm=200"][..]),
+            (example("decentred-iris.toml"), &["spectrum.range_nm=200"][..]),
+        ] {
+            let e = metric::evaluate(&scene::build_from(&source, &owned(overrides)).unwrap()).unwrap();
+            assert!(e.numerics.engine.starts_with("exact-1d"), "{}", e.numerics.engine);
+            check_directional_spectrum(
+                &source,
+                overrides,
+                &keys,
+                (None, 1e-6),
+                &converged,
+                &spectral_step(200.0, true),
+            );
+        }
+    }
+
     /// The overlap engine (a Seidel coma of 0.3 µm on the paper's lens: the mean over azimuth of
     /// the overlap quadrature's complex OTF; a 4 nm band so that the references at 1e-10 take
     /// seconds), asked at 1e-6; and a PSF stack (examples/psf-stack.toml: each slice's OTF with

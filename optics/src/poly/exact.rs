@@ -78,8 +78,11 @@ pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azim
 /// `i k u_a ∂Δ_a/∂d_a` with `∂Δ_a/∂d_a = 2 W020/NA` (a decentre) times itself; the defocus lane
 /// (`W020` scaled by `1 + ε`, `s` fixed) is `w ∂D/∂w` of the node's defocused OTF turned by its
 /// phase, plus `i k u·Δ_iris` times the turned value (the iris's tilt scales with `W020`; a
-/// lateral colour's shift does not). `None` for another direction, a field angle on a node
-/// without its shift's rates, or the defocus lane on a node that is not a defocused circle.
+/// lateral colour's shift does not). The spectral moments
+/// ([`WavefrontDirection::SpectralMoment`]) re-weight each node's turned value by `u = λ − λ̄`
+/// or `u² − ⟨u²⟩` ([`Nodes::wavelength_moments`](super::spectral::Nodes::wavelength_moments)).
+/// `None` for another direction, a field angle on a node without its shift's rates, or the
+/// defocus lane on a node that is not a defocused circle.
 pub(super) fn exact_along_and_field_gradient(
     scene: &Scene<'_>,
     nodes: &Nodes,
@@ -88,7 +91,8 @@ pub(super) fn exact_along_and_field_gradient(
     directions: &[WavefrontDirection],
     gradient: &mut [Complex64],
 ) -> Option<Complex64> {
-    // 0, 1: the field angles; 2: the azimuth; 3, 4: the iris's decentre; 5: the defocus
+    // 0, 1: the field angles; 2: the azimuth; 3, 4: the iris's decentre; 5: the defocus; 6, 7:
+    // the spectral moments
     let axes: Vec<usize> = directions
         .iter()
         .map(|d| match d {
@@ -96,9 +100,11 @@ pub(super) fn exact_along_and_field_gradient(
             WavefrontDirection::Azimuth => Some(2),
             WavefrontDirection::IrisDecentre(a) if *a < 2 => Some(3 + *a),
             WavefrontDirection::Defocus => Some(5),
+            WavefrontDirection::SpectralMoment(k) if (1..=2).contains(k) => Some(5 + *k),
             _ => None,
         })
         .collect::<Option<_>>()?;
+    let (mean, variance) = if axes.iter().any(|&a| a > 5) { nodes.wavelength_moments() } else { (0.0, 0.0) };
     let fields = axes.iter().any(|&a| a < 2);
     let defocus = axes.contains(&5);
     gradient.iter_mut().for_each(|g| *g = Complex64::new(0.0, 0.0));
@@ -129,6 +135,7 @@ pub(super) fn exact_along_and_field_gradient(
             Complex64::new(0.0, 0.0)
         };
         let [ix, iy] = n.iris_shift;
+        let u = n.lambda - mean;
         for (g, &axis) in gradient.iter_mut().zip(&axes) {
             let rate = match axis {
                 0 => k * rx * cos_a,
@@ -136,9 +143,17 @@ pub(super) fn exact_along_and_field_gradient(
                 2 => k * (dy * cos_a - dx * sin_a),
                 3 => k * n.iris_rate * cos_a,
                 4 => k * n.iris_rate * sin_a,
-                _ => {
+                5 => {
                     *g += lane;
                     k * (ix * cos_a + iy * sin_a)
+                }
+                6 => {
+                    *g += turned * u;
+                    continue;
+                }
+                _ => {
+                    *g += turned * (u * u - variance);
+                    continue;
                 }
             };
             *g += Complex64::new(0.0, rate) * turned;
@@ -175,7 +190,8 @@ impl OtfEngine for Quadrature<'_> {
         exact_along(&self.scene, &self.nodes, frequency, azimuth)
     }
 
-    /// The field angles', the iris decentre's and the defocus's lanes ([`exact_along_and_field_gradient`]).
+    /// The field angles', the iris decentre's, the defocus's and the spectral moments' lanes
+    /// ([`exact_along_and_field_gradient`]).
     fn otf_along_and_gradient(
         &self,
         frequency: f64,

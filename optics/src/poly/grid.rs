@@ -788,6 +788,16 @@ pub enum WavefrontDirection {
     /// `∂P = ∂A · P/A` at each edge pixel and the normalization `Σ A` moving by `Σ ∂A`;
     /// docs/physics.md, "Gradients: the edge's motion on the FFT path").
     Obscuration,
+    /// The spectral weight's moment `k` (1 or 2) about the nodes' mean wavelength
+    /// `λ̄ = Σ w λ / Σ w` (node weights `w`, the orders' efficiencies included): each spectral
+    /// node's value times `u = λ − λ̄` (`k = 1`, m) or `u² − ⟨u²⟩` (`k = 2`, m²,
+    /// `⟨u²⟩ = Σ w u² / Σ w`), summed and normalized as the value. A Gaussian band's centre and
+    /// width move the weights by these factors, `∂ln G/∂c = (λ − c)/σ²` and
+    /// `∂ln G/∂σ = (λ − c)²/σ³`, so their lanes are the value's own nodes re-weighted
+    /// (docs/physics.md, "Gradients: the spectrum where the OTF depends on direction"). The exact
+    /// 1-D and overlap engines carry it ([`Polychromatic::node_wavelength_moments`](super::Polychromatic::node_wavelength_moments)
+    /// gives `λ̄` and `⟨u²⟩`).
+    SpectralMoment(usize),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -935,6 +945,7 @@ impl FftPath {
                         | WavefrontDirection::Azimuth
                         | WavefrontDirection::IrisDecentre(_)
                         | WavefrontDirection::Obscuration
+                        | WavefrontDirection::SpectralMoment(_)
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);

@@ -898,6 +898,13 @@ impl<'a> Polychromatic<'a> {
         nodes.nodes.iter().map(|n| n.weight * f(n.lambda, n.w020)).sum::<f64>() / nodes.total_weight
     }
 
+    /// The spectral nodes' mean wavelength `λ̄` (m) and variance `⟨(λ − λ̄)²⟩` (m²), weights
+    /// `ρ τ` as [`spectral_average`](Self::spectral_average)'s: the centre about which the
+    /// [`WavefrontDirection::SpectralMoment`] lanes re-weight the nodes.
+    pub fn node_wavelength_moments(&self) -> (f64, f64) {
+        self.engine.nodes().wavelength_moments()
+    }
+
     /// Signed polychromatic OTF at `frequency` (cycles/m), normalized to 1 at zero frequency, of
     /// the rotationally symmetric system: image displacements are ignored (see
     /// [`otf_along`](Self::otf_along) for the complex OTF with lateral colour).

@@ -1192,7 +1192,11 @@ impl Overlap<'_> {
     /// Into `out_field`, the derivative with respect to each field angle of `axes` (0: x, 1: y;
     /// [`WavefrontDirection::FieldAngle`]): each node's turned value `v e^{ik Δ·u}` (k = −2πν,
     /// `u` the azimuth's unit vector) times `i k u_a ∂Δ_a/∂θ_a`, on the same nodes (every term
-    /// has its `shift_rate` where `axes` is not empty: [`OtfEngine::otf_along_and_gradient`]).
+    /// has its `shift_rate` where `axes` holds a field angle: [`OtfEngine::otf_along_and_gradient`]).
+    /// An axis `1 + k` (2, 3) is the spectral moment `k` ([`WavefrontDirection::SpectralMoment`]):
+    /// each node's turned value times `u = λ − λ̄` or `u² − ⟨u²⟩`, on the same nodes; without
+    /// wavefront lanes (`terms` empty) each node's value is [`term_otf`]'s, as
+    /// [`compute`](Self::compute) takes it.
     #[allow(clippy::too_many_arguments)]
     fn compute_with_derivatives(
         &self,
@@ -1214,6 +1218,7 @@ impl Overlap<'_> {
         let mut sum = Complex64::new(0.0, 0.0);
         let mut excess = 0.0;
         let mut node = vec![Complex64::new(0.0, 0.0); terms.len()];
+        let (mean, variance) = if axes.iter().any(|&a| a >= 2) { self.nodes.wavelength_moments() } else { (0.0, 0.0) };
         for (index, term) in self.terms.iter().enumerate() {
             let s = nuf * term.lambda;
             if s >= 1.0 {
@@ -1227,8 +1232,11 @@ impl Overlap<'_> {
                 excess += term.weight.abs() * 2.0 / total;
                 continue;
             };
-            let (v, error) =
-                term_otf_and_derivatives(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps, terms, &mut node);
+            let (v, error) = if terms.is_empty() {
+                term_otf(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps)
+            } else {
+                term_otf_and_derivatives(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps, terms, &mut node)
+            };
             // the conjugate, as in `compute` (the project's sign)
             let mut v = v.conj();
             let mut turn = Complex64::new(1.0, 0.0);
@@ -1247,11 +1255,16 @@ impl Overlap<'_> {
                 let scale = if matches!(lane, Lane::Defocus) { term.lens_defocus } else { 1.0 };
                 *o += d.conj() * turn * (term.weight * scale);
             }
-            if let Some([rx, ry]) = term.shift_rate {
-                // ∂(v e^{ik Δ·u})/∂θ_a = i k u_a (∂Δ_a/∂θ_a) v e^{ik Δ·u}
-                for (o, &axis) in out_field.iter_mut().zip(axes) {
-                    let rate = if axis == 0 { k * rx * c } else { k * ry * sn };
-                    *o += Complex64::new(0.0, rate) * v * term.weight;
+            let u = term.lambda - mean;
+            for (o, &axis) in out_field.iter_mut().zip(axes) {
+                match (axis, term.shift_rate) {
+                    // ∂(v e^{ik Δ·u})/∂θ_a = i k u_a (∂Δ_a/∂θ_a) v e^{ik Δ·u}
+                    (0, Some([rx, _])) => *o += Complex64::new(0.0, k * rx * c) * v * term.weight,
+                    (1, Some([_, ry])) => *o += Complex64::new(0.0, k * ry * sn) * v * term.weight,
+                    // the spectral moments: the node's weight times u or u² − ⟨u²⟩
+                    (2, _) => *o += v * (term.weight * u),
+                    (3, _) => *o += v * (term.weight * (u * u - variance)),
+                    _ => {}
                 }
             }
         }
@@ -1319,12 +1332,13 @@ impl OtfEngine for Overlap<'_> {
         true
     }
 
-    /// Seidel and Zernike directions and the field angles (where every node has its image
-    /// shift's rates); a pupil symmetric about x with images shifted along x reads a mirrored
+    /// Seidel and Zernike directions, the field angles (where every node has its image
+    /// shift's rates) and the spectral moments (each node's value re-weighted); a pupil symmetric about x with images shifted along x reads a mirrored
     /// azimuth's value and derivatives as the conjugates where every wavefront direction is even
     /// in y (the Seidel terms, Zernike cosine and `m = 0` terms: the derivative keeps the
     /// symmetry; so does the x field angle's, `u_x` changing sign with the conjugate's phase),
-    /// the y field angle's as the conjugates' negatives (`u_y` keeps its sign), as
+    /// the y field angle's as the conjugates' negatives (`u_y` keeps its sign), the spectral
+    /// moments' as the conjugates (real factors on the values), as
     /// [`otf_along`](Self::otf_along) does.
     fn otf_along_and_gradient(
         &self,
@@ -1343,23 +1357,26 @@ impl OtfEngine for Overlap<'_> {
                 for d in directions {
                     match d {
                         WavefrontDirection::FieldAngle(a) if *a < 2 => axes.push(*a),
+                        WavefrontDirection::SpectralMoment(k) if (1..=2).contains(k) => axes.push(1 + *k),
                         _ => terms.push(Lane::of(d)?),
                     }
                 }
                 let terms = Arc::new(terms);
                 *self.lanes.borrow_mut() = Some((directions.to_vec(), terms.clone(), axes.clone()));
+                // the mirrored values cached were of other directions
+                self.differentiated.borrow_mut().clear();
                 (terms, axes)
             }
         };
-        if !axes.is_empty() && self.terms.iter().any(|t| t.shift_rate.is_none()) {
+        if axes.iter().any(|&a| a < 2) && self.terms.iter().any(|t| t.shift_rate.is_none()) {
             return None;
         }
-        // each direction's place in `gradient`: the wavefront lanes, then the field angles', in
-        // the order asked
+        // each direction's place in `gradient`: the wavefront lanes, then the field angles' and
+        // the spectral moments', in the order asked
         let scatter = |lanes: &[Complex64], field: &[Complex64], gradient: &mut [Complex64]| {
             let (mut i, mut j) = (0, 0);
             for (g, d) in gradient.iter_mut().zip(directions) {
-                if matches!(d, WavefrontDirection::FieldAngle(_)) {
+                if matches!(d, WavefrontDirection::FieldAngle(_) | WavefrontDirection::SpectralMoment(_)) {
                     *g = field[j];
                     j += 1;
                 } else {

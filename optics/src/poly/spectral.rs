@@ -260,6 +260,16 @@ impl Nodes {
         parts
     }
 
+    /// The nodes' mean wavelength `λ̄ = Σ w λ / Σ w` and variance `⟨u²⟩ = Σ w (λ − λ̄)² / Σ w`
+    /// (node weights, efficiencies included): the centre of the
+    /// [`WavefrontDirection::SpectralMoment`](super::WavefrontDirection::SpectralMoment) lanes.
+    pub fn wavelength_moments(&self) -> (f64, f64) {
+        let total = self.total_weight;
+        let mean = self.nodes.iter().map(|n| n.weight * n.lambda).sum::<f64>() / total;
+        let variance = self.nodes.iter().map(|n| n.weight * (n.lambda - mean).powi(2)).sum::<f64>() / total;
+        (mean, variance)
+    }
+
     pub fn sum_weights(&mut self) {
         self.total_weight =
             self.panels.iter().map(|p| self.nodes[p.start..p.end].iter().map(|n| n.weight).sum::<f64>()).sum();
