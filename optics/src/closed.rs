@@ -31,9 +31,9 @@ use std::f64::consts::PI;
 
 use num_complex::Complex64;
 
-use wide::f64x4;
+use wide::{f64x4, f64x8};
 
-use crate::complex4::Complex4;
+use crate::complex4::{Complex4, Complexes, Lanes};
 use crate::expo;
 use crate::faddeeva;
 use crate::fft::cis;
@@ -283,17 +283,25 @@ impl GaussianDefocus {
 
     /// [`spectral`](Self::spectral) at four points `c`, by the same operations in the same order
     /// on each lane (each lane is the scalar `E(c)` to the last bit; the real exponentials are
-    /// [`expo::exp4`], whose lanes are the scalar [`expo::exp`]). `None` where the lanes do not share one case of
+    /// [`expo::exp_lanes`], whose lanes are the scalar [`expo::exp`]). `None` where the lanes do not share one case of
     /// [`moments`](Self::moments) (some cut and some not, one below the Gaussian's tail, the
     /// Gaussian truncated at λ = 0, a Faddeeva argument beyond its series): the caller then takes
     /// them one by one. The nodes of one piece of the rule in `t` share their case, since the
     /// pieces are cut where the case changes.
     #[inline(always)]
     fn spectral4(&self, f: &AtFrequency, c: f64x4) -> Option<Complex4> {
+        self.spectral_lanes(f, c)
+    }
+
+    /// [`spectral4`](Self::spectral4) on the lanes of `V` (four or eight: eight advance two
+    /// groups of four through the same chains together), each lane the scalar `E(c)` to the
+    /// last bit; `None` where the lanes do not share one case.
+    #[inline(always)]
+    fn spectral_lanes<V: Lanes>(&self, f: &AtFrequency, c: V) -> Option<Complexes<V>> {
         if self.lower_at(f.tail).is_some() || f.beta <= 0.0 {
             return None;
         }
-        let k = f64x4::splat;
+        let k = V::splat;
         let d = c - k(f.beta * self.center);
         let phi0 = k(f.a_mu) * d;
         let phi1 = k(self.sigma) * (k(f.a1) * d - k(f.beta * f.a_mu));
@@ -304,50 +312,50 @@ impl GaussianDefocus {
             return None;
         }
         // −A(x − m)² + K with m = iφ1/(2A), K = iφ0 + A m²
-        let inv_2a = Complex4::splat(f.inv_2a);
-        let m = Complex4::imaginary(phi1).mul(inv_2a);
-        let kk = Complex4::imaginary(phi0).add(Complex4::splat(f.a).mul(m).mul(m));
+        let inv_2a = Complexes::<V>::splat(f.inv_2a);
+        let m = Complexes::<V>::imaginary(phi1).mul(inv_2a);
+        let kk = Complexes::<V>::imaginary(phi0).add(Complexes::<V>::splat(f.a).mul(m).mul(m));
         let exp_k = || {
-            let (sin, cos) = cis::sin_cos4(kk.im);
-            let e = expo::exp4(kk.re);
-            Complex4 { re: cos, im: sin }.scale(e)
+            let (sin, cos) = cis::sin_cos_lanes(kk.im);
+            let e = expo::exp_lanes(kk.re);
+            Complexes { re: cos, im: sin }.scale(e)
         };
         let terms = self.q.len();
-        let mut moments = [Complex4::ZERO; MAX_TERMS];
+        let mut moments = [Complexes::<V>::ZERO; MAX_TERMS];
         if !cut {
-            moments[0] = exp_k().mul(Complex4::splat(f.root_pi_over_root_a));
+            moments[0] = exp_k().mul(Complexes::<V>::splat(f.root_pi_over_root_a));
             for j in 2..terms {
                 moments[j] = moments[j - 2].scale(k((j - 1) as f64)).mul(inv_2a);
             }
         } else {
             let x = cut_x;
-            let e_hi = Complex4::real(expo::exp4(k(-0.5) * x * x));
-            let y_hi = Complex4::real_minus(x, m);
-            let z = Complex4::splat(f.sqrt_a).mul(y_hi);
-            let positive = z.re.simd_ge(f64x4::ZERO);
-            let w = f.erfcx.eval4(Complex4::select(positive, z, z.neg()))?;
-            let rest_hi = Complex4::select(positive, e_hi.neg().mul(w), e_hi.mul(w));
-            let mut difference = rest_hi.sub(Complex4::ZERO);
+            let e_hi = Complexes::<V>::real(expo::exp_lanes(k(-0.5) * x * x));
+            let y_hi = Complexes::<V>::real_minus(x, m);
+            let z = Complexes::<V>::splat(f.sqrt_a).mul(y_hi);
+            let positive = z.re.simd_ge(V::ZERO);
+            let w = f.erfcx.eval_lanes(Complexes::<V>::select(positive, z, z.neg()))?;
+            let rest_hi = Complexes::<V>::select(positive, e_hi.neg().mul(w), e_hi.mul(w));
+            let mut difference = rest_hi.sub(Complexes::<V>::ZERO);
             if positive.any() {
-                difference = Complex4::select(positive, difference.add(exp_k().scale(k(2.0))), difference);
+                difference = Complexes::<V>::select(positive, difference.add(exp_k().scale(k(2.0))), difference);
             }
-            moments[0] = difference.mul(Complex4::splat(0.5 * f.root_pi_over_root_a));
-            let mut p_hi = Complex4::ONE;
+            moments[0] = difference.mul(Complexes::<V>::splat(0.5 * f.root_pi_over_root_a));
+            let mut p_hi = Complexes::<V>::ONE;
             for j in 1..terms {
-                let boundary = Complex4::ZERO.sub(p_hi.mul(e_hi));
+                let boundary = Complexes::<V>::ZERO.sub(p_hi.mul(e_hi));
                 p_hi = p_hi.mul(y_hi);
-                let previous = if j >= 2 { moments[j - 2].scale(k((j - 1) as f64)) } else { Complex4::ZERO };
+                let previous = if j >= 2 { moments[j - 2].scale(k((j - 1) as f64)) } else { Complexes::<V>::ZERO };
                 moments[j] = previous.add(boundary).mul(inv_2a);
             }
         }
         // Σ_k q_k x^k with x = y + m: the Taylor coefficients of Q at m (repeated synthetic division)
-        let mut r = [Complex4::ZERO; MAX_TERMS];
+        let mut r = [Complexes::<V>::ZERO; MAX_TERMS];
         for (slot, &v) in r.iter_mut().zip(&self.q) {
-            *slot = Complex4::real(k(v));
+            *slot = Complexes::<V>::real(k(v));
         }
-        let mut total = Complex4::ZERO;
+        let mut total = Complexes::<V>::ZERO;
         for (j, moment) in moments.iter().enumerate().take(terms) {
-            let mut acc = Complex4::ZERO;
+            let mut acc = Complexes::<V>::ZERO;
             for v in r[..terms - j].iter_mut().rev() {
                 let t = v.add(acc.mul(m));
                 *v = acc;
@@ -591,11 +599,33 @@ impl GaussianDefocus {
         s * s * self.spectral(f, c).re * scale
     }
 
-    /// [`integrand`](Self::integrand) at the nodes `ts` into `out`, four at a time
-    /// ([`spectral4`](Self::spectral4): each lane the scalar value to the last bit); a group of
-    /// two or three filled up with copies of its last node, a single node alone.
+    /// [`integrand`](Self::integrand) at the nodes `ts` into `out`, eight at a time
+    /// ([`spectral_lanes`](Self::spectral_lanes) on [`f64x8`]: two groups of four whose
+    /// latency-bound chains overlap), a group of five to seven filled up with copies of its last
+    /// node; a group of eight the kernel refuses (lanes of two cases), and the last two to four
+    /// nodes, four at a time, and a single node alone. Each lane is the scalar value to the last
+    /// bit whatever its group.
     #[inline(always)]
     fn batch(&self, f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [f64]) {
+        for (t, o) in ts.chunks(8).zip(out.chunks_mut(8)) {
+            let lanes = t.len();
+            if lanes >= 5 {
+                let (s, c) = cis::sin_cos_lanes(f64x8::from_fn(|l| t[l.min(lanes - 1)]));
+                if let Some(e) = self.spectral_lanes(f, c) {
+                    let mut values = [0.0; 8];
+                    (s * s * e.re * f64x8::splat(scale)).write(&mut values);
+                    o.copy_from_slice(&values[..lanes]);
+                    continue;
+                }
+            }
+            self.batch4(f, scale, t, o);
+        }
+    }
+
+    /// [`batch`](Self::batch) four at a time ([`spectral4`](Self::spectral4)); a group of two or
+    /// three filled up with copies of its last node, a single node alone.
+    #[inline(always)]
+    fn batch4(&self, f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [f64]) {
         for (t, o) in ts.chunks(4).zip(out.chunks_mut(4)) {
             let lanes = t.len();
             if lanes == 1 {
@@ -2002,14 +2032,14 @@ mod tests {
         }
     }
 
-    /// The four-lane kernel ([`GaussianDefocus::spectral4`]) against the scalar one
+    /// The four- and eight-lane kernel ([`GaussianDefocus::spectral_lanes`]) against the scalar one
     /// ([`GaussianDefocus::spectral`]), bit for bit, on the scenes of [`for_each_resolved_case`]
     /// (cut and uncut zones, both signs of the Faddeeva argument's real part), a band with its
     /// Gaussian truncated at λ = 0 (refused: `None`), and groups straddling the cut zone's end
     /// (refused); and the integrand's four-lane sine and cosine against the scalar ones.
     #[test]
     fn four_lanes_are_the_scalar_kernel_to_the_last_bit() {
-        let mut lanes_taken = 0;
+        let (mut lanes_taken, mut eight_taken) = (0, 0);
         let mut check = |g: &GaussianDefocus, nu: f64, tolerance: f64| {
             let tail = (2.0 * (1e3 / tolerance).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
             let (f, _) = g.at_frequency_for(nu, tail, tolerance);
@@ -2031,36 +2061,75 @@ mod tests {
                     );
                 }
             }
+            // eight lanes: eight consecutive points, and eight spread ones
+            let groups = cs
+                .chunks_exact(8)
+                .map(|c| std::array::from_fn::<f64, 8, _>(|l| c[l]))
+                .chain((0..497).map(|i| std::array::from_fn(|l| cs[i + 500 * l])));
+            for group in groups {
+                let Some(e) = g.spectral_lanes(&f, f64x8::new(group)) else { continue };
+                eight_taken += 8;
+                for (l, &c) in group.iter().enumerate() {
+                    let (vector, scalar) = (e.lane(l), g.spectral(&f, c));
+                    assert!(
+                        vector.re.to_bits() == scalar.re.to_bits() && vector.im.to_bits() == scalar.im.to_bits(),
+                        "eight lanes, c {c}, ν {nu}: {vector} vs {scalar}"
+                    );
+                }
+            }
         };
         for_each_resolved_case(|_, g, nu, _| {
             check(g, nu, 1e-7);
             check(g, nu, 1e-12);
         });
         // every case of the scalar kernel is met on some lanes
-        assert!(lanes_taken > 100_000, "{lanes_taken} lanes");
+        assert!(lanes_taken > 100_000 && eight_taken > 100_000, "{lanes_taken} and {eight_taken} lanes");
         // a band reaching λ = 0 within the tail: the lanes refuse, the scalar kernel serves
         let broad = paper(900e-9, &[0.0, 1.0]);
         let f = broad.at_frequency(5e4, TAIL_SIGMAS);
         assert!(broad.spectral4(&f, f64x4::new([0.2, 0.3, 0.4, 0.5])).is_none());
+        assert!(broad.spectral_lanes(&f, f64x8::new([0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55])).is_none());
         // a group straddling the end of the cut zone: refused
         let g = paper(50e-9, &[0.0, 1.0]);
         let f = g.at_frequency(9e4, TAIL_SIGMAS);
         let end = f.beta * (g.center + TAIL_SIGMAS * g.sigma);
         assert!(g.spectral4(&f, f64x4::new([end - 1e-3, end - 1e-4, end + 1e-4, end + 1e-3])).is_none());
-        // the sine and cosine of the pupil angle, and of phases up to the kernel's 1e5 rad
+        let straddling = f64x8::new([
+            end - 4e-3,
+            end - 3e-3,
+            end - 2e-3,
+            end - 1e-3,
+            end - 1e-4,
+            end + 1e-4,
+            end + 1e-3,
+            end + 2e-3,
+        ]);
+        assert!(g.spectral_lanes(&f, straddling).is_none());
+        // the sine and cosine of the pupil angle, and of phases up to the kernel's 1e5 rad, on
+        // four and eight lanes
         for i in 0..20_000 {
             let t = [i as f64 * 7.9e-5, -(i as f64) * 0.37, i as f64 * 5.1, 1.0 + i as f64 * 1e-3];
             let (s, c) = cis::sin_cos4(f64x4::new(t));
+            let t8: [f64; 8] = std::array::from_fn(|l| if l < 4 { t[l] } else { -3.3 * t[l - 4] + 0.1 });
+            let (s8, c8) = cis::sin_cos_lanes(f64x8::new(t8));
             for (l, &t) in t.iter().enumerate() {
                 let (ss, cc) = cis::sin_cos(t);
                 assert_eq!((s.to_array()[l].to_bits(), c.to_array()[l].to_bits()), (ss.to_bits(), cc.to_bits()), "{t}");
             }
+            for (l, &t) in t8.iter().enumerate() {
+                let (ss, cc) = cis::sin_cos(t);
+                assert_eq!(
+                    (s8.to_array()[l].to_bits(), c8.to_array()[l].to_bits()),
+                    (ss.to_bits(), cc.to_bits()),
+                    "{t}"
+                );
+            }
         }
     }
 
-    /// A group of nodes straddling the cut zone's end `c_cut` (cut and uncut lanes): `batch`
-    /// gives each lane the scalar integrand's value to the last bit, and `mixed` serves the
-    /// sides of two or more lanes as groups of their own.
+    /// A group of two to eight nodes straddling the cut zone's end `c_cut` (cut and uncut lanes):
+    /// `batch` gives each lane the scalar integrand's value to the last bit, and `mixed` serves
+    /// the sides of two or more lanes of a group of four as groups of their own.
     #[test]
     fn mixed_groups_are_the_scalar_integrand_to_the_last_bit() {
         let mut served = 0;
@@ -2076,19 +2145,27 @@ mod tests {
                 let t_cut = c_cut.acos();
                 let scale = 4.0 / (PI * g.weight);
                 // the cut zone lies at larger t (smaller c): offsets below the edge's t are uncut
-                for split in 1..4 {
-                    for lanes in 2..=4 {
+                // (groups of five to eight: the eight-lane kernel refuses them, and `batch`
+                // takes them four at a time)
+                for split in 1..8 {
+                    for lanes in 2..=8 {
                         let step = 1e-3 * t_cut;
                         let ts: Vec<f64> = (0..lanes).map(|l| t_cut + (l as f64 - split as f64 + 0.5) * step).collect();
                         let mut out = vec![0.0; lanes];
                         g.batch(&f, scale, &ts, &mut out);
+                        for (l, &t) in ts.iter().enumerate() {
+                            let scalar = g.integrand(&f, scale, t);
+                            assert_eq!(out[l].to_bits(), scalar.to_bits(), "t {t}, ν {nu}: {} vs {scalar}", out[l]);
+                        }
+                        if lanes > 4 || split >= 4 {
+                            continue;
+                        }
                         let (s, c) = cis::sin_cos4(f64x4::new(std::array::from_fn(|l| ts[l.min(lanes - 1)])));
                         let mut again = vec![0.0; lanes];
                         served += g.mixed(&f, scale, &ts, s, c, &mut again);
                         groups += 1;
                         for (l, &t) in ts.iter().enumerate() {
                             let scalar = g.integrand(&f, scale, t);
-                            assert_eq!(out[l].to_bits(), scalar.to_bits(), "t {t}, ν {nu}: {} vs {scalar}", out[l]);
                             assert_eq!(again[l].to_bits(), scalar.to_bits(), "t {t}, ν {nu}: {} vs {scalar}", again[l]);
                         }
                     }

@@ -1,101 +1,219 @@
-//! Four complex numbers in two `wide::f64x4` registers, for the closed form's kernel evaluated at
-//! four nodes of the rule in the pupil angle at once (`closed.rs`, `faddeeva.rs`). Every
-//! operation is the one `num_complex` performs on one number, in the same order (no fused
-//! multiply-adds), so each lane is the scalar result to the last bit.
+//! Complex numbers on four or eight lanes (`wide::f64x4`, `wide::f64x8`), for the closed form's
+//! kernel evaluated at four or eight nodes of the rule in the pupil angle at once (`closed.rs`,
+//! `faddeeva.rs`). Every operation is the one `num_complex` performs on one number, in the same
+//! order (no fused multiply-adds), so each lane is the scalar result to the last bit, whatever
+//! the width: eight lanes advance two independent groups of four through the same latency-bound
+//! chains (the Faddeeva series' Horner sums, the sine, cosine and exponential polynomials)
+//! together, their dependent adds overlapping.
+
+use std::ops::{Add, BitOr, Div, Mul, Neg, Sub};
 
 use num_complex::Complex64;
-use wide::f64x4;
+use wide::{f64x4, f64x8};
 
-/// Four complex numbers, lane by lane.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Complex4 {
-    pub re: f64x4,
-    pub im: f64x4,
+/// The lane-by-lane operations the kernel uses, on [`f64x4`] and [`f64x8`] alike: each is the
+/// `f64` operation on every lane (IEEE-754 sums, products and quotients, comparisons as masks).
+pub(crate) trait Lanes:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + BitOr<Output = Self>
+{
+    const ZERO: Self;
+    const ONE: Self;
+    fn splat(x: f64) -> Self;
+    /// Lane `l` is `f(l)`.
+    fn from_fn(f: impl FnMut(usize) -> f64) -> Self;
+    /// The lanes, into `out[..Self::N]`.
+    fn write(self, out: &mut [f64]);
+    fn simd_lt(self, other: Self) -> Self;
+    fn simd_gt(self, other: Self) -> Self;
+    fn simd_ge(self, other: Self) -> Self;
+    fn simd_eq(self, other: Self) -> Self;
+    /// `self ? a : b`, lane by lane (`self` a mask).
+    fn select(self, a: Self, b: Self) -> Self;
+    fn any(self) -> bool;
+    fn all(self) -> bool;
+    fn max(self, other: Self) -> Self;
+    fn min(self, other: Self) -> Self;
+    fn floor(self) -> Self;
+    fn is_nan(self) -> Self;
+    /// `2^n` on each lane whose `n` is an integer in `[−1022, 1023]`, from its bits: `n + 2⁵² +
+    /// 1023` holds `n + 1023` in its low 52 bits (exact: an integer below 2⁵³), which shifted
+    /// left by 52 are the exponent field of `2^n` (`expo::exp`'s `two_to` on every lane).
+    fn two_to(self) -> Self;
 }
 
-impl Complex4 {
-    pub const ZERO: Complex4 = Complex4 { re: f64x4::ZERO, im: f64x4::ZERO };
-    pub const ONE: Complex4 = Complex4 { re: f64x4::ONE, im: f64x4::ZERO };
+macro_rules! lanes {
+    ($v:ident, $n:literal) => {
+        impl Lanes for $v {
+            const ZERO: $v = $v::ZERO;
+            const ONE: $v = $v::ONE;
+            #[inline(always)]
+            fn splat(x: f64) -> $v {
+                $v::splat(x)
+            }
+            #[inline(always)]
+            fn from_fn(f: impl FnMut(usize) -> f64) -> $v {
+                $v::new(std::array::from_fn(f))
+            }
+            #[inline(always)]
+            fn write(self, out: &mut [f64]) {
+                out[..$n].copy_from_slice(&self.to_array());
+            }
+            #[inline(always)]
+            fn simd_lt(self, other: $v) -> $v {
+                $v::simd_lt(self, other)
+            }
+            #[inline(always)]
+            fn simd_gt(self, other: $v) -> $v {
+                $v::simd_gt(self, other)
+            }
+            #[inline(always)]
+            fn simd_ge(self, other: $v) -> $v {
+                $v::simd_ge(self, other)
+            }
+            #[inline(always)]
+            fn simd_eq(self, other: $v) -> $v {
+                $v::simd_eq(self, other)
+            }
+            #[inline(always)]
+            fn select(self, a: $v, b: $v) -> $v {
+                $v::select(self, a, b)
+            }
+            #[inline(always)]
+            fn any(self) -> bool {
+                $v::any(self)
+            }
+            #[inline(always)]
+            fn all(self) -> bool {
+                $v::all(self)
+            }
+            #[inline(always)]
+            fn max(self, other: $v) -> $v {
+                $v::max(self, other)
+            }
+            #[inline(always)]
+            fn min(self, other: $v) -> $v {
+                $v::min(self, other)
+            }
+            #[inline(always)]
+            fn floor(self) -> $v {
+                $v::floor(self)
+            }
+            #[inline(always)]
+            fn is_nan(self) -> $v {
+                $v::is_nan(self)
+            }
+            #[inline(always)]
+            fn two_to(self) -> $v {
+                $v::from_bits((self + $v::splat(4_503_599_627_370_496.0 + 1023.0)).to_bits() << 52_u32)
+            }
+        }
+    };
+}
+lanes!(f64x4, 4);
+lanes!(f64x8, 8);
+
+/// Four complex numbers, lane by lane.
+pub(crate) type Complex4 = Complexes<f64x4>;
+
+/// Complex numbers on the lanes of `V`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Complexes<V> {
+    pub re: V,
+    pub im: V,
+}
+
+impl<V: Lanes> Complexes<V> {
+    pub const ZERO: Complexes<V> = Complexes { re: V::ZERO, im: V::ZERO };
+    pub const ONE: Complexes<V> = Complexes { re: V::ONE, im: V::ZERO };
 
     /// `z` on every lane.
     #[inline(always)]
-    pub fn splat(z: Complex64) -> Complex4 {
-        Complex4 { re: f64x4::splat(z.re), im: f64x4::splat(z.im) }
+    pub fn splat(z: Complex64) -> Complexes<V> {
+        Complexes { re: V::splat(z.re), im: V::splat(z.im) }
     }
 
     /// `Complex64::new(x, 0.0)` on each lane.
     #[inline(always)]
-    pub fn real(x: f64x4) -> Complex4 {
-        Complex4 { re: x, im: f64x4::ZERO }
+    pub fn real(x: V) -> Complexes<V> {
+        Complexes { re: x, im: V::ZERO }
     }
 
     /// `Complex64::new(0.0, y)` on each lane.
     #[inline(always)]
-    pub fn imaginary(y: f64x4) -> Complex4 {
-        Complex4 { re: f64x4::ZERO, im: y }
+    pub fn imaginary(y: V) -> Complexes<V> {
+        Complexes { re: V::ZERO, im: y }
     }
 
     /// `self * other` (`num_complex`: `(ac − bd) + i(ad + bc)`).
     #[inline(always)]
-    pub fn mul(self, other: Complex4) -> Complex4 {
-        Complex4 { re: self.re * other.re - self.im * other.im, im: self.re * other.im + self.im * other.re }
+    pub fn mul(self, other: Complexes<V>) -> Complexes<V> {
+        Complexes { re: self.re * other.re - self.im * other.im, im: self.re * other.im + self.im * other.re }
     }
 
     #[inline(always)]
-    pub fn add(self, other: Complex4) -> Complex4 {
-        Complex4 { re: self.re + other.re, im: self.im + other.im }
+    pub fn add(self, other: Complexes<V>) -> Complexes<V> {
+        Complexes { re: self.re + other.re, im: self.im + other.im }
     }
 
     #[inline(always)]
-    pub fn sub(self, other: Complex4) -> Complex4 {
-        Complex4 { re: self.re - other.re, im: self.im - other.im }
+    pub fn sub(self, other: Complexes<V>) -> Complexes<V> {
+        Complexes { re: self.re - other.re, im: self.im - other.im }
     }
 
     #[inline(always)]
-    pub fn neg(self) -> Complex4 {
-        Complex4 { re: -self.re, im: -self.im }
+    pub fn neg(self) -> Complexes<V> {
+        Complexes { re: -self.re, im: -self.im }
     }
 
     /// `self * x`, `x` real (`num_complex`'s `Complex * T`, and `T * Complex`).
     #[inline(always)]
-    pub fn scale(self, x: f64x4) -> Complex4 {
-        Complex4 { re: self.re * x, im: self.im * x }
+    pub fn scale(self, x: V) -> Complexes<V> {
+        Complexes { re: self.re * x, im: self.im * x }
     }
 
     /// `self + x`, `x` real.
     #[inline(always)]
-    pub fn add_real(self, x: f64x4) -> Complex4 {
-        Complex4 { re: self.re + x, im: self.im }
+    pub fn add_real(self, x: V) -> Complexes<V> {
+        Complexes { re: self.re + x, im: self.im }
     }
 
     /// `x − self`, `x` real (`num_complex`'s `T − Complex`: `(x − re) + i(0 − im)`).
     #[inline(always)]
-    pub fn real_minus(x: f64x4, z: Complex4) -> Complex4 {
-        Complex4 { re: x - z.re, im: f64x4::ZERO - z.im }
+    pub fn real_minus(x: V, z: Complexes<V>) -> Complexes<V> {
+        Complexes { re: x - z.re, im: V::ZERO - z.im }
     }
 
     /// `1/self` (`num_complex`: `re/|z|² − i im/|z|²`).
     #[inline(always)]
-    pub fn inv(self) -> Complex4 {
+    pub fn inv(self) -> Complexes<V> {
         let norm_sqr = self.norm_sqr();
-        Complex4 { re: self.re / norm_sqr, im: -self.im / norm_sqr }
+        Complexes { re: self.re / norm_sqr, im: -self.im / norm_sqr }
     }
 
     /// `|z|²` (`re² + im²`).
     #[inline(always)]
-    pub fn norm_sqr(self) -> f64x4 {
+    pub fn norm_sqr(self) -> V {
         self.re * self.re + self.im * self.im
     }
 
     /// `mask ? a : b`, lane by lane.
     #[inline(always)]
-    pub fn select(mask: f64x4, a: Complex4, b: Complex4) -> Complex4 {
-        Complex4 { re: mask.select(a.re, b.re), im: mask.select(a.im, b.im) }
+    pub fn select(mask: V, a: Complexes<V>, b: Complexes<V>) -> Complexes<V> {
+        Complexes { re: mask.select(a.re, b.re), im: mask.select(a.im, b.im) }
     }
 
     /// Lane `l` as a `Complex64`.
     #[cfg(test)]
     pub fn lane(self, l: usize) -> Complex64 {
-        Complex64::new(self.re.to_array()[l], self.im.to_array()[l])
+        let (mut re, mut im) = ([0.0; 8], [0.0; 8]);
+        self.re.write(&mut re);
+        self.im.write(&mut im);
+        Complex64::new(re[l], im[l])
     }
 }

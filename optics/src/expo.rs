@@ -1,4 +1,4 @@
-//! `e^x` on four lanes, and the same operations on one number: the closed form's real
+//! `e^x` on four or eight lanes, and the same operations on one number: the closed form's real
 //! exponentials (the cut's `e^{−x²/2}` and the completed square's `e^{Re K}`, `closed.rs`), which
 //! glibc's `exp` took one lane at a time (10 % of the paper point's time).
 //!
@@ -7,9 +7,10 @@
 //! n L2` with `L1` the leading 32 bits of ln 2 (so `n L1` is exact for `|n| < 2^20`) and `L2` the
 //! rest, `|r| ≤ ln 2/2 + 1e-15`. Then `e^r = 1 + r (1 + r (1/2! + r (1/3! + … + r/13!)))`, the
 //! Taylor polynomial to degree 13 (truncation `r^14/14! < 4e-18`, 0.02 ulp), by Horner with the
-//! 1 added last, and `e^x = e^r 2^n`, the power of two from its bits (exact). Plain products and
-//! sums, no fused multiply-adds: each lane of [`exp4`] is [`exp`] of it to the last bit on any
-//! target, so the four-lane kernel stays the scalar one lane by lane.
+//! 1 added last, and `e^x = e^r 2^n`, the power of two from its bits (exact; on the lanes by
+//! the bits of `n + 2⁵² + 1023`, the same power). Plain products and sums, no fused
+//! multiply-adds: each lane of [`exp_lanes`] is [`exp`] of it to the last bit on any target, so
+//! the four- and eight-lane kernel stays the scalar one lane by lane.
 //!
 //! Accuracy (test `exp_is_within_two_ulp_of_the_correctly_rounded_one`, against glibc's `exp`,
 //! itself within 0.502 ulp of `e^x`, over [−708, 709] and densely over the kernel's own range
@@ -18,9 +19,12 @@
 //! an absolute error below that, where glibc returns subnormals), above 709 +∞ (`e^709 =
 //! 8.2e307`), NaN for NaN.
 
+#[cfg(test)]
 use wide::f64x4;
 
-/// Bound on the relative error of [`exp`] and [`exp4`] on `[−708, 709]` (2 ulp of 1).
+use crate::complex4::Lanes;
+
+/// Bound on the relative error of [`exp`] and [`exp_lanes`] on `[−708, 709]` (2 ulp of 1).
 pub(crate) const RELATIVE_ERROR: f64 = 2.0 * f64::EPSILON;
 
 /// `1/ln 2`.
@@ -76,9 +80,15 @@ pub(crate) fn exp(x: f64) -> f64 {
 }
 
 /// [`exp`] on four lanes, by the same operations in the same order on each.
-#[inline(always)]
+#[cfg(test)]
 pub(crate) fn exp4(x: f64x4) -> f64x4 {
-    let k = f64x4::splat;
+    exp_lanes(x)
+}
+
+/// [`exp`] on the lanes of `V` (four or eight), by the same operations in the same order on each.
+#[inline(always)]
+pub(crate) fn exp_lanes<V: Lanes>(x: V) -> V {
+    let k = V::splat;
     let clamped = x.max(k(LOWEST)).min(k(HIGHEST));
     let n = (clamped * k(LOG2_E) + k(ROUND)) - k(ROUND);
     let r = (clamped - n * k(LN2_HI)) - n * k(LN2_LO);
@@ -87,7 +97,7 @@ pub(crate) fn exp4(x: f64x4) -> f64x4 {
         p = p * r + k(c);
     }
     let e_r = k(1.0) + r * (k(1.0) + r * p);
-    let value = e_r * f64x4::new(n.to_array().map(two_to));
+    let value = e_r * n.two_to();
     let value = x.simd_lt(k(LOWEST)).select(k(0.0), value);
     let value = x.simd_gt(k(HIGHEST)).select(k(f64::INFINITY), value);
     x.is_nan().select(x, value)
@@ -102,14 +112,21 @@ fn two_to(n: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use wide::f64x8;
 
     /// The largest difference from `f64::exp` (glibc's, within 0.502 ulp of `e^x`) over the given
-    /// points in units of `2⁻⁵² e^x`, and [`exp4`]'s lanes the scalar one to the bit.
+    /// points in units of `2⁻⁵² e^x`, and the lanes of [`exp4`] and of [`exp_lanes`] on eight
+    /// the scalar one to the bit.
     fn worst_ulp(points: impl Iterator<Item = f64>) -> f64 {
         let mut worst: f64 = 0.0;
         let xs: Vec<f64> = points.collect();
         for chunk in xs.chunks_exact(4) {
             let lanes = exp4(f64x4::new([chunk[0], chunk[1], chunk[2], chunk[3]])).to_array();
+            // eight lanes: these four and their negatives
+            let eight: [f64; 8] = std::array::from_fn(|l| if l < 4 { chunk[l] } else { -chunk[l - 4] });
+            for (&x, &v) in eight.iter().zip(&exp_lanes(f64x8::new(eight)).to_array()) {
+                assert_eq!(v.to_bits(), exp(x).to_bits(), "eight lanes, lane of {x}");
+            }
             for (&x, &v) in chunk.iter().zip(&lanes) {
                 let scalar = exp(x);
                 assert_eq!(v.to_bits(), scalar.to_bits(), "lane of {x}");
@@ -137,6 +154,12 @@ mod tests {
         for (range, worst) in [("[-708, 709]", whole), ("[-60, 5]", kernel), ("|x| < 0.34", small)] {
             println!("{range}: largest difference {worst:.3} × 2⁻⁵² e^x");
             assert!(worst <= 1.4, "{range}: {worst} × 2⁻⁵² e^x");
+        }
+        // the lanes' power of two from the bits of n + 2⁵² + 1023, the scalar one's from n's
+        for n in -1022..=1023 {
+            let lanes = f64x8::splat(n as f64).two_to().to_array();
+            assert!(lanes.iter().all(|v| v.to_bits() == two_to(n as f64).to_bits()), "2^{n}");
+            assert_eq!(f64x4::splat(n as f64).two_to().to_array()[0], 2f64.powi(n), "2^{n}");
         }
         assert_eq!(exp(0.0), 1.0);
         assert_eq!(exp(-709.0), 0.0);

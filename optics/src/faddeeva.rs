@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 
 use num_complex::Complex64;
 
-use crate::complex4::Complex4;
+use crate::complex4::{Complexes, Lanes};
 
 /// Most terms of the series (the full-accuracy one).
 const N: usize = 36;
@@ -121,31 +121,31 @@ impl Erfcx {
 }
 
 impl Erfcx {
-    /// [`eval`](Self::eval) at four points, by the same operations in the same order on each
-    /// lane (each lane is the scalar value to the last bit); `None` where a lane lies beyond
-    /// `SERIES_RADIUS` (the asymptotic series: the caller takes the lanes one by one).
+    /// [`eval`](Self::eval) at four or eight points (the lanes of `V`), by the same operations in
+    /// the same order on each lane (each lane is the scalar value to the last bit); `None` where
+    /// a lane lies beyond `SERIES_RADIUS` (the asymptotic series: the caller takes the lanes one
+    /// by one).
     #[inline(always)]
-    pub(crate) fn eval4(&self, z: Complex4) -> Option<Complex4> {
-        use wide::f64x4;
-        if z.norm_sqr().simd_gt(f64x4::splat(SERIES_RADIUS * SERIES_RADIUS)).any() {
+    pub(crate) fn eval_lanes<V: Lanes>(&self, z: Complexes<V>) -> Option<Complexes<V>> {
+        if z.norm_sqr().simd_gt(V::splat(SERIES_RADIUS * SERIES_RADIUS)).any() {
             return None;
         }
-        let l = f64x4::splat(self.l);
+        let l = V::splat(self.l);
         // ζ = iz; L − iζ and (L + iζ)/(L − iζ)
         let (zeta_re, zeta_im) = (-z.im, z.re);
-        let denominator = Complex4 { re: l + zeta_im, im: -zeta_re };
+        let denominator = Complexes { re: l + zeta_im, im: -zeta_re };
         let inv = denominator.inv();
-        let big_z = Complex4 { re: l - zeta_im, im: zeta_re }.mul(inv);
+        let big_z = Complexes { re: l - zeta_im, im: zeta_re }.mul(inv);
         let z2 = big_z.mul(big_z);
         let y = z2.mul(z2);
-        let mut chains = [Complex4::ZERO; 4];
+        let mut chains = [Complexes::<V>::ZERO; 4];
         for block in self.coefficients[..self.terms].chunks_exact(4).rev() {
             for (acc, &b) in chains.iter_mut().zip(block) {
-                *acc = acc.mul(y).add_real(f64x4::splat(b));
+                *acc = acc.mul(y).add_real(V::splat(b));
             }
         }
         let p = chains[0].add(big_z.mul(chains[1])).add(z2.mul(chains[2].add(big_z.mul(chains[3]))));
-        Some(p.scale(f64x4::splat(2.0)).mul(inv).mul(inv).add(inv.scale(f64x4::splat(0.5 * FRAC_2_SQRT_PI))))
+        Some(p.scale(V::splat(2.0)).mul(inv).mul(inv).add(inv.scale(V::splat(0.5 * FRAC_2_SQRT_PI))))
     }
 }
 

@@ -59,8 +59,14 @@ pub fn sin_cos(phi: f64) -> (f64, f64) {
 /// bit: the closed form's pupil angle and complex exponentials at four nodes at once.
 #[inline(always)]
 pub(crate) fn sin_cos4(phi: wide::f64x4) -> (wide::f64x4, wide::f64x4) {
-    use wide::f64x4;
-    let k = f64x4::splat;
+    sin_cos_lanes(phi)
+}
+
+/// [`sin_cos`] on the lanes of `V` (four or eight), by the same operations in the same order on
+/// each lane.
+#[inline(always)]
+pub(crate) fn sin_cos_lanes<V: crate::complex4::Lanes>(phi: V) -> (V, V) {
+    let k = V::splat;
     let q = (phi * k(std::f64::consts::FRAC_2_PI) + k(ROUND)) - k(ROUND);
     let r = ((phi - q * k(PIO2_1)) - q * k(PIO2_2)) - q * k(PIO2_3);
     let r2 = r * r;
