@@ -596,7 +596,7 @@ fn term_otf(term: &Term, x_level: usize, s: f64, c: f64, sn: f64, eps: f64) -> (
 /// an error estimate of 1.3).
 fn quadratic_phase_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
     if alpha.abs() * x * x < MOMENTS_MIN_PHASE {
-        return small_alpha_moments(alpha, beta, x)[0];
+        return small_alpha_integral(alpha, beta, x);
     }
     let zeta = Complex64::new(0.0, -alpha).sqrt();
     let x0 = beta / (2.0 * alpha);
@@ -833,6 +833,67 @@ fn small_alpha_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
         power *= x;
     }
     out
+}
+
+/// `I0` of [`small_alpha_moments`] alone, for the value (`quadratic_phase_integral`): the terms
+/// `j < J` of `X Σ_j (iαX²)^j/j! L_{2j}(βX)` with `J` the fewest (at most
+/// [`SMALL_ALPHA_TERMS`]) whose first term left out, `2X (|α|X²)^J/J!`, is below `2e-16 X`, and
+/// only the even `L_p` those terms read: where the quadratic phase is far below
+/// [`MOMENTS_MIN_PHASE`] (most of the t rule's nodes near its ends on a lens with Seidel terms)
+/// two or three terms instead of six.
+fn small_alpha_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
+    let a = alpha.abs() * x * x;
+    let (mut terms, mut left_out) = (1, a);
+    while terms < SMALL_ALPHA_TERMS && left_out > 1e-16 {
+        terms += 1;
+        left_out *= a / terms as f64;
+    }
+    let mut l = [Complex64::new(0.0, 0.0); MONOMIALS];
+    monomial_fourier_even(beta * x, 2 * terms - 1, &mut l);
+    let step = Complex64::new(0.0, alpha * x * x);
+    let mut term = Complex64::new(x, 0.0);
+    let mut sum = Complex64::new(0.0, 0.0);
+    for j in 0..terms {
+        sum += term * l[2 * j];
+        term *= step / (j + 1) as f64;
+    }
+    sum
+}
+
+/// [`monomial_fourier`]'s `L_p(b)` for the even `p < count` only (the others left as they are):
+/// the same power series for `|b| < 1`, and above it the Legendre expansion on the spherical
+/// Bessel functions `j_l`, `l < count`.
+fn monomial_fourier_even(b: f64, count: usize, out: &mut [Complex64; MONOMIALS]) {
+    let count = count.min(MONOMIALS);
+    if b.abs() < 1.0 {
+        for p in (0..count).step_by(2) {
+            let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
+            for k in 0..24 {
+                if (p + k) % 2 == 0 {
+                    sum += term * (2.0 / (p + k + 1) as f64);
+                }
+                term *= Complex64::new(0.0, b / (k + 1) as f64);
+            }
+            out[p] = sum;
+        }
+        return;
+    }
+    let mut j = [0.0; MONOMIALS];
+    spherical_bessel(b, &mut j[..count]);
+    let c = monomial_legendre();
+    for p in (0..count).step_by(2) {
+        let (mut re, mut im) = (0.0, 0.0);
+        for (l, &jl) in j.iter().enumerate().take(p + 1) {
+            let v = 2.0 * c[p][l] * jl;
+            match l % 4 {
+                0 => re += v,
+                1 => im += v,
+                2 => re -= v,
+                _ => im -= v,
+            }
+        }
+        out[p] = Complex64::new(re, im);
+    }
 }
 
 /// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]), the Zernike
@@ -1082,9 +1143,7 @@ fn term_otf_and_derivatives(
                 let moments = quadratic_moments(alpha, beta, x_half);
                 (moments, moments[0])
             } else {
-                // which is also `quadratic_phase_integral`'s value there
-                let moments = small_alpha_moments(alpha, beta, x_half);
-                (moments, moments[0])
+                (small_alpha_moments(alpha, beta, x_half), quadratic_phase_integral(alpha, beta, x_half))
             };
             // the value as `term_otf` forms it, bit for bit
             row[0] = Complex64::new(co, si) * closed * ct;
@@ -1485,6 +1544,14 @@ mod tests {
                 for &bx in &[0.0, 1e-9, -0.4, 0.999, 1.0, -2.5, 7.0, 31.0, -80.0] {
                     let (alpha, beta) = (ax2 / (x * x), bx / x);
                     let moments = small_alpha_moments(alpha, beta, x);
+                    // the value's own series (fewer terms where the phase is small) within
+                    // its bound of the moments' I0
+                    let i0 = small_alpha_integral(alpha, beta, x);
+                    assert!(
+                        (i0 - moments[0]).norm() <= 3e-15 * x,
+                        "α X² {ax2}, β X {bx}, X {x}: {i0} vs {}",
+                        moments[0]
+                    );
                     for (m, got) in moments.iter().enumerate() {
                         let reference: Complex64 = rule
                             .iter()
