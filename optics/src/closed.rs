@@ -1112,7 +1112,9 @@ impl GaussianDefocus {
         let cut_x = if f.beta > 0.0 { c * f.inv_beta_sigma - f.center_over_sigma } else { f64::INFINITY };
         let terms = self.q.len();
         let zero = Complex64::new(0.0, 0.0);
-        let Some((moments, m)) = self.lane_moments(f, phi0, phi1, cut_x, terms + 2) else { return (zero, zero) };
+        let Some((moments, m)) = self.lane_moments::<LANE_TERMS>(f, phi0, phi1, cut_x, terms + 2) else {
+            return (zero, zero);
+        };
         // Q φ in powers of x
         let mut p = [0.0; LANE_TERMS];
         for (k, &v) in self.q.iter().enumerate() {
@@ -1125,17 +1127,18 @@ impl GaussianDefocus {
         (value, derivative)
     }
 
-    /// The moments `M_j = ∫ y^j exp(−A y²) e^K dx` (`y = x − m`), `j < count` (≤ [`LANE_TERMS`]),
+    /// The moments `M_j = ∫ y^j exp(−A y²) e^K dx` (`y = x − m`), `j < count` (≤ `T`:
+    /// [`LANE_TERMS`] for the F-number's lane, [`SEIDEL_TERMS`] for the Seidel lanes at zero),
     /// between the same endpoints and in the same bounded forms as
     /// [`moments`](Self::moments), and `m`; `None` where the integral is empty.
-    fn lane_moments(
+    fn lane_moments<const T: usize>(
         &self,
         f: &AtFrequency,
         phi0: f64,
         phi1: f64,
         cut_x: f64,
         count: usize,
-    ) -> Option<([Complex64; LANE_TERMS], Complex64)> {
+    ) -> Option<([Complex64; T], Complex64)> {
         let zero = Complex64::new(0.0, 0.0);
         let upper = (cut_x < f.tail).then_some(cut_x);
         let lower = self.lower_at(f.tail);
@@ -1150,7 +1153,7 @@ impl GaussianDefocus {
             let (sin, cos) = cis::sin_cos(k.im);
             Complex64::new(cos, sin) * expo::exp(k.re)
         };
-        let mut moments = [zero; LANE_TERMS];
+        let mut moments = [zero; T];
         if upper.is_none() && lower.is_none() {
             moments[0] = exp_k() * f.root_pi_over_root_a;
             for j in 2..count {
@@ -1200,10 +1203,10 @@ impl GaussianDefocus {
 
 /// `Σ_k p_k x^k` integrated against the moments of `y = x − m`: the Taylor coefficients of the
 /// polynomial at `m` (repeated synthetic division) dotted with `moments`.
-fn taylor_sum(coefficients: &[f64], moments: &[Complex64; LANE_TERMS], m: Complex64) -> Complex64 {
+fn taylor_sum<const T: usize>(coefficients: &[f64], moments: &[Complex64; T], m: Complex64) -> Complex64 {
     let zero = Complex64::new(0.0, 0.0);
     let terms = coefficients.len();
-    let mut r = [zero; LANE_TERMS];
+    let mut r = [zero; T];
     for (slot, &v) in r.iter_mut().zip(coefficients) {
         *slot = Complex64::new(v, 0.0);
     }
@@ -1218,115 +1221,6 @@ fn taylor_sum(coefficients: &[f64], moments: &[Complex64; LANE_TERMS], m: Comple
         total += acc * moment;
     }
     total
-}
-
-/// [`nested`] with a second lane: `f` gives the value's integrand and the derivative's at each
-/// point, both integrated with the level's weights; the levels, the bisections and the
-/// acceptance are the value's (lane 0) alone, so the value is the one [`nested`] returns.
-#[allow(clippy::too_many_arguments)]
-fn nested_lanes(
-    f: &dyn Fn(f64) -> [f64; 2],
-    a: f64,
-    b: f64,
-    ends: [Option<[f64; 2]>; 2],
-    tolerance: f64,
-    resolved: f64,
-    evaluations: &mut usize,
-    error: &mut f64,
-) -> ([f64; 2], [f64; 2]) {
-    #[allow(clippy::too_many_arguments)]
-    fn piece(
-        f: &dyn Fn(f64) -> [f64; 2],
-        a: f64,
-        b: f64,
-        ends: [[f64; 2]; 2],
-        tol: f64,
-        resolved: f64,
-        depth: u32,
-        evaluations: &mut usize,
-        accepted: &mut f64,
-    ) -> [f64; 2] {
-        let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
-        let cosines = cosines();
-        let mut values = [0.0; 65];
-        let mut lane = [0.0; 65];
-        let mut moves = [0.0; 6];
-        let mut previous = 0.0;
-        let mut integral = [0.0; 2];
-        let mut estimate = f64::INFINITY;
-        let noise = ROUNDING_FLOOR * (b - a);
-        for (level, &points) in LEVELS.iter().enumerate() {
-            let n = points - 1;
-            let stride = 64 / n;
-            if level == 0 {
-                let middle = f(c);
-                values[..3].copy_from_slice(&[ends[1][0], middle[0], ends[0][0]]);
-                lane[..3].copy_from_slice(&[ends[1][1], middle[1], ends[0][1]]);
-                *evaluations += 1;
-            } else {
-                for k in (0..=n / 2).rev() {
-                    values[2 * k] = values[k];
-                    lane[2 * k] = lane[k];
-                }
-                for k in (1..n).step_by(2) {
-                    [values[k], lane[k]] = f(c + h * cosines[k * stride]);
-                }
-                *evaluations += n / 2;
-            }
-            let weights = crate::poly::clenshaw_curtis(points);
-            let mut largest: f64 = 0.0;
-            integral = [0.0; 2];
-            for ((&v, &d), &w) in values[..points].iter().zip(&lane[..points]).zip(weights) {
-                largest = largest.max(v.abs());
-                integral[0] += w * v;
-                integral[1] += w * d;
-            }
-            integral = integral.map(|x| x * h);
-            if level > 0 {
-                let moved = (integral[0] - previous).abs();
-                moves[level - 1] = moved;
-                if level >= 2 {
-                    estimate = if points as f64 >= resolved {
-                        let ratio = |k: usize| {
-                            if k >= 1 && moves[k - 1] > 0.0 { (moves[k] / moves[k - 1]).min(1.0) } else { 1.0 }
-                        };
-                        let by_moves = moved * ratio(level - 1).max(ratio(level - 2));
-                        if by_moves > tol.max(noise) && moved <= COEFFICIENT_CONSISTENCY * tol {
-                            by_moves.min(h * chebyshev_tail(&values[..points]))
-                        } else {
-                            by_moves
-                        }
-                    } else {
-                        moves[level - 2].max(moved)
-                    };
-                    if estimate <= tol.max(noise) || moved <= 50.0 * f64::EPSILON * largest * (b - a) {
-                        *accepted += estimate;
-                        return integral;
-                    }
-                }
-            }
-            previous = integral[0];
-        }
-        if depth >= MAX_DEPTH {
-            *accepted += estimate;
-            return integral;
-        }
-        let middle = [values[32], lane[32]];
-        let left = piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
-        let right = piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
-        [left[0] + right[0], left[1] + right[1]]
-    }
-    let mut end = |known: Option<[f64; 2]>, t: f64| {
-        known.unwrap_or_else(|| {
-            *evaluations += 1;
-            f(t)
-        })
-    };
-    let ends = [end(ends[0], a), end(ends[1], b)];
-    if b <= a {
-        return ([0.0; 2], ends[0]);
-    }
-    (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
 }
 
 // The Seidel lanes at zero (docs/physics.md, "Gradients: Seidel terms at zero"): with every
@@ -1401,7 +1295,7 @@ impl GaussianDefocus {
             let known_a = (hi >= 1.0).then_some([0.0; 3]);
             let (a, b) = (hi.acos(), lo.acos());
             let (integral, at_a) =
-                nested_lanes_n(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
+                nested_lanes(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
             total.iter_mut().zip(integral).for_each(|(t, i)| *t += i);
             shared = Some((hi, at_a));
         }
@@ -1419,7 +1313,7 @@ impl GaussianDefocus {
         let cut_x = if f.beta > 0.0 { c * f.inv_beta_sigma - f.center_over_sigma } else { f64::INFINITY };
         let terms = self.q.len();
         let zero = Complex64::new(0.0, 0.0);
-        let Some((moments, m)) = self.seidel_moments(f, phi0, phi1, cut_x, terms + 3) else {
+        let Some((moments, m)) = self.lane_moments::<SEIDEL_TERMS>(f, phi0, phi1, cut_x, terms + 3) else {
             return (zero, [zero; 2]);
         };
         // u = d − βσx, s = βμ + βσx in powers of x
@@ -1444,110 +1338,19 @@ impl GaussianDefocus {
             }
         }
         let i = Complex64::new(0.0, 1.0);
-        let value = seidel_taylor_sum(&self.q, &moments, m);
-        let w040 = seidel_taylor_sum(&p040[..terms + 3], &moments, m) * i;
-        let w220 = seidel_taylor_sum(&p220[..terms + 1], &moments, m) * i;
+        let value = taylor_sum(&self.q, &moments, m);
+        let w040 = taylor_sum(&p040[..terms + 3], &moments, m) * i;
+        let w220 = taylor_sum(&p220[..terms + 1], &moments, m) * i;
         (value, [w040, w220])
     }
-
-    /// The moments `M_j = ∫ y^j exp(−A y²) e^K dx` (`y = x − m`), `j < count` (≤
-    /// [`SEIDEL_TERMS`]), as [`lane_moments`](Self::lane_moments) computes them (the same
-    /// endpoints, bounded forms and recurrence), and `m`; `None` where the integral is empty.
-    fn seidel_moments(
-        &self,
-        f: &AtFrequency,
-        phi0: f64,
-        phi1: f64,
-        cut_x: f64,
-        count: usize,
-    ) -> Option<([Complex64; SEIDEL_TERMS], Complex64)> {
-        let zero = Complex64::new(0.0, 0.0);
-        let upper = (cut_x < f.tail).then_some(cut_x);
-        let lower = self.lower_at(f.tail);
-        match (upper, lower) {
-            (Some(u), _) if u < -f.tail => return None,
-            (Some(u), Some(l)) if u <= l => return None,
-            _ => {}
-        }
-        let m = Complex64::new(0.0, phi1) * f.inv_2a;
-        let k = Complex64::new(0.0, phi0) + f.a * m * m;
-        let exp_k = || {
-            let (sin, cos) = cis::sin_cos(k.im);
-            Complex64::new(cos, sin) * expo::exp(k.re)
-        };
-        let mut moments = [zero; SEIDEL_TERMS];
-        if upper.is_none() && lower.is_none() {
-            moments[0] = exp_k() * f.root_pi_over_root_a;
-            for j in 2..count {
-                moments[j] = moments[j - 2] * (j - 1) as f64 * f.inv_2a;
-            }
-            return Some((moments, m));
-        }
-        let e_hi = upper.map(|x| Complex64::new(expo::exp(-0.5 * x * x), 0.0));
-        let e_lo = lower.map(|x| {
-            let (sin, cos) = cis::sin_cos(phi0 + x * (phi1 + x * f.phi2));
-            Complex64::new(cos, sin) * expo::exp(-0.5 * x * x)
-        });
-        let erf_term = |x: Option<f64>, e: Option<Complex64>, at_infinity: f64| -> (f64, Complex64) {
-            match (x, e) {
-                (Some(x), Some(e)) => {
-                    let z = f.sqrt_a * (x - m);
-                    if z.re >= 0.0 { (1.0, -e * f.erfcx.eval(z)) } else { (-1.0, e * f.erfcx.eval(-z)) }
-                }
-                _ => (at_infinity, zero),
-            }
-        };
-        let (sign_hi, rest_hi) = erf_term(upper, e_hi, 1.0);
-        let (sign_lo, rest_lo) = erf_term(lower, e_lo, -1.0);
-        let mut difference = rest_hi - rest_lo;
-        if sign_hi != sign_lo {
-            difference += exp_k() * (sign_hi - sign_lo);
-        }
-        moments[0] = difference * (0.5 * f.root_pi_over_root_a);
-        let (y_lo, y_hi) = (lower.map(|x| x - m), upper.map(|x| x - m));
-        let (mut p_lo, mut p_hi) = (Complex64::new(1.0, 0.0), Complex64::new(1.0, 0.0));
-        for j in 1..count {
-            let mut boundary = zero;
-            if let (Some(e), Some(y)) = (e_lo, y_lo) {
-                boundary += p_lo * e;
-                p_lo *= y;
-            }
-            if let (Some(e), Some(y)) = (e_hi, y_hi) {
-                boundary -= p_hi * e;
-                p_hi *= y;
-            }
-            let previous = if j >= 2 { moments[j - 2] * (j - 1) as f64 } else { zero };
-            moments[j] = (previous + boundary) * f.inv_2a;
-        }
-        Some((moments, m))
-    }
 }
 
-/// [`taylor_sum`] over [`SEIDEL_TERMS`] moments.
-fn seidel_taylor_sum(coefficients: &[f64], moments: &[Complex64; SEIDEL_TERMS], m: Complex64) -> Complex64 {
-    let zero = Complex64::new(0.0, 0.0);
-    let terms = coefficients.len();
-    let mut r = [zero; SEIDEL_TERMS];
-    for (slot, &v) in r.iter_mut().zip(coefficients) {
-        *slot = Complex64::new(v, 0.0);
-    }
-    let mut total = zero;
-    for (j, moment) in moments.iter().enumerate().take(terms) {
-        let mut acc = zero;
-        for v in r[..terms - j].iter_mut().rev() {
-            let t = *v + acc * m;
-            *v = acc;
-            acc = t;
-        }
-        total += acc * moment;
-    }
-    total
-}
-
-/// [`nested_lanes`] with `N − 1` lanes beside the value: the levels, the bisections and the
-/// acceptance are the value's (lane 0) alone, every lane integrated with the level's weights.
+/// [`nested`] with `N − 1` lanes beside the value (the F-number's derivative; the Seidel lanes at
+/// zero): `f` gives the value's integrand and the lanes' at each point; the levels, the
+/// bisections and the acceptance are the value's (lane 0) alone, so the value is the one
+/// [`nested`] returns, and every lane is integrated with the level's weights.
 #[allow(clippy::too_many_arguments)]
-fn nested_lanes_n<const N: usize>(
+fn nested_lanes<const N: usize>(
     f: &dyn Fn(f64) -> [f64; N],
     a: f64,
     b: f64,
