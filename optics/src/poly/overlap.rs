@@ -782,35 +782,7 @@ fn monomial_legendre() -> &'static [[f64; MONOMIALS]; MONOMIALS] {
 /// `1/24! < 2e-24`), else from the Legendre expansion of `u^p` ([`monomial_legendre`]) and
 /// `∫_{−1}^{1} P_l(u) e^{ibu} du = 2 i^l j_l(b)` (the Filon rule's identity, [`spherical_bessel`]).
 fn monomial_fourier(b: f64, out: &mut [Complex64; MONOMIALS]) {
-    if b.abs() < 1.0 {
-        for (p, o) in out.iter_mut().enumerate() {
-            let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
-            for k in 0..24 {
-                if (p + k) % 2 == 0 {
-                    sum += term * (2.0 / (p + k + 1) as f64);
-                }
-                term *= Complex64::new(0.0, b / (k + 1) as f64);
-            }
-            *o = sum;
-        }
-        return;
-    }
-    let mut j = [0.0; MONOMIALS];
-    spherical_bessel(b, &mut j);
-    let c = monomial_legendre();
-    for (p, o) in out.iter_mut().enumerate() {
-        let (mut re, mut im) = (0.0, 0.0);
-        for (l, &jl) in j.iter().enumerate().take(p + 1) {
-            let v = 2.0 * c[p][l] * jl;
-            match l % 4 {
-                0 => re += v,
-                1 => im += v,
-                2 => re -= v,
-                _ => im -= v,
-            }
-        }
-        *o = Complex64::new(re, im);
-    }
+    monomial_fourier_every(b, MONOMIALS, 1, out);
 }
 
 /// [`quadratic_moments`] where the quadratic phase is small (`|α| X² <` [`MOMENTS_MIN_PHASE`],
@@ -849,7 +821,7 @@ fn small_alpha_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
         left_out *= a / terms as f64;
     }
     let mut l = [Complex64::new(0.0, 0.0); MONOMIALS];
-    monomial_fourier_even(beta * x, 2 * terms - 1, &mut l);
+    monomial_fourier_every(beta * x, 2 * terms - 1, 2, &mut l);
     let step = Complex64::new(0.0, alpha * x * x);
     let mut term = Complex64::new(x, 0.0);
     let mut sum = Complex64::new(0.0, 0.0);
@@ -860,13 +832,13 @@ fn small_alpha_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
     sum
 }
 
-/// [`monomial_fourier`]'s `L_p(b)` for the even `p < count` only (the others left as they are):
-/// the same power series for `|b| < 1`, and above it the Legendre expansion on the spherical
-/// Bessel functions `j_l`, `l < count`.
-fn monomial_fourier_even(b: f64, count: usize, out: &mut [Complex64; MONOMIALS]) {
+/// [`monomial_fourier`]'s `L_p(b)` for `p < count` in steps of `step` from 0 (the others left as
+/// they are): the power series for `|b| < 1`, and above it the Legendre expansion on the
+/// spherical Bessel functions `j_l`, `l < count`.
+fn monomial_fourier_every(b: f64, count: usize, step: usize, out: &mut [Complex64; MONOMIALS]) {
     let count = count.min(MONOMIALS);
     if b.abs() < 1.0 {
-        for p in (0..count).step_by(2) {
+        for p in (0..count).step_by(step) {
             let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
             for k in 0..24 {
                 if (p + k) % 2 == 0 {
@@ -881,7 +853,7 @@ fn monomial_fourier_even(b: f64, count: usize, out: &mut [Complex64; MONOMIALS])
     let mut j = [0.0; MONOMIALS];
     spherical_bessel(b, &mut j[..count]);
     let c = monomial_legendre();
-    for p in (0..count).step_by(2) {
+    for p in (0..count).step_by(step) {
         let (mut re, mut im) = (0.0, 0.0);
         for (l, &jl) in j.iter().enumerate().take(p + 1) {
             let v = 2.0 * c[p][l] * jl;
