@@ -798,6 +798,7 @@ fn nested(
         let mut moves = [0.0; 6];
         let mut previous = 0.0;
         let mut integral = 0.0;
+        let mut largest: f64 = 0.0;
         let mut estimate = f64::INFINITY;
         // accept at the tolerance, or at the rounding floor of the integrand itself: E(c) is a
         // difference of terms up to ~1e4 times larger than itself at thousands of waves of
@@ -861,10 +862,14 @@ fn nested(
                 *evaluations += n / 2;
             }
             let weights = crate::poly::clenshaw_curtis(points);
-            let mut largest: f64 = 0.0;
+            // the level's largest |value|: the last level's and the new points' (the odd ones;
+            // all three at the first), the same number as the maximum over every point
+            let fresh = if level == 0 { 0..3 } else { 1..n };
+            for k in fresh.step_by(if level == 0 { 1 } else { 2 }) {
+                largest = largest.max(values[k].abs());
+            }
             integral = 0.0;
             for (&v, &w) in values[..points].iter().zip(weights) {
-                largest = largest.max(v.abs());
                 integral += w * v;
             }
             integral *= h;
