@@ -987,6 +987,14 @@ fn cosines() -> &'static [f64; 65] {
 // not change it): the same pieces in `t`, the same nested Clenshaw–Curtis levels accepted by the
 // value's own test, and at each node the same completed square, with two more moments.
 
+/// The integrand of a rule with lanes ([`GaussianDefocus::on_lane_rule`]): at the frequency's
+/// constants and the scale, the value's integrand and the lanes' at the nodes of its first slice
+/// into its second.
+type LaneIntegrand<'a, const N: usize> = dyn Fn(&AtFrequency, f64, &[f64], &mut [[f64; N]]) + 'a;
+
+/// [`LaneIntegrand`] at one frequency ([`nested_lanes`]).
+type LaneBatch<'a, const N: usize> = dyn Fn(&[f64], &mut [[f64; N]]) + 'a;
+
 /// Moments the defocus lane reads: `Q(x)` times the quadratic phase `φ(x)` has two more terms.
 const LANE_TERMS: usize = MAX_TERMS + 2;
 
@@ -1037,7 +1045,7 @@ impl GaussianDefocus {
         &self,
         nu: f64,
         tolerance: f64,
-        integrand: &dyn Fn(&AtFrequency, f64, &[f64], &mut [[f64; N]]),
+        integrand: &LaneIntegrand<'_, N>,
     ) -> ([f64; N], usize, f64) {
         let left_out = 2e-3 * tolerance;
         let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
@@ -1516,7 +1524,7 @@ fn taylor_sum_lanes<V: Lanes>(
 /// and every lane is integrated with the level's weights.
 #[allow(clippy::too_many_arguments)]
 fn nested_lanes<const N: usize>(
-    f: &dyn Fn(&[f64], &mut [[f64; N]]),
+    f: &LaneBatch<'_, N>,
     a: f64,
     b: f64,
     ends: [Option<[f64; N]>; 2],
@@ -1527,7 +1535,7 @@ fn nested_lanes<const N: usize>(
 ) -> ([f64; N], [f64; N]) {
     #[allow(clippy::too_many_arguments)]
     fn piece<const N: usize>(
-        f: &dyn Fn(&[f64], &mut [[f64; N]]),
+        f: &LaneBatch<'_, N>,
         a: f64,
         b: f64,
         ends: &mut [Option<[f64; N]>; 2],
