@@ -1020,6 +1020,14 @@ fn cosines() -> &'static [f64; 65] {
 // not change it): the same pieces in `t`, the same nested Clenshaw–Curtis levels accepted by the
 // value's own test, and at each node the same completed square, with two more moments.
 
+/// The integrand of a rule with lanes ([`GaussianDefocus::on_lane_rule`]): at the frequency's
+/// constants and the scale, the value's integrand and the lanes' at the nodes of its first slice
+/// into its second.
+type LaneIntegrand<'a, const N: usize> = dyn Fn(&AtFrequency, f64, &[f64], &mut [[f64; N]]) + 'a;
+
+/// [`LaneIntegrand`] at one frequency ([`nested_lanes`]).
+type LaneBatch<'a, const N: usize> = dyn Fn(&[f64], &mut [[f64; N]]) + 'a;
+
 /// Moments the defocus lane reads: `Q(x)` times the quadratic phase `φ(x)` has two more terms.
 const LANE_TERMS: usize = MAX_TERMS + 2;
 
@@ -1045,38 +1053,60 @@ impl GaussianDefocus {
         if nu == 0.0 {
             return (1.0, 0.0, 0, 0.0);
         }
+        let integrand = |f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [[f64; 2]]| {
+            for (&t, o) in ts.iter().zip(out) {
+                let (s, c) = cis::sin_cos(t);
+                let (e, d) = self.spectral_and_log_derivative(f, c);
+                *o = [s * s * e.re * scale, s * s * d.re * scale];
+            }
+        };
+        let ([value, derivative], evaluations, error) = self.on_lane_rule(nu, tolerance, &integrand);
+        (value, derivative, evaluations, error)
+    }
+
+    /// The value's rule in the pupil angle with `N − 1` lanes beside it, the loop the
+    /// F-number's lane ([`otf_and_log_derivative`](Self::otf_and_log_derivative)) and the Seidel
+    /// lanes at zero ([`otf_and_seidel_lanes`](Self::otf_and_seidel_lanes)) share: the pieces
+    /// of [`lane_pieces`](Self::lane_pieces), each integrated by [`nested_lanes`] (the value's
+    /// levels and acceptance, lane 0 the value) with its share of the tolerance, the integrand
+    /// at a piece's end handed to the next piece where they meet. `integrand(f, scale, ts,
+    /// out)` fills `out` with the value's integrand `scale · sin²t Re E(cos t)` and the lanes'
+    /// at the nodes `ts` (a level's new nodes in one call). Returns the sums over the pieces, the
+    /// evaluations of E and the value's estimated error (`ESTIMATE_SAFETY` × the accepted
+    /// estimates and what the tolerance let it leave out, as [`otf_estimated`](Self::otf_estimated)).
+    fn on_lane_rule<const N: usize>(
+        &self,
+        nu: f64,
+        tolerance: f64,
+        integrand: &LaneIntegrand<'_, N>,
+    ) -> ([f64; N], usize, f64) {
         let left_out = 2e-3 * tolerance;
         let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
         let (f, erfcx_error) = self.at_frequency_for(nu, tail, tolerance);
         let c_lo = (f.beta * (self.center - tail * self.sigma)).max(0.0);
         if c_lo >= 1.0 {
-            return (0.0, 0.0, 0, left_out);
+            return ([0.0; N], 0, left_out);
         }
         let c_cut = f.beta * (self.center + tail * self.sigma);
         let pieces = self.lane_pieces(&f, tail, c_lo, c_cut);
         let scale = 4.0 / (PI * self.weight);
-        let integrand = |t: f64| {
-            let (s, c) = cis::sin_cos(t);
-            let (e, d) = self.spectral_and_log_derivative(&f, c);
-            [s * s * e.re * scale, s * s * d.re * scale]
-        };
+        let batch = |ts: &[f64], out: &mut [[f64; N]]| integrand(&f, scale, ts, out);
         let mut evaluations = 0;
         let mut error = left_out + erfcx_error;
         let share = (tolerance - erfcx_error).max(0.5 * tolerance) / pieces.len().max(1) as f64;
-        let (mut value, mut derivative) = (0.0, 0.0);
-        let mut shared: Option<(f64, [f64; 2])> = None;
+        let mut total = [0.0; N];
+        let mut shared: Option<(f64, [f64; N])> = None;
         for &(lo, hi, phase) in &pieces {
             let resolved = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
             let known_b = shared.filter(|&(c, _)| c == lo).map(|(_, v)| v);
-            let known_a = (hi >= 1.0).then_some([0.0; 2]);
+            let known_a = (hi >= 1.0).then_some([0.0; N]);
             let (a, b) = (hi.acos(), lo.acos());
             let (integral, at_a) =
-                nested_lanes(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
-            value += integral[0];
-            derivative += integral[1];
+                nested_lanes(&batch, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
+            total.iter_mut().zip(integral).for_each(|(t, i)| *t += i);
             shared = Some((hi, at_a));
         }
-        (value, derivative, evaluations, ESTIMATE_SAFETY * error)
+        (total, evaluations, ESTIMATE_SAFETY * error)
     }
 
     /// The pieces `(lo, hi, phase)` in `c` of [`otf_estimated`](Self::otf_estimated)'s rule at
@@ -1301,38 +1331,63 @@ impl GaussianDefocus {
         if self.q.len() + 3 > SEIDEL_TERMS {
             return None;
         }
-        let left_out = 2e-3 * tolerance;
-        let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
-        let (f, erfcx_error) = self.at_frequency_for(nu, tail, tolerance);
-        let c_lo = (f.beta * (self.center - tail * self.sigma)).max(0.0);
-        if c_lo >= 1.0 {
-            return Some((0.0, [0.0; 2], 0, left_out));
+        let integrand =
+            |f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [[f64; 3]]| self.seidel_batch(f, scale, ts, out);
+        let ([value, w040, w220], evaluations, error) = self.on_lane_rule(nu, tolerance, &integrand);
+        Some((value, [w040, w220], evaluations, error))
+    }
+
+    /// The Seidel lanes' integrand in the pupil angle at one node `t`: `scale sin²t` times the
+    /// real parts of `E` and of the two lanes' spectral integrals
+    /// ([`spectral_and_seidel_lanes`](Self::spectral_and_seidel_lanes)).
+    fn seidel_integrand(&self, f: &AtFrequency, scale: f64, t: f64) -> [f64; 3] {
+        let (s, c) = cis::sin_cos(t);
+        let (e, [w040, w220]) = self.spectral_and_seidel_lanes(f, c, s * s);
+        let w = s * s * scale;
+        [w * e.re, w * w040.re, w * w220.re]
+    }
+
+    /// [`seidel_integrand`](Self::seidel_integrand) at the nodes `ts` into `out`, as
+    /// [`batch`](Self::batch) takes the value's: eight at a time ([`seidel_lanes`](Self::seidel_lanes)
+    /// on [`f64x8`]) for a group of five to eight (filled up with copies of its last node), four
+    /// at a time for two to four, a single node alone, and one by one where the kernel refuses
+    /// a group (lanes of two cases, the Gaussian truncated at λ = 0). Each lane is the scalar
+    /// value to the last bit whatever its group.
+    #[inline(always)]
+    fn seidel_batch(&self, f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [[f64; 3]]) {
+        for (t, o) in ts.chunks(8).zip(out.chunks_mut(8)) {
+            let lanes = t.len();
+            let done = if lanes >= 5 {
+                self.seidel_group::<f64x8>(f, scale, t, o)
+            } else if lanes >= 2 {
+                self.seidel_group::<f64x4>(f, scale, t, o)
+            } else {
+                false
+            };
+            if !done {
+                for (&t, o) in t.iter().zip(o) {
+                    *o = self.seidel_integrand(f, scale, t);
+                }
+            }
         }
-        let c_cut = f.beta * (self.center + tail * self.sigma);
-        let pieces = self.lane_pieces(&f, tail, c_lo, c_cut);
-        let scale = 4.0 / (PI * self.weight);
-        let integrand = |t: f64| {
-            let (s, c) = cis::sin_cos(t);
-            let (e, [w040, w220]) = self.spectral_and_seidel_lanes(&f, c, s * s);
-            let w = s * s * scale;
-            [w * e.re, w * w040.re, w * w220.re]
-        };
-        let mut evaluations = 0;
-        let mut error = left_out + erfcx_error;
-        let share = (tolerance - erfcx_error).max(0.5 * tolerance) / pieces.len().max(1) as f64;
-        let mut total = [0.0; 3];
-        let mut shared: Option<(f64, [f64; 3])> = None;
-        for &(lo, hi, phase) in &pieces {
-            let resolved = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
-            let known_b = shared.filter(|&(c, _)| c == lo).map(|(_, v)| v);
-            let known_a = (hi >= 1.0).then_some([0.0; 3]);
-            let (a, b) = (hi.acos(), lo.acos());
-            let (integral, at_a) =
-                nested_lanes(&integrand, a, b, [known_a, known_b], share, resolved, &mut evaluations, &mut error);
-            total.iter_mut().zip(integral).for_each(|(t, i)| *t += i);
-            shared = Some((hi, at_a));
+    }
+
+    /// One group of [`seidel_batch`](Self::seidel_batch) on the lanes of `V` (`t.len()` ≤ the
+    /// lanes, the rest copies of the last node); false where the kernel refuses it.
+    #[inline(always)]
+    fn seidel_group<V: Lanes>(&self, f: &AtFrequency, scale: f64, t: &[f64], out: &mut [[f64; 3]]) -> bool {
+        let lanes = t.len();
+        let (s, c) = cis::sin_cos_lanes(V::from_fn(|l| t[l.min(lanes - 1)]));
+        let Some(found) = self.seidel_lanes(f, c, s * s) else { return false };
+        let w = s * s * V::splat(scale);
+        let mut values = [[0.0; 8]; 3];
+        for (v, x) in values.iter_mut().zip(found) {
+            (w * x).write(v);
         }
-        Some((total[0], [total[1], total[2]], evaluations, ESTIMATE_SAFETY * error))
+        for (l, o) in out.iter_mut().enumerate() {
+            *o = [values[0][l], values[1][l], values[2][l]];
+        }
+        true
     }
 
     /// `E(c)` as [`spectral`](Self::spectral) and the two Seidel lanes' spectral integrals
@@ -1376,15 +1431,133 @@ impl GaussianDefocus {
         let w220 = taylor_sum(&p220[..terms + 1], &moments, m) * i;
         (value, [w040, w220])
     }
+
+    /// [`spectral_and_seidel_lanes`](Self::spectral_and_seidel_lanes) on the lanes of `V` (four
+    /// or eight points `c`, `sin2` = `1 − c²` each), the real parts of `E` and of the two lanes'
+    /// `i ∫ Q g e^{…} dx`: the same moments as [`lane_moments`](Self::lane_moments) and the
+    /// same Taylor sums as [`taylor_sum`], by the same operations in the same order on each lane
+    /// (each lane is the scalar value to the last bit, as [`spectral_lanes`](Self::spectral_lanes)
+    /// is `E`'s). `None` where the lanes do not share one case (some cut and some not, one below
+    /// the Gaussian's tail, the Gaussian truncated at λ = 0, a Faddeeva argument beyond its
+    /// series): the caller then takes them one by one.
+    #[inline(always)]
+    fn seidel_lanes<V: Lanes>(&self, f: &AtFrequency, c: V, sin2: V) -> Option<[V; 3]> {
+        if self.lower_at(f.tail).is_some() || f.beta <= 0.0 {
+            return None;
+        }
+        let k = V::splat;
+        let d = c - k(f.beta * self.center);
+        let phi0 = k(f.a_mu) * d;
+        let phi1 = k(self.sigma) * (k(f.a1) * d - k(f.beta * f.a_mu));
+        let cut_x = c * k(f.inv_beta_sigma) - k(f.center_over_sigma);
+        let upper = cut_x.simd_lt(k(f.tail));
+        let cut = upper.all();
+        if (!cut && upper.any()) || (cut && cut_x.simd_lt(k(-f.tail)).any()) {
+            return None;
+        }
+        let terms = self.q.len();
+        let count = terms + 3;
+        // the moments M_j of y = x − m, j < count (`lane_moments`)
+        let inv_2a = Complexes::<V>::splat(f.inv_2a);
+        let m = Complexes::<V>::imaginary(phi1).mul(inv_2a);
+        let kk = Complexes::<V>::imaginary(phi0).add(Complexes::<V>::splat(f.a).mul(m).mul(m));
+        let exp_k = || {
+            let (sin, cos) = cis::sin_cos_lanes(kk.im);
+            let e = expo::exp_lanes(kk.re);
+            Complexes { re: cos, im: sin }.scale(e)
+        };
+        let mut moments = [Complexes::<V>::ZERO; SEIDEL_TERMS];
+        if !cut {
+            moments[0] = exp_k().mul(Complexes::<V>::splat(f.root_pi_over_root_a));
+            for j in 2..count {
+                moments[j] = moments[j - 2].scale(k((j - 1) as f64)).mul(inv_2a);
+            }
+        } else {
+            let x = cut_x;
+            let e_hi = Complexes::<V>::real(expo::exp_lanes(k(-0.5) * x * x));
+            let y_hi = Complexes::<V>::real_minus(x, m);
+            let z = Complexes::<V>::splat(f.sqrt_a).mul(y_hi);
+            let positive = z.re.simd_ge(V::ZERO);
+            let w = f.erfcx.eval_lanes(Complexes::<V>::select(positive, z, z.neg()))?;
+            let rest_hi = Complexes::<V>::select(positive, e_hi.neg().mul(w), e_hi.mul(w));
+            let mut difference = rest_hi.sub(Complexes::<V>::ZERO);
+            if positive.any() {
+                difference = Complexes::<V>::select(positive, difference.add(exp_k().scale(k(2.0))), difference);
+            }
+            moments[0] = difference.mul(Complexes::<V>::splat(0.5 * f.root_pi_over_root_a));
+            let mut p_hi = Complexes::<V>::ONE;
+            for j in 1..count {
+                let boundary = Complexes::<V>::ZERO.sub(p_hi.mul(e_hi));
+                p_hi = p_hi.mul(y_hi);
+                let previous = if j >= 2 { moments[j - 2].scale(k((j - 1) as f64)) } else { Complexes::<V>::ZERO };
+                moments[j] = previous.add(boundary).mul(inv_2a);
+            }
+        }
+        // the lanes' polynomials (`spectral_and_seidel_lanes`): u = d − βσx, s = βμ + βσx
+        let bs = f.beta * self.sigma;
+        let (u0, u1) = (d, k(-bs));
+        let (s0, s1) = (k(f.beta * self.center), k(bs));
+        let h = [u0 * u0 + s0 * s0 + sin2 / k(3.0), k(2.0) * (u0 * u1 + s0 * s1), u1 * u1 + s1 * s1];
+        let k040 = k(16.0 * PI * f.beta);
+        let g040 = [k040 * u0 * h[0], k040 * (u0 * h[1] + u1 * h[0]), k040 * (u0 * h[2] + u1 * h[1]), k040 * u1 * h[2]];
+        let k220 = k(8.0 * PI * f.beta);
+        let g220 = [k220 * u0, k220 * u1];
+        let mut q = [V::ZERO; SEIDEL_TERMS];
+        let mut p040 = [V::ZERO; SEIDEL_TERMS];
+        let mut p220 = [V::ZERO; SEIDEL_TERMS];
+        for (kq, &v) in self.q.iter().enumerate() {
+            q[kq] = k(v);
+            for (j, &g) in g040.iter().enumerate() {
+                p040[kq + j] = p040[kq + j] + k(v) * g;
+            }
+            for (j, &g) in g220.iter().enumerate() {
+                p220[kq + j] = p220[kq + j] + k(v) * g;
+            }
+        }
+        let value = taylor_sum_lanes(&q[..terms], &moments, m);
+        let w040 = taylor_sum_lanes(&p040[..terms + 3], &moments, m);
+        let w220 = taylor_sum_lanes(&p220[..terms + 1], &moments, m);
+        // Re(z · i) as `num_complex` forms it: re · 0 − im · 1
+        let times_i = |z: Complexes<V>| z.re * V::ZERO - z.im * V::ONE;
+        Some([value.re, times_i(w040), times_i(w220)])
+    }
+}
+
+/// [`taylor_sum`] on the lanes of `V` (the real `coefficients` per lane), by the same operations
+/// in the same order.
+#[inline(always)]
+fn taylor_sum_lanes<V: Lanes>(
+    coefficients: &[V],
+    moments: &[Complexes<V>; SEIDEL_TERMS],
+    m: Complexes<V>,
+) -> Complexes<V> {
+    let terms = coefficients.len();
+    let mut r = [Complexes::<V>::ZERO; SEIDEL_TERMS];
+    for (slot, &v) in r.iter_mut().zip(coefficients) {
+        *slot = Complexes::<V>::real(v);
+    }
+    let mut total = Complexes::<V>::ZERO;
+    for (j, moment) in moments.iter().enumerate().take(terms) {
+        let mut acc = Complexes::<V>::ZERO;
+        for v in r[..terms - j].iter_mut().rev() {
+            let t = v.add(acc.mul(m));
+            *v = acc;
+            acc = t;
+        }
+        total = total.add(acc.mul(*moment));
+    }
+    total
 }
 
 /// [`nested`] with `N − 1` lanes beside the value (the F-number's derivative; the Seidel lanes at
-/// zero): `f` gives the value's integrand and the lanes' at each point; the levels, the
-/// bisections and the acceptance are the value's (lane 0) alone, so the value is the one
-/// [`nested`] returns, and every lane is integrated with the level's weights.
+/// zero): `f` fills its second slice with the value's integrand and the lanes' at the points of
+/// its first (a level's new points in one call: the first three levels' seven together, with
+/// the ends the caller does not know, as [`nested`] asks them); the levels, the bisections and
+/// the acceptance are the value's (lane 0) alone, so the value is the one [`nested`] returns,
+/// and every lane is integrated with the level's weights.
 #[allow(clippy::too_many_arguments)]
 fn nested_lanes<const N: usize>(
-    f: &dyn Fn(f64) -> [f64; N],
+    f: &LaneBatch<'_, N>,
     a: f64,
     b: f64,
     ends: [Option<[f64; N]>; 2],
@@ -1395,10 +1568,10 @@ fn nested_lanes<const N: usize>(
 ) -> ([f64; N], [f64; N]) {
     #[allow(clippy::too_many_arguments)]
     fn piece<const N: usize>(
-        f: &dyn Fn(f64) -> [f64; N],
+        f: &LaneBatch<'_, N>,
         a: f64,
         b: f64,
-        ends: [[f64; N]; 2],
+        ends: &mut [Option<[f64; N]>; 2],
         tol: f64,
         resolved: f64,
         depth: u32,
@@ -1409,6 +1582,7 @@ fn nested_lanes<const N: usize>(
         let cosines = cosines();
         let mut values = [0.0; 65];
         let mut lanes = [[0.0; N]; 65];
+        let mut first = [[0.0; N]; 7];
         let mut moves = [0.0; 6];
         let mut previous = 0.0;
         let mut integral = [0.0; N];
@@ -1418,15 +1592,47 @@ fn nested_lanes<const N: usize>(
             let n = points - 1;
             let stride = 64 / n;
             if level == 0 {
-                let middle = f(c);
-                lanes[..3].copy_from_slice(&[ends[1], middle, ends[0]]);
-                *evaluations += 1;
+                // the centre, the 5-point level's two and the 9-point level's four new points,
+                // and the ends the caller does not know, in one call (as `nested`)
+                let mut nodes = [c; 9];
+                for (slot, m) in nodes[1..7].iter_mut().zip([16, 48, 8, 24, 40, 56]) {
+                    *slot = c + h * cosines[m];
+                }
+                let mut count = 7;
+                for (end, x) in ends.iter().zip([a, b]) {
+                    if end.is_none() {
+                        nodes[count] = x;
+                        count += 1;
+                    }
+                }
+                let mut out = [[0.0; N]; 9];
+                f(&nodes[..count], &mut out[..count]);
+                first.copy_from_slice(&out[..7]);
+                for (next, end) in (7..).zip(ends.iter_mut().filter(|e| e.is_none())) {
+                    *end = Some(out[next]);
+                }
+                *evaluations += count - 6;
+                let [Some(at_a), Some(at_b)] = *ends else { unreachable!("both ends filled above") };
+                lanes[..3].copy_from_slice(&[at_b, first[0], at_a]);
             } else {
                 for k in (0..=n / 2).rev() {
                     lanes[2 * k] = lanes[k];
                 }
-                for k in (1..n).step_by(2) {
-                    lanes[k] = f(c + h * cosines[k * stride]);
+                if level <= 2 {
+                    let fresh = if level == 1 { &first[1..3] } else { &first[3..7] };
+                    for (&v, k) in fresh.iter().zip((1..n).step_by(2)) {
+                        lanes[k] = v;
+                    }
+                } else {
+                    let mut nodes = [0.0; 32];
+                    for (slot, k) in nodes.iter_mut().zip((1..n).step_by(2)) {
+                        *slot = c + h * cosines[k * stride];
+                    }
+                    let mut fresh = [[0.0; N]; 32];
+                    f(&nodes[..n / 2], &mut fresh[..n / 2]);
+                    for (&v, k) in fresh.iter().zip((1..n).step_by(2)) {
+                        lanes[k] = v;
+                    }
                 }
                 *evaluations += n / 2;
             }
@@ -1472,24 +1678,29 @@ fn nested_lanes<const N: usize>(
             *accepted += estimate;
             return integral;
         }
-        let middle = lanes[32];
-        let left = piece(f, a, c, [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
-        let right = piece(f, c, b, [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
+        // the halves' ends are known: a, the centre (the first level's middle point) and b
+        let middle = Some(lanes[32]);
+        let left = piece(f, a, c, &mut [ends[0], middle], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
+        let right = piece(f, c, b, &mut [middle, ends[1]], 0.5 * tol, 0.5 * resolved, depth + 1, evaluations, accepted);
         let mut sum = left;
         sum.iter_mut().zip(right).for_each(|(s, r)| *s += r);
         sum
     }
-    let mut end = |known: Option<[f64; N]>, t: f64| {
-        known.unwrap_or_else(|| {
-            *evaluations += 1;
-            f(t)
-        })
-    };
-    let ends = [end(ends[0], a), end(ends[1], b)];
     if b <= a {
+        let mut end = |known: Option<[f64; N]>, t: f64| {
+            known.unwrap_or_else(|| {
+                *evaluations += 1;
+                let mut value = [[0.0; N]];
+                f(&[t], &mut value);
+                value[0]
+            })
+        };
+        let ends = [end(ends[0], a), end(ends[1], b)];
         return ([0.0; N], ends[0]);
     }
-    (piece(f, a, b, ends, tolerance, resolved, 0, evaluations, error), ends[0])
+    let mut ends = ends;
+    let integral = piece(f, a, b, &mut ends, tolerance, resolved, 0, evaluations, error);
+    (integral, ends[0].unwrap_or([0.0; N]))
 }
 
 #[cfg(test)]
@@ -1608,6 +1819,116 @@ mod tests {
             assert!((lanes[0] - d040).abs() <= 1e-9 * bound, "{} vs {d040}", lanes[0]);
             assert!((lanes[1] - d220).abs() <= 1e-9 * bound, "{} vs {d220}", lanes[1]);
             assert!(d040.abs() > 1e-3 * bound && d220.abs() > 1e-3 * bound, "a test that can fail: {d040} {d220}");
+        }
+    }
+
+    /// The Seidel lanes' kernel on four and eight lanes ([`GaussianDefocus::seidel_lanes`]) is
+    /// the scalar integrand ([`GaussianDefocus::seidel_integrand`]: `lane_moments` and
+    /// `taylor_sum`) to the last bit on every lane, over the resolved cases' cut and uncut zones,
+    /// groups of consecutive and of spread nodes, and polynomials of one to six terms; groups
+    /// of two cases and a band reaching λ = 0 are refused, and `seidel_batch` then serves them
+    /// one by one, each lane still the scalar value.
+    #[test]
+    fn seidel_lanes_are_the_scalar_integrand_to_the_last_bit() {
+        let (mut four, mut eight, mut refused) = (0, 0, 0);
+        let mut check = |g: &GaussianDefocus, nu: f64, tolerance: f64| {
+            let tail = (2.0 * (1e3 / tolerance).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+            let (f, _) = g.at_frequency_for(nu, tail, tolerance);
+            let scale = 4.0 / (PI * g.weight);
+            // the pupil angle over [0, π/2] in 2000 points; groups of consecutive and spread ones
+            let ts: Vec<f64> = (0..2000).map(|i| (i as f64 + 0.37) / 2000.0 * 0.5 * PI).collect();
+            let mut groups: Vec<Vec<f64>> = ts.chunks(8).map(|c| c.to_vec()).collect();
+            groups.extend(ts.chunks(4).map(|c| c.to_vec()));
+            groups.extend((0..240).map(|i| (0..8).map(|l| ts[i + 250 * l]).collect()));
+            groups.extend((0..490).map(|i| (0..4).map(|l| ts[i + 500 * l]).collect()));
+            groups.extend((0..300).map(|i| ts[3 * i..3 * i + 1 + i % 7].to_vec()));
+            for group in groups {
+                let mut out = [[0.0; 3]; 8];
+                g.seidel_batch(&f, scale, &group, &mut out[..group.len()]);
+                match group.len() {
+                    8 => eight += usize::from(g.seidel_group::<f64x8>(&f, scale, &group, &mut [[0.0; 3]; 8])),
+                    4 => four += usize::from(g.seidel_group::<f64x4>(&f, scale, &group, &mut [[0.0; 3]; 4])),
+                    _ => {}
+                }
+                for (&t, o) in group.iter().zip(&out) {
+                    let scalar = g.seidel_integrand(&f, scale, t);
+                    assert_eq!(o.map(f64::to_bits), scalar.map(f64::to_bits), "t {t}, ν {nu}: {o:?} vs {scalar:?}");
+                }
+            }
+        };
+        // the resolved cases' scenes and frequencies (`for_each_resolved_case`, without its
+        // references)
+        let (f0, l0) = (3.36e-3, 800e-9);
+        for f_number in [0.5, 2.5, 10.0] {
+            for range in [10e-9, 100e-9, 600e-9] {
+                let k = f0 / (8.0 * f_number * f_number);
+                let g = GaussianDefocus::new(l0, range / (2.0 * 2f64.sqrt()), &[0.0, 1.0], 0.15, k, -k / l0, f_number);
+                for share in [0.04, 0.25, 0.42, 0.71, 1.2] {
+                    let nu = share / (f_number * l0);
+                    check(&g, nu, 1e-7);
+                    check(&g, nu, 1e-12);
+                }
+            }
+        }
+        // polynomials of up to six terms (the most the lanes take), chromatic and not
+        for q in [&[1.0][..], &[0.3, -0.2, 0.05], &[1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125]] {
+            for range in [2e-9, 50e-9, 200e-9] {
+                let g = paper(range, q);
+                for nu in [2e4, 1e5, 3e5] {
+                    check(&g, nu, 1e-9);
+                }
+            }
+        }
+        assert!(four > 10_000 && eight > 5_000, "groups taken on the lanes: {four} of four, {eight} of eight");
+        // a band reaching λ = 0 within the tail: refused, served one by one
+        let broad = paper(900e-9, &[0.0, 1.0]);
+        let f = broad.at_frequency(5e4, TAIL_SIGMAS);
+        let c = f64x4::new([0.2, 0.3, 0.4, 0.5]);
+        refused += usize::from(broad.seidel_lanes(&f, c, f64x4::ONE - c * c).is_none());
+        // a group straddling the end of the cut zone: refused
+        let g = paper(50e-9, &[0.0, 1.0]);
+        let f = g.at_frequency(9e4, TAIL_SIGMAS);
+        let end = f.beta * (g.center + TAIL_SIGMAS * g.sigma);
+        let c = f64x4::new([end - 1e-3, end - 1e-4, end + 1e-4, end + 1e-3]);
+        refused += usize::from(g.seidel_lanes(&f, c, f64x4::ONE - c * c).is_none());
+        assert_eq!(refused, 2);
+        let broad_check = |g: &GaussianDefocus| {
+            let f = g.at_frequency(5e4, TAIL_SIGMAS);
+            let ts = [0.1, 0.5, 0.9, 1.2, 1.3];
+            let mut out = [[0.0; 3]; 5];
+            g.seidel_batch(&f, 1.0, &ts, &mut out);
+            for (&t, o) in ts.iter().zip(&out) {
+                assert_eq!(o.map(f64::to_bits), g.seidel_integrand(&f, 1.0, t).map(f64::to_bits));
+            }
+        };
+        broad_check(&broad);
+    }
+
+    /// The Seidel lanes at zero on the rule in t ([`GaussianDefocus::otf_and_seidel_lanes`],
+    /// its nodes four and eight at a time) are the rule's sums with the scalar integrand at every
+    /// node, one node a call, to the last bit, with the same evaluations and error estimate;
+    /// and its value is the value's rule's within the tolerance.
+    #[test]
+    fn seidel_lanes_on_the_rule_are_the_scalar_integrands() {
+        for (range, q) in [(50e-9, &[0.0, 1.0][..]), (200e-9, &[1.0][..]), (2e-9, &[0.3, -0.2, 0.05][..])] {
+            let g = paper(range, q);
+            for nu in [1e4, 6e4, 1.5e5, 3e5] {
+                for tolerance in [1e-6, 1e-10] {
+                    let (value, lanes, evaluations, error) = g.otf_and_seidel_lanes(nu, tolerance).unwrap();
+                    let scalar = |f: &AtFrequency, scale: f64, ts: &[f64], out: &mut [[f64; 3]]| {
+                        for (&t, o) in ts.iter().zip(out) {
+                            *o = g.seidel_integrand(f, scale, t);
+                        }
+                    };
+                    let (found, n, e) = g.on_lane_rule(nu, tolerance, &scalar);
+                    assert_eq!([value, lanes[0], lanes[1]].map(f64::to_bits), found.map(f64::to_bits), "ν {nu}");
+                    assert_eq!((evaluations, error.to_bits()), (n, e.to_bits()));
+                    assert!(evaluations > 0 && lanes[0] != 0.0);
+                    // the value the lanes' rule gives is the value's own rule's to rounding
+                    let (alone, _, _) = g.otf_estimated(nu, tolerance);
+                    assert!((value - alone).abs() <= tolerance, "{value} vs {alone}");
+                }
+            }
         }
     }
 
