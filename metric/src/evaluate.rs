@@ -461,7 +461,10 @@ pub(crate) fn evaluate_field_with_lanes(
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let field = scene.field();
     let options = scene.options();
-    let settings = options.settings();
+    // the obscuration's lane rides on the value's own FFT pass, from each grid's pupil spectrum
+    // (docs/physics.md, "Gradients: the edge's motion on the FFT path"; the value unchanged)
+    let settings =
+        optics::Settings { edge_lane: grid.contains(&optics::WavefrontDirection::Obscuration), ..options.settings() };
     defocus_up_front(scene, &detected, nyquist)?;
     let folded = Folded::of(lens, &detected);
     let parts = folded.parts();

@@ -166,6 +166,7 @@ impl Options {
             overlap: self.overlap,
             spectral_tolerance: None,
             overlap_always: false,
+            edge_lane: false,
             table_rule: self.table_rule,
         }
     }

@@ -3265,7 +3265,8 @@ mod tests {
     /// where the circle crosses a corner or touches a side), and N ∝ 1 − ε² (the area fraction on
     /// τ1 and T) gives ∂N = −2ε N/(1 − ε²) within 1e-9; centred at ε = 0.3, and through an
     /// annulus decentred by 0.15 of the radius (the OTF then depends on direction, the
-    /// decentred defocus a tilt in the grid) at ε = 0.45.
+    /// decentred defocus a tilt in the grid) at ε = 0.45. The value beside the gradient is the
+    /// evaluation's bit for bit (the lane computed in the value's own pass).
     #[test]
     fn obscuration_gradient_is_the_derivative_of_the_discrete_rule() {
         let paper = scene::read(None).unwrap();
@@ -3277,6 +3278,9 @@ mod tests {
                 assignment("lens.iris_decentre_x", decentre),
             ];
             let g = gradient(&paper, &overrides, &owned(&["lens.obscuration"])).unwrap();
+            // the lane rides on the value's pass: the value is the evaluation's bit for bit
+            let plain = metric::evaluate(&scene::build_from(&paper, &overrides).unwrap()).unwrap();
+            assert_eq!((g.mean_mtf, g.asnr), (plain.mean_mtf, plain.asnr));
             let h = 1e-5;
             let at = |v: f64| {
                 let mut set: Vec<String> =

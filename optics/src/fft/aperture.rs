@@ -224,6 +224,15 @@ impl Aperture {
         total / PI
     }
 
+    /// The inner radius ε of a disc shape (an annulus, ring or sector's; 0 for the full disc), in
+    /// units of the full aperture's radius; `None` for a mask.
+    pub fn obscuration(&self) -> Option<f64> {
+        match &self.shape {
+            Shape::Disc { obscuration, .. } => Some(*obscuration),
+            Shape::Mask(_) => None,
+        }
+    }
+
     /// The rate at which the area of the rectangle `[x0, x1] × [y0, y1]` (grid coordinates, as
     /// [`area_in`](Self::area_in)) that transmits moves with the obscuration ε (the inner
     /// radius of a disc shape, in units of the full aperture's radius): minus the length of the

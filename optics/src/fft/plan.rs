@@ -195,6 +195,9 @@ pub struct OtfPlan {
     work: Vec<Complex64>,
     lags: Vec<Complex64>,
     scratch: Vec<Complex64>,
+    /// the pupil spectrum kept while a derivative's spectrum is in `work`
+    /// ([`otf_and_edge_derivative`](Self::otf_and_edge_derivative)); empty until first used
+    kept: Vec<Complex64>,
 }
 
 impl Clone for OtfPlan {
@@ -206,6 +209,7 @@ impl Clone for OtfPlan {
             work: self.work.clone(),
             lags: self.lags.clone(),
             scratch: self.scratch.clone(),
+            kept: self.kept.clone(),
             ..*self
         }
     }
@@ -248,6 +252,7 @@ impl OtfPlan {
             work: vec![zero; m * m],
             lags: vec![zero; (half + 1) * m],
             scratch: vec![zero; scratch_len],
+            kept: Vec::new(),
         })
     }
 
@@ -288,28 +293,40 @@ impl OtfPlan {
     /// `F = DFT₂(P)` of the zero-padded pupil field whose row `j` (`N` values) `fill(j, row)`
     /// writes, left transposed in `work` (`work[qx M + qy]`).
     fn spectrum_of(&mut self, fill: impl Fn(usize, &mut [Complex64])) {
+        self.spectrum_of_rows(0..self.n, fill);
+    }
+
+    /// [`spectrum_of`](Self::spectrum_of) of a field that is zero outside the rows `rows`
+    /// (`fill` is called for those only): the other rows' transforms along x are zero, exactly,
+    /// and are not computed; the spectrum is the same bit for bit as with every row filled.
+    fn spectrum_of_rows(&mut self, rows: std::ops::Range<usize>, fill: impl Fn(usize, &mut [Complex64])) {
         let (n, m) = (self.n, self.m);
         let zero = Complex64::new(0.0, 0.0);
-        for j in 0..n {
+        let rows = rows.start.min(n)..rows.end.min(n).max(rows.start.min(n));
+        let (r_lo, r_hi) = (rows.start, rows.end);
+        for j in rows.clone() {
             let row = &mut self.rows[j * m..(j + 1) * m];
             row[n..].fill(zero);
             fill(j, &mut row[..n]);
         }
-        // along x: the N non-zero rows only
-        self.forward.process_with_scratch(&mut self.rows, &mut self.scratch);
-        // transpose into work (rows N..M of the padded grid are zero)
+        // along x: the N non-zero rows only (of them, those in `rows`)
+        if r_hi > r_lo {
+            self.forward.process_with_scratch(&mut self.rows[r_lo * m..r_hi * m], &mut self.scratch);
+        }
+        // transpose into work (the rows outside `rows`, and N..M of the padded grid, are zero)
         const B: usize = 32;
         for c0 in (0..m).step_by(B) {
-            for r0 in (0..n).step_by(B) {
+            for r0 in (r_lo..r_hi).step_by(B) {
                 for c in c0..(c0 + B).min(m) {
-                    for r in r0..(r0 + B).min(n) {
+                    for r in r0..(r0 + B).min(r_hi) {
                         self.work[c * m + r] = self.rows[r * m + c];
                     }
                 }
             }
         }
         for c in 0..m {
-            self.work[c * m + n..(c + 1) * m].fill(zero);
+            self.work[c * m..c * m + r_lo].fill(zero);
+            self.work[c * m + r_hi..(c + 1) * m].fill(zero);
         }
         // along y
         self.forward.process_with_scratch(&mut self.work, &mut self.scratch);
@@ -434,6 +451,55 @@ impl OtfPlan {
             }
             grid.grid[zero] = Complex64::new(0.0, 0.0);
         }
+    }
+
+    /// The OTF of `pupil` at `wavelength_m` ([`otf`](Self::otf), the same grid bit for bit) and,
+    /// into `derivative`, its derivative where the pupil's inner edge moves (the obscuration ε:
+    /// docs/physics.md, "Gradients: the edge's motion on the FFT path"): `d_field` is the field's
+    /// derivative `∂P` on the rows `rows` (`rows.len() · N` values, row-major from row
+    /// `rows.start`; zero on the other rows) and `d_weight` the
+    /// normalization's `∂(Σ A)`. As [`otf_and_field_derivatives`](Self::otf_and_field_derivatives),
+    /// `∂OTF = IDFT₂(2 Re(F* DFT₂ ∂P))/(M² Σ A) − OTF · ∂(Σ A)/Σ A`, the zero lag's 0, with `F`
+    /// the value's own pupil spectrum kept between the two transforms: one more forward
+    /// transform (along x only the rows of `rows`) and one more inverse transform than the value.
+    ///
+    /// # Panics
+    /// As [`otf`](Self::otf), or if `rows` is not within `0..N` or `d_field.len()` is not
+    /// `rows.len() · N`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn otf_and_edge_derivative(
+        &mut self,
+        pupil: &SampledPupil,
+        wavelength_m: f64,
+        d_field: &[Complex64],
+        rows: std::ops::Range<usize>,
+        d_weight: f64,
+        out: &mut Otf,
+        derivative: &mut Otf,
+    ) {
+        let n = self.n;
+        assert!(rows.start <= rows.end && rows.end <= n, "rows {rows:?} for a plan with N = {n}");
+        assert_eq!(
+            d_field.len(),
+            rows.len() * n,
+            "a field's derivative of {} values for {} rows of N = {n}",
+            d_field.len(),
+            rows.len()
+        );
+        self.pupil_spectrum(pupil, wavelength_m);
+        let weight = pupil.amplitude.iter().sum::<f64>();
+        let mut kept = std::mem::take(&mut self.kept);
+        kept.clone_from(&self.work);
+        self.autocorrelation(weight, out);
+        let first = rows.start;
+        self.spectrum_of_rows(rows, |j, row| row.copy_from_slice(&d_field[(j - first) * n..(j - first + 1) * n]));
+        self.autocorrelation_of(weight, derivative, Some(&kept));
+        self.kept = kept;
+        let rate = if weight > 0.0 { d_weight / weight } else { 0.0 };
+        for (g, o) in derivative.grid.iter_mut().zip(&out.grid) {
+            *g -= o * rate;
+        }
+        derivative.grid[self.half * (2 * self.half + 1) + self.half] = Complex64::new(0.0, 0.0);
     }
 
     /// The OTF grid from the pupil spectrum in `work`: `conj IDFT₂(|F|²) / (M² weight)` at the
@@ -875,6 +941,74 @@ mod tests {
         }
         assert!(largest > 0.1, "{largest}");
         assert_eq!(d[0].sample(0, 0), Complex64::new(0.0, 0.0));
+    }
+
+    /// The grid's derivative in the obscuration from the value's own pupil spectrum
+    /// ([`OtfPlan::otf_and_edge_derivative`]) against central differences of the grids of the
+    /// sampled annulus at ε ± 1e-6 ([`OtfPlan::otf`] of [`SampledPupil::new`], the value's own
+    /// path; truncation ~1e-12): 32 samples, ε = 0.3 and a sector of a ring at ε = 0.45, with
+    /// defocus and coma. The field's derivative is written here on every pixel (each pixel's arc
+    /// rate from [`Aperture::obscuration_rate_in`], the whole grid), and given again on the rows
+    /// the circle crosses only: the same grids bit for bit. The value's grid is `otf`'s bit for
+    /// bit.
+    #[test]
+    fn edge_derivative_matches_differences_of_the_value_grids() {
+        let n = 32;
+        let h = 2.0 / n as f64;
+        let lambda = 1e-6;
+        let aberrations = Aberrations { w020_m: 0.4e-6, w131_m: 0.3e-6, field: 1.0, ..Aberrations::default() };
+        let shapes: [(f64, Option<(f64, f64)>); 2] = [(0.3, None), (0.45, Some((0.3, 2.6)))];
+        for (eps, sector) in shapes {
+            let aperture = |e: f64| Aperture::disc(e, sector).unwrap();
+            let pupil = SampledPupil::new(n, &aperture(eps), &aberrations).unwrap();
+            let k = TAU / lambda;
+            let (mut moved, mut d_weight) = (vec![Complex64::new(0.0, 0.0); n * n], 0.0);
+            for j in 0..n {
+                for i in 0..n {
+                    let (x0, y0) = (-1.0 + i as f64 * h, -1.0 + j as f64 * h);
+                    let rate = aperture(eps).obscuration_rate_in(x0, x0 + h, y0, y0 + h).unwrap() / (h * h);
+                    d_weight += rate;
+                    moved[j * n + i] = Complex64::from_polar(rate, k * pupil.opd_m()[j * n + i]);
+                }
+            }
+            let mut plan = OtfPlan::new(n, 0.9).unwrap();
+            let (mut otf, mut d) = (Otf::new(), Otf::new());
+            plan.otf_and_edge_derivative(&pupil, lambda, &moved, 0..n, d_weight, &mut otf, &mut d);
+            // the rows the circle crosses
+            let rows = (0..n).filter(|&j| moved[j * n..(j + 1) * n].iter().any(|z| z.norm() > 0.0));
+            let (lo, hi) = (rows.clone().min().unwrap(), rows.max().unwrap() + 1);
+            assert!(lo > 0 && hi < n, "rows {lo}..{hi}");
+            let (mut otf_rows, mut d_rows) = (Otf::new(), Otf::new());
+            plan.otf_and_edge_derivative(
+                &pupil,
+                lambda,
+                &moved[lo * n..hi * n],
+                lo..hi,
+                d_weight,
+                &mut otf_rows,
+                &mut d_rows,
+            );
+            assert_eq!(d_rows, d);
+            assert_eq!(otf_rows, otf);
+            let grid = |e: f64| {
+                let mut out = Otf::new();
+                plan.clone().otf(&SampledPupil::new(n, &aperture(e), &aberrations).unwrap(), lambda, &mut out);
+                out
+            };
+            let (up, down, plain) = (grid(eps + 1e-6), grid(eps - 1e-6), grid(eps));
+            assert_eq!(otf, plain);
+            let half = otf.max_lag() as i64;
+            let mut largest: f64 = 0.0;
+            for ky in -half..=half {
+                for kx in -half..=half {
+                    let differences = (up.sample(kx, ky) - down.sample(kx, ky)) / 2e-6;
+                    largest = largest.max(differences.norm());
+                    assert!((d.sample(kx, ky) - differences).norm() <= 1e-7, "ε {eps}, ({kx}, {ky})");
+                }
+            }
+            assert!(largest > 0.05, "{largest}");
+            assert_eq!(d.sample(0, 0), Complex64::new(0.0, 0.0));
+        }
     }
 
     /// The OTF grids' derivatives by forward mode through the FFT against central differences of

@@ -23,6 +23,10 @@ pub(super) struct FftNode {
     weight: f64,
     shift: [f64; 2],
     kind: FftKind,
+    /// the grid's derivative in the obscuration ε, computed with the grid in the value's pass
+    /// where the scene asks for it ([`Settings::edge_lane`](super::Settings::edge_lane)) and the
+    /// order's pupil is an aperture of disc shape ([`FftLayer::kind_and_edge_lane`])
+    lane: Option<Otf>,
 }
 
 /// How an order's OTF is read on the FFT layer.
@@ -59,7 +63,11 @@ impl FftPath {
         // counted before any is made (a 300 nm band at 1024 samples would hold 12 GB)
         let side = 2 * layer.plan.max_lag() + 1;
         let grid_bytes = (side * side * std::mem::size_of::<Complex64>()) as f64;
-        let grids = nodes.nodes.iter().filter(|n| n.table.is_none()).count();
+        let mut grids = nodes.nodes.iter().filter(|n| n.table.is_none()).count();
+        if scene.edge_lane {
+            // each grid may carry its obscuration lane beside it
+            grids *= 2;
+        }
         if grids as f64 * grid_bytes > FFT_MEMORY_BUDGET {
             return Err(Error::WorkBudget {
                 grids,
@@ -79,11 +87,17 @@ impl FftPath {
                     // no light in this order here (a factored part's zone outside its band): no grid
                     continue;
                 }
+                let (kind, lane) = if scene.edge_lane {
+                    layer.kind_and_edge_lane(&order, lambda)?
+                } else {
+                    (layer.kind(&order, lambda)?, None)
+                };
                 out.push(FftNode {
                     lambda,
                     weight: weight * order.efficiency,
                     shift: order.wavefront.image_shift_m,
-                    kind: layer.kind(&order, lambda)?,
+                    kind,
+                    lane,
                 });
             }
         }
@@ -576,6 +590,22 @@ impl FftLayer {
         Ok(FftKind::Grid(otf))
     }
 
+    /// [`kind`](Self::kind) and, where `order`'s pupil is an aperture of disc shape, the grid's
+    /// derivative in the obscuration ε from the same pupil spectrum
+    /// ([`OtfPlan::otf_and_edge_derivative`](crate::fft::OtfPlan::otf_and_edge_derivative),
+    /// [`edge_motion`]): the grid is [`kind`](Self::kind)'s bit for bit.
+    fn kind_and_edge_lane(&mut self, order: &Order, lambda: f64) -> Result<(FftKind, Option<Otf>), Error> {
+        let Pupil::Aperture(aperture) = &order.pupil else { return Ok((self.kind(order, lambda)?, None)) };
+        let slot = self.pupil(order)?;
+        let sampled = &self.pupils[slot].1;
+        let Some((moved, rows, d_weight)) = edge_motion(sampled, aperture, lambda) else {
+            return Ok((self.kind(order, lambda)?, None));
+        };
+        let (mut otf, mut lane) = (Otf::new(), Otf::new());
+        self.plan.otf_and_edge_derivative(sampled, lambda, &moved, rows, d_weight, &mut otf, &mut lane);
+        Ok((FftKind::Grid(otf), Some(lane)))
+    }
+
     /// The cached sampled pupil of `order` (its aperture, or the full circle) with the order's
     /// wavefront: its slot in `pupils`.
     fn pupil(&mut self, order: &Order) -> Result<usize, Error> {
@@ -849,7 +879,8 @@ impl FftPath {
         // the grids again, node by node in `build`'s order, each with its derivatives
         let lambda_max = nodes.samples.iter().map(|s| s.0).fold(0.0, f64::max);
         let s_max = (scene.max_frequency * lambda_max * scene.f_number).min(1.0);
-        let mut layer = FftLayer::new(self.pupil_samples, s_max, scene.lens.numerical_aperture())?;
+        // (built when a node's grid is built again: not where every node carries its lanes)
+        let mut built: Option<FftLayer> = None;
         let n = self.pupil_samples;
         let mut zernike: Vec<(usize, Vec<f64>)> = Vec::new();
         let mut d_grids: Vec<Otf> = (0..k_dirs).map(|_| Otf::new()).collect();
@@ -879,6 +910,16 @@ impl FftPath {
                     if !directions.iter().all(|d| *d == WavefrontDirection::Obscuration) {
                         return Ok(None);
                     }
+                    // the lane the value's pass computed beside the grid, from the same spectrum
+                    if let Some(lane) = &node.lane {
+                        let lanes = vec![lane; k_dirs];
+                        read_derivatives(&mut d_sum, &lanes, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                        continue;
+                    }
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
                     let slot = layer.pupil(&order)?;
                     let Some((field, weight, moved)) = edge_field(&layer.pupils[slot].1, aperture, lambda) else {
                         return Ok(None);
@@ -886,7 +927,8 @@ impl FftPath {
                     let moves: Vec<(&[Complex64], f64)> =
                         directions.iter().map(|_| (moved.0.as_slice(), moved.1)).collect();
                     layer.plan.otf_and_field_derivatives(&field, weight, &moves, &mut otf, &mut d_grids);
-                    read_derivatives(&mut d_sum, &d_grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
                 }
                 let radial = match (&order.pupil, &node.kind) {
@@ -894,6 +936,10 @@ impl FftPath {
                     // a table is data: the wavefront keys do not move it
                     (_, FftKind::Table(_)) => continue,
                     _ => return Ok(None),
+                };
+                let layer = match &mut built {
+                    Some(l) => l,
+                    slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
                 };
                 let slot = layer.pupil(&order)?;
                 let (field, power) = radial_field(&layer.pupils[slot].1, &radial, lambda);
@@ -959,7 +1005,8 @@ impl FftPath {
                     &mut otf,
                     &mut d_grids,
                 );
-                read_derivatives(&mut d_sum, &d_grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                let grids: Vec<&Otf> = d_grids.iter().collect();
+                read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
             }
         }
         if stored.next().is_some() {
@@ -1014,7 +1061,7 @@ impl FftPath {
 /// and `frequencies` (`k_dirs` values per point, azimuth-major).
 fn read_derivatives(
     d_sum: &mut [Complex64],
-    d_grids: &[Otf],
+    d_grids: &[&Otf],
     node: &FftNode,
     f_number: f64,
     frequencies: &[(f64, f64)],
@@ -1079,6 +1126,43 @@ fn edge_field(
         }
     }
     Some((field, area.iter().sum::<f64>(), (moved, d_weight)))
+}
+
+/// The derivative in the obscuration ε of the field of an order through `aperture` sampled as
+/// `sampled` (as [`edge_field`]'s, which [`OtfPlan::otf`](crate::fft::OtfPlan::otf) transforms):
+/// `∂P = ∂A exp(i k W)` at each pixel the inner circle crosses, `∂A` from
+/// [`Aperture::obscuration_rate_in`], zero elsewhere, given on the rows that may hold a non-zero
+/// value (`rows.len() · N` values from row `rows.start`); those rows; and `∂(Σ A)`. Only the pixels within one of the square `[−ε, ε]²` (grid coordinates, the
+/// aperture's centre at the origin) are visited: a pixel farther from it does not meet the
+/// circle `r = ε`, whose arc length in it is exactly 0. `None` for a mask.
+fn edge_motion(
+    sampled: &SampledPupil,
+    aperture: &Aperture,
+    lambda: f64,
+) -> Option<(Vec<Complex64>, std::ops::Range<usize>, f64)> {
+    let n = sampled.n();
+    let h = 2.0 / n as f64;
+    let k = 2.0 * PI / lambda;
+    let opd = sampled.opd_m();
+    let eps = aperture.obscuration()?.clamp(0.0, 1.0);
+    // pixels [−1 + i h, −1 + (i + 1) h] meeting [−ε, ε], one pixel of margin each side
+    let first = (((1.0 - eps) / h).floor() as usize).saturating_sub(1).min(n);
+    let last = ((((1.0 + eps) / h).ceil() as usize) + 1).min(n);
+    let mut moved = vec![Complex64::new(0.0, 0.0); (last - first) * n];
+    let mut d_weight = 0.0;
+    for j in first..last {
+        let y0 = -1.0 + j as f64 * h;
+        for i in first..last {
+            let x0 = -1.0 + i as f64 * h;
+            let rate = aperture.obscuration_rate_in(x0, x0 + h, y0, y0 + h)? / (h * h);
+            if rate == 0.0 {
+                continue;
+            }
+            d_weight += rate;
+            moved[(j - first) * n + i] = Complex64::from_polar(rate, k * opd[j * n + i]);
+        }
+    }
+    Some((moved, first..last, d_weight))
 }
 
 /// The OPD per unit of a radial direction `profile` at the pixels where `field` transmits (0
@@ -1180,5 +1264,66 @@ impl Polychromatic<'_> {
         }
         let mean = self.mean_mtf_over_azimuth(first, None);
         Ok(self.engine.wavefront_gradient_over_azimuth(first, mean.azimuths, directions)?.map(|g| (mean, g)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fft::Aberrations;
+
+    /// [`edge_motion`] (the pixels near the inner circle only) against the field's derivative
+    /// written on every pixel of the grid (each pixel's [`Aperture::obscuration_rate_in`]): the
+    /// same values bit for bit on its rows, zero on the others, and the same `∂(Σ A)`; an
+    /// annulus, a sector of a ring, a decentred annulus (its wavefront then measured from the
+    /// lens axis), at 48 and 64 samples.
+    #[test]
+    fn edge_motion_is_the_whole_grids() {
+        let lambda = 0.8e-6;
+        let aberrations = Aberrations { w020_m: 0.5e-6, w222_m: 0.2e-6, field: 1.0, ..Aberrations::default() };
+        let apertures = [
+            Aperture::annulus(0.3).unwrap(),
+            Aperture::ring(0.45, 0.9, Some((-0.4, 2.1))).unwrap(),
+            Aperture::annulus(0.55).unwrap().decentred(0.15, -0.05).unwrap(),
+        ];
+        for n in [48, 64] {
+            for aperture in &apertures {
+                let sampled = SampledPupil::new(n, aperture, &aberrations).unwrap();
+                let h = 2.0 / n as f64;
+                let k = 2.0 * PI / lambda;
+                let (mut whole, mut d_weight) = (vec![Complex64::new(0.0, 0.0); n * n], 0.0);
+                for j in 0..n {
+                    for i in 0..n {
+                        let (x0, y0) = (-1.0 + i as f64 * h, -1.0 + j as f64 * h);
+                        let rate = aperture.obscuration_rate_in(x0, x0 + h, y0, y0 + h).unwrap() / (h * h);
+                        if rate != 0.0 {
+                            d_weight += rate;
+                            whole[j * n + i] = Complex64::from_polar(rate, k * sampled.opd_m()[j * n + i]);
+                        }
+                    }
+                }
+                let (moved, rows, dw) = edge_motion(&sampled, aperture, lambda).unwrap();
+                assert_eq!(dw, d_weight);
+                assert!(d_weight < 0.0, "{d_weight}");
+                assert_eq!(moved.len(), rows.len() * n);
+                for j in 0..n {
+                    let row = &whole[j * n..(j + 1) * n];
+                    if rows.contains(&j) {
+                        assert_eq!(row, &moved[(j - rows.start) * n..(j - rows.start + 1) * n], "row {j}");
+                    } else {
+                        assert!(row.iter().all(|z| *z == Complex64::new(0.0, 0.0)), "row {j}");
+                    }
+                }
+                assert!(rows.len() < n, "{rows:?}");
+            }
+        }
+        assert!(
+            edge_motion(
+                &SampledPupil::new(16, &Aperture::circle(), &aberrations).unwrap(),
+                &Aperture::mask(|_, _| true),
+                lambda
+            )
+            .is_none()
+        );
     }
 }

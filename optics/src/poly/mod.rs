@@ -214,6 +214,13 @@ pub struct Settings {
     /// [`TableRule::Tensor`](crate::radial::TableRule::Tensor) (default) or the rule split at the
     /// knots.
     pub table_rule: crate::radial::TableRule,
+    /// Whether the FFT path computes, beside each grid of an order through an aperture of disc
+    /// shape, the grid's derivative in the obscuration ε (the inner edge's motion,
+    /// [`WavefrontDirection::Obscuration`](crate::WavefrontDirection::Obscuration)) in the value's own pass, from the value's pupil
+    /// spectrum: the gradient with respect to `lens.obscuration` asks for it (docs/physics.md,
+    /// "Gradients: the edge's motion on the FFT path"). The value is the same bit for bit with
+    /// or without it. Off by default.
+    pub edge_lane: bool,
 }
 
 impl Default for Settings {
@@ -229,6 +236,7 @@ impl Default for Settings {
             spectral_tolerance: None,
             overlap_always: false,
             table_rule: crate::radial::TableRule::Tensor,
+            edge_lane: false,
         }
     }
 }
@@ -652,7 +660,8 @@ fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec
 fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine + 'a>, Error> {
     let pupil_samples = settings.pupil_samples.unwrap_or(DEFAULT_PUPIL_SAMPLES);
     if let Some(l) = scene.detected.as_line() {
-        let scene = scene.whole();
+        // (a line's grids carry no edge lane: its obscuration gradient is refused)
+        let scene = Scene { edge_lane: false, ..scene.whole() };
         let nodes = spectral::line(&scene, l);
         check_signal(&nodes)?;
         // the overlap engine asked for at the line's one wavelength (the Seidel gradient at zero
@@ -818,7 +827,9 @@ impl<'a> Polychromatic<'a> {
         let f_number = lens.f_number();
         let irises = settings.exact_irises.then(|| lens.numerical_aperture());
         let table_rule = settings.table_rule;
-        let scene = Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, table_rule, parts };
+        let edge_lane = settings.edge_lane;
+        let scene =
+            Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, table_rule, parts, edge_lane };
         let engine = choose(scene, settings)?;
         // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
         let engine_tolerance = match engine.engine() {

@@ -299,6 +299,9 @@ pub(super) struct Scene<'a> {
     /// product integration sums each part's orders with the moments of the part's own spectrum;
     /// empty, the lens and the detected spectrum are the one part
     pub parts: &'a [super::Part<'a>],
+    /// whether the FFT path computes each aperture grid's obscuration lane in the value's pass
+    /// ([`Settings::edge_lane`](super::Settings::edge_lane))
+    pub edge_lane: bool,
 }
 
 impl<'a> Scene<'a> {
