@@ -1672,6 +1672,9 @@ fn temperature_band_partials(
     if camera.noise_spectrum().is_some() {
         return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
     }
+    if let Some(found) = temperature_on_value_rule(scene, detected, source) {
+        return Ok(found);
+    }
     let rate = |l: f64| source.log_derivatives(l).1;
     // the relative spread of g over the detected spectrum, std(g)/⟨g⟩
     let (mut w, mut m1, mut m2) = (0.0, 0.0, 0.0);
@@ -1726,6 +1729,36 @@ fn temperature_band_partials(
         |change, next| (change[0] * t).abs() <= tolerance * (next[0] * t).abs().max(scale),
     );
     Ok((d_ln_n, d_mtf))
+}
+
+/// `(∂ln N/∂T, ∂M̄/∂T)` over a band on the value's own pass, where the value's engine is the
+/// per-frequency product rule (docs/physics.md, "Gradients: a line's wavelength and a
+/// blackbody's temperature"): `∂ρ/∂T = ρ g`, so `∂ln N/∂T = ⟨g⟩` (the engine's spectral
+/// average) and each OTF value's lane is its own spectral sum re-weighted by the centred rate
+/// `g(λ) − ⟨g⟩` ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`]), integrated with the
+/// frequency rule's accepted weights. `None` on the other engines (the caller's engines of `ρ`
+/// and `ρ g`).
+fn temperature_on_value_rule(
+    scene: &Scene,
+    detected: &radiometry::Spectrum,
+    source: radiometry::Blackbody,
+) -> Option<(f64, f64)> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let poly =
+        optics::Polychromatic::with_parts(lens, detected, &parts, field, camera.nyquist(), pixel, settings).ok()?;
+    let d_ln_n = poly.spectral_average(|l, _| source.log_derivatives(l).1);
+    let centred = move |l: f64| source.log_derivatives(l).1 - d_ln_n;
+    let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(Some(&centred), false)?;
+    if poly.over_budget().is_some() {
+        return None;
+    }
+    Some((d_ln_n, lanes[0]))
 }
 
 /// `(1/ν_N) ∫_0^{ν_N} sign(O) L_k dν` for the lanes `at(ν) = (O(ν), [L_k(ν)])` (the derivatives
