@@ -1672,7 +1672,7 @@ fn temperature_band_partials(
     if camera.noise_spectrum().is_some() {
         return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
     }
-    if let Some(found) = temperature_on_value_rule(scene, detected, source) {
+    if let Some(found) = temperature_on_value_rule(scene, e, detected, source) {
         return Ok(found);
     }
     let rate = |l: f64| source.log_derivatives(l).1;
@@ -1740,9 +1740,13 @@ fn temperature_band_partials(
 /// and `ρ g`).
 fn temperature_on_value_rule(
     scene: &Scene,
+    e: &Evaluation,
     detected: &radiometry::Spectrum,
     source: radiometry::Blackbody,
 ) -> Option<(f64, f64)> {
+    if !product_rule_on_axis(scene, e) {
+        return None;
+    }
     let lens = scene.lens();
     let field = scene.field();
     let camera = scene.camera();
@@ -1759,6 +1763,14 @@ fn temperature_on_value_rule(
         return None;
     }
     Some((d_ln_n, lanes[0]))
+}
+
+/// Whether the value's engine may be the per-frequency product rule, whose spectral lanes
+/// ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`]) ride on the value's own sums: the
+/// exact 1-D engine on product-integration nodes, on axis (no engine is built for the others:
+/// the FFT path's grids would cost seconds only to be refused).
+fn product_rule_on_axis(scene: &Scene, e: &Evaluation) -> bool {
+    scene.field().is_on_axis() && e.numerics.engine == "exact-1d" && e.numerics.spectral_interpolated
 }
 
 /// `(1/ν_N) ∫_0^{ν_N} sign(O) L_k dν` for the lanes `at(ν) = (O(ν), [L_k(ν)])` (the derivatives
@@ -1862,6 +1874,9 @@ fn top_hat_partials(
     band: radiometry::TopHat,
     _p: Parameter,
 ) -> Result<SpectralPartials, Error> {
+    if let Some(found) = top_hat_on_value_rule(scene, e, detected, band) {
+        return Ok(found);
+    }
     let lens = scene.lens();
     let field = scene.field();
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
@@ -1914,6 +1929,51 @@ fn top_hat_partials(
     );
     let (d_a, d_b) = (-t_a * (i_a - e.mean_mtf), t_b * (i_b - e.mean_mtf));
     Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
+}
+
+/// [`top_hat_partials`] on the value's own pass, where the value's engine is the per-frequency
+/// product rule and the band's edges are its panels' ends (docs/physics.md, "Gradients: a
+/// top-hat's edges"): the Chebyshev–Lobatto points of every level include the panels' ends, so
+/// the value's own sums there are the edges' OTFs `O_a`, `O_b` (times the orders' efficiency),
+/// and each OTF value carries `∂O/∂a = −(T_a/D)(O_a − O)` and `∂O/∂b = (T_b/D)(O_b − O)` beside
+/// it ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`] with its edge lanes), integrated
+/// with the frequency rule's accepted weights; `∂ln N` as there. `None` on the other engines, or
+/// where the band's edges are not the engine's ends (a Gaussian or a table narrower than the
+/// band): the caller's engines of the edges' single wavelengths.
+fn top_hat_on_value_rule(
+    scene: &Scene,
+    e: &Evaluation,
+    detected: &radiometry::Spectrum,
+    band: radiometry::TopHat,
+) -> Option<SpectralPartials> {
+    if !product_rule_on_axis(scene, e) {
+        return None;
+    }
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let poly =
+        optics::Polychromatic::with_parts(lens, detected, &parts, field, camera.nyquist(), pixel, settings).ok()?;
+    let (a, b) = (band.lo(), band.hi());
+    if poly.spectral_ends()? != (a, b) {
+        return None;
+    }
+    let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true)?;
+    if poly.over_budget().is_some() {
+        return None;
+    }
+    // T_x/D: the detected density times the orders' efficiency at the edge, over the weight
+    let density = |x: f64| {
+        let efficiency: f64 = lens.orders(x, field).iter().map(|o| o.efficiency).sum();
+        detected.value(x) * efficiency / poly.total_weight()
+    };
+    let (n_a, n_b) = (-density(a), density(b));
+    let (d_a, d_b) = (lanes[0], lanes[1]);
+    Some(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` for a lens whose every order is the full circular pupil with a
