@@ -230,8 +230,11 @@ impl Polychromatic<'_> {
         *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| {
             let mut derivatives = vec![0.0; lanes];
-            let value =
-                if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_spectral_lanes(nu, rate, edges, &mut derivatives) };
+            let value = if nu == 0.0 {
+                Some(1.0)
+            } else {
+                self.engine.otf_and_spectral_lanes(nu, rate, edges, &mut derivatives)
+            };
             self.record(nu, value, &derivatives)
         });
         let recording = self.gradient.borrow_mut().take()?;

@@ -718,7 +718,8 @@ impl<'a> PerFrequency<'a> {
                     let detected = self.scene.part(p.panel.part).detected;
                     // the level-0 points: k = 0 at b, k = 2 at a
                     let fresh = &p.fresh[0];
-                    let efficiency = |point: usize| fresh.orders[fresh.range(point)].iter().map(|o| o.efficiency).sum::<f64>();
+                    let efficiency =
+                        |point: usize| fresh.orders[fresh.range(point)].iter().map(|o| o.efficiency).sum::<f64>();
                     if p.panel.a == self.lo {
                         let (lambda, v) = (lambdas[values.len() - 1], values[values.len() - 1]);
                         let rho = detected.value(lambda);
