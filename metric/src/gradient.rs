@@ -1294,40 +1294,35 @@ fn spectral_lanes_on_value_rule(scene: &Scene, e: &Evaluation, c: f64, sigma: f6
     if !(engine.starts_with("overlap") || engine.starts_with("exact-1d, complex") || directional_table) {
         return None;
     }
-    let lens = scene.lens();
     let field = scene.field();
     let detected = crate::evaluate::detected_spectrum(scene);
-    let camera = scene.camera();
-    let nyquist = camera.nyquist();
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, &detected);
-    let parts = folded.parts();
     let settings = scene.options().settings();
     let first = field.y_rad.atan2(field.x_rad);
     let directions = [optics::WavefrontDirection::SpectralMoment(1), optics::WavefrontDirection::SpectralMoment(2)];
     // (∂ln N/∂c, ∂M̄/∂c, ∂ln N/∂σ, ∂M̄/∂σ) on the engine of `settings`
     let pass = |settings: optics::Settings| -> Option<[f64; 4]> {
-        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
-        if !poly.direction_dependent()
-            || !matches!(poly.engine(), optics::Engine::Exact1d | optics::Engine::Overlap { .. })
-        {
-            return None;
-        }
-        let lanes = if poly.has_pupil_grid() {
-            poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1
-        } else {
-            let (_, _, t) = poly.mean_mtf_along_and_gradient(first, &directions)?;
-            let (_, _, s) = poly.mean_mtf_along_and_gradient(first + 0.5 * std::f64::consts::PI, &directions)?;
-            vec![0.5 * (t[0] + s[0]), 0.5 * (t[1] + s[1])]
-        };
-        if poly.over_budget().is_some() {
-            return None;
-        }
-        let (mean, _) = poly.node_wavelength_moments();
-        let d = mean - c;
-        let d_ln_n_c = poly.spectral_average(|l, _| (l - c) / (sigma * sigma));
-        let d_ln_n_s = poly.spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
-        Some([d_ln_n_c, lanes[0] / (sigma * sigma), d_ln_n_s, (lanes[1] + 2.0 * d * lanes[0]) / sigma.powi(3)])
+        on_value_engine(scene, &detected, settings, |poly| {
+            if !poly.direction_dependent()
+                || !matches!(poly.engine(), optics::Engine::Exact1d | optics::Engine::Overlap { .. })
+            {
+                return None;
+            }
+            let lanes = if poly.has_pupil_grid() {
+                poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1
+            } else {
+                let (_, _, t) = poly.mean_mtf_along_and_gradient(first, &directions)?;
+                let (_, _, s) = poly.mean_mtf_along_and_gradient(first + 0.5 * std::f64::consts::PI, &directions)?;
+                vec![0.5 * (t[0] + s[0]), 0.5 * (t[1] + s[1])]
+            };
+            if poly.over_budget().is_some() {
+                return None;
+            }
+            let (mean, _) = poly.node_wavelength_moments();
+            let d = mean - c;
+            let d_ln_n_c = poly.spectral_average(|l, _| (l - c) / (sigma * sigma));
+            let d_ln_n_s = poly.spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
+            Some([d_ln_n_c, lanes[0] / (sigma * sigma), d_ln_n_s, (lanes[1] + 2.0 * d * lanes[0]) / sigma.powi(3)])
+        })
     };
     // the spectral rule at `share` times the engine's tolerance (the scene's, or the overlap
     // engine's `fft_tolerance`)
@@ -1557,10 +1552,9 @@ fn line_center_partials(
     // where the value's pass did not carry the lane: the value's engine exactly (its parts, its
     // settings), `lane` beside each OTF value, and P(ν_N)|O(ν_N)| from the same engine
     let own_engine = |lane: &dyn Fn(&optics::Polychromatic<'_>) -> Option<optics::DefocusDerivative>| {
-        let folded = crate::evaluate::Folded::of(lens, &detected);
-        let parts = folded.parts();
-        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
-        Some((lane(&poly)?, crate::evaluate::nyquist_edge(&poly, nyquist, pixel)))
+        on_value_engine(scene, &detected, settings, |poly| {
+            Some((lane(poly)?, crate::evaluate::nyquist_edge(poly, nyquist, pixel)))
+        })
     };
     // several orders, each moving by its own rates (the harmonic lens): the order lane
     // L = (Σ_o [τ_o α_o w ∂H_o/∂w + τ_o′ H_o] − O Σ_o τ_o′)/Σ_o τ_o beside each OTF value
@@ -1747,22 +1741,15 @@ fn temperature_on_value_rule(
     if !product_rule_on_axis(scene, e) {
         return None;
     }
-    let lens = scene.lens();
-    let field = scene.field();
-    let camera = scene.camera();
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, detected);
-    let parts = folded.parts();
-    let settings = scene.options().settings();
-    let poly =
-        optics::Polychromatic::with_parts(lens, detected, &parts, field, camera.nyquist(), pixel, settings).ok()?;
-    let d_ln_n = poly.spectral_average(|l, _| source.log_derivatives(l).1);
-    let centred = move |l: f64| source.log_derivatives(l).1 - d_ln_n;
-    let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(Some(&centred), false)?;
-    if poly.over_budget().is_some() {
-        return None;
-    }
-    Some((d_ln_n, lanes[0]))
+    on_value_engine(scene, detected, scene.options().settings(), |poly| {
+        let d_ln_n = poly.spectral_average(|l, _| source.log_derivatives(l).1);
+        let centred = move |l: f64| source.log_derivatives(l).1 - d_ln_n;
+        let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(Some(&centred), false)?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        Some((d_ln_n, lanes[0]))
+    })
 }
 
 /// Whether the value's engine may be the per-frequency product rule, whose spectral lanes
@@ -1949,31 +1936,43 @@ fn top_hat_on_value_rule(
     if !product_rule_on_axis(scene, e) {
         return None;
     }
-    let lens = scene.lens();
-    let field = scene.field();
-    let camera = scene.camera();
+    let (a, b) = (band.lo(), band.hi());
+    on_value_engine(scene, detected, scene.options().settings(), |poly| {
+        if poly.spectral_ends()? != (a, b) {
+            return None;
+        }
+        let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true)?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        // T_x/D: the detected density times the orders' efficiency at the edge, over the weight
+        let density = |x: f64| {
+            let efficiency: f64 = scene.lens().orders(x, scene.field()).iter().map(|o| o.efficiency).sum();
+            detected.value(x) * efficiency / poly.total_weight()
+        };
+        let (n_a, n_b) = (-density(a), density(b));
+        let (d_a, d_b) = (lanes[0], lanes[1]);
+        Some(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
+    })
+}
+
+/// The value's own engine (metric's `evaluate`: the scene's lens and field, the camera's
+/// Nyquist frequency and pixel MTF, the lens's factored parts of `detected`) with `settings`,
+/// handed to `f`; `None` where it is not built or `f` gives none.
+fn on_value_engine<T>(
+    scene: &Scene,
+    detected: &radiometry::Spectrum,
+    settings: optics::Settings,
+    f: impl FnOnce(&optics::Polychromatic<'_>) -> Option<T>,
+) -> Option<T> {
+    let (lens, camera) = (scene.lens(), scene.camera());
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let folded = crate::evaluate::Folded::of(lens, detected);
     let parts = folded.parts();
-    let settings = scene.options().settings();
     let poly =
-        optics::Polychromatic::with_parts(lens, detected, &parts, field, camera.nyquist(), pixel, settings).ok()?;
-    let (a, b) = (band.lo(), band.hi());
-    if poly.spectral_ends()? != (a, b) {
-        return None;
-    }
-    let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true)?;
-    if poly.over_budget().is_some() {
-        return None;
-    }
-    // T_x/D: the detected density times the orders' efficiency at the edge, over the weight
-    let density = |x: f64| {
-        let efficiency: f64 = lens.orders(x, field).iter().map(|o| o.efficiency).sum();
-        detected.value(x) * efficiency / poly.total_weight()
-    };
-    let (n_a, n_b) = (-density(a), density(b));
-    let (d_a, d_b) = (lanes[0], lanes[1]);
-    Some(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
+        optics::Polychromatic::with_parts(lens, detected, &parts, scene.field(), camera.nyquist(), pixel, settings)
+            .ok()?;
+    f(&poly)
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` for a lens whose every order is the full circular pupil with a
