@@ -1294,40 +1294,35 @@ fn spectral_lanes_on_value_rule(scene: &Scene, e: &Evaluation, c: f64, sigma: f6
     if !(engine.starts_with("overlap") || engine.starts_with("exact-1d, complex") || directional_table) {
         return None;
     }
-    let lens = scene.lens();
     let field = scene.field();
     let detected = crate::evaluate::detected_spectrum(scene);
-    let camera = scene.camera();
-    let nyquist = camera.nyquist();
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, &detected);
-    let parts = folded.parts();
     let settings = scene.options().settings();
     let first = field.y_rad.atan2(field.x_rad);
     let directions = [optics::WavefrontDirection::SpectralMoment(1), optics::WavefrontDirection::SpectralMoment(2)];
     // (∂ln N/∂c, ∂M̄/∂c, ∂ln N/∂σ, ∂M̄/∂σ) on the engine of `settings`
     let pass = |settings: optics::Settings| -> Option<[f64; 4]> {
-        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
-        if !poly.direction_dependent()
-            || !matches!(poly.engine(), optics::Engine::Exact1d | optics::Engine::Overlap { .. })
-        {
-            return None;
-        }
-        let lanes = if poly.has_pupil_grid() {
-            poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1
-        } else {
-            let (_, _, t) = poly.mean_mtf_along_and_gradient(first, &directions)?;
-            let (_, _, s) = poly.mean_mtf_along_and_gradient(first + 0.5 * std::f64::consts::PI, &directions)?;
-            vec![0.5 * (t[0] + s[0]), 0.5 * (t[1] + s[1])]
-        };
-        if poly.over_budget().is_some() {
-            return None;
-        }
-        let (mean, _) = poly.node_wavelength_moments();
-        let d = mean - c;
-        let d_ln_n_c = poly.spectral_average(|l, _| (l - c) / (sigma * sigma));
-        let d_ln_n_s = poly.spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
-        Some([d_ln_n_c, lanes[0] / (sigma * sigma), d_ln_n_s, (lanes[1] + 2.0 * d * lanes[0]) / sigma.powi(3)])
+        on_value_engine(scene, &detected, settings, |poly| {
+            if !poly.direction_dependent()
+                || !matches!(poly.engine(), optics::Engine::Exact1d | optics::Engine::Overlap { .. })
+            {
+                return None;
+            }
+            let lanes = if poly.has_pupil_grid() {
+                poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1
+            } else {
+                let (_, _, t) = poly.mean_mtf_along_and_gradient(first, &directions)?;
+                let (_, _, s) = poly.mean_mtf_along_and_gradient(first + 0.5 * std::f64::consts::PI, &directions)?;
+                vec![0.5 * (t[0] + s[0]), 0.5 * (t[1] + s[1])]
+            };
+            if poly.over_budget().is_some() {
+                return None;
+            }
+            let (mean, _) = poly.node_wavelength_moments();
+            let d = mean - c;
+            let d_ln_n_c = poly.spectral_average(|l, _| (l - c) / (sigma * sigma));
+            let d_ln_n_s = poly.spectral_average(|l, _| ((l - c) / sigma).powi(2)) / sigma;
+            Some([d_ln_n_c, lanes[0] / (sigma * sigma), d_ln_n_s, (lanes[1] + 2.0 * d * lanes[0]) / sigma.powi(3)])
+        })
     };
     // the spectral rule at `share` times the engine's tolerance (the scene's, or the overlap
     // engine's `fft_tolerance`)
@@ -1557,10 +1552,9 @@ fn line_center_partials(
     // where the value's pass did not carry the lane: the value's engine exactly (its parts, its
     // settings), `lane` beside each OTF value, and P(ν_N)|O(ν_N)| from the same engine
     let own_engine = |lane: &dyn Fn(&optics::Polychromatic<'_>) -> Option<optics::DefocusDerivative>| {
-        let folded = crate::evaluate::Folded::of(lens, &detected);
-        let parts = folded.parts();
-        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
-        Some((lane(&poly)?, crate::evaluate::nyquist_edge(&poly, nyquist, pixel)))
+        on_value_engine(scene, &detected, settings, |poly| {
+            Some((lane(poly)?, crate::evaluate::nyquist_edge(poly, nyquist, pixel)))
+        })
     };
     // several orders, each moving by its own rates (the harmonic lens): the order lane
     // L = (Σ_o [τ_o α_o w ∂H_o/∂w + τ_o′ H_o] − O Σ_o τ_o′)/Σ_o τ_o beside each OTF value
@@ -1672,6 +1666,9 @@ fn temperature_band_partials(
     if camera.noise_spectrum().is_some() {
         return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
     }
+    if let Some(found) = temperature_on_value_rule(scene, e, detected, source) {
+        return Ok(found);
+    }
     let rate = |l: f64| source.log_derivatives(l).1;
     // the relative spread of g over the detected spectrum, std(g)/⟨g⟩
     let (mut w, mut m1, mut m2) = (0.0, 0.0, 0.0);
@@ -1726,6 +1723,41 @@ fn temperature_band_partials(
         |change, next| (change[0] * t).abs() <= tolerance * (next[0] * t).abs().max(scale),
     );
     Ok((d_ln_n, d_mtf))
+}
+
+/// `(∂ln N/∂T, ∂M̄/∂T)` over a band on the value's own pass, where the value's engine is the
+/// per-frequency product rule (docs/physics.md, "Gradients: a line's wavelength and a
+/// blackbody's temperature"): `∂ρ/∂T = ρ g`, so `∂ln N/∂T = ⟨g⟩` (the engine's spectral
+/// average) and each OTF value's lane is its own spectral sum re-weighted by the centred rate
+/// `g(λ) − ⟨g⟩` ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`]), integrated with the
+/// frequency rule's accepted weights. `None` on the other engines (the caller's engines of `ρ`
+/// and `ρ g`).
+fn temperature_on_value_rule(
+    scene: &Scene,
+    e: &Evaluation,
+    detected: &radiometry::Spectrum,
+    source: radiometry::Blackbody,
+) -> Option<(f64, f64)> {
+    if !product_rule_on_axis(scene, e) {
+        return None;
+    }
+    on_value_engine(scene, detected, scene.options().settings(), |poly| {
+        let d_ln_n = poly.spectral_average(|l, _| source.log_derivatives(l).1);
+        let centred = move |l: f64| source.log_derivatives(l).1 - d_ln_n;
+        let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(Some(&centred), false)?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        Some((d_ln_n, lanes[0]))
+    })
+}
+
+/// Whether the value's engine may be the per-frequency product rule, whose spectral lanes
+/// ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`]) ride on the value's own sums: the
+/// exact 1-D engine on product-integration nodes, on axis (no engine is built for the others:
+/// the FFT path's grids would cost seconds only to be refused).
+fn product_rule_on_axis(scene: &Scene, e: &Evaluation) -> bool {
+    scene.field().is_on_axis() && e.numerics.engine == "exact-1d" && e.numerics.spectral_interpolated
 }
 
 /// `(1/ν_N) ∫_0^{ν_N} sign(O) L_k dν` for the lanes `at(ν) = (O(ν), [L_k(ν)])` (the derivatives
@@ -1829,6 +1861,9 @@ fn top_hat_partials(
     band: radiometry::TopHat,
     _p: Parameter,
 ) -> Result<SpectralPartials, Error> {
+    if let Some(found) = top_hat_on_value_rule(scene, e, detected, band) {
+        return Ok(found);
+    }
     let lens = scene.lens();
     let field = scene.field();
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
@@ -1881,6 +1916,63 @@ fn top_hat_partials(
     );
     let (d_a, d_b) = (-t_a * (i_a - e.mean_mtf), t_b * (i_b - e.mean_mtf));
     Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
+}
+
+/// [`top_hat_partials`] on the value's own pass, where the value's engine is the per-frequency
+/// product rule and the band's edges are its panels' ends (docs/physics.md, "Gradients: a
+/// top-hat's edges"): the Chebyshev–Lobatto points of every level include the panels' ends, so
+/// the value's own sums there are the edges' OTFs `O_a`, `O_b` (times the orders' efficiency),
+/// and each OTF value carries `∂O/∂a = −(T_a/D)(O_a − O)` and `∂O/∂b = (T_b/D)(O_b − O)` beside
+/// it ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`] with its edge lanes), integrated
+/// with the frequency rule's accepted weights; `∂ln N` as there. `None` on the other engines, or
+/// where the band's edges are not the engine's ends (a Gaussian or a table narrower than the
+/// band): the caller's engines of the edges' single wavelengths.
+fn top_hat_on_value_rule(
+    scene: &Scene,
+    e: &Evaluation,
+    detected: &radiometry::Spectrum,
+    band: radiometry::TopHat,
+) -> Option<SpectralPartials> {
+    if !product_rule_on_axis(scene, e) {
+        return None;
+    }
+    let (a, b) = (band.lo(), band.hi());
+    on_value_engine(scene, detected, scene.options().settings(), |poly| {
+        if poly.spectral_ends()? != (a, b) {
+            return None;
+        }
+        let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true)?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        // T_x/D: the detected density times the orders' efficiency at the edge, over the weight
+        let density = |x: f64| {
+            let efficiency: f64 = scene.lens().orders(x, scene.field()).iter().map(|o| o.efficiency).sum();
+            detected.value(x) * efficiency / poly.total_weight()
+        };
+        let (n_a, n_b) = (-density(a), density(b));
+        let (d_a, d_b) = (lanes[0], lanes[1]);
+        Some(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
+    })
+}
+
+/// The value's own engine (metric's `evaluate`: the scene's lens and field, the camera's
+/// Nyquist frequency and pixel MTF, the lens's factored parts of `detected`) with `settings`,
+/// handed to `f`; `None` where it is not built or `f` gives none.
+fn on_value_engine<T>(
+    scene: &Scene,
+    detected: &radiometry::Spectrum,
+    settings: optics::Settings,
+    f: impl FnOnce(&optics::Polychromatic<'_>) -> Option<T>,
+) -> Option<T> {
+    let (lens, camera) = (scene.lens(), scene.camera());
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, detected);
+    let parts = folded.parts();
+    let poly =
+        optics::Polychromatic::with_parts(lens, detected, &parts, scene.field(), camera.nyquist(), pixel, settings)
+            .ok()?;
+    f(&poly)
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` for a lens whose every order is the full circular pupil with a

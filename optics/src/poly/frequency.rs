@@ -195,6 +195,97 @@ impl Polychromatic<'_> {
         Some((mean, [lanes[0], lanes[1]], work))
     }
 
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass its
+    /// derivatives along the detected spectrum's own changes (docs/physics.md, "Gradients: a
+    /// line's wavelength and a blackbody's temperature", "Gradients: a top-hat's edges"):
+    /// with `rate`, along `∂ln ρ = r(λ)` (a blackbody's temperature: Planck's `∂ln B/∂T`), one
+    /// lane; with `edges`, along the band's lower and upper ends ([`spectral_ends`](Self::spectral_ends)),
+    /// two lanes:
+    ///
+    /// ```text
+    /// ∂M̄ = (1/ν_max) ∫ P(ν) sign(O(ν)) ∂O(ν) dν
+    /// ```
+    ///
+    /// each `∂O` beside its OTF value from the value's own sums on the spectral level each panel
+    /// accepts (the per-frequency product rule), integrated with the frequency rule's accepted
+    /// weights. `r` should be centred (`⟨r⟩ ≈ 0` over the detected weights): the lane is then
+    /// no difference of nearly equal sums. `None` where the engine gives no such lanes (every
+    /// engine but the per-frequency product rule), off axis, or where the OTF depends on
+    /// direction.
+    pub fn mean_mtf_and_spectral_lanes(
+        &self,
+        rate: Option<&dyn Fn(f64) -> f64>,
+        edges: bool,
+    ) -> Option<(f64, Vec<f64>, Work)> {
+        let lanes = usize::from(rate.is_some()) + if edges { 2 } else { 0 };
+        if lanes == 0
+            || !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || self.engine.spectral_ends().is_none()
+        {
+            return None;
+        }
+        let rate = rate.map(|r| (r, self.spectral_average(|l, _| r(l))));
+        *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| {
+            let mut derivatives = vec![0.0; lanes];
+            let value = if nu == 0.0 {
+                Some(1.0)
+            } else {
+                self.engine.otf_and_spectral_lanes(nu, rate, edges, &mut derivatives)
+            };
+            self.record(nu, value, &derivatives)
+        });
+        let recording = self.gradient.borrow_mut().take()?;
+        self.integrate_recorded(mean, recording, work)
+    }
+
+    /// The band `[lo, hi]` (m) whose ends the edge lanes of
+    /// [`mean_mtf_and_spectral_lanes`](Self::mean_mtf_and_spectral_lanes) move, where the engine
+    /// gives them (the per-frequency product rule: the spectrum's support, or a Gaussian's
+    /// ±7σ where narrower).
+    pub fn spectral_ends(&self) -> Option<(f64, f64)> {
+        self.engine.spectral_ends()
+    }
+
+    /// Keeps `value` (the OTF at `nu`) and its lanes `derivatives` in the recording; where the
+    /// engine gave none, marks the recording failed and reads the OTF alone.
+    fn record(&self, nu: f64, value: Option<f64>, derivatives: &[f64]) -> f64 {
+        let mut recording = self.gradient.borrow_mut();
+        let Some(r) = recording.as_mut() else { return value.unwrap_or(f64::NAN) };
+        match value {
+            Some(v) => {
+                let place = r.derivatives.len();
+                r.derivatives.extend_from_slice(derivatives);
+                r.at.insert(nu.to_bits(), place);
+                v
+            }
+            None => {
+                r.failed = true;
+                drop(recording);
+                self.otf(nu)
+            }
+        }
+    }
+
+    /// The recorded lanes integrated with the frequency rule's accepted weights over `ν_max`.
+    fn integrate_recorded(&self, mean: f64, recording: Recording, work: Work) -> Option<(f64, Vec<f64>, Work)> {
+        if recording.failed {
+            return None;
+        }
+        let lanes = recording.lanes;
+        let mut gradient = vec![0.0; lanes];
+        for &(nu, w) in &recording.accepted {
+            let i = *recording.at.get(&nu.to_bits())?;
+            for (g, d) in gradient.iter_mut().zip(&recording.derivatives[i..i + lanes]) {
+                *g += w * d;
+            }
+        }
+        gradient.iter_mut().for_each(|g| *g /= self.scene.max_frequency);
+        Some((mean, gradient, work))
+    }
+
     /// The mean MTF with `recording` set, and the recorded lanes integrated with the frequency
     /// rule's accepted weights over `ν_max`: the one pass both gradients above take. `None`
     /// where the recording failed or an accepted frequency has no lanes.

@@ -388,6 +388,27 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_seidel_lanes(&self, _frequency: f64, _lanes: &mut [f64; 2]) -> Option<f64> {
         None
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf) and into `lanes` its derivatives
+    /// along a rate `r(λ)` of the detected spectrum (`rate = (r, ⟨r⟩)`, one lane) and along the
+    /// band's ends (`edges`, two lanes: the lower, then the upper), on the value's own rule
+    /// (the per-frequency product rule: docs/physics.md, "Gradients: a line's wavelength and a
+    /// blackbody's temperature", "Gradients: a top-hat's edges"); `None` where the engine does
+    /// not give them (the default).
+    fn otf_and_spectral_lanes(
+        &self,
+        _frequency: f64,
+        _rate: Option<(&dyn Fn(f64) -> f64, f64)>,
+        _edges: bool,
+        _lanes: &mut [f64],
+    ) -> Option<f64> {
+        None
+    }
+    /// The band `[lo, hi]` (m) whose ends the edge lanes of
+    /// [`otf_and_spectral_lanes`](Self::otf_and_spectral_lanes) move; `None` where the engine
+    /// gives no such lanes (the default).
+    fn spectral_ends(&self) -> Option<(f64, f64)> {
+        None
+    }
     /// The sampling plan whose coarse level the engine also holds (the FFT engine when the
     /// tolerance chose its sampling): the frequency rule then extrapolates the two means.
     fn richardson(&self) -> Option<crate::fft::SamplingPlan> {

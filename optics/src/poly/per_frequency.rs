@@ -91,6 +91,11 @@ struct Fresh {
     /// an order has none
     fields: Option<Option<Vec<Vec<FieldLane>>>>,
     field_parameters: Vec<usize>,
+    /// the wavelength of each new point
+    lambdas: Vec<f64>,
+    /// a spectral rate lane's `r(λ)` at each new point ([`Lanes::Rate`]), with the address of
+    /// the rate it was made for
+    rates: Option<(usize, Vec<f64>)>,
 }
 
 /// One order's derivative along one parameter: `(∂τ_o, ∂A_o, ∂W_o)` ([`Fresh::fields`]).
@@ -136,7 +141,7 @@ struct Scratch {
 }
 
 /// What a climb carries beside each value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy)]
 enum Lanes<'p> {
     /// the value alone
     None,
@@ -149,6 +154,22 @@ enum Lanes<'p> {
     /// a library lens's parameter bias): `Σ_o (∂τ_o H_o + τ_o ∂H_o)`, `∂H_o` the radial
     /// engine's amplitude and phase lane (`RadialOrder::otf_and_field_derivatives`)
     Fields(&'p [usize]),
+    /// one lane: `r(λ) g(ν, λ)`, the value re-weighted by a rate of the detected spectrum
+    /// (`∂ln ρ = r`: a blackbody's temperature, docs/physics.md "Gradients: a line's wavelength
+    /// and a blackbody's temperature"), the value's own OTFs
+    Rate(&'p dyn Fn(f64) -> f64),
+}
+
+impl std::fmt::Debug for Lanes<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Lanes::None => write!(f, "None"),
+            Lanes::Directions(n) => write!(f, "Directions({n})"),
+            Lanes::Defocus => write!(f, "Defocus"),
+            Lanes::Fields(p) => write!(f, "Fields({p:?})"),
+            Lanes::Rate(_) => write!(f, "Rate"),
+        }
+    }
 }
 
 impl Lanes<'_> {
@@ -159,6 +180,7 @@ impl Lanes<'_> {
             Lanes::Directions(n) => n,
             Lanes::Defocus => 1,
             Lanes::Fields(p) => p.len(),
+            Lanes::Rate(_) => 1,
         }
     }
 }
@@ -204,6 +226,7 @@ impl Levelled {
             let mut orders = Vec::new();
             for k in (0..points).filter(|&k| level == 0 || k % 2 == 1) {
                 let lambda = lambdas[k];
+                fresh.lambdas.push(lambda);
                 if let Some((_, known)) = self.known.iter().find(|(l, _)| *l == lambda) {
                     fresh.orders.extend_from_slice(known);
                     fresh.ends.push(fresh.orders.len());
@@ -306,7 +329,7 @@ impl Levelled {
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
-        if lanes == Lanes::Defocus {
+        if matches!(lanes, Lanes::Defocus) {
             // the defocus lane: each order's w ∂H/∂w beside its OTF on the same forms
             // (`defocus_otf_many_and_log_derivative_within`), summed per point as the values are
             one.clear();
@@ -348,8 +371,9 @@ impl Levelled {
             evaluations.set(evaluations.get() + pairs.len());
             return;
         }
-        let lanes = lanes.count();
-        if lanes > 0 {
+        if let Lanes::Directions(lanes) = lanes
+            && lanes > 0
+        {
             // the gradient's lanes: each order's OTF and its derivatives on the same rule
             // (`RadialOrder::otf_and_derivatives`), summed per point as the values are
             let Some(Some(directions)) = &fresh.directions else { return };
@@ -385,6 +409,18 @@ impl Levelled {
         for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
             let range = fresh.range(point);
             values[k] = fresh.orders[range.clone()].iter().zip(&otfs[range]).map(|(o, v)| o.efficiency * v).sum();
+        }
+        if let Lanes::Rate(rate) = lanes {
+            // the value's own sums, re-weighted by the rate at each point (made once a level)
+            let key = (rate as *const dyn Fn(f64) -> f64).cast::<()>() as usize;
+            let fresh = &mut self.fresh[level];
+            if fresh.rates.as_ref().is_none_or(|(k, _)| *k != key) {
+                fresh.rates = Some((key, fresh.lambdas.iter().map(|&l| rate(l)).collect()));
+            }
+            let Some((_, rates)) = &fresh.rates else { return };
+            for (k, r) in (first..).step_by(step).zip(rates) {
+                derivatives[k] = r * values[k];
+            }
         }
     }
 
@@ -538,6 +574,9 @@ pub(super) struct PerFrequency<'a> {
     /// the parameters of a field gradient and `∫ρ Σ_o ∂τ_o dλ` along each on the averages'
     /// nodes (the derivative of `nodes.total_weight`), made when first asked
     field_total: RefCell<Option<(Vec<usize>, Vec<f64>)>>,
+    /// the band the panels cover, `[lo, hi]` (the spectrum's support, or a Gaussian's ±7σ)
+    lo: f64,
+    hi: f64,
 }
 
 impl<'a> PerFrequency<'a> {
@@ -593,6 +632,8 @@ impl<'a> PerFrequency<'a> {
             otf_tolerance: Cell::new(0.05 * tolerance),
             evaluations: Cell::new(0),
             field_total: RefCell::new(None),
+            lo,
+            hi,
         })
     }
 
@@ -600,7 +641,21 @@ impl<'a> PerFrequency<'a> {
     /// coefficient into it (or, with `defocus`, its one lane `∂O/∂ln K`: every order's defocus
     /// scaled together), on the same spectral levels ([`Levelled::integral`]); `None` where the
     /// lens has no such derivatives on this engine.
-    fn value(&self, frequency: f64, mut gradient: Option<&mut [f64]>, kind: Lanes<'_>) -> Option<f64> {
+    fn value(&self, frequency: f64, gradient: Option<&mut [f64]>, kind: Lanes<'_>) -> Option<f64> {
+        self.value_and_edges(frequency, gradient, kind, None)
+    }
+
+    /// [`value`](Self::value), and with `edges` the band's ends as the value reads them:
+    /// `[E_lo, T_lo, E_hi, T_hi]`, `E_x = Σ_p ρ_p(x) g_p(ν, x)` and `T_x = Σ_p ρ_p(x) Σ_o τ_o(x)`
+    /// over the panels that end at `x` (one a part), `g_p` the value's own sum at the panel's
+    /// end point (a Chebyshev–Lobatto point of every level, 1e-12 of the panel inside it).
+    fn value_and_edges(
+        &self,
+        frequency: f64,
+        mut gradient: Option<&mut [f64]>,
+        kind: Lanes<'_>,
+        mut edges: Option<&mut [f64; 4]>,
+    ) -> Option<f64> {
         let nu = frequency.abs();
         let budget = self.otf_tolerance.get();
         let mut panels = self.panels.borrow_mut();
@@ -655,6 +710,29 @@ impl<'a> PerFrequency<'a> {
                 }
             }
             let value = sum / self.nodes.total_weight;
+            if let Some(edges) = edges.as_deref_mut() {
+                *edges = [0.0; 4];
+                for p in panels.iter().filter(|p| p.panel.mass != 0.0) {
+                    let values = &p.scratch.values;
+                    let lambdas = lobatto_lambdas(p.panel.a, p.panel.b, values.len());
+                    let detected = self.scene.part(p.panel.part).detected;
+                    // the level-0 points: k = 0 at b, k = 2 at a
+                    let fresh = &p.fresh[0];
+                    let efficiency =
+                        |point: usize| fresh.orders[fresh.range(point)].iter().map(|o| o.efficiency).sum::<f64>();
+                    if p.panel.a == self.lo {
+                        let (lambda, v) = (lambdas[values.len() - 1], values[values.len() - 1]);
+                        let rho = detected.value(lambda);
+                        edges[0] += rho * v;
+                        edges[1] += rho * efficiency(2);
+                    }
+                    if p.panel.b == self.hi {
+                        let rho = detected.value(lambdas[0]);
+                        edges[2] += rho * values[0];
+                        edges[3] += rho * efficiency(0);
+                    }
+                }
+            }
             if let Some(g) = gradient {
                 match kind {
                     // O = Σ/∫ρΣτ: ∂O = (∂Σ − O ∂∫ρΣτ)/∫ρΣτ, the normalization's derivative
@@ -745,6 +823,48 @@ impl OtfEngine for PerFrequency<'_> {
         let mut lane = [0.0];
         let value = self.value(frequency, Some(&mut lane), Lanes::Defocus)?;
         Some((value, lane[0]))
+    }
+
+    /// The OTF at `frequency` as [`otf`](OtfEngine::otf), bit for bit (the same climb: the
+    /// lanes read the value's own sums), with the spectral lanes (docs/physics.md, "Gradients: a
+    /// line's wavelength and a blackbody's temperature", "Gradients: a top-hat's edges"):
+    /// - with `rate = (r, ⟨r⟩)`, the detected spectrum moving as `∂ln ρ = r(λ)`:
+    ///   `∂O = Σ w r g / W − O ⟨r⟩` (`W = ∫ρ Σ_o τ_o`, `⟨r⟩` on the averages' nodes, the
+    ///   normalization's own), the first sum with the weights of the level each panel accepts;
+    /// - with `edges`, the band's ends `lo`, `hi` moving (the integrals' limits: Leibniz's rule),
+    ///   `∂O/∂hi = (E_hi − O T_hi)/W` and `∂O/∂lo = −(E_lo − O T_lo)/W`, `E_x`, `T_x` the density
+    ///   times the value's own sum and the orders' efficiency at the end point
+    ///   ([`value_and_edges`](Self::value_and_edges)).
+    fn otf_and_spectral_lanes(
+        &self,
+        frequency: f64,
+        rate: Option<(&dyn Fn(f64) -> f64, f64)>,
+        edges: bool,
+        lanes: &mut [f64],
+    ) -> Option<f64> {
+        let mut raw = [0.0];
+        let mut ends = [0.0; 4];
+        let (kind, gradient) = match rate {
+            Some((r, _)) => (Lanes::Rate(r), Some(&mut raw[..])),
+            None => (Lanes::None, None),
+        };
+        let value = self.value_and_edges(frequency, gradient, kind, edges.then_some(&mut ends))?;
+        let total = self.nodes.total_weight;
+        let mut out = lanes.iter_mut();
+        if let Some((_, mean)) = rate {
+            *out.next()? = raw[0] - value * mean;
+        }
+        if edges {
+            *out.next()? = -(ends[0] - value * ends[1]) / total;
+            *out.next()? = (ends[2] - value * ends[3]) / total;
+        }
+        Some(value)
+    }
+
+    /// The band `[lo, hi]` the panels cover, whose ends the edge lanes of
+    /// [`otf_and_spectral_lanes`](OtfEngine::otf_and_spectral_lanes) move.
+    fn spectral_ends(&self) -> Option<(f64, f64)> {
+        Some((self.lo, self.hi))
     }
 
     fn otf_along(&self, frequency: f64, _azimuth: f64) -> Complex64 {

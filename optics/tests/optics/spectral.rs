@@ -236,3 +236,69 @@ fn closed_form_frequency_rule_does_not_trust_the_three_point_level() {
         assert!(error <= tolerance, "at {tolerance:e}: {got} against Simpson's {simpson} ({error:.1e}; {work:?})");
     }
 }
+
+/// The spectral lanes on the per-frequency product rule
+/// ([`Polychromatic::mean_mtf_and_spectral_lanes`]; docs/physics.md, "Gradients: a line's
+/// wavelength and a blackbody's temperature", "Gradients: a top-hat's edges"): the mean is the
+/// value's bit for bit, and the lanes match central differences written here of the mean on
+/// the panels rule (the reference, exact to rounding) at 1e-12, Richardson-extrapolated from the
+/// steps 2h and h (`(4 D(h) − D(2h))/3`):
+/// - the rate lane with `r = (λ − c)/σ² − ⟨·⟩`, which is `∂ln ρ/∂c` of a Gaussian band of centre
+///   `c` (peak held), against moving `c`;
+/// - the edge lanes of a top-hat `[a, b]` against moving `a` and `b`, with the pixel MTF.
+///
+/// Each within 10× the tolerance asked (1e-7) of `M̄` per unit of the band's scale (σ, or the
+/// range), the scale on which the mean varies.
+#[test]
+fn spectral_lanes_match_differences_of_the_panels_rule() {
+    let lens = Chromatic { f_number: 2.5, lateral: 0.0 };
+    let pixel = 5.2e-6;
+    let nyquist = 1.0 / (2.0 * pixel);
+    let tolerance = 1e-7;
+    let settings = Settings { tolerance, closed_form: false, ..Settings::default() };
+    let reference = |spectrum: &Spectrum| mean(&lens, spectrum, pixel, SpectralRule::Panels, 1e-12).0;
+    let richardson = |f: &dyn Fn(f64) -> f64, h: f64| {
+        let d = |h: f64| (f(h) - f(-h)) / (2.0 * h);
+        (4.0 * d(h) - d(2.0 * h)) / 3.0
+    };
+    // a Gaussian band of 60 nm at 810 nm: the rate of its centre
+    let (c, range) = (810e-9, 60e-9);
+    let sigma = range / (2.0 * std::f64::consts::SQRT_2);
+    let band = |c: f64| {
+        Spectrum::product(vec![
+            Spectrum::Gaussian(Gaussian::from_range(c, range, 1.0).unwrap()),
+            Spectrum::Linear { slope: 1.0 },
+        ])
+    };
+    let spectrum = band(c);
+    let poly = Polychromatic::with_settings(&lens, &spectrum, Field::ON_AXIS, nyquist, Some(pixel), settings).unwrap();
+    assert_eq!(poly.engine(), optics::Engine::Exact1d);
+    let value = poly.mean_mtf().0;
+    let rate = |l: f64| (l - c) / (sigma * sigma);
+    let average = poly.spectral_average(|l, _| rate(l));
+    let centred = move |l: f64| rate(l) - average;
+    let (mean_with_lanes, lanes, _) = poly.mean_mtf_and_spectral_lanes(Some(&centred), false).unwrap();
+    assert_eq!(mean_with_lanes.to_bits(), value.to_bits());
+    let want = richardson(&|h| reference(&band(c + h)), 1e-3 * sigma);
+    let error = (lanes[0] - want).abs() * sigma / value;
+    eprintln!("centre: lane {:.9e}, differences {want:.9e}, error × σ/M̄ {error:.1e}", lanes[0]);
+    assert!(error <= 10.0 * tolerance, "{} vs {want}", lanes[0]);
+    // a top-hat of 770–830 nm: its edges
+    let (a, b) = (770e-9, 830e-9);
+    let hat = |a: f64, b: f64| {
+        Spectrum::product(vec![Spectrum::TopHat(TopHat::new(a, b, 1.0).unwrap()), Spectrum::Linear { slope: 1.0 }])
+    };
+    let spectrum = hat(a, b);
+    let poly = Polychromatic::with_settings(&lens, &spectrum, Field::ON_AXIS, nyquist, Some(pixel), settings).unwrap();
+    assert_eq!(poly.spectral_ends(), Some((a, b)));
+    let value = poly.mean_mtf().0;
+    let (mean_with_lanes, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true).unwrap();
+    assert_eq!(mean_with_lanes.to_bits(), value.to_bits());
+    let h = 1e-3 * (b - a);
+    let wants = [richardson(&|h| reference(&hat(a + h, b)), h), richardson(&|h| reference(&hat(a, b + h)), h)];
+    for (edge, (lane, want)) in ["lower", "upper"].iter().zip(lanes.iter().zip(wants)) {
+        let error = (lane - want).abs() * (b - a) / value;
+        eprintln!("{edge} edge: lane {lane:.9e}, differences {want:.9e}, error × range/M̄ {error:.1e}");
+        assert!(error <= 10.0 * tolerance, "{edge}: {lane} vs {want}");
+    }
+}

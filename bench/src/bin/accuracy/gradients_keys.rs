@@ -2,8 +2,9 @@
 //! value's radial or closed-form rules (a part of BENCHMARKS.md's "Gradients" section): the
 //! F-number and focal length beside Seidel terms on axis (the overlap engine's defocus lane),
 //! the Gaussian band's centre and range where the OTF depends on direction (the overlap engine,
-//! the FFT path of a phase map, lateral colour off axis, a decentred iris), a blackbody's
-//! temperature over a band, the Seidel terms at zero (the closed form's lanes along ρ⁴ and
+//! the FFT path of a phase map, lateral colour off axis, a decentred iris), a top-hat band's
+//! centre and range and a blackbody's temperature over a band (lanes on the per-frequency
+//! product rule's own sums), the Seidel terms at zero (the closed form's lanes along ρ⁴ and
 //! ρ² on its own rule, a pass beside the value's), and the obscuration above 0 (the annulus's
 //! inner edge moving on the FFT path). In one process (`metric::evaluate` against `metric::gradient`, the scene
 //! built inside each timing, alternately, medians: `gradients::side_by_side`) and, where the
@@ -137,6 +138,15 @@ fn cases(root: &Path, dir: &Path) -> Vec<Case> {
             whole_process: false,
         });
     }
+    cases.push(Case {
+        name: "centre, range: 50 nm top-hat on axis (the edges on the value's rule)",
+        scene: paper.clone(),
+        overrides: owned(&["spectrum.shape=\"tophat\""]),
+        keys: SPECTRAL,
+        parameters: vec![Parameter::SpectrumCenter, Parameter::SpectrumRange],
+        slow: false,
+        whole_process: true,
+    });
     if let Some(bb) = blackbody(root, dir) {
         cases.push(Case {
             name: "temperature: 3000 K blackbody over the 50 nm band",
@@ -246,7 +256,9 @@ pub(crate) fn markdown(tools: &Tools) -> Option<String> {
          beside Seidel terms on axis (the paper's lens, examples/paper-theory.toml, on the overlap engine: the \
          defocus lane `W020 ρ²` on the value's nodes, docs/physics.md \"Gradients: the F-number and the focal length \
          with Seidel terms\"), the Gaussian band's centre and range where the OTF depends on direction (\"Gradients: \
-         the spectrum where the OTF depends on direction\"), a 3000 K blackbody's temperature over the paper's band, \
+         the spectrum where the OTF depends on direction\"), a 50 nm top-hat's centre and range and a 3000 K \
+         blackbody's temperature over the paper's band (lanes on the per-frequency product rule's own sums: \"Gradients: \
+         a top-hat's edges\", \"Gradients: a line's wavelength and a blackbody's temperature\"), \
          and the Seidel terms at zero on the paper's lens (the closed form's lanes along ρ⁴ and ρ² on its own rule, \
          \"Gradients: Seidel terms at zero\"), and an obscuration of 0.3 (the annulus's inner edge moving on the FFT \
          path, \"Gradients: the edge's motion on the FFT path\"). In one process: {profile}, the scene built inside each timing, medians (and fastest) of \
