@@ -1715,7 +1715,7 @@ mod tests {
         let by_terms = |b: f64, p: usize| {
             let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
             for k in 0..24 {
-                if (p + k) % 2 == 0 {
+                if (p + k).is_multiple_of(2) {
                     sum += term * (2.0 / (p + k + 1) as f64);
                 }
                 term *= Complex64::new(0.0, b / (k + 1) as f64);
