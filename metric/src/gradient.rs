@@ -2129,10 +2129,14 @@ fn aperture_on_overlap(scene: &Scene, e: &Evaluation, lane: Option<f64>) -> Opti
     let d_f = edge - e.mean_mtf - pixel_slope - 2.0 * d_k;
     // the lane is each node's value times i k W020 [ρ²(p₊) − ρ²(p₋)], at most L = k_max |W020|max
     // times it: where the gradient is small against L M̄ the spectral rule's error ε M̄ may move
-    // it by up to L ε M̄, so the lane, the edge and M̄ are taken again with the spectral rule at
-    // max(q, 10⁻⁴) ε, q = |∇|/(L M̄), the other rules as they are (as the field angles' lanes,
-    // `refine_field_lanes`: tightening the whole engine instead gave the same gradient to 3e-8
-    // of its norm on the paper's lens with coma at a 10 nm band, at 1.4× the time)
+    // it by up to L ε M̄. The engine takes the lane on its own spectral rule, each panel's next
+    // nested level over the value's points (`Polychromatic::defocus_lane_nodes`), in the
+    // value's pass; where it cannot (the reference panels, a panel past 65 points), the lane,
+    // the edge and M̄ are taken again with the spectral rule at max(q, 10⁻⁴) ε, q = |∇|/(L M̄),
+    // the other rules as they are (as the field angles' lanes, `refine_field_lanes`)
+    if poly.defocus_lane_nodes().is_some() {
+        return Some((d_f, d_k));
+    }
     let bound = 2.0 * std::f64::consts::PI * poly.max_defocus() * lens.f_number() * poly.max_cutoff() * e.mean_mtf;
     let q = if bound > 0.0 { (d_f.hypot(d_k) / bound).max(1e-4) } else { 1.0 };
     if q < 1.0 {

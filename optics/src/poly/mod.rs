@@ -452,6 +452,11 @@ trait OtfEngine: std::fmt::Debug {
     fn over_budget(&self) -> Option<String> {
         None
     }
+    /// The spectral nodes of the defocus lane's own rule, where the engine takes the lane
+    /// ([`WavefrontDirection::Defocus`]) on a finer spectral rule than the value's.
+    fn defocus_lane_nodes(&self) -> Option<usize> {
+        None
+    }
     /// Cutoff frequency (cycles/m) of the shortest wavelength covered: the OTF is zero beyond.
     fn max_cutoff(&self) -> f64 {
         1.0 / (self.nodes().shortest() * self.f_number())
@@ -999,6 +1004,15 @@ impl<'a> Polychromatic<'a> {
     /// then not the mean MTF, and the caller reports this instead.
     pub fn over_budget(&self) -> Option<String> {
         self.engine.over_budget()
+    }
+
+    /// The spectral nodes (over all imaging orders) of the defocus lane's own rule, where the
+    /// engine takes [`WavefrontDirection::Defocus`] on a finer spectral rule than the value's (the
+    /// overlap engine on product integration: each panel's next nested Chebyshev–Lobatto
+    /// rule, docs/physics.md "Gradients: the F-number and the focal length with Seidel terms");
+    /// `None` where the lane takes the value's nodes.
+    pub fn defocus_lane_nodes(&self) -> Option<usize> {
+        self.engine.defocus_lane_nodes()
     }
 
     /// The spectral nodes (over all imaging orders) the engine sums at each frequency.

@@ -318,6 +318,30 @@ pub(super) struct Overlap<'a> {
     /// the wavefront lanes of the directions last asked ([`Lane::of`]: each Zernike lane's
     /// polynomial compiled once, not at every OTF value), with the field angles' axes
     lanes: std::cell::RefCell<Option<LaneSet>>,
+    /// per term, its spectral sample's wavelength (bits) and part and its order's place at that
+    /// wavelength: where the defocus lane's rule meets the value's nodes ([`DefocusRule`])
+    keys: Vec<(u64, usize, usize)>,
+    /// the defocus lane's own spectral rule, built when the lane is first asked
+    defocus_rule: std::cell::OnceCell<Option<DefocusRule>>,
+}
+
+/// The [`WavefrontDirection::Defocus`] lane's own spectral rule (docs/physics.md, "Gradients:
+/// the F-number and the focal length with Seidel terms"): each panel's `2n − 1` nested
+/// Chebyshev–Lobatto points over the value's `n` ([`spectral::doubled`](super::spectral::doubled)).
+/// The lane reads the value's terms at the even points (their OTF and lane are computed for the
+/// value anyway) with this rule's weights, and computes the odd points' terms for the lane alone;
+/// the value's own sums are not touched.
+#[derive(Debug)]
+struct DefocusRule {
+    /// per value term, this rule's weight (efficiency included) at its wavelength
+    weights: Vec<f64>,
+    /// the odd points' terms (and any even point's the value left out as light), weighted by
+    /// this rule
+    extra: Vec<Term>,
+    /// the x rule's probed tails of `extra` ([`x_tail`])
+    tails: std::cell::RefCell<Vec<Vec<f64>>>,
+    /// Σ weights × efficiencies over every point and order of the rule
+    total: f64,
 }
 
 /// The directions of a gradient, their wavefront lanes and field angles' axes in their order.
@@ -338,40 +362,16 @@ impl<'a> Overlap<'a> {
     /// oblique radial pupil, a table): the FFT path takes it.
     pub fn new(scene: Scene<'a>, nodes: Nodes, tolerance: f64) -> Option<Overlap<'a>> {
         let mut terms = Vec::new();
+        let mut keys = Vec::new();
         for &(lambda, weight, part) in &nodes.samples {
             if weight == 0.0 {
                 continue;
             }
-            let lens = &scene.part(part).lens;
-            let rates = lens.image_shift_field_rates(lambda, scene.field);
-            for (o, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
-                if order.efficiency == 0.0 {
-                    continue;
+            for (o, term) in sample_terms(&scene, lambda, weight, part)?.into_iter().enumerate() {
+                if let Some(term) = term {
+                    terms.push(term);
+                    keys.push((lambda.to_bits(), part, o));
                 }
-                let w = order.wavefront;
-                let mut term = Term {
-                    lambda,
-                    weight: weight * order.efficiency,
-                    shift: w.image_shift_m,
-                    shift_rate: rates.as_ref().and_then(|r| r.get(o)).copied(),
-                    defocus: w.defocus_m + w.field_curvature_m,
-                    lens_defocus: w.defocus_m,
-                    spherical: w.spherical_m,
-                    coma: w.coma_m,
-                    astigmatism: w.astigmatism_m,
-                    zernike: None,
-                    zernike_rest: Vec::new(),
-                    s_top: 0.0,
-                    slope: 0.0,
-                    curvature: 0.0,
-                };
-                match &order.pupil {
-                    Pupil::Full => {}
-                    Pupil::Radial(p) if p.is_zernike_only() => add_zernike(&mut term, p),
-                    _ => return None,
-                }
-                (term.slope, term.curvature) = term.rest_bounds();
-                terms.push(term);
             }
         }
         let total = nodes.total_weight;
@@ -391,6 +391,7 @@ impl<'a> Overlap<'a> {
             skipped += terms[i].weight.abs();
             keep[i] = false;
         }
+        let keys: Vec<(u64, usize, usize)> = keys.into_iter().zip(&keep).filter(|(_, k)| **k).map(|(t, _)| t).collect();
         let mut kept: Vec<Term> = terms.into_iter().zip(keep).filter(|(_, k)| *k).map(|(t, _)| t).collect();
         let mut engine = Overlap {
             scene,
@@ -403,6 +404,8 @@ impl<'a> Overlap<'a> {
             mirrored: std::cell::RefCell::new(std::collections::HashMap::new()),
             differentiated: std::cell::RefCell::new(std::collections::HashMap::new()),
             lanes: std::cell::RefCell::new(None),
+            keys,
+            defocus_rule: std::cell::OnceCell::new(),
         };
         let top = engine.scene.max_frequency.min(engine.max_cutoff());
         for term in &mut kept {
@@ -468,20 +471,99 @@ impl<'a> Overlap<'a> {
     /// The first x level of node `index` whose probed Legendre tail ([`x_tail`]) is within
     /// `target`, probing levels as they are first needed; `None` past the last.
     fn x_level(&self, index: usize, target: f64) -> Option<usize> {
-        let mut tails = self.tails.borrow_mut();
-        let known = &mut tails[index];
-        if let Some(level) = known.iter().position(|&t| t <= target) {
-            return Some(level);
-        }
-        while known.len() < X_LEVELS.len() {
-            let tail = x_tail(&self.terms[index], known.len());
-            known.push(tail);
-            if tail <= target {
-                return Some(known.len() - 1);
-            }
-        }
-        None
+        x_level_of(&self.tails, &self.terms[index], index, target)
     }
+
+    /// The defocus lane's own spectral rule ([`DefocusRule`]), built on first use; `None` where
+    /// the value's nodes are not product integration's or a panel's doubled rule would pass the
+    /// finest level (the lane then takes the value's nodes and weights).
+    fn defocus_rule(&self) -> Option<&DefocusRule> {
+        self.defocus_rule
+            .get_or_init(|| {
+                let samples = super::spectral::doubled(&self.scene, &self.nodes)?;
+                let top = self.scene.max_frequency.min(self.max_cutoff());
+                let at: std::collections::HashMap<(u64, usize, usize), usize> =
+                    self.keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
+                let mut weights = vec![0.0; self.terms.len()];
+                let (mut extra, mut total) = (Vec::new(), 0.0);
+                for &(lambda, weight, part) in &samples {
+                    if weight == 0.0 {
+                        continue;
+                    }
+                    for (o, term) in sample_terms(&self.scene, lambda, weight, part)?.into_iter().enumerate() {
+                        let Some(mut term) = term else { continue };
+                        total += term.weight;
+                        match at.get(&(lambda.to_bits(), part, o)) {
+                            Some(&i) => weights[i] = term.weight,
+                            None => {
+                                term.s_top = (top * self.scene.f_number * term.lambda).min(0.999);
+                                extra.push(term);
+                            }
+                        }
+                    }
+                }
+                let tails = std::cell::RefCell::new(vec![Vec::new(); extra.len()]);
+                (total > 0.0 && total.is_finite()).then_some(DefocusRule { weights, extra, tails, total })
+            })
+            .as_ref()
+    }
+}
+
+/// The terms of one spectral sample `(lambda, weight, part)`: one per order of the part's lens at
+/// `lambda`, in their order, `None` for an order of zero efficiency; `None` where some order is
+/// not the full circle with Seidel and Zernike terms.
+fn sample_terms(scene: &Scene<'_>, lambda: f64, weight: f64, part: usize) -> Option<Vec<Option<Term>>> {
+    let lens = &scene.part(part).lens;
+    let rates = lens.image_shift_field_rates(lambda, scene.field);
+    let mut out = Vec::new();
+    for (o, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
+        if order.efficiency == 0.0 {
+            out.push(None);
+            continue;
+        }
+        let w = order.wavefront;
+        let mut term = Term {
+            lambda,
+            weight: weight * order.efficiency,
+            shift: w.image_shift_m,
+            shift_rate: rates.as_ref().and_then(|r| r.get(o)).copied(),
+            defocus: w.defocus_m + w.field_curvature_m,
+            lens_defocus: w.defocus_m,
+            spherical: w.spherical_m,
+            coma: w.coma_m,
+            astigmatism: w.astigmatism_m,
+            zernike: None,
+            zernike_rest: Vec::new(),
+            s_top: 0.0,
+            slope: 0.0,
+            curvature: 0.0,
+        };
+        match &order.pupil {
+            Pupil::Full => {}
+            Pupil::Radial(p) if p.is_zernike_only() => add_zernike(&mut term, p),
+            _ => return None,
+        }
+        (term.slope, term.curvature) = term.rest_bounds();
+        out.push(Some(term));
+    }
+    Some(out)
+}
+
+/// [`Overlap::x_level`] on the probed tails `tails` of a list of terms, `term` the one at `index`.
+fn x_level_of(tails: &std::cell::RefCell<Vec<Vec<f64>>>, term: &Term, index: usize, target: f64) -> Option<usize> {
+    let mut tails = tails.borrow_mut();
+    let known = &mut tails[index];
+    if let Some(level) = known.iter().position(|&t| t <= target) {
+        return Some(level);
+    }
+    while known.len() < X_LEVELS.len() {
+        let tail = x_tail(term, known.len());
+        known.push(tail);
+        if tail <= target {
+            return Some(known.len() - 1);
+        }
+    }
+    None
 }
 
 /// The OTF of `term` at normalized frequency `s` along the unit vector `(c, sn)`, to the
@@ -753,7 +835,7 @@ fn quadratic_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
 /// SMALL_ALPHA_TERMS`.
 const SMALL_ALPHA_TERMS: usize = 6;
 
-/// The monomials `u^p` whose Fourier integrals [`monomial_fourier`] gives: `p ≤ 2 + 2 (J − 1)`.
+/// The monomials `u^p` whose Fourier integrals [`monomial_fourier_every`] gives: `p ≤ 2 + 2 (J − 1)`.
 const MONOMIALS: usize = 2 * SMALL_ALPHA_TERMS + 1;
 
 /// The Legendre coefficients of the monomials: `u^p = Σ_l c[p][l] P_l(u)`, from `u^0 = P_0` by
@@ -777,28 +859,32 @@ fn monomial_legendre() -> &'static [[f64; MONOMIALS]; MONOMIALS] {
     })
 }
 
-/// `L_p(b) = ∫_{−1}^{1} u^p e^{ibu} du` for `p < MONOMIALS` into `out`: for `|b| < 1` by the
-/// power series `Σ_k (ib)^k/k! · 2/(p + k + 1)` (`p + k` even; 24 terms, the last below
-/// `1/24! < 2e-24`), else from the Legendre expansion of `u^p` ([`monomial_legendre`]) and
-/// `∫_{−1}^{1} P_l(u) e^{ibu} du = 2 i^l j_l(b)` (the Filon rule's identity, [`spherical_bessel`]).
-fn monomial_fourier(b: f64, out: &mut [Complex64; MONOMIALS]) {
-    monomial_fourier_every(b, MONOMIALS, 1, out);
-}
-
 /// [`quadratic_moments`] where the quadratic phase is small (`|α| X² <` [`MOMENTS_MIN_PHASE`],
 /// where the recurrence would divide by a small `α`): `e^{iαx²} = Σ_j (iαx²)^j/j!`, so `I_m =
-/// X^{m+1} Σ_j (iαX²)^j/j! L_{m+2j}(βX)` ([`monomial_fourier`]), the terms `j <`
+/// X^{m+1} Σ_j (iαX²)^j/j! L_{m+2j}(βX)` ([`monomial_fourier_every`]), the terms `j <`
 /// [`SMALL_ALPHA_TERMS`]; the first left out is at most `2 X^{m+1} (|α| X²)^J/J!`, below
 /// `3e-15 X^{m+1}` here.
+///
+/// The terms `j < J` with `J` the fewest (at most [`SMALL_ALPHA_TERMS`]) whose first term left
+/// out, `2 X^{m+1} (|α|X²)^J/J!`, is below `2e-16 X^{m+1}` (as [`small_alpha_integral`]), and
+/// the monomials `p ≤ 2J` those terms read: where the quadratic phase is far below
+/// [`MOMENTS_MIN_PHASE`] (the t rule's nodes near its ends) three or five monomials of the
+/// thirteen.
 fn small_alpha_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
+    let a = alpha.abs() * x * x;
+    let (mut terms, mut left_out) = (1, a);
+    while terms < SMALL_ALPHA_TERMS && left_out > 1e-16 {
+        terms += 1;
+        left_out *= a / terms as f64;
+    }
     let mut l = [Complex64::new(0.0, 0.0); MONOMIALS];
-    monomial_fourier(beta * x, &mut l);
+    monomial_fourier_every(beta * x, 2 * terms + 1, 1, &mut l);
     let step = Complex64::new(0.0, alpha * x * x);
     let mut out = [Complex64::new(0.0, 0.0); 3];
     let mut power = x;
     for (m, o) in out.iter_mut().enumerate() {
         let mut term = Complex64::new(power, 0.0);
-        for j in 0..SMALL_ALPHA_TERMS {
+        for j in 0..terms {
             *o += term * l[m + 2 * j];
             term *= step / (j + 1) as f64;
         }
@@ -832,21 +918,49 @@ fn small_alpha_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
     sum
 }
 
-/// [`monomial_fourier`]'s `L_p(b)` for `p < count` in steps of `step` from 0 (the others left as
-/// they are): the power series for `|b| < 1`, and above it the Legendre expansion on the
-/// spherical Bessel functions `j_l`, `l < count`.
+/// The terms of [`monomial_fourier_every`]'s power series for `|b| < 1`: `k < 24`, the last below
+/// `1/24! < 2e-24`.
+const SERIES_TERMS: usize = 24;
+
+/// `2/n` for `n < MONOMIALS + SERIES_TERMS` (entry 0 unused), as the series divides.
+const TWO_OVER: [f64; MONOMIALS + SERIES_TERMS] = {
+    let mut t = [0.0; MONOMIALS + SERIES_TERMS];
+    let mut n = 1;
+    while n < t.len() {
+        t[n] = 2.0 / n as f64;
+        n += 1;
+    }
+    t
+};
+
+/// `L_p(b) = ∫_{−1}^{1} u^p e^{ibu} du` for `p < count` (at most `MONOMIALS`) in steps of `step`
+/// from 0 into `out` (the others left as they are): for `|b| < 1` by the power series
+/// `Σ_k (ib)^k/k! · 2/(p + k + 1)` (`p + k` even; 24 terms, the last below `1/24! < 2e-24`),
+/// else from the Legendre expansion of `u^p` ([`monomial_legendre`]) and `∫_{−1}^{1} P_l(u)
+/// e^{ibu} du = 2 i^l j_l(b)` (the Filon rule's identity, [`spherical_bessel`], `l < count`).
+///
+/// The power series: `(ib)^k/k! = i^k r_k` with `r_k = Π_{j<k} b/(j + 1)` (the product in that
+/// order), formed once for every `p`; `L_p` is real for even `p` (the even `k`, `i^k =
+/// (−1)^{k/2}`) and imaginary for odd `p` (the odd `k`, `i^k = i (−1)^{(k−1)/2}`), each a sum of
+/// `r_k · 2/(p + k + 1)` in increasing `k`: the same products and sums, in the same order, as the
+/// series summed term by term in complex arithmetic for each `p` (bit for bit,
+/// `monomial_fourier_matches_the_series_term_by_term`), at a twelfth of the multiplications.
 fn monomial_fourier_every(b: f64, count: usize, step: usize, out: &mut [Complex64; MONOMIALS]) {
     let count = count.min(MONOMIALS);
     if b.abs() < 1.0 {
+        let mut r = [0.0; SERIES_TERMS];
+        let mut v = 1.0;
+        for (k, rk) in r.iter_mut().enumerate() {
+            *rk = v;
+            v *= b / (k + 1) as f64;
+        }
         for p in (0..count).step_by(step) {
-            let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
-            for k in 0..24 {
-                if (p + k) % 2 == 0 {
-                    sum += term * (2.0 / (p + k + 1) as f64);
-                }
-                term *= Complex64::new(0.0, b / (k + 1) as f64);
+            let mut sum = 0.0;
+            for k in (p % 2..SERIES_TERMS).step_by(2) {
+                let term = if (k / 2) % 2 == 0 { r[k] } else { -r[k] };
+                sum += term * TWO_OVER[p + k + 1];
             }
-            out[p] = sum;
+            out[p] = if p % 2 == 0 { Complex64::new(sum, 0.0) } else { Complex64::new(0.0, sum) };
         }
         return;
     }
@@ -1250,6 +1364,9 @@ impl Overlap<'_> {
         let mut excess = 0.0;
         let mut node = vec![Complex64::new(0.0, 0.0); terms.len()];
         let (mean, variance) = if axes.iter().any(|&a| a >= 2) { self.nodes.wavelength_moments() } else { (0.0, 0.0) };
+        // the defocus lane on its own spectral rule, where it is asked and the rule exists
+        let defocus = terms.iter().position(|l| matches!(l, Lane::Defocus));
+        let rule = defocus.and_then(|_| self.defocus_rule());
         for (index, term) in self.terms.iter().enumerate() {
             let s = nuf * term.lambda;
             if s >= 1.0 {
@@ -1282,9 +1399,14 @@ impl Overlap<'_> {
             }
             sum += v * term.weight;
             for ((o, d), lane) in out.iter_mut().zip(&node).zip(terms) {
-                // the defocus lane's ρ² per metre, times this node's own W020: ∂/∂ln K
-                let scale = if matches!(lane, Lane::Defocus) { term.lens_defocus } else { 1.0 };
-                *o += d.conj() * turn * (term.weight * scale);
+                // the defocus lane's ρ² per metre, times this node's own W020: ∂/∂ln K, with
+                // the weight of its own rule where it has one
+                let weight = match (lane, rule) {
+                    (Lane::Defocus, Some(rule)) => rule.weights[index] * term.lens_defocus,
+                    (Lane::Defocus, None) => term.weight * term.lens_defocus,
+                    _ => term.weight,
+                };
+                *o += d.conj() * turn * weight;
             }
             let u = term.lambda - mean;
             for (o, &axis) in out_field.iter_mut().zip(axes) {
@@ -1302,8 +1424,38 @@ impl Overlap<'_> {
         if excess > self.value_tolerance.get() {
             self.worst.set(self.worst.get().max(excess));
         }
-        out.iter_mut().for_each(|o| *o /= total);
+        if let (Some(d), Some(rule)) = (defocus, rule) {
+            // the rule's odd points, for the lane alone, each node to the value's share
+            let one = [Lane::Defocus];
+            let mut derivative = [Complex64::new(0.0, 0.0)];
+            for (index, term) in rule.extra.iter().enumerate() {
+                let s = nuf * term.lambda;
+                if s >= 1.0 {
+                    continue;
+                }
+                let eps = share / term.weight.abs();
+                if eps >= term.otf_bound(s) {
+                    continue;
+                }
+                let Some(x_level) = x_level_of(&rule.tails, term, index, X_SHARE * eps) else { continue };
+                term_otf_and_derivatives(term, x_level, s, cr, sr, (1.0 - X_SHARE) * eps, &one, &mut derivative);
+                let [dx, dy] = term.shift;
+                let turn = if dx != 0.0 || dy != 0.0 {
+                    let (ps, pc) = (k * (dx * c + dy * sn)).sin_cos();
+                    Complex64::new(pc, ps)
+                } else {
+                    Complex64::new(1.0, 0.0)
+                };
+                out[d] += derivative[0].conj() * turn * (term.weight * term.lens_defocus);
+            }
+        }
         out_field.iter_mut().for_each(|o| *o /= total);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o /= match rule {
+                Some(rule) if Some(i) == defocus => rule.total,
+                _ => total,
+            };
+        }
         sum / total
     }
 }
@@ -1461,6 +1613,10 @@ impl OtfEngine for Overlap<'_> {
         self.value_tolerance.get()
     }
 
+    fn defocus_lane_nodes(&self) -> Option<usize> {
+        self.defocus_rule().map(|r| r.weights.iter().filter(|w| **w != 0.0).count() + r.extra.len())
+    }
+
     fn over_budget(&self) -> Option<String> {
         let worst = self.worst.get();
         (worst > 0.0).then(|| {
@@ -1547,6 +1703,53 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// [`monomial_fourier_every`]'s power series (`|b| < 1`) against the series summed term by
+    /// term in complex arithmetic for each power (the form it replaced), bit for bit in the part
+    /// that is not zero, and the other part zero; every power, and the even ones up to a count.
+    #[test]
+    fn monomial_fourier_matches_the_series_term_by_term() {
+        let by_terms = |b: f64, p: usize| {
+            let (mut term, mut sum) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0));
+            for k in 0..24 {
+                if (p + k).is_multiple_of(2) {
+                    sum += term * (2.0 / (p + k + 1) as f64);
+                }
+                term *= Complex64::new(0.0, b / (k + 1) as f64);
+            }
+            sum
+        };
+        let mut b = -0.999_999;
+        while b < 1.0 {
+            for (count, step) in [(MONOMIALS, 1), (1, 2), (3, 2), (7, 2), (11, 2)] {
+                let mut out = [Complex64::new(f64::NAN, f64::NAN); MONOMIALS];
+                monomial_fourier_every(b, count, step, &mut out);
+                for (p, got) in out.iter().enumerate() {
+                    if p >= count || p % step != 0 {
+                        assert!(got.re.is_nan() && got.im.is_nan(), "b {b}, p {p}: {got} written");
+                        continue;
+                    }
+                    let want = by_terms(b, p);
+                    let (part, other, want_part, want_other) = if p % 2 == 0 {
+                        (got.re, got.im, want.re, want.im)
+                    } else {
+                        (got.im, got.re, want.im, want.re)
+                    };
+                    assert_eq!(part.to_bits(), want_part.to_bits(), "b {b}, p {p}: {got} vs {want}");
+                    assert!(other == 0.0 && want_other == 0.0, "b {b}, p {p}: {got} vs {want}");
+                }
+            }
+            b += 0.012_345_7;
+        }
+        for b in [0.0, -0.0, 1e-300, -1e-12, 0.5, -0.75] {
+            let mut out = [Complex64::new(0.0, 0.0); MONOMIALS];
+            monomial_fourier_every(b, MONOMIALS, 1, &mut out);
+            for (p, got) in out.iter().enumerate() {
+                let want = by_terms(b, p);
+                assert!(got.re == want.re && got.im == want.im, "b {b}, p {p}: {got} vs {want}");
             }
         }
     }

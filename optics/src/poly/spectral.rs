@@ -658,6 +658,39 @@ pub(super) fn interpolated(scene: &Scene<'_>, lo: f64, hi: f64, tolerance: f64) 
     Some(emit(scene, &panels))
 }
 
+/// The defocus lane's own spectral rule beside the value's product-integration nodes (docs/physics.md,
+/// "Gradients: the F-number and the focal length with Seidel terms"): on each of the value's
+/// panels, whose `n` points are Chebyshev–Lobatto (a nested level, or the fewest points
+/// [`Interpolant::trim`] kept), the `2n − 1` Chebyshev–Lobatto points of the next nested rule —
+/// its even points are the value's, the same wavelengths bit for bit (`cos(π·2k/(2n − 2))` is
+/// `cos(πk/(n − 1))`: the factor 2 is exact) — with the product-integration weights of the
+/// panel's part's spectrum on them ([`lobatto_weights`] of its exact moments), as `(λ, weight,
+/// part)`. `None` where the nodes are not product integration's or a panel's doubled rule
+/// would pass the finest level ([`LEVELS`]: `n > 65`).
+pub(super) fn doubled(scene: &Scene<'_>, nodes: &Nodes) -> Option<Vec<(f64, f64, usize)>> {
+    if !nodes.interpolated || nodes.panels.is_empty() {
+        return None;
+    }
+    let most = LEVELS[LEVELS.len() - 1];
+    let mut out = Vec::new();
+    for panel in &nodes.panels {
+        let n = nodes.samples.iter().filter(|s| s.2 == panel.part && s.0 > panel.lo && s.0 < panel.hi).count();
+        if n < 2 || 2 * n - 1 > most {
+            return None;
+        }
+        let points = 2 * n - 1;
+        let part = scene.part(panel.part);
+        let density = Density::of(part.detected);
+        let mut interpolant = Interpolant::new(part.detected, &density, panel.lo, panel.hi, 0.0, panel.part);
+        let mu = interpolant.moments(part.detected, points - 1).to_vec();
+        let weights = lobatto_weights(&mu, points);
+        for (lambda, w) in lobatto_lambdas(panel.lo, panel.hi, points).into_iter().zip(weights) {
+            out.push((lambda, w, panel.part));
+        }
+    }
+    Some(out)
+}
+
 /// The product-integration panels of `[lo, hi]` before any point is placed, part by part
 /// ([`Scene::part`]): cut at the part's lens's breakpoints and where its set of orders changes,
 /// each turning by at most [`INTERPOLATION_PANEL_PHASE`] at the frequency limit, with their
