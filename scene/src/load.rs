@@ -4,7 +4,6 @@
 //! here with a message naming the file (or the `--set` that gave it), the dotted key, the value
 //! and what is accepted, before any library type is built.
 
-use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -437,19 +436,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
     let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| TomlFailure::new(text, &e)));
     let mut table = parsed.clone().map_err(|e| e.error(&label))?;
     let overrides = apply_overrides(&mut table, overrides, false)?;
-    let origins = Origins {
-        file: label,
-        dir,
-        overrides,
-        warnings: RefCell::new(Vec::new()),
-        lens: "lens".to_owned(),
-        preset: None,
-        zemax: None,
-        meter: RefCell::new(None),
-        mapping: std::cell::Cell::new(None),
-        tables: source.tables.clone(),
-        arrays: source.arrays.clone(),
-    };
+    let origins = Origins::new(label, dir, overrides, "lens".to_owned(), source.tables.clone(), source.arrays.clone());
     Ok((table, origins))
 }
 
@@ -571,19 +558,14 @@ impl Prepared {
                 _ => return None,
             }
         }
-        let origins = Origins {
-            file: self.label.clone(),
-            dir: self.dir.clone(),
+        let origins = Origins::new(
+            self.label.clone(),
+            self.dir.clone(),
             overrides,
-            warnings: RefCell::new(Vec::new()),
-            lens: "lens".to_owned(),
-            preset: None,
-            zemax: None,
-            meter: RefCell::new(None),
-            mapping: std::cell::Cell::new(None),
-            tables: self.tables.clone(),
-            arrays: self.arrays.clone(),
-        };
+            "lens".to_owned(),
+            self.tables.clone(),
+            self.arrays.clone(),
+        );
         build_checked(&raw, &origins).ok()
     }
 }
