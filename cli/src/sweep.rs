@@ -149,19 +149,22 @@ const SHOWN_WARNINGS: usize = 5;
 /// The warnings of the sweep for stderr: each point's, prefixed with where it is, the first
 /// [`SHOWN_WARNINGS`] of them and a count of the rest (all are in `--json` and `--csv`).
 pub fn warnings(keys: &[String], points: &[Point]) -> Vec<String> {
-    let all: Vec<String> = points
+    // (only the shown ones written: the rest are counted)
+    let mut shown: Vec<String> = points
         .iter()
+        .filter(|p| !p.warnings.is_empty())
         .flat_map(|p| {
             let at = at(keys, &p.values);
             p.warnings.iter().map(move |w| format!("warning: at {at}: {w}"))
         })
+        .take(SHOWN_WARNINGS)
         .collect();
-    let mut shown: Vec<String> = all.iter().take(SHOWN_WARNINGS).cloned().collect();
-    if all.len() > SHOWN_WARNINGS {
+    let all: usize = points.iter().map(|p| p.warnings.len()).sum();
+    if all > SHOWN_WARNINGS {
         let with = points.iter().filter(|p| !p.warnings.is_empty()).count();
         shown.push(format!(
             "warning: … and {} more warnings ({} of the {} points have warnings; --json or --csv lists them all)",
-            all.len() - SHOWN_WARNINGS,
+            all - SHOWN_WARNINGS,
             with,
             points.len()
         ));

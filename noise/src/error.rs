@@ -134,12 +134,19 @@ pub(crate) fn check(name: &'static str, value: f64, ok: bool, accepted: impl Int
     if ok { Ok(value) } else { Err(Error::InvalidParameter { name, value, accepted: accepted.into() }) }
 }
 
-/// Finite and >= 0, with the given unit in the message.
+/// Finite and >= 0, with the given unit in the message (written only when it fails: a sweep
+/// forms the noise budget at every point).
 pub(crate) fn non_negative(name: &'static str, value: f64, unit: &str) -> Result<f64, Error> {
-    check(name, value, value.is_finite() && value >= 0.0, format!("finite and >= 0 {unit}"))
+    if value.is_finite() && value >= 0.0 {
+        return Ok(value);
+    }
+    check(name, value, false, format!("finite and >= 0 {unit}"))
 }
 
-/// Finite and > 0, with the given unit in the message.
+/// Finite and > 0, with the given unit in the message (written only when it fails).
 pub(crate) fn positive(name: &'static str, value: f64, unit: &str) -> Result<f64, Error> {
-    check(name, value, value.is_finite() && value > 0.0, format!("finite and > 0 {unit}"))
+    if value.is_finite() && value > 0.0 {
+        return Ok(value);
+    }
+    check(name, value, false, format!("finite and > 0 {unit}"))
 }

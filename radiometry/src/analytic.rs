@@ -38,15 +38,19 @@ impl Gaussian {
         positive("sigma", sigma_m, "m")?;
         // narrower than this, center ± a few σ are the same few floating-point numbers and no
         // quadrature resolves the peak: such a band is a line (Spectrum::Line)
-        check(
-            "sigma",
-            sigma_m,
-            sigma_m >= MIN_RELATIVE_SIGMA * center_m,
-            format!(
-                "at least {MIN_RELATIVE_SIGMA:e} × center (= {:e} m) for the wavelength grid to resolve it; a narrower band is a line",
-                MIN_RELATIVE_SIGMA * center_m
-            ),
-        )?;
+        // (the message written only when it fails: a sweep builds its band at every point)
+        let resolved = sigma_m >= MIN_RELATIVE_SIGMA * center_m;
+        if !resolved {
+            check(
+                "sigma",
+                sigma_m,
+                false,
+                format!(
+                    "at least {MIN_RELATIVE_SIGMA:e} × center (= {:e} m) for the wavelength grid to resolve it; a narrower band is a line",
+                    MIN_RELATIVE_SIGMA * center_m
+                ),
+            )?;
+        }
         non_negative("peak", peak, "")?;
         Ok(Gaussian { center_m, sigma_m, peak })
     }

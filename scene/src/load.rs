@@ -4,7 +4,6 @@
 //! here with a message naming the file (or the `--set` that gave it), the dotted key, the value
 //! and what is accepted, before any library type is built.
 
-use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -437,19 +436,7 @@ pub(crate) fn merged(source: &Source, overrides: &[String]) -> Result<(toml::Tab
     let parsed = source.parsed.get_or_init(|| toml::from_str(text).map_err(|e| TomlFailure::new(text, &e)));
     let mut table = parsed.clone().map_err(|e| e.error(&label))?;
     let overrides = apply_overrides(&mut table, overrides, false)?;
-    let origins = Origins {
-        file: label,
-        dir,
-        overrides,
-        warnings: RefCell::new(Vec::new()),
-        lens: "lens".to_owned(),
-        preset: None,
-        zemax: None,
-        meter: RefCell::new(None),
-        mapping: std::cell::Cell::new(None),
-        tables: source.tables.clone(),
-        arrays: source.arrays.clone(),
-    };
+    let origins = Origins::new(label, dir, overrides, "lens".to_owned(), source.tables.clone(), source.arrays.clone());
     Ok((table, origins))
 }
 
@@ -489,8 +476,67 @@ pub(crate) struct Prepared {
     dir: PathBuf,
     tables: TableCache,
     arrays: crate::origins::Arrays,
-    /// The swept keys' sections, each once.
-    sections: Vec<&'static str>,
+    /// The swept keys.
+    keys: Vec<String>,
+    /// The swept keys' sections, each once, with the indices (in `keys`) of the keys each holds.
+    sections: Vec<(&'static str, Vec<usize>)>,
+    /// Each section as a point deserialized it, by its index in `sections` and the bits of its
+    /// keys' values, with the overrides its assignments gave: a section is a function of those
+    /// values alone, so a point whose values were seen before (the map's 40 F-numbers each
+    /// come back at every band) takes it from here. At most [`PREPARED_SECTIONS_KEPT`].
+    seen: std::sync::Mutex<std::collections::HashMap<(usize, Vec<u64>), SectionAt>>,
+}
+
+/// How many deserialized sections a [`Prepared`] keeps (a few hundred bytes to a few kB each).
+pub(crate) const PREPARED_SECTIONS_KEPT: usize = 4096;
+
+/// One section of the raw scene, deserialized at some values of its swept keys, and the
+/// overrides (`key`, `assignment`) those keys' assignments gave.
+#[derive(Clone)]
+pub(crate) struct SectionAt {
+    raw: RawSection,
+    overrides: Vec<(String, String)>,
+}
+
+/// A section of the raw scene.
+#[derive(Clone)]
+enum RawSection {
+    Lens(Box<RawLens>),
+    Source(RawSource),
+    Spectrum(RawSpectrum),
+    Camera(RawCamera),
+    Exposure(RawExposure),
+    Options(RawOptions),
+    Field(RawField),
+}
+
+impl RawSection {
+    /// `value` deserialized as the section `name`.
+    fn of(name: &str, value: toml::Value) -> Option<RawSection> {
+        Some(match name {
+            "lens" => RawSection::Lens(Box::new(RawLens::deserialize(value).ok()?)),
+            "source" => RawSection::Source(RawSource::deserialize(value).ok()?),
+            "spectrum" => RawSection::Spectrum(RawSpectrum::deserialize(value).ok()?),
+            "camera" => RawSection::Camera(RawCamera::deserialize(value).ok()?),
+            "exposure" => RawSection::Exposure(RawExposure::deserialize(value).ok()?),
+            "options" => RawSection::Options(RawOptions::deserialize(value).ok()?),
+            "field" => RawSection::Field(RawField::deserialize(value).ok()?),
+            _ => return None,
+        })
+    }
+
+    /// Puts it in place in `raw`.
+    fn set(self, raw: &mut RawScene) {
+        match self {
+            RawSection::Lens(lens) => raw.lens = *lens,
+            RawSection::Source(source) => raw.source = source,
+            RawSection::Spectrum(spectrum) => raw.spectrum = Some(spectrum),
+            RawSection::Camera(camera) => raw.camera = camera,
+            RawSection::Exposure(exposure) => raw.exposure = exposure,
+            RawSection::Options(options) => raw.options = Some(options),
+            RawSection::Field(field) => raw.field = Some(field),
+        }
+    }
 }
 
 impl Prepared {
@@ -501,16 +547,17 @@ impl Prepared {
     /// the lens table from what it holds), a warning while reading, or any error (the points
     /// are then built the whole way, which reports it).
     pub(crate) fn new(source: &Source, overrides: &[String], keys: &[String]) -> Option<Prepared> {
-        let mut sections = Vec::new();
-        for key in keys {
+        let mut sections: Vec<(&'static str, Vec<usize>)> = Vec::new();
+        for (i, key) in keys.iter().enumerate() {
             let (section, leaf) = key.trim().split_once('.')?;
             let section = PREPARED_SECTIONS.iter().find(|s| **s == section)?;
             if leaf.is_empty() || leaf.contains(['.', '[', ']']) || ["preset", "zemax", "zemax_surface"].contains(&leaf)
             {
                 return None;
             }
-            if !sections.contains(section) {
-                sections.push(*section);
+            match sections.iter_mut().find(|(s, _)| s == section) {
+                Some((_, held)) => held.push(i),
+                None => sections.push((*section, vec![i])),
             }
         }
         let (table, mut origins) = merged(source, overrides).ok()?;
@@ -535,55 +582,71 @@ impl Prepared {
             dir: origins.dir,
             tables: origins.tables,
             arrays: origins.arrays,
+            keys: keys.to_vec(),
             sections,
+            seen: std::sync::Mutex::new(std::collections::HashMap::new()),
         })
     }
 
-    /// The scene with `assignments` (`KEY=VALUE`, the prepared keys, each once), built and
-    /// checked as [`build_with_warnings`] builds it; `None` where any step fails (build it
-    /// that way for the error).
-    pub(crate) fn build(&self, assignments: &[String]) -> Option<Loaded> {
+    /// Section `s` of `sections` with its keys set to their `values` (one per key of the
+    /// sweep): each key's assignment applied to a copy of the section's table as
+    /// [`merged`] applies it, then the section deserialized; `None` where a step fails.
+    fn section_at(&self, s: usize, values: &[f64]) -> Option<SectionAt> {
+        let (name, held) = &self.sections[s];
         let mut holder = toml::Table::new();
-        for section in &self.sections {
-            holder.insert((*section).to_owned(), self.table.get(*section)?.clone());
-        }
-        let mut overrides = self.overrides.clone();
-        for arg in assignments {
-            let (key, arg) = apply_override(&mut holder, arg, false).ok()?;
+        holder.insert((*name).to_owned(), self.table.get(*name)?.clone());
+        let mut overrides = Vec::with_capacity(held.len());
+        for &k in held {
+            let arg = crate::sweep::assignment(&self.keys[k], *values.get(k)?);
+            let (key, arg) = apply_override(&mut holder, &arg, false).ok()?;
             // only the prepared sections' keys, given before (the checks of a key given twice
             // or inside a table given after it ran when the point was prepared)
-            overrides.get(&key)?;
-            overrides.insert(key, arg);
+            self.overrides.get(&key)?;
+            overrides.push((key, arg));
         }
-        if holder.len() != self.sections.len() {
+        if holder.len() != 1 {
             return None;
         }
-        let mut raw = self.raw.clone();
-        for (section, value) in holder {
-            match section.as_str() {
-                "lens" => raw.lens = RawLens::deserialize(value).ok()?,
-                "source" => raw.source = RawSource::deserialize(value).ok()?,
-                "spectrum" => raw.spectrum = Some(RawSpectrum::deserialize(value).ok()?),
-                "camera" => raw.camera = RawCamera::deserialize(value).ok()?,
-                "exposure" => raw.exposure = RawExposure::deserialize(value).ok()?,
-                "options" => raw.options = Some(RawOptions::deserialize(value).ok()?),
-                "field" => raw.field = Some(RawField::deserialize(value).ok()?),
-                _ => return None,
-            }
+        let value = holder.remove(*name)?;
+        Some(SectionAt { raw: RawSection::of(name, value)?, overrides })
+    }
+
+    /// The scene with the swept keys at `values` (one per key, in the keys' order), built and
+    /// checked as [`build_with_warnings`] builds it from the overrides and the keys'
+    /// [`crate::sweep::assignment`]s; `None` where any step fails (build it that way for the
+    /// error).
+    pub(crate) fn build(&self, values: &[f64]) -> Option<Loaded> {
+        if values.len() != self.keys.len() {
+            return None;
         }
-        let origins = Origins {
-            file: self.label.clone(),
-            dir: self.dir.clone(),
+        let mut overrides = self.overrides.clone();
+        let mut raw = self.raw.clone();
+        for (s, (_, held)) in self.sections.iter().enumerate() {
+            let id = (s, held.iter().map(|&k| values[k].to_bits()).collect::<Vec<u64>>());
+            let known = self.seen.lock().ok().and_then(|seen| seen.get(&id).cloned());
+            let section = match known {
+                Some(section) => section,
+                None => {
+                    let section = self.section_at(s, values)?;
+                    if let Ok(mut seen) = self.seen.lock()
+                        && seen.len() < PREPARED_SECTIONS_KEPT
+                    {
+                        seen.insert(id, section.clone());
+                    }
+                    section
+                }
+            };
+            overrides.extend(section.overrides);
+            section.raw.set(&mut raw);
+        }
+        let origins = Origins::new(
+            self.label.clone(),
+            self.dir.clone(),
             overrides,
-            warnings: RefCell::new(Vec::new()),
-            lens: "lens".to_owned(),
-            preset: None,
-            zemax: None,
-            meter: RefCell::new(None),
-            mapping: std::cell::Cell::new(None),
-            tables: self.tables.clone(),
-            arrays: self.arrays.clone(),
-        };
+            "lens".to_owned(),
+            self.tables.clone(),
+            self.arrays.clone(),
+        );
         build_checked(&raw, &origins).ok()
     }
 }
@@ -1436,12 +1499,13 @@ mod tests {
             let mut first = fixed.to_vec();
             first.extend(set(&keys.iter().map(String::as_str).collect::<Vec<_>>(), points[0]));
             let prepared = Prepared::new(&paper, &first, &keys).expect("the paper scene's keys are prepared");
-            for values in points {
+            // (twice over: the second time each section comes from those the first deserialized)
+            for values in points.iter().chain(points) {
                 let assignments = set(&keys.iter().map(String::as_str).collect::<Vec<_>>(), values);
                 let mut all = fixed.to_vec();
                 all.extend(assignments.iter().cloned());
                 let whole = build_with_warnings(&paper, &all).unwrap();
-                let fast = prepared.build(&assignments).expect("a valid point is built prepared");
+                let fast = prepared.build(values).expect("a valid point is built prepared");
                 assert_eq!(fast.warnings, whole.warnings, "{keys:?} = {values:?}");
                 let (a, b) = match (metric::evaluate(&fast.scene), metric::evaluate(&whole.scene)) {
                     (Ok(a), Ok(b)) => (a, b),
@@ -1462,7 +1526,9 @@ mod tests {
             let mut bad = points[0].to_vec();
             bad[0] = -1.0;
             let assignments = set(&keys.iter().map(String::as_str).collect::<Vec<_>>(), &bad);
-            assert!(prepared.build(&assignments).is_none(), "{keys:?} = {bad:?}");
+            assert!(prepared.build(&bad).is_none(), "{keys:?} = {bad:?}");
+            assert!(prepared.build(&bad).is_none(), "{keys:?} = {bad:?}, again");
+            assert!(prepared.build(&bad[1..]).is_none(), "too few values");
             let mut all = fixed.to_vec();
             all.extend(assignments);
             assert!(build_with_warnings(&paper, &all).is_err());

@@ -135,22 +135,43 @@ impl TableCache {
 }
 
 impl Origins {
-    /// The origins of one design of a comparison file: the same file and overrides, the lens
-    /// table named `lens` (e.g. `designs[1].lens`), no warnings yet.
-    pub(crate) fn for_lens(&self, lens: String) -> Origins {
+    /// The origins of a scene read from `file` (in `dir`) with the `--set` keys `overrides`, its
+    /// lens table named `lens` in messages, sharing its source's tables and in-memory arrays:
+    /// no warnings, preset, Zemax file, meter steps or pupil mapping yet.
+    pub(crate) fn new(
+        file: String,
+        dir: PathBuf,
+        overrides: BTreeMap<String, String>,
+        lens: String,
+        tables: TableCache,
+        arrays: Arrays,
+    ) -> Origins {
         Origins {
-            file: self.file.clone(),
-            dir: self.dir.clone(),
-            overrides: self.overrides.clone(),
+            file,
+            dir,
+            overrides,
             warnings: RefCell::new(Vec::new()),
             lens,
             preset: None,
             zemax: None,
             meter: RefCell::new(None),
             mapping: std::cell::Cell::new(None),
-            tables: self.tables.clone(),
-            arrays: self.arrays.clone(),
+            tables,
+            arrays,
         }
+    }
+
+    /// The origins of one design of a comparison file: the same file and overrides, the lens
+    /// table named `lens` (e.g. `designs[1].lens`), no warnings yet.
+    pub(crate) fn for_lens(&self, lens: String) -> Origins {
+        Origins::new(
+            self.file.clone(),
+            self.dir.clone(),
+            self.overrides.clone(),
+            lens,
+            self.tables.clone(),
+            self.arrays.clone(),
+        )
     }
 
     /// The plausibility warnings collected so far (taken out).

@@ -211,13 +211,12 @@ impl<'a> Points<'a> {
 
     /// [`evaluate_point_with_lens`] at `values` (one per key).
     pub fn evaluate_with_lens(&self, values: &[f64], lens: Option<Arc<dyn LensModel>>) -> Result<Point, PointError> {
-        let assignments: Vec<String> = self.keys.iter().zip(values).map(|(k, v)| assignment(k, *v)).collect();
         let prepared = self.prepared.get_or_init(|| {
             let mut set = self.overrides.to_vec();
-            set.extend(assignments.iter().cloned());
+            set.extend(self.keys.iter().zip(values).map(|(k, v)| assignment(k, *v)));
             crate::load::Prepared::new(self.source, &set, self.keys)
         });
-        match prepared.as_ref().and_then(|p| p.build(&assignments)) {
+        match prepared.as_ref().and_then(|p| p.build(values)) {
             Some(loaded) => evaluate_scene(self.source, loaded.scene, values, lens),
             None => evaluate_point_with_lens(self.source, self.overrides, self.keys, values, lens),
         }
@@ -260,12 +259,28 @@ pub fn csv_header(keys: &[String], indexed: bool) -> String {
 /// One point's line (with its `\n`): its index first when given, the keys' values, the results
 /// (shortest round-trip decimals), the Fraunhofer validity and the warnings joined by ` | `.
 pub fn csv_row(point: &Point, index: Option<usize>) -> String {
+    use std::fmt::Write;
+    // the numbers and the validity never hold a comma, a quote or a line break, which [`csv_line`]
+    // quotes: where the warnings hold none either, the line is its fields joined by commas
+    // (test `a_csv_row_is_the_csv_writers_line`), with no writer made for it
+    let warnings = point.warnings.join(" | ");
+    if !warnings.contains([',', '"', '\r', '\n']) {
+        let mut line = String::with_capacity(24 * (point.values.len() + 5) + warnings.len());
+        if let Some(i) = index {
+            let _ = write!(line, "{i},");
+        }
+        for v in point.values.iter().chain(&[point.mean_mtf, point.snr0, point.asnr, point.photoelectrons]) {
+            let _ = write!(line, "{v},");
+        }
+        let _ = writeln!(line, "{},{warnings}", point.fraunhofer_valid);
+        return line;
+    }
     let mut fields: Vec<String> = Vec::with_capacity(point.values.len() + RESULT_COLUMNS.len() + 1);
     fields.extend(index.map(|i| i.to_string()));
     fields.extend(point.values.iter().map(f64::to_string));
     fields.extend([point.mean_mtf, point.snr0, point.asnr, point.photoelectrons].map(|v| v.to_string()));
     fields.push(point.fraunhofer_valid.to_string());
-    fields.push(point.warnings.join(" | "));
+    fields.push(warnings);
     csv_line(fields)
 }
 
@@ -442,6 +457,44 @@ mod tests {
             csv_header(&keys, true),
             "index,lens.f_number,mean_mtf,snr0,asnr,photoelectrons,fraunhofer_valid,warnings\n"
         );
+    }
+
+    /// A point's line is the one the `csv` crate writes of its fields (each number's shortest
+    /// decimal, the validity, the warnings joined by ` | `), with and without an index, whatever
+    /// the warnings hold.
+    #[test]
+    fn a_csv_row_is_the_csv_writers_line() {
+        let written = |point: &Point, index: Option<usize>| {
+            let mut fields: Vec<String> = index.iter().map(usize::to_string).collect();
+            fields.extend(point.values.iter().map(f64::to_string));
+            fields.extend([point.mean_mtf, point.snr0, point.asnr, point.photoelectrons].map(|v| v.to_string()));
+            fields.push(point.fraunhofer_valid.to_string());
+            fields.push(point.warnings.join(" | "));
+            csv_line(fields)
+        };
+        let warnings: [&[&str]; 7] = [
+            &[],
+            &["1.11 % of the signal is blurred beyond the Fraunhofer threshold of 0.25 mm"],
+            &["a", "b"],
+            &["a, b"],
+            &["say \"x\""],
+            &["two\nlines", "cr\r"],
+            &["", ""],
+        ];
+        for (k, w) in warnings.iter().enumerate() {
+            let point = Point {
+                values: vec![1.4, 5.01010101010101, -0.0, 1e-300, f64::INFINITY][..1 + k % 5].to_vec(),
+                mean_mtf: 0.9189413370831366,
+                snr0: f64::NAN,
+                asnr: -2.5e-17,
+                photoelectrons: 1e22,
+                fraunhofer_valid: k % 2 == 0,
+                warnings: w.iter().map(|s| (*s).to_owned()).collect(),
+            };
+            for index in [None, Some(0), Some(3999)] {
+                assert_eq!(csv_row(&point, index), written(&point, index), "{w:?}");
+            }
+        }
     }
 
     #[test]

@@ -90,10 +90,10 @@ impl Closed {
             samples: Vec::with_capacity(8 * quad::ORDER),
             ..Nodes::default()
         };
-        let mut densities = Vec::with_capacity(8 * quad::ORDER);
+        let densities = band_densities(detected, lo, hi);
+        let mut read = densities.iter();
         quad::for_each_node(lo, hi, 8, |lambda, q| {
-            let density = detected.value(lambda);
-            densities.push(density);
+            let density = read.next().copied().unwrap_or(f64::NAN);
             let q_rho = q * density;
             nodes.samples.push((lambda, q_rho, WHOLE));
             nodes.nodes.push(Node {
@@ -111,7 +111,7 @@ impl Closed {
             });
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len(), part: WHOLE });
-        nodes.densities = Some(densities);
+        nodes.densities = Some(densities.to_vec());
         nodes.total_weight = closed.total_weight();
         let weight: f64 = nodes.nodes.iter().map(|n| n.weight).sum();
         let mean_defocus = nodes.nodes.iter().map(|n| n.weight * n.w020).sum::<f64>() / weight;
@@ -127,6 +127,49 @@ impl Closed {
             seidel_values: RefCell::new(HashMap::default()),
         }
     }
+}
+
+/// How many bands' densities [`band_densities`] keeps per thread (128 `f64` each, 1 kB); a
+/// band's several spectra (other cameras, sources) count once.
+pub(super) const BAND_DENSITIES_KEPT: usize = 256;
+
+/// The bands whose densities this thread read at the closed form's spectral nodes, by the bits
+/// of the nodes' range: the detected spectrum and the densities ([`band_densities`]).
+type BandDensities = HashMap<[u64; 2], Vec<(Spectrum, std::sync::Arc<[f64]>)>, BuildHasherDefault<BitsHasher>>;
+
+thread_local! {
+    static BAND_DENSITIES: RefCell<BandDensities> = RefCell::new(HashMap::default());
+}
+
+/// The detected spectrum's values at the closed form's spectral nodes over `[lo, hi]` (8
+/// Gauss–Legendre panels, in [`quad::for_each_node`]'s order). They depend on the band and the
+/// camera, not on the lens: a sweep over the F-number reads the same ones at every F-number
+/// (4 % of a map point). Each thread keeps up to [`BAND_DENSITIES_KEPT`] bands (then forgets
+/// them all and starts again), found by the bits of `lo` and `hi` and an equal spectrum, so the
+/// values are the ones `detected.value` gives there, to the bit; `forget_remembered` clears them.
+fn band_densities(detected: &Spectrum, lo: f64, hi: f64) -> std::sync::Arc<[f64]> {
+    let id = [lo.to_bits(), hi.to_bits()];
+    let known = BAND_DENSITIES.with_borrow(|kept| {
+        kept.get(&id).and_then(|same| same.iter().find(|(spectrum, _)| spectrum == detected).map(|k| k.1.clone()))
+    });
+    if let Some(densities) = known {
+        return densities;
+    }
+    let mut densities = Vec::with_capacity(8 * quad::ORDER);
+    quad::for_each_node(lo, hi, 8, |lambda, _| densities.push(detected.value(lambda)));
+    let densities: std::sync::Arc<[f64]> = densities.into();
+    BAND_DENSITIES.with_borrow_mut(|kept| {
+        if kept.len() >= BAND_DENSITIES_KEPT {
+            kept.clear();
+        }
+        kept.entry(id).or_default().push((detected.clone(), densities.clone()));
+    });
+    densities
+}
+
+/// Forgets the bands' densities this thread keeps ([`band_densities`]).
+pub(super) fn forget_band_densities() {
+    BAND_DENSITIES.with_borrow_mut(HashMap::clear);
 }
 
 impl OtfEngine for Closed {

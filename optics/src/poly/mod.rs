@@ -596,13 +596,58 @@ fn resolved_defocus(nodes: &Nodes, scene: &Scene<'_>, relevant: f64) -> f64 {
 
 /// The largest `|W020|` of `signal` (`(|W020|, signal)` pairs) such that the signal at that
 /// defocus and beyond exceeds `relevant`; 0 where none does.
+///
+/// The pairs are taken in the order of a stable sort by `|W020|`, largest first (equal ones in
+/// their order in `signal`), their signal summed in that order until it exceeds `relevant`.
+/// Where `|W020|` first falls and then rises along `signal` (an affine defocus over ascending
+/// wavelengths, the closed form's nodes: the sort was 2 % of a map point), the two runs are
+/// merged from their large ends as far as the sum goes, the same pairs in the same order
+/// (test `defocus_beyond_merges_as_the_sort_orders`); otherwise they are sorted.
 fn defocus_beyond(mut signal: Vec<(f64, f64)>, relevant: f64) -> f64 {
-    signal.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let n = signal.len();
+    // `signal[..fall]` non-increasing in |W020|, then `signal[fall..]` non-decreasing
+    let mut fall = 1.min(n);
+    while fall < n && signal[fall].0.total_cmp(&signal[fall - 1].0).is_le() {
+        fall += 1;
+    }
+    let rises = (fall + 1..n).all(|i| signal[i].0.total_cmp(&signal[i - 1].0).is_ge());
+    if !rises {
+        signal.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut beyond = 0.0;
+        for (w020, mass) in signal {
+            beyond += mass;
+            if beyond > relevant {
+                return w020;
+            }
+        }
+        return 0.0;
+    }
     let mut beyond = 0.0;
-    for (w020, mass) in signal {
-        beyond += mass;
-        if beyond > relevant {
-            return w020;
+    // the next of the falling run, and the end (exclusive) of what is left of the rising one
+    let (mut i, mut end) = (0, n);
+    while i < fall || end > fall {
+        if i < fall && (end == fall || signal[i].0.total_cmp(&signal[end - 1].0).is_ge()) {
+            // (an equal |W020| of the falling run comes first: its index is the lower)
+            let (w020, mass) = signal[i];
+            i += 1;
+            beyond += mass;
+            if beyond > relevant {
+                return w020;
+            }
+        } else {
+            // the rising run's largest |W020|, its equal ones in their order
+            let key = signal[end - 1].0;
+            let mut start = end - 1;
+            while start > fall && signal[start - 1].0.total_cmp(&key).is_eq() {
+                start -= 1;
+            }
+            for &(w020, mass) in &signal[start..end] {
+                beyond += mass;
+                if beyond > relevant {
+                    return w020;
+                }
+            }
+            end = start;
         }
     }
     0.0
@@ -611,8 +656,8 @@ fn defocus_beyond(mut signal: Vec<(f64, f64)>, relevant: f64) -> f64 {
 /// `(|W020|, signal)` of each node of `part` ([`resolved_defocus`]) appended to `signal`;
 /// `detected` is the part's spectrum.
 fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec<(f64, f64)>) {
-    let mut samples: Vec<(f64, f64)> =
-        nodes.samples.iter().filter(|s| s.2 == part && s.0.is_finite()).map(|s| (s.0, s.1)).collect();
+    let mut samples: Vec<(f64, f64)> = Vec::with_capacity(nodes.samples.len());
+    samples.extend(nodes.samples.iter().filter(|s| s.2 == part && s.0.is_finite()).map(|s| (s.0, s.1)));
     // (the rules emit their samples in order: no sort then, the same order a stable sort keeps)
     if !samples.is_sorted_by(|a, b| a.0.total_cmp(&b.0).is_le()) {
         samples.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -929,6 +974,23 @@ impl<'a> Polychromatic<'a> {
         Some(samples.iter().map(|&(lambda, w, _)| w * f(lambda)).sum())
     }
 
+    /// [`detected_integral`](Self::detected_integral) of `N` functions in one pass over the
+    /// nodes: `f(λ)` gives their values at a node. Each sum is taken in the nodes' order from
+    /// −0 as `detected_integral`'s, so each is the same to the bit.
+    pub fn detected_integrals<const N: usize>(&self, mut f: impl FnMut(f64) -> [f64; N]) -> Option<[f64; N]> {
+        let samples = &self.engine.nodes().samples;
+        if !self.scene.parts.is_empty() && samples.iter().any(|s| s.2 != spectral::WHOLE) {
+            return None;
+        }
+        let mut sums = [-0.0; N];
+        for &(lambda, w, _) in samples {
+            for (sum, value) in sums.iter_mut().zip(f(lambda)) {
+                *sum += w * value;
+            }
+        }
+        Some(sums)
+    }
+
     /// Weighted average of `f(λ, W020)` over the detected spectrum (weights `ρ τ`).
     pub fn spectral_average(&self, mut f: impl FnMut(f64, f64) -> f64) -> f64 {
         let nodes = self.engine.nodes();
@@ -1185,6 +1247,97 @@ mod tests {
         let mut signal = Vec::new();
         part_signal(nodes, spectral::WHOLE, &detected, &mut signal);
         assert_eq!(signal, part_signal_reference(nodes, spectral::WHOLE, &detected));
+        // (and the signal integrals in one pass are each `detected_integral`'s sum, to the bit)
+        let three = |l: f64| [1.0, l * 1e6, (l * 1e7).sin()];
+        let together = poly.detected_integrals(three).unwrap();
+        for (k, sum) in together.iter().enumerate() {
+            assert_eq!(sum.to_bits(), poly.detected_integral(|l| three(l)[k]).unwrap().to_bits(), "{k}");
+        }
+        // a second engine of the same band reads the densities this thread kept: the same nodes
+        let again = Polychromatic::with_settings(
+            &lens,
+            &detected,
+            Field::ON_AXIS,
+            1.0 / (2.0 * 5.2e-6),
+            None,
+            Settings { tolerance: 1e-7, ..Settings::default() },
+        )
+        .unwrap();
+        assert_eq!(again.engine.nodes().samples, nodes.samples);
+        assert_eq!(again.engine.nodes().densities, nodes.densities);
+        // (which are the spectrum's values at the nodes, read directly)
+        let mut direct = Vec::new();
+        crate::quad::for_each_node(nodes.panels[0].lo, nodes.panels[0].hi, 8, |l, _| direct.push(detected.value(l)));
+        assert_eq!(again.engine.nodes().densities.as_deref(), Some(&direct[..]));
+    }
+
+    /// `defocus_beyond` as first written: the pairs sorted (stable, largest |W020| first), their
+    /// signal summed in that order.
+    fn defocus_beyond_reference(mut signal: Vec<(f64, f64)>, relevant: f64) -> f64 {
+        signal.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut beyond = 0.0;
+        for (w020, mass) in signal {
+            beyond += mass;
+            if beyond > relevant {
+                return w020;
+            }
+        }
+        0.0
+    }
+
+    /// `defocus_beyond`'s merge of a falling and a rising run of |W020| takes the pairs in the
+    /// stable sort's order: the same answer, to the bit, as the sort, at every threshold from
+    /// none to all of the signal, on runs with equal |W020| within and across them (the equal
+    /// ones in their order in `signal`), one run alone, and pairs in no such order (sorted).
+    #[test]
+    fn defocus_beyond_merges_as_the_sort_orders() {
+        // a fixed pseudo-random sequence (a 64-bit linear congruential generator)
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut cases: Vec<Vec<(f64, f64)>> = vec![vec![], vec![(1.0, 0.5)], vec![(0.0, 1.0), (0.0, 2.0)]];
+        for len in [2, 3, 8, 40, 128] {
+            for _ in 0..30 {
+                // |W020| of an affine defocus over ascending wavelengths, rounded to a coarse
+                // grid so that equal ones occur, with the zero inside, before or after the band
+                let zero = -0.5 + 2.0 * next();
+                let step = 0.01 + next();
+                let grid = [0.05, 0.25, 1.0][(3.0 * next()) as usize];
+                let v: Vec<(f64, f64)> = (0..len)
+                    .map(|k| {
+                        let w = ((k as f64 / len as f64 - zero) * step).abs();
+                        ((w / grid).round() * grid, next() * 10f64.powi(-(6.0 * next()) as i32))
+                    })
+                    .collect();
+                cases.push(v.clone());
+                // no such order
+                let mut mixed = v;
+                for k in 0..len {
+                    mixed.swap(k, (next() * len as f64) as usize % len);
+                }
+                cases.push(mixed);
+            }
+        }
+        for signal in cases {
+            let total: f64 = signal.iter().map(|p| p.1).sum();
+            let mut partial = vec![0.0, -1.0, total, 2.0 * total];
+            let mut sum = 0.0;
+            let mut sorted = signal.clone();
+            sorted.sort_by(|a, b| b.0.total_cmp(&a.0));
+            for p in &sorted {
+                sum += p.1;
+                partial.extend([sum, sum * (1.0 - 1e-15), sum * (1.0 + 1e-15)]);
+            }
+            for relevant in partial {
+                assert_eq!(
+                    defocus_beyond(signal.clone(), relevant).to_bits(),
+                    defocus_beyond_reference(signal.clone(), relevant).to_bits(),
+                    "{signal:?} at {relevant:e}"
+                );
+            }
+        }
     }
 
     /// [`resolved_defocus`] reads a node's signal from the spectrum around it, not from its rule

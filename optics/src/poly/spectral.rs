@@ -1224,10 +1224,11 @@ thread_local! {
 }
 
 /// Forgets what this thread remembers of measured spectra (the densities with their panels'
-/// moments, and radiometry's piecewise polynomials), so that the next evaluation makes its own:
+/// moments, the closed form's bands' densities, and radiometry's piecewise polynomials), so that the next evaluation makes its own:
 /// for a time per evaluation measured by repeating one scene (the accuracy report).
 pub fn forget_remembered() {
     DENSITY_MEMO.with_borrow_mut(Vec::clear);
+    super::closed_form::forget_band_densities();
     radiometry::forget_remembered();
 }
 
