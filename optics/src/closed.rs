@@ -281,23 +281,19 @@ impl GaussianDefocus {
         self.moments(f, phi0, phi1, cut_x)
     }
 
-    /// [`spectral`](Self::spectral) at four points `c`, by the same operations in the same order
-    /// on each lane (each lane is the scalar `E(c)` to the last bit; the real exponentials are
-    /// [`expo::exp_lanes`], whose lanes are the scalar [`expo::exp`]). `None` where the lanes do not share one case of
-    /// [`moments`](Self::moments) (some cut and some not, one below the Gaussian's tail, the
-    /// Gaussian truncated at λ = 0, a Faddeeva argument beyond its series): the caller then takes
-    /// them one by one. The nodes of one piece of the rule in `t` share their case, since the
-    /// pieces are cut where the case changes.
+    /// The moments `M_j`, `j < count`, of `y = x − m` on the lanes of `V` (four or eight points
+    /// `c`), and `m`: the scalar [`moments`](Self::moments)' operations in the same order on each
+    /// lane, for [`spectral_lanes`](Self::spectral_lanes) (`count` the polynomial's terms) and
+    /// [`seidel_lanes`](Self::seidel_lanes) (three more, `lane_moments`). `None` where the lanes
+    /// do not share one case (some cut and some not, one below the Gaussian's tail, the Gaussian
+    /// truncated at λ = 0, a Faddeeva argument beyond its series).
     #[inline(always)]
-    fn spectral4(&self, f: &AtFrequency, c: f64x4) -> Option<Complex4> {
-        self.spectral_lanes(f, c)
-    }
-
-    /// [`spectral4`](Self::spectral4) on the lanes of `V` (four or eight: eight advance two
-    /// groups of four through the same chains together), each lane the scalar `E(c)` to the
-    /// last bit; `None` where the lanes do not share one case.
-    #[inline(always)]
-    fn spectral_lanes<V: Lanes>(&self, f: &AtFrequency, c: V) -> Option<Complexes<V>> {
+    fn moments_lanes<V: Lanes, const N: usize>(
+        &self,
+        f: &AtFrequency,
+        c: V,
+        count: usize,
+    ) -> Option<([Complexes<V>; N], Complexes<V>)> {
         if self.lower_at(f.tail).is_some() || f.beta <= 0.0 {
             return None;
         }
@@ -320,11 +316,10 @@ impl GaussianDefocus {
             let e = expo::exp_lanes(kk.re);
             Complexes { re: cos, im: sin }.scale(e)
         };
-        let terms = self.q.len();
-        let mut moments = [Complexes::<V>::ZERO; MAX_TERMS];
+        let mut moments = [Complexes::<V>::ZERO; N];
         if !cut {
             moments[0] = exp_k().mul(Complexes::<V>::splat(f.root_pi_over_root_a));
-            for j in 2..terms {
+            for j in 2..count {
                 moments[j] = moments[j - 2].scale(k((j - 1) as f64)).mul(inv_2a);
             }
         } else {
@@ -341,28 +336,41 @@ impl GaussianDefocus {
             }
             moments[0] = difference.mul(Complexes::<V>::splat(0.5 * f.root_pi_over_root_a));
             let mut p_hi = Complexes::<V>::ONE;
-            for j in 1..terms {
+            for j in 1..count {
                 let boundary = Complexes::<V>::ZERO.sub(p_hi.mul(e_hi));
                 p_hi = p_hi.mul(y_hi);
                 let previous = if j >= 2 { moments[j - 2].scale(k((j - 1) as f64)) } else { Complexes::<V>::ZERO };
                 moments[j] = previous.add(boundary).mul(inv_2a);
             }
         }
+        Some((moments, m))
+    }
+
+    /// [`spectral`](Self::spectral) at four points `c`, by the same operations in the same order
+    /// on each lane (each lane is the scalar `E(c)` to the last bit; the real exponentials are
+    /// [`expo::exp_lanes`], whose lanes are the scalar [`expo::exp`]). `None` where the lanes do not share one case of
+    /// [`moments`](Self::moments) (some cut and some not, one below the Gaussian's tail, the
+    /// Gaussian truncated at λ = 0, a Faddeeva argument beyond its series): the caller then takes
+    /// them one by one. The nodes of one piece of the rule in `t` share their case, since the
+    /// pieces are cut where the case changes.
+    #[inline(always)]
+    fn spectral4(&self, f: &AtFrequency, c: f64x4) -> Option<Complex4> {
+        self.spectral_lanes(f, c)
+    }
+
+    /// [`spectral4`](Self::spectral4) on the lanes of `V` (four or eight: eight advance two
+    /// groups of four through the same chains together), each lane the scalar `E(c)` to the
+    /// last bit; `None` where the lanes do not share one case.
+    #[inline(always)]
+    fn spectral_lanes<V: Lanes>(&self, f: &AtFrequency, c: V) -> Option<Complexes<V>> {
+        let terms = self.q.len();
+        let (moments, m) = self.moments_lanes::<V, MAX_TERMS>(f, c, terms)?;
         // Σ_k q_k x^k with x = y + m: the Taylor coefficients of Q at m (repeated synthetic division)
-        let mut r = [Complexes::<V>::ZERO; MAX_TERMS];
-        for (slot, &v) in r.iter_mut().zip(&self.q) {
-            *slot = Complexes::<V>::real(k(v));
+        let mut q = [V::ZERO; MAX_TERMS];
+        for (slot, &v) in q.iter_mut().zip(&self.q) {
+            *slot = V::splat(v);
         }
-        let mut total = Complexes::<V>::ZERO;
-        for (j, moment) in moments.iter().enumerate().take(terms) {
-            let mut acc = Complexes::<V>::ZERO;
-            for v in r[..terms - j].iter_mut().rev() {
-                let t = v.add(acc.mul(m));
-                *v = acc;
-                acc = t;
-            }
-            total = total.add(acc.mul(*moment));
-        }
+        let total = taylor_sum_lanes(&q[..terms], &moments, m);
         Some(total)
     }
 
@@ -1442,57 +1450,11 @@ impl GaussianDefocus {
     /// series): the caller then takes them one by one.
     #[inline(always)]
     fn seidel_lanes<V: Lanes>(&self, f: &AtFrequency, c: V, sin2: V) -> Option<[V; 3]> {
-        if self.lower_at(f.tail).is_some() || f.beta <= 0.0 {
-            return None;
-        }
+        let terms = self.q.len();
+        // the moments M_j of y = x − m, j < terms + 3 (`lane_moments`)
+        let (moments, m) = self.moments_lanes::<V, SEIDEL_TERMS>(f, c, terms + 3)?;
         let k = V::splat;
         let d = c - k(f.beta * self.center);
-        let phi0 = k(f.a_mu) * d;
-        let phi1 = k(self.sigma) * (k(f.a1) * d - k(f.beta * f.a_mu));
-        let cut_x = c * k(f.inv_beta_sigma) - k(f.center_over_sigma);
-        let upper = cut_x.simd_lt(k(f.tail));
-        let cut = upper.all();
-        if (!cut && upper.any()) || (cut && cut_x.simd_lt(k(-f.tail)).any()) {
-            return None;
-        }
-        let terms = self.q.len();
-        let count = terms + 3;
-        // the moments M_j of y = x − m, j < count (`lane_moments`)
-        let inv_2a = Complexes::<V>::splat(f.inv_2a);
-        let m = Complexes::<V>::imaginary(phi1).mul(inv_2a);
-        let kk = Complexes::<V>::imaginary(phi0).add(Complexes::<V>::splat(f.a).mul(m).mul(m));
-        let exp_k = || {
-            let (sin, cos) = cis::sin_cos_lanes(kk.im);
-            let e = expo::exp_lanes(kk.re);
-            Complexes { re: cos, im: sin }.scale(e)
-        };
-        let mut moments = [Complexes::<V>::ZERO; SEIDEL_TERMS];
-        if !cut {
-            moments[0] = exp_k().mul(Complexes::<V>::splat(f.root_pi_over_root_a));
-            for j in 2..count {
-                moments[j] = moments[j - 2].scale(k((j - 1) as f64)).mul(inv_2a);
-            }
-        } else {
-            let x = cut_x;
-            let e_hi = Complexes::<V>::real(expo::exp_lanes(k(-0.5) * x * x));
-            let y_hi = Complexes::<V>::real_minus(x, m);
-            let z = Complexes::<V>::splat(f.sqrt_a).mul(y_hi);
-            let positive = z.re.simd_ge(V::ZERO);
-            let w = f.erfcx.eval_lanes(Complexes::<V>::select(positive, z, z.neg()))?;
-            let rest_hi = Complexes::<V>::select(positive, e_hi.neg().mul(w), e_hi.mul(w));
-            let mut difference = rest_hi.sub(Complexes::<V>::ZERO);
-            if positive.any() {
-                difference = Complexes::<V>::select(positive, difference.add(exp_k().scale(k(2.0))), difference);
-            }
-            moments[0] = difference.mul(Complexes::<V>::splat(0.5 * f.root_pi_over_root_a));
-            let mut p_hi = Complexes::<V>::ONE;
-            for j in 1..count {
-                let boundary = Complexes::<V>::ZERO.sub(p_hi.mul(e_hi));
-                p_hi = p_hi.mul(y_hi);
-                let previous = if j >= 2 { moments[j - 2].scale(k((j - 1) as f64)) } else { Complexes::<V>::ZERO };
-                moments[j] = previous.add(boundary).mul(inv_2a);
-            }
-        }
         // the lanes' polynomials (`spectral_and_seidel_lanes`): u = d − βσx, s = βμ + βσx
         let bs = f.beta * self.sigma;
         let (u0, u1) = (d, k(-bs));
@@ -1526,13 +1488,13 @@ impl GaussianDefocus {
 /// [`taylor_sum`] on the lanes of `V` (the real `coefficients` per lane), by the same operations
 /// in the same order.
 #[inline(always)]
-fn taylor_sum_lanes<V: Lanes>(
+fn taylor_sum_lanes<V: Lanes, const N: usize>(
     coefficients: &[V],
-    moments: &[Complexes<V>; SEIDEL_TERMS],
+    moments: &[Complexes<V>; N],
     m: Complexes<V>,
 ) -> Complexes<V> {
     let terms = coefficients.len();
-    let mut r = [Complexes::<V>::ZERO; SEIDEL_TERMS];
+    let mut r = [Complexes::<V>::ZERO; N];
     for (slot, &v) in r.iter_mut().zip(coefficients) {
         *slot = Complexes::<V>::real(v);
     }

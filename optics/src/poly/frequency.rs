@@ -290,22 +290,10 @@ impl Polychromatic<'_> {
     /// rule's accepted weights over `ν_max`: the one pass both gradients above take. `None`
     /// where the recording failed or an accepted frequency has no lanes.
     fn recorded_mean_and_gradient(&self, recording: Recording) -> Option<(f64, Vec<f64>, Work)> {
-        let lanes = recording.lanes;
         *self.gradient.borrow_mut() = Some(recording);
         let (mean, work) = self.mean_of(&|nu| self.recorded_otf(nu));
         let recording = self.gradient.borrow_mut().take()?;
-        if recording.failed {
-            return None;
-        }
-        let mut gradient = vec![0.0; lanes];
-        for &(nu, w) in &recording.accepted {
-            let i = *recording.at.get(&nu.to_bits())?;
-            for (g, d) in gradient.iter_mut().zip(&recording.derivatives[i..i + lanes]) {
-                *g += w * d;
-            }
-        }
-        gradient.iter_mut().for_each(|g| *g /= self.scene.max_frequency);
-        Some((mean, gradient, work))
+        self.integrate_recorded(mean, recording, work)
     }
 
     /// The mean MTF ([`mean_mtf`](Self::mean_mtf)) and, in the same pass, what its derivatives
