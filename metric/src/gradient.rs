@@ -750,7 +750,10 @@ fn point_gradient(
                 let GridGradient::Computed(all) = d_grid else {
                     return Err(not_smooth(
                         p,
-                        "lens.obscuration: the inner edge's motion is computed on the FFT path, for orders through                          the annulus (or annular sector) with its wavefront and a white noise spectrum, asked with                          no wavefront key; this scene's OTF is on another engine (a line spectrum's grids, a noise                          spectrum, or wavefront keys asked with it)"
+                        "lens.obscuration: the inner edge's motion is computed on the FFT path, for orders \
+                        through the annulus (or annular sector) with its wavefront and a white noise \
+                        spectrum, asked with no wavefront key; this scene's OTF is on another engine (a line \
+                        spectrum's grids, a noise spectrum, or wavefront keys asked with it)"
                             .to_owned(),
                     ));
                 };
