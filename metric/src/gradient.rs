@@ -401,6 +401,15 @@ struct PointGradient {
     photoelectrons: Vec<f64>,
 }
 
+/// `∂G` from `∂M̄` where the Nyquist frequency does not move: the metric's `G` is the mean MTF
+/// `M̄`, or the MTF's integral up to Nyquist, `ν_N M̄` (`options.form`).
+fn d_g_from_mean_mtf(scene: &Scene, e: &Evaluation, d_mtf: f64) -> f64 {
+    match scene.options().form {
+        MetricForm::Mean => d_mtf,
+        MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
+    }
+}
+
 /// The derivatives at one field point whose evaluation is `e`; `d_binary2` the mean MTF's
 /// Binary 2 derivatives computed with it, where they were; `d_grid` the wavefront derivatives on
 /// the FFT path, one per wavefront parameter of `parameters` in their order.
@@ -569,10 +578,7 @@ fn point_gradient(
                 let GridGradient::Computed(all) = d_grid else { unreachable!("on_grid") };
                 let d_mtf = all[grid_place];
                 grid_place += 1;
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::Seidel(t) => {
@@ -589,10 +595,7 @@ fn point_gradient(
                         optics::SeidelTerm::FieldCurvature => curvature,
                         _ => 0.5 * curvature,
                     };
-                    let d_g = match scene.options().form {
-                        MetricForm::Mean => d_mtf,
-                        MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                    };
+                    let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                     (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
                 } else if let Some(why) = seidel_zero_off_axis(scene, e, t) {
                     return Err(not_smooth(p, why));
@@ -649,19 +652,13 @@ fn point_gradient(
                         ),
                     ));
                 };
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::FNumber | Parameter::FocalLength => {
                 let (d_f_number, d_focal_length) = aperture.expect("computed above for an aperture parameter");
                 let d_mtf = if p == Parameter::FNumber { d_f_number } else { d_focal_length };
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 if p == Parameter::FNumber {
                     // N and N_T ∝ NA² = 1/(4F#²) (SI eq. S7–S8, S14): ∂ln/∂ln F# = −2 for both,
                     // so the stray light N_T − N too
@@ -712,10 +709,7 @@ fn point_gradient(
                     .relative_illumination()
                     .field_log_derivative(scene.field(), axis)
                     .map_err(|why| not_smooth(p, format!("{}: {why}", field_key(axis))))?;
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 // RI scales N and N_T alike (docs/physics.md, "Relative illumination"), so the
                 // stray light N_T − N in proportion
                 (n * d_ln_ri, background * d_ln_ri, 0.0, 0.0, 0.0, d_g, d_mtf)
@@ -739,10 +733,7 @@ fn point_gradient(
                         ));
                     }
                 };
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 // the iris keeps its area (the full-size circle moved): N and N_T do not move
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
@@ -759,10 +750,7 @@ fn point_gradient(
                 };
                 let d_mtf = all[grid_place];
                 grid_place += 1;
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 // N and N_T move with the area fraction: the key's chain on Efficiency and
                 // Transmission (`Parameter::Obscuration`)
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
@@ -774,10 +762,7 @@ fn point_gradient(
                     (Parameter::SpectrumRange, Some(l)) => (1.0 / l.width(), 1.0 / l.width(), 0.0),
                     _ => line_center.expect("computed above for a line's wavelength"),
                 };
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 let d_b = if stray { transmitted * d_ln_t - n * d_ln_n } else { 0.0 };
                 (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
@@ -797,10 +782,7 @@ fn point_gradient(
                     }
                     None => 0.0,
                 };
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
@@ -813,10 +795,7 @@ fn point_gradient(
                             .to_owned(),
                     ));
                 }
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 // the stray light B = 0 here; N = (constants) ∫ ρ τ1 dλ
                 (n * d_ln_n, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
@@ -831,10 +810,7 @@ fn point_gradient(
                     Some(b) if camera.noise_spectrum().is_none() => b,
                     _ => library_bias_partials(scene, e, p, index)?,
                 };
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => bias.mean_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * bias.mean_mtf,
-                };
+                let d_g = d_g_from_mean_mtf(scene, e, bias.mean_mtf);
                 // N ∝ ∫ρ τ1 dλ and N_T ∝ ∫ρ T dλ (SI eq. S8, S14); the stray light B = N_T − N
                 let d_n = n * bias.ln_photoelectrons;
                 let d_b = if stray { transmitted * bias.ln_transmitted - d_n } else { 0.0 };
@@ -872,10 +848,7 @@ fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Poi
     }
     let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     let d_mtf = edge - e.mean_mtf;
-    let d_g = match scene.options().form {
-        MetricForm::Mean => d_mtf,
-        MetricForm::Integral => e.nyquist_cyc_per_mm * d_mtf,
-    };
+    let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
     Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf))
 }
 
