@@ -905,12 +905,12 @@ impl ExtraLanes {
                         };
                         if fields.iter().any(|f| !f.is_on_axis()) {
                             return Err(not_smooth(
-                                "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the                  radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is                  computed on axis",
+                                "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is computed on axis",
                             ));
                         }
                         if scene.camera().pixel_mtf() {
                             return Err(not_smooth(
-                                "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet                  (set camera.pixel_mtf = false)",
+                                "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet (set camera.pixel_mtf = false)",
                             ));
                         }
                         true
@@ -1050,7 +1050,7 @@ fn aperture_lane_partials(
     let Some(&[d_p, d_t, d_s]) = lanes else {
         return Err(Error::NotDifferentiable {
             parameter: p.describe(),
-            reason: "the radial engine did not carry the aperture's lanes here (an order through an iris, zones, a                      map or a table, or the FFT path)"
+            reason: "the radial engine did not carry the aperture's lanes here (an order through an iris, zones, a map or a table, or the FFT path)"
                 .to_owned(),
         });
     };
