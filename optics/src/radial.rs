@@ -1249,8 +1249,9 @@ fn clenshaw(c: &[f64], q: f64) -> f64 {
 
 /// `Σ c_k T_k(2q − 1)` on eight lanes at once by Clenshaw's recurrence (`wide::f64x8`, one
 /// AVX-512 register where the build has it): the same fused operations as [`clenshaw`] on each
-/// lane.
-#[inline(always)]
+/// lane. The engine runs it as [`clenshaw8_blocks`]; this one block alone is that function's
+/// reference in the tests.
+#[cfg(test)]
 fn clenshaw8(c: &[f64], q: wide::f64x8) -> wide::f64x8 {
     use wide::f64x8;
     let x2 = f64x8::splat(2.0) * q.mul_add(f64x8::splat(2.0), f64x8::splat(-1.0));
@@ -1260,6 +1261,27 @@ fn clenshaw8(c: &[f64], q: wide::f64x8) -> wide::f64x8 {
     }
     // as the scalar recurrence rounds it: the product, then the two sums
     f64x8::splat(c[0]) + f64x8::splat(0.5) * x2 * b1 - b2
+}
+
+/// `clenshaw8` (`Σ c_k T_k(2q − 1)` by Clenshaw's recurrence, each lane the fused operations of
+/// [`clenshaw`]) on `N` blocks of eight lanes at once: one pass over the coefficients carries
+/// the `N` recurrences side by side, so that their chains of dependent multiply-adds overlap
+/// (one recurrence at a time waits on each step's latency). Each lane takes the operations of
+/// `clenshaw8` in the same order, so each block is its value to the last bit (tested in
+/// `lanes_match_the_scalar_recurrence`).
+#[inline(always)]
+fn clenshaw8_blocks<const N: usize>(c: &[f64], q: [wide::f64x8; N]) -> [wide::f64x8; N] {
+    use wide::f64x8;
+    let x2: [f64x8; N] =
+        std::array::from_fn(|j| f64x8::splat(2.0) * q[j].mul_add(f64x8::splat(2.0), f64x8::splat(-1.0)));
+    let (mut b1, mut b2) = ([f64x8::ZERO; N], [f64x8::ZERO; N]);
+    for &ck in c[1..].iter().rev() {
+        let ck = f64x8::splat(ck);
+        for j in 0..N {
+            (b1[j], b2[j]) = (x2[j].mul_add(b1[j], ck - b2[j]), b1[j]);
+        }
+    }
+    std::array::from_fn(|j| f64x8::splat(c[0]) + f64x8::splat(0.5) * x2[j] * b1[j] - b2[j])
 }
 
 /// Eight values from `x[at..at + 8]`.
@@ -1288,7 +1310,7 @@ fn cosine_sum(w: &[f64], a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// `Σ_i w_i cos(a (q₁ − q₂) + p(q₁) − p(q₂))` with `p` the Chebyshev series `c` in `2q − 1`
-/// ([`clenshaw8`]), `q₁ = q1[i]`, `q₂ = q2[i]`: the phase and its cosine fused eight lanes at a
+/// ([`clenshaw8_blocks`]), `q₁ = q1[i]`, `q₂ = q2[i]`: the phase and its cosine fused eight lanes at a
 /// time, nothing stored between them; the rest lane by lane.
 fn proxy_cosine_sum(c: &[f64], a: f64, q1: &[f64], q2: &[f64], w: &[f64]) -> f64 {
     use wide::f64x8;
@@ -1299,14 +1321,16 @@ fn proxy_cosine_sum(c: &[f64], a: f64, q1: &[f64], q2: &[f64], w: &[f64]) -> f64
     let pairs = n / 16 * 16;
     for i in (0..pairs).step_by(16) {
         let (x, y, x2, y2) = (load8(q1, i), load8(q2, i), load8(q1, i + 8), load8(q2, i + 8));
-        let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
-        let phase2 = a8.mul_add(x2 - y2, clenshaw8(c, x2) - clenshaw8(c, y2));
+        let [px, py, px2, py2] = clenshaw8_blocks(c, [x, y, x2, y2]);
+        let phase = a8.mul_add(x - y, px - py);
+        let phase2 = a8.mul_add(x2 - y2, px2 - py2);
         acc = load8(w, i).mul_add(phase.sin_cos().1, acc);
         acc2 = load8(w, i + 8).mul_add(phase2.sin_cos().1, acc2);
     }
     for i in (pairs..n).step_by(8) {
         let (x, y) = (load8(q1, i), load8(q2, i));
-        let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
+        let [px, py] = clenshaw8_blocks(c, [x, y]);
+        let phase = a8.mul_add(x - y, px - py);
         acc = load8(w, i).mul_add(phase.sin_cos().1, acc);
     }
     let mut total = (acc + acc2).reduce_add();
@@ -1817,7 +1841,8 @@ impl RadialOrder {
                         let mut acc = f64x8::ZERO;
                         for i in (0..n).step_by(8) {
                             let (x, y) = (load8(q, i), load8(q, lanes + i));
-                            let (sin, cos) = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y)).sin_cos();
+                            let [px, py] = clenshaw8_blocks(c, [x, y]);
+                            let (sin, cos) = a8.mul_add(x - y, px - py).sin_cos();
                             let w = load8(weight, i);
                             acc = w.mul_add(cos, acc);
                             let slope = -(w * sin);
@@ -2049,8 +2074,9 @@ impl RadialOrder {
         let pairs = n / 16 * 16;
         for i in (0..pairs).step_by(16) {
             let (x, y, x2, y2) = (load8(q1, i), load8(q2, i), load8(q1, i + 8), load8(q2, i + 8));
-            let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
-            let phase2 = a8.mul_add(x2 - y2, clenshaw8(c, x2) - clenshaw8(c, y2));
+            let [px, py, px2, py2] = clenshaw8_blocks(c, [x, y, x2, y2]);
+            let phase = a8.mul_add(x - y, px - py);
+            let phase2 = a8.mul_add(x2 - y2, px2 - py2);
             let ((sin, cos), (sin2, cos2)) = (phase.sin_cos(), phase2.sin_cos());
             acc = load8(w, i).mul_add(cos, acc);
             acc2 = load8(w, i + 8).mul_add(cos2, acc2);
@@ -2059,7 +2085,8 @@ impl RadialOrder {
         }
         for i in (pairs..n).step_by(8) {
             let (x, y) = (load8(q1, i), load8(q2, i));
-            let phase = a8.mul_add(x - y, clenshaw8(c, x) - clenshaw8(c, y));
+            let [px, py] = clenshaw8_blocks(c, [x, y]);
+            let phase = a8.mul_add(x - y, px - py);
             let (sin, cos) = phase.sin_cos();
             acc = load8(w, i).mul_add(cos, acc);
             lanes(i, x, y, sin, cos);
@@ -2229,9 +2256,21 @@ fn for_each_piece_node(theta: f64, curved: f64, allowed: f64, least: usize, mut 
 /// The phase (radians) a 16-point Gauss–Legendre panel may turn through for an error of about
 /// `accuracy`: `(θ/2)^32/32! = accuracy`, between 6 and 16 rad.
 fn panel_phase(accuracy: f64) -> f64 {
+    thread_local! {
+        /// The last accuracy asked and its phase: an evaluation asks one accuracy for each of
+        /// its OTFs, and the power is then read, not computed again (the same value).
+        static LAST: std::cell::Cell<Option<(f64, f64)>> = const { std::cell::Cell::new(None) };
+    }
+    if let Some((last, phase)) = LAST.get()
+        && last.to_bits() == accuracy.to_bits()
+    {
+        return phase;
+    }
     // 32! = 2.63e35
     let acc = accuracy.clamp(1e-300, 1.0);
-    (2.0 * (acc * 2.631_308_369_336_935e35).powf(1.0 / 32.0)).clamp(6.0, 16.0)
+    let phase = (2.0 * (acc * 2.631_308_369_336_935e35).powf(1.0 / 32.0)).clamp(6.0, 16.0);
+    LAST.set(Some((accuracy, phase)));
+    phase
 }
 
 /// A shorter Gauss–Legendre rule across v (4 or 8 nodes on `[0, 1]`) that integrates the v
@@ -2831,6 +2870,22 @@ mod tests {
                 let lanes = clenshaw8(&c, load8(block, 0)).to_array();
                 for (o, &q) in lanes.iter().zip(block) {
                     assert_eq!(o.to_bits(), clenshaw(&c, q).to_bits(), "q = {q}");
+                }
+            }
+            // the recurrences side by side: each block as alone, for every degree the proxies
+            // are cut to
+            for d in 1..=c.len() {
+                let blocks: Vec<wide::f64x8> = q.chunks_exact(8).map(|b| load8(b, 0)).collect();
+                let reversed: Vec<wide::f64x8> = blocks.iter().rev().copied().collect();
+                for (four, two) in blocks.chunks_exact(4).zip(reversed.chunks_exact(2)) {
+                    let together = clenshaw8_blocks(&c[..d], [four[0], four[1], four[2], four[3]]);
+                    let pair = clenshaw8_blocks(&c[..d], [two[0], two[1]]);
+                    for (got, &q) in together.iter().chain(&pair).zip(four.iter().chain(two)) {
+                        let alone = clenshaw8(&c[..d], q).to_array();
+                        for (g, a) in got.to_array().iter().zip(alone) {
+                            assert_eq!(g.to_bits(), a.to_bits(), "degree {d}");
+                        }
+                    }
                 }
             }
             let w: Vec<f64> = q.iter().map(|q| 1.0 - q).collect();
