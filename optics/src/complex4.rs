@@ -1,8 +1,9 @@
 //! Complex numbers on four or eight lanes (`wide::f64x4`, `wide::f64x8`), for the closed form's
 //! kernel evaluated at four or eight nodes of the rule in the pupil angle at once (`closed.rs`,
 //! `faddeeva.rs`). Every operation is the one `num_complex` performs on one number, in the same
-//! order (no fused multiply-adds), so each lane is the scalar result to the last bit, whatever
-//! the width: eight lanes advance two independent groups of four through the same latency-bound
+//! order (no fused multiply-adds, but for the Faddeeva series' Horner step
+//! [`Complexes::mul_add_real`], which its scalar twin in `faddeeva.rs` fuses alike), so each lane
+//! is the scalar result to the last bit, whatever the width: eight lanes advance two independent groups of four through the same latency-bound
 //! chains (the Faddeeva series' Horner sums, the sine, cosine and exponential polynomials)
 //! together, their dependent adds overlapping.
 
@@ -45,6 +46,19 @@ pub(crate) trait Lanes:
     /// 1023` holds `n + 1023` in its low 52 bits (exact: an integer below 2⁵³), which shifted
     /// left by 52 are the exponent field of `2^n` (`expo::exp`'s `two_to` on every lane).
     fn two_to(self) -> Self;
+    /// `self × a + b` on each lane, rounded once where the target has fused multiply-adds
+    /// (`target_feature = "fma"`), else as the product then the sum: on each lane the scalar
+    /// [`fused`].
+    fn fused(self, a: Self, b: Self) -> Self;
+}
+
+/// `a × b + c`, rounded once where the target has fused multiply-adds (`target_feature =
+/// "fma"`: the project's builds for the machine they run on, `-C target-cpu=native`), else as
+/// `a * b + c` (two roundings; `f64::mul_add` would then be a slow software call): the scalar
+/// lane of [`Lanes::fused`], whose lanes it is to the last bit on either kind of target.
+#[inline(always)]
+pub(crate) fn fused(a: f64, b: f64, c: f64) -> f64 {
+    if cfg!(target_feature = "fma") { a.mul_add(b, c) } else { a * b + c }
 }
 
 macro_rules! lanes {
@@ -112,6 +126,10 @@ macro_rules! lanes {
             fn two_to(self) -> $v {
                 $v::from_bits((self + $v::splat(4_503_599_627_370_496.0 + 1023.0)).to_bits() << 52_u32)
             }
+            #[inline(always)]
+            fn fused(self, a: $v, b: $v) -> $v {
+                if cfg!(target_feature = "fma") { $v::mul_add(self, a, b) } else { self * a + b }
+            }
         }
     };
 }
@@ -177,12 +195,14 @@ impl<V: Lanes> Complexes<V> {
         Complexes { re: self.re * x, im: self.im * x }
     }
 
-    /// `self + x`, `x` real.
+    /// `self × y + b`, `b` real: the Faddeeva series' Horner step in fused multiply-adds (`re =
+    /// fused(re_s, re_y, fused(−im_s, im_y, b))`, `im = fused(re_s, im_y, im_s im_y)`), four
+    /// operations where the product and the sum take seven; on each lane the scalar
+    /// [`crate::faddeeva`] step (`horner_step`).
     #[inline(always)]
-    pub fn add_real(self, x: V) -> Complexes<V> {
-        Complexes { re: self.re + x, im: self.im }
+    pub fn mul_add_real(self, y: Complexes<V>, b: V) -> Complexes<V> {
+        Complexes { re: self.re.fused(y.re, (-self.im).fused(y.im, b)), im: self.re.fused(y.im, self.im * y.re) }
     }
-
     /// `x − self`, `x` real (`num_complex`'s `T − Complex`: `(x − re) + i(0 − im)`).
     #[inline(always)]
     pub fn real_minus(x: V, z: Complexes<V>) -> Complexes<V> {

@@ -8,9 +8,11 @@
 //! rest, `|r| ≤ ln 2/2 + 1e-15`. Then `e^r = 1 + r (1 + r (1/2! + r (1/3! + … + r/13!)))`, the
 //! Taylor polynomial to degree 13 (truncation `r^14/14! < 4e-18`, 0.02 ulp), by Horner with the
 //! 1 added last, and `e^x = e^r 2^n`, the power of two from its bits (exact; on the lanes by
-//! the bits of `n + 2⁵² + 1023`, the same power). Plain products and sums, no fused
-//! multiply-adds: each lane of [`exp_lanes`] is [`exp`] of it to the last bit on any target, so
-//! the four- and eight-lane kernel stays the scalar one lane by lane.
+//! the bits of `n + 2⁵² + 1023`, the same power). The polynomial's steps `p r + c` are fused
+//! multiply-adds where the target has them (`complex4::fused`: one rounding a step instead of
+//! two, half the operations; a product then a sum elsewhere), the reduction plain products and
+//! sums: each lane of [`exp_lanes`] is [`exp`] of it to the last bit on either kind of target,
+//! so the four- and eight-lane kernel stays the scalar one lane by lane.
 //!
 //! Accuracy (test `exp_is_within_two_ulp_of_the_correctly_rounded_one`, against glibc's `exp`,
 //! itself within 0.502 ulp of `e^x`, over [−708, 709] and densely over the kernel's own range
@@ -22,7 +24,7 @@
 #[cfg(test)]
 use wide::f64x4;
 
-use crate::complex4::Lanes;
+use crate::complex4::{Lanes, fused};
 
 /// Bound on the relative error of [`exp`] and [`exp_lanes`] on `[−708, 709]` (2 ulp of 1).
 pub(crate) const RELATIVE_ERROR: f64 = 2.0 * f64::EPSILON;
@@ -66,9 +68,9 @@ pub(crate) fn exp(x: f64) -> f64 {
     let r = (clamped - n * LN2_HI) - n * LN2_LO;
     let mut p = INVERSE_FACTORIALS[0];
     for &c in &INVERSE_FACTORIALS[1..] {
-        p = p * r + c;
+        p = fused(p, r, c);
     }
-    let e_r = 1.0 + r * (1.0 + r * p);
+    let e_r = fused(r, fused(r, p, 1.0), 1.0);
     let value = e_r * two_to(n);
     if x < LOWEST {
         0.0
@@ -94,9 +96,9 @@ pub(crate) fn exp_lanes<V: Lanes>(x: V) -> V {
     let r = (clamped - n * k(LN2_HI)) - n * k(LN2_LO);
     let mut p = k(INVERSE_FACTORIALS[0]);
     for &c in &INVERSE_FACTORIALS[1..] {
-        p = p * r + k(c);
+        p = p.fused(r, k(c));
     }
-    let e_r = k(1.0) + r * (k(1.0) + r * p);
+    let e_r = r.fused(r.fused(p, k(1.0)), k(1.0));
     let value = e_r * n.two_to();
     let value = x.simd_lt(k(LOWEST)).select(k(0.0), value);
     let value = x.simd_gt(k(HIGHEST)).select(k(f64::INFINITY), value);
