@@ -281,6 +281,17 @@ impl LensModel for ChromaticMetalens {
         Some(vec![[self.focal_length * sec2(field.x_rad) * k, self.focal_length * sec2(field.y_rad) * k]])
     }
 
+    /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂ln λ0 = (λ/λ0) f0/(8F#²)`; τ1(λ) and T(λ)
+    /// do not depend on λ0. On axis only: off axis the lateral colour `f0 tan θ (λ0/λ − 1)`
+    /// moves with λ0 too.
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        if !field.is_on_axis() {
+            return None;
+        }
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(vec![[k * wavelength_m / self.design_wavelength, 0.0]])
+    }
+
     /// With τ1 or T a table: τ1's table (or 1) factored out of the one order (`relative` has
     /// τ1 = 1 × the iris' area fraction, or τ1 itself where it is a constant), T as a spectrum.
     fn factored_efficiency(&self) -> Option<FactoredEfficiency> {

@@ -185,6 +185,34 @@ impl LensModel for Harmonic {
         Some(OrderWavelengthRates { orders, ln_transmission: 0.0 })
     }
 
+    /// Each order's `W020_m = (1 − mλ/(pλ0)) f0/(8F#²)` moves as `∂W020_m/∂ln λ0 =
+    /// (mλ/(pλ0)) f0/(8F#²)` and its `τ_m = τ_base sinc²(α − m)`, `α = pλ0/λ`, as
+    /// `2 τ_base sinc(x) sinc′(x) α` with `x = α − m` (`∂α/∂ln λ0 = α`), `sinc′` as in
+    /// [`order_wavelength_rates`](LensModel::order_wavelength_rates); T does not depend on λ0. The
+    /// orders entering or leaving the range `|m − α| ≤ 3` do so at `sinc²(±3) = 0` with a zero
+    /// slope, so the sum stays C¹. On axis only (off axis the lateral colour moves with λ0 too).
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        if !field.is_on_axis() {
+            return None;
+        }
+        let alpha = self.phase_depth(wavelength_m);
+        let p_lambda0 = f64::from(self.design_order) * self.design_wavelength;
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(
+            self.order_range(wavelength_m)
+                .map(|m| {
+                    let x = alpha - f64::from(m);
+                    let slope = if x.abs() < 1e-4 {
+                        -std::f64::consts::PI.powi(2) * x / 3.0
+                    } else {
+                        ((std::f64::consts::PI * x).cos() - sinc(x)) / x
+                    };
+                    [f64::from(m) * wavelength_m / p_lambda0 * k, 2.0 * self.base_efficiency * sinc(x) * slope * alpha]
+                })
+                .collect(),
+        )
+    }
+
     /// With a transmission table: one part (no efficiency table: the orders' efficiencies are
     /// smooth), the lens with transmission 1, so that the table's rows cut no spectral panel.
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {

@@ -292,6 +292,21 @@ impl LensModel for Refractive {
         Some(optics::DefocusRates { defocus, ln_efficiency: ln_through, ln_transmission: ln_through })
     }
 
+    /// `W020 = f0/(8F#²) (n0 − n(λ))/(n0 − 1)` with `n0 = n(λ0)` moves as
+    /// `∂W020/∂ln λ0 = f0/(8F#²) λ0 n′(λ0) (n(λ) − 1)/(n0 − 1)²`; τ = T does not depend on λ0
+    /// (0 without dispersion). `None` outside the glass's range (the order carries no light
+    /// there, its wavefront the range's end's) and where the index's slope is not given.
+    fn design_wavelength_rates(&self, wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        let n0 = self.index(self.design_wavelength)?;
+        let slope = match self.glass {
+            Glass::Constant(_) => return Some(vec![[0.0, 0.0]]),
+            Glass::Sellmeier(s) => s.index_derivative(self.design_wavelength)?,
+        };
+        let Some(n) = self.index(wavelength_m) else { return Some(vec![[0.0, 0.0]]) };
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(vec![[k * self.design_wavelength * slope * (n - 1.0) / ((n0 - 1.0) * (n0 - 1.0)), 0.0]])
+    }
+
     fn affine_defocus(&self, _field: Field) -> Option<AffineDefocus> {
         // no dispersion: W020 ≡ 0 and a constant τ = T at every field point
         let Glass::Constant(_) = self.glass else { return None };
