@@ -342,6 +342,23 @@ mod tests {
         ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
     }
 
+    /// `design_wavelength_rates` against central differences of the defocus of lenses built at
+    /// λ0 ± h (relative step 1e-5: truncation ~1e-10), on axis; `None` off axis.
+    #[test]
+    fn design_wavelength_rates_match_differences() {
+        let at =
+            |l0: f64| ChromaticMetalens::new(2.5, 3.36e-3, l0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap();
+        let h = 1e-5;
+        for l in [750e-9, 800e-9, 850e-9] {
+            let [[d_w, d_tau]] = paper().design_wavelength_rates(l, Field::ON_AXIS).unwrap()[..] else { panic!() };
+            let w = (at(800e-9 * (1.0 + h)).defocus(l) - at(800e-9 * (1.0 - h)).defocus(l))
+                / ((1.0 + h).ln() - (1.0 - h).ln());
+            assert!((d_w - w).abs() <= 1e-8 * w.abs(), "{l}: {d_w} vs {w}");
+            assert_eq!(d_tau, 0.0);
+        }
+        assert!(paper().design_wavelength_rates(800e-9, Field::new(0.05, 0.0)).is_none());
+    }
+
     #[test]
     fn focal_length_scales_inversely_with_wavelength() {
         let lens = paper();

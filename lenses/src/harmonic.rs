@@ -246,6 +246,29 @@ mod tests {
         Harmonic::new(2.5, 3.36e-3, 800e-9, p, 0.4, Curve::Constant(0.6)).unwrap()
     }
 
+    /// `design_wavelength_rates` against central differences of each order's defocus and
+    /// efficiency of lenses built at λ0 ± h (relative step 1e-6), at wavelengths where the order
+    /// range is the same on both sides; `None` off axis.
+    #[test]
+    fn design_wavelength_rates_match_differences() {
+        let at = |l0: f64| Harmonic::new(2.5, 3.36e-3, l0, 5, 0.4, Curve::Constant(0.6)).unwrap();
+        let h = 1e-6;
+        let (up, down) = (at(800e-9 * (1.0 + h)), at(800e-9 * (1.0 - h)));
+        let step = (1.0 + h).ln() - (1.0 - h).ln();
+        for l in [760e-9, 803e-9, 845e-9] {
+            let rates = lens(5).design_wavelength_rates(l, Field::ON_AXIS).unwrap();
+            let orders: Vec<u32> = lens(5).order_range(l).collect();
+            assert_eq!(rates.len(), orders.len());
+            for (&m, [d_w, d_tau]) in orders.iter().zip(rates) {
+                let w = (up.order_defocus(m, l) - down.order_defocus(m, l)) / step;
+                let t = (up.order_efficiency(m, l) - down.order_efficiency(m, l)) / step;
+                assert!((d_w - w).abs() <= 1e-7 * w.abs(), "{l} m = {m}: {d_w} vs {w}");
+                assert!((d_tau - t).abs() <= 1e-7 * t.abs().max(1e-3), "{l} m = {m}: {d_tau} vs {t}");
+            }
+        }
+        assert!(lens(5).design_wavelength_rates(800e-9, Field::new(0.05, 0.0)).is_none());
+    }
+
     #[test]
     fn sinc_squared_sums_to_one_and_the_truncation_keeps_most() {
         // Σ over all integers m of sinc²(α − m) = 1; ±200 000 terms leave a tail below 2e-6

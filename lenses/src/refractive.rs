@@ -372,6 +372,25 @@ mod tests {
         }
     }
 
+    /// `design_wavelength_rates` against central differences of the defocus of singlets built at
+    /// λ0 ± h (relative step 1e-5), in and at the design wavelength; 0 without dispersion.
+    #[test]
+    fn design_wavelength_rates_match_differences() {
+        let at = |l0: f64| {
+            Refractive::new(2.5, 3.36e-3, l0, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap()
+        };
+        let (l0, h) = (546.07e-9, 1e-5);
+        for l in [480e-9, 546.07e-9, 650e-9, 803e-9] {
+            let [[d_w, d_tau]] = bk7().design_wavelength_rates(l, Field::ON_AXIS).unwrap()[..] else { panic!() };
+            let w = (at(l0 * (1.0 + h)).defocus(l).unwrap() - at(l0 * (1.0 - h)).defocus(l).unwrap())
+                / ((1.0 + h).ln() - (1.0 - h).ln());
+            assert!((d_w - w).abs() <= 1e-7 * w.abs(), "{l}: {d_w} vs {w}");
+            assert_eq!(d_tau, 0.0);
+        }
+        let constant = Refractive::new(2.5, 3.36e-3, l0, Glass::Constant(1.5168), 1, Surfaces::Uncoated).unwrap();
+        assert_eq!(constant.design_wavelength_rates(650e-9, Field::ON_AXIS), Some(vec![[0.0, 0.0]]));
+    }
+
     fn bk7() -> Refractive {
         Refractive::new(2.5, 3.36e-3, 546.07e-9, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap()
     }
