@@ -281,6 +281,17 @@ impl LensModel for ChromaticMetalens {
         Some(vec![[self.focal_length * sec2(field.x_rad) * k, self.focal_length * sec2(field.y_rad) * k]])
     }
 
+    /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂ln λ0 = (λ/λ0) f0/(8F#²)`; τ1(λ) and T(λ)
+    /// do not depend on λ0. On axis only: off axis the lateral colour `f0 tan θ (λ0/λ − 1)`
+    /// moves with λ0 too.
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        if !field.is_on_axis() {
+            return None;
+        }
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(vec![[k * wavelength_m / self.design_wavelength, 0.0]])
+    }
+
     /// With τ1 or T a table: τ1's table (or 1) factored out of the one order (`relative` has
     /// τ1 = 1 × the iris' area fraction, or τ1 itself where it is a constant), T as a spectrum.
     fn factored_efficiency(&self) -> Option<FactoredEfficiency> {
@@ -329,6 +340,23 @@ mod tests {
 
     fn paper() -> ChromaticMetalens {
         ChromaticMetalens::new(2.5, 3.36e-3, 800e-9, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap()
+    }
+
+    /// `design_wavelength_rates` against central differences of the defocus of lenses built at
+    /// λ0 ± h (relative step 1e-5: truncation ~1e-10), on axis; `None` off axis.
+    #[test]
+    fn design_wavelength_rates_match_differences() {
+        let at =
+            |l0: f64| ChromaticMetalens::new(2.5, 3.36e-3, l0, Curve::Constant(0.15), Curve::Constant(0.55)).unwrap();
+        let h = 1e-5;
+        for l in [750e-9, 800e-9, 850e-9] {
+            let [[d_w, d_tau]] = paper().design_wavelength_rates(l, Field::ON_AXIS).unwrap()[..] else { panic!() };
+            let w = (at(800e-9 * (1.0 + h)).defocus(l) - at(800e-9 * (1.0 - h)).defocus(l))
+                / ((1.0 + h).ln() - (1.0 - h).ln());
+            assert!((d_w - w).abs() <= 1e-8 * w.abs(), "{l}: {d_w} vs {w}");
+            assert_eq!(d_tau, 0.0);
+        }
+        assert!(paper().design_wavelength_rates(800e-9, Field::new(0.05, 0.0)).is_none());
     }
 
     #[test]

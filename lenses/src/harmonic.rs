@@ -185,6 +185,34 @@ impl LensModel for Harmonic {
         Some(OrderWavelengthRates { orders, ln_transmission: 0.0 })
     }
 
+    /// Each order's `W020_m = (1 − mλ/(pλ0)) f0/(8F#²)` moves as `∂W020_m/∂ln λ0 =
+    /// (mλ/(pλ0)) f0/(8F#²)` and its `τ_m = τ_base sinc²(α − m)`, `α = pλ0/λ`, as
+    /// `2 τ_base sinc(x) sinc′(x) α` with `x = α − m` (`∂α/∂ln λ0 = α`), `sinc′` as in
+    /// [`order_wavelength_rates`](LensModel::order_wavelength_rates); T does not depend on λ0. The
+    /// orders entering or leaving the range `|m − α| ≤ 3` do so at `sinc²(±3) = 0` with a zero
+    /// slope, so the sum stays C¹. On axis only (off axis the lateral colour moves with λ0 too).
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        if !field.is_on_axis() {
+            return None;
+        }
+        let alpha = self.phase_depth(wavelength_m);
+        let p_lambda0 = f64::from(self.design_order) * self.design_wavelength;
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(
+            self.order_range(wavelength_m)
+                .map(|m| {
+                    let x = alpha - f64::from(m);
+                    let slope = if x.abs() < 1e-4 {
+                        -std::f64::consts::PI.powi(2) * x / 3.0
+                    } else {
+                        ((std::f64::consts::PI * x).cos() - sinc(x)) / x
+                    };
+                    [f64::from(m) * wavelength_m / p_lambda0 * k, 2.0 * self.base_efficiency * sinc(x) * slope * alpha]
+                })
+                .collect(),
+        )
+    }
+
     /// With a transmission table: one part (no efficiency table: the orders' efficiencies are
     /// smooth), the lens with transmission 1, so that the table's rows cut no spectral panel.
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
@@ -216,6 +244,29 @@ mod tests {
 
     fn lens(p: u32) -> Harmonic {
         Harmonic::new(2.5, 3.36e-3, 800e-9, p, 0.4, Curve::Constant(0.6)).unwrap()
+    }
+
+    /// `design_wavelength_rates` against central differences of each order's defocus and
+    /// efficiency of lenses built at λ0 ± h (relative step 1e-6), at wavelengths where the order
+    /// range is the same on both sides; `None` off axis.
+    #[test]
+    fn design_wavelength_rates_match_differences() {
+        let at = |l0: f64| Harmonic::new(2.5, 3.36e-3, l0, 5, 0.4, Curve::Constant(0.6)).unwrap();
+        let h = 1e-6;
+        let (up, down) = (at(800e-9 * (1.0 + h)), at(800e-9 * (1.0 - h)));
+        let step = (1.0 + h).ln() - (1.0 - h).ln();
+        for l in [760e-9, 803e-9, 845e-9] {
+            let rates = lens(5).design_wavelength_rates(l, Field::ON_AXIS).unwrap();
+            let orders: Vec<u32> = lens(5).order_range(l).collect();
+            assert_eq!(rates.len(), orders.len());
+            for (&m, [d_w, d_tau]) in orders.iter().zip(rates) {
+                let w = (up.order_defocus(m, l) - down.order_defocus(m, l)) / step;
+                let t = (up.order_efficiency(m, l) - down.order_efficiency(m, l)) / step;
+                assert!((d_w - w).abs() <= 1e-7 * w.abs(), "{l} m = {m}: {d_w} vs {w}");
+                assert!((d_tau - t).abs() <= 1e-7 * t.abs().max(1e-3), "{l} m = {m}: {d_tau} vs {t}");
+            }
+        }
+        assert!(lens(5).design_wavelength_rates(800e-9, Field::new(0.05, 0.0)).is_none());
     }
 
     #[test]

@@ -292,6 +292,21 @@ impl LensModel for Refractive {
         Some(optics::DefocusRates { defocus, ln_efficiency: ln_through, ln_transmission: ln_through })
     }
 
+    /// `W020 = f0/(8F#²) (n0 − n(λ))/(n0 − 1)` with `n0 = n(λ0)` moves as
+    /// `∂W020/∂ln λ0 = f0/(8F#²) λ0 n′(λ0) (n(λ) − 1)/(n0 − 1)²`; τ = T does not depend on λ0
+    /// (0 without dispersion). `None` outside the glass's range (the order carries no light
+    /// there, its wavefront the range's end's) and where the index's slope is not given.
+    fn design_wavelength_rates(&self, wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        let n0 = self.index(self.design_wavelength)?;
+        let slope = match self.glass {
+            Glass::Constant(_) => return Some(vec![[0.0, 0.0]]),
+            Glass::Sellmeier(s) => s.index_derivative(self.design_wavelength)?,
+        };
+        let Some(n) = self.index(wavelength_m) else { return Some(vec![[0.0, 0.0]]) };
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(vec![[k * self.design_wavelength * slope * (n - 1.0) / ((n0 - 1.0) * (n0 - 1.0)), 0.0]])
+    }
+
     fn affine_defocus(&self, _field: Field) -> Option<AffineDefocus> {
         // no dispersion: W020 ≡ 0 and a constant τ = T at every field point
         let Glass::Constant(_) = self.glass else { return None };
@@ -355,6 +370,25 @@ mod tests {
             assert!((rates.ln_efficiency - t).abs() <= 1e-7 * t.abs(), "{l}: {} vs {t}", rates.ln_efficiency);
             assert_eq!(rates.ln_transmission, rates.ln_efficiency);
         }
+    }
+
+    /// `design_wavelength_rates` against central differences of the defocus of singlets built at
+    /// λ0 ± h (relative step 1e-5), in and at the design wavelength; 0 without dispersion.
+    #[test]
+    fn design_wavelength_rates_match_differences() {
+        let at = |l0: f64| {
+            Refractive::new(2.5, 3.36e-3, l0, Glass::Sellmeier(Sellmeier::N_BK7), 1, Surfaces::Uncoated).unwrap()
+        };
+        let (l0, h) = (546.07e-9, 1e-5);
+        for l in [480e-9, 546.07e-9, 650e-9, 803e-9] {
+            let [[d_w, d_tau]] = bk7().design_wavelength_rates(l, Field::ON_AXIS).unwrap()[..] else { panic!() };
+            let w = (at(l0 * (1.0 + h)).defocus(l).unwrap() - at(l0 * (1.0 - h)).defocus(l).unwrap())
+                / ((1.0 + h).ln() - (1.0 - h).ln());
+            assert!((d_w - w).abs() <= 1e-7 * w.abs(), "{l}: {d_w} vs {w}");
+            assert_eq!(d_tau, 0.0);
+        }
+        let constant = Refractive::new(2.5, 3.36e-3, l0, Glass::Constant(1.5168), 1, Surfaces::Uncoated).unwrap();
+        assert_eq!(constant.design_wavelength_rates(650e-9, Field::ON_AXIS), Some(vec![[0.0, 0.0]]));
     }
 
     fn bk7() -> Refractive {

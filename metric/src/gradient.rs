@@ -160,6 +160,14 @@ pub enum Parameter {
     /// area fraction on τ1 and T), is the chain rule of the scene's key on
     /// [`Efficiency`](Parameter::Efficiency) and [`Transmission`](Parameter::Transmission).
     Obscuration,
+    /// The lens's design wavelength λ0 (`lens.design_wavelength_nm`), per relative change,
+    /// `∂/∂ln λ0`: for a lens whose every order is the full circular pupil with a defocus alone
+    /// and gives its rates ([`optics::LensModel::design_wavelength_rates`]: the chromatic lens's
+    /// `W020 = (1 − λ/λ0) f0/(8F#²)`, the refractive lens's `n0 = n(λ0)`, the harmonic lens's
+    /// orders' defocus and efficiencies), on axis: each wavelength's defocus moves along its own
+    /// `∂W020/∂ln λ0` (not in proportion to `W020`, so not the focal length's lane), and the
+    /// orders' efficiencies with it (docs/physics.md, "Gradients: the design wavelength").
+    DesignWavelength,
 }
 
 impl Parameter {
@@ -214,6 +222,7 @@ impl Parameter {
             Parameter::PsfPitch => "a PSF stack's sample pitch",
             Parameter::IrisDecentre(_) => "the decentre of the lens's iris",
             Parameter::Obscuration => "the obscuration of the lens's iris",
+            Parameter::DesignWavelength => "the lens's design wavelength",
         }
     }
 }
@@ -755,6 +764,13 @@ fn point_gradient(
                 // Transmission (`Parameter::Obscuration`)
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
+            Parameter::DesignWavelength => {
+                let (d_ln_n, d_mtf) = design_wavelength_partials(scene, e, p)?;
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                // N ∝ ∫ ρ Σ τ_o; T (so N_T) does not depend on λ0: B = N_T − N moves by −∂N
+                let d_n = n * d_ln_n;
+                (d_n, if stray { -d_n } else { 0.0 }, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
             Parameter::SpectrumCenter | Parameter::SpectrumRange if line.is_some() => {
                 // N ∝ (the line's weight) Σ τ_o(c) and N_T ∝ (the weight) T(c): the stray light
                 // B = N_T − N moves by N_T ∂ln N_T − N ∂ln N
@@ -772,14 +788,8 @@ fn point_gradient(
                 // N_T both ∝ B(c, T). Over a band N_T = ∫ ρ T moves by its own average of g
                 let d_b = match line {
                     Some(_) => background * d_ln_n,
-                    None if stray => {
-                        return Err(not_smooth(
-                            p,
-                            "with options.glare = \"included\" the transmitted light's temperature derivative over a \
-                             band is not computed here yet"
-                                .to_owned(),
-                        ));
-                    }
+                    // B = N_T − N: N_T's own average of g over ρ T ([`transmitted_band_log_derivative`])
+                    None if stray => transmitted * transmitted_band_log_derivative(scene, p)? - n * d_ln_n,
                     None => 0.0,
                 };
                 let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
@@ -788,16 +798,13 @@ fn point_gradient(
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
                 let s = spectral.as_ref().expect("computed above for a spectral parameter");
                 let (d_ln_n, d_mtf) = if p == Parameter::SpectrumCenter { s.center } else { s.range };
-                if stray {
-                    return Err(not_smooth(
-                        p,
-                        "with options.glare = \"included\" the transmitted light's spectral derivative is not computed here yet"
-                            .to_owned(),
-                    ));
-                }
                 let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
-                // the stray light B = 0 here; N = (constants) ∫ ρ τ1 dλ
-                (n * d_ln_n, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+                // N = (constants) ∫ ρ τ1 dλ and N_T = (the same constants) ∫ ρ T dλ (SI eq. S8,
+                // S14): the stray light B = N_T − N moves by N_T ∂ln N_T − N ∂ln N, N_T's
+                // derivative its own average over ρ T ([`transmitted_band_log_derivative`])
+                let d_b =
+                    if stray { transmitted * transmitted_band_log_derivative(scene, p)? - n * d_ln_n } else { 0.0 };
+                (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::LibraryBias(index) => {
                 let on_value_rule = d_bias.map(|d| BiasPartials {
@@ -1583,6 +1590,89 @@ fn line_center_partials(
         d_ln_n + rates.ln_transmission,
         (edge - e.mean_mtf - found.pixel_slope) / c + d_defocus,
     ))
+}
+
+/// `∂ln N_T` over a band with respect to the spectral parameter `p` (the centre or range of the
+/// scene's Gaussian or top-hat band, or its blackbody's temperature), per m or per K as `p`
+/// says: the transmitted light `N_T ∝ I_T = ∫ ρ T dλ` (paper SI eq. S14: eq. S8 with τ1 → T;
+/// docs/physics.md, "Gradients: the transmitted light over a band") moves only through the
+/// detected spectrum `ρ`, so its derivative is the photon count's with `T` in place of the
+/// imaging orders' efficiency:
+/// - a Gaussian factor `exp(−(λ − c)²/(2σ²))`: `∂ln N_T/∂c = ⟨λ − c⟩_T/σ²` and
+///   `∂ln N_T/∂r = ⟨(λ − c)²⟩_T/(2√2 σ³)` (`r = 2√2 σ`), `⟨·⟩_T` the mean over `ρ T`;
+/// - a blackbody: `∂ln N_T/∂T = ⟨g⟩_T`, `g = ∂ln B/∂T` ([`radiometry::Blackbody::log_derivatives`]);
+/// - a top-hat `[a, b] = [c − r/2, c + r/2]`: the integral's limits (Leibniz), `∂I_T/∂b =
+///   ρ(b) T(b)`, `∂I_T/∂a = −ρ(a) T(a)`; `∂/∂c = ∂/∂a + ∂/∂b`, `∂/∂r = (∂/∂b − ∂/∂a)/2`, over `I_T`.
+///
+/// The means are taken on the detected spectrum's own quadrature
+/// ([`radiometry::Spectrum::quadrature_nodes`]: 16-point Gauss–Legendre panels 1σ wide over ±12σ
+/// of a Gaussian, Wien-scaled panels and a mapped tail for a blackbody, cut at every breakpoint
+/// of the spectrum), its panels also cut at the lens's breakpoints (the rows of its
+/// transmission table, where `T` has a kink): numerator and denominator on the same nodes,
+/// each exact to about 1e-15 relative for the piecewise smooth `ρ T g`.
+fn transmitted_band_log_derivative(scene: &Scene, p: Parameter) -> Result<f64, Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let lens = scene.lens();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let nodes = detected.quadrature_nodes_cut_at(&lens.breakpoints());
+    // ∫ ρ T f over the nodes, for each f of `rates`
+    let over_transmitted = |rate: &dyn Fn(f64) -> f64| -> f64 {
+        let (mut total, mut moved) = (0.0, 0.0);
+        for node in &nodes {
+            let weight = node.weight * lens.transmission(node.wavelength_m);
+            total += weight;
+            moved += weight * rate(node.wavelength_m);
+        }
+        moved / total
+    };
+    let found = if p == Parameter::Temperature {
+        let mut sources = Vec::new();
+        detected_blackbodies(&detected, &mut sources);
+        let [source] = sources[..] else {
+            return Err(not_smooth(format!("the detected spectrum has {} blackbody factors, not one", sources.len())));
+        };
+        over_transmitted(&|l| source.log_derivatives(l).1)
+    } else {
+        let mut found = Vec::new();
+        gaussians(&detected, &mut found);
+        match (&found[..], top_hat(&detected)) {
+            ([], Some(band)) => {
+                let total: f64 = nodes.iter().map(|n| n.weight * lens.transmission(n.wavelength_m)).sum();
+                let density = |x: f64| detected.value(x) * lens.transmission(x) / total;
+                let (d_a, d_b) = (-density(band.lo()), density(band.hi()));
+                if p == Parameter::SpectrumCenter { d_a + d_b } else { 0.5 * (d_b - d_a) }
+            }
+            ([g], _) => {
+                let (c, sigma) = (g.center(), g.sigma());
+                if p == Parameter::SpectrumCenter {
+                    over_transmitted(&|l| (l - c) / (sigma * sigma))
+                } else {
+                    over_transmitted(&|l| ((l - c) / sigma).powi(2) / sigma) / (2.0 * std::f64::consts::SQRT_2)
+                }
+            }
+            _ => {
+                return Err(not_smooth(format!(
+                    "the transmitted light's spectral derivative needs exactly one Gaussian factor or one top-hat in the \
+                     detected spectrum; this scene has {} Gaussian factors",
+                    found.len()
+                )));
+            }
+        }
+    };
+    if found.is_finite() {
+        Ok(found)
+    } else {
+        Err(not_smooth("the transmitted light N_T is 0 over the band (the lens transmits nothing there)".to_owned()))
+    }
+}
+
+/// The blackbody factors of a spectrum (a product's factors searched in order).
+fn detected_blackbodies(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Blackbody>) {
+    match spectrum {
+        radiometry::Spectrum::Blackbody { source, .. } => found.push(*source),
+        radiometry::Spectrum::Product(factors) => factors.iter().for_each(|f| detected_blackbodies(f, found)),
+        _ => {}
+    }
 }
 
 /// `(∂ln N/∂T, ∂M̄/∂T)` for the temperature `T` of the scene's blackbody source, per K
@@ -2443,6 +2533,116 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
     let (_, d_k) = reference_rule(scene, e, p, refinement, None, node, value, at)?;
     let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+}
+
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` for the design wavelength λ0 of a lens whose every order is the
+/// full circular pupil with a defocus alone and that gives how each order moves with λ0
+/// ([`optics::LensModel::design_wavelength_rates`]: `δW_o = ∂W020_o/∂ln λ0`,
+/// `δτ_o = ∂τ_o/∂ln λ0`), on axis (docs/physics.md, "Gradients: the design wavelength"). Each
+/// wavelength's OTF is `Σ_o τ_o H(νλF#, w_o)` with `w_o = W020_o/λ` ([`optics::defocus_otf`]);
+/// λ0 leaves `s = νλF#` and ρ as they are, so at a fixed frequency
+///
+/// ```text
+/// ∂O/∂ln λ0 = (∫ ρ Σ_o [τ_o ∂H/∂w (δW_o/λ) + δτ_o H_o] dλ − O ∫ ρ Σ_o δτ_o dλ) / ∫ ρ Σ_o τ_o dλ
+/// ```
+///
+/// (`∂H/∂w = (w ∂H/∂w)/w` from [`optics::defocus_otf_log_derivative`], 0 at `w = 0` where `H` is
+/// even in `w`), `∂M̄ = (1/ν_N) ∫ sign(O) ∂O dν`, and `∂ln N/∂ln λ0 = ∫ ρ Σ δτ_o / ∫ ρ Σ τ_o`,
+/// both on the reference rule's own Gauss–Legendre panels in λ and ν ([`reference_rule`]: the λ
+/// panels doubled, then the ν panels, each until the integral moves by at most the tolerance
+/// times `max(|∂M̄|, M̄)`; the ν panels split at the sign changes of `O`, the kink of `|O|`).
+/// Refused with the pixel MTF or a noise spectrum (not followed on this rule), off axis, and for
+/// the other families naming why.
+fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let camera = scene.camera();
+    if camera.pixel_mtf() {
+        return Err(not_smooth(
+            "lens.design_wavelength_nm: with camera.pixel_mtf = true the design wavelength's gradient is not computed \
+             here yet (set camera.pixel_mtf = false)"
+                .to_owned(),
+        ));
+    }
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth(
+            "lens.design_wavelength_nm: with camera.noise_spectrum the design wavelength's gradient is not computed \
+             here yet"
+                .to_owned(),
+        ));
+    }
+    let lens = scene.lens();
+    let field = scene.field();
+    let f_number = lens.f_number();
+    let family = lens.describe();
+    let refused = || {
+        not_smooth(format!(
+            "lens.design_wavelength_nm: {family}: the design wavelength's gradient is computed on axis for a lens \
+             whose every order is the full circular pupil with a defocus alone and that gives how its orders move \
+             with λ0 (the chromatic, refractive and harmonic families without an iris or Seidel terms); this scene's \
+             orders are not that here (off axis the lateral colour f0 tan θ (λ0/λ − 1) moves with λ0 too)"
+        ))
+    };
+    if !field.is_on_axis() {
+        return Err(refused());
+    }
+    // each spectral node: (λ, ρ(λ) × the rule's weight, [(τ_o, w_o, δw_o, δτ_o)] per order)
+    type Node = (f64, f64, Vec<[f64; 4]>);
+    let node = |lambda: f64, weight: f64| -> Result<Node, Error> {
+        let orders = lens.orders(lambda, field);
+        let rates = lens.design_wavelength_rates(lambda, field).ok_or_else(refused)?;
+        if rates.len() != orders.len() {
+            return Err(refused());
+        }
+        let mut out = Vec::with_capacity(orders.len());
+        for (o, [d_w020, d_tau]) in orders.iter().zip(rates) {
+            let w = &o.wavefront;
+            let plain = matches!(o.pupil, optics::Pupil::Full)
+                && w.image_shift_m == [0.0, 0.0]
+                && [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4];
+            if !plain {
+                return Err(refused());
+            }
+            out.push([o.efficiency, w.defocus_m / lambda, d_w020 / lambda, d_tau]);
+        }
+        Ok((lambda, weight, out))
+    };
+    let value = |nodes: &[Node], nu: f64| -> f64 {
+        let (mut total, mut o) = (0.0, 0.0);
+        for (lambda, weight, orders) in nodes {
+            for &[tau, w, _, _] in orders {
+                total += weight * tau;
+                o += weight * tau * optics::defocus_otf(nu * lambda * f_number, w);
+            }
+        }
+        o / total
+    };
+    let at = |nodes: &[Node], nu: f64| -> (f64, f64) {
+        let (mut total, mut o, mut d, mut moved) = (0.0, 0.0, 0.0, 0.0);
+        for (lambda, weight, orders) in nodes {
+            let s = nu * lambda * f_number;
+            for &[tau, w, d_w, d_tau] in orders {
+                let h = optics::defocus_otf(s, w);
+                // ∂H/∂w = (w ∂H/∂w)/w, 0 at w = 0 (H even in w)
+                let slope = if w == 0.0 { 0.0 } else { optics::defocus_otf_log_derivative(s, w) / w };
+                total += weight * tau;
+                moved += weight * d_tau;
+                o += weight * tau * h;
+                d += weight * (tau * slope * d_w + d_tau * h);
+            }
+        }
+        let o = o / total;
+        (o, d / total - o * moved / total)
+    };
+    let refinement = Refinement { lambda_panels: (2, 256), nu_panels: 1024, zero_width: &|_| 1e-13 * camera.nyquist() };
+    let (nodes, d_mtf) = reference_rule(scene, e, p, refinement, None, node, value, at)?;
+    let (mut total, mut moved) = (0.0, 0.0);
+    for (_, weight, orders) in &nodes {
+        for &[tau, _, _, d_tau] in orders {
+            total += weight * tau;
+            moved += weight * d_tau;
+        }
+    }
+    Ok((moved / total, d_mtf))
 }
 
 /// How [`reference_rule`] refines: its first and last number of λ panels a piece, its last

@@ -475,6 +475,17 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// For a lens whose every order at `field` is the full circular pupil with a defocus alone:
+    /// how each order at `wavelength_m` moves with the design wavelength λ0 (`lens.design_wavelength_nm`),
+    /// `[∂W020_o/∂ln λ0, ∂τ_o/∂ln λ0]` per order of [`orders`](Self::orders), in its order (m,
+    /// and per unit ln λ0), the total transmission `T` held; for the gradient with respect to
+    /// λ0 (docs/physics.md, "Gradients: the design wavelength"). `None` (the default) where the
+    /// lens does not give them (its orders move with λ0 otherwise: off axis the lateral colour
+    /// `f0 tan θ (λ0/λ − 1)` moves too).
+    fn design_wavelength_rates(&self, _wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        None
+    }
+
     /// For a lens whose every order at `field` is the full circular pupil with a defocus alone,
     /// several of them with efficiencies that move against each other with λ (the harmonic
     /// lens): how each moves with the wavelength at `wavelength_m` ([`OrderWavelengthRates`]),
@@ -592,6 +603,9 @@ macro_rules! forward_lens_model {
             fn turns_with_field(&self) -> bool { (**self).turns_with_field() }
             fn order_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<OrderWavelengthRates> {
                 (**self).order_wavelength_rates(wavelength_m, field)
+            }
+            fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+                (**self).design_wavelength_rates(wavelength_m, field)
             }
             fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<OrderDerivatives> {
                 (**self).order_derivatives(wavelength_m, parameter)

@@ -802,6 +802,14 @@ impl Spectrum {
     /// support without a decaying (Gaussian or Blackbody) factor. With a [`Line`] factor: one
     /// node, [`as_line`](Self::as_line) (exact for every `g`), or none if its weight is 0.
     pub fn quadrature_nodes(&self) -> Vec<QuadratureNode> {
+        self.quadrature_nodes_cut_at(&[])
+    }
+
+    /// [`quadrature_nodes`](Self::quadrature_nodes) with the panels also cut at `cuts` (m) where
+    /// they fall inside the rule's interval: the kinks of a function `g` the nodes will weigh
+    /// (a lens's transmission between the rows of its tables), so that every panel meets `g`
+    /// smooth. With no cuts the same nodes, bit for bit.
+    pub fn quadrature_nodes_cut_at(&self, extra: &[f64]) -> Vec<QuadratureNode> {
         let mut nodes = Vec::new();
         if let Some(line) = self.as_line() {
             push(&mut nodes, line.wavelength_m, line.weight);
@@ -821,6 +829,7 @@ impl Spectrum {
             return nodes;
         }
         let mut cuts = self.breakpoints();
+        cuts.extend(extra.iter().copied().filter(|x| x.is_finite()));
         cuts.push(lo);
         for g in &gaussians {
             let k = GAUSSIAN_WINDOW_SIGMAS as i32;

@@ -183,6 +183,41 @@ const APERTURE: [(&str, Parameter); 2] =
 /// radius, docs/physics.md "Gradients").
 const APERTURE_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
 
+/// The design wavelength λ0 (docs/physics.md, "Gradients: the design wavelength").
+const DESIGN_WAVELENGTH: &str = "lens.design_wavelength_nm";
+
+/// The families [`DESIGN_WAVELENGTH`] is differentiated for: every order the full circular
+/// pupil with a defocus alone, moving with λ0 as the lens says
+/// (`optics::LensModel::design_wavelength_rates`).
+const DESIGN_WAVELENGTH_MODELS: [&str; 3] = ["chromatic", "refractive", "harmonic"];
+
+/// The scene quantity `lens.design_wavelength_nm` sets (`∂/∂ln λ0`), or why its gradient is
+/// refused for this family; `None` for another key.
+fn design_wavelength_parameter(key: &str, lens_model: &str) -> Option<Result<Parameter>> {
+    if key != DESIGN_WAVELENGTH {
+        return None;
+    }
+    if DESIGN_WAVELENGTH_MODELS.contains(&lens_model) {
+        return Some(Ok(Parameter::DesignWavelength));
+    }
+    let why = match lens_model {
+        "library" => {
+            "it selects each atom from the library (the atom whose phase is nearest the design phase at λ0), a \
+             piecewise choice: the value jumps wherever λ0 moves an atom's choice to the next row"
+        }
+        "phase" => {
+            "the profile given at λ0 (hyperbolic, Binary 2, spline or table) scales each order's path per radian with \
+             λ0/λ, a direction of the radial engine's wavefront lanes not formed yet"
+        }
+        _ => "its orders are not followed through the design wavelength for this family yet",
+    };
+    Some(Err(anyhow!(
+        "--wrt {key}: not differentiable here yet for lens.model = \"{lens_model}\" ({why}); supported for \
+         lens.model = {} (on axis, every order the full circle with a defocus alone)",
+        DESIGN_WAVELENGTH_MODELS.map(|m| format!("\"{m}\"")).join(", ")
+    )))
+}
+
 /// The scene quantity `lens.f_number` or `lens.focal_length_mm` sets, or why its gradient is
 /// refused for this family; `None` for another key (the focal length with
 /// `lens.aperture_diameter_mm` given, F# = f0/D, is [`chain_rule`]'s). A phase lens with
@@ -663,6 +698,9 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     if key == PIXEL_PITCH {
         return Ok(Parameter::PixelPitch);
     }
+    if let Some(p) = design_wavelength_parameter(key, lens_model) {
+        return p;
+    }
     if let Some(p) = field_parameter(key, lens_model) {
         return p;
     }
@@ -734,6 +772,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH}, \
          spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
+         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
          (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero on axis), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
@@ -1058,17 +1097,14 @@ mod tests {
         }
     }
 
-    /// What the temperature's gradient over a band refuses, naming why: the stray light with
-    /// `glare = "included"` (the transmitted light's own average of ∂ln B/∂T is not followed)
-    /// and an OTF that depends on direction (the chromatic lens's lateral colour off axis).
+    /// What the temperature's gradient over a band refuses, naming why: an OTF that depends on
+    /// direction (the chromatic lens's lateral colour off axis).
     #[test]
     fn a_blackbody_temperature_over_a_band_refusals_name_why() {
         let source = paper_blackbody();
         let refused = |overrides: &[&str]| {
             gradient(&source, &owned(overrides), &owned(&["source.temperature_k"])).unwrap_err().to_string()
         };
-        let e = refused(&["options.glare=\"included\""]);
-        assert!(e.contains("blackbody's temperature") && e.contains("glare"), "{e}");
         let e = refused(&["field.x_deg=5"]);
         assert!(e.contains("blackbody's temperature") && e.contains("depends on direction"), "{e}");
     }
@@ -1100,6 +1136,62 @@ mod tests {
                 }
             };
             check_with_steps(&source, &overrides, &keys, &step);
+        }
+    }
+
+    /// The band's spectral keys with the stray light (`options.glare = "included"`: the noise
+    /// budget's background `B = N_T − N`, the transmitted light's derivative its own average over
+    /// `ρ T`, docs/physics.md "Gradients: the transmitted light over a band") against central
+    /// differences of evaluations converged at 1e-10, within 10× the scene's 1e-6 of each
+    /// quantity's gradient norm: the paper's chromatic lens (constant τ1 and T) behind its
+    /// Gaussian band with a read noise and in the integral form, behind a 120 nm top-hat;
+    /// examples/paper-simulated.toml (τ1 and T tables, folded into the spectrum); the Binary 2
+    /// lens on the radial engine. The step as [`spectral_keys_match_central_differences`]'.
+    #[test]
+    fn spectral_keys_with_the_stray_light_match_central_differences() {
+        let keys = ["spectrum.center_nm", "spectrum.range_nm", "exposure.time_ms"];
+        let glare = "options.glare=\"included\"";
+        for (source, overrides, scale) in [
+            (scene::read(None).unwrap(), owned(&INTEGRAL_WITH_GLARE), 50.0 / (2.0 * std::f64::consts::SQRT_2)),
+            (
+                scene::read(None).unwrap(),
+                owned(&[glare, "spectrum.shape=\"tophat\"", "spectrum.range_nm=120", "camera.read_noise_e=2"]),
+                120.0,
+            ),
+            (example("paper-simulated.toml"), owned(&[glare]), 50.0 / (2.0 * std::f64::consts::SQRT_2)),
+            (example("phase-binary2.toml"), owned(&[glare]), 50.0 / (2.0 * std::f64::consts::SQRT_2)),
+        ] {
+            let step = move |k: &str, v: f64| {
+                if k.starts_with("spectrum.") {
+                    (3.0 * REFERENCE_TOLERANCE).cbrt() * scale
+                } else {
+                    relative_step(k, v)
+                }
+            };
+            // the stray light is there: N_T > N
+            let g = gradient(&source, &overrides, &owned(&keys)).unwrap();
+            assert!(g.snr0 < g.photoelectrons.sqrt() * 0.99, "{} vs √N {}", g.snr0, g.photoelectrons.sqrt());
+            check_with_steps(&source, &overrides, &keys, &step);
+        }
+    }
+
+    /// A blackbody's temperature over a band with the stray light (`options.glare =
+    /// "included"`): N_T's own average of ∂ln B/∂T over `ρ T`; the paper's lens behind its 50 nm
+    /// band and examples/tabulated.toml (a lamp behind its filter table, τ1, T and QE tables),
+    /// against the Richardson-extrapolated central differences of
+    /// [`a_blackbody_temperature_over_a_band_matches_central_differences`].
+    #[test]
+    fn a_blackbody_temperature_over_a_band_with_the_stray_light_matches_central_differences() {
+        let keys = ["source.temperature_k", "exposure.time_ms"];
+        let glare = owned(&["options.glare=\"included\"", "camera.read_noise_e=2"]);
+        for source in [paper_blackbody(), example("tabulated.toml")] {
+            let g = gradient(&source, &glare, &owned(&keys)).unwrap();
+            assert!(g.snr0 < g.photoelectrons.sqrt() * 0.99, "{} vs √N {}", g.snr0, g.photoelectrons.sqrt());
+            check_with_references(&source, &glare, &keys, &|k, v| {
+                let h = relative_step(k, v);
+                let (coarse, fine) = (central(&source, &glare, k, v, 2.0 * h), central(&source, &glare, k, v, h));
+                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+            });
         }
     }
 
@@ -1524,6 +1616,56 @@ mod tests {
         let harmonic = example("harmonic.toml");
         check_aperture(&harmonic, &[]);
         check_aperture(&harmonic, &owned(&["camera.pixel_mtf=true"]));
+    }
+
+    /// The design wavelength λ0 (docs/physics.md, "Gradients: the design wavelength": each
+    /// order's defocus along its own ∂W020/∂ln λ0, the harmonic lens's efficiencies with it, on
+    /// the reference rule's panels in λ and ν) with the exposure, against central differences of
+    /// evaluations converged at 1e-10, Richardson-extrapolated from the steps 2h and h,
+    /// h = [`LINE_STEP_NM`] (the paper's aperture defocuses by about 0.1 wave per nm of λ0, as
+    /// per nm of a line's wavelength), within 10× the scene's 1e-6 of each quantity's gradient
+    /// norm: the paper's chromatic lens (the closed form), in the integral form with the stray
+    /// light and a read noise, under a line; the refractive singlet (N-BK7, n0 = n(λ0)) at a
+    /// 100 nm band; the harmonic lens's orders (their defocus and sinc² efficiencies).
+    #[test]
+    fn design_wavelength_matches_central_differences() {
+        let keys = ["lens.design_wavelength_nm", "exposure.time_ms"];
+        let check = |source: &Source, overrides: &[String]| {
+            check_with_references(source, overrides, &keys, &|k, v| {
+                let h = if k == keys[0] { LINE_STEP_NM } else { relative_step(k, v) };
+                let (coarse, fine) = (central(source, overrides, k, v, 2.0 * h), central(source, overrides, k, v, h));
+                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+            });
+        };
+        let paper = scene::read(None).unwrap();
+        check(&paper, &[]);
+        check(&paper, &owned(&INTEGRAL_WITH_GLARE));
+        check(&paper, &owned(&LINE_803));
+        check(&refractive_singlet(), &owned(&["spectrum.range_nm=100"]));
+        check(&example("harmonic.toml"), &[]);
+    }
+
+    /// What the design wavelength's gradient refuses, naming the key and why: a library lens
+    /// (its atoms chosen at λ0, piecewise), a phase lens (not formed yet), the chromatic lens
+    /// off axis (its lateral colour moves with λ0) and with the pixel MTF.
+    #[test]
+    fn design_wavelength_refusals_name_why() {
+        let key = owned(&["lens.design_wavelength_nm"]);
+        let e = gradient(&example("library.toml"), &[], &key).unwrap_err().to_string();
+        assert!(
+            e.contains("--wrt lens.design_wavelength_nm: not differentiable here yet") && e.contains("piecewise"),
+            "{e}"
+        );
+        let e = gradient(&example("phase-binary2.toml"), &[], &key).unwrap_err().to_string();
+        assert!(
+            e.contains("--wrt lens.design_wavelength_nm: not differentiable here yet for lens.model = \"phase\""),
+            "{e}"
+        );
+        let paper = scene::read(None).unwrap();
+        let e = gradient(&paper, &owned(&["field.x_deg=3"]), &key).unwrap_err().to_string();
+        assert!(e.contains("design wavelength") && e.contains("lateral colour"), "{e}");
+        let e = gradient(&paper, &owned(&["camera.pixel_mtf=true"]), &key).unwrap_err().to_string();
+        assert!(e.contains("design wavelength") && e.contains("camera.pixel_mtf"), "{e}");
     }
 
     /// The hyperbolic phase −(2π/λ0)(√(r² + f0²) − f0) of the example's aperture (F/2.5,

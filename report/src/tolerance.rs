@@ -685,12 +685,14 @@ mod tests {
     /// small σ (0.2 % of the exposure, 0.5 nm of the range), where the ASNR is linear in the
     /// keys to about σ²: the two agree within 2 % (the fit of 400 samples of an ASNR curved at
     /// second order); the gradient's is ∂ASNR/∂key × σ from `asnr gradient`, to 1e-12. A key
-    /// without a gradient (the F-number here) has none, the others keep theirs, and the note
-    /// names it.
+    /// without a gradient (the design wavelength with the pixel MTF here) has none, the others
+    /// keep theirs, and the note names it.
     #[test]
     fn gradient_sensitivity_beside_the_fit() {
         let source = scene::read(None).unwrap();
-        let target = Target::new(source.clone(), Vec::new(), crate::objective::Objective::Asnr, &[]).unwrap();
+        // with the pixel MTF the design wavelength has no gradient yet (the key the note names)
+        let pixel = vec!["camera.pixel_mtf=true".to_owned()];
+        let target = Target::new(source.clone(), pixel.clone(), crate::objective::Objective::Asnr, &[]).unwrap();
         let varies = [
             parse_vary("exposure.time_ms=normal:0.2%").unwrap(),
             parse_vary("spectrum.range_nm=normal:0.5").unwrap(),
@@ -698,9 +700,12 @@ mod tests {
         ];
         let settings = Settings { samples: 400, seed: 1, budget_s: 600.0, threads: 1 };
         let t = tolerance(&target, &varies, &settings, &()).unwrap();
-        let g =
-            crate::gradient::gradient(&source, &[], &["exposure.time_ms".to_owned(), "spectrum.range_nm".to_owned()])
-                .unwrap();
+        let g = crate::gradient::gradient(
+            &source,
+            &pixel,
+            &["exposure.time_ms".to_owned(), "spectrum.range_nm".to_owned()],
+        )
+        .unwrap();
         for i in 0..2 {
             let exact = t.gradient_sensitivity[i].unwrap();
             let want = g.d_asnr[i] * t.keys[i].sigma;
@@ -710,7 +715,7 @@ mod tests {
         }
         assert_eq!(t.gradient_sensitivity[2], None);
         let note = t.gradient_note.as_deref().unwrap();
-        assert!(note.contains("--wrt lens.design_wavelength_nm: not differentiable here yet"), "{note}");
+        assert!(note.contains("design wavelength") && note.contains("camera.pixel_mtf"), "{note}");
         let text = report(&t);
         assert!(text.contains("∂ASNR/∂key × σ") && text.contains("no gradient for some keys"), "{text}");
         let json: serde_json::Value = serde_json::from_str(&json(&t).unwrap()).unwrap();
