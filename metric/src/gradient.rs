@@ -831,19 +831,15 @@ type PointPartials = (f64, f64, f64, f64, f64, f64, f64);
 /// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move.
 fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<PointPartials, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
-    if scene.camera().pixel_mtf() {
-        return Err(not_smooth(
-            "with camera.pixel_mtf = true the pixel's sinc does not scale with the stack's pitch, so the OTF's \
-             change of scale is not a change of variables of the MTF integral; not computed here yet",
-        ));
-    }
     if scene.camera().noise_spectrum().is_some() {
         return Err(not_smooth(
             "with camera.noise_spectrum the noise weights do not scale with the stack's pitch; not computed here yet",
         ));
     }
+    // with the pixel MTF P (its sinc does not scale with the stack's pitch) the OTF's change of
+    // scale is ν ∂_ν O, by parts P(ν_N)|O(ν_N)| − M̄ − P_ν (MTF(ν_N) the system's, P included)
     let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    let d_mtf = edge - e.mean_mtf;
+    let d_mtf = edge - e.mean_mtf - pixel_slope(scene, p)?;
     let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
     Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf))
 }
@@ -853,8 +849,8 @@ fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Poi
 /// pixel pitch with the pixel MTF"), on the value's own engine and frequency rule
 /// ([`optics::Polychromatic::mean_mtf_and_pixel_slope`]: `|O|` recorded at each frequency the
 /// rule reads, integrated with its accepted weights), averaged over the value's azimuths as
-/// the mean MTF is. 0 without the pixel MTF. Refused, naming `p`, on the FFT path (its fixed
-/// rule on the two sampling levels is not recorded).
+/// the mean MTF is (on the FFT path, its fixed rule on the value's sampling levels). 0 without
+/// the pixel MTF. Refused, naming `p`, where the engine gives no modulus to record.
 fn pixel_slope(scene: &Scene, p: Parameter) -> Result<f64, Error> {
     if !scene.camera().pixel_mtf() {
         return Ok(0.0);
@@ -868,8 +864,8 @@ fn pixel_slope(scene: &Scene, p: Parameter) -> Result<f64, Error> {
     .ok_or_else(|| Error::NotDifferentiable {
         parameter: p.describe(),
         reason: "with camera.pixel_mtf = true the pixel's sinc term of the integration by parts is taken on the \
-                 value's adaptive frequency rule; this scene's OTF is on the FFT path (a fixed rule on two \
-                 sampling levels), where it is not computed yet (set camera.pixel_mtf = false)"
+                 value's frequency rule, |O| recorded at each frequency read; this scene's engine gives no |O| \
+                 along an azimuth to record (set camera.pixel_mtf = false)"
             .to_owned(),
     })
 }

@@ -727,12 +727,13 @@ impl Polychromatic<'_> {
     /// depends on direction on a 1-D engine (the evaluation's tangential and sagittal means),
     /// and [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)'s rule over azimuth from
     /// `first` for a 2-D OTF on an adaptive rule (the overlap engine, a PSF stack's planes);
-    /// `P_ν` is averaged as the mean is. `None` without the pixel MTF, on the FFT path's fixed
-    /// rule, or where the engine gives no modulus along an azimuth.
+    /// `P_ν` is averaged as the mean is; on the FFT path's fixed rule, that rule's, on the
+    /// value's sampling levels ([`fixed_pixel_slope`](Self::fixed_pixel_slope)). `None` without
+    /// the pixel MTF, or where the engine gives no modulus along an azimuth.
     pub fn mean_mtf_and_pixel_slope(&self, first: f64) -> Option<(f64, f64, Work)> {
         self.scene.pixel_pitch?;
-        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
-            return None;
+        if let FrequencyRule::Fixed { cell } = self.engine.frequency_rule() {
+            return self.has_pupil_grid().then(|| self.fixed_pixel_slope(first, cell));
         }
         if self.has_pupil_grid() {
             let mut pixel = 0.0;
@@ -763,6 +764,39 @@ impl Polychromatic<'_> {
             pixel += w * r.derivatives[i] * self.pixel_log_slope(nu);
         }
         Some((mean, pixel / self.scene.max_frequency, work))
+    }
+
+    /// [`mean_mtf_and_pixel_slope`](Self::mean_mtf_and_pixel_slope) on the FFT path's grids: the
+    /// value's rule over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth), whose
+    /// means along each azimuth the grids hold) gives the azimuths; along each, the value's fixed
+    /// composite rule over `[0, top]` with `P |O|` times `νP′/P`, on the fine level and, where
+    /// the value is the Richardson extrapolation of two levels, on the coarse one too, combined
+    /// as the value is (the extrapolation is linear in the two means).
+    fn fixed_pixel_slope(&self, first: f64, cell: f64) -> (f64, f64, Work) {
+        let mean = self.mean_mtf_over_azimuth(first, None);
+        let count = mean.azimuths;
+        let top = self.active_top();
+        let (panels, _) = super::grid::fixed_rule(top, cell);
+        let level = || {
+            let along = |azimuth: f64| {
+                quad::composite_fixed(0.0, top, panels, |nu| {
+                    self.otf_along(nu, azimuth).norm() * self.pixel_factor(nu) * self.pixel_log_slope(nu)
+                })
+            };
+            let sum: f64 = (0..count).map(|k| along(first + PI * k as f64 / count as f64)).sum();
+            sum / (count as f64 * self.scene.max_frequency)
+        };
+        let fine = level();
+        let slope = match self.engine.richardson() {
+            Some(plan) => {
+                self.engine.read_coarse(true);
+                let coarse = level();
+                self.engine.read_coarse(false);
+                plan.extrapolate(coarse, fine).value
+            }
+            None => fine,
+        };
+        (mean.mean, slope, mean.work)
     }
 
     /// [`mean_mtf_along_and_gradient`](Self::mean_mtf_along_and_gradient) with the pixel MTF's
