@@ -40,13 +40,14 @@ pub enum Parameter {
     DarkCurrent,
     /// The conversion gain K (quantization noise `(1/12)/K²`): `∂/∂K`, per DN/e⁻.
     Gain,
-    /// The pixel pitch p: `N ∝ p²` and `ν_N = 1/(2p)`. `∂/∂ln p`. Refused with the pixel MTF
-    /// (its sinc moves with p inside the integral) or a non-white noise spectrum.
+    /// The pixel pitch p: `N ∝ p²` and `ν_N = 1/(2p)`. `∂/∂ln p`. With the pixel MTF `P`, whose
+    /// sinc stays in `x = ν/ν_N`, by parts `∂M̄/∂ln p = M̄ − P(ν_N)|O(ν_N)| + P_ν` (docs/physics.md,
+    /// "Gradients: the pixel pitch with the pixel MTF"). Refused with a non-white noise spectrum.
     PixelPitch,
     /// The lens's Binary 2 coefficient `A_{i+1}` (`lens.binary2[i]`, radians): it moves the
     /// wavefront of every order (`optics::LensModel::binary2_directions`), so the OTF, not the
-    /// photon count. `∂/∂A`, per radian. On axis, on the radial engine, without the pixel MTF or
-    /// a noise spectrum.
+    /// photon count. `∂/∂A`, per radian. On axis, on the radial engine (the pixel MTF in the
+    /// frequency rule's weights where the camera applies it), without a noise spectrum.
     Binary2(usize),
     /// A knot of the lens's freeform phase spline (`lens.phase_spline_rad[i]`, radians): the
     /// profile is linear in its knots, so the knot moves each order's wavefront along the
@@ -147,9 +148,9 @@ pub enum Parameter {
     /// and every wavelength's OTF as `O_p(ν) = O(ν p/p0)`; the photon count does not move (each
     /// slice is normalized). The mean MTF over `[0, ν_N]` of an OTF in `νp`, by the change of
     /// variables `u = νp/p0`: `∂M̄/∂ln p = MTF(ν_N) − M̄` (the MTF at Nyquist averaged over azimuth
-    /// as `M̄` is), `∂I/∂ln p = ν_N ∂M̄/∂ln p` in the integral form. `∂/∂ln p`. Refused with the
-    /// pixel MTF (its sinc does not scale with p) or a noise spectrum (docs/physics.md,
-    /// "Gradients: a PSF stack's pitch").
+    /// as `M̄` is), `∂I/∂ln p = ν_N ∂M̄/∂ln p` in the integral form; with the pixel MTF (its sinc
+    /// does not scale with p) `P(ν_N)|O(ν_N)| − M̄ − P_ν` by parts. `∂/∂ln p`. Refused with a
+    /// noise spectrum (docs/physics.md, "Gradients: chain rules", a PSF stack).
     PsfPitch,
     /// The obscuration ε of the chromatic lens's annular iris (`lens.obscuration`, the inner
     /// radius in units of the aperture's), per unit ε, where `0 < ε < 1`: the pupil's inner edge
@@ -251,8 +252,8 @@ pub struct Gradient {
 ///
 /// # Errors
 /// The evaluation's errors, and [`Error::NotDifferentiable`] where the value is not smooth in a
-/// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with the pixel
-/// MTF or a noise spectrum, the conversion gain without an ADC.
+/// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with a noise
+/// spectrum, the conversion gain without an ADC.
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
     // the F-number and focal length of a lens that gives its aperture directions (a phase
     // lens): three more lanes of the radial engine, on a lens that appends them
