@@ -728,7 +728,7 @@ impl Polychromatic<'_> {
     /// and [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)'s rule over azimuth from
     /// `first` for a 2-D OTF on an adaptive rule (the overlap engine, a PSF stack's planes);
     /// `P_ν` is averaged as the mean is; on the FFT path's fixed rule, that rule's, on the
-    /// value's sampling levels ([`fixed_pixel_slope`](Self::fixed_pixel_slope)). `None` without
+    /// value's sampling levels (`fixed_pixel_slope`). `None` without
     /// the pixel MTF, or where the engine gives no modulus along an azimuth.
     pub fn mean_mtf_and_pixel_slope(&self, first: f64) -> Option<(f64, f64, Work)> {
         self.scene.pixel_pitch?;
