@@ -40,13 +40,14 @@ pub enum Parameter {
     DarkCurrent,
     /// The conversion gain K (quantization noise `(1/12)/K²`): `∂/∂K`, per DN/e⁻.
     Gain,
-    /// The pixel pitch p: `N ∝ p²` and `ν_N = 1/(2p)`. `∂/∂ln p`. Refused with the pixel MTF
-    /// (its sinc moves with p inside the integral) or a non-white noise spectrum.
+    /// The pixel pitch p: `N ∝ p²` and `ν_N = 1/(2p)`. `∂/∂ln p`. With the pixel MTF `P`, whose
+    /// sinc stays in `x = ν/ν_N`, by parts `∂M̄/∂ln p = M̄ − P(ν_N)|O(ν_N)| + P_ν` (docs/physics.md,
+    /// "Gradients: the pixel pitch with the pixel MTF"). Refused with a non-white noise spectrum.
     PixelPitch,
     /// The lens's Binary 2 coefficient `A_{i+1}` (`lens.binary2[i]`, radians): it moves the
     /// wavefront of every order (`optics::LensModel::binary2_directions`), so the OTF, not the
-    /// photon count. `∂/∂A`, per radian. On axis, on the radial engine, without the pixel MTF or
-    /// a noise spectrum.
+    /// photon count. `∂/∂A`, per radian. On axis, on the radial engine (the pixel MTF in the
+    /// frequency rule's weights where the camera applies it), without a noise spectrum.
     Binary2(usize),
     /// A knot of the lens's freeform phase spline (`lens.phase_spline_rad[i]`, radians): the
     /// profile is linear in its knots, so the knot moves each order's wavefront along the
@@ -147,9 +148,9 @@ pub enum Parameter {
     /// and every wavelength's OTF as `O_p(ν) = O(ν p/p0)`; the photon count does not move (each
     /// slice is normalized). The mean MTF over `[0, ν_N]` of an OTF in `νp`, by the change of
     /// variables `u = νp/p0`: `∂M̄/∂ln p = MTF(ν_N) − M̄` (the MTF at Nyquist averaged over azimuth
-    /// as `M̄` is), `∂I/∂ln p = ν_N ∂M̄/∂ln p` in the integral form. `∂/∂ln p`. Refused with the
-    /// pixel MTF (its sinc does not scale with p) or a noise spectrum (docs/physics.md,
-    /// "Gradients: a PSF stack's pitch").
+    /// as `M̄` is), `∂I/∂ln p = ν_N ∂M̄/∂ln p` in the integral form; with the pixel MTF (its sinc
+    /// does not scale with p) `P(ν_N)|O(ν_N)| − M̄ − P_ν` by parts. `∂/∂ln p`. Refused with a
+    /// noise spectrum (docs/physics.md, "Gradients: chain rules", a PSF stack).
     PsfPitch,
     /// The obscuration ε of the chromatic lens's annular iris (`lens.obscuration`, the inner
     /// radius in units of the aperture's), per unit ε, where `0 < ε < 1`: the pupil's inner edge
@@ -260,8 +261,8 @@ pub struct Gradient {
 ///
 /// # Errors
 /// The evaluation's errors, and [`Error::NotDifferentiable`] where the value is not smooth in a
-/// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with the pixel
-/// MTF or a noise spectrum, the conversion gain without an ADC.
+/// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with a noise
+/// spectrum, the conversion gain without an ADC.
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
     // the F-number and focal length of a lens that gives its aperture directions (a phase
     // lens): three more lanes of the radial engine, on a lens that appends them
@@ -550,14 +551,6 @@ fn point_gradient(
                 (0.0, 0.0, 0.0, 0.0, -2.0 * budget.quantization_variance_e2 / k, 0.0, 0.0)
             }
             Parameter::PixelPitch => {
-                if camera.pixel_mtf() {
-                    return Err(not_smooth(
-                        p,
-                        "with camera.pixel_mtf = true the pixel's sinc moves with the pitch inside the MTF integral, \
-                         which is not differentiated here yet"
-                            .to_owned(),
-                    ));
-                }
                 if camera.noise_spectrum().is_some() {
                     return Err(not_smooth(
                         p,
@@ -567,12 +560,16 @@ fn point_gradient(
                     ));
                 }
                 // ν_N = 1/(2p): ∂ν_N/∂ln p = −ν_N. Leibniz: ∂M̄/∂ν_N = (MTF(ν_N) − M̄)/ν_N, so
-                // ∂M̄/∂ln p = M̄ − MTF(ν_N); the integral I = M̄ ν_N: ∂I/∂ln p = −ν_N MTF(ν_N)
+                // ∂M̄/∂ln p = M̄ − MTF(ν_N); the integral I = M̄ ν_N: ∂I/∂ln p = −ν_N MTF(ν_N).
+                // With the pixel MTF, in x = ν/ν_N its sinc(πx/2) stays and the lens's OTF at
+                // x ν_N moves: by parts ∂M̄/∂ln p = M̄ − P(ν_N)|O(ν_N)| + P_ν (MTF(ν_N) the
+                // system's, P included), ∂I/∂ln p = ν_N (P_ν − P(ν_N)|O(ν_N)|)
                 let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-                let d_mtf = e.mean_mtf - edge;
+                let slope = pixel_slope(scene, p)?;
+                let d_mtf = e.mean_mtf - edge + slope;
                 let d_g = match scene.options().form {
                     MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => -e.nyquist_cyc_per_mm * edge,
+                    MetricForm::Integral => e.nyquist_cyc_per_mm * (slope - edge),
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
@@ -842,21 +839,43 @@ type PointPartials = (f64, f64, f64, f64, f64, f64, f64);
 /// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move.
 fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<PointPartials, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
-    if scene.camera().pixel_mtf() {
-        return Err(not_smooth(
-            "with camera.pixel_mtf = true the pixel's sinc does not scale with the stack's pitch, so the OTF's \
-             change of scale is not a change of variables of the MTF integral; not computed here yet",
-        ));
-    }
     if scene.camera().noise_spectrum().is_some() {
         return Err(not_smooth(
             "with camera.noise_spectrum the noise weights do not scale with the stack's pitch; not computed here yet",
         ));
     }
+    // with the pixel MTF P (its sinc does not scale with the stack's pitch) the OTF's change of
+    // scale is ν ∂_ν O, by parts P(ν_N)|O(ν_N)| − M̄ − P_ν (MTF(ν_N) the system's, P included)
     let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    let d_mtf = edge - e.mean_mtf;
+    let d_mtf = edge - e.mean_mtf - pixel_slope(scene, p)?;
     let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
     Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf))
+}
+
+/// The pixel MTF's term of the integration by parts in ν, `P_ν = (1/ν_N) ∫ ν P′(ν) |O(ν)| dν`
+/// (`P` the pixel MTF, `νP′/P = x cot x − 1`, `x = πpν`; docs/physics.md, "Gradients: the
+/// pixel pitch with the pixel MTF"), on the value's own engine and frequency rule
+/// ([`optics::Polychromatic::mean_mtf_and_pixel_slope`]: `|O|` recorded at each frequency the
+/// rule reads, integrated with its accepted weights), averaged over the value's azimuths as
+/// the mean MTF is (on the FFT path, its fixed rule on the value's sampling levels). 0 without
+/// the pixel MTF. Refused, naming `p`, where the engine gives no modulus to record.
+fn pixel_slope(scene: &Scene, p: Parameter) -> Result<f64, Error> {
+    if !scene.camera().pixel_mtf() {
+        return Ok(0.0);
+    }
+    let field = scene.field();
+    let along_field = field.y_rad.atan2(field.x_rad);
+    let detected = crate::evaluate::detected_spectrum(scene);
+    on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        poly.mean_mtf_and_pixel_slope(along_field).map(|found| found.1)
+    })
+    .ok_or_else(|| Error::NotDifferentiable {
+        parameter: p.describe(),
+        reason: "with camera.pixel_mtf = true the pixel's sinc term of the integration by parts is taken on the \
+                 value's frequency rule, |O| recorded at each frequency read; this scene's engine gives no |O| \
+                 along an azimuth to record (set camera.pixel_mtf = false)"
+            .to_owned(),
+    })
 }
 
 /// The scene key of the field angle `axis` (0: x, 1: y).
@@ -892,8 +911,8 @@ impl ExtraLanes {
     /// directions (`wavelength`: a line's wavelength asked, the scene under a line); `None`
     /// where it gives neither (the families whose F-number gradient is [`aperture_partials`]',
     /// whose line's wavelength is [`line_center_partials`]'). The aperture's lanes are refused
-    /// off axis (the oblique wave moves with the aperture too) and with the pixel MTF; the
-    /// wavelength's where the lens says why not.
+    /// off axis (the oblique wave moves with the aperture too); the wavelength's where the lens
+    /// says why not.
     fn of(scene: &Scene, aperture: Option<Parameter>, wavelength: bool) -> Result<Option<(Scene, LaneBases)>, Error> {
         let lens = scene.lens();
         let lambda = lens.design_wavelength().unwrap_or(550e-9);
@@ -913,11 +932,6 @@ impl ExtraLanes {
                         if fields.iter().any(|f| !f.is_on_axis()) {
                             return Err(not_smooth(
                                 "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is computed on axis",
-                            ));
-                        }
-                        if scene.camera().pixel_mtf() {
-                            return Err(not_smooth(
-                                "with camera.pixel_mtf = true the F-number and focal-length gradient is not computed here yet (set camera.pixel_mtf = false)",
                             ));
                         }
                         true
@@ -1041,11 +1055,13 @@ impl optics::LensModel for ExtraLanes {
 /// docs/physics.md "Gradients"), from the lanes `[P, T, S]` the evaluation carried
 /// (`all[base..base + 3]`: `∂M̄` along each) and one OTF value at Nyquist:
 /// - `F#` moves each wavelength's normalized frequency `s = νλF#`: by parts
-///   `(1/ν_N) ∫ sign(O) ν ∂O/∂ν dν = |O(ν_N)| − M̄`, as for the other families;
+///   `(1/ν_N) ∫ P sign(O) ν ∂O/∂ν dν = P(ν_N)|O(ν_N)| − M̄ − P_ν`, as for the other families
+///   (`P` the pixel MTF where the camera applies it, [`pixel_slope`]'s `P_ν` its sinc's term;
+///   1 and 0 without it);
 /// - `R = f0/(2F#)` moves the wavefront along `P + T` per unit `ln R` (f0 held), so
-///   `∂M̄/∂ln F# = |O(ν_N)| − M̄ − (D_P + D_T)`;
+///   `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − P_ν − (D_P + D_T)`;
 /// - `f0` with `F#` held moves `R` with it, `s` not: the wavefront along `P + S`, so
-///   `∂M̄/∂ln f0 = D_P + D_S`.
+///   `∂M̄/∂ln f0 = D_P + D_S` (the lanes' weights carry `P`).
 fn aperture_lane_partials(
     scene: &Scene,
     e: &Evaluation,
@@ -1061,8 +1077,10 @@ fn aperture_lane_partials(
                 .to_owned(),
         });
     };
+    // with the pixel MTF the edge is P(ν_N)|O(ν_N)| and its sinc's term −P_ν joins the parts
     let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    Ok((edge - e.mean_mtf - (d_p + d_t), d_p + d_s))
+    let slope = pixel_slope(scene, p)?;
+    Ok((edge - e.mean_mtf - slope - (d_p + d_t), d_p + d_s))
 }
 
 /// `∂M̄/∂A_j` for every Binary 2 coefficient of the lens, as the evaluation computed them
@@ -1072,11 +1090,8 @@ fn aperture_lane_partials(
 fn binary2_mean_mtf(scene: &Scene, p: Parameter, d_binary2: Option<Vec<f64>>) -> Result<Vec<f64>, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     let camera = scene.camera();
-    if camera.pixel_mtf() {
-        return Err(not_smooth(
-            "with camera.pixel_mtf = true the Binary 2 gradient is not computed here yet (set camera.pixel_mtf = false)",
-        ));
-    }
+    // the pixel MTF P(ν) does not move with the wavefront: it is in the frequency rule's
+    // accepted weights, ∂M̄ = (1/ν_N) ∫ P sign(O) ∂O dν
     if camera.noise_spectrum().is_some() {
         return Err(not_smooth("with camera.noise_spectrum the Binary 2 gradient is not computed here yet"));
     }
@@ -2082,7 +2097,7 @@ fn aperture_partials(
     {
         return Ok(found);
     }
-    if let Some(found) = aperture_through_iris(scene, e, p)? {
+    if let Some(found) = aperture_through_iris(scene, e)? {
         return Ok(found);
     }
     aperture_partials_by_own_rule(scene, e, p)
@@ -2098,10 +2113,13 @@ fn aperture_partials(
 /// as `w ∂D/∂w` turned by its phase plus `−2πi ν u·Δ` times itself (the tilt scales with
 /// `W020`): the lane `D_K` ([`optics::WavefrontDirection::Defocus`] on the exact engine, on the
 /// value's adaptive rule along each azimuth). So `∂M̄/∂ln F# = |O(ν_N)|‾ − M̄ − 2 D_K` and
-/// `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that: off axis (the lateral colour's
-/// `Δ ∝ f0 tan θ` is not a function of `νF#`), another pupil, a line, another engine. Refused
-/// with the pixel MTF (its sinc does not scale with F#, a term not computed here).
-fn aperture_through_iris(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Option<(f64, f64)>, Error> {
+/// `∂M̄/∂ln f0 = D_K`. With the pixel MTF `P` (its sinc does not scale with F#) the parts give
+/// `P(ν_N)|O(ν_N)|‾ − M̄ − P_ν`, `P_ν = (1/ν_N) ∫ ν P′ |O| dν` averaged over the two azimuths
+/// (recorded in the same pass as the lane,
+/// [`optics::Polychromatic::mean_mtf_along_lanes_and_pixel_slope`]), and `D_K` carries `P` in
+/// its weights. `None` where the scene is not that: off axis (the lateral colour's
+/// `Δ ∝ f0 tan θ` is not a function of `νF#`), another pupil, a line, another engine.
+fn aperture_through_iris(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
     let field = scene.field();
     let camera = scene.camera();
@@ -2118,19 +2136,12 @@ fn aperture_through_iris(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<
     if !circles {
         return Ok(None);
     }
-    if camera.pixel_mtf() {
-        return Err(Error::NotDifferentiable {
-            parameter: p.describe(),
-            reason: "through a decentred iris with camera.pixel_mtf = true the pixel's sinc does not scale with the \
-                     F-number, a term of the integration by parts not computed here yet (set camera.pixel_mtf = false)"
-                .to_owned(),
-        });
-    }
     let nyquist = camera.nyquist();
     let folded = crate::evaluate::Folded::of(lens, &detected);
     let parts = folded.parts();
     let settings = scene.options().settings();
-    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, None, settings) else {
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings) else {
         return Ok(None);
     };
     if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() {
@@ -2140,14 +2151,19 @@ fn aperture_through_iris(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<
     let azimuths = [0.0, 0.5 * std::f64::consts::PI];
     let mut d_k = 0.0;
     let mut edge = 0.0;
+    let mut slope = 0.0;
     for azimuth in azimuths {
-        let Some((_, _, d)) = poly.mean_mtf_along_and_gradient(azimuth, &[optics::WavefrontDirection::Defocus]) else {
+        let Some((_, _, d, pixel_slope)) =
+            poly.mean_mtf_along_lanes_and_pixel_slope(azimuth, &[optics::WavefrontDirection::Defocus])
+        else {
             return Ok(None);
         };
         d_k += 0.5 * d[0];
-        edge += 0.5 * poly.otf_along(nyquist, azimuth).norm();
+        slope += 0.5 * pixel_slope;
+        // P(ν_N)|O(ν_N)| (P = 1 without the pixel MTF)
+        edge += 0.5 * poly.mtf_along(nyquist, azimuth);
     }
-    Ok(Some((edge - e.mean_mtf - 2.0 * d_k, d_k)))
+    Ok(Some((edge - e.mean_mtf - slope - 2.0 * d_k, d_k)))
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of the chromatic lens with Seidel terms on axis, on the overlap

@@ -26,7 +26,8 @@
 //!
 //! And for every tracked `*.md`, `*.rs` and `*.toml` file (`git ls-files`): it refers to no path
 //! outside the repository ([`OUTSIDE_PATTERNS`]); the physics conventions the code cites are in
-//! the repository's own `docs/physics.md`.
+//! the repository's own `docs/physics.md`. In every tracked `*.rs` file no string literal holds
+//! a run of spaces between two words ([`spaced_literals`]).
 
 use std::fs;
 use std::path::Path;
@@ -534,7 +535,8 @@ pub(crate) fn outside_references(path: &str, text: &str) -> Vec<String> {
     problems
 }
 
-/// Check every tracked `*.md`, `*.rs`, `*.toml` file of the repository at `root`.
+/// Check every tracked `*.md`, `*.rs`, `*.toml` file of the repository at `root` (and the
+/// string literals of the `*.rs` files, [`spaced_literals`]).
 fn check_outside_references(root: &Path) -> Result<Vec<String>> {
     let output = Command::new("git")
         .args(["ls-files", "-z"])
@@ -556,8 +558,163 @@ fn check_outside_references(root: &Path) -> Result<Vec<String>> {
         // A tracked file deleted in the work tree is not there to refer to anything.
         let Ok(text) = fs::read_to_string(root.join(path)) else { continue };
         problems.extend(outside_references(path, &text));
+        if path.ends_with(".rs") {
+            problems.extend(spaced_literals(path, &text));
+        }
     }
     Ok(problems)
+}
+
+/// The shortest run of spaces inside a string literal that [`spaced_literals`] reports.
+const SPACED_RUN: usize = 8;
+
+/// The widest text before a run of spaces on its line of a literal's text that is a table's
+/// label or column heading (`"capped black        μ = …"`, `"best of the grid points
+/// ASNR …"`, `"Spatial frequency      Tangential        Sagittal"`), not a sentence: the
+/// joined lines of a broken literal put 60 or more characters before the run.
+const LABEL_WIDTH: usize = 40;
+
+/// The `path:line: a run of N spaces inside a string literal` problems of one Rust source:
+/// a run of [`SPACED_RUN`] or more spaces on one line of a `"…"` literal's text (raw literals
+/// aside), preceded by a letter, a comma or `)` and followed by a letter or `(`, that is between
+/// two words of a sentence, after more than [`LABEL_WIDTH`] characters of its line. It is what
+/// a literal broken over lines without its continuation backslashes becomes once the lines are
+/// joined: the next line's indentation inside the text. A table's label or column heading has
+/// fewer characters before its run, and a column of numbers (`"{x:>8}        {y}"`,
+/// `"1.0        2.0"`) is not between two words.
+pub(crate) fn spaced_literals(path: &str, source: &str) -> Vec<String> {
+    let chars: Vec<char> = source.chars().collect();
+    let mut problems = Vec::new();
+    let mut line = 1;
+    let mut i = 0;
+    // Count the newlines of chars[from..to] into `line`.
+    let advance = |line: &mut usize, from: usize, to: usize| {
+        *line += chars[from..to.min(chars.len())].iter().filter(|&&c| c == '\n').count();
+    };
+    while i < chars.len() {
+        let c = chars[i];
+        let next = chars.get(i + 1).copied();
+        if c == '/' && next == Some('/') {
+            let end = chars[i..].iter().position(|&c| c == '\n').map_or(chars.len(), |n| i + n);
+            i = end;
+        } else if c == '/' && next == Some('*') {
+            // block comments nest in Rust
+            let (mut depth, mut j) = (1, i + 2);
+            while j < chars.len() && depth > 0 {
+                if chars[j] == '/' && chars.get(j + 1) == Some(&'*') {
+                    depth += 1;
+                    j += 2;
+                } else if chars[j] == '*' && chars.get(j + 1) == Some(&'/') {
+                    depth -= 1;
+                    j += 2;
+                } else {
+                    j += 1;
+                }
+            }
+            advance(&mut line, i, j);
+            i = j;
+        } else if c == 'r' && matches!(next, Some('"' | '#')) && starts_raw(&chars, i) {
+            // a raw literal r"…" or r#"…"# (or br…): skipped, its text is verbatim by design
+            let hashes = chars[i + 1..].iter().take_while(|&&c| c == '#').count();
+            if chars.get(i + 1 + hashes) != Some(&'"') {
+                i += 1;
+                continue;
+            }
+            let mut j = i + 2 + hashes;
+            while j < chars.len()
+                && !(chars[j] == '"' && chars[j + 1..].iter().take(hashes).filter(|&&c| c == '#').count() == hashes)
+            {
+                j += 1;
+            }
+            let end = (j + 1 + hashes).min(chars.len());
+            advance(&mut line, i, end);
+            i = end;
+        } else if c == '"' {
+            // a "…" literal: walk its text line by line (of the text: `\n`, `\r` and a newline end
+            // one, a `\` at a source line's end joins two), noting each run of spaces
+            let (mut j, mut label) = (i + 1, 0usize);
+            while j < chars.len() && chars[j] != '"' {
+                match (chars[j], chars.get(j + 1)) {
+                    ('\\', Some('\n')) => {
+                        // the continuation skips the next line's indentation
+                        line += 1;
+                        j += 2;
+                        while chars.get(j).is_some_and(|c| c.is_whitespace()) {
+                            if chars[j] == '\n' {
+                                line += 1;
+                            }
+                            j += 1;
+                        }
+                    }
+                    ('\\', Some('n' | 'r')) => {
+                        label = 0;
+                        j += 2;
+                    }
+                    ('\\', _) => {
+                        label += 1;
+                        j += 2;
+                    }
+                    ('\n', _) => {
+                        line += 1;
+                        label = 0;
+                        j += 1;
+                    }
+                    (' ', _) => {
+                        let run = chars[j..].iter().take_while(|&&c| c == ' ').count();
+                        let before = chars[j - 1];
+                        let after = chars.get(j + run).copied().unwrap_or('"');
+                        if run >= SPACED_RUN
+                            && label > LABEL_WIDTH
+                            && (before.is_alphabetic() || matches!(before, ',' | ')'))
+                            && (after.is_alphabetic() || after == '(')
+                        {
+                            problems.push(format!(
+                                "{path}:{line}: a run of {run} spaces between two words inside a string literal \
+                                 (a literal broken over lines without `\\` at each line's end?)"
+                            ));
+                        }
+                        // leading spaces are indentation, not part of a label
+                        if label > 0 {
+                            label += run;
+                        }
+                        j += run;
+                    }
+                    _ => {
+                        label += 1;
+                        j += 1;
+                    }
+                }
+            }
+            i = j + 1;
+        } else if c == '\'' {
+            // a char literal ('"', '\'', '\u{..}') or a lifetime ('a)
+            if next == Some('\\') {
+                let end = chars[i + 2..].iter().position(|&c| c == '\'').map_or(chars.len(), |n| i + 2 + n + 1);
+                i = end;
+            } else if chars.get(i + 2) == Some(&'\'') {
+                i += 3;
+            } else {
+                i += 1;
+            }
+        } else {
+            if c == '\n' {
+                line += 1;
+            }
+            i += 1;
+        }
+    }
+    problems
+}
+
+/// Whether the `r` at `chars[i]` opens a raw literal (`r"`, `r#"`, `br"`, `cr"`) rather than
+/// ending an identifier (`bar"` is not Rust, but `for r in` is).
+fn starts_raw(chars: &[char], i: usize) -> bool {
+    let ident = |k: Option<usize>| k.is_some_and(|k| chars[k].is_alphanumeric() || chars[k] == '_');
+    match i.checked_sub(1) {
+        None => true,
+        Some(k) if matches!(chars[k], 'b' | 'c') => !ident(k.checked_sub(1)),
+        Some(k) => !ident(Some(k)),
+    }
 }
 
 /// Whether the first non-blank line of `source` is a `//!` doc comment.
@@ -766,6 +923,45 @@ mod tests {
     fn the_repository_refers_to_nothing_outside_it() {
         let problems = check_outside_references(&crate::project_root()).unwrap();
         assert!(problems.is_empty(), "{}", problems.join("\n"));
+    }
+
+    #[test]
+    fn spaced_runs_inside_literals_are_found() {
+        // the bug: a literal whose lines were joined, each next line's indentation kept
+        let sentence = "off axis the oblique wave's aberrations move with the aperture radius too, which the";
+        let joined = format!(
+            "fn f() -> &'static str {{\n    \"{sentence}{}radial engine's lanes do not follow\"\n}}\n",
+            " ".repeat(18)
+        );
+        let problems = spaced_literals("metric/src/x.rs", &joined);
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert!(problems[0].starts_with("metric/src/x.rs:2: a run of 18 spaces"), "{problems:?}");
+        // after a comma or ')' and before '(' too, on the literal's third source line (the
+        // continued line's text joins the first's)
+        let broken = format!("let s = \"{}a,\\\n   b\n {sentence}),        (d\";\n", "x".repeat(LABEL_WIDTH));
+        let problems = spaced_literals("x.rs", &broken);
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert!(problems[0].starts_with("x.rs:3: a run of 8 spaces"), "{problems:?}");
+        // the first line's words count for the second after a continuation
+        let continued = format!("let s = \"{}\\\n      more words        here\";\n", "y".repeat(LABEL_WIDTH));
+        assert_eq!(spaced_literals("x.rs", &continued).len(), 1);
+        // not found: continuation lines, seven spaces, labels and column headings (also after
+        // `\n`), columns of numbers, comments, raw literals, char literals and lifetimes beside
+        // a literal
+        let clean = format!(
+            "let a = \"{sentence}, \\\n{pad}second line\";\n\
+             let b = \"{sentence}{seven}spaces\";\n\
+             let c = \"{{x:>8}}{pad}{{y}}  |{pad}|  {sentence} 1.0{pad}2.0\";\n\
+             let l = \"best of the grid points{pad}ASNR {{}}\\nSpatial frequency{pad}Tangential{pad}Sagittal\";\n\
+             // a comment {sentence}{pad}with spaces\n\
+             /* a block {sentence}{pad}comment /* nested */ still {sentence}{pad}comment */\n\
+             let d = r#\"raw {sentence}{pad}text\"#;\n\
+             let e = ('\"', '\\'', \"quote\");\n\
+             fn g<'a>(x: &'a str) -> &'a str {{ \"fine\" }}\n",
+            pad = " ".repeat(12),
+            seven = " ".repeat(7),
+        );
+        assert!(spaced_literals("y.rs", &clean).is_empty(), "{:?}", spaced_literals("y.rs", &clean));
     }
 
     #[test]

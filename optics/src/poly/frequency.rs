@@ -713,6 +713,135 @@ impl Polychromatic<'_> {
         Some((mean, work, sum.into_iter().map(|g| g * scale).collect()))
     }
 
+    /// The pixel MTF's term of an integration by parts in ν,
+    ///
+    /// ```text
+    /// P_ν = (1/ν_max) ∫ ν P′(ν) |O(ν)| dν      (νP′/P = x cot x − 1, x = πpν)
+    /// ```
+    ///
+    /// beside the mean MTF, on the value's own frequency rule (docs/physics.md, "Gradients: the
+    /// pixel pitch with the pixel MTF"): `|O|` is recorded at every frequency the rule reads and
+    /// the accepted panels' weights (the pixel MTF included) integrate it times `νP′/P`. The
+    /// mean is the value's: [`mean_mtf`](Self::mean_mtf)'s for a rotationally symmetric OTF
+    /// (bit for bit, the same reads), the average along `first` and `first + π/2` where the OTF
+    /// depends on direction on a 1-D engine (the evaluation's tangential and sagittal means),
+    /// and [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)'s rule over azimuth from
+    /// `first` for a 2-D OTF on an adaptive rule (the overlap engine, a PSF stack's planes);
+    /// `P_ν` is averaged as the mean is; on the FFT path's fixed rule, that rule's, on the
+    /// value's sampling levels (`fixed_pixel_slope`). `None` without
+    /// the pixel MTF, or where the engine gives no modulus along an azimuth.
+    pub fn mean_mtf_and_pixel_slope(&self, first: f64) -> Option<(f64, f64, Work)> {
+        self.scene.pixel_pitch?;
+        if let FrequencyRule::Fixed { cell } = self.engine.frequency_rule() {
+            return self.has_pupil_grid().then(|| self.fixed_pixel_slope(first, cell));
+        }
+        if self.has_pupil_grid() {
+            let mut pixel = 0.0;
+            let mean = self.azimuthal_mean_with_lanes(first, &[], &mut |nu, w, recorded| {
+                pixel += w * recorded[0] * self.pixel_log_slope(nu);
+            })?;
+            let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
+            return Some((mean.mean, pixel * scale, mean.work));
+        }
+        if self.direction_dependent() {
+            let (t, w1, _, pt) = self.mean_mtf_along_lanes_and_pixel_slope(first, &[])?;
+            let (s, w2, _, ps) = self.mean_mtf_along_lanes_and_pixel_slope(first + 0.5 * PI, &[])?;
+            return Some((0.5 * (t + s), 0.5 * (pt + ps), add(w1, w2)));
+        }
+        *self.gradient.borrow_mut() = Some(Recording { lanes: 1, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| {
+            let v = self.otf(nu);
+            self.record(nu, Some(v), &[v])
+        });
+        let r = self.gradient.borrow_mut().take()?;
+        if r.failed {
+            return None;
+        }
+        let mut pixel = 0.0;
+        for &(nu, w) in &r.accepted {
+            let &i = r.at.get(&nu.to_bits())?;
+            // the weight carries the sign of O: w O = P |O| times the rule's weight
+            pixel += w * r.derivatives[i] * self.pixel_log_slope(nu);
+        }
+        Some((mean, pixel / self.scene.max_frequency, work))
+    }
+
+    /// [`mean_mtf_and_pixel_slope`](Self::mean_mtf_and_pixel_slope) on the FFT path's grids: the
+    /// value's rule over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth), whose
+    /// means along each azimuth the grids hold) gives the azimuths; along each, the value's fixed
+    /// composite rule over `[0, top]` with `P |O|` times `νP′/P`, on the fine level and, where
+    /// the value is the Richardson extrapolation of two levels, on the coarse one too, combined
+    /// as the value is (the extrapolation is linear in the two means).
+    fn fixed_pixel_slope(&self, first: f64, cell: f64) -> (f64, f64, Work) {
+        let mean = self.mean_mtf_over_azimuth(first, None);
+        let count = mean.azimuths;
+        let top = self.active_top();
+        let (panels, _) = super::grid::fixed_rule(top, cell);
+        let level = || {
+            let along = |azimuth: f64| {
+                quad::composite_fixed(0.0, top, panels, |nu| {
+                    self.otf_along(nu, azimuth).norm() * self.pixel_factor(nu) * self.pixel_log_slope(nu)
+                })
+            };
+            let sum: f64 = (0..count).map(|k| along(first + PI * k as f64 / count as f64)).sum();
+            sum / (count as f64 * self.scene.max_frequency)
+        };
+        let fine = level();
+        let slope = match self.engine.richardson() {
+            Some(plan) => {
+                self.engine.read_coarse(true);
+                let coarse = level();
+                self.engine.read_coarse(false);
+                plan.extrapolate(coarse, fine).value
+            }
+            None => fine,
+        };
+        (mean.mean, slope, mean.work)
+    }
+
+    /// [`mean_mtf_along_and_gradient`](Self::mean_mtf_along_and_gradient) with the pixel MTF's
+    /// term `P_ν` along `azimuth` in the same pass
+    /// ([`mean_mtf_and_pixel_slope`](Self::mean_mtf_and_pixel_slope); 0 without the pixel MTF):
+    /// `(mean, work, lanes, P_ν)`.
+    pub fn mean_mtf_along_lanes_and_pixel_slope(
+        &self,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+    ) -> Option<(f64, Work, Vec<f64>, f64)> {
+        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
+            return None;
+        }
+        let lanes = directions.len();
+        *self.gradient.borrow_mut() =
+            Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+        let r = self.gradient.borrow_mut().take()?;
+        if r.failed {
+            return None;
+        }
+        let mut sum = vec![0.0; lanes];
+        let mut pixel = 0.0;
+        for &(nu, w) in &r.accepted {
+            let &i = r.at.get(&nu.to_bits())?;
+            for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
+                *g += w * d;
+            }
+            // |O| itself after the lanes (`recorded_modulus_along`)
+            pixel += w * r.derivatives[i + lanes] * self.pixel_log_slope(nu);
+        }
+        let scale = 1.0 / self.scene.max_frequency;
+        Some((mean, work, sum.into_iter().map(|g| g * scale).collect(), pixel * scale))
+    }
+
+    /// `ν P′(ν)/P(ν)` of the pixel MTF `P = |sin x / x|`, `x = πpν` (`x cot x − 1`, its series
+    /// near 0); 0 without the pixel MTF.
+    fn pixel_log_slope(&self, nu: f64) -> f64 {
+        self.scene.pixel_pitch.map_or(0.0, |p| {
+            let x = PI * p * nu;
+            if x.abs() < 1e-4 { -x * x / 3.0 - x.powi(4) / 45.0 } else { x / x.tan() - 1.0 }
+        })
+    }
+
     /// `|O(ν, φ)|` at `nu` along `azimuth` with `∂|O| = Re(O* ∂O)/|O|` for each recorded
     /// direction kept in the recording.
     fn recorded_modulus_along(&self, nu: f64, azimuth: f64) -> f64 {
