@@ -659,7 +659,7 @@ impl Polychromatic<'_> {
     /// F-number and the focal length with Seidel terms"). `None` where the engine is not the
     /// overlap engine or gives no lane.
     pub fn mean_mtf_over_azimuth_and_defocus_lane(&self, first: f64) -> Option<DefocusDerivative> {
-        if !matches!(self.engine.engine(), Engine::Overlap { .. })
+        if !matches!(self.engine.engine(), Engine::Overlap { .. } | Engine::Exact1d)
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
         {
             return None;
