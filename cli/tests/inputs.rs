@@ -490,6 +490,6 @@ fn mtf_names_the_source_of_a_2d_otf() {
     let out = asnr(&["mtf", &example("psf-stack.toml")]);
     assert!(out.status.success(), "{}", stderr(&out));
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.contains("mean over azimuth (on axis; a PSF stack, whose OTF depends on direction)"), "{text}");
+    assert!(text.contains("mean over azimuth (on axis; a PSF stack: the OTF depends on direction)"), "{text}");
     assert!(!text.contains("sampled 2-D pupil"), "{text}");
 }

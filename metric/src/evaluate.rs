@@ -149,8 +149,8 @@ pub struct Evaluation {
     pub asnr_mean: f64,
     /// `SNR0 × ∫_0^{ν_N} MTF dν`, cycles/mm (paper eq. 1 as printed).
     pub asnr_integral_cyc_per_mm: f64,
-    /// Mean of the polychromatic MTF over `[0, ν_N]`. Off axis, where lateral colour makes the
-    /// OTF depend on direction, the average of the tangential and sagittal means.
+    /// Mean of the polychromatic MTF over `[0, ν_N]`. Where the OTF depends on direction (lateral
+    /// colour off axis, a decentred iris, a 2-D pupil), averaged over azimuth as well.
     pub mean_mtf: f64,
     /// Tangential mean MTF, as Zemax and Code V name it: for frequencies along the field
     /// direction (in the meridional plane, the direction lateral colour smears; on axis, along
@@ -575,10 +575,10 @@ pub(crate) fn evaluate_field_with_lanes(
     let budget = noise::budget(camera.sensor(), photoelectrons, background, scene.exposure())?;
     let snr0 = budget.snr;
     // where the OTF depends on direction, a mean along the field direction (tangential) and one
-    // across it (sagittal); the ASNR takes, for a sampled pupil's 2-D OTF, the mean averaged over
-    // azimuth (docs/physics.md, "Pupils without rotational symmetry": the same lens turned gives
-    // the same ASNR), and where only the two directions exist (image shifts, T and S tables)
-    // their average; otherwise one mean
+    // across it (sagittal) are reported, and the ASNR takes the mean averaged over azimuth
+    // (docs/physics.md, "Pupils without rotational symmetry": the same lens turned gives the same
+    // ASNR) for every such OTF: a sampled pupil's 2-D OTF, and the 1-D engines' image shifts
+    // (lateral colour, a decentred iris) and T and S tables; otherwise one mean
     let along_field = field.y_rad.atan2(field.x_rad);
     let mut azimuth_warning = None;
     let mut binary2_gradient = None;
@@ -589,7 +589,7 @@ pub(crate) fn evaluate_field_with_lanes(
             None => poly.mean_mtf_along(azimuth),
             Some(shape) => poly.mean_mtf_over_noise(shape, azimuth),
         };
-        if poly.has_pupil_grid() {
+        if poly.has_pupil_grid() || poly.direction_dependent() {
             let mut a = None;
             if noise.is_none() && !grid.is_empty() {
                 match poly.mean_mtf_over_azimuth_and_gradient(along_field, grid) {
@@ -620,42 +620,6 @@ pub(crate) fn evaluate_field_with_lanes(
                 ));
             }
             Ok((a.mean, a.tangential, a.sagittal, a.work))
-        } else if poly.direction_dependent() {
-            let with_azimuth: Vec<optics::WavefrontDirection> =
-                grid.iter().copied().chain([optics::WavefrontDirection::Azimuth]).collect();
-            // the field angles' lanes on the exact engine (docs/physics.md, "Gradients: the
-            // field point"): the tangential and sagittal means with their derivatives
-            if noise.is_none()
-                && !grid.is_empty()
-                && grid.iter().all(|d| {
-                    matches!(d, optics::WavefrontDirection::FieldAngle(_) | optics::WavefrontDirection::IrisDecentre(_))
-                })
-                && let Some((t, w1, dt)) = poly.mean_mtf_along_and_gradient(along_field, &with_azimuth)
-                && let Some((s, w2, ds)) = poly.mean_mtf_along_and_gradient(along_field + 0.5 * PI, &with_azimuth)
-            {
-                // the two azimuths turn with the field direction atan2(θy, θx), which is not
-                // exactly the images' direction atan2(tan θy, tan θx) off the axes: that turn's
-                // share, ∂M̄/∂φ · ∂φ/∂θ_a
-                let k = grid.len();
-                let d_azimuth = 0.5 * (dt[k] + ds[k]);
-                let r2 = field.x_rad * field.x_rad + field.y_rad * field.y_rad;
-                // (an iris's decentre does not turn them; on axis, where a decentred iris makes the
-                // OTF depend on direction, the field keys move the field along x or y, and the
-                // pair of azimuths {x, y} stays the pair: no turn)
-                let turn = |d: &optics::WavefrontDirection| match d {
-                    _ if r2 == 0.0 => 0.0,
-                    optics::WavefrontDirection::FieldAngle(0) => -field.y_rad / r2,
-                    optics::WavefrontDirection::FieldAngle(_) => field.x_rad / r2,
-                    _ => 0.0,
-                };
-                grid_gradient = GridGradient::Computed(
-                    (0..k).map(|i| 0.5 * (dt[i] + ds[i]) + d_azimuth * turn(&grid[i])).collect(),
-                );
-                return Ok((0.5 * (t + s), t, s, add_work(w1, w2)));
-            }
-            let (t, w1) = mean_along(along_field);
-            let (s, w2) = mean_along(along_field + 0.5 * PI);
-            Ok((0.5 * (t + s), t, s, add_work(w1, w2)))
         } else {
             // on axis a rotationally symmetric OTF; off axis one the field does not move (every
             // order's image-shift rate zero: a refractive lens, its stop at the lens)
@@ -1161,16 +1125,21 @@ pub struct MtfCurve {
     /// Where the OTF depends on direction: the sagittal MTF, for frequencies across the field
     /// direction (on axis, along y).
     pub mtf_sagittal: Option<Vec<f64>>,
-    /// Whether `mtf` (and each field point's) is the mean over azimuth of a sampled pupil's 2-D
-    /// OTF (a phase map, non-radial Zernike terms, a decentred iris: docs/physics.md, "Pupils
-    /// without rotational symmetry"), as `Evaluation::mean_mtf` is, rather than the
-    /// tangential–sagittal average; the directional curves are then two of the azimuths it
-    /// averages.
+    /// Whether `mtf` (and each field point's) is the mean over azimuth of an OTF that depends
+    /// on direction (a sampled pupil's 2-D OTF: a phase map, non-radial Zernike terms; the 1-D
+    /// engines' image shifts: lateral colour, a decentred iris; docs/physics.md, "Pupils
+    /// without rotational symmetry"), as `Evaluation::mean_mtf` is; the directional curves are
+    /// then two of the azimuths it averages.
     pub mtf_over_azimuth: bool,
-    /// Whether that 2-D OTF is a PSF stack's (each wavelength's whole PSF, `model = "psf"`)
-    /// rather than a sampled pupil's: it names the curve's source in the reports.
+    /// Whether that OTF is a PSF stack's (each wavelength's whole PSF, `model = "psf"`): it
+    /// names the curve's source in the reports.
     #[serde(skip)]
     pub otf_from_psf_stack: bool,
+    /// Whether that OTF is a sampled pupil's 2-D OTF (the FFT path or the overlap quadrature)
+    /// rather than the 1-D engines' with image shifts or tangential and sagittal tables: it
+    /// names the curve's source in the reports.
+    #[serde(skip)]
+    pub otf_from_pupil: bool,
     /// Field angles `(x, y)`, degrees, of a single field point (the first point of a
     /// field-of-view average).
     pub field_deg: [f64; 2],
@@ -1274,6 +1243,7 @@ fn curves_over_fields(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
     combined.mtf_sagittal = split.then(|| mean(&|c| c.mtf_sagittal.as_ref().unwrap_or(&c.mtf)));
     combined.mtf_over_azimuth = curves.iter().any(|(c, _)| c.mtf_over_azimuth);
     combined.otf_from_psf_stack = curves.iter().any(|(c, _)| c.otf_from_psf_stack);
+    combined.otf_from_pupil = curves.iter().any(|(c, _)| c.otf_from_pupil);
     combined.field_points = curves
         .into_iter()
         .map(|(c, weight)| FieldCurve {
@@ -1340,12 +1310,12 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
         (None, None)
     };
     // where the OTF depends on direction the headline curve is, as `mean_mtf` is, the average
-    // over azimuth for a sampled pupil's 2-D OTF, else the tangential–sagittal average
-    let mtf_over_azimuth = poly.has_pupil_grid();
-    let mtf = match (&mtf_tangential, &mtf_sagittal) {
-        _ if poly.has_pupil_grid() => frequencies.iter().map(|&nu| poly.mtf_over_azimuth(nu, along_field)).collect(),
-        (Some(t), Some(s)) => t.iter().zip(s).map(|(a, b)| 0.5 * (a + b)).collect(),
-        _ => mtf,
+    // over azimuth
+    let mtf_over_azimuth = poly.has_pupil_grid() || poly.direction_dependent();
+    let mtf = if mtf_over_azimuth {
+        frequencies.iter().map(|&nu| poly.mtf_over_azimuth(nu, along_field)).collect()
+    } else {
+        mtf
     };
     let monochromatic = wavelengths_m
         .iter()
@@ -1371,6 +1341,7 @@ fn mtf_curve_at_field(scene: &Scene, sampling: Sampling<'_>, wavelengths_m: &[f6
         mtf_sagittal,
         mtf_over_azimuth,
         otf_from_psf_stack: poly.has_psf_planes(),
+        otf_from_pupil: poly.has_pupil_grid(),
         field_deg: [field.x_rad.to_degrees(), field.y_rad.to_degrees()],
         field_points: Vec::new(),
         nyquist_cyc_per_mm: camera.nyquist() * 1e-3,

@@ -603,8 +603,9 @@ fn point_gradient(
                     };
                     let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                     (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
-                } else if let Some(why) = seidel_zero_off_axis(scene, e, t) {
-                    return Err(not_smooth(p, why));
+                } else if let Some(d_mtf) = seidel_at_zero_off_axis(scene, e, t)? {
+                    let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                    (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
                 } else {
                     return Err(not_smooth(
                         p,
@@ -1305,13 +1306,8 @@ fn spectral_lanes_on_value_rule(scene: &Scene, e: &Evaluation, c: f64, sigma: f6
             {
                 return None;
             }
-            let lanes = if poly.has_pupil_grid() {
-                poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1
-            } else {
-                let (_, _, t) = poly.mean_mtf_along_and_gradient(first, &directions)?;
-                let (_, _, s) = poly.mean_mtf_along_and_gradient(first + 0.5 * std::f64::consts::PI, &directions)?;
-                vec![0.5 * (t[0] + s[0]), 0.5 * (t[1] + s[1])]
-            };
+            // the value's mean over azimuth (its nested rule from the field direction)
+            let lanes = poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions)?.1;
             if poly.over_budget().is_some() {
                 return None;
             }
@@ -1410,7 +1406,7 @@ impl DirectionalRule {
         let field = scene.field();
         DirectionalRule {
             first: field.y_rad.atan2(field.x_rad),
-            over_azimuth: engine.has_pupil_grid(),
+            over_azimuth: engine.has_pupil_grid() || engine.direction_dependent(),
             tolerance: tolerance.max(engine.tolerance()),
         }
     }
@@ -2108,15 +2104,15 @@ fn aperture_partials(
 /// node's OTF is `D(νλF#/r, W020 r²/λ) exp(−2πi ν·Δ)` with `Δ = 2 W020 d/NA = 4 F# W020 d`
 /// (`optics::fft::reduce_decentred_circle`) and `W020 = K a(λ)`, `K ∝ f0/F#²`: at fixed `K`
 /// the OTF along every azimuth is a function of `νF#` (the tilt's phase `−8πi νF# K a u·d`
-/// too), so by parts, per azimuth and then averaged over the value's tangential and sagittal
-/// azimuths, `∂M̄/∂ln F#|_K = |O(ν_N)|‾ − M̄`; and at fixed `νF#` every node moves with `ln K`
+/// too), so by parts, per azimuth and then averaged over the value's azimuths (its nested rule),
+/// `∂M̄/∂ln F#|_K = |O(ν_N)|‾ − M̄`; and at fixed `νF#` every node moves with `ln K`
 /// as `w ∂D/∂w` turned by its phase plus `−2πi ν u·Δ` times itself (the tilt scales with
 /// `W020`): the lane `D_K` ([`optics::WavefrontDirection::Defocus`] on the exact engine, on the
 /// value's adaptive rule along each azimuth). So `∂M̄/∂ln F# = |O(ν_N)|‾ − M̄ − 2 D_K` and
 /// `∂M̄/∂ln f0 = D_K`. With the pixel MTF `P` (its sinc does not scale with F#) the parts give
-/// `P(ν_N)|O(ν_N)|‾ − M̄ − P_ν`, `P_ν = (1/ν_N) ∫ ν P′ |O| dν` averaged over the two azimuths
+/// `P(ν_N)|O(ν_N)|‾ − M̄ − P_ν`, `P_ν = (1/ν_N) ∫ ν P′ |O| dν` averaged over the same azimuths
 /// (recorded in the same pass as the lane,
-/// [`optics::Polychromatic::mean_mtf_along_lanes_and_pixel_slope`]), and `D_K` carries `P` in
+/// [`optics::Polychromatic::mean_mtf_over_azimuth_and_defocus_lane`]), and `D_K` carries `P` in
 /// its weights. `None` where the scene is not that: off axis (the lateral colour's
 /// `Δ ∝ f0 tan θ` is not a function of `νF#`), another pupil, a line, another engine.
 fn aperture_through_iris(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
@@ -2147,23 +2143,14 @@ fn aperture_through_iris(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f
     if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() {
         return Ok(None);
     }
-    // the value's azimuths: the field direction (x on axis) and across it
-    let azimuths = [0.0, 0.5 * std::f64::consts::PI];
-    let mut d_k = 0.0;
-    let mut edge = 0.0;
-    let mut slope = 0.0;
-    for azimuth in azimuths {
-        let Some((_, _, d, pixel_slope)) =
-            poly.mean_mtf_along_lanes_and_pixel_slope(azimuth, &[optics::WavefrontDirection::Defocus])
-        else {
-            return Ok(None);
-        };
-        d_k += 0.5 * d[0];
-        slope += 0.5 * pixel_slope;
-        // P(ν_N)|O(ν_N)| (P = 1 without the pixel MTF)
-        edge += 0.5 * poly.mtf_along(nyquist, azimuth);
-    }
-    Ok(Some((edge - e.mean_mtf - slope - 2.0 * d_k, d_k)))
+    // the value's rule over azimuth from the field direction (x on axis), the lane and the
+    // pixel's term of the parts in the same pass
+    let Some(found) = poly.mean_mtf_over_azimuth_and_defocus_lane(0.0) else {
+        return Ok(None);
+    };
+    // P(ν_N)|O(ν_N)| over azimuth (P = 1 without the pixel MTF)
+    let edge = poly.mtf_over_azimuth(nyquist, 0.0);
+    Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * found.defocus, found.defocus)))
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of the chromatic lens with Seidel terms on axis, on the overlap
@@ -2264,36 +2251,60 @@ fn defocus_lane_on_overlap(scene: &Scene) -> bool {
         && orders.iter().any(|o| !o.wavefront.is_defocus_only())
 }
 
-/// Why a Seidel key is refused off axis where every Seidel term is zero, naming the field point
-/// and what is accepted; `None` on axis or where some term is not zero. Off axis the images of
-/// the wavelengths are shifted apart (lateral colour), and the mean MTF is taken differently on
-/// either side of zero (docs/physics.md, "Pupils without rotational symmetry"): with every term
-/// zero, the average of the tangential and sagittal means (the exact 1-D engine); with any term
-/// not zero, the mean over azimuth (the overlap engine). The value jumps there (e.g. by 1.9e-4
-/// of itself at 5° on the paper's lens), so it has no derivative at zero.
-fn seidel_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm) -> Option<String> {
+/// `∂M̄/∂W` of Seidel term `t` (per µm) off axis where every Seidel term is zero (docs/physics.md,
+/// "Gradients: Seidel terms at zero"): the value's exact 1-D engine has no lane along the Seidel
+/// terms, so the mean over azimuth is taken again on the overlap engine with the terms at zero
+/// (`optics::Settings::overlap_always`), from the field direction, forward mode on its nodes, as
+/// the value with a term not zero is; both are the mean over azimuth of the same OTF, so the
+/// value is continuous there and this is its derivative. The error control is
+/// [`seidel_at_zero`]'s: first at the engine's tolerance, again at `max(q, 10⁻⁴) ε` where the
+/// lane is small against its bound `L M̄`. `None` on axis, where some term is not zero, or where
+/// the overlap engine does not take the scene (an iris, `options.overlap = false`,
+/// `options.pupil_samples`).
+fn seidel_at_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm) -> Result<Option<f64>, Error> {
     let field = scene.field();
-    if field.is_on_axis() {
-        return None;
+    let lens = scene.lens();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if field.is_on_axis() || scene.camera().noise_spectrum().is_some() {
+        return Ok(None);
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
-    let zero = scene.lens().orders(lambda, field).iter().all(|o| {
+    let zero = lens.orders(lambda, field).iter().all(|o| {
         let w = &o.wavefront;
         [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
     });
-    zero.then(|| {
-        format!(
-            "{}: at the field point field.x_deg = {}, field.y_deg = {} (off axis) with every Seidel term zero, the mean \
-             MTF is the average of the tangential and sagittal means (the lateral colour's image shifts on the exact \
-             1-D engine), and with any Seidel term not zero the mean over azimuth (the overlap engine): the value jumps \
-             at zero and has no derivative there. Accepted: the Seidel keys at zero on axis (field.x_deg = field.y_deg \
-             = 0), or off axis with some Seidel term not zero (e.g. --set {}=1e-6)",
-            t.key(),
-            field.x_rad.to_degrees(),
-            field.y_rad.to_degrees(),
-            t.key()
-        )
-    })
+    if !zero {
+        return Ok(None);
+    }
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let first = field.y_rad.atan2(field.x_rad);
+    let directions = [optics::WavefrontDirection::Seidel(t)];
+    // (the lane, the engine's tolerance, L M̄)
+    let run = |settings: optics::Settings| -> Result<Option<(f64, f64, f64)>, Error> {
+        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
+            .map_err(Error::Optics)?;
+        if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
+            return Ok(None);
+        }
+        let bound = 2.0 * std::f64::consts::PI * 1e-6 * poly.max_cutoff() * lens.f_number();
+        let found = poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions);
+        if poly.over_budget().is_some() {
+            return Ok(None);
+        }
+        Ok(found.map(|(mean, d)| (d[0], poly.tolerance(), bound * mean.mean)))
+    };
+    let settings = optics::Settings { overlap_always: true, ..scene.options().settings() };
+    let Some((lane, tolerance, bound)) = run(settings)? else { return Ok(None) };
+    let q = if bound > 0.0 { (lane.abs() / bound).max(1e-4) } else { 1.0 };
+    if q >= 1.0 {
+        return Ok(Some(lane));
+    }
+    let tighter = optics::Settings { tolerance: (q * tolerance).max(1e-14), fft_tolerance: None, ..settings };
+    Ok(run(tighter)?.map(|(lane, _, _)| lane).or(Some(lane)))
 }
 
 /// `[∂M̄/∂W040, ∂M̄/∂W220]` (per µm) where every Seidel term is zero and the OTF rotationally
@@ -2390,7 +2401,7 @@ fn seidel_at_zero_closed_form(scene: &Scene) -> Result<Option<[f64; 2]>, Error> 
     };
     let settings = scene.options().settings();
     // beside zero the value is on the overlap engine only where it may take the scene (else on
-    // the FFT path, and the value jumps at zero: refused by `seidel_at_zero`)
+    // the FFT path, whose sampling error steps the value at zero: refused by `seidel_at_zero`)
     if !settings.overlap || settings.pupil_samples.is_some() {
         return Ok(None);
     }

@@ -321,7 +321,8 @@ fn at_field(scene: &Scene, snr0: f64, options: &MetricsOptions) -> Result<FieldM
         if directional { poly.otf_along(nu / pitch, theta).norm() } else { poly.otf(nu / pitch).abs() }
     };
     // the 1-D curve: along the field direction and across it (on axis: x and y), averaged where
-    // the OTF depends on direction, as the MTF curve is
+    // the OTF depends on direction (the two directions a 1-D NEQ is read along; the mean MTF
+    // and the MTF curve average over every azimuth instead)
     let neq_1d = |nu: f64| {
         let at = |theta: f64| {
             let m = optical(nu, theta) * pixel_2d(nu, theta);

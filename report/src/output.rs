@@ -290,12 +290,18 @@ fn mtf_meaning(c: &MtfCurve) -> String {
         )
     } else if c.mtf_over_azimuth {
         // the 2-D OTF's source: a PSF stack's planes or a sampled pupil
-        let source = if c.otf_from_psf_stack { "a PSF stack" } else { "a sampled 2-D pupil" };
+        let source = if c.otf_from_psf_stack {
+            "a PSF stack"
+        } else if c.otf_from_pupil {
+            "a sampled 2-D pupil"
+        } else {
+            "images shifted apart by wavelength, or tangential and sagittal tables"
+        };
         if c.field_deg == [0.0, 0.0] {
-            format!("MTF: mean over azimuth (on axis; {source}, whose OTF depends on direction)")
+            format!("MTF: mean over azimuth (on axis; {source}: the OTF depends on direction)")
         } else {
             format!(
-                "MTF: mean over azimuth at field ({}°, {}°) ({source}, whose OTF depends on direction)",
+                "MTF: mean over azimuth at field ({}°, {}°) ({source}: the OTF depends on direction)",
                 c.field_deg[0], c.field_deg[1]
             )
         }

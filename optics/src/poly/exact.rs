@@ -91,13 +91,12 @@ pub(super) fn exact_along_and_field_gradient(
     directions: &[WavefrontDirection],
     gradient: &mut [Complex64],
 ) -> Option<Complex64> {
-    // 0, 1: the field angles; 2: the azimuth; 3, 4: the iris's decentre; 5: the defocus; 6, 7:
+    // 0, 1: the field angles; 3, 4: the iris's decentre; 5: the defocus; 6, 7:
     // the spectral moments
     let axes: Vec<usize> = directions
         .iter()
         .map(|d| match d {
             WavefrontDirection::FieldAngle(a) if *a < 2 => Some(*a),
-            WavefrontDirection::Azimuth => Some(2),
             WavefrontDirection::IrisDecentre(a) if *a < 2 => Some(3 + *a),
             WavefrontDirection::Defocus => Some(5),
             WavefrontDirection::SpectralMoment(k) if (1..=2).contains(k) => Some(5 + *k),
@@ -140,7 +139,6 @@ pub(super) fn exact_along_and_field_gradient(
             let rate = match axis {
                 0 => k * rx * cos_a,
                 1 => k * ry * sin_a,
-                2 => k * (dy * cos_a - dx * sin_a),
                 3 => k * n.iris_rate * cos_a,
                 4 => k * n.iris_rate * sin_a,
                 5 => {

@@ -659,7 +659,7 @@ impl Polychromatic<'_> {
     /// F-number and the focal length with Seidel terms"). `None` where the engine is not the
     /// overlap engine or gives no lane.
     pub fn mean_mtf_over_azimuth_and_defocus_lane(&self, first: f64) -> Option<DefocusDerivative> {
-        if !matches!(self.engine.engine(), Engine::Overlap { .. })
+        if !matches!(self.engine.engine(), Engine::Overlap { .. } | Engine::Exact1d)
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
         {
             return None;
@@ -723,10 +723,9 @@ impl Polychromatic<'_> {
     /// pixel pitch with the pixel MTF"): `|O|` is recorded at every frequency the rule reads and
     /// the accepted panels' weights (the pixel MTF included) integrate it times `νP′/P`. The
     /// mean is the value's: [`mean_mtf`](Self::mean_mtf)'s for a rotationally symmetric OTF
-    /// (bit for bit, the same reads), the average along `first` and `first + π/2` where the OTF
-    /// depends on direction on a 1-D engine (the evaluation's tangential and sagittal means),
-    /// and [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)'s rule over azimuth from
-    /// `first` for a 2-D OTF on an adaptive rule (the overlap engine, a PSF stack's planes);
+    /// (bit for bit, the same reads), and [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)'s
+    /// rule over azimuth from `first` where the OTF depends on direction on an adaptive rule (a
+    /// 1-D engine's image shifts or tables, the overlap engine, a PSF stack's planes);
     /// `P_ν` is averaged as the mean is; on the FFT path's fixed rule, that rule's, on the
     /// value's sampling levels (`fixed_pixel_slope`). `None` without
     /// the pixel MTF, or where the engine gives no modulus along an azimuth.
@@ -735,18 +734,14 @@ impl Polychromatic<'_> {
         if let FrequencyRule::Fixed { cell } = self.engine.frequency_rule() {
             return self.has_pupil_grid().then(|| self.fixed_pixel_slope(first, cell));
         }
-        if self.has_pupil_grid() {
+        // the mean over azimuth wherever the OTF depends on direction, as the value's
+        if self.has_pupil_grid() || self.direction_dependent() {
             let mut pixel = 0.0;
             let mean = self.azimuthal_mean_with_lanes(first, &[], &mut |nu, w, recorded| {
                 pixel += w * recorded[0] * self.pixel_log_slope(nu);
             })?;
             let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
             return Some((mean.mean, pixel * scale, mean.work));
-        }
-        if self.direction_dependent() {
-            let (t, w1, _, pt) = self.mean_mtf_along_lanes_and_pixel_slope(first, &[])?;
-            let (s, w2, _, ps) = self.mean_mtf_along_lanes_and_pixel_slope(first + 0.5 * PI, &[])?;
-            return Some((0.5 * (t + s), 0.5 * (pt + ps), add(w1, w2)));
         }
         *self.gradient.borrow_mut() = Some(Recording { lanes: 1, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| {
@@ -797,40 +792,6 @@ impl Polychromatic<'_> {
             None => fine,
         };
         (mean.mean, slope, mean.work)
-    }
-
-    /// [`mean_mtf_along_and_gradient`](Self::mean_mtf_along_and_gradient) with the pixel MTF's
-    /// term `P_ν` along `azimuth` in the same pass
-    /// ([`mean_mtf_and_pixel_slope`](Self::mean_mtf_and_pixel_slope); 0 without the pixel MTF):
-    /// `(mean, work, lanes, P_ν)`.
-    pub fn mean_mtf_along_lanes_and_pixel_slope(
-        &self,
-        azimuth: f64,
-        directions: &[WavefrontDirection],
-    ) -> Option<(f64, Work, Vec<f64>, f64)> {
-        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
-            return None;
-        }
-        let lanes = directions.len();
-        *self.gradient.borrow_mut() =
-            Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
-        let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
-        let r = self.gradient.borrow_mut().take()?;
-        if r.failed {
-            return None;
-        }
-        let mut sum = vec![0.0; lanes];
-        let mut pixel = 0.0;
-        for &(nu, w) in &r.accepted {
-            let &i = r.at.get(&nu.to_bits())?;
-            for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
-                *g += w * d;
-            }
-            // |O| itself after the lanes (`recorded_modulus_along`)
-            pixel += w * r.derivatives[i + lanes] * self.pixel_log_slope(nu);
-        }
-        let scale = 1.0 / self.scene.max_frequency;
-        Some((mean, work, sum.into_iter().map(|g| g * scale).collect(), pixel * scale))
     }
 
     /// `ν P′(ν)/P(ν)` of the pixel MTF `P = |sin x / x|`, `x = πpν` (`x cot x − 1`, its series

@@ -789,11 +789,6 @@ pub enum WavefrontDirection {
     /// library lens: `RadialPupil::with_oblique`, its orders without image shifts) moves with
     /// the angle: `∂W = ∂(α·X + |X − P| − |P|)/∂θ_a` at each pixel, a lane as a Zernike term's.
     FieldAngle(usize),
-    /// The azimuth φ of the frequency direction the OTF is read along, per radian: each node's
-    /// turned OTF gains `−2πi ν (u⊥·Δ)` times itself (`u⊥ = (−sin φ, cos φ)`). The exact engine
-    /// gives it beside the field angles, for the tangential and sagittal azimuths that turn
-    /// with the field direction (docs/physics.md, "Gradients: the field point").
-    Azimuth,
     /// Each order's own defocus `W020(λ)` (not the field curvature), per relative change:
     /// `∂W = W020 ρ²` at each spectral node, the lane `∂O/∂ln K` of the F-number and focal
     /// length (`W020 ∝ f0/F#²`) on the overlap engine (docs/physics.md, "Gradients: the
@@ -988,7 +983,6 @@ impl FftPath {
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
-                        | WavefrontDirection::Azimuth
                         | WavefrontDirection::IrisDecentre(_)
                         | WavefrontDirection::Obscuration
                         | WavefrontDirection::SpectralMoment(_)
@@ -1256,7 +1250,7 @@ impl Polychromatic<'_> {
         first: f64,
         directions: &[WavefrontDirection],
     ) -> Result<Option<(AzimuthalMean, Vec<f64>)>, Error> {
-        if matches!(self.engine(), Engine::Overlap { .. }) {
+        if matches!(self.engine(), Engine::Overlap { .. } | Engine::Exact1d) {
             return Ok(self.mean_mtf_over_azimuth_and_overlap_gradient(first, directions));
         }
         if !matches!(self.engine(), Engine::Fft { .. }) {
