@@ -860,7 +860,7 @@ pub(crate) fn evaluate_field_with_lanes(
 /// [`Differentiated`], these are for `G`.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct NoiseLanes {
-    /// `G` itself, the evaluation's bit for bit (the weighted mean over azimuth where the OTF is
+    /// `G` itself, as the evaluation computes it (the weighted mean over azimuth where the OTF is
     /// 2-D, the mean along one direction where it is rotationally symmetric).
     pub mean: f64,
     /// `∂G/∂A_j` along each of the lens's wavefront directions on the radial engine
