@@ -816,6 +816,101 @@ pub(crate) fn evaluate_field_with_lanes(
     Ok(((evaluation, binary2_gradient, grid_gradient, bias_lanes), defocus_found))
 }
 
+/// The lanes of the noise-weighted mean `G = (1/ν_N) ∫ P |O| / n dν` (with a non-white noise
+/// spectrum `camera.noise_spectrum`, the mean the ASNR takes; paper eq. 1 text), on the value's
+/// own rules (docs/physics.md, "Gradients under a noise spectrum"): the same engine, built from
+/// the scene as [`evaluate_field_with_lanes`] builds it, and the value's noise-weighted pass with
+/// each OTF's lanes divided by `n(ν)` as the value is. What the lanes of the white mean are in
+/// [`Differentiated`], these are for `G`.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct NoiseLanes {
+    /// `G` itself, as the evaluation computes it (the weighted mean over azimuth where the OTF is
+    /// 2-D, the mean along one direction where it is rotationally symmetric).
+    pub mean: f64,
+    /// `∂G/∂A_j` along each of the lens's wavefront directions on the radial engine
+    /// ([`optics::Polychromatic::mean_mtf_over_noise_and_binary2_gradient`]), where asked and given.
+    pub binary2: Option<Vec<f64>>,
+    /// `∂G` along each of `grid` on the 2-D engines
+    /// ([`optics::Polychromatic::mean_mtf_over_azimuth_over_noise_and_gradient`]), or
+    /// [`GridGradient::Symmetric`] where the OTF is rotationally symmetric, as the white lanes'.
+    pub grid: GridGradient,
+}
+
+/// [`NoiseLanes`] of the scene's single field point, along the lens's wavefront directions
+/// (`binary2`) and `grid`. Where the OTF depends on direction on the exact 1-D engine (its
+/// tangential and sagittal means), the grid's lanes are [`GridGradient::Unavailable`].
+pub(crate) fn noise_weighted_lanes(
+    scene: &Scene,
+    binary2: bool,
+    grid: &[optics::WavefrontDirection],
+) -> Result<NoiseLanes, Error> {
+    let camera = scene.camera();
+    let Some(shape) = camera.noise_spectrum() else {
+        return Err(Error::NotDifferentiable {
+            parameter: "the noise-weighted mean MTF",
+            reason: "the scene has a white noise spectrum (camera.noise_spectrum not given)".to_owned(),
+        });
+    };
+    let lens = scene.lens();
+    let detected = detected_spectrum(scene);
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let field = scene.field();
+    // the value's own settings (`evaluate_field_with_lanes`)
+    let settings = optics::Settings {
+        edge_lane: grid.contains(&optics::WavefrontDirection::Obscuration),
+        ..scene.options().settings()
+    };
+    let folded = Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let poly = Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)?;
+    let along_field = field.y_rad.atan2(field.x_rad);
+    let mut lanes = NoiseLanes {
+        mean: f64::NAN,
+        binary2: None,
+        grid: if grid.is_empty() { GridGradient::NotAsked } else { GridGradient::Unavailable },
+    };
+    if poly.has_pupil_grid() {
+        let found = if grid.is_empty() {
+            None
+        } else {
+            poly.mean_mtf_over_azimuth_over_noise_and_gradient(along_field, grid, shape)?
+        };
+        match found {
+            Some((mean, mut gradient)) => {
+                refine_field_lanes(&poly, settings, grid, &mut gradient, mean.mean, &|tighter, lanes| {
+                    let refined =
+                        Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, tighter).ok()?;
+                    refined
+                        .mean_mtf_over_azimuth_over_noise_and_gradient(along_field, lanes, shape)
+                        .ok()
+                        .flatten()
+                        .map(|r| r.1)
+                });
+                lanes.grid = GridGradient::Computed(gradient);
+                lanes.mean = mean.mean;
+            }
+            None => lanes.mean = poly.mean_mtf_over_azimuth(along_field, Some(shape)).mean,
+        }
+    } else if poly.direction_dependent() {
+        let (t, _) = poly.mean_mtf_over_noise(shape, along_field);
+        let (s, _) = poly.mean_mtf_over_noise(shape, along_field + 0.5 * PI);
+        lanes.mean = 0.5 * (t + s);
+    } else {
+        if !grid.is_empty() && (field.is_on_axis() || poly.field_independent()) {
+            lanes.grid = GridGradient::Symmetric;
+        }
+        match binary2.then(|| poly.mean_mtf_over_noise_and_binary2_gradient(shape)).flatten() {
+            Some((m, gradient, _)) => {
+                lanes.mean = m;
+                lanes.binary2 = Some(gradient);
+            }
+            None => lanes.mean = poly.mean_mtf_over_noise(shape, 0.0).0,
+        }
+    }
+    Ok(lanes)
+}
+
 /// `P(ν_N)|O(ν_N)|`, the end term of the defocus and order lanes' integration by parts
 /// ([`DefocusFound::edge`]): the pixel MTF (`pixel`, its pitch, where the camera applies it)
 /// times the engine's OTF at Nyquist (a full centred pupil on axis: real and the same along

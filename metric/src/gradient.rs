@@ -42,12 +42,16 @@ pub enum Parameter {
     Gain,
     /// The pixel pitch p: `N ∝ p²` and `ν_N = 1/(2p)`. `∂/∂ln p`. With the pixel MTF `P`, whose
     /// sinc stays in `x = ν/ν_N`, by parts `∂M̄/∂ln p = M̄ − P(ν_N)|O(ν_N)| + P_ν` (docs/physics.md,
-    /// "Gradients: the pixel pitch with the pixel MTF"). Refused with a non-white noise spectrum.
+    /// "Gradients: the pixel pitch with the pixel MTF"). Under a non-white noise spectrum `n(ν)`
+    /// (fixed in cycles/mm: the pitch moves the integral's upper limit only), Leibniz' rule with
+    /// `MTF(ν_N)/n(ν_N)` at the limit. Refused with both (the sinc moves in `ν/ν_N`, the noise in
+    /// cycles/mm).
     PixelPitch,
     /// The lens's Binary 2 coefficient `A_{i+1}` (`lens.binary2[i]`, radians): it moves the
     /// wavefront of every order (`optics::LensModel::binary2_directions`), so the OTF, not the
     /// photon count. `∂/∂A`, per radian. On axis, on the radial engine (the pixel MTF in the
-    /// frequency rule's weights where the camera applies it), without a noise spectrum.
+    /// frequency rule's weights where the camera applies it); under a noise spectrum on the
+    /// value's noise-weighted pass (docs/physics.md, "Gradients under a noise spectrum").
     Binary2(usize),
     /// A knot of the lens's freeform phase spline (`lens.phase_spline_rad[i]`, radians): the
     /// profile is linear in its knots, so the knot moves each order's wavefront along the
@@ -261,8 +265,10 @@ pub struct Gradient {
 ///
 /// # Errors
 /// The evaluation's errors, and [`Error::NotDifferentiable`] where the value is not smooth in a
-/// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with a noise
-/// spectrum, the conversion gain without an ADC.
+/// parameter there: a saturated pixel (the charges are clipped), the pixel pitch with both the
+/// pixel MTF and a noise spectrum, the conversion gain without an ADC; under a noise spectrum, a
+/// key whose noise-weighted lane is not computed (docs/physics.md, "Gradients under a noise
+/// spectrum").
 pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Error> {
     // the F-number and focal length of a lens that gives its aperture directions (a phase
     // lens): three more lanes of the radial engine, on a lens that appends them
@@ -294,8 +300,9 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         let lane = defocus_lane(scene, parameters, bases);
         let ((evaluation, d_binary2, d_grid, d_bias), found) =
             evaluate_field_with_lanes(scene, binary2, &grid, &bias, lane.as_ref())?;
-        let point =
+        let mut point =
             point_gradient(scene, &evaluation, parameters, d_binary2, &d_grid, bases, d_bias.as_ref(), found.as_ref())?;
+        weigh_by_noise(scene, &evaluation, parameters, binary2, &grid, &mut point)?;
         return Ok(Gradient {
             evaluation,
             asnr: point.asnr,
@@ -337,7 +344,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         let kept: Vec<Parameter> = local.iter().flatten().copied().collect();
         let grid: Vec<optics::WavefrontDirection> = kept.iter().filter_map(|p| p.grid_direction()).collect();
         let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
-        let point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref(), None)?;
+        let mut point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref(), None)?;
+        weigh_by_noise(&single, &e, &kept, binary2, &grid, &mut point)?;
         for (s, p) in [
             (&mut sum.asnr, &point.asnr),
             (&mut sum.mean_mtf, &point.mean_mtf),
@@ -474,17 +482,9 @@ fn point_gradient(
             || (bases.wavelength.is_some() && **p == Parameter::SpectrumCenter)
     };
     let binary2 = match parameters.iter().find(on_lanes) {
-        Some(&p) if !on_grid => Some(binary2_mean_mtf(scene, p, d_binary2)?),
+        Some(&p) if !on_grid => Some(binary2_mean_mtf(p, d_binary2)?),
         _ => None,
     };
-    if let Some(&p) = parameters.iter().find(|p| p.grid_direction().is_some())
-        && scene.camera().noise_spectrum().is_some()
-    {
-        return Err(not_smooth(
-            p,
-            "with camera.noise_spectrum the wavefront gradient is not computed here yet".to_owned(),
-        ));
-    }
     // each parameter's place among the FFT path's directions, and among the bias lanes
     let mut grid_place = 0;
     let mut bias_place = 0;
@@ -551,10 +551,11 @@ fn point_gradient(
                 (0.0, 0.0, 0.0, 0.0, -2.0 * budget.quantization_variance_e2 / k, 0.0, 0.0)
             }
             Parameter::PixelPitch => {
-                if camera.noise_spectrum().is_some() {
+                if camera.pixel_mtf() && camera.noise_spectrum().is_some() {
                     return Err(not_smooth(
                         p,
-                        "with camera.noise_spectrum the noise moves with the Nyquist frequency inside the integral, \
+                        "with camera.pixel_mtf = true and camera.noise_spectrum the pixel's sinc (fixed in ν/ν_N) and the \
+                         noise (fixed in cycles/mm) move apart with the pitch inside the integral, \
                          which is not differentiated here yet"
                             .to_owned(),
                     ));
@@ -567,9 +568,20 @@ fn point_gradient(
                 let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
                 let slope = pixel_slope(scene, p)?;
                 let d_mtf = e.mean_mtf - edge + slope;
-                let d_g = match scene.options().form {
-                    MetricForm::Mean => d_mtf,
-                    MetricForm::Integral => e.nyquist_cyc_per_mm * (slope - edge),
+                // under a noise spectrum n(ν), fixed in cycles/mm (the pitch moves the upper
+                // limit only, and n is continuous there): G = (1/ν_N) ∫ MTF/n dν, so the same
+                // Leibniz rule with MTF(ν_N)/n(ν_N) at the limit (docs/physics.md, "Gradients
+                // under a noise spectrum"); the pixel MTF is then off, `slope` 0
+                let d_g = match (camera.noise_spectrum(), scene.options().form) {
+                    (None, MetricForm::Mean) => d_mtf,
+                    (None, MetricForm::Integral) => e.nyquist_cyc_per_mm * (slope - edge),
+                    (Some(shape), form) => {
+                        let edge = edge / shape.value(e.nyquist_cyc_per_mm * 1e3);
+                        match form {
+                            MetricForm::Mean => e.asnr_mean / e.snr0 - edge,
+                            MetricForm::Integral => -e.nyquist_cyc_per_mm * edge,
+                        }
+                    }
                 };
                 (2.0 * n, 2.0 * background, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
@@ -611,7 +623,7 @@ fn point_gradient(
                         p,
                         format!(
                             "{}: the Seidel gradient is computed on the overlap engine, for a lens whose every order is \
-                             the full circle with Seidel terms and a white noise spectrum; this scene's OTF is {}",
+                             the full circle with Seidel terms; this scene's OTF is {}",
                             t.key(),
                             match d_grid {
                                 GridGradient::Symmetric =>
@@ -620,7 +632,7 @@ fn point_gradient(
                                      options.overlap = false or options.pupil_samples)",
                                 _ =>
                                     "not on the overlap engine (an iris, a phase profile, a table, a wavefront too strong for \
-                                     its rules, a noise spectrum, or other wavefront keys asked with it)",
+                                     its rules, or other wavefront keys asked with it)",
                             }
                         ),
                     ));
@@ -749,9 +761,9 @@ fn point_gradient(
                     return Err(not_smooth(
                         p,
                         "lens.obscuration: the inner edge's motion is computed on the FFT path, for orders \
-                        through the annulus (or annular sector) with its wavefront and a white noise \
-                        spectrum, asked with no wavefront key; this scene's OTF is on another engine (a line \
-                        spectrum's grids, a noise spectrum, or wavefront keys asked with it)"
+                        through the annulus (or annular sector) with its wavefront, asked with no \
+                        wavefront key; this scene's OTF is on another engine (a line \
+                        spectrum's grids, or wavefront keys asked with it)"
                             .to_owned(),
                     ));
                 };
@@ -829,6 +841,73 @@ fn point_gradient(
         out.asnr.push(d_snr0 * g + e.snr0 * d_g);
     }
     Ok(out)
+}
+
+/// Under a non-white noise spectrum `n` (`camera.noise_spectrum`), the ASNR's derivatives
+/// along the wavefront keys (every parameter with a [`Parameter::grid_direction`]) from the
+/// noise-weighted mean `G = (1/ν_N) ∫ MTF/n dν` the ASNR takes, in place of the white mean's in
+/// `point` (docs/physics.md, "Gradients under a noise spectrum"): `n` does not move with the
+/// lens, so `∂G = (1/ν_N) ∫ ∂MTF/n dν`, the white lanes with each frequency's weight divided by
+/// `n(ν)`, on the value's own noise-weighted pass ([`crate::evaluate::noise_weighted_lanes`]).
+/// `∂SNR0` and `∂M̄` stay `point`'s. A key whose white derivative is 0 by the OTF's symmetry
+/// (an `m ≠ 0` Zernike term, coma, a field angle or an iris's decentre on a rotationally
+/// symmetric OTF) is 0 under the noise weight too (`n` depends on `|ν|` alone); a key with no
+/// weighted lane here is refused naming it. Nothing to do with white noise.
+fn weigh_by_noise(
+    scene: &Scene,
+    e: &Evaluation,
+    parameters: &[Parameter],
+    binary2: bool,
+    grid: &[optics::WavefrontDirection],
+    point: &mut PointGradient,
+) -> Result<(), Error> {
+    if scene.camera().noise_spectrum().is_none() || !parameters.iter().any(|p| p.grid_direction().is_some()) {
+        return Ok(());
+    }
+    let lanes = crate::evaluate::noise_weighted_lanes(scene, binary2, grid)?;
+    let g = e.asnr / e.snr0;
+    let mut place = 0;
+    for (k, &p) in parameters.iter().enumerate() {
+        if p.grid_direction().is_none() {
+            continue;
+        }
+        let on_grid = match &lanes.grid {
+            GridGradient::Computed(all) => all.get(place).copied(),
+            _ => None,
+        };
+        place += 1;
+        let symmetric = lanes.grid == GridGradient::Symmetric;
+        let weighted = match p {
+            _ if on_grid.is_some() => on_grid,
+            Parameter::Binary2(i) | Parameter::PhaseSpline(i) | Parameter::Zernike(i) => {
+                lanes.binary2.as_ref().and_then(|all| all.get(i)).copied()
+            }
+            Parameter::FieldAngle(_) if scene.lens().turns_with_field() => Some(0.0),
+            Parameter::ZernikeNoll(_)
+            | Parameter::Seidel(optics::SeidelTerm::Coma)
+            | Parameter::FieldAngle(_)
+            | Parameter::IrisDecentre(_)
+                if symmetric =>
+            {
+                Some(0.0)
+            }
+            _ => None,
+        };
+        let Some(d_weighted) = weighted else {
+            return Err(Error::NotDifferentiable {
+                parameter: p.describe(),
+                reason: "with camera.noise_spectrum the wavefront gradient is computed on the noise-weighted pass of \
+                         the radial engine (Binary 2 coefficients, spline knots, m = 0 Zernike terms on axis), the \
+                         overlap engine and the FFT path, and is 0 where the OTF's symmetry makes it so; this key's \
+                         lane is on another rule here (Seidel terms at zero on a rotationally symmetric OTF, the \
+                         exact 1-D engine's tangential and sagittal lanes, an obscuration's edge, or a line \
+                         spectrum's grids)"
+                    .to_owned(),
+            });
+        };
+        point.asnr[k] = point.snr0[k] * g + e.snr0 * d_g_from_mean_mtf(scene, e, d_weighted);
+    }
+    Ok(())
 }
 
 /// One parameter's `(∂N, ∂B, ∂(dark charge), ∂σ_r², ∂(σ_q²/K²), ∂G, ∂M̄)` at a field point.
@@ -1070,6 +1149,15 @@ fn aperture_lane_partials(
     all: Option<&[f64]>,
     base: Option<usize>,
 ) -> Result<(f64, f64), Error> {
+    if scene.camera().noise_spectrum().is_some() {
+        return Err(Error::NotDifferentiable {
+            parameter: p.describe(),
+            reason: "with camera.noise_spectrum the F-number moves s = νλF# under the noise weight 1/n(ν), whose \
+                     integration by parts takes n's derivative (a piecewise-linear table's, with a jump at each row): \
+                     not computed here yet"
+                .to_owned(),
+        });
+    }
     let lanes = base.and_then(|b| all.and_then(|a| a.get(b..b + 3)));
     let Some(&[d_p, d_t, d_s]) = lanes else {
         return Err(Error::NotDifferentiable {
@@ -1088,14 +1176,11 @@ fn aperture_lane_partials(
 /// (`d_binary2`: [`optics::Polychromatic::mean_mtf_and_binary2_gradient`], the radial engine's
 /// OTF derivatives on the value's own spectral levels and frequency panels), or why there are
 /// none.
-fn binary2_mean_mtf(scene: &Scene, p: Parameter, d_binary2: Option<Vec<f64>>) -> Result<Vec<f64>, Error> {
+fn binary2_mean_mtf(p: Parameter, d_binary2: Option<Vec<f64>>) -> Result<Vec<f64>, Error> {
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
-    let camera = scene.camera();
     // the pixel MTF P(ν) does not move with the wavefront: it is in the frequency rule's
-    // accepted weights, ∂M̄ = (1/ν_N) ∫ P sign(O) ∂O dν
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth("with camera.noise_spectrum the Binary 2 gradient is not computed here yet"));
-    }
+    // accepted weights, ∂M̄ = (1/ν_N) ∫ P sign(O) ∂O dν (and under a noise spectrum the
+    // ASNR's lanes are taken again on the value's noise-weighted pass: `weigh_by_noise`)
     d_binary2.ok_or_else(|| {
         not_smooth(
             "the wavefront gradient (Binary 2 coefficients, spline knots, m = 0 Zernike terms) is computed for a \

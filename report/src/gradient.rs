@@ -774,7 +774,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um, and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -2646,7 +2646,12 @@ mod tests {
     /// error), within 10× `tolerance` of the gradient's norm: ASNR, mean MTF, SNR0 (whose
     /// derivative is 0: the Seidel terms move the OTF only) and N.
     fn check_seidel(overrides: &[&str], keys: &[&str], tolerance: f64, h: f64) -> Gradient {
-        let source = scene::read(None).unwrap();
+        check_seidel_on(&scene::read(None).unwrap(), overrides, keys, tolerance, h)
+    }
+
+    /// [`check_seidel`] on the scene `source`.
+    fn check_seidel_on(source: &Source, overrides: &[&str], keys: &[&str], tolerance: f64, h: f64) -> Gradient {
+        let source = source.clone();
         let mut set = owned(overrides);
         set.push(format!("options.tolerance={tolerance:e}"));
         let g = gradient(&source, &set, &owned(keys)).unwrap();
@@ -2962,27 +2967,17 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("Zernike coefficient") && e.contains("Noll 4") && e.contains("radial engine"), "{e}");
-        // a noise spectrum inside the integral is not followed
-        let dir = std::env::temp_dir().join(format!("asnr-fft-gradient-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("nps.csv"), "frequency_cyc_per_mm,relative\n0,1\n100,2\n").unwrap();
-        let text = paper.text().replace("[camera]", "[camera]\nnoise_spectrum = \"nps.csv\"");
-        let shaped = Source::from_text(text, "paper scene with a noise spectrum", dir);
-        let e = gradient(
-            &shaped,
-            &owned(&["lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.1]"]),
-            &owned(&["lens.zernike_noll_rms_um[4]"]),
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(e.contains("Zernike coefficient") && e.contains("noise_spectrum"), "{e}");
-        // the pixel pitch with it (the noise moves with the Nyquist frequency), with the pixel
-        // MTF or without
-        for pixel in ["false", "true"] {
-            let set = owned(&[&format!("camera.pixel_mtf={pixel}")]);
-            let e = gradient(&shaped, &set, &owned(&["camera.pixel_pitch_um"])).unwrap_err().to_string();
-            assert!(e.contains("pixel pitch") && e.contains("noise_spectrum"), "{e}");
-        }
+        // under a noise spectrum, a Seidel term at zero on the rotationally symmetric OTF (its
+        // lane on the white overlap pass only) is refused naming the noise spectrum
+        let shaped = with_noise_spectrum(&paper, "fft-refusals");
+        let e = gradient(&shaped, &[], &owned(&["lens.spherical_um"])).unwrap_err().to_string();
+        assert!(e.contains("Seidel coefficient") && e.contains("noise_spectrum"), "{e}");
+        // the pixel pitch with both the pixel MTF and a noise spectrum (the sinc fixed in ν/ν_N,
+        // the noise in cycles/mm)
+        let e = gradient(&shaped, &owned(&["camera.pixel_mtf=true"]), &owned(&["camera.pixel_pitch_um"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("pixel pitch") && e.contains("noise_spectrum") && e.contains("pixel_mtf"), "{e}");
         // Noll 5 at zero on the symmetric pupil: 0, as Noll 5 at ±c are one pupil turned by 90°
         let g = gradient(
             &paper,
@@ -3722,5 +3717,139 @@ mod tests {
         let end = |l: &str, what: &str| l.find(what).map(|i| l[..i].chars().count() + what.chars().count());
         assert_eq!(end(lines[0], "value"), end(lines[1], "0.002638937829015425"), "{text}");
         assert_eq!(end(lines[0], "value"), end(lines[2], "1.23"), "{text}");
+    }
+
+    /// `source` with `camera.noise_spectrum` a table n(ν) written in a directory of its own
+    /// (`name`): rows at 0, 30, 70 and 130 cycles/mm rising from 1 to 3, so that the weight
+    /// 1/n(ν) falls by 3× over the band and has kinks inside it, none at the Nyquist frequency
+    /// of a 5.2 µm pixel (96.15 cycles/mm).
+    fn with_noise_spectrum(source: &Source, name: &str) -> Source {
+        let dir = std::env::temp_dir().join(format!("asnr-noise-gradient-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("nps.csv"), "frequency_cyc_per_mm,relative\n0,1\n30,1.4\n70,2.2\n130,3\n").unwrap();
+        let text = source.text().replace("[camera]", "[camera]\nnoise_spectrum = \"nps.csv\"");
+        assert!(text.contains("noise_spectrum"), "{text}");
+        Source::from_text(text, "a scene with a noise spectrum", dir)
+    }
+
+    /// The weight matters: under the noise spectrum ∂ASNR is not SNR0 · ∂M̄ (what the white
+    /// mean's lanes would give) by more than the test's tolerance, for each key of `g` that
+    /// moves the OTF alone; so the checks against differences below can tell the two apart.
+    fn assert_weighted(g: &Gradient) {
+        let norm = g.d_asnr.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let apart = g.d_asnr.iter().zip(&g.d_mean_mtf).map(|(a, m)| (a - g.snr0 * m).abs()).fold(0.0, f64::max);
+        println!("largest |∂ASNR − SNR0 ∂M̄| {apart:.3e} of the norm {norm:.3e}");
+        assert!(apart > 1e-3 * norm, "{g:?}");
+    }
+
+    /// The Binary 2 lens on the radial engine under a noise spectrum (docs/physics.md,
+    /// "Gradients under a noise spectrum"): its Binary 2 coefficients, an m = 0 Zernike term and
+    /// the spline's knots (the radial engine's lanes on the value's noise-weighted pass, each
+    /// divided by n(ν)) against central differences of evaluations converged at 1e-10, within
+    /// 10× the scene's tolerance (1e-6) of the gradient's norm; and the pixel pitch (Leibniz with
+    /// MTF(ν_N)/n(ν_N) at the limit) with the camera keys, in the mean and the integral form.
+    #[test]
+    fn wavefront_and_pitch_keys_under_a_noise_spectrum_match_central_differences() {
+        let source = with_noise_spectrum(&example("phase-binary2.toml"), "binary2");
+        let overrides = owned(&["lens.zernike_noll_rms_um=[0, 0, 0, 0.02]"]);
+        let keys = owned(&["lens.binary2[0]", "lens.binary2[1]", "lens.binary2[2]"]);
+        let (g, _) = check_wavefront(&source, &overrides, &keys, &phase_or_knot_step);
+        assert_weighted(&g);
+        let (g, _) =
+            check_wavefront(&source, &overrides, &owned(&["lens.zernike_noll_rms_um[3]"]), &|_| PHASE_STEP / 27.0);
+        assert_weighted(&g);
+        let knots = owned(&["lens.phase_spline_rad=[0.0, 0.4, -0.3, 0.5]"]);
+        let (g, _) = check_wavefront(
+            &source,
+            &knots,
+            &owned(&["lens.phase_spline_rad[1]", "lens.phase_spline_rad[2]", "lens.phase_spline_rad[3]"]),
+            &phase_or_knot_step,
+        );
+        assert_weighted(&g);
+        let keys = ["camera.pixel_pitch_um", "exposure.time_ms", "lens.efficiency"];
+        check_against_differences(&source, &[], &keys);
+        check_against_differences(&source, &owned(&["options.form=\"integral\"", "camera.read_noise_e=2"]), &keys);
+        // the paper's lens on the closed form: the pitch alone moves its OTF's weight
+        let paper = with_noise_spectrum(&scene::read(None).unwrap(), "paper-pitch");
+        check_against_differences(&paper, &[], &keys);
+    }
+
+    /// The Seidel keys on the overlap engine under a noise spectrum (its lanes on the value's
+    /// noise-weighted pass over azimuth, each divided by n(ν)), on axis and off axis with the
+    /// pixel MTF, against [`check_seidel`]'s Richardson-extrapolated central differences within
+    /// 10× the tolerance 1e-6 of the norm.
+    #[test]
+    fn seidel_keys_under_a_noise_spectrum_match_central_differences() {
+        let source = with_noise_spectrum(&scene::read(None).unwrap(), "seidel");
+        let keys = ["lens.spherical_um", "lens.coma_um", "lens.astigmatism_um", "lens.field_curvature_um"];
+        let g = check_seidel_on(
+            &source,
+            &[
+                "spectrum.range_nm=4",
+                "lens.spherical_um=0.15",
+                "lens.coma_um=0.3",
+                "lens.astigmatism_um=0.2",
+                "lens.field_curvature_um=0.1",
+            ],
+            &keys,
+            1e-6,
+            1e-3,
+        );
+        assert_weighted(&g);
+        let g = check_seidel_on(
+            &source,
+            &[
+                "spectrum.range_nm=4",
+                "field.y_deg=2",
+                "lens.coma_um=0.3",
+                "lens.astigmatism_um=-0.2",
+                "camera.pixel_mtf=true",
+            ],
+            &["lens.coma_um", "lens.astigmatism_um"],
+            1e-6,
+            1e-3,
+        );
+        assert_weighted(&g);
+        // the field angles' lanes on the overlap engine (the lateral colour's shifts and the
+        // relative illumination), held to the tolerance as without the noise spectrum
+        check_field_of(&source, &OFF_AXIS_WITH_SEIDEL_TERMS, &["field.x_deg", "field.y_deg"], 0.02, 1e-6);
+    }
+
+    /// Zernike terms with m ≠ 0 on the FFT path under a noise spectrum (each frequency's weight
+    /// of the value's fixed rule divided by n(ν), the Richardson extrapolation of the two levels
+    /// as the value's), against central differences of the same discrete rule (the sampling
+    /// fixed by `options.pupil_samples`): the ASNR's gradient within 1e-6 of its norm.
+    #[test]
+    fn fft_zernike_keys_under_a_noise_spectrum_are_the_derivative_of_the_discrete_rule() {
+        let source = with_noise_spectrum(&scene::read(None).unwrap(), "fft");
+        let overrides = owned(&[
+            "spectrum.range_nm=4",
+            "options.pupil_samples=64",
+            "lens.zernike_noll_rms_um=[0, 0, 0, 0.05, 0.1, 0.0, 0.05]",
+        ]);
+        let keys =
+            owned(&["lens.zernike_noll_rms_um[3]", "lens.zernike_noll_rms_um[4]", "lens.zernike_noll_rms_um[6]"]);
+        let g = gradient(&source, &overrides, &keys).unwrap();
+        assert_weighted(&g);
+        let norm = g.d_asnr.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let h = 1e-5;
+        for (i, k) in g.keys.iter().enumerate() {
+            let up = evaluated(&source, &overrides, k, g.values[i] + h);
+            let down = evaluated(&source, &overrides, k, g.values[i] - h);
+            let theirs = (up[0] - down[0]) / (2.0 * h);
+            let error = (g.d_asnr[i] - theirs).abs() / norm;
+            println!("{k}: ∂ASNR {:.9e}, differences {theirs:.9e}, error/norm {error:.1e}", g.d_asnr[i]);
+            assert!(error <= 1e-6, "{k}: {} vs {theirs} (norm {norm})", g.d_asnr[i]);
+            assert_eq!(g.d_snr0[i], 0.0);
+        }
+        // the obscuration's edge lane (from the value's own grids) under the noise weight
+        let overrides = owned(&["spectrum.range_nm=4", "options.pupil_samples=64", "lens.obscuration=0.3"]);
+        let g = gradient(&source, &overrides, &owned(&["lens.obscuration"])).unwrap();
+        let up = evaluated(&source, &overrides, "lens.obscuration", 0.3 + h);
+        let down = evaluated(&source, &overrides, "lens.obscuration", 0.3 - h);
+        let theirs = (up[0] - down[0]) / (2.0 * h);
+        println!("lens.obscuration: ∂ASNR {:.9e}, differences {theirs:.9e}", g.d_asnr[0]);
+        assert!((g.d_asnr[0] - theirs).abs() <= 1e-6 * theirs.abs(), "{g:?}");
+        assert!((g.d_asnr[0] - g.snr0 * g.d_mean_mtf[0] - g.d_snr0[0] * g.asnr / g.snr0).abs() > 1e-3 * theirs.abs());
     }
 }

@@ -286,6 +286,50 @@ impl Polychromatic<'_> {
         Some((mean, gradient, work))
     }
 
+    /// The mean over `[0, ν_max]` of `P |O| / n` for a non-white noise spectrum `n`
+    /// ([`mean_mtf_over_noise`](Self::mean_mtf_over_noise), bit for bit) and, in the same pass,
+    /// its derivative with respect to each Binary 2 coefficient of the lens (the lanes of
+    /// [`mean_mtf_and_binary2_gradient`](Self::mean_mtf_and_binary2_gradient); docs/physics.md,
+    /// "Gradients under a noise spectrum"):
+    ///
+    /// ```text
+    /// ∂/∂A_j (1/ν_max) ∫ P |O| / n dν = (1/ν_max) ∫ P(ν) sign(O(ν)) ∂O(ν)/∂A_j / n(ν) dν
+    /// ```
+    ///
+    /// `n` does not depend on the lens: each recorded lane is divided by `n(ν)` as the value is,
+    /// and the frequency rule's accepted weights of the noise-weighted mean integrate them. `None`
+    /// where [`mean_mtf_and_binary2_gradient`](Self::mean_mtf_and_binary2_gradient) is.
+    pub fn mean_mtf_over_noise_and_binary2_gradient(&self, noise: &NoiseShape) -> Option<(f64, Vec<f64>, Work)> {
+        if !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let lambda = self.engine.nodes().nodes.first()?.lambda;
+        let lanes = self.scene.lens.binary2_directions(lambda)?.first()?.len();
+        if lanes == 0 {
+            return None;
+        }
+        *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.over_noise(nu, self.recorded_otf(nu), noise));
+        let recording = self.gradient.borrow_mut().take()?;
+        self.integrate_recorded(mean, recording, work)
+    }
+
+    /// `value / n(ν)` (`value` the integrand just read at `nu`), and every number the recording
+    /// kept at `nu` by that reading divided by `n(ν)` as well: the lanes of the noise-weighted
+    /// mean `(1/ν_max) ∫ P |O| / n dν`, whose weight `1/n` does not move with the lens.
+    fn over_noise(&self, nu: f64, value: f64, noise: &NoiseShape) -> f64 {
+        let n = noise.value(nu);
+        if let Some(r) = self.gradient.borrow_mut().as_mut()
+            && let Some(&place) = r.at.get(&nu.to_bits())
+        {
+            r.derivatives[place..].iter_mut().for_each(|d| *d /= n);
+        }
+        value / n
+    }
+
     /// The mean MTF with `recording` set, and the recorded lanes integrated with the frequency
     /// rule's accepted weights over `ν_max`: the one pass both gradients above take. `None`
     /// where the recording failed or an accepted frequency has no lanes.
@@ -600,7 +644,7 @@ impl Polychromatic<'_> {
         }
         let lanes = directions.len();
         let mut sum = vec![0.0; lanes];
-        let mean = self.azimuthal_mean_with_lanes(first, directions, &mut |_, w, recorded| {
+        let mean = self.azimuthal_mean_with_lanes(first, directions, None, &mut |_, w, recorded| {
             for (g, d) in sum.iter_mut().zip(&recorded[..lanes]) {
                 *g += w * d;
             }
@@ -610,8 +654,37 @@ impl Polychromatic<'_> {
         Some((mean, sum.into_iter().map(|g| g * scale).collect()))
     }
 
+    /// [`mean_mtf_over_azimuth_and_overlap_gradient`](Self::mean_mtf_over_azimuth_and_overlap_gradient)
+    /// under a non-white noise spectrum `n`: the mean over azimuth of `(1/ν_max) ∫ P |O| / n dν`
+    /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) with `noise`, bit for bit) and its
+    /// derivative along each of `directions`, each lane `Re(O* ∂O)/|O|` divided by `n(ν)` as the
+    /// value is (docs/physics.md, "Gradients under a noise spectrum"). `None` where the white
+    /// one is, or where the OTF does not depend on direction.
+    pub fn mean_mtf_over_azimuth_over_noise_and_overlap_gradient(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        noise: &NoiseShape,
+    ) -> Option<(AzimuthalMean, Vec<f64>)> {
+        if !matches!(self.engine.engine(), Engine::Overlap { .. })
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || !self.direction_dependent()
+        {
+            return None;
+        }
+        let lanes = directions.len();
+        let mut sum = vec![0.0; lanes];
+        let mean = self.azimuthal_mean_with_lanes(first, directions, Some(noise), &mut |_, w, recorded| {
+            for (g, d) in sum.iter_mut().zip(&recorded[..lanes]) {
+                *g += w * d;
+            }
+        })?;
+        let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
+        Some((mean, sum.into_iter().map(|g| g * scale).collect()))
+    }
+
     /// The nested rule over azimuth of [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)
-    /// (white noise) with the OTF's lanes along `directions` recorded at each azimuth (forward
+    /// (white noise, or the noise spectrum `noise`) with the OTF's lanes along `directions` recorded at each azimuth (forward
     /// mode on the engine's nodes, `∂|O| = Re(O* ∂O)/|O|`, then `|O|` itself: `lanes + 1` numbers
     /// per frequency read), and `take(ν, w, recorded)` called for each node the frequency rule
     /// accepted at each azimuth, with its weight `w` (the pixel MTF included) and the numbers
@@ -623,6 +696,7 @@ impl Polychromatic<'_> {
         &self,
         first: f64,
         directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
         take: &mut dyn FnMut(f64, f64, &[f64]),
     ) -> Option<AzimuthalMean> {
         let lanes = directions.len();
@@ -631,7 +705,10 @@ impl Polychromatic<'_> {
         let mean = self.azimuthal_mean(first, &mut |azimuth: f64| {
             *self.gradient.borrow_mut() =
                 Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
-            let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+            let (mean, work) = match noise {
+                None => self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth)),
+                Some(shape) => self.mean_of(&|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape)),
+            };
             match self.gradient.borrow_mut().take() {
                 Some(r) if !r.failed => {
                     for &(nu, w) in &r.accepted {
@@ -672,10 +749,11 @@ impl Polychromatic<'_> {
         };
         let (mut d_k, mut pixel) = (0.0, 0.0);
         // the lane, then |O|, at each accepted frequency
-        let mean = self.azimuthal_mean_with_lanes(first, &[WavefrontDirection::Defocus], &mut |nu, w, recorded| {
-            d_k += w * recorded[0];
-            pixel += w * recorded[1] * slope(nu);
-        })?;
+        let mean =
+            self.azimuthal_mean_with_lanes(first, &[WavefrontDirection::Defocus], None, &mut |nu, w, recorded| {
+                d_k += w * recorded[0];
+                pixel += w * recorded[1] * slope(nu);
+            })?;
         let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
         Some(DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work })
     }

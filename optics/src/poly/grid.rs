@@ -521,7 +521,17 @@ impl OtfEngine for Grids<'_> {
         count: usize,
         directions: &[WavefrontDirection],
     ) -> Result<Option<Vec<f64>>, Error> {
-        self.gradient_over_azimuth(first, count, directions)
+        self.gradient_over_azimuth(first, count, directions, None)
+    }
+
+    fn wavefront_gradient_over_azimuth_over_noise(
+        &self,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+        noise: &super::NoiseShape,
+    ) -> Result<Option<Vec<f64>>, Error> {
+        self.gradient_over_azimuth(first, count, directions, Some(noise))
     }
 
     fn means_along(&self, azimuth: f64) -> Option<(f64, f64)> {
@@ -840,6 +850,10 @@ impl FftPath {
     /// a set of measure zero on the fixed rule). `None` where an order is not a radial pupil on
     /// the grid path (apertures, zones and maps do not carry these keys), a lane is missing, or
     /// the accumulators would pass their memory budget.
+    ///
+    /// With a non-white noise spectrum `noise`, of the value's mean of `P |O| / n` instead: each
+    /// frequency's weight divided by `n(ν)` as the value's is (docs/physics.md, "Gradients under
+    /// a noise spectrum").
     fn gradient_over_azimuth(
         &self,
         scene: &Scene<'_>,
@@ -847,6 +861,7 @@ impl FftPath {
         first: f64,
         count: usize,
         directions: &[WavefrontDirection],
+        noise: Option<&super::NoiseShape>,
     ) -> Result<Option<Vec<f64>>, Error> {
         let k_dirs = directions.len();
         if k_dirs == 0 {
@@ -1006,7 +1021,10 @@ impl FftPath {
         if stored.next().is_some() {
             return Ok(None);
         }
-        let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+        let pixel = |nu: f64| {
+            let p = scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+            noise.map_or(p, |n| p / n.value(nu))
+        };
         // the field angles turn the azimuths' start, the field direction φ_f = atan2(θy, θx):
         // the rule's mean moves by ∂M̄/∂φ_f · ∂φ_f/∂θ_a (docs/physics.md, "Gradients: the field
         // point"; 0 on an exact mean over azimuth, the rule's own error otherwise)
@@ -1219,13 +1237,16 @@ impl Grids<'_> {
         first: f64,
         count: usize,
         directions: &[WavefrontDirection],
+        noise: Option<&super::NoiseShape>,
     ) -> Result<Option<Vec<f64>>, Error> {
-        let Some(fine) = self.fft.gradient_over_azimuth(&self.scene, &self.nodes, first, count, directions)? else {
+        let Some(fine) = self.fft.gradient_over_azimuth(&self.scene, &self.nodes, first, count, directions, noise)?
+        else {
             return Ok(None);
         };
         let Some(plan) = self.richardson() else { return Ok(Some(fine)) };
         let Some((coarse_path, _)) = &self.coarse else { return Ok(Some(fine)) };
-        let Some(coarse) = coarse_path.gradient_over_azimuth(&self.scene, &self.nodes, first, count, directions)?
+        let Some(coarse) =
+            coarse_path.gradient_over_azimuth(&self.scene, &self.nodes, first, count, directions, noise)?
         else {
             return Ok(None);
         };
@@ -1258,6 +1279,36 @@ impl Polychromatic<'_> {
         }
         let mean = self.mean_mtf_over_azimuth(first, None);
         Ok(self.engine.wavefront_gradient_over_azimuth(first, mean.azimuths, directions)?.map(|g| (mean, g)))
+    }
+
+    /// [`mean_mtf_over_azimuth_and_gradient`](Self::mean_mtf_over_azimuth_and_gradient) under a
+    /// non-white noise spectrum `n`: the mean over azimuth of `(1/ν_max) ∫ P |O| / n dν`
+    /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) with `noise`, bit for bit) and
+    /// its derivative along each of `directions` on the same rules, each frequency's weight
+    /// divided by `n(ν)` as the value's is (docs/physics.md, "Gradients under a noise
+    /// spectrum"): the overlap engine's lanes
+    /// ([`mean_mtf_over_azimuth_over_noise_and_overlap_gradient`](Self::mean_mtf_over_azimuth_over_noise_and_overlap_gradient))
+    /// or the FFT path's. `Ok(None)` where the white one gives none.
+    ///
+    /// # Errors
+    /// Building the grids again ([`Error`] of the FFT layer).
+    pub fn mean_mtf_over_azimuth_over_noise_and_gradient(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        noise: &super::NoiseShape,
+    ) -> Result<Option<(AzimuthalMean, Vec<f64>)>, Error> {
+        if matches!(self.engine(), Engine::Overlap { .. }) {
+            return Ok(self.mean_mtf_over_azimuth_over_noise_and_overlap_gradient(first, directions, noise));
+        }
+        if !matches!(self.engine(), Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        let mean = self.mean_mtf_over_azimuth(first, Some(noise));
+        Ok(self
+            .engine
+            .wavefront_gradient_over_azimuth_over_noise(first, mean.azimuths, directions, noise)?
+            .map(|g| (mean, g)))
     }
 }
 

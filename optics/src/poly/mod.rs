@@ -435,6 +435,18 @@ trait OtfEngine: std::fmt::Debug {
     ) -> Result<Option<Vec<f64>>, Error> {
         Ok(None)
     }
+    /// [`wavefront_gradient_over_azimuth`](Self::wavefront_gradient_over_azimuth) of the mean
+    /// of `P |O| / n` under the non-white noise spectrum `noise` (each frequency's weight
+    /// divided by `n(ν)`); `Ok(None)` where the engine does not give it (the default).
+    fn wavefront_gradient_over_azimuth_over_noise(
+        &self,
+        _first: f64,
+        _count: usize,
+        _directions: &[WavefrontDirection],
+        _noise: &NoiseShape,
+    ) -> Result<Option<Vec<f64>>, Error> {
+        Ok(None)
+    }
     /// The complex OTF at `frequency` along `azimuth` ([`otf_along`](Self::otf_along)'s rule
     /// at the current value tolerance), and into `gradient` its derivative with respect to each
     /// of `directions`, forward mode on the same rule (the overlap engine's Seidel terms);
