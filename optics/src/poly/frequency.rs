@@ -815,7 +815,7 @@ impl Polychromatic<'_> {
         // the mean over azimuth wherever the OTF depends on direction, as the value's
         if self.has_pupil_grid() || self.direction_dependent() {
             let mut pixel = 0.0;
-            let mean = self.azimuthal_mean_with_lanes(first, &[], &mut |nu, w, recorded| {
+            let mean = self.azimuthal_mean_with_lanes(first, &[], None, &mut |nu, w, recorded| {
                 pixel += w * recorded[0] * self.pixel_log_slope(nu);
             })?;
             let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
