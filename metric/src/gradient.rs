@@ -1995,7 +1995,75 @@ fn aperture_partials(
     if let Some(found) = aperture_through_iris(scene, e, p)? {
         return Ok(found);
     }
+    if let Some(found) = aperture_off_axis(scene, e, p)? {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` off axis for a lens whose every order is the full circular pupil
+/// (or a circular iris, decentred) with a defocus alone and an image shift, on the exact 1-D
+/// engine the value takes: the chromatic lens's lateral colour `Δ = f0 tan θ (λ0/λ − 1)`, each
+/// harmonic order's `f0 tan θ (pλ0/(mλ) − 1)` (docs/physics.md, "Gradients: the F-number and
+/// the focal length off axis"). Along each of the value's azimuths φ (the field direction and
+/// across it) each node's OTF is `D(νλF#/r, W020/λ) exp(−2πi ν u·(Δ + Δ_iris))` with
+/// `W020 = K a(λ)`, `K ∝ f0/F#²`, `Δ ∝ f0` (not F#) and the iris's `Δ_iris = 4 F# W020 d`. So
+/// at fixed `K` and `Δ` the OTF is `H(νF#, νΔ)`: `∂O/∂ln F# = ν ∂O/∂ν − ∂O/∂ln Δ`, and by parts
+/// `(1/ν_N) ∫ P ν ∂_ν|O| dν = P(ν_N)|O(ν_N)| − M̄ − P_ν`. With the lanes `D_K`
+/// ([`optics::WavefrontDirection::Defocus`], the iris's tilt with it) and `D_Δ = ∂M̄/∂ln Δ`
+/// ([`optics::WavefrontDirection::ImageShift`]) on the value's adaptive frequency rule along
+/// each azimuth, averaged over the two as the value is:
+/// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)|‾ − M̄ − P_ν − 2 D_K − D_Δ` and `∂M̄/∂ln f0 = D_K + D_Δ`.
+/// `None` where the scene is not that (on axis, a line, another pupil or engine, a noise
+/// spectrum).
+fn aperture_off_axis(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Option<(f64, f64)>, Error> {
+    let _ = p;
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if field.is_on_axis() || detected.as_line().is_some() || camera.noise_spectrum().is_some() {
+        return Ok(None);
+    }
+    let lambda = e.mean_wavelength_nm * 1e-9;
+    let orders = lens.orders(lambda, field);
+    let circles = !orders.is_empty()
+        && orders.iter().all(|o| {
+            let circle = match &o.pupil {
+                optics::Pupil::Full => true,
+                optics::Pupil::Aperture(a) => a.as_circle().is_some(),
+                _ => false,
+            };
+            circle && o.wavefront.is_defocus_only()
+        });
+    if !circles {
+        return Ok(None);
+    }
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings) else {
+        return Ok(None);
+    };
+    if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() || !poly.direction_dependent() {
+        return Ok(None);
+    }
+    // the value's azimuths: the field direction (tangential) and across it (sagittal)
+    let along_field = field.y_rad.atan2(field.x_rad);
+    let lanes = [optics::WavefrontDirection::Defocus, optics::WavefrontDirection::ImageShift];
+    let (mut d_k, mut d_shift, mut pixel_slope, mut edge) = (0.0, 0.0, 0.0, 0.0);
+    for azimuth in [along_field, along_field + 0.5 * std::f64::consts::PI] {
+        let Some((_, _, d, slope)) = poly.mean_mtf_along_gradient_and_pixel_slope(azimuth, &lanes) else {
+            return Ok(None);
+        };
+        d_k += 0.5 * d[0];
+        d_shift += 0.5 * d[1];
+        pixel_slope += 0.5 * slope;
+        edge += 0.5 * poly.mtf_along(nyquist, azimuth);
+    }
+    Ok(Some((edge - e.mean_mtf - pixel_slope - 2.0 * d_k - d_shift, d_k + d_shift)))
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` on axis for a lens whose every order is a circular iris (decentred)

@@ -713,6 +713,51 @@ impl Polychromatic<'_> {
         Some((mean, work, sum.into_iter().map(|g| g * scale).collect()))
     }
 
+    /// [`mean_mtf_along_and_gradient`](Self::mean_mtf_along_and_gradient) and, on the same
+    /// accepted nodes and weights, the pixel MTF's term of the integration by parts in ν along
+    /// `azimuth`, `P_ν = (1/ν_max) ∫ ν P′ |O| dν` (0 without the pixel MTF; `νP′/P = x cot x − 1`,
+    /// `x = πpν`): with the lanes [`WavefrontDirection::Defocus`] and
+    /// [`WavefrontDirection::ImageShift`], what the F-number's and the focal length's gradient
+    /// off axis take along each of the value's azimuths (docs/physics.md, "Gradients: the
+    /// F-number and the focal length off axis"). The mean and the lanes are
+    /// `mean_mtf_along_and_gradient`'s bit for bit.
+    pub fn mean_mtf_along_gradient_and_pixel_slope(
+        &self,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+    ) -> Option<(f64, Work, Vec<f64>, f64)> {
+        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
+            return None;
+        }
+        let lanes = directions.len();
+        *self.gradient.borrow_mut() =
+            Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+        let r = self.gradient.borrow_mut().take()?;
+        if r.failed {
+            return None;
+        }
+        // ν P′(ν)/P(ν) for P = |sin x / x|, x = π p ν (x ≤ π/2 up to Nyquist)
+        let slope = |nu: f64| {
+            self.scene.pixel_pitch.map_or(0.0, |p| {
+                let x = PI * p * nu;
+                if x.abs() < 1e-4 { -x * x / 3.0 - x.powi(4) / 45.0 } else { x / x.tan() - 1.0 }
+            })
+        };
+        let mut sum = vec![0.0; lanes];
+        let mut pixel = 0.0;
+        for &(nu, w) in &r.accepted {
+            let &i = r.at.get(&nu.to_bits())?;
+            for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
+                *g += w * d;
+            }
+            // |O| itself is kept after the lanes (`recorded_modulus_along`)
+            pixel += w * r.derivatives[i + lanes] * slope(nu);
+        }
+        let scale = 1.0 / self.scene.max_frequency;
+        Some((mean, work, sum.into_iter().map(|g| g * scale).collect(), pixel * scale))
+    }
+
     /// `|O(ν, φ)|` at `nu` along `azimuth` with `∂|O| = Re(O* ∂O)/|O|` for each recorded
     /// direction kept in the recording.
     fn recorded_modulus_along(&self, nu: f64, azimuth: f64) -> f64 {
