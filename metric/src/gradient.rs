@@ -1514,6 +1514,21 @@ fn line_center_partials(
         let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
         return Ok((d_ln_n, d_ln_n, (edge - e.mean_mtf) / c + along));
     }
+    // off axis, one order whose only change with the field is its image shift
+    // (`LensModel::image_shift_field_rates`: the chromatic lens's lateral colour): a line's one
+    // order is one wavelength, whose shift is a phase exp(−2πi ν·Δ) of the whole OTF, so |O|, the
+    // mean MTF and its derivative in c are the order's on axis (docs/physics.md, "Gradients: a
+    // line's wavelength off axis")
+    if !field.is_on_axis()
+        && lens.image_shift_field_rates(c, field).is_some()
+        && let ([o], [a]) = (&lens.orders(c, field)[..], &lens.orders(c, optics::Field::ON_AXIS)[..])
+        && matches!((&o.pupil, &a.pupil), (optics::Pupil::Full, optics::Pupil::Full))
+        && o.wavefront.is_defocus_only()
+        && (o.wavefront.defocus_m, o.efficiency) == (a.wavefront.defocus_m, a.efficiency)
+    {
+        // (the value's pass gave the defocus lane where the shift is 0, at λ0: the OTF on axis)
+        return line_center_partials(&scene.single_field(optics::Field::ON_AXIS), e, None, None, pass);
+    }
     let family = lens.describe();
     let orders = lens.orders(c, field);
     let full = |o: &optics::Order| {
@@ -1559,11 +1574,11 @@ fn line_center_partials(
     let Some(rates) = rates.filter(|_| plain) else {
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
-             pupil with a defocus affine in λ and constant efficiencies, on axis (the chromatic lens without an \
-             iris or Seidel terms), the refractive lens, the harmonic lens on axis with a constant transmission, \
-             and a phase lens on the radial engine; this lens's orders move with λ otherwise (an iris, Seidel or \
-             Zernike terms, an efficiency or transmission table's slope, lateral colour off axis), which is not \
-             followed yet"
+             pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without an iris or \
+             Seidel terms, on axis or off it), the refractive lens, the harmonic lens on axis with a constant \
+             transmission, and a phase lens on the radial engine; this lens's orders move with λ otherwise (an \
+             iris, Seidel or Zernike terms, an efficiency or transmission table's slope, several orders' lateral \
+             colour off axis), which is not followed yet"
         )));
     };
     // the value's own pass where it carried the defocus lane (the line engine); else the value's

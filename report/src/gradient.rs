@@ -1143,6 +1143,24 @@ mod tests {
         check_line(&paper, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=800", "spectrum.range_nm=2"]), &[]);
     }
 
+    /// A line off axis on the chromatic lens (docs/physics.md, "Gradients: a line's wavelength off
+    /// axis"): its one order at one wavelength, the lateral colour a phase of the whole OTF, so
+    /// |O| and its derivative in c are the order's on axis (the value's tangential and sagittal
+    /// means both that). At 803 nm at (5°, 3°) with the pixel MTF and read noise, at 8° in the
+    /// integral form with the stray light, and at the design wavelength at 5° (the shift 0 there,
+    /// its rate in c not: examples/monochromatic.toml).
+    #[test]
+    fn a_line_off_axis_on_the_chromatic_lens_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        check_line(
+            &paper,
+            &joined(&LINE_803, &["field.x_deg=5", "field.y_deg=3", "camera.pixel_mtf=true", "camera.read_noise_e=2"]),
+            &["exposure.time_ms"],
+        );
+        check_line(&paper, &joined(&LINE_803, &["field.x_deg=8", INTEGRAL_WITH_GLARE[0], INTEGRAL_WITH_GLARE[1]]), &[]);
+        check_line(&example("monochromatic.toml"), &owned(&["field.x_deg=5"]), &["field.x_deg"]);
+    }
+
     /// The Binary 2 lens (the radial engine's wavelength lanes: the sphere's phase 2πS/λ turns,
     /// the radian profile of a geometric phase stays) under a line at 803 nm, with read noise,
     /// with its Binary 2 coefficients and the F-number asked beside (the lanes stacked), and as
@@ -1197,9 +1215,11 @@ mod tests {
         diffractive.extend(owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]));
         let e = gradient(&example("phase-binary2.toml"), &diffractive, &keys).unwrap_err().to_string();
         assert!(e.contains("diffractive") && e.contains("sinc"), "{e}");
-        let mut off_axis = line.clone();
-        off_axis.push("field.x_deg=5".to_owned());
-        let e = gradient(&scene::read(None).unwrap(), &off_axis, &keys).unwrap_err().to_string();
+        // the chromatic lens off axis through an iris (the iris's tilt and the lateral colour
+        // on one order: not the on-axis OTF's modulus)
+        let mut iris_off_axis = line.clone();
+        iris_off_axis.push("field.x_deg=5".to_owned());
+        let e = gradient(&example("decentred-iris.toml"), &iris_off_axis, &keys).unwrap_err().to_string();
         assert!(e.contains("not differentiable"), "{e}");
         // the width alone is followed everywhere: N ∝ r
         let g = gradient(&example("harmonic.toml"), &line, &owned(&["spectrum.range_nm"])).unwrap();
@@ -1517,6 +1537,11 @@ mod tests {
         check_aperture(&paper, &joined(&INTEGRAL_WITH_GLARE, &["field.x_deg=8"]));
         check_aperture(&example("harmonic.toml"), &owned(&["field.x_deg=5"]));
         check_aperture(&example("decentred-iris.toml"), &owned(&["field.x_deg=3", "field.y_deg=2"]));
+        // the refractive lens off axis: its stop at the lens, no image displaced, the OTF the one
+        // on axis (`Polychromatic::field_independent`): the value's defocus lane, the pixel MTF's
+        // term with it
+        let refractive = refractive_singlet();
+        check_aperture(&refractive, &owned(&["spectrum.range_nm=100", "field.x_deg=5", "camera.pixel_mtf=true"]));
     }
 
     /// The paper's scene with its lens made an N-BK7 singlet (written here).

@@ -311,7 +311,8 @@ impl Polychromatic<'_> {
     /// spectral level each panel accepts), `P_ν` the pixel MTF's part of the integration by
     /// parts in `ν` (0 without it; `νP′/P = x cot x − 1`, `x = πpν`); both with the frequency
     /// rule's accepted weights (split at the OTF's sign changes, `P` included). `None` where the
-    /// engine gives no such lane, the field is off axis or the OTF depends on direction.
+    /// engine gives no such lane, the field is off axis where it moves the OTF
+    /// ([`field_independent`](Self::field_independent)), or the OTF depends on direction.
     pub fn mean_mtf_and_defocus_derivative(&self) -> Option<DefocusDerivative> {
         self.mean_with_defocus_lane(None)
     }
@@ -331,7 +332,9 @@ impl Polychromatic<'_> {
 
     /// The mean with the defocus lane (`rates` `None`) or the order lane recorded beside it.
     fn mean_with_defocus_lane(&self, rates: Option<Vec<[f64; 2]>>) -> Option<DefocusDerivative> {
-        if !self.scene.field.is_on_axis()
+        // off axis where the field does not move the OTF (no image displaced, every rate 0: the
+        // refractive lens, its stop at the lens), the OTF is the one on axis
+        if !(self.scene.field.is_on_axis() || self.field_independent())
             || self.direction_dependent()
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
         {
