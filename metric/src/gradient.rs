@@ -73,7 +73,9 @@ pub enum Parameter {
     /// photon count as `NA² = 1/(4F#²)` (SI eq. S7), each wavelength's normalized frequency
     /// `s = νλF#` and the defocus `W020 ∝ f0/F#²` of a lens whose every order is the full
     /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
-    /// docs/physics.md, "Gradients"), or with Seidel terms on axis under a band on the overlap
+    /// docs/physics.md, "Gradients"; off axis on the exact 1-D engine with the lateral colour's
+    /// lane beside, "Gradients: the F-number and the focal length off axis"), or with Seidel
+    /// terms on axis under a band on the overlap
     /// engine (the defocus lane on its nodes: "Gradients: the F-number and the focal length
     /// with Seidel terms"); for a lens that gives its aperture directions
     /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
@@ -2010,7 +2012,7 @@ fn aperture_partials(
     if let Some(found) = aperture_through_iris(scene, e, p)? {
         return Ok(found);
     }
-    if let Some(found) = aperture_off_axis(scene, e, p)? {
+    if let Some(found) = aperture_off_axis(scene, e)? {
         return Ok(found);
     }
     aperture_partials_by_own_rule(scene, e, p)
@@ -2031,8 +2033,7 @@ fn aperture_partials(
 /// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)|‾ − M̄ − P_ν − 2 D_K − D_Δ` and `∂M̄/∂ln f0 = D_K + D_Δ`.
 /// `None` where the scene is not that (on axis, a line, another pupil or engine, a noise
 /// spectrum).
-fn aperture_off_axis(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Option<(f64, f64)>, Error> {
-    let _ = p;
+fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
     let field = scene.field();
     let camera = scene.camera();
@@ -2051,7 +2052,11 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Opti
             };
             circle && o.wavefront.is_defocus_only()
         });
-    if !circles {
+    // the full circle with Seidel terms: the overlap engine's mean over azimuth
+    let seidel = !orders.is_empty()
+        && orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full))
+        && orders.iter().any(|o| !o.wavefront.is_defocus_only());
+    if !(circles || seidel) {
         return Ok(None);
     }
     let nyquist = camera.nyquist();
@@ -2062,11 +2067,25 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Opti
     let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings) else {
         return Ok(None);
     };
+    let along_field = field.y_rad.atan2(field.x_rad);
+    if seidel {
+        // the same lanes on the overlap quadrature's nodes, over the value's azimuths (the
+        // defocus lane on its own doubled spectral rule, as on axis), and the by-parts edge
+        // averaged over the same azimuths
+        if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
+            return Ok(None);
+        }
+        let Some((found, d_shift)) = poly.mean_mtf_over_azimuth_and_aperture_lanes(along_field) else {
+            return Ok(None);
+        };
+        let edge = poly.mtf_over_azimuth(nyquist, along_field);
+        let d_k = found.defocus;
+        return Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * d_k - d_shift, d_k + d_shift)));
+    }
     if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() || !poly.direction_dependent() {
         return Ok(None);
     }
     // the value's azimuths: the field direction (tangential) and across it (sagittal)
-    let along_field = field.y_rad.atan2(field.x_rad);
     let lanes = [optics::WavefrontDirection::Defocus, optics::WavefrontDirection::ImageShift];
     let (mut d_k, mut d_shift, mut pixel_slope, mut edge) = (0.0, 0.0, 0.0, 0.0);
     for azimuth in [along_field, along_field + 0.5 * std::f64::consts::PI] {
@@ -2092,7 +2111,8 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Opti
 /// `W020`): the lane `D_K` ([`optics::WavefrontDirection::Defocus`] on the exact engine, on the
 /// value's adaptive rule along each azimuth). So `∂M̄/∂ln F# = |O(ν_N)|‾ − M̄ − 2 D_K` and
 /// `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that: off axis (the lateral colour's
-/// `Δ ∝ f0 tan θ` is not a function of `νF#`), another pupil, a line, another engine. Refused
+/// `Δ ∝ f0 tan θ` is not a function of `νF#`: [`aperture_off_axis`]), another pupil, a line,
+/// another engine. Refused
 /// with the pixel MTF (its sinc does not scale with F#, a term not computed here).
 fn aperture_through_iris(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
@@ -2486,9 +2506,10 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
             if !plain {
                 return Err(not_smooth(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
-                     circular pupil with a defocus alone (the chromatic, refractive and harmonic families on axis, \
-                     paraxial, without an iris or Seidel terms), or with Seidel terms on axis under a band (the \
-                     chromatic lens on the overlap engine); this scene's lens has other pupils or aberrations"
+                     circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
+                     harmonic families, paraxial, without Seidel terms; off axis with their lateral colour on the \
+                     exact 1-D engine), or with Seidel terms on axis under a band (the chromatic lens on the \
+                     overlap engine); this scene's lens has other pupils or aberrations"
                         .to_owned(),
                 ));
             }

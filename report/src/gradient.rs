@@ -2719,12 +2719,20 @@ mod tests {
     /// overlap quadrature's nodes, N ∝ 1/F#²) against Richardson-extrapolated central
     /// differences of evaluations converged to 1e-10 ([`check_aperture_extrapolated`]) within
     /// 10× the tolerance 1e-6 of the norm: coma 0.3 µm, spherical aberration 0.2 µm (with the
-    /// pixel MTF: its term of the integration by parts), on a 10 nm band.
+    /// pixel MTF: its term of the integration by parts), on a 10 nm band; and off axis (docs/physics.md,
+    /// "Gradients: the F-number and the focal length off axis": the lateral colour ∝ f0, not
+    /// F#, its image shifts' lane beside the defocus lane on the same nodes) with coma at
+    /// (5°, 3°), and with spherical aberration, astigmatism and the pixel MTF at 5°.
     #[test]
     fn f_number_and_focal_length_with_seidel_terms_match_central_differences() {
         let paper = scene::read(None).unwrap();
         let keys = owned(&["lens.f_number", "lens.focal_length_mm"]);
-        for more in [&["lens.coma_um=0.3"][..], &["lens.spherical_um=0.2", "camera.pixel_mtf=true"]] {
+        for more in [
+            &["lens.coma_um=0.3"][..],
+            &["lens.spherical_um=0.2", "camera.pixel_mtf=true"],
+            &["lens.coma_um=0.3", "field.x_deg=5", "field.y_deg=3"],
+            &["lens.spherical_um=0.2", "lens.astigmatism_um=0.1", "field.x_deg=5", "camera.pixel_mtf=true"],
+        ] {
             let base = joined(&["spectrum.range_nm=10"], more);
             // the overlap engine at the tolerance 1e-6 (not options.fft_tolerance's 1e-4)
             let mut set = base.clone();

@@ -683,6 +683,38 @@ impl Polychromatic<'_> {
         Some(DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work })
     }
 
+    /// [`mean_mtf_over_azimuth_and_defocus_lane`](Self::mean_mtf_over_azimuth_and_defocus_lane)
+    /// off axis: beside the defocus lane `D_K`, the image shifts' lane
+    /// `D_Δ = ∂M̄/∂ln Δ` ([`WavefrontDirection::ImageShift`]: every node's lateral colour scaled
+    /// by `1 + ε`), on the same nodes and accepted weights, returned after the
+    /// [`DefocusDerivative`] (docs/physics.md, "Gradients: the F-number and the focal length off
+    /// axis"). `None` where the engine is not the overlap engine or gives no lane.
+    pub fn mean_mtf_over_azimuth_and_aperture_lanes(&self, first: f64) -> Option<(DefocusDerivative, f64)> {
+        if !matches!(self.engine.engine(), Engine::Overlap { .. })
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let slope = |nu: f64| {
+            self.scene.pixel_pitch.map_or(0.0, |p| {
+                let x = PI * p * nu;
+                if x.abs() < 1e-4 { -x * x / 3.0 - x.powi(4) / 45.0 } else { x / x.tan() - 1.0 }
+            })
+        };
+        let (mut d_k, mut d_shift, mut pixel) = (0.0, 0.0, 0.0);
+        let lanes = [WavefrontDirection::Defocus, WavefrontDirection::ImageShift];
+        // the two lanes, then |O|, at each accepted frequency
+        let mean = self.azimuthal_mean_with_lanes(first, &lanes, &mut |nu, w, recorded| {
+            d_k += w * recorded[0];
+            d_shift += w * recorded[1];
+            pixel += w * recorded[2] * slope(nu);
+        })?;
+        let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
+        let found =
+            DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work };
+        Some((found, d_shift * scale))
+    }
+
     /// The mean MTF along `azimuth` ([`mean_mtf_along`](Self::mean_mtf_along)'s adaptive rule)
     /// and its derivative with respect to each of `directions` on the same rule: each OTF's
     /// derivatives from the engine (`OtfEngine::otf_along_and_gradient`: the exact engine's
