@@ -75,7 +75,7 @@ pub enum Parameter {
     /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
     /// docs/physics.md, "Gradients"; off axis on the exact 1-D engine with the lateral colour's
     /// lane beside, "Gradients: the F-number and the focal length off axis"), or with Seidel
-    /// terms on axis under a band on the overlap
+    /// terms under a band on the overlap
     /// engine (the defocus lane on its nodes: "Gradients: the F-number and the focal length
     /// with Seidel terms"); for a lens that gives its aperture directions
     /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
@@ -2020,7 +2020,8 @@ fn aperture_partials(
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` off axis for a lens whose every order is the full circular pupil
 /// (or a circular iris, decentred) with a defocus alone and an image shift, on the exact 1-D
-/// engine the value takes: the chromatic lens's lateral colour `Δ = f0 tan θ (λ0/λ − 1)`, each
+/// engine the value takes (or the full circle with Seidel terms, on the overlap engine's mean
+/// over azimuth: the same lanes, [`optics::Polychromatic::mean_mtf_over_azimuth_and_aperture_lanes`]): the chromatic lens's lateral colour `Δ = f0 tan θ (λ0/λ − 1)`, each
 /// harmonic order's `f0 tan θ (pλ0/(mλ) − 1)` (docs/physics.md, "Gradients: the F-number and
 /// the focal length off axis"). Along each of the value's azimuths φ (the field direction and
 /// across it) each node's OTF is `D(νλF#/r, W020/λ) exp(−2πi ν u·(Δ + Δ_iris))` with
@@ -2507,9 +2508,9 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
                 return Err(not_smooth(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
-                     harmonic families, paraxial, without Seidel terms; off axis with their lateral colour on the \
-                     exact 1-D engine), or with Seidel terms on axis under a band (the chromatic lens on the \
-                     overlap engine); this scene's lens has other pupils or aberrations"
+                     harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
+                     with Seidel terms under a band (the chromatic lens on the overlap engine); this scene's lens \
+                     has other pupils or aberrations"
                         .to_owned(),
                 ));
             }
