@@ -107,8 +107,7 @@ pub(super) fn exact_along_and_field_gradient(
             _ => None,
         })
         .collect::<Option<_>>()?;
-    let (mean, variance) =
-        if axes.iter().any(|&a| a == 6 || a == 7) { nodes.wavelength_moments() } else { (0.0, 0.0) };
+    let (mean, variance) = if axes.iter().any(|&a| a == 6 || a == 7) { nodes.wavelength_moments() } else { (0.0, 0.0) };
     let fields = axes.iter().any(|&a| a < 2);
     let defocus = axes.contains(&5);
     gradient.iter_mut().for_each(|g| *g = Complex64::new(0.0, 0.0));
