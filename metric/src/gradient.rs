@@ -78,7 +78,9 @@ pub enum Parameter {
     /// photon count as `NA² = 1/(4F#²)` (SI eq. S7), each wavelength's normalized frequency
     /// `s = νλF#` and the defocus `W020 ∝ f0/F#²` of a lens whose every order is the full
     /// circular pupil with a defocus alone (the chromatic, refractive and harmonic families:
-    /// docs/physics.md, "Gradients"), or with Seidel terms on axis under a band on the overlap
+    /// docs/physics.md, "Gradients"; off axis on the exact 1-D engine with the lateral colour's
+    /// lane beside, "Gradients: the F-number and the focal length off axis"), or with Seidel
+    /// terms under a band on the overlap
     /// engine (the defocus lane on its nodes: "Gradients: the F-number and the focal length
     /// with Seidel terms"); for a lens that gives its aperture directions
     /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
@@ -1617,6 +1619,21 @@ fn line_center_partials(
         let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
         return Ok((d_ln_n, d_ln_n, (edge - e.mean_mtf) / c + along));
     }
+    // off axis, one order whose only change with the field is its image shift
+    // (`LensModel::image_shift_field_rates`: the chromatic lens's lateral colour): a line's one
+    // order is one wavelength, whose shift is a phase exp(−2πi ν·Δ) of the whole OTF, so |O|, the
+    // mean MTF and its derivative in c are the order's on axis (docs/physics.md, "Gradients: a
+    // line's wavelength off axis")
+    if !field.is_on_axis()
+        && lens.image_shift_field_rates(c, field).is_some()
+        && let ([o], [a]) = (&lens.orders(c, field)[..], &lens.orders(c, optics::Field::ON_AXIS)[..])
+        && matches!((&o.pupil, &a.pupil), (optics::Pupil::Full, optics::Pupil::Full))
+        && o.wavefront.is_defocus_only()
+        && (o.wavefront.defocus_m, o.efficiency) == (a.wavefront.defocus_m, a.efficiency)
+    {
+        // (the value's pass gave the defocus lane where the shift is 0, at λ0: the OTF on axis)
+        return line_center_partials(&scene.single_field(optics::Field::ON_AXIS), e, None, None, pass);
+    }
     let family = lens.describe();
     let orders = lens.orders(c, field);
     let full = |o: &optics::Order| {
@@ -1662,11 +1679,11 @@ fn line_center_partials(
     let Some(rates) = rates.filter(|_| plain) else {
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
-             pupil with a defocus affine in λ and constant efficiencies, on axis (the chromatic lens without an \
-             iris or Seidel terms), the refractive lens, the harmonic lens on axis with a constant transmission, \
-             and a phase lens on the radial engine; this lens's orders move with λ otherwise (an iris, Seidel or \
-             Zernike terms, an efficiency or transmission table's slope, lateral colour off axis), which is not \
-             followed yet"
+             pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without an iris or \
+             Seidel terms, on axis or off it), the refractive lens, the harmonic lens on axis with a constant \
+             transmission, and a phase lens on the radial engine; this lens's orders move with λ otherwise (an \
+             iris, Seidel or Zernike terms, an efficiency or transmission table's slope, several orders' lateral \
+             colour off axis), which is not followed yet"
         )));
     };
     // the value's own pass where it carried the defocus lane (the line engine); else the value's
@@ -2181,7 +2198,82 @@ fn aperture_partials(
     if let Some(found) = aperture_through_iris(scene, e)? {
         return Ok(found);
     }
+    if let Some(found) = aperture_off_axis(scene, e)? {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` off axis for a lens whose every order is the full circular pupil
+/// (or a circular iris, decentred) with a defocus alone and an image shift, on the exact 1-D
+/// engine the value takes (or the full circle with Seidel terms, on the overlap engine's mean
+/// over azimuth: the same lanes, [`optics::Polychromatic::mean_mtf_over_azimuth_and_aperture_lanes`]): the chromatic lens's lateral colour `Δ = f0 tan θ (λ0/λ − 1)`, each
+/// harmonic order's `f0 tan θ (pλ0/(mλ) − 1)` (docs/physics.md, "Gradients: the F-number and
+/// the focal length off axis"). Along each of the value's azimuths φ (its rule over azimuth from
+/// the field direction) each node's OTF is `D(νλF#/r, W020/λ) exp(−2πi ν u·(Δ + Δ_iris))` with
+/// `W020 = K a(λ)`, `K ∝ f0/F#²`, `Δ ∝ f0` (not F#) and the iris's `Δ_iris = 4 F# W020 d`. So
+/// at fixed `K` and `Δ` the OTF is `H(νF#, νΔ)`: `∂O/∂ln F# = ν ∂O/∂ν − ∂O/∂ln Δ`, and by parts
+/// `(1/ν_N) ∫ P ν ∂_ν|O| dν = P(ν_N)|O(ν_N)| − M̄ − P_ν`. With the lanes `D_K`
+/// ([`optics::WavefrontDirection::Defocus`], the iris's tilt with it) and `D_Δ = ∂M̄/∂ln Δ`
+/// ([`optics::WavefrontDirection::ImageShift`]) on the value's adaptive frequency rule along
+/// each azimuth, averaged over the value's azimuths (its nested rule) as the value is:
+/// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)|‾ − M̄ − P_ν − 2 D_K − D_Δ` and `∂M̄/∂ln f0 = D_K + D_Δ`.
+/// `None` where the scene is not that (on axis, a line, another pupil or engine, a noise
+/// spectrum).
+fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if field.is_on_axis() || detected.as_line().is_some() || camera.noise_spectrum().is_some() {
+        return Ok(None);
+    }
+    let lambda = e.mean_wavelength_nm * 1e-9;
+    let orders = lens.orders(lambda, field);
+    let circles = !orders.is_empty()
+        && orders.iter().all(|o| {
+            let circle = match &o.pupil {
+                optics::Pupil::Full => true,
+                optics::Pupil::Aperture(a) => a.as_circle().is_some(),
+                _ => false,
+            };
+            circle && o.wavefront.is_defocus_only()
+        });
+    // the full circle with Seidel terms: the overlap engine's mean over azimuth
+    let seidel = !orders.is_empty()
+        && orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full))
+        && orders.iter().any(|o| !o.wavefront.is_defocus_only());
+    if !(circles || seidel) {
+        return Ok(None);
+    }
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let Ok(poly) = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings) else {
+        return Ok(None);
+    };
+    let along_field = field.y_rad.atan2(field.x_rad);
+    // the full circle with Seidel terms on the overlap engine, the circles with image shifts on
+    // the exact 1-D engine: either way the value's mean over azimuth, the lanes on its nodes and
+    // accepted weights (on the overlap engine the defocus lane on its own doubled spectral rule,
+    // as on axis), and the by-parts edge averaged over the same azimuths
+    let engine = poly.engine();
+    let taken = if seidel {
+        matches!(engine, optics::Engine::Overlap { .. })
+    } else {
+        engine == optics::Engine::Exact1d && !poly.has_pupil_grid() && poly.direction_dependent()
+    };
+    if !taken {
+        return Ok(None);
+    }
+    let Some((found, d_shift)) = poly.mean_mtf_over_azimuth_and_aperture_lanes(along_field) else {
+        return Ok(None);
+    };
+    let edge = poly.mtf_over_azimuth(nyquist, along_field);
+    let d_k = found.defocus;
+    Ok(Some((edge - e.mean_mtf - found.pixel_slope - 2.0 * d_k - d_shift, d_k + d_shift)))
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` on axis for a lens whose every order is a circular iris (decentred)
@@ -2199,7 +2291,8 @@ fn aperture_partials(
 /// (recorded in the same pass as the lane,
 /// [`optics::Polychromatic::mean_mtf_over_azimuth_and_defocus_lane`]), and `D_K` carries `P` in
 /// its weights. `None` where the scene is not that: off axis (the lateral colour's
-/// `Δ ∝ f0 tan θ` is not a function of `νF#`), another pupil, a line, another engine.
+/// `Δ ∝ f0 tan θ` is not a function of `νF#`: [`aperture_off_axis`]), another pupil, a line,
+/// another engine.
 fn aperture_through_iris(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
     let field = scene.field();
@@ -2605,9 +2698,10 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
             if !plain {
                 return Err(not_smooth(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
-                     circular pupil with a defocus alone (the chromatic, refractive and harmonic families on axis, \
-                     paraxial, without an iris or Seidel terms), or with Seidel terms on axis under a band (the \
-                     chromatic lens on the overlap engine); this scene's lens has other pupils or aberrations"
+                     circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
+                     harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
+                     with Seidel terms under a band (the chromatic lens on the overlap engine); this scene's lens \
+                     has other pupils or aberrations"
                         .to_owned(),
                 ));
             }

@@ -1260,6 +1260,24 @@ mod tests {
         check_line(&paper, &owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=800", "spectrum.range_nm=2"]), &[]);
     }
 
+    /// A line off axis on the chromatic lens (docs/physics.md, "Gradients: a line's wavelength off
+    /// axis"): its one order at one wavelength, the lateral colour a phase of the whole OTF, so
+    /// |O| and its derivative in c are the order's on axis (the value's tangential and sagittal
+    /// means both that). At 803 nm at (5°, 3°) with the pixel MTF and read noise, at 8° in the
+    /// integral form with the stray light, and at the design wavelength at 5° (the shift 0 there,
+    /// its rate in c not: examples/monochromatic.toml).
+    #[test]
+    fn a_line_off_axis_on_the_chromatic_lens_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        check_line(
+            &paper,
+            &joined(&LINE_803, &["field.x_deg=5", "field.y_deg=3", "camera.pixel_mtf=true", "camera.read_noise_e=2"]),
+            &["exposure.time_ms"],
+        );
+        check_line(&paper, &joined(&LINE_803, &["field.x_deg=8", INTEGRAL_WITH_GLARE[0], INTEGRAL_WITH_GLARE[1]]), &[]);
+        check_line(&example("monochromatic.toml"), &owned(&["field.x_deg=5"]), &["field.x_deg"]);
+    }
+
     /// The Binary 2 lens (the radial engine's wavelength lanes: the sphere's phase 2πS/λ turns,
     /// the radian profile of a geometric phase stays) under a line at 803 nm, with read noise,
     /// with its Binary 2 coefficients and the F-number asked beside (the lanes stacked), and as
@@ -1314,9 +1332,11 @@ mod tests {
         diffractive.extend(owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]));
         let e = gradient(&example("phase-binary2.toml"), &diffractive, &keys).unwrap_err().to_string();
         assert!(e.contains("diffractive") && e.contains("sinc"), "{e}");
-        let mut off_axis = line.clone();
-        off_axis.push("field.x_deg=5".to_owned());
-        let e = gradient(&scene::read(None).unwrap(), &off_axis, &keys).unwrap_err().to_string();
+        // the chromatic lens off axis through an iris (the iris's tilt and the lateral colour
+        // on one order: not the on-axis OTF's modulus)
+        let mut iris_off_axis = line.clone();
+        iris_off_axis.push("field.x_deg=5".to_owned());
+        let e = gradient(&example("decentred-iris.toml"), &iris_off_axis, &keys).unwrap_err().to_string();
         assert!(e.contains("not differentiable"), "{e}");
         // the width alone is followed everywhere: N ∝ r
         let g = gradient(&example("harmonic.toml"), &line, &owned(&["spectrum.range_nm"])).unwrap();
@@ -1605,13 +1625,40 @@ mod tests {
                 "spectrum.range_nm=1",
             ]),
         );
-        // an iris off axis (its tilt's phase and the lateral colour's: not a function of νF#) is
-        // refused by the engine's check
-        let e =
-            gradient(&example("decentred-iris.toml"), &owned(&["field.x_deg=3"]), &owned(&["lens.focal_length_mm"]))
-                .unwrap_err()
-                .to_string();
-        assert!(e.contains("focal length") && e.contains("full circular pupil"), "{e}");
+    }
+
+    /// Off axis without Seidel terms (docs/physics.md, "Gradients: the F-number and the focal
+    /// length off axis"): the exact 1-D engine's tangential and sagittal means, each node's OTF
+    /// `D(νλF#, W020/λ) exp(−2πi ν u·Δ)` with the lateral colour `Δ ∝ f0`, not F# — by parts in
+    /// νF#, the defocus lane and the image shifts' lane. The paper's lens at 5° along x, at
+    /// (5°, 3°) with cos⁴θ, read noise, the pixel MTF (its term of the integration by parts) and
+    /// the integral form with the stray light; the harmonic lens (each order its own shift and
+    /// defocus) at 5°; the decentred iris at (3°, 2°) (its tilt `4 F# W020 d` a function of νF#,
+    /// moving with the defocus lane; the lateral colour with the shifts' lane). Each against
+    /// central differences of evaluations converged at 1e-10, within 10× the scene's 1e-6 of the
+    /// gradient's norm ([`check_aperture`]).
+    #[test]
+    fn f_number_and_focal_length_off_axis_match_central_differences() {
+        let paper = scene::read(None).unwrap();
+        check_aperture(&paper, &owned(&["field.x_deg=5"]));
+        check_aperture(
+            &paper,
+            &owned(&[
+                "field.x_deg=5",
+                "field.y_deg=3",
+                "lens.relative_illumination=\"cos4\"",
+                "camera.read_noise_e=2",
+                "camera.pixel_mtf=true",
+            ]),
+        );
+        check_aperture(&paper, &joined(&INTEGRAL_WITH_GLARE, &["field.x_deg=8"]));
+        check_aperture(&example("harmonic.toml"), &owned(&["field.x_deg=5"]));
+        check_aperture(&example("decentred-iris.toml"), &owned(&["field.x_deg=3", "field.y_deg=2"]));
+        // the refractive lens off axis: its stop at the lens, no image displaced, the OTF the one
+        // on axis (`Polychromatic::field_independent`): the value's defocus lane, the pixel MTF's
+        // term with it
+        let refractive = refractive_singlet();
+        check_aperture(&refractive, &owned(&["spectrum.range_nm=100", "field.x_deg=5", "camera.pixel_mtf=true"]));
     }
 
     /// The paper's scene with its lens made an N-BK7 singlet (written here).
@@ -2893,12 +2940,20 @@ mod tests {
     /// overlap quadrature's nodes, N ∝ 1/F#²) against Richardson-extrapolated central
     /// differences of evaluations converged to 1e-10 ([`check_aperture_extrapolated`]) within
     /// 10× the tolerance 1e-6 of the norm: coma 0.3 µm, spherical aberration 0.2 µm (with the
-    /// pixel MTF: its term of the integration by parts), on a 10 nm band.
+    /// pixel MTF: its term of the integration by parts), on a 10 nm band; and off axis (docs/physics.md,
+    /// "Gradients: the F-number and the focal length off axis": the lateral colour ∝ f0, not
+    /// F#, its image shifts' lane beside the defocus lane on the same nodes) with coma at
+    /// (5°, 3°), and with spherical aberration, astigmatism and the pixel MTF at 5°.
     #[test]
     fn f_number_and_focal_length_with_seidel_terms_match_central_differences() {
         let paper = scene::read(None).unwrap();
         let keys = owned(&["lens.f_number", "lens.focal_length_mm"]);
-        for more in [&["lens.coma_um=0.3"][..], &["lens.spherical_um=0.2", "camera.pixel_mtf=true"]] {
+        for more in [
+            &["lens.coma_um=0.3"][..],
+            &["lens.spherical_um=0.2", "camera.pixel_mtf=true"],
+            &["lens.coma_um=0.3", "field.x_deg=5", "field.y_deg=3"],
+            &["lens.spherical_um=0.2", "lens.astigmatism_um=0.1", "field.x_deg=5", "camera.pixel_mtf=true"],
+        ] {
             let base = joined(&["spectrum.range_nm=10"], more);
             // the overlap engine at the tolerance 1e-6 (not options.fft_tolerance's 1e-4)
             let mut set = base.clone();
@@ -2928,8 +2983,10 @@ mod tests {
                     theirs[1]
                 );
             }
-            // N ∝ 1/F#² (SI eq. S7): exactly −2N per ln F#, and nothing from f0
-            assert_eq!(g.d_photoelectrons[0] * g.values[0], -2.0 * g.photoelectrons);
+            // N ∝ 1/F#² (SI eq. S7): −2N per ln F# (to the rounding of ∂N/∂F# times F#), and
+            // nothing from f0
+            let per_ln = g.d_photoelectrons[0] * g.values[0];
+            assert!((per_ln + 2.0 * g.photoelectrons).abs() <= 4.0 * f64::EPSILON * g.photoelectrons, "{per_ln}");
             assert_eq!(g.d_photoelectrons[1], 0.0);
         }
     }

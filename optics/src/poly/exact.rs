@@ -81,6 +81,8 @@ pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azim
 /// lateral colour's shift does not). The spectral moments
 /// ([`WavefrontDirection::SpectralMoment`]) re-weight each node's turned value by `u = λ − λ̄`
 /// or `u² − ⟨u²⟩` ([`Nodes::wavelength_moments`](super::spectral::Nodes::wavelength_moments)).
+/// The image shifts' scale ([`WavefrontDirection::ImageShift`]) gains `i k u·(Δ − Δ_iris)` times
+/// the turned value (every shift but an iris's tilt scaled by `1 + ε`).
 /// `None` for another direction, a field angle on a node without its shift's rates, or the
 /// defocus lane on a node that is not a defocused circle.
 pub(super) fn exact_along_and_field_gradient(
@@ -91,8 +93,8 @@ pub(super) fn exact_along_and_field_gradient(
     directions: &[WavefrontDirection],
     gradient: &mut [Complex64],
 ) -> Option<Complex64> {
-    // 0, 1: the field angles; 3, 4: the iris's decentre; 5: the defocus; 6, 7:
-    // the spectral moments
+    // 0, 1: the field angles; 3, 4: the iris's decentre; 5: the defocus; 6, 7: the spectral
+    // moments; 8: the image shifts' scale
     let axes: Vec<usize> = directions
         .iter()
         .map(|d| match d {
@@ -100,10 +102,11 @@ pub(super) fn exact_along_and_field_gradient(
             WavefrontDirection::IrisDecentre(a) if *a < 2 => Some(3 + *a),
             WavefrontDirection::Defocus => Some(5),
             WavefrontDirection::SpectralMoment(k) if (1..=2).contains(k) => Some(5 + *k),
+            WavefrontDirection::ImageShift => Some(8),
             _ => None,
         })
         .collect::<Option<_>>()?;
-    let (mean, variance) = if axes.iter().any(|&a| a > 5) { nodes.wavelength_moments() } else { (0.0, 0.0) };
+    let (mean, variance) = if axes.iter().any(|&a| a == 6 || a == 7) { nodes.wavelength_moments() } else { (0.0, 0.0) };
     let fields = axes.iter().any(|&a| a < 2);
     let defocus = axes.contains(&5);
     gradient.iter_mut().for_each(|g| *g = Complex64::new(0.0, 0.0));
@@ -125,9 +128,12 @@ pub(super) fn exact_along_and_field_gradient(
                 [0.0; 2]
             }
         };
-        // w ∂D/∂w of the node's defocused circle at its own frequency scale, turned
+        // w ∂D/∂w of the node's defocused circle at its own frequency scale, turned: the
+        // value's own series forms, to rounding (`defocus_otf_log_derivative`, the t-form
+        // quadrature, is the independent reference the otf tests hold them against)
         let lane = if defocus && n.is_defocused_circle() {
-            let d = n.weight * crate::otf::defocus_otf_log_derivative(nuf * n.lambda / n.scale, n.w020 / n.lambda);
+            let (_, d) = crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda / n.scale, n.w020 / n.lambda);
+            let d = n.weight * d;
             Complex64::new(d * c, d * s)
         } else {
             not_circle |= defocus;
@@ -149,6 +155,9 @@ pub(super) fn exact_along_and_field_gradient(
                     *g += turned * u;
                     continue;
                 }
+                // the lateral colour's share of the shift, scaled (the iris's tilt is the
+                // defocus lane's)
+                8 => k * ((dx - ix) * cos_a + (dy - iy) * sin_a),
                 _ => {
                     *g += turned * (u * u - variance);
                     continue;

@@ -355,7 +355,8 @@ impl Polychromatic<'_> {
     /// spectral level each panel accepts), `P_ν` the pixel MTF's part of the integration by
     /// parts in `ν` (0 without it; `νP′/P = x cot x − 1`, `x = πpν`); both with the frequency
     /// rule's accepted weights (split at the OTF's sign changes, `P` included). `None` where the
-    /// engine gives no such lane, the field is off axis or the OTF depends on direction.
+    /// engine gives no such lane, the field is off axis where it moves the OTF
+    /// ([`field_independent`](Self::field_independent)), or the OTF depends on direction.
     pub fn mean_mtf_and_defocus_derivative(&self) -> Option<DefocusDerivative> {
         self.mean_with_defocus_lane(None)
     }
@@ -375,7 +376,9 @@ impl Polychromatic<'_> {
 
     /// The mean with the defocus lane (`rates` `None`) or the order lane recorded beside it.
     fn mean_with_defocus_lane(&self, rates: Option<Vec<[f64; 2]>>) -> Option<DefocusDerivative> {
-        if !self.scene.field.is_on_axis()
+        // off axis where the field does not move the OTF (no image displaced, every rate 0: the
+        // refractive lens, its stop at the lens), the OTF is the one on axis
+        if !(self.scene.field.is_on_axis() || self.field_independent())
             || self.direction_dependent()
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
         {
@@ -756,6 +759,33 @@ impl Polychromatic<'_> {
             })?;
         let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
         Some(DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work })
+    }
+
+    /// [`mean_mtf_over_azimuth_and_defocus_lane`](Self::mean_mtf_over_azimuth_and_defocus_lane)
+    /// off axis: beside the defocus lane `D_K`, the image shifts' lane
+    /// `D_Δ = ∂M̄/∂ln Δ` ([`WavefrontDirection::ImageShift`]: every node's lateral colour scaled
+    /// by `1 + ε`), on the same nodes and accepted weights, returned after the
+    /// [`DefocusDerivative`] (docs/physics.md, "Gradients: the F-number and the focal length off
+    /// axis"). `None` where the engine is not the overlap engine or the exact 1-D engine (each
+    /// the value's rule over azimuth), or gives no lane.
+    pub fn mean_mtf_over_azimuth_and_aperture_lanes(&self, first: f64) -> Option<(DefocusDerivative, f64)> {
+        if !matches!(self.engine.engine(), Engine::Overlap { .. } | Engine::Exact1d)
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let (mut d_k, mut d_shift, mut pixel) = (0.0, 0.0, 0.0);
+        let lanes = [WavefrontDirection::Defocus, WavefrontDirection::ImageShift];
+        // the two lanes, then |O|, at each accepted frequency
+        let mean = self.azimuthal_mean_with_lanes(first, &lanes, None, &mut |nu, w, recorded| {
+            d_k += w * recorded[0];
+            d_shift += w * recorded[1];
+            pixel += w * recorded[2] * self.pixel_log_slope(nu);
+        })?;
+        let scale = 1.0 / (self.scene.max_frequency * mean.azimuths as f64);
+        let found =
+            DefocusDerivative { mean: mean.mean, defocus: d_k * scale, pixel_slope: pixel * scale, work: mean.work };
+        Some((found, d_shift * scale))
     }
 
     /// The mean MTF along `azimuth` ([`mean_mtf_along`](Self::mean_mtf_along)'s adaptive rule)

@@ -833,6 +833,14 @@ pub enum WavefrontDirection {
     /// 1-D and overlap engines carry it ([`Polychromatic::node_wavelength_moments`](super::Polychromatic::node_wavelength_moments)
     /// gives `λ̄` and `⟨u²⟩`).
     SpectralMoment(usize),
+    /// Each node's image displacement other than a decentred iris's tilt (the lateral colour:
+    /// `Δ = f0 tan θ (λ0/λ − 1)` of the chromatic lens, each harmonic order's own), scaled by
+    /// `1 + ε`, per relative change: each node's turned OTF gains `−2πi ν u·(Δ − Δ_iris)` times
+    /// itself. The lateral colour is proportional to f0 and does not depend on F#, so this is
+    /// the lane the F-number's and the focal length's gradient off axis need beside the defocus
+    /// lane (docs/physics.md, "Gradients: the F-number and the focal length off axis"). The exact
+    /// 1-D engine carries it.
+    ImageShift,
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -1001,6 +1009,7 @@ impl FftPath {
                         | WavefrontDirection::IrisDecentre(_)
                         | WavefrontDirection::Obscuration
                         | WavefrontDirection::SpectralMoment(_)
+                        | WavefrontDirection::ImageShift
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);

@@ -1339,8 +1339,9 @@ impl Overlap<'_> {
     /// `u` the azimuth's unit vector) times `i k u_a ∂Δ_a/∂θ_a`, on the same nodes (every term
     /// has its `shift_rate` where `axes` holds a field angle: [`OtfEngine::otf_along_and_gradient`]).
     /// An axis `1 + k` (2, 3) is the spectral moment `k` ([`WavefrontDirection::SpectralMoment`]):
-    /// each node's turned value times `u = λ − λ̄` or `u² − ⟨u²⟩`, on the same nodes; without
-    /// wavefront lanes (`terms` empty) each node's value is [`term_otf`]'s, as
+    /// each node's turned value times `u = λ − λ̄` or `u² − ⟨u²⟩`, on the same nodes; the axis 4
+    /// the image shifts' scale ([`WavefrontDirection::ImageShift`]): the turned value times
+    /// `i k u·Δ`. Without wavefront lanes (`terms` empty) each node's value is [`term_otf`]'s, as
     /// [`compute`](Self::compute) takes it.
     #[allow(clippy::too_many_arguments)]
     fn compute_with_derivatives(
@@ -1363,7 +1364,8 @@ impl Overlap<'_> {
         let mut sum = Complex64::new(0.0, 0.0);
         let mut excess = 0.0;
         let mut node = vec![Complex64::new(0.0, 0.0); terms.len()];
-        let (mean, variance) = if axes.iter().any(|&a| a >= 2) { self.nodes.wavelength_moments() } else { (0.0, 0.0) };
+        let (mean, variance) =
+            if axes.iter().any(|&a| a == 2 || a == 3) { self.nodes.wavelength_moments() } else { (0.0, 0.0) };
         // the defocus lane on its own spectral rule, where it is asked and the rule exists
         let defocus = terms.iter().position(|l| matches!(l, Lane::Defocus));
         let rule = defocus.and_then(|_| self.defocus_rule());
@@ -1417,6 +1419,8 @@ impl Overlap<'_> {
                     // the spectral moments: the node's weight times u or u² − ⟨u²⟩
                     (2, _) => *o += v * (term.weight * u),
                     (3, _) => *o += v * (term.weight * (u * u - variance)),
+                    // the image shifts scaled by 1 + ε: i k u·Δ times the turned value
+                    (4, _) => *o += Complex64::new(0.0, k * (dx * c + dy * sn)) * v * term.weight,
                     _ => {}
                 }
             }
@@ -1541,6 +1545,7 @@ impl OtfEngine for Overlap<'_> {
                     match d {
                         WavefrontDirection::FieldAngle(a) if *a < 2 => axes.push(*a),
                         WavefrontDirection::SpectralMoment(k) if (1..=2).contains(k) => axes.push(1 + *k),
+                        WavefrontDirection::ImageShift => axes.push(4),
                         _ => terms.push(Lane::of(d)?),
                     }
                 }
@@ -1559,7 +1564,12 @@ impl OtfEngine for Overlap<'_> {
         let scatter = |lanes: &[Complex64], field: &[Complex64], gradient: &mut [Complex64]| {
             let (mut i, mut j) = (0, 0);
             for (g, d) in gradient.iter_mut().zip(directions) {
-                if matches!(d, WavefrontDirection::FieldAngle(_) | WavefrontDirection::SpectralMoment(_)) {
+                if matches!(
+                    d,
+                    WavefrontDirection::FieldAngle(_)
+                        | WavefrontDirection::SpectralMoment(_)
+                        | WavefrontDirection::ImageShift
+                ) {
                     *g = field[j];
                     j += 1;
                 } else {
