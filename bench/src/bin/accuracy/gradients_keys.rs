@@ -109,7 +109,7 @@ fn cases(root: &Path, dir: &Path) -> Vec<Case> {
             whole_process: true,
         },
         Case {
-            name: "centre, range: lateral colour at 5° (exact 1-D engine, T and S)",
+            name: "centre, range: lateral colour at 5° (exact 1-D engine, over azimuth)",
             scene: paper.clone(),
             overrides: owned(&["field.x_deg=5"]),
             keys: SPECTRAL,
