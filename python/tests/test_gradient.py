@@ -121,17 +121,19 @@ def test_gradient_is_the_central_difference_of_evaluations():
 
 
 def test_a_key_without_a_gradient_is_refused_naming_it():
-    scene = asnr.load()
+    paper = asnr.load()
     cases = {
-        "lens.design_wavelength_nm": "lens.design_wavelength_nm: not differentiable here yet",
-        "camera.adc_bits": "camera.adc_bits: not differentiable: it is an integer",
-        "lens.nonsense": "lens.nonsense: embedded paper scene has no such key",
+        # the phase lens's design wavelength (a direction of the radial engine not formed yet)
+        "lens.design_wavelength_nm": (asnr.load(BINARY2), "lens.design_wavelength_nm: not differentiable here yet"),
+        "camera.adc_bits": (paper, "camera.adc_bits: not differentiable: it is an integer"),
+        "lens.nonsense": (paper, "lens.nonsense: embedded paper scene has no such key"),
     }
-    for key, message in cases.items():
+    for key, (source, message) in cases.items():
         with pytest.raises(asnr.SceneError, match=message.replace(".", r"\.")):
-            asnr.gradient(scene, [key])
+            asnr.gradient(source, [key])
         with pytest.raises(asnr.SceneError, match=message.replace(".", r"\.")):
-            asnr.value_and_grad(scene, [key])
+            asnr.value_and_grad(source, [key])
+    scene = paper
     with pytest.raises(asnr.SceneError, match=r"lens\.binary2\[1\] is given twice"):
         asnr.gradient(asnr.load(BINARY2), ["lens.binary2[1]", "lens.binary2[01]"])
     with pytest.raises(ValueError, match="no key"):
@@ -203,7 +205,7 @@ def test_optimize_by_gradient_is_the_command_lines_search():
     with pytest.raises(asnr.SceneError, match="--method newton"):
         asnr.optimize(scene, over, method="newton")
     with pytest.raises(asnr.SceneError, match=r"lens\.design_wavelength_nm: not differentiable here yet"):
-        asnr.optimize(scene, {"lens.design_wavelength_nm": (790, 810)}, method="gradient")
+        asnr.optimize(asnr.load(BINARY2), {"lens.design_wavelength_nm": (790, 810)}, method="gradient")
 
 
 # --- the JAX bridge ---------------------------------------------------------------------------
