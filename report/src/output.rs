@@ -270,7 +270,8 @@ pub fn mtf_json(label: &str, scene: &Scene, c: &MtfCurve) -> Result<String> {
 
 /// What the `MTF` column of the table (and `mtf` of the CSV and JSON) is.
 fn mtf_meaning(c: &MtfCurve) -> String {
-    let split = c.mtf_tangential.is_some();
+    // a curve with tangential and sagittal directions is always the mean over azimuth
+    // (`MtfCurve::mtf_over_azimuth`: every OTF that depends on direction)
     if !c.field_points.is_empty() {
         let points: Vec<String> = c
             .field_points
@@ -281,11 +282,7 @@ fn mtf_meaning(c: &MtfCurve) -> String {
         format!(
             "MTF: weighted mean over {} field points{}: {}",
             c.field_points.len(),
-            match (split, c.mtf_over_azimuth) {
-                (_, true) => " of the means over azimuth",
-                (true, false) => " of the tangential–sagittal averages",
-                (false, false) => "",
-            },
+            if c.mtf_over_azimuth { " of the means over azimuth" } else { "" },
             points.join(", ")
         )
     } else if c.mtf_over_azimuth {
@@ -305,13 +302,6 @@ fn mtf_meaning(c: &MtfCurve) -> String {
                 c.field_deg[0], c.field_deg[1]
             )
         }
-    } else if split && c.field_deg == [0.0, 0.0] {
-        "MTF: mean of the MTFs along x and along y (on axis; the OTF depends on direction)".to_owned()
-    } else if split {
-        format!(
-            "MTF: mean of the tangential (along the field) and sagittal (across it) MTFs at field ({}°, {}°)",
-            c.field_deg[0], c.field_deg[1]
-        )
     } else if c.field_deg == [0.0, 0.0] {
         "MTF: on axis".to_owned()
     } else {
