@@ -130,17 +130,7 @@ impl Polychromatic<'_> {
     /// depends on direction, or the engine is not the per-frequency exact one of radially
     /// symmetric orders.
     pub fn mean_mtf_and_binary2_gradient(&self) -> Option<(f64, Vec<f64>, Work)> {
-        if !self.scene.field.is_on_axis()
-            || self.direction_dependent()
-            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
-        {
-            return None;
-        }
-        let lambda = self.engine.nodes().nodes.first()?.lambda;
-        let lanes = self.scene.lens.binary2_directions(lambda)?.first()?.len();
-        if lanes == 0 {
-            return None;
-        }
+        let lanes = self.binary2_lanes()?;
         self.recorded_mean_and_gradient(Recording { lanes, ..Recording::default() })
     }
 
@@ -286,6 +276,23 @@ impl Polychromatic<'_> {
         Some((mean, gradient, work))
     }
 
+    /// The number of Binary 2 lanes (the lens's wavefront directions) where the radial
+    /// engine's lanes apply: on axis, a rotationally symmetric OTF, the adaptive frequency rule,
+    /// and at least one direction; `None` elsewhere. The guard of
+    /// [`mean_mtf_and_binary2_gradient`](Self::mean_mtf_and_binary2_gradient) and its
+    /// noise-weighted twin.
+    fn binary2_lanes(&self) -> Option<usize> {
+        if !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let lambda = self.engine.nodes().nodes.first()?.lambda;
+        let lanes = self.scene.lens.binary2_directions(lambda)?.first()?.len();
+        (lanes > 0).then_some(lanes)
+    }
+
     /// The mean over `[0, ν_max]` of `P |O| / n` for a non-white noise spectrum `n`
     /// ([`mean_mtf_over_noise`](Self::mean_mtf_over_noise), bit for bit) and, in the same pass,
     /// its derivative with respect to each Binary 2 coefficient of the lens (the lanes of
@@ -300,17 +307,7 @@ impl Polychromatic<'_> {
     /// and the frequency rule's accepted weights of the noise-weighted mean integrate them. `None`
     /// where [`mean_mtf_and_binary2_gradient`](Self::mean_mtf_and_binary2_gradient) is.
     pub fn mean_mtf_over_noise_and_binary2_gradient(&self, noise: &NoiseShape) -> Option<(f64, Vec<f64>, Work)> {
-        if !self.scene.field.is_on_axis()
-            || self.direction_dependent()
-            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
-        {
-            return None;
-        }
-        let lambda = self.engine.nodes().nodes.first()?.lambda;
-        let lanes = self.scene.lens.binary2_directions(lambda)?.first()?.len();
-        if lanes == 0 {
-            return None;
-        }
+        let lanes = self.binary2_lanes()?;
         *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| self.over_noise(nu, self.recorded_otf(nu), noise));
         let recording = self.gradient.borrow_mut().take()?;
