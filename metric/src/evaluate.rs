@@ -1204,8 +1204,8 @@ pub struct MtfCurve {
     /// ignored), before the pixel MTF.
     pub otf: Vec<f64>,
     /// Polychromatic MTF `|OTF|`, times the pixel MTF if the camera applies it; where the OTF
-    /// depends on direction (off axis with lateral colour, a decentred pupil), the average of the
-    /// tangential and sagittal MTFs, as `Evaluation::mean_mtf` is.
+    /// depends on direction (off axis with lateral colour, a decentred pupil, a sampled pupil),
+    /// the mean over azimuth at each frequency, as `Evaluation::mean_mtf` is ([`Self::mtf_over_azimuth`]).
     pub mtf: Vec<f64>,
     /// Aberration-free MTF of the same aperture at the mean wavelength (times the pixel MTF if
     /// applied): the diffraction limit for reference.
@@ -1256,7 +1256,7 @@ pub struct FieldCurve {
     pub field_deg: [f64; 2],
     /// Relative weight.
     pub weight: f64,
-    /// The MTF there (the tangential–sagittal average where they differ).
+    /// The MTF there (the mean over azimuth where the OTF depends on direction).
     pub mtf: Vec<f64>,
     /// The tangential MTF there, where the OTF depends on direction.
     pub mtf_tangential: Option<Vec<f64>>,
