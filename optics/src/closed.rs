@@ -361,12 +361,27 @@ impl GaussianDefocus {
     /// [`spectral4`](Self::spectral4) on the lanes of `V` (four or eight: eight advance two
     /// groups of four through the same chains together), each lane the scalar `E(c)` to the
     /// last bit; `None` where the lanes do not share one case.
+    ///
+    /// The moments and the Taylor sum are held in arrays of the polynomial's own size class
+    /// (two, four or [`MAX_TERMS`] terms; the same operations on the same lanes whatever the
+    /// class): the paper's degree one polynomial then neither zeroes nor moves the six terms'
+    /// arrays (about 2 kB of registers' spill a group of eight).
     #[inline(always)]
     fn spectral_lanes<V: Lanes>(&self, f: &AtFrequency, c: V) -> Option<Complexes<V>> {
+        match self.q.len() {
+            0..=2 => self.spectral_lanes_sized::<V, 2>(f, c),
+            3..=4 => self.spectral_lanes_sized::<V, 4>(f, c),
+            _ => self.spectral_lanes_sized::<V, MAX_TERMS>(f, c),
+        }
+    }
+
+    /// [`spectral_lanes`](Self::spectral_lanes) with the moments held in arrays of `N ≥ terms`.
+    #[inline(always)]
+    fn spectral_lanes_sized<V: Lanes, const N: usize>(&self, f: &AtFrequency, c: V) -> Option<Complexes<V>> {
         let terms = self.q.len();
-        let (moments, m) = self.moments_lanes::<V, MAX_TERMS>(f, c, terms)?;
+        let (moments, m) = self.moments_lanes::<V, N>(f, c, terms)?;
         // Σ_k q_k x^k with x = y + m: the Taylor coefficients of Q at m (repeated synthetic division)
-        let mut q = [V::ZERO; MAX_TERMS];
+        let mut q = [V::ZERO; N];
         for (slot, &v) in q.iter_mut().zip(&self.q) {
             *slot = V::splat(v);
         }
@@ -2308,6 +2323,54 @@ mod tests {
                     "{t}"
                 );
             }
+        }
+    }
+
+    /// The lanes hold the moments in arrays of the polynomial's size class (two, four or six
+    /// terms, `spectral_lanes`): for every count of terms from one to [`MAX_TERMS`] each lane, on
+    /// four and on eight lanes, is the scalar `E(c)` to the last bit, in the cut and the uncut
+    /// zone.
+    #[test]
+    fn lanes_of_every_polynomial_size_are_the_scalar_kernel_to_the_last_bit() {
+        for terms in 1..=MAX_TERMS {
+            // P(λ) = Σ (1 + 0.3k) (λ/1 µm)^k: terms of one size near 800 nm
+            let coefficients: Vec<f64> = (0..terms).map(|k| (1.0 + 0.3 * k as f64) * 1e6f64.powi(k as i32)).collect();
+            let (mut cut, mut uncut) = (0, 0);
+            for range in [10e-9, 100e-9] {
+                let g = paper(range, &coefficients);
+                for share in [0.25, 0.71] {
+                    let nu = share / (2.5 * 800e-9);
+                    let tail = (2.0 * (1e3 / 1e-7_f64).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+                    let (f, _) = g.at_frequency_for(nu, tail, 1e-7);
+                    let c_cut = f.beta * (g.center + tail * g.sigma);
+                    let cs: Vec<f64> = (0..800).map(|i| (i as f64 + 0.37) / 800.0).collect();
+                    for group in cs.chunks_exact(8) {
+                        let eight = std::array::from_fn::<f64, 8, _>(|l| group[l]);
+                        let four = [group[0], group[1], group[2], group[3]];
+                        let lanes = [
+                            g.spectral_lanes(&f, f64x8::new(eight))
+                                .map(|e| (0..8).map(|l| e.lane(l)).collect::<Vec<_>>()),
+                            g.spectral4(&f, f64x4::new(four)).map(|e| (0..4).map(|l| e.lane(l)).collect::<Vec<_>>()),
+                        ];
+                        for values in lanes.iter().flatten() {
+                            if group[0] < c_cut {
+                                cut += 1
+                            } else {
+                                uncut += 1
+                            }
+                            for (vector, &c) in values.iter().zip(group) {
+                                let scalar = g.spectral(&f, c);
+                                assert!(
+                                    vector.re.to_bits() == scalar.re.to_bits()
+                                        && vector.im.to_bits() == scalar.im.to_bits(),
+                                    "{terms} terms, c {c}, ν {nu}: {vector} vs {scalar}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+            assert!(cut > 20 && uncut > 20, "{terms} terms: {cut} cut and {uncut} uncut groups");
         }
     }
 
