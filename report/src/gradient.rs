@@ -774,7 +774,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), lens.psf_pitch_um, spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -3029,7 +3029,10 @@ mod tests {
         let shaped = with_noise_spectrum(&paper, "fft-refusals");
         let e = gradient(&shaped, &[], &owned(&["lens.spherical_um"])).unwrap_err().to_string();
         assert!(e.contains("Seidel coefficient") && e.contains("noise_spectrum"), "{e}");
-        // a top-hat band's edge lanes under a noise spectrum
+        // a PSF stack's pitch and a top-hat band's edge lanes under a noise spectrum
+        let stack = with_noise_spectrum_beside(&example("psf-stack.toml"), "refused-psf");
+        let e = gradient(&stack, &[], &owned(&["lens.psf_pitch_um"])).unwrap_err().to_string();
+        assert!(e.contains("sample pitch") && e.contains("noise_spectrum"), "{e}");
         let e = gradient(&shaped, &owned(&["spectrum.shape=\"tophat\""]), &owned(&["spectrum.center_nm"]))
             .unwrap_err()
             .to_string();
@@ -3910,7 +3913,9 @@ mod tests {
     }
 
     /// [`assert_weighted`] for keys that move N too: ∂ASNR differs from ∂SNR0 · G + SNR0 · ∂M̄
-    /// (G = ASNR/SNR0 the weighted mean, ∂M̄ the white lane) by more than 1e-3 of its norm.
+    /// (G = ASNR/SNR0 the weighted mean, ∂M̄ the white lane) by more than 1e-4 of its norm, 10× the
+    /// checks' bound (a key that moves N as well as the OTF, such as the temperature, keeps its
+    /// gradient's norm mostly in ∂SNR0).
     fn assert_weighted_beside_n(g: &Gradient) {
         let norm = g.d_asnr.iter().map(|x| x * x).sum::<f64>().sqrt();
         let weighted = g.asnr / g.snr0;
@@ -3918,7 +3923,7 @@ mod tests {
             .map(|i| (g.d_asnr[i] - g.d_snr0[i] * weighted - g.snr0 * g.d_mean_mtf[i]).abs())
             .fold(0.0, f64::max);
         println!("largest |∂ASNR − ∂SNR0 G − SNR0 ∂M̄| {apart:.3e} of the norm {norm:.3e}");
-        assert!(apart > 1e-3 * norm, "{g:?}");
+        assert!(apart > 1e-4 * norm, "{g:?}");
     }
 
     /// [`with_noise_spectrum`] keeping `source`'s own directory (its data files), the table
@@ -3941,8 +3946,7 @@ mod tests {
     /// the gradient's norm: the F-number and focal length of the phase lens (its aperture lanes on
     /// the value's noise-weighted pass) and of the paper's chromatic lens (the defocus lane on the
     /// reference rule, weighted; with the pixel MTF in the integral form), with [`check_aperture`]'s
-    /// step, the pixel pitch with the pixel MTF in both forms, and a PSF
-    /// stack's pitch with and without the pixel MTF.
+    /// step, and the pixel pitch with the pixel MTF in both forms.
     #[test]
     fn frequency_scale_keys_under_a_noise_spectrum_match_central_differences() {
         let binary2 = with_noise_spectrum(&example("phase-binary2.toml"), "scale-binary2");
@@ -3956,14 +3960,6 @@ mod tests {
         let pitch = ["camera.pixel_pitch_um", "exposure.time_ms"];
         check_against_differences(&binary2, &owned(&PIXEL_AND_READ_NOISE), &pitch);
         check_against_differences(&binary2, &joined(&PIXEL_AND_READ_NOISE, &["options.form=\"integral\""]), &pitch);
-        let stack = with_noise_spectrum_beside(&example("psf-stack.toml"), "scale-psf");
-        assert_weighted(&gradient(&stack, &[], &owned(&["lens.psf_pitch_um"])).unwrap());
-        check_against_differences(&stack, &[], &["lens.psf_pitch_um", "exposure.time_ms"]);
-        check_against_differences(
-            &stack,
-            &owned(&PIXEL_AND_READ_NOISE),
-            &["lens.psf_pitch_um", "camera.pixel_pitch_um"],
-        );
     }
 
     /// The spectral keys under a noise spectrum (their lanes with each frequency's weight divided
