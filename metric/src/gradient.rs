@@ -950,10 +950,11 @@ fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Poi
     if scene.camera().noise_spectrum().is_some() {
         return Err(Error::NotDifferentiable {
             parameter: p.describe(),
-            reason: "with camera.noise_spectrum the stack's pitch scales its 2-D OTF under the weight 1/n(ν) (by parts, \
+            reason:
+                "with camera.noise_spectrum the stack's pitch scales its 2-D OTF under the weight 1/n(ν) (by parts, \
                      an n′ term over azimuth), which is not checked against converged evaluations of the stack yet \
                      (their noise-weighted mean at 1e-10 takes minutes): not computed here yet"
-                .to_owned(),
+                    .to_owned(),
         });
     }
     // with the pixel MTF P (its sinc does not scale with the stack's pitch) the OTF's change of

@@ -1,5 +1,5 @@
-//! The noise-weighted parts of the keys that move the OTF's frequency scale (the F-number, the
-//! focal length's defocus, a PSF stack's pitch) or the pixel's sinc under a non-white noise
+//! The noise-weighted parts of the keys that move the OTF's frequency scale (the F-number, a
+//! line's wavelength) or the pixel's sinc under a non-white noise
 //! spectrum `n(ν)` (`camera.noise_spectrum`; docs/physics.md, "Gradients under a noise
 //! spectrum"). `G = (1/ν_N) ∫_0^{ν_N} P |O| / n dν` with `n` fixed in cycles/mm: where a key
 //! scales the OTF's frequency, the integration by parts that turns `ν ∂_ν|O|` into one value at
@@ -133,8 +133,8 @@ pub(super) fn pixel_slope_over_noise(scene: &Scene, e: &Evaluation, p: Parameter
 }
 
 /// `∂G/∂ln s` where the OTF's frequency scales, `O(ν) → O(sν)` at `s = 1`, with the pixel MTF
-/// `P`, the noise `n` and `ν_N` held (a PSF stack's pitch; the F-number's normalized frequency
-/// `νλF#` at a fixed wavefront): `(1/ν_N) ∫ P ν ∂_ν|O| / n dν`, by parts
+/// `P`, the noise `n` and `ν_N` held (the F-number's normalized frequency `νλF#` at a fixed
+/// wavefront, a line's `νcF#`): `(1/ν_N) ∫ P ν ∂_ν|O| / n dν`, by parts
 ///
 /// ```text
 /// P(ν_N)|O(ν_N)|/n(ν_N) − G − (1/ν_N) ∫ P |O| (νP′/P − νn′/n)/n dν
