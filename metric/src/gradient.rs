@@ -17,6 +17,8 @@ use crate::evaluate::{
 };
 use crate::{Error, GlareMode, MetricForm, Scene};
 
+mod noise_weight;
+
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
 /// with respect to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -496,6 +498,14 @@ fn point_gradient(
         Some(&p) if line.is_none() => Some(spectral_partials(scene, e, p)?),
         _ => None,
     };
+    // under a noise spectrum the band's lanes again with each frequency's weight divided by n(ν)
+    let spectral_over_noise = match (camera.noise_spectrum(), &spectral) {
+        (Some(shape), Some(_)) => {
+            let p = parameters.iter().find(|p| matches!(p, Parameter::SpectrumCenter | Parameter::SpectrumRange));
+            Some(spectral_partials_over(scene, e, *p.expect("a spectral key"), Some(shape))?)
+        }
+        _ => None,
+    };
     let line_center = match line {
         Some(_) if parameters.contains(&Parameter::SpectrumCenter) => {
             Some(line_center_partials(scene, e, binary2.as_deref(), bases.wavelength, found)?)
@@ -553,15 +563,6 @@ fn point_gradient(
                 (0.0, 0.0, 0.0, 0.0, -2.0 * budget.quantization_variance_e2 / k, 0.0, 0.0)
             }
             Parameter::PixelPitch => {
-                if camera.pixel_mtf() && camera.noise_spectrum().is_some() {
-                    return Err(not_smooth(
-                        p,
-                        "with camera.pixel_mtf = true and camera.noise_spectrum the pixel's sinc (fixed in ν/ν_N) and the \
-                         noise (fixed in cycles/mm) move apart with the pitch inside the integral, \
-                         which is not differentiated here yet"
-                            .to_owned(),
-                    ));
-                }
                 // ν_N = 1/(2p): ∂ν_N/∂ln p = −ν_N. Leibniz: ∂M̄/∂ν_N = (MTF(ν_N) − M̄)/ν_N, so
                 // ∂M̄/∂ln p = M̄ − MTF(ν_N); the integral I = M̄ ν_N: ∂I/∂ln p = −ν_N MTF(ν_N).
                 // With the pixel MTF, in x = ν/ν_N its sinc(πx/2) stays and the lens's OTF at
@@ -573,15 +574,16 @@ fn point_gradient(
                 // under a noise spectrum n(ν), fixed in cycles/mm (the pitch moves the upper
                 // limit only, and n is continuous there): G = (1/ν_N) ∫ MTF/n dν, so the same
                 // Leibniz rule with MTF(ν_N)/n(ν_N) at the limit (docs/physics.md, "Gradients
-                // under a noise spectrum"); the pixel MTF is then off, `slope` 0
+                // under a noise spectrum"); with the pixel MTF its sinc's term P̃_ν weighted by 1/n
                 let d_g = match (camera.noise_spectrum(), scene.options().form) {
                     (None, MetricForm::Mean) => d_mtf,
                     (None, MetricForm::Integral) => e.nyquist_cyc_per_mm * (slope - edge),
                     (Some(shape), form) => {
                         let edge = edge / shape.value(e.nyquist_cyc_per_mm * 1e3);
+                        let slope = noise_weight::pixel_slope_over_noise(scene, e, p)?;
                         match form {
-                            MetricForm::Mean => e.asnr_mean / e.snr0 - edge,
-                            MetricForm::Integral => -e.nyquist_cyc_per_mm * edge,
+                            MetricForm::Mean => e.asnr_mean / e.snr0 - edge + slope,
+                            MetricForm::Integral => e.nyquist_cyc_per_mm * (slope - edge),
                         }
                     }
                 };
@@ -679,7 +681,13 @@ fn point_gradient(
             Parameter::FNumber | Parameter::FocalLength => {
                 let (d_f_number, d_focal_length) = aperture.expect("computed above for an aperture parameter");
                 let d_mtf = if p == Parameter::FNumber { d_f_number } else { d_focal_length };
-                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                let d_g = match camera.noise_spectrum() {
+                    None => d_g_from_mean_mtf(scene, e, d_mtf),
+                    Some(_) => {
+                        let (f, f0) = noise_weight::aperture_over_noise(scene, e, p, bases.aperture)?;
+                        d_g_from_mean_mtf(scene, e, if p == Parameter::FNumber { f } else { f0 })
+                    }
+                };
                 if p == Parameter::FNumber {
                     // N and N_T ∝ NA² = 1/(4F#²) (SI eq. S7–S8, S14): ∂ln/∂ln F# = −2 for both,
                     // so the stray light N_T − N too
@@ -790,7 +798,13 @@ fn point_gradient(
                     (Parameter::SpectrumRange, Some(l)) => (1.0 / l.width(), 1.0 / l.width(), 0.0),
                     _ => line_center.expect("computed above for a line's wavelength"),
                 };
-                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                let d_weighted = match camera.noise_spectrum() {
+                    Some(_) if p == Parameter::SpectrumCenter => {
+                        noise_weight::line_center_over_noise(scene, e, bases.wavelength)?
+                    }
+                    _ => d_mtf,
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
                 let d_b = if stray { transmitted * d_ln_t - n * d_ln_n } else { 0.0 };
                 (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
@@ -804,13 +818,22 @@ fn point_gradient(
                     None if stray => transmitted * transmitted_band_log_derivative(scene, p)? - n * d_ln_n,
                     None => 0.0,
                 };
-                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                let d_weighted = match camera.noise_spectrum() {
+                    Some(shape) if line.is_none() => temperature_partials_over(scene, e, p, Some(shape))?.1,
+                    _ => d_mtf,
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
                 (n * d_ln_n, d_b, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::SpectrumCenter | Parameter::SpectrumRange => {
                 let s = spectral.as_ref().expect("computed above for a spectral parameter");
                 let (d_ln_n, d_mtf) = if p == Parameter::SpectrumCenter { s.center } else { s.range };
-                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                let d_weighted = match &spectral_over_noise {
+                    Some(w) if p == Parameter::SpectrumCenter => w.center.1,
+                    Some(w) => w.range.1,
+                    None => d_mtf,
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
                 // N = (constants) ∫ ρ τ1 dλ and N_T = (the same constants) ∫ ρ T dλ (SI eq. S8,
                 // S14): the stray light B = N_T − N moves by N_T ∂ln N_T − N ∂ln N, N_T's
                 // derivative its own average over ρ T ([`transmitted_band_log_derivative`])
@@ -826,10 +849,14 @@ fn point_gradient(
                 });
                 bias_place += 1;
                 let bias = match on_value_rule {
-                    Some(b) if camera.noise_spectrum().is_none() => b,
+                    Some(b) => b,
                     _ => library_bias_partials(scene, e, p, index)?,
                 };
-                let d_g = d_g_from_mean_mtf(scene, e, bias.mean_mtf);
+                let d_weighted = match camera.noise_spectrum() {
+                    Some(shape) => library_bias_partials_over(scene, e, p, index, Some(shape))?.mean_mtf,
+                    None => bias.mean_mtf,
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
                 // N ∝ ∫ρ τ1 dλ and N_T ∝ ∫ρ T dλ (SI eq. S8, S14); the stray light B = N_T − N
                 let d_n = n * bias.ln_photoelectrons;
                 let d_b = if stray { transmitted * bias.ln_transmitted - d_n } else { 0.0 };
@@ -920,18 +947,21 @@ type PointPartials = (f64, f64, f64, f64, f64, f64, f64);
 /// change of variables `u = νp/p0` gives `M̄(p) = (p0/p)/ν_N ∫_0^{ν_N p/p0} MTF(u) du` and
 /// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move.
 fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<PointPartials, Error> {
-    let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     if scene.camera().noise_spectrum().is_some() {
-        return Err(not_smooth(
-            "with camera.noise_spectrum the noise weights do not scale with the stack's pitch; not computed here yet",
-        ));
+        return Err(Error::NotDifferentiable {
+            parameter: p.describe(),
+            reason:
+                "with camera.noise_spectrum the stack's pitch scales its 2-D OTF under the weight 1/n(ν) (by parts, \
+                     an n′ term over azimuth), which is not checked against converged evaluations of the stack yet \
+                     (their noise-weighted mean at 1e-10 takes minutes): not computed here yet"
+                    .to_owned(),
+        });
     }
     // with the pixel MTF P (its sinc does not scale with the stack's pitch) the OTF's change of
     // scale is ν ∂_ν O, by parts P(ν_N)|O(ν_N)| − M̄ − P_ν (MTF(ν_N) the system's, P included)
     let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     let d_mtf = edge - e.mean_mtf - pixel_slope(scene, p)?;
-    let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
-    Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf))
+    Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g_from_mean_mtf(scene, e, d_mtf), d_mtf))
 }
 
 /// The pixel MTF's term of the integration by parts in ν, `P_ν = (1/ν_N) ∫ ν P′(ν) |O(ν)| dν`
@@ -1151,15 +1181,6 @@ fn aperture_lane_partials(
     all: Option<&[f64]>,
     base: Option<usize>,
 ) -> Result<(f64, f64), Error> {
-    if scene.camera().noise_spectrum().is_some() {
-        return Err(Error::NotDifferentiable {
-            parameter: p.describe(),
-            reason: "with camera.noise_spectrum the F-number moves s = νλF# under the noise weight 1/n(ν), whose \
-                     integration by parts takes n's derivative (a piecewise-linear table's, with a jump at each row): \
-                     not computed here yet"
-                .to_owned(),
-        });
-    }
     let lanes = base.and_then(|b| all.and_then(|a| a.get(b..b + 3)));
     let Some(&[d_p, d_t, d_s]) = lanes else {
         return Err(Error::NotDifferentiable {
@@ -1232,17 +1253,36 @@ fn gaussians(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Gaussi
 /// `∂|O| = Re(O* ∂O)/|O|` ([`modulus_derivative`]), on the value's rule over directions
 /// ([`DirectionalRule`]), the engines at the value's sampling levels ([`spectral_engines`]).
 fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<SpectralPartials, Error> {
+    spectral_partials_over(scene, e, p, None)
+}
+
+/// [`spectral_partials`] with each frequency's weight divided by `n(ν)` where `noise` is given:
+/// the `∂M̄` parts are then `∂G`'s, `G = (1/ν_N) ∫ P |O| / n dν` (docs/physics.md, "Gradients
+/// under a noise spectrum": `n` does not move with the spectrum). Under the noise weight the
+/// lanes are taken on the engines of ρ, ρλ, ρλ² (not the value's own pass), and a top-hat band
+/// is refused.
+fn spectral_partials_over(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<SpectralPartials, Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
-    }
+    let over_noise = |nu: f64| noise.map_or(1.0, |n| 1.0 / n.value(nu));
     let detected = crate::evaluate::detected_spectrum(scene);
     let mut found = Vec::new();
     gaussians(&detected, &mut found);
     if found.is_empty()
         && let Some(band) = top_hat(&detected)
     {
+        if noise.is_some() {
+            return Err(not_smooth(
+                "with camera.noise_spectrum the spectral gradient is computed for a Gaussian band (spectrum.shape = \
+                 \"gaussian\"); a top-hat band's edge lanes are not weighted by 1/n(ν) yet"
+                    .to_owned(),
+            ));
+        }
         return top_hat_partials(scene, e, &detected, band, p);
     }
     let [g] = found[..] else {
@@ -1253,7 +1293,9 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     };
     let (c, sigma) = (g.center(), g.sigma());
     let per_range = 1.0 / (2.0 * std::f64::consts::SQRT_2);
-    if let Some(((d_ln_n_c, dc), (d_ln_n_s, ds))) = spectral_lanes_on_value_rule(scene, e, c, sigma) {
+    if let Some(((d_ln_n_c, dc), (d_ln_n_s, ds))) =
+        spectral_lanes_on_value_rule(scene, e, c, sigma).filter(|_| noise.is_none())
+    {
         return Ok(SpectralPartials { center: (d_ln_n_c, dc), range: (d_ln_n_s * per_range, ds * per_range) });
     }
     let lens = scene.lens();
@@ -1289,7 +1331,7 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
         let weights: Vec<Vec<f64>> =
             levels.iter().map(|(_, l)| l.iter().map(optics::Polychromatic::total_weight).collect()).collect();
         let [_, dc, ds] = rule.mean(nyquist, [1.0, c, sigma], &|nu, azimuth| {
-            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
             let mut sum = [0.0; 3];
             for ((share, level), a) in levels.iter().zip(&weights) {
                 let o: Vec<_> = level.iter().map(|eng| eng.otf_along(nu, azimuth)).collect();
@@ -1308,7 +1350,7 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
     // (O, ∂O/∂c, ∂O/∂σ) at ν, the pixel MTF on the derivatives
     let at = |nu: f64| -> (f64, f64, f64) {
         let o: Vec<f64> = engines.iter().map(|eng| eng.otf(nu)).collect();
-        let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+        let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
         let (d1, d2) = (o[1] - o[0], o[2] - o[0]);
         let dc = a[1] * d1 / (sigma * sigma * a[0]);
         let ds = (a[2] * d2 - 2.0 * c * a[1] * d1) / (sigma.powi(3) * a[0]);
@@ -1593,9 +1635,6 @@ fn line_center_partials(
     let p = Parameter::SpectrumCenter;
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
-    }
     let detected = crate::evaluate::detected_spectrum(scene);
     let Some(line) = detected.line() else {
         return Err(not_smooth("the detected spectrum has no line".to_owned()));
@@ -1796,6 +1835,17 @@ fn detected_blackbodies(spectrum: &radiometry::Spectrum, found: &mut Vec<radiome
 ///   that one wavelength, whatever the weight: `∂M̄/∂T = 0`.
 /// - Over a band: [`temperature_band_partials`].
 fn temperature_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+    temperature_partials_over(scene, e, p, None)
+}
+
+/// [`temperature_partials`] with each frequency's weight divided by `n(ν)` where `noise` is
+/// given (the `∂M̄` part then `∂G`'s; under a line it is 0 either way).
+fn temperature_partials_over(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let detected = crate::evaluate::detected_spectrum(scene);
     fn blackbodies(spectrum: &radiometry::Spectrum, found: &mut Vec<radiometry::Blackbody>) {
@@ -1812,7 +1862,7 @@ fn temperature_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(
     };
     match detected.line() {
         Some(line) => Ok((source.log_derivatives(line.center()).1, 0.0)),
-        None => temperature_band_partials(scene, e, &detected, source).map_err(|e| match e {
+        None => temperature_band_partials(scene, e, &detected, source, noise).map_err(|e| match e {
             Error::NotDifferentiable { reason, .. } => not_smooth(reason),
             other => other,
         }),
@@ -1834,18 +1884,21 @@ fn temperature_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(
 /// relative spread of `g` over the band, from the detected spectrum's own quadrature): it loses
 /// that factor of the engines' relative accuracy, so both OTFs are taken at the tolerance times
 /// `s/10` (at least 1e-13).
+///
+/// Under a noise spectrum (`noise`) each frequency's weight is divided by `n(ν)`: the `∂M̄` part
+/// is then `∂G`'s, on these engines (not the value's own pass).
 fn temperature_band_partials(
     scene: &Scene,
     e: &Evaluation,
     detected: &radiometry::Spectrum,
     source: radiometry::Blackbody,
+    noise: Option<&optics::NoiseShape>,
 ) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: Parameter::Temperature.describe(), reason };
     let camera = scene.camera();
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth("with camera.noise_spectrum the spectral gradient is not computed here yet".to_owned()));
-    }
-    if let Some(found) = temperature_on_value_rule(scene, e, detected, source) {
+    if noise.is_none()
+        && let Some(found) = temperature_on_value_rule(scene, e, detected, source)
+    {
         return Ok(found);
     }
     let rate = |l: f64| source.log_derivatives(l).1;
@@ -1884,7 +1937,7 @@ fn temperature_band_partials(
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let at = |nu: f64| -> (f64, [f64; 1]) {
         let (o, o_g) = (engines[0].otf(nu), engines[1].otf(nu));
-        let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+        let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) / noise.map_or(1.0, |n| n.value(nu));
         (o, [pix * mean_rate * (o_g - o)])
     };
     // per relative change of T, against the size the engines' accuracy is relative to
@@ -2185,14 +2238,11 @@ fn aperture_partials(
     pass: Option<&DefocusFound>,
     overlap_lane: Option<f64>,
 ) -> Result<(f64, f64), Error> {
-    if scene.camera().noise_spectrum().is_none()
-        && let Some(found) = defocus_on_value_rule(scene, e, pass)?
-    {
+    // (the white ∂M̄; under a noise spectrum ∂G is `noise_weight::aperture_over_noise`'s)
+    if let Some(found) = defocus_on_value_rule(scene, e, pass)? {
         return Ok(found);
     }
-    if scene.camera().noise_spectrum().is_none()
-        && let Some(found) = aperture_on_overlap(scene, e, overlap_lane)
-    {
+    if let Some(found) = aperture_on_overlap(scene, e, overlap_lane) {
         return Ok(found);
     }
     if let Some(found) = aperture_through_iris(scene, e)? {
@@ -2677,11 +2727,21 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
                 .to_owned(),
         ));
     }
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth(
-            "with camera.noise_spectrum the F-number and focal-length gradient is not computed here yet".to_owned(),
-        ));
-    }
+    let d_k = defocus_lane_by_own_rule(scene, e, p, None)?;
+    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+}
+
+/// `D_K = (1/ν_N) ∫ sign(O) ∂O/∂ln K / n dν` on [`aperture_partials_by_own_rule`]'s own rule
+/// (`n` the noise spectrum where given, else 1: under it each frequency's weight divided by
+/// `n(ν)`, the table's kinks integrated across as the ν panels double).
+fn defocus_lane_by_own_rule(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<f64, Error> {
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let lens = scene.lens();
     let field = scene.field();
     let f_number = lens.f_number();
@@ -2730,15 +2790,16 @@ pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Pa
                 d += weight * tau * optics::defocus_otf_log_derivative(s, w);
             }
         }
-        (o / total, d / total)
+        (o / total, d / total / noise.map_or(1.0, |n| n.value(nu)))
     };
     // the spectral rule doubled from 2 to 256 panels a piece on a coarse frequency rule (its
     // nodes reach 0.99 ν_N, where the defocus turns the OTF fastest in λ), then the frequency rule
     // to 1024 panels; the zeros to 1e-13 of ν_N: this rule's own (coarser than the value's 1e-15 of ν)
     let refinement = Refinement { lambda_panels: (2, 256), nu_panels: 1024, zero_width: &|_| 1e-13 * nyquist };
-    let (_, d_k) = reference_rule(scene, e, p, refinement, None, node, value, at)?;
-    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+    // the pixel MTF on the lane's weight (the white callers refuse it before)
+    let pixel = scene.camera().pixel_mtf().then_some(scene.camera().pixel_pitch());
+    let (_, d_k) = reference_rule(scene, e, p, refinement, pixel, node, value, at)?;
+    Ok(d_k)
 }
 
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` for the design wavelength λ0 of a lens whose every order is the
@@ -3069,13 +3130,21 @@ type BiasOrder = (f64, f64, optics::radial::RadialOrder, optics::radial::RadialP
 /// times `max(|∂M̄|, M̄)`; then the ν rule (panels split at the sign changes of `O`, the kink
 /// of |O|) doubled the same way. Each OTF and its lane to a tenth of the tolerance.
 fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usize) -> Result<BiasPartials, Error> {
+    library_bias_partials_over(scene, e, p, index, None)
+}
+
+/// [`library_bias_partials`] with each frequency's weight of `∂O` divided by `n(ν)` where
+/// `noise` is given: its `mean_mtf` is then `∂G`'s (docs/physics.md, "Gradients under a noise
+/// spectrum"; the table's kinks integrated across as the ν panels double).
+fn library_bias_partials_over(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    index: usize,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<BiasPartials, Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth(
-            "with camera.noise_spectrum the parameter bias's gradient is not computed here yet".to_owned(),
-        ));
-    }
     let lens = scene.lens();
     let field = scene.field();
     if !field.is_on_axis() {
@@ -3153,7 +3222,7 @@ fn library_bias_partials(scene: &Scene, e: &Evaluation, p: Parameter, index: usi
             }
         }
         let o = o / total;
-        (o, (d - o * d_total) / total)
+        (o, (d - o * d_total) / total / noise.map_or(1.0, |n| n.value(nu)))
     };
     let refinement = Refinement { lambda_panels: (1, 64), nu_panels: 512, zero_width: &|hi| 1e-15 * hi };
     let (nodes, mean_mtf) = reference_rule(scene, e, p, refinement, pixel, node, value, at)?;

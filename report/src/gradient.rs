@@ -774,7 +774,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um, and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -3029,12 +3029,14 @@ mod tests {
         let shaped = with_noise_spectrum(&paper, "fft-refusals");
         let e = gradient(&shaped, &[], &owned(&["lens.spherical_um"])).unwrap_err().to_string();
         assert!(e.contains("Seidel coefficient") && e.contains("noise_spectrum"), "{e}");
-        // the pixel pitch with both the pixel MTF and a noise spectrum (the sinc fixed in ν/ν_N,
-        // the noise in cycles/mm)
-        let e = gradient(&shaped, &owned(&["camera.pixel_mtf=true"]), &owned(&["camera.pixel_pitch_um"]))
+        // a PSF stack's pitch and a top-hat band's edge lanes under a noise spectrum
+        let stack = with_noise_spectrum_beside(&example("psf-stack.toml"), "refused-psf");
+        let e = gradient(&stack, &[], &owned(&["lens.psf_pitch_um"])).unwrap_err().to_string();
+        assert!(e.contains("sample pitch") && e.contains("noise_spectrum"), "{e}");
+        let e = gradient(&shaped, &owned(&["spectrum.shape=\"tophat\""]), &owned(&["spectrum.center_nm"]))
             .unwrap_err()
             .to_string();
-        assert!(e.contains("pixel pitch") && e.contains("noise_spectrum") && e.contains("pixel_mtf"), "{e}");
+        assert!(e.contains("centre") && e.contains("noise_spectrum") && e.contains("top-hat"), "{e}");
         // Noll 5 at zero on the symmetric pupil: 0, as Noll 5 at ±c are one pupil turned by 90°
         let g = gradient(
             &paper,
@@ -3908,5 +3910,121 @@ mod tests {
         println!("lens.obscuration: ∂ASNR {:.9e}, differences {theirs:.9e}", g.d_asnr[0]);
         assert!((g.d_asnr[0] - theirs).abs() <= 1e-6 * theirs.abs(), "{g:?}");
         assert!((g.d_asnr[0] - g.snr0 * g.d_mean_mtf[0] - g.d_snr0[0] * g.asnr / g.snr0).abs() > 1e-3 * theirs.abs());
+    }
+
+    /// [`assert_weighted`] for keys that move N too: ∂ASNR differs from ∂SNR0 · G + SNR0 · ∂M̄
+    /// (G = ASNR/SNR0 the weighted mean, ∂M̄ the white lane) by more than 1e-4 of its norm, 10× the
+    /// checks' bound (a key that moves N as well as the OTF, such as the temperature, keeps its
+    /// gradient's norm mostly in ∂SNR0).
+    fn assert_weighted_beside_n(g: &Gradient) {
+        let norm = g.d_asnr.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let weighted = g.asnr / g.snr0;
+        let apart = (0..g.d_asnr.len())
+            .map(|i| (g.d_asnr[i] - g.d_snr0[i] * weighted - g.snr0 * g.d_mean_mtf[i]).abs())
+            .fold(0.0, f64::max);
+        println!("largest |∂ASNR − ∂SNR0 G − SNR0 ∂M̄| {apart:.3e} of the norm {norm:.3e}");
+        assert!(apart > 1e-4 * norm, "{g:?}");
+    }
+
+    /// [`with_noise_spectrum`] keeping `source`'s own directory (its data files), the table
+    /// written in a directory of its own and named by its absolute path.
+    fn with_noise_spectrum_beside(source: &Source, name: &str) -> Source {
+        let dir = std::env::temp_dir().join(format!("asnr-noise-gradient-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let table = dir.join("nps.csv");
+        std::fs::write(&table, "frequency_cyc_per_mm,relative\n0,1\n30,1.4\n70,2.2\n130,3\n").unwrap();
+        let text =
+            source.text().replace("[camera]", &format!("[camera]\nnoise_spectrum = {:?}", table.display().to_string()));
+        assert!(text.contains("noise_spectrum"), "{text}");
+        Source::from_text(text, "a scene with a noise spectrum", source.dir())
+    }
+
+    /// The keys that scale the OTF's frequency or the pixel's sinc under a noise spectrum
+    /// (docs/physics.md, "Gradients under a noise spectrum": by parts, the end term
+    /// P(ν_N)|O(ν_N)|/n(ν_N) and the interior term of n′, n fixed in cycles/mm) against central
+    /// differences of evaluations converged at 1e-10, within 10× the scene's tolerance (1e-6) of
+    /// the gradient's norm: the F-number and focal length of the phase lens (its aperture lanes on
+    /// the value's noise-weighted pass) and of the paper's chromatic lens (the defocus lane on the
+    /// reference rule, weighted; with the pixel MTF in the integral form), with [`check_aperture`]'s
+    /// step, and the pixel pitch with the pixel MTF in both forms.
+    #[test]
+    fn frequency_scale_keys_under_a_noise_spectrum_match_central_differences() {
+        let binary2 = with_noise_spectrum(&example("phase-binary2.toml"), "scale-binary2");
+        let keys = owned(&["lens.f_number", "lens.focal_length_mm"]);
+        assert_weighted_beside_n(&gradient(&binary2, &[], &keys).unwrap());
+        check_aperture(&binary2, &[]);
+        let paper = with_noise_spectrum(&scene::read(None).unwrap(), "scale-paper");
+        assert_weighted_beside_n(&gradient(&paper, &[], &keys).unwrap());
+        check_aperture(&paper, &[]);
+        check_aperture(&paper, &joined(&INTEGRAL_WITH_GLARE, &["camera.pixel_mtf=true"]));
+        let pitch = ["camera.pixel_pitch_um", "exposure.time_ms"];
+        check_against_differences(&binary2, &owned(&PIXEL_AND_READ_NOISE), &pitch);
+        check_against_differences(&binary2, &joined(&PIXEL_AND_READ_NOISE, &["options.form=\"integral\""]), &pitch);
+    }
+
+    /// The spectral keys under a noise spectrum (their lanes with each frequency's weight divided
+    /// by n(ν)): a Gaussian band's centre and range and a blackbody's temperature over it on the
+    /// paper's lens, against Richardson-extrapolated central differences of evaluations converged
+    /// at 1e-10 (relative steps 2h and h), and a line's wavelength (the frequency scale's term
+    /// and the defocus lane, weighted) as [`check_line`] checks it, within 10× the tolerance 1e-6
+    /// of the norm.
+    #[test]
+    fn spectral_keys_under_a_noise_spectrum_match_central_differences() {
+        let paper = with_noise_spectrum(&scene::read(None).unwrap(), "spectral-paper");
+        let blackbody = with_noise_spectrum(&paper_blackbody(), "spectral-blackbody");
+        for (source, keys) in [
+            (&paper, &["spectrum.center_nm", "spectrum.range_nm", "exposure.time_ms"][..]),
+            (&blackbody, &["source.temperature_k", "exposure.time_ms"][..]),
+        ] {
+            assert_weighted_beside_n(&gradient(source, &[], &owned(&keys[..1])).unwrap());
+            check_with_references(source, &[], keys, &|k, v| {
+                let h = relative_step(k, v);
+                let (coarse, fine) = (central(source, &[], k, v, 2.0 * h), central(source, &[], k, v, h));
+                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+            });
+        }
+        let line = owned(&LINE_803);
+        assert_weighted_beside_n(&gradient(&paper, &line, &owned(&["spectrum.center_nm"])).unwrap());
+        check_line(&paper, &line, &["exposure.time_ms"]);
+        check_line(&paper, &joined(&LINE_803, &PIXEL_AND_READ_NOISE), &["exposure.time_ms"]);
+    }
+
+    /// A library lens's parameter bias under a noise spectrum (its lane on the reference rule
+    /// with each frequency's weight divided by n(ν)), as `library_bias_matches_central_differences`
+    /// checks it: Richardson of steps 0.1 and 0.05 nm of evaluations converged at 1e-10, the ASNR
+    /// within 10× the tolerance 1e-6 of its gradient (N's, mostly) and the weighted mean
+    /// G = ASNR/SNR0's own derivative (∂ASNR − ∂SNR0 G)/SNR0 within the same bound over SNR0
+    /// (the white ∂M̄ is 1e-6 per nm away from it), beside the differences' own error.
+    #[test]
+    fn library_bias_under_a_noise_spectrum_matches_central_differences() {
+        let source = with_noise_spectrum_beside(&example("library.toml"), "bias");
+        let key = "lens.parameter_bias[0]";
+        let overrides = owned(&["lens.library_interpolation=\"cubic\"", "lens.parameter_bias=[0.3]"]);
+        let g = gradient(&source, &overrides, &owned(&[key])).unwrap();
+        let weighted = |v: f64| {
+            let [asnr, _, snr0, _] = converged(&source, &overrides, key, v);
+            [asnr, asnr / snr0]
+        };
+        let difference = |h: f64| -> [f64; 2] {
+            let (up, down) = (weighted(0.3 + h), weighted(0.3 - h));
+            std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
+        };
+        let (coarse, fine) = (difference(0.1), difference(0.05));
+        let richardson: [f64; 2] = std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0);
+        let weighted_mean = g.asnr / g.snr0;
+        let ours = [g.d_asnr[0], (g.d_asnr[0] - g.d_snr0[0] * weighted_mean) / g.snr0];
+        // the ASNR's bound carried to G = ASNR/SNR0 (its gradient's norm over SNR0)
+        let bounds = [1e-5 * g.d_asnr[0].abs(), 1e-5 * g.d_asnr[0].abs() / g.snr0];
+        for (q, name) in ["ASNR", "G"].iter().enumerate() {
+            let noise = REFERENCE_TOLERANCE * [g.asnr, weighted_mean][q] / 0.05;
+            let error = (ours[q] - richardson[q]).abs();
+            println!(
+                "{name}: gradient {:.9e}, Richardson {:.9e}, error {error:.1e} (bound {:.1e})",
+                ours[q],
+                richardson[q],
+                bounds[q] + noise
+            );
+            assert!(error <= bounds[q] + noise, "{name}: {} vs {}", ours[q], richardson[q]);
+        }
     }
 }

@@ -48,4 +48,43 @@ impl NoiseShape {
         let t = (nu - x[i - 1]) / (x[i] - x[i - 1]);
         y[i - 1] + t * (y[i] - y[i - 1])
     }
+
+    /// The table's frequencies (cycles/m, strictly increasing): where `n` has its kinks.
+    pub fn rows(&self) -> &[f64] {
+        &self.frequencies
+    }
+
+    /// `dn/d|ν|` at `frequency` (cycles/m, sign ignored): the slope of the row interval that
+    /// holds it (the one above where it is a row), 0 beyond the table's ends, where `n` is
+    /// constant. `n` has a kink at each row, so the slope is piecewise constant.
+    pub fn slope(&self, frequency: f64) -> f64 {
+        let nu = frequency.abs();
+        let (x, y) = (&self.frequencies, &self.relative);
+        let i = x.partition_point(|&f| f <= nu);
+        if i == 0 || i == x.len() {
+            return 0.0;
+        }
+        (y[i] - y[i - 1]) / (x[i] - x[i - 1])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::NoiseShape;
+
+    /// `slope` against central differences of `value` inside each row interval (exact for the
+    /// linear pieces, to rounding), the interval above at a row, and 0 beyond the table's ends.
+    #[test]
+    fn slope_is_the_derivative_of_the_pieces() {
+        let shape = NoiseShape::new(vec![1e4, 3e4, 7e4], vec![1.0, 1.4, 3.0]).unwrap();
+        for nu in [1.5e4, 2.9e4, 3.1e4, 6.5e4] {
+            let h = 10.0;
+            let theirs = (shape.value(nu + h) - shape.value(nu - h)) / (2.0 * h);
+            assert!((shape.slope(nu) - theirs).abs() <= 1e-12 * theirs.abs(), "{nu}: {} vs {theirs}", shape.slope(nu));
+            assert_eq!(shape.slope(-nu), shape.slope(nu));
+        }
+        assert!((shape.slope(3e4) - 1.6 / 4e4).abs() <= 1e-15 / 4e4, "{}", shape.slope(3e4));
+        assert_eq!((shape.slope(5e3), shape.slope(7e4), shape.slope(9e4)), (0.0, 0.0, 0.0));
+        assert_eq!(shape.rows(), &[1e4, 3e4, 7e4]);
+    }
 }

@@ -1,0 +1,294 @@
+//! The noise-weighted parts of the keys that move the OTF's frequency scale (the F-number, a
+//! line's wavelength) or the pixel's sinc under a non-white noise
+//! spectrum `n(ν)` (`camera.noise_spectrum`; docs/physics.md, "Gradients under a noise
+//! spectrum"). `G = (1/ν_N) ∫_0^{ν_N} P |O| / n dν` with `n` fixed in cycles/mm: where a key
+//! scales the OTF's frequency, the integration by parts that turns `ν ∂_ν|O|` into one value at
+//! Nyquist takes the derivative of `νP/n`, so besides `P(ν_N)|O(ν_N)|/n(ν_N)` and `G` it leaves
+//! `(1/ν_N) ∫ P |O| (νP′/P − νn′/n)/n dν`, which is integrated here on panels split at the
+//! table's rows (where `n′` jumps) and at the sign changes of `O` (the kinks of `|O|`).
+
+use super::{DirectionalRule, Parameter, on_value_engine};
+use crate::evaluate::Evaluation;
+use crate::{Error, Scene};
+
+/// `νP′(ν)/P(ν) = x cot x − 1` of the pixel MTF `P = sinc(x)`, `x = πpν` (`pitch` p in m, ν in
+/// cycles/m; docs/physics.md, "Gradients: the pixel pitch with the pixel MTF"): its series
+/// `−x²/3 − x⁴/45` below `x = 1e-3`, where the quotient loses digits.
+fn pixel_log_slope(pitch: f64, nu: f64) -> f64 {
+    let x = std::f64::consts::PI * pitch * nu;
+    if x.abs() < 1e-3 {
+        let x2 = x * x;
+        -x2 / 3.0 - x2 * x2 / 45.0
+    } else {
+        x / x.tan() - 1.0
+    }
+}
+
+/// `(1/ν_N) ∫_0^{ν_N} P(ν) |O(ν)| w(ν) dν` on the value's own engine (metric's `evaluate`: its
+/// lens, spectrum, field and settings; `P` the pixel MTF where the camera applies it), averaged
+/// over the value's directions where the OTF depends on direction ([`DirectionalRule`], whose
+/// panels integrate across the rows' kinks of `w`). Where the OTF is rotationally symmetric:
+/// composite 16-point Gauss–Legendre panels on each interval between the noise table's rows
+/// (where `w` has its kinks), each panel split at a sign change of `O` (the kink of `|O|`,
+/// bracketed to 1e-15 of its frequency), from 4 panels an interval doubled until the integral
+/// moves by at most the tolerance times `max(|integral|, scale)`, or 1024 panels. Refused,
+/// naming `p`, where the engine is not built.
+pub(super) fn weighted_mtf_integral(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    scale: f64,
+    weight: &dyn Fn(f64) -> f64,
+) -> Result<f64, Error> {
+    let camera = scene.camera();
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let rows: Vec<f64> = camera.noise_spectrum().map(|n| n.rows().to_vec()).unwrap_or_default();
+    let tolerance = scene.options().settings().tolerance;
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let pix = |nu: f64| pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
+    on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        if poly.has_pupil_grid() || poly.direction_dependent() {
+            let rule = DirectionalRule::of(scene, poly, tolerance);
+            let [m, _, _] = rule.mean(nyquist, [1.0, 0.0, 0.0], &|nu, azimuth| {
+                [pix(nu) * poly.otf_along(nu, azimuth).norm() * weight(nu), 0.0, 0.0]
+            });
+            return Some(m);
+        }
+        let mut ends = vec![0.0];
+        ends.extend(rows.iter().copied().filter(|&r| r > 0.0 && r < nyquist));
+        ends.push(nyquist);
+        let piece = |a: f64, b: f64| -> f64 {
+            let mut sum = 0.0;
+            for &(x, wx) in optics::quad::rule() {
+                let half = 0.5 * (b - a);
+                let nu = 0.5 * (a + b) + half * x;
+                sum += half * wx * pix(nu) * poly.otf(nu).abs() * weight(nu);
+            }
+            sum
+        };
+        let integrate = |panels: usize| -> f64 {
+            let mut sum = 0.0;
+            for w in ends.windows(2) {
+                let h = (w[1] - w[0]) / panels as f64;
+                let mut previous = (w[0], poly.otf(w[0]));
+                for i in 1..=panels {
+                    let nu = if i == panels { w[1] } else { w[0] + h * i as f64 };
+                    let value = poly.otf(nu);
+                    if value * previous.1 < 0.0 {
+                        let (mut lo, mut hi) = (previous.0, nu);
+                        while hi - lo > 1e-15 * hi {
+                            let m = 0.5 * (lo + hi);
+                            if poly.otf(m) * previous.1 > 0.0 {
+                                lo = m;
+                            } else {
+                                hi = m;
+                            }
+                        }
+                        let zero = 0.5 * (lo + hi);
+                        sum += piece(previous.0, zero) + piece(zero, nu);
+                    } else {
+                        sum += piece(previous.0, nu);
+                    }
+                    previous = (nu, value);
+                }
+            }
+            sum / nyquist
+        };
+        let mut panels = 4;
+        let mut previous = integrate(panels);
+        loop {
+            panels *= 2;
+            let next = integrate(panels);
+            let change = (next - previous).abs();
+            previous = next;
+            if change <= tolerance * next.abs().max(scale) || panels >= 1024 {
+                return Some(next);
+            }
+        }
+    })
+    .ok_or_else(|| Error::NotDifferentiable {
+        parameter: p.describe(),
+        reason: "with camera.noise_spectrum the frequency scale's term of the integration by parts is taken on the \
+                 value's engine, which was not built here"
+            .to_owned(),
+    })
+}
+
+/// The noise-weighted mean `G = (1/ν_N) ∫ P |O| / n dν` the evaluation took.
+fn weighted_mean(e: &Evaluation) -> f64 {
+    e.asnr_mean / e.snr0
+}
+
+/// The pixel's sinc term under the noise weight, `P̃_ν = (1/ν_N) ∫ ν P′ |O| / n dν` (0 without
+/// the pixel MTF): with the pixel MTF, `∂G/∂ln p = G − MTF(ν_N)/n(ν_N) + P̃_ν` for the pixel
+/// pitch (the sinc fixed in `ν/ν_N`, `O` and `n` in cycles/mm: by parts in `x = ν/ν_N`, no `n′`).
+pub(super) fn pixel_slope_over_noise(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<f64, Error> {
+    let camera = scene.camera();
+    let (Some(shape), true) = (camera.noise_spectrum(), camera.pixel_mtf()) else {
+        return Ok(0.0);
+    };
+    let pitch = camera.pixel_pitch();
+    weighted_mtf_integral(scene, e, p, weighted_mean(e), &|nu| pixel_log_slope(pitch, nu) / shape.value(nu))
+}
+
+/// `∂G/∂ln s` where the OTF's frequency scales, `O(ν) → O(sν)` at `s = 1`, with the pixel MTF
+/// `P`, the noise `n` and `ν_N` held (the F-number's normalized frequency `νλF#` at a fixed
+/// wavefront, a line's `νcF#`): `(1/ν_N) ∫ P ν ∂_ν|O| / n dν`, by parts
+///
+/// ```text
+/// P(ν_N)|O(ν_N)|/n(ν_N) − G − (1/ν_N) ∫ P |O| (νP′/P − νn′/n)/n dν
+/// ```
+///
+/// (`νP/n` is continuous with `n`, its derivative jumping at the table's rows; `|O|` continuous
+/// through its kinks), `edge` the system's `P(ν_N)|O(ν_N)|` as `mtf_at` gives it (averaged over
+/// the directions where the OTF depends on direction). Without the noise spectrum it is the
+/// white `edge − M̄ − P_ν`.
+pub(super) fn frequency_scale_over_noise(scene: &Scene, e: &Evaluation, p: Parameter, edge: f64) -> Result<f64, Error> {
+    let camera = scene.camera();
+    let Some(shape) = camera.noise_spectrum() else {
+        return Err(Error::NotDifferentiable {
+            parameter: p.describe(),
+            reason: "the scene has a white noise spectrum (camera.noise_spectrum not given)".to_owned(),
+        });
+    };
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let g = weighted_mean(e);
+    let interior = weighted_mtf_integral(scene, e, p, g, &|nu| {
+        let n = shape.value(nu);
+        (pixel.map_or(0.0, |pitch| pixel_log_slope(pitch, nu)) - nu * shape.slope(nu) / n) / n
+    })?;
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    Ok(edge / shape.value(nyquist) - g - interior)
+}
+
+/// `(∂G/∂ln F#, ∂G/∂ln f0)` under the noise spectrum, the weighted counterparts of
+/// `aperture_lane_partials` and `aperture_partials_by_own_rule`: the frequency scale's term
+/// ([`frequency_scale_over_noise`]) and the wavefront's lanes, each frequency's weight divided by
+/// `n(ν)` — a phase lens's `[P, T, S]` on the value's noise-weighted pass of the radial engine
+/// (`base`: where they start among its wavefront directions), `∂G/∂ln F# = S − (D̃_P + D̃_T)`,
+/// `∂G/∂ln f0 = D̃_P + D̃_S`; otherwise `D̃_K` on the reference rule of the defocus lane, on axis,
+/// every order the full circle with a defocus alone, `∂G/∂ln F# = S − 2 D̃_K`, `∂G/∂ln f0 = D̃_K`.
+pub(super) fn aperture_over_noise(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    base: Option<usize>,
+) -> Result<(f64, f64), Error> {
+    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    let scale = frequency_scale_over_noise(scene, e, p, edge)?;
+    if let Some(b) = base {
+        let lanes = crate::evaluate::noise_weighted_lanes(scene, true, &[])?;
+        let Some(&[d_p, d_t, d_s]) = lanes.binary2.as_deref().and_then(|a| a.get(b..b + 3)) else {
+            return Err(Error::NotDifferentiable {
+                parameter: p.describe(),
+                reason: "with camera.noise_spectrum the radial engine's noise-weighted pass did not carry the \
+                         aperture's lanes here (an order through an iris, zones, a map or a table, or the FFT path)"
+                    .to_owned(),
+            });
+        };
+        return Ok((scale - (d_p + d_t), d_p + d_s));
+    }
+    let d_k = weighted_defocus_lane(scene, e, p)?;
+    Ok((scale - 2.0 * d_k, d_k))
+}
+
+/// `D̃_K`, the defocus lane with each frequency's weight divided by `n(ν)`, on the reference rule
+/// of `aperture_partials_by_own_rule`; its refusals say that this is the rule taken here.
+fn weighted_defocus_lane(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<f64, Error> {
+    super::defocus_lane_by_own_rule(scene, e, p, scene.camera().noise_spectrum()).map_err(|error| match error {
+        Error::NotDifferentiable { parameter, reason } => Error::NotDifferentiable {
+            parameter,
+            reason: format!(
+                "with camera.noise_spectrum the weighted defocus lane is taken on the reference rule, on axis: {reason}"
+            ),
+        },
+        other => other,
+    })
+}
+
+/// `∂G/∂c` for the wavelength `c` of the scene's line under the noise spectrum, the weighted
+/// counterpart of `line_center_partials`' `∂M̄/∂c`: the OTF is the lens's at `c` alone, moved by
+/// its normalized frequency `νcF#` (the frequency scale's term per unit `ln c`,
+/// [`frequency_scale_over_noise`] over `c`) and by its wavefront — a phase lens's wavelength
+/// directions on the value's noise-weighted pass of the radial engine (`base`: where they start),
+/// or, for one order that is the full pupil with a defocus alone, `D̃_K ∂ln w/∂c` with `D̃_K` on
+/// the reference rule of the defocus lane, each frequency's weight divided by `n(ν)`. Off axis
+/// the chromatic lens's one order is the on-axis OTF times a phase (its `|O|` the same): taken
+/// on axis. Several orders moving by their own rates (the harmonic lens's order lane) are
+/// refused, naming why.
+pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option<usize>) -> Result<f64, Error> {
+    let p = Parameter::SpectrumCenter;
+    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let Some(line) = detected.line() else {
+        return Err(not_smooth("the detected spectrum has no line".to_owned()));
+    };
+    let c = line.center();
+    let lens = scene.lens();
+    let field = scene.field();
+    if !field.is_on_axis() && base.is_none() && lens.image_shift_field_rates(c, field).is_some() {
+        return line_center_over_noise(&scene.single_field(optics::Field::ON_AXIS), e, None);
+    }
+    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+    let scale = frequency_scale_over_noise(scene, e, p, edge)? / c;
+    if let Some(b) = base {
+        let Some(Ok((coefficients, _))) = lens.wavelength_directions(c) else {
+            return Err(not_smooth("the lens gives no wavelength directions here".to_owned()));
+        };
+        let lanes = crate::evaluate::noise_weighted_lanes(scene, true, &[])?;
+        let Some(lanes) = lanes.binary2.as_deref().and_then(|a| a.get(b..b + coefficients.len())) else {
+            return Err(not_smooth(
+                "with camera.noise_spectrum the radial engine's noise-weighted pass did not carry the wavelength's \
+                 lanes here (off axis, an order through an iris, zones, a map or a table, or the FFT path)"
+                    .to_owned(),
+            ));
+        };
+        let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
+        return Ok(scale + along);
+    }
+    let orders = lens.orders(c, field);
+    if orders.len() != 1 {
+        return Err(not_smooth(format!(
+            "{}: with camera.noise_spectrum a line's wavelength is followed for one order with a defocus alone \
+             (the chromatic and refractive lenses) and a phase lens on the radial engine; the {} orders' order \
+             lane is not weighted by 1/n(ν) yet",
+            lens.describe(),
+            orders.len()
+        )));
+    }
+    let rates = match lens.affine_defocus(field) {
+        Some(a) => Some(a.w020_slope),
+        None => lens.defocus_rates(c, field).map(|r| r.defocus),
+    };
+    let Some(rate) = rates else {
+        return Err(not_smooth(format!("{}: the lens gives no rate of its defocus in λ here", lens.describe())));
+    };
+    let w020 = orders[0].wavefront.defocus_m;
+    // ∂H/∂w = 0 at w = 0 (H is even in w)
+    if w020 == 0.0 {
+        return Ok(scale);
+    }
+    let d_k = weighted_defocus_lane(scene, e, p)?;
+    Ok(scale + d_k * (rate / w020 - 1.0 / c))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pixel_log_slope;
+
+    /// `x cot x − 1` against central differences of `ln sinc` in `ln ν`, across the series'
+    /// switch at `x = 1e-3` and up to Nyquist (`x = π/2`).
+    #[test]
+    fn pixel_log_slope_is_the_sinc_s_log_derivative() {
+        let pitch = 5.2e-6;
+        for x in [1e-4, 9.9e-4, 1.01e-3, 0.3, 1.0, 1.5] {
+            let nu = x / (std::f64::consts::PI * pitch);
+            let h = 1e-5;
+            let ln_p = |nu: f64| optics::pixel_mtf(pitch, nu).ln();
+            let theirs = (ln_p(nu * (1.0 + h)) - ln_p(nu * (1.0 - h))) / ((1.0 + h).ln() - (1.0 - h).ln());
+            let ours = pixel_log_slope(pitch, nu);
+            assert!((ours - theirs).abs() <= 1e-9 + 1e-8 * theirs.abs(), "x = {x}: {ours} vs {theirs}");
+        }
+    }
+}
