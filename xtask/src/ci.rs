@@ -99,12 +99,13 @@ fn test(root: &Path) -> Result<()> {
 }
 
 /// The reduced stress grid (`cargo xtask stress --quick`), in the test profile that the test step
-/// has just built (opt-level 2), so CI pays no release build for it.
+/// has just built (opt-level 2), so CI pays no release build for it; the sweep's binary is built
+/// with the test build's features (`cmd::debug_binaries`), so no project crate is compiled again.
 fn stress(root: &Path) -> Result<()> {
-    cmd::run(&mut cmd::cargo(
-        root,
-        &["run", "--locked", "--quiet", "--package", "asnr-bench", "--bin", "stress", "--", "--quick"],
-    ))
+    let sweep = cmd::debug_binaries(root)?.join(format!("stress{}", std::env::consts::EXE_SUFFIX));
+    let mut command = std::process::Command::new(sweep);
+    command.arg("--quick").current_dir(root);
+    cmd::run(&mut command)
 }
 
 fn doc(root: &Path) -> Result<()> {

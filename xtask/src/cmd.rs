@@ -13,6 +13,19 @@ pub(crate) fn cargo(root: &Path, args: &[&str]) -> Command {
     command
 }
 
+/// Builds the workspace's binaries in the debug profile with the feature set of
+/// `cargo test --workspace` (dev-dependencies' features included: `--tests` selects them) and
+/// returns the folder that holds them (`target/debug`).
+///
+/// After the test step of `cargo xtask ci` this compiles only the binaries that no test needed
+/// (the stress sweep's) and reuses every library: `cargo build --package asnr` would resolve the
+/// features of `asnr` alone (no `testkit` on optics, fewer on serde, rand, syn and others) and
+/// compile every project crate again (ARCHITECTURE.md, "CI").
+pub(crate) fn debug_binaries(root: &Path) -> Result<std::path::PathBuf> {
+    run(&mut cargo(root, &["build", "--quiet", "--locked", "--workspace", "--bins", "--tests"]))?;
+    Ok(crate::accuracy::target_dir(root).join("debug"))
+}
+
 /// Echo `command` to stderr, run it and fail unless it exits successfully.
 pub(crate) fn run(command: &mut Command) -> Result<()> {
     if status(command)? { Ok(()) } else { bail!("`{}` failed", display(command)) }

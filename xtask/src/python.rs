@@ -1,6 +1,7 @@
 //! `cargo xtask python`: the Python package as a user gets it, tested (part of `cargo xtask ci`).
 //!
-//! 1. The portable wheel, built and checked by `cargo xtask wheel` (`wheel.rs`).
+//! 1. The portable wheel, built and checked as by `cargo xtask wheel` (`wheel.rs`), in the
+//!    lighter Cargo profile `wheel-ci` (opt-level 2, no line tables; Cargo.toml).
 //! 2. A fresh virtual environment, `target/python-venv` (made anew each run), into which pip
 //!    installs the wheel with its extras, `asnr-….whl[plot,dask,jax]`, pytest and gdstk (the
 //!    GDS writer of `python/tests/test_gds.py`), every version pinned by the constraints file
@@ -40,8 +41,8 @@ const LOSS_EXAMPLE: &str = "examples/python/asnr_in_a_loss.py";
 
 /// Build the wheel, install it into a fresh environment, run the tests and the README's Python.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let wheel = crate::wheel::build(root)?;
-    cmd::run(&mut cmd::cargo(root, &["build", "--quiet", "--locked", "--package", "asnr", "--bin", "asnr"]))?;
+    let wheel = crate::wheel::build(root, crate::wheel::CI)?;
+    let asnr = cmd::debug_binaries(root)?.join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let dir = root.join(VENV);
     if !cmd::status(Command::new("python3").args(["-m", "venv", "--clear"]).arg(&dir))? {
         bail!("python3 -m venv {VENV} failed");
@@ -70,7 +71,6 @@ pub(crate) fn run(root: &Path) -> Result<()> {
         .current_dir(root.join("target"));
     cmd::run(&mut check)?;
 
-    let asnr = crate::accuracy::target_dir(root).join("debug").join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let mut pytest = Command::new(&python);
     pytest
         .args(["-m", "pytest", "-q", "python/tests"])

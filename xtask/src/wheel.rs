@@ -7,6 +7,8 @@
 //!   AVX2 and FMA (Intel since 2013, AMD since 2015) and not only on the machine that built it.
 //!   zig links against glibc 2.17 symbol versions (manylinux2014), whatever the build machine's
 //!   glibc. One wheel serves every CPython ≥ 3.10 (abi3).
+//!   `cargo xtask python` and `cargo xtask torch` build the same wheel in the profile `wheel-ci`
+//!   (`--profile wheel-ci`: opt-level 2, no line tables), which compiles in less time.
 //! - **Checks**: `auditwheel show` must find the manylinux_2_17 tag; `abi3audit --strict` must
 //!   find no symbol outside the 3.10 stable ABI; and the extension's disassembly (`objdump -d`)
 //!   must hold no instruction beyond x86-64-v3: no zmm register, no mask register and no
@@ -39,15 +41,21 @@ const OUT: &str = "target/wheels";
 /// The glibc baseline: the manylinux tag maturin builds for and auditwheel must confirm.
 const MANYLINUX: &str = "manylinux_2_17_x86_64";
 
+/// The Cargo profile of the wheel for users (`cargo xtask wheel`).
+pub(crate) const RELEASE: &str = "release";
+/// The Cargo profile of the wheel CI builds and tests (`cargo xtask python`; the workspace's
+/// Cargo.toml says how it differs from release).
+pub(crate) const CI: &str = "wheel-ci";
+
 /// `cargo xtask wheel`: build and check the wheel, print its path.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let wheel = build(root)?;
+    let wheel = build(root, RELEASE)?;
     println!("{}", wheel.display());
     Ok(())
 }
 
-/// Builds the wheel, checks it, and returns its path.
-pub(crate) fn build(root: &Path) -> Result<PathBuf> {
+/// Builds the wheel in the Cargo profile `profile`, checks it, and returns its path.
+pub(crate) fn build(root: &Path, profile: &str) -> Result<PathBuf> {
     let python = cmd::venv(root, TOOLS_VENV, TOOLS, "auditwheel, abi3audit, ziglang").context("the wheel tools")?;
     let bin = python.parent().context("the venv's bin folder")?.to_path_buf();
     let out = root.join(OUT);
@@ -59,7 +67,17 @@ pub(crate) fn build(root: &Path) -> Result<PathBuf> {
     )?;
     let mut maturin = Command::new(bin.join("maturin"));
     maturin
-        .args(["build", "--release", "--locked", "--strip", "--zig", "--compatibility", "manylinux2014", "--out"])
+        .args([
+            "build",
+            "--profile",
+            profile,
+            "--locked",
+            "--strip",
+            "--zig",
+            "--compatibility",
+            "manylinux2014",
+            "--out",
+        ])
         .arg(&out)
         .current_dir(root.join("python"))
         .env("CARGO_TARGET_DIR", root.join(TARGET_DIR))
