@@ -449,8 +449,8 @@ fn bad_gradient_keys_are_refused_naming_the_key() {
     assert!(err.contains("--wrt lens.colour") && err.contains("no such key"), "{err}");
     let err = fails(&["gradient", "--wrt", "exposure.time_ms", "--wrt", "exposure.time_ms"]);
     assert!(err.contains("exposure.time_ms is given twice"), "{err}");
-    let phase = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml");
-    let err = fails(&["gradient", phase, "--wrt", "lens.design_wavelength_nm"]);
+    let library = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/library.toml");
+    let err = fails(&["gradient", library, "--wrt", "lens.design_wavelength_nm"]);
     assert!(err.contains("--wrt lens.design_wavelength_nm: not differentiable here yet"), "{err}");
     let err = fails(&["gradient", "--wrt", "options.tolerance"]);
     assert!(err.contains("--wrt options.tolerance: not differentiable"), "{err}");

@@ -74,7 +74,7 @@ fn the_text_report_names_the_gradient_search() {
 fn the_gradient_method_refuses_what_has_no_gradient() {
     let e = fails(&[
         "optimize",
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/phase-binary2.toml"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/library.toml"),
         "--over",
         "camera.pixel_pitch_um=2:8",
         "--over",

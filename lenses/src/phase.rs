@@ -318,6 +318,13 @@ impl LensModel for PhaseLens {
         Some(self.design_wavelength)
     }
 
+    /// A geometric phase: each order's path is `λ/2π` per radian of the profile (given in
+    /// radians), its sphere and Zernike terms in metres, its efficiency and transmission curves
+    /// in λ: λ0 enters none of them (only the checks at construction and the reports).
+    fn design_wavelength_inert(&self) -> bool {
+        matches!(self.dispersion, Dispersion::GeometricPhase)
+    }
+
     /// Per order, the path per radian of φ0 times each coefficient's phase term: the order's
     /// wavefront is `path_per_radian · φ0(q)` (plus the sphere and the Zernike terms, which do
     /// not move), so `∂W/∂A_j = path_per_radian · M (R/R_norm)^{2j} q^j` (docs/physics.md,

@@ -1119,6 +1119,12 @@ impl optics::LensModel for ExtraLanes {
     fn design_wavelength(&self) -> Option<f64> {
         self.inner.design_wavelength()
     }
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: optics::Field) -> Option<Vec<[f64; 2]>> {
+        self.inner.design_wavelength_rates(wavelength_m, field)
+    }
+    fn design_wavelength_inert(&self) -> bool {
+        self.inner.design_wavelength_inert()
+    }
     fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<optics::radial::RadialProfile>>> {
         let aperture = match self.aperture {
             true => Some(self.inner.aperture_directions(wavelength_m)?.ok()?),
@@ -2802,6 +2808,57 @@ fn defocus_lane_by_own_rule(
     Ok(d_k)
 }
 
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` for the design wavelength λ0 (docs/physics.md, "Gradients: the
+/// design wavelength"): 0 where nothing the lens images with depends on λ0
+/// ([`optics::LensModel::design_wavelength_inert`]: a phase lens's geometric phase); on the
+/// value's own rules where its engine gives the lane
+/// ([`design_wavelength_on_value_rule`]: the closed form, a line, the per-frequency product
+/// rule; the pixel MTF in the frequency rule's weights; off axis where the field leaves the OTF
+/// as on axis), else on the reference rule ([`design_wavelength_by_own_rule`]). Refused with a
+/// noise spectrum, and where neither applies, naming why.
+fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+    // nothing the lens images with depends on λ0 (a geometric phase given in radians): N, the
+    // OTF and so every quantity do not move
+    if scene.lens().design_wavelength_inert() {
+        return Ok((0.0, 0.0));
+    }
+    if scene.camera().noise_spectrum().is_none()
+        && let Some(found) = design_wavelength_on_value_rule(scene)
+    {
+        return Ok(found);
+    }
+    design_wavelength_by_own_rule(scene, e, p)
+}
+
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` on the value's own engine and rules: the mean computed again with
+/// `∂O/∂ln λ0` beside each OTF value ([`optics::Polychromatic::mean_mtf_and_design_lane`]), and
+/// `∂ln N/∂ln λ0` on the engine's normalization nodes ([`optics::Polychromatic::design_signal_rate`]).
+/// λ0 leaves `s = νλF#` and the pixel MTF as they are: `∂M̄ = (1/ν_N) ∫ P sign(O) ∂O dν`, the
+/// lane integrated with the accepted weights, `P` in them. `None` where the engine has no such
+/// lane.
+fn design_wavelength_on_value_rule(scene: &Scene) -> Option<(f64, f64)> {
+    let detected = crate::evaluate::detected_spectrum(scene);
+    on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let found = poly.mean_mtf_and_design_lane()?;
+        Some((poly.design_signal_rate()?, found.defocus))
+    })
+}
+
+/// `∂M̄/∂ln λ0` of the design wavelength: with `reference`, by the slow reference rule
+/// ([`design_wavelength_by_own_rule`]); else on the value's own rule, `None` where the value's
+/// engine has no such lane. For the tests that hold the one against the other.
+pub fn design_wavelength_mean_mtf_partial(
+    scene: &Scene,
+    e: &Evaluation,
+    reference: bool,
+) -> Result<Option<f64>, Error> {
+    if reference {
+        design_wavelength_by_own_rule(scene, e, Parameter::DesignWavelength).map(|(_, d)| Some(d))
+    } else {
+        Ok(design_wavelength_on_value_rule(scene).map(|(_, d)| d))
+    }
+}
+
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` for the design wavelength λ0 of a lens whose every order is the
 /// full circular pupil with a defocus alone and that gives how each order moves with λ0
 /// ([`optics::LensModel::design_wavelength_rates`]: `δW_o = ∂W020_o/∂ln λ0`,
@@ -2818,15 +2875,17 @@ fn defocus_lane_by_own_rule(
 /// both on the reference rule's own Gauss–Legendre panels in λ and ν ([`reference_rule`]: the λ
 /// panels doubled, then the ν panels, each until the integral moves by at most the tolerance
 /// times `max(|∂M̄|, M̄)`; the ν panels split at the sign changes of `O`, the kink of `|O|`).
-/// Refused with the pixel MTF or a noise spectrum (not followed on this rule), off axis, and for
-/// the other families naming why.
-fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+/// The reference where the value's engine has no lane; refused with the pixel MTF or a noise
+/// spectrum (not followed on this rule), off axis, and for the other families naming why.
+fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let camera = scene.camera();
     if camera.pixel_mtf() {
         return Err(not_smooth(
-            "lens.design_wavelength_nm: with camera.pixel_mtf = true the design wavelength's gradient is not computed \
-             here yet (set camera.pixel_mtf = false)"
+            "lens.design_wavelength_nm: with camera.pixel_mtf = true the design wavelength's gradient is computed on \
+             the value's own rule (the closed form, a line, the per-frequency product rule), which this scene's \
+             engine is not (the reference panels rule: a wavelength's cutoff inside the band or \
+             options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
                 .to_owned(),
         ));
     }
@@ -2843,10 +2902,14 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
     let family = lens.describe();
     let refused = || {
         not_smooth(format!(
-            "lens.design_wavelength_nm: {family}: the design wavelength's gradient is computed on axis for a lens \
-             whose every order is the full circular pupil with a defocus alone and that gives how its orders move \
-             with λ0 (the chromatic, refractive and harmonic families without an iris or Seidel terms); this scene's \
-             orders are not that here (off axis the lateral colour f0 tan θ (λ0/λ − 1) moves with λ0 too)"
+            "lens.design_wavelength_nm: {family}: the design wavelength's gradient is computed for a lens whose \
+             every order is the full circular pupil with a defocus alone and that gives how its orders move with λ0 \
+             (the chromatic, refractive and harmonic families without an iris or Seidel terms), on axis or where the \
+             field leaves the OTF as on axis, and is 0 for a phase lens with a geometric phase (its radian profile \
+             does not depend on λ0); this scene's orders are not that here (off axis the lateral colour \
+             f0 tan θ (λ0/λ − 1) moves with λ0 too; a phase lens's refractive profile scales its path per radian \
+             with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric phase its \
+             reference sphere by 1 − λ/λ0: not followed yet)"
         ))
     };
     if !field.is_on_axis() {

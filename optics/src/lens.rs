@@ -486,6 +486,16 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// Whether nothing the lens images with depends on its design wavelength λ0 (its orders, at
+    /// every wavelength and field point, and its transmission): a phase lens whose profile is
+    /// given in radians and turns into a path `λ/2π` per radian at each wavelength (a geometric
+    /// phase), where λ0 only names the wavelength the profile was designed at. The value's
+    /// derivative with respect to λ0 is then 0 (docs/physics.md, "Gradients: the design
+    /// wavelength"). `false` (the default) otherwise.
+    fn design_wavelength_inert(&self) -> bool {
+        false
+    }
+
     /// For a lens whose every order at `field` is the full circular pupil with a defocus alone,
     /// several of them with efficiencies that move against each other with λ (the harmonic
     /// lens): how each moves with the wavelength at `wavelength_m` ([`OrderWavelengthRates`]),
@@ -606,6 +616,9 @@ macro_rules! forward_lens_model {
             }
             fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
                 (**self).design_wavelength_rates(wavelength_m, field)
+            }
+            fn design_wavelength_inert(&self) -> bool {
+                (**self).design_wavelength_inert()
             }
             fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<OrderDerivatives> {
                 (**self).order_derivatives(wavelength_m, parameter)

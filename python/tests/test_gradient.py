@@ -29,6 +29,7 @@ import asnr
 
 ROOT = Path(__file__).resolve().parents[2]
 BINARY2 = ROOT / "examples" / "phase-binary2.toml"
+LIBRARY = ROOT / "examples" / "library.toml"
 BIN = Path(os.environ.get("ASNR_BIN", ROOT / "target" / "debug" / "asnr"))
 REQUIRED = {name.strip() for name in os.environ.get("ASNR_REQUIRE", "").split(",") if name.strip()}
 
@@ -123,8 +124,8 @@ def test_gradient_is_the_central_difference_of_evaluations():
 def test_a_key_without_a_gradient_is_refused_naming_it():
     paper = asnr.load()
     cases = {
-        # the phase lens's design wavelength (a direction of the radial engine not formed yet)
-        "lens.design_wavelength_nm": (asnr.load(BINARY2), "lens.design_wavelength_nm: not differentiable here yet"),
+        # a library lens's design wavelength (its atoms chosen at λ0: piecewise)
+        "lens.design_wavelength_nm": (asnr.load(LIBRARY), "lens.design_wavelength_nm: not differentiable here yet"),
         "camera.adc_bits": (paper, "camera.adc_bits: not differentiable: it is an integer"),
         "lens.nonsense": (paper, "lens.nonsense: embedded paper scene has no such key"),
     }
@@ -205,7 +206,7 @@ def test_optimize_by_gradient_is_the_command_lines_search():
     with pytest.raises(asnr.SceneError, match="--method newton"):
         asnr.optimize(scene, over, method="newton")
     with pytest.raises(asnr.SceneError, match=r"lens\.design_wavelength_nm: not differentiable here yet"):
-        asnr.optimize(asnr.load(BINARY2), {"lens.design_wavelength_nm": (790, 810)}, method="gradient")
+        asnr.optimize(asnr.load(LIBRARY), {"lens.design_wavelength_nm": (790, 810)}, method="gradient")
 
 
 # --- the JAX bridge ---------------------------------------------------------------------------
@@ -248,7 +249,7 @@ def test_jax_grad_of_the_asnr_is_the_command_lines_gradient():
     with pytest.raises(ValueError, match="expected a 1-D array of 4 values"):
         f(jnp.zeros(3))
     with pytest.raises(asnr.SceneError, match=r"lens\.design_wavelength_nm"):
-        asnr.jax.asnr_function(scene, ["lens.design_wavelength_nm"])  # not differentiated yet: refused by name
+        asnr.jax.asnr_function(asnr.load(LIBRARY), ["lens.design_wavelength_nm"])  # piecewise: refused by name
 
 
 # --- the geometric-phase lens's Binary 2 gradient against a numpy radial reference ----------

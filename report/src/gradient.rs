@@ -188,8 +188,10 @@ const DESIGN_WAVELENGTH: &str = "lens.design_wavelength_nm";
 
 /// The families [`DESIGN_WAVELENGTH`] is differentiated for: every order the full circular
 /// pupil with a defocus alone, moving with λ0 as the lens says
-/// (`optics::LensModel::design_wavelength_rates`).
-const DESIGN_WAVELENGTH_MODELS: [&str; 3] = ["chromatic", "refractive", "harmonic"];
+/// (`optics::LensModel::design_wavelength_rates`); and the phase lens, whose gradient is 0 where
+/// nothing it images with depends on λ0 (a geometric phase:
+/// `optics::LensModel::design_wavelength_inert`), refused naming why otherwise.
+const DESIGN_WAVELENGTH_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
 
 /// The scene quantity `lens.design_wavelength_nm` sets (`∂/∂ln λ0`), or why its gradient is
 /// refused for this family; `None` for another key.
@@ -204,10 +206,6 @@ fn design_wavelength_parameter(key: &str, lens_model: &str) -> Option<Result<Par
         "library" => {
             "it selects each atom from the library (the atom whose phase is nearest the design phase at λ0), a \
              piecewise choice: the value jumps wherever λ0 moves an atom's choice to the next row"
-        }
-        "phase" => {
-            "the profile given at λ0 (hyperbolic, Binary 2, spline or table) scales each order's path per radian with \
-             λ0/λ, a direction of the radial engine's wavefront lanes not formed yet"
         }
         _ => "its orders are not followed through the design wavelength for this family yet",
     };
@@ -772,7 +770,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} (with camera.pixel_mtf true or false), \
          spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
-         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis), \
+         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
          (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, and at zero), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
@@ -1692,13 +1690,14 @@ mod tests {
 
     /// The design wavelength λ0 (docs/physics.md, "Gradients: the design wavelength": each
     /// order's defocus along its own ∂W020/∂ln λ0, the harmonic lens's efficiencies with it, on
-    /// the reference rule's panels in λ and ν) with the exposure, against central differences of
-    /// evaluations converged at 1e-10, Richardson-extrapolated from the steps 2h and h,
-    /// h = [`LINE_STEP_NM`] (the paper's aperture defocuses by about 0.1 wave per nm of λ0, as
-    /// per nm of a line's wavelength), within 10× the scene's 1e-6 of each quantity's gradient
-    /// norm: the paper's chromatic lens (the closed form), in the integral form with the stray
+    /// the value's own rules) with the exposure, against central differences of evaluations
+    /// converged at 1e-10, Richardson-extrapolated from the steps 2h and h, h = [`LINE_STEP_NM`]
+    /// (the paper's aperture defocuses by about 0.1 wave per nm of λ0, as per nm of a line's
+    /// wavelength), within 10× the scene's 1e-6 of each quantity's gradient norm: the paper's
+    /// chromatic lens (the closed form), with the pixel MTF, in the integral form with the stray
     /// light and a read noise, under a line; the refractive singlet (N-BK7, n0 = n(λ0)) at a
-    /// 100 nm band; the harmonic lens's orders (their defocus and sinc² efficiencies).
+    /// 100 nm band; the harmonic lens's orders (their defocus and sinc² efficiencies; the
+    /// per-frequency product rule) with and without the pixel MTF, and under a line.
     #[test]
     fn design_wavelength_matches_central_differences() {
         let keys = ["lens.design_wavelength_nm", "exposure.time_ms"];
@@ -1713,13 +1712,19 @@ mod tests {
         check(&paper, &[]);
         check(&paper, &owned(&INTEGRAL_WITH_GLARE));
         check(&paper, &owned(&LINE_803));
+        check(&paper, &owned(&["camera.pixel_mtf=true"]));
         check(&refractive_singlet(), &owned(&["spectrum.range_nm=100"]));
-        check(&example("harmonic.toml"), &[]);
+        let harmonic = example("harmonic.toml");
+        check(&harmonic, &[]);
+        check(&harmonic, &owned(&["camera.pixel_mtf=true"]));
+        check(&harmonic, &owned(&LINE_803));
     }
 
     /// What the design wavelength's gradient refuses, naming the key and why: a library lens
-    /// (its atoms chosen at λ0, piecewise), a phase lens (not formed yet), the chromatic lens
-    /// off axis (its lateral colour moves with λ0) and with the pixel MTF.
+    /// (its atoms chosen at λ0, piecewise), a phase lens of diffractive dispersion (its orders'
+    /// efficiencies move with λ0: not followed yet), the chromatic lens
+    /// off axis (its lateral colour moves with λ0) and with the pixel MTF on the reference panels
+    /// rule (no lane there).
     #[test]
     fn design_wavelength_refusals_name_why() {
         let key = owned(&["lens.design_wavelength_nm"]);
@@ -1728,16 +1733,32 @@ mod tests {
             e.contains("--wrt lens.design_wavelength_nm: not differentiable here yet") && e.contains("piecewise"),
             "{e}"
         );
-        let e = gradient(&example("phase-binary2.toml"), &[], &key).unwrap_err().to_string();
-        assert!(
-            e.contains("--wrt lens.design_wavelength_nm: not differentiable here yet for lens.model = \"phase\""),
-            "{e}"
-        );
+        let diffractive = owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]);
+        let e = gradient(&example("phase-binary2.toml"), &diffractive, &key).unwrap_err().to_string();
+        assert!(e.contains("design wavelength") && e.contains("diffractive one its orders' efficiencies"), "{e}");
         let paper = scene::read(None).unwrap();
         let e = gradient(&paper, &owned(&["field.x_deg=3"]), &key).unwrap_err().to_string();
         assert!(e.contains("design wavelength") && e.contains("lateral colour"), "{e}");
-        let e = gradient(&paper, &owned(&["camera.pixel_mtf=true"]), &key).unwrap_err().to_string();
-        assert!(e.contains("design wavelength") && e.contains("camera.pixel_mtf"), "{e}");
+        let panels = owned(&["camera.pixel_mtf=true", "options.spectral_rule=\"panels\""]);
+        let e = gradient(&example("harmonic.toml"), &panels, &key).unwrap_err().to_string();
+        assert!(e.contains("design wavelength") && e.contains("camera.pixel_mtf") && e.contains("panels"), "{e}");
+    }
+
+    /// A phase lens with a geometric phase (examples/phase-binary2.toml): its Binary 2 profile is
+    /// given in radians and each order's path is λ/2π per radian, so nothing it images with
+    /// depends on λ0: the value at λ0 ± 1 nm is the value at λ0 to the last bit, and the gradient
+    /// is 0 (said so, not refused), beside the exposure's own.
+    #[test]
+    fn a_geometric_phase_does_not_move_with_the_design_wavelength() {
+        let source = example("phase-binary2.toml");
+        let asnr = |set: &[&str]| metric::evaluate(&scene::build_from(&source, &owned(set)).unwrap()).unwrap().asnr;
+        let at = asnr(&[]);
+        for moved in ["lens.design_wavelength_nm=799", "lens.design_wavelength_nm=801"] {
+            assert_eq!(asnr(&[moved]).to_bits(), at.to_bits(), "{moved}");
+        }
+        let g = gradient(&source, &[], &owned(&["lens.design_wavelength_nm", "exposure.time_ms"])).unwrap();
+        assert_eq!([g.d_asnr[0], g.d_mean_mtf[0], g.d_photoelectrons[0]], [0.0; 3], "{g:?}");
+        assert!(g.d_asnr[1] > 0.0, "the exposure's own derivative beside it: {g:?}");
     }
 
     /// The hyperbolic phase −(2π/λ0)(√(r² + f0²) − f0) of the example's aperture (F/2.5,

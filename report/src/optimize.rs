@@ -1433,11 +1433,11 @@ mod tests {
         let search = Search { xtol: 1e-4, starts: 0, max_evaluations: Search::DEFAULT_MAX_EVALUATIONS };
         let asnr = crate::objective::Objective::Asnr;
         let count = Count(0.into());
-        // a phase lens: its design wavelength has no gradient yet
-        let phase =
-            scene::read(Some(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/phase-binary2.toml")))
+        // a library lens: its design wavelength chooses its atoms (piecewise), no gradient
+        let library =
+            scene::read(Some(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/library.toml")))
                 .unwrap();
-        let e = search_scene_by(phase, vec![], &r, asnr, &search, Some(Method::Gradient), &count).unwrap_err();
+        let e = search_scene_by(library, vec![], &r, asnr, &search, Some(Method::Gradient), &count).unwrap_err();
         let e = format!("{e:#}");
         assert!(
             e.starts_with("--method gradient: --over lens.design_wavelength_nm: not differentiable here yet"),

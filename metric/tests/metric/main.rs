@@ -608,6 +608,7 @@ fn noise_spectrum_moves_the_snr_inside_the_integral() {
 mod aperture_lane;
 mod azimuth;
 mod bias_lane;
+mod design_lane;
 mod factored;
 mod fraunhofer;
 mod line;

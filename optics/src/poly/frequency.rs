@@ -96,6 +96,9 @@ pub(super) struct Recording {
     /// each node's `[α_o, γ_o]` of the order lane ([`Polychromatic::mean_mtf_and_order_lane`]);
     /// `None` for the defocus lane `∂O/∂ln K` and the other lanes
     rates: Option<Vec<[f64; 2]>>,
+    /// the design wavelength's lane ([`Polychromatic::mean_mtf_and_design_lane`]) instead of
+    /// the defocus lane
+    design: bool,
 }
 
 /// What [`Polychromatic::mean_mtf_and_defocus_derivative`] returns.
@@ -355,7 +358,7 @@ impl Polychromatic<'_> {
     /// engine gives no such lane, the field is off axis where it moves the OTF
     /// ([`field_independent`](Self::field_independent)), or the OTF depends on direction.
     pub fn mean_mtf_and_defocus_derivative(&self) -> Option<DefocusDerivative> {
-        self.mean_with_defocus_lane(None)
+        self.mean_with_defocus_lane(None, false)
     }
 
     /// [`mean_mtf_and_defocus_derivative`](Self::mean_mtf_and_defocus_derivative) with the lane
@@ -368,11 +371,43 @@ impl Polychromatic<'_> {
     /// value's own forms (the line engine). `None` where the engine gives no such lane (not a
     /// line, an order other than a full centred circle with a defocus alone).
     pub fn mean_mtf_and_order_lane(&self, rates: &[[f64; 2]]) -> Option<DefocusDerivative> {
-        self.mean_with_defocus_lane(Some(rates.to_vec()))
+        self.mean_with_defocus_lane(Some(rates.to_vec()), false)
     }
 
-    /// The mean with the defocus lane (`rates` `None`) or the order lane recorded beside it.
-    fn mean_with_defocus_lane(&self, rates: Option<Vec<[f64; 2]>>) -> Option<DefocusDerivative> {
+    /// [`mean_mtf_and_defocus_derivative`](Self::mean_mtf_and_defocus_derivative) with the lane
+    /// of the lens's design wavelength λ0: `defocus` is then `(1/ν_max) ∫ P sign(O) ∂O/∂ln λ0 dν`,
+    /// `∂O/∂ln λ0 = (∫ρ Σ_o [τ_o ∂H/∂w δw_o + δτ_o H_o] − O ∫ρ Σ_o δτ_o)/∫ρ Σ_o τ_o` at fixed
+    /// `s = νλF#` (each order's `δW020_o`, `δτ_o` from `LensModel::design_wavelength_rates`;
+    /// docs/physics.md, "Gradients: the design wavelength"), each `∂O` beside its OTF value on
+    /// the value's own rule (the closed form's lane along `δW020 = d0 + d1 λ` on its rule in `t`,
+    /// a line's order lane, the per-frequency product rule's `w ∂H/∂w` on the level each panel
+    /// accepts) and integrated with the frequency rule's accepted weights (`P` included).
+    /// `None` where the engine gives no such lane (the lens gives no rates, the FFT path, the
+    /// reference panels rule), off axis where the field moves the OTF, or where the OTF depends
+    /// on direction.
+    pub fn mean_mtf_and_design_lane(&self) -> Option<DefocusDerivative> {
+        self.mean_with_defocus_lane(None, true)
+    }
+
+    /// `∂ln(∫ρ Σ_o τ_o dλ)/∂ln λ0` on the nodes that make the engine's normalization (each
+    /// sample's weight times `Σ_o ∂τ_o/∂ln λ0`, `LensModel::design_wavelength_rates`): the design
+    /// wavelength's rate of the detected signal N. `None` where the lens gives no rates.
+    pub fn design_signal_rate(&self) -> Option<f64> {
+        let nodes = self.engine.nodes();
+        let mut moved = 0.0;
+        for &(lambda, w, part) in &nodes.samples {
+            if w == 0.0 {
+                continue;
+            }
+            let lens = self.scene.part(part).lens;
+            moved += w * lens.design_wavelength_rates(lambda, self.scene.field)?.iter().map(|r| r[1]).sum::<f64>();
+        }
+        Some(moved / nodes.total_weight)
+    }
+
+    /// The mean with the defocus lane (`rates` `None`), the order lane or the design
+    /// wavelength's lane (`design`) recorded beside it.
+    fn mean_with_defocus_lane(&self, rates: Option<Vec<[f64; 2]>>, design: bool) -> Option<DefocusDerivative> {
         // off axis where the field does not move the OTF (no image displaced, every rate 0: the
         // refractive lens, its stop at the lens), the OTF is the one on axis
         if !(self.scene.field.is_on_axis() || self.field_independent())
@@ -381,7 +416,7 @@ impl Polychromatic<'_> {
         {
             return None;
         }
-        *self.gradient.borrow_mut() = Some(Recording { lanes: 2, rates, ..Recording::default() });
+        *self.gradient.borrow_mut() = Some(Recording { lanes: 2, rates, design, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| self.recorded_defocus_otf(nu));
         let recording = self.gradient.borrow_mut().take()?;
         if recording.failed {
@@ -411,6 +446,7 @@ impl Polychromatic<'_> {
             let recording = self.gradient.borrow();
             match recording.as_ref().and_then(|r| r.rates.as_deref()) {
                 _ if nu == 0.0 => Some((1.0, 0.0)),
+                _ if recording.as_ref().is_some_and(|r| r.design) => self.engine.otf_and_design_lane(nu),
                 None => self.engine.otf_and_defocus_derivative(nu),
                 Some(rates) => self.engine.otf_and_order_lane(nu, rates),
             }

@@ -86,6 +86,24 @@ impl OtfEngine for Line<'_> {
         self.order_lane(frequency, Some(rates))
     }
 
+    /// The order lane ([`order_lane`](Line::order_lane)) with each order's rates along the
+    /// design wavelength (`LensModel::design_wavelength_rates` at the line: `α_o = δW020_o/W020_o`,
+    /// 0 where `W020_o = 0`, `w ∂H/∂w` being 0 there; `γ_o = δτ_o`); `None` where the lens gives
+    /// no rates for its orders here.
+    fn otf_and_design_lane(&self, frequency: f64) -> Option<(f64, f64)> {
+        let lambda = self.nodes.line?;
+        let rates = self.scene.lens.design_wavelength_rates(lambda, self.scene.field)?;
+        if rates.len() != self.nodes.nodes.len() {
+            return None;
+        }
+        let rates: Vec<[f64; 2]> = rates
+            .iter()
+            .zip(&self.nodes.nodes)
+            .map(|(&[d_w020, d_tau], n)| [if n.w020 == 0.0 { 0.0 } else { d_w020 / n.w020 }, d_tau])
+            .collect();
+        self.order_lane(frequency, Some(&rates))
+    }
+
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
         match &self.fft {
             Some(fft) => fft.sum_along(&self.scene, frequency, azimuth) / self.nodes.total_weight,

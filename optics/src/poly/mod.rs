@@ -373,6 +373,14 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_order_lane(&self, _frequency: f64, _rates: &[[f64; 2]]) -> Option<(f64, f64)> {
         None
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf) and its derivative along the lens's
+    /// design wavelength, `∂O/∂ln λ0` at fixed `s = νλF#`: each order's defocus and efficiency
+    /// moving by `LensModel::design_wavelength_rates` (docs/physics.md, "Gradients: the design
+    /// wavelength"), on the value's own rule; `None` where the engine does not give it (the
+    /// default).
+    fn otf_and_design_lane(&self, _frequency: f64) -> Option<(f64, f64)> {
+        None
+    }
     /// The signed OTF at `frequency` as [`otf`](Self::otf) and into `gradient` its derivative
     /// along each of `parameters` of the lens's order derivatives
     /// (`LensModel::order_derivatives`: a library lens's parameter bias), on the value's own
@@ -765,7 +773,8 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
         && scene.parts.is_empty()
         && let Some((closed, affine)) = closed_form::closed_form(scene.lens, scene.detected, scene.field)
     {
-        let engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number, settings.tolerance);
+        let mut engine = closed_form::Closed::new(closed, affine, scene.detected, scene.f_number, settings.tolerance);
+        engine.design = closed_form::design_direction(scene.lens, scene.field, &engine.closed);
         check_signal(&engine.nodes)?;
         return Ok(Box::new(engine));
     }

@@ -91,6 +91,10 @@ struct Fresh {
     /// an order has none
     fields: Option<Option<Vec<Vec<FieldLane>>>>,
     field_parameters: Vec<usize>,
+    /// per order, its rates along the design wavelength `[∂w_o/∂ln λ0, ∂τ_o/∂ln λ0]` (`w_o` in
+    /// waves: `LensModel::design_wavelength_rates`' `∂W020_o` over λ), made when the design
+    /// wavelength's lane first climbs to the level; `Some(None)` where the lens gives none
+    design: Option<Option<Vec<[f64; 2]>>>,
     /// the wavelength of each new point
     lambdas: Vec<f64>,
     /// a spectral rate lane's `r(λ)` at each new point ([`Lanes::Rate`]), with the address of
@@ -158,6 +162,9 @@ enum Lanes<'p> {
     /// (`∂ln ρ = r`: a blackbody's temperature, docs/physics.md "Gradients: a line's wavelength
     /// and a blackbody's temperature"), the value's own OTFs
     Rate(&'p dyn Fn(f64) -> f64),
+    /// one lane: `Σ_o [τ_o ∂H/∂w δw_o + δτ_o H_o]`, the orders moving with the design wavelength
+    /// ([`Fresh::design`]; docs/physics.md, "Gradients: the design wavelength")
+    Design,
 }
 
 impl std::fmt::Debug for Lanes<'_> {
@@ -168,6 +175,7 @@ impl std::fmt::Debug for Lanes<'_> {
             Lanes::Defocus => write!(f, "Defocus"),
             Lanes::Fields(p) => write!(f, "Fields({p:?})"),
             Lanes::Rate(_) => write!(f, "Rate"),
+            Lanes::Design => write!(f, "Design"),
         }
     }
 }
@@ -181,6 +189,7 @@ impl Lanes<'_> {
             Lanes::Defocus => 1,
             Lanes::Fields(p) => p.len(),
             Lanes::Rate(_) => 1,
+            Lanes::Design => 1,
         }
     }
 }
@@ -281,6 +290,32 @@ impl Levelled {
         matches!(fresh.directions, Some(Some(_)))
     }
 
+    /// Makes level `level`'s rates along the design wavelength ready ([`Fresh::design`]);
+    /// whether the lens gives them for every order of its points.
+    fn prepare_design(&mut self, scene: &Scene<'_>, level: usize) -> bool {
+        let fresh = &mut self.fresh[level];
+        if fresh.design.is_none() {
+            let mut all = Vec::with_capacity(fresh.orders.len());
+            let mut ok = true;
+            for (point, &lambda) in fresh.lambdas.iter().enumerate() {
+                let range = fresh.range(point);
+                // the full pupil (an iris scales the pupil and its defocus: not this lane)
+                let full = fresh.orders[range.clone()].iter().all(|o| o.s_per_frequency == scene.f_number * lambda);
+                match scene.lens.design_wavelength_rates(lambda, scene.field) {
+                    Some(r) if full && r.len() == range.len() => {
+                        all.extend(r.iter().map(|&[d_w, d_tau]| [d_w / lambda, d_tau]));
+                    }
+                    _ => {
+                        ok = false;
+                        break;
+                    }
+                }
+            }
+            fresh.design = Some(ok.then_some(all));
+        }
+        matches!(fresh.design, Some(Some(_)))
+    }
+
     /// Makes level `level`'s field derivatives along `parameters` ready ([`Fresh::fields`]);
     /// whether every order of its points has them, on the radial engine.
     fn prepare_fields(&mut self, scene: &Scene<'_>, level: usize, parameters: &[usize]) -> bool {
@@ -329,18 +364,36 @@ impl Levelled {
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
-        if matches!(lanes, Lanes::Defocus) {
+        if matches!(lanes, Lanes::Defocus | Lanes::Design) {
             // the defocus lane: each order's w ∂H/∂w beside its OTF on the same forms
             // (`defocus_otf_many_and_log_derivative_within`), summed per point as the values are
             one.clear();
             one.resize(pairs.len(), 0.0);
             crate::otf::defocus_otf_many_and_log_derivative_within(pairs, otfs, one, accuracy);
             evaluations.set(evaluations.get() + pairs.len());
+            let design = match (lanes, &fresh.design) {
+                (Lanes::Design, Some(Some(d))) => Some(d),
+                (Lanes::Design, _) => return,
+                _ => None,
+            };
             for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
                 let range = fresh.range(point);
                 let orders = &fresh.orders[range.clone()];
                 values[k] = orders.iter().zip(&otfs[range.clone()]).map(|(o, v)| o.efficiency * v).sum();
-                derivatives[k] = orders.iter().zip(&one[range]).map(|(o, d)| o.efficiency * d).sum();
+                derivatives[k] = match design {
+                    None => orders.iter().zip(&one[range]).map(|(o, d)| o.efficiency * d).sum(),
+                    // τ_o ∂H/∂w δw_o + δτ_o H_o, ∂H/∂w = (w ∂H/∂w)/w (0 at w = 0: H is even in w)
+                    Some(rates) => orders
+                        .iter()
+                        .zip(&one[range.clone()])
+                        .zip(&otfs[range.clone()])
+                        .zip(&rates[range])
+                        .map(|(((o, d), h), [d_w, d_tau])| {
+                            let slope = if o.waves == 0.0 { 0.0 } else { d / o.waves };
+                            o.efficiency * slope * d_w + d_tau * h
+                        })
+                        .sum(),
+                };
             }
             return;
         }
@@ -516,9 +569,10 @@ impl Levelled {
                 Lanes::Directions(_) if !self.prepare_directions(scene, level, lanes) => return Err(f64::NAN),
                 Lanes::Fields(parameters) if !self.prepare_fields(scene, level, parameters) => return Err(f64::NAN),
                 // a radial pupil (given as data) has no defocus lane on this engine
-                Lanes::Defocus if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
+                Lanes::Defocus | Lanes::Design if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
                     return Err(f64::NAN);
                 }
+                Lanes::Design if !self.prepare_design(scene, level) => return Err(f64::NAN),
                 _ => {}
             }
             // the level below's points to the even slots (from the top down), the new ones between
@@ -574,6 +628,9 @@ pub(super) struct PerFrequency<'a> {
     /// the parameters of a field gradient and `∫ρ Σ_o ∂τ_o dλ` along each on the averages'
     /// nodes (the derivative of `nodes.total_weight`), made when first asked
     field_total: RefCell<Option<(Vec<usize>, Vec<f64>)>>,
+    /// `∫ρ Σ_o ∂τ_o/∂ln λ0 dλ` on the averages' nodes ([`design_total`](Self::design_total)),
+    /// made when first asked
+    design_total: Cell<Option<f64>>,
     /// the band the panels cover, `[lo, hi]` (the spectrum's support, or a Gaussian's ±7σ)
     lo: f64,
     hi: f64,
@@ -632,6 +689,7 @@ impl<'a> PerFrequency<'a> {
             otf_tolerance: Cell::new(0.05 * tolerance),
             evaluations: Cell::new(0),
             field_total: RefCell::new(None),
+            design_total: Cell::new(None),
             lo,
             hi,
         })
@@ -743,6 +801,10 @@ impl<'a> PerFrequency<'a> {
                             *g = (*g - value * d) / self.nodes.total_weight;
                         }
                     }
+                    Lanes::Design => {
+                        let d_total = self.design_total()?;
+                        g.iter_mut().for_each(|g| *g = (*g - value * d_total) / self.nodes.total_weight);
+                    }
                     _ => g.iter_mut().for_each(|g| *g /= self.nodes.total_weight),
                 }
             }
@@ -770,6 +832,25 @@ impl<'a> PerFrequency<'a> {
             }
         }
         *self.field_total.borrow_mut() = Some((parameters.to_vec(), d_total.clone()));
+        Some(d_total)
+    }
+
+    /// `∂(∫ρ Σ_o τ_o dλ)/∂ln λ0 = Σ w Σ_o ∂τ_o/∂ln λ0` on the nodes that make
+    /// `nodes.total_weight` (`LensModel::design_wavelength_rates`); `None` where the lens gives
+    /// no rates there.
+    pub(super) fn design_total(&self) -> Option<f64> {
+        if let Some(d) = self.design_total.get() {
+            return Some(d);
+        }
+        let mut d_total = 0.0;
+        for &(lambda, w, part) in &self.nodes.samples {
+            if w == 0.0 {
+                continue;
+            }
+            let lens = self.scene.part(part).lens;
+            d_total += w * lens.design_wavelength_rates(lambda, self.scene.field)?.iter().map(|r| r[1]).sum::<f64>();
+        }
+        self.design_total.set(Some(d_total));
         Some(d_total)
     }
 
@@ -822,6 +903,17 @@ impl OtfEngine for PerFrequency<'_> {
     fn otf_and_defocus_derivative(&self, frequency: f64) -> Option<(f64, f64)> {
         let mut lane = [0.0];
         let value = self.value(frequency, Some(&mut lane), Lanes::Defocus)?;
+        Some((value, lane[0]))
+    }
+
+    /// `(O, ∂O/∂ln λ0)`: the design wavelength's lane `Σ_o [τ_o ∂H/∂w δw_o + δτ_o H_o]` of every
+    /// point beside its value (the defocus lane's forms), integrated with the weights of the
+    /// level the value accepts, less `O` times the normalization's own rate
+    /// ([`design_total`](PerFrequency::design_total)) (docs/physics.md, "Gradients: the design
+    /// wavelength"); `None` where an order is a radial pupil or the lens gives no rates.
+    fn otf_and_design_lane(&self, frequency: f64) -> Option<(f64, f64)> {
+        let mut lane = [0.0];
+        let value = self.value(frequency, Some(&mut lane), Lanes::Design)?;
         Some((value, lane[0]))
     }
 

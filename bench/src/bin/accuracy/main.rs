@@ -43,6 +43,7 @@ mod gds_scale;
 mod gradients;
 mod gradients_aperture;
 mod gradients_bias;
+mod gradients_design;
 mod gradients_keys;
 mod iris;
 mod kernels;

@@ -46,6 +46,7 @@ pub(crate) const SECTIONS: &[Section] = &[
         title: "Gradients: the value and its gradient side by side",
         run: crate::gradients::section,
     },
+    Section { name: "gradients-design", title: crate::gradients_design::TITLE, run: crate::gradients_design::section },
     Section {
         name: "gradients-bias",
         title: "Gradients: a library's parameter bias",
