@@ -86,7 +86,9 @@ pub enum Parameter {
     /// engine (the defocus lane on its nodes: "Gradients: the F-number and the focal length
     /// with Seidel terms"); for a lens that gives its aperture directions
     /// (`optics::LensModel::aperture_directions`: a phase lens) the aperture radius
-    /// `R = f0/(2F#)` moving its profile and reference sphere, on the radial engine's lanes.
+    /// `R = f0/(2F#)` moving its profile and reference sphere, on the radial engine's lanes (off
+    /// axis at a single field point on the FFT path's, the oblique wave's path moving too:
+    /// docs/physics.md, "Gradients: the F-number and the focal length of a phase lens off axis").
     FNumber,
     /// The lens's focal length f0 (`lens.focal_length_mm`), F-number held: `∂/∂ln f0`. It scales
     /// the defocus `W020 ∝ f0/F#²` only (the cutoff `1/(λF#)` and `NA` stay); where
@@ -293,6 +295,11 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     // `aperture_on_overlap`)
     if aperture.is_some() && bases.aperture.is_none() && defocus_lane_on_overlap(scene) {
         grid.push(optics::WavefrontDirection::Defocus);
+    }
+    // a phase lens's aperture lanes off axis on the FFT path, after them (read back by
+    // `aperture_lane_partials`)
+    if let (Some(base), true) = (bases.aperture, bases.aperture_on_grid) {
+        grid.extend(aperture_grid_directions(base));
     }
     // a library lens's parameters whose bias is asked, in their order: their lanes ride on the
     // value's own rules where the engine gives them
@@ -534,7 +541,15 @@ fn point_gradient(
             };
             Some(aperture_partials(scene, e, p, found.filter(|f| !f.order_lane), lane)?)
         }
-        Some(&p) => Some(aperture_lane_partials(scene, e, p, binary2.as_deref(), aperture_base)?),
+        Some(&p) => {
+            let on_grid = match d_grid {
+                GridGradient::Computed(all) if bases.aperture_on_grid => {
+                    all.len().checked_sub(APERTURE_ON_GRID).map(|at| &all[at..])
+                }
+                _ => None,
+            };
+            Some(aperture_lane_partials(scene, e, p, binary2.as_deref(), aperture_base, on_grid)?)
+        }
         None => None,
     };
     for &p in parameters {
@@ -635,8 +650,8 @@ fn point_gradient(
                                      one the overlap engine takes at zero Seidel terms (an iris, \
                                      options.overlap = false or options.pupil_samples)",
                                 _ =>
-                                    "not on the overlap engine (an iris, a phase profile, a table, a wavefront too strong for \
-                                     its rules, or other wavefront keys asked with it)",
+                                    "not on the overlap engine nor on the FFT path through an iris (a phase profile, a table, \
+                                     a wavefront too strong for the overlap rules, or other wavefront keys asked with it)",
                             }
                         ),
                     ));
@@ -1001,6 +1016,23 @@ fn field_key(axis: usize) -> &'static str {
 struct LaneBases {
     aperture: Option<usize>,
     wavelength: Option<usize>,
+    /// the aperture's lanes asked of the FFT path (a single field point off axis): the
+    /// [`APERTURE_ON_GRID`] directions after the parameters' own ([`aperture_grid_directions`])
+    aperture_on_grid: bool,
+}
+
+/// How many FFT-path directions the F-number's and the focal length's gradient off axis adds
+/// ([`aperture_grid_directions`]).
+const APERTURE_ON_GRID: usize = 5;
+
+/// The FFT path's directions of the F-number's and the focal length's gradient of a phase lens
+/// off axis, the aperture's lanes starting at `base` among the wrapped lens's wavefront
+/// directions: `P`, `T`, `S` ([`optics::LensModel::aperture_directions`]) and the oblique wave's
+/// path per `ln R` and per `ln` of the whole scale (docs/physics.md, "Gradients: the F-number and
+/// the focal length of a phase lens off axis").
+fn aperture_grid_directions(base: usize) -> [optics::WavefrontDirection; APERTURE_ON_GRID] {
+    use optics::WavefrontDirection::{Lane, ObliqueScale};
+    [Lane(base), Lane(base + 1), Lane(base + 2), ObliqueScale(0), ObliqueScale(1)]
 }
 
 /// A lens whose wavefront directions ([`optics::LensModel::binary2_directions`]) are its own
@@ -1022,12 +1054,14 @@ impl ExtraLanes {
     /// aperture directions (`aperture`: the F-number or focal length asked) or wavelength
     /// directions (`wavelength`: a line's wavelength asked, the scene under a line); `None`
     /// where it gives neither (the families whose F-number gradient is [`aperture_partials`]',
-    /// whose line's wavelength is [`line_center_partials`]'). The aperture's lanes are refused
-    /// off axis (the oblique wave moves with the aperture too); the wavelength's where the lens
-    /// says why not.
+    /// whose line's wavelength is [`line_center_partials`]'). Off axis at a single field point
+    /// the aperture's lanes ride on the FFT path with the oblique wave's
+    /// ([`aperture_grid_directions`]); over a `[[fields]]` list with a point off axis they are
+    /// refused; the wavelength's where the lens says why not.
     fn of(scene: &Scene, aperture: Option<Parameter>, wavelength: bool) -> Result<Option<(Scene, LaneBases)>, Error> {
         let lens = scene.lens();
         let lambda = lens.design_wavelength().unwrap_or(550e-9);
+        let mut on_grid = false;
         let with_aperture = match aperture {
             None => false,
             Some(p) => {
@@ -1042,9 +1076,12 @@ impl ExtraLanes {
                             points => points.iter().map(|f| f.0).collect(),
                         };
                         if fields.iter().any(|f| !f.is_on_axis()) {
-                            return Err(not_smooth(
-                                "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the radial engine's lanes do not follow: the F-number and focal-length gradient of a phase lens is computed on axis",
-                            ));
+                            if !scene.fields().is_empty() {
+                                return Err(not_smooth(
+                                    "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the FFT path follows for a single field point ([field]), not yet over a [[fields]] list",
+                                ));
+                            }
+                            on_grid = true;
                         }
                         true
                     }
@@ -1069,6 +1106,7 @@ impl ExtraLanes {
         let mut bases = LaneBases::default();
         if with_aperture {
             bases.aperture = Some(own(lambda));
+            bases.aperture_on_grid = on_grid;
         }
         if let Some(l) = line.filter(|_| with_wavelength) {
             bases.wavelength = Some(own(l.center()) + if with_aperture { 3 } else { 0 });
@@ -1186,7 +1224,15 @@ fn aperture_lane_partials(
     p: Parameter,
     all: Option<&[f64]>,
     base: Option<usize>,
+    on_grid: Option<&[f64]>,
 ) -> Result<(f64, f64), Error> {
+    // off axis on the FFT path, the oblique wave's path moves with R and f0 too
+    // (docs/physics.md, "Gradients: the F-number and the focal length of a phase lens off axis")
+    if let Some(&[d_p, d_t, d_s, d_or, d_o]) = on_grid {
+        let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
+        let slope = pixel_slope(scene, p)?;
+        return Ok((edge - e.mean_mtf - slope - (d_p + d_t + d_or), d_p + d_s + d_o));
+    }
     let lanes = base.and_then(|b| all.and_then(|a| a.get(b..b + 3)));
     let Some(&[d_p, d_t, d_s]) = lanes else {
         return Err(Error::NotDifferentiable {

@@ -817,6 +817,22 @@ impl Oblique {
         let d_path = -z * (along[a] - image) / to_image - z * image / to_axis_image;
         (d_alpha + d_path) * (1.0 + t[a] * t[a])
     }
+
+    /// The derivative of [`opd_m`](Oblique::opd_m) at `(x, y)` with respect to the logarithm of
+    /// the aperture radius `R`, the detector distance `z` and the field angles held, m
+    /// (docs/physics.md, "Gradients: the F-number and the focal length of a phase lens off
+    /// axis"): the pupil point `X = R(x, y)` moves along itself, so with `r = |X|`
+    /// `R ∂OPD/∂R = α·X + (X − P)·X/|X − P| − r²/√(r² + z²)` (the distances with `z`; the
+    /// on-axis sag `√(r² + z²) − z`). The OPD is homogeneous of degree 1 in `(R, z)` (the image
+    /// point `P = z t` scales with `z`), so its rate along `ln z` is `opd_m − R ∂OPD/∂R`.
+    pub fn opd_radius_rate_m(&self, x: f64, y: f64) -> f64 {
+        let (xm, ym, z) = (self.radius_m * x, self.radius_m * y, self.distance_m);
+        let [hx, hy] = self.image;
+        let to_image = ((xm - hx).powi(2) + (ym - hy).powi(2) + z * z).sqrt();
+        let r2 = xm * xm + ym * ym;
+        self.alpha[0] * xm + self.alpha[1] * ym + ((xm - hx) * xm + (ym - hy) * ym) / to_image
+            - r2 / (r2 + z * z).sqrt()
+    }
 }
 
 /// `scale · √(n+1) R_n^0(ρ)` as a profile in `q = ρ²` (Noll 1976; `n` even): the wavefront of an

@@ -841,6 +841,15 @@ pub enum WavefrontDirection {
     /// lane (docs/physics.md, "Gradients: the F-number and the focal length off axis"). The exact
     /// 1-D engine carries it.
     ImageShift,
+    /// The oblique wave's path of a radial pupil seen off axis (`RadialPupil::with_oblique`: a
+    /// phase lens on the FFT path) per unit relative change of the aperture radius `R`, the
+    /// detector distance held (`0`: `R ∂OPD/∂R`), or of `R` and the detector distance together
+    /// (`1`: the path itself, homogeneous of degree 1 in both;
+    /// [`Oblique::opd_radius_rate_m`](crate::radial::Oblique::opd_radius_rate_m)). With the
+    /// lanes of the lens's aperture directions (`LensModel::aperture_directions`) they give the
+    /// F-number's and the focal length's gradient off axis (docs/physics.md, "Gradients: the
+    /// F-number and the focal length of a phase lens off axis"). The FFT path carries it.
+    ObliqueScale(usize),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -925,6 +934,31 @@ impl FftPath {
                 // an order through an aperture of disc shape: the obscuration moves its inner
                 // edge (the only key this path differentiates there)
                 if let (Pupil::Aperture(aperture), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
+                    // the Seidel terms through an iris: their OPD at the pixels as the value samples it
+                    if directions.iter().all(|d| matches!(d, WavefrontDirection::Seidel(_))) {
+                        let layer = match &mut built {
+                            Some(l) => l,
+                            slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                        };
+                        let slot = layer.pupil(&order)?;
+                        let Some((field, weight, opd)) =
+                            seidel_through_aperture(&layer.pupils[slot].1, aperture, &order, directions, lambda)?
+                        else {
+                            return Ok(None);
+                        };
+                        let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
+                        layer.plan.otf_and_derivatives_of_field(
+                            &field,
+                            weight,
+                            2.0 * PI / lambda,
+                            &refs,
+                            &mut otf,
+                            &mut d_grids,
+                        );
+                        let grids: Vec<&Otf> = d_grids.iter().collect();
+                        read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                        continue;
+                    }
                     if !directions.iter().all(|d| *d == WavefrontDirection::Obscuration) {
                         return Ok(None);
                     }
@@ -1003,6 +1037,16 @@ impl FftPath {
                             }
                             oblique_direction(n, &field, oblique, axis)
                         }
+                        WavefrontDirection::ObliqueScale(which) if which < 2 => {
+                            let Some(oblique) = radial.oblique() else { return Ok(None) };
+                            if node.shift != [0.0, 0.0] {
+                                return Ok(None);
+                            }
+                            at_transmitting_pixels(n, &field, |x, y| match which {
+                                0 => oblique.opd_radius_rate_m(x, y),
+                                _ => oblique.opd_m(x, y),
+                            })
+                        }
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
@@ -1010,6 +1054,7 @@ impl FftPath {
                         | WavefrontDirection::Obscuration
                         | WavefrontDirection::SpectralMoment(_)
                         | WavefrontDirection::ImageShift
+                        | WavefrontDirection::ObliqueScale(_)
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);
@@ -1147,6 +1192,42 @@ fn edge_field(
         }
     }
     Some((field, area.iter().sum::<f64>(), (moved, d_weight)))
+}
+
+/// An order's field, its weight and each direction's OPD per unit key ([`seidel_through_aperture`]).
+type SeidelField = (Vec<Complex64>, f64, Vec<Vec<f64>>);
+
+/// The field of an order through `aperture` sampled as `sampled` (as [`edge_field`]'s: the
+/// pixels' area fractions `A` times `exp(i k W)`), its weight `Σ A`, and the OPD per µm of each
+/// Seidel term of `directions` at every pixel (`10⁻⁶ {ρ⁴, H ρ³ cos φ, H² ρ² cos² φ, H² ρ²}` at the
+/// order's field height `H`, sampled through the same aperture as the value's,
+/// [`SampledPupil::new`]): the Seidel terms through an iris on the FFT path (docs/physics.md,
+/// "Gradients: Seidel terms through an iris"). `None` where a direction is not a Seidel term.
+fn seidel_through_aperture(
+    sampled: &SampledPupil,
+    aperture: &Aperture,
+    order: &crate::lens::Order,
+    directions: &[WavefrontDirection],
+    lambda: f64,
+) -> Result<Option<SeidelField>, Error> {
+    let n = sampled.n();
+    let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+    crate::fft::cis::fill(&mut field, area, 2.0 * PI / lambda, opd);
+    let height = order.wavefront.aberrations().field;
+    let mut out = Vec::with_capacity(directions.len());
+    for d in directions {
+        let WavefrontDirection::Seidel(term) = *d else { return Ok(None) };
+        let mut unit = crate::fft::Aberrations { field: height, ..crate::fft::Aberrations::default() };
+        match term {
+            super::SeidelTerm::Spherical => unit.w040_m = 1e-6,
+            super::SeidelTerm::Coma => unit.w131_m = 1e-6,
+            super::SeidelTerm::Astigmatism => unit.w222_m = 1e-6,
+            super::SeidelTerm::FieldCurvature => unit.w220_m = 1e-6,
+        }
+        out.push(SampledPupil::new(n, aperture, &unit)?.opd_m().to_vec());
+    }
+    Ok(Some((field, area.iter().sum(), out)))
 }
 
 /// The derivative in the obscuration ε of the field of an order through `aperture` sampled as
