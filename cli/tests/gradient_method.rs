@@ -136,13 +136,17 @@ fn tolerance_shows_the_gradient_sensitivity() {
         "40",
         "--set",
         "camera.pixel_mtf=true",
+        "--set",
+        "field.x_deg=5",
         "--json",
     ]);
-    // with the pixel MTF the design wavelength has no gradient yet
+    // off axis the design wavelength has no gradient yet (its lateral colour moves with λ0)
     let g = json(&[
         "gradient",
         "--set",
         "camera.pixel_mtf=true",
+        "--set",
+        "field.x_deg=5",
         "--wrt",
         "exposure.time_ms",
         "--wrt",
@@ -158,7 +162,7 @@ fn tolerance_shows_the_gradient_sensitivity() {
     }
     assert!(t["keys"][2]["gradient_per_sigma"].is_null(), "{t}");
     let note = t["gradient_note"].as_str().unwrap();
-    assert!(note.contains("design wavelength") && note.contains("camera.pixel_mtf"), "{t}");
+    assert!(note.contains("design wavelength") && note.contains("lateral colour"), "{t}");
 }
 
 /// `asnr compare --wrt`: each design's exact gradient at the scene band, taken on the design as a

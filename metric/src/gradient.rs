@@ -2925,23 +2925,6 @@ pub fn design_wavelength_mean_mtf_partial(
 /// spectrum (not followed on this rule), off axis, and for the other families naming why.
 fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
-    let camera = scene.camera();
-    if camera.pixel_mtf() {
-        return Err(not_smooth(
-            "lens.design_wavelength_nm: with camera.pixel_mtf = true the design wavelength's gradient is computed on \
-             the value's own rule (the closed form, a line, the per-frequency product rule), which this scene's \
-             engine is not (the reference panels rule: a wavelength's cutoff inside the band or \
-             options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
-                .to_owned(),
-        ));
-    }
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth(
-            "lens.design_wavelength_nm: with camera.noise_spectrum the design wavelength's gradient is not computed \
-             here yet"
-                .to_owned(),
-        ));
-    }
     let lens = scene.lens();
     let field = scene.field();
     let f_number = lens.f_number();
@@ -2958,8 +2941,26 @@ fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) ->
              reference sphere by 1 − λ/λ0: not followed yet)"
         ))
     };
+    // off axis first: the reason that holds whatever the camera
     if !field.is_on_axis() {
         return Err(refused());
+    }
+    let camera = scene.camera();
+    if camera.pixel_mtf() {
+        return Err(not_smooth(
+            "lens.design_wavelength_nm: with camera.pixel_mtf = true the design wavelength's gradient is computed on \
+             the value's own rule (the closed form, a line, the per-frequency product rule), which this scene's \
+             engine is not (the reference panels rule: a wavelength's cutoff inside the band or \
+             options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
+                .to_owned(),
+        ));
+    }
+    if camera.noise_spectrum().is_some() {
+        return Err(not_smooth(
+            "lens.design_wavelength_nm: with camera.noise_spectrum the design wavelength's gradient is not computed \
+             here yet"
+                .to_owned(),
+        ));
     }
     // each spectral node: (λ, ρ(λ) × the rule's weight, [(τ_o, w_o, δw_o, δτ_o)] per order)
     type Node = (f64, f64, Vec<[f64; 4]>);

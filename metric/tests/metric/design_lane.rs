@@ -3,25 +3,7 @@
 //! line's order lane; docs/physics.md, "Gradients: the design wavelength") against the slow
 //! reference rule (Gauss–Legendre panels in λ and ν split at the OTF's sign changes).
 
-/// The paper's scene with `model` in place of its chromatic lens's model (its efficiency and
-/// transmission lines dropped where `model` is given), and `set`.
-fn scene_with(model: Option<&str>, set: &[&str]) -> metric::Scene {
-    let paper = scene::read(None).unwrap();
-    let text = match model {
-        None => paper.text().to_owned(),
-        Some(model) => {
-            let lines: Vec<&str> = paper
-                .text()
-                .lines()
-                .filter(|l| !(l.starts_with("efficiency") || l.starts_with("transmission")))
-                .collect();
-            lines.join("\n").replace("model = \"chromatic\"", model)
-        }
-    };
-    let source = scene::Source::from_text(text, "scene written in the test", ".");
-    let set: Vec<String> = set.iter().map(|s| (*s).to_owned()).collect();
-    scene::build_from(&source, &set).unwrap()
-}
+use crate::line_lane::scene_with;
 
 /// `∂M̄/∂ln λ0` on the value's rule (scene tolerance 1e-6) against the reference rule at the
 /// tolerance 1e-9, within 10× 1e-6 of `max(|∂M̄|, M̄)`: the paper's chromatic lens (the closed

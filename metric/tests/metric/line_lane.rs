@@ -7,8 +7,8 @@
 use metric::Parameter;
 
 /// The paper's scene with `model` in place of its chromatic lens's model, efficiency and
-/// transmission lines (none: the paper's lens), and `set`.
-fn scene_with(model: Option<&str>, set: &[&str]) -> metric::Scene {
+/// transmission lines (none: the paper's lens), and `set` (also the design lane's scenes).
+pub(crate) fn scene_with(model: Option<&str>, set: &[&str]) -> metric::Scene {
     let paper = scene::read(None).unwrap();
     let text = match model {
         None => paper.text().to_owned(),
