@@ -690,8 +690,9 @@ mod tests {
     #[test]
     fn gradient_sensitivity_beside_the_fit() {
         let source = scene::read(None).unwrap();
-        // with the pixel MTF the design wavelength has no gradient yet (the key the note names)
-        let pixel = vec!["camera.pixel_mtf=true".to_owned()];
+        // off axis the design wavelength has no gradient yet (the key the note names: its
+        // lateral colour moves with λ0)
+        let pixel = vec!["camera.pixel_mtf=true".to_owned(), "field.x_deg=5".to_owned()];
         let target = Target::new(source.clone(), pixel.clone(), crate::objective::Objective::Asnr, &[]).unwrap();
         let varies = [
             parse_vary("exposure.time_ms=normal:0.2%").unwrap(),
@@ -715,7 +716,7 @@ mod tests {
         }
         assert_eq!(t.gradient_sensitivity[2], None);
         let note = t.gradient_note.as_deref().unwrap();
-        assert!(note.contains("design wavelength") && note.contains("camera.pixel_mtf"), "{note}");
+        assert!(note.contains("design wavelength") && note.contains("lateral colour"), "{note}");
         let text = report(&t);
         assert!(text.contains("∂ASNR/∂key × σ") && text.contains("no gradient for some keys"), "{text}");
         let json: serde_json::Value = serde_json::from_str(&json(&t).unwrap()).unwrap();
