@@ -2891,8 +2891,8 @@ fn design_wavelength_on_value_rule(scene: &Scene) -> Option<(f64, f64)> {
 }
 
 /// `∂M̄/∂ln λ0` of the design wavelength: with `reference`, by the slow reference rule
-/// ([`design_wavelength_by_own_rule`]); else on the value's own rule, `None` where the value's
-/// engine has no such lane. For the tests that hold the one against the other.
+/// (docs/physics.md, "Gradients: the design wavelength"); else on the value's own rule, `None`
+/// where the value's engine has no such lane. For the tests that hold the one against the other.
 pub fn design_wavelength_mean_mtf_partial(
     scene: &Scene,
     e: &Evaluation,
