@@ -10,7 +10,6 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::process::timed;
 use crate::sections::Tools;
 
 /// One row: the case, the tolerance, the value's and the gradient's wall times (medians and
@@ -60,17 +59,9 @@ fn row(asnr: &Path, root: &Path, case: &'static str, scene: &Path, tolerance: f6
         ]);
         c
     };
-    // one run of each first (the file cache), then alternately
-    timed(&mut evaluate(), root)?;
-    timed(&mut gradient(), root)?;
-    let (mut values, mut boths) = (Vec::new(), Vec::new());
-    for _ in 0..repeats {
-        values.push(timed(&mut evaluate(), root)?.1);
-        boths.push(timed(&mut gradient(), root)?.1);
-    }
-    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let (value_min, both_min) = (least(&values), least(&boths));
-    Some(Row { case, tolerance, value: crate::median(values), both: crate::median(boths), value_min, both_min })
+    let [value, value_min, both, both_min] =
+        crate::process::value_and_gradient_alternately(&evaluate, &gradient, root, repeats)?;
+    Some(Row { case, tolerance, value, both, value_min, both_min })
 }
 
 /// The same pairs in one process (`metric::evaluate` against `metric::gradient` over both keys,

@@ -8,7 +8,6 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::process::timed;
 use crate::sections::Tools;
 
 /// The section's heading (after `## `).
@@ -36,16 +35,9 @@ fn whole_process(asnr: &Path, root: &Path, scene: &Path, tolerance: f64, repeats
         c.arg("gradient").arg(scene).args(["--wrt", KEY, "--tolerance", &tol]);
         c
     };
-    timed(&mut evaluate(), root)?;
-    timed(&mut gradient(), root)?;
-    let (mut values, mut boths) = (Vec::new(), Vec::new());
-    for _ in 0..repeats {
-        values.push(timed(&mut evaluate(), root)?.1);
-        boths.push(timed(&mut gradient(), root)?.1);
-    }
-    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let (value_min, both_min) = (least(&values), least(&boths));
-    Some([crate::median(values), value_min, crate::median(boths), both_min])
+    let [value, value_min, both, both_min] =
+        crate::process::value_and_gradient_alternately(&evaluate, &gradient, root, repeats)?;
+    Some([value, value_min, both, both_min])
 }
 
 /// The section: the one-process and whole-process tables, or `None` where no scene evaluates.

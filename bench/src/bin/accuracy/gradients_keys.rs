@@ -20,7 +20,6 @@ use metric::Parameter;
 use optics::SeidelTerm;
 
 use crate::gradients::Row;
-use crate::process::timed;
 use crate::sections::Tools;
 
 /// One case: its name, the scene's file, its `--set` overrides, the keys (as `--wrt` spells
@@ -208,16 +207,9 @@ fn whole_process(asnr: &Path, root: &Path, case: &Case, repeats: usize) -> Optio
         }
         c
     };
-    timed(&mut evaluate(), root)?;
-    timed(&mut gradient(), root)?;
-    let (mut values, mut boths) = (Vec::new(), Vec::new());
-    for _ in 0..repeats {
-        values.push(timed(&mut evaluate(), root)?.1);
-        boths.push(timed(&mut gradient(), root)?.1);
-    }
-    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-    let (value_min, both_min) = (least(&values), least(&boths));
-    Some(Wall { value: crate::median(values), both: crate::median(boths), value_min, both_min })
+    let [value, value_min, both, both_min] =
+        crate::process::value_and_gradient_alternately(&evaluate, &gradient, root, repeats)?;
+    Some(Wall { value, both, value_min, both_min })
 }
 
 /// The tables and their text.

@@ -44,6 +44,27 @@ pub(crate) fn timed(command: &mut Command, root: &Path) -> Option<(String, f64)>
     Some((String::from_utf8_lossy(&output.stdout).into_owned(), wall))
 }
 
+/// `evaluate` and `gradient` as whole processes: one run of each first (the file cache), then
+/// `repeats` of each alternately; `[value's median, value's fastest, both's median, both's
+/// fastest]`, s, or None when a run fails.
+pub(crate) fn value_and_gradient_alternately(
+    evaluate: &dyn Fn() -> Command,
+    gradient: &dyn Fn() -> Command,
+    root: &Path,
+    repeats: usize,
+) -> Option<[f64; 4]> {
+    timed(&mut evaluate(), root)?;
+    timed(&mut gradient(), root)?;
+    let (mut values, mut boths) = (Vec::new(), Vec::new());
+    for _ in 0..repeats {
+        values.push(timed(&mut evaluate(), root)?.1);
+        boths.push(timed(&mut gradient(), root)?.1);
+    }
+    let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let (value_min, both_min) = (least(&values), least(&boths));
+    Some([crate::median(values), value_min, crate::median(boths), both_min])
+}
+
 /// numpy's cheapest Binary 2 row within 1e-6, as the script's arguments.
 fn cheapest_numpy(rows: &[Row]) -> Option<(Vec<String>, String)> {
     let row = rows
