@@ -8,6 +8,9 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
+// no code: its dependency features let this build share the test build's (workspace-hack/Cargo.toml)
+use workspace_hack as _;
+
 fn main() -> ExitCode {
     let cli = asnr::Cli::parse();
     match asnr::run(cli) {

@@ -53,6 +53,20 @@ pub(crate) fn curve_spectrum(scale: f64, curve: &Curve) -> Spectrum {
     }
 }
 
+/// The samples of a lens's efficiency and transmission curves with `extra` (a table's
+/// wavelengths, band edges), sorted, each once: the breakpoints of a lens with such curves.
+pub(crate) fn curve_breakpoints(
+    efficiency: &Curve,
+    transmission: &Curve,
+    extra: impl IntoIterator<Item = f64>,
+) -> Vec<f64> {
+    let mut b: Vec<f64> =
+        efficiency.breakpoints().iter().chain(transmission.breakpoints()).copied().chain(extra).collect();
+    b.sort_by(f64::total_cmp);
+    b.dedup();
+    b
+}
+
 impl Curve {
     /// The value at `wavelength_m`.
     pub fn value(&self, wavelength_m: f64) -> f64 {
@@ -301,11 +315,7 @@ impl LensModel for ChromaticMetalens {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        let mut b: Vec<f64> =
-            self.efficiency.breakpoints().iter().chain(self.transmission.breakpoints()).copied().collect();
-        b.sort_by(f64::total_cmp);
-        b.dedup();
-        b
+        curve_breakpoints(&self.efficiency, &self.transmission, [])
     }
 
     fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> {

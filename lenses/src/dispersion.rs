@@ -226,15 +226,12 @@ impl LensModel for DispersionEngineered {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        let mut b: Vec<f64> = [self.band.0, self.band.1]
-            .into_iter()
-            .chain(self.efficiency.breakpoints().iter().copied())
-            .chain(self.transmission.breakpoints().iter().copied())
-            .chain(self.focal_shift.iter().map(|p| p.0))
-            .collect();
-        b.sort_by(f64::total_cmp);
-        b.dedup();
-        b
+        let band = [self.band.0, self.band.1].into_iter();
+        crate::chromatic::curve_breakpoints(
+            &self.efficiency,
+            &self.transmission,
+            band.chain(self.focal_shift.iter().map(|p| p.0)),
+        )
     }
 
     fn describe(&self) -> String {

@@ -7,7 +7,7 @@ use optics::radial::{Oblique, RadialProfile, RadialPupil};
 use optics::{Field, LensModel, Order, Wavefront};
 
 use crate::Error;
-use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
+use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction, curve_breakpoints};
 use crate::harmonic::{HARMONIC_ORDER_REACH, sinc};
 use crate::refractive::Sellmeier;
 
@@ -54,15 +54,6 @@ impl Dispersion {
             other => other.name().to_string(),
         }
     }
-}
-
-/// The breakpoints of a lens's efficiency and transmission curves, sorted, each once.
-pub(crate) fn curve_breakpoints(efficiency: &Curve, transmission: &Curve) -> Vec<f64> {
-    let mut out = efficiency.breakpoints().to_vec();
-    out.extend_from_slice(transmission.breakpoints());
-    out.sort_by(f64::total_cmp);
-    out.dedup();
-    out
 }
 
 /// A lens given by its phase `φ0(ρ)` at the design wavelength (radians, `ρ = r/R` with `R` the
@@ -447,7 +438,7 @@ impl LensModel for PhaseLens {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        curve_breakpoints(&self.efficiency, &self.transmission)
+        curve_breakpoints(&self.efficiency, &self.transmission, [])
     }
 
     fn describe(&self) -> String {

@@ -9,8 +9,9 @@ use optics::radial::Oblique;
 use optics::{Field, LensModel, Order};
 
 use crate::Error;
+use crate::chromatic::curve_breakpoints;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
-use crate::phase::{Dispersion, check_design, curve_breakpoints, order_list};
+use crate::phase::{Dispersion, check_design, order_list};
 
 /// A lens given by a 2-D phase map ([`optics::map::PhaseMap`]): working F-number `f0/D` (`D` the
 /// circle's diameter or the square's side), the detector at `f0`, the dispersion, and the
@@ -180,7 +181,7 @@ impl LensModel for PhaseMapLens {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        curve_breakpoints(&self.efficiency, &self.transmission)
+        curve_breakpoints(&self.efficiency, &self.transmission, [])
     }
 
     fn describe(&self) -> String {

@@ -501,17 +501,11 @@ impl LensModel for PsfStack {
     }
 
     fn breakpoints(&self) -> Vec<f64> {
-        let mut b: Vec<f64> = self
-            .efficiency
-            .breakpoints()
-            .iter()
-            .chain(self.transmission.breakpoints())
-            .chain(self.table.wavelengths())
-            .copied()
-            .collect();
-        b.sort_by(f64::total_cmp);
-        b.dedup();
-        b
+        crate::chromatic::curve_breakpoints(
+            &self.efficiency,
+            &self.transmission,
+            self.table.wavelengths().iter().copied(),
+        )
     }
 
     fn describe(&self) -> String {

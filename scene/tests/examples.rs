@@ -4,6 +4,9 @@ use std::path::Path;
 
 use radiometry::Spectrum;
 
+// no code: its dependency features let this build share the test build's (workspace-hack/Cargo.toml)
+use workspace_hack as _;
+
 /// `examples/spectrometer.toml` loads: the paper's lens behind the generated spectrometer table
 /// (`cargo xtask data`), every one of its 1601 samples read (0.25 nm over 600–1000 nm). Not
 /// evaluated here: the per-interval spectral rule takes seconds on 1600 intervals in a debug

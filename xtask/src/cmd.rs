@@ -18,9 +18,9 @@ pub(crate) fn cargo(root: &Path, args: &[&str]) -> Command {
 /// returns the folder that holds them (`target/debug`).
 ///
 /// After the test step of `cargo xtask ci` this compiles only the binaries that no test needed
-/// (the stress sweep's) and reuses every library: `cargo build --package asnr` would resolve the
-/// features of `asnr` alone (no `testkit` on optics, fewer on serde, rand, syn and others) and
-/// compile every project crate again (ARCHITECTURE.md, "CI").
+/// (the stress sweep's) and reuses every library. Building the whole workspace's binaries, not
+/// `--package asnr`, keeps that true without relying on workspace-hack (which makes `asnr`'s own
+/// resolution agree, for the README's commands; ARCHITECTURE.md, "CI").
 pub(crate) fn debug_binaries(root: &Path) -> Result<std::path::PathBuf> {
     run(&mut cargo(root, &["build", "--quiet", "--locked", "--workspace", "--bins", "--tests"]))?;
     Ok(crate::accuracy::target_dir(root).join("debug"))

@@ -27,6 +27,7 @@ mod ci;
 mod cmd;
 mod data;
 mod emva;
+mod features;
 mod figures;
 mod python;
 mod readme;

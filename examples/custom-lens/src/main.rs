@@ -6,8 +6,11 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use custom_lens::{BK7_CAUCHY, HybridAchromat, paper_scene};
+
+// no code: its dependency features let this build share the test build's (workspace-hack/Cargo.toml)
 use lenses::{ChromaticMetalens, Curve};
 use optics::LensModel;
+use workspace_hack as _;
 
 fn main() -> ExitCode {
     match run() {
