@@ -312,7 +312,7 @@ impl Polychromatic<'_> {
     pub fn mean_mtf_over_noise_and_binary2_gradient(&self, noise: &NoiseShape) -> Option<(f64, Vec<f64>, Work)> {
         let lanes = self.binary2_lanes()?;
         *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
-        let (mean, work) = self.mean_of(&|nu| self.over_noise(nu, self.recorded_otf(nu), noise));
+        let (mean, work) = self.mean_of_cut(&|nu| self.over_noise(nu, self.recorded_otf(nu), noise), noise.rows());
         let recording = self.gradient.borrow_mut().take()?;
         self.integrate_recorded(mean, recording, work)
     }
@@ -573,9 +573,9 @@ impl Polychromatic<'_> {
     /// Along `azimuth` when the OTF depends on direction.
     pub fn mean_mtf_over_noise(&self, noise: &NoiseShape, azimuth: f64) -> (f64, Work) {
         if self.direction_dependent() {
-            self.mean_of(&|nu| self.otf_along(nu, azimuth).norm() / noise.value(nu))
+            self.mean_of_cut(&|nu| self.otf_along(nu, azimuth).norm() / noise.value(nu), noise.rows())
         } else {
-            self.mean_of(&|nu| self.otf(nu) / noise.value(nu))
+            self.mean_of_cut(&|nu| self.otf(nu) / noise.value(nu), noise.rows())
         }
     }
 
@@ -743,7 +743,10 @@ impl Polychromatic<'_> {
                 Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
             let (mean, work) = match noise {
                 None => self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth)),
-                Some(shape) => self.mean_of(&|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape)),
+                Some(shape) => self.mean_of_cut(
+                    &|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape),
+                    shape.rows(),
+                ),
             };
             match self.gradient.borrow_mut().take() {
                 Some(r) if !r.failed => {
@@ -1043,6 +1046,15 @@ impl Polychromatic<'_> {
     /// Adaptive mean over `[0, max_frequency]` of `P(ν) |value(ν)|`, where `value` is a signed
     /// OTF (split at its sign changes) or a modulus.
     fn mean_of(&self, value: &dyn Fn(f64) -> f64) -> (f64, Work) {
+        self.mean_of_cut(value, &[])
+    }
+
+    /// [`mean_of`](Self::mean_of) of an integrand with kinks of its own at `kinks` (cycles/m):
+    /// the adaptive rule's intervals are cut there as at the engine's cutoffs, so that each
+    /// panel holds a smooth integrand (docs/physics.md, "Gradients under a noise spectrum": a
+    /// noise table's rows, where `1/n(ν)` has its kinks). The fixed rule of the FFT path ignores
+    /// them (its grid is only continuous anyway).
+    fn mean_of_cut(&self, value: &dyn Fn(f64) -> f64, kinks: &[f64]) -> (f64, Work) {
         let mut work = if self.engine.engine() == Engine::ClosedForm {
             Work::default()
         } else {
@@ -1090,7 +1102,7 @@ impl Polychromatic<'_> {
         let mut guess = 0.25 * active;
         loop {
             let closed_before = self.engine.value_evaluations();
-            let (mean, pass) = self.mean_pass(value, self.frequency_tolerance() * guess / active);
+            let (mean, pass) = self.mean_pass(value, self.frequency_tolerance() * guess / active, kinks);
             work.frequency_panels += pass.frequency_panels;
             work.otf_evaluations += pass.otf_evaluations;
             work.sign_changes += pass.sign_changes;
@@ -1109,8 +1121,9 @@ impl Polychromatic<'_> {
 
     /// One adaptive pass of [`mean_of`](Self::mean_of) to an absolute error `absolute` of the mean
     /// over the range where the OTF is non-zero (the whole range unless the highest cutoff is
-    /// below `max_frequency`).
-    fn mean_pass(&self, value: &dyn Fn(f64) -> f64, absolute: f64) -> (f64, Work) {
+    /// below `max_frequency`), with the integrand's own `kinks` (cycles/m) among the intervals'
+    /// ends.
+    fn mean_pass(&self, value: &dyn Fn(f64) -> f64, absolute: f64, kinks: &[f64]) -> (f64, Work) {
         let mut work = Work::default();
         // a new pass reads every value again, to its own tolerance: only its rule counts
         if let Some(r) = self.gradient.borrow_mut().as_mut() {
@@ -1133,7 +1146,10 @@ impl Polychromatic<'_> {
         // where every wavelength of its ±7σ passes the limit); elsewhere (cutoff kinks, the
         // reference panels) the adaptive rule alone
         let smooth_rule = self.engine.smooth_in_frequency(self.scene.max_frequency);
-        for pair in self.engine.frequency_cuts(self.scene.max_frequency).windows(2) {
+        let top = self.scene.max_frequency;
+        let mut cuts = self.engine.frequency_cuts(top);
+        cuts.extend(kinks.iter().copied().filter(|&k| k > 0.0 && k < top));
+        for pair in super::sort_cuts(cuts).windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts
             // (2 on the closed-form engine, whose OTF has no kinks)
