@@ -114,32 +114,23 @@ impl Closed {
         };
         let densities = band_densities(detected, lo, hi);
         let mut read = densities.iter();
-        // each node a copy of one made once, its three numbers then written in place (a node
-        // built whole on the stack at each step was written field by field and read back as one
-        // wide copy, a stalled store forwarding per node: 3 % of the paper point)
-        let template = Node {
-            lambda: 0.0,
-            weight: 0.0,
-            w020: 0.0,
-            scale: 1.0,
-            shift: [0.0, 0.0],
-            shift_rate: None,
-            iris_shift: [0.0; 2],
-            iris_rate: 0.0,
-            table: None,
-            radial: None,
-            part: WHOLE,
-        };
         quad::for_each_node(lo, hi, 8, |lambda, q| {
             let density = read.next().copied().unwrap_or(f64::NAN);
             let q_rho = q * density;
             nodes.samples.push((lambda, q_rho, WHOLE));
-            nodes.nodes.push(template.clone());
-            if let Some(node) = nodes.nodes.last_mut() {
-                node.lambda = lambda;
-                node.weight = q_rho * affine.efficiency;
-                node.w020 = affine.w020_intercept_m + affine.w020_slope * lambda;
-            }
+            nodes.nodes.push(Node {
+                lambda,
+                weight: q_rho * affine.efficiency,
+                w020: affine.w020_intercept_m + affine.w020_slope * lambda,
+                scale: 1.0,
+                shift: [0.0, 0.0],
+                shift_rate: None,
+                iris_shift: [0.0; 2],
+                iris_rate: 0.0,
+                table: None,
+                radial: None,
+                part: WHOLE,
+            });
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len(), part: WHOLE });
         nodes.densities = Some(densities.to_vec());
