@@ -498,12 +498,8 @@ impl GaussianDefocus {
         for (slot, v) in key[2..].iter_mut().zip(&self.q) {
             *slot = v.to_bits();
         }
-        if self.q.len() <= MAX_TERMS {
-            if let Some((known, pair)) = KEPT.get() {
-                if known == key {
-                    return pair;
-                }
-            }
+        if let Some((_, pair)) = KEPT.get().filter(|(known, _)| self.q.len() <= MAX_TERMS && *known == key) {
+            return pair;
         }
         let pair = self.tail_and_reach_afresh(tolerance);
         if self.q.len() <= MAX_TERMS {
@@ -759,7 +755,7 @@ impl GaussianDefocus {
 /// paper point); the polar form beyond `|φ2| = 1e150`, where `φ2²` would overflow (test
 /// `principal_root_is_the_polar_one`).
 fn principal_root(phi2: f64) -> Complex64 {
-    if !(phi2.abs() < 1e150) {
+    if phi2.is_nan() || phi2.abs() >= 1e150 {
         return Complex64::new(0.5, -phi2).sqrt();
     }
     let s = (0.5 * ((0.25 + phi2 * phi2).sqrt() + 0.5)).sqrt();
