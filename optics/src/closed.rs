@@ -488,22 +488,18 @@ impl GaussianDefocus {
     /// OTF values, which share one tolerance, take the four logarithms once, not once a value.
     /// The same numbers as computed afresh (test `tail_and_reach_are_kept_to_the_bit`).
     fn tail_and_reach(&self, tolerance: f64) -> (f64, f64) {
-        type Kept = Option<([u64; MAX_TERMS + 2], (f64, f64))>;
-        thread_local! {
-            static KEPT: std::cell::Cell<Kept> = const { std::cell::Cell::new(None) };
-        }
         let mut key = [u64::MAX; MAX_TERMS + 2];
         key[0] = tolerance.to_bits();
         key[1] = self.q.len() as u64;
         for (slot, v) in key[2..].iter_mut().zip(&self.q) {
             *slot = v.to_bits();
         }
-        if let Some((_, pair)) = KEPT.get().filter(|(known, _)| self.q.len() <= MAX_TERMS && *known == key) {
+        if let Some((_, pair)) = TAIL_AND_REACH.get().filter(|(known, _)| self.q.len() <= MAX_TERMS && *known == key) {
             return pair;
         }
         let pair = self.tail_and_reach_afresh(tolerance);
         if self.q.len() <= MAX_TERMS {
-            KEPT.set(Some((key, pair)));
+            TAIL_AND_REACH.set(Some((key, pair)));
         }
         pair
     }
@@ -747,6 +743,19 @@ impl GaussianDefocus {
         }
         served
     }
+}
+
+/// The last tail and reach a thread computed ([`GaussianDefocus::tail_and_reach`]), by the bits
+/// of the tolerance, the polynomial's length and its coefficients.
+type KeptTailAndReach = Option<([u64; MAX_TERMS + 2], (f64, f64))>;
+thread_local! {
+    static TAIL_AND_REACH: std::cell::Cell<KeptTailAndReach> = const { std::cell::Cell::new(None) };
+}
+
+/// Forgets the tail and reach this thread keeps (`optics::forget_remembered`: a call timed
+/// alone computes its own).
+pub(crate) fn forget_tail_and_reach() {
+    TAIL_AND_REACH.set(None);
 }
 
 /// `√A` for `A = ½ − iφ2` (`Re A > 0`), the principal root, algebraically: `√A = s + i Im A/(2s)`
@@ -1838,6 +1847,11 @@ mod tests {
             }
         }
         assert_eq!(checked, 72);
+        // forgotten (`optics::forget_remembered`): nothing kept, and the next one computed
+        assert!(TAIL_AND_REACH.get().is_some());
+        crate::forget_remembered();
+        assert!(TAIL_AND_REACH.get().is_none());
+        assert_eq!(scenes[1].tail_and_reach(1e-7), scenes[1].tail_and_reach_afresh(1e-7));
         // the tails differ across these tolerances (so a stale pair would have been caught)
         assert_ne!(scenes[0].tail_and_reach(1e-7).0, scenes[0].tail_and_reach(1e-12).0);
         assert_ne!(scenes[0].tail_and_reach(1e-7).1, scenes[2].tail_and_reach(1e-7).1);
