@@ -216,7 +216,7 @@ impl GaussianDefocus {
         let (a_mu, a1) = (scale * (self.w0 + self.w1 * self.center), scale * self.w1);
         let phi2 = -a1 * beta * self.sigma * self.sigma;
         let a = Complex64::new(0.5, -phi2);
-        let sqrt_a = a.sqrt();
+        let sqrt_a = principal_root(phi2);
         AtFrequency {
             beta,
             a_mu,
@@ -481,6 +481,45 @@ impl GaussianDefocus {
         total
     }
 
+    /// For [`otf_estimated`](Self::otf_estimated) at `tolerance`: where the Gaussian is cut off,
+    /// in σ, and how many envelope widths from its peak the uncut zone's bump is kept. Both
+    /// depend on the tolerance and the polynomial only, not on the frequency: each thread keeps
+    /// the last pair with its key (the tolerance's and the coefficients' bits), so that a mean's
+    /// OTF values, which share one tolerance, take the four logarithms once, not once a value.
+    /// The same numbers as computed afresh (test `tail_and_reach_are_kept_to_the_bit`).
+    fn tail_and_reach(&self, tolerance: f64) -> (f64, f64) {
+        let mut key = [u64::MAX; MAX_TERMS + 2];
+        key[0] = tolerance.to_bits();
+        key[1] = self.q.len() as u64;
+        for (slot, v) in key[2..].iter_mut().zip(&self.q) {
+            *slot = v.to_bits();
+        }
+        if let Some((_, pair)) = TAIL_AND_REACH.get().filter(|(known, _)| self.q.len() <= MAX_TERMS && *known == key) {
+            return pair;
+        }
+        let pair = self.tail_and_reach_afresh(tolerance);
+        if self.q.len() <= MAX_TERMS {
+            TAIL_AND_REACH.set(Some((key, pair)));
+        }
+        pair
+    }
+
+    /// [`tail_and_reach`](Self::tail_and_reach) computed.
+    fn tail_and_reach_afresh(&self, tolerance: f64) -> (f64, f64) {
+        // the Gaussian's tails beyond ±x weigh ~e^{−x²/2}: cut where that is far below the
+        // tolerance (6σ at 1e-7, 10σ at most)
+        let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+        // |E| ≤ e^{−r²/2} × (the polynomial at |x − m| ≈ r + 2): r widths from c*, with
+        // r² = tail² + 2 ln(growth), is below the tail's own 1e-3 tolerance
+        let norm: f64 = self.q.iter().map(|v| v.abs()).sum();
+        let growth = |r: f64| self.q.iter().rev().fold(0.0, |acc, v| acc * (r + 2.0) + v.abs()) / norm;
+        let mut r = tail;
+        for _ in 0..3 {
+            r = (tail * tail + 2.0 * growth(r).ln()).sqrt();
+        }
+        (tail, r)
+    }
+
     /// The polychromatic OTF at `frequency` (cycles/m), normalized to 1 at 0, to an absolute
     /// error of about `tolerance`; returns it and the number of `E(c)` evaluations.
     pub fn otf(&self, frequency: f64, tolerance: f64) -> (f64, usize) {
@@ -499,9 +538,7 @@ impl GaussianDefocus {
             return (1.0, 0, 0.0);
         }
         let left_out = 2e-3 * tolerance;
-        // the Gaussian's tails beyond ±x weigh ~e^{−x²/2}: cut where that is far below the
-        // tolerance (6σ at 1e-7, 10σ at most)
-        let tail = (2.0 * (1e3 / tolerance.max(1e-300)).ln()).sqrt().clamp(6.0, TAIL_SIGMAS);
+        let (tail, reach_widths) = self.tail_and_reach(tolerance);
         let (f, erfcx_error) = self.at_frequency_for(nu, tail, tolerance);
         // the spectrum is negligible for c < β(μ − tail σ) (and absent below λ = 0)
         let c_lo = (f.beta * (self.center - tail * self.sigma)).max(0.0);
@@ -532,15 +569,8 @@ impl GaussianDefocus {
             // (with the Gaussian truncated at λ = 0 the truncation's endpoint term does not
             // decay away from c*: nothing is skipped then)
             if self.lower_at(tail).is_none() {
-                // |E| ≤ e^{−r²/2} × (the polynomial at |x − m| ≈ r + 2): r widths from c*, with
-                // r² = tail² + 2 ln(growth), is below the tail's own 1e-3 tolerance
-                let norm: f64 = self.q.iter().map(|v| v.abs()).sum();
-                let growth = |r: f64| self.q.iter().rev().fold(0.0, |acc, v| acc * (r + 2.0) + v.abs()) / norm;
-                let mut r = tail;
-                for _ in 0..3 {
-                    r = (tail * tail + 2.0 * growth(r).ln()).sqrt();
-                }
-                let reach = r * width;
+                // (`tail_and_reach`: r widths from c*)
+                let reach = reach_widths * width;
                 from = from.max(c_star - reach);
                 to = to.min(c_star + reach);
                 if to > from {
@@ -715,6 +745,32 @@ impl GaussianDefocus {
     }
 }
 
+/// The last tail and reach a thread computed ([`GaussianDefocus::tail_and_reach`]), by the bits
+/// of the tolerance, the polynomial's length and its coefficients.
+type KeptTailAndReach = Option<([u64; MAX_TERMS + 2], (f64, f64))>;
+thread_local! {
+    static TAIL_AND_REACH: std::cell::Cell<KeptTailAndReach> = const { std::cell::Cell::new(None) };
+}
+
+/// Forgets the tail and reach this thread keeps (`optics::forget_remembered`: a call timed
+/// alone computes its own).
+pub(crate) fn forget_tail_and_reach() {
+    TAIL_AND_REACH.set(None);
+}
+
+/// `√A` for `A = ½ − iφ2` (`Re A > 0`), the principal root, algebraically: `√A = s + i Im A/(2s)`
+/// with `s = √((|A| + Re A)/2)`, a sum of positive numbers (no cancellation), within a few ulp
+/// of the polar form `num_complex` takes (a `hypot`, an `atan2` and a `sincos`: 1 % of the
+/// paper point); the polar form beyond `|φ2| = 1e150`, where `φ2²` would overflow (test
+/// `principal_root_is_the_polar_one`).
+fn principal_root(phi2: f64) -> Complex64 {
+    if phi2.is_nan() || phi2.abs() >= 1e150 {
+        return Complex64::new(0.5, -phi2).sqrt();
+    }
+    let s = (0.5 * ((0.25 + phi2 * phi2).sqrt() + 0.5)).sqrt();
+    Complex64::new(s, -phi2 / (2.0 * s))
+}
+
 /// The cuts of the pupil angle's pieces in `c = cos t` for one OTF value
 /// ([`GaussianDefocus::otf_estimated`]), on the stack: at most [`Cuts::CAPACITY`].
 struct Cuts {
@@ -821,7 +877,6 @@ fn nested(
         let mut moves = [0.0; 6];
         let mut previous = 0.0;
         let mut integral = 0.0;
-        let mut largest: f64 = 0.0;
         let mut estimate = f64::INFINITY;
         // accept at the tolerance, or at the rounding floor of the integrand itself: E(c) is a
         // difference of terms up to ~1e4 times larger than itself at thousands of waves of
@@ -885,12 +940,6 @@ fn nested(
                 *evaluations += n / 2;
             }
             let weights = crate::poly::clenshaw_curtis(points);
-            // the level's largest |value|: the last level's and the new points' (the odd ones;
-            // all three at the first), the same number as the maximum over every point
-            let fresh = if level == 0 { 0..3 } else { 1..n };
-            for k in fresh.step_by(if level == 0 { 1 } else { 2 }) {
-                largest = largest.max(values[k].abs());
-            }
             integral = 0.0;
             for (&v, &w) in values[..points].iter().zip(weights) {
                 integral += w * v;
@@ -919,7 +968,11 @@ fn nested(
                     } else {
                         moves[level - 2].max(moved)
                     };
-                    if estimate <= tol.max(noise) || moved <= 50.0 * f64::EPSILON * largest * (b - a) {
+                    // the level's largest |value| only where the estimate does not accept it
+                    // (the same number in any order: each |v| is not negative, and f64::max
+                    // passes over a NaN in either place)
+                    let largest = || values[..points].iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+                    if estimate <= tol.max(noise) || moved <= 50.0 * f64::EPSILON * largest() * (b - a) {
                         *accepted += estimate;
                         return integral;
                     }
@@ -1763,6 +1816,62 @@ mod tests {
         let (f, f0, l0) = (2.5, 3.36e-3, 800e-9);
         let k = f0 / (8.0 * f * f);
         GaussianDefocus::new(800e-9, range_m / (2.0 * 2f64.sqrt()), coefficients, 0.15, k, -k / l0, f)
+    }
+
+    /// The tail and the bump's reach a thread keeps (`tail_and_reach`) are the ones computed
+    /// afresh, to the bit, whatever came before: tolerances and polynomials alternating (the
+    /// kept pair of one must not serve the other), the same tolerance with other coefficients.
+    #[test]
+    fn tail_and_reach_are_kept_to_the_bit() {
+        let scenes = [
+            paper(50e-9, &[0.0, 1.0]),
+            paper(50e-9, &[0.0, 1.0 + 1e-15]),
+            paper(120e-9, &[1.0, 2e6, -3e12]),
+            paper(50e-9, &[1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125]),
+        ];
+        let mut checked = 0;
+        for round in 0..3 {
+            for (i, g) in scenes.iter().enumerate() {
+                for tolerance in [1e-7, 1e-2, 1e-7 * (1.0 + f64::EPSILON), 1e-12, 1e-300, 3e-5] {
+                    let tolerance = if round == 1 { tolerance * (1 + i) as f64 } else { tolerance };
+                    let (kept, afresh) = (g.tail_and_reach(tolerance), g.tail_and_reach_afresh(tolerance));
+                    assert_eq!(
+                        (kept.0.to_bits(), kept.1.to_bits()),
+                        (afresh.0.to_bits(), afresh.1.to_bits()),
+                        "scene {i}, tolerance {tolerance:e}: {kept:?} against {afresh:?}"
+                    );
+                    // asked again at once: the kept pair
+                    assert_eq!(g.tail_and_reach(tolerance).1.to_bits(), afresh.1.to_bits());
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 72);
+        // forgotten (`optics::forget_remembered`): nothing kept, and the next one computed
+        assert!(TAIL_AND_REACH.get().is_some());
+        crate::forget_remembered();
+        assert!(TAIL_AND_REACH.get().is_none());
+        assert_eq!(scenes[1].tail_and_reach(1e-7), scenes[1].tail_and_reach_afresh(1e-7));
+        // the tails differ across these tolerances (so a stale pair would have been caught)
+        assert_ne!(scenes[0].tail_and_reach(1e-7).0, scenes[0].tail_and_reach(1e-12).0);
+        assert_ne!(scenes[0].tail_and_reach(1e-7).1, scenes[2].tail_and_reach(1e-7).1);
+    }
+
+    /// `principal_root` against `num_complex`'s polar square root, over φ2 from 0 to beyond the
+    /// switch to the polar form, both signs: within 4 ulp of its size in each part.
+    #[test]
+    fn principal_root_is_the_polar_one() {
+        let mut phi2 = 1e-12;
+        while phi2 < 1e160 {
+            for p in [phi2, -phi2, 0.0, -0.0] {
+                let (root, polar) = (principal_root(p), Complex64::new(0.5, -p).sqrt());
+                let size = polar.norm();
+                let off = (root.re - polar.re).abs().max((root.im - polar.im).abs()) / (size * f64::EPSILON);
+                assert!(root.re > 0.0 && off <= 4.0, "φ2 = {p:e}: {root} against {polar} ({off} ulp)");
+                assert!(((root * root) - Complex64::new(0.5, -p)).norm() <= 4.0 * f64::EPSILON * (0.5 + p.abs()));
+            }
+            phi2 *= 1.37;
+        }
     }
 
     /// Slow check: the same OTF by brute-force quadrature over λ of the monochromatic OTF.

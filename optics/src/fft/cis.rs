@@ -8,9 +8,10 @@
 //! class library: Cody–Waite reduction, minimax polynomials), 2.4 times the speed of the scalar
 //! [`sin_cos`] here at the same accuracy (`cargo bench -p asnr-optics --bench sincos`). The
 //! scalar one serves single phases: the reduction is Cody–Waite's with π/2 in three parts and the
-//! sine and cosine are Taylor polynomials on `|r| ≤ π/4` to degrees 15 and 16 (truncation below
-//! 2e-17), without branches. Both are accurate to a few ulp of 1 for `|φ| ≤ 1e5` rad, the
-//! defocus-phase budget (tested against `f64::sin_cos`).
+//! sine and cosine are fdlibm's minimax polynomials on `|r| ≤ π/4` of degrees 13 and 12 in `r`
+//! (truncation within 2⁻⁵⁸; Horner's rule in fused multiply-adds), without branches. Both are
+//! accurate to a few ulp of 1 for `|φ| ≤ 1e5` rad, the defocus-phase budget (tested against
+//! `f64::sin_cos`).
 
 use num_complex::Complex64;
 
@@ -29,29 +30,50 @@ const ROUND: f64 = 6_755_399_441_055_744.0;
 pub fn sin_cos(phi: f64) -> (f64, f64) {
     let q = (phi * std::f64::consts::FRAC_2_PI + ROUND) - ROUND;
     let r = ((phi - q * PIO2_1) - q * PIO2_2) - q * PIO2_3;
-    let r2 = r * r;
-    // sin r = r Σ (−1)^k r^{2k}/(2k+1)!, cos r = Σ (−1)^k r^{2k}/(2k)!, by Horner
-    let s = r
-        * (1.0
-            + r2 * (-1.0 / 6.0
-                + r2 * (1.0 / 120.0
-                    + r2 * (-1.0 / 5040.0
-                        + r2 * (1.0 / 362_880.0
-                            + r2 * (-1.0 / 39_916_800.0
-                                + r2 * (1.0 / 6_227_020_800.0 + r2 * (-1.0 / 1_307_674_368_000.0))))))));
-    let c = 1.0
-        + r2 * (-0.5
-            + r2 * (1.0 / 24.0
-                + r2 * (-1.0 / 720.0
-                    + r2 * (1.0 / 40_320.0
-                        + r2 * (-1.0 / 3_628_800.0
-                            + r2 * (1.0 / 479_001_600.0
-                                + r2 * (-1.0 / 87_178_291_200.0 + r2 * (1.0 / 20_922_789_888_000.0))))))));
+    let (s, c) = kernel(r, crate::complex4::fused, |x| x);
     // the quadrant: φ = q π/2 + r
     let quadrant = (q as i64) & 3;
     let (sin, cos) = if quadrant & 1 == 0 { (s, c) } else { (c, -s) };
     let flip = if quadrant & 2 == 0 { 1.0 } else { -1.0 };
     (flip * sin, flip * cos)
+}
+
+/// fdlibm's minimax polynomials for the sine and cosine on `|r| ≤ π/4` (`k_sin.c`,
+/// `k_cos.c`, Sun Microsystems 1993; FreeBSD `lib/msun/src`): `sin r ≈ r + r³ S(r²)` and
+/// `cos r ≈ 1 − r²/2 + r⁴ C(r²)`, each of degree five in `r²`, their truncation within 2⁻⁵⁸ of
+/// the functions there (docs/physics.md, "The sine and cosine").
+const SIN: [f64; 6] = [
+    -0.16666666666666632,
+    0.00833333333332249,
+    -0.0001984126982985795,
+    2.7557313707070068e-06,
+    -2.5050760253406863e-08,
+    1.58969099521155e-10,
+];
+/// See [`SIN`].
+const COS: [f64; 6] = [
+    0.0416666666666666,
+    -0.001388888888887411,
+    2.480158728947673e-05,
+    -2.7557314351390663e-07,
+    2.087572321298175e-09,
+    -1.1359647557788195e-11,
+];
+
+/// `(sin r, cos r)` for the reduced `|r| ≤ π/4` by [`SIN`] and [`COS`] in Horner's rule, each
+/// step one `fused` multiply-add (one rounding where the target has FMA): the scalar
+/// [`sin_cos`] and each lane of [`sin_cos_lanes`] by the same operations in the same order.
+#[inline(always)]
+fn kernel<T: Copy + std::ops::Mul<Output = T>>(r: T, fused: impl Fn(T, T, T) -> T, k: impl Fn(f64) -> T) -> (T, T) {
+    let z = r * r;
+    let mut s = k(SIN[5]);
+    let mut c = k(COS[5]);
+    for i in (0..5).rev() {
+        s = fused(s, z, k(SIN[i]));
+        c = fused(c, z, k(COS[i]));
+    }
+    // r + r³ S, and 1 − z/2 + z² C (1 − z/2 rounded once: within half an ulp of 1)
+    (fused(r * z, s, r), fused(z * z, c, fused(z, k(-0.5), k(1.0))))
 }
 
 /// [`sin_cos`] on four lanes, by the same operations in the same order on each (the quadrant
@@ -69,23 +91,7 @@ pub(crate) fn sin_cos_lanes<V: crate::complex4::Lanes>(phi: V) -> (V, V) {
     let k = V::splat;
     let q = (phi * k(std::f64::consts::FRAC_2_PI) + k(ROUND)) - k(ROUND);
     let r = ((phi - q * k(PIO2_1)) - q * k(PIO2_2)) - q * k(PIO2_3);
-    let r2 = r * r;
-    let s = r
-        * (k(1.0)
-            + r2 * (k(-1.0 / 6.0)
-                + r2 * (k(1.0 / 120.0)
-                    + r2 * (k(-1.0 / 5040.0)
-                        + r2 * (k(1.0 / 362_880.0)
-                            + r2 * (k(-1.0 / 39_916_800.0)
-                                + r2 * (k(1.0 / 6_227_020_800.0) + r2 * k(-1.0 / 1_307_674_368_000.0))))))));
-    let c = k(1.0)
-        + r2 * (k(-0.5)
-            + r2 * (k(1.0 / 24.0)
-                + r2 * (k(-1.0 / 720.0)
-                    + r2 * (k(1.0 / 40_320.0)
-                        + r2 * (k(-1.0 / 3_628_800.0)
-                            + r2 * (k(1.0 / 479_001_600.0)
-                                + r2 * (k(-1.0 / 87_178_291_200.0) + r2 * k(1.0 / 20_922_789_888_000.0))))))));
+    let (s, c) = kernel(r, |a: V, b: V, c: V| a.fused(b, c), k);
     // the quadrant q mod 4 ∈ {0, 1, 2, 3} (exact: q is an integer below 2^51, and so are its
     // quarter's floor and four times it), as `(q as i64) & 3` for either sign of q
     let quadrant = q - k(4.0) * (q * k(0.25)).floor();

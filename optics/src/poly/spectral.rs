@@ -1224,11 +1224,12 @@ thread_local! {
 }
 
 /// Forgets what this thread remembers of measured spectra (the densities with their panels'
-/// moments, the closed form's bands' densities, and radiometry's piecewise polynomials), so that the next evaluation makes its own:
+/// moments, the closed form's bands' densities and its tail and reach, and radiometry's piecewise polynomials), so that the next evaluation makes its own:
 /// for a time per evaluation measured by repeating one scene (the accuracy report).
 pub fn forget_remembered() {
     DENSITY_MEMO.with_borrow_mut(Vec::clear);
     super::closed_form::forget_band_densities();
+    crate::closed::forget_tail_and_reach();
     radiometry::forget_remembered();
 }
 
