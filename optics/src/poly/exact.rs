@@ -8,6 +8,10 @@ use num_complex::Complex64;
 use super::spectral::{Node, Nodes, Scene, clipped_nodes, node_otfs};
 use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
 
+/// A lens's design-wavelength rates at one wavelength (`LensModel::design_wavelength_rates`:
+/// `[∂W020_o, ∂τ_o]` per order), `None` where it gives none.
+type DesignRates = Option<Vec<[f64; 2]>>;
+
 /// Spectral nodes read through the exact 1-D OTF of each order.
 #[derive(Debug)]
 pub(super) struct Quadrature<'a> {
@@ -118,7 +122,7 @@ pub(super) fn exact_along_and_field_gradient(
     let design = axes.contains(&9);
     // the lens's design rates at the last node's wavelength and part (the orders of one
     // wavelength are consecutive nodes)
-    let mut rates: Option<(u64, usize, Option<Vec<[f64; 2]>>)> = None;
+    let mut rates: Option<((u64, usize), DesignRates)> = None;
     let mut no_rates = false;
     gradient.iter_mut().for_each(|g| *g = Complex64::new(0.0, 0.0));
     let (sin_a, cos_a) = azimuth.sin_cos();
@@ -152,11 +156,11 @@ pub(super) fn exact_along_and_field_gradient(
         };
         let design_lane = if design {
             let key = (n.lambda.to_bits(), n.part);
-            if rates.as_ref().is_none_or(|r| (r.0, r.1) != key) {
+            if rates.as_ref().is_none_or(|r| r.0 != key) {
                 let lens = scene.part(n.part).lens;
-                rates = Some((key.0, key.1, lens.design_wavelength_rates(n.lambda, scene.field)));
+                rates = Some((key, lens.design_wavelength_rates(n.lambda, scene.field)));
             }
-            let rate = rates.as_ref().and_then(|r| r.2.as_ref()).and_then(|r| r.get(n.order)).copied();
+            let rate = rates.as_ref().and_then(|r| r.1.as_ref()).and_then(|r| r.get(n.order)).copied();
             match rate {
                 Some([d_w020, d_tau]) if n.is_defocused_circle() && n.scale == 1.0 && n.iris_shift == [0.0; 2] => {
                     let w = n.w020 / n.lambda;
