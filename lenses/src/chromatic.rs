@@ -296,12 +296,9 @@ impl LensModel for ChromaticMetalens {
     }
 
     /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂ln λ0 = (λ/λ0) f0/(8F#²)`; τ1(λ) and T(λ)
-    /// do not depend on λ0. On axis only: off axis the lateral colour `f0 tan θ (λ0/λ − 1)`
-    /// moves with λ0 too.
-    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
-        if !field.is_on_axis() {
-            return None;
-        }
+    /// do not depend on λ0, nor on the field point. Off axis the lateral colour
+    /// `Δ = f0 tan θ (λ0/λ − 1)` moves as `Δ + f0 tan θ` (`LensModel::design_wavelength_rates`).
+    fn design_wavelength_rates(&self, wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
         let k = self.focal_length / (8.0 * self.f_number * self.f_number);
         Some(vec![[k * wavelength_m / self.design_wavelength, 0.0]])
     }
@@ -353,7 +350,8 @@ mod tests {
     }
 
     /// `design_wavelength_rates` against central differences of the defocus of lenses built at
-    /// λ0 ± h (relative step 1e-5: truncation ~1e-10), on axis; `None` off axis.
+    /// λ0 ± h (relative step 1e-5: truncation ~1e-10), on axis; off axis the same, and the
+    /// lateral colour's rate `Δ + f0 tan θ` against differences of the orders' image shifts.
     #[test]
     fn design_wavelength_rates_match_differences() {
         let at =
@@ -366,7 +364,20 @@ mod tests {
             assert!((d_w - w).abs() <= 1e-8 * w.abs(), "{l}: {d_w} vs {w}");
             assert_eq!(d_tau, 0.0);
         }
-        assert!(paper().design_wavelength_rates(800e-9, Field::new(0.05, 0.0)).is_none());
+        // off axis: the same rates, and the lateral colour moves as Δ + f0 tan θ (its own scale
+        // and a translation common to every wavelength)
+        let field = Field::new(0.05, -0.03);
+        let shift = |lens: &ChromaticMetalens, l: f64| lens.orders(l, field)[0].wavefront.image_shift_m;
+        for l in [750e-9, 850e-9] {
+            assert_eq!(paper().design_wavelength_rates(l, field), paper().design_wavelength_rates(l, Field::ON_AXIS));
+            let (up, down) = (shift(&at(800e-9 * (1.0 + h)), l), shift(&at(800e-9 * (1.0 - h)), l));
+            let own = shift(&paper(), l);
+            for (a, angle) in [field.x_rad, field.y_rad].into_iter().enumerate() {
+                let d = (up[a] - down[a]) / ((1.0 + h).ln() - (1.0 - h).ln());
+                let want = own[a] + 3.36e-3 * angle.tan();
+                assert!((d - want).abs() <= 1e-8 * want.abs(), "{l} axis {a}: {d} vs {want}");
+            }
+        }
     }
 
     #[test]

@@ -190,11 +190,9 @@ impl LensModel for Harmonic {
     /// `2 τ_base sinc(x) sinc′(x) α` with `x = α − m` (`∂α/∂ln λ0 = α`), `sinc′` as in
     /// [`order_wavelength_rates`](LensModel::order_wavelength_rates); T does not depend on λ0. The
     /// orders entering or leaving the range `|m − α| ≤ 3` do so at `sinc²(±3) = 0` with a zero
-    /// slope, so the sum stays C¹. On axis only (off axis the lateral colour moves with λ0 too).
-    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
-        if !field.is_on_axis() {
-            return None;
-        }
+    /// slope, so the sum stays C¹. The same at every field point: off axis each order's lateral
+    /// colour `Δ_m = f0 tan θ (α/m − 1)` moves as `Δ_m + f0 tan θ` (`LensModel::design_wavelength_rates`).
+    fn design_wavelength_rates(&self, wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
         let alpha = self.phase_depth(wavelength_m);
         let p_lambda0 = f64::from(self.design_order) * self.design_wavelength;
         let k = self.focal_length / (8.0 * self.f_number * self.f_number);
@@ -248,7 +246,8 @@ mod tests {
 
     /// `design_wavelength_rates` against central differences of each order's defocus and
     /// efficiency of lenses built at λ0 ± h (relative step 1e-6), at wavelengths where the order
-    /// range is the same on both sides; `None` off axis.
+    /// range is the same on both sides; off axis the same, and each order's lateral colour's rate
+    /// `Δ_m + f0 tan θ` against differences of the orders' image shifts.
     #[test]
     fn design_wavelength_rates_match_differences() {
         let at = |l0: f64| Harmonic::new(2.5, 3.36e-3, l0, 5, 0.4, Curve::Constant(0.6)).unwrap();
@@ -266,7 +265,20 @@ mod tests {
                 assert!((d_tau - t).abs() <= 1e-7 * t.abs().max(1e-3), "{l} m = {m}: {d_tau} vs {t}");
             }
         }
-        assert!(lens(5).design_wavelength_rates(800e-9, Field::new(0.05, 0.0)).is_none());
+        // off axis: the same rates, and each order's lateral colour moves as Δ_m + f0 tan θ
+        let field = Field::new(0.05, -0.03);
+        for l in [760e-9, 845e-9] {
+            assert_eq!(lens(5).design_wavelength_rates(l, field), lens(5).design_wavelength_rates(l, Field::ON_AXIS));
+            let (hi, lo, own) = (up.orders(l, field), down.orders(l, field), at(800e-9).orders(l, field));
+            assert_eq!((hi.len(), lo.len()), (own.len(), own.len()));
+            for ((u, d), o) in hi.iter().zip(&lo).zip(&own) {
+                for (a, angle) in [field.x_rad, field.y_rad].into_iter().enumerate() {
+                    let rate = (u.wavefront.image_shift_m[a] - d.wavefront.image_shift_m[a]) / step;
+                    let want = o.wavefront.image_shift_m[a] + 3.36e-3 * angle.tan();
+                    assert!((rate - want).abs() <= 1e-7 * want.abs(), "{l} axis {a}: {rate} vs {want}");
+                }
+            }
+        }
     }
 
     #[test]

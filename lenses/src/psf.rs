@@ -487,6 +487,14 @@ impl LensModel for PsfStack {
         self.design_wavelength
     }
 
+    /// The PSFs are data: λ0 (`lens.design_wavelength_nm`) names the wavelength they were
+    /// designed at for the Fraunhofer report's reference and enters no order, efficiency or
+    /// transmission, so every quantity's derivative with respect to it is 0 (docs/physics.md,
+    /// "Gradients: the design wavelength").
+    fn design_wavelength_inert(&self) -> bool {
+        true
+    }
+
     /// The PSFs of one field point, in its frame: the same at every field point.
     fn turns_with_field(&self) -> bool {
         true

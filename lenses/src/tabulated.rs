@@ -188,6 +188,14 @@ impl LensModel for Tabulated {
         self.design_wavelength
     }
 
+    /// The tables are data: λ0 (`lens.design_wavelength_nm`) names the wavelength they were
+    /// designed at for the Fraunhofer report's reference and enters no order, efficiency or
+    /// transmission, so every quantity's derivative with respect to it is 0 (docs/physics.md,
+    /// "Gradients: the design wavelength").
+    fn design_wavelength_inert(&self) -> bool {
+        true
+    }
+
     /// The curves' samples and the table's wavelengths (the OTF is linear in λ between them).
     /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {

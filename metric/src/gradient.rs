@@ -159,8 +159,9 @@ pub enum Parameter {
     /// slice is normalized). The mean MTF over `[0, ν_N]` of an OTF in `νp`, by the change of
     /// variables `u = νp/p0`: `∂M̄/∂ln p = MTF(ν_N) − M̄` (the MTF at Nyquist averaged over azimuth
     /// as `M̄` is), `∂I/∂ln p = ν_N ∂M̄/∂ln p` in the integral form; with the pixel MTF (its sinc
-    /// does not scale with p) `P(ν_N)|O(ν_N)| − M̄ − P_ν` by parts. `∂/∂ln p`. Refused with a
-    /// noise spectrum (docs/physics.md, "Gradients: chain rules", a PSF stack).
+    /// does not scale with p) `P(ν_N)|O(ν_N)| − M̄ − P_ν` by parts. `∂/∂ln p`. Under a noise
+    /// spectrum the weighted mean's `P(ν_N)|O(ν_N)|/n(ν_N) − G − (1/ν_N) ∫ P|O|(νP′/P − νn′/n)/n dν`
+    /// (docs/physics.md, "Gradients: chain rules", a PSF stack).
     PsfPitch,
     /// The obscuration ε of the chromatic lens's annular iris (`lens.obscuration`, the inner
     /// radius in units of the aperture's), per unit ε, where `0 < ε < 1`: the pupil's inner edge
@@ -175,9 +176,12 @@ pub enum Parameter {
     /// `∂/∂ln λ0`: for a lens whose every order is the full circular pupil with a defocus alone
     /// and gives its rates ([`optics::LensModel::design_wavelength_rates`]: the chromatic lens's
     /// `W020 = (1 − λ/λ0) f0/(8F#²)`, the refractive lens's `n0 = n(λ0)`, the harmonic lens's
-    /// orders' defocus and efficiencies), on axis: each wavelength's defocus moves along its own
+    /// orders' defocus and efficiencies): each wavelength's defocus moves along its own
     /// `∂W020/∂ln λ0` (not in proportion to `W020`, so not the focal length's lane), and the
-    /// orders' efficiencies with it (docs/physics.md, "Gradients: the design wavelength").
+    /// orders' efficiencies with it (docs/physics.md, "Gradients: the design wavelength"); off
+    /// axis the lateral colour too, as its own scale plus a common translation (docs/physics.md,
+    /// "Gradients: the design wavelength off axis"); under a noise spectrum with each
+    /// frequency's weight divided by `n(ν)`.
     DesignWavelength,
 }
 
@@ -801,7 +805,11 @@ fn point_gradient(
             }
             Parameter::DesignWavelength => {
                 let (d_ln_n, d_mtf) = design_wavelength_partials(scene, e, p)?;
-                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                let d_weighted = match camera.noise_spectrum() {
+                    Some(shape) => design_wavelength_over_noise(scene, e, p, shape)?,
+                    None => d_mtf,
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
                 // N ∝ ∫ ρ Σ τ_o; T (so N_T) does not depend on λ0: B = N_T − N moves by −∂N
                 let d_n = n * d_ln_n;
                 (d_n, if stray { -d_n } else { 0.0 }, 0.0, 0.0, 0.0, d_g, d_mtf)
@@ -960,23 +968,22 @@ type PointPartials = (f64, f64, f64, f64, f64, f64, f64);
 /// [`PointPartials`] per relative change of a PSF stack's sample pitch
 /// ([`Parameter::PsfPitch`]): the OTF is `O(ν p/p0)` at every wavelength, so on `[0, ν_N]` the
 /// change of variables `u = νp/p0` gives `M̄(p) = (p0/p)/ν_N ∫_0^{ν_N p/p0} MTF(u) du` and
-/// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move.
+/// `∂M̄/∂ln p = MTF(ν_N) − M̄`; N and the noise do not move. Under a noise spectrum the weighted
+/// mean's change of scale ([`noise_weight::frequency_scale_over_noise`]: its `n′` term over the
+/// value's directions).
 fn psf_pitch_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<PointPartials, Error> {
-    if scene.camera().noise_spectrum().is_some() {
-        return Err(Error::NotDifferentiable {
-            parameter: p.describe(),
-            reason:
-                "with camera.noise_spectrum the stack's pitch scales its 2-D OTF under the weight 1/n(ν) (by parts, \
-                     an n′ term over azimuth), which is not checked against converged evaluations of the stack yet \
-                     (their noise-weighted mean at 1e-10 takes minutes): not computed here yet"
-                    .to_owned(),
-        });
-    }
     // with the pixel MTF P (its sinc does not scale with the stack's pitch) the OTF's change of
     // scale is ν ∂_ν O, by parts P(ν_N)|O(ν_N)| − M̄ − P_ν (MTF(ν_N) the system's, P included)
     let edge = mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     let d_mtf = edge - e.mean_mtf - pixel_slope(scene, p)?;
-    Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g_from_mean_mtf(scene, e, d_mtf), d_mtf))
+    // under a noise spectrum n (fixed in cycles/mm) the same change of scale of the weighted
+    // mean G: by parts P(ν_N)|O(ν_N)|/n(ν_N) − G − (1/ν_N) ∫ P |O| (νP′/P − νn′/n)/n dν, averaged
+    // over the value's directions as G is
+    let d_weighted = match scene.camera().noise_spectrum() {
+        Some(_) => noise_weight::frequency_scale_over_noise(scene, e, p, edge)?,
+        None => d_mtf,
+    };
+    Ok((0.0, 0.0, 0.0, 0.0, 0.0, d_g_from_mean_mtf(scene, e, d_weighted), d_mtf))
 }
 
 /// The pixel MTF's term of the integration by parts in ν, `P_ν = (1/ν_N) ∫ ν P′(ν) |O(ν)| dν`
@@ -1603,16 +1610,27 @@ impl DirectionalRule {
     /// most [`optics::AZIMUTH_SHARE`] of the tolerance (at most [`optics::MAX_AZIMUTHS`]), as
     /// the value's; or the tangential and sagittal directions.
     fn mean(&self, nyquist: f64, scale: [f64; 3], f: &dyn Fn(f64, f64) -> [f64; 3]) -> [f64; 3] {
+        self.mean_split(&[0.0, nyquist], scale, f)
+    }
+
+    /// [`mean`](Self::mean) over `[0, ν_N]` given as the ends of its pieces (`ends`, rising,
+    /// `0` first and `ν_N` last), each piece its own composite rule with the same number of
+    /// panels: an integrand with a jump at a piece's end (a noise table's row, where `n′` jumps)
+    /// integrated to the rule's order, not across the jump.
+    fn mean_split(&self, ends: &[f64], scale: [f64; 3], f: &dyn Fn(f64, f64) -> [f64; 3]) -> [f64; 3] {
+        let nyquist = ends[ends.len() - 1];
         let measure = |x: [f64; 3]| x.iter().zip(&scale).map(|(v, s)| (v * s).abs()).fold(0.0, f64::max);
         let along = |azimuth: f64| -> [f64; 3] {
             let integrate = |panels: usize| {
                 let mut sum = [0.0; 3];
-                optics::quad::for_each_node(0.0, nyquist, panels, |nu, w| {
-                    let v = f(nu, azimuth);
-                    for (s, v) in sum.iter_mut().zip(v) {
-                        *s += w * v;
-                    }
-                });
+                for piece in ends.windows(2) {
+                    optics::quad::for_each_node(piece[0], piece[1], panels, |nu, w| {
+                        let v = f(nu, azimuth);
+                        for (s, v) in sum.iter_mut().zip(v) {
+                            *s += w * v;
+                        }
+                    });
+                }
                 sum.map(|s| s / nyquist)
             };
             let mut panels = 4;
@@ -2860,20 +2878,89 @@ fn defocus_lane_by_own_rule(
 /// value's own rules where its engine gives the lane
 /// ([`design_wavelength_on_value_rule`]: the closed form, a line, the per-frequency product
 /// rule; the pixel MTF in the frequency rule's weights; off axis where the field leaves the OTF
-/// as on axis), else on the reference rule ([`design_wavelength_by_own_rule`]). Refused with a
-/// noise spectrum, and where neither applies, naming why.
+/// as on axis); off axis on the exact 1-D engine's lanes where the lateral colour moves with λ0
+/// ([`design_wavelength_off_axis`]); else on the reference rule ([`design_wavelength_by_own_rule`]).
+/// The white mean's: under a noise spectrum the weighted mean's is
+/// [`design_wavelength_over_noise`]'s. Refused where none applies, naming why.
 fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
     // nothing the lens images with depends on λ0 (a geometric phase given in radians): N, the
     // OTF and so every quantity do not move
     if scene.lens().design_wavelength_inert() {
         return Ok((0.0, 0.0));
     }
-    if scene.camera().noise_spectrum().is_none()
-        && let Some(found) = design_wavelength_on_value_rule(scene)
-    {
+    if let Some(found) = design_wavelength_on_value_rule(scene) {
         return Ok(found);
     }
-    design_wavelength_by_own_rule(scene, e, p)
+    if let Some(found) = design_wavelength_off_axis(scene, e, None) {
+        return Ok(found);
+    }
+    design_wavelength_by_own_rule(scene, e, p, None)
+}
+
+/// `∂G/∂ln λ0` of the noise-weighted mean `G = (1/ν_N) ∫ P |O| / n dν` the ASNR takes under the
+/// noise spectrum `noise` (docs/physics.md, "Gradients under a noise spectrum", "Gradients:
+/// the design wavelength off axis"): 0 for a lens inert in λ0; off axis on the exact 1-D
+/// engine's lanes with each frequency's weight divided by `n(ν)`
+/// ([`design_wavelength_off_axis`]); on axis on the reference rule with the same weight
+/// ([`design_wavelength_by_own_rule`], the pixel MTF in its weights). Refused where neither
+/// applies, naming why.
+fn design_wavelength_over_noise(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    noise: &optics::NoiseShape,
+) -> Result<f64, Error> {
+    if scene.lens().design_wavelength_inert() {
+        return Ok(0.0);
+    }
+    if let Some((_, d)) = design_wavelength_off_axis(scene, e, Some(noise)) {
+        return Ok(d);
+    }
+    design_wavelength_by_own_rule(scene, e, p, Some(noise)).map(|(_, d)| d)
+}
+
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` off axis for a lens whose every order is the full circular pupil
+/// with a defocus alone and an image shift that moves with λ0 as the lateral colour does
+/// (`Δ_o = f0 tan θ (λ0 a_o(λ) − 1)`: the chromatic and harmonic lenses,
+/// [`optics::LensModel::design_wavelength_rates`]), on the exact 1-D engine the value takes
+/// (docs/physics.md, "Gradients: the design wavelength off axis"). Along each azimuth φ each
+/// node's OTF is `q τ_o H(νλF#, W020_o/λ) exp(−2πi ν u·Δ_o)` over `W = Σ q τ_o`; λ0 moves
+/// `W020_o`, `τ_o` and `Δ_o` (by `Δ_o + f0 tan θ`, whose common translation turns `O` by one
+/// phase and leaves `|O|` as it is), so
+/// `∂|O|/∂ln λ0 = Re(O* L)/|O| − |O| ∂ln W/∂ln λ0 + ∂|O|/∂ln Δ`, `L` the nodes' own lane
+/// ([`optics::WavefrontDirection::DesignWavelength`]) and the last the image shifts' scale
+/// ([`optics::WavefrontDirection::ImageShift`]): `∂M̄ = D_λ0 − r M̄ + D_Δ` with
+/// `r = ∂ln N/∂ln λ0` ([`optics::Polychromatic::design_signal_rate`]), all on the value's
+/// adaptive rule along each of the value's azimuths and averaged over them; under a noise
+/// spectrum (`noise`) each frequency's weight divided by `n(ν)` and `M̄` the weighted mean.
+/// `None` where the scene is not that (on axis, a line, another pupil or engine).
+fn design_wavelength_off_axis(scene: &Scene, e: &Evaluation, noise: Option<&optics::NoiseShape>) -> Option<(f64, f64)> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if field.is_on_axis() || detected.as_line().is_some() {
+        return None;
+    }
+    let orders = lens.orders(e.mean_wavelength_nm * 1e-9, field);
+    let plain = !orders.is_empty()
+        && orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.is_defocus_only());
+    if !plain {
+        return None;
+    }
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let settings = scene.options().settings();
+    let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
+    if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() || !poly.direction_dependent() {
+        return None;
+    }
+    let rate = poly.design_signal_rate()?;
+    let along_field = field.y_rad.atan2(field.x_rad);
+    let (mean, d_design, d_shift, _) = poly.mean_mtf_over_azimuth_and_design_lanes(along_field, noise)?;
+    Some((rate, d_design - rate * mean + d_shift))
 }
 
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` on the value's own engine and rules: the mean computed again with
@@ -2899,7 +2986,7 @@ pub fn design_wavelength_mean_mtf_partial(
     reference: bool,
 ) -> Result<Option<f64>, Error> {
     if reference {
-        design_wavelength_by_own_rule(scene, e, Parameter::DesignWavelength).map(|(_, d)| Some(d))
+        design_wavelength_by_own_rule(scene, e, Parameter::DesignWavelength, None).map(|(_, d)| Some(d))
     } else {
         Ok(design_wavelength_on_value_rule(scene).map(|(_, d)| d))
     }
@@ -2921,9 +3008,17 @@ pub fn design_wavelength_mean_mtf_partial(
 /// both on the reference rule's own Gauss–Legendre panels in λ and ν ([`reference_rule`]: the λ
 /// panels doubled, then the ν panels, each until the integral moves by at most the tolerance
 /// times `max(|∂M̄|, M̄)`; the ν panels split at the sign changes of `O`, the kink of `|O|`).
-/// The reference where the value's engine has no lane; refused with the pixel MTF or a noise
-/// spectrum (not followed on this rule), off axis, and for the other families naming why.
-fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
+/// The reference where the value's engine has no lane; under a noise spectrum (`noise`) the
+/// noise-weighted mean's `∂G`, each frequency's weight divided by `n(ν)` and the pixel MTF in the
+/// weights; refused with the pixel MTF on the white mean (not followed on this rule), off axis
+/// (the lateral colour moves with λ0: [`design_wavelength_off_axis`]), and for the other
+/// families naming why.
+fn design_wavelength_by_own_rule(
+    scene: &Scene,
+    e: &Evaluation,
+    p: Parameter,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<(f64, f64), Error> {
     let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
     let lens = scene.lens();
     let field = scene.field();
@@ -2934,11 +3029,12 @@ fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) ->
             "lens.design_wavelength_nm: {family}: the design wavelength's gradient is computed for a lens whose \
              every order is the full circular pupil with a defocus alone and that gives how its orders move with λ0 \
              (the chromatic, refractive and harmonic families without an iris or Seidel terms), on axis or where the \
-             field leaves the OTF as on axis, and is 0 for a phase lens with a geometric phase (its radian profile \
-             does not depend on λ0); this scene's orders are not that here (off axis the lateral colour \
-             f0 tan θ (λ0/λ − 1) moves with λ0 too; a phase lens's refractive profile scales its path per radian \
-             with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric phase its \
-             reference sphere by 1 − λ/λ0: not followed yet)"
+             field leaves the OTF as on axis, and off axis with the lateral colour f0 tan θ (λ0/λ − 1) on the exact \
+             1-D engine over a band; it is 0 for a phase lens with a geometric phase (its radian profile does not \
+             depend on λ0); this scene's orders are not that here (off axis: a line spectrum, whose lateral \
+             colour's lane is not followed; an iris or Seidel terms; a phase lens's refractive profile scales its \
+             path per radian with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric \
+             phase its reference sphere by 1 − λ/λ0: not followed yet)"
         ))
     };
     // off axis first: the reason that holds whatever the camera
@@ -2946,19 +3042,12 @@ fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) ->
         return Err(refused());
     }
     let camera = scene.camera();
-    if camera.pixel_mtf() {
+    if camera.pixel_mtf() && noise.is_none() {
         return Err(not_smooth(
             "lens.design_wavelength_nm: with camera.pixel_mtf = true the design wavelength's gradient is computed on \
              the value's own rule (the closed form, a line, the per-frequency product rule), which this scene's \
              engine is not (the reference panels rule: a wavelength's cutoff inside the band or \
              options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
-                .to_owned(),
-        ));
-    }
-    if camera.noise_spectrum().is_some() {
-        return Err(not_smooth(
-            "lens.design_wavelength_nm: with camera.noise_spectrum the design wavelength's gradient is not computed \
-             here yet"
                 .to_owned(),
         ));
     }
@@ -3008,10 +3097,13 @@ fn design_wavelength_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) ->
             }
         }
         let o = o / total;
-        (o, d / total - o * moved / total)
+        // under a noise spectrum each frequency's weight divided by n(ν)
+        (o, (d / total - o * moved / total) / noise.map_or(1.0, |n| n.value(nu)))
     };
     let refinement = Refinement { lambda_panels: (2, 256), nu_panels: 1024, zero_width: &|_| 1e-13 * camera.nyquist() };
-    let (nodes, d_mtf) = reference_rule(scene, e, p, refinement, None, node, value, at)?;
+    // the pixel MTF on the weighted pass's weights (the white pass refuses it above)
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let (nodes, d_mtf) = reference_rule(scene, e, p, refinement, pixel, node, value, at)?;
     let (mut total, mut moved) = (0.0, 0.0);
     for (_, weight, orders) in &nodes {
         for &[tau, _, _, d_tau] in orders {

@@ -479,9 +479,13 @@ pub trait LensModel: Send + Sync + fmt::Debug {
     /// how each order at `wavelength_m` moves with the design wavelength λ0 (`lens.design_wavelength_nm`),
     /// `[∂W020_o/∂ln λ0, ∂τ_o/∂ln λ0]` per order of [`orders`](Self::orders), in its order (m,
     /// and per unit ln λ0), the total transmission `T` held; for the gradient with respect to
-    /// λ0 (docs/physics.md, "Gradients: the design wavelength"). `None` (the default) where the
-    /// lens does not give them (its orders move with λ0 otherwise: off axis the lateral colour
-    /// `f0 tan θ (λ0/λ − 1)` moves too).
+    /// λ0 (docs/physics.md, "Gradients: the design wavelength"). Off axis, where the orders are
+    /// displaced, only where each order's image shift is `Δ_o = f0 tan θ (λ0 a_o(λ) − 1)` (the
+    /// lateral colour of the chromatic and harmonic lenses): it moves as
+    /// `∂Δ_o/∂ln λ0 = Δ_o + f0 tan θ`, its own scale and a translation common to every order and
+    /// wavelength that turns the OTF by one phase and leaves the MTF as it is, so the image
+    /// shifts' scale's lane gives its share (docs/physics.md, "Gradients: the design wavelength
+    /// off axis"). `None` (the default) where the lens does not give them.
     fn design_wavelength_rates(&self, _wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
         None
     }

@@ -190,8 +190,10 @@ const DESIGN_WAVELENGTH: &str = "lens.design_wavelength_nm";
 /// pupil with a defocus alone, moving with λ0 as the lens says
 /// (`optics::LensModel::design_wavelength_rates`); and the phase lens, whose gradient is 0 where
 /// nothing it images with depends on λ0 (a geometric phase:
-/// `optics::LensModel::design_wavelength_inert`), refused naming why otherwise.
-const DESIGN_WAVELENGTH_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
+/// `optics::LensModel::design_wavelength_inert`), refused naming why otherwise; and a lens
+/// given as data (a PSF stack, MTF tables), whose λ0 is the Fraunhofer report's reference alone
+/// (its gradient 0).
+const DESIGN_WAVELENGTH_MODELS: [&str; 6] = ["chromatic", "refractive", "harmonic", "phase", "psf", "tabulated"];
 
 /// The scene quantity `lens.design_wavelength_nm` sets (`∂/∂ln λ0`), or why its gradient is
 /// refused for this family; `None` for another key.
@@ -770,9 +772,9 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} (with camera.pixel_mtf true or false), \
          spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
-         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, where it is 0), \
+         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band without an iris or Seidel terms, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -1726,11 +1728,12 @@ mod tests {
     /// What the design wavelength's gradient refuses, naming the key and why: a library lens
     /// (its atoms chosen at λ0, piecewise), a phase lens of diffractive dispersion (its orders'
     /// efficiencies move with λ0: not followed yet), the chromatic lens
-    /// off axis (its lateral colour moves with λ0) and with the pixel MTF on the reference panels
-    /// rule (no lane there). The gradient evaluates the scene before it refuses, so the refused
-    /// scenes are cheap ones on the same refusals: the diffractive lens under a line (over its
-    /// 50 nm band the evaluation takes a minute; the refusal is the family's, whatever the band)
-    /// and the harmonic lens on a 4 nm band (the panels rule forced by the option).
+    /// off axis under a line (its lateral colour's lane is followed over a band) and with the
+    /// pixel MTF on the reference panels rule (no lane there). The gradient evaluates the scene
+    /// before it refuses, so the refused scenes are cheap ones on the same refusals: the
+    /// diffractive lens under a line (over its 50 nm band the evaluation takes a minute; the
+    /// refusal is the family's, whatever the band) and the harmonic lens on a 4 nm band (the
+    /// panels rule forced by the option).
     #[test]
     fn design_wavelength_refusals_name_why() {
         let key = owned(&["lens.design_wavelength_nm"]);
@@ -1743,11 +1746,47 @@ mod tests {
         let e = gradient(&example("phase-binary2.toml"), &diffractive, &key).unwrap_err().to_string();
         assert!(e.contains("design wavelength") && e.contains("diffractive one its orders' efficiencies"), "{e}");
         let paper = scene::read(None).unwrap();
-        let e = gradient(&paper, &owned(&["field.x_deg=3"]), &key).unwrap_err().to_string();
-        assert!(e.contains("design wavelength") && e.contains("lateral colour"), "{e}");
+        let e = gradient(&paper, &joined(&LINE_803, &["field.x_deg=3"]), &key).unwrap_err().to_string();
+        assert!(
+            e.contains("design wavelength") && e.contains("a line spectrum") && e.contains("lateral colour"),
+            "{e}"
+        );
         let panels = owned(&["camera.pixel_mtf=true", "options.spectral_rule=\"panels\"", "spectrum.range_nm=4"]);
         let e = gradient(&example("harmonic.toml"), &panels, &key).unwrap_err().to_string();
         assert!(e.contains("design wavelength") && e.contains("camera.pixel_mtf") && e.contains("panels"), "{e}");
+    }
+
+    /// The design wavelength off axis (docs/physics.md, "Gradients: the design wavelength off
+    /// axis": on the exact 1-D engine, the lane of each order's defocus and efficiency beside the
+    /// image shifts' scale, the lateral colour `f0 tan θ (λ0/λ − 1)` moving as `Δ + f0 tan θ`)
+    /// and under a noise spectrum (each frequency's weight divided by n(ν): off axis on the same
+    /// lanes, on axis on the reference rule), against central differences of evaluations
+    /// converged at 1e-10, Richardson-extrapolated from the steps 2h and h, h = [`LINE_STEP_NM`],
+    /// within 10× the scene's 1e-6 of the gradient's norm: the paper's chromatic lens at 5° along
+    /// x, at (0°, 3°) with the pixel MTF, and under the noise spectrum on axis and at 5° (where
+    /// the weight moves the gradient: [`assert_weighted`]); the harmonic lens's orders (each its
+    /// own shift, defocus and efficiency) at 1° over a 20 nm band.
+    #[test]
+    fn design_wavelength_off_axis_and_under_a_noise_spectrum_match_central_differences() {
+        let keys = ["lens.design_wavelength_nm"];
+        let check = |source: &Source, overrides: &[String]| {
+            check_with_references(source, overrides, &keys, &|k, v| {
+                let (coarse, fine) = (
+                    central(source, overrides, k, v, 2.0 * LINE_STEP_NM),
+                    central(source, overrides, k, v, LINE_STEP_NM),
+                );
+                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+            });
+        };
+        let paper = scene::read(None).unwrap();
+        check(&paper, &owned(&["field.x_deg=5"]));
+        check(&paper, &owned(&["field.y_deg=3", "camera.pixel_mtf=true"]));
+        let shaped = with_noise_spectrum(&paper, "design-wavelength");
+        for overrides in [vec![], owned(&["field.x_deg=5"])] {
+            assert_weighted(&gradient(&shaped, &overrides, &owned(&keys)).unwrap());
+            check(&shaped, &overrides);
+        }
+        check(&example("harmonic.toml"), &owned(&["field.x_deg=1", "spectrum.range_nm=20"]));
     }
 
     /// A phase lens with a geometric phase (examples/phase-binary2.toml): its Binary 2 profile is
@@ -1765,6 +1804,24 @@ mod tests {
         let g = gradient(&source, &[], &owned(&["lens.design_wavelength_nm", "exposure.time_ms"])).unwrap();
         assert_eq!([g.d_asnr[0], g.d_mean_mtf[0], g.d_photoelectrons[0]], [0.0; 3], "{g:?}");
         assert!(g.d_asnr[1] > 0.0, "the exposure's own derivative beside it: {g:?}");
+    }
+
+    /// A PSF stack's design wavelength names the Fraunhofer report's reference alone: the value
+    /// at λ0 ± 1 nm is the value at λ0 to the last bit (a 5 nm band: a few slices), and the
+    /// gradient is 0 (said so, not refused).
+    #[test]
+    fn a_psf_stack_does_not_move_with_the_design_wavelength() {
+        let source = example("psf-stack.toml");
+        let asnr = |set: &[&str]| {
+            let set: Vec<&str> = set.iter().copied().chain(["spectrum.range_nm=5"]).collect();
+            metric::evaluate(&scene::build_from(&source, &owned(&set)).unwrap()).unwrap().asnr
+        };
+        let at = asnr(&[]);
+        for moved in ["lens.design_wavelength_nm=799", "lens.design_wavelength_nm=801"] {
+            assert_eq!(asnr(&[moved]).to_bits(), at.to_bits(), "{moved}");
+        }
+        let g = gradient(&source, &owned(&["spectrum.range_nm=5"]), &owned(&["lens.design_wavelength_nm"])).unwrap();
+        assert_eq!([g.d_asnr[0], g.d_mean_mtf[0], g.d_photoelectrons[0]], [0.0; 3], "{g:?}");
     }
 
     /// The hyperbolic phase −(2π/λ0)(√(r² + f0²) − f0) of the example's aperture (F/2.5,
@@ -3142,10 +3199,7 @@ mod tests {
         let shaped = with_noise_spectrum(&paper, "fft-refusals");
         let e = gradient(&shaped, &[], &owned(&["lens.spherical_um"])).unwrap_err().to_string();
         assert!(e.contains("Seidel coefficient") && e.contains("noise_spectrum"), "{e}");
-        // a PSF stack's pitch and a top-hat band's edge lanes under a noise spectrum
-        let stack = with_noise_spectrum_beside(&example("psf-stack.toml"), "refused-psf");
-        let e = gradient(&stack, &[], &owned(&["lens.psf_pitch_um"])).unwrap_err().to_string();
-        assert!(e.contains("sample pitch") && e.contains("noise_spectrum"), "{e}");
+        // a top-hat band's edge lanes under a noise spectrum
         let e = gradient(&shaped, &owned(&["spectrum.shape=\"tophat\""]), &owned(&["spectrum.center_nm"]))
             .unwrap_err()
             .to_string();
@@ -3619,6 +3673,23 @@ mod tests {
             &owned(&PIXEL_AND_READ_NOISE),
             &["lens.psf_pitch_um", "camera.pixel_pitch_um"],
         );
+    }
+
+    /// A PSF stack's pitch under a noise spectrum (docs/physics.md, "Gradients: chain rules", a
+    /// PSF stack): the weighted mean's change of scale, by parts `P(ν_N)|O(ν_N)|/n(ν_N) − G −
+    /// (1/ν_N) ∫ P|O|(νP′/P − νn′/n)/n dν` over the stack's directions, with and without the pixel
+    /// MTF, against central differences of evaluations converged at 1e-10, within 10× the scene's
+    /// 1e-6 of the gradient's norm, where the weight moves the gradient ([`assert_weighted`]); at
+    /// a 5 nm band (a few slices: the 1e-10 references take seconds, not the minutes of the 50 nm
+    /// band's).
+    #[test]
+    fn psf_pitch_under_a_noise_spectrum_matches_central_differences() {
+        let stack = with_noise_spectrum_beside(&example("psf-stack.toml"), "psf-pitch");
+        let key = ["lens.psf_pitch_um"];
+        for overrides in [owned(&["spectrum.range_nm=5"]), owned(&["spectrum.range_nm=5", "camera.pixel_mtf=true"])] {
+            assert_weighted(&gradient(&stack, &overrides, &owned(&key)).unwrap());
+            check_against_differences(&stack, &overrides, &key);
+        }
     }
 
     /// A PSF stack's field angles (docs/physics.md, "Gradients: the field point"): its PSFs are

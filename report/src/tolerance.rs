@@ -685,19 +685,21 @@ mod tests {
     /// small σ (0.2 % of the exposure, 0.5 nm of the range), where the ASNR is linear in the
     /// keys to about σ²: the two agree within 2 % (the fit of 400 samples of an ASNR curved at
     /// second order); the gradient's is ∂ASNR/∂key × σ from `asnr gradient`, to 1e-12. A key
-    /// without a gradient (the design wavelength with the pixel MTF here) has none, the others
+    /// without a gradient (the design wavelength off axis under a line here) has none, the others
     /// keep theirs, and the note names it.
     #[test]
     fn gradient_sensitivity_beside_the_fit() {
         let source = scene::read(None).unwrap();
-        // off axis the design wavelength has no gradient yet (the key the note names: its
-        // lateral colour moves with λ0)
-        let pixel = vec!["camera.pixel_mtf=true".to_owned(), "field.x_deg=5".to_owned()];
+        // off axis under a line at 803 nm (its equivalent width the scene's 50 nm; its image
+        // displaced) the design wavelength has no gradient (the key the note names: the lateral
+        // colour's lane is followed over a band)
+        let pixel: Vec<String> =
+            ["spectrum.shape=\"line\"", "spectrum.center_nm=803", "field.x_deg=5"].map(str::to_owned).to_vec();
         let target = Target::new(source.clone(), pixel.clone(), crate::objective::Objective::Asnr, &[]).unwrap();
         let varies = [
             parse_vary("exposure.time_ms=normal:0.2%").unwrap(),
             parse_vary("spectrum.range_nm=normal:0.5").unwrap(),
-            parse_vary("lens.design_wavelength_nm=normal:0.5").unwrap(),
+            parse_vary("lens.design_wavelength_nm=normal:0.05").unwrap(),
         ];
         let settings = Settings { samples: 400, seed: 1, budget_s: 600.0, threads: 1 };
         let t = tolerance(&target, &varies, &settings, &()).unwrap();
@@ -716,7 +718,7 @@ mod tests {
         }
         assert_eq!(t.gradient_sensitivity[2], None);
         let note = t.gradient_note.as_deref().unwrap();
-        assert!(note.contains("design wavelength") && note.contains("lateral colour"), "{note}");
+        assert!(note.contains("design wavelength") && note.contains("a line spectrum"), "{note}");
         let text = report(&t);
         assert!(text.contains("∂ASNR/∂key × σ") && text.contains("no gradient for some keys"), "{text}");
         let json: serde_json::Value = serde_json::from_str(&json(&t).unwrap()).unwrap();

@@ -26,8 +26,8 @@ fn pixel_log_slope(pitch: f64, nu: f64) -> f64 {
 
 /// `(1/ν_N) ∫_0^{ν_N} P(ν) |O(ν)| w(ν) dν` on the value's own engine (metric's `evaluate`: its
 /// lens, spectrum, field and settings; `P` the pixel MTF where the camera applies it), averaged
-/// over the value's directions where the OTF depends on direction ([`DirectionalRule`], whose
-/// panels integrate across the rows' kinks of `w`). Where the OTF is rotationally symmetric:
+/// over the value's directions where the OTF depends on direction ([`DirectionalRule`], its
+/// panels on each interval between the table's rows, where `w` jumps). Where the OTF is rotationally symmetric:
 /// composite 16-point Gauss–Legendre panels on each interval between the noise table's rows
 /// (where `w` has its kinks), each panel split at a sign change of `O` (the kink of `|O|`,
 /// bracketed to 1e-15 of its frequency), from 4 panels an interval doubled until the integral
@@ -50,7 +50,11 @@ pub(super) fn weighted_mtf_integral(
     on_value_engine(scene, &detected, scene.options().settings(), |poly| {
         if poly.has_pupil_grid() || poly.direction_dependent() {
             let rule = DirectionalRule::of(scene, poly, tolerance);
-            let [m, _, _] = rule.mean(nyquist, [1.0, 0.0, 0.0], &|nu, azimuth| {
+            // pieces between the table's rows (where `w` jumps with n′)
+            let mut ends = vec![0.0];
+            ends.extend(rows.iter().copied().filter(|&r| r > 0.0 && r < nyquist));
+            ends.push(nyquist);
+            let [m, _, _] = rule.mean_split(&ends, [1.0, 0.0, 0.0], &|nu, azimuth| {
                 [pix(nu) * poly.otf_along(nu, azimuth).norm() * weight(nu), 0.0, 0.0]
             });
             return Some(m);

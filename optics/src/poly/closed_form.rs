@@ -130,6 +130,8 @@ impl Closed {
                 table: None,
                 radial: None,
                 part: WHOLE,
+                order: 0,
+                efficiency: affine.efficiency,
             });
         });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len(), part: WHOLE });

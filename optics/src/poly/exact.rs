@@ -8,6 +8,10 @@ use num_complex::Complex64;
 use super::spectral::{Node, Nodes, Scene, clipped_nodes, node_otfs};
 use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
 
+/// A lens's design-wavelength rates at one wavelength (`LensModel::design_wavelength_rates`:
+/// `[∂W020_o, ∂τ_o]` per order), `None` where it gives none.
+type DesignRates = Option<Vec<[f64; 2]>>;
+
 /// Spectral nodes read through the exact 1-D OTF of each order.
 #[derive(Debug)]
 pub(super) struct Quadrature<'a> {
@@ -82,9 +86,14 @@ pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azim
 /// ([`WavefrontDirection::SpectralMoment`]) re-weight each node's turned value by `u = λ − λ̄`
 /// or `u² − ⟨u²⟩` ([`Nodes::wavelength_moments`](super::spectral::Nodes::wavelength_moments)).
 /// The image shifts' scale ([`WavefrontDirection::ImageShift`]) gains `i k u·(Δ − Δ_iris)` times
-/// the turned value (every shift but an iris's tilt scaled by `1 + ε`).
-/// `None` for another direction, a field angle on a node without its shift's rates, or the
-/// defocus lane on a node that is not a defocused circle.
+/// the turned value (every shift but an iris's tilt scaled by `1 + ε`). The design wavelength
+/// ([`WavefrontDirection::DesignWavelength`]) moves each order's defocus and efficiency by the
+/// lens's rates (`LensModel::design_wavelength_rates`: `δW020`, `δτ` per `ln λ0`), the shifts
+/// held: `(δτ/τ) v + q τ (∂H/∂w) δW020/λ` turned (`∂H/∂w = (w ∂H/∂w)/w`, 0 at `w = 0` where `H`
+/// is even in `w`), the normalization's rate left to the caller.
+/// `None` for another direction, a field angle on a node without its shift's rates, the
+/// defocus lane on a node that is not a defocused circle, or the design wavelength's on a node
+/// that is not the full circle with a defocus alone or whose lens gives no rates there.
 pub(super) fn exact_along_and_field_gradient(
     scene: &Scene<'_>,
     nodes: &Nodes,
@@ -94,7 +103,7 @@ pub(super) fn exact_along_and_field_gradient(
     gradient: &mut [Complex64],
 ) -> Option<Complex64> {
     // 0, 1: the field angles; 3, 4: the iris's decentre; 5: the defocus; 6, 7: the spectral
-    // moments; 8: the image shifts' scale
+    // moments; 8: the image shifts' scale; 9: the design wavelength
     let axes: Vec<usize> = directions
         .iter()
         .map(|d| match d {
@@ -103,12 +112,18 @@ pub(super) fn exact_along_and_field_gradient(
             WavefrontDirection::Defocus => Some(5),
             WavefrontDirection::SpectralMoment(k) if (1..=2).contains(k) => Some(5 + *k),
             WavefrontDirection::ImageShift => Some(8),
+            WavefrontDirection::DesignWavelength => Some(9),
             _ => None,
         })
         .collect::<Option<_>>()?;
     let (mean, variance) = if axes.iter().any(|&a| a == 6 || a == 7) { nodes.wavelength_moments() } else { (0.0, 0.0) };
     let fields = axes.iter().any(|&a| a < 2);
     let defocus = axes.contains(&5);
+    let design = axes.contains(&9);
+    // the lens's design rates at the last node's wavelength and part (the orders of one
+    // wavelength are consecutive nodes)
+    let mut rates: Option<((u64, usize), DesignRates)> = None;
+    let mut no_rates = false;
     gradient.iter_mut().for_each(|g| *g = Complex64::new(0.0, 0.0));
     let (sin_a, cos_a) = azimuth.sin_cos();
     let k = -2.0 * PI * frequency;
@@ -139,6 +154,31 @@ pub(super) fn exact_along_and_field_gradient(
             not_circle |= defocus;
             Complex64::new(0.0, 0.0)
         };
+        let design_lane = if design {
+            let key = (n.lambda.to_bits(), n.part);
+            if rates.as_ref().is_none_or(|r| r.0 != key) {
+                let lens = scene.part(n.part).lens;
+                rates = Some((key, lens.design_wavelength_rates(n.lambda, scene.field)));
+            }
+            let rate = rates.as_ref().and_then(|r| r.1.as_ref()).and_then(|r| r.get(n.order)).copied();
+            match rate {
+                Some([d_w020, d_tau]) if n.is_defocused_circle() && n.scale == 1.0 && n.iris_shift == [0.0; 2] => {
+                    let w = n.w020 / n.lambda;
+                    let (_, d) = crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda, w);
+                    // ∂H/∂w δw = (w ∂H/∂w) δW020/W020, 0 at w = 0 (H even in w)
+                    let slope = if n.w020 == 0.0 { 0.0 } else { d * d_w020 / n.w020 };
+                    let moved = if n.efficiency == 0.0 { 0.0 } else { v * d_tau / n.efficiency };
+                    let d = moved + n.weight * slope;
+                    Complex64::new(d * c, d * s)
+                }
+                _ => {
+                    no_rates = true;
+                    Complex64::new(0.0, 0.0)
+                }
+            }
+        } else {
+            Complex64::new(0.0, 0.0)
+        };
         let [ix, iy] = n.iris_shift;
         let u = n.lambda - mean;
         for (g, &axis) in gradient.iter_mut().zip(&axes) {
@@ -158,6 +198,10 @@ pub(super) fn exact_along_and_field_gradient(
                 // the lateral colour's share of the shift, scaled (the iris's tilt is the
                 // defocus lane's)
                 8 => k * ((dx - ix) * cos_a + (dy - iy) * sin_a),
+                9 => {
+                    *g += design_lane;
+                    continue;
+                }
                 _ => {
                     *g += turned * (u * u - variance);
                     continue;
@@ -166,7 +210,7 @@ pub(super) fn exact_along_and_field_gradient(
             *g += Complex64::new(0.0, rate) * turned;
         }
     });
-    if (missing && fields) || not_circle {
+    if (missing && fields) || not_circle || no_rates {
         return None;
     }
     gradient.iter_mut().for_each(|g| *g /= nodes.total_weight);

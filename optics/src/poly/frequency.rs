@@ -816,29 +816,79 @@ impl Polychromatic<'_> {
             return None;
         }
         let directions = [WavefrontDirection::Defocus, WavefrontDirection::ImageShift];
-        // along one azimuth: [M̄, D_K, D_Δ, P_ν] on the value's adaptive rule, the two lanes and
-        // then |O| recorded at each frequency read
-        let along = |azimuth: f64| -> Option<([f64; 4], Work)> {
+        let (average, work) = self.azimuth_refined_lanes(first, &directions, None)?;
+        let [mean, defocus, shift, pixel_slope] = average[..] else { return None };
+        Some((DefocusDerivative { mean, defocus, pixel_slope, work }, shift))
+    }
+
+    /// The design wavelength's lanes off axis on the exact 1-D engine, beside the mean over
+    /// azimuth (white, or over the noise spectrum `noise`): `(M̄, D_λ0, D_Δ)`, `D_λ0` the
+    /// lane of each order's defocus and efficiency moving with `ln λ0`
+    /// ([`WavefrontDirection::DesignWavelength`], the normalization's rate not subtracted) and
+    /// `D_Δ` the image shifts' scale ([`WavefrontDirection::ImageShift`]), on the value's nodes
+    /// and accepted weights, each `∂|O|` divided by `n(ν)` under a noise spectrum, on the rule
+    /// over azimuth of [`mean_mtf_over_azimuth_and_aperture_lanes`](Self::mean_mtf_over_azimuth_and_aperture_lanes)
+    /// (docs/physics.md, "Gradients: the design wavelength off axis"). `None` where the engine
+    /// is not the exact 1-D engine on its adaptive rule, or gives no lane.
+    pub fn mean_mtf_over_azimuth_and_design_lanes(
+        &self,
+        first: f64,
+        noise: Option<&NoiseShape>,
+    ) -> Option<(f64, f64, f64, Work)> {
+        if self.engine.engine() != Engine::Exact1d
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || !self.direction_dependent()
+        {
+            return None;
+        }
+        let directions = [WavefrontDirection::DesignWavelength, WavefrontDirection::ImageShift];
+        let (average, work) = self.azimuth_refined_lanes(first, &directions, noise)?;
+        let [mean, design, shift, _] = average[..] else { return None };
+        Some((mean, design, shift, work))
+    }
+
+    /// `[M̄, lanes…, P_ν]` averaged over azimuth from `first`: along each azimuth the value's
+    /// adaptive rule (of `P |O|`, or `P |O|/n` with a noise spectrum), the lanes along
+    /// `directions` and then `|O|` recorded at each frequency read and integrated with the
+    /// accepted weights (`P_ν` the pixel MTF's term of an integration by parts). The rule over
+    /// azimuth is the value's nested trapezoid rule, doubled until the mean and the lanes each
+    /// move by at most [`AZIMUTH_SHARE`] of the tolerance relative to the larger of the mean and
+    /// the lanes' size (the lanes turn faster with the azimuth than `|O|` does).
+    fn azimuth_refined_lanes(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
+    ) -> Option<(Vec<f64>, Work)> {
+        let lanes = directions.len();
+        let along = |azimuth: f64| -> Option<(Vec<f64>, Work)> {
             *self.gradient.borrow_mut() =
-                Some(Recording { lanes: 2, directions: directions.to_vec(), ..Recording::default() });
-            let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+                Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
+            let (mean, work) = match noise {
+                None => self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth)),
+                Some(shape) => self.mean_of(&|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape)),
+            };
             let r = self.gradient.borrow_mut().take()?;
             if r.failed {
                 return None;
             }
-            let mut sum = [0.0; 3];
+            let mut sum = vec![0.0; lanes + 1];
             for &(nu, w) in &r.accepted {
                 let &i = r.at.get(&nu.to_bits())?;
-                sum[0] += w * r.derivatives[i];
-                sum[1] += w * r.derivatives[i + 1];
-                sum[2] += w * r.derivatives[i + 2] * self.pixel_log_slope(nu);
+                for (g, d) in sum.iter_mut().zip(&r.derivatives[i..i + lanes]) {
+                    *g += w * d;
+                }
+                sum[lanes] += w * r.derivatives[i + lanes] * self.pixel_log_slope(nu);
             }
             let scale = 1.0 / self.scene.max_frequency;
-            Some(([mean, sum[0] * scale, sum[1] * scale, sum[2] * scale], work))
+            let mut out = Vec::with_capacity(lanes + 2);
+            out.push(mean);
+            out.extend(sum.iter().map(|g| g * scale));
+            Some((out, work))
         };
         let mut work = Work::default();
         let mut count = self.first_azimuths();
-        let mut average = [0.0; 4];
+        let mut average = vec![0.0; lanes + 2];
         for k in 0..count {
             let (v, w) = along(first + PI * k as f64 / count as f64)?;
             for (a, v) in average.iter_mut().zip(v) {
@@ -848,7 +898,7 @@ impl Polychromatic<'_> {
         }
         while count < MAX_AZIMUTHS {
             // the new azimuths halfway between the old ones
-            let mut added = [0.0; 4];
+            let mut added = vec![0.0; lanes + 2];
             for k in 0..count {
                 let (v, w) = along(first + PI * (2 * k + 1) as f64 / (2 * count) as f64)?;
                 for (a, v) in added.iter_mut().zip(v) {
@@ -863,13 +913,12 @@ impl Polychromatic<'_> {
                 change = change.max((refined - *a).abs());
                 *a = refined;
             }
-            let size = average[0].abs().max(average[1].hypot(average[2]));
+            let size = average[0].abs().max(average[1..=lanes].iter().map(|g| g * g).sum::<f64>().sqrt());
             if change <= AZIMUTH_SHARE * self.tolerance() * size {
                 break;
             }
         }
-        let [mean, defocus, shift, pixel_slope] = average;
-        Some((DefocusDerivative { mean, defocus, pixel_slope, work }, shift))
+        Some((average, work))
     }
 
     /// The mean MTF along `azimuth` ([`mean_mtf_along`](Self::mean_mtf_along)'s adaptive rule)

@@ -850,6 +850,15 @@ pub enum WavefrontDirection {
     /// F-number's and the focal length's gradient off axis (docs/physics.md, "Gradients: the
     /// F-number and the focal length of a phase lens off axis"). The FFT path carries it.
     ObliqueScale(usize),
+    /// The lens's design wavelength λ0 (`lens.design_wavelength_nm`), per relative change, each
+    /// order's defocus and efficiency at each node moving by `LensModel::design_wavelength_rates`
+    /// (`s = νλF#` and the image shifts held): each node's turned OTF gains
+    /// `(δτ/τ) v + τ q ∂H/∂w δw` turned by its phase (`v = q τ H`, `δw = δW020/λ`), the
+    /// normalization's own rate not subtracted (the caller's, `Polychromatic::design_signal_rate`),
+    /// and the lateral colour's share of λ0 is the [`ImageShift`](Self::ImageShift) lane's
+    /// (docs/physics.md, "Gradients: the design wavelength off axis"). The exact 1-D engine
+    /// carries it, for full circular pupils with a defocus alone.
+    DesignWavelength,
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -1055,6 +1064,7 @@ impl FftPath {
                         | WavefrontDirection::SpectralMoment(_)
                         | WavefrontDirection::ImageShift
                         | WavefrontDirection::ObliqueScale(_)
+                        | WavefrontDirection::DesignWavelength
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);

@@ -1151,6 +1151,8 @@ mod tests {
             table: None,
             radial: None,
             part,
+            order: 0,
+            efficiency: 1.0,
         }
     }
 

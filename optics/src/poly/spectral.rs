@@ -66,6 +66,11 @@ pub(super) struct Node {
     pub radial: Option<Arc<RadialOrder>>,
     /// the scene's part whose order this is ([`Scene::part`]; [`WHOLE`] for the whole lens)
     pub part: usize,
+    /// the order's place among the lens's orders at `lambda` (`LensModel::orders`), and its
+    /// efficiency τ (`weight` is the rule's weight times it): the design wavelength's lane
+    /// reads the order's rates by them
+    pub order: usize,
+    pub efficiency: f64,
 }
 
 impl Node {
@@ -96,6 +101,8 @@ impl Node {
                 _ => None,
             },
             part: WHOLE,
+            order: 0,
+            efficiency: order.efficiency,
         };
         if let Some(r) = irises.and_then(|na| reduced_circle(order, na)) {
             node.w020 = r.defocus_m;
@@ -232,6 +239,7 @@ impl Nodes {
             let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises, scene.table_rule);
             node.part = part;
             node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
+            node.order = o;
             self.nodes.push(node);
         }
     }
@@ -552,6 +560,7 @@ pub(super) fn clipped_nodes(scene: &Scene<'_>, lo: f64, cut: f64, mut emit: impl
         for (o, order) in orders.into_iter().enumerate() {
             let mut node = Node::of(&order, lambda, q * order.efficiency, scene.irises, scene.table_rule);
             node.shift_rate = rates.as_ref().and_then(|r| r.get(o)).copied();
+            node.order = o;
             emit(node);
         }
     });
