@@ -131,20 +131,25 @@ fn tolerance_shows_the_gradient_sensitivity() {
         "--vary",
         "spectrum.range_nm=normal:0.5",
         "--vary",
-        "lens.design_wavelength_nm=normal:0.5",
+        "lens.design_wavelength_nm=normal:0.05",
         "--samples",
         "40",
         "--set",
-        "camera.pixel_mtf=true",
+        "spectrum.shape=\"line\"",
+        "--set",
+        "spectrum.center_nm=803",
         "--set",
         "field.x_deg=5",
         "--json",
     ]);
-    // off axis the design wavelength has no gradient yet (its lateral colour moves with λ0)
+    // off axis under a line the design wavelength has no gradient (its lateral colour's lane is
+    // followed over a band, not on the line's engine)
     let g = json(&[
         "gradient",
         "--set",
-        "camera.pixel_mtf=true",
+        "spectrum.shape=\"line\"",
+        "--set",
+        "spectrum.center_nm=803",
         "--set",
         "field.x_deg=5",
         "--wrt",
@@ -162,7 +167,7 @@ fn tolerance_shows_the_gradient_sensitivity() {
     }
     assert!(t["keys"][2]["gradient_per_sigma"].is_null(), "{t}");
     let note = t["gradient_note"].as_str().unwrap();
-    assert!(note.contains("design wavelength") && note.contains("lateral colour"), "{t}");
+    assert!(note.contains("design wavelength") && note.contains("a line spectrum"), "{t}");
 }
 
 /// `asnr compare --wrt`: each design's exact gradient at the scene band, taken on the design as a
