@@ -878,7 +878,7 @@ fn small_alpha_moments(alpha: f64, beta: f64, x: f64) -> [Complex64; 3] {
         left_out *= a / terms as f64;
     }
     let mut l = [Complex64::new(0.0, 0.0); MONOMIALS];
-    monomial_fourier_every(beta * x, 2 * terms + 1, 1, &mut l);
+    monomial_fourier_every(beta * x, 2 * terms + 1, 1, 2 * terms + 1, &mut l);
     let step = Complex64::new(0.0, alpha * x * x);
     let mut out = [Complex64::new(0.0, 0.0); 3];
     let mut power = x;
@@ -907,7 +907,9 @@ fn small_alpha_integral(alpha: f64, beta: f64, x: f64) -> Complex64 {
         left_out *= a / terms as f64;
     }
     let mut l = [Complex64::new(0.0, 0.0); MONOMIALS];
-    monomial_fourier_every(beta * x, 2 * terms - 1, 2, &mut l);
+    // the Bessel functions to the order `small_alpha_moments` forms, so that its `I0` is this
+    // bit for bit (the gradient's pass takes the value from it)
+    monomial_fourier_every(beta * x, 2 * terms - 1, 2, 2 * terms + 1, &mut l);
     let step = Complex64::new(0.0, alpha * x * x);
     let mut term = Complex64::new(x, 0.0);
     let mut sum = Complex64::new(0.0, 0.0);
@@ -937,7 +939,9 @@ const TWO_OVER: [f64; MONOMIALS + SERIES_TERMS] = {
 /// from 0 into `out` (the others left as they are): for `|b| < 1` by the power series
 /// `Σ_k (ib)^k/k! · 2/(p + k + 1)` (`p + k` even; 24 terms, the last below `1/24! < 2e-24`),
 /// else from the Legendre expansion of `u^p` ([`monomial_legendre`]) and `∫_{−1}^{1} P_l(u)
-/// e^{ibu} du = 2 i^l j_l(b)` (the Filon rule's identity, [`spherical_bessel`], `l < count`).
+/// e^{ibu} du = 2 i^l j_l(b)` (the Filon rule's identity, [`spherical_bessel`] formed for `l <
+/// top`, `top` at least `count` and at most `MONOMIALS`: two calls with the same `b` and `top`
+/// give the same `L_p` bit for bit whatever their counts).
 ///
 /// The power series: `(ib)^k/k! = i^k r_k` with `r_k = Π_{j<k} b/(j + 1)` (the product in that
 /// order), formed once for every `p`; `L_p` is real for even `p` (the even `k`, `i^k =
@@ -945,8 +949,9 @@ const TWO_OVER: [f64; MONOMIALS + SERIES_TERMS] = {
 /// `r_k · 2/(p + k + 1)` in increasing `k`: the same products and sums, in the same order, as the
 /// series summed term by term in complex arithmetic for each `p` (bit for bit,
 /// `monomial_fourier_matches_the_series_term_by_term`), at a twelfth of the multiplications.
-fn monomial_fourier_every(b: f64, count: usize, step: usize, out: &mut [Complex64; MONOMIALS]) {
+fn monomial_fourier_every(b: f64, count: usize, step: usize, top: usize, out: &mut [Complex64; MONOMIALS]) {
     let count = count.min(MONOMIALS);
+    let top = top.clamp(count, MONOMIALS);
     if b.abs() < 1.0 {
         let mut r = [0.0; SERIES_TERMS];
         let mut v = 1.0;
@@ -965,7 +970,7 @@ fn monomial_fourier_every(b: f64, count: usize, step: usize, out: &mut [Complex6
         return;
     }
     let mut j = [0.0; MONOMIALS];
-    spherical_bessel(b, &mut j[..count]);
+    spherical_bessel(b, &mut j[..top]);
     let c = monomial_legendre();
     for p in (0..count).step_by(step) {
         let (mut re, mut im) = (0.0, 0.0);
@@ -1223,14 +1228,15 @@ fn term_otf_and_derivatives(
             let (alpha, beta, mid) = quadratic_fit();
             let (si, co) = sin_cos(mid);
             let front = Complex64::new(co, si) * ct;
-            // with the value's closed form `quadratic_phase_integral` (the first of
-            // `quadratic_moments`)
-            let ([i0, i1, i2], closed) = if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
-                let moments = quadratic_moments(alpha, beta, x_half);
-                (moments, moments[0])
+            // with the value's closed form `quadratic_phase_integral`: the first of
+            // `quadratic_moments`, or of `small_alpha_moments` (its `small_alpha_integral` bit
+            // for bit, on the same Bessel functions)
+            let [i0, i1, i2] = if alpha.abs() * x_half * x_half >= MOMENTS_MIN_PHASE {
+                quadratic_moments(alpha, beta, x_half)
             } else {
-                (small_alpha_moments(alpha, beta, x_half), quadratic_phase_integral(alpha, beta, x_half))
+                small_alpha_moments(alpha, beta, x_half)
             };
+            let closed = i0;
             // the value as `term_otf` forms it, bit for bit
             row[0] = Complex64::new(co, si) * closed * ct;
             // each lane's k [D(p₊) − D(p₋)] at −X, 0 and X: the six points at once
@@ -1682,11 +1688,11 @@ mod tests {
                 for &bx in &[0.0, 1e-9, -0.4, 0.999, 1.0, -2.5, 7.0, 31.0, -80.0] {
                     let (alpha, beta) = (ax2 / (x * x), bx / x);
                     let moments = small_alpha_moments(alpha, beta, x);
-                    // the value's own series (fewer terms where the phase is small) within
-                    // its bound of the moments' I0
+                    // the value's own series is the moments' I0 bit for bit (the gradient's pass
+                    // takes the value from the moments), on either side of |β X| = 1
                     let i0 = small_alpha_integral(alpha, beta, x);
                     assert!(
-                        (i0 - moments[0]).norm() <= 3e-15 * x,
+                        i0.re.to_bits() == moments[0].re.to_bits() && i0.im.to_bits() == moments[0].im.to_bits(),
                         "α X² {ax2}, β X {bx}, X {x}: {i0} vs {}",
                         moments[0]
                     );
@@ -1736,7 +1742,7 @@ mod tests {
         while b < 1.0 {
             for (count, step) in [(MONOMIALS, 1), (1, 2), (3, 2), (7, 2), (11, 2)] {
                 let mut out = [Complex64::new(f64::NAN, f64::NAN); MONOMIALS];
-                monomial_fourier_every(b, count, step, &mut out);
+                monomial_fourier_every(b, count, step, count, &mut out);
                 for (p, got) in out.iter().enumerate() {
                     if p >= count || p % step != 0 {
                         assert!(got.re.is_nan() && got.im.is_nan(), "b {b}, p {p}: {got} written");
@@ -1756,7 +1762,7 @@ mod tests {
         }
         for b in [0.0, -0.0, 1e-300, -1e-12, 0.5, -0.75] {
             let mut out = [Complex64::new(0.0, 0.0); MONOMIALS];
-            monomial_fourier_every(b, MONOMIALS, 1, &mut out);
+            monomial_fourier_every(b, MONOMIALS, 1, MONOMIALS, &mut out);
             for (p, got) in out.iter().enumerate() {
                 let want = by_terms(b, p);
                 assert!(got.re == want.re && got.im == want.im, "b {b}, p {p}: {got} vs {want}");
