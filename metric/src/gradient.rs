@@ -943,6 +943,11 @@ fn weigh_by_noise(
             {
                 Some(0.0)
             }
+            // every Seidel term zero: the overlap engine run again at zero, weighted
+            Parameter::Seidel(t) => match scene.camera().noise_spectrum() {
+                Some(shape) => noise_weight::seidel_at_zero_over_noise(scene, e, t, shape)?,
+                None => None,
+            },
             _ => None,
         };
         let Some(d_weighted) = weighted else {
@@ -2338,14 +2343,17 @@ fn aperture_partials(
 /// ([`optics::WavefrontDirection::ImageShift`]) on the value's adaptive frequency rule along
 /// each azimuth, averaged over the value's azimuths (its nested rule) as the value is:
 /// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)|‾ − M̄ − P_ν − 2 D_K − D_Δ` and `∂M̄/∂ln f0 = D_K + D_Δ`.
-/// `None` where the scene is not that (on axis, a line, another pupil or engine, a noise
-/// spectrum).
+/// `None` where the scene is not that (on axis, a line, another pupil or engine). Under a noise
+/// spectrum this is the white mean's; the weighted mean's takes the same lanes with each
+/// frequency's weight divided by `n(ν)` (`noise_weight::aperture_over_noise`).
 fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
     let field = scene.field();
     let camera = scene.camera();
     let detected = crate::evaluate::detected_spectrum(scene);
-    if field.is_on_axis() || detected.as_line().is_some() || camera.noise_spectrum().is_some() {
+    // (the white ∂M̄ under a noise spectrum too; the weighted mean's lanes are
+    // `noise_weight::aperture_over_noise`'s, on the same engine)
+    if field.is_on_axis() || detected.as_line().is_some() {
         return Ok(None);
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
@@ -2418,7 +2426,8 @@ fn aperture_through_iris(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f
     let field = scene.field();
     let camera = scene.camera();
     let detected = crate::evaluate::detected_spectrum(scene);
-    if !field.is_on_axis() || detected.as_line().is_some() || camera.noise_spectrum().is_some() {
+    // (the white ∂M̄ under a noise spectrum too: `noise_weight::aperture_over_noise` weighs it)
+    if !field.is_on_axis() || detected.as_line().is_some() {
         return Ok(None);
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
@@ -2563,7 +2572,9 @@ fn seidel_at_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm)
     let field = scene.field();
     let lens = scene.lens();
     let detected = crate::evaluate::detected_spectrum(scene);
-    if field.is_on_axis() || scene.camera().noise_spectrum().is_some() {
+    // (the white ∂M̄ under a noise spectrum too: `noise_weight::seidel_at_zero_over_noise`
+    // weighs it)
+    if field.is_on_axis() {
         return Ok(None);
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
@@ -2933,19 +2944,32 @@ fn design_wavelength_over_noise(
 /// `r = ∂ln N/∂ln λ0` ([`optics::Polychromatic::design_signal_rate`]), all on the value's
 /// adaptive rule along each of the value's azimuths and averaged over them; under a noise
 /// spectrum (`noise`) each frequency's weight divided by `n(ν)` and `M̄` the weighted mean.
-/// `None` where the scene is not that (on axis, a line, another pupil or engine).
+/// Through a decentred circular iris (on axis or off) the same lanes, each node's defocus
+/// `W020 r²` and the iris's tilt `W020 (2d/NA)` moving with `W020` (docs/physics.md, "Gradients:
+/// the design wavelength through an iris"). `None` where the scene is not that (on axis without
+/// an iris, a line, another pupil or engine).
 fn design_wavelength_off_axis(scene: &Scene, e: &Evaluation, noise: Option<&optics::NoiseShape>) -> Option<(f64, f64)> {
     let lens = scene.lens();
     let field = scene.field();
     let camera = scene.camera();
     let detected = crate::evaluate::detected_spectrum(scene);
-    if field.is_on_axis() || detected.as_line().is_some() {
+    if detected.as_line().is_some() {
         return None;
     }
     let orders = lens.orders(e.mean_wavelength_nm * 1e-9, field);
-    let plain = !orders.is_empty()
-        && orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.is_defocus_only());
-    if !plain {
+    // every order the full circle or a circular iris with a defocus alone; on axis an iris
+    // (decentred: the OTF depends on direction, its tilt 2 W020 d/NA moving with W020)
+    let circles = !orders.is_empty()
+        && orders.iter().all(|o| {
+            let circle = match &o.pupil {
+                optics::Pupil::Full => true,
+                optics::Pupil::Aperture(a) => a.as_circle().is_some(),
+                _ => false,
+            };
+            circle && o.wavefront.is_defocus_only()
+        });
+    let iris = orders.iter().any(|o| matches!(o.pupil, optics::Pupil::Aperture(_)));
+    if !circles || (field.is_on_axis() && !iris) {
         return None;
     }
     let nyquist = camera.nyquist();

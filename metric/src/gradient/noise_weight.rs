@@ -193,8 +193,50 @@ pub(super) fn aperture_over_noise(
         };
         return Ok((scale - (d_p + d_t), d_p + d_s));
     }
+    if let Some((d_k, d_shift)) = aperture_lanes_over_noise(scene, shape_of(scene)) {
+        return Ok((scale - 2.0 * d_k - d_shift, d_k + d_shift));
+    }
     let d_k = weighted_defocus_lane(scene, e, p)?;
     Ok((scale - 2.0 * d_k, d_k))
+}
+
+/// The scene's noise spectrum (the callers run under one).
+fn shape_of(scene: &Scene) -> Option<&optics::NoiseShape> {
+    scene.camera().noise_spectrum()
+}
+
+/// `(D̃_K, D̃_Δ)`, the defocus lane and the image shifts' lane with each frequency's weight
+/// divided by `n(ν)`, where the white `∂M̄/∂ln F#` rides on them (metric's `aperture_through_iris`
+/// and `aperture_off_axis`): a band on the exact 1-D engine whose OTF depends on direction (every
+/// order a circular iris, decentred or not, or the full circle, with a defocus alone: the iris's
+/// tilt `Δ_iris = 4 F# W020 d` in the defocus lane, the lateral colour in the shifts' lane, 0 on
+/// axis), or off axis on the overlap engine (Seidel terms); on the value's noise-weighted rules
+/// over azimuth ([`optics::Polychromatic::mean_mtf_over_azimuth_over_noise_and_aperture_lanes`];
+/// docs/physics.md, "Gradients under a noise spectrum", "Gradients: the iris"). `None` elsewhere.
+fn aperture_lanes_over_noise(scene: &Scene, noise: Option<&optics::NoiseShape>) -> Option<(f64, f64)> {
+    let noise = noise?;
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if detected.as_line().is_some() {
+        return None;
+    }
+    let field = scene.field();
+    // a centred iris smaller than the aperture leaves the OTF symmetric, on the same engine
+    let (lo, hi) = detected.support();
+    let lambda = scene.lens().design_wavelength().unwrap_or(0.5 * (lo + hi));
+    let iris = scene.lens().orders(lambda, field).iter().any(|o| matches!(o.pupil, optics::Pupil::Aperture(_)));
+    on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let taken = match poly.engine() {
+            optics::Engine::Exact1d => (poly.direction_dependent() || iris) && !poly.has_pupil_grid(),
+            optics::Engine::Overlap { .. } => !field.is_on_axis(),
+            _ => false,
+        };
+        if !taken {
+            return None;
+        }
+        let (_, d_k, d_shift) =
+            poly.mean_mtf_over_azimuth_over_noise_and_aperture_lanes(field.y_rad.atan2(field.x_rad), noise)?;
+        Some((d_k, d_shift))
+    })
 }
 
 /// `D̃_K`, the defocus lane with each frequency's weight divided by `n(ν)`, on the reference rule
@@ -275,6 +317,82 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     }
     let d_k = weighted_defocus_lane(scene, e, p)?;
     Ok(scale + d_k * (rate / w020 - 1.0 / c))
+}
+
+/// `∂G/∂W` of Seidel term `t` (per µm) where every Seidel term is zero, under the noise
+/// spectrum `noise`: the weighted counterpart of metric's `seidel_at_zero` (on axis, the OTF
+/// rotationally symmetric: spherical aberration's and field curvature's lanes along one azimuth,
+/// astigmatism's half field curvature's, coma's 0 by symmetry) and `seidel_at_zero_off_axis`
+/// (off axis: the term's lane over azimuth from the field direction), each on the overlap engine
+/// run again with the terms at zero (`optics::Settings::overlap_always`), the value's
+/// noise-weighted rules there (each `∂|O|` divided by `n(ν)`, the frequency rule cut at the
+/// table's rows; docs/physics.md, "Gradients under a noise spectrum", "Gradients: Seidel terms
+/// at zero"). Error control as theirs: first at the engine's tolerance, again at
+/// `max(q, 10⁻⁴) ε` where the lanes are small against their bound `L G` (`q = |∂G|/(L G)`).
+/// `None` where some term is not zero or the overlap engine does not take the scene (an iris,
+/// `options.overlap = false`, `options.pupil_samples`).
+pub(super) fn seidel_at_zero_over_noise(
+    scene: &Scene,
+    e: &Evaluation,
+    t: optics::SeidelTerm,
+    noise: &optics::NoiseShape,
+) -> Result<Option<f64>, Error> {
+    use optics::SeidelTerm::{Astigmatism, Coma, FieldCurvature};
+    let field = scene.field();
+    let lens = scene.lens();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let zero = lens.orders(e.mean_wavelength_nm * 1e-9, field).iter().all(|o| {
+        let w = &o.wavefront;
+        [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
+    });
+    if !zero {
+        return Ok(None);
+    }
+    let on_axis = field.is_on_axis();
+    if on_axis && t == Coma {
+        // c and −c are one pupil turned by π: G is even in it
+        return Ok(Some(0.0));
+    }
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let first = field.y_rad.atan2(field.x_rad);
+    // on axis astigmatism's defocus part is half field curvature's (x² = ρ²/2 + ρ² cos 2φ/2, the
+    // cos 2φ part 0 by symmetry)
+    let (direction, share) = match t {
+        Astigmatism if on_axis => (FieldCurvature, 0.5),
+        t => (t, 1.0),
+    };
+    let directions = [optics::WavefrontDirection::Seidel(direction)];
+    // (the lane, the engine's tolerance, L G)
+    let run = |settings: optics::Settings| -> Result<Option<(f64, f64, f64)>, Error> {
+        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
+            .map_err(Error::Optics)?;
+        if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
+            return Ok(None);
+        }
+        let bound = 2.0 * std::f64::consts::PI * 1e-6 * poly.max_cutoff() * lens.f_number();
+        let found = match on_axis {
+            true => poly.mean_mtf_along_over_noise_and_gradient(0.0, &directions, noise).map(|(m, _, d)| (m, d[0])),
+            false => poly
+                .mean_mtf_over_azimuth_over_noise_and_overlap_gradient(first, &directions, noise)
+                .map(|(m, d)| (m.mean, d[0])),
+        };
+        if poly.over_budget().is_some() {
+            return Ok(None);
+        }
+        Ok(found.map(|(mean, d)| (d, poly.tolerance(), bound * mean)))
+    };
+    let settings = optics::Settings { overlap_always: true, ..scene.options().settings() };
+    let Some((lane, tolerance, bound)) = run(settings)? else { return Ok(None) };
+    let q = if bound > 0.0 { (lane.abs() / bound).max(1e-4) } else { 1.0 };
+    if q >= 1.0 {
+        return Ok(Some(share * lane));
+    }
+    let tighter = optics::Settings { tolerance: (q * tolerance).max(1e-14), fft_tolerance: None, ..settings };
+    Ok(Some(share * run(tighter)?.map_or(lane, |(lane, _, _)| lane)))
 }
 
 #[cfg(test)]

@@ -90,10 +90,13 @@ pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azim
 /// ([`WavefrontDirection::DesignWavelength`]) moves each order's defocus and efficiency by the
 /// lens's rates (`LensModel::design_wavelength_rates`: `δW020`, `δτ` per `ln λ0`), the shifts
 /// held: `(δτ/τ) v + q τ (∂H/∂w) δW020/λ` turned (`∂H/∂w = (w ∂H/∂w)/w`, 0 at `w = 0` where `H`
-/// is even in `w`), the normalization's rate left to the caller.
+/// is even in `w`; through a circular iris of radius `r`, `w = W020 r²/λ` and its tilt
+/// `Δ_iris = W020 (2d/NA)` gains `i k u·(2d/NA) δW020` times the turned value), the
+/// normalization's rate left to the caller.
 /// `None` for another direction, a field angle on a node without its shift's rates, the
 /// defocus lane on a node that is not a defocused circle, or the design wavelength's on a node
-/// that is not the full circle with a defocus alone or whose lens gives no rates there.
+/// that is not a circle (the full pupil or a circular iris) with a defocus alone or whose lens
+/// gives no rates there.
 pub(super) fn exact_along_and_field_gradient(
     scene: &Scene<'_>,
     nodes: &Nodes,
@@ -162,14 +165,22 @@ pub(super) fn exact_along_and_field_gradient(
             }
             let rate = rates.as_ref().and_then(|r| r.1.as_ref()).and_then(|r| r.get(n.order)).copied();
             match rate {
-                Some([d_w020, d_tau]) if n.is_defocused_circle() && n.scale == 1.0 && n.iris_shift == [0.0; 2] => {
+                Some([d_w020, d_tau]) if n.is_defocused_circle() => {
                     let w = n.w020 / n.lambda;
-                    let (_, d) = crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda, w);
-                    // ∂H/∂w δw = (w ∂H/∂w) δW020/W020, 0 at w = 0 (H even in w)
-                    let slope = if n.w020 == 0.0 { 0.0 } else { d * d_w020 / n.w020 };
+                    let (_, d) = crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda / n.scale, w);
+                    // ∂H/∂w δw = (w ∂H/∂w) δW020/W020, 0 at w = 0 (H even in w); through a
+                    // circular iris of radius r the node's W020 r² moves with the order's W020
+                    let slope = if n.w020 == 0.0 { 0.0 } else { d * d_w020 * (n.scale * n.scale) / n.w020 };
                     let moved = if n.efficiency == 0.0 { 0.0 } else { v * d_tau / n.efficiency };
                     let d = moved + n.weight * slope;
-                    Complex64::new(d * c, d * s)
+                    let lane = Complex64::new(d * c, d * s);
+                    // a decentred iris's tilt W020 (2d/NA) moves with W020: i k u·δΔ_iris times
+                    // the turned value (docs/physics.md, "Gradients: the design wavelength
+                    // through an iris")
+                    match n.iris_tilt {
+                        [0.0, 0.0] => lane,
+                        [tx, ty] => lane + Complex64::new(0.0, k * d_w020 * (tx * cos_a + ty * sin_a)) * turned,
+                    }
                 }
                 _ => {
                     no_rates = true;

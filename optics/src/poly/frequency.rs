@@ -694,15 +694,17 @@ impl Polychromatic<'_> {
     /// under a non-white noise spectrum `n`: the mean over azimuth of `(1/ν_max) ∫ P |O| / n dν`
     /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) with `noise`, bit for bit) and its
     /// derivative along each of `directions`, each lane `Re(O* ∂O)/|O|` divided by `n(ν)` as the
-    /// value is (docs/physics.md, "Gradients under a noise spectrum"). `None` where the white
-    /// one is, or where the OTF does not depend on direction.
+    /// value is (docs/physics.md, "Gradients under a noise spectrum"): on the overlap engine and
+    /// on the exact 1-D engine where its OTF depends on direction (a circular iris's decentre,
+    /// the field angles' lateral colour, the defocus lane through the iris). `None` where the
+    /// white one is, or where the OTF does not depend on direction.
     pub fn mean_mtf_over_azimuth_over_noise_and_overlap_gradient(
         &self,
         first: f64,
         directions: &[WavefrontDirection],
         noise: &NoiseShape,
     ) -> Option<(AzimuthalMean, Vec<f64>)> {
-        if !matches!(self.engine.engine(), Engine::Overlap { .. })
+        if !matches!(self.engine.engine(), Engine::Overlap { .. } | Engine::Exact1d)
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
             || !self.direction_dependent()
         {
@@ -821,6 +823,28 @@ impl Polychromatic<'_> {
         Some((DefocusDerivative { mean, defocus, pixel_slope, work }, shift))
     }
 
+    /// [`mean_mtf_over_azimuth_and_aperture_lanes`](Self::mean_mtf_over_azimuth_and_aperture_lanes)
+    /// under a non-white noise spectrum `n`: `(G, D̃_K, D̃_Δ)`, the mean over azimuth of
+    /// `(1/ν_max) ∫ P |O| / n dν` and the defocus and image shifts' lanes with each `∂|O|` divided
+    /// by `n(ν)`, on the value's frequency rule cut at the table's rows (`mean_of_cut`) and the
+    /// same rule over azimuth (docs/physics.md, "Gradients under a noise spectrum"). `None` where
+    /// the white one is.
+    pub fn mean_mtf_over_azimuth_over_noise_and_aperture_lanes(
+        &self,
+        first: f64,
+        noise: &NoiseShape,
+    ) -> Option<(f64, f64, f64)> {
+        if !matches!(self.engine.engine(), Engine::Overlap { .. } | Engine::Exact1d)
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let directions = [WavefrontDirection::Defocus, WavefrontDirection::ImageShift];
+        let (average, _) = self.azimuth_refined_lanes(first, &directions, Some(noise))?;
+        let [mean, defocus, shift, _] = average[..] else { return None };
+        Some((mean, defocus, shift))
+    }
+
     /// The design wavelength's lanes off axis on the exact 1-D engine, beside the mean over
     /// azimuth (white, or over the noise spectrum `noise`): `(M̄, D_λ0, D_Δ)`, `D_λ0` the
     /// lane of each order's defocus and efficiency moving with `ln λ0`
@@ -935,13 +959,43 @@ impl Polychromatic<'_> {
         azimuth: f64,
         directions: &[WavefrontDirection],
     ) -> Option<(f64, Work, Vec<f64>)> {
+        self.along_and_gradient(azimuth, directions, None)
+    }
+
+    /// [`mean_mtf_along_and_gradient`](Self::mean_mtf_along_and_gradient) under a non-white
+    /// noise spectrum `n`: the mean along `azimuth` of `P |O| / n` on the value's rule cut at the
+    /// table's rows ([`mean_mtf_over_noise`](Self::mean_mtf_over_noise)'s) and its derivative
+    /// along each of `directions`, each `∂|O|` divided by `n(ν)` as the value is (docs/physics.md,
+    /// "Gradients under a noise spectrum").
+    pub fn mean_mtf_along_over_noise_and_gradient(
+        &self,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+        noise: &NoiseShape,
+    ) -> Option<(f64, Work, Vec<f64>)> {
+        self.along_and_gradient(azimuth, directions, Some(noise))
+    }
+
+    /// The one recording pass of the two above.
+    fn along_and_gradient(
+        &self,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
+    ) -> Option<(f64, Work, Vec<f64>)> {
         if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
             return None;
         }
         let lanes = directions.len();
         *self.gradient.borrow_mut() =
             Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
-        let (mean, work) = self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth));
+        let (mean, work) = match noise {
+            None => self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth)),
+            Some(shape) => self.mean_of_cut(
+                &|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape),
+                shape.rows(),
+            ),
+        };
         let r = self.gradient.borrow_mut().take()?;
         if r.failed {
             return None;

@@ -1386,7 +1386,7 @@ impl Polychromatic<'_> {
     /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) with `noise`, bit for bit) and
     /// its derivative along each of `directions` on the same rules, each frequency's weight
     /// divided by `n(ν)` as the value's is (docs/physics.md, "Gradients under a noise
-    /// spectrum"): the overlap engine's lanes
+    /// spectrum"): the overlap engine's and the exact 1-D engine's lanes
     /// ([`mean_mtf_over_azimuth_over_noise_and_overlap_gradient`](Self::mean_mtf_over_azimuth_over_noise_and_overlap_gradient))
     /// or the FFT path's. `Ok(None)` where the white one gives none.
     ///
@@ -1398,7 +1398,7 @@ impl Polychromatic<'_> {
         directions: &[WavefrontDirection],
         noise: &super::NoiseShape,
     ) -> Result<Option<(AzimuthalMean, Vec<f64>)>, Error> {
-        if matches!(self.engine(), Engine::Overlap { .. }) {
+        if matches!(self.engine(), Engine::Overlap { .. } | Engine::Exact1d) {
             return Ok(self.mean_mtf_over_azimuth_over_noise_and_overlap_gradient(first, directions, noise));
         }
         if !matches!(self.engine(), Engine::Fft { .. }) {

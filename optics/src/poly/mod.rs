@@ -1148,6 +1148,7 @@ mod tests {
             shift_rate: None,
             iris_shift: [0.0; 2],
             iris_rate: 0.0,
+            iris_tilt: [0.0; 2],
             table: None,
             radial: None,
             part,

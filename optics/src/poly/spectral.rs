@@ -59,6 +59,10 @@ pub(super) struct Node {
     /// radius): the iris decentre's and the defocus's lanes of the exact engine; 0 without one
     pub iris_shift: [f64; 2],
     pub iris_rate: f64,
+    /// a decentred circular iris's tilt per metre of the order's `W020`: `iris_shift = W020
+    /// iris_tilt`, `iris_tilt = 2d/NA` (0 without one): the design wavelength's lane through the
+    /// iris, whose tilt moves with `W020` even where `W020` is 0
+    pub iris_tilt: [f64; 2],
     /// the order's OTF table ([`Pupil::Table`]), read instead of the defocused OTF
     pub table: Option<Arc<OtfTable>>,
     /// the order's radially symmetric pupil ([`Pupil::Radial`]) prepared at this wavelength,
@@ -90,6 +94,7 @@ impl Node {
             shift_rate: None,
             iris_shift: [0.0; 2],
             iris_rate: 0.0,
+            iris_tilt: [0.0; 2],
             table: match &order.pupil {
                 Pupil::Table(t) => Some(t.clone()),
                 _ => None,
@@ -109,6 +114,12 @@ impl Node {
             node.scale = r.radius;
             node.shift = [node.shift[0] + r.image_shift_m[0], node.shift[1] + r.image_shift_m[1]];
             node.iris_shift = r.image_shift_m;
+            // `reduce_decentred_circle`'s tilt 2 W020 d/NA per unit W020
+            if let (Pupil::Aperture(a), Some(na)) = (&order.pupil, irises)
+                && let Some((centre, _)) = a.as_circle()
+            {
+                node.iris_tilt = [2.0 * centre[0] / na, 2.0 * centre[1] / na];
+            }
         }
         // the full pupil is the iris of radius 1 at d = 0: a decentre's lane moves it as any
         // circular iris's (the scene's iris is the full circle moved)
