@@ -1323,8 +1323,8 @@ fn spectral_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Spec
 /// [`spectral_partials`] with each frequency's weight divided by `n(ν)` where `noise` is given:
 /// the `∂M̄` parts are then `∂G`'s, `G = (1/ν_N) ∫ P |O| / n dν` (docs/physics.md, "Gradients
 /// under a noise spectrum": `n` does not move with the spectrum). Under the noise weight the
-/// lanes are taken on the engines of ρ, ρλ, ρλ² (not the value's own pass), and a top-hat band
-/// is refused.
+/// lanes are taken on the engines of ρ, ρλ, ρλ² (not the value's own pass), and a top-hat
+/// band's on the engines of its edges' single wavelengths ([`top_hat_partials`]).
 fn spectral_partials_over(
     scene: &Scene,
     e: &Evaluation,
@@ -1340,14 +1340,7 @@ fn spectral_partials_over(
     if found.is_empty()
         && let Some(band) = top_hat(&detected)
     {
-        if noise.is_some() {
-            return Err(not_smooth(
-                "with camera.noise_spectrum the spectral gradient is computed for a Gaussian band (spectrum.shape = \
-                 \"gaussian\"); a top-hat band's edge lanes are not weighted by 1/n(ν) yet"
-                    .to_owned(),
-            ));
-        }
-        return top_hat_partials(scene, e, &detected, band, p);
+        return top_hat_partials(scene, e, &detected, band, noise);
     }
     let [g] = found[..] else {
         return Err(not_smooth(format!(
@@ -2000,16 +1993,23 @@ fn temperature_band_partials(
         .iter()
         .map(|s| optics::Polychromatic::with_settings(lens, s, field, nyquist, None, settings))
         .collect::<Result<Vec<_>, _>>()?;
-    if engines.iter().any(optics::Polychromatic::direction_dependent) {
-        return Err(not_smooth(
-            "the OTF depends on direction here (lateral colour or a non-symmetric pupil): the temperature's \
-             gradient over a band is computed for a rotationally symmetric OTF"
-                .to_owned(),
-        ));
-    }
     let mean_rate = engines[1].total_weight() / engines[0].total_weight();
     let d_ln_n = engines[0].spectral_average(|l, _| rate(l));
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    if engines.iter().any(|e| e.direction_dependent() || e.has_pupil_grid()) {
+        return temperature_over_directions(scene, &engines, mean_rate, noise, source.temperature())
+            .map(|d_mtf| (d_ln_n, d_mtf))
+            .ok_or_else(|| {
+                not_smooth(
+                    "source.temperature_k: the OTF depends on direction here through a sampled pupil on the FFT \
+                     path: the temperature's lanes over a band are the OTFs of ρ and ρ ∂ln B/∂T taken again at a \
+                     tolerance tightened by the spread of ∂ln B/∂T over the band, which the FFT path's grids do \
+                     not reach; they are computed for a rotationally symmetric OTF, and over directions on the \
+                     1-D engines (lateral colour, a decentred iris, MTF tables) and a PSF stack's planes"
+                        .to_owned(),
+                )
+            });
+    }
     let at = |nu: f64| -> (f64, [f64; 1]) {
         let (o, o_g) = (engines[0].otf(nu), engines[1].otf(nu));
         let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) / noise.map_or(1.0, |n| n.value(nu));
@@ -2030,6 +2030,41 @@ fn temperature_band_partials(
         |change, next| (change[0] * t).abs() <= tolerance * (next[0] * t).abs().max(scale),
     );
     Ok((d_ln_n, d_mtf))
+}
+
+/// `∂M̄/∂T` over a band where the OTF depends on direction (docs/physics.md, "Gradients: a
+/// line's wavelength and a blackbody's temperature"): along each direction the complex OTFs of
+/// `ρ` and `ρ g` (`engines`, `g = ∂ln B/∂T`), `∂O/∂T = ⟨g⟩ (O_g − O)`, `∂|O| = Re(O* ∂O)/|O|`
+/// ([`modulus_derivative`]), the pixel MTF and `1/n(ν)` under a noise spectrum on the weight, on
+/// the value's rule over directions ([`DirectionalRule`], its ν pieces cut at the noise table's
+/// rows), each measured per relative change of `T` (`temperature`). `None` on the FFT path (a
+/// sampled pupil: its grids at the engines' tightened tolerance are beyond reach).
+fn temperature_over_directions(
+    scene: &Scene,
+    engines: &[optics::Polychromatic<'_>],
+    mean_rate: f64,
+    noise: Option<&optics::NoiseShape>,
+    temperature: f64,
+) -> Option<f64> {
+    if engines.iter().any(|e| e.has_pupil_grid() && !e.has_psf_planes()) {
+        return None;
+    }
+    let camera = scene.camera();
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let rule = DirectionalRule::of(scene, &engines[0], scene.options().settings().tolerance);
+    let mut ends = vec![0.0];
+    if let Some(n) = noise {
+        ends.extend(n.rows().iter().copied().filter(|&r| r > 0.0 && r < nyquist));
+    }
+    ends.push(nyquist);
+    let [_, d_mtf, _] = rule.mean_split(&ends, [1.0, temperature, 0.0], &|nu, azimuth| {
+        let weight = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) / noise.map_or(1.0, |n| n.value(nu));
+        let (o, o_g) = (engines[0].otf_along(nu, azimuth), engines[1].otf_along(nu, azimuth));
+        let d = (o_g - o) * mean_rate;
+        [weight * o.norm(), weight * modulus_derivative([o.re, o.im], [d.re, d.im]), 0.0]
+    });
+    Some(d_mtf)
 }
 
 /// `(∂ln N/∂T, ∂M̄/∂T)` over a band on the value's own pass, where the value's engine is the
@@ -2161,16 +2196,24 @@ fn top_hat(spectrum: &radiometry::Spectrum) -> Option<radiometry::TopHat> {
 /// times `M̄`. Where the OTF depends on direction, along each direction
 /// `∂|O|/∂b = (T_b/D)(Re(O* O_b)/|O| − |O|)`, both means on the value's rule over directions
 /// ([`DirectionalRule`]).
+///
+/// Under a noise spectrum (`noise`) each frequency's weight is divided by `n(ν)` (docs/physics.md,
+/// "Gradients under a noise spectrum": `n` does not move with the band), so the means are the
+/// weighted `G`'s: `∂G/∂b = (T_b/D)((1/ν_N) ∫ P sign(O) O_b / n dν − G)`, `G` on the same rule
+/// (over directions, its pieces cut at the table's rows where `1/n` has its kinks).
 fn top_hat_partials(
     scene: &Scene,
     e: &Evaluation,
     detected: &radiometry::Spectrum,
     band: radiometry::TopHat,
-    _p: Parameter,
+    noise: Option<&optics::NoiseShape>,
 ) -> Result<SpectralPartials, Error> {
-    if let Some(found) = top_hat_on_value_rule(scene, e, detected, band) {
+    if noise.is_none()
+        && let Some(found) = top_hat_on_value_rule(scene, e, detected, band)
+    {
         return Ok(found);
     }
+    let over_noise = |nu: f64| noise.map_or(1.0, |n| 1.0 / n.value(nu));
     let lens = scene.lens();
     let field = scene.field();
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
@@ -2196,9 +2239,14 @@ fn top_hat_partials(
         // along each direction ∂O/∂b = (T_b/D)(O_b − O), so ∂|O|/∂b = (T_b/D)(Re(O* O_b)/|O| − |O|):
         // J = the mean of P|O| and I_x that of P Re(O* O_x)/|O|, on the same rule
         let rule = DirectionalRule::of(scene, &whole, settings.tolerance);
-        let [j, i_a, i_b] = rule.mean(nyquist, [1.0; 3], &|nu, azimuth| {
+        let mut ends = vec![0.0];
+        if let Some(n) = noise {
+            ends.extend(n.rows().iter().copied().filter(|&r| r > 0.0 && r < nyquist));
+        }
+        ends.push(nyquist);
+        let [j, i_a, i_b] = rule.mean_split(&ends, [1.0; 3], &|nu, azimuth| {
             let o = whole.otf_along(nu, azimuth);
-            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
+            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
             let (x_a, x_b) = (at_a.otf_along(nu, azimuth), at_b.otf_along(nu, azimuth));
             let o0 = [o.re, o.im];
             [
@@ -2210,18 +2258,24 @@ fn top_hat_partials(
         let (d_a, d_b) = (-t_a * (i_a - j), t_b * (i_b - j));
         return Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) });
     }
-    // (1/ν_N) ∫ P sign(O) O_x dν for x = a, b
-    let [i_a, i_b] = sign_split_mean(
+    // (1/ν_N) ∫ P sign(O) O_x / n dν for x = a, b, and x = the band itself (the mean the
+    // differences are taken from: under a noise spectrum the weighted G on this rule)
+    let [i_a, i_b, j] = sign_split_mean(
         nyquist,
         8,
         |nu| whole.otf(nu),
         |nu| {
-            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu));
-            (whole.otf(nu), [pix * at_a.otf(nu), pix * at_b.otf(nu)])
+            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
+            let o = whole.otf(nu);
+            (o, [pix * at_a.otf(nu), pix * at_b.otf(nu), pix * o])
         },
-        |change, _| change[0].abs().max(change[1].abs()) <= tolerance * e.mean_mtf,
+        |change, _| {
+            let weighted = if noise.is_some() { change[2].abs() } else { 0.0 };
+            change[0].abs().max(change[1].abs()).max(weighted) <= tolerance * e.mean_mtf
+        },
     );
-    let (d_a, d_b) = (-t_a * (i_a - e.mean_mtf), t_b * (i_b - e.mean_mtf));
+    let j = if noise.is_some() { j } else { e.mean_mtf };
+    let (d_a, d_b) = (-t_a * (i_a - j), t_b * (i_b - j));
     Ok(SpectralPartials { center: (n_a + n_b, d_a + d_b), range: (0.5 * (n_b - n_a), 0.5 * (d_b - d_a)) })
 }
 
