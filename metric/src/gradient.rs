@@ -951,20 +951,47 @@ fn weigh_by_noise(
             _ => None,
         };
         let Some(d_weighted) = weighted else {
-            return Err(Error::NotDifferentiable {
-                parameter: p.describe(),
-                reason: "with camera.noise_spectrum the wavefront gradient is computed on the noise-weighted pass of \
-                         the radial engine (Binary 2 coefficients, spline knots, m = 0 Zernike terms on axis), the \
-                         overlap engine and the FFT path, and is 0 where the OTF's symmetry makes it so; this key's \
-                         lane is on another rule here (Seidel terms at zero on a rotationally symmetric OTF, the \
-                         exact 1-D engine's tangential and sagittal lanes, an obscuration's edge, or a line \
-                         spectrum's grids)"
-                    .to_owned(),
-            });
+            return Err(Error::NotDifferentiable { parameter: p.describe(), reason: noise_refusal(p) });
         };
         point.asnr[k] = point.snr0[k] * g + e.snr0 * d_g_from_mean_mtf(scene, e, d_weighted);
     }
     Ok(())
+}
+
+/// Why [`weigh_by_noise`] has no weighted lane for `p` here, naming its key.
+fn noise_refusal(p: Parameter) -> String {
+    let passes = "with camera.noise_spectrum the wavefront and field keys' lanes are taken on the value's \
+                  noise-weighted pass of the radial engine (Binary 2 coefficients, spline knots, m = 0 Zernike \
+                  terms on axis), the exact 1-D engine (a circular iris's decentre, the field angles' lateral \
+                  colour), the overlap engine (Seidel and Zernike terms, at zero too) and the FFT path (a band), \
+                  and are 0 where the OTF's symmetry makes them so";
+    let (key, here) = match p {
+        Parameter::IrisDecentre(a) => (
+            format!("lens.iris_decentre_{}", if a == 0 { "x" } else { "y" }),
+            "this scene's pupil is on none of them (a line spectrum's grids, or the iris with Seidel or Zernike \
+             terms on a rule that carries no decentre lane)",
+        ),
+        Parameter::Seidel(t) => (
+            t.key().to_owned(),
+            "this scene's pupil is on none of them (every term zero through an iris, which the overlap engine does \
+             not take at zero; options.overlap = false or options.pupil_samples; a line spectrum's grids)",
+        ),
+        Parameter::FieldAngle(a) => (
+            field_key(a).to_owned(),
+            "this scene's OTF is on none of them (a table, zones or a map; a line spectrum's grids)",
+        ),
+        Parameter::ZernikeNoll(j) => (
+            format!("lens.zernike_noll_rms_um[{}]", j.saturating_sub(1)),
+            "this scene's pupil is on none of them (a line spectrum's grids, or an order of another kind)",
+        ),
+        Parameter::Obscuration => (
+            "lens.obscuration".to_owned(),
+            "its edge's lane rides on the FFT path of a band, asked with no wavefront key; this scene is not that \
+             (a line spectrum's grids, or wavefront keys asked with it)",
+        ),
+        _ => (p.describe().to_owned(), "this key's lane is on another rule here"),
+    };
+    format!("{key}: {passes}; {here}")
 }
 
 /// One parameter's `(∂N, ∂B, ∂(dark charge), ∂σ_r², ∂(σ_q²/K²), ∂G, ∂M̄)` at a field point.
@@ -3106,11 +3133,13 @@ fn design_wavelength_by_own_rule(
         not_smooth(format!(
             "lens.design_wavelength_nm: {family}: the design wavelength's gradient is computed for a lens whose \
              every order is the full circular pupil with a defocus alone and that gives how its orders move with λ0 \
-             (the chromatic, refractive and harmonic families without an iris or Seidel terms), on axis or where the \
-             field leaves the OTF as on axis, and off axis with the lateral colour f0 tan θ (λ0/λ − 1) on the exact \
-             1-D engine over a band; it is 0 for a phase lens with a geometric phase (its radian profile does not \
-             depend on λ0); this scene's orders are not that here (off axis: a line spectrum, whose lateral \
-             colour's lane is not followed; an iris or Seidel terms; a phase lens's refractive profile scales its \
+             (the chromatic, refractive and harmonic families without Seidel terms), on axis or where the field \
+             leaves the OTF as on axis, off axis with the lateral colour f0 tan θ (λ0/λ − 1) on the exact 1-D \
+             engine over a band, and through a decentred circular iris there (its tilt moving with W020); it is 0 \
+             for a phase lens with a geometric phase (its radian profile does not depend on λ0); this scene's \
+             orders are not that here (off axis: a line spectrum, whose lateral colour's lane is not followed; a \
+             centred iris smaller than the aperture, an iris on the FFT path, or Seidel terms, which the exact \
+             engine's lane does not carry; a phase lens's refractive profile scales its \
              path per radian with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric \
              phase its reference sphere by 1 − λ/λ0: not followed yet)"
         ))

@@ -770,11 +770,11 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} (with camera.pixel_mtf true or false), \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band for a rotationally symmetric OTF), \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source; over a band but through a sampled pupil on the FFT path), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
-         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band without an iris or Seidel terms, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
+         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine), spectrum.center_nm and spectrum.range_nm (a Gaussian band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, and the wavefront keys on the radial engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -1200,7 +1200,8 @@ mod tests {
             let started = std::time::Instant::now();
             check_with_references(&source, &overrides, keys, &|k, v| {
                 let h = relative_step(k, v);
-                let (coarse, fine) = (central(&source, &overrides, k, v, 2.0 * h), central(&source, &overrides, k, v, h));
+                let (coarse, fine) =
+                    (central(&source, &overrides, k, v, 2.0 * h), central(&source, &overrides, k, v, h));
                 std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
             });
             println!("{}: {:?}", source.label(), started.elapsed());
@@ -4319,7 +4320,7 @@ mod tests {
     }
 
     /// The decentred iris's keys under a noise spectrum (docs/physics.md, "Gradients under a
-    /// noise spectrum: the exact 1-D engine"): the decentre's lanes on the exact 1-D engine's
+    /// noise spectrum", "Gradients: the iris"): the decentre's lanes on the exact 1-D engine's
     /// noise-weighted pass over azimuth, and the F-number's and the focal length's defocus lane
     /// there beside the frequency scale's term by parts (its `n′` term), each frequency's weight
     /// divided by n(ν), against central differences of evaluations converged at 1e-10 within 10×

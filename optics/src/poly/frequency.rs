@@ -991,10 +991,8 @@ impl Polychromatic<'_> {
             Some(Recording { lanes, directions: directions.to_vec(), ..Recording::default() });
         let (mean, work) = match noise {
             None => self.mean_of(&|nu| self.recorded_modulus_along(nu, azimuth)),
-            Some(shape) => self.mean_of_cut(
-                &|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape),
-                shape.rows(),
-            ),
+            Some(shape) => self
+                .mean_of_cut(&|nu| self.over_noise(nu, self.recorded_modulus_along(nu, azimuth), shape), shape.rows()),
         };
         let r = self.gradient.borrow_mut().take()?;
         if r.failed {
