@@ -295,13 +295,18 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     }
     let orders = lens.orders(c, field);
     if orders.len() != 1 {
-        return Err(not_smooth(format!(
-            "{}: with camera.noise_spectrum a line's wavelength is followed for one order with a defocus alone \
-             (the chromatic and refractive lenses) and a phase lens on the radial engine; the {} orders' order \
-             lane is not weighted by 1/n(ν) yet",
-            lens.describe(),
-            orders.len()
-        )));
+        return match order_lane_over_noise(scene, c, weighted_mean(e)) {
+            Some(d) => Ok(scale + d),
+            None => Err(not_smooth(format!(
+                "spectrum.center_nm: {}: with camera.noise_spectrum a line's wavelength is followed for one order \
+                 with a defocus alone (the chromatic and refractive lenses), a phase lens on the radial engine, and \
+                 several orders that are each the full circle with a defocus alone and whose rates the lens gives \
+                 (the harmonic lens on axis); this scene's {} orders are not that (another pupil, an aberration \
+                 beyond defocus, or no rates), so their order lane has nothing to weigh",
+                lens.describe(),
+                orders.len()
+            ))),
+        };
     }
     let rates = match lens.affine_defocus(field) {
         Some(a) => Some(a.w020_slope),
@@ -317,6 +322,58 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     }
     let d_k = weighted_defocus_lane(scene, e, p)?;
     Ok(scale + d_k * (rate / w020 - 1.0 / c))
+}
+
+/// `D̃ = (1/ν_N) ∫ P sign(O) L / n dν`, the order lane of a line at `c` on several orders under
+/// the noise spectrum (docs/physics.md, "Gradients under a noise spectrum", "Gradients: a line's
+/// wavelength"): every order the full circle with a defocus alone, `O = Σ_o τ_o H(νcF#, w_o) /
+/// Σ_o τ_o` at the line's one wavelength, each moving by its rates `[α_o, γ_o]` (metric's
+/// `order_lane_rates`: `α_o = ∂ln w_o/∂c`, `γ_o = ∂τ_o/∂c`), so at a fixed normalized frequency
+/// `L = (Σ_o [τ_o α_o w_o ∂H/∂w_o + γ_o H_o] − O Σ_o γ_o) / Σ_o τ_o`, the white order lane's
+/// integrand; `P` the pixel MTF where the camera applies it. On 16-point Gauss–Legendre panels
+/// split at the sign changes of `O`, doubled until it moves by at most the tolerance times
+/// `max(|D̃|, G)` (`g`: the table's kinks integrated across as the panels double). `None` where the
+/// orders are not that, or the lens gives no rates.
+fn order_lane_over_noise(scene: &Scene, c: f64, g: f64) -> Option<f64> {
+    let noise = scene.camera().noise_spectrum()?;
+    let lens = scene.lens();
+    let field = scene.field();
+    if !field.is_on_axis() {
+        return None;
+    }
+    let orders = lens.orders(c, field);
+    let plain = orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.is_defocus_only());
+    let rates = super::order_lane_rates(scene, c)?;
+    if !plain || rates.len() != orders.len() {
+        return None;
+    }
+    let f_number = lens.f_number();
+    let total: f64 = orders.iter().map(|o| o.efficiency).sum();
+    let moved: f64 = rates.iter().map(|r| r[1]).sum();
+    let camera = scene.camera();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let nyquist = camera.nyquist();
+    let otf = |nu: f64| -> f64 {
+        let s = nu * c * f_number;
+        orders.iter().map(|o| o.efficiency * optics::defocus_otf(s, o.wavefront.defocus_m / c)).sum::<f64>() / total
+    };
+    let at = |nu: f64| -> (f64, [f64; 1]) {
+        let s = nu * c * f_number;
+        let (mut o, mut lane) = (0.0, 0.0);
+        for (order, [alpha, gamma]) in orders.iter().zip(&rates) {
+            let w = order.wavefront.defocus_m / c;
+            let h = optics::defocus_otf(s, w);
+            o += order.efficiency * h;
+            lane += order.efficiency * alpha * optics::defocus_otf_log_derivative(s, w) + gamma * h;
+        }
+        let o = o / total;
+        let weight = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) / noise.value(nu);
+        (o, [weight * (lane - o * moved) / total])
+    };
+    let tolerance = scene.options().settings().tolerance;
+    let [d] =
+        super::sign_split_mean(nyquist, 8, otf, at, |change, next| change[0].abs() <= tolerance * next[0].abs().max(g));
+    Some(d)
 }
 
 /// `∂G/∂W` of Seidel term `t` (per µm) where every Seidel term is zero, under the noise
