@@ -2980,6 +2980,9 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
     if scene.lens().design_wavelength_inert() {
         return Ok((0.0, 0.0));
     }
+    if let Some(on_axis) = line_seen_on_axis(scene) {
+        return design_wavelength_partials(&on_axis, e, p);
+    }
     if let Some(found) = design_wavelength_on_value_rule(scene) {
         return Ok(found);
     }
@@ -3005,10 +3008,33 @@ fn design_wavelength_over_noise(
     if scene.lens().design_wavelength_inert() {
         return Ok(0.0);
     }
+    if let Some(on_axis) = line_seen_on_axis(scene) {
+        return design_wavelength_over_noise(&on_axis, e, p, noise);
+    }
     if let Some((_, d)) = design_wavelength_off_axis(scene, e, Some(noise)) {
         return Ok(d);
     }
     design_wavelength_by_own_rule(scene, e, p, Some(noise)).map(|(_, d)| d)
+}
+
+/// The scene moved on axis where a line off axis sees its one order as on axis but for its
+/// image shift (`LensModel::image_shift_field_rates`: the chromatic lens's lateral colour
+/// `Δ = f0 tan θ (λ0/c − 1)`): one wavelength, so the shift is a phase `exp(−2πi ν·Δ)` of the
+/// whole OTF whatever λ0 does to it, and `|O|`, N's rates and their derivatives in λ0 are the
+/// on-axis order's (docs/physics.md, "Gradients: the design wavelength off axis", as "a line's
+/// wavelength off axis"). `None` otherwise.
+fn line_seen_on_axis(scene: &Scene) -> Option<Scene> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let c = crate::evaluate::detected_spectrum(scene).line()?.center();
+    if field.is_on_axis() || lens.image_shift_field_rates(c, field).is_none() {
+        return None;
+    }
+    let ([o], [a]) = (&lens.orders(c, field)[..], &lens.orders(c, optics::Field::ON_AXIS)[..]) else { return None };
+    let same = matches!((&o.pupil, &a.pupil), (optics::Pupil::Full, optics::Pupil::Full))
+        && o.wavefront.is_defocus_only()
+        && (o.wavefront.defocus_m, o.efficiency) == (a.wavefront.defocus_m, a.efficiency);
+    same.then(|| scene.single_field(optics::Field::ON_AXIS))
 }
 
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` off axis for a lens whose every order is the full circular pupil
@@ -3137,7 +3163,8 @@ fn design_wavelength_by_own_rule(
              leaves the OTF as on axis, off axis with the lateral colour f0 tan θ (λ0/λ − 1) on the exact 1-D \
              engine over a band, and through a decentred circular iris there (its tilt moving with W020); it is 0 \
              for a phase lens with a geometric phase (its radian profile does not depend on λ0); this scene's \
-             orders are not that here (off axis: a line spectrum, whose lateral colour's lane is not followed; a \
+             orders are not that here (off axis: several orders under a line spectrum, each turned by its own \
+             lateral colour, whose lanes the line's engine does not carry (one order is seen as on axis); a \
              centred iris smaller than the aperture, an iris on the FFT path, or Seidel terms, which the exact \
              engine's lane does not carry; a phase lens's refractive profile scales its \
              path per radian with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric \
