@@ -204,6 +204,11 @@ pub struct Settings {
     /// the value's times the lateral colour's rate (docs/physics.md, "Gradients: the field
     /// point").
     pub spectral_tolerance: Option<f64>,
+    /// The adaptive frequency rule's own tolerance where it is tighter than `tolerance` (`None`:
+    /// follow `tolerance`): a field angle's gradient on the exact 1-D engine asks for it beside
+    /// `spectral_tolerance`, its panels accepting on the value alone (docs/physics.md,
+    /// "Gradients: the field point").
+    pub frequency_tolerance: Option<f64>,
     /// Whether every order that is the full circle with a polynomial wavefront goes to the
     /// overlap engine ([`Engine::Overlap`]), a defocus alone too (no closed form, no exact 1-D
     /// path; a line's one wavelength too, where no order needs the grids): the Seidel gradient
@@ -234,6 +239,7 @@ impl Default for Settings {
             exact_irises: true,
             overlap: true,
             spectral_tolerance: None,
+            frequency_tolerance: None,
             overlap_always: false,
             table_rule: crate::radial::TableRule::Tensor,
             edge_lane: false,
@@ -332,7 +338,7 @@ trait OtfEngine: std::fmt::Debug {
     /// A bound on how much a field angle's lane amplifies the value: the largest
     /// `2π ν |∂Δ/∂θ|` (per radian) over the nodes and the frequencies read, where the engine
     /// carries the field angles' lanes as each node's value times `−2πi ν u·∂Δ/∂θ` (the overlap
-    /// engine); `None` elsewhere.
+    /// engine, the exact 1-D engine); `None` elsewhere.
     fn field_lane_bound(&self) -> Option<f64> {
         None
     }
@@ -573,7 +579,7 @@ pub struct Polychromatic<'a> {
     /// the lens, the detected spectrum and the factored parts ([`with_parts`](Self::with_parts)),
     /// the field, the F-number, the frequency limit and the pixel pitch
     scene: Scene<'a>,
-    /// the settings' tolerance (the frequency rule's)
+    /// the settings' tolerance, or their `frequency_tolerance` where tighter (the frequency rule's)
     asked_tolerance: f64,
     /// the tolerance the engine worked to ([`Polychromatic::tolerance`])
     engine_tolerance: f64,
@@ -965,7 +971,7 @@ impl<'a> Polychromatic<'a> {
         };
         let mut this = Polychromatic {
             scene,
-            asked_tolerance: settings.tolerance,
+            asked_tolerance: settings.frequency_tolerance.map_or(settings.tolerance, |f| f.min(settings.tolerance)),
             engine_tolerance,
             engine,
             w020_max: 0.0,
@@ -1000,7 +1006,8 @@ impl<'a> Polychromatic<'a> {
 
     /// The engine's bound on a field angle's lane relative to the value (the largest
     /// `2π ν |∂Δ/∂θ|` over its nodes up to the frequency limit, per radian), where its field
-    /// lanes are the nodes' values times that factor (the overlap engine); `None` elsewhere.
+    /// lanes are the nodes' values times that factor (the overlap engine and the exact 1-D
+    /// engine); `None` elsewhere.
     pub fn field_lane_bound(&self) -> Option<f64> {
         self.engine.field_lane_bound()
     }
