@@ -165,6 +165,7 @@ impl Options {
             exact_irises: self.exact_irises,
             overlap: self.overlap,
             spectral_tolerance: None,
+            frequency_tolerance: None,
             overlap_always: false,
             edge_lane: false,
             table_rule: self.table_rule,

@@ -1,8 +1,9 @@
 //! Complex numbers on four or eight lanes (`wide::f64x4`, `wide::f64x8`), for the closed form's
 //! kernel evaluated at four or eight nodes of the rule in the pupil angle at once (`closed.rs`,
 //! `faddeeva.rs`). Every operation is the one `num_complex` performs on one number, in the same
-//! order (no fused multiply-adds, but for the Faddeeva series' Horner step
-//! [`Complexes::mul_add_real`], which its scalar twin in `faddeeva.rs` fuses alike), so each lane
+//! order (no fused multiply-adds, but for the Faddeeva function's products and Horner steps
+//! ([`Complexes::mul_add_real`], [`Complexes::mul_fused`], [`Complexes::mul_add`]), which its
+//! scalar twin in `faddeeva.rs` fuses alike), so each lane
 //! is the scalar result to the last bit, whatever the width: eight lanes advance two independent groups of four through the same latency-bound
 //! chains (the Faddeeva series' Horner sums, the sine, cosine and exponential polynomials)
 //! together, their dependent adds overlapping.
@@ -59,6 +60,21 @@ pub(crate) trait Lanes:
 #[inline(always)]
 pub(crate) fn fused(a: f64, b: f64, c: f64) -> f64 {
     if cfg!(target_feature = "fma") { a.mul_add(b, c) } else { a * b + c }
+}
+
+/// `a × b` in fused multiply-adds ([`Complexes::mul_fused`] on one number): `re = fused(re_a,
+/// re_b, −(im_a im_b))`, `im = fused(re_a, im_b, im_a re_b)`. Each part is rounded twice, not
+/// three times as in `num_complex`'s product, so it is within an ulp or so of that product.
+#[inline(always)]
+pub(crate) fn mul_fused(a: Complex64, b: Complex64) -> Complex64 {
+    Complex64::new(fused(a.re, b.re, -(a.im * b.im)), fused(a.re, b.im, a.im * b.re))
+}
+
+/// `a × b + c` in fused multiply-adds ([`Complexes::mul_add`] on one number): `re = fused(re_a,
+/// re_b, fused(−im_a, im_b, re_c))`, `im = fused(re_a, im_b, fused(im_a, re_b, im_c))`.
+#[inline(always)]
+pub(crate) fn mul_add_fused(a: Complex64, b: Complex64, c: Complex64) -> Complex64 {
+    Complex64::new(fused(a.re, b.re, fused(-a.im, b.im, c.re)), fused(a.re, b.im, fused(a.im, b.re, c.im)))
 }
 
 macro_rules! lanes {
@@ -203,6 +219,28 @@ impl<V: Lanes> Complexes<V> {
     pub fn mul_add_real(self, y: Complexes<V>, b: V) -> Complexes<V> {
         Complexes { re: self.re.fused(y.re, (-self.im).fused(y.im, b)), im: self.re.fused(y.im, self.im * y.re) }
     }
+    /// `self × other` in fused multiply-adds: `re = fused(re_s, re_o, −(im_s im_o))`, `im =
+    /// fused(re_s, im_o, im_s re_o)`, four operations where [`mul`](Self::mul) takes six; on each
+    /// lane the scalar [`mul_fused`].
+    #[inline(always)]
+    pub fn mul_fused(self, other: Complexes<V>) -> Complexes<V> {
+        Complexes {
+            re: self.re.fused(other.re, -(self.im * other.im)),
+            im: self.re.fused(other.im, self.im * other.re),
+        }
+    }
+
+    /// `self × other + c` in fused multiply-adds: `re = fused(re_s, re_o, fused(−im_s, im_o,
+    /// re_c))`, `im = fused(re_s, im_o, fused(im_s, re_o, im_c))`, four operations where the
+    /// product and the sum take eight; on each lane the scalar [`mul_add_fused`].
+    #[inline(always)]
+    pub fn mul_add(self, other: Complexes<V>, c: Complexes<V>) -> Complexes<V> {
+        Complexes {
+            re: self.re.fused(other.re, (-self.im).fused(other.im, c.re)),
+            im: self.re.fused(other.im, self.im.fused(other.re, c.im)),
+        }
+    }
+
     /// `x − self`, `x` real (`num_complex`'s `T − Complex`: `(x − re) + i(0 − im)`).
     #[inline(always)]
     pub fn real_minus(x: V, z: Complexes<V>) -> Complexes<V> {

@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 
 use num_complex::Complex64;
 
-use crate::complex4::{Complexes, Lanes};
+use crate::complex4::{Complexes, Lanes, mul_add_fused, mul_fused};
 
 /// Most terms of the series (the full-accuracy one).
 const N: usize = 36;
@@ -104,19 +104,25 @@ impl Erfcx {
         let zeta = Complex64::new(-z.im, z.re);
         let denominator = Complex64::new(self.l + zeta.im, -zeta.re); // L − iζ
         let inv = denominator.inv();
-        let big_z = Complex64::new(self.l - zeta.im, zeta.re) * inv; // (L + iζ)/(L − iζ)
+        // (the complex products and sums in fused multiply-adds, `complex4::mul_fused` and
+        // `mul_add_fused`: four operations a product where `num_complex` takes six, and a product
+        // and a sum in four where it takes eight)
+        let big_z = mul_fused(Complex64::new(self.l - zeta.im, zeta.re), inv); // (L + iζ)/(L − iζ)
         // p(Z) = Σ_j Z^j P_j(Z⁴), four independent Horner chains (the single chain is latency-bound)
-        let z2 = big_z * big_z;
-        let y = z2 * z2;
+        let z2 = mul_fused(big_z, big_z);
+        let y = mul_fused(z2, z2);
         let mut chains = [Complex64::new(0.0, 0.0); 4];
         for block in self.coefficients[..self.terms].chunks_exact(4).rev() {
             for (acc, &b) in chains.iter_mut().zip(block) {
                 *acc = horner_step(*acc, y, b);
             }
         }
-        let p = chains[0] + big_z * chains[1] + z2 * (chains[2] + big_z * chains[3]);
-        // (1/√π as a product: a division costs as much as four terms of the series)
-        2.0 * p * inv * inv + inv * (0.5 * FRAC_2_SQRT_PI)
+        // p = (c0 + Z c1) + Z² (c2 + Z c3)
+        let p =
+            mul_add_fused(z2, mul_add_fused(big_z, chains[3], chains[2]), mul_add_fused(big_z, chains[1], chains[0]));
+        // 2p/(L − iζ)² + 1/(√π (L − iζ)) (1/√π as a product: a division costs as much as four
+        // terms of the series)
+        mul_add_fused(mul_fused(2.0 * p, inv), inv, inv * (0.5 * FRAC_2_SQRT_PI))
     }
 }
 
@@ -135,17 +141,18 @@ impl Erfcx {
         let (zeta_re, zeta_im) = (-z.im, z.re);
         let denominator = Complexes { re: l + zeta_im, im: -zeta_re };
         let inv = denominator.inv();
-        let big_z = Complexes { re: l - zeta_im, im: zeta_re }.mul(inv);
-        let z2 = big_z.mul(big_z);
-        let y = z2.mul(z2);
+        let big_z = Complexes { re: l - zeta_im, im: zeta_re }.mul_fused(inv);
+        let z2 = big_z.mul_fused(big_z);
+        let y = z2.mul_fused(z2);
         let mut chains = [Complexes::<V>::ZERO; 4];
         for block in self.coefficients[..self.terms].chunks_exact(4).rev() {
             for (acc, &b) in chains.iter_mut().zip(block) {
                 *acc = acc.mul_add_real(y, V::splat(b));
             }
         }
-        let p = chains[0].add(big_z.mul(chains[1])).add(z2.mul(chains[2].add(big_z.mul(chains[3]))));
-        Some(p.scale(V::splat(2.0)).mul(inv).mul(inv).add(inv.scale(V::splat(0.5 * FRAC_2_SQRT_PI))))
+        let p = z2.mul_add(big_z.mul_add(chains[3], chains[2]), big_z.mul_add(chains[1], chains[0]));
+        let twice_p_inv = p.scale(V::splat(2.0)).mul_fused(inv);
+        Some(twice_p_inv.mul_add(inv, inv.scale(V::splat(0.5 * FRAC_2_SQRT_PI))))
     }
 }
 

@@ -18,6 +18,9 @@
 
 use std::sync::{Arc, Mutex};
 
+// no code: its dependency features let the wheel share the test build's (workspace-hack/Cargo.toml)
+use workspace_hack as _;
+
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyTypeError, PyValueError};

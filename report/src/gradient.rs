@@ -3463,9 +3463,11 @@ mod tests {
     /// At (1°, 0.6°) a 10 nm band (3 spectral panels where the set of orders changes, against 8
     /// over the example's 50 nm) makes each 1e-10 evaluation eight times cheaper on the same
     /// lane: ∂M̄/∂θx is −2.10e-3 per degree there against −2.21e-3 over 50 nm, the other orders'
-    /// images (m ≠ p, lateral colour f0 tan θ (p/m − 1) at λ0) as far apart (measured 6.5e-6 of
-    /// the norm). Along x the example's band: on the 10 nm band ∂M̄/∂θx at 1e-6 is 1.6e-5 of
-    /// the norm off there.
+    /// images (m ≠ p, lateral colour f0 tan θ (p/m − 1) at λ0) as far apart (measured 1.7e-8 of
+    /// the norm, 6.5e-6 on the value's rules alone). Along x on the
+    /// same band (∂M̄/∂θx −2.106e-3 per degree): the value's rules alone left it 1.6e-5 of the
+    /// norm off, the field lanes' second pass (spectral and frequency rules at q ε) 2.9e-7
+    /// (docs/physics.md, "Gradients: the field point").
     #[test]
     fn harmonic_field_gradient_matches_central_differences() {
         let harmonic = example("harmonic.toml");
@@ -3483,7 +3485,8 @@ mod tests {
             1e-6,
         );
         assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0) && g.d_photoelectrons.iter().all(|d| *d < 0.0), "{g:?}");
-        let g = check_field_of(&harmonic, &["field.x_deg=1"], &["field.x_deg", "field.y_deg"], 0.02, 1e-6);
+        let along_x = ["spectrum.range_nm=10", "field.x_deg=1"];
+        let g = check_field_of(&harmonic, &along_x, &["field.x_deg", "field.y_deg"], 0.02, 1e-6);
         assert!(g.d_mean_mtf[0] != 0.0 && g.d_mean_mtf[1].abs() <= 1e-9 * g.d_mean_mtf[0].abs(), "{g:?}");
     }
 
@@ -3518,27 +3521,33 @@ mod tests {
     /// (steps 0.5° and 0.25°: the oblique aberrations turn on a scale of degrees) of
     /// evaluations at 1e-5, the FFT path's tightest practical tolerance here (it reaches about
     /// 1e-5 at its 1354 samples), within 10× the gradient's 1e-4 of the norm for ASNR, mean MTF,
-    /// SNR0 and N. A 4 nm band keeps the references to seconds each; at 5° along x (∂/∂θy = 0
-    /// there: the pupil is symmetric about x) and at (5°, 3°).
+    /// SNR0 and N. A 1 nm band keeps the references to seconds each; at 5° along x (∂/∂θy = 0
+    /// there: the pupil is symmetric about x) and at (5°, 3°). The band's spectral rule is the
+    /// same there as at 4 nm (one interpolated panel, 6 nodes against 10, the pupil's 1604
+    /// samples against 1600 at the references' 1e-5: `asnr evaluate --json`'s `spectral_nodes`
+    /// and `engine`), so each node's oblique wave and lateral colour still ride the lanes, at
+    /// some 40 % less time per reference evaluation.
     #[test]
     fn phase_lens_field_gradient_matches_converged_differences() {
         let binary2 = example("phase-binary2.toml");
         for at in [["field.x_deg=5", "field.y_deg=0"], ["field.x_deg=5", "field.y_deg=3"]] {
             let mut overrides =
-                vec!["spectrum.range_nm=4", "lens.relative_illumination=\"cos4\"", "camera.read_noise_e=2"];
+                vec!["spectrum.range_nm=1", "lens.relative_illumination=\"cos4\"", "camera.read_noise_e=2"];
             overrides.extend(at);
             let g = check_field_against(&binary2, &overrides, &["field.x_deg", "field.y_deg"], 0.25, 1e-4, 1e-5);
             assert!(g.d_mean_mtf[0] < 0.0 && g.d_photoelectrons.iter().all(|d| *d <= 0.0), "{g:?}");
         }
     }
 
-    /// The library lens of `examples/library.toml` at (5°, 3°) on a 4 nm band with cos⁴θ, as
-    /// [`phase_lens_field_gradient_matches_converged_differences`].
+    /// The library lens of `examples/library.toml` at (5°, 3°) on a 1 nm band with cos⁴θ, as
+    /// [`phase_lens_field_gradient_matches_converged_differences`] (its spectral rule at 1 nm:
+    /// two interpolated panels, 12 nodes, 1604 pupil samples at the references' 1e-5; the test
+    /// takes about a quarter less time than at 4 nm).
     #[test]
     fn library_lens_field_gradient_matches_converged_differences() {
         let library = example("library.toml");
         let overrides = [
-            "spectrum.range_nm=4",
+            "spectrum.range_nm=1",
             "field.x_deg=5",
             "field.y_deg=3",
             "lens.relative_illumination=\"cos4\"",
@@ -3718,7 +3727,10 @@ mod tests {
     /// scaling the OTF's frequencies (`∂M̄/∂ln p = MTF(ν_N) − M̄`, the stack's 2-D OTF averaged
     /// over azimuth; with the pixel MTF, by parts `P(ν_N)|O(ν_N)| − M̄ − P_ν`), in both forms with
     /// the stray light, against central differences of converged evaluations; a slice's
-    /// wavelength is refused.
+    /// wavelength is refused. The differences on a 5 nm band: the same slices' OTFs blended
+    /// between their wavelengths on the same rule (6 spectral panels, 36 nodes, against 26 and
+    /// 156 over the example's 50 nm: `asnr evaluate --json`), each 1e-10 reference some five
+    /// times cheaper.
     #[test]
     fn psf_stack_keys_match_central_differences() {
         let source = example("psf-stack.toml");
@@ -3730,8 +3742,9 @@ mod tests {
             "lens.psf_pitch_um",
             "exposure.time_ms",
         ];
-        check_against_differences(&source, &[], &keys);
-        check_against_differences(&source, &owned(&INTEGRAL_WITH_GLARE), &keys);
+        let narrow = "spectrum.range_nm=5";
+        check_against_differences(&source, &owned(&[narrow]), &keys);
+        check_against_differences(&source, &joined(&INTEGRAL_WITH_GLARE, &[narrow]), &keys);
         let g = gradient(&source, &[], &owned(&["lens.focal_length_mm"])).unwrap();
         assert_eq!((g.d_asnr[0], g.d_photoelectrons[0]), (0.0, 0.0));
         let e = gradient(&source, &[], &owned(&["lens.psf_wavelengths_nm[3]"])).unwrap_err().to_string();
@@ -3740,7 +3753,7 @@ mod tests {
         // 2-D OTF, over azimuth on the value's adaptive rule)
         check_against_differences(
             &source,
-            &owned(&PIXEL_AND_READ_NOISE),
+            &joined(&PIXEL_AND_READ_NOISE, &[narrow]),
             &["lens.psf_pitch_um", "camera.pixel_pitch_um"],
         );
     }
@@ -4098,12 +4111,16 @@ mod tests {
     /// spectrum": the radial engine's lanes on the value's noise-weighted pass, each divided by
     /// n(ν), its frequency rule cut at the table's rows) against central differences of
     /// evaluations converged at 1e-10, within 10× the scene's tolerance (1e-6) of the gradient's
-    /// norm, and apart from the white lanes (measured 6.9e-8 and 1.8e-6 of the norm; knot 3,
-    /// 8.3e-9, left out: each reference at 1e-10 takes some 4 s).
+    /// norm, and apart from the white lanes (measured 1.5e-7–3.2e-7 of the norm on the 10 nm
+    /// band, 6.9e-8–1.8e-6 over 50 nm; knot 3, 8.3e-9, left out: each reference at 1e-10 took
+    /// some 4 s over 50 nm). On a 10 nm band: the same
+    /// per-frequency product rule and noise-weighted pass as over the example's 50 nm, each
+    /// 1e-10 reference some six times cheaper (as in
+    /// [`frequency_scale_keys_under_a_noise_spectrum_match_central_differences`]).
     #[test]
     fn spline_knots_under_a_noise_spectrum_match_central_differences() {
         let source = with_noise_spectrum(&example("phase-binary2.toml"), "spline");
-        let knots = owned(&["lens.phase_spline_rad=[0.0, 0.4, -0.3, 0.5]"]);
+        let knots = owned(&["lens.phase_spline_rad=[0.0, 0.4, -0.3, 0.5]", "spectrum.range_nm=10"]);
         let keys = owned(&["lens.phase_spline_rad[1]", "lens.phase_spline_rad[2]"]);
         let (g, _) = check_wavefront(&source, &knots, &keys, &phase_or_knot_step);
         assert_weighted(&g);
@@ -4287,12 +4304,16 @@ mod tests {
     /// checks it: Richardson of steps 0.1 and 0.05 nm of evaluations converged at 1e-10, the ASNR
     /// within 10× the tolerance 1e-6 of its gradient (N's, mostly) and the weighted mean
     /// G = ASNR/SNR0's own derivative (∂ASNR − ∂SNR0 G)/SNR0 within the same bound over SNR0
-    /// (the white ∂M̄ is 1e-6 per nm away from it), beside the differences' own error.
+    /// (the white ∂M̄ is 1e-6 per nm away from it), beside the differences' own error. On a
+    /// 10 nm band: the same lane on the same reference rule, weighted, in 6 spectral panels of
+    /// 102 nodes against the example's 22 of 374 over 50 nm (`asnr evaluate --json` at 1e-10),
+    /// each 1e-10 reference some six times cheaper.
     #[test]
     fn library_bias_under_a_noise_spectrum_matches_central_differences() {
         let source = with_noise_spectrum_beside(&example("library.toml"), "bias");
         let key = "lens.parameter_bias[0]";
-        let overrides = owned(&["lens.library_interpolation=\"cubic\"", "lens.parameter_bias=[0.3]"]);
+        let overrides =
+            owned(&["lens.library_interpolation=\"cubic\"", "lens.parameter_bias=[0.3]", "spectrum.range_nm=10"]);
         let g = gradient(&source, &overrides, &owned(&[key])).unwrap();
         let weighted = |v: f64| {
             let [asnr, _, snr0, _] = converged(&source, &overrides, key, v);

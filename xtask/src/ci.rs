@@ -21,7 +21,7 @@ const STEPS: &[Step] = &[
     Step { name: "clippy", run: clippy },
     Step { name: "test", run: test },
     Step {
-        name: "python (the portable wheel, built and checked, in a fresh venv without Rust: pytest, README blocks)",
+        name: "python (the x86-64-v3 abi3 wheel from the test build, checked, in a fresh venv without Rust: pytest, README blocks)",
         run: python,
     },
     Step { name: "emva (asnr characterize against the emva1288 camera model)", run: emva },

@@ -20,6 +20,7 @@ const ALONE: &[(&str, &[&str])] = &[
     ("cargo run -p custom-lens", &["-p", "custom-lens", "-e", "normal,build"]),
     ("cargo test -p custom-lens", &["-p", "custom-lens", "-e", "normal,build,dev"]),
     ("cargo run -p asnr-scene --example", &["-p", "asnr-scene", "-e", "normal,build,dev"]),
+    ("maturin build (python/)", &["-p", "asnr-python", "-e", "normal,build"]),
 ];
 
 /// A resolved graph: each package's name and the features on it.

@@ -1,7 +1,9 @@
 //! `cargo xtask python`: the Python package as a user gets it, tested (part of `cargo xtask ci`).
 //!
-//! 1. The portable wheel, built and checked as by `cargo xtask wheel` (`wheel.rs`), in the
-//!    lighter Cargo profile `wheel-ci` (opt-level 2, no line tables; Cargo.toml).
+//! 1. The wheel, built for x86-64-v3 and checked (abi3, the disassembly) as by `cargo xtask wheel`
+//!    (`wheel.rs`), but from the test build: its `dev` profile and, under `.ci/run`'s `RUSTFLAGS`,
+//!    its compiled dependencies, linked by the system's linker (`wheel::Kind::Test`; the glibc
+//!    baseline is `cargo xtask wheel`'s check).
 //! 2. A fresh virtual environment, `target/python-venv` (made anew each run), into which pip
 //!    installs the wheel with its extras, `asnr-….whl[plot,dask,jax]`, pytest and gdstk (the
 //!    GDS writer of `python/tests/test_gds.py`), every version pinned by the constraints file
@@ -41,7 +43,7 @@ const LOSS_EXAMPLE: &str = "examples/python/asnr_in_a_loss.py";
 
 /// Build the wheel, install it into a fresh environment, run the tests and the README's Python.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let wheel = crate::wheel::build(root, crate::wheel::CI)?;
+    let wheel = crate::wheel::build(root, crate::wheel::Kind::Test)?;
     let asnr = cmd::debug_binaries(root)?.join(format!("asnr{}", std::env::consts::EXE_SUFFIX));
     let dir = root.join(VENV);
     if !cmd::status(Command::new("python3").args(["-m", "venv", "--clear"]).arg(&dir))? {

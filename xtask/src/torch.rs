@@ -27,7 +27,7 @@ const REQUIREMENTS: &str = "python/requirements-torch.txt";
 
 /// Build the wheel, install it beside torch, run the torch bridge's tests.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let wheel = crate::wheel::build(root, crate::wheel::CI)?;
+    let wheel = crate::wheel::build(root, crate::wheel::Kind::Test)?;
     cmd::run(&mut cmd::cargo(root, &["build", "--quiet", "--locked", "--package", "asnr", "--bin", "asnr"]))?;
     let started = std::time::Instant::now();
     let python = cmd::venv(root, VENV, REQUIREMENTS, "torch, numpy, pytest")?;

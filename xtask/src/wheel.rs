@@ -7,12 +7,18 @@
 //!   AVX2 and FMA (Intel since 2013, AMD since 2015) and not only on the machine that built it.
 //!   zig links against glibc 2.17 symbol versions (manylinux2014), whatever the build machine's
 //!   glibc. One wheel serves every CPython ≥ 3.10 (abi3).
-//!   `cargo xtask python` and `cargo xtask torch` build the same wheel in the profile `wheel-ci`
-//!   (`--profile wheel-ci`: opt-level 2, no line tables), which compiles in less time.
 //! - **Checks**: `auditwheel show` must find the manylinux_2_17 tag; `abi3audit --strict` must
 //!   find no symbol outside the 3.10 stable ABI; and the extension's disassembly (`objdump -d`)
 //!   must hold no instruction beyond x86-64-v3: no zmm register, no mask register and no
 //!   ymm16–31/xmm16–31 (all AVX-512 only).
+//!
+//! `cargo xtask python` (a step of CI) and `cargo xtask torch` build [`Kind::Test`]: the same
+//! code for the same CPU level and the same abi3 and instruction checks, but compiled by the test
+//! build (the `dev` profile, opt-level 2, in `target/` when the build's `RUSTFLAGS` are already
+//! [`RUSTFLAGS`], as `.ci/run` sets them), so that CI compiles only the extension and pyo3 for
+//! it, and linked by the system's linker: its glibc tag is the build machine's, which only
+//! zig's sysroot can lower. The glibc baseline (manylinux_2_17) is therefore checked by
+//! `cargo xtask wheel` alone (ARCHITECTURE.md, "CI", says what that trades).
 //!
 //! No runtime dispatch: a function compiled for AVX-512 can only be called through `unsafe`
 //! (`#[target_feature]`), which the workspace forbids (`unsafe_code = "forbid"`); the native
@@ -30,32 +36,54 @@ use crate::cmd;
 
 /// The CPU level the wheel is compiled for (x86-64 hosts).
 pub(crate) const CPU: &str = "x86-64-v3";
+/// The flags that compile for [`CPU`]; `.ci/run` exports them for the whole of CI on x86-64.
+pub(crate) const RUSTFLAGS: &str = "-C target-cpu=x86-64-v3";
 /// The tools' virtual environment, relative to the workspace root.
 const TOOLS_VENV: &str = "target/wheel-tools-venv";
 /// The tools, pinned.
 const TOOLS: &str = "python/requirements-wheel.txt";
-/// Cargo's target directory for the wheel's build (other flags than the workspace's).
+/// Cargo's target directory for the users' wheel (other flags and profile than the workspace's).
 const TARGET_DIR: &str = "target/wheel";
+/// Cargo's target directory for the test wheel when the build's own flags are not [`RUSTFLAGS`]
+/// (a developer's native build, left as it is).
+const TEST_TARGET_DIR: &str = "target/wheel-test";
 /// Where the wheel is written.
 const OUT: &str = "target/wheels";
 /// The glibc baseline: the manylinux tag maturin builds for and auditwheel must confirm.
 const MANYLINUX: &str = "manylinux_2_17_x86_64";
 
-/// The Cargo profile of the wheel for users (`cargo xtask wheel`).
-pub(crate) const RELEASE: &str = "release";
-/// The Cargo profile of the wheel CI builds and tests (`cargo xtask python`; the workspace's
-/// Cargo.toml says how it differs from release).
-pub(crate) const CI: &str = "wheel-ci";
+/// Which wheel to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kind {
+    /// The wheel for users (`cargo xtask wheel`): release profile, linked by zig against glibc
+    /// 2.17 (manylinux2014), in its own target directory.
+    Release,
+    /// The wheel CI installs and tests (`cargo xtask python`, `cargo xtask torch`): the test
+    /// build's `dev` profile and, when its flags are [`RUSTFLAGS`], its artifacts; the system's
+    /// linker, so the glibc tag is the build machine's.
+    Test,
+}
 
 /// `cargo xtask wheel`: build and check the wheel, print its path.
 pub(crate) fn run(root: &Path) -> Result<()> {
-    let wheel = build(root, RELEASE)?;
+    let wheel = build(root, Kind::Release)?;
     println!("{}", wheel.display());
     Ok(())
 }
 
-/// Builds the wheel in the Cargo profile `profile`, checks it, and returns its path.
-pub(crate) fn build(root: &Path, profile: &str) -> Result<PathBuf> {
+/// The target directory of the test wheel: the workspace's own when the environment's
+/// `RUSTFLAGS` are [`RUSTFLAGS`] (CI: the test build's dependencies are reused, not compiled
+/// again), else one of its own, so that a native build is not overwritten by another CPU level.
+fn test_target_dir(root: &Path, rustflags: Option<&str>) -> PathBuf {
+    if rustflags.is_some_and(|flags| flags.trim() == RUSTFLAGS) {
+        crate::accuracy::target_dir(root)
+    } else {
+        root.join(TEST_TARGET_DIR)
+    }
+}
+
+/// Builds the wheel of `kind`, checks it, and returns its path.
+pub(crate) fn build(root: &Path, kind: Kind) -> Result<PathBuf> {
     let python = cmd::venv(root, TOOLS_VENV, TOOLS, "auditwheel, abi3audit, ziglang").context("the wheel tools")?;
     let bin = python.parent().context("the venv's bin folder")?.to_path_buf();
     let out = root.join(OUT);
@@ -66,27 +94,30 @@ pub(crate) fn build(root: &Path, profile: &str) -> Result<PathBuf> {
         std::iter::once(bin.clone()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
     )?;
     let mut maturin = Command::new(bin.join("maturin"));
+    maturin.args(["build", "--locked", "--strip"]);
+    let target_dir = match kind {
+        Kind::Release => {
+            maturin.args(["--profile", "release", "--zig", "--compatibility", "manylinux2014"]);
+            root.join(TARGET_DIR)
+        }
+        Kind::Test => {
+            maturin.args(["--profile", "dev"]);
+            test_target_dir(root, std::env::var("RUSTFLAGS").ok().as_deref())
+        }
+    };
     maturin
-        .args([
-            "build",
-            "--profile",
-            profile,
-            "--locked",
-            "--strip",
-            "--zig",
-            "--compatibility",
-            "manylinux2014",
-            "--out",
-        ])
+        .arg("--out")
         .arg(&out)
         .current_dir(root.join("python"))
-        .env("CARGO_TARGET_DIR", root.join(TARGET_DIR))
+        .env("CARGO_TARGET_DIR", target_dir)
         .env("PATH", path);
     let x86_64 = cfg!(target_arch = "x86_64");
     if x86_64 {
-        maturin.env("RUSTFLAGS", format!("-C target-cpu={CPU}"));
+        maturin.env("RUSTFLAGS", RUSTFLAGS);
     }
+    let started = std::time::Instant::now();
     cmd::run(&mut maturin)?;
+    eprintln!("wheel: built in {:.1} s", started.elapsed().as_secs_f64());
     let wheels: Vec<PathBuf> = std::fs::read_dir(&out)?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "whl"))
@@ -94,10 +125,14 @@ pub(crate) fn build(root: &Path, profile: &str) -> Result<PathBuf> {
     let [wheel] = wheels.as_slice() else { bail!("{OUT}: expected one wheel, found {}", wheels.len()) };
 
     let show = output(Command::new(bin.join("auditwheel")).arg("show").arg(wheel))?;
-    if x86_64 && !show.contains(&format!("\"{MANYLINUX}\"")) {
-        bail!("auditwheel show {}: not consistent with {MANYLINUX}:\n{show}", wheel.display());
+    if x86_64 && kind == Kind::Release {
+        if !show.contains(&format!("\"{MANYLINUX}\"")) {
+            bail!("auditwheel show {}: not consistent with {MANYLINUX}:\n{show}", wheel.display());
+        }
+        eprintln!("auditwheel: consistent with {MANYLINUX}");
+    } else {
+        eprintln!("auditwheel (the build machine's glibc; the baseline is `cargo xtask wheel`'s):\n{}", show.trim());
     }
-    eprintln!("auditwheel: consistent with {MANYLINUX}");
     cmd::run(Command::new(bin.join("abi3audit")).args(["--strict", "--summary"]).arg(wheel))?;
     if x86_64 {
         check_instructions(&python, wheel)?;
@@ -183,7 +218,16 @@ fn avx512_register(instruction: &str) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::beyond_v3;
+    use super::{RUSTFLAGS, TEST_TARGET_DIR, beyond_v3, test_target_dir};
+
+    #[test]
+    fn the_test_wheel_shares_the_target_directory_only_with_its_own_flags() {
+        let root = std::path::Path::new("/w");
+        let own = root.join(TEST_TARGET_DIR);
+        assert_eq!(test_target_dir(root, None), own);
+        assert_eq!(test_target_dir(root, Some("-C target-cpu=native")), own);
+        assert_eq!(test_target_dir(root, Some(&format!(" {RUSTFLAGS} "))), crate::accuracy::target_dir(root));
+    }
 
     #[test]
     fn avx512_registers_are_found_and_v3_code_passes() {

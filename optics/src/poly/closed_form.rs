@@ -107,34 +107,38 @@ impl Closed {
     ) -> Closed {
         let (mu, sigma) = (closed.center(), closed.sigma());
         let (lo, hi) = ((mu - 10.0 * sigma).max(0.0), mu + 10.0 * sigma);
+        let densities = band_densities(detected, lo, hi);
+        // the nodes' wavelengths and rule weights first, then the samples and the nodes each
+        // collected from them (written in place, where pushing a node at a time built each on
+        // the stack and copied it: 4 % of the paper point)
+        let mut at = [(0.0, 0.0); 8 * quad::ORDER];
+        let mut count = 0;
+        quad::for_each_node(lo, hi, 8, |lambda, q| {
+            at[count] = (lambda, q * densities.get(count).copied().unwrap_or(f64::NAN));
+            count += 1;
+        });
+        let at = &at[..count];
+        let node = |&(lambda, q_rho): &(f64, f64)| Node {
+            lambda,
+            weight: q_rho * affine.efficiency,
+            w020: affine.w020_intercept_m + affine.w020_slope * lambda,
+            scale: 1.0,
+            shift: [0.0, 0.0],
+            shift_rate: None,
+            iris_shift: [0.0; 2],
+            iris_rate: 0.0,
+            iris_tilt: [0.0; 2],
+            table: None,
+            radial: None,
+            part: WHOLE,
+            order: 0,
+            efficiency: affine.efficiency,
+        };
         let mut nodes = Nodes {
-            nodes: Vec::with_capacity(8 * quad::ORDER),
-            samples: Vec::with_capacity(8 * quad::ORDER),
+            nodes: at.iter().map(node).collect(),
+            samples: at.iter().map(|&(lambda, q_rho)| (lambda, q_rho, WHOLE)).collect(),
             ..Nodes::default()
         };
-        let densities = band_densities(detected, lo, hi);
-        let mut read = densities.iter();
-        quad::for_each_node(lo, hi, 8, |lambda, q| {
-            let density = read.next().copied().unwrap_or(f64::NAN);
-            let q_rho = q * density;
-            nodes.samples.push((lambda, q_rho, WHOLE));
-            nodes.nodes.push(Node {
-                lambda,
-                weight: q_rho * affine.efficiency,
-                w020: affine.w020_intercept_m + affine.w020_slope * lambda,
-                scale: 1.0,
-                shift: [0.0, 0.0],
-                shift_rate: None,
-                iris_shift: [0.0; 2],
-                iris_rate: 0.0,
-                iris_tilt: [0.0; 2],
-                table: None,
-                radial: None,
-                part: WHOLE,
-                order: 0,
-                efficiency: affine.efficiency,
-            });
-        });
         nodes.panels.push(Panel { lo, hi, start: 0, end: nodes.nodes.len(), part: WHOLE });
         nodes.densities = Some(densities.to_vec());
         nodes.total_weight = closed.total_weight();

@@ -241,6 +241,19 @@ impl OtfEngine for Quadrature<'_> {
         self.scene.f_number
     }
 
+    /// The largest `2π ν |∂Δ/∂θ|` over the nodes (each order at each wavelength its own rate,
+    /// far orders included whatever their weight) and the frequencies read, as the overlap
+    /// engine's: the field angles' lanes are each node's turned value times `i k u·∂Δ/∂θ`.
+    fn field_lane_bound(&self) -> Option<f64> {
+        let top = self.scene.max_frequency.min(self.max_cutoff());
+        let mut largest = 0.0_f64;
+        for node in &self.nodes.nodes {
+            let [rx, ry] = node.shift_rate?;
+            largest = largest.max(rx.abs()).max(ry.abs());
+        }
+        Some(2.0 * PI * top * largest)
+    }
+
     fn otf(&self, frequency: f64) -> f64 {
         let mut sum = 0.0;
         // along +x: a tabulated order's direction relative to the field's

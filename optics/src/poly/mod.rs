@@ -204,6 +204,11 @@ pub struct Settings {
     /// the value's times the lateral colour's rate (docs/physics.md, "Gradients: the field
     /// point").
     pub spectral_tolerance: Option<f64>,
+    /// The adaptive frequency rule's own tolerance where it is tighter than `tolerance` (`None`:
+    /// follow `tolerance`): a field angle's gradient on the exact 1-D engine asks for it beside
+    /// `spectral_tolerance`, its panels accepting on the value alone (docs/physics.md,
+    /// "Gradients: the field point").
+    pub frequency_tolerance: Option<f64>,
     /// Whether every order that is the full circle with a polynomial wavefront goes to the
     /// overlap engine ([`Engine::Overlap`]), a defocus alone too (no closed form, no exact 1-D
     /// path; a line's one wavelength too, where no order needs the grids): the Seidel gradient
@@ -234,6 +239,7 @@ impl Default for Settings {
             exact_irises: true,
             overlap: true,
             spectral_tolerance: None,
+            frequency_tolerance: None,
             overlap_always: false,
             table_rule: crate::radial::TableRule::Tensor,
             edge_lane: false,
@@ -332,7 +338,7 @@ trait OtfEngine: std::fmt::Debug {
     /// A bound on how much a field angle's lane amplifies the value: the largest
     /// `2π ν |∂Δ/∂θ|` (per radian) over the nodes and the frequencies read, where the engine
     /// carries the field angles' lanes as each node's value times `−2πi ν u·∂Δ/∂θ` (the overlap
-    /// engine); `None` elsewhere.
+    /// engine, the exact 1-D engine); `None` elsewhere.
     fn field_lane_bound(&self) -> Option<f64> {
         None
     }
@@ -573,7 +579,7 @@ pub struct Polychromatic<'a> {
     /// the lens, the detected spectrum and the factored parts ([`with_parts`](Self::with_parts)),
     /// the field, the F-number, the frequency limit and the pixel pitch
     scene: Scene<'a>,
-    /// the settings' tolerance (the frequency rule's)
+    /// the settings' tolerance, or their `frequency_tolerance` where tighter (the frequency rule's)
     asked_tolerance: f64,
     /// the tolerance the engine worked to ([`Polychromatic::tolerance`])
     engine_tolerance: f64,
@@ -676,6 +682,9 @@ fn defocus_beyond(mut signal: Vec<(f64, f64)>, relevant: f64) -> f64 {
 /// `(|W020|, signal)` of each node of `part` ([`resolved_defocus`]) appended to `signal`;
 /// `detected` is the part's spectrum.
 fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec<(f64, f64)>) {
+    if part_signal_in_step(nodes, part, signal) {
+        return;
+    }
     let mut samples: Vec<(f64, f64)> = Vec::with_capacity(nodes.samples.len());
     samples.extend(nodes.samples.iter().filter(|s| s.2 == part && s.0.is_finite()).map(|s| (s.0, s.1)));
     // (the rules emit their samples in order: no sort then, the same order a stable sort keeps)
@@ -742,6 +751,36 @@ fn part_signal(nodes: &Nodes, part: usize, detected: &Spectrum, signal: &mut Vec
         };
         signal.push((n.w020.abs(), mass));
     }
+}
+
+/// [`part_signal`] where the nodes and the samples go in step: one node a sample, at the
+/// sample's wavelength, all of `part`, strictly ascending and finite, with the densities the
+/// engine read (the closed form's nodes). Each node's signal is then its own density and its
+/// neighbours', read by index: the same numbers in the same order as the searches of the
+/// general way find them, without its four vectors (test `part_signal_shortcuts_match_the_reference`).
+/// Returns `false`, having appended nothing, where the nodes are not so.
+fn part_signal_in_step(nodes: &Nodes, part: usize, signal: &mut Vec<(f64, f64)>) -> bool {
+    let (samples, list) = (&nodes.samples, &nodes.nodes);
+    let n = samples.len();
+    let Some(densities) = nodes.densities.as_deref().filter(|d| d.len() == n && list.len() == n && n >= 3) else {
+        return false;
+    };
+    let in_step = samples.iter().zip(list).enumerate().all(|(i, (s, node))| {
+        s.2 == part && node.part == part && s.0.is_finite() && node.lambda == s.0 && (i == 0 || samples[i - 1].0 < s.0)
+    });
+    if !in_step {
+        return false;
+    }
+    signal.reserve(n);
+    for (i, (s, node)) in samples.iter().zip(list).enumerate() {
+        let w = s.1;
+        let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+        let density = densities[lo..=hi].iter().map(|d| d.abs()).fold(0.0, f64::max);
+        let m = density * 0.5 * (samples[hi].0 - samples[lo].0);
+        let mass = if w != 0.0 && m.is_finite() { m * (node.weight / w).abs() } else { node.weight.abs() };
+        signal.push((node.w020.abs(), mass));
+    }
+    true
 }
 
 /// The engine for a scene: the closed form where it applies (and is allowed), a line's engine
@@ -932,7 +971,7 @@ impl<'a> Polychromatic<'a> {
         };
         let mut this = Polychromatic {
             scene,
-            asked_tolerance: settings.tolerance,
+            asked_tolerance: settings.frequency_tolerance.map_or(settings.tolerance, |f| f.min(settings.tolerance)),
             engine_tolerance,
             engine,
             w020_max: 0.0,
@@ -967,7 +1006,8 @@ impl<'a> Polychromatic<'a> {
 
     /// The engine's bound on a field angle's lane relative to the value (the largest
     /// `2π ν |∂Δ/∂θ|` over its nodes up to the frequency limit, per radian), where its field
-    /// lanes are the nodes' values times that factor (the overlap engine); `None` elsewhere.
+    /// lanes are the nodes' values times that factor (the overlap engine and the exact 1-D
+    /// engine); `None` elsewhere.
     pub fn field_lane_bound(&self) -> Option<f64> {
         self.engine.field_lane_bound()
     }
@@ -1271,6 +1311,19 @@ mod tests {
         let mut signal = Vec::new();
         part_signal(nodes, spectral::WHOLE, &detected, &mut signal);
         assert_eq!(signal, part_signal_reference(nodes, spectral::WHOLE, &detected));
+        // (that by the nodes in step with their samples, read by index; the nodes above go the
+        // general way: two orders a wavelength, out of order, no densities)
+        let mut in_step = Vec::new();
+        assert!(part_signal_in_step(nodes, spectral::WHOLE, &mut in_step));
+        assert_eq!(in_step, signal);
+        assert!(!part_signal_in_step(nodes, 1, &mut in_step));
+        for others in [&ordered, &shuffled] {
+            assert!(!part_signal_in_step(others, 0, &mut in_step));
+        }
+        let mut without = nodes.clone();
+        without.densities = None;
+        assert!(!part_signal_in_step(&without, spectral::WHOLE, &mut in_step));
+        assert_eq!(in_step, signal, "nothing appended where the nodes are not in step");
         // (and the signal integrals in one pass are each `detected_integral`'s sum, to the bit)
         let three = |l: f64| [1.0, l * 1e6, (l * 1e7).sin()];
         let together = poly.detected_integrals(three).unwrap();
