@@ -1401,7 +1401,8 @@ fn spectral_partials_over(
         radiometry::Spectrum::product(vec![detected.clone(), linear.clone()]),
         radiometry::Spectrum::product(vec![detected, linear.clone(), linear]),
     ];
-    let levels = spectral_engines(lens, &spectra, field, nyquist, settings)?;
+    let shared = optics::SharedGrids::new();
+    let levels = spectral_engines(lens, &spectra, field, nyquist, settings, &shared)?;
     let engines = &levels[0].1;
     let a: Vec<f64> = engines.iter().map(optics::Polychromatic::total_weight).collect();
     let d_ln_n_c = engines[0].spectral_average(|l, _| (l - c) / (sigma * sigma));
@@ -1418,7 +1419,7 @@ fn spectral_partials_over(
             let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
             let mut sum = [0.0; 3];
             for ((share, level), a) in levels.iter().zip(&weights) {
-                let o: Vec<_> = level.iter().map(|eng| eng.otf_along(nu, azimuth)).collect();
+                let o = optics::Polychromatic::otf_along_together(level, nu, azimuth);
                 let (d1, d2) = (o[1] - o[0], o[2] - o[0]);
                 let dc = d1 * (a[1] / (sigma * sigma * a[0]));
                 let ds = (d2 * a[2] - d1 * (2.0 * c * a[1])) / (sigma.powi(3) * a[0]);
@@ -1555,16 +1556,20 @@ fn spectral_lanes_on_value_rule(scene: &Scene, e: &Evaluation, c: f64, sigma: f6
 /// [`optics::fft::RICHARDSON_ORDER`]), the three at `N/2` too, the levels' shares
 /// `1 + 1/(2^p − 1)` and `−1/(2^p − 1)`: the derivative of the extrapolated mean is the
 /// extrapolation of the levels' derivatives. The cost is that of the grids: about three times
-/// the value's (the first engine's sampling choice, two more at `N`, three at `N/2`).
+/// the value's (the first engine's sampling choice, two more at `N`, three at `N/2`), less the
+/// grids they share through `shared` ([`optics::SharedGrids`]: a spectral node at the same
+/// wavelength and sampling is one grid for the three, and the first engine's own levels serve
+/// the others' `N/2`).
 fn spectral_engines<'a>(
     lens: &'a dyn optics::LensModel,
     spectra: &'a [radiometry::Spectrum],
     field: optics::Field,
     nyquist: f64,
     settings: optics::Settings,
+    shared: &'a optics::SharedGrids,
 ) -> Result<Vec<(f64, Vec<optics::Polychromatic<'a>>)>, Error> {
     let build = |s: &'a radiometry::Spectrum, settings: optics::Settings| {
-        optics::Polychromatic::with_settings(lens, s, field, nyquist, None, settings)
+        optics::Polychromatic::with_shared_grids(lens, s, field, nyquist, None, settings, shared)
     };
     let first = build(&spectra[0], settings)?;
     let optics::Engine::Fft { pupil_samples, coarse, extrapolated, .. } = first.engine() else {
@@ -1583,9 +1588,13 @@ fn spectral_engines<'a>(
         Some(half) => {
             let r = 1.0 / (2f64.powf(optics::fft::RICHARDSON_ORDER) - 1.0);
             let coarse = spectra.iter().map(|s| build(s, at(half))).collect::<Result<Vec<_>, _>>()?;
+            shared.forget();
             Ok(vec![(1.0 + r, fine), (-r, coarse)])
         }
-        None => Ok(vec![(1.0, fine)]),
+        None => {
+            shared.forget();
+            Ok(vec![(1.0, fine)])
+        }
     }
 }
 

@@ -797,7 +797,7 @@ pub(crate) fn gradient_and_evaluation(
     if keys.is_empty() {
         bail!("no key to differentiate with respect to: give one or more --wrt KEY");
     }
-    let table = crate::objective::resolved(source, overrides)?;
+    let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
     let expanded = expand(source, &table, keys)?;
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
     let shape = lookup(&table, "spectrum.shape").and_then(toml::Value::as_str).unwrap_or("").to_owned();
@@ -824,7 +824,6 @@ pub(crate) fn gradient_and_evaluation(
         // every key's derivative is 0 (a key the value does not depend on): the evaluation alone
         parameters.push(Parameter::SignalScale);
     }
-    let built = scene::build_from(source, overrides)?;
     let g = metric::gradient(&built, &parameters).map_err(|e| engine_refusal(source, &expanded, &chains, e))?;
     // ∂/∂key = Σ c ∂/∂p over the key's chain
     let per_key = |d: &[f64]| -> Vec<f64> {

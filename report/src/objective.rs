@@ -261,6 +261,17 @@ pub(crate) fn resolved(source: &Source, overrides: &[String]) -> Result<toml::Ta
     text.parse::<toml::Table>().map_err(|e| anyhow!("internal error: the resolved scene is not TOML: {e}"))
 }
 
+/// [`resolved`] and the scene it validated, built once ([`scene::resolved_and_built`]: the
+/// scene is `scene::build_from`'s).
+pub(crate) fn resolved_and_built(source: &Source, overrides: &[String]) -> Result<(toml::Table, metric::Scene)> {
+    let (resolved, built) = scene::resolved_and_built(source, overrides)?;
+    let table = resolved
+        .toml
+        .parse::<toml::Table>()
+        .map_err(|e| anyhow!("internal error: the resolved scene is not TOML: {e}"))?;
+    Ok((table, built))
+}
+
 /// The value of the numeric key `key` (dotted, `lens.binary2[2]` for a list's entry) in the
 /// scene with `overrides`, every default filled in (`asnr scene`): refused, naming the key, when
 /// the scene has no such key or its value is not a number.

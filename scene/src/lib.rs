@@ -80,7 +80,7 @@ pub use load::{
 pub use origins::{
     ARRAY_KEYS, EXPOSURE_PLAUSIBLE_MS, FOCAL_LENGTH_PLAUSIBLE_MM, PIXEL_PITCH_PLAUSIBLE_UM, WAVELENGTH_PLAUSIBLE_NM,
 };
-pub use resolved::{Resolved, resolved_toml};
+pub use resolved::{Resolved, resolved_and_built, resolved_toml};
 pub use tables::{Axis, CsvLines, FREQUENCY, MAX_FILE_BYTES, WAVELENGTH, read_pairs, read_table};
 
 #[cfg(test)]

@@ -1638,7 +1638,8 @@ mod tests {
         assert_eq!(unit_of("lens.f_number"), "");
     }
 
-    /// The resolved TOML of every example scene builds to the same scene: same ASNR, bit for bit.
+    /// The resolved TOML of every example scene builds to the same scene: same ASNR, bit for bit;
+    /// and `resolved_and_built` gives that TOML with `build_from`'s scene (the same ASNR).
     #[test]
     fn resolved_examples_load_to_the_same_asnr() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
@@ -1655,6 +1656,9 @@ mod tests {
             let twice = resolved_toml(&again, &[]).unwrap().toml;
             let body = |t: &str| t.lines().filter(|l| !l.starts_with("# From")).collect::<Vec<_>>().join("\n");
             assert_eq!(body(&twice), body(&text), "{name}");
+            let (resolved, built) = crate::resolved_and_built(&source, &[]).unwrap();
+            assert_eq!(body(&resolved.toml), body(&text), "{name}");
+            assert_eq!(metric::evaluate(&built).unwrap().asnr.to_bits(), a.asnr.to_bits(), "{name}");
         }
     }
 

@@ -28,9 +28,15 @@ pub struct Resolved {
 /// path resolved (absolute): what was read. It is validated (built) once, and loads again to the
 /// same scene.
 pub fn resolved_toml(source: &Source, overrides: &[String]) -> Result<Resolved, Error> {
+    Ok(resolved_and_built(source, overrides)?.0)
+}
+
+/// [`resolved_toml`] and the scene it validated, built once: the scene is
+/// [`crate::build_from`]'s of the same `source` and `overrides`.
+pub fn resolved_and_built(source: &Source, overrides: &[String]) -> Result<(Resolved, metric::Scene), Error> {
     let (raw, origins) = prepare(source, overrides)?;
-    let warnings = build_checked(&raw, &origins)?.warnings;
-    Ok(Resolved { toml: write(&raw, &origins)?, warnings })
+    let loaded = build_checked(&raw, &origins)?;
+    Ok((Resolved { toml: write(&raw, &origins)?, warnings: loaded.warnings }, loaded.scene))
 }
 
 struct Out {

@@ -1,5 +1,6 @@
-//! `cargo xtask accuracy [--quick] [--designs] [--only NAME[,NAME]]`: the accuracy-versus-time report (`--designs`: the
-//! rows of the designs given as data alone, into `target/BENCHMARKS-designs.md`; `--only`: the named
+//! `cargo xtask accuracy [--quick] [--designs] [--keys CASE[,CASE]] [--only NAME[,NAME]]`: the accuracy-versus-time report (`--designs`: the
+//! rows of the designs given as data alone, into `target/BENCHMARKS-designs.md`; `--keys`: the gradient's cost rows
+//! of the named cases of `gradients_keys` (a part of each name) alone, into `target/BENCHMARKS-keys.md`; `--only`: the named
 //! stand-alone sections alone, each replacing its own section of `BENCHMARKS.md`). Builds and runs the example
 //! `bench/src/bin/accuracy/` (`main.rs` and its modules, the `asnr-bench` crate) in release (xtask depends on no
 //! project crate), which writes `BENCHMARKS.md` and `docs/benchmarks/accuracy.svg` at the
@@ -30,9 +31,9 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     while let Some(arg) = rest.next() {
         match arg.as_str() {
             "--quick" | "--designs" | "--sweep" => {}
-            "--only" if rest.next().is_some() => {}
+            "--only" | "--keys" if rest.next().is_some() => {}
             bad => bail!(
-                "unknown or incomplete argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs] [--sweep] [--only NAME[,NAME]])"
+                "unknown or incomplete argument `{bad}` (usage: cargo xtask accuracy [--quick] [--designs] [--sweep] [--keys CASE[,CASE]] [--only NAME[,NAME]])"
             ),
         }
     }

@@ -3,8 +3,9 @@
 //! shell scripts. `.cargo/config.toml` aliases `cargo xtask` to this binary.
 //!
 //! Tasks:
-//! - `accuracy [--quick] [--designs] [--only NAME[,NAME]]`: the accuracy-versus-time report (`BENCHMARKS.md`; `--designs`:
-//!   the designs given as data alone, into `target/BENCHMARKS-designs.md`).
+//! - `accuracy [--quick] [--designs] [--keys CASE[,CASE]] [--only NAME[,NAME]]`: the accuracy-versus-time report
+//!   (`BENCHMARKS.md`; `--designs`: the designs given as data alone, into `target/BENCHMARKS-designs.md`; `--keys`: the
+//!   named gradient cost cases alone, into `target/BENCHMARKS-keys.md`).
 //! - `ci`: the full check that `.ci/run` and the README point to.
 //! - `data [--check | --maps]`: the generated data files of `examples/data/` (`data.rs`); `--maps`
 //!   the examples' 2-D phase maps under `target/phase-maps/`.
@@ -43,7 +44,7 @@ use std::process::ExitCode;
 const TASKS: &[(&str, &str)] = &[
     (
         "accuracy",
-        "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings; --designs: the designs given as data alone)",
+        "accuracy against time of every method: BENCHMARKS.md and its plot (--quick: fewer settings; --designs: the designs given as data alone; --keys: named gradient cost cases alone)",
     ),
     (
         "ci",

@@ -58,7 +58,7 @@ mod per_frequency;
 mod spectral;
 
 pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, DefocusDerivative, FIRST_AZIMUTHS, MAX_AZIMUTHS};
-pub use grid::{WavefrontDirection, monochromatic_mtf};
+pub use grid::{SharedGrids, WavefrontDirection, monochromatic_mtf};
 pub use noise::NoiseShape;
 pub use overlap::SeidelTerm;
 pub use spectral::forget_remembered;
@@ -296,6 +296,11 @@ trait OtfEngine: std::fmt::Debug {
     fn otf(&self, frequency: f64) -> f64;
     /// The complex OTF along `azimuth` (radians from the detector's x axis).
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64;
+    /// On the FFT path: the grids read now, the scene and the nodes' total weight
+    /// ([`otf_along`](Self::otf_along) is the path's sum over that weight).
+    fn fft_reading(&self) -> Option<(&grid::FftPath, &Scene<'_>, f64)> {
+        None
+    }
     /// Whether the OTF depends on direction, so that the MTF must be read along an azimuth.
     fn direction_dependent(&self) -> bool {
         self.nodes().direction_dependent()
@@ -941,6 +946,39 @@ impl<'a> Polychromatic<'a> {
         pixel_pitch: Option<f64>,
         settings: Settings,
     ) -> Result<Self, Error> {
+        Self::prepared(lens, detected, parts, field, max_frequency, pixel_pitch, settings, None)
+    }
+
+    /// [`with_settings`](Self::with_settings), the FFT path's grids taken from `shared` where an
+    /// engine of the same lens and field built there already made them (the same spectral node
+    /// wavelength, order, pupil sampling and frequency extent: the same grid bit for bit) and
+    /// put there otherwise ([`SharedGrids`]). Engines of one lens under several spectra (the
+    /// spectral gradient's `ρ`, `ρλ`, `ρλ²`, whose product-integration nodes mostly coincide)
+    /// then compute each pupil field and grid once. Results are those of
+    /// [`with_settings`](Self::with_settings), bit for bit.
+    pub fn with_shared_grids(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+        shared: &'a SharedGrids,
+    ) -> Result<Self, Error> {
+        Self::prepared(lens, detected, &[], field, max_frequency, pixel_pitch, settings, Some(shared))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn prepared(
+        lens: &'a dyn LensModel,
+        detected: &'a Spectrum,
+        parts: &'a [Part<'a>],
+        field: Field,
+        max_frequency: f64,
+        pixel_pitch: Option<f64>,
+        settings: Settings,
+        shared: Option<&'a SharedGrids>,
+    ) -> Result<Self, Error> {
         if !(settings.tolerance.is_finite() && settings.tolerance > 0.0 && settings.tolerance < 1.0) {
             return Err(Error::InvalidParameter {
                 name: "tolerance",
@@ -959,8 +997,19 @@ impl<'a> Polychromatic<'a> {
         let irises = settings.exact_irises.then(|| lens.numerical_aperture());
         let table_rule = settings.table_rule;
         let edge_lane = settings.edge_lane;
-        let scene =
-            Scene { lens, detected, field, f_number, max_frequency, pixel_pitch, irises, table_rule, parts, edge_lane };
+        let scene = Scene {
+            lens,
+            detected,
+            field,
+            f_number,
+            max_frequency,
+            pixel_pitch,
+            irises,
+            table_rule,
+            parts,
+            edge_lane,
+            shared,
+        };
         let engine = choose(scene, settings)?;
         // the FFT path's spectral nodes and sampling work to the FFT tolerance where it is larger
         let engine_tolerance = match engine.engine() {
@@ -1083,6 +1132,24 @@ impl<'a> Polychromatic<'a> {
             return Complex64::new(1.0, 0.0);
         }
         self.engine.otf_along(frequency, azimuth)
+    }
+
+    /// [`otf_along`](Self::otf_along) of each of `engines` at once, each the same to the bit:
+    /// on the FFT path, engines built with one [`SharedGrids`]
+    /// ([`with_shared_grids`](Self::with_shared_grids)) read each grid they share once.
+    pub fn otf_along_together(engines: &[Polychromatic<'_>], frequency: f64, azimuth: f64) -> Vec<Complex64> {
+        if frequency == 0.0 {
+            return vec![Complex64::new(1.0, 0.0); engines.len()];
+        }
+        let reading: Option<Vec<_>> = engines.iter().map(|e| e.engine.fft_reading()).collect();
+        match reading {
+            Some(reading) if engines.len() > 1 => {
+                let paths: Vec<_> = reading.iter().map(|(path, scene, _)| (*path, *scene)).collect();
+                let sums = grid::FftPath::sums_along(&paths, frequency, azimuth);
+                sums.into_iter().zip(&reading).map(|(sum, (_, _, total))| sum / *total).collect()
+            }
+            _ => engines.iter().map(|e| e.otf_along(frequency, azimuth)).collect(),
+        }
     }
 
     /// Whether some wavelength's image is displaced, so that the OTF is complex and depends on

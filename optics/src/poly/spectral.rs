@@ -321,6 +321,9 @@ pub(super) struct Scene<'a> {
     /// whether the FFT path computes each aperture grid's obscuration lane in the value's pass
     /// ([`Settings::edge_lane`](super::Settings::edge_lane))
     pub edge_lane: bool,
+    /// the FFT grids this engine shares with others of the same lens and field
+    /// ([`Polychromatic::with_shared_grids`](super::Polychromatic::with_shared_grids))
+    pub shared: Option<&'a super::SharedGrids>,
 }
 
 impl<'a> Scene<'a> {

@@ -214,10 +214,18 @@ fn whole_process(asnr: &Path, root: &Path, case: &Case, repeats: usize) -> Optio
 
 /// The tables and their text.
 pub(crate) fn markdown(tools: &Tools) -> Option<String> {
+    markdown_of(tools, &[])
+}
+
+/// [`markdown`] of the cases whose names contain one of `names` (all where it is empty):
+/// `accuracy --keys NAME[,NAME]` writes them into `target/BENCHMARKS-keys.md`, the rows to put
+/// in BENCHMARKS.md's tables in place of their old ones.
+pub(crate) fn markdown_of(tools: &Tools, names: &[&str]) -> Option<String> {
     let repeats = if tools.quick { 7 } else { 15 };
     let dir = std::env::temp_dir().join(format!("asnr-bench-keys-{}", std::process::id()));
     std::fs::create_dir_all(&dir).ok()?;
-    let cases = cases(&tools.root, &dir);
+    let mut cases = cases(&tools.root, &dir);
+    cases.retain(|c| names.is_empty() || names.iter().any(|n| c.name.contains(n)));
     let load = crate::load_average();
     let mut inside: Vec<(&Case, Row)> = Vec::new();
     let mut outside: Vec<(&Case, Wall)> = Vec::new();

@@ -345,6 +345,7 @@ fn main() {
     let mut sweep_only = false;
     let mut asnr_python: Option<PathBuf> = None;
     let mut only: Option<String> = None;
+    let mut keys: Option<String> = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -355,6 +356,7 @@ fn main() {
             "--python" => python = Some(PathBuf::from(args.next().expect("--python PY"))),
             "--asnr-python" => asnr_python = Some(PathBuf::from(args.next().expect("--asnr-python PY"))),
             "--only" => only = Some(args.next().expect("--only NAME[,NAME]")),
+            "--keys" => keys = Some(args.next().expect("--keys CASE[,CASE]")),
             flag if flag.starts_with("--") => panic!("unknown flag {flag}"),
             _ => out = PathBuf::from(arg),
         }
@@ -367,6 +369,17 @@ fn main() {
         root: out.clone(),
         quick,
     };
+    if let Some(names) = keys {
+        // the gradient's cost rows of the named cases (gradients_keys: a part of their names),
+        // in a file beside BENCHMARKS.md
+        let names: Vec<&str> = names.split(',').map(str::trim).filter(|n| !n.is_empty()).collect();
+        let md = gradients_keys::markdown_of(&tools, &names).unwrap_or_default();
+        let path = out.join("target/BENCHMARKS-keys.md");
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, md).unwrap();
+        eprintln!("wrote {}", path.display());
+        return;
+    }
     if let Some(names) = only {
         // the named stand-alone sections alone, spliced into the existing BENCHMARKS.md
         let chosen = sections::select(&names).unwrap_or_else(|e| {
