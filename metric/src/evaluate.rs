@@ -884,7 +884,10 @@ pub(crate) fn noise_weighted_lanes(
         binary2: None,
         grid: if grid.is_empty() { GridGradient::NotAsked } else { GridGradient::Unavailable },
     };
-    if poly.has_pupil_grid() {
+    if poly.has_pupil_grid() || poly.direction_dependent() {
+        // the grid's lanes, or the exact 1-D engine's (a circular iris's decentre, the field
+        // angles' lateral colour), on the value's noise-weighted pass over azimuth, as the white
+        // pass takes them
         let found = if grid.is_empty() {
             None
         } else {
@@ -904,30 +907,7 @@ pub(crate) fn noise_weighted_lanes(
                 lanes.grid = GridGradient::Computed(gradient);
                 lanes.mean = mean.mean;
             }
-            None => lanes.mean = poly.mean_mtf_over_azimuth(along_field, Some(shape)).mean,
-        }
-    } else if poly.direction_dependent() {
-        // the exact 1-D engine's lanes (a circular iris's decentre, the field angles' lateral
-        // colour) on the value's noise-weighted pass over azimuth, as the white pass takes them
-        let found = if grid.is_empty() {
-            None
-        } else {
-            poly.mean_mtf_over_azimuth_over_noise_and_gradient(along_field, grid, shape)?
-        };
-        match found {
-            Some((mean, mut gradient)) => {
-                refine_field_lanes(&poly, settings, grid, &mut gradient, mean.mean, &|tighter, lanes| {
-                    let refined =
-                        Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, tighter).ok()?;
-                    refined
-                        .mean_mtf_over_azimuth_over_noise_and_gradient(along_field, lanes, shape)
-                        .ok()
-                        .flatten()
-                        .map(|r| r.1)
-                });
-                lanes.grid = GridGradient::Computed(gradient);
-                lanes.mean = mean.mean;
-            }
+            None if poly.has_pupil_grid() => lanes.mean = poly.mean_mtf_over_azimuth(along_field, Some(shape)).mean,
             None => {
                 let (t, _) = poly.mean_mtf_over_noise(shape, along_field);
                 let (s, _) = poly.mean_mtf_over_noise(shape, along_field + 0.5 * PI);

@@ -2448,15 +2448,7 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
     let orders = lens.orders(lambda, field);
-    let circles = !orders.is_empty()
-        && orders.iter().all(|o| {
-            let circle = match &o.pupil {
-                optics::Pupil::Full => true,
-                optics::Pupil::Aperture(a) => a.as_circle().is_some(),
-                _ => false,
-            };
-            circle && o.wavefront.is_defocus_only()
-        });
+    let circles = circular_defocus_orders(&orders);
     // the full circle with Seidel terms: the overlap engine's mean over azimuth
     let seidel = !orders.is_empty()
         && orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full))
@@ -3075,15 +3067,7 @@ fn design_wavelength_off_axis(scene: &Scene, e: &Evaluation, noise: Option<&opti
     let orders = lens.orders(e.mean_wavelength_nm * 1e-9, field);
     // every order the full circle or a circular iris with a defocus alone; on axis an iris
     // (decentred: the OTF depends on direction, its tilt 2 W020 d/NA moving with W020)
-    let circles = !orders.is_empty()
-        && orders.iter().all(|o| {
-            let circle = match &o.pupil {
-                optics::Pupil::Full => true,
-                optics::Pupil::Aperture(a) => a.as_circle().is_some(),
-                _ => false,
-            };
-            circle && o.wavefront.is_defocus_only()
-        });
+    let circles = circular_defocus_orders(&orders);
     let iris = orders.iter().any(|o| matches!(o.pupil, optics::Pupil::Aperture(_)));
     if !circles || (field.is_on_axis() && !iris) {
         return None;
@@ -3575,4 +3559,18 @@ fn library_bias_partials_over(
     let (t, d_t) =
         nodes.iter().fold((0.0, 0.0), |(a, b), n| (a + n.weight * n.transmission.0, b + n.weight * n.transmission.1));
     Ok(BiasPartials { ln_photoelectrons: d_total / total, ln_transmitted: d_t / t, mean_mtf })
+}
+
+/// Whether there are orders and every one is the full circle or a circular iris, with a defocus
+/// alone: the exact 1-D engine's lanes over azimuth (lateral colour, an iris's decentre).
+fn circular_defocus_orders(orders: &[optics::Order]) -> bool {
+    !orders.is_empty()
+        && orders.iter().all(|o| {
+            let circle = match &o.pupil {
+                optics::Pupil::Full => true,
+                optics::Pupil::Aperture(a) => a.as_circle().is_some(),
+                _ => false,
+            };
+            circle && o.wavefront.is_defocus_only()
+        })
 }
