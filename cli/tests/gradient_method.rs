@@ -126,6 +126,7 @@ fn the_gradient_method_refuses_what_has_no_gradient() {
 fn tolerance_shows_the_gradient_sensitivity() {
     let t = json(&[
         "tolerance",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/harmonic.toml"),
         "--vary",
         "exposure.time_ms=normal:1%",
         "--vary",
@@ -142,10 +143,11 @@ fn tolerance_shows_the_gradient_sensitivity() {
         "field.x_deg=5",
         "--json",
     ]);
-    // off axis under a line the design wavelength has no gradient (its lateral colour's lane is
-    // followed over a band, not on the line's engine)
+    // the harmonic lens off axis under a line has no gradient for the design wavelength (each
+    // order's lateral colour lane is followed over a band, not on the line's engine)
     let g = json(&[
         "gradient",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/harmonic.toml"),
         "--set",
         "spectrum.shape=\"line\"",
         "--set",
