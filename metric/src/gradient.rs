@@ -2089,12 +2089,7 @@ fn temperature_over_directions(
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let rule = DirectionalRule::of(scene, &engines[0], scene.options().settings().tolerance);
-    let mut ends = vec![0.0];
-    if let Some(n) = noise {
-        ends.extend(n.rows().iter().copied().filter(|&r| r > 0.0 && r < nyquist));
-    }
-    ends.push(nyquist);
-    let [_, d_mtf, _] = rule.mean_split(&ends, [1.0, temperature, 0.0], &|nu, azimuth| {
+    let [_, d_mtf, _] = rule.mean_split(&noise_row_ends(noise, nyquist), [1.0, temperature, 0.0], &|nu, azimuth| {
         let weight = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) / noise.map_or(1.0, |n| n.value(nu));
         let (o, o_g) = (engines[0].otf_along(nu, azimuth), engines[1].otf_along(nu, azimuth));
         let d = (o_g - o) * mean_rate;
@@ -2275,12 +2270,7 @@ fn top_hat_partials(
         // along each direction ∂O/∂b = (T_b/D)(O_b − O), so ∂|O|/∂b = (T_b/D)(Re(O* O_b)/|O| − |O|):
         // J = the mean of P|O| and I_x that of P Re(O* O_x)/|O|, on the same rule
         let rule = DirectionalRule::of(scene, &whole, settings.tolerance);
-        let mut ends = vec![0.0];
-        if let Some(n) = noise {
-            ends.extend(n.rows().iter().copied().filter(|&r| r > 0.0 && r < nyquist));
-        }
-        ends.push(nyquist);
-        let [j, i_a, i_b] = rule.mean_split(&ends, [1.0; 3], &|nu, azimuth| {
+        let [j, i_a, i_b] = rule.mean_split(&noise_row_ends(noise, nyquist), [1.0; 3], &|nu, azimuth| {
             let o = whole.otf_along(nu, azimuth);
             let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
             let (x_a, x_b) = (at_a.otf_along(nu, azimuth), at_b.otf_along(nu, azimuth));
@@ -2652,29 +2642,50 @@ fn defocus_lane_on_overlap(scene: &Scene) -> bool {
 /// `options.pupil_samples`).
 fn seidel_at_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm) -> Result<Option<f64>, Error> {
     let field = scene.field();
-    let lens = scene.lens();
-    let detected = crate::evaluate::detected_spectrum(scene);
     // (the white ∂M̄ under a noise spectrum too: `noise_weight::seidel_at_zero_over_noise`
     // weighs it)
     if field.is_on_axis() {
         return Ok(None);
     }
-    let lambda = e.mean_wavelength_nm * 1e-9;
-    let zero = lens.orders(lambda, field).iter().all(|o| {
+    let first = field.y_rad.atan2(field.x_rad);
+    let directions = [optics::WavefrontDirection::Seidel(t)];
+    seidel_lane_at_zero(scene, e, &|poly| {
+        poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions).map(|(mean, d)| (mean.mean, d[0]))
+    })
+}
+
+/// Whether every Seidel term of every order is zero at the band's mean wavelength.
+fn seidel_terms_zero(scene: &Scene, e: &Evaluation) -> bool {
+    scene.lens().orders(e.mean_wavelength_nm * 1e-9, scene.field()).iter().all(|o| {
         let w = &o.wavefront;
         [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
-    });
-    if !zero {
+    })
+}
+
+/// A Seidel term's lane where every term is zero ([`seidel_terms_zero`]), on the overlap engine
+/// run at zero (`optics::Settings::overlap_always`): `lane` gives the engine's mean and the lane
+/// (white or noise-weighted, along one azimuth or over them). Error control: first at the
+/// engine's tolerance, again at `max(q, 10⁻⁴) ε` where the lane is small against its bound
+/// `L · mean` (`L = 2π · 10⁻⁶ ν_c F#` per µm, `q = |lane|/(L · mean)`). `None` where some term is
+/// not zero or the overlap engine does not take the scene (an iris, `options.overlap = false`,
+/// `options.pupil_samples`) or runs over its budget.
+fn seidel_lane_at_zero(
+    scene: &Scene,
+    e: &Evaluation,
+    lane: &dyn Fn(&optics::Polychromatic) -> Option<(f64, f64)>,
+) -> Result<Option<f64>, Error> {
+    if !seidel_terms_zero(scene, e) {
         return Ok(None);
     }
+    let field = scene.field();
+    let lens = scene.lens();
+    let detected = crate::evaluate::detected_spectrum(scene);
     let camera = scene.camera();
     let nyquist = camera.nyquist();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let folded = crate::evaluate::Folded::of(lens, &detected);
     let parts = folded.parts();
-    let first = field.y_rad.atan2(field.x_rad);
-    let directions = [optics::WavefrontDirection::Seidel(t)];
-    // (the lane, the engine's tolerance, L M̄)
+    // (the lane, the engine's tolerance, L · mean)
     let run = |settings: optics::Settings| -> Result<Option<(f64, f64, f64)>, Error> {
         let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
             .map_err(Error::Optics)?;
@@ -2682,11 +2693,11 @@ fn seidel_at_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm)
             return Ok(None);
         }
         let bound = 2.0 * std::f64::consts::PI * 1e-6 * poly.max_cutoff() * lens.f_number();
-        let found = poly.mean_mtf_over_azimuth_and_overlap_gradient(first, &directions);
+        let found = lane(&poly);
         if poly.over_budget().is_some() {
             return Ok(None);
         }
-        Ok(found.map(|(mean, d)| (d[0], poly.tolerance(), bound * mean.mean)))
+        Ok(found.map(|(mean, d)| (d, poly.tolerance(), bound * mean)))
     };
     let settings = optics::Settings { overlap_always: true, ..scene.options().settings() };
     let Some((lane, tolerance, bound)) = run(settings)? else { return Ok(None) };
@@ -2695,7 +2706,7 @@ fn seidel_at_zero_off_axis(scene: &Scene, e: &Evaluation, t: optics::SeidelTerm)
         return Ok(Some(lane));
     }
     let tighter = optics::Settings { tolerance: (q * tolerance).max(1e-14), fft_tolerance: None, ..settings };
-    Ok(run(tighter)?.map(|(lane, _, _)| lane).or(Some(lane)))
+    Ok(Some(run(tighter)?.map_or(lane, |(lane, _, _)| lane)))
 }
 
 /// `[∂M̄/∂W040, ∂M̄/∂W220]` (per µm) where every Seidel term is zero and the OTF rotationally
@@ -3573,4 +3584,15 @@ fn circular_defocus_orders(orders: &[optics::Order]) -> bool {
             };
             circle && o.wavefront.is_defocus_only()
         })
+}
+
+/// The ends of the pieces `[0, ν_N]` is cut into for a noise-weighted mean: the noise table's
+/// rows inside it (where `1/n` has its kinks), none without a noise spectrum.
+fn noise_row_ends(noise: Option<&optics::NoiseShape>, nyquist: f64) -> Vec<f64> {
+    let mut ends = vec![0.0];
+    if let Some(n) = noise {
+        ends.extend(n.rows().iter().copied().filter(|&r| r > 0.0 && r < nyquist));
+    }
+    ends.push(nyquist);
+    ends
 }

@@ -7,7 +7,7 @@
 //! `(1/ν_N) ∫ P |O| (νP′/P − νn′/n)/n dν`, which is integrated here on panels split at the
 //! table's rows (where `n′` jumps) and at the sign changes of `O` (the kinks of `|O|`).
 
-use super::{DirectionalRule, Parameter, on_value_engine};
+use super::{DirectionalRule, Parameter, noise_row_ends, on_value_engine, seidel_lane_at_zero, seidel_terms_zero};
 use crate::evaluate::Evaluation;
 use crate::{Error, Scene};
 
@@ -43,7 +43,6 @@ pub(super) fn weighted_mtf_integral(
     let camera = scene.camera();
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let rows: Vec<f64> = camera.noise_spectrum().map(|n| n.rows().to_vec()).unwrap_or_default();
     let tolerance = scene.options().settings().tolerance;
     let detected = crate::evaluate::detected_spectrum(scene);
     let pix = |nu: f64| pixel.map_or(1.0, |pitch| optics::pixel_mtf(pitch, nu));
@@ -51,17 +50,13 @@ pub(super) fn weighted_mtf_integral(
         if poly.has_pupil_grid() || poly.direction_dependent() {
             let rule = DirectionalRule::of(scene, poly, tolerance);
             // pieces between the table's rows (where `w` jumps with n′)
-            let mut ends = vec![0.0];
-            ends.extend(rows.iter().copied().filter(|&r| r > 0.0 && r < nyquist));
-            ends.push(nyquist);
+            let ends = noise_row_ends(camera.noise_spectrum(), nyquist);
             let [m, _, _] = rule.mean_split(&ends, [1.0, 0.0, 0.0], &|nu, azimuth| {
                 [pix(nu) * poly.otf_along(nu, azimuth).norm() * weight(nu), 0.0, 0.0]
             });
             return Some(m);
         }
-        let mut ends = vec![0.0];
-        ends.extend(rows.iter().copied().filter(|&r| r > 0.0 && r < nyquist));
-        ends.push(nyquist);
+        let ends = noise_row_ends(camera.noise_spectrum(), nyquist);
         let piece = |a: f64, b: f64| -> f64 {
             let mut sum = 0.0;
             for &(x, wx) in optics::quad::rule() {
@@ -396,13 +391,7 @@ pub(super) fn seidel_at_zero_over_noise(
 ) -> Result<Option<f64>, Error> {
     use optics::SeidelTerm::{Astigmatism, Coma, FieldCurvature};
     let field = scene.field();
-    let lens = scene.lens();
-    let detected = crate::evaluate::detected_spectrum(scene);
-    let zero = lens.orders(e.mean_wavelength_nm * 1e-9, field).iter().all(|o| {
-        let w = &o.wavefront;
-        [w.spherical_m, w.coma_m, w.astigmatism_m, w.field_curvature_m] == [0.0; 4]
-    });
-    if !zero {
+    if !seidel_terms_zero(scene, e) {
         return Ok(None);
     }
     let on_axis = field.is_on_axis();
@@ -410,11 +399,6 @@ pub(super) fn seidel_at_zero_over_noise(
         // c and −c are one pupil turned by π: G is even in it
         return Ok(Some(0.0));
     }
-    let camera = scene.camera();
-    let nyquist = camera.nyquist();
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, &detected);
-    let parts = folded.parts();
     let first = field.y_rad.atan2(field.x_rad);
     // on axis astigmatism's defocus part is half field curvature's (x² = ρ²/2 + ρ² cos 2φ/2, the
     // cos 2φ part 0 by symmetry)
@@ -423,33 +407,13 @@ pub(super) fn seidel_at_zero_over_noise(
         t => (t, 1.0),
     };
     let directions = [optics::WavefrontDirection::Seidel(direction)];
-    // (the lane, the engine's tolerance, L G)
-    let run = |settings: optics::Settings| -> Result<Option<(f64, f64, f64)>, Error> {
-        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings)
-            .map_err(Error::Optics)?;
-        if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
-            return Ok(None);
-        }
-        let bound = 2.0 * std::f64::consts::PI * 1e-6 * poly.max_cutoff() * lens.f_number();
-        let found = match on_axis {
-            true => poly.mean_mtf_along_over_noise_and_gradient(0.0, &directions, noise).map(|(m, _, d)| (m, d[0])),
-            false => poly
-                .mean_mtf_over_azimuth_over_noise_and_overlap_gradient(first, &directions, noise)
-                .map(|(m, d)| (m.mean, d[0])),
-        };
-        if poly.over_budget().is_some() {
-            return Ok(None);
-        }
-        Ok(found.map(|(mean, d)| (d, poly.tolerance(), bound * mean)))
-    };
-    let settings = optics::Settings { overlap_always: true, ..scene.options().settings() };
-    let Some((lane, tolerance, bound)) = run(settings)? else { return Ok(None) };
-    let q = if bound > 0.0 { (lane.abs() / bound).max(1e-4) } else { 1.0 };
-    if q >= 1.0 {
-        return Ok(Some(share * lane));
-    }
-    let tighter = optics::Settings { tolerance: (q * tolerance).max(1e-14), fft_tolerance: None, ..settings };
-    Ok(Some(share * run(tighter)?.map_or(lane, |(lane, _, _)| lane)))
+    let lane = seidel_lane_at_zero(scene, e, &|poly| match on_axis {
+        true => poly.mean_mtf_along_over_noise_and_gradient(0.0, &directions, noise).map(|(m, _, d)| (m, d[0])),
+        false => poly
+            .mean_mtf_over_azimuth_over_noise_and_overlap_gradient(first, &directions, noise)
+            .map(|(m, d)| (m.mean, d[0])),
+    })?;
+    Ok(lane.map(|lane| share * lane))
 }
 
 #[cfg(test)]
