@@ -255,10 +255,10 @@ fn channels_nm(source: &Source, overrides: &[String]) -> Result<Vec<f64>> {
     Ok(list.iter().filter_map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))).collect())
 }
 
-/// The scene with every default filled in, as a TOML table.
+/// The scene with every default filled in, as a TOML table (validated: built once, as
+/// `scene::resolved_toml` builds it).
 pub(crate) fn resolved(source: &Source, overrides: &[String]) -> Result<toml::Table> {
-    let text = scene::resolved_toml(source, overrides)?.toml;
-    text.parse::<toml::Table>().map_err(|e| anyhow!("internal error: the resolved scene is not TOML: {e}"))
+    Ok(resolved_and_built(source, overrides)?.0)
 }
 
 /// [`resolved`] and the scene it validated, built once ([`scene::resolved_and_built`]: the
