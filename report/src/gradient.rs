@@ -939,6 +939,14 @@ mod tests {
         [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
     }
 
+    /// [`central`] at the steps `2h` and `h`, Richardson-extrapolated: `(4 D(h) − D(2h))/3`, whose
+    /// error falls as `h⁴`.
+    fn richardson(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
+        let (coarse, fine) =
+            (central(source, overrides, key, value, 2.0 * h), central(source, overrides, key, value, h));
+        std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+    }
+
     /// The reference written here: central differences of converged evaluations with step `h`.
     fn central(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
         central_at(source, overrides, key, value, h, REFERENCE_TOLERANCE)
@@ -1135,8 +1143,7 @@ mod tests {
         ] {
             check_with_references(source, &overrides, &keys, &|k, v| {
                 let h = relative_step(k, v);
-                let (coarse, fine) = (central(source, &overrides, k, v, 2.0 * h), central(source, &overrides, k, v, h));
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+                richardson(source, &overrides, k, v, h)
             });
         }
     }
@@ -1287,8 +1294,7 @@ mod tests {
             assert!(g.snr0 < g.photoelectrons.sqrt() * 0.99, "{} vs √N {}", g.snr0, g.photoelectrons.sqrt());
             check_with_references(&source, &glare, &keys, &|k, v| {
                 let h = relative_step(k, v);
-                let (coarse, fine) = (central(&source, &glare, k, v, 2.0 * h), central(&source, &glare, k, v, h));
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+                richardson(&source, &glare, k, v, h)
             });
         }
     }
@@ -1782,8 +1788,7 @@ mod tests {
         let check = |source: &Source, overrides: &[String]| {
             check_with_references(source, overrides, &keys, &|k, v| {
                 let h = if k == keys[0] { LINE_STEP_NM } else { relative_step(k, v) };
-                let (coarse, fine) = (central(source, overrides, k, v, 2.0 * h), central(source, overrides, k, v, h));
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+                richardson(source, overrides, k, v, h)
             });
         };
         let paper = scene::read(None).unwrap();
@@ -1845,13 +1850,7 @@ mod tests {
     fn design_wavelength_off_axis_and_under_a_noise_spectrum_match_central_differences() {
         let keys = ["lens.design_wavelength_nm"];
         let check = |source: &Source, overrides: &[String]| {
-            check_with_references(source, overrides, &keys, &|k, v| {
-                let (coarse, fine) = (
-                    central(source, overrides, k, v, 2.0 * LINE_STEP_NM),
-                    central(source, overrides, k, v, LINE_STEP_NM),
-                );
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
-            });
+            check_with_references(source, overrides, &keys, &|k, v| richardson(source, overrides, k, v, LINE_STEP_NM));
         };
         let paper = scene::read(None).unwrap();
         check(&paper, &owned(&["field.x_deg=5"]));
@@ -2000,8 +1999,7 @@ mod tests {
                 return central(source, overrides, k, v, relative_step(k, v));
             }
             let h = NARROW_APERTURE_STEP * v.abs();
-            let (coarse, fine) = (central(source, overrides, k, v, 2.0 * h), central(source, overrides, k, v, h));
-            std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+            richardson(source, overrides, k, v, h)
         });
     }
 
@@ -4288,8 +4286,7 @@ mod tests {
             assert_weighted_beside_n(&gradient(source, &[], &owned(&keys[..1])).unwrap());
             check_with_references(source, &[], keys, &|k, v| {
                 let h = relative_step(k, v);
-                let (coarse, fine) = (central(source, &[], k, v, 2.0 * h), central(source, &[], k, v, h));
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+                richardson(source, &[], k, v, h)
             });
         }
         let line = owned(&LINE_803);
@@ -4384,13 +4381,7 @@ mod tests {
     fn design_wavelength_through_an_iris_matches_central_differences() {
         let keys = ["lens.design_wavelength_nm"];
         let check = |source: &Source, overrides: &[String]| {
-            check_with_references(source, overrides, &keys, &|k, v| {
-                let (coarse, fine) = (
-                    central(source, overrides, k, v, 2.0 * LINE_STEP_NM),
-                    central(source, overrides, k, v, LINE_STEP_NM),
-                );
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
-            });
+            check_with_references(source, overrides, &keys, &|k, v| richardson(source, overrides, k, v, LINE_STEP_NM));
         };
         let iris = example("decentred-iris.toml");
         let narrow = owned(&["spectrum.range_nm=10"]);
@@ -4470,11 +4461,7 @@ mod tests {
         let overrides = joined(&LINE_803, &["field.x_deg=3", "camera.read_noise_e=2"]);
         for source in [&paper, &shaped] {
             check_with_references(source, &overrides, &keys, &|k, v| {
-                let (coarse, fine) = (
-                    central(source, &overrides, k, v, 2.0 * LINE_STEP_NM),
-                    central(source, &overrides, k, v, LINE_STEP_NM),
-                );
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+                richardson(source, &overrides, k, v, LINE_STEP_NM)
             });
         }
     }
