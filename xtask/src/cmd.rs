@@ -64,10 +64,18 @@ fn quote(word: &str) -> String {
 /// or was made from other requirements (a stamp file inside it keeps the requirements it was
 /// made from), reused otherwise; `probe` is a module it must import.
 pub(crate) fn venv(root: &Path, venv: &str, requirements: &str, probe: &str) -> Result<std::path::PathBuf> {
+    venv_of(root, venv, &[requirements], probe)
+}
+
+/// [`venv`] with several pinned files installed together (`pip install -r A -r B`), the stamp
+/// keeping all of them.
+pub(crate) fn venv_of(root: &Path, venv: &str, requirements: &[&str], probe: &str) -> Result<std::path::PathBuf> {
     let dir = root.join(venv);
     let bin = if cfg!(windows) { dir.join("Scripts").join("python.exe") } else { dir.join("bin").join("python") };
-    let pinned =
-        std::fs::read_to_string(root.join(requirements)).map_err(|e| anyhow::anyhow!("{requirements}: {e}"))?;
+    let mut pinned = String::new();
+    for file in requirements {
+        pinned += &std::fs::read_to_string(root.join(file)).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+    }
     let imports = |python: &Path| {
         Command::new(python)
             .args(["-c", &format!("import {probe}")])
@@ -84,9 +92,12 @@ pub(crate) fn venv(root: &Path, venv: &str, requirements: &str, probe: &str) -> 
         anyhow::bail!("python3 -m venv {venv} failed");
     }
     let mut pip = Command::new(&bin);
-    pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"]).arg(root.join(requirements));
+    pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check"]);
+    for file in requirements {
+        pip.arg("-r").arg(root.join(file));
+    }
     if !status(&mut pip)? || !imports(&bin) {
-        anyhow::bail!("could not install {requirements} into {venv} (or it does not import {probe})");
+        anyhow::bail!("could not install {} into {venv} (or it does not import {probe})", requirements.join(" and "));
     }
     std::fs::write(&stamp, &pinned)?;
     Ok(bin)

@@ -24,8 +24,9 @@
 //! (`#[target_feature]`), which the workspace forbids (`unsafe_code = "forbid"`); the native
 //! build is one flag away (ARCHITECTURE.md, "Build settings", measures what v3 costs).
 //!
-//! The tools (maturin, ziglang, auditwheel, abi3audit) come pinned from
-//! `python/requirements-wheel.txt` into `target/wheel-tools-venv`.
+//! The tools (maturin, auditwheel, abi3audit) come pinned from `python/requirements-wheel.txt`
+//! into `target/wheel-tools-venv`; the users' wheel adds ziglang (`python/requirements-zig.txt`)
+//! in `target/wheel-release-venv`, so the test wheel of CI does not download zig.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -42,6 +43,11 @@ pub(crate) const RUSTFLAGS: &str = "-C target-cpu=x86-64-v3";
 const TOOLS_VENV: &str = "target/wheel-tools-venv";
 /// The tools, pinned.
 const TOOLS: &str = "python/requirements-wheel.txt";
+/// The users' wheel's tools: [`TOOLS`] and zig (maturin `--zig`), in a virtual environment of
+/// their own.
+const RELEASE_TOOLS_VENV: &str = "target/wheel-release-venv";
+/// zig, pinned: the users' wheel alone links with it.
+const ZIG: &str = "python/requirements-zig.txt";
 /// Cargo's target directory for the users' wheel (other flags and profile than the workspace's).
 const TARGET_DIR: &str = "target/wheel";
 /// Cargo's target directory for the test wheel when the build's own flags are not [`RUSTFLAGS`]
@@ -84,7 +90,11 @@ fn test_target_dir(root: &Path, rustflags: Option<&str>) -> PathBuf {
 
 /// Builds the wheel of `kind`, checks it, and returns its path.
 pub(crate) fn build(root: &Path, kind: Kind) -> Result<PathBuf> {
-    let python = cmd::venv(root, TOOLS_VENV, TOOLS, "auditwheel, abi3audit, ziglang").context("the wheel tools")?;
+    let python = match kind {
+        Kind::Release => cmd::venv_of(root, RELEASE_TOOLS_VENV, &[TOOLS, ZIG], "auditwheel, abi3audit, ziglang"),
+        Kind::Test => cmd::venv(root, TOOLS_VENV, TOOLS, "auditwheel, abi3audit"),
+    }
+    .context("the wheel tools")?;
     let bin = python.parent().context("the venv's bin folder")?.to_path_buf();
     let out = root.join(OUT);
     if out.exists() {
