@@ -17,6 +17,7 @@ use crate::evaluate::{
 };
 use crate::{Error, GlareMode, MetricForm, Scene};
 
+mod library_fft;
 mod noise_weight;
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
@@ -2015,6 +2016,9 @@ fn temperature_band_partials(
         m2 += node.weight * g * g;
     }
     let spread = if w > 0.0 && m1 > 0.0 { ((m2 / w - (m1 / w).powi(2)).max(0.0)).sqrt() / (m1 / w) } else { 1.0 };
+    if e.numerics.engine.starts_with("fft") {
+        return temperature_on_fft_path(scene, e, detected, source, noise, spread);
+    }
     let lens = scene.lens();
     let field = scene.field();
     let nyquist = e.nyquist_cyc_per_mm * 1e3;
@@ -2037,11 +2041,10 @@ fn temperature_band_partials(
             .map(|d_mtf| (d_ln_n, d_mtf))
             .ok_or_else(|| {
                 not_smooth(
-                    "source.temperature_k: the OTF depends on direction here through a sampled pupil on the FFT \
-                     path: the temperature's lanes over a band are the OTFs of ρ and ρ ∂ln B/∂T taken again at a \
-                     tolerance tightened by the spread of ∂ln B/∂T over the band, which the FFT path's grids do \
-                     not reach; they are computed for a rotationally symmetric OTF, and over directions on the \
-                     1-D engines (lateral colour, a decentred iris, MTF tables) and a PSF stack's planes"
+                    "source.temperature_k: the OTF depends on direction here through a sampled pupil outside the \
+                     FFT path's own engines; the temperature's lanes over a band are computed for a rotationally \
+                     symmetric OTF, over directions on the 1-D engines (lateral colour, a decentred iris, MTF \
+                     tables) and a PSF stack's planes, and on the FFT path at the value's sampling"
                         .to_owned(),
                 )
             });
@@ -2068,13 +2071,71 @@ fn temperature_band_partials(
     Ok((d_ln_n, d_mtf))
 }
 
+/// `(∂ln N/∂T, ∂M̄/∂T)` over a band where the value's pupil is sampled on the FFT path (a phase
+/// lens off axis, Zernike terms with m ≠ 0 outside the overlap engine, a phase map or a 2-D
+/// library layout; docs/physics.md, "Gradients: a line's wavelength and a blackbody's
+/// temperature"): the engines of `ρ` and `ρ g` (`g = ∂ln B/∂T`) as the Gaussian band's centre
+/// takes those of `ρ`, `ρλ`, `ρλ²` there ([`spectral_engines`]): the grids at the value's
+/// sampling (its `fft_tolerance`, the sampling fixed for the second engine at the first's `N`,
+/// and the two levels of the value's Richardson extrapolation with their shares), their
+/// spectral nodes at the engine's tolerance times `s/10` (`spread`, `s = std(g)/⟨g⟩`: the
+/// difference `O_g − O` loses that factor). Along each direction `∂O/∂T = ⟨g⟩ (O_g − O)`
+/// complex, `∂|O| = Re(O* ∂O)/|O|` ([`modulus_derivative`]), the pixel MTF and `1/n(ν)` under a
+/// noise spectrum on the weight, on the value's rule over directions ([`DirectionalRule`], its ν
+/// pieces cut at the noise table's rows); `∂ln N/∂T = ⟨g⟩`, the first engine's spectral average.
+fn temperature_on_fft_path(
+    scene: &Scene,
+    e: &Evaluation,
+    detected: &radiometry::Spectrum,
+    source: radiometry::Blackbody,
+    noise: Option<&optics::NoiseShape>,
+    spread: f64,
+) -> Result<(f64, f64), Error> {
+    let camera = scene.camera();
+    let nyquist = e.nyquist_cyc_per_mm * 1e3;
+    let mut settings = scene.options().settings();
+    let tolerance = settings.tolerance;
+    // the grids' sampling at the value's own tolerance (a tightened one would ask for grids
+    // beyond reach); the spectral nodes tightened from it by the spread
+    let engine_tolerance = settings.fft_tolerance.unwrap_or(tolerance).max(tolerance);
+    let tight = |t: f64| (0.1 * t * spread.min(1.0)).max(1e-13);
+    settings.tolerance = tight(tolerance);
+    settings.fft_tolerance = Some(engine_tolerance);
+    settings.spectral_tolerance = Some(tight(engine_tolerance));
+    let spectra = [
+        detected.clone(),
+        radiometry::Spectrum::product(vec![detected.clone(), radiometry::Spectrum::PlanckTemperatureRate { source }]),
+    ];
+    let shared = optics::SharedGrids::new();
+    let levels = spectral_engines(scene.lens(), &spectra, scene.field(), nyquist, settings, &shared)?;
+    let engines = &levels[0].1;
+    let d_ln_n = engines[0].spectral_average(|l, _| source.log_derivatives(l).1);
+    // ⟨g⟩ of each level: the ratio of its two engines' weights
+    let rates: Vec<f64> = levels.iter().map(|(_, l)| l[1].total_weight() / l[0].total_weight()).collect();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let rule = DirectionalRule::of(scene, &engines[0], tolerance);
+    let t = source.temperature();
+    let [_, d_mtf, _] = rule.mean_split(&noise_row_ends(noise, nyquist), [1.0, t, 0.0], &|nu, azimuth| {
+        let weight = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) / noise.map_or(1.0, |n| n.value(nu));
+        let mut sum = [0.0; 3];
+        for ((share, level), rate) in levels.iter().zip(&rates) {
+            let o = optics::Polychromatic::otf_along_together(level, nu, azimuth);
+            let d = (o[1] - o[0]) * rate;
+            sum[0] += share * o[0].norm();
+            sum[1] += share * modulus_derivative([o[0].re, o[0].im], [d.re, d.im]);
+        }
+        sum.map(|x| weight * x)
+    });
+    Ok((d_ln_n, d_mtf))
+}
+
 /// `∂M̄/∂T` over a band where the OTF depends on direction (docs/physics.md, "Gradients: a
 /// line's wavelength and a blackbody's temperature"): along each direction the complex OTFs of
 /// `ρ` and `ρ g` (`engines`, `g = ∂ln B/∂T`), `∂O/∂T = ⟨g⟩ (O_g − O)`, `∂|O| = Re(O* ∂O)/|O|`
 /// ([`modulus_derivative`]), the pixel MTF and `1/n(ν)` under a noise spectrum on the weight, on
 /// the value's rule over directions ([`DirectionalRule`], its ν pieces cut at the noise table's
-/// rows), each measured per relative change of `T` (`temperature`). `None` on the FFT path (a
-/// sampled pupil: its grids at the engines' tightened tolerance are beyond reach).
+/// rows), each measured per relative change of `T` (`temperature`). `None` for a sampled pupil
+/// (the FFT path's is [`temperature_on_fft_path`], taken before these engines are built).
 fn temperature_over_directions(
     scene: &Scene,
     engines: &[optics::Polychromatic<'_>],
@@ -3488,11 +3549,8 @@ fn library_bias_partials_over(
     let lens = scene.lens();
     let field = scene.field();
     if !field.is_on_axis() {
-        return Err(not_smooth(
-            "off axis the library lens's pupil is not rotationally symmetric (the FFT path), where the parameter \
-             bias's amplitude lane is not computed yet"
-                .to_owned(),
-        ));
+        // the radial pupil seen by the oblique wave, on the FFT path
+        return library_fft::library_bias_on_fft_path(scene, e, p, index, noise);
     }
     let f_number = lens.f_number();
     let tolerance = scene.options().settings().tolerance;
@@ -3503,8 +3561,9 @@ fn library_bias_partials_over(
         let Some(d) = lens.order_derivatives(lambda, index) else {
             return Err(not_smooth(format!(
                 "the lens gives no derivative of its orders in this parameter at {:.3} nm (a library lens with \
-                 lens.library_interpolation = \"cubic\", a bias index below its number of parameters, the lens's \
-                 own pupil mapping, and an imaging order with |c_1| > 0 at every radius)",
+                 a radial layout and lens.library_interpolation = \"cubic\", a bias index below its number of \
+                 parameters, the lens's own pupil mapping, and an imaging order with |c_1| > 0 at every radius; a \
+                 2-D layout's sites are not given derivatives yet)",
                 lambda * 1e9
             )));
         };

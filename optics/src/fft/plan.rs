@@ -629,6 +629,19 @@ impl Otf {
         Otf { n, half, s_max, grid }
     }
 
+    /// Adds `rate` times `other` (a grid of the same plan) at every lag: a derivative grid
+    /// gaining the OTF times a rate (an order's efficiency moving with a key, docs/physics.md,
+    /// "Gradients: a library's parameter bias").
+    ///
+    /// # Panics
+    /// If the two grids' sizes differ.
+    pub(crate) fn add_scaled(&mut self, other: &Otf, rate: f64) {
+        assert_eq!(self.grid.len(), other.grid.len(), "grids of {} and {} lags", self.grid.len(), other.grid.len());
+        for (g, o) in self.grid.iter_mut().zip(&other.grid) {
+            *g += o * rate;
+        }
+    }
+
     /// Pupil samples `N`: lag `k` is `s = k/N`.
     pub fn n(&self) -> usize {
         self.n

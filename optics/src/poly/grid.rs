@@ -991,6 +991,17 @@ pub enum WavefrontDirection {
     /// (docs/physics.md, "Gradients: the design wavelength off axis"). The exact 1-D engine
     /// carries it, for full circular pupils with a defocus alone.
     DesignWavelength,
+    /// A lens parameter `p` that moves each order's field, amplitude and phase, and its
+    /// efficiency (`LensModel::order_derivatives(λ, p)`: a library lens's parameter bias, or its
+    /// atoms' phase errors with `p` = [`ATOM_PHASE_ERROR`](crate::ATOM_PHASE_ERROR)), per unit
+    /// of the parameter. On the FFT path, for a radial pupil (seen off axis): the sampled field
+    /// `P = A a e^{ikW}` (area fraction `A`, amplitude `a(q)`) moves by the complex lane
+    /// `∂P = A (∂a + i k a ∂W) e^{ikW}` at each pixel, `∂W` as the value samples `W` (the
+    /// profile at `q` plus its best-fit defocus's rate times `x² + y² − q`), the normalization
+    /// `Σ A a²` by `Σ 2 A a ∂a`, and the node's weight `w τ_o` by `w ∂τ_o`; the normalization of
+    /// the polychromatic OTF `Σ w τ_o` by `Σ w ∂τ_o` (docs/physics.md, "Gradients: a library's
+    /// parameter bias"). The FFT path carries it.
+    OrderField(usize),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -1054,6 +1065,8 @@ impl FftPath {
         let mut d_grids: Vec<Otf> = (0..k_dirs).map(|_| Otf::new()).collect();
         let mut otf = Otf::new();
         let mut stored = self.nodes.iter();
+        // `Σ w ∂τ_o` of each `OrderField` direction (the normalization's motion)
+        let mut d_total = vec![0.0; k_dirs];
         for &(lambda, weight, part) in &nodes.samples {
             if weight == 0.0 {
                 continue;
@@ -1067,6 +1080,17 @@ impl FftPath {
             } else {
                 None
             };
+            // each `OrderField` direction's order derivatives at this wavelength
+            let mut order_fields: Vec<Option<crate::OrderDerivatives>> = Vec::with_capacity(k_dirs);
+            for d in directions {
+                order_fields.push(match *d {
+                    WavefrontDirection::OrderField(p) => match lens.order_derivatives(lambda, p) {
+                        Some(found) => Some(found),
+                        None => return Ok(None),
+                    },
+                    _ => None,
+                });
+            }
             for (index, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
                 if order.efficiency == 0.0 {
                     continue;
@@ -1188,6 +1212,8 @@ impl FftPath {
                                 _ => oblique.opd_m(x, y),
                             })
                         }
+                        // its move is the field's own (below)
+                        WavefrontDirection::OrderField(_) => Vec::new(),
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
@@ -1201,15 +1227,49 @@ impl FftPath {
                     };
                     opd.push(values);
                 }
-                let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
-                layer.plan.otf_and_derivatives_of_field(
-                    &field,
-                    power,
-                    2.0 * PI / lambda,
-                    &refs,
-                    &mut otf,
-                    &mut d_grids,
-                );
+                if order_fields.iter().any(Option::is_some) {
+                    // the complex lanes: each wavefront direction's `i k D P`, each order field's
+                    // own move, and the node's efficiency rate on its OTF
+                    let k = 2.0 * PI / lambda;
+                    let mut moves: Vec<(Vec<Complex64>, f64)> = Vec::with_capacity(k_dirs);
+                    let mut rates = vec![0.0; k_dirs];
+                    for (j, derivatives) in order_fields.iter().enumerate() {
+                        match derivatives {
+                            Some(d) => {
+                                let (Some((d_amplitude, d_wavefront)), Some(&d_tau)) =
+                                    (d.fields.get(index), d.efficiencies.get(index))
+                                else {
+                                    return Ok(None);
+                                };
+                                let sampled = &layer.pupils[slot].1;
+                                moves.push(order_field_move(sampled, &radial, d_amplitude, d_wavefront, lambda));
+                                rates[j] = d_tau / order.efficiency;
+                            }
+                            None => moves.push((
+                                field.iter().zip(&opd[j]).map(|(p, &d)| p * Complex64::new(0.0, k * d)).collect(),
+                                0.0,
+                            )),
+                        }
+                    }
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, power, &refs, &mut otf, &mut d_grids);
+                    for ((grid, &rate), total) in d_grids.iter_mut().zip(&rates).zip(d_total.iter_mut()) {
+                        if rate != 0.0 {
+                            grid.add_scaled(&otf, rate);
+                            *total += node.weight * rate;
+                        }
+                    }
+                } else {
+                    let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
+                    layer.plan.otf_and_derivatives_of_field(
+                        &field,
+                        power,
+                        2.0 * PI / lambda,
+                        &refs,
+                        &mut otf,
+                        &mut d_grids,
+                    );
+                }
                 let grids: Vec<&Otf> = d_grids.iter().collect();
                 read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
             }
@@ -1228,6 +1288,8 @@ impl FftPath {
         let turns = !field.is_on_axis() && directions.iter().any(|d| matches!(d, WavefrontDirection::FieldAngle(_)));
         let mut gradient = vec![0.0; k_dirs];
         let mut d_first = 0.0;
+        // the level's mean `Σ w P |sum|` (the normalization's motion takes it)
+        let mut mean = 0.0;
         for (a, &azimuth) in azimuths.iter().enumerate() {
             for (f, &(nu, w)) in frequencies.iter().enumerate() {
                 let (o, turn) = if turns {
@@ -1245,6 +1307,7 @@ impl FftPath {
                     *g += scale * (o.conj() * d).re;
                 }
                 d_first += scale * (o.conj() * turn).re;
+                mean += w * pixel(nu) * modulus;
             }
         }
         if turns {
@@ -1260,6 +1323,11 @@ impl FftPath {
         // O = sum / total weight: Re(O* ∂O)/|O| = Re(sum* ∂sum)/(|sum| total)
         let norm = nodes.total_weight * scene.max_frequency * count as f64;
         gradient.iter_mut().for_each(|g| *g /= norm);
+        // an order field's efficiencies move the normalization Σ w τ_o: ∂O gains −O Σ w ∂τ_o/Σ w τ_o,
+        // so each mean's derivative −M̄ Σ w ∂τ_o/Σ w τ_o
+        for (g, d) in gradient.iter_mut().zip(&d_total) {
+            *g -= mean / norm * d / nodes.total_weight;
+        }
         Ok(Some(gradient))
     }
 }
@@ -1429,6 +1497,52 @@ fn radial_direction(
         let q = (r2 * scale2).min(1.0);
         profile.value(q) + slope * (r2 - q)
     })
+}
+
+/// The move of a radial pupil's sampled field ([`radial_field`]) where its amplitude profile
+/// moves by `d_amplitude` and its wavefront by `d_wavefront` (m) (docs/physics.md, "Gradients: a
+/// library's parameter bias"; [`WavefrontDirection::OrderField`]): at each pixel the value
+/// transmits, `∂P = A (∂a + i k a ∂W) e^{ikW}`, `∂W` as [`radial_direction`] samples a profile
+/// (its best-fit defocus's rate on the order's sampled defocus), and the normalization's
+/// `∂(Σ A a²) = Σ 2 A a ∂a`.
+fn order_field_move(
+    sampled: &crate::fft::SampledPupil,
+    radial: &crate::radial::RadialPupil,
+    d_amplitude: &crate::radial::RadialProfile,
+    d_wavefront: &crate::radial::RadialProfile,
+    lambda: f64,
+) -> (Vec<Complex64>, f64) {
+    let n = sampled.n();
+    let h = 2.0 / n as f64;
+    let k = 2.0 * PI / lambda;
+    let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let scale2 = radial.frequency_scale().powi(2);
+    let slope = d_wavefront.fitted_slope();
+    let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
+    let mut d_weight = 0.0;
+    for j in 0..n {
+        let y = -1.0 + (j as f64 + 0.5) * h;
+        for i in 0..n {
+            let idx = j * n + i;
+            if area[idx] <= 0.0 {
+                continue;
+            }
+            let x = -1.0 + (i as f64 + 0.5) * h;
+            let r2 = x * x + y * y;
+            let q = r2 * scale2;
+            if scale2 > 1.0 && q > 1.0 {
+                continue;
+            }
+            let q = q.min(1.0);
+            let a = radial.amplitude(q);
+            let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
+            let da = d_amplitude.value(q);
+            let dw = d_wavefront.value(q) + slope * (r2 - q);
+            d_weight += 2.0 * area[idx] * a * da;
+            moved[idx] = Complex64::from_polar(area[idx], k * w) * Complex64::new(da, k * a * dw);
+        }
+    }
+    (moved, d_weight)
 }
 
 /// `value(x, y)` at the centres of the pixels where `field` transmits (0 elsewhere), the pupil
