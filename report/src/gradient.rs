@@ -2887,13 +2887,13 @@ mod tests {
             gradient(&source, &joined(&["spectrum.range_nm=4"], &[at.as_str()]), &owned(&keys)).unwrap()
         };
         let (on_axis, off_axis) = (point("0"), point("3"));
-        for i in 0..keys.len() {
+        for (i, k) in keys.iter().enumerate() {
             for (ours, a, b) in [
                 (list.d_asnr[i], on_axis.d_asnr[i], off_axis.d_asnr[i]),
                 (list.d_mean_mtf[i], on_axis.d_mean_mtf[i], off_axis.d_mean_mtf[i]),
             ] {
                 let mean = (a + 2.0 * b) / 3.0;
-                assert!((ours - mean).abs() <= 1e-12 * a.abs().max(b.abs()), "{}: {ours} vs {mean}", keys[i]);
+                assert!((ours - mean).abs() <= 1e-12 * a.abs().max(b.abs()), "{k}: {ours} vs {mean}");
             }
         }
     }
