@@ -358,7 +358,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
             })
             .collect();
         let kept: Vec<Parameter> = local.iter().flatten().copied().collect();
-        let grid: Vec<optics::WavefrontDirection> = kept.iter().filter_map(|p| p.grid_direction()).collect();
+        let mut grid: Vec<optics::WavefrontDirection> = kept.iter().filter_map(|p| p.grid_direction()).collect();
+        let bases = point_aperture_on_grid(bases, field, &mut grid);
         let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
         let mut point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref(), None)?;
         weigh_by_noise(&single, &e, &kept, binary2, &grid, &mut point)?;
@@ -385,6 +386,26 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
         snr0: sum.snr0,
         photoelectrons: sum.photoelectrons,
     })
+}
+
+/// A `[[fields]]` point's lane bases: where the aperture's lanes ride the radial engine
+/// ([`ExtraLanes`]) and the point is off axis, they ride its FFT pass instead, with the oblique
+/// wave's ([`aperture_grid_directions`], appended to `grid`), as at a single `[field]` point off
+/// axis: the field-of-view mean is the weighted mean of the points' values, so its gradient is the
+/// weighted mean of each point's (docs/physics.md, "Gradients: the F-number and the focal length of
+/// a phase lens off axis").
+fn point_aperture_on_grid(
+    bases: LaneBases,
+    field: optics::Field,
+    grid: &mut Vec<optics::WavefrontDirection>,
+) -> LaneBases {
+    match bases.aperture {
+        Some(base) if !field.is_on_axis() => {
+            grid.extend(aperture_grid_directions(base));
+            LaneBases { aperture_on_grid: true, ..bases }
+        }
+        _ => bases,
+    }
 }
 
 /// The lane to ask of the value's own pass ([`evaluate_field_with_lanes`]): a line's wavelength
@@ -1096,8 +1117,8 @@ impl ExtraLanes {
     /// where it gives neither (the families whose F-number gradient is [`aperture_partials`]',
     /// whose line's wavelength is [`line_center_partials`]'). Off axis at a single field point
     /// the aperture's lanes ride on the FFT path with the oblique wave's
-    /// ([`aperture_grid_directions`]); over a `[[fields]]` list with a point off axis they are
-    /// refused; the wavelength's where the lens says why not.
+    /// ([`aperture_grid_directions`]); over a `[[fields]]` list each point off axis so on its own
+    /// pass ([`point_aperture_on_grid`]); the wavelength's where the lens says why not.
     fn of(scene: &Scene, aperture: Option<Parameter>, wavelength: bool) -> Result<Option<(Scene, LaneBases)>, Error> {
         let lens = scene.lens();
         let lambda = lens.design_wavelength().unwrap_or(550e-9);
@@ -1111,16 +1132,9 @@ impl ExtraLanes {
                     None => false,
                     Some(Err(why)) => return Err(not_smooth(&why)),
                     Some(Ok(_)) => {
-                        let fields: Vec<optics::Field> = match scene.fields() {
-                            [] => vec![scene.field()],
-                            points => points.iter().map(|f| f.0).collect(),
-                        };
-                        if fields.iter().any(|f| !f.is_on_axis()) {
-                            if !scene.fields().is_empty() {
-                                return Err(not_smooth(
-                                    "off axis the oblique wave's aberrations move with the aperture radius R = f0/(2F#) too, which the FFT path follows for a single field point ([field]), not yet over a [[fields]] list",
-                                ));
-                            }
+                        // over a [[fields]] list each point off axis asks them of its own pass
+                        // (`point_aperture_on_grid`)
+                        if scene.fields().is_empty() && !scene.field().is_on_axis() {
                             on_grid = true;
                         }
                         true
@@ -2665,18 +2679,15 @@ fn aperture_on_overlap(scene: &Scene, e: &Evaluation, lane: Option<f64>) -> Opti
 
 /// Whether the F-number's defocus lane is taken on the overlap engine ([`aperture_on_overlap`]):
 /// on axis, a band (not a line), every order at the mean wavelength the full circle without an
-/// image shift and some with a Seidel term, white noise, and the overlap engine allowed.
+/// image shift and some with a Seidel term, and the overlap engine allowed. Under a noise
+/// spectrum this is the white mean's lane; the weighted mean's is taken on the value's
+/// noise-weighted rules (`noise_weight::aperture_over_noise`).
 fn defocus_lane_on_overlap(scene: &Scene) -> bool {
     let lens = scene.lens();
     let field = scene.field();
     let detected = crate::evaluate::detected_spectrum(scene);
     let options = scene.options().settings();
-    if !field.is_on_axis()
-        || detected.as_line().is_some()
-        || scene.camera().noise_spectrum().is_some()
-        || !options.overlap
-        || options.pupil_samples.is_some()
-    {
+    if !field.is_on_axis() || detected.as_line().is_some() || !options.overlap || options.pupil_samples.is_some() {
         return false;
     }
     // the chromatic lens's pupil, Seidel terms and (on axis) image shifts are the same at every

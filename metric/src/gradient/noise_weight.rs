@@ -205,7 +205,7 @@ fn shape_of(scene: &Scene) -> Option<&optics::NoiseShape> {
 /// and `aperture_off_axis`): a band on the exact 1-D engine whose OTF depends on direction (every
 /// order a circular iris, decentred or not, or the full circle, with a defocus alone: the iris's
 /// tilt `Δ_iris = 4 F# W020 d` in the defocus lane, the lateral colour in the shifts' lane, 0 on
-/// axis), or off axis on the overlap engine (Seidel terms); on the value's noise-weighted rules
+/// axis), or on the overlap engine (Seidel terms, on axis and off axis); on the value's noise-weighted rules
 /// over azimuth ([`optics::Polychromatic::mean_mtf_over_azimuth_over_noise_and_aperture_lanes`];
 /// docs/physics.md, "Gradients under a noise spectrum", "Gradients: the iris"). `None` elsewhere.
 fn aperture_lanes_over_noise(scene: &Scene, noise: Option<&optics::NoiseShape>) -> Option<(f64, f64)> {
@@ -222,7 +222,8 @@ fn aperture_lanes_over_noise(scene: &Scene, noise: Option<&optics::NoiseShape>) 
     on_value_engine(scene, &detected, scene.options().settings(), |poly| {
         let taken = match poly.engine() {
             optics::Engine::Exact1d => (poly.direction_dependent() || iris) && !poly.has_pupil_grid(),
-            optics::Engine::Overlap { .. } => !field.is_on_axis(),
+            // on axis the full circle with Seidel terms, as the white lane (`defocus_lane_on_overlap`)
+            optics::Engine::Overlap { .. } => !field.is_on_axis() || super::defocus_lane_on_overlap(scene),
             _ => false,
         };
         if !taken {
