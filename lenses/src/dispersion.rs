@@ -228,6 +228,13 @@ impl LensModel for DispersionEngineered {
         true
     }
 
+    /// No image shift at any field point (no lateral colour modelled), so every rate is 0: the
+    /// OTF off axis is the one on axis, and the lanes of the F-number, focal length and design
+    /// wavelength are taken as on axis (as the refractive lens's, its stop at the lens).
+    fn image_shift_field_rates(&self, _wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        Some(vec![[0.0, 0.0]])
+    }
+
     /// How the one order moves with the band's centre λ0: the wrapped part's defocus
     /// `(1 − β)(1 − λ/λ0) f0/(8F#²)` by `∂W020/∂ln λ0 = (1 − β)(λ/λ0) f0/(8F#²)` (λ clamped to
     /// the band as [`defocus`](DispersionEngineered::defocus) is; 0 for a true achromat and for
@@ -430,6 +437,7 @@ mod tests {
             let lens = at(0.0);
             assert_eq!(lens.design_band(), Some((700e-9, 900e-9)));
             assert!(lens.turns_with_field());
+            assert_eq!(lens.image_shift_field_rates(800e-9, Field::new(0.05, 0.0)), Some(vec![[0.0; 2]]));
             let h = 1e-12;
             for lambda in [720e-9, 800e-9, 880e-9] {
                 let rate = lens.design_wavelength_rates(lambda, Field::ON_AXIS).unwrap()[0];

@@ -184,8 +184,9 @@ const APERTURE: [(&str, Parameter); 2] =
 
 /// The families [`APERTURE`]'s keys are differentiated for: the defocus families, and the phase
 /// lens on the radial engine's lanes (its profile and reference sphere moving with the aperture
-/// radius, docs/physics.md "Gradients").
-const APERTURE_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
+/// radius, docs/physics.md "Gradients"), and the dispersion-engineered lens (its true-delay
+/// fraction moving with them: `achromat`'s chains, which take its keys first).
+const APERTURE_MODELS: [&str; 5] = ["chromatic", "refractive", "harmonic", "phase", "dispersion-engineered"];
 
 /// The design wavelength λ0 (docs/physics.md, "Gradients: the design wavelength").
 const DESIGN_WAVELENGTH: &str = "lens.design_wavelength_nm";

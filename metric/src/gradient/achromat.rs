@@ -22,7 +22,8 @@ use super::{DirectionalRule, Parameter, modulus_derivative, noise_row_ends, sign
 /// edges"), with the lens's window in place of the spectrum's: the total transmission `T` does
 /// not move (the caller's `∂B = −∂N` with the stray light). The integrals in ν on 16-point
 /// Gauss–Legendre panels split at the sign changes of `O`, doubled until they move by at most the
-/// tolerance times `M̄`. Under a noise spectrum (`noise`) each frequency's weight divided by
+/// tolerance times `M̄`; `M̄` on the same rule; the band's OTF and both means again at
+/// `max(q, 1e-4)` times the tolerance where `I_x − M̄` is `q < 1` of `M̄`. Under a noise spectrum (`noise`) each frequency's weight divided by
 /// `n(ν)`, `M̄` the weighted mean on the same rule. Refused where the lens has no design band.
 pub(super) fn band_edge_partials(
     scene: &Scene,
@@ -46,27 +47,30 @@ pub(super) fn band_edge_partials(
     let camera = scene.camera();
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let over_noise = |nu: f64| noise.map_or(1.0, |n| 1.0 / n.value(nu));
-    let whole = optics::Polychromatic::with_settings(lens, &detected, field, nyquist, None, settings)?;
     // T_x/D: the detected density times the orders' efficiency at the edge, over the weight
     let efficiency: f64 = lens.orders(x, field).iter().map(|o| o.efficiency).sum();
-    let density = detected.value(x) * efficiency / whole.total_weight();
-    if density == 0.0 {
+    if detected.value(x) * efficiency == 0.0 {
         // no detected light at the edge: neither N nor the OTF's weights move
         return Ok((0.0, 0.0));
     }
     // the edge's single wavelength (a line of any weight: its OTF is normalized)
     let line = radiometry::Spectrum::Line(radiometry::Line::new(x, 1e-9, 1.0)?);
-    let at_x = optics::Polychromatic::with_settings(lens, &line, field, nyquist, None, settings)?;
-    let (i_x, j) = if whole.direction_dependent() || at_x.direction_dependent() {
-        let rule = DirectionalRule::of(scene, &whole, settings.tolerance);
-        let [j, i_x, _] = rule.mean_split(&noise_row_ends(noise, nyquist), [1.0; 3], &|nu, azimuth| {
-            let o = whole.otf_along(nu, azimuth);
-            let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
-            let o_x = at_x.otf_along(nu, azimuth);
-            [pix * o.norm(), pix * modulus_derivative([o.re, o.im], [o_x.re, o_x.im]), 0.0]
-        });
-        (i_x, j)
-    } else {
+    // (T_x/D, I_x, M̄) with the band's OTF and both means held to `tolerance` relative to M̄
+    let means = |tolerance: f64| -> Result<(f64, f64, f64), Error> {
+        let settings = optics::Settings { tolerance, ..settings };
+        let whole = optics::Polychromatic::with_settings(lens, &detected, field, nyquist, None, settings)?;
+        let at_x = optics::Polychromatic::with_settings(lens, &line, field, nyquist, None, settings)?;
+        let density = detected.value(x) * efficiency / whole.total_weight();
+        if whole.direction_dependent() || at_x.direction_dependent() {
+            let rule = DirectionalRule::of(scene, &whole, tolerance);
+            let [j, i_x, _] = rule.mean_split(&noise_row_ends(noise, nyquist), [1.0; 3], &|nu, azimuth| {
+                let o = whole.otf_along(nu, azimuth);
+                let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
+                let o_x = at_x.otf_along(nu, azimuth);
+                [pix * o.norm(), pix * modulus_derivative([o.re, o.im], [o_x.re, o_x.im]), 0.0]
+            });
+            return Ok((density, i_x, j));
+        }
         let [i_x, j] = sign_split_mean(
             nyquist,
             8,
@@ -76,11 +80,18 @@ pub(super) fn band_edge_partials(
                 let o = whole.otf(nu);
                 (o, [pix * at_x.otf(nu), pix * o])
             },
-            |change, _| change[0].abs().max(change[1].abs()) <= settings.tolerance * e.mean_mtf,
+            |change, next| change[0].abs().max(change[1].abs()) <= tolerance * next[1].abs(),
         );
-        (i_x, j)
+        Ok((density, i_x, j))
     };
-    // the white mean is the evaluation's own; under a noise spectrum the weighted one on this rule
-    let j = if noise.is_some() { j } else { e.mean_mtf };
+    // I_x − M̄ is a difference of two means each held to the tolerance relative to M̄: where it
+    // is q = |I_x − M̄|/M̄ < 1 of M̄, both again at max(q, 1e-4) times the tolerance, so that the
+    // difference keeps the tolerance relative to itself (as the field angles' lanes do)
+    let (mut density, mut i_x, mut j) = means(settings.tolerance)?;
+    let q = (i_x - j).abs() / j.abs().max(f64::MIN_POSITIVE);
+    if q < 1.0 {
+        (density, i_x, j) = means(settings.tolerance * q.max(1e-4))?;
+    }
+    // M̄ on the same rule as I_x (white, or the weighted G under a noise spectrum)
     Ok((sign * density, sign * density * (i_x - j)))
 }
