@@ -267,7 +267,8 @@ mod tests {
     /// length and library range through β and the defocus lane, both band edges (λ0's defocus
     /// lane, and the efficiency's window: the long edge at 1.4σ above the spectrum's centre),
     /// efficiency, transmission and the field angle (3°: the relative illumination cos⁴θ alone), with
-    /// the stray light in the integral form and the pixel MTF.
+    /// the stray light in the integral form and the pixel MTF; and the same aperture given by its
+    /// diameter.
     #[test]
     fn the_reduced_achromat_matches_central_differences() {
         let source = scene_with(REDUCED, "[field]\nx_deg = 3.0");
@@ -284,6 +285,10 @@ mod tests {
         let glare = ["options.glare=\"included\"", "options.form=\"integral\"", "camera.pixel_mtf=true"];
         let cut = ["lens.design_band_nm=[750.0, 804.0]", "lens.relative_illumination=\"cos4\""];
         check(&source, &[&glare[..], &cut[..]].concat(), &keys, &step);
+        // the same aperture given by its diameter (F# = f0/D = 2.5): the diameter, and the focal
+        // length with D held (β moves with both)
+        let by_diameter = scene_with(&REDUCED.replace("f_number = 2.5", "aperture_diameter_mm = 1.344"), "");
+        check(&by_diameter, &[], &["lens.aperture_diameter_mm", "lens.focal_length_mm"], &step);
     }
 
     /// The true achromat below D_max (β = 1, W020 = 0): the diameter and the focal length (D
