@@ -218,6 +218,36 @@ impl LensModel for DispersionEngineered {
         Some(self.centre())
     }
 
+    fn design_band(&self) -> Option<(f64, f64)> {
+        Some(self.band)
+    }
+
+    /// No lateral colour and no oblique aberration: the one order is the same at every field
+    /// point (docs/physics.md, "Gradients: the dispersion-engineered lens").
+    fn turns_with_field(&self) -> bool {
+        true
+    }
+
+    /// No image shift at any field point (no lateral colour modelled), so every rate is 0: the
+    /// OTF off axis is the one on axis, and the lanes of the F-number, focal length and design
+    /// wavelength are taken as on axis (as the refractive lens's, its stop at the lens).
+    fn image_shift_field_rates(&self, _wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        Some(vec![[0.0, 0.0]])
+    }
+
+    /// How the one order moves with the band's centre λ0: the wrapped part's defocus
+    /// `(1 − β)(1 − λ/λ0) f0/(8F#²)` by `∂W020/∂ln λ0 = (1 − β)(λ/λ0) f0/(8F#²)` (λ clamped to
+    /// the band as [`defocus`](DispersionEngineered::defocus) is; 0 for a true achromat and for
+    /// the residual focal shift, a table in λ), the efficiency not at all (docs/physics.md,
+    /// "Gradients: the dispersion-engineered lens"). The band's edges move the efficiency's
+    /// window too: that is the edges' own term, not λ0's.
+    fn design_wavelength_rates(&self, wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        let lambda = wavelength_m.clamp(self.band.0, self.band.1);
+        let k = 1.0 / (8.0 * self.f_number * self.f_number);
+        let rate = k * (1.0 - self.true_delay_fraction()) * (lambda / self.centre()) * self.focal_length;
+        Some(vec![[rate, 0.0]])
+    }
+
     /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
         crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {
@@ -385,6 +415,37 @@ mod tests {
             assert!((lens.defocus(lambda) - want).abs() < 1e-18, "{lambda}");
         }
         assert!(lens.describe().contains("reduced achromatism β = 0.023"), "{}", lens.describe());
+    }
+
+    #[test]
+    fn design_wavelength_rates_are_the_derivative_of_the_defocus() {
+        // ∂W020/∂ln λ0 against a central difference of the defocus in the band's centre (both
+        // edges moved by the same δ), in the reduced mode and for the true achromat
+        for (f_number, overflow) in [(2.5, DelayOverflow::Reduced), (16.75, DelayOverflow::Reject)] {
+            let at = |shift: f64| {
+                DispersionEngineered::new(
+                    f_number,
+                    3.36e-3,
+                    (700e-9 + shift, 900e-9 + shift),
+                    5.0 * FS,
+                    Curve::Constant(0.3),
+                    Curve::Constant(0.6),
+                    overflow,
+                )
+                .unwrap()
+            };
+            let lens = at(0.0);
+            assert_eq!(lens.design_band(), Some((700e-9, 900e-9)));
+            assert!(lens.turns_with_field());
+            assert_eq!(lens.image_shift_field_rates(800e-9, Field::new(0.05, 0.0)), Some(vec![[0.0; 2]]));
+            let h = 1e-12;
+            for lambda in [720e-9, 800e-9, 880e-9] {
+                let rate = lens.design_wavelength_rates(lambda, Field::ON_AXIS).unwrap()[0];
+                let diff = (at(h).defocus(lambda) - at(-h).defocus(lambda)) / (2.0 * h) * 800e-9;
+                assert!((rate[0] - diff).abs() <= 1e-7 * lens.defocus(700e-9).abs().max(1e-12), "{rate:?} {diff}");
+                assert_eq!(rate[1], 0.0);
+            }
+        }
     }
 
     #[test]

@@ -17,6 +17,7 @@ use crate::evaluate::{
 };
 use crate::{Error, GlareMode, MetricForm, Scene};
 
+mod achromat;
 mod library_fft;
 mod noise_weight;
 
@@ -184,6 +185,12 @@ pub enum Parameter {
     /// "Gradients: the design wavelength off axis"); under a noise spectrum with each
     /// frequency's weight divided by `n(ν)`.
     DesignWavelength,
+    /// An edge of the lens's design band (`lens.design_band_nm[i]` of a dispersion-engineered
+    /// lens; 0 the short end, 1 the long end), per m, the band's centre held: outside the band
+    /// the lens images nothing, so the edge is a limit of the signal's integrals over λ
+    /// (Leibniz's rule, as a top-hat spectrum's edge; docs/physics.md, "Gradients: the
+    /// dispersion-engineered lens"). The centre's own part is [`DesignWavelength`](Parameter::DesignWavelength)'s.
+    BandEdge(usize),
 }
 
 impl Parameter {
@@ -239,6 +246,7 @@ impl Parameter {
             Parameter::IrisDecentre(_) => "the decentre of the lens's iris",
             Parameter::Obscuration => "the obscuration of the lens's iris",
             Parameter::DesignWavelength => "the lens's design wavelength",
+            Parameter::BandEdge(_) => "an edge of the lens's design band",
         }
     }
 }
@@ -833,6 +841,17 @@ fn point_gradient(
                 };
                 let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
                 // N ∝ ∫ ρ Σ τ_o; T (so N_T) does not depend on λ0: B = N_T − N moves by −∂N
+                let d_n = n * d_ln_n;
+                (d_n, if stray { -d_n } else { 0.0 }, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::BandEdge(edge) => {
+                let (d_ln_n, d_mtf) = achromat::band_edge_partials(scene, e, p, edge, None)?;
+                let d_weighted = match camera.noise_spectrum() {
+                    Some(shape) => achromat::band_edge_partials(scene, e, p, edge, Some(shape))?.1,
+                    None => d_mtf,
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
+                // N ∝ ∫ ρ Σ τ_o over the band; T (so N_T) does not move: B = N_T − N by −∂N
                 let d_n = n * d_ln_n;
                 (d_n, if stray { -d_n } else { 0.0 }, 0.0, 0.0, 0.0, d_g, d_mtf)
             }

@@ -545,6 +545,15 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// The band `(λ_min, λ_max)` (m) outside which the lens images nothing (every order's
+    /// efficiency 0, the transmitted light background only) and inside which its orders are the
+    /// design's: a dispersion-engineered lens's design band. The value's derivative with respect
+    /// to an edge is a limit of the signal's integrals (docs/physics.md, "Gradients: the
+    /// dispersion-engineered lens"). `None` (the default) for a lens without one.
+    fn design_band(&self) -> Option<(f64, f64)> {
+        None
+    }
+
     /// Numerical aperture on the image side, paraxial: `NA0 = D/(2 f0) = 1/(2 F#)`.
     fn numerical_aperture(&self) -> f64 {
         0.5 / self.f_number()
@@ -599,6 +608,7 @@ macro_rules! forward_lens_model {
             fn factored_efficiency(&self) -> Option<FactoredEfficiency> { (**self).factored_efficiency() }
             fn numerical_aperture(&self) -> f64 { (**self).numerical_aperture() }
             fn design_wavelength(&self) -> Option<f64> { (**self).design_wavelength() }
+            fn design_band(&self) -> Option<(f64, f64)> { (**self).design_band() }
             fn binary2_directions(&self, wavelength_m: f64) -> Option<Vec<Vec<crate::radial::RadialProfile>>> {
                 (**self).binary2_directions(wavelength_m)
             }

@@ -14,6 +14,8 @@ use serde::ser::{SerializeMap, SerializeStruct, Serializer};
 use metric::Parameter;
 use scene::Source;
 
+mod achromat;
+
 /// The gradient at one scene: its keys in their canonical spelling, their values, the value of
 /// the ASNR, mean MTF, SNR0 and photoelectrons there, and the derivative of each with respect to
 /// each key, in the key's own units (per ms for `exposure.time_ms`, per µm for
@@ -107,8 +109,10 @@ const PIXEL_PITCH: &str = "camera.pixel_pitch_um";
 /// and on the transmitted light at every wavelength, so that they leave the OTF as it is: one
 /// order (chromatic, phase, a PSF stack's one tabulated order), or the harmonic lens's orders
 /// `τ_m = τ_base sinc²(α − m)`, every one proportional to `efficiency = τ_base` (no relative
-/// weight between orders moves).
-const SCALAR_EFFICIENCY_MODELS: [&str; 4] = ["chromatic", "phase", "harmonic", "psf"];
+/// weight between orders moves), or the dispersion-engineered lens's one order, τ inside its
+/// design band and 0 outside (a factor on the signal alone; docs/physics.md, "Gradients: the
+/// dispersion-engineered lens").
+const SCALAR_EFFICIENCY_MODELS: [&str; 5] = ["chromatic", "phase", "harmonic", "psf", "dispersion-engineered"];
 
 /// Keys the value does not depend on smoothly: integers, switches, seeds and limits.
 const NOT_SMOOTH: [(&str, &str); 8] = [
@@ -180,8 +184,9 @@ const APERTURE: [(&str, Parameter); 2] =
 
 /// The families [`APERTURE`]'s keys are differentiated for: the defocus families, and the phase
 /// lens on the radial engine's lanes (its profile and reference sphere moving with the aperture
-/// radius, docs/physics.md "Gradients").
-const APERTURE_MODELS: [&str; 4] = ["chromatic", "refractive", "harmonic", "phase"];
+/// radius, docs/physics.md "Gradients"), and the dispersion-engineered lens (its true-delay
+/// fraction moving with them: `achromat`'s chains, which take its keys first).
+const APERTURE_MODELS: [&str; 5] = ["chromatic", "refractive", "harmonic", "phase", "dispersion-engineered"];
 
 /// The design wavelength λ0 (docs/physics.md, "Gradients: the design wavelength").
 const DESIGN_WAVELENGTH: &str = "lens.design_wavelength_nm";
@@ -662,8 +667,10 @@ const FIELD: [(&str, usize); 2] = [("field.x_deg", 0), ("field.y_deg", 1)];
 /// forward mode (`optics::WavefrontDirection::FieldAngle`).
 /// A PSF stack's PSFs are one field point's in its frame (`+x` the field direction), the
 /// same at every field point: its mean MTF does not depend on the field angles, which move the
-/// relative illumination alone (`optics::LensModel::turns_with_field`).
-const FIELD_MODELS: [&str; 6] = ["chromatic", "refractive", "harmonic", "phase", "library", "psf"];
+/// relative illumination alone (`optics::LensModel::turns_with_field`), as the
+/// dispersion-engineered lens's one order, the same at every field point (no lateral colour).
+const FIELD_MODELS: [&str; 7] =
+    ["chromatic", "refractive", "harmonic", "phase", "library", "psf", "dispersion-engineered"];
 
 /// The scene quantity `field.x_deg` or `field.y_deg` sets, or why its gradient is refused for
 /// this family; `None` for another key ([`FIELD_MODELS`]).
@@ -805,12 +812,14 @@ pub(crate) fn gradient_and_evaluation(
     let chains: Vec<Chain> = expanded
         .iter()
         .map(|(k, v)| {
-            chain_rule(k, *v, &lens_model, &table).unwrap_or_else(|| {
-                aperture_parameter(k, &lens_model, &table)
-                    .or_else(|| library_bias(k, &table))
-                    .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
-                    .map(|p| direct(p, *v))
-            })
+            achromat::chain(k, *v, &lens_model, &table)
+                .or_else(|| chain_rule(k, *v, &lens_model, &table))
+                .unwrap_or_else(|| {
+                    aperture_parameter(k, &lens_model, &table)
+                        .or_else(|| library_bias(k, &table))
+                        .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
+                        .map(|p| direct(p, *v))
+                })
         })
         .collect::<Result<_>>()?;
     // the engines' parameters, each once, in the order the keys first ask them

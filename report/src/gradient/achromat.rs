@@ -1,0 +1,339 @@
+//! The dispersion-engineered lens's keys (`lens.model = "dispersion-engineered"`) as chains on
+//! the engines' parameters (docs/physics.md, "Gradients: the dispersion-engineered lens").
+//!
+//! Its one order is the full pupil with `W020(λ) = (1 − β)(1 − λ/λ0) f0/(8F#²)` inside the
+//! design band `[λ_min, λ_max]` (λ0 its centre) and efficiency 0 outside, with
+//! `β = min(1, ΔT_lib/ΔT_req)`, `ΔT_req = f0(√(1 + u) − 1)/c`, `u = 1/(4F#²)` (docs/physics.md,
+//! "Lens families"). At fixed β the F-number and the focal length move it as the chromatic
+//! lens's defocus `∝ f0/F#²` ([`Parameter::FNumber`], [`Parameter::FocalLength`], whose lane
+//! `D_K` is `∂M̄` along `δW020 = W020`); β adds its own share, also along `W020`:
+//! `∂ln β/∂ln F# = 1 + 1/√(1 + u)`, `∂ln β/∂ln f0 = −1`, `∂ln β/∂ln ΔT_lib = 1` where `β < 1`, all 0
+//! where `β = 1` (then `W020 = 0` near the design). The band's edges move λ0
+//! ([`Parameter::DesignWavelength`]) and the efficiency's window ([`Parameter::BandEdge`]).
+
+use anyhow::{Result, anyhow};
+use metric::Parameter;
+
+use super::{Chain, lookup};
+
+/// The family this module's chains are for.
+const MODEL: &str = "dispersion-engineered";
+
+/// Speed of light in vacuum, m/s (as `lenses::dispersion`'s).
+const C: f64 = 299_792_458.0;
+
+/// The design's numbers from the resolved scene.
+struct Design {
+    f_number: f64,
+    focal_length_m: f64,
+    library_s: f64,
+}
+
+/// A number of the resolved scene (a float, or an integer written without a point).
+fn number(table: &toml::Table, name: &str) -> Option<f64> {
+    let v = lookup(table, name)?;
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
+}
+
+impl Design {
+    fn of(table: &toml::Table) -> Result<Design> {
+        let missing = |name: &str| anyhow!("the resolved scene has no {name}");
+        let f0_mm = number(table, "lens.focal_length_mm").ok_or_else(|| missing("lens.focal_length_mm"))?;
+        let f_number = match number(table, "lens.f_number") {
+            Some(f) => f,
+            None => f0_mm / number(table, "lens.aperture_diameter_mm").ok_or_else(|| missing("lens.f_number"))?,
+        };
+        let library_fs =
+            number(table, "lens.group_delay_range_fs").ok_or_else(|| missing("lens.group_delay_range_fs"))?;
+        Ok(Design { f_number, focal_length_m: f0_mm * 1e-3, library_s: library_fs * 1e-15 })
+    }
+
+    /// `ΔT_req = R²/(c(√(R² + f0²) + f0))`, `R = f0/(2F#)` (as `lenses::required_group_delay`).
+    fn required_s(&self) -> f64 {
+        let (f, r) = (self.focal_length_m, 0.5 * self.focal_length_m / self.f_number);
+        r * r / (C * (r.hypot(f) + f))
+    }
+
+    /// `(β, ∂ln β/∂ln F#)`; β < 1 only where the library is short of the aperture's need.
+    fn beta(&self) -> (f64, f64) {
+        let required = self.required_s();
+        if required <= self.library_s {
+            return (1.0, 0.0);
+        }
+        let u = 0.25 / (self.f_number * self.f_number);
+        (self.library_s / required, 1.0 + 1.0 / (1.0 + u).sqrt())
+    }
+}
+
+/// `Σ c ∂/∂p` scaled by `s`, the terms of `parts` together.
+fn combined(parts: &[(&Chain, f64)]) -> Chain {
+    parts.iter().flat_map(|(chain, s)| chain.iter().map(move |(p, c)| (*p, c * s))).collect()
+}
+
+/// The chain of a dispersion-engineered lens's key (`lens.f_number`, `lens.focal_length_mm`,
+/// `lens.aperture_diameter_mm`, `lens.group_delay_range_fs`, `lens.design_band_nm[i]`), or why
+/// it is refused (the kink of β at `ΔT_req = ΔT_lib`, a spectrum whose own edge or line is at a
+/// band edge); `None` for another key or family.
+pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> Option<Result<Chain>> {
+    if lens_model != MODEL {
+        return None;
+    }
+    let edge = match key {
+        "lens.design_band_nm[0]" => Some(0),
+        "lens.design_band_nm[1]" => Some(1),
+        "lens.f_number" | "lens.focal_length_mm" | "lens.aperture_diameter_mm" | "lens.group_delay_range_fs" => None,
+        _ => return None,
+    };
+    Some(match edge {
+        Some(i) => band_edge(key, i, table),
+        None => aperture(key, value, table),
+    })
+}
+
+/// The F-number, focal length, aperture diameter and library range: chains on
+/// [`Parameter::FNumber`] and [`Parameter::FocalLength`] (module docs).
+fn aperture(key: &str, value: f64, table: &toml::Table) -> Result<Chain> {
+    let design = Design::of(table).map_err(|e| anyhow!("--wrt {key}: {e}"))?;
+    let (required, library) = (design.required_s(), design.library_s);
+    if (required - library).abs() <= 1e-12 * library {
+        let d_max = lenses_max_diameter(design.focal_length_m, library);
+        return Err(anyhow!(
+            "--wrt {key}: not differentiable here: the aperture needs exactly the library's group delay \
+             (ΔT_req = ΔT_lib = {:.4} fs, D = D_max = {:.3} µm), where the true-delay fraction \
+             β = min(1, ΔT_lib/ΔT_req) has a kink: on one side a true achromat (β = 1, no defocus), on the other \
+             partly chromatic (W020 = (1 − β)(1 − λ/λ0) f0/(8F#²)), so the ASNR's one-sided derivatives differ; \
+             move the design off D = D_max",
+            library * 1e15,
+            d_max * 1e6
+        ));
+    }
+    let (beta, d_ln_beta) = design.beta();
+    // per ln F# (f0 held), per ln f0 (F# held), per ln ΔT_lib
+    let (d_f_number, d_focal, d_library): (Chain, Chain, Chain) = if beta < 1.0 {
+        let g = beta / (1.0 - beta);
+        (
+            vec![(Parameter::FNumber, 1.0), (Parameter::FocalLength, -g * d_ln_beta)],
+            vec![(Parameter::FocalLength, 1.0 / (1.0 - beta))],
+            vec![(Parameter::FocalLength, -g)],
+        )
+    } else {
+        // a true achromat: W020 = 0 near the design, so only the frequency scale and NA move
+        (vec![(Parameter::FNumber, 1.0)], Vec::new(), Vec::new())
+    };
+    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
+    Ok(match key {
+        "lens.f_number" => combined(&[(&d_f_number, 1.0 / value)]),
+        // ∂/∂D = −(1/D) ∂/∂ln F#
+        "lens.aperture_diameter_mm" => combined(&[(&d_f_number, -1.0 / value)]),
+        // D held: ∂/∂ln f0 = ∂/∂ln f0|F# + ∂/∂ln F#
+        "lens.focal_length_mm" if diameter_given => combined(&[(&d_focal, 1.0 / value), (&d_f_number, 1.0 / value)]),
+        "lens.focal_length_mm" => combined(&[(&d_focal, 1.0 / value)]),
+        _ => combined(&[(&d_library, 1.0 / value)]),
+    })
+}
+
+/// `D_max = 2√(2 f0 c ΔT_lib + (c ΔT_lib)²)` (as `lenses::max_diameter`), for the kink's message.
+fn lenses_max_diameter(focal_length_m: f64, delay_s: f64) -> f64 {
+    let l = C * delay_s;
+    2.0 * (2.0 * focal_length_m * l + l * l).sqrt()
+}
+
+/// A band edge (nm): half the centre's move, `∂/∂λ_i = (1/(2λ0)) ∂/∂ln λ0`, plus the edge's own
+/// Leibniz term (per m). Refused where the spectrum has a kink of its own there (a line at the
+/// edge, a top-hat's edge on it): the value's one-sided derivatives differ.
+fn band_edge(key: &str, edge: usize, table: &toml::Table) -> Result<Chain> {
+    let band = lookup(table, "lens.design_band_nm").and_then(toml::Value::as_array);
+    let ends: Vec<f64> = band
+        .map(|b| b.iter().filter_map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))).collect())
+        .unwrap_or_default();
+    let [lo, hi] = ends[..] else {
+        return Err(anyhow!("--wrt {key}: the resolved scene's lens.design_band_nm is not two wavelengths"));
+    };
+    let x = if edge == 0 { lo } else { hi };
+    let shape = lookup(table, "spectrum.shape").and_then(toml::Value::as_str).unwrap_or("");
+    let center = number(table, "spectrum.center_nm");
+    let spectrum_edges: Vec<f64> = match (shape, center, number(table, "spectrum.range_nm")) {
+        ("line", Some(c), _) => vec![c],
+        ("tophat", Some(c), Some(r)) => vec![c - 0.5 * r, c + 0.5 * r],
+        _ => Vec::new(),
+    };
+    if spectrum_edges.iter().any(|&s| (s - x).abs() <= 1e-12 * x) {
+        return Err(anyhow!(
+            "--wrt {key}: not differentiable here: the band's edge {x} nm is where the spectrum ({shape}) has its own \
+             edge or line, so the detected light at the edge jumps as the edge crosses it (the one-sided derivatives \
+             differ); move the band's edge or the spectrum off it"
+        ));
+    }
+    let centre_nm = 0.5 * (lo + hi);
+    Ok(vec![(Parameter::DesignWavelength, 0.5 / centre_nm), (Parameter::BandEdge(edge), 1e-9)])
+}
+
+#[cfg(test)]
+mod tests {
+    use scene::Source;
+
+    use super::super::gradient;
+
+    /// The converged evaluations the references difference (docs/physics.md, "Gradients").
+    const REFERENCE_TOLERANCE: f64 = 1e-10;
+
+    /// The lens's `[lens]` with the other sections of `examples/paper-theory.toml` (a 8 nm
+    /// Gaussian band at 800 nm: cheap, σ = 2.83 nm), at the tolerance 1e-6, a read noise of 2 e⁻.
+    fn scene_with(lens: &str, extra: &str) -> Source {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/paper-theory.toml");
+        let text = std::fs::read_to_string(path).unwrap();
+        let (head, rest) = text.split_once("[lens]").unwrap();
+        let (_, tail) = rest.split_once("[source]").unwrap();
+        let text = format!("{head}[lens]\nmodel = \"dispersion-engineered\"\n{lens}\n\n[source]{tail}\n{extra}\n")
+            .replace("range_nm = 50.0", "range_nm = 8.0")
+            .replace("quantum_efficiency = 0.2", "quantum_efficiency = 0.2\nread_noise_e = 2.0")
+            .replace("form = \"mean\"", "form = \"mean\"\ntolerance = 1e-6");
+        Source::from_text(text, "dispersion-engineered scene written in the test", std::env::temp_dir())
+    }
+
+    /// `examples/designs.toml`'s "achromat F/2.5, 5 fs (reduced)": β = 5/221.96, mostly chromatic.
+    const REDUCED: &str = "f_number = 2.5\nfocal_length_mm = 3.36\ndesign_band_nm = [750.0, 850.0]\n\
+                           group_delay_range_fs = 5.0\ndelay_overflow = \"reduced\"\nefficiency = 0.15\n\
+                           transmission = 0.55";
+    /// `examples/designs.toml`'s "achromat D = 0.2 mm, 5 fs": below D_max = 200.8 µm, β = 1.
+    const BELOW_D_MAX: &str = "aperture_diameter_mm = 0.2\nfocal_length_mm = 3.36\ndesign_band_nm = [750.0, 850.0]\n\
+                               group_delay_range_fs = 5.0\nefficiency = 0.15\ntransmission = 0.55";
+
+    /// (ASNR, mean MTF, SNR0, N) of an evaluation at `tolerance` with `key = value`.
+    fn evaluated(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 4] {
+        let mut set: Vec<String> = overrides.to_vec();
+        set.push(format!("options.tolerance={REFERENCE_TOLERANCE:e}"));
+        set.push(scene::sweep::assignment(key, value));
+        let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
+        [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
+    }
+
+    /// The reference written here: central differences of converged evaluations at the steps
+    /// `2h` and `h`, Richardson-extrapolated, `(4 D(h) − D(2h))/3` (error ∝ h⁴).
+    fn reference(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
+        let central = |h: f64| -> [f64; 4] {
+            let (up, down) =
+                (evaluated(source, overrides, key, value + h), evaluated(source, overrides, key, value - h));
+            std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
+        };
+        let (coarse, fine) = (central(2.0 * h), central(h));
+        std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+    }
+
+    /// Each key's gradient (ASNR, mean MTF, SNR0, N), as ∂/∂ln key, against [`reference`] with
+    /// the step `step(key, value)`, within 10× the scene's tolerance 1e-6 of the gradient's norm
+    /// (a quantity whose gradient is 0 everywhere against its own size). The errors/norm printed.
+    fn check(source: &Source, overrides: &[&str], keys: &[&str], step: &dyn Fn(&str, f64) -> f64) {
+        let overrides: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
+        let asked: Vec<String> = keys.iter().map(|s| (*s).to_owned()).collect();
+        let g = gradient(source, &overrides, &asked).unwrap();
+        assert_eq!(g.keys, asked);
+        let references: Vec<[f64; 4]> =
+            g.keys.iter().zip(&g.values).map(|(k, v)| reference(source, &overrides, k, *v, step(k, *v))).collect();
+        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            let mine: Vec<f64> = (0..g.keys.len()).map(|i| ours[q][i] * g.values[i]).collect();
+            let theirs: Vec<f64> = (0..g.keys.len()).map(|i| references[i][q] * g.values[i]).collect();
+            let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
+            let norm = match mine.iter().map(|x| x * x).sum::<f64>().sqrt() {
+                0.0 => quantity,
+                norm => norm,
+            };
+            for (i, k) in g.keys.iter().enumerate() {
+                let error = (mine[i] - theirs[i]).abs();
+                println!(
+                    "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {:.1e}",
+                    mine[i],
+                    theirs[i],
+                    error / norm
+                );
+                assert!(error <= 10.0 * 1e-6 * norm, "{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]);
+            }
+        }
+    }
+
+    /// A relative step of 1e-3 of the value for the design's keys (their scale is the key's
+    /// own), 0.1 nm for the band's edges (the band's scale is the spectrum's σ = 2.83 nm), 0.05°
+    /// for the field angle.
+    fn step(key: &str, value: f64) -> f64 {
+        match key {
+            k if k.starts_with("lens.design_band_nm") => 0.1,
+            "field.x_deg" => 0.05,
+            _ => 1e-3 * value.abs(),
+        }
+    }
+
+    /// The reduced design (β = 0.0225, W020 ≈ 0.98 × the chromatic lens's): its F-number, focal
+    /// length and library range through β and the defocus lane, both band edges (λ0's defocus
+    /// lane, and the efficiency's window: the long edge at 1.4σ above the spectrum's centre),
+    /// efficiency, transmission and the field angle (3°: the relative illumination cos⁴θ alone), with
+    /// the stray light in the integral form and the pixel MTF; and the same aperture given by its
+    /// diameter.
+    #[test]
+    fn the_reduced_achromat_matches_central_differences() {
+        let source = scene_with(REDUCED, "[field]\nx_deg = 3.0");
+        let keys = [
+            "lens.f_number",
+            "lens.focal_length_mm",
+            "lens.group_delay_range_fs",
+            "lens.design_band_nm[0]",
+            "lens.design_band_nm[1]",
+            "lens.efficiency",
+            "lens.transmission",
+            "field.x_deg",
+        ];
+        let glare = ["options.glare=\"included\"", "options.form=\"integral\"", "camera.pixel_mtf=true"];
+        let cut = ["lens.design_band_nm=[750.0, 804.0]", "lens.relative_illumination=\"cos4\""];
+        check(&source, &[&glare[..], &cut[..]].concat(), &keys, &step);
+        // the same aperture given by its diameter (F# = f0/D = 2.5): the diameter, and the focal
+        // length with D held (β moves with both)
+        let by_diameter = scene_with(&REDUCED.replace("f_number = 2.5", "aperture_diameter_mm = 1.344"), "");
+        check(&by_diameter, &[], &["lens.aperture_diameter_mm", "lens.focal_length_mm"], &step);
+    }
+
+    /// The true achromat below D_max (β = 1, W020 = 0): the diameter and the focal length (D
+    /// held: F# = f0/D moves), the library's range (0: β stays 1), both band edges (the short
+    /// one 1.1σ below the spectrum's centre; λ0's lane 0). (With the pixel MTF its F-number is
+    /// refused, as the chromatic lens's: at F/16.8 the cutoff 1/(λF#) falls inside [0, ν_N] and the
+    /// value takes the reference panels rule, which carries no defocus lane.)
+    #[test]
+    fn the_true_achromat_below_d_max_matches_central_differences() {
+        let source = scene_with(BELOW_D_MAX, "");
+        let keys = [
+            "lens.aperture_diameter_mm",
+            "lens.focal_length_mm",
+            "lens.group_delay_range_fs",
+            "lens.design_band_nm[0]",
+            "lens.design_band_nm[1]",
+            "lens.efficiency",
+        ];
+        let overrides = ["lens.design_band_nm=[797.0, 850.0]"];
+        check(&source, &overrides, &keys, &step);
+        let g = gradient(
+            &source,
+            &["lens.design_band_nm=[797.0, 850.0]".to_owned()],
+            &["lens.group_delay_range_fs".to_owned()],
+        )
+        .unwrap();
+        assert_eq!((g.d_asnr[0], g.d_mean_mtf[0], g.d_photoelectrons[0]), (0.0, 0.0, 0.0));
+    }
+
+    /// At D = D_max (ΔT_req = ΔT_lib) β = min(1, ΔT_lib/ΔT_req) has a kink: the design's keys are
+    /// refused naming it; a band edge on a top-hat's edge likewise; the band's edges stay.
+    #[test]
+    fn the_kink_at_d_max_is_refused_naming_the_key() {
+        let d_max_mm = super::lenses_max_diameter(3.36e-3, 5e-15) * 1e3;
+        let lens = BELOW_D_MAX.replace("aperture_diameter_mm = 0.2", &format!("aperture_diameter_mm = {d_max_mm:e}"))
+            + "\ndelay_overflow = \"reduced\"";
+        let source = scene_with(&lens, "");
+        for key in ["lens.aperture_diameter_mm", "lens.focal_length_mm", "lens.group_delay_range_fs"] {
+            let e = gradient(&source, &[], &[key.to_owned()]).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("--wrt {key}: not differentiable here")), "{e}");
+            assert!(e.contains("kink") && e.contains("D = D_max = 200.751 µm"), "{e}");
+        }
+        assert!(gradient(&source, &[], &["lens.design_band_nm[1]".to_owned()]).is_ok());
+        let top_hat = ["spectrum.shape=\"tophat\"".to_owned(), "lens.design_band_nm=[796.0, 850.0]".to_owned()];
+        let e = gradient(&source, &top_hat, &["lens.design_band_nm[0]".to_owned()]).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.design_band_nm[0]: not differentiable here") && e.contains("796 nm"), "{e}");
+    }
+}
