@@ -14,6 +14,8 @@ use serde::ser::{SerializeMap, SerializeStruct, Serializer};
 use metric::Parameter;
 use scene::Source;
 
+mod multiplexed;
+
 /// The gradient at one scene: its keys in their canonical spelling, their values, the value of
 /// the ASNR, mean MTF, SNR0 and photoelectrons there, and the derivative of each with respect to
 /// each key, in the key's own units (per ms for `exposure.time_ms`, per µm for
@@ -805,12 +807,14 @@ pub(crate) fn gradient_and_evaluation(
     let chains: Vec<Chain> = expanded
         .iter()
         .map(|(k, v)| {
-            chain_rule(k, *v, &lens_model, &table).unwrap_or_else(|| {
-                aperture_parameter(k, &lens_model, &table)
-                    .or_else(|| library_bias(k, &table))
-                    .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
-                    .map(|p| direct(p, *v))
-            })
+            multiplexed::chain(k, *v, &lens_model, &table)
+                .or_else(|| chain_rule(k, *v, &lens_model, &table))
+                .unwrap_or_else(|| {
+                    aperture_parameter(k, &lens_model, &table)
+                        .or_else(|| library_bias(k, &table))
+                        .unwrap_or_else(|| parameter(k, &lens_model, &shape, lanes))
+                        .map(|p| direct(p, *v))
+                })
         })
         .collect::<Result<_>>()?;
     // the engines' parameters, each once, in the order the keys first ask them

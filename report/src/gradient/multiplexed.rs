@@ -1,0 +1,293 @@
+//! The spatially multiplexed lens's keys (`lens.model = "multiplexed"`): which engine parameter
+//! each sets, or why its gradient is refused (docs/physics.md, "Gradients: the multiplexed lens").
+//!
+//! Interleaved layout: every channel `j` is an order through the full circular pupil with the
+//! defocus `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`, the efficiency `τ_j = η/N²` and, off axis, the
+//! lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)`: the chromatic and harmonic lenses' form, so the
+//! F-number, the focal length and the field angles ride the same lanes of the exact 1-D engine
+//! (`W020_j ∝ f0/F#²`, `Δ_j ∝ f0`, `∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`). Both layouts: one `η`
+//! for every channel scales every order's efficiency (and, segmented, every zone's amplitude
+//! `√η` of one composite pupil whose OTF is normalized at zero frequency), so it leaves the OTF
+//! as it is and moves the photon count alone, `N ∝ η`, as the chromatic lens's τ1; `T` moves the
+//! transmitted light alone.
+
+use anyhow::{Result, anyhow};
+use metric::Parameter;
+
+use super::{Chain, FIELD, field_point, lookup};
+
+/// The chain of `key` (at `value`) of a multiplexed lens, or why it is refused; `None` for a key
+/// that is not the lens's or another family's lens.
+pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> Option<Result<Chain>> {
+    if lens_model != "multiplexed" {
+        return None;
+    }
+    let layout = lookup(table, "lens.layout").and_then(toml::Value::as_str).unwrap_or("");
+    let interleaved = layout == "interleaved";
+    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
+    // the keys that move the channels' defocus or lateral colour: the segmented layout's refusal
+    let moves_wavefront = |why_interleaved: Chain| -> Option<Result<Chain>> {
+        Some(if interleaved {
+            Ok(why_interleaved)
+        } else {
+            Err(anyhow!(
+                "--wrt {key}: not differentiable here yet for lens.layout = \"{layout}\": it moves each zone's defocus \
+                 W020_j = (1 − λ/λ_j) f0/(8F#²) (and off axis its tilt, the lateral colour f0 tan θ (λ_j/λ − 1)) by its \
+                 own amount inside one composite pupil on the FFT path, a lane per zone that the FFT path's forward \
+                 mode does not carry yet (it is never replaced by a finite difference); computed for lens.layout = \
+                 \"interleaved\" (every channel the full circle, on the exact 1-D engine)"
+            ))
+        })
+    };
+    match key {
+        // one η for every channel: N ∝ η, the OTF unmoved (module docs)
+        "lens.efficiency" => Some(Ok(vec![(Parameter::Efficiency, 1.0 / value)])),
+        "lens.transmission" => Some(Ok(vec![(Parameter::Transmission, 1.0 / value)])),
+        "lens.f_number" => moves_wavefront(vec![(Parameter::FNumber, 1.0 / value)]),
+        // F# = f0/D where the diameter is given: ∂/∂ln f0 = ∂/∂ln f0|F# + ∂/∂ln F#
+        "lens.focal_length_mm" if diameter_given => {
+            moves_wavefront(vec![(Parameter::FocalLength, 1.0 / value), (Parameter::FNumber, 1.0 / value)])
+        }
+        "lens.focal_length_mm" => moves_wavefront(vec![(Parameter::FocalLength, 1.0 / value)]),
+        // ∂/∂D = −(1/D) ∂/∂ln F#
+        "lens.aperture_diameter_mm" => moves_wavefront(vec![(Parameter::FNumber, -1.0 / value)]),
+        _ => {
+            if let Some((_, axis)) = FIELD.iter().find(|(k, _)| *k == key) {
+                let p = Parameter::FieldAngle(*axis);
+                return moves_wavefront(super::direct(p, value));
+            }
+            if key.starts_with("fields") {
+                return match field_point(key) {
+                    Ok(Some((point, axis))) => {
+                        moves_wavefront(super::direct(Parameter::FieldPointAngle { point, axis }, value))
+                    }
+                    Ok(None) => None,
+                    Err(e) => Some(Err(e)),
+                };
+            }
+            refusal(key, interleaved)
+        }
+    }
+}
+
+/// The keys of the lens refused here, naming why; `None` for another key.
+fn refusal(key: &str, interleaved: bool) -> Option<Result<Chain>> {
+    let why = if key.starts_with("lens.channels_nm[") {
+        if interleaved {
+            "a channel's wavelength λ_j moves that channel's defocus W020_j = (1 − λ/λ_j) f0/(8F#²) and lateral colour \
+             alone, a lane of one order among the others, which the engines carry for one design wavelength common to \
+             every order (lens.design_wavelength_nm) but not yet per order"
+        } else {
+            "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
+             lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane \
+             per zone that the FFT path's forward mode does not carry yet"
+        }
+    } else if key.starts_with("lens.channel_efficiencies[") {
+        "a channel's own efficiency η_j weighs its OTF against the other channels' (τ_j = η_j/N², segmented a_j η_j: \
+         the order's relative weight moves), a lane the engines carry for a line's wavelength (the harmonic \
+         lens's orders) but not over a band yet"
+    } else if key.starts_with("lens.area_fractions[") {
+        "a zone's area fraction moves the zones' edges across the pupil (the edge's motion on the FFT path, carried \
+         for a central obscuration's circle but not for the zones' rings and wedges yet) and every zone's τ_j = a_j η_j"
+    } else {
+        return None;
+    };
+    Some(Err(anyhow!(
+        "--wrt {key}: not differentiable here yet for lens.model = \"multiplexed\": {why} (it is never replaced by a finite difference)"
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use scene::Source;
+    use scene::sweep::assignment;
+
+    use super::super::gradient;
+
+    /// The tolerance of the converged evaluations the references difference (docs/physics.md,
+    /// "Gradients": ≤ 1e-10).
+    const REFERENCE_TOLERANCE: f64 = 1e-10;
+
+    /// The two multiplexed designs of examples/designs.toml (750/800/850 nm, F/2.5, η = 0.15,
+    /// T = 0.55), `layout` with `zones`, in the paper's theory scene (examples/paper-theory.toml)
+    /// in place of its lens, written here.
+    fn multiplexed(layout: &str) -> Source {
+        multiplexed_with(layout, "efficiency = 0.15")
+    }
+
+    /// [`multiplexed`] with the efficiency given by `efficiency` (a line of `[lens]`).
+    fn multiplexed_with(layout: &str, efficiency: &str) -> Source {
+        let paper = scene::read(None).unwrap();
+        let rest = paper.text().split_once("[source]").unwrap().1;
+        let zones = if layout == "segmented" { "zones = \"concentric\"\n" } else { "" };
+        Source::from_text(
+            format!(
+                "title = \"multiplexed {layout}\"\n[lens]\nmodel = \"multiplexed\"\nlayout = \"{layout}\"\n{zones}\
+                 f_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [750.0, 800.0, 850.0]\n{efficiency}\n\
+                 transmission = 0.55\n\n[source]{rest}"
+            ),
+            "multiplexed lens written in the test",
+            ".",
+        )
+    }
+
+    fn owned(list: &[&str]) -> Vec<String> {
+        list.iter().map(|s| (*s).to_owned()).collect()
+    }
+
+    /// (ASNR, mean MTF, SNR0, N) of an evaluation at `tolerance` with `key = value`.
+    fn evaluated(source: &Source, overrides: &[&str], key: &str, value: f64, tolerance: f64) -> [f64; 4] {
+        let mut set: Vec<String> = overrides
+            .iter()
+            .filter(|o| o.split_once('=').is_none_or(|(k, _)| k.trim() != key))
+            .map(|o| (*o).to_owned())
+            .collect();
+        set.push(format!("options.tolerance={tolerance:e}"));
+        set.push(assignment(key, value));
+        let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
+        [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
+    }
+
+    /// The reference written here: central differences with step `h` of evaluations at
+    /// `tolerance`; for a field angle (whose step is not relative to the key)
+    /// Richardson-extrapolated from the steps `2h` and `h` (`(4 D(h) − D(2h))/3`).
+    fn reference(source: &Source, overrides: &[&str], key: &str, value: f64, h: f64, tolerance: f64) -> [f64; 4] {
+        let central = |h: f64| -> [f64; 4] {
+            let up = evaluated(source, overrides, key, value + h, tolerance);
+            let down = evaluated(source, overrides, key, value - h, tolerance);
+            std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
+        };
+        if !key.starts_with("field") {
+            return central(h);
+        }
+        let (coarse, fine) = (central(2.0 * h), central(h));
+        std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+    }
+
+    /// Every key's gradient at the scene tolerance `tolerance` against [`reference`] (step
+    /// `step(key, value)`, evaluations at `reference_tolerance`), within 10× `tolerance` of the
+    /// gradient's norm per quantity (the quantity itself where the gradient is 0).
+    fn check(
+        source: &Source,
+        overrides: &[&str],
+        keys: &[&str],
+        tolerance: f64,
+        reference_tolerance: f64,
+        step: &dyn Fn(&str, f64) -> f64,
+    ) -> super::super::Gradient {
+        let mut set = owned(overrides);
+        set.push(format!("options.tolerance={tolerance:e}"));
+        let g = gradient(source, &set, &owned(keys)).unwrap();
+        assert_eq!(g.keys, owned(keys));
+        let references: Vec<[f64; 4]> = g
+            .keys
+            .iter()
+            .zip(&g.values)
+            .map(|(k, v)| reference(source, overrides, k, *v, step(k, *v), reference_tolerance))
+            .collect();
+        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+        let mut failures = Vec::new();
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            // as relative sensitivities ∂/∂ln key, except the field angles (0 on axis)
+            let scale = |i: usize| if g.keys[i].starts_with("field") { 1.0 } else { g.values[i] };
+            let mine: Vec<f64> = (0..g.keys.len()).map(|i| ours[q][i] * scale(i)).collect();
+            let theirs: Vec<f64> = (0..g.keys.len()).map(|i| references[i][q] * scale(i)).collect();
+            let norm = match mine.iter().map(|x| x * x).sum::<f64>().sqrt() {
+                0.0 => [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q],
+                norm => norm,
+            };
+            for (i, k) in g.keys.iter().enumerate() {
+                let error = (mine[i] - theirs[i]).abs() / norm;
+                println!("{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {error:.1e}", mine[i], theirs[i]);
+                if error > 10.0 * tolerance {
+                    failures.push(format!("{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]));
+                }
+            }
+        }
+        assert!(failures.is_empty(), "{failures:#?}");
+        g
+    }
+
+    /// A key on which the value varies on the scale of the key itself: h ≈ 6.7e-4 |v|
+    /// (docs/physics.md, "Gradients"); 0.02° for a field angle (the mean MTF turns on degrees).
+    fn step(key: &str, value: f64) -> f64 {
+        if key.starts_with("field") { 0.02 } else { (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs() }
+    }
+
+    /// The interleaved lens on axis on a 10 nm band (the exact 1-D engine): the F-number and
+    /// focal length (every channel's `W020_j ∝ f0/F#²`, `N ∝ 1/F#²`), the one efficiency η (N
+    /// alone) and the transmission (the stray light alone: glare included, read noise), at the
+    /// scene's 1e-6 against differences of evaluations at 1e-10.
+    #[test]
+    fn interleaved_lens_keys_match_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides = ["spectrum.range_nm=10", "options.glare=\"included\"", "camera.read_noise_e=2"];
+        let keys = ["lens.f_number", "lens.focal_length_mm", "lens.efficiency", "lens.transmission"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        // the defocus moves the mean MTF; η and T do not
+        assert!(g.d_mean_mtf[0] != 0.0 && g.d_mean_mtf[1] != 0.0, "{g:?}");
+        assert!(g.d_mean_mtf[2] == 0.0 && g.d_mean_mtf[3] == 0.0 && g.d_snr0[3] < 0.0, "{g:?}");
+    }
+
+    /// The interleaved lens off axis at (2°, 1°) with cos⁴θ on a 4 nm band: each channel's
+    /// lateral colour `f0 tan θ (λ_j/λ − 1)` moves with the field angles
+    /// (`∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`) and with f0 (not F#), on the exact 1-D engine's lanes.
+    #[test]
+    fn interleaved_lens_off_axis_matches_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides =
+            ["spectrum.range_nm=4", "field.x_deg=2", "field.y_deg=1", "lens.relative_illumination=\"cos4\""];
+        let keys = ["field.x_deg", "field.y_deg", "lens.f_number", "lens.focal_length_mm"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+    }
+
+    /// The segmented lens (concentric zones, one composite pupil on the FFT path) on a 4 nm band:
+    /// η and T move N and the stray light alone (the composite pupil's amplitude √η is uniform
+    /// and its OTF normalized at zero frequency), so at a fixed sampling (64 pupil samples: the
+    /// FFT path's discrete rule, the same at every step) the differences are the photon counts'
+    /// and the value's discrete rule's exactly; the gradient within 10× 1e-4, the FFT path's
+    /// tolerance (measured: ≤ 1e-12 of the norm).
+    #[test]
+    fn segmented_lens_efficiency_and_transmission_match_central_differences() {
+        let source = multiplexed("segmented");
+        for other in ["signal", "background"] {
+            let channels = format!("lens.other_channels=\"{other}\"");
+            let overrides = [
+                "spectrum.range_nm=4",
+                "options.pupil_samples=64",
+                "options.glare=\"included\"",
+                "camera.read_noise_e=2",
+                &channels,
+            ];
+            let g = check(&source, &overrides, &["lens.efficiency", "lens.transmission"], 1e-4, 1e-4, &step);
+            assert!(g.d_mean_mtf == [0.0, 0.0] && g.d_photoelectrons[0] > 0.0, "{g:?}");
+        }
+    }
+
+    /// The keys refused, each naming itself and why: the segmented layout's keys that move a
+    /// zone's defocus inside the composite pupil, a channel's wavelength, a channel's own
+    /// efficiency and a zone's area.
+    #[test]
+    fn multiplexed_refusals_name_the_key_and_why() {
+        let segmented = multiplexed("segmented");
+        for (key, says) in [
+            ("lens.f_number", "a lane per zone"),
+            ("lens.focal_length_mm", "a lane per zone"),
+            ("field.x_deg", "a lane per zone"),
+            ("lens.channels_nm[1]", "composite pupil"),
+        ] {
+            let e = gradient(&segmented, &[], &owned(&[key])).unwrap_err().to_string();
+            assert!(e.contains(&format!("--wrt {key}")) && e.contains(says), "{key}: {e}");
+        }
+        let with_areas = owned(&["lens.area_fractions=[0.3, 0.3, 0.4]"]);
+        let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[0]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.area_fractions[0]") && e.contains("zones' edges"), "{e}");
+        let interleaved = multiplexed("interleaved");
+        let e = gradient(&interleaved, &[], &owned(&["lens.channels_nm"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("not yet per order"), "{e}");
+        let own = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("weighs its OTF"), "{e}");
+    }
+}
