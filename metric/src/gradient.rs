@@ -17,7 +17,10 @@ use crate::evaluate::{
 };
 use crate::{Error, GlareMode, MetricForm, Scene};
 
+mod multiplexed;
 mod noise_weight;
+
+pub use multiplexed::channel_wavelength_gradient;
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
 /// with respect to.

@@ -799,6 +799,9 @@ pub(crate) fn gradient_and_evaluation(
     if keys.is_empty() {
         bail!("no key to differentiate with respect to: give one or more --wrt KEY");
     }
+    if let Some(found) = multiplexed::with_channel_wavelengths(source, overrides, keys)? {
+        return Ok(found);
+    }
     let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
     let expanded = expand(source, &table, keys)?;
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();

@@ -5,7 +5,9 @@
 //! defocus `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`, the efficiency `τ_j = η/N²` and, off axis, the
 //! lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)`: the chromatic and harmonic lenses' form, so the
 //! F-number, the focal length and the field angles ride the same lanes of the exact 1-D engine
-//! (`W020_j ∝ f0/F#²`, `Δ_j ∝ f0`, `∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`). Both layouts: one `η`
+//! (`W020_j ∝ f0/F#²`, `Δ_j ∝ f0`, `∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`); a channel's wavelength
+//! λ_j moves its order alone, on axis the design wavelength's lane with that order's rates
+//! ([`with_channel_wavelengths`]). Both layouts: one `η`
 //! for every channel scales every order's efficiency (and, segmented, every zone's amplitude
 //! `√η` of one composite pupil whose OTF is normalized at zero frequency), so it leaves the OTF
 //! as it is and moves the photon count alone, `N ∝ η`, as the chromatic lens's τ1; `T` moves the
@@ -14,7 +16,80 @@
 use anyhow::{Result, anyhow};
 use metric::Parameter;
 
-use super::{Chain, FIELD, field_point, lookup};
+use super::{Chain, FIELD, Gradient, field_point, lookup};
+
+/// The gradient where `keys` ask a channel's wavelength of an interleaved lens
+/// (`lens.channels_nm[j]`, or `lens.channels_nm` for every channel), with its evaluation: each
+/// channel's wavelength by its own lane on axis ([`metric::channel_wavelength_gradient`]: the
+/// design wavelength's lane with the rates of that channel's order alone, per nm), the other
+/// keys as [`super::gradient_and_evaluation`] takes them, in the keys' order; `None` where no
+/// key is a channel's wavelength of an interleaved lens.
+pub(super) fn with_channel_wavelengths(
+    source: &scene::Source,
+    overrides: &[String],
+    keys: &[String],
+) -> Result<Option<(Gradient, metric::Evaluation)>> {
+    const CHANNELS: &str = "lens.channels_nm";
+    if !keys.iter().any(|k| k.trim().starts_with(CHANNELS)) {
+        return Ok(None);
+    }
+    let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
+    let model = lookup(&table, "lens.model").and_then(toml::Value::as_str);
+    let layout = lookup(&table, "lens.layout").and_then(toml::Value::as_str);
+    if model != Some("multiplexed") || layout != Some("interleaved") {
+        return Ok(None);
+    }
+    let expanded = super::expand(source, &table, keys)?;
+    let channel = |key: &str| super::entry_of(key, CHANNELS).and_then(Result::ok);
+    let others: Vec<String> = expanded.iter().filter(|(k, _)| channel(k).is_none()).map(|(k, _)| k.clone()).collect();
+    let mut rest = match others.is_empty() {
+        true => None,
+        false => Some(super::gradient_and_evaluation(source, overrides, &others)?),
+    };
+    let mut evaluation = rest.as_ref().map(|(_, e)| e.clone());
+    let (mut d_asnr, mut d_mean_mtf, mut d_snr0, mut d_photoelectrons) = (vec![], vec![], vec![], vec![]);
+    let mut at_rest = 0;
+    for (key, value) in &expanded {
+        if let Some(j) = channel(key) {
+            let g = metric::channel_wavelength_gradient(&built, j, value * 1e-9)
+                // the design wavelength's refusals, of this channel's
+                .map_err(|e| {
+                    anyhow!(
+                        "--wrt {key}: {}: {}",
+                        source.label(),
+                        e.to_string().replace("lens.design_wavelength_nm", key)
+                    )
+                })?;
+            // ∂/∂ln λ_j per nm
+            d_asnr.push(g.asnr[0] / value);
+            d_mean_mtf.push(g.mean_mtf[0] / value);
+            d_snr0.push(g.snr0[0] / value);
+            d_photoelectrons.push(g.photoelectrons[0] / value);
+            evaluation.get_or_insert(g.evaluation);
+        } else {
+            let (g, _) = rest.as_mut().expect("the other keys' gradient");
+            d_asnr.push(g.d_asnr[at_rest]);
+            d_mean_mtf.push(g.d_mean_mtf[at_rest]);
+            d_snr0.push(g.d_snr0[at_rest]);
+            d_photoelectrons.push(g.d_photoelectrons[at_rest]);
+            at_rest += 1;
+        }
+    }
+    let e = evaluation.expect("at least one key");
+    let gradient = Gradient {
+        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
+        values: expanded.iter().map(|(_, v)| *v).collect(),
+        asnr: e.asnr,
+        mean_mtf: e.mean_mtf,
+        snr0: e.snr0,
+        photoelectrons: e.photoelectrons,
+        d_asnr,
+        d_mean_mtf,
+        d_snr0,
+        d_photoelectrons,
+    };
+    Ok(Some((gradient, e)))
+}
 
 /// The chain of `key` (at `value`) of a multiplexed lens, or why it is refused; `None` for a key
 /// that is not the lens's or another family's lens.
@@ -72,16 +147,11 @@ pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table
 
 /// The keys of the lens refused here, naming why; `None` for another key.
 fn refusal(key: &str, interleaved: bool) -> Option<Result<Chain>> {
-    let why = if key.starts_with("lens.channels_nm[") {
-        if interleaved {
-            "a channel's wavelength λ_j moves that channel's defocus W020_j = (1 − λ/λ_j) f0/(8F#²) and lateral colour \
-             alone, a lane of one order among the others, which the engines carry for one design wavelength common to \
-             every order (lens.design_wavelength_nm) but not yet per order"
-        } else {
-            "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
-             lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane \
-             per zone that the FFT path's forward mode does not carry yet"
-        }
+    let why = if key.starts_with("lens.channels_nm[") && !interleaved {
+        // (an interleaved lens's: `with_channel_wavelengths`)
+        "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
+         lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane per \
+         zone that the FFT path's forward mode does not carry yet"
     } else if key.starts_with("lens.channel_efficiencies[") {
         "a channel's own efficiency η_j weighs its OTF against the other channels' (τ_j = η_j/N², segmented a_j η_j: \
          the order's relative weight moves), a lane the engines carry for a line's wavelength (the harmonic \
@@ -149,7 +219,8 @@ mod tests {
     }
 
     /// The reference written here: central differences with step `h` of evaluations at
-    /// `tolerance`; for a field angle (whose step is not relative to the key)
+    /// `tolerance`; for a field angle and a channel's wavelength (whose steps are not relative to
+    /// the key)
     /// Richardson-extrapolated from the steps `2h` and `h` (`(4 D(h) − D(2h))/3`).
     fn reference(source: &Source, overrides: &[&str], key: &str, value: f64, h: f64, tolerance: f64) -> [f64; 4] {
         let central = |h: f64| -> [f64; 4] {
@@ -157,7 +228,7 @@ mod tests {
             let down = evaluated(source, overrides, key, value - h, tolerance);
             std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
         };
-        if !key.starts_with("field") {
+        if !(key.starts_with("field") || key.starts_with("lens.channels_nm")) {
             return central(h);
         }
         let (coarse, fine) = (central(2.0 * h), central(h));
@@ -209,9 +280,16 @@ mod tests {
     }
 
     /// A key on which the value varies on the scale of the key itself: h ≈ 6.7e-4 |v|
-    /// (docs/physics.md, "Gradients"); 0.02° for a field angle (the mean MTF turns on degrees).
+    /// (docs/physics.md, "Gradients"); 0.02° for a field angle (the mean MTF turns on degrees);
+    /// 0.05 nm for a channel's wavelength (the mean MTF turns on the band's scale, nm).
     fn step(key: &str, value: f64) -> f64 {
-        if key.starts_with("field") { 0.02 } else { (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs() }
+        if key.starts_with("field") {
+            0.02
+        } else if key.starts_with("lens.channels_nm") {
+            0.05
+        } else {
+            (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs()
+        }
     }
 
     /// The interleaved lens on axis on a 10 nm band (the exact 1-D engine): the F-number and
@@ -240,6 +318,25 @@ mod tests {
         let keys = ["field.x_deg", "field.y_deg", "lens.f_number", "lens.focal_length_mm"];
         let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
         assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+    }
+
+    /// The interleaved lens's channel wavelengths on axis on a 10 nm band, with the F-number
+    /// among them (the keys' order kept): λ_j moves channel j's defocus alone,
+    /// `∂W020_j/∂ln λ_j = (λ/λ_j) f0/(8F#²)`, the design wavelength's lane with that order's
+    /// rates; against differences of evaluations at 1e-10 at the step 6.7e-4 λ_j.
+    #[test]
+    fn interleaved_channel_wavelengths_match_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides = ["spectrum.range_nm=10", "camera.read_noise_e=2"];
+        let keys = ["lens.channels_nm[0]", "lens.f_number", "lens.channels_nm[1]", "lens.channels_nm[2]"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        // λ_j moves the OTF alone; the channel in focus at the band's centre (800 nm) least,
+        // the mean MTF near its peak in λ_1 there
+        let least = g.d_mean_mtf[2].abs() < g.d_mean_mtf[0].abs().min(g.d_mean_mtf[3].abs());
+        assert!(g.d_photoelectrons[0] == 0.0 && least, "{g:?}");
+        let all = gradient(&source, &owned(&overrides), &owned(&["lens.channels_nm"])).unwrap();
+        assert_eq!(all.keys, owned(&["lens.channels_nm[0]", "lens.channels_nm[1]", "lens.channels_nm[2]"]));
+        assert_eq!(all.d_asnr, [g.d_asnr[0], g.d_asnr[2], g.d_asnr[3]]);
     }
 
     /// The segmented lens (concentric zones, one composite pupil on the FFT path) on a 4 nm band:
@@ -283,9 +380,11 @@ mod tests {
         let with_areas = owned(&["lens.area_fractions=[0.3, 0.3, 0.4]"]);
         let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[0]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.area_fractions[0]") && e.contains("zones' edges"), "{e}");
+        // an interleaved lens's channel off axis: its lateral colour alone moves
         let interleaved = multiplexed("interleaved");
-        let e = gradient(&interleaved, &[], &owned(&["lens.channels_nm"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("not yet per order"), "{e}");
+        let off_axis = owned(&["field.x_deg=1"]);
+        let e = gradient(&interleaved, &off_axis, &owned(&["lens.channels_nm"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("lateral colour"), "{e}");
         let own = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
         let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("weighs its OTF"), "{e}");
