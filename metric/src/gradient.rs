@@ -20,7 +20,7 @@ use crate::{Error, GlareMode, MetricForm, Scene};
 mod multiplexed;
 mod noise_weight;
 
-pub use multiplexed::channel_wavelength_gradient;
+pub use multiplexed::{channel_efficiency_gradient, channel_wavelength_gradient};
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
 /// with respect to.

@@ -799,7 +799,7 @@ pub(crate) fn gradient_and_evaluation(
     if keys.is_empty() {
         bail!("no key to differentiate with respect to: give one or more --wrt KEY");
     }
-    if let Some(found) = multiplexed::with_channel_wavelengths(source, overrides, keys)? {
+    if let Some(found) = multiplexed::with_channels(source, overrides, keys)? {
         return Ok(found);
     }
     let (table, built) = crate::objective::resolved_and_built(source, overrides)?;

@@ -8,6 +8,11 @@
 //! docs/physics.md "Gradients: the design wavelength") with the rates of the one order. The
 //! lens is seen through [`OneChannel`], which gives those rates and is the lens in everything
 //! else, and the design wavelength's gradient is taken of the scene with it.
+//!
+//! A channel's own efficiency η_j (`lens.channel_efficiencies[j]`, `τ_j = η_j/N²`) likewise
+//! moves that order's weight alone, `∂τ_j/∂ln η_j = τ_j`, its defocus and the transmission
+//! held: the same lane with the rates `[0, τ_j]` of order `j` (the OTF's weights and
+//! `N ∝ ∫ ρ Σ τ_o`, the stray light `N_T − N` by `−∂N`).
 
 use std::sync::Arc;
 
@@ -16,13 +21,22 @@ use optics::{Field, LensModel, Order};
 use super::{Error, Gradient, Parameter};
 use crate::Scene;
 
+/// What of one channel moves.
+#[derive(Clone, Copy, Debug)]
+enum Moving {
+    /// Its wavelength λ_j (m).
+    Wavelength(f64),
+    /// Its own efficiency η_j.
+    Efficiency,
+}
+
 /// A lens of channels in the interleaved lens's form, its design-wavelength rates those of
-/// channel `channel` at `wavelength_m` alone.
+/// channel `channel` alone, as `moving` moves it.
 #[derive(Debug)]
 struct OneChannel {
     lens: Arc<dyn LensModel>,
     channel: usize,
-    wavelength_m: f64,
+    moving: Moving,
 }
 
 impl LensModel for OneChannel {
@@ -57,9 +71,10 @@ impl LensModel for OneChannel {
         self.lens.describe()
     }
 
-    /// On axis, `[(λ/λ_j) K, 0]` for order `j` and `[0, 0]` for the others; `None` off axis
-    /// (the channel's lateral colour moves too, a lane of one order's shift not carried) or
-    /// where order `j` is not the full circle with the defocus `(1 − λ/λ_j) K` (another lens).
+    /// On axis, for order `j`: `[(λ/λ_j) K, 0]` for its wavelength, `[0, τ_j]` for its own
+    /// efficiency; `[0, 0]` for the others. `None` off axis (a channel's wavelength moves its
+    /// lateral colour too, a lane of one order's shift not carried) or where order `j` is not
+    /// the full circle with a defocus alone (for the wavelength: `(1 − λ/λ_j) K`).
     fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
         if !field.is_on_axis() {
             return None;
@@ -68,16 +83,20 @@ impl LensModel for OneChannel {
         let f_number = self.lens.f_number();
         let k = self.lens.focal_length() / (8.0 * f_number * f_number);
         let order = orders.get(self.channel)?;
-        let expected = (1.0 - wavelength_m / self.wavelength_m) * k;
-        let circle = matches!(order.pupil, optics::Pupil::Full) && order.wavefront.is_defocus_only();
-        if !circle || (order.wavefront.defocus_m - expected).abs() > 1e-12 * k {
+        if !(matches!(order.pupil, optics::Pupil::Full) && order.wavefront.is_defocus_only()) {
             return None;
         }
-        Some(
-            (0..orders.len())
-                .map(|o| if o == self.channel { [k * wavelength_m / self.wavelength_m, 0.0] } else { [0.0, 0.0] })
-                .collect(),
-        )
+        let rates = match self.moving {
+            Moving::Wavelength(lambda_j) => {
+                let expected = (1.0 - wavelength_m / lambda_j) * k;
+                if (order.wavefront.defocus_m - expected).abs() > 1e-12 * k {
+                    return None;
+                }
+                [k * wavelength_m / lambda_j, 0.0]
+            }
+            Moving::Efficiency => [0.0, order.efficiency],
+        };
+        Some((0..orders.len()).map(|o| if o == self.channel { rates } else { [0.0, 0.0] }).collect())
     }
 }
 
@@ -98,7 +117,22 @@ pub fn channel_wavelength_gradient(scene: &Scene, channel: usize, wavelength_m: 
                 .to_owned(),
         });
     }
-    let lens: Arc<dyn LensModel> = Arc::new(OneChannel { lens: scene.lens_arc(), channel, wavelength_m });
+    one_channel(scene, channel, Moving::Wavelength(wavelength_m))
+}
+
+/// As [`channel_wavelength_gradient`], with respect to `ln η_j` of channel `channel`'s own
+/// efficiency (`τ_j = η_j/N²`, a constant): the lane with the rates `[0, τ_j]` of its order.
+///
+/// # Errors
+/// The evaluation's, and [`Error::NotDifferentiable`] where the design wavelength's gradient is
+/// refused (off axis among them: its lanes there move every order's image shift), naming why.
+pub fn channel_efficiency_gradient(scene: &Scene, channel: usize) -> Result<Gradient, Error> {
+    one_channel(scene, channel, Moving::Efficiency)
+}
+
+/// The design wavelength's gradient of `scene` with its lens seen through [`OneChannel`].
+fn one_channel(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
+    let lens: Arc<dyn LensModel> = Arc::new(OneChannel { lens: scene.lens_arc(), channel, moving });
     let seen = scene.clone().with_lens(lens);
     super::gradient(&seen, &[Parameter::DesignWavelength])
 }

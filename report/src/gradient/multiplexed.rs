@@ -18,19 +18,21 @@ use metric::Parameter;
 
 use super::{Chain, FIELD, Gradient, field_point, lookup};
 
-/// The gradient where `keys` ask a channel's wavelength of an interleaved lens
-/// (`lens.channels_nm[j]`, or `lens.channels_nm` for every channel), with its evaluation: each
-/// channel's wavelength by its own lane on axis ([`metric::channel_wavelength_gradient`]: the
-/// design wavelength's lane with the rates of that channel's order alone, per nm), the other
-/// keys as [`super::gradient_and_evaluation`] takes them, in the keys' order; `None` where no
-/// key is a channel's wavelength of an interleaved lens.
-pub(super) fn with_channel_wavelengths(
+/// The gradient where `keys` ask a channel's wavelength or own efficiency of an interleaved lens
+/// (`lens.channels_nm[j]`, `lens.channel_efficiencies[j]`, or either list for every channel),
+/// with its evaluation: each by its own lane on axis ([`metric::channel_wavelength_gradient`],
+/// [`metric::channel_efficiency_gradient`]: the design wavelength's lane with the rates of that
+/// channel's order alone, per nm or per unit η_j), the other keys as
+/// [`super::gradient_and_evaluation`] takes them, in the keys' order; `None` where no key is a
+/// channel's of an interleaved lens.
+pub(super) fn with_channels(
     source: &scene::Source,
     overrides: &[String],
     keys: &[String],
 ) -> Result<Option<(Gradient, metric::Evaluation)>> {
     const CHANNELS: &str = "lens.channels_nm";
-    if !keys.iter().any(|k| k.trim().starts_with(CHANNELS)) {
+    const EFFICIENCIES: &str = "lens.channel_efficiencies";
+    if !keys.iter().any(|k| k.trim().starts_with("lens.channel")) {
         return Ok(None);
     }
     let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
@@ -40,7 +42,11 @@ pub(super) fn with_channel_wavelengths(
         return Ok(None);
     }
     let expanded = super::expand(source, &table, keys)?;
-    let channel = |key: &str| super::entry_of(key, CHANNELS).and_then(Result::ok);
+    // (the channel, whether it is its wavelength)
+    let channel = |key: &str| {
+        let entry = |list: &str| super::entry_of(key, list).and_then(Result::ok);
+        entry(CHANNELS).map(|j| (j, true)).or_else(|| entry(EFFICIENCIES).map(|j| (j, false)))
+    };
     let others: Vec<String> = expanded.iter().filter(|(k, _)| channel(k).is_none()).map(|(k, _)| k.clone()).collect();
     let mut rest = match others.is_empty() {
         true => None,
@@ -50,17 +56,16 @@ pub(super) fn with_channel_wavelengths(
     let (mut d_asnr, mut d_mean_mtf, mut d_snr0, mut d_photoelectrons) = (vec![], vec![], vec![], vec![]);
     let mut at_rest = 0;
     for (key, value) in &expanded {
-        if let Some(j) = channel(key) {
-            let g = metric::channel_wavelength_gradient(&built, j, value * 1e-9)
-                // the design wavelength's refusals, of this channel's
-                .map_err(|e| {
-                    anyhow!(
-                        "--wrt {key}: {}: {}",
-                        source.label(),
-                        e.to_string().replace("lens.design_wavelength_nm", key)
-                    )
-                })?;
-            // ∂/∂ln λ_j per nm
+        if let Some((j, wavelength)) = channel(key) {
+            let g = match wavelength {
+                true => metric::channel_wavelength_gradient(&built, j, value * 1e-9),
+                false => metric::channel_efficiency_gradient(&built, j),
+            }
+            // the design wavelength's refusals, of this channel's
+            .map_err(|e| {
+                anyhow!("--wrt {key}: {}: {}", source.label(), e.to_string().replace("lens.design_wavelength_nm", key))
+            })?;
+            // ∂/∂ln λ_j per nm, ∂/∂ln η_j per unit η_j
             d_asnr.push(g.asnr[0] / value);
             d_mean_mtf.push(g.mean_mtf[0] / value);
             d_snr0.push(g.snr0[0] / value);
@@ -152,10 +157,10 @@ fn refusal(key: &str, interleaved: bool) -> Option<Result<Chain>> {
         "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
          lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane per \
          zone that the FFT path's forward mode does not carry yet"
-    } else if key.starts_with("lens.channel_efficiencies[") {
-        "a channel's own efficiency η_j weighs its OTF against the other channels' (τ_j = η_j/N², segmented a_j η_j: \
-         the order's relative weight moves), a lane the engines carry for a line's wavelength (the harmonic \
-         lens's orders) but not over a band yet"
+    } else if key.starts_with("lens.channel_efficiencies[") && !interleaved {
+        // (an interleaved lens's: `with_channels`)
+        "a zone's own efficiency η_j weighs its amplitude √η_j inside one composite pupil on the FFT path against \
+         the other zones' (τ_j = a_j η_j), a lane per zone that the FFT path's forward mode does not carry yet"
     } else if key.starts_with("lens.area_fractions[") {
         "a zone's area fraction moves the zones' edges across the pupil (the edge's motion on the FFT path, carried \
          for a central obscuration's circle but not for the zones' rings and wedges yet) and every zone's τ_j = a_j η_j"
@@ -339,6 +344,27 @@ mod tests {
         assert_eq!(all.d_asnr, [g.d_asnr[0], g.d_asnr[2], g.d_asnr[3]]);
     }
 
+    /// The interleaved lens's channels' own efficiencies on axis on a 10 nm band with the stray
+    /// light and read noise, with T among them: η_j moves channel j's weight alone
+    /// (`∂τ_j/∂ln η_j = τ_j`), so the OTF's weights, N and the stray light; the design
+    /// wavelength's lane with the rates `[0, τ_j]` of that order.
+    #[test]
+    fn interleaved_channel_efficiencies_match_central_differences() {
+        let source = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let overrides = ["spectrum.range_nm=10", "options.glare=\"included\"", "camera.read_noise_e=2"];
+        let keys = ["lens.channel_efficiencies", "lens.transmission"];
+        let mut set = owned(&overrides);
+        set.push("options.tolerance=1e-6".to_owned());
+        let listed = gradient(&source, &set, &owned(&keys)).unwrap();
+        let each = ["lens.channel_efficiencies[0]", "lens.channel_efficiencies[1]", "lens.channel_efficiencies[2]"];
+        assert_eq!(listed.keys[..3], owned(&each));
+        let g =
+            check(&source, &overrides, &[&each[..], &["lens.transmission"]].concat(), 1e-6, REFERENCE_TOLERANCE, &step);
+        assert_eq!(listed.d_asnr, g.d_asnr);
+        // the in-focus channel's weight raises the mean MTF, the defocused ones' lower it
+        assert!(g.d_mean_mtf[1] > 0.0 && g.d_mean_mtf[0] < 0.0 && g.d_mean_mtf[2] < 0.0, "{g:?}");
+    }
+
     /// The segmented lens (concentric zones, one composite pupil on the FFT path) on a 4 nm band:
     /// η and T move N and the stray light alone (the composite pupil's amplitude √η is uniform
     /// and its OTF normalized at zero frequency), so at a fixed sampling (64 pupil samples: the
@@ -385,8 +411,8 @@ mod tests {
         let off_axis = owned(&["field.x_deg=1"]);
         let e = gradient(&interleaved, &off_axis, &owned(&["lens.channels_nm"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("lateral colour"), "{e}");
-        let own = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let own = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
         let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("weighs its OTF"), "{e}");
+        assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("composite pupil"), "{e}");
     }
 }
