@@ -108,15 +108,6 @@ impl LensModel for OneChannel {
 /// The evaluation's, and [`Error::NotDifferentiable`] off axis, over a field-of-view list, and
 /// where the design wavelength's gradient is refused (naming why).
 pub fn channel_wavelength_gradient(scene: &Scene, channel: usize, wavelength_m: f64) -> Result<Gradient, Error> {
-    if !scene.field().is_on_axis() || !scene.fields().is_empty() {
-        return Err(Error::NotDifferentiable {
-            parameter: "a channel's wavelength",
-            reason: "off axis a channel's wavelength λ_j moves its lateral colour f0 tan θ (λ_j/λ − 1) alone, one \
-                     order's image shift against the others', a lane the engines do not carry yet (on axis it is \
-                     computed)"
-                .to_owned(),
-        });
-    }
     one_channel(scene, channel, Moving::Wavelength(wavelength_m))
 }
 
@@ -124,14 +115,29 @@ pub fn channel_wavelength_gradient(scene: &Scene, channel: usize, wavelength_m: 
 /// efficiency (`τ_j = η_j/N²`, a constant): the lane with the rates `[0, τ_j]` of its order.
 ///
 /// # Errors
-/// The evaluation's, and [`Error::NotDifferentiable`] where the design wavelength's gradient is
-/// refused (off axis among them: its lanes there move every order's image shift), naming why.
+/// The evaluation's, and [`Error::NotDifferentiable`] off axis, over a field-of-view list, and
+/// where the design wavelength's gradient is refused (naming why).
 pub fn channel_efficiency_gradient(scene: &Scene, channel: usize) -> Result<Gradient, Error> {
     one_channel(scene, channel, Moving::Efficiency)
 }
 
 /// The design wavelength's gradient of `scene` with its lens seen through [`OneChannel`].
 fn one_channel(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
+    if !scene.field().is_on_axis() || !scene.fields().is_empty() {
+        let (parameter, reason) = match moving {
+            Moving::Wavelength(_) => (
+                "a channel's wavelength",
+                "off axis a channel's wavelength λ_j moves its lateral colour f0 tan θ (λ_j/λ − 1) alone, one order's \
+                 image shift against the others', a lane the engines do not carry yet (on axis it is computed)",
+            ),
+            Moving::Efficiency => (
+                "a channel's own efficiency",
+                "off axis its lane (the design wavelength's with one order's weight moving) is not carried: the \
+                 design wavelength's lanes there move every order's image shift (on axis it is computed)",
+            ),
+        };
+        return Err(Error::NotDifferentiable { parameter, reason: reason.to_owned() });
+    }
     let lens: Arc<dyn LensModel> = Arc::new(OneChannel { lens: scene.lens_arc(), channel, moving });
     let seen = scene.clone().with_lens(lens);
     super::gradient(&seen, &[Parameter::DesignWavelength])

@@ -411,6 +411,9 @@ mod tests {
         let off_axis = owned(&["field.x_deg=1"]);
         let e = gradient(&interleaved, &off_axis, &owned(&["lens.channels_nm"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("lateral colour"), "{e}");
+        let own = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let e = gradient(&own, &off_axis, &owned(&["lens.channel_efficiencies[1]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channel_efficiencies[1]") && e.contains("off axis its lane"), "{e}");
         let own = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
         let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("composite pupil"), "{e}");
