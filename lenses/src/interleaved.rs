@@ -130,6 +130,23 @@ impl LensModel for Interleaved {
         (0..self.channels.len()).map(|j| self.channel_efficiency(j, wavelength_m)).sum()
     }
 
+    /// Each channel's lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)` moves as
+    /// `∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`; its defocus and efficiency do not move with the field
+    /// (docs/physics.md, "Gradients: the multiplexed lens").
+    fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        let sec2 = |angle: f64| 1.0 / (angle.cos() * angle.cos());
+        let (sx, sy) = (self.focal_length * sec2(field.x_rad), self.focal_length * sec2(field.y_rad));
+        Some(
+            self.channels
+                .iter()
+                .map(|c| {
+                    let k = c.wavelength_m / wavelength_m - 1.0;
+                    [sx * k, sy * k]
+                })
+                .collect(),
+        )
+    }
+
     fn transmission(&self, wavelength_m: f64) -> f64 {
         self.transmission.value(wavelength_m)
     }
@@ -244,6 +261,33 @@ mod tests {
             }
         }
         assert_eq!(lens.design_wavelength(), Some(550e-9));
+    }
+
+    /// Each channel's `∂Δ_j/∂θ` against central differences of the orders' image shifts
+    /// (step 1e-5 rad, relative error of order 1e-10), along x and y at (3°, −2°).
+    #[test]
+    fn image_shift_field_rates_are_the_shifts_derivatives() {
+        let lens = rgb();
+        let (tx, ty, h) = (3f64.to_radians(), (-2f64).to_radians(), 1e-5);
+        for lambda in [430e-9, 550e-9, 700e-9] {
+            let rates = lens.image_shift_field_rates(lambda, Field::new(tx, ty)).unwrap();
+            let shifts = |x: f64, y: f64| -> Vec<[f64; 2]> {
+                lens.orders(lambda, Field::new(x, y)).iter().map(|o| o.wavefront.image_shift_m).collect()
+            };
+            let (up_x, down_x) = (shifts(tx + h, ty), shifts(tx - h, ty));
+            let (up_y, down_y) = (shifts(tx, ty + h), shifts(tx, ty - h));
+            assert_eq!(rates.len(), 3);
+            for j in 0..3 {
+                let want = [(up_x[j][0] - down_x[j][0]) / (2.0 * h), (up_y[j][1] - down_y[j][1]) / (2.0 * h)];
+                for axis in 0..2 {
+                    let error = (rates[j][axis] - want[axis]).abs();
+                    assert!(
+                        error <= 1e-8 * want[axis].abs().max(1e-9),
+                        "{j} {axis} at {lambda}: {rates:?} vs {want:?}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

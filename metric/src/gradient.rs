@@ -19,7 +19,10 @@ use crate::{Error, GlareMode, MetricForm, Scene};
 
 mod achromat;
 mod library_fft;
+mod multiplexed;
 mod noise_weight;
+
+pub use multiplexed::{channel_efficiency_gradient, channel_wavelength_gradient};
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken
 /// with respect to.

@@ -15,6 +15,7 @@ use metric::Parameter;
 use scene::Source;
 
 mod achromat;
+mod multiplexed;
 
 /// The gradient at one scene: its keys in their canonical spelling, their values, the value of
 /// the ASNR, mean MTF, SNR0 and photoelectrons there, and the derivative of each with respect to
@@ -804,6 +805,9 @@ pub(crate) fn gradient_and_evaluation(
     if keys.is_empty() {
         bail!("no key to differentiate with respect to: give one or more --wrt KEY");
     }
+    if let Some(found) = multiplexed::with_channels(source, overrides, keys)? {
+        return Ok(found);
+    }
     let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
     let expanded = expand(source, &table, keys)?;
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
@@ -813,6 +817,7 @@ pub(crate) fn gradient_and_evaluation(
         .iter()
         .map(|(k, v)| {
             achromat::chain(k, *v, &lens_model, &table)
+                .or_else(|| multiplexed::chain(k, *v, &lens_model, &table))
                 .or_else(|| chain_rule(k, *v, &lens_model, &table))
                 .unwrap_or_else(|| {
                     aperture_parameter(k, &lens_model, &table)

@@ -1,0 +1,421 @@
+//! The spatially multiplexed lens's keys (`lens.model = "multiplexed"`): which engine parameter
+//! each sets, or why its gradient is refused (docs/physics.md, "Gradients: the multiplexed lens").
+//!
+//! Interleaved layout: every channel `j` is an order through the full circular pupil with the
+//! defocus `W020_j(λ) = (1 − λ/λ_j) f0/(8F#²)`, the efficiency `τ_j = η/N²` and, off axis, the
+//! lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)`: the chromatic and harmonic lenses' form, so the
+//! F-number, the focal length and the field angles ride the same lanes of the exact 1-D engine
+//! (`W020_j ∝ f0/F#²`, `Δ_j ∝ f0`, `∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`); a channel's wavelength
+//! λ_j moves its order alone, on axis the design wavelength's lane with that order's rates
+//! ([`with_channel_wavelengths`]). Both layouts: one `η`
+//! for every channel scales every order's efficiency (and, segmented, every zone's amplitude
+//! `√η` of one composite pupil whose OTF is normalized at zero frequency), so it leaves the OTF
+//! as it is and moves the photon count alone, `N ∝ η`, as the chromatic lens's τ1; `T` moves the
+//! transmitted light alone.
+
+use anyhow::{Result, anyhow};
+use metric::Parameter;
+
+use super::{Chain, FIELD, Gradient, field_point, lookup};
+
+/// The gradient where `keys` ask a channel's wavelength or own efficiency of an interleaved lens
+/// (`lens.channels_nm[j]`, `lens.channel_efficiencies[j]`, or either list for every channel),
+/// with its evaluation: each by its own lane on axis ([`metric::channel_wavelength_gradient`],
+/// [`metric::channel_efficiency_gradient`]: the design wavelength's lane with the rates of that
+/// channel's order alone, per nm or per unit η_j), the other keys as
+/// [`super::gradient_and_evaluation`] takes them, in the keys' order; `None` where no key is a
+/// channel's of an interleaved lens.
+pub(super) fn with_channels(
+    source: &scene::Source,
+    overrides: &[String],
+    keys: &[String],
+) -> Result<Option<(Gradient, metric::Evaluation)>> {
+    const CHANNELS: &str = "lens.channels_nm";
+    const EFFICIENCIES: &str = "lens.channel_efficiencies";
+    if !keys.iter().any(|k| k.trim().starts_with("lens.channel")) {
+        return Ok(None);
+    }
+    let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
+    let model = lookup(&table, "lens.model").and_then(toml::Value::as_str);
+    let layout = lookup(&table, "lens.layout").and_then(toml::Value::as_str);
+    if model != Some("multiplexed") || layout != Some("interleaved") {
+        return Ok(None);
+    }
+    let expanded = super::expand(source, &table, keys)?;
+    // (the channel, whether it is its wavelength)
+    let channel = |key: &str| {
+        let entry = |list: &str| super::entry_of(key, list).and_then(Result::ok);
+        entry(CHANNELS).map(|j| (j, true)).or_else(|| entry(EFFICIENCIES).map(|j| (j, false)))
+    };
+    let others: Vec<String> = expanded.iter().filter(|(k, _)| channel(k).is_none()).map(|(k, _)| k.clone()).collect();
+    let mut rest = match others.is_empty() {
+        true => None,
+        false => Some(super::gradient_and_evaluation(source, overrides, &others)?),
+    };
+    let mut evaluation = rest.as_ref().map(|(_, e)| e.clone());
+    let (mut d_asnr, mut d_mean_mtf, mut d_snr0, mut d_photoelectrons) = (vec![], vec![], vec![], vec![]);
+    let mut at_rest = 0;
+    for (key, value) in &expanded {
+        if let Some((j, wavelength)) = channel(key) {
+            let g = match wavelength {
+                true => metric::channel_wavelength_gradient(&built, j, value * 1e-9),
+                false => metric::channel_efficiency_gradient(&built, j),
+            }
+            // the design wavelength's refusals, of this channel's
+            .map_err(|e| {
+                anyhow!("--wrt {key}: {}: {}", source.label(), e.to_string().replace("lens.design_wavelength_nm", key))
+            })?;
+            // ∂/∂ln λ_j per nm, ∂/∂ln η_j per unit η_j
+            d_asnr.push(g.asnr[0] / value);
+            d_mean_mtf.push(g.mean_mtf[0] / value);
+            d_snr0.push(g.snr0[0] / value);
+            d_photoelectrons.push(g.photoelectrons[0] / value);
+            evaluation.get_or_insert(g.evaluation);
+        } else {
+            let (g, _) = rest.as_mut().expect("the other keys' gradient");
+            d_asnr.push(g.d_asnr[at_rest]);
+            d_mean_mtf.push(g.d_mean_mtf[at_rest]);
+            d_snr0.push(g.d_snr0[at_rest]);
+            d_photoelectrons.push(g.d_photoelectrons[at_rest]);
+            at_rest += 1;
+        }
+    }
+    let e = evaluation.expect("at least one key");
+    let gradient = Gradient {
+        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
+        values: expanded.iter().map(|(_, v)| *v).collect(),
+        asnr: e.asnr,
+        mean_mtf: e.mean_mtf,
+        snr0: e.snr0,
+        photoelectrons: e.photoelectrons,
+        d_asnr,
+        d_mean_mtf,
+        d_snr0,
+        d_photoelectrons,
+    };
+    Ok(Some((gradient, e)))
+}
+
+/// The chain of `key` (at `value`) of a multiplexed lens, or why it is refused; `None` for a key
+/// that is not the lens's or another family's lens.
+pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> Option<Result<Chain>> {
+    if lens_model != "multiplexed" {
+        return None;
+    }
+    let layout = lookup(table, "lens.layout").and_then(toml::Value::as_str).unwrap_or("");
+    let interleaved = layout == "interleaved";
+    let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
+    // the keys that move the channels' defocus or lateral colour: the segmented layout's refusal
+    let moves_wavefront = |why_interleaved: Chain| -> Option<Result<Chain>> {
+        Some(if interleaved {
+            Ok(why_interleaved)
+        } else {
+            Err(anyhow!(
+                "--wrt {key}: not differentiable here yet for lens.layout = \"{layout}\": it moves each zone's defocus \
+                 W020_j = (1 − λ/λ_j) f0/(8F#²) (and off axis its tilt, the lateral colour f0 tan θ (λ_j/λ − 1)) by its \
+                 own amount inside one composite pupil on the FFT path, a lane per zone that the FFT path's forward \
+                 mode does not carry yet (it is never replaced by a finite difference); computed for lens.layout = \
+                 \"interleaved\" (every channel the full circle, on the exact 1-D engine)"
+            ))
+        })
+    };
+    match key {
+        // one η for every channel: N ∝ η, the OTF unmoved (module docs)
+        "lens.efficiency" => Some(Ok(vec![(Parameter::Efficiency, 1.0 / value)])),
+        "lens.transmission" => Some(Ok(vec![(Parameter::Transmission, 1.0 / value)])),
+        "lens.f_number" => moves_wavefront(vec![(Parameter::FNumber, 1.0 / value)]),
+        // F# = f0/D where the diameter is given: ∂/∂ln f0 = ∂/∂ln f0|F# + ∂/∂ln F#
+        "lens.focal_length_mm" if diameter_given => {
+            moves_wavefront(vec![(Parameter::FocalLength, 1.0 / value), (Parameter::FNumber, 1.0 / value)])
+        }
+        "lens.focal_length_mm" => moves_wavefront(vec![(Parameter::FocalLength, 1.0 / value)]),
+        // ∂/∂D = −(1/D) ∂/∂ln F#
+        "lens.aperture_diameter_mm" => moves_wavefront(vec![(Parameter::FNumber, -1.0 / value)]),
+        _ => {
+            if let Some((_, axis)) = FIELD.iter().find(|(k, _)| *k == key) {
+                let p = Parameter::FieldAngle(*axis);
+                return moves_wavefront(super::direct(p, value));
+            }
+            if key.starts_with("fields") {
+                return match field_point(key) {
+                    Ok(Some((point, axis))) => {
+                        moves_wavefront(super::direct(Parameter::FieldPointAngle { point, axis }, value))
+                    }
+                    Ok(None) => None,
+                    Err(e) => Some(Err(e)),
+                };
+            }
+            refusal(key, interleaved)
+        }
+    }
+}
+
+/// The keys of the lens refused here, naming why; `None` for another key.
+fn refusal(key: &str, interleaved: bool) -> Option<Result<Chain>> {
+    let why = if key.starts_with("lens.channels_nm[") && !interleaved {
+        // (an interleaved lens's: `with_channel_wavelengths`)
+        "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
+         lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane per \
+         zone that the FFT path's forward mode does not carry yet"
+    } else if key.starts_with("lens.channel_efficiencies[") && !interleaved {
+        // (an interleaved lens's: `with_channels`)
+        "a zone's own efficiency η_j weighs its amplitude √η_j inside one composite pupil on the FFT path against \
+         the other zones' (τ_j = a_j η_j), a lane per zone that the FFT path's forward mode does not carry yet"
+    } else if key.starts_with("lens.area_fractions[") {
+        "a zone's area fraction moves the zones' edges across the pupil (the edge's motion on the FFT path, carried \
+         for a central obscuration's circle but not for the zones' rings and wedges yet) and every zone's τ_j = a_j η_j"
+    } else {
+        return None;
+    };
+    Some(Err(anyhow!(
+        "--wrt {key}: not differentiable here yet for lens.model = \"multiplexed\": {why} (it is never replaced by a finite difference)"
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use scene::Source;
+    use scene::sweep::assignment;
+
+    use super::super::gradient;
+
+    /// The tolerance of the converged evaluations the references difference (docs/physics.md,
+    /// "Gradients": ≤ 1e-10).
+    const REFERENCE_TOLERANCE: f64 = 1e-10;
+
+    /// The two multiplexed designs of examples/designs.toml (750/800/850 nm, F/2.5, η = 0.15,
+    /// T = 0.55), `layout` with `zones`, in the paper's theory scene (examples/paper-theory.toml)
+    /// in place of its lens, written here.
+    fn multiplexed(layout: &str) -> Source {
+        multiplexed_with(layout, "efficiency = 0.15")
+    }
+
+    /// [`multiplexed`] with the efficiency given by `efficiency` (a line of `[lens]`).
+    fn multiplexed_with(layout: &str, efficiency: &str) -> Source {
+        let paper = scene::read(None).unwrap();
+        let rest = paper.text().split_once("[source]").unwrap().1;
+        let zones = if layout == "segmented" { "zones = \"concentric\"\n" } else { "" };
+        Source::from_text(
+            format!(
+                "title = \"multiplexed {layout}\"\n[lens]\nmodel = \"multiplexed\"\nlayout = \"{layout}\"\n{zones}\
+                 f_number = 2.5\nfocal_length_mm = 3.36\nchannels_nm = [750.0, 800.0, 850.0]\n{efficiency}\n\
+                 transmission = 0.55\n\n[source]{rest}"
+            ),
+            "multiplexed lens written in the test",
+            ".",
+        )
+    }
+
+    fn owned(list: &[&str]) -> Vec<String> {
+        list.iter().map(|s| (*s).to_owned()).collect()
+    }
+
+    /// (ASNR, mean MTF, SNR0, N) of an evaluation at `tolerance` with `key = value`.
+    fn evaluated(source: &Source, overrides: &[&str], key: &str, value: f64, tolerance: f64) -> [f64; 4] {
+        let mut set: Vec<String> = overrides
+            .iter()
+            .filter(|o| o.split_once('=').is_none_or(|(k, _)| k.trim() != key))
+            .map(|o| (*o).to_owned())
+            .collect();
+        set.push(format!("options.tolerance={tolerance:e}"));
+        set.push(assignment(key, value));
+        let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
+        [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
+    }
+
+    /// The reference written here: central differences with step `h` of evaluations at
+    /// `tolerance`; for a field angle and a channel's wavelength (whose steps are not relative to
+    /// the key)
+    /// Richardson-extrapolated from the steps `2h` and `h` (`(4 D(h) − D(2h))/3`).
+    fn reference(source: &Source, overrides: &[&str], key: &str, value: f64, h: f64, tolerance: f64) -> [f64; 4] {
+        let central = |h: f64| -> [f64; 4] {
+            let up = evaluated(source, overrides, key, value + h, tolerance);
+            let down = evaluated(source, overrides, key, value - h, tolerance);
+            std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
+        };
+        if !(key.starts_with("field") || key.starts_with("lens.channels_nm")) {
+            return central(h);
+        }
+        let (coarse, fine) = (central(2.0 * h), central(h));
+        std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+    }
+
+    /// Every key's gradient at the scene tolerance `tolerance` against [`reference`] (step
+    /// `step(key, value)`, evaluations at `reference_tolerance`), within 10× `tolerance` of the
+    /// gradient's norm per quantity (the quantity itself where the gradient is 0).
+    fn check(
+        source: &Source,
+        overrides: &[&str],
+        keys: &[&str],
+        tolerance: f64,
+        reference_tolerance: f64,
+        step: &dyn Fn(&str, f64) -> f64,
+    ) -> super::super::Gradient {
+        let mut set = owned(overrides);
+        set.push(format!("options.tolerance={tolerance:e}"));
+        let g = gradient(source, &set, &owned(keys)).unwrap();
+        assert_eq!(g.keys, owned(keys));
+        let references: Vec<[f64; 4]> = g
+            .keys
+            .iter()
+            .zip(&g.values)
+            .map(|(k, v)| reference(source, overrides, k, *v, step(k, *v), reference_tolerance))
+            .collect();
+        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+        let mut failures = Vec::new();
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            // as relative sensitivities ∂/∂ln key, except the field angles (0 on axis)
+            let scale = |i: usize| if g.keys[i].starts_with("field") { 1.0 } else { g.values[i] };
+            let mine: Vec<f64> = (0..g.keys.len()).map(|i| ours[q][i] * scale(i)).collect();
+            let theirs: Vec<f64> = (0..g.keys.len()).map(|i| references[i][q] * scale(i)).collect();
+            let norm = match mine.iter().map(|x| x * x).sum::<f64>().sqrt() {
+                0.0 => [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q],
+                norm => norm,
+            };
+            for (i, k) in g.keys.iter().enumerate() {
+                let error = (mine[i] - theirs[i]).abs() / norm;
+                println!("{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {error:.1e}", mine[i], theirs[i]);
+                if error > 10.0 * tolerance {
+                    failures.push(format!("{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]));
+                }
+            }
+        }
+        assert!(failures.is_empty(), "{failures:#?}");
+        g
+    }
+
+    /// A key on which the value varies on the scale of the key itself: h ≈ 6.7e-4 |v|
+    /// (docs/physics.md, "Gradients"); 0.02° for a field angle (the mean MTF turns on degrees);
+    /// 0.05 nm for a channel's wavelength (the mean MTF turns on the band's scale, nm).
+    fn step(key: &str, value: f64) -> f64 {
+        if key.starts_with("field") {
+            0.02
+        } else if key.starts_with("lens.channels_nm") {
+            0.05
+        } else {
+            (3.0 * REFERENCE_TOLERANCE).cbrt() * value.abs()
+        }
+    }
+
+    /// The interleaved lens on axis on a 10 nm band (the exact 1-D engine): the F-number and
+    /// focal length (every channel's `W020_j ∝ f0/F#²`, `N ∝ 1/F#²`), the one efficiency η (N
+    /// alone) and the transmission (the stray light alone: glare included, read noise), at the
+    /// scene's 1e-6 against differences of evaluations at 1e-10.
+    #[test]
+    fn interleaved_lens_keys_match_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides = ["spectrum.range_nm=10", "options.glare=\"included\"", "camera.read_noise_e=2"];
+        let keys = ["lens.f_number", "lens.focal_length_mm", "lens.efficiency", "lens.transmission"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        // the defocus moves the mean MTF; η and T do not
+        assert!(g.d_mean_mtf[0] != 0.0 && g.d_mean_mtf[1] != 0.0, "{g:?}");
+        assert!(g.d_mean_mtf[2] == 0.0 && g.d_mean_mtf[3] == 0.0 && g.d_snr0[3] < 0.0, "{g:?}");
+    }
+
+    /// The interleaved lens off axis at (2°, 1°) with cos⁴θ on a 4 nm band: each channel's
+    /// lateral colour `f0 tan θ (λ_j/λ − 1)` moves with the field angles
+    /// (`∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`) and with f0 (not F#), on the exact 1-D engine's lanes.
+    #[test]
+    fn interleaved_lens_off_axis_matches_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides =
+            ["spectrum.range_nm=4", "field.x_deg=2", "field.y_deg=1", "lens.relative_illumination=\"cos4\""];
+        let keys = ["field.x_deg", "field.y_deg", "lens.f_number", "lens.focal_length_mm"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+    }
+
+    /// The interleaved lens's channel wavelengths on axis on a 10 nm band, with the F-number
+    /// among them (the keys' order kept): λ_j moves channel j's defocus alone,
+    /// `∂W020_j/∂ln λ_j = (λ/λ_j) f0/(8F#²)`, the design wavelength's lane with that order's
+    /// rates; against differences of evaluations at 1e-10 at the step 6.7e-4 λ_j.
+    #[test]
+    fn interleaved_channel_wavelengths_match_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides = ["spectrum.range_nm=10", "camera.read_noise_e=2"];
+        let keys = ["lens.channels_nm[0]", "lens.f_number", "lens.channels_nm[1]", "lens.channels_nm[2]"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        // λ_j moves the OTF alone; the channel in focus at the band's centre (800 nm) least,
+        // the mean MTF near its peak in λ_1 there
+        let least = g.d_mean_mtf[2].abs() < g.d_mean_mtf[0].abs().min(g.d_mean_mtf[3].abs());
+        assert!(g.d_photoelectrons[0] == 0.0 && least, "{g:?}");
+        let all = gradient(&source, &owned(&overrides), &owned(&["lens.channels_nm"])).unwrap();
+        assert_eq!(all.keys, owned(&["lens.channels_nm[0]", "lens.channels_nm[1]", "lens.channels_nm[2]"]));
+        assert_eq!(all.d_asnr, [g.d_asnr[0], g.d_asnr[2], g.d_asnr[3]]);
+    }
+
+    /// The interleaved lens's channels' own efficiencies on axis on a 10 nm band with the stray
+    /// light and read noise, with T among them: η_j moves channel j's weight alone
+    /// (`∂τ_j/∂ln η_j = τ_j`), so the OTF's weights, N and the stray light; the design
+    /// wavelength's lane with the rates `[0, τ_j]` of that order.
+    #[test]
+    fn interleaved_channel_efficiencies_match_central_differences() {
+        let source = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let overrides = ["spectrum.range_nm=10", "options.glare=\"included\"", "camera.read_noise_e=2"];
+        let keys = ["lens.channel_efficiencies", "lens.transmission"];
+        let mut set = owned(&overrides);
+        set.push("options.tolerance=1e-6".to_owned());
+        let listed = gradient(&source, &set, &owned(&keys)).unwrap();
+        let each = ["lens.channel_efficiencies[0]", "lens.channel_efficiencies[1]", "lens.channel_efficiencies[2]"];
+        assert_eq!(listed.keys[..3], owned(&each));
+        let g =
+            check(&source, &overrides, &[&each[..], &["lens.transmission"]].concat(), 1e-6, REFERENCE_TOLERANCE, &step);
+        assert_eq!(listed.d_asnr, g.d_asnr);
+        // the in-focus channel's weight raises the mean MTF, the defocused ones' lower it
+        assert!(g.d_mean_mtf[1] > 0.0 && g.d_mean_mtf[0] < 0.0 && g.d_mean_mtf[2] < 0.0, "{g:?}");
+    }
+
+    /// The segmented lens (concentric zones, one composite pupil on the FFT path) on a 4 nm band:
+    /// η and T move N and the stray light alone (the composite pupil's amplitude √η is uniform
+    /// and its OTF normalized at zero frequency), so at a fixed sampling (64 pupil samples: the
+    /// FFT path's discrete rule, the same at every step) the differences are the photon counts'
+    /// and the value's discrete rule's exactly; the gradient within 10× 1e-4, the FFT path's
+    /// tolerance (measured: ≤ 1e-12 of the norm).
+    #[test]
+    fn segmented_lens_efficiency_and_transmission_match_central_differences() {
+        let source = multiplexed("segmented");
+        for other in ["signal", "background"] {
+            let channels = format!("lens.other_channels=\"{other}\"");
+            let overrides = [
+                "spectrum.range_nm=4",
+                "options.pupil_samples=64",
+                "options.glare=\"included\"",
+                "camera.read_noise_e=2",
+                &channels,
+            ];
+            let g = check(&source, &overrides, &["lens.efficiency", "lens.transmission"], 1e-4, 1e-4, &step);
+            assert!(g.d_mean_mtf == [0.0, 0.0] && g.d_photoelectrons[0] > 0.0, "{g:?}");
+        }
+    }
+
+    /// The keys refused, each naming itself and why: the segmented layout's keys that move a
+    /// zone's defocus inside the composite pupil, a channel's wavelength, a channel's own
+    /// efficiency and a zone's area.
+    #[test]
+    fn multiplexed_refusals_name_the_key_and_why() {
+        let segmented = multiplexed("segmented");
+        for (key, says) in [
+            ("lens.f_number", "a lane per zone"),
+            ("lens.focal_length_mm", "a lane per zone"),
+            ("field.x_deg", "a lane per zone"),
+            ("lens.channels_nm[1]", "composite pupil"),
+        ] {
+            let e = gradient(&segmented, &[], &owned(&[key])).unwrap_err().to_string();
+            assert!(e.contains(&format!("--wrt {key}")) && e.contains(says), "{key}: {e}");
+        }
+        let with_areas = owned(&["lens.area_fractions=[0.3, 0.3, 0.4]"]);
+        let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[0]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.area_fractions[0]") && e.contains("zones' edges"), "{e}");
+        // an interleaved lens's channel off axis: its lateral colour alone moves
+        let interleaved = multiplexed("interleaved");
+        let off_axis = owned(&["field.x_deg=1"]);
+        let e = gradient(&interleaved, &off_axis, &owned(&["lens.channels_nm"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("lateral colour"), "{e}");
+        let own = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let e = gradient(&own, &off_axis, &owned(&["lens.channel_efficiencies[1]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channel_efficiencies[1]") && e.contains("off axis its lane"), "{e}");
+        let own = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("composite pupil"), "{e}");
+    }
+}
