@@ -4630,7 +4630,8 @@ mod tests {
     /// noise spectrum (docs/physics.md, "Gradients under a noise spectrum": the frequency scale's
     /// term by parts and the defocus lane D̃_K on the value's noise-weighted rules over azimuth on
     /// the overlap engine, each ∂|O| divided by n(ν); the white ∂M̄ on the overlap pass as without
-    /// it): coma 0.3 µm, and spherical aberration 0.2 µm with the pixel MTF, on a 4 nm band,
+    /// it): coma 0.3 µm, spherical aberration 0.2 µm with the pixel MTF, and coma 0.3 µm at 3°
+    /// (the defocus and image shifts' lanes over azimuth), on a 4 nm band,
     /// against Richardson central differences of evaluations converged at 1e-10 (steps 1e-4 and
     /// 5e-5 relative, [`NARROW_APERTURE_STEP`]) within 10× the tolerance 1e-6 of the norm; the
     /// weight moves ∂ASNR apart from the white lanes' ([`assert_weighted_beside_n`]).
@@ -4638,7 +4639,13 @@ mod tests {
     fn f_number_with_seidel_terms_under_a_noise_spectrum_matches_central_differences() {
         let paper = with_noise_spectrum(&scene::read(None).unwrap(), "seidel-aperture");
         let keys = ["lens.f_number", "lens.focal_length_mm"];
-        for more in [&["lens.coma_um=0.3"][..], &["lens.spherical_um=0.2", "camera.pixel_mtf=true"]] {
+        let cases = [
+            &["lens.coma_um=0.3"][..],
+            &["lens.spherical_um=0.2", "camera.pixel_mtf=true"],
+            // off axis: the defocus and image shifts' lanes over azimuth, weighted
+            &["lens.coma_um=0.3", "field.x_deg=3"],
+        ];
+        for more in cases {
             let base = joined(&["spectrum.range_nm=4"], more);
             // the overlap engine at the tolerance 1e-6 (not options.fft_tolerance's 1e-4)
             let mut set = base.clone();
