@@ -920,7 +920,7 @@ mod tests {
         scene::read(Some(&path)).unwrap()
     }
 
-    fn owned(list: &[&str]) -> Vec<String> {
+    pub(super) fn owned(list: &[&str]) -> Vec<String> {
         list.iter().map(|s| (*s).to_owned()).collect()
     }
 
@@ -955,7 +955,7 @@ mod tests {
 
     /// [`central`] at the steps `2h` and `h`, Richardson-extrapolated: `(4 D(h) − D(2h))/3`, whose
     /// error falls as `h⁴`.
-    fn richardson(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
+    pub(super) fn richardson(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
         let (coarse, fine) =
             (central(source, overrides, key, value, 2.0 * h), central(source, overrides, key, value, h));
         std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
@@ -994,7 +994,7 @@ mod tests {
 
     /// [`check_against_differences`] against `reference(key, value)`: (ASNR, mean MTF, SNR0, N)'s
     /// derivatives with respect to the key.
-    fn check_with_references(
+    pub(super) fn check_with_references(
         source: &Source,
         overrides: &[String],
         keys: &[&str],

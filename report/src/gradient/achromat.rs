@@ -173,9 +173,7 @@ mod tests {
     use scene::Source;
 
     use super::super::gradient;
-
-    /// The converged evaluations the references difference (docs/physics.md, "Gradients").
-    const REFERENCE_TOLERANCE: f64 = 1e-10;
+    use super::super::tests::{check_with_references, owned, richardson};
 
     /// The lens's `[lens]` with the other sections of `examples/paper-theory.toml` (a 8 nm
     /// Gaussian band at 800 nm: cheap, σ = 2.83 nm), at the tolerance 1e-6, a read noise of 2 e⁻.
@@ -199,57 +197,13 @@ mod tests {
     const BELOW_D_MAX: &str = "aperture_diameter_mm = 0.2\nfocal_length_mm = 3.36\ndesign_band_nm = [750.0, 850.0]\n\
                                group_delay_range_fs = 5.0\nefficiency = 0.15\ntransmission = 0.55";
 
-    /// (ASNR, mean MTF, SNR0, N) of an evaluation at `tolerance` with `key = value`.
-    fn evaluated(source: &Source, overrides: &[String], key: &str, value: f64) -> [f64; 4] {
-        let mut set: Vec<String> = overrides.to_vec();
-        set.push(format!("options.tolerance={REFERENCE_TOLERANCE:e}"));
-        set.push(scene::sweep::assignment(key, value));
-        let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
-        [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
-    }
-
-    /// The reference written here: central differences of converged evaluations at the steps
-    /// `2h` and `h`, Richardson-extrapolated, `(4 D(h) − D(2h))/3` (error ∝ h⁴).
-    fn reference(source: &Source, overrides: &[String], key: &str, value: f64, h: f64) -> [f64; 4] {
-        let central = |h: f64| -> [f64; 4] {
-            let (up, down) =
-                (evaluated(source, overrides, key, value + h), evaluated(source, overrides, key, value - h));
-            std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
-        };
-        let (coarse, fine) = (central(2.0 * h), central(h));
-        std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
-    }
-
-    /// Each key's gradient (ASNR, mean MTF, SNR0, N), as ∂/∂ln key, against [`reference`] with
-    /// the step `step(key, value)`, within 10× the scene's tolerance 1e-6 of the gradient's norm
-    /// (a quantity whose gradient is 0 everywhere against its own size). The errors/norm printed.
+    /// Each key's gradient (ASNR, mean MTF, SNR0, N), as ∂/∂ln key, against Richardson central
+    /// differences of evaluations converged at 1e-10 with the steps `2h` and `h`, `h = step(key,
+    /// value)`, within 10× the scene's tolerance 1e-6 of the gradient's norm (a quantity whose
+    /// gradient is 0 everywhere against its own size). The errors/norm printed.
     fn check(source: &Source, overrides: &[&str], keys: &[&str], step: &dyn Fn(&str, f64) -> f64) {
-        let overrides: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
-        let asked: Vec<String> = keys.iter().map(|s| (*s).to_owned()).collect();
-        let g = gradient(source, &overrides, &asked).unwrap();
-        assert_eq!(g.keys, asked);
-        let references: Vec<[f64; 4]> =
-            g.keys.iter().zip(&g.values).map(|(k, v)| reference(source, &overrides, k, *v, step(k, *v))).collect();
-        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
-        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
-            let mine: Vec<f64> = (0..g.keys.len()).map(|i| ours[q][i] * g.values[i]).collect();
-            let theirs: Vec<f64> = (0..g.keys.len()).map(|i| references[i][q] * g.values[i]).collect();
-            let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
-            let norm = match mine.iter().map(|x| x * x).sum::<f64>().sqrt() {
-                0.0 => quantity,
-                norm => norm,
-            };
-            for (i, k) in g.keys.iter().enumerate() {
-                let error = (mine[i] - theirs[i]).abs();
-                println!(
-                    "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {:.1e}",
-                    mine[i],
-                    theirs[i],
-                    error / norm
-                );
-                assert!(error <= 10.0 * 1e-6 * norm, "{name} {k}: {} vs {} (norm {norm})", mine[i], theirs[i]);
-            }
-        }
+        let overrides = owned(overrides);
+        check_with_references(source, &overrides, keys, &|k, v| richardson(source, &overrides, k, v, step(k, v)));
     }
 
     /// A relative step of 1e-3 of the value for the design's keys (their scale is the key's
