@@ -2321,8 +2321,16 @@ mod tests {
                         let (a, b) = (hi.acos(), lo.acos());
                         let resolved_points = RESOLVING_POINTS_PER_RADIAN * phase + 1.0;
                         let (mut evaluations, mut estimate) = (0, 0.0);
-                        let (integral, _) =
-                            nested(&batch, a, b, [None, None], piece_share, resolved_points, &mut evaluations, &mut estimate);
+                        let (integral, _) = nested(
+                            &batch,
+                            a,
+                            b,
+                            [None, None],
+                            piece_share,
+                            resolved_points,
+                            &mut evaluations,
+                            &mut estimate,
+                        );
                         let truth = quad::composite(a, b, 40, |t| g.integrand(&f, scale, t));
                         let off = (integral - truth).abs();
                         assert!(
