@@ -1006,7 +1006,7 @@ fn nested(
     (integral, ends[0].unwrap_or(0.0))
 }
 
-/// Largest ratio of a level's last move to the tolerance at which [`chebyshev_tail`] may
+/// Largest ratio of a level's last move to the tolerance at which [`enveloped_tail`] may
 /// accept it (see `nested`): the 5-point level within 1000× the tolerance.
 const COEFFICIENT_CONSISTENCY: f64 = 1e3;
 
@@ -2277,15 +2277,16 @@ mod tests {
 
     /// The hard cases of the map and beyond it: F/1.4 over 200 nm (the map's corner), F/1.4 and
     /// F/2.5 over a 2 nm band (one narrow envelope), a large defocus (f0 = 20 mm at F/1.4 over
-    /// 100 nm: about 90 waves across the band), at frequencies from 3 % to 80 % of the cutoff and
+    /// 100 nm: W020 moves by 160 µm, 200 waves, across the range), at frequencies from 3 % to 80 % of the cutoff and
     /// tolerances 1e-4, 1e-7 and 1e-10. Each piece of the rule in `t` (the pieces of
     /// `lane_pieces`, the value's own) integrated by [`nested`] at its share of the tolerance is
     /// within the error it reports for it (`ESTIMATE_SAFETY` × its accepted estimate, beyond the
     /// rounding floor the rule stops at) of a resolved rule over the piece (40 panels of
     /// 16-point Gauss–Legendre), and each value is within its tolerance of [`resolved`] with its
     /// reported error bounding the true one: an estimate that under-reports on these pieces
-    /// fails here (a Chebyshev tail 30× too small does), which the values' errors alone, far
-    /// within their tolerances, would not show.
+    /// fails here (the tail without its envelope, [`chebyshev_tail`], does: a piece of the 2 nm
+    /// band at F/2.5, ν = 0.55 νc, 1e-7, 46× off its estimate), which the values' errors alone,
+    /// far within their tolerances, would not show.
     #[test]
     fn the_estimate_bounds_the_error_on_the_hard_cases() {
         let l0 = 800e-9;
