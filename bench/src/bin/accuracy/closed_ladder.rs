@@ -42,9 +42,10 @@ pub(crate) fn section(tools: &crate::sections::Tools) -> Option<String> {
     md += &format!(
         "`metric::evaluate` of the paper scene (F/2.5, 50 nm) and the hard scene (F/1.4, 200 nm) with the closed-form \
          engine, the same scenes, references and timing as the main tables (median of repeated single-threaded calls \
-         in this release process; error against `optics::reference::mean_mtf` at 1e-12). Load average (1, 5, 15 \
-         min) before: {load_before}; after: {load_after}. Regenerate this section alone: `cargo run --release -p \
-         asnr-bench --bin accuracy -- --only closed`.\n\n"
+         in this release process; error against `optics::reference::mean_mtf` at 1e-12). Machine: {}. Load \
+         average (1, 5, 15 min) before: {load_before}; after: {load_after}. Regenerate this section alone: `cargo \
+         run --release -p asnr-bench --bin accuracy -- --only closed`.\n\n",
+        crate::report::machine()
     );
     md += "| scene | setting | mean MTF | error | time | repeats | work |\n|---|---|---|---|---|---|---|\n";
     md += &rows;

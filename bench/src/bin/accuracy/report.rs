@@ -102,7 +102,8 @@ fn nanos(ns: f64) -> String {
     }
 }
 
-fn machine() -> String {
+/// The CPU's model, the cores available, the OS and architecture.
+pub(crate) fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|t| {
