@@ -1148,6 +1148,45 @@ impl FftPath {
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
                 }
+                // a site map's order: its field is linear in the atoms' table, its move the same
+                // sampling of the table's derivative (`MapPupil::field_derivative`)
+                if let (Pupil::Map(map), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
+                    if !directions.iter().all(|d| matches!(d, WavefrontDirection::OrderField(_))) {
+                        return Ok(None);
+                    }
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let slot = layer.pupil(&order)?;
+                    let sampled = &layer.pupils[slot].1;
+                    let (field, power) = map.field(sampled.n(), sampled.amplitude(), lambda);
+                    let mut moves: Vec<(Vec<Complex64>, f64)> = Vec::with_capacity(k_dirs);
+                    let mut rates = vec![0.0; k_dirs];
+                    for (j, derivatives) in order_fields.iter().enumerate() {
+                        let Some(d) = derivatives else { return Ok(None) };
+                        let (Some(d_table), Some(&d_tau)) = (d.tables.get(index), d.efficiencies.get(index)) else {
+                            return Ok(None);
+                        };
+                        let Some(moved) = map.field_derivative(sampled.n(), sampled.amplitude(), lambda, d_table)
+                        else {
+                            return Ok(None);
+                        };
+                        moves.push(moved);
+                        rates[j] = d_tau / order.efficiency;
+                    }
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, power, &refs, &mut otf, &mut d_grids);
+                    for ((grid, &rate), total) in d_grids.iter_mut().zip(&rates).zip(d_total.iter_mut()) {
+                        if rate != 0.0 {
+                            grid.add_scaled(&otf, rate);
+                            *total += node.weight * rate;
+                        }
+                    }
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
                 let radial = match (&order.pupil, &node.kind) {
                     (Pupil::Radial(radial), FftKind::Grid(_)) => radial.clone(),
                     // a table is data: the wavefront keys do not move it
