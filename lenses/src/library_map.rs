@@ -540,7 +540,7 @@ impl LibraryMapLens {
         }
         let phase = match self.errors {
             None => 0.0,
-            Some((phase, amplitude)) if amplitude == 0.0 => phase,
+            Some((phase, 0.0)) => phase,
             Some(_) => return None,
         };
         let factor = (-0.5 * phase * phase).exp();

@@ -1000,7 +1000,10 @@ pub enum WavefrontDirection {
     /// profile at `q` plus its best-fit defocus's rate times `x² + y² − q`), the normalization
     /// `Σ A a²` by `Σ 2 A a ∂a`, and the node's weight `w τ_o` by `w ∂τ_o`; the normalization of
     /// the polychromatic OTF `Σ w τ_o` by `Σ w ∂τ_o` (docs/physics.md, "Gradients: a library's
-    /// parameter bias"). The FFT path carries it.
+    /// parameter bias"). For a site map (a 2-D layout, on and off axis): the field moves by the
+    /// same sampling of the atoms' table's derivative (`OrderDerivatives::tables`,
+    /// [`MapPupil::field_derivative`](crate::map::MapPupil::field_derivative)). The FFT path
+    /// carries it.
     OrderField(usize),
 }
 
@@ -1017,7 +1020,8 @@ impl FftPath {
     /// read at the value's frequencies and azimuths with the value's interpolation, weights and
     /// lateral-colour phases, and `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`: the kink of `|O|`,
     /// a set of measure zero on the fixed rule). `None` where an order is not a radial pupil on
-    /// the grid path (apertures, zones and maps do not carry these keys), a lane is missing, or
+    /// the grid path (apertures, zones and maps do not carry these keys; a site map carries
+    /// [`WavefrontDirection::OrderField`] alone), a lane is missing, or
     /// the accumulators would pass their memory budget.
     ///
     /// With a non-white noise spectrum `noise`, of the value's mean of `P |O| / n` instead: each
