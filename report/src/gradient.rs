@@ -2819,7 +2819,8 @@ pupil_samples = 64
     /// Richardson-extrapolated central differences of evaluations at 1e-10 at the same fixed
     /// sampling (steps 0.5 and 0.25 nm, 0.02 and 0.01 rad), every quantity (ASNR, mean MTF, SNR0,
     /// N) within 10× the gradient's requested tolerance (1e-9) of its own size plus the
-    /// differences' own error (the evaluations' 1e-10 over the smaller step).
+    /// differences' own error (the evaluations' 1e-10 over the smaller step); with transmission
+    /// errors the bias is refused, naming them.
     #[test]
     fn layout_grid_bias_and_phase_error_match_central_differences() {
         let reference = 1e-10;
@@ -2865,6 +2866,13 @@ pupil_samples = 64
             }
             println!("{key} {extra:?}: {:?}", started.elapsed());
         }
+        // transmission errors: the bias moves each atom's error factor through its cap, refused
+        let source = small_layout_grid("refused");
+        let err =
+            gradient(&source, &owned(&["lens.atom_transmission_error=0.05"]), &owned(&["lens.parameter_bias[0]"]))
+                .unwrap_err()
+                .to_string();
+        assert!(err.contains("lens.atom_transmission_error > 0"), "{err}");
     }
 
     /// Bad keys are refused naming the key.
