@@ -1333,6 +1333,7 @@ impl LensModel for LibraryLens {
             efficiencies: vec![d.efficiency_derivative],
             transmission: d.transmission_derivative,
             fields: vec![(d.amplitude, d.wavefront_m)],
+            tables: Vec::new(),
         })
     }
 

@@ -527,6 +527,61 @@ impl LibraryMapLens {
         table
     }
 
+    /// The atoms' table's derivative at `wavelength_m` with respect to the bias of parameter
+    /// `wrt` (docs/physics.md, "Gradients: a library's parameter bias"), and each atom's stray
+    /// power's: each distinct atom's `∂t/∂p` ([`Library::transmission_and_derivative`]) times
+    /// its expected error factor `e^{−σ_φ²/2}`, the incoherent power `|t|²(1 − e^{−σ_φ²})` by
+    /// `2 Re(t̄ ∂t)(1 − e^{−σ_φ²})`; the empty cell does not move. `None` with linear
+    /// interpolation, `wrt` out of range, transmission errors (σ_t > 0: their factor moves with
+    /// `|t|` through its cap) or a fin's unconverted light (`co_amplitude`, not differentiated).
+    fn bias_table_derivative(&self, wavelength_m: f64, wrt: usize) -> Option<(Vec<Complex64>, Vec<f64>)> {
+        if self.library.has_co_amplitude() {
+            return None;
+        }
+        let phase = match self.errors {
+            None => 0.0,
+            Some((phase, 0.0)) => phase,
+            Some(_) => return None,
+        };
+        let factor = (-0.5 * phase * phase).exp();
+        let (mut d_table, mut d_spread) = (Vec::with_capacity(self.unique.len() + 1), Vec::new());
+        for p in &self.unique {
+            let (t, dt) = self.library.transmission_and_derivative(p, wavelength_m, wrt)?;
+            d_table.push(dt * factor);
+            d_spread.push(2.0 * (t.conj() * dt).re * (1.0 - factor * factor));
+        }
+        d_table.push(Complex64::new(0.0, 0.0));
+        d_spread.push(0.0);
+        Some((d_table, d_spread))
+    }
+
+    /// The atoms' table's derivative at `wavelength_m` with respect to σ_φ, the σ of the atoms'
+    /// phase errors (docs/physics.md, "Gradients: a library's atoms' phase errors"): each entry
+    /// is the atom's field times `E[a] e^{−σ_φ²/2}` ([`expected_factor`]), so it moves by `−σ_φ`
+    /// times itself, and the incoherent power `|t|²(E[a²] − E[a]² e^{−σ_φ²})` by `2σ_φ |t|² E[a]²
+    /// e^{−σ_φ²}`; the empty cell does not move. At σ_φ = 0 both are 0 (the factor is even in σ_φ).
+    fn phase_error_table_derivative(&self, wavelength_m: f64) -> (Vec<Complex64>, Vec<f64>) {
+        let Some((phase, amplitude)) = self.errors else {
+            return (vec![Complex64::new(0.0, 0.0); self.unique.len() + 1], vec![0.0; self.unique.len() + 1]);
+        };
+        let table = self.table(wavelength_m);
+        let mut d_table: Vec<Complex64> = table.iter().map(|t| -phase * t).collect();
+        if let Some(last) = d_table.last_mut() {
+            *last = Complex64::new(0.0, 0.0);
+        }
+        let mut d_spread: Vec<f64> = self
+            .unique
+            .iter()
+            .map(|p| {
+                let t = self.library.transmission(p, wavelength_m).norm();
+                let mean = expected_factor(t, phase, amplitude).0;
+                2.0 * phase * t * t * mean * mean
+            })
+            .collect();
+        d_spread.push(0.0);
+        (d_table, d_spread)
+    }
+
     /// `(τ1, T)` at `wavelength_m`: the design order's and all the light of the cells whose
     /// centre is in the aperture, as fractions of the light on it.
     pub fn efficiency_and_transmission(&self, wavelength_m: f64) -> (f64, f64) {
@@ -607,6 +662,24 @@ impl LensModel for LibraryMapLens {
 
     fn design_wavelength(&self) -> Option<f64> {
         Some(self.design_wavelength)
+    }
+
+    fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<optics::OrderDerivatives> {
+        let (d_table, d_spread) = if parameter == optics::ATOM_PHASE_ERROR {
+            self.phase_error_table_derivative(wavelength_m)
+        } else {
+            self.bias_table_derivative(wavelength_m, parameter)?
+        };
+        let table = self.table(wavelength_m);
+        let (d_design, mut d_all) = self.sites.power_rates(&table, &d_table, wavelength_m);
+        d_all += self.sites.count_weighted(&d_spread);
+        let scale = self.pitch * self.pitch / (PI * self.aperture_radius().powi(2));
+        Some(optics::OrderDerivatives {
+            efficiencies: vec![d_design * scale],
+            transmission: d_all * scale,
+            fields: Vec::new(),
+            tables: vec![d_table.into()],
+        })
     }
 
     fn describe(&self) -> String {

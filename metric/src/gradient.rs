@@ -3581,8 +3581,8 @@ fn library_bias_partials_over(
     let camera = scene.camera();
     let lens = scene.lens();
     let field = scene.field();
-    if !field.is_on_axis() {
-        // the radial pupil seen by the oblique wave, on the FFT path
+    if !field.is_on_axis() || e.numerics.engine.starts_with("fft") {
+        // the radial pupil seen by the oblique wave, or a 2-D layout's site map, on the FFT path
         return library_fft::library_bias_on_fft_path(scene, e, p, index, noise);
     }
     let f_number = lens.f_number();
@@ -3595,8 +3595,7 @@ fn library_bias_partials_over(
             return Err(not_smooth(format!(
                 "the lens gives no derivative of its orders in this parameter at {:.3} nm (a library lens with \
                  a radial layout and lens.library_interpolation = \"cubic\", a bias index below its number of \
-                 parameters, the lens's own pupil mapping, and an imaging order with |c_1| > 0 at every radius; a \
-                 2-D layout's sites are not given derivatives yet)",
+                 parameters, the lens's own pupil mapping, and an imaging order with |c_1| > 0 at every radius)",
                 lambda * 1e9
             )));
         };

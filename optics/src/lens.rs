@@ -309,6 +309,10 @@ pub struct OrderDerivatives {
     /// Per order (a radial pupil's), the change of its field amplitude `∂A` and of its whole
     /// wavefront `∂W` (m), as functions of `q = ρ²`.
     pub fields: Vec<(crate::radial::RadialProfile, crate::radial::RadialProfile)>,
+    /// Per order (a site map's, [`MapPupil::sites`](crate::map::MapPupil::sites)), the change
+    /// of its atoms' table `∂t_u` ([`MapPupil::field_derivative`](crate::map::MapPupil::field_derivative));
+    /// empty where the orders are radial pupils.
+    pub tables: Vec<Arc<[num_complex::Complex64]>>,
 }
 
 /// One part of a [`FactoredEfficiency`]: a table and the orders it multiplies.

@@ -595,10 +595,32 @@ impl SiteMap {
     pub fn powers(&self, t: &[Complex64], wavelength_m: f64) -> (f64, f64) {
         assert_eq!(t.len(), self.table, "an atoms' table of {} for {} atoms", t.len(), self.table);
         let power: Vec<f64> = t.iter().map(|v| v.norm_sqr()).collect();
+        self.powers_of(&power, wavelength_m)
+    }
+
+    /// The derivative of [`powers`](Self::powers) where the atoms' table `t` moves by `dt`
+    /// (docs/physics.md, "Gradients: a library's parameter bias"): the same sums with each
+    /// atom's `|t|²` replaced by `∂|t|² = 2 Re(t̄ ∂t)` (the blocks' shares do not move).
+    ///
+    /// # Panics
+    /// If `t` or `dt` is not the table's length.
+    pub fn power_rates(&self, t: &[Complex64], dt: &[Complex64], wavelength_m: f64) -> (f64, f64) {
+        assert!(
+            t.len() == self.table && dt.len() == self.table,
+            "an atoms' table of {} for {} atoms",
+            dt.len(),
+            self.table
+        );
+        let rate: Vec<f64> = t.iter().zip(dt).map(|(v, d)| 2.0 * (v.conj() * d).re).collect();
+        self.powers_of(&rate, wavelength_m)
+    }
+
+    /// [`powers`](Self::powers) with each atom's power `power[a]` given.
+    fn powers_of(&self, power: &[f64], wavelength_m: f64) -> (f64, f64) {
         let u = self.pitch / wavelength_m;
         let (mut design, mut all) = (0.0, 0.0);
         for (b, counts) in self.block_counts.chunks_exact(self.table).enumerate() {
-            let p: f64 = counts.iter().zip(&power).map(|(&n, &a)| f64::from(n) * a).sum();
+            let p: f64 = counts.iter().zip(power).map(|(&n, &a)| f64::from(n) * a).sum();
             if p == 0.0 {
                 continue;
             }
@@ -810,16 +832,53 @@ impl MapPupil {
         let out = match &self.cells {
             Cells::Map(map) => self.map_field(map, n, area, lambda),
             Cells::Sites { sites, table } => {
-                if 2.0 * sites.radius / n as f64 >= sites.pitch {
-                    self.sites_block_field(sites, table, n, area, lambda)
-                } else {
-                    self.sites_point_field(sites, table, n, area, lambda)
-                }
+                let power: Vec<f64> = table.iter().map(|t| t.norm_sqr()).collect();
+                self.sites_field(sites, table, &power, n, area, lambda)
             }
         };
         let nanos = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
         FIELD_NANOS.fetch_add(nanos, std::sync::atomic::Ordering::Relaxed);
         out
+    }
+
+    /// The derivative of [`field`](Self::field) of a site map's order where its atoms' table
+    /// moves by `d_table` (docs/physics.md, "Gradients: a library's parameter bias"): the field
+    /// is linear in the table, so its derivative is the same sampling with the table replaced by
+    /// `∂t` (point and block paths alike), and the power's is the same sum with each atom's `|t|²`
+    /// replaced by `2 Re(t̄ ∂t)`. The site fits do not enter the sampled field (only
+    /// [`fitted_defocus_m`](Self::fitted_defocus_m), which sizes the rule). `None` for a
+    /// designer's map or a table of another length.
+    pub fn field_derivative(
+        &self,
+        n: usize,
+        area: &[f64],
+        lambda: f64,
+        d_table: &[Complex64],
+    ) -> Option<(Vec<Complex64>, f64)> {
+        let Cells::Sites { sites, table } = &self.cells else { return None };
+        if d_table.len() != table.len() {
+            return None;
+        }
+        let rate: Vec<f64> = table.iter().zip(d_table).map(|(t, d)| 2.0 * (t.conj() * d).re).collect();
+        Some(self.sites_field(sites, d_table, &rate, n, area, lambda))
+    }
+
+    /// A site map's field with the atoms' table `table` and their powers `power` (the point or
+    /// the block path by the samples' size against the cells).
+    fn sites_field(
+        &self,
+        sites: &SiteMap,
+        table: &[Complex64],
+        power: &[f64],
+        n: usize,
+        area: &[f64],
+        lambda: f64,
+    ) -> (Vec<Complex64>, f64) {
+        if 2.0 * sites.radius / n as f64 >= sites.pitch {
+            self.sites_block_field(sites, table, power, n, area, lambda)
+        } else {
+            self.sites_point_field(sites, table, power, n, area, lambda)
+        }
     }
 
     fn map_field(&self, map: &PhaseMap, n: usize, area: &[f64], lambda: f64) -> (Vec<Complex64>, f64) {
@@ -865,6 +924,7 @@ impl MapPupil {
         &self,
         sites: &SiteMap,
         table: &[Complex64],
+        power: &[f64],
         n: usize,
         area: &[f64],
         lambda: f64,
@@ -880,7 +940,7 @@ impl MapPupil {
                     continue;
                 }
                 let x = -1.0 + (i as f64 + 0.5) * h;
-                let (v, p) = self.site_at(sites, table, x, y, lambda);
+                let (v, p) = self.site_at(sites, table, power, x, y, lambda);
                 field[idx] = v * area[idx];
                 weight += area[idx] * p;
             }
@@ -889,8 +949,16 @@ impl MapPupil {
     }
 
     /// The design-order field of the cell holding `(x, y)` (units of `R`; clamped at the map's
-    /// edge) and its power.
-    fn site_at(&self, sites: &SiteMap, table: &[Complex64], x: f64, y: f64, lambda: f64) -> (Complex64, f64) {
+    /// edge) and its power (the atom's `power` times the share²).
+    fn site_at(
+        &self,
+        sites: &SiteMap,
+        table: &[Complex64],
+        power: &[f64],
+        x: f64,
+        y: f64,
+        lambda: f64,
+    ) -> (Complex64, f64) {
         let cell = |v: f64, len: usize| {
             ((v * sites.radius / sites.pitch + 0.5 * len as f64).floor().max(0.0) as usize).min(len - 1)
         };
@@ -901,12 +969,13 @@ impl MapPupil {
         let u = sites.pitch / lambda;
         let s = sinc(u * gx) * sinc(u * gy);
         let r = sites.reference[c];
-        let t = table[sites.atoms[c] as usize];
+        let atom = sites.atoms[c] as usize;
+        let t = table[atom];
         let k = 2.0 * PI / lambda;
         let (u_c, v_c) = (cx / sites.radius, cy / sites.radius);
         let w = self.sphere_factor * sites.sphere(cx, cy) + self.oblique_m(u_c, v_c) + self.zernike_m(u_c, v_c);
         let v = t * Complex64::new(f64::from(r.re), f64::from(r.im)) * Complex64::from_polar(s, k * w);
-        (v, t.norm_sqr() * s * s)
+        (v, power[atom] * s * s)
     }
 
     /// A site map on samples at least one cell wide: each sample is the mean of the design-order
@@ -920,6 +989,7 @@ impl MapPupil {
         &self,
         sites: &SiteMap,
         table: &[Complex64],
+        power: &[f64],
         n: usize,
         area: &[f64],
         lambda: f64,
@@ -941,7 +1011,6 @@ impl MapPupil {
             first[r] = first[r].min(j);
             last[r] = last[r].max(j + 1);
         }
-        let power: Vec<f64> = table.iter().map(|t| t.norm_sqr()).collect();
         let k = 2.0 * PI / lambda;
         let u = sites.pitch / lambda;
         let centre = |i: usize| (-1.0 + (i as f64 + 0.5) * h) * radius;
@@ -1014,7 +1083,7 @@ impl MapPupil {
                     let x = -1.0 + (i as f64 + 0.5) * h;
                     if count[i] == 0 {
                         // an edge sample without a cell centre in the aperture: its cell
-                        let (f, p) = self.site_at(sites, table, x, ys / radius, lambda);
+                        let (f, p) = self.site_at(sites, table, power, x, ys / radius, lambda);
                         *v = f * a;
                         weight += a * p;
                         continue;

@@ -322,22 +322,18 @@ fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> O
             Ok(_) => Ok(vec![(Parameter::FocalLength, 1.0 / value), (Parameter::FNumber, 1.0 / value)]),
         });
     }
-    // the atoms' phase errors of a radial layout, every draw held: forward mode through the
-    // lens's pupil, as a parameter bias is (docs/physics.md, "Gradients: a library's atoms' phase
-    // errors")
-    if key == "lens.atom_phase_error_rad"
-        && lens_model == "library"
-        && lookup(table, "lens.layout_grid").is_none()
-        && lookup(table, "lens.layout_gds").is_none()
-    {
+    // the atoms' phase errors of a radial layout, every draw held, or of a 2-D layout, in
+    // expectation over the draws: forward mode through the lens's pupil, as a parameter bias is
+    // (docs/physics.md, "Gradients: a library's atoms' phase errors")
+    if key == "lens.atom_phase_error_rad" && lens_model == "library" {
         return Some(Ok(vec![(Parameter::LibraryBias(metric::ATOM_PHASE_ERROR), 1.0)]));
     }
     let why = match key {
         "lens.atom_phase_error_rad" => {
             "the value is smooth in it for a fixed seed (every atom's factor e^{iσδ_i} with its draw δ_i held), and \
-             its derivative is computed for lens.model = \"library\" with a radial layout (lens.layout), not yet for a \
-             2-D layout (lens.layout_grid or lens.layout_gds, on the FFT path): `asnr tolerance` gives the ASNR's \
-             sensitivity to it"
+             its derivative is computed for lens.model = \"library\" (a radial layout, lens.layout, or a 2-D layout, \
+             lens.layout_grid or lens.layout_gds, on the FFT path): `asnr tolerance` gives the ASNR's sensitivity to \
+             it for the other families"
         }
         "lens.atom_transmission_error" => {
             "every atom's amplitude factor 1 + σε_i is taken as 0 where it falls below 0 and its |t| capped at 1 (a \
@@ -641,7 +637,8 @@ fn library_bias(key: &str, table: &toml::Table) -> Option<Result<Parameter>> {
         Err(anyhow!(
             "--wrt {key}: not differentiable here yet for lens.model = \"{model}\": the parameter bias's gradient is \
              computed for lens.model = \"library\" with a radial layout, on axis and off axis (its pupil on the FFT \
-             path there, the atoms' fields a complex lane of its forward mode)"
+             path there, the atoms' fields a complex lane of its forward mode), and with a 2-D layout on the FFT \
+             path (the atoms' table's derivative sampled as the site map's field)"
         ))
     } else {
         Err(anyhow!(
@@ -782,7 +779,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (interleaved), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (interleaved), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -2739,6 +2736,143 @@ mod tests {
             assert!(error <= 1e-5, "{key} {extra:?}: {} vs {richardson}", at_scene.d_asnr[0]);
             println!("{key} {extra:?}: {:?}", started.elapsed());
         }
+    }
+
+    /// A small 2-D layout (a `.npy` grid of examples/data/library-tio2-like.csv's pillars, F/2.5,
+    /// f0 = 125 µm, R = 25 µm on a 400 nm lattice, 129 × 129 sites: each site the diameter whose
+    /// field at 800 nm is nearest the hyperbolic phase at its centre, among those 10 nm inside the
+    /// library's range, and every 11th site empty, the substrate), its scene written in a fresh
+    /// directory (cli/tests/design.rs builds the same grid without the empty sites).
+    fn small_layout_grid(name: &str) -> Source {
+        let library = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/data/library-tio2-like.csv");
+        let text = std::fs::read_to_string(&library).unwrap();
+        let mut rows = Vec::new();
+        for line in text.lines().filter(|l| !l.starts_with('#') && !l.starts_with("diameter")) {
+            let v: Vec<f64> = line.split(',').map(|s| s.trim().parse().unwrap()).collect();
+            if v[1] == 800.0 {
+                rows.push((v[0], v[2] * v[3].cos(), v[2] * v[3].sin()));
+            }
+        }
+        let (pitch, f0, half) = (400.0f64, 125e3f64, 64usize);
+        let n = 2 * half + 1;
+        let mut grid = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = ((i as f64 - half as f64) * pitch, (j as f64 - half as f64) * pitch);
+                let target = -std::f64::consts::TAU / 800.0 * ((x * x + y * y + f0 * f0).sqrt() - f0);
+                let (tx, ty) = (target.cos(), target.sin());
+                let d = |r: &(f64, f64, f64)| (r.1 - tx).powi(2) + (r.2 - ty).powi(2);
+                let inner = rows.iter().filter(|r| (110.0..=290.0).contains(&r.0));
+                // every 11th site (a diagonal pattern) empty: the substrate, which no key moves
+                let empty = (7 * i + 3 * j) % 11 == 0;
+                grid.push(if empty { f64::NAN } else { inner.min_by(|a, b| d(a).total_cmp(&d(b))).unwrap().0 });
+            }
+        }
+        let dir = std::env::temp_dir().join(format!("asnr-layout-gradient-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("lens.npy"), scene::npy::npy_f64(&[n, n], &grid).unwrap()).unwrap();
+        let text = format!(
+            r#"[lens]
+model = "library"
+f_number = 2.5
+focal_length_mm = 0.125
+design_wavelength_nm = 800.0
+library = {library:?}
+library_interpolation = "cubic"
+layout_grid = "lens.npy"
+lattice_pitch_um = 0.4
+empty_cell = "substrate"
+parameter_bias = [0.0]
+
+[source]
+kind = "flat"
+radiance_w_m2_sr_nm = 0.025
+
+[spectrum]
+shape = "tophat"
+center_nm = 800.0
+range_nm = 4.0
+
+[camera]
+pixel_pitch_um = 5.2
+pixel_mtf = false
+quantum_efficiency = 0.2
+
+[exposure]
+time_ms = 1.23
+
+[options]
+pupil_samples = 64
+"#,
+            library = library.display().to_string()
+        );
+        Source::from_text(text, "a small 2-D layout", dir)
+    }
+
+    /// A 2-D layout (`lens.layout_grid`: a site map on the FFT path, on and off axis;
+    /// docs/physics.md, "Gradients: a library's parameter bias", "… atoms' phase errors"):
+    /// `lens.parameter_bias[0]` with cubic rows (each atom's `∂t`, the site map's field sampled
+    /// with the table replaced by it, on the block path at `options.pupil_samples = 64`, samples
+    /// wider than a site, and on the point path at 128, narrower) and `lens.atom_phase_error_rad`
+    /// at 0.1 rad (each atom's table entry times `−σ`, the stray power `2σ|t|²E[a]²e^{−σ²}`; the
+    /// empty sites do not move, so the mean MTF does), against
+    /// Richardson-extrapolated central differences of evaluations at 1e-10 at the same fixed
+    /// sampling (steps 0.5 and 0.25 nm, 0.02 and 0.01 rad), every quantity (ASNR, mean MTF, SNR0,
+    /// N) within 10× the gradient's requested tolerance (1e-9) of its own size plus the
+    /// differences' own error (the evaluations' 1e-10 over the smaller step); with transmission
+    /// errors the bias is refused, naming them.
+    #[test]
+    fn layout_grid_bias_and_phase_error_match_central_differences() {
+        let reference = 1e-10;
+        let asked = 1e-9;
+        for (key, value, h, extra) in [
+            ("lens.parameter_bias[0]", 0.0, 0.25, &[][..]),
+            ("lens.parameter_bias[0]", 0.0, 0.25, &["options.pupil_samples=128", "field.x_deg=2"][..]),
+            ("lens.atom_phase_error_rad", 0.1, 0.01, &["field.y_deg=2", "options.glare=\"included\""][..]),
+        ] {
+            let started = std::time::Instant::now();
+            let source = small_layout_grid("grid");
+            let mut overrides = owned(&["lens.atom_phase_error_rad=0.1"]);
+            overrides.extend(owned(extra));
+            let e = metric::evaluate(&scene::build_from(&source, &overrides).unwrap()).unwrap();
+            assert!(e.numerics.engine.starts_with("fft"), "{}", e.numerics.engine);
+            let mut at = overrides.clone();
+            at.push(format!("options.tolerance={asked:e}"));
+            let g = gradient(&source, &at, &owned(&[key])).unwrap();
+            let (coarse, fine) = (
+                central_at(&source, &overrides, key, value, 2.0 * h, reference),
+                central_at(&source, &overrides, key, value, h, reference),
+            );
+            let ours = [g.d_asnr[0], g.d_mean_mtf[0], g.d_snr0[0], g.d_photoelectrons[0]];
+            assert!(ours.iter().all(|d| *d != 0.0), "{g:?}");
+            for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+                let richardson = (4.0 * fine[q] - coarse[q]) / 3.0;
+                let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
+                let noise = reference * quantity / h;
+                let error = (ours[q] - richardson).abs();
+                println!(
+                    "{key} {extra:?} {name}: gradient {:.9e}, Richardson {richardson:.9e} (steps {:.9e}, {:.9e}), \
+                     error/|gradient| {:.1e}",
+                    ours[q],
+                    coarse[q],
+                    fine[q],
+                    error / ours[q].abs()
+                );
+                assert!(
+                    error <= 10.0 * asked * ours[q].abs() + noise,
+                    "{key} {extra:?} {name}: {} vs {richardson}",
+                    ours[q]
+                );
+            }
+            println!("{key} {extra:?}: {:?}", started.elapsed());
+        }
+        // transmission errors: the bias moves each atom's error factor through its cap, refused
+        let source = small_layout_grid("refused");
+        let err =
+            gradient(&source, &owned(&["lens.atom_transmission_error=0.05"]), &owned(&["lens.parameter_bias[0]"]))
+                .unwrap_err()
+                .to_string();
+        assert!(err.contains("lens.atom_transmission_error > 0"), "{err}");
     }
 
     /// Bad keys are refused naming the key.

@@ -1,10 +1,11 @@
 //! A library lens's parameter bias and its atoms' phase errors where its pupil is sampled on the
 //! FFT path: a radial layout off axis, whose imaging order is its radial pupil seen by the
-//! oblique wave (docs/physics.md, "Gradients: a library's parameter bias", "… a library's
-//! atoms' phase errors" and "Gradients: 2-D pupils (the FFT path)").
+//! oblique wave, and a 2-D layout on and off axis, whose imaging order is its site map
+//! (docs/physics.md, "Gradients: a library's parameter bias", "… a library's atoms' phase
+//! errors" and "Gradients: 2-D pupils (the FFT path)").
 //!
-//! The key moves each atom's field, so each order's amplitude and phase profiles
-//! ([`optics::LensModel::order_derivatives`]: `∂a(q)`, `∂W(q)`, `∂τ_o`, `∂T`), on the value's own
+//! The key moves each atom's field, so each order's amplitude and phase profiles or its atoms'
+//! table ([`optics::LensModel::order_derivatives`]: `∂a(q)`, `∂W(q)` or `∂t_u`, `∂τ_o`, `∂T`), on the value's own
 //! engine: forward mode through the FFT with the complex lane
 //! ([`optics::WavefrontDirection::OrderField`]) at the value's sampling levels, spectral nodes,
 //! frequencies and azimuths, so that the derivative is that of the value's discrete rule.
@@ -19,8 +20,8 @@ use crate::{Error, Scene};
 /// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_gradient`], under a noise spectrum
 /// `noise` its weighted twin), and on the same engine's spectral nodes (weights `ρ Σ_o τ_o`)
 /// `∂ln N = Σ w ∂τ / Σ w τ` and `∂ln N_T = Σ w ∂T / Σ w T` (SI eq. S8, S14), `τ = Σ_o τ_o`.
-/// Refused where the engine is not the FFT path or the lens gives no order derivatives there (a
-/// 2-D layout's map pupils, the exact pupil mapping).
+/// Refused where the engine is not the FFT path or the lens gives no order derivatives there
+/// (the exact pupil mapping; a 2-D layout with transmission errors or a fin's unconverted light).
 pub(super) fn library_bias_on_fft_path(
     scene: &Scene,
     e: &Evaluation,
@@ -31,8 +32,8 @@ pub(super) fn library_bias_on_fft_path(
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     if !e.numerics.engine.starts_with("fft") {
         return Err(not_smooth(
-            "off axis the library lens's pupil is sampled on the FFT path, where its lanes are computed; this \
-             evaluation's engine is another",
+            "a library lens off axis, or with a 2-D layout, is sampled on the FFT path, where its lanes are \
+             computed; this evaluation's engine is another",
         ));
     }
     let (lens, camera) = (scene.lens(), scene.camera());
@@ -59,7 +60,9 @@ pub(super) fn library_bias_on_fft_path(
     let Some((_, d_mtf)) = found else {
         return Err(not_smooth(
             "the FFT path did not carry the lens's order derivatives here: they are computed for a radial pupil \
-             (a radial layout off axis), not for a 2-D layout's map pupils nor the lens's exact pupil mapping",
+             (a radial layout off axis) and a 2-D layout's site map, not for the lens's exact pupil mapping, a 2-D \
+             layout with lens.atom_transmission_error > 0 or a fin library's unconverted light (co_amplitude) in \
+             a parameter bias",
         ));
     };
     // ∂ln N and ∂ln N_T on the engine's spectral nodes, weighted ρ τ

@@ -1000,7 +1000,10 @@ pub enum WavefrontDirection {
     /// profile at `q` plus its best-fit defocus's rate times `x² + y² − q`), the normalization
     /// `Σ A a²` by `Σ 2 A a ∂a`, and the node's weight `w τ_o` by `w ∂τ_o`; the normalization of
     /// the polychromatic OTF `Σ w τ_o` by `Σ w ∂τ_o` (docs/physics.md, "Gradients: a library's
-    /// parameter bias"). The FFT path carries it.
+    /// parameter bias"). For a site map (a 2-D layout, on and off axis): the field moves by the
+    /// same sampling of the atoms' table's derivative (`OrderDerivatives::tables`,
+    /// [`MapPupil::field_derivative`](crate::map::MapPupil::field_derivative)). The FFT path
+    /// carries it.
     OrderField(usize),
 }
 
@@ -1017,7 +1020,8 @@ impl FftPath {
     /// read at the value's frequencies and azimuths with the value's interpolation, weights and
     /// lateral-colour phases, and `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`: the kink of `|O|`,
     /// a set of measure zero on the fixed rule). `None` where an order is not a radial pupil on
-    /// the grid path (apertures, zones and maps do not carry these keys), a lane is missing, or
+    /// the grid path (apertures, zones and maps do not carry these keys; a site map carries
+    /// [`WavefrontDirection::OrderField`] alone), a lane is missing, or
     /// the accumulators would pass their memory budget.
     ///
     /// With a non-white noise spectrum `noise`, of the value's mean of `P |O| / n` instead: each
@@ -1144,6 +1148,45 @@ impl FftPath {
                     let moves: Vec<(&[Complex64], f64)> =
                         directions.iter().map(|_| (moved.0.as_slice(), moved.1)).collect();
                     layer.plan.otf_and_field_derivatives(&field, weight, &moves, &mut otf, &mut d_grids);
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
+                // a site map's order: its field is linear in the atoms' table, its move the same
+                // sampling of the table's derivative (`MapPupil::field_derivative`)
+                if let (Pupil::Map(map), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
+                    if !directions.iter().all(|d| matches!(d, WavefrontDirection::OrderField(_))) {
+                        return Ok(None);
+                    }
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let slot = layer.pupil(&order)?;
+                    let sampled = &layer.pupils[slot].1;
+                    let (field, power) = map.field(sampled.n(), sampled.amplitude(), lambda);
+                    let mut moves: Vec<(Vec<Complex64>, f64)> = Vec::with_capacity(k_dirs);
+                    let mut rates = vec![0.0; k_dirs];
+                    for (j, derivatives) in order_fields.iter().enumerate() {
+                        let Some(d) = derivatives else { return Ok(None) };
+                        let (Some(d_table), Some(&d_tau)) = (d.tables.get(index), d.efficiencies.get(index)) else {
+                            return Ok(None);
+                        };
+                        let Some(moved) = map.field_derivative(sampled.n(), sampled.amplitude(), lambda, d_table)
+                        else {
+                            return Ok(None);
+                        };
+                        moves.push(moved);
+                        rates[j] = d_tau / order.efficiency;
+                    }
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, power, &refs, &mut otf, &mut d_grids);
+                    for ((grid, &rate), total) in d_grids.iter_mut().zip(&rates).zip(d_total.iter_mut()) {
+                        if rate != 0.0 {
+                            grid.add_scaled(&otf, rate);
+                            *total += node.weight * rate;
+                        }
+                    }
                     let grids: Vec<&Otf> = d_grids.iter().collect();
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;

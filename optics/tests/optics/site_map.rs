@@ -212,3 +212,48 @@ fn samples_coarser_than_the_cells_are_the_mean_of_their_cells() {
         assert!((weight / want_weight - 1.0).abs() < 1e-12, "weight {weight} against {want_weight}");
     }
 }
+
+/// A layout's field is linear in its atoms' table and its power quadratic: the field's
+/// derivative where the table moves by `dt` (`MapPupil::field_derivative`, docs/physics.md,
+/// "Gradients: a library's parameter bias") against the central difference of the fields of
+/// `t ± s dt`, s = 1e-3 (exact for a linear map, and for the power's quadratic form, up to the
+/// rounding of the sums over the samples), on
+/// the point path (samples finer than the cells) and the block path (coarser), on axis and with
+/// the oblique wave; and `SiteMap::power_rates` against the powers' central difference.
+#[test]
+fn field_derivative_is_the_difference_of_the_moved_tables() {
+    let lambda = 0.81e-6;
+    let (atoms, geometric, table) = layout(lambda);
+    let map = site_map(atoms, &geometric);
+    // a move of every atom but the empty cell
+    let mut dt: Vec<Complex64> =
+        (0..table.len()).map(|u| Complex64::new(0.3 - 0.05 * u as f64, 0.1 + 0.02 * u as f64)).collect();
+    dt[LEVELS] = Complex64::new(0.0, 0.0);
+    let s = 1e-3;
+    let moved = |sign: f64| -> Vec<Complex64> { table.iter().zip(&dt).map(|(t, d)| t + sign * s * d).collect() };
+    let (up, down) = (moved(1.0), moved(-1.0));
+    let oblique = optics::radial::Oblique::new(RADIUS, FOCAL, 0.03, -0.02).unwrap();
+    for (n, obl) in [(300, None), (300, Some(oblique)), (40, None), (40, Some(oblique))] {
+        let area = full_samples(n);
+        let pupil = |t: &[Complex64]| MapPupil::sites(map.clone(), t.to_vec().into(), lambda, obl);
+        let (field, _) = pupil(&table).field(n, &area, lambda);
+        let (d_field, d_power) = pupil(&table).field_derivative(n, &area, lambda, &dt).unwrap();
+        let (f_up, p_up) = pupil(&up).field(n, &area, lambda);
+        let (f_down, p_down) = pupil(&down).field(n, &area, lambda);
+        let scale = field.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let worst = (0..n * n).map(|i| ((f_up[i] - f_down[i]) / (2.0 * s) - d_field[i]).norm()).fold(0.0, f64::max);
+        let want = (p_up - p_down) / (2.0 * s);
+        println!(
+            "{n}² samples, oblique {}: field {worst:.1e} of {scale:.2}, power {d_power:.9e} vs {want:.9e}",
+            obl.is_some()
+        );
+        assert!(worst < 1e-10 * scale, "n {n}: the field's derivative is {worst:.1e} off");
+        // the powers are sums of n² terms: their rounding (1e-13 of P over 2s) is the difference's
+        assert!((d_power - want).abs() < 1e-13 * p_up / s, "n {n}: power {d_power} vs {want}");
+    }
+    let (d_design, d_all) = map.power_rates(&table, &dt, lambda);
+    let ((du, au), (dd, ad)) = (map.powers(&up, lambda), map.powers(&down, lambda));
+    let (want_design, want_all) = ((du - dd) / (2.0 * s), (au - ad) / (2.0 * s));
+    assert!((d_design - want_design).abs() < 1e-10 * want_design.abs(), "{d_design} vs {want_design}");
+    assert!((d_all - want_all).abs() < 1e-10 * want_all.abs(), "{d_all} vs {want_all}");
+}
