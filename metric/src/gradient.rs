@@ -1814,6 +1814,14 @@ fn line_center_partials(
         // (the value's pass gave the defocus lane where the shift is 0, at λ0: the OTF on axis)
         return line_center_partials(&scene.single_field(optics::Field::ON_AXIS), e, None, None, pass);
     }
+    // off axis, several orders each turned by its own lateral colour (the harmonic lens): the
+    // line engine's lanes over azimuth (docs/physics.md, "Gradients: several orders under a line
+    // off axis")
+    if !field.is_on_axis()
+        && let Some(found) = line_center_orders_off_axis(scene, c, d_ln_n)
+    {
+        return Ok(found);
+    }
     let family = lens.describe();
     let orders = lens.orders(c, field);
     let full = |o: &optics::Order| {
@@ -1860,10 +1868,10 @@ fn line_center_partials(
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
              pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without an iris or \
-             Seidel terms, on axis or off it), the refractive lens, the harmonic lens on axis with a constant \
-             transmission, and a phase lens on the radial engine; this lens's orders move with λ otherwise (an \
-             iris, Seidel or Zernike terms, an efficiency or transmission table's slope, several orders' lateral \
-             colour off axis), which is not followed yet"
+             Seidel terms, on axis or off it), the refractive lens, the harmonic lens with a constant \
+             transmission (on axis, and off axis on the line's exact 1-D engine), and a phase lens on the radial \
+             engine; this lens's orders move with λ otherwise (an iris, Seidel or Zernike terms, an efficiency or \
+             transmission table's slope), which is not followed yet"
         )));
     };
     // the value's own pass where it carried the defocus lane (the line engine); else the value's
@@ -3089,6 +3097,9 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
     if let Some(on_axis) = line_seen_on_axis(scene) {
         return design_wavelength_partials(&on_axis, e, p);
     }
+    if let Some(found) = line_orders_off_axis(scene, None) {
+        return Ok((found.rate, found.design - found.rate * found.mean + found.shift));
+    }
     if let Some(found) = design_wavelength_on_value_rule(scene) {
         return Ok(found);
     }
@@ -3117,6 +3128,9 @@ fn design_wavelength_over_noise(
     if let Some(on_axis) = line_seen_on_axis(scene) {
         return design_wavelength_over_noise(&on_axis, e, p, noise);
     }
+    if let Some(found) = line_orders_off_axis(scene, Some(noise)) {
+        return Ok(found.design - found.rate * found.mean + found.shift);
+    }
     if let Some((_, d)) = design_wavelength_off_axis(scene, e, Some(noise)) {
         return Ok(d);
     }
@@ -3141,6 +3155,95 @@ fn line_seen_on_axis(scene: &Scene) -> Option<Scene> {
         && o.wavefront.is_defocus_only()
         && (o.wavefront.defocus_m, o.efficiency) == (a.wavefront.defocus_m, a.efficiency);
     same.then(|| scene.single_field(optics::Field::ON_AXIS))
+}
+
+/// A line's lanes off axis on its several orders (docs/physics.md, "Gradients: several orders
+/// under a line off axis"), from [`optics::Polychromatic::mean_mtf_over_azimuth_and_line_lanes`]
+/// on the value's own engine: along each azimuth the mean `M̄` (of `P|O|`, or `P|O|/n` under a
+/// noise spectrum), `D_λ0`, `D_Δ`, `D_K` and `P_ν`, averaged over the value's rule in azimuth;
+/// `r = ∂ln N/∂ln λ0` on the line's node; and with white noise the end term
+/// `P(ν_N) ⟨|O(ν_N, φ)|⟩_φ` over azimuth.
+struct LineOrders {
+    mean: f64,
+    design: f64,
+    shift: f64,
+    defocus: f64,
+    pixel: f64,
+    rate: f64,
+    edge: Option<f64>,
+}
+
+/// [`LineOrders`] for a line off axis whose several orders are each the full circular pupil with
+/// a defocus alone, each turned by its own lateral colour (the harmonic lens `Δ_m = f0 tan θ
+/// (pλ0/(mλ) − 1)`), on the line's exact 1-D engine; `None` otherwise (one order, which
+/// [`line_seen_on_axis`] takes; an iris, Seidel terms, the FFT path; on axis).
+fn line_orders_off_axis(scene: &Scene, noise: Option<&optics::NoiseShape>) -> Option<LineOrders> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let c = detected.line()?.center();
+    let orders = lens.orders(c, field);
+    let full = orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.is_defocus_only());
+    if field.is_on_axis() || orders.len() < 2 || !full {
+        return None;
+    }
+    let nyquist = camera.nyquist();
+    on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let along_field = field.y_rad.atan2(field.x_rad);
+        let ([mean, design, shift, defocus, pixel], _) =
+            poly.mean_mtf_over_azimuth_and_line_lanes(along_field, noise)?;
+        let rate = poly.design_signal_rate()?;
+        let edge = noise.is_none().then(|| poly.mtf_over_azimuth(nyquist, along_field));
+        Some(LineOrders { mean, design, shift, defocus, pixel, rate, edge })
+    })
+}
+
+/// `(∂ln N/∂c, ∂ln N_T/∂c, ∂M̄/∂c)` for the wavelength `c` of a line off axis on several orders
+/// each turned by its own lateral colour (docs/physics.md, "Gradients: several orders under a
+/// line off axis"), per m, `d_ln_n` the line weight's own rate. The lens's orders depend on the
+/// wavelength through `λ/λ0` alone (the harmonic lens: each order's `W020_m`, `τ_m` and
+/// `Δ_m + f0 tan θ ∝ λ0/λ`; checked on the rates the lens gives, `c ∂W020_o/∂c = −∂W020_o/∂ln λ0`
+/// and `c ∂τ_o/∂c = −∂τ_o/∂ln λ0`), so moving `c` and `λ0` together by `1 + ε` holds the orders
+/// and moves only `s = νcF#` (up) and `w_o = W020_o/c` (down):
+///
+/// ```text
+/// ∂M̄/∂ln c = (P(ν_N)|O(ν_N)| − M̄ − P_ν) − D_Δ − D_K − ∂M̄/∂ln λ0
+///          = (P(ν_N)|O(ν_N)| − M̄ − P_ν) − D_K − D_λ0 + r M̄ − 2 D_Δ
+/// ```
+///
+/// (`ν ∂O/∂ν` at fixed `w_o`, `Δ_o` is the frequency scaling plus each order's turn
+/// `−2πi ν u·Δ_o`, the image shifts' lane `D_Δ`; by parts as on axis; `∂M̄/∂ln λ0 = D_λ0 − r M̄
+/// + D_Δ` as [`design_wavelength_off_axis`]'s), each term averaged over azimuth on the value's
+/// rule ([`line_orders_off_axis`]); `∂ln N/∂c = ∂ln w/∂c + Σ_o τ_o′/Σ_o τ_o` and
+/// `∂ln N_T/∂c = ∂ln w/∂c + ∂ln T/∂c`. `None` where the scene is not that.
+fn line_center_orders_off_axis(scene: &Scene, c: f64, d_ln_n: f64) -> Option<(f64, f64, f64)> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let on_axis = lens.order_wavelength_rates(c, optics::Field::ON_AXIS)?;
+    let design = lens.design_wavelength_rates(c, field)?;
+    let orders = lens.orders(c, field);
+    let axis_orders = lens.orders(c, optics::Field::ON_AXIS);
+    if on_axis.orders.len() != orders.len() || design.len() != orders.len() || axis_orders.len() != orders.len() {
+        return None;
+    }
+    // the orders a function of λ/λ0 alone, to rounding
+    let against = |a: f64, b: f64| (a + b).abs() <= 1e-9 * a.abs().max(b.abs());
+    let homogeneous = on_axis.orders.iter().zip(&design).zip(orders.iter().zip(&axis_orders)).all(
+        |(([d_w020, d_tau], [l_w020, l_tau]), (o, a))| {
+            against(c * d_w020, *l_w020) && against(c * d_tau, *l_tau) && o.efficiency == a.efficiency
+        },
+    );
+    if !homogeneous {
+        return None;
+    }
+    let found = line_orders_off_axis(scene, None)?;
+    let edge = found.edge?;
+    let d_log_c =
+        (edge - found.mean - found.pixel) - found.defocus - found.design + found.rate * found.mean - 2.0 * found.shift;
+    let efficiency: f64 = orders.iter().map(|o| o.efficiency).sum();
+    let moved: f64 = on_axis.orders.iter().map(|r| r[1]).sum();
+    Some((d_ln_n + moved / efficiency, d_ln_n + on_axis.ln_transmission, d_log_c / c))
 }
 
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` off axis for a lens whose every order is the full circular pupil
@@ -3259,13 +3362,11 @@ fn design_wavelength_by_own_rule(
              every order is the full circular pupil with a defocus alone and that gives how its orders move with λ0 \
              (the chromatic, refractive and harmonic families without Seidel terms), on axis or where the field \
              leaves the OTF as on axis, off axis with the lateral colour f0 tan θ (λ0/λ − 1) on the exact 1-D \
-             engine over a band, and through a decentred circular iris there (its tilt moving with W020); it is 0 \
-             for a phase lens with a geometric phase (its radian profile does not depend on λ0); this scene's \
-             orders are not that here (off axis: several orders under a line spectrum, each turned by its own \
-             lateral colour, whose lanes the line's engine does not carry (one order is seen as on axis); a \
-             centred iris smaller than the aperture, an iris on the FFT path, or Seidel terms, which the exact \
-             engine's lane does not carry; a phase lens's refractive profile scales its \
-             path per radian with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric \
+             engine over a band or under a line (each order its own), and through a decentred circular iris there \
+             (its tilt moving with W020); it is 0 for a phase lens with a geometric phase (its radian profile does \
+             not depend on λ0); this scene's orders are not that here (off axis: a centred iris smaller than the \
+             aperture, an iris on the FFT path, or Seidel terms, which the exact engine's lane does not carry; a \
+             phase lens's refractive profile scales its path per radian with λ0 and a diffractive one its orders' efficiencies, and a phase map's geometric \
              phase its reference sphere by 1 − λ/λ0: not followed yet)"
         ))
     };

@@ -871,6 +871,34 @@ impl Polychromatic<'_> {
         Some((mean, design, shift, work))
     }
 
+    /// A line's lanes off axis where its several orders are exact 1-D circles each turned by its
+    /// own lateral colour (the harmonic lens): `[M̄, D_λ0, D_Δ, D_K, P_ν]` over azimuth from
+    /// `first` (white, or over the noise spectrum `noise`), `D_λ0` the design wavelength's lane
+    /// ([`WavefrontDirection::DesignWavelength`], the normalization's rate not subtracted), `D_Δ`
+    /// the image shifts' scale ([`WavefrontDirection::ImageShift`]), `D_K` every order's defocus
+    /// scaled ([`WavefrontDirection::Defocus`]) and `P_ν` the pixel MTF's term, on the line
+    /// engine's own nodes and the value's accepted weights, on the rule over azimuth of
+    /// [`mean_mtf_over_azimuth_and_aperture_lanes`](Self::mean_mtf_over_azimuth_and_aperture_lanes)
+    /// (docs/physics.md, "Gradients: several orders under a line off axis"). `None` where the
+    /// engine is not the line's exact one (the FFT path) or the OTF does not depend on direction.
+    pub fn mean_mtf_over_azimuth_and_line_lanes(
+        &self,
+        first: f64,
+        noise: Option<&NoiseShape>,
+    ) -> Option<([f64; 5], Work)> {
+        if self.engine.engine() != (Engine::Monochromatic { fft: None })
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || !self.direction_dependent()
+        {
+            return None;
+        }
+        let directions =
+            [WavefrontDirection::DesignWavelength, WavefrontDirection::ImageShift, WavefrontDirection::Defocus];
+        let (average, work) = self.azimuth_refined_lanes(first, &directions, noise)?;
+        let [mean, design, shift, defocus, pixel] = average[..] else { return None };
+        Some(([mean, design, shift, defocus, pixel], work))
+    }
+
     /// `[M̄, lanes…, P_ν]` averaged over azimuth from `first`: along each azimuth the value's
     /// adaptive rule (of `P |O|`, or `P |O|/n` with a noise spectrum), the lanes along
     /// `directions` and then `|O|` recorded at each frequency read and integrated with the

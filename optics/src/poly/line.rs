@@ -4,10 +4,10 @@
 
 use num_complex::Complex64;
 
-use super::exact::{contributions, exact_along};
+use super::exact::{contributions, exact_along, exact_along_and_field_gradient};
 use super::grid::FftPath;
 use super::spectral::{Nodes, RADIAL_ACCURACY, Scene};
-use super::{Engine, FrequencyRule, OtfEngine};
+use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
 
 /// A line spectrum's nodes, with the FFT grids of its orders where some order needs them.
 #[derive(Debug)]
@@ -102,6 +102,30 @@ impl OtfEngine for Line<'_> {
             .map(|(&[d_w020, d_tau], n)| [if n.w020 == 0.0 { 0.0 } else { d_w020 / n.w020 }, d_tau])
             .collect();
         self.order_lane(frequency, Some(&rates))
+    }
+
+    /// Off axis, where every order is an exact 1-D circle: the design wavelength's, the image
+    /// shifts' scale and the defocus lanes of the exact engine on the line's own nodes
+    /// ([`exact_along_and_field_gradient`]: each order turned by its own lateral colour), the
+    /// value [`otf_along`](OtfEngine::otf_along)'s; `None` for other directions and on the FFT
+    /// path (docs/physics.md, "Gradients: several orders under a line off axis").
+    fn otf_along_and_gradient(
+        &self,
+        frequency: f64,
+        azimuth: f64,
+        directions: &[WavefrontDirection],
+        gradient: &mut [Complex64],
+    ) -> Option<Complex64> {
+        let carried = |d: &WavefrontDirection| {
+            matches!(
+                d,
+                WavefrontDirection::DesignWavelength | WavefrontDirection::ImageShift | WavefrontDirection::Defocus
+            )
+        };
+        if self.fft.is_some() || !directions.iter().all(carried) {
+            return None;
+        }
+        exact_along_and_field_gradient(&self.scene, &self.nodes, frequency, azimuth, directions, gradient)
     }
 
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
