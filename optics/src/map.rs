@@ -882,38 +882,28 @@ impl MapPupil {
     }
 
     fn map_field(&self, map: &PhaseMap, n: usize, area: &[f64], lambda: f64) -> (Vec<Complex64>, f64) {
-        let h = 2.0 / n as f64;
         let k = 2.0 * PI / lambda;
         let mut field = vec![Complex64::new(0.0, 0.0); n * n];
         let mut weight = 0.0;
         let offset = [0.5 * map.nx as f64, 0.5 * map.ny as f64];
-        for j in 0..n {
-            let y = -1.0 + (j as f64 + 0.5) * h;
-            for i in 0..n {
-                let idx = j * n + i;
-                if area[idx] <= 0.0 {
-                    continue;
-                }
-                let x = -1.0 + (i as f64 + 0.5) * h;
-                // the cell holding this sample (the map covers the aperture: clamped at its edge)
-                let cell = |v: f64, o: f64, len: usize| {
-                    ((v * map.radius / map.pitch + o).floor().max(0.0) as usize).min(len - 1)
-                };
-                let (ci, cj) = (cell(x, offset[0], map.nx), cell(y, offset[1], map.ny));
-                let [cx, cy] = map.centre(ci, cj);
-                let a = map.amplitude.as_ref().map_or(1.0, |v| v[cj * map.nx + ci]);
-                // the reference path's gradient across the cell (sphere and oblique wave)
-                let (gx, gy) = self.gradient(cx, cy, map.pitch, map.radius, map.distance);
-                let u = map.pitch / lambda;
-                let design = a * sinc(u * gx) * sinc(u * gy);
-                let w = self.path_per_radian * map.phase[cj * map.nx + ci]
-                    + self.sphere_factor * map.sphere(cx, cy)
-                    + self.oblique_m(cx / map.radius, cy / map.radius)
-                    + self.zernike_m(cx / map.radius, cy / map.radius);
-                let amp = area[idx] * design;
-                weight += area[idx] * design * design;
-                field[idx] = Complex64::from_polar(amp, k * w);
-            }
+        for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+            // the cell holding this sample (the map covers the aperture: clamped at its edge)
+            let cell =
+                |v: f64, o: f64, len: usize| ((v * map.radius / map.pitch + o).floor().max(0.0) as usize).min(len - 1);
+            let (ci, cj) = (cell(x, offset[0], map.nx), cell(y, offset[1], map.ny));
+            let [cx, cy] = map.centre(ci, cj);
+            let a = map.amplitude.as_ref().map_or(1.0, |v| v[cj * map.nx + ci]);
+            // the reference path's gradient across the cell (sphere and oblique wave)
+            let (gx, gy) = self.gradient(cx, cy, map.pitch, map.radius, map.distance);
+            let u = map.pitch / lambda;
+            let design = a * sinc(u * gx) * sinc(u * gy);
+            let w = self.path_per_radian * map.phase[cj * map.nx + ci]
+                + self.sphere_factor * map.sphere(cx, cy)
+                + self.oblique_m(cx / map.radius, cy / map.radius)
+                + self.zernike_m(cx / map.radius, cy / map.radius);
+            let amp = area[idx] * design;
+            weight += area[idx] * design * design;
+            field[idx] = Complex64::from_polar(amp, k * w);
         }
         (field, weight)
     }
@@ -929,21 +919,12 @@ impl MapPupil {
         area: &[f64],
         lambda: f64,
     ) -> (Vec<Complex64>, f64) {
-        let h = 2.0 / n as f64;
         let mut field = vec![Complex64::new(0.0, 0.0); n * n];
         let mut weight = 0.0;
-        for j in 0..n {
-            let y = -1.0 + (j as f64 + 0.5) * h;
-            for i in 0..n {
-                let idx = j * n + i;
-                if area[idx] <= 0.0 {
-                    continue;
-                }
-                let x = -1.0 + (i as f64 + 0.5) * h;
-                let (v, p) = self.site_at(sites, table, power, x, y, lambda);
-                field[idx] = v * area[idx];
-                weight += area[idx] * p;
-            }
+        for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+            let (v, p) = self.site_at(sites, table, power, x, y, lambda);
+            field[idx] = v * area[idx];
+            weight += area[idx] * p;
         }
         (field, weight)
     }

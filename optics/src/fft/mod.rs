@@ -226,5 +226,14 @@ pub use sampling::{
 };
 /// Zernike terms in evaluation form, for a 2-D map's added wavefront (`crate::map::MapPupil`).
 pub(crate) use wavefront::Compiled;
+
+/// The pixels of an `n × n` pupil grid spanning [−1, 1]² (row by row) whose area fraction
+/// `area` is positive: `(index, x, y)`, `(x, y)` the pixel's centre in units of the radius.
+pub(crate) fn transmitting_pixels(n: usize, area: &[f64]) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+    let h = 2.0 / n as f64;
+    (0..n * n)
+        .filter(move |&idx| area[idx] > 0.0)
+        .map(move |idx| (idx, -1.0 + ((idx % n) as f64 + 0.5) * h, -1.0 + ((idx / n) as f64 + 0.5) * h))
+}
 pub use wavefront::{Aberrations, MAX_NOLL_INDEX, noll_to_nm};
 pub use zones::{SampledZones, ZoneField};

@@ -825,32 +825,23 @@ fn radial_field(
     lambda: f64,
 ) -> (Vec<Complex64>, f64) {
     let n = sampled.n();
-    let h = 2.0 / n as f64;
     let k = 2.0 * PI / lambda;
     let (area, opd) = (sampled.amplitude(), sampled.opd_m());
     let scale2 = radial.frequency_scale().powi(2);
     let mut field = vec![Complex64::new(0.0, 0.0); n * n];
     let mut weight = 0.0;
-    for j in 0..n {
-        let y = -1.0 + (j as f64 + 0.5) * h;
-        for i in 0..n {
-            let idx = j * n + i;
-            if area[idx] <= 0.0 {
-                continue;
-            }
-            let x = -1.0 + (i as f64 + 0.5) * h;
-            // a pupil in direction cosines fills the circle of radius 1/k of the paraxial one
-            // (its rim pixel by pixel, not by area fraction)
-            let q = (x * x + y * y) * scale2;
-            if scale2 > 1.0 && q > 1.0 {
-                continue;
-            }
-            let q = q.min(1.0);
-            let a = radial.amplitude(q);
-            weight += area[idx] * a * a;
-            let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
-            field[idx] = Complex64::from_polar(area[idx] * a, k * w);
+    for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+        // a pupil in direction cosines fills the circle of radius 1/k of the paraxial one
+        // (its rim pixel by pixel, not by area fraction)
+        let q = (x * x + y * y) * scale2;
+        if scale2 > 1.0 && q > 1.0 {
+            continue;
         }
+        let q = q.min(1.0);
+        let a = radial.amplitude(q);
+        weight += area[idx] * a * a;
+        let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
+        field[idx] = Complex64::from_polar(area[idx] * a, k * w);
     }
     (field, weight)
 }
@@ -1556,34 +1547,25 @@ fn order_field_move(
     lambda: f64,
 ) -> (Vec<Complex64>, f64) {
     let n = sampled.n();
-    let h = 2.0 / n as f64;
     let k = 2.0 * PI / lambda;
     let (area, opd) = (sampled.amplitude(), sampled.opd_m());
     let scale2 = radial.frequency_scale().powi(2);
     let slope = d_wavefront.fitted_slope();
     let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
     let mut d_weight = 0.0;
-    for j in 0..n {
-        let y = -1.0 + (j as f64 + 0.5) * h;
-        for i in 0..n {
-            let idx = j * n + i;
-            if area[idx] <= 0.0 {
-                continue;
-            }
-            let x = -1.0 + (i as f64 + 0.5) * h;
-            let r2 = x * x + y * y;
-            let q = r2 * scale2;
-            if scale2 > 1.0 && q > 1.0 {
-                continue;
-            }
-            let q = q.min(1.0);
-            let a = radial.amplitude(q);
-            let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
-            let da = d_amplitude.value(q);
-            let dw = d_wavefront.value(q) + slope * (r2 - q);
-            d_weight += 2.0 * area[idx] * a * da;
-            moved[idx] = Complex64::from_polar(area[idx], k * w) * Complex64::new(da, k * a * dw);
+    for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+        let r2 = x * x + y * y;
+        let q = r2 * scale2;
+        if scale2 > 1.0 && q > 1.0 {
+            continue;
         }
+        let q = q.min(1.0);
+        let a = radial.amplitude(q);
+        let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
+        let da = d_amplitude.value(q);
+        let dw = d_wavefront.value(q) + slope * (r2 - q);
+        d_weight += 2.0 * area[idx] * a * da;
+        moved[idx] = Complex64::from_polar(area[idx], k * w) * Complex64::new(da, k * a * dw);
     }
     (moved, d_weight)
 }
