@@ -102,7 +102,8 @@ impl LensModel for OneChannel {
 
 /// The evaluation of `scene` and the derivatives of its ASNR, mean MTF, SNR0 and photoelectrons
 /// with respect to `ln λ_j` of the interleaved lens's channel `channel` at `wavelength_m` (m):
-/// the design wavelength's gradient of the scene with its lens seen through [`OneChannel`].
+/// the design wavelength's gradient of the scene with its lens seen through a view that moves
+/// that channel alone (`OneChannel`).
 ///
 /// # Errors
 /// The evaluation's, and [`Error::NotDifferentiable`] off axis, over a field-of-view list, and
