@@ -2674,6 +2674,37 @@ mod tests {
         }
     }
 
+    /// One key's gradient `g` (ASNR, mean MTF, SNR0, N; none zero) against the Richardson
+    /// extrapolation `(4 fine − coarse)/3` of central differences at the steps `2h` and `h` of
+    /// evaluations at the tolerance `reference`: within `bound` of each derivative plus the
+    /// differences' own error, `reference` times the quantity over `h`; printed after `label`.
+    fn one_key_within(
+        g: &Gradient,
+        (coarse, fine): ([f64; 4], [f64; 4]),
+        h: f64,
+        reference: f64,
+        bound: f64,
+        label: &str,
+    ) {
+        let ours = [g.d_asnr[0], g.d_mean_mtf[0], g.d_snr0[0], g.d_photoelectrons[0]];
+        assert!(ours.iter().all(|d| *d != 0.0), "{g:?}");
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            let richardson = (4.0 * fine[q] - coarse[q]) / 3.0;
+            let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
+            let noise = reference * quantity / h;
+            let error = (ours[q] - richardson).abs();
+            println!(
+                "{label} {name}: gradient {:.9e}, Richardson {richardson:.9e} (steps {:.9e}, {:.9e}), \
+                 error/|gradient| {:.1e}",
+                ours[q],
+                coarse[q],
+                fine[q],
+                error / ours[q].abs()
+            );
+            assert!(error <= bound * ours[q].abs() + noise, "{label} {name}: {} vs {richardson}", ours[q]);
+        }
+    }
+
     /// The library lens off axis (its radial pupil seen by the oblique wave, on the FFT path:
     /// docs/physics.md, "Gradients: a library's parameter bias"): `lens.parameter_bias[0]` with
     /// cubic rows at 0.3 nm and `lens.atom_phase_error_rad` at 0.1 rad, each atom's field moving
@@ -2729,23 +2760,7 @@ mod tests {
                 central_at(source, &overrides, key, value, 2.0 * h, reference),
                 central_at(source, &overrides, key, value, h, reference),
             );
-            let ours = [g.d_asnr[0], g.d_mean_mtf[0], g.d_snr0[0], g.d_photoelectrons[0]];
-            assert!(ours.iter().all(|d| *d != 0.0), "{g:?}");
-            for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
-                let richardson = (4.0 * fine[q] - coarse[q]) / 3.0;
-                let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
-                let noise = reference * quantity / h;
-                let error = (ours[q] - richardson).abs();
-                println!(
-                    "{key} {extra:?} {name}: gradient {:.9e}, Richardson {richardson:.9e} (steps {:.9e}, {:.9e}), \
-                     error/|gradient| {:.1e}",
-                    ours[q],
-                    coarse[q],
-                    fine[q],
-                    error / ours[q].abs()
-                );
-                assert!(error <= 1e-5 * ours[q].abs() + noise, "{key} {extra:?} {name}: {} vs {richardson}", ours[q]);
-            }
+            one_key_within(&g, (coarse, fine), h, reference, 1e-5, &format!("{key} {extra:?}"));
             let richardson = (4.0 * fine[0] - coarse[0]) / 3.0;
             let error = (at_scene.d_asnr[0] - richardson).abs() / at_scene.d_asnr[0].abs();
             println!(
@@ -2862,27 +2877,7 @@ pupil_samples = 64
                 central_at(&source, &overrides, key, value, 2.0 * h, reference),
                 central_at(&source, &overrides, key, value, h, reference),
             );
-            let ours = [g.d_asnr[0], g.d_mean_mtf[0], g.d_snr0[0], g.d_photoelectrons[0]];
-            assert!(ours.iter().all(|d| *d != 0.0), "{g:?}");
-            for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
-                let richardson = (4.0 * fine[q] - coarse[q]) / 3.0;
-                let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
-                let noise = reference * quantity / h;
-                let error = (ours[q] - richardson).abs();
-                println!(
-                    "{key} {extra:?} {name}: gradient {:.9e}, Richardson {richardson:.9e} (steps {:.9e}, {:.9e}), \
-                     error/|gradient| {:.1e}",
-                    ours[q],
-                    coarse[q],
-                    fine[q],
-                    error / ours[q].abs()
-                );
-                assert!(
-                    error <= 10.0 * asked * ours[q].abs() + noise,
-                    "{key} {extra:?} {name}: {} vs {richardson}",
-                    ours[q]
-                );
-            }
+            one_key_within(&g, (coarse, fine), h, reference, 10.0 * asked, &format!("{key} {extra:?}"));
             println!("{key} {extra:?}: {:?}", started.elapsed());
         }
         // transmission errors: the bias moves each atom's error factor through its cap, refused
