@@ -1284,7 +1284,7 @@ impl Polychromatic<'_> {
         for pair in super::sort_cuts(cuts).windows(2) {
             let (a, b) = (pair[0], pair[1]);
             // at least 4 panels over the whole range, not per interval between cutoff cuts
-            // (2 on the closed-form engine, whose OTF has no kinks)
+            // (1 on the closed-form engine, whose OTF has no kinks)
             let floor = (min_panels * (b - a) / self.scene.max_frequency).ceil();
             // beyond the highest cutoff the OTF is zero: one panel (a range up to 1e199 cycles/m
             // past it, from a 1e-206 m pixel, would otherwise ask for more panels than exist)
