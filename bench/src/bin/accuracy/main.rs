@@ -44,6 +44,7 @@ mod gradients;
 mod gradients_aperture;
 mod gradients_bias;
 mod gradients_design;
+mod gradients_families;
 mod gradients_keys;
 mod iris;
 mod kernels;

@@ -48,6 +48,11 @@ pub(crate) const SECTIONS: &[Section] = &[
     },
     Section { name: "gradients-design", title: crate::gradients_design::TITLE, run: crate::gradients_design::section },
     Section {
+        name: "gradients-families",
+        title: crate::gradients_families::TITLE,
+        run: crate::gradients_families::section,
+    },
+    Section {
         name: "gradients-bias",
         title: "Gradients: a library's parameter bias",
         run: crate::gradients_bias::section,
