@@ -75,9 +75,10 @@ pub(crate) const RULES: &[(&str, Allowed)] = &[
         ]),
     ),
     ("xtask", Allowed::Only(&[])),
-    // the benchmark harness (binaries, not published): the libraries it measures, never the
-    // command line, which it runs as a subprocess
-    ("bench", Allowed::Only(&["imaging", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
+    // the benchmark harness (binaries, not published): the libraries it measures (report: the
+    // gradient's chain rules of the lens keys), never the command line, which it runs as a
+    // subprocess
+    ("bench", Allowed::Only(&["report", "imaging", "scene", "metric", "lenses", "optics", "noise", "radiometry"])),
     // examples/custom-lens: a downstream crate implementing LensModel with the public API only
     ("custom-lens", Allowed::Any),
     // no code: the test build's dependency features for the packages built alone
