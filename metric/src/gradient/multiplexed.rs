@@ -135,9 +135,9 @@ impl OneChannel {
 /// that channel alone (`OneChannel`).
 ///
 /// # Errors
-/// The evaluation's, and [`Error::NotDifferentiable`] over a field-of-view list, off axis where
-/// the value is not on the exact 1-D engine over a band, and where the design wavelength's
-/// gradient is refused (naming why).
+/// The evaluation's, and [`Error::NotDifferentiable`] off axis where the value is not on the
+/// exact 1-D engine over a band, and where the design wavelength's gradient is refused (naming
+/// why); over a field-of-view list, any point's.
 pub fn channel_wavelength_gradient(scene: &Scene, channel: usize, wavelength_m: f64) -> Result<Gradient, Error> {
     one_channel(scene, channel, Moving::Wavelength(wavelength_m))
 }
@@ -152,18 +152,10 @@ pub fn channel_efficiency_gradient(scene: &Scene, channel: usize) -> Result<Grad
 }
 
 /// The design wavelength's gradient of `scene` with its lens seen through [`OneChannel`]; off
-/// axis [`channel_off_axis`]'s.
+/// axis [`channel_off_axis`]'s; over a `[[fields]]` list [`over_fields`]'s.
 fn one_channel(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
     if !scene.fields().is_empty() {
-        return Err(Error::NotDifferentiable {
-            parameter: match moving {
-                Moving::Wavelength(_) => "a channel's wavelength",
-                Moving::Efficiency => "a channel's own efficiency",
-            },
-            reason: "over a [[fields]] list a channel's lane is not averaged over the points yet (computed at one \
-                     [field] point, on axis or off)"
-                .to_owned(),
-        });
+        return over_fields(scene, channel, moving);
     }
     if !scene.field().is_on_axis() {
         return channel_off_axis(scene, channel, moving);
@@ -171,6 +163,25 @@ fn one_channel(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient
     let lens: Arc<dyn LensModel> = Arc::new(OneChannel { lens: scene.lens_arc(), channel, moving, shifts: false });
     let seen = scene.clone().with_lens(lens);
     super::gradient(&seen, &[Parameter::DesignWavelength])
+}
+
+/// Over a `[[fields]]` list: the value is the weighted mean of the points' values (evaluate's
+/// relative weights), so its derivative is the weighted mean of each point's, each point's on
+/// axis or off as at a single `[field]` point.
+fn over_fields(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
+    let evaluation = crate::evaluate(scene)?;
+    let largest = scene.fields().iter().map(|f| f.1).fold(0.0, f64::max);
+    let total: f64 = scene.fields().iter().map(|f| f.1 / largest).sum();
+    let mut sum = [0.0; 4];
+    for &(field, weight) in scene.fields() {
+        let g = one_channel(&scene.single_field(field), channel, moving)?;
+        let share = weight / largest / total;
+        for (s, d) in sum.iter_mut().zip([g.asnr[0], g.mean_mtf[0], g.snr0[0], g.photoelectrons[0]]) {
+            *s += share * d;
+        }
+    }
+    let [asnr, mean_mtf, snr0, photoelectrons] = sum.map(|d| vec![d]);
+    Ok(Gradient { evaluation, asnr, mean_mtf, snr0, photoelectrons })
 }
 
 /// The share of the scene's tolerance the off-axis lanes are taken at ([`channel_off_axis`]).

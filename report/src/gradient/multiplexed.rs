@@ -369,6 +369,20 @@ mod tests {
         assert!((on_axis.d_mean_mtf[0] - g.d_mean_mtf[0]).abs() > 1e-3 * g.d_mean_mtf[0].abs(), "{on_axis:?} {g:?}");
     }
 
+    /// The interleaved lens's channel keys over a `[[fields]]` list (on axis, weight 1, and at 3°,
+    /// weight 0.5) on a 4 nm band: the weighted mean of each point's gradient, as the value is
+    /// of the points' values.
+    #[test]
+    fn interleaved_channels_over_a_field_list_match_central_differences() {
+        let one = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let text =
+            format!("{}\n[[fields]]\nx_deg = 0\nweight = 1\n\n[[fields]]\nx_deg = 3\nweight = 0.5\n", one.text());
+        let source = Source::from_text(text, "multiplexed lens over a field list written in the test", ".");
+        let keys = ["lens.channels_nm[0]", "lens.channel_efficiencies[1]"];
+        let g = check(&source, &["spectrum.range_nm=4"], &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+    }
+
     /// The interleaved lens's channels' own efficiencies on axis on a 10 nm band with the stray
     /// light and read noise, with T among them: η_j moves channel j's weight alone
     /// (`∂τ_j/∂ln η_j = τ_j`), so the OTF's weights, N and the stray light; the design
