@@ -1,5 +1,5 @@
 //! The gradient with respect to one channel's wavelength λ_j of an interleaved multiplexed lens
-//! (`lens.channels_nm[j]`), on axis (docs/physics.md, "Gradients: the multiplexed lens").
+//! (`lens.channels_nm[j]`), on axis and off (docs/physics.md, "Gradients: the multiplexed lens").
 //!
 //! Channel `j` is the lens's order `j`, through the full circular pupil with the defocus
 //! `W020_j(λ) = (1 − λ/λ_j) K`, `K = f0/(8F#²)`, and an efficiency that does not depend on λ_j.
@@ -13,6 +13,10 @@
 //! moves that order's weight alone, `∂τ_j/∂ln η_j = τ_j`, its defocus and the transmission
 //! held: the same lane with the rates `[0, τ_j]` of order `j` (the OTF's weights and
 //! `N ∝ ∫ ρ Σ τ_o`, the stray light `N_T − N` by `−∂N`).
+//!
+//! Off axis λ_j also moves channel `j`'s lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)` alone, by
+//! `∂Δ_j/∂ln λ_j = f0 tan θ λ_j/λ`: one order's shift against the others', carried on the exact
+//! 1-D engine as the field angles' lanes with that order's shift rates ([`channel_off_axis`]).
 
 use std::sync::Arc;
 
@@ -37,6 +41,9 @@ struct OneChannel {
     lens: Arc<dyn LensModel>,
     channel: usize,
     moving: Moving,
+    /// Off axis, for the channel's wavelength: the image shifts' rates are the channel's own
+    /// `∂Δ_j/∂ln λ_j` (see [`channel_off_axis`]) in place of the field's.
+    shifts: bool,
 }
 
 impl LensModel for OneChannel {
@@ -71,12 +78,26 @@ impl LensModel for OneChannel {
         self.lens.describe()
     }
 
-    /// On axis, for order `j`: `[(λ/λ_j) K, 0]` for its wavelength, `[0, τ_j]` for its own
-    /// efficiency; `[0, 0]` for the others. `None` off axis (a channel's wavelength moves its
-    /// lateral colour too, a lane of one order's shift not carried) or where order `j` is not
-    /// the full circle with a defocus alone (for the wavelength: `(1 − λ/λ_j) K`).
+    /// With `shifts`, for channel `j`'s wavelength off axis: order `j`'s
+    /// `∂Δ_j/∂ln λ_j = f0 tan θ λ_j/λ` on each axis (its lateral colour
+    /// `Δ_j = f0 tan θ (λ_j/λ − 1)`), `[0, 0]` for the others; else the lens's own field rates.
+    fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        let (true, Moving::Wavelength(lambda_j)) = (self.shifts, self.moving) else {
+            return self.lens.image_shift_field_rates(wavelength_m, field);
+        };
+        let count = self.lens.orders(wavelength_m, field).len();
+        let scale = self.lens.focal_length() * lambda_j / wavelength_m;
+        let rates = [scale * field.x_rad.tan(), scale * field.y_rad.tan()];
+        Some((0..count).map(|o| if o == self.channel { rates } else { [0.0, 0.0] }).collect())
+    }
+
+    /// For order `j`: `[(λ/λ_j) K, 0]` for its wavelength, `[0, τ_j]` for its own efficiency;
+    /// `[0, 0]` for the others (the defocus and weight alone: off axis the lateral colour's
+    /// share is [`channel_off_axis`]'s lane of one order's shift). `None` off axis unless the
+    /// view is [`channel_off_axis`]'s, or where order `j` is not the full circle with a defocus
+    /// alone (for the wavelength: `(1 − λ/λ_j) K`).
     fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
-        if !field.is_on_axis() {
+        if !field.is_on_axis() && !self.off_axis_view() {
             return None;
         }
         let orders = self.lens.orders(wavelength_m, field);
@@ -100,14 +121,23 @@ impl LensModel for OneChannel {
     }
 }
 
+impl OneChannel {
+    /// Whether this view is [`channel_off_axis`]'s (its shift rates the channel's own for a
+    /// wavelength; for an efficiency, whose shifts do not move, every such view).
+    fn off_axis_view(&self) -> bool {
+        self.shifts || matches!(self.moving, Moving::Efficiency)
+    }
+}
+
 /// The evaluation of `scene` and the derivatives of its ASNR, mean MTF, SNR0 and photoelectrons
 /// with respect to `ln λ_j` of the interleaved lens's channel `channel` at `wavelength_m` (m):
 /// the design wavelength's gradient of the scene with its lens seen through a view that moves
 /// that channel alone (`OneChannel`).
 ///
 /// # Errors
-/// The evaluation's, and [`Error::NotDifferentiable`] off axis, over a field-of-view list, and
-/// where the design wavelength's gradient is refused (naming why).
+/// The evaluation's, and [`Error::NotDifferentiable`] off axis where the value is not on the
+/// exact 1-D engine over a band, and where the design wavelength's gradient is refused (naming
+/// why); over a field-of-view list, any point's.
 pub fn channel_wavelength_gradient(scene: &Scene, channel: usize, wavelength_m: f64) -> Result<Gradient, Error> {
     one_channel(scene, channel, Moving::Wavelength(wavelength_m))
 }
@@ -116,30 +146,150 @@ pub fn channel_wavelength_gradient(scene: &Scene, channel: usize, wavelength_m: 
 /// efficiency (`τ_j = η_j/N²`, a constant): the lane with the rates `[0, τ_j]` of its order.
 ///
 /// # Errors
-/// The evaluation's, and [`Error::NotDifferentiable`] off axis, over a field-of-view list, and
-/// where the design wavelength's gradient is refused (naming why).
+/// As [`channel_wavelength_gradient`]'s.
 pub fn channel_efficiency_gradient(scene: &Scene, channel: usize) -> Result<Gradient, Error> {
     one_channel(scene, channel, Moving::Efficiency)
 }
 
-/// The design wavelength's gradient of `scene` with its lens seen through [`OneChannel`].
+/// The design wavelength's gradient of `scene` with its lens seen through [`OneChannel`]; off
+/// axis [`channel_off_axis`]'s; over a `[[fields]]` list [`over_fields`]'s.
 fn one_channel(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
-    if !scene.field().is_on_axis() || !scene.fields().is_empty() {
-        let (parameter, reason) = match moving {
-            Moving::Wavelength(_) => (
-                "a channel's wavelength",
-                "off axis a channel's wavelength λ_j moves its lateral colour f0 tan θ (λ_j/λ − 1) alone, one order's \
-                 image shift against the others', a lane the engines do not carry yet (on axis it is computed)",
-            ),
-            Moving::Efficiency => (
-                "a channel's own efficiency",
-                "off axis its lane (the design wavelength's with one order's weight moving) is not carried: the \
-                 design wavelength's lanes there move every order's image shift (on axis it is computed)",
-            ),
-        };
-        return Err(Error::NotDifferentiable { parameter, reason: reason.to_owned() });
+    if !scene.fields().is_empty() {
+        return over_fields(scene, channel, moving);
     }
-    let lens: Arc<dyn LensModel> = Arc::new(OneChannel { lens: scene.lens_arc(), channel, moving });
+    if !scene.field().is_on_axis() {
+        return channel_off_axis(scene, channel, moving);
+    }
+    let lens: Arc<dyn LensModel> = Arc::new(OneChannel { lens: scene.lens_arc(), channel, moving, shifts: false });
     let seen = scene.clone().with_lens(lens);
     super::gradient(&seen, &[Parameter::DesignWavelength])
+}
+
+/// Over a `[[fields]]` list: the value is the weighted mean of the points' values (evaluate's
+/// relative weights), so its derivative is the weighted mean of each point's, each point's on
+/// axis or off as at a single `[field]` point.
+fn over_fields(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
+    let evaluation = crate::evaluate(scene)?;
+    let largest = scene.fields().iter().map(|f| f.1).fold(0.0, f64::max);
+    let total: f64 = scene.fields().iter().map(|f| f.1 / largest).sum();
+    let mut sum = [0.0; 4];
+    for &(field, weight) in scene.fields() {
+        let g = one_channel(&scene.single_field(field), channel, moving)?;
+        let share = weight / largest / total;
+        for (s, d) in sum.iter_mut().zip([g.asnr[0], g.mean_mtf[0], g.snr0[0], g.photoelectrons[0]]) {
+            *s += share * d;
+        }
+    }
+    let [asnr, mean_mtf, snr0, photoelectrons] = sum.map(|d| vec![d]);
+    Ok(Gradient { evaluation, asnr, mean_mtf, snr0, photoelectrons })
+}
+
+/// The share of the scene's tolerance the off-axis lanes are taken at ([`channel_off_axis`]).
+const LANE_TOLERANCE_SHARE: f64 = 1e-2;
+
+/// Off axis (docs/physics.md, "Gradients: the multiplexed lens"): along each azimuth φ each
+/// node's OTF is `q τ_o H(νλF#, W020_o/λ) exp(−2πi ν u·Δ_o)` over `W = Σ q τ_o`, and channel
+/// `j`'s wavelength moves order `j` alone: its defocus by `(λ/λ_j) K` and its lateral colour by
+/// `∂Δ_j/∂ln λ_j = f0 tan θ λ_j/λ` (on each axis), a shift of one order against the others'
+/// (not the design wavelength's scale of every order's shift). So
+/// `∂M̄/∂ln λ_j = D_λ0 + D_Δj`, `D_λ0` the design wavelength's lane with order `j`'s rates and
+/// `D_Δj` the field angles' lanes with order `j`'s shift rates, both on the exact 1-D engine's
+/// nodes and the value's adaptive rule over azimuth
+/// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_design_shift_lanes`]); N does not move.
+/// A channel's own efficiency moves order `j`'s weight alone, its shift held:
+/// `∂M̄/∂ln η_j = D_λ0 − r M̄` with the rates `[0, τ_j]` and `r = ∂ln N/∂ln η_j`
+/// ([`optics::Polychromatic::design_signal_rate`]). Under a noise spectrum each frequency's
+/// weight divided by `n(ν)`, `M̄` the weighted mean. Then `∂SNR0 = (∂SNR0/∂N) ∂N` (the stray
+/// light `N_T − N` by `−∂N`, T held) and `∂ASNR = ∂SNR0 G + SNR0 ∂G`, as every key's.
+fn channel_off_axis(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient, Error> {
+    let parameter = match moving {
+        Moving::Wavelength(_) => "a channel's wavelength",
+        Moving::Efficiency => "a channel's own efficiency",
+    };
+    let not_smooth = |reason: &str| Error::NotDifferentiable { parameter, reason: reason.to_owned() };
+    let refused = || {
+        not_smooth(
+            "off axis a channel's lane is computed on the exact 1-D engine over a band (every channel the full \
+             circle with a defocus alone, turned by its lateral colour); this scene's value is on another engine or \
+             rule (a line spectrum, options.spectral_rule or a fixed frequency rule)",
+        )
+    };
+    let e = crate::evaluate(scene)?;
+    let view = OneChannel { lens: scene.lens_arc(), channel, moving, shifts: matches!(moving, Moving::Wavelength(_)) };
+    let seen = scene.clone().with_lens(Arc::new(view));
+    let field = seen.field();
+    let detected = crate::evaluate::detected_spectrum(&seen);
+    if detected.as_line().is_some() {
+        return Err(refused());
+    }
+    let orders = seen.lens().orders(e.mean_wavelength_nm * 1e-9, field);
+    let plain = orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.is_defocus_only());
+    if orders.len() <= channel || !plain {
+        return Err(refused());
+    }
+    let camera = seen.camera();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(seen.lens(), &detected);
+    let parts = folded.parts();
+    // the lanes on the value's engine at a hundredth of its tolerance: channel j's shift lane
+    // carries 2πν u·δΔ_j with δΔ_j = f0 tan θ λ_j/λ, the whole displacement (not the small
+    // lateral colour Δ_j), which turns much faster than |O| and is not resolved to the
+    // tolerance by the rule that converges |O| (measured at 1e-6 on the interleaved design at
+    // 3°: 1e-5 of the gradient's norm; at a hundredth, within it)
+    let mut settings = seen.options().settings();
+    settings.tolerance *= LANE_TOLERANCE_SHARE;
+    let poly =
+        optics::Polychromatic::with_parts(seen.lens(), &detected, &parts, field, camera.nyquist(), pixel, settings)
+            .map_err(|_| refused())?;
+    if poly.engine() != optics::Engine::Exact1d || poly.has_pupil_grid() {
+        return Err(refused());
+    }
+    let rate = poly.design_signal_rate().ok_or_else(refused)?;
+    let along_field = field.y_rad.atan2(field.x_rad);
+    // ∂M̄ (white, or over the noise spectrum)
+    let d_mean = |noise: Option<&optics::NoiseShape>| -> Result<f64, Error> {
+        match moving {
+            Moving::Wavelength(_) => {
+                let (mean, design, shift) =
+                    poly.mean_mtf_over_azimuth_and_design_shift_lanes(along_field, noise).ok_or_else(refused)?;
+                Ok(design - rate * mean + shift)
+            }
+            Moving::Efficiency => {
+                let (mean, design, _, _) =
+                    poly.mean_mtf_over_azimuth_and_design_lanes(along_field, noise).ok_or_else(refused)?;
+                Ok(design - rate * mean)
+            }
+        }
+    };
+    let d_mtf = d_mean(None)?;
+    let d_weighted = match camera.noise_spectrum() {
+        Some(shape) => d_mean(Some(shape))?,
+        None => d_mtf,
+    };
+    // the noise budget exactly as evaluate forms it
+    let n = e.photoelectrons;
+    let background = match seen.options().glare {
+        crate::GlareMode::FirstOrder => 0.0,
+        crate::GlareMode::Included => (e.transmitted_photoelectrons - n).max(0.0),
+    };
+    let budget = noise::budget(camera.sensor(), n, background, seen.exposure())?;
+    let Some(partials) = budget.snr_partials() else {
+        return Err(not_smooth(if budget.saturated {
+            "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
+        } else {
+            "there is no signal"
+        }));
+    };
+    let stray = matches!(seen.options().glare, crate::GlareMode::Included) && background > 0.0;
+    let d_n = n * rate;
+    let d_snr0 = partials.signal * d_n + partials.variance * if stray { -d_n } else { 0.0 };
+    let g = e.asnr / e.snr0;
+    let d_g = super::d_g_from_mean_mtf(&seen, &e, d_weighted);
+    Ok(Gradient {
+        asnr: vec![d_snr0 * g + e.snr0 * d_g],
+        mean_mtf: vec![d_mtf],
+        snr0: vec![d_snr0],
+        photoelectrons: vec![d_n],
+        evaluation: e,
+    })
 }

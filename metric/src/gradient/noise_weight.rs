@@ -257,7 +257,8 @@ fn weighted_defocus_lane(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<
 /// or, for one order that is the full pupil with a defocus alone, `D̃_K ∂ln w/∂c` with `D̃_K` on
 /// the reference rule of the defocus lane, each frequency's weight divided by `n(ν)`. Off axis
 /// the chromatic lens's one order is the on-axis OTF times a phase (its `|O|` the same): taken
-/// on axis. Several orders moving by their own rates (the harmonic lens's order lane) are
+/// on axis. Several orders moving by their own rates (the harmonic lens's order lane): on axis
+/// [`order_lane_over_noise`], off axis [`line_center_orders_off_axis_over_noise`]; others are
 /// refused, naming why.
 pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option<usize>) -> Result<f64, Error> {
     let p = Parameter::SpectrumCenter;
@@ -269,6 +270,18 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     let c = line.center();
     let lens = scene.lens();
     let field = scene.field();
+    // several orders off axis, each turned by its own lateral colour (the harmonic lens)
+    if !field.is_on_axis() && base.is_none() && lens.orders(c, field).len() > 1 {
+        return line_center_orders_off_axis_over_noise(scene, e, c).ok_or_else(|| {
+            not_smooth(format!(
+                "spectrum.center_nm: {}: with camera.noise_spectrum a line's wavelength on several orders off axis is \
+                 followed where every order is the full circle with a defocus alone, turned by its own lateral \
+                 colour, and depends on the wavelength through λ/λ0 alone (the harmonic lens), on the line's exact \
+                 1-D engine; this scene's orders are not that",
+                lens.describe()
+            ))
+        })?;
+    }
     if !field.is_on_axis() && base.is_none() && lens.image_shift_field_rates(c, field).is_some() {
         return line_center_over_noise(&scene.single_field(optics::Field::ON_AXIS), e, None);
     }
@@ -318,6 +331,60 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     }
     let d_k = weighted_defocus_lane(scene, e, p)?;
     Ok(scale + d_k * (rate / w020 - 1.0 / c))
+}
+
+/// `∂G/∂c` for the wavelength `c` of a line off axis on several orders, each the full circle
+/// with a defocus alone turned by its own lateral colour (the harmonic lens), under the noise
+/// spectrum: the weighted counterpart of metric's `line_center_orders_off_axis` (docs/physics.md,
+/// "Gradients: several orders under a line off axis", "Gradients under a noise spectrum"). The
+/// orders depend on the wavelength through `λ/λ0` alone (checked on the lens's rates, as there),
+/// so moving `c` and `λ0` together holds them and moves only `s = νcF#` and `w_o = W020_o/c`:
+///
+/// ```text
+/// ∂G/∂ln c = S̃ − D̃_K − D̃_λ0 + r G − 2 D̃_Δ
+/// ```
+///
+/// with `S̃ = P(ν_N)⟨|O(ν_N)|⟩/n(ν_N) − G − (1/ν_N) ∫ P ⟨|O|⟩ (νP′/P − νn′/n)/n dν` the
+/// frequency scale's term by parts under the weight ([`frequency_scale_over_noise`], `⟨·⟩` the
+/// mean over azimuth; with the turn of each order's phase, whose share `D̃_Δ` is taken out
+/// once more), and `D̃_K`, `D̃_λ0`, `D̃_Δ`, `G` the line engine's lanes and weighted mean over
+/// azimuth with each frequency's weight divided by `n(ν)` (metric's `line_orders_off_axis`),
+/// `r = ∂ln N/∂ln λ0`. Per m. `None` where the scene is not that.
+fn line_center_orders_off_axis_over_noise(scene: &Scene, e: &Evaluation, c: f64) -> Option<Result<f64, Error>> {
+    let noise = scene.camera().noise_spectrum()?;
+    let lens = scene.lens();
+    let field = scene.field();
+    let on_axis = lens.order_wavelength_rates(c, optics::Field::ON_AXIS)?;
+    let design = lens.design_wavelength_rates(c, field)?;
+    let orders = lens.orders(c, field);
+    let axis_orders = lens.orders(c, optics::Field::ON_AXIS);
+    if on_axis.orders.len() != orders.len() || design.len() != orders.len() || axis_orders.len() != orders.len() {
+        return None;
+    }
+    // the orders a function of λ/λ0 alone, to rounding (as the white one checks)
+    let against = |a: f64, b: f64| (a + b).abs() <= 1e-9 * a.abs().max(b.abs());
+    let homogeneous = on_axis.orders.iter().zip(&design).zip(orders.iter().zip(&axis_orders)).all(
+        |(([d_w020, d_tau], [l_w020, l_tau]), (o, a))| {
+            against(c * d_w020, *l_w020) && against(c * d_tau, *l_tau) && o.efficiency == a.efficiency
+        },
+    );
+    if !homogeneous {
+        return None;
+    }
+    let found = super::line_orders_off_axis(scene, Some(noise))?;
+    // P(ν_N) ⟨|O(ν_N, φ)|⟩ over azimuth on the value's engine, as the white end term
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let nyquist = scene.camera().nyquist();
+    let along_field = field.y_rad.atan2(field.x_rad);
+    let edge = on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        Some(poly.mtf_over_azimuth(nyquist, along_field))
+    })?;
+    let scale = match frequency_scale_over_noise(scene, e, Parameter::SpectrumCenter, edge) {
+        Ok(s) => s,
+        Err(error) => return Some(Err(error)),
+    };
+    let d_log_c = scale - found.defocus - found.design + found.rate * found.mean - 2.0 * found.shift;
+    Some(Ok(d_log_c / c))
 }
 
 /// `D̃ = (1/ν_N) ∫ P sign(O) L / n dν`, the order lane of a line at `c` on several orders under

@@ -871,6 +871,36 @@ impl Polychromatic<'_> {
         Some((mean, design, shift, work))
     }
 
+    /// [`mean_mtf_over_azimuth_and_design_lanes`](Self::mean_mtf_over_azimuth_and_design_lanes)
+    /// with the field angles' lanes in place of the image shifts' scale: `(M̄, D_λ0, D_Δ)`, `D_Δ`
+    /// the sum of the lanes [`WavefrontDirection::FieldAngle`] `0` and `1`, each node's shift
+    /// moving by its order's rates (`LensModel::image_shift_field_rates`) along x and y together,
+    /// `∂O` gaining `−2πi ν u·δΔ_o` times each node's turned value. For a lens seen through a view
+    /// whose shift rates are one order's own (a multiplexed lens's channel wavelength off axis,
+    /// docs/physics.md "Gradients: the multiplexed lens"), where the design wavelength's
+    /// scale of every order's shift is not the motion; the field direction does not move, so no
+    /// turn of the rule's azimuths is added. `None` where that one is.
+    pub fn mean_mtf_over_azimuth_and_design_shift_lanes(
+        &self,
+        first: f64,
+        noise: Option<&NoiseShape>,
+    ) -> Option<(f64, f64, f64)> {
+        if self.engine.engine() != Engine::Exact1d
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || !self.direction_dependent()
+        {
+            return None;
+        }
+        let directions = [
+            WavefrontDirection::DesignWavelength,
+            WavefrontDirection::FieldAngle(0),
+            WavefrontDirection::FieldAngle(1),
+        ];
+        let (average, _) = self.azimuth_refined_lanes(first, &directions, noise)?;
+        let [mean, design, x, y, _] = average[..] else { return None };
+        Some((mean, design, x + y))
+    }
+
     /// A line's lanes off axis where its several orders are exact 1-D circles each turned by its
     /// own lateral colour (the harmonic lens): `[M̄, D_λ0, D_Δ, D_K, P_ν]` over azimuth from
     /// `first` (white, or over the noise spectrum `noise`), `D_λ0` the design wavelength's lane

@@ -1119,6 +1119,33 @@ impl FftPath {
                         read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                         continue;
                     }
+                    // the obscuration beside Seidel terms through the annulus: every lane a move of
+                    // the field, a term's `i k D P` at a fixed weight and the inner edge's
+                    // `∂A exp(i k W)` with `∂Σ A` (docs/physics.md, "Gradients: the edge's motion on
+                    // the FFT path")
+                    let seidel_or_edge = |d: &WavefrontDirection| {
+                        matches!(d, WavefrontDirection::Seidel(_) | WavefrontDirection::Obscuration)
+                    };
+                    if directions.iter().all(seidel_or_edge)
+                        && directions.iter().any(|d| matches!(d, WavefrontDirection::Seidel(_)))
+                    {
+                        let layer = match &mut built {
+                            Some(l) => l,
+                            slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                        };
+                        let slot = layer.pupil(&order)?;
+                        let Some(moves) =
+                            edge_and_seidel_moves(&layer.pupils[slot].1, aperture, &order, directions, lambda)?
+                        else {
+                            return Ok(None);
+                        };
+                        let (field, weight, moves) = moves;
+                        let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                        layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
+                        let grids: Vec<&Otf> = d_grids.iter().collect();
+                        read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                        continue;
+                    }
                     if !directions.iter().all(|d| *d == WavefrontDirection::Obscuration) {
                         return Ok(None);
                     }
@@ -1472,6 +1499,43 @@ fn seidel_through_aperture(
         out.push(SampledPupil::new(n, aperture, &unit)?.opd_m().to_vec());
     }
     Ok(Some((field, area.iter().sum(), out)))
+}
+
+/// An order's field, its weight and each direction's move of it ([`edge_and_seidel_moves`]).
+type FieldMoves = (Vec<Complex64>, f64, Vec<(Vec<Complex64>, f64)>);
+
+/// An order's field through `aperture` sampled as `sampled` and its weight `Σ A`
+/// ([`edge_field`]'s), with each of `directions` as a move of the field `(∂P, ∂Σ A)`: a Seidel
+/// term's `i k D P` (`D` its OPD per µm, [`seidel_through_aperture`]'s; the weight fixed) and the
+/// obscuration's inner edge `∂A exp(i k W)` with `∂Σ A` ([`edge_field`]'s). `None` where a
+/// direction is neither, or the aperture has no obscuration's edge (a mask).
+fn edge_and_seidel_moves(
+    sampled: &SampledPupil,
+    aperture: &Aperture,
+    order: &crate::lens::Order,
+    directions: &[WavefrontDirection],
+    lambda: f64,
+) -> Result<Option<FieldMoves>, Error> {
+    let Some((field, weight, moved)) = edge_field(sampled, aperture, lambda) else { return Ok(None) };
+    let seidel: Vec<WavefrontDirection> =
+        directions.iter().copied().filter(|d| matches!(d, WavefrontDirection::Seidel(_))).collect();
+    let Some((_, _, opd)) = seidel_through_aperture(sampled, aperture, order, &seidel, lambda)? else {
+        return Ok(None);
+    };
+    let k = 2.0 * PI / lambda;
+    let mut opd = opd.into_iter();
+    let mut moves = Vec::with_capacity(directions.len());
+    for d in directions {
+        match d {
+            WavefrontDirection::Obscuration => moves.push(moved.clone()),
+            WavefrontDirection::Seidel(_) => {
+                let Some(o) = opd.next() else { return Ok(None) };
+                moves.push((field.iter().zip(&o).map(|(p, w)| Complex64::new(0.0, k * w) * p).collect(), 0.0));
+            }
+            _ => return Ok(None),
+        }
+    }
+    Ok(Some((field, weight, moves)))
 }
 
 /// The derivative in the obscuration ε of the field of an order through `aperture` sampled as

@@ -6,8 +6,8 @@
 //! lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)`: the chromatic and harmonic lenses' form, so the
 //! F-number, the focal length and the field angles ride the same lanes of the exact 1-D engine
 //! (`W020_j ∝ f0/F#²`, `Δ_j ∝ f0`, `∂Δ_j/∂θ = f0 sec²θ (λ_j/λ − 1)`); a channel's wavelength
-//! λ_j moves its order alone, on axis the design wavelength's lane with that order's rates
-//! ([`with_channel_wavelengths`]). Both layouts: one `η`
+//! λ_j moves its order alone, on axis the design wavelength's lane with that order's rates, off
+//! axis with its one order's shift's lane beside it ([`with_channels`]). Both layouts: one `η`
 //! for every channel scales every order's efficiency (and, segmented, every zone's amplitude
 //! `√η` of one composite pupil whose OTF is normalized at zero frequency), so it leaves the OTF
 //! as it is and moves the photon count alone, `N ∝ η`, as the chromatic lens's τ1; `T` moves the
@@ -20,7 +20,7 @@ use super::{Chain, FIELD, Gradient, field_point, lookup};
 
 /// The gradient where `keys` ask a channel's wavelength or own efficiency of an interleaved lens
 /// (`lens.channels_nm[j]`, `lens.channel_efficiencies[j]`, or either list for every channel),
-/// with its evaluation: each by its own lane on axis ([`metric::channel_wavelength_gradient`],
+/// with its evaluation: each by its own lane on axis and off ([`metric::channel_wavelength_gradient`],
 /// [`metric::channel_efficiency_gradient`]: the design wavelength's lane with the rates of that
 /// channel's order alone, per nm or per unit η_j), the other keys as
 /// [`super::gradient_and_evaluation`] takes them, in the keys' order; `None` where no key is a
@@ -153,7 +153,7 @@ pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table
 /// The keys of the lens refused here, naming why; `None` for another key.
 fn refusal(key: &str, interleaved: bool) -> Option<Result<Chain>> {
     let why = if key.starts_with("lens.channels_nm[") && !interleaved {
-        // (an interleaved lens's: `with_channel_wavelengths`)
+        // (an interleaved lens's: `with_channels`)
         "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
          lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane per \
          zone that the FFT path's forward mode does not carry yet"
@@ -344,6 +344,45 @@ mod tests {
         assert_eq!(all.d_asnr, [g.d_asnr[0], g.d_asnr[2], g.d_asnr[3]]);
     }
 
+    /// The interleaved lens's channel wavelengths and own efficiencies off axis at 3° on a 4 nm
+    /// band with the stray light and read noise: λ_j moves channel j's
+    /// defocus and its lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)` alone
+    /// (`∂Δ_j/∂ln λ_j = f0 tan θ λ_j/λ`, one order's shift against the others'), η_j its weight
+    /// alone; on the exact 1-D engine's lanes, against differences of evaluations at 1e-10.
+    #[test]
+    fn interleaved_channels_off_axis_match_central_differences() {
+        let source = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let overrides = ["spectrum.range_nm=4", "field.x_deg=3", "options.glare=\"included\"", "camera.read_noise_e=2"];
+        let keys = [
+            "lens.channels_nm[0]",
+            "lens.channels_nm[1]",
+            "lens.channels_nm[2]",
+            "lens.channel_efficiencies[0]",
+            "lens.channel_efficiencies[1]",
+        ];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        // λ_j moves the OTF alone (N held); every key moves the mean MTF
+        assert!(g.d_photoelectrons[..3] == [0.0; 3] && g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+        // off axis the far channels' lateral colour moves with λ_j: their lanes are not the
+        // on-axis ones
+        let on_axis = gradient(&source, &owned(&["spectrum.range_nm=4"]), &owned(&["lens.channels_nm[0]"])).unwrap();
+        assert!((on_axis.d_mean_mtf[0] - g.d_mean_mtf[0]).abs() > 1e-3 * g.d_mean_mtf[0].abs(), "{on_axis:?} {g:?}");
+    }
+
+    /// The interleaved lens's channel keys over a `[[fields]]` list (on axis, weight 1, and at 3°,
+    /// weight 0.5) on a 4 nm band: the weighted mean of each point's gradient, as the value is
+    /// of the points' values.
+    #[test]
+    fn interleaved_channels_over_a_field_list_match_central_differences() {
+        let one = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let text =
+            format!("{}\n[[fields]]\nx_deg = 0\nweight = 1\n\n[[fields]]\nx_deg = 3\nweight = 0.5\n", one.text());
+        let source = Source::from_text(text, "multiplexed lens over a field list written in the test", ".");
+        let keys = ["lens.channels_nm[0]", "lens.channel_efficiencies[1]"];
+        let g = check(&source, &["spectrum.range_nm=4"], &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+    }
+
     /// The interleaved lens's channels' own efficiencies on axis on a 10 nm band with the stray
     /// light and read noise, with T among them: η_j moves channel j's weight alone
     /// (`∂τ_j/∂ln η_j = τ_j`), so the OTF's weights, N and the stray light; the design
@@ -406,14 +445,11 @@ mod tests {
         let with_areas = owned(&["lens.area_fractions=[0.3, 0.3, 0.4]"]);
         let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[0]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.area_fractions[0]") && e.contains("zones' edges"), "{e}");
-        // an interleaved lens's channel off axis: its lateral colour alone moves
+        // an interleaved lens's channel under a line off axis: not on the band's exact 1-D engine
         let interleaved = multiplexed("interleaved");
-        let off_axis = owned(&["field.x_deg=1"]);
-        let e = gradient(&interleaved, &off_axis, &owned(&["lens.channels_nm"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("lateral colour"), "{e}");
-        let own = multiplexed_with("interleaved", "channel_efficiencies = [0.1, 0.15, 0.2]");
-        let e = gradient(&own, &off_axis, &owned(&["lens.channel_efficiencies[1]"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt lens.channel_efficiencies[1]") && e.contains("off axis its lane"), "{e}");
+        let line = owned(&["field.x_deg=1", "spectrum.shape=\"line\""]);
+        let e = gradient(&interleaved, &line, &owned(&["lens.channels_nm[0]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("a line spectrum"), "{e}");
         let own = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
         let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("composite pupil"), "{e}");
