@@ -2901,7 +2901,8 @@ pupil_samples = 64
     /// 400 nm lattice, 33 × 33 sites, every 11th empty: the substrate), each fin's angle half the
     /// hyperbolic phase at its site (lit LCP: `+2θ`), its width one of 62.5, 67.5, …, 87.5 nm by
     /// site, in a fin library written here (`width_nm` 50–100 nm in rows of 5 nm, `length_nm`
-    /// 200 and 300 nm, 700–900 nm): `|t| = 0.6 + 0.25 sin(w/20 nm)`, `φ = 0.3 + w/200 nm`, and
+    /// 200 and 300 nm, 700–900 nm): `|t| = 0.7 − 0.25 sin(w/20 nm)` (0.70–0.94 in the layout, so
+    /// that transmission errors of σ_t = 0.1 reach the cap `1/|t|`), `φ = 0.3 + w/200 nm`, and
     /// the fins' unconverted light `|t_co| = 0.3 + 0.1 cos(w/25 nm)`; the widths midway between
     /// rows, so that a step of 1 nm crosses none of the cubic's rows.
     fn small_fin_layout(name: &str) -> Source {
@@ -2912,7 +2913,7 @@ pupil_samples = 64
             let w = 50.0 + 5.0 * i as f64;
             for l in [200.0, 300.0] {
                 for lambda in [700.0, 800.0, 900.0] {
-                    let (a, phi, co) = (0.6 + 0.25 * (w / 20.0).sin(), 0.3 + w / 200.0, 0.3 + 0.1 * (w / 25.0).cos());
+                    let (a, phi, co) = (0.7 - 0.25 * (w / 20.0).sin(), 0.3 + w / 200.0, 0.3 + 0.1 * (w / 25.0).cos());
                     csv.push_str(&format!("{w},{l},{lambda},{a},{phi},{co}\n"));
                 }
             }
