@@ -409,30 +409,56 @@ impl Library {
             return None;
         }
         let (li, lf) = cell_of(&self.wavelengths, wavelength_m);
-        let [a, p, da, dp] = self.cubic_axis_dual(0, 0, params, (li, lf), wrt);
+        let values = |index: usize| (self.amplitude[index], self.phase[index]);
+        let [a, p, da, dp] = self.cubic_axis_dual(0, 0, params, (li, lf), wrt, &values);
         let (a, da) = if (0.0..=1.0).contains(&a) { (a, da) } else { (a.clamp(0.0, 1.0), 0.0) };
         let t = Complex64::from_polar(a, p);
         Some((t, Complex64::new(da, a * dp) * Complex64::from_polar(1.0, p)))
     }
 
-    /// [`cubic_axis`](Self::cubic_axis) of `|t|` and `arg t` with the derivative along
-    /// parameter `wrt` carried beside each value ([`transmission_and_derivative`](Self::transmission_and_derivative)).
-    fn cubic_axis_dual(&self, d: usize, base: usize, params: &[f64], lambda: (usize, f64), wrt: usize) -> Dual {
+    /// A fin's unconverted amplitude `|t_co(p, λ)|` ([`co_amplitude`](Self::co_amplitude)) and
+    /// its derivative `∂|t_co|/∂p_wrt` with [`Interpolation::Cubic`]: forward mode on the same
+    /// interpolant as [`transmission_and_derivative`](Self::transmission_and_derivative)'s `|t|`
+    /// (0 where the value is clamped to `[0, 1]`). The value is
+    /// [`co_amplitude`](Self::co_amplitude)'s, bit for bit. `(0, 0)` where the library gives no
+    /// unconverted amplitude; `None` with [`Interpolation::Linear`] or `wrt` out of range.
+    pub fn co_amplitude_and_derivative(&self, params: &[f64], wavelength_m: f64, wrt: usize) -> Option<(f64, f64)> {
+        if self.interpolation != Interpolation::Cubic || wrt >= self.axes.len() {
+            return None;
+        }
+        let Some(co) = &self.co_amplitude else { return Some((0.0, 0.0)) };
+        let (li, lf) = cell_of(&self.wavelengths, wavelength_m);
+        let values = |index: usize| (co[index], 0.0);
+        let [a, _, da, _] = self.cubic_axis_dual(0, 0, params, (li, lf), wrt, &values);
+        Some(if (0.0..=1.0).contains(&a) { (a, da) } else { (a.clamp(0.0, 1.0), 0.0) })
+    }
+
+    /// [`cubic_axis`](Self::cubic_axis) of the grid values `values(index) = (amplitude, phase)`
+    /// with the derivative along parameter `wrt` carried beside each value ([`transmission_and_derivative`](Self::transmission_and_derivative)).
+    fn cubic_axis_dual(
+        &self,
+        d: usize,
+        base: usize,
+        params: &[f64],
+        lambda: (usize, f64),
+        wrt: usize,
+        values: &dyn Fn(usize) -> (f64, f64),
+    ) -> Dual {
         if d == self.axes.len() {
             let n = self.wavelengths.len();
             let index = base * n + lambda.0;
-            let (a0, p0) = (self.amplitude[index], self.phase[index]);
+            let (a0, p0) = values(index);
             if n == 1 || lambda.1 == 0.0 {
                 return [a0, p0, 0.0, 0.0];
             }
-            let (a1, p1) = (self.amplitude[index + 1], self.phase[index + 1]);
+            let (a1, p1) = values(index + 1);
             let f = lambda.1;
             return [(1.0 - f) * a0 + f * a1, p0 + f * wrapped_step(p0, p1), 0.0, 0.0];
         }
         let axis = &self.axes[d];
         let n = axis.len();
         if n == 1 {
-            return self.cubic_axis_dual(d + 1, base * n, params, lambda, wrt);
+            return self.cubic_axis_dual(d + 1, base * n, params, lambda, wrt, values);
         }
         let x = params.get(d).copied().unwrap_or(f64::NAN);
         let (i, t) = cell_of(axis, x);
@@ -442,7 +468,7 @@ impl Library {
         let hi = (s0 + w0.len()).max(s1 + w1.len());
         let mut local: Vec<Dual> = Vec::with_capacity(hi - lo);
         for j in lo..hi {
-            let [a, p, da, dp] = self.cubic_axis_dual(d + 1, base * n + j, params, lambda, wrt);
+            let [a, p, da, dp] = self.cubic_axis_dual(d + 1, base * n + j, params, lambda, wrt, values);
             let p = match local.last() {
                 Some(&[_, last, _, _]) => last + wrapped_step(last, p),
                 None => p,

@@ -2853,8 +2853,9 @@ pupil_samples = 64
     /// Richardson-extrapolated central differences of evaluations at 1e-10 at the same fixed
     /// sampling (steps 0.5 and 0.25 nm, 0.02 and 0.01 rad), every quantity (ASNR, mean MTF, SNR0,
     /// N) within 10× the gradient's requested tolerance (1e-9) of its own size plus the
-    /// differences' own error (the evaluations' 1e-10 over the smaller step); with transmission
-    /// errors the bias is refused, naming them.
+    /// differences' own error (the evaluations' 1e-10 over the smaller step); the bias also with
+    /// transmission errors (σ_t = 0.1 at 1° with the glare included: each entry's factor `E[a]`
+    /// moving with `|t|` through its cap `1/|t|`); with linear rows refused, naming the key.
     #[test]
     fn layout_grid_bias_and_phase_error_match_central_differences() {
         let reference = 1e-10;
@@ -2863,6 +2864,13 @@ pupil_samples = 64
             ("lens.parameter_bias[0]", 0.0, 0.25, &[][..]),
             ("lens.parameter_bias[0]", 0.0, 0.25, &["options.pupil_samples=128", "field.x_deg=2"][..]),
             ("lens.atom_phase_error_rad", 0.1, 0.01, &["field.y_deg=2", "options.glare=\"included\""][..]),
+            // transmission errors: each atom's error factor E[a] moves with |t| through its cap
+            (
+                "lens.parameter_bias[0]",
+                0.0,
+                0.25,
+                &["lens.atom_transmission_error=0.1", "options.glare=\"included\"", "field.x_deg=1"][..],
+            ),
         ] {
             let started = std::time::Instant::now();
             let source = small_layout_grid("grid");
@@ -2880,13 +2888,131 @@ pupil_samples = 64
             one_key_within(&g, (coarse, fine), h, reference, 10.0 * asked, &format!("{key} {extra:?}"));
             println!("{key} {extra:?}: {:?}", started.elapsed());
         }
-        // transmission errors: the bias moves each atom's error factor through its cap, refused
+        // linear rows: a kink at every row, refused naming the key
         let source = small_layout_grid("refused");
         let err =
-            gradient(&source, &owned(&["lens.atom_transmission_error=0.05"]), &owned(&["lens.parameter_bias[0]"]))
+            gradient(&source, &owned(&["lens.library_interpolation=\"linear\""]), &owned(&["lens.parameter_bias[0]"]))
                 .unwrap_err()
                 .to_string();
-        assert!(err.contains("lens.atom_transmission_error > 0"), "{err}");
+        assert!(err.contains("--wrt lens.parameter_bias[0]") && err.contains("cubic"), "{err}");
+    }
+
+    /// A small 2-D layout of fins (a GDSII of rectangles, F/2.5, f0 = 31.25 µm, R = 6.25 µm on a
+    /// 400 nm lattice, 33 × 33 sites, every 11th empty: the substrate), each fin's angle half the
+    /// hyperbolic phase at its site (lit LCP: `+2θ`), its width one of 62.5, 67.5, …, 87.5 nm by
+    /// site, in a fin library written here (`width_nm` 50–100 nm in rows of 5 nm, `length_nm`
+    /// 200 and 300 nm, 700–900 nm): `|t| = 0.7 − 0.25 sin(w/20 nm)` (0.70–0.94 in the layout, so
+    /// that transmission errors of σ_t = 0.1 reach the cap `1/|t|`), `φ = 0.3 + w/200 nm`, and
+    /// the fins' unconverted light `|t_co| = 0.3 + 0.1 cos(w/25 nm)`; the widths midway between
+    /// rows, so that a step of 1 nm crosses none of the cubic's rows.
+    fn small_fin_layout(name: &str) -> Source {
+        let dir = std::env::temp_dir().join(format!("asnr-fin-gradient-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut csv = String::from("width_nm,length_nm,wavelength_nm,amplitude,phase_rad,co_amplitude\n");
+        for i in 0..=10 {
+            let w = 50.0 + 5.0 * i as f64;
+            for l in [200.0, 300.0] {
+                for lambda in [700.0, 800.0, 900.0] {
+                    let (a, phi, co) = (0.7 - 0.25 * (w / 20.0).sin(), 0.3 + w / 200.0, 0.3 + 0.1 * (w / 25.0).cos());
+                    csv.push_str(&format!("{w},{l},{lambda},{a},{phi},{co}\n"));
+                }
+            }
+        }
+        std::fs::write(dir.join("fins.csv"), csv).unwrap();
+        // coordinates in picometres (the database unit), so that a fin's corners are right
+        // angles to the reader's 0.06°
+        let file = std::io::BufWriter::new(std::fs::File::create(dir.join("lens.gds")).unwrap());
+        let mut w = scene::gds::Writer::new(file, 1e-12).unwrap();
+        w.begin_cell("LENS").unwrap();
+        let (pitch, f0, half) = (400e3f64, 31.25e6f64, 16i64);
+        for j in -half..=half {
+            for i in -half..=half {
+                if (7 * (i + half) + 3 * (j + half)) % 11 == 0 {
+                    continue;
+                }
+                let (x, y) = (i as f64 * pitch, j as f64 * pitch);
+                let target = -std::f64::consts::TAU / 800e3 * ((x * x + y * y + f0 * f0).sqrt() - f0);
+                let theta = 0.5 * target;
+                let width = 62.5e3 + 5e3 * ((5 * i + 2 * j).rem_euclid(6)) as f64;
+                let (half_l, half_w) = (125e3, 0.5 * width);
+                let (c, s) = (theta.cos(), theta.sin());
+                let corner = |a: f64, b: f64| ((x + a * c - b * s).round() as i32, (y + a * s + b * c).round() as i32);
+                let points = [
+                    corner(-half_l, -half_w),
+                    corner(half_l, -half_w),
+                    corner(half_l, half_w),
+                    corner(-half_l, half_w),
+                ];
+                w.polygon(1, 0, &points).unwrap();
+            }
+        }
+        w.end_cell().unwrap();
+        w.finish().unwrap();
+        let text = r#"[lens]
+model = "library"
+f_number = 2.5
+focal_length_mm = 0.03125
+design_wavelength_nm = 800.0
+library = "fins.csv"
+library_interpolation = "cubic"
+layout_gds = "lens.gds"
+gds_layer = 1
+atom = "fin"
+handedness = "lcp"
+lattice_pitch_um = 0.4
+empty_cell = "substrate"
+parameter_bias = [0.0, 0.0]
+
+[source]
+kind = "flat"
+radiance_w_m2_sr_nm = 0.025
+
+[spectrum]
+shape = "tophat"
+center_nm = 800.0
+range_nm = 4.0
+
+[camera]
+pixel_pitch_um = 5.2
+pixel_mtf = false
+quantum_efficiency = 0.2
+
+[exposure]
+time_ms = 1.23
+
+[options]
+pupil_samples = 64
+glare = "included"
+"#;
+        Source::from_text(text.to_owned(), "a small 2-D layout of fins", dir)
+    }
+
+    /// A 2-D layout of fins whose library gives their unconverted light (`co_amplitude`: zero-
+    /// order light, in T and not in τ1), with transmission errors (docs/physics.md, "Gradients:
+    /// a library's parameter bias"): `lens.parameter_bias[0]` (the width), each atom's table
+    /// entry `t E[a](|t|) e^{−σ_φ²/2}` moving through its cap, `∂T` adding `2|t_co| ∂|t_co|` per
+    /// atom and the stray power's derivative, with the glare included, against
+    /// Richardson-extrapolated central differences (steps 0.5 and 0.25 nm) of evaluations at 1e-10
+    /// at the same fixed sampling (`options.pupil_samples = 64`): every quantity (ASNR, mean MTF,
+    /// SNR0, N) within 10× the gradient's requested tolerance (1e-9) of its own size plus the
+    /// differences' own error (the evaluations' 1e-10 over the smaller step).
+    #[test]
+    fn fin_layout_bias_with_unconverted_light_and_transmission_errors_matches_central_differences() {
+        let (reference, asked, key, h) = (1e-10, 1e-9, "lens.parameter_bias[0]", 0.25);
+        let started = std::time::Instant::now();
+        let source = small_fin_layout("co");
+        let overrides = owned(&["lens.atom_transmission_error=0.1", "lens.atom_phase_error_rad=0.1"]);
+        let e = metric::evaluate(&scene::build_from(&source, &overrides).unwrap()).unwrap();
+        assert!(e.numerics.engine.starts_with("fft"), "{}", e.numerics.engine);
+        let mut at = overrides.clone();
+        at.push(format!("options.tolerance={asked:e}"));
+        let g = gradient(&source, &at, &owned(&[key])).unwrap();
+        let (coarse, fine) = (
+            central_at(&source, &overrides, key, 0.0, 2.0 * h, reference),
+            central_at(&source, &overrides, key, 0.0, h, reference),
+        );
+        one_key_within(&g, (coarse, fine), h, reference, 10.0 * asked, &format!("fins {key}"));
+        println!("fins {key}: {:?}", started.elapsed());
     }
 
     /// Bad keys are refused naming the key.

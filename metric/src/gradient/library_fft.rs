@@ -21,7 +21,7 @@ use crate::{Error, Scene};
 /// `noise` its weighted twin), and on the same engine's spectral nodes (weights `ρ Σ_o τ_o`)
 /// `∂ln N = Σ w ∂τ / Σ w τ` and `∂ln N_T = Σ w ∂T / Σ w T` (SI eq. S8, S14), `τ = Σ_o τ_o`.
 /// Refused where the engine is not the FFT path or the lens gives no order derivatives there
-/// (the exact pupil mapping; a 2-D layout with transmission errors or a fin's unconverted light).
+/// (the exact pupil mapping; linear rows).
 pub(super) fn library_bias_on_fft_path(
     scene: &Scene,
     e: &Evaluation,
@@ -60,9 +60,7 @@ pub(super) fn library_bias_on_fft_path(
     let Some((_, d_mtf)) = found else {
         return Err(not_smooth(
             "the FFT path did not carry the lens's order derivatives here: they are computed for a radial pupil \
-             (a radial layout off axis) and a 2-D layout's site map, not for the lens's exact pupil mapping, a 2-D \
-             layout with lens.atom_transmission_error > 0 or a fin library's unconverted light (co_amplitude) in \
-             a parameter bias",
+             (a radial layout off axis) and a 2-D layout's site map, not for the lens's exact pupil mapping",
         ));
     };
     // ∂ln N and ∂ln N_T on the engine's spectral nodes, weighted ρ τ
