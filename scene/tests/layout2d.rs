@@ -267,53 +267,24 @@ fn mtf_and_tau(scene: &metric::Scene) -> (f64, f64) {
 /// stated lattice error, each error on its own: a parameter bias, the atoms' random phase and
 /// amplitude errors (the 2-D lens takes their expectation; the radial lens draws one error a
 /// ring, so it is averaged over 4 seeds; its few rings a zone add `(e^{σ²} − 1)/N` of
-/// incoherent power, docs/physics.md), and Zernike terms (a symmetric Z11 and a coma Z7).
+/// incoherent power, docs/physics.md); and a bias past the library's range and a seed refused.
+/// The Zernike terms are [`fabrication_wavefront_errors_on_a_2d_layout_follow_the_radial_lens`]
+/// (a test of their own, so the two share the test threads).
 #[test]
 fn fabrication_errors_on_a_2d_layout_follow_the_radial_lens() {
     let d = dir("fabrication");
-    let rings = rings();
-    write_radial_layout(&d.join("layout.csv"), &rings);
-    let (n, at) = sites();
-    write_npy(&d.join("lens.npy"), n, |i, j| at(i, j).unwrap_or(f64::NAN));
+    let (rings, bound, nominal) = fabrication_layout(&d);
     // a bias of 6 nm that keeps every ring inside the library's 100–300 nm
     let (lo, hi) = rings.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     let bias = if hi + 6.0 <= 300.0 { 6.0 } else { -6.0 };
     assert!(lo + bias >= 100.0 && hi + bias <= 300.0, "rings {lo}–{hi}");
-    let bound = lattice_bound();
-    let cases: [(&str, String, usize); 5] = [
+    let cases: [(&str, String, usize); 3] = [
         ("bias", format!("parameter_bias = [{bias}]"), 1),
         ("phase σ 0.3 rad", "atom_phase_error_rad = 0.3".into(), 4),
         ("amplitude σ 0.2", "atom_transmission_error = 0.2".into(), 4),
-        ("Z11 0.05 µm", "zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.05]".into(), 1),
-        ("Z7 0.05 µm", "zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0.05]".into(), 1),
     ];
-    let (m_nominal, t_nominal) =
-        mtf_and_tau(&load_128(&d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4").unwrap());
-    println!("stated lattice error {bound:.4}; nominal 2-D: mean MTF {m_nominal:.5}, τ1 {t_nominal:.5}");
     for (name, keys, seeds) in cases {
-        let (mut m_radial, mut t_radial) = (0.0, 0.0);
-        for seed in 0..seeds {
-            let radial = load_128(&d, &format!("layout = \"layout.csv\"\n{keys}\natom_error_seed = {seed}")).unwrap();
-            let (m, t) = mtf_and_tau(&radial);
-            m_radial += m / seeds as f64;
-            t_radial += t / seeds as f64;
-        }
-        let grid = load_128(&d, &format!("layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\n{keys}")).unwrap();
-        let (m, t) = mtf_and_tau(&grid);
-        println!(
-            "{name}: radial mean MTF {m_radial:.5}, τ1 {t_radial:.5}; 2-D mean MTF {m:.5} ({:+.2e}), τ1 {t:.5} ({:+.2e} relative)",
-            m - m_radial,
-            t / t_radial - 1.0
-        );
-        assert!((m - m_radial).abs() <= bound, "{name}: mean MTF {m} vs radial {m_radial}: beyond {bound}");
-        assert!((t / t_radial - 1.0).abs() <= bound, "{name}: τ1 {t} vs radial {t_radial}: beyond {bound}");
-        // each error moves the lens: the comparison is not of two nominal lenses
-        assert!((m - m_nominal).abs() > 1e-4 || (t - t_nominal).abs() > 1e-4, "{name}: no change");
-        if seeds > 1 && keys.contains("phase") {
-            // in expectation every atom's field is scaled by e^{−σ²/2}: τ1 by e^{−σ²} exactly
-            let ratio = t / t_nominal;
-            assert!((ratio - (-0.09f64).exp()).abs() < 1e-9, "{name}: τ1 ratio {ratio} vs e^(−σ²)");
-        }
+        fabrication_error_follows_the_radial_lens(&d, bound, nominal, name, &keys, seeds);
     }
     // a bias past the library's range is refused naming the key and the atoms; a seed has no draws
     let e = load(&d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\nparameter_bias = [150]").unwrap_err();
@@ -321,4 +292,70 @@ fn fabrication_errors_on_a_2d_layout_follow_the_radial_lens() {
     let e = load(&d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\natom_error_seed = 3").unwrap_err();
     assert!(e.contains("lens.atom_error_seed") && e.contains("expectation"), "{e}");
     std::fs::remove_dir_all(&d).ok();
+}
+
+/// Zernike terms on the 2-D layout (a symmetric Z11 and a coma Z7) give the radial lens's τ1
+/// and mean MTF within the stated lattice error, as
+/// [`fabrication_errors_on_a_2d_layout_follow_the_radial_lens`].
+#[test]
+fn fabrication_wavefront_errors_on_a_2d_layout_follow_the_radial_lens() {
+    let d = dir("fabrication-wavefront");
+    let (_, bound, nominal) = fabrication_layout(&d);
+    let cases: [(&str, &str); 2] = [
+        ("Z11 0.05 µm", "zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.05]"),
+        ("Z7 0.05 µm", "zernike_noll_rms_um = [0, 0, 0, 0, 0, 0, 0.05]"),
+    ];
+    for (name, keys) in cases {
+        fabrication_error_follows_the_radial_lens(&d, bound, nominal, name, keys, 1);
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// The layout of the fabrication tests written in `d` (the radial layout's CSV, the 2-D grid's
+/// `.npy`): the rings, the stated lattice error, and the nominal 2-D lens's (mean MTF, τ1).
+fn fabrication_layout(d: &Path) -> (Vec<f64>, f64, (f64, f64)) {
+    let rings = rings();
+    write_radial_layout(&d.join("layout.csv"), &rings);
+    let (n, at) = sites();
+    write_npy(&d.join("lens.npy"), n, |i, j| at(i, j).unwrap_or(f64::NAN));
+    let bound = lattice_bound();
+    let nominal = mtf_and_tau(&load_128(d, "layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4").unwrap());
+    println!("stated lattice error {bound:.4}; nominal 2-D: mean MTF {:.5}, τ1 {:.5}", nominal.0, nominal.1);
+    (rings, bound, nominal)
+}
+
+/// One fabrication error `keys` (named `name`) on the 2-D layout against the radial lens averaged
+/// over `seeds` draws: mean MTF and τ1 within `bound`, the lens moved from the `nominal` 2-D
+/// lens's (mean MTF, τ1), and a phase error's τ1 scaled by e^{−σ²} exactly.
+fn fabrication_error_follows_the_radial_lens(
+    d: &Path,
+    bound: f64,
+    (m_nominal, t_nominal): (f64, f64),
+    name: &str,
+    keys: &str,
+    seeds: usize,
+) {
+    let (mut m_radial, mut t_radial) = (0.0, 0.0);
+    for seed in 0..seeds {
+        let radial = load_128(d, &format!("layout = \"layout.csv\"\n{keys}\natom_error_seed = {seed}")).unwrap();
+        let (m, t) = mtf_and_tau(&radial);
+        m_radial += m / seeds as f64;
+        t_radial += t / seeds as f64;
+    }
+    let grid = load_128(d, &format!("layout_grid = \"lens.npy\"\nlattice_pitch_um = 0.4\n{keys}")).unwrap();
+    let (m, t) = mtf_and_tau(&grid);
+    println!(
+        "{name}: radial mean MTF {m_radial:.5}, τ1 {t_radial:.5}; 2-D mean MTF {m:.5} ({:+.2e}), τ1 {t:.5} ({:+.2e} relative)",
+        m - m_radial,
+        t / t_radial - 1.0
+    );
+    assert!((m - m_radial).abs() <= bound, "{name}: mean MTF {m} vs radial {m_radial}: beyond {bound}");
+    assert!((t / t_radial - 1.0).abs() <= bound, "{name}: τ1 {t} vs radial {t_radial}: beyond {bound}");
+    // each error moves the lens: the comparison is not of two nominal lenses
+    assert!((m - m_nominal).abs() > 1e-4 || (t - t_nominal).abs() > 1e-4, "{name}: no change");
+    if seeds > 1 && keys.contains("phase") {
+        // in expectation every atom's field is scaled by e^{−σ²/2}: τ1 by e^{−σ²} exactly
+        let ratio = t / t_nominal;
+        assert!((ratio - (-0.09f64).exp()).abs() < 1e-9, "{name}: τ1 ratio {ratio} vs e^(−σ²)");
+    }
 }

@@ -114,8 +114,9 @@ struct Part<'a> {
 
 /// The slow reference: the photon-weighted sum over orders of each order's polychromatic OTF
 /// (a chromatic lens for its own wavelength, with the density `ρ(λ) τ_m(λ)` on the wavelengths
-/// where the order exists, each integrated to 1e-9), and the mean of its modulus to 1e-8.
-fn reference_mean(orders: &[Span]) -> f64 {
+/// where the order exists, each integrated to `otf_tolerance`), and the mean of its modulus to
+/// `mean_tolerance`.
+fn reference_mean(orders: &[Span], otf_tolerance: f64, mean_tolerance: f64) -> f64 {
     let rho = |lambda: f64| lambda; // the top-hat band × λ (SI eq. S8)
     let parts: Vec<Part<'_>> = orders
         .iter()
@@ -144,12 +145,12 @@ fn reference_mean(orders: &[Span]) -> f64 {
                     pixel_pitch_m: 5.2e-6,
                     pixel_mtf: false,
                 };
-                weight * reference::polychromatic_otf(&scene, nu, 1e-9)
+                weight * reference::polychromatic_otf(&scene, nu, otf_tolerance)
             })
             .sum::<f64>()
             / total
     };
-    let q = reference::integrate_modulus(reference::GK21, otf, |_| 1.0, &[0.0, NYQUIST], 0.0, 1e-8);
+    let q = reference::integrate_modulus(reference::GK21, otf, |_| 1.0, &[0.0, NYQUIST], 0.0, mean_tolerance);
     q.value / NYQUIST
 }
 
@@ -176,40 +177,54 @@ fn an_interleaved_lens_takes_few_panels_and_matches_the_reference() {
         .iter()
         .map(|&design| Span { design, efficiency: Box::new(|_| 0.6 / 9.0), band: (lo, hi) })
         .collect();
-    let want = reference_mean(&orders);
+    let want = reference_mean(&orders, 1e-9, 1e-8);
     assert!((mean - want).abs() < 1e-6 * want, "{mean} vs the reference {want}: {:e}", (mean - want) / want);
 }
 
 /// Harmonic lenses: design order 3 over 750–850 nm (the window loses order 6 at α = 3, λ = 800 nm:
 /// the count changes) and design order 5 over 700–900 nm (α = 5 at 800 nm: orders 2–7 become
-/// 3–8, the same count, shifted). Few panels each (the largest-|W020| rule took over 2^20), and
+/// 3–8, the same count, shifted): few panels each (the largest-|W020| rule took over 2^20), and
 /// the mean MTF agrees with the order-by-order reference, each order over the wavelengths where
 /// it is in the window, to the engine's tolerance 1e-6 (measured: 0.271743, 1e-12, with 11
-/// panels; 0.162826, 7e-16, with 16 panels).
-#[test]
-fn harmonic_lenses_take_few_panels_and_match_the_reference() {
-    for (order, (lo, hi)) in [(3u32, (750e-9, 850e-9)), (5, (700e-9, 900e-9))] {
-        let lens = Lens(HarmonicLike { order, efficiency: 0.9 });
-        let spectrum = band(lo, hi);
-        let poly = Polychromatic::new(&lens, &spectrum, Field::ON_AXIS, NYQUIST, None).unwrap();
-        let (mean, work) = poly.mean_mtf();
-        assert!(work.spectral_panels <= 64, "p = {order}: {work:?}");
-        // every order m that is in the window somewhere in the band, over the part where it is:
-        // |m − α| ≤ 3 ⇔ pλ0/(m + 3) ≤ λ ≤ pλ0/(m − 3)
-        let p = f64::from(order);
-        let orders: Vec<Span> = (1..=20u32)
-            .filter_map(|m| {
-                let mf = f64::from(m);
-                let from = (p * LAMBDA0 / (mf + 3.0)).max(lo);
-                let to = if mf > 3.0 { (p * LAMBDA0 / (mf - 3.0)).min(hi) } else { hi };
-                (from < to).then(|| Span {
-                    design: p * LAMBDA0 / mf,
-                    efficiency: Box::new(move |l: f64| 0.9 * sinc(p * LAMBDA0 / l - mf).powi(2)),
-                    band: (from, to),
-                })
+/// panels; 0.162826, 7e-16, with 16 panels). The reference's OTFs to 1e-8 and its mean to 1e-7,
+/// a tenth of the bound (at 1e-9 and 1e-8 it agreed with the engine to 1e-12 and 7e-16 as well).
+/// One test per lens, so the two run side by side.
+fn harmonic_lens_takes_few_panels_and_matches_the_reference(order: u32, (lo, hi): (f64, f64)) {
+    let lens = Lens(HarmonicLike { order, efficiency: 0.9 });
+    let spectrum = band(lo, hi);
+    let poly = Polychromatic::new(&lens, &spectrum, Field::ON_AXIS, NYQUIST, None).unwrap();
+    let (mean, work) = poly.mean_mtf();
+    assert!(work.spectral_panels <= 64, "p = {order}: {work:?}");
+    // every order m that is in the window somewhere in the band, over the part where it is:
+    // |m − α| ≤ 3 ⇔ pλ0/(m + 3) ≤ λ ≤ pλ0/(m − 3)
+    let p = f64::from(order);
+    let orders: Vec<Span> = (1..=20u32)
+        .filter_map(|m| {
+            let mf = f64::from(m);
+            let from = (p * LAMBDA0 / (mf + 3.0)).max(lo);
+            let to = if mf > 3.0 { (p * LAMBDA0 / (mf - 3.0)).min(hi) } else { hi };
+            (from < to).then(|| Span {
+                design: p * LAMBDA0 / mf,
+                efficiency: Box::new(move |l: f64| 0.9 * sinc(p * LAMBDA0 / l - mf).powi(2)),
+                band: (from, to),
             })
-            .collect();
-        let want = reference_mean(&orders);
-        assert!((mean - want).abs() < 1e-6 * want, "p = {order}: {mean} vs the reference {want}");
-    }
+        })
+        .collect();
+    let want = reference_mean(&orders, 1e-8, 1e-7);
+    eprintln!("p = {order}: {mean:.6} against the reference {want:.6}: {:.1e}", (mean - want) / want);
+    assert!((mean - want).abs() < 1e-6 * want, "p = {order}: {mean} vs the reference {want}");
+}
+
+/// [`harmonic_lens_takes_few_panels_and_matches_the_reference`] for design order 3 over
+/// 750–850 nm.
+#[test]
+fn harmonic_lens_of_order_3_takes_few_panels_and_matches_the_reference() {
+    harmonic_lens_takes_few_panels_and_matches_the_reference(3, (750e-9, 850e-9));
+}
+
+/// [`harmonic_lens_takes_few_panels_and_matches_the_reference`] for design order 5 over
+/// 700–900 nm.
+#[test]
+fn harmonic_lens_of_order_5_takes_few_panels_and_matches_the_reference() {
+    harmonic_lens_takes_few_panels_and_matches_the_reference(5, (700e-9, 900e-9));
 }
