@@ -788,6 +788,16 @@ impl FftLayer {
     /// image shift Δ, the tilt `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's
     /// radius), which multiplies its part of the OTF by `exp(−2πi ν·Δ)` as an order's shift does.
     fn zones_grid(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<Otf, Error> {
+        let slot = self.zones_grid_field(zones, lambda)?;
+        let sampled = &self.zones[slot];
+        let mut otf = Otf::new();
+        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
+        Ok(otf)
+    }
+
+    /// Samples `zones` (cached) and sets their composite field at `lambda`, each zone's fields in
+    /// `self.fields`: the slot of the sampling in `self.zones`.
+    fn zones_grid_field(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<usize, Error> {
         let apertures = || zones.iter().map(|z| &z.aperture);
         let slot = match self.zones.iter().position(|s| s.is_sampling_of(apertures())) {
             Some(i) => i,
@@ -807,11 +817,52 @@ impl FftLayer {
             aberrations: z.wavefront.aberrations(),
             tilt_m: [z.wavefront.image_shift_m[0] * na, z.wavefront.image_shift_m[1] * na],
         }));
-        let sampled = &mut self.zones[slot];
-        sampled.set_field(&self.fields, lambda)?;
-        let mut otf = Otf::new();
-        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
-        Ok(otf)
+        self.zones[slot].set_field(&self.fields, lambda)?;
+        Ok(slot)
+    }
+}
+
+impl FftLayer {
+    /// The composite field of `zones` at `lambda` as [`zones_grid`](Self::zones_grid) builds
+    /// it, its weight, and per direction its move `(∂P, ∂weight)` (docs/physics.md, "Gradients:
+    /// the multiplexed lens"): [`WavefrontDirection::Defocus`] moves each zone's own defocus by
+    /// itself, `∂W_j = W020_j (x² + y²)`, and [`WavefrontDirection::ImageShift`] each zone's own
+    /// tilt (its image shift) by itself, `∂W_j = t_j·(x, y)`, both per relative change
+    /// ([`SampledZones::field_derivative`]). `None` for another direction or a zone whose
+    /// wavefront is not a defocus alone.
+    #[allow(clippy::type_complexity)]
+    fn zones_lanes(
+        &mut self,
+        zones: &[crate::Zone],
+        lambda: f64,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<(Vec<Complex64>, f64, Vec<(Vec<Complex64>, f64)>)>, Error> {
+        if !zones.iter().all(|z| z.wavefront.is_defocus_only()) {
+            return Ok(None);
+        }
+        // the value's field on the value's sampling
+        let slot = self.zones_grid_field(zones, lambda)?;
+        let sampled = &self.zones[slot];
+        let field = sampled.field().to_vec();
+        let weight = sampled.weight();
+        let fields = &self.fields;
+        let still = vec![0.0; zones.len()];
+        let mut moves = Vec::with_capacity(directions.len());
+        for d in directions {
+            let moved = match *d {
+                WavefrontDirection::Defocus => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
+                    fields[j].aberrations.w020_m * (x * x + y * y)
+                }),
+                WavefrontDirection::ImageShift => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
+                    let [tx, ty] = fields[j].tilt_m;
+                    tx * x + ty * y
+                }),
+                _ => None,
+            };
+            let Some(moved) = moved else { return Ok(None) };
+            moves.push(moved);
+        }
+        Ok(Some((field, weight, moves)))
     }
 }
 
@@ -1178,6 +1229,26 @@ impl FftPath {
                             *total += node.weight * rate;
                         }
                     }
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
+                // a composite pupil of zones (a segmented multiplexed lens): each zone's own
+                // defocus and tilt move by themselves (`FftLayer::zones_lanes`)
+                if let (Pupil::Zones(zones), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
+                    // (an order-level shift would move with the image-shift lane too)
+                    if node.shift != [0.0, 0.0] {
+                        return Ok(None);
+                    }
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let Some((field, weight, moves)) = layer.zones_lanes(zones, lambda, directions)? else {
+                        return Ok(None);
+                    };
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
                     let grids: Vec<&Otf> = d_grids.iter().collect();
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
