@@ -11,7 +11,11 @@
 //! itself) and `D_Δ` ([`optics::WavefrontDirection::ImageShift`], every zone's tilt by itself),
 //! forward mode through the FFT on the value's own grids, levels, frequencies and azimuths:
 //!
-//! `∂M̄/∂ln F# = P(ν_N)|O(ν_N)|‾ − M̄ − P_ν − 2 D_K − D_Δ`, `∂M̄/∂ln f0 = D_K + D_Δ`.
+//! `∂M̄/∂ln F# = D_s − 2 D_K − D_Δ`, `∂M̄/∂ln f0 = D_K + D_Δ`, with `D_s` the frequency
+//! scale's term at fixed pupils: each grid read at `s = νλF#` moving with F# along the value's
+//! fixed rule (`optics::Polychromatic::mean_mtf_over_azimuth_scale_lane`), the discrete rule's
+//! exact derivative (by parts it is `P(ν_N)|O(ν_N)|‾ − M̄ − P_ν`, the continuous rule's
+//! identity, which the fixed rule on the interpolated grids holds only to its own error's rate).
 
 use super::Parameter;
 use crate::evaluate::Evaluation;
@@ -67,9 +71,11 @@ pub(super) fn aperture_on_zones(scene: &Scene, e: &Evaluation, p: Parameter) -> 
     };
     let d_k = lanes[0];
     let d_shift = lanes.get(1).copied().unwrap_or(0.0);
-    // the by-parts term of s = νλF#: the system MTF at Nyquist averaged over azimuth and the
-    // pixel MTF's own term, as for the phase lens off axis
-    let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    let slope = super::pixel_slope(scene, p)?;
-    Ok(Some((edge - e.mean_mtf - slope - 2.0 * d_k - d_shift, d_k + d_shift)))
+    // the frequency scale s = νλF# at fixed pupils: each grid's reading moving with F# on the
+    // value's own rule (the discrete rule's exact term, where by parts it would be
+    // P(ν_N)|O(ν_N)|‾ − M̄ − P_ν, the continuous rule's)
+    let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(first) else {
+        return Err(not_smooth("the FFT path did not give the frequency scale's lane s = νλF# here"));
+    };
+    Ok(Some((d_s - 2.0 * d_k - d_shift, d_k + d_shift)))
 }

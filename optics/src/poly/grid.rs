@@ -249,6 +249,76 @@ impl FftPath {
         (sum, turn)
     }
 
+    /// [`sum_along`](Self::sum_along) at `frequency ≥ 0` and its derivative with respect to
+    /// `ln F#` at fixed pupils: each grid's interpolant read at `s = νλF#` moves along
+    /// `s (cos φ, sin φ)·∇` ([`Otf::at_xy_and_slope`]); the shifts' phases (in ν) and a
+    /// table (read at ν) do not move.
+    fn sum_along_and_scale(&self, scene: &Scene<'_>, frequency: f64, azimuth: f64) -> (Complex64, Complex64) {
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let k = -2.0 * PI * frequency;
+        let nuf = frequency * scene.f_number;
+        let from_field = azimuth - scene.field_direction();
+        let (mut sum, mut scale) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));
+        for n in &self.nodes {
+            let s = nuf * n.lambda;
+            if s >= 1.0 {
+                continue;
+            }
+            let (mut v, mut d) = match &n.kind {
+                FftKind::Grid(otf) if s <= otf.s_max() => {
+                    let (v, d) = otf.at_xy_and_slope(s * cos_a, s * sin_a, s * cos_a, s * sin_a);
+                    (v * n.weight, d * n.weight)
+                }
+                FftKind::Grid(_) => continue,
+                FftKind::Table(t) => {
+                    (Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0), Complex64::new(0.0, 0.0))
+                }
+            };
+            let [dx, dy] = n.shift;
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+                let phase = Complex64::new(pc, ps);
+                v *= phase;
+                d *= phase;
+            }
+            sum += v;
+            scale += d;
+        }
+        (sum, scale)
+    }
+
+    /// The derivative of this level's mean over `count` azimuths from `first` (the value's
+    /// [`fixed_mean`] along each) with respect to `ln F#` at fixed pupils: the same frequencies
+    /// in ν, azimuths, spectral weights, pixel MTF and normalization as the value, each grid's
+    /// reading moving with `s = νλF#` ([`sum_along_and_scale`](Self::sum_along_and_scale)),
+    /// `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`): the discrete rule's exact derivative, where
+    /// the by-parts identity `P(ν_N)|O(ν_N)| − M̄ − P_ν` is the continuous rule's
+    /// (docs/physics.md, "Gradients: the multiplexed lens").
+    fn scale_over_azimuth(&self, scene: &Scene<'_>, nodes: &Nodes, first: f64, count: usize) -> f64 {
+        let lo = self.nodes.iter().map(|n| n.lambda).fold(f64::INFINITY, f64::min);
+        let top = scene.max_frequency.min(1.0 / (lo * scene.f_number));
+        let (panels, _) = fixed_rule(top, self.finest_cell(scene.f_number));
+        let rule = crate::quad::gauss_legendre(crate::quad::FIXED_ORDER);
+        let h = top / panels as f64;
+        let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+        let mut total = 0.0;
+        for j in 0..count {
+            let azimuth = first + PI * j as f64 / count as f64;
+            for p in 0..panels {
+                let mid = h * (p as f64 + 0.5);
+                for &(x, w) in &rule {
+                    let nu = mid + 0.5 * h * x;
+                    let (o, d) = self.sum_along_and_scale(scene, nu, azimuth);
+                    let modulus = o.norm();
+                    if modulus > 0.0 {
+                        total += 0.5 * h * w * pixel(nu) * (o.conj() * d).re / modulus;
+                    }
+                }
+            }
+        }
+        total / (nodes.total_weight * scene.max_frequency * count as f64)
+    }
+
     /// The finest grid cell in ν (cycles/m): the interpolated grids kink at every cell edge.
     pub fn finest_cell(&self, f_number: f64) -> f64 {
         self.nodes
@@ -664,6 +734,14 @@ impl OtfEngine for Grids<'_> {
         noise: &super::NoiseShape,
     ) -> Result<Option<Vec<f64>>, Error> {
         self.gradient_over_azimuth(first, count, directions, Some(noise))
+    }
+
+    fn scale_over_azimuth(&self, first: f64, count: usize) -> Option<f64> {
+        let fine = self.fft.scale_over_azimuth(&self.scene, &self.nodes, first, count);
+        let Some(plan) = self.richardson() else { return Some(fine) };
+        let Some((coarse_path, _)) = &self.coarse else { return Some(fine) };
+        let coarse = coarse_path.scale_over_azimuth(&self.scene, &self.nodes, first, count);
+        Some(plan.extrapolate(coarse, fine).value)
     }
 
     fn means_along(&self, azimuth: f64) -> Option<(f64, f64)> {
@@ -1721,6 +1799,19 @@ impl Polychromatic<'_> {
         }
         let mean = self.mean_mtf_over_azimuth(first, None);
         Ok(self.engine.wavefront_gradient_over_azimuth(first, mean.azimuths, directions)?.map(|g| (mean, g)))
+    }
+
+    /// The derivative of [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) (white noise)
+    /// with respect to `ln F#` at fixed pupils on the FFT engine: each grid read at `s = νλF#`
+    /// moving with F#, the frequencies in ν, azimuths, weights, pixel MTF and Richardson
+    /// extrapolation the value's (the discrete rule's exact frequency-scale term). `None` on
+    /// another engine.
+    pub fn mean_mtf_over_azimuth_scale_lane(&self, first: f64) -> Option<f64> {
+        if !matches!(self.engine(), Engine::Fft { .. }) {
+            return None;
+        }
+        let mean = self.mean_mtf_over_azimuth(first, None);
+        self.engine.scale_over_azimuth(first, mean.azimuths)
     }
 
     /// [`mean_mtf_over_azimuth_and_gradient`](Self::mean_mtf_over_azimuth_and_gradient) under a
