@@ -21,6 +21,7 @@ mod achromat;
 mod library_fft;
 mod multiplexed;
 mod noise_weight;
+mod segmented;
 
 pub use multiplexed::{channel_efficiency_gradient, channel_wavelength_gradient};
 
@@ -2499,6 +2500,10 @@ fn aperture_partials(
     overlap_lane: Option<f64>,
 ) -> Result<(f64, f64), Error> {
     // (the white ∂M̄; under a noise spectrum ∂G is `noise_weight::aperture_over_noise`'s)
+    // a composite pupil of zones: its lanes on the FFT path (`segmented`)
+    if let Some(found) = segmented::aperture_on_zones(scene, e, p)? {
+        return Ok(found);
+    }
     if let Some(found) = defocus_on_value_rule(scene, e, pass)? {
         return Ok(found);
     }

@@ -179,6 +179,49 @@ impl SampledZones {
         Ok(())
     }
 
+    /// The derivative of the composite field of [`set_field`](Self::set_field) (the same
+    /// `zones` and `wavelength_m`) where each zone's amplitude moves by `d_amplitude[j]` and its
+    /// OPD by `opd_rate(j, x, y)` (m per unit key at the pixel centre, full-aperture
+    /// coordinates): `∂P_k = Σ_j A_jk (∂a_j + i k a_j ∂W_j(x_k)) exp(i k (W_j + t_j·x_k))`, and
+    /// the weight's `Σ_k Σ_j 2 A_jk a_j ∂a_j` (docs/physics.md, "Gradients: the multiplexed
+    /// lens"; a zone of amplitude 0 passes nothing and moves nothing). The same pixels, areas and
+    /// phases as `set_field`. `None` where `zones` or `d_amplitude` is not one per sampled zone.
+    pub fn field_derivative(
+        &self,
+        zones: &[ZoneField],
+        wavelength_m: f64,
+        d_amplitude: &[f64],
+        opd_rate: &dyn Fn(usize, f64, f64) -> f64,
+    ) -> Option<(Vec<Complex64>, f64)> {
+        if zones.len() != self.apertures.len() || d_amplitude.len() != zones.len() {
+            return None;
+        }
+        let n = self.n;
+        let h = 2.0 / n as f64;
+        let k = TAU / wavelength_m;
+        let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
+        let mut d_weight = 0.0;
+        for (zone, (z, pixels)) in zones.iter().zip(&self.pixels).enumerate() {
+            if z.amplitude == 0.0 {
+                continue;
+            }
+            let compiled = Compiled::new(&z.aberrations);
+            let [tx, ty] = z.tilt_m;
+            let da = d_amplitude[zone];
+            let mut area = 0.0;
+            for &(p, a) in pixels {
+                let (i, j) = (p % n, p / n);
+                let (x, y) = (-1.0 + (i as f64 + 0.5) * h, -1.0 + (j as f64 + 0.5) * h);
+                let opd = compiled.opd_m(x, y) + tx * x + ty * y;
+                let rate = Complex64::new(da, k * z.amplitude * opd_rate(zone, x, y));
+                moved[p] += rate * Complex64::from_polar(a, k * opd);
+                area += a;
+            }
+            d_weight += 2.0 * area * z.amplitude * da;
+        }
+        Some((moved, d_weight))
+    }
+
     /// The field of the last [`set_field`](Self::set_field), `N × N` row-major.
     pub fn field(&self) -> &[Complex64] {
         &self.field
@@ -188,5 +231,59 @@ impl SampledZones {
     /// normalization ([`OtfPlan::otf_of_field`](super::OtfPlan::otf_of_field)).
     pub fn weight(&self) -> f64 {
         self.weight
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The derivative of the composite field against central differences of `set_field` itself
+    /// (the slow, obviously correct reference): two rings and a sector, each zone's amplitude,
+    /// defocus and tilt moving at its own rate with one key `p`.
+    #[test]
+    fn field_derivative_matches_differences_of_the_field() {
+        let apertures = vec![
+            Arc::new(Aperture::ring(0.0, 0.5, None).unwrap()),
+            Arc::new(Aperture::ring(0.5, 0.8, None).unwrap()),
+            Arc::new(Aperture::sector(0.0, 2.0).unwrap()),
+        ];
+        let mut sampled = SampledZones::new(32, &apertures).unwrap();
+        let lambda = 800e-9;
+        // (amplitude, W020, tilt) and their rates per unit p
+        let base = [(0.9, 0.3e-6, [0.1e-6, 0.0]), (0.7, -0.5e-6, [0.0, 0.2e-6]), (0.5, 1.1e-6, [-0.1e-6, 0.1e-6])];
+        let rate = [(0.3, 0.2e-6, [0.0, 0.1e-6]), (-0.2, 0.4e-6, [0.3e-6, 0.0]), (0.1, -0.3e-6, [0.1e-6, 0.2e-6])];
+        let at = |p: f64| -> Vec<ZoneField> {
+            base.iter()
+                .zip(&rate)
+                .map(|(&(a, w, t), &(da, dw, dt))| ZoneField {
+                    amplitude: a + p * da,
+                    aberrations: Aberrations::defocus(w + p * dw),
+                    tilt_m: [t[0] + p * dt[0], t[1] + p * dt[1]],
+                })
+                .collect()
+        };
+        let h = 1e-4;
+        sampled.set_field(&at(h), lambda).unwrap();
+        let (up, w_up) = (sampled.field().to_vec(), sampled.weight());
+        sampled.set_field(&at(-h), lambda).unwrap();
+        let (down, w_down) = (sampled.field().to_vec(), sampled.weight());
+        let fields = at(0.0);
+        let d_amplitude: Vec<f64> = rate.iter().map(|r| r.0).collect();
+        let (moved, d_weight) = sampled
+            .field_derivative(&fields, lambda, &d_amplitude, &|j, x, y| {
+                rate[j].1 * (x * x + y * y) + rate[j].2[0] * x + rate[j].2[1] * y
+            })
+            .unwrap();
+        let largest = moved.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        assert!(largest > 1.0, "{largest}");
+        for (k, m) in moved.iter().enumerate() {
+            let reference = (up[k] - down[k]) / (2.0 * h);
+            assert!((m - reference).norm() < 1e-6 * largest, "pixel {k}: {m} vs {reference}");
+        }
+        let reference = (w_up - w_down) / (2.0 * h);
+        assert!((d_weight - reference).abs() < 1e-9 * reference.abs(), "{d_weight} vs {reference}");
+        // one per zone, or none
+        assert!(sampled.field_derivative(&fields[..2], lambda, &d_amplitude[..2], &|_, _, _| 0.0).is_none());
     }
 }

@@ -249,6 +249,76 @@ impl FftPath {
         (sum, turn)
     }
 
+    /// [`sum_along`](Self::sum_along) at `frequency ≥ 0` and its derivative with respect to
+    /// `ln F#` at fixed pupils: each grid's interpolant read at `s = νλF#` moves along
+    /// `s (cos φ, sin φ)·∇` ([`Otf::at_xy_and_slope`]); the shifts' phases (in ν) and a
+    /// table (read at ν) do not move.
+    fn sum_along_and_scale(&self, scene: &Scene<'_>, frequency: f64, azimuth: f64) -> (Complex64, Complex64) {
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let k = -2.0 * PI * frequency;
+        let nuf = frequency * scene.f_number;
+        let from_field = azimuth - scene.field_direction();
+        let (mut sum, mut scale) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));
+        for n in &self.nodes {
+            let s = nuf * n.lambda;
+            if s >= 1.0 {
+                continue;
+            }
+            let (mut v, mut d) = match &n.kind {
+                FftKind::Grid(otf) if s <= otf.s_max() => {
+                    let (v, d) = otf.at_xy_and_slope(s * cos_a, s * sin_a, s * cos_a, s * sin_a);
+                    (v * n.weight, d * n.weight)
+                }
+                FftKind::Grid(_) => continue,
+                FftKind::Table(t) => {
+                    (Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0), Complex64::new(0.0, 0.0))
+                }
+            };
+            let [dx, dy] = n.shift;
+            if dx != 0.0 || dy != 0.0 {
+                let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+                let phase = Complex64::new(pc, ps);
+                v *= phase;
+                d *= phase;
+            }
+            sum += v;
+            scale += d;
+        }
+        (sum, scale)
+    }
+
+    /// The derivative of this level's mean over `count` azimuths from `first` (the value's
+    /// [`fixed_mean`] along each) with respect to `ln F#` at fixed pupils: the same frequencies
+    /// in ν, azimuths, spectral weights, pixel MTF and normalization as the value, each grid's
+    /// reading moving with `s = νλF#` ([`sum_along_and_scale`](Self::sum_along_and_scale)),
+    /// `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`): the discrete rule's exact derivative, where
+    /// the by-parts identity `P(ν_N)|O(ν_N)| − M̄ − P_ν` is the continuous rule's
+    /// (docs/physics.md, "Gradients: the multiplexed lens").
+    fn scale_over_azimuth(&self, scene: &Scene<'_>, nodes: &Nodes, first: f64, count: usize) -> f64 {
+        let lo = self.nodes.iter().map(|n| n.lambda).fold(f64::INFINITY, f64::min);
+        let top = scene.max_frequency.min(1.0 / (lo * scene.f_number));
+        let (panels, _) = fixed_rule(top, self.finest_cell(scene.f_number));
+        let rule = crate::quad::gauss_legendre(crate::quad::FIXED_ORDER);
+        let h = top / panels as f64;
+        let pixel = |nu: f64| scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+        let mut total = 0.0;
+        for j in 0..count {
+            let azimuth = first + PI * j as f64 / count as f64;
+            for p in 0..panels {
+                let mid = h * (p as f64 + 0.5);
+                for &(x, w) in &rule {
+                    let nu = mid + 0.5 * h * x;
+                    let (o, d) = self.sum_along_and_scale(scene, nu, azimuth);
+                    let modulus = o.norm();
+                    if modulus > 0.0 {
+                        total += 0.5 * h * w * pixel(nu) * (o.conj() * d).re / modulus;
+                    }
+                }
+            }
+        }
+        total / (nodes.total_weight * scene.max_frequency * count as f64)
+    }
+
     /// The finest grid cell in ν (cycles/m): the interpolated grids kink at every cell edge.
     pub fn finest_cell(&self, f_number: f64) -> f64 {
         self.nodes
@@ -666,6 +736,14 @@ impl OtfEngine for Grids<'_> {
         self.gradient_over_azimuth(first, count, directions, Some(noise))
     }
 
+    fn scale_over_azimuth(&self, first: f64, count: usize) -> Option<f64> {
+        let fine = self.fft.scale_over_azimuth(&self.scene, &self.nodes, first, count);
+        let Some(plan) = self.richardson() else { return Some(fine) };
+        let Some((coarse_path, _)) = &self.coarse else { return Some(fine) };
+        let coarse = coarse_path.scale_over_azimuth(&self.scene, &self.nodes, first, count);
+        Some(plan.extrapolate(coarse, fine).value)
+    }
+
     fn means_along(&self, azimuth: f64) -> Option<(f64, f64)> {
         let ReadMeans { first, means } = self.read.as_ref()?;
         // the slot of `azimuth`, if it is one (the rule over azimuth reads `first + π k / M`)
@@ -788,6 +866,16 @@ impl FftLayer {
     /// image shift Δ, the tilt `W += (Δx x + Δy y) NA` (x, y in units of the full aperture's
     /// radius), which multiplies its part of the OTF by `exp(−2πi ν·Δ)` as an order's shift does.
     fn zones_grid(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<Otf, Error> {
+        let slot = self.zones_grid_field(zones, lambda)?;
+        let sampled = &self.zones[slot];
+        let mut otf = Otf::new();
+        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
+        Ok(otf)
+    }
+
+    /// Samples `zones` (cached) and sets their composite field at `lambda`, each zone's fields in
+    /// `self.fields`: the slot of the sampling in `self.zones`.
+    fn zones_grid_field(&mut self, zones: &[crate::Zone], lambda: f64) -> Result<usize, Error> {
         let apertures = || zones.iter().map(|z| &z.aperture);
         let slot = match self.zones.iter().position(|s| s.is_sampling_of(apertures())) {
             Some(i) => i,
@@ -807,11 +895,52 @@ impl FftLayer {
             aberrations: z.wavefront.aberrations(),
             tilt_m: [z.wavefront.image_shift_m[0] * na, z.wavefront.image_shift_m[1] * na],
         }));
-        let sampled = &mut self.zones[slot];
-        sampled.set_field(&self.fields, lambda)?;
-        let mut otf = Otf::new();
-        self.plan.otf_of_field(sampled.field(), sampled.weight(), &mut otf);
-        Ok(otf)
+        self.zones[slot].set_field(&self.fields, lambda)?;
+        Ok(slot)
+    }
+}
+
+impl FftLayer {
+    /// The composite field of `zones` at `lambda` as [`zones_grid`](Self::zones_grid) builds
+    /// it, its weight, and per direction its move `(∂P, ∂weight)` (docs/physics.md, "Gradients:
+    /// the multiplexed lens"): [`WavefrontDirection::Defocus`] moves each zone's own defocus by
+    /// itself, `∂W_j = W020_j (x² + y²)`, and [`WavefrontDirection::ImageShift`] each zone's own
+    /// tilt (its image shift) by itself, `∂W_j = t_j·(x, y)`, both per relative change
+    /// ([`SampledZones::field_derivative`]). `None` for another direction or a zone whose
+    /// wavefront is not a defocus alone.
+    #[allow(clippy::type_complexity)]
+    fn zones_lanes(
+        &mut self,
+        zones: &[crate::Zone],
+        lambda: f64,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<(Vec<Complex64>, f64, Vec<(Vec<Complex64>, f64)>)>, Error> {
+        if !zones.iter().all(|z| z.wavefront.is_defocus_only()) {
+            return Ok(None);
+        }
+        // the value's field on the value's sampling
+        let slot = self.zones_grid_field(zones, lambda)?;
+        let sampled = &self.zones[slot];
+        let field = sampled.field().to_vec();
+        let weight = sampled.weight();
+        let fields = &self.fields;
+        let still = vec![0.0; zones.len()];
+        let mut moves = Vec::with_capacity(directions.len());
+        for d in directions {
+            let moved = match *d {
+                WavefrontDirection::Defocus => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
+                    fields[j].aberrations.w020_m * (x * x + y * y)
+                }),
+                WavefrontDirection::ImageShift => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
+                    let [tx, ty] = fields[j].tilt_m;
+                    tx * x + ty * y
+                }),
+                _ => None,
+            };
+            let Some(moved) = moved else { return Ok(None) };
+            moves.push(moved);
+        }
+        Ok(Some((field, weight, moves)))
     }
 }
 
@@ -1205,6 +1334,26 @@ impl FftPath {
                             *total += node.weight * rate;
                         }
                     }
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
+                // a composite pupil of zones (a segmented multiplexed lens): each zone's own
+                // defocus and tilt move by themselves (`FftLayer::zones_lanes`)
+                if let (Pupil::Zones(zones), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
+                    // (an order-level shift would move with the image-shift lane too)
+                    if node.shift != [0.0, 0.0] {
+                        return Ok(None);
+                    }
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let Some((field, weight, moves)) = layer.zones_lanes(zones, lambda, directions)? else {
+                        return Ok(None);
+                    };
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
                     let grids: Vec<&Otf> = d_grids.iter().collect();
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
@@ -1714,6 +1863,19 @@ impl Polychromatic<'_> {
         }
         let mean = self.mean_mtf_over_azimuth(first, None);
         Ok(self.engine.wavefront_gradient_over_azimuth(first, mean.azimuths, directions)?.map(|g| (mean, g)))
+    }
+
+    /// The derivative of [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) (white noise)
+    /// with respect to `ln F#` at fixed pupils on the FFT engine: each grid read at `s = νλF#`
+    /// moving with F#, the frequencies in ν, azimuths, weights, pixel MTF and Richardson
+    /// extrapolation the value's (the discrete rule's exact frequency-scale term). `None` on
+    /// another engine.
+    pub fn mean_mtf_over_azimuth_scale_lane(&self, first: f64) -> Option<f64> {
+        if !matches!(self.engine(), Engine::Fft { .. }) {
+            return None;
+        }
+        let mean = self.mean_mtf_over_azimuth(first, None);
+        self.engine.scale_over_azimuth(first, mean.azimuths)
     }
 
     /// [`mean_mtf_over_azimuth_and_gradient`](Self::mean_mtf_over_azimuth_and_gradient) under a

@@ -443,6 +443,13 @@ trait OtfEngine: std::fmt::Debug {
         None
     }
     /// The derivative of the mean MTF averaged over the `count` azimuths from `first` with
+    /// respect to `ln F#` at fixed pupils (each grid read at `s = νλF#`, the frequencies in ν
+    /// fixed) on the value's own rules (the FFT engine: `grid::FftPath::scale_over_azimuth`);
+    /// `None` where the engine does not give it (the default).
+    fn scale_over_azimuth(&self, _first: f64, _count: usize) -> Option<f64> {
+        None
+    }
+    /// The derivative of the mean MTF averaged over the `count` azimuths from `first` with
     /// respect to each of `directions`, on the value's own rules (the FFT engine:
     /// `grid::FftPath::gradient_over_azimuth`); `Ok(None)` where the engine does not give it
     /// (the default).
