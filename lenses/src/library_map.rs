@@ -591,6 +591,30 @@ impl LibraryMapLens {
         (d_table, d_spread)
     }
 
+    /// The atoms' table's derivative at `wavelength_m` with respect to σ_t, the σ of the atoms'
+    /// relative amplitude errors (docs/physics.md, "Gradients: a library's atoms' phase
+    /// errors"): each entry `t E[a] e^{−σ_φ²/2}` moves by `t ∂E[a]/∂σ_t e^{−σ_φ²/2}` and the
+    /// incoherent power `|t|²(E[a²] − M²)` by `|t|²(∂E[a²] − 2M ∂M)`, the clipped moments'
+    /// derivatives in σ_t ([`expected_factor_sigma_derivative`]); the empty cell does not move.
+    fn transmission_error_table_derivative(&self, wavelength_m: f64) -> (Vec<Complex64>, Vec<f64>) {
+        let (phase, amplitude) = self.errors.unwrap_or((0.0, 0.0));
+        let (mut d_table, mut d_spread) = (Vec::with_capacity(self.unique.len() + 1), Vec::new());
+        for p in &self.unique {
+            let t = self.library.transmission(p, wavelength_m);
+            let (mean, square) = expected_factor(t.norm(), phase, amplitude);
+            let (d_mean, d_square) = expected_factor_sigma_derivative(t.norm(), phase, amplitude);
+            d_table.push(t * d_mean);
+            d_spread.push(if square - mean * mean > 0.0 {
+                t.norm_sqr() * (d_square - 2.0 * mean * d_mean)
+            } else {
+                0.0
+            });
+        }
+        d_table.push(Complex64::new(0.0, 0.0));
+        d_spread.push(0.0);
+        (d_table, d_spread)
+    }
+
     /// `(τ1, T)` at `wavelength_m`: the design order's and all the light of the cells whose
     /// centre is in the aperture, as fractions of the light on it.
     pub fn efficiency_and_transmission(&self, wavelength_m: f64) -> (f64, f64) {
@@ -676,6 +700,8 @@ impl LensModel for LibraryMapLens {
     fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<optics::OrderDerivatives> {
         let (d_table, d_spread) = if parameter == optics::ATOM_PHASE_ERROR {
             self.phase_error_table_derivative(wavelength_m)
+        } else if parameter == optics::ATOM_TRANSMISSION_ERROR {
+            self.transmission_error_table_derivative(wavelength_m)
         } else {
             self.bias_table_derivative(wavelength_m, parameter)?
         };
@@ -784,6 +810,28 @@ fn expected_factor_derivative(t: f64, phase_sigma: f64, transmission_sigma: f64)
     (phase * above * d_cap, 2.0 * cap * above * d_cap)
 }
 
+/// `(∂E[a e^{iδ}]/∂σ_t, ∂E[a²]/∂σ_t)` of [`expected_factor`]'s moments, `a = min(max(1 + σ_t Z,
+/// 0), c)`: the clipping points move no mass (the integrand is continuous there), so
+/// `∂E[a]/∂σ_t = E[Z; α < Z < β] = φ(α) − φ(β)` and `∂E[a²]/∂σ_t = 2E[(1 + σ_t Z) Z; α < Z < β]
+/// = 2(φ(α) − φ(β)) + 2σ_t (Φ(β) − Φ(α) + α φ(α) − β φ(β))` (`α = −1/σ_t`, `β = (c − 1)/σ_t`,
+/// `∫ z² φ = Φ − z φ`), the first times `e^{−σ_φ²/2}`. Both 0 at σ_t = 0 (the moments are even
+/// in σ_t).
+fn expected_factor_sigma_derivative(t: f64, phase_sigma: f64, transmission_sigma: f64) -> (f64, f64) {
+    let s = transmission_sigma;
+    if s == 0.0 {
+        return (0.0, 0.0);
+    }
+    let phase = (-0.5 * phase_sigma * phase_sigma).exp();
+    let pdf = |z: f64| if z.is_finite() { (-0.5 * z * z).exp() / (2.0 * PI).sqrt() } else { 0.0 };
+    let cdf = |z: f64| 0.5 * libm::erfc(-z / std::f64::consts::SQRT_2);
+    let alpha = -1.0 / s;
+    let cap = if t > 0.0 { 1.0 / t } else { f64::INFINITY };
+    let beta = (cap - 1.0) / s;
+    let edge = pdf(alpha) - pdf(beta);
+    let moment = if beta.is_finite() { alpha * pdf(alpha) - beta * pdf(beta) } else { alpha * pdf(alpha) };
+    (phase * edge, 2.0 * edge + 2.0 * s * (cdf(beta) - cdf(alpha) + moment))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -843,5 +891,29 @@ mod tests {
             );
         }
         assert_eq!(expected_factor_derivative(0.8, 0.3, 0.0), (0.0, 0.0));
+    }
+
+    /// The moments' derivative in σ_t against central differences of the moments in σ_t (steps
+    /// 2e-4 and 1e-4, Richardson-extrapolated), also at `|t| = 0` (no cap): within 1e-9 (not at
+    /// `|t| = 1/2`, where the clipping is symmetric about 1 and `∂E[a]/∂σ_t` is 0).
+    #[test]
+    fn expected_factor_sigma_derivative_matches_central_differences() {
+        for &(t, sp, st) in
+            &[(0.9f64, 0.0f64, 0.3f64), (0.99, 0.5, 0.1), (0.55, 0.2, 0.45), (0.0, 0.3, 0.3), (0.7, 0.1, 0.2)]
+        {
+            let central = |h: f64| {
+                let (up, down) = (expected_factor(t, sp, st + h), expected_factor(t, sp, st - h));
+                ((up.0 - down.0) / (2.0 * h), (up.1 - down.1) / (2.0 * h))
+            };
+            let (coarse, fine) = (central(2e-4), central(1e-4));
+            let want = ((4.0 * fine.0 - coarse.0) / 3.0, (4.0 * fine.1 - coarse.1) / 3.0);
+            let got = expected_factor_sigma_derivative(t, sp, st);
+            assert!(got.0 != 0.0 && got.1 != 0.0, "{got:?}");
+            assert!(
+                (got.0 - want.0).abs() < 1e-9 && (got.1 - want.1).abs() < 1e-9,
+                "|t| {t} σφ {sp} σt {st}: {got:?} vs {want:?}"
+            );
+        }
+        assert_eq!(expected_factor_sigma_derivative(0.8, 0.3, 0.0), (0.0, 0.0));
     }
 }

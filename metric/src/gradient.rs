@@ -245,6 +245,9 @@ impl Parameter {
             Parameter::FNumber => "the lens's F-number",
             Parameter::FocalLength => "the lens's focal length",
             Parameter::LibraryBias(optics::ATOM_PHASE_ERROR) => "the σ of a library lens's atoms' phase errors",
+            Parameter::LibraryBias(optics::ATOM_TRANSMISSION_ERROR) => {
+                "the σ of a 2-D library layout's atoms' amplitude errors"
+            }
             Parameter::LibraryBias(_) => "a library lens's parameter bias",
             Parameter::PsfPitch => "a PSF stack's sample pitch",
             Parameter::IrisDecentre(_) => "the decentre of the lens's iris",

@@ -57,7 +57,7 @@ pub use metrics::{
     Symmetry, jinc, metrics, power_law_mean, square_metrics,
 };
 /// The Seidel terms a [`Parameter::Seidel`] names.
-pub use optics::{ATOM_PHASE_ERROR, SeidelTerm};
+pub use optics::{ATOM_PHASE_ERROR, ATOM_TRANSMISSION_ERROR, SeidelTerm};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

@@ -333,6 +333,11 @@ pub struct FactoredPart {
 /// docs/physics.md, "Gradients: a library's atoms' phase errors".
 pub const ATOM_PHASE_ERROR: usize = usize::MAX;
 
+/// The `parameter` of [`LensModel::order_derivatives`] that stands for the σ of a 2-D library
+/// layout's per-atom relative amplitude errors, taken in expectation over the draws:
+/// docs/physics.md, "Gradients: a library's atoms' phase errors".
+pub const ATOM_TRANSMISSION_ERROR: usize = usize::MAX - 1;
+
 /// What a lens does to light: the trait every lens family implements.
 ///
 /// Object safe (`&dyn LensModel`, `Box<dyn LensModel>` work), `Send + Sync + Debug`, plain `f64` in SI

@@ -328,6 +328,12 @@ fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> O
     if key == "lens.atom_phase_error_rad" && lens_model == "library" {
         return Some(Ok(vec![(Parameter::LibraryBias(metric::ATOM_PHASE_ERROR), 1.0)]));
     }
+    // the atoms' amplitude errors of a 2-D layout, in expectation over the draws: smooth in σ_t
+    // (docs/physics.md, "Gradients: a library's atoms' phase errors")
+    let two_d = ["lens.layout_grid", "lens.layout_gds"].iter().any(|k| lookup(table, k).is_some());
+    if key == "lens.atom_transmission_error" && lens_model == "library" && two_d {
+        return Some(Ok(vec![(Parameter::LibraryBias(metric::ATOM_TRANSMISSION_ERROR), 1.0)]));
+    }
     let why = match key {
         "lens.atom_phase_error_rad" => {
             "the value is smooth in it for a fixed seed (every atom's factor e^{iσδ_i} with its draw δ_i held), and \
@@ -337,7 +343,9 @@ fn chain_rule(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> O
         }
         "lens.atom_transmission_error" => {
             "every atom's amplitude factor 1 + σε_i is taken as 0 where it falls below 0 and its |t| capped at 1 (a \
-             passive atom): the value has a kink wherever σ moves an atom across either limit"
+             passive atom): the value has a kink wherever σ moves an atom across either limit (a 2-D layout, \
+             lens.layout_grid or lens.layout_gds, takes the errors in expectation over the draws and its derivative \
+             is computed)"
         }
         "lens.phase_map_pitch_um" => {
             "each sample's phase is held over its cell, so the pitch moves every cell's edges across the pupil and \
@@ -779,7 +787,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key but Seidel terms), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (interleaved), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, asked with no wavefront key but Seidel terms), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (interleaved), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path; this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -2855,7 +2863,9 @@ pupil_samples = 64
     /// N) within 10× the gradient's requested tolerance (1e-9) of its own size plus the
     /// differences' own error (the evaluations' 1e-10 over the smaller step); the bias also with
     /// transmission errors (σ_t = 0.1 at 1° with the glare included: each entry's factor `E[a]`
-    /// moving with `|t|` through its cap `1/|t|`); with linear rows refused, naming the key.
+    /// moving with `|t|` through its cap `1/|t|`), and `lens.atom_transmission_error` itself at
+    /// σ_t = 0.1 (the clipped moments' derivative in σ_t; steps 0.004 and 0.002); with linear rows
+    /// refused, naming the key.
     #[test]
     fn layout_grid_bias_and_phase_error_match_central_differences() {
         let reference = 1e-10;
@@ -2870,6 +2880,14 @@ pupil_samples = 64
                 0.0,
                 0.25,
                 &["lens.atom_transmission_error=0.1", "options.glare=\"included\"", "field.x_deg=1"][..],
+            ),
+            // σ_t itself: the clipped moments E[a], E[a²] smooth in it, but curved on the scale of
+            // σ_t (the differences' h⁴ term is 1.3e-6 of the derivative at steps 0.02 and 0.01)
+            (
+                "lens.atom_transmission_error",
+                0.1,
+                0.002,
+                &["lens.atom_transmission_error=0.1", "options.glare=\"included\""][..],
             ),
         ] {
             let started = std::time::Instant::now();

@@ -381,7 +381,8 @@ fn smooth_fin_library() -> Library {
 /// at σ_t = 0.3 (the cap `a ≤ 1/|t|` reached by a fifth of the draws of the brightest atoms)
 /// with σ_φ = 0.2, and without errors: within 1e-8 of each derivative. Measured 6e-10 (the
 /// differences' own error: the cubic's third derivative jumps at each row, and the atoms
-/// within a step of a row give an error O(h): 6e-9 at 0.01 nm, 3e-8 at 0.1 nm).
+/// within a step of a row give an error O(h): 6e-9 at 0.01 nm, 3e-8 at 0.1 nm). Then σ_t
+/// itself, the clipped moments' derivative in σ_t.
 #[test]
 fn fin_layout_bias_with_transmission_errors_and_unconverted_light() {
     let library = Arc::new(smooth_fin_library());
@@ -432,6 +433,27 @@ fn fin_layout_bias_with_transmission_errors_and_unconverted_light() {
         for (a, b) in [(ours.0, richardson.0), (ours.1, richardson.1)] {
             assert!(a != 0.0 && (a - b).abs() <= 1e-8 * a.abs(), "σφ {phase} σt {amplitude}: {a} vs {b}");
         }
+    }
+    // σ_t itself (optics::ATOM_TRANSMISSION_ERROR), at σ_t = 0.3 and σ_φ = 0.2, against
+    // Richardson central differences in σ_t (steps 0.002 and 0.001): within 1e-8
+    let at = |st: f64| {
+        let lens = nominal.clone().with_fabrication(&[0.5, 0.0], errors(0.2, st, 1)).unwrap();
+        lens.efficiency_and_transmission(780e-9)
+    };
+    let lens = nominal.clone().with_fabrication(&[0.5, 0.0], errors(0.2, 0.3, 1)).unwrap();
+    let d = lens.order_derivatives(780e-9, optics::ATOM_TRANSMISSION_ERROR).unwrap();
+    let central = |h: f64| {
+        let (up, down) = (at(0.3 + h), at(0.3 - h));
+        ((up.0 - down.0) / (2.0 * h), (up.1 - down.1) / (2.0 * h))
+    };
+    let (coarse, fine) = (central(0.002), central(0.001));
+    let richardson = ((4.0 * fine.0 - coarse.0) / 3.0, (4.0 * fine.1 - coarse.1) / 3.0);
+    println!(
+        "σt: ∂τ1 {:.9e} vs {:.9e}, ∂T {:.9e} vs {:.9e}",
+        d.efficiencies[0], richardson.0, d.transmission, richardson.1
+    );
+    for (a, b) in [(d.efficiencies[0], richardson.0), (d.transmission, richardson.1)] {
+        assert!(a != 0.0 && (a - b).abs() <= 1e-8 * a.abs(), "σt: {a} vs {b}");
     }
 }
 
