@@ -829,7 +829,7 @@ fn point_gradient(
                         "lens.obscuration: the inner edge's motion is computed on the FFT path, for orders \
                         through the annulus (or annular sector) with its wavefront, asked with no \
                         wavefront key but Seidel terms; this scene's OTF is on another engine (a line \
-                        spectrum's grids, or Zernike or other wavefront keys asked with it)"
+                        spectrum's grids)"
                             .to_owned(),
                     ));
                 };
@@ -1035,7 +1035,7 @@ fn noise_refusal(p: Parameter) -> String {
         Parameter::Obscuration => (
             "lens.obscuration".to_owned(),
             "its edge's lane rides on the FFT path of a band, asked with no wavefront key but Seidel terms; this \
-             scene is not that (a line spectrum's grids, or Zernike or other wavefront keys asked with it)",
+             scene is not that (a line spectrum's grids)",
         ),
         _ => (p.describe().to_owned(), "this key's lane is on another rule here"),
     };

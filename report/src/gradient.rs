@@ -4289,15 +4289,16 @@ glare = "included"
     }
 
     /// The keys still refused name the key and why: the library's amplitude errors, and the
-    /// obscuration where its edge's motion is not computed (asked with a wavefront key, a Seidel
-    /// term, on the same 2-D pupil).
+    /// obscuration where its edge's motion is not computed (under a line, on the line's grids;
+    /// beside Seidel terms over a band it is computed:
+    /// [`obscuration_beside_seidel_terms_is_the_derivative_of_the_discrete_rule`]).
     #[test]
     fn moving_edges_and_random_draws_are_refused_naming_why() {
         let library = example("library.toml");
         let e = gradient(&library, &[], &owned(&["lens.atom_transmission_error"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.atom_transmission_error") && e.contains("kink"), "{e}");
         let paper = scene::read(None).unwrap();
-        let set = owned(&["lens.obscuration=0.3", "spectrum.range_nm=4", "lens.coma_um=0.1"]);
+        let set = owned(&["lens.obscuration=0.3", "spectrum.shape=\"line\"", "lens.coma_um=0.1"]);
         let e = gradient(&paper, &set, &owned(&["lens.obscuration", "lens.coma_um"])).unwrap_err().to_string();
         assert!(e.contains("lens.obscuration") && e.contains("inner edge's motion"), "{e}");
     }
