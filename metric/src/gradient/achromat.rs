@@ -4,7 +4,13 @@
 
 use crate::{Error, Scene};
 
-use super::{DirectionalRule, Parameter, modulus_derivative, noise_row_ends, sign_split_mean};
+use std::cell::RefCell;
+use std::collections::HashMap;
+
+use super::{
+    DirectionalRule, Parameter, modulus_derivative, noise_row_ends, on_value_engine, product_rule_on_axis,
+    sign_split_mean,
+};
 
 /// `(∂ln N/∂x, ∂M̄/∂x)` (per m) for the edge `x` of the lens's design band
 /// ([`optics::LensModel::design_band`]; `edge` 0 its short end λ_min, 1 its long end λ_max),
@@ -24,7 +30,11 @@ use super::{DirectionalRule, Parameter, modulus_derivative, noise_row_ends, sign
 /// Gauss–Legendre panels split at the sign changes of `O`, doubled until they move by at most the
 /// tolerance times `M̄`; `M̄` on the same rule; the band's OTF and both means again at
 /// `max(q, 1e-4)` times the tolerance where `I_x − M̄` is `q < 1` of `M̄`. Under a noise spectrum (`noise`) each frequency's weight divided by
-/// `n(ν)`, `M̄` the weighted mean on the same rule. Refused where the lens has no design band.
+/// `n(ν)`, `M̄` the weighted mean on the same rule. The band's OTF is computed once per
+/// frequency (the sign and the lane read the same value). Where the value's engine is the
+/// per-frequency product rule on axis (no noise spectrum), the lane rides on that engine's own
+/// pass instead, the band's window on the spectrum ([`band_edge_on_value_rule`]).
+/// Refused where the lens has no design band.
 pub(super) fn band_edge_partials(
     scene: &Scene,
     e: &crate::Evaluation,
@@ -53,6 +63,11 @@ pub(super) fn band_edge_partials(
         // no detected light at the edge: neither N nor the OTF's weights move
         return Ok((0.0, 0.0));
     }
+    if noise.is_none()
+        && let Some(found) = band_edge_on_value_rule(scene, e, &detected, (lo, hi), edge)
+    {
+        return Ok(found);
+    }
     // the edge's single wavelength (a line of any weight: its OTF is normalized)
     let line = radiometry::Spectrum::Line(radiometry::Line::new(x, 1e-9, 1.0)?);
     // (T_x/D, I_x, M̄) with the band's OTF and both means held to `tolerance` relative to M̄
@@ -71,13 +86,24 @@ pub(super) fn band_edge_partials(
             });
             return Ok((density, i_x, j));
         }
+        // the band's OTF once per frequency: the sign changes' search, the sign and the lane
+        // read the same values
+        let known: RefCell<HashMap<u64, f64>> = RefCell::new(HashMap::new());
+        let band_otf = |nu: f64| -> f64 {
+            if let Some(&o) = known.borrow().get(&nu.to_bits()) {
+                return o;
+            }
+            let o = whole.otf(nu);
+            known.borrow_mut().insert(nu.to_bits(), o);
+            o
+        };
         let [i_x, j] = sign_split_mean(
             nyquist,
             8,
-            |nu| whole.otf(nu),
+            band_otf,
             |nu| {
                 let pix = pixel.map_or(1.0, |p| optics::pixel_mtf(p, nu)) * over_noise(nu);
-                let o = whole.otf(nu);
+                let o = band_otf(nu);
                 (o, [pix * at_x.otf(nu), pix * o])
             },
             |change, next| change[0].abs().max(change[1].abs()) <= tolerance * next[1].abs(),
@@ -94,4 +120,47 @@ pub(super) fn band_edge_partials(
     }
     // M̄ on the same rule as I_x (white, or the weighted G under a noise spectrum)
     Ok((sign * density, sign * density * (i_x - j)))
+}
+
+/// [`band_edge_partials`] on the value's own engine, where it is the per-frequency product rule on
+/// axis, built for the detected spectrum with the band's window on it (the same integrand, the
+/// orders' efficiency being 0 outside the band), so that its spectral panels end at the design
+/// band's edges (docs/physics.md, "Gradients: the dispersion-engineered lens"): as a top-hat's
+/// edges on the value's rule
+/// (`top_hat_on_value_rule`), the Chebyshev–Lobatto points of every spectral level include the
+/// panels' ends, so the value's own sums there give the edge's OTF `O_x` (times the detected
+/// density and the orders' efficiency), and each OTF value carries `±(T_x/D)(O_x − O)` beside it
+/// ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`] with its edge lanes), integrated with
+/// the frequency rule's accepted weights: the lane held to the value's own error control. `∂ln N
+/// = ±T_x/D` as there. `None` on the other engines, off axis, or where the engine's ends are not
+/// the band's (a Gaussian's ±7σ inside the band): the caller's rule.
+fn band_edge_on_value_rule(
+    scene: &Scene,
+    e: &crate::Evaluation,
+    detected: &radiometry::Spectrum,
+    (lo, hi): (f64, f64),
+    edge: usize,
+) -> Option<(f64, f64)> {
+    if !product_rule_on_axis(scene, e) {
+        return None;
+    }
+    // the detected spectrum with the band's window on it: the same integrand (the orders'
+    // efficiency is 0 outside the band), its support the band, so the engine's spectral panels
+    // end at the band's edges
+    let window = radiometry::Spectrum::TopHat(radiometry::TopHat::new(lo, hi, 1.0).ok()?);
+    let windowed = radiometry::Spectrum::product(vec![detected.clone(), window]);
+    on_value_engine(scene, &windowed, scene.options().settings(), |poly| {
+        let (a, b) = poly.spectral_ends()?;
+        if (a - lo).abs() > 1e-12 * lo || (b - hi).abs() > 1e-12 * hi {
+            return None;
+        }
+        let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true)?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        let x = if edge == 0 { a } else { b };
+        let efficiency: f64 = scene.lens().orders(x, scene.field()).iter().map(|o| o.efficiency).sum();
+        let density = windowed.value(x) * efficiency / poly.total_weight();
+        Some((if edge == 0 { -density } else { density }, lanes[edge]))
+    })
 }

@@ -245,6 +245,19 @@ mod tests {
         check(&by_diameter, &[], &["lens.aperture_diameter_mm", "lens.focal_length_mm"], &step);
     }
 
+    /// The reduced design on axis, where the value's engine is the per-frequency product rule:
+    /// both edges' lanes (795 and 803.5 nm, 1.8σ below and 1.2σ above the spectrum's centre) ride
+    /// on that engine's own pass with the band's window on the spectrum (the edges' OTFs from its
+    /// sums at the spectral panels' ends), with the stray light included, against the same
+    /// references.
+    #[test]
+    fn the_reduced_achromat_band_edges_on_the_value_rule_match_central_differences() {
+        let source = scene_with(REDUCED, "");
+        let keys = ["lens.design_band_nm[0]", "lens.design_band_nm[1]"];
+        let overrides = ["options.glare=\"included\"", "lens.design_band_nm=[795.0, 803.5]"];
+        check(&source, &overrides, &keys, &step);
+    }
+
     /// The true achromat below D_max (β = 1, W020 = 0): the diameter and the focal length (D
     /// held: F# = f0/D moves), the library's range (0: β stays 1), both band edges (the short
     /// one 1.1σ below the spectrum's centre; λ0's lane 0). (With the pixel MTF its F-number is
