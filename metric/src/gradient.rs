@@ -3000,20 +3000,13 @@ pub fn aperture_mean_mtf_partials(scene: &Scene, e: &Evaluation, reference: bool
 /// above): where the value's engine has no defocus lane, and the reference the tests hold the
 /// lane against.
 pub(crate) fn aperture_partials_by_own_rule(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<(f64, f64), Error> {
-    let not_smooth = |reason: String| Error::NotDifferentiable { parameter: p.describe(), reason };
-    let camera = scene.camera();
-    if camera.pixel_mtf() {
-        return Err(not_smooth(
-            "with camera.pixel_mtf = true the F-number and focal-length gradient is computed only where the \
-             value's engine carries the defocus derivative beside each OTF value (the closed form, a line, the \
-             per-frequency product rule), not on the reference panels rule this scene takes (a wavelength's \
-             cutoff inside the frequency band, or options.spectral_rule = \"panels\"; set camera.pixel_mtf = false)"
-                .to_owned(),
-        ));
-    }
+    // the defocus lane with the pixel MTF P(ν) in its weights, and P's own term of the
+    // integration by parts in ν, P_ν = (1/ν_N) ∫ ν P′ |O| dν, on the value's engine (0 without
+    // the pixel MTF; docs/physics.md, "Gradients: the F-number and the focal length")
     let d_k = defocus_lane_by_own_rule(scene, e, p, None)?;
+    let pixel_slope = noise_weight::pixel_slope_white(scene, e, p)?;
     let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
-    Ok((edge - e.mean_mtf - 2.0 * d_k, d_k))
+    Ok((edge - e.mean_mtf - pixel_slope - 2.0 * d_k, d_k))
 }
 
 /// `D_K = (1/ν_N) ∫ sign(O) ∂O/∂ln K / n dν` on [`aperture_partials_by_own_rule`]'s own rule

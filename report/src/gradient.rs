@@ -1796,6 +1796,21 @@ mod tests {
         );
     }
 
+    /// The F-number and focal length with the pixel MTF where the value takes the reference
+    /// panels rule (a wavelength's cutoff inside the frequency band, or the rule forced by
+    /// `options.spectral_rule`): the defocus lane on the reference rule with the pixel MTF in its
+    /// weights, and the pixel's own term of the integration by parts `P_ν = (1/ν_N) ∫ ν P′|O| dν`
+    /// on the value's engine (docs/physics.md, "Gradients: the F-number and the focal length").
+    /// The paper's lens on a 4 nm band with the panels rule forced, against central differences
+    /// of evaluations converged at 1e-10 ([`check_aperture`]); the dispersion-engineered lens at
+    /// F/16.8, whose value takes that rule by itself, in `achromat`'s tests.
+    #[test]
+    fn f_number_with_the_pixel_mtf_on_the_reference_panels_rule_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        let panels = owned(&["camera.pixel_mtf=true", "options.spectral_rule=\"panels\"", "spectrum.range_nm=4"]);
+        check_aperture(&paper, &panels);
+    }
+
     /// Off axis without Seidel terms (docs/physics.md, "Gradients: the F-number and the focal
     /// length off axis"): the exact 1-D engine's tangential and sagittal means, each node's OTF
     /// `D(νλF#, W020/λ) exp(−2πi ν u·Δ)` with the lateral colour `Δ ∝ f0`, not F# — by parts in

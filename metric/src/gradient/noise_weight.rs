@@ -119,6 +119,19 @@ fn weighted_mean(e: &Evaluation) -> f64 {
     e.asnr_mean / e.snr0
 }
 
+/// The pixel's sinc term of the white mean, `P_ν = (1/ν_N) ∫ ν P′ |O| dν` (0 without the pixel
+/// MTF), on the value's own engine ([`weighted_mtf_integral`] with `νP′/P` as the weight): the
+/// term of the integration by parts in ν that `∂M̄/∂ln F#` takes where its defocus lane is on
+/// the reference rule (a wavelength's cutoff inside the frequency band).
+pub(super) fn pixel_slope_white(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<f64, Error> {
+    let camera = scene.camera();
+    if !camera.pixel_mtf() {
+        return Ok(0.0);
+    }
+    let pitch = camera.pixel_pitch();
+    weighted_mtf_integral(scene, e, p, e.mean_mtf, &|nu| pixel_log_slope(pitch, nu))
+}
+
 /// The pixel's sinc term under the noise weight, `P̃_ν = (1/ν_N) ∫ ν P′ |O| / n dν` (0 without
 /// the pixel MTF): with the pixel MTF, `∂G/∂ln p = G − MTF(ν_N)/n(ν_N) + P̃_ν` for the pixel
 /// pitch (the sinc fixed in `ν/ν_N`, `O` and `n` in cycles/mm: by parts in `x = ν/ν_N`, no `n′`).

@@ -260,9 +260,10 @@ mod tests {
 
     /// The true achromat below D_max (β = 1, W020 = 0): the diameter and the focal length (D
     /// held: F# = f0/D moves), the library's range (0: β stays 1), both band edges (the short
-    /// one 1.1σ below the spectrum's centre; λ0's lane 0). (With the pixel MTF its F-number is
-    /// refused, as the chromatic lens's: at F/16.8 the cutoff 1/(λF#) falls inside [0, ν_N] and the
-    /// value takes the reference panels rule, which carries no defocus lane.)
+    /// one 1.1σ below the spectrum's centre; λ0's lane 0); and with the pixel MTF the diameter and
+    /// the focal length, where at F/16.8 the cutoff 1/(λF#) falls inside [0, ν_N] and the value
+    /// takes the reference panels rule: the defocus lane on the reference rule, the pixel's term of
+    /// the integration by parts on the value's engine.
     #[test]
     fn the_true_achromat_below_d_max_matches_central_differences() {
         let source = scene_with(BELOW_D_MAX, "");
@@ -276,6 +277,8 @@ mod tests {
         ];
         let overrides = ["lens.design_band_nm=[797.0, 850.0]"];
         check(&source, &overrides, &keys, &step);
+        let pixel = ["camera.pixel_mtf=true"];
+        check(&source, &pixel, &["lens.aperture_diameter_mm", "lens.focal_length_mm"], &step);
         let g = gradient(
             &source,
             &["lens.design_band_nm=[797.0, 850.0]".to_owned()],
