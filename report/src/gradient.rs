@@ -2795,6 +2795,29 @@ mod tests {
         }
     }
 
+    /// The sections after `[lens]` of the small 2-D layouts' scenes: a 4 nm top-hat at 800 nm, the
+    /// paper's camera without the pixel MTF, 64 pupil samples (the FFT path's discrete rule).
+    const LAYOUT_SCENE_REST: &str = r#"[source]
+kind = "flat"
+radiance_w_m2_sr_nm = 0.025
+
+[spectrum]
+shape = "tophat"
+center_nm = 800.0
+range_nm = 4.0
+
+[camera]
+pixel_pitch_um = 5.2
+pixel_mtf = false
+quantum_efficiency = 0.2
+
+[exposure]
+time_ms = 1.23
+
+[options]
+pupil_samples = 64
+"#;
+
     /// A small 2-D layout (a `.npy` grid of examples/data/library-tio2-like.csv's pillars, F/2.5,
     /// f0 = 125 µm, R = 25 µm on a 400 nm lattice, 129 × 129 sites: each site the diameter whose
     /// field at 800 nm is nearest the hyperbolic phase at its centre, among those 10 nm inside the
@@ -2841,27 +2864,9 @@ lattice_pitch_um = 0.4
 empty_cell = "substrate"
 parameter_bias = [0.0]
 
-[source]
-kind = "flat"
-radiance_w_m2_sr_nm = 0.025
-
-[spectrum]
-shape = "tophat"
-center_nm = 800.0
-range_nm = 4.0
-
-[camera]
-pixel_pitch_um = 5.2
-pixel_mtf = false
-quantum_efficiency = 0.2
-
-[exposure]
-time_ms = 1.23
-
-[options]
-pupil_samples = 64
-"#,
-            library = library.display().to_string()
+{rest}"#,
+            library = library.display().to_string(),
+            rest = LAYOUT_SCENE_REST
         );
         Source::from_text(text, "a small 2-D layout", dir)
     }
@@ -2996,28 +3001,9 @@ lattice_pitch_um = 0.4
 empty_cell = "substrate"
 parameter_bias = [0.0, 0.0]
 
-[source]
-kind = "flat"
-radiance_w_m2_sr_nm = 0.025
-
-[spectrum]
-shape = "tophat"
-center_nm = 800.0
-range_nm = 4.0
-
-[camera]
-pixel_pitch_um = 5.2
-pixel_mtf = false
-quantum_efficiency = 0.2
-
-[exposure]
-time_ms = 1.23
-
-[options]
-pupil_samples = 64
-glare = "included"
 "#;
-        Source::from_text(text.to_owned(), "a small 2-D layout of fins", dir)
+        let text = format!("{text}{LAYOUT_SCENE_REST}glare = \"included\"\n");
+        Source::from_text(text, "a small 2-D layout of fins", dir)
     }
 
     /// A 2-D layout of fins whose library gives their unconverted light (`co_amplitude`: zero-
@@ -3240,6 +3226,14 @@ glare = "included"
     /// derivative differs from the lanes' by the rate of the rule's own error).
     fn matches_the_fixed_rule(source: &Source, overrides: &[String], keys: &[&str], label: &str) {
         let g = gradient(source, overrides, &owned(keys)).unwrap();
+        let references = fixed_rule_references(source, overrides, &g);
+        within_of_the_norm(&g, &references, 1e-5, label);
+    }
+
+    /// Richardson central differences (relative steps 4e-6 and 2e-6) of (ASNR, M̄, SNR0, N) of
+    /// evaluations under `overrides` (the same fixed pupil sampling as the gradient's), for each
+    /// of `g`'s keys at its value.
+    pub(super) fn fixed_rule_references(source: &Source, overrides: &[String], g: &Gradient) -> Vec<[f64; 4]> {
         let rule = |k: &str, v: f64, h: f64| -> [f64; 4] {
             let at = |x: f64| {
                 let mut set = overrides.to_vec();
@@ -3250,8 +3244,7 @@ glare = "included"
             let (up, down) = (at(v + h), at(v - h));
             std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
         };
-        let references: Vec<[f64; 4]> = g
-            .keys
+        g.keys
             .iter()
             .zip(&g.values)
             .map(|(k, &v)| {
@@ -3259,8 +3252,7 @@ glare = "included"
                 let (coarse, fine) = (rule(k, v, 2.0 * h), rule(k, v, h));
                 std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
             })
-            .collect();
-        within_of_the_norm(&g, &references, 1e-5, label);
+            .collect()
     }
 
     /// Each of (ASNR, mean MTF, SNR0, N)'s derivatives in `g`, as ∂/∂ln key, against

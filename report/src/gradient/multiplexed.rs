@@ -442,26 +442,7 @@ mod tests {
         bound: &dyn Fn(&str) -> f64,
     ) -> super::super::Gradient {
         let g = gradient(source, &owned(overrides), &owned(keys)).unwrap();
-        let rule = |k: &str, v: f64, h: f64| -> [f64; 4] {
-            let at = |x: f64| {
-                let mut set = owned(overrides);
-                set.push(assignment(k, x));
-                let e = metric::evaluate(&scene::build_from(source, &set).unwrap()).unwrap();
-                [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
-            };
-            let (up, down) = (at(v + h), at(v - h));
-            std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
-        };
-        let references: Vec<[f64; 4]> = g
-            .keys
-            .iter()
-            .zip(&g.values)
-            .map(|(k, &v)| {
-                let h = 2e-6 * v.abs();
-                let (coarse, fine) = (rule(k, v, 2.0 * h), rule(k, v, h));
-                std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
-            })
-            .collect();
+        let references = super::super::tests::fixed_rule_references(source, &owned(overrides), &g);
         let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
         let mut failures = Vec::new();
         for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
