@@ -211,42 +211,13 @@ impl FftPath {
     }
 
     /// [`sum_along`](Self::sum_along) at `frequency ≥ 0` and its derivative with respect to
-    /// `azimuth`: each grid's interpolant turned (`s (−sin φ, cos φ)·∇`, [`Otf::at_xy_and_slope`]),
-    /// and each shift's phase `−2πi ν u⊥·Δ` (`u⊥ = (−sin φ, cos φ)`). A table is read from the
-    /// field direction, so it turns with it: its derivative is 0 where the azimuth is the
-    /// field direction's (the only use, [`FftPath::gradient_over_azimuth`]'s field lanes).
+    /// `azimuth` ([`sum_along_and_move`](Self::sum_along_and_move) turning): each grid's
+    /// interpolant turned (`s (−sin φ, cos φ)·∇`, [`Otf::at_xy_and_slope`]), and each shift's
+    /// phase `−2πi ν u⊥·Δ` (`u⊥ = (−sin φ, cos φ)`). A table is read from the field direction,
+    /// so it turns with it: its derivative is 0 where the azimuth is the field direction's (the
+    /// only use, [`FftPath::gradient_over_azimuth`]'s field lanes).
     fn sum_along_and_turn(&self, scene: &Scene<'_>, frequency: f64, azimuth: f64) -> (Complex64, Complex64) {
-        let (sin_a, cos_a) = azimuth.sin_cos();
-        let k = -2.0 * PI * frequency;
-        let nuf = frequency * scene.f_number;
-        let from_field = azimuth - scene.field_direction();
-        let (mut sum, mut turn) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));
-        for n in &self.nodes {
-            let s = nuf * n.lambda;
-            if s >= 1.0 {
-                continue;
-            }
-            let (mut v, mut d) = match &n.kind {
-                FftKind::Grid(otf) if s <= otf.s_max() => {
-                    let (v, d) = otf.at_xy_and_slope(s * cos_a, s * sin_a, -s * sin_a, s * cos_a);
-                    (v * n.weight, d * n.weight)
-                }
-                FftKind::Grid(_) => continue,
-                FftKind::Table(t) => {
-                    (Complex64::new(t.value(n.lambda, frequency, from_field) * n.weight, 0.0), Complex64::new(0.0, 0.0))
-                }
-            };
-            let [dx, dy] = n.shift;
-            if dx != 0.0 || dy != 0.0 {
-                let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
-                let phase = Complex64::new(pc, ps);
-                d = d * phase + v * phase * Complex64::new(0.0, k * (-dx * sin_a + dy * cos_a));
-                v *= phase;
-            }
-            sum += v;
-            turn += d;
-        }
-        (sum, turn)
+        self.sum_along_and_move(scene, frequency, azimuth, true)
     }
 
     /// [`sum_along`](Self::sum_along) at `frequency ≥ 0` and its derivative with respect to
@@ -254,11 +225,23 @@ impl FftPath {
     /// `s (cos φ, sin φ)·∇` ([`Otf::at_xy_and_slope`]); the shifts' phases (in ν) and a
     /// table (read at ν) do not move.
     fn sum_along_and_scale(&self, scene: &Scene<'_>, frequency: f64, azimuth: f64) -> (Complex64, Complex64) {
+        self.sum_along_and_move(scene, frequency, azimuth, false)
+    }
+
+    /// The sum along `azimuth` and its derivative as the readings turn with the azimuth
+    /// (`turn`) or move along it with the frequency scale (else), as the two callers above say.
+    fn sum_along_and_move(
+        &self,
+        scene: &Scene<'_>,
+        frequency: f64,
+        azimuth: f64,
+        turn: bool,
+    ) -> (Complex64, Complex64) {
         let (sin_a, cos_a) = azimuth.sin_cos();
         let k = -2.0 * PI * frequency;
         let nuf = frequency * scene.f_number;
         let from_field = azimuth - scene.field_direction();
-        let (mut sum, mut scale) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));
+        let (mut sum, mut moved) = (Complex64::new(0.0, 0.0), Complex64::new(0.0, 0.0));
         for n in &self.nodes {
             let s = nuf * n.lambda;
             if s >= 1.0 {
@@ -266,7 +249,8 @@ impl FftPath {
             }
             let (mut v, mut d) = match &n.kind {
                 FftKind::Grid(otf) if s <= otf.s_max() => {
-                    let (v, d) = otf.at_xy_and_slope(s * cos_a, s * sin_a, s * cos_a, s * sin_a);
+                    let (dx, dy) = if turn { (-s * sin_a, s * cos_a) } else { (s * cos_a, s * sin_a) };
+                    let (v, d) = otf.at_xy_and_slope(s * cos_a, s * sin_a, dx, dy);
                     (v * n.weight, d * n.weight)
                 }
                 FftKind::Grid(_) => continue,
@@ -278,13 +262,17 @@ impl FftPath {
             if dx != 0.0 || dy != 0.0 {
                 let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
                 let phase = Complex64::new(pc, ps);
+                d = if turn {
+                    d * phase + v * phase * Complex64::new(0.0, k * (-dx * sin_a + dy * cos_a))
+                } else {
+                    d * phase
+                };
                 v *= phase;
-                d *= phase;
             }
             sum += v;
-            scale += d;
+            moved += d;
         }
-        (sum, scale)
+        (sum, moved)
     }
 
     /// The derivative of this level's mean over `count` azimuths from `first` (the value's
