@@ -3200,6 +3200,31 @@ fn line_orders_off_axis(scene: &Scene, noise: Option<&optics::NoiseShape>) -> Op
     })
 }
 
+/// Whether the lens's orders at the line's wavelength `c` off axis are those on axis, each a
+/// function of `λ/λ0` alone to rounding (`c ∂/∂c = −λ0 ∂/∂λ0` of each order's defocus and
+/// efficiency), so that a line's wavelength moves them as the design wavelength does (the
+/// harmonic lens): the condition of [`line_center_orders_off_axis`] and its weighted twin.
+pub(super) fn orders_of_wavelength_ratio(scene: &Scene, c: f64) -> bool {
+    let lens = scene.lens();
+    let field = scene.field();
+    let (Some(on_axis), Some(design)) =
+        (lens.order_wavelength_rates(c, optics::Field::ON_AXIS), lens.design_wavelength_rates(c, field))
+    else {
+        return false;
+    };
+    let orders = lens.orders(c, field);
+    let axis_orders = lens.orders(c, optics::Field::ON_AXIS);
+    if on_axis.orders.len() != orders.len() || design.len() != orders.len() || axis_orders.len() != orders.len() {
+        return false;
+    }
+    let against = |a: f64, b: f64| (a + b).abs() <= 1e-9 * a.abs().max(b.abs());
+    on_axis.orders.iter().zip(&design).zip(orders.iter().zip(&axis_orders)).all(
+        |(([d_w020, d_tau], [l_w020, l_tau]), (o, a))| {
+            against(c * d_w020, *l_w020) && against(c * d_tau, *l_tau) && o.efficiency == a.efficiency
+        },
+    )
+}
+
 /// `(∂ln N/∂c, ∂ln N_T/∂c, ∂M̄/∂c)` for the wavelength `c` of a line off axis on several orders
 /// each turned by its own lateral colour (docs/physics.md, "Gradients: several orders under a
 /// line off axis"), per m, `d_ln_n` the line weight's own rate. The lens's orders depend on the
@@ -3219,25 +3244,12 @@ fn line_orders_off_axis(scene: &Scene, noise: Option<&optics::NoiseShape>) -> Op
 /// rule ([`line_orders_off_axis`]); `∂ln N/∂c = ∂ln w/∂c + Σ_o τ_o′/Σ_o τ_o` and
 /// `∂ln N_T/∂c = ∂ln w/∂c + ∂ln T/∂c`. `None` where the scene is not that.
 fn line_center_orders_off_axis(scene: &Scene, c: f64, d_ln_n: f64) -> Option<(f64, f64, f64)> {
+    if !orders_of_wavelength_ratio(scene, c) {
+        return None;
+    }
     let lens = scene.lens();
-    let field = scene.field();
     let on_axis = lens.order_wavelength_rates(c, optics::Field::ON_AXIS)?;
-    let design = lens.design_wavelength_rates(c, field)?;
-    let orders = lens.orders(c, field);
-    let axis_orders = lens.orders(c, optics::Field::ON_AXIS);
-    if on_axis.orders.len() != orders.len() || design.len() != orders.len() || axis_orders.len() != orders.len() {
-        return None;
-    }
-    // the orders a function of λ/λ0 alone, to rounding
-    let against = |a: f64, b: f64| (a + b).abs() <= 1e-9 * a.abs().max(b.abs());
-    let homogeneous = on_axis.orders.iter().zip(&design).zip(orders.iter().zip(&axis_orders)).all(
-        |(([d_w020, d_tau], [l_w020, l_tau]), (o, a))| {
-            against(c * d_w020, *l_w020) && against(c * d_tau, *l_tau) && o.efficiency == a.efficiency
-        },
-    );
-    if !homogeneous {
-        return None;
-    }
+    let orders = lens.orders(c, scene.field());
     let found = line_orders_off_axis(scene, None)?;
     let edge = found.edge?;
     let d_log_c =

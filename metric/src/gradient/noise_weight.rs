@@ -365,25 +365,10 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
 /// `r = ∂ln N/∂ln λ0`. Per m. `None` where the scene is not that.
 fn line_center_orders_off_axis_over_noise(scene: &Scene, e: &Evaluation, c: f64) -> Option<Result<f64, Error>> {
     let noise = scene.camera().noise_spectrum()?;
-    let lens = scene.lens();
+    if !super::orders_of_wavelength_ratio(scene, c) {
+        return None;
+    }
     let field = scene.field();
-    let on_axis = lens.order_wavelength_rates(c, optics::Field::ON_AXIS)?;
-    let design = lens.design_wavelength_rates(c, field)?;
-    let orders = lens.orders(c, field);
-    let axis_orders = lens.orders(c, optics::Field::ON_AXIS);
-    if on_axis.orders.len() != orders.len() || design.len() != orders.len() || axis_orders.len() != orders.len() {
-        return None;
-    }
-    // the orders a function of λ/λ0 alone, to rounding (as the white one checks)
-    let against = |a: f64, b: f64| (a + b).abs() <= 1e-9 * a.abs().max(b.abs());
-    let homogeneous = on_axis.orders.iter().zip(&design).zip(orders.iter().zip(&axis_orders)).all(
-        |(([d_w020, d_tau], [l_w020, l_tau]), (o, a))| {
-            against(c * d_w020, *l_w020) && against(c * d_tau, *l_tau) && o.efficiency == a.efficiency
-        },
-    );
-    if !homogeneous {
-        return None;
-    }
     let found = super::line_orders_off_axis(scene, Some(noise))?;
     // P(ν_N) ⟨|O(ν_N, φ)|⟩ over azimuth on the value's engine, as the white end term
     let detected = crate::evaluate::detected_spectrum(scene);
