@@ -2461,13 +2461,22 @@ fn on_value_engine<T>(
     settings: optics::Settings,
     f: impl FnOnce(&optics::Polychromatic<'_>) -> Option<T>,
 ) -> Option<T> {
+    with_value_engine(scene, detected, settings, |poly| Ok(f(poly))).ok().flatten()
+}
+
+/// [`on_value_engine`] where the engine's construction error is the caller's to return.
+fn with_value_engine<T>(
+    scene: &Scene,
+    detected: &radiometry::Spectrum,
+    settings: optics::Settings,
+    f: impl FnOnce(&optics::Polychromatic<'_>) -> Result<T, Error>,
+) -> Result<T, Error> {
     let (lens, camera) = (scene.lens(), scene.camera());
     let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
     let folded = crate::evaluate::Folded::of(lens, detected);
     let parts = folded.parts();
     let poly =
-        optics::Polychromatic::with_parts(lens, detected, &parts, scene.field(), camera.nyquist(), pixel, settings)
-            .ok()?;
+        optics::Polychromatic::with_parts(lens, detected, &parts, scene.field(), camera.nyquist(), pixel, settings)?;
     f(&poly)
 }
 

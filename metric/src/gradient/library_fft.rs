@@ -36,60 +36,50 @@ pub(super) fn library_bias_on_fft_path(
              computed; this evaluation's engine is another",
         ));
     }
-    let (lens, camera) = (scene.lens(), scene.camera());
+    let lens = scene.lens();
     let detected = crate::evaluate::detected_spectrum(scene);
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, &detected);
-    let parts = folded.parts();
     let field = scene.field();
-    let poly = optics::Polychromatic::with_parts(
-        lens,
-        &detected,
-        &parts,
-        field,
-        camera.nyquist(),
-        pixel,
-        scene.options().settings(),
-    )?;
-    let first = field.y_rad.atan2(field.x_rad);
-    let directions = [optics::WavefrontDirection::OrderField(index)];
-    let found = match noise {
-        None => poly.mean_mtf_over_azimuth_and_gradient(first, &directions)?,
-        Some(n) => poly.mean_mtf_over_azimuth_over_noise_and_gradient(first, &directions, n)?,
-    };
-    let Some((_, d_mtf)) = found else {
-        return Err(not_smooth(
-            "the FFT path did not carry the lens's order derivatives here: they are computed for a radial pupil \
-             (a radial layout off axis) and a 2-D layout's site map, not for the lens's exact pupil mapping",
-        ));
-    };
-    // ∂ln N and ∂ln N_T on the engine's spectral nodes, weighted ρ τ
-    let mut missing = false;
-    let mut rates = |l: f64| -> [f64; 3] {
-        let tau: f64 = lens.orders(l, field).iter().map(|o| o.efficiency).sum();
-        match lens.order_derivatives(l, index) {
-            Some(d) if tau > 0.0 => {
-                [d.efficiencies.iter().sum::<f64>() / tau, d.transmission / tau, lens.transmission(l) / tau]
+    super::with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let first = field.y_rad.atan2(field.x_rad);
+        let directions = [optics::WavefrontDirection::OrderField(index)];
+        let found = match noise {
+            None => poly.mean_mtf_over_azimuth_and_gradient(first, &directions)?,
+            Some(n) => poly.mean_mtf_over_azimuth_over_noise_and_gradient(first, &directions, n)?,
+        };
+        let Some((_, d_mtf)) = found else {
+            return Err(not_smooth(
+                "the FFT path did not carry the lens's order derivatives here: they are computed for a radial pupil \
+                 (a radial layout off axis) and a 2-D layout's site map, not for the lens's exact pupil mapping",
+            ));
+        };
+        // ∂ln N and ∂ln N_T on the engine's spectral nodes, weighted ρ τ
+        let mut missing = false;
+        let mut rates = |l: f64| -> [f64; 3] {
+            let tau: f64 = lens.orders(l, field).iter().map(|o| o.efficiency).sum();
+            match lens.order_derivatives(l, index) {
+                Some(d) if tau > 0.0 => {
+                    [d.efficiencies.iter().sum::<f64>() / tau, d.transmission / tau, lens.transmission(l) / tau]
+                }
+                _ => {
+                    missing = true;
+                    [0.0; 3]
+                }
             }
-            _ => {
-                missing = true;
-                [0.0; 3]
-            }
+        };
+        // each node's three rates once, then read back in the nodes' order
+        let mut at_nodes: Vec<[f64; 3]> = Vec::new();
+        let d_ln_n = poly.spectral_average(|l, _| {
+            let r = rates(l);
+            at_nodes.push(r);
+            r[0]
+        });
+        let [d_t, t] = [1, 2].map(|k| {
+            let mut read = at_nodes.iter();
+            poly.spectral_average(|_, _| read.next().map_or(0.0, |r| r[k]))
+        });
+        if missing || t <= 0.0 {
+            return Err(not_smooth("the lens gives no derivative of its orders at a spectral node of the value"));
         }
-    };
-    // each node's three rates once, then read back in the nodes' order
-    let mut at_nodes: Vec<[f64; 3]> = Vec::new();
-    let d_ln_n = poly.spectral_average(|l, _| {
-        let r = rates(l);
-        at_nodes.push(r);
-        r[0]
-    });
-    let [d_t, t] = [1, 2].map(|k| {
-        let mut read = at_nodes.iter();
-        poly.spectral_average(|_, _| read.next().map_or(0.0, |r| r[k]))
-    });
-    if missing || t <= 0.0 {
-        return Err(not_smooth("the lens gives no derivative of its orders at a spectral node of the value"));
-    }
-    Ok(BiasPartials { ln_photoelectrons: d_ln_n, ln_transmitted: d_t / t, mean_mtf: d_mtf[0] })
+        Ok(BiasPartials { ln_photoelectrons: d_ln_n, ln_transmitted: d_t / t, mean_mtf: d_mtf[0] })
+    })
 }

@@ -35,7 +35,6 @@ pub(super) fn aperture_on_zones(scene: &Scene, e: &Evaluation, p: Parameter) -> 
         return Ok(None);
     }
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
-    let camera = scene.camera();
     let detected = crate::evaluate::detected_spectrum(scene);
     if !e.numerics.engine.starts_with("fft") || detected.as_line().is_some() {
         return Err(not_smooth(
@@ -43,39 +42,29 @@ pub(super) fn aperture_on_zones(scene: &Scene, e: &Evaluation, p: Parameter) -> 
              lanes); this evaluation's engine is another (a line spectrum's grids)",
         ));
     }
-    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
-    let folded = crate::evaluate::Folded::of(lens, &detected);
-    let parts = folded.parts();
-    let poly = optics::Polychromatic::with_parts(
-        lens,
-        &detected,
-        &parts,
-        field,
-        camera.nyquist(),
-        pixel,
-        scene.options().settings(),
-    )?;
-    let first = field.y_rad.atan2(field.x_rad);
-    // on axis no zone is tilted: the shift lane is 0 (not computed)
-    let directions: &[optics::WavefrontDirection] = if field.is_on_axis() {
-        &[optics::WavefrontDirection::Defocus]
-    } else {
-        &[optics::WavefrontDirection::Defocus, optics::WavefrontDirection::ImageShift]
-    };
-    let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(first, directions)? else {
-        return Err(not_smooth(
-            "the FFT path did not carry the zones' defocus and tilt lanes here: they are computed for zones whose \
-             wavefront is a defocus (and a tilt for the zone's image shift), through an order without an image \
-             shift of its own",
-        ));
-    };
-    let d_k = lanes[0];
-    let d_shift = lanes.get(1).copied().unwrap_or(0.0);
-    // the frequency scale s = νλF# at fixed pupils: each grid's reading moving with F# on the
-    // value's own rule (the discrete rule's exact term, where by parts it would be
-    // P(ν_N)|O(ν_N)|‾ − M̄ − P_ν, the continuous rule's)
-    let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(first) else {
-        return Err(not_smooth("the FFT path did not give the frequency scale's lane s = νλF# here"));
-    };
-    Ok(Some((d_s - 2.0 * d_k - d_shift, d_k + d_shift)))
+    super::with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let first = field.y_rad.atan2(field.x_rad);
+        // on axis no zone is tilted: the shift lane is 0 (not computed)
+        let directions: &[optics::WavefrontDirection] = if field.is_on_axis() {
+            &[optics::WavefrontDirection::Defocus]
+        } else {
+            &[optics::WavefrontDirection::Defocus, optics::WavefrontDirection::ImageShift]
+        };
+        let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(first, directions)? else {
+            return Err(not_smooth(
+                "the FFT path did not carry the zones' defocus and tilt lanes here: they are computed for zones whose \
+                 wavefront is a defocus (and a tilt for the zone's image shift), through an order without an image \
+                 shift of its own",
+            ));
+        };
+        let d_k = lanes[0];
+        let d_shift = lanes.get(1).copied().unwrap_or(0.0);
+        // the frequency scale s = νλF# at fixed pupils: each grid's reading moving with F# on the
+        // value's own rule (the discrete rule's exact term, where by parts it would be
+        // P(ν_N)|O(ν_N)|‾ − M̄ − P_ν, the continuous rule's)
+        let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(first) else {
+            return Err(not_smooth("the FFT path did not give the frequency scale's lane s = νλF# here"));
+        };
+        Ok(Some((d_s - 2.0 * d_k - d_shift, d_k + d_shift)))
+    })
 }
