@@ -173,23 +173,38 @@ fn signed(k: usize, n: usize) -> f64 {
 /// grid's corner or the incoherent cutoff of the shortest wavelength (zero beyond), along one
 /// azimuth where it does not depend on the direction and along [`AZIMUTHS`] otherwise, and read
 /// at each grid frequency by cubic (Catmull–Rom) interpolation in radius and linear
-/// interpolation in azimuth. In parallel (each worker its own `Polychromatic`).
+/// interpolation in azimuth. Where the grid has no more frequencies inside the cutoff than that
+/// table has samples (a small grid off axis, as `asnr otf` and `asnr psf` write), the OTF is
+/// evaluated at each grid frequency instead: exact there, with no interpolation, and cheaper.
+/// In parallel (each worker its own `Polychromatic`).
 ///
 /// # Errors
 /// [`Error::Scene`] when the scene's optics cannot be evaluated.
 pub fn transfer(scene: &metric::Scene, nx: usize, ny: usize, spacing_m: f64) -> Result<Transfer, Error> {
-    transfer_sampled(scene, nx, ny, spacing_m, nx.max(ny))
+    transfer_sampled(scene, nx, ny, spacing_m, nx.max(ny), true)
+}
+
+/// [`transfer`] always read from the table (cubic in radius, linear in azimuth), even where the
+/// grid's own frequencies would be fewer: the interpolated path of large grids, on any grid, for
+/// measuring its error against the direct evaluation.
+///
+/// # Errors
+/// [`Error::Scene`] when the scene's optics cannot be evaluated.
+pub fn transfer_interpolated(scene: &metric::Scene, nx: usize, ny: usize, spacing_m: f64) -> Result<Transfer, Error> {
+    transfer_sampled(scene, nx, ny, spacing_m, nx.max(ny), false)
 }
 
 /// [`transfer`] with the radial samples an eighth of the frequency step of a grid of `sampled`
 /// cells a side (a padded grid keeps the sampling of the image it pads: the OTF is no less
-/// smooth for the padding).
+/// smooth for the padding); `direct`: whether a grid with fewer frequencies than the table has
+/// samples is evaluated at its own frequencies instead.
 fn transfer_sampled(
     scene: &metric::Scene,
     nx: usize,
     ny: usize,
     spacing_m: f64,
     sampled: usize,
+    direct: bool,
 ) -> Result<Transfer, Error> {
     let lens = scene.lens();
     let detected = metric::detected_spectrum(scene);
@@ -205,6 +220,42 @@ fn transfer_sampled(
     let dependent = probe.direction_dependent();
     drop(probe);
     let azimuths = if dependent { AZIMUTHS } else { 1 };
+    let hw = nx / 2 + 1;
+    // the grid's frequency (ν_x, ν_y) of the half spectrum's sample `index`
+    let frequency = |index: usize| -> (f64, f64) {
+        let (kx, ky) = (index % hw, index / hw);
+        (kx as f64 / (nx as f64 * spacing_m), signed(ky, ny) / (ny as f64 * spacing_m))
+    };
+    let inside = (0..ny * hw)
+        .filter(|&index| {
+            let (nu_x, nu_y) = frequency(index);
+            let nu = nu_x.hypot(nu_y);
+            nu > 0.0 && nu < cutoff
+        })
+        .count();
+    if direct && inside <= (radii + 1) * azimuths {
+        // fewer grid frequencies than table samples (a small grid off axis: `asnr otf`, `asnr
+        // psf`): each grid frequency evaluated where it is, exact, with no interpolation
+        let indices: Vec<usize> = (0..ny * hw).collect();
+        let chunk = indices.len().div_ceil(4 * rayon::current_num_threads().max(1)).max(64);
+        let values: Vec<Vec<Complex64>> = indices
+            .par_chunks(chunk)
+            .map(|indices| -> Result<Vec<Complex64>, Error> {
+                let poly = Polychromatic::with_settings(lens, &detected, field, reach, None, settings)
+                    .map_err(optics_error)?;
+                Ok(indices
+                    .iter()
+                    .map(|&index| {
+                        let (nu_x, nu_y) = frequency(index);
+                        let nu = nu_x.hypot(nu_y);
+                        if nu >= cutoff { Complex64::new(0.0, 0.0) } else { poly.otf_along(nu, nu_y.atan2(nu_x)) }
+                    })
+                    .collect())
+            })
+            .collect::<Result<_, _>>()?;
+        let values = values.into_iter().flatten().collect();
+        return Ok(Transfer { nx, ny, spacing_m, values, direction_dependent: dependent, evaluations: inside });
+    }
     // table[k · azimuths + m] = OTF(k h, m π/azimuths), k = 0 … radii
     let chunk = (radii + 1).div_ceil(4 * rayon::current_num_threads().max(1)).max(16);
     let table: Vec<Vec<Complex64>> = (0..=radii)
@@ -243,13 +294,10 @@ fn transfer_sampled(
         ];
         (0..4).map(|j| sample(i - 1 + j as isize, m) * w[j as usize]).sum()
     };
-    let hw = nx / 2 + 1;
     let values: Vec<Complex64> = (0..ny * hw)
         .into_par_iter()
         .map(|index| {
-            let (kx, ky) = (index % hw, index / hw);
-            let nu_x = kx as f64 / (nx as f64 * spacing_m);
-            let nu_y = signed(ky, ny) / (ny as f64 * spacing_m);
+            let (nu_x, nu_y) = frequency(index);
             let nu = nu_x.hypot(nu_y);
             if nu == 0.0 {
                 return Complex64::new(1.0, 0.0);
@@ -442,7 +490,7 @@ pub fn render(
     // does not wrap light from one edge onto the opposite one (PSFs up to half the image wide)
     let (pw, ph) = (2 * fw, 2 * fh);
     let (ox, oy) = (fw / 2, fh / 2);
-    let otf = transfer_sampled(scene, pw, ph, pitch / s as f64, fw.max(fh))?;
+    let otf = transfer_sampled(scene, pw, ph, pitch / s as f64, fw.max(fh), true)?;
     let padded: Vec<f64> = (0..pw * ph)
         .map(|i| {
             let (x, y) = ((i % pw).saturating_sub(ox).min(fw - 1), (i / pw).saturating_sub(oy).min(fh - 1));
