@@ -1238,3 +1238,127 @@ impl MapPupil {
         (field, weights.iter().sum())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each sample's area fraction of `aperture` on `n × n` samples of `[−1, 1]²` (exact).
+    fn areas(n: usize, aperture: MapAperture) -> Vec<f64> {
+        let h = 2.0 / n as f64;
+        let circle = crate::fft::Aperture::circle();
+        let mut out = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                let (x0, y0) = (-1.0 + i as f64 * h, -1.0 + j as f64 * h);
+                out.push(match aperture {
+                    MapAperture::Circle => circle.area_in(x0, x0 + h, y0, y0 + h) / (h * h),
+                    MapAperture::Square => 1.0,
+                });
+            }
+        }
+        out
+    }
+
+    /// A 6 × 6 map of 1 µm cells with an uneven phase, in the aperture of radius 2.7 µm (the
+    /// cells' edges at multiples of ρ = 0.37 of the radius), at λ = 820 nm, designed at 800 nm.
+    fn six_by_six(aperture: MapAperture, radius: f64, distance: f64, stored: StoredPhase) -> Arc<PhaseMap> {
+        let phase: Vec<f64> = (0..36).map(|c| 0.9 * (c as f64 * 0.7).sin() + 0.13 * c as f64).collect();
+        Arc::new(PhaseMap::new(6, 6, 1e-6, phase, None, aperture, radius, distance, 800e-9, stored).unwrap())
+    }
+
+    /// The cells' edges (`MapScale::Radius`), summed over the samples, `h² Σ ∂P_j` and
+    /// `h² ∂power`, against central differences (step 1e-5 in ln R) of the continuous pupil's
+    /// `Σ_c f_c |c ∩ aperture|` and `Σ_c |f_c|² |c ∩ aperture|`, each cell's value `f_c` held and
+    /// its area in the aperture exact (the circle's by `fft::Aperture::area_in`; the map's outer
+    /// cells reach past the aperture): the edge measure's integral is the area's derivative.
+    #[test]
+    fn map_edges_move_the_cells_areas() {
+        let lambda = 820e-9;
+        for aperture in [MapAperture::Circle, MapAperture::Square] {
+            let (radius, distance) = (2.7e-6, 12e-6);
+            let map = six_by_six(aperture, radius, distance, StoredPhase::Residual);
+            let pupil = MapPupil::new(map.clone(), lambda / (2.0 * PI), 1.0 - lambda / 800e-9, None);
+            // each cell's value as the field takes it (sampled at a point inside the cell, every
+            // sample open)
+            let n = 96;
+            let area = areas(n, aperture);
+            let (field, _) = pupil.field(n, &vec![1.0; n * n], lambda);
+            let rho = map.pitch() / radius;
+            let cell_value = |i: usize, j: usize| {
+                let at = |c: usize| ((c as f64 - 3.0 + 0.5) * rho + 1.0) / (2.0 / n as f64);
+                let idx = at(j) as usize * n + at(i) as usize;
+                field[idx]
+            };
+            let continuous = |ln_r: f64| {
+                let rho = map.pitch() / (radius * ln_r.exp());
+                let edge = |c: usize| (c as f64 - 3.0) * rho;
+                let (mut sum, mut power) = (Complex64::new(0.0, 0.0), 0.0);
+                let circle = crate::fft::Aperture::circle();
+                for j in 0..6 {
+                    for i in 0..6 {
+                        let span =
+                            |c: usize| (if c == 0 { -2.0 } else { edge(c) }, if c == 5 { 2.0 } else { edge(c + 1) });
+                        let ((x0, x1), (y0, y1)) = (span(i), span(j));
+                        let a = match aperture {
+                            MapAperture::Circle => circle.area_in(x0, x1, y0, y1),
+                            MapAperture::Square => (x1.min(1.0) - x0.max(-1.0)) * (y1.min(1.0) - y0.max(-1.0)),
+                        };
+                        let f = cell_value(i, j);
+                        sum += f * a;
+                        power += f.norm_sqr() * a;
+                    }
+                }
+                (sum, power)
+            };
+            let d = 1e-5;
+            let ((up, up_power), (down, down_power)) = (continuous(d), continuous(-d));
+            let (reference, reference_power) = ((up - down) / (2.0 * d), (up_power - down_power) / (2.0 * d));
+            let (moved, d_power) = pupil.scale_derivative(n, &area, lambda, MapScale::Radius).unwrap();
+            let h2 = (2.0 / n as f64).powi(2);
+            let total: Complex64 = moved.iter().sum::<Complex64>() * h2;
+            assert!((total - reference).norm() <= 1e-8 * reference.norm(), "{aperture:?}: {total} vs {reference}");
+            assert!(
+                (d_power * h2 - reference_power).abs() <= 1e-8 * reference.norm(),
+                "{aperture:?}: {} vs {reference_power}",
+                d_power * h2
+            );
+            // the pitch's edges move the other way (its cells' values move too)
+            let (pitch_moved, _) = pupil.scale_derivative(n, &area, lambda, MapScale::Pitch).unwrap();
+            assert!(pitch_moved.iter().zip(&moved).any(|(p, r)| (p + r).norm() > 0.0));
+        }
+    }
+
+    /// The cells' values along the detector distance (`MapScale::Distance`: the sphere, the
+    /// residual's stored phase and the share move, the edges do not) against central differences
+    /// (relative step 1e-5) of the sampled field and its power, sample by sample: at a fixed
+    /// sampling the field is smooth in the distance.
+    #[test]
+    fn map_distance_moves_the_cells_values() {
+        let lambda = 820e-9;
+        let (n, radius, distance) = (64, 2.7e-6, 12e-6);
+        let area = areas(n, MapAperture::Circle);
+        let sampled = |z: f64| {
+            let map = six_by_six(MapAperture::Circle, radius, z, StoredPhase::Residual);
+            MapPupil::new(map, lambda / (2.0 * PI), 1.0 - lambda / 800e-9, None).field(n, &area, lambda)
+        };
+        let d: f64 = 1e-5;
+        let ((up, up_power), (down, down_power)) = (sampled(distance * d.exp()), sampled(distance * (-d).exp()));
+        let map = six_by_six(MapAperture::Circle, radius, distance, StoredPhase::Residual);
+        let pupil = MapPupil::new(map, lambda / (2.0 * PI), 1.0 - lambda / 800e-9, None);
+        let (moved, d_power) = pupil.scale_derivative(n, &area, lambda, MapScale::Distance).unwrap();
+        let largest = moved.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        assert!(largest > 0.1, "{largest}");
+        for (idx, m) in moved.iter().enumerate() {
+            let reference = (up[idx] - down[idx]) / (2.0 * d);
+            assert!((m - reference).norm() <= 1e-7 * largest, "sample {idx}: {m} vs {reference}");
+        }
+        let reference_power = (up_power - down_power) / (2.0 * d);
+        assert!((d_power - reference_power).abs() <= 1e-7 * up_power, "{d_power} vs {reference_power}");
+        // off axis the lane is not computed
+        let map = six_by_six(MapAperture::Circle, radius, distance, StoredPhase::Residual);
+        let oblique = Oblique::new(radius, distance, 0.05, 0.0).unwrap();
+        let off = MapPupil::new(map, lambda / (2.0 * PI), 1.0 - lambda / 800e-9, Some(oblique));
+        assert!(off.scale_derivative(n, &area, lambda, MapScale::Distance).is_none());
+    }
+}
