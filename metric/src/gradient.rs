@@ -851,6 +851,14 @@ fn point_gradient(
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::MapPitch => {
+                if camera.noise_spectrum().is_some() {
+                    return Err(not_smooth(
+                        p,
+                        "lens.phase_map_pitch_um: computed with a white noise spectrum only (its lane under \
+                         camera.noise_spectrum is not checked yet)"
+                            .to_owned(),
+                    ));
+                }
                 let Some(d_mtf) = d_grid.next_lane(&mut grid_place) else {
                     return Err(not_smooth(
                         p,

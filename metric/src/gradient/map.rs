@@ -20,7 +20,7 @@ use crate::{Error, Scene};
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` (module docs) where an imaging order of the scene's lens is a
 /// designer's phase map; `None` where none is (another pupil: those keys' other rules apply).
-/// Refused (naming why) off axis, under a line, or where the FFT path does not carry the map's
+/// Refused (naming why) off axis, under a line or a noise spectrum, or where the FFT path does not carry the map's
 /// lanes.
 pub(super) fn aperture_on_map(scene: &Scene, e: &Evaluation, p: Parameter) -> Result<Option<(f64, f64)>, Error> {
     let lens = scene.lens();
@@ -35,6 +35,12 @@ pub(super) fn aperture_on_map(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
     }
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter: p.describe(), reason: reason.to_owned() };
     let detected = crate::evaluate::detected_spectrum(scene);
+    if scene.camera().noise_spectrum().is_some() {
+        return Err(not_smooth(
+            "a phase map's aperture is differentiated with a white noise spectrum only (its lanes under \
+             camera.noise_spectrum are not checked yet)",
+        ));
+    }
     if !e.numerics.engine.starts_with("fft") || detected.as_line().is_some() || !field.is_on_axis() {
         return Err(not_smooth(
             "a phase map's aperture is differentiated on the FFT path of a band, on axis (its cells' edges moving \
