@@ -19,6 +19,7 @@ use crate::{Error, GlareMode, MetricForm, Scene};
 
 mod achromat;
 mod library_fft;
+mod map;
 mod multiplexed;
 mod noise_weight;
 mod segmented;
@@ -195,6 +196,13 @@ pub enum Parameter {
     /// (Leibniz's rule, as a top-hat spectrum's edge; docs/physics.md, "Gradients: the
     /// dispersion-engineered lens"). The centre's own part is [`DesignWavelength`](Parameter::DesignWavelength)'s.
     BandEdge(usize),
+    /// The cell pitch p of a designer's phase map (`lens.phase_map_pitch_um`), per relative
+    /// change, `∂/∂ln p`, on axis: the cells' edges move across the pupil (units of the aperture
+    /// radius) and each cell's centre with its reference sphere and design-order share, a
+    /// complex lane of the field on the FFT path (`optics::WavefrontDirection::MapScale`;
+    /// docs/physics.md, "Gradients: a phase map's pitch and aperture"). The photon count does
+    /// not move.
+    MapPitch,
 }
 
 impl Parameter {
@@ -217,6 +225,7 @@ impl Parameter {
             Parameter::FieldAngle(a) => Some(optics::WavefrontDirection::FieldAngle(a)),
             Parameter::IrisDecentre(a) => Some(optics::WavefrontDirection::IrisDecentre(a)),
             Parameter::Obscuration => Some(optics::WavefrontDirection::Obscuration),
+            Parameter::MapPitch => Some(optics::WavefrontDirection::MapScale(optics::map::MapScale::Pitch)),
             p => p.lane().map(optics::WavefrontDirection::Lane),
         }
     }
@@ -254,6 +263,7 @@ impl Parameter {
             Parameter::Obscuration => "the obscuration of the lens's iris",
             Parameter::DesignWavelength => "the lens's design wavelength",
             Parameter::BandEdge(_) => "an edge of the lens's design band",
+            Parameter::MapPitch => "the cell pitch of the lens's phase map",
         }
     }
 }
@@ -838,6 +848,27 @@ fn point_gradient(
                 let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
                 // N and N_T move with the area fraction: the key's chain on Efficiency and
                 // Transmission (`Parameter::Obscuration`)
+                (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
+            }
+            Parameter::MapPitch => {
+                if camera.noise_spectrum().is_some() {
+                    return Err(not_smooth(
+                        p,
+                        "lens.phase_map_pitch_um: computed with a white noise spectrum only (its lane under \
+                         camera.noise_spectrum is not checked yet)"
+                            .to_owned(),
+                    ));
+                }
+                let Some(d_mtf) = d_grid.next_lane(&mut grid_place) else {
+                    return Err(not_smooth(
+                        p,
+                        "lens.phase_map_pitch_um: the cells' motion is computed on the FFT path of a band, on axis, \
+                         asked with no wavefront key; this scene is not that (off axis, or a line spectrum's grids)"
+                            .to_owned(),
+                    ));
+                };
+                let d_g = d_g_from_mean_mtf(scene, e, d_mtf);
+                // the aperture and the efficiencies do not move with the cells: N and N_T stay
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::DesignWavelength => {
@@ -2514,6 +2545,10 @@ fn aperture_partials(
     // (the white ∂M̄; under a noise spectrum ∂G is `noise_weight::aperture_over_noise`'s)
     // a composite pupil of zones: its lanes on the FFT path (`segmented`)
     if let Some(found) = segmented::aperture_on_zones(scene, e, p)? {
+        return Ok(found);
+    }
+    // a designer's phase map: its cells' edges and values on the FFT path (`map`)
+    if let Some(found) = map::aperture_on_map(scene, e, p)? {
         return Ok(found);
     }
     if let Some(found) = defocus_on_value_rule(scene, e, pass)? {

@@ -118,6 +118,19 @@ impl MapAperture {
     }
 }
 
+/// A length of a designer's map that [`MapPupil::scale_derivative`] moves, per relative change,
+/// the other two held (docs/physics.md, "Gradients: a phase map's pitch and aperture").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MapScale {
+    /// The cell pitch `p`: the cells' edges move across the pupil (units of `R`) with
+    /// `ρ = p/R`, and each cell's centre `X_c ∝ p` with its reference sphere and share.
+    Pitch,
+    /// The aperture radius `R`: the cells' edges move with `ρ = p/R`, against the pitch's.
+    Radius,
+    /// The detector distance `z` (the focal length): each cell's reference sphere and share.
+    Distance,
+}
+
 /// How the stored phase of a [`PhaseMap`] relates to the map the designer gave.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StoredPhase {
@@ -863,6 +876,150 @@ impl MapPupil {
         Some(self.sites_field(sites, d_table, &rate, n, area, lambda))
     }
 
+    /// The derivative of [`field`](Self::field) of a designer's map on axis along `scale` per
+    /// relative change (docs/physics.md, "Gradients: a phase map's pitch and aperture"): the
+    /// field `P_j = A_j f_c` (the cell `c` holding the sample's centre, `f_c = a_c s_c e^{i k w_c}`
+    /// its design-order value) and its power `Σ A_j |f_c|²`, as `(∂P, ∂power)`. Two parts:
+    /// - *the cells' values*, the edges held: the pitch moves each centre `X_c ∝ p`, the distance
+    ///   `z` the sphere `S(X_c) = √(|X_c|² + z²) − z` (`X·∇S = |X|²/r`, `z ∂S/∂z = z²/r − z`,
+    ///   `r = √(|X|² + z²)`) and with it a residual's stored phase `ψ = φ0 + k0 S`, and both the
+    ///   share's arguments `a = p g/λ`, `g = X/r` (`∂ln a = 1 + z²/r²` along `ln p`, `−z²/r²`
+    ///   along `ln z`, `∂sinc a = (cos πa − sinc a) ∂ln a`): `∂P_j = A_j ∂f_c`;
+    /// - *the cells' edges*: in the pupil's units the edges sit at `e = (i − n/2) ρ`, `ρ = p/R`,
+    ///   and move at `∂e/∂ln ρ = e` (`+1` per `ln p`, `−1` per `ln R`), so the field moves by the
+    ///   line measure `e (f_before − f_after)` on every edge between two cells inside the
+    ///   aperture (the cells' jump times the edge's normal velocity); each sample takes its
+    ///   mean over the sample, `(1/h²) ∫ e (f_before − f_after) dl` over the edges' pieces inside
+    ///   the sample and the aperture (exact lengths: the edges are straight, the aperture's
+    ///   boundary a circle or the square's sides), and the power moves by the same integrals of
+    ///   `|f_before|² − |f_after|²`. The map's outermost edges are not between two cells (the
+    ///   map is clamped there), so they carry nothing.
+    ///
+    /// `None` for a site map, off axis or with Zernike terms added (their paths are not
+    /// followed here).
+    pub fn scale_derivative(
+        &self,
+        n: usize,
+        area: &[f64],
+        lambda: f64,
+        scale: MapScale,
+    ) -> Option<(Vec<Complex64>, f64)> {
+        let Cells::Map(map) = &self.cells else { return None };
+        if self.oblique.is_some() || self.zernike.is_some() {
+            return None;
+        }
+        let k = 2.0 * PI / lambda;
+        let u = map.pitch / lambda;
+        let z = map.distance;
+        let residual = map.stored == StoredPhase::Residual;
+        let k0 = 2.0 * PI / map.design_wavelength;
+        // a cell's design amplitude and phase (as `map_field`), and their rates along `scale`
+        let cell = |i: usize, j: usize| -> (f64, f64, f64, f64) {
+            let c = j * map.nx + i;
+            let [cx, cy] = map.centre(i, j);
+            let a = map.amplitude.as_ref().map_or(1.0, |v| v[c]);
+            let r = (cx * cx + cy * cy + z * z).sqrt();
+            let (ax, ay) = (u * cx / r, u * cy / r);
+            let (sx, sy) = (sinc(ax), sinc(ay));
+            let design = a * sx * sy;
+            let w = self.path_per_radian * map.phase[c] + self.sphere_factor * map.sphere(cx, cy);
+            // (∂S, ∂ln a) along the scale
+            let (d_sphere, d_ln_a) = match scale {
+                MapScale::Pitch => ((cx * cx + cy * cy) / r, 1.0 + z * z / (r * r)),
+                MapScale::Distance => (z * z / r - z, -z * z / (r * r)),
+                MapScale::Radius => (0.0, 0.0),
+            };
+            let d_sinc = |a: f64, s: f64| ((PI * a).cos() - s) * d_ln_a;
+            let d_design = a * (d_sinc(ax, sx) * sy + sx * d_sinc(ay, sy));
+            let d_phase = if residual { k0 * d_sphere } else { 0.0 };
+            let d_w = self.path_per_radian * d_phase + self.sphere_factor * d_sphere;
+            (design, k * w, d_design, k * d_w)
+        };
+        let value = |i: usize, j: usize| {
+            let (design, phase, _, _) = cell(i, j);
+            (Complex64::from_polar(design, phase), design * design)
+        };
+        let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
+        let mut d_power = 0.0;
+        let offset = [0.5 * map.nx as f64, 0.5 * map.ny as f64];
+        let holding =
+            |v: f64, o: f64, len: usize| ((v * map.radius / map.pitch + o).floor().max(0.0) as usize).min(len - 1);
+        if scale != MapScale::Radius {
+            for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+                let (ci, cj) = (holding(x, offset[0], map.nx), holding(y, offset[1], map.ny));
+                let (design, phase, d_design, d_phase) = cell(ci, cj);
+                moved[idx] = Complex64::new(d_design, design * d_phase) * Complex64::from_polar(area[idx], phase);
+                d_power += area[idx] * 2.0 * design * d_design;
+            }
+        }
+        let speed = match scale {
+            MapScale::Pitch => 1.0,
+            MapScale::Radius => -1.0,
+            MapScale::Distance => return Some((moved, d_power)),
+        };
+        let h = 2.0 / n as f64;
+        let rho = map.pitch / map.radius;
+        let aperture = map.aperture;
+        // the half length of the line at `e` (across) inside the aperture
+        let half = |e: f64| match aperture {
+            MapAperture::Circle => (1.0 - e * e).max(0.0).sqrt(),
+            MapAperture::Square => 1.0,
+        };
+        // along a line at `e` (units of R) from −l to l: the pieces between the samples' and the
+        // cells' boundaries, each `(sample, cell, length)`
+        let pieces = |l: f64, cells: usize, visit: &mut dyn FnMut(usize, usize, f64)| {
+            // the end of cell `c` along the line (the last cell is clamped: no end)
+            let cell_end = |c: usize| {
+                if c + 1 < cells { (c as f64 + 1.0 - 0.5 * cells as f64) * rho } else { f64::INFINITY }
+            };
+            let mut s = (((1.0 - l) / h).floor().max(0.0) as usize).min(n - 1);
+            let mut c = ((-l / rho + 0.5 * cells as f64).floor().max(0.0) as usize).min(cells - 1);
+            let mut t = -l;
+            loop {
+                let (sample_end, end) = (-1.0 + (s + 1) as f64 * h, cell_end(c));
+                let next = sample_end.min(end).min(l);
+                if next > t {
+                    visit(s, c, next - t);
+                }
+                if next >= l {
+                    break;
+                }
+                // (each turn passes a sample's or a cell's end: the walk ends)
+                if sample_end <= next && s + 1 < n {
+                    s += 1;
+                }
+                if end <= next && c + 1 < cells {
+                    c += 1;
+                }
+                t = next;
+            }
+        };
+        let unit = speed / (h * h);
+        // the edges between columns i − 1 and i (x = e), then between rows j − 1 and j (y = e)
+        for across in [true, false] {
+            let (count, along) = if across { (map.nx, map.ny) } else { (map.ny, map.nx) };
+            for edge in 1..count {
+                let e = (edge as f64 - 0.5 * count as f64) * rho;
+                if e.abs() >= 1.0 {
+                    continue;
+                }
+                let line = (((e + 1.0) / h).floor().max(0.0) as usize).min(n - 1);
+                let l = half(e);
+                pieces(l, along, &mut |s, c, length| {
+                    let ((before, p0), (after, p1)) = if across {
+                        (value(edge - 1, c), value(edge, c))
+                    } else {
+                        (value(c, edge - 1), value(c, edge))
+                    };
+                    let idx = if across { s * n + line } else { line * n + s };
+                    moved[idx] += (before - after) * (unit * e * length);
+                    d_power += unit * e * length * (p0 - p1);
+                });
+            }
+        }
+        Some((moved, d_power))
+    }
+
     /// A site map's field with the atoms' table `table` and their powers `power` (the point or
     /// the block path by the samples' size against the cells).
     fn sites_field(
@@ -1079,5 +1236,129 @@ impl MapPupil {
             })
             .collect();
         (field, weights.iter().sum())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each sample's area fraction of `aperture` on `n × n` samples of `[−1, 1]²` (exact).
+    fn areas(n: usize, aperture: MapAperture) -> Vec<f64> {
+        let h = 2.0 / n as f64;
+        let circle = crate::fft::Aperture::circle();
+        let mut out = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                let (x0, y0) = (-1.0 + i as f64 * h, -1.0 + j as f64 * h);
+                out.push(match aperture {
+                    MapAperture::Circle => circle.area_in(x0, x0 + h, y0, y0 + h) / (h * h),
+                    MapAperture::Square => 1.0,
+                });
+            }
+        }
+        out
+    }
+
+    /// A 6 × 6 map of 1 µm cells with an uneven phase, in the aperture of radius 2.7 µm (the
+    /// cells' edges at multiples of ρ = 0.37 of the radius), at λ = 820 nm, designed at 800 nm.
+    fn six_by_six(aperture: MapAperture, radius: f64, distance: f64, stored: StoredPhase) -> Arc<PhaseMap> {
+        let phase: Vec<f64> = (0..36).map(|c| 0.9 * (c as f64 * 0.7).sin() + 0.13 * c as f64).collect();
+        Arc::new(PhaseMap::new(6, 6, 1e-6, phase, None, aperture, radius, distance, 800e-9, stored).unwrap())
+    }
+
+    /// The cells' edges (`MapScale::Radius`), summed over the samples, `h² Σ ∂P_j` and
+    /// `h² ∂power`, against central differences (step 1e-5 in ln R) of the continuous pupil's
+    /// `Σ_c f_c |c ∩ aperture|` and `Σ_c |f_c|² |c ∩ aperture|`, each cell's value `f_c` held and
+    /// its area in the aperture exact (the circle's by `fft::Aperture::area_in`; the map's outer
+    /// cells reach past the aperture): the edge measure's integral is the area's derivative.
+    #[test]
+    fn map_edges_move_the_cells_areas() {
+        let lambda = 820e-9;
+        for aperture in [MapAperture::Circle, MapAperture::Square] {
+            let (radius, distance) = (2.7e-6, 12e-6);
+            let map = six_by_six(aperture, radius, distance, StoredPhase::Residual);
+            let pupil = MapPupil::new(map.clone(), lambda / (2.0 * PI), 1.0 - lambda / 800e-9, None);
+            // each cell's value as the field takes it (sampled at a point inside the cell, every
+            // sample open)
+            let n = 96;
+            let area = areas(n, aperture);
+            let (field, _) = pupil.field(n, &vec![1.0; n * n], lambda);
+            let rho = map.pitch() / radius;
+            let cell_value = |i: usize, j: usize| {
+                let at = |c: usize| ((c as f64 - 3.0 + 0.5) * rho + 1.0) / (2.0 / n as f64);
+                let idx = at(j) as usize * n + at(i) as usize;
+                field[idx]
+            };
+            let continuous = |ln_r: f64| {
+                let rho = map.pitch() / (radius * ln_r.exp());
+                let edge = |c: usize| (c as f64 - 3.0) * rho;
+                let (mut sum, mut power) = (Complex64::new(0.0, 0.0), 0.0);
+                let circle = crate::fft::Aperture::circle();
+                for j in 0..6 {
+                    for i in 0..6 {
+                        let span =
+                            |c: usize| (if c == 0 { -2.0 } else { edge(c) }, if c == 5 { 2.0 } else { edge(c + 1) });
+                        let ((x0, x1), (y0, y1)) = (span(i), span(j));
+                        let a = match aperture {
+                            MapAperture::Circle => circle.area_in(x0, x1, y0, y1),
+                            MapAperture::Square => (x1.min(1.0) - x0.max(-1.0)) * (y1.min(1.0) - y0.max(-1.0)),
+                        };
+                        let f = cell_value(i, j);
+                        sum += f * a;
+                        power += f.norm_sqr() * a;
+                    }
+                }
+                (sum, power)
+            };
+            let d = 1e-5;
+            let ((up, up_power), (down, down_power)) = (continuous(d), continuous(-d));
+            let (reference, reference_power) = ((up - down) / (2.0 * d), (up_power - down_power) / (2.0 * d));
+            let (moved, d_power) = pupil.scale_derivative(n, &area, lambda, MapScale::Radius).unwrap();
+            let h2 = (2.0 / n as f64).powi(2);
+            let total: Complex64 = moved.iter().sum::<Complex64>() * h2;
+            assert!((total - reference).norm() <= 1e-8 * reference.norm(), "{aperture:?}: {total} vs {reference}");
+            assert!(
+                (d_power * h2 - reference_power).abs() <= 1e-8 * reference.norm(),
+                "{aperture:?}: {} vs {reference_power}",
+                d_power * h2
+            );
+            // the pitch's edges move the other way (its cells' values move too)
+            let (pitch_moved, _) = pupil.scale_derivative(n, &area, lambda, MapScale::Pitch).unwrap();
+            assert!(pitch_moved.iter().zip(&moved).any(|(p, r)| (p + r).norm() > 0.0));
+        }
+    }
+
+    /// The cells' values along the detector distance (`MapScale::Distance`: the sphere, the
+    /// residual's stored phase and the share move, the edges do not) against central differences
+    /// (relative step 1e-5) of the sampled field and its power, sample by sample: at a fixed
+    /// sampling the field is smooth in the distance.
+    #[test]
+    fn map_distance_moves_the_cells_values() {
+        let lambda = 820e-9;
+        let (n, radius, distance) = (64, 2.7e-6, 12e-6);
+        let area = areas(n, MapAperture::Circle);
+        let sampled = |z: f64| {
+            let map = six_by_six(MapAperture::Circle, radius, z, StoredPhase::Residual);
+            MapPupil::new(map, lambda / (2.0 * PI), 1.0 - lambda / 800e-9, None).field(n, &area, lambda)
+        };
+        let d: f64 = 1e-5;
+        let ((up, up_power), (down, down_power)) = (sampled(distance * d.exp()), sampled(distance * (-d).exp()));
+        let map = six_by_six(MapAperture::Circle, radius, distance, StoredPhase::Residual);
+        let pupil = MapPupil::new(map, lambda / (2.0 * PI), 1.0 - lambda / 800e-9, None);
+        let (moved, d_power) = pupil.scale_derivative(n, &area, lambda, MapScale::Distance).unwrap();
+        let largest = moved.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        assert!(largest > 0.1, "{largest}");
+        for (idx, m) in moved.iter().enumerate() {
+            let reference = (up[idx] - down[idx]) / (2.0 * d);
+            assert!((m - reference).norm() <= 1e-7 * largest, "sample {idx}: {m} vs {reference}");
+        }
+        let reference_power = (up_power - down_power) / (2.0 * d);
+        assert!((d_power - reference_power).abs() <= 1e-7 * up_power, "{d_power} vs {reference_power}");
+        // off axis the lane is not computed
+        let map = six_by_six(MapAperture::Circle, radius, distance, StoredPhase::Residual);
+        let oblique = Oblique::new(radius, distance, 0.05, 0.0).unwrap();
+        let off = MapPupil::new(map, lambda / (2.0 * PI), 1.0 - lambda / 800e-9, Some(oblique));
+        assert!(off.scale_derivative(n, &area, lambda, MapScale::Distance).is_none());
     }
 }

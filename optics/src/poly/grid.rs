@@ -1113,6 +1113,12 @@ pub enum WavefrontDirection {
     /// [`MapPupil::field_derivative`](crate::map::MapPupil::field_derivative)). The FFT path
     /// carries it.
     OrderField(usize),
+    /// A designer's phase map's pitch, aperture radius or detector distance, per relative change
+    /// ([`MapScale`](crate::map::MapScale)), on axis: the cells' edges move across the pupil and
+    /// the cells' values with their centres and reference sphere, a complex lane of the field
+    /// and its power ([`MapPupil::scale_derivative`](crate::map::MapPupil::scale_derivative);
+    /// docs/physics.md, "Gradients: a phase map's pitch and aperture"). The FFT path carries it.
+    MapScale(crate::map::MapScale),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -1290,7 +1296,9 @@ impl FftPath {
                 // a site map's order: its field is linear in the atoms' table, its move the same
                 // sampling of the table's derivative (`MapPupil::field_derivative`)
                 if let (Pupil::Map(map), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
-                    if !directions.iter().all(|d| matches!(d, WavefrontDirection::OrderField(_))) {
+                    // (or a designer's map's scales: its cells' edges and values, `MapPupil::scale_derivative`)
+                    let scales = directions.iter().all(|d| matches!(d, WavefrontDirection::MapScale(_)));
+                    if !scales && !directions.iter().all(|d| matches!(d, WavefrontDirection::OrderField(_))) {
                         return Ok(None);
                     }
                     let layer = match &mut built {
@@ -1302,7 +1310,15 @@ impl FftPath {
                     let (field, power) = map.field(sampled.n(), sampled.amplitude(), lambda);
                     let mut moves: Vec<(Vec<Complex64>, f64)> = Vec::with_capacity(k_dirs);
                     let mut rates = vec![0.0; k_dirs];
-                    for (j, derivatives) in order_fields.iter().enumerate() {
+                    for (j, (derivatives, direction)) in order_fields.iter().zip(directions).enumerate() {
+                        if let WavefrontDirection::MapScale(scale) = *direction {
+                            let Some(moved) = map.scale_derivative(sampled.n(), sampled.amplitude(), lambda, scale)
+                            else {
+                                return Ok(None);
+                            };
+                            moves.push(moved);
+                            continue;
+                        }
                         let Some(d) = derivatives else { return Ok(None) };
                         let (Some(d_table), Some(&d_tau)) = (d.tables.get(index), d.efficiencies.get(index)) else {
                             return Ok(None);
@@ -1421,6 +1437,7 @@ impl FftPath {
                         | WavefrontDirection::ImageShift
                         | WavefrontDirection::ObliqueScale(_)
                         | WavefrontDirection::DesignWavelength
+                        | WavefrontDirection::MapScale(_)
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);
