@@ -5,7 +5,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use optics::fft::Aperture;
-use optics::{Field, LensModel, Order, Pupil, Wavefront, Zone};
+use optics::{Field, LensModel, Order, Pupil, Wavefront, Zone, ZoneKey, ZoneRate, ZoneRates};
 
 use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
@@ -377,6 +377,57 @@ impl LensModel for Segmented {
 
     fn efficiency(&self, wavelength_m: f64) -> f64 {
         self.signal_efficiency(wavelength_m, self.other_channels)
+    }
+
+    /// The zones' rates of the one order (docs/physics.md, "Gradients: the multiplexed lens"):
+    /// a field angle θ_a moves every zone's lateral colour `Δ_j = f0 tan θ_a (λ_j/λ − 1)` by
+    /// `f0 sec²θ_a (λ_j/λ − 1)`; `ln λ_j` moves zone `j`'s defocus by `(λ/λ_j) f0/(8F#²)` and its
+    /// lateral colour by `f0 tan θ λ_j/λ`; `ln η_j` moves zone `j`'s amplitude `√η_j` by `√η_j/2`
+    /// and the order's efficiency `Σ a_k η_k` by `a_j η_j` where the zone's light is signal.
+    /// `None` for a channel beyond the lens's, for λ_j with [`OtherChannels::Background`] (the
+    /// channels' band edges move with it: the zones' light switches between signal and
+    /// background there, kinks of the integrand over λ), and for η_j where the zone is lit with
+    /// `η_j = 0` (`√η` has no derivative at 0).
+    fn zone_rates(&self, wavelength_m: f64, field: Field, key: ZoneKey) -> Option<Vec<ZoneRates>> {
+        let n = self.channels.len();
+        let f0 = self.focal_length;
+        let mut zones = vec![ZoneRate::default(); n];
+        let mut efficiency = 0.0;
+        match key {
+            ZoneKey::FieldAngle(axis) => {
+                let theta = [field.x_rad, field.y_rad].get(axis).copied()?;
+                let sec2 = 1.0 / (theta.cos() * theta.cos());
+                for (z, c) in zones.iter_mut().zip(&self.channels) {
+                    z.image_shift_m[axis] = f0 * sec2 * (c.wavelength_m / wavelength_m - 1.0);
+                }
+            }
+            ZoneKey::ChannelWavelength(j) => {
+                if j >= n || self.other_channels == OtherChannels::Background {
+                    return None;
+                }
+                let lambda_j = self.channels[j].wavelength_m;
+                let k = f0 / (8.0 * self.f_number * self.f_number);
+                let lateral = f0 * lambda_j / wavelength_m;
+                zones[j].defocus_m = k * wavelength_m / lambda_j;
+                zones[j].image_shift_m = [lateral * field.x_rad.tan(), lateral * field.y_rad.tan()];
+            }
+            ZoneKey::ChannelEfficiency(j) => {
+                if j >= n {
+                    return None;
+                }
+                let (lo, hi) = self.bands[j];
+                let lit = self.other_channels == OtherChannels::Signal || (wavelength_m >= lo && wavelength_m < hi);
+                if lit {
+                    let eta = self.channels[j].efficiency.value(wavelength_m);
+                    if eta <= 0.0 {
+                        return None;
+                    }
+                    zones[j].amplitude = 0.5 * eta.sqrt();
+                    efficiency = self.areas[j] * eta;
+                }
+            }
+        }
+        Some(vec![ZoneRates { zones, efficiency }])
     }
 
     fn transmission(&self, wavelength_m: f64) -> f64 {

@@ -813,6 +813,9 @@ pub(crate) fn gradient_and_evaluation(
     if let Some(found) = multiplexed::with_channels(source, overrides, keys)? {
         return Ok(found);
     }
+    if let Some(found) = multiplexed::with_zone_channels(source, overrides, keys)? {
+        return Ok(found);
+    }
     let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
     let expanded = expand(source, &table, keys)?;
     let lens_model = lookup(&table, "lens.model").and_then(toml::Value::as_str).unwrap_or("").to_owned();
