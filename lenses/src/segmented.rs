@@ -582,6 +582,78 @@ mod tests {
         assert_eq!(o.wavefront.image_shift_m, [0.0, 0.0]);
     }
 
+    /// `zone_rates` against central differences of the lens's own orders (the slow, obviously
+    /// correct reference): each zone's amplitude, defocus and image shift and the order's
+    /// efficiency, per radian of a field angle, per ln λ_j and per ln η_j.
+    #[test]
+    fn zone_rates_match_differences_of_the_orders() {
+        let (lambda, theta) = (540e-9, [0.03, -0.02]);
+        // (zones' (amplitude, W020, shift), efficiency) of a sectors lens
+        let at = |theta: [f64; 2], waves: [f64; 3], etas: [f64; 3]| {
+            let channels = waves
+                .iter()
+                .zip(etas)
+                .map(|(&w, eta)| Channel { wavelength_m: w, efficiency: Curve::Constant(eta) })
+                .collect();
+            let lens = Segmented::new(2.5, F0, channels, Layout::Sectors, None, Curve::Constant(0.9)).unwrap();
+            let [o] = &lens.orders(lambda, Field::new(theta[0], theta[1]))[..] else { panic!() };
+            let Pupil::Zones(zones) = &o.pupil else { panic!() };
+            let z: Vec<[f64; 4]> = zones
+                .iter()
+                .map(|z| {
+                    let [sx, sy] = z.wavefront.image_shift_m;
+                    [z.amplitude, z.wavefront.defocus_m, sx, sy]
+                })
+                .collect();
+            (z, o.efficiency)
+        };
+        let (waves, etas) = ([500e-9, 550e-9, 600e-9], [0.2, 0.3, 0.25]);
+        let lens = {
+            let channels = waves
+                .iter()
+                .zip(etas)
+                .map(|(&w, eta)| Channel { wavelength_m: w, efficiency: Curve::Constant(eta) })
+                .collect();
+            Segmented::new(2.5, F0, channels, Layout::Sectors, None, Curve::Constant(0.9)).unwrap()
+        };
+        let field = Field::new(theta[0], theta[1]);
+        let h = 1e-5;
+        // each key: its rates, and the orders at its value ± h (per unit of the key)
+        type Moved<'a> = Box<dyn Fn(f64) -> (Vec<[f64; 4]>, f64) + 'a>;
+        let keys: Vec<(ZoneKey, Moved<'_>)> = vec![
+            (ZoneKey::FieldAngle(0), Box::new(move |d| at([theta[0] + d, theta[1]], waves, etas))),
+            (ZoneKey::FieldAngle(1), Box::new(move |d| at([theta[0], theta[1] + d], waves, etas))),
+            (
+                ZoneKey::ChannelWavelength(1),
+                Box::new(move |d| at(theta, [waves[0], waves[1] * d.exp(), waves[2]], etas)),
+            ),
+            (ZoneKey::ChannelEfficiency(2), Box::new(move |d| at(theta, waves, [etas[0], etas[1], etas[2] * d.exp()]))),
+        ];
+        for (key, moved) in keys {
+            let [r] = &lens.zone_rates(lambda, field, key).unwrap()[..] else { panic!() };
+            let ((up, e_up), (down, e_down)) = (moved(h), moved(-h));
+            for (j, z) in r.zones.iter().enumerate() {
+                let ours = [z.amplitude, z.defocus_m, z.image_shift_m[0], z.image_shift_m[1]];
+                for q in 0..4 {
+                    let reference = (up[j][q] - down[j][q]) / (2.0 * h);
+                    let scale = up[j][q].abs().max(reference.abs()).max(1e-12);
+                    assert!(
+                        (ours[q] - reference).abs() < 1e-7 * scale,
+                        "{key:?} zone {j} [{q}]: {} vs {reference}",
+                        ours[q]
+                    );
+                }
+            }
+            let reference = (e_up - e_down) / (2.0 * h);
+            assert!((r.efficiency - reference).abs() < 1e-9, "{key:?}: {} vs {reference}", r.efficiency);
+        }
+        // λ_j with the other channels as background: refused (the band edges move with it)
+        let background = lens.clone().with_other_channels(OtherChannels::Background);
+        assert!(background.zone_rates(lambda, field, ZoneKey::ChannelWavelength(0)).is_none());
+        assert!(background.zone_rates(lambda, field, ZoneKey::ChannelEfficiency(0)).is_some());
+        assert!(lens.zone_rates(lambda, field, ZoneKey::ChannelEfficiency(3)).is_none());
+    }
+
     #[test]
     fn background_keeps_only_the_channel_in_focus() {
         let lens = rgb(Layout::Sectors).with_other_channels(OtherChannels::Background);
