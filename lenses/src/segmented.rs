@@ -5,7 +5,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use optics::fft::Aperture;
-use optics::{Field, LensModel, Order, Pupil, Wavefront, Zone};
+use optics::{Field, LensModel, Order, Pupil, Wavefront, Zone, ZoneKey, ZoneRate, ZoneRates};
 
 use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
@@ -379,6 +379,57 @@ impl LensModel for Segmented {
         self.signal_efficiency(wavelength_m, self.other_channels)
     }
 
+    /// The zones' rates of the one order (docs/physics.md, "Gradients: the multiplexed lens"):
+    /// a field angle θ_a moves every zone's lateral colour `Δ_j = f0 tan θ_a (λ_j/λ − 1)` by
+    /// `f0 sec²θ_a (λ_j/λ − 1)`; `ln λ_j` moves zone `j`'s defocus by `(λ/λ_j) f0/(8F#²)` and its
+    /// lateral colour by `f0 tan θ λ_j/λ`; `ln η_j` moves zone `j`'s amplitude `√η_j` by `√η_j/2`
+    /// and the order's efficiency `Σ a_k η_k` by `a_j η_j` where the zone's light is signal.
+    /// `None` for a channel beyond the lens's, for λ_j with [`OtherChannels::Background`] (the
+    /// channels' band edges move with it: the zones' light switches between signal and
+    /// background there, kinks of the integrand over λ), and for η_j where the zone is lit with
+    /// `η_j = 0` (`√η` has no derivative at 0).
+    fn zone_rates(&self, wavelength_m: f64, field: Field, key: ZoneKey) -> Option<Vec<ZoneRates>> {
+        let n = self.channels.len();
+        let f0 = self.focal_length;
+        let mut zones = vec![ZoneRate::default(); n];
+        let mut efficiency = 0.0;
+        match key {
+            ZoneKey::FieldAngle(axis) => {
+                let theta = [field.x_rad, field.y_rad].get(axis).copied()?;
+                let sec2 = 1.0 / (theta.cos() * theta.cos());
+                for (z, c) in zones.iter_mut().zip(&self.channels) {
+                    z.image_shift_m[axis] = f0 * sec2 * (c.wavelength_m / wavelength_m - 1.0);
+                }
+            }
+            ZoneKey::ChannelWavelength(j) => {
+                if j >= n || self.other_channels == OtherChannels::Background {
+                    return None;
+                }
+                let lambda_j = self.channels[j].wavelength_m;
+                let k = f0 / (8.0 * self.f_number * self.f_number);
+                let lateral = f0 * lambda_j / wavelength_m;
+                zones[j].defocus_m = k * wavelength_m / lambda_j;
+                zones[j].image_shift_m = [lateral * field.x_rad.tan(), lateral * field.y_rad.tan()];
+            }
+            ZoneKey::ChannelEfficiency(j) => {
+                if j >= n {
+                    return None;
+                }
+                let (lo, hi) = self.bands[j];
+                let lit = self.other_channels == OtherChannels::Signal || (wavelength_m >= lo && wavelength_m < hi);
+                if lit {
+                    let eta = self.channels[j].efficiency.value(wavelength_m);
+                    if eta <= 0.0 {
+                        return None;
+                    }
+                    zones[j].amplitude = 0.5 * eta.sqrt();
+                    efficiency = self.areas[j] * eta;
+                }
+            }
+        }
+        Some(vec![ZoneRates { zones, efficiency }])
+    }
+
     fn transmission(&self, wavelength_m: f64) -> f64 {
         self.transmission.value(wavelength_m)
     }
@@ -529,6 +580,78 @@ mod tests {
         }
         assert_eq!(zones[1].wavefront.image_shift_m, [0.0, 0.0]);
         assert_eq!(o.wavefront.image_shift_m, [0.0, 0.0]);
+    }
+
+    /// `zone_rates` against central differences of the lens's own orders (the slow, obviously
+    /// correct reference): each zone's amplitude, defocus and image shift and the order's
+    /// efficiency, per radian of a field angle, per ln λ_j and per ln η_j.
+    #[test]
+    fn zone_rates_match_differences_of_the_orders() {
+        let (lambda, theta) = (540e-9, [0.03, -0.02]);
+        // (zones' (amplitude, W020, shift), efficiency) of a sectors lens
+        let at = |theta: [f64; 2], waves: [f64; 3], etas: [f64; 3]| {
+            let channels = waves
+                .iter()
+                .zip(etas)
+                .map(|(&w, eta)| Channel { wavelength_m: w, efficiency: Curve::Constant(eta) })
+                .collect();
+            let lens = Segmented::new(2.5, F0, channels, Layout::Sectors, None, Curve::Constant(0.9)).unwrap();
+            let [o] = &lens.orders(lambda, Field::new(theta[0], theta[1]))[..] else { panic!() };
+            let Pupil::Zones(zones) = &o.pupil else { panic!() };
+            let z: Vec<[f64; 4]> = zones
+                .iter()
+                .map(|z| {
+                    let [sx, sy] = z.wavefront.image_shift_m;
+                    [z.amplitude, z.wavefront.defocus_m, sx, sy]
+                })
+                .collect();
+            (z, o.efficiency)
+        };
+        let (waves, etas) = ([500e-9, 550e-9, 600e-9], [0.2, 0.3, 0.25]);
+        let lens = {
+            let channels = waves
+                .iter()
+                .zip(etas)
+                .map(|(&w, eta)| Channel { wavelength_m: w, efficiency: Curve::Constant(eta) })
+                .collect();
+            Segmented::new(2.5, F0, channels, Layout::Sectors, None, Curve::Constant(0.9)).unwrap()
+        };
+        let field = Field::new(theta[0], theta[1]);
+        let h = 1e-5;
+        // each key: its rates, and the orders at its value ± h (per unit of the key)
+        type Moved<'a> = Box<dyn Fn(f64) -> (Vec<[f64; 4]>, f64) + 'a>;
+        let keys: Vec<(ZoneKey, Moved<'_>)> = vec![
+            (ZoneKey::FieldAngle(0), Box::new(move |d| at([theta[0] + d, theta[1]], waves, etas))),
+            (ZoneKey::FieldAngle(1), Box::new(move |d| at([theta[0], theta[1] + d], waves, etas))),
+            (
+                ZoneKey::ChannelWavelength(1),
+                Box::new(move |d| at(theta, [waves[0], waves[1] * d.exp(), waves[2]], etas)),
+            ),
+            (ZoneKey::ChannelEfficiency(2), Box::new(move |d| at(theta, waves, [etas[0], etas[1], etas[2] * d.exp()]))),
+        ];
+        for (key, moved) in keys {
+            let [r] = &lens.zone_rates(lambda, field, key).unwrap()[..] else { panic!() };
+            let ((up, e_up), (down, e_down)) = (moved(h), moved(-h));
+            for (j, z) in r.zones.iter().enumerate() {
+                let ours = [z.amplitude, z.defocus_m, z.image_shift_m[0], z.image_shift_m[1]];
+                for q in 0..4 {
+                    let reference = (up[j][q] - down[j][q]) / (2.0 * h);
+                    let scale = up[j][q].abs().max(reference.abs()).max(1e-12);
+                    assert!(
+                        (ours[q] - reference).abs() < 1e-7 * scale,
+                        "{key:?} zone {j} [{q}]: {} vs {reference}",
+                        ours[q]
+                    );
+                }
+            }
+            let reference = (e_up - e_down) / (2.0 * h);
+            assert!((r.efficiency - reference).abs() < 1e-9, "{key:?}: {} vs {reference}", r.efficiency);
+        }
+        // λ_j with the other channels as background: refused (the band edges move with it)
+        let background = lens.clone().with_other_channels(OtherChannels::Background);
+        assert!(background.zone_rates(lambda, field, ZoneKey::ChannelWavelength(0)).is_none());
+        assert!(background.zone_rates(lambda, field, ZoneKey::ChannelEfficiency(0)).is_some());
+        assert!(lens.zone_rates(lambda, field, ZoneKey::ChannelEfficiency(3)).is_none());
     }
 
     #[test]

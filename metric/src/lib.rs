@@ -49,7 +49,7 @@ pub use evaluate::{
 };
 pub use gradient::{
     Gradient, Parameter, aperture_mean_mtf_partials, channel_efficiency_gradient, channel_wavelength_gradient,
-    design_wavelength_mean_mtf_partial, gradient, library_bias_mean_mtf_partials, zernike_m0_place,
+    design_wavelength_mean_mtf_partial, gradient, library_bias_mean_mtf_partials, zernike_m0_place, zone_key_gradient,
 };
 pub use illumination::{IlluminationReport, RelativeIllumination};
 pub use metrics::{
@@ -57,7 +57,7 @@ pub use metrics::{
     Symmetry, jinc, metrics, power_law_mean, square_metrics,
 };
 /// The Seidel terms a [`Parameter::Seidel`] names.
-pub use optics::{ATOM_PHASE_ERROR, ATOM_TRANSMISSION_ERROR, SeidelTerm};
+pub use optics::{ATOM_PHASE_ERROR, ATOM_TRANSMISSION_ERROR, SeidelTerm, ZoneKey};
 pub use scene::{Camera, GlareMode, MetricForm, Options, Scene};
 
 /// What can go wrong building or evaluating a scene.

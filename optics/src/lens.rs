@@ -315,6 +315,42 @@ pub struct OrderDerivatives {
     pub tables: Vec<Arc<[num_complex::Complex64]>>,
 }
 
+/// A scene key that moves the zones of a composite pupil ([`Pupil::Zones`]) each at its own
+/// rate ([`LensModel::zone_rates`]; docs/physics.md, "Gradients: the multiplexed lens").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZoneKey {
+    /// The field angle along x (`0`) or y (`1`), per radian: each zone's own image shift (its
+    /// lateral colour) moves at its own rate.
+    FieldAngle(usize),
+    /// Channel `j`'s design wavelength λ_j, per relative change (`∂/∂ln λ_j`): zone `j`'s
+    /// defocus and image shift.
+    ChannelWavelength(usize),
+    /// Channel `j`'s own efficiency η_j, per relative change (`∂/∂ln η_j`): zone `j`'s field
+    /// amplitude `√η_j` and the order's efficiency.
+    ChannelEfficiency(usize),
+}
+
+/// How one zone of a composite pupil moves with a [`ZoneKey`], per unit of the key.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ZoneRate {
+    /// `∂a_j`, the zone's field amplitude.
+    pub amplitude: f64,
+    /// `∂W020_j`, m: the zone's defocus about the lens axis.
+    pub defocus_m: f64,
+    /// `∂Δ_j`, m: the zone's own image shift (its tilt `Δ_j NA`).
+    pub image_shift_m: [f64; 2],
+}
+
+/// How one order moves with a [`ZoneKey`] ([`LensModel::zone_rates`]): each of its zones (none
+/// where the order is not a composite pupil of zones) and its efficiency `∂τ_o`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ZoneRates {
+    /// One per zone of the order's [`Pupil::Zones`], in order.
+    pub zones: Vec<ZoneRate>,
+    /// `∂τ_o`.
+    pub efficiency: f64,
+}
+
 /// One part of a [`FactoredEfficiency`]: a table and the orders it multiplies.
 #[derive(Clone, Debug)]
 pub struct FactoredPart {
@@ -548,6 +584,15 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
+    /// For a lens whose imaging orders are composite pupils of zones (a segmented multiplexed
+    /// lens): how each order's zones and efficiency move with `key` at `wavelength_m` and
+    /// `field`, one [`ZoneRates`] per order of [`orders`](Self::orders), every other term of
+    /// the orders held (docs/physics.md, "Gradients: the multiplexed lens"). `None` (the
+    /// default) where the lens does not give them or the value is not differentiable in `key`.
+    fn zone_rates(&self, _wavelength_m: f64, _field: Field, _key: ZoneKey) -> Option<Vec<ZoneRates>> {
+        None
+    }
+
     /// The wavelength the lens was designed for (m), if it has one: the reference of the
     /// Fraunhofer-validity check (paper SI eq. S15). Default: none.
     fn design_wavelength(&self) -> Option<f64> {
@@ -645,6 +690,9 @@ macro_rules! forward_lens_model {
             }
             fn order_derivatives(&self, wavelength_m: f64, parameter: usize) -> Option<OrderDerivatives> {
                 (**self).order_derivatives(wavelength_m, parameter)
+            }
+            fn zone_rates(&self, wavelength_m: f64, field: Field, key: ZoneKey) -> Option<Vec<ZoneRates>> {
+                (**self).zone_rates(wavelength_m, field, key)
             }
             fn describe(&self) -> String { (**self).describe() }
             fn affine_defocus(&self, field: Field) -> Option<AffineDefocus> { (**self).affine_defocus(field) }

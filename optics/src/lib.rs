@@ -53,7 +53,7 @@ pub use error::Error;
 pub use lens::{
     ATOM_PHASE_ERROR, ATOM_TRANSMISSION_ERROR, AffineDefocus, ApertureDirections, DefocusRates, FactoredEfficiency,
     FactoredPart, Field, LensModel, Order, OrderDerivatives, OrderWavelengthRates, Pupil, Wavefront,
-    WavelengthDirections, Zone, round_for_display,
+    WavelengthDirections, Zone, ZoneKey, ZoneRate, ZoneRates, round_for_display,
 };
 pub use otf::{
     ASYMPTOTIC_MIN_PHASE, BESSEL_SERIES_MIN_A, cutoff_frequency, defocus_otf, defocus_otf_and_log_derivative,

@@ -405,6 +405,22 @@ impl Polychromatic<'_> {
         Some(moved / nodes.total_weight)
     }
 
+    /// `∂ln(∫ρ Σ_o τ_o dλ)` along `key` on the nodes that make the engine's normalization (each
+    /// sample's weight times `Σ_o ∂τ_o`, `LensModel::zone_rates`): the key's rate of the
+    /// detected signal N, per unit of the key. `None` where the lens gives no rates.
+    pub fn zone_signal_rate(&self, key: crate::ZoneKey) -> Option<f64> {
+        let nodes = self.engine.nodes();
+        let mut moved = 0.0;
+        for &(lambda, w, part) in &nodes.samples {
+            if w == 0.0 {
+                continue;
+            }
+            let lens = self.scene.part(part).lens;
+            moved += w * lens.zone_rates(lambda, self.scene.field, key)?.iter().map(|r| r.efficiency).sum::<f64>();
+        }
+        Some(moved / nodes.total_weight)
+    }
+
     /// The mean with the defocus lane (`rates` `None`), the order lane or the design
     /// wavelength's lane (`design`) recorded beside it.
     fn mean_with_defocus_lane(&self, rates: Option<Vec<[f64; 2]>>, design: bool) -> Option<DefocusDerivative> {

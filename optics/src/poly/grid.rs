@@ -888,20 +888,33 @@ impl FftLayer {
     }
 }
 
+/// How one direction moves the zones of a composite pupil ([`FftLayer::zones_lanes`]).
+enum ZoneLane<'r> {
+    /// Every zone's own defocus by itself (per relative change).
+    Defocus,
+    /// Every zone's own tilt by itself (per relative change).
+    ImageShift,
+    /// Each zone at its own rates (per unit of a key).
+    Rates(&'r [crate::ZoneRate]),
+    /// A direction the zones do not carry.
+    Missing,
+}
+
 impl FftLayer {
     /// The composite field of `zones` at `lambda` as [`zones_grid`](Self::zones_grid) builds
     /// it, its weight, and per direction its move `(∂P, ∂weight)` (docs/physics.md, "Gradients:
     /// the multiplexed lens"): [`WavefrontDirection::Defocus`] moves each zone's own defocus by
     /// itself, `∂W_j = W020_j (x² + y²)`, and [`WavefrontDirection::ImageShift`] each zone's own
     /// tilt (its image shift) by itself, `∂W_j = t_j·(x, y)`, both per relative change
-    /// ([`SampledZones::field_derivative`]). `None` for another direction or a zone whose
-    /// wavefront is not a defocus alone.
+    /// ([`SampledZones::field_derivative`]); [`ZoneLane::Rates`] each zone at the lens's own
+    /// rates (`LensModel::zone_rates`: `∂a_j`, and `∂W_j = ∂W020_j (x² + y²) + NA ∂Δ_j·(x, y)`).
+    /// `None` for a lane missing or a zone whose wavefront is not a defocus alone.
     #[allow(clippy::type_complexity)]
     fn zones_lanes(
         &mut self,
         zones: &[crate::Zone],
         lambda: f64,
-        directions: &[WavefrontDirection],
+        lanes: &[ZoneLane<'_>],
     ) -> Result<Option<(Vec<Complex64>, f64, Vec<(Vec<Complex64>, f64)>)>, Error> {
         if !zones.iter().all(|z| z.wavefront.is_defocus_only()) {
             return Ok(None);
@@ -913,17 +926,25 @@ impl FftLayer {
         let weight = sampled.weight();
         let fields = &self.fields;
         let still = vec![0.0; zones.len()];
-        let mut moves = Vec::with_capacity(directions.len());
-        for d in directions {
-            let moved = match *d {
-                WavefrontDirection::Defocus => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
+        let na = self.numerical_aperture;
+        let mut moves = Vec::with_capacity(lanes.len());
+        for lane in lanes {
+            let moved = match lane {
+                ZoneLane::Defocus => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
                     fields[j].aberrations.w020_m * (x * x + y * y)
                 }),
-                WavefrontDirection::ImageShift => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
+                ZoneLane::ImageShift => sampled.field_derivative(fields, lambda, &still, &|j, x, y| {
                     let [tx, ty] = fields[j].tilt_m;
                     tx * x + ty * y
                 }),
-                _ => None,
+                ZoneLane::Rates(rates) => {
+                    let d_amplitude: Vec<f64> = rates.iter().map(|r| r.amplitude).collect();
+                    sampled.field_derivative(fields, lambda, &d_amplitude, &|j, x, y| {
+                        let r = &rates[j];
+                        r.defocus_m * (x * x + y * y) + na * (r.image_shift_m[0] * x + r.image_shift_m[1] * y)
+                    })
+                }
+                ZoneLane::Missing => None,
             };
             let Some(moved) = moved else { return Ok(None) };
             moves.push(moved);
@@ -1119,6 +1140,17 @@ pub enum WavefrontDirection {
     /// and its power ([`MapPupil::scale_derivative`](crate::map::MapPupil::scale_derivative);
     /// docs/physics.md, "Gradients: a phase map's pitch and aperture"). The FFT path carries it.
     MapScale(crate::map::MapScale),
+    /// A key that moves the zones of a composite pupil each at its own rate
+    /// ([`ZoneKey`](crate::ZoneKey), `LensModel::zone_rates`: a channel's wavelength or own
+    /// efficiency of a segmented multiplexed lens), per unit of the key. On the FFT path the
+    /// composite field moves by `∂P_k = Σ_j A_jk (∂a_j + i k a_j ∂W_j(x_k)) e^{ik(W_j + t_j·x_k)}`
+    /// with `∂W_j = ∂W020_j (x² + y²) + NA ∂Δ_j·(x, y)`, its normalization `Σ A a²` by
+    /// `Σ 2 A a ∂a`, the node's weight `w τ_o` by `w ∂τ_o` and the polychromatic OTF's
+    /// normalization `Σ w τ_o` by `Σ w ∂τ_o` (docs/physics.md, "Gradients: the multiplexed
+    /// lens"). The field angles of such a lens are [`FieldAngle`](Self::FieldAngle), with the
+    /// lens's rates of [`ZoneKey::FieldAngle`](crate::ZoneKey::FieldAngle). The FFT path
+    /// carries it.
+    Zone(crate::ZoneKey),
 }
 
 /// The most bytes the derivatives' accumulators (one complex value per frequency read, azimuth
@@ -1353,11 +1385,52 @@ impl FftPath {
                         Some(l) => l,
                         slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
                     };
-                    let Some((field, weight, moves)) = layer.zones_lanes(zones, lambda, directions)? else {
+                    // each direction's lane: every zone's own defocus or tilt, or the lens's rates per
+                    // zone of a key that moves them one by one (`LensModel::zone_rates`)
+                    let mut rated: Vec<Option<crate::ZoneRates>> = Vec::with_capacity(k_dirs);
+                    for d in directions {
+                        let key = match *d {
+                            WavefrontDirection::FieldAngle(axis) if axis < 2 => crate::ZoneKey::FieldAngle(axis),
+                            WavefrontDirection::Zone(key) => key,
+                            _ => {
+                                rated.push(None);
+                                continue;
+                            }
+                        };
+                        let Some(rates) = lens.zone_rates(lambda, scene.field, key).and_then(|r| r.get(index).cloned())
+                        else {
+                            return Ok(None);
+                        };
+                        if rates.zones.len() != zones.len() {
+                            return Ok(None);
+                        }
+                        rated.push(Some(rates));
+                    }
+                    let lanes: Vec<ZoneLane<'_>> = directions
+                        .iter()
+                        .zip(&rated)
+                        .map(|(d, r)| match (d, r) {
+                            (_, Some(r)) => ZoneLane::Rates(&r.zones),
+                            (WavefrontDirection::Defocus, None) => ZoneLane::Defocus,
+                            (WavefrontDirection::ImageShift, None) => ZoneLane::ImageShift,
+                            _ => ZoneLane::Missing,
+                        })
+                        .collect();
+                    let Some((field, weight, moves)) = layer.zones_lanes(zones, lambda, &lanes)? else {
                         return Ok(None);
                     };
                     let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
                     layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
+                    // the order's efficiency moves its node's weight w τ_o and the normalization
+                    for ((grid, r), total) in d_grids.iter_mut().zip(&rated).zip(d_total.iter_mut()) {
+                        if let Some(r) = r
+                            && r.efficiency != 0.0
+                        {
+                            let rate = r.efficiency / order.efficiency;
+                            grid.add_scaled(&otf, rate);
+                            *total += node.weight * rate;
+                        }
+                    }
                     let grids: Vec<&Otf> = d_grids.iter().collect();
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
@@ -1438,6 +1511,7 @@ impl FftPath {
                         | WavefrontDirection::ObliqueScale(_)
                         | WavefrontDirection::DesignWavelength
                         | WavefrontDirection::MapScale(_)
+                        | WavefrontDirection::Zone(_)
                         | WavefrontDirection::Defocus => return Ok(None),
                     };
                     opd.push(values);

@@ -96,31 +96,84 @@ pub(super) fn with_channels(
     Ok(Some((gradient, e)))
 }
 
+/// The gradient where `keys` ask a channel's wavelength or own efficiency of a segmented lens
+/// (`lens.channels_nm[j]`, `lens.channel_efficiencies[j]`, or either list for every channel),
+/// with its evaluation: each a lane on zone `j` alone inside the composite pupil on the FFT path,
+/// on axis and off ([`metric::zone_key_gradient`], per `ln λ_j` or `ln η_j`, here per nm or per
+/// unit η_j), the other keys as [`super::gradient_and_evaluation`] takes them, in the keys'
+/// order; `None` where no key is a channel's of a segmented lens.
+pub(super) fn with_zone_channels(
+    source: &scene::Source,
+    overrides: &[String],
+    keys: &[String],
+) -> Result<Option<(Gradient, metric::Evaluation)>> {
+    if !keys.iter().any(|k| k.trim().starts_with("lens.channel")) {
+        return Ok(None);
+    }
+    let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
+    let model = lookup(&table, "lens.model").and_then(toml::Value::as_str);
+    let layout = lookup(&table, "lens.layout").and_then(toml::Value::as_str);
+    if model != Some("multiplexed") || layout != Some("segmented") {
+        return Ok(None);
+    }
+    let expanded = super::expand(source, &table, keys)?;
+    let zone_key = |key: &str| {
+        let entry = |list: &str| super::entry_of(key, list).and_then(Result::ok);
+        entry("lens.channels_nm")
+            .map(metric::ZoneKey::ChannelWavelength)
+            .or_else(|| entry("lens.channel_efficiencies").map(metric::ZoneKey::ChannelEfficiency))
+    };
+    let others: Vec<String> = expanded.iter().filter(|(k, _)| zone_key(k).is_none()).map(|(k, _)| k.clone()).collect();
+    let rest = match others.is_empty() {
+        true => None,
+        false => Some(super::gradient_and_evaluation(source, overrides, &others)?),
+    };
+    let mut evaluation = rest.as_ref().map(|(_, e)| e.clone());
+    let mut columns: [Vec<f64>; 4] = Default::default();
+    let mut at_rest = 0;
+    for (key, value) in &expanded {
+        let column = if let Some(zone) = zone_key(key) {
+            let g =
+                metric::zone_key_gradient(&built, zone).map_err(|e| anyhow!("--wrt {key}: {}: {e}", source.label()))?;
+            evaluation.get_or_insert(g.evaluation);
+            // ∂/∂ln λ_j per nm, ∂/∂ln η_j per unit η_j
+            [g.asnr[0], g.mean_mtf[0], g.snr0[0], g.photoelectrons[0]].map(|d| d / value)
+        } else {
+            let (g, _) = rest.as_ref().expect("the other keys' gradient");
+            at_rest += 1;
+            [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons].map(|d| d[at_rest - 1])
+        };
+        for (c, d) in columns.iter_mut().zip(column) {
+            c.push(d);
+        }
+    }
+    let e = evaluation.expect("at least one key");
+    let [d_asnr, d_mean_mtf, d_snr0, d_photoelectrons] = columns;
+    let gradient = Gradient {
+        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
+        values: expanded.iter().map(|(_, v)| *v).collect(),
+        asnr: e.asnr,
+        mean_mtf: e.mean_mtf,
+        snr0: e.snr0,
+        photoelectrons: e.photoelectrons,
+        d_asnr,
+        d_mean_mtf,
+        d_snr0,
+        d_photoelectrons,
+    };
+    Ok(Some((gradient, e)))
+}
+
 /// The chain of `key` (at `value`) of a multiplexed lens, or why it is refused; `None` for a key
 /// that is not the lens's or another family's lens.
 pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table) -> Option<Result<Chain>> {
     if lens_model != "multiplexed" {
         return None;
     }
-    let layout = lookup(table, "lens.layout").and_then(toml::Value::as_str).unwrap_or("");
-    let interleaved = layout == "interleaved";
     let diameter_given = lookup(table, "lens.aperture_diameter_mm").is_some();
-    // the field angles move each zone's tilt (its lateral colour) by its own rate: the segmented
-    // layout's refusal
-    let moves_wavefront = |why_interleaved: Chain| -> Option<Result<Chain>> {
-        Some(if interleaved {
-            Ok(why_interleaved)
-        } else {
-            Err(anyhow!(
-                "--wrt {key}: not differentiable here yet for lens.layout = \"{layout}\": a field angle moves each \
-                 zone's tilt, the lateral colour f0 tan θ (λ_j/λ − 1), by its own rate f0 sec²θ (λ_j/λ − 1) inside one \
-                 composite pupil on the FFT path, a lane per zone whose rates the lens does not give the FFT path's \
-                 forward mode yet (it is never replaced by a finite difference); computed for lens.layout = \
-                 \"interleaved\" (every channel the full circle, on the exact 1-D engine), and for the segmented \
-                 layout's lens.f_number and lens.focal_length_mm"
-            ))
-        })
-    };
+    // the field angles: every channel's lateral colour on the exact 1-D engine (interleaved), or
+    // every zone's tilt by its own rate f0 sec²θ (λ_j/λ − 1) on the FFT path (segmented,
+    // `optics::LensModel::zone_rates`), and the relative illumination
     match key {
         // one η for every channel: N ∝ η, the OTF unmoved (module docs)
         "lens.efficiency" => Some(Ok(vec![(Parameter::Efficiency, 1.0 / value)])),
@@ -138,34 +191,27 @@ pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table
         _ => {
             if let Some((_, axis)) = FIELD.iter().find(|(k, _)| *k == key) {
                 let p = Parameter::FieldAngle(*axis);
-                return moves_wavefront(super::direct(p, value));
+                return Some(Ok(super::direct(p, value)));
             }
             if key.starts_with("fields") {
                 return match field_point(key) {
                     Ok(Some((point, axis))) => {
-                        moves_wavefront(super::direct(Parameter::FieldPointAngle { point, axis }, value))
+                        Some(Ok(super::direct(Parameter::FieldPointAngle { point, axis }, value)))
                     }
                     Ok(None) => None,
                     Err(e) => Some(Err(e)),
                 };
             }
-            refusal(key, interleaved)
+            refusal(key)
         }
     }
 }
 
 /// The keys of the lens refused here, naming why; `None` for another key.
-fn refusal(key: &str, interleaved: bool) -> Option<Result<Chain>> {
-    let why = if key.starts_with("lens.channels_nm[") && !interleaved {
-        // (an interleaved lens's: `with_channels`)
-        "a zone's wavelength λ_j moves that zone's defocus inside one composite pupil on the FFT path (and, with \
-         lens.other_channels = \"background\", the channels' band edges, which are kinks of the value), a lane per \
-         zone that the FFT path's forward mode does not carry yet"
-    } else if key.starts_with("lens.channel_efficiencies[") && !interleaved {
-        // (an interleaved lens's: `with_channels`)
-        "a zone's own efficiency η_j weighs its amplitude √η_j inside one composite pupil on the FFT path against \
-         the other zones' (τ_j = a_j η_j), a lane per zone that the FFT path's forward mode does not carry yet"
-    } else if key.starts_with("lens.area_fractions[") {
+fn refusal(key: &str) -> Option<Result<Chain>> {
+    // (a channel's wavelength and own efficiency: `with_channels`, interleaved, and
+    // `with_zone_channels`, segmented)
+    let why = if key.starts_with("lens.area_fractions[") {
         "a zone's area fraction moves the zones' edges across the pupil (the edge's motion on the FFT path, carried \
          for a central obscuration's circle but not for the zones' rings and wedges yet) and every zone's τ_j = a_j η_j"
     } else {
@@ -467,9 +513,16 @@ mod tests {
     /// fixed rule) are the rule's exact derivative, so the differences' truncation and rounding
     /// remain (f0 and η measured ≤ 1.3e-10 of the norm, 1e-8 asserted; F# ≤ 4.7e-6, the
     /// interpolant's slope kinking at the grids' cell edges which the readings cross as F#
-    /// moves, 1e-5 asserted as the phase lens's off axis).
+    /// moves, 1e-5 asserted as the phase lens's off axis; the field angles through sectors off
+    /// axis ≤ 3.3e-7, the same kink as the value's azimuths turn with the field direction
+    /// across the grids' cells, 1e-6 asserted; through rings ≤ 1.2e-10; the channels' keys
+    /// ≤ 1.2e-10).
     fn exact_lanes(key: &str) -> f64 {
-        if key == "lens.f_number" { 1e-5 } else { 1e-8 }
+        match key {
+            "lens.f_number" => 1e-5,
+            k if k.starts_with("field") => 1e-6,
+            _ => 1e-8,
+        }
     }
 
     /// The segmented lens's F-number and focal length on axis (concentric zones, and sectors with
@@ -511,20 +564,79 @@ mod tests {
         }
     }
 
-    /// The keys refused, each naming itself and why: the segmented layout's keys that move a
-    /// zone's defocus inside the composite pupil, a channel's wavelength, a channel's own
-    /// efficiency and a zone's area.
+    /// The segmented lens's field angles off axis at (2°, 1°) with cos⁴θ on a 4 nm band,
+    /// concentric and sectors, with the focal length: each zone's tilt moves at its own rate
+    /// `f0 sec²θ (λ_j/λ − 1)` times NA (a lane with a rate per zone, `LensModel::zone_rates`),
+    /// the value's azimuths turn with the field direction and the relative illumination moves N;
+    /// against the discrete rule's differences at 64 pupil samples ([`exact_lanes`]).
+    #[test]
+    fn segmented_field_angles_off_axis() {
+        // (the field point in the scene: the references set the keys differenced)
+        let text = format!("{}\n[field]\nx_deg = 2\ny_deg = 1\n", multiplexed("segmented").text());
+        let source = Source::from_text(text, "segmented lens off axis written in the test", ".");
+        let keys = ["field.x_deg", "field.y_deg", "lens.focal_length_mm"];
+        for zones in ["lens.zones=\"concentric\"", "lens.zones=\"sectors\""] {
+            let overrides =
+                ["spectrum.range_nm=4", "options.pupil_samples=64", "lens.relative_illumination=\"cos4\"", zones];
+            let g = matches_the_fixed_rule(&source, &overrides, &keys, &exact_lanes);
+            assert!(g.d_mean_mtf[0] != 0.0 && g.d_mean_mtf[1] != 0.0 && g.d_photoelectrons[0] < 0.0, "{g:?}");
+        }
+    }
+
+    /// The segmented lens's channel wavelengths and own efficiencies on axis and off axis at
+    /// (2°, 1°) on a 4 nm band with the stray light and read noise, concentric and sectors: λ_j
+    /// moves zone j's defocus `(λ/λ_j) f0/(8F#²)` and tilt `f0 tan θ λ_j/λ` alone, η_j zone j's
+    /// amplitude `√η_j` against the others' and the order's efficiency `Σ a_k η_k` (N's share
+    /// `a_j η_j/Σ a_k η_k`); lanes with a rate on zone j alone, against the discrete rule's
+    /// differences at 64 pupil samples ([`exact_lanes`]).
+    #[test]
+    fn segmented_channels_match_the_fixed_rule() {
+        let source = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let keys = ["lens.channels_nm[0]", "lens.channels_nm[1]", "lens.channel_efficiencies[0]", "lens.f_number"];
+        for zones in ["lens.zones=\"concentric\"", "lens.zones=\"sectors\""] {
+            for field in [&[][..], &["field.x_deg=2", "field.y_deg=1"][..]] {
+                let mut overrides = vec![
+                    "spectrum.range_nm=4",
+                    "options.pupil_samples=64",
+                    "options.glare=\"included\"",
+                    "camera.read_noise_e=2",
+                    zones,
+                ];
+                overrides.extend(field);
+                let g = matches_the_fixed_rule(&source, &overrides, &keys, &exact_lanes);
+                // λ_j moves the OTF alone; η_j the OTF's weights and N
+                assert!(g.d_photoelectrons[..2] == [0.0; 2] && g.d_photoelectrons[2] > 0.0, "{g:?}");
+                assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+            }
+        }
+    }
+
+    /// The segmented lens's channel keys and a point's field angle over a `[[fields]]` list (on
+    /// axis, weight 1, and at 3°, weight 0.5), sectors on a 4 nm band: the weighted mean of each
+    /// point's lane, as the value is of the points' values; against the discrete rule's
+    /// differences at 64 pupil samples ([`exact_lanes`]).
+    #[test]
+    fn segmented_keys_over_a_field_list() {
+        let one = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let text =
+            format!("{}\n[[fields]]\nx_deg = 0\nweight = 1\n\n[[fields]]\nx_deg = 3\nweight = 0.5\n", one.text());
+        let source = Source::from_text(text, "segmented lens over a field list written in the test", ".");
+        let overrides = ["spectrum.range_nm=4", "options.pupil_samples=64", "lens.zones=\"sectors\""];
+        let keys = ["lens.channels_nm[2]", "lens.channel_efficiencies[1]", "fields[1].x_deg"];
+        let g = matches_the_fixed_rule(&source, &overrides, &keys, &exact_lanes);
+        assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
+    }
+
+    /// The keys refused, each naming itself and why: the segmented layout's channel wavelength
+    /// with the other channels as background (the band edges move with it), a channel's own
+    /// efficiency at 0, and a zone's area.
     #[test]
     fn multiplexed_refusals_name_the_key_and_why() {
         let segmented = multiplexed("segmented");
-        for (key, says) in [
-            ("field.x_deg", "a lane per zone"),
-            ("field.y_deg", "a lane per zone"),
-            ("lens.channels_nm[1]", "composite pupil"),
-        ] {
-            let e = gradient(&segmented, &[], &owned(&[key])).unwrap_err().to_string();
-            assert!(e.contains(&format!("--wrt {key}")) && e.contains(says), "{key}: {e}");
-        }
+        // a channel's wavelength where the band edges move with it
+        let background = owned(&["lens.other_channels=\"background\""]);
+        let e = gradient(&segmented, &background, &owned(&["lens.channels_nm[1]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channels_nm[1]") && e.contains("band edges"), "{e}");
         let with_areas = owned(&["lens.area_fractions=[0.3, 0.3, 0.4]"]);
         let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[0]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.area_fractions[0]") && e.contains("zones' edges"), "{e}");
@@ -533,8 +645,10 @@ mod tests {
         let line = owned(&["field.x_deg=1", "spectrum.shape=\"line\""]);
         let e = gradient(&interleaved, &line, &owned(&["lens.channels_nm[0]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channels_nm[0]") && e.contains("a line spectrum"), "{e}");
-        let own = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
-        let e = gradient(&own, &[], &owned(&["lens.channel_efficiencies[2]"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt lens.channel_efficiencies[2]") && e.contains("composite pupil"), "{e}");
+        // a channel's own efficiency at 0, lit: √η has no derivative there
+        let own = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.0, 0.2]");
+        let cheap = owned(&["spectrum.range_nm=4", "options.pupil_samples=64"]);
+        let e = gradient(&own, &cheap, &owned(&["lens.channel_efficiencies[1]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.channel_efficiencies[1]") && e.contains("√η"), "{e}");
     }
 }
