@@ -606,7 +606,13 @@ pub(crate) fn evaluate_field_with_lanes(
         if poly.has_pupil_grid() || poly.direction_dependent() {
             let mut a = None;
             if noise.is_none() && !grid.is_empty() {
-                match poly.mean_mtf_over_azimuth_and_gradient(along_field, grid) {
+                // a band's FFT grids, the overlap and exact 1-D engines; or a line's grids
+                // (docs/physics.md, "Gradients: 2-D pupils under a line")
+                let found = match poly.mean_mtf_over_azimuth_and_gradient(along_field, grid) {
+                    Ok(None) => poly.line_mean_mtf_over_azimuth_and_gradient(along_field, grid, None),
+                    other => other,
+                };
+                match found {
                     Ok(Some((mean, mut gradient))) => {
                         refine_field_lanes(&poly, settings, grid, &mut gradient, mean.mean, &|tighter, lanes| {
                             let refined =
@@ -891,7 +897,10 @@ pub(crate) fn noise_weighted_lanes(
         let found = if grid.is_empty() {
             None
         } else {
-            poly.mean_mtf_over_azimuth_over_noise_and_gradient(along_field, grid, shape)?
+            match poly.mean_mtf_over_azimuth_over_noise_and_gradient(along_field, grid, shape)? {
+                None => poly.line_mean_mtf_over_azimuth_and_gradient(along_field, grid, Some(shape))?,
+                found => found,
+            }
         };
         match found {
             Some((mean, mut gradient)) => {

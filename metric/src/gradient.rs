@@ -837,10 +837,10 @@ fn point_gradient(
                 let GridGradient::Computed(all) = d_grid else {
                     return Err(not_smooth(
                         p,
-                        "lens.obscuration: the inner edge's motion is computed on the FFT path, for orders \
-                        through the annulus (or annular sector) with its wavefront, asked with no \
-                        wavefront key but Seidel terms; this scene's OTF is on another engine (a line \
-                        spectrum's grids)"
+                        "lens.obscuration: the inner edge's motion is computed on the FFT path (a band's \
+                        grids or a line's), for orders through the annulus (or annular sector) with its \
+                        wavefront, asked with no wavefront key but Seidel and Zernike terms; this scene's \
+                        OTF is on another engine or its grids give no lane"
                             .to_owned(),
                     ));
                 };
@@ -1043,7 +1043,7 @@ fn noise_refusal(p: Parameter) -> String {
     let passes = "with camera.noise_spectrum the wavefront and field keys' lanes are taken on the value's \
                   noise-weighted pass of the radial engine (Binary 2 coefficients, spline knots, m = 0 Zernike \
                   terms on axis), the exact 1-D engine (a circular iris's decentre, the field angles' lateral \
-                  colour), the overlap engine (Seidel and Zernike terms, at zero too) and the FFT path (a band), \
+                  colour), the overlap engine (Seidel and Zernike terms, at zero too) and the FFT path (a band or a line), \
                   and are 0 where the OTF's symmetry makes them so";
     let (key, here) = match p {
         Parameter::IrisDecentre(a) => (
@@ -1066,8 +1066,8 @@ fn noise_refusal(p: Parameter) -> String {
         ),
         Parameter::Obscuration => (
             "lens.obscuration".to_owned(),
-            "its edge's lane rides on the FFT path of a band, asked with no wavefront key but Seidel terms; this \
-             scene is not that (a line spectrum's grids)",
+            "its edge's lane rides on the FFT path of a band or a line, asked with no wavefront key but Seidel and \
+             Zernike terms; this scene is not that",
         ),
         _ => (p.describe().to_owned(), "this key's lane is on another rule here"),
     };

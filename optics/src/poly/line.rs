@@ -5,9 +5,10 @@
 use num_complex::Complex64;
 
 use super::exact::{contributions, exact_along, exact_along_and_field_gradient};
-use super::grid::FftPath;
+use super::grid::{FftPath, Grids};
 use super::spectral::{Nodes, RADIAL_ACCURACY, Scene};
-use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
+use super::{AzimuthalMean, Engine, FrequencyRule, NoiseShape, OtfEngine, Polychromatic, WavefrontDirection};
+use crate::Error;
 
 /// A line spectrum's nodes, with the FFT grids of its orders where some order needs them.
 #[derive(Debug)]
@@ -145,9 +146,48 @@ impl OtfEngine for Line<'_> {
             None => FrequencyRule::Adaptive { min_panels: 4.0 },
         }
     }
+
+    fn wavefront_gradient_over_azimuth(
+        &self,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<Vec<f64>>, Error> {
+        self.grid_gradient(first, count, directions, None)
+    }
+
+    fn wavefront_gradient_over_azimuth_over_noise(
+        &self,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+        noise: &NoiseShape,
+    ) -> Result<Option<Vec<f64>>, Error> {
+        self.grid_gradient(first, count, directions, Some(noise))
+    }
 }
 
 impl Line<'_> {
+    /// On the line's FFT grids: the derivative of the mean MTF averaged over the `count`
+    /// azimuths from `first` along each of `directions` (docs/physics.md, "Gradients: 2-D pupils
+    /// under a line"), by the FFT path's forward mode on the line's own grids
+    /// ([`Grids::gradient_over_azimuth`] at the line's sampling, one node per order, no
+    /// Richardson level: the value's fixed rule in ν, its azimuths, interpolation, weights and
+    /// pixel MTF; with `noise`, each frequency's weight divided by `n(ν)` as the value's is).
+    /// `Ok(None)` where no order is on the grids (the exact 1-D engine's lanes are the line's).
+    fn grid_gradient(
+        &self,
+        first: f64,
+        count: usize,
+        directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
+    ) -> Result<Option<Vec<f64>>, Error> {
+        let Some(fft) = &self.fft else { return Ok(None) };
+        // the line's grids at its own sampling (`FftPath::build`, as `choose` builds them)
+        let grids = Grids::new(self.scene, self.nodes.clone(), Some(fft.pupil_samples), f64::INFINITY)?;
+        grids.gradient_over_azimuth(first, count, directions, noise)
+    }
+
     /// The OTF at `frequency` as [`otf`](OtfEngine::otf) computes it, bit for bit (the same
     /// nodes below the cutoff, the same points through [`crate::otf::defocus_otf_many_and_log_derivative_within`],
     /// whose values are [`crate::otf::defocus_otf_many`]'s, summed in the same order), and beside
@@ -189,5 +229,32 @@ impl Line<'_> {
         let value = sum / total;
         let moved: f64 = (0..nodes.len()).map(|o| q * rate(o)[1]).sum();
         Some((value, (lane - value * moved) / total))
+    }
+}
+
+impl Polychromatic<'_> {
+    /// Under a line whose orders are on FFT grids ([`Engine::Monochromatic`] with grids): the
+    /// mean MTF averaged over azimuth ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth),
+    /// with `noise` the mean of `P |O| / n`) and its derivative along each of `directions` on
+    /// the same rules (docs/physics.md, "Gradients: 2-D pupils under a line"). `Ok(None)` on
+    /// another engine, or where an order is not a radial pupil on the grids.
+    ///
+    /// # Errors
+    /// Building the grids again ([`Error`] of the FFT layer).
+    pub fn line_mean_mtf_over_azimuth_and_gradient(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
+    ) -> Result<Option<(AzimuthalMean, Vec<f64>)>, Error> {
+        if !matches!(self.engine(), Engine::Monochromatic { fft: Some(_) }) {
+            return Ok(None);
+        }
+        let mean = self.mean_mtf_over_azimuth(first, noise);
+        let gradient = match noise {
+            None => self.engine.wavefront_gradient_over_azimuth(first, mean.azimuths, directions)?,
+            Some(n) => self.engine.wavefront_gradient_over_azimuth_over_noise(first, mean.azimuths, directions, n)?,
+        };
+        Ok(gradient.map(|g| (mean, g)))
     }
 }

@@ -802,8 +802,9 @@ fn part_signal_in_step(nodes: &Nodes, part: usize, signal: &mut Vec<(f64, f64)>)
 fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine + 'a>, Error> {
     let pupil_samples = settings.pupil_samples.unwrap_or(DEFAULT_PUPIL_SAMPLES);
     if let Some(l) = scene.detected.as_line() {
-        // (a line's grids carry no edge lane: its obscuration gradient is refused)
-        let scene = Scene { edge_lane: false, ..scene.whole() };
+        // (its grids carry the edge lane where asked, as a band's: the obscuration's gradient
+        // under a line, docs/physics.md "Gradients: 2-D pupils under a line")
+        let scene = scene.whole();
         let nodes = spectral::line(&scene, l);
         check_signal(&nodes)?;
         // the overlap engine asked for at the line's one wavelength (the Seidel gradient at zero
