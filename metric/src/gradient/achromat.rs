@@ -280,7 +280,11 @@ pub(super) fn aperture_without_defocus(
     }
     let plain = scene.lens().orders(e.mean_wavelength_nm * 1e-9, scene.field()).iter().all(|o| {
         let w = &o.wavefront;
-        matches!(o.pupil, optics::Pupil::Full) && w.is_defocus_only() && w.image_shift_m == [0.0, 0.0]
+        // no defocus at the mean wavelength either: no engine is built for a lens that has some
+        matches!(o.pupil, optics::Pupil::Full)
+            && w.is_defocus_only()
+            && w.defocus_m == 0.0
+            && w.image_shift_m == [0.0, 0.0]
     });
     if !plain {
         return Ok(None);
