@@ -604,6 +604,8 @@ fn point_gradient(
         }
         None => None,
     };
+    // both band edges' lanes from one pass, made for the first edge asked
+    let edge_pass = achromat::EdgePass::default();
     for &p in parameters {
         let Some(partials) = partials else {
             return Err(not_smooth(
@@ -873,7 +875,11 @@ fn point_gradient(
                 (0.0, 0.0, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::DesignWavelength => {
-                let (d_ln_n, d_mtf) = design_wavelength_partials(scene, e, p)?;
+                // a design band's lens: on the band edges' pass where it gives λ0's lane too
+                let (d_ln_n, d_mtf) = match achromat::design_wavelength_on_edge_pass(scene, e, &edge_pass) {
+                    Some(found) => found,
+                    None => design_wavelength_partials(scene, e, p)?,
+                };
                 let d_weighted = match camera.noise_spectrum() {
                     Some(shape) => design_wavelength_over_noise(scene, e, p, shape)?,
                     None => d_mtf,
@@ -884,9 +890,9 @@ fn point_gradient(
                 (d_n, if stray { -d_n } else { 0.0 }, 0.0, 0.0, 0.0, d_g, d_mtf)
             }
             Parameter::BandEdge(edge) => {
-                let (d_ln_n, d_mtf) = achromat::band_edge_partials(scene, e, p, edge, None)?;
+                let (d_ln_n, d_mtf) = achromat::band_edge_partials(scene, e, p, edge, None, &edge_pass)?;
                 let d_weighted = match camera.noise_spectrum() {
-                    Some(shape) => achromat::band_edge_partials(scene, e, p, edge, Some(shape))?.1,
+                    Some(shape) => achromat::band_edge_partials(scene, e, p, edge, Some(shape), &edge_pass)?.1,
                     None => d_mtf,
                 };
                 let d_g = d_g_from_mean_mtf(scene, e, d_weighted);
@@ -2550,6 +2556,12 @@ fn aperture_partials(
     }
     // a designer's phase map: its cells' edges and values on the FFT path (`map`)
     if let Some(found) = map::aperture_on_map(scene, e, p)? {
+        return Ok(found);
+    }
+    // no wavefront error at any node (a true achromat): D_K = 0, no pass for it
+    if pass.is_none()
+        && let Some(found) = achromat::aperture_without_defocus(scene, e, p)?
+    {
         return Ok(found);
     }
     if let Some(found) = defocus_on_value_rule(scene, e, pass)? {

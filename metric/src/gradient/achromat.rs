@@ -4,7 +4,7 @@
 
 use crate::{Error, Scene};
 
-use std::cell::RefCell;
+use std::cell::{OnceCell, RefCell};
 use std::collections::HashMap;
 
 use super::{
@@ -41,6 +41,7 @@ pub(super) fn band_edge_partials(
     p: Parameter,
     edge: usize,
     noise: Option<&optics::NoiseShape>,
+    pass: &EdgePass,
 ) -> Result<(f64, f64), Error> {
     let lens = scene.lens();
     let Some((lo, hi)) = lens.design_band() else {
@@ -64,9 +65,9 @@ pub(super) fn band_edge_partials(
         return Ok((0.0, 0.0));
     }
     if noise.is_none()
-        && let Some(found) = band_edge_on_value_rule(scene, e, &detected, (lo, hi), edge)
+        && let Some(found) = pass.lanes(scene, e)
     {
-        return Ok(found);
+        return Ok(found.edges[edge]);
     }
     // the edge's single wavelength (a line of any weight: its OTF is normalized)
     let line = radiometry::Spectrum::Line(radiometry::Line::new(x, 1e-9, 1.0)?);
@@ -122,6 +123,56 @@ pub(super) fn band_edge_partials(
     Ok((sign * density, sign * density * (i_x - j)))
 }
 
+/// Both edges' `(∂ln N/∂x, ∂M̄/∂x)` of one point's gradient (and, on the per-frequency product
+/// rule, the design wavelength's `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)`), from one pass of the value's
+/// engine ([`band_edges_on_value_rule`], [`band_edges_on_value_pass`]), made when the first of
+/// them is asked and read by the others.
+#[derive(Debug, Default)]
+pub(super) struct EdgePass(OnceCell<Option<EdgeLanes>>);
+
+/// What [`EdgePass`] keeps.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct EdgeLanes {
+    /// `(∂ln N/∂x, ∂M̄/∂x)` at the band's short and long edges (per m)
+    edges: [(f64, f64); 2],
+    /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` where the pass gave it
+    design: Option<(f64, f64)>,
+}
+
+impl EdgePass {
+    /// The pass's lanes for the scene's lens's design band (white noise), made on the first call;
+    /// `None` where the lens has no band or the value's engine gives no such pass.
+    fn lanes(&self, scene: &Scene, e: &crate::Evaluation) -> Option<EdgeLanes> {
+        *self.0.get_or_init(|| {
+            let band = scene.lens().design_band()?;
+            let detected = crate::evaluate::detected_spectrum(scene);
+            band_edges_on_value_rule(scene, e, &detected, band)
+                .or_else(|| band_edges_on_value_pass(scene, &detected, band))
+        })
+    }
+}
+
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` of a lens with a design band from the band edges' pass, where it
+/// gave it (the per-frequency product rule on axis: the design wavelength's lane on the same
+/// climb as the edges', [`band_edges_on_value_rule`]); `None` elsewhere (the caller's rule).
+pub(super) fn design_wavelength_on_edge_pass(
+    scene: &Scene,
+    e: &crate::Evaluation,
+    pass: &EdgePass,
+) -> Option<(f64, f64)> {
+    pass.lanes(scene, e)?.design
+}
+
+/// `±T_x/D` at both edges `x` of the band `(lo, hi)` (`-` at `lo`), with `D` the engine's total
+/// weight: the detected density times the orders' efficiency at the edge, over the weight.
+fn edge_densities(scene: &Scene, detected: &radiometry::Spectrum, (lo, hi): (f64, f64), total: f64) -> [f64; 2] {
+    let density = |x: f64| {
+        let efficiency: f64 = scene.lens().orders(x, scene.field()).iter().map(|o| o.efficiency).sum();
+        detected.value(x) * efficiency / total
+    };
+    [-density(lo), density(hi)]
+}
+
 /// [`band_edge_partials`] on the value's own engine, where it is the per-frequency product rule on
 /// axis, built for the detected spectrum with the band's window on it (the same integrand, the
 /// orders' efficiency being 0 outside the band), so that its spectral panels end at the design
@@ -132,15 +183,15 @@ pub(super) fn band_edge_partials(
 /// density and the orders' efficiency), and each OTF value carries `±(T_x/D)(O_x − O)` beside it
 /// ([`optics::Polychromatic::mean_mtf_and_spectral_lanes`] with its edge lanes), integrated with
 /// the frequency rule's accepted weights: the lane held to the value's own error control. `∂ln N
-/// = ±T_x/D` as there. `None` on the other engines, off axis, or where the engine's ends are not
-/// the band's (a Gaussian's ±7σ inside the band): the caller's rule.
-fn band_edge_on_value_rule(
+/// = ±T_x/D` as there. Both edges from the one pass. `None` on the other engines, off axis, or
+/// where the engine's ends are not the band's (a Gaussian's ±7σ inside the band): the caller's
+/// rule.
+fn band_edges_on_value_rule(
     scene: &Scene,
     e: &crate::Evaluation,
     detected: &radiometry::Spectrum,
     (lo, hi): (f64, f64),
-    edge: usize,
-) -> Option<(f64, f64)> {
+) -> Option<EdgeLanes> {
     if !product_rule_on_axis(scene, e) {
         return None;
     }
@@ -154,13 +205,107 @@ fn band_edge_on_value_rule(
         if (a - lo).abs() > 1e-12 * lo || (b - hi).abs() > 1e-12 * hi {
             return None;
         }
-        let (_, lanes, _) = poly.mean_mtf_and_spectral_lanes(None, true)?;
+        let (_, [design, d_a, d_b], _) = poly.mean_mtf_and_design_and_edge_lanes()?;
         if poly.over_budget().is_some() {
             return None;
         }
-        let x = if edge == 0 { a } else { b };
-        let efficiency: f64 = scene.lens().orders(x, scene.field()).iter().map(|o| o.efficiency).sum();
-        let density = windowed.value(x) * efficiency / poly.total_weight();
-        Some((if edge == 0 { -density } else { density }, lanes[edge]))
+        let [n_a, n_b] = edge_densities(scene, &windowed, (a, b), poly.total_weight());
+        let design = poly.design_signal_rate().map(|rate| (rate, design));
+        Some(EdgeLanes { edges: [(n_a, d_a), (n_b, d_b)], design })
     })
+}
+
+/// [`band_edge_partials`] on the value's own pass where its engine reads the OTF per frequency on
+/// the adaptive rule without a product rule's edge lanes (the reference panels rule: a
+/// wavelength's cutoff `1/(λF#)` inside `[0, ν_N]`, the `D = 0.2 mm` design at F/16.8), on axis
+/// or where the field leaves the OTF as on axis, and the OTF the same along every direction:
+/// beside each OTF value `O(ν)` the value reads, the edges' single-wavelength OTFs `O_x(ν)`
+/// (each edge's orders, one line's engine each) form the lanes `±(T_x/D)(O_x − O)` at that
+/// frequency, integrated with the frequency rule's accepted weights
+/// ([`optics::Polychromatic::mean_mtf_and_lanes`]): the difference formed per frequency, not of
+/// two means, on the value's own error control. `O_x`'s kink at its cutoff `1/(xF#)` is one of
+/// the rule's cuts (the band's edges are the lens's breakpoints, so spectral panel ends, whose
+/// cutoffs cut the frequency range). `∂ln N = ±T_x/D`, `D` the engine's weight. `None` where
+/// the engine is another or gives no such pass.
+fn band_edges_on_value_pass(scene: &Scene, detected: &radiometry::Spectrum, (lo, hi): (f64, f64)) -> Option<EdgeLanes> {
+    let (lens, field) = (scene.lens(), scene.field());
+    if detected.as_line().is_some() {
+        return None;
+    }
+    let settings = scene.options().settings();
+    let nyquist = scene.camera().nyquist();
+    // each edge's single wavelength (a line of any weight: its OTF is normalized)
+    let line = |x: f64| radiometry::Line::new(x, 1e-9, 1.0).ok().map(radiometry::Spectrum::Line);
+    let (line_lo, line_hi) = (line(lo)?, line(hi)?);
+    let at_lo = optics::Polychromatic::with_settings(lens, &line_lo, field, nyquist, None, settings).ok()?;
+    let at_hi = optics::Polychromatic::with_settings(lens, &line_hi, field, nyquist, None, settings).ok()?;
+    if at_lo.direction_dependent() || at_hi.direction_dependent() {
+        return None;
+    }
+    on_value_engine(scene, detected, settings, |poly| {
+        if poly.engine() != optics::Engine::Exact1d || poly.spectral_ends().is_some() {
+            return None;
+        }
+        let densities = edge_densities(scene, detected, (lo, hi), poly.total_weight());
+        // an edge without detected light: its lane 0 (no line read)
+        let lane =
+            |d: f64, at: &optics::Polychromatic<'_>, nu: f64, o: f64| if d == 0.0 { 0.0 } else { d * (at.otf(nu) - o) };
+        let (_, [d_lo, d_hi], _) =
+            poly.mean_mtf_and_lanes(&|nu, o| [lane(densities[0], &at_lo, nu, o), lane(densities[1], &at_hi, nu, o)])?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        Some(EdgeLanes { edges: [(densities[0], d_lo), (densities[1], d_hi)], design: None })
+    })
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` where every order at every spectral node of the value's engine is
+/// the full circular pupil without any wavefront error (a true achromat, β = 1: `W020 = 0`
+/// across the band; docs/physics.md, "Gradients: the dispersion-engineered lens"). Each
+/// wavelength's OTF is then the diffraction-limited `H(νλF#)`: at fixed wavefront the F-number
+/// only scales the frequency, so by parts `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − P_ν`
+/// (`P_ν = (1/ν_N) ∫ ν P′ |O| dν`, 0 without the pixel MTF: on the value's engine), and the
+/// defocus lane `D_K = (1/ν_N) ∫ P sign(O) ∂O/∂ln K dν` is 0 (`w ∂H/∂w = 0` at `w = 0`, `H`
+/// being even in `w`): no integral to take for it. `None` where the scene is not that (a
+/// line, an order with a wavefront error, image shifts, an OTF that depends on direction, the
+/// field moving the OTF).
+pub(super) fn aperture_without_defocus(
+    scene: &Scene,
+    e: &crate::Evaluation,
+    p: Parameter,
+) -> Result<Option<(f64, f64)>, Error> {
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if detected.as_line().is_some() {
+        return Ok(None);
+    }
+    let plain = scene.lens().orders(e.mean_wavelength_nm * 1e-9, scene.field()).iter().all(|o| {
+        let w = &o.wavefront;
+        // no defocus at the mean wavelength either: no engine is built for a lens that has some
+        matches!(o.pupil, optics::Pupil::Full)
+            && w.is_defocus_only()
+            && w.defocus_m == 0.0
+            && w.image_shift_m == [0.0, 0.0]
+    });
+    if !plain {
+        return Ok(None);
+    }
+    let camera = scene.camera();
+    let found = on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let still = scene.field().is_on_axis() || poly.field_independent();
+        if poly.max_defocus() != 0.0 || poly.direction_dependent() || !still {
+            return None;
+        }
+        let edge = poly.mtf(camera.nyquist());
+        let pixel_slope = match camera.pixel_mtf() {
+            false => Some(0.0),
+            true => poly.mean_mtf_and_pixel_slope(0.0).map(|(_, slope, _)| slope),
+        };
+        Some((edge, pixel_slope))
+    });
+    let Some((edge, pixel_slope)) = found else { return Ok(None) };
+    let pixel_slope = match pixel_slope {
+        Some(s) => s,
+        None => super::noise_weight::pixel_slope_white(scene, e, p)?,
+    };
+    Ok(Some((edge - e.mean_mtf - pixel_slope, 0.0)))
 }

@@ -234,6 +234,67 @@ impl Polychromatic<'_> {
         self.integrate_recorded(mean, recording, work)
     }
 
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass the
+    /// design wavelength's lane ([`mean_mtf_and_design_lane`](Self::mean_mtf_and_design_lane)'s
+    /// `∂M̄/∂ln λ0`) and the band's two edge lanes
+    /// ([`mean_mtf_and_spectral_lanes`](Self::mean_mtf_and_spectral_lanes)'s with `edges`),
+    /// `[∂M̄/∂ln λ0, ∂M̄/∂lo, ∂M̄/∂hi]`: each beside its OTF value on the spectral level each panel
+    /// accepts, integrated with the frequency rule's accepted weights (docs/physics.md,
+    /// "Gradients: the dispersion-engineered lens"). `None` where the engine gives no such lanes
+    /// (every engine but the per-frequency product rule), off axis, or where the OTF depends on
+    /// direction.
+    pub fn mean_mtf_and_design_and_edge_lanes(&self) -> Option<(f64, [f64; 3], Work)> {
+        if !self.scene.field.is_on_axis()
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || self.engine.spectral_ends().is_none()
+        {
+            return None;
+        }
+        *self.gradient.borrow_mut() = Some(Recording { lanes: 3, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| {
+            let mut lanes = [0.0; 3];
+            let value = if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_design_and_edge_lanes(nu, &mut lanes) };
+            self.record(nu, value, &lanes)
+        });
+        let recording = self.gradient.borrow_mut().take()?;
+        let (mean, found, work) = self.integrate_recorded(mean, recording, work)?;
+        Some((mean, [found[0], found[1], found[2]], work))
+    }
+
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass
+    ///
+    /// ```text
+    /// (1/ν_max) ∫ P(ν) sign(O(ν)) L_k(ν) dν,   L = lanes(ν, O(ν))
+    /// ```
+    ///
+    /// for lanes the caller forms at each frequency the rule reads from the OTF value there (a
+    /// band edge's `O_x − O`, `O_x` the OTF at the edge's single wavelength: docs/physics.md,
+    /// "Gradients: the dispersion-engineered lens"), integrated with the frequency rule's
+    /// accepted weights (split at the OTF's sign changes and at every spectral panel end's
+    /// cutoff, `P` included): a lane whose kinks fall at those cuts rides on the value's own
+    /// error control. `None` off axis where the field moves the OTF, where the OTF depends on
+    /// direction, or on the FFT path's fixed rule.
+    pub fn mean_mtf_and_lanes<const K: usize>(
+        &self,
+        lanes: &dyn Fn(f64, f64) -> [f64; K],
+    ) -> Option<(f64, [f64; K], Work)> {
+        if !(self.scene.field.is_on_axis() || self.field_independent())
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        *self.gradient.borrow_mut() = Some(Recording { lanes: K, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| {
+            let v = self.otf(nu);
+            self.record(nu, Some(v), &lanes(nu, v))
+        });
+        let recording = self.gradient.borrow_mut().take()?;
+        let (mean, found, work) = self.integrate_recorded(mean, recording, work)?;
+        Some((mean, std::array::from_fn(|k| found[k]), work))
+    }
+
     /// The band `[lo, hi]` (m) whose ends the edge lanes of
     /// [`mean_mtf_and_spectral_lanes`](Self::mean_mtf_and_spectral_lanes) move, where the engine
     /// gives them (the per-frequency product rule: the spectrum's support, or a Gaussian's

@@ -422,6 +422,14 @@ trait OtfEngine: std::fmt::Debug {
     ) -> Option<f64> {
         None
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf), bit for bit, and into `lanes` the
+    /// design wavelength's lane `∂O/∂ln λ0` ([`otf_and_design_lane`](Self::otf_and_design_lane)'s)
+    /// and the band's two edge lanes ([`otf_and_spectral_lanes`](Self::otf_and_spectral_lanes)'s
+    /// with `edges`), read on the same climb (docs/physics.md, "Gradients: the
+    /// dispersion-engineered lens"); `None` where the engine does not give them (the default).
+    fn otf_and_design_and_edge_lanes(&self, _frequency: f64, _lanes: &mut [f64; 3]) -> Option<f64> {
+        None
+    }
     /// The band `[lo, hi]` (m) whose ends the edge lanes of
     /// [`otf_and_spectral_lanes`](Self::otf_and_spectral_lanes) move; `None` where the engine
     /// gives no such lanes (the default).

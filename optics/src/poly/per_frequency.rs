@@ -953,6 +953,19 @@ impl OtfEngine for PerFrequency<'_> {
         Some(value)
     }
 
+    /// `(O, [∂O/∂ln λ0, ∂O/∂lo, ∂O/∂hi])` on one climb: the design wavelength's lane as
+    /// [`otf_and_design_lane`](OtfEngine::otf_and_design_lane) and the band's edges as
+    /// [`otf_and_spectral_lanes`](OtfEngine::otf_and_spectral_lanes) give them, the value bit
+    /// for bit [`otf`](OtfEngine::otf)'s.
+    fn otf_and_design_and_edge_lanes(&self, frequency: f64, lanes: &mut [f64; 3]) -> Option<f64> {
+        let mut design = [0.0];
+        let mut ends = [0.0; 4];
+        let value = self.value_and_edges(frequency, Some(&mut design), Lanes::Design, Some(&mut ends))?;
+        let total = self.nodes.total_weight;
+        *lanes = [design[0], -(ends[0] - value * ends[1]) / total, (ends[2] - value * ends[3]) / total];
+        Some(value)
+    }
+
     /// The band `[lo, hi]` the panels cover, whose ends the edge lanes of
     /// [`otf_and_spectral_lanes`](OtfEngine::otf_and_spectral_lanes) move.
     fn spectral_ends(&self) -> Option<(f64, f64)> {

@@ -139,7 +139,8 @@ fn lenses_max_diameter(focal_length_m: f64, delay_s: f64) -> f64 {
 }
 
 /// A band edge (nm): half the centre's move, `∂/∂λ_i = (1/(2λ0)) ∂/∂ln λ0`, plus the edge's own
-/// Leibniz term (per m). Refused where the spectrum has a kink of its own there (a line at the
+/// Leibniz term (per m); the centre's term left out where β = 1 (`W020 = 0` near the design: it
+/// is 0). Refused where the spectrum has a kink of its own there (a line at the
 /// edge, a top-hat's edge on it): the value's one-sided derivatives differ.
 fn band_edge(key: &str, edge: usize, table: &toml::Table) -> Result<Chain> {
     let band = lookup(table, "lens.design_band_nm").and_then(toml::Value::as_array);
@@ -163,6 +164,11 @@ fn band_edge(key: &str, edge: usize, table: &toml::Table) -> Result<Chain> {
              edge or line, so the detected light at the edge jumps as the edge crosses it (the one-sided derivatives \
              differ); move the band's edge or the spectrum off it"
         ));
+    }
+    // a true achromat (β = 1): W020 = 0 whatever λ0, so λ0's lane is 0 and not taken
+    let design = Design::of(table).map_err(|e| anyhow!("--wrt {key}: {e}"))?;
+    if design.beta().0 == 1.0 {
+        return Ok(vec![(Parameter::BandEdge(edge), 1e-9)]);
     }
     let centre_nm = 0.5 * (lo + hi);
     Ok(vec![(Parameter::DesignWavelength, 0.5 / centre_nm), (Parameter::BandEdge(edge), 1e-9)])
