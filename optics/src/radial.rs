@@ -650,6 +650,27 @@ impl RadialPupil {
         w
     }
 
+    /// The OPD terms `(c_k, f_k)` of [`new`](Self::new) (metres per unit of each profile).
+    pub(crate) fn terms(&self) -> &[(f64, Arc<RadialProfile>)] {
+        &self.terms
+    }
+
+    /// [`opd_beyond_defocus_m`](Self::opd_beyond_defocus_m) at `q` with each term's profile
+    /// value `f_k(q)` given by `value(k)` (samples of the profiles, which do not depend on the
+    /// wavelength where the coefficients do): the same operations in the same order, so the
+    /// same bits where `value(k)` is `f_k(q)`.
+    #[inline]
+    pub(crate) fn opd_beyond_defocus_from(&self, q: f64, value: impl Fn(usize) -> f64) -> f64 {
+        let mut w = -self.fit * q;
+        for (k, (c, _)) in self.terms.iter().enumerate() {
+            w += c * value(k);
+        }
+        if !self.zernike_even.is_empty() {
+            w += self.zernike_even.iter().rev().fold(0.0, |acc, &ci| acc * q + ci);
+        }
+        w
+    }
+
     /// The OPD beyond the order's defocus ([`opd_beyond_defocus_m`](Self::opd_beyond_defocus_m))
     /// from its terms' cached samples and series ([`RadialProfile::sampled`]), a sum with the
     /// pupil's own coefficients, so that a wavelength's pupil costs no profile evaluation:

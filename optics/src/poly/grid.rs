@@ -758,6 +758,7 @@ struct FftLayer {
     pupils: Vec<(Arc<Aperture>, SampledPupil)>,
     zones: Vec<SampledZones>,
     fields: Vec<ZoneField>,
+    radial: RadialCache,
 }
 
 impl FftLayer {
@@ -771,6 +772,7 @@ impl FftLayer {
             pupils: Vec::new(),
             zones: Vec::new(),
             fields: Vec::new(),
+            radial: RadialCache::default(),
         })
     }
 
@@ -790,7 +792,7 @@ impl FftLayer {
                 self.plan.otf_of_field(&field, weight, &mut otf);
             }
             Pupil::Radial(radial) => {
-                let (field, weight) = radial_field(&self.pupils[slot].1, radial, lambda);
+                let (field, weight) = radial_field(&mut self.radial, &self.pupils[slot].1, radial, lambda);
                 self.plan.otf_of_field(&field, weight, &mut otf);
             }
             _ => self.plan.otf(&self.pupils[slot].1, lambda, &mut otf),
@@ -956,8 +958,12 @@ impl FftLayer {
 /// The field of a radial pupil ([`Pupil::Radial`]) on the samples of `sampled` (the full circle
 /// with the order's other aberrations): each transmitting pixel's area fraction times the
 /// profile's amplitude at its centre, with the profile's OPD beyond the defocus added to the
-/// sampled OPD; and its power `Σ f A²` (pixel units), the OTF's normalization.
+/// sampled OPD; and its power `Σ f A²` (pixel units), the OTF's normalization. The profiles'
+/// samples at the pixels do not depend on the wavelength (the phase `k W` does, through `k`
+/// and the terms' coefficients): they are read from `cache` ([`RadialSamples`]), made once per
+/// grid and profile, the same numbers in the same operations as evaluating them here.
 fn radial_field(
+    cache: &mut RadialCache,
     sampled: &crate::fft::SampledPupil,
     radial: &crate::radial::RadialPupil,
     lambda: f64,
@@ -965,23 +971,150 @@ fn radial_field(
     let n = sampled.n();
     let k = 2.0 * PI / lambda;
     let (area, opd) = (sampled.amplitude(), sampled.opd_m());
-    let scale2 = radial.frequency_scale().powi(2);
+    let at = cache.view(sampled, radial);
     let mut field = vec![Complex64::new(0.0, 0.0); n * n];
     let mut weight = 0.0;
-    for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
-        // a pupil in direction cosines fills the circle of radius 1/k of the paraxial one
-        // (its rim pixel by pixel, not by area fraction)
-        let q = (x * x + y * y) * scale2;
-        if scale2 > 1.0 && q > 1.0 {
-            continue;
-        }
-        let q = q.min(1.0);
-        let a = radial.amplitude(q);
-        weight += area[idx] * a * a;
-        let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
-        field[idx] = Complex64::from_polar(area[idx] * a, k * w);
+    for (i, p) in at.pixels.iter().enumerate() {
+        let a = at.amplitude.map_or(1.0, |v| v[i]);
+        weight += area[p.idx] * a * a;
+        let w = opd[p.idx] + radial.opd_beyond_defocus_from(p.q, |t| at.terms[t][i]) + at.oblique.map_or(0.0, |v| v[i]);
+        field[p.idx] = Complex64::from_polar(area[p.idx] * a, k * w);
     }
     (field, weight)
+}
+
+/// A transmitting pixel of a radial pupil's grid ([`radial_field`]) inside its circle: its
+/// index, centre `(x, y)`, `r² = x² + y²` and `q = min(r² k², 1)` (`k` the frequency scale).
+struct RadialPixel {
+    idx: usize,
+    x: f64,
+    y: f64,
+    r2: f64,
+    q: f64,
+}
+
+/// Profiles kept per set of pixels ([`RadialSamples`]): a lens's shared ones (its phase terms,
+/// its reference sphere) and a wavelength's own (a library's amplitude and residual).
+const RADIAL_PROFILES: usize = 16;
+
+/// The samples of radial pupils' profiles at the pixels of one grid ([`radial_field`]): the
+/// pixels (for one pupil grid size and frequency scale), each profile's values at their `q`
+/// (keyed by the profile's `Arc`, which the cache holds so the key stays that profile's), and
+/// an oblique incidence's OPD at their centres. None depends on the wavelength.
+struct RadialSamples {
+    n: usize,
+    scale2: u64,
+    pixels: Vec<RadialPixel>,
+    /// most recently used last
+    profiles: Vec<(Arc<crate::radial::RadialProfile>, Vec<f64>)>,
+    oblique: Vec<(crate::radial::Oblique, Vec<f64>)>,
+}
+
+/// The [`RadialSamples`] of an FFT layer, one per frequency scale seen (a lens has one).
+#[derive(Default)]
+struct RadialCache {
+    sets: Vec<RadialSamples>,
+}
+
+/// What [`radial_field`] reads of a [`RadialSamples`] for one pupil: the pixels, and at each the
+/// amplitude (`None`: uniform), each OPD term's profile, and the oblique OPD (`None`: on axis).
+struct RadialView<'c> {
+    pixels: &'c [RadialPixel],
+    amplitude: Option<&'c [f64]>,
+    terms: Vec<&'c [f64]>,
+    oblique: Option<&'c [f64]>,
+}
+
+impl RadialCache {
+    /// The samples of `radial`'s profiles on the pixels of `sampled` (the layer's full circle:
+    /// its transmitting pixels are those of its size), made where not cached.
+    fn view<'c>(
+        &'c mut self,
+        sampled: &crate::fft::SampledPupil,
+        radial: &crate::radial::RadialPupil,
+    ) -> RadialView<'c> {
+        let n = sampled.n();
+        let scale2 = radial.frequency_scale().powi(2);
+        let at = match self.sets.iter().position(|s| s.n == n && s.scale2 == scale2.to_bits()) {
+            Some(i) => i,
+            None => {
+                let mut pixels = Vec::new();
+                for (idx, x, y) in crate::fft::transmitting_pixels(n, sampled.amplitude()) {
+                    // a pupil in direction cosines fills the circle of radius 1/k of the
+                    // paraxial one (its rim pixel by pixel, not by area fraction)
+                    let r2 = x * x + y * y;
+                    let q = r2 * scale2;
+                    if scale2 > 1.0 && q > 1.0 {
+                        continue;
+                    }
+                    pixels.push(RadialPixel { idx, x, y, r2, q: q.min(1.0) });
+                }
+                if self.sets.len() == SAMPLED_CACHE {
+                    self.sets.remove(0);
+                }
+                self.sets.push(RadialSamples {
+                    n,
+                    scale2: scale2.to_bits(),
+                    pixels,
+                    profiles: Vec::new(),
+                    oblique: Vec::new(),
+                });
+                self.sets.len() - 1
+            }
+        };
+        let set = &mut self.sets[at];
+        let mut wanted: Vec<&Arc<crate::radial::RadialProfile>> = radial.terms().iter().map(|(_, p)| p).collect();
+        if let Some(a) = radial.amplitude_profile() {
+            wanted.push(a);
+        }
+        for p in &wanted {
+            set.keep(p);
+        }
+        // the wanted profiles are the last ones now: drop the least recently used beyond the bound
+        while set.profiles.len() > RADIAL_PROFILES.max(wanted.len()) {
+            set.profiles.remove(0);
+        }
+        if let Some(o) = radial.oblique() {
+            match set.oblique.iter().position(|(seen, _)| seen == o) {
+                Some(i) => {
+                    let entry = set.oblique.remove(i);
+                    set.oblique.push(entry);
+                }
+                None => {
+                    let values = set.pixels.iter().map(|p| o.opd_m(p.x, p.y)).collect();
+                    if set.oblique.len() == SAMPLED_CACHE {
+                        set.oblique.remove(0);
+                    }
+                    set.oblique.push((*o, values));
+                }
+            }
+        }
+        let set = &self.sets[at];
+        let values = |p: &Arc<crate::radial::RadialProfile>| {
+            set.profiles.iter().find(|(seen, _)| Arc::ptr_eq(seen, p)).map_or(&[][..], |(_, v)| v.as_slice())
+        };
+        RadialView {
+            pixels: &set.pixels,
+            amplitude: radial.amplitude_profile().map(values),
+            terms: radial.terms().iter().map(|(_, p)| values(p)).collect(),
+            oblique: radial
+                .oblique()
+                .and_then(|o| set.oblique.iter().find(|(seen, _)| seen == o))
+                .map(|(_, v)| v.as_slice()),
+        }
+    }
+}
+
+impl RadialSamples {
+    /// Makes `profile`'s values at the pixels where not cached, and marks them the most
+    /// recently used.
+    fn keep(&mut self, profile: &Arc<crate::radial::RadialProfile>) {
+        let entry = match self.profiles.iter().position(|(seen, _)| Arc::ptr_eq(seen, profile)) {
+            Some(i) => self.profiles.remove(i),
+            None => (profile.clone(), self.pixels.iter().map(|p| profile.value(p.q)).collect()),
+        };
+        self.profiles.push(entry);
+    }
 }
 
 /// Monochromatic MTF of `lens` at one wavelength along +x, at each of `frequencies` (cycles/m):
@@ -1446,7 +1579,7 @@ impl FftPath {
                     slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
                 };
                 let slot = layer.pupil(&order)?;
-                let (field, power) = radial_field(&layer.pupils[slot].1, &radial, lambda);
+                let (field, power) = radial_field(&mut layer.radial, &layer.pupils[slot].1, &radial, lambda);
                 // each direction's OPD per unit key at the pixels the field transmits
                 let mut opd: Vec<Vec<f64>> = Vec::with_capacity(k_dirs);
                 for d in directions {
@@ -1531,7 +1664,14 @@ impl FftPath {
                                     return Ok(None);
                                 };
                                 let sampled = &layer.pupils[slot].1;
-                                moves.push(order_field_move(sampled, &radial, d_amplitude, d_wavefront, lambda));
+                                moves.push(order_field_move(
+                                    &mut layer.radial,
+                                    sampled,
+                                    &radial,
+                                    d_amplitude,
+                                    d_wavefront,
+                                    lambda,
+                                ));
                                 rates[j] = d_tau / order.efficiency;
                             }
                             None => moves.push((
@@ -1832,6 +1972,7 @@ fn radial_direction(
 /// (its best-fit defocus's rate on the order's sampled defocus), and the normalization's
 /// `∂(Σ A a²) = Σ 2 A a ∂a`.
 fn order_field_move(
+    cache: &mut RadialCache,
     sampled: &crate::fft::SampledPupil,
     radial: &crate::radial::RadialPupil,
     d_amplitude: &crate::radial::RadialProfile,
@@ -1841,23 +1982,17 @@ fn order_field_move(
     let n = sampled.n();
     let k = 2.0 * PI / lambda;
     let (area, opd) = (sampled.amplitude(), sampled.opd_m());
-    let scale2 = radial.frequency_scale().powi(2);
     let slope = d_wavefront.fitted_slope();
+    let at = cache.view(sampled, radial);
     let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
     let mut d_weight = 0.0;
-    for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
-        let r2 = x * x + y * y;
-        let q = r2 * scale2;
-        if scale2 > 1.0 && q > 1.0 {
-            continue;
-        }
-        let q = q.min(1.0);
-        let a = radial.amplitude(q);
-        let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
-        let da = d_amplitude.value(q);
-        let dw = d_wavefront.value(q) + slope * (r2 - q);
-        d_weight += 2.0 * area[idx] * a * da;
-        moved[idx] = Complex64::from_polar(area[idx], k * w) * Complex64::new(da, k * a * dw);
+    for (i, p) in at.pixels.iter().enumerate() {
+        let a = at.amplitude.map_or(1.0, |v| v[i]);
+        let w = opd[p.idx] + radial.opd_beyond_defocus_from(p.q, |t| at.terms[t][i]) + at.oblique.map_or(0.0, |v| v[i]);
+        let da = d_amplitude.value(p.q);
+        let dw = d_wavefront.value(p.q) + slope * (p.r2 - p.q);
+        d_weight += 2.0 * area[p.idx] * a * da;
+        moved[p.idx] = Complex64::from_polar(area[p.idx], k * w) * Complex64::new(da, k * a * dw);
     }
     (moved, d_weight)
 }
@@ -1991,7 +2126,127 @@ impl Polychromatic<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The reference of the cached [`radial_field`]: its profiles evaluated at every pixel.
+    fn radial_field_direct(
+        sampled: &crate::fft::SampledPupil,
+        radial: &crate::radial::RadialPupil,
+        lambda: f64,
+    ) -> (Vec<Complex64>, f64) {
+        let n = sampled.n();
+        let k = 2.0 * PI / lambda;
+        let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+        let scale2 = radial.frequency_scale().powi(2);
+        let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+        let mut weight = 0.0;
+        for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+            // a pupil in direction cosines fills the circle of radius 1/k of the paraxial one
+            // (its rim pixel by pixel, not by area fraction)
+            let q = (x * x + y * y) * scale2;
+            if scale2 > 1.0 && q > 1.0 {
+                continue;
+            }
+            let q = q.min(1.0);
+            let a = radial.amplitude(q);
+            weight += area[idx] * a * a;
+            let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
+            field[idx] = Complex64::from_polar(area[idx] * a, k * w);
+        }
+        (field, weight)
+    }
+
+    /// The reference of the cached [`order_field_move`]: its profiles evaluated at every pixel.
+    fn order_field_move_direct(
+        sampled: &crate::fft::SampledPupil,
+        radial: &crate::radial::RadialPupil,
+        d_amplitude: &crate::radial::RadialProfile,
+        d_wavefront: &crate::radial::RadialProfile,
+        lambda: f64,
+    ) -> (Vec<Complex64>, f64) {
+        let n = sampled.n();
+        let k = 2.0 * PI / lambda;
+        let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+        let scale2 = radial.frequency_scale().powi(2);
+        let slope = d_wavefront.fitted_slope();
+        let mut moved = vec![Complex64::new(0.0, 0.0); n * n];
+        let mut d_weight = 0.0;
+        for (idx, x, y) in crate::fft::transmitting_pixels(n, area) {
+            let r2 = x * x + y * y;
+            let q = r2 * scale2;
+            if scale2 > 1.0 && q > 1.0 {
+                continue;
+            }
+            let q = q.min(1.0);
+            let a = radial.amplitude(q);
+            let w = opd[idx] + radial.opd_beyond_defocus_m(q) + radial.oblique_opd_m(x, y);
+            let da = d_amplitude.value(q);
+            let dw = d_wavefront.value(q) + slope * (r2 - q);
+            d_weight += 2.0 * area[idx] * a * da;
+            moved[idx] = Complex64::from_polar(area[idx], k * w) * Complex64::new(da, k * a * dw);
+        }
+        (moved, d_weight)
+    }
     use crate::fft::Aberrations;
+
+    /// The radial pupil's field and its move from the profiles' samples cached per grid
+    /// ([`RadialCache`], reused across the wavelengths as the FFT path's layer reuses it) are
+    /// the fields from the profiles evaluated at every pixel ([`radial_field_direct`],
+    /// [`order_field_move_direct`]), bit for bit: a phase lens's pupil (a polynomial phase whose
+    /// coefficient scales with λ, the reference sphere, a tabulated amplitude, an `m = 0`
+    /// Zernike term) on axis and seen off axis, and the same pupil in direction cosines (its
+    /// frequency scale drops the rim's pixels), at three wavelengths each, 48 samples.
+    #[test]
+    fn radial_field_from_cached_samples_is_the_direct_field() {
+        use crate::radial::{DirectionCosines, Oblique, RadialProfile, RadialPupil};
+        let n = 48;
+        let phase = Arc::new(RadialProfile::even_polynomial(vec![0.0, -2.0e3, 35.0, -1.5]).unwrap());
+        let sphere = Arc::new(RadialProfile::reference_sphere(0.5e-3, 2.0e-3).unwrap());
+        let amplitude =
+            Arc::new(RadialProfile::table(vec![0.0, 0.4, 0.7, 1.0, 1.2], vec![1.0, 0.97, 0.9, 0.8, 0.78]).unwrap());
+        let d_amplitude = RadialProfile::even_polynomial(vec![0.01, -0.02]).unwrap();
+        let d_wavefront = RadialProfile::table(vec![0.0, 0.5, 0.8, 1.0], vec![0.0, 2e-9, 5e-9, 9e-9]).unwrap();
+        let pupil_at = |lambda: f64| {
+            let terms = vec![(lambda / (2.0 * PI), phase.clone()), (1.0, sphere.clone())];
+            RadialPupil::new(Some(amplitude.clone()), terms, vec![(11, 0.02e-6)]).unwrap()
+        };
+        let oblique = Oblique::new(0.5e-3, 2.0e-3, 0.05, -0.02).unwrap();
+        let cosines = DirectionCosines::new(0.3).unwrap();
+        let lambdas = [0.45e-6, 0.55e-6, 0.65e-6];
+        let kinds: [&dyn Fn(f64) -> RadialPupil; 3] =
+            [&|l| pupil_at(l), &|l| pupil_at(l).with_oblique(oblique), &|l| cosines.map(&pupil_at(l), 0.1e-6).unwrap()];
+        let mut cache = RadialCache::default();
+        let mut compared = 0;
+        for _ in 0..2 {
+            for kind in &kinds {
+                for &lambda in &lambdas {
+                    let radial = kind(lambda);
+                    let defocus = Aberrations { w020_m: radial.fitted_defocus_m(), ..Aberrations::default() };
+                    let sampled = SampledPupil::new(n, &Aperture::circle(), &defocus).unwrap();
+                    let (field, weight) = radial_field(&mut cache, &sampled, &radial, lambda);
+                    let (reference, reference_weight) = radial_field_direct(&sampled, &radial, lambda);
+                    assert_eq!(weight.to_bits(), reference_weight.to_bits(), "{lambda}");
+                    assert!(field.iter().any(|p| p.norm() > 0.0));
+                    for (p, r) in field.iter().zip(&reference) {
+                        assert_eq!((p.re.to_bits(), p.im.to_bits()), (r.re.to_bits(), r.im.to_bits()), "{lambda}");
+                    }
+                    let (moved, d_weight) =
+                        order_field_move(&mut cache, &sampled, &radial, &d_amplitude, &d_wavefront, lambda);
+                    let (reference, reference_weight) =
+                        order_field_move_direct(&sampled, &radial, &d_amplitude, &d_wavefront, lambda);
+                    assert_eq!(d_weight.to_bits(), reference_weight.to_bits(), "{lambda}");
+                    assert!(moved.iter().any(|p| p.norm() > 0.0));
+                    for (p, r) in moved.iter().zip(&reference) {
+                        assert_eq!((p.re.to_bits(), p.im.to_bits()), (r.re.to_bits(), r.im.to_bits()), "{lambda}");
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert_eq!(compared, 18);
+        // one set of pixels per frequency scale, each profile sampled once however many wavelengths
+        assert_eq!(cache.sets.len(), 2);
+        assert!(cache.sets.iter().all(|s| s.profiles.len() <= RADIAL_PROFILES && s.oblique.len() <= 1));
+    }
 
     /// Engines of one lens under `ρ`, `ρλ` and `ρλ²` (the spectral gradient's three) built with
     /// [`SharedGrids`] against each built alone: the same OTF along every direction read, bit for
