@@ -1000,7 +1000,7 @@ impl OtfEngine for PerFrequency<'_> {
     /// ([`order_totals`](PerFrequency::order_totals)); `None` where an order is a radial pupil,
     /// the lens gives no rates or some wavelength has another count of orders.
     fn otf_and_order_lanes(&self, frequency: f64, lanes: &mut [f64]) -> Option<f64> {
-        if lanes.is_empty() || lanes.len() % 2 != 0 {
+        if lanes.is_empty() || !lanes.len().is_multiple_of(2) {
             return None;
         }
         let n = lanes.len() / 2;
