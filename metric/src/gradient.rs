@@ -24,7 +24,7 @@ mod multiplexed;
 mod noise_weight;
 mod segmented;
 
-pub use multiplexed::{channel_efficiency_gradient, channel_wavelength_gradient};
+pub use multiplexed::{channel_efficiency_gradient, channel_gradients, channel_wavelength_gradient};
 pub use segmented::zone_key_gradient;
 
 /// A scene quantity the ASNR can be differentiated against, and what each derivative is taken

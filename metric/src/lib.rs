@@ -48,8 +48,9 @@ pub use evaluate::{
     Numerics, detected_spectrum, evaluate, mtf_at, mtf_curve,
 };
 pub use gradient::{
-    Gradient, Parameter, aperture_mean_mtf_partials, channel_efficiency_gradient, channel_wavelength_gradient,
-    design_wavelength_mean_mtf_partial, gradient, library_bias_mean_mtf_partials, zernike_m0_place, zone_key_gradient,
+    Gradient, Parameter, aperture_mean_mtf_partials, channel_efficiency_gradient, channel_gradients,
+    channel_wavelength_gradient, design_wavelength_mean_mtf_partial, gradient, library_bias_mean_mtf_partials,
+    zernike_m0_place, zone_key_gradient,
 };
 pub use illumination::{IlluminationReport, RelativeIllumination};
 pub use metrics::{

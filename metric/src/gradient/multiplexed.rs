@@ -17,6 +17,10 @@
 //! Off axis λ_j also moves channel `j`'s lateral colour `Δ_j = f0 tan θ (λ_j/λ − 1)` alone, by
 //! `∂Δ_j/∂ln λ_j = f0 tan θ λ_j/λ`: one order's shift against the others', carried on the exact
 //! 1-D engine as the field angles' lanes with that order's shift rates ([`channel_off_axis`]).
+//!
+//! On axis every channel's wavelength and efficiency lanes are taken in one pass
+//! ([`channel_gradients`]): the lens seen with each order's rates of its own channel
+//! ([`AllChannels`]), each order's share of the design lane and its own weight kept apart.
 
 use std::sync::Arc;
 
@@ -182,6 +186,160 @@ fn over_fields(scene: &Scene, channel: usize, moving: Moving) -> Result<Gradient
     }
     let [asnr, mean_mtf, snr0, photoelectrons] = sum.map(|d| vec![d]);
     Ok(Gradient { evaluation, asnr, mean_mtf, snr0, photoelectrons })
+}
+
+/// The interleaved lens seen with every channel's own rates at once: order `o`'s
+/// `design_wavelength_rates` those of its own wavelength `λ_o` (`[(λ/λ_o) K, 0]`), so that the
+/// design wavelength's lane restricted to order `o` is channel `o`'s ([`channel_gradients`]).
+#[derive(Debug)]
+struct AllChannels {
+    lens: Arc<dyn LensModel>,
+    /// each channel's wavelength λ_o (m), order `o`'s
+    channels: Vec<f64>,
+}
+
+impl LensModel for AllChannels {
+    fn f_number(&self) -> f64 {
+        self.lens.f_number()
+    }
+    fn focal_length(&self) -> f64 {
+        self.lens.focal_length()
+    }
+    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+        self.lens.orders(wavelength_m, field)
+    }
+    fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
+        self.lens.orders_into(wavelength_m, field, out)
+    }
+    fn efficiency(&self, wavelength_m: f64) -> f64 {
+        self.lens.efficiency(wavelength_m)
+    }
+    fn transmission(&self, wavelength_m: f64) -> f64 {
+        self.lens.transmission(wavelength_m)
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.lens.breakpoints()
+    }
+    fn numerical_aperture(&self) -> f64 {
+        self.lens.numerical_aperture()
+    }
+    fn design_wavelength(&self) -> Option<f64> {
+        self.lens.design_wavelength()
+    }
+    fn describe(&self) -> String {
+        self.lens.describe()
+    }
+
+    /// Order `o`'s `[(λ/λ_o) K, 0]`, each order [`OneChannel`]'s for its own channel; `None` on
+    /// axis unless every order is the full circle with the defocus `(1 − λ/λ_o) K` alone, and
+    /// off axis.
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        if !field.is_on_axis() {
+            return None;
+        }
+        let orders = self.lens.orders(wavelength_m, field);
+        let f_number = self.lens.f_number();
+        let k = self.lens.focal_length() / (8.0 * f_number * f_number);
+        if orders.len() != self.channels.len() {
+            return None;
+        }
+        orders
+            .iter()
+            .zip(&self.channels)
+            .map(|(order, &lambda_o)| {
+                let expected = (1.0 - wavelength_m / lambda_o) * k;
+                let plain = matches!(order.pupil, optics::Pupil::Full) && order.wavefront.is_defocus_only();
+                (plain && (order.wavefront.defocus_m - expected).abs() <= 1e-12 * k)
+                    .then_some([k * wavelength_m / lambda_o, 0.0])
+            })
+            .collect()
+    }
+}
+
+/// The evaluation of `scene` and the derivatives of its ASNR, mean MTF, SNR0 and photoelectrons
+/// with respect to each of `wanted` (`(j, true)`: `ln λ_j` of channel `j`'s wavelength; `(j,
+/// false)`: `ln η_j` of its own efficiency), in their order, for the interleaved lens whose
+/// channels are at `channels` (m, order `o` channel `o`'s), all in one pass on the value's own
+/// engine and rules: the mean with, beside each OTF value, each order's design lane (the
+/// design wavelength's lane of that order alone, its rates `[(λ/λ_j) K, 0]`: channel `j`'s
+/// wavelength) and each order's own weight `τ_j H_j` (its efficiency), each less `O` times its
+/// normalization's rate ([`optics::Polychromatic::mean_mtf_and_order_lanes`]); the same lanes
+/// [`channel_wavelength_gradient`] and [`channel_efficiency_gradient`] take one at a time
+/// (docs/physics.md, "Gradients: the multiplexed lens"). `evaluation`: the scene's, where the
+/// caller has it. `None` where that engine does not give them (off axis, a `[[fields]]` list,
+/// a noise spectrum, an engine other than the per-frequency product rule): the one-at-a-time
+/// functions take the keys then.
+///
+/// # Errors
+/// The evaluation's, and [`Error::NotDifferentiable`] where the pixel saturates or there is no
+/// signal.
+pub fn channel_gradients(
+    scene: &Scene,
+    channels: &[f64],
+    wanted: &[(usize, bool)],
+    evaluation: Option<crate::Evaluation>,
+) -> Result<Option<Gradient>, Error> {
+    if wanted.is_empty()
+        || wanted.iter().any(|&(j, _)| j >= channels.len())
+        || !scene.fields().is_empty()
+        || !scene.field().is_on_axis()
+        || scene.camera().noise_spectrum().is_some()
+    {
+        return Ok(None);
+    }
+    let view = AllChannels { lens: scene.lens_arc(), channels: channels.to_vec() };
+    let seen = scene.clone().with_lens(Arc::new(view));
+    let detected = crate::evaluate::detected_spectrum(&seen);
+    if detected.as_line().is_some() {
+        return Ok(None);
+    }
+    let n = channels.len();
+    let Some((lanes, rates)) = super::on_value_engine(&seen, &detected, seen.options().settings(), |poly| {
+        let (_, lanes, _) = poly.mean_mtf_and_order_lanes(n)?;
+        // ∂ln N/∂ln η_j = ∫ρ τ_j / ∫ρ Σ τ_o on the normalization's nodes
+        let rates = poly.order_signal_shares(n)?;
+        Some((lanes, rates))
+    }) else {
+        return Ok(None);
+    };
+    let e = match evaluation {
+        Some(e) => e,
+        None => crate::evaluate(scene)?,
+    };
+    // the noise budget exactly as evaluate forms it
+    let n_e = e.photoelectrons;
+    let background = match seen.options().glare {
+        crate::GlareMode::FirstOrder => 0.0,
+        crate::GlareMode::Included => (e.transmitted_photoelectrons - n_e).max(0.0),
+    };
+    let budget = noise::budget(seen.camera().sensor(), n_e, background, seen.exposure())?;
+    let not_smooth =
+        |reason: &str| Error::NotDifferentiable { parameter: "a channel's key", reason: reason.to_owned() };
+    let Some(partials) = budget.snr_partials() else {
+        return Err(not_smooth(if budget.saturated {
+            "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
+        } else {
+            "there is no signal"
+        }));
+    };
+    let stray = matches!(seen.options().glare, crate::GlareMode::Included) && background > 0.0;
+    let g = e.asnr / e.snr0;
+    let mut out = Gradient { asnr: vec![], mean_mtf: vec![], snr0: vec![], photoelectrons: vec![], evaluation: e };
+    for &(j, wavelength) in wanted {
+        // λ_j moves the OTF alone; η_j order j's weight, so N by its share (T held: the stray
+        // light N_T − N by −∂N)
+        let (d_mtf, d_n) = match wavelength {
+            true => (lanes[j], 0.0),
+            false => (lanes[n + j], n_e * rates[j]),
+        };
+        let d_snr0 = partials.signal * d_n + partials.variance * if stray { -d_n } else { 0.0 };
+        let d_g = super::d_g_from_mean_mtf(&seen, &out.evaluation, d_mtf);
+        out.asnr.push(d_snr0 * g + out.evaluation.snr0 * d_g);
+        out.mean_mtf.push(d_mtf);
+        out.snr0.push(d_snr0);
+        out.photoelectrons.push(d_n);
+    }
+    Ok(Some(out))
 }
 
 /// The share of the scene's tolerance the off-axis lanes are taken at ([`channel_off_axis`]).

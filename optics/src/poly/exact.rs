@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use num_complex::Complex64;
 
-use super::spectral::{Node, Nodes, Scene, clipped_nodes, node_otfs};
+use super::spectral::{Node, Nodes, Scene, clipped_nodes, node_otfs, node_otfs_and_lanes};
 use super::{Engine, FrequencyRule, OtfEngine, WavefrontDirection};
 
 /// A lens's design-wavelength rates at one wavelength (`LensModel::design_wavelength_rates`:
@@ -17,6 +17,40 @@ type DesignRates = Option<Vec<[f64; 2]>>;
 pub(super) struct Quadrature<'a> {
     pub scene: Scene<'a>,
     pub nodes: Nodes,
+    /// The nodes' real OTFs at each frequency read ([`NodeCache`]).
+    pub cache: NodeCache,
+}
+
+impl<'a> Quadrature<'a> {
+    pub fn new(scene: Scene<'a>, nodes: Nodes) -> Self {
+        Quadrature { scene, nodes, cache: NodeCache::default() }
+    }
+}
+
+/// The most numbers a [`NodeCache`] keeps (32 MB); past it, frequencies are read without it.
+const NODE_CACHE_LIMIT: usize = 1 << 22;
+
+/// Each passing node's real OTF `H(νλF#/r, W020/λ)` (and, once a lane asked it, its defocus
+/// lane `w ∂H/∂w`) at each frequency read, by the frequency's bits: along every azimuth the
+/// exact engine's OTF is the same real values turned by each node's own phase
+/// `exp(−2πi ν u·Δ)`, so the rule over azimuth, which reads the same frequencies along each
+/// azimuth (the frequency rule's panels do not depend on it), and the gradient's passes on the
+/// same engine compute them once (docs/physics.md, "Gradients: the multiplexed lens"). The
+/// values are the ones computed without it, bit for bit (the same batches of the same nodes);
+/// only the product-integration nodes without a table are kept (a table is read along the
+/// azimuth; a panel clipped at the cutoff makes its nodes as it reads them).
+#[derive(Debug, Default)]
+pub(super) struct NodeCache {
+    entries: std::cell::RefCell<std::collections::HashMap<u64, std::rc::Rc<CachedOtfs>>>,
+    kept: std::cell::Cell<usize>,
+}
+
+/// One frequency's [`NodeCache`] entry: the passing nodes' values in their order, and the
+/// defocus lanes where some read asked them (`None` for a node that is not a defocused circle).
+#[derive(Debug)]
+struct CachedOtfs {
+    values: Vec<f64>,
+    lanes: Option<Vec<Option<f64>>>,
 }
 
 /// Calls `visit(weight × OTF(s, w), node)` for every spectral node of `nodes` that passes
@@ -31,19 +65,65 @@ pub(super) fn contributions(
     azimuth_from_field: f64,
     mut visit: impl FnMut(f64, &Node),
 ) {
+    contributions_with(scene, nodes, None, false, frequency, azimuth_from_field, |v, _, n| visit(v, n));
+}
+
+/// [`contributions`] reading each product-integration node's value from `cache` where it holds
+/// the frequency (and keeping it there), with the node's defocus lane `weight × w ∂H/∂w`
+/// beside it where `lanes` (`None` for a node that is not a defocused circle, or where the
+/// nodes are not kept).
+pub(super) fn contributions_with(
+    scene: &Scene<'_>,
+    nodes: &Nodes,
+    cache: Option<&NodeCache>,
+    lanes: bool,
+    frequency: f64,
+    azimuth_from_field: f64,
+    mut visit: impl FnMut(f64, Option<f64>, &Node),
+) {
     let nu = frequency.abs();
     let nuf = nu * scene.f_number;
     let cut = if nu > 0.0 { 1.0 / nuf } else { f64::INFINITY };
     let mut term = |n: &super::spectral::Node| {
         if n.lambda < cut {
-            visit(n.weight * n.otf(nuf * n.lambda, nu, azimuth_from_field), n);
+            visit(n.weight * n.otf(nuf * n.lambda, nu, azimuth_from_field), None, n);
         }
     };
     if nodes.line.is_some() || nodes.interpolated {
         // every node's OTF at once (`node_otfs`), then visited in order
         let passing: Vec<&super::spectral::Node> = nodes.nodes.iter().filter(|n| n.lambda < cut).collect();
-        for (n, value) in passing.iter().zip(node_otfs(&passing, nu, scene.f_number, azimuth_from_field)) {
-            visit(n.weight * value, n);
+        let cache = cache.filter(|_| passing.iter().all(|n| n.table.is_none()));
+        let Some(cache) = cache else {
+            for (n, value) in passing.iter().zip(node_otfs(&passing, nu, scene.f_number, azimuth_from_field)) {
+                visit(n.weight * value, None, n);
+            }
+            return;
+        };
+        let key = nu.to_bits();
+        let found = cache.entries.borrow().get(&key).cloned();
+        let entry = match found {
+            Some(e) if !lanes || e.lanes.is_some() => e,
+            _ => {
+                let entry = std::rc::Rc::new(match lanes {
+                    false => {
+                        CachedOtfs { values: node_otfs(&passing, nu, scene.f_number, azimuth_from_field), lanes: None }
+                    }
+                    true => {
+                        let (values, lanes) = node_otfs_and_lanes(&passing, nu, scene.f_number, azimuth_from_field);
+                        CachedOtfs { values, lanes: Some(lanes) }
+                    }
+                });
+                let size = entry.values.len() * if lanes { 3 } else { 1 };
+                if cache.kept.get() + size <= NODE_CACHE_LIMIT {
+                    cache.kept.set(cache.kept.get() + size);
+                    cache.entries.borrow_mut().insert(key, entry.clone());
+                }
+                entry
+            }
+        };
+        for (i, (n, value)) in passing.iter().zip(&entry.values).enumerate() {
+            let lane = entry.lanes.as_ref().and_then(|l| l[i]).map(|d| n.weight * d);
+            visit(n.weight * value, lane, n);
         }
         return;
     }
@@ -58,11 +138,17 @@ pub(super) fn contributions(
 
 /// The complex OTF of the exact nodes along `azimuth` (radians from x): each term times
 /// `exp(−2πi ν u·Δ)` for its image displacement Δ.
-pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azimuth: f64) -> Complex64 {
+pub(super) fn exact_along(
+    scene: &Scene<'_>,
+    nodes: &Nodes,
+    cache: Option<&NodeCache>,
+    frequency: f64,
+    azimuth: f64,
+) -> Complex64 {
     let (sin_a, cos_a) = azimuth.sin_cos();
     let k = -2.0 * PI * frequency;
     let mut sum = Complex64::new(0.0, 0.0);
-    contributions(scene, nodes, frequency, azimuth - scene.field_direction(), |v, n| {
+    contributions_with(scene, nodes, cache, false, frequency, azimuth - scene.field_direction(), |v, _, n| {
         let [dx, dy] = n.shift;
         if dx == 0.0 && dy == 0.0 {
             sum.re += v;
@@ -100,6 +186,7 @@ pub(super) fn exact_along(scene: &Scene<'_>, nodes: &Nodes, frequency: f64, azim
 pub(super) fn exact_along_and_field_gradient(
     scene: &Scene<'_>,
     nodes: &Nodes,
+    cache: Option<&NodeCache>,
     frequency: f64,
     azimuth: f64,
     directions: &[WavefrontDirection],
@@ -134,9 +221,20 @@ pub(super) fn exact_along_and_field_gradient(
     let mut sum = Complex64::new(0.0, 0.0);
     let mut missing = false;
     let mut not_circle = false;
-    contributions(scene, nodes, frequency, azimuth - scene.field_direction(), |v, n| {
+    // the nodes' defocus lanes read with their values where a lane needs them
+    let with_lanes = defocus || design;
+    let from_field = azimuth - scene.field_direction();
+    contributions_with(scene, nodes, cache, with_lanes, frequency, from_field, |v, cached, n| {
         let [dx, dy] = n.shift;
         let (s, c) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+        // w ∂H/∂w of the node's defocused circle (times its weight): kept beside its value, or
+        // from the value's own series forms at this one point
+        let log_lane = || match cached {
+            Some(d) => d,
+            None => {
+                n.weight * crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda / n.scale, n.w020 / n.lambda).1
+            }
+        };
         let turned = Complex64::new(v * c, v * s);
         sum += turned;
         let [rx, ry] = match n.shift_rate {
@@ -150,8 +248,7 @@ pub(super) fn exact_along_and_field_gradient(
         // value's own series forms, to rounding (`defocus_otf_log_derivative`, the t-form
         // quadrature, is the independent reference the otf tests hold them against)
         let lane = if defocus && n.is_defocused_circle() {
-            let (_, d) = crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda / n.scale, n.w020 / n.lambda);
-            let d = n.weight * d;
+            let d = log_lane();
             Complex64::new(d * c, d * s)
         } else {
             not_circle |= defocus;
@@ -166,13 +263,11 @@ pub(super) fn exact_along_and_field_gradient(
             let rate = rates.as_ref().and_then(|r| r.1.as_ref()).and_then(|r| r.get(n.order)).copied();
             match rate {
                 Some([d_w020, d_tau]) if n.is_defocused_circle() => {
-                    let w = n.w020 / n.lambda;
-                    let (_, d) = crate::otf::defocus_otf_and_log_derivative(nuf * n.lambda / n.scale, w);
                     // ∂H/∂w δw = (w ∂H/∂w) δW020/W020, 0 at w = 0 (H even in w); through a
                     // circular iris of radius r the node's W020 r² moves with the order's W020
-                    let slope = if n.w020 == 0.0 { 0.0 } else { d * d_w020 * (n.scale * n.scale) / n.w020 };
+                    let slope = if n.w020 == 0.0 { 0.0 } else { log_lane() * d_w020 * (n.scale * n.scale) / n.w020 };
                     let moved = if n.efficiency == 0.0 { 0.0 } else { v * d_tau / n.efficiency };
-                    let d = moved + n.weight * slope;
+                    let d = moved + slope;
                     let lane = Complex64::new(d * c, d * s);
                     // a decentred iris's tilt W020 (2d/NA) moves with W020: i k u·δΔ_iris times
                     // the turned value (docs/physics.md, "Gradients: the design wavelength
@@ -262,7 +357,7 @@ impl OtfEngine for Quadrature<'_> {
     }
 
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
-        exact_along(&self.scene, &self.nodes, frequency, azimuth)
+        exact_along(&self.scene, &self.nodes, Some(&self.cache), frequency, azimuth)
     }
 
     /// The field angles', the iris decentre's, the defocus's and the spectral moments' lanes
@@ -274,10 +369,23 @@ impl OtfEngine for Quadrature<'_> {
         directions: &[WavefrontDirection],
         gradient: &mut [Complex64],
     ) -> Option<Complex64> {
-        exact_along_and_field_gradient(&self.scene, &self.nodes, frequency, azimuth, directions, gradient)
+        exact_along_and_field_gradient(
+            &self.scene,
+            &self.nodes,
+            Some(&self.cache),
+            frequency,
+            azimuth,
+            directions,
+            gradient,
+        )
     }
 
     fn frequency_rule(&self) -> FrequencyRule {
         FrequencyRule::Adaptive { min_panels: 1.0 }
+    }
+
+    #[cfg(test)]
+    fn exact_quadrature(&self) -> Option<&Quadrature<'_>> {
+        Some(self)
     }
 }

@@ -450,6 +450,35 @@ impl Polychromatic<'_> {
         self.mean_with_defocus_lane(None, true)
     }
 
+    /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass, for a
+    /// lens of `orders` orders at every wavelength, each order's own design wavelength lane and
+    /// then each order's efficiency lane (`2 × orders` numbers: `(1/ν_max) ∫ P sign(O) ∂O dν`,
+    /// `∂O` the engine's lanes of order `o` alone, its normalization's
+    /// rate subtracted): the lanes of every channel of an interleaved multiplexed lens at once
+    /// (docs/physics.md, "Gradients: the multiplexed lens"), each `∂O` beside its OTF value on
+    /// the spectral level the value accepts and integrated with the frequency rule's accepted
+    /// weights (`P` included). `None` where the engine gives no such lanes (every engine but the
+    /// per-frequency product rule), off axis where the field moves the OTF, or where the OTF
+    /// depends on direction.
+    pub fn mean_mtf_and_order_lanes(&self, orders: usize) -> Option<(f64, Vec<f64>, Work)> {
+        if orders == 0
+            || !(self.scene.field.is_on_axis() || self.field_independent())
+            || self.direction_dependent()
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let lanes = 2 * orders;
+        *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
+        let (mean, work) = self.mean_of(&|nu| {
+            let mut derivatives = vec![0.0; lanes];
+            let value = if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_order_lanes(nu, &mut derivatives) };
+            self.record(nu, value, &derivatives)
+        });
+        let recording = self.gradient.borrow_mut().take()?;
+        self.integrate_recorded(mean, recording, work)
+    }
+
     /// `∂ln(∫ρ Σ_o τ_o dλ)/∂ln λ0` on the nodes that make the engine's normalization (each
     /// sample's weight times `Σ_o ∂τ_o/∂ln λ0`, `LensModel::design_wavelength_rates`): the design
     /// wavelength's rate of the detected signal N. `None` where the lens gives no rates.
@@ -480,6 +509,28 @@ impl Polychromatic<'_> {
             moved += w * lens.zone_rates(lambda, self.scene.field, key)?.iter().map(|r| r.efficiency).sum::<f64>();
         }
         Some(moved / nodes.total_weight)
+    }
+
+    /// `∫ρ τ_o dλ / ∫ρ Σ_o τ_o dλ` for each of the lens's `orders` orders on the nodes that make
+    /// the engine's normalization: each order's share of the detected signal N, its efficiency's
+    /// rate `∂ln N/∂ln τ_o` ([`mean_mtf_and_order_lanes`](Self::mean_mtf_and_order_lanes)'s
+    /// efficiency lanes). `None` where some wavelength has another count of orders.
+    pub fn order_signal_shares(&self, orders: usize) -> Option<Vec<f64>> {
+        let nodes = self.engine.nodes();
+        let mut shares = vec![0.0; orders];
+        for &(lambda, w, part) in &nodes.samples {
+            if w == 0.0 {
+                continue;
+            }
+            let found = self.scene.part(part).lens.orders(lambda, self.scene.field);
+            if found.len() != orders {
+                return None;
+            }
+            for (share, order) in shares.iter_mut().zip(&found) {
+                *share += w * order.efficiency;
+            }
+        }
+        Some(shares.into_iter().map(|s| s / nodes.total_weight).collect())
     }
 
     /// The mean with the defocus lane (`rates` `None`), the order lane or the design

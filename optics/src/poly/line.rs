@@ -126,13 +126,13 @@ impl OtfEngine for Line<'_> {
         if self.fft.is_some() || !directions.iter().all(carried) {
             return None;
         }
-        exact_along_and_field_gradient(&self.scene, &self.nodes, frequency, azimuth, directions, gradient)
+        exact_along_and_field_gradient(&self.scene, &self.nodes, None, frequency, azimuth, directions, gradient)
     }
 
     fn otf_along(&self, frequency: f64, azimuth: f64) -> Complex64 {
         match &self.fft {
             Some(fft) => fft.sum_along(&self.scene, frequency, azimuth) / self.nodes.total_weight,
-            None => exact_along(&self.scene, &self.nodes, frequency, azimuth),
+            None => exact_along(&self.scene, &self.nodes, None, frequency, azimuth),
         }
     }
 

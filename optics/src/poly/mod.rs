@@ -392,6 +392,20 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_design_lane(&self, _frequency: f64) -> Option<(f64, f64)> {
         None
     }
+    /// The signed OTF at `frequency` as [`otf`](Self::otf) and, into `lanes` (`2n` for `n`
+    /// orders at every wavelength), the design wavelength's lane of each order alone (order
+    /// `o`'s rates from `LensModel::design_wavelength_rates`, the others' held), then each
+    /// order's efficiency lane (`δτ_o = τ_o`), each less `O` times its normalization's rate, on
+    /// the value's own rule (docs/physics.md, "Gradients: the multiplexed lens"); `None` where
+    /// the engine does not give them (the default).
+    fn otf_and_order_lanes(&self, _frequency: f64, _lanes: &mut [f64]) -> Option<f64> {
+        None
+    }
+    /// The exact engine's quadrature, for the tests of its node cache (`None` for the others).
+    #[cfg(test)]
+    fn exact_quadrature(&self) -> Option<&exact::Quadrature<'_>> {
+        None
+    }
     /// The signed OTF at `frequency` as [`otf`](Self::otf) and into `gradient` its derivative
     /// along each of `parameters` of the lens's order derivatives
     /// (`LensModel::order_derivatives`: a library lens's parameter bias), on the value's own
@@ -879,11 +893,11 @@ fn choose<'a>(scene: Scene<'a>, settings: Settings) -> Result<Box<dyn OtfEngine 
             return Ok(Box::new(engine));
         }
         if !nodes.needs_grid {
-            return Ok(Box::new(exact::Quadrature { scene, nodes }));
+            return Ok(Box::new(exact::Quadrature::new(scene, nodes)));
         }
         return Ok(Box::new(grid::Grids::new(scene, nodes, settings.pupil_samples, tolerance)?));
     }
-    Ok(Box::new(exact::Quadrature { scene, nodes }))
+    Ok(Box::new(exact::Quadrature::new(scene, nodes)))
 }
 
 /// A signal must be there: the nodes' total weight positive and finite.
@@ -1536,5 +1550,72 @@ mod tests {
         let want = 5.73 * 10e-9 * 1e3;
         let spacing = 2e-9 * 1e3;
         assert!(resolved >= want - 0.5 * spacing && resolved <= want + 2.5 * spacing, "{resolved:e} vs {want:e}");
+    }
+
+    /// The exact engine's nodes read once per frequency (`exact::NodeCache`): off axis, where
+    /// each order's lateral colour turns its OTF by its own phase along each azimuth, the mean
+    /// along an azimuth on an engine that has read every other azimuth first (its nodes' values
+    /// kept from them, then with their defocus lanes beside them) is the mean on a fresh engine,
+    /// to the bit; and the OTF there is the nodes' sum read without the cache.
+    #[test]
+    fn the_exact_engines_node_cache_gives_the_values_to_the_bit() {
+        // three channels in the interleaved lens's form at 3° along x
+        #[derive(Debug)]
+        struct Channels;
+        impl LensModel for Channels {
+            fn f_number(&self) -> f64 {
+                2.5
+            }
+            fn focal_length(&self) -> f64 {
+                3.36e-3
+            }
+            fn orders(&self, lambda: f64, field: Field) -> Vec<crate::Order> {
+                let k = 3.36e-3 / (8.0 * 2.5 * 2.5);
+                [750e-9, 800e-9, 850e-9]
+                    .iter()
+                    .map(|&channel| {
+                        let shift = 3.36e-3 * field.x_rad.tan() * (channel / lambda - 1.0);
+                        let wavefront = crate::Wavefront::defocus((1.0 - lambda / channel) * k).shifted(shift, 0.0);
+                        crate::Order::new(0.05, crate::Pupil::Full, wavefront)
+                    })
+                    .collect()
+            }
+        }
+        let detected = Spectrum::Gaussian(radiometry::Gaussian::from_range(800e-9, 50e-9, 1.0).unwrap());
+        let field = Field::new(3f64.to_radians(), 0.0);
+        let nyquist = 1.0 / (2.0 * 5.2e-6);
+        let settings = Settings { tolerance: 1e-6, ..Settings::default() };
+        let engine = || Polychromatic::with_settings(&Channels, &detected, field, nyquist, None, settings).unwrap();
+        let shared = engine();
+        assert_eq!(shared.engine(), Engine::Exact1d);
+        assert!(shared.direction_dependent() && shared.engine.nodes().interpolated);
+        let azimuths = [0.0, 0.4, 1.3, 2.9];
+        for &azimuth in &azimuths {
+            shared.mean_mtf_along(azimuth);
+        }
+        // the defocus lanes join the kept values (read again with them, the same values)
+        let (lanes, _) = shared.mean_mtf_over_azimuth_and_aperture_lanes(0.0).unwrap();
+        for &azimuth in &azimuths {
+            let (again, _) = shared.mean_mtf_along(azimuth);
+            let (fresh, _) = engine().mean_mtf_along(azimuth);
+            assert_eq!(again.to_bits(), fresh.to_bits(), "azimuth {azimuth}");
+        }
+        assert_eq!(
+            lanes.mean.to_bits(),
+            engine().mean_mtf_over_azimuth_and_aperture_lanes(0.0).unwrap().0.mean.to_bits()
+        );
+        // the sum over the nodes without the cache
+        let Some(quadrature) = shared.engine.exact_quadrature() else { panic!("the exact engine's quadrature") };
+        for nu in [1e3, 2.7e4, 9.6e4] {
+            for azimuth in azimuths {
+                let kept = shared.otf_along(nu, azimuth);
+                let read = exact::exact_along(&quadrature.scene, &quadrature.nodes, None, nu, azimuth);
+                assert_eq!(
+                    (kept.re.to_bits(), kept.im.to_bits()),
+                    (read.re.to_bits(), read.im.to_bits()),
+                    "{nu} {azimuth}"
+                );
+            }
+        }
     }
 }

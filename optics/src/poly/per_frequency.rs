@@ -165,6 +165,10 @@ enum Lanes<'p> {
     /// one lane: `Σ_o [τ_o ∂H/∂w δw_o + δτ_o H_o]`, the orders moving with the design wavelength
     /// ([`Fresh::design`]; docs/physics.md, "Gradients: the design wavelength")
     Design,
+    /// `2n` lanes for `n` orders at every point: each order's own share of [`Lanes::Design`]'s
+    /// sum, `τ_o ∂H/∂w δw_o + δτ_o H_o`, then each order's `τ_o H_o` (its efficiency moving by
+    /// itself; docs/physics.md, "Gradients: the multiplexed lens")
+    Orders(usize),
 }
 
 impl std::fmt::Debug for Lanes<'_> {
@@ -176,6 +180,7 @@ impl std::fmt::Debug for Lanes<'_> {
             Lanes::Fields(p) => write!(f, "Fields({p:?})"),
             Lanes::Rate(_) => write!(f, "Rate"),
             Lanes::Design => write!(f, "Design"),
+            Lanes::Orders(n) => write!(f, "Orders({n})"),
         }
     }
 }
@@ -190,6 +195,7 @@ impl Lanes<'_> {
             Lanes::Fields(p) => p.len(),
             Lanes::Rate(_) => 1,
             Lanes::Design => 1,
+            Lanes::Orders(n) => 2 * n,
         }
     }
 }
@@ -364,6 +370,29 @@ impl Levelled {
         otfs.resize(pairs.len(), 0.0);
         let accuracy = 0.1 * allowed / self.amplification[level];
         let (first, step) = if level == 0 { (0, 1) } else { (1, 2) };
+        if let Lanes::Orders(n) = lanes {
+            // each order's design lane and its own weight, beside its OTF on the defocus lane's
+            // forms (the values those of the value alone, bit for bit)
+            one.clear();
+            one.resize(pairs.len(), 0.0);
+            crate::otf::defocus_otf_many_and_log_derivative_within(pairs, otfs, one, accuracy);
+            evaluations.set(evaluations.get() + pairs.len());
+            let Some(Some(rates)) = &fresh.design else { return };
+            for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
+                let range = fresh.range(point);
+                let orders = &fresh.orders[range.clone()];
+                values[k] = orders.iter().zip(&otfs[range.clone()]).map(|(o, v)| o.efficiency * v).sum();
+                let slot = &mut derivatives[k * 2 * n..(k + 1) * 2 * n];
+                slot.iter_mut().for_each(|d| *d = 0.0);
+                for (o, i) in range.enumerate().take(n) {
+                    let (order, d, h, [d_w, d_tau]) = (&fresh.orders[i], one[i], otfs[i], rates[i]);
+                    let slope = if order.waves == 0.0 { 0.0 } else { d / order.waves };
+                    slot[o] = order.efficiency * slope * d_w + d_tau * h;
+                    slot[n + o] = order.efficiency * h;
+                }
+            }
+            return;
+        }
         if matches!(lanes, Lanes::Defocus | Lanes::Design) {
             // the defocus lane: each order's w ∂H/∂w beside its OTF on the same forms
             // (`defocus_otf_many_and_log_derivative_within`), summed per point as the values are
@@ -573,6 +602,16 @@ impl Levelled {
                     return Err(f64::NAN);
                 }
                 Lanes::Design if !self.prepare_design(scene, level) => return Err(f64::NAN),
+                Lanes::Orders(_) if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
+                    return Err(f64::NAN);
+                }
+                // every point with the same n orders, each with its rates
+                Lanes::Orders(n)
+                    if !self.prepare_design(scene, level)
+                        || (0..self.fresh[level].ends.len()).any(|k| self.fresh[level].range(k).len() != n) =>
+                {
+                    return Err(f64::NAN);
+                }
                 _ => {}
             }
             // the level below's points to the even slots (from the top down), the new ones between
@@ -631,6 +670,8 @@ pub(super) struct PerFrequency<'a> {
     /// `∫ρ Σ_o ∂τ_o/∂ln λ0 dλ` on the averages' nodes ([`design_total`](Self::design_total)),
     /// made when first asked
     design_total: Cell<Option<f64>>,
+    /// [`order_totals`](Self::order_totals), made when first asked, with its count of orders
+    order_totals: RefCell<Option<(usize, Vec<f64>)>>,
     /// the band the panels cover, `[lo, hi]` (the spectrum's support, or a Gaussian's ±7σ)
     lo: f64,
     hi: f64,
@@ -690,6 +731,7 @@ impl<'a> PerFrequency<'a> {
             evaluations: Cell::new(0),
             field_total: RefCell::new(None),
             design_total: Cell::new(None),
+            order_totals: RefCell::new(None),
             lo,
             hi,
         })
@@ -805,6 +847,12 @@ impl<'a> PerFrequency<'a> {
                         let d_total = self.design_total()?;
                         g.iter_mut().for_each(|g| *g = (*g - value * d_total) / self.nodes.total_weight);
                     }
+                    Lanes::Orders(n) => {
+                        let totals = self.order_totals(n)?;
+                        for (g, d) in g.iter_mut().zip(&totals) {
+                            *g = (*g - value * d) / self.nodes.total_weight;
+                        }
+                    }
                     _ => g.iter_mut().for_each(|g| *g /= self.nodes.total_weight),
                 }
             }
@@ -852,6 +900,35 @@ impl<'a> PerFrequency<'a> {
         }
         self.design_total.set(Some(d_total));
         Some(d_total)
+    }
+
+    /// Per order `o` of `n`, `Σ w ∂τ_o/∂ln λ0` (its rates alone) and then `Σ w τ_o`, on the
+    /// nodes that make `nodes.total_weight`: the normalization's rates of
+    /// [`Lanes::Orders`]' lanes. `None` where the lens gives no rates or another count of orders.
+    fn order_totals(&self, n: usize) -> Option<Vec<f64>> {
+        if let Some((m, totals)) = self.order_totals.borrow().as_ref()
+            && *m == n
+        {
+            return Some(totals.clone());
+        }
+        let mut totals = vec![0.0; 2 * n];
+        for &(lambda, w, part) in &self.nodes.samples {
+            if w == 0.0 {
+                continue;
+            }
+            let lens = self.scene.part(part).lens;
+            let rates = lens.design_wavelength_rates(lambda, self.scene.field)?;
+            let orders = lens.orders(lambda, self.scene.field);
+            if rates.len() != n || orders.len() != n {
+                return None;
+            }
+            for (o, ([_, d_tau], order)) in rates.iter().zip(&orders).enumerate() {
+                totals[o] += w * d_tau;
+                totals[n + o] += w * order.efficiency;
+            }
+        }
+        *self.order_totals.borrow_mut() = Some((n, totals.clone()));
+        Some(totals)
     }
 
     /// The band's extent, for the narrowest panel a split may make.
@@ -915,6 +992,19 @@ impl OtfEngine for PerFrequency<'_> {
         let mut lane = [0.0];
         let value = self.value(frequency, Some(&mut lane), Lanes::Design)?;
         Some((value, lane[0]))
+    }
+
+    /// The OTF at `frequency` as [`otf`](OtfEngine::otf), bit for bit, and each order's design
+    /// lane and efficiency lane ([`Lanes::Orders`]) integrated with the weights of the level the
+    /// value accepts, each less `O` times its normalization's rate
+    /// ([`order_totals`](PerFrequency::order_totals)); `None` where an order is a radial pupil,
+    /// the lens gives no rates or some wavelength has another count of orders.
+    fn otf_and_order_lanes(&self, frequency: f64, lanes: &mut [f64]) -> Option<f64> {
+        if lanes.is_empty() || !lanes.len().is_multiple_of(2) {
+            return None;
+        }
+        let n = lanes.len() / 2;
+        self.value(frequency, Some(lanes), Lanes::Orders(n))
     }
 
     /// The OTF at `frequency` as [`otf`](OtfEngine::otf), bit for bit (the same climb: the

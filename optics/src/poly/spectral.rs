@@ -177,6 +177,33 @@ pub(super) fn node_otfs(nodes: &[&Node], nu: f64, f_number: f64, azimuth_from_fi
         .collect()
 }
 
+/// [`node_otfs`] and each defocused node's lane `w ∂H/∂w` beside its value (`None` for a table
+/// or a radial pupil): the values those of [`node_otfs`] bit for bit (the same points in the
+/// same batches, [`crate::otf::defocus_otf_many_and_log_derivative_within`]).
+pub(super) fn node_otfs_and_lanes(
+    nodes: &[&Node],
+    nu: f64,
+    f_number: f64,
+    azimuth_from_field: f64,
+) -> (Vec<f64>, Vec<Option<f64>>) {
+    let nuf = nu * f_number;
+    let points: Vec<(f64, f64)> = nodes
+        .iter()
+        .filter(|n| n.is_defocused_circle())
+        .map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
+        .collect();
+    let (mut defocused, mut lanes) = (vec![0.0; points.len()], vec![0.0; points.len()]);
+    crate::otf::defocus_otf_many_and_log_derivative_within(&points, &mut defocused, &mut lanes, 0.0);
+    let mut next = defocused.into_iter().zip(lanes);
+    nodes
+        .iter()
+        .map(|n| match n.is_defocused_circle() {
+            true => next.next().map_or((0.0, Some(0.0)), |(v, d)| (v, Some(d))),
+            false => (n.otf(nuf * n.lambda, nu, azimuth_from_field), None),
+        })
+        .unzip()
+}
+
 /// A circular iris, centred or decentred, on an order whose only aberration is defocus: exactly
 /// the centred circle of the iris's radius `r` (F-number `F#/r`) with the defocus `W020 r²` at
 /// its edge and the tilt `2 W020 d` that moves the image by `Δ = 2 W020 d/NA`
