@@ -50,6 +50,24 @@ pub struct Gradient {
 }
 
 impl Gradient {
+    /// The gradient of `evaluation`'s ASNR, mean MTF, SNR0 and photoelectrons with respect to the
+    /// `expanded` keys (each with its value), from the four columns of derivatives in that order.
+    fn of(expanded: &[(String, f64)], evaluation: &metric::Evaluation, columns: [Vec<f64>; 4]) -> Gradient {
+        let [d_asnr, d_mean_mtf, d_snr0, d_photoelectrons] = columns;
+        Gradient {
+            keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
+            values: expanded.iter().map(|(_, v)| *v).collect(),
+            asnr: evaluation.asnr,
+            mean_mtf: evaluation.mean_mtf,
+            snr0: evaluation.snr0,
+            photoelectrons: evaluation.photoelectrons,
+            d_asnr,
+            d_mean_mtf,
+            d_snr0,
+            d_photoelectrons,
+        }
+    }
+
     /// The relative sensitivity `∂ln ASNR/∂ln key = (∂ASNR/∂key)·key/ASNR` of key `i`.
     pub fn relative(&self, i: usize) -> f64 {
         self.d_asnr[i] * self.values[i] / self.asnr
@@ -845,20 +863,8 @@ pub(crate) fn gradient_and_evaluation(
             })
             .collect()
     };
-    let e = &g.evaluation;
-    let gradient = Gradient {
-        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
-        values: expanded.iter().map(|(_, v)| *v).collect(),
-        asnr: e.asnr,
-        mean_mtf: e.mean_mtf,
-        snr0: e.snr0,
-        photoelectrons: e.photoelectrons,
-        d_asnr: per_key(&g.asnr),
-        d_mean_mtf: per_key(&g.mean_mtf),
-        d_snr0: per_key(&g.snr0),
-        d_photoelectrons: per_key(&g.photoelectrons),
-    };
-    Ok((gradient, g.evaluation))
+    let columns = [per_key(&g.asnr), per_key(&g.mean_mtf), per_key(&g.snr0), per_key(&g.photoelectrons)];
+    Ok((Gradient::of(&expanded, &g.evaluation, columns), g.evaluation))
 }
 
 /// The engines' error, naming the keys as `--wrt` spells them: a refusal

@@ -38,6 +38,43 @@ enum Moving {
     Efficiency,
 }
 
+/// The lens's own orders, efficiencies, aperture and description, read through a wrapper's
+/// `lens` field ([`OneChannel`], [`AllChannels`]: each replaces only its rates).
+macro_rules! forward_to_lens {
+    () => {
+        fn f_number(&self) -> f64 {
+            self.lens.f_number()
+        }
+        fn focal_length(&self) -> f64 {
+            self.lens.focal_length()
+        }
+        fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
+            self.lens.orders(wavelength_m, field)
+        }
+        fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
+            self.lens.orders_into(wavelength_m, field, out)
+        }
+        fn efficiency(&self, wavelength_m: f64) -> f64 {
+            self.lens.efficiency(wavelength_m)
+        }
+        fn transmission(&self, wavelength_m: f64) -> f64 {
+            self.lens.transmission(wavelength_m)
+        }
+        fn breakpoints(&self) -> Vec<f64> {
+            self.lens.breakpoints()
+        }
+        fn numerical_aperture(&self) -> f64 {
+            self.lens.numerical_aperture()
+        }
+        fn design_wavelength(&self) -> Option<f64> {
+            self.lens.design_wavelength()
+        }
+        fn describe(&self) -> String {
+            self.lens.describe()
+        }
+    };
+}
+
 /// A lens of channels in the interleaved lens's form, its design-wavelength rates those of
 /// channel `channel` alone, as `moving` moves it.
 #[derive(Debug)]
@@ -51,36 +88,7 @@ struct OneChannel {
 }
 
 impl LensModel for OneChannel {
-    fn f_number(&self) -> f64 {
-        self.lens.f_number()
-    }
-    fn focal_length(&self) -> f64 {
-        self.lens.focal_length()
-    }
-    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
-        self.lens.orders(wavelength_m, field)
-    }
-    fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
-        self.lens.orders_into(wavelength_m, field, out)
-    }
-    fn efficiency(&self, wavelength_m: f64) -> f64 {
-        self.lens.efficiency(wavelength_m)
-    }
-    fn transmission(&self, wavelength_m: f64) -> f64 {
-        self.lens.transmission(wavelength_m)
-    }
-    fn breakpoints(&self) -> Vec<f64> {
-        self.lens.breakpoints()
-    }
-    fn numerical_aperture(&self) -> f64 {
-        self.lens.numerical_aperture()
-    }
-    fn design_wavelength(&self) -> Option<f64> {
-        self.lens.design_wavelength()
-    }
-    fn describe(&self) -> String {
-        self.lens.describe()
-    }
+    forward_to_lens!();
 
     /// With `shifts`, for channel `j`'s wavelength off axis: order `j`'s
     /// `∂Δ_j/∂ln λ_j = f0 tan θ λ_j/λ` on each axis (its lateral colour
@@ -199,36 +207,7 @@ struct AllChannels {
 }
 
 impl LensModel for AllChannels {
-    fn f_number(&self) -> f64 {
-        self.lens.f_number()
-    }
-    fn focal_length(&self) -> f64 {
-        self.lens.focal_length()
-    }
-    fn orders(&self, wavelength_m: f64, field: Field) -> Vec<Order> {
-        self.lens.orders(wavelength_m, field)
-    }
-    fn orders_into(&self, wavelength_m: f64, field: Field, out: &mut Vec<Order>) {
-        self.lens.orders_into(wavelength_m, field, out)
-    }
-    fn efficiency(&self, wavelength_m: f64) -> f64 {
-        self.lens.efficiency(wavelength_m)
-    }
-    fn transmission(&self, wavelength_m: f64) -> f64 {
-        self.lens.transmission(wavelength_m)
-    }
-    fn breakpoints(&self) -> Vec<f64> {
-        self.lens.breakpoints()
-    }
-    fn numerical_aperture(&self) -> f64 {
-        self.lens.numerical_aperture()
-    }
-    fn design_wavelength(&self) -> Option<f64> {
-        self.lens.design_wavelength()
-    }
-    fn describe(&self) -> String {
-        self.lens.describe()
-    }
+    forward_to_lens!();
 
     /// Order `o`'s `[(λ/λ_o) K, 0]`, each order [`OneChannel`]'s for its own channel; `None` on
     /// axis unless every order is the full circle with the defocus `(1 − λ/λ_o) K` alone, and
@@ -424,13 +403,28 @@ fn channel_off_axis(scene: &Scene, channel: usize, moving: Moving) -> Result<Gra
         Some(shape) => d_mean(Some(shape))?,
         None => d_mtf,
     };
-    // the noise budget exactly as evaluate forms it
+    one_key(&seen, e, rate, d_mtf, d_weighted, not_smooth)
+}
+
+/// The gradient along one key of `scene`'s evaluation `e` that moves the detected signal N at the
+/// relative rate `rate` (`∂ln N`) and the mean MTF by `d_mtf` (white) and `d_weighted` (the
+/// noise-weighted mean the ASNR reads): SNR0 through the noise budget exactly as `evaluate`
+/// forms it (the stray light moving with N where the glare is included), the ASNR = SNR0 ·
+/// G. Refused (`not_smooth`) where the pixel saturates or there is no signal.
+pub(super) fn one_key(
+    scene: &Scene,
+    e: crate::Evaluation,
+    rate: f64,
+    d_mtf: f64,
+    d_weighted: f64,
+    not_smooth: impl Fn(&str) -> Error,
+) -> Result<Gradient, Error> {
     let n = e.photoelectrons;
-    let background = match seen.options().glare {
+    let background = match scene.options().glare {
         crate::GlareMode::FirstOrder => 0.0,
         crate::GlareMode::Included => (e.transmitted_photoelectrons - n).max(0.0),
     };
-    let budget = noise::budget(camera.sensor(), n, background, seen.exposure())?;
+    let budget = noise::budget(scene.camera().sensor(), n, background, scene.exposure())?;
     let Some(partials) = budget.snr_partials() else {
         return Err(not_smooth(if budget.saturated {
             "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
@@ -438,11 +432,11 @@ fn channel_off_axis(scene: &Scene, channel: usize, moving: Moving) -> Result<Gra
             "there is no signal"
         }));
     };
-    let stray = matches!(seen.options().glare, crate::GlareMode::Included) && background > 0.0;
+    let stray = matches!(scene.options().glare, crate::GlareMode::Included) && background > 0.0;
     let d_n = n * rate;
     let d_snr0 = partials.signal * d_n + partials.variance * if stray { -d_n } else { 0.0 };
     let g = e.asnr / e.snr0;
-    let d_g = super::d_g_from_mean_mtf(&seen, &e, d_weighted);
+    let d_g = super::d_g_from_mean_mtf(scene, &e, d_weighted);
     Ok(Gradient {
         asnr: vec![d_snr0 * g + e.snr0 * d_g],
         mean_mtf: vec![d_mtf],

@@ -149,30 +149,5 @@ pub fn zone_key_gradient(scene: &Scene, key: optics::ZoneKey) -> Result<Gradient
         };
         Ok((lanes[0], rate))
     })?;
-    // the noise budget exactly as evaluate forms it
-    let n = e.photoelectrons;
-    let background = match scene.options().glare {
-        crate::GlareMode::FirstOrder => 0.0,
-        crate::GlareMode::Included => (e.transmitted_photoelectrons - n).max(0.0),
-    };
-    let budget = noise::budget(scene.camera().sensor(), n, background, scene.exposure())?;
-    let Some(partials) = budget.snr_partials() else {
-        return Err(not_smooth(if budget.saturated {
-            "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
-        } else {
-            "there is no signal"
-        }));
-    };
-    let stray = matches!(scene.options().glare, crate::GlareMode::Included) && background > 0.0;
-    let d_n = n * rate;
-    let d_snr0 = partials.signal * d_n + partials.variance * if stray { -d_n } else { 0.0 };
-    let g = e.asnr / e.snr0;
-    let d_g = super::d_g_from_mean_mtf(scene, &e, d_mtf);
-    Ok(Gradient {
-        asnr: vec![d_snr0 * g + e.snr0 * d_g],
-        mean_mtf: vec![d_mtf],
-        snr0: vec![d_snr0],
-        photoelectrons: vec![d_n],
-        evaluation: e,
-    })
+    super::multiplexed::one_key(scene, e, rate, d_mtf, d_mtf, not_smooth)
 }

@@ -483,14 +483,21 @@ impl Polychromatic<'_> {
     /// sample's weight times `Σ_o ∂τ_o/∂ln λ0`, `LensModel::design_wavelength_rates`): the design
     /// wavelength's rate of the detected signal N. `None` where the lens gives no rates.
     pub fn design_signal_rate(&self) -> Option<f64> {
+        self.signal_rate(|lens, lambda, field| {
+            Some(lens.design_wavelength_rates(lambda, field)?.iter().map(|r| r[1]).sum::<f64>())
+        })
+    }
+
+    /// `Σ w ∂τ/Σ w τ` over the nodes that make the engine's normalization, `∂τ` each sample's
+    /// `rate` (the move of its orders' summed efficiency, `None` where the lens gives none).
+    fn signal_rate(&self, rate: impl Fn(&dyn crate::LensModel, f64, crate::Field) -> Option<f64>) -> Option<f64> {
         let nodes = self.engine.nodes();
         let mut moved = 0.0;
         for &(lambda, w, part) in &nodes.samples {
             if w == 0.0 {
                 continue;
             }
-            let lens = self.scene.part(part).lens;
-            moved += w * lens.design_wavelength_rates(lambda, self.scene.field)?.iter().map(|r| r[1]).sum::<f64>();
+            moved += w * rate(self.scene.part(part).lens, lambda, self.scene.field)?;
         }
         Some(moved / nodes.total_weight)
     }
@@ -499,16 +506,9 @@ impl Polychromatic<'_> {
     /// sample's weight times `Σ_o ∂τ_o`, `LensModel::zone_rates`): the key's rate of the
     /// detected signal N, per unit of the key. `None` where the lens gives no rates.
     pub fn zone_signal_rate(&self, key: crate::ZoneKey) -> Option<f64> {
-        let nodes = self.engine.nodes();
-        let mut moved = 0.0;
-        for &(lambda, w, part) in &nodes.samples {
-            if w == 0.0 {
-                continue;
-            }
-            let lens = self.scene.part(part).lens;
-            moved += w * lens.zone_rates(lambda, self.scene.field, key)?.iter().map(|r| r.efficiency).sum::<f64>();
-        }
-        Some(moved / nodes.total_weight)
+        self.signal_rate(|lens, lambda, field| {
+            Some(lens.zone_rates(lambda, field, key)?.iter().map(|r| r.efficiency).sum::<f64>())
+        })
     }
 
     /// `∫ρ τ_o dλ / ∫ρ Σ_o τ_o dλ` for each of the lens's `orders` orders on the nodes that make

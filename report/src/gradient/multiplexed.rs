@@ -103,18 +103,7 @@ pub(super) fn with_channels(
         }
     }
     let e = evaluation.expect("at least one key");
-    let gradient = Gradient {
-        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
-        values: expanded.iter().map(|(_, v)| *v).collect(),
-        asnr: e.asnr,
-        mean_mtf: e.mean_mtf,
-        snr0: e.snr0,
-        photoelectrons: e.photoelectrons,
-        d_asnr,
-        d_mean_mtf,
-        d_snr0,
-        d_photoelectrons,
-    };
+    let gradient = Gradient::of(&expanded, &e, [d_asnr, d_mean_mtf, d_snr0, d_photoelectrons]);
     Ok(Some((gradient, e)))
 }
 
@@ -170,20 +159,7 @@ pub(super) fn with_zone_channels(
         }
     }
     let e = evaluation.expect("at least one key");
-    let [d_asnr, d_mean_mtf, d_snr0, d_photoelectrons] = columns;
-    let gradient = Gradient {
-        keys: expanded.iter().map(|(k, _)| k.clone()).collect(),
-        values: expanded.iter().map(|(_, v)| *v).collect(),
-        asnr: e.asnr,
-        mean_mtf: e.mean_mtf,
-        snr0: e.snr0,
-        photoelectrons: e.photoelectrons,
-        d_asnr,
-        d_mean_mtf,
-        d_snr0,
-        d_photoelectrons,
-    };
-    Ok(Some((gradient, e)))
+    Ok(Some((Gradient::of(&expanded, &e, columns), e)))
 }
 
 /// The chain of `key` (at `value`) of a multiplexed lens, or why it is refused; `None` for a key
