@@ -285,38 +285,18 @@ pub fn channel_gradients(
         Some(e) => e,
         None => crate::evaluate(scene)?,
     };
-    // the noise budget exactly as evaluate forms it
-    let n_e = e.photoelectrons;
-    let background = match seen.options().glare {
-        crate::GlareMode::FirstOrder => 0.0,
-        crate::GlareMode::Included => (e.transmitted_photoelectrons - n_e).max(0.0),
-    };
-    let budget = noise::budget(seen.camera().sensor(), n_e, background, seen.exposure())?;
     let not_smooth =
         |reason: &str| Error::NotDifferentiable { parameter: "a channel's key", reason: reason.to_owned() };
-    let Some(partials) = budget.snr_partials() else {
-        return Err(not_smooth(if budget.saturated {
-            "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
-        } else {
-            "there is no signal"
-        }));
-    };
-    let stray = matches!(seen.options().glare, crate::GlareMode::Included) && background > 0.0;
-    let g = e.asnr / e.snr0;
+    let chain = SignalChain::new(&seen, &e, not_smooth)?;
     let mut out = Gradient { asnr: vec![], mean_mtf: vec![], snr0: vec![], photoelectrons: vec![], evaluation: e };
     for &(j, wavelength) in wanted {
         // λ_j moves the OTF alone; η_j order j's weight, so N by its share (T held: the stray
         // light N_T − N by −∂N)
-        let (d_mtf, d_n) = match wavelength {
+        let (d_mtf, rate) = match wavelength {
             true => (lanes[j], 0.0),
-            false => (lanes[n + j], n_e * rates[j]),
+            false => (lanes[n + j], rates[j]),
         };
-        let d_snr0 = partials.signal * d_n + partials.variance * if stray { -d_n } else { 0.0 };
-        let d_g = super::d_g_from_mean_mtf(&seen, &out.evaluation, d_mtf);
-        out.asnr.push(d_snr0 * g + out.evaluation.snr0 * d_g);
-        out.mean_mtf.push(d_mtf);
-        out.snr0.push(d_snr0);
-        out.photoelectrons.push(d_n);
+        chain.push(&mut out, rate, d_mtf, d_mtf);
     }
     Ok(Some(out))
 }
@@ -419,29 +399,54 @@ pub(super) fn one_key(
     d_weighted: f64,
     not_smooth: impl Fn(&str) -> Error,
 ) -> Result<Gradient, Error> {
-    let n = e.photoelectrons;
-    let background = match scene.options().glare {
-        crate::GlareMode::FirstOrder => 0.0,
-        crate::GlareMode::Included => (e.transmitted_photoelectrons - n).max(0.0),
-    };
-    let budget = noise::budget(scene.camera().sensor(), n, background, scene.exposure())?;
-    let Some(partials) = budget.snr_partials() else {
-        return Err(not_smooth(if budget.saturated {
-            "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
-        } else {
-            "there is no signal"
-        }));
-    };
-    let stray = matches!(scene.options().glare, crate::GlareMode::Included) && background > 0.0;
-    let d_n = n * rate;
-    let d_snr0 = partials.signal * d_n + partials.variance * if stray { -d_n } else { 0.0 };
-    let g = e.asnr / e.snr0;
-    let d_g = super::d_g_from_mean_mtf(scene, &e, d_weighted);
-    Ok(Gradient {
-        asnr: vec![d_snr0 * g + e.snr0 * d_g],
-        mean_mtf: vec![d_mtf],
-        snr0: vec![d_snr0],
-        photoelectrons: vec![d_n],
-        evaluation: e,
-    })
+    let chain = SignalChain::new(scene, &e, not_smooth)?;
+    let mut out = Gradient { asnr: vec![], mean_mtf: vec![], snr0: vec![], photoelectrons: vec![], evaluation: e };
+    chain.push(&mut out, rate, d_mtf, d_weighted);
+    Ok(out)
+}
+
+/// SNR0's partials in the charges of an evaluation's noise budget, formed exactly as `evaluate`
+/// forms it, for the keys [`one_key`] and [`channel_gradients`] chain through it.
+struct SignalChain<'a> {
+    scene: &'a Scene,
+    partials: noise::SnrPartials,
+    /// Whether the stray light `N_T − N` is in the budget (moving by `−∂N`, T held).
+    stray: bool,
+}
+
+impl<'a> SignalChain<'a> {
+    /// The budget of `scene`'s evaluation `e`; refused (`not_smooth`) where the pixel saturates
+    /// or there is no signal.
+    fn new(scene: &'a Scene, e: &crate::Evaluation, not_smooth: impl Fn(&str) -> Error) -> Result<Self, Error> {
+        let n = e.photoelectrons;
+        let background = match scene.options().glare {
+            crate::GlareMode::FirstOrder => 0.0,
+            crate::GlareMode::Included => (e.transmitted_photoelectrons - n).max(0.0),
+        };
+        let budget = noise::budget(scene.camera().sensor(), n, background, scene.exposure())?;
+        let Some(partials) = budget.snr_partials() else {
+            return Err(not_smooth(if budget.saturated {
+                "the pixel saturates: the charges are clipped at the well, where the SNR has a kink"
+            } else {
+                "there is no signal"
+            }));
+        };
+        let stray = matches!(scene.options().glare, crate::GlareMode::Included) && background > 0.0;
+        Ok(SignalChain { scene, partials, stray })
+    }
+
+    /// One key's derivatives appended to `out` (whose evaluation the budget is): N moving at the
+    /// relative rate `rate`, the mean MTF by `d_mtf` (white) and `d_weighted` (the mean the ASNR
+    /// reads); `∂ASNR = ∂SNR0 G + SNR0 ∂G`.
+    fn push(&self, out: &mut Gradient, rate: f64, d_mtf: f64, d_weighted: f64) {
+        let e = &out.evaluation;
+        let d_n = e.photoelectrons * rate;
+        let d_snr0 = self.partials.signal * d_n + self.partials.variance * if self.stray { -d_n } else { 0.0 };
+        let d_g = super::d_g_from_mean_mtf(self.scene, e, d_weighted);
+        let d_asnr = d_snr0 * (e.asnr / e.snr0) + e.snr0 * d_g;
+        out.asnr.push(d_asnr);
+        out.mean_mtf.push(d_mtf);
+        out.snr0.push(d_snr0);
+        out.photoelectrons.push(d_n);
+    }
 }

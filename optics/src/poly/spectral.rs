@@ -155,16 +155,18 @@ impl Node {
 /// any tolerance of the mean, as the exact 1-D OTF is exact to rounding.
 pub(super) const RADIAL_ACCURACY: f64 = 1e-12;
 
+/// The `(s, w020/λ)` of each defocused circle among `nodes` at `nuf = ν F#`, in order: the
+/// points [`node_otfs`] and [`node_otfs_and_lanes`] evaluate in one batch.
+fn defocused_points(nodes: &[&Node], nuf: f64) -> Vec<(f64, f64)> {
+    nodes.iter().filter(|n| n.is_defocused_circle()).map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda)).collect()
+}
+
 /// [`Node::otf`] of each of `nodes` at `nu` (cycles/m; `f_number` of the lens, a table read along
 /// `azimuth_from_field`), in order: the defocused ones all at once
 /// ([`crate::otf::defocus_otf_many`], the Bessel series in interleaved lanes).
 pub(super) fn node_otfs(nodes: &[&Node], nu: f64, f_number: f64, azimuth_from_field: f64) -> Vec<f64> {
     let nuf = nu * f_number;
-    let points: Vec<(f64, f64)> = nodes
-        .iter()
-        .filter(|n| n.is_defocused_circle())
-        .map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
-        .collect();
+    let points = defocused_points(nodes, nuf);
     let mut defocused = vec![0.0; points.len()];
     crate::otf::defocus_otf_many(&points, &mut defocused);
     let mut next = defocused.into_iter();
@@ -187,11 +189,7 @@ pub(super) fn node_otfs_and_lanes(
     azimuth_from_field: f64,
 ) -> (Vec<f64>, Vec<Option<f64>>) {
     let nuf = nu * f_number;
-    let points: Vec<(f64, f64)> = nodes
-        .iter()
-        .filter(|n| n.is_defocused_circle())
-        .map(|n| (nuf * n.lambda / n.scale, n.w020 / n.lambda))
-        .collect();
+    let points = defocused_points(nodes, nuf);
     let (mut defocused, mut lanes) = (vec![0.0; points.len()], vec![0.0; points.len()]);
     crate::otf::defocus_otf_many_and_log_derivative_within(&points, &mut defocused, &mut lanes, 0.0);
     let mut next = defocused.into_iter().zip(lanes);
