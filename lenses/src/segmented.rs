@@ -103,6 +103,10 @@ pub struct Segmented {
     bands: Vec<(f64, f64)>,
 }
 
+/// How close to 1 the area fractions' sum counts as the zones filling the aperture
+/// ([`LensModel::zone_rates`] of [`ZoneKey::AreaFraction`]: the construction's own `1e-12`).
+const FILLED: f64 = 1e-12;
+
 /// Side of the grid on which a [`Layout::Mask`] is scanned for zone indices beyond the channels.
 const MASK_INDEX_SCAN: usize = 256;
 
@@ -387,7 +391,14 @@ impl LensModel for Segmented {
     /// `None` for a channel beyond the lens's, for λ_j with [`OtherChannels::Background`] (the
     /// channels' band edges move with it: the zones' light switches between signal and
     /// background there, kinks of the integrand over λ), and for η_j where the zone is lit with
-    /// `η_j = 0` (`√η` has no derivative at 0).
+    /// `η_j = 0` (`√η` has no derivative at 0). `ln a_j` moves the cumulative fractions
+    /// `c_k = Σ_{i≤k} a_i`, `k ≥ j`, by `a_j`, so the rings' radii `r_k = √c_k` by `a_j/(2 r_k)`
+    /// (concentric) or the wedges' edges `2π c_k` by `2π a_j` (sectors), each zone's inner and
+    /// outer edge, and the order's efficiency `Σ a_k η_k` by `a_j η_j`; the fractions are free
+    /// (`Σ a ≤ 1`, the rim beyond the zones opaque) except where they fill the aperture
+    /// (`Σ a = 1`): there the last zone absorbs the change (`a_N = 1 − Σ_{k<N} a_k`, its outer
+    /// edge held on the rim, `∂τ = a_j (η_j − η_N)`), and `None` for `a_N` itself (its growth
+    /// would leave the aperture); `None` for a mask (its areas are measured, not parameters).
     fn zone_rates(&self, wavelength_m: f64, field: Field, key: ZoneKey) -> Option<Vec<ZoneRates>> {
         let n = self.channels.len();
         let f0 = self.focal_length;
@@ -425,6 +436,42 @@ impl LensModel for Segmented {
                     zones[j].amplitude = 0.5 * eta.sqrt();
                     efficiency = self.areas[j] * eta;
                 }
+            }
+            ZoneKey::AreaFraction(j) => {
+                let areas = &self.areas;
+                if j >= n || matches!(self.layout, Layout::Mask(_)) {
+                    return None;
+                }
+                // a_j free (Σ a ≤ 1, the rim beyond the zones opaque); where the zones fill the
+                // aperture the last absorbs the change, its outer edge on the rim: a_j alone
+                // there would leave the aperture (refused for the last zone itself)
+                let full = areas.iter().sum::<f64>() >= 1.0 - FILLED;
+                if full && j + 1 == n {
+                    return None;
+                }
+                let a_j = areas[j];
+                // the cumulative fractions c_k = Σ_{i≤k} a_i and their rates ∂c_k/∂ln a_j
+                let mut cumulative = 0.0;
+                let mut c = Vec::with_capacity(n);
+                for a in areas {
+                    cumulative += a;
+                    c.push(cumulative);
+                }
+                let dc: Vec<f64> = (0..n).map(|k| if k >= j && !(full && k + 1 == n) { a_j } else { 0.0 }).collect();
+                for k in 0..n {
+                    let below = if k == 0 { 0.0 } else { dc[k - 1] };
+                    zones[k].edges = match self.layout {
+                        // r_k = √c_k: ∂r_k = ∂c_k/(2 r_k)
+                        Layout::Concentric => {
+                            let rate = |i: usize, d: f64| if d == 0.0 { 0.0 } else { d / (2.0 * c[i].sqrt()) };
+                            [if k == 0 { 0.0 } else { rate(k - 1, below) }, rate(k, dc[k]), 0.0, 0.0]
+                        }
+                        // the wedge [2π c_{k−1}, 2π c_k]
+                        _ => [0.0, 0.0, TAU * below, TAU * dc[k]],
+                    };
+                }
+                let eta = |k: usize| self.signal_eta(k, wavelength_m, self.other_channels);
+                efficiency = a_j * (eta(j) - if full { eta(n - 1) } else { 0.0 });
             }
         }
         Some(vec![ZoneRates { zones, efficiency }])

@@ -328,6 +328,10 @@ pub enum ZoneKey {
     /// Channel `j`'s own efficiency η_j, per relative change (`∂/∂ln η_j`): zone `j`'s field
     /// amplitude `√η_j` and the order's efficiency.
     ChannelEfficiency(usize),
+    /// Zone `j`'s area fraction a_j, per relative change (`∂/∂ln a_j`): the zones' edges that
+    /// move with it (rings' radii, wedges' angles: [`ZoneRate::edges`]) and the order's
+    /// efficiency `Σ a_k η_k`.
+    AreaFraction(usize),
 }
 
 /// How one zone of a composite pupil moves with a [`ZoneKey`], per unit of the key.
@@ -339,6 +343,10 @@ pub struct ZoneRate {
     pub defocus_m: f64,
     /// `∂Δ_j`, m: the zone's own image shift (its tilt `Δ_j NA`).
     pub image_shift_m: [f64; 2],
+    /// The motion of the zone's edges: `∂` of its aperture's inner radius, outer radius (units
+    /// of the full aperture's radius), and its wedge's start and end angles (radians), as
+    /// [`Aperture::edge_rates_in`](crate::fft::Aperture::edge_rates_in) orders them.
+    pub edges: [f64; 4],
 }
 
 /// How one order moves with a [`ZoneKey`] ([`LensModel::zone_rates`]): each of its zones (none

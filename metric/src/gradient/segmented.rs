@@ -23,7 +23,11 @@
 //! efficiency `∂τ/∂ln η_j = a_j η_j` (`optics::LensModel::zone_rates`), a lane with a rate on
 //! zone `j` and 0 elsewhere on the value's FFT path ([`optics::WavefrontDirection::Zone`]).
 //! The field angles ride [`optics::WavefrontDirection::FieldAngle`] with every zone's own rate
-//! `f0 sec²θ (λ_j/λ − 1)` (the value's grid lanes, `Parameter::FieldAngle`).
+//! `f0 sec²θ (λ_j/λ − 1)` (the value's grid lanes, `Parameter::FieldAngle`). A zone's area
+//! fraction a_j moves the zones' edges from zone `j` on (rings' radii `√c_k`, wedges' angles
+//! `2π c_k`, `c_k = Σ_{i≤k} a_i`) and the order's efficiency by `a_j η_j` per `ln a_j`: a lane
+//! with each zone's edge rates, every edge pixel's area fraction moving by its edge's length
+//! (`optics::fft::SampledZones::rates_derivative`).
 
 use super::{Gradient, Parameter};
 use crate::evaluate::Evaluation;
@@ -96,6 +100,7 @@ pub fn zone_key_gradient(scene: &Scene, key: optics::ZoneKey) -> Result<Gradient
         optics::ZoneKey::ChannelWavelength(_) => "a channel's wavelength",
         optics::ZoneKey::ChannelEfficiency(_) => "a channel's own efficiency",
         optics::ZoneKey::FieldAngle(_) => "a field angle",
+        optics::ZoneKey::AreaFraction(_) => "a zone's area fraction",
     };
     let not_smooth = |reason: &str| Error::NotDifferentiable { parameter, reason: reason.to_owned() };
     if !scene.fields().is_empty() {
@@ -117,6 +122,13 @@ pub fn zone_key_gradient(scene: &Scene, key: optics::ZoneKey) -> Result<Gradient
     // (the lens's refusals do not depend on the wavelength: asked before the evaluation)
     let lambda = scene.lens().design_wavelength().unwrap_or(5.5e-7);
     if scene.lens().zone_rates(lambda, field, key).is_none() {
+        if let optics::ZoneKey::AreaFraction(_) = key {
+            return Err(not_smooth(
+                "the lens gives no zones' rates for it here: the last zone's area fraction where the fractions sum \
+                 to 1 (the zones fill the aperture: its growth would leave it, and every other fraction's change is \
+                 absorbed by it), or a mask layout's zone (its areas are measured from the map, not parameters)",
+            ));
+        }
         return Err(not_smooth(
             "the lens gives no zones' rates for it here: a channel's wavelength with lens.other_channels = \
              \"background\" moves the channels' band edges, where each zone's light switches between signal and \

@@ -250,6 +250,34 @@ impl Aperture {
         }
     }
 
+    /// The rates at which the area of the rectangle `[x0, x1] × [y0, y1]` (grid coordinates, as
+    /// [`area_in`](Self::area_in)) that transmits moves with each edge of a disc shape, in the
+    /// order (inner radius ε, outer radius, wedge's start angle a, wedge's end angle b): `−` the
+    /// length of the circle `r = ε` in the rectangle (inside the wedge, if any), `+` that of the
+    /// circle `r = outer`, and for a wedge `∓ ∫ r dr` along its straight edge at angle a (b)
+    /// between ε and the outer radius inside the rectangle, since a radial edge turning by `dθ`
+    /// sweeps `r dr dθ` (docs/physics.md, "Gradients: the multiplexed lens"). The angles' rates
+    /// are 0 without a wedge. Exact to rounding (the arcs as
+    /// [`obscuration_rate_in`](Self::obscuration_rate_in), the segments by clipping). `None` for
+    /// a mask.
+    pub fn edge_rates_in(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<[f64; 4]> {
+        let Shape::Disc { obscuration, outer, sector } = &self.shape else { return None };
+        let rect = Rect { x0, x1, y0, y1 };
+        let (near, far) = rect.distance_range();
+        if near > *outer || far < *obscuration {
+            return Some([0.0; 4]);
+        }
+        let inner = -arc_length_in(&rect, *obscuration, *sector);
+        let rim = arc_length_in(&rect, *outer, *sector);
+        let (start, end) = match sector {
+            Some((a, b)) => {
+                (-radial_moment_in(&rect, *a, *obscuration, *outer), radial_moment_in(&rect, *b, *obscuration, *outer))
+            }
+            None => (0.0, 0.0),
+        };
+        Some([inner, rim, start, end])
+    }
+
     /// Area of the rectangle `[x0, x1] × [y0, y1]` (grid coordinates) that transmits.
     pub fn area_in(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
         let rect = Rect { x0, x1, y0, y1 };
@@ -592,6 +620,25 @@ fn arc_length_in(rect: &Rect, radius: f64, sector: Option<(f64, f64)>) -> f64 {
     length
 }
 
+/// `∫ r dr` over the part of the ray at angle `theta` from the origin with `r` in
+/// `[from, to]` that lies inside `rect` (each coordinate's slab clips the ray's `r`).
+fn radial_moment_in(rect: &Rect, theta: f64, from: f64, to: f64) -> f64 {
+    let (s, c) = theta.sin_cos();
+    let (mut lo, mut hi) = (from, to);
+    for (u, a, b) in [(c, rect.x0, rect.x1), (s, rect.y0, rect.y1)] {
+        if u == 0.0 {
+            if a > 0.0 || b < 0.0 {
+                return 0.0;
+            }
+        } else {
+            let (p, q) = (a / u, b / u);
+            lo = lo.max(p.min(q));
+            hi = hi.min(p.max(q));
+        }
+    }
+    if hi > lo { 0.5 * (hi * hi - lo * lo) } else { 0.0 }
+}
+
 /// Area of `rect` where `inside` holds: nine probes, then a 16 × 16 supersampling if they disagree.
 fn mask_area_in(rect: &Rect, inside: &MaskFn) -> f64 {
     let (w, h) = (rect.x1 - rect.x0, rect.y1 - rect.y0);
@@ -747,5 +794,39 @@ mod tests {
         let brute = r.area() * count as f64 / (m * m) as f64;
         assert!((exact - brute).abs() < 1e-5 * r.area(), "{exact} vs {brute}");
         assert!((ap.area_in(r.x0, r.x1, r.y0, r.y1) - exact).abs() < 1e-15);
+    }
+
+    /// Each edge's rate of a ring wedge's area in pixels that its circles and straight edges
+    /// cross ([`Aperture::edge_rates_in`]) against central differences of the exact area
+    /// ([`Aperture::area_in`], the slow, obviously correct reference) with that edge moved.
+    #[test]
+    fn edge_rates_match_differences_of_the_area() {
+        let (inner, outer, a, b) = (0.3, 0.8, 0.4, 2.3);
+        let ring = |d: [f64; 4]| Aperture::ring(inner + d[0], outer + d[1], Some((a + d[2], b + d[3]))).unwrap();
+        let here = ring([0.0; 4]);
+        let h = 1e-6;
+        let n = 16;
+        let w = 2.0 / n as f64;
+        let mut crossed = [0usize; 4];
+        for j in 0..n {
+            for i in 0..n {
+                let (x0, y0) = (-1.0 + i as f64 * w, -1.0 + j as f64 * w);
+                let rates = here.edge_rates_in(x0, x0 + w, y0, y0 + w).unwrap();
+                for (e, rate) in rates.iter().enumerate() {
+                    let moved = |t: f64| {
+                        let mut d = [0.0; 4];
+                        d[e] = t;
+                        ring(d).area_in(x0, x0 + w, y0, y0 + w)
+                    };
+                    let reference = (moved(h) - moved(-h)) / (2.0 * h);
+                    assert!((rate - reference).abs() < 1e-7, "pixel ({i}, {j}) edge {e}: {rate} vs {reference}");
+                    crossed[e] += usize::from(*rate != 0.0);
+                }
+            }
+        }
+        assert!(crossed.iter().all(|&c| c > 3), "{crossed:?}");
+        // a mask has no edge parameters; a pixel far from every edge has no rate
+        assert!(Aperture::mask(|_, _| true).edge_rates_in(0.0, 0.1, 0.0, 0.1).is_none());
+        assert_eq!(here.edge_rates_in(0.9, 1.0, 0.9, 1.0), Some([0.0; 4]));
     }
 }

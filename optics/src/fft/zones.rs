@@ -222,6 +222,63 @@ impl SampledZones {
         Some((moved, d_weight))
     }
 
+    /// The derivative of the composite field of [`set_field`](Self::set_field) (the same
+    /// `zones` and `wavelength_m`) where each zone moves at the lens's rates `rates` (one per
+    /// sampled zone, per unit of a key, `LensModel::zone_rates`): its amplitude, its OPD
+    /// `∂W_j = ∂W020_j (x² + y²) + NA ∂Δ_j·(x, y)` ([`field_derivative`](Self::field_derivative),
+    /// `na` the NA), and its edges ([`ZoneRate::edges`](crate::ZoneRate::edges)): pixel `k`'s
+    /// area fraction in zone `j` moves by `∂A_jk = Σ_e ∂e · (∂A_jk/∂e)`, each edge's rate of the
+    /// pixel's exact area ([`Aperture::edge_rates_in`]: a circle's length, a radial edge's
+    /// `∫ r dr`, over `h²`), so `∂P_k += Σ_j ∂A_jk a_j e^{ik(W_j + t_j·x_k)}` at the pixel's centre
+    /// and the weight `Σ A a²` by `Σ ∂A a²` (docs/physics.md, "Gradients: the multiplexed lens").
+    /// `None` where `zones` or `rates` is not one per sampled zone, or a zone whose edges move is
+    /// a mask (its edges are not parameters).
+    pub fn rates_derivative(
+        &self,
+        zones: &[ZoneField],
+        wavelength_m: f64,
+        rates: &[crate::ZoneRate],
+        na: f64,
+    ) -> Option<(Vec<Complex64>, f64)> {
+        if rates.len() != self.apertures.len() {
+            return None;
+        }
+        let d_amplitude: Vec<f64> = rates.iter().map(|r| r.amplitude).collect();
+        let (mut moved, mut d_weight) = self.field_derivative(zones, wavelength_m, &d_amplitude, &|j, x, y| {
+            let r = &rates[j];
+            r.defocus_m * (x * x + y * y) + na * (r.image_shift_m[0] * x + r.image_shift_m[1] * y)
+        })?;
+        let n = self.n;
+        let h = 2.0 / n as f64;
+        let k = TAU / wavelength_m;
+        for ((z, rate), aperture) in zones.iter().zip(rates).zip(&self.apertures) {
+            if rate.edges == [0.0; 4] || z.amplitude == 0.0 {
+                continue;
+            }
+            let compiled = Compiled::new(&z.aberrations);
+            let [tx, ty] = z.tilt_m;
+            let (dx, dy) = aperture.decentre();
+            let mut d_area = 0.0;
+            for j in 0..n {
+                let y0 = -1.0 + j as f64 * h - dy;
+                for i in 0..n {
+                    let x0 = -1.0 + i as f64 * h - dx;
+                    let edge = aperture.edge_rates_in(x0, x0 + h, y0, y0 + h)?;
+                    let da = edge.iter().zip(&rate.edges).map(|(e, r)| e * r).sum::<f64>() / (h * h);
+                    if da == 0.0 {
+                        continue;
+                    }
+                    let (x, y) = (-1.0 + (i as f64 + 0.5) * h, -1.0 + (j as f64 + 0.5) * h);
+                    let opd = compiled.opd_m(x, y) + tx * x + ty * y;
+                    moved[j * n + i] += Complex64::from_polar(da * z.amplitude, k * opd);
+                    d_area += da;
+                }
+            }
+            d_weight += d_area * z.amplitude * z.amplitude;
+        }
+        Some((moved, d_weight))
+    }
+
     /// The field of the last [`set_field`](Self::set_field), `N × N` row-major.
     pub fn field(&self) -> &[Complex64] {
         &self.field
@@ -285,5 +342,80 @@ mod tests {
         assert!((d_weight - reference).abs() < 1e-9 * reference.abs(), "{d_weight} vs {reference}");
         // one per zone, or none
         assert!(sampled.field_derivative(&fields[..2], lambda, &d_amplitude[..2], &|_, _, _| 0.0).is_none());
+    }
+
+    /// The edges' part of [`SampledZones::rates_derivative`] against central differences of
+    /// `set_field` on the zones re-sampled with their edges moved (the slow, obviously correct
+    /// reference): two rings whose shared circle and outer rim move (the concentric layout's
+    /// area fraction) and two wedges whose shared edge and last edge turn (the sectors'), with
+    /// each zone's defocus and amplitude moving beside them.
+    #[test]
+    fn edge_rates_match_differences_of_the_resampled_field() {
+        let lambda = 800e-9;
+        let na = 0.2;
+        let fields = vec![
+            ZoneField { amplitude: 0.9, aberrations: Aberrations::defocus(0.4e-6), tilt_m: [0.1e-6, 0.0] },
+            ZoneField { amplitude: 0.6, aberrations: Aberrations::defocus(-0.3e-6), tilt_m: [0.0, -0.2e-6] },
+        ];
+        // (the zones at a step p along the rates, the rates)
+        type Zones = Box<dyn Fn(f64) -> Vec<Arc<Aperture>>>;
+        let cases: Vec<(Zones, [[f64; 4]; 2])> = vec![
+            (
+                Box::new(|p| {
+                    vec![
+                        Arc::new(Aperture::ring(0.0, 0.55 + p, None).unwrap()),
+                        Arc::new(Aperture::ring(0.55 + p, 0.85 + 0.5 * p, None).unwrap()),
+                    ]
+                }),
+                [[0.0, 1.0, 0.0, 0.0], [1.0, 0.5, 0.0, 0.0]],
+            ),
+            (
+                Box::new(|p| {
+                    vec![
+                        Arc::new(Aperture::sector(0.0, 2.0 + p).unwrap()),
+                        Arc::new(Aperture::sector(2.0 + p, 4.5 + 2.0 * p).unwrap()),
+                    ]
+                }),
+                [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 2.0]],
+            ),
+        ];
+        for (zones, edges) in &cases {
+            let rates = [
+                crate::ZoneRate { amplitude: 0.2, defocus_m: 0.1e-6, edges: edges[0], ..Default::default() },
+                crate::ZoneRate { image_shift_m: [0.0, 0.3e-6], edges: edges[1], ..Default::default() },
+            ];
+            let at = |p: f64| {
+                let mut sampled = SampledZones::new(32, &zones(p)).unwrap();
+                let moved: Vec<ZoneField> = fields
+                    .iter()
+                    .zip(&rates)
+                    .map(|(f, r)| ZoneField {
+                        amplitude: f.amplitude + p * r.amplitude,
+                        aberrations: Aberrations::defocus(f.aberrations.w020_m + p * r.defocus_m),
+                        tilt_m: [f.tilt_m[0] + p * na * r.image_shift_m[0], f.tilt_m[1] + p * na * r.image_shift_m[1]],
+                    })
+                    .collect();
+                sampled.set_field(&moved, lambda).unwrap();
+                (sampled.field().to_vec(), sampled.weight())
+            };
+            let h = 1e-6;
+            let ((up, w_up), (down, w_down)) = (at(h), at(-h));
+            let mut sampled = SampledZones::new(32, &zones(0.0)).unwrap();
+            sampled.set_field(&fields, lambda).unwrap();
+            let (moved, d_weight) = sampled.rates_derivative(&fields, lambda, &rates, na).unwrap();
+            let largest = moved.iter().map(|m| m.norm()).fold(0.0, f64::max);
+            assert!(largest > 1.0, "{largest}");
+            for (k, m) in moved.iter().enumerate() {
+                let reference = (up[k] - down[k]) / (2.0 * h);
+                assert!((m - reference).norm() < 1e-5 * largest, "pixel {k}: {m} vs {reference}");
+            }
+            let reference = (w_up - w_down) / (2.0 * h);
+            assert!((d_weight - reference).abs() < 1e-6 * reference.abs(), "{d_weight} vs {reference}");
+        }
+        // a mask's edges are not parameters
+        let mask = SampledZones::new(16, &[Arc::new(Aperture::mask(|x, _| x > 0.0))]).unwrap();
+        let one = [ZoneField { amplitude: 1.0, ..Default::default() }];
+        let rate = [crate::ZoneRate { edges: [0.0, 1.0, 0.0, 0.0], ..Default::default() }];
+        assert!(mask.rates_derivative(&one, lambda, &rate, na).is_none());
     }
 }

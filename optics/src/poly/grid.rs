@@ -939,13 +939,7 @@ impl FftLayer {
                     let [tx, ty] = fields[j].tilt_m;
                     tx * x + ty * y
                 }),
-                ZoneLane::Rates(rates) => {
-                    let d_amplitude: Vec<f64> = rates.iter().map(|r| r.amplitude).collect();
-                    sampled.field_derivative(fields, lambda, &d_amplitude, &|j, x, y| {
-                        let r = &rates[j];
-                        r.defocus_m * (x * x + y * y) + na * (r.image_shift_m[0] * x + r.image_shift_m[1] * y)
-                    })
-                }
+                ZoneLane::Rates(rates) => sampled.rates_derivative(fields, lambda, rates, na),
                 ZoneLane::Missing => None,
             };
             let Some(moved) = moved else { return Ok(None) };

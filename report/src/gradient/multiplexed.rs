@@ -107,18 +107,19 @@ pub(super) fn with_channels(
     Ok(Some((gradient, e)))
 }
 
-/// The gradient where `keys` ask a channel's wavelength or own efficiency of a segmented lens
-/// (`lens.channels_nm[j]`, `lens.channel_efficiencies[j]`, or either list for every channel),
-/// with its evaluation: each a lane on zone `j` alone inside the composite pupil on the FFT path,
-/// on axis and off ([`metric::zone_key_gradient`], per `ln λ_j` or `ln η_j`, here per nm or per
-/// unit η_j), the other keys as [`super::gradient_and_evaluation`] takes them, in the keys'
-/// order; `None` where no key is a channel's of a segmented lens.
+/// The gradient where `keys` ask a channel's wavelength or own efficiency or a zone's area
+/// fraction of a segmented lens (`lens.channels_nm[j]`, `lens.channel_efficiencies[j]`,
+/// `lens.area_fractions[j]`, or a list for every channel), with its evaluation: each a lane on
+/// the zones inside the composite pupil on the FFT path, on axis and off
+/// ([`metric::zone_key_gradient`], per `ln λ_j`, `ln η_j` or `ln a_j`, here per nm or per unit
+/// η_j or a_j: an area fraction moves the zones' edges), the other keys as [`super::gradient_and_evaluation`] takes them, in the keys'
+/// order; `None` where no key is a channel's or a zone's of a segmented lens.
 pub(super) fn with_zone_channels(
     source: &scene::Source,
     overrides: &[String],
     keys: &[String],
 ) -> Result<Option<(Gradient, metric::Evaluation)>> {
-    if !keys.iter().any(|k| k.trim().starts_with("lens.channel")) {
+    if !keys.iter().any(|k| k.trim().starts_with("lens.channel") || k.trim().starts_with("lens.area_fractions")) {
         return Ok(None);
     }
     let (table, built) = crate::objective::resolved_and_built(source, overrides)?;
@@ -133,6 +134,7 @@ pub(super) fn with_zone_channels(
         entry("lens.channels_nm")
             .map(metric::ZoneKey::ChannelWavelength)
             .or_else(|| entry("lens.channel_efficiencies").map(metric::ZoneKey::ChannelEfficiency))
+            .or_else(|| entry("lens.area_fractions").map(metric::ZoneKey::AreaFraction))
     };
     let others: Vec<String> = expanded.iter().filter(|(k, _)| zone_key(k).is_none()).map(|(k, _)| k.clone()).collect();
     let rest = match others.is_empty() {
@@ -147,7 +149,7 @@ pub(super) fn with_zone_channels(
             let g =
                 metric::zone_key_gradient(&built, zone).map_err(|e| anyhow!("--wrt {key}: {}: {e}", source.label()))?;
             evaluation.get_or_insert(g.evaluation);
-            // ∂/∂ln λ_j per nm, ∂/∂ln η_j per unit η_j
+            // ∂/∂ln λ_j per nm, ∂/∂ln η_j per unit η_j, ∂/∂ln a_j per unit a_j
             [g.asnr[0], g.mean_mtf[0], g.snr0[0], g.photoelectrons[0]].map(|d| d / value)
         } else {
             let (g, _) = rest.as_ref().expect("the other keys' gradient");
@@ -200,24 +202,11 @@ pub(super) fn chain(key: &str, value: f64, lens_model: &str, table: &toml::Table
                     Err(e) => Some(Err(e)),
                 };
             }
-            refusal(key)
+            // (a channel's wavelength and own efficiency and a zone's area fraction: `with_channels`,
+            // interleaved, and `with_zone_channels`, segmented)
+            None
         }
     }
-}
-
-/// The keys of the lens refused here, naming why; `None` for another key.
-fn refusal(key: &str) -> Option<Result<Chain>> {
-    // (a channel's wavelength and own efficiency: `with_channels`, interleaved, and
-    // `with_zone_channels`, segmented)
-    let why = if key.starts_with("lens.area_fractions[") {
-        "a zone's area fraction moves the zones' edges across the pupil (the edge's motion on the FFT path, carried \
-         for a central obscuration's circle but not for the zones' rings and wedges yet) and every zone's τ_j = a_j η_j"
-    } else {
-        return None;
-    };
-    Some(Err(anyhow!(
-        "--wrt {key}: not differentiable here yet for lens.model = \"multiplexed\": {why} (it is never replaced by a finite difference)"
-    )))
 }
 
 #[cfg(test)]
@@ -662,9 +651,92 @@ mod tests {
         assert!(g.d_mean_mtf.iter().all(|d| *d != 0.0), "{g:?}");
     }
 
+    /// The segmented lens's zones' area fractions (0.3, 0.25, 0.35: Σ a < 1, each free, the rim
+    /// beyond the zones opaque) with the channels' own efficiencies (0.1, 0.15, 0.2), the stray
+    /// light and read noise on a 4 nm band, concentric on axis and sectors at (2°, 1°): ln a_j
+    /// moves the zones' edges from zone j on (rings' radii √c_k, wedges' angles 2π c_k), every
+    /// edge pixel's area fraction by its edge's length in it, and τ by a_j η_j; against the
+    /// discrete rule's differences at 64 pupil samples ([`exact_lanes`]).
+    #[test]
+    fn segmented_area_fractions_match_the_fixed_rule() {
+        let source = multiplexed_with(
+            "segmented",
+            "channel_efficiencies = [0.1, 0.15, 0.2]\narea_fractions = [0.3, 0.25, 0.35]",
+        );
+        let keys = ["lens.area_fractions[0]", "lens.area_fractions[2]", "lens.f_number"];
+        for at in
+            [&["lens.zones=\"concentric\""][..], &["lens.zones=\"sectors\"", "field.x_deg=2", "field.y_deg=1"][..]]
+        {
+            let mut overrides = vec![
+                "spectrum.range_nm=4",
+                "options.pupil_samples=64",
+                "options.glare=\"included\"",
+                "camera.read_noise_e=2",
+            ];
+            overrides.extend(at);
+            let g = matches_the_fixed_rule(&source, &overrides, &keys, &exact_lanes);
+            // the zones' edges move the OTF, their areas N
+            assert!(g.d_mean_mtf[..2].iter().chain(&g.d_photoelectrons[..2]).all(|d| *d != 0.0), "{g:?}");
+        }
+    }
+
+    /// Where the area fractions fill the aperture (0.3, 0.3, 0.4: Σ a = 1) the last zone absorbs
+    /// a fraction's change, its outer edge held on the rim: the gradient of `area_fractions[j]`
+    /// against Richardson central differences (steps 4e-6 and 2e-6 of a_j) of evaluations with
+    /// a_j and a_3 = 1 − a_1 − a_2 moved together, on the same fixed sampling (64 pupil samples,
+    /// 4 nm band, read noise), concentric and sectors, within 1e-8 of each quantity's norm; the
+    /// last fraction itself is refused there (its growth would leave the aperture).
+    #[test]
+    fn segmented_filled_area_fractions_let_the_last_absorb() {
+        let source = multiplexed_with("segmented", "channel_efficiencies = [0.1, 0.15, 0.2]");
+        let base = [0.3, 0.3, 0.4];
+        let keys = ["lens.area_fractions[0]", "lens.area_fractions[1]"];
+        for zones in ["lens.zones=\"concentric\"", "lens.zones=\"sectors\""] {
+            let overrides = ["spectrum.range_nm=4", "options.pupil_samples=64", "camera.read_noise_e=2", zones];
+            let mut set = owned(&overrides);
+            set.push("lens.area_fractions=[0.3, 0.3, 0.4]".to_owned());
+            let g = gradient(&source, &set, &owned(&keys)).unwrap();
+            let at = |j: usize, d: f64| -> [f64; 4] {
+                let mut a = base;
+                a[j] += d;
+                a[2] -= d;
+                let mut set = owned(&overrides);
+                set.push(format!("lens.area_fractions=[{:e}, {:e}, {:e}]", a[0], a[1], a[2]));
+                let e = metric::evaluate(&scene::build_from(&source, &set).unwrap()).unwrap();
+                [e.asnr, e.mean_mtf, e.snr0, e.photoelectrons]
+            };
+            let central = |j: usize, h: f64| -> [f64; 4] {
+                let (up, down) = (at(j, h), at(j, -h));
+                std::array::from_fn(|q| (up[q] - down[q]) / (2.0 * h))
+            };
+            let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+            let references: Vec<[f64; 4]> = (0..keys.len())
+                .map(|j| {
+                    let h = 2e-6 * base[j];
+                    let (coarse, fine) = (central(j, 2.0 * h), central(j, h));
+                    std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0)
+                })
+                .collect();
+            for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+                let norm = ours[q].iter().map(|x| x * x).sum::<f64>().sqrt();
+                assert!(norm > 0.0, "{name}: {g:?}");
+                for (j, k) in keys.iter().enumerate() {
+                    let error = (ours[q][j] - references[j][q]).abs() / norm;
+                    println!(
+                        "{zones} {name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {error:.1e}",
+                        ours[q][j], references[j][q]
+                    );
+                    assert!(error < 1e-8, "{zones} {name} {k}: {} vs {}", ours[q][j], references[j][q]);
+                }
+            }
+            let e = gradient(&source, &set, &owned(&["lens.area_fractions[2]"])).unwrap_err().to_string();
+            assert!(e.contains("--wrt lens.area_fractions[2]") && e.contains("fill the aperture"), "{e}");
+        }
+    }
+
     /// The keys refused, each naming itself and why: the segmented layout's channel wavelength
     /// with the other channels as background (the band edges move with it), a channel's own
-    /// efficiency at 0, and a zone's area.
+    /// efficiency at 0, and the last zone's area where the zones fill the aperture.
     #[test]
     fn multiplexed_refusals_name_the_key_and_why() {
         let segmented = multiplexed("segmented");
@@ -672,9 +744,10 @@ mod tests {
         let background = owned(&["lens.other_channels=\"background\""]);
         let e = gradient(&segmented, &background, &owned(&["lens.channels_nm[1]"])).unwrap_err().to_string();
         assert!(e.contains("--wrt lens.channels_nm[1]") && e.contains("band edges"), "{e}");
+        // the last zone's area fraction where the zones fill the aperture
         let with_areas = owned(&["lens.area_fractions=[0.3, 0.3, 0.4]"]);
-        let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[0]"])).unwrap_err().to_string();
-        assert!(e.contains("--wrt lens.area_fractions[0]") && e.contains("zones' edges"), "{e}");
+        let e = gradient(&segmented, &with_areas, &owned(&["lens.area_fractions[2]"])).unwrap_err().to_string();
+        assert!(e.contains("--wrt lens.area_fractions[2]") && e.contains("fill the aperture"), "{e}");
         // an interleaved lens's channel under a line off axis: not on the band's exact 1-D engine
         let interleaved = multiplexed("interleaved");
         let line = owned(&["field.x_deg=1", "spectrum.shape=\"line\""]);
