@@ -909,8 +909,9 @@ impl FftLayer {
     /// itself, `∂W_j = W020_j (x² + y²)`, and [`WavefrontDirection::ImageShift`] each zone's own
     /// tilt (its image shift) by itself, `∂W_j = t_j·(x, y)`, both per relative change
     /// ([`SampledZones::field_derivative`]); [`ZoneLane::Rates`] each zone at the lens's own
-    /// rates (`LensModel::zone_rates`: `∂a_j`, and `∂W_j = ∂W020_j (x² + y²) + NA ∂Δ_j·(x, y)`).
-    /// `None` for a lane missing or a zone whose wavefront is not a defocus alone.
+    /// rates (`LensModel::zone_rates`: `∂a_j`, `∂W_j = ∂W020_j (x² + y²) + NA ∂Δ_j·(x, y)` and
+    /// the edges' motion, [`SampledZones::rates_derivative`]). `None` for a lane missing or a
+    /// zone whose wavefront is not a defocus alone.
     #[allow(clippy::type_complexity)]
     fn zones_lanes(
         &mut self,
