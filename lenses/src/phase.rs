@@ -634,6 +634,13 @@ impl<L: LensModel> LensModel for WithZernike<L> {
         self.inner.design_wavelength()
     }
 
+    /// The inner lens's rates, order for order: the terms are fixed on the pupil, so the field
+    /// moves each order's image shift as it moves the inner lens's (docs/physics.md, "Gradients:
+    /// the field point").
+    fn image_shift_field_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        self.inner.image_shift_field_rates(wavelength_m, field)
+    }
+
     fn describe(&self) -> String {
         let terms: Vec<String> = self
             .pupil

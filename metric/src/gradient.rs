@@ -704,8 +704,9 @@ fn point_gradient(
                                      one the overlap engine takes at zero Seidel terms (an iris, \
                                      options.overlap = false or options.pupil_samples)",
                                 _ =>
-                                    "not on the overlap engine nor on the FFT path through an iris (a phase profile, a table, \
-                                     a wavefront too strong for the overlap rules, or other wavefront keys asked with it)",
+                                    "not on the overlap engine nor on the FFT path through an iris or under a line (a phase \
+                                     profile, a table, a wavefront too strong for the overlap rules, or other wavefront keys \
+                                     asked with it)",
                             }
                         ),
                     ));
@@ -792,8 +793,8 @@ fn point_gradient(
                                 p,
                                 format!(
                                     "{key}: the field angle's OTF lane is computed on the exact 1-D engine (off axis without \
-                                 Seidel terms) and the overlap engine (a non-zero Seidel term) as the lateral colour's \
-                                 shifts, on the FFT path as the oblique wave's path of a radial pupil seen off axis (a \
+                                 Seidel terms) and the overlap engine (Seidel or Zernike terms) as the \
+                                 lateral colour's shifts, on the FFT path as the oblique wave's path of a radial pupil seen off axis (a \
                                  phase or library lens), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
                                  this scene's OTF is on another engine or pupil (an iris, zones, a map or a table; Zernike \
                                  terms on a shifted order or on axis; a line spectrum's grids)",
@@ -823,9 +824,10 @@ fn point_gradient(
                             format!(
                                 "lens.iris_decentre_{}: the decentre's lane is computed on the exact 1-D engine, for a \
                                  circular iris on orders whose only aberration is defocus (the centred circle with the \
-                                 tilt 2 W020 d), and is 0 by symmetry where the OTF is rotationally symmetric; this \
-                                 scene's pupil is on another engine (an obscuration or a sector, Seidel or Zernike \
-                                 terms, the FFT path, a line spectrum's grids, or other wavefront keys asked with it)",
+                                 tilt 2 W020 d), on the FFT path for an iris with Seidel terms, an annulus or a sector \
+                                 (the wavefront's slope at each pixel), and is 0 by symmetry where the OTF is \
+                                 rotationally symmetric; this scene's pupil is on another engine (Zernike terms, a \
+                                 line spectrum's grids, or other wavefront keys asked with it)",
                                 if axis == 0 { "x" } else { "y" }
                             ),
                         ));
@@ -2229,7 +2231,12 @@ fn temperature_over_directions(
     noise: Option<&optics::NoiseShape>,
     temperature: f64,
 ) -> Option<f64> {
-    if engines.iter().any(|e| e.has_pupil_grid() && !e.has_psf_planes()) {
+    // the overlap engine's OTF along a direction is its own quadrature at the engine's
+    // (tightened) tolerance: as the 1-D engines', read along the rule's directions
+    let sampled = |e: &optics::Polychromatic<'_>| {
+        e.has_pupil_grid() && !e.has_psf_planes() && !matches!(e.engine(), optics::Engine::Overlap { .. })
+    };
+    if engines.iter().any(sampled) {
         return None;
     }
     let camera = scene.camera();

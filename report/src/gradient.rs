@@ -789,11 +789,11 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} (with camera.pixel_mtf true or false), \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source, under a line or over a band), \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source, under a line or over a band, on the overlap engine too), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -3419,6 +3419,112 @@ parameter_bias = [0.0, 0.0]
         }
     }
 
+    /// The decentre of the iris of `examples/decentred-iris.toml` with Seidel terms, and of an
+    /// annulus (docs/physics.md, "Gradients: the iris": the grid stays on the iris, whose
+    /// decentre moves each pixel's OPD by the wavefront's slope there, its edges with it), on
+    /// the FFT path: on axis with the four Seidel terms, at 3° along y with coma, and through
+    /// the annulus of obscuration 0.3 with spherical aberration, against the discrete rule's
+    /// central differences (step 1e-5 of the radius).
+    #[test]
+    fn fft_iris_decentre_with_seidel_terms_or_an_annulus_is_the_derivative_of_the_discrete_rule() {
+        let iris = example("decentred-iris.toml");
+        let keys = owned(&["lens.iris_decentre_x", "lens.iris_decentre_y"]);
+        let base = ["spectrum.range_nm=4", "options.pupil_samples=64", "lens.iris_decentre_y=-0.1"];
+        for more in [
+            &[
+                "lens.spherical_um=0.05",
+                "lens.coma_um=0.1",
+                "lens.astigmatism_um=-0.05",
+                "lens.field_curvature_um=0.03",
+            ][..],
+            &["lens.coma_um=0.1", "field.y_deg=3"],
+            &["lens.obscuration=0.3", "lens.spherical_um=0.05"],
+            &["lens.obscuration=0.3"],
+        ] {
+            check_discrete_rule(&iris, &joined(&base, more), &keys, 1e-5);
+        }
+    }
+
+    /// The Seidel terms of the paper's lens (a full circle) under a line at 803 nm, whose pupil
+    /// is on the line's FFT grids (docs/physics.md, "Gradients: 2-D pupils under a line"): on
+    /// axis and at 3° along x, against the discrete rule's central differences (step 1e-5 µm).
+    #[test]
+    fn fft_seidel_under_a_line_is_the_derivative_of_the_discrete_rule() {
+        let paper = scene::read(None).unwrap();
+        let keys = owned(&["lens.spherical_um", "lens.coma_um", "lens.astigmatism_um", "lens.field_curvature_um"]);
+        let terms =
+            ["lens.spherical_um=0.1", "lens.coma_um=0.05", "lens.astigmatism_um=0.05", "lens.field_curvature_um=0.05"];
+        for at in ["field.x_deg=0", "field.x_deg=3"] {
+            let overrides = joined(
+                &joined(&LINE_803, &terms).iter().map(String::as_str).collect::<Vec<_>>(),
+                &["options.pupil_samples=64", at],
+            );
+            check_discrete_rule(&paper, &overrides, &keys, 1e-5);
+        }
+    }
+
+    /// `keys`' gradient at the tolerance `tolerance` against central differences of evaluations
+    /// converged at 1e-10, Richardson-extrapolated from the steps `2h` and `h`
+    /// ([`richardson`]), each quantity (ASNR, mean MTF, SNR0, N) within 10× the tolerance of its
+    /// gradient's norm.
+    fn check_at_tolerance(source: &Source, overrides: &[&str], keys: &[&str], tolerance: f64, h: f64) {
+        let base = owned(overrides);
+        let mut set = base.clone();
+        set.push(format!("options.tolerance={tolerance:e}"));
+        let g = gradient(source, &set, &owned(keys)).unwrap();
+        let ours = [&g.d_asnr, &g.d_mean_mtf, &g.d_snr0, &g.d_photoelectrons];
+        let references: Vec<[f64; 4]> =
+            g.keys.iter().zip(&g.values).map(|(k, v)| richardson(source, &base, k, *v, h)).collect();
+        for (q, name) in ["ASNR", "mean MTF", "SNR0", "N"].iter().enumerate() {
+            let quantity = [g.asnr, g.mean_mtf, g.snr0, g.photoelectrons][q];
+            let norm = match ours[q].iter().map(|x| x * x).sum::<f64>().sqrt() {
+                0.0 => quantity,
+                norm => norm,
+            };
+            for (i, k) in g.keys.iter().enumerate() {
+                let error = (ours[q][i] - references[i][q]).abs() / norm;
+                println!(
+                    "{name} {k}: gradient {:.9e}, differences {:.9e}, error/norm {error:.1e}",
+                    ours[q][i], references[i][q]
+                );
+                assert!(error <= 10.0 * tolerance, "{name} {k}: {} vs {} (norm {norm})", ours[q][i], references[i][q]);
+            }
+        }
+    }
+
+    /// The field angles off axis with Zernike terms on the overlap engine (docs/physics.md,
+    /// "Gradients: the field point": the terms are fixed on the pupil, each order's image shift
+    /// moves as the lens's without them): the paper's lens with Z4 = 0.02 µm and Z8 = 0.01 µm on
+    /// a 4 nm band at (3°, 2°), the gradient at 1e-3 against central differences of evaluations
+    /// converged at 1e-10 (steps 0.02° and 0.01°, Richardson), within 10× 1e-3 of the norm.
+    #[test]
+    fn field_angles_with_zernike_terms_match_central_differences() {
+        let keys = ["field.x_deg", "field.y_deg"];
+        let overrides = [
+            "spectrum.range_nm=4",
+            "lens.zernike_noll_rms_um=[0, 0, 0, 0.02, 0, 0, 0, 0.01]",
+            "field.x_deg=3",
+            "field.y_deg=2",
+        ];
+        check_at_tolerance(&scene::read(None).unwrap(), &overrides, &keys, 1e-3, 1e-2);
+    }
+
+    /// A blackbody's temperature over a band on the overlap engine (docs/physics.md, "Gradients:
+    /// a line's wavelength and a blackbody's temperature": the engines of ρ and ρ ∂ln B/∂T read
+    /// along the value's directions): the paper's lens lit by a 3000 K blackbody with Z4 and Z8
+    /// on a 10 nm band, on axis and at 3° along x, the gradient at 1e-3 against central
+    /// differences of evaluations converged at 1e-10 (relative steps, Richardson), within 10×
+    /// 1e-3 of each quantity's norm.
+    #[test]
+    fn a_blackbody_temperature_on_the_overlap_engine_matches_central_differences() {
+        let source = paper_blackbody();
+        let keys = ["source.temperature_k"];
+        let zernike = "lens.zernike_noll_rms_um=[0, 0, 0, 0.02, 0, 0, 0, 0.01]";
+        for at in ["field.x_deg=0", "field.x_deg=3"] {
+            check_at_tolerance(&source, &["spectrum.range_nm=10", zernike, at], &keys, 1e-3, relative_step("", 3000.0));
+        }
+    }
+
     /// The meta-atom library lens of `examples/library.toml` off axis: its imaging order is a
     /// radial pupil seen by the same oblique wave, so the same lanes; against the discrete
     /// rule's central differences at (5°, 3°) on a 4 nm band.
@@ -4137,12 +4243,14 @@ parameter_bias = [0.0, 0.0]
         check_field_against(&binary2, &overrides, &["field.x_deg"], 0.25, 1e-5, 1e-5);
     }
 
-    /// Refused, naming the key and why: off axis with Zernike terms (the FFT path has no shift
-    /// lane), another family.
+    /// Refused, naming the key and why: off axis with Zernike terms held on the FFT path
+    /// (`options.pupil_samples`: the grids have no lateral-colour lane; the overlap engine's are
+    /// `field_angles_with_zernike_terms_match_central_differences`), another family.
     #[test]
     fn field_gradient_refusals_name_the_key() {
         let paper = scene::read(None).unwrap();
-        let zernike = owned(&["field.x_deg=2", "lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.1]"]);
+        let zernike =
+            owned(&["field.x_deg=2", "lens.zernike_noll_rms_um=[0, 0, 0, 0, 0.1]", "options.pupil_samples=64"]);
         let e = gradient(&paper, &zernike, &owned(&["field.x_deg"])).unwrap_err().to_string();
         assert!(e.contains("field.x_deg") && e.contains("Zernike terms"), "{e}");
         // another family (a tabulated MTF: its tables are not followed through the field)

@@ -1377,8 +1377,12 @@ impl FftPath {
                 // an order through an aperture of disc shape: the obscuration moves its inner
                 // edge (the only key this path differentiates there)
                 if let (Pupil::Aperture(aperture), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
-                    // the Seidel terms through an iris: their OPD at the pixels as the value samples it
-                    if directions.iter().all(|d| matches!(d, WavefrontDirection::Seidel(_))) {
+                    // the Seidel terms through an iris: their OPD at the pixels as the value samples
+                    // it; the iris's decentre: the wavefront's slope there (`decentre_opd`)
+                    if directions
+                        .iter()
+                        .all(|d| matches!(d, WavefrontDirection::Seidel(_) | WavefrontDirection::IrisDecentre(0 | 1)))
+                    {
                         let layer = match &mut built {
                             Some(l) => l,
                             slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
@@ -1559,6 +1563,35 @@ impl FftPath {
                             *total += node.weight * rate;
                         }
                     }
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
+                // a full circle's Seidel terms (a line's grids): their OPD at the pixels as the
+                // value samples the circle, as through an iris
+                if let (Pupil::Full, FftKind::Grid(_)) = (&order.pupil, &node.kind)
+                    && directions.iter().all(|d| matches!(d, WavefrontDirection::Seidel(_)))
+                {
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let slot = layer.pupil(&order)?;
+                    let circle = layer.circle.clone();
+                    let Some((field, weight, opd)) =
+                        seidel_through_aperture(&layer.pupils[slot].1, &circle, &order, directions, lambda)?
+                    else {
+                        return Ok(None);
+                    };
+                    let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
+                    layer.plan.otf_and_derivatives_of_field(
+                        &field,
+                        weight,
+                        2.0 * PI / lambda,
+                        &refs,
+                        &mut otf,
+                        &mut d_grids,
+                    );
                     let grids: Vec<&Otf> = d_grids.iter().collect();
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
@@ -1836,7 +1869,8 @@ type SeidelField = (Vec<Complex64>, f64, Vec<Vec<f64>>);
 /// Seidel term of `directions` at every pixel (`10⁻⁶ {ρ⁴, H ρ³ cos φ, H² ρ² cos² φ, H² ρ²}` at the
 /// order's field height `H`, sampled through the same aperture as the value's,
 /// [`SampledPupil::new`]): the Seidel terms through an iris on the FFT path (docs/physics.md,
-/// "Gradients: Seidel terms through an iris"). `None` where a direction is not a Seidel term.
+/// "Gradients: Seidel terms through an iris"); an [`WavefrontDirection::IrisDecentre`]'s OPD
+/// per unit decentre there ([`decentre_opd`]). `None` where a direction is neither.
 fn seidel_through_aperture(
     sampled: &SampledPupil,
     aperture: &Aperture,
@@ -1851,6 +1885,11 @@ fn seidel_through_aperture(
     let height = order.wavefront.aberrations().field;
     let mut out = Vec::with_capacity(directions.len());
     for d in directions {
+        if let WavefrontDirection::IrisDecentre(axis @ (0 | 1)) = *d {
+            let Some(rate) = decentre_opd(sampled, &order.wavefront.aberrations(), axis) else { return Ok(None) };
+            out.push(rate);
+            continue;
+        }
         let WavefrontDirection::Seidel(term) = *d else { return Ok(None) };
         let mut unit = crate::fft::Aberrations { field: height, ..crate::fft::Aberrations::default() };
         match term {
@@ -1862,6 +1901,50 @@ fn seidel_through_aperture(
         out.push(SampledPupil::new(n, aperture, &unit)?.opd_m().to_vec());
     }
     Ok(Some((field, area.iter().sum(), out)))
+}
+
+/// The OPD's rate (m per unit decentre, a fraction of the radius) along `axis` (0: x, 1: y) at
+/// each pixel of `sampled` (0 outside the aperture), where the wavefront `aberrations` is the
+/// Seidel polynomial (docs/physics.md, "Gradients: the iris"): the grid stays on the iris and
+/// the wavefront is read at `ρ = p + d` from the lens axis (`SampledPupil`'s OPD), so the iris's
+/// decentre `d` moves each pixel's OPD by `∂W/∂x_a (p + d)`: with `r² = x² + y²`,
+/// `∂W/∂x = 2 W020 x + 4 W040 r² x + W131 H (r² + 2x²) + 2 W222 H² x + 2 W220 H² x` and
+/// `∂W/∂y = 2 W020 y + 4 W040 r² y + 2 W131 H x y + 2 W220 H² y`; the iris's edges (an
+/// annulus's, a sector's) move with it, fixed on the grid. `None` with a Zernike term.
+fn decentre_opd(sampled: &SampledPupil, aberrations: &crate::fft::Aberrations, axis: usize) -> Option<Vec<f64>> {
+    if aberrations.zernike_noll_m.iter().any(|&(_, c)| c != 0.0) {
+        return None;
+    }
+    let a = aberrations;
+    let h_field = a.field;
+    let n = sampled.n();
+    let h = 2.0 / n as f64;
+    let (dx, dy) = sampled.aperture().decentre();
+    let amplitude = sampled.amplitude();
+    let mut out = vec![0.0; n * n];
+    for j in 0..n {
+        let y = -1.0 + (j as f64 + 0.5) * h + dy;
+        for i in 0..n {
+            let k = j * n + i;
+            if amplitude[k] <= 0.0 {
+                continue;
+            }
+            let x = -1.0 + (i as f64 + 0.5) * h + dx;
+            let r2 = x * x + y * y;
+            out[k] = if axis == 0 {
+                2.0 * a.w020_m * x
+                    + 4.0 * a.w040_m * r2 * x
+                    + a.w131_m * h_field * (r2 + 2.0 * x * x)
+                    + 2.0 * (a.w222_m + a.w220_m) * h_field * h_field * x
+            } else {
+                2.0 * a.w020_m * y
+                    + 4.0 * a.w040_m * r2 * y
+                    + 2.0 * a.w131_m * h_field * x * y
+                    + 2.0 * a.w220_m * h_field * h_field * y
+            };
+        }
+    }
+    Some(out)
 }
 
 /// An order's field, its weight and each direction's move of it ([`edge_and_seidel_moves`]).
