@@ -2576,7 +2576,58 @@ fn aperture_partials(
     if let Some(found) = aperture_off_axis(scene, e)? {
         return Ok(found);
     }
+    if let Some(found) = aperture_on_grids(scene, e)? {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` on axis where the value's OTF is computed on the FFT grids from a
+/// sampled pupil with the chromatic defocus `W020(λ) = K a(λ)`, `K ∝ f0/F#²` (docs/physics.md,
+/// "Gradients: the F-number and the focal length on the FFT grids"): an annulus
+/// (`lens.obscuration`), Seidel terms through an iris (decentred), Zernike terms on the full
+/// circle. The pupil is in units of the aperture's radius: the obscuration, the iris's size and
+/// decentre and the Seidel and Zernike coefficients (keys of their own) do not move with F# or
+/// f0. So at fixed `K` each wavelength's OTF is a function of `s = νλF#`, and the F-number's
+/// share at fixed pupils is the frequency scale's lane `D_s` (each grid's reading moving with
+/// F# on the value's own fixed rule, [`optics::Polychromatic::mean_mtf_over_azimuth_scale_lane`];
+/// by parts the continuous rule's `P(ν_N)|O(ν_N)|‾ − M̄ − P_ν`), and `K` moves every node's
+/// defocus by itself: the lane `D_K` ([`optics::WavefrontDirection::Defocus`], forward mode
+/// through the FFT on the value's grids, levels, frequencies and azimuths). So
+/// `∂M̄/∂ln F# = D_s − 2 D_K` and `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that (off
+/// axis, a line, another engine, a lens that gives its own aperture directions).
+fn aperture_on_grids(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if !field.is_on_axis() || detected.as_line().is_some() || !e.numerics.engine.starts_with("fft") {
+        return Ok(None);
+    }
+    let lambda = e.mean_wavelength_nm * 1e-9;
+    if lens.aperture_directions(lambda).is_some() {
+        return Ok(None);
+    }
+    let orders = lens.orders(lambda, field);
+    let sampled = !orders.is_empty()
+        && orders.iter().all(|o| {
+            o.wavefront.image_shift_m == [0.0, 0.0]
+                && matches!(o.pupil, optics::Pupil::Full | optics::Pupil::Aperture(_) | optics::Pupil::Radial(_))
+        });
+    if !sampled {
+        return Ok(None);
+    }
+    with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(0.0, &[optics::WavefrontDirection::Defocus])?
+        else {
+            return Ok(None);
+        };
+        let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(0.0) else { return Ok(None) };
+        let d_k = lanes[0];
+        Ok(Some((d_s - 2.0 * d_k, d_k)))
+    })
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` off axis for a lens whose every order is the full circular pupil

@@ -1379,6 +1379,33 @@ impl FftPath {
                     continue;
                 }
                 let Some(node) = stored.next() else { return Ok(None) };
+                // the chromatic defocus through a sampled pupil (the full circle or an aperture:
+                // an annulus, a decentred iris), beside Seidel terms and the obscuration's edge:
+                // every lane a move of the field (`sampled_moves`; docs/physics.md, "Gradients: the
+                // F-number and the focal length on the FFT grids")
+                if directions.contains(&WavefrontDirection::Defocus)
+                    && let (Pupil::Full | Pupil::Aperture(_), FftKind::Grid(_)) = (&order.pupil, &node.kind)
+                {
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let slot = layer.pupil(&order)?;
+                    let aperture = match &order.pupil {
+                        Pupil::Aperture(a) => a.clone(),
+                        _ => layer.circle.clone(),
+                    };
+                    let Some((field, weight, moves)) =
+                        sampled_moves(&layer.pupils[slot].1, &aperture, &order, directions, lambda)?
+                    else {
+                        return Ok(None);
+                    };
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
                 // an order through an aperture of disc shape: the obscuration moves its inner
                 // edge (the only key this path differentiates there)
                 if let (Pupil::Aperture(aperture), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
@@ -1634,6 +1661,13 @@ impl FftPath {
                         }
                         // its move is the field's own (below)
                         WavefrontDirection::OrderField(_) => Vec::new(),
+                        // the order's own defocus beyond the pupil's best fit to its terms (the
+                        // chromatic defocus of a lens with Zernike terms, `Order::radial`), sampled
+                        // as the pupil samples the order's `W020 (x² + y²)`
+                        WavefrontDirection::Defocus => {
+                            let own = order.wavefront.defocus_m - radial.fitted_defocus_m();
+                            at_transmitting_pixels(n, &field, |x, y| own * (x * x + y * y))
+                        }
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
@@ -1644,8 +1678,7 @@ impl FftPath {
                         | WavefrontDirection::ObliqueScale(_)
                         | WavefrontDirection::DesignWavelength
                         | WavefrontDirection::MapScale(_)
-                        | WavefrontDirection::Zone(_)
-                        | WavefrontDirection::Defocus => return Ok(None),
+                        | WavefrontDirection::Zone(_) => return Ok(None),
                     };
                     opd.push(values);
                 }
@@ -1900,6 +1933,79 @@ fn edge_and_seidel_moves(
                 let Some(o) = opd.next() else { return Ok(None) };
                 moves.push((field.iter().zip(&o).map(|(p, w)| Complex64::new(0.0, k * w) * p).collect(), 0.0));
             }
+            _ => return Ok(None),
+        }
+    }
+    Ok(Some((field, weight, moves)))
+}
+
+/// An order's field through `aperture` sampled as `sampled` and its weight `Σ A` (as
+/// [`edge_field`]'s: what [`OtfPlan::otf`](crate::fft::OtfPlan::otf) transforms), with each of
+/// `directions` as a move of the field `(∂P, ∂Σ A)`: the order's own defocus per relative change
+/// ([`WavefrontDirection::Defocus`]: `i k W020 ρ² P`, `ρ²` at the pixel's centre in full-aperture
+/// coordinates as the value samples it, so through a decentred iris the tilt `2 W020 d·ρ` moves
+/// with it), a Seidel term's `i k D P` ([`seidel_through_aperture`]'s `D`), both at a fixed
+/// weight, and the obscuration's inner edge ([`edge_field`]'s). `None` where a direction is none
+/// of these, or the obscuration is asked of an aperture without its edge (docs/physics.md,
+/// "Gradients: the F-number and the focal length on the FFT grids").
+fn sampled_moves(
+    sampled: &SampledPupil,
+    aperture: &Aperture,
+    order: &crate::lens::Order,
+    directions: &[WavefrontDirection],
+    lambda: f64,
+) -> Result<Option<FieldMoves>, Error> {
+    let k = 2.0 * PI / lambda;
+    let n = sampled.n();
+    let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let (field, weight, edge) = if directions.contains(&WavefrontDirection::Obscuration) {
+        let Some((field, weight, moved)) = edge_field(sampled, aperture, lambda) else { return Ok(None) };
+        (field, weight, Some(moved))
+    } else {
+        let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+        crate::fft::cis::fill(&mut field, area, k, opd);
+        (field, area.iter().sum::<f64>(), None)
+    };
+    let seidel: Vec<WavefrontDirection> =
+        directions.iter().copied().filter(|d| matches!(d, WavefrontDirection::Seidel(_))).collect();
+    let mut seidel_opd = match seidel.is_empty() {
+        true => Vec::new(),
+        false => match seidel_through_aperture(sampled, aperture, order, &seidel, lambda)? {
+            Some((_, _, opd)) => opd,
+            None => return Ok(None),
+        },
+    }
+    .into_iter();
+    // W020 ρ² at the transmitting pixels' centres, decentred as `SampledPupil` samples it
+    let defocus = crate::fft::Compiled::new(&crate::fft::Aberrations::defocus(order.wavefront.defocus_m));
+    let (dx, dy) = sampled.aperture().decentre();
+    let h = 2.0 / n as f64;
+    let turn =
+        |d: &[f64]| -> Vec<Complex64> { field.iter().zip(d).map(|(p, w)| Complex64::new(0.0, k * w) * p).collect() };
+    let mut moves = Vec::with_capacity(directions.len());
+    for d in directions {
+        match d {
+            WavefrontDirection::Defocus => {
+                let mut w = vec![0.0; n * n];
+                for j in 0..n {
+                    let y = -1.0 + (j as f64 + 0.5) * h + dy;
+                    for i in 0..n {
+                        let idx = j * n + i;
+                        if area[idx] > 0.0 {
+                            w[idx] = defocus.opd_m(-1.0 + (i as f64 + 0.5) * h + dx, y);
+                        }
+                    }
+                }
+                moves.push((turn(&w), 0.0));
+            }
+            WavefrontDirection::Seidel(_) => {
+                let Some(o) = seidel_opd.next() else { return Ok(None) };
+                moves.push((turn(&o), 0.0));
+            }
+            WavefrontDirection::Obscuration => match &edge {
+                Some(moved) => moves.push(moved.clone()),
+                None => return Ok(None),
+            },
             _ => return Ok(None),
         }
     }
