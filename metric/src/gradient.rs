@@ -2583,7 +2583,43 @@ fn aperture_partials(
     if let Some(found) = aperture_off_axis(scene, e)? {
         return Ok(found);
     }
+    if let Some(found) = aperture_on_grids(scene, e)? {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` on axis where the value's OTF is computed on the FFT grids from a
+/// sampled pupil with the chromatic defocus `W020(λ) = K a(λ)`, `K ∝ f0/F#²` (docs/physics.md,
+/// "Gradients: the F-number and the focal length on the FFT grids"): an annulus
+/// (`lens.obscuration`), Seidel terms through an iris (decentred), Zernike terms on the full
+/// circle. The pupil is in units of the aperture's radius: the obscuration, the iris's size and
+/// decentre and the Seidel and Zernike coefficients (keys of their own) do not move with F# or
+/// f0. So at fixed `K` each wavelength's OTF is a function of `s = νλF#`, and the F-number's
+/// share at fixed pupils is the frequency scale's lane `D_s` (each grid's reading moving with
+/// F# on the value's own fixed rule, [`optics::Polychromatic::mean_mtf_over_azimuth_scale_lane`];
+/// by parts the continuous rule's `P(ν_N)|O(ν_N)|‾ − M̄ − P_ν`), and `K` moves every node's
+/// defocus by itself: the lane `D_K` ([`optics::WavefrontDirection::Defocus`], forward mode
+/// through the FFT on the value's grids, levels, frequencies and azimuths). So
+/// `∂M̄/∂ln F# = D_s − 2 D_K` and `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that (off
+/// axis, a line, another engine, a lens that gives its own aperture directions).
+fn aperture_on_grids(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if !on_sampled_grids(scene, e, &detected) {
+        return Ok(None);
+    }
+    with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(0.0, &[optics::WavefrontDirection::Defocus])?
+        else {
+            return Ok(None);
+        };
+        let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(0.0) else { return Ok(None) };
+        let d_k = lanes[0];
+        Ok(Some((d_s - 2.0 * d_k, d_k)))
+    })
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` off axis for a lens whose every order is the full circular pupil
@@ -3101,8 +3137,10 @@ fn defocus_lane_by_own_rule(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
                      harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
-                     with Seidel terms under a band (the chromatic lens on the overlap engine); this scene's lens \
-                     has other pupils or aberrations"
+                     with Seidel terms under a band (the chromatic lens on the overlap engine), or on axis under a \
+                     band on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, Zernike \
+                     terms); this scene's lens has other pupils or aberrations, or is off axis, under a line or a \
+                     noise spectrum there"
                         .to_owned(),
                 ));
             }
@@ -3171,7 +3209,68 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
     if let Some(found) = design_wavelength_off_axis(scene, e, None) {
         return Ok(found);
     }
+    if let Some(found) = design_wavelength_on_grids(scene, e, None)? {
+        return Ok(found);
+    }
     design_wavelength_by_own_rule(scene, e, p, None)
+}
+
+/// Whether the value's OTF is on the FFT grids of sampled pupils with the chromatic defocus
+/// alone moving with the aperture and the design wavelength ([`aperture_on_grids`],
+/// [`design_wavelength_on_grids`]): on axis, a band, every order the full circle, an aperture
+/// or a radial pupil without an image shift, and a lens that gives no aperture directions of
+/// its own (a phase lens's are [`aperture_lane_partials`]').
+fn on_sampled_grids(scene: &Scene, e: &Evaluation, detected: &radiometry::Spectrum) -> bool {
+    let lens = scene.lens();
+    let field = scene.field();
+    if !field.is_on_axis() || detected.as_line().is_some() || !e.numerics.engine.starts_with("fft") {
+        return false;
+    }
+    let lambda = e.mean_wavelength_nm * 1e-9;
+    if lens.aperture_directions(lambda).is_some() {
+        return false;
+    }
+    let orders = lens.orders(lambda, field);
+    !orders.is_empty()
+        && orders.iter().all(|o| {
+            o.wavefront.image_shift_m == [0.0, 0.0]
+                && matches!(o.pupil, optics::Pupil::Full | optics::Pupil::Aperture(_) | optics::Pupil::Radial(_))
+        })
+}
+
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` on axis where the value's OTF is computed on the FFT grids of
+/// sampled pupils ([`on_sampled_grids`]: an annulus, Seidel terms through an iris, Zernike
+/// terms; docs/physics.md, "Gradients: the F-number and the focal length on the FFT grids"):
+/// λ0 leaves `s = νλF#`, the pupil and the Seidel and Zernike terms as they are and moves each
+/// node's defocus by `∂W020/∂ln λ0` and its efficiency by `∂τ/∂ln λ0`
+/// ([`optics::LensModel::design_wavelength_rates`]), the lane `D_λ0`
+/// ([`optics::WavefrontDirection::DesignWavelength`], forward mode through the FFT on the
+/// value's grids, levels, frequencies and azimuths), so `∂M̄ = D_λ0 − r M̄` with
+/// `r = ∂ln N/∂ln λ0` on the engine's nodes ([`optics::Polychromatic::design_signal_rate`]).
+/// Under a noise spectrum (`noise`) each frequency's weight divided by `n(ν)` and `M̄` the
+/// weighted mean, as the value's. `None` where the scene is not that or the lens gives no rates.
+fn design_wavelength_on_grids(
+    scene: &Scene,
+    e: &Evaluation,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<Option<(f64, f64)>, Error> {
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if !on_sampled_grids(scene, e, &detected) {
+        return Ok(None);
+    }
+    with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        let Some(rate) = poly.design_signal_rate() else { return Ok(None) };
+        let directions = [optics::WavefrontDirection::DesignWavelength];
+        let found = match noise {
+            None => poly.mean_mtf_over_azimuth_and_gradient(0.0, &directions)?,
+            Some(n) => poly.mean_mtf_over_azimuth_over_noise_and_gradient(0.0, &directions, n)?,
+        };
+        let Some((mean, lanes)) = found else { return Ok(None) };
+        Ok(Some((rate, lanes[0] - rate * mean.mean)))
+    })
 }
 
 /// `∂G/∂ln λ0` of the noise-weighted mean `G = (1/ν_N) ∫ P |O| / n dν` the ASNR takes under the
@@ -3197,6 +3296,9 @@ fn design_wavelength_over_noise(
         return Ok(found.design - found.rate * found.mean + found.shift);
     }
     if let Some((_, d)) = design_wavelength_off_axis(scene, e, Some(noise)) {
+        return Ok(d);
+    }
+    if let Some((_, d)) = design_wavelength_on_grids(scene, e, Some(noise))? {
         return Ok(d);
     }
     design_wavelength_by_own_rule(scene, e, p, Some(noise)).map(|(_, d)| d)

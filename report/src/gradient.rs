@@ -793,7 +793,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -4676,6 +4676,98 @@ parameter_bias = [0.0, 0.0]
             let error = (ours - theirs).abs() / ours.abs();
             println!("{name}: gradient {ours:.7e}, differences at 1e-5 {theirs:.7e}, error/norm {error:.1e}");
             assert!(error <= 10.0 * tolerance, "{name}: {ours} vs {theirs}");
+        }
+    }
+
+    /// `lens.f_number`, `lens.focal_length_mm` and `lens.design_wavelength_nm` where the value's
+    /// OTF is on the FFT grids of a sampled pupil (docs/physics.md, "Gradients: the F-number and
+    /// the focal length on the FFT grids": the frequency scale's lane and the chromatic defocus's
+    /// `D_K`, λ0's `D_λ0 − r M̄`): the paper's lens through an annulus (ε = 0.3, centred and
+    /// decentred by 0.15), the decentred iris of `examples/decentred-iris.toml` with Seidel terms
+    /// (and the pixel MTF), and the paper's lens with Zernike terms on the FFT path (its radial
+    /// pupil), against central differences of the same discrete rule (64 pupil samples, a 4 nm
+    /// band, relative step 1e-5, 2.5e-6 for λ0): the mean MTF's within 1e-6 of the norm; N ∝ 1/F#²
+    /// as on every engine.
+    #[test]
+    fn aperture_and_design_wavelength_on_the_fft_grids_are_the_derivative_of_the_discrete_rule() {
+        let paper = scene::read(None).unwrap();
+        let iris = example("decentred-iris.toml");
+        let seidel = ["lens.spherical_um=0.05", "lens.coma_um=0.1", "lens.astigmatism_um=-0.05"];
+        let zernike = "lens.zernike_noll_rms_um=[0, 0, 0, 0.05, 0.1, 0.0, 0.05]";
+        let cases: [(&Source, Vec<&str>); 5] = [
+            (&paper, vec!["lens.obscuration=0.3"]),
+            (&paper, vec!["lens.obscuration=0.45", "lens.iris_decentre_x=0.15"]),
+            (&iris, seidel.to_vec()),
+            (&iris, [&seidel[..], &["camera.pixel_mtf=true"]].concat()),
+            (&paper, vec![zernike]),
+        ];
+        for (source, extra) in cases {
+            let overrides = joined(&["spectrum.range_nm=4", "options.pupil_samples=64"], &extra);
+            // (λ0 with Zernike terms is not computed yet: the lens gives no design-wavelength rates)
+            let keys = match extra == [zernike] {
+                true => owned(&["lens.f_number", "lens.focal_length_mm"]),
+                false => owned(&["lens.f_number", "lens.focal_length_mm", "lens.design_wavelength_nm"]),
+            };
+            let g = gradient(source, &overrides, &keys).unwrap();
+            let norm = g.d_mean_mtf.iter().map(|x| x * x).sum::<f64>().sqrt();
+            assert!(norm > 0.0, "{g:?}");
+            for (i, k) in g.keys.iter().enumerate() {
+                // (λ0 turns the band's defocus fast: a finer step, its truncation 4e-8 of the norm)
+                let h = if k == "lens.design_wavelength_nm" { 2.5e-6 } else { 1e-5 } * g.values[i];
+                let up = evaluated(source, &overrides, k, g.values[i] + h);
+                let down = evaluated(source, &overrides, k, g.values[i] - h);
+                let theirs = (up[1] - down[1]) / (2.0 * h);
+                let error = (g.d_mean_mtf[i] - theirs).abs() / norm;
+                println!(
+                    "{extra:?} {k}: gradient {:.9e}, differences {theirs:.9e}, error/norm {error:.1e}",
+                    g.d_mean_mtf[i]
+                );
+                assert!(error <= 1e-6, "{extra:?} {k}: {} vs {theirs} (norm {norm})", g.d_mean_mtf[i]);
+            }
+            // N ∝ 1/F#², f0 and λ0 leave it (a constant efficiency)
+            let n = g.photoelectrons;
+            assert!((g.d_photoelectrons[0] * g.values[0] + 2.0 * n).abs() <= 1e-12 * n, "{g:?}");
+        }
+    }
+
+    /// The F-number and the focal length through the paper's annulus (ε = 0.3, a 4 nm band) at
+    /// the tolerance 1e-3 (the sampling and Richardson extrapolation the tolerance chooses)
+    /// against central differences of evaluations at 1e-4 (0.24 s each; at 1e-5 the FFT path
+    /// takes 2.6 s), Richardson-extrapolated from the relative steps 0.02 and 0.01
+    /// (`(4 D(h) − D(2h))/3`, truncation O(h⁴); the steps wide enough that the evaluations'
+    /// error, ~1e-4 of M̄, moves the differences by less than 2e-3 of the norm): the ASNR's and
+    /// the mean MTF's within 10× the tolerance of their gradients' norms (measured on the command
+    /// line 2.5e-4 and 1.6e-3).
+    #[test]
+    fn aperture_on_the_fft_grids_matches_converged_differences() {
+        let paper = scene::read(None).unwrap();
+        let base = owned(&["spectrum.range_nm=4", "lens.obscuration=0.3"]);
+        let tolerance = 1e-3;
+        let mut set = base.clone();
+        set.push(format!("options.tolerance={tolerance:e}"));
+        let keys = owned(&["lens.f_number", "lens.focal_length_mm"]);
+        let g = gradient(&paper, &set, &keys).unwrap();
+        let reference = owned(&["spectrum.range_nm=4", "lens.obscuration=0.3", "options.tolerance=1e-4"]);
+        let mut theirs = [[0.0; 2]; 2];
+        for (i, k) in keys.iter().enumerate() {
+            let v = g.values[i];
+            let d = |h: f64| {
+                let (up, down) = (evaluated(&paper, &reference, k, v + h), evaluated(&paper, &reference, k, v - h));
+                [(up[0] - down[0]) / (2.0 * h), (up[1] - down[1]) / (2.0 * h)]
+            };
+            let (fine, coarse) = (d(0.01 * v), d(0.02 * v));
+            theirs[i] = std::array::from_fn(|q| (4.0 * fine[q] - coarse[q]) / 3.0);
+        }
+        for (q, (name, ours)) in [("ASNR", &g.d_asnr), ("mean MTF", &g.d_mean_mtf)].into_iter().enumerate() {
+            let norm = ours.iter().map(|x| x * x).sum::<f64>().sqrt();
+            for (i, k) in keys.iter().enumerate() {
+                let error = (ours[i] - theirs[i][q]).abs() / norm;
+                println!(
+                    "{name} {k}: gradient {:.7e}, differences at 1e-4 {:.7e}, error/norm {error:.1e}",
+                    ours[i], theirs[i][q]
+                );
+                assert!(error <= 10.0 * tolerance, "{name} {k}: {} vs {}", ours[i], theirs[i][q]);
+            }
         }
     }
 

@@ -204,6 +204,9 @@ pub(super) fn aperture_over_noise(
     if let Some((d_k, d_shift)) = aperture_lanes_over_noise(scene, shape_of(scene)) {
         return Ok((scale - 2.0 * d_k - d_shift, d_k + d_shift));
     }
+    if let Some(d_k) = defocus_lane_on_grids_over_noise(scene, e, shape_of(scene))? {
+        return Ok((scale - 2.0 * d_k, d_k));
+    }
     let d_k = weighted_defocus_lane(scene, e, p)?;
     Ok((scale - 2.0 * d_k, d_k))
 }
@@ -245,6 +248,31 @@ fn aperture_lanes_over_noise(scene: &Scene, noise: Option<&optics::NoiseShape>) 
         let (_, d_k, d_shift) =
             poly.mean_mtf_over_azimuth_over_noise_and_aperture_lanes(field.y_rad.atan2(field.x_rad), noise)?;
         Some((d_k, d_shift))
+    })
+}
+
+/// `D̃_K`, the defocus lane with each frequency's weight divided by `n(ν)`, on the FFT grids of a
+/// sampled pupil on axis where the white lane is taken there (metric's `aperture_on_grids`: an
+/// annulus, Seidel terms through an iris, Zernike terms), on the value's noise-weighted rules
+/// over azimuth ([`optics::Polychromatic::mean_mtf_over_azimuth_over_noise_and_gradient`] along
+/// [`optics::WavefrontDirection::Defocus`]; docs/physics.md, "Gradients under a noise spectrum",
+/// "Gradients: the F-number and the focal length on the FFT grids"). `None` elsewhere.
+fn defocus_lane_on_grids_over_noise(
+    scene: &Scene,
+    e: &Evaluation,
+    noise: Option<&optics::NoiseShape>,
+) -> Result<Option<f64>, Error> {
+    let Some(noise) = noise else { return Ok(None) };
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if !super::on_sampled_grids(scene, e, &detected) {
+        return Ok(None);
+    }
+    super::with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        let directions = [optics::WavefrontDirection::Defocus];
+        Ok(poly.mean_mtf_over_azimuth_over_noise_and_gradient(0.0, &directions, noise)?.map(|(_, lanes)| lanes[0]))
     })
 }
 

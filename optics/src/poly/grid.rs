@@ -1194,7 +1194,12 @@ pub enum WavefrontDirection {
     /// F-number and the focal length with Seidel terms"). The overlap engine carries it, and the
     /// exact engine for a decentred circular iris ([`IrisDecentre`](Self::IrisDecentre)), whose
     /// tilt `2 W020 d` scales with the defocus: there the node's image displacement
-    /// `Δ = 2 W020 d/NA` moves with it too (docs/physics.md, "Gradients: the iris").
+    /// `Δ = 2 W020 d/NA` moves with it too (docs/physics.md, "Gradients: the iris"). The FFT
+    /// path carries it for orders through a sampled pupil (the full circle, an annulus, an iris,
+    /// decentred, beside Seidel terms and the obscuration's edge; a radial pupil's own defocus
+    /// beyond its best fit to its terms): `i k W020 ρ² P` at each pixel, `ρ²` at the pixel's
+    /// centre as the value samples it (docs/physics.md, "Gradients: the F-number and the focal
+    /// length on the FFT grids").
     Defocus,
     /// The decentre of a circular iris along x (`0`, `lens.iris_decentre_x`) or y (`1`), per unit
     /// of the decentre (a fraction of the aperture's radius), on an order whose only aberration
@@ -1246,7 +1251,9 @@ pub enum WavefrontDirection {
     /// normalization's own rate not subtracted (the caller's, `Polychromatic::design_signal_rate`),
     /// and the lateral colour's share of λ0 is the [`ImageShift`](Self::ImageShift) lane's
     /// (docs/physics.md, "Gradients: the design wavelength off axis"). The exact 1-D engine
-    /// carries it, for full circular pupils with a defocus alone.
+    /// carries it, for full circular pupils with a defocus alone; the FFT path on axis for the
+    /// pupils it carries [`Defocus`](Self::Defocus) on, each node's `∂W020/∂ln λ0 ρ²` as that
+    /// lane's and its efficiency's rate on its grid.
     DesignWavelength,
     /// A lens parameter `p` that moves each order's field, amplitude and phase, and its
     /// efficiency (`LensModel::order_derivatives(λ, p)`: a library lens's parameter bias, or its
@@ -1350,6 +1357,14 @@ impl FftPath {
                 continue;
             }
             let lens = scene.part(part).lens;
+            // each order's `[∂W020/∂ln λ0, ∂τ/∂ln λ0]` at this wavelength where λ0 is asked
+            let design = match directions.contains(&WavefrontDirection::DesignWavelength) {
+                true => match lens.design_wavelength_rates(lambda, scene.field) {
+                    Some(r) => Some(r),
+                    None => return Ok(None),
+                },
+                false => None,
+            };
             let lanes = if directions.iter().any(|d| matches!(d, WavefrontDirection::Lane(_))) {
                 match lens.binary2_directions(lambda) {
                     Some(l) => Some(l),
@@ -1374,6 +1389,41 @@ impl FftPath {
                     continue;
                 }
                 let Some(node) = stored.next() else { return Ok(None) };
+                // the chromatic defocus through a sampled pupil (the full circle or an aperture:
+                // an annulus, a decentred iris), beside Seidel terms and the obscuration's edge:
+                // every lane a move of the field (`sampled_moves`; docs/physics.md, "Gradients: the
+                // F-number and the focal length on the FFT grids")
+                let defocus_lanes = |d: &WavefrontDirection| {
+                    matches!(d, WavefrontDirection::Defocus | WavefrontDirection::DesignWavelength)
+                };
+                let rates = design.as_ref().and_then(|r| r.get(index)).copied();
+                if design.is_some() && rates.is_none() {
+                    return Ok(None);
+                }
+                if directions.iter().any(defocus_lanes)
+                    && let (Pupil::Full | Pupil::Aperture(_), FftKind::Grid(_)) = (&order.pupil, &node.kind)
+                {
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let slot = layer.pupil(&order)?;
+                    let aperture = match &order.pupil {
+                        Pupil::Aperture(a) => a.clone(),
+                        _ => layer.circle.clone(),
+                    };
+                    let Some((field, weight, moves)) =
+                        sampled_moves(&layer.pupils[slot].1, &aperture, &order, directions, rates, lambda)?
+                    else {
+                        return Ok(None);
+                    };
+                    let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
+                    layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
+                    design_efficiency_rate(&mut d_grids, &otf, directions, rates, order.efficiency);
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
                 // an order through an aperture of disc shape: the obscuration moves its inner
                 // edge (the only key this path differentiates there)
                 if let (Pupil::Aperture(aperture), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
@@ -1662,6 +1712,18 @@ impl FftPath {
                         }
                         // its move is the field's own (below)
                         WavefrontDirection::OrderField(_) => Vec::new(),
+                        // the order's own defocus beyond the pupil's best fit to its terms (the
+                        // chromatic defocus of a lens with Zernike terms, `Order::radial`), sampled
+                        // as the pupil samples the order's `W020 (x² + y²)`
+                        WavefrontDirection::Defocus => {
+                            let own = order.wavefront.defocus_m - radial.fitted_defocus_m();
+                            at_transmitting_pixels(n, &field, |x, y| own * (x * x + y * y))
+                        }
+                        // the design wavelength moves that defocus by the lens's rate
+                        WavefrontDirection::DesignWavelength => {
+                            let Some([rate, _]) = rates else { return Ok(None) };
+                            at_transmitting_pixels(n, &field, |x, y| rate * (x * x + y * y))
+                        }
                         // the Seidel terms' orders are the full circle (the overlap engine)
                         WavefrontDirection::Seidel(_)
                         | WavefrontDirection::FieldAngle(_)
@@ -1670,10 +1732,8 @@ impl FftPath {
                         | WavefrontDirection::SpectralMoment(_)
                         | WavefrontDirection::ImageShift
                         | WavefrontDirection::ObliqueScale(_)
-                        | WavefrontDirection::DesignWavelength
                         | WavefrontDirection::MapScale(_)
-                        | WavefrontDirection::Zone(_)
-                        | WavefrontDirection::Defocus => return Ok(None),
+                        | WavefrontDirection::Zone(_) => return Ok(None),
                     };
                     opd.push(values);
                 }
@@ -1727,6 +1787,7 @@ impl FftPath {
                         &mut d_grids,
                     );
                 }
+                design_efficiency_rate(&mut d_grids, &otf, directions, rates, order.efficiency);
                 let grids: Vec<&Otf> = d_grids.iter().collect();
                 read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
             }
@@ -1982,6 +2043,107 @@ fn edge_and_seidel_moves(
         }
     }
     Ok(Some((field, weight, moves)))
+}
+
+/// An order's field through `aperture` sampled as `sampled` and its weight `Σ A` (as
+/// [`edge_field`]'s: what [`OtfPlan::otf`](crate::fft::OtfPlan::otf) transforms), with each of
+/// `directions` as a move of the field `(∂P, ∂Σ A)`: the order's own defocus per relative change
+/// ([`WavefrontDirection::Defocus`]: `i k W020 ρ² P`, `ρ²` at the pixel's centre in full-aperture
+/// coordinates as the value samples it, so through a decentred iris the tilt `2 W020 d·ρ` moves
+/// with it), a Seidel term's `i k D P` ([`seidel_through_aperture`]'s `D`), both at a fixed
+/// weight, and the obscuration's inner edge ([`edge_field`]'s). `None` where a direction is none
+/// of these, or the obscuration is asked of an aperture without its edge (docs/physics.md,
+/// "Gradients: the F-number and the focal length on the FFT grids").
+fn sampled_moves(
+    sampled: &SampledPupil,
+    aperture: &Aperture,
+    order: &crate::lens::Order,
+    directions: &[WavefrontDirection],
+    design: Option<[f64; 2]>,
+    lambda: f64,
+) -> Result<Option<FieldMoves>, Error> {
+    let k = 2.0 * PI / lambda;
+    let n = sampled.n();
+    let (area, opd) = (sampled.amplitude(), sampled.opd_m());
+    let (field, weight, edge) = if directions.contains(&WavefrontDirection::Obscuration) {
+        let Some((field, weight, moved)) = edge_field(sampled, aperture, lambda) else { return Ok(None) };
+        (field, weight, Some(moved))
+    } else {
+        let mut field = vec![Complex64::new(0.0, 0.0); n * n];
+        crate::fft::cis::fill(&mut field, area, k, opd);
+        (field, area.iter().sum::<f64>(), None)
+    };
+    let seidel: Vec<WavefrontDirection> =
+        directions.iter().copied().filter(|d| matches!(d, WavefrontDirection::Seidel(_))).collect();
+    let mut seidel_opd = match seidel.is_empty() {
+        true => Vec::new(),
+        false => match seidel_through_aperture(sampled, aperture, order, &seidel, lambda)? {
+            Some((_, _, opd)) => opd,
+            None => return Ok(None),
+        },
+    }
+    .into_iter();
+    // `w ρ²` at the transmitting pixels' centres, decentred as `SampledPupil` samples it
+    let (dx, dy) = sampled.aperture().decentre();
+    let h = 2.0 / n as f64;
+    let sampled_defocus = |w020: f64| -> Vec<f64> {
+        let defocus = crate::fft::Compiled::new(&crate::fft::Aberrations::defocus(w020));
+        let mut w = vec![0.0; n * n];
+        for j in 0..n {
+            let y = -1.0 + (j as f64 + 0.5) * h + dy;
+            for i in 0..n {
+                let idx = j * n + i;
+                if area[idx] > 0.0 {
+                    w[idx] = defocus.opd_m(-1.0 + (i as f64 + 0.5) * h + dx, y);
+                }
+            }
+        }
+        w
+    };
+    let turn =
+        |d: &[f64]| -> Vec<Complex64> { field.iter().zip(d).map(|(p, w)| Complex64::new(0.0, k * w) * p).collect() };
+    let mut moves = Vec::with_capacity(directions.len());
+    for d in directions {
+        match d {
+            WavefrontDirection::Defocus => moves.push((turn(&sampled_defocus(order.wavefront.defocus_m)), 0.0)),
+            WavefrontDirection::DesignWavelength => {
+                let Some([rate, _]) = design else { return Ok(None) };
+                moves.push((turn(&sampled_defocus(rate)), 0.0));
+            }
+            WavefrontDirection::Seidel(_) => {
+                let Some(o) = seidel_opd.next() else { return Ok(None) };
+                moves.push((turn(&o), 0.0));
+            }
+            WavefrontDirection::Obscuration => match &edge {
+                Some(moved) => moves.push(moved.clone()),
+                None => return Ok(None),
+            },
+            _ => return Ok(None),
+        }
+    }
+    Ok(Some((field, weight, moves)))
+}
+
+/// The design wavelength's move of an order's efficiency on its node (`rates`, the lens's
+/// `[∂W020/∂ln λ0, ∂τ/∂ln λ0]` for the order, [`WavefrontDirection::DesignWavelength`]): the
+/// node's weight `w τ` moves by `w ∂τ`, so its grid's lane gains `(∂τ/τ) OTF`; the
+/// normalization's own rate is the caller's (`Polychromatic::design_signal_rate`).
+fn design_efficiency_rate(
+    d_grids: &mut [Otf],
+    otf: &Otf,
+    directions: &[WavefrontDirection],
+    rates: Option<[f64; 2]>,
+    efficiency: f64,
+) {
+    let Some([_, d_tau]) = rates else { return };
+    if d_tau == 0.0 || efficiency == 0.0 {
+        return;
+    }
+    for (grid, d) in d_grids.iter_mut().zip(directions) {
+        if *d == WavefrontDirection::DesignWavelength {
+            grid.add_scaled(otf, d_tau / efficiency);
+        }
+    }
 }
 
 /// The derivative in the obscuration ε of the field of an order through `aperture` sampled as
