@@ -1919,11 +1919,11 @@ fn line_center_partials(
     let Some(rates) = rates.filter(|_| plain) else {
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
-             pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without an iris or \
-             Seidel terms, on axis or off it), the refractive lens, the harmonic lens with a constant \
-             transmission (on axis, and off axis on the line's exact 1-D engine), and a phase lens on the radial \
-             engine; this lens's orders move with λ otherwise (an iris, Seidel or Zernike terms, an efficiency or \
-             transmission table's slope), which is not followed yet"
+             pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without Seidel terms, \
+             on axis or off it, through a circular iris too), the refractive lens, the harmonic lens with a \
+             constant transmission and the interleaved multiplexed lens (on axis, and off axis on the line's exact \
+             1-D engine), and a phase lens on the radial engine; this lens's orders move with λ otherwise (Seidel \
+             or Zernike terms, an efficiency or transmission table's slope), which is not followed yet"
         )));
     };
     // the value's own pass where it carried the defocus lane (the line engine); else the value's
