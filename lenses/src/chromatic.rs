@@ -3,7 +3,9 @@
 use std::sync::Arc;
 
 use optics::fft::Aperture;
-use optics::{AffineDefocus, FactoredEfficiency, FactoredPart, Field, LensModel, Order, Pupil, Wavefront};
+use optics::{
+    AffineDefocus, DefocusRates, FactoredEfficiency, FactoredPart, Field, LensModel, Order, Pupil, Wavefront,
+};
 use radiometry::{Sampled, Spectrum};
 
 use crate::Error;
@@ -293,6 +295,22 @@ impl LensModel for ChromaticMetalens {
         let k = self.design_wavelength / wavelength_m - 1.0;
         let sec2 = |angle: f64| 1.0 / (angle.cos() * angle.cos());
         Some(vec![[self.focal_length * sec2(field.x_rad) * k, self.focal_length * sec2(field.y_rad) * k]])
+    }
+
+    /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂λ = −f0/(8F#² λ0)` at every field point and
+    /// through an iris (the order's defocus is the pupil's; an iris keeps a disc of it and its
+    /// area fraction, constant in λ); τ1 and T constant curves. `None` with Seidel terms or an
+    /// efficiency or transmission table (whose slope has kinks at its rows).
+    fn defocus_rates(&self, _wavelength_m: f64, _field: Field) -> Option<DefocusRates> {
+        let (Curve::Constant(_), Curve::Constant(_)) = (&self.efficiency, &self.transmission) else {
+            return None;
+        };
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        (self.seidel == [0.0; 4]).then_some(DefocusRates {
+            defocus: -k / self.design_wavelength,
+            ln_efficiency: 0.0,
+            ln_transmission: 0.0,
+        })
     }
 
     /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂ln λ0 = (λ/λ0) f0/(8F#²)`; τ1(λ) and T(λ)

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use optics::{Field, LensModel, Order, Pupil, Wavefront};
+use optics::{Field, LensModel, Order, OrderWavelengthRates, Pupil, Wavefront};
 
 use crate::Error;
 use crate::chromatic::{Curve, check, check_efficiency_below_transmission, check_fraction};
@@ -149,6 +149,34 @@ impl LensModel for Interleaved {
 
     fn transmission(&self, wavelength_m: f64) -> f64 {
         self.transmission.value(wavelength_m)
+    }
+
+    /// On axis, each channel's order `W020_j = (1 − λ/λ_j) f0/(8F#²)` moves as
+    /// `∂W020_j/∂λ = −f0/(8F#² λ_j)` and its `τ_j = η_j/N²` not at all, where every η_j and T
+    /// are constants (docs/physics.md, "Gradients: a line's wavelength"; a table's slope has
+    /// kinks at its rows: `None`). Off axis each channel's lateral colour moves with λ by its own
+    /// `λ_j/λ`: `None`.
+    fn order_wavelength_rates(&self, _wavelength_m: f64, field: Field) -> Option<OrderWavelengthRates> {
+        let constant = self.channels.iter().all(|c| matches!(c.efficiency, Curve::Constant(_)))
+            && matches!(self.transmission, Curve::Constant(_));
+        if !field.is_on_axis() || !constant {
+            return None;
+        }
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        let orders = self.channels.iter().map(|c| [-k / c.wavelength_m, 0.0]).collect();
+        Some(OrderWavelengthRates { orders, ln_transmission: 0.0 })
+    }
+
+    /// Every channel's wavelength scaled together (`λ_j → (1 + ε) λ_j`, the design wavelength
+    /// [`design_wavelength`](LensModel::design_wavelength), their range's centre, with them):
+    /// `W020_j = (1 − λ/λ_j) f0/(8F#²)` moves as `∂W020_j/∂ln λ0 = (λ/λ_j) f0/(8F#²)`, τ_j and T
+    /// not (they do not depend on λ_j); off axis each channel's lateral colour
+    /// `Δ_j = f0 tan θ (λ_j/λ − 1)` moves as `Δ_j + f0 tan θ`. The orders depend on λ through
+    /// each `λ/λ_j` alone, which a line's wavelength off axis follows (docs/physics.md,
+    /// "Gradients: several orders under a line off axis").
+    fn design_wavelength_rates(&self, wavelength_m: f64, _field: Field) -> Option<Vec<[f64; 2]>> {
+        let k = self.focal_length / (8.0 * self.f_number * self.f_number);
+        Some(self.channels.iter().map(|c| [k * wavelength_m / c.wavelength_m, 0.0]).collect())
     }
 
     /// The centre of the channels' range, `(λ_1 + λ_N)/2`.

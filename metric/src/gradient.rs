@@ -1843,6 +1843,16 @@ fn line_center_partials(
         let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
         return Ok((d_ln_n, d_ln_n, (edge - e.mean_mtf) / c + along));
     }
+    // one order through a circular iris, decentred or not, on axis or off it: the line engine's
+    // defocus lane over azimuth (docs/physics.md, "Gradients: a line's wavelength through an
+    // iris")
+    if let Some(iris) = line_through_iris(scene, None) {
+        return Ok((
+            d_ln_n + iris.rates.ln_efficiency,
+            d_ln_n + iris.rates.ln_transmission,
+            (iris.edge - iris.mean - iris.pixel) / c + iris.defocus * iris.alpha,
+        ));
+    }
     // off axis, one order whose only change with the field is its image shift
     // (`LensModel::image_shift_field_rates`: the chromatic lens's lateral colour): a line's one
     // order is one wavelength, whose shift is a phase exp(−2πi ν·Δ) of the whole OTF, so |O|, the
@@ -1911,11 +1921,11 @@ fn line_center_partials(
     let Some(rates) = rates.filter(|_| plain) else {
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
-             pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without an iris or \
-             Seidel terms, on axis or off it), the refractive lens, the harmonic lens with a constant \
-             transmission (on axis, and off axis on the line's exact 1-D engine), and a phase lens on the radial \
-             engine; this lens's orders move with λ otherwise (an iris, Seidel or Zernike terms, an efficiency or \
-             transmission table's slope), which is not followed yet"
+             pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without Seidel terms, \
+             on axis or off it, through a circular iris too), the refractive lens, the harmonic lens with a \
+             constant transmission and the interleaved multiplexed lens (on axis, and off axis on the line's exact \
+             1-D engine), and a phase lens on the radial engine; this lens's orders move with λ otherwise (Seidel \
+             or Zernike terms, an efficiency or transmission table's slope), which is not followed yet"
         )));
     };
     // the value's own pass where it carried the defocus lane (the line engine); else the value's
@@ -3389,6 +3399,47 @@ pub(super) fn orders_of_wavelength_ratio(scene: &Scene, c: f64) -> bool {
             against(c * d_w020, *l_w020) && against(c * d_tau, *l_tau) && o.efficiency == a.efficiency
         },
     )
+}
+
+/// A line's one order through a circular iris (docs/physics.md, "Gradients: a line's wavelength
+/// through an iris"), on the line's exact 1-D engine: `[M̄, D_K, P_ν]` over azimuth from the field
+/// direction ([`optics::Polychromatic::line_mean_mtf_over_azimuth_and_defocus_lane`], white or
+/// over `noise`), the end term `P(ν_N) ⟨|O(ν_N, φ)|⟩_φ`, the lens's rates in λ
+/// ([`optics::LensModel::defocus_rates`]) and `α = ∂ln w/∂c = W020′/W020 − 1/c` (0 at
+/// `W020 = 0`, where `|O|` is even in `W020`: the wavefront `W020 (r² + (2d/NA) x)` changes sign
+/// whole).
+pub(super) struct IrisLine {
+    pub mean: f64,
+    pub defocus: f64,
+    pub pixel: f64,
+    pub edge: f64,
+    pub rates: optics::DefocusRates,
+    pub alpha: f64,
+}
+
+/// [`IrisLine`] where the scene's line sees one order, a circular iris with a defocus alone whose
+/// rates in λ the lens gives, on the line's exact 1-D engine; `None` otherwise (the full pupil,
+/// which [`line_center_partials`] takes on its own lanes; several orders; Seidel terms; the FFT
+/// path).
+pub(super) fn line_through_iris(scene: &Scene, noise: Option<&optics::NoiseShape>) -> Option<IrisLine> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let c = detected.line()?.center();
+    let [o] = &lens.orders(c, field)[..] else { return None };
+    if !matches!(&o.pupil, optics::Pupil::Aperture(a) if a.as_circle().is_some()) || !o.wavefront.is_defocus_only() {
+        return None;
+    }
+    let rates = lens.defocus_rates(c, field)?;
+    let w020 = o.wavefront.defocus_m;
+    let alpha = if w020 == 0.0 { 0.0 } else { rates.defocus / w020 - 1.0 / c };
+    let nyquist = scene.camera().nyquist();
+    let along_field = field.y_rad.atan2(field.x_rad);
+    on_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        let [mean, defocus, pixel] = poly.line_mean_mtf_over_azimuth_and_defocus_lane(along_field, noise)?;
+        let edge = poly.mtf_over_azimuth(nyquist, along_field);
+        Some(IrisLine { mean, defocus, pixel, edge, rates, alpha })
+    })
 }
 
 /// `(∂ln N/∂c, ∂ln N_T/∂c, ∂M̄/∂c)` for the wavelength `c` of a line off axis on several orders

@@ -519,8 +519,9 @@ pub trait LensModel: Send + Sync + fmt::Debug {
         None
     }
 
-    /// For a lens whose one order at `field` is the full circular pupil with a defocus alone:
-    /// how it moves with the wavelength at `wavelength_m` ([`DefocusRates`]), for the gradient
+    /// For a lens whose one order at `field` is a circle (the full pupil or a circular iris,
+    /// decentred or not) with a defocus alone: how it moves with the wavelength at `wavelength_m`
+    /// ([`DefocusRates`]), for the gradient
     /// with respect to a line's wavelength. `None` (the default) where the lens does not give
     /// them (then a defocus affine in λ with constant efficiencies,
     /// [`affine_defocus`](Self::affine_defocus), is used where the lens promises one).

@@ -793,7 +793,7 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, the harmonic lens's orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, through a circular iris too, the harmonic and interleaved lenses' orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -1434,6 +1434,60 @@ mod tests {
         check_line(&example("monochromatic.toml"), &owned(&["field.x_deg=5"]), &["field.x_deg"]);
     }
 
+    /// A line through the decentred iris (docs/physics.md, "Gradients: a line's wavelength
+    /// through an iris": the line engine's defocus lane over azimuth, the iris's tilt
+    /// `W020 (2d/NA)` moving with `W020(c)`): examples/decentred-iris.toml at 803 nm on axis with
+    /// the exposure, at (3°, 1°) with the pixel MTF and read noise (the lateral colour beside the
+    /// tilt), and on axis under a noise spectrum (the weight moving the gradient:
+    /// [`assert_weighted`]), each against Richardson central differences of evaluations
+    /// converged at 1e-10.
+    #[test]
+    fn a_line_through_a_decentred_iris_matches_central_differences() {
+        let iris = example("decentred-iris.toml");
+        check_line(&iris, &owned(&LINE_803), &["exposure.time_ms"]);
+        check_line(
+            &iris,
+            &joined(&LINE_803, &["field.x_deg=3", "field.y_deg=1", PIXEL_AND_READ_NOISE[0], PIXEL_AND_READ_NOISE[1]]),
+            &[],
+        );
+        let shaped = with_noise_spectrum(&iris, "line-iris");
+        let line = owned(&LINE_803);
+        let center = ["spectrum.center_nm"];
+        assert_weighted(&gradient(&shaped, &line, &owned(&center)).unwrap());
+        check_with_references(&shaped, &line, &center, &|k, v| richardson(&shaped, &line, k, v, LINE_STEP_NM));
+    }
+
+    /// A line on the interleaved multiplexed lens (docs/physics.md, "Gradients: a line's
+    /// wavelength": on axis each channel's order `W020_j = (1 − λ/λ_j) f0/(8F#²)` moving by its
+    /// own `−f0/(8F#² λ_j)`, the line engine's order lane; off axis "several orders under a line
+    /// off axis"): the three channels of examples/designs.toml (750/800/850 nm) in the paper's
+    /// scene at 803 nm with the exposure, with the pixel MTF and read noise, at 3°, and under a
+    /// noise spectrum on axis (the weight moving the gradient: [`assert_weighted`]).
+    #[test]
+    fn a_line_on_the_interleaved_lens_matches_central_differences() {
+        let paper = scene::read(None).unwrap();
+        let rest = paper.text().split_once("[source]").unwrap().1;
+        let interleaved = Source::from_text(
+            format!(
+                "title = \"interleaved\"\n[lens]\nmodel = \"multiplexed\"\nlayout = \"interleaved\"\nf_number = 2.5\n\
+                 focal_length_mm = 3.36\nchannels_nm = [750.0, 800.0, 850.0]\nefficiency = 0.15\ntransmission = 0.55\n\n\
+                 [source]{rest}"
+            ),
+            "multiplexed lens written in the test",
+            ".",
+        );
+        check_line(&interleaved, &owned(&LINE_803), &["exposure.time_ms"]);
+        check_line(&interleaved, &joined(&LINE_803, &PIXEL_AND_READ_NOISE), &[]);
+        // off axis at 3°: each channel turned by its own lateral colour f0 tan θ (λ_j/λ − 1),
+        // the orders functions of λ/λ_j alone (the line engine's lanes over azimuth)
+        check_line(&interleaved, &joined(&LINE_803, &["field.x_deg=3"]), &[]);
+        let shaped = with_noise_spectrum(&interleaved, "line-interleaved");
+        let line = owned(&LINE_803);
+        let center = ["spectrum.center_nm"];
+        assert_weighted(&gradient(&shaped, &line, &owned(&center)).unwrap());
+        check_with_references(&shaped, &line, &center, &|k, v| richardson(&shaped, &line, k, v, LINE_STEP_NM));
+    }
+
     /// The Binary 2 lens (the radial engine's wavelength lanes: the sphere's phase 2πS/λ turns,
     /// the radian profile of a geometric phase stays) under a line at 803 nm, with read noise,
     /// with its Binary 2 coefficients and the F-number asked beside (the lanes stacked), and as
@@ -1506,8 +1560,8 @@ mod tests {
     }
 
     /// The families and scenes whose line's wavelength is not followed are refused naming why:
-    /// a diffractive phase profile, the chromatic lens off axis through an iris, a line on a
-    /// table's sample.
+    /// a diffractive phase profile, the chromatic lens through an iris with an efficiency table,
+    /// a line on a table's sample.
     #[test]
     fn a_line_wavelength_refusals_name_why() {
         let keys = owned(&["spectrum.center_nm"]);
@@ -1516,11 +1570,11 @@ mod tests {
         diffractive.extend(owned(&["lens.dispersion=\"diffractive\"", "lens.design_order=2"]));
         let e = gradient(&example("phase-binary2.toml"), &diffractive, &keys).unwrap_err().to_string();
         assert!(e.contains("diffractive") && e.contains("sinc"), "{e}");
-        // the chromatic lens off axis through an iris (the iris's tilt and the lateral colour
-        // on one order: not the on-axis OTF's modulus)
-        let mut iris_off_axis = line.clone();
-        iris_off_axis.push("field.x_deg=5".to_owned());
-        let e = gradient(&example("decentred-iris.toml"), &iris_off_axis, &keys).unwrap_err().to_string();
+        // the chromatic lens through an iris with an efficiency table (its slope has kinks at
+        // the rows: the lens gives no rates in λ)
+        let mut iris_table = line.clone();
+        iris_table.push("lens.efficiency=\"data/metalens-efficiency.csv\"".to_owned());
+        let e = gradient(&example("decentred-iris.toml"), &iris_table, &keys).unwrap_err().to_string();
         assert!(e.contains("not differentiable"), "{e}");
         // the width alone is followed everywhere: N ∝ r
         let g = gradient(&example("harmonic.toml"), &line, &owned(&["spectrum.range_nm"])).unwrap();

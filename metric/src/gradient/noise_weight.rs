@@ -311,6 +311,14 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     let c = line.center();
     let lens = scene.lens();
     let field = scene.field();
+    // one order through a circular iris: the line engine's defocus lane over azimuth, each
+    // frequency's weight divided by n(ν) (docs/physics.md, "Gradients: a line's wavelength
+    // through an iris")
+    if base.is_none()
+        && let Some(iris) = super::line_through_iris(scene, shape_of(scene))
+    {
+        return Ok(frequency_scale_over_noise(scene, e, p, iris.edge)? / c + iris.defocus * iris.alpha);
+    }
     // several orders off axis, each turned by its own lateral colour (the harmonic lens)
     if !field.is_on_axis() && base.is_none() && lens.orders(c, field).len() > 1 {
         return line_center_orders_off_axis_over_noise(scene, e, c).ok_or_else(|| {

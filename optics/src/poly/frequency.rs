@@ -1057,6 +1057,29 @@ impl Polychromatic<'_> {
         Some(([mean, design, shift, defocus, pixel], work))
     }
 
+    /// A line's defocus lane over azimuth on the line's exact 1-D engine: `[M̄, D_K, P_ν]` from
+    /// `first` (white, or over the noise spectrum `noise`), `D_K` every order's defocus scaled by
+    /// `1 + ε` with a decentred iris's tilt `W020 (2d/NA)`, which scales with it
+    /// ([`WavefrontDirection::Defocus`]), and `P_ν` the pixel MTF's term, on the line engine's own
+    /// nodes and the value's accepted weights, on the rule over azimuth of
+    /// [`mean_mtf_over_azimuth_and_aperture_lanes`](Self::mean_mtf_over_azimuth_and_aperture_lanes)
+    /// (docs/physics.md, "Gradients: a line's wavelength through an iris"). `None` where the
+    /// engine is not the line's exact one (the FFT path) or some order is not a defocused circle.
+    pub fn line_mean_mtf_over_azimuth_and_defocus_lane(
+        &self,
+        first: f64,
+        noise: Option<&NoiseShape>,
+    ) -> Option<[f64; 3]> {
+        if self.engine.engine() != (Engine::Monochromatic { fft: None })
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        {
+            return None;
+        }
+        let (average, _) = self.azimuth_refined_lanes(first, &[WavefrontDirection::Defocus], noise)?;
+        let [mean, defocus, pixel] = average[..] else { return None };
+        Some([mean, defocus, pixel])
+    }
+
     /// `[M̄, lanes…, P_ν]` averaged over azimuth from `first`: along each azimuth the value's
     /// adaptive rule (of `P |O|`, or `P |O|/n` with a noise spectrum), the lanes along
     /// `directions` and then `|O|` recorded at each frequency read and integrated with the
