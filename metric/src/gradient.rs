@@ -3108,7 +3108,7 @@ fn defocus_lane_by_own_rule(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
                      harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
-                     with Seidel terms under a band (the chromatic lens on the overlap engine); this scene's lens \
+                     with Seidel or Zernike terms under a band (on the overlap engine); this scene's lens \
                      has other pupils or aberrations"
                         .to_owned(),
                 ));
