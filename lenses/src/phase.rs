@@ -641,6 +641,13 @@ impl<L: LensModel> LensModel for WithZernike<L> {
         self.inner.image_shift_field_rates(wavelength_m, field)
     }
 
+    /// The inner lens's rates: the Zernike terms are given in metres RMS, so the design
+    /// wavelength moves each order's own defocus and efficiency alone (the pupil's best-fit
+    /// defocus added to `defocus_m` stays).
+    fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
+        self.inner.design_wavelength_rates(wavelength_m, field)
+    }
+
     fn describe(&self) -> String {
         let terms: Vec<String> = self
             .pupil

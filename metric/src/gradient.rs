@@ -2663,9 +2663,7 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>
     let orders = lens.orders(lambda, field);
     let circles = circular_defocus_orders(&orders);
     // the full circle with Seidel terms: the overlap engine's mean over azimuth
-    let seidel = !orders.is_empty()
-        && orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full))
-        && orders.iter().any(|o| !o.wavefront.is_defocus_only());
+    let seidel = !orders.is_empty() && orders.iter().all(overlap_pupil) && orders.iter().any(beyond_defocus);
     if !(circles || seidel) {
         return Ok(None);
     }
@@ -2846,8 +2844,24 @@ fn defocus_lane_on_overlap(scene: &Scene) -> bool {
     });
     let Some(lambda) = lambda.filter(|l| *l > 0.0) else { return false };
     let orders = lens.orders(lambda, field);
-    orders.iter().all(|o| matches!(o.pupil, optics::Pupil::Full) && o.wavefront.image_shift_m == [0.0, 0.0])
-        && orders.iter().any(|o| !o.wavefront.is_defocus_only())
+    orders.iter().all(|o| overlap_pupil(o) && o.wavefront.image_shift_m == [0.0, 0.0])
+        && orders.iter().any(beyond_defocus)
+}
+
+/// Whether the order's pupil is one the overlap engine takes as a polynomial wavefront: the full
+/// circle, or the full circle with Zernike terms alone ([`optics::radial::RadialPupil::is_zernike_only`];
+/// docs/physics.md, "Zernike terms on the overlap engine").
+fn overlap_pupil(o: &optics::Order) -> bool {
+    match &o.pupil {
+        optics::Pupil::Full => true,
+        optics::Pupil::Radial(p) => p.is_zernike_only(),
+        _ => false,
+    }
+}
+
+/// Whether the order's wavefront has more than a defocus: a Seidel term, or Zernike terms.
+fn beyond_defocus(o: &optics::Order) -> bool {
+    !o.wavefront.is_defocus_only() || matches!(&o.pupil, optics::Pupil::Radial(p) if !p.zernike_noll_m().is_empty())
 }
 
 /// `∂M̄/∂W` of Seidel term `t` (per µm) off axis where every Seidel term is zero (docs/physics.md,
@@ -3147,7 +3161,7 @@ fn defocus_lane_by_own_rule(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
                      harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
-                     with Seidel terms under a band (the chromatic lens on the overlap engine), or on axis under a \
+                     with Seidel or Zernike terms under a band (on the overlap engine), or on axis under a \
                      band on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, Zernike \
                      terms); this scene's lens has other pupils or aberrations, or is off axis, under a line or a \
                      noise spectrum there"
@@ -3220,6 +3234,9 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
         return Ok(found);
     }
     if let Some(found) = design_wavelength_on_grids(scene, e, None)? {
+        return Ok(found);
+    }
+    if let Some(found) = design_wavelength_on_overlap(scene, e, None) {
         return Ok(found);
     }
     design_wavelength_by_own_rule(scene, e, p, None)
@@ -3309,6 +3326,9 @@ fn design_wavelength_over_noise(
         return Ok(d);
     }
     if let Some((_, d)) = design_wavelength_on_grids(scene, e, Some(noise))? {
+        return Ok(d);
+    }
+    if let Some((_, d)) = design_wavelength_on_overlap(scene, e, Some(noise)) {
         return Ok(d);
     }
     design_wavelength_by_own_rule(scene, e, p, Some(noise)).map(|(_, d)| d)
@@ -3523,6 +3543,74 @@ fn design_wavelength_off_axis(scene: &Scene, e: &Evaluation, noise: Option<&opti
     let along_field = field.y_rad.atan2(field.x_rad);
     let (mean, d_design, d_shift, _) = poly.mean_mtf_over_azimuth_and_design_lanes(along_field, noise)?;
     Some((rate, d_design - rate * mean + d_shift))
+}
+
+/// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` (under a noise spectrum `noise` the weighted mean's `∂G`) where
+/// every order is the full circle with Seidel or Zernike terms and the value is on the overlap
+/// engine, on and off axis (docs/physics.md, "Gradients: the design wavelength with Seidel and
+/// Zernike terms"): λ0 moves each order's defocus by `δW020 = ∂W020/∂ln λ0` and its efficiency
+/// by `δτ` (`optics::LensModel::design_wavelength_rates`; the Seidel and Zernike terms are keys of
+/// their own, in µm, and stay), the image shifts by their scale's lane, `s = νλF#` and the pixel
+/// MTF held: the lane [`optics::WavefrontDirection::DesignWavelength`] (`ρ²` per metre times each
+/// node's `δW020`, plus `δτ/τ` times its value) and the image shifts' on the overlap
+/// quadrature's nodes and the value's accepted weights, averaged over the value's azimuths
+/// ([`optics::Polychromatic::mean_mtf_over_azimuth_and_design_lanes`]), so that
+/// `∂M̄/∂ln λ0 = D_λ0 − (∂ln N/∂ln λ0) M̄ + D_Δ`. Where the lane is small against its bound
+/// `L M̄` (`L = 2π |δW020|max/λ_min`) the pass is taken again with the spectral rule at
+/// `max(q, 10⁻⁴) ε`, `q = |∂M̄|/(L M̄)`. `None` where the scene is not that (a line, another
+/// pupil, another engine, a lens without rates).
+fn design_wavelength_on_overlap(
+    scene: &Scene,
+    e: &Evaluation,
+    noise: Option<&optics::NoiseShape>,
+) -> Option<(f64, f64)> {
+    let lens = scene.lens();
+    let field = scene.field();
+    let camera = scene.camera();
+    let detected = crate::evaluate::detected_spectrum(scene);
+    let settings = scene.options().settings();
+    if detected.as_line().is_some() || !settings.overlap || settings.pupil_samples.is_some() {
+        return None;
+    }
+    let orders = lens.orders(e.mean_wavelength_nm * 1e-9, field);
+    if orders.is_empty() || !orders.iter().all(overlap_pupil) || !orders.iter().any(beyond_defocus) {
+        return None;
+    }
+    let nyquist = camera.nyquist();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let folded = crate::evaluate::Folded::of(lens, &detected);
+    let parts = folded.parts();
+    let along_field = field.y_rad.atan2(field.x_rad);
+    // (∂ln N, ∂M̄, the engine's tolerance, L M̄)
+    let run = |settings: optics::Settings| -> Option<(f64, f64, f64, f64)> {
+        let poly = optics::Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, settings).ok()?;
+        if !matches!(poly.engine(), optics::Engine::Overlap { .. }) {
+            return None;
+        }
+        let rate = poly.design_signal_rate()?;
+        let (mean, d_design, d_shift, _) = poly.mean_mtf_over_azimuth_and_design_lanes(along_field, noise)?;
+        if poly.over_budget().is_some() {
+            return None;
+        }
+        let (lo, hi) = detected.support();
+        let largest = [lo.max(1e-9), 0.5 * (lo + hi), hi.min(1e-5)]
+            .iter()
+            .filter_map(|&l| lens.design_wavelength_rates(l, field))
+            .flatten()
+            .map(|r| r[0].abs())
+            .fold(0.0, f64::max);
+        let bound = 2.0 * std::f64::consts::PI * largest / lo.max(1e-9) * mean;
+        Some((rate, d_design - rate * mean + d_shift, poly.tolerance(), bound))
+    };
+    let (rate, d, tolerance, bound) = run(settings)?;
+    let q = if bound > 0.0 { (d.abs() / bound).max(1e-4) } else { 1.0 };
+    if q < 1.0 {
+        let tighter = optics::Settings { spectral_tolerance: Some(q * tolerance), ..settings };
+        if let Some((rate, d, _, _)) = run(tighter) {
+            return Some((rate, d));
+        }
+    }
+    Some((rate, d))
 }
 
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` on the value's own engine and rules: the mean computed again with

@@ -791,9 +791,9 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} (with camera.pixel_mtf true or false), \
          spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source, under a line or over a band, on the overlap engine too), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
-         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
+         lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with Seidel or Zernike terms on the overlap engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, through a circular iris too, the harmonic and interleaved lenses' orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; with Seidel or Zernike terms on the overlap engine, on axis and off; the phase lens on axis and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, through a circular iris too, the harmonic and interleaved lenses' orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -3966,6 +3966,53 @@ parameter_bias = [0.0, 0.0]
             assert!((per_ln + 2.0 * g.photoelectrons).abs() <= 4.0 * f64::EPSILON * g.photoelectrons, "{per_ln}");
             assert_eq!(g.d_photoelectrons[1], 0.0);
         }
+    }
+
+    /// Zernike terms with `m ≠ 0` on the paper's chromatic lens (Z4 0.02 µm, Z8 0.01 µm: the
+    /// overlap engine) at a 10 nm band.
+    const ZERNIKE_ON_OVERLAP: [&str; 2] =
+        ["spectrum.range_nm=10", "lens.zernike_noll_rms_um=[0, 0, 0, 0.02, 0, 0, 0, 0.01]"];
+
+    /// `keys` of `source` with `more` at the tolerance 1e-6 (the overlap engine's, not
+    /// options.fft_tolerance's 1e-4) against central differences of evaluations converged at
+    /// 1e-10 (without the gradient's tolerance), Richardson-extrapolated from the steps 2h and h:
+    /// h = [`NARROW_APERTURE_STEP`] of the value for the F-number and the focal length,
+    /// [`LINE_STEP_NM`] for the design wavelength; within 10× the tolerance of the gradient's norm.
+    fn check_on_overlap(source: &Source, more: &[String], keys: &[&str]) {
+        let mut set = more.to_vec();
+        set.push("options.tolerance=1e-6".to_owned());
+        let step =
+            |k: &str, v: f64| if k == "lens.design_wavelength_nm" { LINE_STEP_NM } else { NARROW_APERTURE_STEP * v };
+        check_with_references(source, &set, keys, &|k, v| richardson(source, more, k, v, step(k, v)));
+    }
+
+    /// The F-number and the focal length with Zernike terms on the overlap engine (docs/physics.md,
+    /// "Gradients: the F-number and the focal length with Seidel terms": the same lanes with a
+    /// Zernike pupil), on axis with the pixel MTF (its term of the parts), and at 3° along x (the
+    /// mean over azimuth with the image shifts' lane) under a noise spectrum (each weight divided
+    /// by n(ν)), against [`check_on_overlap`]'s references.
+    #[test]
+    fn f_number_and_focal_length_with_zernike_terms_match_central_differences() {
+        let keys = ["lens.f_number", "lens.focal_length_mm"];
+        let paper = scene::read(None).unwrap();
+        check_on_overlap(&paper, &joined(&ZERNIKE_ON_OVERLAP, &["camera.pixel_mtf=true"]), &keys);
+        let shaped = with_noise_spectrum(&paper, "zernike-aperture");
+        check_on_overlap(&shaped, &joined(&ZERNIKE_ON_OVERLAP, &["field.x_deg=3"]), &keys);
+    }
+
+    /// The design wavelength with Zernike and Seidel terms on the overlap engine (docs/physics.md,
+    /// "Gradients: the design wavelength with Seidel and Zernike terms": the lane of each node's
+    /// `∂W020/∂ln λ0` and efficiency's rate on the quadrature's nodes), on axis with Zernike terms
+    /// and the pixel MTF, at 3° along x under a noise spectrum, and with coma 0.3 µm, against
+    /// [`check_on_overlap`]'s references.
+    #[test]
+    fn design_wavelength_with_zernike_and_seidel_terms_matches_central_differences() {
+        let keys = ["lens.design_wavelength_nm"];
+        let paper = scene::read(None).unwrap();
+        check_on_overlap(&paper, &joined(&ZERNIKE_ON_OVERLAP, &["camera.pixel_mtf=true"]), &keys);
+        let shaped = with_noise_spectrum(&paper, "zernike-design");
+        check_on_overlap(&shaped, &joined(&ZERNIKE_ON_OVERLAP, &["field.x_deg=3"]), &keys);
+        check_on_overlap(&paper, &owned(&["spectrum.range_nm=10", "lens.coma_um=0.3"]), &keys);
     }
 
     /// Refusals name the key and the reason: a Seidel key of another family; every Seidel term

@@ -980,17 +980,22 @@ impl Polychromatic<'_> {
     /// `D_Δ` the image shifts' scale ([`WavefrontDirection::ImageShift`]), on the value's nodes
     /// and accepted weights, each `∂|O|` divided by `n(ν)` under a noise spectrum, on the rule
     /// over azimuth of [`mean_mtf_over_azimuth_and_aperture_lanes`](Self::mean_mtf_over_azimuth_and_aperture_lanes)
-    /// (docs/physics.md, "Gradients: the design wavelength off axis"). `None` where the engine
-    /// is not the exact 1-D engine on its adaptive rule, or gives no lane.
+    /// (docs/physics.md, "Gradients: the design wavelength off axis"). On the overlap engine (the
+    /// full circle with Seidel and Zernike terms, on and off axis) the same lanes on its
+    /// quadrature's nodes ("Gradients: the design wavelength with Seidel and Zernike terms").
+    /// `None` where the engine is not the exact 1-D engine (direction-dependent) or the overlap
+    /// engine on its adaptive rule, or gives no lane.
     pub fn mean_mtf_over_azimuth_and_design_lanes(
         &self,
         first: f64,
         noise: Option<&NoiseShape>,
     ) -> Option<(f64, f64, f64, Work)> {
-        if self.engine.engine() != Engine::Exact1d
-            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
-            || !self.direction_dependent()
-        {
+        let taken = match self.engine.engine() {
+            Engine::Exact1d => self.direction_dependent(),
+            Engine::Overlap { .. } => true,
+            _ => false,
+        };
+        if !taken || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
             return None;
         }
         let directions = [WavefrontDirection::DesignWavelength, WavefrontDirection::ImageShift];

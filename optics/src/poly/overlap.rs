@@ -65,6 +65,10 @@ struct Term {
     /// the order's own defocus W020 (m; without the field curvature and a Zernike pupil's
     /// terms): the scale of the [`WavefrontDirection::Defocus`] lane at this node
     lens_defocus: f64,
+    /// `[∂W020/∂ln λ0 (m), (∂τ/∂ln λ0)/τ]` of the order at this node, where the lens gives its
+    /// design-wavelength rates (`LensModel::design_wavelength_rates`): the scale of the
+    /// [`WavefrontDirection::DesignWavelength`] lane's `ρ²` and of its efficiency term
+    design: Option<[f64; 2]>,
     spherical: f64,
     coma: f64,
     astigmatism: f64,
@@ -515,6 +519,7 @@ impl<'a> Overlap<'a> {
 fn sample_terms(scene: &Scene<'_>, lambda: f64, weight: f64, part: usize) -> Option<Vec<Option<Term>>> {
     let lens = &scene.part(part).lens;
     let rates = lens.image_shift_field_rates(lambda, scene.field);
+    let design = lens.design_wavelength_rates(lambda, scene.field);
     let mut out = Vec::new();
     for (o, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
         if order.efficiency == 0.0 {
@@ -529,6 +534,7 @@ fn sample_terms(scene: &Scene<'_>, lambda: f64, weight: f64, part: usize) -> Opt
             shift_rate: rates.as_ref().and_then(|r| r.get(o)).copied(),
             defocus: w.defocus_m + w.field_curvature_m,
             lens_defocus: w.defocus_m,
+            design: design.as_ref().and_then(|r| r.get(o)).map(|&[d_w, d_tau]| [d_w, d_tau / order.efficiency]),
             spherical: w.spherical_m,
             coma: w.coma_m,
             astigmatism: w.astigmatism_m,
@@ -990,11 +996,14 @@ fn monomial_fourier_every(b: f64, count: usize, step: usize, top: usize, out: &m
 /// A direction of the overlap engine's gradient: a Seidel term ([`SeidelTerm`]), the Zernike
 /// term of a Noll index per µm RMS (`∂W = 10⁻⁶ Z_j(x, y)`, [`WavefrontDirection::Zernike`]), or
 /// each order's own defocus per relative change ([`WavefrontDirection::Defocus`]: `ρ²` here,
-/// each node's derivative scaled by its `W020`).
+/// each node's derivative scaled by its `W020`), or the design wavelength
+/// ([`WavefrontDirection::DesignWavelength`]: `ρ²` scaled by each node's `∂W020/∂ln λ0`, plus
+/// its efficiency's rate times its value).
 #[derive(Clone, Debug)]
 enum Lane {
     Seidel(SeidelTerm),
     Defocus,
+    Design,
     /// Noll's polynomial per µm and its radial order
     Zernike(Compiled, usize),
 }
@@ -1006,6 +1015,7 @@ impl Lane {
         match *direction {
             WavefrontDirection::Seidel(t) => Some(Lane::Seidel(t)),
             WavefrontDirection::Defocus => Some(Lane::Defocus),
+            WavefrontDirection::DesignWavelength => Some(Lane::Design),
             WavefrontDirection::Zernike(j) if (1..=crate::fft::MAX_NOLL_INDEX).contains(&j) => {
                 let compiled =
                     Compiled::new(&Aberrations { zernike_noll_m: vec![(j, 1e-6)], ..Aberrations::default() });
@@ -1021,7 +1031,7 @@ impl Lane {
     fn opd(&self, x: f64, y: f64) -> f64 {
         match self {
             Lane::Seidel(t) => t.opd(x, y),
-            Lane::Defocus => x * x + y * y,
+            Lane::Defocus | Lane::Design => x * x + y * y,
             Lane::Zernike(z, _) => z.opd_m(x, y),
         }
     }
@@ -1054,7 +1064,7 @@ fn lanes_opd(lanes: &[Lane], x: f64, y: f64, out: &mut [f64]) {
                 }
                 _ => lane.opd(x, y),
             },
-            Lane::Seidel(_) | Lane::Defocus => lane.opd(x, y),
+            Lane::Seidel(_) | Lane::Defocus | Lane::Design => lane.opd(x, y),
         };
     }
 }
@@ -1112,7 +1122,9 @@ fn lanes_opd_at(
                 }
                 _ => (0..LANE_POINTS).for_each(|i| o[i] = lane.opd(x[i], y[i])),
             },
-            Lane::Seidel(_) | Lane::Defocus => (0..LANE_POINTS).for_each(|i| o[i] = lane.opd(x[i], y[i])),
+            Lane::Seidel(_) | Lane::Defocus | Lane::Design => {
+                (0..LANE_POINTS).for_each(|i| o[i] = lane.opd(x[i], y[i]))
+            }
         }
     }
 }
@@ -1123,7 +1135,7 @@ impl Lane {
         match self {
             Lane::Seidel(SeidelTerm::Spherical) => 4,
             Lane::Seidel(SeidelTerm::Coma) => 3,
-            Lane::Seidel(_) | Lane::Defocus => 2,
+            Lane::Seidel(_) | Lane::Defocus | Lane::Design => 2,
             Lane::Zernike(_, n) => *n,
         }
     }
@@ -1131,7 +1143,7 @@ impl Lane {
     /// Whether the lane is even in y (every Seidel term, a Zernike cosine or `m = 0` term).
     fn even_in_y(&self) -> bool {
         match self {
-            Lane::Seidel(_) | Lane::Defocus => true,
+            Lane::Seidel(_) | Lane::Defocus | Lane::Design => true,
             Lane::Zernike(z, _) => !z.has_sine_terms(),
         }
     }
@@ -1412,6 +1424,13 @@ impl Overlap<'_> {
                 let weight = match (lane, rule) {
                     (Lane::Defocus, Some(rule)) => rule.weights[index] * term.lens_defocus,
                     (Lane::Defocus, None) => term.weight * term.lens_defocus,
+                    // the design wavelength: ρ² per metre times ∂W020/∂ln λ0, and the turned
+                    // value times the efficiency's rate (the caller has every node's rates)
+                    (Lane::Design, _) => {
+                        let [d_w, d_tau] = term.design.unwrap_or([0.0; 2]);
+                        *o += v * (term.weight * d_tau);
+                        term.weight * d_w
+                    }
                     _ => term.weight,
                 };
                 *o += d.conj() * turn * weight;
@@ -1563,6 +1582,9 @@ impl OtfEngine for Overlap<'_> {
             }
         };
         if axes.iter().any(|&a| a < 2) && self.terms.iter().any(|t| t.shift_rate.is_none()) {
+            return None;
+        }
+        if terms.iter().any(|l| matches!(l, Lane::Design)) && self.terms.iter().any(|t| t.design.is_none()) {
             return None;
         }
         // each direction's place in `gradient`: the wavefront lanes, then the field angles' and
@@ -1832,6 +1854,7 @@ mod tests {
             shift_rate: None,
             defocus,
             lens_defocus: defocus,
+            design: None,
             spherical,
             coma,
             astigmatism,

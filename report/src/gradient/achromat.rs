@@ -264,6 +264,16 @@ mod tests {
         check(&source, &overrides, &keys, &step);
     }
 
+    /// The reduced design with Zernike terms (Z4 0.02 µm, Z8 0.01 µm: the overlap engine,
+    /// docs/physics.md "Gradients: the F-number and the focal length with Seidel terms"): the
+    /// F-number and the library range through β and the overlap engine's defocus lane.
+    #[test]
+    fn the_reduced_achromat_with_zernike_terms_matches_central_differences() {
+        let zernike = format!("{REDUCED}\nzernike_noll_rms_um = [0, 0, 0, 0.02, 0, 0, 0, 0.01]");
+        let source = scene_with(&zernike, "");
+        check(&source, &[], &["lens.f_number", "lens.group_delay_range_fs"], &step);
+    }
+
     /// The true achromat below D_max (β = 1, W020 = 0): the diameter and the focal length (D
     /// held: F# = f0/D moves), the library's range (0: β stays 1), both band edges (the short
     /// one 1.1σ below the spectrum's centre; λ0's lane 0); and with the pixel MTF the diameter and
