@@ -579,8 +579,16 @@ fn point_gradient(
         Some(_) => seidel_at_zero(scene)?,
         None => None,
     };
+    // both band edges' lanes from one pass, made for the first edge (or aperture key) asked
+    let edge_pass = achromat::EdgePass::default();
     let aperture = match parameters.iter().find(|p| matches!(p, Parameter::FNumber | Parameter::FocalLength)) {
-        Some(&p) if aperture_base.is_none() => {
+        Some(&p) if aperture_base.is_none() => 'found: {
+            // a lens with a design band: the lanes on the band edges' pass
+            if let Some(found) =
+                achromat::aperture_on_edge_pass(scene, e, p, &edge_pass, found.is_some_and(|f| !f.order_lane))?
+            {
+                break 'found Some(found);
+            }
             // the defocus lane the value's pass gave on the overlap engine, after the
             // parameters' own directions (`gradient`)
             let lane = match d_grid {
@@ -604,8 +612,6 @@ fn point_gradient(
         }
         None => None,
     };
-    // both band edges' lanes from one pass, made for the first edge asked
-    let edge_pass = achromat::EdgePass::default();
     for &p in parameters {
         let Some(partials) = partials else {
             return Err(not_smooth(

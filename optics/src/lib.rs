@@ -64,8 +64,8 @@ pub use otf::{
 pub use plane::{PLANE_TAU, PLANE_WIDTH, SampledPlane};
 pub use poly::{
     AZIMUTH_SHARE, AzimuthalMean, DEFAULT_FFT_TOLERANCE, DEFAULT_PUPIL_SAMPLES, DEFAULT_TOLERANCE, DefocusDerivative,
-    Engine, FFT_MEMORY_BUDGET, FIRST_AZIMUTHS, GAUSSIAN_HALF_WIDTH_SIGMAS, MAX_AZIMUTHS, NoiseShape, Part,
-    Polychromatic, SeidelTerm, Settings, SharedGrids, SpectralRule, WavefrontDirection, Work, forget_remembered,
-    highest_cutoff, monochromatic_mtf,
+    DesignAndEdgeLanes, Engine, FFT_MEMORY_BUDGET, FIRST_AZIMUTHS, GAUSSIAN_HALF_WIDTH_SIGMAS, MAX_AZIMUTHS,
+    NoiseShape, Part, Polychromatic, SeidelTerm, Settings, SharedGrids, SpectralRule, WavefrontDirection, Work,
+    forget_remembered, highest_cutoff, monochromatic_mtf,
 };
 pub use table::{OtfTable, SampledLine, TABLE_ZERO_FREQUENCY_TOLERANCE};

@@ -137,6 +137,8 @@ pub(super) struct EdgeLanes {
     edges: [(f64, f64); 2],
     /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` where the pass gave it
     design: Option<(f64, f64)>,
+    /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` at fixed β where the pass gave the defocus lane
+    aperture: Option<(f64, f64)>,
 }
 
 impl EdgePass {
@@ -161,6 +163,28 @@ pub(super) fn design_wavelength_on_edge_pass(
     pass: &EdgePass,
 ) -> Option<(f64, f64)> {
     pass.lanes(scene, e)?.design
+}
+
+/// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` of a lens with a design band (white noise) from the band edges'
+/// pass where it gave them (the per-frequency product rule on axis: the defocus lane `D_K` on the
+/// same climb as the edges' and the design wavelength's, [`band_edges_on_value_rule`]), so that
+/// the F-number and focal length take no pass of their own; where no order has a wavefront error
+/// (a true achromat) the pass-free [`aperture_without_defocus`] first. `None` elsewhere, or where
+/// the value's own pass gave the lane (`pass_found`): the caller's rules.
+pub(super) fn aperture_on_edge_pass(
+    scene: &Scene,
+    e: &crate::Evaluation,
+    p: Parameter,
+    pass: &EdgePass,
+    pass_found: bool,
+) -> Result<Option<(f64, f64)>, Error> {
+    if pass_found || scene.lens().design_band().is_none() {
+        return Ok(None);
+    }
+    if let Some(found) = aperture_without_defocus(scene, e, p)? {
+        return Ok(Some(found));
+    }
+    Ok(pass.lanes(scene, e).and_then(|l| l.aperture))
 }
 
 /// `±T_x/D` at both edges `x` of the band `(lo, hi)` (`-` at `lo`), with `D` the engine's total
@@ -205,13 +229,22 @@ fn band_edges_on_value_rule(
         if (a - lo).abs() > 1e-12 * lo || (b - hi).abs() > 1e-12 * hi {
             return None;
         }
-        let (_, [design, d_a, d_b], _) = poly.mean_mtf_and_design_and_edge_lanes()?;
+        let found = poly.mean_mtf_and_design_and_edge_lanes()?;
         if poly.over_budget().is_some() {
             return None;
         }
+        let [design, d_a, d_b] = found.design_and_edges;
         let [n_a, n_b] = edge_densities(scene, &windowed, (a, b), poly.total_weight());
         let design = poly.design_signal_rate().map(|rate| (rate, design));
-        Some(EdgeLanes { edges: [(n_a, d_a), (n_b, d_b)], design })
+        // the F-number's and focal length's lanes on the same pass (`defocus_on_value_rule`'s
+        // forms): by parts `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − P_ν − 2 D_K`, `∂M̄/∂ln f0 = D_K`,
+        // the end term and the mean this engine's own
+        let camera = scene.camera();
+        let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+        let edge = crate::evaluate::nyquist_edge(poly, camera.nyquist(), pixel);
+        let d_k = found.defocus;
+        let aperture = Some((edge - found.mean - found.pixel_slope - 2.0 * d_k, d_k));
+        Some(EdgeLanes { edges: [(n_a, d_a), (n_b, d_b)], design, aperture })
     })
 }
 
@@ -255,7 +288,7 @@ fn band_edges_on_value_pass(scene: &Scene, detected: &radiometry::Spectrum, (lo,
         if poly.over_budget().is_some() {
             return None;
         }
-        Some(EdgeLanes { edges: [(densities[0], d_lo), (densities[1], d_hi)], design: None })
+        Some(EdgeLanes { edges: [(densities[0], d_lo), (densities[1], d_hi)], design: None, aperture: None })
     })
 }
 

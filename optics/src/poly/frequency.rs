@@ -116,6 +116,21 @@ pub struct DefocusDerivative {
     pub work: Work,
 }
 
+/// What [`Polychromatic::mean_mtf_and_design_and_edge_lanes`] returns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DesignAndEdgeLanes {
+    /// The mean MTF, as [`Polychromatic::mean_mtf`] computes it.
+    pub mean: f64,
+    /// `[∂M̄/∂ln λ0, ∂M̄/∂lo, ∂M̄/∂hi]`: the design wavelength's lane and the band's edges'.
+    pub design_and_edges: [f64; 3],
+    /// `D_K`, as [`DefocusDerivative::defocus`].
+    pub defocus: f64,
+    /// `P_ν`, as [`DefocusDerivative::pixel_slope`].
+    pub pixel_slope: f64,
+    /// What the mean took.
+    pub work: Work,
+}
+
 impl Polychromatic<'_> {
     /// The mean MTF ([`mean_mtf`](Self::mean_mtf)) and, in the same pass, its derivative with
     /// respect to each Binary 2 coefficient of the lens (`LensModel::binary2_directions`; per
@@ -236,14 +251,16 @@ impl Polychromatic<'_> {
 
     /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass the
     /// design wavelength's lane ([`mean_mtf_and_design_lane`](Self::mean_mtf_and_design_lane)'s
-    /// `∂M̄/∂ln λ0`) and the band's two edge lanes
-    /// ([`mean_mtf_and_spectral_lanes`](Self::mean_mtf_and_spectral_lanes)'s with `edges`),
-    /// `[∂M̄/∂ln λ0, ∂M̄/∂lo, ∂M̄/∂hi]`: each beside its OTF value on the spectral level each panel
-    /// accepts, integrated with the frequency rule's accepted weights (docs/physics.md,
-    /// "Gradients: the dispersion-engineered lens"). `None` where the engine gives no such lanes
-    /// (every engine but the per-frequency product rule), off axis, or where the OTF depends on
-    /// direction.
-    pub fn mean_mtf_and_design_and_edge_lanes(&self) -> Option<(f64, [f64; 3], Work)> {
+    /// `∂M̄/∂ln λ0`), the band's two edge lanes
+    /// ([`mean_mtf_and_spectral_lanes`](Self::mean_mtf_and_spectral_lanes)'s with `edges`) and
+    /// the defocus lane with the pixel MTF's term of the integration by parts
+    /// ([`mean_mtf_and_defocus_derivative`](Self::mean_mtf_and_defocus_derivative)'s `D_K` and
+    /// `P_ν`): `([∂M̄/∂ln λ0, ∂M̄/∂lo, ∂M̄/∂hi], D_K, P_ν)`, each beside its OTF value on the
+    /// spectral level each panel accepts (the defocus and design lanes from the same `w ∂H/∂w`),
+    /// integrated with the frequency rule's accepted weights (docs/physics.md, "Gradients: the
+    /// dispersion-engineered lens"). `None` where the engine gives no such lanes (every engine
+    /// but the per-frequency product rule), off axis, or where the OTF depends on direction.
+    pub fn mean_mtf_and_design_and_edge_lanes(&self) -> Option<DesignAndEdgeLanes> {
         if !self.scene.field.is_on_axis()
             || self.direction_dependent()
             || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
@@ -251,15 +268,23 @@ impl Polychromatic<'_> {
         {
             return None;
         }
-        *self.gradient.borrow_mut() = Some(Recording { lanes: 3, ..Recording::default() });
+        *self.gradient.borrow_mut() = Some(Recording { lanes: 5, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| {
-            let mut lanes = [0.0; 3];
+            let mut lanes = [0.0; 4];
             let value = if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_design_and_edge_lanes(nu, &mut lanes) };
-            self.record(nu, value, &lanes)
+            // the fifth: P_ν's integrand ν P′/P |O| (the accepted weights carry P sign(O))
+            let [design, lo, hi, defocus] = lanes;
+            self.record(nu, value, &[design, lo, hi, defocus, value.unwrap_or(0.0) * self.pixel_log_slope(nu)])
         });
         let recording = self.gradient.borrow_mut().take()?;
         let (mean, found, work) = self.integrate_recorded(mean, recording, work)?;
-        Some((mean, [found[0], found[1], found[2]], work))
+        Some(DesignAndEdgeLanes {
+            mean,
+            design_and_edges: [found[0], found[1], found[2]],
+            defocus: found[3],
+            pixel_slope: found[4],
+            work,
+        })
     }
 
     /// The mean MTF ([`mean_mtf`](Self::mean_mtf)), bit for bit, and in the same pass
@@ -551,12 +576,7 @@ impl Polychromatic<'_> {
             return None;
         }
         // ν P′(ν)/P(ν) for P = |sin x / x|, x = π p ν (x ≤ π/2 up to Nyquist)
-        let slope = |nu: f64| {
-            self.scene.pixel_pitch.map_or(0.0, |p| {
-                let x = PI * p * nu;
-                if x.abs() < 1e-4 { -x * x / 3.0 - x.powi(4) / 45.0 } else { x / x.tan() - 1.0 }
-            })
-        };
+        let slope = |nu: f64| self.pixel_log_slope(nu);
         let (mut d_k, mut pixel) = (0.0, 0.0);
         for &(nu, w) in &recording.accepted {
             let i = *recording.at.get(&nu.to_bits())?;

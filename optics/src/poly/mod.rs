@@ -57,7 +57,9 @@ mod overlap;
 mod per_frequency;
 mod spectral;
 
-pub use frequency::{AZIMUTH_SHARE, AzimuthalMean, DefocusDerivative, FIRST_AZIMUTHS, MAX_AZIMUTHS};
+pub use frequency::{
+    AZIMUTH_SHARE, AzimuthalMean, DefocusDerivative, DesignAndEdgeLanes, FIRST_AZIMUTHS, MAX_AZIMUTHS,
+};
 pub use grid::{SharedGrids, WavefrontDirection, monochromatic_mtf};
 pub use noise::NoiseShape;
 pub use overlap::SeidelTerm;
@@ -441,7 +443,7 @@ trait OtfEngine: std::fmt::Debug {
     /// and the band's two edge lanes ([`otf_and_spectral_lanes`](Self::otf_and_spectral_lanes)'s
     /// with `edges`), read on the same climb (docs/physics.md, "Gradients: the
     /// dispersion-engineered lens"); `None` where the engine does not give them (the default).
-    fn otf_and_design_and_edge_lanes(&self, _frequency: f64, _lanes: &mut [f64; 3]) -> Option<f64> {
+    fn otf_and_design_and_edge_lanes(&self, _frequency: f64, _lanes: &mut [f64; 4]) -> Option<f64> {
         None
     }
     /// The band `[lo, hi]` (m) whose ends the edge lanes of

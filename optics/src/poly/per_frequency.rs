@@ -165,6 +165,9 @@ enum Lanes<'p> {
     /// one lane: `Σ_o [τ_o ∂H/∂w δw_o + δτ_o H_o]`, the orders moving with the design wavelength
     /// ([`Fresh::design`]; docs/physics.md, "Gradients: the design wavelength")
     Design,
+    /// two lanes on one climb: [`Lanes::Design`]'s, then [`Lanes::Defocus`]'s (the design
+    /// wavelength and the F-number's defocus of a lens with a design band from the same OTFs)
+    DesignAndDefocus,
     /// `2n` lanes for `n` orders at every point: each order's own share of [`Lanes::Design`]'s
     /// sum, `τ_o ∂H/∂w δw_o + δτ_o H_o`, then each order's `τ_o H_o` (its efficiency moving by
     /// itself; docs/physics.md, "Gradients: the multiplexed lens")
@@ -180,6 +183,7 @@ impl std::fmt::Debug for Lanes<'_> {
             Lanes::Fields(p) => write!(f, "Fields({p:?})"),
             Lanes::Rate(_) => write!(f, "Rate"),
             Lanes::Design => write!(f, "Design"),
+            Lanes::DesignAndDefocus => write!(f, "DesignAndDefocus"),
             Lanes::Orders(n) => write!(f, "Orders({n})"),
         }
     }
@@ -195,6 +199,7 @@ impl Lanes<'_> {
             Lanes::Fields(p) => p.len(),
             Lanes::Rate(_) => 1,
             Lanes::Design => 1,
+            Lanes::DesignAndDefocus => 2,
             Lanes::Orders(n) => 2 * n,
         }
     }
@@ -393,7 +398,7 @@ impl Levelled {
             }
             return;
         }
-        if matches!(lanes, Lanes::Defocus | Lanes::Design) {
+        if matches!(lanes, Lanes::Defocus | Lanes::Design | Lanes::DesignAndDefocus) {
             // the defocus lane: each order's w ∂H/∂w beside its OTF on the same forms
             // (`defocus_otf_many_and_log_derivative_within`), summed per point as the values are
             one.clear();
@@ -401,28 +406,38 @@ impl Levelled {
             crate::otf::defocus_otf_many_and_log_derivative_within(pairs, otfs, one, accuracy);
             evaluations.set(evaluations.get() + pairs.len());
             let design = match (lanes, &fresh.design) {
-                (Lanes::Design, Some(Some(d))) => Some(d),
-                (Lanes::Design, _) => return,
+                (Lanes::Design | Lanes::DesignAndDefocus, Some(Some(d))) => Some(d),
+                (Lanes::Design | Lanes::DesignAndDefocus, _) => return,
                 _ => None,
             };
+            let both = matches!(lanes, Lanes::DesignAndDefocus);
             for (k, point) in (first..).step_by(step).zip(0..fresh.ends.len()) {
                 let range = fresh.range(point);
                 let orders = &fresh.orders[range.clone()];
                 values[k] = orders.iter().zip(&otfs[range.clone()]).map(|(o, v)| o.efficiency * v).sum();
-                derivatives[k] = match design {
-                    None => orders.iter().zip(&one[range]).map(|(o, d)| o.efficiency * d).sum(),
-                    // τ_o ∂H/∂w δw_o + δτ_o H_o, ∂H/∂w = (w ∂H/∂w)/w (0 at w = 0: H is even in w)
-                    Some(rates) => orders
-                        .iter()
-                        .zip(&one[range.clone()])
-                        .zip(&otfs[range.clone()])
-                        .zip(&rates[range])
-                        .map(|(((o, d), h), [d_w, d_tau])| {
-                            let slope = if o.waves == 0.0 { 0.0 } else { d / o.waves };
-                            o.efficiency * slope * d_w + d_tau * h
-                        })
-                        .sum(),
+                let defocus = || orders.iter().zip(&one[range.clone()]).map(|(o, d)| o.efficiency * d).sum::<f64>();
+                let Some(rates) = design else {
+                    derivatives[k] = defocus();
+                    continue;
                 };
+                // τ_o ∂H/∂w δw_o + δτ_o H_o, ∂H/∂w = (w ∂H/∂w)/w (0 at w = 0: H is even in w)
+                let moved = orders
+                    .iter()
+                    .zip(&one[range.clone()])
+                    .zip(&otfs[range.clone()])
+                    .zip(&rates[range.clone()])
+                    .map(|(((o, d), h), [d_w, d_tau])| {
+                        let slope = if o.waves == 0.0 { 0.0 } else { d / o.waves };
+                        o.efficiency * slope * d_w + d_tau * h
+                    })
+                    .sum();
+                if both {
+                    // the design lane, then the defocus lane from the same w ∂H/∂w
+                    derivatives[2 * k] = moved;
+                    derivatives[2 * k + 1] = defocus();
+                } else {
+                    derivatives[k] = moved;
+                }
             }
             return;
         }
@@ -598,10 +613,14 @@ impl Levelled {
                 Lanes::Directions(_) if !self.prepare_directions(scene, level, lanes) => return Err(f64::NAN),
                 Lanes::Fields(parameters) if !self.prepare_fields(scene, level, parameters) => return Err(f64::NAN),
                 // a radial pupil (given as data) has no defocus lane on this engine
-                Lanes::Defocus | Lanes::Design if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
+                Lanes::Defocus | Lanes::Design | Lanes::DesignAndDefocus
+                    if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) =>
+                {
                     return Err(f64::NAN);
                 }
-                Lanes::Design if !self.prepare_design(scene, level) => return Err(f64::NAN),
+                Lanes::Design | Lanes::DesignAndDefocus if !self.prepare_design(scene, level) => {
+                    return Err(f64::NAN);
+                }
                 Lanes::Orders(_) if self.fresh[level].orders.iter().any(|o| o.radial.is_some()) => {
                     return Err(f64::NAN);
                 }
@@ -847,6 +866,13 @@ impl<'a> PerFrequency<'a> {
                         let d_total = self.design_total()?;
                         g.iter_mut().for_each(|g| *g = (*g - value * d_total) / self.nodes.total_weight);
                     }
+                    // the design lane less O times the normalization's rate; the defocus lane
+                    // moves no efficiency
+                    Lanes::DesignAndDefocus => {
+                        let d_total = self.design_total()?;
+                        g[0] = (g[0] - value * d_total) / self.nodes.total_weight;
+                        g[1] /= self.nodes.total_weight;
+                    }
                     Lanes::Orders(n) => {
                         let totals = self.order_totals(n)?;
                         for (g, d) in g.iter_mut().zip(&totals) {
@@ -1043,16 +1069,17 @@ impl OtfEngine for PerFrequency<'_> {
         Some(value)
     }
 
-    /// `(O, [∂O/∂ln λ0, ∂O/∂lo, ∂O/∂hi])` on one climb: the design wavelength's lane as
-    /// [`otf_and_design_lane`](OtfEngine::otf_and_design_lane) and the band's edges as
-    /// [`otf_and_spectral_lanes`](OtfEngine::otf_and_spectral_lanes) give them, the value bit
-    /// for bit [`otf`](OtfEngine::otf)'s.
-    fn otf_and_design_and_edge_lanes(&self, frequency: f64, lanes: &mut [f64; 3]) -> Option<f64> {
-        let mut design = [0.0];
+    /// `(O, [∂O/∂ln λ0, ∂O/∂lo, ∂O/∂hi, ∂O/∂ln K])` on one climb: the design wavelength's lane
+    /// as [`otf_and_design_lane`](OtfEngine::otf_and_design_lane), the band's edges as
+    /// [`otf_and_spectral_lanes`](OtfEngine::otf_and_spectral_lanes) and the defocus lane as
+    /// [`otf_and_defocus_derivative`](OtfEngine::otf_and_defocus_derivative) give them (the same
+    /// `w ∂H/∂w` beside each OTF), the value bit for bit [`otf`](OtfEngine::otf)'s.
+    fn otf_and_design_and_edge_lanes(&self, frequency: f64, lanes: &mut [f64; 4]) -> Option<f64> {
+        let mut design = [0.0; 2];
         let mut ends = [0.0; 4];
-        let value = self.value_and_edges(frequency, Some(&mut design), Lanes::Design, Some(&mut ends))?;
+        let value = self.value_and_edges(frequency, Some(&mut design), Lanes::DesignAndDefocus, Some(&mut ends))?;
         let total = self.nodes.total_weight;
-        *lanes = [design[0], -(ends[0] - value * ends[1]) / total, (ends[2] - value * ends[3]) / total];
+        *lanes = [design[0], -(ends[0] - value * ends[1]) / total, (ends[2] - value * ends[3]) / total, design[1]];
         Some(value)
     }
 

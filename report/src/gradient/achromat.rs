@@ -274,6 +274,18 @@ mod tests {
         check(&source, &[], &["lens.f_number", "lens.group_delay_range_fs"], &step);
     }
 
+    /// The reduced design on axis, where the value's engine is the per-frequency product rule:
+    /// the F-number's and focal length's defocus lane and the pixel MTF's term ride on the band
+    /// edges' pass (beside the edges' and λ0's lanes, that engine's own mean and end term), the
+    /// library range and an edge with them, with the pixel MTF, against the same references.
+    #[test]
+    fn the_reduced_achromat_aperture_on_the_edge_pass_matches_central_differences() {
+        let source = scene_with(REDUCED, "");
+        let keys = ["lens.f_number", "lens.focal_length_mm", "lens.group_delay_range_fs", "lens.design_band_nm[1]"];
+        let overrides = ["camera.pixel_mtf=true", "lens.design_band_nm=[750.0, 804.0]"];
+        check(&source, &overrides, &keys, &step);
+    }
+
     /// The true achromat below D_max (β = 1, W020 = 0): the diameter and the focal length (D
     /// held: F# = f0/D moves), the library's range (0: β stays 1), both band edges (the short
     /// one 1.1σ below the spectrum's centre; λ0's lane 0); and with the pixel MTF the diameter and

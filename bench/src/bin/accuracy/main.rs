@@ -50,6 +50,7 @@ mod iris;
 mod kernels;
 mod map;
 mod map_numpy;
+mod otf_paths;
 mod phase_maps;
 mod plot;
 mod process;

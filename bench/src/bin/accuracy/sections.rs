@@ -63,6 +63,7 @@ pub(crate) const SECTIONS: &[Section] = &[
     Section { name: "gds_scale", title: "GDS layout at scale", run: crate::gds_scale::run },
     Section { name: "map", title: crate::map_numpy::TITLE, run: crate::map_numpy::section },
     Section { name: "closed", title: crate::closed_ladder::TITLE, run: crate::closed_ladder::section },
+    Section { name: "otf-paths", title: crate::otf_paths::TITLE, run: crate::otf_paths::section },
 ];
 
 /// The sections `--only` names, or an error listing the known names.
