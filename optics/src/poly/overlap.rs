@@ -42,6 +42,10 @@ const X_LEVELS: [usize; 8] = [6, 8, 12, 16, 24, 32, 48, 64];
 /// The nested Clenshaw–Curtis levels of the t rule (points).
 const T_LEVELS: [usize; 6] = [5, 9, 17, 33, 65, 129];
 
+/// The largest defocus phase `k|W020|` (radians) the overlap engine takes: the t rule's last
+/// level resolves it (a point per radian and five more); beyond it the FFT path takes the scene.
+const MAX_DEFOCUS_PHASE: f64 = (T_LEVELS[T_LEVELS.len() - 1] - 5) as f64;
+
 /// Share of the value tolerance the x rule may spend (the t rule takes the rest).
 const X_SHARE: f64 = 0.25;
 
@@ -397,6 +401,12 @@ impl<'a> Overlap<'a> {
         }
         let keys: Vec<(u64, usize, usize)> = keys.into_iter().zip(&keep).filter(|(_, k)| **k).map(|(t, _)| t).collect();
         let mut kept: Vec<Term> = terms.into_iter().zip(keep).filter(|(_, k)| *k).map(|(t, _)| t).collect();
+        // a defocus the t rule cannot resolve (its phase 4s(1 − s) k|W020| peaks at k|W020|, at
+        // s = 1/2; each level needs a point per radian and five more): the FFT path takes the scene — a harmonic lens's far orders with
+        // Zernike terms (docs/physics.md, "Zernike terms on the overlap engine")
+        if kept.iter().any(|t| 2.0 * PI / t.lambda * t.defocus.abs() > MAX_DEFOCUS_PHASE) {
+            return None;
+        }
         let mut engine = Overlap {
             scene,
             nodes,
