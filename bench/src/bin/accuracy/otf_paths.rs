@@ -5,13 +5,13 @@
 //!   OTF grid evaluated directly at its own frequencies (`imaging::render::transfer`, which takes that
 //!   path where the grid has fewer frequencies inside the cutoff than the interpolation table
 //!   has samples) against the same grid read from the table (`imaging::render::transfer_interpolated`,
-//!   cubic in radius and linear in azimuth); the reference the direct path at a tenth of the
+//!   cubic in radius and linear in azimuth); the reference the direct path at a hundredth of the
 //!   scene's tolerance, the error the largest `|OTF − reference|` over the grid (the OTF is 1 at
 //!   zero frequency);
 //! - `asnr evaluate examples/phase-binary2.toml --set field.x_deg=3` (a radial pupil off axis,
 //!   on the FFT path whose pupil profiles are sampled once per grid and reused at every
 //!   wavelength node, optics/src/poly/grid.rs): `metric::evaluate`'s time, its ASNR and its
-//!   relative error against the same scene at a tenth of its tolerance.
+//!   relative error against the same scene at a hundredth of its tolerance.
 //!
 //! `cargo xtask accuracy --only otf-paths`
 
@@ -37,11 +37,11 @@ fn spread(times: &[f64]) -> (f64, f64) {
     (crate::median(times.to_vec()), times.iter().copied().fold(f64::INFINITY, f64::min))
 }
 
-/// The scene's tolerance: the frequency rule's, or on the FFT path the looser of it and the FFT
-/// path's own (what `evaluate` holds the value to there).
-fn tolerance_of(scene: &metric::Scene) -> f64 {
-    let settings = scene.options().settings();
-    settings.fft_tolerance.unwrap_or(settings.tolerance).max(settings.tolerance)
+/// The tolerance the scene's engine holds the value to (`numerics.tolerance` of its evaluation:
+/// the frequency rule's on the 1-D engines, on the FFT path the looser of it and the FFT path's
+/// own).
+fn tolerance_of(scene: &metric::Scene) -> Result<f64, String> {
+    Ok(metric::evaluate(scene).map_err(|e| e.to_string())?.numerics.tolerance)
 }
 
 /// The `asnr otf` row: `(tolerance, [direct median, fastest], [table median, fastest], direct
@@ -56,7 +56,7 @@ fn otf_row(repeats: usize) -> Result<OtfRow, String> {
     let cutoff = optics::highest_cutoff(built.lens(), &detected).map_err(|e| e.to_string())?;
     // the command's default spacing: the grid's Nyquist frequency at the cutoff
     let spacing = 0.5 / cutoff;
-    let tolerance = tolerance_of(&built);
+    let tolerance = tolerance_of(&built)?;
     let direct = || imaging::render::transfer(&built, SIZE, SIZE, spacing).map_err(|e| e.to_string());
     let table = || imaging::render::transfer_interpolated(&built, SIZE, SIZE, spacing).map_err(|e| e.to_string());
     let (first_direct, first_table) = (direct()?, table()?);
@@ -65,8 +65,8 @@ fn otf_row(repeats: usize) -> Result<OtfRow, String> {
         direct_times.push(time(direct).1);
         table_times.push(time(table).1);
     }
-    // the reference: the direct path at a tenth of the tolerance
-    let tighter = [overrides.clone(), vec![format!("options.tolerance={:e}", 0.1 * tolerance)]].concat();
+    // the reference: the direct path at a hundredth of the tolerance
+    let tighter = [overrides.clone(), vec![format!("options.tolerance={:e}", 0.01 * tolerance)]].concat();
     let fine = scene::build_from(&source, &tighter).map_err(|e| e.to_string())?;
     let reference = imaging::render::transfer(&fine, SIZE, SIZE, spacing).map_err(|e| e.to_string())?;
     let error = |t: &imaging::render::Transfer| {
@@ -89,11 +89,11 @@ fn phase_row(tools: &Tools, repeats: usize) -> Result<(f64, f64, f64, (f64, f64)
     let source = scene::read(Some(&path)).map_err(|e| e.to_string())?;
     let overrides = vec!["field.x_deg=3".to_owned()];
     let built = scene::build_from(&source, &overrides).map_err(|e| e.to_string())?;
-    let tolerance = tolerance_of(&built);
+    let tolerance = tolerance_of(&built)?;
     let value = || metric::evaluate(&built).map_err(|e| e.to_string());
     let first = value()?;
     let times: Vec<f64> = (0..repeats).map(|_| time(value).1).collect();
-    let tighter = [overrides, vec![format!("options.tolerance={:e}", 0.1 * tolerance)]].concat();
+    let tighter = [overrides, vec![format!("options.tolerance={:e}", 0.01 * tolerance)]].concat();
     let fine = scene::build_from(&source, &tighter).map_err(|e| e.to_string())?;
     let reference = metric::evaluate(&fine).map_err(|e| e.to_string())?;
     Ok((tolerance, first.asnr, (first.asnr - reference.asnr).abs() / reference.asnr.abs(), spread(&times)))
@@ -117,8 +117,9 @@ pub(crate) fn section(tools: &Tools) -> Option<String> {
     let mut md = format!(
         "## {TITLE}\n\n`cargo xtask accuracy --only otf-paths` (bench/src/bin/accuracy/otf_paths.rs), in one \
          process, {profile}, medians (and fastest) of {repeats} runs after one, load average {load} at the start; \
-         the tolerance is the scene's (on the FFT path the looser of `options.tolerance` and `options.fft_tolerance`, \
-         as `evaluate` holds the value), the reference the same computation at a tenth of it.\n"
+         the tolerance is the one the scene's engine works to (`numerics.tolerance` of its evaluation: on the FFT \
+         path the looser of `options.tolerance` and `options.fft_tolerance`), the reference the same computation \
+         with `options.tolerance` at a hundredth of it.\n"
     );
     if let Some((tolerance, direct, table, e_direct, e_table, n_direct, n_table)) = otf {
         md.push_str(&format!(
