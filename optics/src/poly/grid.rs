@@ -1424,38 +1424,46 @@ impl FftPath {
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
                 }
+                // the Seidel terms through an iris, or on a full circle (a line's grids): their OPD
+                // at the pixels as the value samples the pupil; an iris's decentre: the wavefront's
+                // slope there (`decentre_opd`)
+                let iris = matches!(order.pupil, Pupil::Aperture(_));
+                if let (Pupil::Full | Pupil::Aperture(_), FftKind::Grid(_)) = (&order.pupil, &node.kind)
+                    && directions.iter().all(|d| {
+                        matches!(d, WavefrontDirection::Seidel(_))
+                            || (iris && matches!(d, WavefrontDirection::IrisDecentre(0 | 1)))
+                    })
+                {
+                    let layer = match &mut built {
+                        Some(l) => l,
+                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
+                    };
+                    let slot = layer.pupil(&order)?;
+                    let aperture = match &order.pupil {
+                        Pupil::Aperture(a) => a.clone(),
+                        _ => layer.circle.clone(),
+                    };
+                    let Some((field, weight, opd)) =
+                        seidel_through_aperture(&layer.pupils[slot].1, &aperture, &order, directions, lambda)?
+                    else {
+                        return Ok(None);
+                    };
+                    let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
+                    layer.plan.otf_and_derivatives_of_field(
+                        &field,
+                        weight,
+                        2.0 * PI / lambda,
+                        &refs,
+                        &mut otf,
+                        &mut d_grids,
+                    );
+                    let grids: Vec<&Otf> = d_grids.iter().collect();
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    continue;
+                }
                 // an order through an aperture of disc shape: the obscuration moves its inner
                 // edge (the only key this path differentiates there)
                 if let (Pupil::Aperture(aperture), FftKind::Grid(_)) = (&order.pupil, &node.kind) {
-                    // the Seidel terms through an iris: their OPD at the pixels as the value samples
-                    // it; the iris's decentre: the wavefront's slope there (`decentre_opd`)
-                    if directions
-                        .iter()
-                        .all(|d| matches!(d, WavefrontDirection::Seidel(_) | WavefrontDirection::IrisDecentre(0 | 1)))
-                    {
-                        let layer = match &mut built {
-                            Some(l) => l,
-                            slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
-                        };
-                        let slot = layer.pupil(&order)?;
-                        let Some((field, weight, opd)) =
-                            seidel_through_aperture(&layer.pupils[slot].1, aperture, &order, directions, lambda)?
-                        else {
-                            return Ok(None);
-                        };
-                        let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
-                        layer.plan.otf_and_derivatives_of_field(
-                            &field,
-                            weight,
-                            2.0 * PI / lambda,
-                            &refs,
-                            &mut otf,
-                            &mut d_grids,
-                        );
-                        let grids: Vec<&Otf> = d_grids.iter().collect();
-                        read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
-                        continue;
-                    }
                     // the obscuration beside Seidel terms through the annulus: every lane a move of
                     // the field, a term's `i k D P` at a fixed weight and the inner edge's
                     // `∂A exp(i k W)` with `∂Σ A` (docs/physics.md, "Gradients: the edge's motion on
@@ -1613,35 +1621,6 @@ impl FftPath {
                             *total += node.weight * rate;
                         }
                     }
-                    let grids: Vec<&Otf> = d_grids.iter().collect();
-                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
-                    continue;
-                }
-                // a full circle's Seidel terms (a line's grids): their OPD at the pixels as the
-                // value samples the circle, as through an iris
-                if let (Pupil::Full, FftKind::Grid(_)) = (&order.pupil, &node.kind)
-                    && directions.iter().all(|d| matches!(d, WavefrontDirection::Seidel(_)))
-                {
-                    let layer = match &mut built {
-                        Some(l) => l,
-                        slot => slot.insert(FftLayer::new(n, s_max, scene.lens.numerical_aperture())?),
-                    };
-                    let slot = layer.pupil(&order)?;
-                    let circle = layer.circle.clone();
-                    let Some((field, weight, opd)) =
-                        seidel_through_aperture(&layer.pupils[slot].1, &circle, &order, directions, lambda)?
-                    else {
-                        return Ok(None);
-                    };
-                    let refs: Vec<&[f64]> = opd.iter().map(Vec::as_slice).collect();
-                    layer.plan.otf_and_derivatives_of_field(
-                        &field,
-                        weight,
-                        2.0 * PI / lambda,
-                        &refs,
-                        &mut otf,
-                        &mut d_grids,
-                    );
                     let grids: Vec<&Otf> = d_grids.iter().collect();
                     read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
                     continue;
