@@ -2620,14 +2620,7 @@ fn aperture_partials(
 /// `∂M̄/∂ln F# = D_s − 2 D_K` and `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that (off
 /// axis, a line, another engine, a lens that gives its own aperture directions).
 fn aperture_on_grids(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
-    let detected = crate::evaluate::detected_spectrum(scene);
-    if !on_sampled_grids(scene, e, &detected) {
-        return Ok(None);
-    }
-    with_value_engine(scene, &detected, scene.options().settings(), |poly| {
-        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
-            return Ok(None);
-        }
+    with_sampled_grids(scene, e, |poly| {
         let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(0.0, &[optics::WavefrontDirection::Defocus])?
         else {
             return Ok(None);
@@ -3248,6 +3241,26 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
     design_wavelength_by_own_rule(scene, e, p, None)
 }
 
+/// `f` on the engine the value takes where it is on the FFT grids of sampled pupils
+/// ([`on_sampled_grids`]), through [`with_value_engine`]; `None` elsewhere (another scene, or
+/// another engine).
+fn with_sampled_grids<T>(
+    scene: &Scene,
+    e: &Evaluation,
+    f: impl FnOnce(&optics::Polychromatic<'_>) -> Result<Option<T>, Error>,
+) -> Result<Option<T>, Error> {
+    let detected = crate::evaluate::detected_spectrum(scene);
+    if !on_sampled_grids(scene, e, &detected) {
+        return Ok(None);
+    }
+    with_value_engine(scene, &detected, scene.options().settings(), |poly| {
+        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
+            return Ok(None);
+        }
+        f(poly)
+    })
+}
+
 /// Whether the value's OTF is on the FFT grids of sampled pupils with the chromatic defocus
 /// alone moving with the aperture and the design wavelength ([`aperture_on_grids`],
 /// [`design_wavelength_on_grids`]): on axis, a band, every order the full circle, an aperture
@@ -3287,14 +3300,7 @@ fn design_wavelength_on_grids(
     e: &Evaluation,
     noise: Option<&optics::NoiseShape>,
 ) -> Result<Option<(f64, f64)>, Error> {
-    let detected = crate::evaluate::detected_spectrum(scene);
-    if !on_sampled_grids(scene, e, &detected) {
-        return Ok(None);
-    }
-    with_value_engine(scene, &detected, scene.options().settings(), |poly| {
-        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
-            return Ok(None);
-        }
+    with_sampled_grids(scene, e, |poly| {
         let Some(rate) = poly.design_signal_rate() else { return Ok(None) };
         let directions = [optics::WavefrontDirection::DesignWavelength];
         let found = match noise {

@@ -263,14 +263,7 @@ fn defocus_lane_on_grids_over_noise(
     noise: Option<&optics::NoiseShape>,
 ) -> Result<Option<f64>, Error> {
     let Some(noise) = noise else { return Ok(None) };
-    let detected = crate::evaluate::detected_spectrum(scene);
-    if !super::on_sampled_grids(scene, e, &detected) {
-        return Ok(None);
-    }
-    super::with_value_engine(scene, &detected, scene.options().settings(), |poly| {
-        if !matches!(poly.engine(), optics::Engine::Fft { .. }) {
-            return Ok(None);
-        }
+    super::with_sampled_grids(scene, e, |poly| {
         let directions = [optics::WavefrontDirection::Defocus];
         Ok(poly.mean_mtf_over_azimuth_over_noise_and_gradient(0.0, &directions, noise)?.map(|(_, lanes)| lanes[0]))
     })
