@@ -329,8 +329,8 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
     }
     // a phase lens's aperture lanes off axis on the FFT path, after them (read back by
     // `aperture_lane_partials`)
-    if let (Some(base), true) = (bases.aperture, bases.aperture_on_grid) {
-        grid.extend(aperture_grid_directions(base));
+    if let (Some(base), true) = (bases.aperture, bases.aperture_on_grid > 0) {
+        grid.extend(aperture_grid_directions(base, bases.aperture_on_grid > 3));
     }
     // a library lens's parameters whose bias is asked, in their order: their lanes ride on the
     // value's own rules where the engine gives them
@@ -385,7 +385,7 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
             .collect();
         let kept: Vec<Parameter> = local.iter().flatten().copied().collect();
         let mut grid: Vec<optics::WavefrontDirection> = kept.iter().filter_map(|p| p.grid_direction()).collect();
-        let bases = point_aperture_on_grid(bases, field, &mut grid);
+        let bases = point_aperture_on_grid(&single, bases, field, &mut grid);
         let (e, d_binary2, d_grid, d_bias) = evaluate_field_differentiated(&single, binary2, &grid, &bias)?;
         let mut point = point_gradient(&single, &e, &kept, d_binary2, &d_grid, bases, d_bias.as_ref(), None)?;
         weigh_by_noise(&single, &e, &kept, binary2, &grid, &mut point)?;
@@ -421,16 +421,19 @@ pub fn gradient(scene: &Scene, parameters: &[Parameter]) -> Result<Gradient, Err
 /// weighted mean of each point's (docs/physics.md, "Gradients: the F-number and the focal length of
 /// a phase lens off axis").
 fn point_aperture_on_grid(
+    scene: &Scene,
     bases: LaneBases,
     field: optics::Field,
     grid: &mut Vec<optics::WavefrontDirection>,
 ) -> LaneBases {
     match bases.aperture {
-        Some(base) if !field.is_on_axis() => {
-            grid.extend(aperture_grid_directions(base));
-            LaneBases { aperture_on_grid: true, ..bases }
+        Some(base) if radial_on_grid(scene, field) => {
+            let directions = aperture_grid_directions(base, !field.is_on_axis());
+            let aperture_on_grid = directions.len();
+            grid.extend(directions);
+            LaneBases { aperture_on_grid, ..bases }
         }
-        _ => bases,
+        _ => LaneBases { aperture_on_grid: 0, ..bases },
     }
 }
 
@@ -603,8 +606,8 @@ fn point_gradient(
         }
         Some(&p) => {
             let on_grid = match d_grid {
-                GridGradient::Computed(all) if bases.aperture_on_grid => {
-                    all.len().checked_sub(APERTURE_ON_GRID).map(|at| &all[at..])
+                GridGradient::Computed(all) if bases.aperture_on_grid > 0 => {
+                    all.len().checked_sub(bases.aperture_on_grid).map(|at| &all[at..])
                 }
                 _ => None,
             };
@@ -1149,23 +1152,45 @@ fn field_key(axis: usize) -> &'static str {
 struct LaneBases {
     aperture: Option<usize>,
     wavelength: Option<usize>,
-    /// the aperture's lanes asked of the FFT path (a single field point off axis): the
-    /// [`APERTURE_ON_GRID`] directions after the parameters' own ([`aperture_grid_directions`])
-    aperture_on_grid: bool,
+    /// the aperture's lanes asked of the FFT path (a single field point off axis, or on axis a
+    /// pupil without rotational symmetry): how many directions
+    /// ([`aperture_grid_directions`]) follow the parameters' own, 0 where they ride the radial
+    /// engine
+    aperture_on_grid: usize,
 }
 
-/// How many FFT-path directions the F-number's and the focal length's gradient off axis adds
-/// ([`aperture_grid_directions`]).
-const APERTURE_ON_GRID: usize = 5;
-
 /// The FFT path's directions of the F-number's and the focal length's gradient of a phase lens
-/// off axis, the aperture's lanes starting at `base` among the wrapped lens's wavefront
-/// directions: `P`, `T`, `S` ([`optics::LensModel::aperture_directions`]) and the oblique wave's
-/// path per `ln R` and per `ln` of the whole scale (docs/physics.md, "Gradients: the F-number and
-/// the focal length of a phase lens off axis").
-fn aperture_grid_directions(base: usize) -> [optics::WavefrontDirection; APERTURE_ON_GRID] {
+/// off axis (`oblique`) or on axis with Zernike terms of `m ≠ 0` or Seidel terms, the aperture's
+/// lanes starting at `base` among the wrapped lens's wavefront directions: `P`, `T`, `S`
+/// ([`optics::LensModel::aperture_directions`]) and, off axis, the oblique wave's path per
+/// `ln R` and per `ln` of the whole scale (docs/physics.md, "Gradients: the F-number and the
+/// focal length of a phase lens off axis").
+fn aperture_grid_directions(base: usize, oblique: bool) -> Vec<optics::WavefrontDirection> {
     use optics::WavefrontDirection::{Lane, ObliqueScale};
-    [Lane(base), Lane(base + 1), Lane(base + 2), ObliqueScale(0), ObliqueScale(1)]
+    let mut out = vec![Lane(base), Lane(base + 1), Lane(base + 2)];
+    if oblique {
+        out.extend([ObliqueScale(0), ObliqueScale(1)]);
+    }
+    out
+}
+
+/// Whether the value of `scene` at `field` takes the FFT path for a lens whose orders are
+/// radial pupils (a phase lens): off axis (the oblique wave's path), or on axis where an order's
+/// pupil is not rotationally symmetric (Zernike terms of `m ≠ 0`) or carries Seidel terms
+/// beyond defocus. Under a band only: a line's grids do not carry the aperture's lanes.
+fn radial_on_grid(scene: &Scene, field: optics::Field) -> bool {
+    if !field.is_on_axis() {
+        return true;
+    }
+    if crate::evaluate::detected_spectrum(scene).as_line().is_some() {
+        return false;
+    }
+    let lens = scene.lens();
+    let lambda = lens.design_wavelength().unwrap_or(550e-9);
+    lens.orders(lambda, field).iter().any(|o| match &o.pupil {
+        optics::Pupil::Radial(p) => !(p.is_symmetric() && o.wavefront.is_defocus_only()),
+        _ => false,
+    })
 }
 
 /// A lens whose wavefront directions ([`optics::LensModel::binary2_directions`]) are its own
@@ -1206,7 +1231,7 @@ impl ExtraLanes {
                     Some(Ok(_)) => {
                         // over a [[fields]] list each point off axis asks them of its own pass
                         // (`point_aperture_on_grid`)
-                        if scene.fields().is_empty() && !scene.field().is_on_axis() {
+                        if scene.fields().is_empty() && radial_on_grid(scene, scene.field()) {
                             on_grid = true;
                         }
                         true
@@ -1232,7 +1257,13 @@ impl ExtraLanes {
         let mut bases = LaneBases::default();
         if with_aperture {
             bases.aperture = Some(own(lambda));
-            bases.aperture_on_grid = on_grid;
+            bases.aperture_on_grid = if !on_grid {
+                0
+            } else if scene.field().is_on_axis() {
+                3
+            } else {
+                5
+            };
         }
         if let Some(l) = line.filter(|_| with_wavelength) {
             bases.wavelength = Some(own(l.center()) + if with_aperture { 3 } else { 0 });
@@ -1354,7 +1385,12 @@ fn aperture_lane_partials(
 ) -> Result<(f64, f64), Error> {
     // off axis on the FFT path, the oblique wave's path moves with R and f0 too
     // (docs/physics.md, "Gradients: the F-number and the focal length of a phase lens off axis")
-    if let Some(&[d_p, d_t, d_s, d_or, d_o]) = on_grid {
+    let on_grid = on_grid.and_then(|lanes| match *lanes {
+        [d_p, d_t, d_s] => Some([d_p, d_t, d_s, 0.0, 0.0]),
+        [d_p, d_t, d_s, d_or, d_o] => Some([d_p, d_t, d_s, d_or, d_o]),
+        _ => None,
+    });
+    if let Some([d_p, d_t, d_s, d_or, d_o]) = on_grid {
         let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
         let slope = pixel_slope(scene, p)?;
         return Ok((edge - e.mean_mtf - slope - (d_p + d_t + d_or), d_p + d_s + d_o));
