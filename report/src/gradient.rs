@@ -4575,18 +4575,18 @@ parameter_bias = [0.0, 0.0]
     /// A line on a PSF stack (docs/physics.md, "Gradients: a line's wavelength and a blackbody's
     /// temperature", on a table): between the slices at 800 and 805 nm the OTF is their linear
     /// interpolation in λ, whose slope on the slices' own OTFs (over azimuth, the stack's 2-D
-    /// OTF) moves |O|; at 802 nm with the exposure, with the pixel MTF and read noise at 3° off
-    /// axis, and under a noise spectrum (the weight moving the gradient: [`assert_weighted`]),
-    /// against Richardson central differences of evaluations converged at 1e-10, within 10× the
-    /// scene's 1e-6 of the gradient's norm; at a slice's wavelength (800 nm) the kink is refused.
+    /// OTF) moves |O|; at 802 nm with the pixel MTF and read noise, and under a noise spectrum
+    /// (the weight moving the gradient: [`assert_weighted`]), against Richardson central
+    /// differences of evaluations converged at 1e-10, within 10× the scene's 1e-6 of the
+    /// gradient's norm; at a slice's wavelength (800 nm) the kink is refused.
     #[test]
     fn a_line_on_a_psf_stack_matches_central_differences() {
         let stack = example("psf-stack.toml");
         let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=802", "spectrum.range_nm=1"];
-        check_line(&stack, &owned(&line), &["exposure.time_ms"]);
-        check_line(&stack, &joined(&line, &["field.x_deg=3", PIXEL_AND_READ_NOISE[0], PIXEL_AND_READ_NOISE[1]]), &[]);
-        let shaped = with_noise_spectrum_beside(&stack, "line-stack");
         let center = ["spectrum.center_nm"];
+        let pixel = joined(&line, &PIXEL_AND_READ_NOISE);
+        check_with_references(&stack, &pixel, &center, &|k, v| richardson(&stack, &pixel, k, v, LINE_STEP_NM));
+        let shaped = with_noise_spectrum_beside(&stack, "line-stack");
         assert_weighted(&gradient(&shaped, &owned(&line), &owned(&center)).unwrap());
         check_with_references(&shaped, &owned(&line), &center, &|k, v| {
             richardson(&shaped, &owned(&line), k, v, LINE_STEP_NM)
