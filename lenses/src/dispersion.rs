@@ -248,6 +248,33 @@ impl LensModel for DispersionEngineered {
         Some(vec![[rate, 0.0]])
     }
 
+    /// How the one order moves with a line's wavelength λ strictly inside the design band
+    /// (docs/physics.md, "Gradients: the dispersion-engineered lens"): `W020 = (δf(λ) + (1 − β)
+    /// (1 − λ/λ0) f0)/(8F#²)` by `∂W020/∂λ = (δf′(λ) − (1 − β) f0/λ0)/(8F#²)` (`δf′` the residual
+    /// focal shift table's segment slope, 0 beyond its rows; 0 for a true achromat without one),
+    /// the efficiency and transmission by their tables' segment slopes (0 for constants). `None`
+    /// at or outside a band edge (the efficiency's window: a kink, or no light) and on a row of
+    /// a table (a kink).
+    fn defocus_rates(&self, wavelength_m: f64, _field: Field) -> Option<optics::DefocusRates> {
+        let l = wavelength_m;
+        if !(l > self.band.0 && l < self.band.1) {
+            return None;
+        }
+        let t = &self.focal_shift;
+        let shift_slope = match t.iter().position(|p| p.0 >= l) {
+            _ if t.iter().any(|p| p.0 == l) => return None,
+            None | Some(0) => 0.0,
+            Some(i) => (t[i].1 - t[i - 1].1) / (t[i].0 - t[i - 1].0),
+        };
+        let k = 1.0 / (8.0 * self.f_number * self.f_number);
+        let defocus = k * (shift_slope - (1.0 - self.true_delay_fraction()) * self.focal_length / self.centre());
+        Some(optics::DefocusRates {
+            defocus,
+            ln_efficiency: curve_log_slope(&self.efficiency, l)?,
+            ln_transmission: curve_log_slope(&self.transmission, l)?,
+        })
+    }
+
     /// An efficiency or transmission table factored out (`crate::chromatic::factor_one_curve`).
     fn factored_efficiency(&self) -> Option<optics::FactoredEfficiency> {
         crate::chromatic::factor_one_curve(&self.efficiency, &self.transmission, 1.0, |efficiency, transmission| {
@@ -284,6 +311,19 @@ impl LensModel for DispersionEngineered {
             mode
         )
     }
+}
+
+/// `∂ln c/∂λ` of a curve at `l`: 0 for a constant, a table's segment slope over its value
+/// (piecewise linear); `None` on a row (a kink), outside the table or where its value is 0.
+fn curve_log_slope(curve: &Curve, l: f64) -> Option<f64> {
+    let Curve::Table(t) = curve else { return Some(0.0) };
+    let (w, v) = (t.wavelengths(), t.values());
+    let i = w.iter().position(|&x| x >= l)?;
+    if i == 0 || w[i] == l {
+        return None;
+    }
+    let value = curve.value(l);
+    (value > 0.0).then(|| (v[i] - v[i - 1]) / (w[i] - w[i - 1]) / value)
 }
 
 #[cfg(test)]
@@ -415,6 +455,34 @@ mod tests {
             assert!((lens.defocus(lambda) - want).abs() < 1e-18, "{lambda}");
         }
         assert!(lens.describe().contains("reduced achromatism β = 0.023"), "{}", lens.describe());
+    }
+
+    /// A line's rates (`LensModel::defocus_rates`) against central differences of the order's
+    /// defocus inside the band (step 1e-6 of λ: W020 is piecewise linear, so the difference is
+    /// exact to rounding), in the reduced mode and for a true achromat with a residual focal
+    /// shift table; at a band edge and on a table row, `None` (a kink).
+    #[test]
+    fn defocus_rates_are_the_derivative_of_the_defocus() {
+        let reduced = achromat(2.5, 3.36e-3, 5.0 * FS, DelayOverflow::Reduced).unwrap();
+        let shifted = achromat(16.75, 3.36e-3, 5.0 * FS, DelayOverflow::Reject)
+            .unwrap()
+            .with_focal_shift(&[650e-9, 780e-9, 950e-9], &[2e-6, -1e-6, 3e-6])
+            .unwrap();
+        for lens in [&reduced, &shifted] {
+            for l in [720e-9, 803e-9, 870e-9] {
+                let h = 1e-6 * l;
+                let differences = (lens.defocus(l + h) - lens.defocus(l - h)) / (2.0 * h);
+                let rates = lens.defocus_rates(l, Field::ON_AXIS).unwrap();
+                assert!(
+                    (rates.defocus - differences).abs() <= 1e-7 * differences.abs(),
+                    "{l}: {rates:?} {differences}"
+                );
+                assert_eq!((rates.ln_efficiency, rates.ln_transmission), (0.0, 0.0));
+            }
+            assert!(lens.defocus_rates(700e-9, Field::ON_AXIS).is_none());
+            assert!(lens.defocus_rates(900e-9, Field::ON_AXIS).is_none());
+        }
+        assert!(shifted.defocus_rates(780e-9, Field::ON_AXIS).is_none());
     }
 
     #[test]

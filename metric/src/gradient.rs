@@ -19,6 +19,7 @@ use crate::{Error, GlareMode, MetricForm, Scene};
 
 mod achromat;
 mod library_fft;
+mod line_table;
 mod map;
 mod multiplexed;
 mod noise_weight;
@@ -1885,6 +1886,12 @@ fn line_center_partials(
         let along: f64 = coefficients.iter().zip(lanes).map(|(k, d)| k * d).sum();
         return Ok((d_ln_n, d_ln_n, (edge - e.mean_mtf) / c + along));
     }
+    // one tabulated order (a PSF stack, a tabulated OTF): the interpolation's slope in λ on the
+    // table's own OTFs (docs/physics.md, "Gradients: a line's wavelength and a blackbody's
+    // temperature", on a table)
+    if let Some(t) = line_table::line_on_table(scene, c, None)? {
+        return Ok((d_ln_n + t.ln_efficiency, d_ln_n + t.ln_transmission, t.mean));
+    }
     // one order through a circular iris, decentred or not, on axis or off it: the line engine's
     // defocus lane over azimuth (docs/physics.md, "Gradients: a line's wavelength through an
     // iris")
@@ -1960,11 +1967,15 @@ fn line_center_partials(
         Some(a) => Some(optics::DefocusRates { defocus: a.w020_slope, ln_efficiency: 0.0, ln_transmission: 0.0 }),
         None => lens.defocus_rates(c, field),
     };
+    if let Some(why) = line_table::off_design_band(lens, c) {
+        return Err(not_smooth(format!("{family}: {why}")));
+    }
     let Some(rates) = rates.filter(|_| plain) else {
         return Err(not_smooth(format!(
             "{family}: the line's wavelength is followed through the OTF for a lens whose one order is the full \
              pupil with a defocus affine in λ and constant efficiencies (the chromatic lens without Seidel terms, \
-             on axis or off it, through a circular iris too), the refractive lens, the harmonic lens with a \
+             on axis or off it, through a circular iris too), the refractive lens, the dispersion-engineered lens \
+             inside its band, one tabulated order between its breakpoints (a PSF stack), the harmonic lens with a \
              constant transmission and the interleaved multiplexed lens (on axis, and off axis on the line's exact \
              1-D engine), and a phase lens on the radial engine; this lens's orders move with λ otherwise (Seidel \
              or Zernike terms, an efficiency or transmission table's slope), which is not followed yet"

@@ -789,11 +789,11 @@ fn parameter(key: &str, lens_model: &str, spectrum_shape: &str, lanes: Lanes) ->
     }
     bail!(
         "--wrt {key}: not differentiable here yet: the gradient is computed for {}, {PIXEL_PITCH} (with camera.pixel_mtf true or false), \
-         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line), source.temperature_k (a blackbody source, under a line or over a band, on the overlap engine too), \
+         spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, the OTF rotationally symmetric or not, or a line, on a PSF stack or a tabulated OTF between its slices and on the dispersion-engineered lens inside its band too), source.temperature_k (a blackbody source, under a line or over a band, on the overlap engine too), \
          the radiance meter's source.power_nw, source.fiber_core_diameter_um, source.relay_transmission, source.relay_iris_mm, source.relay_focal_length_mm and source.calibration_wavelength_nm (between the responsivity table's rows), \
          lens.design_wavelength_nm (lens.model = \"chromatic\", \"refractive\" or \"harmonic\", on axis and off axis over a band or under a line without Seidel terms, through a decentred circular iris on the exact 1-D engine, with Seidel or Zernike terms on the overlap engine, with camera.pixel_mtf true or false; lens.model = \"phase\" with a geometric phase, \"psf\" and \"tabulated\", where it is 0), \
          lens.f_number, lens.focal_length_mm and lens.aperture_diameter_mm \
-         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; with Seidel or Zernike terms on the overlap engine, on axis and off; the phase lens on axis (on the FFT path with Zernike terms of m ≠ 0) and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, through a circular iris too, the harmonic and interleaved lenses' orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
+         (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\" or \"psf\"; with Seidel or Zernike terms on the overlap engine, on axis and off; the phase lens on axis (on the FFT path with Zernike terms of m ≠ 0) and off axis at a single [field] point or over a [[fields]] list, a phase map on axis; on axis over a band on the FFT grids of an annulus, Seidel terms through an iris or Zernike terms, with lens.design_wavelength_nm), lens.psf_pitch_um (lens.model = \"psf\"), lens.norm_radius_mm (lens.model = \"phase\" with lens.binary2), lens.binary2[i] and lens.phase_spline_rad[i] (lens.model = \"phase\"), lens.zernike_noll_rms_um[i] (every family that takes it), lens.iris_decentre_x and lens.iris_decentre_y (lens.model = \"chromatic\", a circular iris on the exact 1-D engine, or with Seidel terms, an annulus or a sector on the FFT path), lens.obscuration (lens.model = \"chromatic\": at 0, the edge of its domain, one-sided, 0; above 0 its inner edge's motion on the FFT path, a band's grids or a line's, asked with no wavefront key but Seidel terms), lens.phase_map_pitch_um (a phase map on axis: its cells' edges and values on the FFT path), lens.atom_phase_error_rad (lens.model = \"library\", a radial or 2-D layout), lens.atom_transmission_error (lens.model = \"library\", a 2-D layout), the dispersion-engineered lens's lens.f_number, lens.focal_length_mm, lens.aperture_diameter_mm, lens.group_delay_range_fs and lens.design_band_nm[i] (away from D = D_max), lens.efficiency, lens.transmission and field angles, the multiplexed lens's lens.efficiency and lens.transmission (both layouts), lens.f_number, lens.focal_length_mm and field angles (both layouts), lens.channels_nm[j] and lens.channel_efficiencies[j] (interleaved, on axis and off; segmented, on the FFT path, λ_j with other_channels = \"signal\"), the segmented layout's lens.area_fractions[j] (its zones' edges on the FFT path; where the fractions sum to 1 the last absorbs the change), and lens.spherical_um, lens.coma_um, lens.astigmatism_um and lens.field_curvature_um (lens.model = \"chromatic\", on the overlap engine, at zero, and through an iris or under a line on the FFT path), and field.x_deg and field.y_deg of a single [field] point or fields[i].x_deg and fields[i].y_deg of a [[fields]] list (lens.model = \"chromatic\", \"refractive\", \"harmonic\", \"phase\", \"library\" or \"psf\"; with Zernike terms too); with camera.noise_spectrum, the camera, exposure and radiometric keys, camera.pixel_pitch_um (with camera.pixel_mtf true or false), lens.f_number and lens.focal_length_mm (on axis, every order the full circle with a defocus alone or with Seidel terms, or a phase lens on the radial engine; through a decentred circular iris and off axis on the exact 1-D engine), lens.iris_decentre_x and lens.iris_decentre_y, spectrum.center_nm and spectrum.range_nm (a Gaussian or top-hat band, or a line on one order with a defocus alone, through a circular iris too, or a tabulated order (a PSF stack), the harmonic and interleaved lenses' orders on axis and off, or a phase lens), source.temperature_k, lens.parameter_bias[i], lens.design_wavelength_nm, lens.psf_pitch_um, the Seidel terms (at zero too), and the wavefront and field keys on the radial engine, the exact 1-D engine, the overlap engine and the FFT path (a band's grids or a line's); this key's derivative is not computed by the engines (it is never replaced by a finite difference)",
         SUPPORTED.map(|(k, _)| k).join(", ")
     )
 }
@@ -4593,6 +4593,30 @@ parameter_bias = [0.0, 0.0]
         assert_eq!(g.d_asnr, vec![0.0, 0.0]);
     }
 
+    /// A line on a PSF stack (docs/physics.md, "Gradients: a line's wavelength and a blackbody's
+    /// temperature", on a table): between the slices at 800 and 805 nm the OTF is their linear
+    /// interpolation in λ, whose slope on the slices' own OTFs (over azimuth, the stack's 2-D
+    /// OTF) moves |O|; at 802 nm with the pixel MTF and read noise, and under a noise spectrum
+    /// (the weight moving the gradient: [`assert_weighted`]), against Richardson central
+    /// differences of evaluations converged at 1e-10, within 10× the scene's 1e-6 of the
+    /// gradient's norm; at a slice's wavelength (800 nm) the kink is refused.
+    #[test]
+    fn a_line_on_a_psf_stack_matches_central_differences() {
+        let stack = example("psf-stack.toml");
+        let line = ["spectrum.shape=\"line\"", "spectrum.center_nm=802", "spectrum.range_nm=1"];
+        let center = ["spectrum.center_nm"];
+        let pixel = joined(&line, &PIXEL_AND_READ_NOISE);
+        check_with_references(&stack, &pixel, &center, &|k, v| richardson(&stack, &pixel, k, v, LINE_STEP_NM));
+        let shaped = with_noise_spectrum_beside(&stack, "line-stack");
+        assert_weighted(&gradient(&shaped, &owned(&line), &owned(&center)).unwrap());
+        check_with_references(&shaped, &owned(&line), &center, &|k, v| {
+            richardson(&shaped, &owned(&line), k, v, LINE_STEP_NM)
+        });
+        let at_slice = owned(&["spectrum.shape=\"line\"", "spectrum.center_nm=800", "spectrum.range_nm=1"]);
+        let e = gradient(&stack, &at_slice, &owned(&center)).unwrap_err().to_string();
+        assert!(e.contains("--wrt spectrum.center_nm") && e.contains("breakpoint") && e.contains("kink"), "{e}");
+    }
+
     /// The harmonic lens's `efficiency` (τ_base, a factor on every order's τ_m) and
     /// `transmission`, with the stray light, against central differences.
     #[test]
@@ -5055,7 +5079,7 @@ parameter_bias = [0.0, 0.0]
     /// (`name`): rows at 0, 30, 70 and 130 cycles/mm rising from 1 to 3, so that the weight
     /// 1/n(ν) falls by 3× over the band and has kinks inside it, none at the Nyquist frequency
     /// of a 5.2 µm pixel (96.15 cycles/mm).
-    fn with_noise_spectrum(source: &Source, name: &str) -> Source {
+    pub(super) fn with_noise_spectrum(source: &Source, name: &str) -> Source {
         let dir = std::env::temp_dir().join(format!("asnr-noise-gradient-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("nps.csv"), "frequency_cyc_per_mm,relative\n0,1\n30,1.4\n70,2.2\n130,3\n").unwrap();
@@ -5067,7 +5091,7 @@ parameter_bias = [0.0, 0.0]
     /// The weight matters: under the noise spectrum ∂ASNR is not SNR0 · ∂M̄ (what the white
     /// mean's lanes would give) by more than the test's tolerance, for each key of `g` that
     /// moves the OTF alone; so the checks against differences below can tell the two apart.
-    fn assert_weighted(g: &Gradient) {
+    pub(super) fn assert_weighted(g: &Gradient) {
         let norm = g.d_asnr.iter().map(|x| x * x).sum::<f64>().sqrt();
         let apart = g.d_asnr.iter().zip(&g.d_mean_mtf).map(|(a, m)| (a - g.snr0 * m).abs()).fold(0.0, f64::max);
         println!("largest |∂ASNR − SNR0 ∂M̄| {apart:.3e} of the norm {norm:.3e}");

@@ -304,6 +304,12 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
     let c = line.center();
     let lens = scene.lens();
     let field = scene.field();
+    // one tabulated order: the table's slope in λ, each frequency's weight divided by n(ν)
+    if base.is_none()
+        && let Some(t) = super::line_table::line_on_table(scene, c, shape_of(scene))?
+    {
+        return Ok(t.mean);
+    }
     // one order through a circular iris: the line engine's defocus lane over azimuth, each
     // frequency's weight divided by n(ν) (docs/physics.md, "Gradients: a line's wavelength
     // through an iris")

@@ -1781,6 +1781,74 @@ impl Polychromatic<'_> {
             + self.integrate_panel(value, centre, right, tolerance, depth + 1, work)
     }
 
+    /// The mean MTF as the value takes it and, in the same pass, a lane the caller gives:
+    ///
+    /// ```text
+    /// (1/ν_max) ∫ P(ν) L(ν, φ) dν        (averaged over azimuth as the mean is)
+    /// ```
+    ///
+    /// `lane(ν, φ)` is the derivative of `|O(ν, φ)|` (`φ` from the x axis) the caller knows at
+    /// each frequency the rule reads: a line on one tabulated order, whose `|O|` is the table's
+    /// `|T(c, ν, φ)|` and moves as `sign(T) ∂T/∂c` (docs/physics.md, "Gradients: a line's
+    /// wavelength and a blackbody's temperature", on a table). Integrated with the frequency
+    /// rule's accepted weights (split at the OTF's sign changes, `P` included; with `noise`,
+    /// each weight divided by `n(ν)`, on the value's cut at the noise table's rows), on the
+    /// nested rule over azimuth from `first` where the OTF depends on direction, as the value's
+    /// ([`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth)). Returns `(mean, lane, work)`.
+    /// `None` on the FFT path's fixed rule.
+    pub fn mean_mtf_and_modulus_lane(
+        &self,
+        first: f64,
+        noise: Option<&NoiseShape>,
+        lane: &dyn Fn(f64, f64) -> f64,
+    ) -> Option<(f64, f64, Work)> {
+        if !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. }) {
+            return None;
+        }
+        if !(self.has_pupil_grid() || self.direction_dependent()) {
+            // the signed OTF: the accepted weights carry sign(O), so the lane is recorded times it
+            *self.gradient.borrow_mut() = Some(Recording { lanes: 1, ..Recording::default() });
+            let signed = |nu: f64| {
+                let v = self.otf(nu);
+                self.record(nu, Some(v), &[sign(v) * lane(nu, 0.0)])
+            };
+            let (mean, work) = match noise {
+                None => self.mean_of(&signed),
+                Some(shape) => self.mean_of_cut(&|nu| self.over_noise(nu, signed(nu), shape), shape.rows()),
+            };
+            let recording = self.gradient.borrow_mut().take()?;
+            let (mean, found, work) = self.integrate_recorded(mean, recording, work)?;
+            return Some((mean, found[0], work));
+        }
+        let (mut sum, mut failed, mut read) = (0.0, false, 0usize);
+        let mean = self.azimuthal_mean(first, &mut |azimuth: f64| {
+            *self.gradient.borrow_mut() = Some(Recording { lanes: 1, ..Recording::default() });
+            let modulus = |nu: f64| {
+                let v = self.otf_along(nu, azimuth).norm();
+                self.record(nu, Some(v), &[lane(nu, azimuth)])
+            };
+            let (mean, work) = match noise {
+                None => self.mean_of(&modulus),
+                Some(shape) => self.mean_of_cut(&|nu| self.over_noise(nu, modulus(nu), shape), shape.rows()),
+            };
+            match self.gradient.borrow_mut().take() {
+                Some(r) if !r.failed => {
+                    for &(nu, w) in &r.accepted {
+                        match r.at.get(&nu.to_bits()) {
+                            Some(&i) => sum += w * r.derivatives[i],
+                            None => failed = true,
+                        }
+                    }
+                }
+                _ => failed = true,
+            }
+            read += 1;
+            (mean, work)
+        });
+        (!failed && read == mean.azimuths)
+            .then(|| (mean.mean, sum / (self.scene.max_frequency * mean.azimuths as f64), mean.work))
+    }
+
     /// The end of the frequency range where the OTF can be non-zero: `max_frequency`, or the
     /// highest cutoff if that is below it (the frequency rule's lengths scale with it: a 1e-206 m
     /// pixel puts `max_frequency` 1e200 times above it).
