@@ -3168,7 +3168,8 @@ fn defocus_lane_by_own_rule(
                 return Err(not_smooth(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
-                     harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
+                     harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine, \
+                     under a band or, on several orders, a line), or \
                      with Seidel or Zernike terms under a band (on the overlap engine), or on axis under a \
                      band on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, Zernike \
                      terms); this scene's lens has other pupils or aberrations, or is off axis, under a line or a \
