@@ -401,7 +401,7 @@ fn refine_field_lanes(
         return;
     }
     let tight = (q * poly.tolerance()).max(MIN_LANE_TOLERANCE);
-    let tighter = if matches!(poly.engine(), optics::Engine::Exact1d) {
+    let tighter = if matches!(poly.engine(), optics::Engine::Exact1d | optics::Engine::Monochromatic { fft: None }) {
         // its frequency panels accept on the value alone too
         optics::Settings { spectral_tolerance: Some(tight), frequency_tolerance: Some(tight), ..settings }
     } else {
@@ -609,7 +609,13 @@ pub(crate) fn evaluate_field_with_lanes(
                 // a band's FFT grids, the overlap and exact 1-D engines; or a line's grids
                 // (docs/physics.md, "Gradients: 2-D pupils under a line")
                 let found = match poly.mean_mtf_over_azimuth_and_gradient(along_field, grid) {
-                    Ok(None) => poly.line_mean_mtf_over_azimuth_and_gradient(along_field, grid, None),
+                    Ok(None) => match poly.line_mean_mtf_over_azimuth_and_gradient(along_field, grid, None) {
+                        // a line's several orders off axis, each turned by its own lateral colour
+                        Ok(None) => Ok(poly
+                            .line_field_lanes_over_azimuth(along_field, grid, None)
+                            .map(|g| (poly.mean_mtf_over_azimuth(along_field, None), g))),
+                        other => other,
+                    },
                     other => other,
                 };
                 match found {
@@ -618,7 +624,10 @@ pub(crate) fn evaluate_field_with_lanes(
                             let refined =
                                 Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, tighter)
                                     .ok()?;
-                            refined.mean_mtf_over_azimuth_and_gradient(along_field, lanes).ok().flatten().map(|r| r.1)
+                            match refined.mean_mtf_over_azimuth_and_gradient(along_field, lanes) {
+                                Ok(Some(r)) => Some(r.1),
+                                _ => refined.line_field_lanes_over_azimuth(along_field, lanes, None),
+                            }
                         });
                         grid_gradient = GridGradient::Computed(gradient);
                         a = Some(mean);
@@ -898,7 +907,13 @@ pub(crate) fn noise_weighted_lanes(
             None
         } else {
             match poly.mean_mtf_over_azimuth_over_noise_and_gradient(along_field, grid, shape)? {
-                None => poly.line_mean_mtf_over_azimuth_and_gradient(along_field, grid, Some(shape))?,
+                None => match poly.line_mean_mtf_over_azimuth_and_gradient(along_field, grid, Some(shape))? {
+                    // a line's several orders off axis, each turned by its own lateral colour
+                    None => poly
+                        .line_field_lanes_over_azimuth(along_field, grid, Some(shape))
+                        .map(|g| (poly.mean_mtf_over_azimuth(along_field, Some(shape)), g)),
+                    found => found,
+                },
                 found => found,
             }
         };
@@ -907,11 +922,10 @@ pub(crate) fn noise_weighted_lanes(
                 refine_field_lanes(&poly, settings, grid, &mut gradient, mean.mean, &|tighter, lanes| {
                     let refined =
                         Polychromatic::with_parts(lens, &detected, &parts, field, nyquist, pixel, tighter).ok()?;
-                    refined
-                        .mean_mtf_over_azimuth_over_noise_and_gradient(along_field, lanes, shape)
-                        .ok()
-                        .flatten()
-                        .map(|r| r.1)
+                    match refined.mean_mtf_over_azimuth_over_noise_and_gradient(along_field, lanes, shape) {
+                        Ok(Some(r)) => Some(r.1),
+                        _ => refined.line_field_lanes_over_azimuth(along_field, lanes, Some(shape)),
+                    }
                 });
                 lanes.grid = GridGradient::Computed(gradient);
                 lanes.mean = mean.mean;

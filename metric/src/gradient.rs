@@ -2702,12 +2702,19 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>
     let detected = crate::evaluate::detected_spectrum(scene);
     // (the white ∂M̄ under a noise spectrum too; the weighted mean's lanes are
     // `noise_weight::aperture_over_noise`'s, on the same engine)
-    if field.is_on_axis() || detected.as_line().is_some() {
+    if field.is_on_axis() {
         return Ok(None);
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
     let orders = lens.orders(lambda, field);
     let circles = circular_defocus_orders(&orders);
+    // a line's several orders, each turned by its own lateral colour, on the line's exact 1-D
+    // engine: the same lanes on its nodes (docs/physics.md, "Gradients: the field point under a
+    // line"); one order is a phase of the whole OTF, taken elsewhere
+    let line = detected.as_line().is_some();
+    if line && !(circles && orders.len() >= 2) {
+        return Ok(None);
+    }
     // the full circle with Seidel terms: the overlap engine's mean over azimuth
     let seidel = !orders.is_empty() && orders.iter().all(overlap_pupil) && orders.iter().any(beyond_defocus);
     if !(circles || seidel) {
@@ -2727,7 +2734,9 @@ fn aperture_off_axis(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>
     // accepted weights (on the overlap engine the defocus lane on its own doubled spectral rule,
     // as on axis), and the by-parts edge averaged over the same azimuths
     let engine = poly.engine();
-    let taken = if seidel {
+    let taken = if line {
+        engine == (optics::Engine::Monochromatic { fft: None }) && poly.direction_dependent()
+    } else if seidel {
         matches!(engine, optics::Engine::Overlap { .. })
     } else {
         engine == optics::Engine::Exact1d && !poly.has_pupil_grid() && poly.direction_dependent()
@@ -3206,7 +3215,8 @@ fn defocus_lane_by_own_rule(
                 return Err(not_smooth(
                     "the F-number and focal-length gradient is computed for a lens whose every order is the full \
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
-                     harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine), or \
+                     harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine, \
+                     under a band or, on several orders, a line), or \
                      with Seidel or Zernike terms under a band (on the overlap engine), or on axis under a \
                      band on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, Zernike \
                      terms); this scene's lens has other pupils or aberrations, or is off axis, under a line or a \

@@ -960,8 +960,10 @@ impl Polychromatic<'_> {
     /// `None` where the engine is not the overlap engine or the exact 1-D engine, or gives no
     /// lane.
     pub fn mean_mtf_over_azimuth_and_aperture_lanes(&self, first: f64) -> Option<(DefocusDerivative, f64)> {
-        if !matches!(self.engine.engine(), Engine::Overlap { .. } | Engine::Exact1d)
-            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+        if !matches!(
+            self.engine.engine(),
+            Engine::Overlap { .. } | Engine::Exact1d | Engine::Monochromatic { fft: None }
+        ) || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
         {
             return None;
         }
@@ -1105,6 +1107,37 @@ impl Polychromatic<'_> {
         Some([mean, defocus, pixel])
     }
 
+    /// A line's field angles off axis where its several orders are exact 1-D circles each turned
+    /// by its own lateral colour (the harmonic lens's orders, the interleaved lens's channels):
+    /// the derivative of the mean over azimuth (white, or of `P |O| / n` under `noise`) along
+    /// each of `directions` ([`WavefrontDirection::FieldAngle`]: each order's value times
+    /// `−2πi ν u·∂Δ_o/∂θ`) on the line engine's own nodes and the value's frequency rule, its
+    /// accepted weights (docs/physics.md, "Gradients: the field point under a line"). The rule
+    /// over azimuth is the value's nested trapezoid rule from `first`, doubled until the lanes
+    /// move by at most [`AZIMUTH_SHARE`] of the frequency rule's tolerance relative to their own
+    /// size, not the mean's: the orders' shifts differ, so `|O|` has structure in azimuth on the
+    /// scale of `1/(2πν |Δ_o − Δ_o′|)`, and a gradient small against the mean (a line near the
+    /// harmonic lens's design wavelength, its other orders' weights small) would be left to the
+    /// mean's error. `None` where the engine is not the line's exact one, the OTF does not depend
+    /// on direction, or some direction is not a field angle.
+    pub fn line_field_lanes_over_azimuth(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
+    ) -> Option<Vec<f64>> {
+        if self.engine.engine() != (Engine::Monochromatic { fft: None })
+            || !matches!(self.engine.frequency_rule(), FrequencyRule::Adaptive { .. })
+            || !self.direction_dependent()
+            || directions.is_empty()
+            || !directions.iter().all(|d| matches!(d, WavefrontDirection::FieldAngle(_)))
+        {
+            return None;
+        }
+        let (average, _) = self.azimuth_rule_lanes(first, directions, noise, true)?;
+        Some(average[1..=directions.len()].to_vec())
+    }
+
     /// `[M̄, lanes…, P_ν]` averaged over azimuth from `first`: along each azimuth the value's
     /// adaptive rule (of `P |O|`, or `P |O|/n` with a noise spectrum), the lanes along
     /// `directions` and then `|O|` recorded at each frequency read and integrated with the
@@ -1117,6 +1150,19 @@ impl Polychromatic<'_> {
         first: f64,
         directions: &[WavefrontDirection],
         noise: Option<&NoiseShape>,
+    ) -> Option<(Vec<f64>, Work)> {
+        self.azimuth_rule_lanes(first, directions, noise, false)
+    }
+
+    /// [`azimuth_refined_lanes`](Self::azimuth_refined_lanes); with `own`, the rule over azimuth
+    /// doubles until the lanes move by at most [`AZIMUTH_SHARE`] of the frequency rule's
+    /// tolerance relative to the lanes' own size (the mean's left out).
+    fn azimuth_rule_lanes(
+        &self,
+        first: f64,
+        directions: &[WavefrontDirection],
+        noise: Option<&NoiseShape>,
+        own: bool,
     ) -> Option<(Vec<f64>, Work)> {
         let lanes = directions.len();
         let along = |azimuth: f64| -> Option<(Vec<f64>, Work)> {
@@ -1168,13 +1214,24 @@ impl Polychromatic<'_> {
                 work = add(work, w);
             }
             count *= 2;
+            let before: Vec<f64> = average[1..=lanes].to_vec();
             let mut change = 0.0f64;
             for (a, add) in average.iter_mut().zip(added) {
                 let refined = 0.5 * *a + add / count as f64;
                 change = change.max((refined - *a).abs());
                 *a = refined;
             }
-            let size = average[0].abs().max(average[1..=lanes].iter().map(|g| g * g).sum::<f64>().sqrt());
+            let norm = average[1..=lanes].iter().map(|g| g * g).sum::<f64>().sqrt();
+            if own {
+                // the lanes alone (the pixel MTF's term and the mean not asked), against their
+                // own size; lanes 0 by symmetry stop at the first doubling that leaves them so
+                let change = (0..lanes).map(|i| (average[i + 1] - before[i]).abs()).fold(0.0, f64::max);
+                if change <= AZIMUTH_SHARE * self.asked_tolerance * norm {
+                    break;
+                }
+                continue;
+            }
+            let size = average[0].abs().max(norm);
             if change <= AZIMUTH_SHARE * self.tolerance() * size {
                 break;
             }

@@ -31,6 +31,22 @@ impl OtfEngine for Line<'_> {
         self.scene.f_number
     }
 
+    /// On the exact 1-D orders, as the exact engine's over a band: the largest `2π ν |∂Δ_o/∂θ|`
+    /// over the line's orders (far orders included whatever their weight) and the frequencies
+    /// read; `None` on the FFT path.
+    fn field_lane_bound(&self) -> Option<f64> {
+        if self.fft.is_some() {
+            return None;
+        }
+        let top = self.scene.max_frequency.min(self.max_cutoff());
+        let mut largest = 0.0_f64;
+        for node in &self.nodes.nodes {
+            let [rx, ry] = node.shift_rate?;
+            largest = largest.max(rx.abs()).max(ry.abs());
+        }
+        Some(2.0 * std::f64::consts::PI * top * largest)
+    }
+
     fn otf(&self, frequency: f64) -> f64 {
         if self.fft.is_some() {
             return self.otf_along(frequency, 0.0).re;
@@ -120,7 +136,10 @@ impl OtfEngine for Line<'_> {
         let carried = |d: &WavefrontDirection| {
             matches!(
                 d,
-                WavefrontDirection::DesignWavelength | WavefrontDirection::ImageShift | WavefrontDirection::Defocus
+                WavefrontDirection::DesignWavelength
+                    | WavefrontDirection::ImageShift
+                    | WavefrontDirection::Defocus
+                    | WavefrontDirection::FieldAngle(_)
             )
         };
         if self.fft.is_some() || !directions.iter().all(carried) {
