@@ -244,10 +244,15 @@ impl LensModel for AllChannels {
 /// wavelength) and each order's own weight `τ_j H_j` (its efficiency), each less `O` times its
 /// normalization's rate ([`optics::Polychromatic::mean_mtf_and_order_lanes`]); the same lanes
 /// [`channel_wavelength_gradient`] and [`channel_efficiency_gradient`] take one at a time
-/// (docs/physics.md, "Gradients: the multiplexed lens"). `evaluation`: the scene's, where the
-/// caller has it. `None` where that engine does not give them (off axis, a `[[fields]]` list,
-/// a noise spectrum, an engine other than the per-frequency product rule): the one-at-a-time
-/// functions take the keys then.
+/// (docs/physics.md, "Gradients: the multiplexed lens"). With `aperture`, after them the
+/// derivatives with respect to `ln F#` and then `ln f0` from the same OTFs: every channel's
+/// defocus `W020_o = (1 − λ/λ_o) f0/(8F#²)` moves with `K = f0/(8F#²)`, so the defocus lane
+/// `D_K` (the summed `τ_o w_o ∂H/∂w_o` beside each OTF value) and the pixel's `P_ν` give
+/// `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − P_ν − 2 D_K` and `∂M̄/∂ln f0 = D_K` as on the value's
+/// own rule (`defocus_on_value_rule`), `N` and the stray light `∝ 1/F#²`. `evaluation`: the
+/// scene's, where the caller has it. `None` where that engine does not give them (off axis, a
+/// `[[fields]]` list, a noise spectrum, an engine other than the per-frequency product rule):
+/// the one-at-a-time functions and the scene's gradient take the keys then.
 ///
 /// # Errors
 /// The evaluation's, and [`Error::NotDifferentiable`] where the pixel saturates or there is no
@@ -256,9 +261,10 @@ pub fn channel_gradients(
     scene: &Scene,
     channels: &[f64],
     wanted: &[(usize, bool)],
+    aperture: bool,
     evaluation: Option<crate::Evaluation>,
 ) -> Result<Option<Gradient>, Error> {
-    if wanted.is_empty()
+    if (wanted.is_empty() && !aperture)
         || wanted.iter().any(|&(j, _)| j >= channels.len())
         || !scene.fields().is_empty()
         || !scene.field().is_on_axis()
@@ -273,12 +279,23 @@ pub fn channel_gradients(
         return Ok(None);
     }
     let n = channels.len();
-    let Some((lanes, rates)) = super::on_value_engine(&seen, &detected, seen.options().settings(), |poly| {
-        let (_, lanes, _) = poly.mean_mtf_and_order_lanes(n)?;
-        // ∂ln N/∂ln η_j = ∫ρ τ_j / ∫ρ Σ τ_o on the normalization's nodes
-        let rates = poly.order_signal_shares(n)?;
-        Some((lanes, rates))
-    }) else {
+    let camera = seen.camera();
+    let pixel = camera.pixel_mtf().then_some(camera.pixel_pitch());
+    let Some((lanes, rates, d_aperture)) =
+        super::on_value_engine(&seen, &detected, seen.options().settings(), |poly| {
+            let (mean, lanes, _) = poly.mean_mtf_and_order_lanes(n)?;
+            // ∂ln N/∂ln η_j = ∫ρ τ_j / ∫ρ Σ τ_o on the normalization's nodes
+            let rates = poly.order_signal_shares(n)?;
+            // the F-number's and focal length's lanes from the same OTFs (`defocus_on_value_rule`'s
+            // forms, by parts in ν): the end term this engine's own
+            let (d_k, pixel_slope) = (lanes[2 * n], lanes[2 * n + 1]);
+            let d_aperture = aperture.then(|| {
+                let edge = crate::evaluate::nyquist_edge(poly, camera.nyquist(), pixel);
+                (edge - mean - pixel_slope - 2.0 * d_k, d_k)
+            });
+            Some((lanes, rates, d_aperture))
+        })
+    else {
         return Ok(None);
     };
     let e = match evaluation {
@@ -297,6 +314,11 @@ pub fn channel_gradients(
             false => (lanes[n + j], rates[j]),
         };
         chain.push(&mut out, rate, d_mtf, d_mtf);
+    }
+    if let Some((d_f_number, d_focal_length)) = d_aperture {
+        // N and N_T ∝ NA² = 1/(4F#²): ∂ln/∂ln F# = −2 for both, so the stray light N_T − N too
+        chain.push_moves(&mut out, -2.0, -2.0, d_f_number);
+        chain.push_moves(&mut out, 0.0, 0.0, d_focal_length);
     }
     Ok(Some(out))
 }
@@ -412,6 +434,8 @@ struct SignalChain<'a> {
     partials: noise::SnrPartials,
     /// Whether the stray light `N_T − N` is in the budget (moving by `−∂N`, T held).
     stray: bool,
+    /// The stray light `N_T − N` in the budget (0 without it).
+    background: f64,
 }
 
 impl<'a> SignalChain<'a> {
@@ -432,7 +456,23 @@ impl<'a> SignalChain<'a> {
             }));
         };
         let stray = matches!(scene.options().glare, crate::GlareMode::Included) && background > 0.0;
-        Ok(SignalChain { scene, partials, stray })
+        Ok(SignalChain { scene, partials, stray, background })
+    }
+
+    /// One key's derivatives appended to `out` where N moves at the relative rate `rate` and the
+    /// stray light `N_T − N` at its own `stray_rate` (the aperture's keys: N_T and N alike), the
+    /// mean MTF by `d_mtf` (white: no noise spectrum); `∂ASNR = ∂SNR0 G + SNR0 ∂G`.
+    fn push_moves(&self, out: &mut Gradient, rate: f64, stray_rate: f64, d_mtf: f64) {
+        let e = &out.evaluation;
+        let d_n = e.photoelectrons * rate;
+        let d_b = if self.stray { self.background * stray_rate } else { 0.0 };
+        let d_snr0 = self.partials.signal * d_n + self.partials.variance * d_b;
+        let d_g = super::d_g_from_mean_mtf(self.scene, e, d_mtf);
+        let d_asnr = d_snr0 * (e.asnr / e.snr0) + e.snr0 * d_g;
+        out.asnr.push(d_asnr);
+        out.mean_mtf.push(d_mtf);
+        out.snr0.push(d_snr0);
+        out.photoelectrons.push(d_n);
     }
 
     /// One key's derivatives appended to `out` (whose evaluation the budget is): N moving at the

@@ -482,7 +482,9 @@ impl Polychromatic<'_> {
     /// rate subtracted): the lanes of every channel of an interleaved multiplexed lens at once
     /// (docs/physics.md, "Gradients: the multiplexed lens"), each `∂O` beside its OTF value on
     /// the spectral level the value accepts and integrated with the frequency rule's accepted
-    /// weights (`P` included). `None` where the engine gives no such lanes (every engine but the
+    /// weights (`P` included); then, from the same OTFs, the F-number's and focal length's two
+    /// numbers `D_K` and `P_ν` ([`DefocusDerivative::defocus`] and
+    /// [`DefocusDerivative::pixel_slope`]: `2 × orders + 2` numbers in all). `None` where the engine gives no such lanes (every engine but the
     /// per-frequency product rule), off axis where the field moves the OTF, or where the OTF
     /// depends on direction.
     pub fn mean_mtf_and_order_lanes(&self, orders: usize) -> Option<(f64, Vec<f64>, Work)> {
@@ -493,11 +495,16 @@ impl Polychromatic<'_> {
         {
             return None;
         }
-        let lanes = 2 * orders;
+        // the engine's 2n + 1, then P_ν's integrand ν P′/P |O| (the accepted weights carry P sign(O))
+        let lanes = 2 * orders + 2;
         *self.gradient.borrow_mut() = Some(Recording { lanes, ..Recording::default() });
         let (mean, work) = self.mean_of(&|nu| {
             let mut derivatives = vec![0.0; lanes];
-            let value = if nu == 0.0 { Some(1.0) } else { self.engine.otf_and_order_lanes(nu, &mut derivatives) };
+            let value = match nu {
+                0.0 => Some(1.0),
+                _ => self.engine.otf_and_order_lanes(nu, &mut derivatives[..lanes - 1]),
+            };
+            derivatives[lanes - 1] = value.unwrap_or(0.0) * self.pixel_log_slope(nu);
             self.record(nu, value, &derivatives)
         });
         let recording = self.gradient.borrow_mut().take()?;

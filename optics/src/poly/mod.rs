@@ -394,11 +394,12 @@ trait OtfEngine: std::fmt::Debug {
     fn otf_and_design_lane(&self, _frequency: f64) -> Option<(f64, f64)> {
         None
     }
-    /// The signed OTF at `frequency` as [`otf`](Self::otf) and, into `lanes` (`2n` for `n`
+    /// The signed OTF at `frequency` as [`otf`](Self::otf) and, into `lanes` (`2n + 1` for `n`
     /// orders at every wavelength), the design wavelength's lane of each order alone (order
     /// `o`'s rates from `LensModel::design_wavelength_rates`, the others' held), then each
-    /// order's efficiency lane (`δτ_o = τ_o`), each less `O` times its normalization's rate, on
-    /// the value's own rule (docs/physics.md, "Gradients: the multiplexed lens"); `None` where
+    /// order's efficiency lane (`δτ_o = τ_o`), each less `O` times its normalization's rate,
+    /// then the defocus lane `∂O/∂ln K` ([`otf_and_defocus_derivative`](Self::otf_and_defocus_derivative)'s),
+    /// on the value's own rule (docs/physics.md, "Gradients: the multiplexed lens"); `None` where
     /// the engine does not give them (the default).
     fn otf_and_order_lanes(&self, _frequency: f64, _lanes: &mut [f64]) -> Option<f64> {
         None

@@ -168,9 +168,11 @@ enum Lanes<'p> {
     /// two lanes on one climb: [`Lanes::Design`]'s, then [`Lanes::Defocus`]'s (the design
     /// wavelength and the F-number's defocus of a lens with a design band from the same OTFs)
     DesignAndDefocus,
-    /// `2n` lanes for `n` orders at every point: each order's own share of [`Lanes::Design`]'s
-    /// sum, `τ_o ∂H/∂w δw_o + δτ_o H_o`, then each order's `τ_o H_o` (its efficiency moving by
-    /// itself; docs/physics.md, "Gradients: the multiplexed lens")
+    /// `2n + 1` lanes for `n` orders at every point: each order's own share of
+    /// [`Lanes::Design`]'s sum, `τ_o ∂H/∂w δw_o + δτ_o H_o`, then each order's `τ_o H_o` (its
+    /// efficiency moving by itself), then [`Lanes::Defocus`]'s `Σ_o τ_o w_o ∂H/∂w_o` from the
+    /// same `w ∂H/∂w` (the F-number and focal length; docs/physics.md, "Gradients: the
+    /// multiplexed lens")
     Orders(usize),
 }
 
@@ -200,7 +202,7 @@ impl Lanes<'_> {
             Lanes::Rate(_) => 1,
             Lanes::Design => 1,
             Lanes::DesignAndDefocus => 2,
-            Lanes::Orders(n) => 2 * n,
+            Lanes::Orders(n) => 2 * n + 1,
         }
     }
 }
@@ -387,13 +389,15 @@ impl Levelled {
                 let range = fresh.range(point);
                 let orders = &fresh.orders[range.clone()];
                 values[k] = orders.iter().zip(&otfs[range.clone()]).map(|(o, v)| o.efficiency * v).sum();
-                let slot = &mut derivatives[k * 2 * n..(k + 1) * 2 * n];
+                let slot = &mut derivatives[k * (2 * n + 1)..(k + 1) * (2 * n + 1)];
                 slot.iter_mut().for_each(|d| *d = 0.0);
                 for (o, i) in range.enumerate().take(n) {
                     let (order, d, h, [d_w, d_tau]) = (&fresh.orders[i], one[i], otfs[i], rates[i]);
                     let slope = if order.waves == 0.0 { 0.0 } else { d / order.waves };
                     slot[o] = order.efficiency * slope * d_w + d_tau * h;
                     slot[n + o] = order.efficiency * h;
+                    // the defocus lane, summed as `Lanes::Defocus` sums it
+                    slot[2 * n] += order.efficiency * d;
                 }
             }
             return;
@@ -873,9 +877,11 @@ impl<'a> PerFrequency<'a> {
                         g[0] = (g[0] - value * d_total) / self.nodes.total_weight;
                         g[1] /= self.nodes.total_weight;
                     }
+                    // each order's lanes less O times its normalization's rate; the defocus
+                    // lane (last) moves no efficiency
                     Lanes::Orders(n) => {
                         let totals = self.order_totals(n)?;
-                        for (g, d) in g.iter_mut().zip(&totals) {
+                        for (g, d) in g.iter_mut().zip(totals.iter().chain([&0.0])) {
                             *g = (*g - value * d) / self.nodes.total_weight;
                         }
                     }
@@ -1021,12 +1027,13 @@ impl OtfEngine for PerFrequency<'_> {
     }
 
     /// The OTF at `frequency` as [`otf`](OtfEngine::otf), bit for bit, and each order's design
-    /// lane and efficiency lane ([`Lanes::Orders`]) integrated with the weights of the level the
-    /// value accepts, each less `O` times its normalization's rate
+    /// lane and efficiency lane, then the defocus lane `∂O/∂ln K` ([`Lanes::Orders`]),
+    /// integrated with the weights of the level the value accepts, each order's less `O` times
+    /// its normalization's rate
     /// ([`order_totals`](PerFrequency::order_totals)); `None` where an order is a radial pupil,
     /// the lens gives no rates or some wavelength has another count of orders.
     fn otf_and_order_lanes(&self, frequency: f64, lanes: &mut [f64]) -> Option<f64> {
-        if lanes.is_empty() || !lanes.len().is_multiple_of(2) {
+        if lanes.len() < 3 || lanes.len().is_multiple_of(2) {
             return None;
         }
         let n = lanes.len() / 2;

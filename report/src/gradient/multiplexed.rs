@@ -49,26 +49,45 @@ pub(super) fn with_channels(
         let entry = |list: &str| super::entry_of(key, list).and_then(Result::ok);
         entry(CHANNELS).map(|j| (j, true)).or_else(|| entry(EFFICIENCIES).map(|j| (j, false)))
     };
-    let others: Vec<String> = expanded.iter().filter(|(k, _)| channel(k).is_none()).map(|(k, _)| k.clone()).collect();
-    let mut rest = match others.is_empty() {
+    // the F-number, focal length and aperture diameter: on axis on the channels' pass (their
+    // chains on ln F# and ln f0 alone), else as the other keys
+    let aperture_chain = |key: &str, value: f64| match chain(key, value, "multiplexed", &table) {
+        Some(Ok(c)) if c.iter().all(|(p, _)| matches!(p, Parameter::FNumber | Parameter::FocalLength)) => Some(c),
+        _ => None,
+    };
+    let others = |aperture: bool| -> Vec<String> {
+        expanded
+            .iter()
+            .filter(|(k, v)| channel(k).is_none() && aperture_chain(k, *v).is_some() == aperture)
+            .map(|(k, _)| k.clone())
+            .collect()
+    };
+    let (plain, aperture) = (others(false), others(true));
+    let rest = match plain.is_empty() {
         true => None,
-        false => Some(super::gradient_and_evaluation(source, overrides, &others)?),
+        false => Some(super::gradient_and_evaluation(source, overrides, &plain)?),
     };
     let mut evaluation = rest.as_ref().map(|(_, e)| e.clone());
-    // every channel key in one pass on the value's engine where it gives the lanes (on axis);
-    // else each by its own lane below
+    // every channel key (and the aperture's) in one pass on the value's engine where it gives the
+    // lanes (on axis); else each channel key by its own lane below, the aperture's as the others
     let nm = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
     let channels: Vec<f64> = lookup(&table, CHANNELS)
         .and_then(toml::Value::as_array)
         .map_or_else(Vec::new, |list| list.iter().filter_map(nm).map(|l| l * 1e-9).collect());
     let wanted: Vec<(usize, bool)> = expanded.iter().filter_map(|(k, _)| channel(k)).collect();
-    let together = metric::channel_gradients(&built, &channels, &wanted, evaluation.clone()).map_err(|e| {
-        let key = expanded.iter().find(|(k, _)| channel(k).is_some()).map_or("", |(k, _)| k.as_str());
-        anyhow!("--wrt {key}: {}: {e}", source.label())
-    })?;
+    let together = metric::channel_gradients(&built, &channels, &wanted, !aperture.is_empty(), evaluation.clone())
+        .map_err(|e| {
+            let key = expanded.iter().find(|(k, _)| channel(k).is_some()).map_or("", |(k, _)| k.as_str());
+            anyhow!("--wrt {key}: {}: {e}", source.label())
+        })?;
+    let aside = match (&together, aperture.is_empty()) {
+        (None, false) => Some(super::gradient_and_evaluation(source, overrides, &aperture)?),
+        _ => None,
+    };
+    evaluation = evaluation.or_else(|| aside.as_ref().map(|(_, e)| e.clone()));
     let mut at_together = 0;
     let (mut d_asnr, mut d_mean_mtf, mut d_snr0, mut d_photoelectrons) = (vec![], vec![], vec![], vec![]);
-    let mut at_rest = 0;
+    let (mut at_rest, mut at_aside) = (0, 0);
     for (key, value) in &expanded {
         if let (Some(_), Some(g)) = (channel(key), together.as_ref()) {
             // ∂/∂ln λ_j per nm, ∂/∂ln η_j per unit η_j
@@ -93,13 +112,24 @@ pub(super) fn with_channels(
             d_snr0.push(g.snr0[0] / value);
             d_photoelectrons.push(g.photoelectrons[0] / value);
             evaluation.get_or_insert(g.evaluation);
+        } else if let (Some(c), Some(g)) = (aperture_chain(key, *value), together.as_ref()) {
+            // ∂/∂key = Σ c ∂/∂p over the key's chain, ln F# and ln f0 after the channels' lanes
+            let at = |p: &Parameter| wanted.len() + usize::from(*p == Parameter::FocalLength);
+            let per_key = |d: &[f64]| c.iter().map(|(p, k)| k * d[at(p)]).sum::<f64>() + 0.0;
+            d_asnr.push(per_key(&g.asnr));
+            d_mean_mtf.push(per_key(&g.mean_mtf));
+            d_snr0.push(per_key(&g.snr0));
+            d_photoelectrons.push(per_key(&g.photoelectrons));
         } else {
-            let (g, _) = rest.as_mut().expect("the other keys' gradient");
-            d_asnr.push(g.d_asnr[at_rest]);
-            d_mean_mtf.push(g.d_mean_mtf[at_rest]);
-            d_snr0.push(g.d_snr0[at_rest]);
-            d_photoelectrons.push(g.d_photoelectrons[at_rest]);
-            at_rest += 1;
+            let (g, at) = match aperture_chain(key, *value) {
+                Some(_) => (&aside.as_ref().expect("the aperture keys' gradient").0, &mut at_aside),
+                None => (&rest.as_ref().expect("the other keys' gradient").0, &mut at_rest),
+            };
+            d_asnr.push(g.d_asnr[*at]);
+            d_mean_mtf.push(g.d_mean_mtf[*at]);
+            d_snr0.push(g.d_snr0[*at]);
+            d_photoelectrons.push(g.d_photoelectrons[*at]);
+            *at += 1;
         }
     }
     let e = evaluation.expect("at least one key");
@@ -454,7 +484,7 @@ mod tests {
         let built = scene::build_from(&source, &set).unwrap();
         let channels = [750e-9, 800e-9, 850e-9];
         let wanted = [(0, true), (1, true), (2, true), (0, false), (1, false), (2, false)];
-        let together = metric::channel_gradients(&built, &channels, &wanted, None).unwrap().expect("on axis");
+        let together = metric::channel_gradients(&built, &channels, &wanted, false, None).unwrap().expect("on axis");
         let each: Vec<metric::Gradient> = wanted
             .iter()
             .map(|&(j, wavelength)| match wavelength {
@@ -475,7 +505,28 @@ mod tests {
             }
         }
         let off = scene::build_from(&source, &owned(&["field.x_deg=3"])).unwrap();
-        assert!(metric::channel_gradients(&off, &channels, &wanted, None).unwrap().is_none());
+        assert!(metric::channel_gradients(&off, &channels, &wanted, false, None).unwrap().is_none());
+    }
+
+    /// The interleaved lens's F-number and focal length asked with a channel's wavelength on axis
+    /// ride the channels' pass (`metric::channel_gradients` with the aperture: the defocus lane
+    /// and `P_ν` beside each order's lanes, `∂M̄/∂ln F# = P(ν_N)|O(ν_N)| − M̄ − P_ν − 2 D_K`,
+    /// `∂M̄/∂ln f0 = D_K`): on a 10 nm band with the pixel MTF, the stray light and read noise,
+    /// against differences of evaluations at 1e-10, and the same as the scene's own gradient of
+    /// the two keys (their pass of their own, `defocus_on_value_rule`) within 1e-9 of the norm.
+    #[test]
+    fn interleaved_aperture_on_the_channels_pass_matches_central_differences() {
+        let source = multiplexed("interleaved");
+        let overrides =
+            ["spectrum.range_nm=10", "options.glare=\"included\"", "camera.read_noise_e=2", "camera.pixel_mtf=true"];
+        let keys = ["lens.focal_length_mm", "lens.channels_nm[1]", "lens.f_number"];
+        let g = check(&source, &overrides, &keys, 1e-6, REFERENCE_TOLERANCE, &step);
+        let alone = gradient(&source, &owned(&overrides), &owned(&["lens.focal_length_mm", "lens.f_number"])).unwrap();
+        let norm = alone.d_asnr.iter().map(|d| d * d).sum::<f64>().sqrt();
+        for (a, b) in [g.d_asnr[0], g.d_asnr[2]].iter().zip(&alone.d_asnr) {
+            assert!((a - b).abs() <= 1e-9 * norm, "{a:e} vs {b:e}");
+        }
+        assert!(g.d_mean_mtf[0] != 0.0 && g.d_snr0[2] < 0.0, "{g:?}");
     }
 
     /// The segmented lens (concentric zones, one composite pupil on the FFT path) on a 4 nm band:
