@@ -9,7 +9,11 @@ use super::{Error, Scene, with_value_engine};
 
 /// `f` on the value's engine where it is a line's FFT grids on axis, every order the full circle,
 /// an aperture or a radial pupil without an image shift, and a lens that gives no aperture
-/// directions of its own (a phase lens's ride on the radial engine); `Ok(None)` elsewhere.
+/// directions of its own (a phase lens's ride on the radial engine) and gives its orders' rates
+/// in λ ([`wavelength_rates`]: the chromatic, refractive, harmonic and interleaved lenses, whose
+/// defocus is `K = f0/(8F#²)` times a function of λ; not a dispersion-engineered lens, whose
+/// aperture keys move its group delay too, "Gradients: the dispersion-engineered lens");
+/// `Ok(None)` elsewhere.
 fn with_line_grids<T>(
     scene: &Scene,
     f: impl FnOnce(&optics::Polychromatic<'_>) -> Result<Option<T>, Error>,
@@ -18,7 +22,7 @@ fn with_line_grids<T>(
     let Some(c) = detected.line().map(|l| l.center()) else { return Ok(None) };
     let lens = scene.lens();
     let field = scene.field();
-    if !field.is_on_axis() || lens.aperture_directions(c).is_some() {
+    if !field.is_on_axis() || lens.aperture_directions(c).is_some() || wavelength_rates(scene, c).is_none() {
         return Ok(None);
     }
     let orders = lens.orders(c, field);
@@ -136,6 +140,12 @@ impl optics::LensModel for LineRates {
     }
     fn design_wavelength_rates(&self, _wavelength_m: f64, _field: optics::Field) -> Option<Vec<[f64; 2]>> {
         Some(self.rates.clone())
+    }
+    fn defocus_rates(&self, wavelength_m: f64, field: optics::Field) -> Option<optics::DefocusRates> {
+        self.inner.defocus_rates(wavelength_m, field)
+    }
+    fn order_wavelength_rates(&self, wavelength_m: f64, field: optics::Field) -> Option<optics::OrderWavelengthRates> {
+        self.inner.order_wavelength_rates(wavelength_m, field)
     }
     fn describe(&self) -> String {
         self.inner.describe()
