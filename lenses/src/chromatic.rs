@@ -299,18 +299,16 @@ impl LensModel for ChromaticMetalens {
 
     /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂λ = −f0/(8F#² λ0)` at every field point and
     /// through an iris (the order's defocus is the pupil's; an iris keeps a disc of it and its
-    /// area fraction, constant in λ); τ1 and T constant curves. `None` with Seidel terms or an
-    /// efficiency or transmission table (whose slope has kinks at its rows).
+    /// area fraction, constant in λ); τ1 and T constant curves. The Seidel terms are given in
+    /// metres and do not move with λ (the callers that follow the defocus alone check the order
+    /// is defocus only). `None` with an efficiency or transmission table (whose slope has kinks
+    /// at its rows).
     fn defocus_rates(&self, _wavelength_m: f64, _field: Field) -> Option<DefocusRates> {
         let (Curve::Constant(_), Curve::Constant(_)) = (&self.efficiency, &self.transmission) else {
             return None;
         };
         let k = self.focal_length / (8.0 * self.f_number * self.f_number);
-        (self.seidel == [0.0; 4]).then_some(DefocusRates {
-            defocus: -k / self.design_wavelength,
-            ln_efficiency: 0.0,
-            ln_transmission: 0.0,
-        })
+        Some(DefocusRates { defocus: -k / self.design_wavelength, ln_efficiency: 0.0, ln_transmission: 0.0 })
     }
 
     /// `W020 = (1 − λ/λ0) f0/(8F#²)` moves as `∂W020/∂ln λ0 = (λ/λ0) f0/(8F#²)`; τ1(λ) and T(λ)

@@ -648,6 +648,19 @@ impl<L: LensModel> LensModel for WithZernike<L> {
         self.inner.design_wavelength_rates(wavelength_m, field)
     }
 
+    /// The inner lens's rates in λ: the terms are given in metres, fixed on the pupil, so a
+    /// wavelength moves each order's own defocus and efficiency alone (a line's wavelength on
+    /// the FFT grids, docs/physics.md, "Gradients: the F-number, the focal length and the
+    /// wavelengths under a line on the grids").
+    fn defocus_rates(&self, wavelength_m: f64, field: Field) -> Option<optics::DefocusRates> {
+        self.inner.defocus_rates(wavelength_m, field)
+    }
+
+    /// As [`defocus_rates`](Self::defocus_rates), order for order.
+    fn order_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<optics::OrderWavelengthRates> {
+        self.inner.order_wavelength_rates(wavelength_m, field)
+    }
+
     fn describe(&self) -> String {
         let terms: Vec<String> = self
             .pupil

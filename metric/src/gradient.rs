@@ -20,6 +20,7 @@ use crate::{Error, GlareMode, MetricForm, Scene};
 mod achromat;
 mod library_fft;
 mod line_table;
+mod line_grids;
 mod map;
 mod multiplexed;
 mod noise_weight;
@@ -1925,6 +1926,10 @@ fn line_center_partials(
     {
         return Ok(found);
     }
+    // the line's orders on its FFT grids: an annulus, Seidel or Zernike terms (`line_grids`)
+    if let Some(found) = line_grids::line_center_on_grids(scene, c, d_ln_n)? {
+        return Ok(found);
+    }
     let family = lens.describe();
     let orders = lens.orders(c, field);
     let full = |o: &optics::Order| {
@@ -2649,6 +2654,10 @@ fn aperture_partials(
     if let Some(found) = aperture_on_grids(scene, e)? {
         return Ok(found);
     }
+    // a line's orders on its FFT grids (`line_grids`)
+    if let Some(found) = line_grids::aperture_on_line_grids(scene)? {
+        return Ok(found);
+    }
     aperture_partials_by_own_rule(scene, e, p)
 }
 
@@ -3218,8 +3227,8 @@ fn defocus_lane_by_own_rule(
                      harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine, \
                      under a band or, on several orders, a line), or \
                      with Seidel or Zernike terms under a band (on the overlap engine), or on axis under a \
-                     band on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, Zernike \
-                     terms); this scene's lens has other pupils or aberrations, or is off axis, under a line or a \
+                     band or a line on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, \
+                     Zernike terms); this scene's lens has other pupils or aberrations, or is off axis, or under a \
                      noise spectrum there"
                         .to_owned(),
                 ));
@@ -3293,6 +3302,9 @@ fn design_wavelength_partials(scene: &Scene, e: &Evaluation, p: Parameter) -> Re
         return Ok(found);
     }
     if let Some(found) = design_wavelength_on_overlap(scene, e, None) {
+        return Ok(found);
+    }
+    if let Some(found) = line_grids::design_wavelength_on_line_grids(scene, None)? {
         return Ok(found);
     }
     design_wavelength_by_own_rule(scene, e, p, None)
@@ -3398,6 +3410,9 @@ fn design_wavelength_over_noise(
         return Ok(d);
     }
     if let Some((_, d)) = design_wavelength_on_overlap(scene, e, Some(noise)) {
+        return Ok(d);
+    }
+    if let Some((_, d)) = line_grids::design_wavelength_on_line_grids(scene, Some(noise))? {
         return Ok(d);
     }
     design_wavelength_by_own_rule(scene, e, p, Some(noise)).map(|(_, d)| d)

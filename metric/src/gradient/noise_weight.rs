@@ -365,6 +365,14 @@ pub(super) fn line_center_over_noise(scene: &Scene, e: &Evaluation, base: Option
             ))),
         };
     }
+    // (one order with a defocus alone: Seidel or Zernike terms scale as 1/c in waves too)
+    if !orders[0].wavefront.is_defocus_only() || matches!(orders[0].pupil, optics::Pupil::Radial(_)) {
+        return Err(not_smooth(format!(
+            "spectrum.center_nm: {}: with camera.noise_spectrum a line's wavelength is followed for one order with a \
+             defocus alone; this scene's order has Seidel or Zernike terms",
+            lens.describe()
+        )));
+    }
     let rates = match lens.affine_defocus(field) {
         Some(a) => Some(a.w020_slope),
         None => lens.defocus_rates(c, field).map(|r| r.defocus),

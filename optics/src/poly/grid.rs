@@ -282,7 +282,7 @@ impl FftPath {
     /// `∂|O| = Re(O* ∂O)/|O|` (0 where `O = 0`): the discrete rule's exact derivative, where
     /// the by-parts identity `P(ν_N)|O(ν_N)| − M̄ − P_ν` is the continuous rule's
     /// (docs/physics.md, "Gradients: the multiplexed lens").
-    fn scale_over_azimuth(&self, scene: &Scene<'_>, nodes: &Nodes, first: f64, count: usize) -> f64 {
+    pub(super) fn scale_over_azimuth(&self, scene: &Scene<'_>, nodes: &Nodes, first: f64, count: usize) -> f64 {
         let lo = self.nodes.iter().map(|n| n.lambda).fold(f64::INFINITY, f64::min);
         let top = scene.max_frequency.min(1.0 / (lo * scene.f_number));
         let (panels, _) = fixed_rule(top, self.finest_cell(scene.f_number));

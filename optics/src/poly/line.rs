@@ -166,6 +166,16 @@ impl OtfEngine for Line<'_> {
         }
     }
 
+    /// On the line's FFT grids: the derivative of the mean over the `count` azimuths from
+    /// `first` with respect to `ln F#` at fixed pupils (each grid read at `s = νcF#` moving with
+    /// F#, the value's fixed rule in ν, azimuths, weights and pixel MTF: the discrete rule's
+    /// frequency-scale term, `FftPath::scale_over_azimuth` on the line's one level; no
+    /// Richardson level). `None` on the exact 1-D engine.
+    fn scale_over_azimuth(&self, first: f64, count: usize) -> Option<f64> {
+        let fft = self.fft.as_ref()?;
+        Some(fft.scale_over_azimuth(&self.scene, &self.nodes, first, count))
+    }
+
     fn wavefront_gradient_over_azimuth(
         &self,
         first: f64,
@@ -275,5 +285,18 @@ impl Polychromatic<'_> {
             Some(n) => self.engine.wavefront_gradient_over_azimuth_over_noise(first, mean.azimuths, directions, n)?,
         };
         Ok(gradient.map(|g| (mean, g)))
+    }
+
+    /// Under a line whose orders are on FFT grids: the derivative of
+    /// [`mean_mtf_over_azimuth`](Self::mean_mtf_over_azimuth) (white noise) with respect to
+    /// `ln F#` at fixed pupils, each grid read at `s = νcF#` moving with F# on the value's own
+    /// fixed rule, azimuths and pixel MTF (docs/physics.md, "Gradients: the F-number, the focal
+    /// length and the wavelengths under a line on the grids"). `None` on another engine.
+    pub fn line_mean_mtf_over_azimuth_scale_lane(&self, first: f64) -> Option<f64> {
+        if !matches!(self.engine(), Engine::Monochromatic { fft: Some(_) }) {
+            return None;
+        }
+        let mean = self.mean_mtf_over_azimuth(first, None);
+        self.engine.scale_over_azimuth(first, mean.azimuths)
     }
 }
