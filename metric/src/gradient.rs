@@ -803,8 +803,8 @@ fn point_gradient(
                                  lateral colour's shifts, on the FFT path as the lateral colour's shifts of sampled pupils (an annulus, \
                                  an iris with Seidel terms, Zernike terms) and the oblique wave's path of a radial pupil seen off axis (a \
                                  phase or library lens), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
-                                 this scene's OTF is on another engine or pupil (an iris, zones, a map or a table; Zernike \
-                                 terms on a shifted order or on axis; a line spectrum's grids)",
+                                 this scene's OTF is on another engine or pupil (an iris on the exact 1-D engine with \
+                                 another aberration, zones, a map or a table; a line spectrum's grids)",
                                     key = field_key(axis)
                                 ),
                             ));
