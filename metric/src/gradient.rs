@@ -805,10 +805,11 @@ fn point_gradient(
                                 format!(
                                     "{key}: the field angle's OTF lane is computed on the exact 1-D engine (off axis without \
                                  Seidel terms) and the overlap engine (Seidel or Zernike terms) as the \
-                                 lateral colour's shifts, on the FFT path as the oblique wave's path of a radial pupil seen off axis (a \
+                                 lateral colour's shifts, on the FFT path as the lateral colour's shifts of sampled pupils (an annulus, \
+                                 an iris with Seidel terms, Zernike terms) and the oblique wave's path of a radial pupil seen off axis (a \
                                  phase or library lens), and is 0 by symmetry on axis for a rotationally symmetric pupil; \
-                                 this scene's OTF is on another engine or pupil (an iris, zones, a map or a table; Zernike \
-                                 terms on a shifted order or on axis; a line spectrum's grids)",
+                                 this scene's OTF is on another engine or pupil (an iris on the exact 1-D engine with \
+                                 another aberration, zones, a map or a table; a line spectrum's grids)",
                                     key = field_key(axis)
                                 ),
                             ));
@@ -2676,15 +2677,29 @@ fn aperture_partials(
 /// `∂M̄/∂ln F# = D_s − 2 D_K` and `∂M̄/∂ln f0 = D_K`. `None` where the scene is not that (off
 /// axis, a line, another engine, a lens that gives its own aperture directions).
 fn aperture_on_grids(scene: &Scene, e: &Evaluation) -> Result<Option<(f64, f64)>, Error> {
+    let (first, directions) = grid_lanes(scene, optics::WavefrontDirection::Defocus);
     with_sampled_grids(scene, e, |poly| {
-        let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(0.0, &[optics::WavefrontDirection::Defocus])?
-        else {
+        let Some((_, lanes)) = poly.mean_mtf_over_azimuth_and_gradient(first, &directions)? else {
             return Ok(None);
         };
-        let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(0.0) else { return Ok(None) };
+        let Some(d_s) = poly.mean_mtf_over_azimuth_scale_lane(first) else { return Ok(None) };
         let d_k = lanes[0];
-        Ok(Some((d_s - 2.0 * d_k, d_k)))
+        // off axis the lateral colour's `Δ ∝ f0` (not F#): its lane in f0's
+        let d_shift = lanes.get(1).copied().unwrap_or(0.0);
+        Ok(Some((d_s - 2.0 * d_k, d_k + d_shift)))
     })
+}
+
+/// The first azimuth of the value's rule over azimuth (the field direction, `x` on axis) and the
+/// FFT grids' lanes to read beside `lane` ([`aperture_on_grids`], [`design_wavelength_on_grids`]):
+/// off axis the image shifts' scale ([`optics::WavefrontDirection::ImageShift`], the lateral
+/// colour `Δ ∝ f0` moving with f0 and, but for a shift common to every node, with λ0).
+pub(super) fn grid_lanes(scene: &Scene, lane: optics::WavefrontDirection) -> (f64, Vec<optics::WavefrontDirection>) {
+    let field = scene.field();
+    match field.is_on_axis() {
+        true => (0.0, vec![lane]),
+        false => (field.y_rad.atan2(field.x_rad), vec![lane, optics::WavefrontDirection::ImageShift]),
+    }
 }
 
 /// `(∂M̄/∂ln F#, ∂M̄/∂ln f0)` off axis for a lens whose every order is the full circular pupil
@@ -3226,10 +3241,10 @@ fn defocus_lane_by_own_rule(
                      circular pupil (or a circular iris) with a defocus alone (the chromatic, refractive and \
                      harmonic families, paraxial; off axis with their lateral colour on the exact 1-D engine, \
                      under a band or, on several orders, a line), or \
-                     with Seidel or Zernike terms under a band (on the overlap engine), or on axis under a \
-                     band or a line on the FFT grids of a sampled pupil (an annulus, Seidel terms through an iris, \
-                     Zernike terms); this scene's lens has other pupils or aberrations, or is off axis, or under a \
-                     noise spectrum there"
+                     with Seidel or Zernike terms under a band (on the overlap engine), or on the FFT grids of a \
+                     sampled pupil (an annulus, Seidel terms through an iris, Zernike terms) under a band (off axis \
+                     with the lateral colour's shifts) or on axis under a line; this scene's lens has other pupils \
+                     or aberrations, or is off axis, or under a noise spectrum there"
                         .to_owned(),
                 ));
             }
@@ -3338,19 +3353,23 @@ fn with_sampled_grids<T>(
 fn on_sampled_grids(scene: &Scene, e: &Evaluation, detected: &radiometry::Spectrum) -> bool {
     let lens = scene.lens();
     let field = scene.field();
-    if !field.is_on_axis() || detected.as_line().is_some() || !e.numerics.engine.starts_with("fft") {
+    if detected.as_line().is_some() || !e.numerics.engine.starts_with("fft") {
         return false;
     }
     let lambda = e.mean_wavelength_nm * 1e-9;
     if lens.aperture_directions(lambda).is_some() {
         return false;
     }
+    // off axis the image shifts are the lateral colour's (the lens gives their field rates: its
+    // orders change with the field through them alone)
+    if !field.is_on_axis() && lens.image_shift_field_rates(lambda, field).is_none() {
+        return false;
+    }
     let orders = lens.orders(lambda, field);
     !orders.is_empty()
-        && orders.iter().all(|o| {
-            o.wavefront.image_shift_m == [0.0, 0.0]
-                && matches!(o.pupil, optics::Pupil::Full | optics::Pupil::Aperture(_) | optics::Pupil::Radial(_))
-        })
+        && orders
+            .iter()
+            .all(|o| matches!(o.pupil, optics::Pupil::Full | optics::Pupil::Aperture(_) | optics::Pupil::Radial(_)))
 }
 
 /// `(∂ln N/∂ln λ0, ∂M̄/∂ln λ0)` on axis where the value's OTF is computed on the FFT grids of
@@ -3369,15 +3388,16 @@ fn design_wavelength_on_grids(
     e: &Evaluation,
     noise: Option<&optics::NoiseShape>,
 ) -> Result<Option<(f64, f64)>, Error> {
+    let (first, directions) = grid_lanes(scene, optics::WavefrontDirection::DesignWavelength);
     with_sampled_grids(scene, e, |poly| {
         let Some(rate) = poly.design_signal_rate() else { return Ok(None) };
-        let directions = [optics::WavefrontDirection::DesignWavelength];
         let found = match noise {
-            None => poly.mean_mtf_over_azimuth_and_gradient(0.0, &directions)?,
-            Some(n) => poly.mean_mtf_over_azimuth_over_noise_and_gradient(0.0, &directions, n)?,
+            None => poly.mean_mtf_over_azimuth_and_gradient(first, &directions)?,
+            Some(n) => poly.mean_mtf_over_azimuth_over_noise_and_gradient(first, &directions, n)?,
         };
         let Some((mean, lanes)) = found else { return Ok(None) };
-        Ok(Some((rate, lanes[0] - rate * mean.mean)))
+        let d_shift = lanes.get(1).copied().unwrap_or(0.0);
+        Ok(Some((rate, lanes[0] - rate * mean.mean + d_shift)))
     })
 }
 

@@ -204,8 +204,9 @@ pub(super) fn aperture_over_noise(
     if let Some((d_k, d_shift)) = aperture_lanes_over_noise(scene, shape_of(scene)) {
         return Ok((scale - 2.0 * d_k - d_shift, d_k + d_shift));
     }
-    if let Some(d_k) = defocus_lane_on_grids_over_noise(scene, e, shape_of(scene))? {
-        return Ok((scale - 2.0 * d_k, d_k));
+    // (off axis the parts' `ν ∂_ν` turns each node's lateral-colour phase too: `− D̃_Δ`, as above)
+    if let Some((d_k, d_shift)) = defocus_lane_on_grids_over_noise(scene, e, shape_of(scene))? {
+        return Ok((scale - 2.0 * d_k - d_shift, d_k + d_shift));
     }
     let d_k = weighted_defocus_lane(scene, e, p)?;
     Ok((scale - 2.0 * d_k, d_k))
@@ -251,21 +252,24 @@ fn aperture_lanes_over_noise(scene: &Scene, noise: Option<&optics::NoiseShape>) 
     })
 }
 
-/// `D̃_K`, the defocus lane with each frequency's weight divided by `n(ν)`, on the FFT grids of a
-/// sampled pupil on axis where the white lane is taken there (metric's `aperture_on_grids`: an
-/// annulus, Seidel terms through an iris, Zernike terms), on the value's noise-weighted rules
-/// over azimuth ([`optics::Polychromatic::mean_mtf_over_azimuth_over_noise_and_gradient`] along
+/// `(D̃_K, D̃_Δ)`, the defocus lane and (off axis, 0 on axis) the image shifts' scale lane with
+/// each frequency's weight divided by `n(ν)`, on the FFT grids of a sampled pupil where the
+/// white lanes are taken there (metric's `aperture_on_grids`: an annulus, Seidel terms through
+/// an iris, Zernike terms), on the value's noise-weighted rules over azimuth from the field
+/// direction ([`optics::Polychromatic::mean_mtf_over_azimuth_over_noise_and_gradient`] along
 /// [`optics::WavefrontDirection::Defocus`]; docs/physics.md, "Gradients under a noise spectrum",
 /// "Gradients: the F-number and the focal length on the FFT grids"). `None` elsewhere.
 fn defocus_lane_on_grids_over_noise(
     scene: &Scene,
     e: &Evaluation,
     noise: Option<&optics::NoiseShape>,
-) -> Result<Option<f64>, Error> {
+) -> Result<Option<(f64, f64)>, Error> {
     let Some(noise) = noise else { return Ok(None) };
+    let (first, directions) = super::grid_lanes(scene, optics::WavefrontDirection::Defocus);
     super::with_sampled_grids(scene, e, |poly| {
-        let directions = [optics::WavefrontDirection::Defocus];
-        Ok(poly.mean_mtf_over_azimuth_over_noise_and_gradient(0.0, &directions, noise)?.map(|(_, lanes)| lanes[0]))
+        Ok(poly
+            .mean_mtf_over_azimuth_over_noise_and_gradient(first, &directions, noise)?
+            .map(|(_, lanes)| (lanes[0], lanes.get(1).copied().unwrap_or(0.0))))
     })
 }
 

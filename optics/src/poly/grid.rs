@@ -1339,6 +1339,126 @@ impl FftPath {
         if (points * k_dirs * std::mem::size_of::<Complex64>()) as f64 > GRADIENT_MEMORY_BUDGET {
             return Ok(None);
         }
+        // the image shifts' lanes of orders through sampled pupils are each node's turned OTF
+        // times `−2πi ν u·δΔ` (no FFT: `shift_lane_sums`); the others move the pupil's field
+        let shifted = |d: &WavefrontDirection| {
+            matches!(d, WavefrontDirection::ImageShift | WavefrontDirection::FieldAngle(0 | 1))
+        };
+        let by_shift = directions.iter().any(shifted) && self.shifts_on_sampled_pupils(scene, nodes);
+        let (d_sum, d_total) = if by_shift {
+            let rest: Vec<WavefrontDirection> = directions.iter().copied().filter(|d| !shifted(d)).collect();
+            let moved: Vec<WavefrontDirection> = directions.iter().copied().filter(shifted).collect();
+            let (d_rest, total_rest) = match rest.is_empty() {
+                true => (Vec::new(), Vec::new()),
+                false => match self.lane_sums(scene, nodes, &frequencies, &azimuths, &rest)? {
+                    Some(found) => found,
+                    None => return Ok(None),
+                },
+            };
+            let Some(d_moved) = self.shift_lane_sums(scene, nodes, &frequencies, &azimuths, &moved) else {
+                return Ok(None);
+            };
+            // the two sets of lanes back in the order asked
+            let mut d_sum = Vec::with_capacity(points * k_dirs);
+            let mut d_total = Vec::with_capacity(k_dirs);
+            for point in 0..points {
+                let (mut r, mut m) = (point * rest.len(), point * moved.len());
+                for d in directions {
+                    if shifted(d) {
+                        d_sum.push(d_moved[m]);
+                        m += 1;
+                    } else {
+                        d_sum.push(d_rest[r]);
+                        r += 1;
+                    }
+                }
+            }
+            let mut r = 0;
+            for d in directions {
+                if shifted(d) {
+                    d_total.push(0.0);
+                } else {
+                    d_total.push(total_rest[r]);
+                    r += 1;
+                }
+            }
+            (d_sum, d_total)
+        } else {
+            match self.lane_sums(scene, nodes, &frequencies, &azimuths, directions)? {
+                Some(found) => found,
+                None => return Ok(None),
+            }
+        };
+        let pixel = |nu: f64| {
+            let p = scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
+            noise.map_or(p, |n| p / n.value(nu))
+        };
+        // the field angles turn the azimuths' start, the field direction φ_f = atan2(θy, θx):
+        // the rule's mean moves by ∂M̄/∂φ_f · ∂φ_f/∂θ_a (docs/physics.md, "Gradients: the field
+        // point"; 0 on an exact mean over azimuth, the rule's own error otherwise)
+        let field = scene.field;
+        let turns = !field.is_on_axis() && directions.iter().any(|d| matches!(d, WavefrontDirection::FieldAngle(_)));
+        let mut gradient = vec![0.0; k_dirs];
+        let mut d_first = 0.0;
+        // the level's mean `Σ w P |sum|` (the normalization's motion takes it)
+        let mut mean = 0.0;
+        for (a, &azimuth) in azimuths.iter().enumerate() {
+            for (f, &(nu, w)) in frequencies.iter().enumerate() {
+                let (o, turn) = if turns {
+                    self.sum_along_and_turn(scene, nu, azimuth)
+                } else {
+                    (self.sum_along(scene, nu, azimuth), Complex64::new(0.0, 0.0))
+                };
+                let modulus = o.norm();
+                if modulus == 0.0 {
+                    continue;
+                }
+                let base = (a * frequencies.len() + f) * k_dirs;
+                let scale = w * pixel(nu) / modulus;
+                for (g, d) in gradient.iter_mut().zip(&d_sum[base..base + k_dirs]) {
+                    *g += scale * (o.conj() * d).re;
+                }
+                d_first += scale * (o.conj() * turn).re;
+                mean += w * pixel(nu) * modulus;
+            }
+        }
+        if turns {
+            let r2 = field.x_rad * field.x_rad + field.y_rad * field.y_rad;
+            for (g, d) in gradient.iter_mut().zip(directions) {
+                match d {
+                    WavefrontDirection::FieldAngle(0) => *g += d_first * (-field.y_rad / r2),
+                    WavefrontDirection::FieldAngle(1) => *g += d_first * (field.x_rad / r2),
+                    _ => {}
+                }
+            }
+        }
+        // O = sum / total weight: Re(O* ∂O)/|O| = Re(sum* ∂sum)/(|sum| total)
+        let norm = nodes.total_weight * scene.max_frequency * count as f64;
+        gradient.iter_mut().for_each(|g| *g /= norm);
+        // an order field's efficiencies move the normalization Σ w τ_o: ∂O gains −O Σ w ∂τ_o/Σ w τ_o,
+        // so each mean's derivative −M̄ Σ w ∂τ_o/Σ w τ_o
+        for (g, d) in gradient.iter_mut().zip(&d_total) {
+            *g -= mean / norm * d / nodes.total_weight;
+        }
+        Ok(Some(gradient))
+    }
+
+    /// Each node's derivative grids along `directions` read at `frequencies` and `azimuths` as
+    /// the value reads its grid (`k_dirs` complex sums per point, azimuth-major) and each
+    /// direction's `Σ w ∂τ_o` (an order field's efficiencies: the normalization's motion), for
+    /// [`gradient_over_azimuth`](Self::gradient_over_azimuth). `None` where a node does not
+    /// carry a direction.
+    #[allow(clippy::type_complexity)]
+    fn lane_sums(
+        &self,
+        scene: &Scene<'_>,
+        nodes: &Nodes,
+        frequencies: &[(f64, f64)],
+        azimuths: &[f64],
+        directions: &[WavefrontDirection],
+    ) -> Result<Option<(Vec<Complex64>, Vec<f64>)>, Error> {
+        let k_dirs = directions.len();
+        let points = frequencies.len() * azimuths.len();
         let mut d_sum = vec![Complex64::new(0.0, 0.0); points * k_dirs];
         // the grids again, node by node in `build`'s order, each with its derivatives
         let lambda_max = nodes.samples.iter().map(|s| s.0).fold(0.0, f64::max);
@@ -1421,7 +1541,7 @@ impl FftPath {
                     layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
                     design_efficiency_rate(&mut d_grids, &otf, directions, rates, order.efficiency);
                     let grids: Vec<&Otf> = d_grids.iter().collect();
-                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
                     continue;
                 }
                 // the Seidel terms through an iris, or on a full circle (a line's grids): their OPD
@@ -1458,7 +1578,7 @@ impl FftPath {
                         &mut d_grids,
                     );
                     let grids: Vec<&Otf> = d_grids.iter().collect();
-                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
                     continue;
                 }
                 // an order through an aperture of disc shape: the obscuration moves its inner
@@ -1488,7 +1608,7 @@ impl FftPath {
                         let refs: Vec<(&[Complex64], f64)> = moves.iter().map(|(m, w)| (m.as_slice(), *w)).collect();
                         layer.plan.otf_and_field_derivatives(&field, weight, &refs, &mut otf, &mut d_grids);
                         let grids: Vec<&Otf> = d_grids.iter().collect();
-                        read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                        read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
                         continue;
                     }
                     if !directions.iter().all(|d| *d == WavefrontDirection::Obscuration) {
@@ -1497,7 +1617,7 @@ impl FftPath {
                     // the lane the value's pass computed beside the grid, from the same spectrum
                     if let Some(lane) = &node.lane {
                         let lanes = vec![lane; k_dirs];
-                        read_derivatives(&mut d_sum, &lanes, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                        read_derivatives(&mut d_sum, &lanes, node, scene.f_number, frequencies, azimuths, k_dirs);
                         continue;
                     }
                     let layer = match &mut built {
@@ -1512,7 +1632,7 @@ impl FftPath {
                         directions.iter().map(|_| (moved.0.as_slice(), moved.1)).collect();
                     layer.plan.otf_and_field_derivatives(&field, weight, &moves, &mut otf, &mut d_grids);
                     let grids: Vec<&Otf> = d_grids.iter().collect();
-                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
                     continue;
                 }
                 // a site map's order: its field is linear in the atoms' table, its move the same
@@ -1561,7 +1681,7 @@ impl FftPath {
                         }
                     }
                     let grids: Vec<&Otf> = d_grids.iter().collect();
-                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
                     continue;
                 }
                 // a composite pupil of zones (a segmented multiplexed lens): each zone's own
@@ -1622,7 +1742,7 @@ impl FftPath {
                         }
                     }
                     let grids: Vec<&Otf> = d_grids.iter().collect();
-                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                    read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
                     continue;
                 }
                 let radial = match (&order.pupil, &node.kind) {
@@ -1768,64 +1888,125 @@ impl FftPath {
                 }
                 design_efficiency_rate(&mut d_grids, &otf, directions, rates, order.efficiency);
                 let grids: Vec<&Otf> = d_grids.iter().collect();
-                read_derivatives(&mut d_sum, &grids, node, scene.f_number, &frequencies, &azimuths, k_dirs);
+                read_derivatives(&mut d_sum, &grids, node, scene.f_number, frequencies, azimuths, k_dirs);
             }
         }
         if stored.next().is_some() {
             return Ok(None);
         }
-        let pixel = |nu: f64| {
-            let p = scene.pixel_pitch.map_or(1.0, |p| crate::otf::pixel_mtf(p, nu));
-            noise.map_or(p, |n| p / n.value(nu))
-        };
-        // the field angles turn the azimuths' start, the field direction φ_f = atan2(θy, θx):
-        // the rule's mean moves by ∂M̄/∂φ_f · ∂φ_f/∂θ_a (docs/physics.md, "Gradients: the field
-        // point"; 0 on an exact mean over azimuth, the rule's own error otherwise)
-        let field = scene.field;
-        let turns = !field.is_on_axis() && directions.iter().any(|d| matches!(d, WavefrontDirection::FieldAngle(_)));
-        let mut gradient = vec![0.0; k_dirs];
-        let mut d_first = 0.0;
-        // the level's mean `Σ w P |sum|` (the normalization's motion takes it)
-        let mut mean = 0.0;
-        for (a, &azimuth) in azimuths.iter().enumerate() {
-            for (f, &(nu, w)) in frequencies.iter().enumerate() {
-                let (o, turn) = if turns {
-                    self.sum_along_and_turn(scene, nu, azimuth)
-                } else {
-                    (self.sum_along(scene, nu, azimuth), Complex64::new(0.0, 0.0))
-                };
-                let modulus = o.norm();
-                if modulus == 0.0 {
+        Ok(Some((d_sum, d_total)))
+    }
+
+    /// Whether every order of every node is a sampled pupil whose image shift is a phase of its
+    /// grid's reading (the full circle, an aperture, a radial pupil without an oblique wave's
+    /// path, on a grid): there the image shifts' lanes are [`shift_lane_sums`](Self::shift_lane_sums)'.
+    fn shifts_on_sampled_pupils(&self, scene: &Scene<'_>, nodes: &Nodes) -> bool {
+        let mut stored = self.nodes.iter();
+        for &(lambda, weight, part) in &nodes.samples {
+            if weight == 0.0 {
+                continue;
+            }
+            for order in scene.part(part).lens.orders(lambda, scene.field) {
+                if order.efficiency == 0.0 {
                     continue;
                 }
-                let base = (a * frequencies.len() + f) * k_dirs;
-                let scale = w * pixel(nu) / modulus;
-                for (g, d) in gradient.iter_mut().zip(&d_sum[base..base + k_dirs]) {
-                    *g += scale * (o.conj() * d).re;
-                }
-                d_first += scale * (o.conj() * turn).re;
-                mean += w * pixel(nu) * modulus;
-            }
-        }
-        if turns {
-            let r2 = field.x_rad * field.x_rad + field.y_rad * field.y_rad;
-            for (g, d) in gradient.iter_mut().zip(directions) {
-                match d {
-                    WavefrontDirection::FieldAngle(0) => *g += d_first * (-field.y_rad / r2),
-                    WavefrontDirection::FieldAngle(1) => *g += d_first * (field.x_rad / r2),
-                    _ => {}
+                let Some(node) = stored.next() else { return false };
+                let sampled = match &order.pupil {
+                    Pupil::Full | Pupil::Aperture(_) => true,
+                    Pupil::Radial(radial) => radial.oblique().is_none(),
+                    _ => false,
+                };
+                if !sampled || !matches!(node.kind, FftKind::Grid(_)) {
+                    return false;
                 }
             }
         }
-        // O = sum / total weight: Re(O* ∂O)/|O| = Re(sum* ∂sum)/(|sum| total)
-        let norm = nodes.total_weight * scene.max_frequency * count as f64;
-        gradient.iter_mut().for_each(|g| *g /= norm);
-        // an order field's efficiencies move the normalization Σ w τ_o: ∂O gains −O Σ w ∂τ_o/Σ w τ_o,
-        // so each mean's derivative −M̄ Σ w ∂τ_o/Σ w τ_o
-        for (g, d) in gradient.iter_mut().zip(&d_total) {
-            *g -= mean / norm * d / nodes.total_weight;
+        stored.next().is_none()
+    }
+
+    /// The image shifts' lanes ([`WavefrontDirection::ImageShift`]: every node's shift `Δ` scaled
+    /// by `1 + ε`; [`WavefrontDirection::FieldAngle`] `a`: its shift moving by its order's rate
+    /// `∂Δ_a/∂θ_a`, `LensModel::image_shift_field_rates`) of orders through sampled pupils
+    /// ([`shifts_on_sampled_pupils`](Self::shifts_on_sampled_pupils)): each node's turned reading
+    /// `w O(s) exp(−2πi ν u·Δ)` gains `−2πi ν u·δΔ` times itself, the grid and its weight held
+    /// (docs/physics.md, "Gradients: the F-number and the focal length on the FFT grids off
+    /// axis"). Summed as [`lane_sums`](Self::lane_sums) does; no FFT. `None` where a lens gives
+    /// no field rates for a field angle asked.
+    fn shift_lane_sums(
+        &self,
+        scene: &Scene<'_>,
+        nodes: &Nodes,
+        frequencies: &[(f64, f64)],
+        azimuths: &[f64],
+        directions: &[WavefrontDirection],
+    ) -> Option<Vec<Complex64>> {
+        let k_dirs = directions.len();
+        let mut d_sum = vec![Complex64::new(0.0, 0.0); frequencies.len() * azimuths.len() * k_dirs];
+        let fields = directions.iter().any(|d| matches!(d, WavefrontDirection::FieldAngle(_)));
+        let mut stored = self.nodes.iter();
+        let mut rates: Vec<[f64; 2]> = vec![[0.0; 2]; k_dirs];
+        for &(lambda, weight, part) in &nodes.samples {
+            if weight == 0.0 {
+                continue;
+            }
+            let lens = scene.part(part).lens;
+            let field_rates = match fields {
+                true => Some(lens.image_shift_field_rates(lambda, scene.field)?),
+                false => None,
+            };
+            for (index, order) in lens.orders(lambda, scene.field).into_iter().enumerate() {
+                if order.efficiency == 0.0 {
+                    continue;
+                }
+                let node = stored.next()?;
+                let FftKind::Grid(otf) = &node.kind else { return None };
+                for (rate, d) in rates.iter_mut().zip(directions) {
+                    *rate = match *d {
+                        WavefrontDirection::ImageShift => node.shift,
+                        WavefrontDirection::FieldAngle(a) => {
+                            let r = field_rates.as_ref().and_then(|r| r.get(index))?;
+                            if a == 0 { [r[0], 0.0] } else { [0.0, r[1]] }
+                        }
+                        _ => return None,
+                    };
+                }
+                read_shift_lanes(&mut d_sum, otf, node, scene.f_number, frequencies, azimuths, &rates);
+            }
         }
-        Ok(Some(gradient))
+        stored.next().is_none().then_some(d_sum)
+    }
+}
+
+/// Adds one node's image-shift lanes to `d_sum` (`rates.len()` values per point, azimuth-major):
+/// its grid read as `sum_along` reads it (its weight, its lateral-colour phase, the same
+/// interpolation) times `−2πi ν u·δΔ` for each direction's shift rate `δΔ` in `rates`.
+fn read_shift_lanes(
+    d_sum: &mut [Complex64],
+    otf: &Otf,
+    node: &FftNode,
+    f_number: f64,
+    frequencies: &[(f64, f64)],
+    azimuths: &[f64],
+    rates: &[[f64; 2]],
+) {
+    let k_dirs = rates.len();
+    let nuf = f_number * node.lambda;
+    for (a, &azimuth) in azimuths.iter().enumerate() {
+        let (sin_a, cos_a) = azimuth.sin_cos();
+        let [dx, dy] = node.shift;
+        for (f, &(nu, _)) in frequencies.iter().enumerate() {
+            let s = nu.abs() * nuf;
+            if s >= 1.0 || s > otf.s_max() {
+                continue;
+            }
+            let k = -2.0 * PI * nu;
+            let (ps, pc) = (k * (dx * cos_a + dy * sin_a)).sin_cos();
+            let turned = otf.at_xy(s * cos_a, s * sin_a) * node.weight * Complex64::new(pc, ps);
+            let base = (a * frequencies.len() + f) * k_dirs;
+            for (slot, [rx, ry]) in d_sum[base..base + k_dirs].iter_mut().zip(rates) {
+                *slot += turned * Complex64::new(0.0, k * (rx * cos_a + ry * sin_a));
+            }
+        }
     }
 }
 
