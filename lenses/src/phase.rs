@@ -634,6 +634,12 @@ impl<L: LensModel> LensModel for WithZernike<L> {
         self.inner.design_wavelength()
     }
 
+    /// The inner lens's band: the terms are on every order's pupil and leave its efficiency,
+    /// 0 outside the band, as it is.
+    fn design_band(&self) -> Option<(f64, f64)> {
+        self.inner.design_band()
+    }
+
     /// The inner lens's rates, order for order: the terms are fixed on the pupil, so the field
     /// moves each order's image shift as it moves the inner lens's (docs/physics.md, "Gradients:
     /// the field point").

@@ -107,7 +107,7 @@ impl LensModel for OneChannel {
     /// `[0, 0]` for the others (the defocus and weight alone: off axis the lateral colour's
     /// share is [`channel_off_axis`]'s lane of one order's shift). `None` off axis unless the
     /// view is [`channel_off_axis`]'s, or where order `j` is not the full circle with a defocus
-    /// alone (for the wavelength: `(1 − λ/λ_j) K`).
+    /// alone, or with Zernike terms alone ([`own_defocus`]; for the wavelength: `(1 − λ/λ_j) K`).
     fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
         if !field.is_on_axis() && !self.off_axis_view() {
             return None;
@@ -116,13 +116,11 @@ impl LensModel for OneChannel {
         let f_number = self.lens.f_number();
         let k = self.lens.focal_length() / (8.0 * f_number * f_number);
         let order = orders.get(self.channel)?;
-        if !(matches!(order.pupil, optics::Pupil::Full) && order.wavefront.is_defocus_only()) {
-            return None;
-        }
+        let own = own_defocus(order)?;
         let rates = match self.moving {
             Moving::Wavelength(lambda_j) => {
                 let expected = (1.0 - wavelength_m / lambda_j) * k;
-                if (order.wavefront.defocus_m - expected).abs() > 1e-12 * k {
+                if (own - expected).abs() > 1e-12 * k {
                     return None;
                 }
                 [k * wavelength_m / lambda_j, 0.0]
@@ -130,6 +128,21 @@ impl LensModel for OneChannel {
             Moving::Efficiency => [0.0, order.efficiency],
         };
         Some((0..orders.len()).map(|o| if o == self.channel { rates } else { [0.0, 0.0] }).collect())
+    }
+}
+
+/// The order's own defocus `W020` (m) where it is the full circle with a defocus alone, or a
+/// pupil of Zernike terms alone over it (`lenses::WithZernike`: the terms are µm RMS, keys of
+/// their own that a channel's wavelength leaves as they are; the order's `defocus_m` carries
+/// the pupil's best-fit defocus besides its own, left out here); `None` for another order.
+fn own_defocus(order: &Order) -> Option<f64> {
+    if !order.wavefront.is_defocus_only() {
+        return None;
+    }
+    match &order.pupil {
+        optics::Pupil::Full => Some(order.wavefront.defocus_m),
+        optics::Pupil::Radial(p) if p.is_zernike_only() => Some(order.wavefront.defocus_m - p.fitted_defocus_m()),
+        _ => None,
     }
 }
 
@@ -210,8 +223,7 @@ impl LensModel for AllChannels {
     forward_to_lens!();
 
     /// Order `o`'s `[(λ/λ_o) K, 0]`, each order [`OneChannel`]'s for its own channel; `None` on
-    /// axis unless every order is the full circle with the defocus `(1 − λ/λ_o) K` alone, and
-    /// off axis.
+    /// axis unless every order's own defocus ([`own_defocus`]) is `(1 − λ/λ_o) K`, and off axis.
     fn design_wavelength_rates(&self, wavelength_m: f64, field: Field) -> Option<Vec<[f64; 2]>> {
         if !field.is_on_axis() {
             return None;
@@ -227,9 +239,9 @@ impl LensModel for AllChannels {
             .zip(&self.channels)
             .map(|(order, &lambda_o)| {
                 let expected = (1.0 - wavelength_m / lambda_o) * k;
-                let plain = matches!(order.pupil, optics::Pupil::Full) && order.wavefront.is_defocus_only();
-                (plain && (order.wavefront.defocus_m - expected).abs() <= 1e-12 * k)
-                    .then_some([k * wavelength_m / lambda_o, 0.0])
+                own_defocus(order)
+                    .filter(|own| (own - expected).abs() <= 1e-12 * k)
+                    .map(|_| [k * wavelength_m / lambda_o, 0.0])
             })
             .collect()
     }

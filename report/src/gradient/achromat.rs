@@ -274,6 +274,19 @@ mod tests {
         check(&source, &[], &["lens.f_number", "lens.group_delay_range_fs"], &step);
     }
 
+    /// The reduced design with Zernike terms (Z4 0.02 µm, Z8 0.01 µm: the overlap engine, the
+    /// OTF depending on direction): both band edges (795 and 803.5 nm), λ0's lane on the overlap
+    /// engine's nodes (docs/physics.md "Gradients: the design wavelength with Seidel and Zernike
+    /// terms") and each edge's on the value's rule over directions, the edge's OTF from the band's
+    /// slivers there on the overlap engine (`metric`'s `EdgeOtf`).
+    #[test]
+    fn the_reduced_achromat_band_edges_with_zernike_terms_match_central_differences() {
+        let zernike = format!("{REDUCED}\nzernike_noll_rms_um = [0, 0, 0, 0.02, 0, 0, 0, 0.01]");
+        let source = scene_with(&zernike, "");
+        let keys = ["lens.design_band_nm[0]", "lens.design_band_nm[1]"];
+        check(&source, &["lens.design_band_nm=[795.0, 803.5]"], &keys, &step);
+    }
+
     /// The reduced design on axis, where the value's engine is the per-frequency product rule:
     /// the F-number's and focal length's defocus lane and the pixel MTF's term ride on the band
     /// edges' pass (beside the edges' and λ0's lanes, that engine's own mean and end term), the
