@@ -19,8 +19,8 @@ use crate::{Error, GlareMode, MetricForm, Scene};
 
 mod achromat;
 mod library_fft;
-mod line_table;
 mod line_grids;
+mod line_table;
 mod map;
 mod multiplexed;
 mod noise_weight;

@@ -4949,26 +4949,31 @@ parameter_bias = [0.0, 0.0]
                 true => owned(&["lens.f_number", "lens.focal_length_mm"]),
                 false => owned(&["lens.f_number", "lens.focal_length_mm", "lens.design_wavelength_nm"]),
             };
-            let g = gradient(source, &overrides, &keys).unwrap();
-            let norm = g.d_mean_mtf.iter().map(|x| x * x).sum::<f64>().sqrt();
-            assert!(norm > 0.0, "{g:?}");
-            for (i, k) in g.keys.iter().enumerate() {
-                // (λ0 turns the band's defocus fast: a finer step, its truncation 4e-8 of the norm)
-                let h = if k == "lens.design_wavelength_nm" { 2.5e-6 } else { 1e-5 } * g.values[i];
-                let up = evaluated(source, &overrides, k, g.values[i] + h);
-                let down = evaluated(source, &overrides, k, g.values[i] - h);
-                let theirs = (up[1] - down[1]) / (2.0 * h);
-                let error = (g.d_mean_mtf[i] - theirs).abs() / norm;
-                println!(
-                    "{extra:?} {k}: gradient {:.9e}, differences {theirs:.9e}, error/norm {error:.1e}",
-                    g.d_mean_mtf[i]
-                );
-                assert!(error <= 1e-6, "{extra:?} {k}: {} vs {theirs} (norm {norm})", g.d_mean_mtf[i]);
-            }
+            let g = mean_mtf_of_the_discrete_rule(source, &overrides, &keys, &format!("{extra:?}"));
             // N ∝ 1/F#², f0 and λ0 leave it (a constant efficiency)
             let n = g.photoelectrons;
             assert!((g.d_photoelectrons[0] * g.values[0] + 2.0 * n).abs() <= 1e-12 * n, "{g:?}");
         }
+    }
+
+    /// `source`'s gradient over `keys` under `overrides`, its mean MTF's derivatives against
+    /// central differences of the same discrete rule (relative step 1e-5; 2.5e-6 for λ0, which
+    /// turns the band's defocus fast, its truncation 4e-8 of the norm) within 1e-6 of the norm;
+    /// the errors printed after `label`.
+    fn mean_mtf_of_the_discrete_rule(source: &Source, overrides: &[String], keys: &[String], label: &str) -> Gradient {
+        let g = gradient(source, overrides, keys).unwrap();
+        let norm = g.d_mean_mtf.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!(norm > 0.0, "{g:?}");
+        for (i, k) in g.keys.iter().enumerate() {
+            let h = if k == "lens.design_wavelength_nm" { 2.5e-6 } else { 1e-5 } * g.values[i];
+            let up = evaluated(source, overrides, k, g.values[i] + h);
+            let down = evaluated(source, overrides, k, g.values[i] - h);
+            let theirs = (up[1] - down[1]) / (2.0 * h);
+            let error = (g.d_mean_mtf[i] - theirs).abs() / norm;
+            println!("{label} {k}: gradient {:.9e}, differences {theirs:.9e}, error/norm {error:.1e}", g.d_mean_mtf[i]);
+            assert!(error <= 1e-6, "{label} {k}: {} vs {theirs} (norm {norm})", g.d_mean_mtf[i]);
+        }
+        g
     }
 
     /// Off axis on the FFT grids (docs/physics.md, "Gradients: the F-number and the focal length
@@ -5006,22 +5011,7 @@ parameter_bias = [0.0, 0.0]
             // differences agree from 0.002 to 0.02 nm to 4e-6)
             let overrides =
                 joined(&["spectrum.range_nm=4", "options.pupil_samples=64", "lens.design_wavelength_nm=801"], &extra);
-            let g = gradient(source, &overrides, &owned(&keys)).unwrap();
-            let norm = g.d_mean_mtf.iter().map(|x| x * x).sum::<f64>().sqrt();
-            assert!(norm > 0.0, "{g:?}");
-            for (i, k) in g.keys.iter().enumerate() {
-                // (λ0 turns the band's defocus fast: a finer step)
-                let h = if k == "lens.design_wavelength_nm" { 2.5e-6 } else { 1e-5 } * g.values[i];
-                let up = evaluated(source, &overrides, k, g.values[i] + h);
-                let down = evaluated(source, &overrides, k, g.values[i] - h);
-                let theirs = (up[1] - down[1]) / (2.0 * h);
-                let error = (g.d_mean_mtf[i] - theirs).abs() / norm;
-                println!(
-                    "{extra:?} {k}: gradient {:.9e}, differences {theirs:.9e}, error/norm {error:.1e}",
-                    g.d_mean_mtf[i]
-                );
-                assert!(error <= 1e-6, "{extra:?} {k}: {} vs {theirs} (norm {norm})", g.d_mean_mtf[i]);
-            }
+            mean_mtf_of_the_discrete_rule(source, &overrides, &owned(&keys), &format!("{extra:?}"));
         }
         // under a noise spectrum the F-number's frequency scale is the continuous rule's by parts
         // (`ν ∂_ν` turns each node's lateral-colour phase too: minus the weighted D̃_Δ), so

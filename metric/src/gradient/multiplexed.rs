@@ -475,25 +475,24 @@ impl<'a> SignalChain<'a> {
     /// stray light `N_T − N` at its own `stray_rate` (the aperture's keys: N_T and N alike), the
     /// mean MTF by `d_mtf` (white: no noise spectrum); `∂ASNR = ∂SNR0 G + SNR0 ∂G`.
     fn push_moves(&self, out: &mut Gradient, rate: f64, stray_rate: f64, d_mtf: f64) {
-        let e = &out.evaluation;
-        let d_n = e.photoelectrons * rate;
+        let d_n = out.evaluation.photoelectrons * rate;
         let d_b = if self.stray { self.background * stray_rate } else { 0.0 };
-        let d_snr0 = self.partials.signal * d_n + self.partials.variance * d_b;
-        let d_g = super::d_g_from_mean_mtf(self.scene, e, d_mtf);
-        let d_asnr = d_snr0 * (e.asnr / e.snr0) + e.snr0 * d_g;
-        out.asnr.push(d_asnr);
-        out.mean_mtf.push(d_mtf);
-        out.snr0.push(d_snr0);
-        out.photoelectrons.push(d_n);
+        self.push_with(out, d_n, d_b, d_mtf, d_mtf);
     }
 
     /// One key's derivatives appended to `out` (whose evaluation the budget is): N moving at the
     /// relative rate `rate`, the mean MTF by `d_mtf` (white) and `d_weighted` (the mean the ASNR
     /// reads); `∂ASNR = ∂SNR0 G + SNR0 ∂G`.
     fn push(&self, out: &mut Gradient, rate: f64, d_mtf: f64, d_weighted: f64) {
+        let d_n = out.evaluation.photoelectrons * rate;
+        self.push_with(out, d_n, if self.stray { -d_n } else { 0.0 }, d_mtf, d_weighted);
+    }
+
+    /// One key's derivatives appended to `out`: N moving by `d_n`, the stray light by `d_b`, the
+    /// mean MTF by `d_mtf` (white) and `d_weighted` (the mean the ASNR reads).
+    fn push_with(&self, out: &mut Gradient, d_n: f64, d_b: f64, d_mtf: f64, d_weighted: f64) {
         let e = &out.evaluation;
-        let d_n = e.photoelectrons * rate;
-        let d_snr0 = self.partials.signal * d_n + self.partials.variance * if self.stray { -d_n } else { 0.0 };
+        let d_snr0 = self.partials.signal * d_n + self.partials.variance * d_b;
         let d_g = super::d_g_from_mean_mtf(self.scene, e, d_weighted);
         let d_asnr = d_snr0 * (e.asnr / e.snr0) + e.snr0 * d_g;
         out.asnr.push(d_asnr);
