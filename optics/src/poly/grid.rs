@@ -1823,9 +1823,12 @@ impl FftPath {
                             let Some([rate, _]) = rates else { return Ok(None) };
                             at_transmitting_pixels(n, &field, |x, y| rate * (x * x + y * y))
                         }
-                        // the Seidel terms' orders are the full circle (the overlap engine)
-                        WavefrontDirection::Seidel(_)
-                        | WavefrontDirection::FieldAngle(_)
+                        // the order's Seidel terms, sampled on the full circle with its Zernike
+                        // terms (`FftLayer::pupil`): each term's polynomial as the value samples it
+                        WavefrontDirection::Seidel(term) => {
+                            seidel_unit_opd(n, &Aperture::circle(), term, order.wavefront.aberrations().field)?
+                        }
+                        WavefrontDirection::FieldAngle(_)
                         | WavefrontDirection::IrisDecentre(_)
                         | WavefrontDirection::Obscuration
                         | WavefrontDirection::SpectralMoment(_)
@@ -2112,16 +2115,22 @@ fn seidel_through_aperture(
             continue;
         }
         let WavefrontDirection::Seidel(term) = *d else { return Ok(None) };
-        let mut unit = crate::fft::Aberrations { field: height, ..crate::fft::Aberrations::default() };
-        match term {
-            super::SeidelTerm::Spherical => unit.w040_m = 1e-6,
-            super::SeidelTerm::Coma => unit.w131_m = 1e-6,
-            super::SeidelTerm::Astigmatism => unit.w222_m = 1e-6,
-            super::SeidelTerm::FieldCurvature => unit.w220_m = 1e-6,
-        }
-        out.push(SampledPupil::new(n, aperture, &unit)?.opd_m().to_vec());
+        out.push(seidel_unit_opd(n, aperture, term, height)?);
     }
     Ok(Some((field, area.iter().sum(), out)))
+}
+
+/// The OPD (m) of one Seidel term at 1 µm at field height `height`, sampled on `n` pixels across
+/// `aperture` as the value's pupil samples it: a Seidel key's direction per µm.
+fn seidel_unit_opd(n: usize, aperture: &Aperture, term: super::SeidelTerm, height: f64) -> Result<Vec<f64>, Error> {
+    let mut unit = crate::fft::Aberrations { field: height, ..crate::fft::Aberrations::default() };
+    match term {
+        super::SeidelTerm::Spherical => unit.w040_m = 1e-6,
+        super::SeidelTerm::Coma => unit.w131_m = 1e-6,
+        super::SeidelTerm::Astigmatism => unit.w222_m = 1e-6,
+        super::SeidelTerm::FieldCurvature => unit.w220_m = 1e-6,
+    }
+    Ok(SampledPupil::new(n, aperture, &unit)?.opd_m().to_vec())
 }
 
 /// The OPD's rate (m per unit decentre, a fraction of the radius) along `axis` (0: x, 1: y) at
