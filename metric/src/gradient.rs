@@ -765,7 +765,8 @@ fn point_gradient(
                 let d_g = match camera.noise_spectrum() {
                     None => d_g_from_mean_mtf(scene, e, d_mtf),
                     Some(_) => {
-                        let (f, f0) = noise_weight::aperture_over_noise(scene, e, p, bases.aperture)?;
+                        let (f, f0) =
+                            noise_weight::aperture_over_noise(scene, e, p, bases.aperture, bases.aperture_on_grid)?;
                         d_g_from_mean_mtf(scene, e, if p == Parameter::FNumber { f } else { f0 })
                     }
                 };
@@ -1168,7 +1169,7 @@ struct LaneBases {
 /// ([`optics::LensModel::aperture_directions`]) and, off axis, the oblique wave's path per
 /// `ln R` and per `ln` of the whole scale (docs/physics.md, "Gradients: the F-number and the
 /// focal length of a phase lens off axis").
-fn aperture_grid_directions(base: usize, oblique: bool) -> Vec<optics::WavefrontDirection> {
+pub(super) fn aperture_grid_directions(base: usize, oblique: bool) -> Vec<optics::WavefrontDirection> {
     use optics::WavefrontDirection::{Lane, ObliqueScale};
     let mut out = vec![Lane(base), Lane(base + 1), Lane(base + 2)];
     if oblique {

@@ -181,14 +181,41 @@ pub(super) fn frequency_scale_over_noise(scene: &Scene, e: &Evaluation, p: Param
 /// (`base`: where they start among its wavefront directions), `∂G/∂ln F# = S − (D̃_P + D̃_T)`,
 /// `∂G/∂ln f0 = D̃_P + D̃_S`; otherwise `D̃_K` on the reference rule of the defocus lane, on axis,
 /// every order the full circle with a defocus alone, `∂G/∂ln F# = S − 2 D̃_K`, `∂G/∂ln f0 = D̃_K`.
+///
+/// Where the phase lens's value is on the FFT path (`on_grid` > 0: off axis, or on axis with
+/// Zernike terms of m ≠ 0), its lanes `[P, T, S]` and, off axis, the oblique wave's two
+/// (`aperture_grid_directions`) are taken on the value's noise-weighted pass over azimuth:
+/// `∂G/∂ln F# = S − (D̃_P + D̃_T + D̃_OR)`, `∂G/∂ln f0 = D̃_P + D̃_S + D̃_O`.
 pub(super) fn aperture_over_noise(
     scene: &Scene,
     e: &Evaluation,
     p: Parameter,
     base: Option<usize>,
+    on_grid: usize,
 ) -> Result<(f64, f64), Error> {
     let edge = crate::evaluate::mtf_at(scene, &[e.nyquist_cyc_per_mm], &[])?.mtf[0];
     let scale = frequency_scale_over_noise(scene, e, p, edge)?;
+    if let (Some(b), true) = (base, on_grid > 0) {
+        let directions = super::aperture_grid_directions(b, on_grid > 3);
+        let lanes = crate::evaluate::noise_weighted_lanes(scene, false, &directions)?;
+        let found = match &lanes.grid {
+            crate::evaluate::GridGradient::Computed(all) => match *all.as_slice() {
+                [d_p, d_t, d_s] => Some([d_p, d_t, d_s, 0.0, 0.0]),
+                [d_p, d_t, d_s, d_or, d_o] => Some([d_p, d_t, d_s, d_or, d_o]),
+                _ => None,
+            },
+            _ => None,
+        };
+        let Some([d_p, d_t, d_s, d_or, d_o]) = found else {
+            return Err(Error::NotDifferentiable {
+                parameter: p.describe(),
+                reason: "with camera.noise_spectrum the FFT path's noise-weighted pass did not carry the \
+                         aperture's lanes here"
+                    .to_owned(),
+            });
+        };
+        return Ok((scale - (d_p + d_t + d_or), d_p + d_s + d_o));
+    }
     if let Some(b) = base {
         let lanes = crate::evaluate::noise_weighted_lanes(scene, true, &[])?;
         let Some(&[d_p, d_t, d_s]) = lanes.binary2.as_deref().and_then(|a| a.get(b..b + 3)) else {
